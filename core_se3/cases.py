@@ -1,0 +1,246 @@
+"""Declarative benchmark case definitions shared by ``core_se3`` and ``fenicsx_ref``.
+
+This module holds data only: no solver is imported here, so that neither model can drift from
+the other.  A case is a geometry, a material, supports, loads scaled by the load factor
+``lam`` in [0, 1] (or a signed range for ``curved-rollup``), the probe to record, and the
+reference entry of ``core_se3/data/elastica.json`` the probe is measured against.
+
+Coordinates (all cases): the clamped edge is ``x0`` (the edge at the first parameter value),
+the free end is ``x1``; the width runs along the global y axis, symmetric about y = 0.  Flat
+strips lie in the x-y plane with normal +z.  Arches bend in the x-z plane: reference tangent
++x at the clamp, centre of curvature at (0, 0, R), tip at (0, 0, 2R).
+
+Planar reference solutions (x-y plane of ``elastica.json``) map onto the shell as
+``u -> ux``, ``v -> uz`` and ``theta ->`` rotation about -y (counter-clockwise in the x-z plane).
+
+Units: every case is in one consistent unit system, stated in ``units``; the unit strings are
+reported in results and never converted.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from math import pi
+from typing import Callable
+
+__all__ = ["Case", "CASES", "get_case", "list_cases", "beam_EI"]
+
+
+def beam_EI(p):
+    """Bending stiffness of the strip as a rod, E w h^3 / 12 (exact reduction for nu = 0)."""
+    return p["E"] * p["width"] * p["h"] ** 3 / 12.0
+
+
+@dataclass(frozen=True)
+class Load:
+    """One load of a case, scaled linearly by the load factor.
+
+    kind: ``edge_force`` (total force distributed consistently along ``edge``),
+    ``edge_moment`` (total moment along ``edge``), ``pressure`` (per unit reference area along
+    ``direction`` if dead; along the current surface normal, per unit current area, if
+    follower), ``edge_rotation`` (prescribed rigid rotation of ``edge`` about ``axis`` through
+    ``point``, angle = magnitude * lam, translations along ``free`` axes left free).
+    ``direction`` is a lab vector for dead loads and body-frame components (d1, d2, d3) of the
+    edge's own frame for follower loads.  ``magnitude(params)`` is the value at lam = 1.
+    """
+    kind: str
+    edge: str | None
+    direction: tuple
+    magnitude: Callable[[dict], float]
+    follower: bool = False
+    axis: tuple | None = None
+    point: tuple | None = None
+    free: tuple = ()
+
+
+@dataclass(frozen=True)
+class Reference:
+    """How a reference entry maps onto the case.
+
+    ``entry``: key in elastica.json; ``block``: which tip block ('tip', 'tip_reissner', ...);
+    ``load_to_ref(params, load)``: physical load value -> the entry's ``load`` axis;
+    ``length(params)``: the entry's displacement unit in case units (1 for physical entries,
+    L for the dimensionless master curves).
+    """
+    entry: str
+    load_to_ref: Callable[[dict, float], float]
+    length: Callable[[dict], float]
+    block: str = "tip"
+    note: str = ""
+
+
+@dataclass(frozen=True)
+class Case:
+    name: str
+    description: str
+    geometry: str                      # 'strip' | 'arch' | 'rollup-circle'
+    params: dict
+    units: dict
+    mesh: tuple                        # default (nx, ny)
+    steps: int                         # default number of load steps
+    loads: tuple
+    load_name: str                     # the reported load quantity
+    load_unit: str
+    load_value: Callable[[dict, float], float]  # (params, lam) -> reported load value
+    supports: tuple = (("clamp", "x0"),)
+    reference: Reference | None = None
+    probe: str = "tip"
+    lam_range: tuple = (0.0, 1.0)
+    notes: str = ""
+    extra: dict = field(default_factory=dict)
+
+
+_DIM = dict(E="force/length^2", nu="1", h="length", L="length", width="length",
+            load_max="force", R="length", k="1")
+
+
+def _master(entry, load_name_fn, block="tip"):
+    """Reference on a dimensionless master curve (L = 1, EI = 1)."""
+    return Reference(entry=entry, load_to_ref=load_name_fn, length=lambda p: p["L"], block=block)
+
+
+def _physical(entry, block="tip"):
+    return Reference(entry=entry, load_to_ref=lambda p, P: P, length=lambda p: 1.0, block=block)
+
+
+def _rollup_M(p):
+    return p["k"] * 2.0 * pi * beam_EI(p) / p["L"]
+
+
+CASES: dict[str, Case] = {}
+
+
+def _add(case):
+    CASES[case.name] = case
+
+
+_add(Case(
+    name="cantilever-shear",
+    description="Sze et al. 2004 s3.1 cantilever strip under a dead transverse end shear P (to 4).",
+    geometry="strip",
+    params=dict(E=1.2e6, nu=0.0, h=0.1, L=10.0, width=1.0, load_max=4.0),
+    units=_DIM, mesh=(16, 1), steps=10,
+    loads=(Load("edge_force", "x1", (0.0, 0.0, 1.0), lambda p: p["load_max"]),),
+    load_name="P", load_unit="force", load_value=lambda p, lam: lam * p["load_max"],
+    reference=_master("1_cantilever_tip_force_kirchhoff", lambda p, P: P * p["L"] ** 2 / beam_EI(p)),
+    notes="Kirchhoff elastica master curve; Sze's Abaqus S4R table in literature.json agrees.",
+))
+
+_add(Case(
+    name="cantilever-shear-steel",
+    description="The seed's steel plate strip (mm, N, MPa) under a dead end shear to PL^2/EI = 10.",
+    geometry="strip",
+    params=dict(E=2.0e5, nu=0.0, h=10.0, L=1000.0, width=200.0, load_max=10.0 * 2.0e5 * 200.0 * 1e3 / 12 / 1e6),
+    units=dict(_DIM, E="MPa", h="mm", L="mm", width="mm", load_max="N"), mesh=(20, 1), steps=10,
+    loads=(Load("edge_force", "x1", (0.0, 0.0, 1.0), lambda p: p["load_max"]),),
+    load_name="P", load_unit="N", load_value=lambda p, lam: lam * p["load_max"],
+    reference=_physical("1_cantilever_tip_force_seed_plate_nu0"),
+))
+
+_add(Case(
+    name="rollup",
+    description="Strip rolled up by an end moment about the width axis, M = k 2 pi EI / L (k to 3).",
+    geometry="strip",
+    params=dict(E=1.2e7, nu=0.0, h=0.1, L=10.0, width=1.0, k=3.0),
+    units=_DIM, mesh=(10, 1), steps=6,
+    loads=(Load("edge_moment", "x1", (0.0, -1.0, 0.0), _rollup_M),),
+    load_name="M", load_unit="force*length", load_value=lambda p, lam: lam * _rollup_M(p),
+    reference=_physical("2_pure_bending_rollup_out_of_plane"),
+    notes="Exact: circle of radius EI/M.",
+))
+
+_add(Case(
+    name="inplane-rollup",
+    description="In-plane (drilling) bending of a strip by an end moment about the normal (k to 2).",
+    geometry="strip",
+    params=dict(E=1200.0, nu=0.0, h=1.0, L=10.0, width=1.0, k=2.0),
+    units=_DIM, mesh=(40, 4), steps=40,
+    loads=(Load("edge_moment", "x1", (0.0, 0.0, 1.0),
+                lambda p: p["k"] * 2 * pi * p["E"] * p["h"] * p["width"] ** 3 / 12 / p["L"]),),
+    load_name="M", load_unit="force*length",
+    load_value=lambda p, lam: lam * p["k"] * 2 * pi * p["E"] * p["h"] * p["width"] ** 3 / 12 / p["L"],
+    reference=Reference("2_pure_bending_rollup_inplane_drilling", lambda p, M: M, lambda p: 1.0,
+                        note="in-plane: v -> uy, theta about +z; exact only for small k"),
+    extra=dict(plane="xy"),
+))
+
+_add(Case(
+    name="torsion",
+    description="Strip twisted by a rigid rotation of its end edge about the strip axis (to 3 pi), "
+                "axial displacement of the end free.",
+    geometry="strip",
+    params=dict(E=1.2e7, nu=0.3, h=0.1, L=1.0, width=0.25, angle=3 * pi),
+    units=dict(_DIM, angle="rad"), mesh=(20, 6), steps=24,
+    loads=(Load("edge_rotation", "x1", (1.0, 0.0, 0.0), lambda p: p["angle"],
+                axis=(1.0, 0.0, 0.0), point=(None, 0.0, 0.0), free=(0,)),),
+    load_name="angle", load_unit="rad", load_value=lambda p, lam: lam * p["angle"],
+    reference=None,
+    notes="Small-twist torque -> J = T L/(G angle) against 5_strip_torsion_seed_strip.",
+))
+
+_add(Case(
+    name="torsion-rollup",
+    description="Strip under follower end moments about the strip axis and the width axis together, "
+                "each ramped to the value that alone gives one full turn.",
+    geometry="strip",
+    params=dict(E=1.2e7, nu=0.3, h=0.1, L=10.0, width=1.0),
+    units=_DIM, mesh=(50, 20), steps=40,
+    loads=(
+        Load("edge_moment", "x1", (0.0, -1.0, 0.0), lambda p: 2 * pi * beam_EI(p) / p["L"] / (1 - p["nu"] ** 2), follower=True),
+        Load("edge_moment", "x1", (1.0, 0.0, 0.0),
+             lambda p: 2 * pi * p["E"] / (2 * (1 + p["nu"])) * p["width"] * p["h"] ** 3 / 3 / p["L"], follower=True),
+    ),
+    load_name="lambda", load_unit="1", load_value=lambda p, lam: lam,
+))
+
+_add(Case(
+    name="arch-follower",
+    description="Half-circle arch (R = 0.5 m) under a tip follower force along the current tip "
+                "tangent (direction=tangential) or toward the centre (direction=inward), P to 3000 N.",
+    geometry="arch",
+    params=dict(E=7.2e10, nu=0.0, h=2.4495e-2, R=0.5, width=4.0825e-3, load_max=3000.0, direction=0.0),
+    units=dict(_DIM, E="Pa", h="m", R="m", width="m", load_max="N", direction="0=tangential,1=inward"),
+    mesh=(40, 1), steps=30,
+    loads=(Load("edge_force", "x1", (1.0, 0.0, 0.0), lambda p: p["load_max"], follower=True),),
+    load_name="P", load_unit="N", load_value=lambda p, lam: lam * p["load_max"],
+    reference=_physical("4_arch_halfcircle_follower_tangential_plus_shell_ks1"),
+    notes="direction=1 switches the force to +d3 (toward the centre) and the reference to "
+          "4_arch_halfcircle_follower_normal_inward_shell_ks1.",
+))
+
+_add(Case(
+    name="curved-rollup",
+    description="Half-cylinder of radius 10/(2 pi) (arc length 5) under an end moment, "
+                "M = k 2 pi EI / 10, k from -1 to 2.",
+    geometry="arch",
+    params=dict(E=1.2e7, nu=0.0, h=0.1, R=10.0 / (2 * pi), width=1.0, k=2.0),
+    units=_DIM, mesh=(10, 1), steps=8,
+    loads=(Load("edge_moment", "x1", (0.0, -1.0, 0.0), lambda p: p["k"] * 2 * pi * beam_EI(p) / 10.0),),
+    load_name="M", load_unit="force*length", load_value=lambda p, lam: lam * p["k"] * 2 * pi * beam_EI(p) / 10.0,
+    reference=_physical("4_arch_halfcircle_end_moment_R10over2pi"),
+    notes="Run with --set k=-1 for the opening branch.",
+))
+
+_add(Case(
+    name="pressure-strip",
+    description="The rollup strip clamped on x0 under a uniform pressure to qL^3/EI = 20 (q = p w); "
+                "dead (along +z) or follower (normal to the deformed surface, per current area).",
+    geometry="strip",
+    params=dict(E=1.2e7, nu=0.0, h=0.1, L=10.0, width=1.0, load_max=20.0, follower=0.0),
+    units=dict(_DIM, load_max="1 (q L^3/EI)", follower="0=dead,1=follower"), mesh=(16, 1), steps=20,
+    loads=(Load("pressure", None, (0.0, 0.0, 1.0),
+                lambda p: p["load_max"] * beam_EI(p) / p["L"] ** 3 / p["width"]),),
+    load_name="q L^3/EI", load_unit="1", load_value=lambda p, lam: lam * p["load_max"],
+    reference=_master("5_plate_cylindrical_bending_pressure_dead", lambda p, q: q),
+    notes="follower=1 switches to the follower pressure and 5_plate_cylindrical_bending_pressure_follower.",
+))
+
+
+def get_case(name: str) -> Case:
+    try:
+        return CASES[name]
+    except KeyError:
+        raise KeyError(f"unknown case {name!r}; available: {', '.join(sorted(CASES))}") from None
+
+
+def list_cases():
+    return [(c.name, c.description) for c in CASES.values()]

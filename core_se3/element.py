@@ -1,0 +1,191 @@
+"""The default 4-node SE(3) shell element: exact edge twists + assumed natural strains.
+
+Kinematics.  Along each element edge a -> b the frames are joined by the SE(3) geodesic
+(helicoidal interpolation, Sonneville et al. 2014); its left-trivialised strain is constant
+along the edge and equal to the edge twist (in natural coordinates, edge length 2)
+
+    z_ab = log(g_a^-1 g_b) / 2.
+
+The strain twists zeta_1, zeta_2 of seed eq. (zeta) are *assumed* inside the element as in
+MITC4 tying, from the edges on which they are exact:
+
+    zeta_1(x, y) = ((1 - y) z_bottom + (1 + y) z_top) / 2,
+    zeta_2(x, y) = ((1 - x) z_left   + (1 + x) z_right) / 2.
+
+Consequences, each asserted by a test: the strains depend on the current relative frames
+only (objective and path independent: no incremental strain update as in the seed's
+Algorithm 1); constant commuting strain fields (pure bending, roll-up, uniform stretch) are
+reproduced exactly on any element whose edges turn by less than pi; every strain component of
+every edge is penalised, so a free element has exactly the six rigid-body zero modes; a strip
+bent about its width axis is an assembly of Sonneville's locking-free SE(3) beams.
+
+Energy.  With the reference edge twists z0, the element energy is the quadratic form
+
+    Pi_e = 1/2 (z - z0)^T Dbar_e (z - z0),   z = (z_b, z_t, z_l, z_r) in R^24,
+
+where Dbar_e = sum_gp j0 P_gp^T D(A_1, A_2) P_gp is computed once from the reference geometry
+(2x2 Gauss, P_gp the tying interpolation, D the resultant law of ``material``).  All
+geometric nonlinearity sits in the edge logarithms, which are computed once per mesh edge.
+
+Linearisation (exp-update g_i <- g_i exp(eta_i)).  For psi = log(g_a^-1 g_b), with
+L = dexp_inv (``se3``):
+
+    d psi = L(psi) eta_b - L(-psi) eta_a
+    psi(eta) = psi + L Delta + 1/2 DL(psi)[L Delta] Delta + O(3),
+    Delta = eta_b - Ad_{exp(-psi)} eta_a - 1/2 ad_{Ad eta_a} eta_b,
+
+which gives the edge's geometric stiffness from F = dPi/dz (J_m = d(L(psi)^T F)/d psi is
+taken by complex-step differentiation of the closed form of dexp_inv: exact to round-off).
+The derivative of the left-trivialised gradient r along exp-updates is the symmetric Hessian
+plus 1/2 adt(r_i) on each node's diagonal block (BCH to second order), so the tangent is
+non-symmetric away from equilibrium, as the seed's E75 remarks.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from . import se3
+from .errors import ElementTooDistortedError
+from .mesh import LOCAL_EDGES
+
+__all__ = ["DefaultElement", "edge_twists", "tying_matrices", "GAUSS_2x2"]
+
+_G = 1.0 / np.sqrt(3.0)
+GAUSS_2x2 = np.array([[-_G, -_G], [_G, -_G], [_G, _G], [-_G, _G]])
+
+MAX_EDGE_ANGLE = 0.97 * np.pi   # beyond this the log's cut at pi is too close
+
+
+def tying_matrices(points=GAUSS_2x2):
+    """P (ngp, 12, 24): (zeta_1, zeta_2) at each point from (z_b, z_t, z_l, z_r)."""
+    P = np.zeros((len(points), 12, 24))
+    I = np.eye(6)
+    for q, (x, y) in enumerate(points):
+        P[q, :6, 0:6] = 0.5 * (1 - y) * I
+        P[q, :6, 6:12] = 0.5 * (1 + y) * I
+        P[q, 6:, 12:18] = 0.5 * (1 - x) * I
+        P[q, 6:, 18:24] = 0.5 * (1 + x) * I
+    return P
+
+
+def edge_twists(g, edge_nodes):
+    """psi_e = log(g_a^-1 g_b) for all edges (E, 6); raises if an edge turns by ~pi."""
+    ga, gb = g[edge_nodes[:, 0]], g[edge_nodes[:, 1]]
+    psi = se3.log(se3.inv(ga) @ gb)
+    ang = np.linalg.norm(psi[:, 3:], axis=1)
+    if ang.size and ang.max() > MAX_EDGE_ANGLE:
+        e = int(np.argmax(ang))
+        raise ElementTooDistortedError(
+            f"edge {edge_nodes[e].tolist()} turns by {ang[e]:.3f} rad (>= {MAX_EDGE_ANGLE:.3f}); the "
+            "relative rotation across an element must stay below pi: refine the mesh or the load step")
+    return psi
+
+
+def _dexp_inv_jacobian_T(psi, F, h=1e-30):
+    """J (E, 6, 6) with J[:, :, k] = d/dpsi_k (dexp_inv(psi)^T F), by complex step."""
+    E = psi.shape[0]
+    pc = np.repeat(psi[:, None, :].astype(complex), 6, axis=1)          # (E, 6k, 6)
+    pc[:, np.arange(6), np.arange(6)] += 1j * h
+    L = se3.dexp_inv(pc)                                               # (E, 6k, 6, 6)
+    m = np.einsum("ekji,ej->eki", L, F)                                # (E, 6k, 6)
+    return np.swapaxes(m.imag / h, 1, 2)
+
+
+class DefaultElement:
+    """Precomputed element data for a mesh and material; evaluates energy, residual, tangent."""
+
+    name = "default"
+
+    def __init__(self, mesh, material):
+        self.mesh = mesh
+        self.material = material
+        psi0 = edge_twists(mesh.g0, mesh.edge_nodes)
+        self.z0 = self._element_z(0.5 * psi0)                          # (m, 24)
+        P = tying_matrices()
+        zeta0 = np.einsum("qij,mj->mqi", P, self.z0)                   # (m, 4gp, 12)
+        A1, A2 = zeta0[..., 0:3], zeta0[..., 6:9]
+        Dm, j0 = material.resultant_matrix(A1, A2)                     # (m, 4, 12, 12)
+        self.j0 = j0
+        self.Dbar = np.einsum("qia,mqij,qjb,mq->mab", P, Dm, P, j0)    # (m, 24, 24)
+        self.area = j0.sum(axis=1)                                     # reference area per element
+
+    # ----------------------------------------------------------------------------------
+    def _element_z(self, zE):
+        """Per-element edge twists (m, 24) from per-mesh-edge values (E, 6), with signs."""
+        m = self.mesh
+        return (m.elem_edge_sign[..., None] * zE[m.elem_edges]).reshape(-1, 24)
+
+    def strains(self, g, points=GAUSS_2x2):
+        """Strain twists (zeta_1, zeta_2) (m, npts, 12) at natural points of every element."""
+        z = self._element_z(0.5 * edge_twists(g, self.mesh.edge_nodes))
+        return np.einsum("qij,mj->mqi", tying_matrices(points), z)
+
+    def energy(self, g):
+        z = self._element_z(0.5 * edge_twists(g, self.mesh.edge_nodes))
+        dz = z - self.z0
+        return 0.5 * np.einsum("mi,mij,mj->", dz, self.Dbar, dz)
+
+    def evaluate(self, g, tangent=True):
+        """Internal residual r (n, 6) in body frames and, if asked, the tangent blocks.
+
+        Returns dict with 'energy', 'r' and, for tangent=True, 'Ke' (m,4,4,6,6) element
+        blocks, 'KE' (E,2,2,6,6) edge (geometric) blocks and 'Kn' (n,6,6) nodal blocks.
+        """
+        mesh = self.mesh
+        En = mesh.edge_nodes
+        psi = edge_twists(g, En)
+        Lp = se3.dexp_inv(psi)
+        Lm = se3.dexp_inv(-psi)
+        z = self._element_z(0.5 * psi)
+        dz = z - self.z0
+        f = np.einsum("mij,mj->mi", self.Dbar, dz)                      # dPi/dz_elem
+        energy = 0.5 * np.einsum("mi,mi->", dz, f)
+        sgn = mesh.elem_edge_sign
+        fe = (sgn[..., None] * f.reshape(-1, 4, 6))                    # conjugate to mesh-edge z
+        nE = len(En)
+        F = np.stack([np.bincount(mesh.elem_edges.ravel(), weights=fe[..., k].ravel(), minlength=nE)
+                      for k in range(6)], -1)
+        # nodal residual: r_a = -1/2 L(-psi)^T F, r_b = 1/2 L(psi)^T F
+        ra = -0.5 * np.einsum("eji,ej->ei", Lm, F)
+        rb = 0.5 * np.einsum("eji,ej->ei", Lp, F)
+        n = mesh.n_nodes
+        r = np.stack([np.bincount(En[:, 0], weights=ra[:, k], minlength=n)
+                      + np.bincount(En[:, 1], weights=rb[:, k], minlength=n) for k in range(6)], -1)
+        # size of the terms that cancel in Dbar (z - z0): the residual's round-off floor
+        fscale = np.sqrt(np.einsum("mi,mi->", f + np.einsum("mij,mj->mi", self.Dbar, self.z0),
+                                   f + np.einsum("mij,mj->mi", self.Dbar, self.z0)) + np.einsum("mi,mi->", f, f))
+        out = {"energy": energy, "r": r, "force_scale": fscale}
+        if not tangent:
+            return out
+
+        # ---- material part: G^T Dbar G per element, G = d z_elem / d eta_nodes -------------
+        pos = sgn > 0                                                  # (m, 4)
+        eid = mesh.elem_edges
+        Lloc_p = np.where(pos[..., None, None], Lp[eid], Lm[eid])      # L(psi_local)
+        Lloc_m = np.where(pos[..., None, None], Lm[eid], Lp[eid])      # L(-psi_local)
+        m_el = mesh.n_elements
+        G = np.zeros((m_el, 4, 6, 4, 6))                                # (edge, comp, node, comp)
+        for k, (la, lb) in enumerate(LOCAL_EDGES):
+            G[:, k, :, la, :] = -0.5 * Lloc_m[:, k]
+            G[:, k, :, lb, :] = 0.5 * Lloc_p[:, k]
+        G = G.reshape(m_el, 24, 24)
+        Ke = np.swapaxes(G, 1, 2) @ self.Dbar @ G
+        Ke = Ke.reshape(m_el, 4, 6, 4, 6).transpose(0, 1, 3, 2, 4)
+
+        # ---- geometric part per mesh edge: Hessian of F . z_E(eta) -----------------------
+        p = np.einsum("eji,ej->ei", Lp, F)                             # L(psi)^T F
+        Jm = _dexp_inv_jacobian_T(psi, F)
+        AdI = se3.Ad(se3.exp(-psi))                                    # Ad_{h^-1}
+        M = np.concatenate([-AdI, np.broadcast_to(np.eye(6), AdI.shape)], axis=2)   # (E,6,12)
+        N = np.concatenate([-Lm, Lp], axis=2)                                       # (E,6,12)
+        A = np.swapaxes(M, 1, 2) @ Jm @ N
+        H = 0.25 * (A + np.swapaxes(A, 1, 2))
+        Hba = -0.25 * se3.adt(p) @ AdI
+        H[:, 6:, :6] += Hba
+        H[:, :6, 6:] += np.swapaxes(Hba, 1, 2)
+        KE = H.reshape(nE, 2, 6, 2, 6).transpose(0, 1, 3, 2, 4)
+
+        # ---- derivative of the left-trivialised gradient along exp updates ---------------
+        Kn = 0.5 * se3.adt(r)
+        out.update(Ke=Ke, KE=KE, Kn=Kn)
+        return out

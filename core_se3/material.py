@@ -1,0 +1,120 @@
+"""Isotropic linear-elastic Cosserat shell resultant law (seed eqs. E45-1, E45-2, corrected).
+
+Strains at a point are the differences of left-trivialised twists, eps_a = zeta_a - zeta0_a =
+(c_a, k_a) (translational, rotational), in the body frame of the material point; A_a are the
+reference tangent vectors (translational parts of zeta0_a) and n the unit normal.
+
+    membrane   e_ab = c_a . A_b                       (unsymmetrised, as the seed)
+    shear      g_a  = c_a . n
+    bending    K_ab = (n x k_a) . A_b                 (curvature; corrects the seed's E45-2)
+    drilling   d_a  = k_a . n
+
+    W = 1/2 [ Eh/(1-nu^2) H(e, e) + ks G h A^ab g_a g_b + D H(K, K) + D (1-nu) A^ab d_a d_b ]
+    H(x, y) = nu (A^ab x_ab)(A^cd y_cd) + (1-nu) A^ac A^bd x_ab y_cd,   D = E h^3 / (12 (1-nu^2))
+
+The seed applies H directly to the wryness components, which gives a cylindrical bending
+stiffness D (1 - nu) and loses the Poisson coupling; writing bending on K restores the plate
+law D[(1-nu) K:K + nu (tr K)^2].  W is per unit reference area [energy/length^2]; the
+transverse-shear factor is 1 by default, as the seed's law gives.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import MaterialError, MeshError
+
+__all__ = ["Material", "strain_operators"]
+
+
+@dataclass(frozen=True)
+class Material:
+    """E [force/length^2], nu [-], h [length], shear_factor ks [-] (1 = the seed's law)."""
+    E: float
+    nu: float
+    h: float
+    shear_factor: float = 1.0
+
+    def __post_init__(self):
+        for name in ("E", "nu", "h", "shear_factor"):
+            v = getattr(self, name)
+            if not isinstance(v, (int, float, np.floating, np.integer)) or not math.isfinite(v):
+                raise MaterialError(f"material parameter {name} must be a finite number, got {v!r}")
+        if self.E <= 0:
+            raise MaterialError(f"Young's modulus E must be > 0, got {self.E}")
+        if not -1.0 < self.nu < 0.5:
+            raise MaterialError(f"Poisson's ratio nu must lie in (-1, 0.5), got {self.nu}")
+        if self.h <= 0:
+            raise MaterialError(f"thickness h must be > 0, got {self.h}")
+        if self.shear_factor <= 0:
+            raise MaterialError(f"shear factor must be > 0, got {self.shear_factor}")
+
+    @property
+    def G(self):
+        return self.E / (2.0 * (1.0 + self.nu))
+
+    @property
+    def D(self):
+        """Plate bending stiffness E h^3 / (12 (1 - nu^2))."""
+        return self.E * self.h ** 3 / (12.0 * (1.0 - self.nu ** 2))
+
+    @property
+    def C(self):
+        """Membrane stiffness E h / (1 - nu^2)."""
+        return self.E * self.h / (1.0 - self.nu ** 2)
+
+    def resultant_matrix(self, A1, A2):
+        """12x12 stiffness on (eps_1, eps_2) at points with reference tangents A1, A2 (..., 3).
+
+        Returns (Dmat, j0): ``W = 1/2 eps^T Dmat eps`` per unit reference area, and the area
+        element j0 = |A1 x A2| that turns the parameter measure into reference area.
+        """
+        ops, Ainv, j0 = strain_operators(A1, A2)
+        Mm, Ms, Mb, Md = ops
+        nu = self.nu
+        H = (nu * np.einsum("...ab,...cd->...abcd", Ainv, Ainv)
+             + (1 - nu) * np.einsum("...ac,...bd->...abcd", Ainv, Ainv))
+        H = H.reshape(H.shape[:-4] + (4, 4))
+        Dm = self.C * H
+        Db = self.D * H
+        Ds = self.shear_factor * self.G * self.h * Ainv
+        Dd = self.D * (1 - nu) * Ainv
+        T = lambda M: np.swapaxes(M, -1, -2)
+        Dmat = (T(Mm) @ Dm @ Mm + T(Ms) @ Ds @ Ms + T(Mb) @ Db @ Mb + T(Md) @ Dd @ Md)
+        return Dmat, j0
+
+    def energy_density(self, eps, A1, A2):
+        """W per unit reference area for strains eps (..., 12)."""
+        Dmat, _ = self.resultant_matrix(A1, A2)
+        return 0.5 * np.einsum("...i,...ij,...j->...", eps, Dmat, eps)
+
+
+def strain_operators(A1, A2):
+    """Linear maps from eps = (eps_1, eps_2) in R^12 to the membrane, shear, bending, drilling
+    measures (shapes (...,4,12), (...,2,12), (...,4,12), (...,2,12)), with A^ab and j0."""
+    A1 = np.asarray(A1, float)
+    A2 = np.asarray(A2, float)
+    A = np.stack([A1, A2], -2)                                   # (..., 2, 3)
+    cross = np.cross(A1, A2)
+    j0 = np.linalg.norm(cross, axis=-1)
+    if np.any(~np.isfinite(j0)) or np.any(j0 <= 1e-14 * (np.linalg.norm(A1, axis=-1) * np.linalg.norm(A2, axis=-1) + 1e-300)):
+        raise MeshError("degenerate reference geometry: tangent vectors A1, A2 are parallel or zero "
+                        "(zero-area or collapsed element)")
+    n = cross / j0[..., None]
+    Amet = np.einsum("...ai,...bi->...ab", A, A)
+    Ainv = np.linalg.inv(Amet)
+    shape = A1.shape[:-1]
+    Mm = np.zeros(shape + (4, 12))
+    Mb = np.zeros(shape + (4, 12))
+    Ms = np.zeros(shape + (2, 12))
+    Md = np.zeros(shape + (2, 12))
+    Axn = np.cross(A, n[..., None, :])                           # A_b x n, (..., 2, 3)
+    for a in range(2):
+        for b in range(2):
+            Mm[..., 2 * a + b, 6 * a:6 * a + 3] = A[..., b, :]
+            Mb[..., 2 * a + b, 6 * a + 3:6 * a + 6] = Axn[..., b, :]   # (n x k).A = k.(A x n)
+        Ms[..., a, 6 * a:6 * a + 3] = n
+        Md[..., a, 6 * a + 3:6 * a + 6] = n
+    return (Mm, Ms, Mb, Md), Ainv, j0

@@ -1,0 +1,176 @@
+"""Load-stepped Newton with exponential updates, cut-back and regrowth.
+
+At load factor lam the residual is r = r_int(g) - f_ext(g, lam) (left-trivialised, one 6-vector
+per node in its body frame) and the update is g_i <- g_i exp(eta_i) with K eta = -r.
+
+Convergence is judged on unit-scaled norms so that N-mm and SI problems and L/h = 1e4 behave
+alike: moments are divided by a characteristic length ``ell`` (the bounding-box diagonal),
+rotations of the increment are multiplied by it, and both norms are relative:
+
+    |r_free|_s <= rtol * max(|f_ext|_s, |r_int|_s)       and   |eta|_s <= dtol * ell.
+
+A failed step (no convergence in ``max_iter``, an edge turning by ~pi, a singular tangent
+after the first step, a non-finite residual) is cut back by half; after easy steps the
+step grows again.  Only the requested load factors are stored; sub-steps are logged.
+"""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from . import se3
+from .errors import ConvergenceError, ElementTooDistortedError, SingularSystemError
+from .linalg import checked_solve, make_solver
+from .results import Result, StepResult, unwrap_rotation
+
+__all__ = ["newton_solve"]
+
+
+def _scaled_norm(r, ell, moment=True):
+    r = np.asarray(r).reshape(-1, 6)
+    if moment:
+        return np.sqrt(np.sum(r[:, :3] ** 2) + np.sum((r[:, 3:] / ell) ** 2))
+    return np.sqrt(np.sum(r[:, :3] ** 2) + np.sum((r[:, 3:] * ell) ** 2))
+
+
+def _lab_totals(g, f):
+    """Total lab force and moment about the origin of generalised nodal forces f (n,6)."""
+    R = g[:, :3, :3]
+    F = np.einsum("nij,nj->ni", R, f[:, :3])
+    M = np.einsum("nij,nj->ni", R, f[:, 3:]) + np.cross(g[:, :3, 3], F)
+    return F.sum(0), M.sum(0)
+
+
+def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, rtol=1e-10, dtol=1e-10,
+                 max_iter=30, max_cutbacks=12, g_init=None, verbose=False, linear_solver=None,
+                 record_substeps=False):
+    """Solve the problem from lam_start to lam_end in ``steps`` equal load increments."""
+    t0 = time.perf_counter()
+    if not np.isfinite(lam_end) or steps < 1:
+        raise ValueError("need a finite lam_end and steps >= 1")
+    mesh = problem.mesh
+    fixedmask = problem.constraint_mask()
+    if not fixedmask.any():
+        raise SingularSystemError("no supports: the shell can move as a rigid body, the tangent is "
+                                  "singular; clamp or fix some nodes")
+    asm = problem.assembler()
+    solver = make_solver(linear_solver or problem.linear_solver)
+    ell = problem.length_scale
+    g = mesh.g0.copy() if g_init is None else np.array(g_init, float)
+    result = Result(mesh=mesh, element=problem.element_name)
+    unwrapped = {name: np.zeros(3) for name in problem.probes}
+    result.timings["setup"] = time.perf_counter() - t0
+    t_asm = t_sol = 0.0
+    t_start = time.perf_counter()
+
+    def record(lam, g, its, hist, rint, fext, store):
+        for name, pr in problem.probes.items():
+            x, R = pr.state(g)
+            x0, Rref = pr.state(mesh.g0)
+            unwrapped[name] = unwrap_rotation(R @ Rref.T, unwrapped[name])
+        if not store:
+            return
+        reac = (rint - fext) * fixedmask
+        RF, RM = _lab_totals(g, reac)
+        AF, AM = _lab_totals(g, fext)
+        probes = {}
+        for name, pr in problem.probes.items():
+            x, R = pr.state(g)
+            x0, Rref = pr.state(mesh.g0)
+            probes[name] = dict(u=x - x0, R=R @ Rref.T, w=unwrapped[name].copy())
+        result.steps.append(StepResult(lam, g.copy(), its, list(hist), RF, RM, AF, AM, probes))
+
+    # initial state
+    ev = problem.element.evaluate(g, tangent=False)
+    f0, _, _ = problem.external(g, lam_start, tangent=False)
+    record(lam_start, g, 0, [], ev["r"], f0, True)
+
+    targets = lam_start + (lam_end - lam_start) * np.arange(1, steps + 1) / steps
+    lam = lam_start
+    dlam_nominal = (lam_end - lam_start) / steps
+    dlam = dlam_nominal
+    first_solve = True
+    for target in targets:
+        while abs(target - lam) > 1e-14 * max(1.0, abs(target)):
+            lam_try = lam + dlam if abs(dlam) < abs(target - lam) else target
+            g_try = problem.apply_prescribed(g.copy(), lam_try)
+            hist = []
+            ok = False
+            reason = ""
+            try:
+                for it in range(max_iter + 1):
+                    ta = time.perf_counter()
+                    ev = problem.element.evaluate(g_try, tangent=True)
+                    fext, Kn_ext, Ke_ext = problem.external(g_try, lam_try, tangent=True)
+                    r = ev["r"] - fext
+                    rf = asm.vector(r)
+                    if not np.all(np.isfinite(rf)):
+                        raise FloatingPointError("non-finite residual")
+                    scale = max(_scaled_norm(fext, ell), _scaled_norm(ev["r"], ell), 1e-300)
+                    rn = _scaled_norm(asm.scatter(rf), ell) / scale
+                    # round-off floor of r = Dbar (z - z0): the cancelling terms are ~ Dbar z
+                    floor = 1e3 * np.finfo(float).eps * ev["force_scale"] / scale
+                    hist.append(rn)
+                    if it > 0 and rn <= max(rtol, floor) and dn <= dtol:
+                        ok = True
+                        t_asm += time.perf_counter() - ta
+                        break
+                    if it == max_iter:
+                        reason = f"no convergence in {max_iter} iterations (residual {rn:.2e})"
+                        t_asm += time.perf_counter() - ta
+                        break
+                    if it > 3 and rn > 1e8 * max(hist[0], 1e-300):
+                        reason = f"diverging (residual {rn:.2e})"
+                        t_asm += time.perf_counter() - ta
+                        break
+                    # load blocks are already -d f_ext / d eta
+                    Ke = ev["Ke"] if Ke_ext is None else ev["Ke"] + Ke_ext
+                    Kn = ev["Kn"] + Kn_ext
+                    K = asm.matrix(Ke, ev["KE"], Kn)
+                    t_asm += time.perf_counter() - ta
+                    ts = time.perf_counter()
+                    try:
+                        x = checked_solve(solver, K, -rf)
+                    except SingularSystemError as exc:
+                        if first_solve:
+                            raise SingularSystemError(
+                                f"{exc}: the tangent of the unloaded shell is singular -- a rigid-body "
+                                "motion is not restrained (missing or insufficient supports)") from None
+                        raise
+                    t_sol += time.perf_counter() - ts
+                    first_solve = False
+                    eta = asm.scatter(x)
+                    dn = _scaled_norm(eta, ell, moment=False) / ell
+                    g_try = g_try @ se3.exp(eta)
+            except SingularSystemError as exc:
+                if first_solve:
+                    raise
+                reason = str(exc)
+            except (ElementTooDistortedError, FloatingPointError) as exc:
+                reason = str(exc)
+            result.log.append(dict(lam=lam_try, converged=ok, iterations=len(hist) - 1,
+                                   residual_history=hist, reason=reason))
+            if verbose:
+                print(f"  lam {lam_try:.6g}: {'ok' if ok else 'FAIL'} in {len(hist) - 1} it, "
+                      f"residual {hist[-1] if hist else float('nan'):.2e} {reason}")
+            if ok:
+                lam = lam_try
+                g = g_try
+                store = abs(lam - target) <= 1e-14 * max(1.0, abs(target)) or record_substeps
+                record(lam, g, len(hist) - 1, hist, ev["r"], fext, store)
+                if len(hist) - 1 <= 6 and abs(dlam) < abs(dlam_nominal):
+                    dlam = min(abs(dlam) * 2, abs(dlam_nominal)) * np.sign(dlam_nominal)
+            else:
+                dlam = dlam / 2
+                if abs(dlam) < abs(dlam_nominal) / 2 ** max_cutbacks:
+                    result.timings.update(assembly=t_asm, solve=t_sol,
+                                          other=time.perf_counter() - t_start - t_asm - t_sol)
+                    raise ConvergenceError(
+                        f"Newton failed at load factor {lam_try:.6g} after {max_cutbacks} cut-backs "
+                        f"({reason}); the last converged load factor is {lam:.6g} and its state is "
+                        "kept in .result", result)
+    result.timings.update(assembly=t_asm, solve=t_sol,
+                          other=time.perf_counter() - t_start - t_asm - t_sol)
+    return result
+

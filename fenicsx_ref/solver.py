@@ -1,0 +1,300 @@
+"""Load-stepped Newton solution of a ``core_se3.cases`` case with the fenicsx_ref shell."""
+from __future__ import annotations
+
+import time
+from math import pi
+
+import numpy as np
+
+from core_se3.cases import get_case
+
+from .reference import (apply_variant, case_length, case_params, reference_error,
+                        reference_load_factors)
+
+__all__ = ["run_case"]
+
+THETA_LIMIT = pi  # the 2-parameter director map is singular at |theta| = pi
+
+
+class _Timer:
+    def __init__(self):
+        self.t = dict(setup=0.0, jit=0.0, assembly=0.0, solve=0.0, other=0.0)
+
+
+class _Problem:
+    """Residual/Jacobian callbacks for dolfinx.nls.petsc.NewtonSolver, with point loads added
+    to the assembled residual and timings/residual norms recorded."""
+
+    def __init__(self, L, a, bcs, model, timer):
+        self.L, self.a, self.bcs, self.model, self.timer = L, a, bcs, model, timer
+        self.point_dofs = []
+        V = model.V
+        for point, vec in model.point_loads:
+            for i in range(3):
+                Vi = V.sub(0).sub(i)
+                Vc, _ = Vi.collapse()
+                dofs = dolfinx.fem.locate_dofs_geometrical(
+                    [Vi, Vc], lambda X, p=point: np.isclose(X[0], p[0]) & np.isclose(X[1], p[1]))[0]
+                if len(dofs) != 1:
+                    raise ValueError(f"point load at {point}: no unique node there (found {len(dofs)})")
+                self.point_dofs.append((int(dofs[0]), float(vec[i])))
+        self.residuals = []
+
+    def form(self, x):
+        x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+
+    def F(self, x, b):
+        t0 = time.perf_counter()
+        with b.localForm() as bl:
+            bl.set(0.0)
+        dolfinx.fem.petsc.assemble_vector(b, self.L)
+        if self.point_dofs:
+            lam = float(self.model.lam.value)
+            with b.localForm() as bl:
+                for dof, val in self.point_dofs:
+                    bl.array[dof] -= lam * val
+        dolfinx.fem.petsc.apply_lifting(b, [self.a], bcs=[self.bcs], x0=[x], scale=-1.0)
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        dolfinx.fem.petsc.set_bc(b, self.bcs, x, -1.0)
+        self.residuals.append(b.norm())
+        self.timer.t["assembly"] += time.perf_counter() - t0
+
+    def J(self, x, A):
+        t0 = time.perf_counter()
+        A.zeroEntries()
+        dolfinx.fem.petsc.assemble_matrix(A, self.a, self.bcs)
+        A.assemble()
+        self.timer.t["assembly"] += time.perf_counter() - t0
+
+
+def _import_dolfinx():
+    global dolfinx, PETSc, MPI
+    import dolfinx  # noqa: F401  (fails loudly when DOLFINx is missing)
+    import dolfinx.fem.petsc
+    import dolfinx.geometry
+    import dolfinx.nls.petsc
+    from mpi4py import MPI
+    from petsc4py import PETSc
+
+
+def _tip_evaluator(model):
+    """Returns f(w) -> (u (3,), theta (3,)) at the probe 'tip' = midpoint of the free edge x1."""
+    mesh = model.mesh
+    pt = np.array([[model.length, 0.0, 0.0]])
+    tree = dolfinx.geometry.BoundingBoxTree(mesh, mesh.topology.dim)
+    cand = dolfinx.geometry.compute_collisions(tree, pt)
+    cells = dolfinx.geometry.compute_colliding_cells(mesh, cand, pt)
+    cell = int(cells.links(0)[0])
+    s = model.length
+    if model.geometry == "strip":
+        t1 = np.array([1.0, 0.0, 0.0])
+    else:
+        R = float(model.R.value)
+        t1 = np.array([np.cos(s / R), 0.0, np.sin(s / R)])
+    t2 = np.array([0.0, 1.0, 0.0])
+
+    subs = []
+    for i in range(2):
+        Vi, dofmap = model.V.sub(i).collapse()
+        subs.append((dolfinx.fem.Function(Vi), np.asarray(dofmap)))
+    cells_arr = np.array([cell], dtype=np.int32)
+
+    def ev(w):
+        vals = []
+        for f, dofmap in subs:
+            f.x.array[:] = w.x.array[dofmap]
+            vals.append(np.asarray(f.eval(pt, cells_arr)).reshape(-1))
+        return vals[0][:3].copy(), vals[1][0] * t1 + vals[1][1] * t2
+    return ev
+
+
+def _signed_angle(theta, prev):
+    """Rotation angle about -y (the planar references' axis), continued across steps."""
+    mag = float(np.linalg.norm(theta))
+    sgn = -1.0 if theta[1] > 0 else 1.0
+    a = sgn * mag
+    if prev is not None:  # unwrap: choose the 2 pi multiple closest to the previous angle
+        a += 2 * pi * round((prev - a) / (2 * pi))
+    return a
+
+
+def _newton(model, problem, timer, max_it=25, rtol=1e-9, atol=1e-10):
+    solver = dolfinx.nls.petsc.NewtonSolver(MPI.COMM_WORLD, problem)
+    solver.convergence_criterion = "residual"
+    solver.rtol, solver.atol, solver.max_it = rtol, atol, max_it
+    solver.error_on_nonconvergence = False
+    solver.report = False
+    ksp = solver.krylov_solver
+    ksp.setType("preonly")
+    pc = ksp.getPC()
+    pc.setType("lu")
+    pc.setFactorSolverType("mumps")
+    return solver
+
+
+def run_case(name, mesh=None, overrides=None, steps=None, integration="psri", shear_factor=1.0,
+             cell="quadrilateral", load_factors=None, theta_limit=THETA_LIMIT, max_cuts=10,
+             include_reference_loads=True, rtol=1e-9, atol=None, keep_residuals=False):
+    """Solve case ``name`` and return a result dict (schema "core-se3-result", version 1).
+
+    mesh: (nx, ny) elements (default: the case's); overrides: case parameters to change;
+    steps: number of uniform load steps (default: the case's); the reference loads inside the
+    load range are added to the steps so that the error is measured at each of them.
+    load_factors: explicit list of load factors (replaces the uniform steps).
+    theta_limit: references whose |theta| reaches it are dropped and the path ends before them
+    (the 2-parameter director map is singular at |theta| = pi).
+    """
+    _import_dolfinx()
+    from .model import ShellModel
+
+    timer = _Timer()
+    t_start = time.perf_counter()
+    case = get_case(name)
+    params = case_params(case, overrides or {})
+    loads, ref = apply_variant(case, params)
+    nx, ny = mesh if mesh is not None else case.mesh
+    length = case_length(case, params)
+
+    # ----- load factors -------------------------------------------------------------------------
+    lam0, lam1 = case.lam_range
+    ref_lams, ref_info = ([], None)
+    if ref is not None:
+        ref_lams, lam_cap, ref_info = reference_load_factors(case, params, ref, theta_limit)
+        lam1 = min(lam1, lam_cap)
+    if load_factors is None:
+        n = int(steps if steps is not None else case.steps)
+        base = list(np.linspace(lam0, case.lam_range[1], n + 1)[1:])
+        lams = [l for l in base if l <= lam1 * (1 + 1e-12)]
+        if include_reference_loads:
+            lams = sorted(set(np.round(lams + ref_lams, 14)))
+        else:
+            lams = sorted(lams)
+    else:
+        lams = sorted(float(l) for l in load_factors)
+    lams = [float(l) for l in lams if l > lam0]
+
+    # ----- model ---------------------------------------------------------------------------------
+    t0 = time.perf_counter()
+    model = ShellModel(case.geometry, length, params["width"], nx, ny, cell=cell,
+                       integration=integration)
+    model.set_params(params["E"], params["nu"], params["h"], shear_factor,
+                     R=params.get("R") if case.geometry == "arch" else None)
+    for ld in loads:
+        mag = ld["magnitude"]
+        if ld["kind"] == "edge_force":
+            model.add_edge_force(ld["edge"], ld["direction"], mag, ld["follower"])
+        elif ld["kind"] == "edge_moment":
+            model.add_edge_moment(ld["edge"], ld["direction"], mag, ld["follower"])
+        elif ld["kind"] == "pressure":
+            model.add_pressure(ld["direction"], mag, ld["follower"])
+        elif ld["kind"] == "point_force":
+            model.add_point_force(ld["point"], np.asarray(ld["direction"], float) * mag)
+        else:
+            raise NotImplementedError(f"fenicsx_ref: load kind {ld['kind']!r} is not implemented")
+    for kind, edge in case.supports:
+        if kind != "clamp":
+            raise NotImplementedError(f"support {kind!r}")
+    bcs = [bc for kind, edge in case.supports for bc in model.clamp_bcs(edge)]
+    Fres, Jform = model.residual_and_jacobian()
+    timer.t["setup"] += time.perf_counter() - t0
+
+    from .model import jit_params
+    t0 = time.perf_counter()
+    L = dolfinx.fem.form(Fres, jit_params=jit_params())
+    a = dolfinx.fem.form(Jform, jit_params=jit_params())
+    timer.t["jit"] += time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    problem = _Problem(L, a, bcs, model, timer)
+    if atol is None:
+        atol = 1e-11 * max(1.0, max(abs(ld["magnitude"]) for ld in loads))
+    solver = _newton(model, problem, timer, rtol=rtol, atol=atol)
+    tip = _tip_evaluator(model)
+    timer.t["setup"] += time.perf_counter() - t0
+
+    # ----- load stepping with cut-back --------------------------------------------------------------
+    w = model.w
+    steps_out, prev_angle, lam_done, status = [], 0.0, lam0, "ok"
+    dlam = None
+    failed = []
+    for lam_target in lams:
+        iters, cuts, res_hist = 0, 0, []
+        while lam_done < lam_target - 1e-14:
+            step = lam_target - lam_done if dlam is None else min(dlam, lam_target - lam_done)
+            backup = w.x.array.copy()
+            model.lam.value = lam_done + step
+            problem.residuals = []
+            t0 = time.perf_counter()
+            a0 = timer.t["assembly"]
+            try:
+                n_it, conv = solver.solve(w)
+            except RuntimeError:
+                n_it, conv = solver.max_it, False
+            timer.t["solve"] += (time.perf_counter() - t0) - (timer.t["assembly"] - a0)
+            ok = conv and np.all(np.isfinite(w.x.array))
+            if ok:
+                _, th = tip(w)
+                ok = np.linalg.norm(th) < theta_limit
+            if ok:
+                lam_done += step
+                iters += n_it
+                res_hist.append(list(problem.residuals))
+                dlam = None if dlam is None else min(2 * dlam, 1.0)
+            else:
+                failed.append((lam_done + step, list(problem.residuals)))
+                w.x.array[:] = backup
+                w.x.scatter_forward()
+                cuts += 1
+                if cuts > max_cuts:
+                    status = f"failed at load factor {lam_done + step:.6g} after {max_cuts} cut-backs"
+                    break
+                dlam = step / 2
+        if status != "ok":
+            break
+        u, th = tip(w)
+        ang = _signed_angle(th, prev_angle)
+        prev_angle = ang
+        Rm = _rot(th)
+        final_res = res_hist[-1][-1] if res_hist and res_hist[-1] else 0.0
+        st = {"load_factor": lam_target,
+              "load": {"name": case.load_name, "value": float(case.load_value(params, lam_target)),
+                       "unit": case.load_unit},
+              "probes": {"tip": {"u": [float(c) for c in u], "rotation_angle": float(ang),
+                                 "rotation": Rm.tolist()}},
+              "iterations": int(iters), "residual": float(final_res), "cutbacks": int(cuts)}
+        if keep_residuals:
+            st["residual_history"] = res_hist
+        steps_out.append(st)
+        dlam = None if cuts == 0 else dlam
+
+    t_total = time.perf_counter() - t_start
+    tt = timer.t
+    tt["other"] = max(0.0, t_total - tt["setup"] - tt["jit"] - tt["assembly"] - tt["solve"])
+
+    reference = None
+    if ref is not None:
+        reference = reference_error(case, params, ref, steps_out)
+    n_dofs = model.V.dofmap.index_map.size_global * model.V.dofmap.index_map_bs
+    result = {
+        "schema": "core-se3-result", "version": 1, "case": name, "model": "fenicsx_ref",
+        "variant": integration,
+        "params": {k: {"value": v, "unit": case.units.get(k, "")} for k, v in params.items()},
+        "mesh": {"nx": int(nx), "ny": int(ny), "n_nodes": int(model.mesh.geometry.x.shape[0]),
+                 "n_dofs": int(n_dofs), "cell": cell, "degree": 2},
+        "steps": steps_out,
+        "timings": {k: float(v) for k, v in tt.items()},
+        "reference": reference,
+        "status": status,
+        "options": {"shear_factor": shear_factor, "theta_limit": theta_limit,
+                    "load_range": [lam0, lam1]},
+    }
+    if keep_residuals:
+        result["failed_attempts"] = [{"load_factor": l, "residuals": r} for l, r in failed]
+    if ref_info:
+        result["options"]["reference_truncated_at"] = ref_info
+    return result
+
+
+def _rot(theta):
+    from .model import rotation_matrix_np
+    return rotation_matrix_np(theta)

@@ -1,0 +1,83 @@
+"""core_se3.io: VTU/PVD writing and PNG plots on a 2x1 quad mesh."""
+import xml.etree.ElementTree as ET
+
+import meshio
+import numpy as np
+import pytest
+
+from core_se3 import io
+
+
+def _rot_x(a):
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
+
+
+@pytest.fixture
+def mesh():
+    # 2x1 quads on [0,2]x[0,1]: nodes 0..5 row-major (3 per row)
+    X = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [0, 1, 0], [1, 1, 0], [2, 1, 0]], float)
+    quads = np.array([[0, 1, 4, 3], [1, 2, 5, 4]])
+    n = len(X)
+    g0 = np.tile(np.eye(4), (n, 1, 1))
+    g0[:, :3, 3] = X
+    a = 0.3
+    R = _rot_x(a)
+    t = np.array([0.1, -0.2, 0.5])
+    g = np.tile(np.eye(4), (n, 1, 1))
+    g[:, :3, :3] = R
+    g[:, :3, 3] = X @ R.T + t
+    return X, quads, g0, g, R, t, a
+
+
+def test_write_vtu_roundtrip(tmp_path, mesh):
+    X, quads, g0, g, R, t, a = mesh
+    p = io.write_vtu(tmp_path / "sub" / "s.vtu", X, quads, g0, g, point_data={"w": X[:, 0] ** 2})
+    m = meshio.read(p)
+    np.testing.assert_allclose(m.points, X)
+    assert len(m.cells) == 1 and m.cells[0].type == "quad"
+    np.testing.assert_array_equal(m.cells[0].data, quads)
+    np.testing.assert_allclose(m.point_data["displacement"], X @ R.T + t - X, atol=1e-14)
+    np.testing.assert_allclose(m.point_data["d3"], np.tile(R[:, 2], (6, 1)), atol=1e-14)
+    np.testing.assert_allclose(m.point_data["d1"], np.tile([1.0, 0, 0], (6, 1)), atol=1e-14)
+    np.testing.assert_allclose(m.point_data["rotation_angle"], a, atol=1e-12)
+    np.testing.assert_allclose(m.point_data["w"], X[:, 0] ** 2)
+
+
+def test_rotation_angle_range():
+    Rs = np.stack([np.eye(3), _rot_x(1e-9), _rot_x(np.pi / 2), _rot_x(np.pi), _rot_x(-2.0)])
+    np.testing.assert_allclose(io.rotation_angle(Rs), [0, 1e-9, np.pi / 2, np.pi, 2.0], atol=1e-12)
+
+
+def test_write_vtu_shape_errors(tmp_path, mesh):
+    X, quads, g0, g, *_ = mesh
+    with pytest.raises(ValueError):
+        io.write_vtu(tmp_path / "x.vtu", X, quads, g0, g[:3])
+    with pytest.raises(ValueError):
+        io.write_vtu(tmp_path / "x.vtu", X, quads + 10, g0, g)
+
+
+def test_series_and_pvd(tmp_path, mesh):
+    X, quads, g0, g, *_ = mesh
+    paths = io.write_series(tmp_path / "series", X, quads, g0, [g0, g], [0.0, 1.0])
+    assert [p.rsplit("/", 1)[-1] for p in paths] == ["step_0000.vtu", "step_0001.vtu", "series.pvd"]
+    root = ET.parse(paths[-1]).getroot()
+    assert root.tag == "VTKFile" and root.get("type") == "Collection"
+    ds = root.findall("./Collection/DataSet")
+    assert [d.get("file") for d in ds] == ["step_0000.vtu", "step_0001.vtu"]
+    assert [float(d.get("timestep")) for d in ds] == [0.0, 1.0]
+    m0 = meshio.read(paths[0])
+    np.testing.assert_allclose(m0.point_data["displacement"], 0.0)
+
+
+def test_plots_nonempty_png(tmp_path, mesh):
+    X, quads, g0, g, *_ = mesh
+    loads = np.linspace(0, 1, 5)
+    p1 = io.plot_load_deflection(
+        tmp_path / "ld.png", loads, {"w": loads**2, "u": -0.5 * loads}, labels={"w": "tip w"},
+        reference={"w": (loads[::2], loads[::2] ** 2 + 0.01), "lit": ([0, 1], [0, 0.9])},
+        xlabel="tip displacement [mm]", ylabel="P [N]", title="test")
+    p2 = io.plot_shell(tmp_path / "shell.png", X, quads, g, title="deformed")
+    for p in (p1, p2):
+        data = open(p, "rb").read()
+        assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 2000
