@@ -141,7 +141,7 @@ _add(Case(
     description="Strip rolled up by an end moment about the width axis, M = k 2 pi EI / L (k to 3).",
     geometry="strip",
     params=dict(E=1.2e7, nu=0.0, h=0.1, L=10.0, width=1.0, k=3.0),
-    units=_DIM, mesh=(10, 1), steps=6,
+    units=_DIM, mesh=(10, 1), steps=12,
     loads=(Load("edge_moment", "x1", (0.0, -1.0, 0.0), _rollup_M),),
     load_name="M", load_unit="force*length", load_value=lambda p, lam: lam * _rollup_M(p),
     reference=_physical("2_pure_bending_rollup_out_of_plane"),

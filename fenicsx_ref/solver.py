@@ -118,9 +118,9 @@ def _signed_angle(theta, prev):
     return a
 
 
-def _newton(model, problem, timer, max_it=25, rtol=1e-9, atol=1e-10):
+def _newton(model, problem, timer, max_it=25, rtol=1e-10, atol=1e-14, criterion="incremental"):
     solver = dolfinx.nls.petsc.NewtonSolver(MPI.COMM_WORLD, problem)
-    solver.convergence_criterion = "residual"
+    solver.convergence_criterion = criterion
     solver.rtol, solver.atol, solver.max_it = rtol, atol, max_it
     solver.error_on_nonconvergence = False
     solver.report = False
@@ -134,7 +134,8 @@ def _newton(model, problem, timer, max_it=25, rtol=1e-9, atol=1e-10):
 
 def run_case(name, mesh=None, overrides=None, steps=None, integration="psri", shear_factor=1.0,
              cell="quadrilateral", load_factors=None, theta_limit=THETA_LIMIT, max_cuts=10,
-             include_reference_loads=True, rtol=1e-9, atol=None, keep_residuals=False):
+             include_reference_loads=True, rtol=1e-10, atol=None, keep_residuals=False,
+             criterion="incremental"):
     """Solve case ``name`` and return a result dict (schema "core-se3-result", version 1).
 
     mesh: (nx, ny) elements (default: the case's); overrides: case parameters to change;
@@ -207,8 +208,8 @@ def run_case(name, mesh=None, overrides=None, steps=None, integration="psri", sh
     t0 = time.perf_counter()
     problem = _Problem(L, a, bcs, model, timer)
     if atol is None:
-        atol = 1e-11 * max(1.0, max(abs(ld["magnitude"]) for ld in loads))
-    solver = _newton(model, problem, timer, rtol=rtol, atol=atol)
+        atol = 1e-14 * length  # Newton-increment norm (displacements and rotations)
+    solver = _newton(model, problem, timer, rtol=rtol, atol=atol, criterion=criterion)
     tip = _tip_evaluator(model)
     timer.t["setup"] += time.perf_counter() - t0
 

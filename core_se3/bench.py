@@ -1,0 +1,171 @@
+"""Catalogue runner: build a Problem from a case definition, solve, measure against its reference.
+
+Error measure (used by every module of the project): at each reference load, the distance
+between the computed and the reference probe displacement, divided by the largest reference
+probe displacement on the path; the case's error is the maximum over the path.  The reference
+curves are dense and smooth, so they are interpolated (cubic spline in the load) at the
+computed load levels.
+"""
+from __future__ import annotations
+
+import time
+from math import pi
+
+import numpy as np
+
+from . import cases as C
+from . import mesh as M
+from .material import Material
+from .problem import Problem
+from .references import elastica_entry
+from .results import SCHEMA, VERSION
+
+__all__ = ["build_problem", "run_case", "case_params", "reference_for", "error_against_reference",
+           "result_document"]
+
+
+def case_params(case, overrides=None):
+    p = dict(case.params)
+    for k, v in (overrides or {}).items():
+        if k not in p:
+            raise KeyError(f"case {case.name!r} has no parameter {k!r}; its keys: {', '.join(p)}")
+        p[k] = float(v)
+    return p
+
+
+def _mesh_for(case, p, nx, ny):
+    if case.geometry == "strip":
+        return M.rectangle(p["L"], p["width"], nx, ny)
+    if case.geometry == "arch":
+        return M.cylinder_arch(p["R"], pi, p["width"], nx, ny)
+    raise ValueError(f"unknown geometry {case.geometry!r}")
+
+
+def build_problem(case, p, mesh=None, element="default", linear_solver="auto"):
+    nx, ny = mesh or case.mesh
+    m = _mesh_for(case, p, nx, ny)
+    prob = Problem(m, Material(p["E"], p["nu"], p["h"]), element=element, linear_solver=linear_solver)
+    for kind, where in case.supports:
+        if kind == "clamp":
+            prob.clamp(where)
+    for load in case.loads:
+        mag = load.magnitude(p)
+        d = np.asarray(load.direction, float)
+        if case.name == "arch-follower" and p.get("direction", 0.0) == 1.0:
+            d = np.array([0.0, 0.0, 1.0])
+        if load.kind == "edge_force":
+            prob.add_edge_force(load.edge, mag * d, follower=load.follower)
+        elif load.kind == "edge_moment":
+            prob.add_edge_moment(load.edge, mag * d, follower=load.follower)
+        elif load.kind == "pressure":
+            prob.add_pressure(mag, direction=d, follower=bool(p.get("follower", 0.0)))
+        elif load.kind == "edge_rotation":
+            nodes = m.node_set(load.edge)
+            point = [m.X[nodes, i].mean() if c is None else c for i, c in enumerate(load.point)]
+            prob.rotate_edge(load.edge, load.axis, mag, point=point, free=load.free)
+        else:
+            raise ValueError(f"unknown load kind {load.kind!r}")
+    prob.add_probe(case.probe if case.probe != "tip" else "tip", "x1")
+    return prob
+
+
+def reference_for(case, p):
+    """(entry name, block, ref) with ref = dict(load, u, v, theta) in case units, or None."""
+    ref = case.reference
+    if ref is None:
+        return None
+    entry = ref.entry
+    if case.name == "arch-follower" and p.get("direction", 0.0) == 1.0:
+        entry = "4_arch_halfcircle_follower_normal_inward_shell_ks1"
+    if case.name == "pressure-strip" and p.get("follower", 0.0) == 1.0:
+        entry = "5_plate_cylindrical_bending_pressure_follower"
+    e = elastica_entry(entry)
+    tip = e[ref.block]
+    Lr = ref.length(p)
+    return entry, ref.block, dict(load=np.asarray(e["load"], float), u=Lr * np.asarray(tip["u"], float),
+                                  v=Lr * np.asarray(tip["v"], float), theta=np.asarray(tip["theta"], float))
+
+
+def _planar(case, u):
+    """Map a computed probe displacement (ux, uy, uz) onto the reference plane (u, v)."""
+    if case.extra.get("plane") == "xy":
+        return np.array([u[0], u[1]])
+    return np.array([u[0], u[2]])
+
+
+def error_against_reference(case, p, loads_ref_axis, disps, ref):
+    """Max over the path of |d - d_ref(load)| / max |d_ref| (see module docstring)."""
+    from scipy.interpolate import CubicSpline
+    L = ref["load"]
+    order = np.argsort(L)
+    L, u, v = L[order], ref["u"][order], ref["v"][order]
+    keep = np.concatenate([[True], np.diff(L) > 0])
+    L, u, v = L[keep], u[keep], v[keep]
+    su, sv = CubicSpline(L, u), CubicSpline(L, v)
+    lo, hi = min(loads_ref_axis), max(loads_ref_axis)
+    on_path = (L >= min(lo, 0.0) - 1e-12) & (L <= hi + 1e-12) & (L * np.sign(hi if hi != 0 else lo) >= -1e-12)
+    scale = np.max(np.hypot(u[on_path], v[on_path]))
+    errs = []
+    for lam_ref, d in zip(loads_ref_axis, disps):
+        if lam_ref < L[0] - 1e-12 or lam_ref > L[-1] + 1e-12:
+            continue
+        dr = np.array([su(lam_ref), sv(lam_ref)])
+        errs.append(np.linalg.norm(d - dr) / scale)
+    errs = np.array(errs)
+    k = int(np.argmax(errs))
+    return float(errs[k]), float(loads_ref_axis[k]) if len(errs) == len(loads_ref_axis) else None, errs
+
+
+def run_case(name, mesh=None, overrides=None, steps=None, element="default", linear_solver="auto",
+             verbose=False, **solve_kw):
+    """Run a catalogue case; returns (document in the result schema, Result, Problem)."""
+    case = C.get_case(name)
+    p = case_params(case, overrides)
+    t0 = time.perf_counter()
+    prob = build_problem(case, p, mesh, element, linear_solver)
+    t_setup = time.perf_counter() - t0
+    res = prob.solve(steps=steps or case.steps, verbose=verbose, **solve_kw)
+    res.timings["setup"] += t_setup
+    doc = result_document(case, p, prob, res)
+    return doc, res, prob
+
+
+def result_document(case, p, prob, res):
+    ref = reference_for(case, p)
+    steps = []
+    loads_ref, disps = [], []
+    axis = np.array([0.0, 0.0, 1.0]) if case.extra.get("plane") == "xy" else np.array([0.0, -1.0, 0.0])
+    for st in res.steps:
+        pr = st.probes["tip"]
+        value = case.load_value(p, st.load_factor)
+        steps.append(dict(
+            load_factor=float(st.load_factor),
+            load=dict(name=case.load_name, value=float(value), unit=case.load_unit),
+            probes={"tip": dict(u=pr["u"].tolist(), rotation_angle=float(np.linalg.norm(pr["w"])),
+                                rotation_about_axis=float(pr["w"] @ axis),
+                                rotation_vector=pr["w"].tolist(), rotation=pr["R"].tolist())},
+            iterations=int(st.iterations),
+            residual=float(st.residual_history[-1]) if st.residual_history else 0.0,
+            residual_history=[float(x) for x in st.residual_history],
+            balance_error=float(st.balance_error),
+        ))
+        if ref is not None:
+            loads_ref.append(case.reference.load_to_ref(p, value if case.load_name != "q L^3/EI" else value))
+            disps.append(_planar(case, pr["u"]))
+    reference = None
+    if ref is not None:
+        entry, block, r = ref
+        err, at, errs = error_against_reference(case, p, loads_ref, disps, r)
+        for s, e in zip(steps, errs if len(errs) == len(steps) else [None] * len(steps)):
+            s["error"] = None if e is None else float(e)
+        reference = dict(entry=entry, block=block, error=err, error_at_load=at, file="elastica.json")
+    m = prob.mesh
+    t = dict(res.timings)
+    t["total"] = sum(t.values())
+    return dict(
+        schema=SCHEMA, version=VERSION, case=case.name, model="core_se3", variant=prob.element_name,
+        params={k: dict(value=v, unit=case.units.get(k, "")) for k, v in p.items()},
+        mesh=dict(nx=m.shape[0], ny=m.shape[1], n_nodes=m.n_nodes, n_elements=m.n_elements,
+                  n_dofs=6 * m.n_nodes),
+        steps=steps, timings=t, reference=reference,
+    )

@@ -1,0 +1,137 @@
+"""Command line: ``core-se3 bench list`` and ``core-se3 bench run NAME [options]``."""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+
+import numpy as np
+
+from .errors import ConvergenceError, CoreSE3Error
+
+
+def _parse_mesh(s):
+    try:
+        nx, ny = s.lower().split("x")
+        return int(nx), int(ny)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"mesh must look like 16x1, got {s!r}") from None
+
+
+def _parse_set(items):
+    out = {}
+    for it in items or []:
+        if "=" not in it:
+            raise SystemExit(f"--set expects KEY=VALUE, got {it!r}")
+        k, v = it.split("=", 1)
+        try:
+            out[k] = float(v)
+        except ValueError:
+            raise SystemExit(f"--set {k}: value {v!r} is not a number") from None
+    return out
+
+
+def _print_doc(doc):
+    print(f"case {doc['case']}  model {doc['model']}  element {doc['variant']}  "
+          f"mesh {doc['mesh']['nx']}x{doc['mesh']['ny']} ({doc['mesh']['n_dofs']} dofs)")
+    print("params: " + ", ".join(f"{k}={v['value']:g} [{v['unit']}]" for k, v in doc["params"].items()))
+    ref = doc["reference"]
+    print(f"{'load':>12} {'ux':>12} {'uy':>12} {'uz':>12} {'angle':>9} {'it':>3} {'residual':>9}"
+          + ("  error" if ref else ""))
+    for s in doc["steps"]:
+        u = s["probes"]["tip"]["u"]
+        line = (f"{s['load']['value']:>12.5g} {u[0]:>12.5g} {u[1]:>12.5g} {u[2]:>12.5g} "
+                f"{s['probes']['tip']['rotation_angle']:>9.4f} {s['iterations']:>3d} {s['residual']:>9.1e}")
+        if ref and s.get("error") is not None:
+            line += f"  {100 * s['error']:.3f}%"
+        print(line)
+    if ref:
+        print(f"reference {ref['file']}:{ref['entry']} [{ref['block']}]: error {100 * ref['error']:.3f}% "
+              "(max over the path of |u - u_ref| / max |u_ref|)")
+    t = doc["timings"]
+    print("timings [s]: " + ", ".join(f"{k} {t[k]:.3f}" for k in ("setup", "assembly", "solve", "other", "total")))
+    print(f"reactions balance the applied loads to {max(s['balance_error'] for s in doc['steps']):.1e}")
+
+
+def bench_run(args):
+    from .bench import run_case
+    from .cases import get_case
+    from .results import write_json
+    case = get_case(args.name)
+    try:
+        doc, res, prob = run_case(args.name, mesh=args.mesh, overrides=_parse_set(args.set),
+                                  steps=args.steps, element=args.element, linear_solver=args.solver,
+                                  verbose=args.verbose)
+    except ConvergenceError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except (CoreSE3Error, KeyError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    _print_doc(doc)
+    if args.json:
+        os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
+        write_json(args.json, doc)
+        print(f"wrote {args.json}")
+    if args.vtu:
+        from .io import write_series
+        paths = write_series(args.vtu, prob.mesh.X, prob.mesh.quads, prob.mesh.g0,
+                             [s.g for s in res.steps], [s.load_factor for s in res.steps])
+        print(f"wrote {len(paths) - 1} VTU files and {paths[-1]}")
+    if args.plot:
+        from .bench import reference_for, case_params
+        from .io import plot_load_deflection
+        loads = np.array([s["load"]["value"] for s in doc["steps"]])
+        u = np.array([s["probes"]["tip"]["u"] for s in doc["steps"]])
+        disp = {"ux": u[:, 0], "uy": u[:, 1], "uz": u[:, 2]}
+        reference = None
+        p = case_params(case, _parse_set(args.set))
+        rr = reference_for(case, p)
+        if rr is not None:
+            entry, block, r = rr
+            # reference load axis -> case load axis
+            lmax = loads.max() if loads.max() > 0 else loads.min()
+            L = r["load"]
+            scale = case.reference.load_to_ref(p, 1.0)
+            Lc = L / scale
+            sel = (Lc >= min(0, lmax) - 1e-12) & (Lc <= max(0, lmax) + 1e-12)
+            vkey = "uy" if case.extra.get("plane") == "xy" else "uz"
+            reference = {"ux": (Lc[sel], r["u"][sel]), vkey: (Lc[sel], r["v"][sel])}
+        plot_load_deflection(args.plot, loads, disp, reference=reference,
+                             xlabel="tip displacement [length]",
+                             ylabel=f"{doc['steps'][-1]['load']['name']} [{doc['steps'][-1]['load']['unit']}]",
+                             title=f"{args.name} ({doc['variant']}, {doc['mesh']['nx']}x{doc['mesh']['ny']})")
+        print(f"wrote {args.plot}")
+    return 0
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(prog="core-se3", description="Geometrically exact Cosserat shells on SE(3)")
+    sub = ap.add_subparsers(dest="cmd", required=True)
+    bench = sub.add_parser("bench", help="benchmark catalogue")
+    bsub = bench.add_subparsers(dest="bcmd", required=True)
+    bsub.add_parser("list", help="list the catalogue cases")
+    run = bsub.add_parser("run", help="run a catalogue case")
+    run.add_argument("name")
+    run.add_argument("--mesh", type=_parse_mesh, default=None, help="NXxNY, e.g. 16x1")
+    run.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a case parameter")
+    run.add_argument("--steps", type=int, default=None)
+    run.add_argument("--element", choices=["default", "seed"], default="default")
+    run.add_argument("--solver", choices=["auto", "mumps", "superlu"], default="auto")
+    run.add_argument("--json", default=None)
+    run.add_argument("--vtu", default=None, help="directory for VTU files and series.pvd")
+    run.add_argument("--plot", default=None, help="PNG load-deflection plot")
+    run.add_argument("-v", "--verbose", action="store_true")
+    args = ap.parse_args(argv)
+    if args.cmd == "bench" and args.bcmd == "list":
+        from .cases import CASES
+        for c in CASES.values():
+            print(f"{c.name:<24} {c.description}")
+        return 0
+    if args.cmd == "bench" and args.bcmd == "run":
+        return bench_run(args)
+    return 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
