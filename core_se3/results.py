@@ -80,12 +80,13 @@ class StepResult:
     applied_force: np.ndarray          # total applied lab force
     applied_moment: np.ndarray         # total applied lab moment about the origin
     probes: dict = field(default_factory=dict)   # name -> dict(u, R, w)
+    scale: tuple = (0.0, 0.0)         # sums of nodal reaction/applied force and moment magnitudes
 
     @property
     def balance_error(self):
-        """|reactions + applied| relative to the larger of the two (force and moment)."""
-        sF = max(np.linalg.norm(self.reaction_force), np.linalg.norm(self.applied_force), 1e-300)
-        sM = max(np.linalg.norm(self.reaction_moment), np.linalg.norm(self.applied_moment), 1e-300)
+        """|reactions + applied| relative to the sum of the nodal force (moment) magnitudes."""
+        sF = max(self.scale[0], np.linalg.norm(self.applied_force), 1e-300)
+        sM = max(self.scale[1], np.linalg.norm(self.applied_moment), 1e-300)
         return max(np.linalg.norm(self.reaction_force + self.applied_force) / sF,
                    np.linalg.norm(self.reaction_moment + self.applied_moment) / sM)
 

@@ -34,17 +34,20 @@ def _scaled_norm(r, ell, moment=True):
     return np.sqrt(np.sum(r[:, :3] ** 2) + np.sum((r[:, 3:] * ell) ** 2))
 
 
-def _lab_totals(g, f):
-    """Total lab force and moment about the origin of generalised nodal forces f (n,6)."""
+def _lab_totals(g, f, magnitudes=False):
+    """Total lab force and moment about the origin of generalised nodal forces f (n,6)
+    (and, if asked, the sums of their nodal magnitudes, the scale of the balance check)."""
     R = g[:, :3, :3]
     F = np.einsum("nij,nj->ni", R, f[:, :3])
     M = np.einsum("nij,nj->ni", R, f[:, 3:]) + np.cross(g[:, :3, 3], F)
+    if magnitudes:
+        return F.sum(0), M.sum(0), np.linalg.norm(F, axis=1).sum(), np.linalg.norm(M, axis=1).sum()
     return F.sum(0), M.sum(0)
 
 
 def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, rtol=1e-10, dtol=1e-10,
                  max_iter=30, max_cutbacks=12, g_init=None, verbose=False, linear_solver=None,
-                 record_substeps=False):
+                 record_substeps=False, max_rotation_step=np.inf):
     """Solve the problem from lam_start to lam_end in ``steps`` equal load increments."""
     t0 = time.perf_counter()
     if not np.isfinite(lam_end) or steps < 1:
@@ -72,14 +75,15 @@ def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, rtol=1e-10, dtol
         if not store:
             return
         reac = (rint - fext) * fixedmask
-        RF, RM = _lab_totals(g, reac)
-        AF, AM = _lab_totals(g, fext)
+        RF, RM, sF, sM = _lab_totals(g, reac, magnitudes=True)
+        AF, AM, aF, aM = _lab_totals(g, fext, magnitudes=True)
         probes = {}
         for name, pr in problem.probes.items():
             x, R = pr.state(g)
             x0, Rref = pr.state(mesh.g0)
             probes[name] = dict(u=x - x0, R=R @ Rref.T, w=unwrapped[name].copy())
-        result.steps.append(StepResult(lam, g.copy(), its, list(hist), RF, RM, AF, AM, probes))
+        result.steps.append(StepResult(lam, g.copy(), its, list(hist), RF, RM, AF, AM, probes,
+                                       scale=(max(sF, aF), max(sM, aM))))
 
     # initial state
     ev = problem.element.evaluate(g, tangent=False)
@@ -141,6 +145,11 @@ def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, rtol=1e-10, dtol
                     t_sol += time.perf_counter() - ts
                     first_solve = False
                     eta = asm.scatter(x)
+                    # trust region on rotations: far from the solution a thin shell's Newton
+                    # step can turn elements by ~pi (membrane overshoot); damp such steps
+                    wmax = np.abs(eta[:, 3:]).max()
+                    if wmax > max_rotation_step:
+                        eta *= max_rotation_step / wmax
                     dn = _scaled_norm(eta, ell, moment=False) / ell
                     g_try = g_try @ se3.exp(eta)
             except SingularSystemError as exc:

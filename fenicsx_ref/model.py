@@ -27,8 +27,7 @@ import dolfinx.mesh
 __all__ = ["ShellModel", "jit_params", "JIT_CACHE_DIR"]
 
 #: One JIT cache for every run and every test (override with FENICSX_REF_JIT_CACHE).
-JIT_CACHE_DIR = os.environ.get(
-    "FENICSX_REF_JIT_CACHE", os.path.join(os.path.expanduser("~"), ".cache", "fenicsx_ref", "jit"))
+from . import JIT_CACHE_DIR  # noqa: E402
 
 # Below this value of theta.theta the Rodrigues coefficients are evaluated by their Taylor series
 # (truncation error < 1e-16 there); above it the closed forms with sqrt(theta.theta).
@@ -96,7 +95,7 @@ class ShellModel:
         cname = mesh.ufl_cell().cellname()
         Ue = ufl.VectorElement("Lagrange", cname, degree, dim=3)
         Be = ufl.VectorElement("Lagrange", cname, degree, dim=2)
-        self.V = dolfinx.fem.FunctionSpace(mesh, ufl.MixedElement([Ue, Be]))
+        self.V = dolfinx.fem.FunctionSpace(mesh, ufl.MixedElement([Ue, Be]), jit_params=jit_params())
         self.w = dolfinx.fem.Function(self.V)
         self.v = ufl.TestFunction(self.V)
         self.dw = ufl.TrialFunction(self.V)

@@ -135,13 +135,14 @@ def _newton(model, problem, timer, max_it=25, rtol=1e-10, atol=1e-14, criterion=
 def run_case(name, mesh=None, overrides=None, steps=None, integration="psri", shear_factor=1.0,
              cell="quadrilateral", load_factors=None, theta_limit=THETA_LIMIT, max_cuts=10,
              include_reference_loads=True, rtol=1e-10, atol=None, keep_residuals=False,
-             criterion="incremental"):
+             criterion="incremental", return_state=False, point_loads=()):
     """Solve case ``name`` and return a result dict (schema "core-se3-result", version 1).
 
     mesh: (nx, ny) elements (default: the case's); overrides: case parameters to change;
     steps: number of uniform load steps (default: the case's); the reference loads inside the
     load range are added to the steps so that the error is measured at each of them.
     load_factors: explicit list of load factors (replaces the uniform steps).
+    point_loads: extra dead point forces [((s, y), (fx, fy, fz)), ...] at lam = 1, at mesh nodes.
     theta_limit: references whose |theta| reaches it are dropped and the path ends before them
     (the 2-parameter director map is singular at |theta| = pi).
     """
@@ -192,6 +193,8 @@ def run_case(name, mesh=None, overrides=None, steps=None, integration="psri", sh
             model.add_point_force(ld["point"], np.asarray(ld["direction"], float) * mag)
         else:
             raise NotImplementedError(f"fenicsx_ref: load kind {ld['kind']!r} is not implemented")
+    for point, vec in point_loads:  # extra dead point forces (lab vector at lam = 1)
+        model.add_point_force(point, vec)
     for kind, edge in case.supports:
         if kind != "clamp":
             raise NotImplementedError(f"support {kind!r}")
@@ -280,7 +283,7 @@ def run_case(name, mesh=None, overrides=None, steps=None, integration="psri", sh
         "schema": "core-se3-result", "version": 1, "case": name, "model": "fenicsx_ref",
         "variant": integration,
         "params": {k: {"value": v, "unit": case.units.get(k, "")} for k, v in params.items()},
-        "mesh": {"nx": int(nx), "ny": int(ny), "n_nodes": int(model.mesh.geometry.x.shape[0]),
+        "mesh": {"nx": int(nx), "ny": int(ny), "n_nodes": int(n_dofs // 5),
                  "n_dofs": int(n_dofs), "cell": cell, "degree": 2},
         "steps": steps_out,
         "timings": {k: float(v) for k, v in tt.items()},
@@ -293,6 +296,9 @@ def run_case(name, mesh=None, overrides=None, steps=None, integration="psri", sh
         result["failed_attempts"] = [{"load_factor": l, "residuals": r} for l, r in failed]
     if ref_info:
         result["options"]["reference_truncated_at"] = ref_info
+    if return_state:
+        return result, {"model": model, "L": L, "a": a, "bcs": bcs, "problem": problem,
+                        "solver": solver}
     return result
 
 
