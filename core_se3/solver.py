@@ -83,7 +83,8 @@ def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, rtol=1e-10, dtol
             x0, Rref = pr.state(mesh.g0)
             probes[name] = dict(u=x - x0, R=R @ Rref.T, w=unwrapped[name].copy())
         result.steps.append(StepResult(lam, g.copy(), its, list(hist), RF, RM, AF, AM, probes,
-                                       scale=(max(sF, aF), max(sM, aM))))
+                                       scale=(max(sF, aF, max(sM, aM) / ell),
+                                              max(sM, aM, max(sF, aF) * ell))))
 
     # initial state
     ev = problem.element.evaluate(g, tangent=False)
