@@ -72,7 +72,7 @@ class Reference:
 class Case:
     name: str
     description: str
-    geometry: str                      # 'strip' | 'arch' | 'rollup-circle'
+    geometry: str                      # 'strip' | 'arch' | 'semicylinder'
     params: dict
     units: dict
     mesh: tuple                        # default (nx, ny)
@@ -232,6 +232,31 @@ _add(Case(
     load_name="q L^3/EI", load_unit="1", load_value=lambda p, lam: lam * p["load_max"],
     reference=_master("5_plate_cylindrical_bending_pressure_dead", lambda p, q: q),
     notes="follower=1 switches to the follower pressure and 5_plate_cylindrical_bending_pressure_follower.",
+))
+
+
+_add(Case(
+    name="sze-semicylinder",
+    description="Sze et al. 2004 s3.7: clamped semi-cylinder (isotropic) pinched by a point load at "
+                "the crown of its free curved edge, P to 2000.",
+    geometry="semicylinder",
+    params=dict(E=2.0685e7, nu=0.3, h=0.03, R=1.016, L=3.048, load_max=2000.0),
+    units=_DIM, mesh=(40, 40), steps=40,
+    loads=(Load("point_force", "y1", (0.0, 0.0, -1.0), lambda p: p["load_max"]),),
+    load_name="P", load_unit="force", load_value=lambda p, lam: lam * p["load_max"],
+    supports=(("clamp", "y0"),
+              # longitudinal edges (theta = -+pi/2): lab u_z = 0 and the rotation about the axis
+              # (lab y) fixed; there d1 = -+z and d2 = +y, i.e. body dofs 0 and 4
+              ("fix", "x0", ("uz", "rot_y")), ("fix", "x1", ("uz", "rot_y"))),
+    reference=None,
+    probe="crown",
+    notes="Reference: literature.json sze3.7_clamped_semicylinder_point_load, column "
+          "minus_W_A_x100_isotropic (table = 100 x displacement; -W_A = -u_z at the crown of y1). "
+          "Geometry: phi0 = (R sin t, s, R cos t), t in [-pi/2, pi/2] along x, s in [0, L] along y; "
+          "the load acts at the midpoint of edge y1. Measure: largest distance from each computed "
+          "point to the tabulated curve in the plane (P/P_max, u/u_max).",
+    extra=dict(literature="sze3.7_clamped_semicylinder_point_load", column="minus_W_A_x100_isotropic",
+               displacement_scale=0.01, probe_edge="y1", probe_component=2, probe_sign=-1.0),
 ))
 
 

@@ -48,6 +48,10 @@ def _print_doc(doc):
     if ref:
         print(f"reference {ref['file']}:{ref['entry']} [{ref['block']}]: error {100 * ref['error']:.3f}% "
               "(max over the path of |u - u_ref| / max |u_ref|)")
+    if "torsion" in doc:
+        t = doc["torsion"]
+        print(f"small-twist torsion constant J = {t['J']:.4e} (mesh {t['mesh'][0]}x{t['mesh'][1]}); "
+              f"Mindlin plate ks=1: {t['J_mindlin_ks1']:.4e}, thin plate w h^3/3: {t['J_kirchhoff_plate']:.4e}")
     t = doc["timings"]
     print("timings [s]: " + ", ".join(f"{k} {t[k]:.3f}" for k in ("setup", "assembly", "solve", "other", "total")))
     print(f"reactions balance the applied loads to {max(s['balance_error'] for s in doc['steps']):.1e}")

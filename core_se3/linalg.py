@@ -16,7 +16,7 @@ from .errors import SingularSystemError
 __all__ = ["make_solver", "available_solvers", "checked_solve"]
 
 
-def checked_solve(solver, K, b, rtol=1e-6, refine=2):
+def checked_solve(solver, K, b, rtol=1e-6, refine=2, probe=False):
     """Solve K x = b with symmetric diagonal equilibration and iterative refinement, and
     verify the linear residual: a (near-)singular tangent that the factorisation let through
     is reported, never returned as an answer.
@@ -36,6 +36,14 @@ def checked_solve(solver, K, b, rtol=1e-6, refine=2):
             if np.linalg.norm(rs) <= 1e-14 * np.linalg.norm(bs):
                 break
             y = y + solve(rs)
+        if probe:
+            # a load may not excite an unrestrained mode; a random right-hand side does
+            br = np.random.default_rng(12345).standard_normal(len(bs))
+            yr = solve(br)
+            growth = np.linalg.norm(yr) / np.linalg.norm(br)
+            if not np.isfinite(growth) or growth > 1e15:
+                raise SingularSystemError(f"tangent is singular or nearly so (solution growth "
+                                          f"{growth:.1e} for a random right-hand side)")
     x = S @ y
     # backward error (normwise, of the equilibrated system) and growth of the solution: a
     # backward-stable LU always has a small backward error, so near-singularity shows up as

@@ -15,7 +15,7 @@ import numpy as np
 from . import se3
 from .errors import MeshError
 
-__all__ = ["Mesh", "rectangle", "cylinder_arch", "annulus", "frames_from"]
+__all__ = ["Mesh", "rectangle", "cylinder_arch", "cylinder_panel", "annulus", "frames_from"]
 
 # local edges of a quad in its own orientation: bottom, top (direction xi1), left, right (xi2)
 LOCAL_EDGES = np.array([[0, 1], [3, 2], [0, 3], [1, 2]])
@@ -154,6 +154,27 @@ def cylinder_arch(R, angle, width, nx, ny):
     d1 = np.stack([np.cos(S), 0 * S, np.sin(S)], -1)
     d3 = np.stack([-np.sin(S), 0 * S, np.cos(S)], -1)
     return Mesh(frames_from(X, d1, d3), quads, edges, shape=(nx, ny))
+
+
+def cylinder_panel(R, length, theta0, theta1, nt, nl):
+    """Cylindrical panel phi0 = (R sin t, s, R cos t), t in [theta0, theta1], s in [0, length].
+
+    The axis is the global y axis.  xi1 = t (edges 'x0' at theta0, 'x1' at theta1), xi2 = s
+    (edges 'y0' at s = 0, 'y1' at s = length).  Frames: d1 circumferential, d2 = +y,
+    d3 = d1 x d2 = the outward normal (sin t, 0, cos t).  With theta in [-pi/2, pi/2] this is
+    the semi-cylinder of Sze et al. 2004, s3.7.
+    """
+    if not (R > 0 and length > 0 and theta1 > theta0):
+        raise MeshError("cylinder_panel needs R > 0, length > 0 and theta1 > theta0")
+    ids, quads, edges = _structured(nt, nl)
+    t = np.linspace(theta0, theta1, nt + 1)
+    s = np.linspace(0.0, length, nl + 1)
+    TT, SS = np.meshgrid(t, s)
+    T, S = TT.ravel(), SS.ravel()
+    X = np.stack([R * np.sin(T), S, R * np.cos(T)], -1)
+    d1 = np.stack([np.cos(T), 0 * T, -np.sin(T)], -1)
+    d3 = np.stack([np.sin(T), 0 * T, np.cos(T)], -1)
+    return Mesh(frames_from(X, d1, d3), quads, edges, shape=(nt, nl))
 
 
 def annulus(r_in, r_out, angle, nr, nt):

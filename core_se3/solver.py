@@ -45,6 +45,39 @@ def _lab_totals(g, f, magnitudes=False):
     return F.sum(0), M.sum(0)
 
 
+def check_supports(problem, g):
+    """Raise SingularSystemError if the supports leave a rigid-body motion free.
+
+    A superposed rigid motion h = exp(xi) moves every node by the body-frame increment
+    eta_i = Ad_{g_i^-1} xi; the supports restrain all six rigid motions iff the fixed
+    components of these increments have rank 6 (checked by SVD, unit-scaled).
+    """
+    fixed = problem.constraint_mask()
+    ell = problem.length_scale
+    c = g[:, :3, 3].mean(0)
+    h = np.eye(4)
+    h[:3, 3] = -c                                   # rigid motions about the centroid
+    modes = se3.Ad(se3.inv(g) @ np.linalg.inv(h))   # (n, 6, 6): column k = mode k at node i
+    scale = np.r_[np.ones(3), np.full(3, ell)]      # rotations * ell, comparable to translations
+    B = (modes * scale[None, None, :])[fixed]        # (n_fixed, 6)
+    if B.shape[0] == 0:
+        raise SingularSystemError("no supports: the shell can move as a rigid body; clamp or fix some nodes")
+    U, S, Vt = np.linalg.svd(B, full_matrices=True)
+    S = np.r_[S, np.zeros(6 - len(S))]
+    if S[-1] < 1e-10 * S[0]:
+        v = Vt[-1] * scale
+        tr, rot = v[:3], v[3:]
+        if np.linalg.norm(rot) * ell > 1e-8 * np.linalg.norm(tr):
+            # twist (tr, rot) about the centroid c: screw axis through c + rot x tr / |rot|^2
+            pt = c + np.cross(rot, tr) / (rot @ rot)
+            what = (f"rotation about {np.round(rot / np.linalg.norm(rot), 3).tolist()} "
+                    f"through {np.round(pt, 4).tolist()}")
+        else:
+            what = f"translation along {np.round(tr / np.linalg.norm(tr), 3).tolist()}"
+        raise SingularSystemError("the supports leave a rigid-body motion free (" + what
+                                  + "): the tangent is singular; add supports")
+
+
 def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, rtol=1e-10, dtol=1e-10,
                  max_iter=30, max_cutbacks=12, g_init=None, verbose=False, linear_solver=None,
                  record_substeps=False, max_rotation_step=np.inf):
@@ -54,13 +87,11 @@ def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, rtol=1e-10, dtol
         raise ValueError("need a finite lam_end and steps >= 1")
     mesh = problem.mesh
     fixedmask = problem.constraint_mask()
-    if not fixedmask.any():
-        raise SingularSystemError("no supports: the shell can move as a rigid body, the tangent is "
-                                  "singular; clamp or fix some nodes")
     asm = problem.assembler()
     solver = make_solver(linear_solver or problem.linear_solver)
     ell = problem.length_scale
     g = mesh.g0.copy() if g_init is None else np.array(g_init, float)
+    check_supports(problem, g)
     result = Result(mesh=mesh, element=problem.element_name)
     unwrapped = {name: np.zeros(3) for name in problem.probes}
     result.timings["setup"] = time.perf_counter() - t0
@@ -136,7 +167,7 @@ def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, rtol=1e-10, dtol
                     t_asm += time.perf_counter() - ta
                     ts = time.perf_counter()
                     try:
-                        x = checked_solve(solver, K, -rf)
+                        x = checked_solve(solver, K, -rf, probe=first_solve)
                     except SingularSystemError as exc:
                         if first_solve:
                             raise SingularSystemError(

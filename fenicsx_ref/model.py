@@ -80,17 +80,21 @@ class ShellModel:
     """
 
     def __init__(self, geometry, length, width, nx, ny, cell="quadrilateral", integration="psri",
-                 degree=2):
-        if geometry not in ("strip", "arch"):
-            raise ValueError(f"fenicsx_ref supports geometry 'strip' and 'arch', not {geometry!r}")
+                 degree=2, box=None):
+        if geometry not in ("strip", "arch", "semicylinder"):
+            raise ValueError("fenicsx_ref supports geometry 'strip', 'arch' and 'semicylinder', "
+                             f"not {geometry!r}")
         if integration not in ("full", "psri"):
             raise ValueError(f"integration must be 'full' or 'psri', not {integration!r}")
         self.geometry, self.integration = geometry, integration
         self.length, self.width = float(length), float(width)
+        if box is None:  # strip / arch: s in [0, L], y in [-w/2, w/2]
+            box = ((0.0, -width / 2), (length, width / 2))
+        self.box = tuple(tuple(float(c) for c in corner) for corner in box)
         ct = {"quadrilateral": dolfinx.mesh.CellType.quadrilateral,
               "triangle": dolfinx.mesh.CellType.triangle}[cell]
         self.mesh = dolfinx.mesh.create_rectangle(
-            MPI.COMM_WORLD, [np.array([0.0, -width / 2]), np.array([length, width / 2])], [nx, ny], ct)
+            MPI.COMM_WORLD, [np.array(self.box[0]), np.array(self.box[1])], [nx, ny], ct)
         mesh = self.mesh
         cname = mesh.ufl_cell().cellname()
         Ue = ufl.VectorElement("Lagrange", cname, degree, dim=3)
@@ -114,11 +118,16 @@ class ShellModel:
             self.phi0 = ufl.as_vector([x[0], x[1], 0.0])
             self.t1 = ufl.as_vector([1.0, 0.0, 0.0])
             self.d0 = ufl.as_vector([0.0, 0.0, 1.0])
-        else:  # cylinder bending in the x-z plane, clamp at the origin, centre (0, 0, R)
+        elif geometry == "arch":  # cylinder bending in the x-z plane, clamp at the origin, centre (0, 0, R)
             a = x[0] / self.R
             self.phi0 = ufl.as_vector([self.R * ufl.sin(a), x[1], self.R * (1 - ufl.cos(a))])
             self.t1 = ufl.as_vector([ufl.cos(a), 0.0, ufl.sin(a)])
             self.d0 = ufl.as_vector([-ufl.sin(a), 0.0, ufl.cos(a)])
+        else:  # semicylinder (Sze s3.7): phi0 = (R sin a, y, R cos a), a = s/R, axis = lab y
+            a = x[0] / self.R
+            self.phi0 = ufl.as_vector([self.R * ufl.sin(a), x[1], self.R * ufl.cos(a)])
+            self.t1 = ufl.as_vector([ufl.cos(a), 0.0, -ufl.sin(a)])
+            self.d0 = ufl.as_vector([ufl.sin(a), 0.0, ufl.cos(a)])  # outward normal
         self.t2 = ufl.as_vector([0.0, 1.0, 0.0])
 
         # kinematics
@@ -131,7 +140,7 @@ class ShellModel:
         self.F = F
         sym = lambda A: 0.5 * (A + A.T)
         self.eps = 0.5 * (F.T * F - F0.T * F0)
-        kappa0 = (sym(F0.T * ufl.grad(self.d0)) if geometry == "arch"
+        kappa0 = (sym(F0.T * ufl.grad(self.d0)) if geometry != "strip"
                   else ufl.as_matrix([[0.0, 0.0], [0.0, 0.0]]))  # flat: grad d0 = 0
         self.kappa = sym(F.T * ufl.grad(self.d)) - kappa0
         self.gamma = F.T * self.d - F0.T * self.d0
@@ -159,22 +168,47 @@ class ShellModel:
                        + alpha * (self.psi_m + self.psi_s) * self.dx_full
                        + (1 - alpha) * (self.psi_m + self.psi_s) * self.dx_red)
 
-        # boundaries: x0 (s = 0) and x1 (s = L)
+        # boundaries: x0, x1 (first coordinate at its min / max), y0, y1 (second coordinate)
         fdim = mesh.topology.dim - 1
-        L = self.length
-        self.facets = {
-            "x0": dolfinx.mesh.locate_entities_boundary(mesh, fdim, lambda X: np.isclose(X[0], 0.0)),
-            "x1": dolfinx.mesh.locate_entities_boundary(mesh, fdim, lambda X: np.isclose(X[0], L)),
-        }
-        idx = np.hstack([self.facets["x0"], self.facets["x1"]]).astype(np.int32)
-        mark = np.hstack([np.full(len(self.facets["x0"]), 1, np.int32),
-                          np.full(len(self.facets["x1"]), 2, np.int32)])
-        order = np.argsort(idx)
-        mt = dolfinx.mesh.meshtags(mesh, fdim, idx[order], mark[order])
+        (xa, ya), (xb, yb) = self.box
+        where = {"x0": (0, xa), "x1": (0, xb), "y0": (1, ya), "y1": (1, yb)}
+        self.facets = {e: dolfinx.mesh.locate_entities_boundary(
+                           mesh, fdim, lambda X, i=i, v=v: np.isclose(X[i], v))
+                       for e, (i, v) in where.items()}
+        self.edge_id = {"x0": 1, "x1": 2, "y0": 3, "y1": 4}
+        self.edge_length = {"x0": yb - ya, "x1": yb - ya, "y0": xb - xa, "y1": xb - xa}
+        self.edge_midpoint = {"x0": (xa, 0.5 * (ya + yb)), "x1": (xb, 0.5 * (ya + yb)),
+                              "y0": (0.5 * (xa + xb), ya), "y1": (0.5 * (xa + xb), yb)}
+        # a boundary facet lies on one edge only (corner facets are not shared)
+        idx = np.hstack([self.facets[e] for e in where]).astype(np.int32)
+        mark = np.hstack([np.full(len(self.facets[e]), self.edge_id[e], np.int32) for e in where])
+        idx, first = np.unique(idx, return_index=True)
+        mt = dolfinx.mesh.meshtags(mesh, fdim, idx, mark[first])
         self.ds = ufl.Measure("ds", domain=mesh, subdomain_data=mt, metadata=md(2 * degree))
-        self.edge_id = {"x0": 1, "x1": 2}
         self.ext = []      # UFL external virtual-work terms (already multiplied by lam)
         self.point_loads = []  # (point (s, y), lab vector at lam=1)
+
+    # -- reference geometry in NumPy (probes, prescribed values) ---------------------------------
+    def frame_np(self, s):
+        """(phi0 offset function, t1, t2, d0) at parameter s (the frame depends on s only)."""
+        t2 = np.array([0.0, 1.0, 0.0])
+        if self.geometry == "strip":
+            return np.array([1.0, 0.0, 0.0]), t2, np.array([0.0, 0.0, 1.0])
+        a = s / float(self.R.value)
+        if self.geometry == "arch":
+            return np.array([np.cos(a), 0.0, np.sin(a)]), t2, np.array([-np.sin(a), 0.0, np.cos(a)])
+        return np.array([np.cos(a), 0.0, -np.sin(a)]), t2, np.array([np.sin(a), 0.0, np.cos(a)])
+
+    def phi0_np(self, s, y):
+        """Reference position of parameter points (arrays s, y) -> (n, 3)."""
+        s, y = np.broadcast_arrays(np.asarray(s, float), np.asarray(y, float))
+        if self.geometry == "strip":
+            return np.stack([s, y, 0 * s], -1)
+        R = float(self.R.value)
+        a = s / R
+        if self.geometry == "arch":
+            return np.stack([R * np.sin(a), y, R * (1 - np.cos(a))], -1)
+        return np.stack([R * np.sin(a), y, R * np.cos(a)], -1)
 
     # -- frames -----------------------------------------------------------------------------
     def current_frame(self):
@@ -184,7 +218,7 @@ class ShellModel:
     # -- loads --------------------------------------------------------------------------------
     def add_edge_force(self, edge, direction, total, follower=False, length=None):
         """Total force ``total`` (at lam = 1) spread uniformly along ``edge``."""
-        q = self._const(total / (length or self.width))
+        q = self._const(total / (length or self.edge_length[edge]))
         if follower:
             fr = self.current_frame()
             vec = sum(float(direction[i]) * fr[i] for i in range(3) if direction[i] != 0)
@@ -198,7 +232,7 @@ class ShellModel:
         Virtual work m . delta(theta): exact for rotations about a fixed axis (all planar cases);
         the follower flag then changes nothing.  Only the part of ``direction`` tangent to the
         reference surface is carried (no drilling rotation in this model)."""
-        m = self._const(total / self.width)
+        m = self._const(total / self.edge_length[edge])
         vec = ufl.as_vector([float(a) for a in direction])
         dtheta = self.v_beta[0] * self.t1 + self.v_beta[1] * self.t2
         self.ext.append(self.lam * m * ufl.dot(vec, dtheta) * self.ds(self.edge_id[edge]))
@@ -233,6 +267,32 @@ class ShellModel:
         dofs = dolfinx.fem.locate_dofs_topological(self.V, fdim, self.facets[edge])
         zero = dolfinx.fem.Function(self.V)
         return [dolfinx.fem.dirichletbc(zero, dofs)]
+
+    #: component names of ``fix`` supports -> (sub-space indices); 'rot_y' is the rotation about
+    #: lab y, which is beta_2 on every geometry here (t2 = e_y).  'rot_x' only on the flat strip.
+    _COMPONENTS = {"ux": (0, 0), "uy": (0, 1), "uz": (0, 2), "beta1": (1, 0), "beta2": (1, 1),
+                   "rot_y": (1, 1)}
+
+    def component_bc(self, edge, comp):
+        """Dirichlet condition on one scalar component along ``edge``.
+
+        Returns (bc, value_function, dofs_in_V, dof_coordinates) so that the caller can set
+        prescribed values (value_function lives on the collapsed component space)."""
+        if comp == "rot_x":
+            if self.geometry != "strip":
+                raise NotImplementedError("rot_x supports only on the flat strip (t1 = e_x)")
+            comp = "beta1"
+        if comp not in self._COMPONENTS:
+            raise NotImplementedError(f"support component {comp!r}")
+        i, j = self._COMPONENTS[comp]
+        Vi = self.V.sub(i).sub(j)
+        Vc, _ = Vi.collapse()
+        fdim = self.mesh.topology.dim - 1
+        dofs_V, dofs_c = dolfinx.fem.locate_dofs_topological([Vi, Vc], fdim, self.facets[edge])
+        g = dolfinx.fem.Function(Vc)
+        bc = dolfinx.fem.dirichletbc(g, [dofs_V, dofs_c], Vi)
+        X = Vc.tabulate_dof_coordinates()[dofs_c, :2]
+        return bc, g, np.asarray(dofs_V), np.asarray(dofs_c), X
 
     def set_params(self, E, nu, h, shear_factor=1.0, R=None):
         self.E.value, self.nu.value, self.h.value, self.ks.value = E, nu, h, shear_factor
