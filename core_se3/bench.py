@@ -38,13 +38,16 @@ def _mesh_for(case, p, nx, ny):
         return M.rectangle(p["L"], p["width"], nx, ny)
     if case.geometry == "arch":
         return M.cylinder_arch(p["R"], pi, p["width"], nx, ny)
+    if case.geometry == "semicylinder":
+        return M.cylinder_panel(p["R"], p["L"], -pi / 2, pi / 2, nx, ny)
     raise ValueError(f"unknown geometry {case.geometry!r}")
 
 
 def build_problem(case, p, mesh=None, element="default", linear_solver="auto"):
     nx, ny = mesh or case.mesh
     m = _mesh_for(case, p, nx, ny)
-    prob = Problem(m, Material(p["E"], p["nu"], p["h"]), element=element, linear_solver=linear_solver)
+    prob = Problem(m, Material(p["E"], p["nu"], p["h"], drilling=p.get("drilling", 1.0)),
+                   element=element, linear_solver=linear_solver)
     for kind, where in case.supports:
         if kind == "clamp":
             prob.clamp(where)

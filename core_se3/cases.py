@@ -152,14 +152,17 @@ _add(Case(
     name="inplane-rollup",
     description="In-plane (drilling) bending of a strip by an end moment about the normal (k to 2).",
     geometry="strip",
-    params=dict(E=1200.0, nu=0.0, h=1.0, L=10.0, width=1.0, k=2.0),
-    units=_DIM, mesh=(40, 4), steps=40,
+    params=dict(E=1200.0, nu=0.0, h=1.0, L=10.0, width=1.0, k=2.0, drilling=1.0),
+    units=dict(_DIM, drilling="1 (factor on the seed's drilling modulus)"), mesh=(40, 4), steps=40,
     loads=(Load("edge_moment", "x1", (0.0, 0.0, 1.0),
                 lambda p: p["k"] * 2 * pi * p["E"] * p["h"] * p["width"] ** 3 / 12 / p["L"]),),
     load_name="M", load_unit="force*length",
     load_value=lambda p, lam: lam * p["k"] * 2 * pi * p["E"] * p["h"] * p["width"] ** 3 / 12 / p["L"],
     reference=Reference("2_pure_bending_rollup_inplane_drilling", lambda p, M: M, lambda p: 1.0,
                         note="in-plane: v -> uy, theta about +z; exact only for small k"),
+    notes="The reference circle has the membrane stiffness E h w^3/12 only. The seed's "
+          "drilling-curvature modulus D(1-nu) adds D(1-nu) w, which equals it for this h = w "
+          "strip: with drilling=1 (the seed) the strip is twice as stiff in-plane.",
     extra=dict(plane="xy"),
 ))
 

@@ -31,14 +31,22 @@ __all__ = ["Material", "strain_operators"]
 
 @dataclass(frozen=True)
 class Material:
-    """E [force/length^2], nu [-], h [length], shear_factor ks [-] (1 = the seed's law)."""
+    """E [force/length^2], nu [-], h [length], shear_factor ks [-] (1 = the seed's law),
+    drilling [-]: factor on the seed's drilling-curvature modulus D (1 - nu) (1 = the seed).
+
+    The drilling-curvature term is a micro-polar stiffness of the Cosserat surface: it adds
+    drilling * D (1 - nu) w to the in-plane bending stiffness E h w^3 / 12 of a strip of width
+    w, negligible when h << w, equal to it when h = w.  With drilling = 0 the drilling rotation
+    is still tied to the in-plane rotation by the membrane law's skew part (2 G h).
+    """
     E: float
     nu: float
     h: float
     shear_factor: float = 1.0
+    drilling: float = 1.0
 
     def __post_init__(self):
-        for name in ("E", "nu", "h", "shear_factor"):
+        for name in ("E", "nu", "h", "shear_factor", "drilling"):
             v = getattr(self, name)
             if not isinstance(v, (int, float, np.floating, np.integer)) or not math.isfinite(v):
                 raise MaterialError(f"material parameter {name} must be a finite number, got {v!r}")
@@ -50,6 +58,8 @@ class Material:
             raise MaterialError(f"thickness h must be > 0, got {self.h}")
         if self.shear_factor <= 0:
             raise MaterialError(f"shear factor must be > 0, got {self.shear_factor}")
+        if self.drilling < 0:
+            raise MaterialError(f"drilling factor must be >= 0, got {self.drilling}")
 
     @property
     def G(self):
@@ -80,7 +90,7 @@ class Material:
         Dm = self.C * H
         Db = self.D * H
         Ds = self.shear_factor * self.G * self.h * Ainv
-        Dd = self.D * (1 - nu) * Ainv
+        Dd = self.drilling * self.D * (1 - nu) * Ainv
         T = lambda M: np.swapaxes(M, -1, -2)
         Dmat = (T(Mm) @ Dm @ Mm + T(Ms) @ Ds @ Ms + T(Mb) @ Db @ Mb + T(Md) @ Dd @ Md)
         return Dmat, j0

@@ -15,7 +15,8 @@ import numpy as np
 from . import se3
 from .errors import MeshError
 
-__all__ = ["Mesh", "rectangle", "cylinder_arch", "cylinder_panel", "annulus", "frames_from"]
+__all__ = ["Mesh", "rectangle", "cylinder_arch", "cylinder_panel", "annulus", "from_meshio",
+           "frames_from"]
 
 # local edges of a quad in its own orientation: bottom, top (direction xi1), left, right (xi2)
 LOCAL_EDGES = np.array([[0, 1], [3, 2], [0, 3], [1, 2]])
@@ -175,6 +176,98 @@ def cylinder_panel(R, length, theta0, theta1, nt, nl):
     d1 = np.stack([np.cos(T), 0 * T, -np.sin(T)], -1)
     d3 = np.stack([np.sin(T), 0 * T, np.cos(T)], -1)
     return Mesh(frames_from(X, d1, d3), quads, edges, shape=(nt, nl))
+
+
+def _chain(segments):
+    """Order the nodes of a set of line segments along the line (or return them sorted)."""
+    from collections import defaultdict
+    adj = defaultdict(list)
+    for a, b in segments:
+        adj[a].append(b)
+        adj[b].append(a)
+    ends = [v for v, nb in adj.items() if len(nb) == 1]
+    start = ends[0] if ends else segments[0][0]
+    order, prev, cur = [start], None, start
+    while True:
+        nxt = [v for v in adj[cur] if v != prev and v not in order[-2:]]
+        if not nxt or nxt[0] == start:
+            break
+        prev, cur = cur, nxt[0]
+        order.append(cur)
+    if len(order) != len(adj):
+        return np.array(sorted(adj))
+    return np.array(order)
+
+
+def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None):
+    """Mesh from any quad surface mesh meshio reads (file name or ``meshio.Mesh``).
+
+    Nodal frames: d3 = area-weighted mean of the adjacent quads' normals (quads must be
+    consistently oriented: the normal is the right-hand side of the node order); d1 = the
+    projection of ``d1_hint`` on the tangent plane (the global y axis where that degenerates).
+    Named node sets: every ``cell_sets`` entry made of line cells (e.g. Gmsh physical curves),
+    ordered along the line, plus ``edges`` = {name: predicate(X) -> bool mask}.
+    """
+    import meshio
+    try:
+        m = source if isinstance(source, meshio.Mesh) else meshio.read(source)
+    except Exception as exc:  # meshio raises many kinds; name the file and the cause
+        raise MeshError(f"cannot read mesh {source!r}: {exc}") from None
+    X = np.asarray(m.points, float)
+    if X.ndim != 2 or X.shape[1] not in (2, 3):
+        raise MeshError("mesh points must be 2-D or 3-D")
+    if X.shape[1] == 2:
+        X = np.c_[X, np.zeros(len(X))]
+    quads = [c.data for c in m.cells if c.type == "quad"]
+    other = sorted({c.type for c in m.cells} - {"quad", "line", "vertex"})
+    if other:
+        raise MeshError(f"only quadrilateral shells are supported; the mesh also has {other} cells")
+    if not quads:
+        raise MeshError("the mesh has no quad cells")
+    quads = np.concatenate(quads).astype(np.int64)
+    used = np.unique(quads)
+    if len(used) < len(X):          # drop points no quad uses (e.g. Gmsh geometry points)
+        remap = -np.ones(len(X), np.int64)
+        remap[used] = np.arange(len(used))
+        quads = remap[quads]
+    else:
+        remap = np.arange(len(X))
+    X = X[used]
+    # orientation consistency: each interior edge must be traversed in opposite directions
+    cyc = np.stack([quads, np.roll(quads, -1, axis=1)], -1).reshape(-1, 2)
+    key = cyc[:, 0] * len(X) + cyc[:, 1]
+    u, cnt = np.unique(key, return_counts=True)
+    if np.any(cnt > 1):
+        bad = u[cnt > 1][0]
+        raise MeshError(f"quad normals flip across the edge ({bad // len(X)}, {bad % len(X)}): orient "
+                        "all quads consistently (same node order about the surface normal)")
+    P = X[quads]
+    nq = np.cross(P[:, 2] - P[:, 0], P[:, 3] - P[:, 1])       # 2 x area-weighted normal
+    nn = np.zeros_like(X)
+    for k in range(4):
+        np.add.at(nn, quads[:, k], nq)
+    norm = np.linalg.norm(nn, axis=1)
+    if np.any(norm <= 0):
+        raise MeshError("degenerate quads: a node has no well-defined normal")
+    d3 = nn / norm[:, None]
+    hint = np.broadcast_to(np.asarray(d1_hint, float), X.shape)
+    t = hint - np.einsum("ni,ni->n", hint, d3)[:, None] * d3
+    weak = np.linalg.norm(t, axis=1) < 1e-6
+    if weak.any():
+        alt = np.array([0.0, 1.0, 0.0]) - d3[weak, 1:2] * d3[weak]
+        t[weak] = alt
+    named = {}
+    for name, blocks in (m.cell_sets or {}).items():
+        segs = []
+        for cb, ids in zip(m.cells, blocks):
+            if cb.type == "line" and ids is not None and len(ids):
+                segs.extend(remap[cb.data[np.asarray(ids)]].tolist())
+        if segs:
+            named[name] = _chain(segs)
+    mesh = Mesh(frames_from(X, t, d3), quads, named)
+    for name, pred in (edges or {}).items():
+        mesh.edges[name] = np.nonzero(pred(mesh.X))[0]
+    return mesh
 
 
 def annulus(r_in, r_out, angle, nr, nt):

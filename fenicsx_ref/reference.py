@@ -12,8 +12,9 @@ from math import pi
 
 import numpy as np
 
-__all__ = ["case_params", "apply_variant", "case_length", "reference_entry",
-           "reference_load_factors", "reference_error"]
+__all__ = ["case_params", "apply_variant", "case_length", "case_domain", "reference_entry",
+           "reference_load_factors", "reference_error", "point_curve_distances", "curve_distance",
+           "literature_curve", "literature_error"]
 
 
 def reference_entry(name):
@@ -39,10 +40,25 @@ def case_params(case, overrides):
 
 
 def case_length(case, p):
+    """Extent of the parameter domain along its first coordinate (arc length for curved cases)."""
     if case.geometry == "strip":
         return p["L"]
-    if case.geometry == "arch":
+    if case.geometry in ("arch", "semicylinder"):
         return pi * p["R"]  # half circle
+    raise NotImplementedError(f"fenicsx_ref: geometry {case.geometry!r}")
+
+
+def case_domain(case, p):
+    """(length, width, box) of the parameter domain; box = ((s0, y0), (s1, y1)).
+
+    strip / arch: s in [0, L] (arc length), y in [-w/2, w/2].  semicylinder: s = R t with
+    t in [-pi/2, pi/2] (arc length, so the reference metric is the identity), y in [0, L]."""
+    if case.geometry in ("strip", "arch"):
+        L, w = case_length(case, p), p["width"]
+        return L, w, ((0.0, -w / 2), (L, w / 2))
+    if case.geometry == "semicylinder":
+        S = pi * p["R"]
+        return S, p["L"], ((-S / 2, 0.0), (S / 2, p["L"]))
     raise NotImplementedError(f"fenicsx_ref: geometry {case.geometry!r}")
 
 
@@ -127,3 +143,64 @@ def reference_error(case, p, ref, steps, lam_tol=1e-9):
             "n_points": len(rows), "max_reference_displacement": denom,
             "theta_error_max": float(max(t for _, _, t in rows)),
             "per_load": [[float(r), float(er)] for (r, _, _), er in zip(rows, errs)]}
+
+
+# ---- distance to a tabulated curve (literature load-displacement tables) --------------------------
+
+def point_curve_distances(points, curve):
+    """Euclidean distance from each point to a piecewise-linear curve (NumPy only).
+
+    points: (k, 2) array; curve: (m, 2) array of vertices in order (m >= 1).  Returns (k,)."""
+    P = np.asarray(points, dtype=float).reshape(-1, 2)
+    C = np.asarray(curve, dtype=float).reshape(-1, 2)
+    if len(C) == 0:
+        raise ValueError("empty curve")
+    if len(C) == 1:
+        return np.linalg.norm(P - C[0], axis=1)
+    A, AB = C[:-1], np.diff(C, axis=0)                       # segments A + t AB, t in [0, 1]
+    L2 = np.einsum("ij,ij->i", AB, AB)
+    AP = P[:, None, :] - A[None, :, :]                        # (k, m-1, 2)
+    t = np.einsum("kij,ij->ki", AP, AB) / np.where(L2 > 0, L2, 1.0)
+    t = np.clip(np.where(L2 > 0, t, 0.0), 0.0, 1.0)
+    d = np.linalg.norm(AP - t[..., None] * AB[None], axis=2)  # (k, m-1)
+    return d.min(axis=1)
+
+
+def curve_distance(points, curve):
+    """Largest distance from the points (k, 2) to the piecewise-linear curve (m, 2)."""
+    d = point_curve_distances(points, curve)
+    return float(d.max()) if len(d) else 0.0
+
+
+def literature_curve(case):
+    """(load/P_max, u/u_max, P_max, u_max) of a case whose reference is a literature table
+    (``case.extra['literature']``, column ``case.extra['column']`` scaled by
+    ``displacement_scale``); u_max is the table's largest |displacement|."""
+    from core_se3.references import literature_entry
+    ex = case.extra
+    e = literature_entry(ex["literature"])
+    x = np.asarray(e["P_over_Pmax"], dtype=float)
+    u = np.asarray(e[ex["column"]], dtype=float) * float(ex.get("displacement_scale", 1.0))
+    P_max = float(e["parameters"]["P_max"])
+    u_max = float(np.max(np.abs(u)))
+    return x, u / u_max, P_max, u_max
+
+
+def literature_error(case, p, steps, probe):
+    """Curve distance of the computed path (P_k/P_max, u_k/u_max) to the literature table; u_k is
+    probe component ``probe_component`` times ``probe_sign`` (case.extra)."""
+    x, y, P_max, u_max = literature_curve(case)
+    ex = case.extra
+    k, sgn = int(ex.get("probe_component", 2)), float(ex.get("probe_sign", 1.0))
+    pts = np.array([[s["load"]["value"] / P_max, sgn * s["probes"][probe]["u"][k] / u_max]
+                    for s in steps]).reshape(-1, 2)
+    d = point_curve_distances(pts, np.column_stack([x, y]))
+    out = {"entry": ex["literature"], "file": "literature.json", "column": ex["column"],
+           "measure": "max distance to the tabulated curve in (P/P_max, u/u_max)",
+           "error": float(d.max()) if len(d) else None, "n_points": int(len(d)),
+           "P_max": P_max, "u_max": u_max}
+    if len(d):
+        j = int(np.argmax(d))
+        out["error_at_load"] = float(pts[j, 0] * P_max)
+        out["per_load"] = [[float(a * P_max), float(b)] for a, b in zip(pts[:, 0], d)]
+    return out

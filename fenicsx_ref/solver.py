@@ -8,7 +8,7 @@ import numpy as np
 
 from core_se3.cases import get_case
 
-from .reference import (apply_variant, case_length, case_params, reference_error,
+from .reference import (apply_variant, case_domain, case_params, literature_error, reference_error,
                         reference_load_factors)
 
 __all__ = ["run_case"]
@@ -77,21 +77,17 @@ def _import_dolfinx():
     from petsc4py import PETSc
 
 
-def _tip_evaluator(model):
-    """Returns f(w) -> (u (3,), theta (3,)) at the probe 'tip' = midpoint of the free edge x1."""
+def _tip_evaluator(model, point=None):
+    """Returns f(w) -> (u (3,), theta (3,)) at the parameter point (s, y) of the probe
+    (default: 'tip' = midpoint of the free edge x1)."""
     mesh = model.mesh
-    pt = np.array([[model.length, 0.0, 0.0]])
+    s, y = point if point is not None else model.edge_midpoint["x1"]
+    pt = np.array([[s, y, 0.0]])
     tree = dolfinx.geometry.BoundingBoxTree(mesh, mesh.topology.dim)
     cand = dolfinx.geometry.compute_collisions(tree, pt)
     cells = dolfinx.geometry.compute_colliding_cells(mesh, cand, pt)
     cell = int(cells.links(0)[0])
-    s = model.length
-    if model.geometry == "strip":
-        t1 = np.array([1.0, 0.0, 0.0])
-    else:
-        R = float(model.R.value)
-        t1 = np.array([np.cos(s / R), 0.0, np.sin(s / R)])
-    t2 = np.array([0.0, 1.0, 0.0])
+    t1, t2, _ = model.frame_np(s)
 
     subs = []
     for i in range(2):
@@ -155,7 +151,8 @@ def run_case(name, mesh=None, overrides=None, steps=None, integration="psri", sh
     params = case_params(case, overrides or {})
     loads, ref = apply_variant(case, params)
     nx, ny = mesh if mesh is not None else case.mesh
-    length = case_length(case, params)
+    length, width, box = case_domain(case, params)
+    rot_loads = [ld for ld in loads if ld["kind"] == "edge_rotation"]
 
     # ----- load factors -------------------------------------------------------------------------
     lam0, lam1 = case.lam_range
@@ -163,6 +160,12 @@ def run_case(name, mesh=None, overrides=None, steps=None, integration="psri", sh
     if ref is not None:
         ref_lams, lam_cap, ref_info = reference_load_factors(case, params, ref, theta_limit)
         lam1 = min(lam1, lam_cap)
+    if rot_loads:  # prescribed rotations: the rotation vector alpha*axis must stay below pi
+        amax = max(abs(ld["magnitude"]) for ld in rot_loads)
+        if amax * lam1 >= theta_limit * (1 - 1e-9):
+            lam1 = theta_limit * (1 - 1e-9) / amax
+            ref_info = {"reason": f"prescribed rotation angle >= {theta_limit:.6g} beyond this load "
+                                  "factor", "load_factor": lam1}
     if load_factors is None:
         n = int(steps if steps is not None else case.steps)
         base = list(np.linspace(lam0, case.lam_range[1], n + 1)[1:])
@@ -177,10 +180,10 @@ def run_case(name, mesh=None, overrides=None, steps=None, integration="psri", sh
 
     # ----- model ---------------------------------------------------------------------------------
     t0 = time.perf_counter()
-    model = ShellModel(case.geometry, length, params["width"], nx, ny, cell=cell,
-                       integration=integration)
+    model = ShellModel(case.geometry, length, width, nx, ny, cell=cell,
+                       integration=integration, box=box)
     model.set_params(params["E"], params["nu"], params["h"], shear_factor,
-                     R=params.get("R") if case.geometry == "arch" else None)
+                     R=params.get("R") if case.geometry != "strip" else None)
     for ld in loads:
         mag = ld["magnitude"]
         if ld["kind"] == "edge_force":
@@ -189,16 +192,26 @@ def run_case(name, mesh=None, overrides=None, steps=None, integration="psri", sh
             model.add_edge_moment(ld["edge"], ld["direction"], mag, ld["follower"])
         elif ld["kind"] == "pressure":
             model.add_pressure(ld["direction"], mag, ld["follower"])
-        elif ld["kind"] == "point_force":
-            model.add_point_force(ld["point"], np.asarray(ld["direction"], float) * mag)
+        elif ld["kind"] == "point_force":  # at ld['point'], else at the midpoint of ld['edge']
+            pt = ld.get("point") or model.edge_midpoint[ld["edge"]]
+            model.add_point_force(pt, np.asarray(ld["direction"], float) * mag)
+        elif ld["kind"] == "edge_rotation":
+            pass  # prescribed Dirichlet values, below
         else:
             raise NotImplementedError(f"fenicsx_ref: load kind {ld['kind']!r} is not implemented")
     for point, vec in point_loads:  # extra dead point forces (lab vector at lam = 1)
         model.add_point_force(point, vec)
-    for kind, edge in case.supports:
-        if kind != "clamp":
+    bcs = []
+    for sup in case.supports:
+        kind, edge = sup[0], sup[1]
+        if kind == "clamp":
+            bcs += model.clamp_bcs(edge)
+        elif kind == "fix":  # ("fix", edge, (component names)): homogeneous, e.g. ("uz", "rot_y")
+            bcs += [model.component_bc(edge, comp)[0] for comp in sup[2]]
+        else:
             raise NotImplementedError(f"support {kind!r}")
-    bcs = [bc for kind, edge in case.supports for bc in model.clamp_bcs(edge)]
+    rotations = [_PrescribedRotation(model, ld) for ld in rot_loads]
+    bcs += [bc for pr in rotations for bc in pr.bcs]
     Fres, Jform = model.residual_and_jacobian()
     timer.t["setup"] += time.perf_counter() - t0
 
@@ -211,9 +224,16 @@ def run_case(name, mesh=None, overrides=None, steps=None, integration="psri", sh
     t0 = time.perf_counter()
     problem = _Problem(L, a, bcs, model, timer)
     if atol is None:
-        atol = 1e-14 * length  # Newton-increment norm (displacements and rotations)
+        atol = 1e-14 * max(length, width)  # Newton-increment norm (displacements and rotations)
     solver = _newton(model, problem, timer, rtol=rtol, atol=atol, criterion=criterion)
-    tip = _tip_evaluator(model)
+    probe = case.probe
+    if probe == "tip":
+        probe_point = model.edge_midpoint["x1"]
+    elif case.extra.get("probe_edge"):
+        probe_point = model.edge_midpoint[case.extra["probe_edge"]]
+    else:
+        raise NotImplementedError(f"probe {probe!r}")
+    tip = _tip_evaluator(model, probe_point)
     timer.t["setup"] += time.perf_counter() - t0
 
     # ----- load stepping with cut-back --------------------------------------------------------------
@@ -227,6 +247,8 @@ def run_case(name, mesh=None, overrides=None, steps=None, integration="psri", sh
             step = lam_target - lam_done if dlam is None else min(dlam, lam_target - lam_done)
             backup = w.x.array.copy()
             model.lam.value = lam_done + step
+            for pr in rotations:
+                pr.set(lam_done + step)
             problem.residuals = []
             t0 = time.perf_counter()
             a0 = timer.t["assembly"]
@@ -263,9 +285,13 @@ def run_case(name, mesh=None, overrides=None, steps=None, integration="psri", sh
         st = {"load_factor": lam_target,
               "load": {"name": case.load_name, "value": float(case.load_value(params, lam_target)),
                        "unit": case.load_unit},
-              "probes": {"tip": {"u": [float(c) for c in u], "rotation_angle": float(ang),
+              "probes": {probe: {"u": [float(c) for c in u], "rotation_angle": float(ang),
                                  "rotation": Rm.tolist()}},
               "iterations": int(iters), "residual": float(final_res), "cutbacks": int(cuts)}
+        if rotations:
+            t0 = time.perf_counter()
+            st["reactions"] = [pr.reaction(L, lam_target) for pr in rotations]
+            timer.t["assembly"] += time.perf_counter() - t0
         if keep_residuals:
             st["residual_history"] = res_hist
         steps_out.append(st)
@@ -278,6 +304,8 @@ def run_case(name, mesh=None, overrides=None, steps=None, integration="psri", sh
     reference = None
     if ref is not None:
         reference = reference_error(case, params, ref, steps_out)
+    elif case.extra.get("literature"):
+        reference = literature_error(case, params, steps_out, probe)
     n_dofs = model.V.dofmap.index_map.size_global * model.V.dofmap.index_map_bs
     result = {
         "schema": "core-se3-result", "version": 1, "case": name, "model": "fenicsx_ref",
@@ -300,6 +328,78 @@ def run_case(name, mesh=None, overrides=None, steps=None, integration="psri", sh
         return result, {"model": model, "L": L, "a": a, "bcs": bcs, "problem": problem,
                         "solver": solver}
     return result
+
+
+class _PrescribedRotation:
+    """Rigid rotation of an edge by angle = magnitude * lam about ``axis`` through ``point``
+    (None coordinates of the point: taken from the node, i.e. any point on the axis line).
+
+    Dirichlet values on the edge: u = R(angle a)(X - p) - (X - p) for the lab components not in
+    ``free``, and the rotation vector angle * a, whose tangent components beta_i = angle a.t_i
+    (the axis must be tangent to the reference surface along the edge: this model has no
+    drilling rotation).  ``reaction`` returns the moment about the axis that holds the edge,
+    dPi/d(angle) along the prescribed motion = sum_i r_i d g_i / d angle."""
+
+    def __init__(self, model, ld):
+        from .model import rotation_matrix_np
+        self._rot = rotation_matrix_np
+        self.model, self.edge = model, ld["edge"]
+        self.mag = float(ld["magnitude"])
+        a = np.asarray(ld["axis"] if ld.get("axis") is not None else ld["direction"], float)
+        self.axis = a / np.linalg.norm(a)
+        self.point = ld.get("point") or (None, None, None)
+        free = set(ld.get("free") or ())
+        self.parts = []  # (bc, g, dofs_V, dofs_c, X, kind, index)
+        self.bcs = []
+        for j, name in enumerate(("ux", "uy", "uz")):
+            if j not in free:
+                self._add(name, "u", j)
+        for j, name in enumerate(("beta1", "beta2")):
+            self._add(name, "beta", j)
+        for part in self.parts:
+            if part[5] == "beta":
+                for s in np.unique(part[4][:, 0]):
+                    d0 = model.frame_np(s)[2]
+                    if abs(self.axis @ d0) > 1e-12:
+                        raise NotImplementedError("edge rotation about an axis not tangent to the "
+                                                  "surface (drilling) is not in this model")
+                break
+
+    def _add(self, name, kind, j):
+        bc, g, dV, dc, X = self.model.component_bc(self.edge, name)
+        self.parts.append((bc, g, dV, dc, X, kind, j))
+        self.bcs.append(bc)
+
+    def _values(self, angle, X, kind, j):
+        """(value, d value / d angle) at the dof points X (n, 2)."""
+        a = self.axis
+        if kind == "beta":
+            t = np.array([self.model.frame_np(s)[j] for s in X[:, 0]])
+            c = t @ a
+            return angle * c, c
+        P0 = self.model.phi0_np(X[:, 0], X[:, 1])
+        p = np.array([P0[:, i] if self.point[i] is None else np.full(len(X), float(self.point[i]))
+                      for i in range(3)]).T
+        r = P0 - p
+        Rr = r @ self._rot(angle * a).T
+        return (Rr - r)[:, j], np.cross(a, Rr)[:, j]
+
+    def set(self, lam):
+        angle = self.mag * lam
+        for bc, g, dV, dc, X, kind, j in self.parts:
+            g.x.array[dc] = self._values(angle, X, kind, j)[0]
+
+    def reaction(self, L, lam):
+        b = dolfinx.fem.petsc.assemble_vector(L)
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        r = b.array
+        angle = self.mag * lam
+        T = 0.0
+        for bc, g, dV, dc, X, kind, j in self.parts:
+            T += float(r[dV] @ self._values(angle, X, kind, j)[1])
+        b.destroy()
+        return {"edge": self.edge, "axis": self.axis.tolist(), "angle": float(angle),
+                "moment_about_axis": T}
 
 
 def _rot(theta):
