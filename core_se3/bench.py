@@ -172,9 +172,12 @@ def result_document(case, p, prob, res):
     for st in res.steps:
         pr = st.probes["tip"]
         value = case.load_value(p, st.load_factor)
+        load = dict(name=case.load_name, value=float(value), unit=case.load_unit)
+        if ref is not None:
+            load.update(reference_entry=ref[0], reference_value=float(case.reference.load_to_ref(p, value)))
         steps.append(dict(
             load_factor=float(st.load_factor),
-            load=dict(name=case.load_name, value=float(value), unit=case.load_unit),
+            load=load,
             probes={"tip": dict(u=pr["u"].tolist(), rotation_angle=float(np.linalg.norm(pr["w"])),
                                 rotation_about_axis=float(pr["w"] @ axis),
                                 rotation_vector=pr["w"].tolist(), rotation=pr["R"].tolist())},
@@ -184,7 +187,7 @@ def result_document(case, p, prob, res):
             balance_error=float(st.balance_error),
         ))
         if ref is not None:
-            loads_ref.append(case.reference.load_to_ref(p, value if case.load_name != "q L^3/EI" else value))
+            loads_ref.append(case.reference.load_to_ref(p, value))
             disps.append(_planar(case, pr["u"]))
     reference = None
     if ref is not None:

@@ -49,10 +49,26 @@ def main(argv=None):
             print(f"{name:24s} {desc}")
         return 0
 
-    logging.getLogger().setLevel(logging.WARNING)  # silence FFCx/CFFI build chatter
     from . import run_case
+    from .solver import _import_dolfinx
+    _import_dolfinx()
+    logging.disable(logging.INFO)  # silence the FFCx/CFFI/setuptools build chatter
     r = run_case(a.name, mesh=a.mesh, overrides=_parse_set(a.set), steps=a.steps,
                  integration=a.integration, shear_factor=a.shear_factor, cell=a.cell)
+    if a.name == "torsion":  # the small-twist torsion constant, as core_se3 reports it
+        from core_se3.references import elastica_entry
+        from .solver import torsion_constant
+        d = torsion_constant(mesh=a.mesh, integration=a.integration, shear_factor=a.shear_factor,
+                             cell=a.cell, overrides=_parse_set(a.set))
+        e = elastica_entry("5_strip_torsion_seed_strip")["params"]
+        r["torsion"] = {"J": d["J"], "J_interior": d["J_interior"], "angle": d["angle"],
+                        "mesh": [r["mesh"]["nx"], r["mesh"]["ny"]],
+                        "reference_entry": "5_strip_torsion_seed_strip",
+                        "J_mindlin_ks1": e["J_mindlin_ks=1"],
+                        "J_kirchhoff_plate": e["J_kirchhoff_plate=wh^3/3"],
+                        "note": "J = T L/(G angle) includes the end restraint of the rotation about "
+                                "the width axis (clamp and rigid end edge), ~ +0.08/L here; "
+                                "J_interior = T/(G tau_mid) is the Saint-Venant value."}
     if a.json == "-":
         json.dump(r, sys.stdout, indent=1)
         print()
@@ -62,14 +78,26 @@ def main(argv=None):
                 json.dump(r, f, indent=1)
         m = r["mesh"]
         print(f"{r['case']} [{r['variant']}] mesh {m['nx']}x{m['ny']} ({m['n_dofs']} dofs): {r['status']}")
-        print(f"{'load':>14s} {'ux':>12s} {'uy':>10s} {'uz':>12s} {'angle':>10s} {'it':>4s}")
+        probe = next(iter(r["steps"][0]["probes"])) if r["steps"] else "tip"
+        print(f"probe {probe}")
+        print(f"{'load':>14s} {'ux':>12s} {'uy':>10s} {'uz':>12s} {'angle':>10s} {'it':>4s}"
+              + (f" {'moment':>12s}" if r["steps"] and "reactions" in r["steps"][0] else ""))
         for s in r["steps"]:
-            u = s["probes"]["tip"]["u"]
-            print(f"{s['load']['value']:14.6g} {u[0]:12.6g} {u[1]:10.3g} {u[2]:12.6g} "
-                  f"{s['probes']['tip']['rotation_angle']:10.6f} {s['iterations']:4d}")
+            u = s["probes"][probe]["u"]
+            line = (f"{s['load']['value']:14.6g} {u[0]:12.6g} {u[1]:10.3g} {u[2]:12.6g} "
+                    f"{s['probes'][probe]['rotation_angle']:10.6f} {s['iterations']:4d}")
+            if "reactions" in s:
+                line += f" {s['reactions'][0]['moment_about_axis']:12.6g}"
+            print(line)
         if r["reference"]:
-            print(f"reference {r['reference']['entry']}: error {r['reference']['error']:.3e} "
-                  f"({r['reference']['n_points']} reference loads)")
+            ref = r["reference"]
+            print(f"reference {ref['entry']}: error {ref['error']:.3e} ({ref['n_points']} points"
+                  + (f"; {ref['measure']}" if "measure" in ref else "") + ")")
+        if "torsion" in r:
+            t = r["torsion"]
+            print(f"small-twist torsion constant J = T L/(G angle) = {t['J']:.5e}, from the interior "
+                  f"twist rate {t['J_interior']:.5e} (J_mindlin_ks=1 = {t['J_mindlin_ks1']:.5e}; "
+                  f"ratios {t['J'] / t['J_mindlin_ks1']:.4f}, {t['J_interior'] / t['J_mindlin_ks1']:.4f})")
         t = r["timings"]
         print("timings [s]: " + ", ".join(f"{k} {v:.2f}" for k, v in t.items()))
     return 0 if r["status"] == "ok" else 1

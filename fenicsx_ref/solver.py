@@ -11,7 +11,7 @@ from core_se3.cases import get_case
 from .reference import (apply_variant, case_domain, case_params, literature_error, reference_error,
                         reference_load_factors)
 
-__all__ = ["run_case"]
+__all__ = ["run_case", "torsion_constant"]
 
 THETA_LIMIT = pi  # the 2-parameter director map is singular at |theta| = pi
 
@@ -405,3 +405,37 @@ class _PrescribedRotation:
 def _rot(theta):
     from .model import rotation_matrix_np
     return rotation_matrix_np(theta)
+
+
+def torsion_constant(mesh=None, angle=1e-4, shear_factor=1.0, integration="psri",
+                     cell="quadrilateral", overrides=None, name="torsion", interior=(0.4, 0.6)):
+    """Small-twist torsion constants of the ``torsion`` case's strip.
+
+    One load step to the small end rotation ``angle`` (a linear response: the Wagner stiffening
+    is O(angle^2)).  T = the moment about the strip axis that holds the rotated end edge (the
+    reaction of the prescribed rotation, dPi/d angle).  Returns a dict:
+
+    * ``J`` = T L / (G angle): the end-to-end value.  It includes the end restraint: the clamp
+      and the rigid end edge both hold the rotation about the width axis (beta_2) at zero,
+      which the free twist wants to be -tau y, so J exceeds the Saint-Venant value by ~ c/L;
+    * ``J_interior`` = T / (G tau): tau = the twist rate d(beta_1)/ds measured between the
+      stations s = interior * L on the axis, away from both end layers (the Saint-Venant
+      solution has beta_1 = tau s exactly) -- the Reissner-Mindlin plate constant.
+    """
+    case = get_case(name)
+    p = case_params(case, overrides or {})
+    r, st = run_case(name, mesh=mesh, overrides=overrides, integration=integration,
+                     shear_factor=shear_factor, cell=cell, load_factors=[angle / p["angle"]],
+                     include_reference_loads=False, rtol=1e-12, return_state=True)
+    if r["status"] != "ok":
+        raise RuntimeError(f"torsion small-twist solve failed: {r['status']}")
+    T = r["steps"][-1]["reactions"][0]["moment_about_axis"]
+    G = p["E"] / (2 * (1 + p["nu"]))
+    model = st["model"]
+    s0, s1 = (f * p["L"] for f in interior)
+    b0 = _tip_evaluator(model, (s0, 0.0))(model.w)[1][0]
+    b1 = _tip_evaluator(model, (s1, 0.0))(model.w)[1][0]
+    tau = (b1 - b0) / (s1 - s0)
+    return {"J": T * p["L"] / (G * angle), "J_interior": T / (G * tau), "T": T, "angle": angle,
+            "twist_rate_interior": tau, "mean_twist_rate": angle / p["L"], "G": G,
+            "mesh": list(r["mesh"].values())[:2], "result": r}
