@@ -82,13 +82,15 @@ def edge_twists(g, edge_nodes):
 
 
 def _dexp_inv_jacobian_T(psi, F, h=1e-30):
-    """J (E, 6, 6) with J[:, :, k] = d/dpsi_k (dexp_inv(psi)^T F), by complex step."""
-    E = psi.shape[0]
-    pc = np.repeat(psi[:, None, :].astype(complex), 6, axis=1)          # (E, 6k, 6)
-    pc[:, np.arange(6), np.arange(6)] += 1j * h
-    L = se3.dexp_inv(pc)                                               # (E, 6k, 6, 6)
-    m = np.einsum("ekji,ej->eki", L, F)                                # (E, 6k, 6)
-    return np.swapaxes(m.imag / h, 1, 2)
+    """J (E, 6, 6) with J[:, :, k] = d/dpsi_k (dexp_inv(psi)^T F), by complex step of the closed
+    vector form (exact to round-off: no subtraction)."""
+    pc = np.repeat(psi[None].astype(complex), 6, axis=0)               # (6k, E, 6)
+    pc[np.arange(6), :, np.arange(6)] += 1j * h
+    m = se3.dexp_inv_T_apply(pc, F[None])                              # (6k, E, 6)
+    return np.ascontiguousarray(np.transpose(m.imag / h, (1, 2, 0)))
+
+
+CHUNK = 2048   # elements/edges per block in the tangent: keeps temporaries cache-sized
 
 
 class DefaultElement:
@@ -108,6 +110,7 @@ class DefaultElement:
         self.j0 = j0
         self.Dbar = np.einsum("qia,mqij,qjb,mq->mab", P, Dm, P, j0)    # (m, 24, 24)
         self.area = j0.sum(axis=1)                                     # reference area per element
+        self.Dz0 = np.einsum("mij,mj->mi", self.Dbar, self.z0)         # constant part of Dbar z
 
     # ----------------------------------------------------------------------------------
     def _element_z(self, zE):
@@ -152,40 +155,53 @@ class DefaultElement:
         r = np.stack([np.bincount(En[:, 0], weights=ra[:, k], minlength=n)
                       + np.bincount(En[:, 1], weights=rb[:, k], minlength=n) for k in range(6)], -1)
         # size of the terms that cancel in Dbar (z - z0): the residual's round-off floor
-        fscale = np.sqrt(np.einsum("mi,mi->", f + np.einsum("mij,mj->mi", self.Dbar, self.z0),
-                                   f + np.einsum("mij,mj->mi", self.Dbar, self.z0)) + np.einsum("mi,mi->", f, f))
+        fz = f + self.Dz0
+        fscale = np.sqrt(np.einsum("mi,mi->", fz, fz) + np.einsum("mi,mi->", f, f))
         out = {"energy": energy, "r": r, "force_scale": fscale}
         if not tangent:
             return out
-
-        # ---- material part: G^T Dbar G per element, G = d z_elem / d eta_nodes -------------
-        pos = sgn > 0                                                  # (m, 4)
-        eid = mesh.elem_edges
-        Lloc_p = np.where(pos[..., None, None], Lp[eid], Lm[eid])      # L(psi_local)
-        Lloc_m = np.where(pos[..., None, None], Lm[eid], Lp[eid])      # L(-psi_local)
+        # blocks of CHUNK elements/edges (a loop over ~n/2048 blocks, not over elements)
         m_el = mesh.n_elements
-        G = np.zeros((m_el, 4, 6, 4, 6))                                # (edge, comp, node, comp)
-        for k, (la, lb) in enumerate(LOCAL_EDGES):
-            G[:, k, :, la, :] = -0.5 * Lloc_m[:, k]
-            G[:, k, :, lb, :] = 0.5 * Lloc_p[:, k]
-        G = G.reshape(m_el, 24, 24)
-        Ke = np.swapaxes(G, 1, 2) @ self.Dbar @ G
-        Ke = Ke.reshape(m_el, 4, 6, 4, 6).transpose(0, 1, 3, 2, 4)
+        pos = sgn > 0
+        eid = mesh.elem_edges
+        Ke = np.empty((m_el, 4, 4, 6, 6))
+        G = np.zeros((min(CHUNK, m_el), 4, 6, 4, 6))                    # (edge, comp, node, comp)
+        for s in range(0, m_el, CHUNK):
+            e = min(s + CHUNK, m_el)
+            c = e - s
+            Gc = G[:c]
+            Gc[:] = 0.0
+            ids, pp = eid[s:e], pos[s:e, :, None, None]
+            Lloc_p = np.where(pp, Lp[ids], Lm[ids])                     # L(psi_local)
+            Lloc_m = np.where(pp, Lm[ids], Lp[ids])                     # L(-psi_local)
+            for k, (la, lb) in enumerate(LOCAL_EDGES):
+                Gc[:, k, :, la, :] = -0.5 * Lloc_m[:, k]
+                Gc[:, k, :, lb, :] = 0.5 * Lloc_p[:, k]
+            G2 = Gc.reshape(c, 24, 24)
+            # material part G^T Dbar G, G = d z_elem / d eta_nodes
+            Kc = np.swapaxes(G2, 1, 2) @ (self.Dbar[s:e] @ G2)
+            Ke[s:e] = Kc.reshape(c, 4, 6, 4, 6).transpose(0, 1, 3, 2, 4)
 
-        # ---- geometric part per mesh edge: Hessian of F . z_E(eta) -----------------------
-        p = np.einsum("eji,ej->ei", Lp, F)                             # L(psi)^T F
-        Jm = _dexp_inv_jacobian_T(psi, F)
-        AdI = se3.Ad(se3.exp(-psi))                                    # Ad_{h^-1}
-        M = np.concatenate([-AdI, np.broadcast_to(np.eye(6), AdI.shape)], axis=2)   # (E,6,12)
-        N = np.concatenate([-Lm, Lp], axis=2)                                       # (E,6,12)
-        A = np.swapaxes(M, 1, 2) @ Jm @ N
-        H = 0.25 * (A + np.swapaxes(A, 1, 2))
-        Hba = -0.25 * se3.adt(p) @ AdI
-        H[:, 6:, :6] += Hba
-        H[:, :6, 6:] += np.swapaxes(Hba, 1, 2)
-        KE = H.reshape(nE, 2, 6, 2, 6).transpose(0, 1, 3, 2, 4)
+        # geometric part per mesh edge: Hessian of F . z_E(eta)
+        KE = np.empty((nE, 2, 2, 6, 6))
+        I6 = np.eye(6)
+        for s in range(0, nE, CHUNK):
+            e = min(s + CHUNK, nE)
+            c = e - s
+            ps, Fs, Lps, Lms = psi[s:e], F[s:e], Lp[s:e], Lm[s:e]
+            p = np.einsum("eji,ej->ei", Lps, Fs)                        # L(psi)^T F
+            Jm = _dexp_inv_jacobian_T(ps, Fs)
+            AdI = se3.Ad(se3.exp(-ps))                                   # Ad_{h^-1}
+            M = np.concatenate([-AdI, np.broadcast_to(I6, AdI.shape)], axis=2)   # (c,6,12)
+            N = np.concatenate([-Lms, Lps], axis=2)                              # (c,6,12)
+            A = np.swapaxes(M, 1, 2) @ Jm @ N
+            H = 0.25 * (A + np.swapaxes(A, 1, 2))
+            Hba = -0.25 * se3.adt(p) @ AdI
+            H[:, 6:, :6] += Hba
+            H[:, :6, 6:] += np.swapaxes(Hba, 1, 2)
+            KE[s:e] = H.reshape(c, 2, 6, 2, 6).transpose(0, 1, 3, 2, 4)
 
-        # ---- derivative of the left-trivialised gradient along exp updates ---------------
+        # derivative of the left-trivialised gradient along exp updates
         Kn = 0.5 * se3.adt(r)
         out.update(Ke=Ke, KE=KE, Kn=Kn)
         return out

@@ -27,7 +27,7 @@ import numpy as np
 
 __all__ = [
     "hat3", "vee3", "hat", "vee", "exp_so3", "log_so3", "exp", "log", "inv", "compose",
-    "dexp", "dexp_inv", "dexp_so3", "dexp_inv_so3", "Ad", "ad", "adt", "skew_rotation_angle",
+    "dexp", "dexp_inv", "dexp_inv_T_apply", "dexp_so3", "dexp_inv_so3", "Ad", "ad", "adt", "skew_rotation_angle",
 ]
 
 _SERIES = 1.0  # below this theta the series branch is used (closed forms are exact above)
@@ -247,6 +247,33 @@ def dexp_inv(xi):
     Linv = np.eye(3) + 0.5 * W + e(c) * (W @ W)
     dL = 0.5 * V + e(dc * wv) * (W @ W) + e(c) * (V @ W + W @ V)
     return _block(Linv, dL)
+
+
+def dexp_inv_T_apply(xi, f):
+    """dexp_inv(xi)^T f without forming the matrix (closed vector form; complex-safe):
+
+    with L = [[A, B], [0, A]], A^T f = f - w x f / 2 + c w x (w x f),
+    B^T f = -v x f / 2 + c'(w.v)/t w x (w x f) + c [w x (v x f) + v x (w x f)].
+    """
+    v, w = xi[..., :3], xi[..., 3:]
+    fv, fw = f[..., :3], f[..., 3:]
+    s = np.einsum("...i,...i->...", w, w)
+    wv = np.einsum("...i,...i->...", w, v)
+    c = _coef(s, _C, _c_closed)[..., None]
+    dc = _coef(s, _dC, _dc_closed)[..., None]
+    cr = _cross
+    wwfv = cr(w, cr(w, fv))
+    top = fv - 0.5 * cr(w, fv) + c * wwfv
+    bot = (-0.5 * cr(v, fv) + dc * wv[..., None] * wwfv + c * (cr(w, cr(v, fv)) + cr(v, cr(w, fv)))
+           + fw - 0.5 * cr(w, fw) + c * cr(w, cr(w, fw)))
+    return np.concatenate([top, bot], -1)
+
+
+def _cross(a, b):
+    """Cross product that keeps complex dtype and broadcasts (faster than np.cross here)."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], -1)
 
 
 def Ad(g):
