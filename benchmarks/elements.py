@@ -35,8 +35,8 @@ def _problem(element, nx=16, P=1.0):
 def prop_a(element):
     out = {}
     try:
-        r1 = _problem(element).solve(steps=1, max_cutbacks=0, max_iter=3000, rtol=1e-12, dtol=1e-12)
-        r40 = _problem(element).solve(steps=40, max_iter=3000, rtol=1e-12, dtol=1e-12)
+        r1 = _problem(element).solve(steps=1, max_cutbacks=0, max_iter=300, rtol=1e-12, dtol=1e-12)
+        r40 = _problem(element).solve(steps=40, max_iter=300, rtol=1e-12, dtol=1e-12)
         out["path_1_vs_40"] = float(np.abs(r1.displacements() - r40.displacements()).max() / 10.0)
     except CoreSE3Error as exc:
         out["path_1_vs_40"] = f"failed: {str(exc)[:60]}"
@@ -107,7 +107,7 @@ def prop_b_c(element):
     ev = np.sort(np.abs(np.linalg.eigvals(Kfd0)))
     out["zero_modes"] = int(np.sum(ev < 1e-10 * ev[-1]))
     try:
-        r = _problem(element, P=1.0).solve(steps=1, max_cutbacks=0, max_iter=3000)
+        r = _problem(element, P=1.0).solve(steps=1, max_cutbacks=0, max_iter=300)
         out["newton_iterations_P1"] = r.final.iterations
     except CoreSE3Error as exc:
         out["newton_iterations_P1"] = f"failed: {str(exc)[:60]}"
@@ -121,7 +121,7 @@ def prop_d(element):
         EI = 1.2e6 * h ** 3 / 12
         try:
             doc, _, _ = run_case("cantilever-shear", mesh=(32, 1), steps=4, element=element,
-                                 overrides=dict(h=h, load_max=EI / 100.0), max_iter=3000)
+                                 overrides=dict(h=h, load_max=EI / 100.0), max_iter=300)
             out[f"error_L/h={Lh:g}"] = doc["reference"]["error"]
         except CoreSE3Error as exc:
             out[f"error_L/h={Lh:g}"] = f"failed: {str(exc)[:60]}"
@@ -131,7 +131,7 @@ def prop_d(element):
 def prop_e(element):
     try:
         doc, res, _ = run_case("rollup", mesh=(10, 1), steps=8, element=element,
-                               overrides=dict(k=1.0), max_iter=3000)
+                               overrides=dict(k=1.0), max_iter=300)
         u = np.array(doc["steps"][-1]["probes"]["tip"]["u"])
         return {"rollup_k1_tip_error/L": float(np.linalg.norm(u - np.array([-10.0, 0, 0])) / 10.0)}
     except CoreSE3Error as exc:
