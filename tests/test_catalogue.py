@@ -1,0 +1,52 @@
+"""Catalogue cases against their references (issue 2 acceptance), through the same runner the
+CLI uses.  Errors use the project's measure (core_se3/bench.py): max over the path of the
+distance between computed and reference tip displacement / largest reference displacement.
+References: core_se3/data/elastica.json, entries named in each case."""
+import numpy as np
+import pytest
+
+from core_se3.bench import run_case
+
+
+@pytest.mark.parametrize("follower", [0.0, 1.0])
+def test_pressure_strip(follower):
+    # 5_plate_cylindrical_bending_pressure_{dead,follower}; measured 0.073 % / 0.060 % on 16x1,
+    # bar 0.5 % (the issue's); the discretisation error of 16 elements is ~1e-3 (h^2 rate)
+    doc, _, _ = run_case("pressure-strip", overrides=dict(follower=follower))
+    assert doc["reference"]["entry"].endswith("dead" if follower == 0 else "follower")
+    assert doc["reference"]["error"] < 5e-3
+
+
+def test_cantilever_steel_plate():
+    # 1_cantilever_tip_force_seed_plate_nu0 (N, mm), PL^2/EI to 10 on 20x1: measured 0.040 %, bar 1 %
+    doc, _, _ = run_case("cantilever-shear-steel")
+    assert doc["reference"]["error"] < 1e-2
+
+
+@pytest.mark.parametrize("k,steps", [(2.0, 16), (-1.0, 8)])
+def test_curved_rollup_exact_circle(k, steps):
+    # 4_arch_halfcircle_end_moment_R10over2pi is the closed-form circle of curvature 1/R + M/EI:
+    # a constant commuting strain field, exact on any mesh whose elements turn by < pi, so the
+    # tip must lie on it to Newton tolerance (bar 1e-6 L as in the issue; measured 3e-16)
+    doc, res, prob = run_case("curved-rollup", mesh=(10, 1), steps=steps, overrides=dict(k=k),
+                              rtol=1e-12, dtol=1e-12)
+    p = {key: v["value"] for key, v in doc["params"].items()}
+    EI = p["E"] * p["width"] * p["h"] ** 3 / 12
+    R, s = p["R"], np.pi * p["R"]
+    kap = 1 / R + k * 2 * np.pi * EI / 10.0 / EI
+    tip = np.array([np.sin(kap * s) / kap, 0.0, (1 - np.cos(kap * s)) / kap]) if abs(kap) > 1e-12 \
+        else np.array([s, 0.0, 0.0])
+    u = np.array(doc["steps"][-1]["probes"]["tip"]["u"])
+    assert np.linalg.norm(u - (tip - np.array([0.0, 0.0, 2 * R]))) < 1e-6 * s
+
+
+def test_torsion_constant_between_mindlin_and_thin_plate():
+    # 5_strip_torsion_seed_strip: Mindlin plate ks=1 6.41e-5 < J < thin plate w h^3/3 8.33e-5.
+    # The Cosserat law penalises the skew curvature and the rigid end edge restrains warping,
+    # both stiffening (see README); measured 7.62e-5 on 20x6.  A locking or mis-scaled twist
+    # law would leave this bracket.
+    from core_se3 import bench, cases
+    from core_se3.references import elastica_entry
+    e = elastica_entry("5_strip_torsion_seed_strip")["params"]
+    J = bench.torsion_constant(bench.case_params(cases.get_case("torsion")), (20, 6))
+    assert e["J_mindlin_ks=1"] < J < e["J_kirchhoff_plate=wh^3/3"]
