@@ -80,8 +80,7 @@ def check_supports(problem, g):
 
 def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, rtol=1e-10, dtol=1e-10,
                  max_iter=30, max_cutbacks=12, g_init=None, verbose=False, linear_solver=None,
-                 record_substeps=False, max_rotation_step=np.inf, line_search=0,
-                 predictor=False):
+                 record_substeps=False):
     """Solve the problem from lam_start to lam_end in ``steps`` equal load increments."""
     t0 = time.perf_counter()
     if not np.isfinite(lam_end) or steps < 1:
@@ -129,25 +128,10 @@ def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, rtol=1e-10, dtol
     dlam_nominal = (lam_end - lam_start) / steps
     dlam = dlam_nominal
     first_solve = True
-    prev = None
     for target in targets:
         while abs(target - lam) > 1e-14 * max(1.0, abs(target)):
             lam_try = lam + dlam if abs(dlam) < abs(target - lam) else target
-            g_try = g.copy()
-            if predictor and prev is not None and not stateful:
-                # secant predictor on the group: continue the last converged increment,
-                # g exp(s log(g_prev^-1 g)), s = dlam / dlam_prev.  Thin shells need it: the
-                # linear predictor's membrane error grows like (L/h)^2.
-                g_prev, lam_prev = prev
-                s_ = (lam_try - lam) / (lam - lam_prev)
-                if 0 < s_ <= 2.0:
-                    try:
-                        d = se3.log(se3.inv(g_prev) @ g)
-                        if np.abs(d[:, 3:]).max() < 1.0:
-                            g_try = g @ se3.exp(s_ * d)
-                    except Exception:
-                        g_try = g.copy()
-            g_try = problem.apply_prescribed(g_try, lam_try)
+            g_try = problem.apply_prescribed(g.copy(), lam_try)
             if stateful:
                 # the seed element's strain is a state: save it, and feed it the prescribed motion
                 problem.element.save()
@@ -198,28 +182,7 @@ def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, rtol=1e-10, dtol
                     t_sol += time.perf_counter() - ts
                     first_solve = False
                     eta = asm.scatter(x)
-                    # trust region on rotations: far from the solution a thin shell's Newton
-                    # step can turn elements by ~pi (membrane overshoot); damp such steps
-                    wmax = np.abs(eta[:, 3:]).max()
-                    if wmax > max_rotation_step:
-                        eta *= max_rotation_step / wmax
                     dn = _scaled_norm(eta, ell, moment=False) / ell
-                    if line_search and not stateful and it > 0:
-                        # backtracking on |r|: the consistent Newton direction is a descent
-                        # direction of |r|^2/2; full steps are kept near the solution
-                        r0 = np.linalg.norm(rf)
-                        alpha = 1.0
-                        for _ in range(line_search):
-                            try:
-                                gt = g_try @ se3.exp(alpha * eta)
-                                et = problem.element.evaluate(gt, tangent=False)
-                                ft, _, _ = problem.external(gt, lam_try, tangent=False)
-                                if np.linalg.norm(asm.vector(et["r"] - ft)) < r0:
-                                    break
-                            except ElementTooDistortedError:
-                                pass
-                            alpha *= 0.5
-                        eta = alpha * eta
                     g_try = g_try @ se3.exp(eta)
                     if stateful:
                         problem.element.update(eta)
@@ -235,7 +198,6 @@ def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, rtol=1e-10, dtol
                 print(f"  lam {lam_try:.6g}: {'ok' if ok else 'FAIL'} in {len(hist) - 1} it, "
                       f"residual {hist[-1] if hist else float('nan'):.2e} {reason}")
             if ok:
-                prev = (g, lam)
                 lam = lam_try
                 g = g_try
                 store = abs(lam - target) <= 1e-14 * max(1.0, abs(target)) or record_substeps
