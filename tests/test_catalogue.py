@@ -50,3 +50,19 @@ def test_torsion_constant_between_mindlin_and_thin_plate():
     e = elastica_entry("5_strip_torsion_seed_strip")["params"]
     J = bench.torsion_constant(bench.case_params(cases.get_case("torsion")), (20, 6))
     assert e["J_mindlin_ks=1"] < J < e["J_kirchhoff_plate=wh^3/3"]
+
+
+def test_inplane_rollup_small_k_circle():
+    # 2_pure_bending_rollup_inplane_drilling: circle of radius EI/M with the membrane in-plane
+    # stiffness E h w^3/12 only.  The Cosserat drilling-curvature modulus (seed: D(1-nu)) adds
+    # drilling * D(1-nu) w, which for this h = w strip equals E h w^3/12 at drilling = 1 (the
+    # seed's value doubles the stiffness).  drilling = 0 leaves a seventh zero mode (checked
+    # below), so the comparison uses 1 % of the seed's modulus: expected deviation <~ 1 %
+    # (measured 0.48 % on 40x4 at k = 0.25); bar 1 % as the issue.
+    from core_se3 import Material, Problem, mesh, verify
+    doc, _, _ = run_case("inplane-rollup", mesh=(40, 4), steps=5, overrides=dict(k=0.25, drilling=0.01))
+    assert doc["reference"]["error"] < 1e-2
+    p = Problem(mesh.rectangle(1.0, 1.0, 2, 2), Material(1200.0, 0.0, 1.0, drilling=0.0))
+    assert verify.zero_modes(p)[1] == 7
+    p = Problem(mesh.rectangle(1.0, 1.0, 2, 2), Material(1200.0, 0.0, 1.0, drilling=0.01))
+    assert verify.zero_modes(p)[1] == 6
