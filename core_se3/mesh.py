@@ -103,7 +103,7 @@ class Mesh:
             if np.any(c <= 0):
                 bad = np.nonzero(c <= 0)[0][:5]
                 raise MeshError(f"quads {bad.tolist()} are degenerate, non-convex or listed clockwise "
-                                "about their normal (corner {k})".replace("{k}", str(k)))
+                                f"about their normal (corner {k})")
 
     def node_set(self, name_or_pred):
         """Node ids of a named edge, or of the nodes whose position satisfies a predicate."""

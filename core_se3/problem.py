@@ -26,7 +26,7 @@ __all__ = ["Problem"]
 class _Prescribed:
     """Nodes whose frames follow target(lam) on the fixed components (body-frame dofs)."""
 
-    def __init__(self, nodes, fixed, target=None, check_axis=None):
+    def __init__(self, nodes, fixed, target=None):
         self.nodes = np.asarray(nodes, np.int64)
         self.fixed = np.asarray(fixed, bool)
         self.target = target

@@ -100,20 +100,18 @@ def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, rtol=1e-10, dtol
     t_start = time.perf_counter()
 
     def record(lam, g, its, hist, rint, fext, store):
+        states = {}
         for name, pr in problem.probes.items():
             x, R = pr.state(g)
             x0, Rref = pr.state(mesh.g0)
             unwrapped[name] = unwrap_rotation(R @ Rref.T, unwrapped[name])
+            states[name] = dict(u=x - x0, R=R @ Rref.T, w=unwrapped[name].copy())
         if not store:
             return
         reac = (rint - fext) * fixedmask
         RF, RM, sF, sM = _lab_totals(g, reac, magnitudes=True)
         AF, AM, aF, aM = _lab_totals(g, fext, magnitudes=True)
-        probes = {}
-        for name, pr in problem.probes.items():
-            x, R = pr.state(g)
-            x0, Rref = pr.state(mesh.g0)
-            probes[name] = dict(u=x - x0, R=R @ Rref.T, w=unwrapped[name].copy())
+        probes = states
         result.steps.append(StepResult(lam, g.copy(), its, list(hist), RF, RM, AF, AM, probes,
                                        scale=(max(sF, aF, max(sM, aM) / ell),
                                               max(sM, aM, max(sF, aF) * ell))))
