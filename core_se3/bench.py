@@ -9,7 +9,9 @@ computed load levels.
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 from math import pi
+from typing import Callable
 
 import numpy as np
 
@@ -21,7 +23,39 @@ from .references import elastica_entry
 from .results import SCHEMA, VERSION
 
 __all__ = ["build_problem", "run_case", "case_params", "reference_for", "error_against_reference",
-           "result_document"]
+           "result_document", "Family", "FAMILIES", "register_family"]
+
+
+@dataclass
+class Family:
+    """How to run the cases of one family (``case.extra["family"]``) that the generic strip/arch
+    runner below does not cover: each hook takes the generic one's arguments.
+
+    build(case, p, mesh, element, linear_solver) -> Problem
+    run(case, p, prob, steps, verbose, **solve_kw) -> (doc, Result)     (doc: result schema)
+    plot(case, p, doc, res, path) -> None                               (optional)
+    report(doc) -> list of extra lines for the CLI                      (optional)
+    """
+    build: Callable
+    run: Callable
+    plot: Callable | None = None
+    report: Callable | None = None
+
+
+FAMILIES: dict[str, Family] = {}
+
+
+def register_family(name, family):
+    FAMILIES[name] = family
+
+
+def family_of(case):
+    name = case.extra.get("family")
+    if name is None:
+        return None
+    if name not in FAMILIES:
+        raise KeyError(f"case {case.name!r} belongs to the unregistered family {name!r}")
+    return FAMILIES[name]
 
 
 def case_params(case, overrides=None):
@@ -44,6 +78,9 @@ def _mesh_for(case, p, nx, ny):
 
 
 def build_problem(case, p, mesh=None, element="default", linear_solver="auto"):
+    fam = family_of(case)
+    if fam is not None:
+        return fam.build(case, p, mesh, element, linear_solver)
     nx, ny = mesh or case.mesh
     m = _mesh_for(case, p, nx, ny)
     prob = Problem(m, Material(p["E"], p["nu"], p["h"], drilling=p.get("drilling", 1.0)),
@@ -149,6 +186,11 @@ def run_case(name, mesh=None, overrides=None, steps=None, element="default", lin
     t0 = time.perf_counter()
     prob = build_problem(case, p, mesh, element, linear_solver)
     t_setup = time.perf_counter() - t0
+    fam = family_of(case)
+    if fam is not None:
+        doc, res = fam.run(case, p, prob, steps or case.steps, verbose, **solve_kw)
+        res.timings["setup"] = res.timings.get("setup", 0.0) + t_setup
+        return doc, res, prob
     res = prob.solve(steps=steps or case.steps, verbose=verbose, **solve_kw)
     res.timings["setup"] += t_setup
     doc = result_document(case, p, prob, res)
@@ -206,3 +248,8 @@ def result_document(case, p, prob, res):
                   n_dofs=6 * m.n_nodes),
         steps=steps, timings=t, reference=reference,
     )
+
+
+# Case families with their own runners register here (each module imports this one).
+from . import bench_magnetic  # noqa: E402,F401
+from . import bench_sze  # noqa: E402,F401

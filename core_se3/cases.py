@@ -110,6 +110,8 @@ CASES: dict[str, Case] = {}
 
 
 def _add(case):
+    if case.name in CASES:
+        raise ValueError(f"case {case.name!r} is defined twice")
     CASES[case.name] = case
 
 
@@ -274,3 +276,8 @@ def get_case(name: str) -> Case:
 
 def list_cases():
     return [(c.name, c.description) for c in CASES.values()]
+
+
+# Case families kept in modules of their own (data only, like this one) add to CASES on import.
+from . import cases_magnetic  # noqa: E402,F401
+from . import cases_sze  # noqa: E402,F401

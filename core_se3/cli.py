@@ -38,10 +38,11 @@ def _print_doc(doc):
     ref = doc["reference"]
     print(f"{'load':>12} {'ux':>12} {'uy':>12} {'uz':>12} {'angle':>9} {'it':>3} {'residual':>9}"
           + ("  error" if ref else ""))
+    probe = next(iter(doc["steps"][0]["probes"]))          # the case's probe ('tip', 'crown', ...)
     for s in doc["steps"]:
-        u = s["probes"]["tip"]["u"]
+        u = s["probes"][probe]["u"]
         line = (f"{s['load']['value']:>12.5g} {u[0]:>12.5g} {u[1]:>12.5g} {u[2]:>12.5g} "
-                f"{s['probes']['tip']['rotation_angle']:>9.4f} {s['iterations']:>3d} {s['residual']:>9.1e}")
+                f"{s['probes'][probe]['rotation_angle']:>9.4f} {s['iterations']:>3d} {s['residual']:>9.1e}")
         if ref and s.get("error") is not None:
             line += f"  {100 * s['error']:.3f}%"
         print(line)
@@ -73,6 +74,11 @@ def bench_run(args):
         print(f"error: {exc}", file=sys.stderr)
         return 2
     _print_doc(doc)
+    from .bench import family_of
+    fam = family_of(case)
+    if fam is not None and fam.report is not None:
+        for line in fam.report(doc):
+            print(line)
     if args.json:
         os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
         write_json(args.json, doc)
@@ -82,7 +88,11 @@ def bench_run(args):
         paths = write_series(args.vtu, prob.mesh.X, prob.mesh.quads, prob.mesh.g0,
                              [s.g for s in res.steps], [s.load_factor for s in res.steps])
         print(f"wrote {len(paths) - 1} VTU files and {paths[-1]}")
-    if args.plot:
+    if args.plot and fam is not None and fam.plot is not None:
+        from .bench import case_params
+        fam.plot(case, case_params(case, _parse_set(args.set)), doc, res, args.plot)
+        print(f"wrote {args.plot}")
+    elif args.plot:
         from .bench import reference_for, case_params
         from .io import plot_load_deflection
         loads = np.array([s["load"]["value"] for s in doc["steps"]])
