@@ -1,4 +1,5 @@
-"""Command line: ``core-se3 bench list`` and ``core-se3 bench run NAME [options]``."""
+"""Command line: ``core-se3 bench list``, ``core-se3 bench run NAME [options]`` and
+``core-se3 run SCENARIO.toml [--out DIR] [--resume]`` (scenario files, see docs/SCENARIOS.md)."""
 from __future__ import annotations
 
 import argparse
@@ -85,8 +86,12 @@ def bench_run(args):
         print(f"wrote {args.json}")
     if args.vtu:
         from .io import write_series
+        extra = None
+        if hasattr(prob, "output_fields"):
+            extra = [{k: np.asarray(v) for k, v in prob.output_fields(s.g).items()} for s in res.steps]
         paths = write_series(args.vtu, prob.mesh.X, prob.mesh.quads, prob.mesh.g0,
-                             [s.g for s in res.steps], [s.load_factor for s in res.steps])
+                             [s.g for s in res.steps], [s.load_factor for s in res.steps],
+                             point_data_per_step=extra)
         print(f"wrote {len(paths) - 1} VTU files and {paths[-1]}")
     if args.plot and fam is not None and fam.plot is not None:
         from .bench import case_params
@@ -119,6 +124,46 @@ def bench_run(args):
     return 0
 
 
+def scenario_run(args):
+    """``core-se3 run``: validate the scenario, solve it step by step, write its outputs."""
+    from . import scenario
+    from .runner import run
+    try:
+        scn = scenario.load(args.scenario)
+    except CoreSE3Error as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    if args.check:
+        print(f"{args.scenario}: valid ({scn.mesh.n_elements} elements, {scn.mesh.n_nodes} nodes, "
+              f"{len(scn.spec['supports'])} supports, {len(scn.spec['loads'])} loads, "
+              f"{len(scn.spec['magnets'])} magnets, {scn.solver['steps']} steps)")
+        return 0
+    progress = True if args.progress else (False if args.quiet else None)
+    try:
+        res = run(scn, out=args.out, resume=args.resume, progress=progress, force=args.force,
+                  verbose=args.verbose)
+    except ConvergenceError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 3
+    except CoreSE3Error as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("\ninterrupted: the converged steps are kept; continue with --resume", file=sys.stderr)
+        return 130
+    last = res.doc["steps"][-1]
+    if not args.quiet:
+        print(f"{scn.name}: {len(res.doc['steps']) - 1} steps to load factor {last['load_factor']:g} "
+              f"in {res.doc['timings']['total']:.2f} s")
+        for name, p in last["probes"].items():
+            u = p["u"]
+            print(f"  probe {name}: u = ({u[0]:.6g}, {u[1]:.6g}, {u[2]:.6g}), "
+                  f"rotation {p['rotation_angle']:.6g} rad")
+        for kind, path in res.files.items():
+            print(f"  wrote {kind}: {path}")
+    return 0
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(prog="core-se3", description="Geometrically exact Cosserat shells on SE(3)")
     sub = ap.add_subparsers(dest="cmd", required=True)
@@ -136,7 +181,18 @@ def main(argv=None):
     run.add_argument("--vtu", default=None, help="directory for VTU files and series.pvd")
     run.add_argument("--plot", default=None, help="PNG load-deflection plot")
     run.add_argument("-v", "--verbose", action="store_true")
+    srun = sub.add_parser("run", help="run a scenario file (TOML; schema in docs/SCENARIOS.md)")
+    srun.add_argument("scenario", help="SCENARIO.toml")
+    srun.add_argument("--out", default=None, help="output directory (default [output] dir or out/NAME)")
+    srun.add_argument("--resume", action="store_true", help="continue from the checkpoint in --out")
+    srun.add_argument("--force", action="store_true", help="start over even if --out holds a run")
+    srun.add_argument("--check", action="store_true", help="only validate the scenario")
+    srun.add_argument("--progress", action="store_true", help="progress bar even when not on a terminal")
+    srun.add_argument("-q", "--quiet", action="store_true", help="no progress bar, no summary")
+    srun.add_argument("-v", "--verbose", action="store_true", help="print every Newton (sub-)step")
     args = ap.parse_args(argv)
+    if args.cmd == "run":
+        return scenario_run(args)
     if args.cmd == "bench" and args.bcmd == "list":
         from .cases import CASES
         for c in CASES.values():

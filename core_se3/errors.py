@@ -39,3 +39,19 @@ class ConvergenceError(CoreSE3Error):
 
 class ElementTooDistortedError(CoreSE3Error):
     """A relative rotation across an element edge reached pi, where the logarithm is cut."""
+
+
+class ScenarioError(CoreSE3Error, ValueError):
+    """An invalid scenario file: ``file`` and dotted ``key`` name where, the message what was
+    expected and what was found."""
+
+    def __init__(self, message, file=None, key=None):
+        self.file = file
+        self.key = key
+        where = ": ".join(x for x in (file, f"[{key}]" if key else None) if x)
+        super().__init__(f"{where}: {message}" if where else message)
+        self.detail = message
+
+
+class CheckpointError(CoreSE3Error):
+    """A checkpoint that is missing, unreadable or belongs to another scenario."""

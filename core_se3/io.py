@@ -95,12 +95,14 @@ def frame_fields(g0, g) -> dict[str, np.ndarray]:
 
 
 # ----------------------------------------------------------------------------- VTK / ParaView
-def write_vtu(path, X, quads, g0, g, point_data: Mapping[str, np.ndarray] | None = None) -> str:
+def write_vtu(path, X, quads, g0, g, point_data: Mapping[str, np.ndarray] | None = None,
+              cell_data: Mapping[str, np.ndarray] | None = None) -> str:
     """Write one state as a VTK unstructured grid (``.vtu``) of quads on the reference mesh.
 
     X: (n, 3) reference node positions; quads: (m, 4) node ids; g0, g: (n, 4, 4) reference and
     current frames. Point fields: ``displacement``, ``d1``, ``d2``, ``d3``, ``rotation_angle`` (see
-    :func:`frame_fields`) plus any ``point_data`` (name -> (n,) or (n, k) array). Returns the path.
+    :func:`frame_fields`) plus any ``point_data`` (name -> (n,) or (n, k) array); ``cell_data``:
+    name -> (m,) or (m, k) array per quad (e.g. stress resultants). Returns the path.
     """
     import meshio
 
@@ -113,8 +115,15 @@ def write_vtu(path, X, quads, g0, g, point_data: Mapping[str, np.ndarray] | None
         if a.shape[0] != n:
             raise ValueError(f"point_data[{name!r}] has {a.shape[0]} rows, expected {n}")
         fields[name] = a.astype(float) if a.dtype.kind in "biuf" else a
+    cfields = {}
+    for name, arr in (cell_data or {}).items():
+        a = np.asarray(arr, dtype=float)
+        if a.shape[0] != len(cells):
+            raise ValueError(f"cell_data[{name!r}] has {a.shape[0]} rows, expected {len(cells)}")
+        cfields[name] = [a]
     path = _ensure_parent(path)
-    mesh = meshio.Mesh(points=X, cells=[(_CELL_TYPES[cells.shape[1]], cells)], point_data=fields)
+    mesh = meshio.Mesh(points=X, cells=[(_CELL_TYPES[cells.shape[1]], cells)], point_data=fields,
+                       cell_data=cfields or None)
     meshio.write(path, mesh, file_format="vtu")
     return path
 

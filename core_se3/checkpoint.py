@@ -1,0 +1,106 @@
+"""Atomic file writes and run checkpoints (the state after the last converged load step).
+
+Every file is written to a temporary name in its own directory and moved into place with
+os.replace, which is atomic on POSIX: a reader (or a run killed at any instant) sees either
+the previous complete file or the new complete file, never a partial one.
+
+A checkpoint (``checkpoint.npz``) holds what a run needs to continue exactly where it stopped:
+the nodal frames g (n, 4, 4) of the last converged step, its load factor and step number, the
+continuously unwrapped probe rotation vectors, the step records written so far (results
+JSON), the accumulated timings, and the fingerprint of the scenario it belongs to.  Resuming
+from it repeats the same per-step Newton solves from the same bits, so the final state equals
+that of an uninterrupted run.
+"""
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import tempfile
+
+import numpy as np
+
+from .errors import CheckpointError
+
+__all__ = ["atomic_path", "write_text_atomic", "write_json_atomic", "Checkpoint"]
+
+FORMAT = "core-se3-checkpoint"
+VERSION = 1
+
+
+@contextlib.contextmanager
+def atomic_path(path, suffix=None):
+    """Yield a temporary path next to ``path`` (same extension); on success move it to ``path``."""
+    path = os.fspath(path)
+    d = os.path.dirname(os.path.abspath(path))
+    os.makedirs(d, exist_ok=True)
+    ext = suffix if suffix is not None else os.path.splitext(path)[1]
+    fd, tmp = tempfile.mkstemp(prefix="." + os.path.basename(path) + ".", suffix=".tmp" + ext, dir=d)
+    os.close(fd)
+    try:
+        yield tmp
+        with open(tmp, "rb+") as fh:
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+
+
+def write_text_atomic(path, text):
+    with atomic_path(path) as tmp:
+        with open(tmp, "w") as fh:
+            fh.write(text)
+    return os.fspath(path)
+
+
+def write_json_atomic(path, doc):
+    return write_text_atomic(path, json.dumps(doc, indent=1))
+
+
+class Checkpoint:
+    """The checkpoint file of a run directory."""
+
+    def __init__(self, directory):
+        self.directory = os.fspath(directory)
+        self.path = os.path.join(self.directory, "checkpoint.npz")
+
+    def exists(self):
+        return os.path.isfile(self.path)
+
+    def save(self, fingerprint, step, lam, g, unwrap, records, timings, extra=None):
+        names = sorted(unwrap)
+        with atomic_path(self.path) as tmp:
+            with open(tmp, "wb") as fh:
+                np.savez(fh, format=np.array(FORMAT), version=np.array(VERSION),
+                         fingerprint=np.array(fingerprint), step=np.array(int(step)),
+                         lam=np.array(float(lam)), g=np.asarray(g, float),
+                         probe_names=np.array(json.dumps(names)),
+                         unwrap=np.array([unwrap[k] for k in names], float).reshape(len(names), 3),
+                         records=np.array(json.dumps(records)), timings=np.array(json.dumps(timings)),
+                         extra=np.array(json.dumps(extra or {})))
+
+    def load(self, fingerprint=None):
+        """The saved state as a dict; CheckpointError if missing, unreadable or foreign."""
+        if not self.exists():
+            raise CheckpointError(f"no checkpoint to resume from: {self.path} does not exist "
+                                  "(run without --resume first)")
+        try:
+            with np.load(self.path, allow_pickle=False) as z:
+                if str(z["format"]) != FORMAT or int(z["version"]) != VERSION:
+                    raise ValueError(f"not a {FORMAT} v{VERSION} file")
+                names = json.loads(str(z["probe_names"]))
+                state = dict(fingerprint=str(z["fingerprint"]), step=int(z["step"]),
+                             lam=float(z["lam"]), g=np.array(z["g"]),
+                             unwrap={k: np.array(w) for k, w in zip(names, z["unwrap"])},
+                             records=json.loads(str(z["records"])),
+                             timings=json.loads(str(z["timings"])),
+                             extra=json.loads(str(z["extra"])))
+        except Exception as exc:
+            raise CheckpointError(f"cannot read checkpoint {self.path}: {exc}") from None
+        if fingerprint is not None and state["fingerprint"] != fingerprint:
+            raise CheckpointError(
+                f"checkpoint {self.path} belongs to a different scenario (the mesh, material, "
+                "supports, loads, fields, probes, steps or element changed since it was written); "
+                "run without --resume (and with --force) to start over, or use another --out")
+        return state
