@@ -359,11 +359,9 @@ def _mesh(v, d, base_dir):
         path = fname if os.path.isabs(fname) else os.path.join(base_dir, fname)
         if not os.path.isfile(path):
             v.fail(_join(key, "file"), f"mesh file {fname!r} does not exist (looked for {path})")
-        try:
-            import meshio
-            raw = meshio.read(path)
-        except Exception as exc:
-            v.fail(_join(key, "file"), f"cannot read mesh file {fname!r}: {type(exc).__name__}: {exc}")
+        raw, why = _read_meshio(path)
+        if raw is None:
+            v.fail(_join(key, "file"), f"cannot read mesh file {fname!r}: {why}")
         try:
             mesh = M.from_meshio(raw, d1_hint=hint)
         except CoreSE3Error as exc:
@@ -395,6 +393,44 @@ def _mesh(v, d, base_dir):
     except CoreSE3Error as exc:
         v.fail(key, f"{gen}: {exc}")
     return mesh, dict(generator=gen, **kw), {}, None
+
+
+def _read_meshio(path):
+    """(meshio.Mesh, None) or (None, reason).  meshio reports some unreadable files by printing
+    and calling sys.exit; both are caught here so that a bad file is an ordinary error."""
+    import contextlib
+    import io as _io
+    import meshio
+    buf = _io.StringIO()
+    try:
+        with contextlib.redirect_stdout(buf), contextlib.redirect_stderr(buf):
+            raw = meshio.read(path)
+        _physical_sets(raw)
+        return raw, None
+    except (Exception, SystemExit) as exc:
+        said = " ".join(buf.getvalue().split())
+        what = f"{type(exc).__name__}: {exc}" if not isinstance(exc, SystemExit) else ""
+        return None, "; ".join(x for x in (what, said) if x) or "meshio could not read it"
+
+
+def _physical_sets(raw):
+    """Named cell sets from Gmsh physical tags (``gmsh:physical`` cell data and field_data
+    name -> [tag, dim]) when the reader left ``cell_sets`` empty (Gmsh 2.2 files)."""
+    phys = (raw.cell_data or {}).get("gmsh:physical")
+    if raw.cell_sets or phys is None or not raw.field_data:
+        return
+    dims = {"vertex": 0, "line": 1, "triangle": 2, "quad": 2}
+    sets = {}
+    for name, fd in raw.field_data.items():
+        fd = np.asarray(fd).ravel()
+        if len(fd) < 2:
+            continue
+        tag, dim = int(fd[0]), int(fd[1])
+        blocks = [np.nonzero(np.asarray(p) == tag)[0] if dims.get(cb.type) == dim else
+                  np.zeros(0, np.int64) for cb, p in zip(raw.cells, phys)]
+        if any(len(b) for b in blocks):
+            sets[str(name)] = blocks
+    raw.cell_sets = sets
 
 
 def _file_regions(raw):

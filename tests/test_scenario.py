@@ -1,0 +1,413 @@
+"""core_se3.scenario: TOML scenario files validated before anything runs.
+
+Each kind of bad input gets its own test asserting the error type, the dotted key it names and
+what was expected.  The exact mechanics checks at the end (axial stretch, pure bending) compare
+against closed-form strip solutions: u = F L / (E h w) and the bent circle of radius EI / M.
+"""
+import copy
+import math
+
+import meshio
+import numpy as np
+import pytest
+
+from core_se3 import scenario
+from core_se3.errors import ScenarioError
+
+BASE = {
+    "name": "strip",
+    "mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 4, "ny": 1},
+    "material": {"E": 1.2e6, "nu": 0.0, "h": 0.1},
+    "supports": [{"type": "clamp", "edge": "x0"}],
+    "loads": [{"type": "edge_force", "edge": "x1", "force": [0.0, 0.0, 1.0]}],
+    "probes": [{"name": "tip", "edge": "x1"}],
+    "solver": {"steps": 2},
+}
+
+
+def base():
+    return copy.deepcopy(BASE)
+
+
+def load_text(tmp_path, text, name="s.toml"):
+    p = tmp_path / name
+    p.write_text(text)
+    return scenario.load(p)
+
+
+def load_doc(tmp_path, doc):
+    return load_text(tmp_path, scenario.dumps(doc))
+
+
+def bad(tmp_path, doc, key, *fragments):
+    """The scenario must fail validation naming the file, ``key`` and every fragment."""
+    with pytest.raises(ScenarioError) as ei:
+        load_doc(tmp_path, doc)
+    e = ei.value
+    assert e.file.endswith("s.toml"), e.file
+    assert e.key == key, (e.key, str(e))
+    assert str(e).startswith(str(tmp_path / "s.toml") + f": [{key}]: ") if key else True
+    for f in fragments:
+        assert f in str(e), (f, str(e))
+    return e
+
+
+# ----------------------------------------------------------------------------- valid input
+def test_valid_scenario_defaults_and_problem(tmp_path):
+    scn = load_doc(tmp_path, base())
+    assert scn.name == "strip"
+    assert scn.solver["steps"] == 2 and scn.solver["rtol"] == 1e-10 and scn.solver["element"] == "default"
+    assert scn.spec["loads"][0]["scale"] == "linear" and scn.spec["loads"][0]["follower"] is False
+    assert scn.output == dict(dir=None, vtu=True, vtu_every=1, plots=True, picture=True)
+    assert scn.mesh.n_elements == 4 and set(scn.problem.probes) == {"tip"}
+    assert scn.load_factors() == [0.5, 1.0]
+    assert len(scn.problem.loads) == 1 and len(scn.problem.supports) == 1
+
+
+def test_dumps_roundtrip_and_fingerprint(tmp_path):
+    d = base()
+    d["loads"][0]["scale"] = [[0.0, 0.0], [0.5, 1.0], [1.0, 1.0]]
+    d["edges"] = {"mid": {"box": {"x": [5.0, 5.0]}}}
+    a = load_doc(tmp_path, d)
+    import tomllib
+    assert tomllib.loads(scenario.dumps(d)) == d
+    # solver tolerances and outputs do not change the fingerprint; physics does
+    d2 = copy.deepcopy(d)
+    d2["solver"].update(rtol=1e-8, max_iter=5)
+    d2["output"] = {"vtu": False}
+    assert load_doc(tmp_path, d2).fingerprint == a.fingerprint
+    d3 = copy.deepcopy(d)
+    d3["material"]["E"] = 1.3e6
+    assert load_doc(tmp_path, d3).fingerprint != a.fingerprint
+    # the user node set 'mid' (box x = 5) is ordered along the line
+    assert a.mesh.edges["mid"].tolist() == [2, 7]
+
+
+def test_scale_tables():
+    f = scenario.make_scale([[0.0, 0.0], [0.5, 1.0], [1.0, 1.0]])
+    assert [f(x) for x in (0.0, 0.25, 0.5, 0.9, 2.0)] == [0.0, 0.5, 1.0, 1.0, 1.0]
+    assert scenario.make_scale("constant")(0.3) == 1.0 and scenario.make_scale("linear")(0.3) == 0.3
+
+
+# ----------------------------------------------------------------------------- bad input: one test per kind
+def test_bad_toml_syntax(tmp_path):
+    with pytest.raises(ScenarioError, match=r"s.toml: not valid TOML: .*line 2"):
+        load_text(tmp_path, 'name = "x"\n[mesh\n')
+
+
+def test_missing_file(tmp_path):
+    with pytest.raises(ScenarioError, match="cannot read the scenario file"):
+        scenario.load(tmp_path / "nope.toml")
+
+
+def test_unknown_key_with_suggestion(tmp_path):
+    d = base()
+    d["material"]["thickness"] = 0.1
+    bad(tmp_path, d, "material.thickness", "unknown key 'thickness'", "allowed here: E, nu, h")
+    d = base()
+    d["solver"]["setps"] = 3
+    bad(tmp_path, d, "solver.setps", "did you mean 'steps'?")
+
+
+def test_unknown_top_level_table(tmp_path):
+    d = base()
+    d["load"] = [{"type": "gravity"}]
+    bad(tmp_path, d, "load", "unknown key 'load'", "did you mean 'loads'?")
+
+
+def test_wrong_type(tmp_path):
+    d = base()
+    d["material"]["E"] = "steel"
+    bad(tmp_path, d, "material.E", "expected a number, got a string 'steel'")
+    d = base()
+    d["mesh"]["nx"] = 4.5
+    bad(tmp_path, d, "mesh.nx", "expected an integer, got a number 4.5")
+    d = base()
+    d["loads"][0]["follower"] = 1
+    bad(tmp_path, d, "loads[0].follower", "expected true or false, got an integer 1")
+
+
+def test_missing_required(tmp_path):
+    d = base()
+    del d["material"]["h"]
+    bad(tmp_path, d, "material.h", "missing required key")
+    d = base()
+    del d["mesh"]
+    bad(tmp_path, d, "mesh", "missing required key")
+
+
+def test_negative_thickness(tmp_path):
+    d = base()
+    d["material"]["h"] = -0.1
+    bad(tmp_path, d, "material.h", "expected a number > 0, got -0.1")
+
+
+def test_poisson_ratio_at_least_half(tmp_path):
+    d = base()
+    d["material"]["nu"] = 0.5
+    bad(tmp_path, d, "material.nu", "expected a number < 0.5, got 0.5")
+
+
+def test_nonpositive_modulus(tmp_path):
+    d = base()
+    d["material"]["E"] = 0
+    bad(tmp_path, d, "material.E", "expected a number > 0, got 0")
+
+
+@pytest.mark.parametrize("value", [math.nan, math.inf, -math.inf])
+def test_nan_and_infinite_values(tmp_path, value):
+    d = base()
+    d["loads"][0]["force"] = [0.0, value, 1.0]
+    bad(tmp_path, d, "loads[0].force", "expected finite numbers")
+    d = base()
+    d["mesh"]["L"] = value
+    bad(tmp_path, d, "mesh.L", "expected a finite number")
+
+
+def test_unknown_edge(tmp_path):
+    d = base()
+    d["supports"][0]["edge"] = "x00"
+    bad(tmp_path, d, "supports[0].edge", "unknown edge 'x00'", "did you mean 'x0'?", "x0, x1, y0, y1")
+    d = base()
+    d["probes"][0]["edge"] = "tip"
+    bad(tmp_path, d, "probes[0].edge", "unknown edge 'tip'")
+
+
+def test_unknown_region(tmp_path):
+    d = base()
+    d["loads"].append({"type": "pressure", "p": 1.0, "region": "skin"})
+    bad(tmp_path, d, "loads[1].region", "unknown region 'skin'", "defined regions: none")
+
+
+def test_no_supports(tmp_path):
+    d = base()
+    del d["supports"]
+    bad(tmp_path, d, "supports", "no supports", "rigid body")
+
+
+def test_insufficient_supports_name_the_free_motion(tmp_path):
+    d = base()
+    d["supports"] = [{"type": "fix", "edge": "x0", "dofs": [0, 1, 2]}]
+    bad(tmp_path, d, "supports", "leave a rigid-body motion free", "rotation about")
+
+
+def test_wrong_vector_length(tmp_path):
+    d = base()
+    d["loads"][0]["force"] = [0.0, 1.0]
+    bad(tmp_path, d, "loads[0].force", "expected an array of 3 numbers")
+
+
+def test_unknown_choice(tmp_path):
+    d = base()
+    d["mesh"]["generator"] = "rectangel"
+    bad(tmp_path, d, "mesh.generator", "unknown value 'rectangel'", "did you mean 'rectangle'?")
+    d = base()
+    d["loads"][0]["type"] = "force"
+    bad(tmp_path, d, "loads[0].type", "unknown value 'force'", "'edge_force'")
+
+
+def test_mesh_generator_and_file_both_or_neither(tmp_path):
+    d = base()
+    d["mesh"]["file"] = "m.msh"
+    bad(tmp_path, d, "mesh", "exactly one of 'generator'")
+
+
+def test_element_count_and_limits(tmp_path):
+    d = base()
+    d["mesh"]["nx"] = 0
+    bad(tmp_path, d, "mesh.nx", "expected an integer >= 1, got 0")
+    d = base()
+    d["solver"]["steps"] = 0
+    bad(tmp_path, d, "solver.steps", "expected an integer >= 1")
+    d = base()
+    d["mesh"].update(nx=2000, ny=2000)
+    bad(tmp_path, d, "mesh", "exceed the limit")
+
+
+def test_fix_dofs_out_of_range(tmp_path):
+    d = base()
+    d["supports"].append({"type": "fix", "edge": "x1", "dofs": [2, 6]})
+    bad(tmp_path, d, "supports[1].dofs", "dof numbers 0..5")
+
+
+def test_zero_rotation_axis(tmp_path):
+    d = base()
+    d["supports"].append({"type": "rotate", "edge": "x1", "axis": [0.0, 0.0, 0.0], "angle": 1.0})
+    bad(tmp_path, d, "supports[1].axis", "non-zero vector")
+
+
+def test_bad_scale_table(tmp_path):
+    d = base()
+    d["loads"][0]["scale"] = [[0.0, 0.0], [0.5, 1.0], [0.5, 2.0]]
+    bad(tmp_path, d, "loads[0].scale", "must increase strictly")
+    d["loads"][0]["scale"] = "quadratic"
+    bad(tmp_path, d, "loads[0].scale", "unknown value 'quadratic'")
+
+
+def test_per_region_elastic_material_not_supported_yet(tmp_path):
+    d = base()
+    d["regions"] = {"tip": {"box": {"x": [5.0, 10.0]}}}
+    d["material"]["regions"] = {"tip": {"E": 2e6}}
+    bad(tmp_path, d, "material.regions.tip.E", "not supported yet", "only 'rho' may differ")
+
+
+def test_region_selecting_nothing(tmp_path):
+    d = base()
+    d["regions"] = {"far": {"box": {"x": [50.0, 60.0]}}}
+    bad(tmp_path, d, "regions.far", "selects no elements")
+
+
+def test_gravity_without_density(tmp_path):
+    d = base()
+    d["loads"].append({"type": "gravity"})
+    bad(tmp_path, d, "loads[1].rho", "gravity needs a density")
+
+
+def test_magnet_without_field(tmp_path):
+    d = base()
+    d["magnets"] = [{"Br": [0.1, 0.0, 0.0]}]
+    bad(tmp_path, d, "magnets[0]", "needs an applied field")
+    d["fields"] = {"a": {"type": "uniform", "B": [0, 0, 0.01]}}
+    d["magnets"] = [{"Br": [0.1, 0.0, 0.0], "field": "b"}]
+    bad(tmp_path, d, "magnets[0].field", "unknown value 'b'")
+
+
+def test_duplicate_probe_name(tmp_path):
+    d = base()
+    d["probes"].append({"name": "tip", "edge": "x0"})
+    bad(tmp_path, d, "probes[1].name", "must be unique")
+
+
+def test_node_ids_that_do_not_exist(tmp_path):
+    d = base()
+    d["supports"][0] = {"type": "clamp", "nodes": [0, 99]}
+    bad(tmp_path, d, "supports[0].nodes", "ids [99] do not exist", "0 .. 9")
+
+
+def test_edge_load_on_a_set_that_is_not_a_line(tmp_path):
+    d = base()
+    d["edges"] = {"corners": {"nodes": [0, 9]}}
+    d["loads"][0]["edge"] = "corners"
+    bad(tmp_path, d, "loads[0].edge", "not a line of element edges")
+
+
+def test_arclength_control_not_available(tmp_path):
+    d = base()
+    d["solver"]["control"] = "arclength"
+    bad(tmp_path, d, "solver.control", "arc-length")
+
+
+def test_table_expected(tmp_path):
+    d = base()
+    d["supports"] = {"type": "clamp", "edge": "x0"}
+    bad(tmp_path, d, "supports", "expected an array of tables ([[supports]])")
+
+
+# ----------------------------------------------------------------------------- mesh files
+def _write_quads(path, X, quads, **kw):
+    meshio.write(path, meshio.Mesh(np.asarray(X, float), [("quad", np.asarray(quads))], **kw))
+
+
+def _file_doc(fname):
+    d = base()
+    d["mesh"] = {"file": fname}
+    d["supports"] = [{"type": "clamp", "nodes": [0, 3]}]
+    d["loads"] = [{"type": "nodal", "nodes": [2], "force": [0.0, 0.0, 1.0]}]
+    d["probes"] = []
+    return d
+
+
+def test_mesh_file_ok(tmp_path):
+    X = [[0, 0, 0], [1, 0, 0], [2, 0, 0], [0, 1, 0], [1, 1, 0], [2, 1, 0]]
+    _write_quads(tmp_path / "m.vtu", X, [[0, 1, 4, 3], [1, 2, 5, 4]])
+    scn = load_doc(tmp_path, _file_doc("m.vtu"))
+    assert scn.mesh.n_elements == 2 and scn.spec["mesh"] == {"file": "m.vtu", "d1_hint": [1.0, 0.0, 0.0]}
+
+
+def test_mesh_file_missing(tmp_path):
+    bad(tmp_path, _file_doc("missing.msh"), "mesh.file", "does not exist")
+
+
+def test_mesh_file_unreadable(tmp_path):
+    (tmp_path / "junk.msh").write_text("this is not a mesh\n")
+    bad(tmp_path, _file_doc("junk.msh"), "mesh.file", "cannot read mesh file 'junk.msh'")
+
+
+def test_mesh_file_degenerate_quad(tmp_path):
+    X = [[0, 0, 0], [1, 0, 0], [2, 0, 0], [0, 1, 0], [1, 0, 0], [2, 1, 0]]   # node 4 on node 1
+    _write_quads(tmp_path / "m.vtu", X, [[0, 1, 4, 3], [1, 2, 5, 4]])
+    bad(tmp_path, _file_doc("m.vtu"), "mesh.file", "bad mesh 'm.vtu'", "degenerate")
+
+
+def test_mesh_file_nonconvex_quad(tmp_path):
+    X = [[0, 0, 0], [1, 0, 0], [2, 0, 0], [0, 1, 0], [0.3, 0.3, 0], [2, 1, 0]]  # re-entrant corner
+    _write_quads(tmp_path / "m.vtu", X, [[0, 1, 4, 3], [1, 2, 5, 4]])
+    bad(tmp_path, _file_doc("m.vtu"), "mesh.file", "non-convex")
+
+
+def test_mesh_file_flipped_normals(tmp_path):
+    X = [[0, 0, 0], [1, 0, 0], [2, 0, 0], [0, 1, 0], [1, 1, 0], [2, 1, 0]]
+    _write_quads(tmp_path / "m.vtu", X, [[0, 1, 4, 3], [1, 4, 5, 2]])      # second quad clockwise
+    bad(tmp_path, _file_doc("m.vtu"), "mesh.file", "normals flip across the edge")
+
+
+def test_mesh_file_with_triangles(tmp_path):
+    X = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]
+    meshio.write(tmp_path / "t.vtu", meshio.Mesh(np.array(X, float), [("triangle", np.array([[0, 1, 2]]))]))
+    bad(tmp_path, _file_doc("t.vtu"), "mesh.file", "only quadrilateral shells")
+
+
+def test_gmsh_file_named_regions_and_lines(tmp_path):
+    """Physical curves become edges, physical surfaces regions (Gmsh 2.2 written by meshio)."""
+    X = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [0, 1, 0], [1, 1, 0], [2, 1, 0]], float)
+    cells = [("line", np.array([[0, 3]])), ("line", np.array([[2, 5]])),
+             ("quad", np.array([[0, 1, 4, 3]])), ("quad", np.array([[1, 2, 5, 4]]))]
+    phys = [np.array([1]), np.array([2]), np.array([3]), np.array([4])]
+    m = meshio.Mesh(X, cells, cell_data={"gmsh:physical": phys, "gmsh:geometrical": phys},
+                    field_data={"root": np.array([1, 1]), "tip": np.array([2, 1]),
+                                "base": np.array([3, 2]), "pad": np.array([4, 2])})
+    meshio.write(tmp_path / "m.msh", m, file_format="gmsh22", binary=False)
+    d = _file_doc("m.msh")
+    d["supports"] = [{"type": "clamp", "edge": "root"}]
+    d["loads"] = [{"type": "edge_force", "edge": "tip", "force": [0.0, 0.0, 1.0]},
+                  {"type": "pressure", "p": 1.0, "region": "pad"}]
+    scn = load_doc(tmp_path, d)
+    assert sorted(scn.mesh.edges) == ["root", "tip"]
+    assert scn.regions["pad"].tolist() == [1] and scn.regions["base"].tolist() == [0]
+    assert sorted(scn.mesh.X[scn.mesh.edges["tip"], 0]) == [2.0, 2.0]
+
+
+# ----------------------------------------------------------------------------- exact mechanics
+def test_scenario_problem_axial_stretch_exact(tmp_path):
+    """Strip under an end force along its axis: u = F L / (E h w) (exact for nu = 0)."""
+    d = base()
+    d["loads"][0]["force"] = [1000.0, 0.0, 0.0]
+    scn = load_doc(tmp_path, d)
+    res = scn.problem.solve(steps=1)
+    np.testing.assert_allclose(res.final.probes["tip"]["u"][0], 1000.0 * 10.0 / (1.2e6 * 0.1 * 1.0),
+                               rtol=1e-10)
+
+
+def test_resultants_exact_stretch_and_bending(tmp_path):
+    """Stress resultants at element centres: N1 = F/w along the axis for an end force F;
+    M1 = M/w for an end moment M (the bent circle has constant moment)."""
+    from core_se3.resultants import element_resultants
+    d = base()
+    d["mesh"]["ny"] = 2
+    d["loads"][0]["force"] = [1000.0, 0.0, 0.0]
+    scn = load_doc(tmp_path, d)
+    g = scn.problem.solve(steps=1).final.g
+    f = element_resultants(scn.problem.element, g)
+    np.testing.assert_allclose(f["N1"], np.tile([1000.0, 0, 0], (8, 1)), atol=1e-8)
+    np.testing.assert_allclose(f["N2"], 0.0, atol=1e-8)
+    d["loads"][0] = {"type": "edge_moment", "edge": "x1", "moment": [0.0, -10.0, 0.0]}
+    scn = load_doc(tmp_path, d)
+    res = scn.problem.solve(steps=2)
+    f = element_resultants(scn.problem.element, res.final.g)
+    np.testing.assert_allclose(f["M1"], np.tile([0.0, -10.0, 0.0], (8, 1)), atol=1e-8)
+    np.testing.assert_allclose(f["M1_local"], np.tile([0.0, -10.0, 0.0], (8, 1)), atol=1e-8)
+    np.testing.assert_allclose(f["N1"], 0.0, atol=1e-7)
+    # the strip bends into a circle of radius EI/M = 10: tip at (R sin 1, 0, R (1 - cos 1))
+    R = 1.2e6 * 1.0 * 0.1 ** 3 / 12 / 10.0
+    np.testing.assert_allclose(res.final.probes["tip"]["u"],
+                               [R * np.sin(1.0) - 10.0, 0.0, R * (1 - np.cos(1.0))], atol=1e-9)
