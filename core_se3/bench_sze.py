@@ -1,1 +1,263 @@
-"""Placeholder: filled by its feature (registers a Family into core_se3.bench.FAMILIES)."""
+"""Runner of the Sze et al. (2004) family (cases in cases_sze.py and ``sze-semicylinder``).
+
+Build: mesh, supports and point/line loads from ``case.extra["shape"]``.  Run: arc-length
+continuation (core_se3.continuation) to the end of the published table, or load-stepped
+Newton for ``extra["path"] == "load"``.  Measure: the deviation
+
+    dev = max_k min over the polyline |(P_k/P_max, u_k/u_max) - table curve|
+
+(the largest distance of a computed point to the tabulated curve, each column normalised by
+its largest |value|; max over the case's columns).  It serves snap-throughs and snap-backs,
+where a comparison at equal load is ill-defined.
+"""
+from __future__ import annotations
+
+from math import pi
+
+import numpy as np
+
+from . import bench
+from . import mesh as M
+from .material import Material
+from .problem import Problem
+from .references import literature_entry
+from .results import SCHEMA, VERSION
+
+__all__ = ["point_curve_distances", "curve_deviation", "table_curves", "sze_problem"]
+
+
+# ------------------------------------------------------------------ the measure ----------
+
+def point_curve_distances(points, curve):
+    """Distance of each point (k, 2) to the polyline ``curve`` (m, 2)."""
+    P = np.atleast_2d(np.asarray(points, float))
+    C = np.atleast_2d(np.asarray(curve, float))
+    if len(C) == 1:
+        return np.linalg.norm(P - C[0], axis=1)
+    A, B = C[:-1], C[1:]
+    AB = B - A
+    L2 = np.einsum("si,si->s", AB, AB)
+    t = np.einsum("ksi,si->ks", P[:, None, :] - A[None], AB) / np.where(L2 > 0, L2, 1.0)
+    t = np.clip(np.where(L2 > 0, t, 0.0), 0.0, 1.0)
+    Q = A[None] + t[..., None] * AB[None]
+    return np.linalg.norm(P[:, None, :] - Q, axis=2).min(1)
+
+
+def table_curves(case):
+    """[(column, P/P_max array, u array in case units)] of the case's literature entry."""
+    e = literature_entry(case.extra["literature"])
+    out = []
+    lam = np.asarray(e["P_over_Pmax"], float)
+    for c in _curves(case):
+        key = c["column"].replace("/", "_")
+        out.append((c["column"], lam, c["scale"] * np.asarray(e[key], float)))
+    return out
+
+
+def _curves(case):
+    if "curves" in case.extra:
+        return case.extra["curves"]
+    x = case.extra                                   # sze-semicylinder (shared with fenicsx_ref)
+    return [dict(column=x["column"], probe=case.probe, component=x["probe_component"],
+                 sign=x["probe_sign"], scale=x["displacement_scale"])]
+
+
+def curve_deviation(case, lams, probes):
+    """(deviation, per-step deviations, per-curve info) of computed points against the table.
+
+    lams: load factors (P/P_max); probes: per step {probe: u (3,)}.
+    """
+    lams = np.asarray(lams, float)
+    per_step = np.zeros(len(lams))
+    info = []
+    for (col, tl, tu), c in zip(table_curves(case), _curves(case)):
+        u = np.array([c["sign"] * pr[c["probe"]][c["component"]] for pr in probes])
+        umax = np.abs(tu).max()
+        pmax = 1.0
+        d = point_curve_distances(np.c_[lams / pmax, u / umax], np.c_[tl / pmax, tu / umax])
+        per_step = np.maximum(per_step, d)
+        k = int(np.argmax(d))
+        info.append(dict(column=col, u_max=float(umax), deviation=float(d.max()),
+                         at=dict(P_over_Pmax=float(lams[k]), u=float(u[k])),
+                         table_end=dict(P_over_Pmax=float(tl[-1]), u=float(tu[-1])),
+                         computed_end=dict(P_over_Pmax=float(lams[-1]), u=float(u[-1]))))
+    return float(per_step.max()), per_step, info
+
+
+# ------------------------------------------------------------------ build -----------------
+
+def _corner(m, x, y):
+    X = m.X
+    k = np.nonzero((np.abs(X[:, 0] - x) < 1e-9 * (1 + abs(x))) & (np.abs(X[:, 1] - y) < 1e-9 * (1 + abs(y))))[0]
+    if len(k) != 1:
+        raise ValueError(f"expected one node at x = {x}, y = {y}, found {len(k)}")
+    return int(k[0])
+
+
+def sze_problem(case, p, mesh=None, element="default", linear_solver="auto"):
+    """Problem of a Sze case (see cases_sze.py for geometry, supports and loads)."""
+    shape = case.extra["shape"]
+    nx, ny = mesh or case.mesh
+    mat = Material(p["E"], p["nu"], p["h"], drilling=p.get("drilling", 1.0))
+    if shape == "roof":
+        R, L, th = p["R"], p["L"], p["theta"]
+        full = bool(p.get("full", 0.0))
+        if full:
+            m = M.cylinder_panel(R, L, -th, th, nx, ny)
+            m.g0[:, 1, 3] -= L / 2                           # centre the roof on y = 0
+        else:
+            m = M.cylinder_panel(R, L / 2, 0.0, th, nx, ny)
+        prob = Problem(m, mat, element=element, linear_solver=linear_solver)
+        if full:
+            prob.fix("x0", (0, 1, 2))
+            prob.fix("x1", (0, 1, 2))
+            c = _corner(m, 0.0, 0.0)
+            prob.add_nodal_load(c, force=(0.0, 0.0, -p["load_max"]))
+        else:
+            # crown line x = 0: u_x (= d1) and rotations about y (d2), z (d3) fixed;
+            # mid-length y = 0: u_y (= d2) and rotations about d1, d3 fixed; x1 hinged
+            prob.fix("x0", (0, 4, 5))
+            prob.fix("y0", (1, 3, 5))
+            prob.fix("x1", (0, 1, 2))
+            c = _corner(m, 0.0, 0.0)
+            prob.add_nodal_load(c, force=(0.0, 0.0, -p["load_max"] / 4))
+        prob.add_probe("C", [c])
+        prob.control = (c, (0.0, 0.0, -1.0))
+        return prob
+    if shape == "slit-annulus":
+        m = M.annulus(p["r_in"], p["r_out"], 2 * pi, nx, ny)
+        prob = Problem(m, mat, element=element, linear_solver=linear_solver)
+        prob.clamp("y1")
+        prob.add_edge_force("y0", (0.0, 0.0, p["load_max"] * (p["r_out"] - p["r_in"])))
+        y0 = m.node_set("y0")
+        prob.add_probe("A", [int(y0[0])])
+        prob.add_probe("B", [int(y0[-1])])
+        prob.control = (int(y0[-1]), (0.0, 0.0, 1.0))
+        return prob
+    if shape == "semicylinder":
+        m = M.cylinder_panel(p["R"], p["L"], -pi / 2, pi / 2, nx, ny)
+        prob = Problem(m, mat, element=element, linear_solver=linear_solver)
+        prob.clamp("y0")
+        # longitudinal edges t = -+pi/2: d1 = +-z, d2 = +y: u_z and the rotation about y fixed
+        prob.fix("x0", (0, 4))
+        prob.fix("x1", (0, 4))
+        y1 = m.node_set("y1")
+        if len(y1) % 2 != 1:
+            raise ValueError("sze-semicylinder needs an even number of elements around (a crown node)")
+        crown = int(y1[len(y1) // 2])
+        prob.add_nodal_load(crown, force=(0.0, 0.0, -p["load_max"]))
+        prob.add_probe("crown", [crown])
+        prob.control = (crown, (0.0, 0.0, -1.0))
+        return prob
+    raise ValueError(f"unknown Sze shape {shape!r}")
+
+
+# ------------------------------------------------------------------ run -------------------
+
+def run_sze(case, p, prob, steps, verbose, **kw):
+    """Trace the case's path; returns (document, Result)."""
+    from .continuation import arc_length
+    x = case.extra
+    if x.get("path", "arc_length") == "load":
+        res = prob.solve(steps=steps, verbose=verbose, **kw)
+    else:
+        node, direction = prob.control
+        stop_at, lam_end = None, 1.0
+        if x.get("stop") == "table_end_displacement":
+            (_, _, tu), = table_curves(case)[:1]
+            stop_at, lam_end = (node, direction, float(tu[-1])), None
+        dlam0 = kw.pop("dlam0", x.get("dlam0", 1.0 / max(steps, 1)))
+        res = arc_length(prob, lam_end=lam_end, dlam0=dlam0, stop_at=stop_at,
+                         ds_max=kw.pop("ds_max", None), max_steps=kw.pop("max_steps", 400),
+                         verbose=verbose, **kw)
+    return document(case, p, prob, res), res
+
+
+def document(case, p, prob, res):
+    """Result document (schema core-se3-result) with the curve deviation as the error."""
+    steps = []
+    for st in res.steps:
+        value = case.load_value(p, st.load_factor)
+        probes = {}
+        for name, pr in st.probes.items():
+            probes[name] = dict(u=pr["u"].tolist(), rotation_angle=float(np.linalg.norm(pr["w"])),
+                                rotation_vector=pr["w"].tolist(), rotation=pr["R"].tolist())
+        s = dict(load_factor=float(st.load_factor),
+                 load=dict(name=case.load_name, value=float(value), unit=case.load_unit,
+                           reference_entry=case.extra["literature"], reference_value=float(st.load_factor)),
+                 probes=probes, iterations=int(st.iterations),
+                 residual=float(st.residual_history[-1]) if st.residual_history else 0.0,
+                 residual_history=[float(r) for r in st.residual_history],
+                 balance_error=float(st.balance_error))
+        if hasattr(st, "stability"):
+            s["stability"] = dict(det_sign=int(st.stability["det_sign"]),
+                                  negative_eigenvalues=st.stability["negative_eigenvalues"])
+        steps.append(s)
+    dev, per_step, info = curve_deviation(case, [st.load_factor for st in res.steps],
+                                          [{k: v["u"] for k, v in st.probes.items()} for st in res.steps])
+    for s, d in zip(steps, per_step):
+        s["error"] = float(d)
+    e = literature_entry(case.extra["literature"])
+    reference = dict(entry=case.extra["literature"], file="literature.json",
+                     block=",".join(c["column"] for c in _curves(case)), error=dev, deviation=dev,
+                     measure="max distance of computed points to the table polyline in "
+                             "(P/P_max, u/u_max), u_max per column",
+                     P_max=float(p["load_max"]), curves=info, n_points=len(steps),
+                     unverified=e.get("unverified_fields", []))
+    m = prob.mesh
+    t = dict(res.timings)
+    t.setdefault("setup", 0.0)
+    t["total"] = sum(v for k, v in t.items() if k != "total")
+    doc = dict(schema=SCHEMA, version=VERSION, case=case.name, model="core_se3",
+               variant=prob.element_name,
+               params={k: dict(value=v, unit=case.units.get(k, "")) for k, v in p.items()},
+               mesh=dict(nx=m.shape[0], ny=m.shape[1], n_nodes=m.n_nodes, n_elements=m.n_elements,
+                         n_dofs=6 * m.n_nodes),
+               steps=steps, timings=t, reference=reference)
+    crit = getattr(res, "critical_points", None)
+    if crit is not None:
+        doc["critical_points"] = [dict(kind=c.kind, load_factor=c.lam, bracket=list(c.lam_bracket),
+                                       step=c.step, negative_eigenvalues=list(c.negative_eigenvalues))
+                                  for c in crit]
+    return doc
+
+
+def plot(case, p, doc, res, path):
+    from .io import _ensure_parent, _new_figure
+    fig = _new_figure()
+    ax = fig.add_subplot(111)
+    lam = np.array([s["load_factor"] for s in doc["steps"]])
+    for (col, tl, tu), c in zip(table_curves(case), _curves(case)):
+        u = np.array([c["sign"] * s["probes"][c["probe"]]["u"][c["component"]] for s in doc["steps"]])
+        line, = ax.plot(u, lam, "o-", ms=3, label=f"core_se3 {col}")
+        ax.plot(tu, tl, "--", color="k" if len(_curves(case)) == 1 else line.get_color(), lw=1,
+                label=f"Sze 2004 {col}")
+    for cp in doc.get("critical_points", []):
+        ax.axhline(cp["load_factor"], color="0.8", lw=0.6)
+    ax.set_xlabel("displacement")
+    ax.set_ylabel("P / P_max" + (f"  (P_max = {p['load_max']:g})"))
+    ax.set_title(f"{case.name} ({doc['mesh']['nx']}x{doc['mesh']['ny']}): deviation "
+                 f"{100 * doc['reference']['deviation']:.2f} %")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.savefig(_ensure_parent(path), dpi=120, bbox_inches="tight")
+
+
+def report(doc):
+    ref = doc["reference"]
+    lines = [f"curve deviation (max distance to the table polyline in (P/P_max, u/u_max)): "
+             f"{100 * ref['deviation']:.2f} % over {ref['n_points']} points"]
+    for c in ref["curves"]:
+        lines.append(f"  {c['column']}: {100 * c['deviation']:.2f} % (worst at P/P_max = "
+                     f"{c['at']['P_over_Pmax']:.4g}, u = {c['at']['u']:.4g}); end computed "
+                     f"({c['computed_end']['P_over_Pmax']:.4g}, {c['computed_end']['u']:.4g}), "
+                     f"table ({c['table_end']['P_over_Pmax']:.4g}, {c['table_end']['u']:.4g})")
+    for cp in doc.get("critical_points", []):
+        lines.append(f"  {cp['kind']} point at P/P_max ~ {cp['load_factor']:.5g} (bracket "
+                     f"{cp['bracket'][0]:.5g} .. {cp['bracket'][1]:.5g})")
+    if ref.get("unverified"):
+        lines.append(f"  table fields marked unverified: {ref['unverified']}")
+    return lines
+
+
+bench.register_family("sze", bench.Family(build=sze_problem, run=run_sze, plot=plot, report=report))

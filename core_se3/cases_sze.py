@@ -1,1 +1,77 @@
-"""Placeholder: filled by its feature (registers cases into core_se3.cases.CASES)."""
+"""Sze, Liu & Lo (2004) nonlinear shell benchmarks (data only; run by core_se3.bench_sze).
+
+Each case names its table in ``core_se3/data/literature.json`` (``extra["literature"]``) and
+the columns it is measured against (``extra["curves"]``: column, probe, lab component, sign,
+scale from table units to case units).  Measure (issue 6): the largest distance from each
+computed point to the tabulated polyline in the plane (P/P_max, u/u_max), u_max = the
+column's largest |value|; the maximum over the case's curves.
+
+Geometry and supports are built by ``bench_sze`` from ``extra["shape"]``:
+
+* ``roof`` (s3.8): cylindrical panel phi0 = (R sin t, s, R cos t), crown line t = 0.
+  Quarter model (the published solutions use one): t in [0, theta], s in [0, L/2]; t = 0
+  and s = 0 are symmetry planes (x = 0: u_x, rotations about y and z fixed; y = 0: u_y,
+  rotations about x and z fixed), t = theta the hinged straight edge (translations fixed,
+  rotations free), s = L/2 the free curved edge.  Load P/4 at the corner (0, 0, R), -z, dead.
+  ``extra["model"] = "full"`` (``--set full=1``) meshes the whole roof instead (checks the
+  symmetry supports).
+* ``slit-annulus`` (s3.3): annulus 6..10 slit at theta = 0; edge theta = 2 pi clamped; edge
+  theta = 0 carries the dead lifting line force P per unit length (total 4 P).
+"""
+from __future__ import annotations
+
+from .cases import Case, Load, _add
+
+__all__ = []
+
+_ROOF_UNITS = dict(E="force/length^2", nu="1", h="length", R="length", L="length",
+                   theta="rad", load_max="force", full="0=quarter model,1=full roof")
+
+
+def _roof(name, entry, h, description, notes):
+    return Case(
+        name=name, description=description, geometry="roof",
+        params=dict(E=3102.75, nu=0.3, h=h, R=2540.0, L=508.0, theta=0.1, load_max=3000.0, full=0.0),
+        units=_ROOF_UNITS, mesh=(16, 16), steps=60,
+        loads=(Load("point_force", None, (0.0, 0.0, -1.0), lambda p: p["load_max"]),),
+        load_name="P", load_unit="force", load_value=lambda p, lam: lam * p["load_max"],
+        supports=(), reference=None, probe="C", notes=notes,
+        extra=dict(family="sze", shape="roof", literature=entry,
+                   curves=[dict(column="minus_W_C", probe="C", component=2, sign=-1.0, scale=1.0)],
+                   path="arc_length", stop="table_end_displacement", dlam0=0.05),
+    )
+
+
+_add(_roof(
+    "sze-hinged-roof", "sze3.8a_hinged_roof", 12.7,
+    "Sze et al. 2004 s3.8(a): hinged cylindrical roof (h = 12.7, isotropic) under a central point "
+    "load; snap-through, traced by arc length to the end of the table (-W_C = 29.374).",
+    "Reference: literature.json sze3.8a_hinged_roof (Abaqus S4R), P_max = 3000 (two sources: "
+    "PENGoLINS and Kratos). Quarter model 16x16 (= 32x32 on the whole roof)."))
+
+_add(_roof(
+    "sze-hinged-roof-6.35", "sze3.8d_hinged_roof", 6.35,
+    "Sze et al. 2004 s3.8(d): the hinged roof at h = 6.35: snap-through and snap-back (the load "
+    "and the deflection both reverse), arc length to the end of the table (-W_C = 38.45).",
+    "Reference: literature.json sze3.8d_hinged_roof; its P_max is marked unverified there: the "
+    "curve is plotted on the scale P_max = 3000 of s3.8(a) and reported without a bar."))
+
+_add(Case(
+    name="sze-slit-annular",
+    description="Sze et al. 2004 s3.3: slit annular plate (6 <= r <= 10) clamped on one side of the "
+                "slit and lifted by a dead line force on the other, P to 0.8 per unit length.",
+    geometry="slit-annulus",
+    params=dict(E=2.1e7, nu=0.0, h=0.03, r_in=6.0, r_out=10.0, load_max=0.8),
+    units=dict(E="force/length^2", nu="1", h="length", r_in="length", r_out="length",
+               load_max="force/length"),
+    mesh=(10, 80), steps=40,
+    loads=(Load("edge_force", "y0", (0.0, 0.0, 1.0), lambda p: p["load_max"]),),
+    load_name="P", load_unit="force/length", load_value=lambda p, lam: lam * p["load_max"],
+    supports=(("clamp", "y1"),), reference=None, probe="B",
+    notes="Reference: literature.json sze3.3_slit_annular_plate (Abaqus S4R, 10x80), columns W_A "
+          "(r = 6) and W_B (r = 10) on the loaded edge. Mesh 10x80 (radial x around) as the table.",
+    extra=dict(family="sze", shape="slit-annulus", literature="sze3.3_slit_annular_plate",
+               curves=[dict(column="W_A", probe="A", component=2, sign=1.0, scale=1.0),
+                       dict(column="W_B", probe="B", component=2, sign=1.0, scale=1.0)],
+               path="arc_length", stop="lam_end", dlam0=0.01),
+))

@@ -175,7 +175,8 @@ class ShellSystem:
     prescribe with a target) must not depend on lam: arc length scales the loads only.
     """
 
-    def __init__(self, problem, linear_solver=None):
+    def __init__(self, problem, linear_solver=None, difference="central"):
+        self.difference = difference
         if getattr(problem.element, "stateful", False):
             raise CoreSE3Error("path following needs a path-independent element (the default one); "
                                "the seed element's incremental strain is not supported")
@@ -202,9 +203,10 @@ class ShellSystem:
 
     def load_direction(self, g, lam):
         d = 1e-4 * max(1.0, abs(lam))
-        fp, _, _ = self.problem.external(g, lam + d, tangent=False)
+        hi = lam + d if self.difference == "central" else lam
+        fp, _, _ = self.problem.external(g, hi, tangent=False)
         fm, _, _ = self.problem.external(g, lam - d, tangent=False)
-        return (fp - fm) / (2 * d)
+        return (fp - fm) / (hi - lam + d)
 
     def evaluate(self, g, lam, tangent=True):
         """dict(r, K, q, rn, floor): free residual, tangent, load direction, relative residual."""
@@ -756,10 +758,10 @@ def limit_point_hint(problem, g, lam, linear_solver=None):
     parameter S_p = (q.t_0 / q.t) (t = K^-1 q, 1 at the start, 0 at a limit point, negative
     past it).  Returns a message suggesting arc length when S_p < 0.3, else None."""
     try:
-        sysm = ShellSystem(problem, linear_solver)
+        sysm = ShellSystem(problem, linear_solver, difference="backward")
         p0 = _analyse(sysm, problem.mesh.g0.copy(), 0.0, False)
         p1 = _analyse(sysm, np.asarray(g, float), lam, False)
-    except CoreSE3Error:
+    except (CoreSE3Error, FloatingPointError, ValueError):
         return None
     sp_ = p0.qt / p1.qt if p1.qt != 0 else 0.0
     if sp_ < 0.3:

@@ -78,10 +78,25 @@ def check_supports(problem, g):
                                   + "): the tangent is singular; add supports")
 
 
+def _limit_point_hint(problem, g, lam, linear_solver):
+    """Message suggesting arc length if the failure is a limit point (see continuation)."""
+    if lam == 0.0:
+        return None
+    from .continuation import limit_point_hint
+    return limit_point_hint(problem, g, lam, linear_solver or problem.linear_solver)
+
+
 def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, rtol=1e-10, dtol=1e-10,
                  max_iter=30, max_cutbacks=12, g_init=None, verbose=False, linear_solver=None,
-                 record_substeps=False):
-    """Solve the problem from lam_start to lam_end in ``steps`` equal load increments."""
+                 record_substeps=False, limit_check=True):
+    """Solve the problem from lam_start to lam_end in ``steps`` equal load increments.
+
+    limit_check: stop with a ConvergenceError that suggests arc length when a converged step
+    has jumped past a limit point (snap-through): the step started where the current stiffness
+    parameter S_p = k / k_0 (k = |r_0|_s^2 / (-r_0 . eta_0), the stiffness seen by the first
+    Newton iterate, k_0 its value in the first step) was below 0.3, and the converged increment
+    is more than 3x that first (tangent) iterate.  Not applied to displacement-driven problems.
+    """
     t0 = time.perf_counter()
     if not np.isfinite(lam_end) or steps < 1:
         raise ValueError("need a finite lam_end and steps >= 1")
@@ -93,6 +108,8 @@ def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, rtol=1e-10, dtol
     g = mesh.g0.copy() if g_init is None else np.array(g_init, float)
     check_supports(problem, g)
     stateful = getattr(problem.element, "stateful", False)
+    driven = stateful or any(sup.target is not None for sup in problem.supports)
+    k_ref = None
     result = Result(mesh=mesh, element=problem.element_name)
     unwrapped = {name: np.zeros(3) for name in problem.probes}
     result.timings["setup"] = time.perf_counter() - t0
@@ -135,6 +152,8 @@ def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, rtol=1e-10, dtol
                 problem.element.save()
                 problem.element.update(se3.log(se3.inv(g) @ g_try))
             hist = []
+            eta_sum = 0.0
+            k_step = pred = None
             ok = False
             reason = ""
             try:
@@ -180,6 +199,11 @@ def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, rtol=1e-10, dtol
                     t_sol += time.perf_counter() - ts
                     first_solve = False
                     eta = asm.scatter(x)
+                    eta_sum = eta_sum + eta
+                    if it == 0:
+                        work = -float(rf @ x)
+                        k_step = _scaled_norm(asm.scatter(rf), ell) ** 2 / work if work > 0 else -np.inf
+                        pred = _scaled_norm(eta, ell, moment=False)
                     dn = _scaled_norm(eta, ell, moment=False) / ell
                     g_try = g_try @ se3.exp(eta)
                     if stateful:
@@ -195,6 +219,21 @@ def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, rtol=1e-10, dtol
             if verbose:
                 print(f"  lam {lam_try:.6g}: {'ok' if ok else 'FAIL'} in {len(hist) - 1} it, "
                       f"residual {hist[-1] if hist else float('nan'):.2e} {reason}")
+            if ok and limit_check and not driven and k_step is not None:
+                if k_ref is None:
+                    k_ref = k_step
+                jump = _scaled_norm(eta_sum, ell, moment=False)
+                if k_ref > 0 and k_step / k_ref < 0.3 and jump > 3 * pred:
+                    result.timings.update(assembly=t_asm, solve=t_sol,
+                                          other=time.perf_counter() - t_start - t_asm - t_sol)
+                    raise ConvergenceError(
+                        f"load control met a limit point: the step from load factor {lam:.6g} to "
+                        f"{lam_try:.6g} started at a current stiffness S_p = {k_step / k_ref:.3g} of "
+                        f"the initial one and converged {jump / pred:.1f}x farther than its tangent "
+                        "predicted, i.e. it snapped onto another branch of the equilibrium path. "
+                        "Trace the path with arc length (core_se3.continuation.arc_length) or "
+                        "displacement control (core_se3.continuation.displacement_control); the "
+                        "steps before the limit point are kept in .result", result)
             if ok:
                 lam = lam_try
                 g = g_try
@@ -209,10 +248,11 @@ def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, rtol=1e-10, dtol
                 if abs(dlam) < abs(dlam_nominal) / 2 ** max_cutbacks:
                     result.timings.update(assembly=t_asm, solve=t_sol,
                                           other=time.perf_counter() - t_start - t_asm - t_sol)
+                    hint = _limit_point_hint(problem, g, lam, linear_solver)
                     raise ConvergenceError(
                         f"Newton failed at load factor {lam_try:.6g} after {max_cutbacks} cut-backs "
                         f"({reason}); the last converged load factor is {lam:.6g} and its state is "
-                        "kept in .result", result)
+                        "kept in .result" + (f". Probable cause: {hint}" if hint else ""), result)
     result.timings.update(assembly=t_asm, solve=t_sol,
                           other=time.perf_counter() - t_start - t_asm - t_sol)
     return result
