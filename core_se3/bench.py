@@ -145,15 +145,14 @@ def error_against_reference(case, p, loads_ref_axis, disps, ref):
     lo, hi = min(loads_ref_axis), max(loads_ref_axis)
     on_path = (L >= min(lo, 0.0) - 1e-12) & (L <= hi + 1e-12) & (L * np.sign(hi if hi != 0 else lo) >= -1e-12)
     scale = np.max(np.hypot(u[on_path], v[on_path]))
-    errs = []
-    for lam_ref, d in zip(loads_ref_axis, disps):
+    errs = np.full(len(loads_ref_axis), np.nan)        # NaN where the load is outside the table
+    for i, (lam_ref, d) in enumerate(zip(loads_ref_axis, disps)):
         if lam_ref < L[0] - 1e-12 or lam_ref > L[-1] + 1e-12:
             continue
         dr = np.array([su(lam_ref), sv(lam_ref)])
-        errs.append(np.linalg.norm(d - dr) / scale)
-    errs = np.array(errs)
-    k = int(np.argmax(errs))
-    return float(errs[k]), float(loads_ref_axis[k]) if len(errs) == len(loads_ref_axis) else None, errs
+        errs[i] = np.linalg.norm(d - dr) / scale
+    k = int(np.nanargmax(errs))
+    return float(errs[k]), float(loads_ref_axis[k]), errs
 
 
 def edge_wrench(prob, g, edge, point):
@@ -235,8 +234,8 @@ def result_document(case, p, prob, res):
     if ref is not None:
         entry, block, r = ref
         err, at, errs = error_against_reference(case, p, loads_ref, disps, r)
-        for s, e in zip(steps, errs if len(errs) == len(steps) else [None] * len(steps)):
-            s["error"] = None if e is None else float(e)
+        for s, e in zip(steps, errs):
+            s["error"] = None if np.isnan(e) else float(e)
         reference = dict(entry=entry, block=block, error=err, error_at_load=at, file="elastica.json")
     m = prob.mesh
     t = dict(res.timings)
@@ -244,7 +243,7 @@ def result_document(case, p, prob, res):
     return dict(
         schema=SCHEMA, version=VERSION, case=case.name, model="core_se3", variant=prob.element_name,
         params={k: dict(value=v, unit=case.units.get(k, "")) for k, v in p.items()},
-        mesh=dict(nx=m.shape[0], ny=m.shape[1], n_nodes=m.n_nodes, n_elements=m.n_elements,
+        mesh=dict(nx=(m.shape or (m.n_elements, 1))[0], ny=(m.shape or (m.n_elements, 1))[1], n_nodes=m.n_nodes, n_elements=m.n_elements,
                   n_dofs=6 * m.n_nodes),
         steps=steps, timings=t, reference=reference,
     )

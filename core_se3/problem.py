@@ -152,6 +152,39 @@ class Problem:
         """Dead force per unit reference area (e.g. gravity rho h g), lab vector."""
         self.loads.append(SurfaceLoad(self.mesh, q, False, elements, scale, "body force"))
 
+    def add_gravity(self, rho, g=(0.0, 0.0, -9.81), elements=None, scale=None):
+        """Self-weight: dead body force rho h g per unit reference area (rho [mass/length^3],
+        g [length/time^2] lab vector; default SI, -z)."""
+        if not (np.isfinite(rho) and rho > 0):
+            raise LoadError(f"density must be positive and finite, got {rho}")
+        g = np.asarray(g, float)
+        self.loads.append(SurfaceLoad(self.mesh, rho * self.material.h * g, False, elements, scale, "gravity"))
+
+    def add_magnetic(self, Br, field, elements=None, mu0=None):
+        """Hard-magnetic material of residual flux density ``Br`` [T] (lab, reference
+        configuration; 3-vector, per selected element, per node, or function of position) on
+        ``elements`` (default all) in the applied field ``field`` (core_se3.fields): body couple
+        h/mu0 B^r_t x B^a and body force h/mu0 (B^r_t . grad) B^a per unit reference area, with
+        B^r_t = R_t R_0^T B^r_0 (seed E48-E50).  ``mu0`` must match the units (fields.MU0 for
+        Pa; MU0 * 1e6 for N-mm-MPa).  Returns the load (its ``mag.nodes`` are the magnetised
+        nodes)."""
+        from .fields import MU0
+        from .magnetics import Magnetisation, MagneticLoad
+        mag = Magnetisation(self.mesh, Br, self.material.h, elements, MU0 if mu0 is None else mu0)
+        load = MagneticLoad(mag, field)
+        self.loads.append(load)
+        return load
+
+    def output_fields(self, g, lam=1.0):
+        """Extra point fields for output (name -> (n, k)): magnetisation and magnetic couple and
+        force per unit area, summed over the magnetic loads (empty without magnetic loads)."""
+        out = {}
+        for load in self.loads:
+            if hasattr(load, "output_fields"):
+                for k, v in load.output_fields(g, lam, self.mesh.n_nodes).items():
+                    out[k] = out[k] + v if k in out else v
+        return out
+
     def add_probe(self, name, where="x1"):
         """Record the midpoint of an edge (or a node) at every step."""
         nodes = self._nodes(where)

@@ -1,0 +1,251 @@
+"""Hard-magnetic loads: load stiffness by finite differences, conservation, objectivity, totals,
+and the Zhao et al. 2019 cantilevers against the planar elastica (core_se3/data/elastica.json)."""
+import numpy as np
+import pytest
+
+from core_se3 import Material, Problem, mesh, se3
+from core_se3.bench import run_case
+from core_se3.cases_magnetic import ZHAO_BEAMS
+from core_se3.errors import LoadError
+from core_se3.fields import MU0, DipoleField, GradientField, UniformField
+from core_se3.verify import tangent_fd_check
+
+RNG = np.random.default_rng(11)
+
+
+def _plate(field, Br=None, nx=4, ny=3, elements=None, clamp=True):
+    m = mesh.rectangle(0.02, 0.01, nx, ny)
+    p = Problem(m, Material(1.0e6, 0.3, 1.0e-3))
+    if clamp:
+        p.clamp("x0")
+    if Br is None:
+        # non-uniform magnetisation, a function of position [T]
+        Br = lambda X: np.c_[0.1 + 0 * X[:, 0], 20.0 * X[:, 1], 0.05 + 3.0 * X[:, 0]]   # noqa: E731
+    load = p.add_magnetic(Br, field, elements=elements)
+    return p, load
+
+
+def _random_state(m, amp_x=3e-3, amp_r=1.0):
+    return m.g0 @ se3.exp(RNG.normal(size=(m.n_nodes, 6)) * np.r_[amp_x, amp_x, amp_x, amp_r, amp_r, amp_r])
+
+
+FIELDS = {
+    "uniform": UniformField((0.0, 0.02, 0.05)),
+    "dipole": DipoleField((0.0, 0.5, 2.0), (0.01, 0.002, -0.02)),
+    "gradient": GradientField((0.01, 0.0, 0.02), [[0.5, 0.2, 0.0], [0.2, -0.3, 0.1], [0.0, 0.1, -0.2]]),
+}
+
+
+@pytest.mark.parametrize("name", list(FIELDS))
+def test_magnetic_load_stiffness_matches_finite_differences(name):
+    """-d f_ext/d eta of the couple and the force along g <- g exp(eta), at a random large-rotation
+    state.  Central differences with h = 1e-6 (rotations ~1 rad, positions ~1e-2 m): truncation
+    ~ h^2 / (length scale)^2 ~ 1e-8 for the dipole (|r| ~ 2e-2), ~1e-12 otherwise."""
+    p, load = _plate(FIELDS[name])
+    g = _random_state(p.mesh)
+    n = p.mesh.n_nodes
+    lam = 0.7
+    _, Kn, _ = p.external(g, lam)
+    h = 1e-6
+    worst = 0.0
+    for k in range(6 * n):
+        d = np.zeros(6 * n)
+        d[k] = h
+        d = d.reshape(-1, 6)
+        fd = -(p.external(g @ se3.exp(d), lam, tangent=False)[0] - p.external(g @ se3.exp(-d), lam, tangent=False)[0]) / (2 * h)
+        i = k // 6
+        col = np.zeros((n, 6))
+        col[i] = Kn[i][:, k % 6]
+        worst = max(worst, np.abs(col - fd).max())
+    scale = np.abs(Kn).max()
+    assert worst <= (1e-6 if name == "dipole" else 1e-8) * scale
+
+
+def test_full_tangent_with_magnetic_load_matches_finite_differences():
+    p, _ = _plate(FIELDS["dipole"], nx=3, ny=2)
+    g = _random_state(p.mesh, 1e-3, 0.5)
+    err, _, _ = tangent_fd_check(p, g, lam=1.0)
+    assert err < 1e-6
+
+
+@pytest.mark.parametrize("name", list(FIELDS))
+def test_magnetic_load_is_conservative(name):
+    """f = -dU/deta with U = -sum_i (R_i mu_i) . B(phi_i): the couple and force derive from the
+    magnetic potential energy of the nodal dipoles (curl-free fields)."""
+    p, load = _plate(FIELDS[name])
+    g = _random_state(p.mesh)
+    mag = load.mag
+
+    def U(gg):
+        m = mag.current(gg)
+        return -np.einsum("ki,ki->", m, load.field.value(gg[mag.nodes, :3, 3], 1.0))
+
+    f = p.external(g, 1.0, tangent=False)[0]
+    h = 1e-6
+    for k in RNG.choice(6 * p.mesh.n_nodes, 25, replace=False):
+        d = np.zeros(6 * p.mesh.n_nodes)
+        d[k] = h
+        d = d.reshape(-1, 6)
+        dU = (U(g @ se3.exp(d)) - U(g @ se3.exp(-d))) / (2 * h)
+        assert -dU == pytest.approx(f.ravel()[k], abs=1e-7 * np.abs(f).max())
+
+
+def test_magnetic_load_is_objective():
+    """Rotating body and field sources together by Q leaves the body-frame loads unchanged."""
+    Q = se3.exp_so3(np.array([2.0, -7.0, 13.0]))           # many turns
+    G = np.array([[0.5, 0.2, 0.0], [0.2, -0.3, 0.1], [0.0, 0.1, -0.2]])
+    B0 = np.array([0.01, 0.0, 0.02])
+    p, _ = _plate(GradientField(B0, G))
+    q, _ = _plate(GradientField(Q @ B0, Q @ G @ Q.T))
+    g = _random_state(p.mesh)
+    h = np.eye(4)
+    h[:3, :3] = Q
+    f1, K1, _ = p.external(g, 1.0)
+    f2, K2, _ = q.external(h @ g, 1.0)
+    assert np.abs(f1 - f2).max() <= 1e-12 * np.abs(f1).max()
+    assert np.abs(K1 - K2).max() <= 1e-12 * np.abs(K1).max()
+
+
+def _lab_totals(g, f):
+    R = g[:, :3, :3]
+    F = np.einsum("nij,nj->ni", R, f[:, :3])
+    M = np.einsum("nij,nj->ni", R, f[:, 3:]) + np.cross(g[:, :3, 3], F)
+    return F.sum(0), M.sum(0)
+
+
+def test_free_plate_in_a_uniform_gradient_field_gets_the_total_force():
+    """Reference configuration, piecewise-constant Br per element: the assembled nodal forces sum to
+    (1/mu0) int (Br . grad) Ba dV = (h/mu0) sum_e A_e G Br_e (G uniform: exact)."""
+    G = np.array([[0.4, -0.1, 0.2], [-0.1, 0.1, 0.0], [0.2, 0.0, -0.5]])
+    m = mesh.rectangle(0.03, 0.01, 6, 2)
+    Br = RNG.normal(size=(m.n_elements, 3)) * 0.1
+    p = Problem(m, Material(1.0e6, 0.3, 1.0e-3))
+    p.add_magnetic(Br, GradientField((0.0, 0.01, 0.0), G))
+    f, _, _ = p.external(m.g0, 1.0, tangent=False)
+    F, _ = _lab_totals(m.g0, f)
+    area = (0.03 / 6) * (0.01 / 2)
+    expected = 1.0e-3 / MU0 * area * (G @ Br.sum(0))
+    assert np.allclose(F, expected, rtol=1e-12, atol=1e-12 * np.abs(expected).max())
+
+
+def test_free_plate_in_a_uniform_field_gets_a_pure_couple():
+    m = mesh.rectangle(0.03, 0.01, 6, 2)
+    Br, Ba = np.array([0.1, 0.02, -0.05]), np.array([0.0, 0.03, 0.04])
+    p = Problem(m, Material(1.0e6, 0.3, 1.0e-3))
+    p.add_magnetic(Br, UniformField(Ba))
+    g = _random_state(m, 0.0, 0.0)                         # reference configuration
+    f, _, _ = p.external(g, 1.0, tangent=False)
+    F, M = _lab_totals(g, f)
+    C = 1.0e-3 / MU0 * 0.03 * 0.01 * np.cross(Br, Ba)       # (h/mu0) A Br x Ba
+    assert np.abs(F).max() == 0.0
+    assert np.allclose(M, C, rtol=1e-12)
+
+
+def test_magnetisation_forms_agree_and_only_magnetised_nodes_are_loaded():
+    m = mesh.rectangle(0.03, 0.01, 6, 2)
+    Br = np.array([0.1, 0.0, 0.05])
+    field = UniformField((0.0, 0.0, 0.05))
+    loads = []
+    for form in (Br, np.tile(Br, (m.n_elements, 1)), np.tile(Br, (m.n_nodes, 1)),
+                 lambda X: np.tile(Br, (len(X), 1))):
+        p = Problem(m, Material(1.0e6, 0.3, 1.0e-3))
+        p.add_magnetic(form, field)
+        loads.append(p.external(m.g0, 1.0, tangent=False)[0])
+    for f in loads[1:]:
+        assert np.allclose(f, loads[0], rtol=1e-13, atol=1e-16)
+    # magnetise only the last column of elements: only their nodes carry loads and stiffness
+    p = Problem(m, Material(1.0e6, 0.3, 1.0e-3))
+    last = np.nonzero(m.X[m.quads].mean(1)[:, 0] > 0.025)[0]
+    load = p.add_magnetic(Br, field, elements=last)
+    assert set(load.mag.nodes.tolist()) == set(np.unique(m.quads[last]).tolist())
+    out = p.output_fields(m.g0, 1.0)
+    Bn = np.linalg.norm(out["magnetisation_Br"], axis=1)
+    assert np.allclose(Bn[load.mag.nodes], np.linalg.norm(Br)) and np.all(Bn[np.setdiff1d(np.arange(m.n_nodes), load.mag.nodes)] == 0)
+
+
+@pytest.mark.parametrize("kw, match", [
+    (dict(Br=(0.0, np.nan, 0.1)), "non-finite"),
+    (dict(Br=np.zeros((5, 3))), "shape"),
+    (dict(field="0.05 T"), "Field"),
+    (dict(mu0=-1.0), "mu0"),
+    (dict(elements=[10 ** 6]), "do not exist"),
+])
+def test_bad_magnetic_input_raises_load_error(kw, match):
+    m = mesh.rectangle(0.03, 0.01, 6, 2)
+    p = Problem(m, Material(1.0e6, 0.3, 1.0e-3))
+    args = dict(Br=(0.1, 0.0, 0.0), field=UniformField((0, 0, 0.05)))
+    args.update(kw)
+    with pytest.raises(LoadError, match=match):
+        p.add_magnetic(**args)
+
+
+def test_gravity_total_and_bad_density():
+    m = mesh.rectangle(0.04, 0.03, 4, 3)
+    p = Problem(m, Material(4e5, 0.49, 7e-4))
+    p.add_gravity(1470.0)
+    f, _, _ = p.external(m.g0, 1.0, tangent=False)
+    F, _ = _lab_totals(m.g0, f)
+    assert np.allclose(F, (0, 0, -1470.0 * 7e-4 * 9.81 * 0.04 * 0.03), rtol=1e-12)
+    with pytest.raises(LoadError, match="density"):
+        p.add_gravity(-1.0)
+
+
+# ------------------------------------------------------------------ Zhao et al. 2019 cantilevers
+@pytest.mark.parametrize("L, h, nx", ZHAO_BEAMS)
+@pytest.mark.parametrize("angle, entry", [(90.0, "3_magnetic_perpendicular_field"),
+                                          (135.0, "3_magnetic_field_135deg")])
+def test_zhao_cantilever_nu0_matches_the_elastica(L, h, nx, angle, entry):
+    """nu = 0 reduces the strip exactly to the rod EI th'' + c0 sin(beta - th) = 0 of
+    elastica.json (3_magnetic_*: n = 0, so no shear correction).  The issue's bar: 0.5 % of the
+    largest tip displacement up to A Br Ba L^2/(mu0 E I) = 20, on the seed's meshes (nodal
+    quadrature and the element are second order; measured 0.40 % on the coarsest, 10-element beam,
+    0.10 % on 20)."""
+    doc, _, _ = run_case("magnetic-cantilever", mesh=(nx, 1),
+                         overrides=dict(L=L, h=h, nu=0.0, field_angle_deg=angle))
+    assert doc["reference"]["entry"] == entry
+    assert doc["reference"]["error_up_to_load_20"] <= 0.005
+    loads = [s["load"]["dimensionless"] for s in doc["steps"]]
+    assert max(loads) >= min(20.0, 7.5)      # the path reaches the bar's load (7.6 for the 11 mm beam)
+
+
+def test_zhao_cantilever_converges_at_second_order():
+    e = [run_case("magnetic-cantilever", mesh=(n, 1), overrides=dict(L=11.0, h=1.1, nu=0.0))[0]["reference"]["error"]
+         for n in (10, 20)]
+    assert np.log2(e[0] / e[1]) == pytest.approx(2.0, abs=0.2)
+
+
+@pytest.mark.parametrize("L, h, nx", ZHAO_BEAMS)
+def test_zhao_cantilever_nu048_lies_between_beam_and_plate_stiffness(L, h, nx):
+    """The seed's material (nu = 0.480) on a width-resolved mesh (2 nx x 4): the tip deflection
+    lies between the beam-stiffness ('tip') and plate-stiffness ('tip_plate') answers of
+    3_magnetic_zhao2019_L..mm_h..mm at every field value."""
+    doc, _, _ = run_case("magnetic-cantilever", mesh=(2 * nx, 4), overrides=dict(L=L, h=h))
+    br = doc["bracket"]
+    assert len(br["rows"]) == 20
+    assert br["all_inside"], [r for r in br["rows"] if not r["inside"]][:3]
+
+
+def test_antiparallel_field_buckles_at_pi2_over_4_and_follows_the_elastica():
+    """3_magnetic_antiparallel_field: critical load pi^2/4 (the clamped-free Euler column), bar 1 %;
+    post-buckled tip within 1 % of L for loads >= 1.3 x critical (the issue's bars)."""
+    doc, _, _ = run_case("magnetic-antiparallel")
+    c = doc["critical"]
+    assert abs(c["error"]) <= 0.01
+    assert doc["perfect_branch"]["max_error_over_L_at_load_ge_1p3_critical"] <= 0.01
+    # the imperfect branch (tilted field) turns the tip past 90 deg at the largest load
+    assert doc["steps"][-1]["probes"]["tip"]["rotation_angle"] > np.pi / 2
+
+
+def test_newton_converges_quadratically_in_a_dipole_field():
+    m = mesh.rectangle(0.02, 0.005, 10, 2)
+    p = Problem(m, Material(1.0e6, 0.0, 5e-4))
+    p.clamp("x0")
+    p.add_magnetic((0.1, 0.0, 0.0), DipoleField((0.0, 0.0, 5.0), (0.03, 0.0, 0.0)))
+    p.add_probe("tip", "x1")
+    res = p.solve(steps=2)
+    # r_{k+1} <= C r_k^2 (C = 10, as in test_solver) for every pair above the round-off floor
+    # (relative residual 1e-12 ~ 1e4 eps); observed 0.43, 0.060, 5.7e-3, 1.8e-6, 2.1e-11, 1.0e-13
+    h = res.steps[-1].residual_history
+    pairs = [(h[k], h[k + 1]) for k in range(len(h) - 1) if h[k + 1] > 1e-12 and h[k] < 0.1]
+    assert len(pairs) >= 2 and all(b <= 10.0 * a * a for a, b in pairs), h
+    assert abs(res.final.probes["tip"]["u"][2]) > 1e-4       # the dipole bends it visibly
