@@ -411,3 +411,23 @@ def test_resultants_exact_stretch_and_bending(tmp_path):
     R = 1.2e6 * 1.0 * 0.1 ** 3 / 12 / 10.0
     np.testing.assert_allclose(res.final.probes["tip"]["u"],
                                [R * np.sin(1.0) - 10.0, 0.0, R * (1 - np.cos(1.0))], atol=1e-9)
+
+
+def test_resultants_converge_to_cantilever_equilibrium_at_second_order(tmp_path):
+    """Large-deflection cantilever, dead tip force P: the moment on the cut through the centre of
+    the middle element must equal (phi_tip - phi_c) x P (statics of the outer part); the error of
+    the element-centre resultant falls ~4x per mesh halving (measured 0.28 %, 0.068 %)."""
+    from core_se3.resultants import element_resultants
+    errs = []
+    for nx in (6, 12):
+        d = base()
+        d["mesh"]["nx"] = nx
+        d["loads"][0]["force"] = [0.0, 0.0, 2.0]
+        scn = load_doc(tmp_path, d)
+        g = scn.problem.solve(steps=3).final.g
+        f = element_resultants(scn.problem.element, g)
+        e = nx // 2
+        c = g[scn.mesh.quads[e], :3, 3].mean(0)
+        exact = np.cross(g[scn.mesh.edges["x1"], :3, 3].mean(0) - c, [0.0, 0.0, 2.0])
+        errs.append(np.linalg.norm(f["M1"][e] - exact) / np.linalg.norm(exact))
+    assert errs[0] < 4e-3 and errs[1] < errs[0] / 3.5, errs

@@ -1,0 +1,221 @@
+"""``core-se3 run SCENARIO.toml [--out DIR] [--resume]``: outputs, progress, checkpoints, resume.
+
+The resumed runs must end in exactly the state of an uninterrupted run (the same per-step
+Newton solves from the same saved bits), and nothing written before an interruption may be
+lost or left half-written (atomic writes).
+"""
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+import xml.etree.ElementTree as ET
+
+import meshio
+import numpy as np
+import pytest
+
+from core_se3 import cli, runner, scenario
+from core_se3.checkpoint import Checkpoint
+from core_se3.errors import CheckpointError, ConvergenceError
+
+STRIP = {
+    "name": "strip",
+    "mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 6, "ny": 1},
+    "material": {"E": 1.2e6, "nu": 0.0, "h": 0.1},
+    "supports": [{"type": "clamp", "edge": "x0"}],
+    "loads": [{"type": "edge_force", "edge": "x1", "force": [0.0, 0.0, 2.0]}],
+    "probes": [{"name": "tip", "edge": "x1"}],
+    "solver": {"steps": 3},
+}
+
+
+def write(tmp_path, doc, name="s.toml"):
+    p = tmp_path / name
+    p.write_text(scenario.dumps(doc))
+    return str(p)
+
+
+def with_(doc, **sections):
+    import copy
+    d = copy.deepcopy(doc)
+    for k, v in sections.items():
+        if isinstance(v, dict) and isinstance(d.get(k), dict):
+            d[k].update(v)
+        else:
+            d[k] = v
+    return d
+
+
+def pvd_files(pvd):
+    root = ET.parse(pvd).getroot()
+    return [(float(e.get("timestep")), e.get("file")) for e in root.iter("DataSet")]
+
+
+def assert_outputs_intact(out):
+    """Every file a run has written so far parses: results JSON, checkpoint, each VTU of the pvd."""
+    doc = json.load(open(os.path.join(out, "results.json")))
+    st = Checkpoint(out).load(doc["fingerprint"])
+    assert [s["step"] for s in doc["steps"]] == list(range(len(doc["steps"])))
+    assert st["step"] >= doc["steps"][-1]["step"]
+    for t, f in pvd_files(os.path.join(out, "vtu", "series.pvd")):
+        m = meshio.read(os.path.join(out, "vtu", f))
+        assert m.point_data["displacement"].shape == (len(m.points), 3)
+    return doc, st
+
+
+def test_run_writes_results_vtu_series_and_plots(tmp_path, capsys):
+    path = write(tmp_path, STRIP)
+    out = str(tmp_path / "out")
+    assert cli.main(["run", path, "--out", out]) == 0
+    text = capsys.readouterr().out
+    assert "strip: 3 steps to load factor 1" in text and "probe tip" in text
+    doc = json.load(open(os.path.join(out, "results.json")))
+    assert (doc["schema"], doc["version"], doc["status"], doc["case"]) == ("core-se3-result", 1, "complete", "strip")
+    assert [s["load_factor"] for s in doc["steps"]] == [0.0, 1 / 3, 2 / 3, 1.0]
+    assert doc["mesh"] == dict(nx=6, ny=1, n_nodes=14, n_elements=6, n_dofs=84)
+    assert all(s["balance_error"] < 1e-8 for s in doc["steps"])
+    series = pvd_files(os.path.join(out, "vtu", "series.pvd"))
+    assert [t for t, _ in series] == [0.0, 1 / 3, 2 / 3, 1.0]
+    m = meshio.read(os.path.join(out, "vtu", series[-1][1]))
+    for f in ("displacement", "d1", "d2", "d3", "rotation_angle"):
+        assert f in m.point_data
+    for f in ("N1", "N2", "M1", "M2", "N1_local", "M1_local"):
+        assert m.cell_data[f][0].shape == (6, 3)
+    # the VTU displacement at the tip nodes is the results' tip probe (symmetric tip: both nodes alike)
+    tip = scenario.load(path).mesh.edges["x1"]
+    np.testing.assert_allclose(m.point_data["displacement"][tip].mean(0), doc["steps"][-1]["probes"]["tip"]["u"],
+                               atol=1e-12)
+    # equilibrium of the part beyond each element centre c (dead tip force P e_z, width 1):
+    # moment on the cut M1 = (phi_tip - phi_c) x P e_z, force N1 = P e_z; second-order
+    # discretisation error, measured 0.28 % (M1) and 0.27 % (N1) at worst on 6 elements
+    g = Checkpoint(out).load()["g"]
+    qs = scenario.load(path).mesh.quads
+    c = g[qs, :3, 3].mean(1)
+    phi_tip = g[tip, :3, 3].mean(0)
+    P = np.array([0.0, 0.0, 2.0])
+    exact = np.cross(phi_tip - c, P)
+    assert np.abs(m.cell_data["M1"][0] - exact).max() < 5e-3 * np.abs(exact).max()
+    assert np.abs(m.cell_data["N1"][0] - P).max() < 5e-3 * 2.0
+    for png in ("probes.png", "shell.png"):
+        with open(os.path.join(out, png), "rb") as fh:
+            assert fh.read(8) == b"\x89PNG\r\n\x1a\n"
+
+
+def test_progress_bar_only_when_asked_or_on_a_terminal(tmp_path, capsys):
+    scn = scenario.load(write(tmp_path, with_(STRIP, solver={"steps": 2}, output={"vtu": False, "plots": False,
+                                                                                  "picture": False})))
+    runner.run(scn, out=str(tmp_path / "a"), progress=True)
+    text = capsys.readouterr().out
+    assert "step 1/2" in text and "step 2/2" in text and "it " in text and "res " in text and "dlam 0.5" in text
+    runner.run(scn, out=str(tmp_path / "b"))            # stdout is not a terminal under pytest
+    assert capsys.readouterr().out == ""
+
+
+def test_interrupted_run_resumes_to_the_same_state(tmp_path):
+    scn = scenario.load(write(tmp_path, with_(STRIP, solver={"steps": 4}, output={"plots": False,
+                                                                                  "picture": False})))
+    ref = runner.run(scn, out=str(tmp_path / "ref"))
+    out = str(tmp_path / "cut")
+    with pytest.raises(runner.RunInterrupted):
+        runner.run(scn, out=out, stop_after=2)
+    doc, st = assert_outputs_intact(out)
+    assert st["step"] == 2 and doc["status"] == "running" and len(doc["steps"]) == 3
+    res = runner.run(scn, out=out, resume=True)
+    np.testing.assert_array_equal(res.g, ref.g)          # bit for bit
+    strip_t = lambda d: [dict(s) for s in d["steps"]]
+    assert strip_t(res.doc) == strip_t(ref.doc)
+    assert len(pvd_files(os.path.join(out, "vtu", "series.pvd"))) == 5
+
+
+def test_killed_process_resumes_to_the_same_state(tmp_path):
+    """SIGKILL a real ``core-se3 run`` after a few steps; --resume finishes it identically."""
+    doc = with_(STRIP, solver={"steps": 12}, output={"plots": False, "picture": False})
+    path = write(tmp_path, doc)
+    scn = scenario.load(path)
+    ref = runner.run(scn, out=str(tmp_path / "ref"))
+    out = str(tmp_path / "run")
+    cmd = [sys.executable, "-m", "core_se3", "run", path, "--out", out, "--quiet"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    ck = Checkpoint(out)
+    t0 = time.time()
+    step = -1
+    while time.time() - t0 < 60 and proc.poll() is None:
+        if ck.exists():
+            step = ck.load()["step"]
+            if step >= 3:
+                break
+        time.sleep(0.01)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    assert proc.returncode == -signal.SIGKILL, "the run finished before it could be killed"
+    doc_cut, st = assert_outputs_intact(out)
+    assert 3 <= st["step"] < 12
+    r = subprocess.run(cmd + ["--resume"], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    final = Checkpoint(out).load()
+    assert final["step"] == 12
+    np.testing.assert_array_equal(final["g"], ref.g)
+    done = json.load(open(os.path.join(out, "results.json")))
+    assert done["status"] == "complete"
+    assert done["steps"][:len(doc_cut["steps"])] == doc_cut["steps"]      # nothing written was lost
+    assert [s["probes"] for s in done["steps"]] == [s["probes"] for s in ref.doc["steps"]]
+    assert len(pvd_files(os.path.join(out, "vtu", "series.pvd"))) == 13
+
+
+def test_failed_run_keeps_converged_steps_and_resumes_with_other_controls(tmp_path):
+    """Steps 1-2 are small, 3 jumps: with max_iter = 5 and no cut-backs step 3 fails; the
+    checkpoint keeps step 2 and --resume with the default controls finishes the run exactly as
+    an uninterrupted run with those controls (solver controls are not part of the fingerprint)."""
+    base = with_(STRIP, solver={"steps": 4}, output={"plots": False, "picture": False})
+    base["loads"][0]["scale"] = [[0.0, 0.0], [0.5, 0.02], [1.0, 1.0]]
+    strict = with_(base, solver={"max_iter": 5, "max_cutbacks": 0})
+    out = str(tmp_path / "out")
+    rc = cli.main(["run", write(tmp_path, strict), "--out", out, "--quiet"])
+    assert rc == 3
+    doc = json.load(open(os.path.join(out, "results.json")))
+    assert doc["status"] == "failed" and "step 3" in doc["error"] and len(doc["steps"]) == 3
+    assert Checkpoint(out).load()["step"] == 2
+    path = write(tmp_path, base)
+    assert cli.main(["run", path, "--out", out, "--resume", "--quiet"]) == 0
+    ref = runner.run(scenario.load(path), out=str(tmp_path / "ref"))
+    np.testing.assert_array_equal(Checkpoint(out).load()["g"], ref.g)
+
+
+def test_convergence_error_from_the_api_keeps_the_steps(tmp_path):
+    base = with_(STRIP, solver={"steps": 4, "max_iter": 5, "max_cutbacks": 0}, output={"vtu": False})
+    base["loads"][0]["scale"] = [[0.0, 0.0], [0.5, 0.02], [1.0, 1.0]]
+    with pytest.raises(ConvergenceError, match="step 3 .* failed.*checkpoint keeps step 2") as ei:
+        runner.run(scenario.load(write(tmp_path, base)), out=str(tmp_path / "o"))
+    assert ei.value.result is not None
+
+
+def test_resume_refuses_a_changed_scenario(tmp_path, capsys):
+    out = str(tmp_path / "out")
+    quiet = {"vtu": False, "plots": False, "picture": False}
+    assert cli.main(["run", write(tmp_path, with_(STRIP, output=quiet)), "--out", out, "-q"]) == 0
+    changed = with_(STRIP, material={"E": 2e6}, output=quiet)
+    assert cli.main(["run", write(tmp_path, changed), "--out", out, "--resume"]) == 2
+    assert "belongs to a different scenario" in capsys.readouterr().err
+    with pytest.raises(CheckpointError, match="does not exist"):
+        runner.run(scenario.load(write(tmp_path, changed)), out=str(tmp_path / "empty"), resume=True)
+
+
+def test_existing_run_needs_resume_or_force(tmp_path, capsys):
+    out = str(tmp_path / "out")
+    path = write(tmp_path, with_(STRIP, output={"vtu": False, "plots": False, "picture": False}))
+    assert cli.main(["run", path, "--out", out, "-q"]) == 0
+    assert cli.main(["run", path, "--out", out, "-q"]) == 2
+    assert "already holds a run" in capsys.readouterr().err
+    assert cli.main(["run", path, "--out", out, "-q", "--force"]) == 0
+
+
+def test_bad_scenario_is_one_line_on_stderr(tmp_path, capsys):
+    path = write(tmp_path, with_(STRIP, material={"nu": 0.7}))
+    assert cli.main(["run", path, "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert err.strip() == f"error: {path}: [material.nu]: expected a number < 0.5, got 0.7"
+    assert not os.path.exists(tmp_path / "o")            # nothing ran, nothing written
+    assert cli.main(["run", write(tmp_path, STRIP), "--check"]) == 0
+    assert "valid (6 elements, 14 nodes" in capsys.readouterr().out
