@@ -13,7 +13,17 @@ from __future__ import annotations
 
 from .cases import Case, Load, _add
 
-__all__ = ["ZHAO_BEAMS", "zhao_nx", "MU_ZHAO", "LAMBDA_ZHAO"]
+__all__ = ["ZHAO_BEAMS", "zhao_nx", "MU_ZHAO", "LAMBDA_ZHAO", "GRAVITY_PHASE", "gravity_scale", "field_scale"]
+
+GRAVITY_PHASE = 0.2     # magnetic-plate: lam in [0, 0.2] hangs the plate, lam in [0.2, 1] ramps the field
+
+
+def gravity_scale(lam):
+    return min(1.0, lam / GRAVITY_PHASE)
+
+
+def field_scale(lam):
+    return max(0.0, (lam - GRAVITY_PHASE) / (1.0 - GRAVITY_PHASE))
 
 MU_ZHAO, LAMBDA_ZHAO = 0.303, 7.3                      # MPa
 E_ZHAO = MU_ZHAO * (3 * LAMBDA_ZHAO + 2 * MU_ZHAO) / (LAMBDA_ZHAO + MU_ZHAO)
@@ -73,21 +83,23 @@ _add(Case(
 _add(Case(
     name="magnetic-plate",
     description="The seed's experiment: a 40 x 30 x 0.7 mm Mold Star 31T + NdFeB plate magnetised through "
-                "the thickness, clamped along a 30 mm edge at the top, hanging under gravity, in a "
-                "vertical field Ba = 9.5 mT (in the plate's plane); sample A (default) or B (--set sample=2).",
+                "the thickness, clamped along a 30 mm edge at the top (x0), hanging in the y-z plane under gravity (-z), in a "
+                "vertical field (+z) Ba = 9.5 mT (in the plate's plane); sample A (default) or B (--set sample=2).",
     geometry="strip",
-    params=dict(E=1.19 * 0.324054, nu=0.49, h=0.7, L=40.0, width=30.0, Br=2.5e-3, Ba_max=9.5e-3,
-                rho=1.6e-9, g=9810.0, sample=1.0),
-    units=dict(_UNITS, sample="1 = A (E = 1.19 E0, Br = 2.5 mT), 2 = B (E = 1.45 E0, Br = 6.8 mT)"),
-    mesh=(16, 12), steps=20,
+    params=dict(E=0.0, nu=0.49, h=0.7, L=40.0, width=30.0, Br=0.0, Ba_max=9.5e-3,
+                rho=0.0, g=9810.0, sample=1.0),
+    units=dict(_UNITS, sample="1 = A (E = 1.19 E0, Br = 2.5 mT), 2 = B (E = 1.45 E0, Br = 6.8 mT)",
+               E="MPa (0: the sample's)", Br="T (0: the sample's)", rho="t/mm^3 (0: the sample's)"),
+    mesh=(16, 12), steps=25,
     loads=(Load("magnetic", None, (0.0, 0.0, 1.0), lambda p: p["Br"]),),
-    load_name="Ba", load_unit="T", load_value=lambda p, lam: lam * p["Ba_max"],
+    load_name="Ba", load_unit="T", load_value=lambda p, lam: field_scale(lam) * p["Ba_max"],
     reference=None,
-    notes="The seed's measured data are not available: this is a prediction. Gravity acts in full from "
-          "the first load step (scale 1); the field ramps up with the load factor. E0 = 324.054 kPa (Mold Star 31T, seed s6.2); the seed "
+    notes="The seed's measured data are not available: this is a prediction. The load factor first "
+          "hangs the plate under gravity (lam in [0, 0.2], 5 of the 25 steps), then ramps the field (lam in "
+          "[0.2, 1]). E0 = 324.054 kPa (Mold Star 31T, seed s6.2); the seed "
           "states 1.19 E0 and 1.45 E0 for 6 % and 12 % particles, its eq. E85 would give 1.177 and 1.430. "
-          "Density: Mold Star 31T 1.08 g/cm^3 (manufacturer's data sheet, mixed specific gravity), NdFeB "
-          "7.5 g/cm^3: rho = 1.08 + phi (7.5 - 1.08) = 1.47 (A, phi = 6 %) and 1.85 g/cm^3 (B, 12 %); "
+          "Density: rule of mixtures with NdFeB 7.5 g/cm^3 and an assumed silicone 1.1 g/cm^3 "
+          "(not checked against the data sheet): 1.48 (A, 6 %) and 1.87 g/cm^3 (B, 12 %); "
           "'rho' overrides. nu = 0.49: a nearly incompressible elastomer.",
     extra=dict(family="magnetic"),
 ))

@@ -249,3 +249,25 @@ def test_newton_converges_quadratically_in_a_dipole_field():
     pairs = [(h[k], h[k + 1]) for k in range(len(h) - 1) if h[k + 1] > 1e-12 and h[k] < 0.1]
     assert len(pairs) >= 2 and all(b <= 10.0 * a * a for a, b in pairs), h
     assert abs(res.final.probes["tip"]["u"][2]) > 1e-4       # the dipole bends it visibly
+
+
+@pytest.mark.parametrize("name, mesh", [("magnetic-plate", "4x3"), ("magnetic-gripper", "4x2")])
+def test_plate_and_gripper_run_from_the_cli_and_write_plots_and_vtu(tmp_path, name, mesh):
+    """Predictions (no reference data): the CLI writes the load-deflection plot, the final shape and
+    a VTU series with the magnetisation and the magnetic couple; the reactions balance the loads."""
+    import json
+
+    import meshio
+
+    from core_se3.cli import main
+    out = tmp_path / name
+    rc = main(["bench", "run", name, "--mesh", mesh, "--steps", "5", "--plot", str(out / "tip.png"),
+               "--vtu", str(out / "vtu"), "--json", str(out / "res.json")])
+    assert rc == 0
+    assert (out / "tip.png").stat().st_size > 0 and (out / "tip_shape.png").stat().st_size > 0
+    doc = json.loads((out / "res.json").read_text())
+    assert max(s["balance_error"] for s in doc["steps"]) < 1e-8
+    last = meshio.read(out / "vtu" / "step_0005.vtu")
+    Br = np.linalg.norm(last.point_data["magnetisation_Br"], axis=1)
+    assert Br.max() > 0 and np.abs(last.point_data["magnetic_couple"]).max() > 0
+    assert np.abs(last.point_data["displacement"]).max() > 0.1       # mm: it moved visibly
