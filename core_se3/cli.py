@@ -86,9 +86,10 @@ def bench_run(args):
         print(f"wrote {args.json}")
     if args.vtu:
         from .io import write_series
+        from .runner import point_fields
         extra = None
         if hasattr(prob, "output_fields"):
-            extra = [{k: np.asarray(v) for k, v in prob.output_fields(s.g).items()} for s in res.steps]
+            extra = [point_fields(prob, s.g, s.load_factor) for s in res.steps]
         paths = write_series(args.vtu, prob.mesh.X, prob.mesh.quads, prob.mesh.g0,
                              [s.g for s in res.steps], [s.load_factor for s in res.steps],
                              point_data_per_step=extra)

@@ -24,6 +24,7 @@ __all__ = [
     "write_series",
     "plot_load_deflection",
     "plot_shell",
+    "plot_sequence",
 ]
 
 _CELL_TYPES = {3: "triangle", 4: "quad"}
@@ -239,7 +240,8 @@ def plot_load_deflection(
     return path
 
 
-def plot_shell(path, X, quads, g, title: str | None = None, color_by_rotation: bool = True) -> str:
+def plot_shell(path, X, quads, g, title: str | None = None, color_by_rotation: bool = True,
+               elev: float | None = None, azim: float | None = None) -> str:
     """3-D view of the deformed shell (faces = ``quads`` on the current positions ``g[:, :3, 3]``)
     with equal axis scaling, saved as PNG. ``X`` (reference positions, (n, 3)) is drawn as a faint
     wireframe for comparison. Faces are coloured by their mean nodal rotation angle (rad) if
@@ -285,9 +287,62 @@ def plot_shell(path, X, quads, g, title: str | None = None, color_by_rotation: b
         ax.set_box_aspect((1, 1, 1))
     except AttributeError:  # matplotlib < 3.3
         pass
+    if elev is not None or azim is not None:
+        ax.view_init(elev=elev, azim=azim)
     ax.set_xlabel("x")
     ax.set_ylabel("y")
     ax.set_zlabel("z")
+    if title:
+        ax.set_title(title)
+    path = _ensure_parent(path)
+    fig.savefig(path)
+    return path
+
+
+def plot_sequence(path, X, quads, positions: Sequence[np.ndarray], labels: Sequence[str] | None = None,
+                  title: str | None = None, cmap: str = "viridis", elev: float = 20.0,
+                  azim: float = -60.0) -> str:
+    """Several deformed shapes of one shell in one 3-D view (e.g. the states of a load path):
+    ``positions[k]`` (n, 3) are the current node positions of state k, drawn as faces coloured
+    by k (``cmap``), with a legend of ``labels``; ``X`` (reference) as a dotted outline, equal
+    axis scaling. Returns the path."""
+    import matplotlib
+    import mpl_toolkits.mplot3d  # noqa: F401
+    from matplotlib.patches import Patch
+    from mpl_toolkits.mplot3d.art3d import Line3DCollection, Poly3DCollection
+
+    X = _as_points(X)
+    cells = _as_cells(quads, len(X))
+    positions = [_as_points(p) for p in positions]
+    if not positions:
+        raise ValueError("plot_sequence needs at least one state")
+    fig = _new_figure((7.0, 6.0))
+    ax = fig.add_subplot(1, 1, 1, projection="3d")
+    colors = matplotlib.colormaps[cmap](np.linspace(0.0, 0.9, len(positions)))
+    handles = []
+    for k, phi in enumerate(positions):
+        if phi.shape != X.shape:
+            raise ValueError(f"positions[{k}] has shape {phi.shape}, expected {X.shape}")
+        faces = Poly3DCollection(phi[cells], facecolor=colors[k], edgecolor="k", linewidths=0.15, alpha=0.75)
+        ax.add_collection3d(faces)
+        if labels is not None:
+            handles.append(Patch(facecolor=colors[k], label=labels[k]))
+    ref = X[cells]
+    segs = np.stack([ref, np.roll(ref, -1, axis=1)], axis=2).reshape(-1, 2, 3)
+    ax.add_collection3d(Line3DCollection(segs, colors="0.6", linewidths=0.3, linestyles=":"))
+    pts = np.vstack(positions + [X])
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    centre, half = 0.5 * (lo + hi), 0.5 * max(float((hi - lo).max()), 1e-12)
+    ax.set_xlim(centre[0] - half, centre[0] + half)
+    ax.set_ylim(centre[1] - half, centre[1] + half)
+    ax.set_zlim(centre[2] - half, centre[2] + half)
+    ax.set_box_aspect((1, 1, 1))
+    ax.view_init(elev=elev, azim=azim)
+    ax.set_xlabel("x")
+    ax.set_ylabel("y")
+    ax.set_zlabel("z")
+    if handles:
+        ax.legend(handles=handles, fontsize="x-small", loc="upper left", ncol=2, framealpha=0.6)
     if title:
         ax.set_title(title)
     path = _ensure_parent(path)

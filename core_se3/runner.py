@@ -72,12 +72,19 @@ class Progress:
             self.stream.flush()
 
 
-def point_fields(prob, g):
-    """Extra VTU point fields: those of prob.output_fields(g) (magnetisation, ...) if it has it."""
+def point_fields(prob, g, lam=1.0):
+    """Extra VTU point fields: prob.output_fields(g, lam) (magnetisation, magnetic couple, ...)
+    if the Problem has it."""
     fn = getattr(prob, "output_fields", None)
     if fn is None:
         return {}
-    return {k: np.asarray(v) for k, v in fn(g).items()}
+    import inspect
+    try:
+        takes_lam = len(inspect.signature(fn).parameters) >= 2
+    except (TypeError, ValueError):
+        takes_lam = False
+    out = fn(g, lam) if takes_lam else fn(g)
+    return {k: np.asarray(v) for k, v in out.items()}
 
 
 def cell_fields(prob, g):
@@ -124,11 +131,11 @@ def _document(scn, records, timings, status, error=None):
                 steps=records, timings=t, reference=None)
 
 
-def _write_vtu(path, prob, g):
+def _write_vtu(path, prob, g, lam):
     from .io import write_vtu
     with atomic_path(path) as tmp:
         write_vtu(tmp, prob.mesh.X, prob.mesh.quads, prob.mesh.g0, g,
-                  point_data=point_fields(prob, g), cell_data=cell_fields(prob, g))
+                  point_data=point_fields(prob, g, lam), cell_data=cell_fields(prob, g))
 
 
 def _write_pvd(vtu_dir, records, every, last):
@@ -176,7 +183,7 @@ def run(scn, out=None, resume=False, progress=None, force=False, stop_after=None
                         residual_history=[], substeps=0, cutbacks=0, balance_error=0.0)]
         timings = dict(setup=0.0, assembly=0.0, solve=0.0, other=0.0)
         if o["vtu"]:
-            _write_vtu(os.path.join(vtu_dir, "step_0000.vtu"), prob, g)
+            _write_vtu(os.path.join(vtu_dir, "step_0000.vtu"), prob, g, 0.0)
         ck.save(scn.fingerprint, 0, lam, g, unwrap, records, timings)
         if o["vtu"]:
             _write_pvd(vtu_dir, records, o["vtu_every"], nsteps)
@@ -221,7 +228,7 @@ def run(scn, out=None, resume=False, progress=None, force=False, stop_after=None
         records.append(rec)
         write_vtu_now = o["vtu"] and (k % o["vtu_every"] == 0 or k == nsteps)
         if write_vtu_now:
-            _write_vtu(os.path.join(vtu_dir, f"step_{k:04d}.vtu"), prob, g)
+            _write_vtu(os.path.join(vtu_dir, f"step_{k:04d}.vtu"), prob, g, lam)
         ck.save(scn.fingerprint, k, lam, g, unwrap, records, timings)
         if write_vtu_now:
             _write_pvd(vtu_dir, records, o["vtu_every"], nsteps)
@@ -240,7 +247,8 @@ def run(scn, out=None, resume=False, progress=None, force=False, stop_after=None
     if o["plots"] and prob.probes:
         files["probes"] = plot_probes(os.path.join(out, "probes.png"), doc)
     if o["picture"]:
-        files["picture"] = picture(os.path.join(out, "shell.png"), scn, g)
+        files["picture"] = picture(os.path.join(out, "shell.png"), scn, g, records=records,
+                                   vtu_dir=vtu_dir if o["vtu"] else None)
     return RunResult(doc=doc, g=g, out=out, files=files)
 
 
@@ -261,10 +269,28 @@ def plot_probes(path, doc):
     return path
 
 
-def picture(path, scn, g, title=None):
-    """PNG of the deformed shell (matplotlib 3-D), reference outline dotted."""
-    from .io import plot_shell
+def picture(path, scn, g, title=None, records=None, vtu_dir=None):
+    """PNG of the deformed shell (matplotlib 3-D, reference outline dotted): the final state
+    coloured by rotation angle, or, with [output] picture_steps = k > 1, k states of the path
+    (read back from the VTU files, so also after a resume) overlaid."""
+    from .io import plot_sequence, plot_shell
     m = scn.mesh
+    o = scn.output
+    k = o.get("picture_steps", 1)
+    elev, azim = o.get("view") or (20.0, -60.0)
     with atomic_path(path) as tmp:
-        plot_shell(tmp, m.X, m.quads, g, title=title or scn.name)
+        if k > 1 and records and vtu_dir:
+            import meshio
+            have = [r for r in records
+                    if os.path.exists(os.path.join(vtu_dir, f"step_{r['step']:04d}.vtu"))]
+            pick = sorted({int(round(i)) for i in np.linspace(0, len(have) - 1, min(k, len(have)))})
+            pos, labels = [], []
+            for i in pick:
+                r = have[i]
+                v = meshio.read(os.path.join(vtu_dir, f"step_{r['step']:04d}.vtu"))
+                pos.append(v.points + v.point_data["displacement"])
+                labels.append(f"load factor {r['load_factor']:.3g}")
+            plot_sequence(tmp, m.X, m.quads, pos, labels, title=title or scn.name, elev=elev, azim=azim)
+        else:
+            plot_shell(tmp, m.X, m.quads, g, title=title or scn.name, elev=elev, azim=azim)
     return path

@@ -67,7 +67,7 @@ FIELD_KEYS = {"uniform": ("B", "scale", "rotate"), "gradient": ("B", "G", "x0", 
               "dipole": ("m", "x0", "scale")}
 SOLVER_DEFAULTS = dict(steps=10, lam_end=1.0, rtol=1e-10, dtol=1e-10, max_iter=30, max_cutbacks=12,
                        element="default", linear_solver="auto", control="load")
-OUTPUT_DEFAULTS = dict(vtu=True, vtu_every=1, plots=True, picture=True)
+OUTPUT_DEFAULTS = dict(vtu=True, vtu_every=1, plots=True, picture=True, picture_steps=1, view=None)
 # solver controls that do not change the converged states (may differ on --resume)
 NON_PHYSICAL = ("rtol", "dtol", "max_iter", "max_cutbacks", "linear_solver")
 
@@ -331,7 +331,7 @@ def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario"):
     spec["material"] = _material(v, doc["material"], regions)
     spec["fields"] = _fields(v, doc)
     spec["magnets"] = _magnets(v, doc, regions, spec["fields"])
-    spec["supports"] = _supports(v, doc, mesh)
+    spec["supports"] = _supports(v, doc, mesh, regions)
     spec["loads"] = _loads(v, doc, mesh, regions, spec["material"])
     spec["probes"] = _probes(v, doc, mesh)
     spec["solver"] = _solver(v, doc)
@@ -627,7 +627,7 @@ def _magnets(v, doc, regions, fields):
     out = []
     for i, t in enumerate(v.array_of_tables(doc, "magnets")):
         key = f"magnets[{i}]"
-        v.table(t, key, ("Br", "Br_frame", "region", "field"))
+        v.table(t, key, ("Br", "Br_frame", "region", "field", "mu0"))
         if ("Br" in t) == ("Br_frame" in t):
             v.fail(key, "give exactly one of 'Br' (lab vector [T]) or 'Br_frame' (components "
                         "[T] along the reference directors d1, d2, d3)")
@@ -637,6 +637,7 @@ def _magnets(v, doc, regions, fields):
         else:
             m["Br_frame"] = v.vector(t, "Br_frame", key)
         _, m["region"] = _region_ref(v, t, key, regions)
+        m["mu0"] = v.number(t, "mu0", key, default=None, lo=0.0, lo_open=True)
         if not fields:
             v.fail(key, "a magnet needs an applied field: define one in [fields.NAME]")
         if "field" in t:
@@ -651,10 +652,16 @@ def _magnets(v, doc, regions, fields):
     return out
 
 
-def _nodes_ref(v, t, key, mesh, required=True):
-    """Validated node selection of a table: 'edge' (a named node set) or 'nodes' (ids)."""
-    if ("edge" in t) and ("nodes" in t):
-        v.fail(key, "give one of 'edge' or 'nodes', not both")
+def _nodes_ref(v, t, key, mesh, required=True, regions=None):
+    """Validated node selection of a table: 'edge' (a named node set), 'nodes' (ids) or, where
+    ``regions`` are given, 'region' (the nodes of a region's elements)."""
+    given = [k for k in ("edge", "nodes", "region") if k in t]
+    if len(given) > 1:
+        v.fail(key, f"give one of 'edge', 'nodes'{' or region' if regions is not None else ''}, "
+                    f"not {' and '.join(map(repr, given))}")
+    if "region" in t and regions is not None:
+        _, name = _region_ref(v, t, key, regions)
+        return dict(region=name, nodes=np.unique(mesh.quads[regions[name]]).tolist())
     if "edge" in t:
         name = v.string(t, "edge", key)
         if name not in mesh.edges:
@@ -666,7 +673,8 @@ def _nodes_ref(v, t, key, mesh, required=True):
     if "nodes" in t:
         return dict(nodes=_int_list(v, t, "nodes", key, mesh.n_nodes))
     if required:
-        v.fail(key, "missing the node selection: give 'edge' (a named node set) or 'nodes' (ids)")
+        v.fail(key, "missing the node selection: give 'edge' (a named node set) or 'nodes' (ids)"
+               + (" or 'region'" if regions is not None else ""))
     return {}
 
 
@@ -674,7 +682,7 @@ def _sel(mesh, s):
     return mesh.edges[s["edge"]] if "edge" in s else np.asarray(s["nodes"], np.int64)
 
 
-def _supports(v, doc, mesh):
+def _supports(v, doc, mesh, regions):
     sup = v.array_of_tables(doc, "supports")
     if not sup:
         v.fail("supports", "no supports: the shell could move as a rigid body; add e.g. "
@@ -683,8 +691,8 @@ def _supports(v, doc, mesh):
     for i, t in enumerate(sup):
         key = f"supports[{i}]"
         typ = v.string(t, "type", key, choices=tuple(SUPPORT_KEYS))
-        v.table(t, key, ("type", "edge", "nodes") + SUPPORT_KEYS[typ])
-        s = dict(type=typ, **_nodes_ref(v, t, key, mesh))
+        v.table(t, key, ("type", "edge", "nodes", "region") + SUPPORT_KEYS[typ])
+        s = dict(type=typ, **_nodes_ref(v, t, key, mesh, regions=regions))
         if typ == "fix":
             d = t.get("dofs", None)
             if (not isinstance(d, list) or not d
@@ -796,6 +804,11 @@ def _output(v, doc):
     o["vtu_every"] = v.integer(d, "vtu_every", key, default=1, lo=1)
     o["plots"] = v.boolean(d, "plots", key, default=True)
     o["picture"] = v.boolean(d, "picture", key, default=True)
+    o["picture_steps"] = v.integer(d, "picture_steps", key, default=1, lo=1, hi=50)
+    if o["picture_steps"] > 1 and not o["vtu"]:
+        v.fail(_join(key, "picture_steps"), "a picture of several steps is drawn from the VTU files: "
+                                            "needs vtu = true")
+    o["view"] = v.vector(d, "view", key, n=2, default=None)
     return o
 
 
@@ -930,8 +943,11 @@ def _add_magnets(v, prob, spec, mesh, regions):
             R0 = mesh.g0[mesh.quads[sel], :3, :3].mean(1)          # (k, 3, 3) mean reference frame
             U, _, Vt = np.linalg.svd(R0)
             Br = np.einsum("kij,j->ki", U @ Vt, np.asarray(m["Br_frame"], float))
+        mu0 = m["mu0"]
+        if mu0 is None:
+            mu0 = F.MU0 * (1e6 if spec["units"] == "N-mm-MPa" else 1.0)
         try:
-            prob.add_magnetic(Br, built[m["field"]], elements=elems)
+            prob.add_magnetic(Br, built[m["field"]], elements=elems, mu0=mu0)
         except CoreSE3Error as exc:
             v.fail(key, str(exc))
 
