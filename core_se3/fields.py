@@ -26,7 +26,7 @@ import numpy as np
 from .errors import LoadError
 
 __all__ = ["MU0", "Field", "UniformField", "GradientField", "DipoleField", "UserField",
-           "rotating_direction", "check_field"]
+           "Superposition", "rotating_direction", "check_field"]
 
 MU0 = 4e-7 * pi
 """Vacuum permeability [N/A^2] for SI stresses (Pa).  For N-mm-MPa models use MU0 * 1e6."""
@@ -223,6 +223,28 @@ class UserField(Field):
             e[k] = h
             out[..., k] = (self._gradient(x + e, lam) - self._gradient(x - e, lam)) / (2 * h)
         return out
+
+
+class Superposition(Field):
+    """The sum of several fields (e.g. a uniform field plus a magnet's dipole), each with its own
+    load-factor programme."""
+
+    def __init__(self, *fields):
+        super().__init__(lambda lam: 1.0)
+        if not fields or not all(isinstance(f, Field) for f in fields):
+            raise LoadError("Superposition needs one or more core_se3.fields.Field objects")
+        self.fields = fields
+        self.uniform = all(f.uniform for f in fields)
+        self.approximate_hessian = any(f.approximate_hessian for f in fields)
+
+    def _value(self, x, lam):
+        return sum(f.value(x, lam) for f in self.fields)
+
+    def _gradient(self, x, lam):
+        return sum(f.gradient(x, lam) for f in self.fields)
+
+    def _hessian(self, x, lam):
+        return sum(f.hessian(x, lam) for f in self.fields)
 
 
 def check_field(field, x, lam=1.0, rtol=1e-8):
