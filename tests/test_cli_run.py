@@ -98,6 +98,7 @@ def test_run_writes_results_vtu_series_and_plots(tmp_path, capsys):
     exact = np.cross(phi_tip - c, P)
     assert np.abs(m.cell_data["M1"][0] - exact).max() < 5e-3 * np.abs(exact).max()
     assert np.abs(m.cell_data["N1"][0] - P).max() < 5e-3 * 2.0
+    assert os.stat(os.path.join(out, "results.json")).st_mode & 0o644 == 0o644    # not mkstemp's 0600
     for png in ("probes.png", "shell.png"):
         with open(os.path.join(out, png), "rb") as fh:
             assert fh.read(8) == b"\x89PNG\r\n\x1a\n"

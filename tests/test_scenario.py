@@ -58,7 +58,8 @@ def test_valid_scenario_defaults_and_problem(tmp_path):
     assert scn.name == "strip"
     assert scn.solver["steps"] == 2 and scn.solver["rtol"] == 1e-10 and scn.solver["element"] == "default"
     assert scn.spec["loads"][0]["scale"] == "linear" and scn.spec["loads"][0]["follower"] is False
-    assert scn.output == dict(dir=None, vtu=True, vtu_every=1, plots=True, picture=True)
+    assert scn.output == dict(dir=None, vtu=True, vtu_every=1, plots=True, picture=True, picture_steps=1,
+                              view=None)
     assert scn.mesh.n_elements == 4 and set(scn.problem.probes) == {"tip"}
     assert scn.load_factors() == [0.5, 1.0]
     assert len(scn.problem.loads) == 1 and len(scn.problem.supports) == 1
