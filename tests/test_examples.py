@@ -55,9 +55,9 @@ def test_every_example_validates():
 
 
 def test_gripper(tmp_path):
-    scn = example("gripper", solver={"steps": 4})
+    scn = example("gripper", solver={"steps": 3})
     res = runner.run(scn, out=str(tmp_path / "gripper"))
-    m = check_series(res.out, 5, fields=("magnetisation_Br", "magnetic_couple"))
+    m = check_series(res.out, 4, fields=("magnetisation_Br", "magnetic_couple"))
     assert np.abs(m.point_data["magnetisation_Br"]).max() > 0
     last = res.doc["steps"][-1]["probes"]
     upx, upy = np.array(last["tip_px"]["u"]), np.array(last["tip_py"]["u"])
@@ -66,7 +66,7 @@ def test_gripper(tmp_path):
     assert upx[0] < -10 and upx[2] > 10                       # the fingers close (inward and up)
     # the same model from the catalogue (Python API, bench_magnetic.gripper_mesh): same numbers
     from core_se3.bench import run_case
-    doc, _, _ = run_case("magnetic-gripper", mesh=(8, 3), steps=4)
+    doc, _, _ = run_case("magnetic-gripper", mesh=(8, 3), steps=3)
     np.testing.assert_allclose(doc["steps"][-1]["probes"]["tip"]["u"], upx, rtol=1e-9, atol=1e-9)
     assert os.path.getsize(os.path.join(res.out, "shell.png")) > 1000
 
