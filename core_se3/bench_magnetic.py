@@ -51,56 +51,79 @@ def _field_dir(angle_deg):
 
 
 # ----------------------------------------------------------------------------- eigen monitor
-def smallest_eigenvalue(prob, g, lam):
-    """Smallest eigenvalue of the symmetric part of the free tangent at (g, lam), unit-scaled
-    (rotational dofs times the length scale), by shift-invert Lanczos about 0."""
+def _scaled_symmetric_tangent(prob, g, lam):
+    """Symmetric part of the free tangent, unit-scaled (rotational dofs times the length scale)."""
     import scipy.sparse as sp
-    from scipy.sparse.linalg import eigsh
 
     from .verify import tangent
     K = tangent(prob, g, lam)
-    asm = prob.assembler()
     ell = prob.length_scale
-    s = np.tile(np.r_[np.ones(3), np.full(3, 1.0 / ell)], prob.mesh.n_nodes)[asm.free]
+    s = np.tile(np.r_[np.ones(3), np.full(3, 1.0 / ell)], prob.mesh.n_nodes)[prob.assembler().free]
     S = sp.diags(s)
-    Ks = S @ (0.5 * (K + K.T)) @ S
+    return (S @ (0.5 * (K + K.T)) @ S).tocsc()
+
+
+def smallest_eigenvalue(prob, g, lam):
+    """Smallest eigenvalue of the symmetric unit-scaled free tangent at (g, lam), by shift-invert
+    Lanczos about 0."""
+    from scipy.sparse.linalg import eigsh
+    Ks = _scaled_symmetric_tangent(prob, g, lam)
     if Ks.shape[0] <= 12:
         return float(np.linalg.eigvalsh(Ks.toarray())[0])
-    vals = eigsh(Ks.tocsc(), k=1, sigma=0.0, which="LM", return_eigenvectors=False)
-    return float(vals[0])
+    return float(eigsh(Ks, k=1, sigma=0.0, which="LM", return_eigenvectors=False)[0])
 
 
-def critical_load(prob, lam_grid, rtol=1e-8, **solve_kw):
+def _linearised_crossing(Ka, Kb):
+    """Smallest t in (0, 1] with Ka + t (Kb - Ka) singular (linearised buckling between two states):
+    Ka v = t (Ka - Kb) v, i.e. the largest eigenvalue 1/t of Ka^-1 (Ka - Kb)."""
+    from scipy.sparse.linalg import LinearOperator, eigs, splu
+    lu = splu(Ka)
+    D = (Ka - Kb).tocsr()
+    n = Ka.shape[0]
+    op = LinearOperator((n, n), matvec=lambda x: lu.solve(D @ x), dtype=float)
+    nu = eigs(op, k=min(4, n - 2), which="LR", return_eigenvectors=False)
+    nu = nu.real[np.abs(nu.imag) <= 1e-8 * np.abs(nu).max()]
+    return float(1.0 / nu.max())
+
+
+def critical_load(prob, lam_grid, rtol=1e-6, max_refine=20, **solve_kw):
     """First load factor at which the smallest tangent eigenvalue changes sign.
 
-    Newton-solves the (perfect) path at the load factors of ``lam_grid``, monitors the smallest
-    eigenvalue of the tangent, brackets its first sign change and refines it by the secant
-    (regula falsi) method on re-solved states.  Returns dict(lam, history=[(lam, eig), ...]).
-    Raises LoadError when no sign change occurs on the grid.
+    Newton-solves the path at the load factors of ``lam_grid``, monitors the smallest eigenvalue
+    of the tangent and brackets its first sign change between two converged states a, b.  Inside
+    the bracket the crossing is estimated from the linearised tangent K_a + t (K_b - K_a) (exact
+    for a linear pre-buckling path), and the bracket is halved by re-solved states until it is
+    below ``rtol`` of the estimate (a re-solve that fails, right at the singular point, ends the
+    refinement).  No Newton solve is asked to converge *at* the singular point.  Returns
+    dict(lam, history=[(lam, eig), ...]); raises LoadError when no sign change occurs.
     """
-    g = prob.mesh.g0.copy()
+    from .errors import ConvergenceError
+    g_prev, lam_prev, e_prev = prob.mesh.g0.copy(), 0.0, None
     hist = []
-    lam_prev, e_prev, g_prev = 0.0, None, g
     for lam in lam_grid:
-        res = prob.solve(steps=1, lam_start=lam_prev, lam_end=lam, g_init=g_prev, **solve_kw)
-        g_now = res.final.g
+        g_now = prob.solve(steps=1, lam_start=lam_prev, lam_end=lam, g_init=g_prev, **solve_kw).final.g
         e = smallest_eigenvalue(prob, g_now, lam)
         hist.append((float(lam), e))
         if e_prev is not None and e_prev > 0 >= e:
-            a, fa, ga, b, fb = lam_prev, e_prev, g_prev, lam, e
-            for _ in range(60):
-                c = b - fb * (b - a) / (fb - fa)
-                res = prob.solve(steps=1, lam_start=a, lam_end=c, g_init=ga, **solve_kw)
-                fc = smallest_eigenvalue(prob, res.final.g, c)
-                hist.append((float(c), fc))
-                if abs(fc) <= rtol * max(abs(hist[0][1]), 1e-300) or abs(b - a) <= rtol * abs(c):
-                    return dict(lam=float(c), history=hist)
-                if fc > 0:
-                    a, fa, ga = c, fc, res.final.g
+            a, ga, b, gb = lam_prev, g_prev, lam, g_now
+            for _ in range(max_refine):
+                t = _linearised_crossing(_scaled_symmetric_tangent(prob, ga, a), _scaled_symmetric_tangent(prob, gb, b))
+                lam_c = a + t * (b - a)
+                if b - a <= rtol * abs(lam_c):
+                    break
+                mid = 0.5 * (a + b)
+                try:
+                    gm = prob.solve(steps=1, lam_start=a, lam_end=mid, g_init=ga, **solve_kw).final.g
+                except ConvergenceError:
+                    break
+                em = smallest_eigenvalue(prob, gm, mid)
+                hist.append((float(mid), em))
+                if em > 0:
+                    a, ga = mid, gm
                 else:
-                    b, fb = c, fc
-            return dict(lam=float(c), history=hist)
-        lam_prev, e_prev, g_prev = lam, e, g_now
+                    b, gb = mid, gm
+            return dict(lam=float(lam_c), bracket=(float(a), float(b)), history=hist)
+        g_prev, lam_prev, e_prev = g_now, lam, e
     raise LoadError(f"no sign change of the smallest tangent eigenvalue up to load factor {lam_grid[-1]}")
 
 
@@ -297,7 +320,8 @@ def _run_antiparallel(case, p, prob, steps, verbose, **kw):
     doc["critical"] = dict(load=q_cr, field_T=cr["lam"] * Ba_max, exact=pi ** 2 / 4,
                            error=q_cr / (pi ** 2 / 4) - 1, monitor=cr["history"],
                            method="smallest eigenvalue of the symmetric unit-scaled tangent on the perfect "
-                                  "trivial path, sign change refined by regula falsi")
+                                  "trivial path; sign change bracketed and refined by bisection with a "
+                                  "linearised-tangent estimate inside the bracket")
     doc["imperfection"] = dict(kind="field tilted toward +z", tilt_deg=p["tilt_deg"])
     doc["perfect_branch"] = dict(reference_entry=entry, points=pts,
                                  max_error_over_L_at_load_ge_1p3_critical=max(errs) if errs else None,
