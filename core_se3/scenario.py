@@ -64,7 +64,7 @@ LOAD_KEYS = {
     "gravity": ("g", "rho", "scale", "region"),
 }
 FIELD_KEYS = {"uniform": ("B", "scale", "rotate"), "gradient": ("B", "G", "x0", "scale"),
-              "dipole": ("m", "x0", "scale")}
+              "dipole": ("m", "x0", "scale", "mu0")}
 SOLVER_DEFAULTS = dict(steps=10, lam_end=1.0, rtol=1e-10, dtol=1e-10, max_iter=30, max_cutbacks=12,
                        element="default", linear_solver="auto", control="load")
 OUTPUT_DEFAULTS = dict(vtu=True, vtu_every=1, plots=True, picture=True, picture_steps=1, view=None)
@@ -619,6 +619,7 @@ def _fields(v, doc):
         else:
             f["m"] = v.vector(t, "m", key, nonzero=True)
             f["x0"] = v.vector(t, "x0", key)
+            f["mu0"] = v.number(t, "mu0", key, default=None, lo=0.0, lo_open=True)
         out[name] = f
     return out
 
@@ -929,7 +930,8 @@ def _add_magnets(v, prob, spec, mesh, regions):
             elif f["type"] == "gradient":
                 built[name] = F.GradientField(f["B"], f["G"], x0=f["x0"], scale=sc)
             else:
-                built[name] = F.DipoleField(f["m"], f["x0"], scale=sc)
+                kw = {} if f["mu0"] is None else {"mu0": f["mu0"]}
+                built[name] = F.DipoleField(f["m"], f["x0"], scale=sc, **kw)
         except CoreSE3Error as exc:
             v.fail(key, str(exc))
     for i, m in enumerate(spec["magnets"]):
