@@ -158,7 +158,8 @@ def run_sze(case, p, prob, steps, verbose, **kw):
     """Trace the case's path; returns (document, Result)."""
     from .continuation import arc_length
     x = case.extra
-    if x.get("path", "arc_length") == "load":
+    # monotone paths default to the case's load steps (sze-semicylinder: 40, as fenicsx_ref)
+    if x.get("path", "load" if x["shape"] == "semicylinder" else "arc_length") == "load":
         res = prob.solve(steps=steps, verbose=verbose, **kw)
     else:
         node, direction = prob.control
@@ -168,7 +169,9 @@ def run_sze(case, p, prob, steps, verbose, **kw):
             stop_at, lam_end = (node, direction, float(tu[-1])), None
         dlam0 = kw.pop("dlam0", x.get("dlam0", 1.0 / max(steps, 1)))
         res = arc_length(prob, lam_end=lam_end, dlam0=dlam0, stop_at=stop_at,
-                         ds_max=kw.pop("ds_max", None), max_steps=kw.pop("max_steps", 400),
+                         ds_max=kw.pop("ds_max", None),
+                         ds_max_factor=kw.pop("ds_max_factor", x.get("ds_max_factor", 8.0)),
+                         target_iter=kw.pop("target_iter", x.get("target_iter", 5)), max_steps=kw.pop("max_steps", 400),
                          verbose=verbose, **kw)
     return document(case, p, prob, res), res
 

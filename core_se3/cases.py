@@ -262,7 +262,8 @@ _add(Case(
           "Geometry: phi0 = (R sin t, s, R cos t), t in [-pi/2, pi/2] along x, s in [0, L] along y; "
           "the load acts at the midpoint of edge y1. Measure: largest distance from each computed "
           "point to the tabulated curve in the plane (P/P_max, u/u_max).",
-    extra=dict(literature="sze3.7_clamped_semicylinder_point_load", column="minus_W_A_x100_isotropic",
+    extra=dict(family="sze", shape="semicylinder",
+               literature="sze3.7_clamped_semicylinder_point_load", column="minus_W_A_x100_isotropic",
                displacement_scale=0.01, probe_edge="y1", probe_component=2, probe_sign=-1.0),
 ))
 

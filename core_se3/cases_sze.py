@@ -73,5 +73,6 @@ _add(Case(
     extra=dict(family="sze", shape="slit-annulus", literature="sze3.3_slit_annular_plate",
                curves=[dict(column="W_A", probe="A", component=2, sign=1.0, scale=1.0),
                        dict(column="W_B", probe="B", component=2, sign=1.0, scale=1.0)],
-               path="arc_length", stop="lam_end", dlam0=0.01),
+               path="arc_length", stop="lam_end", dlam0=0.01, ds_max_factor=32.0,
+               target_iter=8),
 ))

@@ -12,7 +12,9 @@ constraint c:
 
 * ``crisfield`` (cylindrical arc length): |Du + du|_W^2 + psi^2 u_ref^2 (Dlam + dlam)^2 = ds^2,
   Du, Dlam the increments accumulated in the step (sum of the etas); the root that keeps the
-  increment closest to its previous direction is taken, complex roots reject the step;
+  increment closest to its previous direction is taken; for complex roots the minimum of the
+  quadratic (the closest point to the constraint) is used, and more than 3 such iterations in
+  a step reject it;
 * ``riks`` (normal plane, Ramm's update): (Du)_W . du + psi^2 u_ref^2 Dlam dlam = 0;
 * displacement control: d . (phi_k - X_k) = u* at node k (lab direction d), linearised
   c_u . du = d . R_k du_v; load control: dlam = lam* - lam.
@@ -319,7 +321,12 @@ class _ArcLength:
         Cc = np.sum(w * ua * ua) + self.c2 * self.dlam ** 2 - self.ds ** 2
         disc = B * B - 4 * A * Cc
         if disc < 0:
-            raise _Failed("arc-length constraint has no real root (complex roots)")
+            # complex roots: take the point of the correction line closest to the sphere
+            # (minimum of the quadratic); the next iterations return to the constraint
+            self.complex_roots = getattr(self, "complex_roots", 0) + 1
+            if self.complex_roots > 3:
+                raise _Failed("arc-length constraint has no real root (complex roots)")
+            return -B / (2 * A)
         roots = ((-B + np.sqrt(disc)) / (2 * A), (-B - np.sqrt(disc)) / (2 * A))
         # choose the root whose increment makes the smallest angle with the previous one
         score = [np.sum(w * self.du * (ua + x * b)) + self.c2 * self.dlam * (self.dlam + x)
@@ -464,7 +471,8 @@ def _correct(sysm, state, lam, con, rtol, dtol, max_iter, timers):
 def path_follow(sysm, constraint="crisfield", lam_end=1.0, dlam0=0.05, ds_max=None, ds_min=None,
                 psi=0.0, max_steps=200, target_iter=5, max_iter=20, rtol=1e-9, dtol=1e-9,
                 max_rejections=12, control=None, control_end=None, lam_min=None, stability=True,
-                branch_switch=False, land=True, verbose=False, record=None, log=None):
+                branch_switch=False, land=True, verbose=False, record=None, log=None,
+                ds_max_factor=8.0):
     """Trace the path of ``sysm`` (ShellSystem or any object with the same methods).
 
     Stops when lam >= lam_end (if lam_end is not None), when the controlled displacement
@@ -487,7 +495,7 @@ def path_follow(sysm, constraint="crisfield", lam_end=1.0, dlam0=0.05, ds_max=No
         raise CoreSE3Error("the loads do not move the structure (K^-1 q = 0)")
     psi_u = psi * tn0                       # load term of the arc length in length units
     ds = abs(dlam0) * np.sqrt(tn0 ** 2 + psi_u ** 2)
-    ds_max = ds_max or 8 * ds
+    ds_max = ds_max or ds_max_factor * ds
     ds_min = ds_min or ds / 2 ** max_rejections
     direction = np.sign(dlam0) or 1.0
     prev_du, prev_dl = None, None
@@ -672,13 +680,13 @@ def _result(problem, sysm, run):
 
 
 def arc_length(problem, lam_end=1.0, dlam0=0.05, method="crisfield", psi=0.0, ds_max=None,
-               max_steps=200, target_iter=5, max_iter=20, rtol=1e-9, dtol=1e-9, stop_at=None,
+               ds_max_factor=8.0, max_steps=200, target_iter=5, max_iter=20, rtol=1e-9, dtol=1e-9, stop_at=None,
                lam_min=None, stability=True, branch_switch=False, land=True, verbose=False,
                linear_solver=None):
     """Arc-length continuation of a Problem (see module docstring).
 
-    dlam0: load factor of the first predictor (sets the arc length ds); ds_max defaults to 8x
-    that.  stop_at = (node, lab direction, value): stop when the displacement of ``node``
+    dlam0: load factor of the first predictor (sets the arc length ds); ds_max defaults to
+    ds_max_factor (8) times that.  stop_at = (node, lab direction, value): stop when the displacement of ``node``
     along ``direction`` reaches ``value`` (the last step lands on it exactly).  Returns a
     Result with every converged step; ``result.critical_points`` lists the limit and
     bifurcation points found (CriticalPoint), each step has ``.stability``.
@@ -691,7 +699,7 @@ def arc_length(problem, lam_end=1.0, dlam0=0.05, method="crisfield", psi=0.0, ds
                            max_iter, rtol, dtol, control=control,
                            control_end=stop_at[2] if stop_at else None, lam_min=lam_min,
                            stability=stability, branch_switch=branch_switch, land=land,
-                           verbose=verbose, record=rec, log=log)
+                           verbose=verbose, record=rec, log=log, ds_max_factor=ds_max_factor)
 
     return _result(problem, sysm, run)
 
