@@ -1,0 +1,189 @@
+"""Study 1 -- agreement of core_se3 and fenicsx_ref on the shared cases at rotations up to pi/2.
+
+Both models run every case at the same load factors k/n and on matched nodal grids: the
+fenicsx_ref Q2 mesh nx x ny has the node grid of the core_se3 Q1 mesh 2nx x 2ny.  Two grid
+levels per case show whether the comparison is converged.  Measure: max over the steps of
+|u_core - u_fx| / (largest probe displacement of either path), the 3 lab components of the
+probe displacement; against the case's reference (nu = 0 only) the project's error measure.
+Same shear factor (k_s = 1) in both models.
+"""
+from __future__ import annotations
+
+from math import pi
+
+import numpy as np
+
+from . import common
+from .metrics import path_distance
+from .models import run_core, run_fenicsx
+from .tables import fmt, markdown_table, pct
+
+__all__ = ["CASES", "run", "markdown"]
+
+# name, label, overrides (rotations <= pi/2 at lam = 1), steps, fenicsx meshes (coarse, fine)
+CASES = [
+    ("cantilever-shear", "cantilever, end shear PL²/EI to 4", {}, 8, [(8, 1), (16, 1)]),
+    ("rollup", "roll-up, M to k = 1/4 (π/2)", dict(k=0.25), 4, [(4, 1), (8, 1)]),
+    ("curved-rollup", "half-cylinder, end moment k to 1/2 (π/2)", dict(k=0.5), 4, [(8, 1), (16, 1)]),
+    ("arch-follower", "arch, tangential follower P to 900 N", dict(load_max=900.0), 6, [(20, 1), (40, 1)]),
+    ("arch-follower", "arch, inward follower P to 3000 N", dict(direction=1.0), 6, [(20, 1), (40, 1)]),
+    ("pressure-strip", "strip, dead pressure qL³/EI to 20", {}, 8, [(8, 1), (16, 1)]),
+    ("pressure-strip", "strip, follower pressure qL³/EI to 10", dict(follower=1.0, load_max=10.0), 8,
+     [(8, 1), (16, 1)]),
+    ("torsion", "torsion, end rotation to π/2", dict(angle=pi / 2), 4, [(10, 3), (20, 6)]),
+]
+QUICK = [0, 1, 7]
+
+
+def _mesh_core(m):
+    return (2 * m[0], 2 * m[1])
+
+
+def _nu_mesh(name, m, nu):
+    """nu = 0.3 on strips: resolve the anticlastic width variation (ny = 2 in Q2)."""
+    if nu > 0 and name in ("cantilever-shear", "rollup", "pressure-strip") and m[1] < 2:
+        return (m[0], 2)
+    return m
+
+
+def _rec_summary(rec):
+    return {k: rec[k] for k in ("model", "variant", "mesh", "n_dofs", "status", "wall", "iterations",
+                                "timings")}
+
+
+def _compare(name, ov, lams, a, b):
+    """Distance of record a to record b (both must have all steps)."""
+    if len(a["u"]) != len(lams) or len(b["u"]) != len(lams):
+        return None
+    return path_distance(a["u"], b["u"])
+
+
+def run(quick=False, seed=True):
+    out = []
+    for ci, (name, label, ov0, steps, meshes) in enumerate(CASES):
+        if quick and ci not in QUICK:
+            continue
+        for nu in (0.0, 0.3):
+            ov = dict(ov0, nu=nu)
+            lams = [k / steps for k in range(1, steps + 1)]
+            row = dict(case=name, label=label, nu=nu, overrides=ov, steps=steps, lams=lams, levels=[])
+            for lev, mfx in enumerate(meshes):
+                mfx = _nu_mesh(name, mfx, nu)
+                mc = _mesh_core(mfx)
+                common.progress(f"agreement {label} nu={nu} level {lev}: core {mc} / fenicsx {mfx}")
+                recs = dict(core=run_core(name, mc, ov, steps),
+                            psri=run_fenicsx(name, mfx, ov, steps, integration="psri"))
+                if lev == len(meshes) - 1:
+                    recs["full"] = run_fenicsx(name, mfx, ov, steps, integration="full")
+                if seed and nu == 0.0 and lev == 0:  # capped (models.SEED_CAP), coarse grid only
+                    recs["seed"] = run_core(name, mc, ov, steps, element="seed")
+                lv = dict(mesh_core=mc, mesh_fx=mfx, records={k: _rec_summary(r) for k, r in recs.items()},
+                          u={k: r["u"] for k, r in recs.items()},
+                          torque={k: r["torque"] for k, r in recs.items()},
+                          angle={k: r["angle"] for k, r in recs.items()})
+                d = _compare(name, ov, lams, recs["core"], recs["psri"])
+                lv["dist_core_psri"] = None if d is None else d[0]
+                lv["dist_core_psri_steps"] = None if d is None else d[1].tolist()
+                for k in ("full", "seed"):
+                    if k in recs:  # the seed runs on the coarse grid: compared with fx there
+                        d2 = _compare(name, ov, lams, recs[k], recs["psri"])
+                        lv[f"dist_{k}_psri"] = None if d2 is None else d2[0]
+                tq = recs["core"]["torque"], recs["psri"]["torque"]
+                if tq[0] and tq[1] and len(tq[0]) == len(tq[1]):
+                    lv["torque_ratio"] = [a / b for a, b in zip(*tq)]
+                # against the reference (the case's entry; nu = 0 only: the entries are nu = 0)
+                lv["ref_error"] = {}
+                if nu == 0.0:
+                    from core_se3.cases import get_case
+                    case = get_case(name)
+                    ref = common.reference_path(name, ov, lams)
+                    if ref is not None:
+                        lv["ref"] = ref.tolist()
+                        scale = float(np.linalg.norm(ref, axis=1).max())
+                        for k, r in recs.items():
+                            if len(r["u"]) == len(lams):
+                                e = path_distance(common.planar(case, r["u"]), ref, scale)
+                                lv["ref_error"][k] = e[0]
+                row["levels"].append(lv)
+            out.append(row)
+    return dict(cases=out)
+
+
+def _status(rec):
+    return "ok" if rec["status"] == "ok" else rec["status"].replace("failed: ", "FAILED: ")[:90]
+
+
+def markdown(data, per_step=True):
+    rows, worst = [], {}
+    for row in data["cases"]:
+        fine = row["levels"][-1]
+        coarse = row["levels"][0]
+        r = fine["records"]
+        rs = coarse["records"]
+        note = ""
+        if "torque_ratio" in fine:
+            note = f"torque core/fx at π/2: {fine['torque_ratio'][-1]:.4f}"
+        rows.append([row["label"], fmt(row["nu"]), f"{fine['mesh_core'][0]}×{fine['mesh_core'][1]} / "
+                     f"{fine['mesh_fx'][0]}×{fine['mesh_fx'][1]}",
+                     pct(coarse.get("dist_core_psri")), pct(fine.get("dist_core_psri")),
+                     pct(fine.get("dist_full_psri")),
+                     pct(fine["ref_error"].get("core")), pct(fine["ref_error"].get("psri")),
+                     ("–" if "seed" not in rs else (pct(coarse.get("dist_seed_psri"))
+                                                    if rs["seed"]["status"] == "ok" else _status(rs["seed"]))),
+                     note])
+        d = fine.get("dist_core_psri")
+        if d is not None:
+            worst.setdefault(row["nu"], []).append((d, row["label"]))
+    md = [markdown_table(
+        ["case", "ν", "mesh core Q1 / fx Q2", "core vs fx-PSRI (coarse grid)", "core vs fx-PSRI (fine grid)",
+         "fx-full vs fx-PSRI", "core vs ref", "fx-PSRI vs ref", "core seed vs fx-PSRI (coarse grid, capped)", "note"], rows)]
+    if per_step:
+        md.append("\n<details><summary>Per-step probe displacements (fine grids)</summary>\n")
+        for row in data["cases"]:
+            fine = row["levels"][-1]
+            uc, uf = fine["u"]["core"], fine["u"]["psri"]
+            if len(uc) != len(row["lams"]) or len(uf) != len(row["lams"]):
+                md.append(f"\n{row['label']}, ν = {row['nu']}: incomplete path "
+                          f"(core {_status(fine['records']['core'])}, fx {_status(fine['records']['psri'])})\n")
+                continue
+            ref = fine.get("ref")
+            steps_rows = []
+            for k, lam in enumerate(row["lams"]):
+                c, f = np.asarray(uc[k]), np.asarray(uf[k])
+                cells = [fmt(lam), fmt(fine["angle"]["core"][k], 4),
+                         f"({c[0]:.5g}, {c[1]:.2g}, {c[2]:.5g})", f"({f[0]:.5g}, {f[1]:.2g}, {f[2]:.5g})",
+                         pct(fine["dist_core_psri_steps"][k], 3),
+                         "–" if ref is None else f"({ref[k][0]:.5g}, {ref[k][1]:.5g})"]
+                steps_rows.append(cells)
+            md.append(f"\n**{row['label']}, ν = {row['nu']}** (core {fine['mesh_core'][0]}×{fine['mesh_core'][1]}, "
+                      f"fx {fine['mesh_fx'][0]}×{fine['mesh_fx'][1]} PSRI)\n")
+            md.append(markdown_table(["λ", "rotation [rad]", "core u (x, y, z)", "fx u (x, y, z)",
+                                      "|Δu| / max|u|", "reference (u_x, u_z)"], steps_rows))
+        md.append("\n</details>\n")
+    return "\n".join(md), worst
+
+
+def plot(data, path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(7.5, 3.2), dpi=90)
+    labels = []
+    for j, nu in enumerate((0.0, 0.3)):
+        rows = [r for r in data["cases"] if r["nu"] == nu]
+        for lev, mk in ((0, "o"), (-1, "s")):
+            y = [r["levels"][lev].get("dist_core_psri") or np.nan for r in rows]
+            x = np.arange(len(rows)) + (j - 0.5) * 0.25
+            ax.semilogy(x, y, mk, mfc="none" if lev == 0 else None, color=f"C{j}",
+                        label=f"ν = {nu}, {'coarse' if lev == 0 else 'fine'} grid")
+        labels = [r["label"].split(",")[0] + "\n" + r["label"].split(",")[1].split(" to")[0].strip()
+                  for r in rows]
+    ax.axhline(0.01, color="k", lw=0.8, ls="--")
+    ax.text(-0.4, 0.011, "1 % bar", fontsize=7)
+    ax.set_xticks(np.arange(len(labels)))
+    ax.set_xticklabels(labels, fontsize=6)
+    ax.set_ylabel("max |u_core − u_fx| / max |u|", fontsize=8)
+    ax.legend(fontsize=6, ncol=2)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
