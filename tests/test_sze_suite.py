@@ -1,0 +1,53 @@
+"""Sze, Liu & Lo (2004) s3.3 (slit annular plate) and s3.7 (clamped semi-cylinder, isotropic)
+with core_se3 (issue 6, P1), on coarse meshes.
+
+References: core_se3/data/literature.json ``sze3.3_slit_annular_plate`` (Abaqus S4R, 10x80,
+columns W_A at r = 6 and W_B at r = 10 of the lifted edge) and
+``sze3.7_clamped_semicylinder_point_load`` (column minus_W_A_x100_isotropic, x 0.01).
+Measure: the largest distance of a computed point to the table polyline in
+(P/P_max, u/u_max), u_max per column (core_se3.bench_sze.curve_deviation).
+
+Measured deviations (core-se3 bench run NAME --mesh ..., default element):
+
+    sze-semicylinder   12x12 3.87 %   16x16 2.09 %   24x24 1.11 %   (table mesh 40x40: benchmarks)
+    sze-slit-annular   6x30  1.53 %   (table mesh 10x80: benchmarks)
+
+The semi-cylinder's error falls as ~h^1.6..2 (stiffer coarse meshes: the end deflection is
+2.1 % low on 16x16), so its coarse bar is 2.5 % on 16x16; the annulus meets the 2 %
+acceptance bar already on the coarse 6x30 mesh, which is its test bar.
+"""
+import numpy as np
+import pytest
+
+from core_se3 import bench
+
+
+def test_slit_annular_plate_6x30_within_2_percent():
+    """Slit annulus, 6x30 (radial x around), arc length to P_max = 0.8: both curves within 2 %
+    (measured W_A 1.53 %, W_B 1.24 %); end deflections within 2.5 % of the table's 13.891 and
+    17.528 (measured 13.66 and 17.30, the coarse mesh is stiffer); equilibrium with reactions
+    balancing the load to 1e-6 (the residual floor of this very flexible plate is ~1e-8)."""
+    doc, res, prob = bench.run_case("sze-slit-annular", mesh=(6, 30))
+    ref = doc["reference"]
+    assert ref["entry"] == "sze3.3_slit_annular_plate"
+    assert ref["deviation"] <= 0.02, ref["curves"]
+    assert abs(doc["steps"][-1]["load_factor"] - 1.0) < 1e-12
+    wa, wb = doc["steps"][-1]["probes"]["A"]["u"][2], doc["steps"][-1]["probes"]["B"]["u"][2]
+    assert abs(wa - 13.891) < 0.025 * 13.891 and abs(wb - 17.528) < 0.025 * 17.528, (wa, wb)
+    assert max(s["balance_error"] for s in doc["steps"]) < 1e-6
+    assert not res.critical_points                       # a monotone, stable path
+
+
+def test_semicylinder_16x16_within_2p5_percent():
+    """Clamped semi-cylinder, 16x16, the case's 40 load steps: deviation <= 2.5 % (measured
+    2.09 %; 24x24 gives 1.11 %, see the module docstring); -u_z(P_max) within 3 % of the
+    table's 1.71505 (measured 1.679); the response is symmetric about the plane x = 0 through
+    the load (|u_x| at the crown < 1e-10)."""
+    doc, res, prob = bench.run_case("sze-semicylinder", mesh=(16, 16))
+    ref = doc["reference"]
+    assert ref["entry"] == "sze3.7_clamped_semicylinder_point_load"
+    assert ref["deviation"] <= 0.025, ref["curves"]
+    u = doc["steps"][-1]["probes"]["crown"]["u"]
+    assert abs(-u[2] - 1.71505) < 0.03 * 1.71505, u
+    assert abs(u[0]) < 1e-10
+    assert len(doc["steps"]) == 41
