@@ -241,7 +241,7 @@ def plot_load_deflection(
 
 
 def plot_shell(path, X, quads, g, title: str | None = None, color_by_rotation: bool = True,
-               elev: float | None = None, azim: float | None = None) -> str:
+               elev: float | None = None, azim: float | None = None, roll: float = 0.0) -> str:
     """3-D view of the deformed shell (faces = ``quads`` on the current positions ``g[:, :3, 3]``)
     with equal axis scaling, saved as PNG. ``X`` (reference positions, (n, 3)) is drawn as a faint
     wireframe for comparison. Faces are coloured by their mean nodal rotation angle (rad) if
@@ -287,8 +287,8 @@ def plot_shell(path, X, quads, g, title: str | None = None, color_by_rotation: b
         ax.set_box_aspect((1, 1, 1))
     except AttributeError:  # matplotlib < 3.3
         pass
-    if elev is not None or azim is not None:
-        ax.view_init(elev=elev, azim=azim)
+    if elev is not None or azim is not None or roll:
+        _view(ax, elev, azim, roll)
     ax.set_xlabel("x")
     ax.set_ylabel("y")
     ax.set_zlabel("z")
@@ -299,13 +299,21 @@ def plot_shell(path, X, quads, g, title: str | None = None, color_by_rotation: b
     return path
 
 
+def _view(ax, elev, azim, roll=0.0):
+    """Camera elevation, azimuth and (matplotlib >= 3.6) roll, in degrees."""
+    try:
+        ax.view_init(elev=elev, azim=azim, roll=roll)
+    except TypeError:          # matplotlib < 3.6: no roll
+        ax.view_init(elev=elev, azim=azim)
+
+
 def plot_sequence(path, X, quads, positions: Sequence[np.ndarray], labels: Sequence[str] | None = None,
                   title: str | None = None, cmap: str = "viridis", elev: float = 20.0,
-                  azim: float = -60.0) -> str:
+                  azim: float = -60.0, roll: float = 0.0) -> str:
     """Several deformed shapes of one shell in one 3-D view (e.g. the states of a load path):
     ``positions[k]`` (n, 3) are the current node positions of state k, drawn as faces coloured
     by k (``cmap``), with a legend of ``labels``; ``X`` (reference) as a dotted outline, equal
-    axis scaling. Returns the path."""
+    axis scaling; camera ``elev``, ``azim``, ``roll`` [deg]. Returns the path."""
     import matplotlib
     import mpl_toolkits.mplot3d  # noqa: F401
     from matplotlib.patches import Patch
@@ -337,7 +345,7 @@ def plot_sequence(path, X, quads, positions: Sequence[np.ndarray], labels: Seque
     ax.set_ylim(centre[1] - half, centre[1] + half)
     ax.set_zlim(centre[2] - half, centre[2] + half)
     ax.set_box_aspect((1, 1, 1))
-    ax.view_init(elev=elev, azim=azim)
+    _view(ax, elev, azim, roll)
     ax.set_xlabel("x")
     ax.set_ylabel("y")
     ax.set_zlabel("z")

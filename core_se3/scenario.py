@@ -809,7 +809,10 @@ def _output(v, doc):
     if o["picture_steps"] > 1 and not o["vtu"]:
         v.fail(_join(key, "picture_steps"), "a picture of several steps is drawn from the VTU files: "
                                             "needs vtu = true")
-    o["view"] = v.vector(d, "view", key, n=2, default=None)
+    if isinstance(d.get("view"), list) and len(d["view"]) == 3:
+        o["view"] = v.vector(d, "view", key, n=3)
+    else:
+        o["view"] = v.vector(d, "view", key, n=2, default=None)
     return o
 
 
