@@ -134,6 +134,23 @@ def sze_problem(case, p, mesh=None, element="default", linear_solver="auto"):
         prob.add_probe("B", [int(y0[-1])])
         prob.control = (int(y0[-1]), (0.0, 0.0, 1.0))
         return prob
+    if shape == "pullout":
+        R, L = p["R"], p["L"]
+        m = M.cylinder_panel(R, L / 2, 0.0, pi / 2, nx, ny)
+        prob = Problem(m, mat, element=element, linear_solver=linear_solver)
+        # symmetry planes: x = 0 (t = 0: d1 = x) and z = 0 (t = pi/2: d1 = -z): u along d1 and
+        # the rotations about d2, d3 fixed; y = L/2 (d2 = y): u_y and rotations about d1, d3
+        prob.fix("x0", (0, 4, 5))
+        prob.fix("x1", (0, 4, 5))
+        prob.fix("y1", (1, 3, 5))
+        y1, x1 = m.node_set("y1"), m.node_set("x1")
+        A, B, Cn = int(y1[0]), int(y1[-1]), int(x1[0])
+        prob.add_nodal_load(A, force=(0.0, 0.0, p["load_max"] / 4))
+        prob.add_probe("A", [A])
+        prob.add_probe("B", [B])
+        prob.add_probe("C", [Cn])
+        prob.control = (A, (0.0, 0.0, 1.0))
+        return prob
     if shape == "semicylinder":
         m = M.cylinder_panel(p["R"], p["L"], -pi / 2, pi / 2, nx, ny)
         prob = Problem(m, mat, element=element, linear_solver=linear_solver)

@@ -76,3 +76,26 @@ _add(Case(
                path="arc_length", stop="lam_end", dlam0=0.01, ds_max_factor=32.0,
                target_iter=8),
 ))
+
+_add(Case(
+    name="sze-pullout",
+    description="Sze et al. 2004 s3.5: open-ended cylinder pulled apart by two opposite radial point "
+                "forces at mid-length, P to 40000 (octant model); snap-through near P/P_max = 0.5.",
+    geometry="octant",
+    params=dict(E=10.5e6, nu=0.3125, h=0.094, R=4.953, L=10.35, load_max=40000.0),
+    units=dict(E="force/length^2", nu="1", h="length", R="length", L="length", load_max="force"),
+    mesh=(36, 24), steps=40,
+    loads=(Load("point_force", None, (0.0, 0.0, 1.0), lambda p: p["load_max"]),),
+    load_name="P", load_unit="force", load_value=lambda p, lam: lam * p["load_max"],
+    supports=(), reference=None, probe="A",
+    notes="Reference: literature.json sze3.5_pullout_open_cylinder (Abaqus S4R, 24x36 on the octant). "
+          "Octant t in [0, pi/2] (36 elements) x s in [0, L/2] (24): t = 0 (plane x = 0), t = pi/2 "
+          "(plane z = 0) and s = L/2 (plane y = L/2) are symmetry planes, s = 0 the free end; "
+          "P/4 at A = (0, L/2, R) along +z. W_A = u_z(A), -U_B = -u_x at (R, L/2, 0), "
+          "-U_C = -u_x at (R, 0, 0).",
+    extra=dict(family="sze", shape="pullout", literature="sze3.5_pullout_open_cylinder",
+               curves=[dict(column="W_A", probe="A", component=2, sign=1.0, scale=1.0),
+                       dict(column="minus_U_B", probe="B", component=0, sign=-1.0, scale=1.0),
+                       dict(column="minus_U_C", probe="C", component=0, sign=-1.0, scale=1.0)],
+               path="arc_length", stop="lam_end", dlam0=0.02, ds_max_factor=3.0, target_iter=6),
+))

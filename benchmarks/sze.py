@@ -1,0 +1,107 @@
+#!/usr/bin/env python3
+"""Sze, Liu & Lo (2004) benchmark suite with core_se3 at the full meshes (issue 6 acceptance).
+
+For each case (and a mesh study where cheap), runs ``core_se3.bench.run_case`` (arc length or
+load control as the case defines), and records the curve deviation (largest distance of a
+computed point to the table polyline in (P/P_max, u/u_max)), the end point against the table's,
+the critical points, steps and timings.  Writes ``benchmarks/results/sze.{md,json}`` and, with
+``--plots DIR``, one PNG per run (computed curve over the table).
+
+    .venv/bin/python benchmarks/sze.py                  # everything (~10 min on 2 busy cores)
+    .venv/bin/python benchmarks/sze.py --only sze-hinged-roof --plots out/sze
+
+Runs one case at a time (the machine is shared).
+"""
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import platform
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from core_se3 import bench  # noqa: E402
+from core_se3.cases import get_case  # noqa: E402
+
+# (case, mesh, overrides, bar or None, role)
+RUNS = [
+    ("sze-hinged-roof", (8, 8), {}, 0.03, "study"),
+    ("sze-hinged-roof", (16, 16), {}, 0.03, "full (quarter 16x16 = roof 32x32)"),
+    ("sze-hinged-roof", (24, 24), {}, 0.03, "study"),
+    ("sze-hinged-roof", (32, 32), {}, 0.03, "study"),
+    ("sze-hinged-roof", (32, 32), {"full": 1.0}, 0.03, "whole roof 32x32 (no symmetry)"),
+    ("sze-hinged-roof-6.35", (8, 8), {}, None, "study"),
+    ("sze-hinged-roof-6.35", (16, 16), {}, None, "full (quarter 16x16), P_max unverified: no bar"),
+    ("sze-hinged-roof-6.35", (32, 32), {}, None, "study"),
+    ("sze-slit-annular", (6, 30), {}, 0.02, "study"),
+    ("sze-slit-annular", (10, 80), {}, 0.02, "full (table mesh 10x80)"),
+    ("sze-semicylinder", (16, 16), {}, 0.02, "study"),
+    ("sze-semicylinder", (24, 24), {}, 0.02, "study"),
+    ("sze-semicylinder", (40, 40), {}, 0.02, "full (table mesh 40x40)"),
+]
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--only", nargs="*", default=None, help="case names to run")
+    ap.add_argument("--plots", default=None, help="directory for PNG plots")
+    ap.add_argument("--out", default=str(ROOT / "benchmarks" / "results" / "sze"))
+    args = ap.parse_args(argv)
+    rows = []
+    for name, mesh, over, bar, role in RUNS:
+        if args.only and name not in args.only:
+            continue
+        t0 = time.perf_counter()
+        doc, res, prob = bench.run_case(name, mesh=mesh, overrides=over)
+        wall = time.perf_counter() - t0
+        ref = doc["reference"]
+        row = dict(case=name, mesh=f"{mesh[0]}x{mesh[1]}", overrides=over, role=role,
+                   deviation=ref["deviation"], bar=bar,
+                   passes=None if bar is None else bool(ref["deviation"] <= bar),
+                   curves=ref["curves"], steps=len(doc["steps"]) - 1, wall_s=round(wall, 1),
+                   n_dofs=doc["mesh"]["n_dofs"], critical_points=doc.get("critical_points", []),
+                   unverified=ref.get("unverified", []))
+        rows.append(row)
+        print(f"{name:22s} {row['mesh']:>6s} {str(over):14s} deviation {100 * row['deviation']:6.2f} % "
+              f"({row['steps']} steps, {wall:.1f} s)" + "".join(
+                  f"  {c['kind']} {c['load_factor']:.4f}" for c in row["critical_points"]), flush=True)
+        if args.plots:
+            from core_se3.bench_sze import plot
+            tag = "-full" if over.get("full") else ""
+            plot(get_case(name), bench.case_params(get_case(name), over), doc, res,
+                 str(Path(args.plots) / f"{name}{tag}-{row['mesh']}.png"))
+    out = Path(args.out)
+    meta = dict(date=datetime.datetime.utcnow().isoformat(timespec="seconds") + "Z",
+                machine=platform.platform(), python=platform.python_version(),
+                command="python benchmarks/sze.py " + " ".join(argv or sys.argv[1:]))
+    out.with_suffix(".json").write_text(json.dumps(dict(meta=meta, runs=rows), indent=1))
+    lines = ["# Sze et al. (2004) suite with core_se3", "",
+             f"{meta['date']}, `{meta['command']}`, {meta['machine']}", "",
+             "Deviation = largest distance of a computed point to the table polyline in "
+             "(P/P_max, u/u_max), u_max per column, max over the case's columns.", "",
+             "| case | mesh | role | deviation | bar | steps | dofs | wall [s] | critical points (P/P_max) |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        crit = ", ".join(f"{c['kind']} {c['load_factor']:.4f}" for c in r["critical_points"]) or "-"
+        bar = "-" if r["bar"] is None else f"{100 * r['bar']:.0f} % ({'ok' if r['passes'] else 'FAIL'})"
+        lines.append(f"| `{r['case']}` | {r['mesh']}{' whole' if r['overrides'].get('full') else ''} | "
+                     f"{r['role']} | {100 * r['deviation']:.2f} % | {bar} | {r['steps']} | {r['n_dofs']} | "
+                     f"{r['wall_s']} | {crit} |")
+    lines += ["", "End points (computed vs table, P/P_max and u):", ""]
+    for r in rows:
+        for c in r["curves"]:
+            lines.append(f"* `{r['case']}` {r['mesh']} {c['column']}: computed "
+                         f"({c['computed_end']['P_over_Pmax']:.4f}, {c['computed_end']['u']:.4f}), table "
+                         f"({c['table_end']['P_over_Pmax']:.4f}, {c['table_end']['u']:.4f}); worst point "
+                         f"{100 * c['deviation']:.2f} % at P/P_max = {c['at']['P_over_Pmax']:.4f}")
+    out.with_suffix(".md").write_text("\n".join(lines) + "\n")
+    print(f"wrote {out.with_suffix('.md')} and .json")
+
+
+if __name__ == "__main__":
+    main()
