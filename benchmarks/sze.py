@@ -43,6 +43,11 @@ RUNS = [
     ("sze-semicylinder", (16, 16), {}, 0.02, "study"),
     ("sze-semicylinder", (24, 24), {}, 0.02, "study"),
     ("sze-semicylinder", (40, 40), {}, 0.02, "full (table mesh 40x40)"),
+    ("sze-pullout", (18, 12), {}, 0.03, "study"),
+    ("sze-pullout", (36, 24), {}, 0.03, "full (table mesh 24x36 octant)"),
+    ("sze-pinched-cylinder", (16, 16), {}, 0.03, "study"),
+    ("sze-pinched-cylinder", (32, 32), {}, 0.03, "study"),
+    ("sze-pinched-cylinder", (48, 48), {}, 0.03, "full (table mesh 48x48 octant)"),
 ]
 
 
@@ -76,6 +81,11 @@ def main(argv=None):
             plot(get_case(name), bench.case_params(get_case(name), over), doc, res,
                  str(Path(args.plots) / f"{name}{tag}-{row['mesh']}.png"))
     out = Path(args.out)
+    if args.only and out.with_suffix(".json").exists():      # keep the other cases' rows
+        old = json.loads(out.with_suffix(".json").read_text())["runs"]
+        keep = [r for r in old if r["case"] not in args.only]
+        order = [n for n, *_ in RUNS]
+        rows = sorted(keep + rows, key=lambda r: order.index(r["case"]))
     meta = dict(date=datetime.datetime.utcnow().isoformat(timespec="seconds") + "Z",
                 machine=platform.platform(), python=platform.python_version(),
                 command="python benchmarks/sze.py " + " ".join(argv or sys.argv[1:]))

@@ -134,7 +134,7 @@ def sze_problem(case, p, mesh=None, element="default", linear_solver="auto"):
         prob.add_probe("B", [int(y0[-1])])
         prob.control = (int(y0[-1]), (0.0, 0.0, 1.0))
         return prob
-    if shape == "pullout":
+    if shape in ("pullout", "pinched"):
         R, L = p["R"], p["L"]
         m = M.cylinder_panel(R, L / 2, 0.0, pi / 2, nx, ny)
         prob = Problem(m, mat, element=element, linear_solver=linear_solver)
@@ -145,7 +145,19 @@ def sze_problem(case, p, mesh=None, element="default", linear_solver="auto"):
         prob.fix("y1", (1, 3, 5))
         y1, x1 = m.node_set("y1"), m.node_set("x1")
         A, B, Cn = int(y1[0]), int(y1[-1]), int(x1[0])
-        prob.add_nodal_load(A, force=(0.0, 0.0, p["load_max"] / 4))
+        sign = 1.0 if shape == "pullout" else -1.0
+        prob.add_nodal_load(A, force=(0.0, 0.0, sign * p["load_max"] / 4))
+        if shape == "pinched":
+            # rigid diaphragm at s = 0: lab radial and circumferential directions of each node
+            from .lab_supports import add_lab_support
+            y0 = m.node_set("y0")
+            g0 = m.g0[y0]
+            dirs = np.stack([g0[:, :3, 0], g0[:, :3, 2]], 1)        # reference d1, d3
+            add_lab_support(prob, y0, dirs, p["k_diaphragm"] * p["E"] * p["h"])
+            prob.add_probe("A", [A])
+            prob.add_probe("B", [B])
+            prob.control = (A, (0.0, 0.0, -1.0))
+            return prob
         prob.add_probe("A", [A])
         prob.add_probe("B", [B])
         prob.add_probe("C", [Cn])

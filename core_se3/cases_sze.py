@@ -99,3 +99,26 @@ _add(Case(
                        dict(column="minus_U_C", probe="C", component=0, sign=-1.0, scale=1.0)],
                path="arc_length", stop="lam_end", dlam0=0.02, ds_max_factor=3.0, target_iter=6),
 ))
+
+_add(Case(
+    name="sze-pinched-cylinder",
+    description="Sze et al. 2004 s3.6: cylinder on rigid end diaphragms pinched by two opposite inward "
+                "radial point forces at mid-length, P to 12000 (octant model).",
+    geometry="octant",
+    params=dict(E=3.0e4, nu=0.3, h=1.0, R=100.0, L=200.0, load_max=12000.0, k_diaphragm=100.0),
+    units=dict(E="force/length^2", nu="1", h="length", R="length", L="length", load_max="force",
+               k_diaphragm="1 (diaphragm penalty stiffness / (E h))"),
+    mesh=(48, 48), steps=40,
+    loads=(Load("point_force", None, (0.0, 0.0, -1.0), lambda p: p["load_max"]),),
+    load_name="P", load_unit="force", load_value=lambda p, lam: lam * p["load_max"],
+    supports=(), reference=None, probe="A",
+    notes="Reference: literature.json sze3.6_pinched_cylinder_diaphragms (Abaqus S4R, 48x48 octant). "
+          "Octant t in [0, pi/2] x s in [0, L/2]: s = 0 the diaphragm (lab radial and "
+          "circumferential displacement zero by penalty springs, core_se3.lab_supports; axial "
+          "displacement and rotations free), t = 0, t = pi/2, s = L/2 symmetry planes; P/4 at "
+          "A = (0, L/2, R) along -z. -W_A = -u_z(A), U_B = u_x at (R, L/2, 0).",
+    extra=dict(family="sze", shape="pinched", literature="sze3.6_pinched_cylinder_diaphragms",
+               curves=[dict(column="minus_W_A", probe="A", component=2, sign=-1.0, scale=1.0),
+                       dict(column="U_B", probe="B", component=0, sign=1.0, scale=1.0)],
+               path="arc_length", stop="lam_end", dlam0=0.02, ds_max_factor=4.0, target_iter=6),
+))
