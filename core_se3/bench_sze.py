@@ -50,7 +50,11 @@ def table_curves(case):
     lam = np.asarray(e["P_over_Pmax"], float)
     for c in _curves(case):
         key = c["column"].replace("/", "_")
-        out.append((c["column"], lam, c["scale"] * np.asarray(e[key], float)))
+        u = c["scale"] * np.asarray(e[key], float)
+        if lam[0] != 0.0:               # tables that omit the unloaded state: it is (0, 0)
+            out.append((c["column"], np.r_[0.0, lam], np.r_[0.0, u]))
+        else:
+            out.append((c["column"], lam, u))
     return out
 
 
@@ -162,6 +166,23 @@ def sze_problem(case, p, mesh=None, element="default", linear_solver="auto"):
         prob.add_probe("B", [B])
         prob.add_probe("C", [Cn])
         prob.control = (A, (0.0, 0.0, 1.0))
+        return prob
+    if shape == "hemisphere":
+        from .lab_supports import add_lab_support
+        from .mesh_shapes import hemisphere_quarter
+        m = hemisphere_quarter(p["R"], p["hole_deg"], nx, ny)
+        prob = Problem(m, mat, element=element, linear_solver=linear_solver)
+        # y = 0 (f = 0, d2 = +y) and x = 0 (f = pi/2, d2 = -x): u along d2 and the rotations
+        # about d1, d3 fixed (the frame may turn about d2 only, which keeps d2 lab-fixed)
+        prob.fix("y0", (1, 3, 5))
+        prob.fix("y1", (1, 3, 5))
+        A, B = int(m.node_set("y0")[-1]), int(m.node_set("y1")[-1])
+        add_lab_support(prob, [A], [[0.0, 0.0, 1.0]], p["k_pin"] * p["E"] * p["h"])
+        prob.add_nodal_load(A, force=(p["load_max"] / 2, 0.0, 0.0))
+        prob.add_nodal_load(B, force=(0.0, -p["load_max"] / 2, 0.0))
+        prob.add_probe("A", [A])
+        prob.add_probe("B", [B])
+        prob.control = (A, (1.0, 0.0, 0.0))
         return prob
     if shape == "semicylinder":
         m = M.cylinder_panel(p["R"], p["L"], -pi / 2, pi / 2, nx, ny)

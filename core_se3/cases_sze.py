@@ -122,3 +122,26 @@ _add(Case(
                        dict(column="U_B", probe="B", component=0, sign=1.0, scale=1.0)],
                path="arc_length", stop="lam_end", dlam0=0.02, ds_max_factor=4.0, target_iter=6),
 ))
+
+_add(Case(
+    name="sze-hemisphere",
+    description="Sze et al. 2004 s3.4: hemisphere with an 18 deg polar hole under four alternating "
+                "radial point forces on the equator (quarter model), P to 400.",
+    geometry="hemisphere",
+    params=dict(E=6.825e7, nu=0.3, h=0.04, R=10.0, hole_deg=18.0, load_max=400.0, k_pin=100.0),
+    units=dict(E="force/length^2", nu="1", h="length", R="length", hole_deg="deg", load_max="force",
+               k_pin="1 (z-pin penalty stiffness / (E h))"),
+    mesh=(16, 16), steps=40,
+    loads=(Load("point_force", None, (1.0, 0.0, 0.0), lambda p: p["load_max"]),),
+    load_name="P", load_unit="force", load_value=lambda p, lam: lam * p["load_max"],
+    supports=(), reference=None, probe="A",
+    notes="Reference: literature.json sze3.4_hemisphere_18deg_hole (Abaqus S4R; R and the column "
+          "signs marked unverified there). Quarter model (core_se3.mesh_shapes.hemisphere_quarter): "
+          "symmetry planes y = 0 and x = 0 (u_y resp. u_x and the in-plane rotations fixed), the "
+          "equator node on y = 0 pinned in z by a lab-frame spring; P/2 outward (+x) at "
+          "A = (R, 0, 0) and P/2 inward (-y) at B = (0, R, 0). u_A = u_x(A), -u_B = -u_y(B).",
+    extra=dict(family="sze", shape="hemisphere", literature="sze3.4_hemisphere_18deg_hole",
+               curves=[dict(column="u_A_outward", probe="A", component=0, sign=1.0, scale=1.0),
+                       dict(column="minus_u_B_inward", probe="B", component=1, sign=-1.0, scale=1.0)],
+               path="arc_length", stop="lam_end", dlam0=0.02, ds_max_factor=4.0, target_iter=6),
+))
