@@ -121,7 +121,7 @@ def _document(scn, records, timings, status, error=None):
     if mat["rho"] is not None:
         params["rho"] = dict(value=mat["rho"], unit="")
     shape = m.shape or (None, None)
-    return dict(schema=SCHEMA, version=VERSION, case=scn.name, model="core_se3",
+    return dict(schema=SCHEMA, version=VERSION, case=scn.name, model="core_se3", control=scn.solver["control"],
                 variant=scn.solver["element"], scenario=os.path.abspath(scn.file)
                 if not scn.file.startswith("<") else scn.file,
                 fingerprint=scn.fingerprint, units=units, status=status, error=error,
@@ -165,6 +165,12 @@ def run(scn, out=None, resume=False, progress=None, force=False, stop_after=None
                               "start over with --force, or choose another --out")
     os.makedirs(out, exist_ok=True)
     vtu_dir = os.path.join(out, "vtu")
+    if s["control"] == "arclength":
+        if resume:
+            raise CheckpointError("an arc-length run cannot be resumed yet: run it again with --force "
+                                  '(or use control = "load", which checkpoints every step)')
+        _clear(out, vtu_dir)
+        return _run_arclength(scn, out, ck, vtu_dir, bool(progress) or verbose)
     lams = scn.load_factors()
     nsteps = len(lams)
     if resume:
@@ -173,9 +179,7 @@ def run(scn, out=None, resume=False, progress=None, force=False, stop_after=None
         unwrap, records, timings = st["unwrap"], st["records"], st["timings"]
         timings["setup"] = timings.get("setup", 0.0)
     else:
-        for stale in ("results.json", "probes.png", "shell.png"):
-            if os.path.exists(os.path.join(out, stale)):
-                os.unlink(os.path.join(out, stale))
+        _clear(out, vtu_dir)
         g, lam, done = prob.mesh.g0.copy(), 0.0, 0
         unwrap = {name: np.zeros(3) for name in prob.probes}
         records = [dict(step=0, load_factor=0.0, load=dict(name="load factor", value=0.0, unit=""),
@@ -242,6 +246,75 @@ def run(scn, out=None, resume=False, progress=None, force=False, stop_after=None
     write_json_atomic(os.path.join(out, "results.json"), doc)
     files["results"] = os.path.join(out, "results.json")
     files["checkpoint"] = ck.path
+    if o["vtu"]:
+        files["pvd"] = os.path.join(vtu_dir, "series.pvd")
+    if o["plots"] and prob.probes:
+        files["probes"] = plot_probes(os.path.join(out, "probes.png"), doc)
+    if o["picture"]:
+        files["picture"] = picture(os.path.join(out, "shell.png"), scn, g, records=records,
+                                   vtu_dir=vtu_dir if o["vtu"] else None)
+    return RunResult(doc=doc, g=g, out=out, files=files)
+
+
+def _clear(out, vtu_dir):
+    """Remove the outputs of an earlier run in ``out`` (a new run, or --force)."""
+    for stale in ("results.json", "probes.png", "shell.png", "checkpoint.npz"):
+        if os.path.exists(os.path.join(out, stale)):
+            os.unlink(os.path.join(out, stale))
+    if os.path.isdir(vtu_dir):
+        for f in os.listdir(vtu_dir):
+            if f.startswith("step_") and f.endswith(".vtu") or f == "series.pvd":
+                os.unlink(os.path.join(vtu_dir, f))
+
+
+def _run_arclength(scn, out, ck, vtu_dir, verbose):
+    """Arc-length continuation (continuation.arc_length) in one call; the outputs of every
+    converged point are written afterwards (also when the path fails part-way)."""
+    from .continuation import arc_length
+    prob, s, o = scn.problem, scn.solver, scn.output
+    status, error = "complete", None
+    try:
+        res = arc_length(prob, lam_end=s["lam_end"], dlam0=s["dlam0"], method=s["method"], psi=s["psi"],
+                         ds_max_factor=s["ds_max_factor"], max_steps=s["max_steps"],
+                         target_iter=s["target_iter"], max_iter=s["max_iter"], rtol=s["rtol"],
+                         dtol=s["dtol"], stability=s["stability"], verbose=verbose,
+                         linear_solver=s["linear_solver"])
+    except ConvergenceError as exc:
+        res, status, error = exc.result, "failed", str(exc)
+        if res is None or not res.steps:
+            raise
+    if status == "complete" and abs(res.final.load_factor - s["lam_end"]) > 1e-9 * abs(s["lam_end"]):
+        status = "failed"
+        error = (f"arc length stopped after max_steps = {s['max_steps']} steps at load factor "
+                 f"{res.final.load_factor:.6g} < lam_end = {s['lam_end']:g}; raise [solver] max_steps or dlam0")
+    records = []
+    for k, st in enumerate(res.steps):
+        probes = {name: dict(u=np.asarray(p["u"]).tolist(), rotation_angle=float(np.linalg.norm(p["w"])),
+                             rotation_vector=np.asarray(p["w"]).tolist(), rotation=np.asarray(p["R"]).tolist())
+                  for name, p in st.probes.items()}
+        records.append(dict(step=k, load_factor=float(st.load_factor),
+                            load=dict(name="load factor", value=float(st.load_factor), unit=""),
+                            probes=probes, iterations=int(st.iterations),
+                            residual=float(st.residual_history[-1]) if st.residual_history else 0.0,
+                            residual_history=[float(x) for x in st.residual_history], substeps=1 if k else 0,
+                            cutbacks=0, balance_error=float(st.balance_error)))
+        if o["vtu"] and (k % o["vtu_every"] == 0 or k == len(res.steps) - 1):
+            _write_vtu(os.path.join(vtu_dir, f"step_{k:04d}.vtu"), prob, st.g, st.load_factor)
+    timings = {k: float(res.timings.get(k, 0.0)) for k in ("setup", "assembly", "solve", "other")}
+    g = res.final.g
+    unwrap = {name: np.asarray(p["w"], float) for name, p in res.final.probes.items()}
+    ck.save(scn.fingerprint, len(records) - 1, res.final.load_factor, g, unwrap, records, timings,
+            extra=dict(control="arclength"))
+    if o["vtu"]:
+        _write_pvd(vtu_dir, records, o["vtu_every"], len(records) - 1)
+    doc = _document(scn, records, timings, status, error)
+    doc["critical_points"] = [dict(kind=c.kind, load_factor=float(c.lam), bracket=[float(x) for x in c.lam_bracket],
+                                   step=int(c.step), description=c.describe())
+                              for c in getattr(res, "critical_points", [])]
+    write_json_atomic(os.path.join(out, "results.json"), doc)
+    if status == "failed":
+        raise ConvergenceError(error + f"; the {len(records) - 1} converged steps are written in {out}", res)
+    files = dict(results=os.path.join(out, "results.json"), checkpoint=ck.path)
     if o["vtu"]:
         files["pvd"] = os.path.join(vtu_dir, "series.pvd")
     if o["plots"] and prob.probes:

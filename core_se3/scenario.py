@@ -67,6 +67,8 @@ FIELD_KEYS = {"uniform": ("B", "scale", "rotate"), "gradient": ("B", "G", "x0", 
               "dipole": ("m", "x0", "scale", "mu0")}
 SOLVER_DEFAULTS = dict(steps=10, lam_end=1.0, rtol=1e-10, dtol=1e-10, max_iter=30, max_cutbacks=12,
                        element="default", linear_solver="auto", control="load")
+ARCLENGTH_DEFAULTS = dict(method="crisfield", dlam0=None, max_steps=200, psi=0.0, target_iter=5,
+                          ds_max_factor=8.0, stability=True)
 OUTPUT_DEFAULTS = dict(vtu=True, vtu_every=1, plots=True, picture=True, picture_steps=1, view=None)
 # solver controls that do not change the converged states (may differ on --resume)
 NON_PHYSICAL = ("rtol", "dtol", "max_iter", "max_cutbacks", "linear_solver")
@@ -335,6 +337,11 @@ def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario"):
     spec["loads"] = _loads(v, doc, mesh, regions, spec["material"])
     spec["probes"] = _probes(v, doc, mesh)
     spec["solver"] = _solver(v, doc)
+    if spec["solver"]["control"] == "arclength":
+        for i, sp in enumerate(spec["supports"]):
+            if sp["type"] == "rotate":
+                v.fail(f"supports[{i}].type", "arc length scales the loads only: a prescribed "
+                       'rotation is not supported with control = "arclength"')
     spec["output"] = _output(v, doc)
     problem = _build(v, spec, mesh, regions)
     phys = {k: spec[k] for k in spec if k not in ("output", "description")}
@@ -775,12 +782,9 @@ def _probes(v, doc, mesh):
 def _solver(v, doc):
     d = doc.get("solver", {})
     key = "solver"
-    v.table(d, key, tuple(SOLVER_DEFAULTS))
+    v.table(d, key, tuple(SOLVER_DEFAULTS) + tuple(ARCLENGTH_DEFAULTS))
     s = dict(SOLVER_DEFAULTS)
     s["control"] = v.string(d, "control", key, default="load", choices=("load", "arclength"))
-    if s["control"] == "arclength":
-        v.fail(_join(key, "control"), "arc-length control is not available in this version of "
-                                      'core_se3 yet; use control = "load"')
     s["steps"] = v.integer(d, "steps", key, default=10, lo=1, hi=100_000)
     s["lam_end"] = v.number(d, "lam_end", key, default=1.0)
     if s["lam_end"] == 0:
@@ -792,6 +796,22 @@ def _solver(v, doc):
     s["element"] = v.string(d, "element", key, default="default", choices=("default", "seed"))
     s["linear_solver"] = v.string(d, "linear_solver", key, default="auto",
                                   choices=("auto", "mumps", "superlu"))
+    if s["control"] != "arclength":
+        extra = [k for k in ARCLENGTH_DEFAULTS if k in d]
+        if extra:
+            v.fail(_join(key, extra[0]), 'an arc-length control: only with control = "arclength"')
+        return s
+    s["method"] = v.string(d, "method", key, default="crisfield", choices=("crisfield", "riks"))
+    s["dlam0"] = v.number(d, "dlam0", key, default=s["lam_end"] / s["steps"])
+    if s["dlam0"] == 0 or s["dlam0"] * s["lam_end"] < 0:
+        v.fail(_join(key, "dlam0"), f"expected a first load-factor step of the sign of lam_end, got {s['dlam0']:g}")
+    s["max_steps"] = v.integer(d, "max_steps", key, default=200, lo=1, hi=100_000)
+    s["psi"] = v.number(d, "psi", key, default=0.0, lo=0.0)
+    s["target_iter"] = v.integer(d, "target_iter", key, default=5, lo=1, hi=100)
+    s["ds_max_factor"] = v.number(d, "ds_max_factor", key, default=8.0, lo=1.0)
+    s["stability"] = v.boolean(d, "stability", key, default=True)
+    if s["element"] != "default":
+        v.fail(_join(key, "element"), "arc length needs the default (path-independent) element")
     return s
 
 

@@ -220,3 +220,48 @@ def test_bad_scenario_is_one_line_on_stderr(tmp_path, capsys):
     assert not os.path.exists(tmp_path / "o")            # nothing ran, nothing written
     assert cli.main(["run", write(tmp_path, STRIP), "--check"]) == 0
     assert "valid (6 elements, 14 nodes" in capsys.readouterr().out
+
+
+ARCH = {
+    "name": "shallow-arch",
+    "mesh": {"generator": "cylinder_arch", "R": 10.0, "angle": 0.4, "width": 1.0, "nx": 12, "ny": 1},
+    "material": {"E": 1.2e6, "nu": 0.0, "h": 0.1},
+    "edges": {"crown": {"box": {"x": [10 * np.sin(0.2)] * 2, "tol": 1e-6}}},
+    "supports": [{"type": "clamp", "edge": "x0"}, {"type": "clamp", "edge": "x1"}],
+    "loads": [{"type": "nodal", "edge": "crown", "force": [0.0, 0.0, 40.0]}],
+    "probes": [{"name": "crown", "edge": "crown"}],
+    "solver": {"control": "arclength", "steps": 20},
+    "output": {"plots": False, "picture": False},
+}
+
+
+def test_arclength_run_passes_the_limit_points_of_a_snapping_arch(tmp_path):
+    """A clamped shallow arch pushed at its crown toward its centre snaps through: the
+    arc-length run goes over the maximum, back down to the minimum and up to lam = 1, and
+    records both limit points (change in the number of negative tangent eigenvalues)."""
+    res = runner.run(scenario.load(write(tmp_path, ARCH)), out=str(tmp_path / "arch"))
+    doc = res.doc
+    assert doc["status"] == "complete" and doc["control"] == "arclength"
+    lam = np.array([s["load_factor"] for s in doc["steps"]])
+    assert lam[-1] == pytest.approx(1.0, abs=1e-12)
+    kinds = [c["kind"] for c in doc["critical_points"]]
+    assert kinds == ["limit", "limit"]
+    lmax, lmin = (c["load_factor"] for c in doc["critical_points"])
+    assert lmin < lmax < 1.0 and lam.max() == pytest.approx(1.0)
+    i1, i2 = (c["step"] for c in doc["critical_points"])    # first steps past each limit point
+    assert lam[i2] < lam[i1 - 1] and np.any(np.diff(lam) < 0)  # the path turns back down
+    uz = [s["probes"]["crown"]["u"][2] for s in doc["steps"]]
+    assert np.all(np.diff(uz) > 0)                            # while the crown keeps moving
+    assert_outputs_intact(res.out)
+    with pytest.raises(CheckpointError, match="cannot be resumed"):
+        runner.run(scenario.load(write(tmp_path, ARCH)), out=res.out, resume=True)
+
+
+def test_arclength_on_a_monotone_path_lands_on_the_load_control_state(tmp_path):
+    arc = with_(STRIP, solver={"control": "arclength", "steps": 4}, output={"vtu": False, "plots": False,
+                                                                            "picture": False})
+    a = runner.run(scenario.load(write(tmp_path, arc)), out=str(tmp_path / "a"))
+    b = runner.run(scenario.load(write(tmp_path, with_(arc, solver={"control": "load"}))), out=str(tmp_path / "b"))
+    assert a.doc["steps"][-1]["load_factor"] == pytest.approx(1.0, abs=1e-12)
+    np.testing.assert_allclose(a.doc["steps"][-1]["probes"]["tip"]["u"], b.doc["steps"][-1]["probes"]["tip"]["u"],
+                               rtol=0, atol=1e-8)

@@ -292,10 +292,16 @@ def test_edge_load_on_a_set_that_is_not_a_line(tmp_path):
     bad(tmp_path, d, "loads[0].edge", "not a line of element edges")
 
 
-def test_arclength_control_not_available(tmp_path):
+def test_arclength_controls_need_arclength_and_no_prescribed_rotation(tmp_path):
     d = base()
+    d["solver"]["dlam0"] = 0.1
+    bad(tmp_path, d, "solver.dlam0", 'only with control = "arclength"')
     d["solver"]["control"] = "arclength"
-    bad(tmp_path, d, "solver.control", "arc-length")
+    d["supports"].append({"type": "rotate", "edge": "x1", "axis": [1.0, 0.0, 0.0], "angle": 0.1})
+    bad(tmp_path, d, "supports[1].type", "arc length scales the loads only")
+    d = base()
+    d["solver"].update(control="arclength", dlam0=-0.1)
+    bad(tmp_path, d, "solver.dlam0", "of the sign of lam_end")
 
 
 def test_table_expected(tmp_path):

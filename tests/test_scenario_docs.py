@@ -49,5 +49,9 @@ def test_documented_fragment_validates_and_solves(name, fragment, tmp_path):
         res = runner.run(scn, out=str(tmp_path / "o"))
         assert os.path.exists(res.files["picture"]) and "probes" not in res.files
         return
+    if name == "arc length":
+        res = runner.run(scn, out=str(tmp_path / "o"))
+        assert res.doc["control"] == "arclength" and abs(res.doc["steps"][-1]["load_factor"] - 1.0) < 1e-12
+        return
     res = scn.problem.solve(steps=2, lam_end=scn.solver["lam_end"])
     assert np.all(np.isfinite(res.final.g)) and res.final.balance_error < 1e-8
