@@ -175,6 +175,7 @@ def run(scn, out=None, resume=False, progress=None, force=False, stop_after=None
     nsteps = len(lams)
     if resume:
         st = ck.load(scn.fingerprint)
+        _clear_temporaries(out, vtu_dir)
         g, lam, done = st["g"], st["lam"], st["step"]
         unwrap, records, timings = st["unwrap"], st["records"], st["timings"]
         timings["setup"] = timings.get("setup", 0.0)
@@ -256,8 +257,18 @@ def run(scn, out=None, resume=False, progress=None, force=False, stop_after=None
     return RunResult(doc=doc, g=g, out=out, files=files)
 
 
+def _clear_temporaries(out, vtu_dir):
+    """Remove temporary files a killed run left behind (atomic writes that never completed)."""
+    for d in (out, vtu_dir):
+        if os.path.isdir(d):
+            for f in os.listdir(d):
+                if f.startswith(".") and ".tmp" in f:
+                    os.unlink(os.path.join(d, f))
+
+
 def _clear(out, vtu_dir):
     """Remove the outputs of an earlier run in ``out`` (a new run, or --force)."""
+    _clear_temporaries(out, vtu_dir)
     for stale in ("results.json", "probes.png", "shell.png", "checkpoint.npz"):
         if os.path.exists(os.path.join(out, stale)):
             os.unlink(os.path.join(out, stale))

@@ -902,19 +902,7 @@ def _add_load(prob, ld, mesh, regions, mat, sc):
         for rho, ids in _densities(ld, mat, regions, mesh, elems):
             if rho == 0 or len(ids) == 0:
                 continue
-            if hasattr(prob, "add_gravity"):
-                prob.add_gravity(rho, g=ld["g"], elements=ids, scale=sc) if _takes_scale(prob.add_gravity) \
-                    else prob.add_gravity(rho, g=ld["g"], elements=ids)
-            else:
-                prob.add_body_force(rho * mat["h"] * np.asarray(ld["g"]), scale=sc, elements=ids)
-
-
-def _takes_scale(fn):
-    import inspect
-    try:
-        return "scale" in inspect.signature(fn).parameters
-    except (TypeError, ValueError):
-        return False
+            prob.add_gravity(rho, g=ld["g"], elements=ids, scale=sc)     # rho h g per reference area
 
 
 def _densities(ld, mat, regions, mesh, elems):

@@ -153,6 +153,7 @@ def test_killed_process_resumes_to_the_same_state(tmp_path):
     assert proc.returncode == -signal.SIGKILL, "the run finished before it could be killed"
     doc_cut, st = assert_outputs_intact(out)
     assert 3 <= st["step"] < 12
+    open(os.path.join(out, "vtu", ".step_0099.vtu.x.tmp.vtu"), "w").close()   # as a kill mid-write leaves
     r = subprocess.run(cmd + ["--resume"], capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
     final = Checkpoint(out).load()
@@ -163,6 +164,7 @@ def test_killed_process_resumes_to_the_same_state(tmp_path):
     assert done["steps"][:len(doc_cut["steps"])] == doc_cut["steps"]      # nothing written was lost
     assert [s["probes"] for s in done["steps"]] == [s["probes"] for s in ref.doc["steps"]]
     assert len(pvd_files(os.path.join(out, "vtu", "series.pvd"))) == 13
+    assert not [f for f in os.listdir(os.path.join(out, "vtu")) if f.startswith(".")]
 
 
 def test_failed_run_keeps_converged_steps_and_resumes_with_other_controls(tmp_path):
@@ -265,3 +267,13 @@ def test_arclength_on_a_monotone_path_lands_on_the_load_control_state(tmp_path):
     assert a.doc["steps"][-1]["load_factor"] == pytest.approx(1.0, abs=1e-12)
     np.testing.assert_allclose(a.doc["steps"][-1]["probes"]["tip"]["u"], b.doc["steps"][-1]["probes"]["tip"]["u"],
                                rtol=0, atol=1e-8)
+
+
+def test_bench_run_vtu_includes_the_problem_output_fields(tmp_path, capsys):
+    """``core-se3 bench run --vtu`` writes prob.output_fields (magnetisation) next to the frames."""
+    out = str(tmp_path / "vtu")
+    assert cli.main(["bench", "run", "magnetic-cantilever", "--mesh", "4x1", "--steps", "2", "--vtu", out]) == 0
+    files = pvd_files(os.path.join(out, "series.pvd"))
+    m = meshio.read(os.path.join(out, files[-1][1]))
+    Br = m.point_data["magnetisation_Br"]
+    assert np.abs(Br).max() > 0 and "magnetic_couple" in m.point_data
