@@ -1,0 +1,87 @@
+"""Sze, Liu & Lo (2004) s3.4 (hemisphere), s3.5 (pull-out), s3.6 (pinched cylinder) with
+core_se3 (issue 6, P2), on coarse meshes, and the lab-frame diaphragm springs they use.
+
+References: core_se3/data/literature.json ``sze3.4_hemisphere_18deg_hole``,
+``sze3.5_pullout_open_cylinder``, ``sze3.6_pinched_cylinder_diaphragms``.  Measure: largest
+distance of a computed point to the table polyline in (P/P_max, u/u_max).  Measured (default
+element):
+
+    sze-hemisphere        8x8 4.71 %    16x16 1.47 %
+    sze-pullout           18x12 2.70 %  (table mesh 36x24: benchmarks/results/sze.md)
+    sze-pinched-cylinder  16x16 5.22 %  (48x48 in the benchmarks; no coarse curve bar: on 8x8
+                          the sequence of wrinkling snaps is not resolved and the path
+                          wanders onto unstable branches)
+
+The hemisphere's R = 10 (marked unverified in LITERATURE.md) is the MacNeal-Harder geometry,
+confirmed by the linear MacNeal-Harder reference (radial deflection 0.0924 under F = 2, two
+public sources) checked below; the column signs are confirmed by the curve itself (a flipped
+sign would deviate by > 100 %).
+"""
+import numpy as np
+import pytest
+
+from core_se3 import bench, continuation as C, se3, verify
+from core_se3.cases import get_case
+from core_se3.lab_supports import LabSpring
+
+
+def test_lab_spring_tangent_matches_finite_differences():
+    """The pinched cylinder's diaphragm springs (k = 100 E h) on a 4x4 octant, at a random
+    deformed state: tangent vs central differences of the residual, relative 1e-6
+    (measured 6e-9)."""
+    case = get_case("sze-pinched-cylinder")
+    prob = bench.build_problem(case, bench.case_params(case), (4, 4))
+    assert any(isinstance(ld, LabSpring) for ld in prob.loads)
+    rng = np.random.default_rng(0)
+    g = prob.mesh.g0 @ se3.exp(0.01 * rng.standard_normal((prob.mesh.n_nodes, 6)))
+    err, _, _ = verify.tangent_fd_check(prob, g, 0.5)
+    assert err < 1e-6, err
+
+
+def test_pinched_cylinder_diaphragm_holds_before_the_snap():
+    """8x8 octant to P = 0.06 P_max (before the first snap): at the diaphragm the radial and
+    circumferential displacements are below 1e-4 of the deflection under the load (penalty
+    error |F|/k), while the axial one is free (it moves by > 1e-2 of it)."""
+    case = get_case("sze-pinched-cylinder")
+    prob = bench.build_problem(case, bench.case_params(case), (8, 8))
+    res = C.arc_length(prob, lam_end=0.06, dlam0=0.02)
+    g = res.final.g
+    y0 = prob.mesh.node_set("y0")
+    g0 = prob.mesh.g0[y0]
+    u = g[y0, :3, 3] - g0[:, :3, 3]
+    wa = -res.final.probes["A"]["u"][2]
+    assert wa > 10.0
+    assert np.abs(np.einsum("ni,ni->n", u, g0[:, :3, 2])).max() < 1e-4 * wa
+    assert np.abs(np.einsum("ni,ni->n", u, g0[:, :3, 0])).max() < 1e-4 * wa
+    assert np.abs(u[:, 1]).max() > 1e-2 * wa
+
+
+def test_hemisphere_linear_macneal_harder():
+    """MacNeal-Harder: F = 2 (P = 2, half loads on the quarter) gives the radial deflection
+    0.0924 under the loads; 8x8 quarter: 0.09146 (outward) and 0.09248 (inward), bar 2 %."""
+    case = get_case("sze-hemisphere")
+    prob = bench.build_problem(case, bench.case_params(case), (8, 8))
+    res = C.arc_length(prob, lam_end=2.0 / 400.0, dlam0=2.0 / 400.0)
+    assert abs(res.final.load_factor - 0.005) < 1e-14
+    ua, ub = res.final.probes["A"]["u"][0], -res.final.probes["B"]["u"][1]
+    assert abs(ua - 0.0924) < 0.02 * 0.0924 and abs(ub - 0.0924) < 0.02 * 0.0924, (ua, ub)
+
+
+def test_hemisphere_8x8_curve():
+    """Hemisphere 8x8 quarter, arc length to P_max = 400: deviation <= 5 % (measured 4.71 %;
+    16x16 gives 1.47 %, inside the 3 % acceptance bar; the 8x8 quarter is ~4 % stiff at the
+    end of this very large-rotation path)."""
+    doc, res, prob = bench.run_case("sze-hemisphere", mesh=(8, 8))
+    assert doc["reference"]["deviation"] <= 0.05, doc["reference"]["curves"]
+    assert abs(doc["steps"][-1]["load_factor"] - 1.0) < 1e-12
+
+
+def test_pullout_18x12_within_3_percent():
+    """Pull-out, 18x12 octant (half the table mesh each way), arc length to P_max: deviation
+    <= 3 % over W_A, -U_B, -U_C (measured 2.70 %); the snap-through is found as a pair of
+    limit points near P/P_max = 0.5 (table: the jump between 0.50 and 0.525)."""
+    doc, res, prob = bench.run_case("sze-pullout", mesh=(18, 12))
+    ref = doc["reference"]
+    assert ref["deviation"] <= 0.03, ref["curves"]
+    lims = [c.lam for c in res.critical_points if c.kind == "limit"]
+    assert len(lims) >= 2 and all(0.4 < x < 0.56 for x in lims[:2]), lims
