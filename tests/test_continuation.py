@@ -192,3 +192,18 @@ def test_bad_input(roof8):
         C.arc_length(prob, max_iter=0)
     assert "rejections" in str(exc.value)
     assert len(exc.value.result.steps) == 1
+
+
+def test_limit_point_hint_on_the_failure_path(roof8):
+    """The message added when load control exhausts its cut-backs: at the roof's state with
+    -W_C = 10 (just before the limit point, P/P_max = 0.74) the current stiffness parameter
+    S_p = q.t_0 / q.t is below 0.3 and the hint suggests arc length; at -W_C = 2 (S_p ~ 0.9)
+    there is no hint."""
+    case, p = roof8
+    prob = bench.build_problem(case, p, (8, 8))
+    node, d = prob.control
+    dc = C.displacement_control(prob, node, d, [2.0, 10.0])
+    near, early = dc.steps[2], dc.steps[1]
+    msg = C.limit_point_hint(prob, near.g, near.load_factor)
+    assert msg is not None and "arc length" in msg and "limit point" in msg
+    assert C.limit_point_hint(prob, early.g, early.load_factor) is None
