@@ -340,15 +340,16 @@ def plot_probes(path, doc):
     """Load factor against the displacement components of every probe (one PNG)."""
     from .io import plot_load_deflection
     lam = np.array([s["load_factor"] for s in doc["steps"]])
-    disp, labels = {}, {}
-    for name in doc["steps"][0]["probes"]:
-        u = np.array([s["probes"][name]["u"] for s in doc["steps"]])
+    disp = {}
+    us = {name: np.array([s["probes"][name]["u"] for s in doc["steps"]]) for name in doc["steps"][0]["probes"]}
+    big = max([np.abs(u).max() for u in us.values()] + [0.0])
+    for name, u in us.items():
         for i, c in enumerate("xyz"):
-            if np.abs(u[:, i]).max() > 0:
+            if np.abs(u[:, i]).max() > 1e-9 * big:          # leave out components that stay ~0
                 disp[f"{name}.u{c}"] = u[:, i]
-    units = doc.get("units") or "length unit"
+    length = {"N-mm-MPa": "mm", "SI": "m"}.get(doc.get("units"), "length unit")
     with atomic_path(path) as tmp:
-        plot_load_deflection(tmp, lam, disp, xlabel=f"probe displacement [{units}]",
+        plot_load_deflection(tmp, lam, disp, xlabel=f"probe displacement [{length}]",
                              ylabel="load factor", title=doc["case"])
     return path
 
