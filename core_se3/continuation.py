@@ -24,7 +24,8 @@ in solver._scaled_norm), so ds is a length.  The predictor is the tangent t = K^
 converged state, Dlam = +-ds / sqrt(|t|_W^2 + psi^2 u_ref^2), signed so that the new increment
 continues the previous one (positive projection).  ds adapts: ds *= clip(sqrt(n_target / n),
 1/2, 2) after a converged step of n iterations; a failed step (no convergence, complex root,
-an edge turning by pi, a singular tangent) is rejected and retried with ds / 2.
+an edge turning by pi, a singular tangent, a converged increment pointing against its
+predictor) is rejected and retried with ds / 2.
 
 Stability: at each converged state the symmetric part of K is factorised (SuperLU, symmetric
 ordering, diagonal pivots); the number of negative pivots is the number of negative
@@ -538,6 +539,8 @@ def path_follow(sysm, constraint="crisfield", lam_end=1.0, dlam0=0.05, ds_max=No
             st_pred = sysm.update(cur.state, du)
             new_state, new_lam, its, hist, ev = _correct(sysm, st_pred, cur.lam + dl, con, rtol, dtol,
                                                          max_iter, timers)
+            if not jumped and np.sum(sysm.w * con.du0 * con.du) + psi_u ** 2 * con.dlam0 * con.dlam <= 0:
+                raise _Failed("the corrector turned back against the predictor (path reversal)")
             pt = _analyse(sysm, new_state, new_lam, stability, its, hist)
         except (_Failed, ElementTooDistortedError, FloatingPointError, SingularSystemError) as exc:
             reason = str(exc)
