@@ -576,13 +576,24 @@ def _material(v, d, regions):
             v.fail(k2, f"unknown region {name!r}; defined regions: {sorted(regions) or 'none'}")
         v.table(t, k2, MATERIAL_KEYS)
         vals = _material_values(v, t, k2, base=out)
-        differ = [k for k in ELASTIC_KEYS if vals[k] != out[k]]
-        if differ:
-            v.fail(_join(k2, differ[0]), "per-region elastic properties (E, nu, h, shear_factor, "
-                   "drilling) are not supported yet: the element takes one material for the whole "
-                   "shell; only 'rho' may differ per region")
-        out["regions"][name] = {"rho": vals["rho"]}
+        for other in out["regions"]:
+            if np.intersect1d(regions[other], regions[name]).size:
+                v.fail(k2, f"material regions {other!r} and {name!r} overlap: an element would get "
+                           "two materials")
+        out["regions"][name] = vals
     return out
+
+
+def material_index(spec_material, regions, n_elements):
+    """(list of property dicts, (m,) index into it): the material of every element."""
+    mats = [{k: spec_material[k] for k in MATERIAL_KEYS}]
+    index = np.zeros(n_elements, np.int64)
+    for name, vals in spec_material["regions"].items():
+        vals = {k: vals[k] for k in MATERIAL_KEYS}
+        if vals not in mats:
+            mats.append(vals)
+        index[regions[name]] = mats.index(vals)
+    return mats, index
 
 
 def _material_values(v, d, key, base):
@@ -843,11 +854,21 @@ def _build(v, spec, mesh, regions):
     from .problem import Problem
     from .errors import SingularSystemError
     from .solver import check_supports
+    from .region_material import RegionMaterial
     mat = spec["material"]
     s = spec["solver"]
+    mats, index = material_index(mat, regions, mesh.n_elements)
+    elastic = [tuple(m[k] for k in ELASTIC_KEYS) for m in mats]
     try:
-        prob = Problem(mesh, Material(**{k: mat[k] for k in ELASTIC_KEYS}), element=s["element"],
-                       linear_solver=s["linear_solver"])
+        if len(set(elastic[i] for i in np.unique(index))) > 1:
+            if s["element"] != "default":
+                v.fail("solver.element", "per-region elastic properties need the default element")
+            law = RegionMaterial([Material(*e) for e in elastic], index)
+        else:
+            law = Material(**{k: mat[k] for k in ELASTIC_KEYS})
+        prob = Problem(mesh, law, element=s["element"], linear_solver=s["linear_solver"])
+    except ScenarioError:
+        raise
     except CoreSE3Error as exc:
         v.fail("material", str(exc))
     axes = {"x": 0, "y": 1, "z": 2}
@@ -899,26 +920,30 @@ def _add_load(prob, ld, mesh, regions, mat, sc):
     elif typ == "body_force":
         prob.add_body_force(ld["q"], scale=sc, elements=elems)
     elif typ == "gravity":
-        for rho, ids in _densities(ld, mat, regions, mesh, elems):
+        from .loads import SurfaceLoad
+        for rho, h, ids in _densities(ld, mat, regions, mesh, elems):
             if rho == 0 or len(ids) == 0:
                 continue
-            prob.add_gravity(rho, g=ld["g"], elements=ids, scale=sc)     # rho h g per reference area
+            # rho h g per unit reference area (Problem.add_gravity, with the region's thickness)
+            prob.loads.append(SurfaceLoad(mesh, rho * h * np.asarray(ld["g"]), False, ids, sc, "gravity"))
 
 
 def _densities(ld, mat, regions, mesh, elems):
-    """[(rho, element ids)] for a gravity load: its own rho, or the material's per region."""
-    sel = np.arange(mesh.n_elements) if elems is None else elems
+    """[(rho, h, element ids)] for a gravity load: its own rho or the material's, and the
+    thickness, per group of loaded elements that share both."""
+    sel = np.arange(mesh.n_elements) if elems is None else np.asarray(elems)
+    mats, index = material_index(mat, regions, mesh.n_elements)
+    rho = np.array([np.nan if m["rho"] is None else m["rho"] for m in mats])[index[sel]]
     if ld["rho"] is not None:
-        return [(ld["rho"], sel)]
-    rho = np.full(mesh.n_elements, np.nan if mat["rho"] is None else mat["rho"])
-    for name, r in mat["regions"].items():
-        if r["rho"] is not None:
-            rho[regions[name]] = r["rho"]
-    rs = rho[sel]
-    if np.any(np.isnan(rs)):
+        rho[:] = ld["rho"]
+    h = np.array([m["h"] for m in mats])[index[sel]]
+    if np.any(np.isnan(rho)):
         raise ScenarioError("gravity needs a density on every loaded element; some have none "
                             "(give 'rho' in [material] or in the load)")
-    return [(float(val), sel[rs == val]) for val in np.unique(rs)]
+    out = []
+    for r, t in sorted(set(zip(rho.tolist(), h.tolist()))):
+        out.append((r, t, sel[(rho == r) & (h == t)]))
+    return out
 
 
 def _add_magnets(v, prob, spec, mesh, regions):
@@ -960,9 +985,25 @@ def _add_magnets(v, prob, spec, mesh, regions):
         if mu0 is None:
             mu0 = F.MU0 * (1e6 if spec["units"] == "N-mm-MPa" else 1.0)
         try:
-            prob.add_magnetic(Br, built[m["field"]], elements=elems, mu0=mu0)
+            _magnetic_load(prob, mesh, Br, built[m["field"]], elems, mu0, spec["material"], regions)
         except CoreSE3Error as exc:
             v.fail(key, str(exc))
+
+
+def _magnetic_load(prob, mesh, Br, field, elems, mu0, mat, regions):
+    """Problem.add_magnetic, split into groups of equal thickness when h differs per region
+    (the magnetisation's loads per unit area are h/mu0 B^r x B^a)."""
+    from .magnetics import MagneticLoad, Magnetisation
+    sel = np.arange(mesh.n_elements) if elems is None else np.asarray(elems)
+    mats, index = material_index(mat, regions, mesh.n_elements)
+    h = np.array([m["h"] for m in mats])[index[sel]]
+    if len(np.unique(h)) == 1:
+        prob.add_magnetic(Br, field, elements=elems, mu0=mu0)
+        return
+    Br = np.broadcast_to(np.asarray(Br, float), (len(sel), 3))
+    for t in np.unique(h):
+        part = h == t
+        prob.loads.append(MagneticLoad(Magnetisation(mesh, Br[part], float(t), sel[part], mu0), field))
 
 
 def _rotating_direction(B, rot):

@@ -245,11 +245,62 @@ def test_bad_scale_table(tmp_path):
     bad(tmp_path, d, "loads[0].scale", "unknown value 'quadratic'")
 
 
-def test_per_region_elastic_material_not_supported_yet(tmp_path):
+def test_overlapping_material_regions(tmp_path):
     d = base()
-    d["regions"] = {"tip": {"box": {"x": [5.0, 10.0]}}}
-    d["material"]["regions"] = {"tip": {"E": 2e6}}
-    bad(tmp_path, d, "material.regions.tip.E", "not supported yet", "only 'rho' may differ")
+    d["regions"] = {"a": {"box": {"x": [0.0, 7.0]}}, "b": {"box": {"x": [3.0, 10.0]}}}
+    d["material"]["regions"] = {"a": {"E": 2e6}, "b": {"E": 3e6}}
+    bad(tmp_path, d, "material.regions.b", "overlap")
+
+
+def _two_materials(load):
+    d = base()
+    d["mesh"]["nx"] = 8
+    d["regions"] = {"tip": {"box": {"x": [5.0, 10.0]}}}               # elements in x = 5 .. 10
+    d["material"]["regions"] = {"tip": {"E": 2.4e6, "h": 0.08}}
+    d["loads"] = [load]
+    return d
+
+
+def test_per_region_material_stretch_exact(tmp_path):
+    """Two materials in series: u = F/w (L1/(E1 h1) + L2/(E2 h2)) (exact, constant strains)."""
+    scn = load_doc(tmp_path, _two_materials({"type": "edge_force", "edge": "x1", "force": [100.0, 0, 0]}))
+    u = scn.problem.solve(steps=1).final.probes["tip"]["u"]
+    np.testing.assert_allclose(u[0], 100.0 * (5.0 / (1.2e6 * 0.1) + 5.0 / (2.4e6 * 0.08)), rtol=1e-10)
+
+
+def test_per_region_material_bending_exact(tmp_path):
+    """End moment M on a strip of two materials (nu = 0): curvatures M/(w D_i), D_i = E_i h_i^3/12,
+    so the tip turns by M (L1/D1 + L2/D2) / w (pure bending is exact on any mesh)."""
+    M = 2.0
+    scn = load_doc(tmp_path, _two_materials({"type": "edge_moment", "edge": "x1", "moment": [0, -M, 0]}))
+    tip = scn.problem.solve(steps=2).final.probes["tip"]
+    D1, D2 = 1.2e6 * 0.1 ** 3 / 12, 2.4e6 * 0.08 ** 3 / 12
+    np.testing.assert_allclose(-tip["w"][1], M * (5.0 / D1 + 5.0 / D2), rtol=1e-9)
+    from core_se3.resultants import element_resultants
+    f = element_resultants(scn.problem.element, scn.problem.solve(steps=2).final.g)
+    np.testing.assert_allclose(f["M1"][:, 1], -M, rtol=1e-8)          # the same moment in both
+
+
+def test_per_region_gravity_uses_each_region_density_and_thickness(tmp_path):
+    d = _two_materials({"type": "gravity", "g": [0.0, 0.0, -10.0]})
+    d["material"]["rho"] = 2.0
+    d["material"]["regions"]["tip"]["rho"] = 3.0
+    scn = load_doc(tmp_path, d)
+    f, _, _ = scn.problem.external(scn.mesh.g0, 1.0, tangent=False)
+    np.testing.assert_allclose(f[:, 2].sum(), -10.0 * (2.0 * 0.1 * 5.0 + 3.0 * 0.08 * 5.0), rtol=1e-12)
+
+
+def test_per_region_magnetisation_uses_each_region_thickness(tmp_path):
+    """A magnet over two regions of different thickness: total dipole moment
+    int h Br dA / mu0 = Br (h1 A1 + h2 A2) / mu0, split into one load per thickness."""
+    d = _two_materials({"type": "edge_force", "edge": "x1", "force": [0.0, 0.0, 0.1]})
+    d["fields"] = {"f": {"type": "uniform", "B": [0.0, 0.0, 1e-3]}}
+    d["magnets"] = [{"Br": [0.1, 0.0, 0.0]}]
+    scn = load_doc(tmp_path, d)
+    mags = [ld.mag for ld in scn.problem.loads if hasattr(ld, "mag")]
+    assert sorted(m.h for m in mags) == [0.08, 0.1]
+    total = sum(m.total_lab for m in mags)
+    np.testing.assert_allclose(total, [0.1 * (0.1 * 5.0 + 0.08 * 5.0), 0, 0], rtol=1e-12)
 
 
 def test_region_selecting_nothing(tmp_path):

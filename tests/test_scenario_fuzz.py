@@ -19,7 +19,7 @@ BASE = {
     "name": "fuzz",
     "mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 3, "ny": 1},
     "regions": {"end": {"box": {"x": [5.0, 10.0]}}},
-    "material": {"E": 1.2e6, "nu": 0.3, "h": 0.1, "rho": 0.1},
+    "material": {"E": 1.2e6, "nu": 0.3, "h": 0.1, "rho": 0.1, "regions": {"end": {"E": 2.4e6, "h": 0.12}}},
     "supports": [{"type": "clamp", "edge": "x0"},
                  {"type": "rotate", "edge": "x1", "axis": [1.0, 0.0, 0.0], "angle": 0.1,
                   "free": ["x"]}],
