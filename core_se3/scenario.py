@@ -996,10 +996,11 @@ def _magnetic_load(prob, mesh, Br, field, elems, mu0, mat, regions):
     from .magnetics import MagneticLoad, Magnetisation
     sel = np.arange(mesh.n_elements) if elems is None else np.asarray(elems)
     mats, index = material_index(mat, regions, mesh.n_elements)
-    h = np.array([m["h"] for m in mats])[index[sel]]
-    if len(np.unique(h)) == 1:
+    h_all = np.array([m["h"] for m in mats])[index]
+    if len(np.unique(h_all)) == 1:                   # one thickness: the Problem's own front end
         prob.add_magnetic(Br, field, elements=elems, mu0=mu0)
         return
+    h = h_all[sel]
     Br = np.broadcast_to(np.asarray(Br, float), (len(sel), 3))
     for t in np.unique(h):
         part = h == t
