@@ -1043,7 +1043,7 @@ def _dump_value(x):
             return "nan"
         if math.isinf(x):
             return "inf" if x > 0 else "-inf"
-        return repr(x)
+        return repr(float(x))                  # float(): NumPy 2 scalars repr as np.float64(...)
     if isinstance(x, str):
         return json.dumps(x)
     if isinstance(x, (list, tuple)):

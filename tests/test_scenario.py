@@ -84,6 +84,12 @@ def test_dumps_roundtrip_and_fingerprint(tmp_path):
     assert a.mesh.edges["mid"].tolist() == [2, 7]
 
 
+def test_dumps_writes_numpy_scalars_as_plain_toml():
+    import tomllib
+    doc = {"a": np.float64(0.5), "b": np.int64(3), "c": [np.float32(0.25), np.bool_(True)]}
+    assert tomllib.loads(scenario.dumps(doc)) == {"a": 0.5, "b": 3, "c": [0.25, True]}
+
+
 def test_scale_tables():
     f = scenario.make_scale([[0.0, 0.0], [0.5, 1.0], [1.0, 1.0]])
     assert [f(x) for x in (0.0, 0.25, 0.5, 0.9, 2.0)] == [0.0, 0.5, 1.0, 1.0, 1.0]
