@@ -218,6 +218,13 @@ def run(scn, out=None, resume=False, progress=None, force=False, stop_after=None
             write_json_atomic(os.path.join(out, "results.json"),
                               _document(scn, records, timings, "failed", msg))
             raise ConvergenceError(msg, r) from None
+        except CoreSE3Error as exc:              # e.g. a tangent that turned singular
+            bar.close()
+            msg = (f"step {k} (load factor {lam:.6g} -> {target:.6g}) failed: {exc}. The checkpoint "
+                   f"keeps step {k - 1}")
+            write_json_atomic(os.path.join(out, "results.json"),
+                              _document(scn, records, timings, "failed", msg))
+            raise
         for key in ("setup", "assembly", "solve", "other"):
             timings[key] = timings.get(key, 0.0) + res.timings.get(key, 0.0)
         stp = res.final
