@@ -59,8 +59,13 @@ def main(argv=None):
     ap.add_argument("--only", nargs="*", default=None, help="case names to run")
     ap.add_argument("--plots", default=None, help="directory for PNG plots")
     ap.add_argument("--out", default=str(ROOT / "benchmarks" / "results" / "sze"))
+    ap.add_argument("--rewrite", action="store_true", help="only rewrite the .md from the .json")
     args = ap.parse_args(argv)
     rows = []
+    if args.rewrite:
+        data = json.loads(Path(args.out).with_suffix(".json").read_text())
+        write_md(Path(args.out), data["meta"], data["runs"])
+        return
     for name, mesh, over, bar, role in RUNS:
         if args.only and name not in args.only:
             continue
@@ -68,6 +73,7 @@ def main(argv=None):
         doc, res, prob = bench.run_case(name, mesh=mesh, overrides=over)
         wall = time.perf_counter() - t0
         ref = doc["reference"]
+        bar = bar if role != "study" else None          # the bars apply at the full meshes
         row = dict(case=name, mesh=f"{mesh[0]}x{mesh[1]}", overrides=over, role=role,
                    deviation=ref["deviation"], bar=bar,
                    passes=None if bar is None else bool(ref["deviation"] <= bar),
@@ -93,22 +99,31 @@ def main(argv=None):
                 machine=platform.platform(), python=platform.python_version(),
                 command="python benchmarks/sze.py " + " ".join(argv or sys.argv[1:]))
     out.with_suffix(".json").write_text(json.dumps(dict(meta=meta, runs=rows), indent=1))
+    write_md(out, meta, rows)
+    print(f"wrote {out.with_suffix('.md')} and .json")
+
+
+def write_md(out, meta, rows):
     lines = ["# Sze et al. (2004) suite with core_se3", "",
-             f"{meta['date']}, `{meta['command']}`, {meta['machine']}", "",
+             f"{meta['date']}, `{meta['command']}`, {meta['machine']} (2 cores shared with other jobs: "
+             "wall times are indicative)", "",
              "Deviation = largest distance of a computed point to the table polyline in "
-             "(P/P_max, u/u_max), u_max per column, max over the case's columns.", "",
+             "(P/P_max, u/u_max), u_max per column, max over the case's columns. Bars (issue 6) "
+             "apply at the full meshes; study rows have none.", "",
              "| case | mesh | role | deviation | bar | steps | dofs | wall [s] | critical points (P/P_max) |",
              "|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         crit = ", ".join(f"{c['kind']} {c['load_factor']:.4f}" for c in r["critical_points"]) or "-"
-        bar = "-" if r["bar"] is None else f"{100 * r['bar']:.0f} % ({'ok' if r['passes'] else 'FAIL'})"
+        bar = None if r["role"] == "study" else r["bar"]
+        bar = "-" if bar is None else f"{100 * bar:.0f} % ({'ok' if r['deviation'] <= bar else 'FAIL'})"
         lines.append(f"| `{r['case']}` | {r['mesh']}{' whole' if r['overrides'].get('full') else ''} | "
                      f"{r['role']} | {100 * r['deviation']:.2f} % | {bar} | {r['steps']} | {r['n_dofs']} | "
                      f"{r['wall_s']} | {crit} |")
     lines += ["", "End points (computed vs table, P/P_max and u):", ""]
     for r in rows:
         for c in r["curves"]:
-            lines.append(f"* `{r['case']}` {r['mesh']} {c['column']}: computed "
+            lines.append(f"* `{r['case']}` {r['mesh']}{' whole' if r['overrides'].get('full') else ''} "
+                         f"{c['column']}: computed "
                          f"({c['computed_end']['P_over_Pmax']:.4f}, {c['computed_end']['u']:.4f}), table "
                          f"({c['table_end']['P_over_Pmax']:.4f}, {c['table_end']['u']:.4f}); worst point "
                          f"{100 * c['deviation']:.2f} % at P/P_max = {c['at']['P_over_Pmax']:.4f}")
