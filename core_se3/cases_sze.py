@@ -38,7 +38,7 @@ def _roof(name, entry, h, description, notes):
         supports=(), reference=None, probe="C", notes=notes,
         extra=dict(family="sze", shape="roof", literature=entry,
                    curves=[dict(column="minus_W_C", probe="C", component=2, sign=-1.0, scale=1.0)],
-                   path="arc_length", stop="table_end_displacement", dlam0=0.05),
+                   path="arc_length", stop="table_end_displacement", dlam0=0.05, ds_max_factor=3.0),
     )
 
 

@@ -58,8 +58,8 @@ def test_hinged_roof_12p7_curve_within_3_percent(roof127):
 
 
 def test_hinged_roof_12p7_limit_points(roof127):
-    """Both limit points are found (negative eigenvalues 0 -> 1 -> 0) at P/P_max = 0.7429
-    and 0.1698 (8x8), against the table's largest and smallest tabulated values 0.7421 and
+    """Both limit points are found (negative eigenvalues 0 -> 1 -> 0) at P/P_max = 0.7436
+    and 0.1705 (8x8, parabolic estimate inside a bracket of one arc-length step), against the table's largest and smallest tabulated values 0.7421 and
     0.1729 (sampled every ~1 in W_C, so they are within ~0.5 % of the true extremes).
     Bars 1 % (upper) and 3 % (lower: the coarse mesh's post-buckling branch is the least
     accurate part, as for the curve)."""
