@@ -221,7 +221,8 @@ def run_sze(case, p, prob, steps, verbose, **kw):
         res = arc_length(prob, lam_end=lam_end, dlam0=dlam0, stop_at=stop_at,
                          ds_max=kw.pop("ds_max", None),
                          ds_max_factor=kw.pop("ds_max_factor", x.get("ds_max_factor", 8.0)),
-                         target_iter=kw.pop("target_iter", x.get("target_iter", 5)), max_steps=kw.pop("max_steps", 400),
+                         target_iter=kw.pop("target_iter", x.get("target_iter", 5)),
+                         psi=kw.pop("psi", x.get("psi", 0.0)), max_steps=kw.pop("max_steps", 400),
                          verbose=verbose, **kw)
     return document(case, p, prob, res), res
 

@@ -97,7 +97,8 @@ _add(Case(
                curves=[dict(column="W_A", probe="A", component=2, sign=1.0, scale=1.0),
                        dict(column="minus_U_B", probe="B", component=0, sign=-1.0, scale=1.0),
                        dict(column="minus_U_C", probe="C", component=0, sign=-1.0, scale=1.0)],
-               path="arc_length", stop="lam_end", dlam0=0.02, ds_max_factor=3.0, target_iter=6),
+               path="arc_length", stop="lam_end", dlam0=0.01, ds_max_factor=4.0, target_iter=6,
+               psi=1.0),
 ))
 
 _add(Case(
