@@ -2,7 +2,8 @@
 
 Record: model, variant, case, mesh (nx, ny), n_dofs, overrides, lams (load factors of the
 converged steps, lam = 0 excluded), u (probe displacement per step, lab components), angle
-(probe rotation angle per step), torque (moment about the axis of a prescribed edge rotation, per
+(probe rotation angle per step), attempts (Newton solves including the failed ones that were
+cut back; core_se3 also iterations_all, their iterations), torque (moment about the axis of a prescribed edge rotation, per
 step, or None), status ('ok' or 'failed: ...'), timings {setup, jit, assembly, solve, other},
 wall (s, around the whole call), iterations (total Newton iterations).
 
@@ -92,6 +93,8 @@ def run_core(name, mesh, overrides=None, steps=10, element="default", cap=None, 
             _, M = bench.edge_wrench(prob, st.g, rot[0].edge, point)
             torque.append(float(M @ ax))
     rec["torque"] = torque
+    rec["attempts"] = len(res.log)                      # Newton solves incl. failed (cut back) ones
+    rec["iterations_all"] = int(sum(l["iterations"] for l in res.log))
     if tangent_check and len(res.steps) > 1:
         from core_se3.verify import tangent_fd_check
         rec["tangent_check"] = float(tangent_fd_check(prob, res.final.g, res.final.load_factor)[0])
@@ -132,6 +135,7 @@ def run_fenicsx(name, mesh, overrides=None, steps=10, integration="psri", shear_
         rec["u"].append([float(c) for c in st["probes"][probe]["u"]])
         rec["angle"].append(abs(float(st["probes"][probe]["rotation_angle"])))
         rec["iterations"] += int(st["iterations"])
+        rec["attempts"] = rec.get("attempts", 0) + 1 + int(st.get("cutbacks", 0))
         if torque is not None:
             torque.append(float(st["reactions"][0]["moment_about_axis"]))
     rec["torque"] = torque

@@ -33,6 +33,7 @@ from .tables import fmt, markdown_table, pct
 __all__ = ["CASES", "TARGETS", "run", "markdown", "plot"]
 
 TARGETS = (1e-2, 1e-3, 1e-4)
+ROUNDOFF = 1e-10
 REPEATS = 2
 # name: (label, overrides, steps, core nx sequence, fx nx sequence, (entry, block))
 CASES = {
@@ -107,8 +108,9 @@ def summarize(data):
             h = np.array([1.0 / r["nx"] for r in sub])
             e = np.array([r["error"] for r in sub])
             t = np.array([r["time"] for r in sub])
-            # rate on the finest runs whose error still falls by > 1.5x per refinement
-            falling = [i for i in range(1, len(e)) if e[i] < e[i - 1] / 1.5]
+            # rate on the finest runs whose error still falls by > 1.5x per refinement, above the
+            # round-off level (errors < ROUNDOFF: the model is exact on every mesh)
+            falling = [i for i in range(1, len(e)) if e[i] < e[i - 1] / 1.5 and e[i] > ROUNDOFF]
             idx = sorted(set([i - 1 for i in falling] + falling))
             p = fit_rate(h[idx], e[idx])[0] if len(idx) >= 2 else float("nan")
             tt = {tg: time_to_error(t, e, tg) for tg in data["targets"]}
@@ -123,7 +125,9 @@ def markdown(data):
     md = []
     rows = []
     for (name, model), v in s.items():
-        cells = [CASES[name][0], model, fmt(v["rate"], 3), pct(v["min_error"], 2)]
+        exact = v["min_error"] < ROUNDOFF
+        cells = [CASES[name][0], model, "exact (round-off)" if exact else fmt(v["rate"], 3),
+                 pct(v["min_error"], 2)]
         for tg in data["targets"]:
             t, how = v["times"][tg]
             cells.append("not reached (floor)" if how == "not reached" else

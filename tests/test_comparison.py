@@ -141,3 +141,14 @@ def test_locking_table_marks_failures_and_torsion_ratio():
     assert "| core seed | 8×2 | fails | fails |" in md
     assert "| core default | 10×4 | 1.1 |" in md
     assert "Failures:" in md
+
+
+def test_pareto_exact_model_has_no_rate():
+    from comparison import pareto
+    d = _pareto_data()
+    for r in d["runs"]:
+        if r["model"] == "core_se3":
+            r["error"] = 1e-15 * (1 + r["nx"] % 3)      # round-off noise only
+    s = pareto.summarize(d)[("cantilever-shear", "core_se3")]
+    assert np.isnan(s["rate"]) and s["times"][1e-4] == (0.1, "measured")
+    assert "exact (round-off)" in pareto.markdown(d)
