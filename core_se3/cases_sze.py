@@ -106,9 +106,11 @@ _add(Case(
     description="Sze et al. 2004 s3.6: cylinder on rigid end diaphragms pinched by two opposite inward "
                 "radial point forces at mid-length, P to 12000 (octant model).",
     geometry="octant",
-    params=dict(E=3.0e4, nu=0.3, h=1.0, R=100.0, L=200.0, load_max=12000.0, k_diaphragm=100.0),
+    params=dict(E=3.0e4, nu=0.3, h=1.0, R=100.0, L=200.0, load_max=12000.0, k_diaphragm=100.0,
+                drilling=1.0),
     units=dict(E="force/length^2", nu="1", h="length", R="length", L="length", load_max="force",
-               k_diaphragm="1 (diaphragm penalty stiffness / (E h))"),
+               k_diaphragm="1 (diaphragm penalty stiffness / (E h))",
+               drilling="1 (factor on the drilling modulus)"),
     mesh=(48, 48), steps=40,
     loads=(Load("point_force", None, (0.0, 0.0, -1.0), lambda p: p["load_max"]),),
     load_name="P", load_unit="force", load_value=lambda p, lam: lam * p["load_max"],
