@@ -30,8 +30,9 @@ predictor) is rejected and retried with ds / 2.
 Stability: at each converged state the symmetric part of K is factorised (SuperLU, symmetric
 ordering, diagonal pivots); the number of negative pivots is the number of negative
 eigenvalues (Sylvester) and its change between two steps brackets a critical point. It is a
-*limit point* when the load component of the tangent, q . t, changes sign with it (dlam/ds
-passes through zero), otherwise a *bifurcation*; the critical load factor of a limit point is
+*limit point* when dlam/ds passes through zero with it (arc length: the sign of the predicted
+load increment at the two states; displacement control: the sign of q . t), otherwise a
+*bifurcation*; the critical load factor of a limit point is
 interpolated where the current stiffness parameter S_p = (q . t_0)/(q . t) vanishes.
 ``branch_switch=True`` leaves a bifurcation along the buckling mode (the eigenvector of the
 smallest eigenvalue, orthogonalised to t) instead of continuing on the primary path.
@@ -585,7 +586,13 @@ def path_follow(sysm, constraint="crisfield", lam_end=1.0, dlam0=0.05, ds_max=No
             else (pt.sign != cur.sign)
         if stability and changed and not jumped:
             span = np.sqrt(np.sum(sysm.w * con.du ** 2))
-            cp = _critical(sysm, cur, pt, sysm.w * con.du / span, span, len(points) - 1)
+            # dlam/ds changes sign across a limit point: the predictor's dlam at cur against the
+            # one the next predictor will take at pt (robust where q.t also passes through 0,
+            # at a turning point of the displacement conjugate to q)
+            nxt = np.sum(sysm.w * con.du * pt.t) + psi_u ** 2 * con.dlam
+            turned = np.sign(con.dlam0) != np.sign(nxt) if nxt != 0 else None
+            cp = _critical(sysm, cur, pt, sysm.w * con.du / span, span, len(points) - 1,
+                           limit=turned)
             crit.append(cp)
             event = "  ** " + cp.describe()
             if cp.kind == "bifurcation" and branch_switch and cp.mode is not None:
@@ -607,17 +614,19 @@ def path_follow(sysm, constraint="crisfield", lam_end=1.0, dlam0=0.05, ds_max=No
     return points, crit, log, timers
 
 
-def _critical(sysm, cur, pt, c, span, step):
+def _critical(sysm, cur, pt, c, span, step, limit=None):
     """Classify and locate the critical point between two converged states.
 
     Along the step, measure progress by sigma = c . du (c = W du/|du| for arc length, the
     control row for displacement control); the path slope dlam/dsigma = 1/(c . t).  A limit
-    point is where the slope passes through zero (q . t changes sign): with the slope linear in
+    point is where the slope passes through zero (arc length: the predicted dlam changes sign between the two states;
+    displacement control: q . t changes sign): with the slope linear in
     sigma, sigma_c = span s0/(s0 - s1) and lam_c = lam_0 + s0 sigma_c / 2 (a parabola; the
     estimate from the far end is averaged in).  A bifurcation (q . t keeps its sign) is located
     where the smallest eigenvalue of sym(K), from inverse iteration, interpolates to zero.
     """
-    limit = np.sign(pt.qt) != np.sign(cur.qt)
+    if limit is None:
+        limit = np.sign(pt.qt) != np.sign(cur.qt)
     mode = None
     if limit:
         s0, s1 = 1.0 / (c @ cur.t), 1.0 / (c @ pt.t)
