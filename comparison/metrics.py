@@ -12,7 +12,7 @@ from math import tanh
 import numpy as np
 
 __all__ = ["path_distance", "interp_reference", "fit_rate", "time_to_error", "mindlin_strip_J",
-           "circle_tip", "geometric_mean_ratio"]
+           "circle_tip", "arc_tip", "geometric_mean_ratio"]
 
 
 def path_distance(d, e, scale=None):
@@ -118,6 +118,24 @@ def circle_tip(L, kappa):
         v = np.where(np.abs(th) > 1e-8, (1 - np.cos(th)) / np.where(kappa == 0, 1, kappa),
                      L * th / 2)
     return u, v, th
+
+
+def arc_tip(S, kappa0, dkappa):
+    """Tip displacement (u, v) of a clamped arc of length S, reference curvature kappa0 (tangent +x
+    and centre on +v at the clamp), whose curvature an end moment changes uniformly by dkappa
+    (= M/EI): the arc stays circular, tip = (sin(k S)/k, (1 - cos(k S))/k), k = kappa0 + dkappa."""
+    k = kappa0 + np.asarray(dkappa, float)
+
+    def pos(k):
+        k = np.asarray(k, float)
+        small = np.abs(k * S) < 1e-6
+        ks = np.where(small, 1.0, k)
+        x = np.where(small, S - k ** 2 * S ** 3 / 6, np.sin(ks * S) / ks)
+        y = np.where(small, k * S ** 2 / 2, (1 - np.cos(ks * S)) / ks)
+        return x, y
+    x, y = pos(k)
+    x0, y0 = pos(np.asarray(kappa0, float))
+    return x - x0, y - y0
 
 
 def geometric_mean_ratio(a, b):

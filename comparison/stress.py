@@ -9,9 +9,11 @@ outcome that must not happen).  Tests:
    exact circle; ``torsion`` to an end rotation α in one step, right = torque within 1e-4 of the
    same model's 8-steps-per-π path at α (an elastic path has one equilibrium there).
    fenicsx_ref cannot represent |θ| ≥ π (rotation vector): such runs are 'n/a'.
-2. Thin shells, L/h = 1e4: the locking study's runs; right = tip error < 1 % (cantilever,
-   roll-up, arch), torsion: J within 1 % of the other model's finest grid (the two models agree
-   there, see the locking study); a locked element that converges is a silent wrong answer.
+2. Thin shells, L/h = 1e4: the locking study's runs; the deviation is the tip error (cantilever,
+   roll-up, arch) or, for torsion, |J/J_other − 1| against the other model's finest grid (the two
+   models agree there, see the locking study).  Right = deviation < 1 %, or at most 1.5 times the
+   same variant's on the same mesh at L/h = 10 (plain discretisation error of a coarse mesh is
+   not a stability failure); a locked element that converges is a silent wrong answer.
 3. Near-incompressible ν up to 0.499 (cantilever, PL²/EI to 4): right = both models within 1 %
    of each other (no closed form for the plate strip at ν > 0).
 4. Superposed rigid rotation of 10 turns + 0.7 rad about a skew axis applied to a converged
@@ -41,8 +43,8 @@ NUS = (0.3, 0.45, 0.49, 0.499)
 MESH = dict(rollup=((10, 1), (5, 1)), torsion=((12, 4), (6, 2)), nu=((16, 4), (8, 2)))
 
 
-def _outcome(converged, right, applicable=True):
-    if not applicable:
+def _outcome(converged, right, applicable=True, status=""):
+    if not applicable or status.startswith("not available"):
         return "n/a"
     if not converged:
         return "fail"
@@ -80,7 +82,7 @@ def run(quick=False, seed=True, locking=None):
             conv = rec["status"] == "ok" and len(rec["u"]) == 1
             err = path_distance(np.array(rec["u"])[:, [0, 2]], ref, float(np.linalg.norm(ref)))[0] if conv else None
             tests.append(dict(group="largest step: rollup", model=model, what=f"k = {k:g} (θ = {2 * k:g}π)",
-                              value=err, outcome=_outcome(conv, err is not None and err < 0.01, appl),
+                              value=err, outcome=_outcome(conv, err is not None and err < 0.01, appl, rec["status"]),
                               status=rec["status"], tangent=_tangent(rec) if conv else None,
                               iterations=rec["iterations"]))
             if rec["status"].startswith("not available"):
@@ -109,31 +111,46 @@ def run(quick=False, seed=True, locking=None):
             Tref = path["torque"][n - 1] if path["torque"] and len(path["torque"]) >= n else None
             err = abs(rec["torque"][0] - Tref) / abs(Tref) if conv and Tref else None
             tests.append(dict(group="largest step: torsion", model=model, what=f"α = {n}π/8",
-                              value=err, outcome=_outcome(conv, err is not None and err < 1e-4, appl),
+                              value=err, outcome=_outcome(conv, err is not None and err < 1e-4, appl, rec["status"]),
                               status=rec["status"], tangent=_tangent(rec) if conv else None,
                               iterations=rec["iterations"]))
     # 2. thin shells from the locking study
     if locking is not None:
-        lk = [r for r in locking["runs"] if r["L_over_h"] == 1e4]
-        finest = {}
-        for r in lk:  # torsion cross-check: the other model's finest grid
-            if r["case"] == "torsion" and r["variant"] in ("default", "psri") and r["error"] is not None:
-                if r["model"] not in finest or r["n_dofs"] > finest[r["model"]]["n_dofs"]:
-                    finest[r["model"]] = r
-        for r in lk:
+        def finest_of(ratio):
+            out = {}
+            for r in locking["runs"]:  # torsion: the finest default / PSRI grid of each model
+                if (r["case"] == "torsion" and r["L_over_h"] == ratio and r["error"] is not None
+                        and r["variant"] in ("default", "psri")):
+                    if r["model"] not in out or r["n_dofs"] > out[r["model"]]["n_dofs"]:
+                        out[r["model"]] = r
+            return out
+        fin = {ratio: finest_of(ratio) for ratio in (10.0, 1e4)}
+
+        def dev(r):
+            if r is None or r["error"] is None:
+                return None
+            if r["case"] != "torsion":
+                return r["error"]
+            other = fin[r["L_over_h"]].get("fenicsx_ref" if r["model"] == "core_se3" else "core_se3")
+            return None if other is None else abs(r["error"] / other["error"] - 1)
+
+        def twin(r):  # the same model, variant and mesh at L/h = 10
+            for q in locking["runs"]:
+                if (q["case"], q["model"], q["variant"], q["mesh"], q["L_over_h"]) == \
+                        (r["case"], r["model"], r["variant"], r["mesh"], 10.0):
+                    return q
+            return None
+
+        for r in locking["runs"]:
+            if r["L_over_h"] != 1e4:
+                continue
             conv = r["status"] == "ok"
-            if r["case"] == "torsion":
-                other = finest.get("fenicsx_ref" if r["model"] == "core_se3" else "core_se3")
-                if other is None:
-                    continue
-                right = conv and abs(r["error"] / other["error"] - 1) < 0.01
-                what = f"torsion J/J_M vs the other model's finest ({other['error']:.4f})"
-            else:
-                right = conv and r["error"] < 0.01
-                what = f"{r['case']} (tip error)"
+            d, d100 = dev(r), dev(twin(r))
+            right = conv and d is not None and (d < 0.01 or (d100 is not None and d <= 1.5 * d100))
+            what = ("torsion J vs the other model" if r["case"] == "torsion" else f"{r['case']} tip error")
             tests.append(dict(group="thin shell L/h = 1e4", model=r["model"],
                               what=f"{what}, {r['variant']} {r['mesh'][0]}×{r['mesh'][1]}",
-                              value=r["error"], outcome=_outcome(conv, right),
+                              value=d, value100=d100, outcome=_outcome(conv, right, True, r["status"]),
                               status=r["status"], tangent=None, iterations=None))
     # 3. nu -> 0.5
     mc, mf = MESH["nu"]
@@ -146,8 +163,8 @@ def run(quick=False, seed=True, locking=None):
         for model, rec in (("core_se3", rc), ("fenicsx_ref", rf)):
             conv = rec["status"] == "ok" and len(rec["u"]) == 8
             tests.append(dict(group="ν → 0.5: cantilever", model=model, what=f"ν = {nu}",
-                              value=d, outcome=_outcome(conv, d is not None and d < 0.01,
-                                                        rf["status"] != "not available" or model == "core_se3"),
+                              value=d, outcome=_outcome(conv, d is not None and d < 0.01, True,
+                                                        rf["status"]),
                               status=rec["status"], tangent=_tangent(rec) if conv else None,
                               iterations=rec["iterations"]))
     # 4. superposed rigid rotation (core_se3)
@@ -200,7 +217,7 @@ def markdown(data):
     for t in data["tests"]:
         tg = t.get("tangent")
         rows.append([t["group"], t["model"], t["what"], t["outcome"],
-                     fmt(t["value"], 3), "–" if not tg else f"{tg['value']:.1e} ({tg['outcome']})",
+                     fmt(t["value"], 3) + (f" (L/h = 10: {fmt(t['value100'], 3)})" if t.get("value100") else ""), "–" if not tg else f"{tg['value']:.1e} ({tg['outcome']})",
                      "–" if t.get("iterations") in (None, 0) else t["iterations"],
                      t["status"].replace("failed: ", "")[:100]])
     md = [markdown_table(["test", "model", "run", "outcome", "measure", "tangent check", "Newton its",

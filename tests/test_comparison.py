@@ -152,3 +152,18 @@ def test_pareto_exact_model_has_no_rate():
     s = pareto.summarize(d)[("cantilever-shear", "core_se3")]
     assert np.isnan(s["rate"]) and s["times"][1e-4] == (0.1, "measured")
     assert "exact (round-off)" in pareto.markdown(d)
+
+
+def test_arc_tip_matches_half_cylinder_entry_and_reduces_to_circle():
+    """core_se3/data/elastica.json, 4_arch_halfcircle_end_moment_R10over2pi (arc length 5)."""
+    from comparison.metrics import arc_tip
+    from core_se3.references import elastica_entry
+    e = elastica_entry("4_arch_halfcircle_end_moment_R10over2pi")
+    p = e["params"]
+    u, v = arc_tip(p["L_arc"], 1.0 / p["R"], np.asarray(e["load"]) / p["EI"])
+    assert u == pytest.approx(np.asarray(e["tip"]["u"]), abs=1e-9)
+    assert v == pytest.approx(np.asarray(e["tip"]["v"]), abs=1e-9)
+    k = np.array([0.0, 1e-9, 0.3, 2.0])
+    cu, cv, _ = circle_tip(10.0, k)
+    au, av = arc_tip(10.0, 0.0, k)
+    assert au == pytest.approx(cu, abs=1e-12) and av == pytest.approx(cv, abs=1e-12)
