@@ -36,8 +36,9 @@ RUNS = [
     ("sze-hinged-roof", (32, 32), {}, 0.03, "study"),
     ("sze-hinged-roof", (32, 32), {"full": 1.0}, 0.03, "whole roof 32x32 (no symmetry)"),
     ("sze-hinged-roof-6.35", (8, 8), {}, None, "study"),
-    ("sze-hinged-roof-6.35", (16, 16), {}, None, "full (quarter 16x16), P_max unverified: no bar"),
-    ("sze-hinged-roof-6.35", (32, 32), {}, None, "study"),
+    ("sze-hinged-roof-6.35", (16, 16), {}, None, "study"),
+    ("sze-hinged-roof-6.35", (32, 32), {}, 0.03,
+     "full (quarter 32x32); bar on the stated, unverified scale P_max = 3000 (s3.8a's)"),
     ("sze-slit-annular", (6, 30), {}, 0.02, "study"),
     ("sze-slit-annular", (10, 80), {}, 0.02, "full (table mesh 10x80)"),
     ("sze-semicylinder", (16, 16), {}, 0.02, "study"),
@@ -51,6 +52,8 @@ RUNS = [
     ("sze-pinched-cylinder", (16, 16), {}, 0.03, "study"),
     ("sze-pinched-cylinder", (32, 32), {}, 0.03, "study"),
     ("sze-pinched-cylinder", (48, 48), {}, 0.03, "full (table mesh 48x48 octant)"),
+    ("sze-pinched-cylinder", (32, 32), {"diaphragm_tilt": 1.0}, None,
+     "study: diaphragm normal held normal to the ring (theta_axis = 0), not the sources' condition"),
 ]
 
 
@@ -79,7 +82,8 @@ def main(argv=None):
                    passes=None if bar is None else bool(ref["deviation"] <= bar),
                    curves=ref["curves"], steps=len(doc["steps"]) - 1, wall_s=round(wall, 1),
                    n_dofs=doc["mesh"]["n_dofs"], critical_points=doc.get("critical_points", []),
-                   unverified=ref.get("unverified", []))
+                   unverified=ref.get("unverified", []),
+                   run=datetime.datetime.utcnow().isoformat(timespec="seconds") + "Z")
         rows.append(row)
         print(f"{name:22s} {row['mesh']:>6s} {str(over):14s} deviation {100 * row['deviation']:6.2f} % "
               f"({row['steps']} steps, {wall:.1f} s)" + "".join(
@@ -103,26 +107,33 @@ def main(argv=None):
     print(f"wrote {out.with_suffix('.md')} and .json")
 
 
+def _tag(r):
+    o = r["overrides"]
+    return (" whole" if o.get("full") else "") + (" tilt" if o.get("diaphragm_tilt") else "")
+
+
 def write_md(out, meta, rows):
     lines = ["# Sze et al. (2004) suite with core_se3", "",
              f"{meta['date']}, `{meta['command']}`, {meta['machine']} (2 cores shared with other jobs: "
              "wall times are indicative)", "",
              "Deviation = largest distance of a computed point to the table polyline in "
              "(P/P_max, u/u_max), u_max per column, max over the case's columns. Bars (issue 6) "
-             "apply at the full meshes; study rows have none.", "",
-             "| case | mesh | role | deviation | bar | steps | dofs | wall [s] | critical points (P/P_max) |",
-             "|---|---|---|---|---|---|---|---|---|"]
+             "apply at the full meshes; study rows have none. Column run: when the row was computed "
+             "(`--only` reruns keep the other cases' rows; '-' = before per-row dates were recorded, "
+             "i.e. an earlier full or --only run).", "",
+             "| case | mesh | role | deviation | bar | steps | dofs | wall [s] | critical points (P/P_max) | run |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         crit = ", ".join(f"{c['kind']} {c['load_factor']:.4f}" for c in r["critical_points"]) or "-"
         bar = None if r["role"] == "study" else r["bar"]
         bar = "-" if bar is None else f"{100 * bar:.0f} % ({'ok' if r['deviation'] <= bar else 'FAIL'})"
-        lines.append(f"| `{r['case']}` | {r['mesh']}{' whole' if r['overrides'].get('full') else ''} | "
+        lines.append(f"| `{r['case']}` | {r['mesh']}{_tag(r)} | "
                      f"{r['role']} | {100 * r['deviation']:.2f} % | {bar} | {r['steps']} | {r['n_dofs']} | "
-                     f"{r['wall_s']} | {crit} |")
+                     f"{r['wall_s']} | {crit} | {r.get('run', '-')} |")
     lines += ["", "End points (computed vs table, P/P_max and u):", ""]
     for r in rows:
         for c in r["curves"]:
-            lines.append(f"* `{r['case']}` {r['mesh']}{' whole' if r['overrides'].get('full') else ''} "
+            lines.append(f"* `{r['case']}` {r['mesh']}{_tag(r)} "
                          f"{c['column']}: computed "
                          f"({c['computed_end']['P_over_Pmax']:.4f}, {c['computed_end']['u']:.4f}), table "
                          f"({c['table_end']['P_over_Pmax']:.4f}, {c['table_end']['u']:.4f}); worst point "

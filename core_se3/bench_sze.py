@@ -153,11 +153,17 @@ def sze_problem(case, p, mesh=None, element="default", linear_solver="auto"):
         prob.add_nodal_load(A, force=(0.0, 0.0, sign * p["load_max"] / 4))
         if shape == "pinched":
             # rigid diaphragm at s = 0: lab radial and circumferential directions of each node
-            from .lab_supports import add_lab_support
+            # held; with diaphragm_tilt = 1 also the rotation about the cylinder axis (the normal
+            # stays normal to the circumferential tangent: MacNeal-Harder's theta_axis = 0)
+            from .lab_supports import add_lab_support, add_lab_tilt_support
             y0 = m.node_set("y0")
             g0 = m.g0[y0]
             dirs = np.stack([g0[:, :3, 0], g0[:, :3, 2]], 1)        # reference d1, d3
-            add_lab_support(prob, y0, dirs, p["k_diaphragm"] * p["E"] * p["h"])
+            k = p["k_diaphragm"] * p["E"] * p["h"]
+            add_lab_support(prob, y0, dirs, k)
+            if p.get("diaphragm_tilt", 0.0):
+                ell = R * (pi / 2) / nx                              # node spacing on the ring
+                add_lab_tilt_support(prob, y0, g0[:, :3, 0], k * ell ** 2)
             prob.add_probe("A", [A])
             prob.add_probe("B", [B])
             prob.control = (A, (0.0, 0.0, -1.0))

@@ -11,6 +11,14 @@ generalised (body-frame) force is f = (R^T F, 0) and the load stiffness along g 
 
 It does not depend on the load factor (so continuation's load direction q is unaffected).  The
 constraint error is |F|/k: choose k a few decades above the element stiffness (E h).
+
+``LabTiltSpring`` holds the normal d3 = R e3 of each selected node normal to a lab direction t
+(c = d3 . t = 0), by the energy 1/2 k_r c^2.  For the rigid diaphragm (t = the circumferential
+tangent) it is the classical theta_axis = 0 of MacNeal & Harder's pinched cylinder: the end
+ring does not move in its plane, so the normal does not tilt circumferentially (Kirchhoff:
+dw/ds = 0 along the ring), while it bends freely about t and drills about d3.  With
+a = R^T t and b = e3 x a the body moment is m = -k_r c b and its stiffness along
+g <- g exp(eta) is  -dm/domega = k_r (b b^T + c (a e3^T - c I)).
 """
 from __future__ import annotations
 
@@ -18,7 +26,7 @@ import numpy as np
 
 from . import se3
 
-__all__ = ["LabSpring", "add_lab_support"]
+__all__ = ["LabSpring", "LabTiltSpring", "add_lab_support", "add_lab_tilt_support"]
 
 
 class LabSpring:
@@ -52,5 +60,43 @@ def add_lab_support(problem, where, dirs, k):
     """Append a LabSpring on the nodes ``where`` (name or ids) to the problem's loads."""
     nodes = problem._nodes(where)
     spring = LabSpring(problem.mesh, nodes, dirs, k)
+    problem.loads.append(spring)
+    return spring
+
+
+class LabTiltSpring:
+    """Penalty c = d3 . t = 0 (the normal stays normal to the lab direction t, per node)."""
+
+    def __init__(self, mesh, nodes, t, k_rot, name="lab tilt support"):
+        self.nodes = np.asarray(nodes, np.int64)
+        t = np.asarray(t, float)
+        self.t = np.broadcast_to(t, (len(self.nodes), 3)) if t.ndim == 1 else t
+        self.k = float(k_rot)
+        self.name = name
+
+    def tilt(self, g):
+        """c = d3 . t at the selected nodes (the constraint error, a sine)."""
+        return np.einsum("ni,ni->n", g[self.nodes, :3, 2], self.t)
+
+    def evaluate(self, g, lam, n):
+        R = g[self.nodes, :3, :3]
+        a = np.einsum("nji,nj->ni", R, self.t)                        # R^T t
+        c = a[:, 2]
+        e3 = np.array([0.0, 0.0, 1.0])
+        b = np.cross(e3, a)
+        f = np.zeros((n, 6))
+        np.add.at(f, self.nodes, np.concatenate([np.zeros_like(b), -self.k * c[:, None] * b], 1))
+        blk = np.zeros((len(self.nodes), 6, 6))
+        blk[:, 3:, 3:] = self.k * (np.einsum("ni,nj->nij", b, b)
+                                   + c[:, None, None] * (np.einsum("ni,j->nij", a, e3)
+                                                         - c[:, None, None] * np.eye(3)))
+        Kn = np.zeros((n, 6, 6))
+        np.add.at(Kn, self.nodes, blk)
+        return f, Kn, None
+
+
+def add_lab_tilt_support(problem, where, t, k_rot):
+    """Append a LabTiltSpring (normal kept normal to the lab directions ``t``) on ``where``."""
+    spring = LabTiltSpring(problem.mesh, problem._nodes(where), t, k_rot)
     problem.loads.append(spring)
     return spring
