@@ -202,6 +202,24 @@ class Problem:
             self._assembler = Assembler(self.mesh, ~self.constraint_mask().ravel())
         return self._assembler
 
+    def prescribed_rotation(self, lam0, lam1, samples=16):
+        """Largest rotation angle [rad] that a prescribed motion turns any node through between
+        load factors lam0 and lam1 (path length of its rotation, sampled at ``samples``
+        sub-steps): a step whose prescribed rotation nears pi is ambiguous for the exponential
+        update (a turn of 2 pi lands on the same frame)."""
+        worst = 0.0
+        for s in self.supports:
+            if s.target is None:
+                continue
+            prev = s.target(lam0)
+            total = np.zeros(len(s.nodes))
+            for t in np.linspace(lam0, lam1, samples + 1)[1:]:
+                cur = s.target(t)
+                total += se3.skew_rotation_angle(np.swapaxes(prev[:, :3, :3], 1, 2) @ cur[:, :3, :3])
+                prev = cur
+            worst = max(worst, float(total.max()))
+        return worst
+
     def apply_prescribed(self, g, lam):
         for s in self.supports:
             if s.target is not None:

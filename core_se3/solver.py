@@ -9,8 +9,9 @@ rotations of the increment are multiplied by it, and both norms are relative:
 
     |r_free|_s <= rtol * max(|f_ext|_s, |r_int|_s)       and   |eta|_s <= dtol * ell.
 
-A failed step (no convergence in ``max_iter``, an edge turning by ~pi, a singular tangent
-after the first step, a non-finite residual) is cut back by half; after easy steps the
+A failed step (no convergence in ``max_iter``, an edge turning by ~pi, a prescribed motion
+turning nodes by more than 0.9 pi within the step, a singular tangent after the first step, a
+non-finite residual) is cut back by half; after easy steps the
 step grows again.  Only the requested load factors are stored; sub-steps are logged.
 """
 from __future__ import annotations
@@ -24,7 +25,9 @@ from .errors import ConvergenceError, ElementTooDistortedError, SingularSystemEr
 from .linalg import checked_solve, make_solver
 from .results import Result, StepResult, unwrap_rotation
 
-__all__ = ["newton_solve"]
+__all__ = ["newton_solve", "MAX_PRESCRIBED_TURN"]
+
+MAX_PRESCRIBED_TURN = 0.9 * np.pi   # largest rotation a prescribed motion may make in one step
 
 
 def _scaled_norm(r, ell, moment=True):
@@ -108,7 +111,8 @@ def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, rtol=1e-10, dtol
     g = mesh.g0.copy() if g_init is None else np.array(g_init, float)
     check_supports(problem, g)
     stateful = getattr(problem.element, "stateful", False)
-    driven = stateful or any(sup.target is not None for sup in problem.supports)
+    has_targets = any(sup.target is not None for sup in problem.supports)
+    driven = stateful or has_targets
     k_ref = None
     result = Result(mesh=mesh, element=problem.element_name)
     unwrapped = {name: np.zeros(3) for name in problem.probes}
@@ -156,7 +160,13 @@ def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, rtol=1e-10, dtol
             k_step = pred = None
             ok = False
             reason = ""
+            turn = problem.prescribed_rotation(lam, lam_try) if has_targets else 0.0
             try:
+                if turn > MAX_PRESCRIBED_TURN:
+                    # never a silent answer: a turn of 2 pi in one step lands on the same frame
+                    raise ElementTooDistortedError(
+                        f"the prescribed motion turns nodes by {turn:.3f} rad in one step "
+                        f"(> {MAX_PRESCRIBED_TURN:.3f}): the step is too large for the exponential update")
                 for it in range(max_iter + 1):
                     ta = time.perf_counter()
                     ev = problem.element.evaluate(g_try, tangent=True)

@@ -278,3 +278,18 @@ def test_cantilever_shear_matches_kirchhoff_elastica(cantilever_8_steps):
     assert err <= 5e-3, f"cantilever-shear error {100 * err:.3f} %"
     # the tip really travelled along the nonlinear path (PL^2/EI = 4: v/L ~ 0.67)
     assert max(rdisp) > 0.6
+
+
+def test_a_prescribed_full_turn_in_one_step_is_stepped_not_aliased():
+    """A rigid end rotation of 2 pi in one step lands every prescribed node on its reference frame;
+    the solver must not return the unloaded state (a silent wrong answer, found by the comparison
+    stress study).  It cuts the step instead: the end state equals the one of 16 steps, and with
+    no cut-backs allowed it fails with a message naming the prescribed turn."""
+    from core_se3.bench import run_case
+    one, _, _ = run_case("torsion", mesh=(10, 3), overrides=dict(angle=2 * np.pi), steps=1)
+    many, _, _ = run_case("torsion", mesh=(10, 3), overrides=dict(angle=2 * np.pi), steps=16)
+    u1, u16 = (np.array(d["steps"][-1]["probes"]["tip"]["u"]) for d in (one, many))
+    assert np.abs(u16).max() > 1e-3                      # the twisted strip shortens visibly
+    assert np.abs(u1 - u16).max() <= 1e-8 * np.abs(u16).max()
+    with pytest.raises(ConvergenceError, match="prescribed motion turns nodes by 6.28"):
+        run_case("torsion", mesh=(10, 3), overrides=dict(angle=2 * np.pi), steps=1, max_cutbacks=0)
