@@ -10,7 +10,8 @@ element):
     sze-pullout           18x12 2.70 %  (table mesh 36x24: benchmarks/results/sze.md)
     sze-pinched-cylinder  16x16 5.22 %  (48x48 in the benchmarks; no coarse curve bar: on 8x8
                           the sequence of wrinkling snaps is not resolved and the path
-                          wanders onto unstable branches)
+                          wanders onto unstable branches; the 48x48 miss of the 3 % bar is
+                          the diaphragm's rotation condition, docs/PATHFOLLOWING.md)
 
 The hemisphere's R = 10 (marked unverified in LITERATURE.md) is the MacNeal-Harder geometry,
 confirmed by the linear MacNeal-Harder reference (radial deflection 0.0924 under F = 2, two
