@@ -37,10 +37,15 @@ class LabSpring:
         D = np.asarray(dirs, float)
         if D.ndim == 2:
             D = np.broadcast_to(D, (len(self.nodes),) + D.shape)
+        self.D = np.asarray(D, float)                                # (k, q, 3) directions
         self.P = np.einsum("nai,naj->nij", D, D)                     # (k, 3, 3) projectors
         self.X0 = mesh.X[self.nodes].copy()
         self.k = float(k)
         self.name = name
+
+    def lab_restraint(self):
+        """(nodes, lab directions (k, q, 3)) that this spring holds (for the support check)."""
+        return self.nodes, self.D
 
     def evaluate(self, g, lam, n):
         R = g[self.nodes, :3, :3]

@@ -63,6 +63,15 @@ def check_supports(problem, g):
     modes = se3.Ad(se3.inv(g) @ np.linalg.inv(h))   # (n, 6, 6): column k = mode k at node i
     scale = np.r_[np.ones(3), np.full(3, ell)]      # rotations * ell, comparable to translations
     B = (modes * scale[None, None, :])[fixed]        # (n_fixed, 6)
+    # supports carried by loads (lab-direction springs): rows d^T R_i [I 0] Ad_{g_i^-1} xi
+    rows = [B]
+    for load in problem.loads:
+        restraint = getattr(load, "lab_restraint", None)
+        if restraint is not None:
+            nodes, D = restraint()                       # (k,), (k, q, 3) lab unit directions
+            lab = np.einsum("kij,kjl->kil", g[nodes, :3, :3], modes[nodes][:, :3, :] * scale)
+            rows.append(np.einsum("kqi,kil->kql", D, lab).reshape(-1, 6))
+    B = np.concatenate(rows)
     if B.shape[0] == 0:
         raise SingularSystemError("no supports: the shell can move as a rigid body; clamp or fix some nodes")
     U, S, Vt = np.linalg.svd(B, full_matrices=True)

@@ -293,3 +293,17 @@ def test_a_prescribed_full_turn_in_one_step_is_stepped_not_aliased():
     assert np.abs(u1 - u16).max() <= 1e-8 * np.abs(u16).max()
     with pytest.raises(ConvergenceError, match="prescribed motion turns nodes by 6.28"):
         run_case("torsion", mesh=(10, 3), overrides=dict(angle=2 * np.pi), steps=1, max_cutbacks=0)
+
+
+def test_support_check_counts_lab_direction_springs():
+    """Supports carried by loads (lab_supports.LabSpring) enter the rigid-body check: springs on
+    all lab translations of the edge x0 leave the rotation about that edge free (named), a spring
+    on the z translation of x1 closes it."""
+    from core_se3.lab_supports import add_lab_support
+    from core_se3.solver import check_supports
+    p = Problem(rectangle(10.0, 1.0, 4, 1), Material(1.2e6, 0.0, 0.1))
+    add_lab_support(p, "x0", np.eye(3), 1e8)
+    with pytest.raises(SingularSystemError, match=r"rotation about \[0.0, -?1.0, 0.0\] through \[-?0.0, 0.0, 0.0\]"):
+        check_supports(p, p.mesh.g0)
+    add_lab_support(p, "x1", [[0.0, 0.0, 1.0]], 1e8)
+    check_supports(p, p.mesh.g0)
