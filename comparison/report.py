@@ -54,9 +54,11 @@ def _run_or_load(study, mod, quick, seed, reuse, **kw):
         except OSError:
             pass
     t0 = time.perf_counter()
+    commit = environment()["commit"]
     data = mod.run(quick=quick, seed=seed, **kw)
     dt = time.perf_counter() - t0
     data["wall_time"] = dt
+    data["commit"] = commit  # the code the study ran (others may commit while it runs)
     common.save(study, data)
     return data, dt
 
@@ -298,6 +300,7 @@ def render(data, walls, total, env0, env1, fx_ok, fx_why, figs, quick, reuse=Fal
         ["fenicsx_ref JIT compile (inside the study times, reported apart)",
          f"{jit_total(data):.0f} s (cache: FENICSX_REF_JIT_CACHE = "
          f"{os.environ.get('FENICSX_REF_JIT_CACHE', '~/.cache/fenicsx_ref/jit')})"],
+        ["commit at the start of each study", ", ".join(f"{k} {data[k].get('commit', '?')}" for k in walls)],
         ["study wall times", ", ".join(f"{k} {v / 60:.1f} min" if v else f"{k} (?)"
                                        for k, v in walls.items())]]))
     L.append("\n## Summary\n")
