@@ -254,14 +254,7 @@ def run(scn, out=None, resume=False, progress=None, force=False, stop_after=None
     write_json_atomic(os.path.join(out, "results.json"), doc)
     files["results"] = os.path.join(out, "results.json")
     files["checkpoint"] = ck.path
-    if o["vtu"]:
-        files["pvd"] = os.path.join(vtu_dir, "series.pvd")
-    if o["plots"] and prob.probes:
-        files["probes"] = plot_probes(os.path.join(out, "probes.png"), doc)
-    if o["picture"]:
-        files["picture"] = picture(os.path.join(out, "shell.png"), scn, g, records=records,
-                                   vtu_dir=vtu_dir if o["vtu"] else None)
-    return RunResult(doc=doc, g=g, out=out, files=files)
+    return _finish(o, prob, doc, scn, g, records, out, vtu_dir, files)
 
 
 def _clear_temporaries(out, vtu_dir):
@@ -333,6 +326,11 @@ def _run_arclength(scn, out, ck, vtu_dir, verbose):
     if status == "failed":
         raise ConvergenceError(error + f"; the {len(records) - 1} converged steps are written in {out}", res)
     files = dict(results=os.path.join(out, "results.json"), checkpoint=ck.path)
+    return _finish(o, prob, doc, scn, g, records, out, vtu_dir, files)
+
+
+def _finish(o, prob, doc, scn, g, records, out, vtu_dir, files):
+    """Series file, probe plot and picture of a completed run; the RunResult."""
     if o["vtu"]:
         files["pvd"] = os.path.join(vtu_dir, "series.pvd")
     if o["plots"] and prob.probes:
