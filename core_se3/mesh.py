@@ -208,11 +208,20 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None):
     Named node sets: every ``cell_sets`` entry made of line cells (e.g. Gmsh physical curves),
     ordered along the line, plus ``edges`` = {name: predicate(X) -> bool mask}.
     """
+    import contextlib
+    import io as _io
     import meshio
+    said = _io.StringIO()
     try:
-        m = source if isinstance(source, meshio.Mesh) else meshio.read(source)
-    except Exception as exc:  # meshio raises many kinds; name the file and the cause
-        raise MeshError(f"cannot read mesh {source!r}: {exc}") from None
+        # meshio raises many kinds, and reports some unreadable files by printing and calling
+        # sys.exit: both become a MeshError naming the file and the cause
+        with contextlib.redirect_stdout(said), contextlib.redirect_stderr(said):
+            m = source if isinstance(source, meshio.Mesh) else meshio.read(source)
+    except (Exception, SystemExit) as exc:
+        why = " ".join(said.getvalue().split())
+        if not isinstance(exc, SystemExit):
+            why = f"{type(exc).__name__}: {exc}" + (f" ({why})" if why else "")
+        raise MeshError(f"cannot read mesh {source!r}: {why or 'meshio could not read it'}") from None
     X = np.asarray(m.points, float)
     if X.ndim != 2 or X.shape[1] not in (2, 3):
         raise MeshError("mesh points must be 2-D or 3-D")

@@ -71,3 +71,12 @@ def test_meshio_triangles_rejected():
 def test_meshio_unreadable_file(tmp_path):
     with pytest.raises(MeshError, match="cannot read"):
         M.from_meshio(str(tmp_path / "nope.msh"))
+
+
+def test_meshio_garbage_file_is_a_mesh_error(tmp_path):
+    """meshio answers a file it cannot parse by printing and calling sys.exit; from_meshio turns
+    that into a MeshError that names the file (the process must not exit)."""
+    path = tmp_path / "garbage.msh"
+    path.write_text("not a mesh\n")
+    with pytest.raises(MeshError, match="garbage.msh"):
+        M.from_meshio(str(path))
