@@ -50,10 +50,13 @@ RUNS = [
     ("sze-pullout", (18, 12), {}, 0.03, "study"),
     ("sze-pullout", (36, 24), {}, 0.03, "full (table mesh 24x36 octant)"),
     ("sze-pinched-cylinder", (16, 16), {}, 0.03, "study"),
+    ("sze-pinched-cylinder", (24, 24), {}, 0.03, "study"),
     ("sze-pinched-cylinder", (32, 32), {}, 0.03, "study"),
     ("sze-pinched-cylinder", (48, 48), {}, 0.03, "full (table mesh 48x48 octant)"),
-    ("sze-pinched-cylinder", (32, 32), {"diaphragm_tilt": 1.0}, None,
-     "study: diaphragm normal held normal to the ring (theta_axis = 0), not the sources' condition"),
+    ("sze-pinched-cylinder", (48, 48), {"diaphragm_theta_axis": 0.0}, None,
+     "study: diaphragm rotations free (the MBDyn and Elmer inputs' support)"),
+    ("sze-pinched-cylinder", (32, 32), {"diaphragm_theta_axis": 0.0, "diaphragm_tilt": 1.0}, None,
+     "study: diaphragm normal held normal to the ring (another finite-rotation reading)"),
 ]
 
 
@@ -90,7 +93,7 @@ def main(argv=None):
                   f"  {c['kind']} {c['load_factor']:.4f}" for c in row["critical_points"]), flush=True)
         if args.plots:
             from core_se3.bench_sze import plot
-            tag = "-full" if over.get("full") else ""
+            tag = _tag(dict(overrides=over)).replace(" ", "-").replace("-whole", "-full")
             plot(get_case(name), bench.case_params(get_case(name), over), doc, res,
                  str(Path(args.plots) / f"{name}{tag}-{row['mesh']}.png"))
     out = Path(args.out)
@@ -109,7 +112,8 @@ def main(argv=None):
 
 def _tag(r):
     o = r["overrides"]
-    return (" whole" if o.get("full") else "") + (" tilt" if o.get("diaphragm_tilt") else "")
+    return ((" whole" if o.get("full") else "") + (" tilt" if o.get("diaphragm_tilt") else "")
+            + (" free" if o.get("diaphragm_theta_axis") == 0.0 and not o.get("diaphragm_tilt") else ""))
 
 
 def write_md(out, meta, rows):

@@ -161,9 +161,13 @@ def sze_problem(case, p, mesh=None, element="default", linear_solver="auto"):
             dirs = np.stack([g0[:, :3, 0], g0[:, :3, 2]], 1)        # reference d1, d3
             k = p["k_diaphragm"] * p["E"] * p["h"]
             add_lab_support(prob, y0, dirs, k)
+            ell = R * (pi / 2) / nx                                  # node spacing on the ring
             if p.get("diaphragm_tilt", 0.0):
-                ell = R * (pi / 2) / nx                              # node spacing on the ring
                 add_lab_tilt_support(prob, y0, g0[:, :3, 0], k * ell ** 2)
+            if p.get("diaphragm_theta_axis", 0.0):
+                # theta_y = 0 as a total-rotation-vector component (Abaqus' UR2 = 0)
+                from .lab_supports import add_rotation_component_support
+                add_rotation_component_support(prob, y0, (0.0, 1.0, 0.0), k * ell ** 2)
             prob.add_probe("A", [A])
             prob.add_probe("B", [B])
             prob.control = (A, (0.0, 0.0, -1.0))

@@ -109,21 +109,26 @@ _add(Case(
                 "radial point forces at mid-length, P to 12000 (octant model).",
     geometry="octant",
     params=dict(E=3.0e4, nu=0.3, h=1.0, R=100.0, L=200.0, load_max=12000.0, k_diaphragm=100.0,
-                drilling=1.0, diaphragm_tilt=0.0),
+                drilling=1.0, diaphragm_theta_axis=1.0, diaphragm_tilt=0.0),
     units=dict(E="force/length^2", nu="1", h="length", R="length", L="length", load_max="force",
                k_diaphragm="1 (diaphragm penalty stiffness / (E h))",
                drilling="1 (factor on the drilling modulus)",
-               diaphragm_tilt="0 = rotations free at the diaphragm (MBDyn, Elmer inputs), 1 = the "
-                              "normal kept normal to the ring (theta_axis = 0, study)"),
+               diaphragm_theta_axis="1 = the rigid diaphragm's theta_y = 0 (MacNeal-Harder; y the axis) "
+                                    "as Abaqus applies it: the lab axial component of the total "
+                                    "rotation vector held; 0 = rotations free (MBDyn, Elmer inputs)",
+               diaphragm_tilt="1 = the normal kept normal to the ring (study; use with "
+                              "diaphragm_theta_axis=0)"),
     mesh=(48, 48), steps=40,
     loads=(Load("point_force", None, (0.0, 0.0, -1.0), lambda p: p["load_max"]),),
     load_name="P", load_unit="force", load_value=lambda p, lam: lam * p["load_max"],
     supports=(), reference=None, probe="A",
     notes="Reference: literature.json sze3.6_pinched_cylinder_diaphragms (Abaqus S4R, 48x48 octant). "
-          "Octant t in [0, pi/2] x s in [0, L/2]: s = 0 the diaphragm (lab radial and "
-          "circumferential displacement zero by penalty springs, core_se3.lab_supports; axial "
-          "displacement and rotations free), t = 0, t = pi/2, s = L/2 symmetry planes; P/4 at "
-          "A = (0, L/2, R) along -z. -W_A = -u_z(A), U_B = u_x at (R, L/2, 0).",
+          "Octant t in [0, pi/2] x s in [0, L/2]: s = 0 the rigid diaphragm u_x = u_z = theta_y = 0 "
+          "(lab radial and circumferential displacement zero by penalty springs, and the lab axial "
+          "component of the total rotation vector zero, core_se3.lab_supports; axial displacement "
+          "free), t = 0, t = pi/2, s = L/2 symmetry planes; P/4 at A = (0, L/2, R) along -z. "
+          "-W_A = -u_z(A), U_B = u_x at (R, L/2, 0). The rotation condition is the standard "
+          "definition, not read in Sze's text: docs/PATHFOLLOWING.md.",
     extra=dict(family="sze", shape="pinched", literature="sze3.6_pinched_cylinder_diaphragms",
                curves=[dict(column="minus_W_A", probe="A", component=2, sign=-1.0, scale=1.0),
                        dict(column="U_B", probe="B", component=0, sign=1.0, scale=1.0)],

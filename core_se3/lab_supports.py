@@ -19,6 +19,18 @@ ring does not move in its plane, so the normal does not tilt circumferentially (
 dw/ds = 0 along the ring), while it bends freely about t and drills about d3.  With
 a = R^T t and b = e3 x a the body moment is m = -k_r c b and its stiffness along
 g <- g exp(eta) is  -dm/domega = k_r (b b^T + c (a e3^T - c I)).
+
+``RotationComponentSpring`` holds the component along a lab axis a of the node's *total*
+rotation vector psi = log(R R0^T) (c = a . psi = 0), by the energy 1/2 k_r c^2.  This is how a
+code with total-rotation-vector dofs (Abaqus' UR1..UR3 in a large-rotation step) applies
+"theta_y = 0": the holonomic constraint on the rotation from the reference frame, not on its
+increments.  With phi = log(R0^T R) = R0^T psi and b = R0^T a, c = b . phi, and along
+g <- g exp(eta), phi(eta) = phi + J_r^-1(phi) eta + O(eta^2) (J_r the right Jacobian,
+``se3.dexp_so3``), so the body moment is m = -k_r c J_r^-T b and
+
+    -dm/deta = k_r [ (J_r^-T b)(J_r^-T b)^T + c D_phi(J_r^-T(phi) b) J_r^-1(phi) ],
+
+the derivative D_phi taken by complex step of the closed form (exact to round-off).
 """
 from __future__ import annotations
 
@@ -26,7 +38,8 @@ import numpy as np
 
 from . import se3
 
-__all__ = ["LabSpring", "LabTiltSpring", "add_lab_support", "add_lab_tilt_support"]
+__all__ = ["LabSpring", "LabTiltSpring", "RotationComponentSpring", "add_lab_support",
+           "add_lab_tilt_support", "add_rotation_component_support"]
 
 
 class LabSpring:
@@ -103,5 +116,52 @@ class LabTiltSpring:
 def add_lab_tilt_support(problem, where, t, k_rot):
     """Append a LabTiltSpring (normal kept normal to the lab directions ``t``) on ``where``."""
     spring = LabTiltSpring(problem.mesh, problem._nodes(where), t, k_rot)
+    problem.loads.append(spring)
+    return spring
+
+
+class RotationComponentSpring:
+    """Penalty c = a . log(R R0^T) = 0 (total rotation vector's lab component a, per node)."""
+
+    def __init__(self, mesh, nodes, a, k_rot, name="rotation component support"):
+        self.nodes = np.asarray(nodes, np.int64)
+        a = np.asarray(a, float)
+        a = np.broadcast_to(a, (len(self.nodes), 3)) if a.ndim == 1 else a
+        self.R0 = mesh.g0[self.nodes, :3, :3].copy()
+        self.b = np.einsum("nji,nj->ni", self.R0, a)                   # R0^T a (body frame)
+        self.k = float(k_rot)
+        self.name = name
+
+    def phi(self, g):
+        """Body total rotation vectors log(R0^T R) at the selected nodes."""
+        return se3.log_so3(np.einsum("nji,njk->nik", self.R0, g[self.nodes, :3, :3]))
+
+    def component(self, g):
+        """c = a . psi at the selected nodes (the constraint error, radians)."""
+        return np.einsum("ni,ni->n", self.b, self.phi(g))
+
+    def evaluate(self, g, lam, n, h=1e-30):
+        phi = self.phi(g)
+        c = np.einsum("ni,ni->n", self.b, phi)
+        Jinv = se3.dexp_inv_so3(phi)                                   # J_r^-1(phi)
+        gv = np.einsum("nji,nj->ni", Jinv, self.b)                     # J_r^-T b = dc/deta
+        pc = np.repeat(phi[None].astype(complex), 3, axis=0)          # (3, k, 3)
+        pc[np.arange(3), :, np.arange(3)] += 1j * h
+        dg = np.einsum("mnji,nj->mni", se3.dexp_inv_so3(pc), self.b).imag / h   # (3, k, 3)
+        D = np.transpose(dg, (1, 2, 0))                                # D[n, i, m] = d gv_i/d phi_m
+        f = np.zeros((n, 6))
+        np.add.at(f, self.nodes, np.concatenate([np.zeros_like(gv), -self.k * c[:, None] * gv], 1))
+        blk = np.zeros((len(self.nodes), 6, 6))
+        blk[:, 3:, 3:] = self.k * (np.einsum("ni,nj->nij", gv, gv)
+                                   + c[:, None, None] * np.einsum("nim,nmj->nij", D, Jinv))
+        Kn = np.zeros((n, 6, 6))
+        np.add.at(Kn, self.nodes, blk)
+        return f, Kn, None
+
+
+def add_rotation_component_support(problem, where, a, k_rot):
+    """Append a RotationComponentSpring (lab component ``a`` of the total rotation vector
+    held at zero) on the nodes ``where``."""
+    spring = RotationComponentSpring(problem.mesh, problem._nodes(where), a, k_rot)
     problem.loads.append(spring)
     return spring
