@@ -7,7 +7,10 @@ the previous complete file or the new complete file, never a partial one.
 A checkpoint (``checkpoint.npz``) holds what a run needs to continue exactly where it stopped:
 the nodal frames g (n, 4, 4) of the last converged step, its load factor and step number, the
 continuously unwrapped probe rotation vectors, the step records written so far (results
-JSON), the accumulated timings, and the fingerprint of the scenario it belongs to.  Resuming
+JSON), the accumulated timings, and the fingerprint of the scenario it belongs to; an
+arc-length run adds its follower state (``extra["arc"]``, scalars, and ``arrays``: the
+previous increment, a pending switch mode).  The array fields are optional, so files written
+before them still load (version 1 either way).  Resuming
 from it repeats the same per-step Newton solves from the same bits, so the final state equals
 that of an uninterrupted run.
 """
@@ -26,6 +29,7 @@ __all__ = ["atomic_path", "write_text_atomic", "write_json_atomic", "Checkpoint"
 
 FORMAT = "core-se3-checkpoint"
 VERSION = 1
+_ARRAY = "array_"                  # prefix of the optional named arrays (save(arrays=...))
 
 
 @contextlib.contextmanager
@@ -75,8 +79,10 @@ class Checkpoint:
     def exists(self):
         return os.path.isfile(self.path)
 
-    def save(self, fingerprint, step, lam, g, unwrap, records, timings, extra=None):
+    def save(self, fingerprint, step, lam, g, unwrap, records, timings, extra=None, arrays=None):
+        """Write the state atomically; extra: JSON-able dict; arrays: {name: float array}."""
         names = sorted(unwrap)
+        arrs = {_ARRAY + k: np.asarray(v, float) for k, v in (arrays or {}).items()}
         with atomic_path(self.path) as tmp:
             with open(tmp, "wb") as fh:
                 np.savez(fh, format=np.array(FORMAT), version=np.array(VERSION),
@@ -85,7 +91,7 @@ class Checkpoint:
                          probe_names=np.array(json.dumps(names)),
                          unwrap=np.array([unwrap[k] for k in names], float).reshape(len(names), 3),
                          records=np.array(json.dumps(records)), timings=np.array(json.dumps(timings)),
-                         extra=np.array(json.dumps(extra or {})))
+                         extra=np.array(json.dumps(extra or {})), **arrs)
 
     def load(self, fingerprint=None):
         """The saved state as a dict; CheckpointError if missing, unreadable or foreign."""
@@ -102,7 +108,9 @@ class Checkpoint:
                              unwrap={k: np.array(w) for k, w in zip(names, z["unwrap"])},
                              records=json.loads(str(z["records"])),
                              timings=json.loads(str(z["timings"])),
-                             extra=json.loads(str(z["extra"])))
+                             extra=json.loads(str(z["extra"])),
+                             arrays={k[len(_ARRAY):]: np.array(z[k]) for k in z.files
+                                     if k.startswith(_ARRAY)})
         except Exception as exc:
             raise CheckpointError(f"cannot read checkpoint {self.path}: {exc}") from None
         if fingerprint is not None and state["fingerprint"] != fingerprint:

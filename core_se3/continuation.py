@@ -27,6 +27,12 @@ continues the previous one (positive projection).  ds adapts: ds *= clip(sqrt(n_
 an edge turning by pi, a singular tangent, a converged increment pointing against its
 predictor) is rejected and retried with ds / 2.
 
+Restart: after every converged point the follower can hand an ``ArcState`` to ``on_step``
+(the point, the next ds, the previous increment that signs the next predictor, the pending
+branch switch, the critical points so far); ``arc_length(..., start=state)`` continues from it
+and repeats the same computations from the same bits, so an interrupted and resumed path ends
+in the state of an uninterrupted one.
+
 Stability: at each converged state the symmetric part of K is factorised (SuperLU, symmetric
 ordering, diagonal pivots); the number of negative pivots is the number of negative
 eigenvalues (Sylvester) and its change between two steps brackets a critical point. It is a
@@ -53,7 +59,7 @@ from .linalg import make_solver
 from .results import Result, StepResult, unwrap_rotation
 
 __all__ = ["ShellSystem", "arc_length", "displacement_control", "path_follow", "inertia",
-           "CriticalPoint", "limit_point_hint", "AlgebraicSystem"]
+           "CriticalPoint", "limit_point_hint", "AlgebraicSystem", "ArcState"]
 
 
 # ============================================================== linear algebra ===========
@@ -392,6 +398,70 @@ class PathPoint:
     ev: dict | None = None
 
 
+@dataclass
+class ArcState:
+    """What the arc-length follower carries from one converged point to the next (a restart).
+
+    state: the converged point (ShellSystem: nodal frames g (n, 4, 4)); lam its load factor;
+    step: converged points so far (0 = the first point of the path); ds: the arc length of the
+    next step (already adapted), ds_max, ds_min its bounds; psi_u = psi |t_0|_W (length units);
+    direction: sign of the first predictor's dlam; prev_du (free dofs), prev_dl: the last
+    converged increment (the next predictor is signed by its W-projection on the tangent; None
+    at the start and after a branch switch); switch_mode: the unit mode of a pending branch
+    switch, branch_switch whether a switch is still to come; critical: the CriticalPoints found
+    so far (``mode`` not needed to continue); finished: why the path stopped at this point
+    ('lam_end', 'control_end', 'lam_min', 'max_steps') or ''; unwrap: the continuously
+    unwrapped probe rotation vectors (arc_length's recorder; None for path_follow).
+    """
+    state: object
+    lam: float
+    step: int
+    ds: float
+    ds_max: float
+    ds_min: float
+    psi_u: float
+    direction: float
+    prev_du: np.ndarray | None = None
+    prev_dl: float | None = None
+    switch_mode: np.ndarray | None = None
+    branch_switch: bool = False
+    critical: list = field(default_factory=list)
+    finished: str = ""
+    unwrap: dict | None = None
+
+    def pack(self):
+        """(scalars, arrays): a JSON-able dict (floats round-trip exactly through repr) and the
+        arrays other than ``state``; ``ArcState.unpack(state, scalars, arrays)`` inverts it."""
+        sc = dict(lam=float(self.lam), step=int(self.step), ds=float(self.ds), ds_max=float(self.ds_max),
+                  ds_min=float(self.ds_min), psi_u=float(self.psi_u), direction=float(self.direction),
+                  prev_dl=None if self.prev_dl is None else float(self.prev_dl),
+                  branch_switch=bool(self.branch_switch), finished=str(self.finished or ""),
+                  critical=[dict(kind=c.kind, step=int(c.step), lam=float(c.lam),
+                                 lam_bracket=[float(x) for x in c.lam_bracket],
+                                 negative_eigenvalues=[None if x is None else int(x)
+                                                       for x in c.negative_eigenvalues])
+                            for c in self.critical],
+                  unwrap=None if self.unwrap is None else
+                  {k: [float(x) for x in np.asarray(v, float)] for k, v in self.unwrap.items()})
+        arrays = {}
+        if self.prev_du is not None:
+            arrays["prev_du"] = np.asarray(self.prev_du, float)
+        if self.switch_mode is not None:
+            arrays["switch_mode"] = np.asarray(self.switch_mode, float)
+        return sc, arrays
+
+    @classmethod
+    def unpack(cls, state, scalars, arrays):
+        sc = scalars
+        crit = [CriticalPoint(c["kind"], c["step"], c["lam"], tuple(c["lam_bracket"]),
+                              tuple(c["negative_eigenvalues"])) for c in sc.get("critical", [])]
+        unwrap = None if sc.get("unwrap") is None else \
+            {k: np.array(v, float) for k, v in sc["unwrap"].items()}
+        return cls(state, sc["lam"], sc["step"], sc["ds"], sc["ds_max"], sc["ds_min"], sc["psi_u"],
+                   sc["direction"], arrays.get("prev_du"), sc["prev_dl"], arrays.get("switch_mode"),
+                   sc["branch_switch"], crit, sc["finished"], unwrap)
+
+
 class _Recorder:
     """Shell results in the project's Result/StepResult form (probes, reactions, balance)."""
 
@@ -474,35 +544,57 @@ def path_follow(sysm, constraint="crisfield", lam_end=1.0, dlam0=0.05, ds_max=No
                 psi=0.0, max_steps=200, target_iter=5, max_iter=20, rtol=1e-9, dtol=1e-9,
                 max_rejections=12, control=None, control_end=None, lam_min=None, stability=True,
                 branch_switch=False, land=True, verbose=False, record=None, log=None,
-                ds_max_factor=8.0):
+                ds_max_factor=8.0, start=None, on_step=None, timers=None):
     """Trace the path of ``sysm`` (ShellSystem or any object with the same methods).
 
     Stops when lam >= lam_end (if lam_end is not None), when the controlled displacement
     ``control = (value, row)`` reaches ``control_end`` (e.g. the deflection at the end of a
     published table), when lam < lam_min, or after max_steps.  With ``land`` the last step is
     redone with load control (displacement control) so that it ends exactly on lam_end
-    (control_end).  Returns (points, critical points, log).
+    (control_end).  Returns (points, critical points, log, timers).
+
+    on_step(ArcState) is called after the first point and after every converged point, with
+    what a restart needs; ``start=ArcState`` continues from such a point instead of the
+    reference state (dlam0, ds_max, ds_min, psi and branch_switch then come from it; the start
+    point is not passed to ``record`` again; a finished start returns at once, unless it stopped
+    at a max_steps now raised), repeating the computations of the uninterrupted path bit for
+    bit.  timers: [assembly, solve] seconds, accumulated in place.
     """
-    timers = [0.0, 0.0]
+    timers = [0.0, 0.0] if timers is None else timers
     log = [] if log is None else log
-    state = sysm.initial()
-    lam = 0.0
+    if start is not None and start.finished and not (start.finished == "max_steps" and start.step < max_steps):
+        return [], list(start.critical), log, timers
+    if start is None:
+        state, lam = sysm.initial(), 0.0
+    else:
+        state, lam = start.state, float(start.lam)
     first = _analyse(sysm, state, lam, stability)
-    if record:
-        record(first)
     points = [first]
-    crit = []
-    tn0 = np.sqrt(np.sum(sysm.w * first.t ** 2))
-    if not np.isfinite(tn0) or tn0 == 0:
-        raise CoreSE3Error("the loads do not move the structure (K^-1 q = 0)")
-    psi_u = psi * tn0                       # load term of the arc length in length units
-    ds = abs(dlam0) * np.sqrt(tn0 ** 2 + psi_u ** 2)
-    ds_max = ds_max or ds_max_factor * ds
-    ds_min = ds_min or ds / 2 ** max_rejections
-    direction = np.sign(dlam0) or 1.0
-    prev_du, prev_dl = None, None
-    switch_mode = None
     ctrl_val = control[0] if control else None
+    if start is None:
+        if record:
+            record(first)
+        crit = []
+        tn0 = np.sqrt(np.sum(sysm.w * first.t ** 2))
+        if not np.isfinite(tn0) or tn0 == 0:
+            raise CoreSE3Error("the loads do not move the structure (K^-1 q = 0)")
+        psi_u = psi * tn0                       # load term of the arc length in length units
+        ds = abs(dlam0) * np.sqrt(tn0 ** 2 + psi_u ** 2)
+        ds_max = ds_max or ds_max_factor * ds
+        ds_min = ds_min or ds / 2 ** max_rejections
+        direction = np.sign(dlam0) or 1.0
+        prev_du, prev_dl = None, None
+        switch_mode = None
+        step = 0
+    else:
+        crit = list(start.critical)
+        psi_u, ds, ds_max, ds_min = start.psi_u, start.ds, start.ds_max, start.ds_min
+        direction = start.direction
+        prev_du = None if start.prev_du is None else np.array(start.prev_du, float)
+        prev_dl = start.prev_dl
+        switch_mode = None if start.switch_mode is None else np.array(start.switch_mode, float)
+        branch_switch = start.branch_switch
+        step = int(start.step)
 
     def finished(pt):
         if lam_end is not None and (pt.lam - lam_end) * np.sign(lam_end or 1.0) >= -1e-12 * max(1, abs(lam_end)):
@@ -514,7 +606,13 @@ def path_follow(sysm, constraint="crisfield", lam_end=1.0, dlam0=0.05, ds_max=No
             return "lam_min"
         return None
 
-    step = 0
+    def snapshot(pt, why):
+        return ArcState(pt.state, pt.lam, step, ds, ds_max, ds_min, psi_u, direction, prev_du, prev_dl,
+                        switch_mode, branch_switch, list(crit),
+                        why or ("max_steps" if step >= max_steps else ""))
+
+    if start is None and on_step:
+        on_step(snapshot(first, ""))
     rejections = 0
     while step < max_steps:
         cur = points[-1]
@@ -591,8 +689,7 @@ def path_follow(sysm, constraint="crisfield", lam_end=1.0, dlam0=0.05, ds_max=No
             # at a turning point of the displacement conjugate to q)
             nxt = np.sum(sysm.w * con.du * pt.t) + psi_u ** 2 * con.dlam
             turned = np.sign(con.dlam0) != np.sign(nxt) if nxt != 0 else None
-            cp = _critical(sysm, cur, pt, sysm.w * con.du / span, span, len(points) - 1,
-                           limit=turned)
+            cp = _critical(sysm, cur, pt, sysm.w * con.du / span, span, step, limit=turned)
             crit.append(cp)
             event = "  ** " + cp.describe()
             if cp.kind == "bifurcation" and branch_switch and cp.mode is not None:
@@ -608,9 +705,12 @@ def path_follow(sysm, constraint="crisfield", lam_end=1.0, dlam0=0.05, ds_max=No
                 event += "  (first step on the bifurcated branch)"
             print(f"  step {step}: lam {pt.lam:.6g} (dlam {pt.lam - cur.lam:+.3g}) ds {ds:.4g} "
                   f"it {pt.its} res {pt.hist[-1]:.1e}{cv} det {'+' if pt.sign >= 0 else '-'}{neg}{event}")
+        if not why:
+            ds = min(ds_max, ds * float(np.clip(np.sqrt(target_iter / max(pt.its, 1)), 0.5, 2.0)))
+        if on_step:
+            on_step(snapshot(pt, why))
         if why:
             break
-        ds = min(ds_max, ds * float(np.clip(np.sqrt(target_iter / max(pt.its, 1)), 0.5, 2.0)))
     return points, crit, log, timers
 
 
@@ -683,7 +783,8 @@ def _result(problem, sysm, run):
         points, crit, _, timers = run(rec, log)
     except _PathError as exc:
         rec.result.critical_points = exc.crit
-        rec.result.timings.update(other=time.perf_counter() - t0)
+        tm = rec.result.timings                  # assembly, solve as of the last converged point
+        tm.update(other=time.perf_counter() - t0 - tm.get("assembly", 0.0) - tm.get("solve", 0.0))
         raise ConvergenceError(f"{exc}; the converged steps are kept in .result", rec.result) from None
     rec.result.critical_points = crit
     rec.result.timings.update(assembly=timers[0], solve=timers[1],
@@ -694,7 +795,7 @@ def _result(problem, sysm, run):
 def arc_length(problem, lam_end=1.0, dlam0=0.05, method="crisfield", psi=0.0, ds_max=None,
                ds_max_factor=8.0, max_steps=200, target_iter=5, max_iter=20, rtol=1e-9, dtol=1e-9, stop_at=None,
                lam_min=None, stability=True, branch_switch=False, land=True, verbose=False,
-               linear_solver=None):
+               linear_solver=None, start=None, on_step=None):
     """Arc-length continuation of a Problem (see module docstring).
 
     dlam0: load factor of the first predictor (sets the arc length ds); ds_max defaults to
@@ -702,16 +803,37 @@ def arc_length(problem, lam_end=1.0, dlam0=0.05, method="crisfield", psi=0.0, ds
     along ``direction`` reaches ``value`` (the last step lands on it exactly).  Returns a
     Result with every converged step; ``result.critical_points`` lists the limit and
     bifurcation points found (CriticalPoint), each step has ``.stability``.
+
+    Restart: ``on_step(result, arc_state)`` is called after the first point and after every
+    converged point (result: the Result so far, its last step the new point, its timings and
+    critical_points up to date; arc_state: the ArcState to restart from, with the probes'
+    unwrapped rotation vectors).  ``start=arc_state`` continues the path from it with the same
+    arguments otherwise: ``result.steps`` then holds only the points after the start (path step
+    ``start.step + 1`` onwards), ``critical_points`` all of the path (steps numbered along the
+    whole path), and the final state equals that of an uninterrupted call bit for bit.
     """
     sysm = ShellSystem(problem, linear_solver)
     control = sysm.node_displacement(stop_at[0], stop_at[1]) if stop_at else None
 
     def run(rec, log):
+        timers = [0.0, 0.0]
+        t0 = time.perf_counter()
+        if start is not None and start.unwrap is not None:
+            rec.unwrapped.update({k: np.array(v, float) for k, v in start.unwrap.items()})
+
+        def step_cb(st):
+            st.unwrap = {k: v.copy() for k, v in rec.unwrapped.items()}
+            rec.result.critical_points = list(st.critical)
+            rec.result.timings.update(assembly=timers[0], solve=timers[1],
+                                      other=time.perf_counter() - t0 - timers[0] - timers[1])
+            on_step(rec.result, st)
+
         return path_follow(sysm, method, lam_end, dlam0, ds_max, None, psi, max_steps, target_iter,
                            max_iter, rtol, dtol, control=control,
                            control_end=stop_at[2] if stop_at else None, lam_min=lam_min,
                            stability=stability, branch_switch=branch_switch, land=land,
-                           verbose=verbose, record=rec, log=log, ds_max_factor=ds_max_factor)
+                           verbose=verbose, record=rec, log=log, ds_max_factor=ds_max_factor,
+                           start=start, on_step=step_cb if on_step else None, timers=timers)
 
     return _result(problem, sysm, run)
 

@@ -9,7 +9,9 @@ Step k solves lam_{k-1} -> lam_k (newton_solve with steps=1, g_init = the state 
 cut-backs inside the step as the solver does them).  After it converges, in this order:
 the step's VTU file, the checkpoint, the .pvd collection and the results JSON are written,
 each atomically (checkpoint.py).  The checkpoint is the record of truth: on resume, the
-steps it holds are kept, the others are solved again.
+steps it holds are kept, the others are solved again.  With control = "arclength" the same
+files are written after every converged path point, the checkpoint also holding the path
+follower's state (continuation.ArcState), and resume continues the path from it.
 
 Run directory:  results.json (schema core-se3-result v1 plus status/scenario fields),
 checkpoint.npz, vtu/step_NNNN.vtu + vtu/series.pvd, probes.png, shell.png.
@@ -166,15 +168,15 @@ def run(scn, out=None, resume=False, progress=None, force=False, stop_after=None
     os.makedirs(out, exist_ok=True)
     vtu_dir = os.path.join(out, "vtu")
     if s["control"] == "arclength":
-        if resume:
-            raise CheckpointError("an arc-length run cannot be resumed yet: run it again with --force "
-                                  '(or use control = "load", which checkpoints every step)')
-        _clear(out, vtu_dir)
-        return _run_arclength(scn, out, ck, vtu_dir, bool(progress) or verbose)
+        return _run_arclength(scn, out, ck, vtu_dir, bool(progress) or verbose, resume, stop_after,
+                              t_setup0)
     lams = scn.load_factors()
     nsteps = len(lams)
     if resume:
         st = ck.load(scn.fingerprint)
+        if st["extra"].get("control") == "arclength":
+            raise CheckpointError(f"checkpoint {ck.path} is of an arc-length run; this scenario is "
+                                  "load-controlled: start over with --force or use another --out")
         _clear_temporaries(out, vtu_dir)
         g, lam, done = st["g"], st["lam"], st["step"]
         unwrap, records, timings = st["unwrap"], st["records"], st["timings"]
@@ -278,53 +280,110 @@ def _clear(out, vtu_dir):
                 os.unlink(os.path.join(vtu_dir, f))
 
 
-def _run_arclength(scn, out, ck, vtu_dir, verbose):
-    """Arc-length continuation (continuation.arc_length) in one call; the outputs of every
-    converged point are written afterwards (also when the path fails part-way)."""
-    from .continuation import arc_length
+def _arc_record(k, st):
+    """The results record of path point k (a StepResult of continuation.arc_length)."""
+    probes = {name: dict(u=np.asarray(p["u"]).tolist(), rotation_angle=float(np.linalg.norm(p["w"])),
+                         rotation_vector=np.asarray(p["w"]).tolist(), rotation=np.asarray(p["R"]).tolist())
+              for name, p in st.probes.items()}
+    return dict(step=k, load_factor=float(st.load_factor),
+                load=dict(name="load factor", value=float(st.load_factor), unit=""),
+                probes=probes, iterations=int(st.iterations),
+                residual=float(st.residual_history[-1]) if st.residual_history else 0.0,
+                residual_history=[float(x) for x in st.residual_history], substeps=1 if k else 0,
+                cutbacks=0, balance_error=float(st.balance_error))
+
+
+def _critical_doc(cps):
+    return [dict(kind=c.kind, load_factor=float(c.lam), bracket=[float(x) for x in c.lam_bracket],
+                 step=int(c.step), description=c.describe()) for c in cps]
+
+
+def _run_arclength(scn, out, ck, vtu_dir, verbose, resume=False, stop_after=None, t_setup0=None):
+    """Arc-length continuation (continuation.arc_length).  After every converged point (and the
+    first one) its VTU file, the checkpoint (the frames and the follower's ArcState), the .pvd
+    collection and the results JSON are written, each atomically, as for load control; resume
+    continues the path from the checkpoint's ArcState (continuation.path_follow ``start``),
+    which repeats the computations of an uninterrupted run from the same bits.  stop_after:
+    RunInterrupted once that many points are done in this call (tests)."""
+    from .continuation import ArcState, arc_length
     prob, s, o = scn.problem, scn.solver, scn.output
+    t_setup0 = time.perf_counter() if t_setup0 is None else t_setup0
+    if resume:
+        ck_state = ck.load(scn.fingerprint)
+        if ck_state["extra"].get("control") != "arclength" or "arc" not in ck_state["extra"]:
+            raise CheckpointError(f"checkpoint {ck.path} holds no arc-length path state (written by a "
+                                  "load-controlled run or by a version that could not resume arc "
+                                  "length): start over with --force or use another --out")
+        _clear_temporaries(out, vtu_dir)
+        start = ArcState.unpack(ck_state["g"], ck_state["extra"]["arc"], ck_state["arrays"])
+        records, base = ck_state["records"], dict(ck_state["timings"])
+        if len(records) != start.step + 1:
+            raise CheckpointError(f"checkpoint {ck.path} is inconsistent: {len(records)} records for "
+                                  f"path step {start.step}")
+    else:
+        _clear(out, vtu_dir)
+        start, records, base = None, [], {}
+    base["setup"] = base.get("setup", 0.0) + time.perf_counter() - t_setup0
+    every = o["vtu_every"]
+    last = dict(state=start, timings={k: float(base.get(k, 0.0)) for k in ("setup", "assembly", "solve", "other")},
+                critical=list(start.critical) if start else [], vtu=set(), n=0)
+
+    def timings_now(res):
+        return dict(setup=float(base["setup"]),
+                    **{k: float(base.get(k, 0.0)) + float(res.timings.get(k, 0.0))
+                       for k in ("assembly", "solve", "other")})
+
+    def on_step(res, state):
+        k = state.step
+        records.append(_arc_record(k, res.steps[-1]))
+        timings = timings_now(res)
+        vtu_now = o["vtu"] and (k % every == 0 or bool(state.finished))
+        if vtu_now:
+            _write_vtu(os.path.join(vtu_dir, f"step_{k:04d}.vtu"), prob, state.state, state.lam)
+            last["vtu"].add(k)
+        scalars, arrays = state.pack()
+        ck.save(scn.fingerprint, k, state.lam, state.state, state.unwrap, records, timings,
+                extra=dict(control="arclength", arc=scalars), arrays=arrays)
+        if vtu_now:
+            _write_pvd(vtu_dir, records, every, k if state.finished else -1)
+        doc = _document(scn, records, timings, "running")
+        doc["critical_points"] = _critical_doc(state.critical)
+        write_json_atomic(os.path.join(out, "results.json"), doc)
+        last.update(state=state, timings=timings, critical=list(state.critical))
+        if k > (start.step if start else 0):
+            last["n"] += 1
+            if stop_after is not None and last["n"] >= stop_after and not state.finished:
+                raise RunInterrupted(f"stopped after path point {k} as asked (stop_after={stop_after})")
+
     status, error = "complete", None
     try:
         res = arc_length(prob, lam_end=s["lam_end"], dlam0=s["dlam0"], method=s["method"], psi=s["psi"],
                          ds_max_factor=s["ds_max_factor"], max_steps=s["max_steps"],
                          target_iter=s["target_iter"], max_iter=s["max_iter"], rtol=s["rtol"],
                          dtol=s["dtol"], stability=s["stability"], verbose=verbose,
-                         linear_solver=s["linear_solver"])
+                         linear_solver=s["linear_solver"], start=start, on_step=on_step)
     except ConvergenceError as exc:
         res, status, error = exc.result, "failed", str(exc)
-        if res is None or not res.steps:
+        if last["state"] is None:
             raise
-    if status == "complete" and abs(res.final.load_factor - s["lam_end"]) > 1e-9 * abs(s["lam_end"]):
+    timings = timings_now(res) if res is not None and res.steps else last["timings"]
+    final = last["state"]
+    k = final.step
+    if status == "complete" and abs(final.lam - s["lam_end"]) > 1e-9 * abs(s["lam_end"]):
         status = "failed"
         error = (f"arc length stopped after max_steps = {s['max_steps']} steps at load factor "
-                 f"{res.final.load_factor:.6g} < lam_end = {s['lam_end']:g}; raise [solver] max_steps or dlam0")
-    records = []
-    for k, st in enumerate(res.steps):
-        probes = {name: dict(u=np.asarray(p["u"]).tolist(), rotation_angle=float(np.linalg.norm(p["w"])),
-                             rotation_vector=np.asarray(p["w"]).tolist(), rotation=np.asarray(p["R"]).tolist())
-                  for name, p in st.probes.items()}
-        records.append(dict(step=k, load_factor=float(st.load_factor),
-                            load=dict(name="load factor", value=float(st.load_factor), unit=""),
-                            probes=probes, iterations=int(st.iterations),
-                            residual=float(st.residual_history[-1]) if st.residual_history else 0.0,
-                            residual_history=[float(x) for x in st.residual_history], substeps=1 if k else 0,
-                            cutbacks=0, balance_error=float(st.balance_error)))
-        if o["vtu"] and (k % o["vtu_every"] == 0 or k == len(res.steps) - 1):
-            _write_vtu(os.path.join(vtu_dir, f"step_{k:04d}.vtu"), prob, st.g, st.load_factor)
-    timings = {k: float(res.timings.get(k, 0.0)) for k in ("setup", "assembly", "solve", "other")}
-    g = res.final.g
-    unwrap = {name: np.asarray(p["w"], float) for name, p in res.final.probes.items()}
-    ck.save(scn.fingerprint, len(records) - 1, res.final.load_factor, g, unwrap, records, timings,
-            extra=dict(control="arclength"))
+                 f"{final.lam:.6g} < lam_end = {s['lam_end']:g}; raise [solver] max_steps or dlam0")
     if o["vtu"]:
-        _write_pvd(vtu_dir, records, o["vtu_every"], len(records) - 1)
+        if k not in last["vtu"] and not os.path.exists(os.path.join(vtu_dir, f"step_{k:04d}.vtu")):
+            _write_vtu(os.path.join(vtu_dir, f"step_{k:04d}.vtu"), prob, final.state, final.lam)
+        _write_pvd(vtu_dir, records, every, k)
     doc = _document(scn, records, timings, status, error)
-    doc["critical_points"] = [dict(kind=c.kind, load_factor=float(c.lam), bracket=[float(x) for x in c.lam_bracket],
-                                   step=int(c.step), description=c.describe())
-                              for c in getattr(res, "critical_points", [])]
+    doc["critical_points"] = _critical_doc(last["critical"])
     write_json_atomic(os.path.join(out, "results.json"), doc)
+    g = np.asarray(final.state)
     if status == "failed":
-        raise ConvergenceError(error + f"; the {len(records) - 1} converged steps are written in {out}", res)
+        raise ConvergenceError(error + f"; the {len(records) - 1} converged steps are written in {out} "
+                               "(the checkpoint keeps the last one)", res)
     files = dict(results=os.path.join(out, "results.json"), checkpoint=ck.path)
     return _finish(o, prob, doc, scn, g, records, out, vtu_dir, files)
 
