@@ -372,7 +372,8 @@ def _run_arclength(scn, out, ck, vtu_dir, verbose, resume=False, stop_after=None
     if status == "complete" and abs(final.lam - s["lam_end"]) > 1e-9 * abs(s["lam_end"]):
         status = "failed"
         error = (f"arc length stopped after max_steps = {s['max_steps']} steps at load factor "
-                 f"{final.lam:.6g} < lam_end = {s['lam_end']:g}; raise [solver] max_steps or dlam0")
+                 f"{final.lam:.6g} < lam_end = {s['lam_end']:g}; raise [solver] max_steps and continue "
+                 "with --resume (or raise dlam0 and start over)")
     if o["vtu"]:
         if k not in last["vtu"] and not os.path.exists(os.path.join(vtu_dir, f"step_{k:04d}.vtu")):
             _write_vtu(os.path.join(vtu_dir, f"step_{k:04d}.vtu"), prob, final.state, final.lam)

@@ -71,7 +71,9 @@ ARCLENGTH_DEFAULTS = dict(method="crisfield", dlam0=None, max_steps=200, psi=0.0
                           ds_max_factor=8.0, stability=True)
 OUTPUT_DEFAULTS = dict(vtu=True, vtu_every=1, plots=True, picture=True, picture_steps=1, view=None)
 # solver controls that do not change the converged states (may differ on --resume)
-NON_PHYSICAL = ("rtol", "dtol", "max_iter", "max_cutbacks", "linear_solver")
+# solver keys that do not change the converged states (left out of the --resume fingerprint);
+# max_steps only decides where an arc-length path stops, so a resume may raise it
+NON_PHYSICAL = ("rtol", "dtol", "max_iter", "max_cutbacks", "linear_solver", "max_steps")
 
 
 # ----------------------------------------------------------------------------- scaling

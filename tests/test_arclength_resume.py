@@ -141,3 +141,21 @@ def test_killed_arclength_process_resumes_to_the_same_state(tmp_path):
     assert done["steps"] == ref.doc["steps"] and done["critical_points"] == ref.doc["critical_points"]
     assert len(pvd_files(os.path.join(out, "vtu", "series.pvd"))) == n + 1
     assert not [f for f in os.listdir(os.path.join(out, "vtu")) if f.startswith(".")]
+
+
+def test_path_stopped_by_max_steps_resumes_with_a_larger_budget(tmp_path):
+    """An arc-length run that stops at [solver] max_steps (a failed run that keeps its converged
+    points) continues with ``--resume`` once max_steps is raised, and ends in the uninterrupted
+    run's frames bit for bit: max_steps is left out of the scenario fingerprint because it only
+    decides where the path stops."""
+    ref = runner.run(scenario.load(write(tmp_path, ARCH)), out=str(tmp_path / "ref"))
+    n = len(ref.doc["steps"]) - 1
+    out = str(tmp_path / "short")
+    short = scenario.load(write(tmp_path, with_(ARCH, solver={"max_steps": 6}), "short.toml"))
+    with pytest.raises(C.ConvergenceError, match="max_steps"):
+        runner.run(short, out=out)
+    assert Checkpoint(out).load()["step"] == 6 < n
+    res = runner.run(scenario.load(write(tmp_path, with_(ARCH, solver={"max_steps": 200}), "long.toml")),
+                     out=out, resume=True)
+    np.testing.assert_array_equal(res.g, ref.g)
+    assert res.doc["steps"] == ref.doc["steps"] and res.status == "complete"
