@@ -30,13 +30,17 @@ g <- g exp(eta), phi(eta) = phi + J_r^-1(phi) eta + O(eta^2) (J_r the right Jaco
 
     -dm/deta = k_r [ (J_r^-T b)(J_r^-T b)^T + c D_phi(J_r^-T(phi) b) J_r^-1(phi) ],
 
-the derivative D_phi taken by complex step of the closed form (exact to round-off).
+the derivative D_phi taken by complex step of the closed form (exact to round-off).  psi is
+the principal log, so the node's total rotation must stay below pi (the cut of log): beyond
+MAX_TOTAL_ROTATION the spring raises ElementTooDistortedError, which the solvers treat as a
+rejected step (cut back), and which names the limit if it persists.
 """
 from __future__ import annotations
 
 import numpy as np
 
 from . import se3
+from .errors import ElementTooDistortedError
 
 __all__ = ["LabSpring", "LabTiltSpring", "RotationComponentSpring", "add_lab_support",
            "add_lab_tilt_support", "add_rotation_component_support"]
@@ -120,6 +124,9 @@ def add_lab_tilt_support(problem, where, t, k_rot):
     return spring
 
 
+MAX_TOTAL_ROTATION = 0.95 * np.pi   # log's cut at pi is too close beyond this
+
+
 class RotationComponentSpring:
     """Penalty c = a . log(R R0^T) = 0 (total rotation vector's lab component a, per node)."""
 
@@ -142,6 +149,13 @@ class RotationComponentSpring:
 
     def evaluate(self, g, lam, n, h=1e-30):
         phi = self.phi(g)
+        turn = np.linalg.norm(phi, axis=-1)
+        if np.any(turn > MAX_TOTAL_ROTATION):
+            k = int(np.argmax(turn))
+            raise ElementTooDistortedError(
+                f"{self.name}: node {int(self.nodes[k])} has turned by {turn[k]:.3f} rad from its "
+                f"reference frame (> {MAX_TOTAL_ROTATION:.3f}); a held component of the total rotation "
+                "vector is defined below pi only")
         c = np.einsum("ni,ni->n", self.b, phi)
         Jinv = se3.dexp_inv_so3(phi)                                   # J_r^-1(phi)
         gv = np.einsum("nji,nj->ni", Jinv, self.b)                     # J_r^-T b = dc/deta

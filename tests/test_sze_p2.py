@@ -162,3 +162,20 @@ def test_pinched_cylinder_16x16_curve():
     assert ub[lam < 0.12].max() <= 0.0 and ub[-1] > 30.0, (ub[lam < 0.12].max(), ub[-1])
     crossing = lam[np.argmax(ub > 0.0)]
     assert 0.12 < crossing < 0.2, crossing
+
+
+def test_rotation_component_spring_refuses_a_turn_near_pi():
+    """Past 0.95 pi of total rotation (the principal log's cut is at pi) the spring raises
+    ElementTooDistortedError naming the node, which the solvers treat as a rejected step."""
+    from core_se3.errors import ElementTooDistortedError
+    case = get_case("sze-pinched-cylinder")
+    prob = bench.build_problem(case, bench.case_params(case), (4, 4))
+    spring = [ld for ld in prob.loads if isinstance(ld, RotationComponentSpring)][0]
+    g = prob.mesh.g0.copy()
+    node = int(spring.nodes[1])
+    g[node] = g[node] @ se3.exp(np.array([0.0, 0.0, 0.0, 0.96 * np.pi, 0.0, 0.0]))
+    with pytest.raises(ElementTooDistortedError, match=f"node {node} has turned"):
+        spring.evaluate(g, 1.0, prob.mesh.n_nodes)
+    g[node] = prob.mesh.g0[node] @ se3.exp(np.array([0.0, 0.0, 0.0, 0.9 * np.pi, 0.0, 0.0]))
+    f, K, _ = spring.evaluate(g, 1.0, prob.mesh.n_nodes)
+    assert np.all(np.isfinite(f)) and np.all(np.isfinite(K))
