@@ -70,7 +70,6 @@ SOLVER_DEFAULTS = dict(steps=10, lam_end=1.0, rtol=1e-10, dtol=1e-10, max_iter=3
 ARCLENGTH_DEFAULTS = dict(method="crisfield", dlam0=None, max_steps=200, psi=0.0, target_iter=5,
                           ds_max_factor=8.0, stability=True)
 OUTPUT_DEFAULTS = dict(vtu=True, vtu_every=1, plots=True, picture=True, picture_steps=1, view=None)
-# solver controls that do not change the converged states (may differ on --resume)
 # solver keys that do not change the converged states (left out of the --resume fingerprint);
 # max_steps only decides where an arc-length path stops, so a resume may raise it
 NON_PHYSICAL = ("rtol", "dtol", "max_iter", "max_cutbacks", "linear_solver", "max_steps")
@@ -286,6 +285,8 @@ class Scenario:
     def load_factors(self):
         """The load factors of the requested steps (excluding the initial state lam = 0)."""
         s = self.solver
+        if s.get("load_factors") is not None:
+            return list(s["load_factors"])
         return [s["lam_end"] * k / s["steps"] for k in range(1, s["steps"] + 1)]
 
     def run(self, out=None, resume=False, progress=None, **kw):
@@ -795,7 +796,7 @@ def _probes(v, doc, mesh):
 def _solver(v, doc):
     d = doc.get("solver", {})
     key = "solver"
-    v.table(d, key, tuple(SOLVER_DEFAULTS) + tuple(ARCLENGTH_DEFAULTS))
+    v.table(d, key, tuple(SOLVER_DEFAULTS) + ("load_factors",) + tuple(ARCLENGTH_DEFAULTS))
     s = dict(SOLVER_DEFAULTS)
     s["control"] = v.string(d, "control", key, default="load", choices=("load", "arclength"))
     s["steps"] = v.integer(d, "steps", key, default=10, lo=1, hi=100_000)
@@ -813,7 +814,16 @@ def _solver(v, doc):
         extra = [k for k in ARCLENGTH_DEFAULTS if k in d]
         if extra:
             v.fail(_join(key, extra[0]), 'an arc-length control: only with control = "arclength"')
+        if "load_factors" in d:
+            both = [k for k in ("steps", "lam_end") if k in d]
+            if both:
+                v.fail(_join(key, both[0]), "give either load_factors or steps and lam_end, not both")
+            s["load_factors"] = _load_factors(v, d["load_factors"], _join(key, "load_factors"))
+            s["steps"], s["lam_end"] = len(s["load_factors"]), s["load_factors"][-1]
         return s
+    if "load_factors" in d:
+        v.fail(_join(key, "load_factors"), 'explicit load factors are for control = "load"; arc length '
+                                          "chooses its own (lam_end, dlam0)")
     s["method"] = v.string(d, "method", key, default="crisfield", choices=("crisfield", "riks"))
     s["dlam0"] = v.number(d, "dlam0", key, default=s["lam_end"] / s["steps"])
     if s["dlam0"] == 0 or s["dlam0"] * s["lam_end"] < 0:
@@ -826,6 +836,21 @@ def _solver(v, doc):
     if s["element"] != "default":
         v.fail(_join(key, "element"), "arc length needs the default (path-independent) element")
     return s
+
+
+def _load_factors(v, x, path):
+    """Explicit load factors of the steps: finite, non-zero, strictly monotone from 0."""
+    if (not isinstance(x, list) or not x
+            or any(isinstance(a, bool) or not isinstance(a, (int, float)) for a in x)):
+        v.fail(path, f"expected a non-empty array of numbers, got {_tname(x)} {_show(x)}")
+    lam = [float(a) for a in x]
+    if not all(math.isfinite(a) for a in lam):
+        v.fail(path, f"expected finite load factors, got {lam}")
+    steps = np.diff([0.0] + lam)
+    if np.any(steps == 0) or np.any(np.sign(steps) != np.sign(steps[0])):
+        v.fail(path, "the load factors must move strictly in one direction from 0 (no repeats, no "
+                     f"reversals: trace a path that turns back with arc length), got {lam}")
+    return lam
 
 
 def _output(v, doc):

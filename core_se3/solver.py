@@ -100,8 +100,11 @@ def _limit_point_hint(problem, g, lam, linear_solver):
 
 def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, rtol=1e-10, dtol=1e-10,
                  max_iter=30, max_cutbacks=12, g_init=None, verbose=False, linear_solver=None,
-                 record_substeps=False, limit_check=True):
-    """Solve the problem from lam_start to lam_end in ``steps`` equal load increments.
+                 record_substeps=False, limit_check=True, load_factors=None):
+    """Solve the problem from lam_start to lam_end in ``steps`` equal load increments, or
+    through the explicit ``load_factors`` (a sequence moving strictly one way from lam_start;
+    it replaces steps and lam_end).  Each requested load factor is a stored step; a failed
+    increment is halved (at most max_cutbacks times per requested step) and grows back.
 
     limit_check: stop with a ConvergenceError that suggests arc length when a converged step
     has jumped past a limit point (snap-through): the step started where the current stiffness
@@ -110,8 +113,17 @@ def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, rtol=1e-10, dtol
     is more than 3x that first (tangent) iterate.  Not applied to displacement-driven problems.
     """
     t0 = time.perf_counter()
-    if not np.isfinite(lam_end) or steps < 1:
+    if load_factors is not None:
+        targets = np.asarray(load_factors, float).ravel()
+        incr = np.diff(np.r_[lam_start, targets])
+        if (len(targets) == 0 or not np.all(np.isfinite(targets)) or np.any(incr == 0)
+                or np.any(np.sign(incr) != np.sign(incr[0]))):
+            raise ValueError("load_factors must be finite and move strictly one way from lam_start "
+                             f"(no repeats, no reversals), got {list(targets)}")
+    elif not np.isfinite(lam_end) or steps < 1:
         raise ValueError("need a finite lam_end and steps >= 1")
+    else:
+        targets = lam_start + (lam_end - lam_start) * np.arange(1, steps + 1) / steps
     mesh = problem.mesh
     fixedmask = problem.constraint_mask()
     asm = problem.assembler()
@@ -151,12 +163,13 @@ def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, rtol=1e-10, dtol
     f0, _, _ = problem.external(g, lam_start, tangent=False)
     record(lam_start, g, 0, [], ev["r"], f0, True)
 
-    targets = lam_start + (lam_end - lam_start) * np.arange(1, steps + 1) / steps
     lam = lam_start
-    dlam_nominal = (lam_end - lam_start) / steps
-    dlam = dlam_nominal
+    dlam = None
     first_solve = True
     for target in targets:
+        # the requested increment; a cut-back increment carries over, capped by it
+        dlam_nominal = target - lam
+        dlam = dlam_nominal if dlam is None else np.sign(dlam_nominal) * min(abs(dlam), abs(dlam_nominal))
         while abs(target - lam) > 1e-14 * max(1.0, abs(target)):
             lam_try = lam + dlam if abs(dlam) < abs(target - lam) else target
             g_try = problem.apply_prescribed(g.copy(), lam_try)

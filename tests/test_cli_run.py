@@ -278,3 +278,17 @@ def test_bench_run_vtu_includes_the_problem_output_fields(tmp_path, capsys):
     m = meshio.read(os.path.join(out, files[-1][1]))
     Br = m.point_data["magnetisation_Br"]
     assert np.abs(Br).max() > 0 and "magnetic_couple" in m.point_data
+
+
+def test_run_with_explicit_load_factors(tmp_path):
+    """A load-controlled run through [solver] load_factors records exactly those load factors
+    and ends in the state of the uniform 3-step run (conservative load: path independent)."""
+    uni = runner.run(scenario.load(write(tmp_path, with_(STRIP, output={"vtu": False, "plots": False,
+                                                                        "picture": False}))),
+                     out=str(tmp_path / "uni"))
+    doc = with_(STRIP, solver={"load_factors": [0.1, 0.45, 1.0]},
+                output={"vtu": False, "plots": False, "picture": False})
+    doc["solver"].pop("steps")
+    res = runner.run(scenario.load(write(tmp_path, doc, "lf.toml")), out=str(tmp_path / "lf"))
+    assert [s["load_factor"] for s in res.doc["steps"]] == [0.0, 0.1, 0.45, 1.0]
+    assert np.abs(res.g[:, :3, 3] - uni.g[:, :3, 3]).max() < 1e-8 * 10.0

@@ -495,3 +495,30 @@ def test_resultants_converge_to_cantilever_equilibrium_at_second_order(tmp_path)
         exact = np.cross(g[scn.mesh.edges["x1"], :3, 3].mean(0) - c, [0.0, 0.0, 2.0])
         errs.append(np.linalg.norm(f["M1"][e] - exact) / np.linalg.norm(exact))
     assert errs[0] < 4e-3 and errs[1] < errs[0] / 3.5, errs
+
+
+def test_explicit_load_factors(tmp_path):
+    """[solver] load_factors = [...] gives the steps' load factors directly (replacing steps and
+    lam_end; part of the fingerprint); bad lists are refused naming the key."""
+    d = base()
+    d["solver"] = {"load_factors": [0.1, 0.25, 0.6, 1.0]}
+    scn = load_doc(tmp_path, d)
+    assert scn.load_factors() == [0.1, 0.25, 0.6, 1.0]
+    assert scn.solver["steps"] == 4 and scn.solver["lam_end"] == 1.0
+    d2 = base()
+    d2["solver"] = {"load_factors": [0.1, 0.25, 0.7, 1.0]}
+    assert load_doc(tmp_path, d2).fingerprint != scn.fingerprint
+    d = base()
+    d["solver"] = {"load_factors": [-0.5, -1.0]}                 # unloading direction is fine
+    assert load_doc(tmp_path, d).load_factors() == [-0.5, -1.0]
+    for lf, frag in (([0.5, 0.5, 1.0], "strictly in one direction"), ([0.5, 0.2], "no reversals"),
+                     ([0.0, 1.0], "strictly"), ([], "non-empty array"), ([0.5, "1"], "array of numbers")):
+        d = base()
+        d["solver"] = {"load_factors": lf}
+        bad(tmp_path, d, "solver.load_factors", frag)
+    d = base()
+    d["solver"] = {"load_factors": [0.5, 1.0], "steps": 2}
+    bad(tmp_path, d, "solver.steps", "either load_factors or steps and lam_end")
+    d = base()
+    d["solver"] = {"control": "arclength", "load_factors": [0.5, 1.0]}
+    bad(tmp_path, d, "solver.load_factors", 'control = "load"')

@@ -307,3 +307,17 @@ def test_support_check_counts_lab_direction_springs():
         check_supports(p, p.mesh.g0)
     add_lab_support(p, "x1", [[0.0, 0.0, 1.0]], 1e8)
     check_supports(p, p.mesh.g0)
+
+
+def test_explicit_load_factors_store_those_steps_and_reach_the_same_state(cantilever_8_steps):
+    """solve(load_factors=[...]) stores exactly the requested load factors (non-uniform spacing)
+    and, the loads being conservative, ends in the state of the 8 uniform steps (observed to
+    round-off); a list that repeats or reverses is refused."""
+    lf = [0.05, 0.2, 0.3, 0.65, 1.0]
+    res = cantilever(4.0).solve(load_factors=lf, rtol=1e-12, dtol=1e-12)
+    assert [s.load_factor for s in res.steps] == [0.0] + lf
+    diff = np.abs(res.displacements() - cantilever_8_steps.displacements()).max()
+    assert diff < 1e-8 * L, diff
+    for badlist in ([0.5, 0.5], [0.5, 0.2], [0.0, 1.0], [], [0.5, float("nan")]):
+        with pytest.raises(ValueError, match="load_factors"):
+            cantilever(4.0).solve(load_factors=badlist)
