@@ -54,8 +54,8 @@ _add(_roof(
     "Sze et al. 2004 s3.8(d): the hinged roof at h = 6.35: snap-through and snap-back (the load "
     "and the deflection both reverse), arc length to the end of the table (-W_C = 38.45).",
     "Reference: literature.json sze3.8d_hinged_roof; its P_max is marked unverified there (no "
-    "second source found): the curve is plotted on the scale P_max = 3000 of s3.8(a), and its 3 % "
-    "is measured on that stated scale. Quarter model 32x32 (at most 40x40 on the modelled part).",
+    "second source found): the curve is plotted on the scale P_max = 3000 of s3.8(a) and reported "
+    "without a bar. Quarter model 32x32 (at most 40x40 on the modelled part).",
     mesh=(32, 32)))
 
 _add(Case(
