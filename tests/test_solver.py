@@ -141,7 +141,30 @@ def test_no_supports_raises_singular_system_error():
         p.solve(steps=1)
 
 
-@pytest.mark.parametrize("solver", ["superlu", "auto"])
+def _mumps_param():
+    from core_se3.linalg import available_solvers
+    return pytest.param("mumps", marks=pytest.mark.skipif("mumps" not in available_solvers(),
+                                                          reason="petsc4py not installed"))
+
+
+def test_auto_solver_picks_by_size():
+    """``auto`` factors small tangents with SuperLU and, with petsc4py, large ones with MUMPS
+    (linalg.AUTO_MUMPS_MIN); both give the same solution."""
+    import scipy.sparse as sps
+    from core_se3.linalg import AUTO_MUMPS_MIN, AutoSolver, available_solvers, checked_solve
+    auto = AutoSolver()
+    n = AUTO_MUMPS_MIN + 10
+    K = sps.diags([-1.0, 2.5, -1.0], [-1, 0, 1], shape=(n, n), format="csr")
+    b = np.random.default_rng(0).standard_normal(n)
+    large = "mumps" if "mumps" in available_solvers() else "superlu"
+    assert auto._large.name == large and auto._small.name == "superlu"
+    x = checked_solve(auto, K, b)
+    assert np.linalg.norm(K @ x - b) < 1e-12 * np.linalg.norm(b)
+    xs = checked_solve(auto, K[:100, :100], b[:100])
+    assert np.linalg.norm(K[:100, :100] @ xs - b[:100]) < 1e-12 * np.linalg.norm(b[:100])
+
+
+@pytest.mark.parametrize("solver", ["superlu", "auto", _mumps_param()])
 def test_insufficient_supports_raise_singular_system_error(solver):
     """Translations fixed along x0 only: the rigid rotation about the x0 line stays free."""
     p = Problem(rectangle(L, WIDTH, 16, 1), Material(E, 0.0, H), linear_solver=solver)
