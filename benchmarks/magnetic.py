@@ -11,8 +11,8 @@ import time
 
 import numpy as np
 
-from core_se3.bench import run_case
-from core_se3.cases_magnetic import ZHAO_BEAMS
+from core_se3.catalogue import run_case
+from core_se3.catalogue.cases_magnetic import ZHAO_BEAMS
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 

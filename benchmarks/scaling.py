@@ -47,11 +47,11 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:          # run from a checkout without installing
     sys.path.insert(0, str(ROOT))
 
-from core_se3 import se3                                    # noqa: E402
-from core_se3.linalg import available_solvers, make_solver  # noqa: E402
-from core_se3.material import Material                      # noqa: E402
+from core_se3 import lie                                    # noqa: E402
+from core_se3.solvers.linalg import available_solvers, make_solver  # noqa: E402
+from core_se3.fem import Material                      # noqa: E402
 from core_se3.mesh import rectangle                         # noqa: E402
-from core_se3.problem import Problem                        # noqa: E402
+from core_se3.model import Problem                        # noqa: E402
 
 SIZES = (100, 1_000, 10_000, 100_000)
 E_MOD, NU, H = 1.2e6, 0.3, 0.1
@@ -103,7 +103,7 @@ def build(n_el, seed):
     eta[:, :3] *= TWIST_TRANS * LENGTH / nx
     eta[:, 3:] *= TWIST_ROT
     eta[problem.constraint_mask()] = 0.0
-    g = mesh.g0 @ se3.exp(eta)
+    g = mesh.g0 @ lie.exp(eta)
     return problem, g, (nx, ny), t_pre
 
 
@@ -113,9 +113,9 @@ def assemble(problem, asm, g):
     ev = problem.element.evaluate(g, tangent=True)
     t1 = time.perf_counter()
     f, Kn, Ke = problem.external(g, LAM, tangent=True)
-    Ke_tot = ev["Ke"] if Ke is None else ev["Ke"] + Ke
-    K = asm.matrix(Ke_tot, ev["KE"], ev["Kn"] + Kn)
-    r = asm.vector(ev["r"] - f)
+    Ke_tot = ev.element_blocks if Ke is None else ev.element_blocks + Ke
+    K = asm.matrix(Ke_tot, ev.edge_blocks, ev.node_blocks + Kn)
+    r = asm.vector(ev.r - f)
     t2 = time.perf_counter()
     return K, r, t1 - t0, t2 - t1
 

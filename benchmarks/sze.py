@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Sze, Liu & Lo (2004) benchmark suite with core_se3 at the full meshes (issue 6 acceptance).
 
-For each case (and a mesh study where cheap), runs ``core_se3.bench.run_case`` (arc length or
+For each case (and a mesh study where cheap), runs ``core_se3.catalogue.run_case`` (arc length or
 load control as the case defines), and records the curve deviation (largest distance of a
 computed point to the table polyline in (P/P_max, u/u_max)), the end point against the table's,
 the critical points, steps and timings.  Writes ``benchmarks/results/sze.{md,json}`` and, with
@@ -25,8 +25,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from core_se3 import bench  # noqa: E402
-from core_se3.cases import get_case  # noqa: E402
+from core_se3 import catalogue  # noqa: E402
+from core_se3.catalogue import get_case  # noqa: E402
 
 # (case, mesh, overrides, bar or None, role)
 RUNS = [
@@ -76,7 +76,7 @@ def main(argv=None):
         if args.only and name not in args.only:
             continue
         t0 = time.perf_counter()
-        doc, res, prob = bench.run_case(name, mesh=mesh, overrides=over)
+        doc, res, prob = catalogue.run_case(name, mesh=mesh, overrides=over)
         wall = time.perf_counter() - t0
         ref = doc["reference"]
         bar = bar if role != "study" else None          # the bars apply at the full meshes
@@ -92,9 +92,9 @@ def main(argv=None):
               f"({row['steps']} steps, {wall:.1f} s)" + "".join(
                   f"  {c['kind']} {c['load_factor']:.4f}" for c in row["critical_points"]), flush=True)
         if args.plots:
-            from core_se3.bench_sze import plot
+            from core_se3.catalogue.family_sze import plot
             tag = _tag(dict(overrides=over)).replace(" ", "-").replace("-whole", "-full")
-            plot(get_case(name), bench.case_params(get_case(name), over), doc, res,
+            plot(get_case(name), catalogue.case_params(get_case(name), over), doc, res,
                  str(Path(args.plots) / f"{name}{tag}-{row['mesh']}.png"))
     out = Path(args.out)
     if args.only and out.with_suffix(".json").exists():      # keep the other cases' rows

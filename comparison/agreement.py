@@ -111,12 +111,12 @@ def run(quick=False, seed=True):
 def exact_reference(name, ov, lams):
     """(u, v) at the load factors from a closed form where the case has one (pure end moments:
     circular arcs), else from the case's reference entry (spline in the load); None without."""
-    from core_se3 import bench, cases
+    from core_se3 import catalogue
     from .metrics import arc_tip
-    case = cases.get_case(name)
-    p = bench.case_params(case, ov)
+    case = catalogue.get_case(name)
+    p = catalogue.case_params(case, ov)
     if name in ("rollup", "curved-rollup"):
-        EI = cases.beam_EI(p)
+        EI = catalogue.beam_EI(p)
         M = np.array([case.load_value(p, lam) for lam in lams])
         S, k0 = (p["L"], 0.0) if name == "rollup" else (5.0, 1.0 / p["R"])
         return np.column_stack(arc_tip(S, k0, M / EI))
@@ -126,7 +126,7 @@ def exact_reference(name, ov, lams):
 def refresh_reference(data):
     """Reference paths and errors of every record with a complete path (nu = 0 only: the
     entries are for nu = 0); recomputed from the stored probe paths, no solver runs."""
-    from core_se3.cases import get_case
+    from core_se3.catalogue import get_case
     for row in data["cases"]:
         case = get_case(row["case"])
         for lv in row["levels"]:

@@ -41,23 +41,21 @@ def progress(msg):
 
 
 def planar(case, u):
-    """Probe displacement (n, 3) -> the reference plane (u, v) of the case: (ux, uz)."""
-    u = np.asarray(u, float).reshape(-1, 3)
-    if case.extra.get("plane") == "xy":
-        return u[:, [0, 1]]
-    return u[:, [0, 2]]
+    """Probe displacements (n, 3) -> the reference plane (u, v) of the case (catalogue.planar)."""
+    from core_se3.catalogue import planar as _planar
+    return _planar(case, np.asarray(u, float).reshape(-1, 3))
 
 
 def reference_path(name, overrides, lams, block=None, entry=None):
     """Reference (u, v) of case ``name`` at the load factors ``lams`` (n, 2), in case units, or
     None when the case has no displacement reference.  ``block``/``entry`` override the case's
     (e.g. 'tip_reissner_instance')."""
-    from core_se3 import bench, cases
-    from core_se3.references import elastica_entry
+    from core_se3 import catalogue
+    from core_se3.catalogue.references import elastica_entry
     from .metrics import interp_reference
-    case = cases.get_case(name)
-    p = bench.case_params(case, overrides)
-    r = bench.reference_for(case, p)
+    case = catalogue.get_case(name)
+    p = catalogue.case_params(case, overrides)
+    r = catalogue.reference_for(case, p)
     if r is None:
         return None
     e = elastica_entry(entry or r[0])

@@ -78,7 +78,7 @@ def _error(name, r, ov, steps, rec):
     lams = [k / steps for k in range(1, steps + 1)]
     if len(rec["u"]) != len(lams):
         return None
-    from core_se3.cases import get_case
+    from core_se3.catalogue import get_case
     case = get_case(name)
     if name == "torsion":
         p = dict(case.params, **ov)

@@ -1,6 +1,7 @@
 """Error norms, rate fits and time-to-accuracy estimates for the cross-model studies (NumPy only).
 
-Conventions (the project's error measure, ``core_se3/bench.py``): a probe path is a sequence of
+Conventions (the project's error measure, ``core_se3.catalogue.measures``, whose
+``path_distance`` and ``interp_reference`` this module re-exports): a probe path is a sequence of
 displacement vectors d_k at the load levels k; the distance between two paths is
 max_k |d_k - e_k| / S with S = the largest displacement |e_k| of the reference path (for two
 models without a reference, S = the largest displacement of either path).
@@ -11,40 +12,10 @@ from math import tanh
 
 import numpy as np
 
+from core_se3.catalogue.measures import interp_reference, path_distance
+
 __all__ = ["path_distance", "interp_reference", "fit_rate", "time_to_error", "mindlin_strip_J",
            "circle_tip", "arc_tip", "geometric_mean_ratio"]
-
-
-def path_distance(d, e, scale=None):
-    """max_k |d_k - e_k| / scale and the per-step values.
-
-    d, e: (n, m) arrays of probe displacements at the same load levels; scale defaults to
-    max(max_k |e_k|, max_k |d_k|) (the largest displacement on either path)."""
-    d, e = np.atleast_2d(np.asarray(d, float)), np.atleast_2d(np.asarray(e, float))
-    if d.shape != e.shape:
-        raise ValueError(f"paths of different shapes {d.shape} and {e.shape}")
-    if scale is None:
-        scale = max(np.linalg.norm(e, axis=1).max(), np.linalg.norm(d, axis=1).max())
-    if not scale > 0:
-        raise ValueError("zero displacement scale: the paths do not move")
-    per = np.linalg.norm(d - e, axis=1) / scale
-    return float(per.max()), per
-
-
-def interp_reference(load, ref_load, ref_values):
-    """Reference values at the given loads: cubic spline (not-a-knot) in the load through the
-    tabulated points, per component.  ref_values: (n_ref, m).  Loads outside the table -> nan."""
-    from scipy.interpolate import CubicSpline
-    L = np.asarray(ref_load, float)
-    V = np.asarray(ref_values, float)
-    order = np.argsort(L)
-    L, V = L[order], V[order]
-    keep = np.concatenate([[True], np.diff(L) > 0])
-    L, V = L[keep], V[keep]
-    out = CubicSpline(L, V, axis=0)(np.asarray(load, float))
-    x = np.asarray(load, float)
-    out[(x < L[0] - 1e-12 * abs(L[0])) | (x > L[-1] + 1e-12 * abs(L[-1]))] = np.nan
-    return out
 
 
 def fit_rate(h, err, last=3):

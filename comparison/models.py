@@ -47,16 +47,16 @@ def _empty(model, variant, name, mesh, overrides):
 def run_core(name, mesh, overrides=None, steps=10, element="default", cap=None, tangent_check=False):
     """core_se3 run of a catalogue case; ConvergenceError -> status 'failed: ...' with the
     steps that converged kept."""
-    from core_se3 import bench, cases
+    from core_se3 import catalogue
     from core_se3.errors import CoreSE3Error, ConvergenceError
     rec = _empty("core_se3", element, name, mesh, overrides)
-    case = cases.get_case(name)
-    p = bench.case_params(case, overrides)
+    case = catalogue.get_case(name)
+    p = catalogue.case_params(case, overrides)
     kw = dict(cap if cap is not None else (SEED_CAP if element == "seed" else {}))
     t0 = time.perf_counter()
     res = None
     try:
-        prob = bench.build_problem(case, p, tuple(mesh), element)
+        prob = catalogue.build_problem(case, p, tuple(mesh), element)
         t_setup = time.perf_counter() - t0
         rec["n_dofs"] = 6 * prob.mesh.n_nodes
         try:
@@ -90,13 +90,13 @@ def run_core(name, mesh, overrides=None, steps=10, element="default", cap=None, 
             nodes = prob.mesh.node_set(rot[0].edge)
             point = np.array([prob.mesh.X[nodes, i].mean() if c is None else c
                               for i, c in enumerate(rot[0].point)])
-            _, M = bench.edge_wrench(prob, st.g, rot[0].edge, point)
+            _, M = catalogue.edge_wrench(prob, st.g, rot[0].edge, point)
             torque.append(float(M @ ax))
     rec["torque"] = torque
     rec["attempts"] = len(res.log)                      # Newton solves incl. failed (cut back) ones
     rec["iterations_all"] = int(sum(l["iterations"] for l in res.log))
     if tangent_check and len(res.steps) > 1:
-        from core_se3.verify import tangent_fd_check
+        from core_se3.model.verify import tangent_fd_check
         rec["tangent_check"] = float(tangent_fd_check(prob, res.final.g, res.final.load_factor)[0])
     return rec
 

@@ -57,7 +57,7 @@ def _reference(name, ov, steps):
 
 
 def _error(name, ov, steps, rec, ref):
-    from core_se3.cases import get_case
+    from core_se3.catalogue import get_case
     if rec["status"] != "ok" or len(rec["u"]) != steps:
         return None
     scale = float(np.linalg.norm(ref, axis=1).max())

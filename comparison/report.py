@@ -15,7 +15,7 @@ import numpy as np
 
 from . import agreement, common, locking, pareto, stress
 from .models import fenicsx_available
-from .tables import fmt, markdown_table, pct
+from .tables import markdown_table, pct
 
 __all__ = ["build", "environment"]
 

@@ -1,11 +1,42 @@
-"""core_se3: geometrically exact Cosserat shells on SE(3)."""
-from . import se3, mesh, fields
-from .errors import (ConvergenceError, CoreSE3Error, ElementTooDistortedError, LoadError,
-                     MaterialError, MeshError, ScenarioError, SingularSystemError, SupportError)
-from .material import Material
-from .problem import Problem
+"""core_se3: geometrically exact Cosserat shells on SE(3).
 
-__all__ = ["se3", "mesh", "fields", "Material", "Problem", "CoreSE3Error", "ConvergenceError",
-           "SingularSystemError", "MaterialError", "MeshError", "LoadError", "SupportError",
-           "ElementTooDistortedError", "ScenarioError"]
-__version__ = "0.1.0"
+Every node of the mid-surface carries a frame g = (R, phi) in SE(3); strains are left-trivialised
+twists; the 4-node quad is solved by Newton with exponential updates g <- g exp(eta).  The
+package is a stack of layers that import only downward (docs/ARCHITECTURE.md):
+
+    lie -> mesh -> fem -> assembly -> model -> results -> solvers -> io -> scenario -> catalogue -> cli
+
+Example (a strip rolled into a full circle by an end moment M = 2 pi EI / L)
+-------
+>>> import numpy as np
+>>> import core_se3 as cs
+>>> p = cs.Problem(cs.mesh.rectangle(10.0, 1.0, 10, 1), cs.Material(E=1.2e7, nu=0.0, h=0.1))
+>>> p.clamp("x0"); p.add_probe("tip", "x1")
+>>> p.add_edge_moment("x1", (0.0, -2 * np.pi * 1.2e7 * 0.1 ** 3 / 12 / 10.0, 0.0))
+>>> tip = p.solve(steps=40).final.probes["tip"]
+>>> (tip["u"].round(9) + 0.0).tolist(), round(float(np.linalg.norm(tip["w"])), 9)     # back at the clamp
+([-10.0, 0.0, 0.0], 6.283185307)
+"""
+from . import lie, mesh
+from . import fem, model, results, solvers  # noqa: F401  (solvers registers Problem.solve's controls)
+from . import io, scenario, catalogue  # noqa: F401
+from .errors import (CheckpointError, ConvergenceError, CoreSE3Error, ElementTooDistortedError, LoadError,
+                     MaterialError, MeshError, OptionError, ScenarioError, SingularSystemError, SupportError)
+from .fem import Element, Material, RegionMaterial, register_element
+from .model import (Field, Load, LoadKind, Param, Problem, register_field, register_load)
+from .model import fields
+from .results import Result, StepResult
+from .scenario import Scenario
+from .solvers import (ArcLengthOptions, NewtonOptions, arc_length, displacement_control,
+                      newton_solve)
+
+load_scenario = scenario.load
+
+__all__ = ["lie", "mesh", "fem", "model", "fields", "results", "solvers", "io", "scenario", "catalogue",
+           "Problem", "Material", "RegionMaterial", "Result", "StepResult", "Scenario", "load_scenario",
+           "newton_solve", "arc_length", "displacement_control", "NewtonOptions", "ArcLengthOptions",
+           "Element", "Load", "LoadKind", "Param", "Field", "register_element", "register_load",
+           "register_field", "CoreSE3Error", "ConvergenceError", "SingularSystemError", "MaterialError",
+           "MeshError", "LoadError", "SupportError", "ElementTooDistortedError", "ScenarioError",
+           "CheckpointError", "OptionError"]
+__version__ = "0.2.0"

@@ -21,7 +21,18 @@ def _pairs(nodes_a, nodes_b):
 
 
 class Assembler:
-    """Assembles K_ff (CSR) and r_f on the free dofs ``free`` (boolean mask of length 6n)."""
+    """Assembles K_ff (CSR) and r_f on the free dofs ``free`` (boolean mask of length 6n).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import mesh
+    >>> m = mesh.rectangle(1.0, 1.0, 1, 1)
+    >>> asm = Assembler(m, np.ones(6 * m.n_nodes, bool))
+    >>> K = asm.matrix(None, None, np.broadcast_to(np.eye(6), (4, 6, 6)))
+    >>> K.shape, float(K.diagonal().sum())
+    ((24, 24), 24.0)
+    """
 
     def __init__(self, mesh, free):
         n = mesh.n_nodes
@@ -59,12 +70,14 @@ class Assembler:
         self.indptr = np.concatenate([[0], np.cumsum(np.bincount(red[rows[keep]], minlength=self.nfree))]).astype(np.int32)
         self.nnz = len(self.take)
 
-    def matrix(self, *blocks):
-        """CSR K_ff from the element (m,4,4,6,6), edge (E,2,2,6,6) and nodal (n,6,6) blocks."""
+    def matrix(self, element_blocks=None, edge_blocks=None, node_blocks=None):
+        """CSR K_ff from the element (m,4,4,6,6), edge (E,2,2,6,6) and nodal (n,6,6) blocks
+        (None: no blocks of that shape)."""
         nb36 = self.nblocks * 36
         acc = np.zeros(nb36)
-        for slot, b in zip(self.slots, blocks):
-            acc += np.bincount(slot, weights=np.ascontiguousarray(b).ravel(), minlength=nb36)
+        for slot, b in zip(self.slots, (element_blocks, edge_blocks, node_blocks)):
+            if b is not None:
+                acc += np.bincount(slot, weights=np.ascontiguousarray(b).ravel(), minlength=nb36)
         return sp.csr_matrix((acc[self.take], self.indices, self.indptr), shape=(self.nfree, self.nfree))
 
     def vector(self, r):

@@ -1,14 +1,18 @@
-"""Command line: ``core-se3 bench list``, ``core-se3 bench run NAME [options]`` and
-``core-se3 run SCENARIO.toml [--out DIR] [--resume]`` (scenario files, see docs/SCENARIOS.md)."""
+"""Command line (the top layer): ``core-se3 bench list``, ``core-se3 bench run NAME [options]`` and
+``core-se3 run SCENARIO.toml [--out DIR] [--resume]`` (scenario files, see docs/SCENARIOS.md).
+
+``-v`` shows the solvers' per-step log (``logging`` at INFO on stderr)."""
 from __future__ import annotations
 
 import argparse
+import logging
 import os
 import sys
 
 import numpy as np
 
 from .errors import ConvergenceError, CoreSE3Error
+from .fem import ELEMENTS
 
 
 def _parse_mesh(s):
@@ -33,8 +37,10 @@ def _parse_set(items):
 
 
 def _print_doc(doc):
+    m = doc["mesh"]
+    shape = f"{m['nx']}x{m['ny']}" if m["nx"] is not None else f"{m['n_elements']} elements"
     print(f"case {doc['case']}  model {doc['model']}  element {doc['variant']}  "
-          f"mesh {doc['mesh']['nx']}x{doc['mesh']['ny']} ({doc['mesh']['n_dofs']} dofs)")
+          f"mesh {shape} ({m['n_dofs']} dofs)")
     print("params: " + ", ".join(f"{k}={v['value']:g} [{v['unit']}]" for k, v in doc["params"].items()))
     ref = doc["reference"]
     print(f"{'load':>12} {'ux':>12} {'uy':>12} {'uz':>12} {'angle':>9} {'it':>3} {'residual':>9}"
@@ -59,23 +65,39 @@ def _print_doc(doc):
     print(f"reactions balance the applied loads to {max(s['balance_error'] for s in doc['steps']):.1e}")
 
 
+def _plot_generic(case, p, doc, path, name):
+    from .catalogue import reference_for
+    from .io import plot_load_deflection
+    loads = np.array([s["load"]["value"] for s in doc["steps"]])
+    u = np.array([s["probes"]["tip"]["u"] for s in doc["steps"]])
+    disp = {"ux": u[:, 0], "uy": u[:, 1], "uz": u[:, 2]}
+    reference = None
+    rr = reference_for(case, p)
+    if rr is not None:
+        entry, block, r = rr
+        # reference load axis -> case load axis
+        lmax = loads.max() if loads.max() > 0 else loads.min()
+        Lc = r["load"] / case.reference.load_to_ref(p, 1.0)
+        sel = (Lc >= min(0, lmax) - 1e-12) & (Lc <= max(0, lmax) + 1e-12)
+        vkey = "uy" if case.extra.get("plane") == "xy" else "uz"
+        reference = {"ux": (Lc[sel], r["u"][sel]), vkey: (Lc[sel], r["v"][sel])}
+    shape = f"{doc['mesh']['nx']}x{doc['mesh']['ny']}"
+    plot_load_deflection(path, loads, disp, reference=reference, xlabel="tip displacement [length]",
+                         ylabel=f"{doc['steps'][-1]['load']['name']} [{doc['steps'][-1]['load']['unit']}]",
+                         title=f"{name} ({doc['variant']}, {shape})")
+
+
 def bench_run(args):
-    from .bench import run_case
-    from .cases import get_case
+    from .catalogue import case_params, family_of, get_case, run_case
     from .results import write_json
-    case = get_case(args.name)
     try:
+        case = get_case(args.name)
         doc, res, prob = run_case(args.name, mesh=args.mesh, overrides=_parse_set(args.set),
-                                  steps=args.steps, element=args.element, linear_solver=args.solver,
-                                  verbose=args.verbose)
-    except ConvergenceError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
+                                  steps=args.steps, element=args.element, linear_solver=args.solver)
     except (CoreSE3Error, KeyError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     _print_doc(doc)
-    from .bench import family_of
     fam = family_of(case)
     if fam is not None and fam.report is not None:
         for line in fam.report(doc):
@@ -86,41 +108,18 @@ def bench_run(args):
         print(f"wrote {args.json}")
     if args.vtu:
         from .io import write_series
-        from .runner import point_fields
-        extra = None
-        if hasattr(prob, "output_fields"):
-            extra = [point_fields(prob, s.g, s.load_factor) for s in res.steps]
+        from .scenario import point_fields
+        extra = [point_fields(prob, s.g, s.load_factor) for s in res.steps]
         paths = write_series(args.vtu, prob.mesh.X, prob.mesh.quads, prob.mesh.g0,
                              [s.g for s in res.steps], [s.load_factor for s in res.steps],
                              point_data_per_step=extra)
         print(f"wrote {len(paths) - 1} VTU files and {paths[-1]}")
-    if args.plot and fam is not None and fam.plot is not None:
-        from .bench import case_params
-        fam.plot(case, case_params(case, _parse_set(args.set)), doc, res, args.plot)
-        print(f"wrote {args.plot}")
-    elif args.plot:
-        from .bench import reference_for, case_params
-        from .io import plot_load_deflection
-        loads = np.array([s["load"]["value"] for s in doc["steps"]])
-        u = np.array([s["probes"]["tip"]["u"] for s in doc["steps"]])
-        disp = {"ux": u[:, 0], "uy": u[:, 1], "uz": u[:, 2]}
-        reference = None
+    if args.plot:
         p = case_params(case, _parse_set(args.set))
-        rr = reference_for(case, p)
-        if rr is not None:
-            entry, block, r = rr
-            # reference load axis -> case load axis
-            lmax = loads.max() if loads.max() > 0 else loads.min()
-            L = r["load"]
-            scale = case.reference.load_to_ref(p, 1.0)
-            Lc = L / scale
-            sel = (Lc >= min(0, lmax) - 1e-12) & (Lc <= max(0, lmax) + 1e-12)
-            vkey = "uy" if case.extra.get("plane") == "xy" else "uz"
-            reference = {"ux": (Lc[sel], r["u"][sel]), vkey: (Lc[sel], r["v"][sel])}
-        plot_load_deflection(args.plot, loads, disp, reference=reference,
-                             xlabel="tip displacement [length]",
-                             ylabel=f"{doc['steps'][-1]['load']['name']} [{doc['steps'][-1]['load']['unit']}]",
-                             title=f"{args.name} ({doc['variant']}, {doc['mesh']['nx']}x{doc['mesh']['ny']})")
+        if fam is not None and fam.plot is not None:
+            fam.plot(case, p, doc, res, args.plot)
+        else:
+            _plot_generic(case, p, doc, args.plot, args.name)
         print(f"wrote {args.plot}")
     return 0
 
@@ -128,7 +127,6 @@ def bench_run(args):
 def scenario_run(args):
     """``core-se3 run``: validate the scenario, solve it step by step, write its outputs."""
     from . import scenario
-    from .runner import run
     try:
         scn = scenario.load(args.scenario)
     except CoreSE3Error as exc:
@@ -141,8 +139,7 @@ def scenario_run(args):
         return 0
     progress = True if args.progress else (False if args.quiet else None)
     try:
-        res = run(scn, out=args.out, resume=args.resume, progress=progress, force=args.force,
-                  verbose=args.verbose)
+        res = scenario.run(scn, out=args.out, resume=args.resume, progress=progress, force=args.force)
     except ConvergenceError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 3
@@ -176,12 +173,12 @@ def main(argv=None):
     run.add_argument("--mesh", type=_parse_mesh, default=None, help="NXxNY, e.g. 16x1")
     run.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a case parameter")
     run.add_argument("--steps", type=int, default=None)
-    run.add_argument("--element", choices=["default", "seed"], default="default")
+    run.add_argument("--element", choices=sorted(ELEMENTS), default="default")
     run.add_argument("--solver", choices=["auto", "mumps", "superlu"], default="auto")
     run.add_argument("--json", default=None)
     run.add_argument("--vtu", default=None, help="directory for VTU files and series.pvd")
     run.add_argument("--plot", default=None, help="PNG load-deflection plot")
-    run.add_argument("-v", "--verbose", action="store_true")
+    run.add_argument("-v", "--verbose", action="store_true", help="log every Newton (sub-)step")
     srun = sub.add_parser("run", help="run a scenario file (TOML; schema in docs/SCENARIOS.md)")
     srun.add_argument("scenario", help="SCENARIO.toml")
     srun.add_argument("--out", default=None, help="output directory (default [output] dir or out/NAME)")
@@ -190,12 +187,15 @@ def main(argv=None):
     srun.add_argument("--check", action="store_true", help="only validate the scenario")
     srun.add_argument("--progress", action="store_true", help="progress bar even when not on a terminal")
     srun.add_argument("-q", "--quiet", action="store_true", help="no progress bar, no summary")
-    srun.add_argument("-v", "--verbose", action="store_true", help="print every Newton (sub-)step")
+    srun.add_argument("-v", "--verbose", action="store_true", help="log every Newton (sub-)step")
     args = ap.parse_args(argv)
+    if getattr(args, "verbose", False):
+        logging.basicConfig(level=logging.INFO, format="%(message)s", stream=sys.stderr)
+        logging.getLogger("core_se3").setLevel(logging.INFO)
     if args.cmd == "run":
         return scenario_run(args)
     if args.cmd == "bench" and args.bcmd == "list":
-        from .cases import CASES
+        from .catalogue import CASES
         for c in CASES.values():
             print(f"{c.name:<24} {c.description}")
         return 0

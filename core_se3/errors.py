@@ -1,5 +1,39 @@
-"""Exception hierarchy: every failure names its cause; nothing fails silently."""
+"""Exception hierarchy: every failure names its cause and the likely fix; nothing fails silently.
+
+Every exception derives from :class:`CoreSE3Error`; the ones caused by invalid input also derive
+from :class:`ValueError`.  :func:`did_you_mean` is the one helper that turns a misspelt name into
+a suggestion, used by every message that rejects a name (keys, regions, edges, cases, elements,
+fields, load kinds).
+
+Example
+-------
+>>> from core_se3.errors import did_you_mean
+>>> did_you_mean("plam", ["palm", "tips"])
+"; did you mean 'palm'?"
+"""
 from __future__ import annotations
+
+import difflib
+
+__all__ = ["CoreSE3Error", "MaterialError", "MeshError", "LoadError", "SupportError",
+           "SingularSystemError", "ConvergenceError", "ElementTooDistortedError", "ScenarioError",
+           "CheckpointError", "OptionError", "did_you_mean"]
+
+
+def did_you_mean(name, choices):
+    """``"; did you mean 'X'?"`` for the closest of ``choices`` to ``name``, else ``""``.
+
+    Case differences count as close (``br`` suggests ``Br``).
+    """
+    choices = [str(c) for c in choices]
+    name = str(name)
+    folded = {c.lower(): c for c in choices}
+    if name.lower() in folded and folded[name.lower()] != name:
+        return f"; did you mean {folded[name.lower()]!r}?"
+    near = difflib.get_close_matches(name, choices, n=1)
+    if not near:
+        near = [folded[m] for m in difflib.get_close_matches(name.lower(), list(folded), n=1)]
+    return f"; did you mean {near[0]!r}?" if near else ""
 
 
 class CoreSE3Error(Exception):
@@ -20,6 +54,11 @@ class LoadError(CoreSE3Error, ValueError):
 
 class SupportError(CoreSE3Error, ValueError):
     """Invalid support specification (unknown edge or node, conflicting constraints)."""
+
+
+class OptionError(CoreSE3Error, ValueError):
+    """An unknown name (element, load kind, field, linear solver, ...) or an invalid solver
+    option (steps < 1, non-finite load factors, ...)."""
 
 
 class SingularSystemError(CoreSE3Error):

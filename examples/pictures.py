@@ -10,7 +10,8 @@ import sys
 
 from PIL import Image
 
-from core_se3 import runner, scenario
+from core_se3 import scenario
+from core_se3.scenario import runner
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 PICTURES = os.path.join(os.path.dirname(HERE), "docs", "pictures")

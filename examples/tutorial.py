@@ -10,9 +10,10 @@ import sys
 
 import numpy as np
 
-from core_se3 import Material, Problem, mesh, runner, scenario
+from core_se3 import Material, Problem, mesh, scenario
+from core_se3.scenario import runner
 from core_se3.errors import ScenarioError
-from core_se3.references import elastica_entry
+from core_se3.catalogue.references import elastica_entry
 
 OUT = sys.argv[1] if len(sys.argv) > 1 else os.path.join("out", "tutorial")
 
@@ -135,7 +136,7 @@ assert abs(M1[1] - np.cross(lever, [0, 0, 4.0])[1]) < 5e-3 * abs(M1[1])
 # Hard-magnetic material (residual flux density Br [T], lab vector in the reference
 # configuration) in an applied field (core_se3.fields).  Units N, mm, MPa, T, so mu0 = 4 pi
 # 1e-7 * 1e6.  Zhao et al. 2019's beam in a perpendicular field of 5 mT bends toward the field.
-from core_se3.fields import MU0, UniformField  # noqa: E402
+from core_se3.model.fields import MU0, UniformField  # noqa: E402
 
 beam = Problem(mesh.rectangle(17.2, 5.0, 10, 1), Material(E=0.8969, nu=0.0, h=0.42))
 beam.clamp("x0")

@@ -1,7 +1,7 @@
 """fenicsx_ref: an independent UFL/DOLFINx total-Lagrangian Naghdi director shell.
 
 It shares nothing with ``core_se3`` but the declarative case definitions
-(``core_se3.cases``) and the reference data.  DOLFINx is imported lazily, on the first
+(``core_se3.catalogue``) and the reference data.  DOLFINx is imported lazily, on the first
 ``run_case`` call, so that ``python -m fenicsx_ref bench list`` works without it.
 
     >>> from fenicsx_ref import run_case

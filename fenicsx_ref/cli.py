@@ -43,7 +43,7 @@ def main(argv=None):
     run.add_argument("--json", default=None, metavar="FILE", help="write the result JSON here ('-' = stdout)")
     a = ap.parse_args(argv)
 
-    from core_se3.cases import list_cases
+    from core_se3.catalogue import list_cases
     if a.bcmd == "list":
         for name, desc in list_cases():
             print(f"{name:24s} {desc}")
@@ -56,7 +56,7 @@ def main(argv=None):
     r = run_case(a.name, mesh=a.mesh, overrides=_parse_set(a.set), steps=a.steps,
                  integration=a.integration, shear_factor=a.shear_factor, cell=a.cell)
     if a.name == "torsion":  # the small-twist torsion constant, as core_se3 reports it
-        from core_se3.references import elastica_entry
+        from core_se3.catalogue.references import elastica_entry
         from .solver import torsion_constant
         d = torsion_constant(mesh=a.mesh, integration=a.integration, shear_factor=a.shear_factor,
                              cell=a.cell, overrides=_parse_set(a.set))

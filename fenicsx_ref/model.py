@@ -12,8 +12,6 @@ map is singular at |theta| = pi, where every direction of theta gives d = -d0).
 """
 from __future__ import annotations
 
-import os
-from math import pi
 
 import numpy as np
 import ufl

@@ -6,7 +6,7 @@ from math import pi
 
 import numpy as np
 
-from core_se3.cases import get_case
+from core_se3.catalogue import get_case
 
 from .reference import (apply_variant, case_domain, case_params, literature_error, reference_error,
                         reference_load_factors)

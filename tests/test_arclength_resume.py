@@ -17,9 +17,10 @@ import time
 import numpy as np
 import pytest
 
-from core_se3 import continuation as C, runner, scenario
-from core_se3.checkpoint import Checkpoint
-from core_se3.errors import CheckpointError
+from core_se3 import scenario, solvers as C
+from core_se3.scenario import runner
+from core_se3.io import Checkpoint
+from core_se3.errors import CheckpointError, ConvergenceError
 
 from test_cli_run import ARCH, assert_outputs_intact, pvd_files, with_, write
 from test_continuation import cubic, pitchfork
@@ -39,10 +40,10 @@ def test_path_follow_restarts_from_every_point_bit_for_bit(case):
     pitchfork and the Riks normal plane with a landing on control_end of the cubic."""
     if case == "pitchfork-switch":
         make = pitchfork
-        kw = dict(constraint="crisfield", lam_end=1.6, dlam0=0.15, branch_switch=True)
+        kw = dict(method="crisfield", lam_end=1.6, dlam0=0.15, branch_switch=True)
     else:
         make = lambda: cubic()[0]
-        kw = dict(constraint="riks", lam_end=None, dlam0=0.02, psi=1.0,
+        kw = dict(method="riks", lam_end=None, dlam0=0.02, psi=1.0,
                   control=(lambda u: u[0], lambda u: np.array([1.0])), control_end=3.0)
     pts, crit, snaps = _snapshots(make, **kw)
     assert len(snaps) == len(pts) and [s.step for s in snaps] == list(range(len(pts)))
@@ -152,7 +153,7 @@ def test_path_stopped_by_max_steps_resumes_with_a_larger_budget(tmp_path):
     n = len(ref.doc["steps"]) - 1
     out = str(tmp_path / "short")
     short = scenario.load(write(tmp_path, with_(ARCH, solver={"max_steps": 6}), "short.toml"))
-    with pytest.raises(C.ConvergenceError, match="max_steps"):
+    with pytest.raises(ConvergenceError, match="max_steps"):
         runner.run(short, out=out)
     assert Checkpoint(out).load()["step"] == 6 < n
     res = runner.run(scenario.load(write(tmp_path, with_(ARCH, solver={"max_steps": 200}), "long.toml")),

@@ -1,11 +1,11 @@
 """Catalogue cases against their references (issue 2 acceptance), through the same runner the
-CLI uses.  Errors use the project's measure (core_se3/bench.py): max over the path of the
+CLI uses.  Errors use the project's measure (core_se3/catalogue.py): max over the path of the
 distance between computed and reference tip displacement / largest reference displacement.
 References: core_se3/data/elastica.json, entries named in each case."""
 import numpy as np
 import pytest
 
-from core_se3.bench import run_case
+from core_se3.catalogue import run_case
 
 
 @pytest.mark.parametrize("follower", [0.0, 1.0])
@@ -45,10 +45,10 @@ def test_torsion_constant_between_mindlin_and_thin_plate():
     # The Cosserat law penalises the skew curvature and the rigid end edge restrains warping,
     # both stiffening (see README); measured 7.62e-5 on 20x6.  A locking or mis-scaled twist
     # law would leave this bracket.
-    from core_se3 import bench, cases
-    from core_se3.references import elastica_entry
+    from core_se3 import catalogue
+    from core_se3.catalogue.references import elastica_entry
     e = elastica_entry("5_strip_torsion_seed_strip")["params"]
-    J = bench.torsion_constant(bench.case_params(cases.get_case("torsion")), (20, 6))
+    J = catalogue.torsion_constant(catalogue.case_params(catalogue.get_case("torsion")), (20, 6))
     assert e["J_mindlin_ks=1"] < J < e["J_kirchhoff_plate=wh^3/3"]
 
 
@@ -59,7 +59,8 @@ def test_inplane_rollup_small_k_circle():
     # seed's value doubles the stiffness).  drilling = 0 leaves a seventh zero mode (checked
     # below), so the comparison uses 1 % of the seed's modulus: expected deviation <~ 1 %
     # (measured 0.48 % on 40x4 at k = 0.25); bar 1 % as the issue.
-    from core_se3 import Material, Problem, mesh, verify
+    from core_se3 import Material, Problem, mesh
+    from core_se3.model import verify
     doc, _, _ = run_case("inplane-rollup", mesh=(40, 4), steps=5, overrides=dict(k=0.25, drilling=0.01))
     assert doc["reference"]["error"] < 1e-2
     p = Problem(mesh.rectangle(1.0, 1.0, 2, 2), Material(1200.0, 0.0, 1.0, drilling=0.0))

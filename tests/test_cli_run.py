@@ -16,8 +16,9 @@ import meshio
 import numpy as np
 import pytest
 
-from core_se3 import cli, runner, scenario
-from core_se3.checkpoint import Checkpoint
+from core_se3 import cli, scenario
+from core_se3.scenario import runner
+from core_se3.io import Checkpoint
 from core_se3.errors import CheckpointError, ConvergenceError
 
 STRIP = {

@@ -61,7 +61,7 @@ def test_time_to_error_measured_extrapolated_and_floor():
 
 def test_mindlin_strip_J_matches_the_tabulated_strip():
     """core_se3/data/elastica.json, 5_strip_torsion_seed_strip: w = 0.25, h = 0.1."""
-    from core_se3.references import elastica_entry
+    from core_se3.catalogue.references import elastica_entry
     p = elastica_entry("5_strip_torsion_seed_strip")["params"]
     assert mindlin_strip_J(p["w"], p["h"]) == pytest.approx(p["J_mindlin_ks=1"], rel=1e-6)
     assert mindlin_strip_J(p["w"], p["h"], 5 / 6) == pytest.approx(p["J_mindlin_ks=5/6"], rel=1e-6)
@@ -72,7 +72,7 @@ def test_mindlin_strip_J_matches_the_tabulated_strip():
 
 def test_circle_tip_matches_rollup_entry():
     """core_se3/data/elastica.json, 2_pure_bending_rollup_out_of_plane (exact circle)."""
-    from core_se3.references import elastica_entry
+    from core_se3.catalogue.references import elastica_entry
     e = elastica_entry("2_pure_bending_rollup_out_of_plane")
     L = 10.0
     EI = 1.2e7 * 1.0 * 0.1 ** 3 / 12
@@ -157,7 +157,7 @@ def test_pareto_exact_model_has_no_rate():
 def test_arc_tip_matches_half_cylinder_entry_and_reduces_to_circle():
     """core_se3/data/elastica.json, 4_arch_halfcircle_end_moment_R10over2pi (arc length 5)."""
     from comparison.metrics import arc_tip
-    from core_se3.references import elastica_entry
+    from core_se3.catalogue.references import elastica_entry
     e = elastica_entry("4_arch_halfcircle_end_moment_R10over2pi")
     p = e["params"]
     u, v = arc_tip(p["L_arc"], 1.0 / p["R"], np.asarray(e["load"]) / p["EI"])

@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from core_se3 import bench, continuation as C
-from core_se3.cases import get_case
+from core_se3 import catalogue, solvers as C
+from core_se3.catalogue import get_case
 from core_se3.errors import ConvergenceError, CoreSE3Error
 
 LAM_LIMIT = 1 / (3 * np.sqrt(3))
@@ -112,7 +112,7 @@ def test_inertia_counts_negative_eigenvalues():
 @pytest.fixture(scope="module")
 def roof8():
     case = get_case("sze-hinged-roof")
-    return case, bench.case_params(case)
+    return case, catalogue.case_params(case)
 
 
 def test_roof_arc_length_equals_displacement_control(roof8):
@@ -121,14 +121,14 @@ def test_roof_arc_length_equals_displacement_control(roof8):
     equations: bar 1e-6), and both find the same two limit points (within 1e-2 in P/P_max:
     different brackets)."""
     case, p = roof8
-    prob = bench.build_problem(case, p, (8, 8))
+    prob = catalogue.build_problem(case, p, (8, 8))
     node, d = prob.control
     arc = C.arc_length(prob, lam_end=None, dlam0=0.05, stop_at=(node, d, 28.0))
     w = np.array([-s.probes["C"]["u"][2] for s in arc.steps])
     lam = np.array([s.load_factor for s in arc.steps])
     assert np.all(np.diff(w) > 0) and abs(w[-1] - 28.0) < 1e-9
     assert lam[w < 12].max() > 0.74 and lam[(w > 12) & (w < 22)].min() < 0.2   # it snapped through
-    prob2 = bench.build_problem(case, p, (8, 8))
+    prob2 = catalogue.build_problem(case, p, (8, 8))
     dc = C.displacement_control(prob2, node, d, w[1:])
     w2 = np.array([-s.probes["C"]["u"][2] for s in dc.steps[1:]])
     lam2 = np.array([s.load_factor for s in dc.steps[1:]])
@@ -148,7 +148,7 @@ def test_roof_bordered_newton_converges_quadratically(roof8):
     10.2).  A linearly converging corrector (inconsistent tangent or load direction) with even a
     0.01 rate would give r_{k+1} = 1e-7 from 1e-5, 100x over this bar."""
     case, p = roof8
-    prob = bench.build_problem(case, p, (8, 8))
+    prob = catalogue.build_problem(case, p, (8, 8))
     node, d = prob.control
     res = C.arc_length(prob, lam_end=None, dlam0=0.05, stop_at=(node, d, 29.374))
     checked = 0
@@ -167,7 +167,7 @@ def test_load_control_past_limit_point_fails_suggesting_arc_length(roof8):
     P/P_max = 0.742 (on to the far stable branch): newton_solve stops with a ConvergenceError
     that names the limit point and suggests arc length, keeping the steps up to 0.7."""
     case, p = roof8
-    prob = bench.build_problem(case, p, (8, 8))
+    prob = catalogue.build_problem(case, p, (8, 8))
     with pytest.raises(ConvergenceError) as exc:
         prob.solve(steps=20)
     msg = str(exc.value)
@@ -181,13 +181,13 @@ def test_bad_input(roof8):
     a step that cannot converge (max_iter = 0) is rejected ds/2 at a time and the error keeps
     the converged steps (the initial state)."""
     case, p = roof8
-    prob = bench.build_problem(case, p, (4, 4), element="seed")
+    prob = catalogue.build_problem(case, p, (4, 4), element="seed")
     with pytest.raises(CoreSE3Error, match="path-independent"):
         C.arc_length(prob)
-    prob = bench.build_problem(get_case("torsion"), bench.case_params(get_case("torsion")), (4, 2))
+    prob = catalogue.build_problem(get_case("torsion"), catalogue.case_params(get_case("torsion")), (4, 2))
     with pytest.raises(CoreSE3Error, match="prescribed motion"):
         C.arc_length(prob)
-    prob = bench.build_problem(case, p, (4, 4))
+    prob = catalogue.build_problem(case, p, (4, 4))
     with pytest.raises(ConvergenceError) as exc:
         C.arc_length(prob, max_iter=0)
     assert "rejections" in str(exc.value)
@@ -200,7 +200,7 @@ def test_limit_point_hint_on_the_failure_path(roof8):
     S_p = q.t_0 / q.t is below 0.3 and the hint suggests arc length; at -W_C = 2 (S_p ~ 0.9)
     there is no hint."""
     case, p = roof8
-    prob = bench.build_problem(case, p, (8, 8))
+    prob = catalogue.build_problem(case, p, (8, 8))
     node, d = prob.control
     dc = C.displacement_control(prob, node, d, [2.0, 10.0])
     near, early = dc.steps[2], dc.steps[1]

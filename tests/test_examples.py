@@ -16,9 +16,9 @@ import xml.etree.ElementTree as ET
 
 import meshio
 import numpy as np
-import pytest
 
-from core_se3 import runner, scenario
+from core_se3 import scenario
+from core_se3.scenario import runner
 
 EXAMPLES = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "examples")
 
@@ -66,7 +66,7 @@ def test_gripper(tmp_path):
     np.testing.assert_allclose([upy[1], -upy[0], upy[2]], upx, atol=1e-9 * np.abs(upx).max())
     assert upx[0] < -10 and upx[2] > 10                       # the fingers close (inward and up)
     # the same model from the catalogue (Python API, bench_magnetic.gripper_mesh): same numbers
-    from core_se3.bench import run_case
+    from core_se3.catalogue import run_case
     doc, _, _ = run_case("magnetic-gripper", mesh=(8, 3), steps=3)
     np.testing.assert_allclose(doc["steps"][-1]["probes"]["tip"]["u"], upx, rtol=1e-9, atol=1e-9)
     assert os.path.getsize(os.path.join(res.out, "shell.png")) > 1000
@@ -137,11 +137,11 @@ def test_snap_roof_traces_both_limit_points_as_the_catalogue_case(tmp_path):
     0.743563 and 0.170464 in both, agreement to round-off; the table's extremes are 0.7421 and
     0.1729, the catalogue's 16x16 quarter meets its 3 % curve bar); the path falls between them
     (snap-through) and ends at the requested load factor 1 on the stiff far branch."""
-    from core_se3 import bench
+    from core_se3 import catalogue
     res = runner.run(example("snap-roof", output={"vtu": False}), out=str(tmp_path / "roof"))
     crit = [c for c in res.doc["critical_points"] if c["kind"] == "limit"]
     assert len(crit) == 2
-    doc, _, _ = bench.run_case("sze-hinged-roof", mesh=(8, 8))
+    doc, _, _ = catalogue.run_case("sze-hinged-roof", mesh=(8, 8))
     ref = [c["load_factor"] for c in doc["critical_points"] if c["kind"] == "limit"]
     assert np.allclose([c["load_factor"] for c in crit], ref, rtol=1e-6, atol=0), (crit, ref)
     lam = [s["load_factor"] for s in res.doc["steps"]]

@@ -21,12 +21,11 @@ max over the reference loads of |u - u_ref| / max |u_ref|):
     32x1    1000   4.75e-2     6.26e-6     0.9986 | 1.0000
 """
 import numpy as np
-import pytest
 
 import dolfinx  # noqa: F401  -- must fail (not skip) without DOLFINx
 import dolfinx.fem.petsc
 
-from core_se3.cases import beam_EI, get_case
+from core_se3.catalogue import beam_EI, get_case
 from fenicsx_ref import run_case
 from fenicsx_ref.reference import reference_entry
 

@@ -30,8 +30,8 @@ import numpy as np
 import dolfinx  # noqa: F401  -- must fail (not skip) without DOLFINx
 import dolfinx.fem.petsc
 
-from core_se3.cases import get_case
-from core_se3.references import elastica_entry
+from core_se3.catalogue import get_case
+from core_se3.catalogue.references import elastica_entry
 from fenicsx_ref import run_case
 from fenicsx_ref.solver import torsion_constant
 

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from core_se3.errors import LoadError
-from core_se3.fields import (DipoleField, GradientField, UniformField, UserField, check_field,
+from core_se3.model.fields import (DipoleField, GradientField, UniformField, UserField, check_field,
                              rotating_direction)
 
 RNG = np.random.default_rng(7)

@@ -1,7 +1,7 @@
 """Packaged reference data (core_se3/data): loading and parsing."""
 import pytest
 
-from core_se3 import references as refs
+from core_se3.catalogue import references as refs
 
 
 def test_elastica_kirchhoff_cantilever_entry_parsed():

@@ -282,7 +282,7 @@ def test_per_region_material_bending_exact(tmp_path):
     tip = scn.problem.solve(steps=2).final.probes["tip"]
     D1, D2 = 1.2e6 * 0.1 ** 3 / 12, 2.4e6 * 0.08 ** 3 / 12
     np.testing.assert_allclose(-tip["w"][1], M * (5.0 / D1 + 5.0 / D2), rtol=1e-9)
-    from core_se3.resultants import element_resultants
+    from core_se3.fem import element_resultants
     f = element_resultants(scn.problem.element, scn.problem.solve(steps=2).final.g)
     np.testing.assert_allclose(f["M1"][:, 1], -M, rtol=1e-8)          # the same moment in both
 
@@ -455,7 +455,7 @@ def test_scenario_problem_axial_stretch_exact(tmp_path):
 def test_resultants_exact_stretch_and_bending(tmp_path):
     """Stress resultants at element centres: N1 = F/w along the axis for an end force F;
     M1 = M/w for an end moment M (the bent circle has constant moment)."""
-    from core_se3.resultants import element_resultants
+    from core_se3.fem import element_resultants
     d = base()
     d["mesh"]["ny"] = 2
     d["loads"][0]["force"] = [1000.0, 0.0, 0.0]
@@ -481,7 +481,7 @@ def test_resultants_converge_to_cantilever_equilibrium_at_second_order(tmp_path)
     """Large-deflection cantilever, dead tip force P: the moment on the cut through the centre of
     the middle element must equal (phi_tip - phi_c) x P (statics of the outer part); the error of
     the element-centre resultant falls ~4x per mesh halving (measured 0.28 %, 0.068 %)."""
-    from core_se3.resultants import element_resultants
+    from core_se3.fem import element_resultants
     errs = []
     for nx in (6, 12):
         d = base()

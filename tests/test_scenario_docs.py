@@ -9,7 +9,8 @@ import tomllib
 import numpy as np
 import pytest
 
-from core_se3 import runner, scenario
+from core_se3 import scenario
+from core_se3.scenario import runner
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DOC = os.path.join(ROOT, "docs", "SCENARIOS.md")

@@ -5,10 +5,8 @@ ScenarioError; a scenario that validates then solves (one coarse step) or fails 
 CoreSE3Error (ConvergenceError, ...), never with an unrelated exception.
 """
 import copy
-import math
 
 import numpy as np
-import pytest
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 

@@ -8,13 +8,13 @@ import numpy as np
 import pytest
 from scipy.sparse.linalg import spsolve
 
-from core_se3 import se3, verify
+from core_se3 import lie
 from core_se3.errors import (ConvergenceError, CoreSE3Error, LoadError, MeshError,
                              SingularSystemError)
 from core_se3.mesh import Mesh, rectangle
-from core_se3.material import Material
-from core_se3.problem import Problem
-from core_se3.references import elastica_entry
+from core_se3.fem import Material
+from core_se3.model import Problem
+from core_se3.catalogue.references import elastica_entry
 
 L, WIDTH, H, E = 10.0, 1.0, 0.1, 1.2e6
 EI = E * WIDTH * H ** 3 / 12          # = 100
@@ -71,11 +71,11 @@ def _newton_history(problem, g, n_iter, perturb_tangent=1.0):
     fscale = np.linalg.norm(asm.vector(problem.external(g, 1.0, tangent=False)[0]))
     hist = []
     for _ in range(n_iter):
-        r = verify.residual(problem, g, 1.0, asm)
+        r = problem.residual(g, 1.0, asm)
         hist.append(np.linalg.norm(r) / fscale)
-        K = verify.tangent(problem, g, 1.0, asm) * perturb_tangent
+        K = problem.tangent(g, 1.0, asm) * perturb_tangent
         d = spsolve(K.tocsc(), -r)
-        g = g @ se3.exp(asm.scatter(d))
+        g = g @ lie.exp(asm.scatter(d))
     return np.array(hist)
 
 
@@ -114,12 +114,12 @@ def test_newton_converges_quadratically(cantilever_8_steps, amp, rot_only):
     g = cantilever_8_steps.final.g.copy()
     asm = p.assembler()
     fscale = np.linalg.norm(asm.vector(p.external(g, 1.0, tangent=False)[0]))
-    floor = 30 * np.linalg.norm(verify.residual(p, g, 1.0, asm)) / fscale
+    floor = 30 * np.linalg.norm(p.residual(g, 1.0, asm)) / fscale
     rng = np.random.default_rng(5)
     x = amp * rng.normal(size=(p.mesh.n_nodes, 6))
     if rot_only:
         x[:, :3] = 0.0
-    g_pert = g @ se3.exp(asm.scatter(asm.vector(x)))
+    g_pert = g @ lie.exp(asm.scatter(asm.vector(x)))
     hist = _newton_history(p, g_pert, 7)
     ok, n_above = _quadratic_pairs(hist, floor, QUAD_C)
     assert n_above >= 2, hist
@@ -142,7 +142,7 @@ def test_no_supports_raises_singular_system_error():
 
 
 def _mumps_param():
-    from core_se3.linalg import available_solvers
+    from core_se3.solvers.linalg import available_solvers
     return pytest.param("mumps", marks=pytest.mark.skipif("mumps" not in available_solvers(),
                                                           reason="petsc4py not installed"))
 
@@ -151,7 +151,7 @@ def test_auto_solver_picks_by_size():
     """``auto`` factors small tangents with SuperLU and, with petsc4py, large ones with MUMPS
     (linalg.AUTO_MUMPS_MIN); both give the same solution."""
     import scipy.sparse as sps
-    from core_se3.linalg import AUTO_MUMPS_MIN, AutoSolver, available_solvers, checked_solve
+    from core_se3.solvers.linalg import AUTO_MUMPS_MIN, AutoSolver, available_solvers, checked_solve
     auto = AutoSolver()
     n = AUTO_MUMPS_MIN + 10
     K = sps.diags([-1.0, 2.5, -1.0], [-1, 0, 1], shape=(n, n), format="csr")
@@ -244,7 +244,7 @@ def test_convergence_error_keeps_every_converged_step():
     assert [s.load_factor for s in res.steps] == [0.0, 0.5]
     g = res.final.g
     asm = p.assembler()
-    r = verify.residual(p, g, 0.5, asm)
+    r = p.residual(g, 0.5, asm)
     f = asm.vector(p.external(g, 0.5, tangent=False)[0])
     # converged to rtol 1e-12 of the scaled norms; the round-off floor here is ~1e-9 |f|
     assert np.linalg.norm(r) < 1e-7 * np.linalg.norm(f)
@@ -308,7 +308,7 @@ def test_a_prescribed_full_turn_in_one_step_is_stepped_not_aliased():
     the solver must not return the unloaded state (a silent wrong answer, found by the comparison
     stress study).  It cuts the step instead: the end state equals the one of 16 steps, and with
     no cut-backs allowed it fails with a message naming the prescribed turn."""
-    from core_se3.bench import run_case
+    from core_se3.catalogue import run_case
     one, _, _ = run_case("torsion", mesh=(10, 3), overrides=dict(angle=2 * np.pi), steps=1)
     many, _, _ = run_case("torsion", mesh=(10, 3), overrides=dict(angle=2 * np.pi), steps=16)
     u1, u16 = (np.array(d["steps"][-1]["probes"]["tip"]["u"]) for d in (one, many))
@@ -319,17 +319,15 @@ def test_a_prescribed_full_turn_in_one_step_is_stepped_not_aliased():
 
 
 def test_support_check_counts_lab_direction_springs():
-    """Supports carried by loads (lab_supports.LabSpring) enter the rigid-body check: springs on
+    """Supports carried by loads (model.supports.LabSpring) enter the rigid-body check: springs on
     all lab translations of the edge x0 leave the rotation about that edge free (named), a spring
     on the z translation of x1 closes it."""
-    from core_se3.lab_supports import add_lab_support
-    from core_se3.solver import check_supports
     p = Problem(rectangle(10.0, 1.0, 4, 1), Material(1.2e6, 0.0, 0.1))
-    add_lab_support(p, "x0", np.eye(3), 1e8)
+    p.add_lab_support("x0", np.eye(3), 1e8)
     with pytest.raises(SingularSystemError, match=r"rotation about \[0.0, -?1.0, 0.0\] through \[-?0.0, 0.0, 0.0\]"):
-        check_supports(p, p.mesh.g0)
-    add_lab_support(p, "x1", [[0.0, 0.0, 1.0]], 1e8)
-    check_supports(p, p.mesh.g0)
+        p.check_supports(p.mesh.g0)
+    p.add_lab_support("x1", [[0.0, 0.0, 1.0]], 1e8)
+    p.check_supports(p.mesh.g0)
 
 
 def test_explicit_load_factors_store_those_steps_and_reach_the_same_state(cantilever_8_steps):

@@ -16,15 +16,16 @@ P_max = 3000 of s3.8a; 3.43 % on 16x16, 7.55 % on 8x8).
 import numpy as np
 import pytest
 
-from core_se3 import bench
-from core_se3.bench_sze import curve_deviation, point_curve_distances, table_curves
-from core_se3.cases import get_case
-from core_se3.references import literature_entry
+from core_se3 import catalogue
+from core_se3.catalogue.family_sze import curve_deviation, table_curves
+from core_se3.catalogue.measures import point_curve_distances
+from core_se3.catalogue import get_case
+from core_se3.catalogue.references import literature_entry
 
 
 @pytest.fixture(scope="module")
 def roof127():
-    doc, res, prob = bench.run_case("sze-hinged-roof", mesh=(8, 8))
+    doc, res, prob = catalogue.run_case("sze-hinged-roof", mesh=(8, 8))
     return doc, res, prob
 
 
@@ -87,8 +88,8 @@ def test_quarter_model_equals_full_roof():
     case = get_case("sze-hinged-roof")
     w = []
     for full, mesh in ((0.0, (4, 4)), (1.0, (8, 8))):
-        p = bench.case_params(case, {"full": full})
-        prob = bench.build_problem(case, p, mesh)
+        p = catalogue.case_params(case, {"full": full})
+        prob = catalogue.build_problem(case, p, mesh)
         res = prob.solve(steps=3, lam_end=0.6)
         w.append(-res.final.probes["C"]["u"][2])
     assert w[0] > 5.0                                   # well into the nonlinear range
@@ -103,7 +104,7 @@ def test_hinged_roof_6p35_snap_back():
     and turns forward again at 14.451 (bars 3 %: measured 16.94 and 14.53 at the step points);
     the ratio of the two limit loads, -0.1288/0.1953 = -0.660 in the table, is also free of
     P_max (measured -0.651, bar 3 %)."""
-    doc, res, prob = bench.run_case("sze-hinged-roof-6.35", mesh=(8, 8))
+    doc, res, prob = catalogue.run_case("sze-hinged-roof-6.35", mesh=(8, 8))
     w = np.array([-s["probes"]["C"]["u"][2] for s in doc["steps"]])
     lam = np.array([s["load_factor"] for s in doc["steps"]])
     assert abs(w[-1] - 38.45) < 1e-8

@@ -16,10 +16,8 @@ The semi-cylinder's error falls as ~h^1.6..2 (stiffer coarse meshes: the end def
 2.1 % low on 16x16), so its coarse bar is 2.5 % on 16x16; the annulus meets the 2 %
 acceptance bar already on the coarse 6x30 mesh, which is its test bar.
 """
-import numpy as np
-import pytest
 
-from core_se3 import bench
+from core_se3 import catalogue
 
 
 def test_slit_annular_plate_6x30_within_2_percent():
@@ -27,7 +25,7 @@ def test_slit_annular_plate_6x30_within_2_percent():
     (measured W_A 1.53 %, W_B 1.24 %); end deflections within 2.5 % of the table's 13.891 and
     17.528 (measured 13.66 and 17.30, the coarse mesh is stiffer); equilibrium with reactions
     balancing the load to 1e-6 (the residual floor of this very flexible plate is ~1e-8)."""
-    doc, res, prob = bench.run_case("sze-slit-annular", mesh=(6, 30))
+    doc, res, prob = catalogue.run_case("sze-slit-annular", mesh=(6, 30))
     ref = doc["reference"]
     assert ref["entry"] == "sze3.3_slit_annular_plate"
     assert ref["deviation"] <= 0.02, ref["curves"]
@@ -43,7 +41,7 @@ def test_semicylinder_16x16_within_2p5_percent():
     2.09 %; 24x24 gives 1.11 %, see the module docstring); -u_z(P_max) within 3 % of the
     table's 1.71505 (measured 1.679); the response is symmetric about the plane x = 0 through
     the load (|u_x| at the crown < 1e-10)."""
-    doc, res, prob = bench.run_case("sze-semicylinder", mesh=(16, 16))
+    doc, res, prob = catalogue.run_case("sze-semicylinder", mesh=(16, 16))
     ref = doc["reference"]
     assert ref["entry"] == "sze3.7_clamped_semicylinder_point_load"
     assert ref["deviation"] <= 0.025, ref["curves"]

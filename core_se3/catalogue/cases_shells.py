@@ -1,0 +1,182 @@
+"""The catalogue's strip, arch and semi-cylinder cases (data only; the generic builder and runner
+are in ``catalogue.generic``).  Coordinates and units as in ``catalogue.case``."""
+from __future__ import annotations
+
+from math import pi
+
+from .case import Case, CaseLoad, Reference, Variant, add_case, beam_EI
+
+__all__ = []
+
+
+_DIM = dict(E="force/length^2", nu="1", h="length", L="length", width="length",
+            load_max="force", R="length", k="1")
+
+
+def _master(entry, load_name_fn, block="tip"):
+    """Reference on a dimensionless master curve (L = 1, EI = 1)."""
+    return Reference(entry=entry, load_to_ref=load_name_fn, length=lambda p: p["L"], block=block)
+
+
+def _physical(entry, block="tip"):
+    return Reference(entry=entry, load_to_ref=lambda p, P: P, length=lambda p: 1.0, block=block)
+
+
+def _rollup_M(p):
+    return p["k"] * 2.0 * pi * beam_EI(p) / p["L"]
+
+
+add_case(Case(
+    name="cantilever-shear",
+    description="Sze et al. 2004 s3.1 cantilever strip under a dead transverse end shear P (to 4).",
+    geometry="strip",
+    params=dict(E=1.2e6, nu=0.0, h=0.1, L=10.0, width=1.0, load_max=4.0),
+    units=_DIM, mesh=(16, 1), steps=10,
+    loads=(CaseLoad("edge_force", "x1", (0.0, 0.0, 1.0), lambda p: p["load_max"]),),
+    load_name="P", load_unit="force", load_value=lambda p, lam: lam * p["load_max"],
+    reference=_master("1_cantilever_tip_force_kirchhoff", lambda p, P: P * p["L"] ** 2 / beam_EI(p)),
+    notes="Kirchhoff elastica master curve; Sze's Abaqus S4R table in literature.json agrees.",
+))
+
+add_case(Case(
+    name="cantilever-shear-steel",
+    description="The seed's steel plate strip (mm, N, MPa) under a dead end shear to PL^2/EI = 10.",
+    geometry="strip",
+    params=dict(E=2.0e5, nu=0.0, h=10.0, L=1000.0, width=200.0, load_max=10.0 * 2.0e5 * 200.0 * 1e3 / 12 / 1e6),
+    units=dict(_DIM, E="MPa", h="mm", L="mm", width="mm", load_max="N"), mesh=(20, 1), steps=10,
+    loads=(CaseLoad("edge_force", "x1", (0.0, 0.0, 1.0), lambda p: p["load_max"]),),
+    load_name="P", load_unit="N", load_value=lambda p, lam: lam * p["load_max"],
+    reference=_physical("1_cantilever_tip_force_seed_plate_nu0"),
+))
+
+add_case(Case(
+    name="rollup",
+    description="Strip rolled up by an end moment about the width axis, M = k 2 pi EI / L (k to 3).",
+    geometry="strip",
+    params=dict(E=1.2e7, nu=0.0, h=0.1, L=10.0, width=1.0, k=3.0),
+    units=_DIM, mesh=(10, 1), steps=12,
+    loads=(CaseLoad("edge_moment", "x1", (0.0, -1.0, 0.0), _rollup_M),),
+    load_name="M", load_unit="force*length", load_value=lambda p, lam: lam * _rollup_M(p),
+    reference=_physical("2_pure_bending_rollup_out_of_plane"),
+    notes="Exact: circle of radius EI/M.",
+))
+
+add_case(Case(
+    name="inplane-rollup",
+    description="In-plane (drilling) bending of a strip by an end moment about the normal (k to 2).",
+    geometry="strip",
+    params=dict(E=1200.0, nu=0.0, h=1.0, L=10.0, width=1.0, k=2.0, drilling=1.0),
+    units=dict(_DIM, drilling="1 (factor on the seed's drilling modulus)"), mesh=(40, 4), steps=40,
+    loads=(CaseLoad("edge_moment", "x1", (0.0, 0.0, 1.0),
+                lambda p: p["k"] * 2 * pi * p["E"] * p["h"] * p["width"] ** 3 / 12 / p["L"]),),
+    load_name="M", load_unit="force*length",
+    load_value=lambda p, lam: lam * p["k"] * 2 * pi * p["E"] * p["h"] * p["width"] ** 3 / 12 / p["L"],
+    reference=Reference("2_pure_bending_rollup_inplane_drilling", lambda p, M: M, lambda p: 1.0,
+                        note="in-plane: v -> uy, theta about +z; exact only for small k"),
+    notes="The reference circle has the membrane stiffness E h w^3/12 only. The seed's "
+          "drilling-curvature modulus D(1-nu) adds D(1-nu) w, which equals it for this h = w "
+          "strip: with drilling=1 (the seed) the strip is twice as stiff in-plane. "
+          "--set drilling=0.01 matches the circle to 0.48 % at k = 0.25 (40x4); drilling=0 leaves "
+          "a drilling zero-energy mode. With drilling=1 the path converges to k = 2 (4 pi).",
+    extra=dict(plane="xy"),
+))
+
+add_case(Case(
+    name="torsion",
+    description="Strip twisted by a rigid rotation of its end edge about the strip axis (to 3 pi), "
+                "axial displacement of the end free.",
+    geometry="strip",
+    params=dict(E=1.2e7, nu=0.3, h=0.1, L=1.0, width=0.25, angle=3 * pi),
+    units=dict(_DIM, angle="rad"), mesh=(20, 6), steps=24,
+    loads=(CaseLoad("edge_rotation", "x1", (1.0, 0.0, 0.0), lambda p: p["angle"],
+                axis=(1.0, 0.0, 0.0), point=(None, 0.0, 0.0), free=(0,)),),
+    load_name="angle", load_unit="rad", load_value=lambda p, lam: lam * p["angle"],
+    reference=None,
+    notes="Small-twist torque -> J = T L/(G angle) against 5_strip_torsion_seed_strip.",
+))
+
+add_case(Case(
+    name="torsion-rollup",
+    description="Strip under follower end moments about the strip axis and the width axis together, "
+                "each ramped to the value that alone gives one full turn.",
+    geometry="strip",
+    params=dict(E=1.2e7, nu=0.3, h=0.1, L=10.0, width=1.0),
+    units=_DIM, mesh=(50, 20), steps=40,
+    loads=(
+        CaseLoad("edge_moment", "x1", (0.0, -1.0, 0.0), lambda p: 2 * pi * beam_EI(p) / p["L"] / (1 - p["nu"] ** 2), follower=True),
+        CaseLoad("edge_moment", "x1", (1.0, 0.0, 0.0),
+             lambda p: 2 * pi * p["E"] / (2 * (1 + p["nu"])) * p["width"] * p["h"] ** 3 / 3 / p["L"], follower=True),
+    ),
+    load_name="lambda", load_unit="1", load_value=lambda p, lam: lam,
+))
+
+add_case(Case(
+    name="arch-follower",
+    description="Half-circle arch (R = 0.5 m) under a tip follower force along the current tip "
+                "tangent (direction=tangential) or toward the centre (direction=inward), P to 3000 N.",
+    geometry="arch",
+    params=dict(E=7.2e10, nu=0.0, h=2.4495e-2, R=0.5, width=4.0825e-3, load_max=3000.0, direction=0.0),
+    units=dict(_DIM, E="Pa", h="m", R="m", width="m", load_max="N", direction="0=tangential,1=inward"),
+    mesh=(40, 1), steps=30,
+    loads=(CaseLoad("edge_force", "x1", (1.0, 0.0, 0.0), lambda p: p["load_max"], follower=True),),
+    load_name="P", load_unit="N", load_value=lambda p, lam: lam * p["load_max"],
+    reference=_physical("4_arch_halfcircle_follower_tangential_plus_shell_ks1"),
+    notes="direction=1 switches the force to +d3 (toward the centre) and the reference to "
+          "4_arch_halfcircle_follower_normal_inward_shell_ks1.",
+    variants=(Variant("direction", 0, dict(direction=(0.0, 0.0, 1.0)),
+                      "4_arch_halfcircle_follower_normal_inward_shell_ks1"),),
+))
+
+add_case(Case(
+    name="curved-rollup",
+    description="Half-cylinder of radius 10/(2 pi) (arc length 5) under an end moment, "
+                "M = k 2 pi EI / 10, k from -1 to 2.",
+    geometry="arch",
+    params=dict(E=1.2e7, nu=0.0, h=0.1, R=10.0 / (2 * pi), width=1.0, k=2.0),
+    units=_DIM, mesh=(10, 1), steps=8,
+    loads=(CaseLoad("edge_moment", "x1", (0.0, -1.0, 0.0), lambda p: p["k"] * 2 * pi * beam_EI(p) / 10.0),),
+    load_name="M", load_unit="force*length", load_value=lambda p, lam: lam * p["k"] * 2 * pi * beam_EI(p) / 10.0,
+    reference=_physical("4_arch_halfcircle_end_moment_R10over2pi"),
+    notes="Run with --set k=-1 for the opening branch.",
+))
+
+add_case(Case(
+    name="pressure-strip",
+    description="The rollup strip clamped on x0 under a uniform pressure to qL^3/EI = 20 (q = p w); "
+                "dead (along +z) or follower (normal to the deformed surface, per current area).",
+    geometry="strip",
+    params=dict(E=1.2e7, nu=0.0, h=0.1, L=10.0, width=1.0, load_max=20.0, follower=0.0),
+    units=dict(_DIM, load_max="1 (q L^3/EI)", follower="0=dead,1=follower"), mesh=(16, 1), steps=20,
+    loads=(CaseLoad("pressure", None, (0.0, 0.0, 1.0),
+                lambda p: p["load_max"] * beam_EI(p) / p["L"] ** 3 / p["width"]),),
+    load_name="q L^3/EI", load_unit="1", load_value=lambda p, lam: lam * p["load_max"],
+    reference=_master("5_plate_cylindrical_bending_pressure_dead", lambda p, q: q),
+    notes="follower=1 switches to the follower pressure and 5_plate_cylindrical_bending_pressure_follower.",
+    variants=(Variant("follower", 0, dict(follower=True), "5_plate_cylindrical_bending_pressure_follower"),),
+))
+
+
+add_case(Case(
+    name="sze-semicylinder",
+    description="Sze et al. 2004 s3.7: clamped semi-cylinder (isotropic) pinched by a point load at "
+                "the crown of its free curved edge, P to 2000.",
+    geometry="semicylinder",
+    params=dict(E=2.0685e7, nu=0.3, h=0.03, R=1.016, L=3.048, load_max=2000.0),
+    units=_DIM, mesh=(40, 40), steps=40,
+    loads=(CaseLoad("point_force", "y1", (0.0, 0.0, -1.0), lambda p: p["load_max"]),),
+    load_name="P", load_unit="force", load_value=lambda p, lam: lam * p["load_max"],
+    supports=(("clamp", "y0"),
+              # longitudinal edges (theta = -+pi/2): lab u_z = 0 and the rotation about the axis
+              # (lab y) fixed; there d1 = -+z and d2 = +y, i.e. body dofs 0 and 4
+              ("fix", "x0", ("uz", "rot_y")), ("fix", "x1", ("uz", "rot_y"))),
+    reference=None,
+    probe="crown",
+    notes="Reference: literature.json sze3.7_clamped_semicylinder_point_load, column "
+          "minus_W_A_x100_isotropic (table = 100 x displacement; -W_A = -u_z at the crown of y1). "
+          "Geometry: phi0 = (R sin t, s, R cos t), t in [-pi/2, pi/2] along x, s in [0, L] along y; "
+          "the load acts at the midpoint of edge y1. Measure: largest distance from each computed "
+          "point to the tabulated curve in the plane (P/P_max, u/u_max).",
+    extra=dict(family="sze", shape="semicylinder",
+               literature="sze3.7_clamped_semicylinder_point_load", column="minus_W_A_x100_isotropic",
+               displacement_scale=0.01, probe_edge="y1", probe_component=2, probe_sign=-1.0),
+))

@@ -1,0 +1,248 @@
+"""Runner of the Sze et al. (2004) family (cases in cases_sze.py and ``sze-semicylinder``).
+
+Build: mesh, supports and point/line loads from ``case.extra["shape"]``.  Run: arc-length
+continuation (core_se3.solvers) to the end of the published table, or load-stepped
+Newton for ``extra["path"] == "load"``.  Measure (``catalogue.measures.curve_deviation``): the deviation
+
+    dev = max_k min over the polyline |(P_k/P_max, u_k/u_max) - table curve|
+
+(the largest distance of a computed point to the tabulated curve, each column normalised by
+its largest |value|; max over the case's columns).  It serves snap-throughs and snap-backs,
+where a comparison at equal load is ill-defined.
+"""
+from __future__ import annotations
+
+from math import pi
+
+import numpy as np
+
+from .. import mesh as M
+from ..fem import Material
+from ..model import Problem
+from ..results import result_document, step_record
+from ..solvers import arc_length
+from .case import Family, register_family
+from .measures import curve_columns, curve_deviation, table_curves
+from .references import literature_entry
+
+__all__ = ["sze_problem", "run_sze", "document"]
+
+
+# ------------------------------------------------------------------ build -----------------
+
+def _corner(m, x, y):
+    X = m.X
+    k = np.nonzero((np.abs(X[:, 0] - x) < 1e-9 * (1 + abs(x))) & (np.abs(X[:, 1] - y) < 1e-9 * (1 + abs(y))))[0]
+    if len(k) != 1:
+        raise ValueError(f"expected one node at x = {x}, y = {y}, found {len(k)}")
+    return int(k[0])
+
+
+def sze_problem(case, p, mesh=None, element="default", linear_solver="auto"):
+    """Problem of a Sze case (see cases_sze.py for geometry, supports and loads)."""
+    shape = case.extra["shape"]
+    nx, ny = mesh or case.mesh
+    mat = Material(p["E"], p["nu"], p["h"], drilling=p.get("drilling", 1.0))
+    if shape == "roof":
+        R, L, th = p["R"], p["L"], p["theta"]
+        full = bool(p.get("full", 0.0))
+        if full:
+            m = M.cylinder_panel(R, L, -th, th, nx, ny)
+            m.g0[:, 1, 3] -= L / 2                           # centre the roof on y = 0
+        else:
+            m = M.cylinder_panel(R, L / 2, 0.0, th, nx, ny)
+        prob = Problem(m, mat, element=element, linear_solver=linear_solver)
+        if full:
+            prob.fix("x0", (0, 1, 2))
+            prob.fix("x1", (0, 1, 2))
+            c = _corner(m, 0.0, 0.0)
+            prob.add_nodal_load(c, force=(0.0, 0.0, -p["load_max"]))
+        else:
+            # crown line x = 0: u_x (= d1) and rotations about y (d2), z (d3) fixed;
+            # mid-length y = 0: u_y (= d2) and rotations about d1, d3 fixed; x1 hinged
+            prob.fix("x0", (0, 4, 5))
+            prob.fix("y0", (1, 3, 5))
+            prob.fix("x1", (0, 1, 2))
+            c = _corner(m, 0.0, 0.0)
+            prob.add_nodal_load(c, force=(0.0, 0.0, -p["load_max"] / 4))
+        prob.add_probe("C", [c])
+        prob.control = (c, (0.0, 0.0, -1.0))
+        return prob
+    if shape == "slit-annulus":
+        m = M.annulus(p["r_in"], p["r_out"], 2 * pi, nx, ny)
+        prob = Problem(m, mat, element=element, linear_solver=linear_solver)
+        prob.clamp("y1")
+        prob.add_edge_force("y0", (0.0, 0.0, p["load_max"] * (p["r_out"] - p["r_in"])))
+        y0 = m.node_set("y0")
+        prob.add_probe("A", [int(y0[0])])
+        prob.add_probe("B", [int(y0[-1])])
+        prob.control = (int(y0[-1]), (0.0, 0.0, 1.0))
+        return prob
+    if shape in ("pullout", "pinched"):
+        R, L = p["R"], p["L"]
+        m = M.cylinder_panel(R, L / 2, 0.0, pi / 2, nx, ny)
+        prob = Problem(m, mat, element=element, linear_solver=linear_solver)
+        # symmetry planes: x = 0 (t = 0: d1 = x) and z = 0 (t = pi/2: d1 = -z): u along d1 and
+        # the rotations about d2, d3 fixed; y = L/2 (d2 = y): u_y and rotations about d1, d3
+        prob.fix("x0", (0, 4, 5))
+        prob.fix("x1", (0, 4, 5))
+        prob.fix("y1", (1, 3, 5))
+        y1, x1 = m.node_set("y1"), m.node_set("x1")
+        A, B, Cn = int(y1[0]), int(y1[-1]), int(x1[0])
+        sign = 1.0 if shape == "pullout" else -1.0
+        prob.add_nodal_load(A, force=(0.0, 0.0, sign * p["load_max"] / 4))
+        if shape == "pinched":
+            # rigid diaphragm at s = 0: lab radial and circumferential directions of each node
+            # held; with diaphragm_tilt = 1 also the rotation about the cylinder axis (the normal
+            # stays normal to the circumferential tangent: MacNeal-Harder's theta_axis = 0)
+            y0 = m.node_set("y0")
+            g0 = m.g0[y0]
+            dirs = np.stack([g0[:, :3, 0], g0[:, :3, 2]], 1)        # reference d1, d3
+            k = p["k_diaphragm"] * p["E"] * p["h"]
+            prob.add_lab_support(y0, dirs, k)
+            ell = R * (pi / 2) / nx                                  # node spacing on the ring
+            if p.get("diaphragm_tilt", 0.0):
+                prob.add_lab_tilt_support(y0, g0[:, :3, 0], k * ell ** 2)
+            if p.get("diaphragm_theta_axis", 0.0):
+                # theta_y = 0 as a total-rotation-vector component (Abaqus' UR2 = 0)
+                prob.add_rotation_component_support(y0, (0.0, 1.0, 0.0), k * ell ** 2)
+            prob.add_probe("A", [A])
+            prob.add_probe("B", [B])
+            prob.control = (A, (0.0, 0.0, -1.0))
+            return prob
+        prob.add_probe("A", [A])
+        prob.add_probe("B", [B])
+        prob.add_probe("C", [Cn])
+        prob.control = (A, (0.0, 0.0, 1.0))
+        return prob
+    if shape == "hemisphere":
+        m = M.hemisphere_quarter(p["R"], p["hole_deg"], nx, ny)
+        prob = Problem(m, mat, element=element, linear_solver=linear_solver)
+        # y = 0 (f = 0, d2 = +y) and x = 0 (f = pi/2, d2 = -x): u along d2 and the rotations
+        # about d1, d3 fixed (the frame may turn about d2 only, which keeps d2 lab-fixed)
+        prob.fix("y0", (1, 3, 5))
+        prob.fix("y1", (1, 3, 5))
+        A, B = int(m.node_set("y0")[-1]), int(m.node_set("y1")[-1])
+        prob.add_lab_support([A], [[0.0, 0.0, 1.0]], p["k_pin"] * p["E"] * p["h"])
+        prob.add_nodal_load(A, force=(p["load_max"] / 2, 0.0, 0.0))
+        prob.add_nodal_load(B, force=(0.0, -p["load_max"] / 2, 0.0))
+        prob.add_probe("A", [A])
+        prob.add_probe("B", [B])
+        prob.control = (A, (1.0, 0.0, 0.0))
+        return prob
+    if shape == "semicylinder":
+        m = M.cylinder_panel(p["R"], p["L"], -pi / 2, pi / 2, nx, ny)
+        prob = Problem(m, mat, element=element, linear_solver=linear_solver)
+        prob.clamp("y0")
+        # longitudinal edges t = -+pi/2: d1 = +-z, d2 = +y: u_z and the rotation about y fixed
+        prob.fix("x0", (0, 4))
+        prob.fix("x1", (0, 4))
+        y1 = m.node_set("y1")
+        if len(y1) % 2 != 1:
+            raise ValueError("sze-semicylinder needs an even number of elements around (a crown node)")
+        crown = int(y1[len(y1) // 2])
+        prob.add_nodal_load(crown, force=(0.0, 0.0, -p["load_max"]))
+        prob.add_probe("crown", [crown])
+        prob.control = (crown, (0.0, 0.0, -1.0))
+        return prob
+    raise ValueError(f"unknown Sze shape {shape!r}")
+
+
+# ------------------------------------------------------------------ run -------------------
+
+def run_sze(case, p, prob, steps, **kw):
+    """Trace the case's path; returns (document, Result)."""
+    x = case.extra
+    # monotone paths default to the case's load steps (sze-semicylinder: 40, as fenicsx_ref)
+    if x.get("path", "load" if x["shape"] == "semicylinder" else "arc_length") == "load":
+        res = prob.solve(steps=steps, **kw)
+    else:
+        node, direction = prob.control
+        stop_at, lam_end = None, 1.0
+        if x.get("stop") == "table_end_displacement":
+            (_, _, tu), = table_curves(case)[:1]
+            stop_at, lam_end = (node, direction, float(tu[-1])), None
+        dlam0 = kw.pop("dlam0", x.get("dlam0", 1.0 / max(steps, 1)))
+        res = arc_length(prob, lam_end=lam_end, dlam0=dlam0, stop_at=stop_at,
+                         ds_max=kw.pop("ds_max", None),
+                         ds_max_factor=kw.pop("ds_max_factor", x.get("ds_max_factor", 8.0)),
+                         target_iter=kw.pop("target_iter", x.get("target_iter", 5)),
+                         psi=kw.pop("psi", x.get("psi", 0.0)), max_steps=kw.pop("max_steps", 400), **kw)
+    return document(case, p, prob, res), res
+
+
+def document(case, p, prob, res):
+    """Result document (schema core-se3-result) with the curve deviation as the error."""
+    steps = []
+    for st in res.steps:
+        value = case.load_value(p, st.load_factor)
+        load = dict(name=case.load_name, value=float(value), unit=case.load_unit,
+                    reference_entry=case.extra["literature"], reference_value=float(st.load_factor))
+        extra = {}
+        if st.stability is not None:
+            extra["stability"] = dict(det_sign=int(st.stability["det_sign"]),
+                                      negative_eigenvalues=st.stability["negative_eigenvalues"])
+        steps.append(step_record(st, load, **extra))
+    dev, per_step, info = curve_deviation(case, [st.load_factor for st in res.steps],
+                                          [{k: v["u"] for k, v in st.probes.items()} for st in res.steps])
+    for s, d in zip(steps, per_step):
+        s["error"] = float(d)
+    e = literature_entry(case.extra["literature"])
+    reference = dict(entry=case.extra["literature"], file="literature.json",
+                     block=",".join(c["column"] for c in curve_columns(case)), error=dev, deviation=dev,
+                     measure="max distance of computed points to the table polyline in "
+                             "(P/P_max, u/u_max), u_max per column",
+                     P_max=float(p["load_max"]), curves=info, n_points=len(steps),
+                     unverified=e.get("unverified_fields", []))
+    t = dict(res.timings)
+    t.setdefault("setup", 0.0)
+    extra = {}
+    if any(st.stability is not None for st in res.steps):        # a path-following result
+        extra["critical_points"] = [dict(kind=c.kind, load_factor=c.lam, bracket=list(c.lam_bracket),
+                                         step=c.step, negative_eigenvalues=list(c.negative_eigenvalues))
+                                    for c in res.critical_points]
+    return result_document(case.name, "core_se3", prob.element_name,
+                           {k: dict(value=v, unit=case.units.get(k, "")) for k, v in p.items()},
+                           prob.mesh, steps, t, reference, **extra)
+
+
+def plot(case, p, doc, res, path):
+    from ..io.plots import new_figure
+    from ..io.vtk import ensure_parent
+    fig = new_figure()
+    ax = fig.add_subplot(111)
+    lam = np.array([s["load_factor"] for s in doc["steps"]])
+    for (col, tl, tu), c in zip(table_curves(case), curve_columns(case)):
+        u = np.array([c["sign"] * s["probes"][c["probe"]]["u"][c["component"]] for s in doc["steps"]])
+        line, = ax.plot(u, lam, "o-", ms=3, label=f"core_se3 {col}")
+        ax.plot(tu, tl, "--", color="k" if len(curve_columns(case)) == 1 else line.get_color(), lw=1,
+                label=f"Sze 2004 {col}")
+    for cp in doc.get("critical_points", []):
+        ax.axhline(cp["load_factor"], color="0.8", lw=0.6)
+    ax.set_xlabel("displacement")
+    ax.set_ylabel("P / P_max" + (f"  (P_max = {p['load_max']:g})"))
+    ax.set_title(f"{case.name} ({doc['mesh']['nx']}x{doc['mesh']['ny']}): deviation "
+                 f"{100 * doc['reference']['deviation']:.2f} %")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.savefig(ensure_parent(path), dpi=120, bbox_inches="tight")
+
+
+def report(doc):
+    ref = doc["reference"]
+    lines = [f"curve deviation (max distance to the table polyline in (P/P_max, u/u_max)): "
+             f"{100 * ref['deviation']:.2f} % over {ref['n_points']} points"]
+    for c in ref["curves"]:
+        lines.append(f"  {c['column']}: {100 * c['deviation']:.2f} % (worst at P/P_max = "
+                     f"{c['at']['P_over_Pmax']:.4g}, u = {c['at']['u']:.4g}); end computed "
+                     f"({c['computed_end']['P_over_Pmax']:.4g}, {c['computed_end']['u']:.4g}), "
+                     f"table ({c['table_end']['P_over_Pmax']:.4g}, {c['table_end']['u']:.4g})")
+    for cp in doc.get("critical_points", []):
+        lines.append(f"  {cp['kind']} point at P/P_max ~ {cp['load_factor']:.5g} (bracket "
+                     f"{cp['bracket'][0]:.5g} .. {cp['bracket'][1]:.5g})")
+    if ref.get("unverified"):
+        lines.append(f"  table fields marked unverified: {ref['unverified']}")
+    return lines
+
+
+register_family("sze", Family(build=sze_problem, run=run_sze, plot=plot, report=report))

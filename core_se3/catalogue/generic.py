@@ -1,0 +1,127 @@
+"""The generic catalogue runner: strips, arches and the semi-cylinder built from their case data,
+solved by load stepping, measured against their reference (``catalogue.measures``)."""
+from __future__ import annotations
+
+from math import pi
+
+import numpy as np
+
+from .. import mesh as M
+from ..fem import Material
+from ..model import Problem
+from ..results import result_document, step_record
+from .case import get_case, resolve
+from .measures import error_against_reference
+from .references import elastica_entry
+
+__all__ = ["build_problem", "reference_for", "case_document", "planar", "edge_wrench",
+           "torsion_constant", "case_mesh"]
+
+# how a case load kind becomes a registered load of the model (core_se3.model.LOADS)
+_AS_LOAD = {
+    "edge_force": lambda ld: dict(force=ld.magnitude * np.asarray(ld.direction, float), follower=ld.follower),
+    "edge_moment": lambda ld: dict(moment=ld.magnitude * np.asarray(ld.direction, float), follower=ld.follower),
+    "pressure": lambda ld: dict(p=ld.magnitude, follower=True) if ld.follower else
+    dict(p=ld.magnitude, direction=ld.direction),
+}
+
+
+def case_mesh(case, p, nx, ny):
+    """The mesh of a strip, arch or semi-cylinder case."""
+    if case.geometry == "strip":
+        return M.rectangle(p["L"], p["width"], nx, ny)
+    if case.geometry == "arch":
+        return M.cylinder_arch(p["R"], pi, p["width"], nx, ny)
+    if case.geometry == "semicylinder":
+        return M.cylinder_panel(p["R"], p["L"], -pi / 2, pi / 2, nx, ny)
+    raise ValueError(f"unknown geometry {case.geometry!r}")
+
+
+def build_problem(case, p, mesh=None, element="default", linear_solver="auto"):
+    """The Problem of a generic case at parameters p on an (nx, ny) mesh (default the case's)."""
+    nx, ny = mesh or case.mesh
+    m = case_mesh(case, p, nx, ny)
+    prob = Problem(m, Material(p["E"], p["nu"], p["h"], drilling=p.get("drilling", 1.0)),
+                   element=element, linear_solver=linear_solver)
+    for kind, where in case.supports:
+        if kind == "clamp":
+            prob.clamp(where)
+    loads, _ = resolve(case, p)
+    for ld in loads:
+        if ld.kind == "edge_rotation":
+            nodes = m.node_set(ld.edge)
+            point = [m.X[nodes, i].mean() if c is None else c for i, c in enumerate(ld.point)]
+            prob.rotate_edge(ld.edge, ld.axis, ld.magnitude, point=point, free=ld.free)
+        elif ld.kind in _AS_LOAD:
+            prob.add_load(ld.kind, ld.edge, **_AS_LOAD[ld.kind](ld))
+        else:
+            raise ValueError(f"unknown load kind {ld.kind!r} of a generic case")
+    prob.add_probe("tip", "x1")
+    return prob
+
+
+def reference_for(case, p):
+    """(entry name, block, ref) with ref = dict(load, u, v, theta) in case units, or None."""
+    _, ref = resolve(case, p)
+    if ref is None:
+        return None
+    e = elastica_entry(ref.entry)
+    tip = e[ref.block]
+    Lr = ref.length(p)
+    return ref.entry, ref.block, dict(load=np.asarray(e["load"], float), u=Lr * np.asarray(tip["u"], float),
+                                      v=Lr * np.asarray(tip["v"], float), theta=np.asarray(tip["theta"], float))
+
+
+def planar(case, u):
+    """Map computed probe displacements (..., 3) = (ux, uy, uz) onto the reference plane (u, v)."""
+    u = np.asarray(u, float)
+    return u[..., [0, 1]] if case.extra.get("plane") == "xy" else u[..., [0, 2]]
+
+
+def case_document(case, p, prob, res, reference_case=None):
+    """The result document of a catalogue run: steps with the reported load, the error against
+    the case's reference (``reference_case`` overrides the case's Reference, e.g. a family's)."""
+    rc = reference_case or case
+    ref = reference_for(rc, p)
+    axis = np.array([0.0, 0.0, 1.0]) if case.extra.get("plane") == "xy" else np.array([0.0, -1.0, 0.0])
+    steps, loads_ref, disps = [], [], []
+    for st in res.steps:
+        value = case.load_value(p, st.load_factor)
+        load = dict(name=case.load_name, value=float(value), unit=case.load_unit)
+        if ref is not None:
+            load.update(reference_entry=ref[0], reference_value=float(rc.reference.load_to_ref(p, value)))
+            loads_ref.append(rc.reference.load_to_ref(p, value))
+            disps.append(planar(case, st.probes["tip"]["u"]))
+        steps.append(step_record(st, load, axis=axis))
+    reference = None
+    if ref is not None:
+        entry, block, r = ref
+        err, at, errs = error_against_reference(loads_ref, disps, r)
+        for s, e in zip(steps, errs):
+            s["error"] = None if np.isnan(e) else float(e)
+        reference = dict(entry=entry, block=block, error=err, error_at_load=at, file="elastica.json")
+    return result_document(case.name, "core_se3", prob.element_name,
+                           {k: dict(value=v, unit=case.units.get(k, "")) for k, v in p.items()},
+                           prob.mesh, steps, res.timings, reference)
+
+
+def edge_wrench(prob, g, edge, point):
+    """Lab force and moment about ``point`` that the shell exerts on the supports of ``edge``
+    (internal forces at the edge nodes, i.e. minus the reactions)."""
+    ev = prob.element.evaluate(g, tangent=False)
+    nodes = prob.mesh.node_set(edge)
+    R = g[nodes, :3, :3]
+    n = np.einsum("nij,nj->ni", R, ev.r[nodes, :3])
+    m = np.einsum("nij,nj->ni", R, ev.r[nodes, 3:]) + np.cross(g[nodes, :3, 3] - point, n)
+    return n.sum(0), m.sum(0)
+
+
+def torsion_constant(p, mesh, element="default", angle=1e-4):
+    """Small-twist torsion constant J = T L / (G angle) of the ``torsion`` case's strip."""
+    case = get_case("torsion")
+    q = dict(p, angle=angle)
+    prob = build_problem(case, q, mesh, element)
+    res = prob.solve(steps=1, rtol=1e-12, dtol=1e-12)
+    _, Mw = edge_wrench(prob, res.final.g, "x1", np.array([q["L"], 0.0, 0.0]))
+    G = q["E"] / (2 * (1 + q["nu"]))
+    return float(Mw[0] * q["L"] / (G * angle))

@@ -1,0 +1,103 @@
+"""The element extension point: the :class:`Element` base class, what its evaluation returns
+(:class:`ElementEvaluation`), and the registry that every front end reads.
+
+An element turns the nodal frames g (n, 4, 4) into the internal nodal forces r (n, 6) (left
+trivialised: one wrench per node in its body frame, r_i = dPi/d eta_i along g_i <- g_i exp(eta_i))
+and, if asked, the blocks of their derivative along the same update.  Blocks come in three
+shapes, summed by the assembler into the sparse tangent:
+
+* ``element_blocks`` (m, 4, 4, 6, 6): node pairs (a, b) of each quad,
+* ``edge_blocks`` (E, 2, 2, 6, 6): node pairs of each mesh edge (``mesh.edge_nodes``),
+* ``node_blocks`` (n, 6, 6): one block per node.
+
+A new element is one file: a subclass of :class:`Element` decorated with
+:func:`register_element`; the Python API (``Problem(..., element=NAME)``), scenario files
+(``[solver] element``) and the command line (``--element``) then accept its name.
+
+Example
+-------
+>>> from core_se3 import fem
+>>> sorted(fem.ELEMENTS)
+['default', 'seed']
+"""
+from __future__ import annotations
+
+import abc
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+
+from ..registry import Registry
+
+__all__ = ["Element", "ElementEvaluation", "ELEMENTS", "register_element", "make_element"]
+
+
+@dataclass
+class ElementEvaluation:
+    """Internal forces and (optionally) tangent blocks of all elements at one state.
+
+    energy: the elastic energy [force x length]; r: (n, 6) internal nodal forces (body frames);
+    force_scale: the size of the terms that cancel in r (its round-off floor, used by the
+    convergence test); the blocks as in the module docstring (None = none of that shape).
+    """
+    energy: float
+    r: np.ndarray
+    force_scale: float
+    element_blocks: np.ndarray | None = None
+    edge_blocks: np.ndarray | None = None
+    node_blocks: np.ndarray | None = None
+
+
+class Element(abc.ABC):
+    """Base class of shell elements on a mesh with a material law.
+
+    Subclasses set ``name`` and implement :meth:`evaluate` and :meth:`energy`.  An element
+    whose strain is a state updated by the increments (``stateful = True``, e.g. the seed's
+    incremental twist) implements :meth:`save`, :meth:`restore` and :meth:`update`; the solvers
+    call them around every Newton step, and path following refuses it.
+    """
+
+    name: ClassVar[str] = ""
+    stateful: ClassVar[bool] = False
+
+    def __init__(self, mesh, material):
+        self.mesh = mesh
+        self.material = material
+
+    @abc.abstractmethod
+    def evaluate(self, g, tangent=True) -> ElementEvaluation:
+        """Internal forces at the frames g (n, 4, 4), with the tangent blocks if ``tangent``."""
+
+    @abc.abstractmethod
+    def energy(self, g) -> float:
+        """Elastic energy at the frames g."""
+
+    def cell_fields(self, g) -> dict:
+        """Per-element output fields (name -> (m, k)) for VTU files; none by default."""
+        return {}
+
+    # state of a stateful element (no-ops for the path-independent ones)
+    def save(self):
+        """Remember the current state (before a Newton step)."""
+
+    def restore(self):
+        """Return to the saved state (after a failed Newton step)."""
+
+    def update(self, eta):
+        """Advance the state by the nodal increments eta (n, 6)."""
+
+
+ELEMENTS = Registry("element")
+
+
+def register_element(cls):
+    """Class decorator: make an Element subclass available under ``cls.name``."""
+    if not (isinstance(cls, type) and issubclass(cls, Element)):
+        raise TypeError("register_element needs an Element subclass")
+    return ELEMENTS.register(cls.name, cls)
+
+
+def make_element(name, mesh, material) -> Element:
+    """The element ``name`` (a key of ELEMENTS) on ``mesh`` with ``material``."""
+    return ELEMENTS.lookup(name)(mesh, material)

@@ -1,0 +1,237 @@
+"""Isotropic linear-elastic Cosserat shell resultant law (seed eqs. E45-1, E45-2, corrected).
+
+Strains at a point are the differences of left-trivialised twists, eps_a = zeta_a - zeta0_a =
+(c_a, k_a) (translational, rotational), in the body frame of the material point; A_a are the
+reference tangent vectors (translational parts of zeta0_a) and n the unit normal.
+
+    membrane   e_ab = c_a . A_b                       (unsymmetrised, as the seed)
+    shear      g_a  = c_a . n
+    bending    K_ab = (n x k_a) . A_b                 (curvature; corrects the seed's E45-2)
+    drilling   d_a  = k_a . n
+
+    W = 1/2 [ Eh/(1-nu^2) H(e, e) + ks G h A^ab g_a g_b + D H(K, K) + D (1-nu) A^ab d_a d_b ]
+    H(x, y) = nu (A^ab x_ab)(A^cd y_cd) + (1-nu) A^ac A^bd x_ab y_cd,   D = E h^3 / (12 (1-nu^2))
+
+The seed applies H directly to the wryness components, which gives a cylindrical bending
+stiffness D (1 - nu) and loses the Poisson coupling; writing bending on K restores the plate
+law D[(1-nu) K:K + nu (tr K)^2].  W is per unit reference area [energy/length^2]; the
+transverse-shear factor is 1 by default, as the seed's law gives.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+
+from ..errors import MaterialError, MeshError
+
+__all__ = ["Material", "RegionMaterial", "ResultantLaw", "strain_operators"]
+
+
+@runtime_checkable
+class ResultantLaw(Protocol):
+    """What an element needs of a material: the 12x12 resultant stiffness at points.
+
+    ``resultant_matrix(A1, A2) -> (Dmat, j0)`` with A1, A2 (..., 3) the reference tangents; see
+    :meth:`Material.resultant_matrix`.  :class:`Material` (one law) and :class:`RegionMaterial`
+    (a law per element) implement it.
+    """
+
+    def resultant_matrix(self, A1, A2):
+        ...
+
+
+@dataclass(frozen=True)
+class Material:
+    """E [force/length^2], nu [-], h [length], shear_factor ks [-] (1 = the seed's law),
+    drilling [-]: factor on the seed's drilling-curvature modulus D (1 - nu) (1 = the seed),
+    rho [mass/length^3]: density, for gravity (optional).
+
+    The drilling-curvature term is a micro-polar stiffness of the Cosserat surface: it adds
+    drilling * D (1 - nu) w to the in-plane bending stiffness E h w^3 / 12 of a strip of width
+    w, negligible when h << w, equal to it when h = w.  With drilling = 0 the drilling rotation
+    is still tied to the in-plane rotation by the membrane law's skew part (2 G h).
+
+    Example
+    -------
+    >>> m = Material(E=1.2e6, nu=0.0, h=0.1)
+    >>> round(m.D, 9), round(m.C, 9)
+    (100.0, 120000.0)
+    >>> Material(E=-1.0, nu=0.3, h=0.1)
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.MaterialError: Young's modulus E must be > 0, got -1.0
+    """
+    E: float
+    nu: float
+    h: float
+    shear_factor: float = 1.0
+    drilling: float = 1.0
+    rho: float | None = None
+
+    def __post_init__(self):
+        for name in ("E", "nu", "h", "shear_factor", "drilling"):
+            v = getattr(self, name)
+            if not isinstance(v, (int, float, np.floating, np.integer)) or not math.isfinite(v):
+                raise MaterialError(f"material parameter {name} must be a finite number, got {v!r}")
+        if self.E <= 0:
+            raise MaterialError(f"Young's modulus E must be > 0, got {self.E}")
+        if not -1.0 < self.nu < 0.5:
+            raise MaterialError(f"Poisson's ratio nu must lie in (-1, 0.5), got {self.nu}")
+        if self.h <= 0:
+            raise MaterialError(f"thickness h must be > 0, got {self.h}")
+        if self.shear_factor <= 0:
+            raise MaterialError(f"shear factor must be > 0, got {self.shear_factor}")
+        if self.drilling < 0:
+            raise MaterialError(f"drilling factor must be >= 0, got {self.drilling}")
+        if self.rho is not None and (isinstance(self.rho, bool) or not isinstance(self.rho, (int, float, np.floating, np.integer))
+                                     or not math.isfinite(self.rho) or self.rho < 0):
+            raise MaterialError(f"density rho must be a finite number >= 0 (or None), got {self.rho!r}")
+
+    @property
+    def G(self):
+        return self.E / (2.0 * (1.0 + self.nu))
+
+    @property
+    def D(self):
+        """Plate bending stiffness E h^3 / (12 (1 - nu^2))."""
+        return self.E * self.h ** 3 / (12.0 * (1.0 - self.nu ** 2))
+
+    @property
+    def C(self):
+        """Membrane stiffness E h / (1 - nu^2)."""
+        return self.E * self.h / (1.0 - self.nu ** 2)
+
+    def resultant_matrix(self, A1, A2):
+        """12x12 stiffness on (eps_1, eps_2) at points with reference tangents A1, A2 (..., 3).
+
+        Returns (Dmat, j0): ``W = 1/2 eps^T Dmat eps`` per unit reference area, and the area
+        element j0 = |A1 x A2| that turns the parameter measure into reference area.
+        """
+        ops, Ainv, j0 = strain_operators(A1, A2)
+        Mm, Ms, Mb, Md = ops
+        nu = self.nu
+        H = (nu * np.einsum("...ab,...cd->...abcd", Ainv, Ainv)
+             + (1 - nu) * np.einsum("...ac,...bd->...abcd", Ainv, Ainv))
+        H = H.reshape(H.shape[:-4] + (4, 4))
+        Dm = self.C * H
+        Db = self.D * H
+        Ds = self.shear_factor * self.G * self.h * Ainv
+        Dd = self.drilling * self.D * (1 - nu) * Ainv
+        T = lambda M: np.swapaxes(M, -1, -2)
+        Dmat = (T(Mm) @ Dm @ Mm + T(Ms) @ Ds @ Ms + T(Mb) @ Db @ Mb + T(Md) @ Dd @ Md)
+        return Dmat, j0
+
+    def energy_density(self, eps, A1, A2):
+        """W per unit reference area for strains eps (..., 12)."""
+        Dmat, _ = self.resultant_matrix(A1, A2)
+        return 0.5 * np.einsum("...i,...ij,...j->...", eps, Dmat, eps)
+
+
+def strain_operators(A1, A2):
+    """Linear maps from eps = (eps_1, eps_2) in R^12 to the membrane, shear, bending, drilling
+    measures (shapes (...,4,12), (...,2,12), (...,4,12), (...,2,12)), with A^ab and j0."""
+    A1 = np.asarray(A1, float)
+    A2 = np.asarray(A2, float)
+    A = np.stack([A1, A2], -2)                                   # (..., 2, 3)
+    cross = np.cross(A1, A2)
+    j0 = np.linalg.norm(cross, axis=-1)
+    if np.any(~np.isfinite(j0)) or np.any(j0 <= 1e-14 * (np.linalg.norm(A1, axis=-1) * np.linalg.norm(A2, axis=-1) + 1e-300)):
+        raise MeshError("degenerate reference geometry: tangent vectors A1, A2 are parallel or zero "
+                        "(zero-area or collapsed element)")
+    n = cross / j0[..., None]
+    Amet = np.einsum("...ai,...bi->...ab", A, A)
+    Ainv = np.linalg.inv(Amet)
+    shape = A1.shape[:-1]
+    Mm = np.zeros(shape + (4, 12))
+    Mb = np.zeros(shape + (4, 12))
+    Ms = np.zeros(shape + (2, 12))
+    Md = np.zeros(shape + (2, 12))
+    Axn = np.cross(A, n[..., None, :])                           # A_b x n, (..., 2, 3)
+    for a in range(2):
+        for b in range(2):
+            Mm[..., 2 * a + b, 6 * a:6 * a + 3] = A[..., b, :]
+            Mb[..., 2 * a + b, 6 * a + 3:6 * a + 6] = Axn[..., b, :]   # (n x k).A = k.(A x n)
+        Ms[..., a, 6 * a:6 * a + 3] = n
+        Md[..., a, 6 * a + 3:6 * a + 6] = n
+    return (Mm, Ms, Mb, Md), Ainv, j0
+
+
+class RegionMaterial:
+    """A material that differs per element (e.g. per region): ``materials`` (k distinct
+    Material), ``index`` (m,) into them.
+
+    The element asks ``resultant_matrix(A1, A2)`` at the Gauss points of all elements at once
+    (A1, A2 of shape (m, ..., 3)); this class answers with each element's own law, grouped by
+    distinct material so that the work stays batched:
+    W_e = 1/2 eps^T D(E_e, nu_e, h_e, ks_e, drilling_e) eps on element e.  Scalar properties
+    (E, nu, h, ...) are available when they are the same on every element; otherwise reading
+    one raises MaterialError (loads that need h per element, such as gravity or magnetisation,
+    must then be built per region with that region's h).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> law = RegionMaterial.from_regions(4, Material(1.0, 0.3, 0.1), {(2, 3): Material(2.0, 0.3, 0.1)})
+    >>> law.per_element("E").tolist(), law.h
+    ([1.0, 1.0, 2.0, 2.0], 0.1)
+    """
+
+    def __init__(self, materials, index):
+        self.materials = list(materials)
+        self.index = np.asarray(index, np.int64)
+        if not self.materials or any(not isinstance(m, Material) for m in self.materials):
+            raise MaterialError("RegionMaterial needs a list of core_se3.Material")
+        if self.index.ndim != 1 or self.index.min() < 0 or self.index.max() >= len(self.materials):
+            raise MaterialError("RegionMaterial index must give one material per element")
+
+    @classmethod
+    def from_regions(cls, n_elements, base, regions):
+        """``base`` everywhere except on the element sets of ``regions`` {ids: Material}."""
+        mats, index = [base], np.zeros(n_elements, np.int64)
+        seen = np.zeros(n_elements, bool)
+        for ids, mat in regions.items() if isinstance(regions, dict) else regions:
+            ids = np.asarray(ids, np.int64)
+            if np.any(seen[ids]):
+                raise MaterialError("material regions overlap: an element would get two materials")
+            seen[ids] = True
+            if mat not in mats:
+                mats.append(mat)
+            index[ids] = mats.index(mat)
+        return cls(mats, index)
+
+    def __len__(self):
+        return len(self.index)
+
+    def per_element(self, name):
+        """Property ``name`` (E, nu, h, ...) of every element, (m,)."""
+        return np.array([getattr(m, name) for m in self.materials])[self.index]
+
+    def _uniform(self, name):
+        vals = {getattr(m, name) for m in self.materials if np.any(self.index == self.materials.index(m))}
+        if len(vals) != 1:
+            raise MaterialError(f"{name} differs between regions ({sorted(vals, key=repr)}); use per_element({name!r})")
+        return vals.pop()
+
+    E = property(lambda self: self._uniform("E"))
+    nu = property(lambda self: self._uniform("nu"))
+    h = property(lambda self: self._uniform("h"))
+    shear_factor = property(lambda self: self._uniform("shear_factor"))
+    drilling = property(lambda self: self._uniform("drilling"))
+    rho = property(lambda self: self._uniform("rho"))
+
+    def resultant_matrix(self, A1, A2):
+        """(Dmat, j0) as Material.resultant_matrix, each element (leading axis) with its own law."""
+        A1 = np.asarray(A1, float)
+        A2 = np.asarray(A2, float)
+        if A1.shape[0] != len(self.index):
+            raise MaterialError(f"RegionMaterial has {len(self.index)} elements, got points of {A1.shape[0]}")
+        D = np.empty(A1.shape[:-1] + (12, 12))
+        j0 = np.empty(A1.shape[:-1])
+        for k, mat in enumerate(self.materials):
+            sel = self.index == k
+            if np.any(sel):
+                D[sel], j0[sel] = mat.resultant_matrix(A1[sel], A2[sel])
+        return D, j0

@@ -1,0 +1,56 @@
+"""Stress resultants at element centres, for output (VTU cell fields).
+
+The energy density W(eps) (material.py) is per unit reference area with eps = zeta - zeta0 the
+strain twists (c_a, k_a) in the body frame.  Its conjugates S^a = dW/d eps_a = (s^a, t^a) give
+the force and moment transmitted across a reference cut with unit conormal nu (tangent to the
+reference surface), per unit reference length of the cut:
+
+    n(nu) = sum_a (nu . A_a) s^a,        m(nu) = sum_a (nu . A_a) t^a
+
+(A_a: reference tangents, the translational parts of zeta0_a; for a membrane W = 1/2 N:e
+this is n(nu) = N^ab nu_a A_b, the usual traction).  Reported for the two cuts nu = the
+reference directors d1 and d2 at the centre, as lab vectors ``N1``, ``N2`` (force/length)
+and ``M1``, ``M2`` (moment/length, = force), and as components along the current directors
+(``N1_local`` = (N11, N12, Q1), ``N2_local`` = (N21, N22, Q2), ``M1_local``, ``M2_local``).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..lie import mean_rotation
+
+__all__ = ["element_resultants"]
+
+CENTRE = np.zeros((1, 2))
+
+
+def element_resultants(element, g):
+    """Cell fields (name -> (m, 3)) of the default element at state g (n, 4, 4).
+
+    Example
+    -------
+    >>> from core_se3 import mesh, Material, fem
+    >>> el = fem.DefaultElement(mesh.rectangle(1.0, 1.0, 2, 1), Material(1.0e3, 0.3, 0.01))
+    >>> sorted(element_resultants(el, el.mesh.g0))[:3]
+    ['M1', 'M1_local', 'M2']
+    """
+    mesh = element.mesh
+    zeta0 = element.strains(mesh.g0, CENTRE)[:, 0]            # (m, 12) body frame
+    zeta = element.strains(g, CENTRE)[:, 0]
+    A1, A2 = zeta0[:, 0:3], zeta0[:, 6:9]
+    D, _ = element.material.resultant_matrix(A1, A2)          # (m, 12, 12)
+    S = np.einsum("mij,mj->mi", D, zeta - zeta0)
+    s = (S[:, 0:3], S[:, 6:9])                                # force conjugates
+    t = (S[:, 3:6], S[:, 9:12])                               # moment conjugates
+    A = np.stack([A1, A2], 1)                                 # (m, 2, 3)
+    R = mean_rotation(g[mesh.quads, :3, :3])                 # current centre frame
+    out = {}
+    for k, nu in ((1, np.array([1.0, 0, 0])), (2, np.array([0, 1.0, 0]))):
+        w = A @ nu                                            # (m, 2): nu . A_a
+        n_loc = w[:, :1] * s[0] + w[:, 1:] * s[1]
+        m_loc = w[:, :1] * t[0] + w[:, 1:] * t[1]
+        out[f"N{k}"] = np.einsum("mij,mj->mi", R, n_loc)
+        out[f"M{k}"] = np.einsum("mij,mj->mi", R, m_loc)
+        out[f"N{k}_local"] = n_loc
+        out[f"M{k}_local"] = m_loc
+    return out

@@ -1,0 +1,57 @@
+"""Atomic file writes: every file is written to a temporary name in its own directory and moved
+into place with os.replace, which is atomic on POSIX: a reader (or a run killed at any instant)
+sees either the previous complete file or the new complete file, never a partial one.
+
+Example
+-------
+>>> import os, tempfile
+>>> d = tempfile.mkdtemp()
+>>> p = write_text_atomic(os.path.join(d, "a.txt"), "done")
+>>> open(p).read(), sorted(os.listdir(d))
+('done', ['a.txt'])
+"""
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import tempfile
+
+__all__ = ["atomic_path", "write_text_atomic", "write_json_atomic"]
+
+
+@contextlib.contextmanager
+def atomic_path(path, suffix=None):
+    """Yield a temporary path next to ``path`` (same extension); on success move it to ``path``."""
+    path = os.fspath(path)
+    d = os.path.dirname(os.path.abspath(path))
+    os.makedirs(d, exist_ok=True)
+    ext = suffix if suffix is not None else os.path.splitext(path)[1]
+    fd, tmp = tempfile.mkstemp(prefix="." + os.path.basename(path) + ".", suffix=".tmp" + ext, dir=d)
+    os.close(fd)
+    os.chmod(tmp, 0o666 & ~_umask())          # mkstemp makes 0600; give the usual permissions
+    try:
+        yield tmp
+        with open(tmp, "rb+") as fh:
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+
+
+def _umask():
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def write_text_atomic(path, text):
+    with atomic_path(path) as tmp:
+        with open(tmp, "w") as fh:
+            fh.write(text)
+    return os.fspath(path)
+
+
+def write_json_atomic(path, doc):
+    return write_text_atomic(path, json.dumps(doc, indent=1))

@@ -1,0 +1,184 @@
+"""PNG plots (matplotlib on an Agg canvas, imported lazily): load-deflection curves, the deformed
+shell, a sequence of states."""
+from __future__ import annotations
+
+from typing import Mapping, Sequence
+
+import numpy as np
+
+from ..lie import rotation_angle
+from .vtk import as_cells, as_frames, as_points, ensure_parent
+
+__all__ = ["new_figure", "plot_load_deflection", "plot_shell", "plot_sequence"]
+
+
+def new_figure(figsize=(6.4, 4.8)):
+    """A matplotlib Figure on an Agg canvas (no pyplot, no global backend switch)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=figsize, dpi=120)
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def plot_load_deflection(
+    path,
+    loads,
+    displacements: Mapping[str, np.ndarray],
+    labels: Mapping[str, str] | Sequence[str] | None = None,
+    reference: Mapping[str, tuple[np.ndarray, np.ndarray]] | None = None,
+    xlabel: str = "displacement [length unit]",
+    ylabel: str = "load [load unit]",
+    title: str | None = None,
+) -> str:
+    """Load-deflection curves as a PNG: displacement on x, load on y (as in Sze et al. 2004).
+
+    loads: (k,) load levels; displacements: name -> (k,) computed values, drawn as lines;
+    labels: legend text per curve (dict name -> label, or a list in the order of ``displacements``;
+    default: the names); reference: name -> (loads, values), drawn as open markers, in the colour of
+    the computed curve of the same name if there is one. Returns the path.
+    """
+    loads = np.asarray(loads, dtype=float)
+    names = list(displacements)
+    if labels is None:
+        lab = {k: k for k in names}
+    elif isinstance(labels, Mapping):
+        lab = {k: labels.get(k, k) for k in names}
+    else:
+        labels = list(labels)
+        if len(labels) != len(names):
+            raise ValueError(f"{len(labels)} labels for {len(names)} curves")
+        lab = dict(zip(names, labels))
+
+    fig = new_figure()
+    ax = fig.add_subplot(1, 1, 1)
+    colors = {}
+    for i, name in enumerate(names):
+        d = np.asarray(displacements[name], dtype=float)
+        if d.shape != loads.shape:
+            raise ValueError(f"displacements[{name!r}] has shape {d.shape}, loads {loads.shape}")
+        (line,) = ax.plot(d, loads, "-", lw=1.6, label=lab[name], color=f"C{i % 10}")
+        colors[name] = line.get_color()
+    j = len(names)
+    for name, (rl, rv) in (reference or {}).items():
+        color = colors.get(name)
+        if color is None:
+            color, j = f"C{j % 10}", j + 1
+        ax.plot(np.asarray(rv, float), np.asarray(rl, float), "o", mfc="none", ms=5, color=color,
+                label=f"{name} (reference)")
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    if title:
+        ax.set_title(title)
+    ax.grid(True, alpha=0.3)
+    if names or reference:
+        ax.legend(fontsize="small")
+    fig.tight_layout()
+    path = ensure_parent(path)
+    fig.savefig(path)
+    return path
+
+
+def plot_shell(path, X, quads, g, title: str | None = None, color_by_rotation: bool = True,
+               elev: float | None = None, azim: float | None = None, roll: float = 0.0) -> str:
+    """3-D view of the deformed shell (faces = ``quads`` on the current positions ``g[:, :3, 3]``)
+    with equal axis scaling, saved as PNG. ``X`` (reference positions, (n, 3)) is drawn as a faint
+    wireframe for comparison. Faces are coloured by their mean nodal rotation angle (rad) if
+    ``color_by_rotation``. Returns the path."""
+    import mpl_toolkits.mplot3d  # noqa: F401  (registers the 3d projection)
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    X = as_points(X)
+    n = len(X)
+    cells = as_cells(quads, n)
+    g = as_frames(g, n)
+    phi = g[:, :3, 3]
+    polys = phi[cells]  # (m, 4, 3)
+
+    fig = new_figure((7.0, 6.0))
+    ax = fig.add_subplot(1, 1, 1, projection="3d")
+    faces = Poly3DCollection(polys, edgecolor="k", linewidths=0.3, alpha=0.9)
+    if color_by_rotation:
+        import matplotlib.cm as cm
+        from matplotlib.colors import Normalize
+
+        ang = rotation_angle(g[:, :3, :3])[cells].mean(axis=1)
+        norm = Normalize(vmin=0.0, vmax=max(float(ang.max()), 1e-12))
+        faces.set_facecolor(cm.viridis(norm(ang)))
+        sm = cm.ScalarMappable(norm=norm, cmap="viridis")
+        sm.set_array(ang)
+        fig.colorbar(sm, ax=ax, shrink=0.6, label="rotation angle [rad]")
+    else:
+        faces.set_facecolor("tab:blue")
+    ax.add_collection3d(faces)
+    _finish_3d(ax, X, cells, [phi], elev, azim, roll, title)
+    path = ensure_parent(path)
+    fig.savefig(path)
+    return path
+
+
+def _finish_3d(ax, X, cells, positions, elev, azim, roll, title):
+    """The reference outline (dotted), equal axis scaling around every state, camera, labels."""
+    from mpl_toolkits.mplot3d.art3d import Line3DCollection
+    ref = X[cells]
+    segs = np.stack([ref, np.roll(ref, -1, axis=1)], axis=2).reshape(-1, 2, 3)
+    ax.add_collection3d(Line3DCollection(segs, colors="0.6", linewidths=0.3, linestyles=":"))
+    pts = np.vstack(list(positions) + [X])
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    centre, half = 0.5 * (lo + hi), 0.5 * max(float((hi - lo).max()), 1e-12)
+    ax.set_xlim(centre[0] - half, centre[0] + half)
+    ax.set_ylim(centre[1] - half, centre[1] + half)
+    ax.set_zlim(centre[2] - half, centre[2] + half)
+    ax.set_box_aspect((1, 1, 1))
+    if elev is not None or azim is not None or roll:
+        _view(ax, elev, azim, roll)
+    ax.set_xlabel("x")
+    ax.set_ylabel("y")
+    ax.set_zlabel("z")
+    if title:
+        ax.set_title(title)
+
+
+def _view(ax, elev, azim, roll=0.0):
+    """Camera elevation, azimuth and (matplotlib >= 3.6) roll, in degrees."""
+    try:
+        ax.view_init(elev=elev, azim=azim, roll=roll)
+    except TypeError:          # matplotlib < 3.6: no roll
+        ax.view_init(elev=elev, azim=azim)
+
+
+def plot_sequence(path, X, quads, positions: Sequence[np.ndarray], labels: Sequence[str] | None = None,
+                  title: str | None = None, cmap: str = "viridis", elev: float = 20.0,
+                  azim: float = -60.0, roll: float = 0.0) -> str:
+    """Several deformed shapes of one shell in one 3-D view (e.g. the states of a load path):
+    ``positions[k]`` (n, 3) are the current node positions of state k, drawn as faces coloured
+    by k (``cmap``), with a legend of ``labels``; ``X`` (reference) as a dotted outline, equal
+    axis scaling; camera ``elev``, ``azim``, ``roll`` [deg]. Returns the path."""
+    import matplotlib
+    import mpl_toolkits.mplot3d  # noqa: F401
+    from matplotlib.patches import Patch
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    X = as_points(X)
+    cells = as_cells(quads, len(X))
+    positions = [as_points(p) for p in positions]
+    if not positions:
+        raise ValueError("plot_sequence needs at least one state")
+    fig = new_figure((7.0, 6.0))
+    ax = fig.add_subplot(1, 1, 1, projection="3d")
+    colors = matplotlib.colormaps[cmap](np.linspace(0.0, 0.9, len(positions)))
+    handles = []
+    for k, phi in enumerate(positions):
+        if phi.shape != X.shape:
+            raise ValueError(f"positions[{k}] has shape {phi.shape}, expected {X.shape}")
+        faces = Poly3DCollection(phi[cells], facecolor=colors[k], edgecolor="k", linewidths=0.15, alpha=0.75)
+        ax.add_collection3d(faces)
+        if labels is not None:
+            handles.append(Patch(facecolor=colors[k], label=labels[k]))
+    _finish_3d(ax, X, cells, positions, elev, azim, roll, title)
+    if handles:
+        ax.legend(handles=handles, fontsize="x-small", loc="upper left", ncol=2, framealpha=0.6)
+    path = ensure_parent(path)
+    fig.savefig(path)
+    return path

@@ -1,0 +1,57 @@
+"""A one-line progress bar for terminals: step, load factor (or arc length), Newton iterations,
+residual, elapsed time and an estimate of the time left; silent when not enabled.
+
+Enabled (by the front ends) only on a terminal and not with ``--quiet``; it starts drawing
+after ``delay`` seconds, so short runs print nothing.
+
+Example
+-------
+>>> import io
+>>> out = io.StringIO()
+>>> bar = Progress(4, enabled=True, stream=out, delay=0.0)
+>>> bar.update(2, lam=0.5, iterations=3, residual=1e-12)
+>>> "step 2/4" in out.getvalue() and "left" in out.getvalue()
+True
+"""
+from __future__ import annotations
+
+import sys
+import time
+
+__all__ = ["Progress"]
+
+
+class Progress:
+    """Progress of ``total`` steps (None: unknown; then ``fraction`` drives the estimate)."""
+
+    def __init__(self, total, enabled, stream=None, width=24, delay=2.0):
+        self.total, self.enabled, self.width, self.delay = total, bool(enabled), width, delay
+        self.stream = stream or sys.stdout
+        self.t0 = time.perf_counter()
+        self.drawn = False
+
+    def update(self, k, lam, iterations, residual, fraction=None, extra=""):
+        """Redraw after step k at load factor lam; ``fraction`` of the path done (default
+        k / total)."""
+        if not self.enabled:
+            return
+        elapsed = time.perf_counter() - self.t0
+        if elapsed < self.delay and not self.drawn:
+            return
+        frac = fraction if fraction is not None else (k / self.total if self.total else None)
+        n = int(round(self.width * min(max(frac or 0.0, 0.0), 1.0)))
+        bar = "#" * n + "." * (self.width - n)
+        left = ""
+        if frac and 0 < frac < 1:
+            left = f"  ~{elapsed * (1 - frac) / frac:.0f} s left"
+        total = f"/{self.total}" if self.total else ""
+        self.stream.write(f"\r[{bar}] step {k}{total}  lam {lam:.4g}  it {iterations:>2d}  res {residual:.1e}"
+                          f"{extra}  {elapsed:.1f} s{left} ")
+        self.stream.flush()
+        self.drawn = True
+
+    def close(self, message=""):
+        """End the line (and print ``message``)."""
+        if self.enabled and (self.drawn or message):
+            self.stream.write(("\n" if self.drawn else "") + (message + "\n" if message else ""))
+            self.stream.flush()

@@ -1,0 +1,165 @@
+"""VTK/ParaView output (via meshio): one state as a ``.vtu``, a series with its ``.pvd``.
+
+Conventions: a shell state is a set of nodal frames ``g`` of shape ``(n, 4, 4)`` in SE(3), with
+rotation ``R = g[:, :3, :3]`` (columns = directors d1, d2, d3; d3 is the shell normal) and position
+``phi = g[:, :3, 3]``. All lengths are in the model's length unit (whatever the mesh uses, e.g. mm or
+m), angles in radians; nothing is rescaled on output.
+
+VTU files are written on the *reference* configuration (points = ``X``) with a ``displacement``
+point field, so ParaView's *Warp By Vector* on ``displacement`` (scale 1) shows the deformed shape.
+"""
+from __future__ import annotations
+
+import os
+import xml.etree.ElementTree as ET
+from typing import Mapping, Sequence
+
+import numpy as np
+
+from ..lie import rotation_angle
+
+__all__ = ["frame_fields", "write_vtu", "write_pvd", "write_series", "as_frames", "as_points",
+           "as_cells", "ensure_parent"]
+
+_CELL_TYPES = {3: "triangle", 4: "quad"}
+
+
+# ----------------------------------------------------------------------------- helpers
+def as_frames(g, n: int | None = None, name: str = "g") -> np.ndarray:
+    g = np.asarray(g, dtype=float)
+    if g.ndim != 3 or g.shape[1:] != (4, 4):
+        raise ValueError(f"{name} must have shape (n, 4, 4), got {g.shape}")
+    if n is not None and g.shape[0] != n:
+        raise ValueError(f"{name} has {g.shape[0]} frames but the mesh has {n} nodes")
+    return g
+
+
+def as_points(X) -> np.ndarray:
+    X = np.asarray(X, dtype=float)
+    if X.ndim != 2 or X.shape[1] not in (2, 3):
+        raise ValueError(f"X must have shape (n, 3), got {X.shape}")
+    if X.shape[1] == 2:
+        X = np.column_stack([X, np.zeros(len(X))])
+    return X
+
+
+def as_cells(quads, n: int) -> np.ndarray:
+    c = np.asarray(quads)
+    if c.ndim != 2 or c.shape[1] not in _CELL_TYPES:
+        raise ValueError(f"quads must have shape (m, 4) (or (m, 3) for triangles), got {c.shape}")
+    if not np.issubdtype(c.dtype, np.integer):
+        if not np.all(np.equal(np.mod(c, 1), 0)):
+            raise ValueError("quads must hold integer node ids")
+    c = c.astype(np.int64)
+    if c.size and (c.min() < 0 or c.max() >= n):
+        raise ValueError(f"quads reference node ids outside [0, {n})")
+    return c
+
+
+def ensure_parent(path) -> str:
+    path = os.fspath(path)
+    parent = os.path.dirname(os.path.abspath(path))
+    os.makedirs(parent, exist_ok=True)
+    return path
+
+
+def frame_fields(g0, g) -> dict[str, np.ndarray]:
+    """Point fields derived from reference/current frames ``g0``, ``g`` (n, 4, 4):
+    ``displacement`` (phi - phi0, length unit), ``d1``/``d2``/``d3`` (current directors, unit
+    vectors) and ``rotation_angle`` (angle of R R0^T, rad, in [0, pi]).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> g = np.broadcast_to(np.eye(4), (2, 4, 4))
+    >>> sorted(frame_fields(g, g))
+    ['d1', 'd2', 'd3', 'displacement', 'rotation_angle']
+    """
+    g0 = as_frames(g0, name="g0")
+    g = as_frames(g, len(g0), name="g")
+    R0, R = g0[:, :3, :3], g[:, :3, :3]
+    return {
+        "displacement": g[:, :3, 3] - g0[:, :3, 3],
+        "d1": np.ascontiguousarray(R[:, :, 0]),
+        "d2": np.ascontiguousarray(R[:, :, 1]),
+        "d3": np.ascontiguousarray(R[:, :, 2]),
+        "rotation_angle": rotation_angle(R @ np.swapaxes(R0, 1, 2)),
+    }
+
+
+# ----------------------------------------------------------------------------- VTK / ParaView
+def write_vtu(path, X, quads, g0, g, point_data: Mapping[str, np.ndarray] | None = None,
+              cell_data: Mapping[str, np.ndarray] | None = None) -> str:
+    """Write one state as a VTK unstructured grid (``.vtu``) of quads on the reference mesh.
+
+    X: (n, 3) reference node positions; quads: (m, 4) node ids; g0, g: (n, 4, 4) reference and
+    current frames. Point fields: ``displacement``, ``d1``, ``d2``, ``d3``, ``rotation_angle`` (see
+    :func:`frame_fields`) plus any ``point_data`` (name -> (n,) or (n, k) array); ``cell_data``:
+    name -> (m,) or (m, k) array per quad (e.g. stress resultants). Returns the path.
+    """
+    import meshio
+
+    X = as_points(X)
+    n = len(X)
+    cells = as_cells(quads, n)
+    fields = frame_fields(as_frames(g0, n, "g0"), as_frames(g, n, "g"))
+    for name, arr in (point_data or {}).items():
+        a = np.asarray(arr)
+        if a.shape[0] != n:
+            raise ValueError(f"point_data[{name!r}] has {a.shape[0]} rows, expected {n}")
+        fields[name] = a.astype(float) if a.dtype.kind in "biuf" else a
+    cfields = {}
+    for name, arr in (cell_data or {}).items():
+        a = np.asarray(arr, dtype=float)
+        if a.shape[0] != len(cells):
+            raise ValueError(f"cell_data[{name!r}] has {a.shape[0]} rows, expected {len(cells)}")
+        cfields[name] = [a]
+    path = ensure_parent(path)
+    mesh = meshio.Mesh(points=X, cells=[(_CELL_TYPES[cells.shape[1]], cells)], point_data=fields,
+                       cell_data=cfields or None)
+    meshio.write(path, mesh, file_format="vtu")
+    return path
+
+
+def write_pvd(path, entries: Sequence[tuple[float, str]]) -> str:
+    """Write a ParaView collection (``.pvd``) listing ``entries`` = [(time, vtu file name relative
+    to the .pvd's directory), ...]. ``time`` is the pseudo-time/load factor (any unit). Returns path."""
+    root = ET.Element("VTKFile", type="Collection", version="0.1", byte_order="LittleEndian")
+    coll = ET.SubElement(root, "Collection")
+    for t, fname in entries:
+        ET.SubElement(coll, "DataSet", timestep=repr(float(t)), group="", part="0", file=os.fspath(fname))
+    ET.indent(root)
+    path = ensure_parent(path)
+    ET.ElementTree(root).write(path, encoding="utf-8", xml_declaration=True)
+    return path
+
+
+def write_series(
+    directory,
+    X,
+    quads,
+    g0,
+    frames_per_step: Sequence[np.ndarray],
+    times: Sequence[float],
+    prefix: str = "step",
+    point_data_per_step: Sequence[Mapping[str, np.ndarray]] | None = None,
+) -> list[str]:
+    """Write a load/time series: ``{prefix}_0000.vtu``, ``{prefix}_0001.vtu``, ... and ``series.pvd``
+    in ``directory`` (created if needed). ``frames_per_step[k]`` is the (n, 4, 4) state at
+    ``times[k]``. Returns the written paths: the .vtu files in order, then the .pvd last."""
+    if len(frames_per_step) != len(times):
+        raise ValueError(f"{len(frames_per_step)} states but {len(times)} times")
+    if point_data_per_step is not None and len(point_data_per_step) != len(times):
+        raise ValueError("point_data_per_step must have one mapping per step")
+    directory = os.fspath(directory)
+    os.makedirs(directory, exist_ok=True)
+    paths, entries = [], []
+    for k, (g, t) in enumerate(zip(frames_per_step, times)):
+        fname = f"{prefix}_{k:04d}.vtu"
+        pdata = point_data_per_step[k] if point_data_per_step is not None else None
+        paths.append(write_vtu(os.path.join(directory, fname), X, quads, g0, g, pdata))
+        entries.append((float(t), fname))
+    paths.append(write_pvd(os.path.join(directory, "series.pvd"), entries))
+    return paths
+
+

@@ -1,0 +1,16 @@
+"""Layer 1, meshes: the :class:`Mesh` (nodal reference frames, quads, named node sets and element
+regions), structured generators, and the file reader.
+
+Example
+-------
+>>> from core_se3 import mesh
+>>> m = mesh.rectangle(10.0, 1.0, 4, 1)
+>>> sorted(m.edges)
+['x0', 'x1', 'y0', 'y1']
+"""
+from .core import LOCAL_EDGES, Mesh, chain_order, frames_from
+from .generators import annulus, cross, cylinder_arch, cylinder_panel, hemisphere_quarter, rectangle
+from .readers import from_meshio, read_meshio
+
+__all__ = ["Mesh", "frames_from", "chain_order", "LOCAL_EDGES", "rectangle", "cylinder_arch",
+           "cylinder_panel", "annulus", "hemisphere_quarter", "cross", "from_meshio", "read_meshio"]

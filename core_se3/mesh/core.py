@@ -1,0 +1,190 @@
+"""The quadrilateral shell mesh: nodal reference frames g0 = (R0, phi0) in SE(3), quads, and named
+node sets (edges) and element regions.
+
+A node carries a reference frame whose third axis is the surface normal; quads are listed
+counter-clockwise about that normal (natural coordinates (-1,-1), (1,-1), (1,1), (-1,1)).  Named
+node sets (``edges``) are ordered along the line they follow; named element sets (``regions``)
+come from Gmsh physical surfaces or from the generators.
+"""
+from __future__ import annotations
+
+from collections import defaultdict
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import MeshError, did_you_mean
+
+__all__ = ["Mesh", "frames_from", "LOCAL_EDGES", "chain_order"]
+
+# local edges of a quad in its own orientation: bottom, top (direction xi1), left, right (xi2)
+LOCAL_EDGES = np.array([[0, 1], [3, 2], [0, 3], [1, 2]])
+
+
+def frames_from(X, d1, d3):
+    """SE(3) frames (n, 4, 4) with position X, first axis d1 and third axis d3 (orthonormalised).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> g = frames_from(np.zeros((1, 3)), np.array([[1.0, 1, 0]]), np.array([[0, 0, 2.0]]))
+    >>> np.allclose(g[0, :3, 1], [-2 ** -0.5, 2 ** -0.5, 0])
+    True
+    """
+    d3 = d3 / np.linalg.norm(d3, axis=-1, keepdims=True)
+    d1 = d1 - np.einsum("...i,...i->...", d1, d3)[..., None] * d3
+    d1 = d1 / np.linalg.norm(d1, axis=-1, keepdims=True)
+    d2 = np.cross(d3, d1)
+    g = np.zeros(X.shape[:-1] + (4, 4))
+    g[..., :3, 0], g[..., :3, 1], g[..., :3, 2] = d1, d2, d3
+    g[..., :3, 3] = X
+    g[..., 3, 3] = 1.0
+    return g
+
+
+def chain_order(segments):
+    """Order the nodes of line segments [(a, b), ...] along the line they form (sorted ids if
+    they do not form one line).
+
+    Example
+    -------
+    >>> chain_order([(2, 3), (1, 2), (3, 7)]).tolist()
+    [1, 2, 3, 7]
+    """
+    adj = defaultdict(list)
+    for a, b in segments:
+        adj[a].append(b)
+        adj[b].append(a)
+    ends = [v for v, nb in adj.items() if len(nb) == 1]
+    start = ends[0] if ends else segments[0][0]
+    order, prev, cur = [start], None, start
+    while True:
+        nxt = [v for v in adj[cur] if v != prev and v not in order[-2:]]
+        if not nxt or nxt[0] == start:
+            break
+        prev, cur = cur, nxt[0]
+        order.append(cur)
+    if len(order) != len(adj):
+        return np.array(sorted(adj))
+    return np.array(order)
+
+
+@dataclass
+class Mesh:
+    """Nodes with reference frames ``g0`` (n, 4, 4), quads (m, 4), named node sets ``edges``
+    (name -> node ids, ordered along the edge) and named element sets ``regions`` (name ->
+    element ids).
+
+    Derived once: the unique undirected element edges ``edge_nodes`` (E, 2), and per quad the
+    ids of its four local edges (bottom, top, left, right) with orientation signs
+    ``elem_edges``, ``elem_edge_sign`` (m, 4).
+
+    Example
+    -------
+    >>> from core_se3 import mesh
+    >>> m = mesh.rectangle(2.0, 1.0, 2, 1)
+    >>> m.n_nodes, m.n_elements, m.node_set("x1").tolist()
+    (6, 2, [2, 5])
+    """
+    g0: np.ndarray
+    quads: np.ndarray
+    edges: dict = field(default_factory=dict)
+    shape: tuple | None = None      # (nx, ny) for structured meshes
+    regions: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        self.g0 = np.asarray(self.g0, float)
+        self.quads = np.asarray(self.quads, dtype=np.int64)
+        n = self.g0.shape[0]
+        if self.g0.shape != (n, 4, 4) or not np.all(np.isfinite(self.g0)):
+            raise MeshError("g0 must be a finite (n, 4, 4) array of SE(3) frames")
+        R = self.g0[:, :3, :3]
+        if np.abs(R @ np.swapaxes(R, 1, 2) - np.eye(3)).max() > 1e-8 or np.any(np.linalg.det(R) < 0):
+            raise MeshError("reference rotations are not proper orthonormal matrices")
+        if self.quads.ndim != 2 or self.quads.shape[1] != 4 or len(self.quads) == 0:
+            raise MeshError("quads must be an (m, 4) integer array with m >= 1")
+        if self.quads.min() < 0 or self.quads.max() >= n:
+            raise MeshError("quad connectivity refers to nodes that do not exist")
+        s = np.sort(self.quads, axis=1)
+        if np.any(s[:, 1:] == s[:, :-1]):
+            bad = np.nonzero(np.any(s[:, 1:] == s[:, :-1], axis=1))[0][:5]
+            raise MeshError(f"quads {bad.tolist()} repeat a node (collapsed element)")
+        for name, ids in self.regions.items():
+            ids = np.asarray(ids, np.int64)
+            if ids.ndim != 1 or len(ids) == 0 or ids.min() < 0 or ids.max() >= len(self.quads):
+                raise MeshError(f"region {name!r} must list existing element ids")
+            self.regions[name] = ids
+        self._build_edges()
+        self._check_geometry()
+
+    @property
+    def X(self):
+        """Reference positions (n, 3)."""
+        return self.g0[:, :3, 3]
+
+    @property
+    def n_nodes(self):
+        return self.g0.shape[0]
+
+    @property
+    def n_elements(self):
+        return self.quads.shape[0]
+
+    @property
+    def length_scale(self):
+        """The bounding-box diagonal of the reference mesh (1 if the mesh has no extent)."""
+        X = self.X
+        return float(np.linalg.norm(X.max(0) - X.min(0))) or 1.0
+
+    def _build_edges(self):
+        loc = self.quads[:, LOCAL_EDGES]                       # (m, 4, 2) directed local edges
+        a, b = loc[..., 0].ravel(), loc[..., 1].ravel()
+        lo, hi = np.minimum(a, b), np.maximum(a, b)
+        key = lo * self.n_nodes + hi
+        uniq, inv = np.unique(key, return_inverse=True)
+        self.edge_nodes = np.stack([uniq // self.n_nodes, uniq % self.n_nodes], 1)
+        self.elem_edges = inv.reshape(-1, 4)
+        self.elem_edge_sign = np.where(a == lo, 1, -1).reshape(-1, 4)
+        counts = np.bincount(inv, minlength=len(uniq))
+        if counts.max() > 2:
+            raise MeshError("an edge is shared by more than two quads (non-manifold mesh)")
+
+    def _check_geometry(self):
+        # every quad must be convex with positive area about the mean of its nodal normals
+        X = self.X[self.quads]                                   # (m,4,3)
+        nrm = self.g0[self.quads][:, :, :3, 2].sum(1)
+        for k in range(4):
+            e1 = X[:, (k + 1) % 4] - X[:, k]
+            e2 = X[:, (k + 3) % 4] - X[:, k]
+            c = np.einsum("mi,mi->m", np.cross(e1, e2), nrm)
+            if np.any(c <= 0):
+                bad = np.nonzero(c <= 0)[0][:5]
+                raise MeshError(f"quads {bad.tolist()} are degenerate, non-convex or listed clockwise "
+                                f"about their normal (corner {k})")
+
+    def node_set(self, name_or_pred):
+        """Node ids of a named node set, of the elements of a named region, or of the nodes
+        whose reference position satisfies a predicate ``pred(X) -> bool mask``."""
+        if callable(name_or_pred):
+            return np.nonzero(name_or_pred(self.X))[0]
+        if name_or_pred in self.edges:
+            return np.asarray(self.edges[name_or_pred])
+        if name_or_pred in self.regions:
+            return np.unique(self.quads[self.regions[name_or_pred]])
+        names = sorted(self.edges) + sorted(self.regions)
+        raise MeshError(f"unknown node set {name_or_pred!r}{did_you_mean(name_or_pred, names)}; "
+                        f"node sets: {sorted(self.edges)}, regions: {sorted(self.regions)}")
+
+    def elements(self, region=None):
+        """Element ids of a named region (a name), of a list of ids, or of all elements (None)."""
+        if region is None:
+            return np.arange(self.n_elements)
+        if isinstance(region, str):
+            if region not in self.regions:
+                raise MeshError(f"unknown region {region!r}{did_you_mean(region, self.regions)}; "
+                                f"regions: {sorted(self.regions) or 'none'}")
+            return self.regions[region]
+        ids = np.asarray(region, np.int64).ravel()
+        if ids.size == 0 or ids.min() < 0 or ids.max() >= self.n_elements:
+            raise MeshError("element selection is empty or refers to elements that do not exist")
+        return ids

@@ -1,0 +1,203 @@
+"""Structured shell meshes with named edges (node sets) and regions (element sets).
+
+Every generator returns a :class:`~core_se3.mesh.Mesh` whose nodal frames have d3 = the surface
+normal.  Parametrised patches (``rectangle``, ``cylinder_arch``, ``cylinder_panel``, ``annulus``,
+``hemisphere_quarter``) name their four boundary lines ``x0``, ``x1`` (first parameter at its
+start and end) and ``y0``, ``y1`` (second parameter); ``cross`` (a four-arm gripper) names its
+palm, arms and arm tips.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import MeshError
+from .core import Mesh, frames_from
+
+__all__ = ["rectangle", "cylinder_arch", "cylinder_panel", "annulus", "hemisphere_quarter", "cross"]
+
+
+def _counts(nx, ny):
+    if nx < 1 or ny < 1:
+        raise MeshError(f"mesh needs at least 1x1 elements, got {nx}x{ny}")
+
+
+def _structured(nx, ny):
+    _counts(nx, ny)
+    ids = np.arange((nx + 1) * (ny + 1)).reshape(ny + 1, nx + 1)   # ids[j, i]
+    quads = np.stack([ids[:-1, :-1], ids[:-1, 1:], ids[1:, 1:], ids[1:, :-1]], -1).reshape(-1, 4)
+    edges = {"x0": ids[:, 0], "x1": ids[:, -1], "y0": ids[0, :], "y1": ids[-1, :]}
+    return ids, quads, edges
+
+
+def _patch(a, b, surface):
+    """A structured patch on the parameter grid a (nx + 1,) x b (ny + 1,): surface(A, B) of the
+    flattened grid (A varies fastest) gives the positions X and the directors d1, d3."""
+    nx, ny = len(a) - 1, len(b) - 1
+    ids, quads, edges = _structured(nx, ny)
+    AA, BB = np.meshgrid(a, b)
+    X, d1, d3 = surface(AA.ravel(), BB.ravel())
+    return Mesh(frames_from(X, d1, d3), quads, edges, shape=(nx, ny))
+
+
+def _flat(X):
+    n = X.shape[0]
+    return X, np.tile([1.0, 0, 0], (n, 1)), np.tile([0, 0, 1.0], (n, 1))
+
+
+def rectangle(L, width, nx, ny, x0=0.0):
+    """Flat strip [x0, x0+L] x [-width/2, width/2] in the x-y plane, frames = identity.
+
+    Example
+    -------
+    >>> m = rectangle(10.0, 1.0, 16, 1)
+    >>> m.n_elements, m.X[m.node_set("x1")][:, 0].tolist()
+    (16, [10.0, 10.0])
+    """
+    if not (L > 0 and width > 0):
+        raise MeshError(f"rectangle needs L > 0 and width > 0, got {L}, {width}")
+    _counts(nx, ny)
+    return _patch(x0 + np.linspace(0.0, L, nx + 1), np.linspace(-width / 2, width / 2, ny + 1),
+                  lambda X, Y: _flat(np.stack([X, Y, np.zeros(X.size)], -1)))
+
+
+def cylinder_arch(R, angle, width, nx, ny):
+    """Cylindrical panel of radius R bent in the x-z plane over ``angle`` [rad].
+
+    The arc starts at the origin with tangent +x; the centre of curvature is (0, 0, R); the
+    width runs along y.  Frames: d1 = tangent, d2 = +y, d3 = d1 x d2 (toward the centre).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> m = cylinder_arch(1.0, np.pi, 0.1, 8, 1)
+    >>> np.allclose(m.X[m.node_set("x1")][:, [0, 2]], [[0.0, 2.0], [0.0, 2.0]])
+    True
+    """
+    if not (R > 0 and angle > 0 and width > 0):
+        raise MeshError("cylinder_arch needs R, angle, width > 0")
+    _counts(nx, ny)
+    return _patch(np.linspace(0.0, angle, nx + 1), np.linspace(-width / 2, width / 2, ny + 1),
+                  lambda S, Y: (np.stack([R * np.sin(S), Y, R * (1 - np.cos(S))], -1),
+                                np.stack([np.cos(S), 0 * S, np.sin(S)], -1),
+                                np.stack([-np.sin(S), 0 * S, np.cos(S)], -1)))
+
+
+def cylinder_panel(R, length, theta0, theta1, nt, nl):
+    """Cylindrical panel phi0 = (R sin t, s, R cos t), t in [theta0, theta1], s in [0, length].
+
+    The axis is the global y axis.  xi1 = t (edges 'x0' at theta0, 'x1' at theta1), xi2 = s
+    (edges 'y0' at s = 0, 'y1' at s = length).  Frames: d1 circumferential, d2 = +y,
+    d3 = d1 x d2 = the outward normal (sin t, 0, cos t).  With theta in [-pi/2, pi/2] this is
+    the semi-cylinder of Sze et al. 2004, s3.7.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> m = cylinder_panel(1.0, 2.0, -np.pi / 2, np.pi / 2, 4, 2)
+    >>> np.allclose(np.linalg.norm(m.X[:, [0, 2]], axis=1), 1.0)
+    True
+    """
+    if not (R > 0 and length > 0 and theta1 > theta0):
+        raise MeshError("cylinder_panel needs R > 0, length > 0 and theta1 > theta0")
+    _counts(nt, nl)
+    return _patch(np.linspace(theta0, theta1, nt + 1), np.linspace(0.0, length, nl + 1),
+                  lambda T, S: (np.stack([R * np.sin(T), S, R * np.cos(T)], -1),
+                                np.stack([np.cos(T), 0 * T, -np.sin(T)], -1),
+                                np.stack([np.sin(T), 0 * T, np.cos(T)], -1)))
+
+
+def annulus(r_in, r_out, angle, nr, nt):
+    """Annular sector in the x-y plane, radius r_in..r_out, polar angle 0..angle (2 pi: slit).
+
+    Parameter xi1 runs along the radius, xi2 around; edges 'x0' (inner), 'x1' (outer),
+    'y0' (angle 0), 'y1' (angle ``angle``).  Frames: d1 radial, d3 = +z.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> m = annulus(6.0, 10.0, 2 * np.pi, 2, 8)
+    >>> len(m.node_set("y0")), m.n_elements
+    (3, 16)
+    """
+    if not (0 < r_in < r_out and 0 < angle <= 2 * np.pi):
+        raise MeshError("annulus needs 0 < r_in < r_out and 0 < angle <= 2 pi")
+    _counts(nr, nt)
+    return _patch(np.linspace(r_in, r_out, nr + 1), np.linspace(0.0, angle, nt + 1),
+                  lambda Rr, T: (np.stack([Rr * np.cos(T), Rr * np.sin(T), 0 * T], -1),
+                                 np.stack([np.cos(T), np.sin(T), 0 * T], -1),
+                                 np.tile([0, 0, 1.0], (T.size, 1))))
+
+
+def hemisphere_quarter(R, hole_deg, nt, nf):
+    """Quarter of a hemisphere of radius R with a polar hole of half-angle ``hole_deg`` [deg].
+
+    phi0 = R (sin t cos f, sin t sin f, cos t), polar angle t in [t_hole, pi/2], azimuth f in
+    [0, pi/2].  xi1 = t (edges 'x0' = the hole, 'x1' = the equator), xi2 = f ('y0' on the plane
+    y = 0, 'y1' on the plane x = 0).  Frames: d1 = e_t (meridian, toward the equator),
+    d2 = e_f, d3 = d1 x d2 = the outward normal e_r (Sze et al. 2004, s3.4).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> m = hemisphere_quarter(10.0, 18.0, 4, 4)
+    >>> np.allclose(np.linalg.norm(m.X, axis=1), 10.0)
+    True
+    """
+    if not (R > 0 and 0 < hole_deg < 90):
+        raise MeshError("hemisphere_quarter needs R > 0 and 0 < hole_deg < 90")
+    _counts(nt, nf)
+
+    def surface(T, F):
+        X = R * np.stack([np.sin(T) * np.cos(F), np.sin(T) * np.sin(F), np.cos(T)], -1)
+        return X, np.stack([np.cos(T) * np.cos(F), np.cos(T) * np.sin(F), -np.sin(T)], -1), X / R
+    return _patch(np.linspace(np.radians(hole_deg), np.pi / 2, nt + 1), np.linspace(0.0, np.pi / 2, nf + 1),
+                  surface)
+
+
+ARMS = {"px": (0, 1.0), "mx": (0, -1.0), "py": (1, 1.0), "my": (1, -1.0)}
+
+
+def cross(arm_length, arm_width, n_along, n_across):
+    """Flat cross-shaped (four-arm) gripper in the x-y plane: a square palm of side ``arm_width``
+    at the origin and four arms of length ``arm_length`` along +x, -x, +y, -y (normal +z).
+
+    Regions: ``palm``, ``finger_px``, ``finger_mx``, ``finger_py``, ``finger_my``.  Node sets:
+    ``palm`` (the palm's nodes), ``tips`` (all arm-tip nodes) and the ordered tip lines
+    ``tip_px``, ``tip_mx``, ``tip_py``, ``tip_my``.
+
+    Example
+    -------
+    >>> m = cross(20.0, 6.0, 10, 3)
+    >>> m.n_elements, len(m.regions["finger_px"]), len(m.node_set("tip_px"))
+    (129, 30, 4)
+    """
+    if not (arm_length > 0 and arm_width > 0) or n_along < 1 or n_across < 1:
+        raise MeshError("cross needs arm_length, arm_width > 0 and at least one element each way")
+    w, a = arm_width / 2, arm_width / 2 + arm_length
+    t = np.concatenate([np.linspace(-a, -w, n_along + 1)[:-1], np.linspace(-w, w, n_across + 1),
+                        np.linspace(w, a, n_along + 1)[1:]])
+    k = len(t)
+    ids = np.arange(k * k).reshape(k, k)                           # ids[j, i]: y_j, x_i
+    quads = np.stack([ids[:-1, :-1], ids[:-1, 1:], ids[1:, 1:], ids[1:, :-1]], -1).reshape(-1, 4)
+    XX, YY = np.meshgrid(t, t)
+    X = np.stack([XX.ravel(), YY.ravel(), np.zeros(XX.size)], -1)
+    c = X[quads].mean(1)
+    keep = (np.abs(c[:, 0]) < w) | (np.abs(c[:, 1]) < w)
+    quads = quads[keep]
+    used = np.unique(quads)
+    new = -np.ones(k * k, np.int64)
+    new[used] = np.arange(len(used))
+    X = X[used]
+    quads = new[quads]
+    n = len(X)
+    g0 = frames_from(X, np.tile([1.0, 0, 0], (n, 1)), np.tile([0, 0, 1.0], (n, 1)))
+    tol = 1e-9 * a
+    edges = {"palm": np.nonzero((np.abs(X[:, 0]) <= w + tol) & (np.abs(X[:, 1]) <= w + tol))[0],
+             "tips": np.nonzero(np.max(np.abs(X[:, :2]), axis=1) >= a - tol)[0]}
+    c = X[quads].mean(1)
+    regions = {"palm": np.nonzero((np.abs(c[:, 0]) < w) & (np.abs(c[:, 1]) < w))[0]}
+    for name, (axis, sign) in ARMS.items():
+        on = np.nonzero(np.abs(X[:, axis] - sign * a) < tol)[0]
+        edges[f"tip_{name}"] = on[np.argsort(X[on, 1 - axis])]
+        regions[f"finger_{name}"] = np.nonzero(sign * c[:, axis] > w)[0]
+    return Mesh(g0, quads, edges, regions=regions)

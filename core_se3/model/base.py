@@ -1,0 +1,160 @@
+"""The load extension point: the :class:`Load` base class, what its evaluation returns
+(:class:`LoadEvaluation`), and the registry of load kinds (:data:`LOADS`) that the Python API,
+scenario files, the catalogue and the docs read.
+
+A load at the frames g (n, 4, 4) and load factor lam gives generalised nodal forces f (n, 6) in
+the body frames (left trivialisation, seed eq. E32: a lab force F at a node does (R^T F) . eta_v
+of virtual work, a lab moment M does (R^T M) . eta_w) and, for the tangent, the blocks of
+-df/d eta along g_i <- g_i exp(eta_i): one (6, 6) block per node and, for loads that couple the
+nodes of an element (follower pressure), (4, 4, 6, 6) blocks per element.
+
+A new load kind is one file plus one registry line: a :class:`Load` subclass and
+``register_load(LoadKind(name, target, params, build))``.  ``params`` declare the keys a scenario
+file may give (their type and default); ``build(problem, nodes_or_elements, scale, **values)``
+makes the load.  ``Problem.add_load(kind, where, **values)`` and ``[[loads]] type = "kind"`` in a
+scenario file then both work.
+
+Example
+-------
+>>> from core_se3.model import LOADS
+>>> sorted(LOADS)
+['body_force', 'edge_force', 'edge_moment', 'gravity', 'nodal', 'pressure']
+>>> [p.name for p in LOADS["edge_force"].params]
+['force', 'follower']
+"""
+from __future__ import annotations
+
+import abc
+from dataclasses import dataclass, field
+from typing import Callable, ClassVar
+
+import numpy as np
+
+from ..errors import LoadError
+from ..registry import Registry
+
+__all__ = ["Load", "LoadEvaluation", "Param", "LoadKind", "LOADS", "register_load", "load_kind",
+           "REQUIRED", "linear_scale", "finite_vector", "param_error"]
+
+
+def linear_scale(lam):
+    """The default load-factor programme s(lam) = lam."""
+    return lam
+
+
+@dataclass
+class LoadEvaluation:
+    """Generalised nodal forces of one load and the blocks of -df/d eta.
+
+    f: (n, 6) forces (body frames); node_blocks: (n, 6, 6) or None; element_blocks:
+    (element ids (k,), blocks (k, 4, 4, 6, 6)) or None.
+    """
+    f: np.ndarray
+    node_blocks: np.ndarray | None = None
+    element_blocks: tuple | None = None
+
+
+class Load(abc.ABC):
+    """Base class of external loads (and of supports written as loads, e.g. penalty springs).
+
+    Subclasses implement :meth:`evaluate`.  Class attributes say what the solvers may assume:
+    ``scales_with_load_factor`` (False for supports such as lab springs: continuation's load
+    direction q = df/dlam ignores them), ``approximate_tangent`` (True when the load stiffness
+    is a finite-difference approximation).  :meth:`restraint` reports rigid-body restraints
+    the load provides (for the support check), :meth:`output_fields` point fields for VTU
+    files, :meth:`total` the resultant lab force and moment (for reports).
+    """
+
+    kind: ClassVar[str] = ""
+    scales_with_load_factor: ClassVar[bool] = True
+    approximate_tangent: bool = False
+    name: str = "load"
+
+    @abc.abstractmethod
+    def evaluate(self, g, lam, tangent=True) -> LoadEvaluation:
+        """Forces (and blocks if ``tangent``) at frames g (n, 4, 4) and load factor lam."""
+
+    def restraint(self):
+        """(nodes (k,), lab unit directions (k, q, 3)) this load holds like a support, or None."""
+        return None
+
+    def output_fields(self, g, lam):
+        """Point fields (name -> (n, k)) for output; none by default."""
+        return {}
+
+
+REQUIRED = object()
+
+
+@dataclass(frozen=True)
+class Param:
+    """One key of a load (or field) kind in a scenario file.
+
+    kind: 'vector' (3 numbers), 'number', 'bool', 'matrix3', 'table' (a sub-table with
+    ``fields``); ``default`` REQUIRED for a required key; ``nonzero`` for vectors; ``lo``: a
+    lower bound of numbers (exclusive with ``lo_open``); ``doc``: one line for the docs.
+    """
+    name: str
+    kind: str
+    default: object = REQUIRED
+    nonzero: bool = False
+    lo: float | None = None
+    lo_open: bool = False
+    doc: str = ""
+    fields: tuple = ()
+
+    @property
+    def required(self):
+        return self.default is REQUIRED
+
+
+@dataclass(frozen=True)
+class LoadKind:
+    """A registered load kind.
+
+    target: 'line' (a named line of element edges or node ids: the load is spread along it),
+    'nodes' (each selected node) or 'elements' (a region, default all elements).
+    build(problem, selection, scale, **values) -> Load: makes the load (selection: node ids for
+    'line'/'nodes', element ids or None for 'elements'; scale: the load-factor programme).
+    check(values, given) -> (key, message) or None: checks across keys (``given``: the keys the
+    user wrote).
+    """
+    name: str
+    target: str
+    params: tuple
+    build: Callable
+    check: Callable | None = None
+    doc: str = ""
+    extra: dict = field(default_factory=dict)
+
+
+LOADS = Registry("load kind")
+
+
+def register_load(kind: LoadKind):
+    """Add a load kind to the registry (its name must be new); returns it."""
+    if not isinstance(kind, LoadKind):
+        raise TypeError("register_load needs a LoadKind")
+    if kind.target not in ("line", "nodes", "elements"):
+        raise TypeError(f"load kind {kind.name!r}: target must be 'line', 'nodes' or 'elements'")
+    return LOADS.register(kind.name, kind)
+
+
+def load_kind(name) -> LoadKind:
+    """The registered kind ``name``; an OptionError naming the closest kind otherwise."""
+    return LOADS.lookup(name)
+
+
+def param_error(message, param):
+    """A LoadError that names the offending key ``param`` (scenario files report it)."""
+    exc = LoadError(message)
+    exc.param = param
+    return exc
+
+
+def finite_vector(v, name):
+    """A finite 3-vector or a LoadError naming it."""
+    v = np.asarray(v, float)
+    if v.shape != (3,) or not np.all(np.isfinite(v)):
+        raise LoadError(f"{name} must be a finite 3-vector, got {v!r}")
+    return v

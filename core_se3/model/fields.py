@@ -1,0 +1,364 @@
+"""Applied magnetic fields B^a(x, lam) [T] with their first and second gradients.
+
+A field gives, at lab points x (k, 3) and load factor lam,
+
+    value     B_i                    (k, 3)        [T]
+    gradient  G_ij = dB_i / dx_j     (k, 3, 3)     [T / length]
+    hessian   H_ijl = d2 B_i / dx_j dx_l  (k, 3, 3, 3)  [T / length^2]
+
+The magnetic body force (B^r . grad) B^a = G B^r and its tangent (through H) need the
+gradients; a ``uniform`` field skips them.  In the region of the body the applied field must be
+curl- and divergence-free (a field of magnets and coils outside the body): G symmetric and
+traceless.  The built-in sources are checked (``GradientField`` at construction; the dipole
+is so by construction, asserted by the tests); for a ``UserField`` this is the user's
+responsibility, and ``check_field`` tests it at sample points.
+
+Load-factor programme: each field is multiplied by ``scale(lam)`` (default ``lam``: the field
+ramps up with the load factor); a ``UniformField`` may also turn, its direction following
+``direction(lam)`` (e.g. a field rotating in a plane as the load factor grows).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from math import pi
+from typing import Callable
+
+import numpy as np
+
+from .. import lie
+from ..errors import LoadError
+from ..registry import Registry
+from .base import Param
+
+__all__ = ["MU0", "Field", "UniformField", "GradientField", "DipoleField", "UserField",
+           "Superposition", "rotating_direction", "check_field", "FieldKind", "FIELDS",
+           "register_field", "field_kind"]
+
+MU0 = 4e-7 * pi
+"""Vacuum permeability [N/A^2] for SI stresses (Pa).  For N-mm-MPa models use MU0 * 1e6."""
+
+
+def _vec3(v, name):
+    v = np.asarray(v, float)
+    if v.shape != (3,) or not np.all(np.isfinite(v)):
+        raise LoadError(f"{name} must be a finite 3-vector, got {v!r}")
+    return v
+
+
+def _scale_fn(scale):
+    if scale is None:
+        return lambda lam: lam
+    if not callable(scale):
+        raise LoadError(f"scale must be a function of the load factor, got {scale!r}")
+    return scale
+
+
+def _finite_scale(s, lam):
+    s = float(s)
+    if not np.isfinite(s):
+        raise LoadError(f"field scale at load factor {lam} is not finite ({s})")
+    return s
+
+
+class Field:
+    """Base class of applied fields: subclasses implement ``_value``, ``_gradient`` and
+    ``_hessian`` at scale 1 (x (k, 3) -> (k, 3), (k, 3, 3), (k, 3, 3, 3)); ``value``,
+    ``gradient`` and ``hessian`` multiply them by ``scale(lam)``.  ``uniform = True`` skips the
+    gradients (no magnetic body force); ``approximate_hessian = True`` flags a finite-difference
+    Hessian (the tangent of the body force is then approximate).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> class Ramp(Field):                      # B = (0, 0, b x) is not curl-free: test only
+    ...     def _value(self, x, lam): return np.c_[0 * x[:, :2], x[:, 0]]
+    ...     def _gradient(self, x, lam): return np.broadcast_to([[0, 0, 0], [0, 0, 0], [1.0, 0, 0]], x.shape + (3,))
+    ...     def _hessian(self, x, lam): return np.zeros(x.shape + (3, 3))
+    >>> Ramp().value(np.array([[2.0, 0, 0]]), 0.5).tolist()
+    [[0.0, 0.0, 1.0]]
+    """
+
+    uniform = False
+    approximate_hessian = False
+
+    def __init__(self, scale=None):
+        self.scale = _scale_fn(scale)
+
+    def value(self, x, lam):
+        return _finite_scale(self.scale(lam), lam) * self._value(np.asarray(x, float), lam)
+
+    def gradient(self, x, lam):
+        x = np.asarray(x, float)
+        if self.uniform:
+            return np.zeros(x.shape[:-1] + (3, 3))
+        return _finite_scale(self.scale(lam), lam) * self._gradient(x, lam)
+
+    def hessian(self, x, lam):
+        x = np.asarray(x, float)
+        if self.uniform:
+            return np.zeros(x.shape[:-1] + (3, 3, 3))
+        return _finite_scale(self.scale(lam), lam) * self._hessian(x, lam)
+
+
+class UniformField(Field):
+    """B^a = scale(lam) * B, or scale(lam) * |B| * direction(lam) if ``direction`` is given."""
+
+    uniform = True
+
+    def __init__(self, B, scale=None, direction=None):
+        super().__init__(scale)
+        self.B = _vec3(B, "uniform field B")
+        if direction is not None and not callable(direction):
+            raise LoadError("direction must be a function of the load factor returning a unit 3-vector")
+        self.direction = direction
+
+    def _value(self, x, lam):
+        if self.direction is None:
+            b = self.B
+        else:
+            d = _vec3(self.direction(lam), f"field direction at load factor {lam}")
+            nd = np.linalg.norm(d)
+            if nd == 0:
+                raise LoadError(f"field direction at load factor {lam} is the zero vector")
+            b = np.linalg.norm(self.B) * d / nd
+        return np.broadcast_to(b, x.shape[:-1] + (3,)).copy()
+
+
+def rotating_direction(axis, start, turns_per_unit=1.0, lam0=0.0, lam1=None):
+    """direction(lam): the unit vector ``start`` turned about ``axis`` by the angle
+    2 pi turns_per_unit (lam - lam0); with ``lam1`` the turn is held outside [lam0, lam1]
+    (lam clipped to that interval).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> d = rotating_direction((0, 0, 1), (1, 0, 0), turns_per_unit=0.25)
+    >>> np.round(d(1.0), 12).tolist()
+    [0.0, 1.0, 0.0]
+    """
+    axis = _vec3(axis, "rotation axis")
+    start = _vec3(start, "start direction")
+    a = axis / np.linalg.norm(axis)
+    s = start / np.linalg.norm(start)
+    angle = 2 * pi * turns_per_unit
+    if lam1 is None:
+        return lambda lam: lie.exp_so3(angle * (lam - lam0) * a) @ s
+    if not lam1 > lam0:
+        raise LoadError(f"a rotating field needs lam1 > lam0, got {lam0}, {lam1}")
+    return lambda lam: lie.exp_so3(angle * (min(max(lam, lam0), lam1) - lam0) * a) @ s
+
+
+class GradientField(Field):
+    """Uniform-gradient field B^a = scale(lam) (B0 + G (x - x0)); G symmetric and traceless."""
+
+    def __init__(self, B0, G, x0=(0.0, 0.0, 0.0), scale=None, tol=1e-12):
+        super().__init__(scale)
+        self.B0 = _vec3(B0, "field B0")
+        self.G = np.asarray(G, float)
+        self.x0 = _vec3(x0, "field origin x0")
+        if self.G.shape != (3, 3) or not np.all(np.isfinite(self.G)):
+            raise LoadError(f"field gradient G must be a finite 3x3 matrix, got {G!r}")
+        g = max(np.abs(self.G).max(), 1e-300)
+        if np.abs(self.G - self.G.T).max() > tol * g:
+            raise LoadError("field gradient G is not symmetric: the field would have a curl "
+                            "(currents) inside the body")
+        if abs(np.trace(self.G)) > tol * g:
+            raise LoadError(f"field gradient G has trace {np.trace(self.G):.3g}: div B must vanish")
+
+    def _value(self, x, lam):
+        return self.B0 + (x - self.x0) @ self.G.T
+
+    def _gradient(self, x, lam):
+        return np.broadcast_to(self.G, x.shape[:-1] + (3, 3)).copy()
+
+    def _hessian(self, x, lam):
+        return np.zeros(x.shape[:-1] + (3, 3, 3))
+
+
+class DipoleField(Field):
+    """Point dipole of moment m [A m^2] at x0:  B = mu0/(4 pi) (3 r (r.m)/|r|^5 - m/|r|^3).
+
+    Curl- and divergence-free everywhere except at x0, which must lie outside the body.
+    The Hessian is the complex-step derivative of the closed-form gradient (exact to round-off).
+    ``mu0`` must match the model's units (see ``MU0``).
+    """
+
+    def __init__(self, m, x0, scale=None, mu0=MU0):
+        super().__init__(scale)
+        self.m = _vec3(m, "dipole moment m")
+        self.x0 = _vec3(x0, "dipole position x0")
+        self.k = mu0 / (4 * pi)
+
+    def _r(self, x):
+        r = x - self.x0
+        r2 = np.einsum("...i,...i->...", r, r)
+        if np.any(np.abs(r2) == 0):
+            raise LoadError("a point lies on the dipole: the field is singular there")
+        return r, r2
+
+    def _value(self, x, lam):
+        r, r2 = self._r(x)
+        rm = r @ self.m
+        return self.k * (3 * r * (rm / r2 ** 2.5)[..., None] - self.m / (r2 ** 1.5)[..., None])
+
+    def _gradient(self, x, lam):
+        r, r2 = self._r(x)
+        rm = r @ self.m
+        I = np.eye(3)
+        a = (3 / r2 ** 2.5)[..., None, None]
+        # dB_i/dx_l = k [3 (d_il (r.m) + r_i m_l + m_i r_l)/r^5 - 15 r_i r_l (r.m)/r^7]
+        return self.k * (a * (I * rm[..., None, None] + r[..., :, None] * self.m + self.m[:, None] * r[..., None, :])
+                         - (15 * rm / r2 ** 3.5)[..., None, None] * r[..., :, None] * r[..., None, :])
+
+    def _hessian(self, x, lam, h=1e-30):
+        x = np.asarray(x, float)
+        out = np.empty(x.shape[:-1] + (3, 3, 3))
+        for k in range(3):
+            xc = x.astype(complex)
+            xc[..., k] += 1j * h * max(1.0, np.abs(x).max())
+            out[..., k] = self._gradient(xc, lam).imag / (h * max(1.0, np.abs(x).max()))
+        return out
+
+
+class UserField(Field):
+    """A user field: value(x) -> (k,3) [T], gradient(x) -> (k,3,3) dB_i/dx_j, optional
+    hessian(x) -> (k,3,3,3).  Without a Hessian the force tangent is taken by central finite
+    differences of the gradient and flagged as approximate (``approximate_hessian``).
+    The field must be curl- and divergence-free in the body's region (``check_field``)."""
+
+    def __init__(self, value, gradient, hessian=None, scale=None, fd_step=None):
+        super().__init__(scale)
+        if not callable(value) or not callable(gradient):
+            raise LoadError("UserField needs callables value(x) and gradient(x)")
+        self._v, self._g, self._h = value, gradient, hessian
+        self.approximate_hessian = hessian is None
+        self.fd_step = fd_step
+
+    def _call(self, fn, x, shape, what):
+        out = np.asarray(fn(x), float)
+        if out.shape != x.shape[:-1] + shape:
+            raise LoadError(f"user field {what} returned shape {out.shape}, expected {x.shape[:-1] + shape}")
+        if not np.all(np.isfinite(out)):
+            raise LoadError(f"user field {what} is not finite at some points")
+        return out
+
+    def _value(self, x, lam):
+        return self._call(self._v, x, (3,), "value")
+
+    def _gradient(self, x, lam):
+        return self._call(self._g, x, (3, 3), "gradient")
+
+    def _hessian(self, x, lam):
+        if self._h is not None:
+            return self._call(self._h, x, (3, 3, 3), "hessian")
+        h = self.fd_step or 1e-6 * max(1.0, float(np.abs(x).max()))
+        out = np.empty(x.shape[:-1] + (3, 3, 3))
+        for k in range(3):
+            e = np.zeros(3)
+            e[k] = h
+            out[..., k] = (self._gradient(x + e, lam) - self._gradient(x - e, lam)) / (2 * h)
+        return out
+
+
+class Superposition(Field):
+    """The sum of several fields (e.g. a uniform field plus a magnet's dipole), each with its own
+    load-factor programme."""
+
+    def __init__(self, *fields):
+        super().__init__(lambda lam: 1.0)
+        if not fields or not all(isinstance(f, Field) for f in fields):
+            raise LoadError("Superposition needs one or more core_se3.fields.Field objects")
+        self.fields = fields
+        self.uniform = all(f.uniform for f in fields)
+        self.approximate_hessian = any(f.approximate_hessian for f in fields)
+
+    def _value(self, x, lam):
+        return sum(f.value(x, lam) for f in self.fields)
+
+    def _gradient(self, x, lam):
+        return sum(f.gradient(x, lam) for f in self.fields)
+
+    def _hessian(self, x, lam):
+        return sum(f.hessian(x, lam) for f in self.fields)
+
+
+def check_field(field, x, lam=1.0, rtol=1e-8):
+    """(max |curl B|, max |div B|) relative to max |grad B| at points x; raises LoadError above rtol."""
+    G = field.gradient(np.asarray(x, float), lam)
+    g = max(np.abs(G).max(), 1e-300)
+    curl = np.abs(G - np.swapaxes(G, -1, -2)).max() / g
+    div = np.abs(np.trace(G, axis1=-2, axis2=-1)).max() / g
+    if curl > rtol or div > rtol:
+        raise LoadError(f"applied field is not curl- and divergence-free in the body: relative "
+                        f"|curl B| {curl:.2e}, |div B| {div:.2e}")
+    return curl, div
+
+
+# ------------------------------------------------------------------ registry -------------
+@dataclass(frozen=True)
+class FieldKind:
+    """A field kind of scenario files: ``params`` (the keys besides type and scale) and
+    ``build(values, scale, mu0) -> Field`` (mu0: the model's vacuum permeability)."""
+    name: str
+    params: tuple
+    build: Callable
+    check: Callable | None = None
+    doc: str = ""
+
+
+FIELDS = Registry("field kind")
+
+
+def register_field(kind: FieldKind):
+    """Add a field kind to the registry (its name must be new); returns it."""
+    if not isinstance(kind, FieldKind):
+        raise TypeError("register_field needs a FieldKind")
+    return FIELDS.register(kind.name, kind)
+
+
+def field_kind(name) -> FieldKind:
+    """The registered field kind ``name``; an OptionError naming the closest one otherwise."""
+    return FIELDS.lookup(name)
+
+
+def _uniform(values, scale, mu0):
+    rot = values.get("rotate")
+    direction = None
+    if rot is not None:
+        # the angle over [start, end] of the load factor, held outside
+        direction = rotating_direction(rot["axis"], values["B"],
+                                       turns_per_unit=rot["angle"] / (2 * pi * (rot["end"] - rot["start"])),
+                                       lam0=rot["start"], lam1=rot["end"])
+    return UniformField(values["B"], scale=scale, direction=direction)
+
+
+def _uniform_check(values, given):
+    rot = values.get("rotate")
+    if rot is not None:
+        if rot["end"] <= rot["start"]:
+            return "rotate.end", f"expected end > start ({rot['start']:g}), got {rot['end']:g}"
+        if not any(values["B"]):
+            return "B", "a rotating field needs a non-zero B (its initial direction)"
+    return None
+
+
+register_field(FieldKind("uniform", (
+    Param("B", "vector", doc="flux density [T] at scale 1"),
+    Param("rotate", "table", None, doc="turn the field: axis, angle [rad], start, end (load factors)",
+          fields=(Param("axis", "vector", nonzero=True), Param("angle", "number"),
+                  Param("start", "number", 0.0), Param("end", "number", 1.0)))),
+    _uniform, _uniform_check, doc="a uniform field, optionally turning with the load factor"))
+register_field(FieldKind("gradient", (
+    Param("B", "vector", doc="flux density [T] at x0"),
+    Param("G", "matrix3", doc="gradient dB_i/dx_j [T/length], symmetric and traceless"),
+    Param("x0", "vector", (0.0, 0.0, 0.0), doc="reference point")),
+    lambda v, scale, mu0: GradientField(v["B"], v["G"], x0=v["x0"], scale=scale),
+    doc="a field of uniform gradient"))
+register_field(FieldKind("dipole", (
+    Param("m", "vector", nonzero=True, doc="dipole moment [A length^2]"),
+    Param("x0", "vector", doc="dipole position (outside the body)"),
+    Param("mu0", "number", None, lo=0.0, lo_open=True,
+          doc="vacuum permeability in the model's units (default SI)")),
+    lambda v, scale, mu0: DipoleField(v["m"], v["x0"], scale=scale,
+                                      **({} if v["mu0"] is None else {"mu0": v["mu0"]})),
+    doc="a point dipole"))

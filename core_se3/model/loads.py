@@ -1,0 +1,274 @@
+"""Mechanical loads and their load stiffness (registered kinds: edge_force, edge_moment, nodal,
+pressure, body_force, gravity).
+
+Virtual work in the left trivialisation: a lab force F at a node does F . delta phi =
+(R^T F) . kappa_phi, a lab moment M does (R^T M) . kappa_R (seed eq. E32).  So
+
+* dead nodal force/moment (fixed lab vector): generalised force (R^T F, R^T M), whose
+  derivative along g <- g exp(eta) is [[0, hat(R^T F)], [0, hat(R^T M)]];
+* follower nodal force/moment (fixed components in the node's frame d1, d2, d3): constant
+  generalised force, no load stiffness in this formulation;
+* dead surface load q per unit reference area (pressure of fixed direction, gravity-type body
+  force): consistent nodal forces int N_i q dA, then as dead nodal forces;
+* follower pressure p per unit *current* area along the current normal, f = p a_1 x a_2 per
+  unit parameter area (bilinear positions): nodal forces int N_i p a_1 x a_2 dxi, with load
+  stiffness from the rotation of R^T and from the change of a_1 x a_2.
+
+Every load is scaled by a function of the load factor (``scale(lam)``, linear by default).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .. import lie
+from ..errors import LoadError
+from ..fem.quadrature import shape_functions, surface_jacobian
+from .base import (Load, LoadEvaluation, LoadKind, Param, finite_vector, linear_scale, param_error,
+                   register_load)
+
+__all__ = ["NodalLoad", "SurfaceLoad", "edge_weights"]
+
+
+def edge_weights(mesh, nodes):
+    """Consistent weights (summing to 1) of a uniform line load along ordered edge nodes.
+
+    Example
+    -------
+    >>> from core_se3 import mesh
+    >>> edge_weights(mesh.rectangle(1.0, 1.0, 1, 2), [0, 2, 4]).tolist()
+    [0.25, 0.5, 0.25]
+    """
+    nodes = np.asarray(nodes)
+    if len(nodes) == 1:
+        return np.ones(1)
+    X = mesh.X[nodes]
+    seg = np.linalg.norm(np.diff(X, axis=0), axis=1)
+    w = np.zeros(len(nodes))
+    w[:-1] += seg / 2
+    w[1:] += seg / 2
+    return w / w.sum()
+
+
+class NodalLoad(Load):
+    """Force and moment on nodes, split by ``weights``; dead (lab) or follower (body frame).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> ld = NodalLoad(3, [2], [1.0], force=(0, 0, 2.0))
+    >>> ld.evaluate(np.broadcast_to(np.eye(4), (3, 4, 4)), 0.5).f[2].tolist()
+    [0.0, 0.0, 1.0, 0.0, 0.0, 0.0]
+    """
+
+    def __init__(self, n_nodes, nodes, weights, force=(0, 0, 0), moment=(0, 0, 0), follower=False,
+                 scale=None, name="nodal"):
+        self.n = int(n_nodes)
+        self.nodes = np.asarray(nodes, np.int64)
+        self.weights = np.asarray(weights, float)
+        self.force = finite_vector(force, "force")
+        self.moment = finite_vector(moment, "moment")
+        self.follower = bool(follower)
+        self.scale = scale or linear_scale
+        self.name = name
+        if self.weights.shape != self.nodes.shape or not np.all(np.isfinite(self.weights)):
+            raise LoadError(f"load {name}: weights must be finite, one per node")
+
+    def evaluate(self, g, lam, tangent=True):
+        n = self.n
+        s = self.scale(lam)
+        f = np.zeros((n, 6))
+        w = self.weights[:, None] * s
+        if self.follower:
+            np.add.at(f, self.nodes, np.concatenate([w * self.force, w * self.moment], 1))
+            return LoadEvaluation(f)
+        Rt = np.swapaxes(g[self.nodes, :3, :3], 1, 2)
+        Fb = w * (Rt @ self.force)
+        Mb = w * (Rt @ self.moment)
+        np.add.at(f, self.nodes, np.concatenate([Fb, Mb], 1))
+        if not tangent:
+            return LoadEvaluation(f)
+        Kn = np.zeros((n, 6, 6))
+        blk = np.zeros((len(self.nodes), 6, 6))
+        blk[:, :3, 3:] = -lie.hat3(Fb)
+        blk[:, 3:, 3:] = -lie.hat3(Mb)
+        np.add.at(Kn, self.nodes, blk)
+        return LoadEvaluation(f, Kn)
+
+    def total(self, lam):
+        """Resultant (force, moment) vectors at lam: lab vectors if dead, frame components if
+        follower."""
+        s = self.scale(lam)
+        return s * self.weights.sum() * self.force, s * self.weights.sum() * self.moment
+
+
+class SurfaceLoad(Load):
+    """Distributed load over the elements ``elements`` (default: all).
+
+    dead: ``q`` is a lab vector per unit reference area (fixed-direction pressure, gravity).
+    follower: ``q`` is a scalar pressure per unit current area along the current normal
+    a_1 x a_2 (positive toward the frames' +d3 side).
+
+    Example
+    -------
+    >>> from core_se3 import mesh
+    >>> m = mesh.rectangle(2.0, 1.0, 2, 1)
+    >>> ld = SurfaceLoad(m, (0.0, 0.0, -3.0))
+    >>> round(float(ld.evaluate(m.g0, 1.0).f[:, 2].sum()), 12)        # q times the area
+    -6.0
+    """
+
+    def __init__(self, mesh, q, follower=False, elements=None, scale=None, name="surface"):
+        self.mesh = mesh
+        self.follower = bool(follower)
+        self.scale = scale or linear_scale
+        self.name = name
+        self.elements = np.arange(mesh.n_elements) if elements is None else np.asarray(elements)
+        self.N, self.dN = shape_functions()
+        if self.follower:
+            q = float(q)
+            if not np.isfinite(q):
+                raise LoadError(f"load {name}: pressure must be finite, got {q}")
+            self.p = q
+        else:
+            self.q = finite_vector(q, "surface load")
+            j0 = surface_jacobian(mesh.X[mesh.quads[self.elements]], self.dN)
+            self.node_w = np.einsum("qi,mq->mi", self.N, j0)           # int N_i dA, (m,4)
+
+    def evaluate(self, g, lam, tangent=True):
+        s = self.scale(lam)
+        quads = self.mesh.quads[self.elements]
+        n = self.mesh.n_nodes
+        f = np.zeros((n, 6))
+        if not self.follower:
+            F = s * self.node_w[..., None] * self.q                      # (m,4,3) lab
+            Rt = np.swapaxes(g[quads, :3, :3], -1, -2)
+            Fb = np.einsum("maij,maj->mai", Rt, F)
+            for k in range(3):
+                f[:, k] += np.bincount(quads.ravel(), weights=Fb[..., k].ravel(), minlength=n)
+            if not tangent:
+                return LoadEvaluation(f)
+            Kn = np.zeros((n, 6, 6))
+            blk = -lie.hat3(Fb)                                          # (m,4,3,3)
+            for i in range(3):
+                for j in range(3):
+                    Kn[:, i, 3 + j] += np.bincount(quads.ravel(), weights=blk[..., i, j].ravel(), minlength=n)
+            return LoadEvaluation(f, Kn)
+        p = s * self.p
+        phi = g[quads, :3, 3]                                            # (m,4,3)
+        R = g[quads, :3, :3]
+        a = np.einsum("qai,mij->mqaj", self.dN, phi)                     # (m,q,2,3)
+        nrm = np.cross(a[:, :, 0], a[:, :, 1])                          # (m,q,3)
+        F = p * np.einsum("qi,mqk->mik", self.N, nrm)                    # (m,4,3) lab
+        Fb = np.einsum("maji,maj->mai", R, F)                            # R^T F
+        for k in range(3):
+            f[:, k] += np.bincount(quads.ravel(), weights=Fb[..., k].ravel(), minlength=n)
+        if not tangent:
+            return LoadEvaluation(f)
+        # load stiffness: -d(R_i^T F_i)/d eta; rotation part on node i, position part couples i, j
+        m = len(quads)
+        Ke = np.zeros((m, 4, 4, 6, 6))
+        idx = np.arange(4)
+        Ke[:, idx, idx, :3, 3:] = -lie.hat3(Fb)
+        A1, A2 = lie.hat3(a[:, :, 0]), lie.hat3(a[:, :, 1])               # (m,q,3,3)
+        # dF_i/dphi_j = p int N_i (-dN_j/dx hat(a2) + dN_j/dy hat(a1)) dxi
+        dF = p * (np.einsum("qi,qj,mqkl->mijkl", self.N, -self.dN[:, 0], A2)
+                  + np.einsum("qi,qj,mqkl->mijkl", self.N, self.dN[:, 1], A1))
+        Ke[..., :3, :3] = -np.einsum("miak,mijab,mjbc->mijkc", R, dF, R)
+        return LoadEvaluation(f, None, (self.elements, Ke))
+
+
+# ------------------------------------------------------------------ registered kinds -------
+
+def _edge(what):
+    def build(problem, nodes, scale, follower=False, **v):
+        vec = v[what]
+        kw = {what: vec}
+        return NodalLoad(problem.mesh.n_nodes, nodes, edge_weights(problem.mesh, nodes),
+                         follower=follower, scale=scale, name=f"edge {what}", **kw)
+    return build
+
+
+def _nodal(problem, nodes, scale, force=(0, 0, 0), moment=(0, 0, 0), follower=False):
+    return NodalLoad(problem.mesh.n_nodes, nodes, np.ones(len(nodes)), force=force, moment=moment,
+                     follower=follower, scale=scale, name="nodal")
+
+
+def _nodal_check(values, given):
+    if "force" not in given and "moment" not in given:
+        return None, "a nodal load needs 'force' and/or 'moment'"
+    return None
+
+
+def _pressure(problem, elements, scale, p, direction=(0.0, 0.0, 1.0), follower=False):
+    if not np.isfinite(p):
+        raise LoadError(f"pressure must be finite, got {p}")
+    if follower:
+        return SurfaceLoad(problem.mesh, p, True, elements, scale, "follower pressure")
+    d = np.array([0, 0, 1.0]) if direction is None else np.asarray(direction, float)
+    return SurfaceLoad(problem.mesh, p * d, False, elements, scale, "dead pressure")
+
+
+def _pressure_check(values, given):
+    if values.get("follower") and "direction" in given:
+        return "direction", ("a follower pressure acts along the current normal; 'direction' is "
+                             "only for dead pressure")
+    return None
+
+
+def _body_force(problem, elements, scale, q):
+    return SurfaceLoad(problem.mesh, q, False, elements, scale, "body force")
+
+
+def _gravity(problem, elements, scale, g=(0.0, 0.0, -9.81), rho=None):
+    """Self-weight rho h g per unit reference area, one load per group of elements sharing
+    (rho, h) (rho from the material where the load gives none)."""
+    mesh, mat = problem.mesh, problem.material
+    sel = np.arange(mesh.n_elements) if elements is None else np.asarray(elements)
+    m = mesh.n_elements
+    h, dens = material_per_element(mat, "h", m)[sel], material_per_element(mat, "rho", m)[sel]
+    if rho is not None:
+        if not (np.isfinite(rho) and rho >= 0):
+            raise param_error(f"density must be non-negative and finite, got {rho}", "rho")
+        dens = np.full(len(sel), float(rho))
+    if np.any(np.isnan(dens)):
+        raise param_error("gravity needs a density on every loaded element: give 'rho' to the "
+                          "load or to the material (Material(..., rho=...), [material] rho)", "rho")
+    gv = np.asarray(g, float)
+    return [SurfaceLoad(mesh, r * t * gv, False, sel[(dens == r) & (h == t)], scale, "gravity")
+            for r, t in sorted(set(zip(dens.tolist(), h.tolist()))) if r != 0]
+
+
+def material_per_element(material, name, n_elements):
+    """Property ``name`` of every element's material (m,) as floats, NaN where it is None."""
+    per = getattr(material, "per_element", None)
+    vals = per(name) if per is not None else [getattr(material, name)] * n_elements
+    return np.array([np.nan if v is None else v for v in vals], float)
+
+
+register_load(LoadKind("edge_force", "line", (
+    Param("force", "vector", doc="total force [force]: lab vector (dead) or d1, d2, d3 components "
+                                 "(follower), spread consistently along the line"),
+    Param("follower", "bool", False, doc="components in each node's current frame")),
+    _edge("force"), doc="a total force spread along a line of element edges"))
+register_load(LoadKind("edge_moment", "line", (
+    Param("moment", "vector", doc="total moment [force x length], spread along the line"),
+    Param("follower", "bool", False, doc="components in each node's current frame")),
+    _edge("moment"), doc="a total moment spread along a line of element edges"))
+register_load(LoadKind("nodal", "nodes", (
+    Param("force", "vector", (0.0, 0.0, 0.0), doc="force on each selected node"),
+    Param("moment", "vector", (0.0, 0.0, 0.0), doc="moment on each selected node"),
+    Param("follower", "bool", False, doc="components in each node's current frame")),
+    _nodal, _nodal_check, doc="the same force and moment on every selected node"))
+register_load(LoadKind("pressure", "elements", (
+    Param("p", "number", doc="pressure [force/length^2]"),
+    Param("direction", "vector", (0.0, 0.0, 1.0), nonzero=True,
+          doc="lab direction of a dead pressure (per reference area)"),
+    Param("follower", "bool", False, doc="along the current normal, per current area")),
+    _pressure, _pressure_check, doc="a uniform pressure on a region"))
+register_load(LoadKind("body_force", "elements", (
+    Param("q", "vector", doc="dead force per unit reference area [force/length^2]"),),
+    _body_force, doc="a dead force per unit reference area"))
+register_load(LoadKind("gravity", "elements", (
+    Param("g", "vector", (0.0, 0.0, -9.81), doc="gravitational acceleration [length/time^2]"),
+    Param("rho", "number", None, lo=0.0, doc="density [mass/length^3] (default: the material's)")),
+    _gravity, doc="self-weight rho h g per unit reference area"))

@@ -1,0 +1,45 @@
+"""Probes: points of the mesh whose position and frame are recorded at every step."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from .. import lie
+
+__all__ = ["Probe"]
+
+
+@dataclass
+class Probe:
+    """A point of the mesh between two nodes a, b: the frame g_a exp((1 - wa) log(g_a^-1 g_b))
+    on the SE(3) geodesic (wa = 1: the node a itself).
+
+    Example
+    -------
+    >>> from core_se3 import mesh
+    >>> m = mesh.rectangle(2.0, 1.0, 1, 1)
+    >>> p = Probe.edge_midpoint("tip", m.node_set("x1"))
+    >>> p.state(m.g0)[0].tolist()
+    [2.0, 0.0, 0.0]
+    """
+    name: str
+    node_a: int
+    node_b: int
+    wa: float = 1.0
+
+    def state(self, g):
+        """(position (3,), rotation (3, 3)) of the probe at the frames g."""
+        ga, gb = g[self.node_a], g[self.node_b]
+        if self.node_a == self.node_b or self.wa == 1.0:
+            return ga[:3, 3].copy(), ga[:3, :3].copy()
+        rel = lie.log(lie.inv(ga) @ gb)
+        gm = ga @ lie.exp((1.0 - self.wa) * rel)
+        return gm[:3, 3].copy(), gm[:3, :3].copy()
+
+    @classmethod
+    def edge_midpoint(cls, name, nodes):
+        """The middle of an ordered node set: its middle node, or halfway between the two."""
+        nodes = list(nodes)
+        k = len(nodes)
+        if k % 2 == 1:
+            return cls(name, nodes[k // 2], nodes[k // 2], 1.0)
+        return cls(name, nodes[k // 2 - 1], nodes[k // 2], 0.5)

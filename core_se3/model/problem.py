@@ -1,0 +1,451 @@
+"""The Problem: mesh + material + element + supports + loads + probes, and the discrete equations
+r(g, lam) = r_int(g) - f_ext(g, lam) and their tangent, evaluated in one place for every solver.
+
+    p = Problem(mesh.rectangle(10.0, 1.0, 16, 1), Material(E=1.2e6, nu=0.0, h=0.1))
+    p.clamp("x0")
+    p.add_edge_force("x1", (0, 0, 4.0))
+    result = p.solve(steps=10)
+
+State: the nodal frames g (n, 4, 4); update g_i <- g_i exp(eta_i) with eta the body-frame twist
+(v, w) of node i (seed Algorithm 1, without its incremental strain update: strains are
+recomputed from the current frames).  The residual and the tangent live on the free degrees of
+freedom (those no support holds).  Solving is delegated to the solver registered under the
+control's name (:data:`SOLVERS`, filled by :mod:`core_se3.solvers`), so that this layer does not
+depend on the solvers.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from .. import lie
+from ..assembly import Assembler
+from ..errors import LoadError, MeshError, OptionError, SingularSystemError, SupportError, did_you_mean
+from ..fem import make_element
+from .base import Load, load_kind
+from .fields import MU0
+from .magnetics import MagneticLoad, Magnetisation
+from .probes import Probe
+from .supports import LabSpring, LabTiltSpring, Prescribed, RotationComponentSpring
+
+__all__ = ["Problem", "Evaluation", "SOLVERS"]
+
+SOLVERS: dict[str, Callable] = {}
+"""Solvers by control name ('load', 'arclength', 'displacement'): solve(problem, **options)."""
+
+
+@dataclass
+class Evaluation:
+    """The discrete equations at one state (g, lam).
+
+    r: residual on the free dofs (nfree,); r_int, f_ext: internal and external generalised
+    nodal forces (n, 6), r = (r_int - f_ext) restricted to the free dofs; force_scale: the
+    element's round-off scale of r_int; energy: the elastic energy; K: the tangent dr/d eta on
+    the free dofs (CSR) when asked for.
+    """
+    r: np.ndarray
+    r_int: np.ndarray
+    f_ext: np.ndarray
+    force_scale: float
+    energy: float
+    K: object = None
+
+
+class Problem:
+    """A shell problem.
+
+    Parameters
+    ----------
+    mesh : core_se3.mesh.Mesh
+        The reference mesh (named node sets and regions are usable by name everywhere below).
+    material : core_se3.Material or core_se3.RegionMaterial
+        The resultant law (one law, or one per element).
+    element : str
+        A key of ``core_se3.fem.ELEMENTS`` ('default': exact edge twists; 'seed': the seed's).
+    linear_solver : str
+        'auto', 'superlu' or 'mumps' (see ``core_se3.solvers.linalg``).
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(10.0, 1.0, 16, 1), Material(E=1.2e6, nu=0.0, h=0.1))
+    >>> p.clamp("x0")
+    >>> p.add_edge_force("x1", (0.0, 0.0, 4.0))
+    >>> p.add_probe("tip", "x1")
+    >>> res = p.solve(steps=10)
+    >>> round(float(res.final.probes["tip"]["u"][2]), 3)                 # Sze et al. 2004: 6.7
+    6.696
+    """
+
+    def __init__(self, mesh, material, element="default", linear_solver="auto"):
+        self.mesh = mesh
+        self.material = material
+        self.element = make_element(element, mesh, material)
+        self.element_name = element
+        self.linear_solver = linear_solver
+        self.loads = []
+        self.supports = []
+        self.probes = {}
+        self.solve_defaults = {}
+        self._assembler = None
+        self.length_scale = mesh.length_scale
+
+    # ---------------------------------------------------------------- selections -------
+    def nodes(self, where):
+        """Node ids of a selection: a node-set or region name, a predicate of the reference
+        positions, or ids."""
+        if isinstance(where, str) or callable(where):
+            nodes = self.mesh.node_set(where)
+        else:
+            nodes = np.atleast_1d(np.asarray(where, np.int64))
+        if len(nodes) == 0:
+            raise SupportError(f"node selection {where!r} is empty")
+        if nodes.min() < 0 or nodes.max() >= self.mesh.n_nodes:
+            raise SupportError(f"node selection {where!r} refers to nodes that do not exist")
+        return nodes
+
+    def elements(self, region):
+        """Element ids of a region name or of ids (None: all elements, returned as None)."""
+        if region is None:
+            return None
+        try:
+            return self.mesh.elements(region)
+        except MeshError as exc:
+            raise LoadError(str(exc)) from None
+
+    # ---------------------------------------------------------------- supports ---------
+    def _support(self, s):
+        self.supports.append(s)
+        self._assembler = None
+
+    def clamp(self, where):
+        """Fix position and rotation of the selected nodes at their reference values."""
+        self._support(Prescribed(self.nodes(where), np.ones(6, bool)))
+
+    def fix(self, where, dofs):
+        """Fix selected body-frame dofs (0-2 translations along d1..d3, 3-5 rotations)."""
+        fixed = np.zeros(6, bool)
+        fixed[list(dofs)] = True
+        self._support(Prescribed(self.nodes(where), fixed))
+
+    def rotate_edge(self, where, axis, angle, point=(0.0, 0.0, 0.0), free=(), scale=None):
+        """Rigidly rotate the selected nodes about ``axis`` through ``point`` by angle*scale(lam).
+
+        ``free``: lab translation directions (0 = x, 1 = y, 2 = z) left free; each must stay
+        aligned with a body axis of every selected node (true for rotations about a frame
+        axis, e.g. a strip end twisted about the strip axis).
+        """
+        nodes = self.nodes(where)
+        axis = np.asarray(axis, float)
+        if axis.shape != (3,) or not np.all(np.isfinite(axis)) or np.linalg.norm(axis) == 0:
+            raise SupportError(f"rotation axis must be a non-zero finite 3-vector, got {axis!r}")
+        axis = axis / np.linalg.norm(axis)
+        point = np.asarray(point, float)
+        scale = scale or (lambda lam: lam)
+        g0 = self.mesh.g0[nodes]
+        fixed = np.ones(6, bool)
+        for d in free:
+            lab = np.zeros(3)
+            lab[d] = 1.0
+            body = np.swapaxes(g0[:, :3, :3], 1, 2) @ lab
+            k = np.argmax(np.abs(body), axis=1)
+            if not np.all(k == k[0]) or np.abs(body[np.arange(len(k)), k]).min() < 1 - 1e-12 \
+                    or abs(abs(axis @ lab) - 1) > 1e-12 and abs(axis @ lab) > 1e-12:
+                raise SupportError("a free direction must coincide with a body axis of every node "
+                                   "and be parallel or perpendicular to the rotation axis")
+            fixed[k[0]] = False
+
+        def target(lam):
+            Q = lie.exp_so3(angle * scale(lam) * axis)
+            h = np.eye(4)
+            h[:3, :3] = Q
+            h[:3, 3] = point - Q @ point
+            return h @ g0
+
+        self._support(Prescribed(nodes, fixed, target))
+
+    def prescribe(self, where, target, fixed=(True,) * 6):
+        """Selected nodes follow ``target(lam) -> (k, 4, 4)`` frames on the fixed dofs."""
+        self._support(Prescribed(self.nodes(where), np.asarray(fixed, bool), target))
+
+    def add_lab_support(self, where, dirs, k):
+        """Hold the lab displacement components ``dirs`` (unit rows, or one set per node) of the
+        selected nodes by penalty springs of stiffness k (supports.LabSpring)."""
+        return self.add(LabSpring(self.mesh, self.nodes(where), dirs, k))
+
+    def add_lab_tilt_support(self, where, t, k_rot):
+        """Keep the normals of the selected nodes normal to the lab directions ``t`` by a
+        rotational penalty (supports.LabTiltSpring)."""
+        return self.add(LabTiltSpring(self.mesh, self.nodes(where), t, k_rot))
+
+    def add_rotation_component_support(self, where, a, k_rot):
+        """Hold the lab component ``a`` of the total rotation vector of the selected nodes at
+        zero by a rotational penalty (supports.RotationComponentSpring)."""
+        return self.add(RotationComponentSpring(self.mesh, self.nodes(where), a, k_rot))
+
+    # ---------------------------------------------------------------- loads ------------
+    def add(self, load):
+        """Add any :class:`~core_se3.model.Load` instance; returns it."""
+        if not isinstance(load, Load):
+            raise LoadError(f"expected a core_se3.model.Load, got {type(load).__name__}")
+        self.loads.append(load)
+        return load
+
+    def add_load(self, kind, where=None, scale=None, check=True, **values):
+        """Add a load of a registered kind (``core_se3.model.LOADS``) on ``where`` (a line or
+        node selection for 'line'/'nodes' kinds, a region or element ids for 'elements' kinds,
+        default all); returns the list of loads added.  ``check=False`` skips the kind's
+        cross-key check (a scenario file has run it on the keys its user wrote).
+
+        Example
+        -------
+        >>> from core_se3 import Problem, Material, mesh
+        >>> p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
+        >>> [type(ld).__name__ for ld in p.add_load("pressure", p=2.0)]
+        ['SurfaceLoad']
+        """
+        k = load_kind(kind)
+        names = {p.name for p in k.params}
+        for key in values:
+            if key not in names:
+                raise LoadError(f"load kind {kind!r} has no parameter {key!r}{did_you_mean(key, names)}; "
+                                f"its parameters: {', '.join(sorted(names))}")
+        for p in k.params:
+            if p.required and p.name not in values:
+                raise LoadError(f"load kind {kind!r} needs {p.name!r}")
+        full = {p.name: values.get(p.name, p.default) for p in k.params}
+        if check and k.check is not None:
+            bad = k.check(full, set(values))
+            if bad is not None:
+                raise LoadError(bad[1])
+        selection = self.nodes(where) if k.target in ("line", "nodes") else self.elements(where)
+        built = k.build(self, selection, scale, **full)
+        built = built if isinstance(built, (list, tuple)) else [built]
+        return [self.add(ld) for ld in built]
+
+    def add_edge_force(self, where, total_force, follower=False, scale=None):
+        """Total force distributed consistently along an edge (lab vector if dead; components
+        in each node's frame d1, d2, d3 if follower)."""
+        self.add_load("edge_force", where, scale, force=total_force, follower=follower)
+
+    def add_edge_moment(self, where, total_moment, follower=False, scale=None):
+        """Total moment distributed consistently along an edge (as add_edge_force)."""
+        self.add_load("edge_moment", where, scale, moment=total_moment, follower=follower)
+
+    def add_nodal_load(self, where, force=(0, 0, 0), moment=(0, 0, 0), follower=False, scale=None):
+        """The same force and moment on each selected node."""
+        self.add_load("nodal", where, scale, force=force, moment=moment, follower=follower)
+
+    def add_pressure(self, p, direction=None, follower=False, scale=None, elements=None):
+        """Pressure p [force/length^2]: follower -> along the current normal per current area;
+        dead -> along the lab ``direction`` (default +z) per reference area."""
+        kw = {} if direction is None else dict(direction=direction)
+        self.add_load("pressure", elements, scale, p=p, follower=follower, **kw)
+
+    def add_body_force(self, q, scale=None, elements=None):
+        """Dead force per unit reference area (e.g. gravity rho h g), lab vector."""
+        self.add_load("body_force", elements, scale, q=q)
+
+    def add_gravity(self, rho=None, g=(0.0, 0.0, -9.81), elements=None, scale=None):
+        """Self-weight: dead body force rho h g per unit reference area (rho [mass/length^3],
+        default the material's; g [length/time^2] lab vector; default SI, -z)."""
+        if rho is not None and not (np.isfinite(rho) and rho > 0):
+            raise LoadError(f"density must be positive and finite, got {rho}")
+        self.add_load("gravity", elements, scale, g=g, rho=rho)
+
+    def add_magnetic(self, Br, field, elements=None, mu0=None):
+        """Hard-magnetic material of residual flux density ``Br`` [T] (lab, reference
+        configuration; 3-vector, per selected element, per node, or function of position) on
+        ``elements`` (region or ids, default all) in the applied field ``field``
+        (core_se3.model.fields): body couple h/mu0 B^r_t x B^a and body force
+        h/mu0 (B^r_t . grad) B^a per unit reference area, with B^r_t = R_t R_0^T B^r_0
+        (seed E48-E50).  ``mu0`` must match the units (fields.MU0 for Pa; MU0 * 1e6 for
+        N-mm-MPa).  Where the thickness differs between elements, one load per thickness.
+        Returns the load (its ``mag.nodes`` are the magnetised nodes), or the list of loads."""
+        mu0 = MU0 if mu0 is None else mu0
+        sel = self.elements(elements)
+        per = getattr(self.material, "per_element", None)
+        h_all = per("h") if per is not None else None
+        if h_all is None or len(np.unique(h_all)) == 1:
+            h = self.material.h if h_all is None else float(h_all[0])
+            return self.add(MagneticLoad(Magnetisation(self.mesh, Br, h, sel, mu0), field))
+        ids = np.arange(self.mesh.n_elements) if sel is None else np.asarray(sel)
+        h = h_all[ids]
+        Br = np.broadcast_to(np.asarray(Br, float), (len(ids), 3))
+        return [self.add(MagneticLoad(Magnetisation(self.mesh, Br[h == t], float(t), ids[h == t], mu0), field))
+                for t in np.unique(h)]
+
+    def add_probe(self, name, where="x1"):
+        """Record the midpoint of an edge (or a node) at every step."""
+        self.probes[name] = Probe.edge_midpoint(name, self.nodes(where))
+
+    def output_fields(self, g, lam=1.0):
+        """Extra point fields for output (name -> (n, k)) summed over the loads (magnetisation,
+        magnetic couple and force per unit area, ...; empty without such loads)."""
+        out = {}
+        for load in self.loads:
+            for k, v in load.output_fields(g, lam).items():
+                out[k] = out[k] + v if k in out else v
+        return out
+
+    # ---------------------------------------------------------------- supports check ---
+    def constraint_mask(self):
+        """(n, 6) booleans: the dofs held by supports."""
+        fixed = np.zeros((self.mesh.n_nodes, 6), bool)
+        for s in self.supports:
+            fixed[s.nodes] |= s.fixed
+        return fixed
+
+    def assembler(self):
+        """The sparse assembler on the free dofs (built once per set of supports)."""
+        if self._assembler is None:
+            self._assembler = Assembler(self.mesh, ~self.constraint_mask().ravel())
+        return self._assembler
+
+    def check_supports(self, g=None):
+        """Raise SingularSystemError if the supports leave a rigid-body motion free.
+
+        A superposed rigid motion h = exp(xi) moves every node by the body-frame increment
+        eta_i = Ad_{g_i^-1} xi; the supports restrain all six rigid motions iff the fixed
+        components of these increments (and the lab directions held by loads, e.g. springs)
+        have rank 6 (checked by SVD, unit-scaled).
+        """
+        g = self.mesh.g0 if g is None else g
+        fixed = self.constraint_mask()
+        ell = self.length_scale
+        c = g[:, :3, 3].mean(0)
+        h = np.eye(4)
+        h[:3, 3] = -c                                   # rigid motions about the centroid
+        modes = lie.Ad(lie.inv(g) @ np.linalg.inv(h))   # (n, 6, 6): column k = mode k at node i
+        scale = np.r_[np.ones(3), np.full(3, ell)]      # rotations * ell, comparable to translations
+        rows = [(modes * scale[None, None, :])[fixed]]   # (n_fixed, 6)
+        # supports carried by loads (lab-direction springs): rows d^T R_i [I 0] Ad_{g_i^-1} xi
+        for load in self.loads:
+            restraint = load.restraint()
+            if restraint is not None:
+                nodes, D = restraint                      # (k,), (k, q, 3) lab unit directions
+                lab = np.einsum("kij,kjl->kil", g[nodes, :3, :3], modes[nodes][:, :3, :] * scale)
+                rows.append(np.einsum("kqi,kil->kql", D, lab).reshape(-1, 6))
+        B = np.concatenate(rows)
+        if B.shape[0] == 0:
+            raise SingularSystemError("no supports: the shell can move as a rigid body; clamp or fix some nodes")
+        U, S, Vt = np.linalg.svd(B, full_matrices=True)
+        S = np.r_[S, np.zeros(6 - len(S))]
+        if S[-1] < 1e-10 * S[0]:
+            v = Vt[-1] * scale
+            tr, rot = v[:3], v[3:]
+            if np.linalg.norm(rot) * ell > 1e-8 * np.linalg.norm(tr):
+                # twist (tr, rot) about the centroid c: screw axis through c + rot x tr / |rot|^2
+                pt = c + np.cross(rot, tr) / (rot @ rot)
+                what = (f"rotation about {np.round(rot / np.linalg.norm(rot), 3).tolist()} "
+                        f"through {np.round(pt, 4).tolist()}")
+            else:
+                what = f"translation along {np.round(tr / np.linalg.norm(tr), 3).tolist()}"
+            raise SingularSystemError("the supports leave a rigid-body motion free (" + what
+                                      + "): the tangent is singular; add supports")
+
+    # ---------------------------------------------------------------- prescribed motion -
+    @property
+    def has_prescribed_motion(self):
+        """True when a support follows a target motion of the load factor."""
+        return any(s.target is not None for s in self.supports)
+
+    def prescribed_rotation(self, lam0, lam1, samples=16):
+        """Largest rotation angle [rad] that a prescribed motion turns any node through between
+        load factors lam0 and lam1 (path length of its rotation, sampled at ``samples``
+        sub-steps): a step whose prescribed rotation nears pi is ambiguous for the exponential
+        update (a turn of 2 pi lands on the same frame)."""
+        worst = 0.0
+        for s in self.supports:
+            if s.target is None:
+                continue
+            prev = s.target(lam0)
+            total = np.zeros(len(s.nodes))
+            for t in np.linspace(lam0, lam1, samples + 1)[1:]:
+                cur = s.target(t)
+                total += lie.rotation_angle(np.swapaxes(prev[:, :3, :3], 1, 2) @ cur[:, :3, :3])
+                prev = cur
+            worst = max(worst, float(total.max()))
+        return worst
+
+    def apply_prescribed(self, g, lam):
+        """Set the frames of prescribed nodes to their targets at lam (in place); returns g."""
+        for s in self.supports:
+            if s.target is not None:
+                g[s.nodes] = s.target(lam)
+        return g
+
+    # ---------------------------------------------------------------- the equations ----
+    def external(self, g, lam, tangent=True):
+        """Sum of the loads at (g, lam): (f (n, 6), node blocks (n, 6, 6) or None, element
+        blocks (m, 4, 4, 6, 6) or None), the blocks being -df/d eta."""
+        n = self.mesh.n_nodes
+        f = np.zeros((n, 6))
+        Kn = np.zeros((n, 6, 6)) if tangent else None
+        Ke = None
+        for load in self.loads:
+            ev = load.evaluate(g, lam, tangent)
+            f += ev.f
+            if tangent and ev.node_blocks is not None:
+                Kn += ev.node_blocks
+            if tangent and ev.element_blocks is not None:
+                if Ke is None:
+                    Ke = np.zeros((self.mesh.n_elements, 4, 4, 6, 6))
+                ids, blocks = ev.element_blocks
+                Ke[ids] += blocks
+        return f, Kn, Ke
+
+    def evaluate(self, g, lam, tangent=True, assembler=None):
+        """The residual on the free dofs and, if asked, the tangent at (g, lam) (an
+        :class:`Evaluation`); ``assembler``: another set of free dofs (default the problem's)."""
+        asm = assembler or self.assembler()
+        ev = self.element.evaluate(g, tangent=tangent)
+        fext, Kn_ext, Ke_ext = self.external(g, lam, tangent=tangent)
+        out = Evaluation(asm.vector(ev.r - fext), ev.r, fext, ev.force_scale, ev.energy)
+        if tangent:
+            Ke = ev.element_blocks if Ke_ext is None else (
+                Ke_ext if ev.element_blocks is None else ev.element_blocks + Ke_ext)
+            Kn = Kn_ext if ev.node_blocks is None else ev.node_blocks + Kn_ext
+            out.K = asm.matrix(Ke, ev.edge_blocks, Kn)
+        return out
+
+    def residual(self, g, lam, assembler=None):
+        """Free residual r_int - f_ext at (g, lam)."""
+        return self.evaluate(g, lam, tangent=False, assembler=assembler).r
+
+    def tangent(self, g, lam, assembler=None):
+        """Assembled sparse tangent on the free dofs at (g, lam)."""
+        return self.evaluate(g, lam, tangent=True, assembler=assembler).K
+
+    # ---------------------------------------------------------------- solving ----------
+    def solve(self, steps=None, control=None, **options):
+        """Solve the problem; returns a :class:`~core_se3.results.Result`.
+
+        Parameters
+        ----------
+        steps : int, optional
+            Number of equal load steps from lam_start to lam_end (load control).  Default: the
+            problem's own settings (``solve_defaults``, e.g. a scenario's ``[solver] steps``),
+            else 10.
+        control : str, optional
+            'load' (load-stepped Newton, :func:`core_se3.solvers.newton_solve`), 'arclength'
+            (:func:`core_se3.solvers.arc_length`) or 'displacement'
+            (:func:`core_se3.solvers.displacement_control`).  Default: ``solve_defaults`` or
+            'load'.
+        **options
+            Passed to the solver: the fields of ``core_se3.solvers.NewtonOptions`` (rtol, dtol,
+            max_iter, max_cutbacks, ...) and its own keywords (lam_end, load_factors, g_init,
+            ...).  Keys given here override ``solve_defaults``.
+        """
+        kw = dict(self.solve_defaults)
+        kw.update(options)
+        if steps is not None:
+            kw["steps"] = steps
+        control = control or kw.pop("control", "load")
+        kw.pop("control", None)
+        if control not in SOLVERS:
+            raise OptionError(f"unknown control {control!r}{did_you_mean(control, SOLVERS)}; "
+                              f"choose one of {', '.join(sorted(SOLVERS))}")
+        return SOLVERS[control](self, **kw)

@@ -1,0 +1,193 @@
+"""Supports: prescribed body-frame dofs (clamp, fix, prescribed motions) and supports on lab
+directions written as penalty springs (e.g. a rigid diaphragm).
+
+``Problem.clamp``/``Problem.fix``/``Problem.rotate_edge`` hold body-frame dofs (a
+:class:`Prescribed` each, optionally following a target motion of the load factor).
+``Problem.fix`` fixes body-frame dofs, which stay lab-fixed only while the node's frame does
+not rotate about an axis that tilts the fixed direction.  A rigid diaphragm (radial and
+circumferential displacement zero, axial displacement and rotations free) is such a case: the
+end section bends about the circumferential axis.  ``LabSpring`` adds, at each selected node,
+the force F = -k P (phi - X) with P the projector on the lab directions ``dirs``; its
+generalised (body-frame) force is f = (R^T F, 0) and the load stiffness along g <- g exp(eta)
+
+    -df/deta = [[k R^T P R, -hat(R^T F)], [0, 0]].
+
+It does not depend on the load factor (so continuation's load direction q is unaffected).  The
+constraint error is |F|/k: choose k a few decades above the element stiffness (E h).
+
+``LabTiltSpring`` holds the normal d3 = R e3 of each selected node normal to a lab direction t
+(c = d3 . t = 0), by the energy 1/2 k_r c^2.  For the rigid diaphragm (t = the circumferential
+tangent) it is the classical theta_axis = 0 of MacNeal & Harder's pinched cylinder: the end
+ring does not move in its plane, so the normal does not tilt circumferentially (Kirchhoff:
+dw/ds = 0 along the ring), while it bends freely about t and drills about d3.  With
+a = R^T t and b = e3 x a the body moment is m = -k_r c b and its stiffness along
+g <- g exp(eta) is  -dm/domega = k_r (b b^T + c (a e3^T - c I)).
+
+``RotationComponentSpring`` holds the component along a lab axis a of the node's *total*
+rotation vector psi = log(R R0^T) (c = a . psi = 0), by the energy 1/2 k_r c^2.  This is how a
+code with total-rotation-vector dofs (Abaqus' UR1..UR3 in a large-rotation step) applies
+"theta_y = 0": the holonomic constraint on the rotation from the reference frame, not on its
+increments.  With phi = log(R0^T R) = R0^T psi and b = R0^T a, c = b . phi, and along
+g <- g exp(eta), phi(eta) = phi + J_r^-1(phi) eta + O(eta^2) (J_r the right Jacobian,
+``lie.dexp_so3``), so the body moment is m = -k_r c J_r^-T b and
+
+    -dm/deta = k_r [ (J_r^-T b)(J_r^-T b)^T + c D_phi(J_r^-T(phi) b) J_r^-1(phi) ],
+
+the derivative D_phi taken by complex step of the closed form (exact to round-off).  psi is
+the principal log, so the node's total rotation must stay below pi (the cut of log): beyond
+MAX_TOTAL_ROTATION the spring raises ElementTooDistortedError, which the solvers treat as a
+rejected step (cut back), and which names the limit if it persists.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .. import lie
+from ..errors import ElementTooDistortedError
+from .base import Load, LoadEvaluation
+
+__all__ = ["Prescribed", "LabSpring", "LabTiltSpring", "RotationComponentSpring",
+           "MAX_TOTAL_ROTATION"]
+
+
+class Prescribed:
+    """Nodes whose body-frame dofs ``fixed`` (6 booleans) are held: at their reference values,
+    or on ``target(lam) -> (k, 4, 4)`` frames (a prescribed motion)."""
+
+    def __init__(self, nodes, fixed, target=None):
+        self.nodes = np.asarray(nodes, np.int64)
+        self.fixed = np.asarray(fixed, bool)
+        self.target = target
+
+
+class _Spring(Load):
+    """A penalty support written as a load: it does not scale with the load factor."""
+    scales_with_load_factor = False
+
+    def _scatter(self, n, fb, blk, tangent):
+        f = np.zeros((n, 6))
+        np.add.at(f, self.nodes, fb)
+        if not tangent:
+            return LoadEvaluation(f)
+        Kn = np.zeros((n, 6, 6))
+        np.add.at(Kn, self.nodes, blk)
+        return LoadEvaluation(f, Kn)
+
+
+class LabSpring(_Spring):
+    """Penalty on the lab displacement components ``dirs`` (rows: unit vectors, per node).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import mesh
+    >>> m = mesh.rectangle(1.0, 1.0, 1, 1)
+    >>> g = m.g0.copy(); g[0, :3, 3] += (0.1, 0.2, 0.3)
+    >>> LabSpring(m, [0], [[0, 0, 1.0]], k=10.0).evaluate(g, 1.0).f[0, :3].tolist()
+    [0.0, 0.0, -3.0]
+    """
+
+    def __init__(self, mesh, nodes, dirs, k, name="lab support"):
+        self.n = mesh.n_nodes
+        self.nodes = np.asarray(nodes, np.int64)
+        D = np.asarray(dirs, float)
+        if D.ndim == 2:
+            D = np.broadcast_to(D, (len(self.nodes),) + D.shape)
+        self.D = np.asarray(D, float)                                # (k, q, 3) directions
+        self.P = np.einsum("nai,naj->nij", D, D)                     # (k, 3, 3) projectors
+        self.X0 = mesh.X[self.nodes].copy()
+        self.k = float(k)
+        self.name = name
+
+    def restraint(self):
+        """(nodes, lab directions (k, q, 3)) that this spring holds (for the support check)."""
+        return self.nodes, self.D
+
+    def evaluate(self, g, lam, tangent=True):
+        R = g[self.nodes, :3, :3]
+        F = -self.k * np.einsum("nij,nj->ni", self.P, g[self.nodes, :3, 3] - self.X0)
+        Fb = np.einsum("nji,nj->ni", R, F)
+        blk = None
+        if tangent:
+            blk = np.zeros((len(self.nodes), 6, 6))
+            blk[:, :3, :3] = self.k * np.einsum("nji,njk,nkl->nil", R, self.P, R)
+            blk[:, :3, 3:] = -lie.hat3(Fb)
+        return self._scatter(self.n, np.concatenate([Fb, np.zeros_like(Fb)], 1), blk, tangent)
+
+
+class LabTiltSpring(_Spring):
+    """Penalty c = d3 . t = 0 (the normal stays normal to the lab direction t, per node)."""
+
+    def __init__(self, mesh, nodes, t, k_rot, name="lab tilt support"):
+        self.n = mesh.n_nodes
+        self.nodes = np.asarray(nodes, np.int64)
+        t = np.asarray(t, float)
+        self.t = np.broadcast_to(t, (len(self.nodes), 3)) if t.ndim == 1 else t
+        self.k = float(k_rot)
+        self.name = name
+
+    def tilt(self, g):
+        """c = d3 . t at the selected nodes (the constraint error, a sine)."""
+        return np.einsum("ni,ni->n", g[self.nodes, :3, 2], self.t)
+
+    def evaluate(self, g, lam, tangent=True):
+        R = g[self.nodes, :3, :3]
+        a = np.einsum("nji,nj->ni", R, self.t)                        # R^T t
+        c = a[:, 2]
+        e3 = np.array([0.0, 0.0, 1.0])
+        b = np.cross(e3, a)
+        blk = None
+        if tangent:
+            blk = np.zeros((len(self.nodes), 6, 6))
+            blk[:, 3:, 3:] = self.k * (np.einsum("ni,nj->nij", b, b)
+                                       + c[:, None, None] * (np.einsum("ni,j->nij", a, e3)
+                                                             - c[:, None, None] * np.eye(3)))
+        return self._scatter(self.n, np.concatenate([np.zeros_like(b), -self.k * c[:, None] * b], 1),
+                             blk, tangent)
+
+
+MAX_TOTAL_ROTATION = 0.95 * np.pi   # log's cut at pi is too close beyond this
+
+
+class RotationComponentSpring(_Spring):
+    """Penalty c = a . log(R R0^T) = 0 (total rotation vector's lab component a, per node)."""
+
+    def __init__(self, mesh, nodes, a, k_rot, name="rotation component support"):
+        self.n = mesh.n_nodes
+        self.nodes = np.asarray(nodes, np.int64)
+        a = np.asarray(a, float)
+        a = np.broadcast_to(a, (len(self.nodes), 3)) if a.ndim == 1 else a
+        self.R0 = mesh.g0[self.nodes, :3, :3].copy()
+        self.b = np.einsum("nji,nj->ni", self.R0, a)                   # R0^T a (body frame)
+        self.k = float(k_rot)
+        self.name = name
+
+    def phi(self, g):
+        """Body total rotation vectors log(R0^T R) at the selected nodes."""
+        return lie.log_so3(np.einsum("nji,njk->nik", self.R0, g[self.nodes, :3, :3]))
+
+    def component(self, g):
+        """c = a . psi at the selected nodes (the constraint error, radians)."""
+        return np.einsum("ni,ni->n", self.b, self.phi(g))
+
+    def evaluate(self, g, lam, tangent=True, h=1e-30):
+        phi = self.phi(g)
+        turn = np.linalg.norm(phi, axis=-1)
+        if np.any(turn > MAX_TOTAL_ROTATION):
+            k = int(np.argmax(turn))
+            raise ElementTooDistortedError(
+                f"{self.name}: node {int(self.nodes[k])} has turned by {turn[k]:.3f} rad from its "
+                f"reference frame (> {MAX_TOTAL_ROTATION:.3f}); a held component of the total rotation "
+                "vector is defined below pi only")
+        c = np.einsum("ni,ni->n", self.b, phi)
+        Jinv = lie.dexp_inv_so3(phi)                                   # J_r^-1(phi)
+        gv = np.einsum("nji,nj->ni", Jinv, self.b)                     # J_r^-T b = dc/deta
+        pc = np.repeat(phi[None].astype(complex), 3, axis=0)          # (3, k, 3)
+        pc[np.arange(3), :, np.arange(3)] += 1j * h
+        dg = np.einsum("mnji,nj->mni", lie.dexp_inv_so3(pc), self.b).imag / h   # (3, k, 3)
+        D = np.transpose(dg, (1, 2, 0))                                # D[n, i, m] = d gv_i/d phi_m
+        blk = np.zeros((len(self.nodes), 6, 6))
+        blk[:, 3:, 3:] = self.k * (np.einsum("ni,nj->nij", gv, gv)
+                                   + c[:, None, None] * np.einsum("nim,nmj->nij", D, Jinv))
+        return self._scatter(self.n, np.concatenate([np.zeros_like(gv), -self.k * c[:, None] * gv], 1),
+                             blk, tangent)

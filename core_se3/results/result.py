@@ -1,0 +1,92 @@
+"""Results of a solve: one :class:`StepResult` per stored load step, gathered in a :class:`Result`."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .. import lie
+
+__all__ = ["StepResult", "Result", "unwrap_rotation"]
+
+
+def unwrap_rotation(R, w_prev):
+    """Rotation vector of R that is closest to w_prev among w + 2 pi k n (continuity along a
+    path: a roll-up reports 6 pi, not its value modulo 2 pi).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import lie
+    >>> w = unwrap_rotation(lie.exp_so3([0.0, 0.0, 0.1]), np.array([0.0, 0.0, 2 * np.pi]))
+    >>> round(float(w[2]), 6)
+    6.383185
+    """
+    w = lie.log_so3(R)
+    t = np.linalg.norm(w)
+    if t < 1e-12:
+        n = w_prev / max(np.linalg.norm(w_prev), 1e-300) if np.linalg.norm(w_prev) > 0 else np.zeros(3)
+        cands = [w + 2 * np.pi * k * n for k in range(-50, 51)] if np.linalg.norm(n) > 0 else [w]
+    else:
+        n = w / t
+        cands = [w + 2 * np.pi * k * n for k in range(-50, 51)]
+    cands = np.array(cands)
+    return cands[np.argmin(np.linalg.norm(cands - w_prev, axis=1))]
+
+
+@dataclass
+class StepResult:
+    """One converged (stored) state: its load factor, frames, Newton history, the total lab
+    reaction and applied force and moment (about the origin), the probes
+    (name -> dict(u, R, w): displacement, rotation R R0^T, unwrapped rotation vector), the
+    scales of the balance check, and (path following) the stability of the state."""
+    load_factor: float
+    g: np.ndarray                      # (n, 4, 4) nodal frames
+    iterations: int
+    residual_history: list
+    reaction_force: np.ndarray         # total lab reaction force at supports
+    reaction_moment: np.ndarray        # total lab reaction moment about the origin
+    applied_force: np.ndarray          # total applied lab force
+    applied_moment: np.ndarray         # total applied lab moment about the origin
+    probes: dict = field(default_factory=dict)   # name -> dict(u, R, w)
+    scale: tuple = (0.0, 0.0)         # sums of nodal reaction/applied force and moment magnitudes
+    stability: dict | None = None      # det_sign, negative_eigenvalues, q_dot_t (path following)
+
+    @property
+    def balance_error(self):
+        """|reactions + applied| relative to the sum of the nodal force (moment) magnitudes."""
+        sF = max(self.scale[0], np.linalg.norm(self.applied_force), 1e-300)
+        sM = max(self.scale[1], np.linalg.norm(self.applied_moment), 1e-300)
+        return max(np.linalg.norm(self.reaction_force + self.applied_force) / sF,
+                   np.linalg.norm(self.reaction_moment + self.applied_moment) / sM)
+
+
+@dataclass
+class Result:
+    """The stored steps of a solve (``steps``; ``final`` the last), the time spent per phase
+    (``timings``: setup, assembly, solve, other [s]), the per-(sub)step log, the element name
+    and, for path following, the critical points found."""
+    mesh: object
+    steps: list = field(default_factory=list)
+    timings: dict = field(default_factory=lambda: dict(setup=0.0, assembly=0.0, solve=0.0, other=0.0))
+    log: list = field(default_factory=list)      # per (sub)step diagnostics
+    element: str = "default"
+    critical_points: list = field(default_factory=list)
+
+    @property
+    def final(self):
+        return self.steps[-1] if self.steps else None
+
+    def displacements(self, k=-1):
+        """Nodal displacements (n, 3) of stored step k."""
+        return self.steps[k].g[:, :3, 3] - self.mesh.X
+
+    def timing_table(self):
+        """The timings as a small text table."""
+        t = self.timings
+        tot = sum(t.values())
+        lines = [f"{'phase':<10}{'seconds':>10}{'share':>8}"]
+        for key in ("setup", "assembly", "solve", "other"):
+            lines.append(f"{key:<10}{t.get(key, 0.0):>10.3f}{100 * t.get(key, 0.0) / max(tot, 1e-300):>7.1f}%")
+        lines.append(f"{'total':<10}{tot:>10.3f}")
+        return "\n".join(lines)

@@ -1,0 +1,113 @@
+"""The Problem of a validated scenario spec: material law, supports, loads and magnets through
+the same registries and Problem methods as the Python API; failures of the core's own checks
+become ScenarioErrors keyed to the section that caused them."""
+from __future__ import annotations
+
+import numpy as np
+
+from .. import lie
+from ..errors import CoreSE3Error, ScenarioError, SingularSystemError
+from ..fem import Material, RegionMaterial
+from ..model import FIELDS, MU0, Problem
+from .geometry import selection
+from .physics import MATERIAL_KEYS, material_index, solve_defaults
+from .validate import join, make_scale
+
+__all__ = ["build_problem", "mu0_of"]
+
+ELASTIC_KEYS = ("E", "nu", "h", "shear_factor", "drilling")
+
+
+def mu0_of(units):
+    """Vacuum permeability in a scenario's units: MU0 (SI, Pa) or MU0 * 1e6 (N-mm-MPa)."""
+    return MU0 * (1e6 if units == "N-mm-MPa" else 1.0)
+
+
+def _law(v, spec, mesh, regions):
+    mat, s = spec["material"], spec["solver"]
+    mats, index = material_index(mat, regions, mesh.n_elements)
+    used = np.unique(index)
+    try:
+        if len({tuple(mats[i][k] for k in MATERIAL_KEYS) for i in used}) == 1:
+            return Material(**{k: mat[k] for k in MATERIAL_KEYS}) if len(mats) == 1 else \
+                Material(**{k: mats[used[0]][k] for k in MATERIAL_KEYS})
+        if len({tuple(mats[i][k] for k in ELASTIC_KEYS) for i in used}) > 1 and s["element"] != "default":
+            v.fail("solver.element", "per-region elastic properties need the default element")
+        return RegionMaterial([Material(**{k: m[k] for k in MATERIAL_KEYS}) for m in mats], index)
+    except ScenarioError:
+        raise
+    except CoreSE3Error as exc:
+        v.fail("material", str(exc))
+
+
+def build_problem(v, spec, mesh, regions):
+    """The Problem of a validated spec (its ``solve_defaults`` are the spec's [solver])."""
+    s = spec["solver"]
+    law = _law(v, spec, mesh, regions)
+    try:
+        prob = Problem(mesh, law, element=s["element"], linear_solver=s["linear_solver"])
+    except CoreSE3Error as exc:
+        v.fail("material", str(exc))
+    prob.solve_defaults = solve_defaults(s)
+    axes = {"x": 0, "y": 1, "z": 2}
+    for i, sp in enumerate(spec["supports"]):
+        key = f"supports[{i}]"
+        nodes = selection(mesh, sp)
+        try:
+            if sp["type"] == "clamp":
+                prob.clamp(nodes)
+            elif sp["type"] == "fix":
+                prob.fix(nodes, sp["dofs"])
+            else:
+                point = sp["point"] if sp["point"] is not None else mesh.X[nodes].mean(0)
+                prob.rotate_edge(nodes, sp["axis"], sp["angle"], point=point,
+                                 free=[axes[a] for a in sp["free"]], scale=make_scale(sp["scale"]))
+        except CoreSE3Error as exc:
+            v.fail(key, str(exc))
+    for i, ld in enumerate(spec["loads"]):
+        key = f"loads[{i}]"
+        values = {k: x for k, x in ld.items() if k not in ("type", "scale", "edge", "nodes", "region")}
+        if "edge" in ld or "nodes" in ld:
+            where = selection(mesh, ld)
+        else:
+            where = regions[ld["region"]] if ld.get("region") else None
+        try:
+            prob.add_load(ld["type"], where, make_scale(ld["scale"]), check=False, **values)
+        except CoreSE3Error as exc:
+            param = getattr(exc, "param", None)
+            v.fail(join(key, param) if param else key, str(exc))
+    if spec["magnets"]:
+        _add_magnets(v, prob, spec, mesh, regions)
+    for pr in spec["probes"]:
+        prob.add_probe(pr["name"], selection(mesh, pr))
+    try:
+        prob.check_supports(mesh.g0)
+    except SingularSystemError as exc:
+        v.fail("supports", str(exc))
+    return prob
+
+
+def _add_magnets(v, prob, spec, mesh, regions):
+    built = {}
+    mu0_units = mu0_of(spec["units"])
+    for name, f in spec["fields"].items():
+        values = {k: x for k, x in f.items() if k not in ("type", "scale")}
+        try:
+            built[name] = FIELDS[f["type"]].build(values, make_scale(f["scale"]), mu0_units)
+        except CoreSE3Error as exc:
+            v.fail(join("fields", name), str(exc))
+    for i, m in enumerate(spec["magnets"]):
+        key = f"magnets[{i}]"
+        elems = regions[m["region"]] if m.get("region") else None
+        if "Br" in m:
+            Br = np.asarray(m["Br"], float)
+        else:
+            # components along the reference directors, one lab vector per element of the selection
+            sel = np.arange(mesh.n_elements) if elems is None else elems
+            R0 = lie.mean_rotation(mesh.g0[mesh.quads[sel], :3, :3])      # (k, 3, 3)
+            Br = np.einsum("kij,j->ki", R0, np.asarray(m["Br_frame"], float))
+        mu0 = m["mu0"] if m["mu0"] is not None else mu0_units
+        try:
+            prob.add_magnetic(Br, built[m["field"]], elements=elems, mu0=mu0)
+        except CoreSE3Error as exc:
+            v.fail(key, str(exc))

@@ -1,0 +1,229 @@
+"""Scenario sections on geometry: [mesh] (a generator or a file), [edges.NAME] (node sets),
+[regions.NAME] (element sets), node selections of supports, loads and probes, [[probes]]."""
+from __future__ import annotations
+
+import hashlib
+import os
+
+import numpy as np
+
+from .. import mesh as M
+from ..errors import CoreSE3Error, did_you_mean
+from .validate import join, show, tname
+
+__all__ = ["GENERATORS", "MAX_ELEMENTS", "mesh_section", "edges_section", "regions_section",
+           "region_ref", "nodes_ref", "selection", "is_line", "probes_section"]
+
+MAX_ELEMENTS = 1_000_000
+
+# generator -> (function, [(parameter, kind)]); kinds: pos (> 0), real, count (int >= 1), angle (> 0)
+GENERATORS = {
+    "rectangle": (M.rectangle, [("L", "pos"), ("width", "pos"), ("nx", "count"), ("ny", "count"),
+                                ("x0", "real?")]),
+    "cylinder_arch": (M.cylinder_arch, [("R", "pos"), ("angle", "pos"), ("width", "pos"),
+                                        ("nx", "count"), ("ny", "count")]),
+    "cylinder_panel": (M.cylinder_panel, [("R", "pos"), ("length", "pos"), ("theta0", "real"),
+                                          ("theta1", "real"), ("nt", "count"), ("nl", "count")]),
+    "annulus": (M.annulus, [("r_in", "pos"), ("r_out", "pos"), ("angle", "pos"), ("nr", "count"),
+                            ("nt", "count")]),
+}
+
+
+def mesh_section(v, d, base_dir):
+    """(Mesh, spec, file digest) of the [mesh] table: a generator or a file meshio reads."""
+    key = "mesh"
+    if not isinstance(d, dict):
+        v.fail(key, f"expected a table, got {tname(d)}")
+    if ("generator" in d) == ("file" in d):
+        v.fail(key, "give exactly one of 'generator' (" + ", ".join(GENERATORS) + ") or 'file' "
+                    "(a mesh meshio reads: Gmsh .msh, .vtu, ...)")
+    if "file" in d:
+        v.table(d, key, ("file", "d1_hint"))
+        fname = v.string(d, "file", key)
+        hint = v.vector(d, "d1_hint", key, default=[1.0, 0.0, 0.0], nonzero=True)
+        path = fname if os.path.isabs(fname) else os.path.join(base_dir, fname)
+        if not os.path.isfile(path):
+            v.fail(join(key, "file"), f"mesh file {fname!r} does not exist (looked for {path})")
+        try:
+            raw = M.read_meshio(path)
+        except CoreSE3Error as exc:
+            v.fail(join(key, "file"), f"cannot read mesh file {fname!r}: {str(exc).split(': ', 1)[-1]}")
+        try:
+            mesh = M.from_meshio(raw, d1_hint=hint)
+        except CoreSE3Error as exc:
+            v.fail(join(key, "file"), f"bad mesh {fname!r}: {exc}")
+        except Exception as exc:      # meshio objects can be malformed in many ways
+            v.fail(join(key, "file"), f"bad mesh {fname!r}: {type(exc).__name__}: {exc}")
+        with open(path, "rb") as fh:
+            digest = hashlib.sha256(fh.read()).hexdigest()
+        return mesh, dict(file=fname, d1_hint=hint), digest
+    gen = v.string(d, "generator", key, choices=tuple(GENERATORS))
+    fn, params = GENERATORS[gen]
+    v.table(d, key, ("generator",) + tuple(p for p, _ in params))
+    kw = {}
+    for p, kind in params:
+        if kind == "count":
+            kw[p] = v.integer(d, p, key, lo=1, hi=100_000)
+        elif kind == "pos":
+            kw[p] = v.number(d, p, key, lo=0.0, lo_open=True)
+        elif kind == "real":
+            kw[p] = v.number(d, p, key)
+        elif kind == "real?":
+            if p in d:
+                kw[p] = v.number(d, p, key)
+    counts = [kw[p] for p, kind in params if kind == "count"]
+    if counts[0] * counts[1] > MAX_ELEMENTS:
+        v.fail(key, f"{counts[0]} x {counts[1]} elements exceed the limit of {MAX_ELEMENTS}")
+    try:
+        mesh = fn(**kw)
+    except CoreSE3Error as exc:
+        v.fail(key, f"{gen}: {exc}")
+    return mesh, dict(generator=gen, **kw), None
+
+
+def _box(v, d, key, X, scale):
+    """Mask of points X inside the box {x = [lo, hi], y = ..., z = ..., tol} (missing = unbounded)."""
+    v.table(d, key, ("x", "y", "z", "tol"))
+    tol = v.number(d, "tol", key, default=1e-9 * scale, lo=0.0)
+    mask = np.ones(len(X), bool)
+    for i, c in enumerate("xyz"):
+        if c in d:
+            lo, hi = v.vector(d, c, key, n=2)
+            if hi < lo:
+                v.fail(join(key, c), f"expected [lo, hi] with lo <= hi, got {[lo, hi]}")
+            mask &= (X[:, i] >= lo - tol) & (X[:, i] <= hi + tol)
+    return mask
+
+
+def edges_section(v, doc, mesh):
+    """User node sets [edges.NAME] box = {...} or nodes = [...] (added to mesh.edges)."""
+    out = {}
+    scale = mesh.length_scale
+    for name, t in v.names_table(doc, "edges").items():
+        key = join("edges", name)
+        if name in mesh.edges:
+            v.fail(key, f"node set {name!r} is already defined by the mesh")
+        v.table(t, key, ("box", "nodes"))
+        if ("box" in t) == ("nodes" in t):
+            v.fail(key, "give exactly one of 'box' or 'nodes'")
+        if "box" in t:
+            nodes = np.nonzero(_box(v, t["box"], join(key, "box"), mesh.X, scale))[0]
+            nodes = _order_along(mesh, nodes)
+            spec = dict(box=t["box"])
+        else:
+            nodes = np.asarray(_int_list(v, t, "nodes", key, mesh.n_nodes), np.int64)
+            spec = dict(nodes=nodes.tolist())
+        if len(nodes) == 0:
+            v.fail(key, "selects no nodes")
+        mesh.edges[name] = nodes
+        out[name] = spec
+    return out
+
+
+def _order_along(mesh, nodes):
+    """Order a node set along the mesh edges joining its nodes (unchanged if not a line)."""
+    if len(nodes) < 2:
+        return nodes
+    inset = np.zeros(mesh.n_nodes, bool)
+    inset[nodes] = True
+    segs = mesh.edge_nodes[inset[mesh.edge_nodes].all(1)]
+    if len(segs) == 0:
+        return nodes
+    order = M.chain_order([tuple(s) for s in segs.tolist()])
+    return order if len(order) == len(nodes) else nodes
+
+
+def is_line(mesh, nodes):
+    """True if consecutive nodes of the set are joined by mesh edges."""
+    if len(nodes) < 2:
+        return True
+    key = set(map(tuple, np.sort(mesh.edge_nodes, 1).tolist()))
+    return all(tuple(sorted((int(a), int(b)))) in key for a, b in zip(nodes[:-1], nodes[1:]))
+
+
+def _int_list(v, d, k, key, n):
+    path = join(key, k)
+    x = d[k]
+    if not isinstance(x, list) or not x or any(isinstance(i, bool) or not isinstance(i, int) for i in x):
+        v.fail(path, f"expected a non-empty array of integer ids, got {tname(x)} {show(x)}")
+    bad = [i for i in x if i < 0 or i >= n]
+    if bad:
+        v.fail(path, f"ids {bad[:5]} do not exist (valid: 0 .. {n - 1})")
+    return x
+
+
+def regions_section(v, doc, mesh):
+    """Named element sets: the mesh's (e.g. Gmsh physical surfaces) and [regions.NAME]
+    (box of element centroids, or ids); added to mesh.regions."""
+    regions = mesh.regions
+    centroids = mesh.X[mesh.quads].mean(1)
+    scale = mesh.length_scale
+    for name, t in v.names_table(doc, "regions").items():
+        key = join("regions", name)
+        if name in regions:
+            v.fail(key, f"region {name!r} is already defined by the mesh file")
+        v.table(t, key, ("box", "elements"))
+        if ("box" in t) == ("elements" in t):
+            v.fail(key, "give exactly one of 'box' (element centroids inside) or 'elements'")
+        if "box" in t:
+            ids = np.nonzero(_box(v, t["box"], join(key, "box"), centroids, scale))[0]
+        else:
+            ids = np.unique(_int_list(v, t, "elements", key, mesh.n_elements))
+        if len(ids) == 0:
+            v.fail(key, "selects no elements")
+        regions[name] = np.asarray(ids, np.int64)
+    return regions
+
+
+def region_ref(v, d, key, regions):
+    """Element ids of d['region'] (None = all elements) and the validated name."""
+    if "region" not in d:
+        return None, None
+    name = v.string(d, "region", key)
+    if name not in regions:
+        v.fail(join(key, "region"), f"unknown region {name!r}{did_you_mean(name, regions)}; defined "
+                                    f"regions: {sorted(regions) or 'none'} (see [regions.NAME])")
+    return regions[name], name
+
+
+def nodes_ref(v, t, key, mesh, required=True, regions=None):
+    """Validated node selection of a table: 'edge' (a named node set), 'nodes' (ids) or, where
+    ``regions`` are given, 'region' (the nodes of a region's elements)."""
+    given = [k for k in ("edge", "nodes", "region") if k in t]
+    if len(given) > 1:
+        v.fail(key, f"give one of 'edge', 'nodes'{' or region' if regions is not None else ''}, "
+                    f"not {' and '.join(map(repr, given))}")
+    if "region" in t and regions is not None:
+        _, name = region_ref(v, t, key, regions)
+        return dict(region=name, nodes=np.unique(mesh.quads[regions[name]]).tolist())
+    if "edge" in t:
+        name = v.string(t, "edge", key)
+        if name not in mesh.edges:
+            v.fail(join(key, "edge"), f"unknown edge {name!r}{did_you_mean(name, mesh.edges)}; the mesh has: "
+                                       f"{', '.join(sorted(mesh.edges)) or 'no named edges'}")
+        return dict(edge=name)
+    if "nodes" in t:
+        return dict(nodes=_int_list(v, t, "nodes", key, mesh.n_nodes))
+    if required:
+        v.fail(key, "missing the node selection: give 'edge' (a named node set) or 'nodes' (ids)"
+               + (" or 'region'" if regions is not None else ""))
+    return {}
+
+
+def selection(mesh, s):
+    """Node ids of a validated selection."""
+    return mesh.edges[s["edge"]] if "edge" in s else np.asarray(s["nodes"], np.int64)
+
+
+def probes_section(v, doc, mesh):
+    out = []
+    seen = set()
+    for i, t in enumerate(v.array_of_tables(doc, "probes")):
+        key = f"probes[{i}]"
+        v.table(t, key, ("name", "edge", "nodes"), required=("name",))
+        name = v.string(t, "name", key)
+        if not name or name in seen:
+            v.fail(join(key, "name"), f"probe names must be unique and non-empty, got {name!r}")
+        seen.add(name)
+        out.append(dict(name=name, **nodes_ref(v, t, key, mesh)))
+    return out

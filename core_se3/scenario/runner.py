@@ -1,0 +1,370 @@
+"""Run a scenario: one loop over the solver's converged steps (load-stepped Newton or arc length),
+with output and a checkpoint after every one, so that an interrupted or failed run continues
+with ``resume=True``.
+
+    from core_se3 import scenario
+    res = scenario.run(scenario.load("gripper.toml"), out="out/gripper")
+    res.doc["steps"][-1]["probes"]["tip"]["u"], res.g
+
+The solver is a generator (``solvers.newton_steps`` or ``solvers.arc_length_steps``); after each
+step it yields, in this order: the step's VTU file, the checkpoint (the frames, the solver's
+restart state, the records so far), the .pvd collection and the results JSON, each written
+atomically (``io.files``).  The checkpoint is the record of truth: on resume, the steps it
+holds are kept and the solver continues from its restart state, repeating the computations of
+an uninterrupted run from the same bits.
+
+Run directory:  results.json (schema core-se3-result v1 plus status/scenario fields),
+checkpoint.npz, vtu/step_NNNN.vtu + vtu/series.pvd, probes.png, shell.png.
+"""
+from __future__ import annotations
+
+import os
+import sys
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import CheckpointError, ConvergenceError, CoreSE3Error
+from ..io import Checkpoint, Progress, atomic_path, write_json_atomic
+from ..results import Result, StepRecorder, result_document, step_record
+from ..solvers import (ArcLengthOptions, ArcState, NewtonOptions, NewtonState, arc_length_steps,
+                       newton_steps)
+
+__all__ = ["run", "RunResult", "RunInterrupted", "point_fields", "cell_fields"]
+
+PHASES = ("setup", "assembly", "solve", "other")
+
+
+class RunInterrupted(CoreSE3Error):
+    """Raised when ``stop_after`` steps were done (to simulate an interrupted run in tests)."""
+
+
+@dataclass
+class RunResult:
+    """What a run left: the results document, the final frames, the output files."""
+    doc: dict
+    g: np.ndarray
+    out: str
+    files: dict = field(default_factory=dict)
+
+    @property
+    def status(self):
+        return self.doc["status"]
+
+
+def point_fields(prob, g, lam=1.0):
+    """Extra VTU point fields of the problem's loads (magnetisation, magnetic couple, ...)."""
+    return {k: np.asarray(v) for k, v in prob.output_fields(g, lam).items()}
+
+
+def cell_fields(prob, g):
+    """VTU cell fields of the element (stress resultants at the element centres)."""
+    return prob.element.cell_fields(g)
+
+
+def _document(scn, records, timings, status, error=None, critical=None):
+    mat = scn.spec["material"]
+    params = {k: dict(value=mat[k], unit="") for k in ("E", "nu", "h", "shear_factor", "drilling")}
+    if mat["rho"] is not None:
+        params["rho"] = dict(value=mat["rho"], unit="")
+    extra = dict(critical_points=_critical_doc(critical)) if critical is not None else {}
+    return result_document(scn.name, "core_se3", scn.solver["element"], params, scn.mesh, records,
+                           {k: timings.get(k, 0.0) for k in PHASES}, None,
+                           control=scn.solver["control"],
+                           scenario=os.path.abspath(scn.file) if not scn.file.startswith("<") else scn.file,
+                           fingerprint=scn.fingerprint, units=scn.spec["units"], status=status,
+                           error=error, **extra)
+
+
+def _critical_doc(cps):
+    return [dict(kind=c.kind, load_factor=float(c.lam), bracket=[float(x) for x in c.lam_bracket],
+                 step=int(c.step), description=c.describe()) for c in cps]
+
+
+def _write_vtu(path, prob, g, lam):
+    from ..io import write_vtu
+    with atomic_path(path) as tmp:
+        write_vtu(tmp, prob.mesh.X, prob.mesh.quads, prob.mesh.g0, g,
+                  point_data=point_fields(prob, g, lam), cell_data=cell_fields(prob, g))
+
+
+def _write_pvd(vtu_dir, records, every, last):
+    from ..io import write_pvd
+    entries = [(r["load_factor"], f"step_{r['step']:04d}.vtu") for r in records
+               if r["step"] % every == 0 or r["step"] == last]
+    with atomic_path(os.path.join(vtu_dir, "series.pvd")) as tmp:
+        write_pvd(tmp, entries)
+
+
+def _clear_temporaries(out, vtu_dir):
+    """Remove temporary files a killed run left behind (atomic writes that never completed)."""
+    for d in (out, vtu_dir):
+        if os.path.isdir(d):
+            for f in os.listdir(d):
+                if f.startswith(".") and ".tmp" in f:
+                    os.unlink(os.path.join(d, f))
+
+
+def _clear(out, vtu_dir):
+    """Remove the outputs of an earlier run in ``out`` (a new run, or --force)."""
+    _clear_temporaries(out, vtu_dir)
+    for stale in ("results.json", "probes.png", "shell.png", "checkpoint.npz"):
+        if os.path.exists(os.path.join(out, stale)):
+            os.unlink(os.path.join(out, stale))
+    if os.path.isdir(vtu_dir):
+        for f in os.listdir(vtu_dir):
+            if f.startswith("step_") and f.endswith(".vtu") or f == "series.pvd":
+                os.unlink(os.path.join(vtu_dir, f))
+
+
+def _record(k, st, iterations=None, substeps=1, cutbacks=0):
+    rec = step_record(st, dict(name="load factor", value=float(st.load_factor), unit=""))
+    rec = dict(step=k, **rec)
+    if iterations is not None:
+        rec["iterations"] = int(iterations)
+    rec["substeps"], rec["cutbacks"] = int(substeps), int(cutbacks)
+    rec["balance_error"] = rec.pop("balance_error")
+    return rec
+
+
+def _options(s):
+    common = dict(rtol=s["rtol"], dtol=s["dtol"], max_iter=s["max_iter"], linear_solver=s["linear_solver"])
+    if s["control"] == "arclength":
+        return ArcLengthOptions(method=s["method"], dlam0=s["dlam0"], psi=s["psi"], max_steps=s["max_steps"],
+                                target_iter=s["target_iter"], ds_max_factor=s["ds_max_factor"],
+                                stability=s["stability"], **common)
+    return NewtonOptions(max_cutbacks=s["max_cutbacks"], **common)
+
+
+def run(scn, out=None, resume=False, progress=None, force=False, stop_after=None, verbose=False):
+    """Solve a validated Scenario, writing its outputs in ``out`` (default [output] dir or
+    out/NAME).  resume: continue from the checkpoint in ``out``; force: start over even if
+    ``out`` holds a checkpoint.  progress: None = only on a terminal (after 2 s), True =
+    always.  stop_after: stop with RunInterrupted once that many steps are done in this call
+    (tests).  ConvergenceError propagates after the failure is recorded (status "failed"); the
+    checkpoint keeps the last converged step.  ``verbose`` is accepted for compatibility (the
+    solvers log through ``logging``)."""
+    t_setup0 = time.perf_counter()
+    prob = scn.problem
+    s, o = scn.solver, scn.output
+    arc = s["control"] == "arclength"
+    out = os.fspath(out or o["dir"] or os.path.join("out", scn.name))
+    ck = Checkpoint(out)
+    if resume and prob.element.stateful:
+        raise CheckpointError(f"--resume is not supported with the stateful {s['element']} element")
+    if not resume and ck.exists() and not force:
+        raise CheckpointError(f"{out} already holds a run ({ck.path}); continue it with --resume, "
+                              "start over with --force, or choose another --out")
+    os.makedirs(out, exist_ok=True)
+    vtu_dir = os.path.join(out, "vtu")
+    every = o["vtu_every"]
+    lams = scn.load_factors()
+    nsteps = None if arc else len(lams)
+    result = Result(mesh=prob.mesh, element=prob.element_name)
+    if resume:
+        st = ck.load(scn.fingerprint)
+        was_arc = st["extra"].get("control") == "arclength"
+        if arc and (not was_arc or "arc" not in st["extra"]):
+            raise CheckpointError(f"checkpoint {ck.path} holds no arc-length path state (written by a "
+                                  "load-controlled run or by a version that could not resume arc "
+                                  "length): start over with --force or use another --out")
+        if not arc and was_arc:
+            raise CheckpointError(f"checkpoint {ck.path} is of an arc-length run; this scenario is "
+                                  "load-controlled: start over with --force or use another --out")
+        _clear_temporaries(out, vtu_dir)
+        records, base, done = st["records"], dict(st["timings"]), st["step"]
+        if arc:
+            start = ArcState.unpack(st["g"], st["extra"]["arc"], st["arrays"])
+            if len(records) != start.step + 1:
+                raise CheckpointError(f"checkpoint {ck.path} is inconsistent: {len(records)} records for "
+                                      f"path step {start.step}")
+        else:
+            nw = st["extra"].get("newton", {})
+            start = NewtonState(st["lam"], st["g"], nw.get("dlam"), nw.get("k_ref"))
+        unwrap = st["unwrap"]
+        critical = list(start.critical) if arc else None
+    else:
+        _clear(out, vtu_dir)
+        records, base, done, start, unwrap = [], {}, 0, None, None
+        critical = [] if arc else None
+    rec = StepRecorder(prob, unwrap)
+    if not resume and not arc:
+        g0 = prob.mesh.g0.copy()
+        ev = prob.evaluate(g0, 0.0, tangent=False)
+        first = rec.step(0.0, g0, 0, [], ev.r_int, ev.f_ext)
+        records.append(_record(0, first, 0, 0, 0))
+        records[0]["balance_error"] = 0.0            # the unloaded start, not an equilibrium
+        if o["vtu"]:
+            _write_vtu(os.path.join(vtu_dir, "step_0000.vtu"), prob, g0, 0.0)
+        ck.save(scn.fingerprint, 0, 0.0, g0, rec.unwrapped, records, {k: 0.0 for k in PHASES},
+                extra=dict(newton=NewtonState(0.0, g0).pack()))
+        if o["vtu"]:
+            _write_pvd(vtu_dir, records, every, nsteps)
+        start = NewtonState(0.0, g0)
+    base["setup"] = base.get("setup", 0.0) + time.perf_counter() - t_setup0
+
+    def timings_now():
+        t = {k: float(base.get(k, 0.0)) for k in PHASES}
+        for k in ("assembly", "solve", "other"):
+            t[k] += float(result.timings.get(k, 0.0))
+        return t
+
+    explicit = bool(progress)
+    bar = Progress(nsteps, sys.stdout.isatty() if progress is None else explicit, delay=0.0 if explicit else 2.0)
+    opts = _options(s)
+    if arc:
+        steps = arc_length_steps(prob, lam_end=s["lam_end"], start=start, result=result, options=opts)
+    else:
+        steps = newton_steps(prob, lams[done:], opts, start=start, recorder=rec, result=result)
+    n_this_call, k, lam = 0, done, records[-1]["load_factor"] if records else 0.0
+    last_state = start
+    status, error = "complete", None
+    try:
+        for item in steps:
+            if arc:
+                k = item.state.step
+                records.append(_record(k, item.step, substeps=1 if k else 0))
+                finished = bool(item.state.finished)
+                critical = list(item.state.critical)
+                scalars, arrays = item.state.pack()
+                extra = dict(control="arclength", arc=scalars)
+                unwrap_now = item.state.unwrap
+            else:
+                k += 1
+                tries = item.tries
+                records.append(_record(k, item.step, sum(e["iterations"] for e in tries),
+                                       sum(e["converged"] for e in tries), sum(not e["converged"] for e in tries)))
+                finished = k == nsteps
+                extra, arrays = dict(newton=item.state.pack()), None
+                unwrap_now = rec.unwrapped
+            lam, g = item.step.load_factor, item.step.g
+            last_state = item.state
+            timings = timings_now()
+            vtu_now = o["vtu"] and (k % every == 0 or finished)
+            if vtu_now:
+                _write_vtu(os.path.join(vtu_dir, f"step_{k:04d}.vtu"), prob, g, lam)
+            ck.save(scn.fingerprint, k, lam, g, unwrap_now, records, timings, extra=extra, arrays=arrays)
+            if vtu_now:
+                _write_pvd(vtu_dir, records, every, k if finished else (nsteps if not arc else -1))
+            write_json_atomic(os.path.join(out, "results.json"),
+                              _document(scn, records, timings, "complete" if finished and not arc else "running",
+                                        critical=critical))
+            if k > done:
+                n_this_call += 1
+                dlam = lam - records[-2]["load_factor"]
+                bar.update(k, lam, records[-1]["iterations"], records[-1]["residual"],
+                           fraction=(lam / s["lam_end"]) if arc else None,
+                           extra=f"  dlam {dlam:.3g}" + (f"  {records[-1]['substeps']} sub-steps"
+                                                          if records[-1]["substeps"] > 1 else ""))
+                if stop_after is not None and n_this_call >= stop_after and not finished:
+                    bar.close()
+                    raise RunInterrupted(f"stopped after {'path point' if arc else 'step'} {k} as asked "
+                                         f"(stop_after={stop_after})")
+    except ConvergenceError as exc:
+        bar.close()
+        timings = timings_now()
+        if not arc:
+            target = lams[k] if k < len(lams) else lams[-1]
+            msg = (f"step {k + 1} (load factor {lam:.6g} -> {target:.6g}) failed: {exc}. The checkpoint "
+                   f"keeps step {k}; change the solver controls or the steps and rerun with --resume")
+            write_json_atomic(os.path.join(out, "results.json"), _document(scn, records, timings, "failed", msg))
+            raise ConvergenceError(msg, exc.result) from None
+        if not records:
+            raise
+        status, error = "failed", str(exc)
+        critical = list(result.critical_points)
+    except RunInterrupted:
+        raise
+    except CoreSE3Error as exc:              # e.g. a tangent that turned singular
+        bar.close()
+        if arc:
+            raise
+        target = lams[k] if k < len(lams) else lams[-1]
+        msg = (f"step {k + 1} (load factor {lam:.6g} -> {target:.6g}) failed: {exc}. The checkpoint "
+               f"keeps step {k}")
+        write_json_atomic(os.path.join(out, "results.json"), _document(scn, records, timings_now(), "failed", msg))
+        raise
+    bar.close()
+    timings = timings_now()
+    if arc:
+        final = last_state
+        k = final.step
+        g = np.asarray(final.state)
+        if status == "complete" and abs(final.lam - s["lam_end"]) > 1e-9 * abs(s["lam_end"]):
+            status = "failed"
+            error = (f"arc length stopped after max_steps = {s['max_steps']} steps at load factor "
+                     f"{final.lam:.6g} < lam_end = {s['lam_end']:g}; raise [solver] max_steps and continue "
+                     "with --resume (or raise dlam0 and start over)")
+        if o["vtu"]:
+            if not os.path.exists(os.path.join(vtu_dir, f"step_{k:04d}.vtu")):
+                _write_vtu(os.path.join(vtu_dir, f"step_{k:04d}.vtu"), prob, final.state, final.lam)
+            _write_pvd(vtu_dir, records, every, k)
+    else:
+        g = last_state.g
+    doc = _document(scn, records, timings, status, error, critical=critical)
+    write_json_atomic(os.path.join(out, "results.json"), doc)
+    if status == "failed":
+        raise ConvergenceError(error + f"; the {len(records) - 1} converged steps are written in {out} "
+                               "(the checkpoint keeps the last one)", result)
+    files = dict(results=os.path.join(out, "results.json"), checkpoint=ck.path)
+    return _finish(o, prob, doc, scn, g, records, out, vtu_dir, files)
+
+
+def _finish(o, prob, doc, scn, g, records, out, vtu_dir, files):
+    """Series file, probe plot and picture of a completed run; the RunResult."""
+    if o["vtu"]:
+        files["pvd"] = os.path.join(vtu_dir, "series.pvd")
+    if o["plots"] and prob.probes:
+        files["probes"] = plot_probes(os.path.join(out, "probes.png"), doc)
+    if o["picture"]:
+        files["picture"] = picture(os.path.join(out, "shell.png"), scn, g, records=records,
+                                   vtu_dir=vtu_dir if o["vtu"] else None)
+    return RunResult(doc=doc, g=g, out=out, files=files)
+
+
+def plot_probes(path, doc):
+    """Load factor against the displacement components of every probe (one PNG)."""
+    from ..io import plot_load_deflection
+    lam = np.array([s["load_factor"] for s in doc["steps"]])
+    disp = {}
+    us = {name: np.array([s["probes"][name]["u"] for s in doc["steps"]]) for name in doc["steps"][0]["probes"]}
+    big = max([np.abs(u).max() for u in us.values()] + [0.0])
+    for name, u in us.items():
+        for i, c in enumerate("xyz"):
+            if np.abs(u[:, i]).max() > 1e-9 * big:          # leave out components that stay ~0
+                disp[f"{name}.u{c}"] = u[:, i]
+    length = {"N-mm-MPa": "mm", "SI": "m"}.get(doc.get("units"), "length unit")
+    with atomic_path(path) as tmp:
+        plot_load_deflection(tmp, lam, disp, xlabel=f"probe displacement [{length}]",
+                             ylabel="load factor", title=doc["case"])
+    return path
+
+
+def picture(path, scn, g, title=None, records=None, vtu_dir=None):
+    """PNG of the deformed shell (matplotlib 3-D, reference outline dotted): the final state
+    coloured by rotation angle, or, with [output] picture_steps = k > 1, k states of the path
+    (read back from the VTU files, so also after a resume) overlaid."""
+    from ..io import plot_sequence, plot_shell
+    m = scn.mesh
+    o = scn.output
+    k = o.get("picture_steps", 1)
+    view = list(o.get("view") or (20.0, -60.0))
+    elev, azim, roll = (view + [0.0])[:3]
+    with atomic_path(path) as tmp:
+        if k > 1 and records and vtu_dir:
+            import meshio
+            have = [r for r in records
+                    if os.path.exists(os.path.join(vtu_dir, f"step_{r['step']:04d}.vtu"))]
+            pick = sorted({int(round(i)) for i in np.linspace(0, len(have) - 1, min(k, len(have)))})
+            pos, labels = [], []
+            for i in pick:
+                r = have[i]
+                v = meshio.read(os.path.join(vtu_dir, f"step_{r['step']:04d}.vtu"))
+                pos.append(v.points + v.point_data["displacement"])
+                labels.append(f"load factor {r['load_factor']:.3g}")
+            plot_sequence(tmp, m.X, m.quads, pos, labels, title=title or scn.name, elev=elev, azim=azim,
+                          roll=roll)
+        else:
+            plot_shell(tmp, m.X, m.quads, g, title=title or scn.name, elev=elev, azim=azim, roll=roll)
+    return path

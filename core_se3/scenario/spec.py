@@ -1,0 +1,200 @@
+"""The validated scenario: :func:`load` (a TOML file), :func:`loads` (TOML text),
+:func:`from_dict` (parsed documents) and the :class:`Scenario` they return.
+
+Validation happens in one pass, in file order of dependence: mesh (generator or file) ->
+named node sets and element regions -> material -> fields and magnets -> supports -> loads
+-> probes -> solver -> output; then the Problem is built and its supports are checked for a
+free rigid-body motion.  Every error is a ScenarioError naming the file, the dotted key
+(``loads[2].force``) and what was expected.  The schema, with one example per feature, is in
+docs/SCENARIOS.md.
+"""
+from __future__ import annotations
+
+import copy
+import hashlib
+import json
+import os
+import re
+
+from ..errors import ScenarioError
+from .build import build_problem
+from .geometry import edges_section, mesh_section, probes_section, regions_section
+from .physics import (NON_PHYSICAL, fields_section, loads_section, magnets_section,
+                      material_section, output_section, solver_section, supports_section)
+from .validate import Validator
+
+try:                                  # Python >= 3.11
+    import tomllib
+except ModuleNotFoundError:           # pragma: no cover - Python 3.10
+    import tomli as tomllib
+
+__all__ = ["Scenario", "load", "loads", "from_dict", "TOP_KEYS"]
+
+TOP_KEYS = ("name", "description", "units", "mesh", "edges", "regions", "material", "fields",
+            "magnets", "supports", "loads", "probes", "solver", "output")
+
+
+class Scenario:
+    """A validated scenario: ``spec`` (normalised, JSON-serialisable), ``mesh``, named node sets
+    and element ``regions`` (name -> element ids), the ``problem`` built from it (whose
+    ``solve()`` runs the scenario's own [solver] settings), and the ``fingerprint`` of
+    everything that determines the converged states (for --resume).
+
+    Example
+    -------
+    >>> scn = loads('''
+    ... [mesh]
+    ... generator = "rectangle"
+    ... L = 10.0
+    ... width = 1.0
+    ... nx = 8
+    ... ny = 1
+    ... [material]
+    ... E = 1.2e6
+    ... nu = 0.0
+    ... h = 0.1
+    ... [[supports]]
+    ... type = "clamp"
+    ... edge = "x0"
+    ... [[loads]]
+    ... type = "edge_force"
+    ... edge = "x1"
+    ... force = [0.0, 0.0, 0.5]
+    ... [solver]
+    ... steps = 3
+    ... ''')
+    >>> len(scn.problem.solve().steps), scn.with_overrides({"solver.steps": 2}).solver["steps"]
+    (4, 2)
+    """
+
+    def __init__(self, spec, mesh, regions, problem, file, fingerprint, raw, base_dir=".",
+                 default_name="scenario"):
+        self.spec = spec
+        self.mesh = mesh
+        self.regions = regions
+        self.problem = problem
+        self.file = file
+        self.fingerprint = fingerprint
+        self.raw = raw
+        self.base_dir = base_dir
+        self.default_name = default_name
+
+    @property
+    def name(self):
+        return self.spec["name"]
+
+    @property
+    def solver(self):
+        return self.spec["solver"]
+
+    @property
+    def output(self):
+        return self.spec["output"]
+
+    def load_factors(self):
+        """The load factors of the requested steps (excluding the initial state lam = 0)."""
+        s = self.solver
+        if s.get("load_factors") is not None:
+            return list(s["load_factors"])
+        return [s["lam_end"] * k / s["steps"] for k in range(1, s["steps"] + 1)]
+
+    def with_overrides(self, overrides):
+        """A new Scenario with the dotted keys of ``overrides`` set in the document and validated
+        anew: ``{"material.E": 2e6, "fields.coil.B": [0, 0, 0.05], "loads[0].force": [...],
+        "solver.steps": 20}`` (a parameter sweep changes one key at a time)."""
+        doc = copy.deepcopy(self.raw)
+        for key, value in overrides.items():
+            _set_dotted(doc, key, value, self.file)
+        return from_dict(doc, file=self.file, base_dir=self.base_dir, default_name=self.default_name)
+
+    def run(self, out=None, resume=False, progress=None, **kw):
+        """Run the scenario with output and checkpoints (``scenario.runner.run``)."""
+        from .runner import run
+        return run(self, out=out, resume=resume, progress=progress, **kw)
+
+
+_PART = re.compile(r"^([^.\[\]]+)((?:\[\d+\])*)$")
+
+
+def _set_dotted(doc, key, value, file):
+    """Set ``a.b[2].c`` = value in nested dicts/lists (missing tables are created)."""
+    parts = []
+    for seg in str(key).split("."):
+        m = _PART.match(seg)
+        if not m:
+            raise ScenarioError(f"cannot read the override key {key!r} (expected a.b[0].c)", file, key)
+        parts.append(m.group(1))
+        parts.extend(int(i) for i in re.findall(r"\[(\d+)\]", m.group(2)))
+    node = doc
+    for p, nxt in zip(parts[:-1], parts[1:]):
+        try:
+            if isinstance(p, int):
+                node = node[p]
+            else:
+                node = node.setdefault(p, [] if isinstance(nxt, int) else {})
+        except (IndexError, TypeError, AttributeError):
+            raise ScenarioError(f"the override key {key!r} does not exist in the scenario", file, key) from None
+    try:
+        node[parts[-1]] = value
+    except (IndexError, TypeError):
+        raise ScenarioError(f"the override key {key!r} does not exist in the scenario", file, key) from None
+
+
+def load(path):
+    """Read and validate a scenario file (TOML)."""
+    path = os.fspath(path)
+    try:
+        with open(path, "rb") as fh:
+            data = fh.read()
+    except OSError as exc:
+        raise ScenarioError(f"cannot read the scenario file: {exc.strerror or exc}", path) from None
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ScenarioError(f"not UTF-8 text ({exc.reason} at byte {exc.start})", path) from None
+    return loads(text, file=path, base_dir=os.path.dirname(os.path.abspath(path)))
+
+
+def loads(text, file="<string>", base_dir="."):
+    """Parse and validate scenario TOML text."""
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ScenarioError(f"not valid TOML: {exc}", file) from None
+    name = os.path.splitext(os.path.basename(file))[0] if not file.startswith("<") else "scenario"
+    return from_dict(doc, file=file, base_dir=base_dir, default_name=name)
+
+
+def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario"):
+    """Validate a scenario given as nested dicts/lists (the parsed TOML) and build its Problem."""
+    v = Validator(file)
+    v.table(doc, "", TOP_KEYS, required=("mesh", "material"))
+    spec = {}
+    spec["name"] = v.string(doc, "name", "", default=default_name)
+    spec["description"] = v.string(doc, "description", "", default="")
+    spec["units"] = v.string(doc, "units", "", default="")
+
+    mesh, mspec, file_digest = mesh_section(v, doc["mesh"], base_dir)
+    spec["mesh"] = mspec
+    spec["edges"] = edges_section(v, doc, mesh)
+    regions = regions_section(v, doc, mesh)
+    spec["regions"] = {k: r.tolist() for k, r in regions.items()}
+    spec["material"] = material_section(v, doc["material"], regions)
+    spec["fields"] = fields_section(v, doc)
+    spec["magnets"] = magnets_section(v, doc, regions, spec["fields"])
+    spec["supports"] = supports_section(v, doc, mesh, regions)
+    spec["loads"] = loads_section(v, doc, mesh, regions)
+    spec["probes"] = probes_section(v, doc, mesh)
+    spec["solver"] = solver_section(v, doc)
+    if spec["solver"]["control"] == "arclength":
+        for i, sp in enumerate(spec["supports"]):
+            if sp["type"] == "rotate":
+                v.fail(f"supports[{i}].type", "arc length scales the loads only: a prescribed "
+                       'rotation is not supported with control = "arclength"')
+    spec["output"] = output_section(v, doc)
+    problem = build_problem(v, spec, mesh, regions)
+    phys = {k: spec[k] for k in spec if k not in ("output", "description")}
+    phys["solver"] = {k: x for k, x in spec["solver"].items() if k not in NON_PHYSICAL}
+    blob = json.dumps(phys, sort_keys=True) + (file_digest or "")
+    fp = hashlib.sha256(blob.encode()).hexdigest()
+    return Scenario(spec, mesh, regions, problem, file, fp, doc, base_dir, default_name)

@@ -1,0 +1,227 @@
+"""Typed access to a parsed scenario document: every failure is a ScenarioError naming the file,
+the dotted key (``loads[2].force``) and what was expected.
+
+:class:`Validator` checks one value at a time (number, integer, boolean, string, vector, 3x3
+matrix, load-factor scale, tables); :meth:`Validator.params` checks the keys a registered load
+or field kind declares (``core_se3.model.Param``), so that a new kind needs no validator code.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..errors import ScenarioError, did_you_mean
+from ..model.base import REQUIRED
+
+__all__ = ["Validator", "join", "tname", "show", "make_scale"]
+
+_REQ = REQUIRED
+
+
+def make_scale(spec):
+    """Load-factor scaling s(lam) from a validated spec ("linear", "constant" or a table
+    [[lam, s], ...], linear in between and constant outside).
+
+    Example
+    -------
+    >>> make_scale([[0.0, 0.0], [0.5, 1.0]])(0.25), make_scale("constant")(7.0)
+    (0.5, 1.0)
+    """
+    if spec == "linear":
+        return lambda lam: lam
+    if spec == "constant":
+        return lambda lam: 1.0
+    t = np.asarray(spec, float)
+    return lambda lam: float(np.interp(lam, t[:, 0], t[:, 1]))
+
+
+_TYPE_NAMES = ((bool, "a boolean"), (int, "an integer"), (float, "a number"), (str, "a string"),
+               (list, "an array"), (dict, "a table"))
+
+
+def tname(v):
+    """'a boolean', 'an integer', ... : the TOML type of a value, for messages."""
+    for t, name in _TYPE_NAMES:
+        if isinstance(v, t):
+            return name
+    return type(v).__name__
+
+
+def show(v):
+    s = repr(v)
+    return s if len(s) <= 60 else s[:57] + "..."
+
+
+class Validator:
+    """Typed access to a parsed TOML document; every failure is a ScenarioError(file, key)."""
+
+    def __init__(self, file):
+        self.file = file
+
+    def fail(self, key, msg):
+        raise ScenarioError(msg, self.file, key)
+
+    def table(self, d, key, allowed, required=()):
+        if not isinstance(d, dict):
+            self.fail(key, f"expected a table, got {tname(d)} {show(d)}")
+        for k in d:
+            if k not in allowed:
+                self.fail(join(key, k), f"unknown key {k!r}{did_you_mean(k, allowed)} (allowed here: "
+                                        f"{', '.join(allowed)})")
+        for k in required:
+            if k not in d:
+                self.fail(join(key, k), "missing required key")
+        return d
+
+    def number(self, d, k, key, default=_REQ, lo=None, lo_open=False, hi=None, hi_open=False):
+        path = join(key, k)
+        if k not in d:
+            if default is _REQ:
+                self.fail(path, "missing required key (a number)")
+            return default
+        v = d[k]
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            self.fail(path, f"expected a number, got {tname(v)} {show(v)}")
+        v = float(v)
+        if not math.isfinite(v):
+            self.fail(path, f"expected a finite number, got {v}")
+        if lo is not None and (v <= lo if lo_open else v < lo):
+            self.fail(path, f"expected a number {'>' if lo_open else '>='} {lo:g}, got {v:g}")
+        if hi is not None and (v >= hi if hi_open else v > hi):
+            self.fail(path, f"expected a number {'<' if hi_open else '<='} {hi:g}, got {v:g}")
+        return v
+
+    def integer(self, d, k, key, default=_REQ, lo=None, hi=None):
+        path = join(key, k)
+        if k not in d:
+            if default is _REQ:
+                self.fail(path, "missing required key (an integer)")
+            return default
+        v = d[k]
+        if isinstance(v, bool) or not isinstance(v, int):
+            self.fail(path, f"expected an integer, got {tname(v)} {show(v)}")
+        if lo is not None and v < lo:
+            self.fail(path, f"expected an integer >= {lo}, got {v}")
+        if hi is not None and v > hi:
+            self.fail(path, f"expected an integer <= {hi}, got {v}")
+        return v
+
+    def boolean(self, d, k, key, default=_REQ):
+        path = join(key, k)
+        if k not in d:
+            if default is _REQ:
+                self.fail(path, "missing required key (true or false)")
+            return default
+        if not isinstance(d[k], bool):
+            self.fail(path, f"expected true or false, got {tname(d[k])} {show(d[k])}")
+        return d[k]
+
+    def string(self, d, k, key, default=_REQ, choices=None):
+        path = join(key, k)
+        if k not in d:
+            if default is _REQ:
+                self.fail(path, "missing required key (a string)" if not choices else
+                          f"missing required key (one of {', '.join(map(repr, choices))})")
+            return default
+        v = d[k]
+        if not isinstance(v, str):
+            self.fail(path, f"expected a string, got {tname(v)} {show(v)}")
+        if choices is not None and v not in choices:
+            self.fail(path, f"unknown value {v!r}{did_you_mean(v, choices)} (expected one of "
+                            f"{', '.join(map(repr, choices))})")
+        return v
+
+    def vector(self, d, k, key, n=3, default=_REQ, nonzero=False):
+        path = join(key, k)
+        if k not in d:
+            if default is _REQ:
+                self.fail(path, f"missing required key (an array of {n} numbers)")
+            return default
+        v = d[k]
+        if (not isinstance(v, list) or len(v) != n
+                or any(isinstance(x, bool) or not isinstance(x, (int, float)) for x in v)):
+            self.fail(path, f"expected an array of {n} numbers, got {tname(v)} {show(v)}")
+        v = [float(x) for x in v]
+        if not all(math.isfinite(x) for x in v):
+            self.fail(path, f"expected finite numbers, got {v}")
+        if nonzero and not any(v):
+            self.fail(path, "expected a non-zero vector")
+        return v
+
+    def matrix3(self, d, k, key):
+        path = join(key, k)
+        v = d.get(k, _REQ)
+        if v is _REQ:
+            self.fail(path, "missing required key (a 3x3 array of numbers)")
+        if not isinstance(v, list) or len(v) != 3:
+            self.fail(path, f"expected a 3x3 array of numbers, got {tname(v)} {show(v)}")
+        return [self.vector({"row": r}, "row", f"{path}[{i}]") for i, r in enumerate(v)]
+
+    def scale(self, d, key, default="linear"):
+        path = join(key, "scale")
+        if "scale" not in d:
+            return default
+        v = d["scale"]
+        if isinstance(v, str):
+            return self.string(d, "scale", key, choices=("linear", "constant"))
+        if not isinstance(v, list) or len(v) < 2:
+            self.fail(path, 'expected "linear", "constant" or a table [[lam, s], ...] of at least two '
+                            f"points, got {tname(v)} {show(v)}")
+        rows = [self.vector({"p": r}, "p", f"{path}[{i}]", n=2) for i, r in enumerate(v)]
+        lam = [r[0] for r in rows]
+        if any(b <= a for a, b in zip(lam, lam[1:])):
+            self.fail(path, f"the load factors of a scale table must increase strictly, got {lam}")
+        return rows
+
+    def array_of_tables(self, doc, k):
+        v = doc.get(k, [])
+        if isinstance(v, dict):
+            self.fail(k, f"expected an array of tables ([[{k}]]), got a single table ([{k}])")
+        if not isinstance(v, list) or any(not isinstance(x, dict) for x in v):
+            self.fail(k, f"expected an array of tables ([[{k}]]), got {tname(v)} {show(v)}")
+        return v
+
+    def names_table(self, doc, k):
+        v = doc.get(k, {})
+        if not isinstance(v, dict):
+            self.fail(k, f"expected a table of named entries ([{k}.NAME]), got {tname(v)} {show(v)}")
+        for name, t in v.items():
+            if not isinstance(t, dict):
+                self.fail(join(k, name), f"expected a table, got {tname(t)} {show(t)}")
+        return v
+
+    def params(self, d, key, params):
+        """Values of the declared keys ``params`` (core_se3.model.Param) of table d, defaults
+        filled in (``table`` params validated recursively; None stays None)."""
+        out = {}
+        for p in params:
+            if p.kind == "vector":
+                val = self.vector(d, p.name, key, default=p.default, nonzero=p.nonzero)
+                out[p.name] = list(val) if isinstance(val, tuple) else val
+            elif p.kind == "number":
+                out[p.name] = self.number(d, p.name, key, default=p.default, lo=p.lo, lo_open=p.lo_open)
+            elif p.kind == "bool":
+                out[p.name] = self.boolean(d, p.name, key, default=p.default)
+            elif p.kind == "matrix3":
+                out[p.name] = self.matrix3(d, p.name, key)
+            elif p.kind == "table":
+                if p.name not in d:
+                    if p.required:
+                        self.fail(join(key, p.name), "missing required key (a table)")
+                    out[p.name] = p.default
+                    continue
+                k2 = join(key, p.name)
+                self.table(d[p.name], k2, tuple(q.name for q in p.fields),
+                           required=tuple(q.name for q in p.fields if q.required))
+                out[p.name] = self.params(d[p.name], k2, p.fields)
+            else:
+                raise TypeError(f"unknown parameter kind {p.kind!r} of {p.name!r}")
+        return out
+
+
+def join(key, k):
+    """The dotted key ``key.k`` (``k`` alone at the top level)."""
+    if not key:
+        return str(k)
+    return f"{key}.{k}"

@@ -1,0 +1,457 @@
+"""Path following past limit points: arc length and displacement control, as generators of
+converged points.
+
+Equilibrium path of r(g, lam) = r_int(g) - f_ext(g, lam) = 0 on the free dofs, g <- g exp(eta)
+(body-frame increments, docs/CONVENTIONS.md).  With q = d f_ext / d lam (central difference
+in lam at the current g, exact for linearly scaled loads, dead or follower) and K = dr/deta,
+one Newton correction of the bordered system
+
+    K du - q dlam = -r,        c_u . du + c_lam dlam = -c
+
+is du = a + dlam b with K a = -r, K b = q (one factorisation, two solves), and dlam from the
+constraint c:
+
+* ``crisfield`` (cylindrical arc length): |Du + du|_W^2 + psi^2 u_ref^2 (Dlam + dlam)^2 = ds^2,
+  Du, Dlam the increments accumulated in the step (sum of the etas); the root that keeps the
+  increment closest to its previous direction is taken; for complex roots the minimum of the
+  quadratic (the closest point to the constraint) is used, and more than 3 such iterations in
+  a step reject it;
+* ``riks`` (normal plane, Ramm's update): (Du)_W . du + psi^2 u_ref^2 Dlam dlam = 0;
+* displacement control: d . (phi_k - X_k) = u* at node k (lab direction d), linearised
+  c_u . du = d . R_k du_v; load control: dlam = lam* - lam.
+
+|x|_W weights translations by 1 and rotations by ell^2 (ell = the problem's length scale, as
+in ``convergence.scaled_norm``), so ds is a length.  The predictor is the tangent t = K^-1 q at the last
+converged state, Dlam = +-ds / sqrt(|t|_W^2 + psi^2 u_ref^2), signed so that the new increment
+continues the previous one (positive projection).  ds adapts: ds *= clip(sqrt(n_target / n),
+1/2, 2) after a converged step of n iterations; a failed step (no convergence, complex root,
+an edge turning by pi, a singular tangent, a converged increment pointing against its
+predictor) is rejected and retried with ds / 2.
+
+Restart: every converged point comes with an ``ArcState`` (the point, the next ds, the
+previous increment that signs the next predictor, the pending branch switch, the critical
+points so far); ``arc_length_steps(..., start=state)`` continues from it and repeats the same
+computations from the same bits, so an interrupted and resumed path ends in the state of an
+uninterrupted one.
+
+Stability (``solvers.stability``): the negative pivots of the symmetrised tangent at every
+converged point bracket limit points and bifurcations; ``branch_switch=True`` leaves a
+bifurcation along the buckling mode (the eigenvector of the smallest eigenvalue,
+orthogonalised to t) instead of continuing on the primary path.
+"""
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from ..errors import ConvergenceError, CoreSE3Error, ElementTooDistortedError, SingularSystemError
+from .linalg import Factorization
+from .options import ArcLengthOptions, split_options, unknown_keywords
+from .stability import CriticalPoint, analyse, locate_critical
+
+__all__ = ["ArcState", "PathEvent", "PathInfo", "path_steps", "path_follow", "correct",
+           "LinearConstraint", "StepFailed", "PathError", "arc_options"]
+
+log = logging.getLogger(__name__)
+
+
+# ============================================================== constraints ===============
+
+class StepFailed(Exception):
+    """A corrector that did not converge (the step is rejected and retried shorter)."""
+
+
+class _ArcLength:
+    def __init__(self, method, ds, psi_u, w):
+        self.method, self.ds, self.c2, self.w = method, ds, psi_u ** 2, w
+
+    def start(self, du, dlam):
+        self.du, self.dlam = du.copy(), dlam
+        self.du0, self.dlam0 = du.copy(), dlam                  # predictor (normal of Riks)
+
+    def dlam_for(self, sysm, state, a, b):
+        w = self.w
+        if self.method == "riks":
+            den = np.sum(w * self.du * b) + self.c2 * self.dlam
+            if den == 0:
+                raise StepFailed("Riks constraint is tangent to the path")
+            return -np.sum(w * self.du * a) / den
+        ua = self.du + a
+        A = np.sum(w * b * b) + self.c2
+        B = 2 * (np.sum(w * ua * b) + self.c2 * self.dlam)
+        Cc = np.sum(w * ua * ua) + self.c2 * self.dlam ** 2 - self.ds ** 2
+        disc = B * B - 4 * A * Cc
+        if disc < 0:
+            # complex roots: take the point of the correction line closest to the sphere
+            # (minimum of the quadratic); the next iterations return to the constraint
+            self.complex_roots = getattr(self, "complex_roots", 0) + 1
+            if self.complex_roots > 3:
+                raise StepFailed("arc-length constraint has no real root (complex roots)")
+            return -B / (2 * A)
+        roots = ((-B + np.sqrt(disc)) / (2 * A), (-B - np.sqrt(disc)) / (2 * A))
+        # choose the root whose increment makes the smallest angle with the previous one
+        score = [np.sum(w * self.du * (ua + x * b)) + self.c2 * self.dlam * (self.dlam + x)
+                 for x in roots]
+        return roots[int(np.argmax(score))]
+
+    def accept(self, x, dl):
+        self.du += x
+        self.dlam += dl
+
+
+class LinearConstraint:
+    """A linear constraint of the bordered corrector: c(state, lam) = value(state) + c_lam lam - target, linearised by row . du + c_lam dlam."""
+
+    def __init__(self, value, row, c_lam, target):
+        self.value, self.row, self.c_lam, self.target = value, row, c_lam, target
+        self.lam = None
+
+    def dlam_for(self, sysm, state, a, b):
+        c = (self.value(state) if self.value else 0.0) + self.c_lam * self.lam - self.target
+        ru = self.row(state) if self.row else None
+        num = c + (ru @ a if ru is not None else 0.0)
+        den = (ru @ b if ru is not None else 0.0) + self.c_lam
+        if den == 0 or not np.isfinite(den):
+            raise StepFailed("the controlled displacement does not respond to the load (c_u . b = 0)")
+        return -num / den
+
+    def accept(self, x, dl):
+        pass
+
+
+# ============================================================== path data ================
+
+@dataclass
+class ArcState:
+    """What the arc-length follower carries from one converged point to the next (a restart).
+
+    state: the converged point (ShellSystem: nodal frames g (n, 4, 4)); lam its load factor;
+    step: converged points so far (0 = the first point of the path); ds: the arc length of the
+    next step (already adapted), ds_max, ds_min its bounds; psi_u = psi |t_0|_W (length units);
+    direction: sign of the first predictor's dlam; prev_du (free dofs), prev_dl: the last
+    converged increment (the next predictor is signed by its W-projection on the tangent; None
+    at the start and after a branch switch); switch_mode: the unit mode of a pending branch
+    switch, branch_switch whether a switch is still to come; critical: the CriticalPoints found
+    so far (``mode`` not needed to continue); finished: why the path stopped at this point
+    ('lam_end', 'control_end', 'lam_min', 'max_steps') or ''; unwrap: the continuously
+    unwrapped probe rotation vectors (arc_length's recorder; None for path_follow).
+    """
+    state: object
+    lam: float
+    step: int
+    ds: float
+    ds_max: float
+    ds_min: float
+    psi_u: float
+    direction: float
+    prev_du: np.ndarray | None = None
+    prev_dl: float | None = None
+    switch_mode: np.ndarray | None = None
+    branch_switch: bool = False
+    critical: list = field(default_factory=list)
+    finished: str = ""
+    unwrap: dict | None = None
+
+    def pack(self):
+        """(scalars, arrays): a JSON-able dict (floats round-trip exactly through repr) and the
+        arrays other than ``state``; ``ArcState.unpack(state, scalars, arrays)`` inverts it."""
+        sc = dict(lam=float(self.lam), step=int(self.step), ds=float(self.ds), ds_max=float(self.ds_max),
+                  ds_min=float(self.ds_min), psi_u=float(self.psi_u), direction=float(self.direction),
+                  prev_dl=None if self.prev_dl is None else float(self.prev_dl),
+                  branch_switch=bool(self.branch_switch), finished=str(self.finished or ""),
+                  critical=[dict(kind=c.kind, step=int(c.step), lam=float(c.lam),
+                                 lam_bracket=[float(x) for x in c.lam_bracket],
+                                 negative_eigenvalues=[None if x is None else int(x)
+                                                       for x in c.negative_eigenvalues])
+                            for c in self.critical],
+                  unwrap=None if self.unwrap is None else
+                  {k: [float(x) for x in np.asarray(v, float)] for k, v in self.unwrap.items()})
+        arrays = {}
+        if self.prev_du is not None:
+            arrays["prev_du"] = np.asarray(self.prev_du, float)
+        if self.switch_mode is not None:
+            arrays["switch_mode"] = np.asarray(self.switch_mode, float)
+        return sc, arrays
+
+    @classmethod
+    def unpack(cls, state, scalars, arrays):
+        sc = scalars
+        crit = [CriticalPoint(c["kind"], c["step"], c["lam"], tuple(c["lam_bracket"]),
+                              tuple(c["negative_eigenvalues"])) for c in sc.get("critical", [])]
+        unwrap = None if sc.get("unwrap") is None else \
+            {k: np.array(v, float) for k, v in sc["unwrap"].items()}
+        return cls(state, sc["lam"], sc["step"], sc["ds"], sc["ds_max"], sc["ds_min"], sc["psi_u"],
+                   sc["direction"], arrays.get("prev_du"), sc["prev_dl"], arrays.get("switch_mode"),
+                   sc["branch_switch"], crit, sc["finished"], unwrap)
+
+
+def correct(sysm, state, lam, con, opts, timers):
+    """Newton on the bordered system from the predicted (state, lam); returns the converged
+    (state, lam, iterations, residual history, evaluation at the solution)."""
+    hist = []
+    dn = np.inf
+    for it in range(opts.max_iter + 1):
+        ta = time.perf_counter()
+        ev = sysm.evaluate(state, lam, tangent=True)
+        timers[0] += time.perf_counter() - ta
+        rn = ev["rn"]
+        hist.append(rn)
+        if it > 0 and rn <= max(opts.rtol, ev["floor"]) and dn <= opts.dtol:
+            return state, lam, it, hist, ev
+        if it == opts.max_iter:
+            raise StepFailed(f"no convergence in {opts.max_iter} iterations (residual {rn:.2e})")
+        if it > 3 and rn > opts.divergence * max(hist[0], 1e-300):
+            raise StepFailed(f"diverging (residual {rn:.2e})")
+        ts = time.perf_counter()
+        with Factorization(ev["K"], sysm.solver) as fac:
+            a = fac.solve(-ev["r"])
+            b = fac.solve(ev["q"])
+        timers[1] += time.perf_counter() - ts
+        if isinstance(con, LinearConstraint):
+            con.lam = lam
+        dl = con.dlam_for(sysm, state, a, b)
+        x = a + dl * b
+        dn = sysm.increment_norm(x)
+        state = sysm.update(state, x)
+        lam = lam + dl
+        con.accept(x, dl)
+
+
+def _fraction(cur, pt, why, lam_end, control_end, ctrl_val):
+    if why == "lam_end":
+        a, b, target = cur.lam, pt.lam, lam_end
+    else:
+        a, b, target = ctrl_val(cur.state), ctrl_val(pt.state), control_end
+    return float(np.clip((target - a) / (b - a), 0.0, 1.0)) if b != a else 1.0
+
+
+# ============================================================== the path follower =========
+
+@dataclass
+class PathInfo:
+    """What a path follower accumulates besides its points: the log of every try, the critical
+    points found, and the time spent assembling and solving ([assembly, solve] seconds)."""
+    log: list = field(default_factory=list)
+    critical: list = field(default_factory=list)
+    timers: list = field(default_factory=lambda: [0.0, 0.0])
+
+
+@dataclass
+class PathEvent:
+    """A converged point of the path and the ArcState to restart from it.  ``restart`` marks
+    the re-analysed start point of a resumed path (not a new point)."""
+    point: object
+    state: ArcState
+    restart: bool = False
+
+
+class PathError(ConvergenceError):
+    """A path that could not go on (too many rejections); ``info`` holds its PathInfo."""
+
+    def __init__(self, message, info):
+        super().__init__(message)
+        self.info = info
+
+
+def path_steps(sysm, options, lam_end=1.0, control=None, control_end=None, lam_min=None,
+               start=None, info=None):
+    """Trace the path of ``sysm`` (ShellSystem or any object with the same methods), yielding a
+    :class:`PathEvent` for the first point and for every converged point.
+
+    Stops when lam >= lam_end (if lam_end is not None), when the controlled displacement
+    ``control = (value, row)`` reaches ``control_end`` (e.g. the deflection at the end of a
+    published table), when lam < lam_min, or after max_steps.  With ``land`` the last step is
+    redone with load control (displacement control) so that it ends exactly on lam_end
+    (control_end).  ``start=ArcState`` continues from such a point instead of the reference
+    state (dlam0, ds_max, ds_min, psi and branch_switch then come from it; its re-analysed
+    point comes as a ``restart`` event; a finished start yields nothing, unless it stopped at a
+    max_steps now raised), repeating the computations of the uninterrupted path bit for bit.
+    ``info`` (a PathInfo) collects the log, the critical points and the timers.
+    """
+    o = options
+    info = PathInfo() if info is None else info
+    timers, trylog = info.timers, info.log
+    max_steps = o.max_steps
+    if start is not None and start.finished and not (start.finished == "max_steps" and start.step < max_steps):
+        info.critical[:] = list(start.critical)
+        return
+    state, lam = (sysm.initial(), 0.0) if start is None else (start.state, float(start.lam))
+    first = analyse(sysm, state, lam, o.stability)
+    cur = first
+    ctrl_val = control[0] if control else None
+    branch_switch = o.branch_switch
+    if start is None:
+        crit = info.critical
+        tn0 = np.sqrt(np.sum(sysm.w * first.t ** 2))
+        if not np.isfinite(tn0) or tn0 == 0:
+            raise CoreSE3Error("the loads do not move the structure (K^-1 q = 0)")
+        psi_u = o.psi * tn0                       # load term of the arc length in length units
+        ds = abs(o.dlam0) * np.sqrt(tn0 ** 2 + psi_u ** 2)
+        ds_max = o.ds_max or o.ds_max_factor * ds
+        ds_min = o.ds_min or ds / 2 ** o.max_rejections
+        direction = np.sign(o.dlam0) or 1.0
+        prev_du, prev_dl = None, None
+        switch_mode = None
+        step = 0
+    else:
+        crit = info.critical
+        crit[:] = list(start.critical)
+        psi_u, ds, ds_max, ds_min = start.psi_u, start.ds, start.ds_max, start.ds_min
+        direction = start.direction
+        prev_du = None if start.prev_du is None else np.array(start.prev_du, float)
+        prev_dl = start.prev_dl
+        switch_mode = None if start.switch_mode is None else np.array(start.switch_mode, float)
+        branch_switch = start.branch_switch
+        step = int(start.step)
+
+    def finished(pt):
+        if lam_end is not None and (pt.lam - lam_end) * np.sign(lam_end or 1.0) >= -1e-12 * max(1, abs(lam_end)):
+            return "lam_end"
+        if control_end is not None and (ctrl_val(pt.state) - control_end) * np.sign(control_end) >= \
+                -1e-12 * abs(control_end):
+            return "control_end"
+        if lam_min is not None and pt.lam < lam_min:
+            return "lam_min"
+        return None
+
+    def snapshot(pt, why):
+        return ArcState(pt.state, pt.lam, step, ds, ds_max, ds_min, psi_u, direction, prev_du, prev_dl,
+                        switch_mode, branch_switch, list(crit),
+                        why or ("max_steps" if step >= max_steps else ""))
+
+    yield PathEvent(first, snapshot(first, ""), restart=start is not None)
+    rejections = 0
+    while step < max_steps:
+        t = cur.t
+        tn = np.sqrt(np.sum(sysm.w * t * t))
+        jumped = switch_mode is not None
+        if jumped:
+            du = switch_mode * ds
+            dl = 0.0
+            switch_mode = None
+        else:
+            dl = ds / np.sqrt(tn ** 2 + psi_u ** 2)
+            if prev_du is None:
+                s = direction
+            else:
+                s = np.sign(np.sum(sysm.w * prev_du * t) + psi_u ** 2 * prev_dl) or 1.0
+            dl *= s
+            du = dl * t
+        con = _ArcLength(o.method, ds, psi_u, sysm.w)
+        con.start(du, dl)
+        reason = ""
+        hist = []
+        try:
+            st_pred = sysm.update(cur.state, du)
+            new_state, new_lam, its, hist, ev = correct(sysm, st_pred, cur.lam + dl, con, o, timers)
+            if not jumped and np.sum(sysm.w * con.du0 * con.du) + psi_u ** 2 * con.dlam0 * con.dlam <= 0:
+                raise StepFailed("the corrector turned back against the predictor (path reversal)")
+            pt = analyse(sysm, new_state, new_lam, o.stability, its, hist)
+        except (StepFailed, ElementTooDistortedError, FloatingPointError, SingularSystemError) as exc:
+            reason = str(exc)
+            pt = None
+        trylog.append(dict(step=step + 1, lam=(cur.lam + dl) if pt is None else pt.lam, ds=ds,
+                           converged=pt is not None, iterations=len(hist) - 1 if pt else None,
+                           reason=reason))
+        if pt is None:
+            rejections += 1
+            log.info("  step %d: ds %.4g REJECTED (%s); retry with ds/2", step + 1, ds, reason)
+            ds /= 2
+            if ds < ds_min or rejections > o.max_rejections:
+                raise PathError(f"arc length failed at lam {cur.lam:.6g} after {rejections} "
+                                 f"rejections ({reason})", info)
+            continue
+        why = finished(pt)
+        if why in ("lam_end", "control_end") and o.land:
+            # redo the step, ending exactly on the stop value
+            if why == "lam_end":
+                lin = LinearConstraint(None, None, 1.0, lam_end)
+            else:
+                lin = LinearConstraint(control[0], control[1], 0.0, control_end)
+            try:
+                frac = _fraction(cur, pt, why, lam_end, control_end, ctrl_val)
+                st_pred = sysm.update(cur.state, frac * con.du)
+                s2, l2, its, hist, ev = correct(sysm, st_pred, cur.lam + frac * con.dlam, lin, o, timers)
+                pt = analyse(sysm, s2, l2, o.stability, its, hist)
+            except (StepFailed, ElementTooDistortedError, FloatingPointError, SingularSystemError) as exc:
+                log.info("  landing failed (%s); keeping the arc-length step", exc)
+        rejections = 0
+        step += 1
+        prev_du, prev_dl = con.du, con.dlam
+        # critical points between cur and pt
+        event = ""
+        changed = (pt.n_neg != cur.n_neg) if (pt.n_neg is not None and cur.n_neg is not None) \
+            else (pt.sign != cur.sign)
+        if o.stability and changed and not jumped:
+            span = np.sqrt(np.sum(sysm.w * con.du ** 2))
+            # dlam/ds changes sign across a limit point: the predictor's dlam at cur against the
+            # one the next predictor will take at pt (robust where q.t also passes through 0,
+            # at a turning point of the displacement conjugate to q)
+            nxt = np.sum(sysm.w * con.du * pt.t) + psi_u ** 2 * con.dlam
+            turned = np.sign(con.dlam0) != np.sign(nxt) if nxt != 0 else None
+            cp = locate_critical(sysm, cur, pt, sysm.w * con.du / span, span, step, limit=turned)
+            crit.append(cp)
+            event = "  ** " + cp.describe()
+            if cp.kind == "bifurcation" and branch_switch and cp.mode is not None:
+                m = cp.mode - (np.sum(sysm.w * cp.mode * pt.t) / np.sum(sysm.w * pt.t * pt.t)) * pt.t
+                switch_mode = m / np.sqrt(np.sum(sysm.w * m * m))
+                prev_du = None
+                branch_switch = False            # switch once
+                event += " -> switching onto the bifurcated branch"
+        if log.isEnabledFor(logging.INFO):
+            cv = f" control {ctrl_val(pt.state):.6g}" if ctrl_val else ""
+            neg = "" if pt.n_neg is None else f" neg.eig {pt.n_neg}"
+            if jumped:
+                event += "  (first step on the bifurcated branch)"
+            log.info(f"  step {step}: lam {pt.lam:.6g} (dlam {pt.lam - cur.lam:+.3g}) ds {ds:.4g} "
+                     f"it {pt.its} res {pt.hist[-1]:.1e}{cv} det {'+' if pt.sign >= 0 else '-'}{neg}{event}")
+        if not why:
+            ds = min(ds_max, ds * float(np.clip(np.sqrt(o.target_iter / max(pt.its, 1)), 0.5, 2.0)))
+        cur = pt
+        yield PathEvent(pt, snapshot(pt, why))
+        if why:
+            break
+
+
+def arc_options(options, kw, method=None):
+    opts, kw = split_options(ArcLengthOptions, options, kw)
+    if method is not None:
+        opts = replace(opts, method=method)
+    return opts, kw
+
+
+def path_follow(sysm, method=None, lam_end=1.0, control=None, control_end=None, lam_min=None,
+                start=None, on_step=None, options=None, **kw):
+    """Run :func:`path_steps` to its end; returns (points, critical points, log, timers).
+
+    ``method`` and the keywords are ArcLengthOptions fields (dlam0, psi, branch_switch, ...);
+    ``on_step(ArcState)`` is called after the first point and after every converged point (not
+    for the restart point of a resumed path, which is still the first of ``points``).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3.solvers import AlgebraicSystem
+    >>> sysm = AlgebraicSystem(lambda u: u - 1.5 * u ** 2 + 0.5 * u ** 3,
+    ...                        lambda u: np.array([[1 - 3 * u[0] + 1.5 * u[0] ** 2]]), [1.0])
+    >>> pts, crit, _, _ = path_follow(sysm, lam_end=None, dlam0=0.02, psi=1.0,
+    ...                               control=(lambda u: u[0], lambda u: np.array([1.0])), control_end=3.0)
+    >>> [c.kind for c in crit], round(float(pts[-1].state[0]), 12)
+    (['limit', 'limit'], 3.0)
+    """
+    opts, kw = arc_options(options, kw, method)
+    unknown_keywords("path_follow", kw, ArcLengthOptions.__dataclass_fields__)
+    info = PathInfo()
+    points = []
+    try:
+        for ev in path_steps(sysm, opts, lam_end, control, control_end, lam_min, start, info):
+            points.append(ev.point)
+            if on_step and not ev.restart:
+                on_step(ev.state)
+    except PathError as exc:
+        exc.points = points
+        raise
+    return points, info.critical, info.log, info.timers

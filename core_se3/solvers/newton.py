@@ -1,0 +1,293 @@
+"""Load-stepped Newton with exponential updates, cut-back and regrowth, as a generator of steps.
+
+At load factor lam the residual is r = r_int(g) - f_ext(g, lam) (left-trivialised, one 6-vector
+per node in its body frame) and the update is g_i <- g_i exp(eta_i) with K eta = -r
+(``solvers.convergence`` for the convergence test).
+
+A failed try (no convergence in ``max_iter``, an edge turning by ~pi, a prescribed motion
+turning nodes by more than 0.9 pi within the step, a singular tangent after the first step, a
+non-finite residual) is cut back by half; after easy steps the increment grows again.  Only
+the requested load factors are yielded (stored); sub-steps are logged.
+
+:func:`newton_steps` yields one :class:`NewtonStep` per requested load factor and can start
+from any :class:`NewtonState` (a restart repeats the same computations from the same bits);
+:func:`newton_solve` runs it to the end and returns a :class:`~core_se3.results.Result`.
+"""
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import lie
+from ..errors import ConvergenceError, ElementTooDistortedError, OptionError, SingularSystemError
+from ..results import Result, StepRecorder
+from .convergence import relative_residual, scaled_norm
+from .linalg import Factorization, make_solver
+from .options import NewtonOptions, split_options, unknown_keywords
+from .stability import limit_point_hint
+
+__all__ = ["newton_solve", "newton_steps", "requested_load_factors", "NewtonState", "NewtonStep",
+           "MAX_PRESCRIBED_TURN"]
+
+log = logging.getLogger(__name__)
+
+MAX_PRESCRIBED_TURN = 0.9 * np.pi   # largest rotation a prescribed motion may make in one step
+
+
+@dataclass
+class NewtonState:
+    """What load stepping carries from one stored step to the next (a restart point).
+
+    lam, g: the converged state; dlam: the increment a cut-back left to carry over (None: the
+    next requested one); k_ref: the stiffness of the first step (limit-point check; None until
+    the first step converged)."""
+    lam: float
+    g: np.ndarray
+    dlam: float | None = None
+    k_ref: float | None = None
+
+    def pack(self):
+        """JSON-able scalars (the frames are stored apart)."""
+        return dict(lam=float(self.lam), dlam=None if self.dlam is None else float(self.dlam),
+                    k_ref=None if self.k_ref is None else float(self.k_ref))
+
+
+@dataclass
+class NewtonStep:
+    """One stored step: its StepResult, the state to continue from, and the log entries of
+    the tries that led to it (each dict(lam, converged, iterations, residual_history, reason))."""
+    step: object
+    state: NewtonState
+    tries: list
+
+
+def requested_load_factors(steps=10, lam_end=1.0, lam_start=0.0, factors=None):
+    """The requested load factors: ``steps`` equal increments from lam_start to lam_end, or the
+    explicit ``factors`` (finite, strictly one way from lam_start)."""
+    if factors is not None:
+        targets = np.asarray(factors, float).ravel()
+        incr = np.diff(np.r_[lam_start, targets])
+        if (len(targets) == 0 or not np.all(np.isfinite(targets)) or np.any(incr == 0)
+                or np.any(np.sign(incr) != np.sign(incr[0]))):
+            raise OptionError("load_factors must be finite and move strictly one way from lam_start "
+                              f"(no repeats, no reversals), got {list(targets)}")
+        return targets
+    if not np.isfinite(lam_end) or steps < 1:
+        raise OptionError("need a finite lam_end and steps >= 1")
+    return lam_start + (lam_end - lam_start) * np.arange(1, steps + 1) / steps
+
+
+class _Timer:
+    def __init__(self, result):
+        self.result = result
+        self.t_asm = self.t_sol = 0.0
+        self.t_start = time.perf_counter()
+
+    def close(self):
+        self.result.timings.update(assembly=self.result.timings.get("assembly", 0.0) + self.t_asm,
+                                   solve=self.result.timings.get("solve", 0.0) + self.t_sol,
+                                   other=self.result.timings.get("other", 0.0) + time.perf_counter()
+                                   - self.t_start - self.t_asm - self.t_sol)
+        self.t_asm = self.t_sol = 0.0
+        self.t_start = time.perf_counter()
+
+
+def newton_steps(problem, targets, options=None, start=None, recorder=None, result=None):
+    """Yield a :class:`NewtonStep` for every requested load factor in ``targets``.
+
+    start: the NewtonState to begin from (default: the reference state at lam 0); recorder:
+    the StepRecorder (default: a new one; pass the same one along a path for continuous probe
+    rotations); result: a Result whose ``log`` and ``timings`` the iterations extend (kept by
+    the ConvergenceError of a failure).  The supports must have been checked.
+    """
+    opts = options or NewtonOptions()
+    mesh = problem.mesh
+    asm = problem.assembler()
+    solver = make_solver(opts.linear_solver or problem.linear_solver)
+    ell = problem.length_scale
+    state = start or NewtonState(0.0, mesh.g0.copy())
+    rec = recorder or StepRecorder(problem)
+    result = result if result is not None else Result(mesh=mesh, element=problem.element_name)
+    stateful = problem.element.stateful
+    has_targets = problem.has_prescribed_motion
+    driven = stateful or has_targets
+    lam, g, dlam, k_ref = state.lam, state.g, state.dlam, state.k_ref
+    first_solve = True
+    timer = _Timer(result)
+    for target in targets:
+        tries = []
+        # the requested increment; a cut-back increment carries over, capped by it
+        dlam_nominal = target - lam
+        dlam = dlam_nominal if dlam is None else np.sign(dlam_nominal) * min(abs(dlam), abs(dlam_nominal))
+        stored = None
+        while abs(target - lam) > 1e-14 * max(1.0, abs(target)):
+            lam_try = lam + dlam if abs(dlam) < abs(target - lam) else target
+            g_try = problem.apply_prescribed(g.copy(), lam_try)
+            if stateful:
+                # the seed element's strain is a state: save it, and feed it the prescribed motion
+                problem.element.save()
+                problem.element.update(lie.log(lie.inv(g) @ g_try))
+            hist = []
+            dn = np.inf
+            eta_sum = 0.0
+            k_step = pred = None
+            ok = False
+            reason = ""
+            turn = problem.prescribed_rotation(lam, lam_try) if has_targets else 0.0
+            try:
+                if turn > MAX_PRESCRIBED_TURN:
+                    # never a silent answer: a turn of 2 pi in one step lands on the same frame
+                    raise ElementTooDistortedError(
+                        f"the prescribed motion turns nodes by {turn:.3f} rad in one step "
+                        f"(> {MAX_PRESCRIBED_TURN:.3f}): the step is too large for the exponential update")
+                for it in range(opts.max_iter + 1):
+                    ta = time.perf_counter()
+                    ev = problem.evaluate(g_try, lam_try, tangent=True)
+                    rf = ev.r
+                    if not np.all(np.isfinite(rf)):
+                        raise FloatingPointError("non-finite residual")
+                    rn, floor = relative_residual(asm, ev, ell)
+                    hist.append(rn)
+                    if it > 0 and rn <= max(opts.rtol, floor) and dn <= opts.dtol:
+                        ok = True
+                        timer.t_asm += time.perf_counter() - ta
+                        break
+                    if it == opts.max_iter:
+                        reason = f"no convergence in {opts.max_iter} iterations (residual {rn:.2e})"
+                        timer.t_asm += time.perf_counter() - ta
+                        break
+                    if it > 3 and rn > opts.divergence * max(hist[0], 1e-300):
+                        reason = f"diverging (residual {rn:.2e})"
+                        timer.t_asm += time.perf_counter() - ta
+                        break
+                    timer.t_asm += time.perf_counter() - ta
+                    ts = time.perf_counter()
+                    try:
+                        with Factorization(ev.K, solver) as fac:
+                            x = fac.solve(-rf)
+                            if first_solve:
+                                fac.probe()
+                    except SingularSystemError as exc:
+                        if first_solve:
+                            raise SingularSystemError(
+                                f"{exc}: the tangent of the unloaded shell is singular -- a rigid-body "
+                                "motion is not restrained (missing or insufficient supports)") from None
+                        raise
+                    timer.t_sol += time.perf_counter() - ts
+                    first_solve = False
+                    eta = asm.scatter(x)
+                    eta_sum = eta_sum + eta
+                    if it == 0:
+                        work = -float(rf @ x)
+                        k_step = scaled_norm(asm.scatter(rf), ell) ** 2 / work if work > 0 else -np.inf
+                        pred = scaled_norm(eta, ell, moment=False)
+                    dn = scaled_norm(eta, ell, moment=False) / ell
+                    g_try = g_try @ lie.exp(eta)
+                    if stateful:
+                        problem.element.update(eta)
+            except SingularSystemError as exc:
+                if first_solve:
+                    raise
+                reason = str(exc)
+            except (ElementTooDistortedError, FloatingPointError) as exc:
+                reason = str(exc)
+            entry = dict(lam=lam_try, converged=ok, iterations=len(hist) - 1, residual_history=hist,
+                         reason=reason)
+            result.log.append(entry)
+            tries.append(entry)
+            log.info("  lam %.6g: %s in %d it, residual %.2e %s", lam_try, "ok" if ok else "FAIL",
+                     len(hist) - 1, hist[-1] if hist else float("nan"), reason)
+            if ok and opts.limit_check and not driven and k_step is not None:
+                if k_ref is None:
+                    k_ref = k_step
+                jump = scaled_norm(eta_sum, ell, moment=False)
+                if k_ref > 0 and k_step / k_ref < 0.3 and jump > 3 * pred:
+                    timer.close()
+                    raise ConvergenceError(
+                        f"load control met a limit point: the step from load factor {lam:.6g} to "
+                        f"{lam_try:.6g} started at a current stiffness S_p = {k_step / k_ref:.3g} of "
+                        f"the initial one and converged {jump / pred:.1f}x farther than its tangent "
+                        "predicted, i.e. it snapped onto another branch of the equilibrium path. "
+                        "Trace the path with arc length (core_se3.solvers.arc_length) or "
+                        "displacement control (core_se3.solvers.displacement_control); the "
+                        "steps before the limit point are kept in .result", result)
+            if ok:
+                lam = lam_try
+                g = g_try
+                at_target = abs(lam - target) <= 1e-14 * max(1.0, abs(target))
+                if at_target or opts.record_substeps:
+                    st = rec.step(lam, g, len(hist) - 1, hist, ev.r_int, ev.f_ext)
+                    if at_target:
+                        stored = st
+                    else:
+                        result.steps.append(st)
+                else:
+                    rec.probes(g)
+                if len(hist) - 1 <= 6 and abs(dlam) < abs(dlam_nominal):
+                    dlam = min(abs(dlam) * 2, abs(dlam_nominal)) * np.sign(dlam_nominal)
+            else:
+                if stateful:
+                    problem.element.restore()
+                dlam = dlam / 2
+                if abs(dlam) < abs(dlam_nominal) / 2 ** opts.max_cutbacks:
+                    timer.close()
+                    hint = limit_point_hint(problem, g, lam, opts.linear_solver) if lam != 0.0 else None
+                    raise ConvergenceError(
+                        f"Newton failed at load factor {lam_try:.6g} after {opts.max_cutbacks} cut-backs "
+                        f"({reason}); the last converged load factor is {lam:.6g} and its state is "
+                        "kept in .result" + (f". Probable cause: {hint}" if hint else ""), result)
+        if stored is None:                       # the target was already reached
+            ev = problem.evaluate(g, lam, tangent=False)
+            stored = rec.step(lam, g, 0, [], ev.r_int, ev.f_ext)
+        timer.close()
+        state = NewtonState(lam, g, dlam, k_ref)
+        yield NewtonStep(stored, state, tries)
+
+
+def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, g_init=None, load_factors=None,
+                 options=None, **kw):
+    """Solve the problem from lam_start to lam_end in ``steps`` equal load increments, or
+    through the explicit ``load_factors`` (a sequence moving strictly one way from lam_start;
+    it replaces steps and lam_end).  Each requested load factor is a stored step; a failed
+    increment is halved (at most max_cutbacks times per requested step) and grows back.
+
+    Options: a NewtonOptions, or its fields as keywords (rtol, dtol, max_iter, max_cutbacks,
+    divergence, limit_check, record_substeps, linear_solver).  limit_check: stop with a
+    ConvergenceError that suggests arc length when a converged step has jumped past a limit
+    point (snap-through): the step started where the current stiffness parameter
+    S_p = k / k_0 (k = |r_0|_s^2 / (-r_0 . eta_0), the stiffness seen by the first Newton
+    iterate, k_0 its value in the first step) was below 0.3, and the converged increment is
+    more than 3x that first (tangent) iterate.  Not applied to displacement-driven problems.
+
+    Returns a Result whose first step is the initial state.
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(10.0, 1.0, 8, 1), Material(1.2e6, 0.0, 0.1))
+    >>> p.clamp("x0"); p.add_edge_force("x1", (0, 0, 0.1)); p.add_probe("tip")
+    >>> res = newton_solve(p, steps=2, rtol=1e-12)
+    >>> len(res.steps), res.steps[-1].iterations <= 4
+    (3, True)
+    """
+    t0 = time.perf_counter()
+    opts, kw = split_options(NewtonOptions, options, kw)
+    unknown_keywords("newton_solve", kw, [f for f in NewtonOptions.__dataclass_fields__])
+    targets = requested_load_factors(steps, lam_end, lam_start, load_factors)
+    mesh = problem.mesh
+    g = mesh.g0.copy() if g_init is None else np.array(g_init, float)
+    problem.check_supports(g)
+    result = Result(mesh=mesh, element=problem.element_name)
+    rec = StepRecorder(problem)
+    make_solver(opts.linear_solver or problem.linear_solver)         # fail early on a bad name
+    result.timings["setup"] = time.perf_counter() - t0
+    t_start = time.perf_counter()
+    ev = problem.evaluate(g, lam_start, tangent=False)
+    result.steps.append(rec.step(lam_start, g, 0, [], ev.r_int, ev.f_ext))
+    result.timings["other"] = time.perf_counter() - t_start
+    for item in newton_steps(problem, targets, opts, NewtonState(lam_start, g), rec, result):
+        result.steps.append(item.step)
+    return result

@@ -1,0 +1,116 @@
+"""The solver controls, held once: :class:`NewtonOptions` (load and displacement-driven load
+stepping) and :class:`ArcLengthOptions` (path following).  Scenario files read their fields and
+defaults (``[solver]``), so a default lives here only.
+
+Example
+-------
+>>> from core_se3.solvers import NewtonOptions
+>>> NewtonOptions(max_iter=50).rtol
+1e-10
+>>> NewtonOptions(rtol=-1.0)
+Traceback (most recent call last):
+...
+core_se3.errors.OptionError: NewtonOptions.rtol must be in (0, 1), got -1.0
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, fields, replace
+
+from ..errors import OptionError, did_you_mean
+
+__all__ = ["NewtonOptions", "ArcLengthOptions", "split_options", "unknown_keywords"]
+
+
+def _check(opts):
+    for f in fields(opts):
+        v = getattr(opts, f.name)
+        lo, hi = f.metadata.get("range", (None, None))
+        if lo is None or v is None:
+            continue
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not (lo < v < hi if f.metadata.get("open")
+                                                                        else lo <= v <= hi):
+            br = "()" if f.metadata.get("open") else "[]"
+            raise OptionError(f"{type(opts).__name__}.{f.name} must be in {br[0]}{lo:g}, {hi:g}{br[1]}, got {v!r}")
+
+
+def _opt(default, lo=None, hi=None, open_=False, doc=""):
+    return field(default=default, metadata=dict(range=(lo, hi), open=open_, doc=doc))
+
+
+@dataclass(frozen=True)
+class NewtonOptions:
+    """Controls of load-stepped Newton (``solvers.newton``).
+
+    rtol, dtol: relative residual and increment tolerances (``solvers.convergence``);
+    max_iter: Newton iterations per try; max_cutbacks: halvings of a failed increment per
+    requested step; divergence: a try whose residual exceeds this factor times its first one
+    after 3 iterations is abandoned; limit_check: stop with a ConvergenceError suggesting arc
+    length when a step has snapped past a limit point; record_substeps: store the cut-back
+    sub-steps as steps too; linear_solver: None = the problem's.
+    """
+    rtol: float = _opt(1e-10, 0.0, 1.0, True)
+    dtol: float = _opt(1e-10, 0.0, 1.0, True)
+    max_iter: int = _opt(30, 0, 1000)
+    max_cutbacks: int = _opt(12, 0, 50)
+    divergence: float = _opt(1e8, 1.0, float("inf"))
+    limit_check: bool = True
+    record_substeps: bool = False
+    linear_solver: str | None = None
+
+    def __post_init__(self):
+        _check(self)
+
+
+@dataclass(frozen=True)
+class ArcLengthOptions:
+    """Controls of arc-length path following (``solvers.arclength``).
+
+    method: 'crisfield' (cylindrical) or 'riks' (normal plane); dlam0: load factor of the first
+    predictor (sets ds); psi: weight of the load term; ds_max (default ds_max_factor x the
+    first ds), ds_min; max_steps: path points; target_iter: Newton iterations per step the
+    step-length adaptation aims at; max_iter, rtol, dtol as for Newton; max_rejections: halvings
+    of ds in a row; divergence: as for Newton; stability: count negative pivots and detect
+    critical points; branch_switch: leave the first bifurcation along its mode; land: end
+    exactly on lam_end (or the controlled displacement) by a last corrector.
+    """
+    method: str = "crisfield"
+    dlam0: float = 0.05
+    psi: float = _opt(0.0, 0.0, float("inf"))
+    ds_max: float | None = None
+    ds_min: float | None = None
+    ds_max_factor: float = _opt(8.0, 1.0, float("inf"))
+    max_steps: int = _opt(200, 1, 100_000)
+    target_iter: int = _opt(5, 1, 100)
+    max_iter: int = _opt(20, 0, 1000)
+    rtol: float = _opt(1e-9, 0.0, 1.0, True)
+    dtol: float = _opt(1e-9, 0.0, 1.0, True)
+    max_rejections: int = _opt(12, 0, 100)
+    divergence: float = _opt(1e6, 1.0, float("inf"))
+    stability: bool = True
+    branch_switch: bool = False
+    land: bool = True
+    linear_solver: str | None = None
+
+    def __post_init__(self):
+        if self.method not in ("crisfield", "riks"):
+            raise OptionError(f"ArcLengthOptions.method must be 'crisfield' or 'riks', got {self.method!r}")
+        _check(self)
+
+
+def split_options(cls, options, kwargs):
+    """(options of type ``cls`` with the keyword overrides that are its fields, the other
+    keywords): ``newton_solve(p, steps=3, rtol=1e-12)`` and ``newton_solve(p, steps=3,
+    options=NewtonOptions(rtol=1e-12))`` mean the same."""
+    names = {f.name for f in fields(cls)}
+    mine = {k: kwargs.pop(k) for k in list(kwargs) if k in names}
+    base = options if options is not None else cls()
+    if not isinstance(base, cls):
+        raise OptionError(f"options must be a {cls.__name__}, got {type(base).__name__}")
+    return (replace(base, **mine) if mine else base), kwargs
+
+
+def unknown_keywords(func, kwargs, known):
+    """OptionError naming the first keyword that neither ``func`` nor its options take."""
+    if kwargs:
+        k = next(iter(kwargs))
+        raise OptionError(f"{func}() got an unknown option {k!r}{did_you_mean(k, known)}")

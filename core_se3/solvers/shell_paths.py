@@ -1,0 +1,171 @@
+"""Path following of a Problem: arc length (a generator of converged steps and a wrapper that
+returns a Result) and displacement control, on the algorithm of ``solvers.arclength``."""
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import ConvergenceError, ElementTooDistortedError, SingularSystemError
+from ..results import Result, StepRecorder
+from .arclength import (ArcState, LinearConstraint, PathError, PathInfo, StepFailed, arc_options, correct,
+                        path_steps)
+from .options import ArcLengthOptions, unknown_keywords
+from .stability import analyse, locate_critical
+from .system import ShellSystem
+
+__all__ = ["PathStep", "arc_length_steps", "arc_length", "displacement_control"]
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class PathStep:
+    """One converged point of a shell path: its StepResult (with ``stability``) and the
+    ArcState to restart from (``unwrap``: the probes' unwrapped rotation vectors)."""
+    step: object
+    state: ArcState
+
+
+def _stability(pt):
+    return dict(det_sign=pt.sign, negative_eigenvalues=pt.n_neg, q_dot_t=pt.qt)
+
+
+def _record(rec, pt):
+    return rec.step(pt.lam, pt.state, pt.its, pt.hist, pt.ev["rint"], pt.ev["fext"], _stability(pt))
+
+
+def arc_length_steps(problem, lam_end=1.0, stop_at=None, lam_min=None, start=None, result=None,
+                     options=None, **kw):
+    """Arc-length continuation of a Problem as a generator of :class:`PathStep` (the first
+    point of a new path included, the start point of a resumed one not).
+
+    stop_at = (node, lab direction, value): stop when the displacement of ``node`` along
+    ``direction`` reaches ``value`` (the last step lands on it exactly).  ``result`` (a Result)
+    gets the log, the critical points and the timings as the path goes.
+    """
+    t0 = time.perf_counter()
+    opts, kw = arc_options(options, kw)
+    unknown_keywords("arc_length", kw, ArcLengthOptions.__dataclass_fields__)
+    sysm = ShellSystem(problem, opts.linear_solver)
+    control = sysm.node_displacement(stop_at[0], stop_at[1]) if stop_at else None
+    result = result if result is not None else Result(mesh=problem.mesh, element=problem.element_name)
+    rec = StepRecorder(problem, start.unwrap if start is not None else None)
+    info = PathInfo(log=result.log)
+    try:
+        for ev in path_steps(sysm, opts, lam_end, control, stop_at[2] if stop_at else None, lam_min,
+                             start, info):
+            if ev.restart:
+                continue
+            st = _record(rec, ev.point)
+            ev.state.unwrap = {k: v.copy() for k, v in rec.unwrapped.items()}
+            result.critical_points = list(ev.state.critical)
+            result.timings.update(assembly=info.timers[0], solve=info.timers[1],
+                                  other=time.perf_counter() - t0 - info.timers[0] - info.timers[1])
+            yield PathStep(st, ev.state)
+    except PathError as exc:
+        result.critical_points = list(info.critical)
+        tm = result.timings                  # assembly, solve as of the last converged point
+        tm.update(other=time.perf_counter() - t0 - tm.get("assembly", 0.0) - tm.get("solve", 0.0))
+        raise ConvergenceError(f"{exc}; the converged steps are kept in .result", result) from None
+    result.critical_points = list(info.critical)
+    result.timings.update(assembly=info.timers[0], solve=info.timers[1],
+                          other=time.perf_counter() - t0 - info.timers[0] - info.timers[1])
+
+
+def arc_length(problem, lam_end=1.0, stop_at=None, lam_min=None, start=None, on_step=None,
+               options=None, **kw):
+    """Arc-length continuation of a Problem (module docstring); returns a Result with every
+    converged step (``steps[k].stability``) and ``critical_points`` (CriticalPoint).
+
+    Options: an ArcLengthOptions or its fields as keywords (dlam0 sets the first arc length;
+    ds_max defaults to ds_max_factor (8) times that; method, psi, target_iter, max_steps, ...).
+    stop_at = (node, lab direction, value) as in :func:`arc_length_steps`.  Restart:
+    ``on_step(result, arc_state)`` after the first point and after every converged point;
+    ``start=arc_state`` continues the path from it with the same arguments otherwise:
+    ``result.steps`` then holds only the points after the start, ``critical_points`` all of
+    the path, and the final state equals that of an uninterrupted call bit for bit.
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(10.0, 1.0, 8, 1), Material(1.2e6, 0.0, 0.1))
+    >>> p.clamp("x0"); p.add_edge_force("x1", (0, 0, 1.0)); p.add_probe("tip")
+    >>> res = arc_length(p, lam_end=1.0, dlam0=0.5)
+    >>> bool(abs(res.final.load_factor - 1.0) < 1e-12), res.critical_points
+    (True, [])
+    """
+    result = Result(mesh=problem.mesh, element=problem.element_name)
+    for item in arc_length_steps(problem, lam_end, stop_at, lam_min, start, result, options, **kw):
+        result.steps.append(item.step)
+        if on_step:
+            on_step(result, item.state)
+    return result
+
+
+def displacement_control(problem, node, direction, values, options=None, max_cutbacks=10, **kw):
+    """Prescribe the displacement of ``node`` along the lab ``direction`` through ``values``
+    (the load factor is the unknown that keeps it there); failed increments are halved (at
+    most ``max_cutbacks`` times).  Records every requested value; ``result.critical_points`` as
+    for arc_length.  Options: ArcLengthOptions fields max_iter, rtol, dtol, stability,
+    linear_solver (the others do not apply).
+    """
+    t0 = time.perf_counter()
+    opts, kw = arc_options(options, kw)
+    unknown_keywords("displacement_control", kw, ArcLengthOptions.__dataclass_fields__)
+    sysm = ShellSystem(problem, opts.linear_solver)
+    value, row = sysm.node_displacement(node, direction)
+    values = [float(v) for v in np.atleast_1d(values)]
+    result = Result(mesh=problem.mesh, element=problem.element_name)
+    rec = StepRecorder(problem)
+    timers = [0.0, 0.0]
+    crit = []
+    try:
+        cur = analyse(sysm, sysm.initial(), 0.0, opts.stability)
+        result.steps.append(_record(rec, cur))
+        n_points = 1
+        for target in values:
+            sub = [target]
+            while sub:
+                tgt = sub[-1]
+                u0 = value(cur.state)
+                rt = row(cur.state)
+                try:
+                    dl = (tgt - u0) / (rt @ cur.t)
+                    st_pred = sysm.update(cur.state, dl * cur.t)
+                    s2, l2, its, hist, ev = correct(sysm, st_pred, cur.lam + dl,
+                                                     LinearConstraint(value, row, 0.0, tgt), opts, timers)
+                    pt = analyse(sysm, s2, l2, opts.stability, its, hist)
+                    ok, reason = True, ""
+                except (StepFailed, ElementTooDistortedError, FloatingPointError,
+                        SingularSystemError, ZeroDivisionError) as exc:
+                    ok, reason = False, str(exc)
+                result.log.append(dict(control=tgt, converged=ok, reason=reason))
+                log.info("  u* %.6g: %s", tgt, f"lam {pt.lam:.6g} it {pt.its}" if ok else f"FAIL {reason}")
+                if not ok:
+                    if len(sub) > max_cutbacks:
+                        raise PathError(f"displacement control failed at u = {tgt:.6g} ({reason})", None)
+                    sub.append(0.5 * (u0 + tgt))
+                    continue
+                sub.pop()
+                changed = (pt.n_neg != cur.n_neg) if (pt.n_neg is not None and cur.n_neg is not None) \
+                    else (pt.sign != cur.sign)
+                if opts.stability and changed:
+                    crit.append(locate_critical(sysm, cur, pt, row(cur.state),
+                                                value(pt.state) - value(cur.state), n_points))
+                    log.info("  ** %s", crit[-1].describe())
+                cur = pt
+                if not sub:
+                    result.steps.append(_record(rec, pt))
+                    n_points += 1
+    except PathError as exc:
+        result.critical_points = crit
+        result.timings.update(assembly=timers[0], solve=timers[1],
+                              other=time.perf_counter() - t0 - timers[0] - timers[1])
+        raise ConvergenceError(f"{exc}; the converged steps are kept in .result", result) from None
+    result.critical_points = crit
+    result.timings.update(assembly=timers[0], solve=timers[1],
+                          other=time.perf_counter() - t0 - timers[0] - timers[1])
+    return result

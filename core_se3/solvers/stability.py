@@ -1,0 +1,192 @@
+"""Stability of converged states: the inertia of the symmetrised tangent, the critical points
+it brackets (limit points and bifurcations), and the diagnosis of a load-control failure.
+
+At each converged state the symmetric part of K is factorised (SuperLU, symmetric ordering,
+diagonal pivots); the number of negative pivots is the number of negative eigenvalues
+(Sylvester) and its change between two steps brackets a critical point.  It is a *limit point*
+when dlam/ds passes through zero with it (arc length: the sign of the predicted load increment
+at the two states; displacement control: the sign of q . t), otherwise a *bifurcation*; the
+critical load factor of a limit point is interpolated where the current stiffness parameter
+S_p = (q . t_0)/(q . t) vanishes.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from ..errors import CoreSE3Error, SingularSystemError
+from .linalg import Factorization
+from .system import ShellSystem
+
+__all__ = ["inertia", "smallest_mode", "CriticalPoint", "PathPoint", "analyse", "locate_critical",
+           "limit_point_hint"]
+
+
+def _perm_parity(p):
+    """+1 for an even permutation, -1 for an odd one (cycle count)."""
+    p = np.asarray(p)
+    seen = np.zeros(len(p), bool)
+    parity = 0
+    for i in range(len(p)):
+        if not seen[i]:
+            j, length = i, 0
+            while not seen[j]:
+                seen[j] = True
+                j = p[j]
+                length += 1
+            parity += length - 1
+    return -1 if parity % 2 else 1
+
+
+def inertia(K):
+    """(sign det, number of negative eigenvalues or None) of the symmetric part of K.
+
+    Sparse: SuperLU of the equilibrated sym(K) with a symmetric ordering and diagonal pivots,
+    i.e. an LDL^T-type factorisation whose negative pivots count the negative eigenvalues
+    (Sylvester's law of inertia); if SuperLU had to pivot off the diagonal only the sign of the
+    determinant is returned.  Dense: the eigenvalues.
+    """
+    if not sp.issparse(K):
+        Ks = 0.5 * (np.asarray(K) + np.asarray(K).T)
+        ev = np.linalg.eigvalsh(Ks)
+        return (1 if np.sum(ev < 0) % 2 == 0 else -1), int(np.sum(ev < 0))
+    Ks = (0.5 * (K + K.T)).tocsc()
+    d = np.abs(Ks.diagonal())
+    d[d == 0] = 1.0
+    S = sp.diags(1.0 / np.sqrt(d))
+    Ks = (S @ Ks @ S).tocsc()
+    try:
+        lu = spla.splu(Ks, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                       options=dict(SymmetricMode=True))
+        u = lu.U.diagonal()
+        if not np.all(np.isfinite(u)) or np.any(u == 0):
+            raise RuntimeError("zero pivot")
+    except RuntimeError:
+        lu = spla.splu(Ks, permc_spec="COLAMD")
+        u = lu.U.diagonal()
+    sign = int(np.prod(np.sign(u))) * _perm_parity(lu.perm_r) * _perm_parity(lu.perm_c)
+    if np.array_equal(lu.perm_r, lu.perm_c):
+        return sign, int(np.sum(u < 0))
+    return sign, None
+
+
+def smallest_mode(K, fac, n_iter=30, seed=7):
+    """Eigenvector of sym(K) of smallest |eigenvalue| by inverse iteration on the factor of K
+    (K is symmetric at equilibrium up to the residual); returns (mu, phi)."""
+    n = K.shape[0]
+    x = np.random.default_rng(seed).standard_normal(n)
+    x /= np.linalg.norm(x)
+    mu = 0.0
+    for k in range(n_iter):
+        y = fac.solve(x)
+        y /= np.linalg.norm(y)
+        mu_new = float(y @ (K @ y))
+        x, done = y, k > 3 and abs(mu_new - mu) <= 1e-10 * max(abs(mu_new), 1e-300)
+        mu = mu_new
+        if done:
+            break
+    return mu, x
+
+
+@dataclass
+class CriticalPoint:
+    """A critical point bracketed by two converged steps (indices into result.steps)."""
+    kind: str                # 'limit' or 'bifurcation'
+    step: int                # first step past the critical point
+    lam: float               # estimated critical load factor
+    lam_bracket: tuple
+    negative_eigenvalues: tuple
+    mode: np.ndarray | None = field(default=None, repr=False)
+
+    def describe(self):
+        a, b = self.lam_bracket
+        neg = "" if None in self.negative_eigenvalues else \
+            f", negative eigenvalues {self.negative_eigenvalues[0]} -> {self.negative_eigenvalues[1]}"
+        return f"{self.kind} point at lam ~ {self.lam:.6g} (between {a:.6g} and {b:.6g}{neg})"
+
+
+@dataclass
+class PathPoint:
+    state: object
+    lam: float
+    t: np.ndarray            # tangent K^-1 q at the state
+    qt: float                # q . t
+    sign: int
+    n_neg: int | None
+    its: int = 0
+    hist: list = field(default_factory=list)
+    ev: dict | None = None
+
+
+def analyse(sysm, state, lam, stability, its=0, hist=(), ev=None):
+    """The PathPoint of a converged state: tangent t = K^-1 q, q . t and the inertia of K."""
+    ev = sysm.evaluate(state, lam, tangent=True) if ev is None or "K" not in ev else ev
+    with Factorization(ev["K"], sysm.solver) as fac:
+        t = fac.solve(ev["q"])
+    sign, nneg = inertia(ev["K"]) if stability else (0, None)
+    return PathPoint(state, lam, t, float(ev["q"] @ t), sign, nneg, its, list(hist), ev)
+
+
+def locate_critical(sysm, cur, pt, c, span, step, limit=None):
+    """Classify and locate the critical point between two converged states.
+
+    Along the step, measure progress by sigma = c . du (c = W du/|du| for arc length, the
+    control row for displacement control); the path slope dlam/dsigma = 1/(c . t).  A limit
+    point is where the slope passes through zero (arc length: the predicted dlam changes sign between the two states;
+    displacement control: q . t changes sign): with the slope linear in
+    sigma, sigma_c = span s0/(s0 - s1) and lam_c = lam_0 + s0 sigma_c / 2 (a parabola; the
+    estimate from the far end is averaged in).  A bifurcation (q . t keeps its sign) is located
+    where the smallest eigenvalue of sym(K), from inverse iteration, interpolates to zero.
+    """
+    if limit is None:
+        limit = np.sign(pt.qt) != np.sign(cur.qt)
+    mode = None
+    if limit:
+        s0, s1 = 1.0 / (c @ cur.t), 1.0 / (c @ pt.t)
+        if np.sign(s0) != np.sign(s1):
+            sc = span * s0 / (s0 - s1)
+            lam_c = 0.5 * ((cur.lam + 0.5 * s0 * sc) + (pt.lam - 0.5 * s1 * (span - sc)))
+        else:
+            lam_c = max(cur.lam, pt.lam, key=abs)
+        kind = "limit"
+    else:
+        kind = "bifurcation"
+        mu0, _ = mode_at(sysm, cur)
+        mu1, mode = mode_at(sysm, pt)
+        if mu0 is not None and mu1 is not None and mu0 != mu1 and np.sign(mu0) != np.sign(mu1):
+            lam_c = cur.lam + (pt.lam - cur.lam) * mu0 / (mu0 - mu1)
+        else:
+            lam_c = 0.5 * (cur.lam + pt.lam)
+    return CriticalPoint(kind, step, float(lam_c), (cur.lam, pt.lam), (cur.n_neg, pt.n_neg), mode)
+
+
+def mode_at(sysm, pt):
+    """(smallest eigenvalue, mode) of sym(K) at a converged point, or (None, None)."""
+    try:
+        with Factorization(pt.ev["K"], sysm.solver) as fac:
+            return smallest_mode(pt.ev["K"], fac)
+    except SingularSystemError:
+        return None, None
+
+
+def limit_point_hint(problem, g, lam, linear_solver=None):
+    """Diagnose a load-control failure at the converged state (g, lam): the current stiffness
+    parameter S_p = (q.t_0 / q.t) (t = K^-1 q, 1 at the start, 0 at a limit point, negative
+    past it).  Returns a message suggesting arc length when S_p < 0.3, else None."""
+    try:
+        sysm = ShellSystem(problem, linear_solver, difference="backward")
+        p0 = analyse(sysm, problem.mesh.g0.copy(), 0.0, False)
+        p1 = analyse(sysm, np.asarray(g, float), lam, False)
+    except (CoreSE3Error, FloatingPointError, ValueError):
+        return None
+    sp_ = p0.qt / p1.qt if p1.qt != 0 else 0.0
+    if sp_ < 0.3:
+        return (f"the load-displacement stiffness at load factor {lam:.6g} has fallen to "
+                f"S_p = {sp_:.3g} of its initial value: load control has met a limit point "
+                "(the load cannot increase further on this path); trace it with arc length "
+                "(core_se3.solvers.arc_length) or displacement control "
+                "(core_se3.solvers.displacement_control)")
+    return None

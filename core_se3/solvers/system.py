@@ -1,0 +1,152 @@
+"""The discrete system as the path followers see it: residual, tangent and load direction on
+the free dofs, with the update of the state.
+
+:class:`ShellSystem` wraps a Problem (state: the nodal frames g, update g <- g exp(eta));
+:class:`AlgebraicSystem` is a small algebraic model r(u, lam) = f(u) - lam q with additive
+updates (tests).  Both give ``evaluate(state, lam, tangent) -> dict(r, K, q, rn, floor, ...)``.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .. import lie
+from ..errors import CoreSE3Error
+from .convergence import relative_residual, scaled_norm
+from .linalg import make_solver
+
+__all__ = ["ShellSystem", "AlgebraicSystem"]
+
+
+class ShellSystem:
+    """A Problem seen by the path follower: free-dof residual, tangent, load direction q.
+
+    The state is the array of nodal frames g (n, 4, 4).  Prescribed motions (rotate_edge,
+    prescribe with a target) must not depend on lam: arc length scales the loads only.  q is
+    the central difference of f_ext in lam at the current g (exact for linearly scaled loads,
+    dead or follower); ``difference='backward'`` uses the one-sided difference.
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(1.0, 0.2, 2, 1), Material(1e3, 0.0, 0.01))
+    >>> p.clamp("x0"); p.add_edge_force("x1", (0, 0, 1.0))
+    >>> s = ShellSystem(p)
+    >>> ev = s.evaluate(s.initial(), 0.0)
+    >>> s.n, float(ev["q"].sum())
+    (24, 1.0)
+    """
+
+    def __init__(self, problem, linear_solver=None, difference="central"):
+        self.difference = difference
+        if problem.element.stateful:
+            raise CoreSE3Error("path following needs a path-independent element (the default one); "
+                               "the seed element's incremental strain is not supported")
+        for s in problem.supports:
+            if s.target is not None:
+                g0 = problem.mesh.g0[s.nodes]
+                if not (np.allclose(s.target(0.0), g0) and np.allclose(s.target(1.0), g0)):
+                    raise CoreSE3Error("path following scales loads only: a prescribed motion that "
+                                       "depends on the load factor is not supported; use "
+                                       "newton_solve for displacement-driven problems")
+        self.problem = problem
+        self.asm = problem.assembler()
+        self.solver = make_solver(linear_solver or problem.linear_solver)
+        self.ell = problem.length_scale
+        self.n = self.asm.nfree
+        w = np.tile(np.r_[np.ones(3), np.full(3, self.ell ** 2)], problem.mesh.n_nodes)
+        self.w = w[self.asm.free]
+
+    def initial(self):
+        return self.problem.mesh.g0.copy()
+
+    def update(self, g, x):
+        return g @ lie.exp(self.asm.scatter(x))
+
+    def load_direction(self, g, lam):
+        """q = d f_ext / d lam at g (n, 6), by a difference in lam."""
+        d = 1e-4 * max(1.0, abs(lam))
+        hi = lam + d if self.difference == "central" else lam
+        fp, _, _ = self.problem.external(g, hi, tangent=False)
+        fm, _, _ = self.problem.external(g, lam - d, tangent=False)
+        return (fp - fm) / (hi - lam + d)
+
+    def evaluate(self, g, lam, tangent=True):
+        """dict(r, K, q, rn, floor, rint, fext): free residual, tangent, load direction,
+        relative residual and its round-off floor, internal and external nodal forces."""
+        ev = self.problem.evaluate(g, lam, tangent=tangent)
+        if not np.all(np.isfinite(ev.r)):
+            raise FloatingPointError("non-finite residual")
+        q = self.load_direction(g, lam)
+        rn, floor = relative_residual(self.asm, ev, self.ell, abs(lam) * scaled_norm(q, self.ell))
+        out = dict(r=ev.r, q=self.asm.vector(q), rint=ev.r_int, fext=ev.f_ext, rn=rn, floor=floor)
+        if tangent:
+            out["K"] = ev.K
+        return out
+
+    def increment_norm(self, x):
+        """|x|_W / ell (relative increment, as the solver's dtol)."""
+        return np.sqrt(np.sum(self.w * x * x)) / self.ell
+
+    def node_displacement(self, node, direction):
+        """(value(g), row(g)): u = d . (phi_k - X_k) and its linearisation on the free dofs."""
+        d = np.asarray(direction, float)
+        d = d / np.linalg.norm(d)
+        X0 = self.problem.mesh.X[node].copy()
+        free_k = self.asm.free.reshape(-1, 6)[node]
+        if not free_k[:3].any():
+            raise CoreSE3Error(f"node {node} has no free translation to control")
+        idx = np.full(self.problem.mesh.n_nodes * 6, -1)
+        idx[self.asm.free] = np.arange(self.n)
+        cols = idx.reshape(-1, 6)[node, :3]
+
+        def value(g):
+            return float(d @ (g[node, :3, 3] - X0))
+
+        def row(g):
+            c = np.zeros(self.n)
+            body = g[node, :3, :3].T @ d                       # d . R eta_v
+            for k in range(3):
+                if cols[k] >= 0:
+                    c[cols[k]] = body[k]
+            return c
+
+        return value, row
+
+
+class AlgebraicSystem:
+    """r(u, lam) = f(u) - lam q on R^n with additive updates (tests, small models).
+
+    f(u) -> (n,), jac(u) -> (n, n) dense; q (n,) the constant load direction.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> s = AlgebraicSystem(lambda u: u ** 3, lambda u: np.diag(3 * u ** 2 + 0), np.ones(1), np.ones(1))
+    >>> float(s.evaluate(s.initial(), 1.0)["rn"])
+    0.0
+    """
+
+    def __init__(self, f, jac, q, u0=None):
+        self.f, self.jac, self.q = f, jac, np.asarray(q, float)
+        self.n = len(self.q)
+        self.u0 = np.zeros(self.n) if u0 is None else np.asarray(u0, float)
+        self.w = np.ones(self.n)
+        self.solver = None
+
+    def initial(self):
+        return self.u0.copy()
+
+    def update(self, u, x):
+        return u + x
+
+    def evaluate(self, u, lam, tangent=True):
+        fu = np.asarray(self.f(u), float)
+        r = fu - lam * self.q
+        scale = max(np.linalg.norm(fu), abs(lam) * np.linalg.norm(self.q), 1e-300)
+        out = dict(r=r, q=self.q.copy(), rn=np.linalg.norm(r) / scale, floor=1e3 * np.finfo(float).eps)
+        if tangent:
+            out["K"] = np.asarray(self.jac(u), float)
+        return out
+
+    def increment_norm(self, x):
+        return float(np.linalg.norm(x))
