@@ -35,6 +35,8 @@ class Assembler:
     """
 
     def __init__(self, mesh, free):
+        self.mesh = mesh
+        self._pattern = None
         n = mesh.n_nodes
         self.ndof = 6 * n
         self.free = np.asarray(free, bool)
@@ -79,6 +81,15 @@ class Assembler:
             if b is not None:
                 acc += np.bincount(slot, weights=np.ascontiguousarray(b).ravel(), minlength=nb36)
         return sp.csr_matrix((acc[self.take], self.indices, self.indptr), shape=(self.nfree, self.nfree))
+
+    def pattern(self):
+        """The compiled backend's pattern of these free dofs (``kernels.Pattern``: the same CSR
+        structure, plus the map that writes 6x6 blocks straight into its data), built once."""
+        if self._pattern is None:
+            from .kernels import Pattern
+            m = self.mesh
+            self._pattern = Pattern(m.quads, m.edge_nodes, m.elem_edges, m.n_nodes, self.free)
+        return self._pattern
 
     def vector(self, r):
         """Free part of a nodal (n, 6) array."""

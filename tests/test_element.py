@@ -124,7 +124,10 @@ def test_load_stiffness_matches_finite_differences(kind, loads):
     g = _large_rotation_state(rng, mesh)
     err, K, Kfd = verify.tangent_fd_check(p, g, 1.0, h=1e-6, free_all=True)
     assert err < FD_TOL, err
-    # the check is discriminating: with the load stiffness removed it fails
+    # the check is discriminating: with the load stiffness removed it fails (the sabotage
+    # patches the NumPy path, so this half runs on that backend)
+    p = Problem(mesh, Material(1.0e-3, 0.3, 0.1), backend="numpy")
+    _add_loads(p, loads)
     orig = p.external
 
     def no_load_stiffness(g, lam, tangent=True):
@@ -142,7 +145,7 @@ def test_fd_check_detects_missing_geometric_terms(drop):
     from the element tangent must fail the FD check at these states by far more than FD_TOL."""
     rng = np.random.default_rng(4)
     mesh = _meshes()["flat"]
-    p = Problem(mesh, Material(1.0e4, 0.3, 0.1))
+    p = Problem(mesh, Material(1.0e4, 0.3, 0.1), backend="numpy")  # the sabotage patches NumPy
     g = _large_rotation_state(rng, mesh)
     orig = p.element.evaluate
 

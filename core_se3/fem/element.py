@@ -77,6 +77,12 @@ class Element(abc.ABC):
         """Per-element output fields (name -> (m, k)) for VTU files; none by default."""
         return {}
 
+    def compiled(self, pattern):
+        """The element's compiled kernels on a ``kernels.Pattern`` (an object with
+        ``residual(g)`` and ``tangent(g, data)``), or None: then the compiled backend evaluates
+        this element with :meth:`evaluate` and scatters its blocks."""
+        return None
+
     # state of a stateful element (no-ops for the path-independent ones)
     def save(self):
         """Remember the current state (before a Newton step)."""

@@ -112,6 +112,7 @@ class DefaultElement(Element):
 
     def __init__(self, mesh, material):
         super().__init__(mesh, material)
+        self._kernels = None
         psi0 = edge_twists(mesh.g0, mesh.edge_nodes)
         self.z0 = self._element_z(0.5 * psi0)                          # (m, 24)
         P = tying_matrices()
@@ -137,6 +138,16 @@ class DefaultElement(Element):
     def cell_fields(self, g):
         """Stress resultants at the element centres (``resultants.element_resultants``)."""
         return element_resultants(self, g)
+
+    def compiled(self, pattern):
+        """The numba kernels of this element on ``pattern`` (``kernels.ElementKernels``), built
+        once per pattern: the same residual and tangent, written into the pattern's CSR data."""
+        kern = self._kernels
+        if kern is None or kern.pattern is not pattern:
+            from ..kernels import ElementKernels
+            kern = ElementKernels.from_element(self, pattern, error=ElementTooDistortedError)
+            self._kernels = kern
+        return kern
 
     def energy(self, g):
         z = self._element_z(0.5 * edge_twists(g, self.mesh.edge_nodes))

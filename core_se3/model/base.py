@@ -33,13 +33,30 @@ import numpy as np
 from ..errors import LoadError
 from ..registry import Registry
 
-__all__ = ["Load", "LoadEvaluation", "Param", "LoadKind", "LOADS", "register_load", "load_kind",
+__all__ = ["Evaluation", "Load", "LoadEvaluation", "Param", "LoadKind", "LOADS", "register_load", "load_kind",
            "REQUIRED", "linear_scale", "finite_vector", "param_error"]
 
 
 def linear_scale(lam):
     """The default load-factor programme s(lam) = lam."""
     return lam
+
+
+@dataclass
+class Evaluation:
+    """The discrete equations at one state (g, lam).
+
+    r: residual on the free dofs (nfree,); r_int, f_ext: internal and external generalised
+    nodal forces (n, 6), r = (r_int - f_ext) restricted to the free dofs; force_scale: the
+    element's round-off scale of r_int; energy: the elastic energy; K: the tangent dr/d eta on
+    the free dofs (CSR) when asked for.
+    """
+    r: np.ndarray
+    r_int: np.ndarray
+    f_ext: np.ndarray
+    force_scale: float
+    energy: float
+    K: object = None
 
 
 @dataclass
@@ -81,6 +98,13 @@ class Load(abc.ABC):
     def output_fields(self, g, lam):
         """Point fields (name -> (n, k)) for output; none by default."""
         return {}
+
+    def compiled(self, pattern):
+        """A compiled evaluation for the numba backend, ``add(g, lam, f, data, tangent)`` adding
+        the forces into f (n, 6) and -df/deta into the CSR ``data`` of ``pattern``
+        (``kernels.Pattern``); None (the default): the backend calls :meth:`evaluate` and
+        scatters its blocks, so every load works with both backends."""
+        return None
 
 
 REQUIRED = object()

@@ -84,6 +84,10 @@ class Field:
     def __init__(self, scale=None):
         self.scale = _scale_fn(scale)
 
+    def scale_at(self, lam):
+        """The finite scale factor s(lam) (LoadError when it is not finite)."""
+        return _finite_scale(self.scale(lam), lam)
+
     def value(self, x, lam):
         return _finite_scale(self.scale(lam), lam) * self._value(np.asarray(x, float), lam)
 

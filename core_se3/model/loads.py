@@ -94,6 +94,16 @@ class NodalLoad(Load):
         np.add.at(Kn, self.nodes, blk)
         return LoadEvaluation(f, Kn)
 
+    def compiled(self, pattern):
+        """The numba kernel of this load (``kernels.loads.nodal_load``)."""
+        from ..kernels.loads import nodal_load
+        nodes, w = np.ascontiguousarray(self.nodes), np.ascontiguousarray(self.weights)
+
+        def add(g, lam, f, data, tangent):
+            nodal_load(g, nodes, w, self.force, self.moment, float(self.scale(lam)), self.follower, f, data,
+                       pattern.map, tangent)
+        return add
+
     def total(self, lam):
         """Resultant (force, moment) vectors at lam: lab vectors if dead, frame components if
         follower."""
@@ -133,6 +143,26 @@ class SurfaceLoad(Load):
             self.q = finite_vector(q, "surface load")
             j0 = surface_jacobian(mesh.X[mesh.quads[self.elements]], self.dN)
             self.node_w = np.einsum("qi,mq->mi", self.N, j0)           # int N_i dA, (m,4)
+
+    def compiled(self, pattern):
+        """The numba kernels of this load (``kernels.loads.surface_load_*``; the follower
+        pressure's elements in the mesh colouring, so that the parallel driver is race-free)."""
+        from ..kernels import loads as K
+        quads = np.ascontiguousarray(self.mesh.quads, dtype=np.int64)
+        el = np.ascontiguousarray(self.elements, dtype=np.int64)
+        cptr, order = pattern.group_elements(el)
+        if not self.follower:
+            node_w = np.ascontiguousarray(self.node_w)
+
+            def add(g, lam, f, data, tangent):
+                K.surface_load_dead(g, quads, el, cptr, order, node_w, self.q, float(self.scale(lam)), f, data,
+                                    pattern.map, tangent)
+            return add
+        run = K.surface_load_follower_par if len(el) >= 1500 else K.surface_load_follower
+
+        def add(g, lam, f, data, tangent):
+            run(g, quads, el, cptr, order, float(self.scale(lam)) * self.p, f, data, pattern.map, tangent)
+        return add
 
     def evaluate(self, g, lam, tangent=True):
         s = self.scale(lam)

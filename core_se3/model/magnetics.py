@@ -176,6 +176,31 @@ class MagneticLoad(Load):
         Kn[nodes] = blk
         return LoadEvaluation(f, Kn)
 
+    def compiled(self, pattern):
+        """The numba kernel of this load (``kernels.loads.magnetic_load``); the field is
+        evaluated by its own methods (a dipole by ``kernels.loads.dipole_field``)."""
+        from ..kernels import loads as K
+        from .fields import DipoleField
+        nodes = np.ascontiguousarray(self.mag.nodes, dtype=np.int64)
+        mu = np.ascontiguousarray(self.mag.mu)
+        k = len(nodes)
+        B, G, H = np.zeros((k, 3)), np.zeros((k, 3, 3)), np.zeros((k, 3, 3, 3))
+        fld = self.field
+
+        def add(g, lam, f, data, tangent):
+            x = np.ascontiguousarray(g[nodes, :3, 3])
+            if isinstance(fld, DipoleField):
+                if K.dipole_field(x, fld.m, fld.x0, fld.k, fld.scale_at(lam), B, G, H):
+                    raise LoadError("a point lies on the dipole: the field is singular there")
+            else:
+                B[:] = fld.value(x, lam)
+                if not fld.uniform:
+                    G[:] = fld.gradient(x, lam)
+                    if tangent:
+                        H[:] = fld.hessian(x, lam)
+            K.magnetic_load(g, nodes, mu, B, G, H, bool(fld.uniform), f, data, pattern.map, tangent)
+        return add
+
     def output_fields(self, g, lam):
         """Point fields for VTU output: B^r_t [T] (area-weighted nodal value), magnetic couple and
         force per unit reference area [N m/m^2, N/m^2] (lab components)."""

@@ -15,42 +15,26 @@ depend on the solvers.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
 
 from .. import lie
 from ..assembly import Assembler
-from ..errors import LoadError, MeshError, OptionError, SingularSystemError, SupportError, did_you_mean
+from ..backend import resolve as resolve_backend
+from ..errors import LoadError, MeshError, OptionError, SupportError, did_you_mean
 from ..fem import make_element
-from .base import Load, load_kind
+from .base import Evaluation, Load, load_kind
+from .compiled import CompiledEvaluation
 from .fields import MU0
 from .magnetics import MagneticLoad, Magnetisation
 from .probes import Probe
-from .supports import LabSpring, LabTiltSpring, Prescribed, RotationComponentSpring
+from .supports import LabSpring, LabTiltSpring, Prescribed, RotationComponentSpring, check_rigid_motions
 
 __all__ = ["Problem", "Evaluation", "SOLVERS"]
 
 SOLVERS: dict[str, Callable] = {}
 """Solvers by control name ('load', 'arclength', 'displacement'): solve(problem, **options)."""
-
-
-@dataclass
-class Evaluation:
-    """The discrete equations at one state (g, lam).
-
-    r: residual on the free dofs (nfree,); r_int, f_ext: internal and external generalised
-    nodal forces (n, 6), r = (r_int - f_ext) restricted to the free dofs; force_scale: the
-    element's round-off scale of r_int; energy: the elastic energy; K: the tangent dr/d eta on
-    the free dofs (CSR) when asked for.
-    """
-    r: np.ndarray
-    r_int: np.ndarray
-    f_ext: np.ndarray
-    force_scale: float
-    energy: float
-    K: object = None
 
 
 class Problem:
@@ -66,6 +50,8 @@ class Problem:
         A key of ``core_se3.fem.ELEMENTS`` ('default': exact edge twists; 'seed': the seed's).
     linear_solver : str
         'auto', 'superlu' or 'mumps' (see ``core_se3.solvers.linalg``).
+    backend : str, optional
+        'numba' (compiled kernels) or 'numpy' (the reference); default ``core_se3.backend``'s.
 
     Example
     -------
@@ -79,7 +65,9 @@ class Problem:
     6.696
     """
 
-    def __init__(self, mesh, material, element="default", linear_solver="auto"):
+    def __init__(self, mesh, material, element="default", linear_solver="auto", backend=None):
+        self.backend = resolve_backend(backend)
+        self._compiled = None
         self.mesh = mesh
         self.material = material
         self.element = make_element(element, mesh, material)
@@ -305,46 +293,9 @@ class Problem:
         return self._assembler
 
     def check_supports(self, g=None):
-        """Raise SingularSystemError if the supports leave a rigid-body motion free.
-
-        A superposed rigid motion h = exp(xi) moves every node by the body-frame increment
-        eta_i = Ad_{g_i^-1} xi; the supports restrain all six rigid motions iff the fixed
-        components of these increments (and the lab directions held by loads, e.g. springs)
-        have rank 6 (checked by SVD, unit-scaled).
-        """
-        g = self.mesh.g0 if g is None else g
-        fixed = self.constraint_mask()
-        ell = self.length_scale
-        c = g[:, :3, 3].mean(0)
-        h = np.eye(4)
-        h[:3, 3] = -c                                   # rigid motions about the centroid
-        modes = lie.Ad(lie.inv(g) @ np.linalg.inv(h))   # (n, 6, 6): column k = mode k at node i
-        scale = np.r_[np.ones(3), np.full(3, ell)]      # rotations * ell, comparable to translations
-        rows = [(modes * scale[None, None, :])[fixed]]   # (n_fixed, 6)
-        # supports carried by loads (lab-direction springs): rows d^T R_i [I 0] Ad_{g_i^-1} xi
-        for load in self.loads:
-            restraint = load.restraint()
-            if restraint is not None:
-                nodes, D = restraint                      # (k,), (k, q, 3) lab unit directions
-                lab = np.einsum("kij,kjl->kil", g[nodes, :3, :3], modes[nodes][:, :3, :] * scale)
-                rows.append(np.einsum("kqi,kil->kql", D, lab).reshape(-1, 6))
-        B = np.concatenate(rows)
-        if B.shape[0] == 0:
-            raise SingularSystemError("no supports: the shell can move as a rigid body; clamp or fix some nodes")
-        U, S, Vt = np.linalg.svd(B, full_matrices=True)
-        S = np.r_[S, np.zeros(6 - len(S))]
-        if S[-1] < 1e-10 * S[0]:
-            v = Vt[-1] * scale
-            tr, rot = v[:3], v[3:]
-            if np.linalg.norm(rot) * ell > 1e-8 * np.linalg.norm(tr):
-                # twist (tr, rot) about the centroid c: screw axis through c + rot x tr / |rot|^2
-                pt = c + np.cross(rot, tr) / (rot @ rot)
-                what = (f"rotation about {np.round(rot / np.linalg.norm(rot), 3).tolist()} "
-                        f"through {np.round(pt, 4).tolist()}")
-            else:
-                what = f"translation along {np.round(tr / np.linalg.norm(tr), 3).tolist()}"
-            raise SingularSystemError("the supports leave a rigid-body motion free (" + what
-                                      + "): the tangent is singular; add supports")
+        """Raise SingularSystemError if the supports (with the lab directions that loads such as
+        penalty springs hold) leave a rigid-body motion free (``supports.check_rigid_motions``)."""
+        check_rigid_motions(self, self.mesh.g0 if g is None else g)
 
     # ---------------------------------------------------------------- prescribed motion -
     @property
@@ -397,10 +348,21 @@ class Problem:
                 Ke[ids] += blocks
         return f, Kn, Ke
 
-    def evaluate(self, g, lam, tangent=True, assembler=None):
+    def evaluate(self, g, lam, tangent=True, assembler=None, out=None):
         """The residual on the free dofs and, if asked, the tangent at (g, lam) (an
-        :class:`Evaluation`); ``assembler``: another set of free dofs (default the problem's)."""
+        :class:`Evaluation`); ``assembler``: another set of free dofs (default the problem's).
+
+        With the numba backend and an element that has compiled kernels, the element and the
+        loads write straight into the CSR data of the assembler's fixed pattern (``out``: a
+        data array of ``assembler.pattern().nnz`` to reuse, which the returned K then shares);
+        otherwise the NumPy path sums the blocks (the reference)."""
         asm = assembler or self.assembler()
+        if self.backend == "numba":
+            if self._compiled is None:
+                self._compiled = CompiledEvaluation(self)
+            out_ev = self._compiled.evaluate(asm, g, lam, tangent, out)
+            if out_ev is not None:
+                return out_ev
         ev = self.element.evaluate(g, tangent=tangent)
         fext, Kn_ext, Ke_ext = self.external(g, lam, tangent=tangent)
         out = Evaluation(asm.vector(ev.r - fext), ev.r, fext, ev.force_scale, ev.energy)

@@ -43,11 +43,11 @@ from __future__ import annotations
 import numpy as np
 
 from .. import lie
-from ..errors import ElementTooDistortedError
+from ..errors import ElementTooDistortedError, SingularSystemError
 from .base import Load, LoadEvaluation
 
 __all__ = ["Prescribed", "LabSpring", "LabTiltSpring", "RotationComponentSpring",
-           "MAX_TOTAL_ROTATION"]
+           "MAX_TOTAL_ROTATION", "check_rigid_motions"]
 
 
 class Prescribed:
@@ -103,6 +103,15 @@ class LabSpring(_Spring):
         """(nodes, lab directions (k, q, 3)) that this spring holds (for the support check)."""
         return self.nodes, self.D
 
+    def compiled(self, pattern):
+        """The numba kernel of this spring (``kernels.loads.lab_spring``)."""
+        from ..kernels.loads import lab_spring
+        nodes, P, X0 = (np.ascontiguousarray(a) for a in (self.nodes, self.P, self.X0))
+
+        def add(g, lam, f, data, tangent):
+            lab_spring(g, nodes, P, X0, self.k, f, data, pattern.map, tangent)
+        return add
+
     def evaluate(self, g, lam, tangent=True):
         R = g[self.nodes, :3, :3]
         F = -self.k * np.einsum("nij,nj->ni", self.P, g[self.nodes, :3, 3] - self.X0)
@@ -125,6 +134,15 @@ class LabTiltSpring(_Spring):
         self.t = np.broadcast_to(t, (len(self.nodes), 3)) if t.ndim == 1 else t
         self.k = float(k_rot)
         self.name = name
+
+    def compiled(self, pattern):
+        """The numba kernel of this spring (``kernels.loads.lab_tilt_spring``)."""
+        from ..kernels.loads import lab_tilt_spring
+        nodes, t = np.ascontiguousarray(self.nodes), np.ascontiguousarray(self.t, dtype=float)
+
+        def add(g, lam, f, data, tangent):
+            lab_tilt_spring(g, nodes, t, self.k, f, data, pattern.map, tangent)
+        return add
 
     def tilt(self, g):
         """c = d3 . t at the selected nodes (the constraint error, a sine)."""
@@ -162,6 +180,17 @@ class RotationComponentSpring(_Spring):
         self.k = float(k_rot)
         self.name = name
 
+    def compiled(self, pattern):
+        """The numba kernel of this spring (``kernels.loads.rotation_component_spring``)."""
+        from ..kernels.loads import rotation_component_spring
+        nodes, R0, b = (np.ascontiguousarray(a) for a in (self.nodes, self.R0, self.b))
+
+        def add(g, lam, f, data, tangent):
+            flag, t = rotation_component_spring(g, nodes, R0, b, self.k, f, data, pattern.map, tangent)
+            if flag:
+                self.evaluate(g, lam, False)          # raises the NumPy path's named error
+        return add
+
     def phi(self, g):
         """Body total rotation vectors log(R0^T R) at the selected nodes."""
         return lie.log_so3(np.einsum("nji,njk->nik", self.R0, g[self.nodes, :3, :3]))
@@ -191,3 +220,45 @@ class RotationComponentSpring(_Spring):
                                    + c[:, None, None] * np.einsum("nim,nmj->nij", D, Jinv))
         return self._scatter(self.n, np.concatenate([np.zeros_like(gv), -self.k * c[:, None] * gv], 1),
                              blk, tangent)
+
+
+def check_rigid_motions(problem, g):
+    """Raise SingularSystemError if the supports leave a rigid-body motion free.
+
+    A superposed rigid motion h = exp(xi) moves every node by the body-frame increment
+    eta_i = Ad_{g_i^-1} xi; the supports restrain all six rigid motions iff the fixed
+    components of these increments (and the lab directions held by loads, e.g. springs)
+    have rank 6 (checked by SVD, unit-scaled).
+    """
+    fixed = problem.constraint_mask()
+    ell = problem.length_scale
+    c = g[:, :3, 3].mean(0)
+    h = np.eye(4)
+    h[:3, 3] = -c                                   # rigid motions about the centroid
+    modes = lie.Ad(lie.inv(g) @ np.linalg.inv(h))   # (n, 6, 6): column k = mode k at node i
+    scale = np.r_[np.ones(3), np.full(3, ell)]      # rotations * ell, comparable to translations
+    rows = [(modes * scale[None, None, :])[fixed]]   # (n_fixed, 6)
+    # supports carried by loads (lab-direction springs): rows d^T R_i [I 0] Ad_{g_i^-1} xi
+    for load in problem.loads:
+        restraint = load.restraint()
+        if restraint is not None:
+            nodes, D = restraint                      # (k,), (k, q, 3) lab unit directions
+            lab = np.einsum("kij,kjl->kil", g[nodes, :3, :3], modes[nodes][:, :3, :] * scale)
+            rows.append(np.einsum("kqi,kil->kql", D, lab).reshape(-1, 6))
+    B = np.concatenate(rows)
+    if B.shape[0] == 0:
+        raise SingularSystemError("no supports: the shell can move as a rigid body; clamp or fix some nodes")
+    U, S, Vt = np.linalg.svd(B, full_matrices=True)
+    S = np.r_[S, np.zeros(6 - len(S))]
+    if S[-1] < 1e-10 * S[0]:
+        v = Vt[-1] * scale
+        tr, rot = v[:3], v[3:]
+        if np.linalg.norm(rot) * ell > 1e-8 * np.linalg.norm(tr):
+            # twist (tr, rot) about the centroid c: screw axis through c + rot x tr / |rot|^2
+            pt = c + np.cross(rot, tr) / (rot @ rot)
+            what = (f"rotation about {np.round(rot / np.linalg.norm(rot), 3).tolist()} "
+                    f"through {np.round(pt, 4).tolist()}")
+        else:
+            what = f"translation along {np.round(tr / np.linalg.norm(tr), 3).tolist()}"
+        raise SingularSystemError("the supports leave a rigid-body motion free (" + what
+                                  + "): the tangent is singular; add supports")

@@ -31,8 +31,10 @@ __all__ = ["make_solver", "available_solvers", "checked_solve", "Factorization",
 class Factorization:
     """The equilibrated factorisation of K (sparse: the project's solver; dense: LAPACK LU).
 
-    ``solve(b)`` returns x with K x = b (refined twice; SingularSystemError when the backward
-    error exceeds 1e-8 or the solution grows more than 1e15 x b); ``probe()`` raises
+    ``solve(b)`` returns x with K x = b: S K S y = S b is solved, then refined while the
+    normwise backward error |S b - S K S y| / (|S K S|_inf |y| + |S b|) is above 4 eps and
+    falls by half per step (at most twice, LAPACK's rule); SingularSystemError when it stays
+    above 1e-8 or the solution grows more than 1e15 x b.  ``probe()`` raises
     SingularSystemError when a random right-hand side grows by 1e15 (a load may not excite an
     unrestrained mode; a random one does).  Use as a context manager or call ``close()``.
 
@@ -58,11 +60,15 @@ class Factorization:
                 raise SingularSystemError("tangent is singular (zero pivot)")
             self.K = K
             return
+        K = K.tocsr()
         d = np.abs(K.diagonal())
         d[d == 0] = 1.0
         self.s = 1.0 / np.sqrt(d)
-        S = sp.diags(self.s)
-        self.Ks = (S @ K @ S).tocsr()
+        rows = _row_indices(K.indptr)
+        # S K S on the same structure (no sparse products): entry (i, j) times s_i s_j
+        data = K.data * (self.s[rows] * self.s[K.indices])
+        self.Ks = sp.csr_matrix((data, K.indices, K.indptr), shape=K.shape)
+        self.knorm = float(np.max(np.add.reduceat(np.abs(data), K.indptr[:-1]))) if len(data) else 0.0
         self._ctx = solver.factor(self.Ks)
         self._solve = self._ctx.__enter__()
 
@@ -73,26 +79,34 @@ class Factorization:
         self.close()
         return False
 
+    def _berr(self, bs, y):
+        rs = bs - self.Ks @ y
+        return rs, np.linalg.norm(rs) / (self.knorm * np.linalg.norm(y) + np.linalg.norm(bs) + 1e-300)
+
     def solve(self, b):
         """x with K x = b (see the class docstring)."""
         if self.dense:
             return sla.lu_solve(self.lu, b)
         bs = self.s * b
         y = self._solve(bs)
+        rs, berr = self._berr(bs, y)
         for _ in range(2):                                   # iterative refinement
-            rs = bs - self.Ks @ y
-            if np.linalg.norm(rs) <= 1e-14 * np.linalg.norm(bs):
+            if not np.isfinite(berr) or berr <= 4 * _EPS:
                 break
-            y = y + self._solve(rs)
-        # backward error (normwise, of the equilibrated system) and growth of the solution: a
-        # backward-stable LU always has a small backward error, so near-singularity shows up as
+            y2 = y + self._solve(rs)
+            rs2, berr2 = self._berr(bs, y2)
+            if not berr2 < berr:
+                break
+            y, rs, improved = y2, rs2, berr2 <= 0.5 * berr
+            berr = berr2
+            if not improved:
+                break
+        # a backward-stable LU always has a small backward error, so near-singularity shows up as
         # |y| >> |b_s| (pivots at round-off level), which is what a missing support produces.
-        res = np.linalg.norm(self.Ks @ y - bs)
-        kn = abs(self.Ks).sum(axis=1).max()
         ny, nb = np.linalg.norm(y), max(np.linalg.norm(bs), 1e-300)
-        if not np.isfinite(res) or res > 1e-8 * (kn * ny + nb) or ny > 1e15 * nb:
+        if not np.isfinite(berr) or berr > 1e-8 or ny > 1e15 * nb:
             raise SingularSystemError(f"tangent is singular or nearly so (backward error "
-                                      f"{res / (kn * ny + nb):.1e}, solution growth {ny / nb:.1e})")
+                                      f"{berr:.1e}, solution growth {ny / nb:.1e})")
         return self.s * y
 
     def probe(self):
@@ -111,6 +125,23 @@ class Factorization:
             self._ctx.__exit__(None, None, None)
 
 
+_EPS = np.finfo(float).eps
+_ROWS = {}
+
+
+def _row_indices(indptr):
+    """The row of every stored entry of a CSR structure (cached per structure array)."""
+    key = (id(indptr), len(indptr), int(indptr[-1]))
+    hit = _ROWS.get(key)
+    if hit is not None and hit[0] is indptr:
+        return hit[1]
+    rows = np.repeat(np.arange(len(indptr) - 1), np.diff(indptr))
+    if len(_ROWS) > 8:
+        _ROWS.clear()
+    _ROWS[key] = (indptr, rows)
+    return rows
+
+
 def checked_solve(solver, K, b, probe=False):
     """Solve K x = b once through a :class:`Factorization` (with ``probe``: also test the
     factor with a random right-hand side, as for the first solve of a path)."""
@@ -122,12 +153,9 @@ def checked_solve(solver, K, b, probe=False):
 
 
 def _have_petsc():
-    try:
-        import petsc4py  # noqa: F401
-        from petsc4py import PETSc  # noqa: F401
-        return True
-    except Exception:
-        return False
+    """petsc4py is installed (found without importing it: the import costs ~0.5 s)."""
+    import importlib.util
+    return importlib.util.find_spec("petsc4py") is not None
 
 
 def available_solvers():
@@ -184,18 +212,33 @@ class SuperLUSolver:
 
 
 class MumpsSolver:
+    """PETSc/MUMPS LU.  The PETSc matrix and solver are kept from one factorisation to the next
+    while the sparsity pattern stays the same, so MUMPS redoes only the numerical
+    factorisation (its ordering and symbolic analysis are reused)."""
     name = "mumps"
 
     def __init__(self):
         from petsc4py import PETSc
         self.PETSc = PETSc
+        self._kept = None           # (indptr, indices, A, ksp, x, bb) of the last pattern
+        self._busy = False
 
-    def factor(self, K):
+    def _objects(self, K):
         PETSc = self.PETSc
-        K = K.tocsr()
-        A = PETSc.Mat().createAIJ(size=K.shape, csr=(K.indptr.astype(PETSc.IntType),
-                                                      K.indices.astype(PETSc.IntType), K.data),
-                                  comm=PETSc.COMM_SELF)
+        kept = self._kept
+        if kept is not None and not self._busy and kept[0].shape == K.indptr.shape and \
+                kept[1].shape == K.indices.shape and np.array_equal(kept[0], K.indptr) and \
+                np.array_equal(kept[1], K.indices):
+            A, ksp = kept[2], kept[3]
+            A.setValuesCSR(kept[0], kept[1], K.data)
+            A.assemble()
+            ksp.setOperators(A)
+            return kept, True
+        if kept is not None and not self._busy:
+            self._destroy(kept)
+        indptr = K.indptr.astype(PETSc.IntType)
+        indices = K.indices.astype(PETSc.IntType)
+        A = PETSc.Mat().createAIJ(size=K.shape, csr=(indptr, indices, K.data), comm=PETSc.COMM_SELF)
         ksp = PETSc.KSP().create(PETSc.COMM_SELF)
         ksp.setOperators(A)
         ksp.setType("preonly")
@@ -203,14 +246,29 @@ class MumpsSolver:
         pc.setType("lu")
         pc.setFactorSolverType("mumps")
         ksp.setErrorIfNotConverged(True)
+        objs = (indptr, indices, A, ksp, A.createVecLeft(), A.createVecRight())
+        return objs, False
+
+    @staticmethod
+    def _destroy(objs):
+        for obj in objs[2:]:
+            obj.destroy()
+
+    def factor(self, K):
+        PETSc = self.PETSc
+        K = K.tocsr()
+        objs, reused = self._objects(K)
+        _, _, A, ksp, x, bb = objs
+        keep = not self._busy
         try:
             ksp.setUp()
         except PETSc.Error as exc:
-            ksp.destroy()
-            A.destroy()
+            self._destroy(objs)
+            if reused:
+                self._kept = None
             raise SingularSystemError(f"tangent is singular (MUMPS: {exc})") from None
-        x = A.createVecLeft()
-        bb = A.createVecRight()
+        if keep:
+            self._kept, self._busy = objs, True
 
         def solve(b):
             bb.setArray(b)
@@ -221,8 +279,10 @@ class MumpsSolver:
             return _finite(x.getArray().copy())
 
         def release():
-            for obj in (ksp, A, x, bb):
-                obj.destroy()
+            if keep:
+                self._busy = False
+            else:
+                self._destroy(objs)
 
         return _Factor(solve, release)
 
@@ -241,10 +301,14 @@ class AutoSolver:
 
     def __init__(self):
         self._small = SuperLUSolver()
-        self._large = MumpsSolver() if _have_petsc() else self._small
+        self._large = None            # MUMPS, made (and petsc4py imported) at the first large matrix
 
     def factor(self, K):
-        return (self._small if K.shape[0] < AUTO_MUMPS_MIN else self._large).factor(K)
+        if K.shape[0] < AUTO_MUMPS_MIN:
+            return self._small.factor(K)
+        if self._large is None:
+            self._large = MumpsSolver() if _have_petsc() else self._small
+        return self._large.factor(K)
 
     def solve(self, K, b):
         with self.factor(K) as solve:

@@ -1,0 +1,58 @@
+"""The computational backend: 'numba' (compiled kernels, ``core_se3.kernels``) or 'numpy' (the
+batched NumPy reference).  The default is 'numba' when numba is installed, else 'numpy'; the
+environment variable ``CORE_SE3_BACKEND`` overrides it, ``set_backend`` changes it for the
+problems created afterwards, and ``Problem(..., backend=...)`` chooses per problem.
+
+Example
+-------
+>>> from core_se3 import backend
+>>> backend.resolve("numpy")
+'numpy'
+>>> backend.resolve("fortran")
+Traceback (most recent call last):
+...
+core_se3.errors.OptionError: unknown backend 'fortran'; choose 'numba' or 'numpy'
+"""
+from __future__ import annotations
+
+import importlib.util
+import os
+
+from .errors import OptionError
+
+__all__ = ["BACKENDS", "numba_available", "default_backend", "set_backend", "resolve"]
+
+BACKENDS = ("numba", "numpy")
+_chosen = None
+
+
+def numba_available():
+    """True when numba can be imported (without importing it)."""
+    return importlib.util.find_spec("numba") is not None
+
+
+def default_backend():
+    """The backend new problems use: set_backend's, else $CORE_SE3_BACKEND, else numba if installed."""
+    if _chosen is not None:
+        return _chosen
+    env = os.environ.get("CORE_SE3_BACKEND", "").strip().lower()
+    if env:
+        return resolve(env)
+    return "numba" if numba_available() else "numpy"
+
+
+def set_backend(name):
+    """Set the backend of the problems created from now on (None: back to the default rule)."""
+    global _chosen
+    _chosen = None if name is None else resolve(name)
+
+
+def resolve(name):
+    """A validated backend name (None: the default)."""
+    if name is None:
+        return default_backend()
+    if name not in BACKENDS:
+        raise OptionError(f"unknown backend {name!r}; choose 'numba' or 'numpy'")
+    if name == "numba" and not numba_available():
+        raise OptionError("the numba backend needs numba (pip install numba); use backend='numpy'")
+    return name

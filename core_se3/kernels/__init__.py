@@ -1,0 +1,12 @@
+"""Layer 0 (beside lie), the compiled kernels of the ``numba`` backend: scalar SE(3) algebra, the
+fixed CSR pattern and its block scatter, the default element and every built-in load, on plain
+arrays.  Importing this package imports numba; the rest of core_se3 imports it only when a
+problem evaluates with the compiled backend (``core_se3.backend``), so a NumPy-only scene
+never pays for it.  The NumPy implementation of each kernel stays the reference
+(``tests/test_kernels.py`` compares them).
+"""
+from .csr import CsrMap, Pattern, Topology, add_blocks, greedy_colouring, scatter, scatter_diag
+from .element import ElementKernels
+
+__all__ = ["Pattern", "CsrMap", "Topology", "greedy_colouring", "scatter", "scatter_diag", "add_blocks",
+           "ElementKernels"]

@@ -1,0 +1,62 @@
+"""The numba backend's evaluation of a Problem: the element's kernels and the loads' compiled
+evaluations write the residual and the tangent straight into the CSR data of the assembler's
+fixed pattern (``kernels.csr``); a load without a compiled evaluation is evaluated by NumPy and
+its blocks scattered.  Built once per assembler and set of loads."""
+from __future__ import annotations
+
+import numpy as np
+
+from .base import Evaluation
+
+__all__ = ["CompiledEvaluation"]
+
+_NO_DATA = np.zeros(0)        # the CSR data of a residual-only evaluation
+
+
+class CompiledEvaluation:
+    """The compiled evaluation of ``problem`` (see the module docstring)."""
+
+    def __init__(self, problem):
+        self.problem = problem
+        self._parts = None
+
+    def parts(self, asm):
+        """(pattern, element kernels, [(load, compiled add or None)]) for the assembler, built
+        once and again when the loads change; None when the element has no kernels."""
+        prob = self.problem
+        key = (id(asm), tuple(id(ld) for ld in prob.loads))
+        if self._parts is None or self._parts[0] != key:
+            pattern = asm.pattern()
+            kern = prob.element.compiled(pattern)
+            loads = [(ld, ld.compiled(pattern)) for ld in prob.loads] if kern is not None else []
+            self._parts = (key, None if kern is None else (pattern, kern, loads))
+        return self._parts[1]
+
+    def evaluate(self, asm, g, lam, tangent, out):
+        """The problem's Evaluation at (g, lam), or None when the element has no kernels."""
+        from ..kernels import add_blocks
+        parts = self.parts(asm)
+        if parts is None:
+            return None
+        pattern, kern, loads = parts
+        g = np.ascontiguousarray(g, dtype=float)
+        if tangent:
+            data = out if out is not None else pattern.new_data()
+            res = kern.tangent(g, data)
+        else:
+            data = _NO_DATA
+            res = kern.residual(g)
+        r_int = res["r"].copy()
+        f = np.zeros((self.problem.mesh.n_nodes, 6))
+        for ld, add in loads:
+            if add is not None:
+                add(g, lam, f, data, tangent)
+                continue
+            ev = ld.evaluate(g, lam, tangent)
+            f += ev.f
+            if tangent:
+                add_blocks(data, pattern, self.problem.mesh.quads, ev.node_blocks, ev.element_blocks)
+        out_ev = Evaluation((r_int - f).ravel()[pattern.free], r_int, f, res["force_scale"], res["energy"])
+        if tangent:
+            out_ev.K = pattern.matrix(data)
+        return out_ev

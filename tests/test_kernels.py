@@ -1,0 +1,329 @@
+"""The numba backend (core_se3.kernels) against the NumPy reference, to 1e-12 relative.
+
+Residuals and tangents are compared on random states whose nodal rotations span several turns
+(a smooth rotation field plus noise plus a rigid motion of 20 pi + 0.7) while every edge turns
+by less than MAX_EDGE_ANGLE, including edges past 2 pi/3 (the log's near-pi branch).  Tangents
+are compared as CSR data arrays against ``Assembler.matrix`` (same indptr/indices).
+
+Problems are evaluated with both backends (``Problem(..., backend=...)``); every built-in load
+kind is compared, and a user load without a compiled kernel goes through the generic block
+scatter.
+"""
+import numpy as np
+import pytest
+
+from core_se3 import lie as se3
+from core_se3 import mesh as M
+from core_se3.assembly import Assembler
+from core_se3.errors import ElementTooDistortedError
+from core_se3.fem import Material, RegionMaterial
+from core_se3.fem.element_default import _dexp_inv_jacobian_T
+from core_se3.model import Load, LoadEvaluation, Problem
+from core_se3.model.fields import DipoleField, GradientField, Superposition, UniformField
+
+from core_se3 import kernels as K
+from core_se3.kernels import lie as KL
+from core_se3.kernels import loads as KLd
+
+TOL = 1e-12
+
+
+def rel(a, b):
+    a, b = np.asarray(a), np.asarray(b)
+    return np.abs(a - b).max() / max(np.abs(b).max(), 1e-300)
+
+
+# ------------------------------------------------------------------ scalar kernels ----------
+
+ANGLES = [0.0, 1e-9, 1e-4, 0.3, 0.999, 1.0, 1.001, 2.0, 2.09, 2.1, 2.5, 3.0, 0.97 * np.pi, np.pi - 1e-6]
+
+
+@pytest.mark.parametrize("t", ANGLES)
+def test_log_exp_dexp_inv(t):
+    rng = np.random.default_rng(int(t * 1e6) % 1000)
+    for _ in range(5):
+        n = rng.normal(size=3)
+        xi = np.r_[rng.normal(size=3), t * n / np.linalg.norm(n)]
+        g = se3.exp(xi)
+        gk = np.empty((4, 4))
+        KL.exp_se3(xi, gk)
+        assert rel(gk, g) <= TOL
+        psi = np.empty(6)
+        KL.log_se3(np.eye(4), g, np.empty((3, 3)), psi)
+        ref = se3.log(g)
+        assert np.abs(psi - ref).max() <= TOL * max(1.0, np.abs(ref).max())
+        L = np.empty((6, 6))
+        KL.dexp_inv_se3(xi, L)
+        assert rel(L, se3.dexp_inv(xi)) <= TOL
+        F = rng.normal(size=6)
+        s = xi[3:] @ xi[3:]
+        c, dc, ddc = KL.coef_c(s), KL.coef_dc(s), KL.coef_ddc(s)
+        out = np.empty(6)
+        for sign in (1.0, -1.0):
+            KL.dexp_inv_T_apply(xi, c, dc, sign, F, out, 1.0)
+            assert rel(out, se3.dexp_inv_T_apply(sign * xi, F)) <= TOL
+        J = np.empty((6, 6))
+        KL.dexp_inv_T_jacobian(xi, c, dc, ddc, F, J)
+        assert rel(J, _dexp_inv_jacobian_T(xi[None], F[None])[0]) <= TOL
+
+
+def test_log_at_pi_is_a_valid_log():
+    """At exactly pi the axis sign is a free choice: exp(log(R)) = R is what must hold."""
+    for axis in np.eye(3):
+        g = se3.exp(np.r_[0.1, 0.2, 0.3, np.pi * axis])
+        psi = np.empty(6)
+        KL.log_se3(np.eye(4), g, np.empty((3, 3)), psi)
+        gk = np.empty((4, 4))
+        KL.exp_se3(psi, gk)
+        assert np.abs(gk - g).max() < 1e-12
+
+
+# ------------------------------------------------------------------ meshes and states -------
+
+def _meshes():
+    flat = M.rectangle(1.5, 1.0, 3, 2)
+    arch = M.cylinder_arch(1.0, 1.2, 0.8, 4, 2)
+    ann = M.annulus(0.5, 1.0, 1.5 * np.pi, 2, 6)
+    return {"flat": flat, "arch": arch, "annulus": ann}
+
+
+def _problem(kind, nu=0.3, backend="numpy"):
+    if kind == "region":
+        mesh = M.rectangle(2.0, 1.0, 4, 3)
+        mat = RegionMaterial.from_regions(mesh.n_elements, Material(1.0e4, 0.3, 0.1),
+                                          [(np.arange(0, mesh.n_elements, 3), Material(3.0e4, 0.2, 0.05))])
+        return Problem(mesh, mat, backend=backend)
+    return Problem(_meshes()[kind], Material(1.0e4, nu, 0.1), backend=backend)
+
+
+def _state(mesh, seed, edge_turn=0.85 * np.pi, noise=0.05):
+    """Frames with a smooth rotation field turning by ~edge_turn per element (several turns over
+    the mesh), random noise, and a rigid motion of 20 pi + 0.7 about a random axis."""
+    rng = np.random.default_rng(seed)
+    X = mesh.X
+    h = np.median(np.linalg.norm(X[mesh.edge_nodes[:, 1]] - X[mesh.edge_nodes[:, 0]], axis=1))
+    ax = rng.normal(size=3)
+    ax /= np.linalg.norm(ax)
+    d = rng.normal(size=3)
+    s = X @ (d / np.linalg.norm(d)) / h                 # coordinate in edge lengths
+    w = edge_turn * s[:, None] * ax                     # turns by ~edge_turn per edge
+    xi = np.concatenate([0.05 * rng.normal(size=(len(X), 3)), w + noise * rng.normal(size=(len(X), 3))], 1)
+    g = mesh.g0 @ se3.exp(xi)
+    n = rng.normal(size=3)
+    rig = se3.exp(np.r_[rng.normal(size=3), (20 * np.pi + 0.7) * n / np.linalg.norm(n)])
+    return rig @ g
+
+
+def _safe_state(mesh, seed):
+    """A state from _state scaled so that the largest edge turn is below MAX_EDGE_ANGLE."""
+    for turn in np.linspace(0.9 * np.pi, 0.1, 40):
+        g = _state(mesh, seed, edge_turn=turn)
+        psi = se3.log(se3.inv(g[mesh.edge_nodes[:, 0]]) @ g[mesh.edge_nodes[:, 1]])
+        ang = np.linalg.norm(psi[:, 3:], axis=1)
+        if ang.max() < 0.96 * np.pi:
+            return g, ang
+    raise AssertionError("no admissible state")
+
+
+def _free(mesh, rng):
+    fixed = np.zeros((mesh.n_nodes, 6), bool)
+    fixed[mesh.edges["x0"]] = True
+    fixed[rng.integers(mesh.n_nodes), rng.integers(6)] = True     # a partly constrained node
+    return ~fixed.ravel()
+
+
+# ------------------------------------------------------------------ pattern -----------------
+
+@pytest.mark.parametrize("kind", ["flat", "arch", "annulus", "region"])
+def test_pattern_equals_assembler(kind):
+    p = _problem(kind)
+    mesh = p.mesh
+    free = _free(mesh, np.random.default_rng(0))
+    asm = Assembler(mesh, free)
+    pat = K.Pattern(mesh.quads, mesh.edge_nodes, mesh.elem_edges, mesh.n_nodes, free)
+    assert pat.nnz == asm.nnz and pat.nfree == asm.nfree
+    assert np.array_equal(pat.indptr, asm.indptr) and np.array_equal(pat.indices, asm.indices)
+    # colourings are valid: no two elements (edges) of a colour share a node
+    for cptr, order, items in [(pat.topo.elem_cptr, pat.topo.elem_order, mesh.quads),
+                               (pat.topo.edge_cptr, pat.topo.edge_order, mesh.edge_nodes)]:
+        for c in range(len(cptr) - 1):
+            nodes = items[order[cptr[c]:cptr[c + 1]]].ravel()
+            assert len(np.unique(nodes)) == len(nodes)
+
+
+# ------------------------------------------------------------------ element -----------------
+
+@pytest.mark.parametrize("mode", ["serial", "colour", "gather"])
+@pytest.mark.parametrize("kind", ["flat", "arch", "annulus", "region"])
+@pytest.mark.parametrize("seed", [1, 2])
+def test_element_residual_and_tangent(kind, mode, seed):
+    p = _problem(kind)
+    mesh, el = p.mesh, p.element
+    free = _free(mesh, np.random.default_rng(seed))
+    asm = Assembler(mesh, free)
+    pat = K.Pattern(mesh.quads, mesh.edge_nodes, mesh.elem_edges, mesh.n_nodes, free)
+    ek = K.ElementKernels.from_element(el, pat, mode=mode, error=ElementTooDistortedError)
+    g, ang = _safe_state(mesh, seed)
+    assert ang.max() > 2 * np.pi / 3          # the near-pi branch of the log is exercised
+    ev = el.evaluate(g, tangent=True)
+    Kref = asm.matrix(ev.element_blocks, ev.edge_blocks, ev.node_blocks)
+    res = ek.residual(g)
+    assert abs(res["energy"] - ev.energy) <= TOL * ev.energy
+    assert rel(res["r"], ev.r) <= TOL
+    assert abs(res["force_scale"] - ev.force_scale) <= TOL * ev.force_scale
+    tan = ek.tangent(g)
+    assert abs(tan["energy"] - ev.energy) <= TOL * ev.energy
+    assert rel(tan["r"], ev.r) <= TOL
+    assert rel(tan["data"], Kref.data) <= TOL
+    # blockwise too: no block may hide under the global max
+    D = pat.matrix(tan["data"]).toarray() - Kref.toarray()
+    scale = np.abs(Kref.toarray()).max()
+    assert np.abs(D).max() <= TOL * scale
+
+
+def test_too_distorted_flag_and_error():
+    p = _problem("flat")
+    mesh = p.mesh
+    pat = K.Pattern(mesh.quads, mesh.edge_nodes, mesh.elem_edges, mesh.n_nodes, np.ones(6 * mesh.n_nodes, bool))
+    ek = K.ElementKernels.from_element(p.element, pat, error=ElementTooDistortedError)
+    g = mesh.g0.copy()
+    node = 5
+    g[node] = g[node] @ se3.exp(np.r_[0, 0, 0, 0, 0, 0.985 * np.pi])
+    with pytest.raises(ElementTooDistortedError) as ref:
+        p.element.evaluate(g)
+    with pytest.raises(ElementTooDistortedError) as got:
+        ek.residual(g)
+    assert str(got.value) == str(ref.value)
+    with pytest.raises(ElementTooDistortedError):
+        ek.tangent(g)
+
+
+# ------------------------------------------------------------------ loads -------------------
+
+class _UserLoad(Load):
+    """A load with no compiled kernel: a dead couple per node (the backend scatters its blocks)."""
+
+    def __init__(self, n, nodes, moment):
+        self.n, self.nodes, self.moment = n, np.asarray(nodes), np.asarray(moment, float)
+
+    def evaluate(self, g, lam, tangent=True):
+        f = np.zeros((self.n, 6))
+        Mb = lam * np.einsum("nji,j->ni", g[self.nodes, :3, :3], self.moment)
+        f[self.nodes, 3:] = Mb
+        if not tangent:
+            return LoadEvaluation(f)
+        Kn = np.zeros((self.n, 6, 6))
+        Kn[self.nodes, 3:, 3:] = -se3.hat3(Mb)
+        Ke = np.zeros((2, 4, 4, 6, 6))
+        Ke[:, 0, 1, :3, 3:] = np.eye(3)            # arbitrary element blocks: they must land too
+        return LoadEvaluation(f, Kn, (np.array([0, 4]), Ke))
+
+
+def _loaded(which, backend):
+    mesh = M.rectangle(1.5, 1.0, 3, 2)
+    p = Problem(mesh, Material(1.0e4, 0.3, 0.1, rho=2.0), backend=backend)
+    p.clamp("x0")
+    if which == "nodal_dead":
+        p.add_edge_force("x1", (3.0, -2.0, 5.0))
+        p.add_edge_moment("x1", (0.5, 1.0, -0.7))
+        p.add_nodal_load(np.array([4, 4, 7]), force=(1.0, 2.0, 3.0), moment=(-1.0, 0.3, 0.2))
+    elif which == "nodal_follower":
+        p.add_edge_force("x1", (3.0, -2.0, 5.0), follower=True)
+        p.add_edge_moment("x1", (0.5, 1.0, -0.7), follower=True)
+    elif which == "surface_dead":
+        p.add_pressure(4.0)
+        p.add_pressure(2.0, direction=np.array([0.3, -0.2, 1.0]), elements=[1, 4])
+        p.add_body_force((0.1, 0.2, -0.5))
+        p.add_gravity(2.0)
+    elif which == "surface_follower":
+        p.add_pressure(4.0, follower=True)
+        p.add_pressure(-1.5, follower=True, elements=[0, 2, 5])
+    elif which == "mag_uniform":
+        p.add_magnetic((0.1, 0.2, 0.05), UniformField((0.01, -0.02, 0.03)))
+    elif which == "mag_gradient":
+        p.add_magnetic((0.1, 0.2, 0.05), GradientField((0.01, 0.0, 0.02),
+                                                       [[0.5, 0.2, 0.0], [0.2, -0.3, 0.1], [0.0, 0.1, -0.2]]))
+    elif which == "mag_dipole":
+        p.add_magnetic((0.1, 0.2, 0.05), DipoleField((0.0, 0.5, 2.0), (0.7, 0.1, -0.6)), elements=[0, 1, 3, 4])
+    elif which == "mag_superposition":
+        p.add_magnetic((0.1, 0.0, 0.3), Superposition(UniformField((0.0, 0.01, 0.0)),
+                                                      DipoleField((0.3, 0.0, 1.0), (-0.4, 0.0, 0.5))))
+    elif which == "lab_springs":
+        p.add_lab_support("x1", np.array([[1.0, 0.0, 0.0], [0.0, 0.6, 0.8]]), 1e3)
+        p.add_lab_tilt_support("y0", np.array([0.0, 1.0, 0.0]), 50.0)
+    elif which == "rotation_spring":
+        p.add_rotation_component_support("x1", np.array([0.0, 1.0, 0.0]), 30.0)
+        p.add_rotation_component_support(np.array([5, 5]), np.array([0.6, 0.0, 0.8]), 10.0)
+    elif which == "user_load":
+        p.add(_UserLoad(mesh.n_nodes, [5, 6, 6], (0.3, -0.2, 0.9)))
+    return p
+
+
+LOADS = ["nodal_dead", "nodal_follower", "surface_dead", "surface_follower", "mag_uniform",
+         "mag_gradient", "mag_dipole", "mag_superposition", "lab_springs", "rotation_spring", "user_load"]
+
+
+def _load_state(mesh, which):
+    rng = np.random.default_rng(3)
+    xi = np.concatenate([0.05 * rng.normal(size=(mesh.n_nodes, 3)), 0.4 * rng.normal(size=(mesh.n_nodes, 3))], 1)
+    if which == "rotation_spring":
+        xi[:, 3:] *= 0.5
+    return mesh.g0 @ se3.exp(xi)
+
+
+@pytest.mark.parametrize("which", LOADS)
+def test_problem_evaluation_both_backends(which):
+    """Problem.evaluate (element + loads + assembly) agrees between the backends: residual,
+    internal and external forces, tangent (CSR data on the same pattern)."""
+    pa, pb = _loaded(which, "numpy"), _loaded(which, "numba")
+    g = pa.apply_prescribed(_load_state(pa.mesh, which), 0.7)
+    for tangent in (True, False):
+        ea, eb = pa.evaluate(g, 0.7, tangent), pb.evaluate(g, 0.7, tangent)
+        assert rel(eb.f_ext, ea.f_ext) <= TOL and rel(eb.r_int, ea.r_int) <= TOL and rel(eb.r, ea.r) <= TOL
+        assert abs(eb.energy - ea.energy) <= TOL * ea.energy
+        if tangent:
+            assert np.array_equal(eb.K.indptr, ea.K.indptr) and np.array_equal(eb.K.indices, ea.K.indices)
+            assert rel(eb.K.data, ea.K.data) <= TOL
+
+
+def test_rotation_spring_limit():
+    pa, pb = _loaded("rotation_spring", "numpy"), _loaded("rotation_spring", "numba")
+    g = pa.mesh.g0.copy()
+    node = pa.mesh.edges["x1"][1]
+    g[node] = g[node] @ se3.exp(np.r_[0, 0, 0, 0.96 * np.pi, 0, 0])
+    with pytest.raises(ElementTooDistortedError) as ref:
+        pa.evaluate(g, 1.0)
+    with pytest.raises(ElementTooDistortedError) as got:
+        pb.evaluate(g, 1.0)
+    assert str(got.value) == str(ref.value)
+
+
+def test_dipole_field_kernel():
+    fld = DipoleField((0.3, -0.5, 2.0), (0.1, 0.2, -0.6), scale=lambda lam: 2.0 * lam)
+    x = np.random.default_rng(0).normal(size=(20, 3))
+    B, G, H = np.empty((20, 3)), np.empty((20, 3, 3)), np.empty((20, 3, 3, 3))
+    assert KLd.dipole_field(x, fld.m, fld.x0, fld.k, 2.0 * 0.8, B, G, H) == 0
+    assert rel(B, fld.value(x, 0.8)) <= TOL
+    assert rel(G, fld.gradient(x, 0.8)) <= TOL
+    assert rel(H, fld.hessian(x, 0.8)) <= 1e-10      # the reference's complex step: ~1e-13
+    assert KLd.dipole_field(fld.x0[None], fld.m, fld.x0, fld.k, 1.0, B[:1], G[:1], H[:1]) == 1
+
+
+# ------------------------------------------------------------------ Newton -------------------
+
+@pytest.mark.parametrize("name", ["cantilever-shear", "pressure-strip", "torsion"])
+def test_newton_same_path_both_backends(name):
+    """A catalogue case solved with each backend: the same Newton iterations per step and the
+    same states (to 1e-10 of the position scale: the two backends differ by round-off only)."""
+    from core_se3 import catalogue
+    case = catalogue.get_case(name)
+    p = catalogue.case_params(case)
+    mesh = None
+    res = {}
+    for b in ("numpy", "numba"):
+        prob = catalogue.build_problem(case, p, mesh)
+        prob.backend = b
+        res[b] = prob.solve(steps=case.steps)
+    for a, b in zip(res["numba"].steps, res["numpy"].steps):
+        assert a.iterations == b.iterations
+        assert np.abs(a.g - b.g).max() <= 1e-10 * np.abs(b.g[:, :3, 3]).max()
