@@ -39,7 +39,9 @@ class ElementEvaluation:
 
     energy: the elastic energy [force x length]; r: (n, 6) internal nodal forces (body frames);
     force_scale: the size of the terms that cancel in r (its round-off floor, used by the
-    convergence test); the blocks as in the module docstring (None = none of that shape).
+    convergence test); the blocks as in the module docstring (None = none of that shape);
+    stress: the element's stress variables at this state (a mixed element, see
+    :attr:`Element.mixed`), linearization: what its ``linear_stress`` needs from this state.
     """
     energy: float
     r: np.ndarray
@@ -47,6 +49,8 @@ class ElementEvaluation:
     element_blocks: np.ndarray | None = None
     edge_blocks: np.ndarray | None = None
     node_blocks: np.ndarray | None = None
+    stress: np.ndarray | None = None
+    linearization: object = None
 
 
 class Element(abc.ABC):
@@ -60,6 +64,10 @@ class Element(abc.ABC):
 
     name: ClassVar[str] = ""
     stateful: ClassVar[bool] = False
+    #: True when the element supports the mixed (MIP) Newton iteration: ``evaluate`` accepts
+    #: ``stress=`` (independent stresses for the geometric part of the tangent) and
+    #: :meth:`linear_stress` updates them (``solvers.newton``, NewtonOptions.iteration)
+    mixed: ClassVar[bool] = False
 
     def __init__(self, mesh, material):
         self.mesh = mesh
@@ -67,7 +75,13 @@ class Element(abc.ABC):
 
     @abc.abstractmethod
     def evaluate(self, g, tangent=True) -> ElementEvaluation:
-        """Internal forces at the frames g (n, 4, 4), with the tangent blocks if ``tangent``."""
+        """Internal forces at the frames g (n, 4, 4), with the tangent blocks if ``tangent``
+        (a mixed element also takes ``stress=``, see :attr:`mixed`)."""
+
+    def linear_stress(self, ev, eta):
+        """A mixed element's stresses linearised about the state of ``ev`` (an evaluation
+        with the tangent) for the nodal increments eta (n, 6)."""
+        raise NotImplementedError(f"element {self.name!r} has no mixed iteration")
 
     @abc.abstractmethod
     def energy(self, g) -> float:

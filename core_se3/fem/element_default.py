@@ -109,6 +109,7 @@ class DefaultElement(Element):
     """
 
     name = "default"
+    mixed = True
 
     def __init__(self, mesh, material):
         super().__init__(mesh, material)
@@ -120,7 +121,9 @@ class DefaultElement(Element):
         A1, A2 = zeta0[..., 0:3], zeta0[..., 6:9]
         Dm, j0 = material.resultant_matrix(A1, A2)                     # (m, 4, 12, 12)
         self.j0 = j0
-        self.Dbar = np.einsum("qia,mqij,qjb,mq->mab", P, Dm, P, j0)    # (m, 24, 24)
+        # Dbar = sum_q j0_q P_q^T D_q P_q, contracted pairwise (a 4-operand einsum is O(24^4 m))
+        DP = np.einsum("mqij,qjb->mqib", Dm * j0[..., None, None], P)
+        self.Dbar = np.einsum("qia,mqib->mab", P, DP)                 # (m, 24, 24)
         self.area = j0.sum(axis=1)                                     # reference area per element
         self.Dz0 = np.einsum("mij,mj->mi", self.Dbar, self.z0)         # constant part of Dbar z
 
@@ -154,10 +157,55 @@ class DefaultElement(Element):
         dz = z - self.z0
         return 0.5 * np.einsum("mi,mij,mj->", dz, self.Dbar, dz)
 
-    def evaluate(self, g, tangent=True):
+    def _edge_forces(self, f):
+        """Per-mesh-edge forces F (E, 6) conjugate to the edge twists, from element forces f (m, 24)."""
+        mesh = self.mesh
+        fe = mesh.elem_edge_sign[..., None] * f.reshape(-1, 4, 6)
+        nE = len(mesh.edge_nodes)
+        return np.stack([np.bincount(mesh.elem_edges.ravel(), weights=fe[..., k].ravel(), minlength=nE)
+                         for k in range(6)], -1)
+
+    def _nodal_forces(self, F, Lp, Lm):
+        """Nodal forces of edge forces F: r_a = -1/2 L(-psi)^T F, r_b = 1/2 L(psi)^T F."""
+        En = self.mesh.edge_nodes
+        ra = -0.5 * np.einsum("eji,ej->ei", Lm, F)
+        rb = 0.5 * np.einsum("eji,ej->ei", Lp, F)
+        n = self.mesh.n_nodes
+        return np.stack([np.bincount(En[:, 0], weights=ra[:, k], minlength=n)
+                         + np.bincount(En[:, 1], weights=rb[:, k], minlength=n) for k in range(6)], -1)
+
+    def linear_stress(self, ev, eta):
+        """Element stresses linearised about the state of ``ev`` for the increment eta (n, 6):
+        f = Dbar (z(g) - z0 + G eta) (m, 24), G = dz/deta (the stress update of the mixed
+        iteration; the nonlinear update would be Dbar (z(g exp(eta)) - z0)).
+
+        Example
+        -------
+        >>> import numpy as np
+        >>> from core_se3 import Material, mesh
+        >>> el = DefaultElement(mesh.rectangle(2.0, 1.0, 2, 1), Material(1.0e3, 0.3, 0.1))
+        >>> ev = el.evaluate(el.mesh.g0, tangent=True)
+        >>> eta = np.zeros((6, 6)); eta[[2, 5], 0] = 1e-3          # stretch the right column
+        >>> f = el.linear_stress(ev, eta)
+        >>> bool(np.allclose(f, el.evaluate(el.mesh.g0 @ lie.exp(eta), tangent=False).stress,
+        ...                  rtol=0, atol=1e-3 * np.abs(f).max()))
+        True
+        """
+        Lp, Lm, dz = ev.linearization
+        En = self.mesh.edge_nodes
+        eta = np.asarray(eta, float).reshape(-1, 6)
+        dpsi = (np.einsum("eij,ej->ei", Lp, eta[En[:, 1]]) - np.einsum("eij,ej->ei", Lm, eta[En[:, 0]]))
+        return np.einsum("mij,mj->mi", self.Dbar, dz + self._element_z(0.5 * dpsi))
+
+    def evaluate(self, g, tangent=True, stress=None):
         """Internal residual r (n, 6) in body frames and, if asked, the tangent blocks: the
         material part G^T Dbar G per element, the geometric part per mesh edge and the nodal
-        1/2 adt(r) (module docstring)."""
+        1/2 adt(r) (module docstring).
+
+        stress: independent element stresses (m, 24) for the geometric part of the tangent (the
+        mixed iteration of Magisano, Leonetti and Garcea 2017: the edge blocks and 1/2 adt(r)
+        see the forces of these stresses); the residual stays Dbar (z(g) - z0)'s.  The
+        evaluation's ``stress`` is Dbar (z(g) - z0) (m, 24)."""
         mesh = self.mesh
         En = mesh.edge_nodes
         psi = edge_twists(g, En)
@@ -168,21 +216,18 @@ class DefaultElement(Element):
         f = np.einsum("mij,mj->mi", self.Dbar, dz)                      # dPi/dz_elem
         energy = 0.5 * np.einsum("mi,mi->", dz, f)
         sgn = mesh.elem_edge_sign
-        fe = (sgn[..., None] * f.reshape(-1, 4, 6))                    # conjugate to mesh-edge z
         nE = len(En)
-        F = np.stack([np.bincount(mesh.elem_edges.ravel(), weights=fe[..., k].ravel(), minlength=nE)
-                      for k in range(6)], -1)
-        # nodal residual: r_a = -1/2 L(-psi)^T F, r_b = 1/2 L(psi)^T F
-        ra = -0.5 * np.einsum("eji,ej->ei", Lm, F)
-        rb = 0.5 * np.einsum("eji,ej->ei", Lp, F)
-        n = mesh.n_nodes
-        r = np.stack([np.bincount(En[:, 0], weights=ra[:, k], minlength=n)
-                      + np.bincount(En[:, 1], weights=rb[:, k], minlength=n) for k in range(6)], -1)
+        F = self._edge_forces(f)                                       # conjugate to mesh-edge z
+        r = self._nodal_forces(F, Lp, Lm)
         # size of the terms that cancel in Dbar (z - z0): the residual's round-off floor
         fz = f + self.Dz0
         fscale = np.sqrt(np.einsum("mi,mi->", fz, fz) + np.einsum("mi,mi->", f, f))
         if not tangent:
-            return ElementEvaluation(energy, r, fscale)
+            return ElementEvaluation(energy, r, fscale, stress=f)
+        r_geo = r
+        if stress is not None:                 # mixed iteration: geometric part from the stresses
+            F = self._edge_forces(np.asarray(stress, float).reshape(-1, 24))
+            r_geo = self._nodal_forces(F, Lp, Lm)
         # blocks of CHUNK elements/edges (a loop over ~n/2048 blocks, not over elements)
         m_el = mesh.n_elements
         pos = sgn > 0
@@ -225,5 +270,5 @@ class DefaultElement(Element):
             KE[s:e] = H.reshape(c, 2, 6, 2, 6).transpose(0, 1, 3, 2, 4)
 
         # derivative of the left-trivialised gradient along exp updates
-        Kn = 0.5 * lie.adt(r)
-        return ElementEvaluation(energy, r, fscale, Ke, KE, Kn)
+        Kn = 0.5 * lie.adt(r_geo)
+        return ElementEvaluation(energy, r, fscale, Ke, KE, Kn, stress=f, linearization=(Lp, Lm, dz))

@@ -389,3 +389,20 @@ def ad_exp_minus(psi, Ad):
         for i in range(3):
             Ad[i + 3, j + 3] = Ad[i, j]
             Ad[i + 3, j] = 0.0
+
+
+@njit(cache=True)
+def retract(g, eta, out):
+    """out[i] = g[i] exp(eta[i]) for nodal frames g (n, 4, 4) and twists eta (n, 6): the
+    exponential update of a Newton iteration (the paper's Algorithm 1, g <- g exp(eta))."""
+    h = np.empty((4, 4))
+    for i in range(g.shape[0]):
+        exp_se3(eta[i], h)
+        for r in range(3):
+            for c in range(4):
+                acc = g[i, r, 3] if c == 3 else 0.0
+                for k in range(3):
+                    acc += g[i, r, k] * h[k, c]
+                out[i, r, c] = acc
+        out[i, 3, 0] = out[i, 3, 1] = out[i, 3, 2] = 0.0
+        out[i, 3, 3] = 1.0

@@ -192,19 +192,24 @@ class SuperLUSolver:
         # pivoting (SciPy's default) inflates it by 10x or more.  Accuracy is guarded by
         # checked_solve's refinement and backward-error test; COLAMD with partial pivoting is
         # the fallback when a pivot breaks down.
-        K = K.tocsc()
+        # The CSR arrays of K are the CSC arrays of K^T: factor K^T (no conversion) and solve
+        # with trans="T", i.e. K x = b.
+        if sp.isspmatrix_csr(K):
+            A, trans = sp.csc_matrix((K.data, K.indices, K.indptr), shape=K.shape[::-1]), "T"
+        else:
+            A, trans = K.tocsc(), "N"
         try:
-            lu = spla.splu(K, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+            lu = spla.splu(A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
                            options=dict(SymmetricMode=True))
-            x = lu.solve(np.ones(K.shape[0]))
+            x = lu.solve(np.ones(A.shape[0]), trans=trans)
             if not np.all(np.isfinite(x)):
                 raise RuntimeError("non-finite")
         except RuntimeError:
             try:
-                lu = spla.splu(K, permc_spec="COLAMD")
+                lu = spla.splu(A, permc_spec="COLAMD")
             except RuntimeError as exc:
                 raise SingularSystemError(f"tangent is singular ({exc})") from None
-        return _Factor(lambda b: _finite(lu.solve(b)))
+        return _Factor(lambda b: _finite(lu.solve(b, trans=trans)))
 
     def solve(self, K, b):
         with self.factor(K) as solve:

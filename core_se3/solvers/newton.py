@@ -145,7 +145,10 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
                         f"(> {MAX_PRESCRIBED_TURN:.3f}): the step is too large for the exponential update")
                 for it in range(opts.max_iter + 1):
                     ta = time.perf_counter()
-                    ev = problem.evaluate(g_try, lam_try, tangent=True)
+                    # after an increment below dtol the state has likely converged: check the
+                    # residual first and build the tangent only if it has not
+                    likely = it > 0 and dn <= opts.dtol
+                    ev = problem.evaluate(g_try, lam_try, tangent=not likely)
                     rf = ev.r
                     if not np.all(np.isfinite(rf)):
                         raise FloatingPointError("non-finite residual")
@@ -163,6 +166,9 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
                         reason = f"diverging (residual {rn:.2e})"
                         timer.t_asm += time.perf_counter() - ta
                         break
+                    if likely:
+                        ev = problem.evaluate(g_try, lam_try, tangent=True)
+                        rf = ev.r
                     timer.t_asm += time.perf_counter() - ta
                     ts = time.perf_counter()
                     try:
@@ -185,7 +191,7 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
                         k_step = scaled_norm(asm.scatter(rf), ell) ** 2 / work if work > 0 else -np.inf
                         pred = scaled_norm(eta, ell, moment=False)
                     dn = scaled_norm(eta, ell, moment=False) / ell
-                    g_try = g_try @ lie.exp(eta)
+                    g_try = problem.retract(g_try, eta)
                     if stateful:
                         problem.element.update(eta)
             except SingularSystemError as exc:

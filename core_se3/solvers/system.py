@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import lie
 from ..errors import CoreSE3Error
 from .convergence import relative_residual, scaled_norm
 from .linalg import make_solver
@@ -60,7 +59,7 @@ class ShellSystem:
         return self.problem.mesh.g0.copy()
 
     def update(self, g, x):
-        return g @ lie.exp(self.asm.scatter(x))
+        return self.problem.retract(g, self.asm.scatter(x))
 
     def load_direction(self, g, lam):
         """q = d f_ext / d lam at g (n, 6), by a difference in lam."""
