@@ -44,6 +44,17 @@ class Evaluation:
     nodal forces (n, 6), r = (r_int - f_ext) restricted to the free dofs; force_scale: the
     element's round-off scale of r_int; energy: the elastic energy; K: the tangent dr/d eta on
     the free dofs (CSR) when asked for.
+
+    Example
+    -------
+    At the reference state r_int = 0, so r = -f_ext on the free dofs:
+
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
+    >>> p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 1.0))
+    >>> ev = p.evaluate(p.mesh.g0, 1.0)
+    >>> float(ev.energy), ev.r.shape, round(float(-ev.r.sum()), 12), ev.K.shape
+    (0.0, (24,), 1.0, (24, 24))
     """
     r: np.ndarray
     r_int: np.ndarray
@@ -66,6 +77,13 @@ class Problem:
         A key of ``core_se3.fem.ELEMENTS`` ('default': exact edge twists; 'seed': the seed's).
     linear_solver : str
         'auto', 'superlu' or 'mumps' (see ``core_se3.solvers.linalg``).
+
+    Attributes
+    ----------
+    loads, supports : list
+        The Load objects and the Prescribed supports added so far; ``probes``: name -> Probe.
+    solve_defaults : dict
+        Options :meth:`solve` uses unless given (a scenario's [solver] settings).
 
     Example
     -------
