@@ -288,6 +288,8 @@ def path_steps(sysm, options, lam_end=1.0, control=None, control_end=None, lam_m
     point comes as a ``restart`` event; a finished start yields nothing, unless it stopped at a
     max_steps now raised), repeating the computations of the uninterrupted path bit for bit.
     ``info`` (a PathInfo) collects the log, the critical points and the timers.
+    Parameters: ``options`` an ArcLengthOptions, the others as above.  Yields: PathEvent; too
+    many rejections raise PathError (a ConvergenceError) with ``info``.
 
     Example
     -------
