@@ -24,6 +24,24 @@ def did_you_mean(name, choices):
     """``"; did you mean 'X'?"`` for the closest of ``choices`` to ``name``, else ``""``.
 
     Case differences count as close (``br`` suggests ``Br``).
+
+    Parameters
+    ----------
+    name : str
+        The name that was not found (converted with ``str``).
+    choices : iterable of str
+        The valid names.
+
+    Returns
+    -------
+    str
+        The hint, to append to an error message, or the empty string when nothing is close
+        (difflib's similarity ratio below 0.6, after case folding).
+
+    Example
+    -------
+    >>> did_you_mean("br", ["Br", "h"]), did_you_mean("zz", ["Br", "h"])
+    ("; did you mean 'Br'?", '')
     """
     choices = [str(c) for c in choices]
     name = str(name)
@@ -37,38 +55,159 @@ def did_you_mean(name, choices):
 
 
 class CoreSE3Error(Exception):
-    """Base class of all errors raised by core_se3."""
+    """Base class of all errors raised by core_se3.
+
+    Catch it to handle every failure of the package in one place; the subclasses name the cause
+    (input errors also derive from :class:`ValueError`).
+
+    Example
+    -------
+    >>> from core_se3 import CoreSE3Error, Material
+    >>> try:
+    ...     Material(E=1.0, nu=0.7, h=0.1)
+    ... except CoreSE3Error as exc:
+    ...     print(type(exc).__name__, isinstance(exc, ValueError))
+    MaterialError True
+    """
 
 
 class MaterialError(CoreSE3Error, ValueError):
-    """Invalid material parameters (E <= 0, nu outside (-1, 0.5), h <= 0, non-finite)."""
+    """Invalid material parameters (E <= 0, nu outside (-1, 0.5), h <= 0, non-finite).
+
+    Raised by :class:`~core_se3.Material` and :class:`~core_se3.RegionMaterial` when they are
+    built, and when a property that differs between regions is read as one number.  The message
+    names the parameter and the value; give a value in the stated range (or, for a
+    RegionMaterial, use ``per_element(name)``).
+
+    Example
+    -------
+    >>> from core_se3 import Material
+    >>> Material(E=1.0, nu=0.5, h=0.1)
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.MaterialError: Poisson's ratio nu must lie in (-1, 0.5), got 0.5
+    """
 
 
 class MeshError(CoreSE3Error, ValueError):
-    """Degenerate or inconsistent mesh (zero-area or inverted quads, bad connectivity, ...)."""
+    """Degenerate or inconsistent mesh (zero-area or inverted quads, bad connectivity, ...).
+
+    Raised when a :class:`~core_se3.mesh.Mesh` is built (frames not in SE(3), collapsed, clockwise
+    or non-convex quads, a non-manifold edge), by the generators and the file reader, and when a
+    node set or region name is unknown (with the closest name).  Fix the mesh or the name the
+    message gives.
+
+    Example
+    -------
+    >>> from core_se3 import mesh
+    >>> mesh.rectangle(1.0, 1.0, 2, 1).node_set("X1")
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.MeshError: unknown node set 'X1'; did you mean 'x1'?; node sets: ['x0', 'x1', 'y0', 'y1'], regions: []
+    """
 
 
 class LoadError(CoreSE3Error, ValueError):
-    """Invalid load specification (NaN or infinite values, unknown edge, bad direction)."""
+    """Invalid load specification (NaN or infinite values, unknown edge, bad direction).
+
+    Raised when a load, applied field or magnetisation is built (``Problem.add_*``, the Load and
+    Field classes): a value that is not finite, a key the load kind does not have (with the
+    closest one), a field that is not curl- and divergence-free.  Correct the value the message
+    names.
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
+    >>> p.add_load("edge_force", "x1", forc=(0.0, 0.0, 1.0))
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.LoadError: load kind 'edge_force' has no parameter 'forc'; did you mean 'force'?; its parameters: follower, force
+    """
 
 
 class SupportError(CoreSE3Error, ValueError):
-    """Invalid support specification (unknown edge or node, conflicting constraints)."""
+    """Invalid support specification (unknown edge or node, conflicting constraints).
+
+    Raised by ``Problem.clamp``, ``fix``, ``rotate_edge``, ``prescribe`` and the ``add_*_support``
+    methods for an empty selection, node ids that do not exist, a zero rotation axis or a free
+    direction that is not a body axis.  A support that leaves a rigid-body motion free is a
+    :class:`SingularSystemError` instead.
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
+    >>> p.clamp([])
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.SupportError: node selection [] is empty
+    """
 
 
 class OptionError(CoreSE3Error, ValueError):
     """An unknown name (element, load kind, field, linear solver, ...) or an invalid solver
-    option (steps < 1, non-finite load factors, ...)."""
+    option (steps < 1, non-finite load factors, ...).
+
+    Raised by the registries (with the closest registered name), by
+    :class:`~core_se3.NewtonOptions` / :class:`~core_se3.ArcLengthOptions` (a value outside its
+    range) and by the solvers (a keyword they do not take).  Use a name or value the message
+    lists.
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01), element="defualt")
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.OptionError: unknown element 'defualt'; did you mean 'default'?; registered: default, seed
+    """
 
 
 class SingularSystemError(CoreSE3Error):
-    """The tangent is singular: usually a missing support (rigid-body motion left free)."""
+    """The tangent is singular: usually a missing support (rigid-body motion left free).
+
+    Raised before solving by ``Problem.check_supports`` (naming the free translation or the axis
+    of the free rotation), and by the linear solvers when a factorisation breaks down or its
+    backward error or solution growth shows a (near-)singular tangent.  Add supports; if it
+    appears only late on a load path, the state is at or near a critical point (use arc length).
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01)).check_supports()
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.SingularSystemError: no supports: the shell can move as a rigid body; clamp or fix some nodes
+    """
 
 
 class ConvergenceError(CoreSE3Error):
     """Newton failed even after the allowed step cut-backs.
 
-    ``result`` keeps every load step that converged before the failure.
+    ``result`` keeps every load step that converged before the failure.  Raised by
+    ``newton_solve`` (also when load control has snapped past a limit point: the message then
+    suggests arc length), ``arc_length`` and ``displacement_control``.  Use smaller steps, more
+    cut-backs or iterations, or a path-following control; ``result`` can be plotted or written
+    as it is.
+
+    Parameters
+    ----------
+    message : str
+        The cause: the load factor reached, the reason of the last failed try, a hint.
+    result : core_se3.Result, optional
+        The steps that converged (None if there is none to keep).
+
+    Example
+    -------
+    >>> from core_se3 import ConvergenceError, Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(10.0, 1.0, 4, 1), Material(1.2e6, 0.0, 0.1))
+    >>> p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 4.0))
+    >>> try:
+    ...     p.solve(steps=1, max_iter=2, max_cutbacks=0)     # a large step, two iterations
+    ... except ConvergenceError as exc:
+    ...     print(len(exc.result.steps), exc.result.final.load_factor)
+    1 0.0
     """
 
     def __init__(self, message, result=None):
@@ -77,12 +216,52 @@ class ConvergenceError(CoreSE3Error):
 
 
 class ElementTooDistortedError(CoreSE3Error):
-    """A relative rotation across an element edge reached pi, where the logarithm is cut."""
+    """A relative rotation across an element edge reached pi, where the logarithm is cut.
+
+    Raised by the default element when an edge turns by more than ``MAX_EDGE_ANGLE`` (0.97 pi),
+    by a prescribed motion that turns nodes by more than 0.9 pi within one step, and by a
+    ``RotationComponentSpring`` whose node has turned by nearly pi.  The solvers treat it as a
+    failed try and cut the step back; if it persists, refine the mesh (or the load step).
+
+    Example
+    -------
+    >>> from core_se3 import mesh, lie
+    >>> from core_se3.fem import edge_twists
+    >>> m = mesh.rectangle(1.0, 1.0, 1, 1)
+    >>> g = m.g0.copy(); g[1, :3, :3] = lie.exp_so3([0.0, 0.0, 3.1])     # node 1 turned by 3.1 rad
+    >>> edge_twists(g, m.edge_nodes)
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.ElementTooDistortedError: edge [0, 1] turns by 3.100 rad (>= 3.047); the relative rotation across an element must stay below pi: refine the mesh or the load step
+    """
 
 
 class ScenarioError(CoreSE3Error, ValueError):
     """An invalid scenario file: ``file`` and dotted ``key`` name where, the message what was
-    expected and what was found."""
+    expected and what was found.
+
+    Raised by ``scenario.load``, ``loads`` and ``from_dict`` (and by ``Scenario.with_overrides``)
+    before anything is solved; ``detail`` is the message without the location.  Edit the key the
+    message names.
+
+    Parameters
+    ----------
+    message : str
+        What was expected and what was found.
+    file : str, optional
+        The scenario file (``"<string>"`` for text, ``"<dict>"`` for a dict).
+    key : str, optional
+        The dotted key, e.g. ``loads[2].force``.
+
+    Example
+    -------
+    >>> from core_se3 import scenario, ScenarioError
+    >>> try:
+    ...     scenario.from_dict({"mesh": {"generator": "rectangle"}})
+    ... except ScenarioError as exc:
+    ...     print(exc.file, exc.key, "|", exc)
+    <dict> material | <dict>: [material]: missing required key
+    """
 
     def __init__(self, message, file=None, key=None):
         self.file = file
@@ -93,4 +272,19 @@ class ScenarioError(CoreSE3Error, ValueError):
 
 
 class CheckpointError(CoreSE3Error):
-    """A checkpoint that is missing, unreadable or belongs to another scenario."""
+    """A checkpoint that is missing, unreadable or belongs to another scenario.
+
+    Raised by ``scenario.run`` (``core-se3 run``): ``--resume`` without a checkpoint, a checkpoint
+    of a changed scenario (its fingerprint differs) or of another control, or a new run into a
+    directory that holds one.  Run without ``--resume`` (with ``--force`` to start over) or use
+    another output directory.
+
+    Example
+    -------
+    >>> import tempfile
+    >>> from core_se3.io import Checkpoint
+    >>> Checkpoint(tempfile.mkdtemp()).load()      # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.CheckpointError: no checkpoint to resume from: ...checkpoint.npz does not exist (run without --resume first)
+    """

@@ -18,6 +18,9 @@ correct *at* pi, where the axis sign is a free choice); ``dexp_inv`` is singular
 All coefficient functions switch to Taylor series in theta^2 below ``_SERIES`` so that they are
 accurate to round-off near theta = 0 and stay complex-analytic (the element uses complex-step
 differentiation of ``dexp_inv``).
+
+Units: translational parts (v, positions) in the model's length unit, rotations in radians.
+The examples run in this module's namespace (``from core_se3.lie import *``, NumPy as ``np``).
 """
 from __future__ import annotations
 
@@ -65,7 +68,13 @@ def _coef(s, series, closed):
 
 
 def hat3(w):
-    """(..., 3) -> (..., 3, 3) skew matrix with hat3(w) @ y = w x y."""
+    """(..., 3) -> (..., 3, 3) skew matrix with hat3(w) @ y = w x y.
+
+    Example
+    -------
+    >>> hat3([1.0, 2.0, 3.0]).tolist()
+    [[0.0, -3.0, 2.0], [3.0, 0.0, -1.0], [-2.0, 1.0, 0.0]]
+    """
     w = np.asarray(w)
     z = np.zeros_like(w[..., 0])
     return np.stack([
@@ -75,13 +84,25 @@ def hat3(w):
 
 
 def vee3(W):
-    """(..., 3, 3) skew matrix -> (..., 3) vector (uses the skew part of W)."""
+    """(..., 3, 3) skew matrix -> (..., 3) vector (uses the skew part of W).
+
+    Example
+    -------
+    >>> vee3(hat3([1.0, 2.0, 3.0])).tolist()
+    [1.0, 2.0, 3.0]
+    """
     return 0.5 * np.stack([W[..., 2, 1] - W[..., 1, 2], W[..., 0, 2] - W[..., 2, 0],
                            W[..., 1, 0] - W[..., 0, 1]], -1)
 
 
 def hat(xi):
-    """(..., 6) twist (v, w) -> (..., 4, 4) element of se(3) (seed eq. E5-11)."""
+    """(..., 6) twist (v, w) -> (..., 4, 4) element of se(3) (seed eq. E5-11).
+
+    Example
+    -------
+    >>> (hat([1.0, 2.0, 3.0, 0.0, 0.0, 0.5]) + 0.0).tolist()
+    [[0.0, -0.5, 0.0, 1.0], [0.5, 0.0, 0.0, 2.0], [0.0, 0.0, 0.0, 3.0], [0.0, 0.0, 0.0, 0.0]]
+    """
     xi = np.asarray(xi)
     out = np.zeros(xi.shape[:-1] + (4, 4), dtype=xi.dtype)
     out[..., :3, :3] = hat3(xi[..., 3:])
@@ -90,12 +111,26 @@ def hat(xi):
 
 
 def vee(X):
-    """(..., 4, 4) element of se(3) -> (..., 6) twist (v, w) (seed eq. E6)."""
+    """(..., 4, 4) element of se(3) -> (..., 6) twist (v, w) (seed eq. E6).
+
+    Example
+    -------
+    >>> vee(hat([1.0, 2.0, 3.0, 0.1, 0.2, 0.3])).tolist()
+    [1.0, 2.0, 3.0, 0.1, 0.2, 0.3]
+    """
     return np.concatenate([X[..., :3, 3], vee3(X[..., :3, :3])], -1)
 
 
 def exp_so3(w):
-    """Rodrigues: exp(hat3(w)) = I + sin(t)/t W + (1-cos t)/t^2 W^2, t = |w|."""
+    """Rodrigues: exp(hat3(w)) = I + sin(t)/t W + (1-cos t)/t^2 W^2, t = |w|.
+
+    Parameters: w (..., 3) rotation vector [rad].  Returns: (..., 3, 3) rotation matrix.
+
+    Example
+    -------
+    >>> (exp_so3([0.0, 0.0, np.pi / 2]).round(12) + 0.0).tolist()      # quarter turn about z
+    [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]
+    """
     w = np.asarray(w)
     s = np.einsum("...i,...i->...", w, w)
     W = hat3(w)
@@ -124,6 +159,13 @@ def log_so3(R):
 
     Uses the skew part of R away from pi and the symmetric part near pi, where the skew part
     carries no information on the axis; at exactly pi the axis sign is a free choice.
+
+    Parameters: R (..., 3, 3) rotation matrices.  Returns: (..., 3) rotation vectors [rad].
+
+    Example
+    -------
+    >>> log_so3(exp_so3([0.3, -0.2, 0.1])).round(12).tolist(), log_so3(exp_so3([0.0, 0.0, np.pi])).tolist()
+    ([0.3, -0.2, 0.1], [0.0, 0.0, 3.141592653589793])
     """
     R = np.asarray(R, dtype=float)
     sinv = vee3(R)                                         # sin(t) n
@@ -147,7 +189,17 @@ def log_so3(R):
 
 
 def dexp_so3(w):
-    """Right Jacobian J_r(w) = I - (1-cos t)/t^2 W + (t - sin t)/t^3 W^2 = dexp restricted to SO(3)."""
+    """Right Jacobian J_r(w) = I - (1-cos t)/t^2 W + (t - sin t)/t^3 W^2 = dexp restricted to SO(3).
+
+    Parameters: w (..., 3) rotation vector [rad].  Returns: (..., 3, 3) J_r(w), with
+    exp_so3(w + dw) = exp_so3(w) exp_so3(J_r(w) dw) to first order in dw.
+
+    Example
+    -------
+    >>> w, dw = np.array([0.4, 0.5, -0.6]), 1e-7 * np.array([-4.0, 5.0, 6.0])
+    >>> np.allclose(exp_so3(w + dw), exp_so3(w) @ exp_so3(dexp_so3(w) @ dw), rtol=0, atol=1e-12)
+    True
+    """
     w = np.asarray(w)
     s = np.einsum("...i,...i->...", w, w)
     W = hat3(w)
@@ -166,7 +218,16 @@ def _dc_closed(s, t):
 
 
 def dexp_inv_so3(w):
-    """Inverse right Jacobian J_r^-1(w) = I + W/2 + c(t) W^2, c = (1 - t/2 cot(t/2))/t^2."""
+    """Inverse right Jacobian J_r^-1(w) = I + W/2 + c(t) W^2, c = (1 - t/2 cot(t/2))/t^2.
+
+    Parameters: w (..., 3) rotation vector [rad], |w| != 2 pi n.  Returns: (..., 3, 3) J_r^-1(w).
+
+    Example
+    -------
+    >>> w = np.array([0.4, 0.5, -0.6])
+    >>> np.allclose(dexp_inv_so3(w) @ dexp_so3(w), np.eye(3), rtol=0, atol=1e-14)
+    True
+    """
     w = np.asarray(w)
     s = np.einsum("...i,...i->...", w, w)
     W = hat3(w)
@@ -175,7 +236,14 @@ def dexp_inv_so3(w):
 
 
 def exp(xi):
-    """exp: se(3) -> SE(3), (..., 6) -> (..., 4, 4) (seed eq. E6-1)."""
+    """exp: se(3) -> SE(3), (..., 6) -> (..., 4, 4) (seed eq. E6-1).
+
+    Example
+    -------
+    >>> g = exp([0.0, -np.pi, 0.0, 0.0, 0.0, np.pi])   # half turn about the z axis through (1, 0, 0)
+    >>> (g[:3, 3].round(12) + 0.0).tolist()               # carries the origin to (2, 0, 0)
+    [2.0, 0.0, 0.0]
+    """
     xi = np.asarray(xi, dtype=float)
     v, w = xi[..., :3], xi[..., 3:]
     out = np.zeros(xi.shape[:-1] + (4, 4))
@@ -187,7 +255,14 @@ def exp(xi):
 
 
 def log(g):
-    """log: SE(3) -> se(3), (..., 4, 4) -> (..., 6) with rotation angle <= pi."""
+    """log: SE(3) -> se(3), (..., 4, 4) -> (..., 6) with rotation angle <= pi.
+
+    Example
+    -------
+    >>> g = np.eye(4); g[:3, :3] = exp_so3([0.0, 0.0, np.pi / 2]); g[:3, 3] = (1.0, -1.0, 0.0)
+    >>> (log(g) / (np.pi / 2)).round(12).tolist()   # quarter turn about z through (1, 0, 0): v = -w x q
+    [0.0, -1.0, 0.0, 0.0, 0.0, 1.0]
+    """
     g = np.asarray(g, dtype=float)
     w = log_so3(g[..., :3, :3])
     Jl_inv = np.swapaxes(dexp_inv_so3(w), -1, -2)  # J_l^-1 = J_r^-T
@@ -196,7 +271,14 @@ def log(g):
 
 
 def inv(g):
-    """Group inverse of (..., 4, 4) SE(3) matrices, [R^T, -R^T p]."""
+    """Group inverse of (..., 4, 4) SE(3) matrices, [R^T, -R^T p].
+
+    Example
+    -------
+    >>> g = exp([1.0, 2.0, 3.0, 0.1, 0.2, 0.3])
+    >>> np.allclose(inv(g) @ g, np.eye(4), rtol=0, atol=1e-14)
+    True
+    """
     g = np.asarray(g)
     out = np.zeros_like(g)
     Rt = np.swapaxes(g[..., :3, :3], -1, -2)
@@ -207,7 +289,16 @@ def inv(g):
 
 
 def compose(g, h):
-    """Group product g h (batched matrix product)."""
+    """Group product g h (batched matrix product).
+
+    Parameters: g, h (..., 4, 4) frames (broadcast).  Returns: (..., 4, 4) g h.
+
+    Example
+    -------
+    >>> a, b = [0.0, 0.0, 1.0, 0.0, 0.0, 0.5], [0.0, 0.0, 2.0, 0.0, 0.0, 0.25]   # one screw axis
+    >>> np.allclose(compose(exp(a), exp(b)), exp(np.add(a, b)), rtol=0, atol=1e-14)
+    True
+    """
     return np.asarray(g) @ np.asarray(h)
 
 
@@ -226,6 +317,12 @@ def dexp(xi):
 
     Block form [[J_r(w), D J_r(w)[v]], [0, J_r(w)]]: the off-diagonal block of an analytic
     function of the block-triangular ad_xi is the directional derivative of that function.
+
+    Example
+    -------
+    >>> xi, d = np.array([0.1, -0.2, 0.3, 0.4, 0.5, -0.6]), 1e-7 * np.array([1.0, -2, 3, -4, 5, 6])
+    >>> np.allclose(exp(xi + d), exp(xi) @ exp(dexp(xi) @ d), rtol=0, atol=1e-12)
+    True
     """
     xi = np.asarray(xi)
     v, w = xi[..., :3], xi[..., 3:]
@@ -244,7 +341,16 @@ def dexp(xi):
 
 
 def dexp_inv(xi):
-    """Inverse of dexp: ``dxi = dexp_inv(xi) (exp(-xi) d exp(xi))^vee``; singular at |w| = 2 pi n."""
+    """Inverse of dexp: ``dxi = dexp_inv(xi) (exp(-xi) d exp(xi))^vee``; singular at |w| = 2 pi n.
+
+    Parameters: xi (..., 6) twist, |w| != 2 pi n.  Returns: (..., 6, 6) dexp(xi)^-1 (closed form).
+
+    Example
+    -------
+    >>> xi = np.array([0.1, -0.2, 0.3, 0.4, 0.5, -0.6])
+    >>> np.allclose(dexp_inv(xi) @ dexp(xi), np.eye(6), rtol=0, atol=1e-14)
+    True
+    """
     xi = np.asarray(xi)
     v, w = xi[..., :3], xi[..., 3:]
     s = np.einsum("...i,...i->...", w, w)
@@ -263,6 +369,14 @@ def dexp_inv_T_apply(xi, f):
 
     with L = [[A, B], [0, A]], A^T f = f - w x f / 2 + c w x (w x f),
     B^T f = -v x f / 2 + c'(w.v)/t w x (w x f) + c [w x (v x f) + v x (w x f)].
+
+    Parameters: xi (..., 6) twists, f (..., 6) wrenches (arrays, real or complex).  Returns: (..., 6).
+
+    Example
+    -------
+    >>> xi, f = np.array([0.1, -0.2, 0.3, 0.4, 0.5, -0.6]), np.array([1.0, 2, 3, 4, 5, 6])
+    >>> np.allclose(dexp_inv_T_apply(xi, f), dexp_inv(xi).T @ f, rtol=0, atol=1e-13)
+    True
     """
     v, w = xi[..., :3], xi[..., 3:]
     fv, fw = f[..., :3], f[..., 3:]
@@ -280,27 +394,60 @@ def dexp_inv_T_apply(xi, f):
 
 def cross(a, b):
     """Cross product a x b over the last axis that keeps a complex dtype and broadcasts (faster
-    than np.cross on small batches)."""
+    than np.cross on small batches).
+
+    Parameters: a, b (..., 3) arrays (not lists).  Returns: (..., 3) a x b.
+
+    Example
+    -------
+    >>> cross(np.array([1.0, 0.0, 0.0]), np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 2.0]])).tolist()
+    [[0.0, 0.0, 1.0], [0.0, -2.0, 0.0]]
+    """
     a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
     b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
     return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], -1)
 
 
 def Ad(g):
-    """Adjoint Ad_g = [[R, hat(p) R], [0, R]] (seed eq. E6-2), (..., 4, 4) -> (..., 6, 6)."""
+    """Adjoint Ad_g = [[R, hat(p) R], [0, R]] (seed eq. E6-2), (..., 4, 4) -> (..., 6, 6).
+
+    Example
+    -------
+    >>> g, xi = exp([1.0, 2.0, 3.0, 0.1, 0.2, 0.3]), np.array([0.5, -1.0, 0.2, 0.3, 0.0, -0.4])
+    >>> np.allclose(Ad(g) @ xi, vee(g @ hat(xi) @ inv(g)), rtol=0, atol=1e-14)
+    True
+    """
     g = np.asarray(g)
     R = g[..., :3, :3]
     return _block(R, hat3(g[..., :3, 3]) @ R)
 
 
 def ad(xi):
-    """ad_xi = [[hat(w), hat(v)], [0, hat(w)]] (seed eq. E6-2s); ad_xi eta = [xi, eta]^vee."""
+    """ad_xi = [[hat(w), hat(v)], [0, hat(w)]] (seed eq. E6-2s); ad_xi eta = [xi, eta]^vee.
+
+    Parameters: xi (..., 6) twists.  Returns: (..., 6, 6) ad_xi.
+
+    Example
+    -------
+    >>> a, b = np.array([1.0, 2.0, 3.0, 0.1, 0.2, 0.3]), np.array([0.5, -1.0, 0.2, 0.3, 0.0, -0.4])
+    >>> np.allclose(ad(a) @ b, vee(hat(a) @ hat(b) - hat(b) @ hat(a)), rtol=0, atol=1e-14)
+    True
+    """
     xi = np.asarray(xi)
     return _block(hat3(xi[..., 3:]), hat3(xi[..., :3]))
 
 
 def adt(gamma):
-    """ad-tilde of a wrench gamma = (n, m): adt(gamma) xi = ad(xi)^T gamma (seed eq. E6-2ss)."""
+    """ad-tilde of a wrench gamma = (n, m): adt(gamma) xi = ad(xi)^T gamma (seed eq. E6-2ss).
+
+    Parameters: gamma (..., 6) wrenches (force n, moment m).  Returns: (..., 6, 6) adt(gamma).
+
+    Example
+    -------
+    >>> f, xi = np.array([1.0, 2.0, 3.0, 4.0, 5.0, 6.0]), np.array([0.5, -1.0, 0.2, 0.3, 0.0, -0.4])
+    >>> np.allclose(adt(f) @ xi, ad(xi).T @ f, rtol=0, atol=1e-14)
+    True
+    """
     gamma = np.asarray(gamma)
     N, M = hat3(gamma[..., :3]), hat3(gamma[..., 3:])
     out = np.zeros(gamma.shape[:-1] + (6, 6), dtype=gamma.dtype)

@@ -38,7 +38,17 @@ def case_mesh(case, p, nx, ny):
 
 
 def build_problem(case, p, mesh=None, element="default", linear_solver="auto"):
-    """The Problem of a generic case at parameters p on an (nx, ny) mesh (default the case's)."""
+    """The Problem of a generic case at parameters p on an (nx, ny) mesh (default the case's).
+
+    Parameters: case (a strip, arch or semi-cylinder Case), p (parameters), mesh ((nx, ny)),
+    element, linear_solver.  Returns: Problem (supports, loads, probe ``tip`` on ``x1``).
+
+    Example
+    -------
+    >>> case = get_case("arch-follower")
+    >>> build_problem(case, case.params, (8, 1)).mesh.n_elements
+    8
+    """
     nx, ny = mesh or case.mesh
     m = case_mesh(case, p, nx, ny)
     prob = Problem(m, Material(p["E"], p["nu"], p["h"], drilling=p.get("drilling", 1.0)),
@@ -61,7 +71,18 @@ def build_problem(case, p, mesh=None, element="default", linear_solver="auto"):
 
 
 def reference_for(case, p):
-    """(entry name, block, ref) with ref = dict(load, u, v, theta) in case units, or None."""
+    """(entry name, block, ref) with ref = dict(load, u, v, theta) in case units, or None.
+
+    Parameters: case, p (its parameters; variants apply).  Returns: as above (u, v scaled by
+    ``Reference.length``).
+
+    Example
+    -------
+    >>> case = get_case("cantilever-shear")
+    >>> entry, block, ref = reference_for(case, case.params)
+    >>> entry, block, sorted(ref), ref["load"][:3].tolist()
+    ('1_cantilever_tip_force_kirchhoff', 'tip', ['load', 'theta', 'u', 'v'], [0.0, 0.25, 0.5])
+    """
     _, ref = resolve(case, p)
     if ref is None:
         return None
@@ -73,14 +94,43 @@ def reference_for(case, p):
 
 
 def planar(case, u):
-    """Map computed probe displacements (..., 3) = (ux, uy, uz) onto the reference plane (u, v)."""
+    """Map computed probe displacements (..., 3) = (ux, uy, uz) onto the reference plane (u, v).
+
+    Parameters: case (``extra["plane"]`` 'xy', else the x-z plane), u (..., 3).  Returns: (..., 2).
+
+    Example
+    -------
+    >>> planar(get_case("cantilever-shear"), [1.0, 2.0, 3.0]).tolist()       # x-z plane: (ux, uz)
+    [1.0, 3.0]
+    """
     u = np.asarray(u, float)
     return u[..., [0, 1]] if case.extra.get("plane") == "xy" else u[..., [0, 2]]
 
 
 def case_document(case, p, prob, res, reference_case=None):
     """The result document of a catalogue run: steps with the reported load, the error against
-    the case's reference (``reference_case`` overrides the case's Reference, e.g. a family's)."""
+    the case's reference (``reference_case`` overrides the case's Reference, e.g. a family's).
+
+    Parameters
+    ----------
+    case : Case
+        The case; ``p`` its parameters; ``prob`` the Problem; ``res`` the Result of its solve.
+    reference_case : Case, optional
+        The case whose Reference to measure against.
+
+    Returns
+    -------
+    dict
+        Schema core-se3-result v1; each step has ``error``, the document ``reference``.
+
+    Example
+    -------
+    >>> case = get_case("cantilever-shear")
+    >>> prob = build_problem(case, case.params, (4, 1))
+    >>> doc = case_document(case, case.params, prob, prob.solve(steps=2))
+    >>> [s["load"]["value"] for s in doc["steps"]], doc["reference"]["error"] < 0.02
+    ([0.0, 2.0, 4.0], True)
+    """
     rc = reference_case or case
     ref = reference_for(rc, p)
     axis = np.array([0.0, 0.0, 1.0]) if case.extra.get("plane") == "xy" else np.array([0.0, -1.0, 0.0])
@@ -106,8 +156,35 @@ def case_document(case, p, prob, res, reference_case=None):
 
 
 def edge_wrench(prob, g, edge, point):
-    """Lab force and moment about ``point`` that the shell exerts on the supports of ``edge``
-    (internal forces at the edge nodes, i.e. minus the reactions)."""
+    """Lab force and moment about ``point`` that the supports of ``edge`` exert on the shell (the
+    reactions: the internal forces r_int at the edge nodes, where no load acts).
+
+    Parameters
+    ----------
+    prob : core_se3.Problem
+        The problem; ``g`` (n, 4, 4) a converged state.
+    edge : str
+        The supported node set.
+    point : (3,) array
+        The moment's reference point [length].
+
+    Returns
+    -------
+    (3,) ndarray, (3,) ndarray
+        Force [force] and moment [force x length].
+
+    Example
+    -------
+    A tip force 0.01 along z: the clamp holds the strip with -0.01 and the moment 0.1 about y.
+
+    >>> import numpy as np
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(10.0, 1.0, 4, 1), Material(1.2e6, 0.0, 0.1))
+    >>> p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 0.01))
+    >>> n, m = edge_wrench(p, p.solve(steps=1).final.g, "x0", np.zeros(3))
+    >>> (n.round(9) + 0.0).tolist(), (m.round(5) + 0.0).tolist()
+    ([0.0, 0.0, -0.01], [0.0, 0.1, 0.0])
+    """
     ev = prob.element.evaluate(g, tangent=False)
     nodes = prob.mesh.node_set(edge)
     R = g[nodes, :3, :3]
@@ -117,7 +194,30 @@ def edge_wrench(prob, g, edge, point):
 
 
 def torsion_constant(p, mesh, element="default", angle=1e-4):
-    """Small-twist torsion constant J = T L / (G angle) of the ``torsion`` case's strip."""
+    """Small-twist torsion constant J = T L / (G angle) of the ``torsion`` case's strip.
+
+    Parameters
+    ----------
+    p : dict
+        The torsion case's parameters (E, nu, h, L, width, ...).
+    mesh : (int, int)
+        (nx, ny) elements.
+    element : str, optional
+        The element; ``angle``: the end twist [rad] of the linear solve.
+
+    Returns
+    -------
+    float
+        J [length^4] (T: the torque at the twisted end).
+
+    Example
+    -------
+    Between the Mindlin (6.41e-5) and thin-plate (w h^3 / 3 = 8.33e-5) values, as in the README:
+
+    >>> J = torsion_constant(get_case("torsion").params, (4, 2))
+    >>> bool(6.41e-5 < J < 8.33e-5)
+    True
+    """
     case = get_case("torsion")
     q = dict(p, angle=angle)
     prob = build_problem(case, q, mesh, element)

@@ -26,6 +26,8 @@ def path_distance(d, e, scale=None):
     d, e: (n, m) arrays of probe displacements at the same load levels; scale defaults to
     max(max_k |e_k|, max_k |d_k|) (the largest displacement on either path).
 
+    Returns: (float, (n,) ndarray); ValueError for paths of different shapes or a zero scale.
+
     Example
     -------
     >>> round(path_distance([[1.0, 0.0], [2.0, 0.0]], [[1.0, 0.0], [2.0, 0.1]], scale=2.0)[0], 12)
@@ -45,6 +47,9 @@ def path_distance(d, e, scale=None):
 def interp_reference(load, ref_load, ref_values):
     """Reference values at the given loads: cubic spline (not-a-knot) in the load through the
     tabulated points, per component.  ref_values: (n_ref, m).  Loads outside the table -> nan.
+
+    Parameters: load (k,), ref_load (n_ref,) (sorted here; repeats dropped), ref_values
+    (n_ref, m).  Returns: (k, m) ndarray.
 
     Example
     -------
@@ -72,6 +77,13 @@ def error_against_reference(loads_ref_axis, disps, ref):
     loads_ref_axis: the computed load levels on the reference's load axis; disps: (k, 2) the
     computed probe displacements in the reference plane; ref: dict(load, u, v) in case units.
     Returns (error, load at the worst point, per-step errors (NaN outside the table)).
+
+    Example
+    -------
+    >>> ref = dict(load=[0.0, 1.0, 2.0], u=[0.0, 1.0, 2.0], v=[0.0, 0.0, 0.0])
+    >>> err, at, errs = error_against_reference([0.0, 1.0, 2.0], [[0, 0], [1.0, 0.0], [2.0, 0.1]], ref)
+    >>> round(err, 12), at, errs.round(12).tolist()          # 0.1 off at the largest reference, 2
+    (0.05, 2.0, [0.0, 0.0, 0.05])
     """
     L = np.asarray(ref["load"], float)
     order = np.argsort(L)
@@ -117,6 +129,8 @@ def errors_at_table_loads(loads_ref_axis, disps, angles, ref, tol=1e-9):
 
 def point_curve_distances(points, curve):
     """Distance of each point (k, 2) to the polyline ``curve`` (m, 2).
+
+    Parameters: points (k, 2), curve (m, 2) (one point: the distance to it).  Returns: (k,).
 
     Example
     -------

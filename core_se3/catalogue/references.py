@@ -78,7 +78,15 @@ def _parse_literals(value: Any) -> Any:
 
 
 def elastica_names() -> list[str]:
-    """Names of the elastica cases (all keys except ``_meta``)."""
+    """Names of the elastica cases (all keys except ``_meta``).
+
+    Returns: list of str, in file order.
+
+    Example
+    -------
+    >>> "1_cantilever_tip_force_kirchhoff" in elastica_names()
+    True
+    """
     return [k for k in _elastica_raw() if not k.startswith("_")]
 
 
@@ -86,6 +94,8 @@ def elastica_entry(name: str) -> dict:
     """One elastica case as a dict, with literal-valued strings parsed into dicts/lists/numbers.
 
     Raises ``KeyError`` listing the available names if ``name`` is unknown.
+
+    Parameters: name (str).  Returns: dict (a copy: safe to modify).
 
     Example
     -------
@@ -102,7 +112,15 @@ def elastica_entry(name: str) -> dict:
 
 
 def literature_ids() -> list[str]:
-    """Ids of the benchmarks in ``literature.json``."""
+    """Ids of the benchmarks in ``literature.json``.
+
+    Returns: list of str, in file order.
+
+    Example
+    -------
+    >>> literature_ids()[0]
+    'sze3.1_cantilever_end_shear'
+    """
     return [b["id"] for b in _literature_raw()["benchmarks"]]
 
 
@@ -110,6 +128,15 @@ def literature_entry(benchmark_id: str) -> dict:
     """One ``literature.json`` benchmark (by its ``id``), literal-valued strings parsed.
 
     Raises ``KeyError`` listing the available ids if ``benchmark_id`` is unknown.
+
+    Parameters: benchmark_id (str).  Returns: dict (a copy) with ``title``, ``columns``, the
+    table columns (``P_over_Pmax``, ...), sources and parameters.
+
+    Example
+    -------
+    >>> e = literature_entry("sze3.1_cantilever_end_shear")
+    >>> e["columns"][0], e["P_over_Pmax"][0], e["P_over_Pmax"][-1]
+    ('P_over_Pmax', 0.0, 1.0)
     """
     for b in _literature_raw()["benchmarks"]:
         if b.get("id") == benchmark_id:

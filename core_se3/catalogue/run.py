@@ -12,7 +12,29 @@ __all__ = ["run_case", "build_problem"]
 
 
 def build_problem(case, p, mesh=None, element="default", linear_solver="auto"):
-    """The Problem of a case at parameters p (its family's builder, or the generic one)."""
+    """The Problem of a case at parameters p (its family's builder, or the generic one).
+
+    Parameters
+    ----------
+    case : Case
+        The case; ``p``: its parameters (:func:`case_params`).
+    mesh : (int, int), optional
+        (nx, ny) elements (default the case's).
+    element, linear_solver : str, optional
+        As for :class:`~core_se3.Problem`.
+
+    Returns
+    -------
+    core_se3.Problem
+        With the case's supports, loads (at lam = 1) and probe.
+
+    Example
+    -------
+    >>> case = get_case("cantilever-shear")
+    >>> prob = build_problem(case, case_params(case), mesh=(4, 1))
+    >>> prob.mesh.n_elements, sorted(prob.probes), len(prob.loads)
+    (4, ['tip'], 1)
+    """
     fam = family_of(case)
     if fam is not None:
         return fam.build(case, p, mesh, element, linear_solver)
@@ -25,6 +47,19 @@ def run_case(name, mesh=None, overrides=None, steps=None, element="default", lin
 
     mesh: (nx, ny) elements (default the case's); overrides: case parameters to change
     (``--set``); steps: load steps (default the case's); solve_kw: solver options.
+
+    Parameters
+    ----------
+    name : str
+        The case.
+    mesh, overrides, steps, element, linear_solver, **solve_kw
+        As above.
+
+    Returns
+    -------
+    (dict, core_se3.Result, core_se3.Problem)
+        The document carries ``reference`` = dict(entry, block, error, ...) for cases with a
+        reference.
 
     Example
     -------

@@ -39,9 +39,38 @@ class ElementEvaluation:
 
     energy: the elastic energy [force x length]; r: (n, 6) internal nodal forces (body frames);
     force_scale: the size of the terms that cancel in r (its round-off floor, used by the
-    convergence test); the blocks as in the module docstring (None = none of that shape);
-    stress: the element's stress variables at this state (a mixed element, see
-    :attr:`Element.mixed`), linearization: what its ``linear_stress`` needs from this state.
+    convergence test); the blocks as in the module docstring (None = none of that shape).
+
+    Attributes
+    ----------
+    energy : float
+        Elastic energy [force x length].
+    r : (n, 6) ndarray
+        Internal generalised nodal forces dPi/d eta_i: force [force] and moment [force x length]
+        in each node's body frame.
+    force_scale : float
+        Size of the terms that cancel in r [force] (round-off floor of the residual).
+    element_blocks : (m, 4, 4, 6, 6) ndarray or None
+        Tangent blocks of the node pairs of each quad.
+    edge_blocks : (E, 2, 2, 6, 6) ndarray or None
+        Tangent blocks of the node pairs of each mesh edge.
+    node_blocks : (n, 6, 6) ndarray or None
+        Tangent blocks of single nodes.
+    stress : ndarray or None
+        The element's stress variables at this state (a mixed element, see :attr:`Element.mixed`;
+        the default element: Dbar (z - z0) (m, 24)).
+    linearization : object
+        What a mixed element's ``linear_stress`` needs from this state.
+
+    Example
+    -------
+    >>> from core_se3 import mesh, Material, fem
+    >>> m = mesh.rectangle(1.0, 1.0, 2, 1)
+    >>> el = fem.make_element("default", m, Material(1.0e3, 0.0, 0.01))
+    >>> g = m.g0.copy(); g[:, 0, 3] *= 1.01              # uniform stretch, strain 0.01
+    >>> ev = el.evaluate(g, tangent=False)
+    >>> round(float(ev.energy), 12), ev.element_blocks    # 1/2 E h eps^2 x area 1
+    (0.0005, None)
     """
     energy: float
     r: np.ndarray
@@ -60,6 +89,34 @@ class Element(abc.ABC):
     whose strain is a state updated by the increments (``stateful = True``, e.g. the seed's
     incremental twist) implements :meth:`save`, :meth:`restore` and :meth:`update`; the solvers
     call them around every Newton step, and path following refuses it.
+
+    Parameters
+    ----------
+    mesh : core_se3.mesh.Mesh
+        The reference mesh.
+    material : core_se3.fem.ResultantLaw
+        A :class:`Material` or :class:`RegionMaterial`.
+
+    Attributes
+    ----------
+    name : str
+        The registry key (class attribute); ``Problem(..., element=name)`` selects the element.
+    stateful : bool
+        True if the strain is a state carried between Newton steps (class attribute).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import mesh, Material
+    >>> class NoStiffness(Element):           # a (useless) element: zero energy, zero forces
+    ...     name = "none"
+    ...     def evaluate(self, g, tangent=True):
+    ...         return ElementEvaluation(0.0, np.zeros((len(g), 6)), 0.0)
+    ...     def energy(self, g):
+    ...         return 0.0
+    >>> el = NoStiffness(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
+    >>> el.evaluate(el.mesh.g0).r.shape, el.stateful, el.cell_fields(el.mesh.g0)
+    ((6, 6), False, {})
     """
 
     name: ClassVar[str] = ""
@@ -112,12 +169,54 @@ ELEMENTS = Registry("element")
 
 
 def register_element(cls):
-    """Class decorator: make an Element subclass available under ``cls.name``."""
+    """Class decorator: make an Element subclass available under ``cls.name``.
+
+    Parameters
+    ----------
+    cls : type
+        A subclass of :class:`Element` with a new, non-empty ``name``.
+
+    Returns
+    -------
+    type
+        ``cls`` itself (so it works as a decorator).  A TypeError for anything but an Element
+        subclass, a ValueError for a name that is already registered.
+
+    Example
+    -------
+    >>> from core_se3.fem import DefaultElement
+    >>> register_element(DefaultElement)
+    Traceback (most recent call last):
+    ...
+    ValueError: element 'default' is registered twice
+    """
     if not (isinstance(cls, type) and issubclass(cls, Element)):
         raise TypeError("register_element needs an Element subclass")
     return ELEMENTS.register(cls.name, cls)
 
 
 def make_element(name, mesh, material) -> Element:
-    """The element ``name`` (a key of ELEMENTS) on ``mesh`` with ``material``."""
+    """The element ``name`` (a key of ELEMENTS) on ``mesh`` with ``material``.
+
+    Parameters
+    ----------
+    name : str
+        A registered element name ('default', 'seed', or one of :func:`register_element`).
+    mesh : core_se3.mesh.Mesh
+        The reference mesh.
+    material : core_se3.fem.ResultantLaw
+        The resultant law.
+
+    Returns
+    -------
+    Element
+        The element, with its reference data computed.  An unknown name raises
+        :class:`~core_se3.errors.OptionError` naming the closest one.
+
+    Example
+    -------
+    >>> from core_se3 import mesh, Material
+    >>> type(make_element("seed", mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))).__name__
+    'SeedElement'
+    """
     return ELEMENTS.lookup(name)(mesh, material)

@@ -57,7 +57,26 @@ MAX_EDGE_ANGLE = 0.97 * np.pi   # beyond this the log's cut at pi is too close
 
 
 def tying_matrices(points=GAUSS_2x2):
-    """P (ngp, 12, 24): (zeta_1, zeta_2) at each point from (z_b, z_t, z_l, z_r)."""
+    """P (ngp, 12, 24): (zeta_1, zeta_2) at each point from (z_b, z_t, z_l, z_r).
+
+    Parameters
+    ----------
+    points : (q, 2) array, optional
+        Natural coordinates (x, y) in [-1, 1]^2; default the 2x2 Gauss points.
+
+    Returns
+    -------
+    (q, 12, 24) ndarray
+        zeta_1 = ((1 - y) z_b + (1 + y) z_t)/2 and zeta_2 = ((1 - x) z_l + (1 + x) z_r)/2 as
+        matrices on the stacked edge twists.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> P = tying_matrices(np.zeros((1, 2)))           # the centre: means of opposite edges
+    >>> P.shape, P[0, 0, [0, 6, 12, 18]].tolist()
+    ((1, 12, 24), [0.5, 0.5, 0.0, 0.0])
+    """
     P = np.zeros((len(points), 12, 24))
     I = np.eye(6)
     for q, (x, y) in enumerate(points):
@@ -69,7 +88,29 @@ def tying_matrices(points=GAUSS_2x2):
 
 
 def edge_twists(g, edge_nodes):
-    """psi_e = log(g_a^-1 g_b) for all edges (E, 6); raises if an edge turns by ~pi."""
+    """psi_e = log(g_a^-1 g_b) for all edges (E, 6); raises if an edge turns by ~pi.
+
+    Parameters
+    ----------
+    g : (n, 4, 4) array
+        Nodal frames.
+    edge_nodes : (E, 2) array of int
+        The edges (a, b), e.g. ``mesh.edge_nodes``.
+
+    Returns
+    -------
+    (E, 6) ndarray
+        The relative twists (translation [length] in the frame of a, rotation [rad]).  An edge
+        turning by more than ``MAX_EDGE_ANGLE`` raises
+        :class:`~core_se3.errors.ElementTooDistortedError`.
+
+    Example
+    -------
+    >>> from core_se3 import mesh
+    >>> m = mesh.rectangle(1.0, 1.0, 1, 1)
+    >>> m.edge_nodes.tolist(), edge_twists(m.g0, m.edge_nodes)[:, :3].tolist()
+    ([[0, 1], [0, 2], [1, 3], [2, 3]], [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]])
+    """
     ga, gb = g[edge_nodes[:, 0]], g[edge_nodes[:, 1]]
     psi = lie.log(lie.inv(ga) @ gb)
     ang = np.linalg.norm(psi[:, 3:], axis=1)
@@ -98,14 +139,33 @@ class DefaultElement(Element):
     """The default element (module docstring): precomputed element data for a mesh and a
     material law; evaluates energy, residual and tangent.
 
+    Parameters
+    ----------
+    mesh : core_se3.mesh.Mesh
+        The reference mesh (its frames give z0 and the reference tangents A_1, A_2).
+    material : core_se3.fem.ResultantLaw
+        One law or one per element.
+
+    Attributes
+    ----------
+    z0 : (m, 24) ndarray
+        Reference edge twists (z_b, z_t, z_l, z_r) of every element.
+    Dbar : (m, 24, 24) ndarray
+        The element stiffness on the edge twists, sum_gp j0 P^T D P.
+    j0 : (m, 4) ndarray
+        Area element at the Gauss points; ``area`` (m,) their sum, the reference area.
+
     Example
     -------
     >>> import numpy as np
-    >>> from core_se3 import mesh, Material
+    >>> from core_se3 import mesh, Material, lie
     >>> el = DefaultElement(mesh.rectangle(1.0, 1.0, 2, 2), Material(1.0e3, 0.3, 0.01))
     >>> ev = el.evaluate(el.mesh.g0)                 # the reference state is stress free
     >>> float(np.abs(ev.r).max()), ev.element_blocks.shape
     (0.0, (4, 4, 4, 6, 6))
+    >>> g = lie.exp([0.1, 0.2, 0.3, 0.3, -0.2, 0.5]) @ el.mesh.g0      # a rigid motion: objective
+    >>> round(float(np.abs(el.evaluate(g, tangent=False).r).max()), 12)
+    0.0
     """
 
     name = "default"

@@ -35,6 +35,19 @@ __all__ = ["SeedElement"]
 class SeedElement(Element):
     """The seed's element (module docstring): centroid strain twists updated incrementally.
 
+    Parameters
+    ----------
+    mesh : core_se3.mesh.Mesh
+        The reference mesh.
+    material : core_se3.fem.ResultantLaw
+        The resultant law (the same as the default element's).
+
+    Attributes
+    ----------
+    zeta0, zeta : (m, 2, 6) ndarray
+        Reference and current centroid strain twists (zeta_1, zeta_2) of every element; ``zeta``
+        is the state that :meth:`update` advances and :meth:`save`/:meth:`restore` keep.
+
     Example
     -------
     >>> from core_se3 import mesh, Material

@@ -37,6 +37,14 @@ class ResultantLaw(Protocol):
     ``resultant_matrix(A1, A2) -> (Dmat, j0)`` with A1, A2 (..., 3) the reference tangents; see
     :meth:`Material.resultant_matrix`.  :class:`Material` (one law) and :class:`RegionMaterial`
     (a law per element) implement it.
+
+    It is a runtime-checkable Protocol: any object with such a method is accepted (a user law,
+    e.g. an orthotropic one, needs no base class).
+
+    Example
+    -------
+    >>> isinstance(Material(1.0e3, 0.3, 0.01), ResultantLaw), isinstance(object(), ResultantLaw)
+    (True, False)
     """
 
     def resultant_matrix(self, A1, A2):
@@ -53,6 +61,34 @@ class Material:
     drilling * D (1 - nu) w to the in-plane bending stiffness E h w^3 / 12 of a strip of width
     w, negligible when h << w, equal to it when h = w.  With drilling = 0 the drilling rotation
     is still tied to the in-plane rotation by the membrane law's skew part (2 G h).
+
+    An isotropic linear-elastic resultant law (module docstring, seed eqs. E45-1, E45-2 with
+    bending on the curvature K); frozen, so it can be shared and compared.  Invalid values raise
+    :class:`~core_se3.errors.MaterialError`.
+
+    Parameters
+    ----------
+    E : float
+        Young's modulus [force/length^2], > 0.
+    nu : float
+        Poisson's ratio [-], in (-1, 0.5).
+    h : float
+        Thickness [length], > 0.
+    shear_factor : float, optional
+        Transverse-shear factor ks [-], > 0 (1 = the seed's law; 5/6 the usual Mindlin value).
+    drilling : float, optional
+        Factor on the drilling-curvature modulus D (1 - nu) [-], >= 0 (1 = the seed).
+    rho : float or None, optional
+        Density [mass/length^3], >= 0; needed only by gravity.
+
+    Attributes
+    ----------
+    G : float
+        Shear modulus E / (2 (1 + nu)).
+    D : float
+        Plate bending stiffness E h^3 / (12 (1 - nu^2)) [force x length].
+    C : float
+        Membrane stiffness E h / (1 - nu^2) [force/length].
 
     Example
     -------
@@ -109,6 +145,13 @@ class Material:
 
         Returns (Dmat, j0): ``W = 1/2 eps^T Dmat eps`` per unit reference area, and the area
         element j0 = |A1 x A2| that turns the parameter measure into reference area.
+
+        Example
+        -------
+        >>> import numpy as np
+        >>> D, j0 = Material(1.0e3, 0.0, 0.01).resultant_matrix(np.array([1.0, 0, 0]), np.array([0, 1.0, 0]))
+        >>> D.shape, float(j0), float(D[0, 0])            # D[0, 0] = C = E h on e_11 (nu = 0)
+        ((12, 12), 1.0, 10.0)
         """
         ops, Ainv, j0 = strain_operators(A1, A2)
         Mm, Ms, Mb, Md = ops
@@ -132,7 +175,30 @@ class Material:
 
 def strain_operators(A1, A2):
     """Linear maps from eps = (eps_1, eps_2) in R^12 to the membrane, shear, bending, drilling
-    measures (shapes (...,4,12), (...,2,12), (...,4,12), (...,2,12)), with A^ab and j0."""
+    measures (shapes (...,4,12), (...,2,12), (...,4,12), (...,2,12)), with A^ab and j0.
+
+    Parameters
+    ----------
+    A1, A2 : (..., 3) array_like
+        Reference tangent vectors (the translational parts of zeta0_1, zeta0_2) in the body
+        frame, not parallel.
+
+    Returns
+    -------
+    ops : tuple of ndarray
+        (Mm, Ms, Mb, Md): e_ab = c_a . A_b, g_a = c_a . n, K_ab = (n x k_a) . A_b, d_a = k_a . n.
+    Ainv : (..., 2, 2) ndarray
+        The inverse metric A^ab.
+    j0 : (...) ndarray
+        The area element |A1 x A2|.  Parallel or zero tangents raise
+        :class:`~core_se3.errors.MeshError`.
+
+    Example
+    -------
+    >>> (Mm, Ms, Mb, Md), Ainv, j0 = strain_operators([1.0, 0, 0], [0, 2.0, 0])
+    >>> Mm.shape, Ms.shape, Ainv.tolist(), float(j0)
+    ((4, 12), (2, 12), [[1.0, 0.0], [0.0, 0.25]], 2.0)
+    """
     A1 = np.asarray(A1, float)
     A2 = np.asarray(A2, float)
     A = np.stack([A1, A2], -2)                                   # (..., 2, 3)
@@ -171,12 +237,23 @@ class RegionMaterial:
     one raises MaterialError (loads that need h per element, such as gravity or magnetisation,
     must then be built per region with that region's h).
 
+    Parameters
+    ----------
+    materials : sequence of Material
+        The distinct laws.
+    index : (m,) array of int
+        The law of every element (an index into ``materials``).
+
     Example
     -------
     >>> import numpy as np
     >>> law = RegionMaterial.from_regions(4, Material(1.0, 0.3, 0.1), {(2, 3): Material(2.0, 0.3, 0.1)})
     >>> law.per_element("E").tolist(), law.h
     ([1.0, 1.0, 2.0, 2.0], 0.1)
+    >>> law.E
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.MaterialError: E differs between regions ([1.0, 2.0]); use per_element('E')
     """
 
     def __init__(self, materials, index):

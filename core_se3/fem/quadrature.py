@@ -16,6 +16,18 @@ GAUSS_2x2 = np.array([[-_G, -_G], [_G, -_G], [_G, _G], [-_G, _G]])
 def shape_functions(points=GAUSS_2x2):
     """Bilinear N (q, 4) and dN/dx, dN/dy (q, 2, 4) at natural points (q, 2).
 
+    Parameters
+    ----------
+    points : (q, 2) array, optional
+        Natural coordinates (x, y) in [-1, 1]^2; default the 2x2 Gauss points ``GAUSS_2x2``.
+
+    Returns
+    -------
+    N : (q, 4) ndarray
+        Shape functions of the corners (-1,-1), (1,-1), (1,1), (-1,1).
+    dN : (q, 2, 4) ndarray
+        Their derivatives with respect to x and y.
+
     Example
     -------
     >>> import numpy as np
@@ -34,6 +46,19 @@ def shape_functions(points=GAUSS_2x2):
 def surface_jacobian(X, dN):
     """Area element j0 = |a_1 x a_2| (m, q) of bilinear quads with corner positions X (m, 4, 3)
     at the points of the shape-function derivatives dN (q, 2, 4): dA = j0 dxi1 dxi2.
+
+    Parameters
+    ----------
+    X : (m, 4, 3) array
+        Corner positions [length] of m quads.
+    dN : (q, 2, 4) array
+        Shape-function derivatives at q points (:func:`shape_functions`).
+
+    Returns
+    -------
+    (m, q) ndarray
+        j0 [length^2 per unit natural area]; with the unit Gauss weights, j0.sum(axis=1) is the
+        area of each quad.
 
     Example
     -------

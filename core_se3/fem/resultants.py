@@ -27,12 +27,30 @@ CENTRE = np.zeros((1, 2))
 def element_resultants(element, g):
     """Cell fields (name -> (m, 3)) of the default element at state g (n, 4, 4).
 
+    Parameters
+    ----------
+    element : DefaultElement
+        The element (its mesh and material law; anything with ``strains(g, points)``).
+    g : (n, 4, 4) array
+        Current nodal frames.
+
+    Returns
+    -------
+    dict
+        ``N1``, ``N2`` [force/length] and ``M1``, ``M2`` [force] as lab vectors, and
+        ``N1_local`` ... ``M2_local`` along the current directors (module docstring), each
+        (m, 3), at the element centres.
+
     Example
     -------
     >>> from core_se3 import mesh, Material, fem
     >>> el = fem.DefaultElement(mesh.rectangle(1.0, 1.0, 2, 1), Material(1.0e3, 0.3, 0.01))
     >>> sorted(element_resultants(el, el.mesh.g0))[:3]
     ['M1', 'M1_local', 'M2']
+    >>> el = fem.DefaultElement(el.mesh, Material(1.0e3, 0.0, 0.01))
+    >>> g = el.mesh.g0.copy(); g[:, 0, 3] *= 1.01        # stretch 0.01: N11 = E h eps = 0.1
+    >>> element_resultants(el, g)["N1"].round(12).tolist()
+    [[0.1, 0.0, 0.0], [0.1, 0.0, 0.0]]
     """
     mesh = element.mesh
     zeta0 = element.strains(mesh.g0, CENTRE)[:, 0]            # (m, 12) body frame

@@ -30,6 +30,17 @@ _ARRAY = "array_"                  # prefix of the optional named arrays (save(a
 class Checkpoint:
     """The checkpoint file of a run directory.
 
+    ``save(fingerprint, step, lam, g, unwrap, records, timings, extra=None, arrays=None)`` writes
+    the state atomically; ``load(fingerprint=None)`` returns it as a dict (fingerprint, step, lam,
+    g, unwrap, records, timings, extra, arrays) and raises
+    :class:`~core_se3.errors.CheckpointError` if it is missing, unreadable or, when a fingerprint
+    is given, of another scenario; ``exists()`` tells whether there is one.
+
+    Parameters
+    ----------
+    directory : str or path-like
+        The run directory; the file is ``directory/checkpoint.npz``.
+
     Example
     -------
     >>> import tempfile, numpy as np
@@ -37,6 +48,10 @@ class Checkpoint:
     >>> ck.save("fp", 1, 0.5, np.eye(4)[None], {}, [], {})
     >>> ck.load("fp")["lam"]
     0.5
+    >>> ck.load("another scenario")                # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.CheckpointError: checkpoint ... belongs to a different scenario ...
     """
 
     def __init__(self, directory):

@@ -22,7 +22,39 @@ __all__ = ["atomic_path", "write_text_atomic", "write_json_atomic"]
 
 @contextlib.contextmanager
 def atomic_path(path, suffix=None):
-    """Yield a temporary path next to ``path`` (same extension); on success move it to ``path``."""
+    """Yield a temporary path next to ``path`` (same extension); on success move it to ``path``.
+
+    If the block raises, the temporary file is removed and ``path`` keeps its previous content.
+    The file is fsync'ed before the move; its permissions follow the umask (not mkstemp's 0600).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The final file (its directory is created if needed).
+    suffix : str, optional
+        Extension of the temporary file (default that of ``path``: writers that choose the format
+        by extension, e.g. meshio, still work).
+
+    Yields
+    ------
+    str
+        The temporary path to write.
+
+    Example
+    -------
+    >>> import os, pathlib, tempfile
+    >>> p = os.path.join(tempfile.mkdtemp(), "a.txt")
+    >>> with atomic_path(p) as tmp:
+    ...     _ = pathlib.Path(tmp).write_text("complete")
+    >>> try:
+    ...     with atomic_path(p) as tmp:
+    ...         _ = pathlib.Path(tmp).write_text("partial")
+    ...         raise KeyboardInterrupt                     # a run killed while writing
+    ... except KeyboardInterrupt:
+    ...     pass
+    >>> open(p).read(), os.listdir(os.path.dirname(p))
+    ('complete', ['a.txt'])
+    """
     path = os.fspath(path)
     d = os.path.dirname(os.path.abspath(path))
     os.makedirs(d, exist_ok=True)
@@ -47,6 +79,27 @@ def _umask():
 
 
 def write_text_atomic(path, text):
+    """Write ``text`` to ``path`` atomically (:func:`atomic_path`).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file.
+    text : str
+        Its new content.
+
+    Returns
+    -------
+    str
+        The path.
+
+    Example
+    -------
+    >>> import os, tempfile
+    >>> p = write_text_atomic(os.path.join(tempfile.mkdtemp(), "sub", "b.txt"), "done")
+    >>> open(p).read()
+    'done'
+    """
     with atomic_path(path) as tmp:
         with open(tmp, "w") as fh:
             fh.write(text)
@@ -54,4 +107,25 @@ def write_text_atomic(path, text):
 
 
 def write_json_atomic(path, doc):
+    """Write ``doc`` as JSON (indent 1) to ``path`` atomically (:func:`atomic_path`).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file.
+    doc : object
+        Anything ``json.dumps`` accepts.
+
+    Returns
+    -------
+    str
+        The path.
+
+    Example
+    -------
+    >>> import json, os, tempfile
+    >>> p = write_json_atomic(os.path.join(tempfile.mkdtemp(), "r.json"), {"status": "running", "step": 3})
+    >>> json.load(open(p))
+    {'status': 'running', 'step': 3}
+    """
     return write_text_atomic(path, json.dumps(doc, indent=1))

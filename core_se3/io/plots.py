@@ -13,7 +13,23 @@ __all__ = ["new_figure", "plot_load_deflection", "plot_shell", "plot_sequence"]
 
 
 def new_figure(figsize=(6.4, 4.8)):
-    """A matplotlib Figure on an Agg canvas (no pyplot, no global backend switch)."""
+    """A matplotlib Figure on an Agg canvas (no pyplot, no global backend switch).
+
+    Parameters
+    ----------
+    figsize : (float, float), optional
+        Width and height [inch] (dpi 120).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+
+    Example
+    -------
+    >>> fig = new_figure((3.0, 2.0))
+    >>> fig.get_size_inches().tolist(), type(fig.canvas).__name__
+    ([3.0, 2.0], 'FigureCanvasAgg')
+    """
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -38,6 +54,27 @@ def plot_load_deflection(
     labels: legend text per curve (dict name -> label, or a list in the order of ``displacements``;
     default: the names); reference: name -> (loads, values), drawn as open markers, in the colour of
     the computed curve of the same name if there is one. Returns the path.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The PNG file.
+    loads, displacements, labels, reference
+        As above (ValueError for mismatched lengths).
+    xlabel, ylabel, title : str, optional
+        Axis labels and title.
+
+    Returns
+    -------
+    str
+
+    Example
+    -------
+    >>> import os, tempfile
+    >>> p = plot_load_deflection(os.path.join(tempfile.mkdtemp(), "ld.png"), [0.0, 0.5, 1.0],
+    ...                          {"tip": [0.0, 0.1, 0.3]}, reference={"tip": ([0.0, 1.0], [0.0, 0.3])})
+    >>> open(p, "rb").read(4)[1:]                # the PNG signature
+    b'PNG'
     """
     loads = np.asarray(loads, dtype=float)
     names = list(displacements)
@@ -85,7 +122,33 @@ def plot_shell(path, X, quads, g, title: str | None = None, color_by_rotation: b
     """3-D view of the deformed shell (faces = ``quads`` on the current positions ``g[:, :3, 3]``)
     with equal axis scaling, saved as PNG. ``X`` (reference positions, (n, 3)) is drawn as a faint
     wireframe for comparison. Faces are coloured by their mean nodal rotation angle (rad) if
-    ``color_by_rotation``. Returns the path."""
+    ``color_by_rotation``. Returns the path.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The PNG file.
+    X : (n, 3) array
+        Reference positions; ``quads`` (m, 4); ``g`` (n, 4, 4) the current frames.
+    title : str, optional
+        Figure title; ``color_by_rotation``: colour by rotation angle (else one colour).
+    elev, azim, roll : float, optional
+        Camera angles [deg] (roll needs matplotlib >= 3.6).
+
+    Returns
+    -------
+    str
+
+    Example
+    -------
+    >>> import os, tempfile
+    >>> from core_se3 import mesh, lie
+    >>> m = mesh.rectangle(1.0, 1.0, 2, 1)
+    >>> g = lie.exp([0.0, 0.0, 0.0, 0.0, -0.5, 0.0]) @ m.g0            # turned about y
+    >>> p = plot_shell(os.path.join(tempfile.mkdtemp(), "shell.png"), m.X, m.quads, g, title="turned")
+    >>> os.path.getsize(p) > 0
+    True
+    """
     import mpl_toolkits.mplot3d  # noqa: F401  (registers the 3d projection)
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
@@ -154,7 +217,31 @@ def plot_sequence(path, X, quads, positions: Sequence[np.ndarray], labels: Seque
     """Several deformed shapes of one shell in one 3-D view (e.g. the states of a load path):
     ``positions[k]`` (n, 3) are the current node positions of state k, drawn as faces coloured
     by k (``cmap``), with a legend of ``labels``; ``X`` (reference) as a dotted outline, equal
-    axis scaling; camera ``elev``, ``azim``, ``roll`` [deg]. Returns the path."""
+    axis scaling; camera ``elev``, ``azim``, ``roll`` [deg]. Returns the path.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The PNG file.
+    X, quads
+        The reference mesh; ``positions``: a non-empty sequence of (n, 3) arrays.
+    labels : sequence of str, optional
+        One per state; ``title``, ``cmap``, ``elev``, ``azim``, ``roll`` as above.
+
+    Returns
+    -------
+    str
+
+    Example
+    -------
+    >>> import os, tempfile
+    >>> from core_se3 import mesh
+    >>> m = mesh.rectangle(1.0, 1.0, 2, 1)
+    >>> p = plot_sequence(os.path.join(tempfile.mkdtemp(), "seq.png"), m.X, m.quads,
+    ...                   [m.X, m.X + [0.0, 0.0, 0.2]], labels=["lam 0", "lam 1"])
+    >>> os.path.getsize(p) > 0
+    True
+    """
     import matplotlib
     import mpl_toolkits.mplot3d  # noqa: F401
     from matplotlib.patches import Patch

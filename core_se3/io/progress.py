@@ -22,7 +22,32 @@ __all__ = ["Progress"]
 
 
 class Progress:
-    """Progress of ``total`` steps (None: unknown; then ``fraction`` drives the estimate)."""
+    """Progress of ``total`` steps (None: unknown; then ``fraction`` drives the estimate).
+
+    Parameters
+    ----------
+    total : int or None
+        Number of steps (None for arc length, whose end is a load factor).
+    enabled : bool
+        Draw at all (the front ends: on a terminal and not ``--quiet``).
+    stream : file-like, optional
+        Where to draw (default stdout).
+    width : int, optional
+        Width of the bar in characters.
+    delay : float, optional
+        Seconds before the first drawing [s].
+
+    Example
+    -------
+    >>> import io
+    >>> out = io.StringIO()
+    >>> Progress(4, enabled=False, stream=out).update(1, 0.25, 3, 1e-12); out.getvalue()
+    ''
+    >>> bar = Progress(None, enabled=True, stream=out, delay=0.0)
+    >>> bar.update(3, lam=0.5, iterations=4, residual=1e-9, fraction=0.5); bar.close("done")
+    >>> "step 3  lam 0.5" in out.getvalue(), out.getvalue().splitlines()[-1]
+    (True, 'done')
+    """
 
     def __init__(self, total, enabled, stream=None, width=24, delay=2.0):
         self.total, self.enabled, self.width, self.delay = total, bool(enabled), width, delay

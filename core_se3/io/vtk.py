@@ -68,6 +68,16 @@ def frame_fields(g0, g) -> dict[str, np.ndarray]:
     ``displacement`` (phi - phi0, length unit), ``d1``/``d2``/``d3`` (current directors, unit
     vectors) and ``rotation_angle`` (angle of R R0^T, rad, in [0, pi]).
 
+    Parameters
+    ----------
+    g0, g : (n, 4, 4) array_like
+        Reference and current frames (ValueError for other shapes or node counts).
+
+    Returns
+    -------
+    dict
+        name -> (n, 3) arrays, and ``rotation_angle`` (n,).
+
     Example
     -------
     >>> import numpy as np
@@ -96,6 +106,29 @@ def write_vtu(path, X, quads, g0, g, point_data: Mapping[str, np.ndarray] | None
     current frames. Point fields: ``displacement``, ``d1``, ``d2``, ``d3``, ``rotation_angle`` (see
     :func:`frame_fields`) plus any ``point_data`` (name -> (n,) or (n, k) array); ``cell_data``:
     name -> (m,) or (m, k) array per quad (e.g. stress resultants). Returns the path.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The ``.vtu`` file (its directory is created).
+    X, quads, g0, g, point_data, cell_data
+        As above (ValueError for inconsistent shapes).
+
+    Returns
+    -------
+    str
+        The path.
+
+    Example
+    -------
+    >>> import os, tempfile, meshio
+    >>> from core_se3 import mesh
+    >>> m = mesh.rectangle(1.0, 1.0, 2, 1)
+    >>> g = m.g0.copy(); g[:, 2, 3] += 0.5                      # lifted by 0.5
+    >>> p = write_vtu(os.path.join(tempfile.mkdtemp(), "s.vtu"), m.X, m.quads, m.g0, g, cell_data={"id": [0, 1]})
+    >>> v = meshio.read(p)
+    >>> v.point_data["displacement"][:, 2].tolist(), list(v.cell_data)
+    ([0.5, 0.5, 0.5, 0.5, 0.5, 0.5], ['id'])
     """
     import meshio
 
@@ -123,7 +156,27 @@ def write_vtu(path, X, quads, g0, g, point_data: Mapping[str, np.ndarray] | None
 
 def write_pvd(path, entries: Sequence[tuple[float, str]]) -> str:
     """Write a ParaView collection (``.pvd``) listing ``entries`` = [(time, vtu file name relative
-    to the .pvd's directory), ...]. ``time`` is the pseudo-time/load factor (any unit). Returns path."""
+    to the .pvd's directory), ...]. ``time`` is the pseudo-time/load factor (any unit). Returns path.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The ``.pvd`` file.
+    entries : sequence of (float, str)
+        (time, file) pairs, in order.
+
+    Returns
+    -------
+    str
+        The path.
+
+    Example
+    -------
+    >>> import os, tempfile
+    >>> p = write_pvd(os.path.join(tempfile.mkdtemp(), "series.pvd"), [(0.0, "step_0000.vtu"), (0.5, "step_0001.vtu")])
+    >>> [ln.strip() for ln in open(p) if "DataSet" in ln]
+    ['<DataSet timestep="0.0" group="" part="0" file="step_0000.vtu" />', '<DataSet timestep="0.5" group="" part="0" file="step_0001.vtu" />']
+    """
     root = ET.Element("VTKFile", type="Collection", version="0.1", byte_order="LittleEndian")
     coll = ET.SubElement(root, "Collection")
     for t, fname in entries:
@@ -146,7 +199,33 @@ def write_series(
 ) -> list[str]:
     """Write a load/time series: ``{prefix}_0000.vtu``, ``{prefix}_0001.vtu``, ... and ``series.pvd``
     in ``directory`` (created if needed). ``frames_per_step[k]`` is the (n, 4, 4) state at
-    ``times[k]``. Returns the written paths: the .vtu files in order, then the .pvd last."""
+    ``times[k]``. Returns the written paths: the .vtu files in order, then the .pvd last.
+
+    Parameters
+    ----------
+    directory : str or path-like
+        Output directory.
+    X, quads, g0
+        The reference mesh as for :func:`write_vtu`.
+    frames_per_step : sequence of (n, 4, 4) arrays
+        One state per step; ``times``: their load factors (same length).
+    prefix : str, optional
+        File-name prefix.
+    point_data_per_step : sequence of dict, optional
+        Extra point fields per step.
+
+    Returns
+    -------
+    list of str
+
+    Example
+    -------
+    >>> import os, tempfile
+    >>> from core_se3 import mesh
+    >>> m = mesh.rectangle(1.0, 1.0, 2, 1)
+    >>> [os.path.basename(p) for p in write_series(tempfile.mkdtemp(), m.X, m.quads, m.g0, [m.g0, m.g0], [0.0, 1.0])]
+    ['step_0000.vtu', 'step_0001.vtu', 'series.pvd']
+    """
     if len(frames_per_step) != len(times):
         raise ValueError(f"{len(frames_per_step)} states but {len(times)} times")
     if point_data_per_step is not None and len(point_data_per_step) != len(times):

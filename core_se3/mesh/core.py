@@ -24,6 +24,22 @@ LOCAL_EDGES = np.array([[0, 1], [3, 2], [0, 3], [1, 2]])
 def frames_from(X, d1, d3):
     """SE(3) frames (n, 4, 4) with position X, first axis d1 and third axis d3 (orthonormalised).
 
+    d3 is normalised, d1 is made orthogonal to it (Gram-Schmidt) and normalised, d2 = d3 x d1.
+
+    Parameters
+    ----------
+    X : (n, 3) array
+        Positions [length].
+    d1 : (n, 3) array
+        Approximate first directors (any length, not parallel to d3).
+    d3 : (n, 3) array
+        Third directors, the surface normals (any non-zero length).
+
+    Returns
+    -------
+    (n, 4, 4) ndarray
+        Frames [[d1, d2, d3, X], [0, 0, 0, 1]] (directors as columns).
+
     Example
     -------
     >>> import numpy as np
@@ -45,6 +61,18 @@ def frames_from(X, d1, d3):
 def chain_order(segments):
     """Order the nodes of line segments [(a, b), ...] along the line they form (sorted ids if
     they do not form one line).
+
+    A closed loop starts at the first node of the first segment.
+
+    Parameters
+    ----------
+    segments : sequence of (int, int)
+        Node-id pairs of the line cells (any order, either direction).
+
+    Returns
+    -------
+    (k,) ndarray of int
+        The node ids in their order along the line, starting at one of its ends.
 
     Example
     -------
@@ -79,12 +107,44 @@ class Mesh:
     ids of its four local edges (bottom, top, left, right) with orientation signs
     ``elem_edges``, ``elem_edge_sign`` (m, 4).
 
+    Construction checks the input and raises :class:`~core_se3.errors.MeshError` for frames
+    that are not proper rigid motions, collapsed, clockwise or non-convex quads (about the mean
+    nodal normal), an edge shared by more than two quads, or regions listing missing elements.
+
+    Parameters
+    ----------
+    g0 : (n, 4, 4) array
+        Reference frames: d1, d2, d3 (= the normal) as rotation columns, position [length].
+    quads : (m, 4) array of int
+        Node ids of each quad, counter-clockwise about the normal.
+    edges : dict, optional
+        Named node sets: name -> node ids (ordered along the line for loads and probes).
+    shape : (int, int), optional
+        (nx, ny) of a structured mesh, None otherwise.
+    regions : dict, optional
+        Named element sets: name -> element ids.
+
+    Attributes
+    ----------
+    X : (n, 3) ndarray
+        Reference positions (property).
+    n_nodes, n_elements : int
+        Node and quad counts (properties).
+    length_scale : float
+        Bounding-box diagonal (1 for a mesh without extent), the scale of the convergence norms.
+    edge_nodes : (E, 2) ndarray
+        Unique element edges (lower node id first).
+    elem_edges, elem_edge_sign : (m, 4) ndarray
+        Mesh-edge id of each local edge (bottom, top, left, right) and +1/-1 for its direction.
+
     Example
     -------
     >>> from core_se3 import mesh
     >>> m = mesh.rectangle(2.0, 1.0, 2, 1)
     >>> m.n_nodes, m.n_elements, m.node_set("x1").tolist()
     (6, 2, [2, 5])
+    >>> len(m.edge_nodes), bool(m.elem_edges[0, 3] == m.elem_edges[1, 2])   # 7 edges, x = 1 shared
+    (7, True)
     """
     g0: np.ndarray
     quads: np.ndarray

@@ -47,6 +47,21 @@ def _flat(X):
 def rectangle(L, width, nx, ny, x0=0.0):
     """Flat strip [x0, x0+L] x [-width/2, width/2] in the x-y plane, frames = identity.
 
+    Parameters
+    ----------
+    L, width : float
+        Length along x and width along y [length], > 0.
+    nx, ny : int
+        Elements along x and along y, >= 1.
+    x0 : float, optional
+        x of the edge ``x0`` [length].
+
+    Returns
+    -------
+    Mesh
+        (nx + 1)(ny + 1) nodes, edges ``x0``, ``x1`` (ordered along y) and ``y0``, ``y1``
+        (ordered along x); ``shape`` = (nx, ny).
+
     Example
     -------
     >>> m = rectangle(10.0, 1.0, 16, 1)
@@ -65,6 +80,22 @@ def cylinder_arch(R, angle, width, nx, ny):
 
     The arc starts at the origin with tangent +x; the centre of curvature is (0, 0, R); the
     width runs along y.  Frames: d1 = tangent, d2 = +y, d3 = d1 x d2 (toward the centre).
+
+    Parameters
+    ----------
+    R : float
+        Radius of the mid-surface [length].
+    angle : float
+        Opening angle of the arc [rad] (pi: a half circle).
+    width : float
+        Width along y [length].
+    nx, ny : int
+        Elements along the arc and across the width.
+
+    Returns
+    -------
+    Mesh
+        Edges ``x0`` (the start of the arc), ``x1`` (its end), ``y0``, ``y1`` (the sides).
 
     Example
     -------
@@ -90,6 +121,19 @@ def cylinder_panel(R, length, theta0, theta1, nt, nl):
     d3 = d1 x d2 = the outward normal (sin t, 0, cos t).  With theta in [-pi/2, pi/2] this is
     the semi-cylinder of Sze et al. 2004, s3.7.
 
+    Parameters
+    ----------
+    R, length : float
+        Radius and axial length [length].
+    theta0, theta1 : float
+        Angular range [rad], theta1 > theta0 (measured from +z toward +x).
+    nt, nl : int
+        Elements around and along the axis.
+
+    Returns
+    -------
+    Mesh
+
     Example
     -------
     >>> import numpy as np
@@ -111,6 +155,20 @@ def annulus(r_in, r_out, angle, nr, nt):
 
     Parameter xi1 runs along the radius, xi2 around; edges 'x0' (inner), 'x1' (outer),
     'y0' (angle 0), 'y1' (angle ``angle``).  Frames: d1 radial, d3 = +z.
+
+    Parameters
+    ----------
+    r_in, r_out : float
+        Inner and outer radius [length], 0 < r_in < r_out.
+    angle : float
+        Polar angle of the sector [rad], in (0, 2 pi]; at 2 pi the edges y0 and y1 coincide in
+        space but are not joined (a slit ring, Sze et al. 2004).
+    nr, nt : int
+        Elements along the radius and around.
+
+    Returns
+    -------
+    Mesh
 
     Example
     -------
@@ -135,6 +193,19 @@ def hemisphere_quarter(R, hole_deg, nt, nf):
     [0, pi/2].  xi1 = t (edges 'x0' = the hole, 'x1' = the equator), xi2 = f ('y0' on the plane
     y = 0, 'y1' on the plane x = 0).  Frames: d1 = e_t (meridian, toward the equator),
     d2 = e_f, d3 = d1 x d2 = the outward normal e_r (Sze et al. 2004, s3.4).
+
+    Parameters
+    ----------
+    R : float
+        Radius [length].
+    hole_deg : float
+        Half-angle of the polar hole [deg], in (0, 90).
+    nt, nf : int
+        Elements along the meridian and around the quarter.
+
+    Returns
+    -------
+    Mesh
 
     Example
     -------
@@ -164,6 +235,18 @@ def cross(arm_length, arm_width, n_along, n_across):
     Regions: ``palm``, ``finger_px``, ``finger_mx``, ``finger_py``, ``finger_my``.  Node sets:
     ``palm`` (the palm's nodes), ``tips`` (all arm-tip nodes) and the ordered tip lines
     ``tip_px``, ``tip_mx``, ``tip_py``, ``tip_my``.
+
+    Parameters
+    ----------
+    arm_length, arm_width : float
+        Length of each arm beyond the palm and width of the arms (= side of the palm) [length].
+    n_along, n_across : int
+        Elements along an arm and across its width.
+
+    Returns
+    -------
+    Mesh
+        Unstructured (``shape`` None): 4 n_along n_across + n_across^2 quads.
 
     Example
     -------

@@ -24,6 +24,28 @@ def read_meshio(source):
 
     meshio reports some unreadable files by printing and calling sys.exit: that output is
     captured and becomes the message.
+
+    Parameters
+    ----------
+    source : str, path-like or meshio.Mesh
+        A file meshio reads (Gmsh ``.msh`` 2.2 or 4, ``.vtu``, ...), or a mesh already read.
+
+    Returns
+    -------
+    meshio.Mesh
+        The mesh (the same object when one is given), its ``cell_sets`` filled from Gmsh 2.2
+        physical tags when the reader left them empty.
+
+    Example
+    -------
+    >>> import meshio, numpy as np
+    >>> raw = meshio.Mesh(np.zeros((4, 3)), [("quad", np.array([[0, 1, 2, 3]]))])
+    >>> read_meshio(raw) is raw
+    True
+    >>> read_meshio("no-such-file.msh")
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.MeshError: cannot read mesh 'no-such-file.msh': ReadError: File no-such-file.msh not found.
     """
     import meshio
     if isinstance(source, meshio.Mesh):
@@ -89,6 +111,25 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None):
     Named node sets: every named set of line cells (e.g. Gmsh physical curves), ordered along
     the line, plus ``edges`` = {name: predicate(X) -> bool mask}.  Named regions: every named
     set of quad cells (Gmsh physical surfaces).
+
+    Points that no quad uses (e.g. Gmsh geometry points) are dropped; line and vertex cells are
+    allowed, any other cell type (triangles) is a MeshError, as are quads whose orientation flips
+    across an edge.
+
+    Parameters
+    ----------
+    source : str, path-like or meshio.Mesh
+        The file (or mesh); see :func:`read_meshio`.
+    d1_hint : (3,) or (n, 3) array_like, optional
+        Lab direction of the first director (default +x).
+    edges : dict, optional
+        Extra node sets: name -> predicate of the reference positions X (n, 3) returning a
+        boolean mask.
+
+    Returns
+    -------
+    Mesh
+        Unstructured (``shape`` None), in the file's length unit.
 
     Example
     -------

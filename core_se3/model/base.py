@@ -49,7 +49,19 @@ class Evaluation:
     r: residual on the free dofs (nfree,); r_int, f_ext: internal and external generalised
     nodal forces (n, 6), r = (r_int - f_ext) restricted to the free dofs; force_scale: the
     element's round-off scale of r_int; energy: the elastic energy; K: the tangent dr/d eta on
-    the free dofs (CSR) when asked for.
+    the free dofs (CSR) when asked for; stress, linearization: a mixed element's stresses at
+    this state and what ``Problem.linear_stress`` needs (``fem.Element.mixed``).
+
+    Example
+    -------
+    At the reference state r_int = 0, so r = -f_ext on the free dofs:
+
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
+    >>> p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 1.0))
+    >>> ev = p.evaluate(p.mesh.g0, 1.0)
+    >>> float(ev.energy), ev.r.shape, round(float(-ev.r.sum()), 12), ev.K.shape
+    (0.0, (24,), 1.0, (24, 24))
     """
     r: np.ndarray
     r_int: np.ndarray
@@ -57,6 +69,8 @@ class Evaluation:
     force_scale: float
     energy: float
     K: object = None
+    stress: np.ndarray | None = None
+    linearization: object = None
 
 
 @dataclass
@@ -65,6 +79,24 @@ class LoadEvaluation:
 
     f: (n, 6) forces (body frames); node_blocks: (n, 6, 6) or None; element_blocks:
     (element ids (k,), blocks (k, 4, 4, 6, 6)) or None.
+
+    Attributes
+    ----------
+    f : (n, 6) ndarray
+        Force [force] and moment [force x length] on every node, body-frame components.
+    node_blocks : (n, 6, 6) ndarray or None
+        -df_i/d eta_i (None: no load stiffness, e.g. a follower force).
+    element_blocks : tuple or None
+        (element ids (k,), (k, 4, 4, 6, 6) blocks -df_a/d eta_b) for loads coupling the nodes of
+        an element (follower pressure).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3.model import NodalLoad
+    >>> ev = NodalLoad(2, [1], [1.0], force=(0.0, 0.0, 3.0)).evaluate(np.broadcast_to(np.eye(4), (2, 4, 4)), 1.0)
+    >>> ev.f[1].tolist(), ev.node_blocks.shape, ev.element_blocks
+    ([0.0, 0.0, 3.0, 0.0, 0.0, 0.0], (2, 6, 6), None)
     """
     f: np.ndarray
     node_blocks: np.ndarray | None = None
@@ -80,6 +112,25 @@ class Load(abc.ABC):
     is a finite-difference approximation).  :meth:`restraint` reports rigid-body restraints
     the load provides (for the support check), :meth:`output_fields` point fields for VTU
     files, :meth:`total` the resultant lab force and moment (for reports).
+
+    Add an instance to a problem with ``Problem.add(load)``; register a kind
+    (:func:`register_load`) to make it available by name and in scenario files.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import Problem, Material, mesh
+    >>> class TipLift(Load):                  # a dead lab force lam (0, 0, 1) on node k
+    ...     def __init__(self, n, k):
+    ...         self.n, self.k = n, k
+    ...     def evaluate(self, g, lam, tangent=True):
+    ...         f = np.zeros((self.n, 6))
+    ...         f[self.k, :3] = g[self.k, :3, :3].T @ (lam * np.array([0.0, 0.0, 1.0]))
+    ...         return LoadEvaluation(f)          # (its load stiffness is left out here)
+    >>> p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
+    >>> ld = p.add(TipLift(p.mesh.n_nodes, 2))
+    >>> p.external(p.mesh.g0, 0.5)[0][2].tolist()
+    [0.0, 0.0, 0.5, 0.0, 0.0, 0.0]
     """
 
     kind: ClassVar[str] = ""
@@ -117,6 +168,26 @@ class Param:
     kind: 'vector' (3 numbers), 'number', 'bool', 'matrix3', 'table' (a sub-table with
     ``fields``); ``default`` REQUIRED for a required key; ``nonzero`` for vectors; ``lo``: a
     lower bound of numbers (exclusive with ``lo_open``); ``doc``: one line for the docs.
+
+    The scenario validator checks every key a kind declares from these fields, so a new kind
+    needs no validator code.
+
+    Attributes
+    ----------
+    name : str
+        The key.
+    kind : str
+        'vector', 'number', 'bool', 'matrix3' or 'table'.
+    default : object
+        The default value, or ``REQUIRED``; ``required`` (property) is True for the latter.
+    nonzero, lo, lo_open, doc, fields
+        As above.
+
+    Example
+    -------
+    >>> from core_se3.model import LOADS
+    >>> [(p.name, p.kind, p.required) for p in LOADS["pressure"].params]
+    [('p', 'number', True), ('direction', 'vector', False), ('follower', 'bool', False)]
     """
     name: str
     kind: str
@@ -142,6 +213,25 @@ class LoadKind:
     'line'/'nodes', element ids or None for 'elements'; scale: the load-factor programme).
     check(values, given) -> (key, message) or None: checks across keys (``given``: the keys the
     user wrote).
+
+    Attributes
+    ----------
+    name : str
+        The kind's name (``Problem.add_load(name, ...)``, ``[[loads]] type = name``).
+    target : str
+        'line', 'nodes' or 'elements'.
+    params : tuple of Param
+        The keys it takes.
+    build, check : callable
+        As above (``check`` may be None).
+    doc : str
+        One line for the docs; ``extra``: free-form data of the kind.
+
+    Example
+    -------
+    >>> k = load_kind("gravity")
+    >>> k.target, [p.name for p in k.params], k.check is None
+    ('elements', ['g', 'rho'], True)
     """
     name: str
     target: str
@@ -156,7 +246,26 @@ LOADS = Registry("load kind")
 
 
 def register_load(kind: LoadKind):
-    """Add a load kind to the registry (its name must be new); returns it."""
+    """Add a load kind to the registry (its name must be new); returns it.
+
+    Parameters
+    ----------
+    kind : LoadKind
+        The kind; its ``target`` must be 'line', 'nodes' or 'elements'.
+
+    Returns
+    -------
+    LoadKind
+        ``kind``.  TypeError for anything but a LoadKind or a bad target, ValueError for a name
+        that is already registered.
+
+    Example
+    -------
+    >>> register_load(load_kind("gravity"))
+    Traceback (most recent call last):
+    ...
+    ValueError: load kind 'gravity' is registered twice
+    """
     if not isinstance(kind, LoadKind):
         raise TypeError("register_load needs a LoadKind")
     if kind.target not in ("line", "nodes", "elements"):
@@ -165,7 +274,24 @@ def register_load(kind: LoadKind):
 
 
 def load_kind(name) -> LoadKind:
-    """The registered kind ``name``; an OptionError naming the closest kind otherwise."""
+    """The registered kind ``name``; an OptionError naming the closest kind otherwise.
+
+    Parameters
+    ----------
+    name : str
+        A key of ``LOADS``.
+
+    Returns
+    -------
+    LoadKind
+
+    Example
+    -------
+    >>> load_kind("presure")
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.OptionError: unknown load kind 'presure'; did you mean 'pressure'?; registered: body_force, edge_force, edge_moment, gravity, nodal, pressure
+    """
     return LOADS.lookup(name)
 
 

@@ -67,6 +67,11 @@ class Field:
     gradients (no magnetic body force); ``approximate_hessian = True`` flags a finite-difference
     Hessian (the tangent of the body force is then approximate).
 
+    Parameters
+    ----------
+    scale : callable, optional
+        The load-factor programme s(lam) (default s = lam); a non-finite value raises LoadError.
+
     Example
     -------
     >>> import numpy as np
@@ -105,7 +110,18 @@ class Field:
 
 
 class UniformField(Field):
-    """B^a = scale(lam) * B, or scale(lam) * |B| * direction(lam) if ``direction`` is given."""
+    """B^a = scale(lam) * B, or scale(lam) * |B| * direction(lam) if ``direction`` is given.
+
+    Parameters: B (3,) flux density [T] at scale 1; scale s(lam) (default lam); direction
+    lam -> (3,) (normalised, e.g. :func:`rotating_direction`): then only |B| is used.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> f = UniformField((0.0, 0.0, 0.01))
+    >>> f.value(np.zeros((2, 3)), 0.5).tolist(), f.uniform, float(np.abs(f.gradient(np.zeros((2, 3)), 0.5)).max())
+    ([[0.0, 0.0, 0.005], [0.0, 0.0, 0.005]], True, 0.0)
+    """
 
     uniform = True
 
@@ -133,6 +149,9 @@ def rotating_direction(axis, start, turns_per_unit=1.0, lam0=0.0, lam1=None):
     2 pi turns_per_unit (lam - lam0); with ``lam1`` the turn is held outside [lam0, lam1]
     (lam clipped to that interval).
 
+    Parameters: axis, start (3,) (normalised here); turns_per_unit: turns per unit load factor;
+    lam0 < lam1: where the turn starts and ends.  Returns: lam -> (3,) unit vector.
+
     Example
     -------
     >>> import numpy as np
@@ -153,7 +172,21 @@ def rotating_direction(axis, start, turns_per_unit=1.0, lam0=0.0, lam1=None):
 
 
 class GradientField(Field):
-    """Uniform-gradient field B^a = scale(lam) (B0 + G (x - x0)); G symmetric and traceless."""
+    """Uniform-gradient field B^a = scale(lam) (B0 + G (x - x0)); G symmetric and traceless.
+
+    Parameters: B0 (3,) flux density [T] at x0 (3,) [length]; G (3, 3) gradient dB_i/dx_j
+    [T/length], symmetric (no curl) and traceless (no divergence) to ``tol``, else LoadError.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> GradientField((0, 0, 0.1), np.diag([1.0, -1.0, 0.0])).value([[1.0, 2.0, 0.0]], 1.0).tolist()
+    [[1.0, -2.0, 0.1]]
+    >>> GradientField((0, 0, 0), np.eye(3))
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.LoadError: field gradient G has trace 3: div B must vanish
+    """
 
     def __init__(self, B0, G, x0=(0.0, 0.0, 0.0), scale=None, tol=1e-12):
         super().__init__(scale)
@@ -185,6 +218,15 @@ class DipoleField(Field):
     Curl- and divergence-free everywhere except at x0, which must lie outside the body.
     The Hessian is the complex-step derivative of the closed-form gradient (exact to round-off).
     ``mu0`` must match the model's units (see ``MU0``).
+
+    Parameters: m (3,) moment [A length^2] at x0 (3,) [length]; scale s(lam); mu0 (default SI).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> d = DipoleField((0, 0, 1.0), (0, 0, 0), mu0=4 * np.pi)      # on the axis: B = 2 m / r^3
+    >>> d.value([[0.0, 0.0, 2.0]], 1.0).tolist()
+    [[0.0, 0.0, 0.25]]
     """
 
     def __init__(self, m, x0, scale=None, mu0=MU0):
@@ -228,7 +270,19 @@ class UserField(Field):
     """A user field: value(x) -> (k,3) [T], gradient(x) -> (k,3,3) dB_i/dx_j, optional
     hessian(x) -> (k,3,3,3).  Without a Hessian the force tangent is taken by central finite
     differences of the gradient and flagged as approximate (``approximate_hessian``).
-    The field must be curl- and divergence-free in the body's region (``check_field``)."""
+    The field must be curl- and divergence-free in the body's region (``check_field``).
+
+    Parameters: value, gradient, hessian as above (checked for shape and finiteness); scale
+    s(lam); fd_step: the finite-difference step [length] (default 1e-6 max(1, |x|)).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> G = np.diag([1.0, -1.0, 0.0])
+    >>> f = UserField(lambda x: x @ G, lambda x: np.broadcast_to(G, x.shape + (3,)))
+    >>> f.approximate_hessian, float(np.abs(f.hessian(np.array([[1.0, 2.0, 3.0]]), 1.0)).max())
+    (True, 0.0)
+    """
 
     def __init__(self, value, gradient, hessian=None, scale=None, fd_step=None):
         super().__init__(scale)
@@ -266,7 +320,17 @@ class UserField(Field):
 
 class Superposition(Field):
     """The sum of several fields (e.g. a uniform field plus a magnet's dipole), each with its own
-    load-factor programme."""
+    load-factor programme.
+
+    Parameters: *fields, one or more Field; the sum is uniform only if all of them are.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> s = Superposition(UniformField((0, 0, 1.0)), GradientField((0, 0, 0.1), np.diag([1.0, -1.0, 0.0])))
+    >>> s.uniform, s.value([[1.0, 2.0, 0.0]], 1.0).tolist()
+    (False, [[1.0, -2.0, 1.1]])
+    """
 
     def __init__(self, *fields):
         super().__init__(lambda lam: 1.0)
@@ -287,7 +351,20 @@ class Superposition(Field):
 
 
 def check_field(field, x, lam=1.0, rtol=1e-8):
-    """(max |curl B|, max |div B|) relative to max |grad B| at points x; raises LoadError above rtol."""
+    """(max |curl B|, max |div B|) relative to max |grad B| at points x; raises LoadError above rtol.
+
+    Parameters: field; x (k, 3) sample points in the body's region [length]; lam; rtol.
+    Returns: (relative curl, relative divergence), both <= rtol.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> f = UserField(lambda x: np.c_[0 * x[:, :2], x[:, 0]], lambda x: np.broadcast_to([[0, 0, 0], [0, 0, 0], [1.0, 0, 0]], x.shape + (3,)))
+    >>> check_field(f, np.zeros((1, 3)))
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.LoadError: applied field is not curl- and divergence-free in the body: relative |curl B| 1.00e+00, |div B| 0.00e+00
+    """
     G = field.gradient(np.asarray(x, float), lam)
     g = max(np.abs(G).max(), 1e-300)
     curl = np.abs(G - np.swapaxes(G, -1, -2)).max() / g
@@ -302,7 +379,16 @@ def check_field(field, x, lam=1.0, rtol=1e-8):
 @dataclass(frozen=True)
 class FieldKind:
     """A field kind of scenario files: ``params`` (the keys besides type and scale) and
-    ``build(values, scale, mu0) -> Field`` (mu0: the model's vacuum permeability)."""
+    ``build(values, scale, mu0) -> Field`` (mu0: the model's vacuum permeability).
+
+    Attributes: name, params (tuple of Param), build, check ((values, given) -> (key, message)
+    or None, optional) and doc, as for :class:`~core_se3.model.LoadKind`.
+
+    Example
+    -------
+    >>> [p.name for p in field_kind("dipole").params], type(field_kind("uniform").build({"B": (0, 0, 1.0), "rotate": None}, None, MU0)).__name__
+    (['m', 'x0', 'mu0'], 'UniformField')
+    """
     name: str
     params: tuple
     build: Callable
@@ -314,14 +400,35 @@ FIELDS = Registry("field kind")
 
 
 def register_field(kind: FieldKind):
-    """Add a field kind to the registry (its name must be new); returns it."""
+    """Add a field kind to the registry (its name must be new); returns it.
+
+    Parameters: kind (FieldKind).  Returns: kind; TypeError for anything else, ValueError for a
+    name that is already registered.
+
+    Example
+    -------
+    >>> register_field(field_kind("dipole"))
+    Traceback (most recent call last):
+    ...
+    ValueError: field kind 'dipole' is registered twice
+    """
     if not isinstance(kind, FieldKind):
         raise TypeError("register_field needs a FieldKind")
     return FIELDS.register(kind.name, kind)
 
 
 def field_kind(name) -> FieldKind:
-    """The registered field kind ``name``; an OptionError naming the closest one otherwise."""
+    """The registered field kind ``name``; an OptionError naming the closest one otherwise.
+
+    Parameters: name (str, a key of ``FIELDS``).  Returns: FieldKind.
+
+    Example
+    -------
+    >>> field_kind("unifrom")
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.OptionError: unknown field kind 'unifrom'; did you mean 'uniform'?; registered: dipole, gradient, uniform
+    """
     return FIELDS.lookup(name)
 
 

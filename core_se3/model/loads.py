@@ -32,6 +32,21 @@ __all__ = ["NodalLoad", "SurfaceLoad", "edge_weights"]
 def edge_weights(mesh, nodes):
     """Consistent weights (summing to 1) of a uniform line load along ordered edge nodes.
 
+    Each node gets half the length of each segment it ends (the consistent load of linear
+    shape functions along the line), normalised by the total length.
+
+    Parameters
+    ----------
+    mesh : core_se3.mesh.Mesh
+        The mesh (for the reference positions).
+    nodes : sequence of int
+        Node ids ordered along the line (a named node set is).
+
+    Returns
+    -------
+    (k,) ndarray
+        Weights; total force F on the line puts w_i F on node i.
+
     Example
     -------
     >>> from core_se3 import mesh
@@ -52,12 +67,29 @@ def edge_weights(mesh, nodes):
 class NodalLoad(Load):
     """Force and moment on nodes, split by ``weights``; dead (lab) or follower (body frame).
 
+    A dead load has the generalised force (R^T F, R^T M) and the load stiffness of the module
+    docstring; a follower load has constant components in the node's frame and no stiffness.
+
+    Parameters
+    ----------
+    n_nodes : int
+        Number of nodes of the mesh.
+    nodes : sequence of int
+        The loaded nodes; ``weights`` (same length): the share of each.
+    force, moment : (3,) array_like, optional
+        The total force [force] and moment [force x length] at scale 1: lab vectors (dead) or
+        d1, d2, d3 components (``follower=True``).
+    scale : callable, optional
+        The load-factor programme s(lam) (default lam); ``name``: for reports.
+
     Example
     -------
     >>> import numpy as np
     >>> ld = NodalLoad(3, [2], [1.0], force=(0, 0, 2.0))
     >>> ld.evaluate(np.broadcast_to(np.eye(4), (3, 4, 4)), 0.5).f[2].tolist()
     [0.0, 0.0, 1.0, 0.0, 0.0, 0.0]
+    >>> [v.tolist() for v in ld.total(0.5)]
+    [[0.0, 0.0, 1.0], [0.0, 0.0, 0.0]]
     """
 
     def __init__(self, n_nodes, nodes, weights, force=(0, 0, 0), moment=(0, 0, 0), follower=False,
@@ -118,6 +150,20 @@ class SurfaceLoad(Load):
     follower: ``q`` is a scalar pressure per unit current area along the current normal
     a_1 x a_2 (positive toward the frames' +d3 side).
 
+    Parameters
+    ----------
+    mesh : core_se3.mesh.Mesh
+        The mesh.
+    q : (3,) array_like or float
+        Dead: force per unit reference area [force/length^2] (lab vector).  Follower: the
+        pressure [force/length^2].
+    follower : bool, optional
+        Pressure along the current normal (with its load stiffness, element blocks).
+    elements : array_like of int, optional
+        The loaded elements (default all).
+    scale : callable, optional
+        s(lam), default lam; ``name``: for reports.
+
     Example
     -------
     >>> from core_se3 import mesh
@@ -125,6 +171,8 @@ class SurfaceLoad(Load):
     >>> ld = SurfaceLoad(m, (0.0, 0.0, -3.0))
     >>> round(float(ld.evaluate(m.g0, 1.0).f[:, 2].sum()), 12)        # q times the area
     -6.0
+    >>> round(float(SurfaceLoad(m, 3.0, follower=True).evaluate(m.g0, 1.0).f[:, 2].sum()), 12)
+    6.0
     """
 
     def __init__(self, mesh, q, follower=False, elements=None, scale=None, name="surface"):

@@ -49,12 +49,35 @@ class Magnetisation:
     interpolated bilinearly), or a callable X (k, 3) -> (k, 3) (function of reference position,
     evaluated at the 2x2 Gauss points).
 
+    Parameters
+    ----------
+    mesh : core_se3.mesh.Mesh
+        The mesh.
+    Br : array_like or callable
+        As above [T].
+    h : float
+        Thickness [length] (B^r is per unit volume).
+    elements : array_like of int, optional
+        The magnetised elements (default all).
+    mu0 : float, optional
+        Vacuum permeability in the model's units (default ``MU0``, SI).
+
+    Attributes
+    ----------
+    nodes : (k,) ndarray
+        The magnetised nodes; ``mu`` (k, 3): their dipoles [A length^2] in the body frames,
+        (h/mu0) R_0^T int N_i B^r_0 dA.
+    total_lab : (3,) ndarray
+        int B^r_0 dV [T length^3] (exact for the lumped dipoles).
+
     Example
     -------
     >>> from core_se3 import mesh
     >>> mag = Magnetisation(mesh.rectangle(2.0, 1.0, 2, 1), (0.1, 0.0, 0.0), h=0.5, mu0=1.0)
     >>> mag.total_lab.round(12).tolist()                        # int Br dV = Br h A
     [0.1, 0.0, 0.0]
+    >>> mag.mu[:3, 0].round(12).tolist()                        # corner, mid-edge, corner node
+    [0.0125, 0.025, 0.0125]
     """
 
     def __init__(self, mesh, Br, h, elements=None, mu0=MU0):
@@ -115,6 +138,16 @@ class Magnetisation:
 
 class MagneticLoad(Load):
     """Couple and force of the applied field ``field`` on the magnetisation ``mag``.
+
+    Parameters
+    ----------
+    mag : Magnetisation
+        The magnetised material (nodal dipoles).
+    field : core_se3.model.Field
+        The applied field B^a(x, lam); its ``approximate_hessian`` makes the load's tangent
+        approximate.
+    name : str, optional
+        For reports.
 
     Example
     -------

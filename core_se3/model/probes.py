@@ -13,6 +13,15 @@ class Probe:
     """A point of the mesh between two nodes a, b: the frame g_a exp((1 - wa) log(g_a^-1 g_b))
     on the SE(3) geodesic (wa = 1: the node a itself).
 
+    Parameters
+    ----------
+    name : str
+        The probe's name (a key of ``StepResult.probes``).
+    node_a, node_b : int
+        The two nodes.
+    wa : float, optional
+        The weight of node a (1: a itself, 0.5: halfway along the geodesic).
+
     Example
     -------
     >>> from core_se3 import mesh

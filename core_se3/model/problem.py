@@ -53,6 +53,13 @@ class Problem:
     backend : str, optional
         'numba' (compiled kernels) or 'numpy' (the reference); default ``core_se3.backend``'s.
 
+    Attributes
+    ----------
+    loads, supports : list
+        The Load objects and the Prescribed supports added so far; ``probes``: name -> Probe.
+    solve_defaults : dict
+        Options :meth:`solve` uses unless given (a scenario's [solver] settings).
+
     Example
     -------
     >>> from core_se3 import Problem, Material, mesh

@@ -52,7 +52,29 @@ __all__ = ["Prescribed", "LabSpring", "LabTiltSpring", "RotationComponentSpring"
 
 class Prescribed:
     """Nodes whose body-frame dofs ``fixed`` (6 booleans) are held: at their reference values,
-    or on ``target(lam) -> (k, 4, 4)`` frames (a prescribed motion)."""
+    or on ``target(lam) -> (k, 4, 4)`` frames (a prescribed motion).
+
+    Made by ``Problem.clamp``, ``fix``, ``rotate_edge`` and ``prescribe``; the held dofs leave the
+    system (``Problem.constraint_mask``), the solvers set the frames of a target before each try.
+
+    Parameters
+    ----------
+    nodes : array_like of int
+        The held nodes (k,).
+    fixed : (6,) array_like of bool
+        The held body-frame dofs: translations along d1, d2, d3, then rotations.
+    target : callable, optional
+        lam -> (k, 4, 4) frames of the nodes (None: the reference frames).
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
+    >>> p.fix("x0", [0, 1, 2])                                  # a hinge: translations held
+    >>> s = p.supports[0]
+    >>> s.nodes.tolist(), s.fixed.tolist(), s.target is None
+    ([0, 3], [True, True, True, False, False, False], True)
+    """
 
     def __init__(self, nodes, fixed, target=None):
         self.nodes = np.asarray(nodes, np.int64)
@@ -76,6 +98,19 @@ class _Spring(Load):
 
 class LabSpring(_Spring):
     """Penalty on the lab displacement components ``dirs`` (rows: unit vectors, per node).
+
+    Parameters
+    ----------
+    mesh : core_se3.mesh.Mesh
+        The mesh.
+    nodes : array_like of int
+        The supported nodes (k,).
+    dirs : (q, 3) or (k, q, 3) array_like
+        Lab unit directions held at every node (or per node).
+    k : float
+        Spring stiffness [force/length] (module docstring: a few decades above E h).
+    name : str, optional
+        For reports.
 
     Example
     -------
@@ -125,7 +160,28 @@ class LabSpring(_Spring):
 
 
 class LabTiltSpring(_Spring):
-    """Penalty c = d3 . t = 0 (the normal stays normal to the lab direction t, per node)."""
+    """Penalty c = d3 . t = 0 (the normal stays normal to the lab direction t, per node).
+
+    Parameters
+    ----------
+    mesh : core_se3.mesh.Mesh
+        The mesh.
+    nodes : array_like of int
+        The supported nodes (k,).
+    t : (3,) or (k, 3) array_like
+        Lab unit direction(s) the normal must stay normal to.
+    k_rot : float
+        Rotational stiffness [force x length] of the energy 1/2 k_rot c^2; ``name``: for reports.
+
+    Example
+    -------
+    >>> from core_se3 import mesh, lie
+    >>> m = mesh.rectangle(1.0, 1.0, 1, 1)
+    >>> g = m.g0.copy(); g[0, :3, :3] = lie.exp_so3([0.1, 0.0, 0.0])   # tilted about x by 0.1
+    >>> sp = LabTiltSpring(m, [0], (0.0, 1.0, 0.0), k_rot=10.0)
+    >>> sp.tilt(g).round(6).tolist(), sp.evaluate(g, 1.0).f[0, 3:].round(6).tolist()   # c = -sin 0.1
+    ([-0.099833], [-0.993347, 0.0, 0.0])
+    """
 
     def __init__(self, mesh, nodes, t, k_rot, name="lab tilt support"):
         self.n = mesh.n_nodes
@@ -168,7 +224,28 @@ MAX_TOTAL_ROTATION = 0.95 * np.pi   # log's cut at pi is too close beyond this
 
 
 class RotationComponentSpring(_Spring):
-    """Penalty c = a . log(R R0^T) = 0 (total rotation vector's lab component a, per node)."""
+    """Penalty c = a . log(R R0^T) = 0 (total rotation vector's lab component a, per node).
+
+    Parameters
+    ----------
+    mesh : core_se3.mesh.Mesh
+        The mesh.
+    nodes : array_like of int
+        The supported nodes (k,).
+    a : (3,) or (k, 3) array_like
+        Lab unit axis (or one per node) of the held component.
+    k_rot : float
+        Rotational stiffness [force x length/rad^2]; ``name``: for reports.
+
+    Example
+    -------
+    >>> from core_se3 import mesh, lie
+    >>> m = mesh.rectangle(1.0, 1.0, 1, 1)
+    >>> g = m.g0.copy(); g[0, :3, :3] = lie.exp_so3([0.0, 0.0, 0.2])   # node 0 turned about z
+    >>> sp = RotationComponentSpring(m, [0], (0.0, 0.0, 1.0), k_rot=10.0)
+    >>> sp.component(g).round(12).tolist(), (sp.evaluate(g, 1.0).f[0, 3:].round(12) + 0.0).tolist()
+    ([0.2], [0.0, 0.0, -2.0])
+    """
 
     def __init__(self, mesh, nodes, a, k_rot, name="rotation component support"):
         self.n = mesh.n_nodes

@@ -25,6 +25,26 @@ def tangent_fd_check(problem, g, lam=1.0, h=1e-6, free_all=False):
     With ``free_all`` every dof is treated as free (supports ignored).  Returns
     (relative error, K dense, K_fd dense).
 
+    Parameters
+    ----------
+    problem : core_se3.Problem
+        The problem (element, loads and supports).
+    g : (n, 4, 4) array
+        The state at which to compare (set prescribed frames first: ``apply_prescribed``).
+    lam : float, optional
+        Load factor.
+    h : float, optional
+        Step of the central differences along g_i <- g_i exp(+-h e_k).
+    free_all : bool, optional
+        Compare on all 6n dofs instead of the free ones.
+
+    Returns
+    -------
+    err : float
+        max |K - K_fd| / max |K_fd|: about h^2 for a consistent tangent.
+    K, K_fd : ndarray
+        The dense tangent and its finite-difference approximation.
+
     Example
     -------
     >>> import numpy as np
@@ -51,6 +71,22 @@ def tangent_fd_check(problem, g, lam=1.0, h=1e-6, free_all=False):
 def zero_modes(problem, g=None, lam=0.0, rel=1e-10):
     """Eigenvalues of the symmetric part of the free-free tangent, sorted by magnitude,
     and the number below rel * lambda_max.
+
+    Parameters
+    ----------
+    problem : core_se3.Problem
+        The problem (supports ignored: every dof free).
+    g : (n, 4, 4) array, optional
+        The state (default the reference frames); ``lam``: the load factor.
+    rel : float, optional
+        Threshold of a zero eigenvalue relative to the largest.
+
+    Returns
+    -------
+    ev : ndarray
+        |eigenvalues| of sym(K), ascending.
+    count : int
+        The number of zero-energy modes: 6 (the rigid motions) for a sound free element.
 
     Example
     -------

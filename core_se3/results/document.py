@@ -29,7 +29,28 @@ VERSION = 1
 
 def probe_record(p, axis=None):
     """JSON form of a recorded probe state dict(u, R, w) (``rotation_about_axis`` = w . axis
-    when an axis is given)."""
+    when an axis is given).
+
+    Parameters
+    ----------
+    p : dict
+        dict(u (3,), R (3, 3), w (3,)) as in ``StepResult.probes``.
+    axis : (3,) array, optional
+        Lab axis for ``rotation_about_axis`` [rad].
+
+    Returns
+    -------
+    dict
+        u, rotation_angle (|w|), [rotation_about_axis], rotation_vector, rotation: plain lists
+        and floats.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> r = probe_record(dict(u=np.zeros(3), R=np.eye(3), w=np.array([0.0, 0.0, 2 * np.pi])), axis=np.array([0, 0, 1.0]))
+    >>> list(r), r["rotation_angle"]                  # a full turn: the unwrapped angle is 2 pi
+    (['u', 'rotation_angle', 'rotation_about_axis', 'rotation_vector', 'rotation'], 6.283185307179586)
+    """
     out = dict(u=np.asarray(p["u"]).tolist(), rotation_angle=float(np.linalg.norm(p["w"])))
     if axis is not None:
         out["rotation_about_axis"] = float(np.asarray(p["w"]) @ axis)
@@ -39,7 +60,32 @@ def probe_record(p, axis=None):
 
 def step_record(st, load, axis=None, **extra):
     """JSON form of a StepResult: load factor, the reported load (dict name, value, unit, ...),
-    probes, Newton iterations and residuals, balance error, then ``extra`` keys."""
+    probes, Newton iterations and residuals, balance error, then ``extra`` keys.
+
+    Parameters
+    ----------
+    st : StepResult
+        The step.
+    load : dict
+        The reported load, e.g. dict(name="P", value=1.0, unit="N").
+    axis : (3,) array, optional
+        As for :func:`probe_record`.
+    **extra
+        Further keys of the record.
+
+    Returns
+    -------
+    dict
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e6, 0.0, 0.1))
+    >>> p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 1.0)); p.add_probe("tip")
+    >>> rec = step_record(p.solve(steps=1).final, dict(name="P", value=1.0, unit="N"), error=None)
+    >>> list(rec), rec["load_factor"], rec["residual"] < 1e-10
+    (['load_factor', 'load', 'probes', 'iterations', 'residual', 'residual_history', 'balance_error', 'error'], 1.0, True)
+    """
     rec = dict(load_factor=float(st.load_factor), load=load,
                probes={name: probe_record(p, axis) for name, p in st.probes.items()},
                iterations=int(st.iterations),
@@ -51,13 +97,30 @@ def step_record(st, load, axis=None, **extra):
 
 
 def mesh_record(mesh):
-    """nx, ny (the structured shape, None for unstructured meshes), node, element, dof counts."""
+    """nx, ny (the structured shape, None for unstructured meshes), node, element, dof counts.
+
+    Parameters: mesh (core_se3.mesh.Mesh).  Returns: dict(nx, ny, n_nodes, n_elements, n_dofs).
+
+    Example
+    -------
+    >>> from core_se3 import mesh
+    >>> mesh_record(mesh.rectangle(1.0, 1.0, 2, 1))
+    {'nx': 2, 'ny': 1, 'n_nodes': 6, 'n_elements': 2, 'n_dofs': 36}
+    """
     nx, ny = mesh.shape or (None, None)
     return dict(nx=nx, ny=ny, n_nodes=mesh.n_nodes, n_elements=mesh.n_elements, n_dofs=6 * mesh.n_nodes)
 
 
 def timing_record(timings):
-    """The timings with their ``total`` (the sum of the phases)."""
+    """The timings with their ``total`` (the sum of the phases).
+
+    Parameters: timings (dict phase -> seconds; a ``total`` given is recomputed).  Returns: dict.
+
+    Example
+    -------
+    >>> timing_record({"setup": 0.5, "solve": 1.0, "total": 9.0})
+    {'setup': 0.5, 'solve': 1.0, 'total': 1.5}
+    """
     t = {k: float(v) for k, v in timings.items() if k != "total"}
     t["total"] = sum(t.values())
     return t
@@ -66,6 +129,28 @@ def timing_record(timings):
 def result_document(case, model, variant, params, mesh, steps, timings, reference=None, **extra):
     """The schema's top level: ``params`` {key: {value, unit}}, ``mesh`` a Mesh (or its record),
     ``steps`` step records, ``timings`` a dict of phases; ``extra`` keys follow the standard ones.
+
+    Parameters
+    ----------
+    case, model, variant : str
+        Case (or scenario) name, model ('core_se3', 'fenicsx_ref') and variant (element).
+    params : dict
+        key -> dict(value, unit).
+    mesh : core_se3.mesh.Mesh or dict
+        The mesh (or its :func:`mesh_record`).
+    steps : list of dict
+        Step records (:func:`step_record`).
+    timings : dict
+        Seconds per phase (the total is added).
+    reference : dict, optional
+        dict(entry, block, error, ...) of the reference comparison.
+    **extra
+        Further top-level keys (``control`` goes right after ``variant``).
+
+    Returns
+    -------
+    dict
+        The JSON-able document of schema ``core-se3-result`` version 1.
 
     Example
     -------
@@ -83,13 +168,39 @@ def result_document(case, model, variant, params, mesh, steps, timings, referenc
 
 
 def write_json(path, doc):
-    """Write a document (indent 1)."""
+    """Write a document (indent 1).
+
+    Parameters: path (str or path-like), doc (a JSON-able dict).  Not atomic: the run directories
+    use ``io.write_json_atomic``.
+
+    Example
+    -------
+    >>> import os, tempfile
+    >>> path = os.path.join(tempfile.mkdtemp(), "r.json")
+    >>> write_json(path, result_document("demo", "core_se3", "default", {}, {"nx": None}, [], {}))
+    >>> read_json(path)["case"]
+    'demo'
+    """
     with open(path, "w") as fh:
         json.dump(doc, fh, indent=1)
 
 
 def read_json(path):
-    """Read a document, checking its schema and version."""
+    """Read a document, checking its schema and version.
+
+    Parameters: path (str or path-like).  Returns: the document (dict); ValueError for another
+    schema or version.
+
+    Example
+    -------
+    >>> import pathlib, tempfile
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "other.json"
+    >>> _ = path.write_text('{"schema": "something-else"}')
+    >>> read_json(path)                   # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    ValueError: ...other.json: not a core-se3-result document
+    """
     with open(path) as fh:
         doc = json.load(fh)
     if doc.get("schema") != SCHEMA:

@@ -14,6 +14,18 @@ def unwrap_rotation(R, w_prev):
     """Rotation vector of R that is closest to w_prev among w + 2 pi k n (continuity along a
     path: a roll-up reports 6 pi, not its value modulo 2 pi).
 
+    Parameters
+    ----------
+    R : (3, 3) array
+        The rotation (e.g. R R0^T of a probe).
+    w_prev : (3,) array
+        The unwrapped rotation vector of the previous state [rad] (zeros at the start).
+
+    Returns
+    -------
+    (3,) ndarray
+        log_so3(R) + 2 pi k n (n its axis, |k| <= 50) nearest to w_prev [rad].
+
     Example
     -------
     >>> import numpy as np
@@ -39,7 +51,35 @@ class StepResult:
     """One converged (stored) state: its load factor, frames, Newton history, the total lab
     reaction and applied force and moment (about the origin), the probes
     (name -> dict(u, R, w): displacement, rotation R R0^T, unwrapped rotation vector), the
-    scales of the balance check, and (path following) the stability of the state."""
+    scales of the balance check, and (path following) the stability of the state.
+
+    Attributes
+    ----------
+    load_factor : float
+        lam of the state.
+    g : (n, 4, 4) ndarray
+        Nodal frames.
+    iterations : int
+        Newton iterations of the step; ``residual_history``: the relative residual of each.
+    reaction_force, reaction_moment : (3,) ndarray
+        Total lab reaction of the supports [force], its moment about the origin [force x length].
+    applied_force, applied_moment : (3,) ndarray
+        The same of the applied loads; at equilibrium they cancel the reactions
+        (``balance_error``, relative to ``scale``, the sums of the nodal magnitudes).
+    probes : dict
+        name -> dict(u (3,) [length], R (3, 3), w (3,) [rad], unwrapped along the path).
+    stability : dict or None
+        det_sign, negative_eigenvalues, q_dot_t of the tangent (path following only).
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e6, 0.0, 0.1))
+    >>> p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 1.0))
+    >>> st = p.solve(steps=1).final
+    >>> (st.reaction_force.round(9) + 0.0).tolist(), bool(st.balance_error < 1e-9)   # balances the load
+    ([0.0, 0.0, -1.0], True)
+    """
     load_factor: float
     g: np.ndarray                      # (n, 4, 4) nodal frames
     iterations: int
@@ -65,7 +105,30 @@ class StepResult:
 class Result:
     """The stored steps of a solve (``steps``; ``final`` the last), the time spent per phase
     (``timings``: setup, assembly, solve, other [s]), the per-(sub)step log, the element name
-    and, for path following, the critical points found."""
+    and, for path following, the critical points found.
+
+    Attributes
+    ----------
+    mesh : core_se3.mesh.Mesh
+        The reference mesh.
+    steps : list of StepResult
+        The stored states, the initial one first; ``final`` (property): the last, or None.
+    timings : dict
+        Seconds per phase: setup, assembly, solve, other.
+    log : list of dict
+        One entry per (sub)step try: load factor, converged, iterations, residuals, reason.
+    element : str
+        The element's name; ``critical_points``: CriticalPoint list (path following).
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e6, 0.0, 0.1))
+    >>> p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 1.0))
+    >>> res = p.solve(steps=2)
+    >>> len(res.steps), res.displacements().shape, res.timing_table().split()[:2]
+    (3, (6, 3), ['phase', 'seconds'])
+    """
     mesh: object
     steps: list = field(default_factory=list)
     timings: dict = field(default_factory=lambda: dict(setup=0.0, assembly=0.0, solve=0.0, other=0.0))

@@ -63,7 +63,30 @@ def material_section(v, d, regions):
 
 
 def material_index(spec_material, regions, n_elements):
-    """(list of property dicts, (m,) index into it): the material of every element."""
+    """(list of property dicts, (m,) index into it): the material of every element.
+
+    Parameters
+    ----------
+    spec_material : dict
+        The validated [material] section (E, nu, h, shear_factor, drilling, rho and
+        ``regions``: name -> the same keys).
+    regions : dict
+        name -> element ids.
+    n_elements : int
+        Number of elements.
+
+    Returns
+    -------
+    (list of dict, (m,) ndarray)
+        The distinct property sets (the base one first) and each element's index.
+
+    Example
+    -------
+    >>> base = dict(E=1.0, nu=0.3, h=0.1, shear_factor=1.0, drilling=1.0, rho=None)
+    >>> mats, index = material_index(dict(base, regions={"tip": dict(base, E=2.0)}), {"tip": [2, 3]}, 4)
+    >>> [m["E"] for m in mats], index.tolist()
+    ([1.0, 2.0], [0, 0, 1, 1])
+    """
     mats = [{k: spec_material[k] for k in MATERIAL_KEYS}]
     index = np.zeros(n_elements, np.int64)
     for name, vals in spec_material["regions"].items():

@@ -37,12 +37,50 @@ PHASES = ("setup", "assembly", "solve", "other")
 
 
 class RunInterrupted(CoreSE3Error):
-    """Raised when ``stop_after`` steps were done (to simulate an interrupted run in tests)."""
+    """Raised when ``stop_after`` steps were done (to simulate an interrupted run in tests).
+
+    The checkpoint then holds the last step: ``run(..., resume=True)`` continues and ends in the
+    state of an uninterrupted run.
+
+    Example
+    -------
+    >>> import tempfile
+    >>> from core_se3 import scenario
+    >>> scn = scenario.from_dict({"mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 4, "ny": 1},
+    ...     "material": {"E": 1.2e6, "nu": 0.0, "h": 0.1}, "supports": [{"type": "clamp", "edge": "x0"}],
+    ...     "loads": [{"type": "edge_force", "edge": "x1", "force": [0.0, 0.0, 1.0]}], "solver": {"steps": 2},
+    ...     "output": {"vtu": False, "plots": False, "picture": False}})
+    >>> out = tempfile.mkdtemp()
+    >>> try:
+    ...     run(scn, out=out, stop_after=1)
+    ... except RunInterrupted as exc:
+    ...     print(exc)
+    stopped after step 1 as asked (stop_after=1)
+    >>> bool((run(scn, out=out, resume=True).g == run(scn, out=tempfile.mkdtemp()).g).all())
+    True
+    """
 
 
 @dataclass
 class RunResult:
-    """What a run left: the results document, the final frames, the output files."""
+    """What a run left: the results document, the final frames, the output files.
+
+    Attributes: ``doc`` (the results document: schema core-se3-result v1 with status, scenario,
+    fingerprint; ``status`` its status), ``g`` (n, 4, 4) the final frames, ``out`` the run
+    directory, ``files``: kind -> path (results, checkpoint, pvd, probes, picture).
+
+    Example
+    -------
+    >>> import tempfile
+    >>> from core_se3 import scenario
+    >>> scn = scenario.from_dict({"mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 4, "ny": 1},
+    ...     "material": {"E": 1.2e6, "nu": 0.0, "h": 0.1}, "supports": [{"type": "clamp", "edge": "x0"}],
+    ...     "loads": [{"type": "edge_force", "edge": "x1", "force": [0.0, 0.0, 1.0]}], "solver": {"steps": 2},
+    ...     "output": {"vtu": False, "plots": False, "picture": False}})
+    >>> res = run(scn, out=tempfile.mkdtemp())
+    >>> res.status, len(res.doc["steps"]), sorted(res.files), res.g.shape
+    ('complete', 3, ['checkpoint', 'results'], (10, 4, 4))
+    """
     doc: dict
     g: np.ndarray
     out: str
@@ -54,12 +92,35 @@ class RunResult:
 
 
 def point_fields(prob, g, lam=1.0):
-    """Extra VTU point fields of the problem's loads (magnetisation, magnetic couple, ...)."""
+    """Extra VTU point fields of the problem's loads (magnetisation, magnetic couple, ...).
+
+    Parameters: prob (Problem), g (n, 4, 4), lam.  Returns: name -> (n, k) array (empty without
+    such loads).
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> from core_se3.model import UniformField
+    >>> p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
+    >>> _ = p.add_magnetic(Br=(0.1, 0.0, 0.0), field=UniformField((0.0, 0.0, 0.01)))
+    >>> sorted(point_fields(p, p.mesh.g0))
+    ['magnetic_couple', 'magnetic_force', 'magnetisation_Br']
+    """
     return {k: np.asarray(v) for k, v in prob.output_fields(g, lam).items()}
 
 
 def cell_fields(prob, g):
-    """VTU cell fields of the element (stress resultants at the element centres)."""
+    """VTU cell fields of the element (stress resultants at the element centres).
+
+    Parameters: prob (Problem), g (n, 4, 4).  Returns: name -> (m, 3) array.
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
+    >>> {k: v.shape for k, v in cell_fields(p, p.mesh.g0).items() if k in ("N1", "M2")}
+    {'N1': (2, 3), 'M2': (2, 3)}
+    """
     return prob.element.cell_fields(g)
 
 
@@ -144,7 +205,23 @@ def run(scn, out=None, resume=False, progress=None, force=False, stop_after=None
     always.  stop_after: stop with RunInterrupted once that many steps are done in this call
     (tests).  ConvergenceError propagates after the failure is recorded (status "failed"); the
     checkpoint keeps the last converged step.  ``verbose`` is accepted for compatibility (the
-    solvers log through ``logging``)."""
+    solvers log through ``logging``).
+
+    Parameters: scn (Scenario) and the keywords above; a missing or foreign checkpoint, or an
+    ``out`` that holds one without resume or force, is a CheckpointError.  Returns: RunResult.
+
+    Example
+    -------
+    >>> import os, tempfile
+    >>> from core_se3 import scenario
+    >>> scn = scenario.from_dict({"mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 4, "ny": 1},
+    ...     "material": {"E": 1.2e6, "nu": 0.0, "h": 0.1}, "supports": [{"type": "clamp", "edge": "x0"}],
+    ...     "loads": [{"type": "edge_force", "edge": "x1", "force": [0.0, 0.0, 1.0]}], "solver": {"steps": 2},
+    ...     "output": {"vtu": False, "plots": False, "picture": False}})
+    >>> res = run(scn, out=tempfile.mkdtemp())
+    >>> [s["load_factor"] for s in res.doc["steps"]], sorted(os.listdir(res.out))
+    ([0.0, 0.5, 1.0], ['checkpoint.npz', 'results.json'])
+    """
     t_setup0 = time.perf_counter()
     prob = scn.problem
     s, o = scn.solver, scn.output
@@ -324,7 +401,18 @@ def _finish(o, prob, doc, scn, g, records, out, vtu_dir, files):
 
 
 def plot_probes(path, doc):
-    """Load factor against the displacement components of every probe (one PNG)."""
+    """Load factor against the displacement components of every probe (one PNG).
+
+    Components that stay ~0 along the path are left out.  Parameters: path (written
+    atomically), doc (a results document whose steps have probes).  Returns: the path.
+
+    Example
+    -------
+    >>> import os, tempfile
+    >>> doc = {"case": "demo", "steps": [{"load_factor": x, "probes": {"tip": {"u": [0.0, 0.0, x]}}} for x in (0.0, 1.0)]}
+    >>> os.path.basename(plot_probes(os.path.join(tempfile.mkdtemp(), "probes.png"), doc))
+    'probes.png'
+    """
     from ..io import plot_load_deflection
     lam = np.array([s["load_factor"] for s in doc["steps"]])
     disp = {}
@@ -344,7 +432,21 @@ def plot_probes(path, doc):
 def picture(path, scn, g, title=None, records=None, vtu_dir=None):
     """PNG of the deformed shell (matplotlib 3-D, reference outline dotted): the final state
     coloured by rotation angle, or, with [output] picture_steps = k > 1, k states of the path
-    (read back from the VTU files, so also after a resume) overlaid."""
+    (read back from the VTU files, so also after a resume) overlaid.
+
+    Parameters: path (written atomically); scn (mesh, [output] view and picture_steps); g
+    (n, 4, 4) the final state; title (default the scenario's name); records, vtu_dir (for
+    several states).  Returns: the path.
+
+    Example
+    -------
+    >>> import os, tempfile
+    >>> from core_se3 import scenario
+    >>> scn = scenario.from_dict({"mesh": {"generator": "rectangle", "L": 1.0, "width": 1.0, "nx": 2, "ny": 1},
+    ...     "material": {"E": 1e3, "nu": 0.0, "h": 0.01}, "supports": [{"type": "clamp", "edge": "x0"}]})
+    >>> os.path.getsize(picture(os.path.join(tempfile.mkdtemp(), "shell.png"), scn, scn.mesh.g0)) > 0
+    True
+    """
     from ..io import plot_sequence, plot_shell
     m = scn.mesh
     o = scn.output

@@ -40,6 +40,23 @@ class Scenario:
     ``solve()`` runs the scenario's own [solver] settings), and the ``fingerprint`` of
     everything that determines the converged states (for --resume).
 
+    Made by :func:`load`, :func:`loads` and :func:`from_dict` (not by hand).  ``name``,
+    ``solver`` and ``output`` are the spec's sections; :meth:`load_factors` the requested load
+    factors; :meth:`with_overrides` a changed copy; :meth:`run` runs it with output.
+
+    Attributes
+    ----------
+    spec : dict
+        The validated document with every default filled in.
+    mesh : core_se3.mesh.Mesh
+        The mesh; ``regions``: name -> element ids.
+    problem : core_se3.Problem
+        The shell problem, supports checked.
+    file : str
+        The source (a path, ``"<string>"`` or ``"<dict>"``); ``raw``: the parsed document.
+    fingerprint : str
+        SHA-256 of the physical content (solver tolerances, limits and outputs left out).
+
     Example
     -------
     >>> scn = loads('''
@@ -141,7 +158,32 @@ def _set_dotted(doc, key, value, file):
 
 
 def load(path):
-    """Read and validate a scenario file (TOML)."""
+    """Read and validate a scenario file (TOML).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file (UTF-8 TOML, schema in docs/SCENARIOS.md); relative mesh files are found from
+        its directory.
+
+    Returns
+    -------
+    Scenario
+        Named after the file's stem unless it gives a ``name``.  Every problem is a
+        :class:`~core_se3.errors.ScenarioError` naming the file and the key.
+
+    Example
+    -------
+    >>> import pathlib, tempfile
+    >>> from core_se3.scenario import dumps
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "strip.toml"
+    >>> _ = path.write_text(dumps({"mesh": {"generator": "rectangle", "L": 1.0, "width": 1.0, "nx": 2, "ny": 1},
+    ...                             "material": {"E": 1e3, "nu": 0.0, "h": 0.01},
+    ...                             "supports": [{"type": "clamp", "edge": "x0"}]}))
+    >>> scn = load(path)
+    >>> scn.name, scn.mesh.n_elements, scn.solver["steps"]
+    ('strip', 2, 10)
+    """
     path = os.fspath(path)
     try:
         with open(path, "rb") as fh:
@@ -156,7 +198,28 @@ def load(path):
 
 
 def loads(text, file="<string>", base_dir="."):
-    """Parse and validate scenario TOML text."""
+    """Parse and validate scenario TOML text.
+
+    Parameters
+    ----------
+    text : str
+        The TOML document.
+    file : str, optional
+        Its name in messages (and, without a leading '<', the default scenario name).
+    base_dir : str, optional
+        Directory of relative mesh files.
+
+    Returns
+    -------
+    Scenario
+
+    Example
+    -------
+    >>> loads("[mesh")                      # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.ScenarioError: <string>: not valid TOML: ...
+    """
     try:
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -166,7 +229,31 @@ def loads(text, file="<string>", base_dir="."):
 
 
 def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario"):
-    """Validate a scenario given as nested dicts/lists (the parsed TOML) and build its Problem."""
+    """Validate a scenario given as nested dicts/lists (the parsed TOML) and build its Problem.
+
+    Parameters
+    ----------
+    doc : dict
+        The document (TOML types: dicts, lists, str, int, float, bool).
+    file : str, optional
+        Its name in messages; ``base_dir``: directory of relative mesh files.
+    default_name : str, optional
+        The scenario's name when ``doc`` gives none.
+
+    Returns
+    -------
+    Scenario
+
+    Example
+    -------
+    A tolerance does not change the converged states (the fingerprint stays), a modulus does:
+
+    >>> doc = {"mesh": {"generator": "rectangle", "L": 1.0, "width": 1.0, "nx": 2, "ny": 1},
+    ...        "material": {"E": 1e3, "nu": 0.0, "h": 0.01}, "supports": [{"type": "clamp", "edge": "x0"}]}
+    >>> scn = from_dict(doc)
+    >>> [scn.with_overrides({k: v}).fingerprint == scn.fingerprint for k, v in [("solver.rtol", 1e-12), ("material.E", 2e3)]]
+    [True, False]
+    """
     v = Validator(file)
     v.table(doc, "", TOP_KEYS, required=("mesh", "material"))
     spec = {}

@@ -12,6 +12,17 @@ __all__ = ["dumps"]
 def dumps(doc):
     """TOML text of a scenario given as nested dicts/lists (tables, arrays of tables, values).
 
+    Parameters
+    ----------
+    doc : dict
+        Tables (dicts), arrays of tables (lists of dicts) and values (bool, int, float, str,
+        lists, NumPy scalars); anything else is a TypeError.
+
+    Returns
+    -------
+    str
+        TOML that ``tomllib.loads`` reads back to ``doc`` (floats written with repr).
+
     Example
     -------
     >>> print(dumps({"name": "demo", "mesh": {"generator": "rectangle", "nx": 4}}))

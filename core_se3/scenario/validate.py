@@ -23,6 +23,16 @@ def make_scale(spec):
     """Load-factor scaling s(lam) from a validated spec ("linear", "constant" or a table
     [[lam, s], ...], linear in between and constant outside).
 
+    Parameters
+    ----------
+    spec : str or sequence of (float, float)
+        "linear" (s = lam), "constant" (s = 1) or the table (lam strictly increasing).
+
+    Returns
+    -------
+    callable
+        lam -> s.
+
     Example
     -------
     >>> make_scale([[0.0, 0.0], [0.5, 1.0]])(0.25), make_scale("constant")(7.0)

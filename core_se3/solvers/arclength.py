@@ -138,6 +138,12 @@ class ArcState:
     so far (``mode`` not needed to continue); finished: why the path stopped at this point
     ('lam_end', 'control_end', 'lam_min', 'max_steps') or ''; unwrap: the continuously
     unwrapped probe rotation vectors (arc_length's recorder; None for path_follow).
+
+    Example
+    -------
+    >>> st = ArcState(None, 0.5, 3, 0.1, 0.8, 1e-4, 0.0, 1.0)
+    >>> scalars, arrays = st.pack(); ArcState.unpack(None, scalars, arrays) == st    # JSON round trip
+    True
     """
     state: object
     lam: float
@@ -233,7 +239,13 @@ def _fraction(cur, pt, why, lam_end, control_end, ctrl_val):
 @dataclass
 class PathInfo:
     """What a path follower accumulates besides its points: the log of every try, the critical
-    points found, and the time spent assembling and solving ([assembly, solve] seconds)."""
+    points found, and the time spent assembling and solving ([assembly, solve] seconds).
+
+    Example
+    -------
+    >>> PathInfo()                      # path_steps(..., info=PathInfo()) fills it
+    PathInfo(log=[], critical=[], timers=[0.0, 0.0])
+    """
     log: list = field(default_factory=list)
     critical: list = field(default_factory=list)
     timers: list = field(default_factory=lambda: [0.0, 0.0])
@@ -242,7 +254,13 @@ class PathInfo:
 @dataclass
 class PathEvent:
     """A converged point of the path and the ArcState to restart from it.  ``restart`` marks
-    the re-analysed start point of a resumed path (not a new point)."""
+    the re-analysed start point of a resumed path (not a new point).
+
+    Example
+    -------
+    >>> PathEvent(point=None, state=None).restart
+    False
+    """
     point: object
     state: ArcState
     restart: bool = False
@@ -270,6 +288,16 @@ def path_steps(sysm, options, lam_end=1.0, control=None, control_end=None, lam_m
     point comes as a ``restart`` event; a finished start yields nothing, unless it stopped at a
     max_steps now raised), repeating the computations of the uninterrupted path bit for bit.
     ``info`` (a PathInfo) collects the log, the critical points and the timers.
+    Parameters: ``options`` an ArcLengthOptions, the others as above.  Yields: PathEvent; too
+    many rejections raise PathError (a ConvergenceError) with ``info``.
+
+    Example
+    -------
+    >>> import numpy as np; from core_se3.solvers import AlgebraicSystem
+    >>> s = AlgebraicSystem(lambda u: u + u ** 3, lambda u: np.diag(1 + 3 * u ** 2), [1.0])
+    >>> ev = list(path_steps(s, ArcLengthOptions(dlam0=0.5), lam_end=1.0))
+    >>> [float(e.point.lam) for e in ev], ev[-1].state.finished, round(float(ev[-1].point.state[0]), 9)  # u + u^3 = 1
+    ([0.0, 0.625, 1.0], 'lam_end', 0.682327804)
     """
     o = options
     info = PathInfo() if info is None else info
@@ -430,6 +458,8 @@ def path_follow(sysm, method=None, lam_end=1.0, control=None, control_end=None, 
     ``method`` and the keywords are ArcLengthOptions fields (dlam0, psi, branch_switch, ...);
     ``on_step(ArcState)`` is called after the first point and after every converged point (not
     for the restart point of a resumed path, which is still the first of ``points``).
+    Parameters ``sysm``, ``lam_end``, ``control``, ``control_end``, ``lam_min``, ``start`` as for
+    :func:`path_steps`; returns (list of PathPoint, list of CriticalPoint, log, [assembly, solve]).
 
     Example
     -------

@@ -20,6 +20,20 @@ def scaled_norm(r, ell, moment=True):
     """Norm of nodal 6-vectors with the rotational part divided by ell (moments; ``moment``)
     or multiplied by it (rotations of an increment).
 
+    Parameters
+    ----------
+    r : array_like
+        Nodal 6-vectors, any shape with 6n entries (n, 6) or (6n,).
+    ell : float
+        The characteristic length [length] (``Problem.length_scale``).
+    moment : bool, optional
+        True: forces and moments (moments / ell); False: increments (rotations x ell).
+
+    Returns
+    -------
+    float
+        [force] or [length].
+
     Example
     -------
     >>> import numpy as np
@@ -34,7 +48,35 @@ def scaled_norm(r, ell, moment=True):
 
 def relative_residual(asm, ev, ell, extra_scale=0.0):
     """(relative residual, its round-off floor) of an Evaluation ``ev`` on the assembler's free
-    dofs; ``extra_scale`` (e.g. |lam q|_s of continuation) joins the scale."""
+    dofs; ``extra_scale`` (e.g. |lam q|_s of continuation) joins the scale.
+
+    Parameters
+    ----------
+    asm : core_se3.assembly.Assembler
+        The free dofs (``Problem.assembler()``).
+    ev : core_se3.model.Evaluation
+        The equations at the state.
+    ell : float
+        The length scale of :func:`scaled_norm`.
+    extra_scale : float, optional
+        A further force scale.
+
+    Returns
+    -------
+    (float, float)
+        |r|_s / max(|f_ext|_s, |r_int|_s, extra_scale), and 1e3 eps force_scale / that scale.
+
+    Example
+    -------
+    At the reference state r = -f_ext, so the relative residual is 1:
+
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(10.0, 1.0, 4, 1), Material(1.2e6, 0.0, 0.1))
+    >>> p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 1.0))
+    >>> rn, floor = relative_residual(p.assembler(), p.evaluate(p.mesh.g0, 1.0), p.length_scale)
+    >>> round(float(rn), 12), bool(floor < 1e-6)
+    (1.0, True)
+    """
     scale = max(scaled_norm(ev.f_ext, ell), scaled_norm(ev.r_int, ell), extra_scale, 1e-300)
     rn = scaled_norm(asm.scatter(ev.r), ell) / scale
     floor = 1e3 * np.finfo(float).eps * ev.force_scale / scale
@@ -42,5 +84,14 @@ def relative_residual(asm, ev, ell, extra_scale=0.0):
 
 
 def increment_norm(eta, ell):
-    """|eta|_s / ell of nodal increments (n, 6): the relative size the dtol test uses."""
+    """|eta|_s / ell of nodal increments (n, 6): the relative size the dtol test uses.
+
+    Parameters: eta (n, 6) increments [length, rad]; ell [length].  Returns: float [-].
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> float(increment_norm(np.array([[0.3, 0, 0, 0, 0, 0.2]]), ell=2.0))     # sqrt(0.3^2 + 0.4^2) / 2
+    0.25
+    """
     return scaled_norm(eta, ell, moment=False) / ell

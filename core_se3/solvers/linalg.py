@@ -38,6 +38,13 @@ class Factorization:
     SingularSystemError when a random right-hand side grows by 1e15 (a load may not excite an
     unrestrained mode; a random one does).  Use as a context manager or call ``close()``.
 
+    Parameters
+    ----------
+    K : scipy.sparse matrix or (N, N) array
+        The (non-symmetric) tangent.
+    solver : object
+        A linear solver of :func:`make_solver` (ignored for a dense K).
+
     Example
     -------
     >>> import numpy as np, scipy.sparse as sp
@@ -144,7 +151,32 @@ def _row_indices(indptr):
 
 def checked_solve(solver, K, b, probe=False):
     """Solve K x = b once through a :class:`Factorization` (with ``probe``: also test the
-    factor with a random right-hand side, as for the first solve of a path)."""
+    factor with a random right-hand side, as for the first solve of a path).
+
+    Parameters
+    ----------
+    solver : object
+        From :func:`make_solver`.
+    K : scipy.sparse matrix or array
+        The matrix; b : (N,) the right-hand side.
+    probe : bool, optional
+        Also run :meth:`Factorization.probe`.
+
+    Returns
+    -------
+    (N,) ndarray
+        x; a (near-)singular K raises :class:`~core_se3.errors.SingularSystemError`.
+
+    Example
+    -------
+    >>> import numpy as np, scipy.sparse as sp
+    >>> checked_solve(make_solver("superlu"), sp.csr_matrix([[2.0, 0.0], [0.0, 4.0]]), np.array([2.0, 2.0])).tolist()
+    [1.0, 0.5]
+    >>> checked_solve(make_solver("superlu"), sp.csr_matrix([[1.0, 1.0], [1.0, 1.0]]), np.ones(2))  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.SingularSystemError: tangent is singular...
+    """
     with Factorization(K, solver) as F:
         x = F.solve(b)
         if probe:
@@ -159,7 +191,18 @@ def _have_petsc():
 
 
 def available_solvers():
-    """The linear solvers this installation has."""
+    """The linear solvers this installation has.
+
+    Returns
+    -------
+    list of str
+        'superlu' always, 'mumps' when petsc4py imports.
+
+    Example
+    -------
+    >>> "superlu" in available_solvers()
+    True
+    """
     return ["superlu"] + (["mumps"] if _have_petsc() else [])
 
 
@@ -321,7 +364,25 @@ class AutoSolver:
 
 
 def make_solver(name="auto"):
-    """The linear solver ``name`` ('auto', 'superlu' or 'mumps')."""
+    """The linear solver ``name`` ('auto', 'superlu' or 'mumps').
+
+    Parameters
+    ----------
+    name : str, optional
+        'auto' (SuperLU below AUTO_MUMPS_MIN unknowns, MUMPS above when available), 'superlu' or
+        'mumps' (needs petsc4py).
+
+    Returns
+    -------
+    object
+        A solver with ``factor(K)`` (a context manager yielding solve(b)) and ``solve(K, b)``.
+        OptionError for an unknown or unavailable name.
+
+    Example
+    -------
+    >>> make_solver("superlu").name, make_solver().name
+    ('superlu', 'auto')
+    """
     if name == "auto":
         return AutoSolver()
     if name == "superlu":

@@ -43,7 +43,21 @@ class NewtonState:
 
     lam, g: the converged state; dlam: the increment a cut-back left to carry over (None: the
     next requested one); k_ref: the stiffness of the first step (limit-point check; None until
-    the first step converged)."""
+    the first step converged).
+
+    Attributes
+    ----------
+    lam : float
+        Load factor of the converged state; ``g`` (n, 4, 4) its frames.
+    dlam : float or None
+        The carried-over increment; ``k_ref``: the reference stiffness [force/length].
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> NewtonState(0.5, np.eye(4)[None], dlam=0.25).pack()      # what a checkpoint stores
+    {'lam': 0.5, 'dlam': 0.25, 'k_ref': None}
+    """
     lam: float
     g: np.ndarray
     dlam: float | None = None
@@ -58,7 +72,26 @@ class NewtonState:
 @dataclass
 class NewtonStep:
     """One stored step: its StepResult, the state to continue from, and the log entries of
-    the tries that led to it (each dict(lam, converged, iterations, residual_history, reason))."""
+    the tries that led to it (each dict(lam, converged, iterations, residual_history, reason)).
+
+    Attributes
+    ----------
+    step : core_se3.StepResult
+        The stored step.
+    state : NewtonState
+        The restart point after it.
+    tries : list of dict
+        The tries (sub-steps and failed attempts) since the previous stored step.
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(10.0, 1.0, 4, 1), Material(1.2e6, 0.0, 0.1))
+    >>> p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 1.0)); p.check_supports()
+    >>> item = next(newton_steps(p, [0.5]))
+    >>> item.step.load_factor, item.state.lam, [t["converged"] for t in item.tries]
+    (0.5, 0.5, [True])
+    """
     step: object
     state: NewtonState
     tries: list
@@ -66,7 +99,27 @@ class NewtonStep:
 
 def requested_load_factors(steps=10, lam_end=1.0, lam_start=0.0, factors=None):
     """The requested load factors: ``steps`` equal increments from lam_start to lam_end, or the
-    explicit ``factors`` (finite, strictly one way from lam_start)."""
+    explicit ``factors`` (finite, strictly one way from lam_start).
+
+    Parameters
+    ----------
+    steps : int, optional
+        Number of equal increments (>= 1).
+    lam_end, lam_start : float, optional
+        The end and start of the load factor.
+    factors : sequence of float, optional
+        Explicit load factors (replace steps and lam_end).
+
+    Returns
+    -------
+    (k,) ndarray
+        The targets, lam_start excluded.  OptionError for repeats, reversals or non-finite values.
+
+    Example
+    -------
+    >>> requested_load_factors(4, 1.0).tolist(), requested_load_factors(factors=[0.1, 0.5, 2.0]).tolist()
+    ([0.25, 0.5, 0.75, 1.0], [0.1, 0.5, 2.0])
+    """
     if factors is not None:
         targets = np.asarray(factors, float).ravel()
         incr = np.diff(np.r_[lam_start, targets])
@@ -102,6 +155,31 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
     the StepRecorder (default: a new one; pass the same one along a path for continuous probe
     rotations); result: a Result whose ``log`` and ``timings`` the iterations extend (kept by
     the ConvergenceError of a failure).  The supports must have been checked.
+
+    Parameters
+    ----------
+    problem : core_se3.Problem
+        The problem (``check_supports`` called).
+    targets : sequence of float
+        The load factors to store (e.g. :func:`requested_load_factors`).
+    options : NewtonOptions, optional
+        The controls (default ``NewtonOptions()``).
+    start, recorder, result : optional
+        As above.
+
+    Yields
+    ------
+    NewtonStep
+        One per target, in order; a failure raises
+        :class:`~core_se3.errors.ConvergenceError` (with ``result``).
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(10.0, 1.0, 4, 1), Material(1.2e6, 0.0, 0.1))
+    >>> p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 1.0)); p.check_supports()
+    >>> [round(item.step.load_factor, 12) for item in newton_steps(p, [0.5, 1.0])]
+    [0.5, 1.0]
     """
     opts = options or NewtonOptions()
     mesh = problem.mesh
@@ -269,6 +347,26 @@ def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, g_init=None, loa
     more than 3x that first (tangent) iterate.  Not applied to displacement-driven problems.
 
     Returns a Result whose first step is the initial state.
+
+    Parameters
+    ----------
+    problem : core_se3.Problem
+        The problem; its supports are checked first (SingularSystemError).
+    steps : int, optional
+        Number of equal load increments.
+    lam_end, lam_start : float, optional
+        End and start of the load factor.
+    g_init : (n, 4, 4) array, optional
+        Initial frames (default the reference ones).
+    load_factors : sequence of float, optional
+        Explicit load factors instead of steps and lam_end.
+    options : NewtonOptions, optional
+        The controls; keywords override its fields.
+
+    Returns
+    -------
+    core_se3.Result
+        ``steps[0]`` the initial state, then one step per requested load factor.
 
     Example
     -------

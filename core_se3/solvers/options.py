@@ -47,6 +47,29 @@ class NewtonOptions:
     after 3 iterations is abandoned; limit_check: stop with a ConvergenceError suggesting arc
     length when a step has snapped past a limit point; record_substeps: store the cut-back
     sub-steps as steps too; linear_solver: None = the problem's.
+
+    Attributes
+    ----------
+    rtol, dtol : float
+        In (0, 1); default 1e-10 each.
+    max_iter : int
+        In [0, 1000]; default 30.
+    max_cutbacks : int
+        In [0, 50]; default 12.
+    divergence : float
+        >= 1; default 1e8.
+    limit_check, record_substeps : bool
+        Default True and False.
+    linear_solver : str or None
+        'auto', 'superlu', 'mumps' or None.
+
+    A value outside its range raises :class:`~core_se3.errors.OptionError`.
+
+    Example
+    -------
+    >>> opts = NewtonOptions(max_cutbacks=4)
+    >>> opts.max_cutbacks, opts.max_iter, opts.limit_check
+    (4, 30, True)
     """
     rtol: float = _opt(1e-10, 0.0, 1.0, True)
     dtol: float = _opt(1e-10, 0.0, 1.0, True)
@@ -72,6 +95,38 @@ class ArcLengthOptions:
     of ds in a row; divergence: as for Newton; stability: count negative pivots and detect
     critical points; branch_switch: leave the first bifurcation along its mode; land: end
     exactly on lam_end (or the controlled displacement) by a last corrector.
+
+    Attributes
+    ----------
+    method : str
+        'crisfield' (default) or 'riks'.
+    dlam0 : float
+        Default 0.05 (its sign sets the direction).
+    psi : float
+        >= 0, default 0 (a pure displacement arc length).
+    ds_max, ds_min : float or None
+        Bounds of the arc length [length] (None: 8 x the first ds, and ds / 2^max_rejections).
+    ds_max_factor : float
+        >= 1, default 8.
+    max_steps, target_iter, max_iter : int
+        Defaults 200, 5, 20.
+    rtol, dtol : float
+        Default 1e-9 each.
+    max_rejections : int
+        Default 12; ``divergence``: default 1e6.
+    stability, branch_switch, land : bool
+        Defaults True, False, True.
+    linear_solver : str or None
+        As for NewtonOptions.
+
+    Example
+    -------
+    >>> ArcLengthOptions(method="riks").ds_max_factor
+    8.0
+    >>> ArcLengthOptions(method="arc")
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.OptionError: ArcLengthOptions.method must be 'crisfield' or 'riks', got 'arc'
     """
     method: str = "crisfield"
     dlam0: float = 0.05

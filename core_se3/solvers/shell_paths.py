@@ -24,7 +24,24 @@ log = logging.getLogger(__name__)
 @dataclass
 class PathStep:
     """One converged point of a shell path: its StepResult (with ``stability``) and the
-    ArcState to restart from (``unwrap``: the probes' unwrapped rotation vectors)."""
+    ArcState to restart from (``unwrap``: the probes' unwrapped rotation vectors).
+
+    Attributes
+    ----------
+    step : core_se3.StepResult
+        The point, ``step.stability`` = dict(det_sign, negative_eigenvalues, q_dot_t).
+    state : ArcState
+        The restart state (``state.step``: the point's index on the path).
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(10.0, 1.0, 4, 1), Material(1.2e6, 0.0, 0.1))
+    >>> p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 1.0))
+    >>> first = next(arc_length_steps(p, dlam0=0.5))
+    >>> first.step.load_factor, first.state.step, first.step.stability["negative_eigenvalues"]
+    (0.0, 0, 0)
+    """
     step: object
     state: ArcState
 
@@ -45,6 +62,34 @@ def arc_length_steps(problem, lam_end=1.0, stop_at=None, lam_min=None, start=Non
     stop_at = (node, lab direction, value): stop when the displacement of ``node`` along
     ``direction`` reaches ``value`` (the last step lands on it exactly).  ``result`` (a Result)
     gets the log, the critical points and the timings as the path goes.
+
+    Parameters
+    ----------
+    problem : core_se3.Problem
+        The problem (loads scaled by lam; no lam-dependent prescribed motion).
+    lam_end : float or None, optional
+        Stop at this load factor (None: only stop_at, lam_min or max_steps stop the path).
+    stop_at : (int, (3,), float), optional
+        As above; lam_min: stop when lam falls below it.
+    start : ArcState, optional
+        Continue from this restart state.
+    result : core_se3.Result, optional
+        Collects the log, critical points and timings.
+    options : ArcLengthOptions, optional
+        The controls; keywords override its fields.
+
+    Yields
+    ------
+    PathStep
+        A failure raises :class:`~core_se3.errors.ConvergenceError` (with ``result``).
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(10.0, 1.0, 4, 1), Material(1.2e6, 0.0, 0.1))
+    >>> p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 1.0))
+    >>> [(item.state.step, round(float(item.step.load_factor), 6)) for item in arc_length_steps(p, dlam0=0.5)]
+    [(0, 0.0), (1, 0.511148), (2, 1.0)]
     """
     t0 = time.perf_counter()
     opts, kw = arc_options(options, kw)
@@ -88,6 +133,19 @@ def arc_length(problem, lam_end=1.0, stop_at=None, lam_min=None, start=None, on_
     ``result.steps`` then holds only the points after the start, ``critical_points`` all of
     the path, and the final state equals that of an uninterrupted call bit for bit.
 
+    Parameters
+    ----------
+    problem : core_se3.Problem
+        The problem.
+    lam_end, stop_at, lam_min, start, options
+        As for :func:`arc_length_steps`.
+    on_step : callable, optional
+        on_step(result, arc_state), e.g. to write a checkpoint.
+
+    Returns
+    -------
+    core_se3.Result
+
     Example
     -------
     >>> from core_se3 import Problem, Material, mesh
@@ -111,6 +169,34 @@ def displacement_control(problem, node, direction, values, options=None, max_cut
     most ``max_cutbacks`` times).  Records every requested value; ``result.critical_points`` as
     for arc_length.  Options: ArcLengthOptions fields max_iter, rtol, dtol, stability,
     linear_solver (the others do not apply).
+
+    Parameters
+    ----------
+    problem : core_se3.Problem
+        The problem (loads scaled by lam).
+    node : int
+        The controlled node (with a free translation).
+    direction : (3,) array_like
+        Lab direction of the controlled displacement (normalised).
+    values : float or sequence of float
+        The displacements to reach [length], in order.
+    options : ArcLengthOptions, optional
+        Keywords override its fields; ``max_cutbacks``: halvings per value.
+
+    Returns
+    -------
+    core_se3.Result
+        The initial state and one step per value (its ``load_factor`` the load that holds it).
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(10.0, 1.0, 4, 1), Material(1.2e6, 0.0, 0.1))
+    >>> p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 1.0))
+    >>> k = int(p.mesh.node_set("x1")[0])
+    >>> res = displacement_control(p, k, (0.0, 0.0, 1.0), [1.0, 2.0])
+    >>> [round(float(st.g[k, 2, 3]), 12) for st in res.steps], [round(float(st.load_factor), 3) for st in res.steps]
+    ([0.0, 1.0, 2.0], [0.0, 0.308, 0.636])
     """
     t0 = time.perf_counter()
     opts, kw = arc_options(options, kw)

@@ -48,6 +48,23 @@ def inertia(K):
     i.e. an LDL^T-type factorisation whose negative pivots count the negative eigenvalues
     (Sylvester's law of inertia); if SuperLU had to pivot off the diagonal only the sign of the
     determinant is returned.  Dense: the eigenvalues.
+
+    Parameters
+    ----------
+    K : scipy.sparse matrix or (N, N) array
+        The tangent (only its symmetric part counts).
+
+    Returns
+    -------
+    (int, int or None)
+        +1 or -1, and the count of negative eigenvalues (None when it could not be counted).
+
+    Example
+    -------
+    >>> import numpy as np, scipy.sparse as sp
+    >>> K = np.diag([2.0, -1.0, 3.0])
+    >>> inertia(K), inertia(sp.csr_matrix(K))
+    ((-1, 1), (-1, 1))
     """
     if not sp.issparse(K):
         Ks = 0.5 * (np.asarray(K) + np.asarray(K).T)
@@ -75,7 +92,33 @@ def inertia(K):
 
 def smallest_mode(K, fac, n_iter=30, seed=7):
     """Eigenvector of sym(K) of smallest |eigenvalue| by inverse iteration on the factor of K
-    (K is symmetric at equilibrium up to the residual); returns (mu, phi)."""
+    (K is symmetric at equilibrium up to the residual); returns (mu, phi).
+
+    Parameters
+    ----------
+    K : scipy.sparse matrix or array
+        The tangent.
+    fac : Factorization
+        Its factorisation.
+    n_iter : int, optional
+        Inverse iterations at most; ``seed``: of the random start vector.
+
+    Returns
+    -------
+    mu : float
+        The Rayleigh quotient phi . K phi (the eigenvalue estimate).
+    phi : (N,) ndarray
+        The unit mode.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> K = np.diag([4.0, 0.5, 2.0])
+    >>> with Factorization(K, None) as F:
+    ...     mu, phi = smallest_mode(K, F)
+    >>> round(mu, 6), np.abs(phi).round(3).tolist()
+    (0.5, [0.0, 1.0, 0.0])
+    """
     n = K.shape[0]
     x = np.random.default_rng(seed).standard_normal(n)
     x /= np.linalg.norm(x)
@@ -93,7 +136,26 @@ def smallest_mode(K, fac, n_iter=30, seed=7):
 
 @dataclass
 class CriticalPoint:
-    """A critical point bracketed by two converged steps (indices into result.steps)."""
+    """A critical point bracketed by two converged steps (indices into result.steps).
+
+    Attributes
+    ----------
+    kind : str
+        'limit' or 'bifurcation'.
+    step : int
+        The first step past the critical point.
+    lam : float
+        The estimated critical load factor; ``lam_bracket``: the load factors of the two steps.
+    negative_eigenvalues : tuple
+        The negative-eigenvalue counts of the two steps (None where not counted).
+    mode : ndarray or None
+        The buckling mode of a bifurcation (free dofs), not in the repr.
+
+    Example
+    -------
+    >>> CriticalPoint("limit", 5, 0.742, (0.74, 0.745), (0, 1)).describe()
+    'limit point at lam ~ 0.742 (between 0.74 and 0.745, negative eigenvalues 0 -> 1)'
+    """
     kind: str                # 'limit' or 'bifurcation'
     step: int                # first step past the critical point
     lam: float               # estimated critical load factor
@@ -110,6 +172,28 @@ class CriticalPoint:
 
 @dataclass
 class PathPoint:
+    """A converged point of a path as the path follower sees it (:func:`analyse`).
+
+    Attributes
+    ----------
+    state : object
+        The state (ShellSystem: frames (n, 4, 4)); ``lam`` its load factor.
+    t : ndarray
+        The tangent K^-1 q on the free dofs; ``qt`` = q . t.
+    sign, n_neg : int, int or None
+        Inertia of sym(K) (:func:`inertia`; 0 and None without the stability analysis).
+    its, hist, ev
+        Iterations and residual history of the corrector, the system's evaluation (with K).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3.solvers import AlgebraicSystem
+    >>> s = AlgebraicSystem(lambda u: u + u ** 3, lambda u: np.diag(1 + 3 * u ** 2), [1.0])
+    >>> pt = analyse(s, s.initial(), 0.0, True)            # K = 1, q = 1 at u = 0
+    >>> pt.t.tolist(), pt.qt, pt.sign, pt.n_neg
+    ([1.0], 1.0, 1, 0)
+    """
     state: object
     lam: float
     t: np.ndarray            # tangent K^-1 q at the state
@@ -175,7 +259,32 @@ def mode_at(sysm, pt):
 def limit_point_hint(problem, g, lam, linear_solver=None):
     """Diagnose a load-control failure at the converged state (g, lam): the current stiffness
     parameter S_p = (q.t_0 / q.t) (t = K^-1 q, 1 at the start, 0 at a limit point, negative
-    past it).  Returns a message suggesting arc length when S_p < 0.3, else None."""
+    past it).  Returns a message suggesting arc length when S_p < 0.3, else None.
+
+    Parameters
+    ----------
+    problem : core_se3.Problem
+        The problem.
+    g : (n, 4, 4) array
+        The last converged state; ``lam`` its load factor.
+    linear_solver : str, optional
+        Default the problem's.
+
+    Returns
+    -------
+    str or None
+        The hint (None also when the diagnosis itself fails).
+
+    Example
+    -------
+    The unloaded strip is as stiff as at the start (S_p = 1): no hint.
+
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(10.0, 1.0, 4, 1), Material(1.2e6, 0.0, 0.1))
+    >>> p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 1.0))
+    >>> limit_point_hint(p, p.mesh.g0, 0.5) is None
+    True
+    """
     try:
         sysm = ShellSystem(problem, linear_solver, difference="backward")
         p0 = analyse(sysm, problem.mesh.g0.copy(), 0.0, False)

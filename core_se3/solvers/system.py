@@ -24,6 +24,21 @@ class ShellSystem:
     the central difference of f_ext in lam at the current g (exact for linearly scaled loads,
     dead or follower); ``difference='backward'`` uses the one-sided difference.
 
+    Parameters
+    ----------
+    problem : core_se3.Problem
+        The problem (path-independent element; CoreSE3Error otherwise).
+    linear_solver : str, optional
+        Default the problem's.
+    difference : str, optional
+        'central' or 'backward' difference in lam for q.
+
+    Attributes
+    ----------
+    n : int
+        Number of free dofs; ``w`` (n,): the weights of |x|_W (1 for translations, ell^2 for
+        rotations); ``ell``: the problem's length scale.
+
     Example
     -------
     >>> from core_se3 import Problem, Material, mesh
@@ -116,6 +131,15 @@ class AlgebraicSystem:
     """r(u, lam) = f(u) - lam q on R^n with additive updates (tests, small models).
 
     f(u) -> (n,), jac(u) -> (n, n) dense; q (n,) the constant load direction.
+
+    Parameters
+    ----------
+    f, jac : callable
+        u (n,) -> f(u) (n,) and its Jacobian (n, n).
+    q : (n,) array_like
+        The load direction.
+    u0 : (n,) array_like, optional
+        The initial state (default zeros).
 
     Example
     -------
