@@ -36,6 +36,11 @@ def _parse_set(items):
     return out
 
 
+def _count(step, key):
+    v = step.get(key)
+    return "-" if v is None else str(v)
+
+
 def _print_doc(doc):
     m = doc["mesh"]
     shape = f"{m['nx']}x{m['ny']}" if m["nx"] is not None else f"{m['n_elements']} elements"
@@ -43,13 +48,14 @@ def _print_doc(doc):
           f"mesh {shape} ({m['n_dofs']} dofs)")
     print("params: " + ", ".join(f"{k}={v['value']:g} [{v['unit']}]" for k, v in doc["params"].items()))
     ref = doc["reference"]
-    print(f"{'load':>12} {'ux':>12} {'uy':>12} {'uz':>12} {'angle':>9} {'it':>3} {'residual':>9}"
-          + ("  error" if ref else ""))
+    print(f"{'load':>12} {'ux':>12} {'uy':>12} {'uz':>12} {'angle':>9} {'it':>3} {'try':>3} {'solves':>6} "
+          f"{'residual':>9}" + ("  error" if ref else ""))
     probe = next(iter(doc["steps"][0]["probes"]))          # the case's probe ('tip', 'crown', ...)
     for s in doc["steps"]:
         u = s["probes"][probe]["u"]
         line = (f"{s['load']['value']:>12.5g} {u[0]:>12.5g} {u[1]:>12.5g} {u[2]:>12.5g} "
-                f"{s['probes'][probe]['rotation_angle']:>9.4f} {s['iterations']:>3d} {s['residual']:>9.1e}")
+                f"{s['probes'][probe]['rotation_angle']:>9.4f} {s['iterations']:>3d} {_count(s, 'attempts'):>3} "
+                f"{_count(s, 'linear_solves'):>6} {s['residual']:>9.1e}")
         if ref and s.get("error") is not None:
             line += f"  {100 * s['error']:.3f}%"
         print(line)
@@ -60,6 +66,10 @@ def _print_doc(doc):
         t = doc["torsion"]
         print(f"small-twist torsion constant J = {t['J']:.4e} (mesh {t['mesh'][0]}x{t['mesh'][1]}); "
               f"Mindlin plate ks=1: {t['J_mindlin_ks1']:.4e}, thin plate w h^3/3: {t['J_kirchhoff_plate']:.4e}")
+    tot = doc.get("totals") or {}
+    if tot.get("linear_solves") is not None:
+        print(f"cost: {tot['attempts']} Newton tries, {tot['iterations']} iterations of the stored tries, "
+              f"{tot['linear_solves']} linear solves")
     t = doc["timings"]
     print("timings [s]: " + ", ".join(f"{k} {t[k]:.3f}" for k in ("setup", "assembly", "solve", "other", "total")))
     print(f"reactions balance the applied loads to {max(s['balance_error'] for s in doc['steps']):.1e}")

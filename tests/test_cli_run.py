@@ -169,10 +169,11 @@ def test_killed_process_resumes_to_the_same_state(tmp_path):
 
 
 def test_failed_run_keeps_converged_steps_and_resumes_with_other_controls(tmp_path):
-    """Steps 1-2 are small, 3 jumps: with max_iter = 5 and no cut-backs step 3 fails; the
-    checkpoint keeps step 2 and --resume with the default controls finishes the run exactly as
-    an uninterrupted run with those controls (solver controls are not part of the fingerprint)."""
-    base = with_(STRIP, solver={"steps": 4}, output={"plots": False, "picture": False})
+    """Steps 1-2 are small, 3 jumps: with the plain displacement Newton, max_iter = 5 and no
+    cut-backs step 3 fails; the checkpoint keeps step 2 and --resume with the default max_iter
+    and cut-backs finishes the run exactly as an uninterrupted run with those controls (solver
+    controls are not part of the fingerprint)."""
+    base = with_(STRIP, solver={"steps": 4, "iteration": "displacement"}, output={"plots": False, "picture": False})
     base["loads"][0]["scale"] = [[0.0, 0.0], [0.5, 0.02], [1.0, 1.0]]
     strict = with_(base, solver={"max_iter": 5, "max_cutbacks": 0})
     out = str(tmp_path / "out")
@@ -188,7 +189,8 @@ def test_failed_run_keeps_converged_steps_and_resumes_with_other_controls(tmp_pa
 
 
 def test_convergence_error_from_the_api_keeps_the_steps(tmp_path):
-    base = with_(STRIP, solver={"steps": 4, "max_iter": 5, "max_cutbacks": 0}, output={"vtu": False})
+    base = with_(STRIP, solver={"steps": 4, "max_iter": 5, "max_cutbacks": 0, "iteration": "displacement"},
+                 output={"vtu": False})
     base["loads"][0]["scale"] = [[0.0, 0.0], [0.5, 0.02], [1.0, 1.0]]
     with pytest.raises(ConvergenceError, match="step 3 .* failed.*checkpoint keeps step 2") as ei:
         runner.run(scenario.load(write(tmp_path, base)), out=str(tmp_path / "o"))

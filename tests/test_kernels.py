@@ -327,3 +327,83 @@ def test_newton_same_path_both_backends(name):
     for a, b in zip(res["numba"].steps, res["numpy"].steps):
         assert a.iterations == b.iterations
         assert np.abs(a.g - b.g).max() <= 1e-10 * np.abs(b.g[:, :3, 3]).max()
+
+
+# ------------------------------------------------------------------ mixed (MIP) iteration ----
+
+def _mixed_setup(kind, mode, seed):
+    p = _problem(kind)
+    mesh, el = p.mesh, p.element
+    free = _free(mesh, np.random.default_rng(seed))
+    asm = Assembler(mesh, free)
+    pat = K.Pattern(mesh.quads, mesh.edge_nodes, mesh.elem_edges, mesh.n_nodes, free)
+    ek = K.ElementKernels.from_element(el, pat, mode=mode, error=ElementTooDistortedError)
+    g, ang = _safe_state(mesh, seed)
+    assert ang.max() > 2 * np.pi / 3
+    return el, asm, pat, ek, g
+
+
+@pytest.mark.parametrize("mode", ["serial", "colour", "gather"])
+@pytest.mark.parametrize("kind", ["flat", "arch", "annulus", "region"])
+def test_mixed_tangent_and_stress(kind, mode):
+    """tangent(g, data, stress=S): the NumPy element's evaluate(g, stress=S), assembled; the
+    returned stress is the NumPy evaluation's Dbar (z - z0); S = that stress gives the ordinary
+    tangent, which the kernels still compute after a mixed call."""
+    el, asm, pat, ek, g = _mixed_setup(kind, mode, seed=1)
+    ev = el.evaluate(g, tangent=True)
+    K0 = asm.matrix(ev.element_blocks, ev.edge_blocks, ev.node_blocks)
+    rng = np.random.default_rng(7)
+    S = rng.normal(size=ev.stress.shape) * np.abs(ev.stress).max()
+    evm = el.evaluate(g, True, stress=S)
+    Km = asm.matrix(evm.element_blocks, evm.edge_blocks, evm.node_blocks)
+    assert rel(Km.data, K0.data) > 1e-3               # the stresses matter
+    data = pat.new_data()
+    tan = ek.tangent(g, data, stress=S)
+    assert tan["data"] is data
+    assert rel(data, Km.data) <= TOL
+    D = pat.matrix(data).toarray() - Km.toarray()
+    assert np.abs(D).max() <= TOL * np.abs(Km.toarray()).max()
+    # the residual side is the displacement one
+    assert abs(tan["energy"] - evm.energy) <= TOL * evm.energy
+    assert rel(tan["r"], evm.r) <= TOL and rel(evm.r, ev.r) == 0.0
+    assert abs(tan["force_scale"] - ev.force_scale) <= TOL * ev.force_scale
+    # stress of the state, a fresh array, from tangent and from residual
+    assert tan["stress"].shape == ev.stress.shape and not np.shares_memory(tan["stress"], ek.fe)
+    assert rel(tan["stress"], ev.stress) <= TOL
+    res = ek.residual(g)
+    assert rel(res["stress"], ev.stress) <= TOL
+    # S = the state's own stress: the ordinary tangent
+    t0 = ek.tangent(g)["data"].copy()
+    assert rel(t0, K0.data) <= TOL
+    tm = ek.tangent(g, stress=res["stress"])["data"]
+    assert rel(tm, t0) <= TOL
+    assert rel(ek.tangent(g)["data"], K0.data) <= TOL  # not mixed again: no trace of the last S
+    with pytest.raises(ValueError):
+        ek.tangent(g, stress=S[:-1])
+
+
+@pytest.mark.parametrize("mode", ["serial", "gather"])
+@pytest.mark.parametrize("kind", ["flat", "arch", "annulus", "region"])
+def test_linear_stress(kind, mode):
+    """linear_stress(eta) = NumPy's DefaultElement.linear_stress at the state of the last call,
+    with O(1) increments (G eta as large as z - z0: its signs are checked), and the first-order
+    expansion of the nonlinear stresses Dbar (z(g exp(eps eta)) - z0)."""
+    el, asm, pat, ek, g = _mixed_setup(kind, mode, seed=2)
+    ev = el.evaluate(g, tangent=True)
+    rng = np.random.default_rng(11)
+    eta = rng.normal(size=(el.mesh.n_nodes, 6))
+    ref = el.linear_stress(ev, eta)
+    assert rel(ref, ev.stress) > 0.1
+    ek.tangent(el.mesh.g0)                             # another state first: the last call counts
+    ek.residual(g)
+    got = ek.linear_stress(eta)
+    assert got.shape == ref.shape and rel(got, ref) <= TOL
+    assert rel(ek.linear_stress(np.zeros_like(eta)), ev.stress) <= TOL
+    ek.tangent(g)
+    assert rel(ek.linear_stress(eta.ravel()), ref) <= TOL
+    eps = 1e-6
+    lin = ek.linear_stress(eps * eta) - ev.stress
+    fp = ek.residual(g @ se3.exp(eps * eta))["stress"] - ev.stress
+    assert np.abs(fp - lin).max() <= 1e-4 * np.abs(lin).max()
+    with pytest.raises(ValueError):
+        ek.linear_stress(eta[:-1])

@@ -14,6 +14,7 @@ import numpy as np
 from numba import njit, prange
 
 from .csr import scatter
+from .element_mixed import element_linear_stress, element_linear_stress_serial, signed_edge_stress, stress_from_signed
 from .element_ops import (CHUNK, MAX_EDGE_ANGLE, check_angles, edge_F, edge_KE, edge_pass1, edge_residual,
                           element_force, element_G, element_Ke, node_Kn, node_residual)
 
@@ -75,12 +76,22 @@ def _element_tangent_one(el, quads, elem_edges, sgn, Dbar, z0, Dz0, psi, coef, f
     return a, b
 
 
+# mixed = "fe_geo is not None": pruned at compile time (one version per argument types); a run-time
+# flag, or these branches one helper level deeper, cost ~10 % in the serial driver (measured)
 @njit(cache=True)
-def _edge_tangent_one(e, edge_nodes, topo, psi, coef, fe, rE, cmap, data, F, Lp, Lm, Ad, Jm, Y, H, p):
-    """F_e, the nodal residual parts and the geometric blocks of edge e, scattered into data."""
+def _edge_tangent_one(e, edge_nodes, topo, psi, coef, fe, rE, fe_geo, rEg, cmap, data, F, Fg,
+                      Lp, Lm, Ad, Jm, Y, H, p):
+    """F_e, the nodal residual parts and the geometric blocks of edge e, scattered into data;
+    mixed (fe_geo given): the blocks from F_geo = edge sum of fe_geo (into Fg), whose nodal
+    parts go to rEg[e]."""
     edge_F(e, topo.edge_slots, fe, F)
     edge_residual(e, psi, coef, F, rE)
-    edge_KE(e, psi, coef, F, Lp, Lm, Ad, Jm, Y, H, p)
+    if fe_geo is not None:
+        edge_F(e, topo.edge_slots, fe_geo, Fg)
+        edge_residual(e, psi, coef, Fg, rEg)
+        edge_KE(e, psi, coef, Fg, Lp, Lm, Ad, Jm, Y, H, p)
+    else:
+        edge_KE(e, psi, coef, F, Lp, Lm, Ad, Jm, Y, H, p)
     for I in range(2):
         for J in range(2):
             scatter(data, cmap, cmap.edge_blk[e, I, J], edge_nodes[e, I], edge_nodes[e, J], H,
@@ -89,7 +100,7 @@ def _edge_tangent_one(e, edge_nodes, topo, psi, coef, fe, rE, cmap, data, F, Lp,
 
 @njit(cache=True, parallel=True)
 def element_tangent(g, quads, edge_nodes, elem_edges, elem_edge_sign, Dbar, z0, Dz0, topo, cmap,
-                    psi, coef, ang, fe, rE, r, data):
+                    psi, coef, ang, fe, rE, r, data, fe_geo, rEg, rg):
     """Residual and tangent of the default element, written into the CSR ``data`` (nnz,).
 
     Coloured, fused compute + scatter (parallel within each colour, race-free):
@@ -101,7 +112,14 @@ def element_tangent(g, quads, edge_nodes, elem_edges, elem_edge_sign, Dbar, z0, 
       4. nodes:    r = sum of edge ends, Kn = adt(r)/2 on the diagonal block.
 
     data is zeroed first; loads add their blocks afterwards.  Returns (energy, force_scale,
-    flag, edge) like ``element_residual``; on flag = 1 nothing past pass 1 is computed."""
+    flag, edge) like ``element_residual``; on flag = 1 nothing past pass 1 is computed.
+
+    Mixed iteration (fe_geo, rEg, rg arrays; Magisano, Leonetti and Garcea 2017): the
+    geometric part sees independent stresses, fe_geo (m,4,6) = their signed edge parts (like
+    fe): pass 3 also forms F_geo = sum of fe_geo and its nodal parts into rEg (E,2,6), H is
+    built with F_geo, and pass 4 sums r_geo into rg (n,6) and writes 1/2 adt(r_geo).  The
+    residual, the energy and the material blocks do not change.  fe_geo = rEg = rg = None:
+    the ordinary tangent (a separate compiled version: the mixed branches are pruned)."""
     nE = edge_nodes.shape[0]
     n = r.shape[0]
     for i in prange(data.size):
@@ -138,6 +156,7 @@ def element_tangent(g, quads, edge_nodes, elem_edges, elem_edge_sign, Dbar, z0, 
         nch = (hi - lo + CHUNK - 1) // CHUNK
         for ch in prange(nch):
             F = np.empty(6)
+            Fg = np.empty(6) if fe_geo is not None else F
             p = np.empty(6)
             Lp = np.empty((6, 6))
             Lm = np.empty((6, 6))
@@ -146,21 +165,26 @@ def element_tangent(g, quads, edge_nodes, elem_edges, elem_edge_sign, Dbar, z0, 
             Y = np.empty((12, 6))
             H = np.empty((12, 12))
             for ii in range(lo + ch * CHUNK, min(hi, lo + (ch + 1) * CHUNK)):
-                _edge_tangent_one(order[ii], edge_nodes, topo, psi, coef, fe, rE, cmap, data,
-                                  F, Lp, Lm, Ad, Jm, Y, H, p)
+                _edge_tangent_one(order[ii], edge_nodes, topo, psi, coef, fe, rE, fe_geo, rEg,
+                                  cmap, data, F, Fg, Lp, Lm, Ad, Jm, Y, H, p)
     nchn = (n + CHUNK - 1) // CHUNK
     for ch in prange(nchn):
         K6 = np.empty((6, 6))
         for nd in range(ch * CHUNK, min(n, (ch + 1) * CHUNK)):
             node_residual(nd, topo.node_ptr, topo.node_inc, rE, r)
-            node_Kn(nd, r, data, cmap, K6)
+            if rEg is not None:
+                node_residual(nd, topo.node_ptr, topo.node_inc, rEg, rg)
+                node_Kn(nd, rg, data, cmap, K6)
+            else:
+                node_Kn(nd, r, data, cmap, K6)
     return energy, sqrt(fs), 0, -1
 
 
 @njit(cache=True)
 def element_tangent_serial(g, quads, edge_nodes, elem_edges, elem_edge_sign, Dbar, z0, Dz0, topo, cmap,
-                           psi, coef, ang, fe, rE, r, data):
-    """``element_tangent`` in one thread, natural order (no threading overhead: small meshes)."""
+                           psi, coef, ang, fe, rE, r, data, fe_geo, rEg, rg):
+    """``element_tangent`` in one thread, natural order (no threading overhead: small meshes);
+    the same mixed option (fe_geo, rEg, rg: arrays or None)."""
     nE = edge_nodes.shape[0]
     m = elem_edges.shape[0]
     n = r.shape[0]
@@ -185,6 +209,7 @@ def element_tangent_serial(g, quads, edge_nodes, elem_edges, elem_edge_sign, Dba
         energy += a
         fs += b
     F = np.empty(6)
+    Fg = np.empty(6) if fe_geo is not None else F
     p = np.empty(6)
     Lp = np.empty((6, 6))
     Lm = np.empty((6, 6))
@@ -193,11 +218,16 @@ def element_tangent_serial(g, quads, edge_nodes, elem_edges, elem_edge_sign, Dba
     Y = np.empty((12, 6))
     H = np.empty((12, 12))
     for e in range(nE):
-        _edge_tangent_one(e, edge_nodes, topo, psi, coef, fe, rE, cmap, data, F, Lp, Lm, Ad, Jm, Y, H, p)
+        _edge_tangent_one(e, edge_nodes, topo, psi, coef, fe, rE, fe_geo, rEg, cmap, data, F, Fg,
+                          Lp, Lm, Ad, Jm, Y, H, p)
     K6 = np.empty((6, 6))
     for nd in range(n):
         node_residual(nd, topo.node_ptr, topo.node_inc, rE, r)
-        node_Kn(nd, r, data, cmap, K6)
+        if rEg is not None:
+            node_residual(nd, topo.node_ptr, topo.node_inc, rEg, rg)
+            node_Kn(nd, rg, data, cmap, K6)
+        else:
+            node_Kn(nd, r, data, cmap, K6)
     return energy, sqrt(fs), 0, -1
 
 
@@ -232,10 +262,11 @@ def element_residual_serial(g, edge_nodes, elem_edges, elem_edge_sign, Dbar, z0,
 
 @njit(cache=True, parallel=True)
 def element_tangent_gather(g, quads, edge_nodes, elem_edges, elem_edge_sign, Dbar, z0, Dz0, topo, cmap,
-                           psi, coef, ang, fe, rE, r, data, Keb, KEb):
+                           psi, coef, ang, fe, rE, r, data, fe_geo, rEg, rg, Keb, KEb):
     """``element_tangent`` by compute-then-gather: element blocks Keb (m,4,4,6,6) and edge
     blocks KEb (E,2,2,6,6) are stored (parallel, no colours), then every CSR block sums its
-    contributors (``cmap.src``) and is written once (no zeroing of data needed)."""
+    contributors (``cmap.src``) and is written once (no zeroing of data needed).  The same
+    mixed option as ``element_tangent`` (fe_geo, rEg, rg: arrays or None)."""
     nE = edge_nodes.shape[0]
     m = elem_edges.shape[0]
     n = r.shape[0]
@@ -270,6 +301,7 @@ def element_tangent_gather(g, quads, edge_nodes, elem_edges, elem_edge_sign, Dba
                             Keb[el, A, B, i, j] = KeT[6 * A + i, 6 * B + j]
     for ch in prange(nchE):
         F = np.empty(6)
+        Fg = np.empty(6) if fe_geo is not None else F
         p = np.empty(6)
         Lp = np.empty((6, 6))
         Lm = np.empty((6, 6))
@@ -280,7 +312,12 @@ def element_tangent_gather(g, quads, edge_nodes, elem_edges, elem_edge_sign, Dba
         for e in range(ch * CHUNK, min(nE, (ch + 1) * CHUNK)):
             edge_F(e, topo.edge_slots, fe, F)
             edge_residual(e, psi, coef, F, rE)
-            edge_KE(e, psi, coef, F, Lp, Lm, Ad, Jm, Y, H, p)
+            if fe_geo is not None:
+                edge_F(e, topo.edge_slots, fe_geo, Fg)
+                edge_residual(e, psi, coef, Fg, rEg)
+                edge_KE(e, psi, coef, Fg, Lp, Lm, Ad, Jm, Y, H, p)
+            else:
+                edge_KE(e, psi, coef, F, Lp, Lm, Ad, Jm, Y, H, p)
             for I in range(2):
                 for J in range(2):
                     for i in range(6):
@@ -320,7 +357,11 @@ def element_tangent_gather(g, quads, edge_nodes, elem_edges, elem_edge_sign, Dba
         K6 = np.empty((6, 6))
         for nd in range(ch * CHUNK, min(n, (ch + 1) * CHUNK)):
             node_residual(nd, topo.node_ptr, topo.node_inc, rE, r)
-            node_Kn(nd, r, data, cmap, K6)
+            if rEg is not None:
+                node_residual(nd, topo.node_ptr, topo.node_inc, rEg, rg)
+                node_Kn(nd, rg, data, cmap, K6)
+            else:
+                node_Kn(nd, r, data, cmap, K6)
     return energy, sqrt(fs), 0, -1
 
 
@@ -364,6 +405,9 @@ class ElementKernels:
         self.fe = np.zeros((m, 4, 6))
         self.rE = np.zeros((nE, 2, 6))
         self.r = np.zeros((n, 6))
+        self.fe_geo = np.zeros((m, 4, 6))      # the mixed tangent's workspace (signed stresses,
+        self.rEg = np.zeros((nE, 2, 6))        # their edge-end and nodal forces)
+        self.rg = np.zeros((n, 6))
         self.data = pattern.new_data()
         if mode == "gather":
             self.Keb = np.zeros((m, 4, 4, 6, 6))
@@ -394,7 +438,8 @@ class ElementKernels:
             "across an element must stay below pi: refine the mesh or the load step")
 
     def residual(self, g):
-        """dict(energy, r (n,6) -- a view of the workspace, force_scale)."""
+        """dict(energy, r (n,6) -- a view of the workspace, force_scale, stress (m,24) -- the
+        displacement stresses Dbar (z - z0), a new array)."""
         g = np.ascontiguousarray(g, dtype=float)
         fn = element_residual_serial if self.mode == "serial" else element_residual
         en, fs, flag, e = fn(g, self.edge_nodes, self.elem_edges, self.sign, self.Dbar, self.z0,
@@ -402,15 +447,24 @@ class ElementKernels:
                              self.rE, self.r)
         if flag:
             self._raise(e)
-        return {"energy": en, "r": self.r, "force_scale": fs}
+        return {"energy": en, "r": self.r, "force_scale": fs, "stress": stress_from_signed(self.fe, self.sign)}
 
-    def tangent(self, g, data=None):
-        """dict(energy, r, force_scale, data): data (nnz,) of the free-dof CSR, element part."""
+    def tangent(self, g, data=None, stress=None):
+        """dict(energy, r, force_scale, stress, data): data (nnz,) of the free-dof CSR, element
+        part; stress as in :meth:`residual`.
+
+        stress : (m, 24) independent element stresses, or None.  Given, the geometric part of
+        the tangent (edge blocks and 1/2 adt(r)) is built from their forces (the mixed
+        iteration, ``DefaultElement.evaluate(g, stress=...)``); r, energy and the material
+        blocks stay those of Dbar (z(g) - z0)."""
         g = np.ascontiguousarray(g, dtype=float)
         data = self.data if data is None else data
+        mixed = (None, None, None)
+        if stress is not None:
+            mixed = (signed_edge_stress(stress, self.sign, self.fe_geo), self.rEg, self.rg)
         args = (g, self.quads, self.edge_nodes, self.elem_edges, self.sign, self.Dbar, self.z0,
                 self.Dz0, self.pattern.topo, self.pattern.map, self.psi, self.coef, self.ang,
-                self.fe, self.rE, self.r, data)
+                self.fe, self.rE, self.r, data, *mixed)
         if self.mode == "serial":
             en, fs, flag, e = element_tangent_serial(*args)
         elif self.mode == "colour":
@@ -419,4 +473,23 @@ class ElementKernels:
             en, fs, flag, e = element_tangent_gather(*args, self.Keb, self.KEb)
         if flag:
             self._raise(e)
-        return {"energy": en, "r": self.r, "force_scale": fs, "data": data}
+        return {"energy": en, "r": self.r, "force_scale": fs, "data": data,
+                "stress": stress_from_signed(self.fe, self.sign)}
+
+    def linear_stress(self, eta):
+        """Element stresses linearised about the state of the last :meth:`residual` or
+        :meth:`tangent` call: Dbar (z(g) - z0 + G eta) (m, 24), a new array
+        (``DefaultElement.linear_stress``).
+
+        Parameters
+        ----------
+        eta : (n, 6) array_like
+            Nodal increments (g <- g exp(eta)).
+        """
+        eta = np.ascontiguousarray(eta, dtype=float).reshape(-1, 6)
+        if eta.shape[0] != self.r.shape[0]:
+            raise ValueError(f"eta must have {self.r.shape[0]} rows of 6, got {eta.shape[0]}")
+        out = np.empty((len(self.quads), 24))
+        fn = element_linear_stress_serial if self.mode == "serial" else element_linear_stress
+        fn(self.quads, self.elem_edges, self.sign, self.Dbar, self.z0, self.psi, self.coef, eta, out)
+        return out

@@ -103,6 +103,30 @@ def element_G(el, elem_edges, sgn, psi, coef, G):
 
 
 @njit(cache=True)
+def element_stress_lin(el, quads, elem_edges, sgn, Dbar, z0, psi, coef, eta, G, w, out):
+    """out[el] = Dbar (z - z0 + G eta) (24,): the element's stresses linearised in the nodal
+    increments eta (n, 6); the z increment of local edge k (nodes la, lb of _LOCAL_EDGES) is
+    G[k,0] eta_la + G[k,1] eta_lb (``element_G``: = sgn_k/2 (L(psi) eta_b - L(-psi) eta_a) of
+    the mesh edge a -> b).  Workspace G (4,2,6,6), w (24,)."""
+    element_G(el, elem_edges, sgn, psi, coef, G)
+    for k in range(4):
+        e = elem_edges[el, k]
+        sk = 0.5 * sgn[el, k]
+        na = quads[el, _LOCAL_EDGES[k, 0]]
+        nb = quads[el, _LOCAL_EDGES[k, 1]]
+        for i in range(6):
+            acc = 0.0
+            for j in range(6):
+                acc += G[k, 0, i, j] * eta[na, j] + G[k, 1, i, j] * eta[nb, j]
+            w[6 * k + i] = (sk * psi[e, i] - z0[el, 6 * k + i]) + acc
+    for a in range(24):
+        acc = 0.0
+        for b in range(24):
+            acc += Dbar[el, a, b] * w[b]
+        out[el, a] = acc
+
+
+@njit(cache=True)
 def element_Ke(el, Dbar, G, TT, TTt, KeT):
     """KeT (24,24) <- (G^T Dbar G)^T = G^T (G^T Dbar)^T: two vectorisable G^T products.
     Dbar is symmetric, so KeT equals Ke to round-off and is read row-wise by the scatter."""

@@ -19,6 +19,15 @@ class CompiledEvaluation:
     def __init__(self, problem):
         self.problem = problem
         self._parts = None
+        self._state = None            # (kernels, g) of the kernels' last evaluation
+
+    def _linear_stress(self, kern, g, eta):
+        """The kernels' linear stress about g (their workspace holds the last evaluated state:
+        re-evaluate the residual at g first if another state came in between)."""
+        if self._state is None or self._state[0] is not kern or self._state[1] is not g:
+            kern.residual(g)
+            self._state = (kern, g)
+        return kern.linear_stress(np.ascontiguousarray(eta, dtype=float))
 
     def parts(self, asm):
         """(pattern, element kernels, [(load, compiled add or None)]) for the assembler, built
@@ -32,8 +41,9 @@ class CompiledEvaluation:
             self._parts = (key, None if kern is None else (pattern, kern, loads))
         return self._parts[1]
 
-    def evaluate(self, asm, g, lam, tangent, out):
-        """The problem's Evaluation at (g, lam), or None when the element has no kernels."""
+    def evaluate(self, asm, g, lam, tangent, out, stress=None):
+        """The problem's Evaluation at (g, lam), or None when the element has no kernels
+        (stress: a mixed element's independent stresses, see ``Problem.evaluate``)."""
         from ..kernels import add_blocks
         parts = self.parts(asm)
         if parts is None:
@@ -42,10 +52,11 @@ class CompiledEvaluation:
         g = np.ascontiguousarray(g, dtype=float)
         if tangent:
             data = out if out is not None else pattern.new_data()
-            res = kern.tangent(g, data)
+            res = kern.tangent(g, data, stress=stress)
         else:
             data = _NO_DATA
             res = kern.residual(g)
+        self._state = (kern, g)
         r_int = res["r"].copy()
         f = np.zeros((self.problem.mesh.n_nodes, 6))
         for ld, add in loads:
@@ -56,7 +67,10 @@ class CompiledEvaluation:
             f += ev.f
             if tangent:
                 add_blocks(data, pattern, self.problem.mesh.quads, ev.node_blocks, ev.element_blocks)
-        out_ev = Evaluation((r_int - f).ravel()[pattern.free], r_int, f, res["force_scale"], res["energy"])
+        out_ev = Evaluation((r_int - f).ravel()[pattern.free], r_int, f, res["force_scale"], res["energy"],
+                            stress=res.get("stress"))
+        if tangent and self.problem.element.mixed:
+            out_ev.linearization = lambda eta, g=g: self._linear_stress(kern, g, eta)
         if tangent:
             out_ev.K = pattern.matrix(data)
         return out_ev

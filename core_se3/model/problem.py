@@ -355,24 +355,31 @@ class Problem:
                 Ke[ids] += blocks
         return f, Kn, Ke
 
-    def evaluate(self, g, lam, tangent=True, assembler=None, out=None):
+    def evaluate(self, g, lam, tangent=True, assembler=None, out=None, stress=None):
         """The residual on the free dofs and, if asked, the tangent at (g, lam) (an
         :class:`Evaluation`); ``assembler``: another set of free dofs (default the problem's).
 
         With the numba backend and an element that has compiled kernels, the element and the
         loads write straight into the CSR data of the assembler's fixed pattern (``out``: a
         data array of ``assembler.pattern().nnz`` to reuse, which the returned K then shares);
-        otherwise the NumPy path sums the blocks (the reference)."""
+        otherwise the NumPy path sums the blocks (the reference).
+
+        stress: a mixed element's independent stresses for the geometric part of the tangent
+        (``fem.Element.mixed``; the mixed Newton iteration), None = the state's own."""
         asm = assembler or self.assembler()
+        if stress is not None and not self.element.mixed:
+            raise OptionError(f"element {self.element_name!r} has no mixed iteration (stress=)")
         if self.backend == "numba":
             if self._compiled is None:
                 self._compiled = CompiledEvaluation(self)
-            out_ev = self._compiled.evaluate(asm, g, lam, tangent, out)
+            out_ev = self._compiled.evaluate(asm, g, lam, tangent, out, stress)
             if out_ev is not None:
                 return out_ev
-        ev = self.element.evaluate(g, tangent=tangent)
+        ev = (self.element.evaluate(g, tangent=tangent, stress=stress) if stress is not None
+              else self.element.evaluate(g, tangent=tangent))
         fext, Kn_ext, Ke_ext = self.external(g, lam, tangent=tangent)
-        out = Evaluation(asm.vector(ev.r - fext), ev.r, fext, ev.force_scale, ev.energy)
+        out = Evaluation(asm.vector(ev.r - fext), ev.r, fext, ev.force_scale, ev.energy,
+                         stress=ev.stress, linearization=ev.linearization)
         if tangent:
             Ke = ev.element_blocks if Ke_ext is None else (
                 Ke_ext if ev.element_blocks is None else ev.element_blocks + Ke_ext)
@@ -399,6 +406,25 @@ class Problem:
             retract(np.ascontiguousarray(g, dtype=float), np.ascontiguousarray(eta, dtype=float), out)
             return out
         return g @ lie.exp(eta)
+
+    def linear_stress(self, ev, eta):
+        """A mixed element's stresses linearised about the state of the Evaluation ``ev``
+        (with the tangent) for the nodal increments eta (n, 6) (``fem.Element.linear_stress``).
+
+        Example
+        -------
+        >>> import numpy as np
+        >>> from core_se3 import Material, Problem, mesh
+        >>> p = Problem(mesh.rectangle(2.0, 1.0, 2, 1), Material(1.0e3, 0.0, 0.1))
+        >>> eta = np.zeros((6, 6)); eta[[2, 5], 0] = 1e-2      # stretch the right column by 1 %
+        >>> f = p.linear_stress(p.evaluate(p.mesh.g0, 0.0), eta)
+        >>> round(float(f[1, 6]), 9)                            # N = E h eps on the right element
+        1.0
+        """
+        lin = ev.linearization
+        if callable(lin):
+            return lin(eta)
+        return self.element.linear_stress(ev, eta)
 
     def residual(self, g, lam, assembler=None):
         """Free residual r_int - f_ext at (g, lam)."""

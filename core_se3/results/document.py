@@ -5,7 +5,9 @@
      "steps": [{"load_factor", "load": {"name", "value", "unit"},
                 "probes": {name: {"u": [ux, uy, uz], "rotation_angle", "rotation_vector",
                                   "rotation": 3x3}},
-                "iterations", "residual", "residual_history", "balance_error"}],
+                "iterations", "residual", "residual_history", "balance_error",
+                "attempts", "linear_solves"}],
+     "totals": {"attempts", "linear_solves", "iterations"},
      "timings": {"setup", "assembly", "solve", "other", "total"},
      "reference": {"entry", "block", "error", "error_at"} or null}
 
@@ -21,7 +23,7 @@ import json
 import numpy as np
 
 __all__ = ["SCHEMA", "VERSION", "read_json", "write_json", "probe_record", "step_record",
-           "mesh_record", "timing_record", "result_document"]
+           "mesh_record", "timing_record", "step_totals", "result_document"]
 
 SCHEMA = "core-se3-result"
 VERSION = 1
@@ -84,14 +86,15 @@ def step_record(st, load, axis=None, **extra):
     >>> p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 1.0)); p.add_probe("tip")
     >>> rec = step_record(p.solve(steps=1).final, dict(name="P", value=1.0, unit="N"), error=None)
     >>> list(rec), rec["load_factor"], rec["residual"] < 1e-10
-    (['load_factor', 'load', 'probes', 'iterations', 'residual', 'residual_history', 'balance_error', 'error'], 1.0, True)
+    (['load_factor', 'load', 'probes', 'iterations', 'residual', 'residual_history', 'balance_error', 'attempts', 'linear_solves', 'error'], 1.0, True)
     """
     rec = dict(load_factor=float(st.load_factor), load=load,
                probes={name: probe_record(p, axis) for name, p in st.probes.items()},
                iterations=int(st.iterations),
                residual=float(st.residual_history[-1]) if st.residual_history else 0.0,
                residual_history=[float(x) for x in st.residual_history],
-               balance_error=float(st.balance_error))
+               balance_error=float(st.balance_error), attempts=int(st.attempts),
+               linear_solves=None if st.linear_solves is None else int(st.linear_solves))
     rec.update(extra)
     return rec
 
@@ -162,9 +165,26 @@ def result_document(case, model, variant, params, mesh, steps, timings, referenc
     doc = dict(schema=SCHEMA, version=VERSION, case=case, model=model, variant=variant)
     doc.update({k: extra.pop(k) for k in list(extra) if k in ("control",)})
     doc.update(params=params, mesh=mesh if isinstance(mesh, dict) else mesh_record(mesh), steps=steps,
-               timings=timing_record(timings), reference=reference)
+               totals=step_totals(steps), timings=timing_record(timings), reference=reference)
     doc.update(extra)
     return doc
+
+
+def step_totals(steps):
+    """Sums over step records of ``attempts``, ``linear_solves`` and ``iterations`` (the cost
+    of the path; a sum is None when a step did not count it).
+
+    Example
+    -------
+    >>> step_totals([dict(attempts=1, linear_solves=4, iterations=4),
+    ...              dict(attempts=3, linear_solves=20, iterations=5)])
+    {'attempts': 4, 'linear_solves': 24, 'iterations': 9}
+    """
+    out = {}
+    for key in ("attempts", "linear_solves", "iterations"):
+        vals = [s.get(key) for s in steps]
+        out[key] = None if any(v is None for v in vals) else int(sum(vals))
+    return out
 
 
 def write_json(path, doc):

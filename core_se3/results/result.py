@@ -70,6 +70,10 @@ class StepResult:
         name -> dict(u (3,) [length], R (3, 3), w (3,) [rad], unwrapped along the path).
     stability : dict or None
         det_sign, negative_eigenvalues, q_dot_t of the tangent (path following only).
+    attempts, linear_solves : int
+        Newton tries (failed ones and sub-steps included) since the previous stored step, and
+        the linear solves (sparse factorisations) they took: the cost of the step (0 for the
+        initial state, None when not counted).
 
     Example
     -------
@@ -91,6 +95,8 @@ class StepResult:
     probes: dict = field(default_factory=dict)   # name -> dict(u, R, w)
     scale: tuple = (0.0, 0.0)         # sums of nodal reaction/applied force and moment magnitudes
     stability: dict | None = None      # det_sign, negative_eigenvalues, q_dot_t (path following)
+    attempts: int = 0                  # Newton tries since the previous stored step (failed included)
+    linear_solves: int | None = 0      # linear solves of those tries (None: not counted)
 
     @property
     def balance_error(self):

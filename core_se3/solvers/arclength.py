@@ -212,6 +212,7 @@ def correct(sysm, state, lam, con, opts, timers):
         if it > 3 and rn > opts.divergence * max(hist[0], 1e-300):
             raise StepFailed(f"diverging (residual {rn:.2e})")
         ts = time.perf_counter()
+        sysm.factorizations += 1
         with Factorization(ev["K"], sysm.solver) as fac:
             a = fac.solve(-ev["r"])
             b = fac.solve(ev["q"])

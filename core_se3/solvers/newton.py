@@ -148,6 +148,19 @@ class _Timer:
         self.t_start = time.perf_counter()
 
 
+def _split_prescribed(problem, lam, lam_try):
+    """The load factor of the next try from lam toward lam_try such that the prescribed
+    motion turns no node by more than 0.95 MAX_PRESCRIBED_TURN (a turn near pi is ambiguous for
+    the exponential update: 2 pi lands on the same frame), found by equal splitting."""
+    for _ in range(60):
+        turn = problem.prescribed_rotation(lam, lam_try)
+        if turn <= MAX_PRESCRIBED_TURN:
+            return lam_try
+        lam_try = lam + (lam_try - lam) / max(2.0, np.ceil(turn / (0.95 * MAX_PRESCRIBED_TURN)))
+    raise ElementTooDistortedError("the prescribed motion turns nodes by more than "
+                                   f"{MAX_PRESCRIBED_TURN:.3f} rad in any step from load factor {lam:.6g}")
+
+
 def newton_steps(problem, targets, options=None, start=None, recorder=None, result=None):
     """Yield a :class:`NewtonStep` for every requested load factor in ``targets``.
 
@@ -195,14 +208,23 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
     lam, g, dlam, k_ref = state.lam, state.g, state.dlam, state.k_ref
     first_solve = True
     timer = _Timer(result)
+    # the mixed iteration's stresses start every try from those of the converged state (a
+    # function of g alone, so a restart from a NewtonState repeats the same computations)
+    mip = opts.iteration == "mip" and problem.element.mixed and not stateful
+    stress_conv = problem.evaluate(g, lam, tangent=False).stress if mip else None
     for target in targets:
         tries = []
+        n_recorded = 0                           # tries already counted in a recorded sub-step
         # the requested increment; a cut-back increment carries over, capped by it
         dlam_nominal = target - lam
         dlam = dlam_nominal if dlam is None else np.sign(dlam_nominal) * min(abs(dlam), abs(dlam_nominal))
         stored = None
         while abs(target - lam) > 1e-14 * max(1.0, abs(target)):
             lam_try = lam + dlam if abs(dlam) < abs(target - lam) else target
+            if has_targets:
+                lam_try = _split_prescribed(problem, lam, lam_try)
+                if abs(lam_try - lam) < abs(dlam):
+                    dlam = lam_try - lam         # the split increment carries on (and regrows)
             g_try = problem.apply_prescribed(g.copy(), lam_try)
             if stateful:
                 # the seed element's strain is a state: save it, and feed it the prescribed motion
@@ -214,19 +236,16 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
             k_step = pred = None
             ok = False
             reason = ""
-            turn = problem.prescribed_rotation(lam, lam_try) if has_targets else 0.0
+            solves = 0
+            mip_try, stress = mip, stress_conv
             try:
-                if turn > MAX_PRESCRIBED_TURN:
-                    # never a silent answer: a turn of 2 pi in one step lands on the same frame
-                    raise ElementTooDistortedError(
-                        f"the prescribed motion turns nodes by {turn:.3f} rad in one step "
-                        f"(> {MAX_PRESCRIBED_TURN:.3f}): the step is too large for the exponential update")
                 for it in range(opts.max_iter + 1):
                     ta = time.perf_counter()
                     # after an increment below dtol the state has likely converged: check the
                     # residual first and build the tangent only if it has not
                     likely = it > 0 and dn <= opts.dtol
-                    ev = problem.evaluate(g_try, lam_try, tangent=not likely)
+                    ev = problem.evaluate(g_try, lam_try, tangent=not likely,
+                                          stress=stress if mip_try and not likely else None)
                     rf = ev.r
                     if not np.all(np.isfinite(rf)):
                         raise FloatingPointError("non-finite residual")
@@ -245,7 +264,7 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
                         timer.t_asm += time.perf_counter() - ta
                         break
                     if likely:
-                        ev = problem.evaluate(g_try, lam_try, tangent=True)
+                        ev = problem.evaluate(g_try, lam_try, tangent=True, stress=stress if mip_try else None)
                         rf = ev.r
                     timer.t_asm += time.perf_counter() - ta
                     ts = time.perf_counter()
@@ -261,6 +280,7 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
                                 "motion is not restrained (missing or insufficient supports)") from None
                         raise
                     timer.t_sol += time.perf_counter() - ts
+                    solves += 1
                     first_solve = False
                     eta = asm.scatter(x)
                     eta_sum = eta_sum + eta
@@ -268,7 +288,15 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
                         work = -float(rf @ x)
                         k_step = scaled_norm(asm.scatter(rf), ell) ** 2 / work if work > 0 else -np.inf
                         pred = scaled_norm(eta, ell, moment=False)
+                        # guard: a first increment doing negative work starts past an
+                        # instability, where the mixed iteration's reach can carry it onto
+                        # another equilibrium; iterate that try on the displacements
+                        mip_try = mip_try and work > 0
                     dn = scaled_norm(eta, ell, moment=False) / ell
+                    if mip_try:
+                        # the mixed update: stresses linear in the increment (no membrane
+                        # overshoot of Dbar (z(g exp eta) - z0) in the geometric stiffness)
+                        stress = problem.linear_stress(ev, eta)
                     g_try = problem.retract(g_try, eta)
                     if stateful:
                         problem.element.update(eta)
@@ -278,8 +306,8 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
                 reason = str(exc)
             except (ElementTooDistortedError, FloatingPointError) as exc:
                 reason = str(exc)
-            entry = dict(lam=lam_try, converged=ok, iterations=len(hist) - 1, residual_history=hist,
-                         reason=reason)
+            entry = dict(lam=lam_try, converged=ok, iterations=max(len(hist) - 1, 0), linear_solves=solves,
+                         residual_history=hist, reason=reason)
             result.log.append(entry)
             tries.append(entry)
             log.info("  lam %.6g: %s in %d it, residual %.2e %s", lam_try, "ok" if ok else "FAIL",
@@ -301,9 +329,14 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
             if ok:
                 lam = lam_try
                 g = g_try
+                if mip:
+                    stress_conv = ev.stress
                 at_target = abs(lam - target) <= 1e-14 * max(1.0, abs(target))
                 if at_target or opts.record_substeps:
                     st = rec.step(lam, g, len(hist) - 1, hist, ev.r_int, ev.f_ext)
+                    st.attempts = len(tries) - n_recorded
+                    st.linear_solves = sum(t["linear_solves"] for t in tries[n_recorded:])
+                    n_recorded = len(tries)
                     if at_target:
                         stored = st
                     else:
@@ -326,6 +359,7 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
         if stored is None:                       # the target was already reached
             ev = problem.evaluate(g, lam, tangent=False)
             stored = rec.step(lam, g, 0, [], ev.r_int, ev.f_ext)
+            stored.attempts, stored.linear_solves = 0, 0
         timer.close()
         state = NewtonState(lam, g, dlam, k_ref)
         yield NewtonStep(stored, state, tries)

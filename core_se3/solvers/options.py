@@ -18,7 +18,9 @@ from dataclasses import dataclass, field, fields, replace
 
 from ..errors import OptionError, did_you_mean
 
-__all__ = ["NewtonOptions", "ArcLengthOptions", "split_options", "unknown_keywords"]
+__all__ = ["NewtonOptions", "ArcLengthOptions", "split_options", "unknown_keywords", "ITERATIONS"]
+
+ITERATIONS = ("mip", "displacement")     # NewtonOptions.iteration
 
 
 def _check(opts):
@@ -46,7 +48,11 @@ class NewtonOptions:
     requested step; divergence: a try whose residual exceeds this factor times its first one
     after 3 iterations is abandoned; limit_check: stop with a ConvergenceError suggesting arc
     length when a step has snapped past a limit point; record_substeps: store the cut-back
-    sub-steps as steps too; linear_solver: None = the problem's.
+    sub-steps as steps too; linear_solver: None = the problem's; iteration: 'mip' (the mixed
+    integration point Newton of Magisano, Leonetti and Garcea 2017, with an element that
+    supports it: the geometric part of the tangent sees element stresses updated linearly,
+    ``solvers.newton``) or 'displacement' (plain Newton on the displacement residual); both
+    converge to the same states.
 
     Attributes
     ----------
@@ -62,6 +68,8 @@ class NewtonOptions:
         Default True and False.
     linear_solver : str or None
         'auto', 'superlu', 'mumps' or None.
+    iteration : str
+        'mip' (default) or 'displacement'.
 
     A value outside its range raises :class:`~core_se3.errors.OptionError`.
 
@@ -79,9 +87,13 @@ class NewtonOptions:
     limit_check: bool = True
     record_substeps: bool = False
     linear_solver: str | None = None
+    iteration: str = "mip"
 
     def __post_init__(self):
         _check(self)
+        if self.iteration not in ITERATIONS:
+            raise OptionError(f"NewtonOptions.iteration must be one of {', '.join(map(repr, ITERATIONS))}, "
+                              f"got {self.iteration!r}")
 
 
 @dataclass(frozen=True)

@@ -50,8 +50,15 @@ def _stability(pt):
     return dict(det_sign=pt.sign, negative_eigenvalues=pt.n_neg, q_dot_t=pt.qt)
 
 
-def _record(rec, pt):
-    return rec.step(pt.lam, pt.state, pt.its, pt.hist, pt.ev["rint"], pt.ev["fext"], _stability(pt))
+def _record(rec, pt, sysm, log, counted):
+    """The StepResult of a path point, with the tries (log entries) and factorisations
+    (``sysm.factorizations``) since the previous one; ``counted`` = [entries, factorisations]
+    already attributed, advanced here."""
+    st = rec.step(pt.lam, pt.state, pt.its, pt.hist, pt.ev["rint"], pt.ev["fext"], _stability(pt))
+    st.attempts = len(log) - counted[0]
+    st.linear_solves = sysm.factorizations - counted[1]
+    counted[:] = [len(log), sysm.factorizations]
+    return st
 
 
 def arc_length_steps(problem, lam_end=1.0, stop_at=None, lam_min=None, start=None, result=None,
@@ -99,12 +106,14 @@ def arc_length_steps(problem, lam_end=1.0, stop_at=None, lam_min=None, start=Non
     result = result if result is not None else Result(mesh=problem.mesh, element=problem.element_name)
     rec = StepRecorder(problem, start.unwrap if start is not None else None)
     info = PathInfo(log=result.log)
+    counted = [len(result.log), 0]
     try:
         for ev in path_steps(sysm, opts, lam_end, control, stop_at[2] if stop_at else None, lam_min,
                              start, info):
-            if ev.restart:
+            if ev.restart:                   # the re-analysed start point is not a new cost
+                counted[:] = [len(result.log), sysm.factorizations]
                 continue
-            st = _record(rec, ev.point)
+            st = _record(rec, ev.point, sysm, result.log, counted)
             ev.state.unwrap = {k: v.copy() for k, v in rec.unwrapped.items()}
             result.critical_points = list(ev.state.critical)
             result.timings.update(assembly=info.timers[0], solve=info.timers[1],
@@ -209,8 +218,9 @@ def displacement_control(problem, node, direction, values, options=None, max_cut
     timers = [0.0, 0.0]
     crit = []
     try:
+        counted = [0, 0]
         cur = analyse(sysm, sysm.initial(), 0.0, opts.stability)
-        result.steps.append(_record(rec, cur))
+        result.steps.append(_record(rec, cur, sysm, result.log, counted))
         n_points = 1
         for target in values:
             sub = [target]
@@ -244,7 +254,7 @@ def displacement_control(problem, node, direction, values, options=None, max_cut
                     log.info("  ** %s", crit[-1].describe())
                 cur = pt
                 if not sub:
-                    result.steps.append(_record(rec, pt))
+                    result.steps.append(_record(rec, pt, sysm, result.log, counted))
                     n_points += 1
     except PathError as exc:
         result.critical_points = crit

@@ -208,6 +208,7 @@ class PathPoint:
 def analyse(sysm, state, lam, stability, its=0, hist=(), ev=None):
     """The PathPoint of a converged state: tangent t = K^-1 q, q . t and the inertia of K."""
     ev = sysm.evaluate(state, lam, tangent=True) if ev is None or "K" not in ev else ev
+    sysm.factorizations += 1
     with Factorization(ev["K"], sysm.solver) as fac:
         t = fac.solve(ev["q"])
     sign, nneg = inertia(ev["K"]) if stability else (0, None)
@@ -250,6 +251,7 @@ def locate_critical(sysm, cur, pt, c, span, step, limit=None):
 def mode_at(sysm, pt):
     """(smallest eigenvalue, mode) of sym(K) at a converged point, or (None, None)."""
     try:
+        sysm.factorizations += 1
         with Factorization(pt.ev["K"], sysm.solver) as fac:
             return smallest_mode(pt.ev["K"], fac)
     except SingularSystemError:

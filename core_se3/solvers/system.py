@@ -67,6 +67,7 @@ class ShellSystem:
         self.solver = make_solver(linear_solver or problem.linear_solver)
         self.ell = problem.length_scale
         self.n = self.asm.nfree
+        self.factorizations = 0        # sparse factorisations so far (the cost of the path)
         w = np.tile(np.r_[np.ones(3), np.full(3, self.ell ** 2)], problem.mesh.n_nodes)
         self.w = w[self.asm.free]
 
@@ -155,6 +156,7 @@ class AlgebraicSystem:
         self.u0 = np.zeros(self.n) if u0 is None else np.asarray(u0, float)
         self.w = np.ones(self.n)
         self.solver = None
+        self.factorizations = 0
 
     def initial(self):
         return self.u0.copy()
