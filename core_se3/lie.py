@@ -302,6 +302,13 @@ def compose(g, h):
     return np.asarray(g) @ np.asarray(h)
 
 
+def _twist_parts(xi):
+    """(|w|^2, w.v, hat3(w), hat3(v)) of twists xi = (v, w) (..., 6): what dexp and dexp_inv share."""
+    xi = np.asarray(xi)
+    v, w = xi[..., :3], xi[..., 3:]
+    return (np.einsum("...i,...i->...", w, w), np.einsum("...i,...i->...", w, v), hat3(w), hat3(v))
+
+
 def _block(A, B):
     """[[A, B], [0, A]] as (..., 6, 6)."""
     shape = np.broadcast_shapes(A.shape, B.shape)
@@ -324,11 +331,7 @@ def dexp(xi):
     >>> np.allclose(exp(xi + d), exp(xi) @ exp(dexp(xi) @ d), rtol=0, atol=1e-12)
     True
     """
-    xi = np.asarray(xi)
-    v, w = xi[..., :3], xi[..., 3:]
-    s = np.einsum("...i,...i->...", w, w)
-    wv = np.einsum("...i,...i->...", w, v)
-    W, V = hat3(w), hat3(v)
+    s, wv, W, V = _twist_parts(xi)
     a = _coef(s, _A, lambda s, t: (1 - np.cos(t)) / s)
     b = _coef(s, _Bc, lambda s, t: (t - np.sin(t)) / (s * t))
     da = _coef(s, _dA, lambda s, t: (t * np.sin(t) - 2.0 * (1 - np.cos(t))) / (s * s))
@@ -351,11 +354,7 @@ def dexp_inv(xi):
     >>> np.allclose(dexp_inv(xi) @ dexp(xi), np.eye(6), rtol=0, atol=1e-14)
     True
     """
-    xi = np.asarray(xi)
-    v, w = xi[..., :3], xi[..., 3:]
-    s = np.einsum("...i,...i->...", w, w)
-    wv = np.einsum("...i,...i->...", w, v)
-    W, V = hat3(w), hat3(v)
+    s, wv, W, V = _twist_parts(xi)
     c = _coef(s, _C, _c_closed)
     dc = _coef(s, _dC, _dc_closed)
     e = lambda x: x[..., None, None]

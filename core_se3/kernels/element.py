@@ -13,10 +13,10 @@ from math import sqrt
 import numpy as np
 from numba import njit, prange
 
-from .csr import scatter
 from .element_mixed import element_linear_stress, element_linear_stress_serial, signed_edge_stress, stress_from_signed
-from .element_ops import (CHUNK, MAX_EDGE_ANGLE, check_angles, edge_F, edge_KE, edge_pass1, edge_residual,
-                          element_force, element_G, element_Ke, node_Kn, node_residual)
+from .element_ops import CHUNK, MAX_EDGE_ANGLE, check_angles
+from .element_passes import (edges_log, edges_residual, edges_tangent, edges_tangent_store, elements_force,
+                             elements_tangent, elements_tangent_store, nodes_pass)
 
 __all__ = ["ElementKernels", "element_residual", "element_residual_serial", "element_tangent",
            "element_tangent_serial", "element_tangent_gather", "SERIAL_BELOW"]
@@ -30,72 +30,40 @@ def element_residual(g, edge_nodes, elem_edges, elem_edge_sign, Dbar, z0, Dz0, t
     F_E = sum over elements of sgn f (f = Dbar dz); r_a += -1/2 L(-psi)^T F, r_b += 1/2 L(psi)^T F;
     force_scale = sqrt(sum |f + Dz0|^2 + |f|^2).  Workspace: psi (E,6), coef (E,3), ang (E,),
     fe (m,4,6), rE (E,2,6).  Parallel over edges, elements, nodes (no colouring needed)."""
-    nE = edge_nodes.shape[0]
-    m = elem_edges.shape[0]
-    n = r.shape[0]
-    nchE = (nE + CHUNK - 1) // CHUNK
-    for ch in prange(nchE):
-        R = np.empty((3, 3))
-        for e in range(ch * CHUNK, min(nE, (ch + 1) * CHUNK)):
-            ang[e] = edge_pass1(g, edge_nodes, e, R, psi, coef)
+    nE, m, n = edge_nodes.shape[0], elem_edges.shape[0], r.shape[0]
+    for ch in prange((nE + CHUNK - 1) // CHUNK):
+        edges_log(g, edge_nodes, psi, coef, ang, ch * CHUNK, min(nE, (ch + 1) * CHUNK))
     flag, bad = check_angles(ang)
     if flag:
         return 0.0, 0.0, flag, bad
     energy = 0.0
     fs = 0.0
-    nchm = (m + CHUNK - 1) // CHUNK
-    for ch in prange(nchm):
-        z = np.empty(24)
-        f = np.empty(24)
-        for el in range(ch * CHUNK, min(m, (ch + 1) * CHUNK)):
-            a, b = element_force(el, elem_edges, elem_edge_sign, Dbar, z0, Dz0, psi, z, f, fe)
-            energy += a
-            fs += b
-    for ch in prange(nchE):
-        F = np.empty(6)
-        for e in range(ch * CHUNK, min(nE, (ch + 1) * CHUNK)):
-            edge_F(e, topo.edge_slots, fe, F)
-            edge_residual(e, psi, coef, F, rE)
-    for nd in prange(n):
-        node_residual(nd, topo.node_ptr, topo.node_inc, rE, r)
+    for ch in prange((m + CHUNK - 1) // CHUNK):
+        a, b = elements_force(elem_edges, elem_edge_sign, Dbar, z0, Dz0, psi, fe, ch * CHUNK,
+                              min(m, (ch + 1) * CHUNK))
+        energy += a
+        fs += b
+    for ch in prange((nE + CHUNK - 1) // CHUNK):
+        edges_residual(topo.edge_slots, psi, coef, fe, rE, ch * CHUNK, min(nE, (ch + 1) * CHUNK))
+    for ch in prange((n + CHUNK - 1) // CHUNK):
+        nodes_pass(topo.node_ptr, topo.node_inc, rE, r, None, None, None, None, ch * CHUNK,
+                   min(n, (ch + 1) * CHUNK))
     return energy, sqrt(fs), 0, -1
 
 
 @njit(cache=True)
-def _element_tangent_one(el, quads, elem_edges, sgn, Dbar, z0, Dz0, psi, coef, fe, cmap, data,
-                         z, f, G, TT, TTt, KeT):
-    """Residual forces and material blocks Ke = G^T Dbar G of element el, scattered into data."""
-    a, b = element_force(el, elem_edges, sgn, Dbar, z0, Dz0, psi, z, f, fe)
-    element_G(el, elem_edges, sgn, psi, coef, G)
-    element_Ke(el, Dbar, G, TT, TTt, KeT)
-    # Ke = KeT^T = KeT up to round-off (Dbar is symmetric): read KeT row-wise (contiguous)
-    for A in range(4):
-        nA = quads[el, A]
-        for B in range(4):
-            scatter(data, cmap, cmap.elem_blk[el, A, B], nA, quads[el, B], KeT, 6 * A, 6 * B, False, 1.0)
-    return a, b
-
-
-# mixed = "fe_geo is not None": pruned at compile time (one version per argument types); a run-time
-# flag, or these branches one helper level deeper, cost ~10 % in the serial driver (measured)
-@njit(cache=True)
-def _edge_tangent_one(e, edge_nodes, topo, psi, coef, fe, rE, fe_geo, rEg, cmap, data, F, Fg,
-                      Lp, Lm, Ad, Jm, Y, H, p):
-    """F_e, the nodal residual parts and the geometric blocks of edge e, scattered into data;
-    mixed (fe_geo given): the blocks from F_geo = edge sum of fe_geo (into Fg), whose nodal
-    parts go to rEg[e]."""
-    edge_F(e, topo.edge_slots, fe, F)
-    edge_residual(e, psi, coef, F, rE)
-    if fe_geo is not None:
-        edge_F(e, topo.edge_slots, fe_geo, Fg)
-        edge_residual(e, psi, coef, Fg, rEg)
-        edge_KE(e, psi, coef, Fg, Lp, Lm, Ad, Jm, Y, H, p)
-    else:
-        edge_KE(e, psi, coef, F, Lp, Lm, Ad, Jm, Y, H, p)
-    for I in range(2):
-        for J in range(2):
-            scatter(data, cmap, cmap.edge_blk[e, I, J], edge_nodes[e, I], edge_nodes[e, J], H,
-                     6 * I, 6 * J, False, 1.0)
+def element_residual_serial(g, edge_nodes, elem_edges, elem_edge_sign, Dbar, z0, Dz0, topo,
+                            psi, coef, ang, fe, rE, r):
+    """``element_residual`` in one thread."""
+    nE, m, n = edge_nodes.shape[0], elem_edges.shape[0], r.shape[0]
+    edges_log(g, edge_nodes, psi, coef, ang, 0, nE)
+    flag, bad = check_angles(ang)
+    if flag:
+        return 0.0, 0.0, flag, bad
+    energy, fs = elements_force(elem_edges, elem_edge_sign, Dbar, z0, Dz0, psi, fe, 0, m)
+    edges_residual(topo.edge_slots, psi, coef, fe, rE, 0, nE)
+    nodes_pass(topo.node_ptr, topo.node_inc, rE, r, None, None, None, None, 0, n)
+    return energy, sqrt(fs), 0, -1
 
 
 @njit(cache=True, parallel=True)
@@ -120,15 +88,11 @@ def element_tangent(g, quads, edge_nodes, elem_edges, elem_edge_sign, Dbar, z0, 
     built with F_geo, and pass 4 sums r_geo into rg (n,6) and writes 1/2 adt(r_geo).  The
     residual, the energy and the material blocks do not change.  fe_geo = rEg = rg = None:
     the ordinary tangent (a separate compiled version: the mixed branches are pruned)."""
-    nE = edge_nodes.shape[0]
-    n = r.shape[0]
+    nE, n = edge_nodes.shape[0], r.shape[0]
     for i in prange(data.size):
         data[i] = 0.0
-    nchE = (nE + CHUNK - 1) // CHUNK
-    for ch in prange(nchE):
-        R = np.empty((3, 3))
-        for e in range(ch * CHUNK, min(nE, (ch + 1) * CHUNK)):
-            ang[e] = edge_pass1(g, edge_nodes, e, R, psi, coef)
+    for ch in prange((nE + CHUNK - 1) // CHUNK):
+        edges_log(g, edge_nodes, psi, coef, ang, ch * CHUNK, min(nE, (ch + 1) * CHUNK))
     flag, bad = check_angles(ang)
     if flag:
         return 0.0, 0.0, flag, bad
@@ -137,46 +101,20 @@ def element_tangent(g, quads, edge_nodes, elem_edges, elem_edge_sign, Dbar, z0, 
     cptr, order = topo.elem_cptr, topo.elem_order
     for col in range(len(cptr) - 1):
         lo, hi = cptr[col], cptr[col + 1]
-        nch = (hi - lo + CHUNK - 1) // CHUNK
-        for ch in prange(nch):
-            z = np.empty(24)
-            f = np.empty(24)
-            G = np.empty((4, 2, 6, 6))
-            TT = np.empty((24, 24))
-            TTt = np.empty((24, 24))
-            KeT = np.empty((24, 24))
-            for ii in range(lo + ch * CHUNK, min(hi, lo + (ch + 1) * CHUNK)):
-                a, b = _element_tangent_one(order[ii], quads, elem_edges, elem_edge_sign, Dbar, z0, Dz0,
-                                            psi, coef, fe, cmap, data, z, f, G, TT, TTt, KeT)
-                energy += a
-                fs += b
+        for ch in prange((hi - lo + CHUNK - 1) // CHUNK):
+            a, b = elements_tangent(order, quads, elem_edges, elem_edge_sign, Dbar, z0, Dz0, psi, coef, fe,
+                                    cmap, data, lo + ch * CHUNK, min(hi, lo + (ch + 1) * CHUNK))
+            energy += a
+            fs += b
     cptr, order = topo.edge_cptr, topo.edge_order
     for col in range(len(cptr) - 1):
         lo, hi = cptr[col], cptr[col + 1]
-        nch = (hi - lo + CHUNK - 1) // CHUNK
-        for ch in prange(nch):
-            F = np.empty(6)
-            Fg = np.empty(6) if fe_geo is not None else F
-            p = np.empty(6)
-            Lp = np.empty((6, 6))
-            Lm = np.empty((6, 6))
-            Ad = np.empty((6, 6))
-            Jm = np.empty((6, 6))
-            Y = np.empty((12, 6))
-            H = np.empty((12, 12))
-            for ii in range(lo + ch * CHUNK, min(hi, lo + (ch + 1) * CHUNK)):
-                _edge_tangent_one(order[ii], edge_nodes, topo, psi, coef, fe, rE, fe_geo, rEg,
-                                  cmap, data, F, Fg, Lp, Lm, Ad, Jm, Y, H, p)
-    nchn = (n + CHUNK - 1) // CHUNK
-    for ch in prange(nchn):
-        K6 = np.empty((6, 6))
-        for nd in range(ch * CHUNK, min(n, (ch + 1) * CHUNK)):
-            node_residual(nd, topo.node_ptr, topo.node_inc, rE, r)
-            if rEg is not None:
-                node_residual(nd, topo.node_ptr, topo.node_inc, rEg, rg)
-                node_Kn(nd, rg, data, cmap, K6)
-            else:
-                node_Kn(nd, r, data, cmap, K6)
+        for ch in prange((hi - lo + CHUNK - 1) // CHUNK):
+            edges_tangent(order, edge_nodes, topo.edge_slots, psi, coef, fe, rE, fe_geo, rEg, cmap, data,
+                          lo + ch * CHUNK, min(hi, lo + (ch + 1) * CHUNK))
+    for ch in prange((n + CHUNK - 1) // CHUNK):
+        nodes_pass(topo.node_ptr, topo.node_inc, rE, r, rEg, rg, data, cmap, ch * CHUNK,
+                   min(n, (ch + 1) * CHUNK))
     return energy, sqrt(fs), 0, -1
 
 
@@ -185,78 +123,16 @@ def element_tangent_serial(g, quads, edge_nodes, elem_edges, elem_edge_sign, Dba
                            psi, coef, ang, fe, rE, r, data, fe_geo, rEg, rg):
     """``element_tangent`` in one thread, natural order (no threading overhead: small meshes);
     the same mixed option (fe_geo, rEg, rg: arrays or None)."""
-    nE = edge_nodes.shape[0]
-    m = elem_edges.shape[0]
-    n = r.shape[0]
+    nE, m, n = edge_nodes.shape[0], elem_edges.shape[0], r.shape[0]
     data[:] = 0.0
-    R = np.empty((3, 3))
-    for e in range(nE):
-        ang[e] = edge_pass1(g, edge_nodes, e, R, psi, coef)
+    edges_log(g, edge_nodes, psi, coef, ang, 0, nE)
     flag, bad = check_angles(ang)
     if flag:
         return 0.0, 0.0, flag, bad
-    energy = 0.0
-    fs = 0.0
-    z = np.empty(24)
-    f = np.empty(24)
-    G = np.empty((4, 2, 6, 6))
-    TT = np.empty((24, 24))
-    TTt = np.empty((24, 24))
-    KeT = np.empty((24, 24))
-    for el in range(m):
-        a, b = _element_tangent_one(el, quads, elem_edges, elem_edge_sign, Dbar, z0, Dz0,
-                                    psi, coef, fe, cmap, data, z, f, G, TT, TTt, KeT)
-        energy += a
-        fs += b
-    F = np.empty(6)
-    Fg = np.empty(6) if fe_geo is not None else F
-    p = np.empty(6)
-    Lp = np.empty((6, 6))
-    Lm = np.empty((6, 6))
-    Ad = np.empty((6, 6))
-    Jm = np.empty((6, 6))
-    Y = np.empty((12, 6))
-    H = np.empty((12, 12))
-    for e in range(nE):
-        _edge_tangent_one(e, edge_nodes, topo, psi, coef, fe, rE, fe_geo, rEg, cmap, data, F, Fg,
-                          Lp, Lm, Ad, Jm, Y, H, p)
-    K6 = np.empty((6, 6))
-    for nd in range(n):
-        node_residual(nd, topo.node_ptr, topo.node_inc, rE, r)
-        if rEg is not None:
-            node_residual(nd, topo.node_ptr, topo.node_inc, rEg, rg)
-            node_Kn(nd, rg, data, cmap, K6)
-        else:
-            node_Kn(nd, r, data, cmap, K6)
-    return energy, sqrt(fs), 0, -1
-
-
-@njit(cache=True)
-def element_residual_serial(g, edge_nodes, elem_edges, elem_edge_sign, Dbar, z0, Dz0, topo,
-                            psi, coef, ang, fe, rE, r):
-    """``element_residual`` in one thread."""
-    nE = edge_nodes.shape[0]
-    m = elem_edges.shape[0]
-    R = np.empty((3, 3))
-    for e in range(nE):
-        ang[e] = edge_pass1(g, edge_nodes, e, R, psi, coef)
-    flag, bad = check_angles(ang)
-    if flag:
-        return 0.0, 0.0, flag, bad
-    energy = 0.0
-    fs = 0.0
-    z = np.empty(24)
-    f = np.empty(24)
-    for el in range(m):
-        a, b = element_force(el, elem_edges, elem_edge_sign, Dbar, z0, Dz0, psi, z, f, fe)
-        energy += a
-        fs += b
-    F = np.empty(6)
-    for e in range(nE):
-        edge_F(e, topo.edge_slots, fe, F)
-        edge_residual(e, psi, coef, F, rE)
-    for nd in range(r.shape[0]):
-        node_residual(nd, topo.node_ptr, topo.node_inc, rE, r)
+    energy, fs = elements_tangent(None, quads, elem_edges, elem_edge_sign, Dbar, z0, Dz0, psi, coef, fe,
+                                  cmap, data, 0, m)
+    edges_tangent(None, edge_nodes, topo.edge_slots, psi, coef, fe, rE, fe_geo, rEg, cmap, data, 0, nE)
+    nodes_pass(topo.node_ptr, topo.node_inc, rE, r, rEg, rg, data, cmap, 0, n)
     return energy, sqrt(fs), 0, -1
 
 
@@ -267,62 +143,22 @@ def element_tangent_gather(g, quads, edge_nodes, elem_edges, elem_edge_sign, Dba
     blocks KEb (E,2,2,6,6) are stored (parallel, no colours), then every CSR block sums its
     contributors (``cmap.src``) and is written once (no zeroing of data needed).  The same
     mixed option as ``element_tangent`` (fe_geo, rEg, rg: arrays or None)."""
-    nE = edge_nodes.shape[0]
-    m = elem_edges.shape[0]
-    n = r.shape[0]
-    nchE = (nE + CHUNK - 1) // CHUNK
-    for ch in prange(nchE):
-        R = np.empty((3, 3))
-        for e in range(ch * CHUNK, min(nE, (ch + 1) * CHUNK)):
-            ang[e] = edge_pass1(g, edge_nodes, e, R, psi, coef)
+    nE, m, n = edge_nodes.shape[0], elem_edges.shape[0], r.shape[0]
+    for ch in prange((nE + CHUNK - 1) // CHUNK):
+        edges_log(g, edge_nodes, psi, coef, ang, ch * CHUNK, min(nE, (ch + 1) * CHUNK))
     flag, bad = check_angles(ang)
     if flag:
         return 0.0, 0.0, flag, bad
     energy = 0.0
     fs = 0.0
-    nchm = (m + CHUNK - 1) // CHUNK
-    for ch in prange(nchm):
-        z = np.empty(24)
-        f = np.empty(24)
-        G = np.empty((4, 2, 6, 6))
-        TT = np.empty((24, 24))
-        TTt = np.empty((24, 24))
-        KeT = np.empty((24, 24))
-        for el in range(ch * CHUNK, min(m, (ch + 1) * CHUNK)):
-            a, b = element_force(el, elem_edges, elem_edge_sign, Dbar, z0, Dz0, psi, z, f, fe)
-            energy += a
-            fs += b
-            element_G(el, elem_edges, elem_edge_sign, psi, coef, G)
-            element_Ke(el, Dbar, G, TT, TTt, KeT)
-            for A in range(4):
-                for B in range(4):
-                    for i in range(6):
-                        for j in range(6):
-                            Keb[el, A, B, i, j] = KeT[6 * A + i, 6 * B + j]
-    for ch in prange(nchE):
-        F = np.empty(6)
-        Fg = np.empty(6) if fe_geo is not None else F
-        p = np.empty(6)
-        Lp = np.empty((6, 6))
-        Lm = np.empty((6, 6))
-        Ad = np.empty((6, 6))
-        Jm = np.empty((6, 6))
-        Y = np.empty((12, 6))
-        H = np.empty((12, 12))
-        for e in range(ch * CHUNK, min(nE, (ch + 1) * CHUNK)):
-            edge_F(e, topo.edge_slots, fe, F)
-            edge_residual(e, psi, coef, F, rE)
-            if fe_geo is not None:
-                edge_F(e, topo.edge_slots, fe_geo, Fg)
-                edge_residual(e, psi, coef, Fg, rEg)
-                edge_KE(e, psi, coef, Fg, Lp, Lm, Ad, Jm, Y, H, p)
-            else:
-                edge_KE(e, psi, coef, F, Lp, Lm, Ad, Jm, Y, H, p)
-            for I in range(2):
-                for J in range(2):
-                    for i in range(6):
-                        for j in range(6):
-                            KEb[e, I, J, i, j] = H[6 * I + i, 6 * J + j]
+    for ch in prange((m + CHUNK - 1) // CHUNK):
+        a, b = elements_tangent_store(elem_edges, elem_edge_sign, Dbar, z0, Dz0, psi, coef, fe, Keb,
+                                      ch * CHUNK, min(m, (ch + 1) * CHUNK))
+        energy += a
+        fs += b
+    for ch in prange((nE + CHUNK - 1) // CHUNK):
+        edges_tangent_store(topo.edge_slots, psi, coef, fe, rE, fe_geo, rEg, KEb, ch * CHUNK,
+                            min(nE, (ch + 1) * CHUNK))
     nb = cmap.blk_a.size
     ke = Keb.reshape(-1, 6, 6)
     kE = KEb.reshape(-1, 6, 6)
@@ -352,16 +188,9 @@ def element_tangent_gather(g, quads, edge_nodes, elem_edges, elem_edge_sign, Dba
                     cr = cmap.colrank[B, j]
                     if cr >= 0:
                         data[rb + cs + cr] = S[i, j]
-    nchn = (n + CHUNK - 1) // CHUNK
-    for ch in prange(nchn):
-        K6 = np.empty((6, 6))
-        for nd in range(ch * CHUNK, min(n, (ch + 1) * CHUNK)):
-            node_residual(nd, topo.node_ptr, topo.node_inc, rE, r)
-            if rEg is not None:
-                node_residual(nd, topo.node_ptr, topo.node_inc, rEg, rg)
-                node_Kn(nd, rg, data, cmap, K6)
-            else:
-                node_Kn(nd, r, data, cmap, K6)
+    for ch in prange((n + CHUNK - 1) // CHUNK):
+        nodes_pass(topo.node_ptr, topo.node_inc, rE, r, rEg, rg, data, cmap, ch * CHUNK,
+                   min(n, (ch + 1) * CHUNK))
     return energy, sqrt(fs), 0, -1
 
 

@@ -406,3 +406,24 @@ def retract(g, eta, out):
                 out[i, r, c] = acc
         out[i, 3, 0] = out[i, 3, 1] = out[i, 3, 2] = 0.0
         out[i, 3, 3] = 1.0
+
+
+@njit(cache=True)
+def geodesic_point(g_a, g_b, t, out):
+    """out (4,4) <- g_a exp(t log(g_a^-1 g_b)): the point at parameter t of the SE(3) geodesic
+    from g_a (t = 0) to g_b (t = 1) (a probe between two nodes)."""
+    R = np.empty((3, 3))
+    psi = np.empty(6)
+    log_se3(g_a, g_b, R, psi)
+    for i in range(6):
+        psi[i] *= t
+    h = np.empty((4, 4))
+    exp_se3(psi, h)
+    for r in range(3):
+        for c in range(4):
+            acc = g_a[r, 3] if c == 3 else 0.0
+            for k in range(3):
+                acc += g_a[r, k] * h[k, c]
+            out[r, c] = acc
+    out[3, 0] = out[3, 1] = out[3, 2] = 0.0
+    out[3, 3] = 1.0

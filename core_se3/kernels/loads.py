@@ -50,6 +50,23 @@ def _RtX(g, nd, x0, x1, x2):
 
 
 @njit(cache=True)
+def _add_dead(f, nd, F0, F1, F2, M0, M1, M2, data, cmap, K6, tangent):
+    """f_nd += (F, M) (body-frame components of a dead lab wrench) and, with the tangent, the
+    load stiffness -df/deta = [[0, -hat(F)], [0, -hat(M)]] on the node's diagonal block."""
+    f[nd, 0] += F0
+    f[nd, 1] += F1
+    f[nd, 2] += F2
+    f[nd, 3] += M0
+    f[nd, 4] += M1
+    f[nd, 5] += M2
+    if tangent:
+        _zero6(K6)
+        hat_add(K6, 0, 3, F0, F1, F2, -1.0)
+        hat_add(K6, 3, 3, M0, M1, M2, -1.0)
+        scatter_diag(data, cmap, nd, K6, 1.0)
+
+
+@njit(cache=True)
 def nodal_load(g, nodes, weights, force, moment, s, follower, f, data, cmap, tangent):
     """NodalLoad.  Dead (lab F, M): f_i += w_i s (R_i^T F, R_i^T M), block
     -df/deta = [[0, -hat(R^T F)], [0, -hat(R^T M)]] (weighted); follower: f_i += w_i s (F, M),
@@ -66,17 +83,7 @@ def nodal_load(g, nodes, weights, force, moment, s, follower, f, data, cmap, tan
         F0, F1, F2 = _RtX(g, nd, force[0], force[1], force[2])
         M0, M1, M2 = _RtX(g, nd, moment[0], moment[1], moment[2])
         F0, F1, F2, M0, M1, M2 = w * F0, w * F1, w * F2, w * M0, w * M1, w * M2
-        f[nd, 0] += F0
-        f[nd, 1] += F1
-        f[nd, 2] += F2
-        f[nd, 3] += M0
-        f[nd, 4] += M1
-        f[nd, 5] += M2
-        if tangent:
-            _zero6(K6)
-            hat_add(K6, 0, 3, F0, F1, F2, -1.0)
-            hat_add(K6, 3, 3, M0, M1, M2, -1.0)
-            scatter_diag(data, cmap, nd, K6, 1.0)
+        _add_dead(f, nd, F0, F1, F2, M0, M1, M2, data, cmap, K6, tangent)
 
 
 @njit(cache=True)
@@ -95,13 +102,7 @@ def surface_load_dead(g, quads, elements, cptr, order, node_w, q, s, f, data, cm
                 nd = quads[el, a]
                 w = s * node_w[pos, a]
                 F0, F1, F2 = _RtX(g, nd, w * q[0], w * q[1], w * q[2])
-                f[nd, 0] += F0
-                f[nd, 1] += F1
-                f[nd, 2] += F2
-                if tangent:
-                    _zero6(K6)
-                    hat_add(K6, 0, 3, F0, F1, F2, -1.0)
-                    scatter_diag(data, cmap, nd, K6, 1.0)
+                _add_dead(f, nd, F0, F1, F2, 0.0, 0.0, 0.0, data, cmap, K6, tangent)
 
 
 # bilinear shape functions at the 2x2 Gauss points (loads.shape_functions, GAUSS_2x2 order)

@@ -3,6 +3,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
 from .. import lie
 
 __all__ = ["Probe"]
@@ -35,11 +37,18 @@ class Probe:
     node_b: int
     wa: float = 1.0
 
-    def state(self, g):
-        """(position (3,), rotation (3, 3)) of the probe at the frames g."""
+    def state(self, g, compiled=False):
+        """(position (3,), rotation (3, 3)) of the probe at the frames g (``compiled``: with the
+        numba kernel ``kernels.lie.geodesic_point``, the same to round-off)."""
         ga, gb = g[self.node_a], g[self.node_b]
         if self.node_a == self.node_b or self.wa == 1.0:
             return ga[:3, 3].copy(), ga[:3, :3].copy()
+        if compiled:
+            from ..kernels.lie import geodesic_point
+            gm = np.empty((4, 4))
+            geodesic_point(np.ascontiguousarray(ga, dtype=float), np.ascontiguousarray(gb, dtype=float),
+                           1.0 - self.wa, gm)
+            return gm[:3, 3].copy(), gm[:3, :3].copy()
         rel = lie.log(lie.inv(ga) @ gb)
         gm = ga @ lie.exp((1.0 - self.wa) * rel)
         return gm[:3, 3].copy(), gm[:3, :3].copy()

@@ -77,7 +77,8 @@ class StepRecorder:
         self.g0 = problem.mesh.g0
         self.fixed = problem.constraint_mask()
         self.ell = problem.length_scale
-        self.reference = {name: pr.state(self.g0) for name, pr in problem.probes.items()}
+        self.compiled = getattr(problem, "backend", "numpy") == "numba"
+        self.reference = {name: pr.state(self.g0, compiled=self.compiled) for name, pr in problem.probes.items()}
         self.unwrapped = {name: np.zeros(3) for name in problem.probes}
         if unwrapped:
             self.unwrapped.update({k: np.array(v, float) for k, v in unwrapped.items()})
@@ -86,7 +87,7 @@ class StepRecorder:
         """name -> dict(u, R, w) at the frames g, unwrapping the rotation vectors."""
         states = {}
         for name, pr in self.problem.probes.items():
-            x, R = pr.state(g)
+            x, R = pr.state(g, compiled=self.compiled)
             x0, Rref = self.reference.get(name) or pr.state(self.g0)
             self.unwrapped[name] = unwrap_rotation(R @ Rref.T, self.unwrapped[name])
             states[name] = dict(u=x - x0, R=R @ Rref.T, w=self.unwrapped[name].copy())

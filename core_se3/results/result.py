@@ -24,7 +24,7 @@ def unwrap_rotation(R, w_prev):
     Returns
     -------
     (3,) ndarray
-        log_so3(R) + 2 pi k n (n its axis, |k| <= 50) nearest to w_prev [rad].
+        log_so3(R) + 2 pi k n (n its axis, k integer) nearest to w_prev [rad].
 
     Example
     -------
@@ -35,15 +35,19 @@ def unwrap_rotation(R, w_prev):
     6.383185
     """
     w = lie.log_so3(R)
-    t = np.linalg.norm(w)
-    if t < 1e-12:
-        n = w_prev / max(np.linalg.norm(w_prev), 1e-300) if np.linalg.norm(w_prev) > 0 else np.zeros(3)
-        cands = [w + 2 * np.pi * k * n for k in range(-50, 51)] if np.linalg.norm(n) > 0 else [w]
-    else:
+    t = float(np.sqrt(w @ w))
+    w_prev = np.asarray(w_prev, float)
+    if t >= 1e-12:
         n = w / t
-        cands = [w + 2 * np.pi * k * n for k in range(-50, 51)]
-    cands = np.array(cands)
-    return cands[np.argmin(np.linalg.norm(cands - w_prev, axis=1))]
+    else:
+        tp = float(np.sqrt(w_prev @ w_prev))
+        if tp == 0.0:
+            return w
+        n = w_prev / tp
+    # the representations of R are w + 2 pi k n (k integer); |w + 2 pi k n - w_prev| is least
+    # for the k nearest to (n . w_prev - t) / (2 pi)
+    k = np.round((float(n @ w_prev) - t) / (2 * np.pi))
+    return w + 2 * np.pi * k * n
 
 
 @dataclass

@@ -72,9 +72,11 @@ class Factorization:
         d[d == 0] = 1.0
         self.s = 1.0 / np.sqrt(d)
         rows = _row_indices(K.indptr)
-        # S K S on the same structure (no sparse products): entry (i, j) times s_i s_j
+        # S K S on the same structure (no sparse products): entry (i, j) times s_i s_j, handed
+        # to the solver as bare CSR arrays (no second scipy matrix per factorisation)
         data = K.data * (self.s[rows] * self.s[K.indices])
-        self.Ks = sp.csr_matrix((data, K.indices, K.indptr), shape=K.shape)
+        self.K = K
+        self.Ks = _CsrArrays(data, K.indices, K.indptr, K.shape)
         self.knorm = float(np.max(np.add.reduceat(np.abs(data), K.indptr[:-1]))) if len(data) else 0.0
         self._ctx = solver.factor(self.Ks)
         self._solve = self._ctx.__enter__()
@@ -87,7 +89,7 @@ class Factorization:
         return False
 
     def _berr(self, bs, y):
-        rs = bs - self.Ks @ y
+        rs = bs - self.s * (self.K @ (self.s * y))              # S b - S K S y
         return rs, np.linalg.norm(rs) / (self.knorm * np.linalg.norm(y) + np.linalg.norm(bs) + 1e-300)
 
     def solve(self, b):
@@ -130,6 +132,18 @@ class Factorization:
     def close(self):
         if not self.dense:
             self._ctx.__exit__(None, None, None)
+
+
+class _CsrArrays:
+    """The arrays of a CSR matrix (data, indices, indptr, shape) without a scipy object: what
+    the solvers' ``factor`` reads (``tocsr()`` returns itself)."""
+    __slots__ = ("data", "indices", "indptr", "shape")
+
+    def __init__(self, data, indices, indptr, shape):
+        self.data, self.indices, self.indptr, self.shape = data, indices, indptr, tuple(shape)
+
+    def tocsr(self):
+        return self
 
 
 _EPS = np.finfo(float).eps
@@ -237,7 +251,7 @@ class SuperLUSolver:
         # the fallback when a pivot breaks down.
         # The CSR arrays of K are the CSC arrays of K^T: factor K^T (no conversion) and solve
         # with trans="T", i.e. K x = b.
-        if sp.isspmatrix_csr(K):
+        if isinstance(K, _CsrArrays) or sp.isspmatrix_csr(K):
             A, trans = sp.csc_matrix((K.data, K.indices, K.indptr), shape=K.shape[::-1]), "T"
         else:
             A, trans = K.tocsc(), "N"

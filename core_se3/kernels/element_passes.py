@@ -1,0 +1,174 @@
+"""The passes of the default element's drivers (numba), each over a range [lo, hi) of edges,
+elements or nodes: the serial drivers of ``kernels.element`` call them once over everything,
+the parallel ones once per chunk of CHUNK items (inside ``prange``), so that every pass is
+written once.  Each pass allocates its own small scratch arrays.
+
+``order`` is None (natural order) or an index array (the coloured drivers' order: item
+``order[i]`` for i in [lo, hi)); ``fe_geo``, ``rEg``, ``rg`` None or arrays select at compile
+time the ordinary or the mixed tangent (``kernels.element``); ``data`` None selects the
+residual-only node pass.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from .csr import scatter
+from .element_ops import (edge_F, edge_KE, edge_pass1, edge_residual, element_force, element_G, element_Ke,
+                          node_Kn, node_residual)
+
+__all__ = ["edges_log", "elements_force", "edges_residual", "nodes_pass", "elements_tangent",
+           "edges_tangent", "elements_tangent_store", "edges_tangent_store"]
+
+
+@njit(cache=True)
+def _item(order, i):
+    return i if order is None else order[i]
+
+
+@njit(cache=True)
+def edges_log(g, edge_nodes, psi, coef, ang, lo, hi):
+    """Edges lo..hi: psi = log(g_a^-1 g_b), its coefficients, the turn angle into ang."""
+    R = np.empty((3, 3))
+    for e in range(lo, hi):
+        ang[e] = edge_pass1(g, edge_nodes, e, R, psi, coef)
+
+
+@njit(cache=True)
+def elements_force(elem_edges, sgn, Dbar, z0, Dz0, psi, fe, lo, hi):
+    """Elements lo..hi: f = Dbar (z - z0) into fe (signed per edge); returns (energy, |f+Dz0|^2+|f|^2)."""
+    z = np.empty(24)
+    f = np.empty(24)
+    en = 0.0
+    fs = 0.0
+    for el in range(lo, hi):
+        a, b = element_force(el, elem_edges, sgn, Dbar, z0, Dz0, psi, z, f, fe)
+        en += a
+        fs += b
+    return en, fs
+
+
+@njit(cache=True)
+def edges_residual(edge_slots, psi, coef, fe, rE, lo, hi):
+    """Edges lo..hi: F = sum of the sides' fe, nodal parts r_a, r_b into rE."""
+    F = np.empty(6)
+    for e in range(lo, hi):
+        edge_F(e, edge_slots, fe, F)
+        edge_residual(e, psi, coef, F, rE)
+
+
+@njit(cache=True)
+def nodes_pass(node_ptr, node_inc, rE, r, rEg, rg, data, cmap, lo, hi):
+    """Nodes lo..hi: r = sum of the edge ends; with data, the nodal block 1/2 adt(r) (mixed:
+    r_geo from rEg into rg, and 1/2 adt(r_geo))."""
+    K6 = np.empty((6, 6))
+    for nd in range(lo, hi):
+        node_residual(nd, node_ptr, node_inc, rE, r)
+        if data is not None:
+            if rEg is not None:
+                node_residual(nd, node_ptr, node_inc, rEg, rg)
+                node_Kn(nd, rg, data, cmap, K6)
+            else:
+                node_Kn(nd, r, data, cmap, K6)
+
+
+@njit(cache=True)
+def _element_blocks(el, elem_edges, sgn, Dbar, z0, Dz0, psi, coef, fe, z, f, G, TT, TTt, KeT):
+    """Forces and KeT = (G^T Dbar G)^T of element el; returns (energy, force scale part)."""
+    a, b = element_force(el, elem_edges, sgn, Dbar, z0, Dz0, psi, z, f, fe)
+    element_G(el, elem_edges, sgn, psi, coef, G)
+    element_Ke(el, Dbar, G, TT, TTt, KeT)
+    return a, b
+
+
+@njit(cache=True)
+def _element_scratch():
+    return (np.empty(24), np.empty(24), np.empty((4, 2, 6, 6)), np.empty((24, 24)), np.empty((24, 24)),
+            np.empty((24, 24)))
+
+
+@njit(cache=True)
+def elements_tangent(order, quads, elem_edges, sgn, Dbar, z0, Dz0, psi, coef, fe, cmap, data, lo, hi):
+    """Elements lo..hi (through order): forces and material blocks, scattered into data.
+    Ke = KeT^T = KeT up to round-off (Dbar is symmetric): KeT is read row-wise (contiguous)."""
+    z, f, G, TT, TTt, KeT = _element_scratch()
+    en = 0.0
+    fs = 0.0
+    for i in range(lo, hi):
+        el = _item(order, i)
+        a, b = _element_blocks(el, elem_edges, sgn, Dbar, z0, Dz0, psi, coef, fe, z, f, G, TT, TTt, KeT)
+        en += a
+        fs += b
+        for A in range(4):
+            nA = quads[el, A]
+            for B in range(4):
+                scatter(data, cmap, cmap.elem_blk[el, A, B], nA, quads[el, B], KeT, 6 * A, 6 * B, False, 1.0)
+    return en, fs
+
+
+@njit(cache=True)
+def elements_tangent_store(elem_edges, sgn, Dbar, z0, Dz0, psi, coef, fe, Keb, lo, hi):
+    """Elements lo..hi: forces, and the material blocks stored in Keb (m,4,4,6,6)."""
+    z, f, G, TT, TTt, KeT = _element_scratch()
+    en = 0.0
+    fs = 0.0
+    for el in range(lo, hi):
+        a, b = _element_blocks(el, elem_edges, sgn, Dbar, z0, Dz0, psi, coef, fe, z, f, G, TT, TTt, KeT)
+        en += a
+        fs += b
+        for A in range(4):
+            for B in range(4):
+                for r in range(6):
+                    for c in range(6):
+                        Keb[el, A, B, r, c] = KeT[6 * A + r, 6 * B + c]
+    return en, fs
+
+
+# mixed = "fe_geo is not None": pruned at compile time (one version per argument types); a
+# run-time flag cost ~10 % in the serial driver (measured)
+@njit(cache=True)
+def _edge_blocks(e, edge_slots, psi, coef, fe, rE, fe_geo, rEg, F, Fg, Lp, Lm, Ad, Jm, Y, H, p):
+    """F_e, the nodal residual parts and the geometric block H of edge e; mixed (fe_geo
+    given): H from F_geo = edge sum of fe_geo (into Fg), whose nodal parts go to rEg[e]."""
+    edge_F(e, edge_slots, fe, F)
+    edge_residual(e, psi, coef, F, rE)
+    if fe_geo is not None:
+        edge_F(e, edge_slots, fe_geo, Fg)
+        edge_residual(e, psi, coef, Fg, rEg)
+        edge_KE(e, psi, coef, Fg, Lp, Lm, Ad, Jm, Y, H, p)
+    else:
+        edge_KE(e, psi, coef, F, Lp, Lm, Ad, Jm, Y, H, p)
+
+
+@njit(cache=True)
+def _edge_scratch(mixed):
+    F = np.empty(6)
+    Fg = np.empty(6) if mixed else F
+    return F, Fg, np.empty((6, 6)), np.empty((6, 6)), np.empty((6, 6)), np.empty((6, 6)), \
+        np.empty((12, 6)), np.empty((12, 12)), np.empty(6)
+
+
+@njit(cache=True)
+def edges_tangent(order, edge_nodes, edge_slots, psi, coef, fe, rE, fe_geo, rEg, cmap, data, lo, hi):
+    """Edges lo..hi (through order): residual parts and geometric blocks, scattered into data."""
+    F, Fg, Lp, Lm, Ad, Jm, Y, H, p = _edge_scratch(fe_geo is not None)
+    for i in range(lo, hi):
+        e = _item(order, i)
+        _edge_blocks(e, edge_slots, psi, coef, fe, rE, fe_geo, rEg, F, Fg, Lp, Lm, Ad, Jm, Y, H, p)
+        for I in range(2):
+            for J in range(2):
+                scatter(data, cmap, cmap.edge_blk[e, I, J], edge_nodes[e, I], edge_nodes[e, J], H,
+                        6 * I, 6 * J, False, 1.0)
+
+
+@njit(cache=True)
+def edges_tangent_store(edge_slots, psi, coef, fe, rE, fe_geo, rEg, KEb, lo, hi):
+    """Edges lo..hi: residual parts, and the geometric blocks stored in KEb (E,2,2,6,6)."""
+    F, Fg, Lp, Lm, Ad, Jm, Y, H, p = _edge_scratch(fe_geo is not None)
+    for e in range(lo, hi):
+        _edge_blocks(e, edge_slots, psi, coef, fe, rE, fe_geo, rEg, F, Fg, Lp, Lm, Ad, Jm, Y, H, p)
+        for I in range(2):
+            for J in range(2):
+                for r in range(6):
+                    for c in range(6):
+                        KEb[e, I, J, r, c] = H[6 * I + r, 6 * J + c]
