@@ -107,6 +107,22 @@ def test_inertia_counts_negative_eigenvalues():
         assert C.inertia(A) == ((-1) ** k, k)
 
 
+@pytest.mark.parametrize("shift_index", [0, 1, 6])
+def test_inertia_of_large_matrices_matches_the_analytic_count(shift_index):
+    """From AUTO_MUMPS_MIN unknowns the inertia comes from MUMPS' LDL^T (petsc4py), else from
+    SuperLU: both must count the negative eigenvalues of a shifted 1-D Laplacian exactly
+    (eigenvalues 2 - 2 cos(k pi / (n + 1)), the shift halfway between two of them), with the
+    determinant's sign (-1)^count."""
+    from core_se3.solvers.linalg import AUTO_MUMPS_MIN
+    n = AUTO_MUMPS_MIN + 100
+    lam = 2 - 2 * np.cos(np.arange(1, n + 1) * np.pi / (n + 1))
+    shift = 0.5 * (lam[shift_index] + lam[shift_index + 1]) if shift_index else 0.5 * lam[0]
+    K = (sp.diags([-1.0, 2.0, -1.0], [-1, 0, 1], shape=(n, n)) - shift * sp.eye(n)).tocsr()
+    k = int(np.sum(lam < shift))
+    assert k == (shift_index + 1 if shift_index else 0)
+    assert C.inertia(K) == ((-1) ** k, k)
+
+
 # ------------------------------------------------------------------ shell ---------------
 
 @pytest.fixture(scope="module")

@@ -33,7 +33,7 @@ class CompiledEvaluation:
         """(pattern, element kernels, [(load, compiled add or None)]) for the assembler, built
         once and again when the loads change; None when the element has no kernels."""
         prob = self.problem
-        key = (id(asm), tuple(id(ld) for ld in prob.loads))
+        key = (id(asm), id(prob.element), tuple(id(ld) for ld in prob.loads))
         if self._parts is None or self._parts[0] != key:
             pattern = asm.pattern()
             kern = prob.element.compiled(pattern)

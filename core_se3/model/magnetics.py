@@ -162,7 +162,7 @@ class MagneticLoad(Load):
 
     def __init__(self, mag, field, name="magnetic"):
         if not isinstance(field, Field):
-            raise LoadError(f"the applied field must be a core_lie.fields.Field, got {type(field).__name__}")
+            raise LoadError(f"the applied field must be a core_se3.model.Field, got {type(field).__name__}")
         self.mag = mag
         self.field = field
         self.name = name
@@ -215,7 +215,6 @@ class MagneticLoad(Load):
         from ..kernels import loads as K
         from .fields import DipoleField
         nodes = np.ascontiguousarray(self.mag.nodes, dtype=np.int64)
-        mu = np.ascontiguousarray(self.mag.mu)
         k = len(nodes)
         B, G, H = np.zeros((k, 3)), np.zeros((k, 3, 3)), np.zeros((k, 3, 3, 3))
         fld = self.field
@@ -231,6 +230,8 @@ class MagneticLoad(Load):
                     G[:] = fld.gradient(x, lam)
                     if tangent:
                         H[:] = fld.hessian(x, lam)
+            # the dipoles are read at call time (a design loop may change the magnetisation)
+            mu = np.ascontiguousarray(self.mag.mu, dtype=float)
             K.magnetic_load(g, nodes, mu, B, G, H, bool(fld.uniform), f, data, pattern.map, tangent)
         return add
 

@@ -25,7 +25,8 @@ import scipy.sparse.linalg as spla
 
 from ..errors import OptionError, SingularSystemError
 
-__all__ = ["make_solver", "available_solvers", "checked_solve", "Factorization", "AUTO_MUMPS_MIN"]
+__all__ = ["make_solver", "available_solvers", "checked_solve", "Factorization", "AUTO_MUMPS_MIN",
+           "mumps_inertia"]
 
 
 class Factorization:
@@ -93,9 +94,14 @@ class Factorization:
         return rs, np.linalg.norm(rs) / (self.knorm * np.linalg.norm(y) + np.linalg.norm(bs) + 1e-300)
 
     def solve(self, b):
-        """x with K x = b (see the class docstring)."""
+        """x with K x = b (see the class docstring); b (N,) or (N, k) (k right-hand sides,
+        solved one by one on the same factorisation)."""
         if self.dense:
             return sla.lu_solve(self.lu, b)
+        b = np.asarray(b, dtype=float)
+        if b.ndim == 2:
+            return np.column_stack([self.solve(b[:, j]) for j in range(b.shape[1])]) if b.shape[1] \
+                else np.zeros_like(b)
         bs = self.s * b
         y = self._solve(bs)
         rs, berr = self._berr(bs, y)
@@ -292,7 +298,7 @@ class MumpsSolver:
                 kept[1].shape == K.indices.shape and np.array_equal(kept[0], K.indptr) and \
                 np.array_equal(kept[1], K.indices):
             A, ksp = kept[2], kept[3]
-            A.setValuesCSR(kept[0], kept[1], K.data)
+            np.copyto(kept[6], K.data)          # the matrix shares this buffer (no insertion)
             A.assemble()
             ksp.setOperators(A)
             return kept, True
@@ -300,7 +306,8 @@ class MumpsSolver:
             self._destroy(kept)
         indptr = K.indptr.astype(PETSc.IntType)
         indices = K.indices.astype(PETSc.IntType)
-        A = PETSc.Mat().createAIJ(size=K.shape, csr=(indptr, indices, K.data), comm=PETSc.COMM_SELF)
+        data = np.array(K.data, dtype=PETSc.ScalarType)  # owned here, shared with the matrix
+        A = PETSc.Mat().createAIJWithArrays(K.shape, (indptr, indices, data), comm=PETSc.COMM_SELF)
         ksp = PETSc.KSP().create(PETSc.COMM_SELF)
         ksp.setOperators(A)
         ksp.setType("preonly")
@@ -308,19 +315,19 @@ class MumpsSolver:
         pc.setType("lu")
         pc.setFactorSolverType("mumps")
         ksp.setErrorIfNotConverged(True)
-        objs = (indptr, indices, A, ksp, A.createVecLeft(), A.createVecRight())
+        objs = (indptr, indices, A, ksp, A.createVecLeft(), A.createVecRight(), data)
         return objs, False
 
     @staticmethod
     def _destroy(objs):
-        for obj in objs[2:]:
+        for obj in objs[2:6]:
             obj.destroy()
 
     def factor(self, K):
         PETSc = self.PETSc
         K = K.tocsr()
         objs, reused = self._objects(K)
-        _, _, A, ksp, x, bb = objs
+        _, _, A, ksp, x, bb, _ = objs
         keep = not self._busy
         try:
             ksp.setUp()
@@ -351,6 +358,45 @@ class MumpsSolver:
     def solve(self, K, b):
         with self.factor(K) as solve:
             return solve(b)
+
+
+def mumps_inertia(K):
+    """(negative, zero, positive) eigenvalue counts of a symmetric sparse matrix K from MUMPS'
+    LDL^T factorisation (Sylvester's law of inertia; PETSc Cholesky with MUMPS, null-pivot
+    detection on).  Needs petsc4py.
+
+    Example
+    -------
+    >>> import numpy as np, scipy.sparse as sp
+    >>> K = sp.diags([-1.0, 2.0, -1.0], [-1, 0, 1], shape=(50, 50)) - 0.1 * sp.eye(50)
+    >>> lam = np.linalg.eigvalsh(K.toarray())            # 2 - 2 cos(k pi / 51) - 0.1: five below 0
+    >>> counts = mumps_inertia(K.tocsr()) if _have_petsc() else (5, 0, 45)
+    >>> counts, (int(np.sum(lam < 0)), 0, int(np.sum(lam > 0)))
+    ((5, 0, 45), (5, 0, 45))
+    """
+    from petsc4py import PETSc
+    K = K.tocsr()
+    A = PETSc.Mat().createAIJ(size=K.shape, csr=(K.indptr.astype(PETSc.IntType), K.indices.astype(PETSc.IntType),
+                                                 K.data), comm=PETSc.COMM_SELF)
+    A.setOption(PETSc.Mat.Option.SYMMETRIC, True)
+    ksp = PETSc.KSP().create(PETSc.COMM_SELF)
+    try:
+        ksp.setOperators(A)
+        ksp.setType("preonly")
+        pc = ksp.getPC()
+        pc.setType("cholesky")
+        pc.setFactorSolverType("mumps")
+        pc.setFactorSetUpSolverType()
+        F = pc.getFactorMatrix()
+        F.setMumpsIcntl(24, 1)                   # null-pivot detection (needed for the counts)
+        F.setMumpsIcntl(13, 1)
+        ksp.setUp()
+        return tuple(int(v) for v in F.getInertia())
+    except PETSc.Error as exc:
+        raise SingularSystemError(f"MUMPS LDL^T failed ({exc})") from None
+    finally:
+        ksp.destroy()
+        A.destroy()
 
 
 AUTO_MUMPS_MIN = 2000   # unknowns from which "auto" uses MUMPS (see the module docstring)

@@ -2,7 +2,7 @@
 it brackets (limit points and bifurcations), and the diagnosis of a load-control failure.
 
 At each converged state the symmetric part of K is factorised (SuperLU, symmetric ordering,
-diagonal pivots); the number of negative pivots is the number of negative eigenvalues
+diagonal pivots; MUMPS LDL^T from AUTO_MUMPS_MIN unknowns); the number of negative pivots is the number of negative eigenvalues
 (Sylvester) and its change between two steps brackets a critical point.  It is a *limit point*
 when dlam/ds passes through zero with it (arc length: the sign of the predicted load increment
 at the two states; displacement control: the sign of q . t), otherwise a *bifurcation*; the
@@ -18,7 +18,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..errors import CoreSE3Error, SingularSystemError
-from .linalg import Factorization
+from .linalg import AUTO_MUMPS_MIN, Factorization, available_solvers, mumps_inertia
 from .system import ShellSystem
 
 __all__ = ["inertia", "smallest_mode", "CriticalPoint", "PathPoint", "analyse", "locate_critical",
@@ -70,11 +70,18 @@ def inertia(K):
         Ks = 0.5 * (np.asarray(K) + np.asarray(K).T)
         ev = np.linalg.eigvalsh(Ks)
         return (1 if np.sum(ev < 0) % 2 == 0 else -1), int(np.sum(ev < 0))
-    Ks = (0.5 * (K + K.T)).tocsc()
+    Ks = (0.5 * (K + K.T)).tocsr()
     d = np.abs(Ks.diagonal())
     d[d == 0] = 1.0
-    S = sp.diags(1.0 / np.sqrt(d))
-    Ks = (S @ Ks @ S).tocsc()
+    s = 1.0 / np.sqrt(d)
+    # S Ks S on the same structure (a congruence: the inertia is unchanged)
+    Ks.data *= s[np.repeat(np.arange(Ks.shape[0]), np.diff(Ks.indptr))] * s[Ks.indices]
+    if Ks.shape[0] >= AUTO_MUMPS_MIN and "mumps" in available_solvers():
+        # large: MUMPS' LDL^T counts the negative pivots (measured 4x faster than SuperLU at
+        # 14k unknowns on the pinched cylinder); a null pivot is a singular matrix
+        nneg, _, _ = mumps_inertia(Ks)
+        return (-1 if nneg % 2 else 1), nneg
+    Ks = Ks.tocsc()
     try:
         lu = spla.splu(Ks, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
                        options=dict(SymmetricMode=True))
