@@ -12,6 +12,7 @@ Example
 True
 """
 from .equilibrium import EquilibriumOptions, EquilibriumState, assign_all, follow, solve_flat
+from .inverse import METHODS, Design, DesignResult, Pose, Smoothness, Target
 from .objectives import (Energy, NodePosition, Orientation, ProbePosition, Quantity, RotationAngle,
                          UserQuantity, local_jacobian)
 from .sensitivity import Sensitivity, quantity_jacobian, residual_derivative, sensitivity
@@ -23,4 +24,5 @@ __all__ = ["sensitivity", "Sensitivity", "residual_derivative", "quantity_jacobi
            "LoadMagnitude", "magnetic_loads", "polar_vector",
            "Quantity", "NodePosition", "ProbePosition", "Orientation", "RotationAngle", "Energy",
            "UserQuantity", "local_jacobian",
+           "Design", "DesignResult", "Pose", "Target", "Smoothness", "METHODS",
            "EquilibriumOptions", "EquilibriumState", "follow", "solve_flat", "assign_all"]

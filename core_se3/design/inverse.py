@@ -1,0 +1,522 @@
+"""The inverse solver: the design variables that make the shell take target shapes.
+
+    Phi(x) = 1/2 sum_poses sum_targets w_t |m_t(g_pose(x))|^2 / s_t^2  +  1/2 sum alpha |D x|^2
+
+over one or several poses (one magnetisation shared by all, a field per pose: Lum et al. 2016's
+problem), m_t the misfit of a target (``design.objectives`` with a ``target``), s_t its scale
+(the problem's length for positions, 1 rad for angles), D the differences of neighbouring
+regions' values (smoothness, :class:`Smoothness`).  Every evaluation starts from the last
+equilibrium of its pose (``design.equilibrium.follow``).
+
+Optimisers (scipy.optimize): 'least_squares' (trust-region reflective Gauss-Newton on the
+misfit vector, its Jacobian by the direct or adjoint method, whichever needs fewer solves:
+the choice for misfit targets), 'L-BFGS-B' (box bounds), 'SLSQP' and 'trust-constr' (also the
+norm bounds |B^a| <= B_max, |B^r| <= B^r_max of vector forms as constraints); the scalar
+methods get the adjoint gradient (one extra linear solve per pose, with K^T).
+
+Example
+-------
+Find the tip force multiplier that puts a cantilever's tip 1.0 above the clamp line:
+
+>>> import numpy as np
+>>> from core_se3 import Problem, Material, mesh
+>>> from core_se3.design import LoadMagnitude, ProbePosition
+>>> p = Problem(mesh.rectangle(10.0, 1.0, 8, 1), Material(1.2e6, 0.0, 0.1))
+>>> p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 0.1)); p.add_probe("tip", "x1")
+>>> P = LoadMagnitude(p, p.loads[0], lower=0.0)
+>>> tip = ProbePosition(p, "tip")
+>>> d = Design(p, [P], [Pose("bent", [Target(tip, components=[2], value=[1.0])])])
+>>> r = d.optimise(tolerance=1e-9)
+>>> r.reached, round(float(r.states[0].g[p.probes["tip"].node_a, 2, 3]), 6)
+(True, 1.0)
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import ConvergenceError, DesignError
+from .equilibrium import EquilibriumOptions, assign_all, follow, solve_flat
+from .sensitivity import sensitivity
+
+__all__ = ["Target", "Pose", "Smoothness", "Design", "DesignResult", "METHODS"]
+
+METHODS = ("least_squares", "L-BFGS-B", "SLSQP", "trust-constr")
+
+
+class Target:
+    """A target of a pose: the misfit of a quantity (``design.objectives``), optionally only some
+    of its components and minus a ``value``, weighted by w / s^2.
+
+    Parameters
+    ----------
+    quantity : Quantity
+        The quantity (its own ``target`` already subtracted, or give ``value``).
+    weight : float
+        w >= 0.
+    scale : float, optional
+        s (default: the problem's length for positions, 1 for angles and other quantities).
+    components : sequence of int, optional
+        The components of the quantity that count (default all).
+    value : array, optional
+        Subtracted from those components.
+    name : str, optional
+        For reports (default the quantity's name).
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> from core_se3.design import ProbePosition
+    >>> p = Problem(mesh.rectangle(2.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01)); p.add_probe("tip", "x1")
+    >>> t = Target(ProbePosition(p, "tip"), components=[2], value=[0.5])
+    >>> t.misfit(p, p.mesh.g0, 1.0).tolist()
+    [-0.5]
+    """
+
+    def __init__(self, quantity, weight=1.0, scale=None, components=None, value=None, name=None):
+        if not (np.isfinite(weight) and weight >= 0):
+            raise DesignError(f"target weight must be finite and >= 0, got {weight}")
+        self.quantity, self.weight = quantity, float(weight)
+        self.scale = scale
+        self.components = None if components is None else np.asarray(components, np.int64)
+        if self.components is not None and (self.components.min() < 0 or self.components.max() >= quantity.size):
+            raise DesignError(f"target {name or quantity.name!r}: components {self.components.tolist()} outside "
+                              f"0 .. {quantity.size - 1}")
+        n = quantity.size if self.components is None else len(self.components)
+        self.value = np.zeros(n) if value is None else np.broadcast_to(np.asarray(value, float), (n,)).copy()
+        self.name = name or quantity.name
+        self.size = n
+
+    def resolve_scale(self, problem):
+        if self.scale is None:
+            from .objectives import NodePosition, ProbePosition
+            self.scale = problem.length_scale if isinstance(self.quantity, (NodePosition, ProbePosition)) else 1.0
+        return self.scale
+
+    def misfit(self, problem, g, lam):
+        """The misfit (size,) in the quantity's units."""
+        q = self.quantity.value(problem, g, lam)
+        return (q if self.components is None else q[self.components]) - self.value
+
+    def rows(self):
+        """Index of the misfit's components in the quantity."""
+        return np.arange(self.quantity.size) if self.components is None else self.components
+
+
+class Pose:
+    """A pose: its targets, the fixed values of variables in this pose (``settings``:
+    {variable: value}, e.g. the field of a pose at zero), and its load factor.
+
+    Example
+    -------
+    >>> Pose("flat").lam
+    1.0
+    """
+
+    def __init__(self, name, targets=(), settings=None, lam=1.0):
+        self.name, self.targets, self.lam = str(name), list(targets), float(lam)
+        self.settings = dict(settings or {})
+
+
+class Smoothness:
+    """Smoothness regularisation 1/2 alpha sum_j |x_(j+1) - x_j|^2 / scale^2 over the regions of a
+    region variable (a magnetisation: neighbouring regions in the order given).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import Problem, Material, mesh
+    >>> from core_se3.model import UniformField
+    >>> from core_se3.design import RegionMagnetisation
+    >>> p = Problem(mesh.rectangle(4.0, 0.5, 4, 1), Material(1e3, 0.0, 0.1))
+    >>> _ = p.add_magnetic((0.2, 0.0, 0.0), UniformField((0.0, 0.0, 1.0)), mu0=1.0)
+    >>> Smoothness(RegionMagnetisation(p, [[0, 1], [2, 3]]), 1e-3).D.shape
+    (3, 6)
+    """
+
+    def __init__(self, variable, alpha):
+        k = len(getattr(variable, "regions", []))
+        if k < 2:
+            raise DesignError("smoothness needs a variable over two or more regions")
+        if not (np.isfinite(alpha) and alpha >= 0):
+            raise DesignError(f"smoothness weight must be >= 0, got {alpha}")
+        c = variable.size // k
+        D = np.zeros(((k - 1) * c, variable.size))
+        for j in range(k - 1):
+            for i in range(c):
+                D[j * c + i, j * c + i], D[j * c + i, (j + 1) * c + i] = -1.0, 1.0
+        self.variable, self.alpha, self.D = variable, float(alpha), D
+
+
+@dataclass
+class DesignResult:
+    """The outcome of :meth:`Design.optimise`.
+
+    Attributes
+    ----------
+    success : bool
+        The optimiser's own convergence flag; ``reached``: the largest misfit is within the
+        ``tolerance`` (None without one); ``message``: says which, with the misfit.
+    x : (nx,) ndarray
+        The variables' components (``labels``); ``values``: name -> array per variable.
+    objective : float
+        Phi at x; ``gradient``: dPhi/dx; ``misfit``: pose -> target -> max |misfit|;
+        ``max_misfit``: the largest.
+    iterations, evaluations, equilibrium_solves, newton_iterations : int
+        Counts; ``time`` [s]; ``history``: one dict per iteration (objective, gradient_norm,
+        equilibrium_solves, ...); ``states``: the final EquilibriumState of every pose.
+
+    Example
+    -------
+    >>> r = DesignResult(True, None, "ok", np.zeros(1), ["a"], {"a": np.zeros(1)}, 0.0, np.zeros(1), {}, 0.0)
+    >>> r.document()["variables"]
+    {'a': [0.0]}
+    """
+    success: bool
+    reached: bool | None
+    message: str
+    x: np.ndarray
+    labels: list
+    values: dict
+    objective: float
+    gradient: np.ndarray
+    misfit: dict
+    max_misfit: float
+    iterations: int = 0
+    evaluations: int = 0
+    equilibrium_solves: int = 0
+    newton_iterations: int = 0
+    time: float = 0.0
+    method: str = ""
+    history: list = field(default_factory=list)
+    states: list = field(default_factory=list)
+
+    def document(self):
+        """A JSON-able summary (no frames)."""
+        return dict(success=bool(self.success), reached=self.reached, message=self.message, method=self.method,
+                    variables={k: np.asarray(v).tolist() for k, v in self.values.items()},
+                    components=dict(zip(self.labels, np.asarray(self.x).tolist())),
+                    objective=float(self.objective), gradient=np.asarray(self.gradient).tolist(),
+                    misfit=self.misfit, max_misfit=float(self.max_misfit), iterations=int(self.iterations),
+                    evaluations=int(self.evaluations), equilibrium_solves=int(self.equilibrium_solves),
+                    newton_iterations=int(self.newton_iterations), time=float(self.time), history=self.history)
+
+
+class Design:
+    """A design problem (module docstring).
+
+    Parameters
+    ----------
+    problem : core_se3.Problem
+        The shell, with the variables' loads and fields in it.
+    variables : sequence of Variable
+        The design variables (``pose`` None: shared by all poses; k: the k-th pose's own).
+    poses : sequence of Pose
+        The poses and their targets.
+    regularisation : sequence of Smoothness, optional
+        Regularisation terms.
+    options : EquilibriumOptions, optional
+        The equilibrium solves' controls.
+    sensitivity_method : str
+        'auto', 'adjoint' or 'direct' for the least-squares Jacobian.
+
+    Example
+    -------
+    See the module docstring.
+
+    >>> METHODS[0]
+    'least_squares'
+    """
+
+    def __init__(self, problem, variables, poses, regularisation=(), options=None, sensitivity_method="auto"):
+        self.problem, self.variables, self.poses = problem, list(variables), list(poses)
+        self.regularisation = list(regularisation)
+        self.options = options or EquilibriumOptions()
+        self.sensitivity_method = sensitivity_method
+        if not self.variables:
+            raise DesignError("a design needs at least one variable")
+        if not self.poses or not any(p.targets for p in self.poses):
+            raise DesignError("a design needs at least one pose with a target")
+        for v in self.variables:
+            if v.pose is not None and not 0 <= v.pose < len(self.poses):
+                raise DesignError(f"variable {v.name!r} belongs to pose {v.pose}, but there are {len(self.poses)} poses")
+            v.check_start()
+        for r in self.regularisation:
+            if not any(r.variable is v for v in self.variables):
+                raise DesignError("a smoothness term refers to a variable that is not in the design")
+        self.aux = []
+        for pose in self.poses:
+            for v in pose.settings:
+                if not any(v is u for u in self.variables + self.aux):
+                    self.aux.append(v)
+            for t in pose.targets:
+                t.resolve_scale(problem)
+        self.all = self.variables + self.aux
+        self.x0 = [v.value() for v in self.all]
+        self.slices, k = [], 0
+        for v in self.variables:
+            self.slices.append(slice(k, k + v.size))
+            k += v.size
+        self.nx = k
+        self.labels = [lab for v in self.variables for lab in v.labels]
+        self.xscale = np.concatenate([v.scale for v in self.variables])
+        self.lower = np.concatenate([v.lower for v in self.variables])
+        self.upper = np.concatenate([v.upper for v in self.variables])
+        self.states = [None] * len(self.poses)
+        self.solves = self.newton_iterations = self.evaluations = 0
+        self._cache = None
+
+    # ------------------------------------------------------------------ evaluations --------
+    def x_start(self):
+        """The variables' starting values (nx,)."""
+        return np.concatenate(self.x0[:len(self.variables)])
+
+    def pose_values(self, k, x):
+        """The values (one array per variable, auxiliary ones last) pose k sees at x."""
+        pose, out = self.poses[k], []
+        for i, v in enumerate(self.all):
+            if i < len(self.variables) and (v.pose is None or v.pose == k):
+                out.append(np.asarray(x[self.slices[i]], float))
+            elif v in pose.settings:
+                out.append(np.broadcast_to(np.asarray(pose.settings[v], float), (v.size,)).copy())
+            else:
+                out.append(self.x0[i])
+        return out
+
+    def solve(self, x):
+        """Equilibria of every pose at x (warm-started), cached; returns the states."""
+        x = np.asarray(x, float)
+        if self._cache is not None and np.array_equal(self._cache[0], x):
+            return self._cache[1]
+        self.evaluations += 1
+        for k, pose in enumerate(self.poses):
+            xs = self.pose_values(k, x)
+            st = self.states[k]
+            if st is None:
+                st = solve_flat(self.problem, self.all, xs, pose.lam, self.options)
+                info = st.stats
+            else:
+                if all(np.array_equal(a, b) for a, b in zip(st.x, xs)):
+                    continue
+                st, info = follow(self.problem, self.all, xs, st, self.options)
+            self.states[k] = st
+            self.solves += 1
+            self.newton_iterations += info["iterations"]
+        self._cache = (x.copy(), list(self.states), {})
+        return self._cache[1]
+
+    def _active(self, k):
+        return [i for i, v in enumerate(self.variables) if v.pose is None or v.pose == k]
+
+    def residuals(self, x):
+        """The weighted misfit vector F (Phi = |F|^2 / 2), regularisation rows last."""
+        states = self.solve(x)
+        rows = []
+        for k, pose in enumerate(self.poses):
+            assign_all(self.all, states[k].x)
+            for t in pose.targets:
+                rows.append(np.sqrt(t.weight) / t.scale * t.misfit(self.problem, states[k].g, states[k].lam))
+        for r in self.regularisation:
+            i = next(j for j, v in enumerate(self.variables) if v is r.variable)
+            rows.append(np.sqrt(r.alpha) * (r.D @ (np.asarray(x[self.slices[i]]) / r.variable.scale)))
+        return np.concatenate(rows)
+
+    def jacobian(self, x):
+        """dF/dx (nF, nx): per pose, the direct or adjoint sensitivities of its targets."""
+        states = self.solve(x)
+        cache = self._cache[2]
+        if "J" in cache:
+            return cache["J"]
+        blocks = []
+        for k, pose in enumerate(self.poses):
+            if not pose.targets:
+                continue
+            assign_all(self.all, states[k].x)
+            act = self._active(k)
+            vs = [self.variables[i] for i in act]
+            s = sensitivity(self.problem, states[k].g, states[k].lam, [t.quantity for t in pose.targets], vs,
+                            self.sensitivity_method, linear_solver=self.options.linear_solver)
+            cols = np.concatenate([np.arange(self.nx)[self.slices[i]] for i in act])
+            off = 0
+            for t in pose.targets:
+                J = np.zeros((t.size, self.nx))
+                J[:, cols] = s.jacobian[off + t.rows()] * (np.sqrt(t.weight) / t.scale)
+                off += t.quantity.size
+                blocks.append(J)
+        for r in self.regularisation:
+            i = next(j for j, v in enumerate(self.variables) if v is r.variable)
+            J = np.zeros((r.D.shape[0], self.nx))
+            J[:, self.slices[i]] = np.sqrt(r.alpha) * r.D / r.variable.scale
+            blocks.append(J)
+        cache["J"] = np.concatenate(blocks)
+        return cache["J"]
+
+    def objective(self, x):
+        """Phi(x)."""
+        F = self.residuals(x)
+        return 0.5 * float(F @ F)
+
+    def gradient(self, x):
+        """dPhi/dx by the adjoint method: one solve with K^T per pose (the cotangent F of its
+        targets), plus the regularisation's."""
+        F = self.residuals(x)
+        states = self.solve(x)
+        cache = self._cache[2]
+        if "grad" in cache:
+            return cache["grad"]
+        grad, off = np.zeros(self.nx), 0
+        for k, pose in enumerate(self.poses):
+            if not pose.targets:
+                continue
+            assign_all(self.all, states[k].x)
+            act = self._active(k)
+            c = []
+            for t in pose.targets:
+                ct = np.zeros(t.quantity.size)
+                ct[t.rows()] = F[off:off + t.size] * np.sqrt(t.weight) / t.scale
+                off += t.size
+                c.append(ct)
+            s = sensitivity(self.problem, states[k].g, states[k].lam, [t.quantity for t in pose.targets],
+                            [self.variables[i] for i in act], cotangent=np.concatenate(c),
+                            linear_solver=self.options.linear_solver)
+            cols = np.concatenate([np.arange(self.nx)[self.slices[i]] for i in act])
+            grad[cols] += s.jacobian[0]
+        for r in self.regularisation:
+            i = next(j for j, v in enumerate(self.variables) if v is r.variable)
+            n = r.D.shape[0]
+            grad[self.slices[i]] += np.sqrt(r.alpha) * (r.D.T @ F[off:off + n]) / r.variable.scale
+            off += n
+        cache["grad"] = grad
+        return grad
+
+    def misfits(self, x):
+        """pose name -> target name -> max |misfit| (the targets' units) at x."""
+        states = self.solve(x)
+        out = {}
+        for k, pose in enumerate(self.poses):
+            assign_all(self.all, states[k].x)
+            out[pose.name] = {t.name: float(np.abs(t.misfit(self.problem, states[k].g, states[k].lam)).max())
+                              for t in pose.targets}
+        return out
+
+    # ------------------------------------------------------------------ the optimiser ------
+    def optimise(self, method="least_squares", x0=None, max_iter=100, tol=1e-12, tolerance=None, progress=False,
+                 callback=None):
+        """Minimise Phi from x0 (default the variables' current values).
+
+        Parameters
+        ----------
+        method : str
+            One of :data:`METHODS`.
+        x0 : (nx,) array, optional
+            The start (checked against the bounds).
+        max_iter : int
+            Iterations (least_squares: function evaluations).
+        tol : float
+            The optimiser's tolerance (ftol, xtol and gtol of least_squares; tol of minimize).
+        tolerance : float, optional
+            ``reached`` when every misfit is within it (the targets' units).
+        progress : bool
+            Print objective, gradient norm and equilibrium solves per iteration.
+        callback : callable, optional
+            Called with the history entry of every iteration.
+
+        Returns
+        -------
+        DesignResult
+            The problem is left at the design's values (the last pose's equilibrium assigned).
+
+        Example
+        -------
+        See the module docstring.
+
+        >>> "SLSQP" in METHODS
+        True
+        """
+        import scipy.optimize as so
+        if method not in METHODS:
+            raise DesignError(f"unknown design method {method!r}; choose one of {', '.join(METHODS)}")
+        norm = [(self.slices[i].start + idx, top) for i, v in enumerate(self.variables) for idx, top in v.norm_bounds]
+        if norm and method in ("least_squares", "L-BFGS-B"):
+            raise DesignError(f"method {method!r} takes box bounds only; a norm bound (|B| <= B_max of a vector form) "
+                              "needs 'SLSQP' or 'trust-constr', or the polar form with a bound on the magnitude")
+        x0 = self.x_start() if x0 is None else np.asarray(x0, float)
+        if np.any(x0 < self.lower) or np.any(x0 > self.upper):
+            i = int(np.nonzero((x0 < self.lower) | (x0 > self.upper))[0][0])
+            raise DesignError(f"the start {x0[i]:g} of {self.labels[i]!r} lies outside its bounds "
+                              f"[{self.lower[i]:g}, {self.upper[i]:g}]")
+        sc = self.xscale
+        t0 = time.perf_counter()
+        history = []
+        last = {}
+
+        def record(z):
+            x = z * sc
+            phi, g = self.objective(x), self.gradient(x) * sc
+            entry = dict(iteration=len(history) + 1, objective=phi, gradient_norm=float(np.linalg.norm(g)),
+                         equilibrium_solves=self.solves, newton_iterations=self.newton_iterations,
+                         time=time.perf_counter() - t0, x=x.tolist())
+            history.append(entry)
+            if progress:
+                print(f"design iteration {entry['iteration']:3d}: objective {phi:.6e}  |grad| "
+                      f"{entry['gradient_norm']:.3e}  equilibrium solves {self.solves}", flush=True)
+            if callback is not None:
+                callback(entry)
+
+        try:
+            if method == "least_squares":
+                def jac(z):
+                    J = self.jacobian(z * sc) * sc
+                    if last.get("z") is None or not np.array_equal(last["z"], z):
+                        last["z"] = z.copy()
+                        record(z)
+                    return J
+                r = so.least_squares(lambda z: self.residuals(z * sc), x0 / sc, jac=jac,
+                                     bounds=(self.lower / sc, self.upper / sc), method="trf",
+                                     ftol=tol, xtol=tol, gtol=tol, max_nfev=max_iter)
+                z, ok, msg, nit = r.x, r.success and r.status > 0, r.message, len(history)
+            else:
+                kw = {}
+                if method in ("SLSQP", "trust-constr") and norm:
+                    def cons(z):
+                        x = z * sc
+                        return np.array([top ** 2 - x[idx] @ x[idx] for idx, top in norm])
+
+                    def cons_jac(z):
+                        x = z * sc
+                        J = np.zeros((len(norm), len(z)))
+                        for j, (idx, top) in enumerate(norm):
+                            J[j, idx] = -2 * x[idx] * sc[idx]
+                        return J
+                    kw["constraints"] = [so.NonlinearConstraint(cons, 0.0, np.inf, jac=cons_jac)] \
+                        if method == "trust-constr" else [dict(type="ineq", fun=cons, jac=cons_jac)]
+                bounds = so.Bounds(self.lower / sc, self.upper / sc)
+                cb = (lambda z, *a: record(z)) if method != "trust-constr" else (lambda z, state: record(z))
+                r = so.minimize(lambda z: (self.objective(z * sc), self.gradient(z * sc) * sc), x0 / sc, jac=True,
+                                method=method, bounds=bounds, tol=tol, callback=cb,
+                                options=dict(maxiter=max_iter), **kw)
+                z, ok, msg, nit = r.x, bool(r.success), str(r.message), len(history)
+        except ConvergenceError as exc:
+            raise ConvergenceError(f"the design stopped: an equilibrium failed ({exc}); the last design "
+                                   "iterations are in the history", exc.result) from None
+        x = z * sc
+        mis = self.misfits(x)
+        worst = max((v for d in mis.values() for v in d.values()), default=0.0)
+        reached = None if tolerance is None else bool(worst <= tolerance)
+        if reached is False:
+            msg = f"did not reach the target: misfit {worst:.3e} > tolerance {tolerance:.3e} ({msg})"
+        elif reached:
+            msg = f"reached the target: misfit {worst:.3e} <= tolerance {tolerance:.3e} ({msg})"
+        values = {v.name: np.asarray(x[self.slices[i]]) for i, v in enumerate(self.variables)}
+        states = self.solve(x)
+        res = DesignResult(bool(ok), reached, msg, x, self.labels, values, self.objective(x), self.gradient(x), mis,
+                           worst, nit, self.evaluations, self.solves, self.newton_iterations,
+                           time.perf_counter() - t0, method, history, list(states))
+        assign_all(self.all, states[-1].x)
+        return res
+
+    def assign_pose(self, k, x):
+        """Set the problem to pose k's values at x (e.g. before writing its outputs)."""
+        assign_all(self.all, self.pose_values(k, np.asarray(x, float)))
