@@ -259,9 +259,9 @@ class FieldVariable(Variable):
         self.free = _free_index(self.parts, free, f"field variable {name!r}")
         self.norm_bounds = []
         if B_max is not None and form == "vector":
-            if len(self.free) != 3:
-                raise DesignError(f"field variable {name!r}: a norm bound B_max needs all three components free")
-            self.norm_bounds = [(np.arange(3), float(B_max))]
+            # |B|^2 = |free part|^2 + |fixed part|^2 <= B_max^2 (the fixed part as a constant)
+            fixed = np.setdiff1d(np.arange(3), self.free)
+            self.norm_bounds = [(np.arange(len(self.free)), float(np.sqrt(max(B_max ** 2 - B[fixed] @ B[fixed], 0.0))))]
         self._setup(name, len(self.free), lo[self.free], hi[self.free], sc[self.free],
                     [f"{name}.{'B' if p == 'magnitude' else p}" for p in np.array(self.parts)[self.free]], pose)
 
