@@ -16,8 +16,9 @@ from .inverse import METHODS, Design, DesignResult, Pose, Smoothness, Target
 from .objectives import (Energy, NodePosition, Orientation, ProbePosition, Quantity, RotationAngle,
                          UserQuantity, local_jacobian)
 from .sensitivity import Sensitivity, quantity_jacobian, residual_derivative, sensitivity
-from .variables import (FieldGradientVariable, FieldVariable, LoadMagnitude, MaterialVariable,
-                        RegionMagnetisation, Variable, magnetic_loads, polar_vector)
+from .magnetisation import RegionMagnetisation
+from .material import MaterialVariable
+from .variables import FieldGradientVariable, FieldVariable, LoadMagnitude, Variable, magnetic_loads, polar_vector
 
 __all__ = ["sensitivity", "Sensitivity", "residual_derivative", "quantity_jacobian",
            "Variable", "FieldVariable", "FieldGradientVariable", "RegionMagnetisation", "MaterialVariable",

@@ -19,7 +19,7 @@ Example
 >>> import numpy as np
 >>> from core_se3 import Problem, Material, mesh
 >>> p = Problem(mesh.rectangle(2.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
->>> q = NodePosition(p, [2], target=[2.0, 0.0, 0.5])
+>>> q = NodePosition(p, [2], target=[2.0, -0.5, 0.5])
 >>> q.value(p, p.mesh.g0, 1.0).tolist(), q.jacobian(p, p.mesh.g0, 1.0).shape
 ([0.0, 0.0, -0.5], (3, 36))
 """
@@ -131,7 +131,7 @@ class NodePosition(Quantity):
     >>> from core_se3 import Problem, Material, mesh
     >>> p = Problem(mesh.rectangle(2.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
     >>> NodePosition(p, [5]).value(p, p.mesh.g0, 1.0).tolist()
-    [2.0, 1.0, 0.0]
+    [2.0, 0.5, 0.0]
     """
 
     def __init__(self, problem, nodes, target=None, name="position"):
@@ -161,7 +161,7 @@ class ProbePosition(Quantity):
     >>> from core_se3 import Problem, Material, mesh
     >>> p = Problem(mesh.rectangle(2.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01)); p.add_probe("tip", "x1")
     >>> ProbePosition(p, "tip").value(p, p.mesh.g0, 1.0).tolist()
-    [2.0, 0.5, 0.0]
+    [2.0, 0.0, 0.0]
     """
 
     def __init__(self, problem, probe, target=None, name=None):

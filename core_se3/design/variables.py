@@ -10,11 +10,12 @@ optimisers work on x / scale), and two derivatives of the full residual r = r_in
 How dr/dp is computed (no equilibrium is re-solved for it):
 
 * applied field (uniform vector, in-plane polar form, uniform gradient), magnetisation per
-  region (vector or magnitude + angle in a plane) and load magnitudes: **analytically**.  The
+  region (``design.magnetisation``: vector or magnitude + angle in a plane) and load
+  magnitudes: **analytically**.  The
   magnetic load is bilinear in the dipoles mu_i and the field, f_w = mu x R^T B^a,
   f_v = R^T G R mu, so its derivatives are closed-form nodal 6x3 blocks, exact and as cheap
   as one load evaluation; a load is linear in its magnitude, df/dP = f at P = 1.
-* E and h per region: by central differences of the **element residual only** at the fixed
+* E and h per region (``design.material``): by central differences of the **element residual only** at the fixed
   state g (the element is rebuilt with the perturbed law).  The residual is linear in E and
   a cubic polynomial in h (membrane and shear ~ h, bending and drilling ~ h^3), so the
   Richardson combination (4 D(d) - D(2d)) / 3 of two central differences is exact up to
@@ -40,12 +41,10 @@ import numpy as np
 
 from .. import lie
 from ..errors import DesignError, did_you_mean
-from ..fem import Material, RegionMaterial
-from ..fem.quadrature import shape_functions, surface_jacobian
-from ..model import MU0, GradientField, MagneticLoad, Magnetisation, UniformField
+from ..model import GradientField, MagneticLoad, UniformField
 
-__all__ = ["Variable", "FieldVariable", "FieldGradientVariable", "RegionMagnetisation",
-           "MaterialVariable", "LoadMagnitude", "magnetic_loads", "polar_vector"]
+__all__ = ["Variable", "FieldVariable", "FieldGradientVariable", "LoadMagnitude", "magnetic_loads", "polar_vector",
+           "region_elements", "field_at", "free_index", "plane_axes"]
 
 
 def polar_vector(b, angle, e1, e2):
@@ -66,7 +65,7 @@ def polar_vector(b, angle, e1, e2):
     return np.asarray(b)[:, None] * d, d, np.asarray(b)[:, None] * (-s * e1 + c * e2)
 
 
-def _plane(e1, e2, what):
+def plane_axes(e1, e2, what):
     e1, e2 = np.asarray(e1, float), np.asarray(e2, float)
     if e1.shape != (3,) or e2.shape != (3,) or not np.all(np.isfinite(np.r_[e1, e2])):
         raise DesignError(f"{what}: the plane needs two finite 3-vectors e1, e2")
@@ -75,6 +74,28 @@ def _plane(e1, e2, what):
     if n1 == 0 or np.linalg.norm(e2) < 1e-12 * n1:
         raise DesignError(f"{what}: the plane axes e1, e2 must be non-zero and not parallel")
     return e1 / n1, e2 / np.linalg.norm(e2)
+
+
+def region_elements(problem, r, what):
+    """Element ids (sorted) of a region name or of ids; DesignError naming ``what`` otherwise.
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
+    >>> region_elements(p, [1, 0], "x").tolist()
+    [0, 1]
+    """
+    if isinstance(r, str):
+        try:
+            return np.asarray(problem.mesh.elements(r), np.int64)
+        except Exception as exc:              # MeshError: unknown region (with a suggestion)
+            raise DesignError(f"{what}: {exc}") from None
+    ids = np.unique(np.asarray(r, np.int64).ravel())
+    if ids.size == 0 or ids.min() < 0 or ids.max() >= problem.mesh.n_elements:
+        raise DesignError(f"{what}: element ids {np.asarray(r).ravel()[:5].tolist()} do not exist (the mesh has "
+                          f"{problem.mesh.n_elements} elements)")
+    return ids
 
 
 def magnetic_loads(problem, field=None):
@@ -92,7 +113,7 @@ def magnetic_loads(problem, field=None):
     return [ld for ld in problem.loads if isinstance(ld, MagneticLoad) and (field is None or ld.field is field)]
 
 
-def _field_at(ld, g, lam):
+def field_at(ld, g, lam):
     """Per magnetised node of load ld: R (k,3,3), a = R^T B (k,3), A = R^T G R (k,3,3) or None."""
     nodes = ld.mag.nodes
     R = g[nodes, :3, :3]
@@ -178,7 +199,7 @@ class Variable:
                 raise DesignError(f"variable {self.name!r}: the start has norm {n:g} above the bound {top:g}")
 
 
-def _free_index(parts, free, what):
+def free_index(parts, free, what):
     if free is None:
         return np.arange(len(parts))
     free = [free] if isinstance(free, str) else list(free)
@@ -247,7 +268,7 @@ class FieldVariable(Variable):
             self.full = B.copy()
             lo, hi, sc = np.full(3, -np.inf), np.full(3, np.inf), np.full(3, scale0)
         else:
-            self.e1, self.e2 = _plane(*plane, f"field variable {name!r}")
+            self.e1, self.e2 = plane_axes(*plane, f"field variable {name!r}")
             b1, b2 = B @ self.e1, B @ self.e2
             if np.linalg.norm(B - b1 * self.e1 - b2 * self.e2) > 1e-12 * scale0:
                 raise DesignError(f"field variable {name!r}: the field {B.tolist()} is not in the plane of the polar form")
@@ -256,7 +277,7 @@ class FieldVariable(Variable):
             lo, hi, sc = np.array([0.0, -np.inf]), np.array([np.inf, np.inf]), np.array([scale0, 1.0])
             if B_max is not None:
                 hi[0] = B_max
-        self.free = _free_index(self.parts, free, f"field variable {name!r}")
+        self.free = free_index(self.parts, free, f"field variable {name!r}")
         self.norm_bounds = []
         if B_max is not None and form == "vector":
             # |B|^2 = |free part|^2 + |fixed part|^2 <= B_max^2 (the fixed part as a constant)
@@ -330,7 +351,7 @@ class FieldGradientVariable(Variable):
     >>> from core_se3.model import GradientField
     >>> p = Problem(mesh.rectangle(1.0, 0.2, 2, 1), Material(1e3, 0.0, 0.01))
     >>> f = GradientField((0.0, 0.0, 1.0), np.diag([2.0, -2.0, 0.0])); _ = p.add_magnetic((1.0, 0, 0), f, mu0=1.0)
-    >>> FieldGradientVariable(p, f).value().round(12).tolist()
+    >>> (FieldGradientVariable(p, f).value().round(12) + 0.0).tolist()
     [2.0, 0.0, 0.0, 0.0, 0.0]
     """
 
@@ -365,318 +386,6 @@ class FieldGradientVariable(Variable):
             # f_v = s R^T E_k R mu,  f_w = mu x (s R^T E_k (x - x0))
             out[nodes, :3, :] -= s * np.einsum("kai,bij,kj->kab", Rt, _GBASIS, Rmu)
             out[nodes, 3:, :] -= s * np.einsum("kac,kci,bij,kj->kab", lie.hat3(mu), Rt, _GBASIS, dx)
-        return out
-
-
-def _lumping(mesh, elements):
-    """(n, m) weights int_e N_i dA of the nodes i of the elements (reference area shares)."""
-    N, dN = shape_functions()
-    quads = mesh.quads[elements]
-    w = np.einsum("qi,mq->mi", N, surface_jacobian(mesh.X[quads], dN))          # (m, 4)
-    W = np.zeros((mesh.n_nodes, len(elements)))
-    np.add.at(W, (quads, np.broadcast_to(np.arange(len(elements))[:, None], quads.shape)), w)
-    return W
-
-
-class RegionMagnetisation(Variable):
-    """The residual flux density B^r [T] (lab, reference configuration) constant over each of a
-    list of element regions -- what can be fabricated -- as a design variable: form 'vector'
-    (3 per region) or 'polar' (magnitude and angle [rad] from e1 toward e2 in each region's
-    plane); ``free`` picks the components ('x', 'y', 'z' or 'magnitude', 'angle').
-
-    The magnets of the problem on these regions (``Problem.add_magnetic``) are replaced by this
-    variable's own magnetic loads (one per thickness); their magnetisation, fitted per region
-    (least squares of the nodal moments: exact when it was constant per region), is the start.
-    The dipoles are mu_i = (h/mu0) R0_i^T sum_j C_ij B^r_j with C_ij = int_(region j) N_i dA.
-
-    Parameters
-    ----------
-    problem : core_se3.Problem
-        The problem.
-    regions : sequence
-        Region names or element-id arrays (disjoint).
-    form : str
-        'vector' or 'polar'.
-    planes : (e1, e2) or a sequence of them, optional
-        The plane(s) of the polar form (default x and z).
-    free : sequence of str, optional
-        The free components of every region.
-    Br_max : float, optional
-        |B^r| <= Br_max [T] per region (norm bound, or the magnitude's upper bound).
-    field : Field, optional
-        The applied field (default that of the replaced magnets; needed without them).
-    mu0 : float, optional
-        Vacuum permeability (default that of the replaced magnets, else MU0).
-    start : (k, 3) array, optional
-        The starting B^r per region (lab vectors) instead of the fitted one.
-    name : str
-        Its name.
-
-    Example
-    -------
-    >>> import numpy as np
-    >>> from core_se3 import Problem, Material, mesh
-    >>> from core_se3.model import UniformField
-    >>> p = Problem(mesh.rectangle(4.0, 0.5, 4, 1), Material(1e3, 0.0, 0.1))
-    >>> _ = p.add_magnetic((0.2, 0.0, 0.0), UniformField((0.0, 0.0, 1.0)), mu0=1.0)
-    >>> v = RegionMagnetisation(p, [[0, 1], [2, 3]])
-    >>> v.value().round(12).tolist(), len(p.loads)
-    ([0.2, 0.0, 0.0, 0.2, 0.0, 0.0], 1)
-    """
-
-    def __init__(self, problem, regions, form="vector", planes=((1.0, 0.0, 0.0), (0.0, 0.0, 1.0)), free=None,
-                 Br_max=None, field=None, mu0=None, start=None, name="magnetisation"):
-        mesh = problem.mesh
-        self.problem, self.form = problem, form
-        if form not in ("vector", "polar"):
-            raise DesignError(f"magnetisation {name!r}: form must be 'vector' or 'polar', got {form!r}")
-        self.regions = [self._elements(problem, r, name) for r in regions]
-        if not self.regions:
-            raise DesignError(f"magnetisation {name!r}: no regions")
-        allel = np.concatenate(self.regions)
-        if len(np.unique(allel)) != len(allel):
-            raise DesignError(f"magnetisation {name!r}: the regions overlap")
-        k = len(self.regions)
-        inside = np.zeros(mesh.n_elements, bool)
-        inside[allel] = True
-        old = [ld for ld in magnetic_loads(problem) if np.any(inside[ld.mag.elements])]
-        for ld in old:
-            if not np.all(inside[ld.mag.elements]):
-                raise DesignError(f"magnetisation {name!r}: a magnet covers elements inside and outside the design "
-                                  "regions; make the regions cover each magnet entirely")
-        fields = {id(ld.field): ld.field for ld in old}
-        if field is None:
-            if len(fields) != 1:
-                raise DesignError(f"magnetisation {name!r}: " + ("no magnet on these regions: give the applied field"
-                                  if not fields else "the magnets on these regions are in different fields: give one"))
-            field = next(iter(fields.values()))
-        mu0s = {ld.mag.mu0 for ld in old}
-        self.mu0 = float(mu0 if mu0 is not None else (mu0s.pop() if len(mu0s) == 1 else MU0))
-        self.field = field
-        W = _lumping(mesh, allel)                                            # (n, m_all)
-        owner = np.repeat(np.arange(k), [len(r) for r in self.regions])
-        self.Wr = np.stack([W[:, owner == j].sum(1) for j in range(k)], 1)  # (n, k)
-        R0 = mesh.g0[:, :3, :3]
-        if start is None:
-            mom = np.zeros((mesh.n_nodes, 3))                                # lab int Br N dA
-            for ld in old:
-                mom[ld.mag.nodes] += np.einsum("kij,kj->ki", R0[ld.mag.nodes], ld.mag.mu) * ld.mag.mu0 / ld.mag.h
-            Br = np.linalg.lstsq(self.Wr, mom, rcond=None)[0] if old else np.zeros((k, 3))
-            self.start_misfit = float(np.linalg.norm(self.Wr @ Br - mom) / max(np.linalg.norm(mom), 1e-300))
-        else:
-            Br = np.array(np.broadcast_to(np.asarray(start, float), (k, 3)))
-            self.start_misfit = 0.0
-        problem.loads[:] = [ld for ld in problem.loads if not any(ld is o for o in old)]
-        per = getattr(problem.material, "per_element", None)
-        h_el = per("h") if per is not None else np.full(mesh.n_elements, float(problem.material.h))
-        self.loads = []
-        for t in np.unique(h_el[allel]):
-            el = allel[h_el[allel] == t]
-            mag = Magnetisation(mesh, np.tile([1.0, 0.0, 0.0], (len(el), 1)), float(t), el, self.mu0)
-            Wt = W[:, np.isin(allel, el)]
-            C = np.stack([Wt[:, owner[np.isin(allel, el)] == j].sum(1) for j in range(k)], 1)[mag.nodes]
-            self.loads.append((problem.add(MagneticLoad(mag, field, name=f"{name} (h = {t:g})")),
-                               C * (t / self.mu0), R0[mag.nodes]))
-        scale0 = max(float(np.abs(Br).max()), float(Br_max or 0.0), 1e-300)
-        if form == "vector":
-            self.parts = ["x", "y", "z"]
-            self.full = Br.copy()
-            lo, hi, sc = np.full(3, -np.inf), np.full(3, np.inf), np.full(3, scale0)
-        else:
-            pl = np.asarray(planes, float)
-            pl = np.broadcast_to(pl, (k, 2, 3)) if pl.shape == (2, 3) else pl
-            if pl.shape != (k, 2, 3):
-                raise DesignError(f"magnetisation {name!r}: planes must be one (e1, e2) or one per region ({k})")
-            self.e = np.array([_plane(a, b, f"magnetisation {name!r}") for a, b in pl])    # (k, 2, 3)
-            b1, b2 = np.einsum("ki,ki->k", Br, self.e[:, 0]), np.einsum("ki,ki->k", Br, self.e[:, 1])
-            off = np.linalg.norm(Br - b1[:, None] * self.e[:, 0] - b2[:, None] * self.e[:, 1], axis=1)
-            if start is None and np.any(off > 1e-9 * scale0) and old:
-                raise DesignError(f"magnetisation {name!r}: the magnets' B^r is not in the planes of the polar form")
-            self.parts = ["magnitude", "angle"]
-            self.full = np.stack([np.hypot(b1, b2), np.arctan2(b2, b1)], 1)
-            lo, hi, sc = np.array([0.0, -np.inf]), np.array([np.inf, np.inf]), np.array([scale0, 1.0])
-            if Br_max is not None:
-                hi[0] = Br_max
-        self.free = _free_index(self.parts, free, f"magnetisation {name!r}")
-        nf = len(self.free)
-        self.norm_bounds = []
-        if Br_max is not None and form == "vector":
-            if nf != 3:
-                raise DesignError(f"magnetisation {name!r}: a norm bound Br_max needs all three components free")
-            self.norm_bounds = [(np.arange(3 * j, 3 * j + 3), float(Br_max)) for j in range(k)]
-        labels = [f"{name}[{j}].{'Br' if p == 'magnitude' else p}" for j in range(k) for p in np.array(self.parts)[self.free]]
-        self._setup(name, k * nf, np.tile(lo[self.free], k), np.tile(hi[self.free], k), np.tile(sc[self.free], k),
-                    labels, None)
-        self.assign(self.value())
-
-    @staticmethod
-    def _elements(problem, r, name):
-        if isinstance(r, str):
-            try:
-                return np.asarray(problem.mesh.elements(r), np.int64)
-            except Exception as exc:              # MeshError: unknown region (with a suggestion)
-                raise DesignError(f"magnetisation {name!r}: {exc}") from None
-        ids = np.unique(np.asarray(r, np.int64).ravel())
-        if ids.size == 0 or ids.min() < 0 or ids.max() >= problem.mesh.n_elements:
-            raise DesignError(f"magnetisation {name!r}: element ids {np.asarray(r).ravel()[:5].tolist()}... "
-                              f"do not exist (the mesh has {problem.mesh.n_elements} elements)")
-        return ids
-
-    def Br(self, full=None):
-        """B^r per region (k, 3) [T] of the full parameters (default the current ones)."""
-        full = self.full if full is None else full
-        if self.form == "vector":
-            return np.array(full, float)
-        return polar_vector(full[:, 0], full[:, 1], self.e[:, 0], self.e[:, 1])[0]
-
-    def _dBr(self):
-        """dBr_j/d(full parameters of j) (k, 3, nfull)."""
-        k = len(self.regions)
-        if self.form == "vector":
-            return np.broadcast_to(np.eye(3), (k, 3, 3))
-        _, db, da = polar_vector(self.full[:, 0], self.full[:, 1], self.e[:, 0], self.e[:, 1])
-        return np.stack([db, da], 2)
-
-    def value(self):
-        return self.full[:, self.free].ravel().copy()
-
-    def assign(self, x):
-        self.full = self.full.copy()
-        self.full[:, self.free] = np.asarray(x, float).reshape(len(self.regions), len(self.free))
-        Br = self.Br()
-        for ld, C, R0 in self.loads:
-            ld.mag.mu[...] = np.einsum("kji,kj->ki", R0, C @ Br)       # in place: compiled loads share it
-            ld.mag.total_lab = (C @ Br).sum(0) * self.mu0
-
-    def _blocks(self, g, lam):
-        """Per load: d f / d(lab B^r contribution) blocks M_i = [A_i; -hat(a_i)] R0_i^T (k, 6, 3)."""
-        out = []
-        for ld, C, R0 in self.loads:
-            R, a, A = _field_at(ld, g, lam)
-            M = np.zeros((len(ld.mag.nodes), 6, 3))
-            if A is not None:
-                M[:, :3] = A @ np.swapaxes(R0, 1, 2)
-            M[:, 3:] = -lie.hat3(a) @ np.swapaxes(R0, 1, 2)
-            out.append((ld, C, M))
-        return out
-
-    def dr_dBr(self, problem, g, lam):
-        """d(r_int - f_ext)/dB^r_j (n, 6, k, 3)."""
-        out = np.zeros((problem.mesh.n_nodes, 6, len(self.regions), 3))
-        for ld, C, M in self._blocks(g, lam):
-            out[ld.mag.nodes] -= np.einsum("ij,iab->iajb", C, M)
-        return out
-
-    def dr_dp(self, problem, g, lam):
-        J = np.einsum("najb,jbc->najc", self.dr_dBr(problem, g, lam), self._dBr()[:, :, self.free])
-        return J.reshape(problem.mesh.n_nodes, 6, -1)
-
-    def vjp(self, problem, g, lam, mu):
-        mu = np.asarray(mu)
-        grad = np.zeros(mu.shape[:-2] + (len(self.regions), 3))
-        for ld, C, M in self._blocks(g, lam):
-            grad -= np.einsum("ij,iab,...ia->...jb", C, M, mu[..., ld.mag.nodes, :])
-        out = np.einsum("...jb,jbc->...jc", grad, self._dBr()[:, :, self.free])
-        return out.reshape(mu.shape[:-2] + (-1,))
-
-
-_MATERIAL_KEYS = ("E", "nu", "h", "shear_factor", "drilling", "rho")
-
-
-class MaterialVariable(Variable):
-    """Young's modulus E or the thickness h constant over each of a list of element regions.
-
-    dr/dp by central differences of the element residual at the fixed state, Richardson
-    extrapolated (module docstring): exact up to round-off for E (linear) and h (cubic).  A
-    thickness variable on a region that carries a magnet or gravity is refused: those loads keep
-    the thickness they were built with.
-
-    Parameters
-    ----------
-    problem : core_se3.Problem
-        The problem (default element; any law, it becomes a RegionMaterial).
-    regions : sequence
-        Region names or element-id arrays (disjoint).
-    prop : str
-        'E' or 'h'.
-    lower, upper : float, optional
-        Bounds (default: positive values).
-    name : str, optional
-        Its name (default ``prop``).
-
-    Example
-    -------
-    >>> from core_se3 import Problem, Material, mesh
-    >>> p = Problem(mesh.rectangle(2.0, 0.5, 2, 1), Material(1e3, 0.0, 0.1))
-    >>> v = MaterialVariable(p, [[0], [1]], "E")
-    >>> v.assign([1e3, 3e3]); p.material.per_element("E").tolist()
-    [1000.0, 3000.0]
-    """
-
-    def __init__(self, problem, regions, prop="E", lower=None, upper=np.inf, name=None):
-        name = name or prop
-        if prop not in ("E", "h"):
-            raise DesignError(f"material variable {name!r}: prop must be 'E' or 'h', got {prop!r}{did_you_mean(prop, ('E', 'h'))}")
-        self.problem, self.prop = problem, prop
-        self.regions = [RegionMagnetisation._elements(problem, r, name) for r in regions]
-        allel = np.concatenate(self.regions)
-        if len(np.unique(allel)) != len(allel):
-            raise DesignError(f"material variable {name!r}: the regions overlap")
-        if prop == "h":
-            touched = np.zeros(problem.mesh.n_elements, bool)
-            touched[allel] = True
-            for ld in problem.loads:
-                el = getattr(getattr(ld, "mag", None), "elements", None)
-                if (el is not None and np.any(touched[el])) or getattr(ld, "name", "") == "gravity":
-                    raise DesignError(f"material variable {name!r}: the thickness of a region with a magnet or "
-                                      "gravity cannot be designed (those loads keep the thickness they were built with)")
-        props = self._per_element()
-        x0 = np.array([props[prop][r].mean() for r in self.regions])
-        self._setup(name, len(self.regions), 0.0 if lower is None else lower, upper, x0,
-                    [f"{name}[{j}]" for j in range(len(self.regions))], None)
-
-    def _per_element(self):
-        mat, m = self.problem.material, self.problem.mesh.n_elements
-        per = getattr(mat, "per_element", None)
-        return {k: (per(k) if per is not None else np.full(m, getattr(mat, k), dtype=object if k == "rho" else float))
-                for k in _MATERIAL_KEYS}
-
-    def value(self):
-        props = self._per_element()
-        return np.array([float(props[self.prop][r][0]) for r in self.regions])
-
-    def _law(self, x):
-        props = self._per_element()                 # the current law (other variables may change it)
-        for r, val in zip(self.regions, x):
-            props[self.prop][r] = val
-        keys = list(zip(*[props[k] for k in _MATERIAL_KEYS]))
-        uniq = list(dict.fromkeys(keys))
-        if len(uniq) == 1:
-            return Material(*uniq[0])
-        return RegionMaterial([Material(*u) for u in uniq], np.array([uniq.index(t) for t in keys]))
-
-    def assign(self, x):
-        x = np.asarray(x, float)
-        self.problem.set_material(self._law(x))
-
-    def dr_dp(self, problem, g, lam):
-        x = self.value()
-        out = np.zeros((problem.mesh.n_nodes, 6, self.size))
-        try:
-            for j in range(self.size):
-                d = 0.02 * x[j]
-                D = []
-                for step in (d, 2 * d):
-                    rs = []
-                    for sgn in (1, -1):
-                        xx = x.copy()
-                        xx[j] += sgn * step
-                        problem.set_material(self._law(xx))
-                        rs.append(problem.element.evaluate(g, tangent=False).r)
-                    D.append((rs[0] - rs[1]) / (2 * step))
-                out[:, :, j] = (4 * D[0] - D[1]) / 3
-        finally:
-            problem.set_material(self._law(x))
         return out
 
 
