@@ -97,6 +97,15 @@ class Design:
                 t.resolve_scale(problem)
         self.all = self.variables + self.aux
         self.x0 = [v.value() for v in self.all]
+        # the order in which pose k assigns: other poses' variables (their start), the pose's
+        # fixed settings, shared variables, its own -- the later ones win on a shared field
+        nv = len(self.variables)
+        self.order = []
+        for k, pose in enumerate(self.poses):
+            others = [i for i, v in enumerate(self.variables) if v.pose is not None and v.pose != k]
+            shared = [i for i, v in enumerate(self.variables) if v.pose is None]
+            own = [i for i, v in enumerate(self.variables) if v.pose == k]
+            self.order.append(others + list(range(nv, len(self.all))) + shared + own)
         self.slices, k = [], 0
         for v in self.variables:
             self.slices.append(slice(k, k + v.size))
@@ -107,6 +116,7 @@ class Design:
         self.lower = np.concatenate([v.lower for v in self.variables])
         self.upper = np.concatenate([v.upper for v in self.variables])
         self.states = [None] * len(self.poses)
+        self.best = None
         self.solves = self.newton_iterations = self.evaluations = 0
         self._cache = None
 
@@ -115,10 +125,15 @@ class Design:
         """The variables' starting values (nx,)."""
         return np.concatenate(self.x0[:len(self.variables)])
 
+    def pose_variables(self, k):
+        """The variables pose k assigns, in its order (``pose_values``)."""
+        return [self.all[i] for i in self.order[k]]
+
     def pose_values(self, k, x):
-        """The values (one array per variable, auxiliary ones last) pose k sees at x."""
+        """The values (one array per variable of ``pose_variables(k)``) pose k sees at x."""
         pose, out = self.poses[k], []
-        for i, v in enumerate(self.all):
+        for i in self.order[k]:
+            v = self.all[i]
             if i < len(self.variables) and (v.pose is None or v.pose == k):
                 out.append(np.asarray(x[self.slices[i]], float))
             elif v in pose.settings:
@@ -133,21 +148,29 @@ class Design:
         if self._cache is not None and np.array_equal(self._cache[0], x):
             return self._cache[1]
         self.evaluations += 1
+        base = self.best[1] if self.best is not None else self.states
         for k, pose in enumerate(self.poses):
             xs = self.pose_values(k, x)
-            st = self.states[k]
+            st = base[k]
             if st is None:
-                st = solve_flat(self.problem, self.all, xs, pose.lam, self.options)
+                st = solve_flat(self.problem, self.pose_variables(k), xs, pose.lam, self.options)
                 info = st.stats
             else:
                 if all(np.array_equal(a, b) for a, b in zip(st.x, xs)):
                     continue
-                st, info = follow(self.problem, self.all, xs, st, self.options)
+                st, info = follow(self.problem, self.pose_variables(k), xs, st, self.options)
             self.states[k] = st
             self.solves += 1
             self.newton_iterations += info["iterations"]
         self._cache = (x.copy(), list(self.states), {})
         return self._cache[1]
+
+    def _accept(self, x, phi):
+        """Keep the states of the best point so far: every evaluation follows the path from them
+        (an equilibrium of a multistable shell depends on where its path starts; starting from
+        the best point keeps the objective the one of the optimiser's accepted iterates)."""
+        if self.best is None or phi < self.best[0]:
+            self.best = (phi, list(self.solve(x)))
 
     def _active(self, k):
         return [i for i, v in enumerate(self.variables) if v.pose is None or v.pose == k]
@@ -157,7 +180,7 @@ class Design:
         states = self.solve(x)
         rows = []
         for k, pose in enumerate(self.poses):
-            assign_all(self.all, states[k].x)
+            assign_all(self.pose_variables(k), states[k].x)
             for t in pose.targets:
                 rows.append(np.sqrt(t.weight) / t.scale * t.misfit(self.problem, states[k].g, states[k].lam))
         for r in self.regularisation:
@@ -175,7 +198,7 @@ class Design:
         for k, pose in enumerate(self.poses):
             if not pose.targets:
                 continue
-            assign_all(self.all, states[k].x)
+            assign_all(self.pose_variables(k), states[k].x)
             act = self._active(k)
             vs = [self.variables[i] for i in act]
             s = sensitivity(self.problem, states[k].g, states[k].lam, [t.quantity for t in pose.targets], vs,
@@ -198,7 +221,9 @@ class Design:
     def objective(self, x):
         """Phi(x)."""
         F = self.residuals(x)
-        return 0.5 * float(F @ F)
+        phi = 0.5 * float(F @ F)
+        self._accept(x, phi)
+        return phi
 
     def gradient(self, x):
         """dPhi/dx by the adjoint method: one solve with K^T per pose (the cotangent F of its
@@ -212,7 +237,7 @@ class Design:
         for k, pose in enumerate(self.poses):
             if not pose.targets:
                 continue
-            assign_all(self.all, states[k].x)
+            assign_all(self.pose_variables(k), states[k].x)
             act = self._active(k)
             c = []
             for t in pose.targets:
@@ -238,14 +263,14 @@ class Design:
         states = self.solve(x)
         out = {}
         for k, pose in enumerate(self.poses):
-            assign_all(self.all, states[k].x)
+            assign_all(self.pose_variables(k), states[k].x)
             out[pose.name] = {t.name: float(np.abs(t.misfit(self.problem, states[k].g, states[k].lam)).max())
                               for t in pose.targets}
         return out
 
     # ------------------------------------------------------------------ the optimiser ------
     def optimise(self, method="least_squares", x0=None, max_iter=100, tol=1e-12, tolerance=None, progress=False,
-                 callback=None):
+                 callback=None, stop_at_tolerance=False):
         """Minimise Phi from x0 (default the variables' current values).
 
         Parameters
@@ -264,6 +289,8 @@ class Design:
             Print objective, gradient norm and equilibrium solves per iteration.
         callback : callable, optional
             Called with the history entry of every iteration.
+        stop_at_tolerance : bool
+            Stop at the first iteration whose misfits are all within ``tolerance``.
 
         Returns
         -------
@@ -294,6 +321,9 @@ class Design:
         history = []
         last = {}
 
+        class Reached(Exception):
+            pass
+
         def record(z):
             x = z * sc
             phi, g = self.objective(x), self.gradient(x) * sc
@@ -306,6 +336,12 @@ class Design:
                       f"{entry['gradient_norm']:.3e}  equilibrium solves {self.solves}", flush=True)
             if callback is not None:
                 callback(entry)
+            if tolerance is not None and stop_at_tolerance:
+                worst = max((v for d in self.misfits(x).values() for v in d.values()), default=0.0)
+                entry["max_misfit"] = worst
+                if worst <= tolerance:
+                    last["reached"] = z.copy()
+                    raise Reached()
 
         try:
             if method == "least_squares":
@@ -315,7 +351,11 @@ class Design:
                         last["z"] = z.copy()
                         record(z)
                     return J
-                r = so.least_squares(lambda z: self.residuals(z * sc), x0 / sc, jac=jac,
+                def fun(z):
+                    F = self.residuals(z * sc)
+                    self._accept(z * sc, 0.5 * float(F @ F))
+                    return F
+                r = so.least_squares(fun, x0 / sc, jac=jac,
                                      bounds=(self.lower / sc, self.upper / sc), method="trf",
                                      ftol=tol, xtol=tol, gtol=tol, max_nfev=max_iter)
                 z, ok, msg, nit = r.x, r.success and r.status > 0, r.message, len(history)
@@ -340,6 +380,8 @@ class Design:
                                 method=method, bounds=bounds, tol=tol, callback=cb,
                                 options=dict(maxiter=max_iter), **kw)
                 z, ok, msg, nit = r.x, bool(r.success), str(r.message), len(history)
+        except Reached:
+            z, ok, msg, nit = last["reached"], True, "stopped at the tolerance", len(history)
         except ConvergenceError as exc:
             raise ConvergenceError(f"the design stopped: an equilibrium failed ({exc}); the last design "
                                    "iterations are in the history", exc.result) from None
@@ -356,9 +398,9 @@ class Design:
         res = DesignResult(bool(ok), reached, msg, x, self.labels, values, self.objective(x), self.gradient(x), mis,
                            worst, nit, self.evaluations, self.solves, self.newton_iterations,
                            time.perf_counter() - t0, method, history, list(states))
-        assign_all(self.all, states[-1].x)
+        assign_all(self.pose_variables(len(self.poses) - 1), states[-1].x)
         return res
 
     def assign_pose(self, k, x):
         """Set the problem to pose k's values at x (e.g. before writing its outputs)."""
-        assign_all(self.all, self.pose_values(k, np.asarray(x, float)))
+        assign_all(self.pose_variables(k), self.pose_values(k, np.asarray(x, float)))
