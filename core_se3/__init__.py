@@ -4,7 +4,7 @@ Every node of the mid-surface carries a frame g = (R, phi) in SE(3); strains are
 twists; the 4-node quad is solved by Newton with exponential updates g <- g exp(eta).  The
 package is a stack of layers that import only downward (docs/ARCHITECTURE.md):
 
-    lie -> mesh -> fem -> assembly -> model -> results -> solvers -> io -> scenario -> catalogue -> cli
+    lie -> mesh -> fem -> assembly -> model -> results -> solvers -> io -> design -> scenario -> catalogue -> cli
 
 Example (a strip rolled into a full circle by an end moment M = 2 pi EI / L)
 -------
@@ -19,7 +19,7 @@ Example (a strip rolled into a full circle by an end moment M = 2 pi EI / L)
 """
 from . import lie, mesh
 from . import fem, model, results, solvers  # noqa: F401  (solvers registers Problem.solve's controls)
-from . import io, scenario, catalogue  # noqa: F401
+from . import io, design, scenario, catalogue  # noqa: F401
 from .errors import (CheckpointError, ConvergenceError, CoreSE3Error, ElementTooDistortedError, LoadError,
                      MaterialError, MeshError, OptionError, ScenarioError, SingularSystemError, SupportError)
 from .fem import Element, Material, RegionMaterial, register_element
@@ -32,7 +32,7 @@ from .solvers import (ArcLengthOptions, NewtonOptions, arc_length, displacement_
 
 load_scenario = scenario.load
 
-__all__ = ["lie", "mesh", "fem", "model", "fields", "results", "solvers", "io", "scenario", "catalogue",
+__all__ = ["lie", "mesh", "fem", "model", "fields", "results", "solvers", "io", "design", "scenario", "catalogue",
            "Problem", "Material", "RegionMaterial", "Result", "StepResult", "Scenario", "load_scenario",
            "newton_solve", "arc_length", "displacement_control", "NewtonOptions", "ArcLengthOptions",
            "Element", "Load", "LoadKind", "Param", "Field", "register_element", "register_load",

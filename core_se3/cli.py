@@ -1,5 +1,6 @@
 """Command line (the top layer): ``core-se3 bench list``, ``core-se3 bench run NAME [options]`` and
-``core-se3 run SCENARIO.toml [--out DIR] [--resume]`` (scenario files, see docs/SCENARIOS.md).
+``core-se3 run SCENARIO.toml [--out DIR] [--resume]`` (scenario files, see docs/SCENARIOS.md) and
+``core-se3 design SCENARIO.toml [--out DIR]`` (a scenario's [design], docs/DESIGN.md).
 
 ``-v`` shows the solvers' per-step log (``logging`` at INFO on stderr)."""
 from __future__ import annotations
@@ -172,6 +173,35 @@ def scenario_run(args):
     return 0
 
 
+def design_run(args):
+    """``core-se3 design``: optimise the [design] of a scenario, write the optimised scenario and
+    the design's outputs (docs/DESIGN.md)."""
+    from . import scenario
+    from .scenario.design_runner import run_design
+    try:
+        scn = scenario.load(args.scenario)
+        if "design" not in scn.spec:
+            print(f"error: {args.scenario} has no [design] section (docs/DESIGN.md)", file=sys.stderr)
+            return 2
+        r, files = run_design(scn, out=args.out, method=args.method, max_iter=args.max_iter,
+                              progress=not args.quiet)
+    except ConvergenceError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 3
+    except CoreSE3Error as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    if not args.quiet:
+        print(f"{scn.name}: {r.message}")
+        print(f"  objective {r.objective:.6e} after {r.iterations} iterations, {r.equilibrium_solves} equilibrium "
+              f"solves, {r.newton_iterations} Newton iterations, {r.time:.2f} s")
+        for label, x in zip(r.labels, r.x):
+            print(f"  {label} = {x:.8g}")
+        for kind, path in files.items():
+            print(f"  wrote {kind}: {path}")
+    return 0 if r.reached is not False else 4
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(prog="core-se3", description="Geometrically exact Cosserat shells on SE(3)")
     sub = ap.add_subparsers(dest="cmd", required=True)
@@ -198,12 +228,21 @@ def main(argv=None):
     srun.add_argument("--progress", action="store_true", help="progress bar even when not on a terminal")
     srun.add_argument("-q", "--quiet", action="store_true", help="no progress bar, no summary")
     srun.add_argument("-v", "--verbose", action="store_true", help="log every Newton (sub-)step")
+    dsub = sub.add_parser("design", help="optimise the [design] of a scenario file (docs/DESIGN.md)")
+    dsub.add_argument("scenario", help="SCENARIO.toml with a [design] section")
+    dsub.add_argument("--out", default=None, help="output directory (default [output] dir or out/NAME-design)")
+    dsub.add_argument("--method", default=None, help="least_squares, L-BFGS-B, SLSQP or trust-constr")
+    dsub.add_argument("--max-iter", type=int, default=None, help="iterations (least_squares: evaluations)")
+    dsub.add_argument("-q", "--quiet", action="store_true", help="no progress, no summary")
+    dsub.add_argument("-v", "--verbose", action="store_true", help="log every Newton (sub-)step")
     args = ap.parse_args(argv)
     if getattr(args, "verbose", False):
         logging.basicConfig(level=logging.INFO, format="%(message)s", stream=sys.stderr)
         logging.getLogger("core_se3").setLevel(logging.INFO)
     if args.cmd == "run":
         return scenario_run(args)
+    if args.cmd == "design":
+        return design_run(args)
     if args.cmd == "bench" and args.bcmd == "list":
         from .catalogue import CASES
         for c in CASES.values():

@@ -17,7 +17,7 @@ import difflib
 
 __all__ = ["CoreSE3Error", "MaterialError", "MeshError", "LoadError", "SupportError",
            "SingularSystemError", "ConvergenceError", "ElementTooDistortedError", "ScenarioError",
-           "CheckpointError", "OptionError", "did_you_mean"]
+           "CheckpointError", "OptionError", "DesignError", "did_you_mean"]
 
 
 def did_you_mean(name, choices):
@@ -287,4 +287,25 @@ class CheckpointError(CoreSE3Error):
     Traceback (most recent call last):
     ...
     core_se3.errors.CheckpointError: no checkpoint to resume from: ...checkpoint.npz does not exist (run without --resume first)
+    """
+
+
+class DesignError(CoreSE3Error, ValueError):
+    """An invalid design problem (``core_se3.design``): a target on a node, probe or region that
+    does not exist, a variable the problem does not have (no magnet on a region, no such field),
+    bounds that exclude the start or are empty, a norm bound the chosen optimiser cannot hold.
+
+    Raised when a design variable, target or ``Design`` is built and when an optimisation is
+    started; a target that is valid but not reached is not an error (the result says "did not
+    reach the target: misfit X").  Fix the name or the bound the message gives.
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> from core_se3.design import NodePosition
+    >>> p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
+    >>> NodePosition(p, [99])
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.DesignError: node ids [99] do not exist (the mesh has 6 nodes: 0 .. 5)
     """

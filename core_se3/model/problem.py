@@ -272,6 +272,22 @@ class Problem:
         return [self.add(MagneticLoad(Magnetisation(self.mesh, Br[h == t], float(t), ids[h == t], mu0), field))
                 for t in np.unique(h)]
 
+    def set_material(self, material):
+        """Replace the material law (a design changes E or h per region): the element is rebuilt
+        for it and the compiled evaluation is dropped (loads keep their own data: a magnetisation
+        or gravity built from the old thickness is not updated).
+
+        Example
+        -------
+        >>> from core_se3 import Problem, Material, mesh
+        >>> p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
+        >>> p.set_material(Material(2e3, 0.0, 0.01)); p.material.E, p.element.material.E
+        (2000.0, 2000.0)
+        """
+        self.material = material
+        self.element = make_element(self.element_name, self.mesh, material)
+        self._compiled = None
+
     def add_probe(self, name, where="x1"):
         """Record the midpoint of an edge (or a node) at every step."""
         self.probes[name] = Probe.edge_midpoint(name, self.nodes(where))

@@ -49,6 +49,7 @@ def build_problem(v, spec, mesh, regions):
     except CoreSE3Error as exc:
         v.fail("material", str(exc))
     prob.solve_defaults = solve_defaults(s)
+    prob.scenario_parts = dict(fields={}, loads=[])     # what [design] variables refer to by name
     axes = {"x": 0, "y": 1, "z": 2}
     for i, sp in enumerate(spec["supports"]):
         key = f"supports[{i}]"
@@ -72,7 +73,8 @@ def build_problem(v, spec, mesh, regions):
         else:
             where = regions[ld["region"]] if ld.get("region") else None
         try:
-            prob.add_load(ld["type"], where, make_scale(ld["scale"]), check=False, **values)
+            added = prob.add_load(ld["type"], where, make_scale(ld["scale"]), check=False, **values)
+            prob.scenario_parts["loads"].append(added)
         except CoreSE3Error as exc:
             param = getattr(exc, "param", None)
             v.fail(join(key, param) if param else key, str(exc))
@@ -96,6 +98,7 @@ def _add_magnets(v, prob, spec, mesh, regions):
             built[name] = FIELDS[f["type"]].build(values, make_scale(f["scale"]), mu0_units)
         except CoreSE3Error as exc:
             v.fail(join("fields", name), str(exc))
+    prob.scenario_parts["fields"] = built
     for i, m in enumerate(spec["magnets"]):
         key = f"magnets[{i}]"
         elems = regions[m["region"]] if m.get("region") else None

@@ -18,6 +18,7 @@ import re
 
 from ..errors import ScenarioError
 from .build import build_problem
+from .design_section import design_section
 from .geometry import edges_section, mesh_section, probes_section, regions_section
 from .physics import (NON_PHYSICAL, fields_section, loads_section, magnets_section,
                       material_section, output_section, solver_section, supports_section)
@@ -31,7 +32,7 @@ except ModuleNotFoundError:           # pragma: no cover - Python 3.10
 __all__ = ["Scenario", "load", "loads", "from_dict", "TOP_KEYS"]
 
 TOP_KEYS = ("name", "description", "units", "mesh", "edges", "regions", "material", "fields",
-            "magnets", "supports", "loads", "probes", "solver", "output")
+            "magnets", "supports", "loads", "probes", "solver", "output", "design")
 
 
 class Scenario:
@@ -107,6 +108,24 @@ class Scenario:
     @property
     def output(self):
         return self.spec["output"]
+
+    @property
+    def fields(self):
+        """name -> the applied Field of [fields.NAME] (the objects the magnets use)."""
+        return getattr(self.problem, "scenario_parts", {}).get("fields", {})
+
+    @property
+    def load_objects(self):
+        """The Load objects of every [[loads]] entry (a list per entry)."""
+        return getattr(self.problem, "scenario_parts", {}).get("loads", [])
+
+    def design(self):
+        """The :class:`core_se3.design.Design` of the [design] section (ScenarioError without one);
+        building it turns the magnets of design regions into the design's own loads."""
+        if "design" not in self.spec:
+            raise ScenarioError("the scenario has no [design] section", self.file, "design")
+        from .design_section import build_design
+        return build_design(self)
 
     def load_factors(self):
         """The load factors of the requested steps (excluding the initial state lam = 0)."""
@@ -279,6 +298,9 @@ def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario"):
                 v.fail(f"supports[{i}].type", "arc length scales the loads only: a prescribed "
                        'rotation is not supported with control = "arclength"')
     spec["output"] = output_section(v, doc)
+    design = design_section(v, doc, spec, mesh, regions)
+    if design is not None:
+        spec["design"] = design
     problem = build_problem(v, spec, mesh, regions)
     phys = {k: spec[k] for k in spec if k not in ("output", "description")}
     phys["solver"] = {k: x for k, x in spec["solver"].items() if k not in NON_PHYSICAL}

@@ -1,0 +1,209 @@
+"""Equilibria of a design: every evaluation starts from the last equilibrium of its pose and
+follows the path in the design variables to the new values (x(t) = x_old + t (x_new - x_old),
+t from 0 to 1, Newton with exponential updates at each t, halving the step of t on a failure).
+Only when the path cannot be followed (after ``max_cutbacks`` halvings) is the pose solved
+again from the flat state by load stepping (``Problem.solve``).
+
+The residual is linear in most design variables (field, magnetisation, load magnitudes), so
+the first Newton iterate from the old state is the tangent predictor of the direct method:
+a small design step converges in two or three iterations.
+
+Example
+-------
+>>> import numpy as np
+>>> from core_se3 import Problem, Material, mesh
+>>> from core_se3.design import LoadMagnitude
+>>> p = Problem(mesh.rectangle(10.0, 1.0, 8, 1), Material(1.2e6, 0.0, 0.1))
+>>> p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 1.0))
+>>> v = LoadMagnitude(p, p.loads[0])
+>>> st = solve_flat(p, [v], [np.array([1.0])])
+>>> st2, info = follow(p, [v], [np.array([1.5])], st)
+>>> info["iterations"] <= 6, info["restarted"]
+(True, False)
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import ConvergenceError, ElementTooDistortedError, SingularSystemError
+from ..solvers import Factorization, make_solver, relative_residual, scaled_norm
+
+__all__ = ["EquilibriumState", "EquilibriumOptions", "follow", "solve_flat", "assign_all"]
+
+
+@dataclass(frozen=True)
+class EquilibriumOptions:
+    """Controls of the design's equilibrium solves.
+
+    rtol, dtol: relative residual and increment tolerances (tight: the sensitivities are those of
+    the exact equilibrium); max_iter: Newton iterations per try; max_cutbacks: halvings of the
+    step in the design variables before a restart from the flat state; flat_steps: load steps of
+    such a restart (and of a pose's first solve); linear_solver: None = the problem's.
+
+    Example
+    -------
+    >>> EquilibriumOptions().rtol, EquilibriumOptions(flat_steps=4).flat_steps
+    (1e-12, 4)
+    """
+    rtol: float = 1e-12
+    dtol: float = 1e-12
+    max_iter: int = 25
+    max_cutbacks: int = 8
+    flat_steps: int = 10
+    linear_solver: str | None = None
+
+
+@dataclass
+class EquilibriumState:
+    """A converged state of a pose: frames g, load factor lam, and the values x of the design
+    variables (one array per variable) it is in equilibrium for.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> EquilibriumState(np.eye(4)[None], 1.0, [np.zeros(2)]).lam
+    1.0
+    """
+    g: np.ndarray
+    lam: float
+    x: list
+    stats: dict = field(default_factory=dict)
+
+
+def assign_all(variables, xs):
+    """Assign the values xs (one array per variable) to the variables.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import Problem, Material, mesh
+    >>> from core_se3.design import LoadMagnitude
+    >>> p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01)); p.add_edge_force("x1", (0, 0, 1.0))
+    >>> v = LoadMagnitude(p, p.loads[0]); assign_all([v], [np.array([2.0])]); v.P
+    2.0
+    """
+    for v, x in zip(variables, xs):
+        v.assign(x)
+
+
+def solve_flat(problem, variables, xs, lam=1.0, options=None):
+    """Solve from the flat (reference) state by load stepping at the values xs.
+
+    Returns: EquilibriumState (``stats``: iterations, time).  ConvergenceError if it fails.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import Problem, Material, mesh
+    >>> from core_se3.design import LoadMagnitude
+    >>> p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01)); p.clamp("x0")
+    >>> p.add_edge_force("x1", (0, 0, 1e-3)); v = LoadMagnitude(p, p.loads[0])
+    >>> solve_flat(p, [v], [np.array([1.0])]).stats["restarted"]
+    True
+    """
+    opts = options or EquilibriumOptions()
+    t0 = time.perf_counter()
+    assign_all(variables, xs)
+    kw = dict(rtol=max(opts.rtol, 1e-12), dtol=max(opts.dtol, 1e-12), max_iter=opts.max_iter)
+    if opts.linear_solver:
+        kw["linear_solver"] = opts.linear_solver
+    res = problem.solve(steps=opts.flat_steps, lam_end=lam, control="load", limit_check=False, **kw)
+    its = sum(e["iterations"] for e in res.log)
+    return EquilibriumState(res.final.g.copy(), lam, [np.array(x, float) for x in xs],
+                            dict(iterations=its, substeps=len(res.log), cutbacks=0, restarted=True,
+                                 time=time.perf_counter() - t0))
+
+
+def _newton(problem, g, lam, opts, solver):
+    """Newton at fixed parameters from g: (g, iterations) or (None, iterations) on failure."""
+    asm = problem.assembler()
+    ell = problem.length_scale
+    dn = np.inf
+    hist = []
+    try:
+        for it in range(opts.max_iter + 1):
+            ev = problem.evaluate(g, lam, tangent=True)
+            if not np.all(np.isfinite(ev.r)):
+                return None, it
+            rn, floor = relative_residual(asm, ev, ell)
+            hist.append(rn)
+            if rn <= max(opts.rtol, floor) and (dn <= opts.dtol or (it == 0 and rn == 0.0)):
+                return g, it
+            if it == opts.max_iter or (it > 3 and rn > 1e8 * max(hist[0], 1e-300)):
+                return None, it
+            with Factorization(ev.K, solver) as F:
+                eta = asm.scatter(F.solve(-ev.r))
+            dn = scaled_norm(eta, ell, moment=False) / ell
+            g = problem.retract(g, eta)
+    except (ElementTooDistortedError, SingularSystemError, FloatingPointError):
+        return None, len(hist)
+    return None, len(hist)
+
+
+def follow(problem, variables, xs, state, options=None):
+    """Follow the equilibrium of ``state`` to the variables' values xs (module docstring).
+
+    Parameters
+    ----------
+    problem : core_se3.Problem
+        The problem.
+    variables : sequence of Variable
+        The variables (all those the pose's state records).
+    xs : sequence of arrays
+        Their new values.
+    state : EquilibriumState
+        The last equilibrium of the pose.
+    options : EquilibriumOptions, optional
+        The controls.
+
+    Returns
+    -------
+    (EquilibriumState, dict)
+        The new state and stats (iterations, substeps, cutbacks, restarted, time).  A failure of
+        the restart from the flat state is a ConvergenceError.
+
+    Example
+    -------
+    See the module docstring.
+
+    >>> EquilibriumOptions().max_cutbacks
+    8
+    """
+    opts = options or EquilibriumOptions()
+    t0 = time.perf_counter()
+    solver = make_solver(opts.linear_solver or problem.linear_solver)
+    x0 = [np.array(x, float) for x in state.x]
+    x1 = [np.array(x, float) for x in xs]
+    g, t, dt = state.g, 0.0, 1.0
+    its = subs = cuts = 0
+    if all(np.array_equal(a, b) for a, b in zip(x0, x1)):
+        assign_all(variables, x1)
+        info = dict(iterations=0, substeps=0, cutbacks=0, restarted=False, time=0.0)
+        return EquilibriumState(g, state.lam, x1, info), info
+    while t < 1.0:
+        t_try = min(1.0, t + dt)
+        assign_all(variables, [a + t_try * (b - a) for a, b in zip(x0, x1)])
+        g_new, k = _newton(problem, g, state.lam, opts, solver)
+        its += k
+        subs += 1
+        if g_new is not None:
+            g, t = g_new, t_try
+            if k <= 4:
+                dt = min(2 * dt, 1.0)
+            continue
+        cuts += 1
+        dt /= 2
+        if cuts > opts.max_cutbacks:
+            try:
+                st = solve_flat(problem, variables, x1, state.lam, opts)
+            except ConvergenceError as exc:
+                raise ConvergenceError(f"the design's equilibrium could not be followed to the new values, nor "
+                                       f"solved again from the flat state: {exc}", exc.result) from None
+            info = dict(iterations=its + st.stats["iterations"], substeps=subs, cutbacks=cuts, restarted=True,
+                        time=time.perf_counter() - t0)
+            return EquilibriumState(st.g, state.lam, x1, info), info
+    info = dict(iterations=its, substeps=subs, cutbacks=cuts, restarted=False, time=time.perf_counter() - t0)
+    return EquilibriumState(g, state.lam, x1, info), info

@@ -1,0 +1,406 @@
+"""The inverse solver: the design variables that make the shell take target shapes.
+
+    Phi(x) = 1/2 sum_poses sum_targets w_t |m_t(g_pose(x))|^2 / s_t^2  +  1/2 sum alpha |D x|^2
+
+over one or several poses (one magnetisation shared by all, a field per pose: Lum et al. 2016's
+problem), m_t the misfit of a target (``design.objectives`` with a ``target``), s_t its scale
+(the problem's length for positions, 1 rad for angles), D the differences of neighbouring
+regions' values (smoothness, :class:`Smoothness`).  Every evaluation starts from the last
+equilibrium of its pose (``design.equilibrium.follow``).
+
+Optimisers (scipy.optimize): 'least_squares' (trust-region reflective Gauss-Newton on the
+misfit vector, its Jacobian by the direct or adjoint method, whichever needs fewer solves:
+the choice for misfit targets), 'L-BFGS-B' (box bounds), 'SLSQP' and 'trust-constr' (also the
+norm bounds |B^a| <= B_max, |B^r| <= B^r_max of vector forms as constraints); the scalar
+methods get the adjoint gradient (one extra linear solve per pose, with K^T).
+
+Example
+-------
+Find the tip force multiplier that puts a cantilever's tip 1.0 above the clamp line:
+
+>>> import numpy as np
+>>> from core_se3 import Problem, Material, mesh
+>>> from core_se3.design import LoadMagnitude, ProbePosition
+>>> p = Problem(mesh.rectangle(10.0, 1.0, 8, 1), Material(1.2e6, 0.0, 0.1))
+>>> p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 0.1)); p.add_probe("tip", "x1")
+>>> P = LoadMagnitude(p, p.loads[0], lower=0.0)
+>>> tip = ProbePosition(p, "tip")
+>>> d = Design(p, [P], [Pose("bent", [Target(tip, components=[2], value=[1.0])])])
+>>> r = d.optimise(tolerance=1e-9)
+>>> r.reached, round(float(r.states[0].g[p.probes["tip"].node_a, 2, 3]), 6)
+(True, 1.0)
+"""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ..errors import ConvergenceError, DesignError
+from .equilibrium import EquilibriumOptions, assign_all, follow, solve_flat
+from .sensitivity import sensitivity
+from .targets import DesignResult, Pose, Smoothness, Target
+
+__all__ = ["Design", "METHODS", "Target", "Pose", "Smoothness", "DesignResult"]
+
+METHODS = ("least_squares", "L-BFGS-B", "SLSQP", "trust-constr")
+
+
+class Design:
+    """A design problem (module docstring).
+
+    Parameters
+    ----------
+    problem : core_se3.Problem
+        The shell, with the variables' loads and fields in it.
+    variables : sequence of Variable
+        The design variables (``pose`` None: shared by all poses; k: the k-th pose's own).
+    poses : sequence of Pose
+        The poses and their targets.
+    regularisation : sequence of Smoothness, optional
+        Regularisation terms.
+    options : EquilibriumOptions, optional
+        The equilibrium solves' controls.
+    sensitivity_method : str
+        'auto', 'adjoint' or 'direct' for the least-squares Jacobian.
+
+    Example
+    -------
+    See the module docstring.
+
+    >>> METHODS[0]
+    'least_squares'
+    """
+
+    def __init__(self, problem, variables, poses, regularisation=(), options=None, sensitivity_method="auto"):
+        self.problem, self.variables, self.poses = problem, list(variables), list(poses)
+        self.regularisation = list(regularisation)
+        self.options = options or EquilibriumOptions()
+        self.sensitivity_method = sensitivity_method
+        if not self.variables:
+            raise DesignError("a design needs at least one variable")
+        if not self.poses or not any(p.targets for p in self.poses):
+            raise DesignError("a design needs at least one pose with a target")
+        for v in self.variables:
+            if v.pose is not None and not 0 <= v.pose < len(self.poses):
+                raise DesignError(f"variable {v.name!r} belongs to pose {v.pose}, but there are {len(self.poses)} poses")
+            v.check_start()
+        for r in self.regularisation:
+            if not any(r.variable is v for v in self.variables):
+                raise DesignError("a smoothness term refers to a variable that is not in the design")
+        self.aux = []
+        for pose in self.poses:
+            for v in pose.settings:
+                if not any(v is u for u in self.variables + self.aux):
+                    self.aux.append(v)
+            for t in pose.targets:
+                t.resolve_scale(problem)
+        self.all = self.variables + self.aux
+        self.x0 = [v.value() for v in self.all]
+        # the order in which pose k assigns: other poses' variables (their start), the pose's
+        # fixed settings, shared variables, its own -- the later ones win on a shared field
+        nv = len(self.variables)
+        self.order = []
+        for k, pose in enumerate(self.poses):
+            others = [i for i, v in enumerate(self.variables) if v.pose is not None and v.pose != k]
+            shared = [i for i, v in enumerate(self.variables) if v.pose is None]
+            own = [i for i, v in enumerate(self.variables) if v.pose == k]
+            self.order.append(others + list(range(nv, len(self.all))) + shared + own)
+        self.slices, k = [], 0
+        for v in self.variables:
+            self.slices.append(slice(k, k + v.size))
+            k += v.size
+        self.nx = k
+        self.labels = [lab for v in self.variables for lab in v.labels]
+        self.xscale = np.concatenate([v.scale for v in self.variables])
+        self.lower = np.concatenate([v.lower for v in self.variables])
+        self.upper = np.concatenate([v.upper for v in self.variables])
+        self.states = [None] * len(self.poses)
+        self.best = None
+        self.solves = self.newton_iterations = self.evaluations = 0
+        self._cache = None
+
+    # ------------------------------------------------------------------ evaluations --------
+    def x_start(self):
+        """The variables' starting values (nx,)."""
+        return np.concatenate(self.x0[:len(self.variables)])
+
+    def pose_variables(self, k):
+        """The variables pose k assigns, in its order (``pose_values``)."""
+        return [self.all[i] for i in self.order[k]]
+
+    def pose_values(self, k, x):
+        """The values (one array per variable of ``pose_variables(k)``) pose k sees at x."""
+        pose, out = self.poses[k], []
+        for i in self.order[k]:
+            v = self.all[i]
+            if i < len(self.variables) and (v.pose is None or v.pose == k):
+                out.append(np.asarray(x[self.slices[i]], float))
+            elif v in pose.settings:
+                out.append(np.broadcast_to(np.asarray(pose.settings[v], float), (v.size,)).copy())
+            else:
+                out.append(self.x0[i])
+        return out
+
+    def solve(self, x):
+        """Equilibria of every pose at x (warm-started), cached; returns the states."""
+        x = np.asarray(x, float)
+        if self._cache is not None and np.array_equal(self._cache[0], x):
+            return self._cache[1]
+        self.evaluations += 1
+        base = self.best[1] if self.best is not None else self.states
+        for k, pose in enumerate(self.poses):
+            xs = self.pose_values(k, x)
+            st = base[k]
+            if st is None:
+                st = solve_flat(self.problem, self.pose_variables(k), xs, pose.lam, self.options)
+                info = st.stats
+            else:
+                if all(np.array_equal(a, b) for a, b in zip(st.x, xs)):
+                    continue
+                st, info = follow(self.problem, self.pose_variables(k), xs, st, self.options)
+            self.states[k] = st
+            self.solves += 1
+            self.newton_iterations += info["iterations"]
+        self._cache = (x.copy(), list(self.states), {})
+        return self._cache[1]
+
+    def _accept(self, x, phi):
+        """Keep the states of the best point so far: every evaluation follows the path from them
+        (an equilibrium of a multistable shell depends on where its path starts; starting from
+        the best point keeps the objective the one of the optimiser's accepted iterates)."""
+        if self.best is None or phi < self.best[0]:
+            self.best = (phi, list(self.solve(x)))
+
+    def _active(self, k):
+        return [i for i, v in enumerate(self.variables) if v.pose is None or v.pose == k]
+
+    def residuals(self, x):
+        """The weighted misfit vector F (Phi = |F|^2 / 2), regularisation rows last."""
+        states = self.solve(x)
+        rows = []
+        for k, pose in enumerate(self.poses):
+            assign_all(self.pose_variables(k), states[k].x)
+            for t in pose.targets:
+                rows.append(np.sqrt(t.weight) / t.scale * t.misfit(self.problem, states[k].g, states[k].lam))
+        for r in self.regularisation:
+            i = next(j for j, v in enumerate(self.variables) if v is r.variable)
+            rows.append(np.sqrt(r.alpha) * (r.D @ (np.asarray(x[self.slices[i]]) / r.variable.scale)))
+        return np.concatenate(rows)
+
+    def jacobian(self, x):
+        """dF/dx (nF, nx): per pose, the direct or adjoint sensitivities of its targets."""
+        states = self.solve(x)
+        cache = self._cache[2]
+        if "J" in cache:
+            return cache["J"]
+        blocks = []
+        for k, pose in enumerate(self.poses):
+            if not pose.targets:
+                continue
+            assign_all(self.pose_variables(k), states[k].x)
+            act = self._active(k)
+            vs = [self.variables[i] for i in act]
+            s = sensitivity(self.problem, states[k].g, states[k].lam, [t.quantity for t in pose.targets], vs,
+                            self.sensitivity_method, linear_solver=self.options.linear_solver)
+            cols = np.concatenate([np.arange(self.nx)[self.slices[i]] for i in act])
+            off = 0
+            for t in pose.targets:
+                J = np.zeros((t.size, self.nx))
+                J[:, cols] = s.jacobian[off + t.rows()] * (np.sqrt(t.weight) / t.scale)
+                off += t.quantity.size
+                blocks.append(J)
+        for r in self.regularisation:
+            i = next(j for j, v in enumerate(self.variables) if v is r.variable)
+            J = np.zeros((r.D.shape[0], self.nx))
+            J[:, self.slices[i]] = np.sqrt(r.alpha) * r.D / r.variable.scale
+            blocks.append(J)
+        cache["J"] = np.concatenate(blocks)
+        return cache["J"]
+
+    def objective(self, x):
+        """Phi(x)."""
+        F = self.residuals(x)
+        phi = 0.5 * float(F @ F)
+        self._accept(x, phi)
+        return phi
+
+    def gradient(self, x):
+        """dPhi/dx by the adjoint method: one solve with K^T per pose (the cotangent F of its
+        targets), plus the regularisation's."""
+        F = self.residuals(x)
+        states = self.solve(x)
+        cache = self._cache[2]
+        if "grad" in cache:
+            return cache["grad"]
+        grad, off = np.zeros(self.nx), 0
+        for k, pose in enumerate(self.poses):
+            if not pose.targets:
+                continue
+            assign_all(self.pose_variables(k), states[k].x)
+            act = self._active(k)
+            c = []
+            for t in pose.targets:
+                ct = np.zeros(t.quantity.size)
+                ct[t.rows()] = F[off:off + t.size] * np.sqrt(t.weight) / t.scale
+                off += t.size
+                c.append(ct)
+            s = sensitivity(self.problem, states[k].g, states[k].lam, [t.quantity for t in pose.targets],
+                            [self.variables[i] for i in act], cotangent=np.concatenate(c),
+                            linear_solver=self.options.linear_solver)
+            cols = np.concatenate([np.arange(self.nx)[self.slices[i]] for i in act])
+            grad[cols] += s.jacobian[0]
+        for r in self.regularisation:
+            i = next(j for j, v in enumerate(self.variables) if v is r.variable)
+            n = r.D.shape[0]
+            grad[self.slices[i]] += np.sqrt(r.alpha) * (r.D.T @ F[off:off + n]) / r.variable.scale
+            off += n
+        cache["grad"] = grad
+        return grad
+
+    def misfits(self, x):
+        """pose name -> target name -> max |misfit| (the targets' units) at x."""
+        states = self.solve(x)
+        out = {}
+        for k, pose in enumerate(self.poses):
+            assign_all(self.pose_variables(k), states[k].x)
+            out[pose.name] = {t.name: float(np.abs(t.misfit(self.problem, states[k].g, states[k].lam)).max())
+                              for t in pose.targets}
+        return out
+
+    # ------------------------------------------------------------------ the optimiser ------
+    def optimise(self, method="least_squares", x0=None, max_iter=100, tol=1e-12, tolerance=None, progress=False,
+                 callback=None, stop_at_tolerance=False):
+        """Minimise Phi from x0 (default the variables' current values).
+
+        Parameters
+        ----------
+        method : str
+            One of :data:`METHODS`.
+        x0 : (nx,) array, optional
+            The start (checked against the bounds).
+        max_iter : int
+            Iterations (least_squares: function evaluations).
+        tol : float
+            The optimiser's tolerance (ftol, xtol and gtol of least_squares; tol of minimize).
+        tolerance : float, optional
+            ``reached`` when every misfit is within it (the targets' units).
+        progress : bool
+            Print objective, gradient norm and equilibrium solves per iteration.
+        callback : callable, optional
+            Called with the history entry of every iteration.
+        stop_at_tolerance : bool
+            Stop at the first iteration whose misfits are all within ``tolerance``.
+
+        Returns
+        -------
+        DesignResult
+            The problem is left at the design's values (the last pose's equilibrium assigned).
+
+        Example
+        -------
+        See the module docstring.
+
+        >>> "SLSQP" in METHODS
+        True
+        """
+        import scipy.optimize as so
+        if method not in METHODS:
+            raise DesignError(f"unknown design method {method!r}; choose one of {', '.join(METHODS)}")
+        norm = [(self.slices[i].start + idx, top) for i, v in enumerate(self.variables) for idx, top in v.norm_bounds]
+        if norm and method in ("least_squares", "L-BFGS-B"):
+            raise DesignError(f"method {method!r} takes box bounds only; a norm bound (|B| <= B_max of a vector form) "
+                              "needs 'SLSQP' or 'trust-constr', or the polar form with a bound on the magnitude")
+        x0 = self.x_start() if x0 is None else np.asarray(x0, float)
+        if np.any(x0 < self.lower) or np.any(x0 > self.upper):
+            i = int(np.nonzero((x0 < self.lower) | (x0 > self.upper))[0][0])
+            raise DesignError(f"the start {x0[i]:g} of {self.labels[i]!r} lies outside its bounds "
+                              f"[{self.lower[i]:g}, {self.upper[i]:g}]")
+        sc = self.xscale
+        t0 = time.perf_counter()
+        history = []
+        last = {}
+
+        class Reached(Exception):
+            pass
+
+        def record(z):
+            x = z * sc
+            phi, g = self.objective(x), self.gradient(x) * sc
+            entry = dict(iteration=len(history) + 1, objective=phi, gradient_norm=float(np.linalg.norm(g)),
+                         equilibrium_solves=self.solves, newton_iterations=self.newton_iterations,
+                         time=time.perf_counter() - t0, x=x.tolist())
+            history.append(entry)
+            if progress:
+                print(f"design iteration {entry['iteration']:3d}: objective {phi:.6e}  |grad| "
+                      f"{entry['gradient_norm']:.3e}  equilibrium solves {self.solves}", flush=True)
+            if callback is not None:
+                callback(entry)
+            if tolerance is not None and stop_at_tolerance:
+                worst = max((v for d in self.misfits(x).values() for v in d.values()), default=0.0)
+                entry["max_misfit"] = worst
+                if worst <= tolerance:
+                    last["reached"] = z.copy()
+                    raise Reached()
+
+        try:
+            if method == "least_squares":
+                def jac(z):
+                    J = self.jacobian(z * sc) * sc
+                    if last.get("z") is None or not np.array_equal(last["z"], z):
+                        last["z"] = z.copy()
+                        record(z)
+                    return J
+                def fun(z):
+                    F = self.residuals(z * sc)
+                    self._accept(z * sc, 0.5 * float(F @ F))
+                    return F
+                r = so.least_squares(fun, x0 / sc, jac=jac,
+                                     bounds=(self.lower / sc, self.upper / sc), method="trf",
+                                     ftol=tol, xtol=tol, gtol=tol, max_nfev=max_iter)
+                z, ok, msg, nit = r.x, r.success and r.status > 0, r.message, len(history)
+            else:
+                kw = {}
+                if method in ("SLSQP", "trust-constr") and norm:
+                    def cons(z):
+                        x = z * sc
+                        return np.array([top ** 2 - x[idx] @ x[idx] for idx, top in norm])
+
+                    def cons_jac(z):
+                        x = z * sc
+                        J = np.zeros((len(norm), len(z)))
+                        for j, (idx, top) in enumerate(norm):
+                            J[j, idx] = -2 * x[idx] * sc[idx]
+                        return J
+                    kw["constraints"] = [so.NonlinearConstraint(cons, 0.0, np.inf, jac=cons_jac)] \
+                        if method == "trust-constr" else [dict(type="ineq", fun=cons, jac=cons_jac)]
+                bounds = so.Bounds(self.lower / sc, self.upper / sc)
+                cb = (lambda z, *a: record(z)) if method != "trust-constr" else (lambda z, state: record(z))
+                r = so.minimize(lambda z: (self.objective(z * sc), self.gradient(z * sc) * sc), x0 / sc, jac=True,
+                                method=method, bounds=bounds, tol=tol, callback=cb,
+                                options=dict(maxiter=max_iter), **kw)
+                z, ok, msg, nit = r.x, bool(r.success), str(r.message), len(history)
+        except Reached:
+            z, ok, msg, nit = last["reached"], True, "stopped at the tolerance", len(history)
+        except ConvergenceError as exc:
+            raise ConvergenceError(f"the design stopped: an equilibrium failed ({exc}); the last design "
+                                   "iterations are in the history", exc.result) from None
+        x = z * sc
+        mis = self.misfits(x)
+        worst = max((v for d in mis.values() for v in d.values()), default=0.0)
+        reached = None if tolerance is None else bool(worst <= tolerance)
+        if reached is False:
+            msg = f"did not reach the target: misfit {worst:.3e} > tolerance {tolerance:.3e} ({msg})"
+        elif reached:
+            msg = f"reached the target: misfit {worst:.3e} <= tolerance {tolerance:.3e} ({msg})"
+        values = {v.name: np.asarray(x[self.slices[i]]) for i, v in enumerate(self.variables)}
+        states = self.solve(x)
+        res = DesignResult(bool(ok), reached, msg, x, self.labels, values, self.objective(x), self.gradient(x), mis,
+                           worst, nit, self.evaluations, self.solves, self.newton_iterations,
+                           time.perf_counter() - t0, method, history, list(states))
+        assign_all(self.pose_variables(len(self.poses) - 1), states[-1].x)
+        return res
+
+    def assign_pose(self, k, x):
+        """Set the problem to pose k's values at x (e.g. before writing its outputs)."""
+        assign_all(self.pose_variables(k), self.pose_values(k, np.asarray(x, float)))

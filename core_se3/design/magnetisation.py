@@ -1,0 +1,213 @@
+"""The magnetisation of element regions as a design variable (see ``design.variables`` for the
+contract and how dr/dp is computed: here analytically, the magnetic load being linear in the
+dipoles)."""
+from __future__ import annotations
+
+import numpy as np
+
+from .. import lie
+from ..errors import DesignError
+from ..fem.quadrature import shape_functions, surface_jacobian
+from ..model import MU0, MagneticLoad, Magnetisation
+from .variables import Variable, field_at, free_index, magnetic_loads, plane_axes, polar_vector, region_elements
+
+__all__ = ["RegionMagnetisation"]
+
+
+def lumping(mesh, elements):
+    """(n, m) weights int_e N_i dA of the nodes i of the elements (reference area shares)."""
+    N, dN = shape_functions()
+    quads = mesh.quads[elements]
+    w = np.einsum("qi,mq->mi", N, surface_jacobian(mesh.X[quads], dN))          # (m, 4)
+    W = np.zeros((mesh.n_nodes, len(elements)))
+    np.add.at(W, (quads, np.broadcast_to(np.arange(len(elements))[:, None], quads.shape)), w)
+    return W
+
+
+class RegionMagnetisation(Variable):
+    """The residual flux density B^r [T] (lab, reference configuration) constant over each of a
+    list of element regions -- what can be fabricated -- as a design variable: form 'vector'
+    (3 per region) or 'polar' (magnitude and angle [rad] from e1 toward e2 in each region's
+    plane); ``free`` picks the components ('x', 'y', 'z' or 'magnitude', 'angle').
+
+    The magnets of the problem on these regions (``Problem.add_magnetic``) are replaced by this
+    variable's own magnetic loads (one per thickness); their magnetisation, fitted per region
+    (least squares of the nodal moments: exact when it was constant per region), is the start.
+    The dipoles are mu_i = (h/mu0) R0_i^T sum_j C_ij B^r_j with C_ij = int_(region j) N_i dA.
+
+    Parameters
+    ----------
+    problem : core_se3.Problem
+        The problem.
+    regions : sequence
+        Region names or element-id arrays (disjoint).
+    form : str
+        'vector' or 'polar'.
+    planes : (e1, e2) or a sequence of them, optional
+        The plane(s) of the polar form (default x and z).
+    free : sequence of str, optional
+        The free components of every region.
+    Br_max : float, optional
+        |B^r| <= Br_max [T] per region (norm bound, or the magnitude's upper bound).
+    field : Field, optional
+        The applied field (default that of the replaced magnets; needed without them).
+    mu0 : float, optional
+        Vacuum permeability (default that of the replaced magnets, else MU0).
+    start : (k, 3) array, optional
+        The starting B^r per region (lab vectors) instead of the fitted one.
+    name : str
+        Its name.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import Problem, Material, mesh
+    >>> from core_se3.model import UniformField
+    >>> p = Problem(mesh.rectangle(4.0, 0.5, 4, 1), Material(1e3, 0.0, 0.1))
+    >>> _ = p.add_magnetic((0.2, 0.0, 0.0), UniformField((0.0, 0.0, 1.0)), mu0=1.0)
+    >>> v = RegionMagnetisation(p, [[0, 1], [2, 3]])
+    >>> v.value().round(12).tolist(), len(p.loads)
+    ([0.2, 0.0, 0.0, 0.2, 0.0, 0.0], 1)
+    """
+
+    def __init__(self, problem, regions, form="vector", planes=((1.0, 0.0, 0.0), (0.0, 0.0, 1.0)), free=None,
+                 Br_max=None, field=None, mu0=None, start=None, name="magnetisation"):
+        mesh = problem.mesh
+        self.problem, self.form = problem, form
+        if form not in ("vector", "polar"):
+            raise DesignError(f"magnetisation {name!r}: form must be 'vector' or 'polar', got {form!r}")
+        self.regions = [region_elements(problem, r, f"magnetisation {name!r}") for r in regions]
+        if not self.regions:
+            raise DesignError(f"magnetisation {name!r}: no regions")
+        allel = np.concatenate(self.regions)
+        if len(np.unique(allel)) != len(allel):
+            raise DesignError(f"magnetisation {name!r}: the regions overlap")
+        k = len(self.regions)
+        inside = np.zeros(mesh.n_elements, bool)
+        inside[allel] = True
+        old = [ld for ld in magnetic_loads(problem) if np.any(inside[ld.mag.elements])]
+        for ld in old:
+            if not np.all(inside[ld.mag.elements]):
+                raise DesignError(f"magnetisation {name!r}: a magnet covers elements inside and outside the design "
+                                  "regions; make the regions cover each magnet entirely")
+        fields = {id(ld.field): ld.field for ld in old}
+        if field is None:
+            if len(fields) != 1:
+                raise DesignError(f"magnetisation {name!r}: " + ("no magnet on these regions: give the applied field"
+                                  if not fields else "the magnets on these regions are in different fields: give one"))
+            field = next(iter(fields.values()))
+        mu0s = {ld.mag.mu0 for ld in old}
+        self.mu0 = float(mu0 if mu0 is not None else (mu0s.pop() if len(mu0s) == 1 else MU0))
+        self.field = field
+        W = lumping(mesh, allel)                                            # (n, m_all)
+        owner = np.repeat(np.arange(k), [len(r) for r in self.regions])
+        self.Wr = np.stack([W[:, owner == j].sum(1) for j in range(k)], 1)  # (n, k)
+        R0 = mesh.g0[:, :3, :3]
+        if start is None:
+            mom = np.zeros((mesh.n_nodes, 3))                                # lab int Br N dA
+            for ld in old:
+                mom[ld.mag.nodes] += np.einsum("kij,kj->ki", R0[ld.mag.nodes], ld.mag.mu) * ld.mag.mu0 / ld.mag.h
+            Br = np.linalg.lstsq(self.Wr, mom, rcond=None)[0] if old else np.zeros((k, 3))
+            self.start_misfit = float(np.linalg.norm(self.Wr @ Br - mom) / max(np.linalg.norm(mom), 1e-300))
+        else:
+            Br = np.array(np.broadcast_to(np.asarray(start, float), (k, 3)))
+            self.start_misfit = 0.0
+        problem.loads[:] = [ld for ld in problem.loads if not any(ld is o for o in old)]
+        per = getattr(problem.material, "per_element", None)
+        h_el = per("h") if per is not None else np.full(mesh.n_elements, float(problem.material.h))
+        self.loads = []
+        for t in np.unique(h_el[allel]):
+            el = allel[h_el[allel] == t]
+            mag = Magnetisation(mesh, np.tile([1.0, 0.0, 0.0], (len(el), 1)), float(t), el, self.mu0)
+            Wt = W[:, np.isin(allel, el)]
+            C = np.stack([Wt[:, owner[np.isin(allel, el)] == j].sum(1) for j in range(k)], 1)[mag.nodes]
+            self.loads.append((problem.add(MagneticLoad(mag, field, name=f"{name} (h = {t:g})")),
+                               C * (t / self.mu0), R0[mag.nodes]))
+        scale0 = max(float(np.abs(Br).max()), float(Br_max or 0.0), 1e-300)
+        if form == "vector":
+            self.parts = ["x", "y", "z"]
+            self.full = Br.copy()
+            lo, hi, sc = np.full(3, -np.inf), np.full(3, np.inf), np.full(3, scale0)
+        else:
+            pl = np.asarray(planes, float)
+            pl = np.broadcast_to(pl, (k, 2, 3)) if pl.shape == (2, 3) else pl
+            if pl.shape != (k, 2, 3):
+                raise DesignError(f"magnetisation {name!r}: planes must be one (e1, e2) or one per region ({k})")
+            self.e = np.array([plane_axes(a, b, f"magnetisation {name!r}") for a, b in pl])    # (k, 2, 3)
+            b1, b2 = np.einsum("ki,ki->k", Br, self.e[:, 0]), np.einsum("ki,ki->k", Br, self.e[:, 1])
+            off = np.linalg.norm(Br - b1[:, None] * self.e[:, 0] - b2[:, None] * self.e[:, 1], axis=1)
+            if start is None and np.any(off > 1e-9 * scale0) and old:
+                raise DesignError(f"magnetisation {name!r}: the magnets' B^r is not in the planes of the polar form")
+            self.parts = ["magnitude", "angle"]
+            self.full = np.stack([np.hypot(b1, b2), np.arctan2(b2, b1)], 1)
+            lo, hi, sc = np.array([0.0, -np.inf]), np.array([np.inf, np.inf]), np.array([scale0, 1.0])
+            if Br_max is not None:
+                hi[0] = Br_max
+        self.free = free_index(self.parts, free, f"magnetisation {name!r}")
+        nf = len(self.free)
+        self.norm_bounds = []
+        if Br_max is not None and form == "vector":
+            if nf != 3:
+                raise DesignError(f"magnetisation {name!r}: a norm bound Br_max needs all three components free")
+            self.norm_bounds = [(np.arange(3 * j, 3 * j + 3), float(Br_max)) for j in range(k)]
+        labels = [f"{name}[{j}].{'Br' if p == 'magnitude' else p}" for j in range(k) for p in np.array(self.parts)[self.free]]
+        self._setup(name, k * nf, np.tile(lo[self.free], k), np.tile(hi[self.free], k), np.tile(sc[self.free], k),
+                    labels, None)
+        self.assign(self.value())
+
+    def Br(self, full=None):
+        """B^r per region (k, 3) [T] of the full parameters (default the current ones)."""
+        full = self.full if full is None else full
+        if self.form == "vector":
+            return np.array(full, float)
+        return polar_vector(full[:, 0], full[:, 1], self.e[:, 0], self.e[:, 1])[0]
+
+    def _dBr(self):
+        """dBr_j/d(full parameters of j) (k, 3, nfull)."""
+        k = len(self.regions)
+        if self.form == "vector":
+            return np.broadcast_to(np.eye(3), (k, 3, 3))
+        _, db, da = polar_vector(self.full[:, 0], self.full[:, 1], self.e[:, 0], self.e[:, 1])
+        return np.stack([db, da], 2)
+
+    def value(self):
+        return self.full[:, self.free].ravel().copy()
+
+    def assign(self, x):
+        self.full = self.full.copy()
+        self.full[:, self.free] = np.asarray(x, float).reshape(len(self.regions), len(self.free))
+        Br = self.Br()
+        for ld, C, R0 in self.loads:
+            ld.mag.mu[...] = np.einsum("kji,kj->ki", R0, C @ Br)       # in place: compiled loads share it
+            ld.mag.total_lab = (C @ Br).sum(0) * self.mu0
+
+    def _blocks(self, g, lam):
+        """Per load: d f / d(lab B^r contribution) blocks M_i = [A_i; -hat(a_i)] R0_i^T (k, 6, 3)."""
+        out = []
+        for ld, C, R0 in self.loads:
+            R, a, A = field_at(ld, g, lam)
+            M = np.zeros((len(ld.mag.nodes), 6, 3))
+            if A is not None:
+                M[:, :3] = A @ np.swapaxes(R0, 1, 2)
+            M[:, 3:] = -lie.hat3(a) @ np.swapaxes(R0, 1, 2)
+            out.append((ld, C, M))
+        return out
+
+    def dr_dBr(self, problem, g, lam):
+        """d(r_int - f_ext)/dB^r_j (n, 6, k, 3)."""
+        out = np.zeros((problem.mesh.n_nodes, 6, len(self.regions), 3))
+        for ld, C, M in self._blocks(g, lam):
+            out[ld.mag.nodes] -= np.einsum("ij,iab->iajb", C, M)
+        return out
+
+    def dr_dp(self, problem, g, lam):
+        J = np.einsum("najb,jbc->najc", self.dr_dBr(problem, g, lam), self._dBr()[:, :, self.free])
+        return J.reshape(problem.mesh.n_nodes, 6, -1)
+
+    def vjp(self, problem, g, lam, mu):
+        mu = np.asarray(mu)
+        grad = np.zeros(mu.shape[:-2] + (len(self.regions), 3))
+        for ld, C, M in self._blocks(g, lam):
+            grad -= np.einsum("ij,iab,...ia->...jb", C, M, mu[..., ld.mag.nodes, :])
+        out = np.einsum("...jb,jbc->...jc", grad, self._dBr()[:, :, self.free])
+        return out.reshape(mu.shape[:-2] + (-1,))

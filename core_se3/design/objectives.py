@@ -1,0 +1,353 @@
+"""Quantities of a state whose sensitivities a design needs: nodal and probe positions, frame
+orientations (the log of the rotation relative to a target), the rotation angle about an axis,
+the elastic energy and any user function of (g, lam) with its gradient.
+
+A quantity q (size,) gives ``value(problem, g, lam)`` and its left-trivialised derivative
+``jacobian(problem, g, lam)`` -> scipy.sparse (size, 6 n): row k, column 6 i + j is
+d/d eps q_k(g with g_i <- g_i exp(eps e_j)) -- the derivative along the same update as the
+solver's, so that it pairs with the tangent K = dr/d eta.  With ``target`` the value is the
+misfit q - target (a position or angle target) and the design minimises its square.
+
+Exact derivatives where they are one line (nodal positions: R_i on the translations; nodal
+orientations: J_r^-1(log(R_t^T R_i)) on the rotations; energy: the internal forces r_int);
+probes between two nodes (a point on their SE(3) geodesic) by central differences in eta of
+the few local dofs, Richardson-extrapolated (truncation O(d^4) ~ 1e-16 at d = 1e-4: no
+equilibrium is re-solved, the frames of two nodes are perturbed).
+
+Example
+-------
+>>> import numpy as np
+>>> from core_se3 import Problem, Material, mesh
+>>> p = Problem(mesh.rectangle(2.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
+>>> q = NodePosition(p, [2], target=[2.0, -0.5, 0.5])
+>>> q.value(p, p.mesh.g0, 1.0).tolist(), q.jacobian(p, p.mesh.g0, 1.0).shape
+([0.0, 0.0, -0.5], (3, 36))
+"""
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from .. import lie
+from ..errors import DesignError, did_you_mean
+from ..model import Probe
+
+__all__ = ["Quantity", "NodePosition", "ProbePosition", "Orientation", "RotationAngle", "Energy",
+           "UserQuantity", "local_jacobian"]
+
+
+def local_jacobian(fn, g, nodes, ell, step=1e-4):
+    """Left-trivialised derivative of fn(g) -> (k,) over the dofs of ``nodes`` by central
+    differences in eta (translations step * ell, rotations step), Richardson-extrapolated.
+
+    Returns: scipy.sparse (k, 6 n).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> g = np.broadcast_to(np.eye(4), (2, 4, 4)).copy()
+    >>> J = local_jacobian(lambda g: g[1, :3, 3], g, [1], ell=1.0)
+    >>> np.round(J.toarray()[:, 6:9], 12).tolist()
+    [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+    """
+    n = g.shape[0]
+    cols, vals = [], []
+    for i in nodes:
+        for j in range(6):
+            h = step * (ell if j < 3 else 1.0)
+            D = []
+            for d in (h, 2 * h):
+                e = np.zeros(6)
+                e[j] = d
+                gp, gm = g.copy(), g.copy()
+                gp[i] = g[i] @ lie.exp(e)
+                gm[i] = g[i] @ lie.exp(-e)
+                D.append((np.asarray(fn(gp)) - np.asarray(fn(gm))) / (2 * d))
+            cols.append(6 * i + j)
+            vals.append((4 * D[0] - D[1]) / 3)
+    V = np.array(vals).T                                         # (k, ncols)
+    k = V.shape[0]
+    return sp.csr_matrix((V.ravel(), (np.repeat(np.arange(k), len(cols)), np.tile(cols, k))), shape=(k, 6 * n))
+
+
+def _nodes(problem, nodes, what):
+    n = problem.mesh.n_nodes
+    if isinstance(nodes, str):
+        try:
+            return np.asarray(problem.mesh.node_set(nodes), np.int64)
+        except Exception as exc:                     # MeshError with the closest name
+            raise DesignError(f"{what}: {exc}") from None
+    ids = np.atleast_1d(np.asarray(nodes, np.int64))
+    bad = ids[(ids < 0) | (ids >= n)]
+    if ids.size == 0 or bad.size:
+        raise DesignError(f"node ids {bad[:5].tolist() if bad.size else []} do not exist (the mesh has {n} nodes: "
+                          f"0 .. {n - 1})")
+    return ids
+
+
+def _probe(problem, probe, what):
+    if isinstance(probe, Probe):
+        return probe
+    if probe not in problem.probes:
+        raise DesignError(f"{what}: no probe {probe!r}{did_you_mean(probe, problem.probes)}; the problem's probes: "
+                          f"{', '.join(sorted(problem.probes)) or 'none'}")
+    return problem.probes[probe]
+
+
+class Quantity:
+    """Base class (module docstring): ``value`` (size,) and ``jacobian`` (size, 6 n) sparse;
+    ``explicit(problem, g, lam, variable)`` (size, variable.size): the partial derivative at
+    fixed g (zero unless the quantity depends on parameters directly, e.g. the energy on E).
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(2.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
+    >>> q = NodePosition(p, "x1")
+    >>> isinstance(q, Quantity), q.size
+    (True, 6)
+    """
+
+    name = "quantity"
+    size = 1
+
+    def value(self, problem, g, lam):
+        raise NotImplementedError
+
+    def jacobian(self, problem, g, lam):
+        raise NotImplementedError
+
+    def explicit(self, problem, g, lam, variable):
+        return np.zeros((self.size, variable.size))
+
+
+class NodePosition(Quantity):
+    """Positions of nodes (3 per node, lab) [length], minus ``target`` (k, 3) if given.
+
+    Parameters: problem; nodes (ids or a node-set name); target (optional); name.
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(2.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
+    >>> NodePosition(p, [5]).value(p, p.mesh.g0, 1.0).tolist()
+    [2.0, 0.5, 0.0]
+    """
+
+    def __init__(self, problem, nodes, target=None, name="position"):
+        self.nodes = _nodes(problem, nodes, f"target {name!r}")
+        self.name, self.size = name, 3 * len(self.nodes)
+        self.target = None if target is None else np.broadcast_to(np.asarray(target, float), (len(self.nodes), 3)).copy()
+
+    def value(self, problem, g, lam):
+        x = g[self.nodes, :3, 3]
+        return (x if self.target is None else x - self.target).ravel()
+
+    def jacobian(self, problem, g, lam):
+        k = len(self.nodes)
+        R = g[self.nodes, :3, :3]                                    # dx = R eta_v
+        rows = np.repeat(np.arange(3 * k), 3)
+        cols = (6 * self.nodes[:, None, None] + np.arange(3)[None, None, :]).repeat(3, 1).reshape(-1)
+        return sp.csr_matrix((R.reshape(-1), (rows, cols)), shape=(3 * k, 6 * problem.mesh.n_nodes))
+
+
+class ProbePosition(Quantity):
+    """Position of a probe (a point on the geodesic between two nodes) [length], minus ``target``.
+
+    Parameters: problem; probe (a name of ``problem.probes`` or a Probe); target (3,); name.
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(2.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01)); p.add_probe("tip", "x1")
+    >>> ProbePosition(p, "tip").value(p, p.mesh.g0, 1.0).tolist()
+    [2.0, 0.0, 0.0]
+    """
+
+    def __init__(self, problem, probe, target=None, name=None):
+        self.probe = _probe(problem, probe, f"target {name or probe!r}")
+        self.name, self.size = name or self.probe.name, 3
+        self.target = None if target is None else np.asarray(target, float)
+
+    def value(self, problem, g, lam):
+        x = self.probe.state(g)[0]
+        return x if self.target is None else x - self.target
+
+    def jacobian(self, problem, g, lam):
+        nodes = sorted({self.probe.node_a, self.probe.node_b})
+        return local_jacobian(lambda gg: self.probe.state(gg)[0], g, nodes, problem.length_scale)
+
+
+class Orientation(Quantity):
+    """The rotation vector log(R_t^T R) [rad] of a node's or a probe's frame R relative to the
+    target rotation R_t (3, 3) (default the reference frame): zero when the frame is on target.
+
+    Parameters: problem; node (an id) or probe (a name); target (3, 3) rotation; name.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import Problem, Material, mesh, lie
+    >>> p = Problem(mesh.rectangle(2.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
+    >>> g = p.mesh.g0 @ lie.exp(np.array([0, 0, 0, 0, 0.3, 0]))
+    >>> Orientation(p, node=2).value(p, g, 1.0).round(12).tolist()
+    [0.0, 0.3, 0.0]
+    """
+
+    def __init__(self, problem, node=None, probe=None, target=None, name="orientation"):
+        if (node is None) == (probe is None):
+            raise DesignError(f"target {name!r}: give one of node or probe")
+        self.name, self.size = name, 3
+        self.node = None if node is None else int(_nodes(problem, [node], f"target {name!r}")[0])
+        self.probe = None if probe is None else _probe(problem, probe, f"target {name!r}")
+        R0 = problem.mesh.g0[self.node, :3, :3] if node is not None else self.probe.state(problem.mesh.g0)[1]
+        self.target = R0 if target is None else np.asarray(target, float)
+        if self.target.shape != (3, 3) or np.abs(self.target.T @ self.target - np.eye(3)).max() > 1e-9:
+            raise DesignError(f"target {name!r}: the target orientation must be a rotation matrix")
+
+    def _R(self, g):
+        return g[self.node, :3, :3] if self.node is not None else self.probe.state(g)[1]
+
+    def value(self, problem, g, lam):
+        return lie.log_so3(self.target.T @ self._R(g))
+
+    def jacobian(self, problem, g, lam):
+        n = problem.mesh.n_nodes
+        if self.node is None:
+            nodes = sorted({self.probe.node_a, self.probe.node_b})
+            return local_jacobian(lambda gg: lie.log_so3(self.target.T @ self.probe.state(gg)[1]), g, nodes,
+                                  problem.length_scale)
+        J = lie.dexp_inv_so3(self.value(problem, g, lam))            # log(Q exp(e w)) = q + J_r^-1(q) e w
+        rows, cols = np.repeat(np.arange(3), 3), np.tile(6 * self.node + 3 + np.arange(3), 3)
+        return sp.csr_matrix((J.ravel(), (rows, cols)), shape=(3, 6 * n))
+
+
+class RotationAngle(Quantity):
+    """The angle [rad] by which a probe (or node) has turned about the lab ``axis`` from its
+    reference frame, continuous through any number of turns near ``reference`` [rad]:
+    theta = reference + axis . log(exp(-reference axis) R R_0^T); with ``target`` [rad] the
+    misfit theta - target (and reference = target).
+
+    Parameters: problem; probe (a name) or node (an id); axis (3,); target, reference [rad]; name.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import Problem, Material, mesh, lie
+    >>> p = Problem(mesh.rectangle(2.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
+    >>> g = lie.exp(np.array([0, 0, 0, 0, -4.0, 0])) @ p.mesh.g0            # 4 rad about -y
+    >>> round(float(RotationAngle(p, node=2, axis=(0, -1, 0), reference=3.0).value(p, g, 1.0)[0]), 12)
+    4.0
+    """
+
+    def __init__(self, problem, probe=None, node=None, axis=(0.0, -1.0, 0.0), target=None, reference=None,
+                 name="angle"):
+        self.frame = Orientation(problem, node=node, probe=probe, name=name)
+        a = np.asarray(axis, float)
+        if a.shape != (3,) or not np.linalg.norm(a) > 0:
+            raise DesignError(f"target {name!r}: the axis must be a non-zero 3-vector")
+        self.axis = a / np.linalg.norm(a)
+        self.target = None if target is None else float(target)
+        self.reference = float(reference if reference is not None else (target or 0.0))
+        self.R0 = self.frame.target
+        self.name, self.size = name, 1
+
+    def value(self, problem, g, lam):
+        Rref = lie.exp_so3(self.reference * self.axis) @ self.R0
+        th = self.reference + self.axis @ lie.log_so3(Rref.T @ self.frame._R(g))
+        return np.array([th - (self.target if self.target is not None else 0.0)])
+
+    def jacobian(self, problem, g, lam):
+        # theta changes with the lab components of the rotation: d(log(Rref^T R))/d w through J_r^-1
+        Rref = lie.exp_so3(self.reference * self.axis) @ self.R0
+        q = lie.log_so3(Rref.T @ self.frame._R(g))
+        if self.frame.node is None:
+            return local_jacobian(lambda gg: self.value(problem, gg, lam), g,
+                                  sorted({self.frame.probe.node_a, self.frame.probe.node_b}), problem.length_scale)
+        row = self.axis @ lie.dexp_inv_so3(q)
+        n = problem.mesh.n_nodes
+        return sp.csr_matrix((row, (np.zeros(3, int), 6 * self.frame.node + 3 + np.arange(3))), shape=(1, 6 * n))
+
+
+class Energy(Quantity):
+    """The elastic energy [force x length]; its left-trivialised gradient is the internal force
+    r_int (the element's residual is dPi/d eta), its partial derivative by E or h is taken by
+    central differences at the fixed state (Richardson, exact for the polynomial dependence).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1.0e3, 0.0, 0.01))
+    >>> g = p.mesh.g0.copy(); g[:, 0, 3] *= 1.01                       # strain 0.01
+    >>> round(float(Energy().value(p, g, 1.0)[0]), 12)                  # 1/2 E h eps^2 x area 1
+    0.0005
+    """
+
+    name, size = "energy", 1
+
+    def value(self, problem, g, lam):
+        return np.array([problem.element.evaluate(g, tangent=False).energy])
+
+    def jacobian(self, problem, g, lam):
+        r = problem.element.evaluate(g, tangent=False).r
+        return sp.csr_matrix(r.reshape(1, -1))
+
+    def explicit(self, problem, g, lam, variable):
+        out = np.zeros((1, variable.size))
+        if not hasattr(variable, "_law"):
+            return out
+        x = variable.value()
+        try:
+            for j in range(variable.size):
+                d = 0.02 * x[j]
+                D = []
+                for step in (d, 2 * d):
+                    e = []
+                    for sgn in (1, -1):
+                        xx = x.copy()
+                        xx[j] += sgn * step
+                        problem.set_material(variable._law(xx))
+                        e.append(problem.element.evaluate(g, tangent=False).energy)
+                    D.append((e[0] - e[1]) / (2 * step))
+                out[0, j] = (4 * D[0] - D[1]) / 3
+        finally:
+            problem.set_material(variable._law(x))
+        return out
+
+
+class UserQuantity(Quantity):
+    """Any function of the state: fn(g, lam) -> (size,) and grad(g, lam) -> (size, n, 6), its
+    left-trivialised derivative (d/d eps fn(g_i exp(eps e_j)) at [k, i, j]).
+
+    Parameters: fn, grad, size, name.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(1.0, 1.0, 1, 1), Material(1.0e3, 0.0, 0.01))
+    >>> def grad(g, lam):
+    ...     out = np.zeros((1, len(g), 6)); out[0, :, :3] = g[:, 2, :3]; return out   # d z_i = (R eta_v)_z
+    >>> q = UserQuantity(lambda g, lam: [g[:, 2, 3].sum()], grad)
+    >>> q.value(p, p.mesh.g0, 1.0).tolist(), q.jacobian(p, p.mesh.g0, 1.0).nnz
+    ([0.0], 4)
+    """
+
+    def __init__(self, fn, grad, size=1, name="user"):
+        if not callable(fn) or not callable(grad):
+            raise DesignError(f"quantity {name!r}: needs callables fn(g, lam) and grad(g, lam)")
+        self.fn, self.grad, self.size, self.name = fn, grad, int(size), name
+
+    def value(self, problem, g, lam):
+        v = np.atleast_1d(np.asarray(self.fn(g, lam), float))
+        if v.shape != (self.size,):
+            raise DesignError(f"quantity {self.name!r}: fn returned shape {v.shape}, expected ({self.size},)")
+        return v
+
+    def jacobian(self, problem, g, lam):
+        G = np.asarray(self.grad(g, lam), float)
+        if G.shape != (self.size, problem.mesh.n_nodes, 6):
+            raise DesignError(f"quantity {self.name!r}: grad returned shape {G.shape}, expected "
+                              f"{(self.size, problem.mesh.n_nodes, 6)}")
+        return sp.csr_matrix(G.reshape(self.size, -1))

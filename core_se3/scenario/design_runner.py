@@ -1,0 +1,182 @@
+"""``core-se3 design FILE.toml --out DIR``: optimise a scenario's [design] and write
+
+* ``optimised.toml`` (one pose) or ``optimised_<pose>.toml``: the scenario with the design's
+  values (fields, magnets per design region, material regions, load magnitudes) and without its
+  [design] section -- ``core-se3 run`` reproduces the design's state;
+* ``design.json``: the result (variables, objective, gradient, misfits, history, every pose's
+  targets and achieved values);
+* ``convergence.png``: objective and gradient norm per iteration;
+* ``target_<pose>.png``: the achieved shape with the targets and the achieved points;
+* ``vtu/<pose>/``: the VTU series of the final design's load path from the flat state.
+"""
+from __future__ import annotations
+
+import copy
+import os
+
+import numpy as np
+
+from ..design import FieldVariable, LoadMagnitude, MaterialVariable, RegionMagnetisation
+from ..io import atomic_path, write_json_atomic
+from .build import mu0_of
+from .toml_writer import dumps
+
+__all__ = ["run_design", "optimised_document"]
+
+_LOAD_KEYS = {"edge_force": ("force",), "edge_moment": ("moment",), "nodal": ("force", "moment"), "pressure": ("p",),
+              "body_force": ("q",), "gravity": ("g",)}
+
+
+def optimised_document(scn, design, result, k):
+    """The scenario document (dicts) of pose k at the design's values, without [design].
+
+    Example
+    -------
+    See tests/test_design_scenario.py.
+
+    >>> sorted(_LOAD_KEYS)[:2]
+    ['body_force', 'edge_force']
+    """
+    doc = copy.deepcopy(scn.raw)
+    doc.pop("design", None)
+    names = {id(f): n for n, f in scn.fields.items()}
+    design.assign_pose(k, result.x)
+    for v in design.pose_variables(k):
+        if isinstance(v, FieldVariable):
+            doc["fields"][names[id(v.field)]]["B"] = [float(b) for b in v.vector()]
+        elif isinstance(v, RegionMagnetisation):
+            union = np.unique(np.concatenate(v.regions))
+            kept = []
+            for m in doc.get("magnets", []):
+                el = scn.regions[m["region"]] if "region" in m else np.arange(scn.mesh.n_elements)
+                if not np.all(np.isin(el, union)):
+                    kept.append(m)
+            for name, Br in zip(v.region_names, v.Br()):
+                m = dict(region=name, Br=[float(b) for b in Br], field=names[id(v.field)])
+                if abs(v.mu0 - mu0_of(scn.spec["units"])) > 1e-15 * v.mu0:
+                    m["mu0"] = v.mu0
+                kept.append(m)
+            doc["magnets"] = kept
+        elif isinstance(v, MaterialVariable):
+            mr = doc["material"].setdefault("regions", {})
+            for name, val in zip(v.region_names, v.value()):
+                mr.setdefault(name, {})[v.prop] = float(val)
+        elif isinstance(v, LoadMagnitude):
+            i = next(j for j, lds in enumerate(scn.load_objects) if any(ld is v.load for ld in lds))
+            ld = doc["loads"][i]
+            for key in _LOAD_KEYS.get(ld["type"], ()):
+                if key in ld:
+                    ld[key] = (np.asarray(ld[key], float) * v.P).tolist() if isinstance(ld[key], list) else ld[key] * v.P
+    doc["name"] = f"{scn.name}-optimised" + (f"-{design.poses[k].name}" if len(design.poses) > 1 else "")
+    return doc
+
+
+def _convergence_plot(path, history, title):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    it = [h["iteration"] for h in history]
+    fig, ax = plt.subplots(figsize=(6, 4))
+    ax.semilogy(it, [max(h["objective"], 1e-300) for h in history], "o-", label="objective")
+    ax.semilogy(it, [max(h["gradient_norm"], 1e-300) for h in history], "s--", label="|gradient|")
+    ax.set_xlabel("design iteration")
+    ax.set_title(title)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=110, bbox_inches="tight", format="png")
+    plt.close(fig)
+    return path
+
+
+def _target_plot(path, mesh, g, targets, achieved, title):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+    x = g[:, :3, 3]
+    fig = plt.figure(figsize=(6, 5))
+    ax = fig.add_subplot(111, projection="3d")
+    ax.add_collection3d(Poly3DCollection(x[mesh.quads], facecolor=(0.6, 0.75, 0.9, 0.6), edgecolor="k", linewidth=0.2))
+    ax.plot(*mesh.X[mesh.edge_nodes].transpose(2, 0, 1).reshape(3, -1), ",", color="0.7")
+    if len(targets):
+        t, a = np.array(targets), np.array(achieved)
+        ax.scatter(*t.T, color="red", marker="x", s=60, label="target")
+        ax.scatter(*a.T, facecolor="none", edgecolor="blue", s=60, label="achieved")
+        ax.legend()
+    pts = np.vstack([x, mesh.X] + ([np.array(targets)] if len(targets) else []))
+    c, r = pts.mean(0), 0.55 * np.ptp(pts, 0).max()
+    ax.set_xlim(c[0] - r, c[0] + r)
+    ax.set_ylim(c[1] - r, c[1] + r)
+    ax.set_zlim(c[2] - r, c[2] + r)
+    ax.set_title(title)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=110, bbox_inches="tight", format="png")
+    plt.close(fig)
+    return path
+
+
+def run_design(scn, out=None, method=None, max_iter=None, progress=False, vtu=True, plots=True):
+    """Optimise the [design] of a Scenario and write its outputs in ``out`` (module docstring).
+
+    Parameters: scn (a Scenario with [design]); out (default [output] dir or out/NAME-design);
+    method, max_iter (override the section's); progress (one line per iteration); vtu, plots.
+    Returns: (DesignResult, files: kind -> path).
+
+    Example
+    -------
+    See tests/test_design_scenario.py (the CLI: ``core-se3 design FILE.toml --out DIR``).
+
+    >>> callable(run_design)
+    True
+    """
+    from ..io import write_series
+    from .runner import point_fields
+    ds = scn.spec["design"]
+    out = os.fspath(out or scn.output["dir"] or os.path.join("out", scn.name + "-design"))
+    os.makedirs(out, exist_ok=True)
+    design = scn.design()
+    r = design.optimise(method or ds["method"], max_iter=max_iter or ds["max_iter"], tol=ds["tol"],
+                        tolerance=ds["tolerance"], progress=progress, stop_at_tolerance=ds["stop_at_tolerance"])
+    files = {}
+    poses_doc = []
+    for k, pose in enumerate(design.poses):
+        st = r.states[k]
+        design.assign_pose(k, r.x)
+        tg, ach, rows = [], [], []
+        for t in pose.targets:
+            m = t.misfit(scn.problem, st.g, st.lam)
+            q = t.quantity.value(scn.problem, st.g, st.lam)
+            rows.append(dict(name=t.name, type=type(t.quantity).__name__, misfit=m.tolist(),
+                             max_misfit=float(np.abs(m).max()), value=q.tolist()))
+            target = getattr(t.quantity, "target", None)
+            if type(t.quantity).__name__ in ("ProbePosition", "NodePosition") and target is not None:
+                tg.extend(np.atleast_2d(target).tolist())
+                ach.extend((np.atleast_2d(target) + q.reshape(-1, 3)).tolist())
+        poses_doc.append(dict(name=pose.name, lam=pose.lam, targets=rows))
+        suffix = "" if len(design.poses) == 1 else f"_{pose.name}"
+        path = os.path.join(out, f"optimised{suffix}.toml")
+        with atomic_path(path) as tmp, open(tmp, "w") as fh:
+            fh.write(f"# written by core-se3 design from {scn.file}: pose {pose.name!r}\n")
+            fh.write(dumps(optimised_document(scn, design, r, k)))
+        files[f"scenario{suffix}"] = path
+        if plots:
+            files[f"target{suffix}"] = _target_plot(os.path.join(out, f"target{suffix or '_' + pose.name}.png"),
+                                                    scn.mesh, st.g, tg, ach,
+                                                    f"{scn.name}: pose {pose.name} (x target, o achieved)")
+        if vtu:
+            design.assign_pose(k, r.x)
+            res = scn.problem.solve(lam_end=pose.lam)
+            extra = [point_fields(scn.problem, s.g, s.load_factor) for s in res.steps]
+            paths = write_series(os.path.join(out, "vtu", pose.name), scn.mesh.X, scn.mesh.quads, scn.mesh.g0,
+                                 [s.g for s in res.steps], [s.load_factor for s in res.steps],
+                                 point_data_per_step=extra)
+            files[f"vtu_{pose.name}"] = paths[-1]
+    if plots and r.history:
+        files["convergence"] = _convergence_plot(os.path.join(out, "convergence.png"), r.history,
+                                                 f"{scn.name}: {r.method}")
+    doc = dict(schema="core-se3-design v1", scenario=scn.file, name=scn.name, result=r.document(), poses=poses_doc,
+               files={k: os.path.relpath(v, out) for k, v in files.items()})
+    files["design"] = os.path.join(out, "design.json")
+    write_json_atomic(files["design"], doc)
+    return r, files

@@ -1,0 +1,123 @@
+"""Design cases with exact answers and the inverse solver (issue 15 items 2 and 4).
+
+* design-tip-angle: the recovered field magnitude against the elastica's exact one
+  (3_magnetic_perpendicular_field inverted in closed form), bar 0.5 % and 15 equilibrium solves
+  (the issue's); measured +0.0003 % (10 deg) .. +0.056 % (80 deg) in 3 .. 7 solves on the
+  seed's 30 elements: the FE discretisation error of the beam (README: 0.05 % at L/h = 41).
+* design-field-direction: the recovered direction against the one that made the target point
+  (bar 0.5 %, measured 0.03 %).
+* the twin experiment: a smooth magnetisation profile, sampled on 8 regions of a strip, gives a
+  shape; from a uniform guess the inverse solver recovers a magnetisation that reproduces the
+  shape to 1e-6 L (measured 1e-15 L: a zero-residual Gauss-Newton problem converges
+  quadratically)."""
+from math import pi, radians
+
+import numpy as np
+import pytest
+
+from core_se3 import Material, Problem, mesh
+from core_se3.catalogue import elastica_entry, run_case
+from core_se3.catalogue.family_design import magnetic_elastica, tip_angle_load
+from core_se3.design import (Design, FieldVariable, NodePosition, Pose, ProbePosition, RegionMagnetisation,
+                             Smoothness, Target)
+from core_se3.errors import DesignError
+from core_se3.model import UniformField
+
+pytestmark = pytest.mark.core
+
+
+def test_exact_answers_against_the_tabulated_elastica():
+    # closed form q(theta) and the shooting solver against elastica.json (its accuracy: 6e-12)
+    e = elastica_entry("3_magnetic_perpendicular_field")
+    for q, th in zip(e["load"][1:], e["tip"]["theta"][1:]):
+        if np.degrees(th) <= 80:
+            assert abs(tip_angle_load(th) / q - 1) < 1e-12
+    e = elastica_entry("3_magnetic_field_135deg")
+    k = e["load"].index(5.0)
+    r = magnetic_elastica(5.0, 3 * pi / 4)
+    assert abs(r["theta"] - e["tip"]["theta"][k]) < 1e-10
+    assert abs(r["x"] - 1 - e["tip"]["u"][k]) < 1e-10 and abs(r["z"] - e["tip"]["v"][k]) < 1e-10
+
+
+@pytest.mark.parametrize("theta", [10.0, 45.0, 80.0])
+def test_design_tip_angle(theta):
+    doc, res, prob = run_case("design-tip-angle", overrides=dict(theta_deg=theta))
+    d = doc["design"]
+    assert abs(d["error"]["Ba"]) < 5e-3 and d["equilibrium_solves"] <= 15 and d["reached"]
+    # the final design's path ends at the target angle
+    assert abs(doc["steps"][-1]["probes"]["tip"]["rotation_angle"] - radians(theta)) < 1e-8
+    assert abs(doc["steps"][-1]["load"]["value"] - d["variables"]["Ba"]) < 1e-15
+
+
+def test_design_field_direction():
+    doc, _, _ = run_case("design-field-direction")
+    d = doc["design"]
+    assert abs(d["error"]["angle_deg"]) < 5e-3 and d["reached"] and d["equilibrium_solves"] <= 15
+
+
+def strip(Br_regions, regions, nx=32, L=1.0, w=0.1, h=0.01, E=1e5):
+    m = mesh.rectangle(L, w, nx, 1)
+    p = Problem(m, Material(E, 0.0, h))
+    p.clamp("x0")
+    f = UniformField((0.0, 0.0, 1.0))
+    el = np.zeros((nx, 3))
+    for j, r in enumerate(regions):
+        el[r] = Br_regions[j]
+    p.add_magnetic(el, f, mu0=1.0)
+    p.add_probe("tip", "x1")
+    return p, f, m
+
+
+def test_twin_experiment_recovers_an_eight_region_magnetisation():
+    L, w, h, E = 1.0, 0.1, 0.01, 1e5
+    regions = [np.arange(4 * j, 4 * j + 4) for j in range(8)]
+    xc = (np.arange(8) + 0.5) / 8
+    b = 6.0 * E * w * h ** 3 / 12 / (h * w * L ** 2)          # A Br Ba L^2 / (mu0 EI) = 6
+    ang = -0.3 * pi + 0.5 * pi * xc                            # a smooth profile along the strip
+    truth = b * np.stack([np.cos(ang), 0 * ang, np.sin(ang)], 1)
+    pt, _, m = strip(truth, regions)
+    X = pt.solve(steps=10, rtol=1e-12, dtol=1e-12).final.g[:, :3, 3]
+    assert np.abs(X[:, 2]).max() > 0.2 * L                     # a real shape, not a flat strip
+    p, f, _ = strip(np.tile([b, 0.0, 0.0], (8, 1)), regions)  # the uniform guess
+    M = RegionMagnetisation(p, regions, free=("x", "z"))
+    d = Design(p, [M], [Pose("shape", [Target(NodePosition(p, np.arange(m.n_nodes), target=X))])])
+    r = d.optimise(tolerance=1e-6 * L)
+    assert r.reached and r.max_misfit < 1e-6 * L
+    assert np.abs(r.values["magnetisation"].reshape(8, 2) - truth[:, [0, 2]]).max() < 1e-6 * b
+    assert r.equilibrium_solves < 20 and r.history[-1]["objective"] < r.history[0]["objective"]
+
+
+def test_scalar_methods_bounds_constraints_and_bad_input():
+    Br = 5.0 * 1e5 * 0.01 ** 2 / 12                          # q = 5 at |B^a| = 1
+    p, f, m = strip(np.tile([Br, 0.0, 0.0], (1, 1)), [np.arange(32)])
+    f.B = np.array([0.6, 0.0, 0.8])
+    goal = p.probes["tip"].state(p.solve(steps=5).final.g)[0]     # reachable with |B| = 1
+    f.B = np.array([0.0, 0.0, 0.5])
+    tip = ProbePosition(p, "tip", target=goal)
+    # a vector field bounded in norm: SLSQP with the constraint, started inside the ball
+    v = FieldVariable(p, f, free=("x", "z"), B_max=2.0)
+    d = Design(p, [v], [Pose("reach", [Target(tip)])])
+    with pytest.raises(DesignError, match="norm bound"):
+        d.optimise("L-BFGS-B")
+    r = d.optimise("SLSQP", tol=1e-14, max_iter=60)
+    assert np.linalg.norm(r.x) <= 2.0 + 1e-9 and r.max_misfit < 1e-6
+    # the same target with L-BFGS-B on the polar form (box bounds on the magnitude)
+    p2, f2, _ = strip(np.tile([Br, 0.0, 0.0], (1, 1)), [np.arange(32)])
+    f2.B = np.array([0.0, 0.0, 0.5])
+    v2 = FieldVariable(p2, f2, form="polar", B_max=2.0)
+    d2 = Design(p2, [v2], [Pose("reach", [Target(ProbePosition(p2, "tip", target=goal))])])
+    r2 = d2.optimise("L-BFGS-B", tol=1e-16, max_iter=80)
+    assert np.abs(f2.B - [0.6, 0.0, 0.8]).max() < 1e-4 and r2.max_misfit < 1e-5
+    # an unreachable target: a clear result, not an error
+    p3, f3, _ = strip(np.tile([Br, 0.0, 0.0], (1, 1)), [np.arange(32)])
+    f3.B = np.array([0.0, 0.0, 0.5])
+    v3 = FieldVariable(p3, f3, form="polar", B_max=2.0)
+    far = Design(p3, [v3], [Pose("far", [Target(ProbePosition(p3, "tip", target=[3.0, 0.0, 0.0]))])])
+    r3 = far.optimise(tolerance=1e-3)
+    assert r3.reached is False and r3.message.startswith("did not reach the target: misfit")
+    # bounds that exclude the start
+    f3.B = np.array([0.0, 0.0, 1.0])
+    with pytest.raises(DesignError, match="outside its bounds"):
+        Design(p3, [FieldVariable(p3, f3, form="polar", B_max=0.5)], [Pose("x", [Target(tip)])])
+    with pytest.raises(DesignError, match="two or more regions"):
+        Smoothness(v3, 1.0)

@@ -1,0 +1,118 @@
+"""The front door of core_se3.design (issue 15 item 3): a [design] section in a scenario file,
+``core-se3 design FILE.toml --out DIR`` and its outputs; the optimised scenario reproduces the
+design's state under ``core-se3 run``; bad input is refused with the file and the key."""
+import json
+import os
+
+import numpy as np
+import pytest
+
+from core_se3 import scenario
+from core_se3.cli import main
+from core_se3.errors import ScenarioError
+
+pytestmark = pytest.mark.core
+
+BASE = """
+units = "N-mm-MPa"
+[mesh]
+generator = "rectangle"
+L = 17.2
+width = 5.0
+nx = 12
+ny = 1
+[material]
+E = 0.8969
+nu = 0.0
+h = 0.42
+[regions.root]
+box = { x = [0.0, 8.6] }
+[regions.free]
+box = { x = [8.6, 17.2] }
+[[supports]]
+type = "clamp"
+edge = "x0"
+[fields.coil]
+type = "uniform"
+B = [0.0, 0.0, 0.002]
+[[magnets]]
+Br = [0.143, 0.0, 0.0]
+[[probes]]
+name = "tip"
+edge = "x1"
+[solver]
+steps = 4
+[design]
+tolerance = 1e-6
+[[design.variables]]
+type = "field"
+field = "coil"
+form = "polar"
+free = ["magnitude"]
+B_max = 0.05
+[[design.variables]]
+type = "magnetisation"
+regions = ["root", "free"]
+form = "polar"
+free = ["angle"]
+[[design.targets]]
+type = "position"
+probe = "tip"
+value = [12.0, 0.0, 10.0]
+components = [0, 2]
+"""
+
+
+def test_design_command_writes_and_the_optimised_scenario_reproduces(tmp_path):
+    path = tmp_path / "strip.toml"
+    path.write_text(BASE)
+    out = tmp_path / "out"
+    assert main(["design", str(path), "--out", str(out), "-q"]) == 0
+    doc = json.loads((out / "design.json").read_text())
+    assert doc["result"]["reached"] and doc["result"]["max_misfit"] < 1e-6
+    assert doc["result"]["history"] and doc["poses"][0]["targets"][0]["max_misfit"] < 1e-6
+    for f in ("optimised.toml", "convergence.png", "target_design.png", os.path.join("vtu", "design", "series.pvd")):
+        assert (out / f).exists(), f
+    scn = scenario.load(out / "optimised.toml")
+    assert "design" not in scn.spec and len(scn.spec["magnets"]) == 2
+    tip = scn.problem.solve().final.probes["tip"]["u"] + np.array([17.2, 0.0, 0.0])
+    assert abs(tip[0] - 12.0) < 1e-5 and abs(tip[2] - 10.0) < 1e-5
+
+
+@pytest.mark.parametrize("old,new,key", [
+    ('probe = "tip"\nvalue', 'probe = "tpi"\nvalue', "design.targets[0].probe"),
+    ('regions = ["root", "free"]', 'regions = ["root", "fre"]', "design.variables[1].regions"),
+    ('field = "coil"\nform = "polar"\nfree', 'field = "cool"\nform = "polar"\nfree', "design.variables[0].field"),
+    ("B_max = 0.05", "B_max = 0.001", "design"),
+    ('type = "field"', 'type = "feild"', "design.variables[0].type"),
+    ("components = [0, 2]", "components = [0, 3]", "design.targets[0].components"),
+])
+def test_bad_design_input_names_the_key(tmp_path, old, new, key):
+    assert old in BASE
+    path = tmp_path / "bad.toml"
+    path.write_text(BASE.replace(old, new, 1))
+    with pytest.raises(ScenarioError) as exc:
+        scenario.load(path).design()
+    assert exc.value.key == key and str(path) in str(exc.value)
+
+
+def test_unreachable_target_is_reported(tmp_path, capsys):
+    path = tmp_path / "far.toml"
+    path.write_text(BASE.replace("value = [12.0, 0.0, 10.0]", "value = [40.0, 0.0, 10.0]").replace(
+        "[design]\n", "[design]\nmax_iter = 8\n"))
+    assert main(["design", str(path), "--out", str(tmp_path / "o"), "-q"]) == 4
+    doc = json.loads((tmp_path / "o" / "design.json").read_text())
+    assert doc["result"]["reached"] is False and "did not reach the target: misfit" in doc["result"]["message"]
+
+
+def test_gripper_design_example():
+    # examples/gripper-design.toml (docs/DESIGN.md): two poses, 14 variables; bar: misfit below
+    # 1e-3 of the finger length (0.02 mm) within 60 s (the issue's); measured 13 s, 13 iterations,
+    # 38 equilibrium solves on this machine
+    import time
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    scn = scenario.load(os.path.join(root, "examples", "gripper-design.toml"))
+    t0 = time.perf_counter()
+    r = scn.design().optimise(max_iter=40, tolerance=0.02, stop_at_tolerance=True)
+    assert r.reached and r.max_misfit < 0.02 and time.perf_counter() - t0 < 60
+    assert r.misfit["flat"]["targets[0]"] < 1e-9          # no field: the gripper stays flat
