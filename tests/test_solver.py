@@ -366,3 +366,19 @@ def test_explicit_load_factors_store_those_steps_and_reach_the_same_state(cantil
     for badlist in ([0.5, 0.5], [0.5, 0.2], [0.0, 1.0], [], [0.5, float("nan")]):
         with pytest.raises(ValueError, match="load_factors"):
             cantilever(4.0).solve(load_factors=badlist)
+
+
+def test_factorization_solves_several_right_hand_sides():
+    """Factorization.solve with an (N, k) right-hand side solves every column on the same
+    factorisation (the design sensitivities' direct method): each column equals the 1-D solve."""
+    import scipy.sparse as sps
+    from core_se3.solvers.linalg import Factorization, make_solver
+    n = 40
+    K = sps.diags([-1.0, 2.5, -1.2], [-1, 0, 1], shape=(n, n), format="csr")
+    B = np.random.default_rng(1).standard_normal((n, 3))
+    with Factorization(K, make_solver("superlu")) as F:
+        X = F.solve(B)
+        cols = [F.solve(B[:, j]) for j in range(3)]
+    assert X.shape == (n, 3)
+    assert np.abs(K @ X - B).max() < 1e-13 * np.abs(B).max()
+    assert all(np.array_equal(X[:, j], cols[j]) for j in range(3))
