@@ -312,7 +312,7 @@ def check_rigid_motions(problem, g):
     c = g[:, :3, 3].mean(0)
     h = np.eye(4)
     h[:3, 3] = -c                                   # rigid motions about the centroid
-    modes = lie.Ad(lie.inv(g) @ np.linalg.inv(h))   # (n, 6, 6): column k = mode k at node i
+    modes = lie.Ad(lie.inv(g) @ lie.inv(h))         # (n, 6, 6): column k = mode k at node i
     scale = np.r_[np.ones(3), np.full(3, ell)]      # rotations * ell, comparable to translations
     rows = [(modes * scale[None, None, :])[fixed]]   # (n_fixed, 6)
     # supports carried by loads (lab-direction springs): rows d^T R_i [I 0] Ad_{g_i^-1} xi
