@@ -93,12 +93,26 @@ class StepRecorder:
         return states
 
     def step(self, lam, g, iterations, history, r_int, f_ext, stability=None):
-        """The StepResult of a converged state (internal r_int and external f_ext forces)."""
+        """The StepResult of a converged state (internal r_int and external f_ext forces).
+
+        The loads that are constraint forces (``Load.constraint_force``: contact) are split off
+        the applied loads: ``contact`` holds each one's lab force and moment (about the origin)
+        with its ``report`` scalars, and the balance sums applied, reactions and contact."""
         probes = self.probes(g)
         reac = (r_int - f_ext) * self.fixed
         RF, RM, sF, sM = lab_totals(g, reac, magnitudes=True)
         AF, AM, aF, aM = lab_totals(g, f_ext, magnitudes=True)
+        contact = {}
+        cons = [ld for ld in self.problem.loads if getattr(ld, "constraint_force", False)]
+        if cons:
+            f_app = np.array(f_ext, float)
+            for ld in cons:
+                fc = ld.evaluate(g, lam, tangent=False).f
+                f_app -= fc
+                CF, CM = lab_totals(g, fc)
+                contact[ld.name] = dict(force=CF, moment=CM, **ld.report(g, lam))
+            AF, AM = lab_totals(g, f_app)
         ell = self.ell
         return StepResult(lam, g.copy(), iterations, list(history), RF, RM, AF, AM, probes,
                           scale=(max(sF, aF, max(sM, aM) / ell), max(sM, aM, max(sF, aF) * ell)),
-                          stability=stability)
+                          stability=stability, contact=contact)

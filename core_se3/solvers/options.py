@@ -52,7 +52,8 @@ class NewtonOptions:
     integration point Newton of Magisano, Leonetti and Garcea 2017, with an element that
     supports it: the geometric part of the tangent sees element stresses updated linearly,
     ``solvers.newton``) or 'displacement' (plain Newton on the displacement residual); both
-    converge to the same states.
+    converge to the same states; max_augmentations: multiplier updates (and solves again) per try
+    of the loads that have multipliers (augmented-Lagrangian contact, ``Load.update_multipliers``).
 
     Attributes
     ----------
@@ -70,6 +71,8 @@ class NewtonOptions:
         'auto', 'superlu', 'mumps' or None.
     iteration : str
         'mip' (default) or 'displacement'.
+    max_augmentations : int
+        In [0, 1000]; default 25.
 
     A value outside its range raises :class:`~core_se3.errors.OptionError`.
 
@@ -88,6 +91,7 @@ class NewtonOptions:
     record_substeps: bool = False
     linear_solver: str | None = None
     iteration: str = "mip"
+    max_augmentations: int = _opt(25, 0, 1000)
 
     def __post_init__(self):
         _check(self)
