@@ -213,7 +213,7 @@ def augmented_try(trier, aug, g_try, lam_try, mip, stress, max_augmentations, re
     >>> from core_se3 import Problem, Material, mesh
     >>> from core_se3.solvers import NewtonOptions, make_solver
     >>> p = Problem(mesh.rectangle(1.0, 0.2, 4, 1), Material(1e4, 0.0, 0.02))
-    >>> p.clamp("x0"); p.add_pressure(-0.01)
+    >>> p.clamp("x0"); p.add_pressure(-0.004)
     >>> c = p.add_obstacle("half_space", point=(0, 0, -0.05), normal=(0, 0, 1))
     >>> t = NewtonTry(p, NewtonOptions(), make_solver("auto"), types.SimpleNamespace(t_asm=0.0, t_sol=0.0))
     >>> seen = []
