@@ -120,7 +120,8 @@ class Load(abc.ABC):
     from the applied loads, per load name (``StepResult.contact``), with the scalars of
     :meth:`report`.  Solver hooks, optional (load-stepped Newton calls a hook only on the loads
     whose class overrides it, see :func:`overrides`; without them its path is unchanged):
-    :meth:`limit_increment` caps a Newton increment; :meth:`update_multipliers` augments the
+    :meth:`limit_increment` caps a Newton increment; :meth:`start_error` refuses the start of a
+    try (it is cut back); :meth:`update_multipliers` augments the
     load's multipliers at a converged state and the same load factor is solved again until it
     returns <= 1; :meth:`multipliers` / :meth:`set_multipliers` save and restore them (a failed
     try, a restart point).
@@ -164,6 +165,11 @@ class Load(abc.ABC):
         """Hook: the factor alpha in (0, 1] by which Newton scales the increment eta (n, 6) at
         (g, lam) before applying it (a step cap); 1.0 here."""
         return 1.0
+
+    def start_error(self, g, lam):
+        """Hook: why a Newton try must not start from (g, lam) (e.g. a moving obstacle that has
+        swept deep into the shell over the increment: the try is cut back), '' if it may."""
+        return ""
 
     def update_multipliers(self, g, lam):
         """Hook: at a converged state, the constraint error over its tolerance; when above 1 the

@@ -321,6 +321,17 @@ class ContactLoad(Load):
         a = (d0[free][hit] + depth) / (d0[free][hit] - d1[hit])
         return float(np.clip(np.min(a), 1e-3, 1.0))
 
+    def start_error(self, g, lam):
+        """Refuse a try that starts with a contact point deeper than the thickness h inside the
+        obstacle (a moving obstacle that swept into the shell over the increment: from there the
+        node may be pushed out on the far side, tunnelling); the solver cuts the increment back."""
+        d = self.gaps(g, lam)
+        i = int(np.argmin(d))
+        if d[i] < -self.h:
+            return (f"obstacle {self.name!r} starts the increment {-d[i]:.3g} inside the shell at node "
+                    f"{int(self.nodes[i])} (more than the thickness {self.h:.3g}): smaller increment")
+        return ""
+
     def update_multipliers(self, g, lam):
         """At a converged state: the gap error e (|d| on nodes carrying force, the penetration on
         the others) over ``tol``; when it exceeds 1 (mode 'al') the multipliers are updated,

@@ -19,6 +19,7 @@ import re
 from ..errors import ScenarioError
 from .build import build_problem
 from .geometry import edges_section, mesh_section, probes_section, regions_section
+from .obstacles import obstacles_section
 from .physics import (NON_PHYSICAL, fields_section, loads_section, magnets_section,
                       material_section, output_section, solver_section, supports_section)
 from .validate import Validator
@@ -31,7 +32,7 @@ except ModuleNotFoundError:           # pragma: no cover - Python 3.10
 __all__ = ["Scenario", "load", "loads", "from_dict", "TOP_KEYS"]
 
 TOP_KEYS = ("name", "description", "units", "mesh", "edges", "regions", "material", "fields",
-            "magnets", "supports", "loads", "probes", "solver", "output")
+            "magnets", "supports", "loads", "probes", "solver", "output", "obstacles")
 
 
 class Scenario:
@@ -271,6 +272,7 @@ def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario"):
     spec["magnets"] = magnets_section(v, doc, regions, spec["fields"])
     spec["supports"] = supports_section(v, doc, mesh, regions)
     spec["loads"] = loads_section(v, doc, mesh, regions)
+    spec["obstacles"] = obstacles_section(v, doc, regions)
     spec["probes"] = probes_section(v, doc, mesh)
     spec["solver"] = solver_section(v, doc)
     if spec["solver"]["control"] == "arclength":
@@ -278,6 +280,9 @@ def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario"):
             if sp["type"] == "rotate":
                 v.fail(f"supports[{i}].type", "arc length scales the loads only: a prescribed "
                        'rotation is not supported with control = "arclength"')
+    if spec["solver"]["control"] == "arclength" and spec["obstacles"]:
+        v.fail("solver.control", 'contact with [[obstacles]] needs load control (control = "load"): arc '
+                                 "length does not update the contact multipliers")
     spec["output"] = output_section(v, doc)
     problem = build_problem(v, spec, mesh, regions)
     phys = {k: spec[k] for k in spec if k not in ("output", "description")}

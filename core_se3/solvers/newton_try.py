@@ -1,6 +1,8 @@
 """One Newton try of load stepping (``solvers.newton``): Newton at a fixed load factor from a
 start state, with the optional hooks of the loads (docs/CONTACT.md):
 
+* a refused start: loads overriding ``Load.start_error`` may refuse the start state of a try
+  (contact: an obstacle that moved deep into the shell over the increment), which is cut back;
 * a step cap: loads overriding ``Load.limit_increment`` scale each increment by the smallest
   factor they return (contact: a node the linearisation does not see must not land deep inside
   an obstacle);
@@ -111,11 +113,16 @@ class NewtonTry:
         self.stateful = problem.element.stateful
         self.first_solve = True
         self.caps = hooked_loads(problem, "limit_increment")
+        self.starts = hooked_loads(problem, "start_error")
 
     def run(self, g_try, lam_try, mip, stress):
         """Iterate from g_try at lam_try (mip: the mixed iteration from the stresses ``stress``);
         returns a :class:`TryOutcome`.  A singular tangent at the first solve of the path raises."""
         problem, opts, asm, ell, timer = self.problem, self.opts, self.asm, self.ell, self.timer
+        for ld in self.starts:
+            why = ld.start_error(g_try, lam_try)
+            if why:
+                return TryOutcome(False, why, g_try, None, [], 0)
         hist = []
         dn = np.inf
         eta_sum = 0.0
