@@ -215,6 +215,7 @@ def _grasp_measures(prob, p, st):
 
 
 def run(case, p, prob, steps, **kw):
+    kw.setdefault("predictor", "tangent")      # the lifted edge carries the strip (no kink, no fold)
     res = prob.solve(steps=steps, **kw)
     doc = case_document(case, p, prob, res)
     cols = _columns(prob.mesh) if case.name == "contact-lift" else None

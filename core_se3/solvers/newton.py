@@ -22,11 +22,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import lie
-from ..errors import ConvergenceError, ElementTooDistortedError, OptionError
+from ..errors import ConvergenceError, ElementTooDistortedError, OptionError, SingularSystemError
 from ..results import Result, StepRecorder
 from .convergence import scaled_norm
 from .linalg import make_solver
-from .newton_try import NewtonTry, augmented_try, hooked_loads
+from .newton_try import NewtonTry, augmented_try, hooked_loads, tangent_predictor
 from .options import NewtonOptions, split_options, unknown_keywords
 from .stability import limit_point_hint
 
@@ -262,8 +262,14 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
                 # the seed element's strain is a state: save it, and feed it the prescribed motion
                 problem.element.save()
                 problem.element.update(lie.log(lie.inv(g) @ g_try))
+            stress_try = stress_conv
+            if opts.predictor == "tangent" and has_targets and not stateful:
+                try:
+                    g_try, stress_try = tangent_predictor(problem, g, lam, lam_try, solver, mip, trier.caps)
+                except (SingularSystemError, ElementTooDistortedError, FloatingPointError):
+                    g_try, stress_try = problem.apply_prescribed(g.copy(), lam_try), stress_conv
             saved = [ld.multipliers() for ld in aug]
-            out = augmented_try(trier, aug, g_try, lam_try, mip, stress_conv, opts.max_augmentations,
+            out = augmented_try(trier, aug, g_try, lam_try, mip, stress_try, opts.max_augmentations,
                                 lambda o, k: _log_try(result, tries, lam_try, o, augmentation=k))
             ok, reason, hist, g_try, ev = out.ok, out.reason, out.hist, out.g, out.ev
             k_step, pred, eta_sum = out.k_step, out.pred, out.eta_sum

@@ -20,12 +20,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import lie
+from ..assembly import Assembler
 from ..errors import ElementTooDistortedError, SingularSystemError
 from ..model.base import overrides
 from .convergence import relative_residual, scaled_norm
 from .linalg import Factorization
 
-__all__ = ["NewtonTry", "TryOutcome", "augmented_try", "hooked_loads"]
+__all__ = ["NewtonTry", "TryOutcome", "augmented_try", "hooked_loads", "tangent_predictor"]
 
 
 def hooked_loads(problem, hook):
@@ -246,3 +248,58 @@ def augmented_try(trier, aug, g_try, lam_try, mip, stress, max_augmentations, re
         out.eta_sum = out.eta_sum + first.eta_sum
         out.k_step, out.pred = first.k_step, first.pred
     return out
+
+
+def tangent_predictor(problem, g, lam, lam_try, solver, mip, caps=()):
+    """The start of a try from the converged state (g, lam) to lam_try along the tangent,
+    prescribed increments included (``NewtonOptions.predictor = "tangent"``): with xi_p the
+    increments of the prescribed dofs (the body translation R^T (phi_1 - phi_0) of a
+    translation-only target, log(g^-1 g_1) otherwise), the free dofs solve
+
+        K_ff eta_f = -r_f(g, lam_try) - K_fp xi_p,
+
+    so that a prescribed edge takes the shell with it instead of leaving a kink in its first
+    elements; the increment is capped by the loads' ``limit_increment`` (contact).  Returns
+    (g_start, stresses of the mixed iteration at the start or None).
+
+    Example
+    -------
+    A strip whose end x1 is lifted by 0.1: the predicted start bends the whole strip.
+
+    >>> import numpy as np
+    >>> from core_se3 import Problem, Material, mesh
+    >>> from core_se3.solvers import make_solver
+    >>> p = Problem(mesh.rectangle(10.0, 1.0, 8, 1), Material(1.2e6, 0.0, 0.1))
+    >>> g1 = p.mesh.g0[p.mesh.node_set("x1")].copy()
+    >>> p.clamp("x0"); p.prescribe("x1", lambda lam: g1 + lam * np.pad([[0, 0, 0, 0.1]], ((2, 0), (0, 0)))[None, 2:])
+    >>> g, _ = tangent_predictor(p, p.mesh.g0, 0.0, 1.0, make_solver("auto"), False)
+    >>> bool(0.0 < g[4, 2, 3] < 0.1)                   # the mid-span node moved up
+    True
+    """
+    n = problem.mesh.n_nodes
+    g1 = problem.apply_prescribed(g.copy(), lam_try)
+    xi = np.zeros((n, 6))
+    for s in problem.supports:
+        if s.target is None:
+            continue
+        a, b = g[s.nodes], g1[s.nodes]
+        if s.fixed[:3].all() and not s.fixed[3:].any():
+            x = np.zeros((len(s.nodes), 6))
+            x[:, :3] = np.einsum("kji,kj->ki", a[:, :3, :3], b[:, :3, 3] - a[:, :3, 3])
+        else:
+            x = lie.log(lie.inv(a) @ b)
+        xi[s.nodes] = np.where(s.fixed, x, 0.0)
+    full = Assembler(problem.mesh, np.ones(6 * n, bool))
+    ev = problem.evaluate(g, lam_try, tangent=True, assembler=full)
+    free = problem.assembler().free
+    K = ev.K.tocsr()
+    rhs = -(ev.r[free] + K[free][:, ~free] @ xi.ravel()[~free])
+    with Factorization(K[free][:, free].tocsr(), solver) as fac:
+        x = fac.solve(rhs)
+    eta = xi.ravel().copy()
+    eta[free] = x
+    eta = eta.reshape(n, 6)
+    alpha = min([ld.limit_increment(g, eta, lam_try) for ld in caps] + [1.0])
+    eta = alpha * eta
+    stress = problem.linear_stress(ev, eta) if mip else None
+    return problem.apply_prescribed(problem.retract(g, eta), lam_try), stress

@@ -18,9 +18,10 @@ from dataclasses import dataclass, field, fields, replace
 
 from ..errors import OptionError, did_you_mean
 
-__all__ = ["NewtonOptions", "ArcLengthOptions", "split_options", "unknown_keywords", "ITERATIONS"]
+__all__ = ["NewtonOptions", "ArcLengthOptions", "split_options", "unknown_keywords", "ITERATIONS", "PREDICTORS"]
 
 ITERATIONS = ("mip", "displacement")     # NewtonOptions.iteration
+PREDICTORS = ("none", "tangent")         # NewtonOptions.predictor
 
 
 def _check(opts):
@@ -73,6 +74,10 @@ class NewtonOptions:
         'mip' (default) or 'displacement'.
     max_augmentations : int
         In [0, 1000]; default 25.
+    predictor : str
+        'none' (default: a try starts from the converged state with the prescribed nodes moved)
+        or 'tangent' (with a prescribed motion: the Euler predictor of ``newton_try.tangent_predictor``,
+        which carries the shell along with the prescribed nodes).
 
     A value outside its range raises :class:`~core_se3.errors.OptionError`.
 
@@ -92,9 +97,13 @@ class NewtonOptions:
     linear_solver: str | None = None
     iteration: str = "mip"
     max_augmentations: int = _opt(25, 0, 1000)
+    predictor: str = "none"
 
     def __post_init__(self):
         _check(self)
+        if self.predictor not in PREDICTORS:
+            raise OptionError(f"NewtonOptions.predictor must be one of {', '.join(map(repr, PREDICTORS))}, "
+                              f"got {self.predictor!r}")
         if self.iteration not in ITERATIONS:
             raise OptionError(f"NewtonOptions.iteration must be one of {', '.join(map(repr, ITERATIONS))}, "
                               f"got {self.iteration!r}")
