@@ -178,14 +178,16 @@ def test_lift_against_the_small_deflection_formula(lift):
 
 def test_lift_difference_shrinks_as_delta_goes_to_zero():
     """At a fixed resolution of the lifted part (about 26 elements on it: nx ~ delta^(-1/4)) the
-    lift force's difference from the small-deflection formula falls with delta."""
-    diffs = []
+    differences of the lifted length and of the lift force from the small-deflection formula fall
+    with delta (measured: l +0.32, +0.12, +0.023 %; F +0.58, +0.080, -0.004 %)."""
+    dl, dF = [], []
     for delta, nx in ((0.04, 57), (0.01, 80), (0.0025, 113)):
         doc, _, _ = run_case("contact-lift", mesh=(nx, 1), overrides=dict(delta=delta), steps=2)
         m = doc["steps"][-1]["measures"]
-        diffs.append(abs(m["F_error_formula"]))
-    assert diffs[0] > diffs[1] > diffs[2], diffs
-    assert diffs[1] < 0.01
+        dl.append(abs(m["l_error_formula"]))
+        dF.append(abs(m["F_error_formula"]))
+    assert dl[0] > dl[1] > dl[2] and dF[0] > dF[1] > dF[2], (dl, dF)
+    assert dl[1] < 0.01 and dF[1] < 0.01
 
 
 def test_lift_against_the_elastica_at_large_deflection(lift_large):
