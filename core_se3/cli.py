@@ -134,6 +134,14 @@ def bench_run(args):
                              [s.g for s in res.steps], [s.load_factor for s in res.steps],
                              point_data_per_step=extra)
         print(f"wrote {len(paths) - 1} VTU files and {paths[-1]}")
+        from .io import write_obstacles, write_pvd
+        from .scenario.obstacles import obstacles_of
+        obstacles = obstacles_of(prob)
+        if obstacles:                     # the obstacles' surfaces per step, a series of their own
+            names = [f"obstacles_{k:04d}.vtu" for k in range(len(res.steps))]
+            for name, s in zip(names, res.steps):
+                write_obstacles(os.path.join(args.vtu, name), obstacles, s.g[:, :3, 3], s.load_factor)
+            print(f"wrote {write_pvd(os.path.join(args.vtu, 'obstacles.pvd'), [(s.load_factor, n) for s, n in zip(res.steps, names)])}")
     if args.plot:
         p = case_params(case, _parse_set(args.set))
         if fam is not None and fam.plot is not None:

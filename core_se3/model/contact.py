@@ -234,8 +234,11 @@ class ContactLoad(Load):
         mesh = problem.mesh
         self.obstacle, self.mode, self.name = obstacle, mode, obstacle.name
         self.n = mesh.n_nodes
-        h = problem.material.h
-        self.h = float(np.max(h)) if np.ndim(h) else float(h)
+        per = getattr(problem.material, "per_element", None)
+        h_el = per("h") if per is not None else np.full(mesh.n_elements, float(problem.material.h))
+        el = np.arange(mesh.n_elements) if elements is None else np.asarray(elements, np.int64)
+        h_node = np.zeros(mesh.n_nodes)                  # the thickest contact element at each node
+        np.maximum.at(h_node, mesh.quads[el].ravel(), np.repeat(h_el[el], 4))
         area = nodal_areas(mesh, elements)
         self.nodes = np.nonzero(area > 0)[0] if nodes is None else np.asarray(nodes, np.int64)
         self.A = area[self.nodes]
@@ -247,7 +250,8 @@ class ContactLoad(Load):
             s = np.broadcast_to(np.asarray(side, float), self.nodes.shape).copy()
             if not np.all(np.abs(s) == 1):
                 raise contact_error("side must be 'auto', +1, -1 or one +-1 per contact node", "side")
-        self.side, self.c = s, s * self.h / 2
+        self.h = float(h_node[self.nodes].max())
+        self.side, self.c = s, s * h_node[self.nodes] / 2
         self.beta = float(beta)
         if k is None:
             self.k = self.beta * shell_diagonal_stiffness(problem)[self.nodes] / self.A
