@@ -205,7 +205,8 @@ def _options(s):
         return ArcLengthOptions(method=s["method"], dlam0=s["dlam0"], psi=s["psi"], max_steps=s["max_steps"],
                                 target_iter=s["target_iter"], ds_max_factor=s["ds_max_factor"],
                                 stability=s["stability"], **common)
-    return NewtonOptions(max_cutbacks=s["max_cutbacks"], iteration=s["iteration"], **common)
+    return NewtonOptions(max_cutbacks=s["max_cutbacks"], iteration=s["iteration"],
+                         predictor=s.get("predictor", "none"), **common)
 
 
 def run(scn, out=None, resume=False, progress=None, force=False, stop_after=None, verbose=False):
