@@ -97,6 +97,8 @@ def child(args):
             out = dict(status="ok", **_solve(name, thin, None, iteration, None, 12))
         except CoreSE3Error as exc:
             out = dict(status="failed", error=str(exc)[:300])
+    elif not CASES[name][1]:
+        out = dict(status="n/a (no load parameter to scale)")
     else:
         out = dict(status="ok", largest=None, tries=[])
         for frac in FRACTIONS:

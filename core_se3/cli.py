@@ -49,14 +49,18 @@ def _print_doc(doc):
           f"mesh {shape} ({m['n_dofs']} dofs)")
     print("params: " + ", ".join(f"{k}={v['value']:g} [{v['unit']}]" for k, v in doc["params"].items()))
     ref = doc["reference"]
+    obstacles = list(doc["steps"][-1].get("contact", {}))    # total contact force |F| per obstacle
     print(f"{'load':>12} {'ux':>12} {'uy':>12} {'uz':>12} {'angle':>9} {'it':>3} {'try':>3} {'solves':>6} "
-          f"{'residual':>9}" + ("  error" if ref else ""))
+          f"{'residual':>9}" + "".join(f" {'|F ' + o + '|':>12}" for o in obstacles) + ("  error" if ref else ""))
     probe = next(iter(doc["steps"][0]["probes"]))          # the case's probe ('tip', 'crown', ...)
     for s in doc["steps"]:
         u = s["probes"][probe]["u"]
         line = (f"{s['load']['value']:>12.5g} {u[0]:>12.5g} {u[1]:>12.5g} {u[2]:>12.5g} "
                 f"{s['probes'][probe]['rotation_angle']:>9.4f} {s['iterations']:>3d} {_count(s, 'attempts'):>3} "
                 f"{_count(s, 'linear_solves'):>6} {s['residual']:>9.1e}")
+        for o in obstacles:
+            c = s.get("contact", {}).get(o)
+            line += f" {float(np.linalg.norm(c['force'])) if c else 0.0:>12.5g}"
         if ref and s.get("error") is not None:
             line += f"  {100 * s['error']:.3f}%"
         print(line)
@@ -73,7 +77,9 @@ def _print_doc(doc):
               f"{tot['linear_solves']} linear solves")
     t = doc["timings"]
     print("timings [s]: " + ", ".join(f"{k} {t[k]:.3f}" for k in ("setup", "assembly", "solve", "other", "total")))
-    print(f"reactions balance the applied loads to {max(s['balance_error'] for s in doc['steps']):.1e}")
+    what = "applied loads, reactions and contact forces balance" if obstacles else \
+        "reactions balance the applied loads"
+    print(f"{what} to {max(s['balance_error'] for s in doc['steps']):.1e}")
 
 
 def _plot_generic(case, p, doc, path, name):
@@ -119,12 +125,24 @@ def bench_run(args):
         print(f"wrote {args.json}")
     if args.vtu:
         from .io import write_series
+        from .results import restore_multipliers
         from .scenario import point_fields
-        extra = [point_fields(prob, s.g, s.load_factor) for s in res.steps]
+        extra = []
+        for s in res.steps:
+            restore_multipliers(prob, s)                 # contact forces of that step
+            extra.append(point_fields(prob, s.g, s.load_factor))
         paths = write_series(args.vtu, prob.mesh.X, prob.mesh.quads, prob.mesh.g0,
                              [s.g for s in res.steps], [s.load_factor for s in res.steps],
                              point_data_per_step=extra)
         print(f"wrote {len(paths) - 1} VTU files and {paths[-1]}")
+        from .io import write_obstacles, write_pvd
+        from .scenario.obstacles import obstacles_of
+        obstacles = obstacles_of(prob)
+        if obstacles:                     # the obstacles' surfaces per step, a series of their own
+            names = [f"obstacles_{k:04d}.vtu" for k in range(len(res.steps))]
+            for name, s in zip(names, res.steps):
+                write_obstacles(os.path.join(args.vtu, name), obstacles, s.g[:, :3, 3], s.load_factor)
+            print(f"wrote {write_pvd(os.path.join(args.vtu, 'obstacles.pvd'), [(s.load_factor, n) for s, n in zip(res.steps, names)])}")
     if args.plot:
         p = case_params(case, _parse_set(args.set))
         if fam is not None and fam.plot is not None:

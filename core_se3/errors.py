@@ -17,7 +17,7 @@ import difflib
 
 __all__ = ["CoreSE3Error", "MaterialError", "MeshError", "LoadError", "SupportError",
            "SingularSystemError", "ConvergenceError", "ElementTooDistortedError", "ScenarioError",
-           "CheckpointError", "OptionError", "DesignError", "did_you_mean"]
+           "CheckpointError", "OptionError", "DesignError", "ContactError", "did_you_mean"]
 
 
 def did_you_mean(name, choices):
@@ -123,6 +123,30 @@ class LoadError(CoreSE3Error, ValueError):
     Traceback (most recent call last):
     ...
     core_se3.errors.LoadError: load kind 'edge_force' has no parameter 'forc'; did you mean 'force'?; its parameters: follower, force
+    """
+
+
+class ContactError(LoadError):
+    """Invalid contact or obstacle specification: an unknown obstacle kind, a radius or size that
+    is not positive and finite, a motion that is not a proper rigid transform, an obstacle that
+    already intersects the undeformed shell, contact nodes outside the contact elements.
+
+    Raised by ``Problem.add_obstacle`` and the obstacle classes (``core_se3.model.obstacles``);
+    ``param`` names the offending key when there is one (scenario files report it as
+    ``obstacles[i].KEY``).  Correct the value the message names, or move the obstacle off the shell.
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
+    >>> p.add_obstacle("sphere", centre=(0.5, 0.0, 0.0), radius=0.2)     # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.ContactError: obstacle 'sphere' already intersects the undeformed shell: ...
+    >>> p.add_obstacle("sphere", centre=(0.5, 0.0, 0.0), radius=-0.2)
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.ContactError: sphere radius must be positive and finite, got -0.2
     """
 
 

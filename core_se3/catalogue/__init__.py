@@ -8,13 +8,14 @@ Example
 >>> "cantilever-shear" in catalogue.CASES, catalogue.get_case("rollup").reference.entry
 (True, '2_pure_bending_rollup_out_of_plane')
 """
-from . import cases_design, cases_magnetic, cases_shells, cases_sze  # noqa: F401  (register the cases)
-from . import family_design, family_magnetic, family_sze  # noqa: F401  (register the families)
+from . import cases_contact, cases_design, cases_magnetic, cases_shells, cases_sze  # noqa: F401  (register the cases)
+from . import family_contact, family_design, family_magnetic, family_sze  # noqa: F401  (register the families)
 from .case import (CASES, FAMILIES, Case, CaseLoad, Family, Reference, ResolvedLoad, Variant, add_case,
                    beam_EI, case_params, family_of, get_case, list_cases, register_family, resolve)
 from .generic import case_document, edge_wrench, planar, reference_for, torsion_constant
-from .measures import error_against_reference, interp_reference, path_distance, point_curve_distances
-from .references import elastica_entry, elastica_names, literature_entry, literature_ids
+from .measures import (error_against_reference, interp_reference, lifted_length_from_gaps, path_distance,
+                       point_curve_distances)
+from .references import contact_lift_elastica, elastica_entry, elastica_names, literature_entry, literature_ids
 from .run import build_problem, run_case
 
 __all__ = ["Case", "CaseLoad", "Reference", "Variant", "ResolvedLoad", "CASES", "add_case", "get_case",
@@ -22,4 +23,4 @@ __all__ = ["Case", "CaseLoad", "Reference", "Variant", "ResolvedLoad", "CASES", 
            "case_params", "resolve", "build_problem", "run_case", "case_document", "reference_for",
            "planar", "edge_wrench", "torsion_constant", "error_against_reference", "interp_reference",
            "path_distance", "point_curve_distances", "elastica_entry", "elastica_names",
-           "literature_entry", "literature_ids"]
+           "literature_entry", "literature_ids", "lifted_length_from_gaps", "contact_lift_elastica"]

@@ -17,7 +17,8 @@ import numpy as np
 from .references import literature_entry
 
 __all__ = ["path_distance", "interp_reference", "error_against_reference", "point_curve_distances",
-           "table_curves", "curve_columns", "curve_deviation", "errors_at_table_loads"]
+           "table_curves", "curve_columns", "curve_deviation", "errors_at_table_loads",
+           "lifted_length_from_gaps"]
 
 
 def path_distance(d, e, scale=None):
@@ -194,3 +195,60 @@ def curve_deviation(case, lams, probes):
                          table_end=dict(P_over_Pmax=float(tl[-1]), u=float(tu[-1])),
                          computed_end=dict(P_over_Pmax=float(lams[-1]), u=float(u[-1]))))
     return float(per_step.max()), per_step, info
+
+
+def lifted_length_from_gaps(xc, gap, force, window=0.3):
+    """Reference position x_d of the detachment line of a strip lifted off a plane, located
+    between the nodes from the gap field (``contact-lift``).
+
+    xc (m,) increasing column positions, the lifted end at xc[0]; gap (m,) and force (m,) the
+    columns' mean gap and contact force.  Columns carrying force rest on the plane (their median
+    gap is the rest level).  Near the detachment the lifted gap of a shear-deformable strip is
+    w(s) = a1 s + a3 s^3 + a4 s^4, s = x_d - x (a1 = R / (k G A) the shear angle of the
+    detachment reaction R, a3 = R / (6 EI), a4 = -q_l / (24 EI); the a2 s^2 term, a2 / a3 ~
+    (h / l)^2, is dropped): the exact Timoshenko shape for small deflections, the leading terms
+    of the expansion for large ones.  x_d minimises the least-squares residual of this model
+    (linear in the a's; x_d by a bounded 1-D search within three columns of the first touching
+    one) over the lifted columns within ``window`` x (that column's distance from the lifted end).
+
+    Returns
+    -------
+    (float, int)
+        x_d [length] (NaN when no column or the first one touches) and the columns fitted.
+
+    Example
+    -------
+    The exact small-deflection gap (q_l / (24 EI)) s^3 (2 l - s) of l = 0.3137 on 61 columns:
+
+    >>> import numpy as np
+    >>> xc = np.linspace(0.0, 1.0, 61); s = 0.3137 - xc
+    >>> gap = np.where(s > 0, 0.1 / (24 * 0.005) * s ** 3 * (2 * 0.3137 - s), 0.0)
+    >>> xd, k = lifted_length_from_gaps(xc, gap, np.where(s > 0, 0.0, 1.0))
+    >>> bool(abs(xd - 0.3137) < 1e-6), k
+    (True, 5)
+    """
+    from scipy.optimize import minimize_scalar
+    xc, gap, force = (np.asarray(a, float) for a in (xc, gap, force))
+    touching = force > 0
+    if not touching.any() or touching[0]:
+        return float("nan"), 0
+    first = int(np.argmax(touching))
+    if first < 3:
+        return float("nan"), 0
+    rest = float(np.median(gap[touching]))
+    dx = xc[first] - xc[first - 1]
+    xf = xc[first]
+    sel = np.nonzero((xc < xf - 0.5 * dx) & (xc >= xf - window * (xf - xc[0])))[0]
+    if len(sel) < 4:
+        sel = np.arange(max(0, first - 4), first)
+    w = gap[sel] - rest
+
+    def misfit(xd):
+        s = xd - xc[sel]
+        A = np.stack([s, s ** 3, s ** 4], 1)
+        c, *_ = np.linalg.lstsq(A, w, rcond=None)
+        return float(np.sum((A @ c - w) ** 2))
+
+    r = minimize_scalar(misfit, bounds=(xf - 3 * dx, xf + 3 * dx), method="bounded",
+                        options=dict(xatol=1e-12 * (xc[-1] - xc[0])))
+    return float(r.x), len(sel)

@@ -22,6 +22,7 @@ __all__ = [
     "elastica_entry",
     "literature_ids",
     "literature_entry",
+    "contact_lift_elastica",
 ]
 
 def _read_json(name: str) -> Any:
@@ -144,3 +145,26 @@ def literature_entry(benchmark_id: str) -> dict:
     raise KeyError(
         f"no literature benchmark {benchmark_id!r} in literature.json; available: " + ", ".join(literature_ids())
     )
+
+
+@lru_cache(maxsize=None)
+def _lift_raw() -> dict:
+    return _read_json("contact_lift_elastica.json")
+
+
+def contact_lift_elastica() -> dict:
+    """``contact_lift_elastica.json``: the large-deflection reference of ``contact-lift`` (the
+    elastica of a heavy strip lifted off a rigid plane, free detachment point), rows for
+    q_l L^3 / EI = 20 at delta / L = 0.0025 ... 0.3, computed in this project by
+    ``benchmarks/contact_lift_elastica.py`` (shooting and collocation, agreeing to < 1e-12).
+
+    Returns: dict (a copy) with ``params``, ``scaling``, ``rows`` (delta_over_L, l_over_L,
+    lift_force_over_qlL, tip_angle_rad, ...), ``methods`` and ``source``.
+
+    Example
+    -------
+    >>> d = contact_lift_elastica()
+    >>> d["params"]["Q"], [round(r["l_over_L"], 6) for r in d["rows"] if r["delta_over_L"] == 0.2]
+    (20.0, [0.717426])
+    """
+    return copy.deepcopy(_lift_raw())

@@ -118,7 +118,8 @@ def plot_load_deflection(
 
 
 def plot_shell(path, X, quads, g, title: str | None = None, color_by_rotation: bool = True,
-               elev: float | None = None, azim: float | None = None, roll: float = 0.0) -> str:
+               elev: float | None = None, azim: float | None = None, roll: float = 0.0,
+               surfaces=None) -> str:
     """3-D view of the deformed shell (faces = ``quads`` on the current positions ``g[:, :3, 3]``)
     with equal axis scaling, saved as PNG. ``X`` (reference positions, (n, 3)) is drawn as a faint
     wireframe for comparison. Faces are coloured by their mean nodal rotation angle (rad) if
@@ -134,6 +135,8 @@ def plot_shell(path, X, quads, g, title: str | None = None, color_by_rotation: b
         Figure title; ``color_by_rotation``: colour by rotation angle (else one colour).
     elev, azim, roll : float, optional
         Camera angles [deg] (roll needs matplotlib >= 3.6).
+    surfaces : list of (name, points (p, 3), quads (q, 4)), optional
+        Rigid obstacles, drawn as translucent grey surfaces (``io.obstacle_surfaces``).
 
     Returns
     -------
@@ -175,7 +178,12 @@ def plot_shell(path, X, quads, g, title: str | None = None, color_by_rotation: b
     else:
         faces.set_facecolor("tab:blue")
     ax.add_collection3d(faces)
-    _finish_3d(ax, X, cells, [phi], elev, azim, roll, title)
+    extra = []
+    for _, pts, quads_s in surfaces or ():
+        ax.add_collection3d(Poly3DCollection(np.asarray(pts)[np.asarray(quads_s)], facecolor="0.55",
+                                             edgecolor="0.35", linewidths=0.1, alpha=0.25))
+        extra.append(np.asarray(pts))
+    _finish_3d(ax, X, cells, [phi] + extra, elev, azim, roll, title)
     path = ensure_parent(path)
     fig.savefig(path)
     return path

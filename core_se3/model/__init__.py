@@ -4,15 +4,19 @@ magnetic materials, supports, probes and the :class:`Problem` that owns the disc
 Example
 -------
 >>> from core_se3 import model
->>> sorted(model.FIELDS)
-['dipole', 'gradient', 'uniform']
+>>> sorted(model.FIELDS), sorted(model.OBSTACLES)
+(['dipole', 'gradient', 'uniform'], ['box', 'cylinder', 'half_space', 'sphere'])
 """
-from .base import LOADS, REQUIRED, Load, LoadEvaluation, LoadKind, Param, load_kind, register_load
+from .base import LOADS, REQUIRED, Load, LoadEvaluation, LoadKind, Param, load_kind, overrides, register_load
 from .fields import (FIELDS, MU0, DipoleField, Field, FieldKind, GradientField, Superposition,
                      UniformField, UserField, check_field, field_kind, register_field,
                      rotating_direction)
 from .loads import NodalLoad, SurfaceLoad, edge_weights
 from .magnetics import MagneticLoad, Magnetisation
+from .obstacles import (OBSTACLES, Obstacle, ObstacleKind, check_sdf, make_obstacle, obstacle_kind,
+                        register_obstacle, rigid_motion, rotation, translation)
+from .obstacle_kinds import Box, Cylinder, HalfSpace, Sphere, UserSDF
+from .contact import ContactLoad, add_obstacle
 from .probes import Probe
 from .problem import SOLVERS, Evaluation, Problem
 from .supports import LabSpring, LabTiltSpring, Prescribed, RotationComponentSpring
@@ -24,4 +28,6 @@ __all__ = ["Load", "LoadEvaluation", "LoadKind", "Param", "REQUIRED", "LOADS", "
            "check_field", "rotating_direction", "NodalLoad", "SurfaceLoad", "edge_weights",
            "Magnetisation", "MagneticLoad", "Probe", "Problem", "Evaluation", "SOLVERS",
            "Prescribed", "LabSpring", "LabTiltSpring", "RotationComponentSpring",
-           "tangent_fd_check", "zero_modes"]
+           "tangent_fd_check", "zero_modes", "overrides", "Obstacle", "ObstacleKind", "OBSTACLES",
+           "register_obstacle", "obstacle_kind", "make_obstacle", "rigid_motion", "translation", "rotation",
+           "check_sdf", "HalfSpace", "Sphere", "Cylinder", "Box", "UserSDF", "ContactLoad", "add_obstacle"]

@@ -33,7 +33,7 @@ import numpy as np
 from ..errors import LoadError
 from ..registry import Registry
 
-__all__ = ["Evaluation", "Load", "LoadEvaluation", "Param", "LoadKind", "LOADS", "register_load", "load_kind",
+__all__ = ["Evaluation", "Load", "LoadEvaluation", "overrides", "Param", "LoadKind", "LOADS", "register_load", "load_kind",
            "REQUIRED", "linear_scale", "finite_vector", "param_error"]
 
 
@@ -116,6 +116,16 @@ class Load(abc.ABC):
     Add an instance to a problem with ``Problem.add(load)``; register a kind
     (:func:`register_load`) to make it available by name and in scenario files.
 
+    Loads that are constraint forces (``constraint_force = True``: contact) are reported apart
+    from the applied loads, per load name (``StepResult.contact``), with the scalars of
+    :meth:`report`.  Solver hooks, optional (load-stepped Newton calls a hook only on the loads
+    whose class overrides it, see :func:`overrides`; without them its path is unchanged):
+    :meth:`limit_increment` caps a Newton increment; :meth:`start_error` refuses the start of a
+    try (it is cut back); :meth:`update_multipliers` augments the
+    load's multipliers at a converged state and the same load factor is solved again until it
+    returns <= 1; :meth:`multipliers` / :meth:`set_multipliers` save and restore them (a failed
+    try, a restart point).
+
     Example
     -------
     >>> import numpy as np
@@ -135,6 +145,7 @@ class Load(abc.ABC):
 
     kind: ClassVar[str] = ""
     scales_with_load_factor: ClassVar[bool] = True
+    constraint_force: ClassVar[bool] = False
     approximate_tangent: bool = False
     name: str = "load"
 
@@ -150,12 +161,51 @@ class Load(abc.ABC):
         """Point fields (name -> (n, k)) for output; none by default."""
         return {}
 
+    def limit_increment(self, g, eta, lam):
+        """Hook: the factor alpha in (0, 1] by which Newton scales the increment eta (n, 6) at
+        (g, lam) before applying it (a step cap); 1.0 here."""
+        return 1.0
+
+    def start_error(self, g, lam):
+        """Hook: why a Newton try must not start from (g, lam) (e.g. a moving obstacle that has
+        swept deep into the shell over the increment: the try is cut back), '' if it may."""
+        return ""
+
+    def update_multipliers(self, g, lam):
+        """Hook: at a converged state, the constraint error over its tolerance; when above 1 the
+        load has augmented its multipliers and Newton solves the same load factor again.  0.0 here."""
+        return 0.0
+
+    def multipliers(self):
+        """Hook: a copy of the load's multipliers (its state between solves), None here."""
+        return None
+
+    def set_multipliers(self, state=None):
+        """Hook: restore :meth:`multipliers` (None: the initial ones); nothing here."""
+
+    def report(self, g, lam):
+        """Scalars to report per step for a constraint force (e.g. the penetration); none here."""
+        return {}
+
     def compiled(self, pattern):
         """A compiled evaluation for the numba backend, ``add(g, lam, f, data, tangent)`` adding
         the forces into f (n, 6) and -df/deta into the CSR ``data`` of ``pattern``
         (``kernels.Pattern``); None (the default): the backend calls :meth:`evaluate` and
         scatters its blocks, so every load works with both backends."""
         return None
+
+
+def overrides(load, hook):
+    """True when the class of ``load`` overrides the :class:`Load` method ``hook`` (the solvers
+    call the optional hooks only then).
+
+    Example
+    -------
+    >>> from core_se3.model import NodalLoad, ContactLoad
+    >>> overrides(NodalLoad(1, [0], [1.0]), "limit_increment"), ContactLoad.limit_increment is Load.limit_increment
+    (False, False)
+    """
+    return getattr(type(load), hook, None) is not getattr(Load, hook)
 
 
 REQUIRED = object()

@@ -26,6 +26,7 @@ from ..errors import LoadError, MeshError, OptionError, SupportError, did_you_me
 from ..fem import make_element
 from .base import Evaluation, Load, load_kind
 from .compiled import CompiledEvaluation
+from .contact import add_obstacle
 from .fields import MU0
 from .magnetics import MagneticLoad, Magnetisation
 from .probes import Probe
@@ -288,6 +289,21 @@ class Problem:
         self.element = make_element(self.element_name, self.mesh, material)
         self._compiled = None
 
+    def add_obstacle(self, obstacle, region=None, nodes=None, **options):
+        """Frictionless contact with a rigid obstacle: a registered kind ('half_space', 'sphere',
+        'cylinder', 'box') with its parameters, or an Obstacle; options ``motion``, ``name``,
+        ``mode``, ``beta``, ``eps``, ``tol``, ``side``, ``cap_depth`` (``model.contact.add_obstacle``).
+        Returns the ContactLoad.
+
+        Example
+        -------
+        >>> from core_se3 import Problem, Material, mesh
+        >>> p = Problem(mesh.rectangle(1.0, 0.2, 2, 1), Material(1e4, 0.0, 0.02))
+        >>> p.add_obstacle("sphere", centre=(0.5, 0.0, 0.5), radius=0.4).name
+        'sphere'
+        """
+        return add_obstacle(self, obstacle, region, nodes, **options)
+
     def add_probe(self, name, where="x1"):
         """Record the midpoint of an edge (or a node) at every step."""
         self.probes[name] = Probe.edge_midpoint(name, self.nodes(where))
@@ -345,10 +361,15 @@ class Problem:
         return worst
 
     def apply_prescribed(self, g, lam):
-        """Set the frames of prescribed nodes to their targets at lam (in place); returns g."""
+        """Set the frames of prescribed nodes to their targets at lam (in place); returns g.  A
+        target that holds the three translations only (rotations free) sets the positions and
+        keeps the nodes' current rotations."""
         for s in self.supports:
             if s.target is not None:
-                g[s.nodes] = s.target(lam)
+                if s.fixed[:3].all() and not s.fixed[3:].any():
+                    g[s.nodes, :3, 3] = s.target(lam)[:, :3, 3]
+                else:
+                    g[s.nodes] = s.target(lam)
         return g
 
     # ---------------------------------------------------------------- the equations ----

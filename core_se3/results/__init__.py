@@ -9,9 +9,9 @@ Example
 """
 from .document import (SCHEMA, VERSION, mesh_record, probe_record, read_json, result_document, step_totals,
                        step_record, timing_record, write_json)
-from .recorder import StepRecorder, lab_totals
+from .recorder import StepRecorder, lab_totals, restore_multipliers
 from .result import Result, StepResult, unwrap_rotation
 
-__all__ = ["Result", "StepResult", "unwrap_rotation", "StepRecorder", "lab_totals", "SCHEMA",
+__all__ = ["Result", "StepResult", "unwrap_rotation", "StepRecorder", "lab_totals", "restore_multipliers", "SCHEMA",
            "VERSION", "read_json", "write_json", "probe_record", "step_record", "mesh_record",
            "timing_record", "step_totals", "result_document"]

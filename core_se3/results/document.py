@@ -6,7 +6,8 @@
                 "probes": {name: {"u": [ux, uy, uz], "rotation_angle", "rotation_vector",
                                   "rotation": 3x3}},
                 "iterations", "residual", "residual_history", "balance_error",
-                "attempts", "linear_solves"}],
+                "attempts", "linear_solves", "contact": {name: {"force", "moment", "penetration",
+                ...}} (with obstacles only)}],
      "totals": {"attempts", "linear_solves", "iterations"},
      "timings": {"setup", "assembly", "solve", "other", "total"},
      "reference": {"entry", "block", "error", "error_at"} or null}
@@ -22,7 +23,7 @@ import json
 
 import numpy as np
 
-__all__ = ["SCHEMA", "VERSION", "read_json", "write_json", "probe_record", "step_record",
+__all__ = ["SCHEMA", "VERSION", "read_json", "write_json", "probe_record", "step_record", "contact_record",
            "mesh_record", "timing_record", "step_totals", "result_document"]
 
 SCHEMA = "core-se3-result"
@@ -95,8 +96,29 @@ def step_record(st, load, axis=None, **extra):
                residual_history=[float(x) for x in st.residual_history],
                balance_error=float(st.balance_error), attempts=int(st.attempts),
                linear_solves=None if st.linear_solves is None else int(st.linear_solves))
+    if st.contact:
+        rec["contact"] = {name: contact_record(c) for name, c in st.contact.items()}
     rec.update(extra)
     return rec
+
+
+def contact_record(c):
+    """JSON form of one entry of ``StepResult.contact``: the total lab force on the shell
+    [force] and its moment about the origin, and the scalars of the load's report (penetration
+    [length], gap_error, nodes_in_contact); the multipliers are left out.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> contact_record(dict(force=np.array([0.0, 0.0, 2.0]), moment=np.zeros(3), multipliers=np.ones(4),
+    ...                     penetration=1e-9, nodes_in_contact=3))
+    {'force': [0.0, 0.0, 2.0], 'moment': [0.0, 0.0, 0.0], 'penetration': 1e-09, 'nodes_in_contact': 3}
+    """
+    out = dict(force=np.asarray(c["force"], float).tolist(), moment=np.asarray(c["moment"], float).tolist())
+    for k, v in c.items():
+        if k not in ("force", "moment", "multipliers") and np.isscalar(v):
+            out[k] = v.item() if hasattr(v, "item") else v
+    return out
 
 
 def mesh_record(mesh):

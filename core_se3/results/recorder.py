@@ -10,7 +10,7 @@ import numpy as np
 
 from .result import StepResult, unwrap_rotation
 
-__all__ = ["StepRecorder", "lab_totals"]
+__all__ = ["StepRecorder", "lab_totals", "restore_multipliers"]
 
 
 def lab_totals(g, f, magnitudes=False):
@@ -94,12 +94,48 @@ class StepRecorder:
         return states
 
     def step(self, lam, g, iterations, history, r_int, f_ext, stability=None):
-        """The StepResult of a converged state (internal r_int and external f_ext forces)."""
+        """The StepResult of a converged state (internal r_int and external f_ext forces).
+
+        The loads that are constraint forces (``Load.constraint_force``: contact) are split off
+        the applied loads: ``contact`` holds each one's lab force and moment (about the origin)
+        with its ``report`` scalars, and the balance sums applied, reactions and contact."""
         probes = self.probes(g)
         reac = (r_int - f_ext) * self.fixed
         RF, RM, sF, sM = lab_totals(g, reac, magnitudes=True)
         AF, AM, aF, aM = lab_totals(g, f_ext, magnitudes=True)
+        contact = {}
+        cons = [ld for ld in self.problem.loads if getattr(ld, "constraint_force", False)]
+        if cons:
+            f_app = np.array(f_ext, float)
+            for ld in cons:
+                fc = ld.evaluate(g, lam, tangent=False).f
+                f_app -= fc
+                CF, CM = lab_totals(g, fc)
+                contact[ld.name] = dict(force=CF, moment=CM, multipliers=ld.multipliers(), **ld.report(g, lam))
+            AF, AM = lab_totals(g, f_app)
         ell = self.ell
         return StepResult(lam, g.copy(), iterations, list(history), RF, RM, AF, AM, probes,
                           scale=(max(sF, aF, max(sM, aM) / ell), max(sM, aM, max(sF, aF) * ell)),
-                          stability=stability)
+                          stability=stability, contact=contact)
+
+
+def restore_multipliers(problem, step):
+    """Set the multipliers of the problem's constraint-force loads (contact) to those recorded
+    with ``step`` (a StepResult), so that their forces and output fields evaluated afterwards at
+    ``step.g`` are those of that step (the loads keep the multipliers of the last solve otherwise).
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(1.0, 0.2, 4, 1), Material(1e4, 0.0, 0.02))
+    >>> p.clamp("x0"); p.add_pressure(-0.004)
+    >>> c = p.add_obstacle("half_space", point=(0, 0, -0.05), normal=(0, 0, 1), name="floor")
+    >>> res = p.solve(load_factors=[0.7, 1.0])
+    >>> restore_multipliers(p, res.steps[1])
+    >>> bool(abs(c.total(res.steps[1].g, 0.7)[0][2] - res.steps[1].contact["floor"]["force"][2]) < 1e-15)
+    True
+    """
+    for ld in problem.loads:
+        rec = step.contact.get(getattr(ld, "name", None)) if getattr(ld, "constraint_force", False) else None
+        if rec is not None and rec.get("multipliers") is not None:
+            ld.set_multipliers(rec["multipliers"])

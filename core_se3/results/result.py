@@ -78,6 +78,10 @@ class StepResult:
         Newton tries (failed ones and sub-steps included) since the previous stored step, and
         the linear solves (sparse factorisations) they took: the cost of the step (0 for the
         initial state, None when not counted).
+    contact : dict
+        name -> dict(force (3,), moment (3,) about the origin, scalars such as penetration) of
+        each constraint-force load (contact with an obstacle): not counted in the applied
+        force; the balance is applied + reactions + contact.
 
     Example
     -------
@@ -101,14 +105,19 @@ class StepResult:
     stability: dict | None = None      # det_sign, negative_eigenvalues, q_dot_t (path following)
     attempts: int = 0                  # Newton tries since the previous stored step (failed included)
     linear_solves: int | None = 0      # linear solves of those tries (None: not counted)
+    contact: dict = field(default_factory=dict)   # name -> dict(force, moment, ...) of contacts
 
     @property
     def balance_error(self):
-        """|reactions + applied| relative to the sum of the nodal force (moment) magnitudes."""
+        """|reactions + applied (+ contact)| relative to the sum of the nodal force (moment)
+        magnitudes."""
         sF = max(self.scale[0], np.linalg.norm(self.applied_force), 1e-300)
         sM = max(self.scale[1], np.linalg.norm(self.applied_moment), 1e-300)
-        return max(np.linalg.norm(self.reaction_force + self.applied_force) / sF,
-                   np.linalg.norm(self.reaction_moment + self.applied_moment) / sM)
+        F = self.reaction_force + self.applied_force
+        M = self.reaction_moment + self.applied_moment
+        for c in self.contact.values():
+            F, M = F + c["force"], M + c["moment"]
+        return max(np.linalg.norm(F) / sF, np.linalg.norm(M) / sM)
 
 
 @dataclass

@@ -10,6 +10,7 @@ from ..errors import CoreSE3Error, ScenarioError, SingularSystemError
 from ..fem import Material, RegionMaterial
 from ..model import FIELDS, MU0, Problem
 from .geometry import selection
+from .obstacles import add_obstacles
 from .physics import MATERIAL_KEYS, material_index, solve_defaults
 from .validate import join, make_scale
 
@@ -80,6 +81,7 @@ def build_problem(v, spec, mesh, regions):
             v.fail(join(key, param) if param else key, str(exc))
     if spec["magnets"]:
         _add_magnets(v, prob, spec, mesh, regions)
+    add_obstacles(v, prob, spec, regions)
     for pr in spec["probes"]:
         prob.add_probe(pr["name"], selection(mesh, pr))
     try:

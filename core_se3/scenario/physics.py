@@ -12,7 +12,7 @@ from ..fem import ELEMENTS
 from ..model import FIELDS, LOADS
 from ..model.base import REQUIRED
 from ..solvers import ArcLengthOptions, NewtonOptions
-from ..solvers.options import ITERATIONS
+from ..solvers.options import ITERATIONS, PREDICTORS
 from .geometry import is_line, nodes_ref, region_ref
 from .validate import join, tname, show
 
@@ -30,7 +30,7 @@ _ARC = ArcLengthOptions()
 SOLVER_DEFAULTS = dict(steps=10, lam_end=1.0, rtol=_NEWTON.rtol, dtol=_NEWTON.dtol,
                        max_iter=_NEWTON.max_iter, max_cutbacks=_NEWTON.max_cutbacks,
                        element="default", linear_solver="auto", control="load",
-                       iteration=_NEWTON.iteration)
+                       iteration=_NEWTON.iteration, predictor=_NEWTON.predictor)
 # arc-length keys, with ArcLengthOptions' defaults (dlam0: lam_end / steps)
 ARCLENGTH_DEFAULTS = dict(method=_ARC.method, dlam0=None, max_steps=_ARC.max_steps, psi=_ARC.psi,
                           target_iter=_ARC.target_iter, ds_max_factor=_ARC.ds_max_factor,
@@ -38,7 +38,8 @@ ARCLENGTH_DEFAULTS = dict(method=_ARC.method, dlam0=None, max_steps=_ARC.max_ste
 OUTPUT_DEFAULTS = dict(vtu=True, vtu_every=1, plots=True, picture=True, picture_steps=1, view=None)
 # solver keys that do not change the converged states (left out of the --resume fingerprint);
 # max_steps only decides where an arc-length path stops, so a resume may raise it
-NON_PHYSICAL = ("rtol", "dtol", "max_iter", "max_cutbacks", "linear_solver", "max_steps", "iteration")
+NON_PHYSICAL = ("rtol", "dtol", "max_iter", "max_cutbacks", "linear_solver", "max_steps", "iteration",
+                "predictor")
 
 
 def material_section(v, d, regions):
@@ -239,6 +240,7 @@ def solver_section(v, doc):
     s["linear_solver"] = v.string(d, "linear_solver", key, default="auto",
                                   choices=("auto", "mumps", "superlu"))
     s["iteration"] = v.string(d, "iteration", key, default=SOLVER_DEFAULTS["iteration"], choices=ITERATIONS)
+    s["predictor"] = v.string(d, "predictor", key, default=SOLVER_DEFAULTS["predictor"], choices=PREDICTORS)
     if s["control"] != "arclength":
         extra = [k for k in ARCLENGTH_DEFAULTS if k in d]
         if extra:
@@ -276,7 +278,8 @@ def solve_defaults(s):
         return dict(control="arclength", method=s["method"], dlam0=s["dlam0"], psi=s["psi"],
                     max_steps=s["max_steps"], target_iter=s["target_iter"],
                     ds_max_factor=s["ds_max_factor"], stability=s["stability"], **common)
-    out = dict(control="load", max_cutbacks=s["max_cutbacks"], iteration=s["iteration"], **common)
+    out = dict(control="load", max_cutbacks=s["max_cutbacks"], iteration=s["iteration"],
+               predictor=s["predictor"], **common)
     if s.get("load_factors") is not None:
         out.pop("lam_end")
         out["load_factors"] = list(s["load_factors"])

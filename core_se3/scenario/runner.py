@@ -30,6 +30,7 @@ from ..io import Checkpoint, Progress, atomic_path, write_json_atomic
 from ..results import Result, StepRecorder, result_document, step_record
 from ..solvers import (ArcLengthOptions, ArcState, NewtonOptions, NewtonState, arc_length_steps,
                        newton_steps)
+from .obstacles import obstacles_of
 
 __all__ = ["run", "RunResult", "RunInterrupted", "point_fields", "cell_fields"]
 
@@ -148,6 +149,11 @@ def _write_vtu(path, prob, g, lam):
     with atomic_path(path) as tmp:
         write_vtu(tmp, prob.mesh.X, prob.mesh.quads, prob.mesh.g0, g,
                   point_data=point_fields(prob, g, lam), cell_data=cell_fields(prob, g))
+    obstacles = obstacles_of(prob)
+    if obstacles:                    # their surfaces at lam, beside the shell's file (ParaView)
+        from ..io import write_obstacles
+        with atomic_path(path[:-4] + "_obstacles.vtu") as tmp:
+            write_obstacles(tmp, obstacles, g[:, :3, 3], lam)
 
 
 def _write_pvd(vtu_dir, records, every, last):
@@ -156,6 +162,10 @@ def _write_pvd(vtu_dir, records, every, last):
                if r["step"] % every == 0 or r["step"] == last]
     with atomic_path(os.path.join(vtu_dir, "series.pvd")) as tmp:
         write_pvd(tmp, entries)
+    obst = [(t, f[:-4] + "_obstacles.vtu") for t, f in entries if os.path.exists(os.path.join(vtu_dir, f[:-4] + "_obstacles.vtu"))]
+    if obst:                         # the obstacles' surfaces as a series of their own
+        with atomic_path(os.path.join(vtu_dir, "obstacles.pvd")) as tmp:
+            write_pvd(tmp, obst)
 
 
 def _clear_temporaries(out, vtu_dir):
@@ -195,7 +205,8 @@ def _options(s):
         return ArcLengthOptions(method=s["method"], dlam0=s["dlam0"], psi=s["psi"], max_steps=s["max_steps"],
                                 target_iter=s["target_iter"], ds_max_factor=s["ds_max_factor"],
                                 stability=s["stability"], **common)
-    return NewtonOptions(max_cutbacks=s["max_cutbacks"], iteration=s["iteration"], **common)
+    return NewtonOptions(max_cutbacks=s["max_cutbacks"], iteration=s["iteration"],
+                         predictor=s.get("predictor", "none"), **common)
 
 
 def run(scn, out=None, resume=False, progress=None, force=False, stop_after=None, verbose=False):
@@ -258,7 +269,8 @@ def run(scn, out=None, resume=False, progress=None, force=False, stop_after=None
                                       f"path step {start.step}")
         else:
             nw = st["extra"].get("newton", {})
-            start = NewtonState(st["lam"], st["g"], nw.get("dlam"), nw.get("k_ref"))
+            start = NewtonState(st["lam"], st["g"], nw.get("dlam"), nw.get("k_ref"),
+                                NewtonState.multipliers_of(st["arrays"]))
         unwrap = st["unwrap"]
         critical = list(start.critical) if arc else None
     else:
@@ -311,9 +323,10 @@ def run(scn, out=None, resume=False, progress=None, force=False, stop_after=None
                 k += 1
                 tries = item.tries
                 records.append(_record(k, item.step, sum(e["iterations"] for e in tries),
-                                       sum(e["converged"] for e in tries), sum(not e["converged"] for e in tries)))
+                                       sum(e["converged"] and not e.get("augmented") for e in tries),
+                                       sum(not e["converged"] for e in tries)))
                 finished = k == nsteps
-                extra, arrays = dict(newton=item.state.pack()), None
+                extra, arrays = dict(newton=item.state.pack()), item.state.arrays() or None
                 unwrap_now = rec.unwrapped
             lam, g = item.step.load_factor, item.step.g
             last_state = item.state
@@ -468,5 +481,8 @@ def picture(path, scn, g, title=None, records=None, vtu_dir=None):
             plot_sequence(tmp, m.X, m.quads, pos, labels, title=title or scn.name, elev=elev, azim=azim,
                           roll=roll)
         else:
-            plot_shell(tmp, m.X, m.quads, g, title=title or scn.name, elev=elev, azim=azim, roll=roll)
+            from ..io import obstacle_surfaces
+            lam = records[-1]["load_factor"] if records else 1.0
+            plot_shell(tmp, m.X, m.quads, g, title=title or scn.name, elev=elev, azim=azim, roll=roll,
+                       surfaces=obstacle_surfaces(obstacles_of(scn.problem), g[:, :3, 3], lam))
     return path

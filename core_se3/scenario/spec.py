@@ -20,6 +20,7 @@ from ..errors import ScenarioError
 from .build import build_problem
 from .design_section import design_section
 from .geometry import edges_section, mesh_section, probes_section, regions_section
+from .obstacles import obstacles_section
 from .physics import (NON_PHYSICAL, fields_section, loads_section, magnets_section,
                       material_section, output_section, solver_section, supports_section)
 from .validate import Validator
@@ -32,7 +33,7 @@ except ModuleNotFoundError:           # pragma: no cover - Python 3.10
 __all__ = ["Scenario", "load", "loads", "from_dict", "TOP_KEYS"]
 
 TOP_KEYS = ("name", "description", "units", "mesh", "edges", "regions", "material", "fields",
-            "magnets", "supports", "loads", "probes", "solver", "output", "design")
+            "magnets", "supports", "loads", "probes", "solver", "output", "obstacles", "design")
 
 
 class Scenario:
@@ -290,6 +291,7 @@ def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario"):
     spec["magnets"] = magnets_section(v, doc, regions, spec["fields"])
     spec["supports"] = supports_section(v, doc, mesh, regions)
     spec["loads"] = loads_section(v, doc, mesh, regions)
+    spec["obstacles"] = obstacles_section(v, doc, regions)
     spec["probes"] = probes_section(v, doc, mesh)
     spec["solver"] = solver_section(v, doc)
     if spec["solver"]["control"] == "arclength":
@@ -297,6 +299,9 @@ def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario"):
             if sp["type"] == "rotate":
                 v.fail(f"supports[{i}].type", "arc length scales the loads only: a prescribed "
                        'rotation is not supported with control = "arclength"')
+    if spec["solver"]["control"] == "arclength" and spec["obstacles"]:
+        v.fail("solver.control", 'contact with [[obstacles]] needs load control (control = "load"): arc '
+                                 "length does not update the contact multipliers")
     spec["output"] = output_section(v, doc)
     design = design_section(v, doc, spec, mesh, regions)
     if design is not None:

@@ -24,8 +24,9 @@ import numpy as np
 from .. import lie
 from ..errors import ConvergenceError, ElementTooDistortedError, OptionError, SingularSystemError
 from ..results import Result, StepRecorder
-from .convergence import relative_residual, scaled_norm
-from .linalg import Factorization, make_solver
+from .convergence import scaled_norm
+from .linalg import make_solver
+from .newton_try import NewtonTry, augmented_try, hooked_loads, tangent_predictor
 from .options import NewtonOptions, split_options, unknown_keywords
 from .stability import limit_point_hint
 
@@ -43,7 +44,8 @@ class NewtonState:
 
     lam, g: the converged state; dlam: the increment a cut-back left to carry over (None: the
     next requested one); k_ref: the stiffness of the first step (limit-point check; None until
-    the first step converged).
+    the first step converged); multipliers: those of the augmented loads (contact), one array
+    per load in the order of ``problem.loads`` (None: their cold start).
 
     Attributes
     ----------
@@ -51,6 +53,8 @@ class NewtonState:
         Load factor of the converged state; ``g`` (n, 4, 4) its frames.
     dlam : float or None
         The carried-over increment; ``k_ref``: the reference stiffness [force/length].
+    multipliers : list of ndarray or None
+        As above (a checkpoint stores them with :meth:`arrays`).
 
     Example
     -------
@@ -62,11 +66,23 @@ class NewtonState:
     g: np.ndarray
     dlam: float | None = None
     k_ref: float | None = None
+    multipliers: list | None = None
 
     def pack(self):
-        """JSON-able scalars (the frames are stored apart)."""
+        """JSON-able scalars (the frames and multipliers are stored apart)."""
         return dict(lam=float(self.lam), dlam=None if self.dlam is None else float(self.dlam),
                     k_ref=None if self.k_ref is None else float(self.k_ref))
+
+    def arrays(self):
+        """The multipliers as named arrays for a checkpoint ({} without augmented loads);
+        :meth:`multipliers_of` reads them back."""
+        return {f"multipliers_{i}": np.asarray(m, float) for i, m in enumerate(self.multipliers or [])}
+
+    @staticmethod
+    def multipliers_of(arrays):
+        """The multipliers list of a checkpoint's named arrays (None when there are none)."""
+        keys = sorted((k for k in arrays if k.startswith("multipliers_")), key=lambda k: int(k.split("_")[1]))
+        return [np.array(arrays[k], float) for k in keys] or None
 
 
 @dataclass
@@ -161,6 +177,19 @@ def _split_prescribed(problem, lam, lam_try):
                                    f"{MAX_PRESCRIBED_TURN:.3f} rad in any step from load factor {lam:.6g}")
 
 
+def _log_try(result, tries, lam_try, out, augmentation=None):
+    """Append the log entry of a try (an augmented one, k > 0, converged and solved again)."""
+    entry = dict(lam=lam_try, converged=out.ok, iterations=out.iterations, linear_solves=out.solves,
+                 residual_history=out.hist, reason=out.reason)
+    if augmentation:
+        entry["augmented"] = augmentation
+    result.log.append(entry)
+    tries.append(entry)
+    log.info("  lam %.6g: %s in %d it, residual %.2e %s", lam_try,
+             "ok" if out.ok else "FAIL", len(out.hist) - 1, out.hist[-1] if out.hist else float("nan"),
+             out.reason + (" (multipliers updated: solved again)" if augmentation else ""))
+
+
 def newton_steps(problem, targets, options=None, start=None, recorder=None, result=None):
     """Yield a :class:`NewtonStep` for every requested load factor in ``targets``.
 
@@ -206,8 +235,11 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
     has_targets = problem.has_prescribed_motion
     driven = stateful or has_targets
     lam, g, dlam, k_ref = state.lam, state.g, state.dlam, state.k_ref
-    first_solve = True
     timer = _Timer(result)
+    trier = NewtonTry(problem, opts, solver, timer)
+    aug = hooked_loads(problem, "update_multipliers")       # augmented-Lagrangian loads (contact)
+    for i, ld in enumerate(aug):
+        ld.set_multipliers(None if state.multipliers is None else state.multipliers[i])
     # the mixed iteration's stresses start every try from those of the converged state (a
     # function of g alone, so a restart from a NewtonState repeats the same computations)
     mip = opts.iteration == "mip" and problem.element.mixed and not stateful
@@ -230,88 +262,21 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
                 # the seed element's strain is a state: save it, and feed it the prescribed motion
                 problem.element.save()
                 problem.element.update(lie.log(lie.inv(g) @ g_try))
-            hist = []
-            dn = np.inf
-            eta_sum = 0.0
-            k_step = pred = None
-            ok = False
-            reason = ""
-            solves = 0
-            mip_try, stress = mip, stress_conv
-            try:
-                for it in range(opts.max_iter + 1):
-                    ta = time.perf_counter()
-                    # after an increment below dtol the state has likely converged: check the
-                    # residual first and build the tangent only if it has not
-                    likely = it > 0 and dn <= opts.dtol
-                    ev = problem.evaluate(g_try, lam_try, tangent=not likely,
-                                          stress=stress if mip_try and not likely else None)
-                    rf = ev.r
-                    if not np.all(np.isfinite(rf)):
-                        raise FloatingPointError("non-finite residual")
-                    rn, floor = relative_residual(asm, ev, ell)
-                    hist.append(rn)
-                    if it > 0 and rn <= max(opts.rtol, floor) and dn <= opts.dtol:
-                        ok = True
-                        timer.t_asm += time.perf_counter() - ta
-                        break
-                    if it == opts.max_iter:
-                        reason = f"no convergence in {opts.max_iter} iterations (residual {rn:.2e})"
-                        timer.t_asm += time.perf_counter() - ta
-                        break
-                    if it > 3 and rn > opts.divergence * max(hist[0], 1e-300):
-                        reason = f"diverging (residual {rn:.2e})"
-                        timer.t_asm += time.perf_counter() - ta
-                        break
-                    if likely:
-                        ev = problem.evaluate(g_try, lam_try, tangent=True, stress=stress if mip_try else None)
-                        rf = ev.r
-                    timer.t_asm += time.perf_counter() - ta
-                    ts = time.perf_counter()
-                    try:
-                        with Factorization(ev.K, solver) as fac:
-                            x = fac.solve(-rf)
-                            if first_solve:
-                                fac.probe()
-                    except SingularSystemError as exc:
-                        if first_solve:
-                            raise SingularSystemError(
-                                f"{exc}: the tangent of the unloaded shell is singular -- a rigid-body "
-                                "motion is not restrained (missing or insufficient supports)") from None
-                        raise
-                    timer.t_sol += time.perf_counter() - ts
-                    solves += 1
-                    first_solve = False
-                    eta = asm.scatter(x)
-                    eta_sum = eta_sum + eta
-                    if it == 0:
-                        work = -float(rf @ x)
-                        k_step = scaled_norm(asm.scatter(rf), ell) ** 2 / work if work > 0 else -np.inf
-                        pred = scaled_norm(eta, ell, moment=False)
-                        # guard: a first increment doing negative work starts past an
-                        # instability, where the mixed iteration's reach can carry it onto
-                        # another equilibrium; iterate that try on the displacements
-                        mip_try = mip_try and work > 0
-                    dn = scaled_norm(eta, ell, moment=False) / ell
-                    if mip_try:
-                        # the mixed update: stresses linear in the increment (no membrane
-                        # overshoot of Dbar (z(g exp eta) - z0) in the geometric stiffness)
-                        stress = problem.linear_stress(ev, eta)
-                    g_try = problem.retract(g_try, eta)
-                    if stateful:
-                        problem.element.update(eta)
-            except SingularSystemError as exc:
-                if first_solve:
-                    raise
-                reason = str(exc)
-            except (ElementTooDistortedError, FloatingPointError) as exc:
-                reason = str(exc)
-            entry = dict(lam=lam_try, converged=ok, iterations=max(len(hist) - 1, 0), linear_solves=solves,
-                         residual_history=hist, reason=reason)
-            result.log.append(entry)
-            tries.append(entry)
-            log.info("  lam %.6g: %s in %d it, residual %.2e %s", lam_try, "ok" if ok else "FAIL",
-                     len(hist) - 1, hist[-1] if hist else float("nan"), reason)
+            stress_try = stress_conv
+            if opts.predictor == "tangent" and has_targets and not stateful:
+                try:
+                    g_try, stress_try = tangent_predictor(problem, g, lam, lam_try, solver, mip, trier.caps)
+                except (SingularSystemError, ElementTooDistortedError, FloatingPointError):
+                    g_try, stress_try = problem.apply_prescribed(g.copy(), lam_try), stress_conv
+            saved = [ld.multipliers() for ld in aug]
+            out = augmented_try(trier, aug, g_try, lam_try, mip, stress_try, opts.max_augmentations,
+                                lambda o, k: _log_try(result, tries, lam_try, o, augmentation=k))
+            ok, reason, hist, g_try, ev = out.ok, out.reason, out.hist, out.g, out.ev
+            k_step, pred, eta_sum = out.k_step, out.pred, out.eta_sum
+            if not ok:
+                for ld, m in zip(aug, saved):
+                    ld.set_multipliers(m)
+            _log_try(result, tries, lam_try, out, augmentation=0 if aug else None)
             if ok and opts.limit_check and not driven and k_step is not None:
                 if k_ref is None:
                     k_ref = k_step
@@ -361,7 +326,7 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
             stored = rec.step(lam, g, 0, [], ev.r_int, ev.f_ext)
             stored.attempts, stored.linear_solves = 0, 0
         timer.close()
-        state = NewtonState(lam, g, dlam, k_ref)
+        state = NewtonState(lam, g, dlam, k_ref, [ld.multipliers() for ld in aug] if aug else None)
         yield NewtonStep(stored, state, tries)
 
 

@@ -18,9 +18,10 @@ from dataclasses import dataclass, field, fields, replace
 
 from ..errors import OptionError, did_you_mean
 
-__all__ = ["NewtonOptions", "ArcLengthOptions", "split_options", "unknown_keywords", "ITERATIONS"]
+__all__ = ["NewtonOptions", "ArcLengthOptions", "split_options", "unknown_keywords", "ITERATIONS", "PREDICTORS"]
 
 ITERATIONS = ("mip", "displacement")     # NewtonOptions.iteration
+PREDICTORS = ("none", "tangent")         # NewtonOptions.predictor
 
 
 def _check(opts):
@@ -52,7 +53,8 @@ class NewtonOptions:
     integration point Newton of Magisano, Leonetti and Garcea 2017, with an element that
     supports it: the geometric part of the tangent sees element stresses updated linearly,
     ``solvers.newton``) or 'displacement' (plain Newton on the displacement residual); both
-    converge to the same states.
+    converge to the same states; max_augmentations: multiplier updates (and solves again) per try
+    of the loads that have multipliers (augmented-Lagrangian contact, ``Load.update_multipliers``).
 
     Attributes
     ----------
@@ -70,6 +72,12 @@ class NewtonOptions:
         'auto', 'superlu', 'mumps' or None.
     iteration : str
         'mip' (default) or 'displacement'.
+    max_augmentations : int
+        In [0, 1000]; default 25.
+    predictor : str
+        'none' (default: a try starts from the converged state with the prescribed nodes moved)
+        or 'tangent' (with a prescribed motion: the Euler predictor of ``newton_try.tangent_predictor``,
+        which carries the shell along with the prescribed nodes).
 
     A value outside its range raises :class:`~core_se3.errors.OptionError`.
 
@@ -88,9 +96,14 @@ class NewtonOptions:
     record_substeps: bool = False
     linear_solver: str | None = None
     iteration: str = "mip"
+    max_augmentations: int = _opt(25, 0, 1000)
+    predictor: str = "none"
 
     def __post_init__(self):
         _check(self)
+        if self.predictor not in PREDICTORS:
+            raise OptionError(f"NewtonOptions.predictor must be one of {', '.join(map(repr, PREDICTORS))}, "
+                              f"got {self.predictor!r}")
         if self.iteration not in ITERATIONS:
             raise OptionError(f"NewtonOptions.iteration must be one of {', '.join(map(repr, ITERATIONS))}, "
                               f"got {self.iteration!r}")

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import CoreSE3Error
+from ..model.base import overrides
 from .convergence import relative_residual, scaled_norm
 from .linalg import make_solver
 
@@ -62,6 +63,10 @@ class ShellSystem:
                     raise CoreSE3Error("path following scales loads only: a prescribed motion that "
                                        "depends on the load factor is not supported; use "
                                        "newton_solve for displacement-driven problems")
+        hooked = [ld for ld in problem.loads if overrides(ld, "update_multipliers") or overrides(ld, "limit_increment")]
+        if hooked:
+            raise CoreSE3Error(f"path following does not support the load {hooked[0].name!r} (contact with an "
+                               "obstacle: its multipliers and step cap need load stepping); use newton_solve")
         self.problem = problem
         self.asm = problem.assembler()
         self.solver = make_solver(linear_solver or problem.linear_solver)

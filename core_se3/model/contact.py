@@ -1,0 +1,477 @@
+"""Frictionless contact of the shell with rigid obstacles (``model.obstacles``): node-to-surface,
+a C^1-regularised augmented Lagrangian (penalty: the same law with the multipliers held), as a
+:class:`~core_se3.model.Load` with the solver hooks of the Load protocol (``limit_increment``,
+``update_multipliers``).  Derivations in docs/CONTACT.md.
+
+Contact surface.  The shell touches with its face toward the obstacle, the mid-surface offset by
+h/2 along the director: node i's contact point is
+
+    x_i = phi_i + c_i d3_i,    c_i = s_i h / 2,    s_i = -sign(n(X_i, lam_ref) . d3_i(ref)),
+
+s_i = +1 (the +d3 face) when, in the reference configuration, the obstacle lies on the +d3 side
+of the node (``side`` overrides it).  The offset follows the current director d3, so the gap
+couples to the rotation and the force F_i at x_i exerts the moment (x_i - phi_i) x F_i.
+
+Sampling.  Gaps are sampled at the nodes with the nodal areas A_i = int N_i dA: one constraint
+per node, 6x6 nodal tangent blocks, no over-constraint (Gauss-point gaps on bilinear quads give
+four constraints per element for about one node: contact locking).  On a plane nodal
+non-penetration is that of the interpolated surface; on a convex obstacle of radius rho a chord
+may cut in by ~ l_e^2 / (8 rho) between nodes.
+
+Law (pressure p >= 0 per unit reference area, F_i = A_i p_i n(x_i)):
+
+    p = ramp(u0(lam_i) - k_i d_i; k_i eps),   u0 = ramp^-1,
+    ramp(u; w) = 0 (u <= 0), u^2 / (2 w) (0 < u < w), u - w/2 (u >= w),
+
+with multipliers lam_i >= 0 [force/length^2], penalty k_i = beta K_i / A_i [force/length^3] (K_i
+the translational diagonal of the shell's own tangent at node i) and band eps [length].  p(0) =
+lam_i exactly, so the Uzawa fixed points lam_i <- p_i(d_i) are the Signorini conditions, whatever
+eps.  Generalised force and tangent, with n_b = R^T n, H_b = R^T H R, B = [I, -c hat(e3)]:
+
+    f = B^T F_b,  F_b = A p n_b,   -df/deta = -B^T [A (p' n_b n_b^T + p H_b) B + [0, hat(F_b)]].
+
+Example
+-------
+>>> from core_se3 import Problem, Material, mesh
+>>> p = Problem(mesh.rectangle(1.0, 0.2, 4, 1), Material(1e4, 0.0, 0.02))
+>>> p.clamp("x0"); p.add_pressure(-1.0)
+>>> c = p.add_obstacle("half_space", point=(0.0, 0.0, -0.05), normal=(0.0, 0.0, 1.0), name="floor")
+>>> st = p.solve(steps=2).final
+>>> F = st.contact["floor"]["force"]
+>>> bool(F[2] > 0), bool(c.penetration(st.g, 1.0) <= c.tol), bool(st.balance_error < 1e-8)
+(True, True, True)
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .. import lie
+from ..assembly import Assembler
+from ..fem.quadrature import shape_functions, surface_jacobian
+from .base import Load, LoadEvaluation
+from .obstacles import Obstacle, contact_error, make_obstacle, rigid_motion
+
+__all__ = ["ContactLoad", "add_obstacle", "ramp", "ramp_inverse", "normal_law", "contact_wrench",
+           "nodal_areas", "shell_diagonal_stiffness", "reference_sides", "MODES"]
+
+E3 = np.array([0.0, 0.0, 1.0])
+MODES = ("al", "penalty")
+
+
+def ramp(u, w):
+    """The C^1 ramp 0 (u <= 0), u^2 / (2 w) (0 < u < w), u - w/2 (u >= w) and its derivative.
+
+    Example
+    -------
+    >>> [v.tolist() for v in ramp([-1.0, 0.5, 2.0], 1.0)]
+    [[0.0, 0.125, 1.5], [0.0, 0.5, 1.0]]
+    """
+    u = np.asarray(u, float)
+    w = np.broadcast_to(np.asarray(w, float), u.shape)
+    ws = np.where(w > 0, w, 1.0)
+    val = np.where(u <= 0, 0.0, np.where(u < w, u * u / (2 * ws), u - w / 2))
+    der = np.where(u <= 0, 0.0, np.where(u < w, u / ws, 1.0))
+    return val, der
+
+
+def ramp_inverse(p, w):
+    """u >= 0 with ramp(u, w) = p >= 0: sqrt(2 w p) (p < w/2), p + w/2 otherwise.
+
+    Example
+    -------
+    >>> ramp_inverse([0.125, 1.5], 1.0).tolist()
+    [0.5, 2.0]
+    """
+    p = np.maximum(np.asarray(p, float), 0.0)
+    w = np.broadcast_to(np.asarray(w, float), p.shape)
+    return np.where(p < w / 2, np.sqrt(2 * w * p), p + w / 2)
+
+
+def normal_law(d, lam, k, eps):
+    """Pressure p(d) >= 0 and dp/dd of the regularised augmented-Lagrangian law,
+    p = ramp(ramp_inverse(lam) - k d; k eps), so that p(0) = lam (module docstring).
+
+    Parameters: d gaps [length], lam multipliers [force/length^2], k penalties
+    [force/length^3], eps band [length] (broadcast).  Returns: (p, dp/dd).
+
+    Example
+    -------
+    >>> p, dp = normal_law([0.0, -1.0], [2.0, 0.0], 1.0, 0.5)
+    >>> p.tolist(), dp.tolist()
+    ([2.0, 0.75], [-1.0, -1.0])
+    """
+    w = np.asarray(k) * eps
+    p, dr = ramp(ramp_inverse(lam, w) - np.asarray(k) * np.asarray(d, float), w)
+    return p, -np.asarray(k) * dr
+
+
+def contact_wrench(R, c, A, n, H, p, dp):
+    """Generalised nodal forces f (k, 6) and -df/deta (k, 6, 6) of the contact forces A p n acting
+    at x = phi + c d3 (R (k, 3, 3) frames, c (k,) offsets [length], A (k,) areas, n (k, 3) lab
+    normals, H (k, 3, 3) lab Hessians of the SDF, p (k,) pressures, dp (k,) dp/dd).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> f, K = contact_wrench(np.eye(3)[None], np.array([-0.5]), np.array([2.0]), np.array([[1.0, 0, 0]]),
+    ...                       np.zeros((1, 3, 3)), np.array([3.0]), np.array([0.0]))
+    >>> f[0].tolist()                       # 6 along x at -0.5 d3: the moment -0.5 e3 x 6 e1
+    [6.0, 0.0, 0.0, 0.0, -3.0, 0.0]
+    """
+    Rt = np.swapaxes(R, 1, 2)
+    nb = np.einsum("kij,kj->ki", Rt, n)
+    Hb = Rt @ H @ R
+    Fb = (A * p)[:, None] * nb
+    k = len(c)
+    B = np.zeros((k, 3, 6))
+    B[:, :, :3] = np.eye(3)
+    B[:, :, 3:] = -c[:, None, None] * lie.hat3(E3)
+    Bt = np.swapaxes(B, 1, 2)
+    f = np.einsum("kij,kj->ki", Bt, Fb)
+    S = (A * dp)[:, None, None] * nb[:, :, None] * nb[:, None, :] + (A * p)[:, None, None] * Hb
+    dF = S @ B
+    dF[:, :, 3:] += lie.hat3(Fb)
+    return f, -Bt @ dF
+
+
+def nodal_areas(mesh, elements=None):
+    """A_i = int N_i dA over ``elements`` (default all; 2x2 Gauss, reference area) (n,).
+
+    Example
+    -------
+    >>> from core_se3 import mesh
+    >>> nodal_areas(mesh.rectangle(2.0, 1.0, 2, 1)).round(12).tolist()
+    [0.25, 0.5, 0.25, 0.25, 0.5, 0.25]
+    """
+    el = np.arange(mesh.n_elements) if elements is None else np.asarray(elements, np.int64)
+    quads = mesh.quads[el]
+    N, dN = shape_functions()
+    w = np.einsum("qi,mq->mi", N, surface_jacobian(mesh.X[quads], dN))
+    return np.bincount(quads.ravel(), weights=w.ravel(), minlength=mesh.n_nodes)
+
+
+def shell_diagonal_stiffness(problem, g=None):
+    """K_i = tr(K_vv,ii) / 3 (n,): the mean translational diagonal of the element tangent at g
+    (default the reference), the shell's own stiffness per node [force/length].
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(1.0, 1.0, 1, 1), Material(1e3, 0.0, 0.1))
+    >>> K = shell_diagonal_stiffness(p)
+    >>> K.shape, bool(K.min() > 0)
+    ((4,), True)
+    """
+    m = problem.mesh
+    ev = problem.element.evaluate(m.g0 if g is None else g, tangent=True)
+    K = Assembler(m, np.ones(6 * m.n_nodes, bool)).matrix(ev.element_blocks, ev.edge_blocks, ev.node_blocks)
+    return K.diagonal().reshape(-1, 6)[:, :3].mean(1)
+
+
+def reference_sides(obstacle, g0, lam_ref=0.0):
+    """s_i = -sign(n(X_i, lam_ref) . d3_i) (k,): +1 where the obstacle lies on the node's +d3 side.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3.model import make_obstacle
+    >>> floor = make_obstacle("half_space", point=(0, 0, -1.0), normal=(0, 0, 1.0))
+    >>> reference_sides(floor, np.eye(4)[None]).tolist()           # below: the -d3 face
+    [-1.0]
+    """
+    _, n, _ = obstacle.evaluate(g0[:, :3, 3], lam_ref)
+    return np.where(np.einsum("ki,ki->k", n, g0[:, :3, 2]) > 0, -1.0, 1.0)
+
+
+class ContactLoad(Load):
+    """Frictionless contact of the nodes ``nodes`` (default all nodes of ``elements``, default all)
+    with one rigid ``obstacle``, as a load (module docstring); made by ``Problem.add_obstacle``.
+
+    Parameters
+    ----------
+    problem : core_se3.Problem
+        The problem (mesh, thickness, element for the penalty scale).
+    obstacle : core_se3.model.obstacles.Obstacle
+        The obstacle; its ``name`` names the contact in reports and output fields.
+    nodes, elements : array_like of int, optional
+        Contact nodes, and the elements whose areas they carry.
+    mode : str
+        'al' (augmented Lagrangian: the solver's Uzawa updates drive the gap error to ``tol``;
+        default) or 'penalty' (multipliers held at k eps / 8).
+    beta : float
+        Penalty factor on the shell's nodal diagonal stiffness (default 1); or ``k`` directly.
+    eps, tol : float, optional
+        Band of the C^1 law and the tolerance on the gap error [length]; default 1e-6 h each.
+    side : 'auto', +1, -1 or (k,) of them
+        The contact face (module docstring).
+    cap_depth : float, optional
+        The Newton step cap lets a node the linearisation does not see penetrate at most this
+        far in one iterate [length]; default 0.05 h.
+    cold_start : float
+        Start multipliers cold_start k eps / 8 in mode 'al' (a shell resting exactly on an
+        obstacle is then restrained at the first iteration).
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> from core_se3.model import make_obstacle
+    >>> p = Problem(mesh.rectangle(1.0, 0.2, 2, 1), Material(1e4, 0.0, 0.02))
+    >>> c = ContactLoad(p, make_obstacle("sphere", centre=(0.5, 0.0, 0.5), radius=0.4))
+    >>> c.side.tolist(), round(float(c.gaps(p.mesh.g0, 0.0).min()), 4)     # the top face, ~0.1 away
+    ([1.0, 1.0, 1.0, 1.0, 1.0, 1.0], 0.1001)
+    """
+
+    kind = "contact"
+    scales_with_load_factor = False
+    constraint_force = True
+
+    def __init__(self, problem, obstacle, nodes=None, elements=None, mode="al", beta=1.0, k=None, eps=None,
+                 tol=None, side="auto", lam_ref=0.0, cap_depth=None, cold_start=1e-2):
+        if not isinstance(obstacle, Obstacle):
+            raise contact_error(f"expected a core_se3.model.obstacles.Obstacle, got {type(obstacle).__name__}")
+        if mode not in MODES:
+            raise contact_error(f"contact mode must be 'al' or 'penalty', got {mode!r}", "mode")
+        mesh = problem.mesh
+        self.obstacle, self.mode, self.name = obstacle, mode, obstacle.name
+        self.n = mesh.n_nodes
+        per = getattr(problem.material, "per_element", None)
+        h_el = per("h") if per is not None else np.full(mesh.n_elements, float(problem.material.h))
+        el = np.arange(mesh.n_elements) if elements is None else np.asarray(elements, np.int64)
+        h_node = np.zeros(mesh.n_nodes)                  # the thickest contact element at each node
+        np.maximum.at(h_node, mesh.quads[el].ravel(), np.repeat(h_el[el], 4))
+        area = nodal_areas(mesh, elements)
+        self.nodes = np.nonzero(area > 0)[0] if nodes is None else np.asarray(nodes, np.int64)
+        self.A = area[self.nodes]
+        if len(self.nodes) == 0 or np.any(self.A <= 0):
+            raise contact_error("contact nodes must belong to the contact elements (zero area weight)", "nodes")
+        if isinstance(side, str) and side == "auto":
+            s = reference_sides(obstacle, mesh.g0[self.nodes], lam_ref)
+        else:
+            s = np.broadcast_to(np.asarray(side, float), self.nodes.shape).copy()
+            if not np.all(np.abs(s) == 1):
+                raise contact_error("side must be 'auto', +1, -1 or one +-1 per contact node", "side")
+        self.h = float(h_node[self.nodes].max())
+        self.side, self.c = s, s * h_node[self.nodes] / 2
+        self.beta = float(beta)
+        if k is None:
+            self.k = self.beta * shell_diagonal_stiffness(problem)[self.nodes] / self.A
+        else:
+            self.k = np.broadcast_to(np.asarray(k, float), self.nodes.shape).copy()
+        if not np.all(np.isfinite(self.k)) or np.any(self.k <= 0):
+            raise contact_error("the contact penalty must be positive and finite (beta > 0)", "beta")
+        self.eps = 1e-6 * self.h if eps is None else float(eps)
+        self.tol = 1e-6 * self.h if tol is None else float(tol)
+        self.cap_depth = 0.05 * self.h if cap_depth is None else float(cap_depth)
+        for key in ("eps", "tol", "cap_depth"):
+            v = getattr(self, key)
+            if not (np.isfinite(v) and v > 0):
+                raise contact_error(f"contact {key} must be positive and finite, got {v}", key)
+        self.lam0 = (self.k * self.eps / 8) * (1.0 if mode == "penalty" else float(cold_start))
+        self.lam = self.lam0.copy()
+        self.gap_error = 0.0
+        self.approximate_tangent = bool(obstacle.approximate_hessian)
+        self._active = np.zeros(len(self.nodes), bool)
+        self._normals = np.zeros((len(self.nodes), 3))
+        self.state(mesh.g0, 0.0)                    # the active set of the reference state
+
+    # ------------------------------------------------------------------ kinematics, law
+    def contact_points(self, g):
+        """x_i = phi_i + c_i d3_i (k, 3) at the contact nodes [length]."""
+        return g[self.nodes, :3, 3] + self.c[:, None] * g[self.nodes, :3, 2]
+
+    def state(self, g, lam):
+        """(x, d, n, H, p, dp) at the contact nodes (and the active set for :meth:`restraint`)."""
+        x = self.contact_points(g)
+        d, n, H = self.obstacle.evaluate(x, lam)
+        p, dp = normal_law(d, self.lam, self.k, self.eps)
+        self._active, self._normals = (p > 0) | (dp < 0), n
+        return x, d, n, H, p, dp
+
+    def evaluate(self, g, lam, tangent=True):
+        x, d, n, H, p, dp = self.state(g, lam)
+        fb, Kb = contact_wrench(g[self.nodes, :3, :3], self.c, self.A, n, H, p, dp)
+        f = np.zeros((self.n, 6))
+        f[self.nodes] = fb
+        if not tangent:
+            return LoadEvaluation(f)
+        K = np.zeros((self.n, 6, 6))
+        K[self.nodes] = Kb
+        return LoadEvaluation(f, K)
+
+    def restraint(self):
+        """(nodes, lab normals (k, 1, 3)) of the nodes in contact at the last evaluation: a shell
+        resting on an obstacle is held along the normals (for the rigid-motion check)."""
+        on = self._active
+        return self.nodes[on], self._normals[on][:, None, :]
+
+    # ------------------------------------------------------------------ solver hooks
+    def limit_increment(self, g, eta, lam):
+        """The step cap alpha in [1e-3, 1]: a node the current linearisation does not see (no force,
+        no stiffness) that the full increment eta would carry deeper than max(eps/2, cap_depth)
+        into the obstacle stops there, alpha = min (d0 + D) / (d0 - d1) (d0, d1 its gaps before and
+        after).  Without it an iterate can land deep in a stiff contact whose unbalanced force
+        throws Newton off; near convergence alpha = 1."""
+        x, d0, n, H, p, dp = self.state(g, lam)
+        free = (p <= 0) & (dp >= 0)
+        if not free.any():
+            return 1.0
+        idx = self.nodes[free]
+        g1 = g[idx] @ lie.exp(eta[idx])
+        d1 = self.obstacle.distance(g1[:, :3, 3] + self.c[free, None] * g1[:, :3, 2], lam)
+        depth = max(self.eps / 2, self.cap_depth)
+        hit = d1 < -depth
+        if not hit.any():
+            return 1.0
+        a = (d0[free][hit] + depth) / (d0[free][hit] - d1[hit])
+        return float(np.clip(np.min(a), 1e-3, 1.0))
+
+    def start_error(self, g, lam):
+        """Refuse a try that starts with a contact point deeper than the thickness h inside the
+        obstacle (a moving obstacle that swept into the shell over the increment: from there the
+        node may be pushed out on the far side, tunnelling); the solver cuts the increment back."""
+        d = self.gaps(g, lam)
+        i = int(np.argmin(d))
+        if d[i] < -self.h:
+            return (f"obstacle {self.name!r} starts the increment {-d[i]:.3g} inside the shell at node "
+                    f"{int(self.nodes[i])} (more than the thickness {self.h:.3g}): smaller increment")
+        return ""
+
+    def update_multipliers(self, g, lam):
+        """At a converged state: the gap error e (|d| on nodes carrying force, the penetration on
+        the others) over ``tol``; when it exceeds 1 (mode 'al') the multipliers are updated,
+        lam_i <- p_i(d_i) (Uzawa), and the solver solves the same load factor again."""
+        _, d, _, _, p, _ = self.state(g, lam)
+        err = np.where(p > 0, np.abs(d), np.maximum(0.0, -d))
+        self.gap_error = float(err.max()) if self.mode == "al" else float(np.maximum(0.0, -d).max())
+        if self.mode != "al":
+            return 0.0
+        ratio = self.gap_error / self.tol
+        if ratio > 1.0:
+            self.lam = p
+        return ratio
+
+    def multipliers(self):
+        """A copy of the multipliers (k,) [force/length^2] (a restart point keeps them)."""
+        return self.lam.copy()
+
+    def set_multipliers(self, lam=None):
+        """Set the multipliers (None: back to the cold start)."""
+        self.lam = self.lam0.copy() if lam is None else np.array(lam, float).reshape(self.lam0.shape)
+
+    # ------------------------------------------------------------------ output
+    def gaps(self, g, lam):
+        """d_i (k,) at the contact nodes [length]."""
+        return self.state(g, lam)[1]
+
+    def penetration(self, g, lam):
+        """max_i (-d_i), 0 when no node penetrates [length]."""
+        return float(max(0.0, -self.gaps(g, lam).min()))
+
+    def nodal_forces(self, g, lam):
+        """Lab contact forces (k, 3) on the contact nodes and their points of action x (k, 3)."""
+        x, d, n, H, p, dp = self.state(g, lam)
+        return (self.A * p)[:, None] * n, x
+
+    def total(self, g, lam):
+        """Total lab contact force [force] and its moment about the origin [force x length]."""
+        F, x = self.nodal_forces(g, lam)
+        return F.sum(0), np.cross(x, F).sum(0)
+
+    def report(self, g, lam):
+        """Per-step scalars: penetration [length], gap error of the last update [length], the
+        number of nodes carrying force."""
+        _, d, _, _, p, _ = self.state(g, lam)
+        return dict(penetration=float(max(0.0, -d.min())), gap_error=self.gap_error,
+                    nodes_in_contact=int(np.count_nonzero(p > 0)))
+
+    def output_fields(self, g, lam):
+        """VTU point fields: ``contact_force`` (lab) and ``contact_pressure`` (summed over the
+        obstacles), ``contact_gap_NAME`` [length] (NaN off the contact nodes)."""
+        x, d, n, H, p, dp = self.state(g, lam)
+        gap = np.full(self.n, np.nan)
+        gap[self.nodes] = d
+        F = np.zeros((self.n, 3))
+        F[self.nodes] = (self.A * p)[:, None] * n
+        P = np.zeros(self.n)
+        P[self.nodes] = p
+        key = "".join(ch if ch.isalnum() else "_" for ch in self.name)
+        return {f"contact_gap_{key}": gap, "contact_force": F, "contact_pressure": P}
+
+    def check_initial(self, mesh, g, lam=0.0):
+        """ContactError when the obstacle intersects the contact surface at (g, lam) by more than
+        tol: at the nodes and at 3 x 3 points of every element (the bilinear surface through the
+        contact points), so that an obstacle between nodes is found too."""
+        where = np.full(self.n, -1)
+        where[self.nodes] = np.arange(len(self.nodes))
+        el = np.nonzero((where[mesh.quads] >= 0).all(1))[0]
+        x = np.zeros((self.n, 3))
+        x[self.nodes] = self.contact_points(g)
+        t = np.array([-1.0, 0.0, 1.0])
+        xi, et = (a.ravel() for a in np.meshgrid(t, t))
+        N = 0.25 * np.stack([(1 - xi) * (1 - et), (1 + xi) * (1 - et), (1 + xi) * (1 + et), (1 - xi) * (1 + et)], 1)
+        pts = np.einsum("qa,mai->mqi", N, x[mesh.quads[el]]).reshape(-1, 3)
+        d = self.obstacle.distance(np.concatenate([x[self.nodes], pts]), lam)
+        i = int(np.argmin(d))
+        if d[i] < -self.tol:
+            at = (f"node {int(self.nodes[i])}" if i < len(self.nodes) else
+                  f"element {int(el[(i - len(self.nodes)) // 9])}")
+            raise contact_error(
+                f"obstacle {self.name!r} already intersects the undeformed shell: its contact surface at {at} "
+                f"lies {-d[i]:.4g} inside it (tolerance {self.tol:.3g}); move or shrink the obstacle, or start "
+                "its motion off the shell")
+
+
+def add_obstacle(problem, obstacle, region=None, nodes=None, motion=None, name=None, mode="al", beta=1.0,
+                 eps=None, tol=None, side="auto", cap_depth=None, **params):
+    """Add frictionless contact with a rigid obstacle to ``problem``; returns the ContactLoad.
+
+    Parameters
+    ----------
+    problem : core_se3.Problem
+        The problem.
+    obstacle : str or Obstacle
+        A registered kind (``model.OBSTACLES``: 'half_space', 'sphere', 'cylinder', 'box') with
+        its ``params``, or an Obstacle instance (e.g. a ``UserSDF``).
+    region, nodes : optional
+        The contact elements (a region name or ids; default all) and nodes (a node selection;
+        default all nodes of those elements).
+    motion : callable or dict, optional
+        lam -> (4, 4) rigid transform, or dict(translate, axis, angle, point) of
+        :func:`~core_se3.model.obstacles.rigid_motion`; for a kind only.
+    name : str, optional
+        The contact's name in reports (default the kind); ``mode``, ``beta``, ``eps``, ``tol``,
+        ``side``, ``cap_depth``: as for :class:`ContactLoad`.
+    **params
+        The kind's parameters (e.g. centre, radius).
+
+    Returns
+    -------
+    ContactLoad
+        ContactError for an unknown kind or key, a bad value, or an obstacle that already
+        intersects the undeformed shell.
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(1.0, 0.2, 2, 1), Material(1e4, 0.0, 0.02))
+    >>> c = add_obstacle(p, "cylinder", point=(1.0, 0.0, -0.2), axis=(0, 1, 0), radius=0.1,
+    ...                  motion=dict(translate=(0.0, 0.0, 0.1)), name="pusher")
+    >>> c.name, round(float(c.obstacle.distance([[1.0, 0.0, 0.0]], lam=1.0)[0]), 12)
+    ('pusher', 0.0)
+    """
+    if isinstance(motion, dict):
+        motion = rigid_motion(**motion)
+    if isinstance(obstacle, str):
+        obstacle = make_obstacle(obstacle, motion=motion, name=name, **params)
+    elif params or motion is not None:
+        raise contact_error("an Obstacle instance carries its own parameters and motion: give them to its "
+                            f"constructor (got {', '.join(list(params) + ['motion'] * (motion is not None))})")
+    elif name is not None:
+        obstacle.name = name
+    elements = problem.elements(region)
+    sel = None if nodes is None else problem.nodes(nodes)
+    load = ContactLoad(problem, obstacle, sel, elements, mode, beta, None, eps, tol, side, 0.0, cap_depth)
+    load.check_initial(problem.mesh, problem.mesh.g0, 0.0)
+    if any(getattr(ld, "name", None) == load.name for ld in problem.loads if isinstance(ld, ContactLoad)):
+        raise contact_error(f"there is already an obstacle named {load.name!r}: give each a name", "name")
+    return problem.add(load)

@@ -1,0 +1,91 @@
+"""Scenario section [[obstacles]]: rigid obstacles the shell may touch (frictionless contact,
+``model.contact``).  Each entry: ``type`` (a key of ``core_se3.model.OBSTACLES``) with the kind's
+parameters (read from the registry, so a new kind needs no code here), ``name``, the contact
+elements ``region`` (default all), an optional rigid ``motion`` with the load factor (a table:
+``translate``, ``axis``, ``angle``, ``point``, ``scale``) and the enforcement (``mode``, ``beta``,
+``eps``, ``tol``, ``cap_depth``, ``side``).  Schema and examples: docs/SCENARIOS.md."""
+from __future__ import annotations
+
+from ..errors import CoreSE3Error
+from ..model import OBSTACLES
+from ..model.contact import MODES
+from .geometry import region_ref
+from .validate import join, make_scale
+
+__all__ = ["OBSTACLE_KEYS", "MOTION_KEYS", "SIDES", "obstacles_section", "add_obstacles", "obstacles_of"]
+
+OBSTACLE_KEYS = ("type", "name", "region", "motion", "mode", "beta", "eps", "tol", "cap_depth", "side")
+MOTION_KEYS = ("translate", "axis", "angle", "point", "scale")
+SIDES = {"auto": "auto", "top": 1.0, "bottom": -1.0}        # the contact face: auto, +d3, -d3
+
+
+def obstacles_section(v, doc, regions):
+    """The validated [[obstacles]] entries (a list of dicts, defaults filled in)."""
+    out, names = [], set()
+    for i, t in enumerate(v.array_of_tables(doc, "obstacles")):
+        key = f"obstacles[{i}]"
+        typ = v.string(t, "type", key, choices=tuple(OBSTACLES))
+        kind = OBSTACLES[typ]
+        v.table(t, key, OBSTACLE_KEYS + tuple(p.name for p in kind.params))
+        o = dict(type=typ, name=v.string(t, "name", key, default=typ))
+        if o["name"] in names:
+            v.fail(join(key, "name"), f"obstacle names must be unique: {o['name']!r} is used twice (give 'name')")
+        names.add(o["name"])
+        o["params"] = v.params(t, key, kind.params)
+        _, o["region"] = region_ref(v, t, key, regions)
+        o["mode"] = v.string(t, "mode", key, default="al", choices=MODES)
+        o["beta"] = v.number(t, "beta", key, default=1.0, lo=0.0, lo_open=True)
+        for k in ("eps", "tol", "cap_depth"):
+            o[k] = v.number(t, k, key, default=None, lo=0.0, lo_open=True)
+        o["side"] = v.string(t, "side", key, default="auto", choices=tuple(SIDES))
+        o["motion"] = None
+        if "motion" in t:
+            mk = join(key, "motion")
+            m = v.table(t["motion"], mk, MOTION_KEYS)
+            if "translate" not in m and "axis" not in m:
+                v.fail(mk, "a motion needs 'translate' (a vector [length] at load factor 1) and/or 'axis' "
+                           "with 'angle' [rad] (and 'point')")
+            o["motion"] = dict(translate=v.vector(m, "translate", mk, default=None),
+                               axis=v.vector(m, "axis", mk, default=None, nonzero=True),
+                               angle=v.number(m, "angle", mk, default=0.0),
+                               point=v.vector(m, "point", mk, default=[0.0, 0.0, 0.0]),
+                               scale=v.scale(m, mk))
+            if o["motion"]["axis"] is not None and "angle" not in m:
+                v.fail(join(mk, "angle"), "a rotation 'axis' needs its 'angle' [rad] at load factor 1")
+        out.append(o)
+    return out
+
+
+def add_obstacles(v, prob, spec, regions):
+    """Add the validated obstacles to the Problem; a failure of the core's checks (e.g. an
+    obstacle that already intersects the undeformed shell) is a ScenarioError keyed to it."""
+    for i, o in enumerate(spec.get("obstacles", [])):
+        key = f"obstacles[{i}]"
+        motion = None
+        if o["motion"] is not None:
+            m = dict(o["motion"])
+            motion = dict(translate=m["translate"], axis=m["axis"], angle=m["angle"], point=m["point"],
+                          scale=make_scale(m["scale"]))
+        try:
+            prob.add_obstacle(o["type"], region=regions[o["region"]] if o["region"] else None, motion=motion,
+                              name=o["name"], mode=o["mode"], beta=o["beta"], eps=o["eps"], tol=o["tol"],
+                              side=SIDES[o["side"]], cap_depth=o["cap_depth"], **o["params"])
+        except CoreSE3Error as exc:
+            param = getattr(exc, "param", None)
+            if param in ("nodes", "beta", "eps", "tol", "cap_depth", "side", "mode", "type"):
+                param = None if param == "nodes" else param
+            v.fail(join(key, param) if param else key, str(exc))
+
+
+def obstacles_of(prob):
+    """The rigid obstacles of the problem's contact loads (for pictures and VTU files).
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(1.0, 0.2, 2, 1), Material(1e4, 0.0, 0.02))
+    >>> _ = p.add_obstacle("sphere", centre=(0.5, 0.0, 0.5), radius=0.4, name="ball")
+    >>> [ob.name for ob in obstacles_of(p)]
+    ['ball']
+    """
+    return [ld.obstacle for ld in prob.loads if getattr(ld, "constraint_force", False) and hasattr(ld, "obstacle")]

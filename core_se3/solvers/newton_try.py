@@ -1,0 +1,305 @@
+"""One Newton try of load stepping (``solvers.newton``): Newton at a fixed load factor from a
+start state, with the optional hooks of the loads (docs/CONTACT.md):
+
+* a refused start: loads overriding ``Load.start_error`` may refuse the start state of a try
+  (contact: an obstacle that moved deep into the shell over the increment), which is cut back;
+* a step cap: loads overriding ``Load.limit_increment`` scale each increment by the smallest
+  factor they return (contact: a node the linearisation does not see must not land deep inside
+  an obstacle);
+* augmentation: loads overriding ``Load.update_multipliers`` are asked, once a try converged,
+  for their constraint error over its tolerance; while it exceeds 1 they have augmented their
+  multipliers and :func:`augmented_try` solves the same load factor again from the converged
+  state (Uzawa), each solve a try of its own in the log.
+
+Without such loads the iteration is the plain one, operation for operation.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import lie
+from ..assembly import Assembler
+from ..errors import ElementTooDistortedError, SingularSystemError
+from ..model.base import overrides
+from .convergence import relative_residual, scaled_norm
+from .linalg import Factorization
+
+__all__ = ["NewtonTry", "TryOutcome", "augmented_try", "hooked_loads", "tangent_predictor"]
+
+
+def hooked_loads(problem, hook):
+    """The loads of ``problem`` whose class overrides the Load hook ``hook``.
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(1.0, 0.2, 2, 1), Material(1e4, 0.0, 0.02))
+    >>> p.add_edge_force("x1", (0.0, 0.0, 1.0)); c = p.add_obstacle("sphere", centre=(0.5, 0, 1.0), radius=0.5)
+    >>> [ld.kind for ld in hooked_loads(p, "update_multipliers")]
+    ['contact']
+    """
+    return [ld for ld in problem.loads if overrides(ld, hook)]
+
+
+@dataclass
+class TryOutcome:
+    """What a Newton try ended with.
+
+    Attributes
+    ----------
+    ok : bool
+        Converged; ``reason``: why not.
+    g : (n, 4, 4) ndarray
+        The last iterate; ``ev``: its Evaluation.
+    hist : list of float
+        Relative residual of every iteration; ``solves``: linear solves.
+    eta_sum : ndarray or float
+        Sum of the applied increments (n, 6); ``k_step``, ``pred``: the first iterate's
+        stiffness estimate and increment norm (the limit-point check).
+
+    Example
+    -------
+    >>> TryOutcome(True, "", None, None, [1.0, 1e-12], 1).iterations
+    1
+    """
+    ok: bool
+    reason: str
+    g: object
+    ev: object
+    hist: list
+    solves: int
+    eta_sum: object = 0.0
+    k_step: float | None = None
+    pred: float | None = None
+
+    @property
+    def iterations(self):
+        return max(len(self.hist) - 1, 0)
+
+
+class NewtonTry:
+    """Newton iterations at one load factor (the body of ``newton_steps``' tries).
+
+    Parameters
+    ----------
+    problem : core_se3.Problem
+        The problem; ``opts``: NewtonOptions; ``solver``: a linear solver (``make_solver``).
+    timer : object
+        Accumulates ``t_asm`` and ``t_sol`` [s] (attributes).
+
+    Attributes
+    ----------
+    first_solve : bool
+        True until the first linear solve of the path (its singular tangent is an error).
+
+    Example
+    -------
+    >>> import types
+    >>> from core_se3 import Problem, Material, mesh
+    >>> from core_se3.solvers import NewtonOptions, make_solver
+    >>> p = Problem(mesh.rectangle(10.0, 1.0, 4, 1), Material(1.2e6, 0.0, 0.1))
+    >>> p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 0.1))
+    >>> t = NewtonTry(p, NewtonOptions(), make_solver("auto"), types.SimpleNamespace(t_asm=0.0, t_sol=0.0))
+    >>> out = t.run(p.mesh.g0.copy(), 1.0, False, None)
+    >>> out.ok, out.iterations <= 5
+    (True, True)
+    """
+
+    def __init__(self, problem, opts, solver, timer):
+        self.problem, self.opts, self.solver, self.timer = problem, opts, solver, timer
+        self.asm = problem.assembler()
+        self.ell = problem.length_scale
+        self.stateful = problem.element.stateful
+        self.first_solve = True
+        self.caps = hooked_loads(problem, "limit_increment")
+        self.starts = hooked_loads(problem, "start_error")
+
+    def run(self, g_try, lam_try, mip, stress):
+        """Iterate from g_try at lam_try (mip: the mixed iteration from the stresses ``stress``);
+        returns a :class:`TryOutcome`.  A singular tangent at the first solve of the path raises."""
+        problem, opts, asm, ell, timer = self.problem, self.opts, self.asm, self.ell, self.timer
+        for ld in self.starts:
+            why = ld.start_error(g_try, lam_try)
+            if why:
+                return TryOutcome(False, why, g_try, None, [], 0)
+        hist = []
+        dn = np.inf
+        eta_sum = 0.0
+        k_step = pred = None
+        ok = False
+        reason = ""
+        solves = 0
+        ev = None
+        mip_try = mip
+        try:
+            for it in range(opts.max_iter + 1):
+                ta = time.perf_counter()
+                # after an increment below dtol the state has likely converged: check the
+                # residual first and build the tangent only if it has not
+                likely = it > 0 and dn <= opts.dtol
+                ev = problem.evaluate(g_try, lam_try, tangent=not likely,
+                                      stress=stress if mip_try and not likely else None)
+                rf = ev.r
+                if not np.all(np.isfinite(rf)):
+                    raise FloatingPointError("non-finite residual")
+                rn, floor = relative_residual(asm, ev, ell)
+                hist.append(rn)
+                if it > 0 and rn <= max(opts.rtol, floor) and dn <= opts.dtol:
+                    ok = True
+                    timer.t_asm += time.perf_counter() - ta
+                    break
+                if it == opts.max_iter:
+                    reason = f"no convergence in {opts.max_iter} iterations (residual {rn:.2e})"
+                    timer.t_asm += time.perf_counter() - ta
+                    break
+                if it > 3 and rn > opts.divergence * max(hist[0], 1e-300):
+                    reason = f"diverging (residual {rn:.2e})"
+                    timer.t_asm += time.perf_counter() - ta
+                    break
+                if likely:
+                    ev = problem.evaluate(g_try, lam_try, tangent=True, stress=stress if mip_try else None)
+                    rf = ev.r
+                timer.t_asm += time.perf_counter() - ta
+                ts = time.perf_counter()
+                try:
+                    with Factorization(ev.K, self.solver) as fac:
+                        x = fac.solve(-rf)
+                        if self.first_solve:
+                            fac.probe()
+                except SingularSystemError as exc:
+                    if self.first_solve:
+                        raise SingularSystemError(
+                            f"{exc}: the tangent of the unloaded shell is singular -- a rigid-body "
+                            "motion is not restrained (missing or insufficient supports)") from None
+                    raise
+                timer.t_sol += time.perf_counter() - ts
+                solves += 1
+                self.first_solve = False
+                eta = asm.scatter(x)
+                if it == 0:
+                    work = -float(rf @ x)
+                    k_step = scaled_norm(asm.scatter(rf), ell) ** 2 / work if work > 0 else -np.inf
+                    pred = scaled_norm(eta, ell, moment=False)
+                    # guard: a first increment doing negative work starts past an
+                    # instability, where the mixed iteration's reach can carry it onto
+                    # another equilibrium; iterate that try on the displacements
+                    mip_try = mip_try and work > 0
+                if self.caps:
+                    alpha = min(ld.limit_increment(g_try, eta, lam_try) for ld in self.caps)
+                    if alpha < 1.0:
+                        eta = alpha * eta
+                eta_sum = eta_sum + eta
+                dn = scaled_norm(eta, ell, moment=False) / ell
+                if mip_try:
+                    # the mixed update: stresses linear in the increment (no membrane
+                    # overshoot of Dbar (z(g exp eta) - z0) in the geometric stiffness)
+                    stress = problem.linear_stress(ev, eta)
+                g_try = problem.retract(g_try, eta)
+                if self.stateful:
+                    problem.element.update(eta)
+        except SingularSystemError as exc:
+            if self.first_solve:
+                raise
+            reason = str(exc)
+        except (ElementTooDistortedError, FloatingPointError) as exc:
+            reason = str(exc)
+        return TryOutcome(ok, reason, g_try, ev, hist, solves, eta_sum, k_step, pred)
+
+
+def augmented_try(trier, aug, g_try, lam_try, mip, stress, max_augmentations, record):
+    """A try with the multiplier updates of the loads ``aug`` (module docstring): after each
+    converged solve, solve again from it while a load reports a constraint error above its
+    tolerance, at most ``max_augmentations`` times; ``record(outcome, augmentation)`` logs each
+    intermediate solve.  Returns the last :class:`TryOutcome` (its eta_sum the sum over the
+    solves, k_step and pred the first's); a failure is an outcome with ``ok`` False.
+
+    Example
+    -------
+    >>> import types
+    >>> from core_se3 import Problem, Material, mesh
+    >>> from core_se3.solvers import NewtonOptions, make_solver
+    >>> p = Problem(mesh.rectangle(1.0, 0.2, 4, 1), Material(1e4, 0.0, 0.02))
+    >>> p.clamp("x0"); p.add_pressure(-0.004)
+    >>> c = p.add_obstacle("half_space", point=(0, 0, -0.05), normal=(0, 0, 1))
+    >>> t = NewtonTry(p, NewtonOptions(), make_solver("auto"), types.SimpleNamespace(t_asm=0.0, t_sol=0.0))
+    >>> seen = []
+    >>> out = augmented_try(t, [c], p.mesh.g0.copy(), 1.0, False, None, 25, lambda o, k: seen.append(k))
+    >>> out.ok, len(seen) > 0, bool(c.gap_error <= c.tol)
+    (True, True, True)
+    """
+    out = trier.run(g_try, lam_try, mip, stress)
+    n_aug = 0
+    while out.ok and aug:
+        ratio = max(ld.update_multipliers(out.g, lam_try) for ld in aug)
+        if ratio <= 1.0:
+            break
+        if n_aug >= max_augmentations:
+            out.ok = False
+            out.reason = (f"constraint error {ratio:.3g} x its tolerance after {max_augmentations} "
+                          "multiplier updates (raise NewtonOptions.max_augmentations or the tolerance)")
+            break
+        n_aug += 1
+        record(out, n_aug)
+        first = out
+        out = trier.run(out.g, lam_try, mip, out.ev.stress if mip else None)
+        out.eta_sum = out.eta_sum + first.eta_sum
+        out.k_step, out.pred = first.k_step, first.pred
+    return out
+
+
+def tangent_predictor(problem, g, lam, lam_try, solver, mip, caps=()):
+    """The start of a try from the converged state (g, lam) to lam_try along the tangent,
+    prescribed increments included (``NewtonOptions.predictor = "tangent"``): with xi_p the
+    increments of the prescribed dofs (the body translation R^T (phi_1 - phi_0) of a
+    translation-only target, log(g^-1 g_1) otherwise), the free dofs solve
+
+        K_ff eta_f = -r_f(g, lam_try) - K_fp xi_p,
+
+    so that a prescribed edge takes the shell with it instead of leaving a kink in its first
+    elements; the increment is capped by the loads' ``limit_increment`` (contact).  Returns
+    (g_start, stresses of the mixed iteration at the start or None).
+
+    Example
+    -------
+    A strip whose end x1 is lifted by 0.1: the predicted start bends the whole strip.
+
+    >>> import numpy as np
+    >>> from core_se3 import Problem, Material, mesh
+    >>> from core_se3.solvers import make_solver
+    >>> p = Problem(mesh.rectangle(10.0, 1.0, 8, 1), Material(1.2e6, 0.0, 0.1))
+    >>> g1 = p.mesh.g0[p.mesh.node_set("x1")].copy()
+    >>> p.clamp("x0"); p.prescribe("x1", lambda lam: g1 + lam * np.pad([[0, 0, 0, 0.1]], ((2, 0), (0, 0)))[None, 2:])
+    >>> g, _ = tangent_predictor(p, p.mesh.g0, 0.0, 1.0, make_solver("auto"), False)
+    >>> bool(0.0 < g[4, 2, 3] < 0.1)                   # the mid-span node moved up
+    True
+    """
+    n = problem.mesh.n_nodes
+    g1 = problem.apply_prescribed(g.copy(), lam_try)
+    xi = np.zeros((n, 6))
+    for s in problem.supports:
+        if s.target is None:
+            continue
+        a, b = g[s.nodes], g1[s.nodes]
+        if s.fixed[:3].all() and not s.fixed[3:].any():
+            x = np.zeros((len(s.nodes), 6))
+            x[:, :3] = np.einsum("kji,kj->ki", a[:, :3, :3], b[:, :3, 3] - a[:, :3, 3])
+        else:
+            x = lie.log(lie.inv(a) @ b)
+        xi[s.nodes] = np.where(s.fixed, x, 0.0)
+    full = Assembler(problem.mesh, np.ones(6 * n, bool))
+    ev = problem.evaluate(g, lam_try, tangent=True, assembler=full)
+    free = problem.assembler().free
+    K = ev.K.tocsr()
+    rhs = -(ev.r[free] + K[free][:, ~free] @ xi.ravel()[~free])
+    with Factorization(K[free][:, free].tocsr(), solver) as fac:
+        x = fac.solve(rhs)
+    eta = xi.ravel().copy()
+    eta[free] = x
+    eta = eta.reshape(n, 6)
+    alpha = min([ld.limit_increment(g, eta, lam_try) for ld in caps] + [1.0])
+    eta = alpha * eta
+    stress = problem.linear_stress(ev, eta) if mip else None
+    return problem.apply_prescribed(problem.retract(g, eta), lam_try), stress

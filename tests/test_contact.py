@@ -1,0 +1,404 @@
+"""Frictionless contact with rigid obstacles (issue 16): the SDFs and their derivatives, the contact
+tangent against central differences across the active-set states, the catalogue cases against
+their formulas and the elastica reference (``data/contact_lift_elastica.json``), penetration and
+balance, quadratic convergence with a fixed active set, the solver hooks, scenario validation and
+the outputs.  Derivations: docs/CONTACT.md."""
+from __future__ import annotations
+
+import importlib.util
+import json
+import os
+
+import numpy as np
+import pytest
+
+import core_se3 as cs
+from core_se3 import lie, scenario
+from core_se3 import mesh as M
+from core_se3.catalogue import contact_lift_elastica, lifted_length_from_gaps, run_case
+from core_se3.errors import ContactError, ScenarioError
+from core_se3.model import (Box, ContactLoad, Cylinder, HalfSpace, Sphere, UserSDF, check_sdf, rotation,
+                            tangent_fd_check, translation)
+from core_se3.model.contact import contact_wrench, normal_law, ramp, ramp_inverse
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def obstacles():
+    """One obstacle of every kind, placed to cut through the perturbed 3 x 2 plate below."""
+    return {
+        "half_space": HalfSpace((0, 0, -0.01), (0.1, 0, 1)),
+        "sphere": Sphere((0.5, 0, 0.6), 0.6),
+        "cylinder": Cylinder((0, 0, 0.5), (0.3, 1, 0), 0.5),
+        "capped_cylinder": Cylinder((0.5, 0, 0.3), (0, 0, 1), 0.35, length=0.6, rounding=0.05),
+        "box": Box((0.5, 0, -0.3), (0.4, 0.2, 0.3), rotation=lie.exp_so3(np.array([0.1, 0.2, 0.3])), rounding=0.05),
+        "user_fd_hessian": UserSDF(lambda y: y[:, 2] + 0.05 * np.sin(3 * y[:, 0]),
+                                   lambda y: np.stack([0.15 * np.cos(3 * y[:, 0]), 0 * y[:, 0], 1 + 0 * y[:, 0]], 1)),
+        "moving_sphere": Sphere((0.5, 0, 0.9), 0.6, motion=translation((0, 0, -0.5))),
+        "rotating_box": Box((0.5, 0, -0.25), (0.4, 0.2, 0.25), rounding=0.05,
+                            motion=rotation((0, 1, 0), (0.5, 0, 0), 0.2)),
+    }
+
+
+def _state(seed=1):
+    m = M.rectangle(1.0, 0.6, 3, 2)
+    g = m.g0 @ lie.exp(np.random.default_rng(seed).normal(size=(m.n_nodes, 6)) * 0.08)
+    return m, g
+
+
+def _load_fd(load, g, lam, h=1e-7):
+    """Max relative difference of the load's own -df/deta blocks against central differences."""
+    n = len(g)
+    K = load.evaluate(g, lam).node_blocks
+    err, scale = 0.0, 0.0
+    for i in range(n):
+        for k in range(6):
+            d = np.zeros((n, 6))
+            d[i, k] = h
+            col = -(load.evaluate(g @ lie.exp(d), lam, False).f - load.evaluate(g @ lie.exp(-d), lam, False).f) / (2 * h)
+            err = max(err, np.abs(col[i] - K[i, :, k]).max(), np.abs(np.delete(col, i, 0)).max())
+            scale = max(scale, np.abs(col).max())
+    return err / scale
+
+
+# ----------------------------------------------------------------------------- laws, SDFs
+def test_ramp_law_is_c1_and_shifted():
+    w = 0.7
+    u = np.linspace(-1, 2, 3001)
+    p, dp = ramp(u, w)
+    assert np.all(p >= 0) and np.all(np.diff(p) >= -1e-15)
+    assert np.allclose(np.gradient(p, u)[1:-1], dp[1:-1], atol=2e-3)
+    lam = np.array([0.0, 1e-3, 0.1, 0.35, 2.0])
+    assert np.allclose(ramp(ramp_inverse(lam, w), w)[0], lam)
+    # p(d = 0) = lam for every multiplier: the Uzawa fixed points are the exact contact conditions
+    assert np.allclose(normal_law(np.zeros(5), lam, 3.0, w / 3.0)[0], lam)
+
+
+@pytest.mark.parametrize("name", list(obstacles()))
+def test_sdf_gradient_and_hessian(name):
+    ob = obstacles()[name]
+    x = np.random.default_rng(3).normal(size=(60, 3)) * 0.8 + np.array([0.5, 0, 0])
+    x = x[np.abs(ob.distance(x, 0.6)) > 1e-3]            # off the medial kinks at the surface
+    dn, dH = check_sdf(ob, x, 0.6)
+    assert dn < 1e-7
+    assert dH < (1e-4 if ob.approximate_hessian else 1e-6)
+
+
+def test_rounded_box_is_c1_across_edges():
+    b = Box((0, 0, 0), (0.5, 0.4, 0.3), rounding=0.05)
+    x = np.stack([np.linspace(0.3, 0.6, 3001), np.zeros(3001), np.full(3001, 0.31)], 1)
+    d, n, H = b.evaluate(x)
+    assert np.abs(np.linalg.norm(n, axis=1) - 1).max() < 1e-12
+    assert np.allclose(n[0], [0, 0, 1]) and n[-1, 0] > 0.9
+    assert np.abs(np.diff(n, axis=0)).max() < 2e-3             # no jump of the normal
+    assert np.abs(H).max() <= 1 / 0.05 + 1e-9                   # curvature bounded by 1/rounding
+
+
+def test_obstacle_surfaces_lie_on_the_obstacles():
+    bounds = np.array([[-1.0, -1.0, -1.0], [2.0, 1.0, 1.0]])
+    for name, ob in obstacles().items():
+        surf = ob.surface(0.6, bounds)
+        if surf is None:
+            assert name.startswith("user")
+            continue
+        pts, quads = surf
+        assert quads.shape[1] == 4 and quads.max() < len(pts)
+        tol = 0.06 if isinstance(ob, (Box, Cylinder)) and getattr(ob, "rounding", None) else 1e-9
+        assert np.abs(ob.distance(pts, 0.6)).max() < tol        # rounded bodies are drawn sharp
+
+
+# ----------------------------------------------------------------------------- tangents
+@pytest.mark.parametrize("name", list(obstacles()))
+def test_tangent_fd_in_band_and_out_of_contact(name):
+    """Central differences along g exp(eps eta) of the full problem and of the contact load
+    alone, at a state with nodes deep in contact, inside the C^1 band and free."""
+    m, g = _state()
+    prob = cs.Problem(m, cs.Material(1e4, 0.3, 0.02))
+    cl = prob.add(ContactLoad(prob, obstacles()[name], eps=0.02))      # a wide band: all states testable
+    lam = 0.6
+    d = cl.gaps(g, lam)
+    w = cl.k * cl.eps
+    target = np.array([2.0, 0.5, -1.0])[np.arange(len(d)) % 3] * w      # u = u0(lam) - k d
+    cl.set_multipliers(ramp(np.maximum(target + cl.k * d, 0.0), w)[0])
+    _, d, _, _, p, dp = cl.state(g, lam)
+    deep, band, out = dp == -cl.k, (p > 0) & (dp > -cl.k), p == 0
+    assert deep.any() and band.any() and out.any(), (deep.sum(), band.sum(), out.sum())
+    assert tangent_fd_check(prob, g, lam, free_all=True)[0] < 1e-7
+    assert _load_fd(cl, g, lam) < (1e-5 if cl.approximate_tangent else 1e-7)
+
+
+def test_tangent_fd_default_band_and_penalty_mode():
+    m, g = _state(2)
+    for mode in ("al", "penalty"):
+        prob = cs.Problem(m, cs.Material(1e4, 0.3, 0.02), backend="numpy")
+        cl = prob.add(ContactLoad(prob, Sphere((0.5, 0, 0.6), 0.6), mode=mode))
+        _, d, _, _, p, _ = cl.state(g, 0.0)
+        assert (p > 0).any() and (p == 0).any()
+        assert tangent_fd_check(prob, g, 0.0, free_all=True)[0] < 1e-7
+        assert _load_fd(cl, g, 0.0) < 1e-7
+
+
+def test_offset_force_exerts_its_moment():
+    R = lie.exp_so3(np.array([[0.3, -0.2, 0.5]]))
+    n = np.array([[0.2, 0.1, 0.97]]) / np.linalg.norm([0.2, 0.1, 0.97])
+    f, K = contact_wrench(R, np.array([-0.01]), np.array([2.0]), n, np.zeros((1, 3, 3)), np.array([5.0]),
+                          np.array([-10.0]))
+    Fb = R[0].T @ (10.0 * n[0])
+    assert np.allclose(f[0, :3], Fb) and np.allclose(f[0, 3:], np.cross(-0.01 * np.array([0, 0, 1.0]), Fb))
+
+
+# ----------------------------------------------------------------------------- the cases
+@pytest.fixture(scope="module")
+def lift():
+    return run_case("contact-lift")                      # delta / L = 0.01, 80 x 1, 2 steps
+
+
+@pytest.fixture(scope="module")
+def lift_large():
+    return run_case("contact-lift", overrides=dict(delta=0.2), steps=10)
+
+
+@pytest.fixture(scope="module")
+def propped():
+    return run_case("contact-propped")                   # g / L = 0.01, 40 x 1, 10 steps
+
+
+def test_lift_against_the_small_deflection_formula(lift):
+    doc, res, prob = lift
+    m = doc["steps"][-1]["measures"]
+    assert abs(m["delta"] - 0.01) < 1e-15
+    assert abs(m["l_error_formula"]) < 0.01 and abs(m["F_error_formula"]) < 0.01
+    # on the model's side of the difference: the elastica tends to the formula as delta -> 0
+    errs = [abs(s["measures"]["l_elastica"] / s["measures"]["l_formula"] - 1) for s in doc["steps"][1:]]
+    assert errs[0] < errs[1] < 1e-3
+    assert abs(m["horizontal_reaction"]) < 1e-8 * 0.1          # frictionless: no horizontal reaction
+    # the detachment falls between two nodes
+    assert m["lifted_length"] % (1.0 / 80) > 1e-4
+
+
+def test_lift_difference_shrinks_as_delta_goes_to_zero():
+    """At a fixed resolution of the lifted part (about 26 elements on it: nx ~ delta^(-1/4)) the
+    differences of the lifted length and of the lift force from the small-deflection formula fall
+    with delta (measured: l +0.32, +0.12, +0.023 %; F +0.58, +0.080, -0.004 %)."""
+    dl, dF = [], []
+    for delta, nx in ((0.04, 57), (0.01, 80), (0.0025, 113)):
+        doc, _, _ = run_case("contact-lift", mesh=(nx, 1), overrides=dict(delta=delta), steps=2)
+        m = doc["steps"][-1]["measures"]
+        dl.append(abs(m["l_error_formula"]))
+        dF.append(abs(m["F_error_formula"]))
+    assert dl[0] > dl[1] > dl[2] and dF[0] > dF[1] > dF[2], (dl, dF)
+    assert dl[1] < 0.01 and dF[1] < 0.01
+
+
+def test_lift_against_the_elastica_at_large_deflection(lift_large):
+    doc, res, prob = lift_large
+    m = doc["steps"][-1]["measures"]
+    assert abs(m["delta"] - 0.2) < 1e-12 and m["elastica_interpolated"] is False
+    assert abs(m["l_error_elastica"]) < 0.005 and abs(m["F_error_elastica"]) < 0.005
+    assert abs(m["end_angle"] / m["end_angle_elastica"] - 1) < 0.005
+    assert m["l_error_formula"] > 0.02                   # far beyond small deflection
+
+
+def test_propped_against_the_formula(propped):
+    doc, res, prob = propped
+    for s in doc["steps"][1:]:
+        m = s["measures"]
+        if m["R_formula"] == 0:
+            assert m["R"] == 0 and not m["nodes_with_force"]       # no contact before lam = 1/2
+        else:
+            assert abs(m["R_error"]) < 0.01
+            assert set(m["nodes_with_force"]) == set(m["tip_nodes"])   # the tip only
+            assert m["min_gap_off_tip"] > 0
+    assert abs(doc["steps"][-1]["measures"]["R_error"]) < 0.01         # g / L = 0.01 at lam = 1
+
+
+@pytest.mark.parametrize("which", ["lift", "lift_large", "propped"])
+def test_penetration_and_balance(which, request):
+    doc, res, prob = request.getfixturevalue(which)
+    c = [ld for ld in prob.loads if isinstance(ld, ContactLoad)][0]
+    for st, rec in zip(res.steps[1:], doc["steps"][1:]):
+        assert st.contact[c.name]["penetration"] <= c.tol               # 1e-6 h
+        assert st.balance_error < 1e-8                                   # applied + reactions + contact
+        assert np.allclose(rec["contact"][c.name]["force"], st.contact[c.name]["force"])
+    # the balance check means what it says: without the contact forces it fails
+    st = res.final
+    F = st.reaction_force + st.applied_force
+    assert np.linalg.norm(F) > 0.5 * np.linalg.norm(st.contact[c.name]["force"])
+
+
+def test_quadratic_convergence_once_the_active_set_is_fixed(lift):
+    """Newton (displacement iteration) from the converged lift with its multipliers, to a lift 2 %
+    higher: the active set does not change, and once the residual is below 1e-2 each next one is
+    below 10 r^2 or at the round-off floor."""
+    import types
+    from core_se3.results import restore_multipliers
+    from core_se3.solvers import NewtonOptions, make_solver
+    from core_se3.solvers.newton_try import NewtonTry
+    doc, res, prob = lift
+    restore_multipliers(prob, res.final)
+    c = [ld for ld in prob.loads if isinstance(ld, ContactLoad)][0]
+    t = NewtonTry(prob, NewtonOptions(rtol=1e-14, dtol=1e-14, max_iter=12), make_solver("auto"),
+                  types.SimpleNamespace(t_asm=0.0, t_sol=0.0))
+    active = c.state(res.final.g, 1.0)[4] > 0
+    out = t.run(prob.apply_prescribed(res.final.g.copy(), 1.02), 1.02, False, None)
+    assert out.ok and np.array_equal(c.state(out.g, 1.02)[4] > 0, active)
+    r = out.hist
+    pairs = [(a, b) for a, b in zip(r, r[1:]) if a < 1e-2]
+    assert pairs and all(b < 10 * a * a or b < 1e-8 for a, b in pairs), r
+
+
+def test_gripper_grasp_converges_without_step_tuning():
+    doc, res, prob = run_case("magnetic-gripper-grasp")
+    assert len(res.steps) == 21 and abs(res.final.load_factor - 1) < 1e-12
+    m = doc["steps"][-1]["measures"]
+    assert m["nodes_in_contact"] >= 4 and np.linalg.norm(m["force_on_sphere"]) > 0
+    assert all(s["balance_error"] < 1e-8 for s in doc["steps"][1:])
+    assert m["penetration"] <= [ld for ld in prob.loads if isinstance(ld, ContactLoad)][0].tol
+    assert doc["timings"]["total"] < 60
+
+
+# ----------------------------------------------------------------------------- solver hooks
+def test_no_hooks_no_change():
+    """A problem without contact never calls the hooks: the log entries carry no augmentation."""
+    p = cs.Problem(M.rectangle(10.0, 1.0, 4, 1), cs.Material(1.2e6, 0.0, 0.1))
+    p.clamp("x0")
+    p.add_edge_force("x1", (0, 0, 1.0))
+    res = p.solve(steps=2)
+    assert all("augmented" not in e for e in res.log) and res.final.contact == {}
+
+
+def test_augmentations_are_counted_and_failures_restore_the_multipliers():
+    doc, res, prob = run_case("contact-propped", steps=10)
+    aug = [e for e in res.log if e.get("augmented")]
+    tries = sum(s.attempts for s in res.steps)
+    assert tries == len(res.log) and sum(s.linear_solves for s in res.steps) == sum(e["linear_solves"] for e in res.log)
+    assert any(not e["converged"] for e in res.log)             # first contact: cut-backs (automatic)
+    assert len(aug) >= 1
+    # no augmentation allowed: every try fails on its gap error, and the multipliers are restored
+    from core_se3.catalogue import build_problem, case_params, get_case
+    case = get_case("contact-lift")
+    prob = build_problem(case, case_params(case))
+    c = [ld for ld in prob.loads if isinstance(ld, ContactLoad)][0]
+    with pytest.raises(cs.ConvergenceError, match="multiplier updates"):
+        prob.solve(steps=2, max_augmentations=0, max_cutbacks=1, predictor="tangent")
+    assert np.array_equal(c.multipliers(), c.lam0)
+
+
+def test_arc_length_refuses_contact():
+    p = cs.Problem(M.rectangle(1.0, 0.2, 4, 1), cs.Material(1e4, 0.0, 0.02))
+    p.clamp("x0")
+    p.add_pressure(-0.004)
+    p.add_obstacle("half_space", point=(0, 0, -0.05), normal=(0, 0, 1))
+    with pytest.raises(cs.CoreSE3Error, match="path following"):
+        p.solve(control="arclength")
+
+
+# ----------------------------------------------------------------------------- front door
+BASE = """
+[mesh]
+generator = "rectangle"
+L = 10.0
+width = 1.0
+nx = 8
+ny = 1
+[material]
+E = 1.2e6
+nu = 0.0
+h = 0.1
+[[supports]]
+type = "clamp"
+edge = "x0"
+[[loads]]
+type = "edge_force"
+edge = "x1"
+force = [0.0, 0.0, -0.5]
+[solver]
+steps = 2
+"""
+
+
+@pytest.mark.parametrize("entry,key,message", [
+    ('type = "sphere"\ncentre = [5.0, 0.0, -1.0]\nradius = 1.0', "obstacles[0]", "already intersects the undeformed shell"),
+    ('type = "sphere"\ncentre = [5.0, 0.0, -2.0]\nradius = -1.0', "obstacles[0].radius", "expected a number > 0"),
+    ('type = "sphere"\ncentre = [5.0, 0.0, nan]\nradius = 1.0', "obstacles[0].centre", "expected finite numbers"),
+    ('type = "cylinder"\npoint = [5.0, 0.0, -2.0]\naxis = [0.0, 1.0, 0.0]\nradius = inf', "obstacles[0].radius",
+     "expected a finite number"),
+    ('type = "sphre"\ncentre = [5.0, 0.0, -2.0]\nradius = 1.0', "obstacles[0].type", "did you mean 'sphere'"),
+    ('type = "box"\ncentre = [5.0, 0.0, -2.0]\nhalf_sizes = [1.0, 1.0, 0.0]', "obstacles[0].half_sizes",
+     "must be positive"),
+    ('type = "sphere"\ncentre = [5.0, 0.0, -2.0]\nradius = 1.0\nradus = 1.0', "obstacles[0].radus",
+     "did you mean 'radius'"),
+    ('type = "sphere"\ncentre = [5.0, 0.0, -2.0]\nradius = 1.0\nmode = "barrier"', "obstacles[0].mode",
+     "unknown value 'barrier'"),
+])
+def test_scenario_validation_errors(entry, key, message):
+    with pytest.raises(ScenarioError) as exc:
+        scenario.loads(BASE + "[[obstacles]]\n" + entry + "\n", file="grasp.toml")
+    assert exc.value.file == "grasp.toml" and exc.value.key == key and message in str(exc.value)
+
+
+def test_python_api_errors():
+    p = cs.Problem(M.rectangle(1.0, 1.0, 2, 1), cs.Material(1e3, 0.0, 0.01))
+    with pytest.raises(ContactError, match="already intersects"):
+        p.add_obstacle("sphere", centre=(0.5, 0.0, 0.0), radius=0.2)    # between the nodes
+    with pytest.raises(ContactError, match="no parameter 'radus'"):
+        p.add_obstacle("sphere", centre=(0.5, 0.0, 1.0), radus=0.2)
+    with pytest.raises(ContactError, match="unknown obstacle kind"):
+        p.add_obstacle("torus", centre=(0.5, 0.0, 1.0))
+    p.add_obstacle("half_space", point=(0, 0, -1), normal=(0, 0, 1))
+    with pytest.raises(ContactError, match="already an obstacle named"):
+        p.add_obstacle("half_space", point=(0, 0, -2), normal=(0, 0, 1))
+
+
+def test_scenario_run_writes_contact_outputs(tmp_path):
+    text = BASE + """
+[[obstacles]]
+type = "half_space"
+name = "floor"
+point = [0.0, 0.0, -1.0]
+normal = [0.0, 0.0, 1.0]
+"""
+    scn = scenario.loads(text, file="floor.toml")
+    res = scenario.run(scn, out=str(tmp_path / "o"))
+    doc = json.load(open(res.files["results"]))
+    last = doc["steps"][-1]
+    assert last["contact"]["floor"]["force"][2] > 0 and last["balance_error"] < 1e-8
+    vtu = tmp_path / "o" / "vtu"
+    assert (vtu / "obstacles.pvd").exists() and (vtu / "step_0002_obstacles.vtu").exists()
+    import meshio
+    v = meshio.read(str(vtu / "step_0002.vtu"))
+    F = v.point_data["contact_force"]
+    assert abs(F[:, 2].sum() - last["contact"]["floor"]["force"][2]) < 1e-12 and "contact_gap_floor" in v.point_data
+    assert os.path.getsize(res.files["picture"]) > 0
+
+
+# ----------------------------------------------------------------------------- references
+def _elastica_script():
+    spec = importlib.util.spec_from_file_location("contact_lift_elastica",
+                                                  os.path.join(ROOT, "benchmarks", "contact_lift_elastica.py"))
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_elastica_reference_two_methods_and_the_packaged_table():
+    mod = _elastica_script()
+    for d in (0.05, 1.0):
+        a, b = mod.shoot(d), mod.collocate(d)
+        assert abs(a["l"] - b["l"]) < 1e-8 and abs(a["F"] - b["F"]) < 1e-8
+    a = mod.shoot(1e-4)                                          # small-deflection limit
+    assert abs(a["l"] / (24e-4) ** 0.25 - 1) < 1e-3 and abs(a["F"] / a["l"] - 0.5) < 1e-3
+    tab = contact_lift_elastica()
+    row = [r for r in tab["rows"] if r["delta_over_L"] == 0.2][0]
+    mine = mod.shoot(0.2 * tab["params"]["Q"] ** (1 / 3))
+    assert abs(mine["l"] / tab["params"]["Q"] ** (1 / 3) - row["l_over_L"]) < 1e-10
+    assert "benchmarks/contact_lift_elastica.py" in tab["source"]
+
+
+def test_gap_estimator_between_nodes():
+    ql, EI, l = 0.1, 0.005, 0.3137
+    xc = np.linspace(0, 1, 61)
+    s = l - xc
+    gap = np.where(s > 0, ql / (24 * EI) * s ** 3 * (2 * l - s), 0.0)
+    xd, nfit = lifted_length_from_gaps(xc, gap, np.where(s > 0, 0.0, 1.0))
+    assert abs(xd - l) < 1e-6 * l and nfit >= 4
