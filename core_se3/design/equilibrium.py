@@ -24,12 +24,14 @@ Example
 from __future__ import annotations
 
 import time
+from types import SimpleNamespace
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import ConvergenceError, ElementTooDistortedError, SingularSystemError
-from ..solvers import Factorization, make_solver, relative_residual, scaled_norm
+from ..errors import ConvergenceError, ElementTooDistortedError
+from ..solvers import NewtonOptions, make_solver
+from ..solvers.newton_try import NewtonTry
 
 __all__ = ["EquilibriumState", "EquilibriumOptions", "follow", "solve_flat", "assign_all"]
 
@@ -118,29 +120,18 @@ def solve_flat(problem, variables, xs, lam=1.0, options=None):
 
 
 def _newton(problem, g, lam, opts, solver):
-    """Newton at fixed parameters from g: (g, iterations) or (None, iterations) on failure."""
-    asm = problem.assembler()
-    ell = problem.length_scale
-    dn = np.inf
-    hist = []
+    """Newton at fixed parameters from g (the load-stepping try of ``solvers.newton_try``,
+    mixed iteration included): (g, iterations) or (None, iterations) on failure."""
+    nopts = NewtonOptions(rtol=opts.rtol, dtol=opts.dtol, max_iter=opts.max_iter, limit_check=False)
+    trial = NewtonTry(problem, nopts, solver, SimpleNamespace(t_asm=0.0, t_sol=0.0))
+    trial.first_solve = False                       # a singular tangent fails the try, as any
+    mip = nopts.iteration == "mip" and problem.element.mixed and not problem.element.stateful
     try:
-        for it in range(opts.max_iter + 1):
-            ev = problem.evaluate(g, lam, tangent=True)
-            if not np.all(np.isfinite(ev.r)):
-                return None, it
-            rn, floor = relative_residual(asm, ev, ell)
-            hist.append(rn)
-            if rn <= max(opts.rtol, floor) and (dn <= opts.dtol or (it == 0 and rn == 0.0)):
-                return g, it
-            if it == opts.max_iter or (it > 3 and rn > 1e8 * max(hist[0], 1e-300)):
-                return None, it
-            with Factorization(ev.K, solver) as F:
-                eta = asm.scatter(F.solve(-ev.r))
-            dn = scaled_norm(eta, ell, moment=False) / ell
-            g = problem.retract(g, eta)
-    except (ElementTooDistortedError, SingularSystemError, FloatingPointError):
-        return None, len(hist)
-    return None, len(hist)
+        stress = problem.evaluate(g, lam, tangent=False).stress if mip else None
+    except (ElementTooDistortedError, FloatingPointError):
+        return None, 0
+    out = trial.run(g.copy(), lam, mip, stress)
+    return (out.g if out.ok else None), out.iterations
 
 
 def follow(problem, variables, xs, state, options=None):

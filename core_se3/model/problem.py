@@ -30,7 +30,8 @@ from .contact import add_obstacle
 from .fields import MU0
 from .magnetics import MagneticLoad, Magnetisation
 from .probes import Probe
-from .supports import LabSpring, LabTiltSpring, Prescribed, RotationComponentSpring, check_rigid_motions
+from .supports import (LabSpring, LabTiltSpring, Prescribed, RotationComponentSpring, check_rigid_motions,
+                       prescribed_rotation)
 
 __all__ = ["Problem", "Evaluation", "SOLVERS"]
 
@@ -343,22 +344,9 @@ class Problem:
         return any(s.target is not None for s in self.supports)
 
     def prescribed_rotation(self, lam0, lam1, samples=16):
-        """Largest rotation angle [rad] that a prescribed motion turns any node through between
-        load factors lam0 and lam1 (path length of its rotation, sampled at ``samples``
-        sub-steps): a step whose prescribed rotation nears pi is ambiguous for the exponential
-        update (a turn of 2 pi lands on the same frame)."""
-        worst = 0.0
-        for s in self.supports:
-            if s.target is None:
-                continue
-            prev = s.target(lam0)
-            total = np.zeros(len(s.nodes))
-            for t in np.linspace(lam0, lam1, samples + 1)[1:]:
-                cur = s.target(t)
-                total += lie.rotation_angle(np.swapaxes(prev[:, :3, :3], 1, 2) @ cur[:, :3, :3])
-                prev = cur
-            worst = max(worst, float(total.max()))
-        return worst
+        """Largest rotation [rad] a prescribed motion turns any node through between load
+        factors lam0 and lam1 (``supports.prescribed_rotation``)."""
+        return prescribed_rotation(self.supports, lam0, lam1, samples)
 
     def apply_prescribed(self, g, lam):
         """Set the frames of prescribed nodes to their targets at lam (in place); returns g.  A

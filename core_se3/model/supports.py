@@ -46,7 +46,7 @@ from .. import lie
 from ..errors import ElementTooDistortedError, SingularSystemError
 from .base import Load, LoadEvaluation
 
-__all__ = ["Prescribed", "LabSpring", "LabTiltSpring", "RotationComponentSpring",
+__all__ = ["prescribed_rotation", "Prescribed", "LabSpring", "LabTiltSpring", "RotationComponentSpring",
            "MAX_TOTAL_ROTATION", "check_rigid_motions"]
 
 
@@ -339,3 +339,32 @@ def check_rigid_motions(problem, g):
             what = f"translation along {np.round(tr / np.linalg.norm(tr), 3).tolist()}"
         raise SingularSystemError("the supports leave a rigid-body motion free (" + what
                                   + "): the tangent is singular; add supports")
+
+
+def prescribed_rotation(supports, lam0, lam1, samples=16):
+    """Largest rotation angle [rad] that the prescribed motions of ``supports`` turn any node
+    through between load factors lam0 and lam1 (the path length of its rotation, sampled at
+    ``samples`` sub-steps): a step whose prescribed rotation nears pi is ambiguous for the
+    exponential update (a turn of 2 pi lands on the same frame).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
+    >>> p.clamp("x0"); p.rotate_edge("x1", (1.0, 0.0, 0.0), np.pi)
+    >>> round(prescribed_rotation(p.supports, 0.0, 0.5), 12)               # half of pi
+    1.570796326795
+    """
+    worst = 0.0
+    for s in supports:
+        if s.target is None:
+            continue
+        prev = s.target(lam0)
+        total = np.zeros(len(s.nodes))
+        for t in np.linspace(lam0, lam1, samples + 1)[1:]:
+            cur = s.target(t)
+            total += lie.rotation_angle(np.swapaxes(prev[:, :3, :3], 1, 2) @ cur[:, :3, :3])
+            prev = cur
+        worst = max(worst, float(total.max()))
+    return worst
