@@ -18,7 +18,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 
 
 def main():
-    rows, out = [], {}
+    out = {}
     lines = ["# Hard-magnetic benchmarks (`python benchmarks/magnetic.py`)", "",
              "Error = max over the path (up to A Br Ba L^2/(mu0 E I) = 20) of |tip - ref| / max |tip_ref|,",
              "against `core_se3/data/elastica.json` (nu = 0; default element).", "",

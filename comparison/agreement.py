@@ -163,7 +163,6 @@ def markdown(data, per_step=True):
     for row in data["cases"]:
         fine = row["levels"][-1]
         coarse = row["levels"][0]
-        r = fine["records"]
         rs = coarse["records"]
         note = ""
         if "torque_ratio" in fine:

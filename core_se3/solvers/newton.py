@@ -225,7 +225,7 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
     """
     opts = options or NewtonOptions()
     mesh = problem.mesh
-    asm = problem.assembler()
+    problem.assembler()                       # the sparsity pattern, built once before the tries
     solver = make_solver(opts.linear_solver or problem.linear_solver)
     ell = problem.length_scale
     state = start or NewtonState(0.0, mesh.g0.copy())
