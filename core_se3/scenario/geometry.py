@@ -38,9 +38,10 @@ def mesh_section(v, d, base_dir):
         v.fail(key, "give exactly one of 'generator' (" + ", ".join(GENERATORS) + ") or 'file' "
                     "(a mesh meshio reads: Gmsh .msh, .vtu, ...)")
     if "file" in d:
-        v.table(d, key, ("file", "d1_hint"))
+        v.table(d, key, ("file", "d1_hint", "triangles"))
         fname = v.string(d, "file", key)
         hint = v.vector(d, "d1_hint", key, default=[1.0, 0.0, 0.0], nonzero=True)
+        tri = v.string(d, "triangles", key, default="error", choices=("error", "split"))
         path = fname if os.path.isabs(fname) else os.path.join(base_dir, fname)
         if not os.path.isfile(path):
             v.fail(join(key, "file"), f"mesh file {fname!r} does not exist (looked for {path})")
@@ -49,14 +50,17 @@ def mesh_section(v, d, base_dir):
         except CoreSE3Error as exc:
             v.fail(join(key, "file"), f"cannot read mesh file {fname!r}: {str(exc).split(': ', 1)[-1]}")
         try:
-            mesh = M.from_meshio(raw, d1_hint=hint)
+            mesh = M.from_meshio(raw, d1_hint=hint, triangles=tri)
         except CoreSE3Error as exc:
             v.fail(join(key, "file"), f"bad mesh {fname!r}: {exc}")
         except Exception as exc:      # meshio objects can be malformed in many ways
             v.fail(join(key, "file"), f"bad mesh {fname!r}: {type(exc).__name__}: {exc}")
         with open(path, "rb") as fh:
             digest = hashlib.sha256(fh.read()).hexdigest()
-        return mesh, dict(file=fname, d1_hint=hint), digest
+        spec = dict(file=fname, d1_hint=hint)
+        if tri != "error":
+            spec["triangles"] = tri
+        return mesh, spec, digest
     gen = v.string(d, "generator", key, choices=tuple(GENERATORS))
     fn, params = GENERATORS[gen]
     v.table(d, key, ("generator",) + tuple(p for p, _ in params))
