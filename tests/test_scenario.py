@@ -289,6 +289,7 @@ def test_per_region_material_bending_exact(tmp_path):
 
 def test_per_region_gravity_uses_each_region_density_and_thickness(tmp_path):
     d = _two_materials({"type": "gravity", "g": [0.0, 0.0, -10.0]})
+    d["units"] = "SI"
     d["material"]["rho"] = 2.0
     d["material"]["regions"]["tip"]["rho"] = 3.0
     scn = load_doc(tmp_path, d)
@@ -302,6 +303,7 @@ def test_per_region_magnetisation_uses_each_region_thickness(tmp_path):
     d = _two_materials({"type": "edge_force", "edge": "x1", "force": [0.0, 0.0, 0.1]})
     d["fields"] = {"f": {"type": "uniform", "B": [0.0, 0.0, 1e-3]}}
     d["magnets"] = [{"Br": [0.1, 0.0, 0.0]}]
+    d["units"] = "SI"
     scn = load_doc(tmp_path, d)
     mags = [ld.mag for ld in scn.problem.loads if hasattr(ld, "mag")]
     assert sorted(m.h for m in mags) == [0.08, 0.1]

@@ -15,12 +15,14 @@ import hashlib
 import json
 import os
 import re
+import warnings
 
 from ..errors import ScenarioError
 from .build import build_problem
 from .geometry import edges_section, mesh_section, probes_section, regions_section
 from .physics import (NON_PHYSICAL, fields_section, loads_section, magnets_section,
                       material_section, output_section, solver_section, supports_section)
+from .units import plausibility, units_section
 from .validate import Validator
 
 try:                                  # Python >= 3.11
@@ -30,6 +32,7 @@ except ModuleNotFoundError:           # pragma: no cover - Python 3.10
 
 __all__ = ["Scenario", "load", "loads", "from_dict", "TOP_KEYS"]
 
+EXTENSIBLE = ("steps", "lam_end", "load_factors")     # load control: not in the fingerprint
 TOP_KEYS = ("name", "description", "units", "mesh", "edges", "regions", "material", "fields",
             "magnets", "supports", "loads", "probes", "solver", "output")
 
@@ -85,7 +88,7 @@ class Scenario:
     """
 
     def __init__(self, spec, mesh, regions, problem, file, fingerprint, raw, base_dir=".",
-                 default_name="scenario"):
+                 default_name="scenario", strict=False):
         self.spec = spec
         self.mesh = mesh
         self.regions = regions
@@ -95,6 +98,19 @@ class Scenario:
         self.raw = raw
         self.base_dir = base_dir
         self.default_name = default_name
+        self.strict = strict
+        self.warnings = []            # ScenarioWarning: implausible values (scenario/units.py)
+        self.physical = {}            # what the fingerprint hashes (to name a changed key)
+        self.mesh_digest = None
+        self.numbers = None
+
+    def load_numbers(self):
+        """The dimensionless load numbers of the magnets and loads (``scenario.units``), at
+        full load; computed once."""
+        if self.numbers is None:
+            from .units import load_numbers
+            self.numbers = load_numbers(self)
+        return self.numbers
 
     @property
     def name(self):
@@ -122,7 +138,8 @@ class Scenario:
         doc = copy.deepcopy(self.raw)
         for key, value in overrides.items():
             _set_dotted(doc, key, value, self.file)
-        return from_dict(doc, file=self.file, base_dir=self.base_dir, default_name=self.default_name)
+        return from_dict(doc, file=self.file, base_dir=self.base_dir, default_name=self.default_name,
+                         strict=self.strict)
 
     def run(self, out=None, resume=False, progress=None, **kw):
         """Run the scenario with output and checkpoints (``scenario.runner.run``)."""
@@ -157,7 +174,7 @@ def _set_dotted(doc, key, value, file):
         raise ScenarioError(f"the override key {key!r} does not exist in the scenario", file, key) from None
 
 
-def load(path):
+def load(path, strict=False):
     """Read and validate a scenario file (TOML).
 
     Parameters
@@ -165,6 +182,8 @@ def load(path):
     path : str or path-like
         The file (UTF-8 TOML, schema in docs/SCENARIOS.md); relative mesh files are found from
         its directory.
+    strict : bool, optional
+        Make every plausibility warning (``Scenario.warnings``) a ScenarioError.
 
     Returns
     -------
@@ -194,10 +213,10 @@ def load(path):
         text = data.decode("utf-8")
     except UnicodeDecodeError as exc:
         raise ScenarioError(f"not UTF-8 text ({exc.reason} at byte {exc.start})", path) from None
-    return loads(text, file=path, base_dir=os.path.dirname(os.path.abspath(path)))
+    return loads(text, file=path, base_dir=os.path.dirname(os.path.abspath(path)), strict=strict)
 
 
-def loads(text, file="<string>", base_dir="."):
+def loads(text, file="<string>", base_dir=".", strict=False):
     """Parse and validate scenario TOML text.
 
     Parameters
@@ -225,10 +244,10 @@ def loads(text, file="<string>", base_dir="."):
     except tomllib.TOMLDecodeError as exc:
         raise ScenarioError(f"not valid TOML: {exc}", file) from None
     name = os.path.splitext(os.path.basename(file))[0] if not file.startswith("<") else "scenario"
-    return from_dict(doc, file=file, base_dir=base_dir, default_name=name)
+    return from_dict(doc, file=file, base_dir=base_dir, default_name=name, strict=strict)
 
 
-def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario"):
+def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario", strict=False):
     """Validate a scenario given as nested dicts/lists (the parsed TOML) and build its Problem.
 
     Parameters
@@ -254,7 +273,7 @@ def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario"):
     >>> [scn.with_overrides({k: v}).fingerprint == scn.fingerprint for k, v in [("solver.rtol", 1e-12), ("material.E", 2e3)]]
     [True, False]
     """
-    v = Validator(file)
+    v = Validator(file, strict=strict)
     v.table(doc, "", TOP_KEYS, required=("mesh", "material"))
     spec = {}
     spec["name"] = v.string(doc, "name", "", default=default_name)
@@ -280,8 +299,20 @@ def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario"):
                        'rotation is not supported with control = "arclength"')
     spec["output"] = output_section(v, doc)
     problem = build_problem(v, spec, mesh, regions)
+    units_section(v, doc, spec)
     phys = {k: spec[k] for k in spec if k not in ("output", "description")}
     phys["solver"] = {k: x for k, x in spec["solver"].items() if k not in NON_PHYSICAL}
+    if spec["solver"]["control"] == "load":
+        # the load factors may grow on --resume (a finished run extended to a higher lam_end);
+        # the runner checks that the steps done are the first steps of the new ones
+        phys["solver"] = {k: x for k, x in phys["solver"].items() if k not in EXTENSIBLE}
     blob = json.dumps(phys, sort_keys=True) + (file_digest or "")
     fp = hashlib.sha256(blob.encode()).hexdigest()
-    return Scenario(spec, mesh, regions, problem, file, fp, doc, base_dir, default_name)
+    scn = Scenario(spec, mesh, regions, problem, file, fp, doc, base_dir, default_name, strict)
+    scn.physical = json.loads(json.dumps(phys))
+    scn.mesh_digest = file_digest
+    plausibility(v, scn)
+    scn.warnings = v.warnings
+    for w in scn.warnings:
+        warnings.warn(w, stacklevel=2)
+    return scn
