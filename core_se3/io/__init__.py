@@ -10,9 +10,9 @@ Example
 from .checkpoint import Checkpoint
 from .files import atomic_path, write_json_atomic, write_text_atomic
 from .plots import new_figure, plot_load_deflection, plot_sequence, plot_shell
-from .progress import Progress
+from .progress import LogProgress, Progress
 from .vtk import frame_fields, read_field_data, write_pvd, write_series, write_vtu
 
 __all__ = ["write_vtu", "write_pvd", "write_series", "frame_fields", "plot_load_deflection",
            "plot_shell", "plot_sequence", "new_figure", "atomic_path", "write_text_atomic",
-           "write_json_atomic", "Checkpoint", "Progress", "read_field_data"]
+           "write_json_atomic", "Checkpoint", "Progress", "read_field_data", "LogProgress"]

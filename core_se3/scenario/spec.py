@@ -30,11 +30,11 @@ try:                                  # Python >= 3.11
 except ModuleNotFoundError:           # pragma: no cover - Python 3.10
     import tomli as tomllib
 
-__all__ = ["Scenario", "load", "loads", "from_dict", "TOP_KEYS"]
+__all__ = ["Scenario", "load", "loads", "from_dict", "TOP_KEYS", "split_dotted"]
 
 EXTENSIBLE = ("steps", "lam_end", "load_factors")     # load control: not in the fingerprint
 TOP_KEYS = ("name", "description", "units", "mesh", "edges", "regions", "material", "fields",
-            "magnets", "supports", "loads", "probes", "solver", "output")
+            "magnets", "supports", "loads", "probes", "solver", "output", "sweep")
 
 
 class Scenario:
@@ -150,8 +150,14 @@ class Scenario:
 _PART = re.compile(r"^([^.\[\]]+)((?:\[\d+\])*)$")
 
 
-def _set_dotted(doc, key, value, file):
-    """Set ``a.b[2].c`` = value in nested dicts/lists (missing tables are created)."""
+def split_dotted(key, file=None):
+    """The parts of a dotted key: ``"loads[0].force"`` -> ``['loads', 0, 'force']``.
+
+    Example
+    -------
+    >>> split_dotted("fields.coil.B[2]")
+    ['fields', 'coil', 'B', 2]
+    """
     parts = []
     for seg in str(key).split("."):
         m = _PART.match(seg)
@@ -159,6 +165,12 @@ def _set_dotted(doc, key, value, file):
             raise ScenarioError(f"cannot read the override key {key!r} (expected a.b[0].c)", file, key)
         parts.append(m.group(1))
         parts.extend(int(i) for i in re.findall(r"\[(\d+)\]", m.group(2)))
+    return parts
+
+
+def _set_dotted(doc, key, value, file):
+    """Set ``a.b[2].c`` = value in nested dicts/lists (missing tables are created)."""
+    parts = split_dotted(key, file)
     node = doc
     for p, nxt in zip(parts[:-1], parts[1:]):
         try:
@@ -287,7 +299,7 @@ def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario", strict=
     spec["regions"] = {k: r.tolist() for k, r in regions.items()}
     spec["material"] = material_section(v, doc["material"], regions)
     spec["fields"] = fields_section(v, doc)
-    spec["magnets"] = magnets_section(v, doc, regions, spec["fields"])
+    spec["magnets"] = magnets_section(v, doc, regions, spec["fields"], mesh, base_dir)
     spec["supports"] = supports_section(v, doc, mesh, regions)
     spec["loads"] = loads_section(v, doc, mesh, regions)
     spec["probes"] = probes_section(v, doc, mesh)
@@ -298,9 +310,12 @@ def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario", strict=
                 v.fail(f"supports[{i}].type", "arc length scales the loads only: a prescribed "
                        'rotation is not supported with control = "arclength"')
     spec["output"] = output_section(v, doc)
+    spec["sweep"] = sweep_section(v, doc)
     problem = build_problem(v, spec, mesh, regions)
     units_section(v, doc, spec)
-    phys = {k: spec[k] for k in spec if k not in ("output", "description")}
+    phys = {k: spec[k] for k in spec if k not in ("output", "description", "sweep")}
+    phys["magnets"] = [{k: (dict(x, path=None) if k == "Br_table" else x) for k, x in m.items()}
+                       for m in spec["magnets"]]          # a table's digest, not where it lies
     phys["solver"] = {k: x for k, x in spec["solver"].items() if k not in NON_PHYSICAL}
     if spec["solver"]["control"] == "load":
         # the load factors may grow on --resume (a finished run extended to a higher lam_end);
@@ -316,3 +331,30 @@ def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario", strict=
     for w in scn.warnings:
         warnings.warn(w, stacklevel=2)
     return scn
+
+
+def sweep_section(v, doc):
+    """[sweep]: dotted key -> non-empty array of values (``"fields.coil.B[2]" = [0.02, 0.04]``;
+    unquoted dotted keys, nested tables, are flattened); every key must exist in the scenario."""
+    from .sweep import check_key
+    d = doc.get("sweep", {})
+    if not isinstance(d, dict):
+        v.fail("sweep", f"expected a table of KEY = [values], got {type(d).__name__}")
+    flat = {}
+
+    def walk(t, prefix):
+        for k, x in t.items():
+            key = f"{prefix}.{k}" if prefix else str(k)
+            if isinstance(x, dict):
+                walk(x, key)
+            else:
+                flat[key] = x
+    walk(d, "")
+    for key, vals in flat.items():
+        if not isinstance(vals, list) or not vals or any(isinstance(x, (bool, str, dict)) for x in vals):
+            v.fail(f"sweep.{key}", f"expected a non-empty array of values to sweep, got {vals!r}")
+        try:
+            check_key(doc, key, v.file)
+        except ScenarioError as exc:
+            v.fail(f"sweep.{key}", exc.detail)
+    return flat

@@ -218,6 +218,8 @@ def load_numbers(scn, lam=None):
 
 
 def _br_magnitude(m, mesh):
+    if "Br_max" in m:
+        return float(m["Br_max"])
     if "Br" in m:
         return float(np.linalg.norm(m["Br"]))
     if "Br_frame" in m:
