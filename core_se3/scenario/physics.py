@@ -141,7 +141,7 @@ def magnets_section(v, doc, regions, fields, mesh=None, base_dir="."):
             v.fail(key, "give exactly one of 'Br' (lab vector [T]) or 'Br_frame' (components "
                         "[T] along the reference directors d1, d2, d3), or 'Br_file' (a table per element or node)")
         m = {}
-        if "direction" in t or "Br_file" in t:
+        if "direction" in t or "Br_file" in t or any(k in t for k in ("Br_axial", "centre", "axis")):
             elems, m["region"] = region_ref(v, t, key, regions)
             m.update(pattern_section(v, t, key, mesh, elems, base_dir))
         elif "Br" in t:

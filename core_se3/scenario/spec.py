@@ -19,6 +19,7 @@ import warnings
 
 from ..errors import ScenarioError
 from .build import build_problem
+from .keys import check_key, split_dotted
 from .geometry import edges_section, mesh_section, probes_section, regions_section
 from .physics import (NON_PHYSICAL, fields_section, loads_section, magnets_section,
                       material_section, output_section, solver_section, supports_section)
@@ -146,26 +147,6 @@ class Scenario:
         from .runner import run
         return run(self, out=out, resume=resume, progress=progress, **kw)
 
-
-_PART = re.compile(r"^([^.\[\]]+)((?:\[\d+\])*)$")
-
-
-def split_dotted(key, file=None):
-    """The parts of a dotted key: ``"loads[0].force"`` -> ``['loads', 0, 'force']``.
-
-    Example
-    -------
-    >>> split_dotted("fields.coil.B[2]")
-    ['fields', 'coil', 'B', 2]
-    """
-    parts = []
-    for seg in str(key).split("."):
-        m = _PART.match(seg)
-        if not m:
-            raise ScenarioError(f"cannot read the override key {key!r} (expected a.b[0].c)", file, key)
-        parts.append(m.group(1))
-        parts.extend(int(i) for i in re.findall(r"\[(\d+)\]", m.group(2)))
-    return parts
 
 
 def _set_dotted(doc, key, value, file):
@@ -336,7 +317,6 @@ def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario", strict=
 def sweep_section(v, doc):
     """[sweep]: dotted key -> non-empty array of values (``"fields.coil.B[2]" = [0.02, 0.04]``;
     unquoted dotted keys, nested tables, are flattened); every key must exist in the scenario."""
-    from .sweep import check_key
     d = doc.get("sweep", {})
     if not isinstance(d, dict):
         v.fail("sweep", f"expected a table of KEY = [values], got {type(d).__name__}")

@@ -27,17 +27,25 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import ConvergenceError, CoreSE3Error, ScenarioError, did_you_mean
+from ..errors import ConvergenceError, CoreSE3Error, ScenarioError
+from .keys import check_key
 
-__all__ = ["sweep", "SweepResult", "parse_values", "check_key", "WARM_SECTIONS"]
+__all__ = ["sweep", "SweepResult", "parse_values", "WARM_SECTIONS"]
 
 WARM_SECTIONS = ("loads", "fields", "magnets", "material", "solver")
 
 
 @dataclass
 class SweepResult:
-    """What a sweep left: ``rows`` (one dict per grid point: the swept values, status, every
-    probe's final ux, uy, uz and rotation, the iterations, warm), ``files`` (csv, plot)."""
+    """What a sweep left: ``keys`` (the swept keys), ``rows`` (one dict per grid point: the swept
+    values, status, warm, steps, iterations, every probe's final ux, uy, uz and rotation),
+    ``files`` (csv, plot).
+
+    Example
+    -------
+    >>> SweepResult(["material.E"], [{"material.E": 1.0, "status": "complete"}]).rows[0]["status"]
+    'complete'
+    """
     keys: list
     rows: list = field(default_factory=list)
     files: dict = field(default_factory=dict)
@@ -75,30 +83,6 @@ def parse_values(text, key="--set"):
     if not vals or any(v == "" for v in vals):
         raise ScenarioError(f"{key} needs at least one value", key=key)
     return vals
-
-
-def check_key(raw, key, file=None):
-    """ScenarioError unless every table and list entry on the way to the dotted ``key`` exists
-    in the document (the last part may be a key the section takes); names the closest one."""
-    from .spec import split_dotted
-    node, path = raw, ""
-    parts = split_dotted(key, file)
-    for i, p in enumerate(parts[:-1]):
-        here = f"{path}.{p}" if path and not isinstance(p, int) else (f"{path}[{p}]" if isinstance(p, int) else p)
-        if isinstance(p, int):
-            if not isinstance(node, list) or p >= len(node):
-                n = len(node) if isinstance(node, list) else 0
-                raise ScenarioError(f"the swept key {key!r} refers to {here}, but the scenario has {n} entries "
-                                    f"there", file, key)
-        elif not isinstance(node, dict) or p not in node:
-            if i == 0 and p in ("solver", "output"):
-                return
-            choices = list(node) if isinstance(node, dict) else []
-            raise ScenarioError(f"the swept key {key!r} refers to {here!r}, which the scenario does not "
-                                f"have{did_you_mean(p, choices)}; it has: {', '.join(map(str, choices)) or 'nothing'}",
-                                file, key)
-        node = node[p]
-        path = here
 
 
 def _nearest(done, point, spans):

@@ -248,6 +248,13 @@ def plausibility(v, scn):
                                          f"densities of real solids (1 to 25 000 kg/m^3): in {units} the density "
                                          f"is in {u['density']} (water {1000 / u['to_kg_m3']:g})")
         for i, ld in enumerate(spec["loads"]):
+            if ld["type"] == "gravity" and ld.get("rho") is not None:
+                r = ld["rho"] * u["to_kg_m3"]
+                if not RHO_RANGE[0] <= r <= RHO_RANGE[1]:
+                    v.warn(f"loads[{i}].rho", f"rho = {ld['rho']:g} {u['density']}"
+                                              f"{'' if u['to_kg_m3'] == 1 else f' = {r:.3g} kg/m^3'} is outside the "
+                                              f"densities of real solids (1 to 25 000 kg/m^3): in {units} the density "
+                                              f"is in {u['density']} (water {1000 / u['to_kg_m3']:g})")
             if ld["type"] == "gravity":
                 gmag = float(np.linalg.norm(ld["g"]))
                 if gmag and not 0.01 <= gmag / u["g"] <= 100:
