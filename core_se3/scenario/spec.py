@@ -14,7 +14,6 @@ import copy
 import hashlib
 import json
 import os
-import re
 import warnings
 
 from ..errors import ScenarioError
