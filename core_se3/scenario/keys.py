@@ -40,7 +40,7 @@ def check_key(raw, key, file=None):
     >>> check_key({"fields": {"coil": {"B": [0, 0, 1]}}}, "fields.coli.B")
     Traceback (most recent call last):
     ...
-    core_se3.errors.ScenarioError: [fields.coli.B]: the swept key 'fields.coli.B' refers to 'fields.coli', which the scenario does not have; did you mean 'coil'?; it has: coil
+    core_se3.errors.ScenarioError: [fields.coli.B]: the key 'fields.coli.B' refers to 'fields.coli', which the scenario does not have; did you mean 'coil'?; it has: coil
     """
     node, path = raw, ""
     parts = split_dotted(key, file)
@@ -49,13 +49,13 @@ def check_key(raw, key, file=None):
         if isinstance(p, int):
             if not isinstance(node, list) or p >= len(node):
                 n = len(node) if isinstance(node, list) else 0
-                raise ScenarioError(f"the swept key {key!r} refers to {here}, but the scenario has {n} entries "
+                raise ScenarioError(f"the key {key!r} refers to {here}, but the scenario has {n} entries "
                                     f"there", file, key)
         elif not isinstance(node, dict) or p not in node:
             if i == 0 and p in ("solver", "output"):
                 return
             choices = list(node) if isinstance(node, dict) else []
-            raise ScenarioError(f"the swept key {key!r} refers to {here!r}, which the scenario does not "
+            raise ScenarioError(f"the key {key!r} refers to {here!r}, which the scenario does not "
                                 f"have{did_you_mean(p, choices)}; it has: {', '.join(map(str, choices)) or 'nothing'}",
                                 file, key)
         node = node[p]

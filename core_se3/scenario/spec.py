@@ -137,6 +137,7 @@ class Scenario:
         "solver.steps": 20}`` (a parameter sweep changes one key at a time)."""
         doc = copy.deepcopy(self.raw)
         for key, value in overrides.items():
+            check_key(doc, key, self.file)            # a misspelt section or name: did you mean
             _set_dotted(doc, key, value, self.file)
         return from_dict(doc, file=self.file, base_dir=self.base_dir, default_name=self.default_name,
                          strict=self.strict)

@@ -52,6 +52,8 @@ def draw(path, m, title):
     ax.set_axis_off()
     fig.tight_layout()
     fig.savefig(path)
+    from PIL import Image                      # a 64-colour palette keeps each picture small
+    Image.open(path).convert("RGB").quantize(64).save(path, optimize=True)
 
 
 if __name__ == "__main__":
