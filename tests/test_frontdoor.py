@@ -189,7 +189,7 @@ def test_magnetisation_tables_per_element_and_per_node(tmp_path):
     er = c / np.linalg.norm(c[:, :2], axis=1)[:, None] * [1, 1, 0]
     Br = Br45 * er + [0, 0, -Br45]
     with open(tmp_path / "el.csv", "w") as fh:
-        fh.write("element,Brx,Bry,Brz\n" + "".join(f"{i},{b[0]!r},{b[1]!r},{b[2]!r}\n" for i, b in zip(el, Br)))
+        fh.write("element,Brx,Bry,Brz\n" + "".join(f"{i},{float(b[0])!r},{float(b[1])!r},{float(b[2])!r}\n" for i, b in zip(el, Br)))
     table = load(doc(magnets=[{"region": "fingers", "Br_file": "el.csv"}]), tmp_path).problem.solve(steps=2).final.g
     np.testing.assert_allclose(table, scn.problem.solve(steps=2).final.g, rtol=0, atol=1e-12 * 20)
     nodes = np.unique(m.quads[el])
