@@ -1,5 +1,6 @@
-"""Command line (the top layer): ``core-se3 bench list``, ``core-se3 bench run NAME [options]`` and
-``core-se3 run SCENARIO.toml [--out DIR] [--resume]`` (scenario files, see docs/SCENARIOS.md) and
+"""Command line (the top layer): ``core-se3 bench list``, ``core-se3 bench run NAME [options]``,
+``core-se3 run SCENARIO.toml [--out DIR] [--resume] [--strict]`` (scenario files, see
+docs/SCENARIOS.md), ``core-se3 sweep SCENARIO.toml --set KEY=v1,v2,...`` and
 ``core-se3 design SCENARIO.toml [--out DIR]`` (a scenario's [design], docs/DESIGN.md).
 
 ``-v`` shows the solvers' per-step log (``logging`` at INFO on stderr)."""
@@ -107,12 +108,18 @@ def _plot_generic(case, p, doc, path, name):
 def bench_run(args):
     from .catalogue import case_params, family_of, get_case, run_case
     from .results import write_json
+    from .io import LogProgress, Progress
     try:
         case = get_case(args.name)
-        doc, res, prob = run_case(args.name, mesh=args.mesh, overrides=_parse_set(args.set),
-                                  steps=args.steps, element=args.element, linear_solver=args.solver)
+        ELEMENTS.lookup(args.element)
+        if not args.quiet:
+            print(f"case {case.name}: units " + ", ".join(f"{k} [{u}]" for k, u in case.units.items()))
+        bar = Progress(None, _progress_on(args), delay=0.0 if args.progress else 2.0)
+        with LogProgress(bar):
+            doc, res, prob = run_case(args.name, mesh=args.mesh, overrides=_parse_set(args.set),
+                                      steps=args.steps, element=args.element, linear_solver=args.solver)
     except (CoreSE3Error, KeyError) as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        print(f"error: {exc.args[0] if isinstance(exc, KeyError) and exc.args else exc}", file=sys.stderr)
         return 2
     _print_doc(doc)
     fam = family_of(case)
@@ -157,10 +164,11 @@ def scenario_run(args):
     """``core-se3 run``: validate the scenario, solve it step by step, write its outputs."""
     from . import scenario
     try:
-        scn = scenario.load(args.scenario)
+        scn = _load_quietly(scenario, args.scenario, args.strict)
     except CoreSE3Error as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    _preamble(scn, args.quiet)
     if args.check:
         print(f"{args.scenario}: valid ({scn.mesh.n_elements} elements, {scn.mesh.n_nodes} nodes, "
               f"{len(scn.spec['supports'])} supports, {len(scn.spec['loads'])} loads, "
@@ -180,6 +188,7 @@ def scenario_run(args):
         return 130
     last = res.doc["steps"][-1]
     if not args.quiet:
+        _step_table(res.doc)
         print(f"{scn.name}: {len(res.doc['steps']) - 1} steps to load factor {last['load_factor']:g} "
               f"in {res.doc['timings']['total']:.2f} s")
         for name, p in last["probes"].items():
@@ -220,6 +229,85 @@ def design_run(args):
     return 0 if r.reached is not False else 4
 
 
+def _progress_on(args):
+    """Progress line: with --progress, else on a terminal unless --quiet."""
+    if getattr(args, "progress", False):
+        return True
+    return not getattr(args, "quiet", False) and sys.stdout.isatty()
+
+
+def _load_quietly(scenario, path, strict):
+    """Load a scenario, its warnings kept (printed by the command, not by ``warnings``)."""
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return scenario.load(path, strict=strict)
+
+
+def _preamble(scn, quiet):
+    """The first lines of a run: the unit system, the warnings, the load numbers."""
+    from .scenario.units import describe_units
+    for w in scn.warnings:
+        print(f"warning: {w}", file=sys.stderr)
+    if quiet:
+        return
+    print(f"{scn.name}: {describe_units(scn.spec['units'])}")
+    for n in scn.load_numbers():
+        print(f"  load number {n['name']} ({n['kind']}): {n['formula']} = {n['value']:.4g} "
+              f"(span L = {n['span']:.4g}, E = {n['E']:.4g}, h = {n['h']:.4g})")
+
+
+def _step_table(doc):
+    """One line per step: load factor, the physical loads (with units), the first probe."""
+    steps = doc["steps"]
+    phys = list((steps[-1].get("physical") or {}).items())
+    probe = next(iter(steps[0]["probes"]), None)
+    head = f"{'step':>5} {'lam':>9}" + "".join(f" {k + ' [' + v['unit'] + ']' if v['unit'] else k:>22}"
+                                             for k, v in phys)
+    if probe:
+        head += f" {probe + '.ux':>12} {probe + '.uy':>12} {probe + '.uz':>12}"
+    print(head + f" {'it':>3} {'residual':>9}")
+    for st in steps:
+        line = f"{st['step']:>5d} {st['load_factor']:>9.4g}"
+        line += "".join(f" {(st.get('physical') or {}).get(k, {}).get('value', float('nan')):>22.6g}" for k, _ in phys)
+        if probe:
+            line += "".join(f" {x:>12.6g}" for x in st["probes"][probe]["u"])
+        print(line + f" {st.get('iterations', 0):>3d} {st.get('residual', 0.0):>9.1e}")
+
+
+def scenario_sweep(args):
+    """``core-se3 sweep``: the scenario over the values of --set KEY=v1,v2,... (or [sweep])."""
+    from . import scenario
+    from .scenario.sweep import parse_values
+    try:
+        scn = _load_quietly(scenario, args.scenario, args.strict)
+        grid = {}
+        for item in args.set or []:
+            if "=" not in item:
+                raise CoreSE3Error(f"--set expects KEY=v1,v2,..., got {item!r}")
+            k, vals = item.split("=", 1)
+            grid[k.strip()] = parse_values(vals, f"--set {k.strip()}")
+        grid = grid or dict(scn.spec["sweep"])
+        if not grid:
+            raise CoreSE3Error(f"{args.scenario}: nothing to sweep: give --set KEY=v1,v2,... or a [sweep] section")
+        _preamble(scn, args.quiet)
+        res = scenario.sweep(scn, grid, out=args.out, progress=True if args.progress else (False if args.quiet else None),
+                             warm=not args.cold)
+    except CoreSE3Error as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("\ninterrupted: the sweep's finished runs are not written (rerun it)", file=sys.stderr)
+        return 130
+    failed = [r for r in res.rows if r["status"] != "complete"]
+    if not args.quiet:
+        print(f"{scn.name}: {len(res.rows)} runs ({len(failed)} failed, "
+              f"{sum(bool(r.get('warm')) for r in res.rows)} warm-started)")
+        for kind, path in res.files.items():
+            print(f"  wrote {kind}: {path}")
+    return 3 if failed else 0
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(prog="core-se3", description="Geometrically exact Cosserat shells on SE(3)")
     sub = ap.add_subparsers(dest="cmd", required=True)
@@ -231,12 +319,14 @@ def main(argv=None):
     run.add_argument("--mesh", type=_parse_mesh, default=None, help="NXxNY, e.g. 16x1")
     run.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a case parameter")
     run.add_argument("--steps", type=int, default=None)
-    run.add_argument("--element", choices=sorted(ELEMENTS), default="default")
+    run.add_argument("--element", default="default", help=f"element: {', '.join(sorted(ELEMENTS))}")
     run.add_argument("--solver", choices=["auto", "mumps", "superlu"], default="auto")
     run.add_argument("--json", default=None)
     run.add_argument("--vtu", default=None, help="directory for VTU files and series.pvd")
     run.add_argument("--plot", default=None, help="PNG load-deflection plot")
     run.add_argument("-v", "--verbose", action="store_true", help="log every Newton (sub-)step")
+    run.add_argument("--progress", action="store_true", help="progress line even when not on a terminal")
+    run.add_argument("-q", "--quiet", action="store_true", help="no progress line")
     srun = sub.add_parser("run", help="run a scenario file (TOML; schema in docs/SCENARIOS.md)")
     srun.add_argument("scenario", help="SCENARIO.toml")
     srun.add_argument("--out", default=None, help="output directory (default [output] dir or out/NAME)")
@@ -253,6 +343,16 @@ def main(argv=None):
     dsub.add_argument("--max-iter", type=int, default=None, help="iterations (least_squares: evaluations)")
     dsub.add_argument("-q", "--quiet", action="store_true", help="no progress, no summary")
     dsub.add_argument("-v", "--verbose", action="store_true", help="log every Newton (sub-)step")
+    srun.add_argument("--strict", action="store_true", help="make the plausibility warnings errors")
+    sw = sub.add_parser("sweep", help="run a scenario over a grid of values (one CSV and plot)")
+    sw.add_argument("scenario", help="SCENARIO.toml")
+    sw.add_argument("--set", action="append", metavar="KEY=v1,v2,...",
+                    help="a dotted key and its values (a vector as [a;b;c]); repeat for a grid")
+    sw.add_argument("--out", default=None, help="directory of sweep.csv and sweep.png (default out/NAME-sweep)")
+    sw.add_argument("--cold", action="store_true", help="no warm starts: every run steps from the reference")
+    sw.add_argument("--strict", action="store_true", help="make the plausibility warnings errors")
+    sw.add_argument("--progress", action="store_true", help="progress line even when not on a terminal")
+    sw.add_argument("-q", "--quiet", action="store_true", help="no progress line, no summary")
     args = ap.parse_args(argv)
     if getattr(args, "verbose", False):
         logging.basicConfig(level=logging.INFO, format="%(message)s", stream=sys.stderr)
@@ -261,6 +361,8 @@ def main(argv=None):
         return scenario_run(args)
     if args.cmd == "design":
         return design_run(args)
+    if args.cmd == "sweep":
+        return scenario_sweep(args)
     if args.cmd == "bench" and args.bcmd == "list":
         from .catalogue import CASES
         for c in CASES.values():

@@ -17,7 +17,7 @@ import difflib
 
 __all__ = ["CoreSE3Error", "MaterialError", "MeshError", "LoadError", "SupportError",
            "SingularSystemError", "ConvergenceError", "ElementTooDistortedError", "ScenarioError",
-           "CheckpointError", "OptionError", "DesignError", "ContactError", "did_you_mean"]
+           "CheckpointError", "OptionError", "DesignError", "ContactError", "ScenarioWarning", "did_you_mean"]
 
 
 def did_you_mean(name, choices):
@@ -333,3 +333,33 @@ class DesignError(CoreSE3Error, ValueError):
     ...
     core_se3.errors.DesignError: node ids [99] do not exist (the mesh has 6 nodes: 0 .. 5)
     """
+
+
+class ScenarioWarning(UserWarning):
+    """An implausible but valid scenario value: ``file`` and dotted ``key`` name where, the
+    message why it is implausible and the likely fix.
+
+    Collected in ``Scenario.warnings`` and issued with :func:`warnings.warn` when a scenario is
+    loaded; ``core-se3 run`` prints them before the run, and ``--strict`` (``strict=True``)
+    makes each one a :class:`ScenarioError`.
+
+    Parameters
+    ----------
+    message : str
+        Why the value is implausible, and the fix.
+    file, key : str, optional
+        As for :class:`ScenarioError`.
+
+    Example
+    -------
+    >>> w = ScenarioWarning("|Br| = 100 T exceeds 2 T", "grip.toml", "magnets[0]")
+    >>> str(w), w.key
+    ('grip.toml: [magnets[0]]: |Br| = 100 T exceeds 2 T', 'magnets[0]')
+    """
+
+    def __init__(self, message, file=None, key=None):
+        self.file = file
+        self.key = key
+        where = ": ".join(x for x in (file, f"[{key}]" if key else None) if x)
+        super().__init__(f"{where}: {message}" if where else message)
+        self.detail = message

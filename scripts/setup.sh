@@ -14,11 +14,14 @@ if [ "$(id -u)" -ne 0 ]; then
     fi
 fi
 
-echo "==> apt: python3-dolfinx-real python3-venv libopenblas0"
+# the gmsh wheel (test extra) links X11/OpenGL libraries: libglu1-mesa libgl1 libopengl0 libxrender1
+# libxcursor1 libxfixes3 libxext6 libxft2 libfontconfig1 libxinerama1 libx11-6 libgomp1
+GMSH_LIBS="libglu1-mesa libgl1 libopengl0 libxrender1 libxcursor1 libxfixes3 libxext6 libxft2 libfontconfig1 libxinerama1 libx11-6 libgomp1"
+echo "==> apt: python3-dolfinx-real python3-venv libopenblas0 $GMSH_LIBS"
 export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get update -q
 $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends \
-    python3-dolfinx-real python3-venv libopenblas0
+    python3-dolfinx-real python3-venv libopenblas0 $GMSH_LIBS
 
 SYSPY=/usr/bin/python3
 VENV="$ROOT/.venv"
@@ -48,6 +51,7 @@ export PIP_DISABLE_PIP_VERSION_CHECK=1 PIP_NO_INPUT=1
 echo "==> check"
 "$VENV/bin/python" - <<'PY'
 import numpy, scipy, dolfinx, petsc4py, meshio, matplotlib
+import gmsh    # the test extra; its wheel needs the X11/OpenGL libraries installed above
 assert numpy.__version__.startswith("1."), numpy.__version__
 print(f"numpy {numpy.__version__}  scipy {scipy.__version__}  dolfinx {dolfinx.__version__}  "
       f"petsc4py {petsc4py.__version__}  meshio {meshio.__version__}  matplotlib {matplotlib.__version__}")

@@ -15,15 +15,16 @@ from core_se3.errors import CoreSE3Error, ScenarioError
 
 BASE = {
     "name": "fuzz",
+    "units": "SI",
     "mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 3, "ny": 1},
     "regions": {"end": {"box": {"x": [5.0, 10.0]}}},
-    "material": {"E": 1.2e6, "nu": 0.3, "h": 0.1, "rho": 0.1, "regions": {"end": {"E": 2.4e6, "h": 0.12}}},
+    "material": {"E": 1.2e6, "nu": 0.3, "h": 0.1, "rho": 1.0, "regions": {"end": {"E": 2.4e6, "h": 0.12}}},
     "supports": [{"type": "clamp", "edge": "x0"},
                  {"type": "rotate", "edge": "x1", "axis": [1.0, 0.0, 0.0], "angle": 0.1,
                   "free": ["x"]}],
     "loads": [{"type": "edge_force", "edge": "x1", "force": [0.0, 0.0, 0.1], "scale": "linear"},
               {"type": "pressure", "p": 0.05, "region": "end", "follower": True},
-              {"type": "gravity", "g": [0.0, 0.0, -9.81]},
+              {"type": "gravity", "g": [0.0, 0.0, -0.981]},
               {"type": "nodal", "nodes": [1], "moment": [0.0, 0.1, 0.0],
                "scale": [[0.0, 0.0], [1.0, 1.0]]}],
     "fields": {"coil": {"type": "gradient", "B": [0.0, 0.0, 1e-4],

@@ -47,13 +47,16 @@ def plot_load_deflection(
     xlabel: str = "displacement [length unit]",
     ylabel: str = "load [load unit]",
     title: str | None = None,
+    secondary: tuple | None = None,
 ) -> str:
     """Load-deflection curves as a PNG: displacement on x, load on y (as in Sze et al. 2004).
 
     loads: (k,) load levels; displacements: name -> (k,) computed values, drawn as lines;
     labels: legend text per curve (dict name -> label, or a list in the order of ``displacements``;
     default: the names); reference: name -> (loads, values), drawn as open markers, in the colour of
-    the computed curve of the same name if there is one. Returns the path.
+    the computed curve of the same name if there is one; secondary: (label, values (k,)) a second
+    load axis on the right whose ticks give ``values`` at the loads (e.g. the physical load
+    beside the load factor). Returns the path.
 
     Parameters
     ----------
@@ -106,6 +109,16 @@ def plot_load_deflection(
                 label=f"{name} (reference)")
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
+    if secondary is not None:
+        label, values = secondary
+        values = np.asarray(values, float)
+        ax2 = ax.twinx()
+        ax2.set_ylim(ax.get_ylim())
+        ticks = [t for t in ax.get_yticks() if loads.min() - 1e-12 <= t <= loads.max() + 1e-12]
+        order = np.argsort(loads)
+        ax2.set_yticks(ticks)
+        ax2.set_yticklabels([f"{np.interp(t, loads[order], values[order]):.3g}" for t in ticks])
+        ax2.set_ylabel(label)
     if title:
         ax.set_title(title)
     ax.grid(True, alpha=0.3)

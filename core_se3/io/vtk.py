@@ -19,7 +19,7 @@ import numpy as np
 from ..lie import rotation_angle
 
 __all__ = ["frame_fields", "write_vtu", "write_pvd", "write_series", "as_frames", "as_points",
-           "as_cells", "ensure_parent"]
+           "as_cells", "ensure_parent", "read_field_data"]
 
 _CELL_TYPES = {3: "triangle", 4: "quad"}
 
@@ -99,13 +99,16 @@ def frame_fields(g0, g) -> dict[str, np.ndarray]:
 
 # ----------------------------------------------------------------------------- VTK / ParaView
 def write_vtu(path, X, quads, g0, g, point_data: Mapping[str, np.ndarray] | None = None,
-              cell_data: Mapping[str, np.ndarray] | None = None) -> str:
+              cell_data: Mapping[str, np.ndarray] | None = None,
+              field_data: Mapping[str, float] | None = None) -> str:
     """Write one state as a VTK unstructured grid (``.vtu``) of quads on the reference mesh.
 
     X: (n, 3) reference node positions; quads: (m, 4) node ids; g0, g: (n, 4, 4) reference and
     current frames. Point fields: ``displacement``, ``d1``, ``d2``, ``d3``, ``rotation_angle`` (see
     :func:`frame_fields`) plus any ``point_data`` (name -> (n,) or (n, k) array); ``cell_data``:
-    name -> (m,) or (m, k) array per quad (e.g. stress resultants). Returns the path.
+    name -> (m,) or (m, k) array per quad (e.g. stress resultants); ``field_data``: name -> number,
+    global values of the state (the load factor, the physical loads), written as the VTK
+    ``FieldData`` that ParaView shows per time step. Returns the path.
 
     Parameters
     ----------
@@ -151,7 +154,42 @@ def write_vtu(path, X, quads, g0, g, point_data: Mapping[str, np.ndarray] | None
     mesh = meshio.Mesh(points=X, cells=[(_CELL_TYPES[cells.shape[1]], cells)], point_data=fields,
                        cell_data=cfields or None)
     meshio.write(path, mesh, file_format="vtu")
+    if field_data:
+        _add_field_data(path, field_data)
     return path
+
+
+def _add_field_data(path, values):
+    """Insert a VTK <FieldData> block (one Float64 tuple per name) into a written .vtu file."""
+    from xml.sax.saxutils import quoteattr
+    arrays = "".join(f'<DataArray type="Float64" Name={quoteattr(str(k))} NumberOfTuples="1" '
+                     f'format="ascii">{float(v)!r}</DataArray>\n' for k, v in values.items())
+    with open(path, encoding="utf-8") as fh:
+        text = fh.read()
+    text = text.replace("<UnstructuredGrid>", f"<UnstructuredGrid>\n<FieldData>\n{arrays}</FieldData>", 1)
+    with open(path, "w", encoding="utf-8") as fh:
+        fh.write(text)
+
+
+def read_field_data(path) -> dict:
+    """The ``FieldData`` values of a .vtu file written by :func:`write_vtu` (name -> float).
+
+    Example
+    -------
+    >>> import os, tempfile
+    >>> from core_se3 import mesh
+    >>> m = mesh.rectangle(1.0, 1.0, 1, 1)
+    >>> p = write_vtu(os.path.join(tempfile.mkdtemp(), "s.vtu"), m.X, m.quads, m.g0, m.g0,
+    ...               field_data={"load_factor": 0.5, "fields.coil.B [T]": 0.03})
+    >>> read_field_data(p)
+    {'load_factor': 0.5, 'fields.coil.B [T]': 0.03}
+    """
+    out = {}
+    root = ET.parse(os.fspath(path)).getroot()
+    for fd in root.iter("FieldData"):
+        for arr in fd.iter("DataArray"):
+            out[arr.get("Name")] = float(arr.text.split()[0])
+    return out
 
 
 def write_pvd(path, entries: Sequence[tuple[float, str]]) -> str:

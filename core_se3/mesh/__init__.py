@@ -11,6 +11,10 @@ Example
 from .core import LOCAL_EDGES, Mesh, chain_order, frames_from
 from .generators import annulus, cross, cylinder_arch, cylinder_panel, hemisphere_quarter, rectangle
 from .readers import from_meshio, read_meshio
+from .gmsh_backend import gmsh_module
+from .shapes import BACKENDS, annulus_sector, disk, polygon, resolve_backend, rounded_rectangle, star
 
 __all__ = ["Mesh", "frames_from", "chain_order", "LOCAL_EDGES", "rectangle", "cylinder_arch",
-           "cylinder_panel", "annulus", "hemisphere_quarter", "cross", "from_meshio", "read_meshio"]
+           "cylinder_panel", "annulus", "hemisphere_quarter", "cross", "from_meshio", "read_meshio",
+           "star", "polygon", "rounded_rectangle", "disk", "annulus_sector", "gmsh_module",
+           "BACKENDS", "resolve_backend"]

@@ -12,6 +12,7 @@ import numpy as np
 
 from ..errors import MeshError
 from .core import Mesh, chain_order, frames_from
+from .subdivide import split_to_quads
 
 __all__ = ["from_meshio", "read_meshio"]
 
@@ -83,38 +84,48 @@ def _physical_sets(raw):
     raw.cell_sets = sets
 
 
-def _file_regions(raw):
-    """Element sets of quad cells named in the file (e.g. Gmsh physical surfaces), as ids into
-    the concatenated quad blocks (the element order of :func:`from_meshio`)."""
-    out, offset = {}, 0
-    offsets = []
-    for cb in raw.cells:
-        offsets.append(offset if cb.type == "quad" else None)
-        if cb.type == "quad":
-            offset += len(cb.data)
+def _named_sets(raw):
+    """name -> per-block index arrays of the file's named cell sets (Gmsh physical groups),
+    leaving out meshio's own ``gmsh:*`` sets (``gmsh:bounding_entities`` holds entity tags,
+    not cell indices: taking it for a group crashed MSH 4.1 files)."""
+    out = {}
     for name, blocks in (raw.cell_sets or {}).items():
-        ids = []
-        for off, blk in zip(offsets, blocks):
-            if off is not None and blk is not None and len(blk):
-                ids.extend((off + np.asarray(blk, np.int64)).tolist())
-        if ids:
-            out[str(name)] = np.unique(ids)
+        if str(name).startswith("gmsh:"):
+            continue
+        blocks = list(blocks) + [None] * (len(raw.cells) - len(blocks))
+        out[str(name)] = [None if b is None else np.asarray(b, np.int64).ravel() for b in blocks]
     return out
 
 
-def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None):
-    """Mesh from any quad surface mesh meshio reads (file name or ``meshio.Mesh``).
+def _physical_dims(raw):
+    """The dimensions of the file's physical groups (Gmsh ``field_data`` name -> [tag, dim])."""
+    dims = set()
+    for fd in (raw.field_data or {}).values():
+        fd = np.asarray(fd).ravel()
+        if len(fd) >= 2:
+            dims.add(int(fd[1]))
+    return dims
+
+
+def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None, triangles="error"):
+    """Mesh from any quad surface mesh meshio reads (file name or ``meshio.Mesh``): Gmsh MSH 4.1
+    and 2.2, ASCII and binary, VTU, ...
 
     Nodal frames: d3 = area-weighted mean of the adjacent quads' normals (quads must be
     consistently oriented: the normal is the right-hand side of the node order); d1 = the
     projection of ``d1_hint`` on the tangent plane (the global y axis where that degenerates).
-    Named node sets: every named set of line cells (e.g. Gmsh physical curves), ordered along
-    the line, plus ``edges`` = {name: predicate(X) -> bool mask}.  Named regions: every named
-    set of quad cells (Gmsh physical surfaces).
+    Named groups (Gmsh physical groups, meshio cell sets): a group of line cells (a physical
+    curve) becomes a node set in ``edges``, ordered along the line; a group of vertex cells (a
+    physical point) a node set of those nodes; a group of quads (a physical surface) a region.
+    ``edges`` = {name: predicate(X) -> bool mask} adds node sets.
 
     Points that no quad uses (e.g. Gmsh geometry points) are dropped; line and vertex cells are
-    allowed, any other cell type (triangles) is a MeshError, as are quads whose orientation flips
-    across an edge.
+    allowed.  Triangles (a quad-dominant mesh) are a MeshError naming the fixes, unless
+    ``triangles="split"``: then every cell is split conformingly into quads (each quad into 4,
+    each triangle into 3, lines into 2; :func:`~core_se3.mesh.subdivide.split_to_quads`) and the
+    groups follow their cells.  Any other cell type, quads whose orientation flips across an
+    edge, and a file without quads (Gmsh saves only the elements of physical groups: a file
+    with physical curves but no physical surface has none) are MeshErrors.
 
     Parameters
     ----------
@@ -125,6 +136,8 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None):
     edges : dict, optional
         Extra node sets: name -> predicate of the reference positions X (n, 3) returning a
         boolean mask.
+    triangles : {"error", "split"}, optional
+        What to do with triangles (default: a MeshError).
 
     Returns
     -------
@@ -139,26 +152,43 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None):
     >>> sorted(m.regions)[:2], "tip_px" in m.edges
     (['finger_mx', 'finger_my'], True)
     """
+    if triangles not in ("error", "split"):
+        raise MeshError(f"triangles must be 'error' or 'split', got {triangles!r}")
     m = read_meshio(source)
     X = np.asarray(m.points, float)
     if X.ndim != 2 or X.shape[1] not in (2, 3):
         raise MeshError("mesh points must be 2-D or 3-D")
     if X.shape[1] == 2:
         X = np.c_[X, np.zeros(len(X))]
-    quads = [c.data for c in m.cells if c.type == "quad"]
-    other = sorted({c.type for c in m.cells} - {"quad", "line", "vertex"})
+    blocks = [(c.type, np.asarray(c.data, np.int64)) for c in m.cells]
+    sets = _named_sets(m)
+    types = {t for t, _ in blocks}
+    other = sorted(types - {"quad", "line", "vertex"})
+    if other == ["triangle"] and triangles == "split" and "quad" in types | {"triangle"}:
+        X, blocks, kids = split_to_quads(X, blocks)
+        sets = {name: [None if ids is None or not len(ids) else np.sort(k[ids].ravel())
+                       for ids, k in zip(per, kids)] for name, per in sets.items()}
+        other = []
     if other:
-        raise MeshError(f"only quadrilateral shells are supported; the mesh also has {other} cells")
-    if not quads:
-        raise MeshError("the mesh has no quad cells")
-    quads = np.concatenate(quads).astype(np.int64)
+        hint = (": a quad-dominant mesh (quads and triangles) becomes all quads with triangles = "
+                "\"split\" ([mesh] triangles, or mesh.from_meshio(..., triangles=\"split\")), or in "
+                "Gmsh with Mesh.RecombineAll = 1 and Mesh.SubdivisionAlgorithm = 1"
+                if other == ["triangle"] else "")
+        raise MeshError(f"only quadrilateral shells are supported; the mesh also has {other} cells{hint}")
+    qb = [i for i, (t, _) in enumerate(blocks) if t == "quad"]
+    if not qb:
+        hint = ""
+        if types & {"line", "vertex"} and 2 not in _physical_dims(m) and _physical_dims(m):
+            hint = ("; the file has physical groups of curves or points but none of surfaces, and "
+                    "Gmsh then saves only the elements of physical groups: add a physical surface "
+                    "(e.g. gmsh.model.addPhysicalGroup(2, [...], name=\"shell\")) or set "
+                    "Mesh.SaveAll = 1 before writing")
+        raise MeshError("the mesh has no quad cells" + hint)
+    quads = np.concatenate([blocks[i][1] for i in qb]).astype(np.int64)
     used = np.unique(quads)
-    if len(used) < len(X):          # drop points no quad uses (e.g. Gmsh geometry points)
-        remap = -np.ones(len(X), np.int64)
-        remap[used] = np.arange(len(used))
-        quads = remap[quads]
-    else:
-        remap = np.arange(len(X))
+    remap = -np.ones(len(X), np.int64)
+    remap[used] = np.arange(len(used))
+    quads = remap[quads]
     X = X[used]
     # orientation consistency: each interior edge must be traversed in opposite directions
     cyc = np.stack([quads, np.roll(quads, -1, axis=1)], -1).reshape(-1, 2)
@@ -183,15 +213,29 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None):
     if weak.any():
         alt = np.array([0.0, 1.0, 0.0]) - d3[weak, 1:2] * d3[weak]
         t[weak] = alt
-    named = {}
-    for name, blocks in (m.cell_sets or {}).items():
-        segs = []
-        for cb, ids in zip(m.cells, blocks):
-            if cb.type == "line" and ids is not None and len(ids):
-                segs.extend(remap[cb.data[np.asarray(ids)]].tolist())
+    named, regions, offsets, off = {}, {}, {}, 0
+    for i in qb:
+        offsets[i], off = off, off + len(blocks[i][1])
+    for name, per in sets.items():
+        segs, points, elems = [], [], []
+        for i, ((typ, cells), ids) in enumerate(zip(blocks, per)):
+            if ids is None or not len(ids):
+                continue
+            if typ == "line":
+                segs.extend(remap[cells[ids]].tolist())
+            elif typ == "vertex":
+                points.extend(remap[cells[ids]].ravel().tolist())
+            elif typ == "quad":
+                elems.extend((offsets[i] + ids).tolist())
         if segs:
             named[name] = chain_order(segs)
-    mesh = Mesh(frames_from(X, t, d3), quads, named, regions=_file_regions(m))
+        elif points:
+            pts = [p for p in dict.fromkeys(points) if p >= 0]     # points no quad uses are dropped
+            if pts:
+                named[name] = np.asarray(pts, np.int64)
+        if elems:
+            regions[name] = np.unique(elems)
+    mesh = Mesh(frames_from(X, t, d3), quads, named, regions=regions)
     for name, pred in (edges or {}).items():
         mesh.edges[name] = np.nonzero(pred(mesh.X))[0]
     return mesh

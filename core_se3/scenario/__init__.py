@@ -14,16 +14,18 @@ Example
 -------
 >>> from core_se3 import scenario
 >>> sorted(scenario.GENERATORS)
-['annulus', 'cylinder_arch', 'cylinder_panel', 'rectangle']
+['annulus', 'annulus_sector', 'cylinder_arch', 'cylinder_panel', 'disk', 'polygon', 'rectangle', 'rounded_rectangle', 'star']
 """
 from .geometry import GENERATORS, MAX_ELEMENTS
 from .physics import ARCLENGTH_DEFAULTS, NON_PHYSICAL, OUTPUT_DEFAULTS, SOLVER_DEFAULTS, material_index
 from .runner import RunInterrupted, RunResult, cell_fields, picture, plot_probes, point_fields, run
 from .spec import TOP_KEYS, Scenario, from_dict, load, loads
+from .sweep import SweepResult, sweep
+from .units import UNIT_SYSTEMS
 from .toml_writer import dumps
 from .validate import make_scale
 
 __all__ = ["Scenario", "load", "loads", "from_dict", "dumps", "make_scale", "run", "RunResult",
            "RunInterrupted", "GENERATORS", "TOP_KEYS", "SOLVER_DEFAULTS", "ARCLENGTH_DEFAULTS",
            "OUTPUT_DEFAULTS", "NON_PHYSICAL", "MAX_ELEMENTS", "material_index", "point_fields",
-           "cell_fields", "picture", "plot_probes"]
+           "cell_fields", "picture", "plot_probes", "sweep", "SweepResult", "UNIT_SYSTEMS"]

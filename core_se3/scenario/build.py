@@ -11,6 +11,7 @@ from ..fem import Material, RegionMaterial
 from ..model import FIELDS, MU0, Problem
 from .geometry import selection
 from .obstacles import add_obstacles
+from .magnetisation import pattern_br
 from .physics import MATERIAL_KEYS, material_index, solve_defaults
 from .validate import join, make_scale
 
@@ -104,7 +105,9 @@ def _add_magnets(v, prob, spec, mesh, regions):
     for i, m in enumerate(spec["magnets"]):
         key = f"magnets[{i}]"
         elems = regions[m["region"]] if m.get("region") else None
-        if "Br" in m:
+        if "direction" in m or "Br_table" in m:
+            Br = pattern_br(m, mesh, elems)
+        elif "Br" in m:
             Br = np.asarray(m["Br"], float)
         else:
             # components along the reference directors, one lab vector per element of the selection

@@ -26,6 +26,16 @@ GENERATORS = {
                                           ("theta1", "real"), ("nt", "count"), ("nl", "count")]),
     "annulus": (M.annulus, [("r_in", "pos"), ("r_out", "pos"), ("angle", "pos"), ("nr", "count"),
                             ("nt", "count")]),
+    # outlines of soft robots (mesh/shapes.py): element size and backend instead of counts
+    "star": (M.star, [("n_arms", "arms"), ("arm_length", "pos"), ("arm_width", "pos"), ("palm", "pos?"),
+                      ("angle0", "real?"), ("size", "size"), ("backend", "backend")]),
+    "polygon": (M.polygon, [("n_sides", "arms"), ("radius", "pos"), ("angle0", "real?"), ("size", "size"),
+                            ("backend", "backend")]),
+    "rounded_rectangle": (M.rounded_rectangle, [("length", "pos"), ("width", "pos"), ("radius", "real?"),
+                                                ("size", "size"), ("backend", "backend")]),
+    "disk": (M.disk, [("radius", "pos"), ("size", "size"), ("backend", "backend")]),
+    "annulus_sector": (M.annulus_sector, [("r_in", "pos"), ("r_out", "pos"), ("angle", "pos"),
+                                          ("theta0", "real?"), ("size", "size"), ("backend", "backend")]),
 }
 
 
@@ -38,9 +48,10 @@ def mesh_section(v, d, base_dir):
         v.fail(key, "give exactly one of 'generator' (" + ", ".join(GENERATORS) + ") or 'file' "
                     "(a mesh meshio reads: Gmsh .msh, .vtu, ...)")
     if "file" in d:
-        v.table(d, key, ("file", "d1_hint"))
+        v.table(d, key, ("file", "d1_hint", "triangles"))
         fname = v.string(d, "file", key)
         hint = v.vector(d, "d1_hint", key, default=[1.0, 0.0, 0.0], nonzero=True)
+        tri = v.string(d, "triangles", key, default="error", choices=("error", "split"))
         path = fname if os.path.isabs(fname) else os.path.join(base_dir, fname)
         if not os.path.isfile(path):
             v.fail(join(key, "file"), f"mesh file {fname!r} does not exist (looked for {path})")
@@ -49,14 +60,17 @@ def mesh_section(v, d, base_dir):
         except CoreSE3Error as exc:
             v.fail(join(key, "file"), f"cannot read mesh file {fname!r}: {str(exc).split(': ', 1)[-1]}")
         try:
-            mesh = M.from_meshio(raw, d1_hint=hint)
+            mesh = M.from_meshio(raw, d1_hint=hint, triangles=tri)
         except CoreSE3Error as exc:
             v.fail(join(key, "file"), f"bad mesh {fname!r}: {exc}")
         except Exception as exc:      # meshio objects can be malformed in many ways
             v.fail(join(key, "file"), f"bad mesh {fname!r}: {type(exc).__name__}: {exc}")
         with open(path, "rb") as fh:
             digest = hashlib.sha256(fh.read()).hexdigest()
-        return mesh, dict(file=fname, d1_hint=hint), digest
+        spec = dict(file=fname, d1_hint=hint)
+        if tri != "error":
+            spec["triangles"] = tri
+        return mesh, spec, digest
     gen = v.string(d, "generator", key, choices=tuple(GENERATORS))
     fn, params = GENERATORS[gen]
     v.table(d, key, ("generator",) + tuple(p for p, _ in params))
@@ -71,9 +85,23 @@ def mesh_section(v, d, base_dir):
         elif kind == "real?":
             if p in d:
                 kw[p] = v.number(d, p, key)
+        elif kind == "pos?":
+            if p in d:
+                kw[p] = v.number(d, p, key, lo=0.0, lo_open=True)
+        elif kind == "arms":
+            kw[p] = v.integer(d, p, key, lo=3, hi=64)
+        elif kind == "size":
+            kw[p] = v.number(d, p, key, lo=0.0, lo_open=True)
+        elif kind == "backend":
+            kw[p] = M.resolve_backend(v.string(d, p, key, default="auto", choices=M.BACKENDS))
     counts = [kw[p] for p, kind in params if kind == "count"]
-    if counts[0] * counts[1] > MAX_ELEMENTS:
+    if len(counts) == 2 and counts[0] * counts[1] > MAX_ELEMENTS:
         v.fail(key, f"{counts[0]} x {counts[1]} elements exceed the limit of {MAX_ELEMENTS}")
+    if "size" in kw:
+        extent = max(kw[p] for p, kind in params if kind == "pos")
+        if (extent / kw["size"]) ** 2 > 4 * MAX_ELEMENTS:
+            v.fail(join(key, "size"), f"size {kw['size']:g} makes about {(extent / kw['size']) ** 2:.3g} elements "
+                                      f"on an outline {extent:g} across, over the limit of {MAX_ELEMENTS}")
     try:
         mesh = fn(**kw)
     except CoreSE3Error as exc:

@@ -14,6 +14,7 @@ from ..model.base import REQUIRED
 from ..solvers import ArcLengthOptions, NewtonOptions
 from ..solvers.options import ITERATIONS, PREDICTORS
 from .geometry import is_line, nodes_ref, region_ref
+from .magnetisation import PATTERN_KEYS, pattern_section
 from .validate import join, tname, show
 
 __all__ = ["MATERIAL_KEYS", "material_section", "material_index", "fields_section",
@@ -132,16 +133,19 @@ def fields_section(v, doc):
     return out
 
 
-def magnets_section(v, doc, regions, fields):
+def magnets_section(v, doc, regions, fields, mesh=None, base_dir="."):
     out = []
     for i, t in enumerate(v.array_of_tables(doc, "magnets")):
         key = f"magnets[{i}]"
-        v.table(t, key, ("Br", "Br_frame", "region", "field", "mu0"))
-        if ("Br" in t) == ("Br_frame" in t):
+        v.table(t, key, ("Br", "Br_frame", "region", "field", "mu0") + PATTERN_KEYS)
+        if ("Br" in t) + ("Br_frame" in t) + ("Br_file" in t) != 1:
             v.fail(key, "give exactly one of 'Br' (lab vector [T]) or 'Br_frame' (components "
-                        "[T] along the reference directors d1, d2, d3)")
+                        "[T] along the reference directors d1, d2, d3), or 'Br_file' (a table per element or node)")
         m = {}
-        if "Br" in t:
+        if "direction" in t or "Br_file" in t or any(k in t for k in ("Br_axial", "centre", "axis")):
+            elems, m["region"] = region_ref(v, t, key, regions)
+            m.update(pattern_section(v, t, key, mesh, elems, base_dir))
+        elif "Br" in t:
             m["Br"] = v.vector(t, "Br", key)
         else:
             m["Br_frame"] = v.vector(t, "Br_frame", key)

@@ -31,8 +31,11 @@ from ..results import Result, StepRecorder, result_document, step_record
 from ..solvers import (ArcLengthOptions, ArcState, NewtonOptions, NewtonState, arc_length_steps,
                        newton_steps)
 from .obstacles import obstacles_of
+from .outputs import physical_record, picture, plot_probes, unit_system_record
+from .resume import check_extension, check_same_scenario
 
-__all__ = ["run", "RunResult", "RunInterrupted", "point_fields", "cell_fields"]
+__all__ = ["run", "RunResult", "RunInterrupted", "point_fields", "cell_fields", "physical_record",
+           "unit_system_record"]
 
 PHASES = ("setup", "assembly", "solve", "other")
 
@@ -131,6 +134,8 @@ def _document(scn, records, timings, status, error=None, critical=None):
     if mat["rho"] is not None:
         params["rho"] = dict(value=mat["rho"], unit="")
     extra = dict(critical_points=_critical_doc(critical)) if critical is not None else {}
+    extra["unit_system"] = unit_system_record(scn.spec["units"])
+    extra["load_numbers"] = scn.load_numbers()
     return result_document(scn.name, "core_se3", scn.solver["element"], params, scn.mesh, records,
                            {k: timings.get(k, 0.0) for k in PHASES}, None,
                            control=scn.solver["control"],
@@ -144,11 +149,13 @@ def _critical_doc(cps):
                  step=int(c.step), description=c.describe()) for c in cps]
 
 
-def _write_vtu(path, prob, g, lam):
+def _write_vtu(path, prob, g, lam, physical=None):
     from ..io import write_vtu
+    values = {"load_factor": float(lam)}
+    values.update({f"{k} [{v['unit']}]" if v["unit"] else k: v["value"] for k, v in (physical or {}).items()})
     with atomic_path(path) as tmp:
         write_vtu(tmp, prob.mesh.X, prob.mesh.quads, prob.mesh.g0, g,
-                  point_data=point_fields(prob, g, lam), cell_data=cell_fields(prob, g))
+                  point_data=point_fields(prob, g, lam), cell_data=cell_fields(prob, g), field_data=values)
     obstacles = obstacles_of(prob)
     if obstacles:                    # their surfaces at lam, beside the shell's file (ParaView)
         from ..io import write_obstacles
@@ -251,7 +258,8 @@ def run(scn, out=None, resume=False, progress=None, force=False, stop_after=None
     nsteps = None if arc else len(lams)
     result = Result(mesh=prob.mesh, element=prob.element_name)
     if resume:
-        st = ck.load(scn.fingerprint)
+        st = ck.load()
+        check_same_scenario(ck.path, st, scn)
         was_arc = st["extra"].get("control") == "arclength"
         if arc and (not was_arc or "arc" not in st["extra"]):
             raise CheckpointError(f"checkpoint {ck.path} holds no arc-length path state (written by a "
@@ -262,6 +270,8 @@ def run(scn, out=None, resume=False, progress=None, force=False, stop_after=None
                                   "load-controlled: start over with --force or use another --out")
         _clear_temporaries(out, vtu_dir)
         records, base, done = st["records"], dict(st["timings"]), st["step"]
+        if not arc:
+            check_extension(ck.path, records, lams, scn.solver)
         if arc:
             start = ArcState.unpack(st["g"], st["extra"]["arc"], st["arrays"])
             if len(records) != start.step + 1:
@@ -284,10 +294,11 @@ def run(scn, out=None, resume=False, progress=None, force=False, stop_after=None
         first = rec.step(0.0, g0, 0, [], ev.r_int, ev.f_ext)
         records.append(_record(0, first, 0, 0, 0))
         records[0]["balance_error"] = 0.0            # the unloaded start, not an equilibrium
+        records[0]["physical"] = physical_record(scn, 0.0)
         if o["vtu"]:
-            _write_vtu(os.path.join(vtu_dir, "step_0000.vtu"), prob, g0, 0.0)
+            _write_vtu(os.path.join(vtu_dir, "step_0000.vtu"), prob, g0, 0.0, records[0]["physical"])
         ck.save(scn.fingerprint, 0, 0.0, g0, rec.unwrapped, records, {k: 0.0 for k in PHASES},
-                extra=dict(newton=NewtonState(0.0, g0).pack()))
+                extra=dict(newton=NewtonState(0.0, g0).pack(), physical=scn.physical))
         if o["vtu"]:
             _write_pvd(vtu_dir, records, every, nsteps)
         start = NewtonState(0.0, g0)
@@ -329,11 +340,13 @@ def run(scn, out=None, resume=False, progress=None, force=False, stop_after=None
                 extra, arrays = dict(newton=item.state.pack()), item.state.arrays() or None
                 unwrap_now = rec.unwrapped
             lam, g = item.step.load_factor, item.step.g
+            records[-1]["physical"] = physical_record(scn, lam)
+            extra["physical"] = scn.physical
             last_state = item.state
             timings = timings_now()
             vtu_now = o["vtu"] and (k % every == 0 or finished)
             if vtu_now:
-                _write_vtu(os.path.join(vtu_dir, f"step_{k:04d}.vtu"), prob, g, lam)
+                _write_vtu(os.path.join(vtu_dir, f"step_{k:04d}.vtu"), prob, g, lam, records[-1]["physical"])
             ck.save(scn.fingerprint, k, lam, g, unwrap_now, records, timings, extra=extra, arrays=arrays)
             if vtu_now:
                 _write_pvd(vtu_dir, records, every, k if finished else (nsteps if not arc else -1))
@@ -365,6 +378,13 @@ def run(scn, out=None, resume=False, progress=None, force=False, stop_after=None
         status, error = "failed", str(exc)
         critical = list(result.critical_points)
     except RunInterrupted:
+        raise
+    except KeyboardInterrupt:
+        bar.close()
+        msg = (f"interrupted (Ctrl-C) after {'path point' if arc else 'step'} {k} at load factor {lam:.6g}; "
+               "the checkpoint keeps it: continue with --resume")
+        write_json_atomic(os.path.join(out, "results.json"),
+                          _document(scn, records, timings_now(), "interrupted", msg, critical=critical))
         raise
     except CoreSE3Error as exc:              # e.g. a tangent that turned singular
         bar.close()
@@ -411,78 +431,3 @@ def _finish(o, prob, doc, scn, g, records, out, vtu_dir, files):
         files["picture"] = picture(os.path.join(out, "shell.png"), scn, g, records=records,
                                    vtu_dir=vtu_dir if o["vtu"] else None)
     return RunResult(doc=doc, g=g, out=out, files=files)
-
-
-def plot_probes(path, doc):
-    """Load factor against the displacement components of every probe (one PNG).
-
-    Components that stay ~0 along the path are left out.  Parameters: path (written
-    atomically), doc (a results document whose steps have probes).  Returns: the path.
-
-    Example
-    -------
-    >>> import os, tempfile
-    >>> doc = {"case": "demo", "steps": [{"load_factor": x, "probes": {"tip": {"u": [0.0, 0.0, x]}}} for x in (0.0, 1.0)]}
-    >>> os.path.basename(plot_probes(os.path.join(tempfile.mkdtemp(), "probes.png"), doc))
-    'probes.png'
-    """
-    from ..io import plot_load_deflection
-    lam = np.array([s["load_factor"] for s in doc["steps"]])
-    disp = {}
-    us = {name: np.array([s["probes"][name]["u"] for s in doc["steps"]]) for name in doc["steps"][0]["probes"]}
-    big = max([np.abs(u).max() for u in us.values()] + [0.0])
-    for name, u in us.items():
-        for i, c in enumerate("xyz"):
-            if np.abs(u[:, i]).max() > 1e-9 * big:          # leave out components that stay ~0
-                disp[f"{name}.u{c}"] = u[:, i]
-    length = {"N-mm-MPa": "mm", "SI": "m"}.get(doc.get("units"), "length unit")
-    with atomic_path(path) as tmp:
-        plot_load_deflection(tmp, lam, disp, xlabel=f"probe displacement [{length}]",
-                             ylabel="load factor", title=doc["case"])
-    return path
-
-
-def picture(path, scn, g, title=None, records=None, vtu_dir=None):
-    """PNG of the deformed shell (matplotlib 3-D, reference outline dotted): the final state
-    coloured by rotation angle, or, with [output] picture_steps = k > 1, k states of the path
-    (read back from the VTU files, so also after a resume) overlaid.
-
-    Parameters: path (written atomically); scn (mesh, [output] view and picture_steps); g
-    (n, 4, 4) the final state; title (default the scenario's name); records, vtu_dir (for
-    several states).  Returns: the path.
-
-    Example
-    -------
-    >>> import os, tempfile
-    >>> from core_se3 import scenario
-    >>> scn = scenario.from_dict({"mesh": {"generator": "rectangle", "L": 1.0, "width": 1.0, "nx": 2, "ny": 1},
-    ...     "material": {"E": 1e3, "nu": 0.0, "h": 0.01}, "supports": [{"type": "clamp", "edge": "x0"}]})
-    >>> os.path.getsize(picture(os.path.join(tempfile.mkdtemp(), "shell.png"), scn, scn.mesh.g0)) > 0
-    True
-    """
-    from ..io import plot_sequence, plot_shell
-    m = scn.mesh
-    o = scn.output
-    k = o.get("picture_steps", 1)
-    view = list(o.get("view") or (20.0, -60.0))
-    elev, azim, roll = (view + [0.0])[:3]
-    with atomic_path(path) as tmp:
-        if k > 1 and records and vtu_dir:
-            import meshio
-            have = [r for r in records
-                    if os.path.exists(os.path.join(vtu_dir, f"step_{r['step']:04d}.vtu"))]
-            pick = sorted({int(round(i)) for i in np.linspace(0, len(have) - 1, min(k, len(have)))})
-            pos, labels = [], []
-            for i in pick:
-                r = have[i]
-                v = meshio.read(os.path.join(vtu_dir, f"step_{r['step']:04d}.vtu"))
-                pos.append(v.points + v.point_data["displacement"])
-                labels.append(f"load factor {r['load_factor']:.3g}")
-            plot_sequence(tmp, m.X, m.quads, pos, labels, title=title or scn.name, elev=elev, azim=azim,
-                          roll=roll)
-        else:
-            from ..io import obstacle_surfaces
-            lam = records[-1]["load_factor"] if records else 1.0
-            plot_shell(tmp, m.X, m.quads, g, title=title or scn.name, elev=elev, azim=azim, roll=roll,
-                       surfaces=obstacle_surfaces(obstacles_of(scn.problem), g[:, :3, 3], lam))
-    return path

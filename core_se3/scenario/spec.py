@@ -14,15 +14,17 @@ import copy
 import hashlib
 import json
 import os
-import re
+import warnings
 
 from ..errors import ScenarioError
 from .build import build_problem
 from .design_section import design_section
+from .keys import check_key, split_dotted
 from .geometry import edges_section, mesh_section, probes_section, regions_section
 from .obstacles import obstacles_section
 from .physics import (NON_PHYSICAL, fields_section, loads_section, magnets_section,
                       material_section, output_section, solver_section, supports_section)
+from .units import plausibility, units_section
 from .validate import Validator
 
 try:                                  # Python >= 3.11
@@ -30,10 +32,11 @@ try:                                  # Python >= 3.11
 except ModuleNotFoundError:           # pragma: no cover - Python 3.10
     import tomli as tomllib
 
-__all__ = ["Scenario", "load", "loads", "from_dict", "TOP_KEYS"]
+__all__ = ["Scenario", "load", "loads", "from_dict", "TOP_KEYS", "split_dotted"]
 
+EXTENSIBLE = ("steps", "lam_end", "load_factors")     # load control: not in the fingerprint
 TOP_KEYS = ("name", "description", "units", "mesh", "edges", "regions", "material", "fields",
-            "magnets", "supports", "loads", "probes", "solver", "output", "obstacles", "design")
+            "magnets", "supports", "loads", "probes", "solver", "output", "obstacles", "design", "sweep")
 
 
 class Scenario:
@@ -87,7 +90,7 @@ class Scenario:
     """
 
     def __init__(self, spec, mesh, regions, problem, file, fingerprint, raw, base_dir=".",
-                 default_name="scenario"):
+                 default_name="scenario", strict=False):
         self.spec = spec
         self.mesh = mesh
         self.regions = regions
@@ -97,6 +100,19 @@ class Scenario:
         self.raw = raw
         self.base_dir = base_dir
         self.default_name = default_name
+        self.strict = strict
+        self.warnings = []            # ScenarioWarning: implausible values (scenario/units.py)
+        self.physical = {}            # what the fingerprint hashes (to name a changed key)
+        self.mesh_digest = None
+        self.numbers = None
+
+    def load_numbers(self):
+        """The dimensionless load numbers of the magnets and loads (``scenario.units``), at
+        full load; computed once."""
+        if self.numbers is None:
+            from .units import load_numbers
+            self.numbers = load_numbers(self)
+        return self.numbers
 
     @property
     def name(self):
@@ -141,8 +157,10 @@ class Scenario:
         "solver.steps": 20}`` (a parameter sweep changes one key at a time)."""
         doc = copy.deepcopy(self.raw)
         for key, value in overrides.items():
+            check_key(doc, key, self.file)            # a misspelt section or name: did you mean
             _set_dotted(doc, key, value, self.file)
-        return from_dict(doc, file=self.file, base_dir=self.base_dir, default_name=self.default_name)
+        return from_dict(doc, file=self.file, base_dir=self.base_dir, default_name=self.default_name,
+                         strict=self.strict)
 
     def run(self, out=None, resume=False, progress=None, **kw):
         """Run the scenario with output and checkpoints (``scenario.runner.run``)."""
@@ -150,18 +168,10 @@ class Scenario:
         return run(self, out=out, resume=resume, progress=progress, **kw)
 
 
-_PART = re.compile(r"^([^.\[\]]+)((?:\[\d+\])*)$")
-
 
 def _set_dotted(doc, key, value, file):
     """Set ``a.b[2].c`` = value in nested dicts/lists (missing tables are created)."""
-    parts = []
-    for seg in str(key).split("."):
-        m = _PART.match(seg)
-        if not m:
-            raise ScenarioError(f"cannot read the override key {key!r} (expected a.b[0].c)", file, key)
-        parts.append(m.group(1))
-        parts.extend(int(i) for i in re.findall(r"\[(\d+)\]", m.group(2)))
+    parts = split_dotted(key, file)
     node = doc
     for p, nxt in zip(parts[:-1], parts[1:]):
         try:
@@ -177,7 +187,7 @@ def _set_dotted(doc, key, value, file):
         raise ScenarioError(f"the override key {key!r} does not exist in the scenario", file, key) from None
 
 
-def load(path):
+def load(path, strict=False):
     """Read and validate a scenario file (TOML).
 
     Parameters
@@ -185,6 +195,8 @@ def load(path):
     path : str or path-like
         The file (UTF-8 TOML, schema in docs/SCENARIOS.md); relative mesh files are found from
         its directory.
+    strict : bool, optional
+        Make every plausibility warning (``Scenario.warnings``) a ScenarioError.
 
     Returns
     -------
@@ -214,10 +226,10 @@ def load(path):
         text = data.decode("utf-8")
     except UnicodeDecodeError as exc:
         raise ScenarioError(f"not UTF-8 text ({exc.reason} at byte {exc.start})", path) from None
-    return loads(text, file=path, base_dir=os.path.dirname(os.path.abspath(path)))
+    return loads(text, file=path, base_dir=os.path.dirname(os.path.abspath(path)), strict=strict)
 
 
-def loads(text, file="<string>", base_dir="."):
+def loads(text, file="<string>", base_dir=".", strict=False):
     """Parse and validate scenario TOML text.
 
     Parameters
@@ -245,10 +257,10 @@ def loads(text, file="<string>", base_dir="."):
     except tomllib.TOMLDecodeError as exc:
         raise ScenarioError(f"not valid TOML: {exc}", file) from None
     name = os.path.splitext(os.path.basename(file))[0] if not file.startswith("<") else "scenario"
-    return from_dict(doc, file=file, base_dir=base_dir, default_name=name)
+    return from_dict(doc, file=file, base_dir=base_dir, default_name=name, strict=strict)
 
 
-def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario"):
+def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario", strict=False):
     """Validate a scenario given as nested dicts/lists (the parsed TOML) and build its Problem.
 
     Parameters
@@ -274,7 +286,7 @@ def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario"):
     >>> [scn.with_overrides({k: v}).fingerprint == scn.fingerprint for k, v in [("solver.rtol", 1e-12), ("material.E", 2e3)]]
     [True, False]
     """
-    v = Validator(file)
+    v = Validator(file, strict=strict)
     v.table(doc, "", TOP_KEYS, required=("mesh", "material"))
     spec = {}
     spec["name"] = v.string(doc, "name", "", default=default_name)
@@ -288,7 +300,7 @@ def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario"):
     spec["regions"] = {k: r.tolist() for k, r in regions.items()}
     spec["material"] = material_section(v, doc["material"], regions)
     spec["fields"] = fields_section(v, doc)
-    spec["magnets"] = magnets_section(v, doc, regions, spec["fields"])
+    spec["magnets"] = magnets_section(v, doc, regions, spec["fields"], mesh, base_dir)
     spec["supports"] = supports_section(v, doc, mesh, regions)
     spec["loads"] = loads_section(v, doc, mesh, regions)
     spec["obstacles"] = obstacles_section(v, doc, regions)
@@ -306,9 +318,50 @@ def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario"):
     design = design_section(v, doc, spec, mesh, regions)
     if design is not None:
         spec["design"] = design
+    spec["sweep"] = sweep_section(v, doc)
     problem = build_problem(v, spec, mesh, regions)
-    phys = {k: spec[k] for k in spec if k not in ("output", "description")}
+    units_section(v, doc, spec)
+    phys = {k: spec[k] for k in spec if k not in ("output", "description", "sweep")}
+    phys["magnets"] = [{k: (dict(x, path=None) if k == "Br_table" else x) for k, x in m.items()}
+                       for m in spec["magnets"]]          # a table's digest, not where it lies
     phys["solver"] = {k: x for k, x in spec["solver"].items() if k not in NON_PHYSICAL}
+    if spec["solver"]["control"] == "load":
+        # the load factors may grow on --resume (a finished run extended to a higher lam_end);
+        # the runner checks that the steps done are the first steps of the new ones
+        phys["solver"] = {k: x for k, x in phys["solver"].items() if k not in EXTENSIBLE}
     blob = json.dumps(phys, sort_keys=True) + (file_digest or "")
     fp = hashlib.sha256(blob.encode()).hexdigest()
-    return Scenario(spec, mesh, regions, problem, file, fp, doc, base_dir, default_name)
+    scn = Scenario(spec, mesh, regions, problem, file, fp, doc, base_dir, default_name, strict)
+    scn.physical = json.loads(json.dumps(phys))
+    scn.mesh_digest = file_digest
+    plausibility(v, scn)
+    scn.warnings = v.warnings
+    for w in scn.warnings:
+        warnings.warn(w, stacklevel=2)
+    return scn
+
+
+def sweep_section(v, doc):
+    """[sweep]: dotted key -> non-empty array of values (``"fields.coil.B[2]" = [0.02, 0.04]``;
+    unquoted dotted keys, nested tables, are flattened); every key must exist in the scenario."""
+    d = doc.get("sweep", {})
+    if not isinstance(d, dict):
+        v.fail("sweep", f"expected a table of KEY = [values], got {type(d).__name__}")
+    flat = {}
+
+    def walk(t, prefix):
+        for k, x in t.items():
+            key = f"{prefix}.{k}" if prefix else str(k)
+            if isinstance(x, dict):
+                walk(x, key)
+            else:
+                flat[key] = x
+    walk(d, "")
+    for key, vals in flat.items():
+        if not isinstance(vals, list) or not vals or any(isinstance(x, (bool, str, dict)) for x in vals):
+            v.fail(f"sweep.{key}", f"expected a non-empty array of values to sweep, got {vals!r}")
+        try:
+            check_key(doc, key, v.file)
+        except ScenarioError as exc:
+            v.fail(f"sweep.{key}", exc.detail)
+    return flat

@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from ..errors import ScenarioError, did_you_mean
+from ..errors import ScenarioError, ScenarioWarning, did_you_mean
 from ..model.base import REQUIRED
 
 __all__ = ["Validator", "join", "tname", "show", "make_scale"]
@@ -66,11 +66,25 @@ def show(v):
 class Validator:
     """Typed access to a parsed TOML document; every failure is a ScenarioError(file, key)."""
 
-    def __init__(self, file):
+    def __init__(self, file, strict=False):
         self.file = file
+        self.strict = strict
+        self.warnings = []
 
     def fail(self, key, msg):
         raise ScenarioError(msg, self.file, key)
+
+    def warn(self, key, msg):
+        """An implausible value: a ScenarioWarning kept in ``warnings`` (with ``strict`` a
+        ScenarioError)."""
+        if self.strict:
+            self.fail(key, msg + " (an error with --strict)")
+        self.warnings.append(ScenarioWarning(msg, self.file, key))
+
+    def choice_fail(self, key, value, choices):
+        """Fail for a value that is not one of ``choices`` (with the closest one)."""
+        self.fail(key, f"unknown value {value!r}{did_you_mean(value, choices)} (expected one of "
+                       f"{', '.join(map(repr, choices))})")
 
     def table(self, d, key, allowed, required=()):
         if not isinstance(d, dict):

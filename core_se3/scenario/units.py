@@ -1,0 +1,299 @@
+"""Unit systems of scenario files, the physical value of every load and field at a load
+factor, the dimensionless load numbers, and the plausibility checks that warn before a run.
+
+``units`` is one of :data:`UNIT_SYSTEMS`: ``"SI"`` (N, m, Pa, kg/m^3, T), ``"N-mm-MPa"`` (N, mm,
+MPa, t/mm^3, T) or ``"consistent"`` (any consistent system of your own: no range checks, and
+every magnet needs its ``mu0``).  A magnetic or gravity problem must name one.
+
+Load numbers (dimensionless, ``load_numbers``): for each magnet 12 |B^r| |B^a| L^2 / (mu0 E h^2)
+(the magneto-elastic number A B^r B^a L^2 / (mu0 E I) of a strip); for each load, with the
+plate modulus D = E h^3 / 12: a force F along a line of width w, F L^2 / (D w) (a point force
+F L / D); a moment, M L / (D w) (M / D); a pressure or body force q, q L^3 / D; gravity,
+rho h |g| L^3 / D.  L, the span, is the largest distance from the loaded (or magnetised) nodes
+to the nearest supported node; E and h are the means over the loaded elements.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..model import FIELDS, MU0
+from .validate import make_scale
+
+__all__ = ["UNIT_SYSTEMS", "units_section", "unit_of", "physical_loads", "load_numbers",
+           "plausibility", "describe_units"]
+
+UNIT_SYSTEMS = {
+    "SI": dict(length="m", force="N", stress="Pa", moment="N m", density="kg/m^3", acceleration="m/s^2",
+               field="T", to_pa=1.0, to_kg_m3=1.0, g=9.81, mu0=MU0, dipole_mu0=MU0),
+    "N-mm-MPa": dict(length="mm", force="N", stress="MPa", moment="N mm", density="t/mm^3",
+                     acceleration="mm/s^2", field="T", to_pa=1e6, to_kg_m3=1e12, g=9810.0, mu0=MU0 * 1e6,
+                     dipole_mu0=MU0 * 1e3),
+    "consistent": dict(length="length", force="force", stress="force/length^2", moment="force length",
+                       density="mass/length^3", acceleration="length/time^2", field="field", to_pa=None,
+                       to_kg_m3=None, g=None, mu0=None, dipole_mu0=None),
+}
+_CHOICES = ('units = "SI" (N, m, Pa, kg/m^3, T), units = "N-mm-MPa" (N, mm, MPa, t/mm^3, T) or '
+            'units = "consistent" (your own consistent units; then every magnet needs its mu0)')
+E_RANGE_PA = (10.0, 7e11)          # soft gels .. tungsten carbide
+RHO_RANGE = (1.0, 2.5e4)           # kg/m^3: aerogels .. osmium
+B_MAX = 2.0                        # T: NdFeB magnets reach ~1.4 T, lab electromagnets ~2 T
+H_OVER_L_MAX = 0.3
+FIRST_STEP_MAX = 1e3
+# parameters of the built-in load kinds -> dimension
+_DIMENSION = {"force": "force", "moment": "moment", "p": "stress", "q": "stress", "g": "acceleration"}
+
+
+def describe_units(units):
+    """One line naming the unit system (for the first line of a run).
+
+    Example
+    -------
+    >>> describe_units("N-mm-MPa")
+    'units N-mm-MPa: length mm, force N, stress MPa, density t/mm^3, field T, mu0 = 1.25664 (magnets)'
+    """
+    if units not in UNIT_SYSTEMS:
+        return "units: none given (lengths, forces and moduli in any consistent units)"
+    u = UNIT_SYSTEMS[units]
+    mu = f", mu0 = {u['mu0']:.6g} (magnets)" if u["mu0"] else ", mu0 given per magnet"
+    return (f"units {units}: length {u['length']}, force {u['force']}, stress {u['stress']}, density "
+            f"{u['density']}, field {u['field']}{mu}")
+
+
+def unit_of(units, dimension):
+    """The unit string of a dimension ('force', 'stress', ...) in a unit system ('' if none)."""
+    return UNIT_SYSTEMS.get(units, {}).get(dimension, "")
+
+
+def units_section(v, doc, spec):
+    """Check ``units``: a known system (did you mean), required by magnets and gravity."""
+    units = spec["units"]
+    if units and units not in UNIT_SYSTEMS:
+        v.choice_fail("units", units, tuple(UNIT_SYSTEMS))
+    needs = [w for w, on in (("magnets", bool(spec["magnets"])),
+                             ("gravity", any(ld["type"] == "gravity" for ld in spec["loads"]))) if on]
+    if needs and not units:
+        v.fail("units", f"a problem with {' and '.join(needs)} needs its unit system (mu0, g and the "
+                        f"plausibility checks depend on it): add {_CHOICES}")
+    if units == "consistent":
+        for i, m in enumerate(spec["magnets"]):
+            if m["mu0"] is None:
+                v.fail(f"magnets[{i}].mu0", 'with units = "consistent" every magnet needs mu0, the vacuum '
+                                            "permeability in your units (4 pi 1e-7 in SI)")
+    return units
+
+
+def _scale_values(spec_scale, lams):
+    f = make_scale(spec_scale)
+    return np.array([f(x) for x in lams], float)
+
+
+def physical_loads(spec, lam):
+    """name -> (value, unit) of every load, field and prescribed rotation at load factor lam:
+    the magnitude of its main vector (or its number) times its scale s(lam).
+
+    Example
+    -------
+    >>> spec = {"units": "N-mm-MPa", "loads": [{"type": "edge_force", "force": [0.0, 0.0, 2.0], "scale": "linear"}],
+    ...         "fields": {"coil": {"type": "uniform", "B": [0.0, 0.0, 0.06], "scale": "linear"}}, "supports": []}
+    >>> physical_loads(spec, 0.5)
+    {'loads[0].force': (1.0, 'N'), 'fields.coil.B': (0.03, 'T')}
+    """
+    units = spec.get("units", "")
+    out = {}
+    for i, ld in enumerate(spec.get("loads", [])):
+        s = float(make_scale(ld["scale"])(lam))
+        for key, dim in _DIMENSION.items():
+            if key in ld and ld[key] is not None and not isinstance(ld[key], bool):
+                val = ld[key]
+                mag = float(np.linalg.norm(val)) if isinstance(val, (list, tuple)) else float(val)
+                if key == "g" and ld["type"] == "gravity" or mag:
+                    out[f"loads[{i}].{key}"] = (s * mag, unit_of(units, dim))
+    for name, f in spec.get("fields", {}).items():
+        s = float(make_scale(f["scale"])(lam))
+        key = "B" if "B" in f else ("m" if "m" in f else None)
+        if key is not None:
+            unit = unit_of(units, "field") if key == "B" else f"A {unit_of(units, 'length')}^2".strip()
+            out[f"fields.{name}.{key}"] = (s * float(np.linalg.norm(f[key])), unit)
+    for i, sp in enumerate(spec.get("supports", [])):
+        if sp["type"] == "rotate":
+            out[f"supports[{i}].angle"] = (float(make_scale(sp["scale"])(lam)) * sp["angle"], "rad")
+    return {k: (round(v, 15), u) for k, (v, u) in out.items()}
+
+
+def _spans(mesh, problem, nodes):
+    """Largest distance from ``nodes`` to the nearest supported node."""
+    from scipy.spatial import cKDTree
+    held = np.nonzero(problem.constraint_mask().any(1))[0]
+    if len(held) == 0 or len(nodes) == 0:
+        return mesh.length_scale
+    d, _ = cKDTree(mesh.X[held]).query(mesh.X[np.asarray(nodes)])
+    return float(d.max()) or mesh.length_scale
+
+
+def _elem_props(spec, mats_index, elems):
+    mats, index = mats_index
+    sel = index[elems] if elems is not None else index
+    E = float(np.mean([mats[i]["E"] for i in sel]))
+    h = float(np.mean([mats[i]["h"] for i in sel]))
+    return E, h
+
+
+def _line_width(X, nodes):
+    P = X[np.asarray(nodes)]
+    return float(np.linalg.norm(np.diff(P, axis=0), axis=1).sum()) if len(P) > 1 else 0.0
+
+
+def load_numbers(scn, lam=None):
+    """The dimensionless load number of every magnet and load (module docstring).
+
+    Parameters
+    ----------
+    scn : Scenario
+        A validated scenario.
+    lam : float, optional
+        Load factor (default: the largest |scale| over the requested load factors, i.e. full load).
+
+    Returns
+    -------
+    list of dict
+        name (``magnets[0]``, ``loads[1]``), kind, value, span L [length], E, h, formula.
+
+    Example
+    -------
+    >>> from core_se3 import scenario
+    >>> scn = scenario.from_dict({"mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 4, "ny": 1},
+    ...     "material": {"E": 1.2e6, "nu": 0.0, "h": 0.1}, "supports": [{"type": "clamp", "edge": "x0"}],
+    ...     "loads": [{"type": "edge_force", "edge": "x1", "force": [0.0, 0.0, 1.0]}]})
+    >>> [(n["name"], round(n["value"], 9), n["span"]) for n in load_numbers(scn)]     # F L^2 / (D w) = 12 * 100 / 1200
+    [('loads[0]', 1.0, 10.0)]
+    """
+    from .physics import material_index
+    spec, mesh, prob = scn.spec, scn.mesh, scn.problem
+    mi = material_index(spec["material"], scn.regions, mesh.n_elements)
+    lams = scn.load_factors() if lam is None else [lam]
+    out = []
+    for i, m in enumerate(spec["magnets"]):
+        elems = scn.regions[m["region"]] if m.get("region") else None
+        nodes = np.unique(mesh.quads[elems if elems is not None else slice(None)])
+        E, h = _elem_props(spec, mi, elems)
+        L = _spans(mesh, prob, nodes)
+        f = spec["fields"][m["field"]]
+        field = FIELDS[f["type"]].build({k: x for k, x in f.items() if k not in ("type", "scale")},
+                                        make_scale(f["scale"]), MU0)
+        Ba = max(float(np.linalg.norm(field.value(mesh.X[nodes], x), axis=1).max()) for x in lams)
+        Br = _br_magnitude(m, mesh)
+        mu0 = m["mu0"] if m["mu0"] is not None else (UNIT_SYSTEMS.get(spec["units"], {}).get("mu0") or MU0)
+        out.append(dict(name=f"magnets[{i}]", kind="magnetic", value=12 * Br * Ba * L ** 2 / (mu0 * E * h ** 2),
+                        span=L, E=E, h=h, formula="12 |Br| |Ba| L^2 / (mu0 E h^2)"))
+    for i, ld in enumerate(spec["loads"]):
+        s = float(np.abs(_scale_values(ld["scale"], lams)).max())
+        if "edge" in ld or "nodes" in ld:
+            nodes = mesh.edges[ld["edge"]] if "edge" in ld else np.asarray(ld["nodes"])
+            elems = np.nonzero(np.isin(mesh.quads, nodes).any(1))[0]
+        else:
+            elems = scn.regions[ld["region"]] if ld.get("region") else None
+            nodes = np.unique(mesh.quads[elems if elems is not None else slice(None)])
+        E, h = _elem_props(spec, mi, elems)
+        D = E * h ** 3 / 12
+        L = _spans(mesh, prob, nodes)
+        w = _line_width(mesh.X, nodes) if ("edge" in ld or "nodes" in ld) else 0.0
+        if ld["type"] == "nodal":
+            w = 0.0 if len(nodes) == 1 else w
+        value, formula = None, ""
+        F = float(np.linalg.norm(ld.get("force") or [0.0])) * (len(nodes) if ld["type"] == "nodal" else 1)
+        M = float(np.linalg.norm(ld.get("moment") or [0.0])) * (len(nodes) if ld["type"] == "nodal" else 1)
+        if F or M:
+            value = (F * L ** 2 / (D * w) + M * L / (D * w)) if w > 0 else (F * L / D + M / D)
+            formula = "F L^2/(D w) + M L/(D w)" if w > 0 else "F L/D + M/D"
+        elif ld["type"] in ("pressure", "body_force"):
+            q = abs(ld["p"]) if "p" in ld else float(np.linalg.norm(ld["q"]))
+            value, formula = q * L ** 3 / D, "q L^3 / D"
+        elif ld["type"] == "gravity":
+            rho = ld.get("rho") if ld.get("rho") is not None else spec["material"]["rho"]
+            value, formula = (rho or 0.0) * h * float(np.linalg.norm(ld["g"])) * L ** 3 / D, "rho h |g| L^3 / D"
+        if value is not None:
+            out.append(dict(name=f"loads[{i}]", kind=ld["type"], value=s * value, span=L, E=E, h=h,
+                            formula=formula + ", D = E h^3/12"))
+    return out
+
+
+def _br_magnitude(m, mesh):
+    if "Br_max" in m:
+        return float(m["Br_max"])
+    if "Br" in m:
+        return float(np.linalg.norm(m["Br"]))
+    if "Br_frame" in m:
+        return float(np.linalg.norm(m["Br_frame"]))
+    return float(m.get("Br_max", 0.0))
+
+
+def plausibility(v, scn):
+    """Warn (``v.warn``, errors with strict) about implausible values: see docs/SCENARIOS.md."""
+    spec, units = scn.spec, scn.spec["units"]
+    u = UNIT_SYSTEMS.get(units)
+    mats = [("material", spec["material"])] + [(f"material.regions.{k}", r)
+                                               for k, r in spec["material"]["regions"].items()]
+    if u is not None and u["to_pa"] is not None:
+        for key, mat in mats:
+            E_pa = mat["E"] * u["to_pa"]
+            if not E_RANGE_PA[0] <= E_pa <= E_RANGE_PA[1]:
+                v.warn(f"{key}.E", f"E = {mat['E']:g} {u['stress']}{'' if u['to_pa'] == 1 else f' = {E_pa:.3g} Pa'} is outside the range of real "
+                                   f"solids (10 Pa for soft gels to 700 GPa for tungsten carbide): with units = "
+                                   f"{units!r} E is in {u['stress']} (a silicone elastomer ~{1e6 / u['to_pa']:g}, "
+                                   f"steel {2.1e11 / u['to_pa']:g}); check its unit")
+            if mat.get("rho") is not None:
+                r = mat["rho"] * u["to_kg_m3"]
+                if mat["rho"] > 0 and not RHO_RANGE[0] <= r <= RHO_RANGE[1]:
+                    v.warn(f"{key}.rho", f"rho = {mat['rho']:g} {u['density']}{'' if u['to_kg_m3'] == 1 else f' = {r:.3g} kg/m^3'} is outside the "
+                                         f"densities of real solids (1 to 25 000 kg/m^3): in {units} the density "
+                                         f"is in {u['density']} (water {1000 / u['to_kg_m3']:g})")
+        for i, ld in enumerate(spec["loads"]):
+            if ld["type"] == "gravity" and ld.get("rho") is not None:
+                r = ld["rho"] * u["to_kg_m3"]
+                if not RHO_RANGE[0] <= r <= RHO_RANGE[1]:
+                    v.warn(f"loads[{i}].rho", f"rho = {ld['rho']:g} {u['density']}"
+                                              f"{'' if u['to_kg_m3'] == 1 else f' = {r:.3g} kg/m^3'} is outside the "
+                                              f"densities of real solids (1 to 25 000 kg/m^3): in {units} the density "
+                                              f"is in {u['density']} (water {1000 / u['to_kg_m3']:g})")
+            if ld["type"] == "gravity":
+                gmag = float(np.linalg.norm(ld["g"]))
+                if gmag and not 0.01 <= gmag / u["g"] <= 100:
+                    v.warn(f"loads[{i}].g", f"|g| = {gmag:g} {u['acceleration']} is {gmag / u['g']:.3g} times "
+                                            f"Earth's gravity ({u['g']:g} {u['acceleration']} in {units}); check its unit")
+        for i, m in enumerate(spec["magnets"]):
+            if m["mu0"] is not None and abs(m["mu0"] / u["mu0"] - 1) > 1e-6:
+                v.warn(f"magnets[{i}].mu0", f"mu0 = {m['mu0']:g} differs from mu0 in {units} ({u['mu0']:.6g}, "
+                                            f"4 pi 1e-7 T m/A for stresses in {u['stress']}): leave it out")
+        for name, f in spec["fields"].items():
+            if f["type"] == "dipole" and f.get("mu0") is None and units != "SI":
+                v.warn(f"fields.{name}.mu0", f"a dipole field without mu0 uses the SI value (m in A m^2, lengths "
+                                             f"in m); with lengths in {u['length']} and m in A {u['length']}^2 "
+                                             f"give mu0 = {u['dipole_mu0']:.6g}")
+    if u is not None and u["mu0"] is not None:
+        for i, m in enumerate(spec["magnets"]):
+            br = _br_magnitude(m, scn.mesh)
+            if br > B_MAX:
+                v.warn(f"magnets[{i}]", f"|Br| = {br:g} T exceeds {B_MAX:g} T (the strongest permanent magnets, "
+                                        "NdFeB, reach about 1.4 T): Br is in tesla; did you give mT?")
+        for name, f in spec["fields"].items():
+            field = FIELDS[f["type"]].build({k: x for k, x in f.items() if k not in ("type", "scale")},
+                                            make_scale(f["scale"]), MU0)
+            b = max(float(np.linalg.norm(field.value(scn.mesh.X, x), axis=1).max()) for x in scn.load_factors())
+            if b > B_MAX and f["type"] != "dipole" or b > 1e3 * B_MAX:
+                v.warn(f"fields.{name}", f"the applied field reaches |B| = {b:g} T on the shell, above "
+                                         f"{B_MAX:g} T (lab electromagnets): B is in tesla; did you give mT?")
+    span = _spans(scn.mesh, scn.problem, np.arange(scn.mesh.n_nodes))
+    for key, mat in mats:
+        if mat["h"] / span > H_OVER_L_MAX:
+            v.warn(f"{key}.h", f"h / L = {mat['h']:g} / {span:g} = {mat['h'] / span:.3g} > {H_OVER_L_MAX:g}: the "
+                               "shell is thick for its span (L = the largest distance to a support); a shell "
+                               "model needs h << L: check h and the mesh's length unit")
+    lam1 = scn.load_factors()[0] if scn.solver["control"] == "load" else scn.solver["dlam0"]
+    for n in load_numbers(scn, lam=lam1):
+        if n["value"] > FIRST_STEP_MAX:
+            v.warn(n["name"], f"the load number {n['formula']} = {n['value']:.3g} in the first step (load factor "
+                              f"{lam1:g}; span L = {n['span']:.4g}) is above {FIRST_STEP_MAX:g}: the first step "
+                              "bends the shell through many turns; check the units of the load (and mu0), or "
+                              "take more or smaller steps")
+    return None
+

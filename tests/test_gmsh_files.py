@@ -1,0 +1,163 @@
+"""Meshes as Gmsh writes them (issue 18, finding 1): files written during the test by the `gmsh`
+Python package (PyPI) in MSH 4.1 and 2.2, ASCII and binary, with physical groups of curves,
+surfaces and points; all-quad and quad-dominant meshes; the same through the Python API and
+scenario files.  Skipped cleanly where gmsh is not installed.
+
+The checks are exact: a transfinite 10 x 2 plate is the same mesh as ``mesh.rectangle`` (up to
+the node order), so the cantilever solved on the file equals the one solved on the generator
+to round-off.
+"""
+import numpy as np
+import pytest
+
+from core_se3 import mesh as M
+from core_se3 import scenario
+from core_se3.errors import MeshError, ScenarioError
+
+try:                                    # the wheel needs X11/OpenGL libraries: an OSError without them
+    import gmsh
+except (ImportError, OSError):
+    gmsh = None
+if gmsh is None:
+    pytest.skip("gmsh (PyPI) is not installed or cannot load its libraries", allow_module_level=True)
+
+FORMATS = [(4.1, 0), (4.1, 1), (2.2, 0), (2.2, 1)]
+
+
+def _start():
+    gmsh.initialize(readConfigFiles=False)
+    gmsh.option.setNumber("General.Terminal", 0)
+    gmsh.model.add("t")
+
+
+def _write(path, version, binary):
+    gmsh.option.setNumber("Mesh.MshFileVersion", version)
+    gmsh.option.setNumber("Mesh.Binary", binary)
+    gmsh.write(str(path))
+    gmsh.finalize()
+    return str(path)
+
+
+def plate_file(path, version=4.1, binary=0, nx=10, ny=2, surfaces=True):
+    """10 x 2 plate of two 5 x 2 halves (physical surfaces 'left', 'right'), transfinite nx x ny
+    quads; physical curves 'clamped' (x = 0) and 'tip' (x = 10), physical point 'corner' (10, 2)."""
+    _start()
+    occ = gmsh.model.occ
+    a = occ.addRectangle(0, 0, 0, 5, 2)
+    b = occ.addRectangle(5, 0, 0, 5, 2)
+    occ.fragment([(2, a)], [(2, b)])
+    occ.synchronize()
+    for dim, tag in gmsh.model.getEntities(1):
+        x0, y0, _, x1, y1, _ = gmsh.model.getBoundingBox(dim, tag)
+        gmsh.model.mesh.setTransfiniteCurve(tag, (ny if abs(x1 - x0) < 1e-5 else nx // 2) + 1)
+    for _, tag in gmsh.model.getEntities(2):
+        gmsh.model.mesh.setTransfiniteSurface(tag)
+        gmsh.model.mesh.setRecombine(2, tag)
+
+    def at(dim, x=None, y=None):
+        out = []
+        for _, tag in gmsh.model.getEntities(dim):
+            c = gmsh.model.occ.getCenterOfMass(dim, tag) if dim else gmsh.model.getValue(0, tag, [])
+            if (x is None or abs(c[0] - x) < 1e-9) and (y is None or abs(c[1] - y) < 1e-9):
+                out.append(tag)
+        return out
+    if surfaces:
+        gmsh.model.addPhysicalGroup(2, at(2, x=2.5), name="left")
+        gmsh.model.addPhysicalGroup(2, at(2, x=7.5), name="right")
+    gmsh.model.addPhysicalGroup(1, at(1, x=0.0), name="clamped")
+    gmsh.model.addPhysicalGroup(1, at(1, x=10.0), name="tip")
+    gmsh.model.addPhysicalGroup(0, at(0, x=10.0, y=2.0), name="corner")
+    gmsh.model.mesh.generate(2)
+    return _write(path, version, binary)
+
+
+def disk_file(path, version=4.1, binary=0):
+    """A quad-dominant disk (radius 5, simple recombination leaves triangles), physical
+    surface 'disk' and curve 'rim'."""
+    _start()
+    d = gmsh.model.occ.addDisk(0, 0, 0, 5, 5)
+    gmsh.model.occ.synchronize()
+    gmsh.option.setNumber("Mesh.MeshSizeMax", 1.3)
+    gmsh.option.setNumber("Mesh.Algorithm", 6)
+    gmsh.option.setNumber("Mesh.RecombinationAlgorithm", 0)
+    gmsh.model.mesh.setRecombine(2, d)
+    gmsh.model.addPhysicalGroup(2, [d], name="disk")
+    gmsh.model.addPhysicalGroup(1, [t for _, t in gmsh.model.getEntities(1)], name="rim")
+    gmsh.model.mesh.generate(2)
+    return _write(path, version, binary)
+
+
+def _cantilever(where):
+    doc = {"mesh": where, "material": {"E": 1.2e6, "nu": 0.3, "h": 0.1},
+           "supports": [{"type": "clamp", "edge": "clamped" if "file" in where else "x0"}],
+           "loads": [{"type": "edge_force", "edge": "tip" if "file" in where else "x1",
+                      "force": [0.0, 0.0, 1.0]}],
+           "probes": [{"name": "tip", "edge": "tip" if "file" in where else "x1"}],
+           "solver": {"steps": 2}}
+    return doc
+
+
+@pytest.mark.parametrize("version,binary", FORMATS, ids=["4.1-ascii", "4.1-binary", "2.2-ascii", "2.2-binary"])
+def test_gmsh_formats_groups_of_curves_surfaces_points(tmp_path, version, binary):
+    path = plate_file(tmp_path / "plate.msh", version, binary)
+    m = M.from_meshio(path)
+    assert m.n_elements == 20 and m.n_nodes == 33
+    assert sorted(m.regions) == ["left", "right"]
+    assert len(m.regions["left"]) == 10 and len(m.regions["right"]) == 10
+    centroids = m.X[m.quads].mean(1)
+    assert np.all(centroids[m.regions["left"], 0] < 5) and np.all(centroids[m.regions["right"], 0] > 5)
+    assert sorted(m.edges) == ["clamped", "corner", "tip"]
+    assert m.X[m.edges["tip"]].tolist() in ([[10.0, 0, 0], [10.0, 1, 0], [10.0, 2, 0]],
+                                           [[10.0, 2, 0], [10.0, 1, 0], [10.0, 0, 0]])   # ordered
+    assert m.X[m.edges["corner"]].tolist() == [[10.0, 2.0, 0.0]]
+    assert np.allclose(m.g0[:, :3, 2], [0, 0, 1])              # normals +z
+
+
+@pytest.mark.parametrize("version,binary", [(4.1, 0), (2.2, 1)], ids=["4.1-ascii", "2.2-binary"])
+def test_gmsh_file_scenario_equals_generator(tmp_path, version, binary):
+    """The scenario on the Gmsh file and on mesh.rectangle (the same 10 x 2 quads) agree to
+    round-off (1e-12 of the tip lift)."""
+    plate_file(tmp_path / "plate.msh", version, binary)
+    on_file = scenario.from_dict(_cantilever({"file": "plate.msh"}), base_dir=str(tmp_path))
+    on_gen = scenario.from_dict(_cantilever({"generator": "rectangle", "L": 10.0, "width": 2.0,
+                                             "nx": 10, "ny": 2, "x0": 0.0}))
+    a = on_file.problem.solve().final.probes["tip"]["u"]
+    b = on_gen.problem.solve().final.probes["tip"]["u"]
+    assert abs(a[2]) > 1.0
+    np.testing.assert_allclose(a, b, rtol=0, atol=1e-12 * abs(b[2]))
+
+
+def test_gmsh_quad_dominant_mesh_split_into_quads(tmp_path):
+    path = disk_file(tmp_path / "disk.msh")
+    with pytest.raises(MeshError, match=r"only quadrilateral shells.*triangles = \"split\".*SubdivisionAlgorithm"):
+        M.from_meshio(path)
+    import meshio
+    raw = meshio.read(path)
+    n_tri = sum(len(c.data) for c in raw.cells if c.type == "triangle")
+    n_quad = sum(len(c.data) for c in raw.cells if c.type == "quad")
+    assert n_tri > 0 and n_quad > 0
+    m = M.from_meshio(path, triangles="split")
+    assert m.n_elements == 4 * n_quad + 3 * n_tri
+    assert len(m.regions["disk"]) == m.n_elements
+    # the split keeps the area of the polygonal disk exactly; the rim stays a closed line of nodes
+    area = lambda X, q: 0.5 * np.abs(np.cross(X[q[:, 2]] - X[q[:, 0]], X[q[:, 3]] - X[q[:, 1]])[:, 2]).sum()
+    X0 = np.asarray(raw.points)
+    a0 = area(X0, np.concatenate([c.data for c in raw.cells if c.type == "quad"]))
+    tri = np.concatenate([c.data for c in raw.cells if c.type == "triangle"])
+    a0 += 0.5 * np.abs(np.cross(X0[tri[:, 1]] - X0[tri[:, 0]], X0[tri[:, 2]] - X0[tri[:, 0]])[:, 2]).sum()
+    np.testing.assert_allclose(area(m.X, m.quads), a0, rtol=1e-12)
+    np.testing.assert_allclose(np.linalg.norm(m.X[m.edges["rim"], :2], axis=1)[::2], 5.0, rtol=1e-12)
+    # the same from a scenario file
+    doc = {"mesh": {"file": "disk.msh", "triangles": "split"}, "material": {"E": 1e3, "nu": 0.3, "h": 0.1},
+           "supports": [{"type": "clamp", "edge": "rim"}]}
+    scn = scenario.from_dict(doc, base_dir=str(tmp_path))
+    assert scn.mesh.n_elements == m.n_elements
+    doc["mesh"].pop("triangles")
+    with pytest.raises(ScenarioError, match=r"\[mesh.file\]: bad mesh 'disk.msh': only quadrilateral"):
+        scenario.from_dict(doc, base_dir=str(tmp_path))
+
+
+def test_gmsh_file_without_physical_surface_names_the_fix(tmp_path):
+    path = plate_file(tmp_path / "curves.msh", surfaces=False)
+    with pytest.raises(MeshError, match=r"no quad cells; .*physical groups of curves .* Mesh.SaveAll = 1"):
+        M.from_meshio(path)
