@@ -166,8 +166,7 @@ def scenario_run(args):
     try:
         scn = _load_quietly(scenario, args.scenario, args.strict)
     except CoreSE3Error as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
+        return _error_code(exc)
     _preamble(scn, args.quiet)
     if args.check:
         print(f"{args.scenario}: valid ({scn.mesh.n_elements} elements, {scn.mesh.n_nodes} nodes, "
@@ -177,12 +176,8 @@ def scenario_run(args):
     progress = True if args.progress else (False if args.quiet else None)
     try:
         res = scenario.run(scn, out=args.out, resume=args.resume, progress=progress, force=args.force)
-    except ConvergenceError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 3
     except CoreSE3Error as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
+        return _error_code(exc)
     except KeyboardInterrupt:
         print("\ninterrupted: the converged steps are kept; continue with --resume", file=sys.stderr)
         return 130
@@ -200,6 +195,13 @@ def scenario_run(args):
     return 0
 
 
+def _error_code(exc):
+    """Print a core_se3 error; the exit status: 3 for a solver that did not converge (the
+    converged steps are kept), 2 for bad input."""
+    print(f"error: {exc}", file=sys.stderr)
+    return 3 if isinstance(exc, ConvergenceError) else 2
+
+
 def design_run(args):
     """``core-se3 design``: optimise the [design] of a scenario, write the optimised scenario and
     the design's outputs (docs/DESIGN.md)."""
@@ -212,12 +214,8 @@ def design_run(args):
             return 2
         r, files = run_design(scn, out=args.out, method=args.method, max_iter=args.max_iter,
                               progress=not args.quiet)
-    except ConvergenceError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 3
     except CoreSE3Error as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
+        return _error_code(exc)
     if not args.quiet:
         print(f"{scn.name}: {r.message}")
         print(f"  objective {r.objective:.6e} after {r.iterations} iterations, {r.equilibrium_solves} equilibrium "
@@ -294,8 +292,7 @@ def scenario_sweep(args):
         res = scenario.sweep(scn, grid, out=args.out, progress=True if args.progress else (False if args.quiet else None),
                              warm=not args.cold)
     except CoreSE3Error as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
+        return _error_code(exc)
     except KeyboardInterrupt:
         print("\ninterrupted: the sweep's finished runs are not written (rerun it)", file=sys.stderr)
         return 130

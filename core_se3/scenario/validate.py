@@ -98,11 +98,16 @@ class Validator:
                 self.fail(join(key, k), "missing required key")
         return d
 
-    def number(self, d, k, key, default=_REQ, lo=None, lo_open=False, hi=None, hi_open=False):
+    def _lookup(self, d, k, key, default, what):
+        """(path, present): the dotted path of d[k]; a missing required key fails naming ``what``."""
         path = join(key, k)
-        if k not in d:
-            if default is _REQ:
-                self.fail(path, "missing required key (a number)")
+        if k not in d and default is _REQ:
+            self.fail(path, f"missing required key ({what})")
+        return path, k in d
+
+    def number(self, d, k, key, default=_REQ, lo=None, lo_open=False, hi=None, hi_open=False):
+        path, present = self._lookup(d, k, key, default, "a number")
+        if not present:
             return default
         v = d[k]
         if isinstance(v, bool) or not isinstance(v, (int, float)):
@@ -117,10 +122,8 @@ class Validator:
         return v
 
     def integer(self, d, k, key, default=_REQ, lo=None, hi=None):
-        path = join(key, k)
-        if k not in d:
-            if default is _REQ:
-                self.fail(path, "missing required key (an integer)")
+        path, present = self._lookup(d, k, key, default, "an integer")
+        if not present:
             return default
         v = d[k]
         if isinstance(v, bool) or not isinstance(v, int):
@@ -132,21 +135,17 @@ class Validator:
         return v
 
     def boolean(self, d, k, key, default=_REQ):
-        path = join(key, k)
-        if k not in d:
-            if default is _REQ:
-                self.fail(path, "missing required key (true or false)")
+        path, present = self._lookup(d, k, key, default, "true or false")
+        if not present:
             return default
         if not isinstance(d[k], bool):
             self.fail(path, f"expected true or false, got {tname(d[k])} {show(d[k])}")
         return d[k]
 
     def string(self, d, k, key, default=_REQ, choices=None):
-        path = join(key, k)
-        if k not in d:
-            if default is _REQ:
-                self.fail(path, "missing required key (a string)" if not choices else
-                          f"missing required key (one of {', '.join(map(repr, choices))})")
+        path, present = self._lookup(d, k, key, default, "a string" if not choices else
+                                     f"one of {', '.join(map(repr, choices))}")
+        if not present:
             return default
         v = d[k]
         if not isinstance(v, str):
@@ -157,10 +156,8 @@ class Validator:
         return v
 
     def vector(self, d, k, key, n=3, default=_REQ, nonzero=False):
-        path = join(key, k)
-        if k not in d:
-            if default is _REQ:
-                self.fail(path, f"missing required key (an array of {n} numbers)")
+        path, present = self._lookup(d, k, key, default, f"an array of {n} numbers")
+        if not present:
             return default
         v = d[k]
         if (not isinstance(v, list) or len(v) != n
