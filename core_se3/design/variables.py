@@ -310,11 +310,7 @@ class FieldVariable(Variable):
 
     def dr_dB(self, problem, g, lam):
         """d(r_int - f_ext)/dB (n, 6, 3): the couple f_w = mu x R^T s B of every magnetised node."""
-        out = np.zeros((problem.mesh.n_nodes, 6, 3))
-        s = self.field.scale_at(lam)
-        loads = magnetic_loads(problem, self.field)
-        if not loads:
-            raise DesignError(f"field variable {self.name!r}: no magnet of the problem is in this field")
+        out, s, loads = _field_derivative_setup(problem, self.field, lam, 3, f"field variable {self.name!r}")
         for ld in loads:
             R = g[ld.mag.nodes, :3, :3]
             out[ld.mag.nodes, 3:, :] -= s * lie.hat3(ld.mag.mu) @ np.swapaxes(R, 1, 2)
@@ -322,6 +318,15 @@ class FieldVariable(Variable):
 
     def dr_dp(self, problem, g, lam):
         return self.dr_dB(problem, g, lam) @ self._dvec()[:, self.free]
+
+
+def _field_derivative_setup(problem, field, lam, k, what):
+    """(zeros (n, 6, k), the field's scale at lam, the magnetic loads in ``field``): the start of
+    a field variable's dr/dp; DesignError when no magnet of the problem is in that field."""
+    loads = magnetic_loads(problem, field)
+    if not loads:
+        raise DesignError(f"{what}: no magnet of the problem is in this field")
+    return np.zeros((problem.mesh.n_nodes, 6, k)), field.scale_at(lam), loads
 
 
 # a basis of the symmetric traceless 3x3 matrices (the gradients of curl- and divergence-free fields)
@@ -372,11 +377,7 @@ class FieldGradientVariable(Variable):
         self.field.G = np.einsum("k,kij->ij", self.c, _GBASIS)
 
     def dr_dp(self, problem, g, lam):
-        out = np.zeros((problem.mesh.n_nodes, 6, 5))
-        s = self.field.scale_at(lam)
-        loads = magnetic_loads(problem, self.field)
-        if not loads:
-            raise DesignError(f"gradient variable {self.name!r}: no magnet of the problem is in this field")
+        out, s, loads = _field_derivative_setup(problem, self.field, lam, 5, f"gradient variable {self.name!r}")
         for ld in loads:
             nodes, mu = ld.mag.nodes, ld.mag.mu
             R = g[nodes, :3, :3]
