@@ -65,7 +65,9 @@ def _print_doc(doc):
         if ref and s.get("error") is not None:
             line += f"  {100 * s['error']:.3f}%"
         print(line)
-    if ref:
+    if ref and ref.get("error") is None:
+        print(f"reference {ref['file']}:{ref['entry']}: {ref.get('note', 'not compared')}")
+    elif ref:
         print(f"reference {ref['file']}:{ref['entry']} [{ref['block']}]: error {100 * ref['error']:.3f}% "
               "(max over the path of |u - u_ref| / max |u_ref|)")
     if "torsion" in doc:

@@ -67,3 +67,18 @@ def test_inplane_rollup_small_k_circle():
     assert verify.zero_modes(p)[1] == 7
     p = Problem(mesh.rectangle(1.0, 1.0, 2, 2), Material(1200.0, 0.0, 1.0, drilling=0.01))
     assert verify.zero_modes(p)[1] == 6
+
+
+def test_reference_follows_the_parameters_or_is_not_compared():
+    """A reference table is only compared where it holds (a silent wrong error otherwise):
+    the roll-up circle depends on k = M L / (2 pi EI) alone, so with other E, h and L it is the
+    same exact circle by similarity (error at round-off); a table computed for one physical
+    section (cantilever-shear-steel's h = 10 mm) is not compared at another, and says why."""
+    from core_se3.catalogue import run_case
+    doc, _, _ = run_case("rollup", overrides=dict(k=0.5, h=0.001, E=3.0e6, L=7.0), steps=2)
+    assert doc["reference"]["error"] < 1e-12
+    doc, _, _ = run_case("cantilever-shear-steel", overrides=dict(h=5.0), steps=2)
+    assert doc["reference"]["error"] is None and "h = 10" in doc["reference"]["note"]
+    assert all(s.get("error") is None for s in doc["steps"])
+    doc, _, _ = run_case("cantilever-shear-steel", steps=2)           # its own section: compared
+    assert doc["reference"]["error"] < 5e-3

@@ -102,7 +102,8 @@ class Reference:
     ``entry``: key in elastica.json; ``block``: which tip block ('tip', 'tip_reissner', ...);
     ``load_to_ref(params, load)``: physical load value -> the entry's ``load`` axis;
     ``length(params)``: the entry's displacement unit in case units (1 for physical entries,
-    L for the dimensionless master curves).  ``note``: a remark for reports.
+    L for the dimensionless master curves).  ``note``: a remark for reports; ``applies``: the
+    check that the entry holds at the case's parameters (see the attribute).
 
     Example
     -------
@@ -118,6 +119,10 @@ class Reference:
     length: Callable[[dict], float]
     block: str = "tip"
     note: str = ""
+    #: (case parameters, the entry's ``params``) -> "" when the entry applies to these
+    #: parameters, else why not (a table computed for other parameters must not be compared
+    #: against: ``reference_for`` then returns None); None: it always applies
+    applies: Callable[[dict, dict], str] | None = None
 
 
 @dataclass(frozen=True)

@@ -5,6 +5,7 @@ from __future__ import annotations
 from math import pi
 
 from .case import Case, CaseLoad, Reference, Variant, add_case, beam_EI
+from .references import elastica_entry
 
 __all__ = []
 
@@ -18,12 +19,54 @@ def _master(entry, load_name_fn, block="tip"):
     return Reference(entry=entry, load_to_ref=load_name_fn, length=lambda p: p["L"], block=block)
 
 
+_UNITS = ("MPa", "Pa", "mm", "m", "m2", "m4", "N", "Nmm2")      # unit suffixes of the entries' names
+_NAMES = {"w": "width", "width": "width"}
+
+
+def same_params(p, data):
+    """"" when every parameter the reference entry states (``data``: E, nu, L, h, w, R, and the
+    section's A, I, EI, with or without a unit suffix such as ``E_MPa``) has the case's value
+    (to 1e-4 relative: the arch's section is given to five digits), else the first that differs:
+    a table computed in physical units holds only there.
+
+    Example
+    -------
+    >>> same_params({"E": 2.0, "h": 0.1}, {"E_MPa": 2.0, "h_mm": 0.2})
+    'the reference entry is for h = 0.2, the run has h = 0.1'
+    """
+    q = dict(p)
+    if "h" in p and "width" in p:
+        q.setdefault("A", p["h"] * p["width"])
+        q.setdefault("I", p["width"] * p["h"] ** 3 / 12)
+        if "E" in p:
+            q.setdefault("EI", p["E"] * q["I"])
+    for key, v in data.items():
+        base, _, unit = key.rpartition("_")
+        name = base if unit in _UNITS and base else key
+        name = _NAMES.get(name, name)
+        if name in q and isinstance(v, (int, float)) and not isinstance(v, bool):
+            if abs(q[name] - v) > 1e-4 * max(abs(q[name]), abs(v)):
+                return f"the reference entry is for {name} = {v:g}, the run has {name} = {q[name]:g}"
+    return ""
+
+
 def _physical(entry, block="tip"):
-    return Reference(entry=entry, load_to_ref=lambda p, P: P, length=lambda p: 1.0, block=block)
+    return Reference(entry=entry, load_to_ref=lambda p, P: P, length=lambda p: 1.0, block=block,
+                     applies=same_params)
 
 
 def _rollup_M(p):
     return p["k"] * 2.0 * pi * beam_EI(p) / p["L"]
+
+
+def _circle(entry, EI):
+    """The exact roll-up circle of a table in physical units, carried to any parameters by
+    similarity: the state depends on k = M L / (2 pi EI) only, lengths scale with L."""
+    def data():
+        return elastica_entry(entry)["params"]
+    return Reference(entry=entry, block="tip",
+                     load_to_ref=lambda p, M: M * (p["L"] / EI(p)) * (data()["EI"] / data()["L"]),
+                     length=lambda p: p["L"] / data()["L"])
 
 
 add_case(Case(
@@ -57,7 +100,7 @@ add_case(Case(
     units=_DIM, mesh=(10, 1), steps=12,
     loads=(CaseLoad("edge_moment", "x1", (0.0, -1.0, 0.0), _rollup_M),),
     load_name="M", load_unit="force*length", load_value=lambda p, lam: lam * _rollup_M(p),
-    reference=_physical("2_pure_bending_rollup_out_of_plane"),
+    reference=_circle("2_pure_bending_rollup_out_of_plane", beam_EI),
     notes="Exact: circle of radius EI/M.",
 ))
 
@@ -72,7 +115,7 @@ add_case(Case(
     load_name="M", load_unit="force*length",
     load_value=lambda p, lam: lam * p["k"] * 2 * pi * p["E"] * p["h"] * p["width"] ** 3 / 12 / p["L"],
     reference=Reference("2_pure_bending_rollup_inplane_drilling", lambda p, M: M, lambda p: 1.0,
-                        note="in-plane: v -> uy, theta about +z; exact only for small k"),
+                        note="in-plane: v -> uy, theta about +z; exact only for small k", applies=same_params),
     notes="The reference circle has the membrane stiffness E h w^3/12 only. The seed's "
           "drilling-curvature modulus D(1-nu) adds D(1-nu) w, which equals it for this h = w "
           "strip: with drilling=1 (the seed) the strip is twice as stiff in-plane. "
