@@ -55,7 +55,7 @@ def reference_path(name, overrides, lams, block=None, entry=None):
     from .metrics import interp_reference
     case = catalogue.get_case(name)
     p = catalogue.case_params(case, overrides)
-    r = catalogue.reference_for(case, p)
+    r = catalogue.reference_for(case, p, check=entry is None)   # a study's own entry is its choice
     if r is None:
         return None
     e = elastica_entry(entry or r[0])
