@@ -21,9 +21,9 @@ import numpy as np
 
 from .. import lie
 from ..assembly import Assembler
-from ..backend import resolve as resolve_backend
-from ..errors import LoadError, MeshError, OptionError, SupportError, did_you_mean
-from ..fem import make_element
+from ..backend import launched_ranks, resolve as resolve_backend
+from ..errors import LoadError, MeshError, OptionError, ParallelError, SupportError, did_you_mean
+from ..fem import ELEMENTS, make_element
 from .base import Evaluation, Load, load_kind
 from .compiled import CompiledEvaluation
 from .fields import MU0
@@ -34,7 +34,8 @@ from .supports import LabSpring, LabTiltSpring, Prescribed, RotationComponentSpr
 __all__ = ["Problem", "Evaluation", "SOLVERS"]
 
 SOLVERS: dict[str, Callable] = {}
-"""Solvers by control name ('load', 'arclength', 'displacement'): solve(problem, **options)."""
+"""Solvers by control name ('load', 'arclength', 'displacement'): solve(problem, **options); and
+'distributed' (load stepping over MPI ranks, ``core_se3.parallel``)."""
 
 
 class Problem:
@@ -55,6 +56,9 @@ class Problem:
 
     Attributes
     ----------
+    element : core_se3.fem.Element
+        The element on the whole mesh, built at its first use (a distributed run builds one
+        per rank on that rank's elements instead).
     loads, supports : list
         The Load objects and the Prescribed supports added so far; ``probes``: name -> Probe.
     solve_defaults : dict
@@ -77,7 +81,8 @@ class Problem:
         self._compiled = None
         self.mesh = mesh
         self.material = material
-        self.element = make_element(element, mesh, material)
+        ELEMENTS.lookup(element)                      # an unknown name fails here
+        self._element = None                          # built at first use (see ``element``)
         self.element_name = element
         self.linear_solver = linear_solver
         self.loads = []
@@ -86,6 +91,17 @@ class Problem:
         self.solve_defaults = {}
         self._assembler = None
         self.length_scale = mesh.length_scale
+
+    @property
+    def element(self):
+        """The element on the whole mesh (``fem.make_element``), built at its first use."""
+        if self._element is None:
+            self._element = make_element(self.element_name, self.mesh, self.material)
+        return self._element
+
+    @element.setter
+    def element(self, value):
+        self._element = value
 
     # ---------------------------------------------------------------- selections -------
     def nodes(self, where):
@@ -451,7 +467,7 @@ class Problem:
         return self.evaluate(g, lam, tangent=True, assembler=assembler).K
 
     # ---------------------------------------------------------------- solving ----------
-    def solve(self, steps=None, control=None, **options):
+    def solve(self, steps=None, control=None, solver=None, **options):
         """Solve the problem; returns a :class:`~core_se3.results.Result`.
 
         Parameters
@@ -465,6 +481,11 @@ class Problem:
             (:func:`core_se3.solvers.arc_length`) or 'displacement'
             (:func:`core_se3.solvers.displacement_control`).  Default: ``solve_defaults`` or
             'load'.
+        solver : str, optional
+            'serial' or 'distributed' (load stepping over the MPI ranks of an ``mpirun``
+            launch, :mod:`core_se3.parallel`).  Default: 'distributed' for load control when
+            the process was launched among more than one rank (``backend.launched_ranks``),
+            else 'serial'; other controls run serially on every rank.
         **options
             Passed to the solver: the fields of ``core_se3.solvers.NewtonOptions`` (rtol, dtol,
             max_iter, max_cutbacks, ...) and its own keywords (lam_end, load_factors, g_init,
@@ -476,7 +497,17 @@ class Problem:
             kw["steps"] = steps
         control = control or kw.pop("control", "load")
         kw.pop("control", None)
-        if control not in SOLVERS:
-            raise OptionError(f"unknown control {control!r}{did_you_mean(control, SOLVERS)}; "
-                              f"choose one of {', '.join(sorted(SOLVERS))}")
+        solver = solver or kw.pop("solver", None)
+        kw.pop("solver", None)
+        controls = [c for c in SOLVERS if c != "distributed"]
+        if control not in controls:
+            raise OptionError(f"unknown control {control!r}{did_you_mean(control, controls)}; "
+                              f"choose one of {', '.join(sorted(controls))}")
+        if solver not in (None, "serial", "distributed"):
+            raise OptionError(f"unknown solver {solver!r}; choose 'serial' or 'distributed'")
+        if solver == "distributed" and control != "load":
+            raise ParallelError(f"the distributed solver steps the load (control='load'); control "
+                                f"{control!r} runs serially (drop solver='distributed')")
+        if solver == "distributed" or (solver is None and control == "load" and launched_ranks() > 1):
+            return SOLVERS["distributed"](self, **kw)
         return SOLVERS[control](self, **kw)
