@@ -20,7 +20,7 @@ import os
 
 from .errors import OptionError
 
-__all__ = ["BACKENDS", "numba_available", "default_backend", "set_backend", "resolve", "launched_ranks"]
+__all__ = ["BACKENDS", "numba_available", "default_backend", "set_backend", "resolve", "launched_ranks", "launched_rank"]
 
 BACKENDS = ("numba", "numpy")
 _chosen = None
@@ -91,3 +91,25 @@ def launched_ranks(environ=None):
         if value.isdigit() and int(value) > 0:
             return int(value)
     return 1
+
+
+_RANK_ID_VARIABLES = ("OMPI_COMM_WORLD_RANK", "PMI_RANK", "PMIX_RANK", "SLURM_PROCID")
+
+
+def launched_rank(environ=None):
+    """This process's rank among those of its MPI launcher (0 outside one), from the
+    environment as :func:`launched_ranks` (rank 0 writes the files of a run).
+
+    Example
+    -------
+    >>> launched_rank({}), launched_rank({"OMPI_COMM_WORLD_RANK": "1", "OMPI_COMM_WORLD_SIZE": "2"})
+    (0, 1)
+    """
+    env = os.environ if environ is None else environ
+    if launched_ranks(env) == 1:
+        return 0
+    for name in _RANK_ID_VARIABLES:
+        value = env.get(name, "").strip()
+        if value.isdigit():
+            return int(value)
+    return 0

@@ -15,27 +15,23 @@ depend on the solvers.
 """
 from __future__ import annotations
 
-from typing import Callable
-
 import numpy as np
 
 from .. import lie
 from ..assembly import Assembler
-from ..backend import launched_ranks, resolve as resolve_backend
-from ..errors import LoadError, MeshError, OptionError, ParallelError, SupportError, did_you_mean
+from ..backend import resolve as resolve_backend
+from ..errors import LoadError, MeshError, OptionError, SupportError, did_you_mean
 from ..fem import ELEMENTS, make_element
 from .base import Evaluation, Load, load_kind
 from .compiled import CompiledEvaluation
 from .fields import MU0
 from .magnetics import MagneticLoad, Magnetisation
 from .probes import Probe
+from .solving import SOLVERS, dispatch
 from .supports import LabSpring, LabTiltSpring, Prescribed, RotationComponentSpring, check_rigid_motions
 
 __all__ = ["Problem", "Evaluation", "SOLVERS"]
 
-SOLVERS: dict[str, Callable] = {}
-"""Solvers by control name ('load', 'arclength', 'displacement'): solve(problem, **options); and
-'distributed' (load stepping over MPI ranks, ``core_se3.parallel``)."""
 
 
 class Problem:
@@ -497,17 +493,4 @@ class Problem:
             kw["steps"] = steps
         control = control or kw.pop("control", "load")
         kw.pop("control", None)
-        solver = solver or kw.pop("solver", None)
-        kw.pop("solver", None)
-        controls = [c for c in SOLVERS if c != "distributed"]
-        if control not in controls:
-            raise OptionError(f"unknown control {control!r}{did_you_mean(control, controls)}; "
-                              f"choose one of {', '.join(sorted(controls))}")
-        if solver not in (None, "serial", "distributed"):
-            raise OptionError(f"unknown solver {solver!r}; choose 'serial' or 'distributed'")
-        if solver == "distributed" and control != "load":
-            raise ParallelError(f"the distributed solver steps the load (control='load'); control "
-                                f"{control!r} runs serially (drop solver='distributed')")
-        if solver == "distributed" or (solver is None and control == "load" and launched_ranks() > 1):
-            return SOLVERS["distributed"](self, **kw)
-        return SOLVERS[control](self, **kw)
+        return dispatch(self, control, solver or kw.pop("solver", None), kw)

@@ -94,7 +94,29 @@ class Subdomain:
 
 def subdomain(mesh, part, rank, size):
     """The :class:`Subdomain` of ``rank`` for the element partition ``part``; its ``mesh`` is the
-    sub-mesh of the rank's elements on its local nodes (Example: :class:`Subdomain`)."""
+    sub-mesh of the rank's elements on its local nodes.
+
+    Parameters
+    ----------
+    mesh : core_se3.mesh.Mesh
+        The whole mesh.
+    part : (m,) array of int
+        The rank of every element.
+    rank, size : int
+        This rank and the number of ranks.
+
+    Returns
+    -------
+    Subdomain
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import mesh
+    >>> s = subdomain(mesh.rectangle(2.0, 1.0, 2, 1), np.array([0, 1]), rank=0, size=2)
+    >>> s.mesh.n_elements, s.mesh.n_nodes, s.n_owned, s.ghost_index.tolist()
+    (1, 4, 4, [])
+    """
     owner = node_owners(mesh.quads, part, mesh.n_nodes, size)
     sub = Subdomain(part, owner, rank, size, mesh.quads)
     # nodes that no element uses belong to rank 0 (and stay out of the sub-mesh's quads)

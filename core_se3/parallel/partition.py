@@ -46,7 +46,7 @@ def rcb(points, nparts):
     >>> import numpy as np
     >>> x = np.c_[np.arange(8.0), np.zeros(8), np.zeros(8)]
     >>> rcb(x, 2).tolist(), np.bincount(rcb(x, 3)).tolist()
-    ([0, 0, 0, 0, 1, 1, 1, 1], [2, 3, 3])
+    ([0, 0, 0, 0, 1, 1, 1, 1], [3, 2, 3])
     """
     pts = np.asarray(points, float)
     part = np.zeros(len(pts), np.int64)
