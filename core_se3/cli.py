@@ -12,6 +12,7 @@ import sys
 
 import numpy as np
 
+from .backend import launched_rank, launched_ranks
 from .errors import ConvergenceError, CoreSE3Error
 from .fem import ELEMENTS
 
@@ -103,11 +104,14 @@ def bench_run(args):
     from .results import write_json
     try:
         case = get_case(args.name)
+        kw = dict(linear=args.linear) if args.linear and launched_ranks() > 1 else {}   # distributed runs
         doc, res, prob = run_case(args.name, mesh=args.mesh, overrides=_parse_set(args.set),
-                                  steps=args.steps, element=args.element, linear_solver=args.solver)
+                                  steps=args.steps, element=args.element, linear_solver=args.solver, **kw)
     except (CoreSE3Error, KeyError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    if launched_rank() != 0:                 # under mpirun: rank 0 reports and writes
+        return 0
     _print_doc(doc)
     fam = family_of(case)
     if fam is not None and fam.report is not None:
@@ -215,6 +219,8 @@ def main(argv=None):
     run.add_argument("--steps", type=int, default=None)
     run.add_argument("--element", choices=sorted(ELEMENTS), default="default")
     run.add_argument("--solver", choices=["auto", "mumps", "superlu"], default="auto")
+    run.add_argument("--linear", choices=["mumps", "gamg", "hypre"], default=None,
+                     help="linear solver of a distributed run (mpirun -n N, N > 1; docs/PARALLEL.md)")
     run.add_argument("--json", default=None)
     run.add_argument("--vtu", default=None, help="directory for VTU files and series.pvd")
     run.add_argument("--plot", default=None, help="PNG load-deflection plot")
@@ -236,6 +242,8 @@ def main(argv=None):
     dsub.add_argument("-q", "--quiet", action="store_true", help="no progress, no summary")
     dsub.add_argument("-v", "--verbose", action="store_true", help="log every Newton (sub-)step")
     args = ap.parse_args(argv)
+    if launched_rank() != 0 and args.cmd in ("run", "bench"):     # under mpirun: rank 0 prints
+        sys.stdout = open(os.devnull, "w")
     if getattr(args, "verbose", False):
         logging.basicConfig(level=logging.INFO, format="%(message)s", stream=sys.stderr)
         logging.getLogger("core_se3").setLevel(logging.INFO)
