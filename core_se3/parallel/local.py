@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..assembly import Assembler
 from ..errors import ParallelError
 from ..fem import ELEMENTS, RegionMaterial
 from ..mesh import Mesh
@@ -18,7 +19,7 @@ from ..model import Problem
 from .localize import localize_load, localize_support
 from .partition import node_owners
 
-__all__ = ["Subdomain", "subdomain", "local_problem"]
+__all__ = ["Subdomain", "subdomain", "local_problem", "PatternAssembler"]
 
 
 class Subdomain:
@@ -171,3 +172,33 @@ def local_problem(problem, sub):
         for part in localize_load(ld, sub):
             loc.loads.append(part)
     return loc
+
+
+class PatternAssembler(Assembler):
+    """An Assembler of the compiled backend only: the free dofs and the fixed CSR pattern
+    (``Assembler.pattern()``), without the NumPy reference's block-slot arrays (about 11 kB per
+    element, more than the element itself); ``matrix`` builds the full Assembler at its first
+    use (a problem evaluated by NumPy).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import mesh
+    >>> m = mesh.rectangle(1.0, 1.0, 2, 1)
+    >>> a = PatternAssembler(m, np.ones(6 * m.n_nodes, bool))
+    >>> a.nfree, a.vector(np.arange(36.0).reshape(6, 6))[:3].tolist()
+    (36, [0.0, 1.0, 2.0])
+    """
+
+    def __init__(self, mesh, free):                    # noqa: D107 (no call of the base __init__)
+        self.mesh = mesh
+        self._pattern = None
+        self.ndof = 6 * mesh.n_nodes
+        self.free = np.asarray(free, bool)
+        self.nfree = int(self.free.sum())
+        self._full = None
+
+    def matrix(self, element_blocks=None, edge_blocks=None, node_blocks=None):
+        if self._full is None:
+            self._full = Assembler(self.mesh, self.free)
+        return self._full.matrix(element_blocks, edge_blocks, node_blocks)

@@ -17,7 +17,7 @@ import time
 
 import numpy as np
 
-from ..errors import ConvergenceError, ElementTooDistortedError, SingularSystemError
+from ..errors import ConvergenceError, ElementTooDistortedError, LinearSolverError, SingularSystemError
 from ..results import Result, StepRecorder
 from ..solvers import MAX_PRESCRIBED_TURN, NewtonOptions, NewtonState, NewtonStep, requested_load_factors
 from ..solvers.options import split_options, unknown_keywords
@@ -91,7 +91,7 @@ def distributed_newton_steps(run, targets, options=None, start=None, recorder=No
     t = dict(assembly=0.0, solve=0.0, other=0.0)
     t_start = time.perf_counter()
     mip = opts.iteration == "mip" and run.mixed
-    stress_conv = run.local.evaluate(g, lam, tangent=False).stress if mip else None
+    stress_conv = run.stress(g, lam) if mip else None
     for target in targets:
         tries = []
         n_recorded = 0
@@ -134,6 +134,8 @@ def distributed_newton_steps(run, targets, options=None, start=None, recorder=No
                     ts = time.perf_counter()
                     try:
                         eta = run.solve(ev, g_try, probe=first_solve)
+                    except LinearSolverError:
+                        raise                      # the iterative solver's own report, not a support hint
                     except SingularSystemError as exc:
                         if first_solve:
                             raise SingularSystemError(

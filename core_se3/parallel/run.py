@@ -14,12 +14,22 @@ import numpy as np
 
 from ..errors import ParallelError
 from .comm import collective, world
-from .local import local_problem, subdomain
+from .local import PatternAssembler, local_problem, subdomain
 from .partition import check_partition, partition_elements
 
 __all__ = ["DistributedRun", "GlobalEvaluation"]
 
 STAGGER_ABOVE = 20_000     # local elements from which the ranks build their elements one at a time
+
+
+def _threads_per_rank(size):
+    """numba threads of this rank: NUMBA_NUM_THREADS if set, else 1 with several ranks (the
+    ranks already share the cores); set in numba and returned."""
+    import os
+    import numba
+    if size > 1 and not os.environ.get("NUMBA_NUM_THREADS"):
+        numba.set_num_threads(1)
+    return numba.get_num_threads()
 
 
 class GlobalEvaluation:
@@ -91,14 +101,24 @@ class DistributedRun:
         self.part = part
         self.sub = sub = subdomain(mesh, part, c.rank, c.size)
         self.local = collective(c, local_problem, problem, sub)
-        if len(sub.elements) > STAGGER_ABOVE and c.size > 1:
-            for r in range(c.size):            # one rank at a time: the peak of the element set-up
-                if r == c.rank:
-                    self.local.element
+        loc = self.local
+        compiled = loc.backend == "numba"
+        self.asm = PatternAssembler(loc.mesh, ~loc.constraint_mask().ravel()) if compiled else loc.assembler()
+        big = c.size > 1 and max(c.allgather(len(sub.elements))) > STAGGER_ABOVE    # the same on every rank
+        for r in range(c.size if big else 1):    # big: one rank at a time (the set-up's peak memory)
+            if not big or r == c.rank:
+                loc.element
+                structure = self.asm.pattern() if compiled else self.asm
+            if big:
                 c.Barrier()
-        asm = self.local.assembler()
-        structure = asm.pattern() if self.local.backend == "numba" else asm
-        self.free = asm.free.reshape(-1, 6)
+        if self.local.backend == "numba":
+            threads = _threads_per_rank(c.size)
+            if threads == 1 and hasattr(self.local.element, "compiled"):
+                try:                        # one thread: the serial driver (no block workspace)
+                    self.local.element.compiled(structure, mode="serial")
+                except TypeError:           # an element whose compiled() takes no mode
+                    pass
+        self.free = self.asm.free.reshape(-1, 6)
         self.system = DistributedSystem(c, sub, self.free, structure.indptr, structure.indices, linear,
                                         petsc_options)
         self.ell = problem.length_scale
@@ -139,7 +159,8 @@ class DistributedRun:
         tangent is assembled too (its COO values written by the local evaluation)."""
         sys_ = self.system
         out = sys_.data_view() if tangent else None
-        ev = collective(self.comm, self.local.evaluate, g_loc, lam, tangent=tangent, out=out, stress=stress)
+        ev = collective(self.comm, self.local.evaluate, g_loc, lam, tangent=tangent, assembler=self.asm, out=out,
+                        stress=stress)
         r_int, f_ext = sys_.sum_nodal(ev.r_int, ev.f_ext)
         r = np.where(self.free[:self.n_own], r_int - f_ext, 0.0)
         ell = self.ell
@@ -153,6 +174,10 @@ class DistributedRun:
         if tangent:
             sys_.assemble(ev.K.data)
         return GlobalEvaluation(r_int, f_ext, r, rn, floor, float(np.sqrt(fs2)), float(en), ev)
+
+    def stress(self, g_loc, lam):
+        """This rank's element stresses at g_loc (the mixed iteration's start)."""
+        return collective(self.comm, self.local.evaluate, g_loc, lam, tangent=False, assembler=self.asm).stress
 
     def solve(self, gev, g_loc, probe=False):
         """eta (n_loc, 6): K eta = -r, ghosts included."""
