@@ -112,7 +112,7 @@ def worker_solve(n, linear="gamg", h=0.01, opts=None):
                     memory=comm.allgather(__import__("resource").getrusage(0).ru_maxrss * 1024.0))
     wall = time.perf_counter() - t
     return dict(kind="solve", n=n, elements=n * n, dofs=6 * (n + 1) ** 2, ranks=comm.size, linear=linear,
-                L_over_h=1.0 / h, wall=wall, newton=[s.iterations for s in res.steps][1:],
+                L_over_h=1.0 / h, wall=wall, large=bool(opts), options=opts or {}, newton=[s.iterations for s in res.steps][1:],
                 krylov=res.parallel["linear_iterations"], memory=res.parallel["memory_peak"],
                 timings={k: v for k, v in res.timings.items()},
                 tip=np.asarray(res.final.probes["tip"]["u"]).tolist())
@@ -149,7 +149,7 @@ def save(doc):
 def record(doc, r):
     if r is None:
         return
-    key = lambda x: (x["kind"], x["n"], x["ranks"], x.get("linear"), x.get("L_over_h"))     # noqa: E731
+    key = lambda x: (x["kind"], x["n"], x["ranks"], x.get("linear"), x.get("L_over_h"), x.get("large", False))  # noqa
     doc["runs"] = [x for x in doc["runs"] if key(x) != key(r)] + [r]
     doc["load_average"] = os.getloadavg()
     save(doc)
@@ -166,9 +166,9 @@ def run_all(which):
         for n, Lh in [(50, 10), (50, 100), (50, 1000), (50, 10000), (100, 10), (100, 100), (100, 1000),
                       (200, 10), (200, 100), (316, 10)]:
             record(doc, launch(2, "solve", n, "gamg", 1.0 / Lh))
-    if "large" in which:
+    if "large" in which:                  # L/h = 10 (GAMG's robust range), GMRES(30): memory
         for n in [int(a) for a in which[which.index("large") + 1:]] or [1000]:
-            record(doc, launch(2, "solve", n, "gamg", 0.01, timeout=7200))
+            record(doc, launch(2, "solve", n, "gamg", 0.1, "ksp_gmres_restart=30", timeout=7200))
 
 
 def report():
@@ -214,7 +214,7 @@ if __name__ == "__main__":
         if kind == "iteration":
             r = worker_iteration(int(rest[0]))
         else:
-            r = worker_solve(int(rest[0]), rest[1], float(rest[2]))
+            r = worker_solve(int(rest[0]), rest[1], float(rest[2]), dict(a.split("=") for a in rest[3:]))
         from core_se3.parallel import world
         if world().rank == 0:
             with open(out, "w") as fh:

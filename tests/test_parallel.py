@@ -21,8 +21,9 @@ import sys
 import numpy as np
 import pytest
 
-from core_se3 import Material, Problem, mesh
-from core_se3.model import UniformField
+from core_se3 import Material, Problem, lie, mesh
+from core_se3.errors import ParallelError
+from core_se3.model import Load, LoadEvaluation, UniformField
 from core_se3.parallel import local_problem, partition_elements, rcb, subdomain
 from core_se3.parallel.comm import SerialComm
 from core_se3.parallel.system import rigid_body_modes
@@ -75,12 +76,36 @@ def test_two_ranks_agree_with_serial(two_ranks, name):
 
 def test_two_ranks_resume_and_output(two_ranks):
     r = two_ranks["resume"]
-    assert r["bitwise"] and r["steps"] == 5
+    # MUMPS over two ranks assembles its fronts in message-arrival order: two runs of the same
+    # steps agree to rounding (a few 1e-15 measured), not bit for bit as the serial resume does
+    assert r["difference"] < 1e-12 and r["steps"] == 5
     assert r["files"] == ["checkpoint.npz", "results.json", "vtu"]
     assert r["vtu"] == ["series.pvd"] + [f"step_{k:04d}.vtu" for k in range(5)]
 
 
 # ---------------------------------------------------------------------------- serially ------
+class _NodalCouple(Load):
+    """A load of one's own with the ``localized`` hook of docs/EXTENDING.md (a dead couple
+    area_i c on every node)."""
+
+    def __init__(self, n, area, c):
+        self.area, self.c, self.n = np.asarray(area, float), np.asarray(c, float), n
+
+    def evaluate(self, g, lam, tangent=True):
+        Mb = lam * self.area[:, None] * np.einsum("nji,j->ni", g[:, :3, :3], self.c)
+        f = np.zeros((self.n, 6))
+        f[:, 3:] = Mb
+        K = np.zeros((self.n, 6, 6))
+        K[:, 3:, 3:] = -lie.hat3(Mb)
+        return LoadEvaluation(f, K if tangent else None)
+
+    def localized(self, part):
+        pos, loc = part.owned_local(np.arange(self.n))
+        area = np.zeros(part.mesh.n_nodes)
+        area[loc] = self.area[pos]
+        return [_NodalCouple(part.mesh.n_nodes, area, self.c)]
+
+
 def _problem():
     """A plate with every kind of load the decomposition handles."""
     m = mesh.rectangle(2.0, 1.0, 8, 5)
@@ -97,6 +122,7 @@ def _problem():
     p.add_lab_support([40, 41], [[0.0, 0.0, 1.0]], 10.0)
     p.add_lab_tilt_support([42], (1.0, 0.0, 0.0), 5.0)
     p.add_rotation_component_support([43], (0.0, 1.0, 0.0), 5.0)
+    p.add(_NodalCouple(m.n_nodes, np.linspace(0.0, 1.0, m.n_nodes), (0.0, 0.2, 0.1)))
     return p
 
 
@@ -105,7 +131,6 @@ def test_local_problems_sum_to_the_whole(backend):
     p = _problem()
     p.backend = backend
     rng = np.random.default_rng(3)
-    from core_se3 import lie
     g = p.mesh.g0 @ lie.exp(0.05 * rng.standard_normal((p.mesh.n_nodes, 6)))
     ev = p.evaluate(g, 0.7)
     n = p.mesh.n_nodes
@@ -129,6 +154,18 @@ def test_local_problems_sum_to_the_whole(backend):
     assert np.abs(K[np.ix_(free, free)] - Kg).max() < 1e-12 * np.abs(Kg).max()
 
 
+def test_a_load_without_a_distributed_form_is_refused():
+    class Bare(Load):
+        name = "bare"
+
+        def evaluate(self, g, lam, tangent=True):
+            return LoadEvaluation(np.zeros((len(g), 6)))
+    p = Problem(mesh.rectangle(2.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
+    p.add(Bare())
+    with pytest.raises(ParallelError, match="'bare' .*localized"):
+        local_problem(p, subdomain(p.mesh, np.array([0, 1]), 0, 2))
+
+
 def test_partitions_are_balanced_and_cover_every_element():
     m = mesh.rectangle(3.0, 1.0, 30, 10)
     for P in (2, 3, 5):
@@ -139,7 +176,6 @@ def test_partitions_are_balanced_and_cover_every_element():
 
 
 def test_rigid_body_modes_are_the_null_space_of_a_free_plate():
-    from core_se3 import lie
     p = Problem(mesh.rectangle(2.0, 1.0, 6, 3), Material(1e4, 0.3, 0.02))
     for g in (p.mesh.g0, lie.exp([0.3, -0.2, 0.5, 0.4, 0.2, -0.7]) @ p.mesh.g0):    # reference, rigidly moved
         K = p.tangent(g, 0.0).toarray()
@@ -163,3 +199,29 @@ def test_a_serial_run_imports_no_mpi():
     env["PYTHONPATH"] = ROOT
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120)
     assert out.stdout.split() == ["False", "False"], out.stderr
+
+
+def test_front_door_mpirun_core_se3_run(tmp_path):
+    """``mpirun -n 2 core-se3 run FILE.toml``: rank 0 writes the run directory, the answers are
+    the serial run's."""
+    if not HAVE_MPI:
+        pytest.skip("needs mpi4py, petsc4py and mpirun")
+    from core_se3 import scenario
+    toml = tmp_path / "strip.toml"
+    toml.write_text('name = "strip"\n[mesh]\ngenerator = "rectangle"\nL = 10.0\nwidth = 1.0\nnx = 16\nny = 2\n'
+                    '[material]\nE = 1.2e6\nnu = 0.0\nh = 0.1\n[[supports]]\ntype = "clamp"\nedge = "x0"\n'
+                    '[[loads]]\ntype = "edge_force"\nedge = "x1"\nforce = [0.0, 0.0, 4.0]\n'
+                    '[[probes]]\nname = "tip"\nedge = "x1"\n[solver]\nsteps = 4\nlinear = "mumps"\n'
+                    '[output]\nplots = false\npicture = false\n')
+    cmd = ["mpirun", "-n", "2", "-x", "PYTHONPATH", "-x", "OMP_NUM_THREADS", "-x", "NUMBA_NUM_THREADS",
+           sys.executable, "-m", "core_se3", "run", str(toml), "--out", str(tmp_path / "out")]
+    p = subprocess.run(cmd, env=mpi_env(), capture_output=True, text=True, timeout=300, cwd=ROOT)
+    assert p.returncode == 0, p.stdout[-3000:] + p.stderr[-3000:]
+    assert p.stdout.count("strip: 4 steps") == 1                       # rank 0 alone reports
+    doc = json.loads((tmp_path / "out" / "results.json").read_text())
+    ser = scenario.run(scenario.load(str(toml)), out=str(tmp_path / "serial"))
+    assert doc["status"] == "complete"
+    assert [s["iterations"] for s in doc["steps"]] == [s["iterations"] for s in ser.doc["steps"]]
+    u, v = doc["steps"][-1]["probes"]["tip"]["u"], ser.doc["steps"][-1]["probes"]["tip"]["u"]
+    assert np.linalg.norm(np.subtract(u, v)) < 1e-10 * np.linalg.norm(v)
+    assert len(list((tmp_path / "out" / "vtu").glob("step_*.vtu"))) == 5

@@ -38,11 +38,11 @@ _EPS = np.finfo(float).eps
 
 _DEFAULTS = {
     "mumps": {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"},
-    "gamg": {"ksp_type": "gmres", "ksp_gmres_restart": 200, "ksp_gmres_modifiedgramschmidt": True, "ksp_rtol": 1e-10, "ksp_atol": 0.0, "ksp_max_it": 2000,
+    "gamg": {"ksp_type": "gmres", "ksp_gmres_restart": 100, "ksp_gmres_modifiedgramschmidt": True, "ksp_rtol": 1e-10, "ksp_atol": 0.0, "ksp_max_it": 2000,
              "pc_type": "gamg", "pc_gamg_type": "agg", "pc_gamg_agg_nsmooths": 1, "pc_gamg_threshold": 0.02,
              "pc_gamg_reuse_interpolation": True, "mg_levels_ksp_type": "chebyshev",
              "mg_levels_pc_type": "jacobi", "mg_levels_ksp_max_it": 3},
-    "hypre": {"ksp_type": "gmres", "ksp_gmres_restart": 200, "ksp_gmres_modifiedgramschmidt": True, "ksp_rtol": 1e-10, "ksp_atol": 0.0, "ksp_max_it": 2000,
+    "hypre": {"ksp_type": "gmres", "ksp_gmres_restart": 100, "ksp_gmres_modifiedgramschmidt": True, "ksp_rtol": 1e-10, "ksp_atol": 0.0, "ksp_max_it": 2000,
               "pc_type": "hypre", "pc_hypre_type": "boomeramg", "pc_hypre_boomeramg_nodal_coarsen": 6,
               "pc_hypre_boomeramg_vec_interp_variant": 0, "pc_hypre_boomeramg_strong_threshold": 0.5},
 }
