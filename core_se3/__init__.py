@@ -4,7 +4,7 @@ Every node of the mid-surface carries a frame g = (R, phi) in SE(3); strains are
 twists; the 4-node quad is solved by Newton with exponential updates g <- g exp(eta).  The
 package is a stack of layers that import only downward (docs/ARCHITECTURE.md):
 
-    lie -> mesh -> fem -> assembly -> model -> results -> solvers -> io -> design -> scenario -> catalogue -> cli
+    lie -> mesh -> fem -> assembly -> model -> results -> solvers -> parallel -> io -> design -> scenario -> catalogue -> cli
 
 Example (a strip rolled into a full circle by an end moment M = 2 pi EI / L)
 -------
@@ -19,6 +19,7 @@ Example (a strip rolled into a full circle by an end moment M = 2 pi EI / L)
 """
 from . import lie, mesh
 from . import fem, model, results, solvers  # noqa: F401  (solvers registers Problem.solve's controls)
+from . import parallel  # noqa: F401  (registers the distributed solver; imports no MPI)
 from . import io, design, scenario, catalogue  # noqa: F401
 from .errors import (CheckpointError, ConvergenceError, CoreSE3Error, ElementTooDistortedError, LoadError,
                      MaterialError, MeshError, OptionError, ScenarioError, SingularSystemError, SupportError)

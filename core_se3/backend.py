@@ -20,7 +20,7 @@ import os
 
 from .errors import OptionError
 
-__all__ = ["BACKENDS", "numba_available", "default_backend", "set_backend", "resolve"]
+__all__ = ["BACKENDS", "numba_available", "default_backend", "set_backend", "resolve", "launched_ranks", "launched_rank"]
 
 BACKENDS = ("numba", "numpy")
 _chosen = None
@@ -56,3 +56,60 @@ def resolve(name):
     if name == "numba" and not numba_available():
         raise OptionError("the numba backend needs numba (pip install numba); use backend='numpy'")
     return name
+
+
+# environment variables in which MPI launchers announce the number of processes of the job
+_RANK_VARIABLES = ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE", "MPI_LOCALNRANKS", "SLURM_STEP_NUM_TASKS")
+
+
+def launched_ranks(environ=None):
+    """The number of MPI processes this one was started among, read from the launcher's
+    environment (Open MPI's ``OMPI_COMM_WORLD_SIZE``, MPICH/Hydra's ``PMI_SIZE``, PMIx's, Slurm's
+    ``SLURM_STEP_NUM_TASKS`` under ``srun``), without importing mpi4py; 1 outside a launcher.
+
+    ``Problem.solve`` hands load control to the distributed solver (``core_se3.parallel``)
+    when this is above 1, so a serial run never imports mpi4py or petsc4py.
+
+    Parameters
+    ----------
+    environ : mapping, optional
+        The environment to read (default ``os.environ``).
+
+    Returns
+    -------
+    int
+        >= 1.
+
+    Example
+    -------
+    >>> launched_ranks({}), launched_ranks({"OMPI_COMM_WORLD_SIZE": "4"})
+    (1, 4)
+    """
+    env = os.environ if environ is None else environ
+    for name in _RANK_VARIABLES:
+        value = env.get(name, "").strip()
+        if value.isdigit() and int(value) > 0:
+            return int(value)
+    return 1
+
+
+_RANK_ID_VARIABLES = ("OMPI_COMM_WORLD_RANK", "PMI_RANK", "PMIX_RANK", "SLURM_PROCID")
+
+
+def launched_rank(environ=None):
+    """This process's rank among those of its MPI launcher (0 outside one), from the
+    environment as :func:`launched_ranks` (rank 0 writes the files of a run).
+
+    Example
+    -------
+    >>> launched_rank({}), launched_rank({"OMPI_COMM_WORLD_RANK": "1", "OMPI_COMM_WORLD_SIZE": "2"})
+    (0, 1)
+    """
+    env = os.environ if environ is None else environ
+    if launched_ranks(env) == 1:
+        return 0
+    for name in _RANK_ID_VARIABLES:
+        value = env.get(name, "").strip()
+        if value.isdigit():
+            return int(value)
+    return 0

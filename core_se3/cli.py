@@ -13,6 +13,7 @@ import sys
 
 import numpy as np
 
+from .backend import launched_rank, launched_ranks
 from .errors import ConvergenceError, CoreSE3Error
 from .fem import ELEMENTS
 
@@ -116,13 +117,16 @@ def bench_run(args):
         ELEMENTS.lookup(args.element)
         if not args.quiet:
             print(f"case {case.name}: units " + ", ".join(f"{k} [{u}]" for k, u in case.units.items()))
-        bar = Progress(None, _progress_on(args), delay=0.0 if args.progress else 2.0)
+        kw = dict(linear=args.linear) if args.linear and launched_ranks() > 1 else {}   # distributed runs
+        bar = Progress(None, _progress_on(args) and launched_rank() == 0, delay=0.0 if args.progress else 2.0)
         with LogProgress(bar):
             doc, res, prob = run_case(args.name, mesh=args.mesh, overrides=_parse_set(args.set),
-                                      steps=args.steps, element=args.element, linear_solver=args.solver)
+                                      steps=args.steps, element=args.element, linear_solver=args.solver, **kw)
     except (CoreSE3Error, KeyError) as exc:
         print(f"error: {exc.args[0] if isinstance(exc, KeyError) and exc.args else exc}", file=sys.stderr)
         return 2
+    if launched_rank() != 0:                 # under mpirun: rank 0 reports and writes
+        return 0
     _print_doc(doc)
     fam = family_of(case)
     if fam is not None and fam.report is not None:
@@ -320,6 +324,8 @@ def main(argv=None):
     run.add_argument("--steps", type=int, default=None)
     run.add_argument("--element", default="default", help=f"element: {', '.join(sorted(ELEMENTS))}")
     run.add_argument("--solver", choices=["auto", "mumps", "superlu"], default="auto")
+    run.add_argument("--linear", choices=["mumps", "gamg", "hypre"], default=None,
+                     help="linear solver of a distributed run (mpirun -n N, N > 1; docs/PARALLEL.md)")
     run.add_argument("--json", default=None)
     run.add_argument("--vtu", default=None, help="directory for VTU files and series.pvd")
     run.add_argument("--plot", default=None, help="PNG load-deflection plot")
@@ -353,6 +359,8 @@ def main(argv=None):
     sw.add_argument("--progress", action="store_true", help="progress line even when not on a terminal")
     sw.add_argument("-q", "--quiet", action="store_true", help="no progress line, no summary")
     args = ap.parse_args(argv)
+    if launched_rank() != 0 and args.cmd in ("run", "bench"):     # under mpirun: rank 0 prints
+        sys.stdout = open(os.devnull, "w")
     if getattr(args, "verbose", False):
         logging.basicConfig(level=logging.INFO, format="%(message)s", stream=sys.stderr)
         logging.getLogger("core_se3").setLevel(logging.INFO)

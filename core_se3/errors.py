@@ -17,7 +17,8 @@ import difflib
 
 __all__ = ["CoreSE3Error", "MaterialError", "MeshError", "LoadError", "SupportError",
            "SingularSystemError", "ConvergenceError", "ElementTooDistortedError", "ScenarioError",
-           "CheckpointError", "OptionError", "DesignError", "ContactError", "ScenarioWarning", "did_you_mean"]
+           "CheckpointError", "OptionError", "DesignError", "ContactError", "ParallelError",
+           "LinearSolverError", "ScenarioWarning", "did_you_mean"]
 
 
 def did_you_mean(name, choices):
@@ -363,3 +364,35 @@ class ScenarioWarning(UserWarning):
         where = ": ".join(x for x in (file, f"[{key}]" if key else None) if x)
         super().__init__(f"{where}: {message}" if where else message)
         self.detail = message
+
+
+class ParallelError(CoreSE3Error, ValueError):
+    """A problem or an option that the distributed solver (``core_se3.parallel``, runs under
+    ``mpirun``) cannot take: a load kind without a distributed form (give the Load a
+    ``localized(part)`` method, docs/PARALLEL.md), a control other than load stepping asked for
+    explicitly with ``solver="distributed"``, an unknown partitioner or linear solver, or
+    mpi4py/petsc4py missing.
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
+    >>> p.solve(control="arclength", solver="distributed")
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.ParallelError: the distributed solver steps the load (control='load'); control 'arclength' runs serially (drop solver='distributed')
+    """
+
+
+class LinearSolverError(SingularSystemError):
+    """An iterative linear solver (``[solver] linear = "gamg"`` or ``"hypre"`` in a distributed
+    run) did not reach its tolerance, or its answer failed the true-residual check.  Newton
+    treats it like a singular tangent after the first step (the step is cut back).  Use the
+    direct solver (``linear = "mumps"``), or loosen ``ksp_rtol`` / raise ``ksp_max_it`` in the
+    PETSc options (docs/PARALLEL.md).
+
+    Example
+    -------
+    >>> issubclass(LinearSolverError, SingularSystemError)
+    True
+    """

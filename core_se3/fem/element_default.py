@@ -202,13 +202,15 @@ class DefaultElement(Element):
         """Stress resultants at the element centres (``resultants.element_resultants``)."""
         return element_resultants(self, g)
 
-    def compiled(self, pattern):
+    def compiled(self, pattern, mode="auto"):
         """The numba kernels of this element on ``pattern`` (``kernels.ElementKernels``), built
-        once per pattern: the same residual and tangent, written into the pattern's CSR data."""
+        once per pattern: the same residual and tangent, written into the pattern's CSR data
+        (``mode``: the kernels' driver, 'auto', 'serial', 'colour' or 'gather'; a distributed
+        run with one thread per rank asks for 'serial', which needs no block workspace)."""
         kern = self._kernels
         if kern is None or kern.pattern is not pattern:
             from ..kernels import ElementKernels
-            kern = ElementKernels.from_element(self, pattern, error=ElementTooDistortedError)
+            kern = ElementKernels.from_element(self, pattern, mode=mode, error=ElementTooDistortedError)
             self._kernels = kern
         return kern
 

@@ -15,28 +15,24 @@ depend on the solvers.
 """
 from __future__ import annotations
 
-from typing import Callable
-
 import numpy as np
 
 from .. import lie
 from ..assembly import Assembler
 from ..backend import resolve as resolve_backend
 from ..errors import LoadError, MeshError, OptionError, SupportError, did_you_mean
-from ..fem import make_element
+from ..fem import ELEMENTS, make_element
 from .base import Evaluation, Load, load_kind
 from .compiled import CompiledEvaluation
 from .contact import add_obstacle
 from .fields import MU0
 from .magnetics import MagneticLoad, Magnetisation
 from .probes import Probe
+from .solving import SOLVERS, dispatch
 from .supports import (LabSpring, LabTiltSpring, Prescribed, RotationComponentSpring, check_rigid_motions,
                        prescribed_rotation)
 
 __all__ = ["Problem", "Evaluation", "SOLVERS"]
-
-SOLVERS: dict[str, Callable] = {}
-"""Solvers by control name ('load', 'arclength', 'displacement'): solve(problem, **options)."""
 
 
 class Problem:
@@ -57,6 +53,8 @@ class Problem:
 
     Attributes
     ----------
+    element : core_se3.fem.Element
+        The element on the whole mesh, built at first use (a distributed run builds its own).
     loads, supports : list
         The Load objects and the Prescribed supports added so far; ``probes``: name -> Probe.
     solve_defaults : dict
@@ -79,7 +77,8 @@ class Problem:
         self._compiled = None
         self.mesh = mesh
         self.material = material
-        self.element = make_element(element, mesh, material)
+        ELEMENTS.lookup(element)                      # an unknown name fails here
+        self._element = None                          # built at first use (see ``element``)
         self.element_name = element
         self.linear_solver = linear_solver
         self.loads = []
@@ -88,6 +87,17 @@ class Problem:
         self.solve_defaults = {}
         self._assembler = None
         self.length_scale = mesh.length_scale
+
+    @property
+    def element(self):
+        """The element on the whole mesh (``fem.make_element``), built at its first use."""
+        if self._element is None:
+            self._element = make_element(self.element_name, self.mesh, self.material)
+        return self._element
+
+    @element.setter
+    def element(self, value):
+        self._element = value
 
     # ---------------------------------------------------------------- selections -------
     def nodes(self, where):
@@ -460,7 +470,7 @@ class Problem:
         return self.evaluate(g, lam, tangent=True, assembler=assembler).K
 
     # ---------------------------------------------------------------- solving ----------
-    def solve(self, steps=None, control=None, **options):
+    def solve(self, steps=None, control=None, solver=None, **options):
         """Solve the problem; returns a :class:`~core_se3.results.Result`.
 
         Parameters
@@ -470,10 +480,12 @@ class Problem:
             problem's own settings (``solve_defaults``, e.g. a scenario's ``[solver] steps``),
             else 10.
         control : str, optional
-            'load' (load-stepped Newton, :func:`core_se3.solvers.newton_solve`), 'arclength'
-            (:func:`core_se3.solvers.arc_length`) or 'displacement'
-            (:func:`core_se3.solvers.displacement_control`).  Default: ``solve_defaults`` or
-            'load'.
+            'load' (:func:`core_se3.solvers.newton_solve`), 'arclength' (``solvers.arc_length``)
+            or 'displacement' (``solvers.displacement_control``); default ``solve_defaults`` or 'load'.
+        solver : str, optional
+            'serial' or 'distributed' (load stepping over the MPI ranks, :mod:`core_se3.parallel`).
+            Default: 'distributed' for load control under ``mpirun -n N`` with N > 1, else
+            'serial'; other controls run serially on every rank.
         **options
             Passed to the solver: the fields of ``core_se3.solvers.NewtonOptions`` (rtol, dtol,
             max_iter, max_cutbacks, ...) and its own keywords (lam_end, load_factors, g_init,
@@ -485,7 +497,4 @@ class Problem:
             kw["steps"] = steps
         control = control or kw.pop("control", "load")
         kw.pop("control", None)
-        if control not in SOLVERS:
-            raise OptionError(f"unknown control {control!r}{did_you_mean(control, SOLVERS)}; "
-                              f"choose one of {', '.join(sorted(SOLVERS))}")
-        return SOLVERS[control](self, **kw)
+        return dispatch(self, control, solver or kw.pop("solver", None), kw)

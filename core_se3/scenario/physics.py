@@ -40,7 +40,9 @@ OUTPUT_DEFAULTS = dict(vtu=True, vtu_every=1, plots=True, picture=True, picture_
 # solver keys that do not change the converged states (left out of the --resume fingerprint);
 # max_steps only decides where an arc-length path stops, so a resume may raise it
 NON_PHYSICAL = ("rtol", "dtol", "max_iter", "max_cutbacks", "linear_solver", "max_steps", "iteration",
-                "predictor")
+                "predictor", "linear", "petsc", "partition")
+# [solver] keys of a distributed run (mpirun; docs/PARALLEL.md): serial runs ignore them
+PARALLEL_KEYS = dict(linear=("mumps", "gamg", "hypre"), partition=("auto", "ptscotch", "parmetis", "rcb"))
 
 
 def material_section(v, d, regions):
@@ -229,8 +231,12 @@ def solver_section(v, doc):
     control = "arclength", the arc-length controls."""
     d = doc.get("solver", {})
     key = "solver"
-    v.table(d, key, tuple(SOLVER_DEFAULTS) + ("load_factors",) + tuple(ARCLENGTH_DEFAULTS))
+    v.table(d, key, tuple(SOLVER_DEFAULTS) + ("load_factors",) + tuple(ARCLENGTH_DEFAULTS) + tuple(PARALLEL_KEYS)
+            + ("petsc",))
     s = dict(SOLVER_DEFAULTS)
+    s["linear"] = v.string(d, "linear", key, default="mumps", choices=PARALLEL_KEYS["linear"])
+    s["partition"] = v.string(d, "partition", key, default="auto", choices=PARALLEL_KEYS["partition"])
+    s["petsc"] = _petsc_options(v, d.get("petsc", {}), join(key, "petsc"))
     s["control"] = v.string(d, "control", key, default="load", choices=("load", "arclength"))
     s["steps"] = v.integer(d, "steps", key, default=SOLVER_DEFAULTS["steps"], lo=1, hi=100_000)
     s["lam_end"] = v.number(d, "lam_end", key, default=1.0)
@@ -273,6 +279,18 @@ def solver_section(v, doc):
     return s
 
 
+def _petsc_options(v, d, path):
+    """[solver.petsc]: free-form PETSc options (name without the dash = number, string or bool)."""
+    if not isinstance(d, dict):
+        v.fail(path, f"expected a table of PETSc options, got {tname(d)} {show(d)}")
+    out = {}
+    for k, x in d.items():
+        if not isinstance(x, (bool, int, float, str)) or isinstance(x, float) and not math.isfinite(x):
+            v.fail(join(path, k), f"expected a number, string or boolean PETSc option value, got {tname(x)} {show(x)}")
+        out[str(k).lstrip("-")] = x
+    return out
+
+
 def solve_defaults(s):
     """Problem.solve keywords of a validated [solver] (so that scenario.problem.solve() runs
     the scenario's own settings)."""
@@ -284,6 +302,8 @@ def solve_defaults(s):
                     ds_max_factor=s["ds_max_factor"], stability=s["stability"], **common)
     out = dict(control="load", max_cutbacks=s["max_cutbacks"], iteration=s["iteration"],
                predictor=s["predictor"], **common)
+    out.update(linear=s.get("linear", "mumps"), petsc_options=dict(s.get("petsc") or {}),
+               partition=s.get("partition", "auto"))
     if s.get("load_factors") is not None:
         out.pop("lam_end")
         out["load_factors"] = list(s["load_factors"])

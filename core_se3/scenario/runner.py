@@ -26,10 +26,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import CheckpointError, ConvergenceError, CoreSE3Error
+from ..fem import ELEMENTS
 from ..io import Checkpoint, Progress, atomic_path, write_json_atomic
 from ..results import Result, StepRecorder, result_document, step_record
-from ..solvers import (ArcLengthOptions, ArcState, NewtonOptions, NewtonState, arc_length_steps,
-                       newton_steps)
+from ..solvers import ArcLengthOptions, ArcState, NewtonOptions, NewtonState, arc_length_steps
+from .context import run_context
 from .obstacles import obstacles_of
 from .outputs import physical_record, picture, plot_probes, unit_system_record
 from .resume import check_extension, check_same_scenario
@@ -149,15 +150,20 @@ def _critical_doc(cps):
                  step=int(c.step), description=c.describe()) for c in cps]
 
 
-def _write_vtu(path, prob, g, lam, physical=None):
+def _write_vtu(path, prob, g, lam, ctx=None, physical=None):
+    """One VTU file (rank 0 of a distributed run writes it; every rank computes its cells),
+    with the obstacles' surfaces at lam beside it when the problem has any (ParaView)."""
     from ..io import write_vtu
+    cells = cell_fields(prob, g) if ctx is None else ctx.cell_fields(g)
+    if ctx is not None and not ctx.root:
+        return
     values = {"load_factor": float(lam)}
     values.update({f"{k} [{v['unit']}]" if v["unit"] else k: v["value"] for k, v in (physical or {}).items()})
     with atomic_path(path) as tmp:
         write_vtu(tmp, prob.mesh.X, prob.mesh.quads, prob.mesh.g0, g,
-                  point_data=point_fields(prob, g, lam), cell_data=cell_fields(prob, g), field_data=values)
+                  point_data=point_fields(prob, g, lam), cell_data=cells, field_data=values)
     obstacles = obstacles_of(prob)
-    if obstacles:                    # their surfaces at lam, beside the shell's file (ParaView)
+    if obstacles:
         from ..io import write_obstacles
         with atomic_path(path[:-4] + "_obstacles.vtu") as tmp:
             write_obstacles(tmp, obstacles, g[:, :3, 3], lam)
@@ -241,25 +247,38 @@ def run(scn, out=None, resume=False, progress=None, force=False, stop_after=None
     ([0.0, 0.5, 1.0], ['checkpoint.npz', 'results.json'])
     """
     t_setup0 = time.perf_counter()
-    prob = scn.problem
-    s, o = scn.solver, scn.output
-    arc = s["control"] == "arclength"
+    prob, s, o = scn.problem, scn.solver, scn.output
     out = os.fspath(out or o["dir"] or os.path.join("out", scn.name))
     ck = Checkpoint(out)
-    if resume and prob.element.stateful:
+    if resume and ELEMENTS.lookup(prob.element_name).stateful:
         raise CheckpointError(f"--resume is not supported with the stateful {s['element']} element")
     if not resume and ck.exists() and not force:
         raise CheckpointError(f"{out} already holds a run ({ck.path}); continue it with --resume, "
                               "start over with --force, or choose another --out")
-    os.makedirs(out, exist_ok=True)
+    st = ck.load() if resume else None
+    if resume:
+        check_same_scenario(ck.path, st, scn)
+    ctx = run_context(prob, s, s["control"] == "arclength", st)
+    try:
+        return _run(scn, out, ck, ctx, st, resume, progress, stop_after, t_setup0)
+    finally:
+        ctx.close()
+
+
+def _run(scn, out, ck, ctx, st, resume, progress, stop_after, t_setup0):
+    prob = scn.problem
+    s, o = scn.solver, scn.output
+    arc = s["control"] == "arclength"
+    root = ctx.root
+    ctx.barrier()                        # every rank has checked the directory before rank 0 writes
+    if root:
+        os.makedirs(out, exist_ok=True)
     vtu_dir = os.path.join(out, "vtu")
     every = o["vtu_every"]
     lams = scn.load_factors()
     nsteps = None if arc else len(lams)
     result = Result(mesh=prob.mesh, element=prob.element_name)
     if resume:
-        st = ck.load()
-        check_same_scenario(ck.path, st, scn)
         was_arc = st["extra"].get("control") == "arclength"
         if arc and (not was_arc or "arc" not in st["extra"]):
             raise CheckpointError(f"checkpoint {ck.path} holds no arc-length path state (written by a "
@@ -268,7 +287,8 @@ def run(scn, out=None, resume=False, progress=None, force=False, stop_after=None
         if not arc and was_arc:
             raise CheckpointError(f"checkpoint {ck.path} is of an arc-length run; this scenario is "
                                   "load-controlled: start over with --force or use another --out")
-        _clear_temporaries(out, vtu_dir)
+        if root:
+            _clear_temporaries(out, vtu_dir)
         records, base, done = st["records"], dict(st["timings"]), st["step"]
         if not arc:
             check_extension(ck.path, records, lams, scn.solver)
@@ -284,22 +304,24 @@ def run(scn, out=None, resume=False, progress=None, force=False, stop_after=None
         unwrap = st["unwrap"]
         critical = list(start.critical) if arc else None
     else:
-        _clear(out, vtu_dir)
+        if root:
+            _clear(out, vtu_dir)
         records, base, done, start, unwrap = [], {}, 0, None, None
         critical = [] if arc else None
     rec = StepRecorder(prob, unwrap)
     if not resume and not arc:
         g0 = prob.mesh.g0.copy()
-        ev = prob.evaluate(g0, 0.0, tangent=False)
-        first = rec.step(0.0, g0, 0, [], ev.r_int, ev.f_ext)
+        first = rec.step(0.0, g0, 0, [], *ctx.initial_forces(g0))
         records.append(_record(0, first, 0, 0, 0))
         records[0]["balance_error"] = 0.0            # the unloaded start, not an equilibrium
         records[0]["physical"] = physical_record(scn, 0.0)
         if o["vtu"]:
-            _write_vtu(os.path.join(vtu_dir, "step_0000.vtu"), prob, g0, 0.0, records[0]["physical"])
-        ck.save(scn.fingerprint, 0, 0.0, g0, rec.unwrapped, records, {k: 0.0 for k in PHASES},
-                extra=dict(newton=NewtonState(0.0, g0).pack(), physical=scn.physical))
-        if o["vtu"]:
+            _write_vtu(os.path.join(vtu_dir, "step_0000.vtu"), prob, g0, 0.0, ctx, records[0]["physical"])
+        if root:
+            ck.save(scn.fingerprint, 0, 0.0, g0, rec.unwrapped, records, {k: 0.0 for k in PHASES},
+                    extra=dict(newton=NewtonState(0.0, g0).pack(), physical=scn.physical, ranks=ctx.ranks),
+                    arrays=ctx.checkpoint_arrays())
+        if o["vtu"] and root:
             _write_pvd(vtu_dir, records, every, nsteps)
         start = NewtonState(0.0, g0)
     base["setup"] = base.get("setup", 0.0) + time.perf_counter() - t_setup0
@@ -311,12 +333,13 @@ def run(scn, out=None, resume=False, progress=None, force=False, stop_after=None
         return t
 
     explicit = bool(progress)
-    bar = Progress(nsteps, sys.stdout.isatty() if progress is None else explicit, delay=0.0 if explicit else 2.0)
+    bar = Progress(nsteps, (sys.stdout.isatty() if progress is None else explicit) and root,
+                   delay=0.0 if explicit else 2.0)
     opts = _options(s)
     if arc:
         steps = arc_length_steps(prob, lam_end=s["lam_end"], start=start, result=result, options=opts)
     else:
-        steps = newton_steps(prob, lams[done:], opts, start=start, recorder=rec, result=result)
+        steps = ctx.steps(lams[done:], opts, start, rec, result)
     n_this_call, k, lam = 0, done, records[-1]["load_factor"] if records else 0.0
     last_state = start
     status, error = "complete", None
@@ -337,7 +360,8 @@ def run(scn, out=None, resume=False, progress=None, force=False, stop_after=None
                                        sum(e["converged"] and not e.get("augmented") for e in tries),
                                        sum(not e["converged"] for e in tries)))
                 finished = k == nsteps
-                extra, arrays = dict(newton=item.state.pack()), item.state.arrays() or None
+                extra = dict(newton=item.state.pack(), ranks=ctx.ranks)
+                arrays = {**(item.state.arrays() or {}), **(ctx.checkpoint_arrays() or {})} or None
                 unwrap_now = rec.unwrapped
             lam, g = item.step.load_factor, item.step.g
             records[-1]["physical"] = physical_record(scn, lam)
@@ -346,13 +370,14 @@ def run(scn, out=None, resume=False, progress=None, force=False, stop_after=None
             timings = timings_now()
             vtu_now = o["vtu"] and (k % every == 0 or finished)
             if vtu_now:
-                _write_vtu(os.path.join(vtu_dir, f"step_{k:04d}.vtu"), prob, g, lam, records[-1]["physical"])
-            ck.save(scn.fingerprint, k, lam, g, unwrap_now, records, timings, extra=extra, arrays=arrays)
-            if vtu_now:
+                _write_vtu(os.path.join(vtu_dir, f"step_{k:04d}.vtu"), prob, g, lam, ctx, records[-1]["physical"])
+            if root:
+                ck.save(scn.fingerprint, k, lam, g, unwrap_now, records, timings, extra=extra, arrays=arrays)
+            if vtu_now and root:
                 _write_pvd(vtu_dir, records, every, k if finished else (nsteps if not arc else -1))
-            write_json_atomic(os.path.join(out, "results.json"),
-                              _document(scn, records, timings, "complete" if finished and not arc else "running",
-                                        critical=critical))
+            if root:
+                write_json_atomic(os.path.join(out, "results.json"), _document(
+                    scn, records, timings, "complete" if finished and not arc else "running", critical=critical))
             if k > done:
                 n_this_call += 1
                 dlam = lam - records[-2]["load_factor"]
@@ -371,7 +396,8 @@ def run(scn, out=None, resume=False, progress=None, force=False, stop_after=None
             target = lams[k] if k < len(lams) else lams[-1]
             msg = (f"step {k + 1} (load factor {lam:.6g} -> {target:.6g}) failed: {exc}. The checkpoint "
                    f"keeps step {k}; change the solver controls or the steps and rerun with --resume")
-            write_json_atomic(os.path.join(out, "results.json"), _document(scn, records, timings, "failed", msg))
+            if root:
+                write_json_atomic(os.path.join(out, "results.json"), _document(scn, records, timings, "failed", msg))
             raise ConvergenceError(msg, exc.result) from None
         if not records:
             raise
@@ -393,7 +419,8 @@ def run(scn, out=None, resume=False, progress=None, force=False, stop_after=None
         target = lams[k] if k < len(lams) else lams[-1]
         msg = (f"step {k + 1} (load factor {lam:.6g} -> {target:.6g}) failed: {exc}. The checkpoint "
                f"keeps step {k}")
-        write_json_atomic(os.path.join(out, "results.json"), _document(scn, records, timings_now(), "failed", msg))
+        if root:
+            write_json_atomic(os.path.join(out, "results.json"), _document(scn, records, timings_now(), "failed", msg))
         raise
     bar.close()
     timings = timings_now()
@@ -408,21 +435,25 @@ def run(scn, out=None, resume=False, progress=None, force=False, stop_after=None
                      "with --resume (or raise dlam0 and start over)")
         if o["vtu"]:
             if not os.path.exists(os.path.join(vtu_dir, f"step_{k:04d}.vtu")):
-                _write_vtu(os.path.join(vtu_dir, f"step_{k:04d}.vtu"), prob, final.state, final.lam)
-            _write_pvd(vtu_dir, records, every, k)
+                _write_vtu(os.path.join(vtu_dir, f"step_{k:04d}.vtu"), prob, final.state, final.lam, ctx)
+            if root:
+                _write_pvd(vtu_dir, records, every, k)
     else:
         g = last_state.g
     doc = _document(scn, records, timings, status, error, critical=critical)
-    write_json_atomic(os.path.join(out, "results.json"), doc)
+    if root:
+        write_json_atomic(os.path.join(out, "results.json"), doc)
     if status == "failed":
         raise ConvergenceError(error + f"; the {len(records) - 1} converged steps are written in {out} "
                                "(the checkpoint keeps the last one)", result)
     files = dict(results=os.path.join(out, "results.json"), checkpoint=ck.path)
-    return _finish(o, prob, doc, scn, g, records, out, vtu_dir, files)
+    return _finish(o, prob, doc, scn, g, records, out, vtu_dir, files, root)
 
 
-def _finish(o, prob, doc, scn, g, records, out, vtu_dir, files):
-    """Series file, probe plot and picture of a completed run; the RunResult."""
+def _finish(o, prob, doc, scn, g, records, out, vtu_dir, files, root=True):
+    """Series file, probe plot and picture of a completed run (rank 0 draws); the RunResult."""
+    if not root:
+        o = dict(o, plots=False, picture=False)
     if o["vtu"]:
         files["pvd"] = os.path.join(vtu_dir, "series.pvd")
     if o["plots"] and prob.probes:

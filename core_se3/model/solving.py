@@ -1,0 +1,72 @@
+"""The registry of solvers by control (``Problem.solve`` looks them up; ``core_se3.solvers`` and
+``core_se3.parallel`` fill it, so the model layer does not depend on them) and the choice
+between the serial solvers and the distributed one.
+
+Example
+-------
+>>> sorted(SOLVERS)
+['arclength', 'displacement', 'distributed', 'load']
+"""
+from __future__ import annotations
+
+from typing import Callable
+
+from ..backend import launched_ranks
+from ..errors import OptionError, ParallelError, did_you_mean
+
+__all__ = ["SOLVERS", "DISTRIBUTED_KEYS", "dispatch"]
+
+# keywords of the distributed set-up (a scenario's [solver] linear, petsc, partition), which
+# the serial solvers do not take
+DISTRIBUTED_KEYS = ("linear", "petsc_options", "partition")
+
+SOLVERS: dict[str, Callable] = {}
+"""Solvers by control name ('load', 'arclength', 'displacement'): solve(problem, **options); and
+'distributed' (load stepping over MPI ranks, ``core_se3.parallel``)."""
+
+
+def dispatch(problem, control, solver, kw):
+    """Solve ``problem`` with the solver of ``control``: the distributed one for load control
+    with ``solver="distributed"``, or by default when launched among several MPI ranks
+    (``backend.launched_ranks``); the serial one otherwise.
+
+    Parameters
+    ----------
+    problem : core_se3.Problem
+        The problem.
+    control : str
+        'load', 'arclength' or 'displacement'.
+    solver : str or None
+        None, 'serial' or 'distributed'.
+    kw : dict
+        The solver's keywords (the distributed set-up's are dropped for a serial solver).
+
+    Returns
+    -------
+    core_se3.Result
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
+    >>> dispatch(p, "load", "parallel", {})
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.OptionError: unknown solver 'parallel'; choose 'serial' or 'distributed'
+    """
+    kw = dict(kw)
+    kw.pop("solver", None)
+    controls = [c for c in SOLVERS if c != "distributed"]
+    if control not in controls:
+        raise OptionError(f"unknown control {control!r}{did_you_mean(control, controls)}; "
+                          f"choose one of {', '.join(sorted(controls))}")
+    if solver not in (None, "serial", "distributed"):
+        raise OptionError(f"unknown solver {solver!r}; choose 'serial' or 'distributed'")
+    if solver == "distributed" and control != "load":
+        raise ParallelError(f"the distributed solver steps the load (control='load'); control "
+                            f"{control!r} runs serially (drop solver='distributed')")
+    if solver == "distributed" or (solver is None and control == "load" and launched_ranks() > 1):
+        return SOLVERS["distributed"](problem, **kw)
+    for k in DISTRIBUTED_KEYS:
+        kw.pop(k, None)
+    return SOLVERS[control](problem, **kw)

@@ -1,0 +1,174 @@
+"""Loads and supports restricted to one rank's share (``local.Subdomain``), renumbered to its
+local nodes and elements.
+
+A nodal load (nodal and edge forces and moments, magnetic dipoles, penalty springs) keeps the
+nodes this rank owns, so that each acts once when the ranks' forces are summed; a surface load
+(pressure, body force, gravity) keeps this rank's elements, whose nodal parts the sum adds up
+as the serial assembly does.  The magnetisation's nodal dipoles are those of the whole mesh
+(computed once from all magnetised elements), so a node on a rank boundary gets its whole
+dipole.  A load class of one's own takes part by a method ``localized(part)`` returning the
+list of local loads, ``part`` being this module's :class:`LocalView` of the subdomain.
+"""
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+
+from ..errors import ParallelError
+from ..model import MagneticLoad, NodalLoad, SurfaceLoad
+from ..model.supports import LabSpring, LabTiltSpring, Prescribed, RotationComponentSpring
+
+__all__ = ["LocalView", "localize_load", "localize_support"]
+
+
+class LocalView:
+    """What a ``Load.localized(part)`` method gets: the local mesh and the index maps.
+
+    Attributes
+    ----------
+    mesh : core_se3.mesh.Mesh
+        The sub-mesh (local node and element ids).
+    owned_local(global_nodes) -> (positions, local ids)
+        The given nodes this rank owns (count a nodal quantity once).
+    local_nodes(global_nodes) -> (positions, local ids)
+        The given nodes on this rank (owned or ghost).
+    local_elements(global_elements) -> (positions, local ids)
+        The given elements of this rank.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import mesh
+    >>> from core_se3.parallel.local import subdomain
+    >>> v = LocalView(subdomain(mesh.rectangle(2.0, 1.0, 2, 1), np.array([0, 1]), rank=1, size=2))
+    >>> [a.tolist() for a in v.owned_local([1, 2, 5])], [a.tolist() for a in v.local_elements([0, 1])]
+    ([[1, 2], [0, 1]], [[1], [0]])
+    """
+
+    def __init__(self, sub):
+        self.sub = sub
+        self.mesh = sub.mesh
+
+    def owned_local(self, global_nodes):
+        return self.sub.owned_local(global_nodes)
+
+    def local_nodes(self, global_nodes):
+        return self.sub.local_nodes(global_nodes)
+
+    def local_elements(self, global_elements):
+        loc = self.sub.e2l[np.asarray(global_elements, np.int64)]
+        pos = np.nonzero(loc >= 0)[0]
+        return pos, loc[pos]
+
+
+def _nodal(ld, view):
+    pos, loc = view.owned_local(ld.nodes)
+    if not len(pos):
+        return []
+    return [NodalLoad(view.mesh.n_nodes, loc, ld.weights[pos], ld.force, ld.moment, ld.follower, ld.scale,
+                      ld.name)]
+
+
+def _surface(ld, view):
+    pos, loc = view.local_elements(ld.elements)
+    if not len(pos):
+        return []
+    q = ld.p if ld.follower else ld.q
+    return [SurfaceLoad(view.mesh, q, ld.follower, loc, ld.scale, ld.name)]
+
+
+def _magnetic(ld, view):
+    mag = ld.mag
+    pos, loc = view.owned_local(mag.nodes)
+    if not len(pos):
+        return []
+    part = copy.copy(mag)
+    part.mesh = view.mesh
+    part.nodes, part.mu, part.area = loc, mag.mu[pos], mag.area[pos]
+    node_area = np.zeros(view.mesh.n_nodes)
+    lp, ll = view.local_nodes(np.arange(len(mag.node_area)))
+    node_area[ll] = mag.node_area[lp]
+    part.node_area = node_area
+    part.elements = view.local_elements(mag.elements)[1]
+    out = MagneticLoad(part, ld.field, ld.name)
+    return [out]
+
+
+def _spring(ld, view, arrays):
+    pos, loc = view.owned_local(ld.nodes)
+    if not len(pos):
+        return []
+    part = copy.copy(ld)
+    part.n, part.nodes = view.mesh.n_nodes, loc
+    for name in arrays:
+        setattr(part, name, np.ascontiguousarray(getattr(ld, name)[pos]))
+    return [part]
+
+
+_RULES = {
+    NodalLoad: _nodal,
+    SurfaceLoad: _surface,
+    MagneticLoad: _magnetic,
+    LabSpring: lambda ld, v: _spring(ld, v, ("D", "P", "X0")),
+    LabTiltSpring: lambda ld, v: _spring(ld, v, ("t",)),
+    RotationComponentSpring: lambda ld, v: _spring(ld, v, ("R0", "b")),
+}
+
+
+def localize_load(load, sub):
+    """The local loads (a list, maybe empty) of ``load`` on ``sub`` (module docstring).
+
+    Parameters
+    ----------
+    load : core_se3.model.Load
+        A built-in load, or one with a ``localized(part)`` method.
+    sub : core_se3.parallel.local.Subdomain
+        This rank's share.
+
+    Returns
+    -------
+    list of Load
+        ParallelError for a load class without a distributed form.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import mesh
+    >>> from core_se3.model import NodalLoad
+    >>> from core_se3.parallel.local import subdomain
+    >>> s = subdomain(mesh.rectangle(2.0, 1.0, 2, 1), np.array([0, 1]), rank=0, size=2)
+    >>> [ld.nodes.tolist() for ld in localize_load(NodalLoad(6, [1, 2], [0.5, 0.5], (0, 0, 1.0)), s)]
+    [[1]]
+    """
+    own = getattr(load, "localized", None)
+    if callable(own):
+        return list(own(LocalView(sub)))
+    rule = _RULES.get(type(load))          # the exact class: a subclass may change the equations
+    if rule is not None:
+        return rule(load, LocalView(sub))
+    raise ParallelError(f"load {getattr(load, 'name', '?')!r} ({type(load).__name__}) has no distributed form: "
+                        "give its class a localized(part) method (docs/PARALLEL.md) or run serially")
+
+
+def localize_support(support, sub):
+    """A Prescribed support on ``sub``'s local nodes (ghosts included), or None if it holds none.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import mesh
+    >>> from core_se3.model.supports import Prescribed
+    >>> from core_se3.parallel.local import subdomain
+    >>> s = subdomain(mesh.rectangle(2.0, 1.0, 2, 1), np.array([0, 1]), rank=1, size=2)
+    >>> localize_support(Prescribed([0, 1, 3], np.ones(6, bool)), s).nodes.tolist()
+    [2]
+    """
+    pos, loc = sub.local_nodes(support.nodes)
+    if not len(pos):
+        return None
+    target = support.target
+    if target is not None:
+        def target(lam, full=support.target, pos=pos):
+            return np.asarray(full(lam))[pos]
+    return Prescribed(loc, support.fixed, target)

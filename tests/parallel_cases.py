@@ -1,0 +1,33 @@
+"""The problems that tests/test_parallel.py solves serially and on two ranks (shared by the
+test and tests/parallel_driver.py)."""
+from core_se3 import Material, Problem, mesh
+from core_se3.catalogue.case import case_params, get_case
+from core_se3.catalogue.run import build_problem
+
+# name -> load steps; sze-hemisphere in load control (the catalogue traces it by arc length,
+# which the distributed solver does not do; its path has no limit point up to P = 400)
+CASES = {"sze-hemisphere": 10, "magnetic-gripper": 20, "plate-100x100": 1}
+
+
+def build(name):
+    """(Problem, steps, solve keywords) of a case."""
+    if name == "plate-100x100":
+        prob = Problem(mesh.rectangle(1.0, 1.0, 100, 100), Material(1e6, 0.3, 0.01))
+        prob.clamp("x0")
+        prob.add_pressure(0.5, follower=True)
+        prob.add_probe("tip", "x1")
+        return prob, CASES[name], {}
+    case = get_case(name)
+    return build_problem(case, case_params(case)), CASES[name], {}
+
+
+def scenario_dict():
+    """A small scenario with a clamp, an edge force, a gravity load and a probe, 4 steps."""
+    return {"name": "par", "units": "consistent", "mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 24, "ny": 4},
+            "material": {"E": 1.2e6, "nu": 0.3, "h": 0.1, "rho": 1.0},
+            "supports": [{"type": "clamp", "edge": "x0"}],
+            "loads": [{"type": "edge_force", "edge": "x1", "force": [0.0, 0.0, 2.0]},
+                      {"type": "gravity", "g": [0.0, 0.0, -1.0]}],
+            "probes": [{"name": "tip", "edge": "x1"}],
+            "solver": {"steps": 4},
+            "output": {"vtu": True, "plots": False, "picture": False}}

@@ -1,0 +1,56 @@
+"""Run by tests/test_parallel.py under ``mpirun -n 2``: the agreement cases with the distributed
+solver, and a scenario run interrupted and resumed; rank 0 writes the outcome as JSON.
+
+    mpirun -n 2 python tests/parallel_driver.py OUT.json [case ...]
+"""
+import json
+import os
+import sys
+import tempfile
+
+import numpy as np
+
+from core_se3.parallel import world
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from parallel_cases import CASES, build, scenario_dict  # noqa: E402
+
+
+def summary(res):
+    return dict(iterations=[int(s.iterations) for s in res.steps],
+                lam=[float(s.load_factor) for s in res.steps],
+                probes=[{k: np.asarray(v["u"]).tolist() for k, v in s.probes.items()} for s in res.steps],
+                g=np.asarray(res.final.g).ravel()[::7].tolist())
+
+
+def main(out, names):
+    comm = world()
+    doc = {"ranks": comm.size}
+    for name in [n for n in names if n != "resume"]:
+        prob, steps, kw = build(name)
+        res = prob.solve(steps=steps, **kw)          # dispatches to the distributed solver
+        doc[name] = summary(res)
+        doc[name]["parallel"] = {k: v for k, v in res.parallel.items() if k in ("ranks", "linear")}
+    if "resume" in names or not names:
+        from core_se3 import scenario
+        scn = scenario.from_dict(scenario_dict())
+        base = tempfile.mkdtemp() if comm.rank == 0 else None
+        base = comm.bcast(base)
+        whole = scenario.run(scn, out=os.path.join(base, "whole"))
+        try:
+            scenario.run(scn, out=os.path.join(base, "cut"), stop_after=2)
+        except scenario.RunInterrupted:
+            pass
+        resumed = scenario.run(scn, out=os.path.join(base, "cut"), resume=True)
+        doc["resume"] = dict(difference=float(np.abs(np.asarray(whole.g) - np.asarray(resumed.g)).max()
+                                              / np.abs(np.asarray(whole.g)).max()),
+                             steps=len(resumed.doc["steps"]),
+                             files=sorted(os.listdir(os.path.join(base, "whole"))),
+                             vtu=sorted(os.listdir(os.path.join(base, "whole", "vtu"))))
+    if comm.rank == 0:
+        with open(out, "w") as fh:
+            json.dump(doc, fh)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1], sys.argv[2:])
