@@ -47,6 +47,15 @@ def lab_totals(g, f, magnitudes=False):
     return F.sum(0), M.sum(0)
 
 
+def _compiled_log(R):
+    """log_so3 of one rotation by the compiled kernel (the NumPy routine's twin, ~100x faster
+    on a single 3x3 matrix: a probe is unwrapped after every converged state)."""
+    from ..kernels.lie import log_so3
+    w = np.empty(3)
+    log_so3(np.ascontiguousarray(R, dtype=float), w)
+    return w
+
+
 class StepRecorder:
     """Records the steps of one path of ``problem`` (its probes, supports and length scale).
 
@@ -80,6 +89,7 @@ class StepRecorder:
         self.compiled = getattr(problem, "backend", "numpy") == "numba"
         self.reference = {name: pr.state(self.g0, compiled=self.compiled) for name, pr in problem.probes.items()}
         self.unwrapped = {name: np.zeros(3) for name in problem.probes}
+        self._log = _compiled_log if self.compiled else None
         if unwrapped:
             self.unwrapped.update({k: np.array(v, float) for k, v in unwrapped.items()})
 
@@ -89,7 +99,7 @@ class StepRecorder:
         for name, pr in self.problem.probes.items():
             x, R = pr.state(g, compiled=self.compiled)
             x0, Rref = self.reference.get(name) or pr.state(self.g0)
-            self.unwrapped[name] = unwrap_rotation(R @ Rref.T, self.unwrapped[name])
+            self.unwrapped[name] = unwrap_rotation(R @ Rref.T, self.unwrapped[name], self._log)
             states[name] = dict(u=x - x0, R=R @ Rref.T, w=self.unwrapped[name].copy())
         return states
 

@@ -10,7 +10,7 @@ from .. import lie
 __all__ = ["StepResult", "Result", "unwrap_rotation"]
 
 
-def unwrap_rotation(R, w_prev):
+def unwrap_rotation(R, w_prev, log=None):
     """Rotation vector of R that is closest to w_prev among w + 2 pi k n (continuity along a
     path: a roll-up reports 6 pi, not its value modulo 2 pi).
 
@@ -20,6 +20,9 @@ def unwrap_rotation(R, w_prev):
         The rotation (e.g. R R0^T of a probe).
     w_prev : (3,) array
         The unwrapped rotation vector of the previous state [rad] (zeros at the start).
+    log : callable, optional
+        R -> its rotation vector with |w| <= pi (default ``lie.log_so3``; the recorder of a
+        compiled problem passes the compiled twin).
 
     Returns
     -------
@@ -34,7 +37,7 @@ def unwrap_rotation(R, w_prev):
     >>> round(float(w[2]), 6)
     6.383185
     """
-    w = lie.log_so3(R)
+    w = (log or lie.log_so3)(R)
     t = float(np.sqrt(w @ w))
     w_prev = np.asarray(w_prev, float)
     if t >= 1e-12:

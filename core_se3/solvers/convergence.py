@@ -40,10 +40,10 @@ def scaled_norm(r, ell, moment=True):
     >>> float(scaled_norm(np.array([3.0, 0, 0, 0, 0, 8.0]), ell=2.0))
     5.0
     """
-    r = np.asarray(r).reshape(-1, 6)
-    if moment:
-        return np.sqrt(np.sum(r[:, :3] ** 2) + np.sum((r[:, 3:] / ell) ** 2))
-    return np.sqrt(np.sum(r[:, :3] ** 2) + np.sum((r[:, 3:] * ell) ** 2))
+    r = np.asarray(r, dtype=float).reshape(-1, 2, 3)        # (node, force/moment, component)
+    w = np.array([1.0, ell ** -2 if moment else ell ** 2])
+    # one pass: sum_n,k w_k |r_nk|^2 (this runs several times per Newton iteration)
+    return np.sqrt(np.einsum("nkc,nkc,k->", r, r, w))
 
 
 def relative_residual(asm, ev, ell, extra_scale=0.0):
