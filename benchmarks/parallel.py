@@ -166,6 +166,9 @@ def run_all(which):
         for n, Lh in [(50, 10), (50, 100), (50, 1000), (50, 10000), (100, 10), (100, 100), (100, 1000),
                       (200, 10), (200, 100), (316, 10)]:
             record(doc, launch(2, "solve", n, "gamg", 1.0 / Lh))
+    if "hypre" in which:                  # BoomerAMG on the same plates (docs/PARALLEL.md)
+        for n, Lh in [(50, 10), (50, 100), (50, 1000), (100, 10), (100, 100)]:
+            record(doc, launch(2, "solve", n, "hypre", 1.0 / Lh))
     if "large" in which:                  # L/h = 10 (GAMG's robust range), GMRES(30): memory
         for n in [int(a) for a in which[which.index("large") + 1:]] or [1000]:
             record(doc, launch(2, "solve", n, "gamg", 0.1, "ksp_gmres_restart=30", timeout=7200))
@@ -192,16 +195,16 @@ def report():
         L.append("")
     sv = sorted([r for r in runs if r["kind"] == "solve"], key=lambda r: (r["n"], r["L_over_h"]))
     if sv:
-        L += ["## One load step to convergence with GAMG (2 ranks)", "",
-              "| elements | dofs | L/h | Newton iterations | Krylov iterations per Newton iteration | wall [s] | "
-              "peak memory per rank [GB] |", "|---|---|---|---|---|---|---|"]
-        for r in sv:
+        L += ["## One load step to convergence with an iterative solver (2 ranks)", "",
+              "| solver | elements | dofs | L/h | Newton iterations | Krylov iterations per Newton iteration | "
+              "wall [s] | peak memory per rank [GB] | memory per dof [kB] |", "|---|---|---|---|---|---|---|---|---|"]
+        for r in sorted(sv, key=lambda r: (r.get("linear", "gamg"), r["n"], r["L_over_h"])):
+            head = f"| {r.get('linear', 'gamg')} | {r['elements']:,} | {r['dofs']:,} | {r['L_over_h']:g} |"
             if r.get("error"):
-                L.append(f"| {r['elements']:,} | {r['dofs']:,} | {r['L_over_h']:g} | failed | {r['error'][:120]} | "
-                         f"{r['wall']:.1f} | |")
+                L.append(f"{head} failed | {r['error'][:120]} | {r['wall']:.1f} | | |")
                 continue
-            L.append(f"| {r['elements']:,} | {r['dofs']:,} | {r['L_over_h']:g} | {r['newton']} | {r['krylov']} | "
-                     f"{r['wall']:.1f} | {', '.join(f'{m / 1e9:.2f}' for m in r['memory'])} |")
+            L.append(f"{head} {r['newton']} | {r['krylov']} | {r['wall']:.1f} | "
+                     f"{', '.join(f'{m / 1e9:.2f}' for m in r['memory'])} | {sum(r['memory']) / r['dofs'] / 1e3:.1f} |")
         L.append("")
     with open(os.path.join(HERE, "results", "parallel.md"), "w") as fh:
         fh.write("\n".join(L) + "\n" + doc.get("notes", ""))

@@ -23,7 +23,8 @@ def build(name):
 
 def scenario_dict():
     """A small scenario with a clamp, an edge force, a gravity load and a probe, 4 steps."""
-    return {"name": "par", "units": "consistent", "mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 24, "ny": 4},
+    return {"name": "par", "units": "consistent",
+            "mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 24, "ny": 4},
             "material": {"E": 1.2e6, "nu": 0.3, "h": 0.1, "rho": 1.0},
             "supports": [{"type": "clamp", "edge": "x0"}],
             "loads": [{"type": "edge_force", "edge": "x1", "force": [0.0, 0.0, 2.0]},
