@@ -34,7 +34,8 @@ import sys
 import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-SKIP_KEYS = {"timings", "scenario", "fingerprint", "file", "error", "monitor_and_perfect_branch"}
+# "time": the wall time of each design iteration
+SKIP_KEYS = {"timings", "time", "scenario", "fingerprint", "file", "error", "monitor_and_perfect_branch"}
 EXACT_KEYS = {"iterations", "substeps", "cutbacks", "step", "n_points", "negative_eigenvalues",
               "det_sign", "attempts", "linear_solves"}
 ROUNDOFF_KEYS = {"residual", "residual_history", "balance_error"}

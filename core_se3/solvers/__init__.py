@@ -18,6 +18,7 @@ from ..model.problem import SOLVERS
 from .arclength import ArcState, PathEvent, PathInfo, path_follow, path_steps
 from .shell_paths import PathStep, arc_length, arc_length_steps, displacement_control
 from .convergence import increment_norm, relative_residual, scaled_norm
+from .equations import NewtonEquations
 from .linalg import AUTO_MUMPS_MIN, Factorization, available_solvers, checked_solve, make_solver
 from .newton import (MAX_PRESCRIBED_TURN, NewtonState, NewtonStep, newton_solve, newton_steps,
                      requested_load_factors)
@@ -31,7 +32,7 @@ __all__ = ["newton_solve", "newton_steps", "NewtonState", "NewtonStep", "request
            "PathEvent", "PathInfo", "PathStep", "CriticalPoint", "PathPoint", "inertia",
            "smallest_mode", "limit_point_hint", "ShellSystem", "AlgebraicSystem", "make_solver",
            "available_solvers", "checked_solve", "Factorization", "AUTO_MUMPS_MIN", "scaled_norm",
-           "relative_residual", "increment_norm"]
+           "relative_residual", "increment_norm", "NewtonEquations"]
 
 
 def _arclength(problem, steps=None, lam_end=1.0, **kw):

@@ -24,8 +24,8 @@ import numpy as np
 from .. import lie
 from ..errors import ConvergenceError, ElementTooDistortedError, OptionError, SingularSystemError
 from ..results import Result, StepRecorder
-from .convergence import scaled_norm
 from .linalg import make_solver
+from .equations import NewtonEquations
 from .newton_try import NewtonTry, augmented_try, hooked_loads, tangent_predictor
 from .options import NewtonOptions, split_options, unknown_keywords
 from .stability import limit_point_hint
@@ -177,20 +177,23 @@ def _split_prescribed(problem, lam, lam_try):
                                    f"{MAX_PRESCRIBED_TURN:.3f} rad in any step from load factor {lam:.6g}")
 
 
-def _log_try(result, tries, lam_try, out, augmentation=None):
-    """Append the log entry of a try (an augmented one, k > 0, converged and solved again)."""
+def _log_try(result, tries, lam_try, out, augmentation=None, quiet=False):
+    """Append the log entry of a try (an augmented one, k > 0, converged and solved again);
+    ``quiet``: not to the logger (the ranks of a distributed run other than rank 0)."""
     entry = dict(lam=lam_try, converged=out.ok, iterations=out.iterations, linear_solves=out.solves,
                  residual_history=out.hist, reason=out.reason)
     if augmentation:
         entry["augmented"] = augmentation
     result.log.append(entry)
     tries.append(entry)
+    if quiet:
+        return
     log.info("  lam %.6g: %s in %d it, residual %.2e %s", lam_try,
              "ok" if out.ok else "FAIL", len(out.hist) - 1, out.hist[-1] if out.hist else float("nan"),
              out.reason + (" (multipliers updated: solved again)" if augmentation else ""))
 
 
-def newton_steps(problem, targets, options=None, start=None, recorder=None, result=None):
+def newton_steps(problem, targets, options=None, start=None, recorder=None, result=None, equations=None):
     """Yield a :class:`NewtonStep` for every requested load factor in ``targets``.
 
     start: the NewtonState to begin from (default: the reference state at lam 0); recorder:
@@ -208,6 +211,9 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
         The controls (default ``NewtonOptions()``).
     start, recorder, result : optional
         As above.
+    equations : optional
+        What the tries evaluate and solve (``solvers.equations``): default the problem on this
+        process; ``parallel`` passes one rank's share of a distributed run.
 
     Yields
     ------
@@ -225,25 +231,29 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
     """
     opts = options or NewtonOptions()
     mesh = problem.mesh
-    problem.assembler()                       # the sparsity pattern, built once before the tries
-    solver = make_solver(opts.linear_solver or problem.linear_solver)
-    ell = problem.length_scale
+    if equations is None:
+        problem.assembler()                   # the sparsity pattern, built once before the tries
+        solver = make_solver(opts.linear_solver or problem.linear_solver)
+        eq = NewtonEquations(problem, solver)
+    else:
+        solver, eq = None, equations
     state = start or NewtonState(0.0, mesh.g0.copy())
     rec = recorder or StepRecorder(problem)
     result = result if result is not None else Result(mesh=mesh, element=problem.element_name)
-    stateful = problem.element.stateful
+    stateful = eq.stateful
     has_targets = problem.has_prescribed_motion
     driven = stateful or has_targets
-    lam, g, dlam, k_ref = state.lam, state.g, state.dlam, state.k_ref
+    lam, dlam, k_ref = state.lam, state.dlam, state.k_ref
+    g, g_whole = eq.local_frames(state.g), state.g     # the iterate, and the whole mesh's frames
     timer = _Timer(result)
-    trier = NewtonTry(problem, opts, solver, timer)
-    aug = hooked_loads(problem, "update_multipliers")       # augmented-Lagrangian loads (contact)
+    trier = NewtonTry(problem, opts, solver, timer, eq)
+    aug = hooked_loads(eq, "update_multipliers")            # augmented-Lagrangian loads (contact)
     for i, ld in enumerate(aug):
         ld.set_multipliers(None if state.multipliers is None else state.multipliers[i])
     # the mixed iteration's stresses start every try from those of the converged state (a
     # function of g alone, so a restart from a NewtonState repeats the same computations)
-    mip = opts.iteration == "mip" and problem.element.mixed and not stateful
-    stress_conv = problem.evaluate(g, lam, tangent=False).stress if mip else None
+    mip = opts.iteration == "mip" and eq.mixed and not stateful
+    stress_conv = eq.stress(g, lam) if mip else None
     for target in targets:
         tries = []
         n_recorded = 0                           # tries already counted in a recorded sub-step
@@ -257,30 +267,30 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
                 lam_try = _split_prescribed(problem, lam, lam_try)
                 if abs(lam_try - lam) < abs(dlam):
                     dlam = lam_try - lam         # the split increment carries on (and regrows)
-            g_try = problem.apply_prescribed(g.copy(), lam_try)
+            g_try = eq.apply_prescribed(g.copy(), lam_try)
             if stateful:
                 # the seed element's strain is a state: save it, and feed it the prescribed motion
                 problem.element.save()
                 problem.element.update(lie.log(lie.inv(g) @ g_try))
             stress_try = stress_conv
-            if opts.predictor == "tangent" and has_targets and not stateful:
+            if opts.predictor == "tangent" and has_targets and not stateful and eq.predictor:
                 try:
                     g_try, stress_try = tangent_predictor(problem, g, lam, lam_try, solver, mip, trier.caps)
                 except (SingularSystemError, ElementTooDistortedError, FloatingPointError):
                     g_try, stress_try = problem.apply_prescribed(g.copy(), lam_try), stress_conv
             saved = [ld.multipliers() for ld in aug]
             out = augmented_try(trier, aug, g_try, lam_try, mip, stress_try, opts.max_augmentations,
-                                lambda o, k: _log_try(result, tries, lam_try, o, augmentation=k))
+                                lambda o, k: _log_try(result, tries, lam_try, o, augmentation=k, quiet=not eq.root))
             ok, reason, hist, g_try, ev = out.ok, out.reason, out.hist, out.g, out.ev
             k_step, pred, eta_sum = out.k_step, out.pred, out.eta_sum
             if not ok:
                 for ld, m in zip(aug, saved):
                     ld.set_multipliers(m)
-            _log_try(result, tries, lam_try, out, augmentation=0 if aug else None)
+            _log_try(result, tries, lam_try, out, augmentation=0 if aug else None, quiet=not eq.root)
             if ok and opts.limit_check and not driven and k_step is not None:
                 if k_ref is None:
                     k_ref = k_step
-                jump = scaled_norm(eta_sum, ell, moment=False)
+                jump = eq.increment_norm(eta_sum)
                 if k_ref > 0 and k_step / k_ref < 0.3 and jump > 3 * pred:
                     timer.close()
                     raise ConvergenceError(
@@ -294,11 +304,12 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
             if ok:
                 lam = lam_try
                 g = g_try
+                g_whole = eq.whole_frames(g)
                 if mip:
                     stress_conv = ev.stress
                 at_target = abs(lam - target) <= 1e-14 * max(1.0, abs(target))
                 if at_target or opts.record_substeps:
-                    st = rec.step(lam, g, len(hist) - 1, hist, ev.r_int, ev.f_ext)
+                    st = rec.step(lam, g_whole, len(hist) - 1, hist, *eq.forces(ev))
                     st.attempts = len(tries) - n_recorded
                     st.linear_solves = sum(t["linear_solves"] for t in tries[n_recorded:])
                     n_recorded = len(tries)
@@ -307,7 +318,7 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
                     else:
                         result.steps.append(st)
                 else:
-                    rec.probes(g)
+                    rec.probes(g_whole)
                 if len(hist) - 1 <= 6 and abs(dlam) < abs(dlam_nominal):
                     dlam = min(abs(dlam) * 2, abs(dlam_nominal)) * np.sign(dlam_nominal)
             else:
@@ -316,17 +327,18 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
                 dlam = dlam / 2
                 if abs(dlam) < abs(dlam_nominal) / 2 ** opts.max_cutbacks:
                     timer.close()
-                    hint = limit_point_hint(problem, g, lam, opts.linear_solver) if lam != 0.0 else None
+                    hint = limit_point_hint(problem, g, lam, opts.linear_solver) \
+                        if lam != 0.0 and not eq.distributed else None
                     raise ConvergenceError(
                         f"Newton failed at load factor {lam_try:.6g} after {opts.max_cutbacks} cut-backs "
                         f"({reason}); the last converged load factor is {lam:.6g} and its state is "
                         "kept in .result" + (f". Probable cause: {hint}" if hint else ""), result)
         if stored is None:                       # the target was already reached
-            ev = problem.evaluate(g, lam, tangent=False)
-            stored = rec.step(lam, g, 0, [], ev.r_int, ev.f_ext)
+            ev, _, _ = eq.evaluate(g, lam, tangent=False)
+            stored = rec.step(lam, g_whole, 0, [], *eq.forces(ev))
             stored.attempts, stored.linear_solves = 0, 0
         timer.close()
-        state = NewtonState(lam, g, dlam, k_ref, [ld.multipliers() for ld in aug] if aug else None)
+        state = NewtonState(lam, g_whole, dlam, k_ref, [ld.multipliers() for ld in aug] if aug else None)
         yield NewtonStep(stored, state, tries)
 
 

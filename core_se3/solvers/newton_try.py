@@ -22,16 +22,17 @@ import numpy as np
 
 from .. import lie
 from ..assembly import Assembler
-from ..errors import ElementTooDistortedError, SingularSystemError
+from ..errors import ElementTooDistortedError, LinearSolverError, SingularSystemError
 from ..model.base import overrides
-from .convergence import relative_residual, scaled_norm
+from .equations import NewtonEquations
 from .linalg import Factorization
 
 __all__ = ["NewtonTry", "TryOutcome", "augmented_try", "hooked_loads", "tangent_predictor"]
 
 
 def hooked_loads(problem, hook):
-    """The loads of ``problem`` whose class overrides the Load hook ``hook``.
+    """The loads of ``problem`` (a Problem, or the equations of ``solvers.equations``) whose
+    class overrides the Load hook ``hook``.
 
     Example
     -------
@@ -89,6 +90,9 @@ class NewtonTry:
         The problem; ``opts``: NewtonOptions; ``solver``: a linear solver (``make_solver``).
     timer : object
         Accumulates ``t_asm`` and ``t_sol`` [s] (attributes).
+    equations : optional
+        What the iterations evaluate and solve (``solvers.equations``; default the problem's
+        :class:`~core_se3.solvers.equations.NewtonEquations` on this process).
 
     Attributes
     ----------
@@ -108,19 +112,19 @@ class NewtonTry:
     (True, True)
     """
 
-    def __init__(self, problem, opts, solver, timer):
+    def __init__(self, problem, opts, solver, timer, equations=None):
         self.problem, self.opts, self.solver, self.timer = problem, opts, solver, timer
-        self.asm = problem.assembler()
+        self.eq = equations or NewtonEquations(problem, solver)
         self.ell = problem.length_scale
-        self.stateful = problem.element.stateful
+        self.stateful = self.eq.stateful
         self.first_solve = True
-        self.caps = hooked_loads(problem, "limit_increment")
-        self.starts = hooked_loads(problem, "start_error")
+        self.caps = hooked_loads(self.eq, "limit_increment")
+        self.starts = hooked_loads(self.eq, "start_error")
 
     def run(self, g_try, lam_try, mip, stress):
         """Iterate from g_try at lam_try (mip: the mixed iteration from the stresses ``stress``);
         returns a :class:`TryOutcome`.  A singular tangent at the first solve of the path raises."""
-        problem, opts, asm, ell, timer = self.problem, self.opts, self.asm, self.ell, self.timer
+        problem, opts, eq, ell, timer = self.problem, self.opts, self.eq, self.ell, self.timer
         for ld in self.starts:
             why = ld.start_error(g_try, lam_try)
             if why:
@@ -140,12 +144,8 @@ class NewtonTry:
                 # after an increment below dtol the state has likely converged: check the
                 # residual first and build the tangent only if it has not
                 likely = it > 0 and dn <= opts.dtol
-                ev = problem.evaluate(g_try, lam_try, tangent=not likely,
-                                      stress=stress if mip_try and not likely else None)
-                rf = ev.r
-                if not np.all(np.isfinite(rf)):
-                    raise FloatingPointError("non-finite residual")
-                rn, floor = relative_residual(asm, ev, ell)
+                ev, rn, floor = eq.evaluate(g_try, lam_try, tangent=not likely,
+                                            stress=stress if mip_try and not likely else None)
                 hist.append(rn)
                 if it > 0 and rn <= max(opts.rtol, floor) and dn <= opts.dtol:
                     ok = True
@@ -160,17 +160,13 @@ class NewtonTry:
                     timer.t_asm += time.perf_counter() - ta
                     break
                 if likely:
-                    ev = problem.evaluate(g_try, lam_try, tangent=True, stress=stress if mip_try else None)
-                    rf = ev.r
+                    ev, _, _ = eq.evaluate(g_try, lam_try, tangent=True, stress=stress if mip_try else None)
                 timer.t_asm += time.perf_counter() - ta
                 ts = time.perf_counter()
                 try:
-                    with Factorization(ev.K, self.solver) as fac:
-                        x = fac.solve(-rf)
-                        if self.first_solve:
-                            fac.probe()
+                    x = eq.solve(ev, g_try, probe=self.first_solve)
                 except SingularSystemError as exc:
-                    if self.first_solve:
+                    if self.first_solve and not isinstance(exc, LinearSolverError):
                         raise SingularSystemError(
                             f"{exc}: the tangent of the unloaded shell is singular -- a rigid-body "
                             "motion is not restrained (missing or insufficient supports)") from None
@@ -178,11 +174,11 @@ class NewtonTry:
                 timer.t_sol += time.perf_counter() - ts
                 solves += 1
                 self.first_solve = False
-                eta = asm.scatter(x)
+                eta = eq.increment(x)
                 if it == 0:
-                    work = -float(rf @ x)
-                    k_step = scaled_norm(asm.scatter(rf), ell) ** 2 / work if work > 0 else -np.inf
-                    pred = scaled_norm(eta, ell, moment=False)
+                    work = eq.work(ev, x)
+                    k_step = eq.residual_sq(ev) / work if work > 0 else -np.inf
+                    pred = eq.increment_norm(eta)
                     # guard: a first increment doing negative work starts past an
                     # instability, where the mixed iteration's reach can carry it onto
                     # another equilibrium; iterate that try on the displacements
@@ -192,12 +188,12 @@ class NewtonTry:
                     if alpha < 1.0:
                         eta = alpha * eta
                 eta_sum = eta_sum + eta
-                dn = scaled_norm(eta, ell, moment=False) / ell
+                dn = eq.increment_norm(eta) / ell
                 if mip_try:
                     # the mixed update: stresses linear in the increment (no membrane
                     # overshoot of Dbar (z(g exp eta) - z0) in the geometric stiffness)
-                    stress = problem.linear_stress(ev, eta)
-                g_try = problem.retract(g_try, eta)
+                    stress = eq.linear_stress(ev, eta)
+                g_try = eq.retract(g_try, eta)
                 if self.stateful:
                     problem.element.update(eta)
         except SingularSystemError as exc:
