@@ -135,6 +135,28 @@ def _frac(x):
     return "1" if x == 1 else f"1/{round(1 / x)}"
 
 
+def save(rows):
+    """Merge ``rows`` into robustness.json (rows of other cases kept, e.g. from a run of the
+    other cases alongside; a file lock serialises the writers) and rewrite robustness.md."""
+    import fcntl
+    import numpy
+    from core_se3.backend import default_backend
+    meta = dict(date=datetime.datetime.now().isoformat(timespec="seconds"),
+                machine=f"{platform.processor() or platform.machine()}, nproc {os.cpu_count()}",
+                python=platform.python_version(), numpy=numpy.__version__, backend=default_backend())
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    key = lambda r: (r["case"], r["thin"], r["iteration"])          # noqa: E731
+    with open(RESULTS / ".robustness.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        path = RESULTS / "robustness.json"
+        old = json.loads(path.read_text())["rows"] if path.exists() else []
+        mine = {key(r) for r in rows}
+        merged = [r for r in old if key(r) not in mine] + list(rows)
+        order = {name: i for i, name in enumerate(CASES)}
+        merged.sort(key=lambda r: (order.get(r["case"], len(order)), r["thin"], ITERATIONS.index(r["iteration"])))
+        write(merged, meta)
+
+
 def write(rows, meta):
     RESULTS.mkdir(parents=True, exist_ok=True)
     (RESULTS / "robustness.json").write_text(json.dumps(dict(meta=meta, rows=rows), indent=1))
@@ -184,12 +206,8 @@ def main():
                       {k: path.get(k) for k in ("status", "tries", "failed", "iterations", "linear_solves")},
                       flush=True)
                 rows.append(row)
-    import numpy
-    from core_se3.backend import default_backend
-    meta = dict(date=datetime.datetime.now().isoformat(timespec="seconds"),
-                machine=f"{platform.processor() or platform.machine()}, nproc {os.cpu_count()}",
-                python=platform.python_version(), numpy=numpy.__version__, backend=default_backend())
-    write(rows, meta)
+                save(rows)                   # after every row: a long run keeps what it measured
+    save(rows)
 
 
 if __name__ == "__main__":
