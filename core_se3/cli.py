@@ -123,7 +123,8 @@ def bench_run(args):
             doc, res, prob = run_case(args.name, mesh=args.mesh, overrides=_parse_set(args.set),
                                       steps=args.steps, element=args.element, linear_solver=args.solver, **kw)
     except (CoreSE3Error, KeyError) as exc:
-        print(f"error: {exc.args[0] if isinstance(exc, KeyError) and exc.args else exc}", file=sys.stderr)
+        if launched_rank() == 0:         # every rank reads the same input and meets the same error
+            print(f"error: {exc.args[0] if isinstance(exc, KeyError) and exc.args else exc}", file=sys.stderr)
         return 2
     if launched_rank() != 0:                 # under mpirun: rank 0 reports and writes
         return 0
@@ -204,7 +205,8 @@ def scenario_run(args):
 def _error_code(exc):
     """Print a core_se3 error; the exit status: 3 for a solver that did not converge (the
     converged steps are kept), 2 for bad input."""
-    print(f"error: {exc}", file=sys.stderr)
+    if launched_rank() == 0:             # under mpirun every rank meets the same error
+        print(f"error: {exc}", file=sys.stderr)
     return 3 if isinstance(exc, ConvergenceError) else 2
 
 

@@ -225,3 +225,19 @@ def test_front_door_mpirun_core_se3_run(tmp_path):
     u, v = doc["steps"][-1]["probes"]["tip"]["u"], ser.doc["steps"][-1]["probes"]["tip"]["u"]
     assert np.linalg.norm(np.subtract(u, v)) < 1e-10 * np.linalg.norm(v)
     assert len(list((tmp_path / "out" / "vtu").glob("step_*.vtu"))) == 5
+
+
+def test_a_design_under_mpirun_is_refused(monkeypatch):
+    """A design is serial: launched among several ranks it stops with a ParallelError that says
+    to run it without mpirun, before any rank optimises and writes the same files."""
+    from core_se3.design import Design, LoadMagnitude, Pose, ProbePosition, Target
+    p = Problem(mesh.rectangle(1.0, 0.2, 4, 1), Material(1e4, 0.0, 0.02))
+    p.clamp("x0")
+    p.add_edge_force("x1", (0.0, 0.0, 1e-3))
+    p.add_probe("tip", "x1")
+    reach = Pose("reach", [Target(ProbePosition(p, "tip", target=(1.0, 0.1, 0.05)))])
+    args = (p, [LoadMagnitude(p, p.loads[0])], [reach])
+    Design(*args)                                    # serially it is accepted
+    monkeypatch.setenv("OMPI_COMM_WORLD_SIZE", "2")
+    with pytest.raises(ParallelError, match="without mpirun"):
+        Design(*args)

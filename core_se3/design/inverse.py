@@ -36,7 +36,8 @@ import time
 
 import numpy as np
 
-from ..errors import ConvergenceError, DesignError
+from ..backend import launched_ranks
+from ..errors import ConvergenceError, DesignError, ParallelError
 from .equilibrium import EquilibriumOptions, assign_all, follow, solve_flat
 from .sensitivity import sensitivity
 from .targets import DesignResult, Pose, Smoothness, Target
@@ -73,6 +74,10 @@ class Design:
     """
 
     def __init__(self, problem, variables, poses, regularisation=(), options=None, sensitivity_method="auto"):
+        if launched_ranks() > 1:
+            # every rank would optimise the whole design and write the same files
+            raise ParallelError("a design runs on one process (its equilibria and sensitivities are "
+                                "serial): run it without mpirun (docs/PARALLEL.md, Limits)")
         self.problem, self.variables, self.poses = problem, list(variables), list(poses)
         self.regularisation = list(regularisation)
         self.options = options or EquilibriumOptions()
