@@ -64,8 +64,8 @@ class DistributedEquations:
     def retract(self, g, eta):
         return self.run.retract(g, eta)
 
-    def evaluate(self, g, lam, tangent=True, stress=None):
-        ev = self.run.evaluate(g, lam, tangent=tangent, stress=stress)
+    def evaluate(self, g, lam, tangent=True, stress=None, norms=True):
+        ev = self.run.evaluate(g, lam, tangent=tangent, stress=stress)    # norms are global sums anyway
         return ev, ev.rn, ev.floor
 
     def forces(self, ev):

@@ -7,8 +7,9 @@ methods on one rank's share of the mesh, with global norms and gathered frames):
 
 * frames: ``local_frames(g)`` the iterate of the whole-mesh frames g, ``whole_frames(g)`` back,
   ``apply_prescribed(g, lam)``, ``retract(g, eta)`` (g exp(eta));
-* equations: ``evaluate(g, lam, tangent, stress) -> (ev, rn, floor)`` (the Evaluation with its
-  relative residual and round-off floor, ``solvers.convergence``), ``forces(ev)`` the whole-mesh
+* equations: ``evaluate(g, lam, tangent, stress, norms) -> (ev, rn, floor)`` (the Evaluation with
+  its relative residual and round-off floor, ``solvers.convergence``; None, None without
+  ``norms``), ``forces(ev)`` the whole-mesh
   internal and external nodal forces, ``stress(g, lam)`` the mixed iteration's stresses,
   ``linear_stress(ev, eta)``;
 * the linear step: ``solve(ev, g, probe) -> x`` (K x = -r at the frames g; ``probe``: also check
@@ -78,8 +79,10 @@ class NewtonEquations:
         return self.problem.retract(g, eta)
 
     # ------------------------------------------------------------------ equations -------
-    def evaluate(self, g, lam, tangent=True, stress=None):
+    def evaluate(self, g, lam, tangent=True, stress=None, norms=True):
         ev = self.problem.evaluate(g, lam, tangent=tangent, stress=stress)
+        if not norms:                    # the tangent of a state whose residual was just measured
+            return ev, None, None
         if not np.all(np.isfinite(ev.r)):
             raise FloatingPointError("non-finite residual")
         rn, floor = relative_residual(self.asm, ev, self.ell)

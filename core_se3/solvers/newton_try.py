@@ -160,7 +160,8 @@ class NewtonTry:
                     timer.t_asm += time.perf_counter() - ta
                     break
                 if likely:
-                    ev, _, _ = eq.evaluate(g_try, lam_try, tangent=True, stress=stress if mip_try else None)
+                    ev, _, _ = eq.evaluate(g_try, lam_try, tangent=True, stress=stress if mip_try else None,
+                                           norms=False)
                 timer.t_asm += time.perf_counter() - ta
                 ts = time.perf_counter()
                 try:
