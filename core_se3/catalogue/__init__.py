@@ -12,6 +12,7 @@ from . import cases_contact, cases_design, cases_magnetic, cases_shells, cases_s
 from . import family_contact, family_design, family_magnetic, family_sze  # noqa: F401  (register the families)
 from .case import (CASES, FAMILIES, Case, CaseLoad, Family, Reference, ResolvedLoad, Variant, add_case,
                    beam_EI, case_params, family_of, get_case, list_cases, register_family, resolve)
+from .finite_bending import drilling_for_rotation, finite_bending_moment, limit_moment
 from .generic import case_document, edge_wrench, planar, reference_for, torsion_constant
 from .measures import (error_against_reference, interp_reference, lifted_length_from_gaps, path_distance,
                        point_curve_distances)
@@ -23,4 +24,5 @@ __all__ = ["Case", "CaseLoad", "Reference", "Variant", "ResolvedLoad", "CASES", 
            "case_params", "resolve", "build_problem", "run_case", "case_document", "reference_for",
            "planar", "edge_wrench", "torsion_constant", "error_against_reference", "interp_reference",
            "path_distance", "point_curve_distances", "elastica_entry", "elastica_names",
-           "literature_entry", "literature_ids", "lifted_length_from_gaps", "contact_lift_elastica"]
+           "literature_entry", "literature_ids", "lifted_length_from_gaps", "contact_lift_elastica",
+           "finite_bending_moment", "limit_moment", "drilling_for_rotation"]
