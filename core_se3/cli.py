@@ -325,7 +325,7 @@ def main(argv=None):
     run.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a case parameter")
     run.add_argument("--steps", type=int, default=None)
     run.add_argument("--element", default="default", help=f"element: {', '.join(sorted(ELEMENTS))}")
-    run.add_argument("--solver", choices=["auto", "mumps", "superlu"], default="auto")
+    run.add_argument("--solver", choices=["auto", "banded", "mumps", "superlu"], default="auto")
     run.add_argument("--linear", choices=["mumps", "gamg", "hypre"], default=None,
                      help="linear solver of a distributed run (mpirun -n N, N > 1; docs/PARALLEL.md)")
     run.add_argument("--json", default=None)

@@ -147,25 +147,54 @@ def _mumps_param():
                                                           reason="petsc4py not installed"))
 
 
-def test_auto_solver_picks_by_size():
-    """``auto`` factors small tangents with SuperLU and, with petsc4py, large ones with MUMPS
-    (linalg.AUTO_MUMPS_MIN); both give the same solution."""
+def _wide(n, seed=0):
+    """A diagonally dominant matrix whose random pattern no ordering makes narrow."""
+    import scipy.sparse as sps
+    A = sps.random(n, n, density=4.0 / n, random_state=seed, format="csr")
+    return (A + A.T + 10.0 * sps.eye(n)).tocsr()
+
+
+def test_auto_solver_picks_by_pattern():
+    """``auto`` factors narrow patterns with the banded LU (linalg.BANDED_MAX_COST), other small
+    tangents with SuperLU and, with petsc4py, large ones with MUMPS (linalg.AUTO_MUMPS_MIN);
+    each solves to round-off."""
     import scipy.sparse as sps
     from core_se3.solvers.linalg import AUTO_MUMPS_MIN, AutoSolver, available_solvers, checked_solve
     auto = AutoSolver()
     n = AUTO_MUMPS_MIN + 10
-    K = sps.diags([-1.0, 2.5, -1.0], [-1, 0, 1], shape=(n, n), format="csr")
-    b = np.random.default_rng(0).standard_normal(n)
+    rng = np.random.default_rng(0)
     large = "mumps" if "mumps" in available_solvers() else "superlu"
-    assert auto._large is None               # MUMPS (and petsc4py) only at the first large matrix
-    x = checked_solve(auto, K, b)
-    assert auto._large.name == large and auto._small.name == "superlu"
-    assert np.linalg.norm(K @ x - b) < 1e-12 * np.linalg.norm(b)
-    xs = checked_solve(auto, K[:100, :100], b[:100])
-    assert np.linalg.norm(K[:100, :100] @ xs - b[:100]) < 1e-12 * np.linalg.norm(b[:100])
+    for K, which in [(sps.diags([-1.0, 2.5, -1.0], [-1, 0, 1], shape=(n, n), format="csr"), "banded"),
+                     (_wide(n), large), (_wide(1500), "superlu")]:
+        b = rng.standard_normal(K.shape[0])
+        assert auto.choice(K) == which
+        x = checked_solve(auto, K, b)
+        assert np.linalg.norm(K @ x - b) < 1e-12 * np.linalg.norm(b)
+    assert auto._large is None or auto._large.name == "mumps"   # MUMPS only made for a large wide matrix
 
 
-@pytest.mark.parametrize("solver", ["superlu", "auto", _mumps_param()])
+def test_banded_lu_in_rcm_order_solves_a_shell_tangent_as_superlu():
+    """The banded LU (reverse Cuthill-McKee order, LAPACK dgbtrf) on the cantilever's tangent at
+    a bent equilibrium: the same solution as SuperLU to the conditioning of the system, and a band of
+    four nodes (23 sub-diagonals) for the 1-element-wide strip."""
+    from core_se3.solvers.linalg import BandedSolver, Factorization, make_solver
+    p = Problem(rectangle(L, WIDTH, 16, 1), Material(E, 0.0, H))
+    p.clamp("x0")
+    p.add_edge_force("x1", (0, 0, 2.0))
+    g = p.solve(steps=2).final.g                               # a bent equilibrium state
+    K = p.evaluate(g, 1.0, tangent=True).K.tocsr()
+    b = np.random.default_rng(3).standard_normal(K.shape[0])
+    band = BandedSolver()
+    with Factorization(K, band) as F:
+        x = F.solve(b)
+    with Factorization(K, make_solver("superlu")) as F:
+        xs = F.solve(b)
+    assert band.layout(K).kl == 23
+    assert np.linalg.norm(x - xs) < 1e-9 * np.linalg.norm(xs)
+    assert np.linalg.norm(K @ x - b) < 1e-12 * np.linalg.norm(K @ np.abs(x))
+
+
+@pytest.mark.parametrize("solver", ["superlu", "banded", "auto", _mumps_param()])
 def test_insufficient_supports_raise_singular_system_error(solver):
     """Translations fixed along x0 only: the rigid rotation about the x0 line stays free."""
     p = Problem(rectangle(L, WIDTH, 16, 1), Material(E, 0.0, H), linear_solver=solver)

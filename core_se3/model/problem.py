@@ -47,7 +47,7 @@ class Problem:
     element : str
         A key of ``core_se3.fem.ELEMENTS`` ('default': exact edge twists; 'seed': the seed's).
     linear_solver : str
-        'auto', 'superlu' or 'mumps' (see ``core_se3.solvers.linalg``).
+        'auto', 'banded', 'superlu' or 'mumps' (see ``core_se3.solvers.linalg``).
     backend : str, optional
         'numba' (compiled kernels) or 'numpy' (the reference); default ``core_se3.backend``'s.
 

@@ -248,7 +248,7 @@ def solver_section(v, doc):
     s["max_cutbacks"] = v.integer(d, "max_cutbacks", key, default=SOLVER_DEFAULTS["max_cutbacks"], lo=0, hi=50)
     s["element"] = v.string(d, "element", key, default="default", choices=tuple(ELEMENTS))
     s["linear_solver"] = v.string(d, "linear_solver", key, default="auto",
-                                  choices=("auto", "mumps", "superlu"))
+                                  choices=("auto", "banded", "mumps", "superlu"))
     s["iteration"] = v.string(d, "iteration", key, default=SOLVER_DEFAULTS["iteration"], choices=ITERATIONS)
     s["predictor"] = v.string(d, "predictor", key, default=SOLVER_DEFAULTS["predictor"], choices=PREDICTORS)
     if s["control"] != "arclength":

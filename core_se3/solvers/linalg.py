@@ -1,11 +1,13 @@
 """Sparse direct solvers for the (non-symmetric) tangent, and the one equilibrated factorisation
 with iterative refinement that every solver uses.
 
+``banded``: LAPACK's banded LU (dgbtrf) in a reverse Cuthill-McKee ordering, for the narrow
+patterns of strips and beams, where SuperLU's set-up costs more than the factorisation.
 ``mumps``: PETSc/MUMPS LU through petsc4py (Debian's python3-petsc4py; with OpenBLAS it was
 the fastest measured here, see ``benchmarks/``).  ``superlu``: SciPy's SuperLU with the
 MMD_AT_PLUS_A ordering and diagonal pivoting on the equilibrated matrix (COLAMD fallback).
-``auto`` picks, per matrix, SuperLU below AUTO_MUMPS_MIN unknowns and MUMPS above (when
-petsc4py imports): measured on this machine with checked_solve (equilibration, refinement,
+``auto`` picks, per pattern, the banded LU while n kl (kl + ku) <= BANDED_MAX_COST, else
+SuperLU below AUTO_MUMPS_MIN unknowns and MUMPS above (when petsc4py imports): measured on this machine with checked_solve (equilibration, refinement,
 backward-error check) SuperLU took 3.3 / 16 ms against MUMPS' 6.4 / 22 ms at 480 / 1583
 unknowns, and MUMPS was faster from ~2500 (26 vs 41 ms) to 13967 unknowns (261 vs 450 ms),
 where PETSc's set-up cost no longer dominates.
@@ -21,12 +23,13 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from ..errors import OptionError, SingularSystemError
+from .direct import (BandedSolver, CsrArrays, MumpsSolver, SuperLUSolver, available_solvers, have_petsc,
+                     mumps_inertia)
 
 __all__ = ["make_solver", "available_solvers", "checked_solve", "Factorization", "AUTO_MUMPS_MIN",
-           "mumps_inertia"]
+           "mumps_inertia", "BandedSolver", "BANDED_MAX_COST"]
 
 
 class Factorization:
@@ -77,7 +80,7 @@ class Factorization:
         # to the solver as bare CSR arrays (no second scipy matrix per factorisation)
         data = K.data * (self.s[rows] * self.s[K.indices])
         self.K = K
-        self.Ks = _CsrArrays(data, K.indices, K.indptr, K.shape)
+        self.Ks = CsrArrays(data, K.indices, K.indptr, K.shape)
         self.knorm = float(np.max(np.add.reduceat(np.abs(data), K.indptr[:-1]))) if len(data) else 0.0
         self._ctx = solver.factor(self.Ks)
         self._solve = self._ctx.__enter__()
@@ -140,18 +143,6 @@ class Factorization:
             self._ctx.__exit__(None, None, None)
 
 
-class _CsrArrays:
-    """The arrays of a CSR matrix (data, indices, indptr, shape) without a scipy object: what
-    the solvers' ``factor`` reads (``tocsr()`` returns itself)."""
-    __slots__ = ("data", "indices", "indptr", "shape")
-
-    def __init__(self, data, indices, indptr, shape):
-        self.data, self.indices, self.indptr, self.shape = data, indices, indptr, tuple(shape)
-
-    def tocsr(self):
-        return self
-
-
 _EPS = np.finfo(float).eps
 _ROWS = {}
 
@@ -204,218 +195,43 @@ def checked_solve(solver, K, b, probe=False):
     return x
 
 
-def _have_petsc():
-    """petsc4py is installed (found without importing it: the import costs ~0.5 s)."""
-    import importlib.util
-    return importlib.util.find_spec("petsc4py") is not None
-
-
-def available_solvers():
-    """The linear solvers this installation has.
-
-    Returns
-    -------
-    list of str
-        'superlu' always, 'mumps' when petsc4py imports.
-
-    Example
-    -------
-    >>> "superlu" in available_solvers()
-    True
-    """
-    return ["superlu"] + (["mumps"] if _have_petsc() else [])
-
-
-class _Factor:
-    """Context manager holding a factorisation; calling it solves for one right-hand side."""
-
-    def __init__(self, solve, release=lambda: None):
-        self._solve, self._release = solve, release
-
-    def __enter__(self):
-        return self._solve
-
-    def __exit__(self, *exc):
-        self._release()
-        return False
-
-
-def _finite(x):
-    if not np.all(np.isfinite(x)):
-        raise SingularSystemError("tangent is singular (non-finite solution)")
-    return x
-
-
-class SuperLUSolver:
-    name = "superlu"
-
-    def factor(self, K):
-        # On the equilibrated tangent (unit diagonal) a diagonal-preferring factorisation with
-        # the symmetric-pattern ordering keeps the fill of a shell matrix small; threshold
-        # pivoting (SciPy's default) inflates it by 10x or more.  Accuracy is guarded by
-        # checked_solve's refinement and backward-error test; COLAMD with partial pivoting is
-        # the fallback when a pivot breaks down.
-        # The CSR arrays of K are the CSC arrays of K^T: factor K^T (no conversion) and solve
-        # with trans="T", i.e. K x = b.
-        if isinstance(K, _CsrArrays) or sp.isspmatrix_csr(K):
-            A, trans = sp.csc_matrix((K.data, K.indices, K.indptr), shape=K.shape[::-1]), "T"
-        else:
-            A, trans = K.tocsc(), "N"
-        try:
-            lu = spla.splu(A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                           options=dict(SymmetricMode=True))
-            x = lu.solve(np.ones(A.shape[0]), trans=trans)
-            if not np.all(np.isfinite(x)):
-                raise RuntimeError("non-finite")
-        except RuntimeError:
-            try:
-                lu = spla.splu(A, permc_spec="COLAMD")
-            except RuntimeError as exc:
-                raise SingularSystemError(f"tangent is singular ({exc})") from None
-        return _Factor(lambda b: _finite(lu.solve(b, trans=trans)))
-
-    def solve(self, K, b):
-        with self.factor(K) as solve:
-            return solve(b)
-
-
-class MumpsSolver:
-    """PETSc/MUMPS LU.  The PETSc matrix and solver are kept from one factorisation to the next
-    while the sparsity pattern stays the same, so MUMPS redoes only the numerical
-    factorisation (its ordering and symbolic analysis are reused)."""
-    name = "mumps"
-
-    def __init__(self):
-        from petsc4py import PETSc
-        self.PETSc = PETSc
-        self._kept = None           # (indptr, indices, A, ksp, x, bb) of the last pattern
-        self._busy = False
-
-    def _objects(self, K):
-        PETSc = self.PETSc
-        kept = self._kept
-        if kept is not None and not self._busy and kept[0].shape == K.indptr.shape and \
-                kept[1].shape == K.indices.shape and np.array_equal(kept[0], K.indptr) and \
-                np.array_equal(kept[1], K.indices):
-            A, ksp = kept[2], kept[3]
-            np.copyto(kept[6], K.data)          # the matrix shares this buffer (no insertion)
-            A.assemble()
-            ksp.setOperators(A)
-            return kept, True
-        if kept is not None and not self._busy:
-            self._destroy(kept)
-        indptr = K.indptr.astype(PETSc.IntType)
-        indices = K.indices.astype(PETSc.IntType)
-        data = np.array(K.data, dtype=PETSc.ScalarType)  # owned here, shared with the matrix
-        A = PETSc.Mat().createAIJWithArrays(K.shape, (indptr, indices, data), comm=PETSc.COMM_SELF)
-        ksp = PETSc.KSP().create(PETSc.COMM_SELF)
-        ksp.setOperators(A)
-        ksp.setType("preonly")
-        pc = ksp.getPC()
-        pc.setType("lu")
-        pc.setFactorSolverType("mumps")
-        ksp.setErrorIfNotConverged(True)
-        objs = (indptr, indices, A, ksp, A.createVecLeft(), A.createVecRight(), data)
-        return objs, False
-
-    @staticmethod
-    def _destroy(objs):
-        for obj in objs[2:6]:
-            obj.destroy()
-
-    def factor(self, K):
-        PETSc = self.PETSc
-        K = K.tocsr()
-        objs, reused = self._objects(K)
-        _, _, A, ksp, x, bb, _ = objs
-        keep = not self._busy
-        try:
-            ksp.setUp()
-        except PETSc.Error as exc:
-            self._destroy(objs)
-            if reused:
-                self._kept = None
-            raise SingularSystemError(f"tangent is singular (MUMPS: {exc})") from None
-        if keep:
-            self._kept, self._busy = objs, True
-
-        def solve(b):
-            bb.setArray(b)
-            try:
-                ksp.solve(bb, x)
-            except PETSc.Error as exc:
-                raise SingularSystemError(f"tangent is singular (MUMPS: {exc})") from None
-            return _finite(x.getArray().copy())
-
-        def release():
-            if keep:
-                self._busy = False
-            else:
-                self._destroy(objs)
-
-        return _Factor(solve, release)
-
-    def solve(self, K, b):
-        with self.factor(K) as solve:
-            return solve(b)
-
-
-def mumps_inertia(K):
-    """(negative, zero, positive) eigenvalue counts of a symmetric sparse matrix K from MUMPS'
-    LDL^T factorisation (Sylvester's law of inertia; PETSc Cholesky with MUMPS, null-pivot
-    detection on).  Needs petsc4py.
-
-    Example
-    -------
-    >>> import numpy as np, scipy.sparse as sp
-    >>> K = sp.diags([-1.0, 2.0, -1.0], [-1, 0, 1], shape=(50, 50)) - 0.1 * sp.eye(50)
-    >>> lam = np.linalg.eigvalsh(K.toarray())            # 2 - 2 cos(k pi / 51) - 0.1: five below 0
-    >>> counts = mumps_inertia(K.tocsr()) if _have_petsc() else (5, 0, 45)
-    >>> counts, (int(np.sum(lam < 0)), 0, int(np.sum(lam > 0)))
-    ((5, 0, 45), (5, 0, 45))
-    """
-    from petsc4py import PETSc
-    K = K.tocsr()
-    A = PETSc.Mat().createAIJ(size=K.shape, csr=(K.indptr.astype(PETSc.IntType), K.indices.astype(PETSc.IntType),
-                                                 K.data), comm=PETSc.COMM_SELF)
-    A.setOption(PETSc.Mat.Option.SYMMETRIC, True)
-    ksp = PETSc.KSP().create(PETSc.COMM_SELF)
-    try:
-        ksp.setOperators(A)
-        ksp.setType("preonly")
-        pc = ksp.getPC()
-        pc.setType("cholesky")
-        pc.setFactorSolverType("mumps")
-        pc.setFactorSetUpSolverType()
-        F = pc.getFactorMatrix()
-        F.setMumpsIcntl(24, 1)                   # null-pivot detection (needed for the counts)
-        F.setMumpsIcntl(13, 1)
-        ksp.setUp()
-        return tuple(int(v) for v in F.getInertia())
-    except PETSc.Error as exc:
-        raise SingularSystemError(f"MUMPS LDL^T failed ({exc})") from None
-    finally:
-        ksp.destroy()
-        A.destroy()
-
-
 AUTO_MUMPS_MIN = 2000   # unknowns from which "auto" uses MUMPS (see the module docstring)
+BANDED_MAX_COST = 5e7   # n kl (kl + ku) up to which "auto" uses the banded LU
+BANDED_MAX_N = 50_000   # beyond this many unknowns "auto" does not look for a band
 
 
 class AutoSolver:
-    """SuperLU for small tangents, MUMPS for large ones (the choice depends on the size only,
-    so a run and its resumption factor the same matrices the same way)."""
+    """The banded LU for narrow patterns (strips, beams: ``BANDED_MAX_COST``), else SuperLU
+    for small tangents and MUMPS for large ones (the choice depends on the pattern only, so a
+    run and its resumption factor the same matrices the same way).
+
+    Measured (``benchmarks/speed.py``, factorisation with refinement): the banded LU is 2.2-2.4x
+    faster than SuperLU on 1-element-wide strips (192-2400 unknowns), 1.4-2x on 20x2-20x6 and
+    10x10 plates (cost 1e6-2e7), even at 16x16 (1.2e8) and 0.6x at 30x30 (1.4e9)."""
     name = "auto"
 
     def __init__(self):
         self._small = SuperLUSolver()
+        self._band = BandedSolver()
         self._large = None            # MUMPS, made (and petsc4py imported) at the first large matrix
 
+    def choice(self, K):
+        """'banded', 'superlu' or 'mumps': the solver this pattern gets."""
+        n = K.shape[0]
+        if n <= BANDED_MAX_N and self._band.layout(K).cost <= BANDED_MAX_COST:
+            return "banded"
+        return "superlu" if n < AUTO_MUMPS_MIN or not have_petsc() else "mumps"
+
     def factor(self, K):
-        if K.shape[0] < AUTO_MUMPS_MIN:
+        if not (isinstance(K, CsrArrays) or sp.isspmatrix_csr(K)):
+            K = K.tocsr()
+        which = self.choice(K)
+        if which == "banded":
+            return self._band.factor(K)
+        if which == "superlu":
             return self._small.factor(K)
         if self._large is None:
-            self._large = MumpsSolver() if _have_petsc() else self._small
+            self._large = MumpsSolver()
         return self._large.factor(K)
 
     def solve(self, K, b):
@@ -424,13 +240,13 @@ class AutoSolver:
 
 
 def make_solver(name="auto"):
-    """The linear solver ``name`` ('auto', 'superlu' or 'mumps').
+    """The linear solver ``name`` ('auto', 'banded', 'superlu' or 'mumps').
 
     Parameters
     ----------
     name : str, optional
-        'auto' (SuperLU below AUTO_MUMPS_MIN unknowns, MUMPS above when available), 'superlu' or
-        'mumps' (needs petsc4py).
+        'auto' (the banded LU for narrow patterns, else SuperLU below AUTO_MUMPS_MIN unknowns and
+        MUMPS above when available), 'banded', 'superlu' or 'mumps' (needs petsc4py).
 
     Returns
     -------
@@ -447,8 +263,10 @@ def make_solver(name="auto"):
         return AutoSolver()
     if name == "superlu":
         return SuperLUSolver()
+    if name == "banded":
+        return BandedSolver()
     if name == "mumps":
-        if not _have_petsc():
+        if not have_petsc():
             raise OptionError("solver 'mumps' needs petsc4py (Debian: python3-petsc4py); use 'superlu'")
         return MumpsSolver()
-    raise OptionError(f"unknown linear solver {name!r}; choose auto, mumps or superlu")
+    raise OptionError(f"unknown linear solver {name!r}; choose auto, banded, mumps or superlu")
