@@ -6,7 +6,10 @@ from core_se3.catalogue.run import build_problem
 
 # name -> load steps; sze-hemisphere in load control (the catalogue traces it by arc length,
 # which the distributed solver does not do; its path has no limit point up to P = 400)
-CASES = {"sze-hemisphere": 10, "magnetic-gripper": 20, "plate-100x100": 1}
+CASES = {"sze-hemisphere": 10, "magnetic-gripper": 20, "plate-100x100": 1,
+         # contact: a cantilever propped by a plane under its tip, the magnetic gripper closing
+         # on a sphere (augmented Lagrangian: Uzawa updates, step caps, every rank's nodes)
+         "contact-propped": 10, "magnetic-gripper-grasp": 20}
 
 
 def build(name):

@@ -20,6 +20,7 @@ def summary(res):
     return dict(iterations=[int(s.iterations) for s in res.steps],
                 lam=[float(s.load_factor) for s in res.steps],
                 probes=[{k: np.asarray(v["u"]).tolist() for k, v in s.probes.items()} for s in res.steps],
+                contact=[{k: np.asarray(v["force"]).tolist() for k, v in (s.contact or {}).items()} for s in res.steps],
                 g=np.asarray(res.final.g).ravel()[::7].tolist())
 
 

@@ -1,9 +1,10 @@
 """The distributed solver (core_se3.parallel, issue 17).
 
 * Two ranks agree with the serial solver (``mpirun -n 2`` in a subprocess): sze-hemisphere (in
-  load control: the catalogue traces it by arc length, which runs serially), magnetic-gripper
-  and a 100x100 plate under follower pressure give the same probes to 1e-10 relative at every
-  step and the same Newton iterations per step; a scenario run interrupted after two steps and
+  load control: the catalogue traces it by arc length, which runs serially), magnetic-gripper,
+  a 100x100 plate under follower pressure, and two contact cases (contact-propped, the
+  gripper grasping a sphere) give the same probes and contact forces to 1e-10 relative at
+  every step and the same Newton iterations per step; a scenario run interrupted after two steps and
   resumed on two ranks ends in the bits of an uninterrupted one.  Skipped without mpi4py,
   petsc4py or mpirun.
 * The decomposition, serially: the ranks' local problems (every load kind) sum to the whole
@@ -23,7 +24,7 @@ import pytest
 
 from core_se3 import Material, Problem, lie, mesh
 from core_se3.errors import ParallelError
-from core_se3.model import Load, LoadEvaluation, UniformField
+from core_se3.model import Load, LoadEvaluation, UniformField, make_obstacle
 from core_se3.parallel import local_problem, partition_elements, rcb, subdomain
 from core_se3.parallel.comm import SerialComm
 from core_se3.parallel.system import rigid_body_modes
@@ -70,6 +71,11 @@ def test_two_ranks_agree_with_serial(two_ranks, name):
             u = np.asarray(v["u"])
             err = np.linalg.norm(np.asarray(par["probes"][k][probe]) - u) / np.linalg.norm(u)
             assert err < 1e-10, (name, k, probe, err)
+        for obstacle, c in (st.contact or {}).items():             # the contact force on each obstacle
+            F = np.asarray(c["force"])                              # (relative to its largest on the path)
+            scale = max(np.linalg.norm(s.contact[obstacle]["force"]) for s in ser.steps[1:])
+            err = np.linalg.norm(np.asarray(par["contact"][k][obstacle]) - F) / scale
+            assert err < 1e-10, (name, k, obstacle, err)
     g = np.asarray(ser.final.g).ravel()[::7]
     assert np.abs(np.asarray(par["g"]) - g).max() < 1e-10 * np.abs(g).max()
 
@@ -123,6 +129,8 @@ def _problem():
     p.add_lab_tilt_support([42], (1.0, 0.0, 0.0), 5.0)
     p.add_rotation_component_support([43], (0.0, 1.0, 0.0), 5.0)
     p.add(_NodalCouple(m.n_nodes, np.linspace(0.0, 1.0, m.n_nodes), (0.0, 0.2, 0.1)))
+    # a sphere 0.002 below the lower face at (1, 0): the random state below presses nodes into it
+    p.add_obstacle(make_obstacle("sphere", centre=(1.0, 0.0, -3.012), radius=3.0))
     return p
 
 
@@ -148,6 +156,8 @@ def test_local_problems_sum_to_the_whole(backend):
         Kl = le.K.tocoo()
         np.add.at(K, (dof[Kl.row], dof[Kl.col]), Kl.data)
     free = p.assembler().free
+    contact = p.loads[-1].evaluate(g, 0.7).f
+    assert np.count_nonzero(np.abs(contact).sum(1)) >= 3           # the contact takes part
     assert np.abs(r_int - ev.r_int).max() < 1e-12 * np.abs(ev.r_int).max()
     assert np.abs(f_ext - ev.f_ext).max() < 1e-12 * np.abs(ev.f_ext).max()
     Kg = ev.K.toarray()

@@ -131,7 +131,7 @@ def _local_material(material, elements):
     return material
 
 
-def local_problem(problem, sub):
+def local_problem(problem, sub, comm=None):
     """The Problem of ``sub``'s elements and nodes: the same element kind and material (per
     element), supports on its nodes, loads localised (``localize``), the global length scale.
 
@@ -141,6 +141,8 @@ def local_problem(problem, sub):
         The whole problem (the same on every rank).
     sub : Subdomain
         This rank's share.
+    comm : mpi4py.MPI.Comm, optional
+        The ranks, for the loads whose solver hooks are collective (contact).
 
     Returns
     -------
@@ -169,7 +171,7 @@ def local_problem(problem, sub):
         if ls is not None:
             loc.supports.append(ls)
     for ld in problem.loads:
-        for part in localize_load(ld, sub):
+        for part in localize_load(ld, sub, comm):
             loc.loads.append(part)
     return loc
 

@@ -6,8 +6,10 @@ nodes this rank owns, so that each acts once when the ranks' forces are summed; 
 (pressure, body force, gravity) keeps this rank's elements, whose nodal parts the sum adds up
 as the serial assembly does.  The magnetisation's nodal dipoles are those of the whole mesh
 (computed once from all magnetised elements), so a node on a rank boundary gets its whole
-dipole.  A load class of one's own takes part by a method ``localized(part)`` returning the
-list of local loads, ``part`` being this module's :class:`LocalView` of the subdomain.
+dipole.  Contact keeps the contact nodes this rank owns (maybe none: every rank takes part in
+its collective solver hooks), see :class:`LocalContact`.  A load class of one's own takes part
+by a method ``localized(part)`` returning the list of local loads, ``part`` being this
+module's :class:`LocalView` of the subdomain.
 """
 from __future__ import annotations
 
@@ -17,9 +19,11 @@ import numpy as np
 
 from ..errors import ParallelError
 from ..model import MagneticLoad, NodalLoad, SurfaceLoad
+from ..model.contact import ContactLoad
 from ..model.supports import LabSpring, LabTiltSpring, Prescribed, RotationComponentSpring
+from .comm import SerialComm
 
-__all__ = ["LocalView", "localize_load", "localize_support"]
+__all__ = ["LocalView", "LocalContact", "localize_load", "localize_support"]
 
 
 class LocalView:
@@ -35,6 +39,8 @@ class LocalView:
         The given nodes on this rank (owned or ghost).
     local_elements(global_elements) -> (positions, local ids)
         The given elements of this rank.
+    comm : mpi4py.MPI.Comm or SerialComm
+        The ranks (for a load whose solver hooks must agree on every rank).
 
     Example
     -------
@@ -46,9 +52,10 @@ class LocalView:
     ([[1, 2], [0, 1]], [[1], [0]])
     """
 
-    def __init__(self, sub):
+    def __init__(self, sub, comm=None):
         self.sub = sub
         self.mesh = sub.mesh
+        self.comm = comm if comm is not None else SerialComm()
 
     def owned_local(self, global_nodes):
         return self.sub.owned_local(global_nodes)
@@ -106,6 +113,72 @@ def _spring(ld, view, arrays):
     return [part]
 
 
+class LocalContact(ContactLoad):
+    """A :class:`~core_se3.model.contact.ContactLoad` on one rank: the contact nodes it owns (each
+    node's force counts once in the sum over the ranks; a rank may own none), with the solver
+    hooks made collective -- the step cap is the smallest of the ranks', a refused start is
+    refused on every rank, the gap error of an Uzawa update is the largest, so that every rank
+    takes the serial decision.  The multipliers are exchanged as whole arrays (``multipliers``
+    returns, ``set_multipliers`` takes, all contact nodes), and after every update the whole
+    problem's load gets them too: the step records and checkpoints are the serial ones.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import Problem, Material, mesh
+    >>> from core_se3.model import make_obstacle
+    >>> from core_se3.parallel.local import subdomain
+    >>> p = Problem(mesh.rectangle(2.0, 1.0, 2, 1), Material(1e4, 0.0, 0.02))
+    >>> c = p.add_obstacle(make_obstacle("half_space", point=(0, 0, -0.5), normal=(0, 0, 1)))
+    >>> s = subdomain(p.mesh, np.array([0, 1]), rank=1, size=2)
+    >>> part = localize_load(c, s)[0]
+    >>> part.nodes.tolist(), part.multipliers().shape                 # owned nodes; all multipliers
+    ([0, 1], (6,))
+    """
+
+    def __init__(self, whole, view):                   # noqa: D107 (the whole load is built already)
+        self.__dict__.update(copy.copy(whole).__dict__)
+        pos, loc = view.owned_local(whole.nodes)
+        self.whole, self.pos, self.comm = whole, pos, view.comm
+        self.n, self.nodes = view.mesh.n_nodes, loc
+        for name in ("A", "side", "c", "k", "lam0", "lam", "_active", "_normals"):
+            setattr(self, name, np.array(getattr(whole, name)[pos]))
+
+    def _publish(self):
+        """Every rank's multipliers and the global gap error into the whole load."""
+        for pos, lam in self.comm.allgather((self.pos, self.lam)):
+            self.whole.lam[pos] = lam
+        self.whole.gap_error = self.gap_error
+
+    def limit_increment(self, g, eta, lam):
+        a = super().limit_increment(g, eta, lam) if len(self.nodes) else 1.0
+        return float(min(self.comm.allgather(a)))
+
+    def start_error(self, g, lam):
+        why = super().start_error(g, lam) if len(self.nodes) else ""
+        return next((w for w in self.comm.allgather(why) if w), "")
+
+    def update_multipliers(self, g, lam):
+        if len(self.nodes):
+            _, d, _, _, p, _ = self.state(g, lam)
+        else:
+            d = p = np.zeros(0)
+        err = np.where(p > 0, np.abs(d), np.maximum(0.0, -d)) if self.mode == "al" else np.maximum(0.0, -d)
+        self.gap_error = float(max(self.comm.allgather(float(err.max()) if len(err) else 0.0)))
+        ratio = self.gap_error / self.tol if self.mode == "al" else 0.0
+        if ratio > 1.0:
+            self.lam = p
+        self._publish()
+        return ratio
+
+    def multipliers(self):
+        return self.whole.lam.copy()
+
+    def set_multipliers(self, lam=None):
+        self.whole.set_multipliers(lam)
+        self.lam = self.whole.lam[self.pos].copy()
+
+
 _RULES = {
     NodalLoad: _nodal,
     SurfaceLoad: _surface,
@@ -113,10 +186,11 @@ _RULES = {
     LabSpring: lambda ld, v: _spring(ld, v, ("D", "P", "X0")),
     LabTiltSpring: lambda ld, v: _spring(ld, v, ("t",)),
     RotationComponentSpring: lambda ld, v: _spring(ld, v, ("R0", "b")),
+    ContactLoad: lambda ld, v: [LocalContact(ld, v)],
 }
 
 
-def localize_load(load, sub):
+def localize_load(load, sub, comm=None):
     """The local loads (a list, maybe empty) of ``load`` on ``sub`` (module docstring).
 
     Parameters
@@ -125,6 +199,8 @@ def localize_load(load, sub):
         A built-in load, or one with a ``localized(part)`` method.
     sub : core_se3.parallel.local.Subdomain
         This rank's share.
+    comm : mpi4py.MPI.Comm, optional
+        The ranks (default a one-rank SerialComm).
 
     Returns
     -------
@@ -143,10 +219,10 @@ def localize_load(load, sub):
     """
     own = getattr(load, "localized", None)
     if callable(own):
-        return list(own(LocalView(sub)))
+        return list(own(LocalView(sub, comm)))
     rule = _RULES.get(type(load))          # the exact class: a subclass may change the equations
     if rule is not None:
-        return rule(load, LocalView(sub))
+        return rule(load, LocalView(sub, comm))
     raise ParallelError(f"load {getattr(load, 'name', '?')!r} ({type(load).__name__}) has no distributed form: "
                         "give its class a localized(part) method (docs/PARALLEL.md) or run serially")
 

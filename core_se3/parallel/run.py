@@ -122,7 +122,7 @@ class DistributedRun:
             part = check_partition(partition, mesh.n_elements, c.size)
         self.part = part
         self.sub = sub = subdomain(mesh, part, c.rank, c.size)
-        self.local = collective(c, local_problem, problem, sub)
+        self.local = collective(c, local_problem, problem, sub, c)
         loc = self.local
         compiled = loc.backend == "numba"
         self.asm = PatternAssembler(loc.mesh, ~loc.constraint_mask().ravel()) if compiled else loc.assembler()
