@@ -320,3 +320,21 @@ def test_rollup_three_turns_lands_on_the_exact_circle():
     assert n_on_grid == 12                               # k = 0.25, 0.5, ..., 3
     tip = res.final.probes["tip"]["u"]
     assert np.linalg.norm(tip - [-L, 0.0, 0.0]) <= 1e-6 * L
+
+
+def test_reference_stiffness_set_up_in_chunks_is_bit_identical(monkeypatch):
+    """The default element builds Dbar = sum_q j0 P^T D P in blocks of elements (the set-up's
+    temporaries stay bounded on big meshes); blocks of 7 elements give the bits of one block, for
+    one law and for a law per element (RegionMaterial.restricted) on a curved mesh."""
+    import core_se3.fem.element_default as ed
+    from core_se3.fem import RegionMaterial
+    m = cylinder_arch(1.0, 1.5, 0.5, 12, 5)
+    mats = [Material(1e4, 0.3, 0.02), Material(2e4, 0.25, 0.03)]
+    for law in (mats[0], RegionMaterial(mats, (np.arange(m.n_elements) % 3 == 0).astype(int))):
+        whole = ed.DefaultElement(m, law)
+        monkeypatch.setattr(ed, "SETUP_CHUNK", 7)
+        blocks = ed.DefaultElement(m, law)
+        monkeypatch.undo()
+        assert m.n_elements > 7
+        for name in ("Dbar", "j0", "Dz0", "area"):
+            assert np.array_equal(getattr(whole, name), getattr(blocks, name)), name

@@ -54,6 +54,7 @@ from .resultants import element_resultants
 __all__ = ["DefaultElement", "edge_twists", "tying_matrices", "MAX_EDGE_ANGLE"]
 
 MAX_EDGE_ANGLE = 0.97 * np.pi   # beyond this the log's cut at pi is too close
+SETUP_CHUNK = 4096              # elements per block of the reference stiffness set-up
 
 
 def tying_matrices(points=GAUSS_2x2):
@@ -177,14 +178,22 @@ class DefaultElement(Element):
         psi0 = edge_twists(mesh.g0, mesh.edge_nodes)
         self.z0 = self._element_z(0.5 * psi0)                          # (m, 24)
         P = tying_matrices()
-        zeta0 = np.einsum("qij,mj->mqi", P, self.z0)                   # (m, 4gp, 12)
-        A1, A2 = zeta0[..., 0:3], zeta0[..., 6:9]
-        Dm, j0 = material.resultant_matrix(A1, A2)                     # (m, 4, 12, 12)
-        self.j0 = j0
-        # Dbar = sum_q j0_q P_q^T D_q P_q, contracted pairwise (a 4-operand einsum is O(24^4 m))
-        DP = np.einsum("mqij,qjb->mqib", Dm * j0[..., None, None], P)
-        self.Dbar = np.einsum("qia,mqib->mab", P, DP)                 # (m, 24, 24)
-        self.area = j0.sum(axis=1)                                     # reference area per element
+        m = len(self.z0)
+        self.Dbar = np.empty((m, 24, 24))
+        self.j0 = np.empty((m, 4))
+        # in chunks of elements: the resultant matrices and products of one element take ~18 kB,
+        # four times its Dbar (a law without ``restricted`` gets all elements at once)
+        step = SETUP_CHUNK if callable(getattr(material, "restricted", None)) else max(m, 1)
+        for s in range(0, m, step):
+            sl = slice(s, min(s + step, m))
+            law = material.restricted(sl) if step < m else material
+            zeta0 = np.einsum("qij,mj->mqi", P, self.z0[sl])               # (k, 4gp, 12)
+            Dm, j0 = law.resultant_matrix(zeta0[..., 0:3], zeta0[..., 6:9])  # (k, 4, 12, 12)
+            self.j0[sl] = j0
+            # Dbar = sum_q j0_q P_q^T D_q P_q, contracted pairwise (a 4-operand einsum is O(24^4 m))
+            DP = np.einsum("mqij,qjb->mqib", Dm * j0[..., None, None], P)
+            self.Dbar[sl] = np.einsum("qia,mqib->mab", P, DP)                # (k, 24, 24)
+        self.area = self.j0.sum(axis=1)                                 # reference area per element
         self.Dz0 = np.einsum("mij,mj->mi", self.Dbar, self.z0)         # constant part of Dbar z
 
     # ----------------------------------------------------------------------------------

@@ -140,6 +140,17 @@ class Material:
         """Membrane stiffness E h / (1 - nu^2)."""
         return self.E * self.h / (1.0 - self.nu ** 2)
 
+    def restricted(self, elements):
+        """The law of some elements: the same (one law for all).
+
+        Example
+        -------
+        >>> m = Material(1.0e3, 0.3, 0.01)
+        >>> m.restricted(slice(0, 5)) is m
+        True
+        """
+        return self
+
     def resultant_matrix(self, A1, A2):
         """12x12 stiffness on (eps_1, eps_2) at points with reference tangents A1, A2 (..., 3).
 
@@ -303,6 +314,18 @@ class RegionMaterial:
     shear_factor = property(lambda self: self._uniform("shear_factor"))
     drilling = property(lambda self: self._uniform("drilling"))
     rho = property(lambda self: self._uniform("rho"))
+
+    def restricted(self, elements):
+        """The law of the elements ``elements`` (a slice or index array) only.
+
+        Example
+        -------
+        >>> import numpy as np
+        >>> r = RegionMaterial([Material(1.0, 0.0, 0.1), Material(2.0, 0.0, 0.1)], np.array([0, 1, 1]))
+        >>> r.restricted(slice(1, 3)).per_element("E").tolist()
+        [2.0, 2.0]
+        """
+        return RegionMaterial(self.materials, self.index[elements])
 
     def resultant_matrix(self, A1, A2):
         """(Dmat, j0) as Material.resultant_matrix, each element (leading axis) with its own law."""
