@@ -221,10 +221,10 @@ def design_run(args):
             print(f"error: {args.scenario} has no [design] section (docs/DESIGN.md)", file=sys.stderr)
             return 2
         r, files = run_design(scn, out=args.out, method=args.method, max_iter=args.max_iter,
-                              progress=not args.quiet)
+                              progress=not args.quiet and launched_rank() == 0)
     except CoreSE3Error as exc:
         return _error_code(exc)
-    if not args.quiet:
+    if not args.quiet and launched_rank() == 0:          # under mpirun: rank 0 reports
         print(f"{scn.name}: {r.message}")
         print(f"  objective {r.objective:.6e} after {r.iterations} iterations, {r.equilibrium_solves} equilibrium "
               f"solves, {r.newton_iterations} Newton iterations, {r.time:.2f} s")

@@ -10,6 +10,8 @@ CASES = {"sze-hemisphere": 10, "magnetic-gripper": 20, "plate-100x100": 1,
          # contact: a cantilever propped by a plane under its tip, the magnetic gripper closing
          # on a sphere (augmented Lagrangian: Uzawa updates, step caps, every rank's nodes)
          "contact-propped": 10, "magnetic-gripper-grasp": 20}
+# designs optimised on two ranks (equilibria and sensitivities distributed) against serially
+DESIGNS = ("design-tip-angle", "design-field-direction")
 
 
 def build(name):

@@ -1,7 +1,7 @@
 """Run by tests/test_parallel.py under ``mpirun -n 2``: the agreement cases with the distributed
 solver, and a scenario run interrupted and resumed; rank 0 writes the outcome as JSON.
 
-    mpirun -n 2 python tests/parallel_driver.py OUT.json [case ...]
+    mpirun -n 2 python tests/parallel_driver.py OUT.json [case ...] [design-...] [resume]
 """
 import json
 import os
@@ -27,7 +27,13 @@ def summary(res):
 def main(out, names):
     comm = world()
     doc = {"ranks": comm.size}
-    for name in [n for n in names if n != "resume"]:
+    for name in [n for n in names if n.startswith("design-")]:      # a design's optimiser on the ranks
+        from core_se3.catalogue import run_case
+        doc_d, _, _ = run_case(name)
+        d = doc_d["design"]
+        doc[name] = dict(variables=d["variables"], max_misfit=d["max_misfit"], reached=d["reached"],
+                         iterations=d["iterations"], equilibrium_solves=d["equilibrium_solves"])
+    for name in [n for n in names if n != "resume" and not n.startswith("design-")]:
         prob, steps, kw = build(name)
         res = prob.solve(steps=steps, **kw)          # dispatches to the distributed solver
         doc[name] = summary(res)

@@ -119,22 +119,38 @@ def solve_flat(problem, variables, xs, lam=1.0, options=None):
                                  time=time.perf_counter() - t0))
 
 
-def _newton(problem, g, lam, opts, solver):
+def _newton(problem, g, lam, opts, solver, run=None):
     """Newton at fixed parameters from g (the load-stepping try of ``solvers.newton_try``,
-    mixed iteration included): (g, iterations) or (None, iterations) on failure."""
+    mixed iteration included): (g, iterations) or (None, iterations) on failure.  With ``run``
+    (a ``parallel.DistributedRun`` of ``problem``) the try runs on the ranks' shares, its loads
+    localised again for the current values of the variables; g in and out is the whole mesh's."""
     nopts = NewtonOptions(rtol=opts.rtol, dtol=opts.dtol, max_iter=opts.max_iter, limit_check=False)
-    trial = NewtonTry(problem, nopts, solver, SimpleNamespace(t_asm=0.0, t_sol=0.0))
+    timer = SimpleNamespace(t_asm=0.0, t_sol=0.0)
+    if run is not None:
+        from ..parallel.newton import DistributedEquations
+        run.relocalize()
+        eq = DistributedEquations(run)
+        trial = NewtonTry(problem, nopts, None, timer, eq)
+        mip = nopts.iteration == "mip" and eq.mixed
+        g_start = eq.local_frames(g)
+    else:
+        eq = None
+        trial = NewtonTry(problem, nopts, solver, timer)
+        mip = nopts.iteration == "mip" and problem.element.mixed and not problem.element.stateful
+        g_start = g.copy()
     trial.first_solve = False                       # a singular tangent fails the try, as any
-    mip = nopts.iteration == "mip" and problem.element.mixed and not problem.element.stateful
     try:
-        stress = problem.evaluate(g, lam, tangent=False).stress if mip else None
+        stress = (eq.stress(g_start, lam) if eq is not None else problem.evaluate(g, lam, tangent=False).stress) \
+            if mip else None
     except (ElementTooDistortedError, FloatingPointError):
         return None, 0
-    out = trial.run(g.copy(), lam, mip, stress)
-    return (out.g if out.ok else None), out.iterations
+    out = trial.run(g_start, lam, mip, stress)
+    if not out.ok:
+        return None, out.iterations
+    return (eq.whole_frames(out.g) if eq is not None else out.g), out.iterations
 
 
-def follow(problem, variables, xs, state, options=None):
+def follow(problem, variables, xs, state, options=None, run=None):
     """Follow the equilibrium of ``state`` to the variables' values xs (module docstring).
 
     Parameters
@@ -149,6 +165,8 @@ def follow(problem, variables, xs, state, options=None):
         The last equilibrium of the pose.
     options : EquilibriumOptions, optional
         The controls.
+    run : core_se3.parallel.DistributedRun, optional
+        Solve on the MPI ranks (a design under mpirun).
 
     Returns
     -------
@@ -177,7 +195,7 @@ def follow(problem, variables, xs, state, options=None):
     while t < 1.0:
         t_try = min(1.0, t + dt)
         assign_all(variables, [a + t_try * (b - a) for a, b in zip(x0, x1)])
-        g_new, k = _newton(problem, g, state.lam, opts, solver)
+        g_new, k = _newton(problem, g, state.lam, opts, solver, run)
         its += k
         subs += 1
         if g_new is not None:

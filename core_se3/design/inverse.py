@@ -74,11 +74,8 @@ class Design:
     """
 
     def __init__(self, problem, variables, poses, regularisation=(), options=None, sensitivity_method="auto"):
-        if launched_ranks() > 1:
-            # every rank would optimise the whole design and write the same files
-            raise ParallelError("a design runs on one process (its equilibria and sensitivities are "
-                                "serial): run it without mpirun (docs/PARALLEL.md, Limits)")
         self.problem, self.variables, self.poses = problem, list(variables), list(poses)
+        self.run = None             # under mpirun: the ranks' share of the problem (``distributed``)
         self.regularisation = list(regularisation)
         self.options = options or EquilibriumOptions()
         self.sensitivity_method = sensitivity_method
@@ -125,6 +122,21 @@ class Design:
         self.solves = self.newton_iterations = self.evaluations = 0
         self._cache = None
 
+    @property
+    def distributed(self):
+        """The ``parallel.DistributedRun`` of the problem when launched among several MPI ranks
+        (built at the first use; None otherwise): every rank takes the same optimiser steps on
+        the same gathered equilibria and sensitivities, the Newton tries and the linear solves of
+        the equilibria and of the sensitivities run on the ranks' shares."""
+        if self.run is None and launched_ranks() > 1:
+            from ..parallel import DistributedRun
+            from .material import MaterialVariable
+            if any(isinstance(v, MaterialVariable) for v in self.all):
+                raise ParallelError("a material variable changes the element, which every rank builds "
+                                    "for its share once: run a design with material variables without mpirun")
+            self.run = DistributedRun(self.problem, linear="mumps")
+        return self.run
+
     # ------------------------------------------------------------------ evaluations --------
     def x_start(self):
         """The variables' starting values (nx,)."""
@@ -163,7 +175,7 @@ class Design:
             else:
                 if all(np.array_equal(a, b) for a, b in zip(st.x, xs)):
                     continue
-                st, info = follow(self.problem, self.pose_variables(k), xs, st, self.options)
+                st, info = follow(self.problem, self.pose_variables(k), xs, st, self.options, self.distributed)
             self.states[k] = st
             self.solves += 1
             self.newton_iterations += info["iterations"]
@@ -207,7 +219,7 @@ class Design:
             act = self._active(k)
             vs = [self.variables[i] for i in act]
             s = sensitivity(self.problem, states[k].g, states[k].lam, [t.quantity for t in pose.targets], vs,
-                            self.sensitivity_method, linear_solver=self.options.linear_solver)
+                            self.sensitivity_method, linear_solver=self.options.linear_solver, run=self.distributed)
             cols = np.concatenate([np.arange(self.nx)[self.slices[i]] for i in act])
             off = 0
             for t in pose.targets:
@@ -252,7 +264,7 @@ class Design:
                 c.append(ct)
             s = sensitivity(self.problem, states[k].g, states[k].lam, [t.quantity for t in pose.targets],
                             [self.variables[i] for i in act], cotangent=np.concatenate(c),
-                            linear_solver=self.options.linear_solver)
+                            linear_solver=self.options.linear_solver, run=self.distributed)
             cols = np.concatenate([np.arange(self.nx)[self.slices[i]] for i in act])
             grad[cols] += s.jacobian[0]
         for r in self.regularisation:

@@ -15,6 +15,7 @@ import numpy as np
 from ..errors import ParallelError
 from .comm import collective, world
 from .local import PatternAssembler, local_problem, subdomain
+from .localize import localize_load
 from .partition import check_partition, partition_elements
 
 __all__ = ["DistributedRun", "GlobalEvaluation", "release_memory"]
@@ -150,6 +151,16 @@ class DistributedRun:
         self.ell = problem.length_scale
         self.n_own = sub.n_owned
         self.mixed = self.local.element.mixed
+
+    def relocalize(self):
+        """Localise the whole problem's loads again: after a change of their values in place (a
+        design's variables), the local parts, which hold copies of the per-node arrays, follow."""
+        self.local.loads[:] = [part for ld in self.problem.loads
+                               for part in localize_load(ld, self.sub, self.comm)]
+
+    def owned_rows(self, whole):
+        """This rank's owned rows (n_own, 6) of a whole-mesh nodal array (n, 6)."""
+        return np.ascontiguousarray(np.asarray(whole, float).reshape(-1, 6)[self.sub.nodes[:self.n_own]])
 
     # ------------------------------------------------------------------ arrays ----------
     def local_frames(self, g):

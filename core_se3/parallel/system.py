@@ -239,10 +239,40 @@ class DistributedSystem:
         self.x.setArray(s * y)
         return self._ghosted(self.x)
 
-    def _apply(self, b, out):
+    def solve_many(self, rhs_owns, transpose=False):
+        """[eta (n_loc, 6)] with K eta = rhs (or K^T eta = rhs) for each rhs_own (n_own, 6) on one
+        factorisation (the design's adjoint and direct sensitivities); the matrix must be
+        assembled.  MUMPS only: the equilibrated S K S (or its transpose, S K^T S) is factored
+        once, each solve refined as :meth:`solve`'s."""
+        if self.linear != "mumps":
+            raise ParallelError("several right-hand sides (design sensitivities) need linear = 'mumps'")
+        PETSc = self.PETSc
+        A = self.K.mat
+        d = A.getDiagonal()
+        sa = np.abs(d.getArray(readonly=True))
+        sa[sa == 0] = 1.0
+        s = 1.0 / np.sqrt(sa)
+        d.destroy()
+        self.s.setArray(s)
+        A.diagonalScale(self.s, self.s)
+        self.ksp.setOperators(A)
+        try:
+            self.ksp.setUp()
+        except PETSc.Error as exc:
+            raise SingularSystemError(f"tangent is singular ({self.linear}: {exc})") from None
+        out = []
+        for rhs in rhs_owns:
+            bs = s * np.where(self.free_own, rhs, 0.0).ravel()
+            self.b.setArray(bs)
+            y = self._refine(A, bs, self._apply(self.b, self.y, transpose), transpose)
+            self.x.setArray(s * y)
+            out.append(self._ghosted(self.x))
+        return out
+
+    def _apply(self, b, out, transpose=False):
         PETSc = self.PETSc
         try:
-            self.ksp.solve(b, out)
+            (self.ksp.solveTranspose if transpose else self.ksp.solve)(b, out)
         except PETSc.Error as exc:
             raise SingularSystemError(f"tangent is singular ({self.linear}: {exc})") from None
         reason = self.ksp.getConvergedReason()
@@ -257,16 +287,16 @@ class DistributedSystem:
             raise SingularSystemError("tangent is singular (non-finite solution)")
         return y
 
-    def _refine(self, A, bs, y):
+    def _refine(self, A, bs, y, transpose=False):
         """Two steps of iterative refinement with the backward-error test (as the serial
-        Factorization), on the equilibrated system."""
+        Factorization), on the equilibrated system (or its transpose)."""
         PETSc = self.PETSc
-        knorm = A.norm(PETSc.NormType.NORM_INFINITY)
+        knorm = A.norm(PETSc.NormType.NORM_1 if transpose else PETSc.NormType.NORM_INFINITY)
         nb = np.sqrt(self.allsum(float(bs @ bs))[0])
 
         def berr(y):
             self.y.setArray(y)
-            A.mult(self.y, self.x)
+            (A.multTranspose if transpose else A.mult)(self.y, self.x)
             rs = bs - self.x.getArray(readonly=True)
             sq = self.allsum(float(rs @ rs), float(y @ y))
             return rs, np.sqrt(sq[0]) / (knorm * np.sqrt(sq[1]) + nb + 1e-300)
@@ -276,7 +306,7 @@ class DistributedSystem:
             if not np.isfinite(e) or e <= 4 * _EPS:
                 break
             self.b.setArray(rs)
-            y2 = y + self._apply(self.b, self.y)
+            y2 = y + self._apply(self.b, self.y, transpose)
             rs2, e2 = berr(y2)
             if not e2 < e:
                 break

@@ -130,11 +130,14 @@ def run_design(scn, out=None, method=None, max_iter=None, progress=False, vtu=Tr
     >>> callable(run_design)
     True
     """
+    from ..backend import launched_rank
     from ..io import write_series
     from .runner import point_fields
     ds = scn.spec["design"]
     out = os.fspath(out or scn.output["dir"] or os.path.join("out", scn.name + "-design"))
-    os.makedirs(out, exist_ok=True)
+    root = launched_rank() == 0          # under mpirun every rank optimises the same design, rank 0 writes
+    if root:
+        os.makedirs(out, exist_ok=True)
     design = scn.design()
     r = design.optimise(method or ds["method"], max_iter=max_iter or ds["max_iter"], tol=ds["tol"],
                         tolerance=ds["tolerance"], progress=progress, stop_at_tolerance=ds["stop_at_tolerance"])
@@ -156,27 +159,31 @@ def run_design(scn, out=None, method=None, max_iter=None, progress=False, vtu=Tr
         poses_doc.append(dict(name=pose.name, lam=pose.lam, targets=rows))
         suffix = "" if len(design.poses) == 1 else f"_{pose.name}"
         path = os.path.join(out, f"optimised{suffix}.toml")
-        with atomic_path(path) as tmp, open(tmp, "w") as fh:
-            fh.write(f"# written by core-se3 design from {scn.file}: pose {pose.name!r}\n")
-            fh.write(dumps(optimised_document(scn, design, r, k)))
+        if root:
+            with atomic_path(path) as tmp, open(tmp, "w") as fh:
+                fh.write(f"# written by core-se3 design from {scn.file}: pose {pose.name!r}\n")
+                fh.write(dumps(optimised_document(scn, design, r, k)))
         files[f"scenario{suffix}"] = path
-        if plots:
+        if plots and root:
             files[f"target{suffix}"] = _target_plot(os.path.join(out, f"target{suffix or '_' + pose.name}.png"),
                                                     scn.mesh, st.g, tg, ach,
                                                     f"{scn.name}: pose {pose.name} (x target, o achieved)")
         if vtu:
             design.assign_pose(k, r.x)
-            res = scn.problem.solve(lam_end=pose.lam)
+            res = scn.problem.solve(lam_end=pose.lam)          # (collective under mpirun)
+            if not root:
+                continue
             extra = [point_fields(scn.problem, s.g, s.load_factor) for s in res.steps]
             paths = write_series(os.path.join(out, "vtu", pose.name), scn.mesh.X, scn.mesh.quads, scn.mesh.g0,
                                  [s.g for s in res.steps], [s.load_factor for s in res.steps],
                                  point_data_per_step=extra)
             files[f"vtu_{pose.name}"] = paths[-1]
-    if plots and r.history:
+    if plots and r.history and root:
         files["convergence"] = _convergence_plot(os.path.join(out, "convergence.png"), r.history,
                                                  f"{scn.name}: {r.method}")
     doc = dict(schema="core-se3-design v1", scenario=scn.file, name=scn.name, result=r.document(), poses=poses_doc,
                files={k: os.path.relpath(v, out) for k, v in files.items()})
     files["design"] = os.path.join(out, "design.json")
-    write_json_atomic(files["design"], doc)
+    if root:
+        write_json_atomic(files["design"], doc)
     return r, files
