@@ -110,16 +110,6 @@ def _explicit(problem, g, lam, quantities, variables):
     return np.block(blocks)
 
 
-def _distributed_solves(run, g, lam, rhs, transpose):
-    """Solutions (k, n, 6) of K x = b (or K^T x = b) for whole-mesh right-hand sides rhs (k, n, 6)
-    on the ranks of ``run`` (the tangent at (g, lam), one MUMPS factorisation), gathered."""
-    run.relocalize()
-    g_loc = run.local_frames(g)
-    run.evaluate(g_loc, lam, tangent=True)
-    sols = run.system.solve_many([run.owned_rows(b) for b in rhs], transpose=transpose)
-    return np.stack([run.gather(x[:run.n_own]) for x in sols]) if len(sols) else np.zeros((0,) + g.shape[:1] + (6,))
-
-
 def sensitivity(problem, g, lam, quantities, variables, method="auto", cotangent=None, linear_solver=None,
                 evaluation=None, run=None):
     """Total derivatives of ``quantities`` by ``variables`` at the equilibrium (g, lam).
@@ -169,42 +159,10 @@ def sensitivity(problem, g, lam, quantities, variables, method="auto", cotangent
     """
     if method not in ("auto", "adjoint", "direct"):
         raise DesignError(f"sensitivity method must be 'auto', 'adjoint' or 'direct', got {method!r}")
-    asm = problem.assembler()
-    free = asm.free
-    if run is not None:
-        return _sensitivity_distributed(problem, g, lam, quantities, variables, method, cotangent, run)
-    ev = evaluation if evaluation is not None and evaluation.K is not None else problem.evaluate(g, lam, tangent=True)
-    vals, Q = quantity_jacobian(problem, g, lam, quantities)
-    Qf = Q[:, np.nonzero(free)[0]]
-    labels = [lab for v in variables for lab in v.labels]
-    nx = len(labels)
-    E = _explicit(problem, g, lam, quantities, variables)
-    solver = make_solver(linear_solver or problem.linear_solver)
-    if cotangent is not None:
-        c = np.asarray(cotangent, float)
-        with Factorization(ev.K.T.tocsr(), solver) as F:
-            mu = asm.scatter(F.solve(Qf.T @ c))
-        row = c @ E - np.concatenate([v.vjp(problem, g, lam, mu) for v in variables]) if variables else np.zeros(0)
-        return Sensitivity(vals, row[None, :], "adjoint", 1, labels)
-    nq = len(vals)
-    if method == "auto":
-        method = "adjoint" if nq <= nx else "direct"
-    if method == "adjoint":
-        with Factorization(ev.K.T.tocsr(), solver) as F:
-            mus = np.stack([asm.scatter(F.solve(Qf[k].toarray().ravel())) for k in range(nq)])   # (nq, n, 6)
-        jac = E - np.concatenate([v.vjp(problem, g, lam, mus) for v in variables], 1) if variables else E
-        return Sensitivity(vals, jac, "adjoint", nq, labels)
-    Rp = residual_derivative(problem, g, lam, variables)
-    with Factorization(ev.K, solver) as F:
-        S = np.stack([F.solve(-Rp[:, j]) for j in range(nx)], 1) if nx else np.zeros((int(free.sum()), 0))
-    return Sensitivity(vals, E + Qf @ S, "direct", nx, labels)
-
-
-def _sensitivity_distributed(problem, g, lam, quantities, variables, method, cotangent, run):
-    """:func:`sensitivity` with the linear solves on the ranks of ``run``; the same equations,
-    the right-hand sides and solutions as whole-mesh nodal arrays (zero on held dofs)."""
     free = problem.assembler().free
     n = problem.mesh.n_nodes
+    solves = _distributed_solver(run, g, lam) if run is not None else \
+        _serial_solver(problem, g, lam, evaluation, linear_solver)
     vals, Q = quantity_jacobian(problem, g, lam, quantities)
     Qh = (Q @ sp.diags(free.astype(float))).tocsr()         # dq/d eta on the free dofs
     labels = [lab for v in variables for lab in v.labels]
@@ -212,18 +170,45 @@ def _sensitivity_distributed(problem, g, lam, quantities, variables, method, cot
     E = _explicit(problem, g, lam, quantities, variables)
     if cotangent is not None:
         c = np.asarray(cotangent, float)
-        mu = _distributed_solves(run, g, lam, [(Qh.T @ c).reshape(n, 6)], transpose=True)[0]
+        mu = solves([(Qh.T @ c).reshape(n, 6)], True)[0]
         row = c @ E - np.concatenate([v.vjp(problem, g, lam, mu) for v in variables]) if variables else np.zeros(0)
         return Sensitivity(vals, row[None, :], "adjoint", 1, labels)
     nq = len(vals)
     if method == "auto":
         method = "adjoint" if nq <= nx else "direct"
     if method == "adjoint":
-        mus = _distributed_solves(run, g, lam, [Qh[k].toarray().reshape(n, 6) for k in range(nq)], transpose=True)
+        mus = solves([Qh[k].toarray().reshape(n, 6) for k in range(nq)], True)          # (nq, n, 6)
         jac = E - np.concatenate([v.vjp(problem, g, lam, mus) for v in variables], 1) if variables else E
         return Sensitivity(vals, jac, "adjoint", nq, labels)
     Rp = np.concatenate([v.dr_dp(problem, g, lam).reshape(n, 6, v.size) for v in variables], 2) if variables \
         else np.zeros((n, 6, 0))
-    Rp = Rp * free.reshape(n, 6)[:, :, None]
-    S = _distributed_solves(run, g, lam, [-Rp[:, :, j] for j in range(nx)], transpose=False)   # (nx, n, 6)
+    S = solves([-Rp[:, :, j] for j in range(nx)], False)                                   # (nx, n, 6)
     return Sensitivity(vals, E + Qh @ S.reshape(nx, -1).T, "direct", nx, labels)
+
+
+def _serial_solver(problem, g, lam, evaluation, linear_solver):
+    """solves(rhs, transpose): K x = b (or K^T x = b) for nodal right-hand sides b (n, 6) on one
+    factorisation of the free tangent at (g, lam); the solutions (k, n, 6), zero on held dofs."""
+    asm = problem.assembler()
+    ev = evaluation if evaluation is not None and evaluation.K is not None else problem.evaluate(g, lam, tangent=True)
+    solver = make_solver(linear_solver or problem.linear_solver)
+
+    def solves(rhs, transpose):
+        if not rhs:
+            return np.zeros((0, problem.mesh.n_nodes, 6))
+        with Factorization(ev.K.T.tocsr() if transpose else ev.K, solver) as F:
+            return np.stack([asm.scatter(F.solve(np.asarray(b).ravel()[asm.free])) for b in rhs])
+    return solves
+
+
+def _distributed_solver(run, g, lam):
+    """:func:`_serial_solver`'s solves on the ranks of ``run`` (one MUMPS factorisation of the
+    tangent at (g, lam), the loads localised for the variables' current values), gathered."""
+    def solves(rhs, transpose):
+        if not rhs:
+            return np.zeros((0, len(g), 6))
+        run.relocalize()
+        run.evaluate(run.local_frames(g), lam, tangent=True)
+        sols = run.system.solve_many([run.owned_rows(b) for b in rhs], transpose=transpose)
+        return np.stack([run.gather(x[:run.n_own]) for x in sols])
+    return solves

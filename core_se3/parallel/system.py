@@ -207,11 +207,10 @@ class DistributedSystem:
         """A view of the COO values that the local evaluation may write its CSR data into."""
         return self.values[:self.nnz_local]
 
-    def solve(self, rhs_own, g_loc=None, ell=1.0, probe=False):
-        """eta (n_loc, 6) with K eta = rhs on the free dofs (rhs_own (n_own, 6), zero on held
-        dofs), ghosts updated; the matrix must be assembled.  g_loc (the current local frames)
-        gives the multigrid's near-null space.  SingularSystemError for a (near-)singular
-        tangent, LinearSolverError when an iterative solver fails."""
+    def _factor(self, g_loc=None, ell=1.0):
+        """The symmetric equilibration S K S of the assembled tangent in place (S = |diag K|^-1/2),
+        the multigrid's near-null space (g_loc: the local frames), the KSP set up; returns
+        (the matrix, the diagonal of S).  SingularSystemError when the factorisation fails."""
         PETSc = self.PETSc
         A = self.K.mat
         d = A.getDiagonal()
@@ -221,8 +220,6 @@ class DistributedSystem:
         d.destroy()
         self.s.setArray(s)
         A.diagonalScale(self.s, self.s)                                   # S K S in place
-        bs = (s * np.where(self.free_own, rhs_own, 0.0).ravel())
-        self.b.setArray(bs)
         if self.linear != "mumps" and g_loc is not None:
             self._near_null(g_loc, ell)
         self.ksp.setOperators(A)
@@ -230,6 +227,16 @@ class DistributedSystem:
             self.ksp.setUp()
         except PETSc.Error as exc:
             raise SingularSystemError(f"tangent is singular ({self.linear}: {exc})") from None
+        return A, s
+
+    def solve(self, rhs_own, g_loc=None, ell=1.0, probe=False):
+        """eta (n_loc, 6) with K eta = rhs on the free dofs (rhs_own (n_own, 6), zero on held
+        dofs), ghosts updated; the matrix must be assembled.  g_loc (the current local frames)
+        gives the multigrid's near-null space.  SingularSystemError for a (near-)singular
+        tangent, LinearSolverError when an iterative solver fails."""
+        A, s = self._factor(g_loc, ell)
+        bs = (s * np.where(self.free_own, rhs_own, 0.0).ravel())
+        self.b.setArray(bs)
         y = self._apply(self.b, self.y)
         if self.linear == "mumps":
             y = self._refine(A, bs, y)
@@ -246,20 +253,7 @@ class DistributedSystem:
         once, each solve refined as :meth:`solve`'s."""
         if self.linear != "mumps":
             raise ParallelError("several right-hand sides (design sensitivities) need linear = 'mumps'")
-        PETSc = self.PETSc
-        A = self.K.mat
-        d = A.getDiagonal()
-        sa = np.abs(d.getArray(readonly=True))
-        sa[sa == 0] = 1.0
-        s = 1.0 / np.sqrt(sa)
-        d.destroy()
-        self.s.setArray(s)
-        A.diagonalScale(self.s, self.s)
-        self.ksp.setOperators(A)
-        try:
-            self.ksp.setUp()
-        except PETSc.Error as exc:
-            raise SingularSystemError(f"tangent is singular ({self.linear}: {exc})") from None
+        A, s = self._factor()
         out = []
         for rhs in rhs_owns:
             bs = s * np.where(self.free_own, rhs, 0.0).ravel()
