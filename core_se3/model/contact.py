@@ -330,6 +330,8 @@ class ContactLoad(Load):
         obstacle (a moving obstacle that swept into the shell over the increment: from there the
         node may be pushed out on the far side, tunnelling); the solver cuts the increment back."""
         d = self.gaps(g, lam)
+        if not len(d):                    # no contact node here (a rank's part of the load)
+            return ""
         i = int(np.argmin(d))
         if d[i] < -self.h:
             return (f"obstacle {self.name!r} starts the increment {-d[i]:.3g} inside the shell at node "
@@ -341,14 +343,25 @@ class ContactLoad(Load):
         the others) over ``tol``; when it exceeds 1 (mode 'al') the multipliers are updated,
         lam_i <- p_i(d_i) (Uzawa), and the solver solves the same load factor again."""
         _, d, _, _, p, _ = self.state(g, lam)
-        err = np.where(p > 0, np.abs(d), np.maximum(0.0, -d))
-        self.gap_error = float(err.max()) if self.mode == "al" else float(np.maximum(0.0, -d).max())
+        err = np.where(p > 0, np.abs(d), np.maximum(0.0, -d)) if self.mode == "al" else np.maximum(0.0, -d)
+        self.gap_error = float(self.largest(float(err.max(initial=0.0))))
         if self.mode != "al":
             return 0.0
         ratio = self.gap_error / self.tol
         if ratio > 1.0:
             self.lam = p
         return ratio
+
+    def largest(self, value):
+        """The largest of ``value`` over the processes that share this load: the value itself
+        (a rank's part under mpirun, ``parallel.localize.LocalContact``, takes it over the ranks).
+
+        Example
+        -------
+        >>> ContactLoad.largest(None, 2.5)
+        2.5
+        """
+        return value
 
     def multipliers(self):
         """A copy of the multipliers (k,) [force/length^2] (a restart point keeps them)."""

@@ -151,23 +151,16 @@ class LocalContact(ContactLoad):
         self.whole.gap_error = self.gap_error
 
     def limit_increment(self, g, eta, lam):
-        a = super().limit_increment(g, eta, lam) if len(self.nodes) else 1.0
-        return float(min(self.comm.allgather(a)))
+        return float(min(self.comm.allgather(super().limit_increment(g, eta, lam))))
 
     def start_error(self, g, lam):
-        why = super().start_error(g, lam) if len(self.nodes) else ""
-        return next((w for w in self.comm.allgather(why) if w), "")
+        return next((w for w in self.comm.allgather(super().start_error(g, lam)) if w), "")
+
+    def largest(self, value):
+        return max(self.comm.allgather(value))
 
     def update_multipliers(self, g, lam):
-        if len(self.nodes):
-            _, d, _, _, p, _ = self.state(g, lam)
-        else:
-            d = p = np.zeros(0)
-        err = np.where(p > 0, np.abs(d), np.maximum(0.0, -d)) if self.mode == "al" else np.maximum(0.0, -d)
-        self.gap_error = float(max(self.comm.allgather(float(err.max()) if len(err) else 0.0)))
-        ratio = self.gap_error / self.tol if self.mode == "al" else 0.0
-        if ratio > 1.0:
-            self.lam = p
+        ratio = super().update_multipliers(g, lam)        # the decision on the largest gap error
         self._publish()
         return ratio
 
