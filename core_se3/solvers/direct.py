@@ -118,10 +118,7 @@ class _BandLayout:
         self.indptr, self.indices, self.n = indptr, indices, int(n)
         pattern = sp.csr_matrix((np.ones(len(indices)), indices, indptr), shape=(n, n))
         self.perm = np.asarray(reverse_cuthill_mckee(pattern, symmetric_mode=False), np.int64)
-        iperm = np.empty(n, np.int64)
-        iperm[self.perm] = np.arange(n)
-        r = iperm[np.repeat(np.arange(n), np.diff(indptr))]
-        c = iperm[np.asarray(indices, np.int64)]
+        r, c = self._rows_cols()
         self.kl = int(max(np.max(r - c), 0)) if len(c) else 0
         self.ku = int(max(np.max(c - r), 0)) if len(c) else 0
         self.ldab = 2 * self.kl + self.ku + 1
@@ -130,11 +127,23 @@ class _BandLayout:
         self._rc = (r, c)
         self._flat = None
 
+    def _rows_cols(self):
+        """(row, column) of every stored entry in the permuted numbering."""
+        iperm = np.empty(self.n, np.int64)
+        iperm[self.perm] = np.arange(self.n)
+        return (iperm[np.repeat(np.arange(self.n), np.diff(self.indptr))],
+                iperm[np.asarray(self.indices, np.int64)])
+
+    def release(self):
+        """Drop the per-entry arrays (a pattern too wide to be factored banded: ``auto`` keeps
+        only its verdict); ``flat`` builds them again if asked."""
+        self._rc = self._flat = None
+
     @property
     def flat(self):
         """Flat Fortran-order position in ab of every stored entry (built at the first use)."""
         if self._flat is None:
-            r, c = self._rc
+            r, c = self._rc if self._rc is not None else self._rows_cols()
             self._flat = (self.kl + self.ku + r - c) + self.ldab * c
             self._rc = None
         return self._flat

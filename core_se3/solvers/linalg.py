@@ -218,8 +218,11 @@ class AutoSolver:
     def choice(self, K):
         """'banded', 'superlu' or 'mumps': the solver this pattern gets."""
         n = K.shape[0]
-        if n <= BANDED_MAX_N and self._band.layout(K).cost <= BANDED_MAX_COST:
-            return "banded"
+        if n <= BANDED_MAX_N:
+            lay = self._band.layout(K)
+            if lay.cost <= BANDED_MAX_COST:
+                return "banded"
+            lay.release()                      # a wide pattern keeps only its verdict
         return "superlu" if n < AUTO_MUMPS_MIN or not have_petsc() else "mumps"
 
     def factor(self, K):
