@@ -84,8 +84,8 @@ def mutated_docs(draw):
                 parent[draw(st.text(min_size=1, max_size=6))] = draw(values)
             else:
                 parent.append(draw(values))
-        except (KeyError, IndexError, TypeError):
-            pass                                      # an earlier mutation removed the path
+        except (KeyError, IndexError, TypeError, AttributeError):
+            pass                                      # an earlier mutation removed the path (or made it None)
     return _strip_none(doc)
 
 
