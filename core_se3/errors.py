@@ -261,6 +261,12 @@ class ElementTooDistortedError(CoreSE3Error):
     """
 
 
+def _located(message, file=None, key=None):
+    """``file: [key]: message`` (the parts present) for errors and warnings about an input file."""
+    where = ": ".join(x for x in (file, f"[{key}]" if key else None) if x)
+    return f"{where}: {message}" if where else message
+
+
 class ScenarioError(CoreSE3Error, ValueError):
     """An invalid scenario file: ``file`` and dotted ``key`` name where, the message what was
     expected and what was found.
@@ -289,11 +295,8 @@ class ScenarioError(CoreSE3Error, ValueError):
     """
 
     def __init__(self, message, file=None, key=None):
-        self.file = file
-        self.key = key
-        where = ": ".join(x for x in (file, f"[{key}]" if key else None) if x)
-        super().__init__(f"{where}: {message}" if where else message)
-        self.detail = message
+        self.file, self.key, self.detail = file, key, message
+        super().__init__(_located(message, file, key))
 
 
 class CheckpointError(CoreSE3Error):
@@ -359,11 +362,8 @@ class ScenarioWarning(UserWarning):
     """
 
     def __init__(self, message, file=None, key=None):
-        self.file = file
-        self.key = key
-        where = ": ".join(x for x in (file, f"[{key}]" if key else None) if x)
-        super().__init__(f"{where}: {message}" if where else message)
-        self.detail = message
+        self.file, self.key, self.detail = file, key, message
+        super().__init__(_located(message, file, key))
 
 
 class ParallelError(CoreSE3Error, ValueError):

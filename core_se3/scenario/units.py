@@ -227,6 +227,13 @@ def _br_magnitude(m, mesh):
     return float(m.get("Br_max", 0.0))
 
 
+def _density_message(rho, rho_si, u, units):
+    """The warning for a density rho [the system's unit] of rho_si kg/m^3 outside real solids'."""
+    si = '' if u['to_kg_m3'] == 1 else f' = {rho_si:.3g} kg/m^3'
+    return (f"rho = {rho:g} {u['density']}{si} is outside the densities of real solids (1 to 25 000 kg/m^3): "
+            f"in {units} the density is in {u['density']} (water {1000 / u['to_kg_m3']:g})")
+
+
 def plausibility(v, scn):
     """Warn (``v.warn``, errors with strict) about implausible values: see docs/SCENARIOS.md."""
     spec, units = scn.spec, scn.spec["units"]
@@ -244,17 +251,12 @@ def plausibility(v, scn):
             if mat.get("rho") is not None:
                 r = mat["rho"] * u["to_kg_m3"]
                 if mat["rho"] > 0 and not RHO_RANGE[0] <= r <= RHO_RANGE[1]:
-                    v.warn(f"{key}.rho", f"rho = {mat['rho']:g} {u['density']}{'' if u['to_kg_m3'] == 1 else f' = {r:.3g} kg/m^3'} is outside the "
-                                         f"densities of real solids (1 to 25 000 kg/m^3): in {units} the density "
-                                         f"is in {u['density']} (water {1000 / u['to_kg_m3']:g})")
+                    v.warn(f"{key}.rho", _density_message(mat["rho"], r, u, units))
         for i, ld in enumerate(spec["loads"]):
             if ld["type"] == "gravity" and ld.get("rho") is not None:
                 r = ld["rho"] * u["to_kg_m3"]
                 if not RHO_RANGE[0] <= r <= RHO_RANGE[1]:
-                    v.warn(f"loads[{i}].rho", f"rho = {ld['rho']:g} {u['density']}"
-                                              f"{'' if u['to_kg_m3'] == 1 else f' = {r:.3g} kg/m^3'} is outside the "
-                                              f"densities of real solids (1 to 25 000 kg/m^3): in {units} the density "
-                                              f"is in {u['density']} (water {1000 / u['to_kg_m3']:g})")
+                    v.warn(f"loads[{i}].rho", _density_message(ld["rho"], r, u, units))
             if ld["type"] == "gravity":
                 gmag = float(np.linalg.norm(ld["g"]))
                 if gmag and not 0.01 <= gmag / u["g"] <= 100:
