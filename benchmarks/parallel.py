@@ -13,7 +13,9 @@ follower pressure (the default element, mixed iteration):
   MUMPS solve (equilibration, factorisation, refinement, ghost update), and one whole Newton
   iteration (assembly, solve, exponential update with ghost frames, linear stress update);
   the peak resident memory of every rank;
-* ``solve``: one load step to convergence with an iterative solver (GAMG), time and memory;
+* ``solve``: one load step to convergence with an iterative solver (GAMG), time and memory
+  (``large N ...``: 2 ranks at L/h = 10 with GMRES(30); ``large1 N ...``: the same on one rank,
+  whose PETSc matrix shares the kernels' CSR, with two numba threads);
 * ``gamg``: GAMG's Krylov iterations per Newton iteration against L/h and the mesh.
 
 The results go to benchmarks/results/parallel.json; ``report`` writes parallel.md.
@@ -111,16 +113,17 @@ def worker_solve(n, linear="gamg", h=0.01, opts=None):
                     L_over_h=1.0 / h, wall=time.perf_counter() - t, error=str(exc)[:300], newton=None, krylov=None,
                     memory=comm.allgather(__import__("resource").getrusage(0).ru_maxrss * 1024.0))
     wall = time.perf_counter() - t
+    import numba
     return dict(kind="solve", n=n, elements=n * n, dofs=6 * (n + 1) ** 2, ranks=comm.size, linear=linear,
-                L_over_h=1.0 / h, wall=wall, large=bool(opts), options=opts or {}, newton=[s.iterations for s in res.steps][1:],
+                threads=numba.get_num_threads(), L_over_h=1.0 / h, wall=wall, large=bool(opts), options=opts or {}, newton=[s.iterations for s in res.steps][1:],
                 krylov=res.parallel["linear_iterations"], memory=res.parallel["memory_peak"],
                 timings={k: v for k, v in res.timings.items()},
                 tip=np.asarray(res.final.probes["tip"]["u"]).tolist())
 
 
-def launch(ranks, *args, timeout=3600):
+def launch(ranks, *args, timeout=3600, threads=1):
     env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OMP_NUM_THREADS="1",
-               NUMBA_NUM_THREADS="1", PYTHONPATH=ROOT + os.pathsep + os.environ.get("PYTHONPATH", ""))
+               NUMBA_NUM_THREADS=str(threads), PYTHONPATH=ROOT + os.pathsep + os.environ.get("PYTHONPATH", ""))
     tmp = os.path.join(HERE, "results", f".parallel-{os.getpid()}.json")
     cmd = ["mpirun", "-n", str(ranks), "-x", "PYTHONPATH", "-x", "OMP_NUM_THREADS", "-x", "NUMBA_NUM_THREADS",
            sys.executable, os.path.abspath(__file__), "worker", tmp, *map(str, args)]
@@ -169,9 +172,18 @@ def run_all(which):
     if "hypre" in which:                  # BoomerAMG on the same plates (docs/PARALLEL.md)
         for n, Lh in [(50, 10), (50, 100), (50, 1000), (100, 10), (100, 100)]:
             record(doc, launch(2, "solve", n, "hypre", 1.0 / Lh))
-    if "large" in which:                  # L/h = 10 (GAMG's robust range), GMRES(30): memory
-        for n in [int(a) for a in which[which.index("large") + 1:]] or [1000]:
-            record(doc, launch(2, "solve", n, "gamg", 0.1, "ksp_gmres_restart=30", timeout=7200))
+    for mode, ranks, threads in (("large", 2, 1), ("large1", 1, 2)):
+        # L/h = 10 (GAMG's robust range), GMRES(30): memory. large1: one rank (PETSc's matrix shares
+        # the kernels' CSR: the leanest layout) with two numba threads for the element kernels
+        if mode in which:
+            args = []
+            for a in which[which.index(mode) + 1:]:
+                if not a.isdigit():
+                    break
+                args.append(int(a))
+            for n in args or [1000]:
+                record(doc, launch(ranks, "solve", n, "gamg", 0.1, "ksp_gmres_restart=30", timeout=7200,
+                                   threads=threads))
 
 
 def report():
@@ -195,11 +207,12 @@ def report():
         L.append("")
     sv = sorted([r for r in runs if r["kind"] == "solve"], key=lambda r: (r["n"], r["L_over_h"]))
     if sv:
-        L += ["## One load step to convergence with an iterative solver (2 ranks)", "",
-              "| solver | elements | dofs | L/h | Newton iterations | Krylov iterations per Newton iteration | "
-              "wall [s] | peak memory per rank [GB] | memory per dof [kB] |", "|---|---|---|---|---|---|---|---|---|"]
-        for r in sorted(sv, key=lambda r: (r.get("linear", "gamg"), r["n"], r["L_over_h"])):
-            head = f"| {r.get('linear', 'gamg')} | {r['elements']:,} | {r['dofs']:,} | {r['L_over_h']:g} |"
+        L += ["## One load step to convergence with an iterative solver", "",
+              "| solver | ranks | elements | dofs | L/h | Newton iterations | Krylov iterations per Newton iteration | "
+              "wall [s] | peak memory per rank [GB] | memory per dof [kB] |", "|---|---|---|---|---|---|---|---|---|---|"]
+        for r in sorted(sv, key=lambda r: (r.get("linear", "gamg"), r["n"], r["L_over_h"], r["ranks"])):
+            head = (f"| {r.get('linear', 'gamg')} | {r['ranks']} | {r['elements']:,} | {r['dofs']:,} | "
+                    f"{r['L_over_h']:g} |")
             if r.get("error"):
                 L.append(f"{head} failed | {r['error'][:120]} | {r['wall']:.1f} | | |")
                 continue

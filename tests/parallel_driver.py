@@ -1,5 +1,5 @@
-"""Run by tests/test_parallel.py under ``mpirun -n 2``: the agreement cases with the distributed
-solver, and a scenario run interrupted and resumed; rank 0 writes the outcome as JSON.
+"""Run by tests/test_parallel.py under ``mpirun -n 2`` (and ``-n 1``): the agreement cases with the
+distributed solver, and a scenario run interrupted and resumed; rank 0 writes the outcome as JSON.
 
     mpirun -n 2 python tests/parallel_driver.py OUT.json [case ...] [design-...] [resume]
 """
@@ -35,6 +35,8 @@ def main(out, names):
                          iterations=d["iterations"], equilibrium_solves=d["equilibrium_solves"])
     for name in [n for n in names if n != "resume" and not n.startswith("design-")]:
         prob, steps, kw = build(name)
+        if comm.size == 1:                           # one rank: the shared-matrix path, asked for
+            kw = dict(kw, solver="distributed")
         res = prob.solve(steps=steps, **kw)          # dispatches to the distributed solver
         doc[name] = summary(res)
         doc[name]["parallel"] = {k: v for k, v in res.parallel.items() if k in ("ranks", "linear")}

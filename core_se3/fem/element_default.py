@@ -51,6 +51,16 @@ from .element import Element, ElementEvaluation, register_element
 from .quadrature import GAUSS_2x2
 from .resultants import element_resultants
 
+_IU = np.triu_indices(24)                # the upper triangle of a 24x24 matrix, row by row
+
+
+def _unpack(Dp):
+    """The symmetric (k, 24, 24) matrices of their packed upper triangles Dp (k, 300)."""
+    D = np.empty((len(Dp), 24, 24))
+    D[:, _IU[0], _IU[1]] = Dp
+    D[:, _IU[1], _IU[0]] = Dp
+    return D
+
 __all__ = ["DefaultElement", "edge_twists", "tying_matrices", "MAX_EDGE_ANGLE"]
 
 MAX_EDGE_ANGLE = 0.97 * np.pi   # beyond this the log's cut at pi is too close
@@ -179,7 +189,9 @@ class DefaultElement(Element):
         self.z0 = self._element_z(0.5 * psi0)                          # (m, 24)
         P = tying_matrices()
         m = len(self.z0)
-        self.Dbar = np.empty((m, 24, 24))
+        # Dbar is symmetric: its upper triangles are kept (300 of 576 entries, ``Dbar_packed``)
+        self.Dbar_packed = np.empty((m, len(_IU[0])))
+        self.Dz0 = np.empty((m, 24))
         self.j0 = np.empty((m, 4))
         # in chunks of elements: the resultant matrices and products of one element take ~18 kB,
         # four times its Dbar (a law without ``restricted`` gets all elements at once)
@@ -192,9 +204,19 @@ class DefaultElement(Element):
             self.j0[sl] = j0
             # Dbar = sum_q j0_q P_q^T D_q P_q, contracted pairwise (a 4-operand einsum is O(24^4 m))
             DP = np.einsum("mqij,qjb->mqib", Dm * j0[..., None, None], P)
-            self.Dbar[sl] = np.einsum("qia,mqib->mab", P, DP)                # (k, 24, 24)
+            self.Dbar_packed[sl] = np.einsum("qia,mqib->mab", P, DP)[:, _IU[0], _IU[1]]
+            self.Dz0[sl] = np.einsum("mij,mj->mi", _unpack(self.Dbar_packed[sl]), self.z0[sl])  # Dbar z0
         self.area = self.j0.sum(axis=1)                                 # reference area per element
-        self.Dz0 = np.einsum("mij,mj->mi", self.Dbar, self.z0)         # constant part of Dbar z
+        self._Dbar = None
+
+    @property
+    def Dbar(self):
+        """The element stiffness Dbar (m, 24, 24) on the element edge twists (module docstring),
+        unpacked from ``Dbar_packed`` at the first use and kept (the NumPy backend's; the compiled
+        kernels read the packed form)."""
+        if self._Dbar is None:
+            self._Dbar = _unpack(self.Dbar_packed)
+        return self._Dbar
 
     # ----------------------------------------------------------------------------------
     def _element_z(self, zE):

@@ -66,6 +66,9 @@ def greedy_colouring(items):
     return colour, ncol
 
 
+PATTERN_CHUNK = 1 << 16   # node-pair blocks per chunk of the pattern's set-up
+
+
 def _group(colour, ncol):
     order = np.argsort(colour, kind="stable").astype(np.int64)
     cptr = np.concatenate([[0], np.cumsum(np.bincount(colour, minlength=ncol))]).astype(np.int64)
@@ -118,16 +121,17 @@ class Pattern:
         rowbase = np.where(free.ravel(), indptr[np.maximum(red, 0)], -1).reshape(n, 6)
         colrank = np.where(free, np.cumsum(free, 1) - 1, -1).astype(np.int64)
         self.nnz = int(indptr[-1])
-        # indices: every free (row, col) of every block at its position
+        # indices: every free (row, col) of every block at its position, in chunks of blocks
+        # (the (k, 6, 6) position and column arrays take 17 bytes per entry)
         i = np.arange(6)
-        ok = free[bA][:, :, None] & free[bB][:, None, :]                # (nb, 6, 6)
-        pos = rowbase[bA][:, :, None] + colstart[:, None, None] + colrank[bB][:, None, :]
-        col = (6 * bB[:, None, None] + i[None, None, :]) + 0 * i[None, :, None]
-        indices = np.empty(self.nnz, np.int64)
-        indices[pos[ok]] = red[col[ok]]
+        self.indices = np.empty(self.nnz, np.int32)
+        for s in range(0, nb, PATTERN_CHUNK):
+            a, b = bA[s:s + PATTERN_CHUNK], bB[s:s + PATTERN_CHUNK]
+            ok = free[a][:, :, None] & free[b][:, None, :]               # (k, 6, 6)
+            pos = rowbase[a][:, :, None] + colstart[s:s + PATTERN_CHUNK, None, None] + colrank[b][:, None, :]
+            col = np.broadcast_to(6 * b[:, None, None] + i[None, None, :], ok.shape)
+            self.indices[pos[ok]] = red[col[ok]]
         self.indptr = indptr.astype(np.int32)
-        self.indices = indices.astype(np.int32)
-        del pos, col, ok
         # gather lists: contributors of every block
         contrib = np.concatenate([elem_blk.ravel(), edge_blk.ravel()])
         order = np.argsort(contrib, kind="stable").astype(np.int64)

@@ -14,7 +14,7 @@ import numpy as np
 from numba import njit, prange
 
 from .element_mixed import element_linear_stress, element_linear_stress_serial, signed_edge_stress, stress_from_signed
-from .element_ops import CHUNK, MAX_EDGE_ANGLE, check_angles
+from .element_ops import CHUNK, MAX_EDGE_ANGLE, NSYM, check_angles, packed_matvec
 from .element_passes import (edges_log, edges_residual, edges_tangent, edges_tangent_store, elements_force,
                              elements_tangent, elements_tangent_store, nodes_pass)
 
@@ -206,7 +206,8 @@ class ElementKernels:
     Parameters
     ----------
     quads (m,4), edge_nodes (E,2), elem_edges (m,4), elem_edge_sign (m,4) : mesh topology
-    Dbar (m,24,24), z0 (m,24), Dz0 (m,24) : DefaultElement's constant data
+    Dbar (m,300) (the upper triangles, row by row: ``DefaultElement.Dbar_packed``), z0 (m,24),
+    Dz0 (m,24) : DefaultElement's constant data
     pattern : Pattern of the free dofs
     mode : 'auto' (serial below SERIAL_BELOW elements, else 'gather'), 'serial', 'colour', 'gather'
     error : exception class raised when an edge turns by more than MAX_EDGE_ANGLE
@@ -220,6 +221,8 @@ class ElementKernels:
         self.elem_edges = c(elem_edges, dtype=np.int64)
         self.sign = c(elem_edge_sign, dtype=np.int64)
         self.Dbar, self.z0, self.Dz0 = c(Dbar, dtype=float), c(z0, dtype=float), c(Dz0, dtype=float)
+        if self.Dbar.shape != (len(self.quads), NSYM):
+            raise ValueError(f"Dbar must be packed ({len(self.quads)}, {NSYM}), got {self.Dbar.shape}")
         self.pattern = pattern
         m, nE, n = len(self.quads), len(self.edge_nodes), pattern.n
         if mode == "auto":
@@ -237,14 +240,15 @@ class ElementKernels:
         self.fe_geo = np.zeros((m, 4, 6))      # the mixed tangent's workspace (signed stresses,
         self.rEg = np.zeros((nE, 2, 6))        # their edge-end and nodal forces)
         self.rg = np.zeros((n, 6))
-        self.data = pattern.new_data()
+        self._data = None                      # the CSR data when the caller gives none (lazy:
+                                               # a distributed run writes into PETSc's input)
         if mode == "gather":
             self.Keb = np.zeros((m, 4, 4, 6, 6))
             self.KEb = np.zeros((nE, 2, 2, 6, 6))
 
     @classmethod
     def from_element(cls, element, pattern, **kw):
-        """From a ``DefaultElement``-like object (attributes mesh, Dbar, z0, Dz0).
+        """From a ``DefaultElement``-like object (attributes mesh, Dbar_packed, z0, Dz0).
 
         The reference edge twists z0 are recomputed by these kernels at the reference frames
         g0, so that the reference state is stress free to the last bit in this backend too (the
@@ -252,11 +256,12 @@ class ElementKernels:
         """
         mesh = element.mesh
         self = cls(mesh.quads, mesh.edge_nodes, mesh.elem_edges, mesh.elem_edge_sign,
-                   element.Dbar, element.z0, element.Dz0, pattern, **kw)
+                   element.Dbar_packed, element.z0, element.Dz0, pattern, **kw)
         self.residual(np.ascontiguousarray(mesh.g0, dtype=float))
         z0 = (self.sign[..., None] * (0.5 * self.psi)[self.elem_edges]).reshape(-1, 24)
         self.z0 = np.ascontiguousarray(z0)
-        self.Dz0 = np.ascontiguousarray(np.einsum("mij,mj->mi", self.Dbar, z0))
+        self.Dz0 = np.empty_like(self.z0)
+        packed_matvec(self.Dbar, self.z0, self.Dz0)
         return self
 
     def _raise(self, e):
@@ -287,7 +292,10 @@ class ElementKernels:
         iteration, ``DefaultElement.evaluate(g, stress=...)``); r, energy and the material
         blocks stay those of Dbar (z(g) - z0)."""
         g = np.ascontiguousarray(g, dtype=float)
-        data = self.data if data is None else data
+        if data is None:
+            if self._data is None:
+                self._data = self.pattern.new_data()
+            data = self._data
         mixed = (None, None, None)
         if stress is not None:
             mixed = (signed_edge_stress(stress, self.sign, self.fe_geo), self.rEg, self.rg)

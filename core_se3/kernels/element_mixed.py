@@ -21,7 +21,7 @@ def element_linear_stress(quads, elem_edges, elem_edge_sign, Dbar, z0, psi, coef
     Parameters
     ----------
     quads (m,4), elem_edges (m,4), elem_edge_sign (m,4) : mesh topology
-    Dbar (m,24,24), z0 (m,24) : the element's constant data
+    Dbar (m,300) packed (``element_ops.unpack_sym``), z0 (m,24) : the element's constant data
     psi (E,6), coef (E,3) : edge twists and their coefficients at the state (the workspace of
         the last ``element_residual``/``element_tangent`` call)
     eta (n,6) : nodal increments (g <- g exp(eta))
@@ -32,8 +32,9 @@ def element_linear_stress(quads, elem_edges, elem_edge_sign, Dbar, z0, psi, coef
     for ch in prange(nch):
         G = np.empty((4, 2, 6, 6))
         w = np.empty(24)
+        D = np.empty((24, 24))
         for el in range(ch * CHUNK, min(m, (ch + 1) * CHUNK)):
-            element_stress_lin(el, quads, elem_edges, elem_edge_sign, Dbar, z0, psi, coef, eta, G, w, out)
+            element_stress_lin(el, quads, elem_edges, elem_edge_sign, Dbar, z0, psi, coef, eta, G, w, D, out)
 
 
 @njit(cache=True)
@@ -41,8 +42,9 @@ def element_linear_stress_serial(quads, elem_edges, elem_edge_sign, Dbar, z0, ps
     """``element_linear_stress`` in one thread (same parameters)."""
     G = np.empty((4, 2, 6, 6))
     w = np.empty(24)
+    D = np.empty((24, 24))
     for el in range(quads.shape[0]):
-        element_stress_lin(el, quads, elem_edges, elem_edge_sign, Dbar, z0, psi, coef, eta, G, w, out)
+        element_stress_lin(el, quads, elem_edges, elem_edge_sign, Dbar, z0, psi, coef, eta, G, w, D, out)
 
 
 def signed_edge_stress(stress, sign, out):

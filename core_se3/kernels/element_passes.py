@@ -15,6 +15,7 @@ from numba import njit
 
 from .csr import scatter
 from .element_ops import (edge_F, edge_KE, edge_pass1, edge_residual, element_force, element_G, element_Ke,
+                          unpack_sym,
                           node_Kn, node_residual)
 
 __all__ = ["edges_log", "elements_force", "edges_residual", "nodes_pass", "elements_tangent",
@@ -36,13 +37,16 @@ def edges_log(g, edge_nodes, psi, coef, ang, lo, hi):
 
 @njit(cache=True)
 def elements_force(elem_edges, sgn, Dbar, z0, Dz0, psi, fe, lo, hi):
-    """Elements lo..hi: f = Dbar (z - z0) into fe (signed per edge); returns (energy, |f+Dz0|^2+|f|^2)."""
+    """Elements lo..hi: f = Dbar (z - z0) into fe (signed per edge; Dbar packed (m, 300));
+    returns (energy, |f+Dz0|^2+|f|^2)."""
     z = np.empty(24)
     f = np.empty(24)
+    D = np.empty((24, 24))
     en = 0.0
     fs = 0.0
     for el in range(lo, hi):
-        a, b = element_force(el, elem_edges, sgn, Dbar, z0, Dz0, psi, z, f, fe)
+        unpack_sym(Dbar, el, D)
+        a, b = element_force(el, elem_edges, sgn, D, z0, Dz0, psi, z, f, fe)
         en += a
         fs += b
     return en, fs
@@ -73,30 +77,32 @@ def nodes_pass(node_ptr, node_inc, rE, r, rEg, rg, data, cmap, lo, hi):
 
 
 @njit(cache=True)
-def _element_blocks(el, elem_edges, sgn, Dbar, z0, Dz0, psi, coef, fe, z, f, G, TT, TTt, KeT):
-    """Forces and KeT = (G^T Dbar G)^T of element el; returns (energy, force scale part)."""
-    a, b = element_force(el, elem_edges, sgn, Dbar, z0, Dz0, psi, z, f, fe)
+def _element_blocks(el, elem_edges, sgn, Dbar, z0, Dz0, psi, coef, fe, z, f, G, TT, TTt, KeT, D):
+    """Forces and KeT = (G^T Dbar G)^T of element el (Dbar packed, unpacked into D); returns
+    (energy, force scale part)."""
+    unpack_sym(Dbar, el, D)
+    a, b = element_force(el, elem_edges, sgn, D, z0, Dz0, psi, z, f, fe)
     element_G(el, elem_edges, sgn, psi, coef, G)
-    element_Ke(el, Dbar, G, TT, TTt, KeT)
+    element_Ke(D, G, TT, TTt, KeT)
     return a, b
 
 
 @njit(cache=True)
 def _element_scratch():
     return (np.empty(24), np.empty(24), np.empty((4, 2, 6, 6)), np.empty((24, 24)), np.empty((24, 24)),
-            np.empty((24, 24)))
+            np.empty((24, 24)), np.empty((24, 24)))
 
 
 @njit(cache=True)
 def elements_tangent(order, quads, elem_edges, sgn, Dbar, z0, Dz0, psi, coef, fe, cmap, data, lo, hi):
     """Elements lo..hi (through order): forces and material blocks, scattered into data.
     Ke = KeT^T = KeT up to round-off (Dbar is symmetric): KeT is read row-wise (contiguous)."""
-    z, f, G, TT, TTt, KeT = _element_scratch()
+    z, f, G, TT, TTt, KeT, D = _element_scratch()
     en = 0.0
     fs = 0.0
     for i in range(lo, hi):
         el = _item(order, i)
-        a, b = _element_blocks(el, elem_edges, sgn, Dbar, z0, Dz0, psi, coef, fe, z, f, G, TT, TTt, KeT)
+        a, b = _element_blocks(el, elem_edges, sgn, Dbar, z0, Dz0, psi, coef, fe, z, f, G, TT, TTt, KeT, D)
         en += a
         fs += b
         for A in range(4):
@@ -109,11 +115,11 @@ def elements_tangent(order, quads, elem_edges, sgn, Dbar, z0, Dz0, psi, coef, fe
 @njit(cache=True)
 def elements_tangent_store(elem_edges, sgn, Dbar, z0, Dz0, psi, coef, fe, Keb, lo, hi):
     """Elements lo..hi: forces, and the material blocks stored in Keb (m,4,4,6,6)."""
-    z, f, G, TT, TTt, KeT = _element_scratch()
+    z, f, G, TT, TTt, KeT, D = _element_scratch()
     en = 0.0
     fs = 0.0
     for el in range(lo, hi):
-        a, b = _element_blocks(el, elem_edges, sgn, Dbar, z0, Dz0, psi, coef, fe, z, f, G, TT, TTt, KeT)
+        a, b = _element_blocks(el, elem_edges, sgn, Dbar, z0, Dz0, psi, coef, fe, z, f, G, TT, TTt, KeT, D)
         en += a
         fs += b
         for A in range(4):

@@ -17,6 +17,7 @@ from .comm import collective, world
 from .local import PatternAssembler, local_problem, subdomain
 from .localize import localize_load
 from .partition import check_partition, partition_elements
+from ..kernels.element import SERIAL_BELOW
 
 __all__ = ["DistributedRun", "GlobalEvaluation", "release_memory"]
 
@@ -126,7 +127,11 @@ class DistributedRun:
         self.local = collective(c, local_problem, problem, sub, c)
         loc = self.local
         compiled = loc.backend == "numba"
-        self.asm = PatternAssembler(loc.mesh, ~loc.constraint_mask().ravel()) if compiled else loc.assembler()
+        free = ~loc.constraint_mask().ravel()
+        # one rank: the pattern of all dofs, which PETSc's matrix shares (system.SharedCsrMatrix)
+        shared = compiled and c.size == 1
+        self.asm = PatternAssembler(loc.mesh, np.ones_like(free) if shared else free) if compiled \
+            else loc.assembler()
         big = c.size > 1 and max(c.allgather(len(sub.elements))) > STAGGER_ABOVE    # the same on every rank
         release_memory()
         for r in range(c.size if big else 1):    # big: one rank at a time (the set-up's peak memory)
@@ -139,14 +144,15 @@ class DistributedRun:
                 c.Barrier()
         if self.local.backend == "numba":
             threads = _threads_per_rank(c.size)
-            if threads == 1 and hasattr(self.local.element, "compiled"):
-                try:                        # one thread: the serial driver (no block workspace)
-                    self.local.element.compiled(structure, mode="serial")
+            if hasattr(self.local.element, "compiled"):
+                try:                        # the drivers without a block workspace (4.6 kB per element):
+                    lean = "serial" if threads == 1 or len(sub.elements) < SERIAL_BELOW else "colour"
+                    self.local.element.compiled(structure, mode=lean)
                 except TypeError:           # an element whose compiled() takes no mode
                     pass
-        self.free = self.asm.free.reshape(-1, 6)
+        self.free = free.reshape(-1, 6)
         self.system = DistributedSystem(c, sub, self.free, structure.indptr, structure.indices, linear,
-                                        petsc_options)
+                                        petsc_options, shared=shared)
         release_memory()
         self.ell = problem.length_scale
         self.n_own = sub.n_owned

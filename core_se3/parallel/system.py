@@ -5,9 +5,11 @@ solvers (MUMPS, or a Krylov method with GAMG or BoomerAMG), all through PETSc.
 Layout.  Every node keeps its six dofs in the distributed vectors (block size 6, nodes in the
 numbering of ``partition``: rank after rank); a dof that a support holds is an identity row
 and column (right-hand side zero), so the free block is the serial K_ff and the multigrid
-solvers see whole nodes.  The local Problem's CSR (free dofs of the local nodes) maps entry by
-entry into COO positions (``setPreallocationCOO`` once); each iteration hands its data to
-``MatSetValuesCOO``, which sums the entries that several ranks hold.
+solvers see whole nodes.  On several ranks the local Problem's CSR (free dofs of the local
+nodes) maps entry by entry into COO positions (``setPreallocationCOO`` once); each iteration
+hands its data to ``MatSetValuesCOO``, which sums the entries that several ranks hold.  On one
+rank the kernels' CSR of all dofs is PETSc's matrix (``matrix.SharedCsrMatrix``: no copy),
+its held rows and columns made identity in place.
 
 Solve.  As the serial ``solvers.linalg.Factorization``: the symmetric diagonal equilibration
 S K S (S = |diag K|^-1/2), then
@@ -29,7 +31,7 @@ import numpy as np
 
 from .. import lie
 from ..errors import LinearSolverError, ParallelError, SingularSystemError
-from .coo import CooMatrix
+from .matrix import CooMatrix, SharedCsrMatrix
 
 __all__ = ["LINEAR", "DistributedSystem", "rigid_body_modes"]
 
@@ -108,6 +110,10 @@ class DistributedSystem:
         'mumps' (default), 'gamg' or 'hypre'.
     petsc_options : dict, optional
         PETSc options without the leading dash (override the defaults of ``linear``).
+    shared : bool, optional
+        One rank whose ``indptr``/``indices`` are the CSR of all its dofs (held ones included):
+        PETSc's matrix shares them (``matrix.SharedCsrMatrix``, no copy) instead of being
+        filled through COO from the free dofs' CSR.
 
     Example
     -------
@@ -117,7 +123,7 @@ class DistributedSystem:
     ('mumps', 'gamg', 'hypre')
     """
 
-    def __init__(self, comm, sub, free, indptr, indices, linear="mumps", petsc_options=None):
+    def __init__(self, comm, sub, free, indptr, indices, linear="mumps", petsc_options=None, shared=False):
         from petsc4py import PETSc
         if linear not in LINEAR:
             raise ParallelError(f"unknown linear solver {linear!r}; choose one of {', '.join(LINEAR)}")
@@ -128,15 +134,23 @@ class DistributedSystem:
         free = np.asarray(free, bool).reshape(-1, 6)
         gnode = sub.index[sub.nodes]                                        # distributed node ids
         gdof = (6 * gnode[:, None] + np.arange(6)).ravel()[free.ravel()]   # local free dof -> global
-        rows = np.repeat(np.arange(len(indptr) - 1), np.diff(indptr))
-        held = ~free[:n_own]
-        hdof = (6 * gnode[:n_own, None] + np.arange(6))[held]
-        self.nnz_local = int(indptr[-1])
-        self.values = np.zeros(self.nnz_local + len(hdof))
-        self.values[self.nnz_local:] = 1.0                                 # identity rows of held dofs
-        self.K = CooMatrix(pcomm, 6 * n_own, 6 * n, np.concatenate([gdof[rows], hdof]),
-                           np.concatenate([gdof[np.asarray(indices)], hdof]), bsize=6)
-        del rows
+        self.shared = bool(shared)
+        if self.shared:                  # one rank, a pattern of all dofs: PETSc's matrix is its CSR
+            if comm.size != 1 or len(indptr) != 6 * n + 1:
+                raise ParallelError("a shared matrix needs one rank and a pattern of all dofs")
+            self.K = SharedCsrMatrix(indptr, indices, ~free.ravel(), bsize=6)
+            self.values = self.K.data
+            self.nnz_local = len(self.values)
+        else:
+            rows = np.repeat(np.arange(len(indptr) - 1), np.diff(indptr))
+            held = ~free[:n_own]
+            hdof = (6 * gnode[:n_own, None] + np.arange(6))[held]
+            self.nnz_local = int(indptr[-1])
+            self.values = np.zeros(self.nnz_local + len(hdof))
+            self.values[self.nnz_local:] = 1.0                             # identity rows of held dofs
+            self.K = CooMatrix(pcomm, 6 * n_own, 6 * n, np.concatenate([gdof[rows], hdof]),
+                               np.concatenate([gdof[np.asarray(indices)], hdof]), bsize=6)
+            del rows
         self.free_own = free[:n_own]
         ghosts = np.asarray(sub.ghost_index, dtype=PETSc.IntType)
         self.x = PETSc.Vec().createGhost(ghosts, size=(6 * n_own, 6 * n), bsize=6, comm=pcomm)
@@ -204,7 +218,7 @@ class DistributedSystem:
         return self.K.set(self.values)
 
     def data_view(self):
-        """A view of the COO values that the local evaluation may write its CSR data into."""
+        """A view of the matrix values that the local evaluation may write its CSR data into."""
         return self.values[:self.nnz_local]
 
     def _factor(self, g_loc=None, ell=1.0):
