@@ -190,7 +190,7 @@ def report():
     doc = load()
     runs = doc["runs"]
     L = ["# Distributed assembly and solve (core_se3.parallel)", "",
-         "`python benchmarks/parallel.py run` (one `mpirun -n R` per row, one thread per rank); "
+         "`python benchmarks/parallel.py run` (one `mpirun -n R` per row, one thread per rank unless the notes say otherwise); "
          f"machine: 2 cores, 24 GB, shared (load average {doc.get('load_average', ['?'])[0]:.1f} at the last run).", ""]
     it = sorted([r for r in runs if r["kind"] == "iteration"], key=lambda r: (r["n"], r["ranks"]))
     if it:
