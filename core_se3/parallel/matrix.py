@@ -167,8 +167,8 @@ class SharedCsrMatrix:
         hrows = np.flatnonzero(held)
         lens = np.diff(indptr)[hrows]
         # entries of the held rows (few: supported nodes), then of the held columns (a scan)
-        in_rows = np.repeat(indptr[hrows].astype(np.int64), lens) + (np.arange(lens.sum()) -
-                                                                     np.repeat(np.cumsum(lens) - lens, lens))
+        first = np.cumsum(lens) - lens                         # each held row's first slot in in_rows
+        in_rows = np.arange(lens.sum()) + np.repeat(indptr[hrows].astype(np.int64) - first, lens)
         row_of = np.repeat(hrows, lens)
         self.diagonal = in_rows[indices[in_rows] == row_of]
         if len(self.diagonal) != len(hrows):

@@ -132,8 +132,6 @@ class DistributedSystem:
         n_own, n = sub.n_owned, len(sub.owner)
         self.n_own = n_own
         free = np.asarray(free, bool).reshape(-1, 6)
-        gnode = sub.index[sub.nodes]                                        # distributed node ids
-        gdof = (6 * gnode[:, None] + np.arange(6)).ravel()[free.ravel()]   # local free dof -> global
         self.shared = bool(shared)
         if self.shared:                  # one rank, a pattern of all dofs: PETSc's matrix is its CSR
             if comm.size != 1 or len(indptr) != 6 * n + 1:
@@ -142,6 +140,8 @@ class DistributedSystem:
             self.values = self.K.data
             self.nnz_local = len(self.values)
         else:
+            gnode = sub.index[sub.nodes]                                    # distributed node ids
+            gdof = (6 * gnode[:, None] + np.arange(6)).ravel()[free.ravel()]   # local free dof -> global
             rows = np.repeat(np.arange(len(indptr) - 1), np.diff(indptr))
             held = ~free[:n_own]
             hdof = (6 * gnode[:n_own, None] + np.arange(6))[held]
