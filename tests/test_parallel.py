@@ -185,6 +185,37 @@ def test_local_problems_sum_to_the_whole(backend):
     assert np.abs(K[np.ix_(free, free)] - Kg).max() < 1e-12 * np.abs(Kg).max()
 
 
+def test_one_rank_shares_the_kernels_csr_with_petsc():
+    """One rank: PETSc's matrix is the compiled evaluation's CSR of all dofs, not a copy; after
+    ``set`` its free block is the serial tangent K_ff entry for entry and every held dof is an
+    identity row and column (the layout of the COO path of several ranks)."""
+    if importlib.util.find_spec("petsc4py") is None:
+        pytest.skip("needs petsc4py")
+    from core_se3.parallel.local import PatternAssembler
+    from core_se3.parallel.matrix import SharedCsrMatrix
+    p = _problem()
+    rng = np.random.default_rng(5)
+    g = p.mesh.g0 @ lie.exp(0.05 * rng.standard_normal((p.mesh.n_nodes, 6)))
+    ref = p.evaluate(g, 0.7).K.toarray()                            # K_ff of the free dofs
+    free = p.assembler().free
+    everything = PatternAssembler(p.mesh, np.ones_like(free))
+    pat = everything.pattern()
+    A = SharedCsrMatrix(pat.indptr, pat.indices, ~free, bsize=6)
+    p.evaluate(g, 0.7, assembler=everything, out=A.data)           # the kernels write PETSc's values
+    M = A.set()
+    assert M.getBlockSize() == 6                                    # the multigrid's 6-dof nodes
+    dense = np.zeros((6 * p.mesh.n_nodes,) * 2)
+    ip, ix, v = M.getValuesCSR()
+    dense[np.repeat(np.arange(len(ip) - 1), np.diff(ip)), ix] = v
+    assert np.array_equal(dense[np.ix_(free, free)], ref)          # the same sums, bit for bit
+    held = np.flatnonzero(~free)
+    assert len(held) > 0
+    assert np.array_equal(dense[held][:, held], np.eye(len(held)))
+    assert not dense[np.ix_(held, np.flatnonzero(free))].any() and not dense[np.ix_(free, held)].any()
+    A.data[0] += 1.0                                                # no copy: PETSc sees the change
+    assert M.getValue(0, int(pat.indices[0])) == dense[0, pat.indices[0]] + 1.0
+
+
 def test_a_load_without_a_distributed_form_is_refused():
     class Bare(Load):
         name = "bare"

@@ -17,7 +17,6 @@ from .comm import collective, world
 from .local import PatternAssembler, local_problem, subdomain
 from .localize import localize_load
 from .partition import check_partition, partition_elements
-from ..kernels.element import SERIAL_BELOW
 
 __all__ = ["DistributedRun", "GlobalEvaluation", "release_memory"]
 
@@ -145,6 +144,7 @@ class DistributedRun:
         if self.local.backend == "numba":
             threads = _threads_per_rank(c.size)
             if hasattr(self.local.element, "compiled"):
+                from ..kernels.element import SERIAL_BELOW
                 try:                        # the drivers without a block workspace (4.6 kB per element):
                     lean = "serial" if threads == 1 or len(sub.elements) < SERIAL_BELOW else "colour"
                     self.local.element.compiled(structure, mode=lean)
