@@ -9,8 +9,10 @@
   resumed on two ranks ends in the bits of an uninterrupted one.  Skipped without mpi4py,
   petsc4py or mpirun.
 * The decomposition, serially: the ranks' local problems (every load kind) sum to the whole
-  problem's forces and tangent; partitions are balanced; the rigid-body modes are the null
-  space of the tangent of a free, unloaded plate (the near-null space given to GAMG).
+  problem's forces and tangent; one rank's PETSc matrix is the kernels' CSR (its free block the
+  serial K_ff bit for bit, held dofs identity, no copy); partitions are balanced; the rigid-body
+  modes are the null space of the tangent of a free, unloaded plate (the near-null space given
+  to GAMG).
 * Designs on two ranks (design-tip-angle, design-field-direction) reach the serial designs.
 * A serial run does not import mpi4py or petsc4py.
 """
