@@ -15,8 +15,7 @@ from numba import njit
 
 from .csr import scatter
 from .element_ops import (edge_F, edge_KE, edge_pass1, edge_residual, element_force, element_G, element_Ke,
-                          unpack_sym,
-                          node_Kn, node_residual)
+                          node_Kn, node_residual, unpack_sym)
 
 __all__ = ["edges_log", "elements_force", "edges_residual", "nodes_pass", "elements_tangent",
            "edges_tangent", "elements_tangent_store", "edges_tangent_store"]
