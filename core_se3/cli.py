@@ -108,8 +108,28 @@ def _plot_generic(case, p, doc, path, name):
                          title=f"{name} ({doc['variant']}, {shape})")
 
 
+def _case_plot(name, overrides, doc, res, path):
+    """The case's PNG: its family's plot, or the load-deflection curve of its tip probe."""
+    from .catalogue import case_params, family_of, get_case
+    case = get_case(name)
+    p = case_params(case, overrides)
+    fam = family_of(case)
+    if fam is not None and fam.plot is not None:
+        fam.plot(case, p, doc, res, path)
+    else:
+        _plot_generic(case, p, doc, path, name)
+
+
 def bench_run(args):
-    from .catalogue import case_params, family_of, get_case, run_case
+    """``core-se3 bench run``; with ``--plot`` matplotlib is imported by a forked worker while the
+    case solves (``io.worker.PlotProcess``; not under MPI)."""
+    from .io.worker import PlotProcess
+    with PlotProcess(enabled=bool(args.plot) and launched_ranks() == 1) as plots:
+        return _bench_run(args, plots)
+
+
+def _bench_run(args, plots):
+    from .catalogue import family_of, get_case, run_case
     from .results import write_json
     from .io import LogProgress, Progress
     try:
@@ -158,11 +178,7 @@ def bench_run(args):
                 write_obstacles(os.path.join(args.vtu, name), obstacles, s.g[:, :3, 3], s.load_factor)
             print(f"wrote {write_pvd(os.path.join(args.vtu, 'obstacles.pvd'), [(s.load_factor, n) for s, n in zip(res.steps, names)])}")
     if args.plot:
-        p = case_params(case, _parse_set(args.set))
-        if fam is not None and fam.plot is not None:
-            fam.plot(case, p, doc, res, args.plot)
-        else:
-            _plot_generic(case, p, doc, args.plot, args.name)
+        plots.draw(_case_plot, args.name, _parse_set(args.set), doc, res, args.plot)
         print(f"wrote {args.plot}")
     return 0
 

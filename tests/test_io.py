@@ -81,3 +81,46 @@ def test_plots_nonempty_png(tmp_path, mesh):
     for p in (p1, p2):
         data = open(p, "rb").read()
         assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 2000
+
+
+# ------------------------------------------------------------------ the plot worker ------
+def _raise_value_error(message):
+    raise ValueError(message)
+
+
+def _png_size(path):
+    from core_se3.io.plots import plot_load_deflection
+    plot_load_deflection(path, [0.0, 1.0], {"uz": [0.0, 0.5]})
+    return 7
+
+
+def test_plot_worker_draws_and_raises_the_plots_exception(tmp_path):
+    """The forked worker draws the PNG it is sent; an exception of the plot reaches the caller
+    with its type and message, and no worker is left behind."""
+    import os
+    from core_se3.io.worker import PlotProcess
+    path = tmp_path / "c.png"
+    with PlotProcess() as plots:
+        assert plots.pid is not None                 # a worker (Linux has fork)
+        assert plots.draw(_png_size, str(path)) is None
+    assert path.read_bytes()[1:4] == b"PNG"
+    with PlotProcess() as plots:
+        pid = plots.pid
+        with pytest.raises(ValueError, match="no such axis"):
+            plots.draw(_raise_value_error, "no such axis")
+    with pytest.raises(ChildProcessError):           # reaped
+        os.waitpid(pid, os.WNOHANG)
+
+
+def test_plot_worker_unused_exits_and_unpicklable_jobs_are_drawn_here(tmp_path):
+    import os
+    from core_se3.io.worker import PlotProcess
+    with PlotProcess() as plots:
+        pid = plots.pid
+    with pytest.raises(ChildProcessError):           # the unused worker ended and was reaped
+        os.waitpid(pid, os.WNOHANG)
+    with PlotProcess() as plots:
+        assert plots.draw(lambda: 3) == 3            # a lambda does not pickle: drawn here
+    with PlotProcess(enabled=False) as plots:
+        assert plots.pid is None and plots.draw(_png_size, str(tmp_path / "d.png")) == 7
+    assert (tmp_path / "d.png").exists()
