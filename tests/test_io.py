@@ -124,3 +124,23 @@ def test_plot_worker_unused_exits_and_unpicklable_jobs_are_drawn_here(tmp_path):
     with PlotProcess(enabled=False) as plots:
         assert plots.pid is None and plots.draw(_png_size, str(tmp_path / "d.png")) == 7
     assert (tmp_path / "d.png").exists()
+
+
+def test_plot_worker_submit_returns_before_the_png_and_wait_collects_it(tmp_path):
+    """submit() sends the job and returns; the caller's own output is written meanwhile and
+    wait() returns once the PNG exists.  Without a worker the job is kept until wait(), so a
+    failing plot cannot stop the caller's other output."""
+    from core_se3.io.worker import PlotProcess
+    path = tmp_path / "s.png"
+    with PlotProcess() as plots:
+        plots.submit(_png_size, str(path))
+        (tmp_path / "other.json").write_text("{}")   # the caller's other output
+        assert plots.wait() is None
+        assert path.read_bytes()[1:4] == b"PNG"
+        assert plots.wait() is None                  # nothing in flight: no-op
+    with PlotProcess(enabled=False) as plots:
+        plots.submit(_raise_value_error, "later")
+        (tmp_path / "kept.json").write_text("{}")   # written before the plot's error
+        with pytest.raises(ValueError, match="later"):
+            plots.wait()
+    assert (tmp_path / "kept.json").exists()

@@ -46,7 +46,8 @@ class PlotProcess:
     """Draw one plot in a forked worker that has imported matplotlib in the meantime.
 
     Use as a context manager around the computation; :meth:`draw` sends the job and waits for
-    the PNG; leaving the block without a job lets the worker exit unused.
+    the PNG (:meth:`submit` and :meth:`wait` split the two, so that the caller writes its other
+    output while the worker draws); leaving the block without a job lets the worker exit unused.
 
     Parameters
     ----------
@@ -68,6 +69,7 @@ class PlotProcess:
     def __init__(self, enabled=True):
         self.pid = None
         self._job = self._err = None
+        self._pending = None                      # a job run by wait() (no worker)
         if not (enabled and hasattr(os, "fork")):
             return
         job_r, job_w = os.pipe()
@@ -97,20 +99,37 @@ class PlotProcess:
         """``fn(*args, **kw)``, drawn by the worker (in the caller without one); waits for it.
         Returns fn's value when drawn here, None when drawn by the worker; an exception of the
         plot is raised here either way."""
-        if self.pid is None:
+        self.submit(fn, *args, **kw)
+        return self.wait()
+
+    def submit(self, fn, *args, **kw):
+        """Send ``fn(*args, **kw)`` to the worker and return at once, so that the caller writes
+        its other output while the worker draws; :meth:`wait` collects it.  Without a worker, or
+        when the job does not pickle, the job is kept and run by :meth:`wait` (the caller's
+        other output is then written first, as it is with a worker)."""
+        if self.pid is not None:
+            try:
+                payload = pickle.dumps((fn, args, kw))
+            except Exception:                     # not picklable: drawn here, by wait()
+                self.close()
+            else:
+                try:
+                    with os.fdopen(self._job, "wb") as fh:
+                        fh.write(payload)
+                except BrokenPipeError:           # the worker stopped before the job: its error
+                    pass
+                self._job = None
+                return
+        self._pending = (fn, args, kw)
+
+    def wait(self):
+        """Finish the submitted plot: wait for the worker and raise its exception here, or run
+        a job kept by :meth:`submit` and return its value (None without a job)."""
+        if self._pending is not None:
+            (fn, args, kw), self._pending = self._pending, None
             return fn(*args, **kw)
-        try:
-            payload = pickle.dumps((fn, args, kw))
-        except Exception:                         # not picklable: draw here
-            self.close()
-            return fn(*args, **kw)
-        try:
-            with os.fdopen(self._job, "wb") as fh:
-                fh.write(payload)
-        except BrokenPipeError:                   # the worker stopped before the job: its error
-            pass
-        self._job = None
-        self._wait()
+        if self.pid is not None and self._job is None:
+            self._wait()
         return None
 
     def _wait(self):
