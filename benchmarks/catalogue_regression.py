@@ -173,9 +173,10 @@ def _docs(d):
 def compare(args):
     A, B = _docs(args.a), _docs(args.b)
     bad = 0
+    lines = []
     for name in sorted(set(A) | set(B)):
         if name not in A or name not in B:
-            print(f"{name:<32} MISSING in {'second' if name in A else 'first'}")
+            lines.append(f"{name:<32} MISSING in {'second' if name in A else 'first'}")
             bad += 1
             continue
         with open(A[name]) as fa, open(B[name]) as fb:
@@ -183,12 +184,18 @@ def compare(args):
         c = _Cmp(args.rtol, args.residual_atol, _scales(da, ""))
         c.walk(da, db, name)
         status = "same" if not c.diffs else f"{len(c.diffs)} DIFFERENCES"
-        print(f"{name:<32} {status:<16} {c.compared:>7} numbers, worst relative {c.worst:.1e}")
-        for d in c.diffs[:8]:
-            print("    " + d)
+        lines.append(f"{name:<32} {status:<16} {c.compared:>7} numbers, worst relative {c.worst:.1e}")
+        lines += ["    " + d for d in c.diffs[:8]]
         bad += bool(c.diffs)
-    print(f"{len(set(A) | set(B))} documents, {bad} with differences (rtol {args.rtol:g}, "
-          f"residual atol {args.residual_atol:g})")
+    lines.append(f"{len(set(A) | set(B))} documents, {bad} with differences (rtol {args.rtol:g}, "
+                 f"residual atol {args.residual_atol:g})")
+    print("\n".join(lines))
+    if args.output:                      # the same lines as a results page
+        cmd = " ".join(["python benchmarks/catalogue_regression.py compare", *sys.argv[2:]])
+        title = args.title or f"{args.a} against {args.b}"
+        with open(args.output, "w") as fh:
+            fh.write(f"# Catalogue regression: {title}\n\n`{cmd}` on "
+                     f"{time.strftime('%Y-%m-%dT%H:%M:%S')}\n\n```\n" + "\n".join(lines) + "\n```\n")
     return 1 if bad else 0
 
 
@@ -206,6 +213,8 @@ def main(argv=None):
     c.add_argument("b")
     c.add_argument("--rtol", type=float, default=1e-12)
     c.add_argument("--residual-atol", type=float, default=1e-12)
+    c.add_argument("--output", default=None, help="also write the comparison as a Markdown page")
+    c.add_argument("--title", default=None, help="the page's title (default: the two directories)")
     args = ap.parse_args(argv)
     return record(args) if args.cmd == "record" else compare(args)
 

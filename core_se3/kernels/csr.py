@@ -175,7 +175,7 @@ class Pattern:
 # ------------------------------------------------------------------------------------------
 # Scatter helpers
 # ------------------------------------------------------------------------------------------
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def scatter(data, cmap, blk, A, B, M, i0, j0, transpose, s):
     """data[block (A,B)] += s * M[i0:i0+6, j0:j0+6] (or of M^T's sub-block if ``transpose``).
 
@@ -206,7 +206,7 @@ def scatter(data, cmap, blk, A, B, M, i0, j0, transpose, s):
                     data[base + cr] += s * M[i0 + i, j0 + j]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def scatter_diag(data, cmap, node, M, s):
     scatter(data, cmap, cmap.diag_blk[node], node, node, M, 0, 0, False, s)
 

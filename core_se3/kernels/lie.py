@@ -100,7 +100,7 @@ def coef_ddc(s):
 # ------------------------------------------------------------------------------------------
 # SO(3) / SE(3) kernels on small arrays (out-parameters, no allocation)
 # ------------------------------------------------------------------------------------------
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def log_so3(R, w):
     """w (3,) <- log(R) with |w| <= pi, the algorithm of se3.log_so3: the skew part of R away
     from pi (w = sin(t) n / (sin t / t)); for cos t < -1/2 the symmetric part,
@@ -138,7 +138,7 @@ def cross3(a0, a1, a2, b0, b1, b2):
     return a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def log_se3(g_a, g_b, R, psi):
     """psi (6,) <- log(g_a^-1 g_b) = (J_l^-1(w) p, w), R = R_a^T R_b, p = R_a^T (p_b - p_a),
     J_l^-1 p = p - w x p / 2 + c(t) w x (w x p).  R (3,3) is scratch."""
