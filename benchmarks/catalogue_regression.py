@@ -38,7 +38,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SKIP_KEYS = {"timings", "time", "scenario", "fingerprint", "file", "error", "monitor_and_perfect_branch"}
 EXACT_KEYS = {"iterations", "substeps", "cutbacks", "step", "n_points", "negative_eigenvalues",
               "det_sign", "attempts", "linear_solves"}
-ROUNDOFF_KEYS = {"residual", "residual_history", "balance_error"}
+ROUNDOFF_KEYS = {"residual", "residual_floor", "residual_history", "balance_error"}
 
 
 def _cli(python):

@@ -16,6 +16,7 @@ import numpy as np
 from .backend import launched_rank, launched_ranks
 from .errors import ConvergenceError, CoreSE3Error
 from .fem import ELEMENTS
+from .results.document import ROUNDOFF_NOTE, format_residual
 
 
 def _parse_mesh(s):
@@ -59,13 +60,15 @@ def _print_doc(doc):
         u = s["probes"][probe]["u"]
         line = (f"{s['load']['value']:>12.5g} {u[0]:>12.5g} {u[1]:>12.5g} {u[2]:>12.5g} "
                 f"{s['probes'][probe]['rotation_angle']:>9.4f} {s['iterations']:>3d} {_count(s, 'attempts'):>3} "
-                f"{_count(s, 'linear_solves'):>6} {s['residual']:>9.1e}")
+                f"{_count(s, 'linear_solves'):>6} {format_residual(s)}")
         for o in obstacles:
             c = s.get("contact", {}).get(o)
             line += f" {float(np.linalg.norm(c['force'])) if c else 0.0:>12.5g}"
         if ref and s.get("error") is not None:
             line += f"  {100 * s['error']:.3f}%"
         print(line)
+    if any(format_residual(s).endswith("*") for s in doc["steps"]):
+        print(ROUNDOFF_NOTE)
     if ref and ref.get("error") is None:
         print(f"reference {ref['file']}:{ref['entry']}: {ref.get('note', 'not compared')}")
     elif ref:
@@ -296,7 +299,9 @@ def _step_table(doc):
         line += "".join(f" {(st.get('physical') or {}).get(k, {}).get('value', float('nan')):>22.6g}" for k, _ in phys)
         if probe:
             line += "".join(f" {x:>12.6g}" for x in st["probes"][probe]["u"])
-        print(line + f" {st.get('iterations', 0):>3d} {st.get('residual', 0.0):>9.1e}")
+        print(line + f" {st.get('iterations', 0):>3d} {format_residual(st)}")
+    if any(format_residual(st).endswith("*") for st in steps):
+        print(ROUNDOFF_NOTE)
 
 
 def scenario_sweep(args):

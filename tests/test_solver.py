@@ -411,3 +411,24 @@ def test_factorization_solves_several_right_hand_sides():
     assert X.shape == (n, 3)
     assert np.abs(K @ X - B).max() < 1e-13 * np.abs(B).max()
     assert all(np.array_equal(X[:, j], cols[j]) for j in range(3))
+
+
+def test_a_state_where_the_loads_vanish_is_converged_to_round_off_and_marked_in_tables():
+    """Unloading to zero (scale 1 - lam): at lam = 1 the shell is back to its stress-free
+    reference, internal and external forces are round-off, so the relative residual is of
+    order 1 -- below its recorded round-off floor (converged), and the step tables mark it
+    instead of printing a bare 1e+00 as if the step had failed."""
+    from core_se3.results import ROUNDOFF_NOTE, format_residual, step_record
+    p = Problem(rectangle(L, WIDTH, 8, 1), Material(E, 0.0, H))
+    p.clamp("x0")
+    p.add_edge_force("x1", (0.0, 0.0, 2.0), scale=lambda lam: 1.0 - lam)
+    p.add_probe("tip", "x1")
+    res = p.solve(steps=2)
+    half, end = res.steps[1], res.steps[2]
+    assert half.residual_history[-1] < 1e-8 and 0.0 < half.residual_floor < 1e-6   # an ordinary step
+    assert np.abs(end.g - p.mesh.g0).max() < 1e-12                          # back to the reference
+    rn = end.residual_history[-1]
+    assert 1e-3 < rn <= end.residual_floor, (rn, end.residual_floor)
+    recs = [step_record(s, dict(name="lam", value=s.load_factor, unit="")) for s in res.steps]
+    assert [format_residual(r).endswith("*") for r in recs] == [False, False, True]
+    assert recs[2]["residual_floor"] == end.residual_floor and "round-off" in ROUNDOFF_NOTE

@@ -5,7 +5,7 @@
      "steps": [{"load_factor", "load": {"name", "value", "unit"},
                 "probes": {name: {"u": [ux, uy, uz], "rotation_angle", "rotation_vector",
                                   "rotation": 3x3}},
-                "iterations", "residual", "residual_history", "balance_error",
+                "iterations", "residual", "residual_floor", "residual_history", "balance_error",
                 "attempts", "linear_solves", "contact": {name: {"force", "moment", "penetration",
                 ...}} (with obstacles only)}],
      "totals": {"attempts", "linear_solves", "iterations"},
@@ -23,7 +23,8 @@ import json
 
 import numpy as np
 
-__all__ = ["SCHEMA", "VERSION", "read_json", "write_json", "probe_record", "step_record", "contact_record",
+__all__ = ["SCHEMA", "VERSION", "read_json", "write_json", "probe_record", "step_record", "format_residual",
+           "ROUNDOFF_NOTE", "contact_record",
            "mesh_record", "timing_record", "step_totals", "result_document"]
 
 SCHEMA = "core-se3-result"
@@ -87,12 +88,13 @@ def step_record(st, load, axis=None, **extra):
     >>> p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 1.0)); p.add_probe("tip")
     >>> rec = step_record(p.solve(steps=1).final, dict(name="P", value=1.0, unit="N"), error=None)
     >>> list(rec), rec["load_factor"], rec["residual"] < 1e-10
-    (['load_factor', 'load', 'probes', 'iterations', 'residual', 'residual_history', 'balance_error', 'attempts', 'linear_solves', 'error'], 1.0, True)
+    (['load_factor', 'load', 'probes', 'iterations', 'residual', 'residual_floor', 'residual_history', 'balance_error', 'attempts', 'linear_solves', 'error'], 1.0, True)
     """
     rec = dict(load_factor=float(st.load_factor), load=load,
                probes={name: probe_record(p, axis) for name, p in st.probes.items()},
                iterations=int(st.iterations),
                residual=float(st.residual_history[-1]) if st.residual_history else 0.0,
+               residual_floor=float(getattr(st, "residual_floor", 0.0)),
                residual_history=[float(x) for x in st.residual_history],
                balance_error=float(st.balance_error), attempts=int(st.attempts),
                linear_solves=None if st.linear_solves is None else int(st.linear_solves))
@@ -100,6 +102,39 @@ def step_record(st, load, axis=None, **extra):
         rec["contact"] = {name: contact_record(c) for name, c in st.contact.items()}
     rec.update(extra)
     return rec
+
+
+ROUNDOFF_NOTE = ("* the loads vanish at this state (internal and external forces are round-off): the "
+                 "relative residual is of order 1 and below its round-off floor -- converged")
+
+
+def format_residual(rec, width=9):
+    """The relative residual of a step record for a table: ``1.2e-11``, or ``1.0e+00*`` where
+    the state converged at the residual's round-off floor with a relative residual above 1e-6
+    -- a state where the loads vanish, so that the relative residual compares round-off with
+    round-off (:data:`ROUNDOFF_NOTE` explains the mark).
+
+    Parameters
+    ----------
+    rec : dict
+        A step record (:func:`step_record`; ``residual_floor`` may be missing in old documents).
+    width : int, optional
+        Field width, the mark included.
+
+    Returns
+    -------
+    str
+
+    Example
+    -------
+    >>> format_residual({"residual": 3e-12, "residual_floor": 1e-10})
+    '  3.0e-12'
+    >>> format_residual({"residual": 0.9997, "residual_floor": 310.0})
+    ' 1.0e+00*'
+    """
+    r = float(rec.get("residual", 0.0))
+    mark = "*" if r > 1e-6 and r <= float(rec.get("residual_floor", 0.0)) else ""
+    return f"{r:.1e}{mark}".rjust(width)
 
 
 def contact_record(c):

@@ -68,6 +68,13 @@ class StepResult:
         Nodal frames.
     iterations : int
         Newton iterations of the step; ``residual_history``: the relative residual of each.
+    residual_floor : float
+        The round-off floor of the last relative residual: 1e3 eps times the element's force
+        scale over the residual's scale (``solvers.convergence.relative_residual``; 0 when not
+        evaluated).  Where the loads vanish (a stress-free state on the path) internal and
+        external forces are round-off themselves, so the relative residual is of order 1 and
+        this floor exceeds it: the state is converged to round-off (see
+        :func:`core_se3.results.format_residual`).
     reaction_force, reaction_moment : (3,) ndarray
         Total lab reaction of the supports [force], its moment about the origin [force x length].
     applied_force, applied_moment : (3,) ndarray
@@ -109,6 +116,7 @@ class StepResult:
     attempts: int = 0                  # Newton tries since the previous stored step (failed included)
     linear_solves: int | None = 0      # linear solves of those tries (None: not counted)
     contact: dict = field(default_factory=dict)   # name -> dict(force, moment, ...) of contacts
+    residual_floor: float = 0.0        # round-off floor of the last relative residual
 
     @property
     def balance_error(self):

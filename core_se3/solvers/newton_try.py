@@ -60,6 +60,9 @@ class TryOutcome:
     eta_sum : ndarray or float
         Sum of the applied increments (n, 6); ``k_step``, ``pred``: the first iterate's
         stiffness estimate and increment norm (the limit-point check).
+    floor : float
+        The round-off floor of the relative residual at the last iterate
+        (``solvers.convergence.relative_residual``; 0 when not evaluated).
 
     Example
     -------
@@ -75,6 +78,7 @@ class TryOutcome:
     eta_sum: object = 0.0
     k_step: float | None = None
     pred: float | None = None
+    floor: float = 0.0
 
     @property
     def iterations(self):
@@ -137,6 +141,7 @@ class NewtonTry:
         reason = ""
         solves = 0
         ev = None
+        floor = 0.0
         mip_try = mip
         try:
             for it in range(opts.max_iter + 1):
@@ -203,7 +208,8 @@ class NewtonTry:
             reason = str(exc)
         except (ElementTooDistortedError, FloatingPointError) as exc:
             reason = str(exc)
-        return TryOutcome(ok, reason, g_try, ev, hist, solves, eta_sum, k_step, pred)
+        return TryOutcome(ok, reason, g_try, ev, hist, solves, eta_sum, k_step, pred,
+                          0.0 if floor is None else float(floor))
 
 
 def augmented_try(trier, aug, g_try, lam_try, mip, stress, max_augmentations, record):
