@@ -223,3 +223,25 @@ def test_limit_point_hint_on_the_failure_path(roof8):
     msg = C.limit_point_hint(prob, near.g, near.load_factor)
     assert msg is not None and "arc length" in msg and "limit point" in msg
     assert C.limit_point_hint(prob, early.g, early.load_factor) is None
+
+
+def test_a_far_too_long_first_step_is_retried_shorter_not_taken_onto_another_branch():
+    """A very slender cantilever (1 x 0.2, E = 1e3, h = 0.01: P L^2 / EI = 6e4 at lam = 1) with
+    dlam0 = 0.05: the first arc lengths are several strip lengths long.  Found in a stress run:
+    the halved step converged on the sphere at lam = -1.8e-4 with the tip at u = (-1.18, 0, 0.47)
+    -- folded back past the clamp, against the load, an unstable state (one negative
+    eigenvalue) of another branch.  The first step of a path starts on the stable branch through
+    the unloaded state, so its load factor must move the way the predictor asked: now such a
+    step is rejected and halved until it follows the load (lam > 0, tip displaced along +z, the
+    tangent positive definite)."""
+    from core_se3 import Material, Problem, mesh
+    p = Problem(mesh.rectangle(1.0, 0.2, 4, 1), Material(1e3, 0.0, 0.01))
+    p.clamp("x0")
+    p.add_edge_force("x1", (0.0, 0.0, 1.0))
+    p.add_probe("tip", "x1")
+    it = C.arc_length_steps(p, dlam0=0.05)
+    next(it)                                              # the initial state
+    first = next(it).step
+    assert first.load_factor > 0.0
+    assert first.probes["tip"]["u"][2] > 0.0
+    assert first.stability["negative_eigenvalues"] == 0

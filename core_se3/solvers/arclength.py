@@ -378,6 +378,12 @@ def path_steps(sysm, options, lam_end=1.0, control=None, control_end=None, lam_m
             new_state, new_lam, its, hist, ev = correct(sysm, st_pred, cur.lam + dl, con, o, timers)
             if not jumped and np.sum(sysm.w * con.du0 * con.du) + psi_u ** 2 * con.dlam0 * con.dlam <= 0:
                 raise StepFailed("the corrector turned back against the predictor (path reversal)")
+            if prev_du is None and not jumped and con.dlam * con.dlam0 < 0:
+                # the first step of a path starts on the stable branch through the start, so a
+                # load factor moved against the predictor's is a jump onto another branch
+                # (e.g. a looped elastica at a far too long first step), not a limit point
+                raise StepFailed("the first step moved the load factor against the requested "
+                                 "direction (the corrector jumped to another branch)")
             pt = analyse(sysm, new_state, new_lam, o.stability, its, hist)
         except (StepFailed, ElementTooDistortedError, FloatingPointError, SingularSystemError) as exc:
             reason = str(exc)
@@ -390,8 +396,10 @@ def path_steps(sysm, options, lam_end=1.0, control=None, control_end=None, lam_m
             log.info("  step %d: ds %.4g REJECTED (%s); retry with ds/2", step + 1, ds, reason)
             ds /= 2
             if ds < ds_min or rejections > o.max_rejections:
+                hint = (f"; ds {ds:.3g} fell below ds_min {ds_min:.3g}: start with a smaller dlam0 "
+                        "or lower ds_min" if ds < ds_min and rejections <= o.max_rejections else "")
                 raise PathError(f"arc length failed at lam {cur.lam:.6g} after {rejections} "
-                                 f"rejections ({reason})", info)
+                                 f"rejections ({reason}){hint}", info)
             continue
         why = finished(pt)
         if why in ("lam_end", "control_end") and o.land:

@@ -310,7 +310,7 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
                 at_target = abs(lam - target) <= 1e-14 * max(1.0, abs(target))
                 if at_target or opts.record_substeps:
                     st = rec.step(lam, g_whole, len(hist) - 1, hist, *eq.forces(ev))
-                    st.residual_floor = out.floor
+                    st.residual_floor = min(out.floor, 1e300)      # finite in JSON when all forces are 0
                     st.attempts = len(tries) - n_recorded
                     st.linear_solves = sum(t["linear_solves"] for t in tries[n_recorded:])
                     n_recorded = len(tries)

@@ -55,7 +55,7 @@ def _record(rec, pt, sysm, log, counted):
     (``sysm.factorizations``) since the previous one; ``counted`` = [entries, factorisations]
     already attributed, advanced here."""
     st = rec.step(pt.lam, pt.state, pt.its, pt.hist, pt.ev["rint"], pt.ev["fext"], _stability(pt))
-    st.residual_floor = float(pt.ev.get("floor", 0.0))
+    st.residual_floor = min(float(pt.ev.get("floor", 0.0)), 1e300) if pt.hist else 0.0
     st.attempts = len(log) - counted[0]
     st.linear_solves = sysm.factorizations - counted[1]
     counted[:] = [len(log), sysm.factorizations]
