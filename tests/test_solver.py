@@ -432,3 +432,23 @@ def test_a_state_where_the_loads_vanish_is_converged_to_round_off_and_marked_in_
     recs = [step_record(s, dict(name="lam", value=s.load_factor, unit="")) for s in res.steps]
     assert [format_residual(r).endswith("*") for r in recs] == [False, False, True]
     assert recs[2]["residual_floor"] == end.residual_floor and "round-off" in ROUNDOFF_NOTE
+
+
+@pytest.mark.parametrize("k, steps", [(1.0, 1), (3.0, 1), (3.0, 2)])
+def test_a_roll_up_of_whole_turns_in_few_steps_reports_its_whole_rotation(k, steps):
+    """A strip rolled by an end moment 2 pi k EI / L turns its tip by exactly 2 pi k (the
+    elastica: a circle, k times; ``rollup`` of the catalogue).  Newton reaches k = 1 and 3 in
+    one load step, so between the two stored states the tip turns by 2 pi or 6 pi: R R0^T is
+    the identity and its rotation vector alone said 0.  The recorder unwraps through the try's
+    increments: the reported rotation is 2 pi k, as with 60 steps."""
+    def strip():
+        p = Problem(rectangle(L, WIDTH, 10, 1), Material(E, 0.0, H))
+        p.clamp("x0")
+        p.add_edge_moment("x1", (0.0, -2 * np.pi * k * EI / L, 0.0))
+        p.add_probe("tip", "x1")
+        return p
+    few, fine = strip().solve(steps=steps), strip().solve(steps=60)
+    w_few, w_fine = few.final.probes["tip"]["w"], fine.final.probes["tip"]["w"]
+    assert w_fine[1] == pytest.approx(-2 * np.pi * k, rel=1e-10)      # about -y, as the moment
+    assert np.abs(w_few - w_fine).max() < 1e-9
+    assert np.abs(few.final.probes["tip"]["u"] - fine.final.probes["tip"]["u"]).max() < 1e-9 * L

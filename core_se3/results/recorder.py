@@ -63,6 +63,17 @@ class StepRecorder:
     converged state, stored or not, so that the unwrapping is continuous); ``step(...)`` also
     computes the reactions and returns the StepResult.
 
+    Between two converged states a probe may turn by more than pi (a roll-up into a full
+    circle in one load step): its rotation R R0^T alone cannot tell 2 pi from 0.  The Newton
+    solver then passes the try's start frames and the sum of its increments (g = g_start
+    exp(eta_1) exp(eta_2) ...): the unwrapped vector at g_start (within pi of the previous
+    state: prescribed turns are split below pi) plus R_start eta_w, the body increment's
+    rotation in the lab, is the hint whose nearest 2 pi representation is taken.  That is
+    exact for turns about a fixed axis (roll-ups, in-plane bending).  In 3D a multi-turn
+    rotation vector is ill-conditioned wherever |w| passes near 2 pi k (exp is singular there,
+    so a path near the identity has no unique continuous lift): it may then differ by 2 pi
+    between step sizes, in one step or in many; positions and frames do not.
+
     Parameters
     ----------
     problem : core_se3.Problem
@@ -93,23 +104,44 @@ class StepRecorder:
         if unwrapped:
             self.unwrapped.update({k: np.array(v, float) for k, v in unwrapped.items()})
 
-    def probes(self, g):
-        """name -> dict(u, R, w) at the frames g, unwrapping the rotation vectors."""
+    def probes(self, g, start=None, increments=None):
+        """name -> dict(u, R, w) at the frames g, unwrapping the rotation vectors; ``start``
+        (n, 4, 4) and ``increments`` (n, 6): the Newton try that reached g (class docstring).
+
+        Example
+        -------
+        A full turn about z in one step (g = g0 exp(eta)): 2 pi with the increments, 0 without.
+
+        >>> import numpy as np
+        >>> from core_se3 import Problem, Material, mesh, lie
+        >>> p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01)); p.add_probe("tip")
+        >>> eta = np.zeros((6, 6)); eta[:, 5] = 2 * np.pi
+        >>> g = p.mesh.g0 @ lie.exp(eta)
+        >>> [abs(float(StepRecorder(p).probes(g, *a)["tip"]["w"][2].round(9))) for a in ((), (p.mesh.g0, eta))]
+        [0.0, 6.283185307]
+        """
         states = {}
         for name, pr in self.problem.probes.items():
             x, R = pr.state(g, compiled=self.compiled)
             x0, Rref = self.reference.get(name) or pr.state(self.g0)
-            self.unwrapped[name] = unwrap_rotation(R @ Rref.T, self.unwrapped[name], self._log)
+            hint = self.unwrapped[name]
+            if start is not None and increments is not None:
+                _, Rs = pr.state(start, compiled=self.compiled)
+                ws = unwrap_rotation(Rs @ Rref.T, hint, self._log)
+                eta_w = pr.wa * increments[pr.node_a, 3:] + (1.0 - pr.wa) * increments[pr.node_b, 3:]
+                hint = ws + Rs @ eta_w
+            self.unwrapped[name] = unwrap_rotation(R @ Rref.T, hint, self._log)
             states[name] = dict(u=x - x0, R=R @ Rref.T, w=self.unwrapped[name].copy())
         return states
 
-    def step(self, lam, g, iterations, history, r_int, f_ext, stability=None):
-        """The StepResult of a converged state (internal r_int and external f_ext forces).
+    def step(self, lam, g, iterations, history, r_int, f_ext, stability=None, start=None, increments=None):
+        """The StepResult of a converged state (internal r_int and external f_ext forces;
+        ``start``, ``increments``: as for :meth:`probes`).
 
         The loads that are constraint forces (``Load.constraint_force``: contact) are split off
         the applied loads: ``contact`` holds each one's lab force and moment (about the origin)
         with its ``report`` scalars, and the balance sums applied, reactions and contact."""
-        probes = self.probes(g)
+        probes = self.probes(g, start, increments)
         reac = (r_int - f_ext) * self.fixed
         RF, RM, sF, sM = lab_totals(g, reac, magnitudes=True)
         AF, AM, aF, aM = lab_totals(g, f_ext, magnitudes=True)

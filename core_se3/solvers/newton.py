@@ -279,6 +279,7 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
                 except (SingularSystemError, ElementTooDistortedError, FloatingPointError):
                     g_try, stress_try = problem.apply_prescribed(g.copy(), lam_try), stress_conv
             saved = [ld.multipliers() for ld in aug]
+            g_start = g_try
             out = augmented_try(trier, aug, g_try, lam_try, mip, stress_try, opts.max_augmentations,
                                 lambda o, k: _log_try(result, tries, lam_try, o, augmentation=k, quiet=not eq.root))
             ok, reason, hist, g_try, ev = out.ok, out.reason, out.hist, out.g, out.ev
@@ -308,8 +309,10 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
                 if mip:
                     stress_conv = ev.stress
                 at_target = abs(lam - target) <= 1e-14 * max(1.0, abs(target))
+                # the try's start and increments unwrap a probe turned by more than pi
+                turn = () if eq.distributed or np.isscalar(eta_sum) else (g_start, eta_sum)
                 if at_target or opts.record_substeps:
-                    st = rec.step(lam, g_whole, len(hist) - 1, hist, *eq.forces(ev))
+                    st = rec.step(lam, g_whole, len(hist) - 1, hist, *eq.forces(ev), None, *turn)
                     st.residual_floor = min(out.floor, 1e300)      # finite in JSON when all forces are 0
                     st.attempts = len(tries) - n_recorded
                     st.linear_solves = sum(t["linear_solves"] for t in tries[n_recorded:])
@@ -319,7 +322,7 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
                     else:
                         result.steps.append(st)
                 else:
-                    rec.probes(g_whole)
+                    rec.probes(g_whole, *turn)
                 if len(hist) - 1 <= 6 and abs(dlam) < abs(dlam_nominal):
                     dlam = min(abs(dlam) * 2, abs(dlam_nominal)) * np.sign(dlam_nominal)
             else:
