@@ -27,6 +27,16 @@ def _parse_mesh(s):
         raise argparse.ArgumentTypeError(f"mesh must look like 16x1, got {s!r}") from None
 
 
+def _parse_steps(s):
+    try:
+        n = int(s)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"steps must be a whole number, got {s!r}") from None
+    if n < 1:
+        raise argparse.ArgumentTypeError(f"steps must be at least 1, got {n}")
+    return n
+
+
 def _parse_set(items):
     out = {}
     for it in items or []:
@@ -346,7 +356,7 @@ def main(argv=None):
     run.add_argument("name")
     run.add_argument("--mesh", type=_parse_mesh, default=None, help="NXxNY, e.g. 16x1")
     run.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a case parameter")
-    run.add_argument("--steps", type=int, default=None)
+    run.add_argument("--steps", type=_parse_steps, default=None, help="load steps (>= 1; default the case's)")
     run.add_argument("--element", default="default", help=f"element: {', '.join(sorted(ELEMENTS))}")
     run.add_argument("--solver", choices=["auto", "banded", "mumps", "superlu"], default="auto")
     run.add_argument("--linear", choices=["mumps", "gamg", "hypre"], default=None,

@@ -295,3 +295,30 @@ def test_run_with_explicit_load_factors(tmp_path):
     res = runner.run(scenario.load(write(tmp_path, doc, "lf.toml")), out=str(tmp_path / "lf"))
     assert [s["load_factor"] for s in res.doc["steps"]] == [0.0, 0.1, 0.45, 1.0]
     assert np.abs(res.g[:, :3, 3] - uni.g[:, :3, 3]).max() < 1e-8 * 10.0
+
+
+@pytest.mark.parametrize("args, message", [
+    (["design-tip-angle", "--set", "theta_deg=120"], "turns its tip by 0 .. 90 deg"),
+    (["sze-semicylinder", "--mesh", "15x16"], "even number of elements around"),
+    (["cantilever-shear", "--set", "nu=0.5"], "nu must lie in (-1, 0.5)"),
+    (["cantilever-shear", "--mesh", "0x1"], "at least 1x1"),
+])
+def test_bench_run_bad_parameters_are_one_error_line_not_a_traceback(args, message, capsys):
+    """A case parameter, mesh or option outside what the case admits: exit status 2 and one
+    'error: ...' line naming the cause (found: an out-of-range design target and an odd
+    semicylinder mesh ended in a Python traceback)."""
+    assert cli.main(["bench", "run", *args]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1].startswith("error: ") and message in err[-1] and "Traceback" not in "\n".join(err)
+
+
+def test_steps_below_one_are_refused_not_replaced_by_the_default(capsys):
+    """--steps 0 used to run the case's default 10 steps silently."""
+    from core_se3.catalogue.run import run_case
+    from core_se3.errors import OptionError
+    with pytest.raises(SystemExit) as exc:
+        cli.main(["bench", "run", "cantilever-shear", "--steps", "0"])
+    assert exc.value.code == 2 and "steps must be at least 1" in capsys.readouterr().err
+    for bad in (0, -3, 2.5, True):
+        with pytest.raises(OptionError, match="steps must be a whole number"):
+            run_case("cantilever-shear", steps=bad)

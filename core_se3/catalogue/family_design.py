@@ -23,6 +23,7 @@ import numpy as np
 
 from .. import mesh as M
 from ..design import Design, FieldVariable, Pose, ProbePosition, RotationAngle, Target, magnetic_loads
+from ..errors import OptionError
 from ..fem import Material
 from ..model import Problem, UniformField
 from .case import Family, register_family
@@ -88,7 +89,9 @@ def tip_angle_load(theta):
 
     from scipy.special import ellipk, ellipkinc
     if not 0 < theta < pi / 2:
-        raise ValueError(f"the perpendicular-field cantilever turns its tip by 0 .. 90 deg, got {np.degrees(theta):g} deg")
+        raise OptionError(f"theta_deg: the perpendicular-field cantilever turns its tip by 0 .. 90 deg "
+                          f"(a field perpendicular to Br at any strength), got {np.degrees(theta):g} deg; "
+                          "for a larger turn use design-field-direction (a field direction)")
     k2 = (1 + np.sin(theta)) / 2
     return float((ellipk(k2) - ellipkinc(np.arcsin(1 / np.sqrt(2 * k2)), k2)) ** 2)
 

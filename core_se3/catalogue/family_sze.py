@@ -17,6 +17,7 @@ from math import pi
 import numpy as np
 
 from .. import mesh as M
+from ..errors import MeshError
 from ..fem import Material
 from ..model import Problem
 from ..results import result_document, step_record
@@ -139,7 +140,8 @@ def sze_problem(case, p, mesh=None, element="default", linear_solver="auto"):
         prob.fix("x1", (0, 4))
         y1 = m.node_set("y1")
         if len(y1) % 2 != 1:
-            raise ValueError("sze-semicylinder needs an even number of elements around (a crown node)")
+            raise MeshError("sze-semicylinder needs an even number of elements around the half-circle "
+                            f"(a node at the crown, where the load acts), got {nx} (mesh {nx}x{ny})")
         crown = int(y1[len(y1) // 2])
         prob.add_nodal_load(crown, force=(0.0, 0.0, -p["load_max"]))
         prob.add_probe("crown", [crown])

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import time
 
+from ..errors import OptionError
 from .case import case_params, family_of, get_case
 from .generic import build_problem as generic_build, case_document, torsion_constant
 from .references import elastica_entry
@@ -68,6 +69,8 @@ def run_case(name, mesh=None, overrides=None, steps=None, element="default", lin
     ('1_cantilever_tip_force_kirchhoff', True)
     """
     case = get_case(name)
+    if steps is not None and (isinstance(steps, bool) or int(steps) != steps or steps < 1):
+        raise OptionError(f"steps must be a whole number >= 1 (or None: the case's {case.steps}), got {steps!r}")
     p = case_params(case, overrides)
     t0 = time.perf_counter()
     prob = build_problem(case, p, mesh, element, linear_solver)
