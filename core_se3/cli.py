@@ -143,7 +143,6 @@ def bench_run(args):
 
 def _bench_run(args, plots):
     from .catalogue import family_of, get_case, run_case
-    from .results import write_json
     from .io import LogProgress, Progress
     try:
         case = get_case(args.name)
@@ -168,6 +167,16 @@ def _bench_run(args, plots):
     if fam is not None and fam.report is not None:
         for line in fam.report(doc):
             print(line)
+    try:
+        _write_bench_outputs(args, doc, res, prob, plots)
+    except OSError as exc:
+        return _output_error(exc, "the solve finished and its table above is complete")
+    return 0
+
+
+def _write_bench_outputs(args, doc, res, prob, plots):
+    """The --json, --vtu and --plot outputs of ``bench run`` (the plot drawn by the worker)."""
+    from .results import write_json
     if args.json:
         os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
         write_json(args.json, doc)
@@ -195,7 +204,6 @@ def _bench_run(args, plots):
     if args.plot:
         plots.wait()
         print(f"wrote {args.plot}")
-    return 0
 
 
 def scenario_run(args):
@@ -216,6 +224,8 @@ def scenario_run(args):
         res = scenario.run(scn, out=args.out, resume=args.resume, progress=progress, force=args.force)
     except CoreSE3Error as exc:
         return _error_code(exc)
+    except OSError as exc:
+        return _output_error(exc, "the steps converged so far are kept where they could be written")
     except KeyboardInterrupt:
         print("\ninterrupted: the converged steps are kept; continue with --resume", file=sys.stderr)
         return 130
@@ -241,6 +251,14 @@ def _error_code(exc):
     return 3 if isinstance(exc, ConvergenceError) else 2
 
 
+def _output_error(exc, kept):
+    """An output that could not be written (an unwritable path or a full disk): one error line,
+    exit status 2."""
+    if launched_rank() == 0:
+        print(f"error: cannot write the outputs ({exc}): choose a writable path; {kept}", file=sys.stderr)
+    return 2
+
+
 def design_run(args):
     """``core-se3 design``: optimise the [design] of a scenario, write the optimised scenario and
     the design's outputs (docs/DESIGN.md)."""
@@ -255,6 +273,8 @@ def design_run(args):
                               progress=not args.quiet and launched_rank() == 0)
     except CoreSE3Error as exc:
         return _error_code(exc)
+    except OSError as exc:
+        return _output_error(exc, "the design's result is not written")
     if not args.quiet and launched_rank() == 0:          # under mpirun: rank 0 reports
         print(f"{scn.name}: {r.message}")
         print(f"  objective {r.objective:.6e} after {r.iterations} iterations, {r.equilibrium_solves} equilibrium "
@@ -334,6 +354,8 @@ def scenario_sweep(args):
                              warm=not args.cold)
     except CoreSE3Error as exc:
         return _error_code(exc)
+    except OSError as exc:
+        return _output_error(exc, "the sweep's table is not written")
     except KeyboardInterrupt:
         print("\ninterrupted: the sweep's finished runs are not written (rerun it)", file=sys.stderr)
         return 130

@@ -322,3 +322,17 @@ def test_steps_below_one_are_refused_not_replaced_by_the_default(capsys):
     for bad in (0, -3, 2.5, True):
         with pytest.raises(OptionError, match="steps must be a whole number"):
             run_case("cantilever-shear", steps=bad)
+
+
+def test_an_unwritable_output_path_is_one_error_line(tmp_path, capsys):
+    """An output under a regular file (so no directory can be made there): exit status 2 and
+    one 'error: cannot write the outputs' line, for bench run (after its table is printed) and
+    for a scenario run, instead of an OSError traceback."""
+    blocker = tmp_path / "a-file"
+    blocker.write_text("")
+    assert cli.main(["bench", "run", "cantilever-shear", "--mesh", "4x1", "--steps", "2",
+                     "--vtu", str(blocker / "vtu")]) == 2
+    out, err = capsys.readouterr()
+    assert "reactions balance" in out and err.strip().startswith("error: cannot write the outputs")
+    assert cli.main(["run", write(tmp_path, STRIP), "--out", str(blocker / "run"), "-q"]) == 2
+    assert capsys.readouterr().err.strip().startswith("error: cannot write the outputs")
