@@ -452,3 +452,24 @@ def test_a_roll_up_of_whole_turns_in_few_steps_reports_its_whole_rotation(k, ste
     assert w_fine[1] == pytest.approx(-2 * np.pi * k, rel=1e-10)      # about -y, as the moment
     assert np.abs(w_few - w_fine).max() < 1e-9
     assert np.abs(few.final.probes["tip"]["u"] - fine.final.probes["tip"]["u"]).max() < 1e-9 * L
+
+
+def test_fractional_step_counts_and_fully_held_shells_are_refused():
+    """solve(steps=2.5) used to run load factors 0.4, 0.8, 1.2 -- past the requested end -- and
+    a shell whose supports hold every dof crashed in the linear solver's set-up; strings as
+    vectors and fractional element counts gave bare NumPy errors."""
+    p = cantilever(1.0, nx=4)
+    with pytest.raises(CoreSE3Error, match="whole number of steps"):
+        p.solve(steps=2.5)
+    assert cantilever(1.0, nx=4).solve(steps=3.0).final.load_factor == 1.0
+    held = Problem(rectangle(L, WIDTH, 4, 1), Material(E, 0.0, H))
+    held.clamp(lambda X: X[:, 0] > -1.0)
+    held.add_edge_force("x1", (0.0, 0.0, 1.0))
+    with pytest.raises(CoreSE3Error, match="nothing to solve"):
+        held.solve(steps=1)
+    with pytest.raises(LoadError, match="finite 3-vector"):
+        cantilever(1.0, nx=4).add_edge_force("x1", "up")
+    for bad in (2.5, "4", True):
+        with pytest.raises(MeshError, match="whole numbers"):
+            rectangle(L, WIDTH, bad, 1)
+    assert rectangle(L, WIDTH, 4.0, 1).n_elements == 4

@@ -8,6 +8,8 @@ palm, arms and arm tips.
 """
 from __future__ import annotations
 
+import numbers
+
 import numpy as np
 
 from ..errors import MeshError
@@ -17,12 +19,18 @@ __all__ = ["rectangle", "cylinder_arch", "cylinder_panel", "annulus", "hemispher
 
 
 def _counts(nx, ny):
+    """(nx, ny) as ints, or a MeshError: whole numbers >= 1."""
+    whole = all(isinstance(k, numbers.Real) and not isinstance(k, bool) and float(k).is_integer()
+                for k in (nx, ny))
+    if not whole:
+        raise MeshError(f"element counts must be whole numbers, got {nx!r} x {ny!r}")
     if nx < 1 or ny < 1:
         raise MeshError(f"mesh needs at least 1x1 elements, got {nx}x{ny}")
+    return int(nx), int(ny)
 
 
 def _structured(nx, ny):
-    _counts(nx, ny)
+    nx, ny = _counts(nx, ny)
     ids = np.arange((nx + 1) * (ny + 1)).reshape(ny + 1, nx + 1)   # ids[j, i]
     quads = np.stack([ids[:-1, :-1], ids[:-1, 1:], ids[1:, 1:], ids[1:, :-1]], -1).reshape(-1, 4)
     edges = {"x0": ids[:, 0], "x1": ids[:, -1], "y0": ids[0, :], "y1": ids[-1, :]}
@@ -70,7 +78,7 @@ def rectangle(L, width, nx, ny, x0=0.0):
     """
     if not (L > 0 and width > 0):
         raise MeshError(f"rectangle needs L > 0 and width > 0, got {L}, {width}")
-    _counts(nx, ny)
+    nx, ny = _counts(nx, ny)
     return _patch(x0 + np.linspace(0.0, L, nx + 1), np.linspace(-width / 2, width / 2, ny + 1),
                   lambda X, Y: _flat(np.stack([X, Y, np.zeros(X.size)], -1)))
 
@@ -106,7 +114,7 @@ def cylinder_arch(R, angle, width, nx, ny):
     """
     if not (R > 0 and angle > 0 and width > 0):
         raise MeshError("cylinder_arch needs R, angle, width > 0")
-    _counts(nx, ny)
+    nx, ny = _counts(nx, ny)
     return _patch(np.linspace(0.0, angle, nx + 1), np.linspace(-width / 2, width / 2, ny + 1),
                   lambda S, Y: (np.stack([R * np.sin(S), Y, R * (1 - np.cos(S))], -1),
                                 np.stack([np.cos(S), 0 * S, np.sin(S)], -1),
@@ -143,7 +151,7 @@ def cylinder_panel(R, length, theta0, theta1, nt, nl):
     """
     if not (R > 0 and length > 0 and theta1 > theta0):
         raise MeshError("cylinder_panel needs R > 0, length > 0 and theta1 > theta0")
-    _counts(nt, nl)
+    nt, nl = _counts(nt, nl)
     return _patch(np.linspace(theta0, theta1, nt + 1), np.linspace(0.0, length, nl + 1),
                   lambda T, S: (np.stack([R * np.sin(T), S, R * np.cos(T)], -1),
                                 np.stack([np.cos(T), 0 * T, -np.sin(T)], -1),
@@ -179,7 +187,7 @@ def annulus(r_in, r_out, angle, nr, nt):
     """
     if not (0 < r_in < r_out and 0 < angle <= 2 * np.pi):
         raise MeshError("annulus needs 0 < r_in < r_out and 0 < angle <= 2 pi")
-    _counts(nr, nt)
+    nr, nt = _counts(nr, nt)
     return _patch(np.linspace(r_in, r_out, nr + 1), np.linspace(0.0, angle, nt + 1),
                   lambda Rr, T: (np.stack([Rr * np.cos(T), Rr * np.sin(T), 0 * T], -1),
                                  np.stack([np.cos(T), np.sin(T), 0 * T], -1),
@@ -216,7 +224,7 @@ def hemisphere_quarter(R, hole_deg, nt, nf):
     """
     if not (R > 0 and 0 < hole_deg < 90):
         raise MeshError("hemisphere_quarter needs R > 0 and 0 < hole_deg < 90")
-    _counts(nt, nf)
+    nt, nf = _counts(nt, nf)
 
     def surface(T, F):
         X = R * np.stack([np.sin(T) * np.cos(F), np.sin(T) * np.sin(F), np.cos(T)], -1)

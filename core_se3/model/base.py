@@ -354,7 +354,10 @@ def param_error(message, param):
 
 def finite_vector(v, name):
     """A finite 3-vector or a LoadError naming it."""
-    v = np.asarray(v, float)
+    try:
+        v = np.asarray(v, float)
+    except (TypeError, ValueError):
+        raise LoadError(f"{name} must be a finite 3-vector, got {v!r}") from None
     if v.shape != (3,) or not np.all(np.isfinite(v)):
         raise LoadError(f"{name} must be a finite 3-vector, got {v!r}")
     return v

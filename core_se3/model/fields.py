@@ -28,7 +28,7 @@ import numpy as np
 from .. import lie
 from ..errors import LoadError
 from ..registry import Registry
-from .base import Param
+from .base import Param, finite_vector
 
 __all__ = ["MU0", "Field", "UniformField", "GradientField", "DipoleField", "UserField",
            "Superposition", "rotating_direction", "check_field", "FieldKind", "FIELDS",
@@ -38,11 +38,6 @@ MU0 = 4e-7 * pi
 """Vacuum permeability [N/A^2] for SI stresses (Pa).  For N-mm-MPa models use MU0 * 1e6."""
 
 
-def _vec3(v, name):
-    v = np.asarray(v, float)
-    if v.shape != (3,) or not np.all(np.isfinite(v)):
-        raise LoadError(f"{name} must be a finite 3-vector, got {v!r}")
-    return v
 
 
 def _scale_fn(scale):
@@ -127,7 +122,7 @@ class UniformField(Field):
 
     def __init__(self, B, scale=None, direction=None):
         super().__init__(scale)
-        self.B = _vec3(B, "uniform field B")
+        self.B = finite_vector(B, "uniform field B")
         if direction is not None and not callable(direction):
             raise LoadError("direction must be a function of the load factor returning a unit 3-vector")
         self.direction = direction
@@ -136,7 +131,7 @@ class UniformField(Field):
         if self.direction is None:
             b = self.B
         else:
-            d = _vec3(self.direction(lam), f"field direction at load factor {lam}")
+            d = finite_vector(self.direction(lam), f"field direction at load factor {lam}")
             nd = np.linalg.norm(d)
             if nd == 0:
                 raise LoadError(f"field direction at load factor {lam} is the zero vector")
@@ -159,8 +154,8 @@ def rotating_direction(axis, start, turns_per_unit=1.0, lam0=0.0, lam1=None):
     >>> np.round(d(1.0), 12).tolist()
     [0.0, 1.0, 0.0]
     """
-    axis = _vec3(axis, "rotation axis")
-    start = _vec3(start, "start direction")
+    axis = finite_vector(axis, "rotation axis")
+    start = finite_vector(start, "start direction")
     a = axis / np.linalg.norm(axis)
     s = start / np.linalg.norm(start)
     angle = 2 * pi * turns_per_unit
@@ -190,9 +185,9 @@ class GradientField(Field):
 
     def __init__(self, B0, G, x0=(0.0, 0.0, 0.0), scale=None, tol=1e-12):
         super().__init__(scale)
-        self.B0 = _vec3(B0, "field B0")
+        self.B0 = finite_vector(B0, "field B0")
         self.G = np.asarray(G, float)
-        self.x0 = _vec3(x0, "field origin x0")
+        self.x0 = finite_vector(x0, "field origin x0")
         if self.G.shape != (3, 3) or not np.all(np.isfinite(self.G)):
             raise LoadError(f"field gradient G must be a finite 3x3 matrix, got {G!r}")
         g = max(np.abs(self.G).max(), 1e-300)
@@ -231,8 +226,8 @@ class DipoleField(Field):
 
     def __init__(self, m, x0, scale=None, mu0=MU0):
         super().__init__(scale)
-        self.m = _vec3(m, "dipole moment m")
-        self.x0 = _vec3(x0, "dipole position x0")
+        self.m = finite_vector(m, "dipole moment m")
+        self.x0 = finite_vector(x0, "dipole position x0")
         self.k = mu0 / (4 * pi)
 
     def _r(self, x):

@@ -43,7 +43,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import lie
-from ..errors import ElementTooDistortedError, SingularSystemError
+from ..errors import ElementTooDistortedError, SingularSystemError, SupportError
 from .base import Load, LoadEvaluation
 
 __all__ = ["prescribed_rotation", "Prescribed", "LabSpring", "LabTiltSpring", "RotationComponentSpring",
@@ -300,7 +300,8 @@ class RotationComponentSpring(_Spring):
 
 
 def check_rigid_motions(problem, g):
-    """Raise SingularSystemError if the supports leave a rigid-body motion free.
+    """Raise SingularSystemError if the supports leave a rigid-body motion free (SupportError
+    if they leave nothing free).
 
     A superposed rigid motion h = exp(xi) moves every node by the body-frame increment
     eta_i = Ad_{g_i^-1} xi; the supports restrain all six rigid motions iff the fixed
@@ -308,6 +309,9 @@ def check_rigid_motions(problem, g):
     have rank 6 (checked by SVD, unit-scaled).
     """
     fixed = problem.constraint_mask()
+    if fixed.all():
+        raise SupportError(f"the supports hold every degree of freedom of all {len(fixed)} nodes: there "
+                           "is nothing to solve; select fewer nodes (e.g. clamp one edge)")
     ell = problem.length_scale
     c = g[:, :3, 3].mean(0)
     h = np.eye(4)

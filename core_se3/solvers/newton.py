@@ -144,8 +144,10 @@ def requested_load_factors(steps=10, lam_end=1.0, lam_start=0.0, factors=None):
             raise OptionError("load_factors must be finite and move strictly one way from lam_start "
                               f"(no repeats, no reversals), got {list(targets)}")
         return targets
-    if not np.isfinite(lam_end) or steps < 1:
-        raise OptionError("need a finite lam_end and steps >= 1")
+    if not np.isfinite(lam_end) or isinstance(steps, bool) or int(steps) != steps or steps < 1:
+        raise OptionError(f"need a finite lam_end and a whole number of steps >= 1, got lam_end {lam_end!r}, "
+                          f"steps {steps!r}")
+    steps = int(steps)
     return lam_start + (lam_end - lam_start) * np.arange(1, steps + 1) / steps
 
 

@@ -68,6 +68,7 @@ class ShellSystem:
             raise CoreSE3Error(f"path following does not support the load {hooked[0].name!r} (contact with an "
                                "obstacle: its multipliers and step cap need load stepping); use newton_solve")
         self.problem = problem
+        problem.check_supports()
         self.asm = problem.assembler()
         self.solver = make_solver(linear_solver or problem.linear_solver)
         self.ell = problem.length_scale
