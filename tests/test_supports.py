@@ -35,3 +35,26 @@ def test_clamped_edge_restrains_all_rigid_motions():
     p.add_edge_force("x1", (0, 0, 1e-3))
     res = p.solve(steps=1)
     assert np.isfinite(res.final.g).all()
+
+
+@pytest.mark.parametrize("length_unit", [1e-6, 1e-3, 1e3, 1e6, 1e9])
+def test_the_support_check_and_the_solution_do_not_depend_on_the_unit_of_length(length_unit):
+    """The same cantilever (10 x 1 x 0.1, PL^2/EI = 4) in another unit of length, E scaled to
+    keep the load number: the tip displacement over the unit matches to round-off and Newton
+    takes the same iterations; and a line of pins still leaves its rotation free.  Found in a
+    stress run: with L = 10^4 (a 10 m strip in mm) the check called the clamp singular -- the
+    lever arms of its rotation modes entered scaled by the mesh size squared."""
+    def strip(s, clamp=True):
+        E, h = 1.2e6 / s ** 2, 0.1 * s                   # E h^3 w / L^2 scales as 1/s^2 * s^2
+        p = Problem(mesh.rectangle(10.0 * s, 1.0 * s, 16, 1), Material(E, 0.0, h))
+        EI = E * s * h ** 3 / 12
+        (p.clamp("x0") if clamp else p.fix("x0", [0, 1, 2]))
+        p.add_edge_force("x1", (0.0, 0.0, 4.0 * EI / (10.0 * s) ** 2))
+        p.add_probe("tip", "x1")
+        return p
+    ref, scaled = strip(1.0).solve(steps=4), strip(length_unit).solve(steps=4)
+    u_ref, u = ref.final.probes["tip"]["u"], scaled.final.probes["tip"]["u"] / length_unit
+    assert np.abs(u - u_ref).max() < 1e-12 * np.abs(u_ref).max()
+    assert [s.iterations for s in scaled.steps] == [s.iterations for s in ref.steps]
+    with pytest.raises(SingularSystemError, match=r"rotation about \[0\.0, -?1\.0, 0\.0\]"):
+        strip(length_unit, clamp=False).solve(steps=1)

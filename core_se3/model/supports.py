@@ -317,14 +317,18 @@ def check_rigid_motions(problem, g):
     h = np.eye(4)
     h[:3, 3] = -c                                   # rigid motions about the centroid
     modes = lie.Ad(lie.inv(g) @ lie.inv(h))         # (n, 6, 6): column k = mode k at node i
-    scale = np.r_[np.ones(3), np.full(3, ell)]      # rotations * ell, comparable to translations
-    rows = [(modes * scale[None, None, :])[fixed]]   # (n_fixed, 6)
-    # supports carried by loads (lab-direction springs): rows d^T R_i [I 0] Ad_{g_i^-1} xi
+    # dimensionless: translations of the modes by ell, nodal translations over ell (rotations
+    # as they are), so that every entry is O(1) whatever the mesh's size (a lever arm x - c of
+    # a rotation mode scaled by ell^2 made a clamp of a 10^4-long strip look singular)
+    scale = np.r_[np.full(3, ell), np.ones(3)]      # mode (v, w) = (ell v^, w^)
+    dof = np.r_[np.full(3, 1.0 / ell), np.ones(3)]  # nodal increments (eta_v / ell, eta_w)
+    rows = [(modes * scale[None, None, :] * dof[None, :, None])[fixed]]   # (n_fixed, 6)
+    # supports carried by loads (lab-direction springs): rows d^T R_i [I 0] Ad_{g_i^-1} xi / ell
     for load in problem.loads:
         restraint = load.restraint()
         if restraint is not None:
             nodes, D = restraint                      # (k,), (k, q, 3) lab unit directions
-            lab = np.einsum("kij,kjl->kil", g[nodes, :3, :3], modes[nodes][:, :3, :] * scale)
+            lab = np.einsum("kij,kjl->kil", g[nodes, :3, :3], modes[nodes][:, :3, :] * scale) / ell
             rows.append(np.einsum("kqi,kil->kql", D, lab).reshape(-1, 6))
     B = np.concatenate(rows)
     if B.shape[0] == 0:
