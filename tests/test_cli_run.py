@@ -320,7 +320,7 @@ def test_steps_below_one_are_refused_not_replaced_by_the_default(capsys):
         cli.main(["bench", "run", "cantilever-shear", "--steps", "0"])
     assert exc.value.code == 2 and "steps must be at least 1" in capsys.readouterr().err
     for bad in (0, -3, 2.5, True):
-        with pytest.raises(OptionError, match="steps must be a whole number"):
+        with pytest.raises(OptionError, match="load steps must be a whole number"):
             run_case("cantilever-shear", steps=bad)
 
 

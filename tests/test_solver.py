@@ -459,7 +459,7 @@ def test_fractional_step_counts_and_fully_held_shells_are_refused():
     a shell whose supports hold every dof crashed in the linear solver's set-up; strings as
     vectors and fractional element counts gave bare NumPy errors."""
     p = cantilever(1.0, nx=4)
-    with pytest.raises(CoreSE3Error, match="whole number of steps"):
+    with pytest.raises(CoreSE3Error, match="load steps must be a whole number"):
         p.solve(steps=2.5)
     assert cantilever(1.0, nx=4).solve(steps=3.0).final.load_factor == 1.0
     held = Problem(rectangle(L, WIDTH, 4, 1), Material(E, 0.0, H))

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import time
 
-from ..errors import OptionError
+from ..solvers.options import load_steps
 from .case import case_params, family_of, get_case
 from .generic import build_problem as generic_build, case_document, torsion_constant
 from .references import elastica_entry
@@ -69,20 +69,19 @@ def run_case(name, mesh=None, overrides=None, steps=None, element="default", lin
     ('1_cantilever_tip_force_kirchhoff', True)
     """
     case = get_case(name)
-    if steps is not None and (isinstance(steps, bool) or int(steps) != steps or steps < 1):
-        raise OptionError(f"steps must be a whole number >= 1 (or None: the case's {case.steps}), got {steps!r}")
+    steps = case.steps if steps is None else load_steps(steps)
     p = case_params(case, overrides)
     t0 = time.perf_counter()
     prob = build_problem(case, p, mesh, element, linear_solver)
     t_setup = time.perf_counter() - t0
     fam = family_of(case)
     if fam is not None:
-        doc, res = fam.run(case, p, prob, steps or case.steps, **solve_kw)
+        doc, res = fam.run(case, p, prob, steps, **solve_kw)
         res.timings["setup"] = res.timings.get("setup", 0.0) + t_setup
         doc["timings"]["setup"] = doc["timings"].get("setup", 0.0) + t_setup
         doc["timings"]["total"] = doc["timings"].get("total", 0.0) + t_setup
         return doc, res, prob
-    res = prob.solve(steps=steps or case.steps, **solve_kw)
+    res = prob.solve(steps=steps, **solve_kw)
     res.timings["setup"] += t_setup
     doc = case_document(case, p, prob, res)
     if case.name == "torsion":

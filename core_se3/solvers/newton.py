@@ -27,7 +27,7 @@ from ..results import Result, StepRecorder
 from .linalg import make_solver
 from .equations import NewtonEquations
 from .newton_try import NewtonTry, augmented_try, hooked_loads, tangent_predictor
-from .options import NewtonOptions, split_options, unknown_keywords
+from .options import NewtonOptions, load_steps, split_options, unknown_keywords
 from .stability import limit_point_hint
 
 __all__ = ["newton_solve", "newton_steps", "requested_load_factors", "NewtonState", "NewtonStep",
@@ -144,10 +144,9 @@ def requested_load_factors(steps=10, lam_end=1.0, lam_start=0.0, factors=None):
             raise OptionError("load_factors must be finite and move strictly one way from lam_start "
                               f"(no repeats, no reversals), got {list(targets)}")
         return targets
-    if not np.isfinite(lam_end) or isinstance(steps, bool) or int(steps) != steps or steps < 1:
-        raise OptionError(f"need a finite lam_end and a whole number of steps >= 1, got lam_end {lam_end!r}, "
-                          f"steps {steps!r}")
-    steps = int(steps)
+    steps = load_steps(steps)
+    if not np.isfinite(lam_end):
+        raise OptionError(f"need a finite lam_end, got {lam_end!r}")
     return lam_start + (lam_end - lam_start) * np.arange(1, steps + 1) / steps
 
 

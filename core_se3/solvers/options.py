@@ -14,11 +14,13 @@ core_se3.errors.OptionError: NewtonOptions.rtol must be in (0, 1), got -1.0
 """
 from __future__ import annotations
 
+import numbers
 from dataclasses import dataclass, field, fields, replace
 
 from ..errors import OptionError, did_you_mean
 
-__all__ = ["NewtonOptions", "ArcLengthOptions", "split_options", "unknown_keywords", "ITERATIONS", "PREDICTORS"]
+__all__ = ["NewtonOptions", "ArcLengthOptions", "split_options", "unknown_keywords", "load_steps", "ITERATIONS",
+           "PREDICTORS"]
 
 ITERATIONS = ("mip", "displacement")     # NewtonOptions.iteration
 PREDICTORS = ("none", "tangent")         # NewtonOptions.predictor
@@ -194,3 +196,21 @@ def unknown_keywords(func, kwargs, known):
     if kwargs:
         k = next(iter(kwargs))
         raise OptionError(f"{func}() got an unknown option {k!r}{did_you_mean(k, known)}")
+
+
+def load_steps(steps):
+    """A number of load steps as an int: a whole number >= 1 (3.0 is accepted), else OptionError.
+
+    Example
+    -------
+    >>> load_steps(4), load_steps(3.0)
+    (4, 3)
+    >>> load_steps(2.5)
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.OptionError: the number of load steps must be a whole number >= 1, got 2.5
+    """
+    if (isinstance(steps, bool) or not isinstance(steps, numbers.Real) or not float(steps).is_integer()
+            or steps < 1):
+        raise OptionError(f"the number of load steps must be a whole number >= 1, got {steps!r}")
+    return int(steps)
