@@ -304,3 +304,37 @@ def test_rotating_field_ends_on_the_elastica_of_its_final_direction():
     # and it did move through the 90-degree state first: the tip angle grows with the field's turn
     angles = [s.probes["tip"]["w"] @ np.array([0.0, -1.0, 0.0]) for s in res.steps]
     assert np.all(np.diff(angles) > 0) and angles[-1] > np.pi / 2
+
+
+def test_a_field_turned_in_big_steps_is_followed_not_jumped_to_another_equilibrium():
+    """examples/rotating-field.toml's strip (Zhao's beam, 20x1) in a 5 mT field that ramps up
+    over lam in [0, 0.1] and then turns a whole turn about +y.  The strip has several stable
+    states in the same field (it is dragged round by the turn), so a load step may only turn
+    the field so far: with 4 steps (100 deg each) Newton used to converge at lam = 1 on another
+    equilibrium, the tip 12.4 mm from the path's state.  Tries now turn the field by at most
+    MAX_LOAD_TURN (pi/4): every step count ends on the path of 40 steps (10 deg each) -- to
+    round-off, the states of a conservative couple being the same equilibria -- and a field
+    scaled through zero (reversed, not turned) is not split."""
+    from core_se3.catalogue.family_magnetic import MU0_MM
+    from core_se3.solvers.newton import MAX_LOAD_TURN
+
+    def strip():
+        prob = Problem(mesh.rectangle(17.2, 5.0, 20, 1), Material(0.8969, 0.4801, 0.42))
+        prob.clamp("x0")
+        prob.add_probe("tip", "x1")
+        turn = rotating_direction((0.0, 1.0, 0.0), (0.0, 0.0, 1.0), turns_per_unit=1 / 0.9, lam0=0.1, lam1=1.0)
+        ld = prob.add_magnetic((0.143, 0.0, 0.0), UniformField((0.0, 0.0, 0.005), scale=lambda lam: min(1.0, lam / 0.1),
+                                                               direction=turn), mu0=MU0_MM)
+        return prob, ld
+    fine = {round(s.load_factor, 9): s.probes["tip"]["u"] for s in strip()[0].solve(steps=40).steps}
+    for steps in (4, 1):
+        res = strip()[0].solve(steps=steps)
+        assert len(res.log) >= 8                             # split into tries of <= pi/4
+        for s in res.steps:
+            assert np.abs(s.probes["tip"]["u"] - fine[round(s.load_factor, 9)]).max() < 1e-9 * 17.2
+    prob, ld = strip()
+    assert ld.direction_turn(prob.mesh.g0, 0.1, 1.0) == pytest.approx(2 * np.pi, rel=1e-12)
+    assert ld.direction_turn(prob.mesh.g0, 0.1, 0.1 + 0.9 / 8) <= MAX_LOAD_TURN + 1e-12
+    m = mesh.rectangle(2.0, 1.0, 2, 1)
+    reversing = Problem(m, Material(1.0, 0.0, 0.1)).add_magnetic((1.0, 0, 0), UniformField((0, 0, 1.0), scale=lambda lam: 2 * lam - 1))
+    assert reversing.direction_turn(m.g0, 0.0, 1.0) == 0.0

@@ -161,6 +161,12 @@ class Load(abc.ABC):
         """Point fields (name -> (n, k)) for output; none by default."""
         return {}
 
+    def direction_turn(self, g, lam0, lam1):
+        """Hook: the largest angle [rad] through which the load's direction turns at the state g
+        as the load factor goes from lam0 to lam1 (a rotating applied field); Newton splits a
+        try whose turn exceeds ``solvers.newton.MAX_LOAD_TURN``.  0.0 here."""
+        return 0.0
+
     def limit_increment(self, g, eta, lam):
         """Hook: the factor alpha in (0, 1] by which Newton scales the increment eta (n, 6) at
         (g, lam) before applying it (a step cap); 1.0 here."""

@@ -91,6 +91,12 @@ class Field:
     def value(self, x, lam):
         return _finite_scale(self.scale(lam), lam) * self._value(np.asarray(x, float), lam)
 
+    def unscaled(self, x, lam):
+        """The field at scale 1 (value = scale(lam) * unscaled): its direction and profile,
+        which turn with lam only for a rotating field (a scale through zero reverses the field
+        without turning it)."""
+        return self._value(np.asarray(x, float), lam)
+
     def gradient(self, x, lam):
         x = np.asarray(x, float)
         if self.uniform:

@@ -168,6 +168,37 @@ class MagneticLoad(Load):
         self.name = name
         self.approximate_tangent = bool(field.approximate_hessian)
 
+    def direction_turn(self, g, lam0, lam1, samples=16):
+        """The largest angle [rad] the applied field turns through at the magnetised nodes of
+        the state g between load factors lam0 and lam1: the path length of the direction of
+        ``Field.unscaled`` (a ramp through zero reverses the field without turning it), sampled
+        at ``samples`` sub-steps (a whole turn in one step counts 2 pi, not 0); where the field
+        vanishes it does not count.
+
+        Example
+        -------
+        >>> import numpy as np
+        >>> from core_se3 import mesh
+        >>> from core_se3.model.fields import UniformField, rotating_direction
+        >>> m = mesh.rectangle(2.0, 1.0, 2, 1)
+        >>> turn = rotating_direction((0, 1, 0), (0, 0, 1), turns_per_unit=1.0)   # a turn for lam 0 -> 1
+        >>> ld = MagneticLoad(Magnetisation(m, (1.0, 0, 0), h=1.0, mu0=1.0),
+        ...                   UniformField((0, 0, 1.0), scale=lambda lam: 1.0, direction=turn))
+        >>> round(ld.direction_turn(m.g0, 0.0, 0.25), 6), round(ld.direction_turn(m.g0, 0.0, 1.0), 6)
+        (1.570796, 6.283185)
+        """
+        x = g[self.mag.nodes, :3, 3]
+        prev = self.field.unscaled(x, lam0)
+        total = np.zeros(len(x))
+        for t in np.linspace(lam0, lam1, samples + 1)[1:]:
+            cur = self.field.unscaled(x, t)
+            n = np.linalg.norm(prev, axis=1) * np.linalg.norm(cur, axis=1)
+            ok = n > 0
+            cosang = np.einsum("ki,ki->k", prev[ok], cur[ok]) / n[ok]
+            total[ok] += np.arccos(np.clip(cosang, -1.0, 1.0))
+            prev = cur
+        return float(total.max()) if len(total) else 0.0
+
     def nodal(self, g, lam):
         """Lab couple and force (k,3) on the magnetised nodes, and their node ids."""
         nodes = self.mag.nodes

@@ -31,11 +31,15 @@ from .options import NewtonOptions, load_steps, split_options, unknown_keywords
 from .stability import limit_point_hint
 
 __all__ = ["newton_solve", "newton_steps", "requested_load_factors", "NewtonState", "NewtonStep",
-           "MAX_PRESCRIBED_TURN"]
+           "MAX_PRESCRIBED_TURN", "MAX_LOAD_TURN"]
 
 log = logging.getLogger(__name__)
 
 MAX_PRESCRIBED_TURN = 0.9 * np.pi   # largest rotation a prescribed motion may make in one step
+# largest angle an applied load's direction (a rotating field) may turn through in one try: a
+# magnet in a field turned by more than pi/2 feels a couple that can flip it the other way, onto
+# another equilibrium (a strip following a field turned 100 deg per step did; 50 deg did not)
+MAX_LOAD_TURN = 0.25 * np.pi
 
 
 @dataclass
@@ -178,6 +182,18 @@ def _split_prescribed(problem, lam, lam_try):
                                    f"{MAX_PRESCRIBED_TURN:.3f} rad in any step from load factor {lam:.6g}")
 
 
+def _split_turning(turning, g, lam, lam_try):
+    """The load factor of the next try from lam toward lam_try such that no load of
+    ``turning`` (``Load.direction_turn``) turns its direction by more than MAX_LOAD_TURN at the
+    state g, found by equal splitting (the request is then reached by several tries)."""
+    for _ in range(60):
+        turn = max(ld.direction_turn(g, lam, lam_try) for ld in turning)
+        if turn <= MAX_LOAD_TURN:
+            return lam_try
+        lam_try = lam + (lam_try - lam) / max(2.0, np.ceil(turn / (0.95 * MAX_LOAD_TURN)))
+    return lam_try
+
+
 def _log_try(result, tries, lam_try, out, augmentation=None, quiet=False):
     """Append the log entry of a try (an augmented one, k > 0, converged and solved again);
     ``quiet``: not to the logger (the ranks of a distributed run other than rank 0)."""
@@ -249,6 +265,7 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
     timer = _Timer(result)
     trier = NewtonTry(problem, opts, solver, timer, eq)
     aug = hooked_loads(eq, "update_multipliers")            # augmented-Lagrangian loads (contact)
+    turning = hooked_loads(eq, "direction_turn")            # loads whose direction turns (fields)
     for i, ld in enumerate(aug):
         ld.set_multipliers(None if state.multipliers is None else state.multipliers[i])
     # the mixed iteration's stresses start every try from those of the converged state (a
@@ -268,6 +285,12 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
                 lam_try = _split_prescribed(problem, lam, lam_try)
                 if abs(lam_try - lam) < abs(dlam):
                     dlam = lam_try - lam         # the split increment carries on (and regrows)
+            if turning:
+                lam_split = _split_turning(turning, g_whole, lam, lam_try)
+                if lam_split != lam_try:         # a rotating field: the split carries on too
+                    lam_try = lam_split
+                    if abs(lam_try - lam) < abs(dlam):
+                        dlam = lam_try - lam
             g_try = eq.apply_prescribed(g.copy(), lam_try)
             if stateful:
                 # the seed element's strain is a state: save it, and feed it the prescribed motion
