@@ -27,14 +27,17 @@ def _parse_mesh(s):
         raise argparse.ArgumentTypeError(f"mesh must look like 16x1, got {s!r}") from None
 
 
-def _parse_steps(s):
-    try:
-        n = int(s)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"steps must be a whole number, got {s!r}") from None
-    if n < 1:
-        raise argparse.ArgumentTypeError(f"steps must be at least 1, got {n}")
-    return n
+def _whole(what):
+    """An argparse type: a whole number >= 1 (``what`` names it in the error)."""
+    def parse(s):
+        try:
+            n = int(s)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{what} must be a whole number, got {s!r}") from None
+        if n < 1:
+            raise argparse.ArgumentTypeError(f"{what} must be at least 1, got {n}")
+        return n
+    return parse
 
 
 def _parse_set(items):
@@ -378,7 +381,7 @@ def main(argv=None):
     run.add_argument("name")
     run.add_argument("--mesh", type=_parse_mesh, default=None, help="NXxNY, e.g. 16x1")
     run.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a case parameter")
-    run.add_argument("--steps", type=_parse_steps, default=None, help="load steps (>= 1; default the case's)")
+    run.add_argument("--steps", type=_whole("steps"), default=None, help="load steps (>= 1; default the case's)")
     run.add_argument("--element", default="default", help=f"element: {', '.join(sorted(ELEMENTS))}")
     run.add_argument("--solver", choices=["auto", "banded", "mumps", "superlu"], default="auto")
     run.add_argument("--linear", choices=["mumps", "gamg", "hypre"], default=None,
@@ -402,7 +405,8 @@ def main(argv=None):
     dsub.add_argument("scenario", help="SCENARIO.toml with a [design] section")
     dsub.add_argument("--out", default=None, help="output directory (default [output] dir or out/NAME-design)")
     dsub.add_argument("--method", default=None, help="least_squares, L-BFGS-B, SLSQP or trust-constr")
-    dsub.add_argument("--max-iter", type=int, default=None, help="iterations (least_squares: evaluations)")
+    dsub.add_argument("--max-iter", type=_whole("max-iter"), default=None,
+                      help="iterations (least_squares: evaluations; >= 1)")
     dsub.add_argument("-q", "--quiet", action="store_true", help="no progress, no summary")
     dsub.add_argument("-v", "--verbose", action="store_true", help="log every Newton (sub-)step")
     srun.add_argument("--strict", action="store_true", help="make the plausibility warnings errors")

@@ -21,6 +21,8 @@ from core_se3.scenario import runner
 from core_se3.io import Checkpoint
 from core_se3.errors import CheckpointError, ConvergenceError
 
+EXAMPLES = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "examples")
+
 STRIP = {
     "name": "strip",
     "mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 6, "ny": 1},
@@ -313,12 +315,18 @@ def test_bench_run_bad_parameters_are_one_error_line_not_a_traceback(args, messa
 
 
 def test_steps_below_one_are_refused_not_replaced_by_the_default(capsys):
-    """--steps 0 used to run the case's default 10 steps silently."""
+    """--steps 0 used to run the case's default 10 steps silently, and design --max-iter 0 the
+    section's iterations."""
     from core_se3.catalogue.run import run_case
-    from core_se3.errors import OptionError
-    with pytest.raises(SystemExit) as exc:
-        cli.main(["bench", "run", "cantilever-shear", "--steps", "0"])
-    assert exc.value.code == 2 and "steps must be at least 1" in capsys.readouterr().err
+    from core_se3.errors import DesignError, OptionError
+    from core_se3.scenario.design_runner import run_design
+    for argv, what in ((["bench", "run", "cantilever-shear", "--steps", "0"], "steps"),
+                       (["design", os.path.join(EXAMPLES, "gripper-design.toml"), "--max-iter", "0"], "max-iter")):
+        with pytest.raises(SystemExit) as exc:
+            cli.main(argv)
+        assert exc.value.code == 2 and f"{what} must be at least 1" in capsys.readouterr().err
+    with pytest.raises(DesignError, match="max_iter must be a whole number"):
+        run_design(scenario.load(os.path.join(EXAMPLES, "gripper-design.toml")), max_iter=0)
     for bad in (0, -3, 2.5, True):
         with pytest.raises(OptionError, match="load steps must be a whole number"):
             run_case("cantilever-shear", steps=bad)

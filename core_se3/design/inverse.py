@@ -324,6 +324,8 @@ class Design:
         import scipy.optimize as so
         if method not in METHODS:
             raise DesignError(f"unknown design method {method!r}; choose one of {', '.join(METHODS)}")
+        if isinstance(max_iter, bool) or not isinstance(max_iter, (int, np.integer)) or max_iter < 1:
+            raise DesignError(f"max_iter must be a whole number >= 1, got {max_iter!r}")
         norm = [(self.slices[i].start + idx, top) for i, v in enumerate(self.variables) for idx, top in v.norm_bounds]
         if norm and method in ("least_squares", "L-BFGS-B"):
             raise DesignError(f"method {method!r} takes box bounds only; a norm bound (|B| <= B_max of a vector form) "

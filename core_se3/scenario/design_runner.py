@@ -139,7 +139,7 @@ def run_design(scn, out=None, method=None, max_iter=None, progress=False, vtu=Tr
     if root:
         os.makedirs(out, exist_ok=True)
     design = scn.design()
-    r = design.optimise(method or ds["method"], max_iter=max_iter or ds["max_iter"], tol=ds["tol"],
+    r = design.optimise(method or ds["method"], max_iter=ds["max_iter"] if max_iter is None else max_iter, tol=ds["tol"],
                         tolerance=ds["tolerance"], progress=progress, stop_at_tolerance=ds["stop_at_tolerance"])
     files = {}
     poses_doc = []
