@@ -303,7 +303,8 @@ def test_run_with_explicit_load_factors(tmp_path):
     (["design-tip-angle", "--set", "theta_deg=120"], "turns its tip by 0 .. 90 deg"),
     (["sze-semicylinder", "--mesh", "15x16"], "even number of elements around"),
     (["cantilever-shear", "--set", "nu=0.5"], "nu must lie in (-1, 0.5)"),
-    (["cantilever-shear", "--mesh", "0x1"], "at least 1x1"),
+    (["cantilever-shear", "--mesh", "0x1"], "two whole numbers >= 1"),
+    (["magnetic-cantilever", "--mesh", "0x1"], "two whole numbers >= 1"),      # was: 0 read as "auto"
 ])
 def test_bench_run_bad_parameters_are_one_error_line_not_a_traceback(args, message, capsys):
     """A case parameter, mesh or option outside what the case admits: exit status 2 and one

@@ -2,8 +2,10 @@
 write its result document with the error against its reference."""
 from __future__ import annotations
 
+import numbers
 import time
 
+from ..errors import MeshError
 from ..solvers.options import load_steps
 from .case import case_params, family_of, get_case
 from .generic import build_problem as generic_build, case_document, torsion_constant
@@ -70,6 +72,10 @@ def run_case(name, mesh=None, overrides=None, steps=None, element="default", lin
     """
     case = get_case(name)
     steps = case.steps if steps is None else load_steps(steps)
+    if mesh is not None and (len(mesh) != 2 or any(isinstance(k, bool) or not isinstance(k, numbers.Integral)
+                                                   or k < 1 for k in mesh)):
+        # checked here: a case whose mesh is chosen from its parameters (nx None) read 0 as "auto"
+        raise MeshError(f"mesh must be two whole numbers >= 1 (elements along x and y), got {mesh!r}")
     p = case_params(case, overrides)
     t0 = time.perf_counter()
     prob = build_problem(case, p, mesh, element, linear_solver)
