@@ -58,3 +58,20 @@ def test_the_support_check_and_the_solution_do_not_depend_on_the_unit_of_length(
     assert [s.iterations for s in scaled.steps] == [s.iterations for s in ref.steps]
     with pytest.raises(SingularSystemError, match=r"rotation about \[0\.0, -?1\.0, 0\.0\]"):
         strip(length_unit, clamp=False).solve(steps=1)
+
+
+def test_bad_support_input_names_the_cause():
+    """fix([-1]) used to fix the rotation about d3 silently (a negative index), fix([7]) raised
+    a bare IndexError, and a NaN rotation angle was accepted until the solve."""
+    from core_se3.errors import SupportError
+    for dofs in ([-1], [7], [], [1.5], [True]):
+        with pytest.raises(SupportError, match="dofs must be one or more of 0, 1, 2"):
+            _strip().fix("x0", dofs)
+    for angle in (float("nan"), float("inf"), "pi"):
+        with pytest.raises(SupportError, match="rotation angle must be a finite number"):
+            _strip().rotate_edge("x1", (1.0, 0.0, 0.0), angle)
+    with pytest.raises(SupportError, match="rotation point must be a finite 3-vector"):
+        _strip().rotate_edge("x1", (1.0, 0.0, 0.0), 1.0, point=(0.0, np.nan, 0.0))
+    p = _strip()
+    p.fix("x0", np.array([0, 5]))
+    assert p.constraint_mask()[p.nodes("x0")][:, [0, 5]].all() and not p.constraint_mask()[:, 1:5].any()
