@@ -59,7 +59,8 @@ class CoreSE3Error(Exception):
     """Base class of all errors raised by core_se3.
 
     Catch it to handle every failure of the package in one place; the subclasses name the cause
-    (input errors also derive from :class:`ValueError`).
+    (input errors also derive from :class:`ValueError`).  Raised during ``newton_solve`` after
+    the start, any of them carries ``result``: the steps that converged before it.
 
     Example
     -------

@@ -473,3 +473,18 @@ def test_fractional_step_counts_and_fully_held_shells_are_refused():
         with pytest.raises(MeshError, match="whole numbers"):
             rectangle(L, WIDTH, bad, 1)
     assert rectangle(L, WIDTH, 4.0, 1).n_elements == 4
+
+
+def test_a_load_programme_that_turns_non_finite_is_named_and_the_steps_before_are_kept():
+    """A user's scale(lam) = 1/(1 - lam) is infinite at lam = 1: the error names the load and
+    the load factor (it used to surface as a non-finite residual after 12 cut-backs), and the
+    steps converged before it are kept on the exception.  A dead pressure along (0, 0, 0) was
+    accepted as a zero load."""
+    p = cantilever(1.0, nx=4)
+    p.loads.clear()
+    p.add_edge_force("x1", (0.0, 0.0, 1.0), scale=lambda lam: lam / (1.0 - lam) if lam < 1.0 else float("inf"))
+    with pytest.raises(LoadError, match=r"load 'edge force': its scale\(lam\) is inf at load factor 1") as exc:
+        p.solve(steps=4)
+    assert [s.load_factor for s in exc.value.result.steps] == [0.0, 0.25, 0.5, 0.75]
+    with pytest.raises(LoadError, match="pressure direction must be a non-zero 3-vector"):
+        cantilever(1.0, nx=4).add_pressure(1.0, direction=(0.0, 0.0, 0.0))

@@ -29,6 +29,16 @@ from .base import (Load, LoadEvaluation, LoadKind, Param, finite_vector, linear_
 __all__ = ["NodalLoad", "SurfaceLoad", "edge_weights"]
 
 
+def _scale_at(load, lam):
+    """The load's scale(lam) as a finite float, else a LoadError naming the load (a NaN from a
+    user's programme would otherwise surface as a non-finite residual and a storm of cut-backs)."""
+    s = float(load.scale(lam))
+    if not np.isfinite(s):
+        raise LoadError(f"load {load.name!r}: its scale(lam) is {s} at load factor {lam:.6g}; the "
+                        "load-factor programme must return finite numbers")
+    return s
+
+
 def edge_weights(mesh, nodes):
     """Consistent weights (summing to 1) of a uniform line load along ordered edge nodes.
 
@@ -107,7 +117,7 @@ class NodalLoad(Load):
 
     def evaluate(self, g, lam, tangent=True):
         n = self.n
-        s = self.scale(lam)
+        s = _scale_at(self, lam)
         f = np.zeros((n, 6))
         w = self.weights[:, None] * s
         if self.follower:
@@ -132,14 +142,14 @@ class NodalLoad(Load):
         nodes, w = np.ascontiguousarray(self.nodes), np.ascontiguousarray(self.weights)
 
         def add(g, lam, f, data, tangent):
-            nodal_load(g, nodes, w, self.force, self.moment, float(self.scale(lam)), self.follower, f, data,
+            nodal_load(g, nodes, w, self.force, self.moment, _scale_at(self, lam), self.follower, f, data,
                        pattern.map, tangent)
         return add
 
     def total(self, lam):
         """Resultant (force, moment) vectors at lam: lab vectors if dead, frame components if
         follower."""
-        s = self.scale(lam)
+        s = _scale_at(self, lam)
         return s * self.weights.sum() * self.force, s * self.weights.sum() * self.moment
 
 
@@ -203,17 +213,17 @@ class SurfaceLoad(Load):
             node_w = np.ascontiguousarray(self.node_w)
 
             def add(g, lam, f, data, tangent):
-                K.surface_load_dead(g, quads, el, cptr, order, node_w, self.q, float(self.scale(lam)), f, data,
+                K.surface_load_dead(g, quads, el, cptr, order, node_w, self.q, _scale_at(self, lam), f, data,
                                     pattern.map, tangent)
             return add
         run = K.surface_load_follower_par if len(el) >= 1500 else K.surface_load_follower
 
         def add(g, lam, f, data, tangent):
-            run(g, quads, el, cptr, order, float(self.scale(lam)) * self.p, f, data, pattern.map, tangent)
+            run(g, quads, el, cptr, order, _scale_at(self, lam) * self.p, f, data, pattern.map, tangent)
         return add
 
     def evaluate(self, g, lam, tangent=True):
-        s = self.scale(lam)
+        s = _scale_at(self, lam)
         quads = self.mesh.quads[self.elements]
         n = self.mesh.n_nodes
         f = np.zeros((n, 6))
@@ -282,7 +292,10 @@ def _pressure(problem, elements, scale, p, direction=(0.0, 0.0, 1.0), follower=F
         raise LoadError(f"pressure must be finite, got {p}")
     if follower:
         return SurfaceLoad(problem.mesh, p, True, elements, scale, "follower pressure")
-    d = np.array([0, 0, 1.0]) if direction is None else np.asarray(direction, float)
+    d = np.array([0, 0, 1.0]) if direction is None else finite_vector(direction, "pressure direction")
+    if not np.any(d):
+        raise LoadError("pressure direction must be a non-zero 3-vector (the lab direction of a dead "
+                        "pressure), got (0, 0, 0)")
     return SurfaceLoad(problem.mesh, p * d, False, elements, scale, "dead pressure")
 
 

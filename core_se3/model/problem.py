@@ -30,7 +30,7 @@ from .magnetics import MagneticLoad, Magnetisation
 from .probes import Probe
 from .solving import SOLVERS, dispatch
 from .supports import (LabSpring, LabTiltSpring, Prescribed, RotationComponentSpring, check_rigid_motions,
-                       prescribed_rotation)
+                       fixed_dofs, prescribed_rotation, rigid_rotation)
 
 __all__ = ["Problem", "Evaluation", "SOLVERS"]
 
@@ -133,15 +133,7 @@ class Problem:
 
     def fix(self, where, dofs):
         """Fix selected body-frame dofs (0-2 translations along d1..d3, 3-5 rotations)."""
-        dofs = list(dofs)
-        if not dofs or any(isinstance(d, bool) or not isinstance(d, (int, np.integer)) or not 0 <= d <= 5
-                           for d in dofs):
-            # a negative index would silently fix another dof (-1 is the rotation about d3)
-            raise SupportError(f"dofs must be one or more of 0, 1, 2 (translations along d1, d2, d3) and "
-                               f"3, 4, 5 (rotations about them), got {dofs!r}")
-        fixed = np.zeros(6, bool)
-        fixed[dofs] = True
-        self._support(Prescribed(self.nodes(where), fixed))
+        self._support(Prescribed(self.nodes(where), fixed_dofs(dofs)))
 
     def rotate_edge(self, where, axis, angle, point=(0.0, 0.0, 0.0), free=(), scale=None):
         """Rigidly rotate the selected nodes about ``axis`` through ``point`` by angle*scale(lam).
@@ -151,19 +143,7 @@ class Problem:
         axis, e.g. a strip end twisted about the strip axis).
         """
         nodes = self.nodes(where)
-        axis = np.asarray(axis, float)
-        if axis.shape != (3,) or not np.all(np.isfinite(axis)) or np.linalg.norm(axis) == 0:
-            raise SupportError(f"rotation axis must be a non-zero finite 3-vector, got {axis!r}")
-        axis = axis / np.linalg.norm(axis)
-        try:
-            ok = not isinstance(angle, bool) and np.isfinite(float(angle))
-        except (TypeError, ValueError):
-            ok = False
-        if not ok:
-            raise SupportError(f"rotation angle must be a finite number [rad], got {angle!r}")
-        point = np.asarray(point, float)
-        if point.shape != (3,) or not np.all(np.isfinite(point)):
-            raise SupportError(f"rotation point must be a finite 3-vector, got {point!r}")
+        axis, angle, point = rigid_rotation(axis, angle, point)
         scale = scale or (lambda lam: lam)
         g0 = self.mesh.g0[nodes]
         fixed = np.ones(6, bool)

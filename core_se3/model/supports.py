@@ -47,7 +47,7 @@ from ..errors import ElementTooDistortedError, SingularSystemError, SupportError
 from .base import Load, LoadEvaluation
 
 __all__ = ["prescribed_rotation", "Prescribed", "LabSpring", "LabTiltSpring", "RotationComponentSpring",
-           "MAX_TOTAL_ROTATION", "check_rigid_motions"]
+           "MAX_TOTAL_ROTATION", "check_rigid_motions", "fixed_dofs", "rigid_rotation"]
 
 
 class Prescribed:
@@ -297,6 +297,49 @@ class RotationComponentSpring(_Spring):
                                    + c[:, None, None] * np.einsum("nim,nmj->nij", D, Jinv))
         return self._scatter(self.n, np.concatenate([np.zeros_like(gv), -self.k * c[:, None] * gv], 1),
                              blk, tangent)
+
+
+def fixed_dofs(dofs):
+    """The (6,) mask of the body-frame dofs ``dofs`` (0-2 translations along d1..d3, 3-5
+    rotations about them), or a SupportError (a negative index would silently fix another dof).
+
+    Example
+    -------
+    >>> fixed_dofs([0, 5]).astype(int).tolist()
+    [1, 0, 0, 0, 0, 1]
+    """
+    dofs = list(dofs)
+    if not dofs or any(isinstance(d, bool) or not isinstance(d, (int, np.integer)) or not 0 <= d <= 5 for d in dofs):
+        raise SupportError(f"dofs must be one or more of 0, 1, 2 (translations along d1, d2, d3) and 3, 4, 5 "
+                           f"(rotations about them), got {dofs!r}")
+    fixed = np.zeros(6, bool)
+    fixed[dofs] = True
+    return fixed
+
+
+def rigid_rotation(axis, angle, point):
+    """(unit axis (3,), angle [rad], point (3,)) of a prescribed rigid rotation, checked finite
+    (the axis non-zero), or a SupportError.
+
+    Example
+    -------
+    >>> a, t, x = rigid_rotation((0, 0, 2.0), 1.5, (1.0, 0, 0))
+    >>> a.tolist(), t, x.tolist()
+    ([0.0, 0.0, 1.0], 1.5, [1.0, 0.0, 0.0])
+    """
+    axis = np.asarray(axis, float)
+    if axis.shape != (3,) or not np.all(np.isfinite(axis)) or np.linalg.norm(axis) == 0:
+        raise SupportError(f"rotation axis must be a non-zero finite 3-vector, got {axis!r}")
+    try:
+        ok = not isinstance(angle, bool) and np.isfinite(float(angle))
+    except (TypeError, ValueError):
+        ok = False
+    if not ok:
+        raise SupportError(f"rotation angle must be a finite number [rad], got {angle!r}")
+    point = np.asarray(point, float)
+    if point.shape != (3,) or not np.all(np.isfinite(point)):
+        raise SupportError(f"rotation point must be a finite 3-vector, got {point!r}")
+    return axis / np.linalg.norm(axis), float(angle), point
 
 
 def check_rigid_motions(problem, g):

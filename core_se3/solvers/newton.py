@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import lie
-from ..errors import ConvergenceError, ElementTooDistortedError, OptionError, SingularSystemError
+from ..errors import ConvergenceError, CoreSE3Error, ElementTooDistortedError, OptionError, SingularSystemError
 from ..results import Result, StepRecorder
 from .linalg import make_solver
 from .equations import NewtonEquations
@@ -431,6 +431,13 @@ def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, g_init=None, loa
     ev = problem.evaluate(g, lam_start, tangent=False)
     result.steps.append(rec.step(lam_start, g, 0, [], ev.r_int, ev.f_ext))
     result.timings["other"] = time.perf_counter() - t_start
-    for item in newton_steps(problem, targets, opts, NewtonState(lam_start, g), rec, result):
-        result.steps.append(item.step)
+    try:
+        for item in newton_steps(problem, targets, opts, NewtonState(lam_start, g), rec, result):
+            result.steps.append(item.step)
+    except CoreSE3Error as exc:
+        # any failure past the start (a load whose programme turns non-finite, a contact error)
+        # keeps the converged steps, as ConvergenceError does
+        if getattr(exc, "result", None) is None:
+            exc.result = result
+        raise
     return result
