@@ -488,3 +488,10 @@ def test_a_load_programme_that_turns_non_finite_is_named_and_the_steps_before_ar
     assert [s.load_factor for s in exc.value.result.steps] == [0.0, 0.25, 0.5, 0.75]
     with pytest.raises(LoadError, match="pressure direction must be a non-zero 3-vector"):
         cantilever(1.0, nx=4).add_pressure(1.0, direction=(0.0, 0.0, 0.0))
+
+
+def test_a_second_probe_of_the_same_name_is_refused_not_overwriting_the_first():
+    p = cantilever(1.0, nx=4)
+    with pytest.raises(CoreSE3Error, match="a probe named 'tip' exists already"):
+        p.add_probe("tip", "y0")
+    assert p.probes["tip"].node_a in p.nodes("x1")

@@ -310,7 +310,9 @@ class Problem:
         return add_obstacle(self, obstacle, region, nodes, **options)
 
     def add_probe(self, name, where="x1"):
-        """Record the midpoint of an edge (or a node) at every step."""
+        """Record the midpoint of an edge (or a node) at every step (names are unique)."""
+        if name in self.probes:
+            raise OptionError(f"a probe named {name!r} exists already; give this one another name")
         self.probes[name] = Probe.edge_midpoint(name, self.nodes(where))
 
     def output_fields(self, g, lam=1.0):
