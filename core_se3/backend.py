@@ -1,7 +1,20 @@
-"""The computational backend: 'numba' (compiled kernels, ``core_se3.kernels``) or 'numpy' (the
-batched NumPy reference).  The default is 'numba' when numba is installed, else 'numpy'; the
-environment variable ``CORE_SE3_BACKEND`` overrides it, ``set_backend`` changes it for the
-problems created afterwards, and ``Problem(..., backend=...)`` chooses per problem.
+"""The computational backend: 'numba' (compiled kernels, ``core_se3.kernels``), 'numpy' (the
+batched NumPy reference) or 'auto' (NumPy until numba pays for itself, then numba; below).  The
+default is 'auto' when numba is installed, else 'numpy'; the environment variable
+``CORE_SE3_BACKEND`` overrides it, ``set_backend`` changes it for the problems created
+afterwards, and ``Problem(..., backend=...)`` chooses per problem.
+
+The 'auto' rule is the ski-rental rule.  Starting numba costs a fixed time per process (its
+import and its first cache loads, about 0.2-0.3 s on the 2-core test machine with a warm cache;
+benchmarks/results/speed.md), which a small scene never earns back: a 16-element cantilever
+solves in 40 Newton iterations, where numba saves about 1.5 ms each.  So every process starts on
+NumPy and, after each tangent evaluation, adds up what numba would have saved
+(:func:`iteration_saving`, a fit of the measured per-iteration assembly of both backends); once
+that reaches the start cost, the process switches to numba for good (the problem's next
+evaluation).  The total is then at most about twice the better of the two fixed choices, for any
+sequence of solves: one short run pays no numba start, a sweep or design loop of hundreds of
+solves runs on numba after its first few.  The rule counts work, not time, so a script takes the
+same path in every run.  A distributed run (``launched_ranks() > 1``) takes numba at once.
 
 Example
 -------
@@ -11,34 +24,114 @@ Example
 >>> backend.resolve("fortran")
 Traceback (most recent call last):
 ...
-core_se3.errors.OptionError: unknown backend 'fortran'; choose 'numba' or 'numpy'
+core_se3.errors.OptionError: unknown backend 'fortran'; choose 'auto', 'numba' or 'numpy'
 """
 from __future__ import annotations
 
+import functools
 import importlib.util
 import os
 
 from .errors import OptionError
 
-__all__ = ["BACKENDS", "numba_available", "default_backend", "set_backend", "resolve", "launched_ranks", "launched_rank"]
+__all__ = ["BACKENDS", "numba_available", "default_backend", "set_backend", "resolve", "active",
+           "charge", "iteration_saving", "NUMBA_START_COST", "rent_state", "restore_rent", "launched_ranks", "launched_rank"]
 
-BACKENDS = ("numba", "numpy")
+BACKENDS = ("auto", "numba", "numpy")
 _chosen = None
 
+# The ski-rental rule of 'auto' (module docstring), fitted to benchmarks/results/speed.md
+# (2-core x86_64, one thread; per Newton iteration, residual checks included): NumPy minus numba
+# assembly 1.19 ms at 16 elements, 2.52 ms at 120, 5.3 ms at 256, 59 ms at 2304, 145 ms at 10^4.
+NUMBA_START_COST = 0.4        # s: numba's import and first cache loads (0.2-0.3 s), with margin
+SAVING_PER_ITERATION = 1.2e-3  # s
+SAVING_PER_ELEMENT = 1.6e-5    # s per element and iteration
 
+
+class _Rent:
+    """What 'auto' has spent on NumPy so far in this process (estimated saving of numba, s)."""
+    saved = 0.0
+    switched = False
+
+
+def iteration_saving(n_elements):
+    """The time [s] numba's kernels save over NumPy in one Newton iteration (the tangent and the
+    residual checks) of a mesh of ``n_elements`` elements: the fit above.
+
+    Example
+    -------
+    >>> from core_se3.backend import iteration_saving
+    >>> round(iteration_saving(16) * 1e3, 2)          # ms
+    1.46
+    """
+    return SAVING_PER_ITERATION + SAVING_PER_ELEMENT * float(n_elements)
+
+
+def charge(n_elements):
+    """Count one NumPy tangent evaluation of an 'auto' problem of ``n_elements`` elements: once
+    the savings missed reach ``NUMBA_START_COST``, 'auto' means numba from then on."""
+    if not _Rent.switched:
+        _Rent.saved += iteration_saving(n_elements)
+        if _Rent.saved >= NUMBA_START_COST:
+            _Rent.switched = True
+
+
+def rent_state():
+    """The 'auto' rule's count of this process (JSON-able): a checkpoint keeps it, so that a
+    resumed run switches to numba where the uninterrupted run did (bit-for-bit resume)."""
+    return {"saved": _Rent.saved, "switched": _Rent.switched}
+
+
+def restore_rent(state):
+    """Set the 'auto' count from :func:`rent_state`'s dict (None: leave it).
+
+    Example
+    -------
+    >>> from core_se3 import backend
+    >>> old = backend.rent_state()
+    >>> backend.restore_rent({"saved": 0.1, "switched": False}); backend.rent_state()["saved"]
+    0.1
+    >>> backend.restore_rent(old)
+    """
+    if state:
+        _Rent.saved, _Rent.switched = float(state["saved"]), bool(state["switched"])
+
+
+def active(name):
+    """The backend that evaluates now for the setting ``name`` ('auto', 'numba' or 'numpy'):
+    'auto' is 'numpy' until :func:`charge` has counted enough work, or numba is missing, and
+    'numba' after (or at once in a distributed run).
+
+    Example
+    -------
+    >>> from core_se3 import backend
+    >>> backend.active("numpy")
+    'numpy'
+    """
+    if name != "auto":
+        return name
+    if not numba_available():
+        return "numpy"
+    if _Rent.switched or launched_ranks() > 1:
+        return "numba"
+    return "numpy"
+
+
+@functools.lru_cache(maxsize=None)
 def numba_available():
-    """True when numba can be imported (without importing it)."""
+    """True when numba can be imported (without importing it; looked up once per process)."""
     return importlib.util.find_spec("numba") is not None
 
 
 def default_backend():
-    """The backend new problems use: set_backend's, else $CORE_SE3_BACKEND, else numba if installed."""
+    """The backend new problems use: set_backend's, else $CORE_SE3_BACKEND, else 'auto' if numba
+    is installed, else 'numpy'."""
     if _chosen is not None:
         return _chosen
     env = os.environ.get("CORE_SE3_BACKEND", "").strip().lower()
     if env:
         return resolve(env)
-    return "numba" if numba_available() else "numpy"
+    return "auto" if numba_available() else "numpy"
 
 
 def set_backend(name):
@@ -52,7 +145,7 @@ def resolve(name):
     if name is None:
         return default_backend()
     if name not in BACKENDS:
-        raise OptionError(f"unknown backend {name!r}; choose 'numba' or 'numpy'")
+        raise OptionError(f"unknown backend {name!r}; choose 'auto', 'numba' or 'numpy'")
     if name == "numba" and not numba_available():
         raise OptionError("the numba backend needs numba (pip install numba); use backend='numpy'")
     return name

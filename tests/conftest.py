@@ -60,3 +60,24 @@ def pytest_report_header(config):
     if _core_only():
         return f"CORE_ONLY=1: DOLFINx importable: {_dolfinx_importable()}"
     return None
+
+
+@pytest.fixture
+def fresh_backend_count(monkeypatch):
+    """A process whose 'auto' problems have done no work yet (``core_se3.backend``'s count),
+    as in a new ``core-se3`` process: in-process runs compared bit for bit with a child's."""
+    from core_se3 import backend
+    monkeypatch.setattr(backend._Rent, "saved", 0.0)
+    monkeypatch.setattr(backend._Rent, "switched", False)
+    return backend._Rent
+
+
+@pytest.fixture
+def pinned_backend(monkeypatch):
+    """One backend for every run of a test, in this process and its children
+    (``CORE_SE3_BACKEND``): runs compared bit for bit then take the same path whatever the
+    'auto' rule's count (tests/test_backend.py covers the count itself)."""
+    import importlib.util
+    name = "numba" if importlib.util.find_spec("numba") is not None else "numpy"
+    monkeypatch.setenv("CORE_SE3_BACKEND", name)
+    return name

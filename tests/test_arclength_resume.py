@@ -32,6 +32,12 @@ def _snapshots(sysm_factory, **kw):
     return pts, crit, snaps
 
 
+@pytest.fixture(autouse=True)
+def _one_backend(pinned_backend):
+    """Every run here on one backend (the runs are compared bit for bit)."""
+    return pinned_backend
+
+
 @pytest.mark.parametrize("case", ["pitchfork-switch", "cubic-riks"])
 def test_path_follow_restarts_from_every_point_bit_for_bit(case):
     """Restarting path_follow from the ArcState of any converged point (through pack/unpack,

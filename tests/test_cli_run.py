@@ -117,7 +117,7 @@ def test_progress_bar_only_when_asked_or_on_a_terminal(tmp_path, capsys):
     assert capsys.readouterr().out == ""
 
 
-def test_interrupted_run_resumes_to_the_same_state(tmp_path):
+def test_interrupted_run_resumes_to_the_same_state(tmp_path, pinned_backend):
     scn = scenario.load(write(tmp_path, with_(STRIP, solver={"steps": 4}, output={"plots": False,
                                                                                   "picture": False})))
     ref = runner.run(scn, out=str(tmp_path / "ref"))
@@ -133,7 +133,34 @@ def test_interrupted_run_resumes_to_the_same_state(tmp_path):
     assert len(pvd_files(os.path.join(out, "vtu", "series.pvd"))) == 5
 
 
-def test_killed_process_resumes_to_the_same_state(tmp_path):
+def test_a_resumed_run_switches_backend_where_the_uninterrupted_one_did(tmp_path, fresh_backend_count,
+                                                                         monkeypatch):
+    """The 'auto' backend's count is in the checkpoint: a run interrupted before its switch to
+    numba and resumed in a new process (a fresh count) switches at the same Newton iteration
+    and ends on the uninterrupted frames bit for bit (without the count it would switch later
+    and differ by round-off)."""
+    pytest.importorskip("numba")
+    from core_se3 import backend
+    monkeypatch.delenv("CORE_SE3_BACKEND", raising=False)
+    scn = scenario.load(write(tmp_path, with_(STRIP, solver={"steps": 6}, output={"plots": False,
+                                                                                  "picture": False})))
+    m = scn.problem.mesh.n_elements
+    # a start cost that the uninterrupted run passes during its 4th step (4 iterations a step)
+    monkeypatch.setattr(backend, "NUMBA_START_COST", 14.5 * backend.iteration_saving(m))
+    ref = runner.run(scn, out=str(tmp_path / "ref"))
+    assert fresh_backend_count.switched and ref.doc["steps"][4]["iterations"] == 4
+    out = str(tmp_path / "cut")
+    backend.restore_rent({"saved": 0.0, "switched": False})         # a new process
+    with pytest.raises(runner.RunInterrupted):
+        runner.run(scn, out=out, stop_after=2)
+    assert not fresh_backend_count.switched                         # stopped before the switch
+    backend.restore_rent({"saved": 0.0, "switched": False})         # another new process
+    res = runner.run(scn, out=out, resume=True)
+    assert fresh_backend_count.switched
+    np.testing.assert_array_equal(res.g, ref.g)            # bit for bit
+
+
+def test_killed_process_resumes_to_the_same_state(tmp_path, pinned_backend):
     """SIGKILL a real ``core-se3 run`` after a few steps; --resume finishes it identically."""
     doc = with_(STRIP, solver={"steps": 12}, output={"plots": False, "picture": False})
     path = write(tmp_path, doc)
@@ -170,7 +197,7 @@ def test_killed_process_resumes_to_the_same_state(tmp_path):
     assert not [f for f in os.listdir(os.path.join(out, "vtu")) if f.startswith(".")]
 
 
-def test_failed_run_keeps_converged_steps_and_resumes_with_other_controls(tmp_path):
+def test_failed_run_keeps_converged_steps_and_resumes_with_other_controls(tmp_path, pinned_backend):
     """Steps 1-2 are small, 3 jumps: with the plain displacement Newton, max_iter = 5 and no
     cut-backs step 3 fails; the checkpoint keeps step 2 and --resume with the default max_iter
     and cut-backs finishes the run exactly as an uninterrupted run with those controls (solver
@@ -242,7 +269,7 @@ ARCH = {
 }
 
 
-def test_arclength_run_passes_the_limit_points_of_a_snapping_arch(tmp_path):
+def test_arclength_run_passes_the_limit_points_of_a_snapping_arch(tmp_path, pinned_backend):
     """A clamped shallow arch pushed at its crown toward its centre snaps through: the
     arc-length run goes over the maximum, back down to the minimum and up to lam = 1, and
     records both limit points (change in the number of negative tangent eigenvalues)."""

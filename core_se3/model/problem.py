@@ -19,7 +19,7 @@ import numpy as np
 
 from .. import lie
 from ..assembly import Assembler
-from ..backend import resolve as resolve_backend
+from .. import backend as _backend
 from ..errors import LoadError, MeshError, OptionError, SupportError, did_you_mean
 from ..fem import ELEMENTS, make_element
 from .base import Evaluation, Load, load_kind
@@ -30,7 +30,7 @@ from .magnetics import MagneticLoad, Magnetisation
 from .probes import Probe
 from .solving import SOLVERS, dispatch
 from .supports import (LabSpring, LabTiltSpring, Prescribed, RotationComponentSpring, check_rigid_motions,
-                       fixed_dofs, prescribed_rotation, rigid_rotation)
+                       apply_prescribed, fixed_dofs, prescribed_rotation, rigid_rotation)
 
 __all__ = ["Problem", "Evaluation", "SOLVERS"]
 
@@ -49,7 +49,8 @@ class Problem:
     linear_solver : str
         'auto', 'banded', 'superlu' or 'mumps' (see ``core_se3.solvers.linalg``).
     backend : str, optional
-        'numba' (compiled kernels) or 'numpy' (the reference); default ``core_se3.backend``'s.
+        'numba' (compiled kernels), 'numpy' (the reference) or 'auto' (NumPy until numba pays
+        for its start, then numba: ``core_se3.backend``); default ``core_se3.backend``'s.
 
     Attributes
     ----------
@@ -73,7 +74,7 @@ class Problem:
     """
 
     def __init__(self, mesh, material, element="default", linear_solver="auto", backend=None):
-        self.backend = resolve_backend(backend)
+        self.backend = backend
         self._compiled = None
         self.mesh = mesh
         self.material = material
@@ -87,6 +88,16 @@ class Problem:
         self.solve_defaults = {}
         self._assembler = None
         self.length_scale = mesh.length_scale
+
+    @property
+    def backend(self):
+        """The backend evaluating now, 'numba' or 'numpy' (``backend_setting`` 'auto' goes from
+        the one to the other: ``core_se3.backend.active``); set it to any setting."""
+        return _backend.active(self.backend_setting)
+
+    @backend.setter
+    def backend(self, name):
+        self.backend_setting = _backend.resolve(name)
 
     @property
     def element(self):
@@ -355,16 +366,9 @@ class Problem:
         return prescribed_rotation(self.supports, lam0, lam1, samples)
 
     def apply_prescribed(self, g, lam):
-        """Set the frames of prescribed nodes to their targets at lam (in place); returns g.  A
-        target that holds the three translations only (rotations free) sets the positions and
-        keeps the nodes' current rotations."""
-        for s in self.supports:
-            if s.target is not None:
-                if s.fixed[:3].all() and not s.fixed[3:].any():
-                    g[s.nodes, :3, 3] = s.target(lam)[:, :3, 3]
-                else:
-                    g[s.nodes] = s.target(lam)
-        return g
+        """Set the frames of prescribed nodes to their targets at lam (in place); returns g
+        (``supports.apply_prescribed``)."""
+        return apply_prescribed(self.supports, g, lam)
 
     # ---------------------------------------------------------------- the equations ----
     def external(self, g, lam, tangent=True):
@@ -393,10 +397,8 @@ class Problem:
         With the numba backend and an element that has compiled kernels, the element and the
         loads write straight into the CSR data of the assembler's fixed pattern (``out``: a
         data array of ``assembler.pattern().nnz`` to reuse, which the returned K then shares);
-        otherwise the NumPy path sums the blocks (the reference).
-
-        stress: a mixed element's independent stresses for the geometric part of the tangent
-        (``fem.Element.mixed``; the mixed Newton iteration), None = the state's own."""
+        otherwise the NumPy path sums the blocks (the reference).  stress: a mixed element's
+        independent stresses for the geometric part of the tangent (the mixed iteration)."""
         asm = assembler or self.assembler()
         if stress is not None and not self.element.mixed:
             raise OptionError(f"element {self.element_name!r} has no mixed iteration (stress=)")
@@ -406,6 +408,8 @@ class Problem:
             out_ev = self._compiled.evaluate(asm, g, lam, tangent, out, stress)
             if out_ev is not None:
                 return out_ev
+        if tangent and self.backend_setting == "auto":
+            _backend.charge(self.mesh.n_elements)          # the 'auto' rule's count
         ev = (self.element.evaluate(g, tangent=tangent, stress=stress) if stress is not None
               else self.element.evaluate(g, tangent=tangent))
         fext, Kn_ext, Ke_ext = self.external(g, lam, tangent=tangent)

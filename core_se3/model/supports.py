@@ -46,7 +46,7 @@ from .. import lie
 from ..errors import ElementTooDistortedError, SingularSystemError, SupportError
 from .base import Load, LoadEvaluation
 
-__all__ = ["prescribed_rotation", "Prescribed", "LabSpring", "LabTiltSpring", "RotationComponentSpring",
+__all__ = ["apply_prescribed", "prescribed_rotation", "Prescribed", "LabSpring", "LabTiltSpring", "RotationComponentSpring",
            "MAX_TOTAL_ROTATION", "check_rigid_motions", "fixed_dofs", "rigid_rotation"]
 
 
@@ -390,6 +390,19 @@ def check_rigid_motions(problem, g):
             what = f"translation along {np.round(tr / np.linalg.norm(tr), 3).tolist()}"
         raise SingularSystemError("the supports leave a rigid-body motion free (" + what
                                   + "): the tangent is singular; add supports")
+
+
+def apply_prescribed(supports, g, lam):
+    """Set the frames of the prescribed nodes of ``supports`` to their targets at lam (in
+    place); returns g.  A target that holds the three translations only (rotations free) sets
+    the positions and keeps the nodes' current rotations."""
+    for s in supports:
+        if s.target is not None:
+            if s.fixed[:3].all() and not s.fixed[3:].any():
+                g[s.nodes, :3, 3] = s.target(lam)[:, :3, 3]
+            else:
+                g[s.nodes] = s.target(lam)
+    return g
 
 
 def prescribed_rotation(supports, lam0, lam1, samples=16):

@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..backend import rent_state, restore_rent
 from ..errors import CheckpointError, ConvergenceError, CoreSE3Error
 from ..fem import ELEMENTS
 from ..io import Checkpoint, Progress, atomic_path, write_json_atomic
@@ -258,6 +259,7 @@ def run(scn, out=None, resume=False, progress=None, force=False, stop_after=None
     st = ck.load() if resume else None
     if resume:
         check_same_scenario(ck.path, st, scn)
+        restore_rent(st["extra"].get("backend"))
     ctx = run_context(prob, s, s["control"] == "arclength", st)
     try:
         return _run(scn, out, ck, ctx, st, resume, progress, stop_after, t_setup0)
@@ -366,6 +368,7 @@ def _run(scn, out, ck, ctx, st, resume, progress, stop_after, t_setup0):
             lam, g = item.step.load_factor, item.step.g
             records[-1]["physical"] = physical_record(scn, lam)
             extra["physical"] = scn.physical
+            extra["backend"] = rent_state()       # where 'auto' stands (a resume continues from it)
             last_state = item.state
             timings = timings_now()
             vtu_now = o["vtu"] and (k % every == 0 or finished)
