@@ -43,19 +43,22 @@ ONE_THREAD = {v: "1" for v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_N
 TARGET = 1e-3
 
 
-def _env():
+def _env(backend=None):
     env = dict(os.environ, PYTHONPATH=str(ROOT), **ONE_THREAD)
+    env.pop("CORE_SE3_BACKEND", None)
+    if backend:                          # None: core_se3's default ('auto')
+        env["CORE_SE3_BACKEND"] = backend
     # as a default installation: Python's bytecode cache on (this machine's shell sets
     # PYTHONDONTWRITEBYTECODE=1, +0.15 s per core_se3 start; Kratos is compiled code)
     env.pop("PYTHONDONTWRITEBYTECODE", None)
     return env
 
 
-def _wall(cmd, repeats, cwd=None):
+def _wall(cmd, repeats, cwd=None, backend=None):
     best, out = math.inf, None
     for _ in range(repeats):
         t = time.perf_counter()
-        p = subprocess.run(cmd, capture_output=True, text=True, env=_env(), cwd=cwd)
+        p = subprocess.run(cmd, capture_output=True, text=True, env=_env(backend), cwd=cwd)
         dt = time.perf_counter() - t
         if p.returncode != 0:
             raise RuntimeError(f"{' '.join(map(str, cmd))} failed: {p.stderr[-1500:]}")
@@ -83,9 +86,11 @@ def core_cantilever(nx, repeats):
     with tempfile.TemporaryDirectory() as tmp:
         exe = Path(sys.executable).with_name("core-se3")
         cmd = [str(exe)] if exe.exists() else [sys.executable, "-m", "core_se3"]
-        wall, _ = _wall(cmd + ["bench", "run", "cantilever-shear", "--mesh", f"{nx}x1", "--json",
-                               f"{tmp}/c.json"], repeats)
+        run = cmd + ["bench", "run", "cantilever-shear", "--mesh", f"{nx}x1", "--json", f"{tmp}/c.json"]
+        wall_numba, _ = _wall(run, repeats, backend="numba")
+        wall, _ = _wall(run, repeats)                   # the default backend, last: its c.json
         doc = json.loads(Path(f"{tmp}/c.json").read_text())
+    solve_once = sum(doc["timings"][k] for k in ("assembly", "solve", "other"))
     code = ("import json, time, sys\nfrom core_se3.catalogue import run_case\n"
             f"run_case('cantilever-shear', mesh=({nx}, 1))\nbest = None\n"
             f"for _ in range({max(repeats, 3)}):\n"
@@ -93,9 +98,10 @@ def core_cantilever(nx, repeats):
             "    t = r.timings['assembly'] + r.timings['solve'] + r.timings['other']\n"
             "    best = t if best is None or t < best else best\n"
             "print('RESULT ' + json.dumps(dict(solve=best, its=sum(s.iterations for s in r.steps))))")
-    _, out = _wall([sys.executable, "-c", code], 1)
+    _, out = _wall([sys.executable, "-c", code], 1, backend="numba")
     r = _kratos_result(out)
-    return dict(nx=nx, error=doc["reference"]["error"], solve=r["solve"], wall=wall, iterations=r["its"])
+    return dict(nx=nx, error=doc["reference"]["error"], solve=r["solve"], wall=wall, iterations=r["its"],
+                wall_numba=wall_numba, solve_once=solve_once)
 
 
 def kratos_cantilever(py, nx, repeats):
@@ -126,7 +132,7 @@ def rollup_one_step(py, k, repeats):
             "    best = t if best is None or t < best else best\n"
             "print('RESULT ' + json.dumps(dict(solve=best, its=r.final.iterations, "
             "error=d['reference']['error'] if d.get('reference') else None)))")
-    _, out = _wall([sys.executable, "-c", code], 1)
+    _, out = _wall([sys.executable, "-c", code], 1, backend="numba")
     core = _kratos_result(out)
     kr = None
     if py:
@@ -152,7 +158,8 @@ def main():
             krat.append(kratos_cantilever(py, nx, a.repeats))
         print(nx, core[-1], krat[-1] if krat else "", flush=True)
     roll = [rollup_one_step(py, k, a.repeats) for k in (0.25, 0.5, 1.0)]
-    t = {m: {k: time_to(rows, k) for k in ("solve", "wall")} for m, rows in (("core_se3", core), ("kratos", krat))}
+    t = {"core_se3": {k: time_to(core, k) for k in ("solve", "wall", "solve_once", "wall_numba")},
+         "kratos": {k: time_to(krat, k) for k in ("solve", "wall")}}
     meta = dict(date=datetime.datetime.now().isoformat(timespec="seconds"), nproc=os.cpu_count(),
                 load=os.getloadavg())
     RESULTS.mkdir(parents=True, exist_ok=True)
@@ -162,19 +169,27 @@ def main():
          f"`python benchmarks/peers.py` on {meta['date']} (2 shared cores, one thread per run, fastest of "
          f"{a.repeats}; load average {meta['load'][0]:.2f}).", "",
          "## cantilever-shear, 10 load steps, error against the Kirchhoff elastica", "",
-         "| nx | core_se3 error | its | solve s | whole process s | Kratos error | its | solve s | whole process s |",
-         "|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+         "core_se3: *solve* warm on numba (the best of repeated solves in one process), *once* the "
+         "solve inside the one-shot `core-se3 bench run` process, *whole process* that command's wall "
+         "time with the default backend ('auto', which keeps these small jobs on NumPy) and with "
+         "`CORE_SE3_BACKEND=numba`.", "",
+         "| nx | core_se3 error | its | solve s | once s | whole process s | numba: whole s | Kratos error | its | solve s | whole process s |",
+         "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for i, c in enumerate(core):
         k = krat[i] if krat else None
-        L.append(f"| {c['nx']} | {100 * c['error']:.4f} % | {c['iterations']} | {c['solve']:.4f} | {c['wall']:.2f} | "
+        L.append(f"| {c['nx']} | {100 * c['error']:.4f} % | {c['iterations']} | {c['solve']:.4f} | "
+                 f"{c['solve_once']:.4f} | {c['wall']:.2f} | {c['wall_numba']:.2f} | "
                  + (f"{100 * k['error']:.4f} % | {k['iterations']} | {k['solve']:.4f} | {k['wall']:.2f} |" if k else "| | | |"))
 
     def f(x):
         return "not reached" if x is None else f"{x:.4f} s"
     L += ["", f"Time to {100 * TARGET:g} % error (log-log between the bracketing meshes):", "",
           "| | core_se3 | Kratos | core / Kratos |", "|---|---:|---:|---:|"]
-    for key, label in (("solve", "solve"), ("wall", "whole process")):
-        c, k = t["core_se3"][key], t["kratos"].get(key) if krat else None
+    for key, kkey, label in (("solve", "solve", "solve (core_se3 warm, numba)"),
+                             ("solve_once", "solve", "solve (core_se3 once, default)"),
+                             ("wall", "wall", "whole process (core_se3 default)"),
+                             ("wall_numba", "wall", "whole process (core_se3 numba)")):
+        c, k = t["core_se3"][key], t["kratos"].get(kkey) if krat else None
         L.append(f"| {label} | {f(c)} | {f(k)} | {c / k:.2f} |" if c and k else f"| {label} | {f(c)} | {f(k)} | |")
     L += ["", "## rollup 10x1 from the flat strip in one load step", "",
           "| k | tip rotation | core_se3 its | solve s | Kratos its | solve s |", "|---:|---:|---:|---:|---:|---:|"]

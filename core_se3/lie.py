@@ -76,11 +76,11 @@ def hat3(w):
     [[0.0, -3.0, 2.0], [3.0, 0.0, -1.0], [-2.0, 1.0, 0.0]]
     """
     w = np.asarray(w)
-    z = np.zeros_like(w[..., 0])
-    return np.stack([
-        np.stack([z, -w[..., 2], w[..., 1]], -1),
-        np.stack([w[..., 2], z, -w[..., 0]], -1),
-        np.stack([-w[..., 1], w[..., 0], z], -1)], -2)
+    out = np.zeros(w.shape[:-1] + (3, 3), dtype=w.dtype)    # six entry writes: no stacking
+    out[..., 0, 1], out[..., 0, 2] = -w[..., 2], w[..., 1]
+    out[..., 1, 0], out[..., 1, 2] = w[..., 2], -w[..., 0]
+    out[..., 2, 0], out[..., 2, 1] = -w[..., 1], w[..., 0]
+    return out
 
 
 def vee3(W):
@@ -404,7 +404,10 @@ def cross(a, b):
     """
     a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
     b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], -1)
+    x = a1 * b2 - a2 * b1
+    out = np.empty(x.shape + (3,), dtype=x.dtype)          # three writes: no stacking
+    out[..., 0], out[..., 1], out[..., 2] = x, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
+    return out
 
 
 def Ad(g):
