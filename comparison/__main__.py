@@ -15,6 +15,8 @@ STUDIES = ("agreement", "locking", "pareto", "stress")
 
 
 def main(argv=None):
+    from core_se3.backend import pin_for_timing
+    pin_for_timing()          # time the compiled product, not 'auto''s NumPy start
     ap = argparse.ArgumentParser(prog="python -m comparison", description=__doc__.splitlines()[0])
     ap.add_argument("study", choices=STUDIES + ("report",))
     ap.add_argument("--quick", action="store_true", help="a few cases only (development)")

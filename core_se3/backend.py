@@ -35,7 +35,7 @@ import os
 from .errors import OptionError
 
 __all__ = ["BACKENDS", "numba_available", "default_backend", "set_backend", "resolve", "active",
-           "charge", "iteration_saving", "NUMBA_START_COST", "rent_state", "restore_rent", "launched_ranks", "launched_rank"]
+           "charge", "iteration_saving", "NUMBA_START_COST", "rent_state", "restore_rent", "pin_for_timing", "launched_ranks", "launched_rank"]
 
 BACKENDS = ("auto", "numba", "numpy")
 _chosen = None
@@ -132,6 +132,24 @@ def default_backend():
     if env:
         return resolve(env)
     return "auto" if numba_available() else "numpy"
+
+
+def pin_for_timing(environ=None):
+    """Fix ``CORE_SE3_BACKEND`` to 'numba' (or 'numpy' without numba) unless it is set, in
+    ``environ`` (default ``os.environ``: this process and the processes it starts).  For timing
+    studies (``benchmarks/``, ``python -m comparison``): they time the compiled product, not
+    the NumPy start of 'auto', which depends on what the process solved before.  Returns the
+    backend now set.
+
+    Example
+    -------
+    >>> from core_se3.backend import pin_for_timing
+    >>> pin_for_timing({"CORE_SE3_BACKEND": "numpy"})
+    'numpy'
+    """
+    env = os.environ if environ is None else environ
+    env.setdefault("CORE_SE3_BACKEND", "numba" if numba_available() else "numpy")
+    return env["CORE_SE3_BACKEND"]
 
 
 def set_backend(name):
