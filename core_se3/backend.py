@@ -35,7 +35,8 @@ import os
 from .errors import OptionError
 
 __all__ = ["BACKENDS", "numba_available", "default_backend", "set_backend", "resolve", "active",
-           "charge", "iteration_saving", "NUMBA_START_COST", "rent_state", "restore_rent", "pin_for_timing", "launched_ranks", "launched_rank"]
+           "charge", "iteration_saving", "NUMBA_START_COST", "rent_state", "restore_rent",
+           "pin_for_timing", "launched_ranks", "launched_rank"]
 
 BACKENDS = ("auto", "numba", "numpy")
 _chosen = None
