@@ -35,7 +35,9 @@ import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 # "time": the wall time of each design iteration
-SKIP_KEYS = {"timings", "time", "scenario", "fingerprint", "file", "error", "monitor_and_perfect_branch"}
+# "backend": which backend evaluated a step (record --env CORE_SE3_BACKEND=... compares them)
+SKIP_KEYS = {"timings", "time", "scenario", "fingerprint", "file", "error", "monitor_and_perfect_branch",
+             "backend"}
 EXACT_KEYS = {"iterations", "substeps", "cutbacks", "step", "n_points", "negative_eigenvalues",
               "det_sign", "attempts", "linear_solves"}
 ROUNDOFF_KEYS = {"residual", "residual_floor", "residual_history", "balance_error"}

@@ -16,7 +16,7 @@ import numpy as np
 from .backend import launched_rank, launched_ranks
 from .errors import ConvergenceError, CoreSE3Error
 from .fem import ELEMENTS
-from .results.document import ROUNDOFF_NOTE, format_residual
+from .results.document import ROUNDOFF_NOTE, format_backends, format_residual
 
 
 def _parse_mesh(s):
@@ -82,6 +82,8 @@ def _print_doc(doc):
         print(line)
     if any(format_residual(s).endswith("*") for s in doc["steps"]):
         print(ROUNDOFF_NOTE)
+    if format_backends(doc["steps"]):
+        print(format_backends(doc["steps"]))
     if ref and ref.get("error") is None:
         print(f"reference {ref['file']}:{ref['entry']}: {ref.get('note', 'not compared')}")
     elif ref:
@@ -335,6 +337,8 @@ def _step_table(doc):
         print(line + f" {st.get('iterations', 0):>3d} {format_residual(st)}")
     if any(format_residual(st).endswith("*") for st in steps):
         print(ROUNDOFF_NOTE)
+    if format_backends(steps):
+        print(format_backends(steps))
 
 
 def scenario_sweep(args):

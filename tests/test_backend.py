@@ -123,3 +123,20 @@ def test_setting_the_backend_of_a_problem(fresh_rent):
     assert p.backend == "numba" and p.backend_setting == "numba"
     with pytest.raises(OptionError, match="unknown backend"):
         p.backend = "gpu"
+
+
+def test_each_step_records_the_backend_that_evaluated_it(fresh_rent, monkeypatch):
+    """A start cost passed within the first solve: its steps are recorded on NumPy up to the
+    switch and on numba after it (``StepResult.backend``, the step records' ``backend``)."""
+    from core_se3.results import format_backends, step_record
+    p = _cantilever()
+    # one charge per Newton iteration (test above): the 11th switches, in the step whose
+    # iterations reach it (here step 3 of 4: 5, 5, 5, 4 iterations)
+    monkeypatch.setattr(backend, "NUMBA_START_COST", 10.5 * backend.iteration_saving(p.mesh.n_elements))
+    res = p.solve(steps=4)
+    k = int(np.searchsorted(np.cumsum([s.iterations for s in res.steps[1:]]), 11)) + 1
+    assert k == 3
+    assert [s.backend for s in res.steps] == ["numpy"] * k + ["numba"] * (len(res.steps) - k)
+    recs = [step_record(s, None) for s in res.steps]
+    assert format_backends(recs) == "backend: numpy for steps 0-2, numba for steps 3-4"
+    assert format_backends([step_record(s, None) for s in _cantilever().solve(steps=1).steps]) == "backend: numba"

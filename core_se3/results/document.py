@@ -6,7 +6,8 @@
                 "probes": {name: {"u": [ux, uy, uz], "rotation_angle", "rotation_vector",
                                   "rotation": 3x3}},
                 "iterations", "residual", "residual_floor", "residual_history", "balance_error",
-                "attempts", "linear_solves", "contact": {name: {"force", "moment", "penetration",
+                "attempts", "linear_solves", "backend" ('numpy'/'numba': what evaluated the step),
+                "contact": {name: {"force", "moment", "penetration",
                 ...}} (with obstacles only)}],
      "totals": {"attempts", "linear_solves", "iterations"},
      "timings": {"setup", "assembly", "solve", "other", "total"},
@@ -88,7 +89,7 @@ def step_record(st, load, axis=None, **extra):
     >>> p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 1.0)); p.add_probe("tip")
     >>> rec = step_record(p.solve(steps=1).final, dict(name="P", value=1.0, unit="N"), error=None)
     >>> list(rec), rec["load_factor"], rec["residual"] < 1e-10
-    (['load_factor', 'load', 'probes', 'iterations', 'residual', 'residual_floor', 'residual_history', 'balance_error', 'attempts', 'linear_solves', 'error'], 1.0, True)
+    (['load_factor', 'load', 'probes', 'iterations', 'residual', 'residual_floor', 'residual_history', 'balance_error', 'attempts', 'linear_solves', 'backend', 'error'], 1.0, True)
     """
     rec = dict(load_factor=float(st.load_factor), load=load,
                probes={name: probe_record(p, axis) for name, p in st.probes.items()},
@@ -97,7 +98,8 @@ def step_record(st, load, axis=None, **extra):
                residual_floor=float(getattr(st, "residual_floor", 0.0)),
                residual_history=[float(x) for x in st.residual_history],
                balance_error=float(st.balance_error), attempts=int(st.attempts),
-               linear_solves=None if st.linear_solves is None else int(st.linear_solves))
+               linear_solves=None if st.linear_solves is None else int(st.linear_solves),
+               backend=str(getattr(st, "backend", "")) or None)
     if st.contact:
         rec["contact"] = {name: contact_record(c) for name, c in st.contact.items()}
     rec.update(extra)
@@ -106,6 +108,32 @@ def step_record(st, load, axis=None, **extra):
 
 ROUNDOFF_NOTE = ("* the loads vanish at this state (internal and external forces are round-off): the "
                  "relative residual is of order 1 and below its round-off floor -- converged")
+
+
+def format_backends(steps):
+    """One line naming the backend of each run of steps (``backend`` of the step records; the
+    'auto' backend moves from NumPy to numba once, ``core_se3.backend``); '' when not recorded.
+
+    Example
+    -------
+    >>> format_backends([{"backend": None}] + [{"backend": "numpy"}] * 3 + [{"backend": "numba"}] * 2)
+    'backend: numpy for steps 1-3, numba for steps 4-5'
+    """
+    runs = []
+    for k, rec in enumerate(steps):
+        b = rec.get("backend")
+        if not b:
+            continue
+        if runs and runs[-1][0] == b and runs[-1][2] == k - 1:
+            runs[-1][2] = k
+        else:
+            runs.append([b, k, k])
+    if not runs:
+        return ""
+    if len(runs) == 1:
+        return f"backend: {runs[0][0]}"
+    return "backend: " + ", ".join(f"{b} for step{'s' if a != z else ''} {a}{'-' + str(z) if a != z else ''}"
+                                   for b, a, z in runs)
 
 
 def format_residual(rec, width=9):

@@ -158,7 +158,8 @@ class StepRecorder:
         ell = self.ell
         return StepResult(lam, g.copy(), iterations, list(history), RF, RM, AF, AM, probes,
                           scale=(max(sF, aF, max(sM, aM) / ell), max(sM, aM, max(sF, aF) * ell)),
-                          stability=stability, contact=contact)
+                          stability=stability, contact=contact,
+                          backend=str(getattr(self.problem, "backend", "")))
 
 
 def restore_multipliers(problem, step):

@@ -68,6 +68,8 @@ class StepResult:
         Nodal frames.
     iterations : int
         Newton iterations of the step; ``residual_history``: the relative residual of each.
+    backend : str
+        'numpy' or 'numba': the backend that evaluated the converged state (``core_se3.backend``).
     residual_floor : float
         The round-off floor of the last relative residual: 1e3 eps times the element's force
         scale over the residual's scale (``solvers.convergence.relative_residual``; 0 when not
@@ -117,6 +119,7 @@ class StepResult:
     linear_solves: int | None = 0      # linear solves of those tries (None: not counted)
     contact: dict = field(default_factory=dict)   # name -> dict(force, moment, ...) of contacts
     residual_floor: float = 0.0        # round-off floor of the last relative residual
+    backend: str = ""                  # the backend that evaluated the converged state ('auto' moves)
 
     @property
     def balance_error(self):
