@@ -10,7 +10,8 @@ import pytest
 from core_se3 import Material, Problem, backend, mesh
 from core_se3.errors import OptionError
 
-numba = pytest.importorskip("numba")
+# the switch itself needs numba; without it 'auto' is NumPy (test_without_numba_auto_is_numpy)
+needs_numba = pytest.mark.skipif(not backend.numba_available(), reason="the switch to numba needs numba")
 
 
 @pytest.fixture
@@ -38,6 +39,7 @@ def _iterations(res):
     return sum(s.iterations for s in res.steps)
 
 
+@needs_numba
 def test_auto_is_the_default_and_starts_on_numpy(fresh_rent):
     p = _cantilever()
     assert p.backend_setting == "auto" and p.backend == "numpy"
@@ -48,6 +50,7 @@ def test_auto_is_the_default_and_starts_on_numpy(fresh_rent):
     assert fresh_rent.saved < backend.NUMBA_START_COST and p.backend == "numpy"
 
 
+@needs_numba
 def test_auto_switches_to_numba_once_the_start_would_have_paid_and_stays(fresh_rent):
     p = _cantilever()
     ref = _cantilever(backend="numpy").solve(steps=4).final.probes["tip"]["u"]
@@ -72,6 +75,7 @@ def test_auto_switches_to_numba_once_the_start_would_have_paid_and_stays(fresh_r
     assert _cantilever().backend == "numba"
 
 
+@needs_numba
 def test_fixed_settings_are_not_counted_and_not_switched(fresh_rent):
     for name in ("numpy", "numba"):
         p = _cantilever(backend=name)
@@ -80,6 +84,7 @@ def test_fixed_settings_are_not_counted_and_not_switched(fresh_rent):
     assert fresh_rent.saved == 0.0 and not fresh_rent.switched
 
 
+@needs_numba
 def test_a_big_mesh_switches_within_its_first_iterations(fresh_rent):
     """The count grows with the mesh: 10^4 elements pass the start cost in 3 iterations."""
     m = 10_000
@@ -90,6 +95,7 @@ def test_a_big_mesh_switches_within_its_first_iterations(fresh_rent):
     assert backend.active("auto") == "numba"
 
 
+@needs_numba
 def test_a_distributed_run_takes_numba_at_once(fresh_rent, monkeypatch):
     monkeypatch.setenv("OMPI_COMM_WORLD_SIZE", "2")
     assert backend.active("auto") == "numba"
@@ -104,6 +110,7 @@ def test_without_numba_auto_is_numpy(fresh_rent, monkeypatch):
         backend.resolve("numba")
 
 
+@needs_numba
 def test_settings_from_the_environment_and_set_backend(fresh_rent, monkeypatch):
     monkeypatch.setenv("CORE_SE3_BACKEND", " NumPy ")
     assert _cantilever().backend_setting == "numpy"
@@ -117,6 +124,7 @@ def test_settings_from_the_environment_and_set_backend(fresh_rent, monkeypatch):
         _cantilever()
 
 
+@needs_numba
 def test_setting_the_backend_of_a_problem(fresh_rent):
     p = _cantilever()
     p.backend = "numba"
@@ -125,6 +133,7 @@ def test_setting_the_backend_of_a_problem(fresh_rent):
         p.backend = "gpu"
 
 
+@needs_numba
 def test_each_step_records_the_backend_that_evaluated_it(fresh_rent, monkeypatch):
     """A start cost passed within the first solve: its steps are recorded on NumPy up to the
     switch and on numba after it (``StepResult.backend``, the step records' ``backend``)."""
