@@ -8,6 +8,7 @@
 from __future__ import annotations
 
 import os
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -81,3 +82,24 @@ def pinned_backend(monkeypatch):
     name = "numba" if importlib.util.find_spec("numba") is not None else "numpy"
     monkeypatch.setenv("CORE_SE3_BACKEND", name)
     return name
+
+
+_SESSION_TMP = []
+
+
+def pytest_sessionstart(session):
+    """``tempfile.mkdtemp()`` and friends (about 25 docstring examples use them) make their
+    files in one directory of this test session, removed at its end, instead of leaving them
+    in /tmp (this process only: child processes keep their own TMPDIR)."""
+    # pytest's own tmp_path root stays where it was (kept for failed tests, pruned by pytest)
+    os.environ.setdefault("PYTEST_DEBUG_TEMPROOT", tempfile.gettempdir())
+    _SESSION_TMP.append((tempfile.tempdir, tempfile.mkdtemp(prefix="core-se3-tests-")))
+    tempfile.tempdir = _SESSION_TMP[-1][1]
+
+
+def pytest_sessionfinish(session, exitstatus):
+    import shutil
+    if _SESSION_TMP:
+        old, path = _SESSION_TMP.pop()
+        tempfile.tempdir = old
+        shutil.rmtree(path, ignore_errors=True)
