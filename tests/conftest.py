@@ -78,8 +78,8 @@ def pinned_backend(monkeypatch):
     """One backend for every run of a test, in this process and its children
     (``CORE_SE3_BACKEND``): runs compared bit for bit then take the same path whatever the
     'auto' rule's count (tests/test_backend.py covers the count itself)."""
-    import importlib.util
-    name = "numba" if importlib.util.find_spec("numba") is not None else "numpy"
+    from core_se3.backend import pin_for_timing
+    name = pin_for_timing(dict(os.environ))          # the same choice the timing studies make
     monkeypatch.setenv("CORE_SE3_BACKEND", name)
     return name
 

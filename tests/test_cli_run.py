@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 from core_se3 import cli, scenario
+from core_se3.backend import numba_available
 from core_se3.scenario import runner
 from core_se3.io import Checkpoint
 from core_se3.errors import CheckpointError, ConvergenceError
@@ -133,13 +134,13 @@ def test_interrupted_run_resumes_to_the_same_state(tmp_path, pinned_backend):
     assert len(pvd_files(os.path.join(out, "vtu", "series.pvd"))) == 5
 
 
+@pytest.mark.skipif(not numba_available(), reason="the switch to numba needs numba")
 def test_a_resumed_run_switches_backend_where_the_uninterrupted_one_did(tmp_path, fresh_backend_count,
                                                                          monkeypatch):
     """The 'auto' backend's count is in the checkpoint: a run interrupted before its switch to
     numba and resumed in a new process (a fresh count) switches at the same Newton iteration
     and ends on the uninterrupted frames bit for bit (without the count it would switch later
     and differ by round-off)."""
-    pytest.importorskip("numba")
     from core_se3 import backend
     monkeypatch.delenv("CORE_SE3_BACKEND", raising=False)
     scn = scenario.load(write(tmp_path, with_(STRIP, solver={"steps": 6}, output={"plots": False,
