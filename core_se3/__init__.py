@@ -20,18 +20,36 @@ Example (a strip rolled into a full circle by an end moment M = 2 pi EI / L)
 from . import lie, mesh
 from . import fem, model, results, solvers  # noqa: F401  (solvers registers Problem.solve's controls)
 from . import parallel  # noqa: F401  (registers the distributed solver; imports no MPI)
-from . import io, design, scenario, catalogue  # noqa: F401
 from .errors import (CheckpointError, ConvergenceError, CoreSE3Error, ElementTooDistortedError, LoadError,
                      MaterialError, MeshError, OptionError, ScenarioError, SingularSystemError, SupportError)
 from .fem import Element, Material, RegionMaterial, register_element
 from .model import (Field, Load, LoadKind, Param, Problem, register_field, register_load)
 from .model import fields
 from .results import Result, StepResult
-from .scenario import Scenario
 from .solvers import (ArcLengthOptions, NewtonOptions, arc_length, displacement_control,
                       newton_solve)
 
-load_scenario = scenario.load
+# The upper layers a solve does not need are imported at their first use (PEP 562): a
+# one-shot `core-se3 bench run` does not pay for the design, scenario (TOML) and output
+# (XML) modules it never touches.  ``core_se3.io``, ``core_se3.design``, ``core_se3.scenario``,
+# ``core_se3.catalogue``, ``Scenario`` and ``load_scenario`` behave as eagerly imported names.
+_LAZY = {"io": ("io", None), "design": ("design", None), "scenario": ("scenario", None),
+         "catalogue": ("catalogue", None), "Scenario": ("scenario", "Scenario"),
+         "load_scenario": ("scenario", "load")}
+
+
+def __getattr__(name):
+    try:
+        module, attr = _LAZY[name]
+    except KeyError:
+        raise AttributeError(f"module 'core_se3' has no attribute {name!r}") from None
+    import importlib
+    obj = importlib.import_module(f"{__name__}.{module}")
+    return obj if attr is None else getattr(obj, attr)
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY))
 
 __all__ = ["lie", "mesh", "fem", "model", "fields", "results", "solvers", "io", "design", "scenario", "catalogue",
            "Problem", "Material", "RegionMaterial", "Result", "StepResult", "Scenario", "load_scenario",

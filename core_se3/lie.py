@@ -43,9 +43,9 @@ _NTERMS = 10
 
 
 def _series(coeffs, s):
-    """Evaluate sum_k coeffs[k] s^k (Horner) for array s (real or complex)."""
-    out = np.zeros_like(s) + coeffs[-1]
-    for c in coeffs[-2::-1]:
+    """sum_k coeffs[k] s^k (Horner, >= 2 coefficients) for an array s (real or complex)."""
+    out = s * coeffs[-1] + coeffs[-2]
+    for c in coeffs[-3::-1]:
         out = out * s + c
     return out
 
@@ -61,8 +61,13 @@ _dC = [2 * (n - 1) * _B2N[n - 1] / factorial(2 * n) for n in range(2, _NTERMS + 
 
 
 def _coef(s, series, closed):
-    """Coefficient as a function of s = theta^2: series below _SERIES, closed form above."""
+    """Coefficient as a function of s = theta^2: series below _SERIES, closed form above (only
+    the branch in use where all entries lie on one side: half the calls on small arrays)."""
     small = np.abs(s.real if np.iscomplexobj(s) else s) < _SERIES ** 2
+    if small.all():
+        return _series(series, s)
+    if not small.any():
+        return closed(s, np.sqrt(s))
     s_big = np.where(small, 4.0, s)  # dummy value keeps the closed form finite on the small branch
     return np.where(small, _series(series, s), closed(s_big, np.sqrt(s_big)))
 
@@ -174,6 +179,8 @@ def log_so3(R):
     s = t * t
     fac = _coef(s, _S, lambda s, t: np.sin(t) / t)         # sin(t)/t
     near_pi = c < -0.5
+    if not near_pi.any():                                  # every angle below 2 pi / 3
+        return sinv / fac[..., None]
     fac_safe = np.where(near_pi, 1.0, fac)
     w_regular = sinv / fac_safe[..., None]
     # near pi: n n^T = (R + R^T - 2 c I) / (2 (1 - c)); take the best-conditioned column
@@ -343,31 +350,37 @@ def dexp(xi):
     return _block(Jr, dJ)
 
 
-def dexp_inv(xi):
+def dexp_inv(xi, both=False):
     """Inverse of dexp: ``dxi = dexp_inv(xi) (exp(-xi) d exp(xi))^vee``; singular at |w| = 2 pi n.
 
-    Parameters: xi (..., 6) twist, |w| != 2 pi n.  Returns: (..., 6, 6) dexp(xi)^-1 (closed form).
+    Parameters: xi (..., 6) twist, |w| != 2 pi n.  Returns: (..., 6, 6) dexp(xi)^-1 (closed form);
+    with ``both``, (dexp_inv(xi), dexp_inv(-xi)) at the cost of one: they differ only in the sign
+    of the terms odd in xi (W/2, V/2), since c, c' and w.v are even.
 
     Example
     -------
     >>> xi = np.array([0.1, -0.2, 0.3, 0.4, 0.5, -0.6])
-    >>> np.allclose(dexp_inv(xi) @ dexp(xi), np.eye(6), rtol=0, atol=1e-14)
-    True
+    >>> Lp, Lm = dexp_inv(xi, both=True)
+    >>> np.allclose(Lp @ dexp(xi), np.eye(6), rtol=0, atol=1e-14), np.allclose(Lm @ dexp(-xi), np.eye(6))
+    (True, True)
     """
     s, wv, W, V = _twist_parts(xi)
     c = _coef(s, _C, _c_closed)
     dc = _coef(s, _dC, _dc_closed)
     e = lambda x: x[..., None, None]
-    Linv = np.eye(3) + 0.5 * W + e(c) * (W @ W)
-    dL = 0.5 * V + e(dc * wv) * (W @ W) + e(c) * (V @ W + W @ V)
-    return _block(Linv, dL)
+    W2 = W @ W
+    even_A = np.eye(3) + e(c) * W2                 # L = [[A, B], [0, A]] as in dexp_inv_T_apply
+    even_B = e(dc * wv) * W2 + e(c) * (V @ W + W @ V)
+    Lp = _block(even_A + 0.5 * W, even_B + 0.5 * V)
+    return (Lp, _block(even_A - 0.5 * W, even_B - 0.5 * V)) if both else Lp
 
 
 def dexp_inv_T_apply(xi, f):
     """dexp_inv(xi)^T f without forming the matrix (closed vector form; complex-safe):
 
     with L = [[A, B], [0, A]], A^T f = f - w x f / 2 + c w x (w x f),
-    B^T f = -v x f / 2 + c'(w.v)/t w x (w x f) + c [w x (v x f) + v x (w x f)].
+    B^T f = -v x f / 2 + c'(w.v)/t w x (w x f) + c [w x (v x f) + v x (w x f)], with a x (b x f)
+    = b (a.f) - f (a.b) expanded: w x (v x f) + v x (w x f) = v (w.f) + w (v.f) - 2 (w.v) f.
 
     Parameters: xi (..., 6) twists, f (..., 6) wrenches (arrays, real or complex).  Returns: (..., 6).
 
@@ -379,15 +392,16 @@ def dexp_inv_T_apply(xi, f):
     """
     v, w = xi[..., :3], xi[..., 3:]
     fv, fw = f[..., :3], f[..., 3:]
-    s = np.einsum("...i,...i->...", w, w)
-    wv = np.einsum("...i,...i->...", w, v)
-    c = _coef(s, _C, _c_closed)[..., None]
-    dc = _coef(s, _dC, _dc_closed)[..., None]
-    cr = cross
-    wwfv = cr(w, cr(w, fv))
-    top = fv - 0.5 * cr(w, fv) + c * wwfv
-    bot = (-0.5 * cr(v, fv) + dc * wv[..., None] * wwfv + c * (cr(w, cr(v, fv)) + cr(v, cr(w, fv)))
-           + fw - 0.5 * cr(w, fw) + c * cr(w, cr(w, fw)))
+    dot = lambda a, b: np.einsum("...i,...i->...", a, b)[..., None]   # no conjugation: complex-safe
+    s = dot(w, w)
+    wv = dot(w, v)
+    c = _coef(s, _C, _c_closed)
+    dc = _coef(s, _dC, _dc_closed)
+    wfv = dot(w, fv)
+    wwfv = w * wfv - s * fv                                   # w x (w x fv)
+    top = fv - 0.5 * cross(w, fv) + c * wwfv
+    bot = (-0.5 * cross(v, fv) + (dc * wv) * wwfv + c * (v * wfv + w * dot(v, fv) - 2.0 * wv * fv)
+           + fw - 0.5 * cross(w, fw) + c * (w * dot(w, fw) - s * fw))
     return np.concatenate([top, bot], -1)
 
 

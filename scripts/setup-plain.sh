@@ -27,7 +27,8 @@ fi
 
 echo "==> pip install -e .[test] (NumPy 2)"
 export PIP_DISABLE_PIP_VERSION_CHECK=1 PIP_NO_INPUT=1
-"$VENV/bin/python" -m pip install -q "numpy>=2" -e ".[test]"
+# editable_mode=compat: a .pth path line instead of setuptools' editable finder (scripts/setup.sh)
+"$VENV/bin/python" -m pip install -q "numpy>=2" --config-settings editable_mode=compat -e ".[test]"
 
 "$VENV/bin/python" -c "import numpy, scipy, meshio, matplotlib; print('numpy', numpy.__version__, ' scipy', scipy.__version__)"
 echo "==> setup-plain done: $VENV"

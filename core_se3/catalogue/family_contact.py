@@ -25,6 +25,7 @@ from .family_magnetic import build as magnetic_build
 from .generic import case_document
 from .measures import lifted_length_from_gaps
 from .references import contact_lift_elastica
+from .spline import CubicSpline
 
 __all__ = ["strip_EI", "lift_formula", "lift_elastica", "propped_formula", "contact_of"]
 
@@ -65,7 +66,6 @@ def lift_elastica(p, delta):
     >>> round(ref["l"], 6), round(ref["F"], 7), ref["interpolated"]
     (0.717426, 0.0370879, False)
     """
-    from scipy.interpolate import CubicSpline
     tab = contact_lift_elastica()
     Q = tab["params"]["Q"]
     ql = p["q"] * p["width"]

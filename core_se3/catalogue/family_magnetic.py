@@ -26,6 +26,7 @@ from .case import Family, Reference, register_family
 from .cases_magnetic import field_scale, gravity_scale, zhao_nx
 from .generic import case_document
 from .references import elastica_entry
+from .spline import CubicSpline
 
 __all__ = ["critical_load", "smallest_eigenvalue", "dimensionless_load", "MU0_MM", "gripper_mesh"]
 
@@ -216,7 +217,6 @@ def zhao_entry_name(p):
 
 def _bracket(p, doc):
     """For nu != 0 at 90 deg: is the tip deflection between the beam- and plate-stiffness answers?"""
-    from scipy.interpolate import CubicSpline
     try:
         e = elastica_entry(zhao_entry_name(p))
     except KeyError:
@@ -257,7 +257,6 @@ def _run_cantilever(case, p, prob, steps, **kw):
 
 
 def _tip_error_L(p, st, ref_entry):
-    from scipy.interpolate import CubicSpline
     e = elastica_entry(ref_entry)
     L = np.asarray(e["load"])
     q = st["load"]["value"]

@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from .references import literature_entry
+from .spline import CubicSpline
 
 __all__ = ["path_distance", "interp_reference", "error_against_reference", "point_curve_distances",
            "table_curves", "curve_columns", "curve_deviation", "errors_at_table_loads",
@@ -59,14 +60,13 @@ def interp_reference(load, ref_load, ref_values):
     >>> interp_reference([0.3, 2.0], L, np.c_[L ** 2]).round(12).ravel().tolist()
     [0.09, nan]
     """
-    from scipy.interpolate import CubicSpline
     L = np.asarray(ref_load, float)
     V = np.asarray(ref_values, float)
     order = np.argsort(L)
     L, V = L[order], V[order]
     keep = np.concatenate([[True], np.diff(L) > 0])
     L, V = L[keep], V[keep]
-    out = CubicSpline(L, V, axis=0)(np.asarray(load, float))
+    out = CubicSpline(L, V)(np.asarray(load, float))
     x = np.asarray(load, float)
     out[(x < L[0] - 1e-12 * abs(L[0])) | (x > L[-1] + 1e-12 * abs(L[-1]))] = np.nan
     return out

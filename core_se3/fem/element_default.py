@@ -122,8 +122,17 @@ def edge_twists(g, edge_nodes):
     >>> m.edge_nodes.tolist(), edge_twists(m.g0, m.edge_nodes)[:, :3].tolist()
     ([[0, 1], [0, 2], [1, 3], [2, 3]], [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]])
     """
-    ga, gb = g[edge_nodes[:, 0]], g[edge_nodes[:, 1]]
-    psi = lie.log(lie.inv(ga) @ gb)
+    return _checked_log(_relative_frames(g, edge_nodes), edge_nodes)
+
+
+def _relative_frames(g, edge_nodes):
+    """h_e = g_a^-1 g_b (E, 4, 4) of every edge (a, b)."""
+    return lie.inv(g[edge_nodes[:, 0]]) @ g[edge_nodes[:, 1]]
+
+
+def _checked_log(h, edge_nodes):
+    """psi = log(h) (E, 6); ElementTooDistortedError where an edge turns by ~pi."""
+    psi = lie.log(h)
     ang = np.linalg.norm(psi[:, 3:], axis=1)
     if ang.size and ang.max() > MAX_EDGE_ANGLE:
         e = int(np.argmax(ang))
@@ -301,9 +310,9 @@ class DefaultElement(Element):
         evaluation's ``stress`` is Dbar (z(g) - z0) (m, 24)."""
         mesh = self.mesh
         En = mesh.edge_nodes
-        psi = edge_twists(g, En)
-        Lp = lie.dexp_inv(psi)
-        Lm = lie.dexp_inv(-psi)
+        h = _relative_frames(g, En)
+        psi = _checked_log(h, En)
+        Lp, Lm = lie.dexp_inv(psi, both=True)                          # L(psi), L(-psi)
         z = self._element_z(0.5 * psi)
         dz = z - self.z0
         f = np.einsum("mij,mj->mi", self.Dbar, dz)                      # dPi/dz_elem
@@ -352,7 +361,7 @@ class DefaultElement(Element):
             ps, Fs, Lps, Lms = psi[s:e], F[s:e], Lp[s:e], Lm[s:e]
             p = np.einsum("eji,ej->ei", Lps, Fs)                        # L(psi)^T F
             Jm = _dexp_inv_jacobian_T(ps, Fs)
-            AdI = lie.Ad(lie.exp(-ps))                                   # Ad_{h^-1}
+            AdI = lie.Ad(lie.inv(h[s:e]))                                # Ad_{h^-1} = Ad_{exp(-psi)}
             M = np.concatenate([-AdI, np.broadcast_to(I6, AdI.shape)], axis=2)   # (c,6,12)
             N = np.concatenate([-Lms, Lps], axis=2)                              # (c,6,12)
             A = np.swapaxes(M, 1, 2) @ Jm @ N
