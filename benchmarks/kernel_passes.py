@@ -5,7 +5,10 @@ timed alone, per element, on square plates in a bent state (issue 13's small-mes
 Passes (``core_se3.kernels.element_passes``): the edges' logs psi = log(g_a^-1 g_b); the
 elements (forces and material blocks G^T Dbar G, scattered into the CSR data); the edges
 (edge forces, geometric blocks); the nodes (residual sums, 1/2 adt(r)); and, for comparison,
-the whole residual-only and tangent drivers.  Best of ``--repeats`` calls each, one thread.
+the whole residual-only and tangent drivers.  The plate's law has no v-w coupling, so the
+element passes read Dbar's split form (``ElementKernels.split``); the rows "general path"
+time the same drivers on the same Dbar through the general path (Dbar unpacked per element,
+as for a law that couples v and w).  Best of ``--repeats`` calls each, one thread.
 Writes ``benchmarks/results/kernel_passes.md``.
 
     .venv/bin/python benchmarks/kernel_passes.py
@@ -61,23 +64,33 @@ def measure(n, repeats):
     mesh, pat, ek, g = _setup(n)
     topo, cmap, data = pat.topo, pat.map, pat.new_data()
     m, nE, nn = mesh.n_elements, len(ek.edge_nodes), mesh.n_nodes
-    args = (g, ek.quads, ek.edge_nodes, ek.elem_edges, ek.sign, ek.Dbar, ek.z0, ek.Dz0, topo, cmap,
+    args = (g, ek.quads, ek.edge_nodes, ek.elem_edges, ek.sign, ek.Dbar, ek.Dsplit, ek.z0, ek.Dz0, topo, cmap,
             ek.psi, ek.coef, ek.ang, ek.fe, ek.rE, ek.r, data, None, None, None)
+    nosplit = np.empty((0, 24, 12))
+    gargs = args[:6] + (nosplit,) + args[7:]
     rows = {
         "tangent (whole driver)": lambda: element_tangent_serial(*args),
         "residual (whole driver)": lambda: element_residual_serial(
-            g, ek.edge_nodes, ek.elem_edges, ek.sign, ek.Dbar, ek.z0, ek.Dz0, topo, ek.psi, ek.coef, ek.ang,
-            ek.fe, ek.rE, ek.r),
+            g, ek.edge_nodes, ek.elem_edges, ek.sign, ek.Dbar, ek.Dsplit, ek.z0, ek.Dz0, topo, ek.psi, ek.coef,
+            ek.ang, ek.fe, ek.rE, ek.r),
         "edges: logs": lambda: P.edges_log(g, ek.edge_nodes, ek.psi, ek.coef, ek.ang, 0, nE),
-        "elements: forces only": lambda: P.elements_force(ek.elem_edges, ek.sign, ek.Dbar, ek.z0, ek.Dz0,
-                                                          ek.psi, ek.fe, 0, m),
+        "elements: forces only": lambda: P.elements_force(ek.elem_edges, ek.sign, ek.Dbar, ek.Dsplit, ek.z0,
+                                                          ek.Dz0, ek.psi, ek.fe, 0, m),
         "elements: forces + material blocks, scattered": lambda: P.elements_tangent(
-            None, ek.quads, ek.elem_edges, ek.sign, ek.Dbar, ek.z0, ek.Dz0, ek.psi, ek.coef, ek.fe, cmap, data,
-            0, m),
+            None, ek.quads, ek.elem_edges, ek.sign, ek.Dbar, ek.Dsplit, ek.z0, ek.Dz0, ek.psi, ek.coef, ek.fe, cmap,
+            data, 0, m),
         "edges: forces + geometric blocks, scattered": lambda: P.edges_tangent(
             None, ek.edge_nodes, topo.edge_slots, ek.psi, ek.coef, ek.fe, ek.rE, None, None, cmap, data, 0, nE),
         "nodes: residual + 1/2 adt(r), scattered": lambda: P.nodes_pass(
             topo.node_ptr, topo.node_inc, ek.rE, ek.r, None, None, data, cmap, 0, nn),
+        # the general path (a law coupling v and w: Dbar unpacked per element), on the same Dbar
+        "general path: tangent (whole driver)": lambda: element_tangent_serial(*gargs),
+        "general path: residual (whole driver)": lambda: element_residual_serial(
+            g, ek.edge_nodes, ek.elem_edges, ek.sign, ek.Dbar, nosplit, ek.z0, ek.Dz0, topo, ek.psi, ek.coef,
+            ek.ang, ek.fe, ek.rE, ek.r),
+        "general path: elements, forces + material blocks, scattered": lambda: P.elements_tangent(
+            None, ek.quads, ek.elem_edges, ek.sign, ek.Dbar, nosplit, ek.z0, ek.Dz0, ek.psi, ek.coef, ek.fe, cmap,
+            data, 0, m),
     }
     element_tangent_serial(*args)          # the state the passes read (psi, fe, rE)
     return m, {k: _best(f, repeats) * 1e6 / m for k, f in rows.items()}

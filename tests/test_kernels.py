@@ -7,7 +7,9 @@ are compared as CSR data arrays against ``Assembler.matrix`` (same indptr/indice
 
 Problems are evaluated with both backends (``Problem(..., backend=...)``); every built-in load
 kind is compared, and a user load without a compiled kernel goes through the generic block
-scatter.
+scatter.  The element kernels' two forms of Dbar are both compared: the split form of the
+laws of ``fem.material`` (on aligned meshes and on the disk's general quads) and the general
+path of a law coupling membrane and bending (``CoupledLaw``).
 """
 import numpy as np
 import pytest
@@ -84,7 +86,29 @@ def _meshes():
     flat = M.rectangle(1.5, 1.0, 3, 2)
     arch = M.cylinder_arch(1.0, 1.2, 0.8, 4, 2)
     ann = M.annulus(0.5, 1.0, 1.5 * np.pi, 2, 6)
-    return {"flat": flat, "arch": arch, "annulus": ann}
+    disk = M.disk(1.0, 0.3)         # general quads, frames not along the edges: a fuller Dbar
+    return {"flat": flat, "arch": arch, "annulus": ann, "disk": disk}
+
+
+class CoupledLaw:
+    """A test-only ResultantLaw that couples membrane and bending (as a laminate's B matrix):
+    W = W_base + beta sqrt(C D) H(e, K) (``fem.material``'s e, K and H), i.e. Material's
+    resultant matrix plus beta sqrt(C D) (Mm^T H Mb + Mb^T H Mm): positive definite for
+    |beta| < 1, and Dbar's v-w blocks are not zero, so the kernels take their general path."""
+
+    def __init__(self, base, beta=0.5):
+        self.base, self.beta = base, beta
+
+    def resultant_matrix(self, A1, A2):
+        from core_se3.fem.material import strain_operators
+        Dm, j0 = self.base.resultant_matrix(A1, A2)
+        (Mm, _, Mb, _), Ainv, _ = strain_operators(A1, A2)
+        nu = self.base.nu
+        H = (nu * np.einsum("...ab,...cd->...abcd", Ainv, Ainv)
+             + (1 - nu) * np.einsum("...ac,...bd->...abcd", Ainv, Ainv)).reshape(Ainv.shape[:-2] + (4, 4))
+        B = np.swapaxes(Mm, -1, -2) @ H @ Mb
+        c = self.beta * np.sqrt(self.base.C * self.base.D)
+        return Dm + c * (B + np.swapaxes(B, -1, -2)), j0
 
 
 def _problem(kind, nu=0.3, backend="numpy"):
@@ -93,7 +117,12 @@ def _problem(kind, nu=0.3, backend="numpy"):
         mat = RegionMaterial.from_regions(mesh.n_elements, Material(1.0e4, 0.3, 0.1),
                                           [(np.arange(0, mesh.n_elements, 3), Material(3.0e4, 0.2, 0.05))])
         return Problem(mesh, mat, backend=backend)
+    if kind == "coupled":
+        return Problem(M.cylinder_arch(1.0, 1.2, 0.8, 4, 2), CoupledLaw(Material(1.0e4, nu, 0.1)), backend=backend)
     return Problem(_meshes()[kind], Material(1.0e4, nu, 0.1), backend=backend)
+
+
+KINDS = ["flat", "arch", "annulus", "region", "disk", "coupled"]
 
 
 def _state(mesh, seed, edge_turn=0.85 * np.pi, noise=0.05):
@@ -127,14 +156,14 @@ def _safe_state(mesh, seed):
 
 def _free(mesh, rng):
     fixed = np.zeros((mesh.n_nodes, 6), bool)
-    fixed[mesh.edges["x0"]] = True
+    fixed[mesh.edges["x0"] if "x0" in mesh.edges else mesh.edges["rim"][:3]] = True
     fixed[rng.integers(mesh.n_nodes), rng.integers(6)] = True     # a partly constrained node
     return ~fixed.ravel()
 
 
 # ------------------------------------------------------------------ pattern -----------------
 
-@pytest.mark.parametrize("kind", ["flat", "arch", "annulus", "region"])
+@pytest.mark.parametrize("kind", KINDS)
 def test_pattern_equals_assembler(kind):
     p = _problem(kind)
     mesh = p.mesh
@@ -154,7 +183,7 @@ def test_pattern_equals_assembler(kind):
 # ------------------------------------------------------------------ element -----------------
 
 @pytest.mark.parametrize("mode", ["serial", "colour", "gather"])
-@pytest.mark.parametrize("kind", ["flat", "arch", "annulus", "region"])
+@pytest.mark.parametrize("kind", KINDS)
 @pytest.mark.parametrize("seed", [1, 2])
 def test_element_residual_and_tangent(kind, mode, seed):
     p = _problem(kind)
@@ -179,6 +208,33 @@ def test_element_residual_and_tangent(kind, mode, seed):
     D = pat.matrix(tan["data"]).toarray() - Kref.toarray()
     scale = np.abs(Kref.toarray()).max()
     assert np.abs(D).max() <= TOL * scale
+
+
+def test_dbar_paths():
+    """Each law of fem.material gives a Dbar without v-w coupling: the kernels read its split
+    form (the two 12x12 diagonal blocks in the order z' = (v of the 4 edges, w of the 4
+    edges)); a law coupling membrane and bending takes the general path (Dbar unpacked)."""
+    from core_se3.kernels.element_ops import ZP
+    for kind, split in [("flat", True), ("disk", True), ("arch", True), ("region", True), ("coupled", False)]:
+        el = _problem(kind).element
+        mesh = el.mesh
+        pat = K.Pattern(mesh.quads, mesh.edge_nodes, mesh.elem_edges, mesh.n_nodes, np.ones(6 * mesh.n_nodes, bool))
+        ek = K.ElementKernels.from_element(el, pat, mode="serial")
+        assert ek.split is split, kind
+        D = np.empty_like(el.Dbar)
+        D[:, ZP[:, None], ZP[None, :]] = el.Dbar                    # Dbar in the order z'
+        vw = np.abs(D[:, :12, 12:]).max()
+        if split:
+            assert vw == 0.0 and ek.Dsplit.shape == (mesh.n_elements, 24, 12)
+            assert np.array_equal(ek.Dsplit[:, :12], D[:, :12, :12])
+            assert np.array_equal(ek.Dsplit[:, 12:], D[:, 12:, 12:])
+        else:
+            scale = np.sqrt(np.abs(D[:, :12, :12]).max() * np.abs(D[:, 12:, 12:]).max())   # |D_vw| <= that
+            assert vw > 0.1 * scale and ek.Dsplit.shape[0] == 0
+    # the disk's frames are not along the element edges: more of Dbar's v-v, w-w entries are
+    # non-zero than on a rectangle (160 against 64 of 576)
+    nz = {k: int((_problem(k).element.Dbar != 0).any(0).sum()) for k in ("flat", "disk")}
+    assert nz == {"flat": 64, "disk": 160}
 
 
 def test_too_distorted_flag_and_error():
@@ -344,7 +400,7 @@ def _mixed_setup(kind, mode, seed):
 
 
 @pytest.mark.parametrize("mode", ["serial", "colour", "gather"])
-@pytest.mark.parametrize("kind", ["flat", "arch", "annulus", "region"])
+@pytest.mark.parametrize("kind", KINDS)
 def test_mixed_tangent_and_stress(kind, mode):
     """tangent(g, data, stress=S): the NumPy element's evaluate(g, stress=S), assembled; the
     returned stress is the NumPy evaluation's Dbar (z - z0); S = that stress gives the ordinary
@@ -383,7 +439,7 @@ def test_mixed_tangent_and_stress(kind, mode):
 
 
 @pytest.mark.parametrize("mode", ["serial", "gather"])
-@pytest.mark.parametrize("kind", ["flat", "arch", "annulus", "region"])
+@pytest.mark.parametrize("kind", KINDS)
 def test_linear_stress(kind, mode):
     """linear_stress(eta) = NumPy's DefaultElement.linear_stress at the state of the last call,
     with O(1) increments (G eta as large as z - z0: its signs are checked), and the first-order

@@ -4,7 +4,9 @@ Python wrapper :class:`ElementKernels` with its preallocated workspace.
 
 The tangent drivers write the element's blocks (material G^T Dbar G, edge geometric, nodal
 1/2 adt(r)) straight into the CSR ``data`` of the free-dof pattern (``kernels.csr``): no COO to
-CSR conversion and no pattern-sized allocation per iteration.
+CSR conversion and no pattern-sized allocation per iteration.  Dbar is read in its split form
+(two 12x12 blocks per element) when its v-w coupling is exactly zero, as for every law of
+``fem.material``, else unpacked per element (``element_ops``' module docstring).
 """
 from __future__ import annotations
 
@@ -14,7 +16,7 @@ import numpy as np
 from numba import njit, prange
 
 from .element_mixed import element_linear_stress, element_linear_stress_serial, signed_edge_stress, stress_from_signed
-from .element_ops import CHUNK, MAX_EDGE_ANGLE, NSYM, check_angles, packed_matvec
+from .element_ops import CHUNK, MAX_EDGE_ANGLE, NSYM, check_angles, packed_matvec, split_form
 from .element_passes import (edges_log, edges_residual, edges_tangent, edges_tangent_store, elements_force,
                              elements_tangent, elements_tangent_store, nodes_pass)
 
@@ -22,14 +24,16 @@ __all__ = ["ElementKernels", "element_residual", "element_residual_serial", "ele
            "element_tangent_serial", "element_tangent_gather", "SERIAL_BELOW"]
 
 @njit(cache=True, parallel=True)
-def element_residual(g, edge_nodes, elem_edges, elem_edge_sign, Dbar, z0, Dz0, topo,
+def element_residual(g, edge_nodes, elem_edges, elem_edge_sign, Dbar, Dsplit, z0, Dz0, topo,
                      psi, coef, ang, fe, rE, r):
     """Residual only.  Returns (energy, force_scale, flag, edge); r (n, 6) is written.
 
     energy = 1/2 sum_e dz^T Dbar dz, dz = z - z0, z = (sgn psi / 2) over the 4 edges;
     F_E = sum over elements of sgn f (f = Dbar dz); r_a += -1/2 L(-psi)^T F, r_b += 1/2 L(psi)^T F;
-    force_scale = sqrt(sum |f + Dz0|^2 + |f|^2).  Workspace: psi (E,6), coef (E,3), ang (E,),
-    fe (m,4,6), rE (E,2,6).  Parallel over edges, elements, nodes (no colouring needed)."""
+    force_scale = sqrt(sum |f + Dz0|^2 + |f|^2).  Dbar (m,300) packed, Dsplit (m,24,12) its
+    split form or empty (0,24,12) for the general path (``ElementKernels.split``).  Workspace:
+    psi (E,6), coef (E,3), ang (E,), fe (m,4,6), rE (E,2,6).  Parallel over edges, elements,
+    nodes (no colouring needed)."""
     nE, m, n = edge_nodes.shape[0], elem_edges.shape[0], r.shape[0]
     for ch in prange((nE + CHUNK - 1) // CHUNK):
         edges_log(g, edge_nodes, psi, coef, ang, ch * CHUNK, min(nE, (ch + 1) * CHUNK))
@@ -39,7 +43,7 @@ def element_residual(g, edge_nodes, elem_edges, elem_edge_sign, Dbar, z0, Dz0, t
     energy = 0.0
     fs = 0.0
     for ch in prange((m + CHUNK - 1) // CHUNK):
-        a, b = elements_force(elem_edges, elem_edge_sign, Dbar, z0, Dz0, psi, fe, ch * CHUNK,
+        a, b = elements_force(elem_edges, elem_edge_sign, Dbar, Dsplit, z0, Dz0, psi, fe, ch * CHUNK,
                               min(m, (ch + 1) * CHUNK))
         energy += a
         fs += b
@@ -52,7 +56,7 @@ def element_residual(g, edge_nodes, elem_edges, elem_edge_sign, Dbar, z0, Dz0, t
 
 
 @njit(cache=True)
-def element_residual_serial(g, edge_nodes, elem_edges, elem_edge_sign, Dbar, z0, Dz0, topo,
+def element_residual_serial(g, edge_nodes, elem_edges, elem_edge_sign, Dbar, Dsplit, z0, Dz0, topo,
                             psi, coef, ang, fe, rE, r):
     """``element_residual`` in one thread."""
     nE, m, n = edge_nodes.shape[0], elem_edges.shape[0], r.shape[0]
@@ -60,14 +64,14 @@ def element_residual_serial(g, edge_nodes, elem_edges, elem_edge_sign, Dbar, z0,
     flag, bad = check_angles(ang)
     if flag:
         return 0.0, 0.0, flag, bad
-    energy, fs = elements_force(elem_edges, elem_edge_sign, Dbar, z0, Dz0, psi, fe, 0, m)
+    energy, fs = elements_force(elem_edges, elem_edge_sign, Dbar, Dsplit, z0, Dz0, psi, fe, 0, m)
     edges_residual(topo.edge_slots, psi, coef, fe, rE, 0, nE)
     nodes_pass(topo.node_ptr, topo.node_inc, rE, r, None, None, None, None, 0, n)
     return energy, sqrt(fs), 0, -1
 
 
 @njit(cache=True, parallel=True)
-def element_tangent(g, quads, edge_nodes, elem_edges, elem_edge_sign, Dbar, z0, Dz0, topo, cmap,
+def element_tangent(g, quads, edge_nodes, elem_edges, elem_edge_sign, Dbar, Dsplit, z0, Dz0, topo, cmap,
                     psi, coef, ang, fe, rE, r, data, fe_geo, rEg, rg):
     """Residual and tangent of the default element, written into the CSR ``data`` (nnz,).
 
@@ -102,7 +106,7 @@ def element_tangent(g, quads, edge_nodes, elem_edges, elem_edge_sign, Dbar, z0, 
     for col in range(len(cptr) - 1):
         lo, hi = cptr[col], cptr[col + 1]
         for ch in prange((hi - lo + CHUNK - 1) // CHUNK):
-            a, b = elements_tangent(order, quads, elem_edges, elem_edge_sign, Dbar, z0, Dz0, psi, coef, fe,
+            a, b = elements_tangent(order, quads, elem_edges, elem_edge_sign, Dbar, Dsplit, z0, Dz0, psi, coef, fe,
                                     cmap, data, lo + ch * CHUNK, min(hi, lo + (ch + 1) * CHUNK))
             energy += a
             fs += b
@@ -119,7 +123,7 @@ def element_tangent(g, quads, edge_nodes, elem_edges, elem_edge_sign, Dbar, z0, 
 
 
 @njit(cache=True)
-def element_tangent_serial(g, quads, edge_nodes, elem_edges, elem_edge_sign, Dbar, z0, Dz0, topo, cmap,
+def element_tangent_serial(g, quads, edge_nodes, elem_edges, elem_edge_sign, Dbar, Dsplit, z0, Dz0, topo, cmap,
                            psi, coef, ang, fe, rE, r, data, fe_geo, rEg, rg):
     """``element_tangent`` in one thread, natural order (no threading overhead: small meshes);
     the same mixed option (fe_geo, rEg, rg: arrays or None)."""
@@ -129,7 +133,7 @@ def element_tangent_serial(g, quads, edge_nodes, elem_edges, elem_edge_sign, Dba
     flag, bad = check_angles(ang)
     if flag:
         return 0.0, 0.0, flag, bad
-    energy, fs = elements_tangent(None, quads, elem_edges, elem_edge_sign, Dbar, z0, Dz0, psi, coef, fe,
+    energy, fs = elements_tangent(None, quads, elem_edges, elem_edge_sign, Dbar, Dsplit, z0, Dz0, psi, coef, fe,
                                   cmap, data, 0, m)
     edges_tangent(None, edge_nodes, topo.edge_slots, psi, coef, fe, rE, fe_geo, rEg, cmap, data, 0, nE)
     nodes_pass(topo.node_ptr, topo.node_inc, rE, r, rEg, rg, data, cmap, 0, n)
@@ -137,7 +141,7 @@ def element_tangent_serial(g, quads, edge_nodes, elem_edges, elem_edge_sign, Dba
 
 
 @njit(cache=True, parallel=True)
-def element_tangent_gather(g, quads, edge_nodes, elem_edges, elem_edge_sign, Dbar, z0, Dz0, topo, cmap,
+def element_tangent_gather(g, quads, edge_nodes, elem_edges, elem_edge_sign, Dbar, Dsplit, z0, Dz0, topo, cmap,
                            psi, coef, ang, fe, rE, r, data, fe_geo, rEg, rg, Keb, KEb):
     """``element_tangent`` by compute-then-gather: element blocks Keb (m,4,4,6,6) and edge
     blocks KEb (E,2,2,6,6) are stored (parallel, no colours), then every CSR block sums its
@@ -152,7 +156,7 @@ def element_tangent_gather(g, quads, edge_nodes, elem_edges, elem_edge_sign, Dba
     energy = 0.0
     fs = 0.0
     for ch in prange((m + CHUNK - 1) // CHUNK):
-        a, b = elements_tangent_store(elem_edges, elem_edge_sign, Dbar, z0, Dz0, psi, coef, fe, Keb,
+        a, b = elements_tangent_store(elem_edges, elem_edge_sign, Dbar, Dsplit, z0, Dz0, psi, coef, fe, Keb,
                                       ch * CHUNK, min(m, (ch + 1) * CHUNK))
         energy += a
         fs += b
@@ -211,6 +215,15 @@ class ElementKernels:
     pattern : Pattern of the free dofs
     mode : 'auto' (serial below SERIAL_BELOW elements, else 'gather'), 'serial', 'colour', 'gather'
     error : exception class raised when an edge turns by more than MAX_EDGE_ANGLE
+
+    Attributes
+    ----------
+    split : bool
+        Whether Dbar's v-w coupling blocks are exactly zero on every element (every law of
+        ``fem.material``): the element passes then read ``Dsplit`` (m, 24, 12), the two 12x12
+        diagonal blocks in the order z' (``element_ops.split_form``: no unpacking, half the
+        force products and half of G^T Dbar's), else the general path unpacks the packed
+        Dbar per element (a law coupling v and w; ``Dsplit`` is then empty, (0, 24, 12)).
     """
 
     def __init__(self, quads, edge_nodes, elem_edges, elem_edge_sign, Dbar, z0, Dz0, pattern,
@@ -223,6 +236,9 @@ class ElementKernels:
         self.Dbar, self.z0, self.Dz0 = c(Dbar, dtype=float), c(z0, dtype=float), c(Dz0, dtype=float)
         if self.Dbar.shape != (len(self.quads), NSYM):
             raise ValueError(f"Dbar must be packed ({len(self.quads)}, {NSYM}), got {self.Dbar.shape}")
+        Ds = split_form(self.Dbar)
+        self.split = Ds is not None
+        self.Dsplit = Ds if Ds is not None else np.empty((0, 24, 12))
         self.pattern = pattern
         m, nE, n = len(self.quads), len(self.edge_nodes), pattern.n
         if mode == "auto":
@@ -276,8 +292,8 @@ class ElementKernels:
         displacement stresses Dbar (z - z0), a new array)."""
         g = np.ascontiguousarray(g, dtype=float)
         fn = element_residual_serial if self.mode == "serial" else element_residual
-        en, fs, flag, e = fn(g, self.edge_nodes, self.elem_edges, self.sign, self.Dbar, self.z0,
-                             self.Dz0, self.pattern.topo, self.psi, self.coef, self.ang, self.fe,
+        en, fs, flag, e = fn(g, self.edge_nodes, self.elem_edges, self.sign, self.Dbar, self.Dsplit,
+                             self.z0, self.Dz0, self.pattern.topo, self.psi, self.coef, self.ang, self.fe,
                              self.rE, self.r)
         if flag:
             self._raise(e)
@@ -299,8 +315,8 @@ class ElementKernels:
         mixed = (None, None, None)
         if stress is not None:
             mixed = (signed_edge_stress(stress, self.sign, self.fe_geo), self.rEg, self.rg)
-        args = (g, self.quads, self.edge_nodes, self.elem_edges, self.sign, self.Dbar, self.z0,
-                self.Dz0, self.pattern.topo, self.pattern.map, self.psi, self.coef, self.ang,
+        args = (g, self.quads, self.edge_nodes, self.elem_edges, self.sign, self.Dbar, self.Dsplit,
+                self.z0, self.Dz0, self.pattern.topo, self.pattern.map, self.psi, self.coef, self.ang,
                 self.fe, self.rE, self.r, data, *mixed)
         if self.mode == "serial":
             en, fs, flag, e = element_tangent_serial(*args)

@@ -12,7 +12,45 @@ Measured on a 12x12 plate, serial, three runs each (per element): the node pass 
 us, the edge pass 2.0 -> 1.5 us, the edges' logs 0.54 -> 0.27 us; the residual 1.15-1.38 ->
 0.83-0.85 us, the whole tangent 5.3-6.5 -> 4.2-4.7 us.  The element's dense products
 (``element_Ke`` and its helpers) stay calls: inlining them too added 3 s to the first-run
-compile (23.7 -> 26.5 s for the main job) with no gain beyond the run-to-run noise."""
+compile (23.7 -> 26.5 s for the main job) with no gain beyond the run-to-run noise
+(``element_D``, the per-element choice of Dbar's form below, is inlined).
+
+The material block.  With the element energy Pi_e = 1/2 (z - z0)^T Dbar (z - z0), z = (sgn_k
+psi_k / 2) over the element's 4 edges, and d psi = L(psi) eta_b - L(-psi) eta_a (L = dexp_inv
+= [[A, B], [0, A]]; ``fem.element_default``'s module docstring), the element's forces are f =
+Dbar (z - z0) and its material block Ke = G^T Dbar G, G = dz/deta (24x24, two 6x6 blocks per
+edge row: ``element_G``).  The kernels order the 24 components of z as z' = (v of the 4 edges,
+w of the 4 edges) (``ZP``).  Every law of ``fem.material`` acts with membrane and shear on the
+translational parts v and with bending and drilling on the rotational parts w, so its Dbar has
+exactly zero v-w blocks: Dbar' = diag(Dvv, Dww), stored per element as the two 12x12 blocks
+(``split_form``, read without unpacking; ``ElementKernels.split``).  A law that couples v and w
+(a user's ``ResultantLaw``) takes the general path: the whole Dbar, unpacked per element
+(``unpack_perm``).  Products per element (multiply-adds):
+
+    ========================== ======== ======================== ====================
+    per element                before   split Dbar (every law    general path (a law
+                                        of ``fem.material``)     coupling v and w)
+    ========================== ======== ======================== ====================
+    unpack Dbar (stores)       576      0                        576
+    f = Dbar dz                576      288                      576
+    TT = G^T P^T Dbar'         5184     2592                     5184
+    Ke = G^T P^T TT^T          5184     5184                     5184
+    ========================== ======== ======================== ====================
+
+The time went down mostly by the form of the G^T products (``_gt_times``: each output row
+written once, its 6 or 12 terms in registers, instead of 6 or 12 axpys into it) and of the
+forces (axpys of Dbar's rows instead of dot products: ``element_force``); the split form adds
+the saved unpacking and halves.  Measured (``benchmarks/kernel_passes.py``, one thread, a
+12x12 | 100x100 plate, min [range] of 6 alternating runs, us per element): the element pass
+(forces + material blocks, scattered) 2.95-4.17 | 3.54-3.82 -> 1.90-2.10 | 2.71-3.34 (general
+path 2.04-3.20 | 2.79-3.67); the whole tangent 4.73-7.31 | 5.75-7.15 -> 3.69-3.85 | 4.87-5.04
+(general 3.81-4.42 | 4.91-5.54); the residual 0.92-1.27 | 0.88-1.02 -> 0.50-0.53 | 0.46-0.50
+(general 0.79-1.04 | 0.81-1.10).  Tried and not kept: a product over the non-zero entries of
+Dbar's union pattern (64 of 576 on meshes whose frames follow the edges, 160 on general quads):
+a list of (row, column) pairs cost 7 ns per pair (0.49 us for 64 pairs, more than the whole
+G^T P^T Dbar' above); only the upper node blocks of the symmetric Ke (rows of 24, 18, 12, 6
+columns: no faster); one pass per node for all its six rows (register spills: slower);
+storing the first product transposed (strided stores: slower than the transpose)."""
 from __future__ import annotations
 
 from math import sqrt
@@ -63,6 +101,88 @@ def unpack_sym(Dp, el, D):
             k += 1
 
 
+# The kernels' order z' of an element's 24 edge-twist components (z_b, z_t, z_l, z_r; (v, w)
+# each): the v of the four edges, then their w.  ZP[6k + i]: component i of edge k in z'.
+ZP = np.array([3 * (a // 6) + a % 6 if a % 6 < 3 else 9 + 3 * (a // 6) + a % 6 for a in range(24)], np.int64)
+
+
+def _packed(a, b):
+    """Position of the entry (a, b) of a symmetric 24x24 matrix in its packed upper triangle."""
+    a, b = np.minimum(a, b), np.maximum(a, b)
+    return a * 24 - a * (a - 1) // 2 + (b - a)
+
+
+_IU = np.triu_indices(24)
+VW_INDEX = np.flatnonzero((_IU[0] % 6 < 3) != (_IU[1] % 6 < 3))      # the packed v-w entries (144)
+# SPLIT_INDEX[r, c]: the packed entry of D'[r, c'] (z' indices; c' = c for the v rows r < 12, 12 + c
+# for the w rows): Dbar[:, SPLIT_INDEX] (m, 24, 12) = the diagonal blocks Dvv, Dww, stacked
+SPLIT_INDEX = _packed(np.argsort(ZP)[:, None], np.argsort(ZP)[np.arange(24)[:, None] // 12 * 12 + np.arange(12)])
+
+
+def split_form(Dp):
+    """The v/w split form of packed element stiffnesses Dp (m, 300), or None.
+
+    A law whose membrane and shear act only on the translational parts v of the strain twists
+    and bending and drilling only on the rotational parts w (every law of ``fem.material``)
+    gives a Dbar with exactly zero v-w blocks: in the order z' = (v_b, v_t, v_l, v_r, w_b, w_t,
+    w_l, w_r) (``ZP``), Dbar = diag(Dvv, Dww), read by the kernels as (m, 24, 12) (row r of z'
+    over its own half: 2.3 kB per element, no unpacking).  A law coupling v and w gives None:
+    the kernels then unpack the whole Dbar per element (``unpack_perm``).
+
+    Parameters
+    ----------
+    Dp : (m, 300) float array
+        Upper triangles, row by row (``DefaultElement.Dbar_packed``).
+
+    Returns
+    -------
+    (m, 24, 12) float array or None
+        Exactly zero v-w entries are required (a test on the values, not a tolerance).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> Dp = np.zeros((1, 300))
+    >>> Dp[0, _packed(np.arange(24), np.arange(24))] = np.arange(24.0)     # diag(0, 1, ..., 23)
+    >>> Ds = split_form(Dp)
+    >>> Ds.shape, Ds[0, 3, 3], Ds[0, 12, 0]          # z'[3] = v_0 of edge 1, z'[12] = w_0 of edge 0
+    ((1, 24, 12), 6.0, 3.0)
+    >>> Dp[0, _packed(0, 3)] = 1.0                   # couple v_0 and w_0 of edge 0
+    >>> split_form(Dp) is None
+    True
+    """
+    Dp = np.asarray(Dp, dtype=float)
+    if Dp[:, VW_INDEX].any():
+        return None
+    return np.ascontiguousarray(Dp[:, SPLIT_INDEX])
+
+
+@njit(cache=True)
+def unpack_perm(Dp, el, D):
+    """D (24,24) <- element el's Dbar (packed Dp[el], 300,) in the order z' (``ZP``): D[ZP[a],
+    ZP[b]] = Dbar[a, b] (the general path, for a law that couples v and w)."""
+    k = 0
+    for a in range(24):
+        pa = ZP[a]
+        for b in range(a, 24):
+            pb = ZP[b]
+            v = Dp[el, k]
+            D[pa, pb] = v
+            D[pb, pa] = v
+            k += 1
+
+
+@njit(cache=True, inline="always")
+def element_D(Dbar, Dsplit, el, D):
+    """Element el's stiffness in the order z', as the rows the kernels read: Dsplit[el] (24, 12)
+    (row r over its own half, v or w: ``split_form``) when Dsplit holds the split form, else
+    the whole Dbar unpacked into the workspace D (24, 24) (Dsplit empty, (0, 24, 12))."""
+    if Dsplit.shape[0] == 0:
+        unpack_perm(Dbar, el, D)
+        return D
+    return Dsplit[el]
+
+
 @njit(cache=True)
 def packed_matvec(Dp, x, out):
     """out[el] = Dbar[el] x[el] for every element, Dbar packed (m, 300), x (m, 24)."""
@@ -81,38 +201,59 @@ def packed_matvec(Dp, x, out):
 
 
 @njit(cache=True)
-def element_force(el, elem_edges, sgn, D, z0, Dz0, psi, z, f, fe):
-    """z = (sgn_k psi_k / 2) (24,), f = D (z - z0) (D: element el's Dbar, unpacked), fe[el, k]
-    = sgn_k f_k (conjugate to the mesh-edge twists).  Returns (energy 1/2 dz.f, |f + Dz0|^2 +
-    |f|^2)."""
+def element_force(el, elem_edges, sgn, Dr, z0, Dz0, psi, z, f, fe):
+    """Element forces f = dPi_e/dz = Dbar (z - z0), z = (sgn_k psi_k / 2) over the 4 edges
+    (``fem.element_default``: Pi_e = 1/2 (z - z0)^T Dbar (z - z0)); returns (energy 1/2 dz.f,
+    |f + Dz0|^2 + |f|^2).  Dr: element el's Dbar in the order z' (``element_D``), (24, 24), or
+    the split form (24, 12) whose v rows act on dz'[:12] and w rows on dz'[12:] (288 products
+    instead of 576); z, f (24,): workspace (dz, f in the order z'); fe (m, 4, 6): written,
+    fe[el, k] = sgn_k f_k (conjugate to the mesh-edge twists)."""
     for k in range(4):
         e = elem_edges[el, k]
         sk = 0.5 * sgn[el, k]
         for i in range(6):
-            z[6 * k + i] = sk * psi[e, i] - z0[el, 6 * k + i]
+            z[ZP[6 * k + i]] = sk * psi[e, i] - z0[el, 6 * k + i]
+    # f = sum_r dz_r Dbar[r] (Dbar symmetric): axpys of Dbar's rows, vectorised (a dot product
+    # per row is a chain of dependent additions: about 1.8 times as long, measured)
+    W = Dr.shape[1]
+    for r in range(24):
+        f[r] = 0.0
+    for r in range(24):
+        o = 0 if r < 12 else 24 - W
+        zr = z[r]
+        d = Dr[r]
+        fo = f[o:o + W]
+        for c in range(W):
+            fo[c] += zr * d[c]
     en = 0.0
+    for r in range(24):
+        en += z[r] * f[r]
     fs = 0.0
-    for a in range(24):
-        acc = 0.0
-        for b in range(24):
-            acc += D[a, b] * z[b]
-        f[a] = acc
-        en += z[a] * acc
-        fz = acc + Dz0[el, a]
-        fs += fz * fz + acc * acc
     for k in range(4):
         sk = sgn[el, k]
         for i in range(6):
-            fe[el, k, i] = sk * f[6 * k + i]
+            fa = f[ZP[6 * k + i]]
+            fz = fa + Dz0[el, 6 * k + i]
+            fs += fz * fz + fa * fa
+            fe[el, k, i] = sk * fa
     return 0.5 * en, fs
 
 
 @njit(cache=True)
 def _gt_times(G, M, out, nc):
-    """out (24,24) <- G^T M for the element's G = d z / d eta (24x24, two non-zero 6x6 blocks
-    per node column: G[k, la] = -L(-psi_k)/2, G[k, lb] = L(psi_k)/2, local psi_k = sgn psi),
-    G stored as (4 edges, 2 ends, 6, 6); rows of M are used whole as axpys of length nc = 24.
-    The lower-left 3x3 of every L block is zero and skipped.  ``nc`` is passed at run time on
+    """out (24,24) <- G^T P^T M: the product of G^T, G = d z / d eta (``element_G``), with a
+    matrix M whose rows are in the order z' (``ZP``; P z = z').
+
+    G (24x24) has two non-zero 6x6 blocks per node column, G[k, la] = -L(-psi_k)/2, G[k, lb] =
+    L(psi_k)/2 (local psi_k = sgn psi), stored as (4 edges, 2 ends, 6, 6).  Row 6A + i of the
+    product (node A, component i) combines the rows of A's two edges k0, k1 (``_NODE_INC``):
+
+        out[6A+i] = sum_q G[k0,e0,q,i] M[ZP[6k0+q]] + G[k1,e1,q,i] M[ZP[6k1+q]],
+
+    q < 3 for i < 3 (the lower-left 3x3 of every L block is zero and skipped), q < 6 for
+    i >= 3: 6 or 12 terms, written as one expression per column so that each output row is
+    stored once and its terms stay in registers (an axpy per term, loading and storing the row
+    up to 12 times, took 2.5 times as long, measured).  ``nc`` (= 24) is passed at run time on
     purpose: with a literal 24 LLVM unrolls the loop fully and can then no longer vectorise it
     (possible aliasing of out and M); as a run-time trip count it is vectorised with a runtime
     alias check (2x faster, measured)."""
@@ -121,18 +262,63 @@ def _gt_times(G, M, out, nc):
         e0 = _NODE_INC[A, 0, 1]
         k1 = _NODE_INC[A, 1, 0]
         e1 = _NODE_INC[A, 1, 1]
-        for i in range(6):
+        P = G[k0, e0]
+        Q = G[k1, e1]
+        m0, m1, m2 = M[3 * k0], M[3 * k0 + 1], M[3 * k0 + 2]                  # rows ZP[6k0 + q], q < 3
+        m3, m4, m5 = M[12 + 3 * k0], M[13 + 3 * k0], M[14 + 3 * k0]           # q >= 3
+        n0, n1, n2 = M[3 * k1], M[3 * k1 + 1], M[3 * k1 + 2]
+        n3, n4, n5 = M[12 + 3 * k1], M[13 + 3 * k1], M[14 + 3 * k1]
+        for i in range(3):
+            a0, a1, a2 = P[0, i], P[1, i], P[2, i]
+            b0, b1, b2 = Q[0, i], Q[1, i], Q[2, i]
             o = out[6 * A + i]
             for c in range(nc):
-                o[c] = 0.0
-            qmax = 3 if i < 3 else 6
-            for q in range(qmax):
-                gv = G[k0, e0, q, i]
-                gw = G[k1, e1, q, i]
-                m0 = M[6 * k0 + q]
-                m1 = M[6 * k1 + q]
-                for c in range(nc):
-                    o[c] += gv * m0[c] + gw * m1[c]
+                o[c] = a0 * m0[c] + a1 * m1[c] + a2 * m2[c] + b0 * n0[c] + b1 * n1[c] + b2 * n2[c]
+        for i in range(3, 6):
+            a0, a1, a2, a3, a4, a5 = P[0, i], P[1, i], P[2, i], P[3, i], P[4, i], P[5, i]
+            b0, b1, b2, b3, b4, b5 = Q[0, i], Q[1, i], Q[2, i], Q[3, i], Q[4, i], Q[5, i]
+            o = out[6 * A + i]
+            for c in range(nc):
+                o[c] = (a0 * m0[c] + a1 * m1[c] + a2 * m2[c] + a3 * m3[c] + a4 * m4[c] + a5 * m5[c]
+                        + b0 * n0[c] + b1 * n1[c] + b2 * n2[c] + b3 * n3[c] + b4 * n4[c] + b5 * n5[c])
+
+
+@njit(cache=True)
+def _gt_times_split(G, Ds, out, h):
+    """out (24,24) <- G^T P^T D' for D' = diag(Dvv, Dww) given as Ds (24, h = 12) (``split_form``):
+    ``_gt_times`` with M = D', whose v rows vanish on the w columns and w rows on the v columns:
+
+        out[6A+i, :h] = sum_{q<3} G[k0,e0,q,i] Dvv[3k0+q] + G[k1,e1,q,i] Dvv[3k1+q]   (all i),
+        out[6A+i, h:] = sum_{q<3} G[k0,e0,3+q,i] Dww[3k0+q] + G[k1,e1,3+q,i] Dww[3k1+q]
+                        (i >= 3; 0 for i < 3, where the L blocks' lower-left 3x3 is zero),
+
+    6 terms over 12 columns per half (2592 products instead of 5184)."""
+    for A in range(4):
+        k0 = _NODE_INC[A, 0, 0]
+        e0 = _NODE_INC[A, 0, 1]
+        k1 = _NODE_INC[A, 1, 0]
+        e1 = _NODE_INC[A, 1, 1]
+        P = G[k0, e0]
+        Q = G[k1, e1]
+        m0, m1, m2 = Ds[3 * k0], Ds[3 * k0 + 1], Ds[3 * k0 + 2]               # Dvv rows of edge k0
+        m3, m4, m5 = Ds[12 + 3 * k0], Ds[13 + 3 * k0], Ds[14 + 3 * k0]        # Dww rows of edge k0
+        n0, n1, n2 = Ds[3 * k1], Ds[3 * k1 + 1], Ds[3 * k1 + 2]
+        n3, n4, n5 = Ds[12 + 3 * k1], Ds[13 + 3 * k1], Ds[14 + 3 * k1]
+        for i in range(6):
+            a0, a1, a2 = P[0, i], P[1, i], P[2, i]
+            b0, b1, b2 = Q[0, i], Q[1, i], Q[2, i]
+            o = out[6 * A + i]
+            for c in range(h):
+                o[c] = a0 * m0[c] + a1 * m1[c] + a2 * m2[c] + b0 * n0[c] + b1 * n1[c] + b2 * n2[c]
+            ow = out[6 * A + i, h:]
+            if i < 3:
+                for c in range(h):
+                    ow[c] = 0.0
+            else:
+                a3, a4, a5 = P[3, i], P[4, i], P[5, i]
+                b3, b4, b5 = Q[3, i], Q[4, i], Q[5, i]
+                for c in range(h):
+                    ow[c] = a3 * m3[c] + a4 * m4[c] + a5 * m5[c] + b3 * n3[c] + b4 * n4[c] + b5 * n5[c]
 
 
 @njit(cache=True)
@@ -172,12 +358,23 @@ def element_stress_lin(el, quads, elem_edges, sgn, Dbar, z0, psi, coef, eta, G, 
 
 
 @njit(cache=True)
-def element_Ke(D, G, TT, TTt, KeT):
-    """KeT (24,24) <- (G^T D G)^T = G^T (G^T D)^T: two vectorisable G^T products (D: the
-    element's Dbar, unpacked).  D is symmetric, so KeT equals Ke to round-off and is read
-    row-wise by the scatter."""
-    nc = D.shape[1]
-    _gt_times(G, D, TT, nc)
+def element_Ke(Dr, G, TT, TTt, KeT):
+    """KeT (24,24) <- the material block G^T Dbar G of the element (``fem.element_default``:
+    the part of the Hessian of Pi_e = 1/2 (z - z0)^T Dbar (z - z0) in the nodal increments eta
+    that comes from dz = G eta, G = dz/deta; the part from z's curvature is the edges'), as
+    G^T (G^T P^T D')^T with D' = P Dbar P^T in the order z' (``ZP``):
+
+        TT = G^T P^T D' (= G^T Dbar P^T),  TTt = TT^T (= P Dbar G),  KeT = G^T P^T TTt,
+
+    two vectorised G^T products (``_gt_times``).  Dr is ``element_D``'s: the whole D' (24, 24),
+    or the split form (24, 12) of a law without v-w coupling, whose first product
+    (``_gt_times_split``) takes half the work.  KeT equals Ke to round-off (Dbar is symmetric)
+    and is read row-wise by the scatter."""
+    nc = TT.shape[1]
+    if Dr.shape[1] == nc:
+        _gt_times(G, Dr, TT, nc)
+    else:
+        _gt_times_split(G, Dr, TT, Dr.shape[1])
     for a in range(24):
         for b in range(24):
             TTt[a, b] = TT[b, a]

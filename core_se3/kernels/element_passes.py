@@ -6,7 +6,10 @@ written once.  Each pass allocates its own small scratch arrays.
 ``order`` is None (natural order) or an index array (the coloured drivers' order: item
 ``order[i]`` for i in [lo, hi)); ``fe_geo``, ``rEg``, ``rg`` None or arrays select at compile
 time the ordinary or the mixed tangent (``kernels.element``); ``data`` None selects the
-residual-only node pass.
+residual-only node pass.  The element passes read Dbar through ``element_ops.element_D``:
+``Dsplit`` (m, 24, 12) is the split form of a law without v-w coupling (``split_form``), or
+empty (0, 24, 12) for the general path that unpacks the packed ``Dbar`` (m, 300) per element
+(a run-time choice: one compiled version).
 """
 from __future__ import annotations
 
@@ -14,8 +17,8 @@ import numpy as np
 from numba import njit
 
 from .csr import scatter
-from .element_ops import (edge_F, edge_KE, edge_pass1, edge_residual, element_force, element_G, element_Ke,
-                          node_Kn, node_residual, unpack_sym)
+from .element_ops import (edge_F, edge_KE, edge_pass1, edge_residual, element_D, element_force, element_G,
+                          element_Ke, node_Kn, node_residual)
 
 __all__ = ["edges_log", "elements_force", "edges_residual", "nodes_pass", "elements_tangent",
            "edges_tangent", "elements_tangent_store", "edges_tangent_store"]
@@ -35,17 +38,17 @@ def edges_log(g, edge_nodes, psi, coef, ang, lo, hi):
 
 
 @njit(cache=True)
-def elements_force(elem_edges, sgn, Dbar, z0, Dz0, psi, fe, lo, hi):
-    """Elements lo..hi: f = Dbar (z - z0) into fe (signed per edge; Dbar packed (m, 300));
-    returns (energy, |f+Dz0|^2+|f|^2)."""
+def elements_force(elem_edges, sgn, Dbar, Dsplit, z0, Dz0, psi, fe, lo, hi):
+    """Elements lo..hi: f = Dbar (z - z0) into fe (signed per edge; Dbar packed (m, 300),
+    Dsplit its split form or empty); returns (energy, |f+Dz0|^2+|f|^2)."""
     z = np.empty(24)
     f = np.empty(24)
     D = np.empty((24, 24))
     en = 0.0
     fs = 0.0
     for el in range(lo, hi):
-        unpack_sym(Dbar, el, D)
-        a, b = element_force(el, elem_edges, sgn, D, z0, Dz0, psi, z, f, fe)
+        Dr = element_D(Dbar, Dsplit, el, D)
+        a, b = element_force(el, elem_edges, sgn, Dr, z0, Dz0, psi, z, f, fe)
         en += a
         fs += b
     return en, fs
@@ -76,13 +79,13 @@ def nodes_pass(node_ptr, node_inc, rE, r, rEg, rg, data, cmap, lo, hi):
 
 
 @njit(cache=True)
-def _element_blocks(el, elem_edges, sgn, Dbar, z0, Dz0, psi, coef, fe, z, f, G, TT, TTt, KeT, D):
-    """Forces and KeT = (G^T Dbar G)^T of element el (Dbar packed, unpacked into D); returns
-    (energy, force scale part)."""
-    unpack_sym(Dbar, el, D)
-    a, b = element_force(el, elem_edges, sgn, D, z0, Dz0, psi, z, f, fe)
+def _element_blocks(el, elem_edges, sgn, Dbar, Dsplit, z0, Dz0, psi, coef, fe, z, f, G, TT, TTt, KeT, D):
+    """Forces and KeT = (G^T Dbar G)^T of element el (Dbar: ``element_D``, the split form or
+    unpacked into D); returns (energy, force scale part)."""
+    Dr = element_D(Dbar, Dsplit, el, D)
+    a, b = element_force(el, elem_edges, sgn, Dr, z0, Dz0, psi, z, f, fe)
     element_G(el, elem_edges, sgn, psi, coef, G)
-    element_Ke(D, G, TT, TTt, KeT)
+    element_Ke(Dr, G, TT, TTt, KeT)
     return a, b
 
 
@@ -93,7 +96,7 @@ def _element_scratch():
 
 
 @njit(cache=True)
-def elements_tangent(order, quads, elem_edges, sgn, Dbar, z0, Dz0, psi, coef, fe, cmap, data, lo, hi):
+def elements_tangent(order, quads, elem_edges, sgn, Dbar, Dsplit, z0, Dz0, psi, coef, fe, cmap, data, lo, hi):
     """Elements lo..hi (through order): forces and material blocks, scattered into data.
     Ke = KeT^T = KeT up to round-off (Dbar is symmetric): KeT is read row-wise (contiguous)."""
     z, f, G, TT, TTt, KeT, D = _element_scratch()
@@ -101,7 +104,8 @@ def elements_tangent(order, quads, elem_edges, sgn, Dbar, z0, Dz0, psi, coef, fe
     fs = 0.0
     for i in range(lo, hi):
         el = _item(order, i)
-        a, b = _element_blocks(el, elem_edges, sgn, Dbar, z0, Dz0, psi, coef, fe, z, f, G, TT, TTt, KeT, D)
+        a, b = _element_blocks(el, elem_edges, sgn, Dbar, Dsplit, z0, Dz0, psi, coef, fe, z, f, G, TT, TTt, KeT,
+                               D)
         en += a
         fs += b
         for A in range(4):
@@ -112,13 +116,14 @@ def elements_tangent(order, quads, elem_edges, sgn, Dbar, z0, Dz0, psi, coef, fe
 
 
 @njit(cache=True)
-def elements_tangent_store(elem_edges, sgn, Dbar, z0, Dz0, psi, coef, fe, Keb, lo, hi):
+def elements_tangent_store(elem_edges, sgn, Dbar, Dsplit, z0, Dz0, psi, coef, fe, Keb, lo, hi):
     """Elements lo..hi: forces, and the material blocks stored in Keb (m,4,4,6,6)."""
     z, f, G, TT, TTt, KeT, D = _element_scratch()
     en = 0.0
     fs = 0.0
     for el in range(lo, hi):
-        a, b = _element_blocks(el, elem_edges, sgn, Dbar, z0, Dz0, psi, coef, fe, z, f, G, TT, TTt, KeT, D)
+        a, b = _element_blocks(el, elem_edges, sgn, Dbar, Dsplit, z0, Dz0, psi, coef, fe, z, f, G, TT, TTt, KeT,
+                               D)
         en += a
         fs += b
         for A in range(4):
