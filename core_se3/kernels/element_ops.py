@@ -145,7 +145,7 @@ def split_form(Dp):
     >>> Dp = np.zeros((1, 300))
     >>> Dp[0, _packed(np.arange(24), np.arange(24))] = np.arange(24.0)     # diag(0, 1, ..., 23)
     >>> Ds = split_form(Dp)
-    >>> Ds.shape, Ds[0, 3, 3], Ds[0, 12, 0]          # z'[3] = v_0 of edge 1, z'[12] = w_0 of edge 0
+    >>> Ds.shape, float(Ds[0, 3, 3]), float(Ds[0, 12, 0])   # z'[3]: v_0 of edge 1, z'[12]: w_0 of edge 0
     ((1, 24, 12), 6.0, 3.0)
     >>> Dp[0, _packed(0, 3)] = 1.0                   # couple v_0 and w_0 of edge 0
     >>> split_form(Dp) is None
