@@ -5,9 +5,9 @@ default is 'auto' when numba is installed, else 'numpy'; the environment variabl
 afterwards, and ``Problem(..., backend=...)`` chooses per problem.
 
 The 'auto' rule is the ski-rental rule.  Starting numba costs a fixed time per process (its
-import and its first cache loads, about 0.2-0.3 s on the 2-core test machine with a warm cache;
+import and its first cache loads, about 0.3-0.45 s on the 2-core test machine with a warm cache;
 benchmarks/results/speed.md), which a small scene never earns back: a 16-element cantilever
-solves in 40 Newton iterations, where numba saves about 1.5 ms each.  So every process starts on
+solves in 40 Newton iterations, where numba saves about 1.2 ms each.  So every process starts on
 NumPy and, after each tangent evaluation, adds up what numba would have saved
 (:func:`iteration_saving`, a fit of the measured per-iteration assembly of both backends); once
 that reaches the start cost, the process switches to numba for good (the problem's next
@@ -41,12 +41,13 @@ __all__ = ["BACKENDS", "numba_available", "default_backend", "set_backend", "res
 BACKENDS = ("auto", "numba", "numpy")
 _chosen = None
 
-# The ski-rental rule of 'auto' (module docstring), fitted to benchmarks/results/speed.md
-# (2-core x86_64, one thread; per Newton iteration, residual checks included): NumPy minus numba
-# assembly 1.19 ms at 16 elements, 2.52 ms at 120, 5.3 ms at 256, 59 ms at 2304, 145 ms at 10^4.
-NUMBA_START_COST = 0.4        # s: numba's import and first cache loads (0.2-0.3 s), with margin
-SAVING_PER_ITERATION = 1.2e-3  # s
-SAVING_PER_ELEMENT = 1.6e-5    # s per element and iteration
+# The ski-rental rule of 'auto' (module docstring), fitted to benchmarks/results/speed.md of
+# 2026-12-03 (2-core x86_64, one thread; per Newton iteration, residual checks included): NumPy
+# minus numba assembly 1.15 ms at 16 elements, 3.05 ms at 120, 8.2 ms at 256, 56 ms at 2304,
+# 203 ms at 10^4; numba's start on the same host 0.31-0.45 s (speed.md's main job, peers.md).
+NUMBA_START_COST = 0.4        # s: numba's import and first cache loads
+SAVING_PER_ITERATION = 0.9e-3  # s
+SAVING_PER_ELEMENT = 1.8e-5    # s per element and iteration
 
 
 class _Rent:
@@ -63,7 +64,7 @@ def iteration_saving(n_elements):
     -------
     >>> from core_se3.backend import iteration_saving
     >>> round(iteration_saving(16) * 1e3, 2)          # ms
-    1.46
+    1.19
     """
     return SAVING_PER_ITERATION + SAVING_PER_ELEMENT * float(n_elements)
 
