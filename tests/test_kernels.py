@@ -211,11 +211,14 @@ def test_element_residual_and_tangent(kind, mode, seed):
 
 
 def test_dbar_paths():
-    """Each law of fem.material gives a Dbar without v-w coupling: the kernels read its split
-    form (the two 12x12 diagonal blocks in the order z' = (v of the 4 edges, w of the 4
-    edges)); a law coupling membrane and bending takes the general path (Dbar unpacked)."""
+    """Each law of fem.material gives a Dbar without v-w coupling on parallelograms: the kernels
+    read its split form (the two 12x12 diagonal blocks in the order z' = (v of the 4 edges, w
+    of the 4 edges)); a law coupling membrane and bending takes the general path (Dbar
+    unpacked), and so do distorted quads (the disk), whose membrane strain sees the drilling
+    components of the edge twists (fem.membrane_drilling) -- only those: the v-w block is zero
+    outside the 4 drilling columns."""
     from core_se3.kernels.element_ops import ZP
-    for kind, split in [("flat", True), ("disk", True), ("arch", True), ("region", True), ("coupled", False)]:
+    for kind, split in [("flat", True), ("disk", False), ("arch", True), ("region", True), ("coupled", False)]:
         el = _problem(kind).element
         mesh = el.mesh
         pat = K.Pattern(mesh.quads, mesh.edge_nodes, mesh.elem_edges, mesh.n_nodes, np.ones(6 * mesh.n_nodes, bool))
@@ -228,13 +231,18 @@ def test_dbar_paths():
             assert vw == 0.0 and ek.Dsplit.shape == (mesh.n_elements, 24, 12)
             assert np.array_equal(ek.Dsplit[:, :12], D[:, :12, :12])
             assert np.array_equal(ek.Dsplit[:, 12:], D[:, 12:, 12:])
+        elif kind == "disk":
+            drill = 12 + 3 * np.arange(4) + 2                         # the w_3 of the 4 edges in z'
+            other = np.setdiff1d(np.arange(12, 24), drill)
+            assert vw > 0 and np.abs(D[:, :12][:, :, other]).max() == 0.0 and ek.Dsplit.shape[0] == 0
         else:
             scale = np.sqrt(np.abs(D[:, :12, :12]).max() * np.abs(D[:, 12:, 12:]).max())   # |D_vw| <= that
             assert vw > 0.1 * scale and ek.Dsplit.shape[0] == 0
     # the disk's frames are not along the element edges: more of Dbar's v-v, w-w entries are
-    # non-zero than on a rectangle (160 against 64 of 576)
+    # non-zero than on a rectangle (160 against 64 of 576), and the membrane-drilling coupling
+    # adds 64 (the 8 in-plane v components of the 4 edges with the 4 drilling components, both ways)
     nz = {k: int((_problem(k).element.Dbar != 0).any(0).sum()) for k in ("flat", "disk")}
-    assert nz == {"flat": 64, "disk": 160}
+    assert nz == {"flat": 64, "disk": 224}
 
 
 def test_too_distorted_flag_and_error():

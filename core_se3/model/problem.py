@@ -480,8 +480,9 @@ class Problem:
             problem's own settings (``solve_defaults``, e.g. a scenario's ``[solver] steps``),
             else 10.
         control : str, optional
-            'load' (:func:`core_se3.solvers.newton_solve`), 'arclength' (``solvers.arc_length``)
-            or 'displacement' (``solvers.displacement_control``); default ``solve_defaults`` or 'load'.
+            'load' (:func:`core_se3.solvers.newton_solve`), 'arclength' (``solvers.arc_length``),
+            'displacement' (``solvers.displacement_control``) or 'linear' (one solve at the
+            reference state, :meth:`solve_linear`); default ``solve_defaults`` or 'load'.
         solver : str, optional
             'serial' or 'distributed' (load stepping over the MPI ranks, :mod:`core_se3.parallel`).
             Default: 'distributed' for load control under ``mpirun -n N`` with N > 1, else
@@ -498,3 +499,18 @@ class Problem:
         control = control or kw.pop("control", "load")
         kw.pop("control", None)
         return dispatch(self, control, solver or kw.pop("solver", None), kw)
+
+    def solve_linear(self, lam_end=1.0, **options):
+        """Linear analysis: one solve at the reference state (``solvers.linear_solve``), the
+        loads at ``lam_end`` on the reference geometry; a Result like :meth:`solve`'s (the
+        reference state and the linear solution).  Same as ``solve(control="linear")``.
+
+        Example
+        -------
+        >>> from core_se3 import Problem, Material, mesh
+        >>> p = Problem(mesh.rectangle(10.0, 1.0, 16, 1), Material(1.2e6, 0.0, 0.1))
+        >>> p.clamp("x0"); p.add_edge_force("x1", (4e-4, 0.0, 0.0)); p.add_probe("tip")
+        >>> round(float(p.solve_linear().final.probes["tip"]["u"][0] / (4e-4 * 10.0 / 1.2e5)), 6)  # P L/(E A)
+        1.0
+        """
+        return self.solve(control="linear", lam_end=lam_end, **options)

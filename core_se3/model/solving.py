@@ -5,7 +5,7 @@ between the serial solvers and the distributed one.
 Example
 -------
 >>> sorted(SOLVERS)
-['arclength', 'displacement', 'distributed', 'load']
+['arclength', 'displacement', 'distributed', 'linear', 'load']
 """
 from __future__ import annotations
 
@@ -21,7 +21,7 @@ __all__ = ["SOLVERS", "DISTRIBUTED_KEYS", "dispatch"]
 DISTRIBUTED_KEYS = ("linear", "petsc_options", "partition")
 
 SOLVERS: dict[str, Callable] = {}
-"""Solvers by control name ('load', 'arclength', 'displacement'): solve(problem, **options); and
+"""Solvers by control name ('load', 'arclength', 'displacement', 'linear'): solve(problem, **options); and
 'distributed' (load stepping over MPI ranks, ``core_se3.parallel``)."""
 
 
