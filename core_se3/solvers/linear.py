@@ -15,7 +15,8 @@ of eta_p = (R0^T (x_t - X), log(R0^T R_t)) of each held node.
 The state reported is g_i = g0_i (exp_so3(w_i), v_i) (the rotation and the translation updated
 separately, not by the SE(3) exponential): its probes and displacements are then exactly the
 linear ones, u = R0 v, the rotation vector R0 w.  Reactions are those of the linear internal
-forces K0 eta.  The result has the reference state and this one step, like a one-step solve.
+forces K0 eta (the forces in the reference frames).  The result has the reference state and
+this one step, like a one-step solve.
 """
 from __future__ import annotations
 
@@ -132,7 +133,11 @@ def linear_solve(problem, lam_end=1.0, steps=None, linear_solver=None, **kw):
     f = f.reshape(n, 6)
     result.steps.append(rec.step(0.0, g0, 0, [], np.zeros((n, 6)), problem.external(g0, 0.0, tangent=False)[0]))
     g = linear_state(g0, eta)
-    result.steps.append(rec.step(lam_end, g, 1, [], r_lin, f))
+    # the forces act in the reference frames: expressed in the frames of g, so that the step's
+    # lab totals (R f) are the reference ones (R0 f)
+    Q = np.swapaxes(g[:, :3, :3], 1, 2) @ g0[:, :3, :3]
+    to_g = lambda a: np.concatenate([np.einsum("nij,nj->ni", Q, a[:, :3]), np.einsum("nij,nj->ni", Q, a[:, 3:])], 1)
+    result.steps.append(rec.step(lam_end, g, 1, [], to_g(r_lin), to_g(f)))
     result.log.append(dict(lam=lam_end, converged=True, iterations=1, reason="linear"))
     result.timings["other"] = time.perf_counter() - t
     return result
