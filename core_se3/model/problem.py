@@ -28,7 +28,7 @@ from .contact import add_obstacle
 from .fields import MU0
 from .magnetics import MagneticLoad, Magnetisation
 from .probes import Probe
-from .solving import SOLVERS, dispatch
+from .solving import SOLVERS, dispatch, solve_linear
 from .supports import (LabSpring, LabTiltSpring, Prescribed, RotationComponentSpring, check_rigid_motions,
                        apply_prescribed, fixed_dofs, prescribed_rotation, rigid_rotation)
 
@@ -477,12 +477,9 @@ class Problem:
         ----------
         steps : int, optional
             Number of equal load steps from lam_start to lam_end (load control).  Default: the
-            problem's own settings (``solve_defaults``, e.g. a scenario's ``[solver] steps``),
-            else 10.
+            problem's own settings (``solve_defaults``, a scenario's ``[solver] steps``), else 10.
         control : str, optional
-            'load' (:func:`core_se3.solvers.newton_solve`), 'arclength' (``solvers.arc_length``),
-            'displacement' (``solvers.displacement_control``) or 'linear' (one solve at the
-            reference state, :meth:`solve_linear`); default ``solve_defaults`` or 'load'.
+            'load' (``solvers.newton_solve``), 'arclength', 'displacement' or 'linear' (:meth:`solve_linear`).
         solver : str, optional
             'serial' or 'distributed' (load stepping over the MPI ranks, :mod:`core_se3.parallel`).
             Default: 'distributed' for load control under ``mpirun -n N`` with N > 1, else
@@ -500,17 +497,4 @@ class Problem:
         kw.pop("control", None)
         return dispatch(self, control, solver or kw.pop("solver", None), kw)
 
-    def solve_linear(self, lam_end=1.0, **options):
-        """Linear analysis: one solve at the reference state (``solvers.linear_solve``), the
-        loads at ``lam_end`` on the reference geometry; a Result like :meth:`solve`'s (the
-        reference state and the linear solution).  Same as ``solve(control="linear")``.
-
-        Example
-        -------
-        >>> from core_se3 import Problem, Material, mesh
-        >>> p = Problem(mesh.rectangle(10.0, 1.0, 16, 1), Material(1.2e6, 0.0, 0.1))
-        >>> p.clamp("x0"); p.add_edge_force("x1", (4e-4, 0.0, 0.0)); p.add_probe("tip")
-        >>> round(float(p.solve_linear().final.probes["tip"]["u"][0] / (4e-4 * 10.0 / 1.2e5)), 6)  # P L/(E A)
-        1.0
-        """
-        return self.solve(control="linear", lam_end=lam_end, **options)
+    solve_linear = solve_linear            # linear analysis (model.solving.solve_linear)
