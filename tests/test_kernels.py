@@ -214,11 +214,11 @@ def test_dbar_paths():
     """Each law of fem.material gives a Dbar without v-w coupling on parallelograms: the kernels
     read its split form (the two 12x12 diagonal blocks in the order z' = (v of the 4 edges, w
     of the 4 edges)); a law coupling membrane and bending takes the general path (Dbar
-    unpacked), and so do distorted quads (the disk), whose membrane strain sees the drilling
-    components of the edge twists (fem.membrane_drilling) -- only those: the v-w block is zero
-    outside the 4 drilling columns."""
+    unpacked).  Distorted quads (the disk), whose membrane strain sees the drilling components
+    w_3 of the edge twists (fem.membrane_drilling), couple v and w in those 4 columns only: the
+    split form then carries them in 4 more columns (m, 24, 16)."""
     from core_se3.kernels.element_ops import ZP
-    for kind, split in [("flat", True), ("disk", False), ("arch", True), ("region", True), ("coupled", False)]:
+    for kind, split in [("flat", True), ("disk", True), ("arch", True), ("region", True), ("coupled", False)]:
         el = _problem(kind).element
         mesh = el.mesh
         pat = K.Pattern(mesh.quads, mesh.edge_nodes, mesh.elem_edges, mesh.n_nodes, np.ones(6 * mesh.n_nodes, bool))
@@ -227,14 +227,19 @@ def test_dbar_paths():
         D = np.empty_like(el.Dbar)
         D[:, ZP[:, None], ZP[None, :]] = el.Dbar                    # Dbar in the order z'
         vw = np.abs(D[:, :12, 12:]).max()
-        if split:
+        if kind == "disk":
+            drill = 12 + 3 * np.arange(4) + 2                         # the w_3 of the 4 edges in z'
+            other = np.setdiff1d(np.arange(12, 24), drill)
+            assert vw > 0 and np.abs(D[:, :12][:, :, other]).max() == 0.0
+            assert ek.Dsplit.shape == (mesh.n_elements, 24, 16)
+            assert np.array_equal(ek.Dsplit[:, :12, :12], D[:, :12, :12])
+            assert np.array_equal(ek.Dsplit[:, 12:, :12], D[:, 12:, 12:])
+            assert np.array_equal(ek.Dsplit[:, :12, 12:], D[:, :12, drill])
+            assert not ek.Dsplit[:, 12:, 12:].any()
+        elif split:
             assert vw == 0.0 and ek.Dsplit.shape == (mesh.n_elements, 24, 12)
             assert np.array_equal(ek.Dsplit[:, :12], D[:, :12, :12])
             assert np.array_equal(ek.Dsplit[:, 12:], D[:, 12:, 12:])
-        elif kind == "disk":
-            drill = 12 + 3 * np.arange(4) + 2                         # the w_3 of the 4 edges in z'
-            other = np.setdiff1d(np.arange(12, 24), drill)
-            assert vw > 0 and np.abs(D[:, :12][:, :, other]).max() == 0.0 and ek.Dsplit.shape[0] == 0
         else:
             scale = np.sqrt(np.abs(D[:, :12, :12]).max() * np.abs(D[:, 12:, 12:]).max())   # |D_vw| <= that
             assert vw > 0.1 * scale and ek.Dsplit.shape[0] == 0

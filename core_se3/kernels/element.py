@@ -222,7 +222,8 @@ class ElementKernels:
         Whether Dbar's v-w coupling blocks are exactly zero on every element (every law of
         ``fem.material``): the element passes then read ``Dsplit`` (m, 24, 12), the two 12x12
         diagonal blocks in the order z' (``element_ops.split_form``: no unpacking, half the
-        force products and half of G^T Dbar's), else the general path unpacks the packed
+        force products and half of G^T Dbar's), or (m, 24, 16) with the membrane-drilling
+        coupling of distorted quads in 4 more columns, else the general path unpacks the packed
         Dbar per element (a law coupling v and w; ``Dsplit`` is then empty, (0, 24, 12)).
     """
 

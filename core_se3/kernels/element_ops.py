@@ -113,10 +113,14 @@ def _packed(a, b):
 
 
 _IU = np.triu_indices(24)
+_DRILL = (_IU[0] % 6 == 5) | (_IU[1] % 6 == 5)                       # an edge's drilling component w_3
 VW_INDEX = np.flatnonzero((_IU[0] % 6 < 3) != (_IU[1] % 6 < 3))      # the packed v-w entries (144)
+VW_OTHER = np.flatnonzero(((_IU[0] % 6 < 3) != (_IU[1] % 6 < 3)) & ~_DRILL)   # those not with a w_3 (96)
 # SPLIT_INDEX[r, c]: the packed entry of D'[r, c'] (z' indices; c' = c for the v rows r < 12, 12 + c
 # for the w rows): Dbar[:, SPLIT_INDEX] (m, 24, 12) = the diagonal blocks Dvv, Dww, stacked
 SPLIT_INDEX = _packed(np.argsort(ZP)[:, None], np.argsort(ZP)[np.arange(24)[:, None] // 12 * 12 + np.arange(12)])
+# DRILL_INDEX[r, k]: the packed entry of D'[r, 14 + 3k] (v row r < 12 with the w_3 of edge k)
+DRILL_INDEX = _packed(np.argsort(ZP)[:12, None], 6 * np.arange(4)[None, :] + 5)
 
 
 def split_form(Dp):
@@ -126,8 +130,12 @@ def split_form(Dp):
     and bending and drilling only on the rotational parts w (every law of ``fem.material``)
     gives a Dbar with exactly zero v-w blocks: in the order z' = (v_b, v_t, v_l, v_r, w_b, w_t,
     w_l, w_r) (``ZP``), Dbar = diag(Dvv, Dww), read by the kernels as (m, 24, 12) (row r of z'
-    over its own half: 2.3 kB per element, no unpacking).  A law coupling v and w gives None:
-    the kernels then unpack the whole Dbar per element (``unpack_perm``).
+    over its own half: 2.3 kB per element, no unpacking).  On distorted quads the membrane
+    strain also sees the edges' drilling components w_3 (``fem.membrane_drilling``): the v-w
+    blocks are then zero except in those 4 columns, and the form is (m, 24, 16), the v rows
+    carrying their coupling Dc (12 x 4) with the w_3 of the 4 edges in columns 12..15 (the w
+    rows' coupling is its transpose; their last 4 columns are zero).  A law coupling v and w
+    otherwise gives None: the kernels then unpack the whole Dbar per element (``unpack_perm``).
 
     Parameters
     ----------
@@ -147,14 +155,22 @@ def split_form(Dp):
     >>> Ds = split_form(Dp)
     >>> Ds.shape, float(Ds[0, 3, 3]), float(Ds[0, 12, 0])   # z'[3]: v_0 of edge 1, z'[12]: w_0 of edge 0
     ((1, 24, 12), 6.0, 3.0)
+    >>> Dp[0, _packed(0, 5)] = 2.0                   # couple v_0 and w_3 of edge 0: the drilling form
+    >>> Ds = split_form(Dp)
+    >>> Ds.shape, float(Ds[0, 0, 12]), float(Ds[0, 12, 12])
+    ((1, 24, 16), 2.0, 0.0)
     >>> Dp[0, _packed(0, 3)] = 1.0                   # couple v_0 and w_0 of edge 0
     >>> split_form(Dp) is None
     True
     """
     Dp = np.asarray(Dp, dtype=float)
-    if Dp[:, VW_INDEX].any():
+    if Dp[:, VW_OTHER].any():
         return None
-    return np.ascontiguousarray(Dp[:, SPLIT_INDEX])
+    Ds = Dp[:, SPLIT_INDEX]
+    if Dp[:, VW_INDEX].any():
+        Ds = np.concatenate([Ds, np.zeros((len(Dp), 24, 4))], 2)
+        Ds[:, :12, 12:] = Dp[:, DRILL_INDEX]
+    return np.ascontiguousarray(Ds)
 
 
 @njit(cache=True)
@@ -206,7 +222,8 @@ def element_force(el, elem_edges, sgn, Dr, z0, Dz0, psi, z, f, fe):
     (``fem.element_default``: Pi_e = 1/2 (z - z0)^T Dbar (z - z0)); returns (energy 1/2 dz.f,
     |f + Dz0|^2 + |f|^2).  Dr: element el's Dbar in the order z' (``element_D``), (24, 24), or
     the split form (24, 12) whose v rows act on dz'[:12] and w rows on dz'[12:] (288 products
-    instead of 576); z, f (24,): workspace (dz, f in the order z'); fe (m, 4, 6): written,
+    instead of 576), or (24, 16) with the v rows' coupling to the edges' w_3 (96 more); z, f
+    (24,): workspace (dz, f in the order z'); fe (m, 4, 6): written,
     fe[el, k] = sgn_k f_k (conjugate to the mesh-edge twists)."""
     for k in range(4):
         e = elem_edges[el, k]
@@ -216,15 +233,22 @@ def element_force(el, elem_edges, sgn, Dr, z0, Dz0, psi, z, f, fe):
     # f = sum_r dz_r Dbar[r] (Dbar symmetric): axpys of Dbar's rows, vectorised (a dot product
     # per row is a chain of dependent additions: about 1.8 times as long, measured)
     W = Dr.shape[1]
+    H = 24 if W == 24 else 12                      # the whole row, or its own half (split forms)
     for r in range(24):
         f[r] = 0.0
     for r in range(24):
-        o = 0 if r < 12 else 24 - W
+        o = 0 if r < 12 or H == 24 else 12
         zr = z[r]
         d = Dr[r]
-        fo = f[o:o + W]
-        for c in range(W):
+        fo = f[o:o + H]
+        for c in range(H):
             fo[c] += zr * d[c]
+    if W == 16:                                    # the v rows' coupling with the edges' w_3
+        for r in range(12):
+            d = Dr[r]
+            for k in range(4):
+                f[r] += d[12 + k] * z[14 + 3 * k]
+                f[14 + 3 * k] += d[12 + k] * z[r]
     en = 0.0
     for r in range(24):
         en += z[r] * f[r]
@@ -322,6 +346,35 @@ def _gt_times_split(G, Ds, out, h):
 
 
 @njit(cache=True)
+def _gt_times_drill(G, Ds, out):
+    """out (24,24) += G^T P^T Dc' for the coupling part Dc' of the split form with drilling
+    coupling (``split_form``, Ds (24, 16)): the v rows r of the edges (z' 3k + q) have Dc[r, k']
+    in the w_3 columns 14 + 3k', the w_3 rows (z' 14 + 3k) have Dc[:, k] in the v columns:
+
+        out[6A+i, 14+3k'] += sum_{q<3} G[k0,e0,q,i] Dc[3k0+q, k'] + G[k1,e1,q,i] Dc[3k1+q, k'],
+        out[6A+i, c < 12] += G[k0,e0,5,i] Dc[c, k0] + G[k1,e1,5,i] Dc[c, k1]    (i >= 3)."""
+    for A in range(4):
+        k0 = _NODE_INC[A, 0, 0]
+        e0 = _NODE_INC[A, 0, 1]
+        k1 = _NODE_INC[A, 1, 0]
+        e1 = _NODE_INC[A, 1, 1]
+        P = G[k0, e0]
+        Q = G[k1, e1]
+        for i in range(6):
+            o = out[6 * A + i]
+            a0, a1, a2 = P[0, i], P[1, i], P[2, i]
+            b0, b1, b2 = Q[0, i], Q[1, i], Q[2, i]
+            for k in range(4):
+                o[14 + 3 * k] += (a0 * Ds[3 * k0, 12 + k] + a1 * Ds[3 * k0 + 1, 12 + k] + a2 * Ds[3 * k0 + 2, 12 + k]
+                                  + b0 * Ds[3 * k1, 12 + k] + b1 * Ds[3 * k1 + 1, 12 + k]
+                                  + b2 * Ds[3 * k1 + 2, 12 + k])
+            if i >= 3:
+                a5, b5 = P[5, i], Q[5, i]
+                for c in range(12):
+                    o[c] += a5 * Ds[c, 12 + k0] + b5 * Ds[c, 12 + k1]
+
+
+@njit(cache=True)
 def element_G(el, elem_edges, sgn, psi, coef, G):
     """G blocks of element el: for local edge k with local psi_k = sgn_k psi_e,
     G[k,0] = -1/2 L(-psi_k) (node la), G[k,1] = 1/2 L(psi_k) (node lb)."""
@@ -374,7 +427,9 @@ def element_Ke(Dr, G, TT, TTt, KeT):
     if Dr.shape[1] == nc:
         _gt_times(G, Dr, TT, nc)
     else:
-        _gt_times_split(G, Dr, TT, Dr.shape[1])
+        _gt_times_split(G, Dr, TT, 12)
+        if Dr.shape[1] == 16:
+            _gt_times_drill(G, Dr, TT)
     for a in range(24):
         for b in range(24):
             TTt[a, b] = TT[b, a]
