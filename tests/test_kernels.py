@@ -217,7 +217,7 @@ def test_dbar_paths():
     unpacked).  Distorted quads (the disk), whose membrane strain sees the drilling components
     w_3 of the edge twists (fem.membrane_drilling), couple v and w in those 4 columns only: the
     split form then carries them in 4 more columns (m, 24, 16)."""
-    from core_se3.kernels.element_ops import ZP
+    from core_se3.kernels.element_dbar import ZP
     for kind, split in [("flat", True), ("disk", True), ("arch", True), ("region", True), ("coupled", False)]:
         el = _problem(kind).element
         mesh = el.mesh

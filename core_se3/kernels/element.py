@@ -16,7 +16,8 @@ import numpy as np
 from numba import njit, prange
 
 from .element_mixed import element_linear_stress, element_linear_stress_serial, signed_edge_stress, stress_from_signed
-from .element_ops import CHUNK, MAX_EDGE_ANGLE, NSYM, check_angles, packed_matvec, split_form
+from .element_dbar import NSYM, packed_matvec, split_form
+from .element_ops import CHUNK, MAX_EDGE_ANGLE, check_angles
 from .element_passes import (edges_log, edges_residual, edges_tangent, edges_tangent_store, elements_force,
                              elements_tangent, elements_tangent_store, nodes_pass)
 
