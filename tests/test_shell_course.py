@@ -118,3 +118,21 @@ def test_linear_solve_refuses_unknown_options():
 def test_classical_flag_is_checked():
     with pytest.raises(MaterialError, match="classical"):
         Material(1.0, 0.3, 0.1, classical="yes")
+
+
+def test_distorted_patch_keeps_a_consistent_tangent_and_six_zero_modes():
+    """The correction lives in Dbar: on MacNeal and Harder's (distorted) patch the tangent still
+    matches central differences at a large-rotation state (bar 1e-6 as tests/test_element.py;
+    seen ~1e-10) and the free patch has exactly the six rigid zero modes."""
+    from core_se3 import lie
+    from core_se3.model import verify
+    m, _ = pt.mh_patch()
+    p = Problem(m, Material(1.0e6, 0.25, 0.01))
+    assert p.element.drill_Ek.any()
+    rng = np.random.default_rng(3)
+    g = lie.exp(np.r_[rng.normal(size=3), 10.0 * np.array([0.6, 0.0, 0.8])]) @ m.g0 \
+        @ lie.exp(np.c_[0.01 * rng.normal(size=(8, 3)), 0.3 * rng.normal(size=(8, 3))])
+    err, _, _ = verify.tangent_fd_check(p, g, 1.0, h=1e-6, free_all=True)
+    assert err < 1e-6, err
+    ev, nzero = verify.zero_modes(p, m.g0)
+    assert nzero == 6 and ev[6] >= 1e6 * ev[5]
