@@ -297,8 +297,11 @@ def element_Ke(Dr, G, TT, TTt, KeT):
     if Dr.shape[1] == nc:
         _gt_times(G, Dr, TT, nc)
     else:
-        _gt_times_split(G, Dr, TT, 12)
-        if Dr.shape[1] == 16:
+        w = Dr.shape[1]
+        # the half width 12 as a run-time value (a literal would be unrolled and not vectorised,
+        # as ``_gt_times``' nc)
+        _gt_times_split(G, Dr, TT, w if w == 12 else w - 4)
+        if w == 16:
             _gt_times_drill(G, Dr, TT)
     for a in range(24):
         for b in range(24):
