@@ -52,21 +52,8 @@ def build_problem(v, spec, mesh, regions):
         v.fail("material", str(exc))
     prob.solve_defaults = solve_defaults(s)
     prob.scenario_parts = dict(fields={}, loads=[])     # what [design] variables refer to by name
-    axes = {"x": 0, "y": 1, "z": 2}
     for i, sp in enumerate(spec["supports"]):
-        key = f"supports[{i}]"
-        nodes = selection(mesh, sp)
-        try:
-            if sp["type"] == "clamp":
-                prob.clamp(nodes)
-            elif sp["type"] == "fix":
-                prob.fix(nodes, sp["dofs"])
-            else:
-                point = sp["point"] if sp["point"] is not None else mesh.X[nodes].mean(0)
-                prob.rotate_edge(nodes, sp["axis"], sp["angle"], point=point,
-                                 free=[axes[a] for a in sp["free"]], scale=make_scale(sp["scale"]))
-        except CoreSE3Error as exc:
-            v.fail(key, str(exc))
+        _add_support(v, prob, mesh, sp, f"supports[{i}]")
     for i, ld in enumerate(spec["loads"]):
         key = f"loads[{i}]"
         values = {k: x for k, x in ld.items() if k not in ("type", "scale", "edge", "nodes", "region")}
@@ -90,6 +77,33 @@ def build_problem(v, spec, mesh, regions):
     except SingularSystemError as exc:
         v.fail("supports", str(exc))
     return prob
+
+
+def _add_support(v, prob, mesh, sp, key):
+    """One [[supports]] entry; a conflict with an earlier one (a node moved by one and held by
+    the other) names both entries."""
+    axes = {"x": 0, "y": 1, "z": 2}
+    nodes = selection(mesh, sp)
+    try:
+        if sp["type"] == "clamp":
+            prob.clamp(nodes)
+        elif sp["type"] == "fix":
+            prob.fix(nodes, sp["dofs"])
+        elif sp["type"] == "rotate":
+            point = sp["point"] if sp["point"] is not None else mesh.X[nodes].mean(0)
+            prob.rotate_edge(nodes, sp["axis"], sp["angle"], point=point,
+                             free=[axes[a] for a in sp["free"]], scale=make_scale(sp["scale"]))
+        else:
+            rot = sp["rotate"] or dict(axis=None, angle=0.0, point=None)
+            prob.move_edge(nodes, sp["translate"], rot["axis"], rot["angle"], rot["point"],
+                           free=[axes[a] for a in sp["free"]], scale=make_scale(sp["scale"]))
+    except CoreSE3Error as exc:
+        other = getattr(exc, "other", None)
+        msg = str(exc)
+        if other is not None:
+            msg = msg.replace(f"support {len(prob.supports)} (", f"{key} (").replace(
+                f"support {other} (", f"supports[{other}] (")
+        v.fail(key, msg)
 
 
 def _add_magnets(v, prob, spec, mesh, regions):
