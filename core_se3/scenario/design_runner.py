@@ -156,9 +156,10 @@ def _pose_rows(scn, pose, st):
     for t in pose.targets:
         m = t.misfit(scn.problem, st.g, st.lam)
         q = t.quantity.value(scn.problem, st.g, st.lam)
-        unit = "deg" if isinstance(t.quantity, AngleInDegrees) else None
+        angle = dict(unit="deg", target=t.quantity.target, achieved=[float(t.quantity.target + q[0])]) \
+            if isinstance(t.quantity, AngleInDegrees) else {}
         rows.append(dict(name=t.name, type=type(t.quantity).__name__, misfit=m.tolist(),
-                         max_misfit=float(np.abs(m).max()), value=q.tolist(), **({"unit": unit} if unit else {})))
+                         max_misfit=float(np.abs(m).max()), value=q.tolist(), **angle))
         target = getattr(t.quantity, "target", None)
         if type(t.quantity).__name__ in ("ProbePosition", "NodePosition") and target is not None:
             tg.extend(np.atleast_2d(target).tolist())

@@ -46,6 +46,7 @@ import numpy as np
 
 from ..design import (METHODS, Design, FieldVariable, LoadMagnitude, MaterialVariable, NodePosition, Orientation,
                       Pose, ProbePosition, RegionMagnetisation, RotationAngle, Smoothness, Target)
+from ..design.objectives import Quantity
 from .. import lie
 from ..errors import CoreSE3Error, ScenarioError, did_you_mean
 from .validate import join, show, tname
@@ -79,10 +80,10 @@ def _plane(v, d, k, key, default):
     return [v.vector({"e": e}, "e", f"{join(key, k)}[{i}]", nonzero=True) for i, e in enumerate(x)]
 
 
-class AngleInDegrees(RotationAngle):
-    """A scenario's angle target: ``RotationAngle`` with its value, misfit, target and scale in
-    degrees (an angle goes in and comes out of a scenario in degrees), the default scale 1 rad =
-    57.3 deg (the Python API's, so the objective is the same).
+class AngleInDegrees(Quantity):
+    """A scenario's angle target: a ``RotationAngle`` with its value, misfit, target and scale
+    in degrees (an angle goes in and comes out of a scenario in degrees); the scenario's default
+    scale is 1 rad = 57.3 deg (the Python API's, so the objective is the same).
 
     Example
     -------
@@ -96,13 +97,17 @@ class AngleInDegrees(RotationAngle):
     DEGREE = 180.0 / np.pi
 
     def __init__(self, problem, target=None, **kw):
-        super().__init__(problem, target=None if target is None else np.radians(target), **kw)
+        self.angle = RotationAngle(problem, target=None if target is None else np.radians(target), **kw)
+        self.target, self.name, self.size = target, self.angle.name, 1
 
     def value(self, problem, g, lam):
-        return self.DEGREE * super().value(problem, g, lam)
+        return self.DEGREE * self.angle.value(problem, g, lam)
 
     def jacobian(self, problem, g, lam):
-        return self.DEGREE * super().jacobian(problem, g, lam)
+        return self.DEGREE * self.angle.jacobian(problem, g, lam)
+
+    def explicit(self, problem, g, lam, variable):
+        return self.DEGREE * self.angle.explicit(problem, g, lam, variable)
 
 
 def design_section(v, doc, spec, mesh, regions):

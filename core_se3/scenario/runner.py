@@ -201,6 +201,7 @@ def _run(scn, rd, ctx, st, progress, stop_after, t0):
 def _restore(run, st):
     """Records, timings and the solver's restart state of a checkpoint: (start, unwrap)."""
     run.records, run.base, run.done = st["records"], dict(st["timings"]), st["step"]
+    run.saved = len(run.records)
     if run.arc:
         start = ArcState.unpack(st["g"], st["extra"]["arc"], st["arrays"])
         run.critical = list(start.critical)
@@ -286,7 +287,9 @@ def _stopped(run, sinks, exc):
     """A run that stops early: the status and message in results.json (the checkpoint keeps the
     last converged step; its VTU file is written if it was not due), every other sink closed, with
     signals held while the files are written.  Returns the exception to raise instead of ``exc``
-    (a ConvergenceError with the message), or None."""
+    (a ConvergenceError with the message), or None.  The document reports the steps the
+    checkpoint holds (a signal during a step's writing leaves that step to the resume)."""
+    del run.records[run.saved:]
     last = run.records[-1] if run.records else None
     where = "before its first step" if last is None else \
         f"after {'path point' if run.arc else 'step'} {last['step']} at load factor {last['load_factor']:.6g}"
@@ -303,7 +306,7 @@ def _stopped(run, sinks, exc):
     else:
         status, msg = "failed", f"{type(exc).__name__}: {exc} ({where})"
     with held_signals():
-        ev = getattr(run, "last", None)
+        ev = run.last if run.last is not None and last is not None and run.last.k == last["step"] else None
         if status == "failed" and ev is not None and run.scn.output["vtu"] and \
                 not os.path.exists(os.path.join(run.rd.path, "vtu", f"step_{ev.k:04d}.vtu")):
             write_step_vtu(run, ev.k, ev.g, ev.lam, ev.record.get("physical"))

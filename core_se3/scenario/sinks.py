@@ -113,6 +113,7 @@ class RunState:
     provenance: dict = field(default_factory=dict)
     done: int = 0
     last: object = None
+    saved: int = 0
 
     @property
     def root(self):
@@ -207,6 +208,7 @@ class CheckpointSink(Sink):
             run.rd.file("checkpoint.npz")
             ck.save(run.scn.fingerprint, ev.k, ev.lam, ev.g, ev.unwrap, run.records, run.timings(),
                     extra=ev.extra, arrays=ev.arrays)
+        run.saved = len(run.records)          # what a resume continues from
 
 
 class PvdSink(Sink):
