@@ -132,7 +132,7 @@ def write_json_atomic(path, doc):
     return write_text_atomic(path, json.dumps(doc, indent=1))
 
 
-def check_input_file(path, limit, what="input file"):
+def check_input_file(path, limit, what="an input file"):
     """None if ``path`` is a regular file of at most ``limit`` bytes, else the reason it is not
     read (a device such as /dev/zero, a pipe, a directory, a missing or oversized file): input
     files are read only when they are regular and bounded.
@@ -150,12 +150,12 @@ def check_input_file(path, limit, what="input file"):
     if not stat.S_ISREG(st.st_mode):
         return f"{path!r} is not a regular file (a device, a pipe or a directory): give an input file"
     if st.st_size > limit:
-        return (f"{path!r} has {st.st_size / 2 ** 20:.1f} MiB, more than the {limit / 2 ** 20:.0f} MiB an {what} may "
+        return (f"{path!r} has {st.st_size / 2 ** 20:.1f} MiB, more than the {limit / 2 ** 20:.0f} MiB {what} may "
                 "have: is it the right file?")
     return None
 
 
-def read_input_file(path, limit, what="input file"):
+def read_input_file(path, limit, what="an input file"):
     """The bytes of a regular input file of at most ``limit`` bytes (read at most limit + 1
     bytes, in case it grows); ValueError with the reason otherwise (:func:`check_input_file`).
 
@@ -172,7 +172,7 @@ def read_input_file(path, limit, what="input file"):
     with open(path, "rb") as fh:
         data = fh.read(limit + 1)
     if len(data) > limit:
-        raise ValueError(f"{path!r} has more than the {limit / 2 ** 20:.0f} MiB an {what} may have")
+        raise ValueError(f"{path!r} has more than the {limit / 2 ** 20:.0f} MiB {what} may have")
     return data
 
 

@@ -57,7 +57,7 @@ def mesh_section(v, d, base_dir):
         path = fname if os.path.isabs(fname) else os.path.join(base_dir, fname)
         if not os.path.exists(path):
             v.fail(join(key, "file"), f"mesh file {fname!r} does not exist (looked for {path})")
-        why = check_input_file(path, MAX_MESH_BYTES, "mesh file")
+        why = check_input_file(path, MAX_MESH_BYTES, "a mesh file")
         if why is not None:
             v.fail(join(key, "file"), why)
         try:
@@ -168,7 +168,8 @@ def _order_along(mesh, nodes):
     if len(segs) == 0:
         return nodes
     order = M.chain_order([tuple(s) for s in segs.tolist()])
-    return order if len(order) == len(nodes) else nodes
+    # a line visits every node once (a block of nodes gave a walk that repeats one and skips another)
+    return order if sorted(order) == sorted(np.asarray(nodes).tolist()) else nodes
 
 
 def is_line(mesh, nodes):

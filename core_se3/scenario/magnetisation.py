@@ -82,7 +82,7 @@ def _read_table(v, key, fname, path):
     if not os.path.exists(path):
         v.fail(key, f"magnetisation table {fname!r} does not exist (looked for {path})")
     try:
-        data = read_input_file(path, MAX_TABLE_BYTES, "magnetisation table")
+        data = read_input_file(path, MAX_TABLE_BYTES, "a magnetisation table")
     except (ValueError, OSError) as exc:
         v.fail(key, str(exc))
     rows = [r for r in csv.reader(data.decode("utf-8", "replace").splitlines()) if r and not r[0].startswith("#")]

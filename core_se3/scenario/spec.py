@@ -221,7 +221,7 @@ def load(path, strict=False):
     path = os.fspath(path)
     try:
         os.stat(path)
-        data = read_input_file(path, MAX_SCENARIO_BYTES, "scenario file")
+        data = read_input_file(path, MAX_SCENARIO_BYTES, "a scenario file")
     except ValueError as exc:
         raise ScenarioError(str(exc), path) from None
     except OSError as exc:
