@@ -174,7 +174,7 @@ HAVE_MPI = (importlib.util.find_spec("mpi4py") is not None and importlib.util.fi
             and shutil.which("mpirun") is not None)
 
 
-def _mpirun(tmp_path, doc, *args):
+def _mpirun(tmp_path, doc, *args, command=("run",)):
     if not HAVE_MPI:
         pytest.skip("needs mpi4py, petsc4py and mpirun")
     path = tmp_path / "s.toml"
@@ -182,8 +182,9 @@ def _mpirun(tmp_path, doc, *args):
     env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OMP_NUM_THREADS="1",
                NUMBA_NUM_THREADS="1", OMPI_MCA_rmaps_base_oversubscribe="1", CORE_SE3_BACKEND="numpy",
                PYTHONPATH=ROOT + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    what = list(command) + ([path.name] if command == ("run",) else [])
     cmd = ["mpirun", "-n", "2", "-x", "PYTHONPATH", "-x", "CORE_SE3_BACKEND", "-x", "OMP_NUM_THREADS",
-           sys.executable, "-m", "core_se3", "run", path.name, "-q", *args]
+           sys.executable, "-m", "core_se3", *what, "-q", *args]
     return subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=600, cwd=str(tmp_path))
 
 
@@ -196,6 +197,12 @@ def test_a_run_on_two_ranks_records_how_it_ran(tmp_path):
     assert prov["ranks"] == 2 and prov["linear_solver"]["used"] == "mumps"
     assert prov["partition"]["method"] == "auto" and sum(prov["partition"]["elements_per_rank"]) == 16
     assert len(prov["peak_memory"]) == 2 and min(prov["peak_memory"]) > 1e7
+    r = _mpirun(tmp_path, doc, "--json", "b.json", command=("bench", "run", "cantilever-shear", "--mesh", "8x2",
+                                                             "--steps", "2"))
+    assert r.returncode == 0, r.stderr[-3000:]
+    bench = json.load(open(tmp_path / "b.json"))["provenance"]
+    assert bench["ranks"] == 2 and bench["linear_solver"]["used"] == "mumps" and len(bench["peak_memory"]) == 2
+    assert sum(bench["partition"]["elements_per_rank"]) == 16
 
 
 def test_C4_petsc_options_it_refuses_are_one_error_line_naming_the_key(tmp_path):

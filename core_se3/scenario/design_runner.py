@@ -212,8 +212,9 @@ def _design(scn, rd, method, max_iter, progress, vtu, plots):
     if plots and r.history and root:
         files["convergence"] = _convergence_plot(rd.file("convergence.png"), r.history,
                                                  f"{scn.name}: {r.method}")
+    from .provenance import problem_provenance
     doc = dict(schema="core-se3-design v1", scenario=scn.file, name=scn.name, result=r.document(), poses=poses_doc,
-               files={k: os.path.relpath(v, out) for k, v in files.items()})
+               files={k: os.path.relpath(v, out) for k, v in files.items()}, provenance=problem_provenance(scn.problem))
     files["design"] = rd.file("design.json")
     if root:
         write_json_atomic(files["design"], doc)

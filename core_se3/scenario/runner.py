@@ -27,7 +27,7 @@ import numpy as np
 from ..backend import rent_state, restore_rent
 from ..errors import CheckpointError, ConvergenceError, CoreSE3Error, OptionError, ScenarioError
 from ..fem import ELEMENTS
-from ..io import Checkpoint
+from ..io import Checkpoint, write_json_atomic
 from ..io.lifecycle import Terminated, held_signals, termination_as_interrupt
 from ..io.rundir import RunDirectory, safe_name
 from ..results import Result, StepRecorder, step_record
@@ -138,8 +138,29 @@ def run(scn, out=None, resume=False, progress=None, force=False, stop_after=None
                 return _run(scn, rd, ctx, st, progress, stop_after, t0)
             finally:
                 ctx.close()
+        except KeyboardInterrupt as exc:
+            if not getattr(exc, "recorded", False):
+                _mark_interrupted(rd, exc)
+            raise
         finally:
             rd.release()
+
+
+def _mark_interrupted(rd, exc):
+    """A signal before the run's sinks took over (while it read its checkpoint or set up its
+    context): the results document of the earlier session, if any, says so."""
+    import json
+    from ..backend import launched_rank
+    path = os.path.join(rd.path, "results.json")
+    if launched_rank() != 0 or not os.path.exists(path) or getattr(rd, "completed", False):
+        return                            # (a signal while a completed run drew its plots)
+    what = exc.describe() if isinstance(exc, Terminated) else "Ctrl-C (SIGINT)"
+    with held_signals():
+        with open(path) as fh:
+            doc = json.load(fh)
+        doc.update(status="interrupted", error=f"interrupted by {what} while the run started; the checkpoint keeps "
+                                               "its last converged step: continue with --resume")
+        write_json_atomic(rd.file("results.json"), doc)
 
 
 def _context(scn, st):
@@ -305,6 +326,8 @@ def _stopped(run, sinks, exc):
             again = ConvergenceError(msg, exc.result)
     else:
         status, msg = "failed", f"{type(exc).__name__}: {exc} ({where})"
+    if isinstance(exc, BaseException):
+        exc.recorded = True               # results.json says it (run() need not)
     with held_signals():
         ev = run.last if run.last is not None and last is not None and run.last.k == last["step"] else None
         if status == "failed" and ev is not None and run.scn.output["vtu"] and \
@@ -349,6 +372,7 @@ def _complete(run, sinks, last):
     with held_signals():
         for sink in sinks:
             sink.end(run, status, error)
+        run.rd.completed = status == "complete"
     doc = run.document(status, error)
     if status == "failed":
         raise ConvergenceError(error + f"; the {len(run.records) - 1} converged steps are written in "

@@ -207,10 +207,11 @@ def sweep(scn, grid, out=None, progress=None, warm=True, plot=True, resume=False
     rd = RunDirectory(output_directory(scn, out, "-sweep"), "sweep", SWEEP_FILES)
     with termination_as_interrupt(), rd.claim(resume=resume, force=force, adopt=SWEEP_FILES):
         state = SweepCheckpoint(rd, scn, grid, warm)
-        if resume:
-            state.load()
-        result = SweepResult(keys, state.rows)
+        result = SweepResult(keys, state.rows, status="running")
         try:
+            write_status(rd.file("sweep.json"), result, scn, state)         # from the start
+            if resume:
+                result.rows = state.load().rows
             _run_points(scn, keys, points, state, warm, progress)
         except KeyboardInterrupt as exc:
             what = exc.describe() if isinstance(exc, Terminated) else "Ctrl-C (SIGINT)"
@@ -219,6 +220,7 @@ def sweep(scn, grid, out=None, progress=None, warm=True, plot=True, resume=False
                 result.files = _write_all(rd, result, state, scn, plot, f"interrupted by {what} after {len(state.rows)} "
                                           f"of {len(points)} runs: the finished rows are kept; continue with --resume")
             raise
+        result.status = "complete"
         result.files = _write_all(rd, result, state, scn, plot)
     return result
 
