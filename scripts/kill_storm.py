@@ -61,6 +61,12 @@ def _final(kind, out):
     return Checkpoint(out).load()["g"]
 
 
+def _stamp(kind, out):
+    """The status file's modification time (None without one)."""
+    p = os.path.join(out, "sweep.json" if kind == "sweep" else "results.json")
+    return os.stat(p).st_mtime_ns if os.path.exists(p) else None
+
+
 def check_files(kind, out):
     """Every file of the directory readable and consistent (module docstring); returns the status."""
     from core_se3.io import Checkpoint
@@ -123,6 +129,7 @@ def storm(kills=50, seed=1, workdir=None, log=print):
         while True:                       # kill, check, resume (killed again, 1-3 times) until the job ends
             sig = rng.choice(SIGNALS) if left > 0 and summary["kills"] < kills else None
             left -= 1
+            before = _stamp(kind, out)
             proc = subprocess.Popen(_cmd(kind, paths[kind], out, resume), env=_env(), stdout=subprocess.PIPE,
                                     stderr=subprocess.PIPE, text=True)
             if sig is not None:
@@ -135,11 +142,13 @@ def storm(kills=50, seed=1, workdir=None, log=print):
             _, err = proc.communicate(timeout=600)
             status = check_files(kind, out)
             if sig in (signal.SIGTERM, signal.SIGINT) and proc.returncode in (143, 130):
-                # 'complete': the signal came while the finished run drew its plots; None: before
-                # the run had written anything (while it read the scenario or claimed its directory)
-                assert status in ("interrupted", "complete", None), (kind, out, status, err)
+                # 'complete': the signal came while the finished run drew its plots; an unchanged
+                # status file: before the process claimed the directory (it read the scenario)
+                assert status in ("interrupted", "complete") or _stamp(kind, out) == before, (kind, out, status, err)
                 assert proc.returncode == (143 if sig == signal.SIGTERM else 130), (proc.returncode, err)
                 summary["interrupted_statuses"] += 1
+            elif proc.returncode == 1 and "KeyboardInterrupt" in err and _stamp(kind, out) == before:
+                pass                      # SIGINT while the interpreter started (runpy), before core_se3 ran
             elif proc.returncode not in (0, -signal.SIGKILL, -signal.SIGTERM, -signal.SIGINT, 143, 130):
                 raise AssertionError(f"{kind} {out}: exit {proc.returncode}: {err[-2000:]}")
             if proc.returncode == 0:

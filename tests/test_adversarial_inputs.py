@@ -110,6 +110,14 @@ CASES = [
      "supports[1].type", "a prescribed motion is not supported"),
     ("prescribed motion with an unknown key", with_(supports=[BASE["supports"][0], dict(LIFT, angle=0.1)]),
      "supports[1].angle", "unknown key 'angle'"),
+    ("an edge force on the clamped edge", with_(loads=[{"type": "edge_force", "edge": "x0", "force": [0.0, 0.0, 1.0]}]),
+     "loads[0]", "it acts only on dofs that supports[0] hold (nodes [0, 5])"),
+    ("a moment on nodes whose rotations are fixed",
+     with_(supports=[BASE["supports"][0], {"type": "fix", "nodes": [9], "dofs": [3, 4, 5]}],
+           loads=[dict(NODAL, nodes=[9], force=[0.0, 0.0, 0.0], moment=[0.0, 1.0, 0.0])]), "loads[0]",
+     "it acts only on dofs that supports[1] hold (nodes [9])"),
+    ("a load on a node a prescribed motion moves", with_(supports=[BASE["supports"][0], LIFT],
+                                                         loads=[dict(NODAL, nodes=[4])]), "loads[0]", "supports[1] hold"),
 ]
 
 
@@ -123,7 +131,18 @@ def test_bad_input_is_refused_by_name(name, d, key, fragment):
 
 
 def test_the_battery_holds_forty_new_kinds():
-    assert len(CASES) + len(FILE_CASES) + len(CHECKPOINT_CASES) + 4 >= 40
+    assert len(CASES) + len(FILE_CASES) + len(CHECKPOINT_CASES) + 6 >= 40
+
+
+def test_command_line_contradictions_are_one_error_line(tmp_path, capsys):
+    from core_se3 import cli
+    path = tmp_path / "s.toml"
+    path.write_text(scenario.dumps(with_(units=None)))
+    assert cli.main(["run", str(path), "--out", str(tmp_path / "o"), "--resume", "--force"]) == 2
+    assert "give one of them" in capsys.readouterr().err
+    assert cli.main(["sweep", str(path), "--set", "material.E=1e6", "--set", "material.E=2e6",
+                     "--out", str(tmp_path / "w")]) == 2
+    assert "--set material.E is given twice" in capsys.readouterr().err
 
 
 # ----------------------------------------------------------------------------- input files

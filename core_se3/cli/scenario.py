@@ -91,9 +91,20 @@ def _check(args, scn):
     return 0
 
 
+def _contradiction(args):
+    """--resume (continue) and --force (start over) together: an error line, exit status 2."""
+    if getattr(args, "resume", False) and getattr(args, "force", False):
+        print("error: --resume continues the run in --out and --force starts it over: give one of them",
+              file=sys.stderr)
+        return 2
+    return None
+
+
 def scenario_run(args):
     """``core-se3 run``: validate the scenario, solve it step by step, write its outputs."""
     from .. import scenario
+    if _contradiction(args):
+        return 2
     try:
         scn = _load_quietly(args.scenario, args.strict)
     except CoreSE3Error as exc:
@@ -197,6 +208,9 @@ def _grid(args, scn):
         if "=" not in item:
             raise CoreSE3Error(f"--set expects KEY=v1,v2,..., got {item!r}")
         k, vals = item.split("=", 1)
+        if k.strip() in grid:
+            raise CoreSE3Error(f"--set {k.strip()} is given twice (the second would silently replace the first): "
+                               "give all its values in one --set KEY=v1,v2,...")
         grid[k.strip()] = parse_values(vals, f"--set {k.strip()}")
     if not grid and not scn.spec["sweep"]:
         raise CoreSE3Error(f"{args.scenario}: nothing to sweep: give --set KEY=v1,v2,... or a [sweep] section")
@@ -206,6 +220,8 @@ def _grid(args, scn):
 def scenario_sweep(args):
     """``core-se3 sweep``: the scenario over the values of --set KEY=v1,v2,... (or [sweep])."""
     from .. import scenario
+    if _contradiction(args):
+        return 2
     try:
         scn = _load_quietly(args.scenario, args.strict)
         grid, where = _grid(args, scn)

@@ -67,6 +67,7 @@ def build_problem(v, spec, mesh, regions):
         except CoreSE3Error as exc:
             param = getattr(exc, "param", None)
             v.fail(join(key, param) if param else key, str(exc))
+    _loads_act(v, prob, spec)
     if spec["magnets"]:
         _add_magnets(v, prob, spec, mesh, regions)
     add_obstacles(v, prob, spec, regions)
@@ -77,6 +78,24 @@ def build_problem(v, spec, mesh, regions):
     except SingularSystemError as exc:
         v.fail("supports", str(exc))
     return prob
+
+
+def _loads_act(v, prob, spec):
+    """A ScenarioError for a load that acts only on dofs the supports hold: its reaction absorbs it
+    and it does nothing (an edge force on the clamped edge).  Each load is evaluated at the
+    reference frames and the final load factor (a load switched off there is not checked)."""
+    held = prob.constraint_mask()
+    g0 = prob.mesh.g0
+    lam = spec["solver"]["lam_end"]
+    for i, built in enumerate(prob.scenario_parts["loads"]):
+        f = sum(ld.evaluate(g0, lam, tangent=False).f for ld in built)
+        total = float(np.abs(f).max()) if np.size(f) else 0.0
+        if total > 0 and float(np.abs(np.where(held, 0.0, f)).max()) <= 1e-14 * total:
+            nodes = np.nonzero(np.abs(f).max(1) > 0)[0]
+            by = [f"supports[{j}]" for j, s in enumerate(prob.supports) if np.isin(nodes, s.nodes).any()]
+            v.fail(f"loads[{i}]", f"it acts only on dofs that {', '.join(by) or 'the supports'} hold (nodes "
+                                  f"{nodes[:6].tolist()}{'...' if len(nodes) > 6 else ''}): their reaction would absorb "
+                                  "it and it would do nothing; load other nodes, or free those dofs")
 
 
 def _add_support(v, prob, mesh, sp, key):

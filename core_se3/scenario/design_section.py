@@ -92,7 +92,7 @@ class AngleInDegrees(Quantity):
     >>> p = Problem(mesh.rectangle(2.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
     >>> g = lie.exp(np.array([0, 0, 0, 0, -0.5, 0])) @ p.mesh.g0            # 0.5 rad about -y
     >>> round(float(AngleInDegrees(p, node=2, target=30.0).value(p, g, 1.0)[0]), 6)   # 28.6479 - 30
-    -1.352056
+    -1.35211
     """
     DEGREE = 180.0 / np.pi
 

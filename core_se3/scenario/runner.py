@@ -195,12 +195,7 @@ def _run(scn, rd, ctx, st, progress, stop_after, t0):
     start, unwrap = _restore(run, st) if st is not None else (None, None)
     rec = StepRecorder(scn.problem, unwrap)
     ctx.barrier()                            # every rank has read the directory before rank 0 writes
-    doc_sink = DocumentSink()
-    vtu = VtuSink(scn.output["vtu_every"])
-    sinks = ([vtu] if scn.output["vtu"] else []) + [CheckpointSink()] + ([PvdSink(vtu)] if scn.output["vtu"] else [])
-    sinks += [ProvenanceSink(), doc_sink, ProgressSink(run, progress, None if run.arc else len(scn.load_factors()))]
-    sinks += [StopAfter(stop_after)] if stop_after is not None else []
-    doc_sink.start(run)
+    sinks = _sinks(run, progress, stop_after)
     try:
         if start is None and not run.arc:
             start = _feed(run, sinks, _initial_event(run, rec))
@@ -217,6 +212,19 @@ def _run(scn, rd, ctx, st, progress, stop_after, t0):
             raise again from None
         raise
     return _complete(run, sinks, last or start)
+
+
+def _sinks(run, progress, stop_after):
+    """The sinks of a run, in the order they see each step (``scenario.sinks``); the results
+    document is written at once (status running)."""
+    o = run.scn.output
+    doc = DocumentSink()
+    vtu = VtuSink(o["vtu_every"])
+    sinks = ([vtu] if o["vtu"] else []) + [CheckpointSink()] + ([PvdSink(vtu)] if o["vtu"] else [])
+    sinks += [ProvenanceSink(), doc, ProgressSink(run, progress, None if run.arc else len(run.scn.load_factors()))]
+    sinks += [StopAfter(stop_after)] if stop_after is not None else []
+    doc.start(run)
+    return sinks
 
 
 def _restore(run, st):

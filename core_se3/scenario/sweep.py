@@ -209,9 +209,10 @@ def sweep(scn, grid, out=None, progress=None, warm=True, plot=True, resume=False
         state = SweepCheckpoint(rd, scn, grid, warm)
         result = SweepResult(keys, state.rows, status="running")
         try:
-            write_status(rd.file("sweep.json"), result, scn, state)         # from the start
-            if resume:
-                result.rows = state.load().rows
+            with held_signals():
+                write_status(rd.file("sweep.json"), result, scn, state)     # from the start
+                if resume:
+                    result.rows = state.load().rows
             _run_points(scn, keys, points, state, warm, progress)
         except KeyboardInterrupt as exc:
             what = exc.describe() if isinstance(exc, Terminated) else "Ctrl-C (SIGINT)"
@@ -220,8 +221,9 @@ def sweep(scn, grid, out=None, progress=None, warm=True, plot=True, resume=False
                 result.files = _write_all(rd, result, state, scn, plot, f"interrupted by {what} after {len(state.rows)} "
                                           f"of {len(points)} runs: the finished rows are kept; continue with --resume")
             raise
-        result.status = "complete"
-        result.files = _write_all(rd, result, state, scn, plot)
+        with held_signals():                  # the last files complete, then a signal that came
+            result.status = "complete"
+            result.files = _write_all(rd, result, state, scn, plot)
     return result
 
 
