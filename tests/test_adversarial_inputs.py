@@ -118,6 +118,15 @@ CASES = [
      "it acts only on dofs that supports[1] hold (nodes [9])"),
     ("a load on a node a prescribed motion moves", with_(supports=[BASE["supports"][0], LIFT],
                                                          loads=[dict(NODAL, nodes=[4])]), "loads[0]", "supports[1] hold"),
+    ("magnet repeated", with_(loads=[], regions={"tip": {"box": {"x": [7.5, 10.0]}}},
+                              fields={"c": {"type": "uniform", "B": [0.0, 0.0, 0.01]}},
+                              magnets=[{"Br": [0.1, 0.0, 0.0], "region": "tip"}] * 2), "magnets[1]", "repeats magnets[0]"),
+    ("a magnet on clamped elements only", with_(loads=[], regions={"root": {"box": {"x": [0.0, 2.5]}}},
+                                                supports=[{"type": "clamp", "region": "root"}],
+                                                fields={"c": {"type": "uniform", "B": [0.0, 0.0, 0.01]}},
+                                                magnets=[{"Br": [0.1, 0.0, 0.0], "region": "root"},
+                                                         {"Br": [0.1, 0.0, 0.0]}]),
+     "magnets[0]", "it acts only on dofs that supports[0] hold"),
 ]
 
 

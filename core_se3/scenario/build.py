@@ -67,9 +67,10 @@ def build_problem(v, spec, mesh, regions):
         except CoreSE3Error as exc:
             param = getattr(exc, "param", None)
             v.fail(join(key, param) if param else key, str(exc))
-    _loads_act(v, prob, spec)
+    _loads_act(v, prob, spec["solver"]["lam_end"], prob.scenario_parts["loads"], "loads")
     if spec["magnets"]:
         _add_magnets(v, prob, spec, mesh, regions)
+        _loads_act(v, prob, spec["solver"]["lam_end"], prob.scenario_parts["magnets"], "magnets")
     add_obstacles(v, prob, spec, regions)
     for pr in spec["probes"]:
         prob.add_probe(pr["name"], selection(mesh, pr))
@@ -80,20 +81,20 @@ def build_problem(v, spec, mesh, regions):
     return prob
 
 
-def _loads_act(v, prob, spec):
-    """A ScenarioError for a load that acts only on dofs the supports hold: its reaction absorbs it
-    and it does nothing (an edge force on the clamped edge).  Each load is evaluated at the
-    reference frames and the final load factor (a load switched off there is not checked)."""
+def _loads_act(v, prob, lam, entries, section):
+    """A ScenarioError for a load (or magnet) that acts only on dofs the supports hold: their
+    reaction absorbs it and it does nothing (an edge force on the clamped edge).  Each entry's
+    loads are evaluated at the reference frames and the final load factor ``lam`` (one that is
+    switched off there, or vanishes at the reference, is not checked)."""
     held = prob.constraint_mask()
     g0 = prob.mesh.g0
-    lam = spec["solver"]["lam_end"]
-    for i, built in enumerate(prob.scenario_parts["loads"]):
+    for i, built in enumerate(entries):
         f = sum(ld.evaluate(g0, lam, tangent=False).f for ld in built)
         total = float(np.abs(f).max()) if np.size(f) else 0.0
         if total > 0 and float(np.abs(np.where(held, 0.0, f)).max()) <= 1e-14 * total:
             nodes = np.nonzero(np.abs(f).max(1) > 0)[0]
             by = [f"supports[{j}]" for j, s in enumerate(prob.supports) if np.isin(nodes, s.nodes).any()]
-            v.fail(f"loads[{i}]", f"it acts only on dofs that {', '.join(by) or 'the supports'} hold (nodes "
+            v.fail(f"{section}[{i}]", f"it acts only on dofs that {', '.join(by) or 'the supports'} hold (nodes "
                                   f"{nodes[:6].tolist()}{'...' if len(nodes) > 6 else ''}): their reaction would absorb "
                                   "it and it would do nothing; load other nodes, or free those dofs")
 
@@ -149,6 +150,7 @@ def _add_magnets(v, prob, spec, mesh, regions):
             Br = np.einsum("kij,j->ki", R0, np.asarray(m["Br_frame"], float))
         mu0 = m["mu0"] if m["mu0"] is not None else mu0_units
         try:
-            prob.add_magnetic(Br, built[m["field"]], elements=elems, mu0=mu0)
+            added = prob.add_magnetic(Br, built[m["field"]], elements=elems, mu0=mu0)
         except CoreSE3Error as exc:
             v.fail(key, str(exc))
+        prob.scenario_parts.setdefault("magnets", []).append(added if isinstance(added, list) else [added])

@@ -163,6 +163,7 @@ def magnets_section(v, doc, regions, fields, mesh=None, base_dir="."):
             m["field"] = next(iter(fields))
         else:
             v.fail(join(key, "field"), f"several fields are defined ({', '.join(fields)}): name one")
+        _refuse_repeat(v, out, m, key, "magnets", "the magnet")
         out.append(m)
     if fields and not out:
         v.fail("fields", "fields are defined but no [[magnets]] use them")
