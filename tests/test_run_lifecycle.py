@@ -62,6 +62,16 @@ def test_force_deletes_only_the_files_of_the_earlier_run(tmp_path):
                                           "vtu/step_0001.vtu"]
 
 
+def test_a_resume_keeps_the_files_added_beside_the_run(tmp_path):
+    out = tmp_path / "o"
+    scn = load()
+    with pytest.raises(sinks.RunInterrupted):
+        runner.run(scn, out=str(out), stop_after=1)
+    (out / "notes.txt").write_text("mine")
+    assert runner.run(scn, out=str(out), resume=True).status == "complete"
+    assert (out / "notes.txt").read_text() == "mine" and "notes.txt" not in manifest(str(out))
+
+
 def test_a_resume_adopts_the_run_directory_of_an_older_version(tmp_path):
     out = str(tmp_path / "o")
     scn = load()

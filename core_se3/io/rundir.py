@@ -5,8 +5,9 @@ live run at a time.
   it is created (:meth:`RunDirectory.file`), so that whatever a killed run left is known to be
   its own; ``--force`` deletes only the files of a previous run that its manifest lists (and
   their half-written temporaries), never a file this tool did not write.
-* **Foreign files**: a directory holding files that no manifest lists is refused (naming them)
-  unless ``force``; even then they are kept, and a run refuses to overwrite one of them.
+* **Foreign files**: a new run in a directory holding files that no manifest lists is refused
+  (naming them) unless ``force``; even then they are kept, and a run refuses to overwrite one of
+  them (a resumed run keeps those added beside it).
 * **Lock** (``.core-se3.lock``): an exclusive ``flock`` held while the run lives, released by
   the kernel when its process ends however it ends (so a killed run leaves no stale lock); a
   second run on the same directory is refused, naming the first one's process.
@@ -154,7 +155,7 @@ class RunDirectory:
 
     def _check(self, foreign, resume, force):
         where = self.path
-        if foreign and not force:
+        if foreign and not force and not resume:          # a resumed run keeps files added beside it
             raise RunDirectoryError(
                 f"{where} holds files that core-se3 did not write ({_some(foreign)}): choose an empty or new "
                 f"--out directory, or --force to write beside them (--force never deletes them)")
