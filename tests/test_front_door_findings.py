@@ -470,3 +470,16 @@ def test_U13_the_documented_design_fragment_reaches_its_target():
     scn = load(merged(frag))
     r = scn.design().optimise("least_squares", max_iter=20, tolerance=0.01)
     assert r.reached and r.max_misfit < 0.01                            # degrees
+
+
+def test_U11_warmup_fills_the_kernel_cache_once():
+    from core_se3.backend import kernel_cache_warm, numba_available
+    if not numba_available():
+        pytest.skip("needs numba")
+    r = subprocess.run([sys.executable, "-m", "core_se3", "warmup"], env=env(), capture_output=True, text=True,
+                       timeout=900)
+    assert r.returncode == 0 and r.stdout.strip().splitlines()[-1].startswith("numba kernels "), r.stderr[-2000:]
+    assert kernel_cache_warm()
+    again = subprocess.run([sys.executable, "-m", "core_se3", "warmup"], env=env(), capture_output=True, text=True,
+                           timeout=900)
+    assert "were already compiled" in again.stdout

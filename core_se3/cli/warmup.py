@@ -18,7 +18,8 @@ __all__ = ["warm_kernels", "warm_problems"]
 
 
 def warm_problems():
-    """The small problems whose solves compile every kernel (module docstring)."""
+    """The small problems whose solves compile every kernel (module docstring): (problem,
+    solve options) pairs."""
     from ..fem import Material
     from ..mesh import rectangle
     from ..model import GradientField, Problem, UniformField
@@ -50,14 +51,14 @@ def warm_problems():
 
 def warm_kernels(progress=False):
     """Compile the kernels (module docstring); returns a line saying what it did and how long it
-    took.
+    took (``core-se3 warmup``; tests/test_front_door_findings.py runs it in a subprocess).
 
     Example
     -------
-    >>> from core_se3.backend import numba_available
-    >>> line = warm_kernels() if numba_available() else "numba kernels: not installed"
-    >>> line.startswith("numba kernels")
-    True
+    The problems it solves (each on the numba backend):
+
+    >>> [sorted(options) for _, options in warm_problems()]
+    [['steps'], ['iteration', 'steps'], ['control', 'steps']]
     """
     from ..backend import kernel_cache_warm, mark_kernel_cache_warm, numba_available
     if not numba_available():
