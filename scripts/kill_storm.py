@@ -133,7 +133,9 @@ def storm(kills=50, seed=1, workdir=None, log=print):
             proc = subprocess.Popen(_cmd(kind, paths[kind], out, resume), env=_env(), stdout=subprocess.PIPE,
                                     stderr=subprocess.PIPE, text=True)
             if sig is not None:
-                time.sleep(rng.uniform(0.0, 1.1 * durations[kind]))
+                # a quarter in the start (imports, validation, claiming), the rest while it computes
+                early = rng.random() < 0.25
+                time.sleep(durations[kind] * (rng.uniform(0.0, 0.4) if early else rng.uniform(0.4, 1.05)))
                 if proc.poll() is None:
                     proc.send_signal(sig)
                     summary["kills"] += 1
