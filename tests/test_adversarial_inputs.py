@@ -216,6 +216,9 @@ CHECKPOINT_CASES = [
      "lacks its step number or load factor"),
     ("probes of another scenario", lambda st: _edit(st, unwrap={"elsewhere": np.zeros(3)}), "its probe rotations"),
     ("timings that are not numbers", lambda st: _edit(st, timings={"solve": "fast"}), "its timings are not numbers"),
+    ("a solver state at another load factor",
+     lambda st: _edit(st, extra=dict(st["extra"], newton=dict(st["extra"]["newton"], lam=0.5))),
+     "its solver state is at load factor 0.5, its frames at 1.0"),
 ]
 
 

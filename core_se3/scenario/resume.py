@@ -146,6 +146,9 @@ def check_consistent(path, st, problem):
         bad(f"its step {st['step']} is not that of its last record ({steps[-1]})")
     if not np.isfinite(st["lam"]) or st["lam"] != lams[-1]:
         bad(f"its load factor {st['lam']!r} is not that of its last record ({lams[-1]!r})")
+    solver = st["extra"].get("newton") or st["extra"].get("arc") or {}
+    if "lam" in solver and solver["lam"] != st["lam"]:
+        bad(f"its solver state is at load factor {solver['lam']!r}, its frames at {st['lam']!r}")
     if sorted(st["unwrap"]) != sorted(problem.probes) or any(np.shape(w) != (3,) or not np.all(np.isfinite(w))
                                                              for w in st["unwrap"].values()):
         bad(f"its probe rotations ({sorted(st['unwrap'])}) are not 3-vectors of the probes {sorted(problem.probes)}")
