@@ -30,6 +30,7 @@ import numpy as np
 
 from ..errors import CoreSE3Error
 from ..io import Checkpoint, Progress, atomic_path, write_json_atomic
+from ..io.lifecycle import held_signals
 from ..results import result_document
 from .obstacles import obstacles_of
 from .outputs import unit_system_record
@@ -203,12 +204,13 @@ class CheckpointSink(Sink):
     """``checkpoint.npz`` after every step: frames, restart state, records, timings."""
 
     def step(self, run, ev):
-        if run.root:
-            ck = Checkpoint(run.rd.path)
-            run.rd.file("checkpoint.npz")
-            ck.save(run.scn.fingerprint, ev.k, ev.lam, ev.g, ev.unwrap, run.records, run.timings(),
-                    extra=ev.extra, arrays=ev.arrays)
-        run.saved = len(run.records)          # what a resume continues from
+        with held_signals():                  # the file and the count of what it holds agree
+            if run.root:
+                ck = Checkpoint(run.rd.path)
+                run.rd.file("checkpoint.npz")
+                ck.save(run.scn.fingerprint, ev.k, ev.lam, ev.g, ev.unwrap, run.records, run.timings(),
+                        extra=ev.extra, arrays=ev.arrays)
+            run.saved = len(run.records)      # what a resume continues from
 
 
 class PvdSink(Sink):
