@@ -20,7 +20,8 @@ from core_se3.assembly import Assembler
 from core_se3.errors import ElementTooDistortedError
 from core_se3.fem import Material, RegionMaterial
 from core_se3.fem.element_default import _dexp_inv_jacobian_T
-from core_se3.model import Load, LoadEvaluation, Problem
+from core_se3.model import Load, LoadEvaluation, NodalLoad, Problem
+from core_se3.model.supports import RotationComponentSpring
 from core_se3.model.fields import DipoleField, GradientField, Superposition, UniformField
 
 from core_se3 import kernels as K
@@ -295,7 +296,8 @@ def _loaded(which, backend):
     if which == "nodal_dead":
         p.add_edge_force("x1", (3.0, -2.0, 5.0))
         p.add_edge_moment("x1", (0.5, 1.0, -0.7))
-        p.add_nodal_load(np.array([4, 4, 7]), force=(1.0, 2.0, 3.0), moment=(-1.0, 0.3, 0.2))
+        # a repeated node (the kernels accumulate repeats as np.add.at does; selections refuse them)
+        p.add(NodalLoad(mesh.n_nodes, np.array([4, 4, 7]), np.ones(3), force=(1.0, 2.0, 3.0), moment=(-1.0, 0.3, 0.2)))
     elif which == "nodal_follower":
         p.add_edge_force("x1", (3.0, -2.0, 5.0), follower=True)
         p.add_edge_moment("x1", (0.5, 1.0, -0.7), follower=True)
@@ -322,7 +324,7 @@ def _loaded(which, backend):
         p.add_lab_tilt_support("y0", np.array([0.0, 1.0, 0.0]), 50.0)
     elif which == "rotation_spring":
         p.add_rotation_component_support("x1", np.array([0.0, 1.0, 0.0]), 30.0)
-        p.add_rotation_component_support(np.array([5, 5]), np.array([0.6, 0.0, 0.8]), 10.0)
+        p.add(RotationComponentSpring(mesh, np.array([5, 5]), np.array([0.6, 0.0, 0.8]), 10.0))   # a repeated node
     elif which == "user_load":
         p.add(_UserLoad(mesh.n_nodes, [5, 6, 6], (0.3, -0.2, 0.9)))
     return p
