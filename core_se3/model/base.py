@@ -177,6 +177,12 @@ class Load(abc.ABC):
         swept deep into the shell over the increment: the try is cut back), '' if it may."""
         return ""
 
+    def step_error(self, g0, lam0, g1, lam1):
+        """Hook: why a converged step from the accepted state (g0, lam0) to (g1, lam1) must not be
+        accepted (e.g. the shell passed through an obstacle between the two: the step is cut
+        back), '' if it may."""
+        return ""
+
     def update_multipliers(self, g, lam):
         """Hook: at a converged state, the constraint error over its tolerance; when above 1 the
         load has augmented its multipliers and Newton solves the same load factor again.  0.0 here."""

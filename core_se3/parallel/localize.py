@@ -141,17 +141,22 @@ class LocalContact(ContactLoad):
         pos, loc = view.owned_local(whole.nodes)
         self.whole, self.pos, self.comm = whole, pos, view.comm
         self.n, self.nodes = view.mesh.n_nodes, loc
-        for name in ("A", "side", "c", "k", "lam0", "lam", "_active", "_normals"):
+        for name in ("A", "side", "c", "k", "lam0", "lam", "soft", "_active", "_normals"):
             setattr(self, name, np.array(getattr(whole, name)[pos]))
+        self._quads = self.face_q = np.zeros((0, 4), np.int64)   # nodes only: faces need the whole mesh
+        self.face_el, self.Af, self.kf = np.zeros(0, np.int64), np.zeros(0), np.zeros(0)
 
     def _publish(self):
         """Every rank's multipliers and the global gap error into the whole load."""
-        for pos, lam in self.comm.allgather((self.pos, self.lam)):
-            self.whole.lam[pos] = lam
+        for pos, lam, soft in self.comm.allgather((self.pos, self.lam, self.soft)):
+            self.whole.lam[pos], self.whole.soft[pos] = lam, soft
         self.whole.gap_error = self.gap_error
 
     def limit_increment(self, g, eta, lam):
         return float(min(self.comm.allgather(super().limit_increment(g, eta, lam))))
+
+    def step_error(self, g0, lam0, g1, lam1):
+        return next((w for w in self.comm.allgather(super().step_error(g0, lam0, g1, lam1)) if w), "")
 
     def start_error(self, g, lam):
         return next((w for w in self.comm.allgather(super().start_error(g, lam)) if w), "")
@@ -165,11 +170,11 @@ class LocalContact(ContactLoad):
         return ratio
 
     def multipliers(self):
-        return self.whole.lam.copy()
+        return self.whole.multipliers()
 
     def set_multipliers(self, lam=None):
         self.whole.set_multipliers(lam)
-        self.lam = self.whole.lam[self.pos].copy()
+        self.lam, self.soft = self.whole.lam[self.pos].copy(), self.whole.soft[self.pos].copy()
 
 
 _RULES = {

@@ -210,6 +210,11 @@ def _log_try(result, tries, lam_try, out, augmentation=None, quiet=False):
              out.reason + (" (multipliers updated: solved again)" if augmentation else ""))
 
 
+def _step_error(loads, g0, lam0, g1, lam1):
+    """The first load's reason to refuse the converged step (g0, lam0) -> (g1, lam1), or ''."""
+    return next((why for why in (ld.step_error(g0, lam0, g1, lam1) for ld in loads) if why), "")
+
+
 def newton_steps(problem, targets, options=None, start=None, recorder=None, result=None, equations=None):
     """Yield a :class:`NewtonStep` for every requested load factor in ``targets``.
 
@@ -266,6 +271,7 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
     trier = NewtonTry(problem, opts, solver, timer, eq)
     aug = hooked_loads(eq, "update_multipliers")            # augmented-Lagrangian loads (contact)
     turning = hooked_loads(eq, "direction_turn")            # loads whose direction turns (fields)
+    sweeps = hooked_loads(eq, "step_error")                 # loads that check the whole step (contact)
     for i, ld in enumerate(aug):
         ld.set_multipliers(None if state.multipliers is None else state.multipliers[i])
     # the mixed iteration's stresses start every try from those of the converged state (a
@@ -306,6 +312,8 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
             g_start = g_try
             out = augmented_try(trier, aug, g_try, lam_try, mip, stress_try, opts.max_augmentations,
                                 lambda o, k: _log_try(result, tries, lam_try, o, augmentation=k, quiet=not eq.root))
+            if out.ok and sweeps:                # a step that passed through an obstacle: cut back
+                out.ok, out.reason = not (why := _step_error(sweeps, g, lam, out.g, lam_try)), why or out.reason
             ok, reason, hist, g_try, ev = out.ok, out.reason, out.hist, out.g, out.ev
             k_step, pred, eta_sum = out.k_step, out.pred, out.eta_sum
             if not ok:
