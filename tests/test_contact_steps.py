@@ -6,6 +6,8 @@ flexible strip (``soft_start``).  Each case here failed, or passed through, befo
 Derivations: docs/CONTACT.md."""
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
@@ -152,3 +154,65 @@ def test_a_ball_smaller_than_an_element_is_held_by_the_face():
     assert st.contact["pin"]["force"][2] > 0 and st.balance_error < 1e-8
     assert _surface_depth(c, st.g, 1.0, 0.02) > -10 * c.tol
     assert c.report(st.g, 1.0)["faces_in_contact"] >= 1
+
+
+# ----------------------------------------------------------------------------- lift-off
+HINGED_STRIP = """
+name = "hinged-strip"
+units = "N-mm-MPa"
+[mesh]
+generator = "rectangle"
+L = 17.2
+width = 5.0
+nx = 20
+ny = 1
+[material]
+E = 0.8969
+nu = 0.4801
+h = 0.42
+[[supports]]
+type = "fix"
+edge = "x0"
+dofs = [0, 1, 2, 3, 5]
+[[obstacles]]
+type = "half_space"
+name = "floor"
+point = [0.0, 0.0, -0.21]
+normal = [0.0, 0.0, 1.0]
+[[loads]]
+type = "gravity"
+rho = 1.8e-9
+scale = "constant"
+g = [0.0, 0.0, -9810.0]
+[fields.rotating]
+type = "uniform"
+B = [0.005, 0.0, 0.0]
+scale = [[0.0, 0.0], [0.1, 1.0], [1.0, 1.0]]
+rotate = { axis = [0.0, -1.0, 0.0], angle = 3.0, start = 0.1, end = 1.0 }
+[[magnets]]
+Br = [0.143, 0.0, 0.0]
+[[probes]]
+name = "tip"
+edge = "x1"
+[solver]
+steps = STEPS
+"""
+
+
+def test_lift_off_is_not_a_limit_point(tmp_path):
+    """Issue 29: a magnetic strip hinged at x = 0 on a floor, lifted by a field that turns up
+    from +x through +z toward -x, and laid down again: the lift-off step stopped with 'load
+    control met a limit point' (S_p 0.137, a jump 26.8x the tangent's prediction: the tangent
+    of the strip held by its contact springs).  Now the run completes, and 40 and 80 steps give
+    the same states at the common load factors (a continuous path, not a snap)."""
+    from core_se3 import scenario
+    tips = {}
+    for steps in (40, 80):
+        scn = scenario.loads(HINGED_STRIP.replace("STEPS", str(steps)), file="hinged.toml")
+        res = scenario.run(scn, out=str(tmp_path / f"o{steps}"))
+        doc = json.load(open(res.files["results"]))
+        assert doc["status"] == "complete" and abs(doc["steps"][-1]["load_factor"] - 1) < 1e-12
+        tips[steps] = {round(s["load_factor"], 9): np.array(s["probes"]["tip"]["u"]) for s in doc["steps"]}
+        assert max(u[2] for u in tips[steps].values()) > 10.0                         # it did lift off
+    for lam, u in tips[40].items():
+        assert np.linalg.norm(u - tips[80][lam]) < 1e-5 * 17.2, lam

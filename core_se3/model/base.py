@@ -183,6 +183,12 @@ class Load(abc.ABC):
         back), '' if it may."""
         return ""
 
+    def active_set_changed(self, g0, lam0, g1, lam1):
+        """Hook: True when the load's tangent switched between the states (a contact opened or
+        closed): the load-control limit check then takes a new reference stiffness instead of
+        calling the jump a limit point.  False here."""
+        return False
+
     def update_multipliers(self, g, lam):
         """Hook: at a converged state, the constraint error over its tolerance; when above 1 the
         load has augmented its multipliers and Newton solves the same load factor again.  0.0 here."""

@@ -280,6 +280,12 @@ class ContactLoad(Load):
         return crossing_report(self.obstacle, self._quads, self.contact_points(g0), self.contact_points(g1),
                                lam0, lam1, depth, self.nodes)
 
+    def active_set_changed(self, g0, lam0, g1, lam1):
+        """True when a node touches (gap within 10 tol) at one of the states and not at the other:
+        lift-off or touch-down over the step (the limit check re-bases its stiffness)."""
+        on0, on1 = self.gaps(g0, lam0) <= 10 * self.tol, self.gaps(g1, lam1) <= 10 * self.tol
+        return bool(self.largest(float(np.any(on0 != on1))))
+
     def update_multipliers(self, g, lam):
         """At a converged state: the gap error e (|d| on nodes carrying force, the penetration on
         the others) over ``tol``; when it exceeds 1 (mode 'al') the multipliers are updated,

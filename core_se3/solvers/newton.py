@@ -272,6 +272,7 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
     aug = hooked_loads(eq, "update_multipliers")            # augmented-Lagrangian loads (contact)
     turning = hooked_loads(eq, "direction_turn")            # loads whose direction turns (fields)
     sweeps = hooked_loads(eq, "step_error")                 # loads that check the whole step (contact)
+    switches = hooked_loads(eq, "active_set_changed")       # loads whose tangent switches (contact)
     for i, ld in enumerate(aug):
         ld.set_multipliers(None if state.multipliers is None else state.multipliers[i])
     # the mixed iteration's stresses start every try from those of the converged state (a
@@ -320,7 +321,10 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
                 for ld, m in zip(aug, saved):
                     ld.set_multipliers(m)
             _log_try(result, tries, lam_try, out, augmentation=0 if aug else None, quiet=not eq.root)
-            if ok and opts.limit_check and not driven and k_step is not None:
+            if ok and opts.limit_check and not driven and k_step is not None and switches and any(
+                    ld.active_set_changed(g, lam, g_try, lam_try) for ld in switches):
+                k_ref = None                     # a contact opened or closed: a new tangent, not a limit point
+            elif ok and opts.limit_check and not driven and k_step is not None:
                 if k_ref is None:
                     k_ref = k_step
                 jump = eq.increment_norm(eta_sum)
