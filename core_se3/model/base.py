@@ -189,6 +189,10 @@ class Load(abc.ABC):
         calling the jump a limit point.  False here."""
         return False
 
+    def accept_state(self, g, lam):
+        """Hook: (g, lam) has been accepted as a step of the path (a path-dependent load moves its
+        history on, e.g. friction); nothing here."""
+
     def update_multipliers(self, g, lam):
         """Hook: at a converged state, the constraint error over its tolerance; when above 1 the
         load has augmented its multipliers and Newton solves the same load factor again.  0.0 here."""

@@ -48,6 +48,8 @@ import numpy as np
 from .. import lie
 from .base import Load, LoadEvaluation
 from .contact_faces import face_minima, face_wrench
+from .contact_output import ContactOutputs
+from .friction import coulomb_law, wrench
 from .contact_sweep import crossing_report
 from .contact_law import (E3, contact_wrench, nodal_areas, normal_law, ramp, ramp_inverse, reference_sides,
                           shell_diagonal_stiffness)
@@ -58,7 +60,7 @@ __all__ = ["ContactLoad", "add_obstacle", "ramp", "ramp_inverse", "normal_law", 
 
 MODES = ("al", "penalty")
 
-class ContactLoad(Load):
+class ContactLoad(ContactOutputs, Load):
     """Frictionless contact of the nodes ``nodes`` (default all nodes of ``elements``, default all)
     with one rigid ``obstacle``, as a load (module docstring); made by ``Problem.add_obstacle``.
 
@@ -89,6 +91,9 @@ class ContactLoad(Load):
         Mode 'al': a sample that carries no force meets the penalty soft_start k; each Uzawa
         update at which it carries force multiplies its penalty by 10, up to k (a first contact
         of a very flexible shell converges; the answer does not depend on the penalty).
+    friction : float
+        Coulomb's coefficient mu >= 0 of the contact nodes (``model.friction``; 0: frictionless,
+        the face samples are frictionless in any case).
     faces : 'auto', True or False
         Face samples (``model.contact_faces``): the obstacle's closest point on each contact face
         carries a constraint too; 'auto': when the obstacle is curved and thinner (inradius)
@@ -110,7 +115,7 @@ class ContactLoad(Load):
 
     def __init__(self, problem, obstacle, nodes=None, elements=None, mode="al", beta=1.0, k=None, eps=None,
                  tol=None, side="auto", lam_ref=0.0, cap_depth=None, cold_start=1e-2, soft_start=1e-2,
-                 faces="auto"):
+                 faces="auto", friction=0.0):
         if not isinstance(obstacle, Obstacle):
             raise contact_error(f"expected a core_se3.model.obstacles.Obstacle, got {type(obstacle).__name__}")
         if mode not in MODES:
@@ -172,6 +177,13 @@ class ContactLoad(Load):
         if not 0 < self.soft_start <= 1:
             raise contact_error(f"soft_start must lie in (0, 1], got {soft_start}", "soft_start")
         self.soft = np.full(len(kk), self.soft_start)
+        self.mu = float(friction)
+        if not (np.isfinite(self.mu) and self.mu >= 0):
+            raise contact_error(f"the friction coefficient must be >= 0 and finite, got {friction}", "friction")
+        if self.mu > 0:          # the history: tangential multipliers (obstacle frame) and anchors
+            self.tau = np.zeros((len(self.nodes), 3))
+            self.y_a0 = self.placement(self.contact_points(mesh.g0), 0.0)
+            self.y_a = self.y_a0.copy()
         self.gap_error = 0.0
         self.approximate_tangent = bool(obstacle.approximate_hessian)
         self._active = np.zeros(len(self.nodes), bool)
@@ -206,9 +218,35 @@ class ContactLoad(Load):
         s, p, _ = self.face_state(g, lam)
         return (self.Af * p)[:, None] * s["n"], s["x"]
 
-    def evaluate(self, g, lam, tangent=True):
+    def placement(self, x, lam):
+        """Lab points x (k, 3) in the obstacle's placement coordinates at lam."""
+        T = self.obstacle.transform(lam)
+        return (x - T[:3, 3]) @ T[:3, :3]
+
+    def friction_state(self, g, lam, x, n, H, p, dp):
+        """(t, dt/dx, stick, slip) of the nodes (``model.friction.coulomb_law``), the multiplier
+        and the anchors moved with the obstacle to lam."""
+        T = self.obstacle.transform(lam)
+        v = x - (self.y_a @ T[:3, :3].T + T[:3, 3])
+        return coulomb_law(n, H, p, dp, v, self.tau @ T[:3, :3].T, self.k * self.soft[:len(self.nodes)], self.mu)
+
+    def node_forces(self, g, lam):
+        """Lab forces A (p n + t) (k, 3) on the contact nodes, their points x (k, 3), and dF/dx."""
         x, d, n, H, p, dp = self.state(g, lam)
-        fb, Kb = contact_wrench(g[self.nodes, :3, :3], self.c, self.A, n, H, p, dp)
+        F = (self.A * p)[:, None] * n
+        S = (self.A * dp)[:, None, None] * n[:, :, None] * n[:, None, :] + (self.A * p)[:, None, None] * H
+        if self.mu > 0:
+            t, dt, _, _ = self.friction_state(g, lam, x, n, H, p, dp)
+            F, S = F + self.A[:, None] * t, S + self.A[:, None, None] * dt
+        return F, x, S
+
+    def evaluate(self, g, lam, tangent=True):
+        if self.mu > 0:
+            F, _, S = self.node_forces(g, lam)
+            fb, Kb = wrench(g[self.nodes, :3, :3], self.c, F, S)
+        else:
+            x, d, n, H, p, dp = self.state(g, lam)
+            fb, Kb = contact_wrench(g[self.nodes, :3, :3], self.c, self.A, n, H, p, dp)
         f = np.zeros((self.n, 6))
         f[self.nodes] = fb
         blocks = None
@@ -261,6 +299,9 @@ class ContactLoad(Load):
         d = self.gaps(g, lam)
         if not len(d):                    # no contact node here (a rank's part of the load)
             return ""
+        # a node whose multiplier carries force is pushed out by it (a soft first contact, an
+        # Uzawa re-solve): only a node the obstacle swept into counts
+        d = np.where(self.lam[:len(d)] > self.lam0[:len(d)], np.inf, d)
         i = int(np.argmin(d))
         if d[i] < -self.h:
             return (f"obstacle {self.name!r} starts the increment {-d[i]:.3g} inside the shell at node "
@@ -295,6 +336,14 @@ class ContactLoad(Load):
             s, pf, _ = self.face_state(g, lam)
             d, p = np.concatenate([d, np.where(s["ok"], s["d"], np.inf)]), np.concatenate([p, pf])
         err = np.where(p > 0, np.abs(d), np.maximum(0.0, -d)) if self.mode == "al" else np.maximum(0.0, -d)
+        if self.mu > 0:          # the tangential error |t - P w| / k [length]
+            x, _, n, H, pn, dpn = self.state(g, lam)
+            t, _, _, _ = self.friction_state(g, lam, x, n, H, pn, dpn)
+            Q = self.obstacle.transform(lam)[:3, :3]
+            w = self.tau @ Q.T
+            w -= np.einsum("ki,ki->k", n, w)[:, None] * n
+            kn = self.k * self.soft[:len(self.nodes)]
+            err[:len(self.nodes)] = np.maximum(err[:len(self.nodes)], np.linalg.norm(t - w, axis=1) / kn)
         self.gap_error = float(self.largest(float(err.max(initial=0.0))))
         if self.mode != "al":
             return 0.0
@@ -302,7 +351,19 @@ class ContactLoad(Load):
         if ratio > 1.0:
             self.lam = p
             self.soft = np.where(p > 0, np.minimum(1.0, 10 * self.soft), self.soft_start)
+            if self.mu > 0:
+                self.tau = t @ Q
         return ratio
+
+    def accept_state(self, g, lam):
+        """An accepted state (``Load.accept_state``): the friction history moves on -- the
+        multipliers become the nodes' tractions there (obstacle frame) and the anchors their
+        current points on the obstacle."""
+        if self.mu > 0:
+            x, _, n, H, p, dp = self.state(g, lam)
+            t, _, _, _ = self.friction_state(g, lam, x, n, H, p, dp)
+            self.tau = t @ self.obstacle.transform(lam)[:3, :3]
+            self.y_a = self.placement(x, lam)
 
     def largest(self, value):
         """The largest of ``value`` over the processes that share this load: the value itself
@@ -318,16 +379,24 @@ class ContactLoad(Load):
     def multipliers(self):
         """The restart point: the multipliers [force/length^2] of the nodes and the face samples
         followed by their penalty factors (``soft_start``), one array."""
-        return np.concatenate([self.lam, self.soft])
+        hist = [self.tau.ravel(), self.y_a.ravel()] if self.mu > 0 else []
+        return np.concatenate([self.lam, self.soft] + hist)
 
     def set_multipliers(self, lam=None):
         """Set the multipliers (None: back to the cold start); the nodes' alone (k,) leave the
         face samples' at the cold start."""
         self.lam = self.lam0.copy()
         self.soft = np.full(len(self.lam0), self.soft_start)
+        if self.mu > 0:
+            self.tau, self.y_a = np.zeros_like(self.tau), self.y_a0.copy()
         if lam is not None:
             lam = np.array(lam, float).ravel()
             m = len(self.lam0)
+            if self.mu > 0 and len(lam) == 2 * m + 6 * len(self.nodes):     # with the friction history
+                k3 = 3 * len(self.nodes)
+                self.tau = lam[2 * m:2 * m + k3].reshape(-1, 3).copy()
+                self.y_a = lam[2 * m + k3:].reshape(-1, 3).copy()
+                lam = lam[:2 * m]
             if len(lam) == 2 * m:                      # multipliers and penalty factors
                 self.lam, self.soft = lam[:m].copy(), lam[m:].copy()
             elif len(lam) == len(self.nodes) or len(lam) == m:     # multipliers alone: full penalties
@@ -336,89 +405,9 @@ class ContactLoad(Load):
             else:
                 raise contact_error(f"contact {self.name!r}: {len(lam)} multipliers for {m} samples")
 
-    # ------------------------------------------------------------------ output
-    def gaps(self, g, lam):
-        """d_i (k,) at the contact nodes [length]."""
-        return self.state(g, lam)[1]
-
-    def penetration(self, g, lam):
-        """max_i (-d_i) over the nodes and the face samples, 0 when none penetrates [length]."""
-        pen = float(max(0.0, -self.gaps(g, lam).min()))
-        if len(self.face_el):
-            s, _, _ = self.face_state(g, lam)
-            pen = max(pen, float(-s["d"][s["ok"]].min(initial=0.0)))
-        return pen
-
-    def nodal_forces(self, g, lam):
-        """Lab contact forces (k, 3) on the contact nodes and their points of action x (k, 3)."""
-        x, d, n, H, p, dp = self.state(g, lam)
-        return (self.A * p)[:, None] * n, x
-
-    def total(self, g, lam):
-        """Total lab contact force [force] and its moment about the origin [force x length]
-        (nodes and face samples)."""
-        F, x = self.nodal_forces(g, lam)
-        if len(self.face_el):
-            Ff, xf = self.face_forces(g, lam)
-            F, x = np.concatenate([F, Ff]), np.concatenate([x, xf])
-        return F.sum(0), np.cross(x, F).sum(0)
-
-    def report(self, g, lam):
-        """Per-step scalars: penetration [length], gap error of the last update [length], the
-        number of nodes carrying force."""
-        _, d, _, _, p, _ = self.state(g, lam)
-        out = dict(penetration=float(max(0.0, -d.min())), gap_error=self.gap_error,
-                   nodes_in_contact=int(np.count_nonzero(p > 0)))
-        if len(self.face_el):
-            s, pf, _ = self.face_state(g, lam)
-            out["penetration"] = float(max(out["penetration"], -s["d"][s["ok"]].min(initial=0.0)))
-            out["faces_in_contact"] = int(np.count_nonzero(pf > 0))
-        return out
-
-    def output_fields(self, g, lam):
-        """VTU point fields: ``contact_force`` (lab) and ``contact_pressure`` (summed over the
-        obstacles), ``contact_gap_NAME`` [length] (NaN off the contact nodes)."""
-        x, d, n, H, p, dp = self.state(g, lam)
-        gap = np.full(self.n, np.nan)
-        gap[self.nodes] = d
-        F = np.zeros((self.n, 3))
-        F[self.nodes] = (self.A * p)[:, None] * n
-        P = np.zeros(self.n)
-        P[self.nodes] = p
-        if len(self.face_el):                          # face samples shared out by N_a(xi*)
-            s, pf, _ = self.face_state(g, lam)
-            nq = self.nodes[self.face_q]
-            np.add.at(F, nq.ravel(), (s["N"][:, :, None] * ((self.Af * pf)[:, None] * s["n"])[:, None, :]).reshape(-1, 3))
-            np.add.at(P, nq.ravel(), (s["N"] * (self.Af * pf)[:, None] / self.A[self.face_q]).ravel())
-        key = "".join(ch if ch.isalnum() else "_" for ch in self.name)
-        return {f"contact_gap_{key}": gap, "contact_force": F, "contact_pressure": P}
-
-    def check_initial(self, mesh, g, lam=0.0):
-        """ContactError when the obstacle intersects the contact surface at (g, lam) by more than
-        tol: at the nodes and at 3 x 3 points of every element (the bilinear surface through the
-        contact points), so that an obstacle between nodes is found too."""
-        where = np.full(self.n, -1)
-        where[self.nodes] = np.arange(len(self.nodes))
-        el = np.nonzero((where[mesh.quads] >= 0).all(1))[0]
-        x = np.zeros((self.n, 3))
-        x[self.nodes] = self.contact_points(g)
-        t = np.array([-1.0, 0.0, 1.0])
-        xi, et = (a.ravel() for a in np.meshgrid(t, t))
-        N = 0.25 * np.stack([(1 - xi) * (1 - et), (1 + xi) * (1 - et), (1 + xi) * (1 + et), (1 - xi) * (1 + et)], 1)
-        pts = np.einsum("qa,mai->mqi", N, x[mesh.quads[el]]).reshape(-1, 3)
-        d = self.obstacle.distance(np.concatenate([x[self.nodes], pts]), lam)
-        i = int(np.argmin(d))
-        if d[i] < -self.tol:
-            at = (f"node {int(self.nodes[i])}" if i < len(self.nodes) else
-                  f"element {int(el[(i - len(self.nodes)) // 9])}")
-            raise contact_error(
-                f"obstacle {self.name!r} already intersects the undeformed shell: its contact surface at {at} "
-                f"lies {-d[i]:.4g} inside it (tolerance {self.tol:.3g}); move or shrink the obstacle, or start "
-                "its motion off the shell")
-
 
 def add_obstacle(problem, obstacle, region=None, nodes=None, motion=None, name=None, mode="al", beta=1.0,
-                 eps=None, tol=None, side="auto", cap_depth=None, faces="auto", **params):
+                 eps=None, tol=None, side="auto", cap_depth=None, faces="auto", friction=0.0, **params):
     """Add frictionless contact with a rigid obstacle to ``problem``; returns the ContactLoad.
 
     Parameters
@@ -436,7 +425,7 @@ def add_obstacle(problem, obstacle, region=None, nodes=None, motion=None, name=N
         :func:`~core_se3.model.obstacles.rigid_motion`; for a kind only.
     name : str, optional
         The contact's name in reports (default the kind); ``mode``, ``beta``, ``eps``, ``tol``,
-        ``side``, ``cap_depth``, ``faces``: as for :class:`ContactLoad`.
+        ``side``, ``cap_depth``, ``faces``, ``friction`` (Coulomb's mu): as for :class:`ContactLoad`.
     **params
         The kind's parameters (e.g. centre, radius).
 
@@ -467,7 +456,7 @@ def add_obstacle(problem, obstacle, region=None, nodes=None, motion=None, name=N
     elements = problem.elements(region)
     sel = None if nodes is None else problem.nodes(nodes)
     load = ContactLoad(problem, obstacle, sel, elements, mode, beta, None, eps, tol, side, 0.0, cap_depth,
-                       faces=faces)
+                       faces=faces, friction=friction)
     load.check_initial(problem.mesh, problem.mesh.g0, 0.0)
     if any(getattr(ld, "name", None) == load.name for ld in problem.loads if isinstance(ld, ContactLoad)):
         raise contact_error(f"there is already an obstacle named {load.name!r}: give each a name", "name")

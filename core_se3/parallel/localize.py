@@ -137,6 +137,10 @@ class LocalContact(ContactLoad):
     """
 
     def __init__(self, whole, view):                   # noqa: D107 (the whole load is built already)
+        if getattr(whole, "mu", 0.0) > 0:
+            from ..errors import ContactError
+            raise ContactError(f"obstacle {whole.name!r}: friction is not distributed over ranks yet; run it "
+                               "on one process")
         self.__dict__.update(copy.copy(whole).__dict__)
         pos, loc = view.owned_local(whole.nodes)
         self.whole, self.pos, self.comm = whole, pos, view.comm

@@ -273,6 +273,7 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
     turning = hooked_loads(eq, "direction_turn")            # loads whose direction turns (fields)
     sweeps = hooked_loads(eq, "step_error")                 # loads that check the whole step (contact)
     switches = hooked_loads(eq, "active_set_changed")       # loads whose tangent switches (contact)
+    accepts = hooked_loads(eq, "accept_state")              # path-dependent loads (friction)
     for i, ld in enumerate(aug):
         ld.set_multipliers(None if state.multipliers is None else state.multipliers[i])
     # the mixed iteration's stresses start every try from those of the converged state (a
@@ -341,6 +342,8 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
             if ok:
                 lam = lam_try
                 g = g_try
+                for ld in accepts:               # path-dependent loads move their history on (friction)
+                    ld.accept_state(g, lam)
                 g_whole = eq.whole_frames(g)
                 if mip:
                     stress_conv = ev.stress
