@@ -296,7 +296,7 @@ def test_augmentations_are_counted_and_failures_restore_the_multipliers():
     c = [ld for ld in prob.loads if isinstance(ld, ContactLoad)][0]
     with pytest.raises(cs.ConvergenceError, match="multiplier updates"):
         prob.solve(steps=2, max_augmentations=0, max_cutbacks=1, predictor="tangent")
-    assert np.array_equal(c.multipliers(), np.concatenate([c.lam0, np.full(len(c.lam0), c.soft_start)]))
+    assert np.array_equal(c.multipliers(), np.concatenate([c.lam0, c.soft0]))
 
 
 def test_arc_length_refuses_contact():

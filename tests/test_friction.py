@@ -115,3 +115,107 @@ def test_rough_table_bar_release_keeps_its_hysteresis():
     F = 0.6 * k["mu"] * k["q"] * k["L"]
     exact = F ** 2 / (4 * k["EA"] * k["mu"] * k["q"])
     assert abs(_tip(res.final) / exact - 1) < 0.02, (_tip(res.final), exact)
+
+
+# ----------------------------------------------------------------------------- the incline
+def _incline(f, mu=0.3):
+    """A free 1 x 1 plate (4 x 4, h 0.01, E 1e5) on a rough incline of slope angle f atan(mu),
+    written in the incline's frame (gravity tilted by the angle)."""
+    a = f * np.arctan(mu)
+    p = cs.Problem(M.rectangle(1.0, 1.0, 4, 4), cs.Material(1e5, 0.3, 0.01))
+    p.add_gravity(rho=1000.0, g=(9.81 * np.sin(a), 0.0, -9.81 * np.cos(a)))
+    c = p.add_obstacle("half_space", point=(0, 0, -0.005), normal=(0, 0, 1), name="incline", friction=mu)
+    return p, c
+
+
+def test_incline_holds_below_the_friction_angle():
+    """tan(alpha) = 0.99 mu: the plate holds (elastic creep only; a corner node may slip where
+    the moment of the friction at the face offset lowers its pressure), the tangential over the
+    normal force is tan(alpha)."""
+    p, c = _incline(0.99)
+    st = p.solve(steps=4).final
+    rep = c.report(st.g, 1.0)
+    assert rep["sticking"] + rep["slipping"] == 25 and rep["sticking"] >= 20
+    assert abs(rep["tangential_force"] / rep["normal_force"] - np.tan(0.99 * np.arctan(0.3))) < 1e-6
+    assert np.abs(st.g[:, :3, 3] - p.mesh.g0[:, :3, 3]).max() < 1e-4
+
+
+def test_incline_above_the_friction_angle_says_it_slides():
+    """tan(alpha) = 1.01 mu: no static equilibrium; the error says so (not a bare
+    non-convergence)."""
+    p, c = _incline(1.01)
+    with pytest.raises(cs.ConvergenceError, match="no static equilibrium: it slides"):
+        p.solve(steps=4)
+
+
+# ----------------------------------------------------------------------------- scenario, restart
+BAR = """
+name = "rough-bar"
+units = "SI"
+[mesh]
+generator = "rectangle"
+L = 1.0
+width = 0.1
+nx = 20
+ny = 2
+[material]
+E = 1.0e5
+nu = 0.0
+h = 0.01
+[[supports]]
+type = "clamp"
+edge = "x0"
+[[loads]]
+type = "gravity"
+rho = 1000.0
+scale = "constant"
+[[loads]]
+type = "edge_force"
+edge = "x1"
+force = [2.5, 0.0, 0.0]
+scale = [[0.0, 0.0], [0.5, 1.0], [1.0, 0.3]]
+[[obstacles]]
+type = "half_space"
+name = "table"
+point = [0.0, 0.0, -0.005]
+normal = [0.0, 0.0, 1.0]
+friction = 0.5
+[[probes]]
+name = "tip"
+edge = "x1"
+[solver]
+steps = 4
+[output]
+plots = false
+picture = false
+"""
+
+
+def test_scenario_friction_outputs_and_bit_identical_resume(tmp_path, pinned_backend):
+    """`friction` in [[obstacles]]; results.json carries the stick/slip counts and the largest
+    slip; a run stopped after 2 of 4 steps (pull, then partial release) and resumed from its
+    checkpoint ends bit for bit in the uninterrupted run's state (the friction history is in
+    the checkpoint: without it the released bar would not keep its hysteresis)."""
+    import json
+
+    from core_se3 import scenario
+    from core_se3.scenario import runner
+    scn = scenario.loads(BAR, file="bar.toml")
+    ref = runner.run(scn, out=str(tmp_path / "ref"))
+    doc = json.load(open(ref.files["results"]))
+    c = doc["steps"][2]["contact"]["table"]
+    assert c["slipping"] > 0 and c["sticking"] > 0 and c["largest_slip"] > 0 and c["tangential_force"] > 0
+    out = str(tmp_path / "cut")
+    with pytest.raises(runner.RunInterrupted):
+        runner.run(scn, out=out, stop_after=2)
+    res = runner.run(scn, out=out, resume=True)
+    np.testing.assert_array_equal(res.g, ref.g)
+    with pytest.raises(cs.errors.ScenarioError, match=r"obstacles\[0\].friction"):
+        scenario.loads(BAR.replace("friction = 0.5", "friction = -0.1"), file="bar.toml")
+
+
+def test_frictionless_contact_has_no_friction_state():
+    """mu = 0 (the default) keeps the frictionless code path and restart state."""
+    p = cs.Problem(M.rectangle(1.0, 0.2, 4, 1), cs.Material(1e4, 0.0, 0.02))
+    c = p.add_obstacle("half_space", point=(0, 0, -0.05), normal=(0, 0, 1))
+    assert c.mu == 0 and len(c.multipliers()) == 2 * len(c.lam0) and "sticking" not in c.report(p.mesh.g0, 0.0)

@@ -189,6 +189,11 @@ class Load(abc.ABC):
         calling the jump a limit point.  False here."""
         return False
 
+    def failure_hint(self):
+        """Hook: why the last failed Newton try could not converge, from this load's side (e.g.
+        every contact node slips: no static equilibrium), or ''.  Named in the error."""
+        return ""
+
     def accept_state(self, g, lam):
         """Hook: (g, lam) has been accepted as a step of the path (a path-dependent load moves its
         history on, e.g. friction); nothing here."""

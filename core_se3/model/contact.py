@@ -88,7 +88,8 @@ class ContactLoad(ContactOutputs, Load):
         Start multipliers cold_start k eps / 8 in mode 'al' (a shell resting exactly on an
         obstacle is then restrained at the first iteration).
     soft_start : float
-        Mode 'al': a sample that carries no force meets the penalty soft_start k; each Uzawa
+        Mode 'al': a sample that carries no force (and does not rest on the obstacle in the
+        reference state) meets the penalty soft_start k; each Uzawa
         update at which it carries force multiplies its penalty by 10, up to k (a first contact
         of a very flexible shell converges; the answer does not depend on the penalty).
     friction : float
@@ -188,6 +189,10 @@ class ContactLoad(ContactOutputs, Load):
         self.approximate_tangent = bool(obstacle.approximate_hessian)
         self._active = np.zeros(len(self.nodes), bool)
         self._normals = np.zeros((len(self.nodes), 3))
+        # a node resting on the obstacle in the reference state takes the full penalty at once
+        self.soft0 = self.soft.copy()
+        self.soft0[:len(self.nodes)][self.gaps(mesh.g0, 0.0) <= self.tol] = 1.0
+        self.soft = self.soft0.copy()
         self.state(mesh.g0, 0.0)                    # the active set of the reference state
 
     # ------------------------------------------------------------------ kinematics, law
@@ -244,6 +249,7 @@ class ContactLoad(ContactOutputs, Load):
         if self.mu > 0:
             F, _, S = self.node_forces(g, lam)
             fb, Kb = wrench(g[self.nodes, :3, :3], self.c, F, S)
+            self._slide = self._sliding(g, lam)
         else:
             x, d, n, H, p, dp = self.state(g, lam)
             fb, Kb = contact_wrench(g[self.nodes, :3, :3], self.c, self.A, n, H, p, dp)
@@ -269,6 +275,8 @@ class ContactLoad(ContactOutputs, Load):
         """(nodes, lab normals (k, 1, 3)) of the nodes in contact at the last evaluation: a shell
         resting on an obstacle is held along the normals (for the rigid-motion check)."""
         on = self._active
+        if self.mu > 0:                  # friction holds the tangential directions too
+            return self.nodes[on], np.broadcast_to(np.eye(3), (int(on.sum()), 3, 3))
         return self.nodes[on], self._normals[on][:, None, :]
 
     # ------------------------------------------------------------------ solver hooks
@@ -299,9 +307,10 @@ class ContactLoad(ContactOutputs, Load):
         d = self.gaps(g, lam)
         if not len(d):                    # no contact node here (a rank's part of the load)
             return ""
-        # a node whose multiplier carries force is pushed out by it (a soft first contact, an
-        # Uzawa re-solve): only a node the obstacle swept into counts
-        d = np.where(self.lam[:len(d)] > self.lam0[:len(d)], np.inf, d)
+        # an Uzawa re-solve at the load factor of the last update starts from an equilibrium:
+        # there a node whose multiplier carries force is pushed out by it (a soft first contact)
+        if lam == getattr(self, "_lam_update", None):
+            d = np.where(self.lam[:len(d)] > self.lam0[:len(d)], np.inf, d)
         i = int(np.argmin(d))
         if d[i] < -self.h:
             return (f"obstacle {self.name!r} starts the increment {-d[i]:.3g} inside the shell at node "
@@ -345,6 +354,7 @@ class ContactLoad(ContactOutputs, Load):
             kn = self.k * self.soft[:len(self.nodes)]
             err[:len(self.nodes)] = np.maximum(err[:len(self.nodes)], np.linalg.norm(t - w, axis=1) / kn)
         self.gap_error = float(self.largest(float(err.max(initial=0.0))))
+        self._lam_update = lam
         if self.mode != "al":
             return 0.0
         ratio = self.gap_error / self.tol
@@ -355,13 +365,35 @@ class ContactLoad(ContactOutputs, Load):
                 self.tau = t @ Q
         return ratio
 
+    def _sliding(self, g, lam):
+        """(nodes in contact, of them slipping) at (g, lam): the failure hint's evidence."""
+        x, _, n, H, p, dp = self.state(g, lam)
+        _, _, stick, _ = self.friction_state(g, lam, x, n, H, p, dp)
+        on = p > 0
+        return int(on.sum()), int((on & ~stick).sum())
+
+    def failure_hint(self):
+        """'no static equilibrium: it slides' when every node in contact slipped at the last
+        evaluation (of the failed try): friction cannot hold the loads."""
+        on, slip = getattr(self, "_slide", (0, 0))
+        if self.mu > 0 and on and slip == on:
+            return (f"no static equilibrium: it slides -- all {on} contact nodes on obstacle {self.name!r} slip "
+                    f"(Coulomb friction {self.mu:g} cannot hold the loads); raise the friction, add a support, "
+                    "or prescribe the sliding motion")
+        return ""
+
     def accept_state(self, g, lam):
         """An accepted state (``Load.accept_state``): the friction history moves on -- the
         multipliers become the nodes' tractions there (obstacle frame) and the anchors their
         current points on the obstacle."""
         if self.mu > 0:
             x, _, n, H, p, dp = self.state(g, lam)
-            t, _, _, _ = self.friction_state(g, lam, x, n, H, p, dp)
+            t, _, stick, slip = self.friction_state(g, lam, x, n, H, p, dp)
+            on = p > 0                   # the step's stick/slip record, before the anchors move
+            self.step_stats = dict(sticking=int(np.count_nonzero(on & stick)),
+                                   slipping=int(np.count_nonzero(on & ~stick)),
+                                   largest_slip=float(np.linalg.norm(slip[on & ~stick], axis=1).max(initial=0.0)),
+                                   stick=np.where(on, stick.astype(float), np.nan))
             self.tau = t @ self.obstacle.transform(lam)[:3, :3]
             self.y_a = self.placement(x, lam)
 
@@ -386,7 +418,7 @@ class ContactLoad(ContactOutputs, Load):
         """Set the multipliers (None: back to the cold start); the nodes' alone (k,) leave the
         face samples' at the cold start."""
         self.lam = self.lam0.copy()
-        self.soft = np.full(len(self.lam0), self.soft_start)
+        self.soft = self.soft0.copy()
         if self.mu > 0:
             self.tau, self.y_a = np.zeros_like(self.tau), self.y_a0.copy()
         if lam is not None:

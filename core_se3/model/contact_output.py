@@ -50,12 +50,16 @@ class ContactOutputs:
             out["penetration"] = float(max(out["penetration"], -s["d"][s["ok"]].min(initial=0.0)))
             out["faces_in_contact"] = int(np.count_nonzero(pf > 0))
         if self.mu > 0:                                # friction: stick/slip counts, largest slip
+            # the counts and the slip of the last accepted step (``accept_state``: the anchors
+            # have moved to this state since)
             x, _, n, H, p, dp = self.state(g, lam)
             t, _, stick, slip = self.friction_state(g, lam, x, n, H, p, dp)
             on = p > 0
             Ft = (self.A[:, None] * t).sum(0)
-            out.update(sticking=int(np.count_nonzero(on & stick)), slipping=int(np.count_nonzero(on & ~stick)),
-                       largest_slip=float(np.linalg.norm(slip[on & ~stick], axis=1).max(initial=0.0)),
+            rec = getattr(self, "step_stats", None) or dict(
+                sticking=int(np.count_nonzero(on & stick)), slipping=int(np.count_nonzero(on & ~stick)),
+                largest_slip=float(np.linalg.norm(slip[on & ~stick], axis=1).max(initial=0.0)))
+            out.update(sticking=rec["sticking"], slipping=rec["slipping"], largest_slip=rec["largest_slip"],
                        tangential_force=float(np.linalg.norm(Ft)),
                        normal_force=float(np.linalg.norm(((self.A * p)[:, None] * n).sum(0))))
         return out
@@ -81,7 +85,8 @@ class ContactOutputs:
             t, _, stick, _ = self.friction_state(g, lam, x, n, H, p, dp)
             T, st = np.zeros((self.n, 3)), np.full(self.n, np.nan)
             T[self.nodes] = t
-            st[self.nodes] = np.where(p > 0, stick.astype(float), np.nan)
+            rec = getattr(self, "step_stats", None)
+            st[self.nodes] = rec["stick"] if rec else np.where(p > 0, stick.astype(float), np.nan)
             out.update({f"friction_traction_{key}": T, f"contact_stick_{key}": st})
         return out
 

@@ -370,8 +370,9 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
                 dlam = dlam / 2
                 if abs(dlam) < abs(dlam_nominal) / 2 ** opts.max_cutbacks:
                     timer.close()
-                    hint = limit_point_hint(problem, g, lam, opts.linear_solver) \
-                        if lam != 0.0 and not eq.distributed else None
+                    hint = next((h for h in (ld.failure_hint() for ld in hooked_loads(eq, "failure_hint")) if h),
+                                None) or (limit_point_hint(problem, g, lam, opts.linear_solver)
+                                          if lam != 0.0 and not eq.distributed else None)
                     raise ConvergenceError(
                         f"Newton failed at load factor {lam_try:.6g} after {opts.max_cutbacks} cut-backs "
                         f"({reason}); the last converged load factor is {lam:.6g} and its state is "
