@@ -155,7 +155,7 @@ def test_a_ball_smaller_than_an_element_is_held_by_the_face():
     p.clamp("x0")
     c = p.add_obstacle("sphere", centre=(1.5, 0.0, -0.07), radius=0.05, motion=dict(translate=(0, 0, 0.1)),
                        name="pin")
-    assert len(c.face_el) == 2                      # auto: thinner than half an element
+    assert len(c.face_el) == 2                      # auto: thinner than an element
     res = p.solve(steps=4)
     st = res.final
     assert st.contact["pin"]["force"][2] > 0 and st.balance_error < 1e-8

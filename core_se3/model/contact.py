@@ -97,8 +97,9 @@ class ContactLoad(ContactOutputs, Load):
         the face samples are frictionless in any case).
     faces : 'auto', True or False
         Face samples (``model.contact_faces``): the obstacle's closest point on each contact face
-        carries a constraint too; 'auto': when the obstacle is curved and thinner (inradius)
-        than half the largest contact element, i.e. when it can fit between nodes.
+        carries a constraint too; 'auto': when the obstacle is curved and its inradius is below
+        the largest contact element's diameter (it can fit between nodes, or a chord between
+        two nodes would cut into it by a large part of it).
 
     Example
     -------
@@ -166,7 +167,7 @@ class ContactLoad(ContactOutputs, Load):
         # are the means of its nodes'
         size = np.linalg.norm(mesh.X[mesh.quads[el, 2]] - mesh.X[mesh.quads[el, 0]], axis=1).max(initial=0.0)
         if isinstance(faces, str) and faces == "auto":
-            faces = float(getattr(obstacle, "thickness", np.inf)) < 0.5 * size
+            faces = float(getattr(obstacle, "thickness", np.inf)) < size
         use = bool(faces) and not getattr(obstacle, "flat", False)
         self.face_el = el[on] if use else np.zeros(0, np.int64)
         self.face_q = self._quads if len(self.face_el) else np.zeros((0, 4), np.int64)
