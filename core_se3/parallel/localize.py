@@ -132,8 +132,8 @@ class LocalContact(ContactLoad):
     >>> c = p.add_obstacle(make_obstacle("half_space", point=(0, 0, -0.5), normal=(0, 0, 1)))
     >>> s = subdomain(p.mesh, np.array([0, 1]), rank=1, size=2)
     >>> part = localize_load(c, s)[0]
-    >>> part.nodes.tolist(), part.multipliers().shape                 # owned nodes; all multipliers
-    ([0, 1], (6,))
+    >>> part.nodes.tolist(), part.multipliers().shape      # owned nodes; all multipliers and penalty factors
+    ([0, 1], (12,))
     """
 
     def __init__(self, whole, view):                   # noqa: D107 (the whole load is built already)
