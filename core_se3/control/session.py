@@ -109,7 +109,8 @@ class Session:
     state : State
         The current equilibrium (``g``, ``lam``, ``values`` are its).
     stats : dict
-        Totals: updates, substeps, splits, iterations, factorizations, residuals, solves.
+        Totals: updates, refused, substeps, splits, iterations (``counts``: residual evaluations,
+        factorisations, back-substitutions).
 
     Example
     -------
@@ -139,7 +140,7 @@ class Session:
         self._turning = [ld for ld in problem.loads if overrides(ld, "direction_turn")]
         self._stamp = 0
         self._corr = Corrector(problem, opts)
-        self.stats = dict(updates=0, substeps=0, splits=0, iterations=0)
+        self.stats = dict(updates=0, refused=0, substeps=0, splits=0, iterations=0)
         t0 = time.perf_counter()
         g = self._cold(lam, steps) if g is None else np.array(g, float)
         if g.shape != problem.mesh.g0.shape:
@@ -289,26 +290,35 @@ class Session:
             dt /= 2.0
             if dt < 2.0 ** -self.options.max_splits:
                 self._assign(x0)
+                self._count(subs, splits, its, refused=1)
+                at = self._describe(lam0, lam1, x0, x1, t)
                 raise ControlError(
-                    f"update refused: {self._describe(lam0, lam1, x0, x1)} could not be followed; the sub-step "
-                    f"from t = {t:.6g} to {t_try:.6g} of the command path failed after {self.options.max_splits} "
-                    f"halvings: {out.reason}.  The session stays at its state before the command (load factor "
-                    f"{lam0:g}); send a smaller change, or trace the path with arc length "
-                    "(core_se3.solvers.arc_length) if it passes a limit point")
+                    f"update refused: {self._describe(lam0, lam1, x0, x1)} could not be followed beyond {at} "
+                    f"(t = {t:.6g} of the command path; the sub-step to t = {t_try:.6g} failed after "
+                    f"{self.options.max_splits} halvings): {out.reason}.  The session stays at its state "
+                    "before the command; send a smaller change, or trace the path with arc length "
+                    "(core_se3.solvers.arc_length) if it passes a limit point there")
         self.state = State(self.problem, g, lam1, self.commands.values(), its, nf, subs, splits,
                            time.perf_counter() - t0)
-        st = self.stats
-        st["updates"] += 1
-        st["substeps"] += subs
-        st["splits"] += splits
-        st["iterations"] += its
+        self._count(subs, splits, its, updates=1)
         return self.state
 
-    def _describe(self, lam0, lam1, x0, x1):
-        parts = [f"{k} {np.round(x0[k], 12).tolist()} -> {np.round(x1[k], 12).tolist()}" for k in x1]
-        if lam1 != lam0:
-            parts.insert(0, f"load factor {lam0:g} -> {lam1:g}")
-        return "the command " + ", ".join(parts)
+    def _count(self, subs, splits, its, updates=0, refused=0):
+        st = self.stats
+        for k, v in (("updates", updates), ("refused", refused), ("substeps", subs), ("splits", splits),
+                     ("iterations", its)):
+            st[k] += v
+
+    @staticmethod
+    def _describe(lam0, lam1, x0, x1, t=None):
+        """The command p0 -> p1 (or, with t, the point p0 + t (p1 - p0) of its path) in words."""
+        def show(a):
+            return np.round(a, 12).tolist() if np.size(a) > 1 else float(np.round(np.ravel(a)[0], 12))
+        if t is not None:
+            parts = [f"{k} = {show(x0[k] + t * (x1[k] - x0[k]))}" for k in x1]
+            return ", ".join(([f"load factor {lam0 + t * (lam1 - lam0):.6g}"] if lam1 != lam0 else []) + parts)
+        parts = [f"{k} {show(x0[k])} -> {show(x1[k])}" for k in x1]
+        return "the command " + ", ".join(([f"load factor {lam0:g} -> {lam1:g}"] if lam1 != lam0 else []) + parts)
 
     # ------------------------------------------------------------------ sensitivities --
     def jacobian(self, quantities, variables=None, method="auto"):
@@ -342,7 +352,7 @@ class Session:
         >>> round(float(J[2, 0]) / (1e-6 * 10.0 ** 3 / 300), 2)
         1.0
         """
-        qs = [self._quantity(q) for q in quantities]
+        qs = [self.quantity(q) for q in quantities]
         vs = list(self.variables.values()) if variables is None else \
             [v if isinstance(v, Variable) else self.commands.lookup(v) for v in variables]
         c = self._corr
@@ -350,7 +360,9 @@ class Session:
             c.factor(self.g, self.lam, self._stamp)
         return sensitivity(self.problem, self.g, self.lam, qs, vs, method, factorization=c.F)
 
-    def _quantity(self, q):
+    def quantity(self, q):
+        """A ``design`` quantity as given, or the position of the probe named q
+        (``ProbePosition``, made once per name)."""
         if isinstance(q, Quantity):
             return q
         if isinstance(q, str):
