@@ -53,12 +53,17 @@ def least_squares_step(J, e, scale, damping=0.0):
 class _Loop:
     """What track and plan share: the quantity's components, the variables, their commands."""
 
-    def __init__(self, session, quantity, variables, components):
-        self.s = session
+    def __init__(self, session, quantity, variables, components, model=None):
+        self.s, self.model = session, model
         self.q = session.quantity(quantity)
         names = list(session.variables) if variables is None else list(variables)
         self.vars = [session.commands.lookup(n) for n in names]
         self.names = names
+        if model is not None:
+            self.qm = model.quantity(quantity)
+            sizes = [model.commands.lookup(n).size for n in names]
+            if sizes != [v.size for v in self.vars]:
+                raise OptionError(f"the model's variables {names} do not have the plant's sizes")
         self.rows = np.arange(self.q.size) if components is None else np.asarray(components, np.int64)
         if self.rows.size == 0 or self.rows.min() < 0 or self.rows.max() >= self.q.size:
             raise OptionError(f"components {np.asarray(components).tolist()} outside 0 .. {self.q.size - 1}")
@@ -80,12 +85,17 @@ class _Loop:
         return self.q.value(self.s.problem, self.s.g, self.s.lam)[self.rows]
 
     def jacobian(self):
+        if self.model is not None:
+            return self.model.jacobian([self.qm], self.names).jacobian[self.rows]
         return self.s.jacobian([self.q], self.vars).jacobian[self.rows]
 
     def command(self, x):
-        """Update the session to the command x (clipped to the bounds); the State."""
-        x = np.clip(x, self.lower, self.upper)
-        return self.s.update(**dict(zip(self.names, np.split(x, self.split))))
+        """Update the session (and the model) to the command x (clipped to the bounds); the
+        session's State."""
+        values = dict(zip(self.names, np.split(np.clip(x, self.lower, self.upper), self.split)))
+        if self.model is not None:
+            self.model.update(**values)
+        return self.s.update(**values)
 
     def step(self, x, dx, max_halvings):
         """Update to x + a dx with a = 1, 1/2, ... while the session refuses; (state, a)."""
@@ -143,7 +153,8 @@ class Tracking:
         return float(self.errors[1:].max())
 
 
-def track(session, quantity, targets, variables=None, components=None, gain=1.0, damping=0.0, max_halvings=5):
+def track(session, quantity, targets, variables=None, components=None, gain=1.0, damping=0.0, max_halvings=5,
+          model=None):
     """Track ``targets`` (K, m) with the components ``components`` of ``quantity`` (a probe name
     or a ``design`` quantity) by Jacobian feedback, one warm update per sample (module
     docstring).
@@ -151,11 +162,16 @@ def track(session, quantity, targets, variables=None, components=None, gain=1.0,
     Parameters
     ----------
     session : Session
-        At the start (targets[0] is recorded against the start's value).
+        The plant, at the start (targets[0] is recorded against the start's value): what is
+        measured and commanded.
     variables : sequence of str, optional
         The commanded variables (default all of the session's).
     gain, damping : float
         Feedback gain (1: a Newton step toward the next target) and the damping mu.
+    model : Session, optional
+        The controller's model, when it is not the plant (a model error): the Jacobian is the
+        model's, at the same commands (both sessions are updated every cycle; a probe name
+        refers to the model's probe of that name).
 
     Returns
     -------
@@ -175,7 +191,7 @@ def track(session, quantity, targets, variables=None, components=None, gain=1.0,
     >>> bool(t.max_error < 1e-3)
     True
     """
-    lp = _Loop(session, quantity, variables, components)
+    lp = _Loop(session, quantity, variables, components, model)
     T = lp.targets(targets)
     K = len(T)
     Y = np.zeros_like(T)
