@@ -159,6 +159,28 @@ def test_the_predictor_is_the_direct_sensitivity():
     assert np.abs(asm.vector(eta) - S @ dB).max() < 1e-9 * np.abs(S @ dB).max()
 
 
+def test_the_predictor_reuses_the_last_residual_plus_its_exact_change():
+    """A command of the linear variables (field and magnetisation in polar form, a load
+    magnitude) starts from the last residual plus its change, not a new evaluation: that sum
+    equals the evaluated residual to round-off; a load-factor change evaluates."""
+    p, f = magnetic_strip()
+    p.add_edge_force("x1", (0.0, 0.0, 0.01))
+    edge = p.loads[-1]
+    mv = RegionMagnetisation(p, [np.arange(4), np.arange(4, 8)], form="polar", name="Br")
+    s = Session(p, 1.0, [mv, FieldVariable(p, f, "polar", name="B"), LoadMagnitude(p, edge, name="P")])
+    seen, step = [], s._corr.step
+
+    def spy(g, lam, stamp=None, check_path=True, r0=None):
+        r = p.evaluate(g, lam, tangent=False).r
+        seen.append(None if r0 is None else np.abs(r0 - r).max() / np.abs(r).max())
+        return step(g, lam, stamp, check_path, r0)
+    s._corr.step = spy
+    s.update(B=[0.35, 1.4], Br=[1.0, 0.1, 0.9, -0.1], P=2.0)
+    s.update(lam=0.9)
+    s.update(B=[0.3, 1.5])
+    assert seen[0] < 1e-14 and seen[1] is None and seen[2] < 1e-14, seen
+
+
 def test_a_command_past_a_limit_point_is_refused_not_snapped():
     """The snap roof (limit point at load factor 0.742): load control from 0.72 to 0.76 cannot
     be followed -- the session refuses, says where (0.743), and keeps its state.  (Without the path

@@ -58,6 +58,15 @@ class Commands:
     ----------
     variables : dict
         name -> Variable, in the order given.
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> from core_se3.design import LoadMagnitude
+    >>> p = Problem(mesh.rectangle(1.0, 0.2, 2, 1), Material(1e3, 0.0, 0.01))
+    >>> p.add_edge_force("x1", (0.0, 0.0, 1.0))
+    >>> Commands([LoadMagnitude(p, p.loads[0], name="P")]).values()["P"].tolist()
+    [1.0]
     """
 
     def __init__(self, variables):
@@ -113,10 +122,37 @@ class Commands:
             out[name] = a
         return out
 
-    def assign(self, values):
-        """Assign name -> values (already parsed) to the variables."""
+    def assign(self, values, problem=None, g=None, lam=None):
+        """Assign name -> values (already parsed) to the variables.  With ``problem``, ``g`` and
+        ``lam``: return the exact change of the free residual at (g, lam) that the assignment
+        makes, or None when a variable changes in which the residual is not linear (module
+        docstring of ``control.corrector``: the predictor's right-hand side without a residual
+        evaluation)."""
+        dr = None if problem is None else np.zeros((problem.mesh.n_nodes, 6))
         for name, x in values.items():
-            self.variables[name].assign(x)
+            v = self.variables[name]
+            if dr is not None:
+                # one variable at a time, at the others' current values: r is linear in each
+                # (the magnetic load is bilinear in field and dipoles), so the sum is exact
+                d = _linear_change(v, problem, g, lam, np.asarray(x, float))
+                dr = None if d is None else dr + d
+            v.assign(x)
+        return None if dr is None else problem.assembler().vector(dr)
+
+
+def _linear_change(v, problem, g, lam, x):
+    """r(g; v = x) - r(g; v now) (n, 6) for a variable in which r is linear, else None."""
+    if isinstance(v, FieldVariable):                      # linear in the field vector
+        full = v.full.copy()
+        full[v.free] = x
+        return np.einsum("nik,k->ni", v.dr_dB(problem, g, lam), v.vector(full) - v.vector())
+    if isinstance(v, RegionMagnetisation):                # linear in B^r per region
+        full = v.full.copy()
+        full[:, v.free] = x.reshape(len(v.regions), len(v.free))
+        return np.einsum("nijk,jk->ni", v.dr_dBr(problem, g, lam), v.Br(full) - v.Br())
+    if isinstance(v, (LoadMagnitude, FieldGradientVariable)):
+        return np.einsum("nik,k->ni", v.dr_dp(problem, g, lam), x - v.value())
+    return None
 
 
 def scenario_variables(scn):
@@ -127,12 +163,34 @@ def scenario_variables(scn):
 
     Example
     -------
-    >>> import os
     >>> from core_se3 import scenario
-    >>> here = os.path.dirname(os.path.abspath(scenario.__file__))
-    >>> scn = scenario.load(os.path.join(here, "..", "..", "examples", "gripper.toml"))
+    >>> scn = scenario.loads('''
+    ... units = "N-mm-MPa"
+    ... [mesh]
+    ... generator = "rectangle"
+    ... L = 20.0
+    ... width = 5.0
+    ... nx = 4
+    ... ny = 1
+    ... [material]
+    ... E = 1.0
+    ... nu = 0.3
+    ... h = 0.5
+    ... [[supports]]
+    ... type = "clamp"
+    ... edge = "x0"
+    ... [fields.coil]
+    ... type = "uniform"
+    ... B = [0.0, 0.0, 0.01]
+    ... [[magnets]]
+    ... Br = [0.01, 0.0, 0.0]
+    ... [[loads]]
+    ... type = "edge_force"
+    ... edge = "x1"
+    ... force = [0.0, 0.0, 1e-4]
+    ... ''')
     >>> [v.name for v in scenario_variables(scn)]
-    ['coil']
+    ['coil', 'load0']
     """
     prob, out = scn.problem, []
     for name, f in scn.fields.items():

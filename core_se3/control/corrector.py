@@ -8,21 +8,29 @@ held factors, K eta = -r(g; p + dp), is therefore the direct method's tangent pr
 eta = S dp (``design.sensitivity``: K S = -dr/dp), in one back-substitution and without forming
 dr/dp; the residual's evaluation is the only other work.
 
-Corrector.  Modified Newton: eta_k = -K_F^-1 r(g_k) with the held factors K_F, a fixed-point
-iteration that contracts by c ~ |I - K_F^-1 K(g_k)| per iteration, while a full Newton iteration
-costs a tangent and a factorisation (on the gripper about six back-substitutions with their
-residuals).  When an increment is more than ``contraction`` times the one before, the tangent is
-evaluated and factored afresh at the current iterate and the iteration goes on with it.  The
-convergence test is the solver's (``solvers.convergence``: relative residual <= max(rtol, its
-round-off floor) and last increment <= dtol ell) with, for the linear rate, the error the last
-increment leaves, dn c / (1 - c) <= dtol ell, too.
+Corrector.  Modified Newton, f_k = -K_F^-1 r(g_k) on the held factors K_F: a fixed-point
+iteration that contracts by about |I - K_F^-1 K(g_k)| per iteration, each iteration a residual
+and a back-substitution, while a Newton iteration costs a tangent and a factorisation (on the
+gripper about six back-substitutions with their residuals).  Anderson acceleration (memory
+``anderson``) mixes the last increments; it matters for the longer steps, whose rate the thin
+shell's stiff membrane part slows.  The convergence test is the solver's
+(``solvers.convergence``), at the state returned: its relative residual <= max(rtol, round-off
+floor), and the increment that would leave it <= dtol ell (and shrinking: the error estimate of
+a contracting iteration) -- the solver takes the increment that led to its state instead.
+
+Escalation.  When the held factors were made at another state (an earlier update, other
+parameters) and their first correction is more than ``STALE`` of the predictor, or they do
+not converge in ``max_iter`` iterations, the sub-step starts again with the tangent factored at
+its start (and the new parameters); if that fails too, the solver's own Newton try runs from the
+start (``solvers.newton_try``: a fresh tangent at every iterate, the mixed iteration), which
+reaches further; only then does the sub-step fail.
 
 Path.  A sub-step fails (and the session splits the command) when the predictor turns a node by
-more than ``max_turn``, the corrector does not converge, the tangent is singular, an element is
+more than ``max_turn``, neither corrector converges, the tangent is singular, an element is
 distorted, or the converged increment differs from the predictor by more than
-``path_tolerance`` times the predictor: on a smooth path that difference is O(dp) relative, so
-halving the step makes it pass; a jump to another branch (a snap past a limit point) does not
-shrink with the step, and the command is refused.
+``path_tolerance`` times the predictor (with factors made at the start): on a smooth path that
+difference is O(dp) relative, so halving the step makes it pass; a jump to another branch (a
+snap past a limit point) does not shrink with the step, and the command is refused.
 """
 from __future__ import annotations
 
@@ -60,6 +68,8 @@ class SubStep:
     predictor : (n, 6) ndarray or None
         The first increment of the held factors' try; ``fatal``: the step is too long whatever
         the factors (a predictor turning nodes too far, a path test failed on fresh factors).
+    residual : (nfree,) ndarray or None
+        The free residual at the converged state (the next sub-step's start).
 
     Example
     -------
@@ -74,6 +84,7 @@ class SubStep:
     history: list = field(default_factory=list)
     predictor: np.ndarray = None
     fatal: bool = False
+    residual: np.ndarray = None
 
 
 class Corrector:
@@ -105,6 +116,7 @@ class Corrector:
         self.ell = problem.length_scale
         self.solver = make_solver(options.linear_solver or problem.linear_solver)
         self.F = self.F_g = self.F_stamp = None
+        self._checked = False
         self.counts = dict(residuals=0, factorizations=0, solves=0)
 
     def close(self):
@@ -128,31 +140,37 @@ class Corrector:
         K = self.problem.evaluate(g, lam, tangent=True).K
         self.close()                                  # MUMPS reuses its analysis when released first
         self.F = Factorization(K, self.solver)
-        self.F_g, self.F_stamp = g, stamp
+        self.F_g, self.F_stamp, self._checked = g, stamp, False
         self.counts["factorizations"] += 1
 
-    def increment(self, r, check=True):
-        """(eta (n, 6), |eta|_s / ell) of K_F eta = -r (``check``: ``Factorization.solve``'s)."""
+    def increment(self, r, check=None):
+        """(eta (n, 6), |eta|_s / ell) of K_F eta = -r (``check``: ``Factorization.solve``'s
+        refinement and backward-error check; default at the first solve on new factors only:
+        a singular tangent shows there, and the corrector tests its answers on the residual)."""
+        if check is None:
+            check, self._checked = not self._checked, True
         eta = self.asm.scatter(self.F.solve(-r, check=check))
         self.counts["solves"] += 1
         return eta, increment_norm(eta, self.ell)
 
-    def step(self, g, lam, stamp=None, check_path=True):
+    def step(self, g, lam, stamp=None, check_path=True, r0=None):
         """One sub-step from the frames g to the equilibrium at lam and the parameters assigned
         now (``stamp``); a :class:`SubStep` (module docstring: held factors, then factors made
-        at g, then Newton with a fresh tangent at every iterate)."""
+        at g, then Newton with a fresh tangent at every iterate).  ``r0``: the free residual at
+        (g, lam) and these parameters when the caller has it (``Session``: the last one plus
+        its exact change), else it is evaluated."""
         nf = its = 0
         try:
             if self.F is None:
                 self.factor(g, lam, stamp)
                 nf += 1
             fresh = self.F_g is g and self.F_stamp == stamp
-            out = self._iterate(g, lam, check_path, fresh)
+            out = self._iterate(g, lam, check_path, fresh, r0)
             its += out.iterations
             if not out.ok and not out.fatal and not fresh:
                 self.factor(g, lam, stamp)                     # stale factors: again with g's
                 nf += 1
-                out = self._iterate(g, lam, check_path, True)
+                out = self._iterate(g, lam, check_path, True, r0)
                 its += out.iterations
             if not out.ok and not out.fatal:
                 out = self._newton(g, lam, out.predictor, check_path)
@@ -173,11 +191,15 @@ class Corrector:
                 f"path_tolerance = {self.opts.path_tolerance:g}): the equilibrium path turns sharply or the state "
                 "snapped onto another branch")
 
-    def _iterate(self, g, lam, check_path, fresh):
+    def _iterate(self, g, lam, check_path, fresh, r0=None):
         """Predictor and corrector on the held factors: a SubStep (``fatal``: the step is too long
-        whatever the factors; ``predictor``: the first increment)."""
+        whatever the factors; ``predictor``: the first increment; ``residual``: the free residual
+        at the state returned)."""
         opts, ell = self.opts, self.ell
-        r, rn, floor = self.residual(g, lam)
+        if r0 is None:
+            r, rn, _ = self.residual(g, lam)
+        else:
+            r, rn = r0, np.nan
         hist = [rn]
         eta, pred = self.increment(r)                  # the predictor: S dp (module docstring)
         turn = float(np.sqrt(np.max(np.einsum("ij,ij->i", eta[:, 3:], eta[:, 3:]))))
@@ -191,7 +213,7 @@ class Corrector:
         while True:
             r, rn, floor = self.residual(g1, lam)
             hist.append(rn)
-            f, fn = self.increment(r, check=False)
+            f, fn = self.increment(r)
             its += 1
             # the solver's test, at the state returned: its relative residual, and the increment
             # that would leave it (the error estimate of a contracting iteration, or far below
@@ -212,7 +234,7 @@ class Corrector:
             fn_prev = fn
         why = self._path_error(predictor, total, check_path)
         return SubStep(not why, g1 if not why else g, why, its, history=hist, predictor=predictor,
-                       fatal=bool(why) and fresh)
+                       fatal=bool(why) and fresh, residual=None if why else r)
 
     def _newton(self, g, lam, predictor, check_path):
         """Newton with a fresh tangent at every iterate (the solver's try, ``solvers.newton_try``,
@@ -230,7 +252,8 @@ class Corrector:
             return SubStep(False, g, f"Newton with a fresh tangent at every iterate failed: {out.reason}",
                            out.solves, out.solves, out.hist)
         why = self._path_error(predictor, out.eta_sum, check_path) if predictor is not None else ""
-        return SubStep(not why, out.g if not why else g, why, out.solves, out.solves, out.hist)
+        return SubStep(not why, out.g if not why else g, why, out.solves, out.solves, out.hist,
+                       residual=None if why or out.ev is None else out.ev.r)
 
 
 class _Anderson:
@@ -250,16 +273,23 @@ class _Anderson:
     def step(self, f):
         if self.m == 0:
             return f
+        fw = (f * self.w).ravel()                       # the increment norm's weights
         if self.f is not None:
-            self.dF.append((f - self.f).ravel())
+            self.dF.append(fw - self.f)
             self.dX.append(self.x.ravel())
             if len(self.dF) > self.m:
                 del self.dF[0], self.dX[0]
         step = f
         if self.dF:
+            # gamma from the normal equations of the m columns (m <= a few: a small solve);
+            # a tiny Tikhonov term keeps nearly dependent columns from blowing gamma up
             dF = np.stack(self.dF, 1)
-            wf = np.tile(self.w, len(f))[:, None]
-            gamma = np.linalg.lstsq(wf * dF, (wf[:, 0] * f.ravel()), rcond=None)[0]
-            step = f - ((np.stack(self.dX, 1) + dF) @ gamma).reshape(f.shape)
-        self.f, self.x = f, step
+            A = dF.T @ dF
+            A[np.diag_indices_from(A)] *= 1.0 + 1e-10
+            try:
+                gamma = np.linalg.solve(A, dF.T @ fw)
+            except np.linalg.LinAlgError:
+                gamma = np.zeros(len(self.dF))
+            step = f - ((np.stack(self.dX, 1) + dF / np.tile(self.w, len(f))[:, None]) @ gamma).reshape(f.shape)
+        self.f, self.x = fw, step
         return step

@@ -151,6 +151,7 @@ class Session:
                                f"{out.reason}")
         self.state = State(problem, out.g, lam, self.commands.values(), out.iterations, out.factorizations,
                            1, 0, time.perf_counter() - t0)
+        self._r = out.residual            # the free residual at the state (the next predictor's start)
 
     @classmethod
     def from_scenario(cls, scn, lam=None, variables=None, **kw):
@@ -230,9 +231,12 @@ class Session:
             return self.problem.mesh.g0.copy()
         return newton_solve(self.problem, steps=steps, lam_end=lam, options=opts).final.g
 
-    def _assign(self, values):
-        self.commands.assign(values)
+    def _assign(self, values, g=None, lam=None):
+        """Assign values; with (g, lam), return the exact change of the free residual there
+        (None if not linear: ``Commands.assign``)."""
+        dr = self.commands.assign(values, None if g is None else self.problem, g, lam)
         self._stamp += 1
+        return dr
 
     # ------------------------------------------------------------------ updates --------
     def update(self, lam=None, **values):
@@ -270,6 +274,7 @@ class Session:
         x0 = {k: self.values[k] for k in x1}
         g, t, dt = self.g, 0.0, 1.0
         its = nf = subs = splits = 0
+        r, lam_r = self._r, lam0            # the free residual at (g, lam_r) and the assigned values
         while t < 1.0:
             t_try = min(1.0, t + dt)
             lam_t = lam1 if t_try == 1.0 else lam0 + t_try * (lam1 - lam0)
@@ -278,11 +283,14 @@ class Session:
                 if turn > MAX_LOAD_TURN:            # a turning field: the solver's split rule
                     dt = (t_try - t) / max(2.0, np.ceil(turn / (0.95 * MAX_LOAD_TURN)))
                     continue
-            self._assign(x1 if t_try == 1.0 else {k: x0[k] + t_try * (x1[k] - x0[k]) for k in x1})
-            out = self._corr.step(g, lam_t, self._stamp)
+            linear = r is not None and lam_t == lam_r
+            dr = self._assign(x1 if t_try == 1.0 else {k: x0[k] + t_try * (x1[k] - x0[k]) for k in x1},
+                              g if linear else None, lam_t)
+            r = r + dr if linear and dr is not None else None
+            out = self._corr.step(g, lam_t, self._stamp, r0=r)
             its, nf, subs = its + out.iterations, nf + out.factorizations, subs + 1
             if out.ok:
-                g, t = out.g, t_try
+                g, t, r, lam_r = out.g, t_try, out.residual, lam_t
                 if out.iterations <= 6:
                     dt = min(2.0 * dt, 1.0)
                 continue
@@ -300,6 +308,7 @@ class Session:
                     "(core_se3.solvers.arc_length) if it passes a limit point there")
         self.state = State(self.problem, g, lam1, self.commands.values(), its, nf, subs, splits,
                            time.perf_counter() - t0)
+        self._r = r
         self._count(subs, splits, its, updates=1)
         return self.state
 
