@@ -3,7 +3,7 @@
 Example
 -------
 >>> ControlOptions().max_iter, ControlOptions(max_splits=4).max_splits
-(12, 4)
+(16, 4)
 >>> ControlOptions(path_tolerance=-1.0)
 Traceback (most recent call last):
 ...
@@ -37,7 +37,7 @@ class ControlOptions:
         Newton) factorisation also the error left after it, dn c / (1 - c) <= dtol (c the
         observed contraction).  Default 1e-10 each, as ``NewtonOptions``.
     max_iter : int
-        Iterations (back-substitutions) on the held factors per try of a sub-step (default 12:
+        Iterations (back-substitutions) on the held factors per try of a sub-step (default 16:
         on the gripper an iteration costs about a sixth of a factorisation and its tangent);
         beyond it, or when an increment is longer than the predictor (divergence), the
         sub-step starts again with the tangent factored at its start, or, if the held factors
@@ -66,7 +66,7 @@ class ControlOptions:
     """
     rtol: float = 1e-10
     dtol: float = 1e-10
-    max_iter: int = 12
+    max_iter: int = 16
     max_factorizations: int = 3
     anderson: int = 5
     max_splits: int = 10
