@@ -15,7 +15,7 @@ import scipy.sparse as sp
 from core_se3 import Material, Problem, lie, mesh, scenario
 from core_se3.control import ControlOptions, Session, plan, track
 from core_se3.design import FieldVariable, LoadMagnitude, ProbePosition, RegionMagnetisation, sensitivity
-from core_se3.errors import ControlError, OptionError
+from core_se3.errors import ControlError, LoadError, OptionError
 from core_se3.model import UniformField
 from core_se3.solvers import Factorization, available_solvers, make_solver
 
@@ -238,6 +238,20 @@ def test_bad_commands_and_sessions_are_clear_errors():
         Session(seed, 0.0)
     with pytest.raises(OptionError, match="path_tolerance"):
         ControlOptions(path_tolerance=0.0)
+
+
+def test_an_error_inside_an_update_keeps_the_state_and_its_values():
+    """A load whose programme turns non-finite past load factor 1.5 (LoadError from the residual)
+    stops the update; the session keeps its state and the variables their values."""
+    p = Problem(mesh.rectangle(10.0, 1.0, 8, 1), Material(1.2e6, 0.0, 0.1))
+    p.clamp("x0")
+    p.add_edge_force("x1", (0.0, 0.0, 0.1), scale=lambda lam: lam if lam <= 1.5 else np.nan)
+    s = Session(p, 1.0, [LoadMagnitude(p, p.loads[0], name="P")])
+    before = s.state
+    with pytest.raises(LoadError, match="not finite|scale"):
+        s.update(lam=2.0, P=2.0)
+    assert s.state is before and s.values["P"].tolist() == [1.0] and s.variables["P"].value().tolist() == [1.0]
+    assert s.update(P=1.5).values["P"].tolist() == [1.5]
 
 
 def test_backends_give_the_same_updates():

@@ -272,6 +272,20 @@ class Session:
             raise ControlError("update(lam=...) with a prescribed motion of the load factor (rotate_edge, prescribe) "
                                "is not supported by a session; change the variables only, or solve with Problem.solve")
         x0 = {k: self.values[k] for k in x1}
+        try:
+            g, r, counts = self._follow(lam0, lam1, x0, x1)
+        except BaseException:
+            self._assign(x0)                 # refused or interrupted: the values of the state kept
+            raise
+        self.state = State(self.problem, g, lam1, self.commands.values(), *counts, time.perf_counter() - t0)
+        self._r = r
+        self._count(*counts, updates=1)
+        return self.state
+
+    def _follow(self, lam0, lam1, x0, x1):
+        """Follow the command path p0 -> p1 in sub-steps (module docstring): (frames, free
+        residual or None, (iterations, factorisations, substeps, splits)); ControlError when
+        refused."""
         g, t, dt = self.g, 0.0, 1.0
         its = nf = subs = splits = 0
         r, lam_r = self._r, lam0            # the free residual at (g, lam_r) and the assigned values
@@ -297,8 +311,7 @@ class Session:
             splits += 1
             dt /= 2.0
             if dt < 2.0 ** -self.options.max_splits:
-                self._assign(x0)
-                self._count(subs, splits, its, refused=1)
+                self._count(its, nf, subs, splits, refused=1)
                 at = self._describe(lam0, lam1, x0, x1, t)
                 raise ControlError(
                     f"update refused: {self._describe(lam0, lam1, x0, x1)} could not be followed beyond {at} "
@@ -306,13 +319,9 @@ class Session:
                     f"{self.options.max_splits} halvings): {out.reason}.  The session stays at its state "
                     "before the command; send a smaller change, or trace the path with arc length "
                     "(core_se3.solvers.arc_length) if it passes a limit point there")
-        self.state = State(self.problem, g, lam1, self.commands.values(), its, nf, subs, splits,
-                           time.perf_counter() - t0)
-        self._r = r
-        self._count(subs, splits, its, updates=1)
-        return self.state
+        return g, r, (its, nf, subs, splits)
 
-    def _count(self, subs, splits, its, updates=0, refused=0):
+    def _count(self, its, nf, subs, splits, updates=0, refused=0):
         st = self.stats
         for k, v in (("updates", updates), ("refused", refused), ("substeps", subs), ("splits", splits),
                      ("iterations", its)):
