@@ -1,7 +1,7 @@
 """A control session: an equilibrium held with its factorisation, moved warm to new commands.
 
     s = Session.from_scenario("examples/gripper.toml")          # cold solve once, factor once
-    st = s.update(coil=[0.0, 0.0, 0.062])                         # warm: ~1 LU's time
+    st = s.update(coil=[0.0, 0.0, 0.062])                         # warm, on the held factors
     st.g, st.probes["tip_px"]["x"]
     J = s.jacobian(["tip_px"], ["coil"])                          # d tip / d B, same factors
 
