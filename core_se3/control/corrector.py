@@ -268,30 +268,35 @@ class _Anderson:
     see.  m = 0: the plain modified Newton step f."""
 
     def __init__(self, m, ell):
-        self.m, self.w = m, np.array([1.0, 1.0, 1.0, ell, ell, ell])
-        self.dF, self.dX = [], []
-        self.f = self.x = None
+        self.m, self.ell = m, ell
+        self.k = 0                      # pairs recorded so far (the last m are kept, in a ring)
+        self.w = self.Fd = self.Sd = self.u = self.s = None
+        self.G = np.zeros((m, m))       # Gram matrix of the kept dF (weighted)
 
     def step(self, f):
+        """The next step from the modified-Newton increment f (n, 6)."""
         if self.m == 0:
             return f
-        fw = (f * self.w).ravel()                       # the increment norm's weights
-        if self.f is not None:
-            self.dF.append(fw - self.f)
-            self.dX.append(self.x.ravel())
-            if len(self.dF) > self.m:
-                del self.dF[0], self.dX[0]
-        step = f
-        if self.dF:
-            # gamma from the normal equations of the m columns (m <= a few: a small solve);
-            # a tiny Tikhonov term keeps nearly dependent columns from blowing gamma up
-            dF = np.stack(self.dF, 1)
-            A = dF.T @ dF
-            A[np.diag_indices_from(A)] *= 1.0 + 1e-10
+        if self.w is None:
+            self.w = np.tile([1.0, 1.0, 1.0, self.ell, self.ell, self.ell], len(f))
+            self.Fd, self.Sd = np.empty((self.m, f.size)), np.empty((self.m, f.size))
+        u = f.ravel() * self.w                          # weighted: the increment norm's inner product
+        if self.u is not None:
+            i = self.k % self.m
+            np.subtract(u, self.u, out=self.Fd[i])      # dF
+            np.add(self.s, self.Fd[i], out=self.Sd[i])  # dX + dF (the step taken, plus dF)
+            self.k += 1
+            a = min(self.k, self.m)
+            self.G[i, :a] = self.G[:a, i] = self.Fd[:a] @ self.Fd[i]
+        a = min(self.k, self.m)
+        s = u
+        if a:
+            # gamma from the normal equations (a <= m columns: a small solve); a tiny Tikhonov
+            # term keeps nearly dependent columns from blowing gamma up
+            A = self.G[:a, :a] * (1.0 + 1e-10 * np.eye(a))
             try:
-                gamma = np.linalg.solve(A, dF.T @ fw)
+                s = u - np.linalg.solve(A, self.Fd[:a] @ u) @ self.Sd[:a]
             except np.linalg.LinAlgError:
-                gamma = np.zeros(len(self.dF))
-            step = f - ((np.stack(self.dX, 1) + dF / np.tile(self.w, len(f))[:, None]) @ gamma).reshape(f.shape)
-        self.f, self.x = fw, step
-        return step
+                pass
+        self.u, self.s = u, s
+        return (s / self.w).reshape(f.shape)
