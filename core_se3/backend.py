@@ -69,11 +69,12 @@ def iteration_saving(n_elements):
     return SAVING_PER_ITERATION + SAVING_PER_ELEMENT * float(n_elements)
 
 
-def charge(n_elements):
-    """Count one NumPy tangent evaluation of an 'auto' problem of ``n_elements`` elements: once
-    the savings missed reach ``NUMBA_START_COST``, 'auto' means numba from then on."""
+def charge(n_elements, share=1.0):
+    """Count one NumPy tangent evaluation of an 'auto' problem of ``n_elements`` elements (or
+    ``share`` of one: a control session's residual-only evaluations, ``control.corrector``):
+    once the savings missed reach ``NUMBA_START_COST``, 'auto' means numba from then on."""
     if not _Rent.switched:
-        _Rent.saved += iteration_saving(n_elements)
+        _Rent.saved += share * iteration_saving(n_elements)
         if _Rent.saved >= NUMBA_START_COST:
             _Rent.switched = True
 

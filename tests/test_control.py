@@ -264,6 +264,26 @@ def test_backends_give_the_same_updates():
     assert frame_error(states[0], states[1], 1.0) < 1e-10
 
 
+def test_auto_backend_counts_a_sessions_residuals():
+    """'auto' switches to numba once numba would have paid; a session evaluates residuals, not
+    tangents, so it charges them (a share of a Newton iteration each): otherwise a control loop
+    would stay on NumPy for ever."""
+    from core_se3 import backend
+    if not backend.numba_available():
+        pytest.skip("needs numba")
+    old = backend.rent_state()
+    try:
+        p, f = magnetic_strip()
+        p.backend = "auto"
+        s = Session(p, 1.0, [FieldVariable(p, f, name="B")])
+        backend.restore_rent({"saved": backend.NUMBA_START_COST - 1e-6, "switched": False})
+        assert p.backend == "numpy"
+        s.update(B=[0.0, 0.0, 0.31])
+        assert p.backend == "numba"
+    finally:
+        backend.restore_rent(old)
+
+
 def test_session_from_a_scenario_names_its_fields_and_loads():
     scn = scenario.loads("""
 [mesh]
