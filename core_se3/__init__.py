@@ -15,7 +15,7 @@ Example (a strip rolled into a full circle by an end moment M = 2 pi EI / L)
 >>> p.clamp("x0"); p.add_probe("tip", "x1")
 >>> p.add_edge_moment("x1", (0.0, -2 * np.pi * 1.2e7 * 0.1 ** 3 / 12 / 10.0, 0.0))
 >>> tip = p.solve(steps=40).final.probes["tip"]
->>> (tip["u"].round(9) + 0.0).tolist(), round(float(np.linalg.norm(tip["w"])), 9)     # back at the clamp
+>>> (tip["u"].round(9) + 0.0).tolist(), round(float(np.linalg.norm(tip["rotation_vector"])), 9)     # back at the clamp
 ([-10.0, 0.0, 0.0], 6.283185307)
 """
 from . import lie, mesh

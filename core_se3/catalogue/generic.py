@@ -159,9 +159,10 @@ def case_document(case, p, prob, res, reference_case=None):
         for s, e in zip(steps, errs):
             s["error"] = None if np.isnan(e) else float(e)
         reference = dict(entry=entry, block=block, error=err, error_at_load=at, file="elastica.json")
+    from ..scenario.provenance import problem_provenance
     return result_document(case.name, "core_se3", prob.element_name,
                            {k: dict(value=v, unit=case.units.get(k, "")) for k, v in p.items()},
-                           prob.mesh, steps, res.timings, reference)
+                           prob.mesh, steps, res.timings, reference, provenance=problem_provenance(prob, res))
 
 
 def edge_wrench(prob, g, edge, point):
