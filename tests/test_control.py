@@ -276,7 +276,7 @@ def test_auto_backend_counts_a_sessions_residuals():
         p, f = magnetic_strip()
         p.backend = "auto"
         s = Session(p, 1.0, [FieldVariable(p, f, name="B")])
-        backend.restore_rent({"saved": backend.NUMBA_START_COST - 1e-6, "switched": False})
+        backend.restore_rent({"saved": backend.start_cost() - 1e-6, "switched": False, "cold": old.get("cold")})
         assert p.backend == "numpy"
         s.update(B=[0.0, 0.0, 0.31])
         assert p.backend == "numba"
