@@ -104,6 +104,10 @@ class Session:
     options : ControlOptions, optional
         The controls; keywords override its fields.
 
+    The session owns the values of its variables: change them by :meth:`update` (a change made
+    on the problem behind its back is seen by the corrector's residuals, but not by the state's
+    ``values`` or the predictor's start).
+
     Attributes
     ----------
     state : State
