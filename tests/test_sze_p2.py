@@ -132,17 +132,19 @@ def test_hemisphere_8x8_curve():
 
 def test_pullout_18x12_within_3_percent():
     """Pull-out, 18x12 octant (half the table mesh each way), arc length (psi = 1) to P_max:
-    deviation <= 3 % over W_A, -U_B, -U_C (measured 2.70 %).  The snap-through: the largest
-    one-step growth of -U_B (0.38, between P/P_max 0.496 and 0.507) lies in [0.49, 0.53] and
-    exceeds 0.3, as the table's jump 3.653 -> 4.061 between 0.50 and 0.525."""
+    deviation <= 3 % over W_A, -U_B, -U_C (measured 2.67 %).  The snap-through: -U_B grows
+    from the table's 3.653 to its 4.061 while P/P_max stays in [0.49, 0.53] (the table's jump
+    lies between 0.50 and 0.525; measured: 3.647 at 0.496 to 4.062 at 0.509 in 12 arc-length
+    steps through a limit point at 0.507; with the tied in-plane shear of curved elements the
+    arc length took it in one step, 3.646 at 0.496 to 4.029 at 0.507)."""
     doc, res, prob = catalogue.run_case("sze-pullout", mesh=(18, 12))
     ref = doc["reference"]
     assert ref["deviation"] <= 0.03, ref["curves"]
     lam = np.array([s["load_factor"] for s in doc["steps"]])
     ub = np.array([-s["probes"]["B"]["u"][0] for s in doc["steps"]])
-    grow = np.where(lam[:-1] > 0.2, np.diff(ub), 0.0)   # past the soft start of the path
-    k = int(np.argmax(grow))
-    assert 0.49 <= lam[k] and lam[k + 1] <= 0.53 and ub[k + 1] - ub[k] > 0.3, (lam[k], ub[k:k + 2])
+    i0 = int(np.nonzero(ub < 3.653)[0].max())                # the last step before the jump
+    i1 = int(np.nonzero(ub > 4.0)[0].min())                  # the first one past it
+    assert i1 > i0 and 0.49 <= lam[i0:i1 + 1].min() and lam[i0:i1 + 1].max() <= 0.53, (lam[i0:i1 + 1], ub[i0:i1 + 1])
 
 
 def test_pinched_cylinder_16x16_curve():

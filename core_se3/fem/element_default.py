@@ -49,6 +49,7 @@ from ..errors import ElementTooDistortedError
 from ..mesh import LOCAL_EDGES
 from .element import Element, ElementEvaluation, register_element
 from .membrane_drilling import drilling_correction, reference_G, tying_correction
+from .membrane_shear import shear_correction, shear_mean, shear_retention
 from .quadrature import GAUSS_2x2
 from .resultants import element_resultants
 
@@ -204,6 +205,7 @@ class DefaultElement(Element):
         self.Dz0 = np.empty((m, 24))
         self.j0 = np.empty((m, 4))
         self.drill_Ek = np.zeros((m, 3, 3, 4))     # the membrane-drilling correction (membrane_drilling)
+        self.shear_beta = np.ones(m)               # the kept part of the tied shear (membrane_shear)
         # in chunks of elements: the resultant matrices and products of one element take ~18 kB,
         # four times its Dbar (a law without ``restricted`` gets all elements at once)
         step = SETUP_CHUNK if callable(getattr(material, "restricted", None)) else max(m, 1)
@@ -219,6 +221,10 @@ class DefaultElement(Element):
             Pm = np.broadcast_to(P, (len(z0),) + P.shape)
             if Ek.any():
                 Pm = Pm + tying_correction(P, z0, Ek)                       # (k, 4gp, 12, 24)
+            beta = shear_retention(z0, zeta0, Dm, j0)
+            self.shear_beta[sl] = beta
+            dS = shear_correction(Pm, P, z0, shear_mean(Pm, P, z0))            # membrane_shear
+            Pm = Pm + (1.0 - beta)[:, None, None, None] * dS
             # Dbar = sum_q j0_q P_q^T D_q P_q, contracted pairwise (a 4-operand einsum is O(24^4 m))
             DP = np.einsum("mqij,mqjb->mqib", Dm * j0[..., None, None], Pm)
             self.Dbar_packed[sl] = np.einsum("mqia,mqib->mab", Pm, DP)[:, _IU[0], _IU[1]]
@@ -245,11 +251,21 @@ class DefaultElement(Element):
         """Strain twists (zeta_1, zeta_2) (m, npts, 12) at natural points of every element (the
         tying with the membrane-drilling correction, ``membrane_drilling``)."""
         z = self._element_z(0.5 * edge_twists(g, self.mesh.edge_nodes))
-        P = tying_matrices(points)
-        out = np.einsum("qij,mj->mqi", P, z)
-        if self.drill_Ek.any():
-            out += np.einsum("mqij,mj->mqi", tying_correction(P, self.z0, self.drill_Ek), z)
-        return out
+        return np.einsum("mqij,mj->mqi", self.tying(points), z)
+
+    def tying(self, points=GAUSS_2x2):
+        """The element's tying matrices (m, npts, 12, 24) at natural points: the interpolation of
+        the edge twists with the membrane-drilling (``membrane_drilling``) and in-plane shear
+        (``membrane_shear``) corrections; zeta = tying(points) z."""
+        P, Pg = tying_matrices(points), tying_matrices()
+        z0, Ek = self.z0, self.drill_Ek
+        Pm = np.broadcast_to(P, (len(z0),) + P.shape)
+        Pmg = np.broadcast_to(Pg, (len(z0),) + Pg.shape)
+        if Ek.any():
+            Pm = Pm + tying_correction(P, z0, Ek)
+            Pmg = Pmg + tying_correction(Pg, z0, Ek)
+        dS = shear_correction(Pm, P, z0, shear_mean(Pmg, Pg, z0))
+        return Pm + (1.0 - self.shear_beta)[:, None, None, None] * dS
 
     def cell_fields(self, g):
         """Stress resultants at the element centres (``resultants.element_resultants``)."""
