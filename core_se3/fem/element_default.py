@@ -49,7 +49,7 @@ from ..errors import ElementTooDistortedError
 from ..mesh import LOCAL_EDGES
 from .element import Element, ElementEvaluation, register_element
 from .membrane_drilling import drilling_correction, reference_G, tying_correction
-from .membrane_shear import shear_correction, shear_mean, shear_retention
+from .membrane_shear import shear_retention, shear_tying
 from .quadrature import GAUSS_2x2
 from .resultants import element_resultants
 
@@ -223,8 +223,7 @@ class DefaultElement(Element):
                 Pm = Pm + tying_correction(P, z0, Ek)                       # (k, 4gp, 12, 24)
             beta = shear_retention(z0, zeta0, Dm, j0)
             self.shear_beta[sl] = beta
-            dS = shear_correction(Pm, P, z0, shear_mean(Pm, P, z0))            # membrane_shear
-            Pm = Pm + (1.0 - beta)[:, None, None, None] * dS
+            Pm = shear_tying(Pm, P, z0, beta)                                  # membrane_shear
             # Dbar = sum_q j0_q P_q^T D_q P_q, contracted pairwise (a 4-operand einsum is O(24^4 m))
             DP = np.einsum("mqij,mqjb->mqib", Dm * j0[..., None, None], Pm)
             self.Dbar_packed[sl] = np.einsum("mqia,mqib->mab", Pm, DP)[:, _IU[0], _IU[1]]
@@ -264,8 +263,7 @@ class DefaultElement(Element):
         if Ek.any():
             Pm = Pm + tying_correction(P, z0, Ek)
             Pmg = Pmg + tying_correction(Pg, z0, Ek)
-        dS = shear_correction(Pm, P, z0, shear_mean(Pmg, Pg, z0))
-        return Pm + (1.0 - self.shear_beta)[:, None, None, None] * dS
+        return shear_tying(Pm, P, z0, self.shear_beta, gauss=(Pmg, Pg))
 
     def cell_fields(self, g):
         """Stress resultants at the element centres (``resultants.element_resultants``)."""

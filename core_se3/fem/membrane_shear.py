@@ -50,7 +50,7 @@ import numpy as np
 
 from .material import strain_operators
 
-__all__ = ["shear_mean", "shear_correction", "shear_retention"]
+__all__ = ["shear_tying", "shear_retention", "shear_mean", "shear_correction"]
 
 
 def shear_retention(z0, zeta0, Dmat, j0):
@@ -107,30 +107,58 @@ def shear_retention(z0, zeta0, Dmat, j0):
     return 1.0 / np.sqrt(1.0 + phi ** 2 * j0.sum(axis=1) * km / kb)
 
 
+def shear_tying(Pm, P, z0, beta, gauss=None):
+    """The tying matrices Pm (m, q, 12, 24) at the points of P (q, 12, 24) with the shear
+    correction: Pm + (1 - beta) dP (module docstring), worked out on the elements with beta < 1
+    only (a flat mesh costs nothing).  ``gauss`` = (Pm_g, P_g): the tying at the Gauss points,
+    where the element means are taken (default: Pm and P themselves).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3.fem.element_default import tying_matrices
+    >>> P = tying_matrices()
+    >>> Pm = np.broadcast_to(P, (1,) + P.shape)
+    >>> shear_tying(Pm, P, np.zeros((1, 24)), np.ones(1)) is Pm      # beta = 1: untouched
+    True
+    """
+    k = np.nonzero(beta < 1.0)[0]
+    if not len(k):
+        return Pm
+    Pmg, Pg = (Pm, P) if gauss is None else gauss
+    if len(k) == len(beta):                    # all curved: no gather, one new array
+        dP = shear_correction(Pm, P, z0, shear_mean(Pmg, Pg, z0))
+        dP *= (1.0 - beta)[:, None, None, None]
+        return dP.__iadd__(Pm)
+    out = np.array(Pm)
+    out[k] += (1.0 - beta[k])[:, None, None, None] * shear_correction(Pm[k], P, z0[k], shear_mean(Pmg[k], Pg, z0[k]))
+    return out
+
+
 def _geometry(P, z0):
-    """A (m, q, 2, 3) tied reference tangents at the points of P, their duals A^a, the unit
-    normal n and the area element j0 (m, q)."""
+    """At the points of P: A (m, q, 2, 3) the tied reference tangents, Acon their duals A^a, T
+    (m, q, 2, 2) = At_a . A^c(q) and S = T^-1 (module docstring), the area element j0 (m, q)."""
     zeta0 = np.einsum("qij,mj->mqi", P, z0)
     A = np.stack([zeta0[..., 0:3], zeta0[..., 6:9]], -2)
     _, Ainv, j0 = strain_operators(A[..., 0, :], A[..., 1, :])
     n = np.cross(A[..., 0, :], A[..., 1, :]) / j0[..., None]
-    return A, np.einsum("mqab,mqbi->mqai", Ainv, A), n, j0
-
-
-def _centre_frame(P, z0):
-    """T (m, q, 2, 2) = At_a . A^c(q) and S = T^-1 at the points of P (module docstring)."""
-    A, Acon, n, _ = _geometry(P, z0)
+    Acon = np.einsum("mqab,mqbi->mqai", Ainv, A)
     # the centre's tangents: the means of opposite edges' reference twists (z_b, z_t, z_l, z_r)
     A0 = 0.5 * np.stack([z0[:, 0:3] + z0[:, 6:9], z0[:, 12:15] + z0[:, 18:21]], 1)     # (m, 2, 3)
     At = A0[:, None] - np.einsum("mai,mqi->mqa", A0, n)[..., None] * n[:, :, None]
     T = np.einsum("mqai,mqci->mqac", At, Acon)
-    return T, np.linalg.inv(T), Acon
+    S = np.empty_like(T)                       # the 2x2 inverse in closed form
+    S[..., 0, 0], S[..., 1, 1] = T[..., 1, 1], T[..., 0, 0]
+    S[..., 0, 1], S[..., 1, 0] = -T[..., 0, 1], -T[..., 1, 0]
+    S /= (T[..., 0, 0] * T[..., 1, 1] - T[..., 0, 1] * T[..., 1, 0])[..., None, None]
+    return A, Acon, T, S, j0
 
 
-def _membrane_rows(Pm, A):
-    """e_ab(q) as rows on the edge twists (m, q, 2, 2, 24): e_ab = c_a . A_b."""
+def _centre_shear(Pm, A, T):
+    """e^c_ab(q) = T e(q) T^T as rows on the edge twists (m, q, 2, 2, 24), e_ab = c_a . A_b."""
     c = np.stack([Pm[..., 0:3, :], Pm[..., 6:9, :]], 2)               # (m, q, 2, 3, 24)
-    return np.einsum("mqaiz,mqbi->mqabz", c, A)
+    e = np.einsum("mqaiz,mqbi->mqabz", c, A)
+    return np.einsum("mqac,mqcdz,mqbd->mqabz", T, e, T)
 
 
 def shear_mean(Pm, P, z0):
@@ -153,23 +181,18 @@ def shear_mean(Pm, P, z0):
     >>> np.round(eb[0, 0, [1, 7]], 12).tolist()        # e_12 = c_1 . A_2: v_y of bottom and top
     [0.25, 0.25]
     """
-    A, _, _, j0 = _geometry(P, z0)
-    T, _, _ = _centre_frame(P, z0)
-    e = _membrane_rows(Pm, A)
-    ec = np.einsum("mqac,mqcdz,mqbd->mqabz", T, e, T)
+    A, _, T, _, j0 = _geometry(P, z0)
+    ec = _centre_shear(Pm, A, T)
     w = j0 / j0.sum(1, keepdims=True)
-    ebar = np.einsum("mq,mqabz->mabz", w, ec)
-    return np.stack([ebar[:, 0, 1], ebar[:, 1, 0]], 1)
+    return np.stack([np.einsum("mq,mqz->mz", w, ec[:, :, 0, 1]), np.einsum("mq,mqz->mz", w, ec[:, :, 1, 0])], 1)
 
 
 def shear_correction(Pm, P, z0, ebar):
     """dP (m, q, 12, 24): the correction of the tying matrices Pm (m, q, 12, 24) at the points
     of P (q, 12, 24) that sets the centre-basis shear components to their element means ebar
     (:func:`shear_mean`) (module docstring)."""
-    A, Acon, n, _ = _geometry(P, z0)
-    T, S, _ = _centre_frame(P, z0)
-    e = _membrane_rows(Pm, A)
-    ec = np.einsum("mqac,mqcdz,mqbd->mqabz", T, e, T)
+    A, Acon, T, S, _ = _geometry(P, z0)
+    ec = _centre_shear(Pm, A, T)
     D = np.zeros_like(ec)
     D[:, :, 0, 1] = ebar[:, None, 0] - ec[:, :, 0, 1]
     D[:, :, 1, 0] = ebar[:, None, 1] - ec[:, :, 1, 0]
