@@ -34,7 +34,7 @@ E h beta^2 ~ D / (phi L)^2, whatever the law's drilling modulus.  The full mean 
 would leave them to the drilling curvature of the law (D (1 - nu), zero at ``drilling = 0``):
 4 zero-energy modes more on a 3x3 cylinder patch at drilling = 0 (11 against 7), as a one-point
 shear's hourglass; the kept part closes them (7, the count of the tying), and the hemisphere's
-4x4 mesh gives 0.980 / 0.978 at R/h 1e4 / 1e5 (before 0.626 / 0.017).  Only the skew part's
+4x4 mesh gives 0.980 / 0.979 at R/h 1e4 / 1e5 (before 0.626 / 0.017).  Only the skew part's
 variation locks: averaging the symmetric part alone leaves the hemisphere at 0.626.
 
 A constant membrane strain has constant e^c (the Cartesian tensor is the same at every point),
