@@ -98,6 +98,7 @@ def critical_load(prob, lam_grid, rtol=1e-6, max_refine=20, **solve_kw):
     """
     g_prev, lam_prev, e_prev = prob.mesh.g0.copy(), 0.0, None
     hist = []
+    solve_kw = dict(solve_kw, limit_check=False)        # the trivial path past the bifurcation, knowingly
     for lam in lam_grid:
         g_now = prob.solve(steps=1, lam_start=lam_prev, lam_end=lam, g_init=g_prev, **solve_kw).final.g
         e = smallest_eigenvalue(prob, g_now, lam)

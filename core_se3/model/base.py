@@ -109,7 +109,10 @@ class Load(abc.ABC):
     Subclasses implement :meth:`evaluate`.  Class attributes say what the solvers may assume:
     ``scales_with_load_factor`` (False for supports such as lab springs: continuation's load
     direction q = df/dlam ignores them), ``approximate_tangent`` (True when the load stiffness
-    is a finite-difference approximation).  :meth:`restraint` reports rigid-body restraints
+    is a finite-difference approximation), ``translation_invariant`` (True when the load's
+    forces do not depend on where the shell is: load stepping then iterates on positions
+    relative to the part when every load is so, ``solvers.equations.part_origin``; False here,
+    the safe default for a load that reads positions, such as an obstacle or a field gradient).  :meth:`restraint` reports rigid-body restraints
     the load provides (for the support check), :meth:`output_fields` point fields for VTU
     files, :meth:`total` the resultant lab force and moment (for reports).
 
@@ -146,6 +149,7 @@ class Load(abc.ABC):
     kind: ClassVar[str] = ""
     scales_with_load_factor: ClassVar[bool] = True
     constraint_force: ClassVar[bool] = False
+    translation_invariant: bool = False
     approximate_tangent: bool = False
     name: str = "load"
 

@@ -102,6 +102,8 @@ class NodalLoad(Load):
     [[0.0, 0.0, 1.0], [0.0, 0.0, 0.0]]
     """
 
+    translation_invariant = True          # forces from the frames' rotations and relative positions
+
     def __init__(self, n_nodes, nodes, weights, force=(0, 0, 0), moment=(0, 0, 0), follower=False,
                  scale=None, name="nodal"):
         self.n = int(n_nodes)
@@ -184,6 +186,8 @@ class SurfaceLoad(Load):
     >>> round(float(SurfaceLoad(m, 3.0, follower=True).evaluate(m.g0, 1.0).f[:, 2].sum()), 12)
     6.0
     """
+
+    translation_invariant = True          # forces from the frames' rotations and relative positions
 
     def __init__(self, mesh, q, follower=False, elements=None, scale=None, name="surface"):
         self.mesh = mesh

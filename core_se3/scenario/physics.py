@@ -31,16 +31,19 @@ _ARC = ArcLengthOptions()
 SOLVER_DEFAULTS = dict(steps=10, lam_end=1.0, rtol=_NEWTON.rtol, dtol=_NEWTON.dtol,
                        max_iter=_NEWTON.max_iter, max_cutbacks=_NEWTON.max_cutbacks,
                        element="default", linear_solver="auto", control="load",
-                       iteration=_NEWTON.iteration, predictor=_NEWTON.predictor)
+                       iteration=_NEWTON.iteration, predictor=_NEWTON.predictor,
+                       path_check=_NEWTON.path_check, limit_check=_NEWTON.limit_check,
+                       max_substeps=_NEWTON.max_substeps)
 # arc-length keys, with ArcLengthOptions' defaults (dlam0: lam_end / steps)
 ARCLENGTH_DEFAULTS = dict(method=_ARC.method, dlam0=None, max_steps=_ARC.max_steps, psi=_ARC.psi,
                           target_iter=_ARC.target_iter, ds_max_factor=_ARC.ds_max_factor,
-                          stability=_ARC.stability)
+                          stability=_ARC.stability, critical_tol=_ARC.critical_tol)
 OUTPUT_DEFAULTS = dict(vtu=True, vtu_every=1, plots=True, picture=True, picture_steps=1, view=None)
 # solver keys that do not change the converged states (left out of the --resume fingerprint);
 # max_steps only decides where an arc-length path stops, so a resume may raise it
 NON_PHYSICAL = ("rtol", "dtol", "max_iter", "max_cutbacks", "linear_solver", "max_steps", "iteration",
-                "predictor", "linear", "petsc", "partition")
+                "predictor", "linear", "petsc", "partition", "path_check", "limit_check", "max_substeps",
+                "critical_tol")
 # [solver] keys of a distributed run (mpirun; docs/PARALLEL.md): serial runs ignore them
 PARALLEL_KEYS = dict(linear=("mumps", "gamg", "hypre"), partition=("auto", "ptscotch", "parmetis", "rcb"))
 
@@ -251,6 +254,10 @@ def solver_section(v, doc):
                                   choices=("auto", "banded", "mumps", "superlu"))
     s["iteration"] = v.string(d, "iteration", key, default=SOLVER_DEFAULTS["iteration"], choices=ITERATIONS)
     s["predictor"] = v.string(d, "predictor", key, default=SOLVER_DEFAULTS["predictor"], choices=PREDICTORS)
+    for name in ("path_check", "limit_check"):          # the checks of load stepping (docs/STEPS.md)
+        s[name] = v.boolean(d, name, key, default=SOLVER_DEFAULTS[name])
+    s["max_substeps"] = v.integer(d, "max_substeps", key, default=SOLVER_DEFAULTS["max_substeps"], lo=1,
+                                  hi=10_000_000)
     if s["control"] != "arclength":
         extra = [k for k in ARCLENGTH_DEFAULTS if k in d]
         if extra:
@@ -274,6 +281,8 @@ def solver_section(v, doc):
     s["target_iter"] = v.integer(d, "target_iter", key, default=ARCLENGTH_DEFAULTS["target_iter"], lo=1, hi=100)
     s["ds_max_factor"] = v.number(d, "ds_max_factor", key, default=ARCLENGTH_DEFAULTS["ds_max_factor"], lo=1.0)
     s["stability"] = v.boolean(d, "stability", key, default=ARCLENGTH_DEFAULTS["stability"])
+    s["critical_tol"] = v.number(d, "critical_tol", key, default=ARCLENGTH_DEFAULTS["critical_tol"], lo=0.0,
+                                 lo_open=True, hi=1.0, hi_open=True)
     if ELEMENTS[s["element"]].stateful:
         v.fail(join(key, "element"), "arc length needs the default (path-independent) element")
     return s
@@ -299,9 +308,11 @@ def solve_defaults(s):
     if s["control"] == "arclength":
         return dict(control="arclength", method=s["method"], dlam0=s["dlam0"], psi=s["psi"],
                     max_steps=s["max_steps"], target_iter=s["target_iter"],
-                    ds_max_factor=s["ds_max_factor"], stability=s["stability"], **common)
+                    ds_max_factor=s["ds_max_factor"], stability=s["stability"],
+                    critical_tol=s["critical_tol"], **common)
     out = dict(control="load", max_cutbacks=s["max_cutbacks"], iteration=s["iteration"],
-               predictor=s["predictor"], **common)
+               predictor=s["predictor"], path_check=s["path_check"], limit_check=s["limit_check"],
+               max_substeps=s["max_substeps"], **common)
     out.update(linear=s.get("linear", "mumps"), petsc_options=dict(s.get("petsc") or {}),
                partition=s.get("partition", "auto"))
     if s.get("load_factors") is not None:

@@ -218,9 +218,10 @@ def _options(s):
     if s["control"] == "arclength":
         return ArcLengthOptions(method=s["method"], dlam0=s["dlam0"], psi=s["psi"], max_steps=s["max_steps"],
                                 target_iter=s["target_iter"], ds_max_factor=s["ds_max_factor"],
-                                stability=s["stability"], **common)
+                                stability=s["stability"], critical_tol=s["critical_tol"], **common)
     return NewtonOptions(max_cutbacks=s["max_cutbacks"], iteration=s["iteration"],
-                         predictor=s.get("predictor", "none"), **common)
+                         predictor=s.get("predictor", "none"), path_check=s["path_check"],
+                         limit_check=s["limit_check"], max_substeps=s["max_substeps"], **common)
 
 
 def run(scn, out=None, resume=False, progress=None, force=False, stop_after=None, verbose=False):

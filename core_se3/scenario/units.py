@@ -39,6 +39,7 @@ RHO_RANGE = (1.0, 2.5e4)           # kg/m^3: aerogels .. osmium
 B_MAX = 2.0                        # T: NdFeB magnets reach ~1.4 T, lab electromagnets ~2 T
 H_OVER_L_MAX = 0.3
 FIRST_STEP_MAX = 1e3
+TURNS_MAX = 10                     # a bare angle [rad] over ten turns is likely degrees (360 -> 57 turns)
 # parameters of the built-in load kinds -> dimension
 _DIMENSION = {"force": "force", "moment": "moment", "p": "stress", "q": "stress", "g": "acceleration"}
 
@@ -234,6 +235,22 @@ def _density_message(rho, rho_si, u, units):
             f"in {units} the density is in {u['density']} (water {1000 / u['to_kg_m3']:g})")
 
 
+def _angles(v, spec):
+    """Warn about angles [rad] of more than TURNS_MAX turns (a rotating field, a rotated edge):
+    such a turn is split into sub-steps of at most pi/4 (``solvers.splitting``), and an angle in
+    degrees by mistake turns 57 times per 360."""
+    found = [(f"fields.{name}.rotate.angle", f["rotate"]["angle"]) for name, f in spec["fields"].items()
+             if f.get("rotate") and f["rotate"].get("angle") is not None]
+    found += [(f"supports[{i}].angle", sp["angle"]) for i, sp in enumerate(spec["supports"])
+              if sp.get("angle") is not None]
+    for key, angle in found:
+        turns = abs(float(angle)) / (2 * np.pi)
+        if turns > TURNS_MAX:
+            v.warn(key, f"angle = {angle:g} rad is {turns:.3g} turns (more than {TURNS_MAX}): angles are in "
+                        f"radians (360 degrees is {2 * np.pi:.6g} rad); if so many turns are meant, the run takes "
+                        "at least 8 sub-steps per turn")
+
+
 def plausibility(v, scn):
     """Warn (``v.warn``, errors with strict) about implausible values: see docs/SCENARIOS.md."""
     spec, units = scn.spec, scn.spec["units"]
@@ -284,6 +301,7 @@ def plausibility(v, scn):
             if b > B_MAX and f["type"] != "dipole" or b > 1e3 * B_MAX:
                 v.warn(f"fields.{name}", f"the applied field reaches |B| = {b:g} T on the shell, above "
                                          f"{B_MAX:g} T (lab electromagnets): B is in tesla; did you give mT?")
+    _angles(v, spec)
     span = _spans(scn.mesh, scn.problem, np.arange(scn.mesh.n_nodes))
     for key, mat in mats:
         if mat["h"] / span > H_OVER_L_MAX:

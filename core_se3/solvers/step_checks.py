@@ -1,0 +1,207 @@
+"""The checks of every converged try of load stepping (``solvers.newton``): does the state
+continue the path, and has the path met a critical point?
+
+**Path check** (``NewtonOptions.path_check``).  A large load step can converge onto another
+equilibrium: the Zhao magnetic cantilever at A Br Ba L^2/(mu0 E I) = 14 in one step converged in
+9 iterations to a tip angle of pi (the path's is 1.5 rad), a state with two negative tangent
+eigenvalues; at 17 to a looped, *stable* state (positive-definite tangent), so the inertia of the
+converged state cannot tell every such jump.  What tells it is how Newton got there.  With the
+affine-covariant contraction of Newton's method (Deuflhard, *Newton Methods for Nonlinear
+Problems*, 2004, ch. 2 and 5), Theta_k = |eta_{k+1}| / |eta_k| of two successive corrections: if
+Newton contracts from the start of the step (Theta_k < 1 throughout), the iterates stay in a ball
+about the start in which the solution is unique, and, the first correction growing with the load
+increment, the solutions for the smaller increments lie in smaller balls: the converged state is
+the continuation of the start state (the homotopy argument behind Deuflhard's step-size control
+of continuation methods).  A Newton that grows its corrections has left that region and may end
+anywhere.  Measured over 296 converged tries of the Zhao beam (q = 5 ... 30, 20 to 90 elements,
+1, 2 and 4 steps, ``benchmarks/results/path_checks.md``): every try that converged away from
+the path had some Theta_k >= 1.58; of the tries that converged on it, 25 of 269 had Theta_k
+>= 1 (a non-monotone Newton that happened to return) -- rejecting those costs a cut-back, never
+a wrong answer.  The other measured candidates do worse: the change of the negative-eigenvalue
+count found 10 of the 21 jumps (the others are stable), the ratio of the converged increment to
+the tangent predictor 3 of 21 (the predictor of a large step is far off on the path too), the sign
+of det K none (two eigenvalues at once).  A try that fails the check is cut back, not accepted.
+Corrections below CONTRACTION_FLOOR ell are round-off and do not count.
+
+**Stability check** (``NewtonOptions.limit_check``).  The sign of det K of the last factorised
+tangent of each converged try comes from the factors in hand (``Factorization.det_sign``: pivots
+and permutation parities; free for the banded LU, an extraction of U's diagonal for SuperLU,
+MUMPS' own determinant).  Between two accepted states it changes when an odd number of real
+eigenvalues passed through zero: a critical point.  Under load control a limit point cannot be
+passed continuously (the tries beyond it fail or jump, which the path check refuses), so an
+accepted change is a bifurcation on a continuing path, beyond which the states depend on the
+step size.  The change is located by bisection of the load factor to ``critical_tol`` (relative);
+then the run stops with a ConvergenceError naming it and what to do, or, with ``limit_check``
+off, records it (``Result.critical_points``) and goes on along the unstable path.  The start
+state's sign is taken to be that of the first accepted state when that is +1 (an unloaded,
+supported shell); a first state with det K < 0 costs one factorisation at the start to tell.
+
+Example
+-------
+>>> contraction([1.0, 0.5, 0.05, 1e-6, 1e-13]), contraction([1.0, 3.0, 0.2])
+(0.5, 3.0)
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import SingularSystemError
+from .stability import CriticalPoint
+
+__all__ = ["contraction", "start_sign", "StepChecks", "CONTRACTION_MAX", "CONTRACTION_FLOOR"]
+
+CONTRACTION_MAX = 1.0    # a try whose corrections grow by this factor (or more) is not accepted
+CONTRACTION_FLOOR = 1e-8  # corrections below this (relative to ell) are round-off: not compared
+
+
+def contraction(incs, floor=CONTRACTION_FLOOR):
+    """The largest ratio |eta_{k+1}| / |eta_k| of two successive Newton corrections (relative
+    norms ``incs``), over the pairs whose second correction is above ``floor``; 0.0 for fewer
+    than two.
+
+    Parameters
+    ----------
+    incs : sequence of float
+        |eta_k|_s / ell of the corrections of a try, in order.
+    floor : float, optional
+        Corrections below it are round-off (default CONTRACTION_FLOOR).
+
+    Returns
+    -------
+    float
+        Theta = max_k |eta_{k+1}| / |eta_k| (>= 1: the corrections grew).
+
+    Example
+    -------
+    >>> round(contraction([0.3, 0.1, 1e-9, 2e-9]), 12)      # the last pair is round-off
+    0.333333333333
+    """
+    a = np.asarray(incs, float)
+    if len(a) < 2:
+        return 0.0
+    keep = (a[1:] > floor) & (a[:-1] > 0)
+    return float(np.max(a[1:][keep] / a[:-1][keep])) if np.any(keep) else 0.0
+
+
+def start_sign(eq, g, lam, stress=None):
+    """The sign of det K at the converged start state (g, lam) of a path (the equations ``eq``
+    of ``solvers.equations``; ``stress``: the mixed iteration's, or None): one factorisation.
+    Not the first tangent of the first try, which is at the start frames under the *next* load
+    factor -- not an equilibrium, and indefinite in a field at 135 degrees for a step of 0.05.
+    None when that tangent is singular (the first try reports it)."""
+    try:
+        ev, _, _ = eq.evaluate(g, lam, tangent=True, stress=stress, norms=False)
+        eq.solve(ev, g)
+    except (SingularSystemError, FloatingPointError):
+        return None
+    return eq.det_sign()
+
+
+class StepChecks:
+    """The path and stability checks of load stepping (module docstring) and their record.
+
+    Parameters
+    ----------
+    path, stability : bool
+        Apply the path check, the stability check (the equations give det K's sign).
+    critical_tol : float
+        Relative width in the load factor to which a det K sign change is located.
+    sign : int or None, optional
+        det K's sign at the start state (None: found with the first accepted try).
+    stop : bool, optional
+        A located sign change stops the run (``limit_check``; default True), else it is
+        recorded and passed (:meth:`passed`).
+
+    Attributes
+    ----------
+    rejected : int
+        Tries refused by the path check since the last stored step (``record`` resets it).
+    bracket : (float, float) or None
+        (last load factor with the start's sign, first with the other) while one is located.
+
+    Example
+    -------
+    >>> import types
+    >>> chk = StepChecks(True, True, 1e-3, sign=1)
+    >>> ok = types.SimpleNamespace(contraction=0.2, det_sign=1)
+    >>> jump = types.SimpleNamespace(contraction=3.4, det_sign=1)
+    >>> chk.judge(ok, 0.0, 0.5), chk.judge(jump, 0.0, 1.0)[:44]
+    ('', 'path check: the Newton corrections grew 3.4x')
+    """
+
+    def __init__(self, path, stability, critical_tol, sign=None, stop=True):
+        self.path, self.stability, self.tol, self.stop = path, stability, critical_tol, stop
+        self.sign = sign
+        self.bracket = None
+        self.rejected = 0
+        self.last = None
+
+    def judge(self, out, lam, lam_try):
+        """'' when the converged try ``out`` (a TryOutcome) from lam to lam_try may be accepted,
+        else why it is refused (it is cut back; ``bracket`` is set for a det K sign change)."""
+        theta = out.contraction
+        if self.path and theta >= CONTRACTION_MAX:
+            self.rejected += 1
+            return (f"path check: the Newton corrections grew {theta:.3g}x from one iteration to the "
+                    "next, so the try may have converged onto another equilibrium")
+        s = out.det_sign
+        if self.stability and s is not None and self.sign is None and s > 0:
+            self.sign = s                      # module docstring: the start's sign taken as +1
+        if self.stability and s is not None and self.sign is not None and s != self.sign:
+            self.bracket = (lam, lam_try)
+            return (f"stability check: det K changed sign ({self.sign:+d} -> {s:+d}) between load "
+                    f"factors {lam:.6g} and {lam_try:.6g}")
+        return ""
+
+    def accept(self, out, lam_try):
+        """Record the accepted try (its sign becomes the path's; the bracket's low end moves)."""
+        if out.det_sign is not None:
+            self.sign = out.det_sign
+        if self.bracket is not None:
+            self.bracket = (lam_try, self.bracket[1])
+        self.last = out
+
+    def next_increment(self, lam, dlam):
+        """The next increment while a sign change is located (bisection of the bracket), else
+        ``dlam``."""
+        if self.bracket is None:
+            return dlam
+        return (self.bracket[1] - lam) / 2
+
+    def located(self, floor):
+        """True when the bracket is narrow enough: critical_tol of its load factor, or its half
+        below ``floor`` (the smallest increment the cut-backs allow)."""
+        if self.bracket is None:
+            return False
+        lo, hi = self.bracket
+        return abs(hi - lo) <= self.tol * max(abs(hi), abs(lo)) or abs(hi - lo) / 2 < floor
+
+    def critical_message(self):
+        """The ConvergenceError message of a located sign change."""
+        lo, hi = self.bracket
+        return (f"load control crossed a critical point: det K changed sign between load factors "
+                f"{lo:.7g} and {hi:.7g}, i.e. at {0.5 * (lo + hi):.7g} +- {0.5 * abs(hi - lo):.2g}. The "
+                "path went on continuously through it (its Newton tries contracted), so it is a "
+                "bifurcation: beyond it this path is unstable and the states depend on the load "
+                "steps. Trace it with arc length (core_se3.solvers.arc_length, stability=True; "
+                "branch_switch=True follows the buckled branch) or add an imperfection; "
+                "limit_check=False ([solver] limit_check = false) continues on the unstable path. "
+                "The steps before it are kept in .result")
+
+    def passed(self, step):
+        """The located sign change as a CriticalPoint (``step``: the index of the next stored
+        step), the path going on past it: its sign is now the other one."""
+        lo, hi = self.bracket
+        self.bracket = None
+        cp = CriticalPoint("bifurcation", step, 0.5 * (lo + hi), (lo, hi), (None, None),
+                           accuracy=abs(hi - lo) / 2 / max(abs(hi), abs(lo), 1e-300))
+        self.sign = -self.sign
+        return cp
+
+    def record(self):
+        """What was checked for the stored step (``StepResult.checks``); resets the count."""
+        out = self.last
+        rec = dict(path_check=self.path, contraction=None if out is None else float(out.contraction),
+                   path_rejections=self.rejected, det_sign=self.sign if self.stability else None)
+        self.rejected = 0
+        return rec
