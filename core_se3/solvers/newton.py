@@ -361,10 +361,9 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
                     problem.element.restore()
                 dlam = checks.next_increment(lam, dlam / 2)
             if checks.located(abs(dlam_nominal) / 2 ** opts.max_cutbacks):
-                if checks.stop:
-                    timer.close()
-                    raise ConvergenceError(checks.critical_message(), result)
-                cp = checks.passed(len(result.steps) + 1)
+                timer.close()
+                raise ConvergenceError(checks.critical_message(), result)
+            for cp in checks.passed(len(result.steps) + 1):
                 result.critical_points.append(cp)
                 if eq.root:
                     log.warning("load control passed a %s (limit_check off: the path goes on, unstable)",

@@ -30,9 +30,10 @@ MUMPS' own determinant).  Between two accepted states it changes when an odd num
 eigenvalues passed through zero: a critical point.  Under load control a limit point cannot be
 passed continuously (the tries beyond it fail or jump, which the path check refuses), so an
 accepted change is a bifurcation on a continuing path, beyond which the states depend on the
-step size.  The change is located by bisection of the load factor to ``critical_tol`` (relative);
-then the run stops with a ConvergenceError naming it and what to do, or, with ``limit_check``
-off, records it (``Result.critical_points``) and goes on along the unstable path.  The start
+step size.  The change is located by bisection of the load factor to ``critical_tol`` (relative)
+and the run stops with a ConvergenceError naming it and what to do; with ``limit_check`` off it
+is recorded where it was passed (``Result.critical_points``, bracketed by the step, no extra
+tries) and the path goes on, unstable.  The start
 state's sign is taken to be that of the first accepted state when that is +1 (an unloaded,
 supported shell); a first state with det K < 0 costs one factorisation at the start to tell.
 
@@ -42,6 +43,8 @@ Example
 (0.5, 3.0)
 """
 from __future__ import annotations
+
+import dataclasses
 
 import numpy as np
 
@@ -133,6 +136,7 @@ class StepChecks:
         self.path, self.stability, self.tol, self.stop = path, stability, critical_tol, stop
         self.sign = sign
         self.bracket = None
+        self.crossed = []
         self.rejected = 0
         self.last = None
 
@@ -148,6 +152,9 @@ class StepChecks:
         if self.stability and s is not None and self.sign is None and s > 0:
             self.sign = s                      # module docstring: the start's sign taken as +1
         if self.stability and s is not None and self.sign is not None and s != self.sign:
+            if not self.stop:                 # recorded where it was passed (no bisection)
+                self.crossed.append(self._point(lam, lam_try))
+                return ""
             self.bracket = (lam, lam_try)
             return (f"stability check: det K changed sign ({self.sign:+d} -> {s:+d}) between load "
                     f"factors {lam:.6g} and {lam_try:.6g}")
@@ -188,15 +195,16 @@ class StepChecks:
                 "limit_check=False ([solver] limit_check = false) continues on the unstable path. "
                 "The steps before it are kept in .result")
 
+    @staticmethod
+    def _point(lo, hi, step=-1):
+        return CriticalPoint("bifurcation", step, 0.5 * (lo + hi), (lo, hi), (None, None))
+
     def passed(self, step):
-        """The located sign change as a CriticalPoint (``step``: the index of the next stored
-        step), the path going on past it: its sign is now the other one."""
-        lo, hi = self.bracket
-        self.bracket = None
-        cp = CriticalPoint("bifurcation", step, 0.5 * (lo + hi), (lo, hi), (None, None),
-                           accuracy=abs(hi - lo) / 2 / max(abs(hi), abs(lo), 1e-300))
-        self.sign = -self.sign
-        return cp
+        """The sign changes passed since the last call (``stop`` off), as CriticalPoints whose
+        ``step`` is the index of the next stored step; the list is emptied."""
+        out = [dataclasses.replace(cp, step=step) for cp in self.crossed]
+        self.crossed.clear()
+        return out
 
     def record(self):
         """What was checked for the stored step (``StepResult.checks``); resets the count."""
