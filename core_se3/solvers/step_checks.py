@@ -13,14 +13,15 @@ about the start in which the solution is unique, and, the first correction growi
 increment, the solutions for the smaller increments lie in smaller balls: the converged state is
 the continuation of the start state (the homotopy argument behind Deuflhard's step-size control
 of continuation methods).  A Newton that grows its corrections has left that region and may end
-anywhere.  Measured over 296 converged tries of the Zhao beam (q = 5 ... 30, 20 to 90 elements,
-1, 2 and 4 steps, ``benchmarks/results/path_checks.md``): every try that converged away from
-the path had some Theta_k >= 1.58; of the tries that converged on it, 25 of 269 had Theta_k
->= 1 (a non-monotone Newton that happened to return) -- rejecting those costs a cut-back, never
-a wrong answer.  The other measured candidates do worse: the change of the negative-eigenvalue
-count found 10 of the 21 jumps (the others are stable), the ratio of the converged increment to
-the tangent predictor 3 of 21 (the predictor of a large step is far off on the path too), the sign
-of det K none (two eigenvalues at once).  A try that fails the check is cut back, not accepted.
+anywhere.  Measured over 296 converged tries of the Zhao beam without the check (q = 5 ... 30,
+20 to 90 elements, 1, 2 and 4 steps; ``benchmarks/robustness.py --part candidates``): each of
+the 17 jumps from a state on the path had some Theta_k >= 1.58; 25 of the 269 tries that
+converged on the path had Theta_k >= 1 (a non-monotone Newton that happened to return) --
+refusing those costs a cut-back, never a wrong answer.  The change of the negative-eigenvalue
+count found 10 of the 17 jumps (the looped states are stable), the ratio of the converged
+increment to the tangent predictor 1 (the predictor of a large step is far off on the path
+too), the sign of det K none (two eigenvalues at once); docs/STEPS.md.  A try that fails the
+check is cut back, not accepted.
 Corrections below CONTRACTION_FLOOR ell are round-off and do not count.
 
 **Stability check** (``NewtonOptions.limit_check``).  The sign of det K of the last factorised
