@@ -363,7 +363,7 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
             if checks.located(abs(dlam_nominal) / 2 ** opts.max_cutbacks):
                 timer.close()
                 raise ConvergenceError(checks.critical_message(), result)
-            for cp in checks.passed(len(result.steps) + 1):
+            for cp in checks.passed(len(result.steps)):          # the index of the next stored step
                 result.critical_points.append(cp)
                 if eq.root:
                     log.warning("load control passed a %s (limit_check off: the path goes on, unstable)",
