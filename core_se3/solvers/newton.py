@@ -351,8 +351,10 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
                         stored = st
                     else:
                         result.steps.append(st)
+                elif local is None:
+                    rec.probes(g_whole, *turn)
                 else:
-                    rec.probes(g_whole, *turn) if local is None else rec.probes(g, *turn, origin=eq.origin)
+                    rec.probes(g, *turn, origin=eq.origin)
                 if len(hist) - 1 <= 6 and abs(dlam) < abs(dlam_nominal):
                     dlam = min(abs(dlam) * 2, abs(dlam_nominal)) * np.sign(dlam_nominal)
                 dlam = checks.next_increment(lam, dlam)       # bisecting a det K sign change
@@ -395,12 +397,15 @@ def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, g_init=None, loa
     increment is halved (at most max_cutbacks times per requested step) and grows back.
 
     Options: a NewtonOptions, or its fields as keywords (rtol, dtol, max_iter, max_cutbacks,
-    divergence, limit_check, record_substeps, linear_solver).  limit_check: stop with a
-    ConvergenceError that suggests arc length when a converged step has jumped past a limit
-    point (snap-through): the step started where the current stiffness parameter
+    divergence, path_check, limit_check, critical_tol, max_substeps, record_substeps,
+    linear_solver, ...).  path_check: a converged try whose Newton corrections grew is cut back
+    (it may have converged onto another equilibrium; docs/STEPS.md).  limit_check: stop with a
+    ConvergenceError at a critical point: when det K changes sign between two accepted states
+    (a bifurcation, located to critical_tol), or when a converged step has jumped past a limit
+    point (snap-through: the step started where the current stiffness parameter
     S_p = k / k_0 (k = |r_0|_s^2 / (-r_0 . eta_0), the stiffness seen by the first Newton
     iterate, k_0 its value in the first step) was below 0.3, and the converged increment is
-    more than 3x that first (tangent) iterate.  Not applied to displacement-driven problems.
+    more than 3x that first (tangent) iterate; not applied to displacement-driven problems).
 
     Returns a Result whose first step is the initial state.
 
