@@ -190,3 +190,17 @@ def test_arc_length_locates_a_bifurcation_whatever_the_first_step():
         lams.append(cp.lam)
     assert max(lams) - min(lams) <= 1e-3 * min(lams)
     assert abs(lams[0] / 0.742 - 1) < 2e-3
+
+
+def test_a_sign_change_seen_across_a_jump_is_not_a_critical_point():
+    """magnetic-antiparallel's tilted field in ONE step: the big tries land on states with
+    det K < 0 (a jump past the buckling load, not the tilted path's doing); the bisection moves
+    its low end along the path up to the high end, reaches it with the old sign, drops the
+    bracket and goes on (a first version bisected forever, then would have reported a critical
+    point that is not there).  The post-buckled state agrees with the case's own 40 steps."""
+    doc1, res1, _ = run_case("magnetic-antiparallel", steps=1)
+    assert any(e["reason"].startswith("stability check") for e in res1.log)
+    doc, res, _ = run_case("magnetic-antiparallel")
+    u1, u = res1.final.probes["tip"]["u"], res.final.probes["tip"]["u"]
+    assert np.abs(u1 - u).max() <= 1e-6 * np.abs(u).max()
+    assert not res1.critical_points

@@ -268,6 +268,7 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
         # the requested increment; a cut-back increment carries over, capped by it
         dlam_nominal = target - lam
         dlam = dlam_nominal if dlam is None else np.sign(dlam_nominal) * min(abs(dlam), abs(dlam_nominal))
+        floor = abs(dlam_nominal) / 2 ** opts.max_cutbacks        # the smallest increment cut-backs allow
         stored = None
         while abs(target - lam) > 1e-14 * max(1.0, abs(target)):
             lam_try = lam + dlam if abs(dlam) < abs(target - lam) else target
@@ -357,12 +358,13 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
                     rec.probes(g, *turn, origin=eq.origin)
                 if len(hist) - 1 <= 6 and abs(dlam) < abs(dlam_nominal):
                     dlam = min(abs(dlam) * 2, abs(dlam_nominal)) * np.sign(dlam_nominal)
-                dlam = checks.next_increment(lam, dlam)       # bisecting a det K sign change
+                dlam = checks.next_increment(lam, dlam, floor)       # locating a det K sign change
             else:
                 if stateful:
                     problem.element.restore()
-                dlam = checks.next_increment(lam, dlam / 2)
-            if checks.located(abs(dlam_nominal) / 2 ** opts.max_cutbacks):
+                checks.failed()
+                dlam = checks.next_increment(lam, dlam / 2, floor)
+            if checks.located(floor):
                 timer.close()
                 raise ConvergenceError(checks.critical_message(), result)
             for cp in checks.passed(len(result.steps)):          # the index of the next stored step
@@ -371,7 +373,7 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
                     log.warning("load control passed a %s (limit_check off: the path goes on, unstable)",
                                 cp.describe())
             if not ok:
-                if abs(dlam) < abs(dlam_nominal) / 2 ** opts.max_cutbacks:
+                if abs(dlam) < floor:
                     timer.close()
                     hint = limit_point_hint(problem, g_whole, lam, opts.linear_solver) \
                         if lam != 0.0 and not eq.distributed else None

@@ -121,7 +121,8 @@ class StepChecks:
     rejected : int
         Tries refused by the path check since the last stored step (``record`` resets it).
     bracket : (float, float) or None
-        (last load factor with the start's sign, first with the other) while one is located.
+        (last load factor with the start's sign, first with the other) while one is located;
+        ``confirmed``: the other sign was seen by a try from the low end.
 
     Example
     -------
@@ -137,6 +138,7 @@ class StepChecks:
         self.path, self.stability, self.tol, self.stop = path, stability, critical_tol, stop
         self.sign = sign
         self.bracket = None
+        self.confirmed = self.probing = False
         self.crossed = []
         self.rejected = 0
         self.last = None
@@ -156,33 +158,53 @@ class StepChecks:
             if not self.stop:                 # recorded where it was passed (no bisection)
                 self.crossed.append(self._point(lam, lam_try))
                 return ""
-            self.bracket = (lam, lam_try)
+            self.bracket, self.confirmed, self.probing = (lam, lam_try), True, False
             return (f"stability check: det K changed sign ({self.sign:+d} -> {s:+d}) between load "
                     f"factors {lam:.6g} and {lam_try:.6g}")
         return ""
 
     def accept(self, out, lam_try):
-        """Record the accepted try (its sign becomes the path's; the bracket's low end moves)."""
+        """Record the accepted try (its sign becomes the path's).  While a sign change is being
+        located the bracket's low end moves up; a try that reached its high end with the old sign
+        shows that the change seen there came from a jump, not from the path: the bracket goes."""
         if out.det_sign is not None:
             self.sign = out.det_sign
         if self.bracket is not None:
-            self.bracket = (lam_try, self.bracket[1])
+            lo, hi = self.bracket
+            self.bracket = None if abs(hi - lam_try) <= 1e-14 * max(1.0, abs(hi)) else (lam_try, hi)
+            self.confirmed = self.probing = False
         self.last = out
 
-    def next_increment(self, lam, dlam):
-        """The next increment while a sign change is located (bisection of the bracket), else
-        ``dlam``."""
-        if self.bracket is None:
-            return dlam
-        return (self.bracket[1] - lam) / 2
+    def failed(self):
+        """A try that did not converge (or that the path check refused): a probe of the
+        bracket's high end that fails cannot confirm the change there, so the bracket goes and
+        the cut-backs go on as for any failure."""
+        if self.probing:
+            self.bracket = None
+            self.probing = False
 
-    def located(self, floor):
-        """True when the bracket is narrow enough: critical_tol of its load factor, or its half
-        below ``floor`` (the smallest increment the cut-backs allow)."""
-        if self.bracket is None:
-            return False
+    def _narrow(self, floor):
         lo, hi = self.bracket
         return abs(hi - lo) <= self.tol * max(abs(hi), abs(lo)) or abs(hi - lo) / 2 < floor
+
+    def next_increment(self, lam, dlam, floor):
+        """The next increment while a sign change is located, else ``dlam``: at most half the
+        bracket (bisection; a failed try halves ``dlam`` as usual), and once the bracket is
+        narrow (``critical_tol``, or half of it below ``floor``, the smallest increment the
+        cut-backs allow) but its change was seen from an older low end, a try to its high end
+        from the current one."""
+        if self.bracket is None:
+            return dlam
+        lo, hi = self.bracket
+        if self._narrow(floor):
+            self.probing = True
+            return hi - lam
+        return np.sign(hi - lam) * min(abs(dlam), abs(hi - lam) / 2)
+
+    def located(self, floor):
+        """True when the bracket is narrow (:meth:`next_increment`) and its sign change was seen
+        by a try from its low end: a critical point on the path, not a jump."""
+        return self.bracket is not None and self.confirmed and self._narrow(floor)
 
     def critical_message(self):
         """The ConvergenceError message of a located sign change."""
