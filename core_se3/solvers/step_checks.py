@@ -29,10 +29,13 @@ tangent of each converged try comes from the factors in hand (``Factorization.de
 and permutation parities; free for the banded LU, an extraction of U's diagonal for SuperLU,
 MUMPS' own determinant).  Between two accepted states it changes when an odd number of real
 eigenvalues passed through zero: a critical point.  Under load control a limit point cannot be
-passed continuously (the tries beyond it fail or jump, which the path check refuses), so an
-accepted change is a bifurcation on a continuing path, beyond which the states depend on the
-step size.  The change is located by bisection of the load factor to ``critical_tol`` (relative)
-and the run stops with a ConvergenceError naming it and what to do; with ``limit_check`` off it
+passed continuously (the tries beyond it fail or jump, which the path check refuses), so a
+change on the path is a bifurcation, beyond which the states depend on the step size; a long
+try that contracted onto an unstable state of another branch shows a change too.  The try is
+refused and the change located by bisection of the load factor to ``critical_tol`` (relative),
+the last try from the bracket's low end to its high end telling the two apart (the old sign
+there: a jump, the bracket is dropped); a critical point stops the run with a ConvergenceError
+naming it and what to do; with ``limit_check`` off it
 is recorded where it was passed (``Result.critical_points``, bracketed by the step, no extra
 tries) and the path goes on, unstable.  The start
 state's sign is taken to be that of the first accepted state when that is +1 (an unloaded,
