@@ -96,10 +96,10 @@ class StepResult:
         force; the balance is applied + reactions + contact.
     checks : dict
         What load stepping checked before accepting the state (``solvers.step_checks``):
-        path_check (applied or not), contraction (the largest ratio of two successive Newton
-        corrections of the accepted try: < 1), path_rejections (tries refused since the previous
-        stored step), det_sign (the sign of det K at the state; None when not checked); {} when
-        not recorded (path following, the initial state).
+        path_check (applied or not), contraction and travel of the accepted try's Newton
+        corrections (< 1 and < 1.5: ``path_measures``), path_rejections (tries refused since the
+        previous stored step), det_sign (the sign of det K at the state; None when not checked);
+        {} when not recorded (path following, the initial state).
 
     Example
     -------

@@ -178,11 +178,12 @@ class _Timer:
 def _log_try(result, tries, lam_try, out, augmentation=None, quiet=False):
     """Append the log entry of a try (an augmented one, k > 0, converged and solved again);
     ``quiet``: not to the logger (the ranks of a distributed run other than rank 0).  The
-    entry keeps the relative size of every correction (``increments``), their largest ratio
-    (``contraction``) and the sign of det K at its end (``det_sign``, None when not found)."""
+    entry keeps the relative size of every correction (``increments``), their measures
+    (``contraction``, ``travel``: ``solvers.step_checks.path_measures``) and the sign of det K
+    at its end (``det_sign``, None when not found)."""
     entry = dict(lam=lam_try, converged=out.ok, iterations=out.iterations, linear_solves=out.solves,
                  residual_history=out.hist, reason=out.reason, increments=[float(x) for x in out.incs],
-                 contraction=out.contraction, det_sign=out.det_sign)
+                 contraction=out.contraction, travel=out.travel, det_sign=out.det_sign)
     if augmentation:
         entry["augmented"] = augmentation
     result.log.append(entry)

@@ -26,7 +26,7 @@ from ..errors import ElementTooDistortedError, LinearSolverError, SingularSystem
 from ..model.base import overrides
 from .equations import NewtonEquations
 from .linalg import Factorization
-from .step_checks import contraction
+from .step_checks import path_measures
 
 __all__ = ["NewtonTry", "TryOutcome", "augmented_try", "hooked_loads", "tangent_predictor"]
 
@@ -65,8 +65,8 @@ class TryOutcome:
         The round-off floor of the relative residual at the last iterate
         (``solvers.convergence.relative_residual``; 0 when not evaluated).
     incs : list of float
-        |eta|_s / ell of every applied correction; ``contraction`` the largest ratio of two
-        successive ones (``solvers.step_checks.contraction``; over the solves of an augmented try).
+        |eta|_s / ell of every applied correction; ``contraction`` and ``travel`` their measures
+        of ``solvers.step_checks.path_measures`` (the largest over the solves of an augmented try).
     det_sign : int or None
         Sign of det K of the last factorised tangent (at the converged state up to the last
         correction), when :attr:`NewtonTry.signs` asks for it.
@@ -91,10 +91,14 @@ class TryOutcome:
 
     @property
     def contraction(self):
-        return max(self.contractions) if self.contractions else 0.0
+        return max(m[0] for m in self.measures)
+
+    @property
+    def travel(self):
+        return max(m[1] for m in self.measures)
 
     def __post_init__(self):
-        self.contractions = [contraction(self.incs)]
+        self.measures = [path_measures(self.incs)]
 
     @property
     def iterations(self):
@@ -273,7 +277,7 @@ def augmented_try(trier, aug, g_try, lam_try, mip, stress, max_augmentations, re
         out = trier.run(out.g, lam_try, mip, out.ev.stress if mip else None)
         out.eta_sum = out.eta_sum + first.eta_sum
         out.k_step, out.pred = first.k_step, first.pred
-        out.contractions += first.contractions
+        out.measures += first.measures
     return out
 
 
