@@ -36,8 +36,9 @@ import time
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 # "time": the wall time of each design iteration
 # "backend": which backend evaluated a step (record --env CORE_SE3_BACKEND=... compares them)
+# "provenance": how a result ran (version, backend, ranks, linear solver, peak memory), not what it is
 SKIP_KEYS = {"timings", "time", "scenario", "fingerprint", "file", "error", "monitor_and_perfect_branch",
-             "backend"}
+             "backend", "provenance"}
 EXACT_KEYS = {"iterations", "substeps", "cutbacks", "step", "n_points", "negative_eigenvalues",
               "det_sign", "attempts", "linear_solves"}
 ROUNDOFF_KEYS = {"residual", "residual_floor", "residual_history", "balance_error"}

@@ -83,7 +83,7 @@ def run_core(name, mesh, overrides=None, steps=10, element="default", cap=None, 
         pr = st.probes["tip"]
         rec["lams"].append(float(st.load_factor))
         rec["u"].append([float(c) for c in pr["u"]])
-        rec["angle"].append(float(np.linalg.norm(pr["w"])))
+        rec["angle"].append(float(np.linalg.norm(pr["rotation_vector"])))
         rec["iterations"] += int(st.iterations)
         if rot:
             ax = np.asarray(rot[0].axis, float)

@@ -36,7 +36,8 @@ from .errors import OptionError
 
 __all__ = ["BACKENDS", "numba_available", "default_backend", "set_backend", "resolve", "active",
            "charge", "iteration_saving", "NUMBA_START_COST", "rent_state", "restore_rent",
-           "pin_for_timing", "launched_ranks", "launched_rank"]
+           "pin_for_timing", "launched_ranks", "launched_rank", "start_cost", "kernel_cache_warm",
+           "mark_kernel_cache_warm", "NUMBA_COLD_START_COST"]
 
 BACKENDS = ("auto", "numba", "numpy")
 _chosen = None
@@ -50,10 +51,19 @@ SAVING_PER_ITERATION = 0.9e-3  # s
 SAVING_PER_ELEMENT = 1.8e-5    # s per element and iteration
 
 
+# numba's start with a cold cache: it compiles the kernels first; measured with an empty
+# NUMBA_CACHE_DIR on the 2-core test machine: a cantilever with one edge force (the element
+# kernels and one load) 22.4 s of CPU, ``core-se3 warmup`` (every kernel) 31.9 s
+NUMBA_COLD_START_COST = 22.0  # s
+WARM_MARKER = "warm.json"      # written into the kernels' cache directory by ``core-se3 warmup``
+
+
 class _Rent:
-    """What 'auto' has spent on NumPy so far in this process (estimated saving of numba, s)."""
+    """What 'auto' has spent on NumPy so far in this process (estimated saving of numba, s), and
+    whether the kernels' cache was cold when it started counting (None: not looked at yet)."""
     saved = 0.0
     switched = False
+    cold = None
 
 
 def iteration_saving(n_elements):
@@ -69,19 +79,73 @@ def iteration_saving(n_elements):
     return SAVING_PER_ITERATION + SAVING_PER_ELEMENT * float(n_elements)
 
 
-def charge(n_elements):
-    """Count one NumPy tangent evaluation of an 'auto' problem of ``n_elements`` elements: once
-    the savings missed reach ``NUMBA_START_COST``, 'auto' means numba from then on."""
+def start_cost():
+    """numba's start cost [s] for the 'auto' rule: ``NUMBA_START_COST`` with a warm kernel cache,
+    ``NUMBA_COLD_START_COST`` when the kernels would be compiled first (looked at once per
+    process and kept in the rule's count, so that a resumed run uses the same)."""
+    if _Rent.cold is None:
+        _Rent.cold = numba_available() and not kernel_cache_warm()
+    return NUMBA_COLD_START_COST if _Rent.cold else NUMBA_START_COST
+
+
+def charge(n_elements, share=1.0):
+    """Count one NumPy tangent evaluation of an 'auto' problem of ``n_elements`` elements (or
+    ``share`` of one: a control session's residual-only evaluations, ``control.corrector``):
+    once the savings missed reach :func:`start_cost`, 'auto' means numba from then on (with a
+    cold cache, after a one-line notice on stderr of the compilation about to start)."""
     if not _Rent.switched:
-        _Rent.saved += iteration_saving(n_elements)
-        if _Rent.saved >= NUMBA_START_COST:
+        _Rent.saved += share * iteration_saving(n_elements)
+        if _Rent.saved >= start_cost():
             _Rent.switched = True
+            if _Rent.cold:
+                import sys
+                print(f"core_se3: the 'auto' backend moves to numba now and compiles its kernels first, once "
+                      f"(about {NUMBA_COLD_START_COST:.0f} s; `core-se3 warmup` does it ahead)", file=sys.stderr,
+                      flush=True)
+
+
+def _cache_paths():
+    """``kernels/cache.py`` (the kernels' cache directory) loaded on its own: the kernels package
+    imports numba, which this module must not."""
+    import importlib.util
+    spec = importlib.util.spec_from_file_location(
+        "core_se3._kernel_cache_paths", os.path.join(os.path.dirname(os.path.abspath(__file__)), "kernels", "cache.py"))
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def kernel_cache_warm():
+    """True when the cache of the kernels' current source holds the compiled element kernels
+    (nine tenths of the compile time; a load's kernel compiles in under a second): filled by
+    ``core-se3 warmup`` (its marker) or by an earlier run.
+
+    Example
+    -------
+    >>> kernel_cache_warm() in (True, False)
+    True
+    """
+    import glob
+    d = _cache_paths().cache_directory()
+    return os.path.exists(os.path.join(d, WARM_MARKER)) or all(
+        glob.glob(os.path.join(glob.escape(d), f"element.element_{k}_serial-*.nbi")) for k in ("residual", "tangent"))
+
+
+def mark_kernel_cache_warm(seconds=None):
+    """Write the marker of a filled kernel cache (``core-se3 warmup``); returns the directory."""
+    import json
+    d = _cache_paths().cache_directory()
+    os.makedirs(d, exist_ok=True)
+    with open(os.path.join(d, WARM_MARKER), "w") as fh:
+        json.dump({"seconds": seconds}, fh)
+    _Rent.cold = False
+    return d
 
 
 def rent_state():
     """The 'auto' rule's count of this process (JSON-able): a checkpoint keeps it, so that a
     resumed run switches to numba where the uninterrupted run did (bit-for-bit resume)."""
-    return {"saved": _Rent.saved, "switched": _Rent.switched}
+    return {"saved": _Rent.saved, "switched": _Rent.switched, "cold": _Rent.cold}
 
 
 def restore_rent(state):
@@ -97,6 +161,7 @@ def restore_rent(state):
     """
     if state:
         _Rent.saved, _Rent.switched = float(state["saved"]), bool(state["switched"])
+        _Rent.cold = state.get("cold")
 
 
 def active(name):

@@ -31,4 +31,6 @@ export PIP_DISABLE_PIP_VERSION_CHECK=1 PIP_NO_INPUT=1
 "$VENV/bin/python" -m pip install -q "numpy>=2" --config-settings editable_mode=compat -e ".[test]"
 
 "$VENV/bin/python" -c "import numpy, scipy, meshio, matplotlib; print('numpy', numpy.__version__, ' scipy', scipy.__version__)"
+echo "==> core-se3 warmup (compiles the numba kernels once into their cache: ~25-70 s)"
+"$VENV/bin/python" -m core_se3 warmup
 echo "==> setup-plain done: $VENV"

@@ -58,4 +58,6 @@ assert numpy.__version__.startswith("1."), numpy.__version__
 print(f"numpy {numpy.__version__}  scipy {scipy.__version__}  dolfinx {dolfinx.__version__}  "
       f"petsc4py {petsc4py.__version__}  meshio {meshio.__version__}  matplotlib {matplotlib.__version__}")
 PY
+echo "==> core-se3 warmup (compiles the numba kernels once into their cache: ~25-70 s)"
+"$VENV/bin/python" -m core_se3 warmup
 echo "==> setup done: $VENV"

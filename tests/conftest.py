@@ -70,6 +70,7 @@ def fresh_backend_count(monkeypatch):
     from core_se3 import backend
     monkeypatch.setattr(backend._Rent, "saved", 0.0)
     monkeypatch.setattr(backend._Rent, "switched", False)
+    monkeypatch.setattr(backend._Rent, "cold", False)          # a warm kernel cache
     return backend._Rent
 
 

@@ -136,7 +136,7 @@ def test_killed_arclength_process_resumes_to_the_same_state(tmp_path):
     assert proc.returncode == -signal.SIGKILL, "the run finished before it could be killed"
     doc_cut, st = assert_outputs_intact(out)
     assert 3 <= st["step"] < n
-    open(os.path.join(out, "vtu", ".step_0099.vtu.x.tmp.vtu"), "w").close()   # as a kill mid-write leaves
+    open(os.path.join(out, ".results.json.x1y2z3w4.tmp.json"), "w").close()   # as a kill mid-write leaves
     r = subprocess.run(cmd + ["--resume"], capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
     final = Checkpoint(out).load()

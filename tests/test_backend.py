@@ -19,6 +19,7 @@ def fresh_rent(monkeypatch):
     """A process whose 'auto' problems have done no work yet."""
     monkeypatch.setattr(backend._Rent, "saved", 0.0)
     monkeypatch.setattr(backend._Rent, "switched", False)
+    monkeypatch.setattr(backend._Rent, "cold", False)            # a warm kernel cache
     monkeypatch.delenv("CORE_SE3_BACKEND", raising=False)
     for var in backend._RANK_VARIABLES:
         monkeypatch.delenv(var, raising=False)

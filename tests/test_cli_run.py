@@ -151,11 +151,11 @@ def test_a_resumed_run_switches_backend_where_the_uninterrupted_one_did(tmp_path
     ref = runner.run(scn, out=str(tmp_path / "ref"))
     assert fresh_backend_count.switched and ref.doc["steps"][4]["iterations"] == 4
     out = str(tmp_path / "cut")
-    backend.restore_rent({"saved": 0.0, "switched": False})         # a new process
+    backend.restore_rent({"saved": 0.0, "switched": False, "cold": False})         # a new process
     with pytest.raises(runner.RunInterrupted):
         runner.run(scn, out=out, stop_after=2)
     assert not fresh_backend_count.switched                         # stopped before the switch
-    backend.restore_rent({"saved": 0.0, "switched": False})         # another new process
+    backend.restore_rent({"saved": 0.0, "switched": False, "cold": False})         # another new process
     res = runner.run(scn, out=out, resume=True)
     assert fresh_backend_count.switched
     np.testing.assert_array_equal(res.g, ref.g)            # bit for bit
@@ -184,7 +184,7 @@ def test_killed_process_resumes_to_the_same_state(tmp_path, pinned_backend):
     assert proc.returncode == -signal.SIGKILL, "the run finished before it could be killed"
     doc_cut, st = assert_outputs_intact(out)
     assert 3 <= st["step"] < 12
-    open(os.path.join(out, "vtu", ".step_0099.vtu.x.tmp.vtu"), "w").close()   # as a kill mid-write leaves
+    open(os.path.join(out, ".results.json.x1y2z3w4.tmp.json"), "w").close()   # as a kill mid-write leaves
     r = subprocess.run(cmd + ["--resume"], capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
     final = Checkpoint(out).load()
@@ -196,6 +196,7 @@ def test_killed_process_resumes_to_the_same_state(tmp_path, pinned_backend):
     assert [s["probes"] for s in done["steps"]] == [s["probes"] for s in ref.doc["steps"]]
     assert len(pvd_files(os.path.join(out, "vtu", "series.pvd"))) == 13
     assert not [f for f in os.listdir(os.path.join(out, "vtu")) if f.startswith(".")]
+    assert not [f for f in os.listdir(out) if ".tmp" in f]
 
 
 def test_failed_run_keeps_converged_steps_and_resumes_with_other_controls(tmp_path, pinned_backend):
@@ -243,7 +244,7 @@ def test_existing_run_needs_resume_or_force(tmp_path, capsys):
     path = write(tmp_path, with_(STRIP, output={"vtu": False, "plots": False, "picture": False}))
     assert cli.main(["run", path, "--out", out, "-q"]) == 0
     assert cli.main(["run", path, "--out", out, "-q"]) == 2
-    assert "already holds a run" in capsys.readouterr().err
+    assert "holds the files of an earlier run" in capsys.readouterr().err
     assert cli.main(["run", path, "--out", out, "-q", "--force"]) == 0
 
 

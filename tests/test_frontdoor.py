@@ -266,10 +266,12 @@ def test_finding6_refused_resume_names_the_key_that_changed(tmp_path):
 
 
 def test_finding6_a_ctrl_c_run_says_interrupted(tmp_path, monkeypatch):
-    class Stop(runner.Progress):
+    from core_se3.scenario import sinks
+
+    class Stop(sinks.Progress):
         def update(self, *a, **k):
             raise KeyboardInterrupt
-    monkeypatch.setattr(runner, "Progress", Stop)
+    monkeypatch.setattr(sinks, "Progress", Stop)
     with pytest.raises(KeyboardInterrupt):
         runner.run(load(STRIP), out=str(tmp_path / "o"))
     doc_ = json.load(open(tmp_path / "o" / "results.json"))
@@ -301,7 +303,8 @@ def test_finding8_progress_for_bench_run_and_sweeps(tmp_path, capsys):
                      "--progress"]) == 0
     out = capsys.readouterr().out
     assert "run 1/2" in out and "left" in out
-    assert cli.main(["sweep", str(path), "--set", "material.E=1.2e6,2.4e6", "--out", str(tmp_path / "w"), "-q"]) == 0
+    assert cli.main(["sweep", str(path), "--set", "material.E=1.2e6,2.4e6", "--out", str(tmp_path / "w"), "-q",
+                     "--force"]) == 0
     assert capsys.readouterr().out == ""                              # --quiet: silent
 
 
@@ -321,8 +324,8 @@ def test_implausible_density_gravity_mu0_dipole_field_thickness_first_step():
     grav["loads"][0]["rho"] = 1e-9
     warns(grav, "loads[0].g", "|g| = 9.81 mm/s^2 is 0.001 times Earth's gravity (9810 mm/s^2 in N-mm-MPa)")
     warns(doc(magnets__0__mu0=4e-7 * np.pi), "magnets[0].mu0", "differs from mu0 in N-mm-MPa (1.25664")
-    dip = doc(fields={"coil": {"type": "dipole", "m": [0.0, 0.0, 1.0], "x0": [0.0, 0.0, -50.0]}})
-    warns(dip, "fields.coil.mu0", "a dipole field without mu0 uses the SI value", "give mu0 = 0.00125664")
+    dip = doc(fields={"coil": {"type": "dipole", "m": [0.0, 0.0, 1.0], "x0": [0.0, 0.0, -50.0], "mu0": 4e-7 * np.pi}})
+    warns(dip, "fields.coil.mu0", "differs from mu0 of a dipole in N-mm-MPa (0.00125664", "leave it out")
     warns(doc(fields__coil__B=[0.0, 0.0, 60.0]), "fields.coil", "the applied field reaches |B| = 60 T")
     warns(doc(material__h=7.0), "material.h", "h / L = 7 / 20 = 0.35 > 0.3")
     warns(doc(solver={"steps": 1}, fields__coil__B=[0.0, 0.0, 1.9], magnets__0__Br=1.0, magnets__0__Br_axial=0.0),
@@ -362,8 +365,8 @@ def test_magnetisation_table_errors(tmp_path):
 
 def test_sweep_input_errors(tmp_path):
     from core_se3.scenario.sweep import parse_values
-    with pytest.raises(ScenarioError, match=r"cannot read the value 'x' of --set material.E"):
-        parse_values("1,x", "--set material.E")
+    with pytest.raises(ScenarioError, match=r"cannot read the value '\{x\}' of --set material.E"):
+        parse_values("1,{x}", "--set material.E")
     bad(doc(sweep={"material.E": []}), "sweep.material.E", "expected a non-empty array of values")
     with pytest.raises(ScenarioError, match=r"refers to loads\[3\], but the scenario has 1 entries"):
         scenario.sweep(load(STRIP), {"loads[3].force": [[0.0, 0.0, 1.0]]}, out=str(tmp_path / "s"))

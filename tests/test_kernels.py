@@ -20,7 +20,8 @@ from core_se3.assembly import Assembler
 from core_se3.errors import ElementTooDistortedError
 from core_se3.fem import Material, RegionMaterial
 from core_se3.fem.element_default import _dexp_inv_jacobian_T
-from core_se3.model import Load, LoadEvaluation, Problem
+from core_se3.model import Load, LoadEvaluation, NodalLoad, Problem
+from core_se3.model.supports import RotationComponentSpring
 from core_se3.model.fields import DipoleField, GradientField, Superposition, UniformField
 
 from core_se3 import kernels as K
@@ -211,10 +212,13 @@ def test_element_residual_and_tangent(kind, mode, seed):
 
 
 def test_dbar_paths():
-    """Each law of fem.material gives a Dbar without v-w coupling: the kernels read its split
-    form (the two 12x12 diagonal blocks in the order z' = (v of the 4 edges, w of the 4
-    edges)); a law coupling membrane and bending takes the general path (Dbar unpacked)."""
-    from core_se3.kernels.element_ops import ZP
+    """Each law of fem.material gives a Dbar without v-w coupling on parallelograms: the kernels
+    read its split form (the two 12x12 diagonal blocks in the order z' = (v of the 4 edges, w
+    of the 4 edges)); a law coupling membrane and bending takes the general path (Dbar
+    unpacked).  Distorted quads (the disk), whose membrane strain sees the drilling components
+    w_3 of the edge twists (fem.membrane_drilling), couple v and w in those 4 columns only: the
+    split form then carries them in 4 more columns (m, 24, 16)."""
+    from core_se3.kernels.element_dbar import ZP
     for kind, split in [("flat", True), ("disk", True), ("arch", True), ("region", True), ("coupled", False)]:
         el = _problem(kind).element
         mesh = el.mesh
@@ -224,7 +228,16 @@ def test_dbar_paths():
         D = np.empty_like(el.Dbar)
         D[:, ZP[:, None], ZP[None, :]] = el.Dbar                    # Dbar in the order z'
         vw = np.abs(D[:, :12, 12:]).max()
-        if split:
+        if kind == "disk":
+            drill = 12 + 3 * np.arange(4) + 2                         # the w_3 of the 4 edges in z'
+            other = np.setdiff1d(np.arange(12, 24), drill)
+            assert vw > 0 and np.abs(D[:, :12][:, :, other]).max() == 0.0
+            assert ek.Dsplit.shape == (mesh.n_elements, 24, 16)
+            assert np.array_equal(ek.Dsplit[:, :12, :12], D[:, :12, :12])
+            assert np.array_equal(ek.Dsplit[:, 12:, :12], D[:, 12:, 12:])
+            assert np.array_equal(ek.Dsplit[:, :12, 12:], D[:, :12, drill])
+            assert not ek.Dsplit[:, 12:, 12:].any()
+        elif split:
             assert vw == 0.0 and ek.Dsplit.shape == (mesh.n_elements, 24, 12)
             assert np.array_equal(ek.Dsplit[:, :12], D[:, :12, :12])
             assert np.array_equal(ek.Dsplit[:, 12:], D[:, 12:, 12:])
@@ -232,9 +245,10 @@ def test_dbar_paths():
             scale = np.sqrt(np.abs(D[:, :12, :12]).max() * np.abs(D[:, 12:, 12:]).max())   # |D_vw| <= that
             assert vw > 0.1 * scale and ek.Dsplit.shape[0] == 0
     # the disk's frames are not along the element edges: more of Dbar's v-v, w-w entries are
-    # non-zero than on a rectangle (160 against 64 of 576)
+    # non-zero than on a rectangle (160 against 64 of 576), and the membrane-drilling coupling
+    # adds 64 (the 8 in-plane v components of the 4 edges with the 4 drilling components, both ways)
     nz = {k: int((_problem(k).element.Dbar != 0).any(0).sum()) for k in ("flat", "disk")}
-    assert nz == {"flat": 64, "disk": 160}
+    assert nz == {"flat": 64, "disk": 224}
 
 
 def test_too_distorted_flag_and_error():
@@ -282,7 +296,8 @@ def _loaded(which, backend):
     if which == "nodal_dead":
         p.add_edge_force("x1", (3.0, -2.0, 5.0))
         p.add_edge_moment("x1", (0.5, 1.0, -0.7))
-        p.add_nodal_load(np.array([4, 4, 7]), force=(1.0, 2.0, 3.0), moment=(-1.0, 0.3, 0.2))
+        # a repeated node (the kernels accumulate repeats as np.add.at does; selections refuse them)
+        p.add(NodalLoad(mesh.n_nodes, np.array([4, 4, 7]), np.ones(3), force=(1.0, 2.0, 3.0), moment=(-1.0, 0.3, 0.2)))
     elif which == "nodal_follower":
         p.add_edge_force("x1", (3.0, -2.0, 5.0), follower=True)
         p.add_edge_moment("x1", (0.5, 1.0, -0.7), follower=True)
@@ -309,7 +324,7 @@ def _loaded(which, backend):
         p.add_lab_tilt_support("y0", np.array([0.0, 1.0, 0.0]), 50.0)
     elif which == "rotation_spring":
         p.add_rotation_component_support("x1", np.array([0.0, 1.0, 0.0]), 30.0)
-        p.add_rotation_component_support(np.array([5, 5]), np.array([0.6, 0.0, 0.8]), 10.0)
+        p.add(RotationComponentSpring(mesh, np.array([5, 5]), np.array([0.6, 0.0, 0.8]), 10.0))   # a repeated node
     elif which == "user_load":
         p.add(_UserLoad(mesh.n_nodes, [5, 6, 6], (0.3, -0.2, 0.9)))
     return p

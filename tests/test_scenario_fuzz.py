@@ -22,7 +22,7 @@ BASE = {
     "supports": [{"type": "clamp", "edge": "x0"},
                  {"type": "rotate", "edge": "x1", "axis": [1.0, 0.0, 0.0], "angle": 0.1,
                   "free": ["x"]}],
-    "loads": [{"type": "edge_force", "edge": "x1", "force": [0.0, 0.0, 0.1], "scale": "linear"},
+    "loads": [{"type": "edge_force", "edge": "x1", "force": [0.01, 0.0, 0.1], "scale": "linear"},   # x: free
               {"type": "pressure", "p": 0.05, "region": "end", "follower": True},
               {"type": "gravity", "g": [0.0, 0.0, -0.981]},
               {"type": "nodal", "nodes": [1], "moment": [0.0, 0.1, 0.0],

@@ -203,9 +203,10 @@ def document(case, p, prob, res):
         extra["critical_points"] = [dict(kind=c.kind, load_factor=c.lam, bracket=list(c.lam_bracket),
                                          step=c.step, negative_eigenvalues=list(c.negative_eigenvalues))
                                     for c in res.critical_points]
+    from ..scenario.provenance import problem_provenance
     return result_document(case.name, "core_se3", prob.element_name,
                            {k: dict(value=v, unit=case.units.get(k, "")) for k, v in p.items()},
-                           prob.mesh, steps, t, reference, **extra)
+                           prob.mesh, steps, t, reference, provenance=problem_provenance(prob, res), **extra)
 
 
 def plot(case, p, doc, res, path):

@@ -160,13 +160,15 @@ def case_document(case, p, prob, res, reference_case=None):
         for s, e in zip(steps, errs):
             s["error"] = None if np.isnan(e) else float(e)
         reference = dict(entry=entry, block=block, error=err, error_at_load=at, file="elastica.json")
+    from ..scenario.provenance import problem_provenance
     extra = {}
     if res.critical_points:             # passed by load control with limit_check off (torsion)
         extra["critical_points"] = [dict(kind=c.kind, load_factor=float(c.lam), bracket=list(c.lam_bracket),
                                          step=int(c.step), description=c.describe()) for c in res.critical_points]
     return result_document(case.name, "core_se3", prob.element_name,
                            {k: dict(value=v, unit=case.units.get(k, "")) for k, v in p.items()},
-                           prob.mesh, steps, res.timings, reference, **extra)
+                           prob.mesh, steps, res.timings, reference, provenance=problem_provenance(prob, res),
+                           **extra)
 
 
 def edge_wrench(prob, g, edge, point):

@@ -174,6 +174,7 @@ class Design:
                 info = st.stats
             else:
                 if all(np.array_equal(a, b) for a, b in zip(st.x, xs)):
+                    self.states[k] = st     # the best point's own state, not the last trial's
                     continue
                 st, info = follow(self.problem, self.pose_variables(k), xs, st, self.options, self.distributed)
             self.states[k] = st

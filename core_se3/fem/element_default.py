@@ -48,6 +48,7 @@ from .. import lie
 from ..errors import ElementTooDistortedError
 from ..mesh import LOCAL_EDGES
 from .element import Element, ElementEvaluation, register_element
+from .membrane_drilling import drilling_correction, reference_G, tying_correction
 from .quadrature import GAUSS_2x2
 from .resultants import element_resultants
 
@@ -202,19 +203,26 @@ class DefaultElement(Element):
         self.Dbar_packed = np.empty((m, len(_IU[0])))
         self.Dz0 = np.empty((m, 24))
         self.j0 = np.empty((m, 4))
+        self.drill_Ek = np.zeros((m, 3, 3, 4))     # the membrane-drilling correction (membrane_drilling)
         # in chunks of elements: the resultant matrices and products of one element take ~18 kB,
         # four times its Dbar (a law without ``restricted`` gets all elements at once)
         step = SETUP_CHUNK if callable(getattr(material, "restricted", None)) else max(m, 1)
         for s in range(0, m, step):
             sl = slice(s, min(s + step, m))
             law = material.restricted(sl) if step < m else material
-            zeta0 = np.einsum("qij,mj->mqi", P, self.z0[sl])               # (k, 4gp, 12)
+            z0 = self.z0[sl]
+            zeta0 = np.einsum("qij,mj->mqi", P, z0)                        # (k, 4gp, 12)
             Dm, j0 = law.resultant_matrix(zeta0[..., 0:3], zeta0[..., 6:9])  # (k, 4, 12, 12)
             self.j0[sl] = j0
+            Ek = drilling_correction(P, z0, reference_G(mesh, psi0, sl))
+            self.drill_Ek[sl] = Ek
+            Pm = np.broadcast_to(P, (len(z0),) + P.shape)
+            if Ek.any():
+                Pm = Pm + tying_correction(P, z0, Ek)                       # (k, 4gp, 12, 24)
             # Dbar = sum_q j0_q P_q^T D_q P_q, contracted pairwise (a 4-operand einsum is O(24^4 m))
-            DP = np.einsum("mqij,qjb->mqib", Dm * j0[..., None, None], P)
-            self.Dbar_packed[sl] = np.einsum("qia,mqib->mab", P, DP)[:, _IU[0], _IU[1]]
-            self.Dz0[sl] = np.einsum("mij,mj->mi", _unpack(self.Dbar_packed[sl]), self.z0[sl])  # Dbar z0
+            DP = np.einsum("mqij,mqjb->mqib", Dm * j0[..., None, None], Pm)
+            self.Dbar_packed[sl] = np.einsum("mqia,mqib->mab", Pm, DP)[:, _IU[0], _IU[1]]
+            self.Dz0[sl] = np.einsum("mij,mj->mi", _unpack(self.Dbar_packed[sl]), z0)  # Dbar z0
         self.area = self.j0.sum(axis=1)                                 # reference area per element
         self._Dbar = None
 
@@ -234,9 +242,14 @@ class DefaultElement(Element):
         return (m.elem_edge_sign[..., None] * zE[m.elem_edges]).reshape(-1, 24)
 
     def strains(self, g, points=GAUSS_2x2):
-        """Strain twists (zeta_1, zeta_2) (m, npts, 12) at natural points of every element."""
+        """Strain twists (zeta_1, zeta_2) (m, npts, 12) at natural points of every element (the
+        tying with the membrane-drilling correction, ``membrane_drilling``)."""
         z = self._element_z(0.5 * edge_twists(g, self.mesh.edge_nodes))
-        return np.einsum("qij,mj->mqi", tying_matrices(points), z)
+        P = tying_matrices(points)
+        out = np.einsum("qij,mj->mqi", P, z)
+        if self.drill_Ek.any():
+            out += np.einsum("mqij,mj->mqi", tying_correction(P, self.z0, self.drill_Ek), z)
+        return out
 
     def cell_fields(self, g):
         """Stress resultants at the element centres (``resultants.element_resultants``)."""

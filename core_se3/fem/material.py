@@ -15,7 +15,9 @@ reference tangent vectors (translational parts of zeta0_a) and n the unit normal
 The seed applies H directly to the wryness components, which gives a cylindrical bending
 stiffness D (1 - nu) and loses the Poisson coupling; writing bending on K restores the plate
 law D[(1-nu) K:K + nu (tr K)^2].  W is per unit reference area [energy/length^2]; the
-transverse-shear factor is 1 by default, as the seed's law gives.
+transverse-shear factor is 1 by default, as the seed's law gives.  ``Material.classical_shell``
+(``classical=True``) is the Reissner-Mindlin law for comparisons with classical shells: H on the
+symmetrised curvature (K_ab + K_ba)/2 and the shear factor 5/6.
 """
 from __future__ import annotations
 
@@ -80,6 +82,13 @@ class Material:
         Factor on the drilling-curvature modulus D (1 - nu) [-], >= 0 (1 = the seed).
     rho : float or None, optional
         Density [mass/length^3], >= 0; needed only by gravity.
+    classical : bool, optional
+        False (the default): the seed's Cosserat bending law, H on the curvature K_ab itself,
+        so its skew part (K_12 - K_21, the twist's rotation about the normal's gradient)
+        carries energy too.  True: the classical (Reissner-Mindlin) shell, bending on the
+        symmetrised curvature (K_ab + K_ba)/2 only; :meth:`classical_shell` also sets the shear
+        factor 5/6.  Measured differences (docs/ELEMENTS.md): the thick strip's torsion constant
+        (the Cosserat law's is about 20 % above Saint-Venant's) and Raasch's hook.
 
     Attributes
     ----------
@@ -106,6 +115,7 @@ class Material:
     shear_factor: float = 1.0
     drilling: float = 1.0
     rho: float | None = None
+    classical: bool = False
 
     def __post_init__(self):
         for name in ("E", "nu", "h", "shear_factor", "drilling"):
@@ -122,9 +132,25 @@ class Material:
             raise MaterialError(f"shear factor must be > 0, got {self.shear_factor}")
         if self.drilling < 0:
             raise MaterialError(f"drilling factor must be >= 0, got {self.drilling}")
+        if not isinstance(self.classical, (bool, np.bool_)):
+            raise MaterialError(f"classical must be True or False, got {self.classical!r}")
         if self.rho is not None and (isinstance(self.rho, bool) or not isinstance(self.rho, (int, float, np.floating, np.integer))
                                      or not math.isfinite(self.rho) or self.rho < 0):
             raise MaterialError(f"density rho must be a finite number >= 0 (or None), got {self.rho!r}")
+
+    @classmethod
+    def classical_shell(cls, E, nu, h, **kw):
+        """The classical (Reissner-Mindlin) shell law: bending on the symmetrised curvature and
+        the shear factor 5/6 (both may be overridden by keywords).
+
+        Example
+        -------
+        >>> m = Material.classical_shell(1.0e3, 0.3, 0.01)
+        >>> m.classical, round(m.shear_factor, 12)
+        (True, 0.833333333333)
+        """
+        kw.setdefault("shear_factor", 5.0 / 6.0)
+        return cls(E, nu, h, classical=True, **kw)
 
     @property
     def G(self):
@@ -166,6 +192,8 @@ class Material:
         """
         ops, Ainv, j0 = strain_operators(A1, A2)
         Mm, Ms, Mb, Md = ops
+        if self.classical:                       # bending on (K_ab + K_ba)/2
+            Mb = _SYM @ Mb
         nu = self.nu
         H = (nu * np.einsum("...ab,...cd->...abcd", Ainv, Ainv)
              + (1 - nu) * np.einsum("...ac,...bd->...abcd", Ainv, Ainv))
@@ -182,6 +210,10 @@ class Material:
         """W per unit reference area for strains eps (..., 12)."""
         Dmat, _ = self.resultant_matrix(A1, A2)
         return 0.5 * np.einsum("...i,...ij,...j->...", eps, Dmat, eps)
+
+
+# the symmetrising projector on (x_11, x_12, x_21, x_22)
+_SYM = np.array([[1.0, 0, 0, 0], [0, 0.5, 0.5, 0], [0, 0.5, 0.5, 0], [0, 0, 0, 1.0]])
 
 
 def strain_operators(A1, A2):
@@ -312,6 +344,7 @@ class RegionMaterial:
     nu = property(lambda self: self._uniform("nu"))
     h = property(lambda self: self._uniform("h"))
     shear_factor = property(lambda self: self._uniform("shear_factor"))
+    classical = property(lambda self: self._uniform("classical"))
     drilling = property(lambda self: self._uniform("drilling"))
     rho = property(lambda self: self._uniform("rho"))
 

@@ -17,7 +17,8 @@ import json
 import os
 import tempfile
 
-__all__ = ["atomic_path", "write_text_atomic", "write_json_atomic"]
+__all__ = ["atomic_path", "write_text_atomic", "write_json_atomic", "check_input_file", "read_input_file",
+           "without_contents"]
 
 
 @contextlib.contextmanager
@@ -129,3 +130,75 @@ def write_json_atomic(path, doc):
     {'status': 'running', 'step': 3}
     """
     return write_text_atomic(path, json.dumps(doc, indent=1))
+
+
+def check_input_file(path, limit, what="an input file"):
+    """None if ``path`` is a regular file of at most ``limit`` bytes, else the reason it is not
+    read (a device such as /dev/zero, a pipe, a directory, a missing or oversized file): input
+    files are read only when they are regular and bounded.
+
+    Example
+    -------
+    >>> check_input_file("/dev/zero", 1 << 20)
+    "'/dev/zero' is not a regular file (a device, a pipe or a directory): give an input file"
+    """
+    import stat
+    try:
+        st = os.stat(path)
+    except OSError as exc:
+        return f"cannot read {path!r}: {exc.strerror or exc}"
+    if not stat.S_ISREG(st.st_mode):
+        return f"{path!r} is not a regular file (a device, a pipe or a directory): give an input file"
+    if st.st_size > limit:
+        return (f"{path!r} has {st.st_size / 2 ** 20:.1f} MiB, more than the {limit / 2 ** 20:.0f} MiB {what} may "
+                "have: is it the right file?")
+    return None
+
+
+def read_input_file(path, limit, what="an input file"):
+    """The bytes of a regular input file of at most ``limit`` bytes (read at most limit + 1
+    bytes, in case it grows); ValueError with the reason otherwise (:func:`check_input_file`).
+
+    Example
+    -------
+    >>> import tempfile
+    >>> p = write_text_atomic(os.path.join(tempfile.mkdtemp(), "s.toml"), "name = 'x'")
+    >>> read_input_file(p, 100)
+    b"name = 'x'"
+    """
+    why = check_input_file(path, limit, what)
+    if why is not None:
+        raise ValueError(why)
+    with open(path, "rb") as fh:
+        data = fh.read(limit + 1)
+    if len(data) > limit:
+        raise ValueError(f"{path!r} has more than the {limit / 2 ** 20:.0f} MiB {what} may have")
+    return data
+
+
+def without_contents(message, path, head_bytes=1 << 16):
+    """An error message about the file ``path`` without any text of that file: quoted passages
+    and what follows 'found' are cut (readers quote the line they failed on), and if any 8
+    characters of what is left (the path aside) still occur in the file's first 64 KiB, the
+    detail goes entirely.  An error message must never show a file's contents (a scenario
+    may name any file as its mesh).
+
+    Example
+    -------
+    >>> import tempfile
+    >>> p = write_text_atomic(os.path.join(tempfile.mkdtemp(), "m.msh"), "SECRET TOKEN 42\\n")
+    >>> without_contents("ReadError: Unexpected line 'SECRET TOKEN 42'", p)
+    'ReadError: Unexpected line ...'
+    """
+    import re
+    msg = re.sub(r"(['\"]).*?\1", "...", str(message))
+    msg = re.sub(r"\bfound\b.*", "found ...", msg)
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(head_bytes).decode("latin-1")
+    except OSError:
+        return msg
+    rest = msg.replace(os.fspath(path), "").replace(os.path.basename(os.fspath(path)), "")
+    if any(rest[i:i + 8] in head for i in range(max(len(rest) - 7, 0)) if rest[i:i + 8].strip()):
+        return "its contents are not a mesh this reader knows"
+    return msg

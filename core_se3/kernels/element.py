@@ -16,7 +16,8 @@ import numpy as np
 from numba import njit, prange
 
 from .element_mixed import element_linear_stress, element_linear_stress_serial, signed_edge_stress, stress_from_signed
-from .element_ops import CHUNK, MAX_EDGE_ANGLE, NSYM, check_angles, packed_matvec, split_form
+from .element_dbar import NSYM, packed_matvec, split_form
+from .element_ops import CHUNK, MAX_EDGE_ANGLE, check_angles
 from .element_passes import (edges_log, edges_residual, edges_tangent, edges_tangent_store, elements_force,
                              elements_tangent, elements_tangent_store, nodes_pass)
 
@@ -222,7 +223,8 @@ class ElementKernels:
         Whether Dbar's v-w coupling blocks are exactly zero on every element (every law of
         ``fem.material``): the element passes then read ``Dsplit`` (m, 24, 12), the two 12x12
         diagonal blocks in the order z' (``element_ops.split_form``: no unpacking, half the
-        force products and half of G^T Dbar's), else the general path unpacks the packed
+        force products and half of G^T Dbar's), or (m, 24, 16) with the membrane-drilling
+        coupling of distorted quads in 4 more columns, else the general path unpacks the packed
         Dbar per element (a law coupling v and w; ``Dsplit`` is then empty, (0, 24, 12)).
     """
 

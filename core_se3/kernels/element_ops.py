@@ -13,7 +13,7 @@ us, the edge pass 2.0 -> 1.5 us, the edges' logs 0.54 -> 0.27 us; the residual 1
 0.83-0.85 us, the whole tangent 5.3-6.5 -> 4.2-4.7 us.  The element's dense products
 (``element_Ke`` and its helpers) stay calls: inlining them too added 3 s to the first-run
 compile (23.7 -> 26.5 s for the main job) with no gain beyond the run-to-run noise
-(``element_D``, the per-element choice of Dbar's form below, is inlined).
+(``element_dbar.element_D``, the per-element choice of Dbar's form, is inlined).
 
 The material block.  With the element energy Pi_e = 1/2 (z - z0)^T Dbar (z - z0), z = (sgn_k
 psi_k / 2) over the element's 4 edges, and d psi = L(psi) eta_b - L(-psi) eta_a (L = dexp_inv
@@ -59,6 +59,7 @@ import numpy as np
 from numba import njit
 
 from .csr import scatter_diag
+from .element_dbar import ZP, unpack_sym
 from .lie import (ad_exp_minus, coef_c, coef_dc, coef_ddc, cross3, dexp_inv_T_apply, dexp_inv_T_jacobian,
                   fill_L, hat_add, log_se3)
 
@@ -85,128 +86,14 @@ def edge_pass1(g, En, e, R, psi, coef):
     return sqrt(s)
 
 
-NSYM = 300                          # entries of a symmetric 24x24 matrix's upper triangle
-
-
-@njit(cache=True)
-def unpack_sym(Dp, el, D):
-    """D (24,24) <- the symmetric matrix whose upper triangle, row by row, is Dp[el] (300,)
-    (the element's Dbar is stored packed: 2.4 kB instead of 4.6 kB per element)."""
-    k = 0
-    for a in range(24):
-        for b in range(a, 24):
-            v = Dp[el, k]
-            D[a, b] = v
-            D[b, a] = v
-            k += 1
-
-
-# The kernels' order z' of an element's 24 edge-twist components (z_b, z_t, z_l, z_r; (v, w)
-# each): the v of the four edges, then their w.  ZP[6k + i]: component i of edge k in z'.
-ZP = np.array([3 * (a // 6) + a % 6 if a % 6 < 3 else 9 + 3 * (a // 6) + a % 6 for a in range(24)], np.int64)
-
-
-def _packed(a, b):
-    """Position of the entry (a, b) of a symmetric 24x24 matrix in its packed upper triangle."""
-    a, b = np.minimum(a, b), np.maximum(a, b)
-    return a * 24 - a * (a - 1) // 2 + (b - a)
-
-
-_IU = np.triu_indices(24)
-VW_INDEX = np.flatnonzero((_IU[0] % 6 < 3) != (_IU[1] % 6 < 3))      # the packed v-w entries (144)
-# SPLIT_INDEX[r, c]: the packed entry of D'[r, c'] (z' indices; c' = c for the v rows r < 12, 12 + c
-# for the w rows): Dbar[:, SPLIT_INDEX] (m, 24, 12) = the diagonal blocks Dvv, Dww, stacked
-SPLIT_INDEX = _packed(np.argsort(ZP)[:, None], np.argsort(ZP)[np.arange(24)[:, None] // 12 * 12 + np.arange(12)])
-
-
-def split_form(Dp):
-    """The v/w split form of packed element stiffnesses Dp (m, 300), or None.
-
-    A law whose membrane and shear act only on the translational parts v of the strain twists
-    and bending and drilling only on the rotational parts w (every law of ``fem.material``)
-    gives a Dbar with exactly zero v-w blocks: in the order z' = (v_b, v_t, v_l, v_r, w_b, w_t,
-    w_l, w_r) (``ZP``), Dbar = diag(Dvv, Dww), read by the kernels as (m, 24, 12) (row r of z'
-    over its own half: 2.3 kB per element, no unpacking).  A law coupling v and w gives None:
-    the kernels then unpack the whole Dbar per element (``unpack_perm``).
-
-    Parameters
-    ----------
-    Dp : (m, 300) float array
-        Upper triangles, row by row (``DefaultElement.Dbar_packed``).
-
-    Returns
-    -------
-    (m, 24, 12) float array or None
-        Exactly zero v-w entries are required (a test on the values, not a tolerance).
-
-    Example
-    -------
-    >>> import numpy as np
-    >>> Dp = np.zeros((1, 300))
-    >>> Dp[0, _packed(np.arange(24), np.arange(24))] = np.arange(24.0)     # diag(0, 1, ..., 23)
-    >>> Ds = split_form(Dp)
-    >>> Ds.shape, float(Ds[0, 3, 3]), float(Ds[0, 12, 0])   # z'[3]: v_0 of edge 1, z'[12]: w_0 of edge 0
-    ((1, 24, 12), 6.0, 3.0)
-    >>> Dp[0, _packed(0, 3)] = 1.0                   # couple v_0 and w_0 of edge 0
-    >>> split_form(Dp) is None
-    True
-    """
-    Dp = np.asarray(Dp, dtype=float)
-    if Dp[:, VW_INDEX].any():
-        return None
-    return np.ascontiguousarray(Dp[:, SPLIT_INDEX])
-
-
-@njit(cache=True)
-def unpack_perm(Dp, el, D):
-    """D (24,24) <- element el's Dbar (packed Dp[el], 300,) in the order z' (``ZP``): D[ZP[a],
-    ZP[b]] = Dbar[a, b] (the general path, for a law that couples v and w)."""
-    k = 0
-    for a in range(24):
-        pa = ZP[a]
-        for b in range(a, 24):
-            pb = ZP[b]
-            v = Dp[el, k]
-            D[pa, pb] = v
-            D[pb, pa] = v
-            k += 1
-
-
-@njit(cache=True, inline="always")
-def element_D(Dbar, Dsplit, el, D):
-    """Element el's stiffness in the order z', as the rows the kernels read: Dsplit[el] (24, 12)
-    (row r over its own half, v or w: ``split_form``) when Dsplit holds the split form, else
-    the whole Dbar unpacked into the workspace D (24, 24) (Dsplit empty, (0, 24, 12))."""
-    if Dsplit.shape[0] == 0:
-        unpack_perm(Dbar, el, D)
-        return D
-    return Dsplit[el]
-
-
-@njit(cache=True)
-def packed_matvec(Dp, x, out):
-    """out[el] = Dbar[el] x[el] for every element, Dbar packed (m, 300), x (m, 24)."""
-    for el in range(Dp.shape[0]):
-        for a in range(24):
-            out[el, a] = 0.0
-        k = 0
-        for a in range(24):
-            out[el, a] += Dp[el, k] * x[el, a]
-            k += 1
-            for b in range(a + 1, 24):
-                v = Dp[el, k]
-                out[el, a] += v * x[el, b]
-                out[el, b] += v * x[el, a]
-                k += 1
-
-
 @njit(cache=True)
 def element_force(el, elem_edges, sgn, Dr, z0, Dz0, psi, z, f, fe):
     """Element forces f = dPi_e/dz = Dbar (z - z0), z = (sgn_k psi_k / 2) over the 4 edges
     (``fem.element_default``: Pi_e = 1/2 (z - z0)^T Dbar (z - z0)); returns (energy 1/2 dz.f,
     |f + Dz0|^2 + |f|^2).  Dr: element el's Dbar in the order z' (``element_D``), (24, 24), or
     the split form (24, 12) whose v rows act on dz'[:12] and w rows on dz'[12:] (288 products
-    instead of 576); z, f (24,): workspace (dz, f in the order z'); fe (m, 4, 6): written,
+    instead of 576), or (24, 16) with the v rows' coupling to the edges' w_3 (96 more); z, f
+    (24,): workspace (dz, f in the order z'); fe (m, 4, 6): written,
     fe[el, k] = sgn_k f_k (conjugate to the mesh-edge twists)."""
     for k in range(4):
         e = elem_edges[el, k]
@@ -216,15 +103,22 @@ def element_force(el, elem_edges, sgn, Dr, z0, Dz0, psi, z, f, fe):
     # f = sum_r dz_r Dbar[r] (Dbar symmetric): axpys of Dbar's rows, vectorised (a dot product
     # per row is a chain of dependent additions: about 1.8 times as long, measured)
     W = Dr.shape[1]
+    H = 24 if W == 24 else 12                      # the whole row, or its own half (split forms)
     for r in range(24):
         f[r] = 0.0
     for r in range(24):
-        o = 0 if r < 12 else 24 - W
+        o = 0 if r < 12 or H == 24 else 12
         zr = z[r]
         d = Dr[r]
-        fo = f[o:o + W]
-        for c in range(W):
+        fo = f[o:o + H]
+        for c in range(H):
             fo[c] += zr * d[c]
+    if W == 16:                                    # the v rows' coupling with the edges' w_3
+        for r in range(12):
+            d = Dr[r]
+            for k in range(4):
+                f[r] += d[12 + k] * z[14 + 3 * k]
+                f[14 + 3 * k] += d[12 + k] * z[r]
     en = 0.0
     for r in range(24):
         en += z[r] * f[r]
@@ -322,6 +216,35 @@ def _gt_times_split(G, Ds, out, h):
 
 
 @njit(cache=True)
+def _gt_times_drill(G, Ds, out):
+    """out (24,24) += G^T P^T Dc' for the coupling part Dc' of the split form with drilling
+    coupling (``split_form``, Ds (24, 16)): the v rows r of the edges (z' 3k + q) have Dc[r, k']
+    in the w_3 columns 14 + 3k', the w_3 rows (z' 14 + 3k) have Dc[:, k] in the v columns:
+
+        out[6A+i, 14+3k'] += sum_{q<3} G[k0,e0,q,i] Dc[3k0+q, k'] + G[k1,e1,q,i] Dc[3k1+q, k'],
+        out[6A+i, c < 12] += G[k0,e0,5,i] Dc[c, k0] + G[k1,e1,5,i] Dc[c, k1]    (i >= 3)."""
+    for A in range(4):
+        k0 = _NODE_INC[A, 0, 0]
+        e0 = _NODE_INC[A, 0, 1]
+        k1 = _NODE_INC[A, 1, 0]
+        e1 = _NODE_INC[A, 1, 1]
+        P = G[k0, e0]
+        Q = G[k1, e1]
+        for i in range(6):
+            o = out[6 * A + i]
+            a0, a1, a2 = P[0, i], P[1, i], P[2, i]
+            b0, b1, b2 = Q[0, i], Q[1, i], Q[2, i]
+            for k in range(4):
+                o[14 + 3 * k] += (a0 * Ds[3 * k0, 12 + k] + a1 * Ds[3 * k0 + 1, 12 + k] + a2 * Ds[3 * k0 + 2, 12 + k]
+                                  + b0 * Ds[3 * k1, 12 + k] + b1 * Ds[3 * k1 + 1, 12 + k]
+                                  + b2 * Ds[3 * k1 + 2, 12 + k])
+            if i >= 3:
+                a5, b5 = P[5, i], Q[5, i]
+                for c in range(12):
+                    o[c] += a5 * Ds[c, 12 + k0] + b5 * Ds[c, 12 + k1]
+
+
+@njit(cache=True)
 def element_G(el, elem_edges, sgn, psi, coef, G):
     """G blocks of element el: for local edge k with local psi_k = sgn_k psi_e,
     G[k,0] = -1/2 L(-psi_k) (node la), G[k,1] = 1/2 L(psi_k) (node lb)."""
@@ -374,7 +297,12 @@ def element_Ke(Dr, G, TT, TTt, KeT):
     if Dr.shape[1] == nc:
         _gt_times(G, Dr, TT, nc)
     else:
-        _gt_times_split(G, Dr, TT, Dr.shape[1])
+        w = Dr.shape[1]
+        # the half width 12 as a run-time value (a literal would be unrolled and not vectorised,
+        # as ``_gt_times``' nc)
+        _gt_times_split(G, Dr, TT, w if w == 12 else w - 4)
+        if w == 16:
+            _gt_times_drill(G, Dr, TT)
     for a in range(24):
         for b in range(24):
             TTt[a, b] = TT[b, a]

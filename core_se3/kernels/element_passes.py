@@ -17,7 +17,8 @@ import numpy as np
 from numba import njit
 
 from .csr import scatter
-from .element_ops import (edge_F, edge_KE, edge_pass1, edge_residual, element_D, element_force, element_G,
+from .element_dbar import element_D
+from .element_ops import (edge_F, edge_KE, edge_pass1, edge_residual, element_force, element_G,
                           element_Ke, node_Kn, node_residual)
 
 __all__ = ["edges_log", "elements_force", "edges_residual", "nodes_pass", "elements_tangent",

@@ -235,6 +235,35 @@ class Mesh:
         raise MeshError(f"unknown node set {name_or_pred!r}{did_you_mean(name_or_pred, names)}; "
                         f"node sets: {sorted(self.edges)}, regions: {sorted(self.regions)}")
 
+    def node_at(self, x, tol=None):
+        """The id of the node at the point x: the nearest node, which must lie within ``tol``
+        (default a quarter of the shortest mesh edge at that node, so that a point typed with a
+        few digits finds its node and a point between nodes is refused); MeshError otherwise.
+
+        Example
+        -------
+        >>> from core_se3 import mesh
+        >>> m = mesh.rectangle(2.0, 1.0, 2, 1)
+        >>> m.node_at((2.0, 0.5, 0.0)), m.node_at((1.0001, -0.5, 0.0))
+        (5, 1)
+        >>> m.node_at((0.5, -0.5, 0.0))                     # between nodes 0 and 1
+        Traceback (most recent call last):
+        ...
+        core_se3.errors.MeshError: no node at [0.5, -0.5, 0.0]: the nearest is node 0 at [0.0, -0.5, 0.0], at distance 0.5 > 0.25 (give that point, or a larger tol)
+        """
+        p = np.asarray(x, float)
+        if p.shape != (3,) or not np.all(np.isfinite(p)):
+            raise MeshError(f"a point must be three finite coordinates [x, y, z], got {np.asarray(x).tolist()}")
+        d = np.linalg.norm(self.X - p, axis=1)
+        k = int(np.argmin(d))
+        if tol is None:
+            at = self.edge_nodes[(self.edge_nodes == k).any(1)]
+            tol = 0.25 * float(np.linalg.norm(self.X[at[:, 0]] - self.X[at[:, 1]], axis=1).min())
+        if d[k] > tol:
+            raise MeshError(f"no node at {p.tolist()}: the nearest is node {k} at {self.X[k].round(6).tolist()}, at "
+                            f"distance {d[k]:.4g} > {tol:.4g} (give that point, or a larger tol)")
+        return k
+
     def elements(self, region=None):
         """Element ids of a named region (a name), of a list of ids, or of all elements (None)."""
         if region is None:

@@ -20,7 +20,7 @@ import numpy as np
 from .. import lie
 from ..assembly import Assembler
 from .. import backend as _backend
-from ..errors import LoadError, MeshError, OptionError, SupportError, did_you_mean
+from ..errors import LoadError, MeshError, OptionError, did_you_mean
 from ..fem import ELEMENTS, make_element
 from .base import Evaluation, Load, load_kind
 from .compiled import CompiledEvaluation
@@ -28,9 +28,10 @@ from .contact import add_obstacle
 from .fields import MU0
 from .magnetics import MagneticLoad, Magnetisation
 from .probes import Probe
-from .solving import SOLVERS, dispatch
-from .supports import (LabSpring, LabTiltSpring, Prescribed, RotationComponentSpring, check_rigid_motions,
-                       apply_prescribed, fixed_dofs, prescribed_rotation, rigid_rotation)
+from .solving import SOLVERS, dispatch, solve_linear
+from .supports import (LabSpring, LabTiltSpring, Prescribed, RotationComponentSpring, check_conflict,
+                       check_rigid_motions, apply_prescribed, fixed_dofs, prescribed_rotation, rigid_motion,
+                       select_nodes)
 
 __all__ = ["Problem", "Evaluation", "SOLVERS"]
 
@@ -113,16 +114,12 @@ class Problem:
     # ---------------------------------------------------------------- selections -------
     def nodes(self, where):
         """Node ids of a selection: a node-set or region name, a predicate of the reference
-        positions, or ids."""
-        if isinstance(where, str) or callable(where):
-            nodes = self.mesh.node_set(where)
-        else:
-            nodes = np.atleast_1d(np.asarray(where, np.int64))
-        if len(nodes) == 0:
-            raise SupportError(f"node selection {where!r} is empty")
-        if nodes.min() < 0 or nodes.max() >= self.mesh.n_nodes:
-            raise SupportError(f"node selection {where!r} refers to nodes that do not exist")
-        return nodes
+        positions, or ids (each once: ``supports.select_nodes``)."""
+        return select_nodes(self.mesh, where)
+
+    def node_at(self, x, tol=None):
+        """The id of the node at the point x (``Mesh.node_at``: the nearest node, within tol)."""
+        return self.mesh.node_at(x, tol)
 
     def elements(self, region):
         """Element ids of a region name or of ids (None: all elements, returned as None)."""
@@ -135,6 +132,7 @@ class Problem:
 
     # ---------------------------------------------------------------- supports ---------
     def _support(self, s):
+        check_conflict(self.supports, s)          # a node moved by two supports: refused
         self.supports.append(s)
         self._assembler = None
 
@@ -153,30 +151,13 @@ class Problem:
         aligned with a body axis of every selected node (true for rotations about a frame
         axis, e.g. a strip end twisted about the strip axis).
         """
-        nodes = self.nodes(where)
-        axis, angle, point = rigid_rotation(axis, angle, point)
-        scale = scale or (lambda lam: lam)
-        g0 = self.mesh.g0[nodes]
-        fixed = np.ones(6, bool)
-        for d in free:
-            lab = np.zeros(3)
-            lab[d] = 1.0
-            body = np.swapaxes(g0[:, :3, :3], 1, 2) @ lab
-            k = np.argmax(np.abs(body), axis=1)
-            if not np.all(k == k[0]) or np.abs(body[np.arange(len(k)), k]).min() < 1 - 1e-12 \
-                    or abs(abs(axis @ lab) - 1) > 1e-12 and abs(axis @ lab) > 1e-12:
-                raise SupportError("a free direction must coincide with a body axis of every node "
-                                   "and be parallel or perpendicular to the rotation axis")
-            fixed[k[0]] = False
+        self._support(rigid_motion(self.mesh, self.nodes(where), (0.0, 0.0, 0.0), axis, angle, point, free, scale))
 
-        def target(lam):
-            Q = lie.exp_so3(angle * scale(lam) * axis)
-            h = np.eye(4)
-            h[:3, :3] = Q
-            h[:3, 3] = point - Q @ point
-            return h @ g0
-
-        self._support(Prescribed(nodes, fixed, target))
+    def move_edge(self, where, translate=(0.0, 0.0, 0.0), axis=None, angle=0.0, point=None, free=(), scale=None):
+        """Move the selected nodes rigidly: rotated by angle*s about ``axis`` through ``point``
+        (default their centroid), then translated by s*translate, s = scale(lam) (default lam);
+        ``free`` as for :meth:`rotate_edge` (``supports.rigid_motion``)."""
+        self._support(rigid_motion(self.mesh, self.nodes(where), translate, axis, angle, point, free, scale))
 
     def prescribe(self, where, target, fixed=(True,) * 6):
         """Selected nodes follow ``target(lam) -> (k, 4, 4)`` frames on the fixed dofs."""
@@ -477,11 +458,9 @@ class Problem:
         ----------
         steps : int, optional
             Number of equal load steps from lam_start to lam_end (load control).  Default: the
-            problem's own settings (``solve_defaults``, e.g. a scenario's ``[solver] steps``),
-            else 10.
+            problem's own settings (``solve_defaults``, a scenario's ``[solver] steps``), else 10.
         control : str, optional
-            'load' (:func:`core_se3.solvers.newton_solve`), 'arclength' (``solvers.arc_length``)
-            or 'displacement' (``solvers.displacement_control``); default ``solve_defaults`` or 'load'.
+            'load' (``solvers.newton_solve``), 'arclength', 'displacement' or 'linear' (:meth:`solve_linear`).
         solver : str, optional
             'serial' or 'distributed' (load stepping over the MPI ranks, :mod:`core_se3.parallel`).
             Default: 'distributed' for load control under ``mpirun -n N`` with N > 1, else
@@ -498,3 +477,5 @@ class Problem:
         control = control or kw.pop("control", "load")
         kw.pop("control", None)
         return dispatch(self, control, solver or kw.pop("solver", None), kw)
+
+    solve_linear = solve_linear            # linear analysis (model.solving.solve_linear)

@@ -5,7 +5,7 @@ between the serial solvers and the distributed one.
 Example
 -------
 >>> sorted(SOLVERS)
-['arclength', 'displacement', 'distributed', 'load']
+['arclength', 'displacement', 'distributed', 'linear', 'load']
 """
 from __future__ import annotations
 
@@ -14,14 +14,14 @@ from typing import Callable
 from ..backend import launched_ranks
 from ..errors import OptionError, ParallelError, did_you_mean
 
-__all__ = ["SOLVERS", "DISTRIBUTED_KEYS", "dispatch"]
+__all__ = ["SOLVERS", "DISTRIBUTED_KEYS", "dispatch", "solve_linear"]
 
 # keywords of the distributed set-up (a scenario's [solver] linear, petsc, partition), which
 # the serial solvers do not take
 DISTRIBUTED_KEYS = ("linear", "petsc_options", "partition")
 
 SOLVERS: dict[str, Callable] = {}
-"""Solvers by control name ('load', 'arclength', 'displacement'): solve(problem, **options); and
+"""Solvers by control name ('load', 'arclength', 'displacement', 'linear'): solve(problem, **options); and
 'distributed' (load stepping over MPI ranks, ``core_se3.parallel``)."""
 
 
@@ -70,3 +70,20 @@ def dispatch(problem, control, solver, kw):
     for k in DISTRIBUTED_KEYS:
         kw.pop(k, None)
     return SOLVERS[control](problem, **kw)
+
+
+def solve_linear(problem, lam_end=1.0, **options):
+    """Linear analysis (``Problem.solve_linear``): one solve at the reference state
+    (``solvers.linear_solve``), the loads at ``lam_end`` on the reference geometry; a Result like
+    ``Problem.solve``'s (the reference state and the linear solution).  Same as
+    ``problem.solve(control="linear")``.
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(10.0, 1.0, 16, 1), Material(1.2e6, 0.0, 0.1))
+    >>> p.clamp("x0"); p.add_edge_force("x1", (4e-4, 0.0, 0.0)); p.add_probe("tip")
+    >>> round(float(p.solve_linear().final.probes["tip"]["u"][0] / (4e-4 * 10.0 / 1.2e5)), 6)  # P L/(E A)
+    1.0
+    """
+    return problem.solve(control="linear", lam_end=lam_end, **options)

@@ -45,41 +45,12 @@ import numpy as np
 from .. import lie
 from ..errors import ElementTooDistortedError, SingularSystemError, SupportError
 from .base import Load, LoadEvaluation
+from .prescribed import (DOF_NAMES, Prescribed, apply_prescribed, check_conflict, fixed_dofs,  # noqa: F401
+                         prescribed_rotation, rigid_motion, rigid_rotation, select_nodes, support_kind)
 
 __all__ = ["apply_prescribed", "prescribed_rotation", "Prescribed", "LabSpring", "LabTiltSpring", "RotationComponentSpring",
-           "MAX_TOTAL_ROTATION", "check_rigid_motions", "fixed_dofs", "rigid_rotation"]
-
-
-class Prescribed:
-    """Nodes whose body-frame dofs ``fixed`` (6 booleans) are held: at their reference values,
-    or on ``target(lam) -> (k, 4, 4)`` frames (a prescribed motion).
-
-    Made by ``Problem.clamp``, ``fix``, ``rotate_edge`` and ``prescribe``; the held dofs leave the
-    system (``Problem.constraint_mask``), the solvers set the frames of a target before each try.
-
-    Parameters
-    ----------
-    nodes : array_like of int
-        The held nodes (k,).
-    fixed : (6,) array_like of bool
-        The held body-frame dofs: translations along d1, d2, d3, then rotations.
-    target : callable, optional
-        lam -> (k, 4, 4) frames of the nodes (None: the reference frames).
-
-    Example
-    -------
-    >>> from core_se3 import Problem, Material, mesh
-    >>> p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
-    >>> p.fix("x0", [0, 1, 2])                                  # a hinge: translations held
-    >>> s = p.supports[0]
-    >>> s.nodes.tolist(), s.fixed.tolist(), s.target is None
-    ([0, 3], [True, True, True, False, False, False], True)
-    """
-
-    def __init__(self, nodes, fixed, target=None):
-        self.nodes = np.asarray(nodes, np.int64)
-        self.fixed = np.asarray(fixed, bool)
-        self.target = target
+           "MAX_TOTAL_ROTATION", "check_rigid_motions", "fixed_dofs", "rigid_rotation", "select_nodes",
+           "check_conflict", "support_kind", "DOF_NAMES", "rigid_motion", "mesh_parts"]
 
 
 class _Spring(Load):
@@ -299,136 +270,102 @@ class RotationComponentSpring(_Spring):
                              blk, tangent)
 
 
-def fixed_dofs(dofs):
-    """The (6,) mask of the body-frame dofs ``dofs`` (0-2 translations along d1..d3, 3-5
-    rotations about them), or a SupportError (a negative index would silently fix another dof).
+def mesh_parts(mesh):
+    """The connected parts of a mesh (quads joined through shared nodes): (number of parts,
+    (n,) part of every node, (m,) part of every element), parts numbered by their first node.
 
     Example
     -------
-    >>> fixed_dofs([0, 5]).astype(int).tolist()
-    [1, 0, 0, 0, 0, 1]
+    >>> import numpy as np
+    >>> from core_se3.mesh import Mesh, rectangle
+    >>> a = rectangle(1.0, 1.0, 1, 1); g = np.concatenate([a.g0, a.g0]); g[4:, 0, 3] += 3.0
+    >>> k, nodes, elements = mesh_parts(Mesh(g, np.concatenate([a.quads, a.quads + 4])))
+    >>> k, nodes.tolist(), elements.tolist()
+    (2, [0, 0, 0, 0, 1, 1, 1, 1], [0, 1])
     """
-    dofs = list(dofs)
-    if not dofs or any(isinstance(d, bool) or not isinstance(d, (int, np.integer)) or not 0 <= d <= 5 for d in dofs):
-        raise SupportError(f"dofs must be one or more of 0, 1, 2 (translations along d1, d2, d3) and 3, 4, 5 "
-                           f"(rotations about them), got {dofs!r}")
-    fixed = np.zeros(6, bool)
-    fixed[dofs] = True
-    return fixed
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    q = mesh.quads
+    a, b = q[:, [0, 1, 2, 3]].ravel(), q[:, [1, 2, 3, 0]].ravel()
+    adj = coo_matrix((np.ones(len(a)), (a, b)), shape=(mesh.n_nodes, mesh.n_nodes))
+    k, labels = connected_components(adj, directed=False)
+    return k, labels, labels[q[:, 0]]
 
 
-def rigid_rotation(axis, angle, point):
-    """(unit axis (3,), angle [rad], point (3,)) of a prescribed rigid rotation, checked finite
-    (the axis non-zero), or a SupportError.
-
-    Example
-    -------
-    >>> a, t, x = rigid_rotation((0, 0, 2.0), 1.5, (1.0, 0, 0))
-    >>> a.tolist(), t, x.tolist()
-    ([0.0, 0.0, 1.0], 1.5, [1.0, 0.0, 0.0])
-    """
-    axis = np.asarray(axis, float)
-    if axis.shape != (3,) or not np.all(np.isfinite(axis)) or np.linalg.norm(axis) == 0:
-        raise SupportError(f"rotation axis must be a non-zero finite 3-vector, got {axis!r}")
-    try:
-        ok = not isinstance(angle, bool) and np.isfinite(float(angle))
-    except (TypeError, ValueError):
-        ok = False
-    if not ok:
-        raise SupportError(f"rotation angle must be a finite number [rad], got {angle!r}")
-    point = np.asarray(point, float)
-    if point.shape != (3,) or not np.all(np.isfinite(point)):
-        raise SupportError(f"rotation point must be a finite 3-vector, got {point!r}")
-    return axis / np.linalg.norm(axis), float(angle), point
+def _describe_part(mesh, i, nodes, elements):
+    ids = np.nonzero(elements == i)[0]
+    x = mesh.X[nodes == i]
+    return (f"part {i + 1} ({len(ids)} elements, ids {ids[0]}..{ids[-1]}, nodes "
+            f"{np.nonzero(nodes == i)[0][:4].tolist()}..., between {np.round(x.min(0), 4).tolist()} and "
+            f"{np.round(x.max(0), 4).tolist()})")
 
 
 def check_rigid_motions(problem, g):
     """Raise SingularSystemError if the supports leave a rigid-body motion free (SupportError
-    if they leave nothing free).
+    if they leave nothing free), part by part of a mesh of disconnected parts (naming the part).
 
     A superposed rigid motion h = exp(xi) moves every node by the body-frame increment
     eta_i = Ad_{g_i^-1} xi; the supports restrain all six rigid motions iff the fixed
     components of these increments (and the lab directions held by loads, e.g. springs)
-    have rank 6 (checked by SVD, unit-scaled).
+    have rank 6 (checked by SVD, unit-scaled).  Each connected part of the mesh moves on its
+    own, so the check is made for each.
     """
     fixed = problem.constraint_mask()
     if fixed.all():
         raise SupportError(f"the supports hold every degree of freedom of all {len(fixed)} nodes: there "
                            "is nothing to solve; select fewer nodes (e.g. clamp one edge)")
+    k, nodes, elements = mesh_parts(problem.mesh)
+    for i in range(k):
+        what = _free_motion(problem, g, fixed, nodes == i)
+        if what is None:
+            continue
+        if k == 1 and what.startswith("no supports"):
+            raise SingularSystemError("no supports: the shell can move as a rigid body; clamp or fix some nodes")
+        if k == 1:
+            raise SingularSystemError("the supports leave a rigid-body motion free (" + what
+                                      + "): the tangent is singular; add supports")
+        raise SingularSystemError(
+            f"the mesh has {k} disconnected parts, and the supports leave a rigid-body motion of "
+            f"{_describe_part(problem.mesh, i, nodes, elements)} free ({what}): support that part too, or join "
+            "it to the rest (shared nodes)")
+
+
+def _free_motion(problem, g, fixed, part):
+    """The rigid motion of the nodes ``part`` (mask) that the supports leave free, described
+    ('rotation about ... through ...', 'translation along ...'), or None."""
     ell = problem.length_scale
-    c = g[:, :3, 3].mean(0)
+    c = g[part, :3, 3].mean(0)
     h = np.eye(4)
-    h[:3, 3] = -c                                   # rigid motions about the centroid
+    h[:3, 3] = -c                                   # rigid motions about the part's centroid
     modes = lie.Ad(lie.inv(g) @ lie.inv(h))         # (n, 6, 6): column k = mode k at node i
     # dimensionless: translations of the modes by ell, nodal translations over ell (rotations
     # as they are), so that every entry is O(1) whatever the mesh's size (a lever arm x - c of
     # a rotation mode scaled by ell^2 made a clamp of a 10^4-long strip look singular)
     scale = np.r_[np.full(3, ell), np.ones(3)]      # mode (v, w) = (ell v^, w^)
     dof = np.r_[np.full(3, 1.0 / ell), np.ones(3)]  # nodal increments (eta_v / ell, eta_w)
-    rows = [(modes * scale[None, None, :] * dof[None, :, None])[fixed]]   # (n_fixed, 6)
+    rows = [(modes * scale[None, None, :] * dof[None, :, None])[fixed & part[:, None]]]   # (n_fixed, 6)
     # supports carried by loads (lab-direction springs): rows d^T R_i [I 0] Ad_{g_i^-1} xi / ell
     for load in problem.loads:
         restraint = load.restraint()
         if restraint is not None:
             nodes, D = restraint                      # (k,), (k, q, 3) lab unit directions
+            keep = part[nodes]
+            nodes, D = nodes[keep], np.asarray(D)[keep]
             lab = np.einsum("kij,kjl->kil", g[nodes, :3, :3], modes[nodes][:, :3, :] * scale) / ell
             rows.append(np.einsum("kqi,kil->kql", D, lab).reshape(-1, 6))
     B = np.concatenate(rows)
     if B.shape[0] == 0:
-        raise SingularSystemError("no supports: the shell can move as a rigid body; clamp or fix some nodes")
+        return "no supports: it can move as a rigid body; clamp or fix some of its nodes"
     U, S, Vt = np.linalg.svd(B, full_matrices=True)
     S = np.r_[S, np.zeros(6 - len(S))]
-    if S[-1] < 1e-10 * S[0]:
-        v = Vt[-1] * scale
-        tr, rot = v[:3], v[3:]
-        if np.linalg.norm(rot) * ell > 1e-8 * np.linalg.norm(tr):
-            # twist (tr, rot) about the centroid c: screw axis through c + rot x tr / |rot|^2
-            pt = c + np.cross(rot, tr) / (rot @ rot)
-            what = (f"rotation about {np.round(rot / np.linalg.norm(rot), 3).tolist()} "
-                    f"through {np.round(pt, 4).tolist()}")
-        else:
-            what = f"translation along {np.round(tr / np.linalg.norm(tr), 3).tolist()}"
-        raise SingularSystemError("the supports leave a rigid-body motion free (" + what
-                                  + "): the tangent is singular; add supports")
+    if S[-1] >= 1e-10 * S[0]:
+        return None
+    v = Vt[-1] * scale
+    tr, rot = v[:3], v[3:]
+    if np.linalg.norm(rot) * ell > 1e-8 * np.linalg.norm(tr):
+        # twist (tr, rot) about the centroid c: screw axis through c + rot x tr / |rot|^2
+        pt = c + np.cross(rot, tr) / (rot @ rot)
+        return f"rotation about {np.round(rot / np.linalg.norm(rot), 3).tolist()} through {np.round(pt, 4).tolist()}"
+    return f"translation along {np.round(tr / np.linalg.norm(tr), 3).tolist()}"
 
 
-def apply_prescribed(supports, g, lam):
-    """Set the frames of the prescribed nodes of ``supports`` to their targets at lam (in
-    place); returns g.  A target that holds the three translations only (rotations free) sets
-    the positions and keeps the nodes' current rotations."""
-    for s in supports:
-        if s.target is not None:
-            if s.fixed[:3].all() and not s.fixed[3:].any():
-                g[s.nodes, :3, 3] = s.target(lam)[:, :3, 3]
-            else:
-                g[s.nodes] = s.target(lam)
-    return g
-
-
-def prescribed_rotation(supports, lam0, lam1, samples=16):
-    """Largest rotation angle [rad] that the prescribed motions of ``supports`` turn any node
-    through between load factors lam0 and lam1 (the path length of its rotation, sampled at
-    ``samples`` sub-steps): a step whose prescribed rotation nears pi is ambiguous for the
-    exponential update (a turn of 2 pi lands on the same frame).
-
-    Example
-    -------
-    >>> import numpy as np
-    >>> from core_se3 import Problem, Material, mesh
-    >>> p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
-    >>> p.clamp("x0"); p.rotate_edge("x1", (1.0, 0.0, 0.0), np.pi)
-    >>> round(prescribed_rotation(p.supports, 0.0, 0.5), 12)               # half of pi
-    1.570796326795
-    """
-    worst = 0.0
-    for s in supports:
-        if s.target is None:
-            continue
-        prev = s.target(lam0)
-        total = np.zeros(len(s.nodes))
-        for t in np.linspace(lam0, lam1, samples + 1)[1:]:
-            cur = s.target(t)
-            total += lie.rotation_angle(np.swapaxes(prev[:, :3, :3], 1, 2) @ cur[:, :3, :3])
-            prev = cur
-        worst = max(worst, float(total.max()))
-    return worst

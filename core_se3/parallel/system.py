@@ -30,7 +30,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import lie
-from ..errors import LinearSolverError, ParallelError, SingularSystemError
+from ..errors import LinearSolverError, OptionError, ParallelError, SingularSystemError
 from .matrix import CooMatrix, SharedCsrMatrix
 
 __all__ = ["LINEAR", "DistributedSystem", "rigid_body_modes"]
@@ -167,7 +167,10 @@ class DistributedSystem:
             k = str(k).lstrip("-")
             opts[f"core_se3_{k}"] = ("true" if v else "false") if isinstance(v, bool) else v
             self._option_names.append(f"core_se3_{k}")
-        self.ksp.setFromOptions()
+        try:
+            self.ksp.setFromOptions()
+        except PETSc.Error as exc:
+            self._refused(exc, petsc_options or {}, _DEFAULTS[linear])
         self.probed = False
         self.iterations = []               # Krylov iterations of every solve (iterative solvers)
 
@@ -359,6 +362,39 @@ class DistributedSystem:
         for v in vecs:
             v.destroy()
         ns.destroy()
+
+    def _refused(self, exc, user, defaults):
+        """PETSc refused the options (the same on every rank): an OptionError naming the user's
+        option it refuses (each tried alone on a scratch solver) and PETSc's reason, instead of
+        a PETSc traceback on every rank."""
+        PETSc = self.PETSc
+        reason = [ln.strip() for ln in str(exc).splitlines() if ln.strip()][-1:] or [f"error code {exc.ierr}"]
+        comm = self.ksp.getComm()
+        self.destroy()
+        culprit = None
+        for k, v in user.items():
+            k = str(k).lstrip("-")
+            opts = PETSc.Options()
+            trial = {**{str(d).lstrip("-"): x for d, x in defaults.items()}, k: v}    # the linear solver's own, and k
+            for name, x in trial.items():
+                opts[f"core_se3_probe_{name}"] = ("true" if x else "false") if isinstance(x, bool) else x
+            ksp = PETSc.KSP().create(comm)
+            ksp.setOptionsPrefix("core_se3_probe_")
+            try:
+                ksp.setFromOptions()
+            except PETSc.Error as err:
+                if culprit is None:
+                    culprit = (k, v)
+                    reason = [ln.strip() for ln in str(err).splitlines() if ln.strip()][-1:] or reason
+            finally:
+                ksp.destroy()
+                for name in trial:
+                    opts.delValue(f"core_se3_probe_{name}")
+        what = f"the option {culprit[0]} = {culprit[1]!r}" if culprit else f"the options {dict(user)!r}"
+        err = OptionError(f"PETSc refused {what} ({reason[0].lstrip('[0123456789] ')}); see the PETSc manual "
+                          "for the option's values (docs/PARALLEL.md)")
+        err.param = None if culprit is None else f"petsc.{culprit[0]}"
+        raise err from None
 
     def destroy(self):
         opts = self.PETSc.Options()

@@ -35,13 +35,14 @@ VERSION = 1
 
 
 def probe_record(p, axis=None):
-    """JSON form of a recorded probe state dict(u, R, w) (``rotation_about_axis`` = w . axis
-    when an axis is given).
+    """JSON form of a recorded probe state (``results.ProbeState``: the same keys;
+    ``rotation_about_axis`` = rotation_vector . axis when an axis is given).
 
     Parameters
     ----------
     p : dict
-        dict(u (3,), R (3, 3), w (3,)) as in ``StepResult.probes``.
+        dict(u (3,), rotation (3, 3), rotation_vector (3,)) as in ``StepResult.probes`` (the
+        older names R and w are read too).
     axis : (3,) array, optional
         Lab axis for ``rotation_about_axis`` [rad].
 
@@ -54,14 +55,17 @@ def probe_record(p, axis=None):
     Example
     -------
     >>> import numpy as np
-    >>> r = probe_record(dict(u=np.zeros(3), R=np.eye(3), w=np.array([0.0, 0.0, 2 * np.pi])), axis=np.array([0, 0, 1.0]))
+    >>> r = probe_record(dict(u=np.zeros(3), rotation=np.eye(3), rotation_vector=np.array([0.0, 0.0, 2 * np.pi])),
+    ...                  axis=np.array([0, 0, 1.0]))
     >>> list(r), r["rotation_angle"]                  # a full turn: the unwrapped angle is 2 pi
     (['u', 'rotation_angle', 'rotation_about_axis', 'rotation_vector', 'rotation'], 6.283185307179586)
     """
-    out = dict(u=np.asarray(p["u"]).tolist(), rotation_angle=float(np.linalg.norm(p["w"])))
+    w = np.asarray(p["rotation_vector"] if "rotation_vector" in p else p["w"])
+    R = np.asarray(p["rotation"] if "rotation" in p else p["R"])
+    out = dict(u=np.asarray(p["u"]).tolist(), rotation_angle=float(np.linalg.norm(w)))
     if axis is not None:
-        out["rotation_about_axis"] = float(np.asarray(p["w"]) @ axis)
-    out.update(rotation_vector=np.asarray(p["w"]).tolist(), rotation=np.asarray(p["R"]).tolist())
+        out["rotation_about_axis"] = float(w @ axis)
+    out.update(rotation_vector=w.tolist(), rotation=R.tolist())
     return out
 
 

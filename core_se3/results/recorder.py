@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .result import StepResult, unwrap_rotation
+from .result import ProbeState, StepResult, unwrap_rotation
 
 __all__ = ["StepRecorder", "lab_totals", "restore_multipliers"]
 
@@ -88,7 +88,7 @@ class StepRecorder:
     >>> from core_se3 import Problem, Material, mesh, lie
     >>> p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01)); p.add_probe("tip")
     >>> rec = StepRecorder(p)
-    >>> [float(rec.probes(lie.exp([0, 0, 0, 0, 0, a]) @ p.mesh.g0)["tip"]["w"][2].round(12)) for a in (2.0, 4.0, 6.0)]
+    >>> [float(rec.probes(lie.exp([0, 0, 0, 0, 0, a]) @ p.mesh.g0)["tip"]["rotation_vector"][2].round(12)) for a in (2.0, 4.0, 6.0)]
     [2.0, 4.0, 6.0]
     """
 
@@ -120,7 +120,7 @@ class StepRecorder:
         >>> p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01)); p.add_probe("tip")
         >>> eta = np.zeros((6, 6)); eta[:, 5] = 2 * np.pi
         >>> g = p.mesh.g0 @ lie.exp(eta)
-        >>> [abs(float(StepRecorder(p).probes(g, *a)["tip"]["w"][2].round(9))) for a in ((), (p.mesh.g0, eta))]
+        >>> [abs(float(StepRecorder(p).probes(g, *a)["tip"]["rotation_vector"][2].round(9))) for a in ((), (p.mesh.g0, eta))]
         [0.0, 6.283185307]
         """
         states = {}
@@ -139,7 +139,7 @@ class StepRecorder:
                 eta_w = pr.wa * increments[pr.node_a, 3:] + (1.0 - pr.wa) * increments[pr.node_b, 3:]
                 hint = ws + Rs @ eta_w
             self.unwrapped[name] = unwrap_rotation(R @ Rref.T, hint, self._log)
-            states[name] = dict(u=x - x0, R=R @ Rref.T, w=self.unwrapped[name].copy())
+            states[name] = ProbeState(x - x0, R @ Rref.T, self.unwrapped[name].copy())
         return states
 
     def step(self, lam, g, iterations, history, r_int, f_ext, stability=None, start=None, increments=None,

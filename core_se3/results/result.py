@@ -7,7 +7,7 @@ import numpy as np
 
 from .. import lie
 
-__all__ = ["StepResult", "Result", "unwrap_rotation"]
+__all__ = ["StepResult", "Result", "unwrap_rotation", "ProbeState"]
 
 
 def unwrap_rotation(R, w_prev, log=None):
@@ -53,11 +53,40 @@ def unwrap_rotation(R, w_prev, log=None):
     return w + 2 * np.pi * k * n
 
 
+class ProbeState(dict):
+    """The state of a probe at a step, with the keys of the result documents (``results.json``):
+    ``u`` (3,) displacement [length], ``rotation`` (3, 3) the rotation R R0^T from the
+    reference, ``rotation_vector`` (3,) [rad] unwrapped continuously along the path and
+    ``rotation_angle`` its norm [rad].  The short names of earlier versions, ``R`` and ``w``,
+    still read ``rotation`` and ``rotation_vector``.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> p = ProbeState(np.zeros(3), np.eye(3), np.array([0.0, 0.0, 2 * np.pi]))
+    >>> list(p), p["rotation_angle"], bool(p["w"] is p["rotation_vector"])
+    (['u', 'rotation', 'rotation_vector', 'rotation_angle'], 6.283185307179586, True)
+    """
+    ALIASES = {"R": "rotation", "w": "rotation_vector"}
+
+    def __init__(self, u, rotation, rotation_vector):
+        super().__init__(u=u, rotation=rotation, rotation_vector=rotation_vector,
+                         rotation_angle=float(np.linalg.norm(rotation_vector)))
+
+    def __missing__(self, key):
+        if key in self.ALIASES:
+            return self[self.ALIASES[key]]
+        raise KeyError(key)
+
+    def get(self, key, default=None):
+        return self[key] if key in self or key in self.ALIASES else default
+
+
 @dataclass
 class StepResult:
     """One converged (stored) state: its load factor, frames, Newton history, the total lab
     reaction and applied force and moment (about the origin), the probes
-    (name -> dict(u, R, w): displacement, rotation R R0^T, unwrapped rotation vector), the
+    (name -> :class:`ProbeState`: u, rotation R R0^T, rotation_vector unwrapped, rotation_angle), the
     scales of the balance check, and (path following) the stability of the state.
 
     Attributes
@@ -83,7 +112,8 @@ class StepResult:
         The same of the applied loads; at equilibrium they cancel the reactions
         (``balance_error``, relative to ``scale``, the sums of the nodal magnitudes).
     probes : dict
-        name -> dict(u (3,) [length], R (3, 3), w (3,) [rad], unwrapped along the path).
+        name -> :class:`ProbeState` (u (3,) [length], rotation (3, 3), rotation_vector (3,) [rad]
+        unwrapped along the path, rotation_angle [rad]): the keys of ``results.json``.
     stability : dict or None
         det_sign, negative_eigenvalues, q_dot_t of the tangent (path following only).
     attempts, linear_solves : int
@@ -118,7 +148,7 @@ class StepResult:
     reaction_moment: np.ndarray        # total lab reaction moment about the origin
     applied_force: np.ndarray          # total applied lab force
     applied_moment: np.ndarray         # total applied lab moment about the origin
-    probes: dict = field(default_factory=dict)   # name -> dict(u, R, w)
+    probes: dict = field(default_factory=dict)   # name -> ProbeState
     scale: tuple = (0.0, 0.0)         # sums of nodal reaction/applied force and moment magnitudes
     stability: dict | None = None      # det_sign, negative_eigenvalues, q_dot_t (path following)
     attempts: int = 0                  # Newton tries since the previous stored step (failed included)

@@ -52,21 +52,8 @@ def build_problem(v, spec, mesh, regions):
         v.fail("material", str(exc))
     prob.solve_defaults = solve_defaults(s)
     prob.scenario_parts = dict(fields={}, loads=[])     # what [design] variables refer to by name
-    axes = {"x": 0, "y": 1, "z": 2}
     for i, sp in enumerate(spec["supports"]):
-        key = f"supports[{i}]"
-        nodes = selection(mesh, sp)
-        try:
-            if sp["type"] == "clamp":
-                prob.clamp(nodes)
-            elif sp["type"] == "fix":
-                prob.fix(nodes, sp["dofs"])
-            else:
-                point = sp["point"] if sp["point"] is not None else mesh.X[nodes].mean(0)
-                prob.rotate_edge(nodes, sp["axis"], sp["angle"], point=point,
-                                 free=[axes[a] for a in sp["free"]], scale=make_scale(sp["scale"]))
-        except CoreSE3Error as exc:
-            v.fail(key, str(exc))
+        _add_support(v, prob, mesh, sp, f"supports[{i}]")
     for i, ld in enumerate(spec["loads"]):
         key = f"loads[{i}]"
         values = {k: x for k, x in ld.items() if k not in ("type", "scale", "edge", "nodes", "region")}
@@ -80,8 +67,10 @@ def build_problem(v, spec, mesh, regions):
         except CoreSE3Error as exc:
             param = getattr(exc, "param", None)
             v.fail(join(key, param) if param else key, str(exc))
+    _loads_act(v, prob, spec["solver"]["lam_end"], prob.scenario_parts["loads"], "loads")
     if spec["magnets"]:
         _add_magnets(v, prob, spec, mesh, regions)
+        _loads_act(v, prob, spec["solver"]["lam_end"], prob.scenario_parts["magnets"], "magnets")
     add_obstacles(v, prob, spec, regions)
     for pr in spec["probes"]:
         prob.add_probe(pr["name"], selection(mesh, pr))
@@ -90,6 +79,51 @@ def build_problem(v, spec, mesh, regions):
     except SingularSystemError as exc:
         v.fail("supports", str(exc))
     return prob
+
+
+def _loads_act(v, prob, lam, entries, section):
+    """A ScenarioError for a load (or magnet) that acts only on dofs the supports hold: their
+    reaction absorbs it and it does nothing (an edge force on the clamped edge).  Each entry's
+    loads are evaluated at the reference frames and the final load factor ``lam`` (one that is
+    switched off there, or vanishes at the reference, is not checked)."""
+    held = prob.constraint_mask()
+    g0 = prob.mesh.g0
+    for i, built in enumerate(entries):
+        f = sum(ld.evaluate(g0, lam, tangent=False).f for ld in built)
+        total = float(np.abs(f).max()) if np.size(f) else 0.0
+        if total > 0 and float(np.abs(np.where(held, 0.0, f)).max()) <= 1e-14 * total:
+            nodes = np.nonzero(np.abs(f).max(1) > 0)[0]
+            by = [f"supports[{j}]" for j, s in enumerate(prob.supports) if np.isin(nodes, s.nodes).any()]
+            v.fail(f"{section}[{i}]", f"it acts only on dofs that {', '.join(by) or 'the supports'} hold (nodes "
+                                  f"{nodes[:6].tolist()}{'...' if len(nodes) > 6 else ''}): their reaction would absorb "
+                                  "it and it would do nothing; load other nodes, or free those dofs")
+
+
+def _add_support(v, prob, mesh, sp, key):
+    """One [[supports]] entry; a conflict with an earlier one (a node moved by one and held by
+    the other) names both entries."""
+    axes = {"x": 0, "y": 1, "z": 2}
+    nodes = selection(mesh, sp)
+    try:
+        if sp["type"] == "clamp":
+            prob.clamp(nodes)
+        elif sp["type"] == "fix":
+            prob.fix(nodes, sp["dofs"])
+        elif sp["type"] == "rotate":
+            point = sp["point"] if sp["point"] is not None else mesh.X[nodes].mean(0)
+            prob.rotate_edge(nodes, sp["axis"], sp["angle"], point=point,
+                             free=[axes[a] for a in sp["free"]], scale=make_scale(sp["scale"]))
+        else:
+            rot = sp["rotate"] or dict(axis=None, angle=0.0, point=None)
+            prob.move_edge(nodes, sp["translate"], rot["axis"], rot["angle"], rot["point"],
+                           free=[axes[a] for a in sp["free"]], scale=make_scale(sp["scale"]))
+    except CoreSE3Error as exc:
+        other = getattr(exc, "other", None)
+        msg = str(exc)
+        if other is not None:
+            msg = msg.replace(f"support {len(prob.supports)} (", f"{key} (").replace(
+                f"support {other} (", f"supports[{other}] (")
+        v.fail(key, msg)
 
 
 def _add_magnets(v, prob, spec, mesh, regions):
@@ -116,6 +150,7 @@ def _add_magnets(v, prob, spec, mesh, regions):
             Br = np.einsum("kij,j->ki", R0, np.asarray(m["Br_frame"], float))
         mu0 = m["mu0"] if m["mu0"] is not None else mu0_units
         try:
-            prob.add_magnetic(Br, built[m["field"]], elements=elems, mu0=mu0)
+            added = prob.add_magnetic(Br, built[m["field"]], elements=elems, mu0=mu0)
         except CoreSE3Error as exc:
             v.fail(key, str(exc))
+        prob.scenario_parts.setdefault("magnets", []).append(added if isinstance(added, list) else [added])

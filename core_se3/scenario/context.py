@@ -12,7 +12,7 @@ import numpy as np
 from ..backend import launched_rank, launched_ranks
 from ..solvers import newton_steps
 
-__all__ = ["RunContext", "run_context"]
+__all__ = ["RunContext", "run_context", "on_root"]
 
 
 class RunContext:
@@ -127,3 +127,32 @@ def run_context(problem, solver, arc=False, state=None):
     return DistributedContext(problem, solver, state)
 
 
+
+
+def on_root(fn):
+    """Call ``fn()`` on rank 0 only of an MPI launch (the one process of a serial run) and raise its
+    core_se3 error on every rank, so that all ranks stop alike (e.g. an output directory that
+    holds another run).  Returns fn's value (picklable: every rank gets rank 0's).
+
+    Example
+    -------
+    >>> on_root(lambda: 42)
+    42
+    """
+    from ..errors import CoreSE3Error
+    if launched_ranks() == 1:
+        return fn()
+    from ..parallel import world
+    comm = world()
+    out, caught = None, None
+    if comm.rank == 0:
+        try:
+            out = fn()
+        except CoreSE3Error as exc:
+            caught = exc
+    err, out = comm.bcast((None if caught is None else (type(caught), str(caught)), out), root=0)
+    if caught is not None:
+        raise caught
+    if err is not None:
+        raise err[0](err[1])
+    return out

@@ -4,7 +4,7 @@
   values (fields, magnets per design region, material regions, load magnitudes) and without its
   [design] section -- ``core-se3 run`` reproduces the design's state;
 * ``design.json``: the result (variables, objective, gradient, misfits, history, every pose's
-  targets and achieved values);
+  targets and achieved values: angles in degrees, as the targets give them);
 * ``convergence.png``: objective and gradient norm per iteration;
 * ``target_<pose>.png``: the achieved shape with the targets and the achieved points;
 * ``vtu/<pose>/``: the VTU series of the final design's load path from the flat state.
@@ -19,9 +19,13 @@ import numpy as np
 from ..design import FieldVariable, LoadMagnitude, MaterialVariable, RegionMagnetisation
 from ..io import atomic_path, write_json_atomic
 from .build import mu0_of
+from .design_section import AngleInDegrees
 from .toml_writer import dumps
 
-__all__ = ["run_design", "optimised_document"]
+__all__ = ["run_design", "optimised_document", "DESIGN_FILES"]
+
+# the names a design writes (a foreign file of such a name is never overwritten)
+DESIGN_FILES = ("optimised*.toml", "design.json", "convergence.png", "target_*.png", "vtu/*/step_*.vtu", "vtu/*/series.pvd")
 
 _LOAD_KEYS = {"edge_force": ("force",), "edge_moment": ("moment",), "nodal": ("force", "moment"), "pressure": ("p",),
               "body_force": ("q",), "gravity": ("g",)}
@@ -116,12 +120,14 @@ def _target_plot(path, mesh, g, targets, achieved, title):
     return path
 
 
-def run_design(scn, out=None, method=None, max_iter=None, progress=False, vtu=True, plots=True):
+def run_design(scn, out=None, method=None, max_iter=None, progress=False, vtu=True, plots=True, force=False):
     """Optimise the [design] of a Scenario and write its outputs in ``out`` (module docstring).
 
-    Parameters: scn (a Scenario with [design]); out (default [output] dir or out/NAME-design);
-    method, max_iter (override the section's); progress (one line per iteration); vtu, plots.
-    Returns: (DesignResult, files: kind -> path).
+    Parameters: scn (a Scenario with [design]); out (default [output] dir or out/NAME-design,
+    the name made safe); method, max_iter (override the section's); progress (one line per
+    iteration); vtu, plots; force (write into the directory of an earlier design, deleting only
+    its files).  The directory is handled as a run's (``io.rundir``).  Returns: (DesignResult,
+    files: kind -> path).
 
     Example
     -------
@@ -133,11 +139,41 @@ def run_design(scn, out=None, method=None, max_iter=None, progress=False, vtu=Tr
     from ..backend import launched_rank
     from ..io import write_series
     from .runner import point_fields
-    ds = scn.spec["design"]
-    out = os.fspath(out or scn.output["dir"] or os.path.join("out", scn.name + "-design"))
+    from ..io.rundir import RunDirectory
+    from .context import on_root
+    from .runner import output_directory
+    rd = RunDirectory(output_directory(scn, out, "-design"), "design", DESIGN_FILES)
+    on_root(lambda: rd.claim(force=force))
+    try:
+        return _design(scn, rd, method, max_iter, progress, vtu, plots)
+    finally:
+        rd.release()
+
+
+def _pose_rows(scn, pose, st):
+    """The achieved values and misfits of a pose's targets (angles in degrees, as given)."""
+    tg, ach, rows = [], [], []
+    for t in pose.targets:
+        m = t.misfit(scn.problem, st.g, st.lam)
+        q = t.quantity.value(scn.problem, st.g, st.lam)
+        angle = dict(unit="deg", target=t.quantity.target, achieved=[float(t.quantity.target + q[0])]) \
+            if isinstance(t.quantity, AngleInDegrees) else {}
+        rows.append(dict(name=t.name, type=type(t.quantity).__name__, misfit=m.tolist(),
+                         max_misfit=float(np.abs(m).max()), value=q.tolist(), **angle))
+        target = getattr(t.quantity, "target", None)
+        if type(t.quantity).__name__ in ("ProbePosition", "NodePosition") and target is not None:
+            tg.extend(np.atleast_2d(target).tolist())
+            ach.extend((np.atleast_2d(target) + q.reshape(-1, 3)).tolist())
+    return tg, ach, rows
+
+
+def _design(scn, rd, method, max_iter, progress, vtu, plots):
+    from ..backend import launched_rank
+    from ..io import write_series
+    from ..io.rundir import safe_name
+    from .runner import point_fields
+    ds, out = scn.spec["design"], rd.path
     root = launched_rank() == 0          # under mpirun every rank optimises the same design, rank 0 writes
-    if root:
-        os.makedirs(out, exist_ok=True)
     design = scn.design()
     r = design.optimise(method or ds["method"], max_iter=ds["max_iter"] if max_iter is None else max_iter, tol=ds["tol"],
                         tolerance=ds["tolerance"], progress=progress, stop_at_tolerance=ds["stop_at_tolerance"])
@@ -146,26 +182,17 @@ def run_design(scn, out=None, method=None, max_iter=None, progress=False, vtu=Tr
     for k, pose in enumerate(design.poses):
         st = r.states[k]
         design.assign_pose(k, r.x)
-        tg, ach, rows = [], [], []
-        for t in pose.targets:
-            m = t.misfit(scn.problem, st.g, st.lam)
-            q = t.quantity.value(scn.problem, st.g, st.lam)
-            rows.append(dict(name=t.name, type=type(t.quantity).__name__, misfit=m.tolist(),
-                             max_misfit=float(np.abs(m).max()), value=q.tolist()))
-            target = getattr(t.quantity, "target", None)
-            if type(t.quantity).__name__ in ("ProbePosition", "NodePosition") and target is not None:
-                tg.extend(np.atleast_2d(target).tolist())
-                ach.extend((np.atleast_2d(target) + q.reshape(-1, 3)).tolist())
+        tg, ach, rows = _pose_rows(scn, pose, st)
         poses_doc.append(dict(name=pose.name, lam=pose.lam, targets=rows))
-        suffix = "" if len(design.poses) == 1 else f"_{pose.name}"
-        path = os.path.join(out, f"optimised{suffix}.toml")
+        suffix = "" if len(design.poses) == 1 else f"_{safe_name(pose.name)}"
+        path = rd.file(f"optimised{suffix}.toml")
         if root:
             with atomic_path(path) as tmp, open(tmp, "w") as fh:
                 fh.write(f"# written by core-se3 design from {scn.file}: pose {pose.name!r}\n")
                 fh.write(dumps(optimised_document(scn, design, r, k)))
         files[f"scenario{suffix}"] = path
         if plots and root:
-            files[f"target{suffix}"] = _target_plot(os.path.join(out, f"target{suffix or '_' + pose.name}.png"),
+            files[f"target{suffix}"] = _target_plot(rd.file(f"target{suffix or '_' + safe_name(pose.name)}.png"),
                                                     scn.mesh, st.g, tg, ach,
                                                     f"{scn.name}: pose {pose.name} (x target, o achieved)")
         if vtu:
@@ -174,16 +201,21 @@ def run_design(scn, out=None, method=None, max_iter=None, progress=False, vtu=Tr
             if not root:
                 continue
             extra = [point_fields(scn.problem, s.g, s.load_factor) for s in res.steps]
-            paths = write_series(os.path.join(out, "vtu", pose.name), scn.mesh.X, scn.mesh.quads, scn.mesh.g0,
+            vdir = os.path.join("vtu", safe_name(pose.name))
+            for i in range(len(res.steps)):
+                rd.file(os.path.join(vdir, f"step_{i:04d}.vtu"))
+            rd.file(os.path.join(vdir, "series.pvd"))
+            paths = write_series(os.path.join(out, vdir), scn.mesh.X, scn.mesh.quads, scn.mesh.g0,
                                  [s.g for s in res.steps], [s.load_factor for s in res.steps],
                                  point_data_per_step=extra)
             files[f"vtu_{pose.name}"] = paths[-1]
     if plots and r.history and root:
-        files["convergence"] = _convergence_plot(os.path.join(out, "convergence.png"), r.history,
+        files["convergence"] = _convergence_plot(rd.file("convergence.png"), r.history,
                                                  f"{scn.name}: {r.method}")
+    from .provenance import problem_provenance
     doc = dict(schema="core-se3-design v1", scenario=scn.file, name=scn.name, result=r.document(), poses=poses_doc,
-               files={k: os.path.relpath(v, out) for k, v in files.items()})
-    files["design"] = os.path.join(out, "design.json")
+               files={k: os.path.relpath(v, out) for k, v in files.items()}, provenance=problem_provenance(scn.problem))
+    files["design"] = rd.file("design.json")
     if root:
         write_json_atomic(files["design"], doc)
     return r, files

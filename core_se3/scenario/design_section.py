@@ -36,6 +36,9 @@ and built into a :class:`core_se3.design.Design`.
     value = [18.0, 0.0, 10.0]       # position [length]; angle [deg]; orientation rotation vector [rad]
     components = [0, 2]             # optional
     weight = 1.0
+
+The full schema, with every key, is in docs/SCENARIOS.md ("[design]").  An angle target's
+value, misfit (in design.json), scale and the tolerance it is compared with are in degrees.
 """
 from __future__ import annotations
 
@@ -43,11 +46,12 @@ import numpy as np
 
 from ..design import (METHODS, Design, FieldVariable, LoadMagnitude, MaterialVariable, NodePosition, Orientation,
                       Pose, ProbePosition, RegionMagnetisation, RotationAngle, Smoothness, Target)
+from ..design.objectives import Quantity
 from .. import lie
 from ..errors import CoreSE3Error, ScenarioError, did_you_mean
 from .validate import join, show, tname
 
-__all__ = ["design_section", "build_design", "DESIGN_KEYS"]
+__all__ = ["design_section", "build_design", "DESIGN_KEYS", "AngleInDegrees"]
 
 DESIGN_KEYS = ("method", "max_iter", "tolerance", "tol", "stop_at_tolerance", "variables", "poses", "targets")
 VARIABLE_KEYS = {"field": ("field", "form", "plane", "free", "B_max", "pose"),
@@ -74,6 +78,36 @@ def _plane(v, d, k, key, default):
     if not isinstance(x, list) or len(x) != 2:
         v.fail(join(key, k), f"expected two 3-vectors [e1, e2], got {tname(x)} {show(x)}")
     return [v.vector({"e": e}, "e", f"{join(key, k)}[{i}]", nonzero=True) for i, e in enumerate(x)]
+
+
+class AngleInDegrees(Quantity):
+    """A scenario's angle target: a ``RotationAngle`` with its value, misfit, target and scale
+    in degrees (an angle goes in and comes out of a scenario in degrees); the scenario's default
+    scale is 1 rad = 57.3 deg (the Python API's, so the objective is the same).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import Problem, Material, mesh, lie
+    >>> p = Problem(mesh.rectangle(2.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
+    >>> g = lie.exp(np.array([0, 0, 0, 0, -0.5, 0])) @ p.mesh.g0            # 0.5 rad about -y
+    >>> round(float(AngleInDegrees(p, node=2, target=30.0).value(p, g, 1.0)[0]), 6)   # 28.6479 - 30
+    -1.35211
+    """
+    DEGREE = 180.0 / np.pi
+
+    def __init__(self, problem, target=None, **kw):
+        self.angle = RotationAngle(problem, target=None if target is None else np.radians(target), **kw)
+        self.target, self.name, self.size = target, self.angle.name, 1
+
+    def value(self, problem, g, lam):
+        return self.DEGREE * self.angle.value(problem, g, lam)
+
+    def jacobian(self, problem, g, lam):
+        return self.DEGREE * self.angle.jacobian(problem, g, lam)
+
+    def explicit(self, problem, g, lam, variable):
+        return self.DEGREE * self.angle.explicit(problem, g, lam, variable)
 
 
 def design_section(v, doc, spec, mesh, regions):
@@ -264,8 +298,9 @@ def build_design(scn):
         try:
             if t["type"] == "position":
                 q = ProbePosition(prob, t["probe"], t["value"]) if "probe" in t else NodePosition(prob, [t["node"]], t["value"])
-            elif t["type"] == "angle":
-                q = RotationAngle(prob, axis=t["axis"], target=np.radians(t["value"]), **where)
+            elif t["type"] == "angle":             # degrees in, degrees out (misfit, tolerance, scale)
+                q = AngleInDegrees(prob, axis=t["axis"], target=t["value"], **where)
+                t = dict(t, scale=t["scale"] if t["scale"] is not None else AngleInDegrees.DEGREE)
             else:                           # the frame turned by the rotation vector from its reference
                 q = Orientation(prob, **where)
                 q.target = lie.exp_so3(np.asarray(t["value"], float)) @ q.target

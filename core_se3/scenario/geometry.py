@@ -9,12 +9,14 @@ import numpy as np
 
 from .. import mesh as M
 from ..errors import CoreSE3Error, did_you_mean
+from ..io.files import check_input_file, without_contents
 from .validate import join, show, tname
 
 __all__ = ["GENERATORS", "MAX_ELEMENTS", "mesh_section", "edges_section", "regions_section",
            "region_ref", "nodes_ref", "selection", "is_line", "probes_section"]
 
 MAX_ELEMENTS = 1_000_000
+MAX_MESH_BYTES = 2 ** 30          # 1 GiB: an ASCII Gmsh file of 10^6 quads has about 100 MB
 
 # generator -> (function, [(parameter, kind)]); kinds: pos (> 0), real, count (int >= 1), angle (> 0)
 GENERATORS = {
@@ -53,18 +55,22 @@ def mesh_section(v, d, base_dir):
         hint = v.vector(d, "d1_hint", key, default=[1.0, 0.0, 0.0], nonzero=True)
         tri = v.string(d, "triangles", key, default="error", choices=("error", "split"))
         path = fname if os.path.isabs(fname) else os.path.join(base_dir, fname)
-        if not os.path.isfile(path):
+        if not os.path.exists(path):
             v.fail(join(key, "file"), f"mesh file {fname!r} does not exist (looked for {path})")
+        why = check_input_file(path, MAX_MESH_BYTES, "a mesh file")
+        if why is not None:
+            v.fail(join(key, "file"), why)
         try:
             raw = M.read_meshio(path)
         except CoreSE3Error as exc:
-            v.fail(join(key, "file"), f"cannot read mesh file {fname!r}: {str(exc).split(': ', 1)[-1]}")
+            detail = without_contents(str(exc).split(f"{path!r}: ", 1)[-1], path)
+            v.fail(join(key, "file"), f"cannot read mesh file {fname!r}: {detail}")
         try:
             mesh = M.from_meshio(raw, d1_hint=hint, triangles=tri)
         except CoreSE3Error as exc:
-            v.fail(join(key, "file"), f"bad mesh {fname!r}: {exc}")
+            v.fail(join(key, "file"), f"bad mesh {fname!r}: {without_contents(str(exc), path)}")
         except Exception as exc:      # meshio objects can be malformed in many ways
-            v.fail(join(key, "file"), f"bad mesh {fname!r}: {type(exc).__name__}: {exc}")
+            v.fail(join(key, "file"), f"bad mesh {fname!r}: {type(exc).__name__}: {without_contents(str(exc), path)}")
         with open(path, "rb") as fh:
             digest = hashlib.sha256(fh.read()).hexdigest()
         spec = dict(file=fname, d1_hint=hint)
@@ -112,6 +118,8 @@ def mesh_section(v, d, base_dir):
 def _box(v, d, key, X, scale):
     """Mask of points X inside the box {x = [lo, hi], y = ..., z = ..., tol} (missing = unbounded)."""
     v.table(d, key, ("x", "y", "z", "tol"))
+    if not any(c in d for c in "xyz"):
+        v.fail(key, "an empty box selects every node (not a line): give x, y and/or z = [lo, hi]")
     tol = v.number(d, "tol", key, default=1e-9 * scale, lo=0.0)
     mask = np.ones(len(X), bool)
     for i, c in enumerate("xyz"):
@@ -139,7 +147,9 @@ def edges_section(v, doc, mesh):
             nodes = _order_along(mesh, nodes)
             spec = dict(box=t["box"])
         else:
-            nodes = np.asarray(_int_list(v, t, "nodes", key, mesh.n_nodes), np.int64)
+            ids = _near_nodes(v, t["nodes"], key, mesh) if isinstance(t["nodes"], dict) else \
+                _int_list(v, t, "nodes", key, mesh.n_nodes)
+            nodes = np.asarray(ids, np.int64)
             spec = dict(nodes=nodes.tolist())
         if len(nodes) == 0:
             v.fail(key, "selects no nodes")
@@ -158,7 +168,8 @@ def _order_along(mesh, nodes):
     if len(segs) == 0:
         return nodes
     order = M.chain_order([tuple(s) for s in segs.tolist()])
-    return order if len(order) == len(nodes) else nodes
+    # a line visits every node once (a block of nodes gave a walk that repeats one and skips another)
+    return order if sorted(order) == sorted(np.asarray(nodes).tolist()) else nodes
 
 
 def is_line(mesh, nodes):
@@ -169,7 +180,9 @@ def is_line(mesh, nodes):
     return all(tuple(sorted((int(a), int(b)))) in key for a, b in zip(nodes[:-1], nodes[1:]))
 
 
-def _int_list(v, d, k, key, n):
+def _int_list(v, d, k, key, n, what="node"):
+    """A non-empty array of existing ids, each once (a node listed three times would carry a
+    nodal load three times)."""
     path = join(key, k)
     x = d[k]
     if not isinstance(x, list) or not x or any(isinstance(i, bool) or not isinstance(i, int) for i in x):
@@ -177,7 +190,31 @@ def _int_list(v, d, k, key, n):
     bad = [i for i in x if i < 0 or i >= n]
     if bad:
         v.fail(path, f"ids {bad[:5]} do not exist (valid: 0 .. {n - 1})")
+    ids, counts = np.unique(x, return_counts=True)
+    if counts.max() > 1:
+        i = int(np.argmax(counts))
+        v.fail(path, f"{what} {int(ids[i])} is listed {int(counts[i])} times: list every {what} once")
     return x
+
+
+def _near_nodes(v, t, key, mesh):
+    """``nodes = {near = [x, y, z], tol = ...}`` (or ``near = [[x, y, z], ...]``): the node at each
+    point (``Mesh.node_at``: the nearest, within tol)."""
+    path = join(key, "nodes")
+    v.table(t, path, ("near", "tol"), required=("near",))
+    pts = t["near"]
+    pts = pts if isinstance(pts, list) and pts and all(isinstance(p, list) for p in pts) else [pts]
+    tol = v.number(t, "tol", path, default=None, lo=0.0, lo_open=True)
+    out = []
+    for i, p in enumerate(pts):
+        x = v.vector({"near": p}, "near", path if len(pts) == 1 else f"{path}.near[{i}]")
+        try:
+            out.append(mesh.node_at(x, tol))
+        except CoreSE3Error as exc:
+            v.fail(join(path, "near"), str(exc))
+    if len(set(out)) != len(out):
+        v.fail(join(path, "near"), f"two points find the same node ({out}): give each node once")
+    return out
 
 
 def regions_section(v, doc, mesh):
@@ -196,7 +233,7 @@ def regions_section(v, doc, mesh):
         if "box" in t:
             ids = np.nonzero(_box(v, t["box"], join(key, "box"), centroids, scale))[0]
         else:
-            ids = np.unique(_int_list(v, t, "elements", key, mesh.n_elements))
+            ids = np.unique(_int_list(v, t, "elements", key, mesh.n_elements, what="element"))
         if len(ids) == 0:
             v.fail(key, "selects no elements")
         regions[name] = np.asarray(ids, np.int64)
@@ -231,6 +268,8 @@ def nodes_ref(v, t, key, mesh, required=True, regions=None):
                                        f"{', '.join(sorted(mesh.edges)) or 'no named edges'}")
         return dict(edge=name)
     if "nodes" in t:
+        if isinstance(t["nodes"], dict):
+            return dict(nodes=_near_nodes(v, t["nodes"], key, mesh))
         return dict(nodes=_int_list(v, t, "nodes", key, mesh.n_nodes))
     if required:
         v.fail(key, "missing the node selection: give 'edge' (a named node set) or 'nodes' (ids)"
@@ -253,5 +292,9 @@ def probes_section(v, doc, mesh):
         if not name or name in seen:
             v.fail(join(key, "name"), f"probe names must be unique and non-empty, got {name!r}")
         seen.add(name)
-        out.append(dict(name=name, **nodes_ref(v, t, key, mesh)))
+        sel = nodes_ref(v, t, key, mesh)
+        if "edge" in sel and not is_line(mesh, mesh.edges[sel["edge"]]):
+            v.fail(join(key, "edge"), f"node set {sel['edge']!r} is not a line of element edges, so it has no "
+                                      "midpoint to record: select a line (or one node, nodes = [ID])")
+        out.append(dict(name=name, **sel))
     return out

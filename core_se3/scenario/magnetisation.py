@@ -15,6 +15,8 @@ import os
 
 import numpy as np
 
+from ..io.files import read_input_file
+
 from .validate import join
 
 __all__ = ["DIRECTIONS", "pattern_section", "pattern_br"]
@@ -71,20 +73,28 @@ def pattern_section(v, t, key, mesh, elems, base_dir):
     return out
 
 
+MAX_TABLE_BYTES = 256 * 2 ** 20      # a table of 10^6 elements has about 60 MB
+
+
 def _read_table(v, key, fname, path):
-    if not os.path.isfile(path):
+    """The table's kind, ids, values and digest; errors never show the file's contents (a
+    scenario may name any file)."""
+    if not os.path.exists(path):
         v.fail(key, f"magnetisation table {fname!r} does not exist (looked for {path})")
-    with open(path, "rb") as fh:
-        data = fh.read()
+    try:
+        data = read_input_file(path, MAX_TABLE_BYTES, "a magnetisation table")
+    except (ValueError, OSError) as exc:
+        v.fail(key, str(exc))
     rows = [r for r in csv.reader(data.decode("utf-8", "replace").splitlines()) if r and not r[0].startswith("#")]
     head = [c.strip() for c in rows[0]] if rows else []
     if head not in (["element", "Brx", "Bry", "Brz"], ["node", "Brx", "Bry", "Brz"]):
-        v.fail(key, f"{fname}: expected the header element,Brx,Bry,Brz or node,Brx,Bry,Brz, got {','.join(head)!r}")
+        v.fail(key, f"{fname}: expected the header element,Brx,Bry,Brz or node,Brx,Bry,Brz as its first row "
+                    f"(a CSV table; its first row has {len(head)} field{'s' if len(head) != 1 else ''})")
     try:
         table = np.array([[float(c) for c in r] for r in rows[1:]], float).reshape(-1, 4)
     except ValueError:
         line = next(i for i, r in enumerate(rows[1:], 2) if not _numeric(r))
-        v.fail(key, f"{fname}: row {line} is not four numbers: {','.join(rows[line - 1])!r}")
+        v.fail(key, f"{fname}: row {line} is not four numbers (id, Brx, Bry, Brz)")
     if not np.all(np.isfinite(table)) or np.any(table[:, 0] != np.round(table[:, 0])):
         v.fail(key, f"{fname}: ids must be integers and Br values finite numbers")
     return head[0], table[:, 0].astype(np.int64), table[:, 1:], hashlib.sha256(data).hexdigest()

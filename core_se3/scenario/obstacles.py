@@ -3,7 +3,7 @@
 parameters (read from the registry, so a new kind needs no code here), ``name``, the contact
 elements ``region`` (default all), an optional rigid ``motion`` with the load factor (a table:
 ``translate``, ``axis``, ``angle``, ``point``, ``scale``) and the enforcement (``mode``, ``beta``,
-``eps``, ``tol``, ``cap_depth``, ``side``).  Schema and examples: docs/SCENARIOS.md."""
+``eps``, ``tol``, ``cap_depth``, ``side``) and Coulomb's ``friction`` coefficient (default 0).  Schema and examples: docs/SCENARIOS.md."""
 from __future__ import annotations
 
 from ..errors import CoreSE3Error
@@ -14,7 +14,7 @@ from .validate import join, make_scale
 
 __all__ = ["OBSTACLE_KEYS", "MOTION_KEYS", "SIDES", "obstacles_section", "add_obstacles", "obstacles_of"]
 
-OBSTACLE_KEYS = ("type", "name", "region", "motion", "mode", "beta", "eps", "tol", "cap_depth", "side")
+OBSTACLE_KEYS = ("type", "name", "region", "motion", "mode", "beta", "eps", "tol", "cap_depth", "side", "friction")
 MOTION_KEYS = ("translate", "axis", "angle", "point", "scale")
 SIDES = {"auto": "auto", "top": 1.0, "bottom": -1.0}        # the contact face: auto, +d3, -d3
 
@@ -38,6 +38,7 @@ def obstacles_section(v, doc, regions):
         for k in ("eps", "tol", "cap_depth"):
             o[k] = v.number(t, k, key, default=None, lo=0.0, lo_open=True)
         o["side"] = v.string(t, "side", key, default="auto", choices=tuple(SIDES))
+        o["friction"] = v.number(t, "friction", key, default=0.0, lo=0.0)         # Coulomb's mu
         o["motion"] = None
         if "motion" in t:
             mk = join(key, "motion")
@@ -69,10 +70,11 @@ def add_obstacles(v, prob, spec, regions):
         try:
             prob.add_obstacle(o["type"], region=regions[o["region"]] if o["region"] else None, motion=motion,
                               name=o["name"], mode=o["mode"], beta=o["beta"], eps=o["eps"], tol=o["tol"],
-                              side=SIDES[o["side"]], cap_depth=o["cap_depth"], **o["params"])
+                              side=SIDES[o["side"]], cap_depth=o["cap_depth"], friction=o["friction"],
+                              **o["params"])
         except CoreSE3Error as exc:
             param = getattr(exc, "param", None)
-            if param in ("nodes", "beta", "eps", "tol", "cap_depth", "side", "mode", "type"):
+            if param in ("nodes", "beta", "eps", "tol", "cap_depth", "side", "mode", "type", "friction"):
                 param = None if param == "nodes" else param
             v.fail(join(key, param) if param else key, str(exc))
 

@@ -1,5 +1,5 @@
-"""Outputs of a scenario run besides the VTU series: the physical loads of a step, the unit
-system record, the probe plot (probes.png) and the picture of the shell (shell.png)."""
+"""Outputs of a scenario run: the VTU point and cell fields, the physical loads of a step, the
+unit system record, the probe plot (probes.png) and the picture of the shell (shell.png)."""
 from __future__ import annotations
 
 import os
@@ -10,7 +10,40 @@ from ..io import atomic_path
 from .obstacles import obstacles_of
 from .units import UNIT_SYSTEMS, describe_units, physical_loads
 
-__all__ = ["physical_record", "unit_system_record", "plot_probes", "picture"]
+__all__ = ["physical_record", "unit_system_record", "plot_probes", "picture", "point_fields", "cell_fields"]
+
+
+def point_fields(prob, g, lam=1.0):
+    """Extra VTU point fields of the problem's loads (magnetisation, magnetic couple, ...).
+
+    Parameters: prob (Problem), g (n, 4, 4), lam.  Returns: name -> (n, k) array (empty without
+    such loads).
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> from core_se3.model import UniformField
+    >>> p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
+    >>> _ = p.add_magnetic(Br=(0.1, 0.0, 0.0), field=UniformField((0.0, 0.0, 0.01)))
+    >>> sorted(point_fields(p, p.mesh.g0))
+    ['magnetic_couple', 'magnetic_force', 'magnetisation_Br']
+    """
+    return {k: np.asarray(v) for k, v in prob.output_fields(g, lam).items()}
+
+
+def cell_fields(prob, g):
+    """VTU cell fields of the element (stress resultants at the element centres).
+
+    Parameters: prob (Problem), g (n, 4, 4).  Returns: name -> (m, 3) array.
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
+    >>> {k: v.shape for k, v in cell_fields(p, p.mesh.g0).items() if k in ("N1", "M2")}
+    {'N1': (2, 3), 'M2': (2, 3)}
+    """
+    return prob.element.cell_fields(g)
 
 
 def physical_record(scn, lam):

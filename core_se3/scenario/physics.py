@@ -23,7 +23,9 @@ __all__ = ["MATERIAL_KEYS", "material_section", "material_index", "fields_sectio
            "NON_PHYSICAL", "SUPPORT_KEYS"]
 
 MATERIAL_KEYS = ("E", "nu", "h", "shear_factor", "drilling", "rho")
-SUPPORT_KEYS = {"clamp": (), "fix": ("dofs",), "rotate": ("axis", "angle", "point", "free", "scale")}
+SUPPORT_KEYS = {"clamp": (), "fix": ("dofs",), "rotate": ("axis", "angle", "point", "free", "scale"),
+                "prescribed": ("translate", "rotate", "free", "scale")}
+MOVING_SUPPORTS = ("rotate", "prescribed")          # supports that move their nodes with the load factor
 _NEWTON = NewtonOptions()
 _ARC = ArcLengthOptions()
 # [solver] keys of both controls; their defaults are NewtonOptions' (arc-length runs of scenario
@@ -164,6 +166,7 @@ def magnets_section(v, doc, regions, fields, mesh=None, base_dir="."):
             m["field"] = next(iter(fields))
         else:
             v.fail(join(key, "field"), f"several fields are defined ({', '.join(fields)}): name one")
+        _refuse_repeat(v, out, m, key, "magnets", "the magnet")
         out.append(m)
     if fields and not out:
         v.fail("fields", "fields are defined but no [[magnets]] use them")
@@ -192,13 +195,42 @@ def supports_section(v, doc, mesh, regions):
             s["axis"] = v.vector(t, "axis", key, nonzero=True)
             s["angle"] = v.number(t, "angle", key)
             s["point"] = v.vector(t, "point", key, default=None)
+        elif typ == "prescribed":
+            s.update(_prescribed(v, t, key))
+        if typ in MOVING_SUPPORTS:
             fr = t.get("free", [])
-            if not isinstance(fr, list) or any(x not in ("x", "y", "z") for x in fr):
-                v.fail(join(key, "free"), f'expected an array of lab axes "x", "y", "z", got {show(fr)}')
+            if not isinstance(fr, list) or any(x not in ("x", "y", "z") for x in fr) or len(set(fr)) != len(fr):
+                v.fail(join(key, "free"), f'expected an array of distinct lab axes "x", "y", "z", got {show(fr)}')
             s["free"] = fr
             s["scale"] = v.scale(t, key)
+        _refuse_repeat(v, out, s, key, "supports", "the support")
         out.append(s)
     return out
+
+
+def _prescribed(v, t, key):
+    """The motion of a ``type = "prescribed"`` support: ``translate`` [length, at scale 1] and/or
+    ``rotate = {axis, angle [rad], point}`` (the nodes' centroid by default); at load factor lam
+    x -> p + Q(s angle) (x - p) + s translate, s = scale(lam)."""
+    if "translate" not in t and "rotate" not in t:
+        v.fail(key, "a prescribed support needs 'translate' = [dx, dy, dz] and/or 'rotate' = {axis, angle, point}")
+    out = dict(translate=v.vector(t, "translate", key, default=[0.0, 0.0, 0.0]), rotate=None)
+    if "rotate" in t:
+        k2 = join(key, "rotate")
+        v.table(t["rotate"], k2, ("axis", "angle", "point"), required=("axis", "angle"))
+        out["rotate"] = dict(axis=v.vector(t["rotate"], "axis", k2, nonzero=True),
+                             angle=v.number(t["rotate"], "angle", k2),
+                             point=v.vector(t["rotate"], "point", k2, default=None))
+    return out
+
+
+def _refuse_repeat(v, done, entry, key, section, what):
+    """A ScenarioError when ``entry`` repeats an earlier entry of ``section`` exactly (a copy
+    that would apply a load twice, or hold the same nodes twice)."""
+    for j, other in enumerate(done):
+        if other == entry:
+            v.fail(key, f"repeats {section}[{j}] exactly: {what} would act twice; remove one (or, for a "
+                        "load meant twice, double its value)")
 
 
 def loads_section(v, doc, mesh, regions):
@@ -225,6 +257,7 @@ def loads_section(v, doc, mesh, regions):
                 v.fail(join(key, bad[0]) if bad[0] else key, bad[1])
         if not nodal:
             _, ld["region"] = region_ref(v, t, key, regions)
+        _refuse_repeat(v, out, ld, key, "loads", "the load")
         out.append(ld)
     return out
 
@@ -246,7 +279,7 @@ def solver_section(v, doc):
     if s["lam_end"] == 0:
         v.fail(join(key, "lam_end"), "expected a non-zero final load factor, got 0")
     for name in ("rtol", "dtol"):
-        s[name] = v.number(d, name, key, default=SOLVER_DEFAULTS[name], lo=0.0, lo_open=True, hi=1.0)
+        s[name] = v.number(d, name, key, default=SOLVER_DEFAULTS[name], lo=0.0, lo_open=True, hi=1.0, hi_open=True)
     s["max_iter"] = v.integer(d, "max_iter", key, default=SOLVER_DEFAULTS["max_iter"], lo=1, hi=1000)
     s["max_cutbacks"] = v.integer(d, "max_cutbacks", key, default=SOLVER_DEFAULTS["max_cutbacks"], lo=0, hi=50)
     s["element"] = v.string(d, "element", key, default="default", choices=tuple(ELEMENTS))

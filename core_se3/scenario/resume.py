@@ -1,13 +1,16 @@
 """Checks of ``--resume``: the checkpoint belongs to this scenario (else the message names the
-keys that changed), and the load factors done so far are the first ones of the scenario's steps
-(so a finished run can be extended to a higher ``lam_end``)."""
+keys that changed), it is consistent (a hand-edited or damaged file: frames of the mesh's shape,
+proper rotations, its step and load factor those of its last record, records numbered from 0,
+the probes' unwrapped rotations), it is of the same control, and the load factors done so far
+are the first ones of the scenario's steps (so a finished run can be extended to a higher
+``lam_end``)."""
 from __future__ import annotations
 
 import numpy as np
 
 from ..errors import CheckpointError
 
-__all__ = ["changed_keys", "check_same_scenario", "check_extension"]
+__all__ = ["changed_keys", "check_same_scenario", "check_extension", "check_checkpoint", "check_consistent"]
 
 
 def changed_keys(old, new, prefix=""):
@@ -79,3 +82,75 @@ def check_extension(path, records, lams, solver):
         raise CheckpointError(f"checkpoint {path}: {key} (or solver.lam_end) changed: step {bad + 1} was done at "
                               f"load factor {done[bad]:.6g}, the scenario now puts it at {lams[bad]:.6g}; an "
                               "extended run must keep the steps done (raise lam_end and steps in proportion)")
+
+
+def check_checkpoint(path, st, scn):
+    """Every check of a checkpoint ``st`` (``io.Checkpoint.load``) before a resume of ``scn``:
+    the same scenario, a consistent file, the same control, the steps done among the scenario's.
+    CheckpointError naming what is wrong."""
+    check_same_scenario(path, st, scn)
+    arc = scn.solver["control"] == "arclength"
+    was_arc = st["extra"].get("control") == "arclength"
+    if arc and (not was_arc or "arc" not in st["extra"]):
+        raise CheckpointError(f"checkpoint {path} holds no arc-length path state (written by a load-controlled run "
+                              "or by a version that could not resume arc length): start over with --force or use "
+                              "another --out")
+    if not arc and was_arc:
+        raise CheckpointError(f"checkpoint {path} is of an arc-length run; this scenario is load-controlled: start "
+                              "over with --force or use another --out")
+    check_consistent(path, st, scn.problem)
+    if not arc:
+        check_extension(path, st["records"], scn.load_factors(), scn.solver)
+
+
+def check_consistent(path, st, problem):
+    """CheckpointError unless the checkpoint's parts agree with each other and with the problem
+    (a file edited by hand, or damaged): frames (n, 4, 4) of finite proper rigid motions for the
+    mesh's n nodes, records numbered 0..step, the step and load factor those of the last record,
+    the probes' unwrapped rotations 3-vectors of the problem's probes, the timings numbers.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
+    >>> st = dict(g=np.zeros((5, 4, 4)), step=0, lam=0.0, records=[{"step": 0, "load_factor": 0.0}], unwrap={},
+    ...           timings={})
+    >>> check_consistent("ck.npz", st, p)
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.CheckpointError: checkpoint ck.npz is inconsistent: its frames g have shape (5, 4, 4), the mesh has 6 nodes (expected (6, 4, 4)); it was edited or damaged: start over with --force, or use another --out
+    """
+    def bad(why):
+        raise CheckpointError(f"checkpoint {path} is inconsistent: {why}; it was edited or damaged: start over with "
+                              "--force, or use another --out")
+    n = problem.mesh.n_nodes
+    g = np.asarray(st["g"])
+    if g.shape != (n, 4, 4):
+        bad(f"its frames g have shape {g.shape}, the mesh has {n} nodes (expected ({n}, 4, 4))")
+    R = g[:, :3, :3]
+    if not np.all(np.isfinite(g)) or np.abs(R @ np.swapaxes(R, 1, 2) - np.eye(3)).max() > 1e-8 \
+            or np.any(np.linalg.det(R) < 0) or np.abs(g[:, 3] - [0.0, 0.0, 0.0, 1.0]).max() > 0:
+        bad("its frames g are not finite proper rigid motions")
+    recs = st["records"]
+    if not isinstance(recs, list) or not recs or any(not isinstance(r, dict) for r in recs):
+        bad("it holds no step records")
+    try:
+        steps = [int(r["step"]) for r in recs]
+        lams = [float(r["load_factor"]) for r in recs]
+    except (KeyError, TypeError, ValueError):
+        bad("a step record lacks its step number or load factor")
+    if steps != list(range(len(recs))):
+        bad(f"its records are numbered {steps[:6]}{'...' if len(steps) > 6 else ''}, not 0, 1, 2, ...")
+    if st["step"] != steps[-1]:
+        bad(f"its step {st['step']} is not that of its last record ({steps[-1]})")
+    if not np.isfinite(st["lam"]) or st["lam"] != lams[-1]:
+        bad(f"its load factor {st['lam']!r} is not that of its last record ({lams[-1]!r})")
+    solver = st["extra"].get("newton") or st["extra"].get("arc") or {}
+    if "lam" in solver and solver["lam"] != st["lam"]:
+        bad(f"its solver state is at load factor {solver['lam']!r}, its frames at {st['lam']!r}")
+    if sorted(st["unwrap"]) != sorted(problem.probes) or any(np.shape(w) != (3,) or not np.all(np.isfinite(w))
+                                                             for w in st["unwrap"].values()):
+        bad(f"its probe rotations ({sorted(st['unwrap'])}) are not 3-vectors of the probes {sorted(problem.probes)}")
+    if not isinstance(st["timings"], dict) or any(not isinstance(v, (int, float)) for v in st["timings"].values()):
+        bad("its timings are not numbers")

@@ -22,9 +22,9 @@ from .design_section import design_section
 from .keys import check_key, split_dotted
 from .geometry import edges_section, mesh_section, probes_section, regions_section
 from .obstacles import obstacles_section
-from .physics import (NON_PHYSICAL, fields_section, loads_section, magnets_section,
+from .physics import (MOVING_SUPPORTS, NON_PHYSICAL, fields_section, loads_section, magnets_section,
                       material_section, output_section, solver_section, supports_section)
-from .units import plausibility, units_section
+from .units import plausibility, unit_defaults, units_section
 from .validate import Validator
 
 try:                                  # Python >= 3.11
@@ -35,6 +35,7 @@ except ModuleNotFoundError:           # pragma: no cover - Python 3.10
 __all__ = ["Scenario", "load", "loads", "from_dict", "TOP_KEYS", "split_dotted"]
 
 EXTENSIBLE = ("steps", "lam_end", "load_factors")     # load control: not in the fingerprint
+MAX_SCENARIO_BYTES = 16 * 2 ** 20        # a scenario file is text of a few kB; refuse what cannot be one
 TOP_KEYS = ("name", "description", "units", "mesh", "edges", "regions", "material", "fields",
             "magnets", "supports", "loads", "probes", "solver", "output", "obstacles", "design", "sweep")
 
@@ -216,10 +217,13 @@ def load(path, strict=False):
     >>> scn.name, scn.mesh.n_elements, scn.solver["steps"]
     ('strip', 2, 10)
     """
+    from ..io import read_input_file
     path = os.fspath(path)
     try:
-        with open(path, "rb") as fh:
-            data = fh.read()
+        os.stat(path)
+        data = read_input_file(path, MAX_SCENARIO_BYTES, "a scenario file")
+    except ValueError as exc:
+        raise ScenarioError(str(exc), path) from None
     except OSError as exc:
         raise ScenarioError(f"cannot read the scenario file: {exc.strerror or exc}", path) from None
     try:
@@ -303,14 +307,15 @@ def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario", strict=
     spec["magnets"] = magnets_section(v, doc, regions, spec["fields"], mesh, base_dir)
     spec["supports"] = supports_section(v, doc, mesh, regions)
     spec["loads"] = loads_section(v, doc, mesh, regions)
+    unit_defaults(v, doc, spec)                         # gravity's g, a dipole's mu0 in the units
     spec["obstacles"] = obstacles_section(v, doc, regions)
     spec["probes"] = probes_section(v, doc, mesh)
     spec["solver"] = solver_section(v, doc)
     if spec["solver"]["control"] == "arclength":
         for i, sp in enumerate(spec["supports"]):
-            if sp["type"] == "rotate":
+            if sp["type"] in MOVING_SUPPORTS:
                 v.fail(f"supports[{i}].type", "arc length scales the loads only: a prescribed "
-                       'rotation is not supported with control = "arclength"')
+                       'motion is not supported with control = "arclength"')
     if spec["solver"]["control"] == "arclength" and spec["obstacles"]:
         v.fail("solver.control", 'contact with [[obstacles]] needs load control (control = "load"): arc '
                                  "length does not update the contact multipliers")
@@ -358,7 +363,7 @@ def sweep_section(v, doc):
                 flat[key] = x
     walk(d, "")
     for key, vals in flat.items():
-        if not isinstance(vals, list) or not vals or any(isinstance(x, (bool, str, dict)) for x in vals):
+        if not isinstance(vals, list) or not vals or any(isinstance(x, dict) for x in vals):
             v.fail(f"sweep.{key}", f"expected a non-empty array of values to sweep, got {vals!r}")
         try:
             check_key(doc, key, v.file)

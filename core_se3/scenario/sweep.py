@@ -17,20 +17,33 @@ finished run (in the swept values, scaled by each key's range); if that fails it
 scenario's load steps from the reference state.  Away from limit points (a single equilibrium
 branch) both give the same state to the Newton tolerances; ``warm=False`` (``--cold``) always
 steps from the reference.  The CSV records which runs were warm-started.
+
+Lifecycle: every value is validated before the first run; ``sweep.csv`` (and the checkpoint
+``sweep.npz``: the finished rows and their final states) are rewritten after every finished run,
+so that an interrupted sweep (SIGTERM, Ctrl-C, a kill) keeps them, and ``resume=True``
+(``--resume``) continues with the next point, warm-started from the same states: the rows of a
+resumed sweep are those of an uninterrupted one, bit for bit.  ``sweep.json`` holds the status
+(``running``, ``complete``, ``interrupted``), the message and the provenance.  The output
+directory is handled as a run's (``io.rundir``: its own files only, a lock, ``force``).
 """
 from __future__ import annotations
 
-import csv
 import itertools
 import os
+import re
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..backend import rent_state, restore_rent
 from ..errors import ConvergenceError, CoreSE3Error, ScenarioError
+from ..io.lifecycle import Terminated, held_signals, termination_as_interrupt
+from ..io.rundir import RunDirectory
+from ..results.document import contact_record
 from .keys import check_key
+from .sweep_files import SWEEP_FILES, SweepCheckpoint, write_csv, write_plot, write_status
 
-__all__ = ["sweep", "SweepResult", "parse_values", "WARM_SECTIONS"]
+__all__ = ["sweep", "SweepResult", "parse_values", "WARM_SECTIONS", "point_row"]
 
 WARM_SECTIONS = ("loads", "fields", "magnets", "material", "solver")
 
@@ -38,8 +51,8 @@ WARM_SECTIONS = ("loads", "fields", "magnets", "material", "solver")
 @dataclass
 class SweepResult:
     """What a sweep left: ``keys`` (the swept keys), ``rows`` (one dict per grid point: the swept
-    values, status, warm, steps, iterations, every probe's final ux, uy, uz and rotation),
-    ``files`` (csv, plot).
+    values, status, warm, steps, iterations, every probe's final ux, uy, uz and rotation, every
+    obstacle's contact force and report), ``files`` (csv, plot, status), ``status``.
 
     Example
     -------
@@ -49,15 +62,38 @@ class SweepResult:
     keys: list
     rows: list = field(default_factory=list)
     files: dict = field(default_factory=dict)
+    status: str = "complete"
+
+
+def _literal(item):
+    """One value as TOML reads it: an integer (``8``), a number (``8.0``, ``1e6``), true/false, or
+    a string (bare or quoted); the scenario's schema then checks its type (an integer key such
+    as ``mesh.nx`` takes ``8``, not ``8.5``)."""
+    if re.fullmatch(r"[+-]?\d+", item):
+        return int(item)
+    if item in ("true", "false"):
+        return item == "true"
+    try:
+        return float(item)
+    except ValueError:
+        pass
+    if len(item) >= 2 and item[0] == item[-1] and item[0] in "'\"":
+        return item[1:-1]
+    if not item or not re.fullmatch(r"[A-Za-z0-9_.+-]+", item):
+        raise ValueError(item)
+    return item
 
 
 def parse_values(text, key="--set"):
-    """The values of ``KEY=v1,v2,...`` (numbers; ``[a;b;c]`` for a vector value).
+    """The values of ``KEY=v1,v2,...``, each typed as TOML would read it: integers, numbers,
+    true/false, strings, and ``[a;b;c]`` for a vector value.
 
     Example
     -------
     >>> parse_values("0.02,0.04"), parse_values("[0;0;0.02],[0;0;0.04]")
     ([0.02, 0.04], [[0.0, 0.0, 0.02], [0.0, 0.0, 0.04]])
+    >>> parse_values("8,16"), parse_values("banded,superlu")
+    ([8, 16], ['banded', 'superlu'])
     """
     out, depth, cur = [], 0, ""
     for ch in text:
@@ -76,10 +112,10 @@ def parse_values(text, key="--set"):
             if item.startswith("["):
                 vals.append([float(x) for x in item.strip("[]").split(";")])
             else:
-                vals.append(float(item))
+                vals.append(_literal(item))
         except ValueError:
-            raise ScenarioError(f"cannot read the value {item!r} of {key} (numbers separated by commas, "
-                                "a vector as [a;b;c])", key=key) from None
+            raise ScenarioError(f"cannot read the value {item!r} of {key} (values separated by commas: numbers, "
+                                "true/false, names; a vector as [a;b;c])", key=key) from None
     if not vals or any(v == "" for v in vals):
         raise ScenarioError(f"{key} needs at least one value", key=key)
     return vals
@@ -88,19 +124,42 @@ def parse_values(text, key="--set"):
 def _nearest(done, point, spans):
     best, dist = None, np.inf
     for pt, g in done:
-        d = sum(float((((np.ravel(a) - np.ravel(b)) / s) ** 2).sum()) for a, b, s in zip(pt, point, spans))
+        if g is None:
+            continue
+        d = sum(_distance(a, b, s) for a, b, s in zip(pt, point, spans))
         if d < dist:
             best, dist = g, d
     return best
 
 
+def _distance(a, b, span):
+    if span is None:                          # names or switches: equal or not
+        return 0.0 if a == b else 1.0
+    return float((((np.ravel(a) - np.ravel(b)) / span) ** 2).sum())
+
+
 def _span(values):
+    if any(isinstance(v, (str, bool)) for v in values):
+        return None
     arr = np.array([np.ravel(v) for v in values], float)
     r = arr.max(0) - arr.min(0)
     return np.where(r > 0, r, 1.0)
 
 
-def sweep(scn, grid, out=None, progress=None, warm=True, plot=True):
+def _check_values(scn, grid, where):
+    """Every swept value validated before the first run (one override at a time): a bad value
+    is an error naming its key, not a failed row after an hour of runs."""
+    for k, vals in grid.items():
+        check_key(scn.raw, k, scn.file)
+        for x in vals:
+            try:
+                scn.with_overrides({k: x})
+            except ScenarioError as exc:
+                raise ScenarioError(f"the swept value {x!r} of {k}: {exc.detail}", scn.file,
+                                    f"{where}.{k}" if where == "sweep" else k) from None
+
+
+def sweep(scn, grid, out=None, progress=None, warm=True, plot=True, resume=False, force=False, where="--set"):
     """Run ``scn`` at every point of ``grid`` (dotted key -> list of values; several keys: the
     product), warm-starting each run from the nearest finished one.
 
@@ -111,13 +170,18 @@ def sweep(scn, grid, out=None, progress=None, warm=True, plot=True):
     grid : dict
         Dotted key (as for ``Scenario.with_overrides``) -> values.
     out : str, optional
-        Directory of ``sweep.csv`` and ``sweep.png`` (default out/NAME-sweep).
+        Directory of ``sweep.csv``, ``sweep.png``, ``sweep.json``, ``sweep.npz`` (default
+        out/NAME-sweep).
     progress : bool, optional
         Progress line (None: only on a terminal).
     warm : bool, optional
         Warm starts (module docstring).
     plot : bool, optional
         Write ``sweep.png``.
+    resume, force : bool, optional
+        Continue an interrupted sweep in ``out``; start over in a directory of an earlier one.
+    where : str, optional
+        Where the grid came from ('--set' or 'sweep'), for messages.
 
     Returns
     -------
@@ -136,41 +200,87 @@ def sweep(scn, grid, out=None, progress=None, warm=True, plot=True):
     >>> round(a / b, 6), [r["warm"] for r in res.rows]           # nearly linear: twice E, half the lift
     (2.0, [False, True])
     """
+    from .runner import output_directory
+    keys = list(grid)
+    _check_values(scn, grid, where)
+    points = list(itertools.product(*[grid[k] for k in keys]))
+    rd = RunDirectory(output_directory(scn, out, "-sweep"), "sweep", SWEEP_FILES)
+    with termination_as_interrupt(), rd.claim(resume=resume, force=force, adopt=SWEEP_FILES):
+        state = SweepCheckpoint(rd, scn, grid, warm)
+        result = SweepResult(keys, state.rows, status="running")
+        try:
+            with held_signals():
+                write_status(rd.file("sweep.json"), result, scn, state)     # from the start
+                if resume:
+                    result.rows = state.load().rows
+            _run_points(scn, keys, points, state, warm, progress)
+        except KeyboardInterrupt as exc:
+            what = exc.describe() if isinstance(exc, Terminated) else "Ctrl-C (SIGINT)"
+            with held_signals():
+                result.status = "interrupted"
+                result.files = _write_all(rd, result, state, scn, plot, f"interrupted by {what} after {len(state.rows)} "
+                                          f"of {len(points)} runs: the finished rows are kept; continue with --resume")
+            raise
+        with held_signals():                  # the last files complete, then a signal that came
+            result.status = "complete"
+            result.files = _write_all(rd, result, state, scn, plot)
+    return result
+
+
+def _write_all(rd, result, state, scn, plot, message=None):
+    files = dict(csv=write_csv(rd.file("sweep.csv"), result.keys, result.rows))
+    if plot and result.rows:
+        files["plot"] = write_plot(rd.file("sweep.png"), result, scn.name)
+    files["status"] = write_status(rd.file("sweep.json"), result, scn, state, message)
+    return files
+
+
+def _run_points(scn, keys, points, state, warm, progress):
+    """The loop over the grid points not done yet: each finished row is written at once."""
     from ..io import Progress
     import sys
-    keys = list(grid)
-    for k in keys:
-        check_key(scn.raw, k, scn.file)
-    points = list(itertools.product(*[grid[k] for k in keys]))
-    spans = [_span(grid[k]) for k in keys]
-    out = os.fspath(out or os.path.join("out", f"{scn.name}-sweep"))
-    os.makedirs(out, exist_ok=True)
+    spans = [_span(v) for v in zip(*points)] if points else []
     can_warm = warm and all(k.split(".")[0].split("[")[0] in WARM_SECTIONS for k in keys)
     bar = Progress(len(points), sys.stdout.isatty() if progress is None else bool(progress), delay=0.0)
-    result = SweepResult(keys)
-    done = []
-    for i, pt in enumerate(points):
-        s = scn.with_overrides(dict(zip(keys, pt)))
-        g_start = _nearest(done, pt, spans) if can_warm and done else None
-        row = {k: v for k, v in zip(keys, pt)}
-        try:
-            final, nsteps, its, warm_used = _solve(s, g_start)
-            row.update(status="complete", warm=warm_used, steps=nsteps, iterations=its)
-            for name, p in final.probes.items():
-                for c, x in zip("xyz", p["u"]):
-                    row[f"{name}.u{c}"] = float(x)
-                row[f"{name}.rotation"] = float(np.linalg.norm(p["w"]))
-            done.append((pt, final.g))
-        except (ConvergenceError, CoreSE3Error) as exc:
-            row.update(status="failed", warm=g_start is not None, error=str(exc).split("\n")[0][:200])
-        result.rows.append(row)
-        bar.update(i + 1, 0.0, row.get("iterations", 0), 0.0, extra=f"  {', '.join(f'{k}={v}' for k, v in zip(keys, pt))}",
-                   label=f"run {i + 1}/{len(points)}")
-    bar.close()
-    result.files["csv"] = _write_csv(os.path.join(out, "sweep.csv"), result)
-    if plot:
-        result.files["plot"] = _plot(os.path.join(out, "sweep.png"), result, scn.name)
-    return result
+    try:
+        for i, pt in enumerate(points):
+            if i < len(state.rows):
+                continue
+            done = [(p, g) for p, g in zip(points, state.finals)]
+            g_start = _nearest(done, pt, spans) if can_warm and done else None
+            row, g = point_row(scn.with_overrides(dict(zip(keys, pt))), dict(zip(keys, pt)), g_start)
+            with held_signals():
+                state.add(row, g, rent_state())
+                write_csv(state.rd.file("sweep.csv"), keys, state.rows)
+            bar.update(i + 1, 0.0, row.get("iterations", 0), 0.0,
+                       extra=f"  {', '.join(f'{k}={v}' for k, v in zip(keys, pt))}", label=f"run {i + 1}/{len(points)}")
+    finally:
+        bar.close()
+
+
+def point_row(s, values, g_start=None):
+    """Solve one grid point (the scenario ``s`` with the swept ``values``): (row, final frames or
+    None).  The row holds the values, status, warm, steps, iterations, every probe's final
+    displacement and rotation, every obstacle's contact force, moment and report; a failed
+    point its error."""
+    row = dict(values)
+    try:
+        final, nsteps, its, warm_used = _solve(s, g_start)
+    except (ConvergenceError, CoreSE3Error) as exc:
+        row.update(status="failed", warm=g_start is not None, error=str(exc).split("\n")[0][:200])
+        return row, None
+    row.update(status="complete", warm=warm_used, steps=nsteps, iterations=its)
+    for name, p in final.probes.items():
+        for c, x in zip("xyz", p["u"]):
+            row[f"{name}.u{c}"] = float(x)
+        row[f"{name}.rotation"] = float(np.linalg.norm(p["rotation_vector"]))
+    for name, c in (final.contact or {}).items():
+        rec = contact_record(c)
+        for q in ("force", "moment"):
+            for comp, x in zip("xyz", rec.pop(q)):
+                row[f"contact.{name}.{q[0].upper()}{comp}"] = float(x)
+        row.update({f"contact.{name}.{k}": v for k, v in rec.items()})
+    return row, final.g
 
 
 def _solve(s, g_start):
@@ -194,56 +304,3 @@ def _solve(s, g_start):
     return res.final, len(res.steps) - 1, int(sum(st.iterations for st in res.steps)), False
 
 
-def _columns(result):
-    cols = []
-    for r in result.rows:
-        for k in r:
-            if k not in cols:
-                cols.append(k)
-    return cols
-
-
-def _cell(v):
-    if isinstance(v, (list, tuple)):
-        return ";".join(f"{x:.17g}" for x in v)
-    if isinstance(v, float):
-        return repr(v)
-    return str(v)
-
-
-def _write_csv(path, result):
-    from ..io import atomic_path
-    cols = _columns(result)
-    with atomic_path(path) as tmp:
-        with open(tmp, "w", newline="") as fh:
-            w = csv.writer(fh)
-            w.writerow(cols)
-            for r in result.rows:
-                w.writerow([_cell(r.get(c, "")) for c in cols])
-    return path
-
-
-def _plot(path, result, title):
-    """Every probe displacement component against the first swept value (one line per value of
-    the other keys)."""
-    from ..io import atomic_path, new_figure
-    fig = new_figure()
-    ax = fig.add_subplot(1, 1, 1)
-    key = result.keys[0]
-    xs = [r[key] for r in result.rows]
-    x = np.array([np.linalg.norm(v) if isinstance(v, (list, tuple)) else v for v in xs], float)
-    cols = [c for c in _columns(result) if c.endswith((".ux", ".uy", ".uz"))]
-    ys = {c: np.array([r.get(c, np.nan) for r in result.rows], float) for c in cols}
-    big = max([np.nanmax(np.abs(y)) for y in ys.values() if np.isfinite(y).any()] + [0.0])
-    for i, (c, y) in enumerate(ys.items()):
-        if np.isfinite(y).any() and np.nanmax(np.abs(y)) > 1e-9 * big:
-            ax.plot(x, y, "o-", ms=4, label=c, color=f"C{i % 10}")
-    ax.set_xlabel(key + (" (|vector|)" if isinstance(xs[0], (list, tuple)) else ""))
-    ax.set_ylabel("final probe displacement")
-    ax.set_title(f"{title}: sweep of {', '.join(result.keys)}")
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize="small")
-    fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png")
-    return path

@@ -19,7 +19,7 @@ import numpy as np
 from ..model import FIELDS, MU0
 from .validate import make_scale
 
-__all__ = ["UNIT_SYSTEMS", "units_section", "unit_of", "physical_loads", "load_numbers",
+__all__ = ["UNIT_SYSTEMS", "UNIT_DEFAULTS", "unit_defaults", "units_section", "unit_of", "physical_loads", "load_numbers",
            "plausibility", "describe_units"]
 
 UNIT_SYSTEMS = {
@@ -83,6 +83,39 @@ def units_section(v, doc, spec):
     return units
 
 
+# defaults that depend on the unit system: (section, kind, key) -> the unit system's value
+UNIT_DEFAULTS = {("loads", "gravity", "g"): lambda u: [0.0, 0.0, -u["g"]],
+                 ("fields", "dipole", "mu0"): lambda u: u["dipole_mu0"]}
+
+
+def unit_defaults(v, doc, spec):
+    """Fill the defaults that depend on the unit system (:data:`UNIT_DEFAULTS`: gravity's g, a
+    dipole's mu0) where the file leaves them out: -9.81 m/s^2 in SI is -9810 mm/s^2 in
+    N-mm-MPa; with ``units = "consistent"`` such a key is required.
+
+    Example
+    -------
+    >>> from core_se3.scenario.validate import Validator
+    >>> spec = {"units": "N-mm-MPa", "loads": [{"type": "gravity", "g": [0.0, 0.0, -9.81]}], "fields": {}}
+    >>> unit_defaults(Validator("s.toml"), {"loads": [{"type": "gravity"}]}, spec)["loads"][0]["g"]
+    [0.0, 0.0, -9810.0]
+    """
+    u = UNIT_SYSTEMS.get(spec["units"])
+    if u is None:
+        return spec                      # none given or unknown: units_section says so
+    entries = [("loads", f"loads[{i}]", ld, raw) for i, (ld, raw) in
+               enumerate(zip(spec["loads"], doc.get("loads") or []))]
+    entries += [("fields", f"fields.{n}", f, (doc.get("fields") or {}).get(n, {})) for n, f in spec["fields"].items()]
+    for section, key, entry, raw in entries:
+        for (sec, kind, name), value in UNIT_DEFAULTS.items():
+            if sec == section and entry.get("type") == kind and name not in raw:
+                if spec["units"] == "consistent":
+                    v.fail(f"{key}.{name}", f'with units = "consistent" {kind} needs {name!r} in your units '
+                                            "(there is no default)")
+                entry[name] = value(u)
+    return spec
+
+
 def _scale_values(spec_scale, lams):
     f = make_scale(spec_scale)
     return np.array([f(x) for x in lams], float)
@@ -116,8 +149,15 @@ def physical_loads(spec, lam):
             unit = unit_of(units, "field") if key == "B" else f"A {unit_of(units, 'length')}^2".strip()
             out[f"fields.{name}.{key}"] = (s * float(np.linalg.norm(f[key])), unit)
     for i, sp in enumerate(spec.get("supports", [])):
+        s = float(make_scale(sp["scale"])(lam)) if "scale" in sp else 0.0
         if sp["type"] == "rotate":
-            out[f"supports[{i}].angle"] = (float(make_scale(sp["scale"])(lam)) * sp["angle"], "rad")
+            out[f"supports[{i}].angle"] = (s * sp["angle"], "rad")
+        elif sp["type"] == "prescribed":
+            if any(sp["translate"]):
+                out[f"supports[{i}].translate"] = (s * float(np.linalg.norm(sp["translate"])),
+                                                   unit_of(units, "length"))
+            if sp["rotate"] is not None:
+                out[f"supports[{i}].rotate.angle"] = (s * sp["rotate"]["angle"], "rad")
     return {k: (round(v, 15), u) for k, (v, u) in out.items()}
 
 
@@ -284,10 +324,10 @@ def plausibility(v, scn):
                 v.warn(f"magnets[{i}].mu0", f"mu0 = {m['mu0']:g} differs from mu0 in {units} ({u['mu0']:.6g}, "
                                             f"4 pi 1e-7 T m/A for stresses in {u['stress']}): leave it out")
         for name, f in spec["fields"].items():
-            if f["type"] == "dipole" and f.get("mu0") is None and units != "SI":
-                v.warn(f"fields.{name}.mu0", f"a dipole field without mu0 uses the SI value (m in A m^2, lengths "
-                                             f"in m); with lengths in {u['length']} and m in A {u['length']}^2 "
-                                             f"give mu0 = {u['dipole_mu0']:.6g}")
+            if f["type"] == "dipole" and abs(f["mu0"] / u["dipole_mu0"] - 1) > 1e-6:
+                v.warn(f"fields.{name}.mu0", f"mu0 = {f['mu0']:g} differs from mu0 of a dipole in {units} "
+                                             f"({u['dipole_mu0']:.6g}: m in A {u['length']}^2, lengths in "
+                                             f"{u['length']}): leave it out")
     if u is not None and u["mu0"] is not None:
         for i, m in enumerate(spec["magnets"]):
             br = _br_magnitude(m, scn.mesh)

@@ -3,8 +3,8 @@ load-stepped Newton and path following (arc length, displacement control), each 
 converged steps with a wrapper that returns a Result, and the stability analysis.
 
 Importing this package registers the solvers that ``Problem.solve(control=...)`` uses:
-'load' (:func:`newton_solve`), 'arclength' (:func:`arc_length`) and 'displacement'
-(:func:`displacement_control`).
+'load' (:func:`newton_solve`), 'arclength' (:func:`arc_length`), 'displacement'
+(:func:`displacement_control`) and 'linear' (:func:`linear_solve`: one solve at the reference state).
 
 Example
 -------
@@ -19,6 +19,7 @@ from .arclength import ArcState, PathEvent, PathInfo, path_follow, path_steps
 from .shell_paths import PathStep, arc_length, arc_length_steps, displacement_control
 from .convergence import increment_norm, relative_residual, scaled_norm
 from .equations import NewtonEquations
+from .linear import linear_solve, linear_state
 from .linalg import AUTO_MUMPS_MIN, Factorization, available_solvers, checked_solve, make_solver
 from .newton import (MAX_PRESCRIBED_TURN, NewtonState, NewtonStep, newton_solve, newton_steps,
                      requested_load_factors)
@@ -32,7 +33,7 @@ __all__ = ["newton_solve", "newton_steps", "NewtonState", "NewtonStep", "request
            "PathEvent", "PathInfo", "PathStep", "CriticalPoint", "PathPoint", "inertia",
            "smallest_mode", "limit_point_hint", "ShellSystem", "AlgebraicSystem", "make_solver",
            "available_solvers", "checked_solve", "Factorization", "AUTO_MUMPS_MIN", "scaled_norm",
-           "relative_residual", "increment_norm", "NewtonEquations"]
+           "relative_residual", "increment_norm", "NewtonEquations", "linear_solve", "linear_state"]
 
 
 def _arclength(problem, steps=None, lam_end=1.0, **kw):
@@ -43,4 +44,4 @@ def _arclength(problem, steps=None, lam_end=1.0, **kw):
     return arc_length(problem, lam_end=lam_end, **kw)
 
 
-SOLVERS.update(load=newton_solve, arclength=_arclength, displacement=displacement_control)
+SOLVERS.update(load=newton_solve, arclength=_arclength, displacement=displacement_control, linear=linear_solve)

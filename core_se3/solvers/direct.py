@@ -63,10 +63,13 @@ def available_solvers():
 class Factor:
     """Context manager holding a factorisation; calling it solves for one right-hand side.
     ``sign()``: +1 or -1, the sign of det K from the factors (None when the solver cannot
-    tell); it stays valid after the context closes, until the solver factors again."""
+    tell); it stays valid after the context closes, until the solver factors again.
+    ``solve_transpose`` (None when the solver has none) solves with the transpose on the same
+    factors (the adjoint sensitivities of a control session, ``core_se3.control``)."""
 
-    def __init__(self, solve, release=lambda: None, sign=lambda: None):
+    def __init__(self, solve, release=lambda: None, sign=lambda: None, solve_transpose=None):
         self._solve, self._release, self.sign = solve, release, sign
+        self.solve_transpose = solve_transpose
 
     def __enter__(self):
         return self._solve
@@ -140,7 +143,9 @@ class SuperLUSolver:
             s = _pivot_sign(lu.U.diagonal())
             return None if s is None else s * permutation_parity(lu.perm_r) * permutation_parity(lu.perm_c)
 
-        return Factor(lambda b: finite_solution(lu.solve(b, trans=trans)), sign=sign)
+        flip = "N" if trans == "T" else "T"
+        return Factor(lambda b: finite_solution(lu.solve(b, trans=trans)), sign=sign,
+                      solve_transpose=lambda b: finite_solution(lu.solve(b, trans=flip)))
 
     def solve(self, K, b):
         with self.factor(K) as solve:
@@ -233,8 +238,8 @@ class BandedSolver:
                                       else f"banded LU: illegal argument {-info}")
         perm, kl, ku = lay.perm, lay.kl, lay.ku
 
-        def solve(b):
-            y, inf = lapack.dgbtrs(lu, kl, ku, b[perm], ipiv)
+        def solve(b, trans=0):
+            y, inf = lapack.dgbtrs(lu, kl, ku, b[perm], ipiv, trans=trans)
             x = np.empty_like(y)
             x[perm] = y
             return finite_solution(x)
@@ -247,7 +252,7 @@ class BandedSolver:
             swaps = np.count_nonzero(ipiv != np.arange(lay.n))
             return None if s is None else s * (-1 if swaps % 2 else 1)
 
-        return Factor(solve, sign=sign)
+        return Factor(solve, sign=sign, solve_transpose=lambda b: solve(b, 1))   # (P K P^T)^T = P K^T P^T
 
     def solve(self, K, b):
         with self.factor(K) as solve:
@@ -324,6 +329,14 @@ class MumpsSolver:
                 raise SingularSystemError(f"tangent is singular (MUMPS: {exc})") from None
             return finite_solution(x.getArray().copy())
 
+        def solve_transpose(b):
+            bb.setArray(b)
+            try:
+                ksp.solveTranspose(bb, x)
+            except PETSc.Error as exc:
+                raise SingularSystemError(f"tangent is singular (MUMPS: {exc})") from None
+            return finite_solution(x.getArray().copy())
+
         def release():
             if keep:
                 self._busy = False
@@ -334,7 +347,7 @@ class MumpsSolver:
         # factor is in hand: a matrix made for one factorisation is destroyed at release
         mantissa = ksp.getPC().getFactorMatrix().getMumpsRinfog(12)
         det_sign = None if not np.isfinite(mantissa) or mantissa == 0 else (1 if mantissa > 0 else -1)
-        return Factor(solve, release, sign=lambda: det_sign)
+        return Factor(solve, release, sign=lambda: det_sign, solve_transpose=solve_transpose)
 
     def solve(self, K, b):
         with self.factor(K) as solve:

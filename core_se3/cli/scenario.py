@@ -1,0 +1,256 @@
+"""The scenario commands of ``core-se3``: ``run`` (with ``--check``), ``sweep``, ``design`` and
+``warmup`` (docs/SCENARIOS.md, docs/DESIGN.md)."""
+from __future__ import annotations
+
+import sys
+
+from ..backend import launched_rank
+from ..errors import CoreSE3Error
+from ..results.document import ROUNDOFF_NOTE, format_backends, format_residual
+from .common import error_code, interrupted, output_error, whole_number
+
+__all__ = ["add_parsers", "scenario_run", "scenario_sweep", "design_run", "warmup", "step_table"]
+
+
+def add_parsers(sub):
+    """The subcommands run, sweep, design and warmup of the ``core-se3`` parser."""
+    srun = sub.add_parser("run", help="run a scenario file (TOML; schema in docs/SCENARIOS.md)")
+    srun.add_argument("scenario", help="SCENARIO.toml")
+    srun.add_argument("--out", default=None, help="output directory (default [output] dir or out/NAME)")
+    srun.add_argument("--resume", action="store_true", help="continue from the checkpoint in --out")
+    srun.add_argument("--force", action="store_true",
+                      help="start over even if --out holds a run (deletes only that run's files)")
+    srun.add_argument("--check", action="store_true", help="only validate the scenario (and estimate its memory)")
+    srun.add_argument("--strict", action="store_true", help="make the plausibility warnings errors")
+    _common(srun, "progress bar even when not on a terminal", "no progress bar, no summary")
+    dsub = sub.add_parser("design", help="optimise the [design] of a scenario file (docs/DESIGN.md)")
+    dsub.add_argument("scenario", help="SCENARIO.toml with a [design] section")
+    dsub.add_argument("--out", default=None, help="output directory (default [output] dir or out/NAME-design)")
+    dsub.add_argument("--method", default=None, help="least_squares, L-BFGS-B, SLSQP or trust-constr")
+    dsub.add_argument("--max-iter", type=whole_number("max-iter"), default=None,
+                      help="iterations (least_squares: evaluations; >= 1)")
+    dsub.add_argument("--force", action="store_true", help="write into a directory of an earlier design")
+    dsub.add_argument("-q", "--quiet", action="store_true", help="no progress, no summary")
+    dsub.add_argument("-v", "--verbose", action="store_true", help="log every Newton (sub-)step")
+    sw = sub.add_parser("sweep", help="run a scenario over a grid of values (one CSV and plot)")
+    sw.add_argument("scenario", help="SCENARIO.toml")
+    sw.add_argument("--set", action="append", metavar="KEY=v1,v2,...",
+                    help="a dotted key and its values (typed as in TOML; a vector as [a;b;c]); repeat for a grid")
+    sw.add_argument("--out", default=None, help="directory of sweep.csv and sweep.png (default out/NAME-sweep)")
+    sw.add_argument("--cold", action="store_true", help="no warm starts: every run steps from the reference")
+    sw.add_argument("--resume", action="store_true", help="continue an interrupted sweep in --out")
+    sw.add_argument("--force", action="store_true", help="start over in a directory of an earlier sweep")
+    sw.add_argument("--strict", action="store_true", help="make the plausibility warnings errors")
+    sw.add_argument("--progress", action="store_true", help="progress line even when not on a terminal")
+    sw.add_argument("-q", "--quiet", action="store_true", help="no progress line, no summary")
+    sub.add_parser("warmup", help="compile the numba kernels once into their cache (scripts/setup.sh runs it)")
+
+
+def _common(p, progress, quiet):
+    p.add_argument("--progress", action="store_true", help=progress)
+    p.add_argument("-q", "--quiet", action="store_true", help=quiet)
+    p.add_argument("-v", "--verbose", action="store_true", help="log every Newton (sub-)step")
+
+
+def _load_quietly(path, strict):
+    """Load a scenario, its warnings kept (printed by the command, not by ``warnings``)."""
+    import warnings
+    from .. import scenario
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return scenario.load(path, strict=strict)
+
+
+def _preamble(scn, quiet):
+    """The first lines of a run: the unit system, the warnings, the load numbers."""
+    from ..scenario.units import describe_units
+    for w in scn.warnings:
+        print(f"warning: {w}", file=sys.stderr)
+    if quiet:
+        return
+    print(f"{scn.name}: {describe_units(scn.spec['units'])}")
+    for n in scn.load_numbers():
+        print(f"  load number {n['name']} ({n['kind']}): {n['formula']} = {n['value']:.4g} "
+              f"(span L = {n['span']:.4g}, E = {n['E']:.4g}, h = {n['h']:.4g})")
+
+
+def _check(args, scn):
+    """``--check``: the summary of a valid scenario, its mesh's parts and its memory estimate
+    (a warning past the machine's memory)."""
+    from ..scenario.memory import estimate, machine_memory
+    print(f"{args.scenario}: valid ({scn.mesh.n_elements} elements, {scn.mesh.n_nodes} nodes, "
+          f"{len(scn.spec['supports'])} supports, {len(scn.spec['loads'])} loads, "
+          f"{len(scn.spec['magnets'])} magnets, {scn.solver['steps']} steps)")
+    est = estimate(scn)
+    print(f"  memory: about {est.bytes / 2 ** 30:.3g} GiB ({est.describe()})")
+    have = machine_memory()
+    if have is not None and est.bytes > have:
+        print(f"warning: {args.scenario}: the run needs about {est.bytes / 2 ** 30:.3g} GiB, more than this "
+              f"machine's {have / 2 ** 30:.3g} GiB: coarsen the mesh, or run it on more memory (mpirun -n N "
+              "shares it over the ranks' machines)", file=sys.stderr)
+    return 0
+
+
+def _contradiction(args):
+    """--resume (continue) and --force (start over) together: an error line, exit status 2."""
+    if getattr(args, "resume", False) and getattr(args, "force", False):
+        print("error: --resume continues the run in --out and --force starts it over: give one of them",
+              file=sys.stderr)
+        return 2
+    return None
+
+
+def scenario_run(args):
+    """``core-se3 run``: validate the scenario, solve it step by step, write its outputs."""
+    from .. import scenario
+    if _contradiction(args):
+        return 2
+    try:
+        scn = _load_quietly(args.scenario, args.strict)
+    except CoreSE3Error as exc:
+        return error_code(exc)
+    _preamble(scn, args.quiet)
+    if args.check:
+        return _check(args, scn)
+    progress = True if args.progress else (False if args.quiet else None)
+    try:
+        res = scenario.run(scn, out=args.out, resume=args.resume, progress=progress, force=args.force)
+    except CoreSE3Error as exc:
+        return error_code(exc)
+    except OSError as exc:
+        return output_error(exc, "the steps converged so far are kept where they could be written")
+    except KeyboardInterrupt as exc:
+        return interrupted(exc, "results.json says where; the checkpoint keeps the last converged step: "
+                                "continue with --resume")
+    if not args.quiet:
+        _summary(scn, res)
+    return 0
+
+
+def _summary(scn, res):
+    last = res.doc["steps"][-1]
+    step_table(res.doc)
+    print(f"{scn.name}: {len(res.doc['steps']) - 1} steps to load factor {last['load_factor']:g} "
+          f"in {res.doc['timings']['total']:.2f} s")
+    for name, p in last["probes"].items():
+        u = p["u"]
+        print(f"  probe {name}: u = ({u[0]:.6g}, {u[1]:.6g}, {u[2]:.6g}), rotation {p['rotation_angle']:.6g} rad")
+    for name, c in (last.get("contact") or {}).items():
+        f = c["force"]
+        print(f"  contact {name}: force ({f[0]:.6g}, {f[1]:.6g}, {f[2]:.6g}) on the shell"
+              + (f", {c['nodes_in_contact']} nodes in contact" if "nodes_in_contact" in c else ""))
+    for kind, path in res.files.items():
+        print(f"  wrote {kind}: {path}")
+
+
+def step_table(doc):
+    """One line per step: load factor, the physical loads (with units), the first probe, the
+    total contact force |F| of every obstacle, iterations and residual."""
+    import numpy as np
+    steps = doc["steps"]
+    phys = list((steps[-1].get("physical") or {}).items())
+    probe = next(iter(steps[0]["probes"]), None)
+    obstacles = list(steps[-1].get("contact") or {})
+    head = f"{'step':>5} {'lam':>9}" + "".join(f" {k + ' [' + v['unit'] + ']' if v['unit'] else k:>22}"
+                                             for k, v in phys)
+    if probe:
+        head += f" {probe + '.ux':>12} {probe + '.uy':>12} {probe + '.uz':>12}"
+    head += "".join(f" {'|F ' + o + '|':>12}" for o in obstacles)
+    print(head + f" {'it':>3} {'residual':>9}")
+    for st in steps:
+        line = f"{st['step']:>5d} {st['load_factor']:>9.4g}"
+        line += "".join(f" {(st.get('physical') or {}).get(k, {}).get('value', float('nan')):>22.6g}" for k, _ in phys)
+        if probe:
+            line += "".join(f" {x:>12.6g}" for x in st["probes"][probe]["u"])
+        for o in obstacles:
+            c = (st.get("contact") or {}).get(o)
+            line += f" {float(np.linalg.norm(c['force'])) if c else 0.0:>12.6g}"
+        print(line + f" {st.get('iterations', 0):>3d} {format_residual(st)}")
+    if any(format_residual(st).endswith("*") for st in steps):
+        print(ROUNDOFF_NOTE)
+    if format_backends(steps):
+        print(format_backends(steps))
+
+
+def design_run(args):
+    """``core-se3 design``: optimise the [design] of a scenario, write the optimised scenario and
+    the design's outputs (docs/DESIGN.md)."""
+    from .. import scenario
+    from ..scenario.design_runner import run_design
+    try:
+        scn = scenario.load(args.scenario)
+        if "design" not in scn.spec:
+            print(f"error: {args.scenario} has no [design] section (docs/DESIGN.md)", file=sys.stderr)
+            return 2
+        r, files = run_design(scn, out=args.out, method=args.method, max_iter=args.max_iter,
+                              progress=not args.quiet and launched_rank() == 0, force=args.force)
+    except CoreSE3Error as exc:
+        return error_code(exc)
+    except OSError as exc:
+        return output_error(exc, "the design's result is not written")
+    except KeyboardInterrupt as exc:
+        return interrupted(exc, "the design is not finished (its outputs are written at the end)")
+    if not args.quiet and launched_rank() == 0:          # under mpirun: rank 0 reports
+        print(f"{scn.name}: {r.message}")
+        print(f"  objective {r.objective:.6e} after {r.iterations} iterations, {r.equilibrium_solves} equilibrium "
+              f"solves, {r.newton_iterations} Newton iterations, {r.time:.2f} s")
+        for label, x in zip(r.labels, r.x):
+            print(f"  {label} = {x:.8g}")
+        for kind, path in files.items():
+            print(f"  wrote {kind}: {path}")
+    return 0 if r.reached is not False else 4
+
+
+def _grid(args, scn):
+    from ..scenario.sweep import parse_values
+    grid = {}
+    for item in args.set or []:
+        if "=" not in item:
+            raise CoreSE3Error(f"--set expects KEY=v1,v2,..., got {item!r}")
+        k, vals = item.split("=", 1)
+        if k.strip() in grid:
+            raise CoreSE3Error(f"--set {k.strip()} is given twice (the second would silently replace the first): "
+                               "give all its values in one --set KEY=v1,v2,...")
+        grid[k.strip()] = parse_values(vals, f"--set {k.strip()}")
+    if not grid and not scn.spec["sweep"]:
+        raise CoreSE3Error(f"{args.scenario}: nothing to sweep: give --set KEY=v1,v2,... or a [sweep] section")
+    return (grid, "--set") if grid else (dict(scn.spec["sweep"]), "sweep")
+
+
+def scenario_sweep(args):
+    """``core-se3 sweep``: the scenario over the values of --set KEY=v1,v2,... (or [sweep])."""
+    from .. import scenario
+    if _contradiction(args):
+        return 2
+    try:
+        scn = _load_quietly(args.scenario, args.strict)
+        grid, where = _grid(args, scn)
+        _preamble(scn, args.quiet)
+        res = scenario.sweep(scn, grid, out=args.out, progress=True if args.progress else (False if args.quiet else None),
+                             warm=not args.cold, resume=args.resume, force=args.force, where=where)
+    except CoreSE3Error as exc:
+        return error_code(exc)
+    except OSError as exc:
+        return output_error(exc, "the sweep's finished rows are kept in sweep.csv where it could be written")
+    except KeyboardInterrupt as exc:
+        return interrupted(exc, "the finished runs are in sweep.csv (sweep.json says where it stopped): continue "
+                                "with --resume")
+    failed = [r for r in res.rows if r["status"] != "complete"]
+    if not args.quiet:
+        print(f"{scn.name}: {len(res.rows)} runs ({len(failed)} failed, "
+              f"{sum(bool(r.get('warm')) for r in res.rows)} warm-started)")
+        for kind, path in res.files.items():
+            print(f"  wrote {kind}: {path}")
+    return 3 if failed else 0
+
+
+def warmup(args):
+    """``core-se3 warmup``: compile every numba kernel into its cache (``kernels.cache``), once
+    per version of the kernels' source, so that no run pays for it."""
+    from .warmup import warm_kernels
+    try:
+        done = warm_kernels(progress=True)
+    except CoreSE3Error as exc:
+        return error_code(exc)
+    print(done)
+    return 0

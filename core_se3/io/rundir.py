@@ -1,0 +1,272 @@
+"""The output directory of a run: it holds only the run's own files, listed in its manifest, and one
+live run at a time.
+
+* **Manifest** (``.core-se3-manifest.json``): every file a run writes is listed there *before*
+  it is created (:meth:`RunDirectory.file`), so that whatever a killed run left is known to be
+  its own; ``--force`` deletes only the files of a previous run that its manifest lists (and
+  their half-written temporaries), never a file this tool did not write.
+* **Foreign files**: a new run in a directory holding files that no manifest lists is refused
+  (naming them) unless ``force``; even then they are kept, and a run refuses to overwrite one of
+  them (a resumed run keeps those added beside it).
+* **Lock** (``.core-se3.lock``): an exclusive ``flock`` held while the run lives, released by
+  the kernel when its process ends however it ends (so a killed run leaves no stale lock); a
+  second run on the same directory is refused, naming the first one's process.
+
+Example
+-------
+>>> import os, tempfile
+>>> d = tempfile.mkdtemp()
+>>> with RunDirectory(d, "run").claim() as rd:
+...     _ = open(rd.file("results.json"), "w").write("{}")
+>>> try:
+...     RunDirectory(d, "run").claim()
+... except RunDirectoryError as exc:
+...     print(str(exc)[len(d):])
+ holds the files of an earlier run (results.json): continue it with --resume, start over with --force, or choose another --out directory
+>>> open(os.path.join(d, "notes.txt"), "w").close()        # the user's file
+>>> with RunDirectory(d, "run").claim(force=True) as rd:   # the old run's files go, notes.txt stays
+...     sorted(f for f in os.listdir(d) if not f.startswith("."))
+['notes.txt']
+"""
+from __future__ import annotations
+
+import errno
+import fnmatch
+import json
+import os
+import re
+import time
+
+from ..errors import CheckpointError
+from .files import write_json_atomic
+
+__all__ = ["RunDirectory", "RunDirectoryError", "safe_name", "MANIFEST", "LOCK"]
+
+MANIFEST = ".core-se3-manifest.json"
+LOCK = ".core-se3.lock"
+_TMP = re.compile(r"^\.(?P<name>.+)\.[a-z0-9_]{8}\.tmp")    # io.files.atomic_path's temporaries
+
+
+class RunDirectoryError(CheckpointError):
+    """An output directory that holds another run, files this tool did not write, or a live
+    run (its lock); the message says which and what to do.
+
+    Example
+    -------
+    >>> issubclass(RunDirectoryError, CheckpointError)
+    True
+    """
+
+
+def safe_name(name, default="scenario"):
+    """A name usable as one directory component under ``out/``: characters other than letters,
+    digits, '.', '_' and '-' become '_', and leading dots go (so ``../..`` or ``/etc`` stays under
+    ``out/``).
+
+    Example
+    -------
+    >>> safe_name("../.."), safe_name("/etc/passwd"), safe_name("gripper v2"), safe_name("")
+    ('__', '_etc_passwd', 'gripper_v2', 'scenario')
+    """
+    s = re.sub(r"[^A-Za-z0-9._-]", "_", str(name)).lstrip(".")
+    s = s.replace("..", "_")
+    return s[:120] or default
+
+
+class RunDirectory:
+    """The output directory ``path`` of one run of ``kind`` ('run', 'sweep', 'design').
+
+    :meth:`claim` takes the lock and checks the contents; :meth:`file` registers a file
+    (relative path) and returns its path; :meth:`release` (or the ``with`` block) drops the lock.
+    ``previous`` lists the files of an earlier run that the manifest names and that exist.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The directory (created if missing).
+    kind : str
+        What writes it (in the manifest and the messages).
+    patterns : sequence of str, optional
+        The relative names a run of this kind writes (fnmatch patterns, e.g. ``vtu/step_*.vtu``):
+        a foreign file of such a name is never overwritten, even with force.
+
+    Example
+    -------
+    See the module docstring.
+
+    >>> RunDirectory("out/x", "run").manifest_path.endswith(MANIFEST)
+    True
+    """
+
+    def __init__(self, path, kind="run", patterns=()):
+        self.path = os.fspath(path)
+        self.kind = kind
+        self.patterns = tuple(patterns)
+        self.manifest_path = os.path.join(self.path, MANIFEST)
+        self.files = []
+        self.previous = []
+        self.existed = False            # a manifest was there: the directory of an earlier run
+        self._lock = None
+
+    # ------------------------------------------------------------------ claiming -------------
+    def claim(self, resume=False, force=False, adopt=()):
+        """Lock the directory and check what it holds.
+
+        Parameters
+        ----------
+        resume : bool
+            Continue the run whose files the manifest lists (they stay).
+        force : bool
+            Start over: delete the files a previous run of this tool listed, write beside foreign
+            files (never over them).
+        adopt : sequence of str
+            Patterns of files of an older version's run (no manifest) that ``resume`` takes as
+            its own.
+
+        Returns
+        -------
+        RunDirectory
+            self, locked.
+        """
+        os.makedirs(self.path, exist_ok=True)
+        self._take_lock()
+        try:
+            listed = self._read_manifest()
+            self.existed = listed is not None
+            present = self._walk()
+            if listed is None and resume:       # a run of an older version: its files by name
+                listed = [f for f in present if any(fnmatch.fnmatch(f, p) for p in adopt)]
+            listed = listed or []
+            ours = set(listed) | {MANIFEST, LOCK}
+            self.previous = [f for f in listed if f in present]
+            foreign = [f for f in present if f not in ours and not self._temporary(f, ours)]
+            self._check(foreign, resume, force)
+            if force and not resume:
+                self._delete(self.previous, ours, present)
+                listed, self.previous = [], []
+            else:
+                self._delete([], ours, present)          # only half-written temporaries
+            self.files = [f for f in listed if f in present]
+            self._write_manifest()
+        except BaseException:
+            self.release()
+            raise
+        return self
+
+    def _check(self, foreign, resume, force):
+        where = self.path
+        if foreign and not force and not resume:          # a resumed run keeps files added beside it
+            raise RunDirectoryError(
+                f"{where} holds files that core-se3 did not write ({_some(foreign)}): choose an empty or new "
+                f"--out directory, or --force to write beside them (--force never deletes them)")
+        clash = [f for f in foreign if any(fnmatch.fnmatch(f, p) for p in self.patterns)]
+        if clash:
+            raise RunDirectoryError(
+                f"{where} holds files that core-se3 did not write under the names a {self.kind} writes "
+                f"({_some(clash)}): --force does not overwrite them; move them away or choose another --out")
+        if self.previous and not resume and not force:
+            raise RunDirectoryError(
+                f"{where} holds the files of an earlier {self.kind} ({_some(self.previous)}): continue it with "
+                "--resume, start over with --force, or choose another --out directory")
+
+    def start_over(self):
+        """Delete the files of the earlier run (a resume of a run that stopped before it saved
+        anything to continue from)."""
+        self._delete(self.previous, set(self.files), [])
+        self.previous, self.files = [], []
+        self._write_manifest()
+
+    # ------------------------------------------------------------------ writing --------------
+    def file(self, relative):
+        """The path of the run's file ``relative`` (e.g. 'vtu/step_0003.vtu'), listed in the
+        manifest (written atomically) before the caller creates it."""
+        rel = os.path.normpath(relative)
+        if rel.startswith("..") or os.path.isabs(rel):
+            raise ValueError(f"{relative!r} is not inside the run directory")
+        if rel not in self.files:
+            self.files.append(rel)
+            self._write_manifest()
+        return os.path.join(self.path, rel)
+
+    def release(self):
+        """Drop the lock (the kernel drops it too when the process ends)."""
+        if self._lock is not None:
+            os.close(self._lock)
+            self._lock = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.release()
+        return False
+
+    # ------------------------------------------------------------------ internals ------------
+    def _take_lock(self):
+        import fcntl
+        path = os.path.join(self.path, LOCK)
+        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError as exc:
+            os.close(fd)
+            if exc.errno not in (errno.EAGAIN, errno.EACCES):
+                raise
+            raise RunDirectoryError(f"{self.path} is in use by another live run ({_holder(path)}): wait for it "
+                                    "to end, or choose another --out directory") from None
+        os.ftruncate(fd, 0)
+        os.write(fd, json.dumps(dict(pid=os.getpid(), kind=self.kind, started=time.strftime(
+            "%Y-%m-%d %H:%M:%S"))).encode())
+        self._lock = fd
+
+    def _read_manifest(self):
+        """The files the manifest lists (None without one); a damaged manifest is an error."""
+        if not os.path.exists(self.manifest_path):
+            return None
+        try:
+            with open(self.manifest_path, "rb") as fh:
+                doc = json.loads(fh.read(1 << 24))
+            files = [os.path.normpath(f) for f in doc["files"]]
+            if doc.get("tool") != "core-se3" or any(f.startswith("..") or os.path.isabs(f) for f in files):
+                raise ValueError("not a core-se3 manifest")
+        except (OSError, ValueError, KeyError, TypeError) as exc:
+            raise RunDirectoryError(f"{self.manifest_path} is damaged ({type(exc).__name__}): it lists the files "
+                                    "of the run that wrote this directory; choose another --out") from None
+        return files
+
+    def _write_manifest(self):
+        write_json_atomic(self.manifest_path, dict(tool="core-se3", kind=self.kind, files=sorted(self.files)))
+
+    def _walk(self):
+        out = []
+        for root, dirs, files in os.walk(self.path):
+            for f in files:
+                out.append(os.path.relpath(os.path.join(root, f), self.path))
+        return sorted(out)
+
+    @staticmethod
+    def _temporary(f, ours):
+        """A half-written temporary of one of ``ours`` (atomic_path's name in the same folder)."""
+        d, base = os.path.split(f)
+        m = _TMP.match(base)
+        return m is not None and os.path.join(d, m.group("name")) in ours
+
+    def _delete(self, files, ours, present):
+        for f in list(files) + [p for p in present if p not in ours and self._temporary(p, ours)]:
+            try:
+                os.unlink(os.path.join(self.path, f))
+            except FileNotFoundError:
+                pass
+
+
+def _some(names, k=5):
+    return ", ".join(names[:k]) + (f" and {len(names) - k} more" if len(names) > k else "")
+
+
+def _holder(path):
+    try:
+        with open(path) as fh:
+            info = json.loads(fh.read(4096) or "{}")
+        return f"a {info.get('kind', 'run')} of process {info.get('pid', '?')}, started {info.get('started', '?')}"
+    except (OSError, ValueError):
+        return "another process"

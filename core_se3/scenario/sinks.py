@@ -1,0 +1,301 @@
+"""What a scenario run does with each converged step: small sinks fed, in order, by the one loop of
+``scenario.runner`` over the solver's steps (load-stepped Newton or arc length, normalised to a
+:class:`StepEvent`).
+
+==================  =========================================================================
+sink                writes
+==================  =========================================================================
+:class:`VtuSink`    ``vtu/step_NNNN.vtu`` (every ``vtu_every``-th step and the last)
+:class:`CheckpointSink`  ``checkpoint.npz``: the record of truth a resume continues from
+:class:`PvdSink`    ``vtu/series.pvd`` (and ``vtu/obstacles.pvd``)
+:class:`DocumentSink`    ``results.json``: status ``running`` from the start, then ``complete``,
+                    ``failed`` or ``interrupted`` with the message
+:class:`ProgressSink`    the progress line
+:class:`StopAfter`  raises RunInterrupted after a number of steps (tests)
+==================  =========================================================================
+
+The order is that of the table: a VTU file exists before the checkpoint that counts its step,
+and the checkpoint before the results document that reports it.  Every file is written
+atomically and registered in the run directory's manifest before it is created
+(``io.rundir``).  A sink has ``step(run, event)`` and ``end(run, status, message)``; each can be
+tested alone with a :class:`RunState` (``tests/test_run_lifecycle.py``).
+"""
+from __future__ import annotations
+
+import os
+import sys
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import CoreSE3Error
+from ..io import Checkpoint, Progress, atomic_path, write_json_atomic
+from ..io.lifecycle import held_signals
+from ..results import result_document
+from .obstacles import obstacles_of
+from .outputs import unit_system_record
+
+__all__ = ["StepEvent", "RunState", "VtuSink", "CheckpointSink", "PvdSink", "DocumentSink", "ProgressSink",
+           "StopAfter", "RunInterrupted", "PHASES", "RUN_FILES", "ProvenanceSink", "write_step_vtu",
+           "write_series_files"]
+
+PHASES = ("setup", "assembly", "solve", "other")
+# the names a scenario run writes (a foreign file of such a name is never overwritten)
+RUN_FILES = ("results.json", "checkpoint.npz", "probes.png", "shell.png", "vtu/series.pvd", "vtu/obstacles.pvd",
+             "vtu/step_*.vtu")
+
+
+class RunInterrupted(CoreSE3Error):
+    """Raised when ``stop_after`` steps were done (to simulate an interrupted run in tests).
+
+    The checkpoint then holds the last step: ``run(..., resume=True)`` continues and ends in the
+    state of an uninterrupted run.
+
+    Example
+    -------
+    >>> import tempfile
+    >>> from core_se3 import scenario
+    >>> scn = scenario.from_dict({"mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 4, "ny": 1},
+    ...     "material": {"E": 1.2e6, "nu": 0.0, "h": 0.1}, "supports": [{"type": "clamp", "edge": "x0"}],
+    ...     "loads": [{"type": "edge_force", "edge": "x1", "force": [0.0, 0.0, 1.0]}], "solver": {"steps": 2},
+    ...     "output": {"vtu": False, "plots": False, "picture": False}})
+    >>> out = tempfile.mkdtemp()
+    >>> try:
+    ...     scenario.run(scn, out=out, stop_after=1)
+    ... except RunInterrupted as exc:
+    ...     print(exc)
+    stopped after step 1 as asked (stop_after=1)
+    >>> bool((scenario.run(scn, out=out, resume=True).g == scenario.run(scn, out=tempfile.mkdtemp()).g).all())
+    True
+    """
+
+
+@dataclass
+class StepEvent:
+    """One converged step as the sinks see it: its number ``k``, its results record, frames
+    ``g``, load factor ``lam``, whether it is the last, and the solver's restart state for the
+    checkpoint (``extra``: JSON scalars, ``arrays``: named arrays, ``unwrap``: the probes'
+    unwrapped rotation vectors).
+
+    Example
+    -------
+    >>> StepEvent(0, {"step": 0}, None, 0.0).finished
+    False
+    """
+    k: int
+    record: dict
+    g: np.ndarray
+    lam: float
+    finished: bool = False
+    extra: dict = field(default_factory=dict)
+    arrays: dict | None = None
+    unwrap: dict = field(default_factory=dict)
+
+
+@dataclass
+class RunState:
+    """What the sinks of one run share: the scenario, its directory (``io.RunDirectory``), the
+    run context (who writes, ``scenario.context``), the step records so far, the timings of
+    earlier sessions (``base``), the solver's Result (this session's timings), the critical
+    points of an arc-length path, and the provenance of the run.
+
+    Example
+    -------
+    >>> RunState(None, None, None).root
+    True
+    """
+    scn: object
+    rd: object
+    ctx: object
+    records: list = field(default_factory=list)
+    base: dict = field(default_factory=dict)
+    result: object = None
+    critical: list | None = None
+    provenance: dict = field(default_factory=dict)
+    done: int = 0
+    last: object = None
+    saved: int = 0
+
+    @property
+    def root(self):
+        return self.ctx is None or self.ctx.root
+
+    @property
+    def arc(self):
+        return self.scn.solver["control"] == "arclength"
+
+    def timings(self):
+        """Seconds per phase: earlier sessions' plus this one's."""
+        t = {k: float(self.base.get(k, 0.0)) for k in PHASES}
+        for k in ("assembly", "solve", "other"):
+            t[k] += float((self.result.timings if self.result is not None else {}).get(k, 0.0))
+        return t
+
+    def document(self, status, error=None):
+        """The results document (schema core-se3-result v1 and the run's fields)."""
+        scn = self.scn
+        mat = scn.spec["material"]
+        params = {k: dict(value=mat[k], unit="") for k in ("E", "nu", "h", "shear_factor", "drilling")}
+        if mat["rho"] is not None:
+            params["rho"] = dict(value=mat["rho"], unit="")
+        extra = dict(critical_points=_critical_doc(self.critical)) if self.critical is not None else {}
+        prov = dict(self.provenance)
+        if "backend" in prov:                # what evaluated the steps so far
+            prov["backend"] = dict(prov["backend"], used=sorted({r["backend"] for r in self.records if r.get("backend")}))
+        extra.update(unit_system=unit_system_record(scn.spec["units"]), load_numbers=scn.load_numbers(),
+                     provenance=prov)
+        return result_document(scn.name, "core_se3", scn.solver["element"], params, scn.mesh, self.records,
+                               self.timings(), None, control=scn.solver["control"],
+                               scenario=os.path.abspath(scn.file) if not scn.file.startswith("<") else scn.file,
+                               fingerprint=scn.fingerprint, units=scn.spec["units"], status=status, error=error,
+                               **extra)
+
+
+def _critical_doc(cps):
+    return [dict(kind=c.kind, load_factor=float(c.lam), bracket=[float(x) for x in c.lam_bracket],
+                 step=int(c.step), description=c.describe()) for c in cps]
+
+
+class Sink:
+    """A consumer of the run's steps (module docstring); the default methods do nothing."""
+
+    def step(self, run, ev):
+        return None
+
+    def end(self, run, status, message=None):
+        return None
+
+
+class VtuSink(Sink):
+    """``vtu/step_NNNN.vtu`` of every ``every``-th step and the last (rank 0 writes; every rank
+    computes its cells), with the obstacles' surfaces beside it."""
+
+    def __init__(self, every):
+        self.every = every
+
+    def due(self, ev):
+        return ev.k % self.every == 0 or ev.finished
+
+    def step(self, run, ev):
+        if self.due(ev):
+            write_step_vtu(run, ev.k, ev.g, ev.lam, ev.record.get("physical"))
+
+
+def write_step_vtu(run, k, g, lam, physical=None):
+    """The VTU file of step k (module docstring of ``scenario.sinks``)."""
+    from ..io import write_obstacles, write_vtu
+    from .outputs import point_fields
+    prob = run.scn.problem
+    cells = prob.element.cell_fields(g) if run.ctx is None else run.ctx.cell_fields(g)
+    if not run.root:
+        return
+    values = {"load_factor": float(lam)}
+    values.update({f"{n} [{v['unit']}]" if v["unit"] else n: v["value"] for n, v in (physical or {}).items()})
+    with atomic_path(run.rd.file(f"vtu/step_{k:04d}.vtu")) as tmp:
+        write_vtu(tmp, prob.mesh.X, prob.mesh.quads, prob.mesh.g0, g, point_data=point_fields(prob, g, lam),
+                  cell_data=cells, field_data=values)
+    obstacles = obstacles_of(prob)
+    if obstacles:
+        with atomic_path(run.rd.file(f"vtu/step_{k:04d}_obstacles.vtu")) as tmp:
+            write_obstacles(tmp, obstacles, g[:, :3, 3], lam)
+
+
+class CheckpointSink(Sink):
+    """``checkpoint.npz`` after every step: frames, restart state, records, timings."""
+
+    def step(self, run, ev):
+        with held_signals():                  # the file and the count of what it holds agree
+            if run.root:
+                ck = Checkpoint(run.rd.path)
+                run.rd.file("checkpoint.npz")
+                ck.save(run.scn.fingerprint, ev.k, ev.lam, ev.g, ev.unwrap, run.records, run.timings(),
+                        extra=ev.extra, arrays=ev.arrays)
+            run.saved = len(run.records)      # what a resume continues from
+
+
+class PvdSink(Sink):
+    """``vtu/series.pvd`` (and ``vtu/obstacles.pvd``) over the VTU files written so far."""
+
+    def __init__(self, vtu):
+        self.vtu = vtu
+
+    def step(self, run, ev):
+        if run.root and self.vtu.due(ev):
+            write_series_files(run, ev.finished)
+
+
+def write_series_files(run, finished):
+    """The .pvd collections of the step files that exist."""
+    from ..io import write_pvd
+    vtu_dir = os.path.join(run.rd.path, "vtu")
+    entries = [(r["load_factor"], f"step_{r['step']:04d}.vtu") for r in run.records
+               if os.path.exists(os.path.join(vtu_dir, f"step_{r['step']:04d}.vtu"))]
+    with atomic_path(run.rd.file("vtu/series.pvd")) as tmp:
+        write_pvd(tmp, entries)
+    obst = [(t, f[:-4] + "_obstacles.vtu") for t, f in entries if os.path.exists(os.path.join(vtu_dir, f[:-4] + "_obstacles.vtu"))]
+    if obst:                         # the obstacles' surfaces as a series of their own
+        with atomic_path(run.rd.file("vtu/obstacles.pvd")) as tmp:
+            write_pvd(tmp, obst)
+
+
+class ProvenanceSink(Sink):
+    """The peak memory of every rank after each step (collective in a distributed run)."""
+
+    def step(self, run, ev):
+        from .provenance import ranks_memory
+        run.provenance["peak_memory"] = [float(m) for m in ranks_memory(run.ctx)]
+
+
+class DocumentSink(Sink):
+    """``results.json``: written at the start (status running), after every step, and at the end
+    with the status and the message."""
+
+    def start(self, run):
+        if run.root:
+            write_json_atomic(run.rd.file("results.json"), run.document("running"))
+
+    def step(self, run, ev):
+        if run.root:
+            write_json_atomic(run.rd.file("results.json"), run.document(
+                "complete" if ev.finished and not run.arc else "running"))
+
+    def end(self, run, status, message=None):
+        if run.root:
+            write_json_atomic(run.rd.file("results.json"), run.document(status, message))
+
+
+class ProgressSink(Sink):
+    """The progress line (``io.Progress``): None = only on a terminal (after 2 s), True = always."""
+
+    def __init__(self, run, progress, nsteps):
+        explicit = bool(progress)
+        self.bar = Progress(nsteps, (sys.stdout.isatty() if progress is None else explicit) and run.root,
+                            delay=0.0 if explicit else 2.0)
+        self.lam_end = run.scn.solver["lam_end"]
+
+    def step(self, run, ev):
+        if ev.k <= run.done:
+            return
+        rec = run.records[-1]
+        dlam = ev.lam - run.records[-2]["load_factor"] if len(run.records) > 1 else ev.lam
+        self.bar.update(ev.k, ev.lam, rec.get("iterations", 0), rec.get("residual", 0.0),
+                        fraction=(ev.lam / self.lam_end) if run.arc else None,
+                        extra=f"  dlam {dlam:.3g}" + (f"  {rec['substeps']} sub-steps" if rec.get("substeps", 1) > 1
+                                                       else ""))
+
+    def end(self, run, status, message=None):
+        self.bar.close()
+
+
+class StopAfter(Sink):
+    """Raise RunInterrupted once ``n`` new steps are done (tests of resume)."""
+
+    def __init__(self, n):
+        self.n, self.count = n, 0
+
+    def step(self, run, ev):
+        if ev.k > run.done:
+            self.count += 1
+            if self.count >= self.n and not ev.finished:
+                raise RunInterrupted(f"stopped after {'path point' if run.arc else 'step'} {ev.k} as asked "
+                                     f"(stop_after={self.n})")

@@ -1,0 +1,150 @@
+"""The files of a sweep (``scenario.sweep``): ``sweep.csv`` (one row per finished run, rewritten
+atomically after each), ``sweep.png``, ``sweep.json`` (status, message, provenance) and the
+checkpoint ``sweep.npz`` (the finished rows, their final frames and the 'auto' backend's count,
+so that a resumed sweep repeats the uninterrupted one bit for bit).
+
+Example
+-------
+>>> import csv, os, tempfile
+>>> p = write_csv(os.path.join(tempfile.mkdtemp(), "sweep.csv"), ["material.E"],
+...               [{"material.E": 1.0, "status": "complete", "tip.uz": 0.5}])
+>>> list(csv.DictReader(open(p)))[0]["tip.uz"]
+'0.5'
+"""
+from __future__ import annotations
+
+import csv
+import hashlib
+import json
+
+import numpy as np
+
+from ..backend import restore_rent
+from ..errors import CheckpointError
+from ..io import atomic_path, write_json_atomic
+
+__all__ = ["SWEEP_FILES", "SweepCheckpoint", "write_csv", "write_plot", "write_status", "columns"]
+
+SWEEP_FILES = ("sweep.csv", "sweep.png", "sweep.json", "sweep.npz")
+FORMAT = "core-se3-sweep-checkpoint"
+
+
+class SweepCheckpoint:
+    """The finished rows of a sweep and their final frames (None for a failed run), saved in
+    ``sweep.npz`` after every run; :meth:`load` restores them for a resume (CheckpointError for
+    a checkpoint of another scenario or grid, or a damaged one)."""
+
+    def __init__(self, rd, scn, grid, warm):
+        self.rd = rd
+        self.rows, self.finals, self.rent = [], [], None
+        self.n = scn.mesh.n_nodes
+        self.fingerprint = hashlib.sha256(json.dumps(dict(scenario=scn.fingerprint, grid=grid, warm=bool(warm)),
+                                                     sort_keys=True, default=str).encode()).hexdigest()
+
+    def add(self, row, g, rent):
+        """One finished run: its row, final frames (or None) and the backend count after it."""
+        self.rows.append(row)
+        self.finals.append(g)
+        self.rent = rent
+        arrays = {f"g_{i}": g for i, g in enumerate(self.finals) if g is not None}
+        with atomic_path(self.rd.file("sweep.npz")) as tmp:
+            with open(tmp, "wb") as fh:
+                np.savez(fh, format=np.array(FORMAT), fingerprint=np.array(self.fingerprint),
+                         rows=np.array(json.dumps(self.rows)), rent=np.array(json.dumps(rent)), **arrays)
+
+    def load(self):
+        """The rows done so far (none without a checkpoint: the sweep starts at its first point)."""
+        import os
+        path = os.path.join(self.rd.path, "sweep.npz")
+        if not os.path.exists(path):
+            return self
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                if str(z["format"]) != FORMAT:
+                    raise ValueError(f"not a {FORMAT} file")
+                fp, rows, rent = str(z["fingerprint"]), json.loads(str(z["rows"])), json.loads(str(z["rent"]))
+                finals = [np.array(z[f"g_{i}"]) if f"g_{i}" in z.files else None for i in range(len(rows))]
+        except Exception as exc:
+            raise CheckpointError(f"cannot read the sweep checkpoint {path}: {type(exc).__name__}; start over with "
+                                  "--force, or use another --out") from None
+        if fp != self.fingerprint:
+            raise CheckpointError(f"{path} belongs to another sweep (the scenario, the swept values or --cold "
+                                  "changed): start over with --force, or use another --out")
+        if not isinstance(rows, list) or any(g is not None and g.shape != (self.n, 4, 4) for g in finals):
+            raise CheckpointError(f"{path} is inconsistent (its rows or frames do not fit the scenario): start over "
+                                  "with --force, or use another --out")
+        self.rows, self.finals, self.rent = rows, finals, rent
+        restore_rent(rent)
+        return self
+
+
+def columns(rows):
+    """The CSV columns: every key of every row, in order of appearance."""
+    cols = []
+    for r in rows:
+        for k in r:
+            if k not in cols:
+                cols.append(k)
+    return cols
+
+
+def _cell(v):
+    if isinstance(v, (list, tuple)):
+        return ";".join(f"{x:.17g}" for x in v)
+    if isinstance(v, float):
+        return repr(v)
+    return str(v)
+
+
+def write_csv(path, keys, rows):
+    """``sweep.csv``: the rows (swept values first), written atomically."""
+    cols = columns([{k: None for k in keys}] + list(rows))
+    with atomic_path(path) as tmp:
+        with open(tmp, "w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(cols)
+            for r in rows:
+                w.writerow([_cell(r.get(c, "")) for c in cols])
+    return path
+
+
+def write_status(path, result, scn, state, message=None):
+    """``sweep.json``: status, message, the swept keys, the number of rows, provenance."""
+    from ..results.provenance import provenance
+    doc = dict(schema="core-se3-sweep", version=1, scenario=scn.file, name=scn.name, status=result.status,
+               error=message, keys=result.keys, rows=len(result.rows),
+               failed=sum(r.get("status") != "complete" for r in result.rows),
+               provenance=provenance(scn.problem))
+    return write_json_atomic(path, doc)
+
+
+def write_plot(path, result, title):
+    """Every probe displacement component against the first swept value (names or switches:
+    one tick per run)."""
+    from ..io import new_figure
+    fig = new_figure()
+    ax = fig.add_subplot(1, 1, 1)
+    key = result.keys[0]
+    xs = [r[key] for r in result.rows]
+    numeric = all(isinstance(v, (int, float, list, tuple)) and not isinstance(v, bool) for v in xs)
+    x = np.array([np.linalg.norm(v) if isinstance(v, (list, tuple)) else v for v in xs], float) if numeric \
+        else np.arange(len(xs), dtype=float)
+    if not numeric:
+        ax.set_xticks(x)
+        ax.set_xticklabels([str(v) for v in xs], rotation=30)
+    cols = [c for c in columns(result.rows) if c.endswith((".ux", ".uy", ".uz"))]
+    ys = {c: np.array([r.get(c, np.nan) for r in result.rows], float) for c in cols}
+    big = max([np.nanmax(np.abs(y)) for y in ys.values() if np.isfinite(y).any()] + [0.0])
+    for i, (c, y) in enumerate(ys.items()):
+        if np.isfinite(y).any() and np.nanmax(np.abs(y)) > 1e-9 * big:
+            ax.plot(x, y, "o-", ms=4, label=c, color=f"C{i % 10}")
+    ax.set_xlabel(key + (" (|vector|)" if numeric and isinstance(xs[0], (list, tuple)) else ""))
+    ax.set_ylabel("final probe displacement")
+    ax.set_title(f"{title}: sweep of {', '.join(result.keys)}")
+    ax.grid(True, alpha=0.3)
+    if ys:
+        ax.legend(fontsize="small")
+    fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png")
+    return path

@@ -1,0 +1,143 @@
+"""Linear analysis: one solve at the reference state (``Problem.solve_linear``,
+``Problem.solve(control="linear")``).
+
+The equations are linearised about the reference frames g0 at zero load:
+
+    K0 eta = f_ext(g0, lam_end),   K0 = d r / d eta at (g0, lam = 0),
+
+with eta_i = (v_i, w_i) the body-frame displacement and rotation of node i.  K0 holds the
+element's material stiffness (the reference is stress free, so there is no geometric part) and
+the load-independent stiffness of the loads (penalty supports); the stiffness of follower loads,
+proportional to the load, is a geometric effect and is left out, so that the answer is linear
+in the load.  Prescribed motions enter through their targets at lam_end: the held components
+of eta_p = (R0^T (x_t - X), log(R0^T R_t)) of each held node.
+
+The state reported is g_i = g0_i (exp_so3(w_i), v_i) (the rotation and the translation updated
+separately, not by the SE(3) exponential): its probes and displacements are then exactly the
+linear ones, u = R0 v, the rotation vector R0 w.  Reactions are those of the linear internal
+forces K0 eta (the forces in the reference frames).  The result has the reference state and
+this one step, like a one-step solve.
+"""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from .. import lie
+from ..assembly import Assembler
+from ..errors import OptionError
+from ..results import Result, StepRecorder
+from .linalg import checked_solve, make_solver
+from .options import NewtonOptions, unknown_keywords
+
+__all__ = ["linear_solve", "linear_state"]
+
+
+def linear_state(g0, eta):
+    """Frames g0_i (exp_so3(w_i), v_i) of the linear increments eta (n, 6) (module docstring).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> g0 = np.eye(4)[None]
+    >>> linear_state(g0, np.array([[1.0, 2.0, 3.0, 0.0, 0.0, 0.1]]))[0, :3, 3].tolist()
+    [1.0, 2.0, 3.0]
+    """
+    eta = np.asarray(eta, float).reshape(-1, 6)
+    h = np.zeros((len(eta), 4, 4))
+    h[:, :3, :3] = lie.exp_so3(eta[:, 3:])
+    h[:, :3, 3] = eta[:, :3]
+    h[:, 3, 3] = 1.0
+    return g0 @ h
+
+
+def _prescribed_increments(problem, lam):
+    """(n, 6) body-frame increments of the held dofs at lam (zero where no target moves)."""
+    g0 = problem.mesh.g0
+    eta = np.zeros((problem.mesh.n_nodes, 6))
+    for s in problem.supports:
+        if s.target is None:
+            continue
+        gt = np.asarray(s.target(lam), float)
+        R0 = g0[s.nodes, :3, :3]
+        rel = np.swapaxes(R0, 1, 2)
+        ev = np.einsum("nij,nj->ni", rel, gt[:, :3, 3] - g0[s.nodes, :3, 3])
+        ew = lie.log_so3(rel @ gt[:, :3, :3])
+        e = np.concatenate([ev, ew], 1)
+        eta[s.nodes] = np.where(s.fixed, e, eta[s.nodes])
+    return eta
+
+
+def linear_solve(problem, lam_end=1.0, steps=None, linear_solver=None, **kw):
+    """Linear analysis of ``problem`` at load factor ``lam_end`` (module docstring).
+
+    Parameters
+    ----------
+    problem : core_se3.Problem
+        The problem; its supports are checked first (SingularSystemError).
+    lam_end : float, optional
+        The load factor of the answer (the loads at lam_end on the reference geometry).
+    steps : int, optional
+        Ignored (one solve); accepted so that a problem's solve defaults apply unchanged.
+    linear_solver : str, optional
+        'auto', 'banded', 'superlu' or 'mumps' (default the problem's).
+    **kw
+        Fields of NewtonOptions are accepted and ignored (they control iterations).
+
+    Returns
+    -------
+    core_se3.Result
+        steps[0] the reference state, steps[1] the linear solution (iterations 1).
+
+    Example
+    -------
+    A cantilever strip under a small tip force: Timoshenko's deflection P L^3/(3 EI) + P L/(G A)
+    (shear factor 1).
+
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(10.0, 1.0, 32, 1), Material(1.2e6, 0.0, 0.1))
+    >>> p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 1e-3)); p.add_probe("tip")
+    >>> u = p.solve_linear().final.probes["tip"]["u"][2]
+    >>> EI, GA = 1.2e6 * 0.1 ** 3 / 12, 0.6e6 * 0.1
+    >>> round(float(u / (1e-3 * (10.0 ** 3 / (3 * EI) + 10.0 / GA))), 3)
+    1.0
+    """
+    unknown_keywords("linear_solve", {k: v for k, v in kw.items() if k not in NewtonOptions.__dataclass_fields__},
+                     ["lam_end", "linear_solver", *NewtonOptions.__dataclass_fields__])
+    if not np.isfinite(lam_end):
+        raise OptionError(f"lam_end must be finite, got {lam_end!r}")
+    t0 = time.perf_counter()
+    mesh = problem.mesh
+    g0 = mesh.g0
+    problem.check_supports(g0)
+    result = Result(mesh=mesh, element=problem.element_name)
+    rec = StepRecorder(problem)
+    solver = make_solver(linear_solver or problem.linear_solver)
+    n = mesh.n_nodes
+    free = ~problem.constraint_mask().ravel()
+    every = Assembler(mesh, np.ones(6 * n, bool))
+    result.timings["setup"] = time.perf_counter() - t0
+    t = time.perf_counter()
+    ev = problem.evaluate(g0, 0.0, assembler=every)                   # K0 on all dofs
+    K = ev.K.tocsr()
+    f = problem.external(g0, lam_end, tangent=False)[0].ravel()
+    eta = _prescribed_increments(problem, lam_end).ravel()
+    rhs = f[free] - K[free][:, ~free] @ eta[~free]
+    result.timings["assembly"] = time.perf_counter() - t
+    t = time.perf_counter()
+    eta[free] = checked_solve(solver, K[free][:, free], rhs)
+    result.timings["solve"] = time.perf_counter() - t
+    t = time.perf_counter()
+    r_lin = (K @ eta).reshape(n, 6)
+    f = f.reshape(n, 6)
+    result.steps.append(rec.step(0.0, g0, 0, [], np.zeros((n, 6)), problem.external(g0, 0.0, tangent=False)[0]))
+    g = linear_state(g0, eta)
+    # the forces act in the reference frames: expressed in the frames of g, so that the step's
+    # lab totals (R f) are the reference ones (R0 f)
+    Q = np.swapaxes(g[:, :3, :3], 1, 2) @ g0[:, :3, :3]
+    to_g = lambda a: np.concatenate([np.einsum("nij,nj->ni", Q, a[:, :3]), np.einsum("nij,nj->ni", Q, a[:, 3:])], 1)
+    result.steps.append(rec.step(lam_end, g, 1, [], to_g(r_lin), to_g(f)))
+    result.log.append(dict(lam=lam_end, converged=True, iterations=1, reason="linear"))
+    result.timings["other"] = time.perf_counter() - t
+    return result
