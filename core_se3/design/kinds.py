@@ -46,7 +46,11 @@ REFERENCE_KEYS = ("field", "regions", "pose", "load", "probe")
 
 @dataclass(frozen=True)
 class VariableKind(Kind):
-    """A design variable of scenario files: ``build(ctx, values) -> Variable`` (module docstring).
+    """A design variable of scenario files: ``build(ctx, values) -> Variable`` (module docstring);
+    ``write(scn, doc, variable)`` puts the variable's value into the scenario document ``doc``
+    (nested dicts), so that ``core-se3 design`` writes an optimised scenario that reproduces the
+    design (the built-in kinds' writers are in ``scenario.design_runner``; a user kind without
+    one is refused by ``core-se3 design``).
 
     Example
     -------
@@ -58,6 +62,7 @@ class VariableKind(Kind):
     build: Callable
     check: Callable | None = None
     doc: str = ""
+    write: Callable | None = None
     extra: dict = field(default_factory=dict)
 
 

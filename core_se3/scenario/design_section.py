@@ -193,6 +193,7 @@ def build_design(scn):
         ctx.index = i
         kind = VARIABLES[var["type"]]
         variables.append(_built(v, f"design.variables[{i}]", kind, lambda: kind.build(ctx, var)))
+        variables[-1].scenario_kind = kind            # how core-se3 design writes its value back
     poses = _design_poses(ctx, ds, variables)
     for i, t in enumerate(ds["targets"]):
         kind = TARGETS[t["type"]]
