@@ -147,11 +147,11 @@ class Param:
         if self.kind == "matrix3":
             return "a 3x3 array of numbers"
         if self.kind == "table":
-            return "a table: " + ", ".join(p.name for p in self.fields)
+            return "a table" + (": " + ", ".join(p.name for p in self.fields) if self.fields else "")
         if self.kind == "list":
             what = "names" if self.item == "string" else "integers"
             return f"an array of {what}" + (f" from {', '.join(map(repr, self.choices))}" if self.choices else "")
-        return "a value (checked by the kind)"
+        return "(see the text)"
 
     def default_text(self):
         """The default as the docs show it: 'required', 'none' or the TOML value."""
@@ -259,11 +259,20 @@ class Kind:
             rows.append(f"| `{p.name}` | {p.describe()} | {p.default_text()} | {p.doc} |")
         return "\n".join(rows)
 
-    def summary(self):
-        """One line: the keys (required ones first, then the optional with their defaults)."""
-        req = [p.name for p in self.params if p.required]
-        opt = [f"{p.name} ({p.default_text()})" for p in self.params if not p.required]
-        return ", ".join(req + opt) or "no keys"
+    def summary(self, markdown=False):
+        """One line: the keys (required ones first, then the optional with their defaults),
+        with the section's own keys this kind reads (:meth:`selection`) in front."""
+        q = (lambda k: f"`{k}`") if markdown else (lambda k: k)
+        req = [q(p.name) for p in self.params if p.required]
+        opt = [f"{q(p.name)} ({p.default_text()})" for p in self.params if not p.required]
+        own = self.selection()
+        return ", ".join(([" or ".join(map(q, own[0]))] if own and own[0] else []) + req + opt
+                         + [q(k) for k in (own[1] if own else ())]) or "no keys"
+
+    def selection(self):
+        """(alternative keys the entry selects its place by, further section keys it takes),
+        e.g. (("edge", "nodes"), ("scale",)) of an edge load; None: none."""
+        return None
 
 
 @dataclass(frozen=True)
@@ -347,7 +356,8 @@ class Registry(dict):
         """The Markdown table of the registered kinds: selector value, keys, doc."""
         rows = [f"| {self.key} | keys | |", "|---|---|---|"]
         for name, k in self.items():
-            rows.append(f"| `{name}` | {k.summary()} | {getattr(k, 'doc', '')} |")
+            doc = getattr(k, "doc", "") + (f"; {k.edges}" if getattr(k, "edges", "") else "")
+            rows.append(f"| `{name}` | {k.summary(markdown=True)} | {doc} |")
         return "\n".join(rows)
 
 

@@ -26,7 +26,8 @@ class GeneratorKind(Kind):
     """A mesh generator of scenario files.
 
     build(**values) -> Mesh makes the mesh from the values of its ``params`` (optional keys the
-    file leaves out are not passed: the function's own default applies).  ``counts``: the two
+    file leaves out are not passed: the function's own default applies, and the Param's default
+    documents it; a ``backend`` is always passed).  ``counts``: the two
     integer keys whose product is the element count, ``extent``: the length keys whose largest
     over ``size`` estimates it (the scenario refuses more than its limit of elements; both may
     be empty); ``edges``: the named node sets and regions it makes, for the docs.
@@ -103,7 +104,7 @@ _BACKEND = Param("backend", "string", "auto", choices=BACKENDS,
 
 register_generator(GeneratorKind(
     "rectangle", (_pos("L", "length along x"), _pos("width", "along y"), _count("nx"), _count("ny"),
-                  _real("x0", "start of the strip along x (0)", None)),
+                  _real("x0", "start of the strip along x", 0.0)),
     rectangle, doc="a flat L x width strip in the x-y plane", edges="`x0`, `x1` (ends), `y0`, `y1` (sides)",
     counts=("nx", "ny")))
 register_generator(GeneratorKind(
@@ -122,22 +123,22 @@ register_generator(GeneratorKind(
 register_generator(GeneratorKind(
     "star", (Param("n_arms", "integer", lo=3, hi=64, doc=">= 3"), _pos("arm_length"), _pos("arm_width"),
              _pos("palm", "circumradius of the palm polygon (default: side = arm width)", None),
-             _real("angle0", "0: arm 0 along +x", None), _SIZE, _BACKEND),
+             _real("angle0", "0: arm 0 along +x", 0.0), _SIZE, _BACKEND),
     star, doc="a star-shaped gripper", edges="regions `palm`, `finger_0` ..., `fingers`; node sets `tip_0` ..., `tips`",
     extent=("arm_length", "arm_width")))
 register_generator(GeneratorKind(
-    "polygon", (Param("n_sides", "integer", lo=3, hi=64), _pos("radius", "circumradius"), _real("angle0", "", None),
+    "polygon", (Param("n_sides", "integer", lo=3, hi=64), _pos("radius", "circumradius"), _real("angle0", "", 0.0),
                 _SIZE, _BACKEND),
     polygon, doc="a regular polygon", edges="region `polygon`; node sets `side_0` ..., `boundary`", extent=("radius",)))
 register_generator(GeneratorKind(
-    "rounded_rectangle", (_pos("length"), _pos("width"), _real("radius", "corners, 0: sharp", None), _SIZE, _BACKEND),
+    "rounded_rectangle", (_pos("length"), _pos("width"), _real("radius", "corners, 0: sharp", 0.0), _SIZE, _BACKEND),
     rounded_rectangle, doc="a rectangle with rounded corners",
     edges="region `plate`; node sets `x0`, `x1`, `y0`, `y1` (straight parts), `boundary`", extent=("length", "width")))
 register_generator(GeneratorKind(
     "disk", (_pos("radius"), _SIZE, _BACKEND), disk, doc="a disk", edges="region `disk`; node set `rim`",
     extent=("radius",)))
 register_generator(GeneratorKind(
-    "annulus_sector", (_pos("r_in"), _pos("r_out"), _pos("angle", "< 2 pi [rad]"), _real("theta0", "", None), _SIZE,
+    "annulus_sector", (_pos("r_in"), _pos("r_out"), _pos("angle", "< 2 pi [rad]"), _real("theta0", "", 0.0), _SIZE,
                        _BACKEND),
     annulus_sector, doc="an annular sector", edges="region `sector`; node sets `inner`, `outer`, `start`, `end`",
     extent=("r_in", "r_out", "angle")))

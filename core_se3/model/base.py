@@ -252,6 +252,9 @@ class LoadKind(Kind):
     doc: str = ""
     extra: dict = field(default_factory=dict)
 
+    def selection(self):
+        return (("edge", "nodes"), ("scale",)) if self.target != "elements" else ((), ("region", "scale"))
+
     def __post_init__(self):
         super().__post_init__()
         if self.target not in ("line", "nodes", "elements"):

@@ -56,6 +56,9 @@ class SupportKind(Kind):
     moves: bool = False
     extra: dict = field(default_factory=dict)
 
+    def selection(self):
+        return ("edge", "nodes", "region"), (("scale",) if self.moves else ())
+
 
 SUPPORTS = Registry("support kind", SupportKind, reserved=("edge", "nodes", "region", "scale"))
 
@@ -110,16 +113,19 @@ register_support(SupportKind("clamp", (), lambda problem, nodes, scale: problem.
 register_support(SupportKind(
     "fix", (Param("dofs", "list", item="integer", lo=0, hi=5, min_items=1, unique="sort",
                   doc="dof numbers 0..5 (0-2 translations along d1..d3, 3-5 rotations)"),),
-    lambda problem, nodes, scale, dofs: problem.fix(nodes, dofs), doc="body-frame dofs held"))
+    lambda problem, nodes, scale, dofs: problem.fix(nodes, dofs),
+    doc="body-frame dofs held: 0-2 translations along d1, d2, d3, 3-5 rotations"))
 register_support(SupportKind(
     "rotate", (Param("axis", "vector", nonzero=True, doc="lab axis of the rotation"),
                Param("angle", "number", doc="[rad] at scale 1"),
                Param("point", "vector", None, doc="on the axis (default the nodes' centroid)"), _FREE),
-    _rotate, doc="the nodes turned rigidly by angle * scale(lam)", moves=True))
+    _rotate, doc="rigid rotation by angle * scale(lam) about `axis` through `point`; `free`: lab axes along which "
+                 "the nodes may still translate", moves=True))
 register_support(SupportKind(
     "prescribed", (Param("translate", "vector", [0.0, 0.0, 0.0], doc="[length] at scale 1"),
                    Param("rotate", "table", None, doc="axis, angle [rad], point (default the centroid)",
                          fields=(Param("axis", "vector", nonzero=True), Param("angle", "number"),
                                  Param("point", "vector", None))), _FREE),
     _prescribed, _prescribed_check,
-    doc="x -> p + Q(s angle)(x - p) + s translate, s = scale(lam)", moves=True))
+    doc="rigid motion: at load factor lam, with s = scale(lam), x -> p + Q(s angle)(x - p) + s translate (lifting "
+        "an end, pushing a foot; Python: `Problem.move_edge`)", moves=True))

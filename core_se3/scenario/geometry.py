@@ -64,7 +64,8 @@ def mesh_section(v, d, base_dir):
     gen = v.string(d, "generator", key, choices=tuple(GENERATORS))
     kind = GENERATORS[gen]
     values = v.section(d, key, kind, first=("generator",))
-    kw = {k: x for k, x in values.items() if x is not None}      # a missing optional key: the function's default
+    # a missing optional key: the function's own default (which the Param documents)
+    kw = {k: x for k, x in values.items() if k in d or kind.param(k).required or k == "backend"}
     if "backend" in kw:
         kw["backend"] = M.resolve_backend(kw["backend"])
     _refuse_too_many(v, key, kind, kw)

@@ -106,18 +106,24 @@ def _option(name, opts, doc, **kw):
 
 
 SOLVER = Section("solver", (
-    Param("control", "string", "load", choices=("load", "arclength"), doc="load stepping or arc length"),
-    Param("steps", "integer", 10, lo=1, hi=100_000, doc="equal load-factor steps from 0 to lam_end"),
-    Param("lam_end", "number", 1.0, doc="final load factor (not 0)"),
-    Param("load_factors", "any", None, doc="explicit load factors of the steps, moving strictly one way from 0"),
-    _option("rtol", _NEWTON, "relative residual tolerance", lo=0.0, lo_open=True, hi=1.0, hi_open=True),
+    Param("control", "string", "load", choices=("load", "arclength"),
+          doc="load stepping, or path following past limit points (`core_se3/solvers/arclength.py`)"),
+    Param("steps", "integer", 10, lo=1, hi=100_000, doc="equal load-factor steps from 0 to `lam_end`"),
+    Param("lam_end", "number", 1.0, doc="final load factor (≠ 0)"),
+    Param("load_factors", "any", None, doc="explicit load factors of the steps, e.g. `[0.05, 0.2, 0.5, 1.0]`, moving "
+          "strictly one way from 0 (instead of `steps` and `lam_end`; load control)"),
+    _option("rtol", _NEWTON, "relative residual tolerance (`core_se3/solvers/convergence.py`)", lo=0.0, lo_open=True, hi=1.0, hi_open=True),
     _option("dtol", _NEWTON, "relative increment tolerance", lo=0.0, lo_open=True, hi=1.0, hi_open=True),
     _option("max_iter", _NEWTON, "Newton iterations per attempt", kind="integer", lo=1, hi=1000),
     _option("max_cutbacks", _NEWTON, "step halvings before a step fails", kind="integer", lo=0, hi=50),
-    Param("element", "string", "default", choices=ELEMENTS, doc="a registered element"),
+    Param("element", "string", "default", choices=ELEMENTS, doc="a registered element (`seed`: the seed's, no `--resume`)"),
     Param("linear_solver", "string", "auto", choices=LINEAR_SOLVERS, doc="the sparse factorisation"),
-    _option("iteration", _NEWTON, "mixed integration point Newton, or plain", kind="string", choices=ITERATIONS),
-    _option("predictor", _NEWTON, "start of each step with a prescribed motion", kind="string", choices=PREDICTORS),
+    _option("iteration", _NEWTON, "Newton of load control: mixed integration point (the geometric stiffness sees "
+            "linearly updated element stresses: large steps converge) or plain; the same converged states",
+            kind="string", choices=ITERATIONS),
+    _option("predictor", _NEWTON, "start of each step with a prescribed motion: the prescribed nodes moved, the rest "
+            "kept, or the Euler predictor (capped by contact: a lifted edge carries the shell along)", kind="string",
+            choices=PREDICTORS),
     Param("linear", "string", "mumps", choices=PARALLEL_KEYS["linear"], doc="linear solver of a distributed run"),
     Param("partition", "string", "auto", choices=PARALLEL_KEYS["partition"], doc="partition of a distributed run"),
     Param("petsc", "table", None, doc="free-form PETSc options of a distributed run")),
@@ -139,14 +145,17 @@ OUTPUT = Section("output", (
     Param("vtu_every", "integer", 1, lo=1, doc="write every k-th step (and the last)"),
     Param("plots", "bool", True, doc="probes.png"),
     Param("picture", "bool", True, doc="shell.png"),
-    Param("picture_steps", "integer", 1, lo=1, hi=50, doc="states drawn in shell.png"),
-    Param("view", "any", None, doc="[elevation, azimuth] or [elevation, azimuth, roll] [deg]")),
+    Param("picture_steps", "integer", 1, lo=1, hi=50, doc="states drawn in shell.png (> 1: evenly spaced, read from "
+          "the VTU files)"),
+    Param("view", "any", None, doc="`[elevation, azimuth]` or `[elevation, azimuth, roll]` of the camera [deg] "
+          "(default [20, -60])")),
     doc="[output]: files")
 
 DESIGN = Section("design", (
     Param("method", "string", "least_squares", choices=METHODS, doc="the optimiser"),
     Param("max_iter", "integer", 50, lo=1, hi=10_000, doc="iterations (least squares: evaluations)"),
-    Param("tolerance", "number", None, lo=0.0, doc="the largest misfit that counts as reaching the targets"),
+    Param("tolerance", "number", None, lo=0.0, doc="the largest misfit that counts as reaching the targets (in "
+          "each target's unit: length, or degrees for angles)"),
     Param("tol", "number", 1e-12, lo=0.0, lo_open=True, doc="the optimiser's own tolerance"),
     Param("stop_at_tolerance", "bool", False, doc="stop at the first iteration within tolerance"),
     Param("variables", "any", doc="[[design.variables]]"), Param("poses", "any", None, doc="[[design.poses]]"),
@@ -214,3 +223,38 @@ def describe_kinds(section=None):
         for name, kind in reg.items():
             lines.append(f"  {name}: {kind.summary()} -- {getattr(kind, 'doc', '')}")
     return "\n".join(lines)
+
+
+_BLOCK = "<!-- schema: {} -->"
+_END = "<!-- /schema -->"
+
+
+def update_doc(text):
+    """``text`` (docs/SCENARIOS.md) with every block between ``<!-- schema: NAME -->`` and
+    ``<!-- /schema -->`` replaced by the table :func:`schema_tables` gives for NAME (a KeyError
+    for an unknown NAME): the document's tables are the vocabulary's (tests/test_kind_contracts.py
+    checks that the document is up to date; ``python -m core_se3.scenario.schema FILE`` updates it).
+
+    Example
+    -------
+    >>> print(update_doc("<!-- schema: output -->\\nold\\n<!-- /schema -->").splitlines()[2])
+    | key | value | default | |
+    """
+    import re
+    tables = schema_tables()
+
+    def repl(m):
+        return f"{_BLOCK.format(m.group(1))}\n{tables[m.group(1)]}\n{_END}"
+    return re.sub(r"<!-- schema: (.+?) -->\n.*?<!-- /schema -->", repl, text, flags=re.S)
+
+
+if __name__ == "__main__":          # python -m core_se3.scenario.schema docs/SCENARIOS.md
+    import sys
+    for path in sys.argv[1:]:
+        with open(path, encoding="utf-8") as fh:
+            old = fh.read()
+        new = update_doc(old)
+        if new != old:
+            with open(path, "w", encoding="utf-8") as fh:
+                fh.write(new)
+            print(f"updated {path}")

@@ -110,7 +110,8 @@ class Validator:
             self.fail(path, f"missing required key ({what})")
         return path, k in d
 
-    def number(self, d, k, key, default=_REQ, lo=None, lo_open=False, hi=None, hi_open=False):
+    def number(self, d, k, key, default=_REQ, lo=None, lo_open=False, hi=None, hi_open=False, infinite=False):
+        """A finite number (``infinite``: +-inf too, for a bound whose default is none) in the bounds."""
         path, present = self._lookup(d, k, key, default, "a number")
         if not present:
             return default
@@ -118,7 +119,7 @@ class Validator:
         if isinstance(v, bool) or not isinstance(v, (int, float)):
             self.fail(path, f"expected a number, got {tname(v)} {show(v)}")
         v = float(v)
-        if not math.isfinite(v):
+        if not math.isfinite(v) and not (infinite and math.isinf(v)):
             self.fail(path, f"expected a finite number, got {v}")
         if lo is not None and (v <= lo if lo_open else v < lo):
             self.fail(path, f"expected a number {'>' if lo_open else '>='} {lo:g}, got {v:g}")
@@ -254,9 +255,9 @@ class Validator:
         if p.kind == "vector":
             val = self.vector(d, p.name, key, n=p.n, default=p.default, nonzero=p.nonzero)
             return list(val) if isinstance(val, (tuple, list)) else val
-        if p.kind == "number":
+        if p.kind == "number":           # a bound whose default is infinite may be given as inf
             return self.number(d, p.name, key, default=p.default, lo=p.lo, lo_open=p.lo_open, hi=p.hi,
-                               hi_open=p.hi_open)
+                               hi_open=p.hi_open, infinite=isinstance(p.default, float) and math.isinf(p.default))
         if p.kind == "integer":
             return self.integer(d, p.name, key, default=p.default, lo=p.lo, hi=p.hi)
         if p.kind == "bool":
