@@ -209,7 +209,9 @@ def _grasp_measures(prob, p, st):
     lam = st.load_factor
     F, _ = c.nodal_forces(st.g, lam)
     on = np.linalg.norm(F, axis=1) > 0
-    return dict(force_on_sphere=(-F.sum(0)).tolist(), nodes_in_contact=int(on.sum()),
+    rep = c.report(st.g, lam)
+    return dict(force_on_sphere=(-c.total(st.g, lam)[0]).tolist(), nodes_in_contact=int(on.sum()),
+                faces_in_contact=int(rep.get("faces_in_contact", 0)),
                 penetration=c.penetration(st.g, lam), tip_z=float(st.probes["tip"]["u"][2]) if "tip" in st.probes
                 else None)
 
@@ -259,7 +261,7 @@ def report(doc):
         elif "force_on_sphere" in m:
             F = m["force_on_sphere"]
             lines.append(f"Ba {s['load']['value']:.4g} T: force on the sphere ({F[0]:.4g}, {F[1]:.4g}, {F[2]:.4g}), "
-                         f"{m['nodes_in_contact']} nodes in contact")
+                         f"{m['nodes_in_contact']} nodes and {m.get('faces_in_contact', 0)} faces in contact")
     return lines
 
 

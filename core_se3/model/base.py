@@ -177,6 +177,27 @@ class Load(abc.ABC):
         swept deep into the shell over the increment: the try is cut back), '' if it may."""
         return ""
 
+    def step_error(self, g0, lam0, g1, lam1):
+        """Hook: why a converged step from the accepted state (g0, lam0) to (g1, lam1) must not be
+        accepted (e.g. the shell passed through an obstacle between the two: the step is cut
+        back), '' if it may."""
+        return ""
+
+    def active_set_changed(self, g0, lam0, g1, lam1):
+        """Hook: True when the load's tangent switched between the states (a contact opened or
+        closed): the load-control limit check then takes a new reference stiffness instead of
+        calling the jump a limit point.  False here."""
+        return False
+
+    def failure_hint(self):
+        """Hook: why the last failed Newton try could not converge, from this load's side (e.g.
+        every contact node slips: no static equilibrium), or ''.  Named in the error."""
+        return ""
+
+    def accept_state(self, g, lam):
+        """Hook: (g, lam) has been accepted as a step of the path (a path-dependent load moves its
+        history on, e.g. friction); nothing here."""
+
     def update_multipliers(self, g, lam):
         """Hook: at a converged state, the constraint error over its tolerance; when above 1 the
         load has augmented its multipliers and Newton solves the same load factor again.  0.0 here."""

@@ -46,144 +46,21 @@ from __future__ import annotations
 import numpy as np
 
 from .. import lie
-from ..assembly import Assembler
-from ..fem.quadrature import shape_functions, surface_jacobian
 from .base import Load, LoadEvaluation
+from .contact_faces import face_minima, face_wrench
+from .contact_output import ContactOutputs
+from .friction import coulomb_law, wrench
+from .contact_sweep import crossing_report
+from .contact_law import (E3, contact_wrench, nodal_areas, normal_law, ramp, ramp_inverse, reference_sides,
+                          shell_diagonal_stiffness)
 from .obstacles import Obstacle, contact_error, make_obstacle, rigid_motion
 
 __all__ = ["ContactLoad", "add_obstacle", "ramp", "ramp_inverse", "normal_law", "contact_wrench",
            "nodal_areas", "shell_diagonal_stiffness", "reference_sides", "MODES"]
 
-E3 = np.array([0.0, 0.0, 1.0])
 MODES = ("al", "penalty")
 
-
-def ramp(u, w):
-    """The C^1 ramp 0 (u <= 0), u^2 / (2 w) (0 < u < w), u - w/2 (u >= w) and its derivative.
-
-    Example
-    -------
-    >>> [v.tolist() for v in ramp([-1.0, 0.5, 2.0], 1.0)]
-    [[0.0, 0.125, 1.5], [0.0, 0.5, 1.0]]
-    """
-    u = np.asarray(u, float)
-    w = np.broadcast_to(np.asarray(w, float), u.shape)
-    ws = np.where(w > 0, w, 1.0)
-    val = np.where(u <= 0, 0.0, np.where(u < w, u * u / (2 * ws), u - w / 2))
-    der = np.where(u <= 0, 0.0, np.where(u < w, u / ws, 1.0))
-    return val, der
-
-
-def ramp_inverse(p, w):
-    """u >= 0 with ramp(u, w) = p >= 0: sqrt(2 w p) (p < w/2), p + w/2 otherwise.
-
-    Example
-    -------
-    >>> ramp_inverse([0.125, 1.5], 1.0).tolist()
-    [0.5, 2.0]
-    """
-    p = np.maximum(np.asarray(p, float), 0.0)
-    w = np.broadcast_to(np.asarray(w, float), p.shape)
-    return np.where(p < w / 2, np.sqrt(2 * w * p), p + w / 2)
-
-
-def normal_law(d, lam, k, eps):
-    """Pressure p(d) >= 0 and dp/dd of the regularised augmented-Lagrangian law,
-    p = ramp(ramp_inverse(lam) - k d; k eps), so that p(0) = lam (module docstring).
-
-    Parameters: d gaps [length], lam multipliers [force/length^2], k penalties
-    [force/length^3], eps band [length] (broadcast).  Returns: (p, dp/dd).
-
-    Example
-    -------
-    >>> p, dp = normal_law([0.0, -1.0], [2.0, 0.0], 1.0, 0.5)
-    >>> p.tolist(), dp.tolist()
-    ([2.0, 0.75], [-1.0, -1.0])
-    """
-    w = np.asarray(k) * eps
-    p, dr = ramp(ramp_inverse(lam, w) - np.asarray(k) * np.asarray(d, float), w)
-    return p, -np.asarray(k) * dr
-
-
-def contact_wrench(R, c, A, n, H, p, dp):
-    """Generalised nodal forces f (k, 6) and -df/deta (k, 6, 6) of the contact forces A p n acting
-    at x = phi + c d3 (R (k, 3, 3) frames, c (k,) offsets [length], A (k,) areas, n (k, 3) lab
-    normals, H (k, 3, 3) lab Hessians of the SDF, p (k,) pressures, dp (k,) dp/dd).
-
-    Example
-    -------
-    >>> import numpy as np
-    >>> f, K = contact_wrench(np.eye(3)[None], np.array([-0.5]), np.array([2.0]), np.array([[1.0, 0, 0]]),
-    ...                       np.zeros((1, 3, 3)), np.array([3.0]), np.array([0.0]))
-    >>> f[0].tolist()                       # 6 along x at -0.5 d3: the moment -0.5 e3 x 6 e1
-    [6.0, 0.0, 0.0, 0.0, -3.0, 0.0]
-    """
-    Rt = np.swapaxes(R, 1, 2)
-    nb = np.einsum("kij,kj->ki", Rt, n)
-    Hb = Rt @ H @ R
-    Fb = (A * p)[:, None] * nb
-    k = len(c)
-    B = np.zeros((k, 3, 6))
-    B[:, :, :3] = np.eye(3)
-    B[:, :, 3:] = -c[:, None, None] * lie.hat3(E3)
-    Bt = np.swapaxes(B, 1, 2)
-    f = np.einsum("kij,kj->ki", Bt, Fb)
-    S = (A * dp)[:, None, None] * nb[:, :, None] * nb[:, None, :] + (A * p)[:, None, None] * Hb
-    dF = S @ B
-    dF[:, :, 3:] += lie.hat3(Fb)
-    return f, -Bt @ dF
-
-
-def nodal_areas(mesh, elements=None):
-    """A_i = int N_i dA over ``elements`` (default all; 2x2 Gauss, reference area) (n,).
-
-    Example
-    -------
-    >>> from core_se3 import mesh
-    >>> nodal_areas(mesh.rectangle(2.0, 1.0, 2, 1)).round(12).tolist()
-    [0.25, 0.5, 0.25, 0.25, 0.5, 0.25]
-    """
-    el = np.arange(mesh.n_elements) if elements is None else np.asarray(elements, np.int64)
-    quads = mesh.quads[el]
-    N, dN = shape_functions()
-    w = np.einsum("qi,mq->mi", N, surface_jacobian(mesh.X[quads], dN))
-    return np.bincount(quads.ravel(), weights=w.ravel(), minlength=mesh.n_nodes)
-
-
-def shell_diagonal_stiffness(problem, g=None):
-    """K_i = tr(K_vv,ii) / 3 (n,): the mean translational diagonal of the element tangent at g
-    (default the reference), the shell's own stiffness per node [force/length].
-
-    Example
-    -------
-    >>> from core_se3 import Problem, Material, mesh
-    >>> p = Problem(mesh.rectangle(1.0, 1.0, 1, 1), Material(1e3, 0.0, 0.1))
-    >>> K = shell_diagonal_stiffness(p)
-    >>> K.shape, bool(K.min() > 0)
-    ((4,), True)
-    """
-    m = problem.mesh
-    ev = problem.element.evaluate(m.g0 if g is None else g, tangent=True)
-    K = Assembler(m, np.ones(6 * m.n_nodes, bool)).matrix(ev.element_blocks, ev.edge_blocks, ev.node_blocks)
-    return K.diagonal().reshape(-1, 6)[:, :3].mean(1)
-
-
-def reference_sides(obstacle, g0, lam_ref=0.0):
-    """s_i = -sign(n(X_i, lam_ref) . d3_i) (k,): +1 where the obstacle lies on the node's +d3 side.
-
-    Example
-    -------
-    >>> import numpy as np
-    >>> from core_se3.model import make_obstacle
-    >>> floor = make_obstacle("half_space", point=(0, 0, -1.0), normal=(0, 0, 1.0))
-    >>> reference_sides(floor, np.eye(4)[None]).tolist()           # below: the -d3 face
-    [-1.0]
-    """
-    _, n, _ = obstacle.evaluate(g0[:, :3, 3], lam_ref)
-    return np.where(np.einsum("ki,ki->k", n, g0[:, :3, 2]) > 0, -1.0, 1.0)
-
-
-class ContactLoad(Load):
+class ContactLoad(ContactOutputs, Load):
     """Frictionless contact of the nodes ``nodes`` (default all nodes of ``elements``, default all)
     with one rigid ``obstacle``, as a load (module docstring); made by ``Problem.add_obstacle``.
 
@@ -210,6 +87,19 @@ class ContactLoad(Load):
     cold_start : float
         Start multipliers cold_start k eps / 8 in mode 'al' (a shell resting exactly on an
         obstacle is then restrained at the first iteration).
+    soft_start : float
+        Mode 'al': a sample that carries no force (and does not rest on the obstacle in the
+        reference state) meets the penalty soft_start k; each Uzawa
+        update at which it carries force multiplies its penalty by 10, up to k (a first contact
+        of a very flexible shell converges; the answer does not depend on the penalty).
+    friction : float
+        Coulomb's coefficient mu >= 0 of the contact nodes (``model.friction``; 0: frictionless,
+        the face samples are frictionless in any case).
+    faces : 'auto', True or False
+        Face samples (``model.contact_faces``): the obstacle's closest point on each contact face
+        carries a constraint too; 'auto': when the obstacle is curved and its inradius is below
+        the largest contact element's diameter (it can fit between nodes, or a chord between
+        two nodes would cut into it by a large part of it).
 
     Example
     -------
@@ -226,7 +116,8 @@ class ContactLoad(Load):
     constraint_force = True
 
     def __init__(self, problem, obstacle, nodes=None, elements=None, mode="al", beta=1.0, k=None, eps=None,
-                 tol=None, side="auto", lam_ref=0.0, cap_depth=None, cold_start=1e-2):
+                 tol=None, side="auto", lam_ref=0.0, cap_depth=None, cold_start=1e-2, soft_start=1e-2,
+                 faces="auto", friction=0.0):
         if not isinstance(obstacle, Obstacle):
             raise contact_error(f"expected a core_se3.model.obstacles.Obstacle, got {type(obstacle).__name__}")
         if mode not in MODES:
@@ -266,12 +157,43 @@ class ContactLoad(Load):
             v = getattr(self, key)
             if not (np.isfinite(v) and v > 0):
                 raise contact_error(f"contact {key} must be positive and finite, got {v}", key)
-        self.lam0 = (self.k * self.eps / 8) * (1.0 if mode == "penalty" else float(cold_start))
+        where = np.full(mesh.n_nodes, -1)
+        where[self.nodes] = np.arange(len(self.nodes))
+        quads = where[mesh.quads[el]]
+        on = (quads >= 0).all(1)
+        self._quads = quads[on]                     # the contact faces, in contact-node positions
+        self._mesh_quads = mesh.quads
+        # face samples (model.contact_faces) on curved obstacles: each face's area and penalty
+        # are the means of its nodes'
+        size = np.linalg.norm(mesh.X[mesh.quads[el, 2]] - mesh.X[mesh.quads[el, 0]], axis=1).max(initial=0.0)
+        if isinstance(faces, str) and faces == "auto":
+            faces = float(getattr(obstacle, "thickness", np.inf)) < size
+        use = bool(faces) and not getattr(obstacle, "flat", False)
+        self.face_el = el[on] if use else np.zeros(0, np.int64)
+        self.face_q = self._quads if len(self.face_el) else np.zeros((0, 4), np.int64)
+        self.Af, self.kf = self.A[self.face_q].mean(1), self.k[self.face_q].mean(1)
+        kk = np.concatenate([self.k, self.kf])
+        self.lam0 = (kk * self.eps / 8) * (1.0 if mode == "penalty" else float(cold_start))
         self.lam = self.lam0.copy()
+        self.soft_start = 1.0 if mode == "penalty" else float(soft_start)
+        if not 0 < self.soft_start <= 1:
+            raise contact_error(f"soft_start must lie in (0, 1], got {soft_start}", "soft_start")
+        self.soft = np.full(len(kk), self.soft_start)
+        self.mu = float(friction)
+        if not (np.isfinite(self.mu) and self.mu >= 0):
+            raise contact_error(f"the friction coefficient must be >= 0 and finite, got {friction}", "friction")
+        if self.mu > 0:          # the history: tangential multipliers (obstacle frame) and anchors
+            self.tau = np.zeros((len(self.nodes), 3))
+            self.y_a0 = self.placement(self.contact_points(mesh.g0), 0.0)
+            self.y_a = self.y_a0.copy()
         self.gap_error = 0.0
         self.approximate_tangent = bool(obstacle.approximate_hessian)
         self._active = np.zeros(len(self.nodes), bool)
         self._normals = np.zeros((len(self.nodes), 3))
+        # a node resting on the obstacle in the reference state takes the full penalty at once
+        self.soft0 = self.soft.copy()
+        self.soft0[:len(self.nodes)][self.gaps(mesh.g0, 0.0) <= self.tol] = 1.0
+        self.soft = self.soft0.copy()
         self.state(mesh.g0, 0.0)                    # the active set of the reference state
 
     # ------------------------------------------------------------------ kinematics, law
@@ -283,25 +205,79 @@ class ContactLoad(Load):
         """(x, d, n, H, p, dp) at the contact nodes (and the active set for :meth:`restraint`)."""
         x = self.contact_points(g)
         d, n, H = self.obstacle.evaluate(x, lam)
-        p, dp = normal_law(d, self.lam, self.k, self.eps)
+        kn = len(self.nodes)
+        p, dp = normal_law(d, self.lam[:kn], self.k * self.soft[:kn], self.eps)
         self._active, self._normals = (p > 0) | (dp < 0), n
         return x, d, n, H, p, dp
 
-    def evaluate(self, g, lam, tangent=True):
+    def face_state(self, g, lam):
+        """(samples, p, dp) of the face samples (``model.contact_faces``): the samples dict of
+        :func:`~core_se3.model.contact_faces.face_minima`; p = 0 where a face has none."""
+        xq = self.contact_points(g)[self.face_q]
+        s = face_minima(self.obstacle, xq, lam)
+        kn = len(self.nodes)
+        p, dp = normal_law(s["d"], self.lam[kn:], self.kf * self.soft[kn:], self.eps)
+        return s, np.where(s["ok"], p, 0.0), np.where(s["ok"], dp, 0.0)
+
+    def face_forces(self, g, lam):
+        """Lab forces (m, 3) of the face samples and their points (m, 3)."""
+        s, p, _ = self.face_state(g, lam)
+        return (self.Af * p)[:, None] * s["n"], s["x"]
+
+    def placement(self, x, lam):
+        """Lab points x (k, 3) in the obstacle's placement coordinates at lam."""
+        T = self.obstacle.transform(lam)
+        return (x - T[:3, 3]) @ T[:3, :3]
+
+    def friction_state(self, g, lam, x, n, H, p, dp):
+        """(t, dt/dx, stick, slip) of the nodes (``model.friction.coulomb_law``), the multiplier
+        and the anchors moved with the obstacle to lam."""
+        T = self.obstacle.transform(lam)
+        v = x - (self.y_a @ T[:3, :3].T + T[:3, 3])
+        return coulomb_law(n, H, p, dp, v, self.tau @ T[:3, :3].T, self.k * self.soft[:len(self.nodes)], self.mu)
+
+    def node_forces(self, g, lam):
+        """Lab forces A (p n + t) (k, 3) on the contact nodes, their points x (k, 3), and dF/dx."""
         x, d, n, H, p, dp = self.state(g, lam)
-        fb, Kb = contact_wrench(g[self.nodes, :3, :3], self.c, self.A, n, H, p, dp)
+        F = (self.A * p)[:, None] * n
+        S = (self.A * dp)[:, None, None] * n[:, :, None] * n[:, None, :] + (self.A * p)[:, None, None] * H
+        if self.mu > 0:
+            t, dt, _, _ = self.friction_state(g, lam, x, n, H, p, dp)
+            F, S = F + self.A[:, None] * t, S + self.A[:, None, None] * dt
+        return F, x, S
+
+    def evaluate(self, g, lam, tangent=True):
+        if self.mu > 0:
+            F, _, S = self.node_forces(g, lam)
+            fb, Kb = wrench(g[self.nodes, :3, :3], self.c, F, S)
+            self._slide = self._sliding(g, lam)
+        else:
+            x, d, n, H, p, dp = self.state(g, lam)
+            fb, Kb = contact_wrench(g[self.nodes, :3, :3], self.c, self.A, n, H, p, dp)
         f = np.zeros((self.n, 6))
         f[self.nodes] = fb
+        blocks = None
+        if len(self.face_el):
+            s, pf, dpf = self.face_state(g, lam)
+            on = pf > 0
+            if on.any():
+                nq = self.nodes[self.face_q[on]]
+                sub = {key: v[on] for key, v in s.items()}
+                ff, Kf = face_wrench(g[nq, :3, :3], self.c[self.face_q[on]], self.Af[on], sub, pf[on], dpf[on])
+                np.add.at(f, nq.ravel(), ff.reshape(-1, 6))
+                blocks = (self.face_el[on], Kf)
         if not tangent:
             return LoadEvaluation(f)
         K = np.zeros((self.n, 6, 6))
         K[self.nodes] = Kb
-        return LoadEvaluation(f, K)
+        return LoadEvaluation(f, K, blocks)
 
     def restraint(self):
         """(nodes, lab normals (k, 1, 3)) of the nodes in contact at the last evaluation: a shell
         resting on an obstacle is held along the normals (for the rigid-motion check)."""
         on = self._active
+        if self.mu > 0:                  # friction holds the tangential directions too
+            return self.nodes[on], np.broadcast_to(np.eye(3), (int(on.sum()), 3, 3))
         return self.nodes[on], self._normals[on][:, None, :]
 
     # ------------------------------------------------------------------ solver hooks
@@ -332,25 +308,95 @@ class ContactLoad(Load):
         d = self.gaps(g, lam)
         if not len(d):                    # no contact node here (a rank's part of the load)
             return ""
+        # an Uzawa re-solve at the load factor of the last update starts from an equilibrium:
+        # there a node whose multiplier carries force is pushed out by it (a soft first contact)
+        if lam == getattr(self, "_lam_update", None):
+            d = np.where(self.lam[:len(d)] > self.lam0[:len(d)], np.inf, d)
         i = int(np.argmin(d))
         if d[i] < -self.h:
             return (f"obstacle {self.name!r} starts the increment {-d[i]:.3g} inside the shell at node "
                     f"{int(self.nodes[i])} (more than the thickness {self.h:.3g}): smaller increment")
         return ""
 
+    def step_error(self, g0, lam0, g1, lam1):
+        """Refuse a converged step whose contact surface passed through the obstacle between the
+        accepted state (g0, lam0) and the new one (g1, lam1): the nodes' and the faces' paths,
+        linear in the lab, against the obstacle's rigid motion (``model.contact_sweep``); deeper
+        than min(h/2, half the obstacle's thickness) anywhere is a crossing, and the solver cuts
+        the step back.  '' when the step is clear."""
+        if not len(self.nodes):
+            return ""
+        thick = float(getattr(self.obstacle, "thickness", np.inf))
+        depth = max(min(self.h / 2, thick / 2), 2 * self.tol)
+        return crossing_report(self.obstacle, self._quads, self.contact_points(g0), self.contact_points(g1),
+                               lam0, lam1, depth, self.nodes)
+
+    def active_set_changed(self, g0, lam0, g1, lam1):
+        """True when a node touches (gap within 10 tol) at one of the states and not at the other:
+        lift-off or touch-down over the step (the limit check re-bases its stiffness)."""
+        on0, on1 = self.gaps(g0, lam0) <= 10 * self.tol, self.gaps(g1, lam1) <= 10 * self.tol
+        return bool(self.largest(float(np.any(on0 != on1))))
+
     def update_multipliers(self, g, lam):
         """At a converged state: the gap error e (|d| on nodes carrying force, the penetration on
         the others) over ``tol``; when it exceeds 1 (mode 'al') the multipliers are updated,
         lam_i <- p_i(d_i) (Uzawa), and the solver solves the same load factor again."""
         _, d, _, _, p, _ = self.state(g, lam)
+        if len(self.face_el):
+            s, pf, _ = self.face_state(g, lam)
+            d, p = np.concatenate([d, np.where(s["ok"], s["d"], np.inf)]), np.concatenate([p, pf])
         err = np.where(p > 0, np.abs(d), np.maximum(0.0, -d)) if self.mode == "al" else np.maximum(0.0, -d)
+        if self.mu > 0:          # the tangential error |t - P w| / k [length]
+            x, _, n, H, pn, dpn = self.state(g, lam)
+            t, _, _, _ = self.friction_state(g, lam, x, n, H, pn, dpn)
+            Q = self.obstacle.transform(lam)[:3, :3]
+            w = self.tau @ Q.T
+            w -= np.einsum("ki,ki->k", n, w)[:, None] * n
+            kn = self.k * self.soft[:len(self.nodes)]
+            err[:len(self.nodes)] = np.maximum(err[:len(self.nodes)], np.linalg.norm(t - w, axis=1) / kn)
         self.gap_error = float(self.largest(float(err.max(initial=0.0))))
+        self._lam_update = lam
         if self.mode != "al":
             return 0.0
         ratio = self.gap_error / self.tol
         if ratio > 1.0:
             self.lam = p
+            self.soft = np.where(p > 0, np.minimum(1.0, 10 * self.soft), self.soft_start)
+            if self.mu > 0:
+                self.tau = t @ Q
         return ratio
+
+    def _sliding(self, g, lam):
+        """(nodes in contact, of them slipping) at (g, lam): the failure hint's evidence."""
+        x, _, n, H, p, dp = self.state(g, lam)
+        _, _, stick, _ = self.friction_state(g, lam, x, n, H, p, dp)
+        on = p > 0
+        return int(on.sum()), int((on & ~stick).sum())
+
+    def failure_hint(self):
+        """'no static equilibrium: it slides' when every node in contact slipped at the last
+        evaluation (of the failed try): friction cannot hold the loads."""
+        on, slip = getattr(self, "_slide", (0, 0))
+        if self.mu > 0 and on and slip == on:
+            return (f"no static equilibrium: it slides -- all {on} contact nodes on obstacle {self.name!r} slip "
+                    f"(Coulomb friction {self.mu:g} cannot hold the loads); raise the friction, add a support, "
+                    "or prescribe the sliding motion")
+        return ""
+
+    def accept_state(self, g, lam):
+        """An accepted state (``Load.accept_state``): the friction history moves on -- the
+        multipliers become the nodes' tractions there (obstacle frame) and the anchors their
+        current points on the obstacle."""
+        if self.mu > 0:
+            x, _, n, H, p, dp = self.state(g, lam)
+            t, _, stick, slip = self.friction_state(g, lam, x, n, H, p, dp)
+            on = p > 0                   # the step's stick/slip record, before the anchors move
+            self.step_stats = dict(sticking=int(np.count_nonzero(on & stick)),
+                                   slipping=int(np.count_nonzero(on & ~stick)),
+                                   largest_slip=float(np.linalg.norm(slip[on & ~stick], axis=1).max(initial=0.0)),
+                                   stick=np.where(on, stick.astype(float), np.nan))
+            self.tau = t @ self.obstacle.transform(lam)[:3, :3]
+            self.y_a = self.placement(x, lam)
 
     def largest(self, value):
         """The largest of ``value`` over the processes that share this load: the value itself
@@ -364,78 +410,37 @@ class ContactLoad(Load):
         return value
 
     def multipliers(self):
-        """A copy of the multipliers (k,) [force/length^2] (a restart point keeps them)."""
-        return self.lam.copy()
+        """The restart point: the multipliers [force/length^2] of the nodes and the face samples
+        followed by their penalty factors (``soft_start``), one array."""
+        hist = [self.tau.ravel(), self.y_a.ravel()] if self.mu > 0 else []
+        return np.concatenate([self.lam, self.soft] + hist)
 
     def set_multipliers(self, lam=None):
-        """Set the multipliers (None: back to the cold start)."""
-        self.lam = self.lam0.copy() if lam is None else np.array(lam, float).reshape(self.lam0.shape)
-
-    # ------------------------------------------------------------------ output
-    def gaps(self, g, lam):
-        """d_i (k,) at the contact nodes [length]."""
-        return self.state(g, lam)[1]
-
-    def penetration(self, g, lam):
-        """max_i (-d_i), 0 when no node penetrates [length]."""
-        return float(max(0.0, -self.gaps(g, lam).min()))
-
-    def nodal_forces(self, g, lam):
-        """Lab contact forces (k, 3) on the contact nodes and their points of action x (k, 3)."""
-        x, d, n, H, p, dp = self.state(g, lam)
-        return (self.A * p)[:, None] * n, x
-
-    def total(self, g, lam):
-        """Total lab contact force [force] and its moment about the origin [force x length]."""
-        F, x = self.nodal_forces(g, lam)
-        return F.sum(0), np.cross(x, F).sum(0)
-
-    def report(self, g, lam):
-        """Per-step scalars: penetration [length], gap error of the last update [length], the
-        number of nodes carrying force."""
-        _, d, _, _, p, _ = self.state(g, lam)
-        return dict(penetration=float(max(0.0, -d.min())), gap_error=self.gap_error,
-                    nodes_in_contact=int(np.count_nonzero(p > 0)))
-
-    def output_fields(self, g, lam):
-        """VTU point fields: ``contact_force`` (lab) and ``contact_pressure`` (summed over the
-        obstacles), ``contact_gap_NAME`` [length] (NaN off the contact nodes)."""
-        x, d, n, H, p, dp = self.state(g, lam)
-        gap = np.full(self.n, np.nan)
-        gap[self.nodes] = d
-        F = np.zeros((self.n, 3))
-        F[self.nodes] = (self.A * p)[:, None] * n
-        P = np.zeros(self.n)
-        P[self.nodes] = p
-        key = "".join(ch if ch.isalnum() else "_" for ch in self.name)
-        return {f"contact_gap_{key}": gap, "contact_force": F, "contact_pressure": P}
-
-    def check_initial(self, mesh, g, lam=0.0):
-        """ContactError when the obstacle intersects the contact surface at (g, lam) by more than
-        tol: at the nodes and at 3 x 3 points of every element (the bilinear surface through the
-        contact points), so that an obstacle between nodes is found too."""
-        where = np.full(self.n, -1)
-        where[self.nodes] = np.arange(len(self.nodes))
-        el = np.nonzero((where[mesh.quads] >= 0).all(1))[0]
-        x = np.zeros((self.n, 3))
-        x[self.nodes] = self.contact_points(g)
-        t = np.array([-1.0, 0.0, 1.0])
-        xi, et = (a.ravel() for a in np.meshgrid(t, t))
-        N = 0.25 * np.stack([(1 - xi) * (1 - et), (1 + xi) * (1 - et), (1 + xi) * (1 + et), (1 - xi) * (1 + et)], 1)
-        pts = np.einsum("qa,mai->mqi", N, x[mesh.quads[el]]).reshape(-1, 3)
-        d = self.obstacle.distance(np.concatenate([x[self.nodes], pts]), lam)
-        i = int(np.argmin(d))
-        if d[i] < -self.tol:
-            at = (f"node {int(self.nodes[i])}" if i < len(self.nodes) else
-                  f"element {int(el[(i - len(self.nodes)) // 9])}")
-            raise contact_error(
-                f"obstacle {self.name!r} already intersects the undeformed shell: its contact surface at {at} "
-                f"lies {-d[i]:.4g} inside it (tolerance {self.tol:.3g}); move or shrink the obstacle, or start "
-                "its motion off the shell")
+        """Set the multipliers (None: back to the cold start); the nodes' alone (k,) leave the
+        face samples' at the cold start."""
+        self.lam = self.lam0.copy()
+        self.soft = self.soft0.copy()
+        if self.mu > 0:
+            self.tau, self.y_a = np.zeros_like(self.tau), self.y_a0.copy()
+        if lam is not None:
+            lam = np.array(lam, float).ravel()
+            m = len(self.lam0)
+            if self.mu > 0 and len(lam) == 2 * m + 6 * len(self.nodes):     # with the friction history
+                k3 = 3 * len(self.nodes)
+                self.tau = lam[2 * m:2 * m + k3].reshape(-1, 3).copy()
+                self.y_a = lam[2 * m + k3:].reshape(-1, 3).copy()
+                lam = lam[:2 * m]
+            if len(lam) == 2 * m:                      # multipliers and penalty factors
+                self.lam, self.soft = lam[:m].copy(), lam[m:].copy()
+            elif len(lam) == len(self.nodes) or len(lam) == m:     # multipliers alone: full penalties
+                self.lam[:len(lam)] = lam
+                self.soft[:] = 1.0
+            else:
+                raise contact_error(f"contact {self.name!r}: {len(lam)} multipliers for {m} samples")
 
 
 def add_obstacle(problem, obstacle, region=None, nodes=None, motion=None, name=None, mode="al", beta=1.0,
-                 eps=None, tol=None, side="auto", cap_depth=None, **params):
+                 eps=None, tol=None, side="auto", cap_depth=None, faces="auto", friction=0.0, **params):
     """Add frictionless contact with a rigid obstacle to ``problem``; returns the ContactLoad.
 
     Parameters
@@ -453,7 +458,7 @@ def add_obstacle(problem, obstacle, region=None, nodes=None, motion=None, name=N
         :func:`~core_se3.model.obstacles.rigid_motion`; for a kind only.
     name : str, optional
         The contact's name in reports (default the kind); ``mode``, ``beta``, ``eps``, ``tol``,
-        ``side``, ``cap_depth``: as for :class:`ContactLoad`.
+        ``side``, ``cap_depth``, ``faces``, ``friction`` (Coulomb's mu): as for :class:`ContactLoad`.
     **params
         The kind's parameters (e.g. centre, radius).
 
@@ -483,7 +488,8 @@ def add_obstacle(problem, obstacle, region=None, nodes=None, motion=None, name=N
         obstacle.name = name
     elements = problem.elements(region)
     sel = None if nodes is None else problem.nodes(nodes)
-    load = ContactLoad(problem, obstacle, sel, elements, mode, beta, None, eps, tol, side, 0.0, cap_depth)
+    load = ContactLoad(problem, obstacle, sel, elements, mode, beta, None, eps, tol, side, 0.0, cap_depth,
+                       faces=faces, friction=friction)
     load.check_initial(problem.mesh, problem.mesh.g0, 0.0)
     if any(getattr(ld, "name", None) == load.name for ld in problem.loads if isinstance(ld, ContactLoad)):
         raise contact_error(f"there is already an obstacle named {load.name!r}: give each a name", "name")

@@ -96,6 +96,7 @@ class HalfSpace(Obstacle):
     """
 
     kind = "half_space"
+    flat = True                       # d is bilinear on a bilinear face: the nodes suffice
 
     def __init__(self, point, normal, motion=None, name=None):
         super().__init__(motion, name)
@@ -133,6 +134,7 @@ class Sphere(Obstacle):
         self.centre = vector3(centre, "sphere centre")
         self.radius = positive(radius, "sphere radius")
         self.sign = -1.0 if inside else 1.0
+        self.thickness = np.inf if inside else self.radius
 
     def local(self, y):
         r = y - self.centre
@@ -178,6 +180,7 @@ class Cylinder(Obstacle):
             raise contact_error("inside = true is for infinite cylinders (a bore)", "inside")
         self.sign = -1.0 if inside else 1.0
         self.rounding = None
+        self.thickness = np.inf if inside else min(self.radius, np.inf if self.length is None else self.length / 2)
         if self.length is not None:
             m = min(self.radius, self.length / 2)
             self.rounding = 0.01 * m if rounding is None else float(rounding)
@@ -264,6 +267,7 @@ class Box(Obstacle):
                                 "rotation")
         self.Qb = Q
         self.rounding = 0.01 * self.half.min() if rounding is None else float(rounding)
+        self.thickness = float(self.half.min())
         if not 0 <= self.rounding < self.half.min():
             raise contact_error(f"box rounding must lie in [0, smallest half-size) = [0, {self.half.min():g}), "
                                 f"got {self.rounding}", "rounding")
@@ -294,7 +298,8 @@ class UserSDF(Obstacle):
     (k, 3)`` and optionally ``hessian(y) -> (k, 3, 3)`` (y: (k, 3) points).  Without ``hessian``
     it is taken by central differences of ``grad`` (step ``fd_step``, default 1e-6
     ``length_scale``) and ``approximate_hessian`` is set.  ``surface(bounds) -> (points, quads)``
-    optionally draws it.
+    optionally draws it; ``thickness``: the solid's inradius where it is thin (default inf: only
+    the nodes are checked for crossings over a step, ``model.contact_sweep``).
 
     Example
     -------
@@ -308,8 +313,9 @@ class UserSDF(Obstacle):
     kind = "user"
 
     def __init__(self, d, grad, hessian=None, length_scale=1.0, fd_step=None, surface=None, motion=None,
-                 name=None):
+                 name=None, thickness=np.inf):
         super().__init__(motion, name)
+        self.thickness = np.inf if thickness is None or np.isinf(thickness) else positive(thickness, "thickness")
         if not (callable(d) and callable(grad)) or (hessian is not None and not callable(hessian)):
             raise contact_error("UserSDF needs callables d(y), grad(y) and optionally hessian(y)")
         self.d, self.grad, self.hessian, self.draw = d, grad, hessian, surface

@@ -175,6 +175,10 @@ class Obstacle:
     ----------
     approximate_hessian : bool
         True when H is a finite-difference approximation (the contact tangent then is too).
+    thickness : float
+        The inradius of the solid (the deepest a point can be inside it: a ball's radius, a box's
+        smallest half size; inf for a half-space or a cavity) [length]: the continuous collision
+        check over a step samples the faces at half of it (``model.contact_sweep``).
 
     Example
     -------
@@ -191,6 +195,8 @@ class Obstacle:
 
     kind = "obstacle"
     approximate_hessian = False
+    thickness = np.inf
+    flat = False
 
     def __init__(self, motion=None, name=None):
         if motion is not None and not callable(motion):

@@ -132,26 +132,35 @@ class LocalContact(ContactLoad):
     >>> c = p.add_obstacle(make_obstacle("half_space", point=(0, 0, -0.5), normal=(0, 0, 1)))
     >>> s = subdomain(p.mesh, np.array([0, 1]), rank=1, size=2)
     >>> part = localize_load(c, s)[0]
-    >>> part.nodes.tolist(), part.multipliers().shape                 # owned nodes; all multipliers
-    ([0, 1], (6,))
+    >>> part.nodes.tolist(), part.multipliers().shape      # owned nodes; all multipliers and penalty factors
+    ([0, 1], (12,))
     """
 
     def __init__(self, whole, view):                   # noqa: D107 (the whole load is built already)
+        if getattr(whole, "mu", 0.0) > 0:
+            from ..errors import ContactError
+            raise ContactError(f"obstacle {whole.name!r}: friction is not distributed over ranks yet; run it "
+                               "on one process")
         self.__dict__.update(copy.copy(whole).__dict__)
         pos, loc = view.owned_local(whole.nodes)
         self.whole, self.pos, self.comm = whole, pos, view.comm
         self.n, self.nodes = view.mesh.n_nodes, loc
-        for name in ("A", "side", "c", "k", "lam0", "lam", "_active", "_normals"):
+        for name in ("A", "side", "c", "k", "lam0", "lam", "soft", "_active", "_normals"):
             setattr(self, name, np.array(getattr(whole, name)[pos]))
+        self._quads = self.face_q = np.zeros((0, 4), np.int64)   # nodes only: faces need the whole mesh
+        self.face_el, self.Af, self.kf = np.zeros(0, np.int64), np.zeros(0), np.zeros(0)
 
     def _publish(self):
         """Every rank's multipliers and the global gap error into the whole load."""
-        for pos, lam in self.comm.allgather((self.pos, self.lam)):
-            self.whole.lam[pos] = lam
+        for pos, lam, soft in self.comm.allgather((self.pos, self.lam, self.soft)):
+            self.whole.lam[pos], self.whole.soft[pos] = lam, soft
         self.whole.gap_error = self.gap_error
 
     def limit_increment(self, g, eta, lam):
         return float(min(self.comm.allgather(super().limit_increment(g, eta, lam))))
+
+    def step_error(self, g0, lam0, g1, lam1):
+        return next((w for w in self.comm.allgather(super().step_error(g0, lam0, g1, lam1)) if w), "")
 
     def start_error(self, g, lam):
         return next((w for w in self.comm.allgather(super().start_error(g, lam)) if w), "")
@@ -165,11 +174,11 @@ class LocalContact(ContactLoad):
         return ratio
 
     def multipliers(self):
-        return self.whole.lam.copy()
+        return self.whole.multipliers()
 
     def set_multipliers(self, lam=None):
         self.whole.set_multipliers(lam)
-        self.lam = self.whole.lam[self.pos].copy()
+        self.lam, self.soft = self.whole.lam[self.pos].copy(), self.whole.soft[self.pos].copy()
 
 
 _RULES = {

@@ -3,7 +3,7 @@
 parameters (read from the registry, so a new kind needs no code here), ``name``, the contact
 elements ``region`` (default all), an optional rigid ``motion`` with the load factor (a table:
 ``translate``, ``axis``, ``angle``, ``point``, ``scale``) and the enforcement (``mode``, ``beta``,
-``eps``, ``tol``, ``cap_depth``, ``side``).  Schema and examples: docs/SCENARIOS.md."""
+``eps``, ``tol``, ``cap_depth``, ``side``) and Coulomb's ``friction`` coefficient (default 0).  Schema and examples: docs/SCENARIOS.md."""
 from __future__ import annotations
 
 from ..errors import CoreSE3Error
@@ -34,7 +34,7 @@ def obstacles_section(v, doc, regions):
         o["params"] = v.params(t, key, kind.params)
         v.kind_check(kind, o["params"], t, key)
         _, o["region"] = region_ref(v, t, key, regions)
-        for k in ("mode", "beta", "eps", "tol", "cap_depth", "side"):
+        for k in ("mode", "beta", "eps", "tol", "cap_depth", "side", "friction"):
             o[k] = v.param(t, key, OBSTACLE.param(k))
         o["motion"] = None
         if "motion" in t:
@@ -64,10 +64,11 @@ def add_obstacles(v, prob, spec, regions):
         try:
             prob.add_obstacle(o["type"], region=regions[o["region"]] if o["region"] else None, motion=motion,
                               name=o["name"], mode=o["mode"], beta=o["beta"], eps=o["eps"], tol=o["tol"],
-                              side=SIDES[o["side"]], cap_depth=o["cap_depth"], **o["params"])
+                              side=SIDES[o["side"]], cap_depth=o["cap_depth"], friction=o["friction"],
+                              **o["params"])
         except CoreSE3Error as exc:
             param = getattr(exc, "param", None)
-            if param in ("nodes", "beta", "eps", "tol", "cap_depth", "side", "mode", "type"):
+            if param in ("nodes", "beta", "eps", "tol", "cap_depth", "side", "mode", "type", "friction"):
                 param = None if param == "nodes" else param
             v.fail(join(key, param) if param else key, str(exc))
         except ValueError as exc:               # a user's kind refusing its values

@@ -210,6 +210,11 @@ def _log_try(result, tries, lam_try, out, augmentation=None, quiet=False):
              out.reason + (" (multipliers updated: solved again)" if augmentation else ""))
 
 
+def _step_error(loads, g0, lam0, g1, lam1):
+    """The first load's reason to refuse the converged step (g0, lam0) -> (g1, lam1), or ''."""
+    return next((why for why in (ld.step_error(g0, lam0, g1, lam1) for ld in loads) if why), "")
+
+
 def newton_steps(problem, targets, options=None, start=None, recorder=None, result=None, equations=None):
     """Yield a :class:`NewtonStep` for every requested load factor in ``targets``.
 
@@ -266,6 +271,9 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
     trier = NewtonTry(problem, opts, solver, timer, eq)
     aug = hooked_loads(eq, "update_multipliers")            # augmented-Lagrangian loads (contact)
     turning = hooked_loads(eq, "direction_turn")            # loads whose direction turns (fields)
+    sweeps = hooked_loads(eq, "step_error")                 # loads that check the whole step (contact)
+    switches = hooked_loads(eq, "active_set_changed")       # loads whose tangent switches (contact)
+    accepts = hooked_loads(eq, "accept_state")              # path-dependent loads (friction)
     for i, ld in enumerate(aug):
         ld.set_multipliers(None if state.multipliers is None else state.multipliers[i])
     # the mixed iteration's stresses start every try from those of the converged state (a
@@ -306,13 +314,18 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
             g_start = g_try
             out = augmented_try(trier, aug, g_try, lam_try, mip, stress_try, opts.max_augmentations,
                                 lambda o, k: _log_try(result, tries, lam_try, o, augmentation=k, quiet=not eq.root))
+            if out.ok and sweeps:                # a step that passed through an obstacle: cut back
+                out.ok, out.reason = not (why := _step_error(sweeps, g, lam, out.g, lam_try)), why or out.reason
             ok, reason, hist, g_try, ev = out.ok, out.reason, out.hist, out.g, out.ev
             k_step, pred, eta_sum = out.k_step, out.pred, out.eta_sum
             if not ok:
                 for ld, m in zip(aug, saved):
                     ld.set_multipliers(m)
             _log_try(result, tries, lam_try, out, augmentation=0 if aug else None, quiet=not eq.root)
-            if ok and opts.limit_check and not driven and k_step is not None:
+            if ok and opts.limit_check and not driven and k_step is not None and switches and any(
+                    ld.active_set_changed(g, lam, g_try, lam_try) for ld in switches):
+                k_ref = None                     # a contact opened or closed: a new tangent, not a limit point
+            elif ok and opts.limit_check and not driven and k_step is not None:
                 if k_ref is None:
                     k_ref = k_step
                 jump = eq.increment_norm(eta_sum)
@@ -329,6 +342,8 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
             if ok:
                 lam = lam_try
                 g = g_try
+                for ld in accepts:               # path-dependent loads move their history on (friction)
+                    ld.accept_state(g, lam)
                 g_whole = eq.whole_frames(g)
                 if mip:
                     stress_conv = ev.stress
@@ -355,8 +370,9 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
                 dlam = dlam / 2
                 if abs(dlam) < abs(dlam_nominal) / 2 ** opts.max_cutbacks:
                     timer.close()
-                    hint = limit_point_hint(problem, g, lam, opts.linear_solver) \
-                        if lam != 0.0 and not eq.distributed else None
+                    hint = next((h for h in (ld.failure_hint() for ld in hooked_loads(eq, "failure_hint")) if h),
+                                None) or (limit_point_hint(problem, g, lam, opts.linear_solver)
+                                          if lam != 0.0 and not eq.distributed else None)
                     raise ConvergenceError(
                         f"Newton failed at load factor {lam_try:.6g} after {opts.max_cutbacks} cut-backs "
                         f"({reason}); the last converged load factor is {lam:.6g} and its state is "

@@ -1,0 +1,114 @@
+"""The outputs of a contact load (``model.contact.ContactLoad``): gaps, penetration, forces and
+their totals, the per-step report, the VTU fields and the check of the undeformed shell, as a
+mixin so that the law and the solver hooks stay in one screenful each."""
+from __future__ import annotations
+
+import numpy as np
+
+from .obstacles import contact_error
+
+__all__ = ["ContactOutputs"]
+
+
+class ContactOutputs:
+    """Outputs of :class:`~core_se3.model.contact.ContactLoad` (which see)."""
+    def gaps(self, g, lam):
+        """d_i (k,) at the contact nodes [length]."""
+        return self.state(g, lam)[1]
+
+    def penetration(self, g, lam):
+        """max_i (-d_i) over the nodes and the face samples, 0 when none penetrates [length]."""
+        pen = float(max(0.0, -self.gaps(g, lam).min()))
+        if len(self.face_el):
+            s, _, _ = self.face_state(g, lam)
+            pen = max(pen, float(-s["d"][s["ok"]].min(initial=0.0)))
+        return pen
+
+    def nodal_forces(self, g, lam):
+        """Lab contact forces (k, 3) on the contact nodes (friction included) and their points of
+        action x (k, 3)."""
+        F, x, _ = self.node_forces(g, lam)
+        return F, x
+
+    def total(self, g, lam):
+        """Total lab contact force [force] and its moment about the origin [force x length]
+        (nodes and face samples)."""
+        F, x = self.nodal_forces(g, lam)
+        if len(self.face_el):
+            Ff, xf = self.face_forces(g, lam)
+            F, x = np.concatenate([F, Ff]), np.concatenate([x, xf])
+        return F.sum(0), np.cross(x, F).sum(0)
+
+    def report(self, g, lam):
+        """Per-step scalars: penetration [length], gap error of the last update [length], the
+        number of nodes carrying force."""
+        _, d, _, _, p, _ = self.state(g, lam)
+        out = dict(penetration=float(max(0.0, -d.min())), gap_error=self.gap_error,
+                   nodes_in_contact=int(np.count_nonzero(p > 0)))
+        if len(self.face_el):
+            s, pf, _ = self.face_state(g, lam)
+            out["penetration"] = float(max(out["penetration"], -s["d"][s["ok"]].min(initial=0.0)))
+            out["faces_in_contact"] = int(np.count_nonzero(pf > 0))
+        if self.mu > 0:                                # friction: stick/slip counts, largest slip
+            # the counts and the slip of the last accepted step (``accept_state``: the anchors
+            # have moved to this state since)
+            x, _, n, H, p, dp = self.state(g, lam)
+            t, _, stick, slip = self.friction_state(g, lam, x, n, H, p, dp)
+            on = p > 0
+            Ft = (self.A[:, None] * t).sum(0)
+            rec = getattr(self, "step_stats", None) or dict(
+                sticking=int(np.count_nonzero(on & stick)), slipping=int(np.count_nonzero(on & ~stick)),
+                largest_slip=float(np.linalg.norm(slip[on & ~stick], axis=1).max(initial=0.0)))
+            out.update(sticking=rec["sticking"], slipping=rec["slipping"], largest_slip=rec["largest_slip"],
+                       tangential_force=float(np.linalg.norm(Ft)),
+                       normal_force=float(np.linalg.norm(((self.A * p)[:, None] * n).sum(0))))
+        return out
+
+    def output_fields(self, g, lam):
+        """VTU point fields: ``contact_force`` (lab) and ``contact_pressure`` (summed over the
+        obstacles), ``contact_gap_NAME`` [length] (NaN off the contact nodes)."""
+        x, d, n, H, p, dp = self.state(g, lam)
+        gap = np.full(self.n, np.nan)
+        gap[self.nodes] = d
+        F = np.zeros((self.n, 3))
+        F[self.nodes] = self.node_forces(g, lam)[0]
+        P = np.zeros(self.n)
+        P[self.nodes] = p
+        if len(self.face_el):                          # face samples shared out by N_a(xi*)
+            s, pf, _ = self.face_state(g, lam)
+            nq = self.nodes[self.face_q]
+            np.add.at(F, nq.ravel(), (s["N"][:, :, None] * ((self.Af * pf)[:, None] * s["n"])[:, None, :]).reshape(-1, 3))
+            np.add.at(P, nq.ravel(), (s["N"] * (self.Af * pf)[:, None] / self.A[self.face_q]).ravel())
+        key = "".join(ch if ch.isalnum() else "_" for ch in self.name)
+        out = {f"contact_gap_{key}": gap, "contact_force": F, "contact_pressure": P}
+        if self.mu > 0:                     # the friction traction (lab) and 1 stick / 0 slip
+            t, _, stick, _ = self.friction_state(g, lam, x, n, H, p, dp)
+            T, st = np.zeros((self.n, 3)), np.full(self.n, np.nan)
+            T[self.nodes] = t
+            rec = getattr(self, "step_stats", None)
+            st[self.nodes] = rec["stick"] if rec else np.where(p > 0, stick.astype(float), np.nan)
+            out.update({f"friction_traction_{key}": T, f"contact_stick_{key}": st})
+        return out
+
+    def check_initial(self, mesh, g, lam=0.0):
+        """ContactError when the obstacle intersects the contact surface at (g, lam) by more than
+        tol: at the nodes and at 3 x 3 points of every element (the bilinear surface through the
+        contact points), so that an obstacle between nodes is found too."""
+        where = np.full(self.n, -1)
+        where[self.nodes] = np.arange(len(self.nodes))
+        el = np.nonzero((where[mesh.quads] >= 0).all(1))[0]
+        x = np.zeros((self.n, 3))
+        x[self.nodes] = self.contact_points(g)
+        t = np.array([-1.0, 0.0, 1.0])
+        xi, et = (a.ravel() for a in np.meshgrid(t, t))
+        N = 0.25 * np.stack([(1 - xi) * (1 - et), (1 + xi) * (1 - et), (1 + xi) * (1 + et), (1 - xi) * (1 + et)], 1)
+        pts = np.einsum("qa,mai->mqi", N, x[mesh.quads[el]]).reshape(-1, 3)
+        d = self.obstacle.distance(np.concatenate([x[self.nodes], pts]), lam)
+        i = int(np.argmin(d))
+        if d[i] < -self.tol:
+            at = (f"node {int(self.nodes[i])}" if i < len(self.nodes) else
+                  f"element {int(el[(i - len(self.nodes)) // 9])}")
+            raise contact_error(
+                f"obstacle {self.name!r} already intersects the undeformed shell: its contact surface at {at} "
+                f"lies {-d[i]:.4g} inside it (tolerance {self.tol:.3g}); move or shrink the obstacle, or start "
+                "its motion off the shell")

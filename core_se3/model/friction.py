@@ -1,0 +1,95 @@
+"""Quasi-static Coulomb friction of the contact nodes (``model.contact``, issue 31): an augmented
+Lagrangian on the tangential slip of each node over the step, with a return mapping onto the
+Coulomb cone and its consistent (non-symmetric) tangent.  Derivations in docs/CONTACT.md
+"Friction".
+
+Kinematics.  Node i's contact point x (lab) and its anchor y_a, the point of the obstacle it
+stuck to at the last accepted state (placement coordinates, moved with the obstacle:
+x_a = T(lam) y_a).  With the obstacle's normal n(x), P = I - n n^T and the multiplier w = Q tau
+(the tangential traction carried from the last state, stored in the obstacle's frame):
+
+    v = x - x_a,   s = P v (the slip over the step),   t* = P w - k s (trial traction),
+    t = t*                      if |t*| <= mu p   (stick),
+    t = mu p t* / |t*|          otherwise         (slip: the return onto the cone),
+
+p the normal pressure of the node (``contact_law.normal_law``), k the penalty [force/length^3].
+The Uzawa update tau <- Q^T t has as fixed points exactly Coulomb's law with maximal
+dissipation: s = 0 and |t| <= mu p, or |t| = mu p and s = -alpha t (alpha >= 0).
+
+Tangent (at fixed lam; H = grad n, e = t*/|t*|):
+
+    dt*/dx = -(n.w) H - n (H w)^T - k [P - (n.v) H - n (H v)^T],
+    dt/dx  = dt*/dx (stick),   mu e (p' n)^T + (mu p / |t*|) (I - e e^T) dt*/dx (slip),
+
+and the node's force A (p n + t) enters :func:`wrench` with S = A (p' n n^T + p H + dt/dx).
+
+Example
+-------
+>>> import numpy as np
+>>> n, H = np.array([[0.0, 0.0, 1.0]]), np.zeros((1, 3, 3))
+>>> v = np.array([[0.1, 0.0, 0.0]])                      # 0.1 of slip along x
+>>> t, dt, stick, s = coulomb_law(n, H, np.array([1.0]), np.array([-5.0]), v, np.zeros((1, 3)), 2.0, 0.5)
+>>> t[0].tolist(), bool(stick[0])                        # k s = 0.2 < mu p = 0.5: it sticks
+([-0.2, 0.0, 0.0], True)
+>>> t, dt, stick, s = coulomb_law(n, H, np.array([1.0]), np.array([-5.0]), 3 * v, np.zeros((1, 3)), 2.0, 0.5)
+>>> t[0].tolist(), bool(stick[0])                        # 0.6 > 0.5: it slips, |t| = mu p
+([-0.5, 0.0, 0.0], False)
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .. import lie
+from .contact_law import E3
+
+__all__ = ["coulomb_law", "wrench"]
+
+
+def coulomb_law(n, H, p, dp, v, w, k, mu):
+    """Tangential traction t (k, 3) [force/length^2], dt/dx (k, 3, 3), the stick mask (k,) and the
+    slip s (k, 3) [length] of the module docstring: n (k, 3) normals, H (k, 3, 3) SDF Hessians,
+    p, dp (k,) normal pressure and dp/dd, v (k, 3) position from the anchor, w (k, 3) the
+    multiplier in the lab, k penalties (broadcast), mu the friction coefficient."""
+    kk = np.broadcast_to(np.asarray(k, float), p.shape)[:, None, None]
+    nv, nw = np.einsum("ki,ki->k", n, v), np.einsum("ki,ki->k", n, w)
+    P = np.eye(3) - n[:, :, None] * n[:, None, :]
+    s = np.einsum("kij,kj->ki", P, v)
+    tt = np.einsum("kij,kj->ki", P, w) - kk[:, :, 0] * s
+    Hv, Hw = np.einsum("kij,kj->ki", H, v), np.einsum("kij,kj->ki", H, w)
+    dPv = P - nv[:, None, None] * H - n[:, :, None] * Hv[:, None, :]
+    T = -nw[:, None, None] * H - n[:, :, None] * Hw[:, None, :] - kk * dPv
+    norm = np.linalg.norm(tt, axis=1)
+    cap = mu * p
+    stick = norm <= cap
+    e = tt / np.where(norm > 0, norm, 1.0)[:, None]
+    ratio = np.where(norm > 0, cap / np.where(norm > 0, norm, 1.0), 0.0)
+    t = np.where(stick[:, None], tt, ratio[:, None] * tt)
+    slip_dt = (mu * e[:, :, None] * (dp[:, None] * n)[:, None, :]
+               + ratio[:, None, None] * (np.eye(3) - e[:, :, None] * e[:, None, :]) @ T)
+    dt = np.where(stick[:, None, None], T, slip_dt)
+    return t, dt, stick, s
+
+
+def wrench(R, c, F, S):
+    """Generalised nodal forces f (k, 6) and -df/deta (k, 6, 6) of lab forces F (k, 3) acting at
+    x = phi + c d3 whose derivative is dF/dx = S (k, 3, 3) (R (k, 3, 3) frames, c (k,) offsets):
+    f = B^T R^T F, -df/deta = -B^T [R^T S R B + [0, hat(R^T F)]], B = [I, -c hat(e3)]
+    (``contact_law.contact_wrench`` with S = A (p' n n^T + p H)).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> f, K = wrench(np.eye(3)[None], np.array([-0.5]), np.array([[6.0, 0, 0]]), np.zeros((1, 3, 3)))
+    >>> f[0].tolist()
+    [6.0, 0.0, 0.0, 0.0, -3.0, 0.0]
+    """
+    Rt = np.swapaxes(R, 1, 2)
+    Fb = np.einsum("kij,kj->ki", Rt, F)
+    k = len(c)
+    B = np.zeros((k, 3, 6))
+    B[:, :, :3] = np.eye(3)
+    B[:, :, 3:] = -c[:, None, None] * lie.hat3(E3)
+    Bt = np.swapaxes(B, 1, 2)
+    dF = (Rt @ S @ R) @ B
+    dF[:, :, 3:] += lie.hat3(Fb)
+    return np.einsum("kij,kj->ki", Bt, Fb), -Bt @ dF

@@ -1,0 +1,221 @@
+"""Coulomb friction of the contact nodes (issue 31, ``model.friction``): the law and its return
+mapping, the consistent tangent against central differences in stick and in slip, the
+rough-table bar against its exact solution in its three regimes, the history in the restart
+state, and frictionless runs unchanged.  Derivations: docs/CONTACT.md "Friction"."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import core_se3 as cs
+from core_se3 import lie
+from core_se3 import mesh as M
+from core_se3.model import ContactLoad, HalfSpace, Sphere, tangent_fd_check, translation
+from core_se3.model.contact_law import ramp
+from core_se3.model.friction import coulomb_law
+
+
+def test_return_mapping_is_coulomb():
+    """|t| <= mu p always; stick keeps the trial traction, slip returns onto the cone opposite
+    to the slip; the tangent of the law against central differences in stick and slip."""
+    rng = np.random.default_rng(3)
+    n = np.tile([0.0, 0.0, 1.0], (6, 1))
+    H = np.zeros((6, 3, 3))
+    p, dp = np.full(6, 2.0), np.full(6, -3.0)
+    v = rng.normal(size=(6, 3)) * 0.3
+    t, dt, stick, s = coulomb_law(n, H, p, dp, v, np.zeros((6, 3)), 4.0, 0.4)
+    assert stick.any() and (~stick).any()
+    assert np.all(np.linalg.norm(t, axis=1) <= 0.4 * 2.0 + 1e-12)
+    assert np.allclose(t[~stick] / np.linalg.norm(t[~stick], axis=1)[:, None],
+                       -s[~stick] / np.linalg.norm(s[~stick], axis=1)[:, None])
+
+
+def _friction_state(obstacle, seed=1, mu=0.3):
+    m = M.rectangle(1.0, 0.6, 3, 2)
+    g = m.g0 @ lie.exp(np.random.default_rng(seed).normal(size=(m.n_nodes, 6)) * 0.08)
+    prob = cs.Problem(m, cs.Material(1e4, 0.3, 0.02), backend="numpy")
+    cl = prob.add(ContactLoad(prob, obstacle, eps=0.02, friction=mu, faces=False))
+    lam = 0.6
+    d = cl.gaps(g, lam)
+    w = cl.k * cl.eps
+    target = np.array([2.0, 0.5, 3.0, -1.0])[np.arange(len(d)) % 4] * w
+    lam_n = ramp(np.maximum(target + cl.k * d, 0.0), w)[0]
+    rng = np.random.default_rng(seed + 7)
+    x = cl.contact_points(g)
+    anchors = cl.placement(x, lam) + rng.normal(size=x.shape) * 0.02 * np.array([1, 1, 0.3])
+    tau = rng.normal(size=x.shape) * 0.3 * w[:, None]
+    m_ = len(cl.lam0)
+    cl.set_multipliers(np.concatenate([np.concatenate([lam_n, cl.lam0[len(d):]]), np.ones(m_), tau.ravel(),
+                                       anchors.ravel()]))
+    return prob, cl, g, lam
+
+
+@pytest.mark.parametrize("name", ["half_space", "sphere", "moving_sphere"])
+def test_frictional_tangent_against_central_differences(name):
+    """The non-symmetric tangent (with its moment about the node from the offset h/2, and the
+    obstacle's curvature and motion) against central differences of the full residual, at a
+    state with nodes sticking, slipping and free."""
+    ob = {"half_space": HalfSpace((0, 0, -0.01), (0.1, 0, 1)),
+          "sphere": Sphere((0.5, 0, 0.6), 0.6),
+          "moving_sphere": Sphere((0.5, 0, 0.9), 0.6, motion=translation((0, 0, -0.5)))}[name]
+    prob, cl, g, lam = _friction_state(ob)
+    x, d, n, H, p, dp = cl.state(g, lam)
+    t, dt, stick, s = cl.friction_state(g, lam, x, n, H, p, dp)
+    on = p > 0
+    assert (on & stick).any() and (on & ~stick).any() and (~on).any(), (on & stick, on & ~stick)
+    err = tangent_fd_check(prob, g, lam, free_all=True)[0]
+    assert err < 1e-6, err
+    K = tangent_fd_check(prob, g, lam, free_all=True)[1]
+    assert np.abs(K - K.T).max() > 1e-6 * np.abs(K).max()           # non-symmetric, as it must be
+
+
+# ----------------------------------------------------------------------------- the rough-table bar
+def _bar(mu=0.5, F=1.0, steps=10, scale=None):
+    """A strip (L 1, w 0.1, h 0.01, E 1e5, nu 0) lying on a rough table under its weight q per
+    length (rho 1000, g 9.81), clamped at x = 0, pulled along its axis at x = 1 by F mu q L."""
+    L, w, h, E = 1.0, 0.1, 0.01, 1e5
+    p = cs.Problem(M.rectangle(L, w, 40, 2),
+                   cs.Material(E, 0.0, h))
+    p.clamp("x0")
+    q = 1000.0 * 9.81 * h * w
+    p.add_gravity(rho=1000.0, scale=lambda lam: 1.0)
+    p.add_edge_force("x1", (F * mu * q * L, 0.0, 0.0), scale=scale)
+    c = p.add_obstacle("half_space", point=(0, 0, -h / 2), normal=(0, 0, 1), name="table", friction=mu)
+    return p, c, dict(EA=E * w * h, q=q, L=L, mu=mu)
+
+
+def _tip(st):
+    return float(np.mean(st.g[[40, 81, 122], 0, 3]) - 1.0)
+
+
+def test_rough_table_bar_partial_slip():
+    """F < mu q L: a slip zone of length F/(mu q) from the tip; u_tip = F^2 / (2 EA mu q)."""
+    p, c, k = _bar(F=0.6)
+    res = p.solve(steps=6)
+    F = 0.6 * k["mu"] * k["q"] * k["L"]
+    exact = F ** 2 / (2 * k["EA"] * k["mu"] * k["q"])
+    assert abs(_tip(res.final) / exact - 1) < 0.02, (_tip(res.final), exact)
+    rep = c.report(res.final.g, 1.0)
+    assert rep["sticking"] > 0 and rep["slipping"] > 0
+
+
+def test_rough_table_bar_full_slip():
+    """F > mu q L: the whole bar slides; u_tip = (F L - mu q L^2 / 2) / EA."""
+    p, c, k = _bar(F=1.5)
+    res = p.solve(steps=10)
+    F = 1.5 * k["mu"] * k["q"] * k["L"]
+    exact = (F * k["L"] - k["mu"] * k["q"] * k["L"] ** 2 / 2) / k["EA"]
+    assert abs(_tip(res.final) / exact - 1) < 0.02, (_tip(res.final), exact)
+
+
+def test_rough_table_bar_release_keeps_its_hysteresis():
+    """Pulled to F < mu q L and released: the tip keeps F^2 / (4 EA mu q)."""
+    p, c, k = _bar(F=0.6, scale=lambda lam: 1.0 - abs(2 * lam - 1.0))
+    res = p.solve(steps=12)
+    F = 0.6 * k["mu"] * k["q"] * k["L"]
+    exact = F ** 2 / (4 * k["EA"] * k["mu"] * k["q"])
+    assert abs(_tip(res.final) / exact - 1) < 0.02, (_tip(res.final), exact)
+
+
+# ----------------------------------------------------------------------------- the incline
+def _incline(f, mu=0.3):
+    """A free 1 x 1 plate (4 x 4, h 0.01, E 1e5) on a rough incline of slope angle f atan(mu),
+    written in the incline's frame (gravity tilted by the angle)."""
+    a = f * np.arctan(mu)
+    p = cs.Problem(M.rectangle(1.0, 1.0, 4, 4), cs.Material(1e5, 0.3, 0.01))
+    p.add_gravity(rho=1000.0, g=(9.81 * np.sin(a), 0.0, -9.81 * np.cos(a)))
+    c = p.add_obstacle("half_space", point=(0, 0, -0.005), normal=(0, 0, 1), name="incline", friction=mu)
+    return p, c
+
+
+def test_incline_holds_below_the_friction_angle():
+    """tan(alpha) = 0.99 mu: the plate holds (elastic creep only; a corner node may slip where
+    the moment of the friction at the face offset lowers its pressure), the tangential over the
+    normal force is tan(alpha)."""
+    p, c = _incline(0.99)
+    st = p.solve(steps=4).final
+    rep = c.report(st.g, 1.0)
+    assert rep["sticking"] + rep["slipping"] == 25 and rep["sticking"] >= 20
+    assert abs(rep["tangential_force"] / rep["normal_force"] - np.tan(0.99 * np.arctan(0.3))) < 1e-6
+    assert np.abs(st.g[:, :3, 3] - p.mesh.g0[:, :3, 3]).max() < 1e-4
+
+
+def test_incline_above_the_friction_angle_says_it_slides():
+    """tan(alpha) = 1.01 mu: no static equilibrium; the error says so (not a bare
+    non-convergence)."""
+    p, c = _incline(1.01)
+    with pytest.raises(cs.ConvergenceError, match="no static equilibrium: it slides"):
+        p.solve(steps=4)
+
+
+# ----------------------------------------------------------------------------- scenario, restart
+BAR = """
+name = "rough-bar"
+units = "SI"
+[mesh]
+generator = "rectangle"
+L = 1.0
+width = 0.1
+nx = 20
+ny = 2
+[material]
+E = 1.0e5
+nu = 0.0
+h = 0.01
+[[supports]]
+type = "clamp"
+edge = "x0"
+[[loads]]
+type = "gravity"
+rho = 1000.0
+scale = "constant"
+[[loads]]
+type = "edge_force"
+edge = "x1"
+force = [2.5, 0.0, 0.0]
+scale = [[0.0, 0.0], [0.5, 1.0], [1.0, 0.3]]
+[[obstacles]]
+type = "half_space"
+name = "table"
+point = [0.0, 0.0, -0.005]
+normal = [0.0, 0.0, 1.0]
+friction = 0.5
+[[probes]]
+name = "tip"
+edge = "x1"
+[solver]
+steps = 4
+[output]
+plots = false
+picture = false
+"""
+
+
+def test_scenario_friction_outputs_and_bit_identical_resume(tmp_path, pinned_backend):
+    """`friction` in [[obstacles]]; results.json carries the stick/slip counts and the largest
+    slip; a run stopped after 2 of 4 steps (pull, then partial release) and resumed from its
+    checkpoint ends bit for bit in the uninterrupted run's state (the friction history is in
+    the checkpoint: without it the released bar would not keep its hysteresis)."""
+    import json
+
+    from core_se3 import scenario
+    from core_se3.scenario import runner
+    scn = scenario.loads(BAR, file="bar.toml")
+    ref = runner.run(scn, out=str(tmp_path / "ref"))
+    doc = json.load(open(ref.files["results"]))
+    c = doc["steps"][2]["contact"]["table"]
+    assert c["slipping"] > 0 and c["sticking"] > 0 and c["largest_slip"] > 0 and c["tangential_force"] > 0
+    out = str(tmp_path / "cut")
+    with pytest.raises(runner.RunInterrupted):
+        runner.run(scn, out=out, stop_after=2)
+    res = runner.run(scn, out=out, resume=True)
+    np.testing.assert_array_equal(res.g, ref.g)
+    with pytest.raises(cs.errors.ScenarioError, match=r"obstacles\[0\].friction"):
+        scenario.loads(BAR.replace("friction = 0.5", "friction = -0.1"), file="bar.toml")
+
+
+def test_frictionless_contact_has_no_friction_state():
+    """mu = 0 (the default) keeps the frictionless code path and restart state."""
+    p = cs.Problem(M.rectangle(1.0, 0.2, 4, 1), cs.Material(1e4, 0.0, 0.02))
+    c = p.add_obstacle("half_space", point=(0, 0, -0.05), normal=(0, 0, 1))
+    assert c.mu == 0 and len(c.multipliers()) == 2 * len(c.lam0) and "sticking" not in c.report(p.mesh.g0, 0.0)
