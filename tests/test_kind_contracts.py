@@ -112,7 +112,7 @@ def test_the_schema_document_shows_the_vocabulary():
     path = os.path.join(ROOT, "docs", "SCENARIOS.md")
     text = open(path, encoding="utf-8").read()
     assert text.count("<!-- schema: ") >= 12
-    assert update_doc(text) == text, "docs/SCENARIOS.md: run python -m core_se3.scenario.schema docs/SCENARIOS.md"
+    assert update_doc(text) == text, "docs/SCENARIOS.md: run python scripts/schema_tables.py"
 
 
 RECIPE_CONTRACTS = """

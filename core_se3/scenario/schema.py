@@ -234,7 +234,7 @@ def update_doc(text):
     """``text`` (docs/SCENARIOS.md) with every block between ``<!-- schema: NAME -->`` and
     ``<!-- /schema -->`` replaced by the table :func:`schema_tables` gives for NAME (a KeyError
     for an unknown NAME): the document's tables are the vocabulary's (tests/test_kind_contracts.py
-    checks that the document is up to date; ``python -m core_se3.scenario.schema FILE`` updates it).
+    checks that the document is up to date; ``python scripts/schema_tables.py`` updates it).
 
     Example
     -------
@@ -248,14 +248,3 @@ def update_doc(text):
         return f"{_BLOCK.format(m.group(1))}\n{tables[m.group(1)]}\n{_END}"
     return re.sub(r"<!-- schema: (.+?) -->\n.*?<!-- /schema -->", repl, text, flags=re.S)
 
-
-if __name__ == "__main__":          # python -m core_se3.scenario.schema docs/SCENARIOS.md
-    import sys
-    for path in sys.argv[1:]:
-        with open(path, encoding="utf-8") as fh:
-            old = fh.read()
-        new = update_doc(old)
-        if new != old:
-            with open(path, "w", encoding="utf-8") as fh:
-                fh.write(new)
-            print(f"updated {path}")
