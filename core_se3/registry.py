@@ -373,7 +373,7 @@ def register(kind):
     Traceback (most recent call last):
     ...
     ValueError: load kind 'gravity' is registered twice
-    >>> register(Section("x"))
+    >>> register(Section("x"))                     # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
     TypeError: Section 'x' is not a kind of an extension point (registered kind classes: ...)

@@ -74,6 +74,9 @@ def test_the_contracts_can_fail():
     class NoStiffness(NodalLoad):             # a dead lab force with its load stiffness dropped
         def evaluate(self, g, lam, tangent=True):
             return LoadEvaluation(super().evaluate(g, lam, tangent).f)
+
+        def compiled(self, pattern):          # (the numba kernel of NodalLoad has the stiffness)
+            return None
     kinds = [LoadKind("no_stiffness", "nodes", (Param("force", "vector"),),
                       lambda problem, nodes, scale, force: NoStiffness(problem.mesh.n_nodes, nodes, np.ones(len(nodes)),
                                                                        force=force, scale=scale)),

@@ -66,6 +66,24 @@ picture = false
 '''
 
 
+@pytest.fixture(autouse=True)
+def _registries_restored():
+    """The kinds these tests register in this process are taken out again (the doctests list
+    the built-in registries)."""
+    from core_se3 import registry
+    saved, loaded = [(r, dict(r)) for r in registry.registries()], dict(LOADED)
+    by_kind, regs = dict(registry._BY_KIND), list(registry._REGISTRIES)
+    yield
+    for r, entries in saved:
+        r.clear()
+        r.update(entries)
+    LOADED.clear()
+    LOADED.update(loaded)
+    registry._BY_KIND.clear()
+    registry._BY_KIND.update(by_kind)
+    registry._REGISTRIES[:] = regs
+
+
 def _files(tmp_path, name, F=2.0, plugins=True):
     (tmp_path / "kinds.py").write_text(PLUGIN.replace("{name}", name))
     path = tmp_path / "s.toml"
@@ -151,8 +169,10 @@ def test_a_malformed_declaration_is_refused_where_it_is_written():
         LoadKind("somewhere", "faces", (), lambda *a: None)
     with pytest.raises(TypeError, match="is not a kind of an extension point"):
         register(Section("x"))
-    reg = Registry("widget", Kind)
-    with pytest.raises(TypeError, match="a widget must be a Kind, got str"):
+    class Widget(Kind):
+        pass
+    reg = Registry("widget", Widget)
+    with pytest.raises(TypeError, match="a widget must be a Widget, got str"):
         reg.add("w")
 
 

@@ -20,7 +20,7 @@ Params (every default given, a required number 1 or inside its bounds, a vector 
 Example
 -------
 >>> from core_se3.model import LOADS
->>> check_kind("loads", LOADS["edge_force"])
+>>> check_kind("loads", LOADS["edge_force"])              # doctest: +ELLIPSIS
 {'round_trip': 0.0, 'missing_keys': ['force'], 'fd_tangent': ..., 'frame_invariance': ...}
 """
 from __future__ import annotations

@@ -197,7 +197,7 @@ def schema_tables():
     -------
     >>> t = schema_tables()
     >>> t["[[supports]] type"].splitlines()[2]
-    '| `clamp` | no keys | position and rotation held at their reference values |'
+    '| `clamp` | `edge` or `nodes` or `region` | position and rotation held at their reference values |'
     """
     out = {s.name: s.table() for s in SECTIONS}
     for where, reg in _registries():
@@ -214,7 +214,7 @@ def describe_kinds(section=None):
     Example
     -------
     >>> print(describe_kinds("supports").splitlines()[1])
-      clamp: no keys -- position and rotation held at their reference values
+      clamp: edge or nodes or region -- position and rotation held at their reference values
     """
     lines = []
     for where, reg in _registries():
@@ -238,7 +238,7 @@ def update_doc(text):
 
     Example
     -------
-    >>> print(update_doc("<!-- schema: output -->\\nold\\n<!-- /schema -->").splitlines()[2])
+    >>> print(update_doc("<!-- schema: output -->\\nold\\n<!-- /schema -->").splitlines()[1])
     | key | value | default | |
     """
     import re
