@@ -210,6 +210,8 @@ def load_numbers(scn, lam=None):
     """
     from .physics import material_index
     spec, mesh, prob = scn.spec, scn.mesh, scn.problem
+    if "E" not in spec["material"] or "h" not in spec["material"]:
+        return []                     # a material law without E and h: no plate modulus to scale by
     mi = material_index(spec["material"], scn.regions, mesh.n_elements)
     lams = scn.load_factors() if lam is None else [lam]
     out = []
@@ -250,7 +252,7 @@ def load_numbers(scn, lam=None):
             q = abs(ld["p"]) if "p" in ld else float(np.linalg.norm(ld["q"]))
             value, formula = q * L ** 3 / D, "q L^3 / D"
         elif ld["type"] == "gravity":
-            rho = ld.get("rho") if ld.get("rho") is not None else spec["material"]["rho"]
+            rho = ld.get("rho") if ld.get("rho") is not None else spec["material"].get("rho")
             value, formula = (rho or 0.0) * h * float(np.linalg.norm(ld["g"])) * L ** 3 / D, "rho h |g| L^3 / D"
         if value is not None:
             out.append(dict(name=f"loads[{i}]", kind=ld["type"], value=s * value, span=L, E=E, h=h,
@@ -299,8 +301,8 @@ def plausibility(v, scn):
                                                for k, r in spec["material"]["regions"].items()]
     if u is not None and u["to_pa"] is not None:
         for key, mat in mats:
-            E_pa = mat["E"] * u["to_pa"]
-            if not E_RANGE_PA[0] <= E_pa <= E_RANGE_PA[1]:
+            E_pa = mat["E"] * u["to_pa"] if "E" in mat else None       # a law without E: no check
+            if E_pa is not None and not E_RANGE_PA[0] <= E_pa <= E_RANGE_PA[1]:
                 v.warn(f"{key}.E", f"E = {mat['E']:g} {u['stress']}{'' if u['to_pa'] == 1 else f' = {E_pa:.3g} Pa'} is outside the range of real "
                                    f"solids (10 Pa for soft gels to 700 GPa for tungsten carbide): with units = "
                                    f"{units!r} E is in {u['stress']} (a silicone elastomer ~{1e6 / u['to_pa']:g}, "
@@ -344,7 +346,7 @@ def plausibility(v, scn):
     _angles(v, spec)
     span = _spans(scn.mesh, scn.problem, np.arange(scn.mesh.n_nodes))
     for key, mat in mats:
-        if mat["h"] / span > H_OVER_L_MAX:
+        if mat.get("h", 0.0) / span > H_OVER_L_MAX:
             v.warn(f"{key}.h", f"h / L = {mat['h']:g} / {span:g} = {mat['h'] / span:.3g} > {H_OVER_L_MAX:g}: the "
                                "shell is thick for its span (L = the largest distance to a support); a shell "
                                "model needs h << L: check h and the mesh's length unit")
