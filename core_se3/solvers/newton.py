@@ -268,7 +268,9 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
     # contact (a constraint-force load) is not smooth: its Newton tries contract irregularly at
     # any step size and det K jumps as nodes touch and lift off, so both checks leave it
     smooth = not any(getattr(ld, "constraint_force", False) for ld in eq.loads)
-    checks = StepChecks(opts.path_check and smooth, smooth and hasattr(eq, "det_sign"), opts.critical_tol,
+    # a stateful element (the seed's) has no consistent tangent: its Newton corrections contract
+    # linearly at any step, so their growth says nothing of the path
+    checks = StepChecks(opts.path_check and smooth and not stateful, smooth and hasattr(eq, "det_sign"), opts.critical_tol,
                         state.det_sign, stop=opts.limit_check)
     trier.signs = checks.stability
     for target in targets:
