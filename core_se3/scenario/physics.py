@@ -233,6 +233,9 @@ def solver_section(v, doc):
         extra = [k for k in ARCLENGTH_DEFAULTS if k in d]
         if extra:
             v.fail(join(key, extra[0]), 'an arc-length control: only with control = "arclength"')
+        if "load_factors" in d and s["control"] == "linear":
+            v.fail(join(key, "load_factors"), 'a linear analysis (control = "linear") is one solve at lam_end: '
+                                              "give lam_end, not load factors")
         if "load_factors" in d:
             both = [k for k in ("steps", "lam_end") if k in d]
             if both:
@@ -275,6 +278,8 @@ def solve_defaults(s):
                     max_steps=s["max_steps"], target_iter=s["target_iter"],
                     ds_max_factor=s["ds_max_factor"], stability=s["stability"],
                     critical_tol=s["critical_tol"], **common)
+    if s["control"] == "linear":
+        return dict(control="linear", **common)
     out = dict(control="load", max_cutbacks=s["max_cutbacks"], iteration=s["iteration"],
                predictor=s["predictor"], path_check=s["path_check"], limit_check=s["limit_check"],
                max_substeps=s["max_substeps"], **common)
