@@ -150,10 +150,30 @@ def magnets_section(v, doc, regions, fields, mesh=None, base_dir="."):
         else:
             v.fail(join(key, "field"), f"several fields are defined ({', '.join(fields)}): name one")
         _refuse_repeat(v, out, m, key, "magnets", "the magnet")
+        _refuse_overlap(v, out, m, key, regions)
         out.append(m)
     if fields and not out:
         v.fail("fields", "fields are defined but no [[magnets]] use them")
     return out
+
+
+def _refuse_overlap(v, out, m, key, regions):
+    """An element has one remanent magnetisation: two magnets of the same field on common
+    elements would add their Br silently (a copied region name, a whole-shell magnet beside a
+    region's)."""
+    mine = None if m["region"] is None else set(np.asarray(regions[m["region"]]).tolist())
+    for j, o in enumerate(out):
+        if o["field"] != m["field"]:
+            continue
+        other = None if o["region"] is None else set(np.asarray(regions[o["region"]]).tolist())
+        common = (mine & other if other is not None else mine) if mine is not None else other
+        if common is None or common:
+            where = ("common elements: " + ("every element" if common is None else f"{len(common)}") +
+                     ("" if mine is not None and other is not None else
+                      " (a magnet without 'region' magnetises the whole shell)"))
+            v.fail(key, f"magnets[{j}] and {key} have {where}, for field {m['field']!r}: an element has one "
+                        "remanent magnetisation, and the two would add; give each region once (split the "
+                        "regions, or sum the Br into one magnet)")
 
 
 def supports_section(v, doc, mesh, regions):
