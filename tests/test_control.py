@@ -83,7 +83,7 @@ def test_warm_updates_equal_cold_solves_on_the_gripper():
 
 
 def test_small_updates_reuse_the_factors_and_rebuild_nothing():
-    s = gripper()
+    s = gripper(factor_cost=np.inf)                        # no renewal for ageing (the next test)
     p = s.problem
     asm, compiled, F = p.assembler(), p._compiled, s._corr.F
     B0 = s.values["coil"].copy()
@@ -93,6 +93,34 @@ def test_small_updates_reuse_the_factors_and_rebuild_nothing():
     assert p.assembler() is asm and p._compiled is compiled and s._corr.F is F
     assert s.counts["factorizations"] == 1                 # the first equilibrium's, nothing since
     assert s.update(coil=s.values["coil"]) is s.state      # no change: no work
+
+
+def test_aged_factors_are_renewed_at_converged_states():
+    """The refactorisation rule (control.corrector, a factorisation priced at 2 iterations): a
+    field drifting 1.5 % in 0.1 % steps renews the factors at converged states, with states
+    equal to the cold solves to 1e-8 ell and the same as on factors never renewed; the renewed
+    factors are at the state (a Jacobian there makes none) and cost fewer iterations."""
+    runs = {}
+    for price in (2.0, np.inf):
+        s = gripper(factor_cost=price)
+        B0 = s.values["coil"].copy()
+        its, renewed = 0, 0
+        for k in range(1, 16):
+            st = s.update(coil=B0 * (1 + 1e-3 * k))
+            its += st.iterations
+            if st.factorizations and not renewed:          # renewed at the state: the Jacobian reuses them
+                assert s._corr.F_g is s.g
+                n = s.counts["factorizations"]
+                s.jacobian(["tip_px"], ["coil"])
+                assert s.counts["factorizations"] == n
+            renewed += st.factorizations
+        assert st.substeps == 1 and s.stats["splits"] == 0
+        assert frame_error(st.g, cold(s.problem), s.problem.length_scale) < 1e-8
+        runs[price] = (st.g, its, renewed, s)
+    g2, its2, renewed2, s2 = runs[2.0]
+    ginf, itsinf, renewedinf, _ = runs[np.inf]
+    assert renewedinf == 0 and renewed2 >= 2 and its2 < itsinf, (renewed2, its2, itsinf)
+    assert frame_error(g2, ginf, s2.problem.length_scale) < 1e-10
 
 
 def test_jacobian_equals_central_differences_of_cold_solves():

@@ -22,7 +22,8 @@ __all__ = ["ControlOptions"]
 # field -> (low, high, open interval)
 _RANGES = dict(rtol=(0.0, 1.0, True), dtol=(0.0, 1.0, True), max_iter=(1, 1000, False),
                max_factorizations=(1, 100, False), max_splits=(0, 50, False), anderson=(0, 50, False),
-               max_turn=(0.0, np.pi, True), path_tolerance=(0.0, np.inf, True))
+               max_turn=(0.0, np.pi, True), path_tolerance=(0.0, np.inf, True),
+               factor_cost=(0.0, np.inf, False))
 
 
 @dataclass(frozen=True)
@@ -56,6 +57,13 @@ class ControlOptions:
         A sub-step whose converged increment differs from its predictor by more than this
         fraction of the predictor left the path (default 0.5): it is tried again with a fresh
         factorisation at its start, then split; refused after ``max_splits``.
+    factor_cost : float or None
+        The price of a tangent and its factorisation, in corrector iterations, for the
+        refactorisation rule (``control.corrector``: the held factors are renewed at a
+        converged state once the iterations they cost beyond their first update's count add
+        up to it).  None (default): the ratio of the two times measured as the session runs;
+        a number: that fixed price (the same schedule on every machine); inf: never renewed
+        for ageing alone.
     linear_solver : str or None
         None: the problem's.
 
@@ -72,6 +80,7 @@ class ControlOptions:
     max_splits: int = 10
     max_turn: float = 0.5
     path_tolerance: float = 0.5
+    factor_cost: float | None = None
     linear_solver: str | None = None
 
     def __post_init__(self):
@@ -79,6 +88,8 @@ class ControlOptions:
             if f.name not in _RANGES:
                 continue
             v = getattr(self, f.name)
+            if v is None and f.default is None:
+                continue
             lo, hi, open_ = _RANGES[f.name]
             whole = isinstance(f.default, int)
             ok = isinstance(v, (int, np.integer) if whole else (int, float, np.floating, np.integer)) and \

@@ -281,9 +281,11 @@ class Session:
         except BaseException:
             self._assign(x0)                 # refused or interrupted: the values of the state kept
             raise
-        self.state = State(self.problem, g, lam1, self.commands.values(), *counts, time.perf_counter() - t0)
         self._r = r
+        if self._corr.settle(g, lam1, self._stamp, counts[0]):     # aged factors renewed here
+            counts = (counts[0], counts[1] + 1) + counts[2:]
         self._count(*counts, updates=1)
+        self.state = State(self.problem, g, lam1, self.commands.values(), *counts, time.perf_counter() - t0)
         return self.state
 
     def _follow(self, lam0, lam1, x0, x1):
