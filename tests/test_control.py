@@ -359,3 +359,17 @@ def test_track_and_plan_reach_their_targets():
     assert tr.max_error < 1e-3 * 1.5 and tr.rate > 0
     with pytest.raises(OptionError, match="tolerance"):
         plan(s, "tip", targets, 0.0, components=[2])
+
+
+def test_default_schedule_is_deterministic():
+    """The default renewal price is a fixed number of iterations, not a measured time: two
+    sessions given the same drifting commands renew at the same updates and end bit for bit
+    alike (with the measured price, the schedule follows the machine's load)."""
+    runs = []
+    for _ in range(2):
+        s = gripper()
+        B0 = s.values["coil"].copy()
+        sched = [s.update(coil=B0 * (1 + 1e-3 * k)).factorizations for k in range(1, 16)]
+        runs.append((sched, s.g.copy()))
+    assert runs[0][0] == runs[1][0] and sum(runs[0][0]) >= 1
+    assert np.array_equal(runs[0][1], runs[1][1])

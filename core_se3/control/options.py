@@ -61,9 +61,11 @@ class ControlOptions:
         The price of a tangent and its factorisation, in corrector iterations, for the
         refactorisation rule (``control.corrector``: the held factors are renewed at a
         converged state once the iterations they cost beyond their first update's count add
-        up to it).  None (default): the ratio of the two times measured as the session runs;
-        a number: that fixed price (the same schedule on every machine); inf: never renewed
-        for ageing alone.
+        up to it).  A number (default 6: measured 5 with the NumPy backend and 8 with numba on
+        the gripper, benchmarks/results/control.md): that fixed price, the same schedule and the
+        same states bit for bit on every machine; None: the ratio of the two times measured as
+        the session runs (adapts to the machine, but the schedule, and the states' last bits,
+        then vary from run to run); inf: never renewed for ageing alone.
     linear_solver : str or None
         None: the problem's.
 
@@ -80,7 +82,7 @@ class ControlOptions:
     max_splits: int = 10
     max_turn: float = 0.5
     path_tolerance: float = 0.5
-    factor_cost: float | None = None
+    factor_cost: float | None = 6.0
     linear_solver: str | None = None
 
     def __post_init__(self):
