@@ -272,6 +272,12 @@ class ContactLoad(ContactOutputs, Load):
         K[self.nodes] = Kb
         return LoadEvaluation(f, K, blocks)
 
+    @property
+    def path_dependent(self):
+        """True with friction: the state depends on the path, not on (g, lam) alone (a sweep
+        does not warm-start it from another point's final state)."""
+        return self.mu > 0
+
     def restraint(self):
         """(nodes, lab normals (k, 1, 3)) of the nodes in contact at the last evaluation: a shell
         resting on an obstacle is held along the normals (for the rigid-motion check)."""
