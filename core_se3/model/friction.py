@@ -42,7 +42,13 @@ import numpy as np
 from .. import lie
 from .contact_law import E3
 
-__all__ = ["coulomb_law", "wrench"]
+__all__ = ["coulomb_law", "wrench", "CoulombFriction", "STICK_MARGIN"]
+
+STICK_MARGIN = 1e-10        # |t*| >= (1 - STICK_MARGIN) mu p: on the cone (slip)
+# the slip tangent keeps SLIP_FLOOR k along the slip (the law does not): a body whose contact
+# nodes all slip has no zero pivot, and an indeterminate split of the sliding (two feet that
+# slip alike) takes the smallest increment along it
+SLIP_FLOOR = 1e-8
 
 
 def coulomb_law(n, H, p, dp, v, w, k, mu):
@@ -60,12 +66,16 @@ def coulomb_law(n, H, p, dp, v, w, k, mu):
     T = -nw[:, None, None] * H - n[:, :, None] * Hw[:, None, :] - kk * dPv
     norm = np.linalg.norm(tt, axis=1)
     cap = mu * p
-    stick = norm <= cap
+    # a node off contact (cap 0) never sticks (no tangential stiffness), and one whose trial
+    # traction lies on the cone to round-off (it slipped over the last step) starts on the slip
+    # side: its tangent is the slip tangent, which the increment then follows
+    stick = norm < cap * (1 - STICK_MARGIN)
     e = tt / np.where(norm > 0, norm, 1.0)[:, None]
     ratio = np.where(norm > 0, cap / np.where(norm > 0, norm, 1.0), 0.0)
     t = np.where(stick[:, None], tt, ratio[:, None] * tt)
     slip_dt = (mu * e[:, :, None] * (dp[:, None] * n)[:, None, :]
-               + ratio[:, None, None] * (np.eye(3) - e[:, :, None] * e[:, None, :]) @ T)
+               + ratio[:, None, None] * (np.eye(3) - e[:, :, None] * e[:, None, :]) @ T
+               - SLIP_FLOOR * kk * e[:, :, None] * e[:, None, :])
     dt = np.where(stick[:, None, None], T, slip_dt)
     return t, dt, stick, s
 
@@ -93,3 +103,63 @@ def wrench(R, c, F, S):
     dF = (Rt @ S @ R) @ B
     dF[:, :, 3:] += lie.hat3(Fb)
     return np.einsum("kij,kj->ki", Bt, Fb), -Bt @ dF
+
+
+class CoulombFriction:
+    """The friction side of :class:`~core_se3.model.contact.ContactLoad` (a mixin: its state
+    ``mu``, ``tau``, ``y_a`` and the hooks of a path-dependent load; module docstring)."""
+
+    @property
+    def path_dependent(self):
+        """True with friction: the state depends on the path, not on (g, lam) alone (a sweep
+        does not warm-start it from another point's final state)."""
+        return self.mu > 0
+
+    def friction_state(self, g, lam, x, n, H, p, dp):
+        """(t, dt/dx, stick, slip) of the nodes (:func:`coulomb_law`), the multiplier and the
+        anchors moved with the obstacle to lam."""
+        T = self.obstacle.transform(lam)
+        v = x - (self.y_a @ T[:3, :3].T + T[:3, 3])
+        return coulomb_law(n, H, p, dp, v, self.tau @ T[:3, :3].T, self.k * self.soft[:len(self.nodes)], self.mu)
+
+    def sticking(self, lam, n, p):
+        """The nodes that carry force and whose stored traction lies inside the cone,
+        |P w| < mu p (1 - STICK_MARGIN), at an accepted state at lam (n, p: its normals and
+        pressures): the nodes that stuck over the last step."""
+        if self.mu <= 0:
+            return np.zeros(len(p), bool)
+        w = self.tau @ self.obstacle.transform(lam)[:3, :3].T
+        w -= np.einsum("ki,ki->k", n, w)[:, None] * n
+        return np.linalg.norm(w, axis=1) < self.mu * p * (1 - STICK_MARGIN)
+
+    def _sliding(self, g, lam):
+        """(nodes in contact, of them slipping) at (g, lam): the failure hint's evidence."""
+        x, _, n, H, p, dp = self.state(g, lam)
+        _, _, stick, _ = self.friction_state(g, lam, x, n, H, p, dp)
+        on = p > 0
+        return int(on.sum()), int((on & ~stick).sum())
+
+    def failure_hint(self):
+        """'no static equilibrium: it slides' when every node in contact slipped at the last
+        evaluation (of the failed try): friction cannot hold the loads."""
+        on, slip = getattr(self, "_slide", (0, 0))
+        if self.mu > 0 and on and slip == on:
+            return (f"no static equilibrium: it slides -- all {on} contact nodes on obstacle {self.name!r} slip "
+                    f"(Coulomb friction {self.mu:g} cannot hold the loads); raise the friction, add a support, "
+                    "or prescribe the sliding motion")
+        return ""
+
+    def accept_state(self, g, lam):
+        """An accepted state (``Load.accept_state``): the friction history moves on -- the
+        multipliers become the nodes' tractions there (obstacle frame) and the anchors their
+        current points on the obstacle."""
+        if self.mu > 0:
+            x, _, n, H, p, dp = self.state(g, lam)
+            t, _, stick, slip = self.friction_state(g, lam, x, n, H, p, dp)
+            on = p > 0                   # the step's stick/slip record, before the anchors move
+            self.step_stats = dict(sticking=int(np.count_nonzero(on & stick)),
+                                   slipping=int(np.count_nonzero(on & ~stick)),
+                                   largest_slip=float(np.linalg.norm(slip[on & ~stick], axis=1).max(initial=0.0)),
+                                   stick=np.where(on, stick.astype(float), np.nan))
+            self.tau = t @ self.obstacle.transform(lam)[:3, :3]
+            self.y_a = self.placement(x, lam)

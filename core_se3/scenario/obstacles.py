@@ -16,7 +16,7 @@ __all__ = ["OBSTACLE_KEYS", "MOTION_KEYS", "SIDES", "obstacles_section", "add_ob
 
 OBSTACLE_KEYS = ("type", "name", "region", "motion", "mode", "beta", "eps", "tol", "cap_depth", "side", "friction")
 MOTION_KEYS = ("translate", "axis", "angle", "point", "scale")
-SIDES = {"auto": "auto", "top": 1.0, "bottom": -1.0}        # the contact face: auto, +d3, -d3
+SIDES = {"auto": "auto", "top": 1.0, "bottom": -1.0, "mid": 0.0}    # the contact face: auto, +d3, -d3, mid-surface
 
 
 def obstacles_section(v, doc, regions):

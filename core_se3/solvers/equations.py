@@ -75,6 +75,9 @@ class NewtonEquations:
     def apply_prescribed(self, g, lam):
         return self.problem.apply_prescribed(g, lam)
 
+    def fixed_dofs(self):
+        return self.problem.constraint_mask()
+
     def retract(self, g, eta):
         return self.problem.retract(g, eta)
 
