@@ -12,7 +12,7 @@ from core_se3 import lie
 from core_se3 import mesh as M
 from core_se3.model import ContactLoad, HalfSpace, Sphere, tangent_fd_check, translation
 from core_se3.model.contact_law import ramp
-from core_se3.model.friction import coulomb_law
+from core_se3.model.friction import HARDENING, coulomb_law
 
 
 def test_return_mapping_is_coulomb():
@@ -25,7 +25,11 @@ def test_return_mapping_is_coulomb():
     v = rng.normal(size=(6, 3)) * 0.3
     t, dt, stick, s = coulomb_law(n, H, p, dp, v, np.zeros((6, 3)), 4.0, 0.4)
     assert stick.any() and (~stick).any()
-    assert np.all(np.linalg.norm(t, axis=1) <= 0.4 * 2.0 + 1e-12)
+    trial = 4.0 * np.linalg.norm(s, axis=1)            # |t*| = k |s| (no stored traction)
+    assert np.all(np.linalg.norm(t[stick], axis=1) < 0.4 * 2.0)
+    # on the cone, up to the hardening: |t| = mu p + HARDENING (|t*| - mu p)
+    np.testing.assert_allclose(np.linalg.norm(t[~stick], axis=1), 0.8 + HARDENING * (trial[~stick] - 0.8),
+                               rtol=1e-14)
     assert np.allclose(t[~stick] / np.linalg.norm(t[~stick], axis=1)[:, None],
                        -s[~stick] / np.linalg.norm(s[~stick], axis=1)[:, None])
 

@@ -351,6 +351,8 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         the step back.  '' when the step is clear."""
         if not len(self.nodes):
             return ""
+        if self.mu > 0 and (why := self.cone_excess(g1, lam1)):
+            return why
         thick = float(getattr(self.obstacle, "thickness", np.inf))
         depth = max(min(self.h / 2, thick / 2), 2 * self.tol)
         return crossing_report(self.obstacle, self._quads, self.contact_points(g0), self.contact_points(g1),

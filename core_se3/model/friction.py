@@ -9,17 +9,19 @@ x_a = T(lam) y_a).  With the obstacle's normal n(x), P = I - n n^T and the multi
 (the tangential traction carried from the last state, stored in the obstacle's frame):
 
     v = x - x_a,   s = P v (the slip over the step),   t* = P w - k s (trial traction),
-    t = t*                      if |t*| <= mu p   (stick),
-    t = mu p t* / |t*|          otherwise         (slip: the return onto the cone),
+    t = t*                                 if |t*| < mu p   (stick),
+    t = (mu p + d (|t*| - mu p)) t* / |t*|  otherwise        (slip: the return onto the cone),
 
 p the normal pressure of the node (``contact_law.normal_law``), k the penalty [force/length^3].
 The Uzawa update tau <- Q^T t has as fixed points exactly Coulomb's law with maximal
-dissipation: s = 0 and |t| <= mu p, or |t| = mu p and s = -alpha t (alpha >= 0).
+dissipation: s = 0 and |t| <= mu p, or |t| = mu p and s = -alpha t (alpha >= 0), up to the
+hardening d = 1e-8 (|t| = mu p + d k |s| / (1 - d): 1e-8 of the penalty per unit slip over the
+step; a converged state where it exceeds 1e-3 mu p is refused).
 
 Tangent (at fixed lam; H = grad n, e = t*/|t*|):
 
     dt*/dx = -(n.w) H - n (H w)^T - k [P - (n.v) H - n (H v)^T],
-    dt/dx  = dt*/dx (stick),   mu e (p' n)^T + (mu p / |t*|) (I - e e^T) dt*/dx (slip),
+    dt/dx  = dt*/dx (stick),   (1 - d) [mu e (p' n)^T + (mu p / |t*|) (I - e e^T) dt*/dx] + d dt*/dx (slip),
 
 and the node's force A (p n + t) enters :func:`wrench` with S = A (p' n n^T + p H + dt/dx).
 
@@ -32,7 +34,7 @@ Example
 >>> t[0].tolist(), bool(stick[0])                        # k s = 0.2 < mu p = 0.5: it sticks
 ([-0.2, 0.0, 0.0], True)
 >>> t, dt, stick, s = coulomb_law(n, H, np.array([1.0]), np.array([-5.0]), 3 * v, np.zeros((1, 3)), 2.0, 0.5)
->>> t[0].tolist(), bool(stick[0])                        # 0.6 > 0.5: it slips, |t| = mu p
+>>> t[0].round(6).tolist(), bool(stick[0])               # 0.6 > 0.5: it slips, |t| = mu p
 ([-0.5, 0.0, 0.0], False)
 """
 from __future__ import annotations
@@ -42,13 +44,17 @@ import numpy as np
 from .. import lie
 from .contact_law import E3
 
-__all__ = ["coulomb_law", "wrench", "CoulombFriction", "STICK_MARGIN"]
+__all__ = ["coulomb_law", "wrench", "CoulombFriction", "STICK_MARGIN", "HARDENING", "CONE_EXCESS"]
 
 STICK_MARGIN = 1e-10        # |t*| >= (1 - STICK_MARGIN) mu p: on the cone (slip)
-# the slip tangent keeps SLIP_FLOOR k along the slip (the law does not): a body whose contact
-# nodes all slip has no zero pivot, and an indeterminate split of the sliding (two feet that
-# slip alike) takes the smallest increment along it
-SLIP_FLOOR = 1e-8
+# the cone hardens by HARDENING of the trial traction beyond it (|t| = mu p + HARDENING (|t*| - mu p)):
+# the slip keeps HARDENING k of stiffness along itself, so that a body whose contact nodes all
+# slip has no zero pivot and the split of a sliding between feet that slip alike (indeterminate
+# in rigid-plastic friction) is the one the residual selects, the symmetric one; a converged
+# state whose traction exceeds the cone by more than CONE_EXCESS of it is refused (the loads
+# exceed the friction: no static equilibrium)
+HARDENING = 1e-8
+CONE_EXCESS = 1e-3
 
 
 def coulomb_law(n, H, p, dp, v, w, k, mu):
@@ -72,10 +78,10 @@ def coulomb_law(n, H, p, dp, v, w, k, mu):
     stick = norm < cap * (1 - STICK_MARGIN)
     e = tt / np.where(norm > 0, norm, 1.0)[:, None]
     ratio = np.where(norm > 0, cap / np.where(norm > 0, norm, 1.0), 0.0)
-    t = np.where(stick[:, None], tt, ratio[:, None] * tt)
-    slip_dt = (mu * e[:, :, None] * (dp[:, None] * n)[:, None, :]
-               + ratio[:, None, None] * (np.eye(3) - e[:, :, None] * e[:, None, :]) @ T
-               - SLIP_FLOOR * kk * e[:, :, None] * e[:, None, :])
+    d = HARDENING
+    t = np.where(stick[:, None], tt, ((1 - d) * ratio + d)[:, None] * tt)
+    slip_dt = ((1 - d) * (mu * e[:, :, None] * (dp[:, None] * n)[:, None, :]
+                          + ratio[:, None, None] * (np.eye(3) - e[:, :, None] * e[:, None, :]) @ T) + d * T)
     dt = np.where(stick[:, None, None], T, slip_dt)
     return t, dt, stick, s
 
@@ -131,6 +137,21 @@ class CoulombFriction:
         w = self.tau @ self.obstacle.transform(lam)[:3, :3].T
         w -= np.einsum("ki,ki->k", n, w)[:, None] * n
         return np.linalg.norm(w, axis=1) < self.mu * p * (1 - STICK_MARGIN)
+
+    def cone_excess(self, g, lam):
+        """Why the converged state (g, lam) is refused: a slipping node whose traction exceeds
+        the cone by more than CONE_EXCESS of it (the hardening has carried a load the friction
+        cannot: no static equilibrium), or ''."""
+        x, _, n, H, p, dp = self.state(g, lam)
+        t, _, stick, _ = self.friction_state(g, lam, x, n, H, p, dp)
+        cap = self.mu * p
+        over = np.where((p > 0) & ~stick, np.linalg.norm(t, axis=1) - cap * (1 + CONE_EXCESS), -1.0)
+        i = int(np.argmax(over)) if len(over) else 0
+        if len(over) and self.largest(float(over[i])) > 0:
+            return (f"obstacle {self.name!r}: the friction at node {int(self.nodes[i])} exceeds mu p by "
+                    f"{(np.linalg.norm(t[i]) / cap[i] - 1):.2g} of it (more than {CONE_EXCESS:g}): the loads exceed "
+                    "what Coulomb friction can hold there")
+        return ""
 
     def _sliding(self, g, lam):
         """(nodes in contact, of them slipping) at (g, lam): the failure hint's evidence."""
