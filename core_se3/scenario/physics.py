@@ -172,7 +172,9 @@ def magnets_section(v, doc, regions, fields, mesh=None, base_dir="."):
 
 def supports_section(v, doc, mesh, regions):
     sup = v.array_of_tables(doc, "supports")
-    if not sup:
+    # a free shell may rest on obstacles (friction holds it: the rigid-motion check of the solve
+    # counts the contact nodes' restraints and names a motion left free)
+    if not sup and not doc.get("obstacles"):
         v.fail("supports", "no supports: the shell could move as a rigid body; add e.g. "
                            '[[supports]] type = "clamp", edge = "x0"')
     out = []
