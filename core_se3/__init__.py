@@ -4,7 +4,8 @@ Every node of the mid-surface carries a frame g = (R, phi) in SE(3); strains are
 twists; the 4-node quad is solved by Newton with exponential updates g <- g exp(eta).  The
 package is a stack of layers that import only downward (docs/ARCHITECTURE.md):
 
-    lie -> mesh -> fem -> assembly -> model -> results -> solvers -> parallel -> io -> design -> scenario -> catalogue -> cli
+    lie -> mesh -> fem -> assembly -> model -> results -> solvers -> parallel -> io -> design -> scenario -> control
+    -> catalogue -> cli
 
 Example (a strip rolled into a full circle by an end moment M = 2 pi EI / L)
 -------
@@ -32,8 +33,9 @@ from .solvers import (ArcLengthOptions, NewtonOptions, arc_length, displacement_
 # The upper layers a solve does not need are imported at their first use (PEP 562): a
 # one-shot `core-se3 bench run` does not pay for the design, scenario (TOML) and output
 # (XML) modules it never touches.  ``core_se3.io``, ``core_se3.design``, ``core_se3.scenario``,
-# ``core_se3.catalogue``, ``Scenario`` and ``load_scenario`` behave as eagerly imported names.
-_LAZY = {"io": ("io", None), "design": ("design", None), "scenario": ("scenario", None),
+# ``core_se3.control``, ``core_se3.catalogue``, ``Scenario`` and ``load_scenario`` behave as
+# eagerly imported names.
+_LAZY = {"io": ("io", None), "design": ("design", None), "scenario": ("scenario", None), "control": ("control", None),
          "catalogue": ("catalogue", None), "Scenario": ("scenario", "Scenario"),
          "load_scenario": ("scenario", "load")}
 
@@ -51,7 +53,8 @@ def __getattr__(name):
 def __dir__():
     return sorted(set(globals()) | set(_LAZY))
 
-__all__ = ["lie", "mesh", "fem", "model", "fields", "results", "solvers", "io", "design", "scenario", "catalogue",
+__all__ = ["lie", "mesh", "fem", "model", "fields", "results", "solvers", "io", "design", "scenario", "control",
+           "catalogue",
            "Problem", "Material", "RegionMaterial", "Result", "StepResult", "Scenario", "load_scenario",
            "newton_solve", "arc_length", "displacement_control", "NewtonOptions", "ArcLengthOptions",
            "Element", "Load", "LoadKind", "Param", "Field", "register_element", "register_load",

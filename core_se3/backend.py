@@ -88,12 +88,13 @@ def start_cost():
     return NUMBA_COLD_START_COST if _Rent.cold else NUMBA_START_COST
 
 
-def charge(n_elements):
-    """Count one NumPy tangent evaluation of an 'auto' problem of ``n_elements`` elements: once
-    the savings missed reach :func:`start_cost`, 'auto' means numba from then on (with a cold
-    cache, after a one-line notice on stderr of the compilation about to start)."""
+def charge(n_elements, share=1.0):
+    """Count one NumPy tangent evaluation of an 'auto' problem of ``n_elements`` elements (or
+    ``share`` of one: a control session's residual-only evaluations, ``control.corrector``):
+    once the savings missed reach :func:`start_cost`, 'auto' means numba from then on (with a
+    cold cache, after a one-line notice on stderr of the compilation about to start)."""
     if not _Rent.switched:
-        _Rent.saved += iteration_saving(n_elements)
+        _Rent.saved += share * iteration_saving(n_elements)
         if _Rent.saved >= start_cost():
             _Rent.switched = True
             if _Rent.cold:

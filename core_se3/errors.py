@@ -18,7 +18,7 @@ import difflib
 __all__ = ["CoreSE3Error", "MaterialError", "MeshError", "LoadError", "SupportError",
            "SingularSystemError", "ConvergenceError", "ElementTooDistortedError", "ScenarioError",
            "CheckpointError", "OptionError", "DesignError", "ContactError", "ParallelError",
-           "LinearSolverError", "ScenarioWarning", "did_you_mean"]
+           "LinearSolverError", "ControlError", "ScenarioWarning", "did_you_mean"]
 
 
 def did_you_mean(name, choices):
@@ -337,6 +337,23 @@ class DesignError(CoreSE3Error, ValueError):
     Traceback (most recent call last):
     ...
     core_se3.errors.DesignError: node ids [99] do not exist (the mesh has 6 nodes: 0 .. 5)
+    """
+
+
+class ControlError(CoreSE3Error):
+    """A command that a control session (``core_se3.control.Session``) refuses: a session the
+    model cannot have (a path-dependent element, contact, a prescribed motion of the load
+    factor), or an update it cannot follow on the equilibrium path -- the corrector leaves the
+    path (a limit point or a snap onto another branch), turns nodes too far, or fails to converge
+    even after the command was split ``max_splits`` times.  The session stays at the state before
+    the command; the message says where the path was lost and why.  Send smaller command changes,
+    or trace the path with arc length (``core_se3.solvers.arc_length``).
+
+    Example
+    -------
+    >>> from core_se3.errors import ControlError
+    >>> issubclass(ControlError, CoreSE3Error)
+    True
     """
 
 

@@ -18,7 +18,7 @@ ROOT = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
 
 # bottom to top; a module's layer is that of its first package below core_se3 (or its own name)
 LAYERS = ["errors", "registry", "backend", "lie", "kernels", "mesh", "fem", "assembly", "model", "results", "solvers", "parallel", "io", "design", "scenario",
-          "catalogue", "cli", "__main__", "__init__"]
+          "control", "catalogue", "cli", "__main__", "__init__"]
 
 LONG_MODULES = {}     # module -> why it may exceed 500 lines (none today)
 

@@ -9,7 +9,8 @@ import importlib
 import inspect
 
 PACKAGES = ["core_se3", "core_se3.mesh", "core_se3.fem", "core_se3.model", "core_se3.results",
-            "core_se3.solvers", "core_se3.parallel", "core_se3.io", "core_se3.design", "core_se3.scenario", "core_se3.catalogue",
+            "core_se3.solvers", "core_se3.parallel", "core_se3.io", "core_se3.design", "core_se3.scenario", "core_se3.control",
+            "core_se3.catalogue",
             "core_se3.lie", "core_se3.errors"]
 
 

@@ -111,7 +111,7 @@ def _explicit(problem, g, lam, quantities, variables):
 
 
 def sensitivity(problem, g, lam, quantities, variables, method="auto", cotangent=None, linear_solver=None,
-                evaluation=None, run=None):
+                evaluation=None, run=None, factorization=None):
     """Total derivatives of ``quantities`` by ``variables`` at the equilibrium (g, lam).
 
     Parameters
@@ -136,6 +136,9 @@ def sensitivity(problem, g, lam, quantities, variables, method="auto", cotangent
     run : core_se3.parallel.DistributedRun, optional
         Solve with the tangent on the MPI ranks (a design under mpirun): the quantities and
         the variables' derivatives are the whole problem's, the linear solves distributed.
+    factorization : core_se3.solvers.Factorization, optional
+        A factorisation of the free tangent at (g, lam) to solve with (K and K^T on the same
+        factors; a control session's, ``core_se3.control``): no tangent is evaluated or factored.
 
     Returns
     -------
@@ -162,6 +165,7 @@ def sensitivity(problem, g, lam, quantities, variables, method="auto", cotangent
     free = problem.assembler().free
     n = problem.mesh.n_nodes
     solves = _distributed_solver(run, g, lam) if run is not None else \
+        _factored_solver(problem, factorization) if factorization is not None else \
         _serial_solver(problem, g, lam, evaluation, linear_solver)
     vals, Q = quantity_jacobian(problem, g, lam, quantities)
     Qh = (Q @ sp.diags(free.astype(float))).tocsr()         # dq/d eta on the free dofs
@@ -198,6 +202,18 @@ def _serial_solver(problem, g, lam, evaluation, linear_solver):
             return np.zeros((0, problem.mesh.n_nodes, 6))
         with Factorization(ev.K.T.tocsr() if transpose else ev.K, solver) as F:
             return np.stack([asm.scatter(F.solve(np.asarray(b).ravel()[asm.free])) for b in rhs])
+    return solves
+
+
+def _factored_solver(problem, F):
+    """:func:`_serial_solver`'s solves on a given factorisation F of the free tangent (its
+    transposed solves for the adjoint)."""
+    asm = problem.assembler()
+
+    def solves(rhs, transpose):
+        if not rhs:
+            return np.zeros((0, problem.mesh.n_nodes, 6))
+        return np.stack([asm.scatter(F.solve(np.asarray(b).ravel()[asm.free], transpose)) for b in rhs])
     return solves
 
 

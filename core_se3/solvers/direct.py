@@ -56,10 +56,13 @@ def available_solvers():
 
 
 class Factor:
-    """Context manager holding a factorisation; calling it solves for one right-hand side."""
+    """Context manager holding a factorisation; calling it solves for one right-hand side.
+    ``solve_transpose`` (None when the solver has none) solves with the transpose on the same
+    factors (the adjoint sensitivities of a control session, ``core_se3.control``)."""
 
-    def __init__(self, solve, release=lambda: None):
+    def __init__(self, solve, release=lambda: None, solve_transpose=None):
         self._solve, self._release = solve, release
+        self.solve_transpose = solve_transpose
 
     def __enter__(self):
         return self._solve
@@ -101,7 +104,9 @@ class SuperLUSolver:
                 lu = spla.splu(A, permc_spec="COLAMD")
             except RuntimeError as exc:
                 raise SingularSystemError(f"tangent is singular ({exc})") from None
-        return Factor(lambda b: finite_solution(lu.solve(b, trans=trans)))
+        flip = "N" if trans == "T" else "T"
+        return Factor(lambda b: finite_solution(lu.solve(b, trans=trans)),
+                      solve_transpose=lambda b: finite_solution(lu.solve(b, trans=flip)))
 
     def solve(self, K, b):
         with self.factor(K) as solve:
@@ -194,13 +199,13 @@ class BandedSolver:
                                       else f"banded LU: illegal argument {-info}")
         perm, kl, ku = lay.perm, lay.kl, lay.ku
 
-        def solve(b):
-            y, inf = lapack.dgbtrs(lu, kl, ku, b[perm], ipiv)
+        def solve(b, trans=0):
+            y, inf = lapack.dgbtrs(lu, kl, ku, b[perm], ipiv, trans=trans)
             x = np.empty_like(y)
             x[perm] = y
             return finite_solution(x)
 
-        return Factor(solve)
+        return Factor(solve, solve_transpose=lambda b: solve(b, 1))   # (P K P^T)^T = P K^T P^T
 
     def solve(self, K, b):
         with self.factor(K) as solve:
@@ -275,13 +280,21 @@ class MumpsSolver:
                 raise SingularSystemError(f"tangent is singular (MUMPS: {exc})") from None
             return finite_solution(x.getArray().copy())
 
+        def solve_transpose(b):
+            bb.setArray(b)
+            try:
+                ksp.solveTranspose(bb, x)
+            except PETSc.Error as exc:
+                raise SingularSystemError(f"tangent is singular (MUMPS: {exc})") from None
+            return finite_solution(x.getArray().copy())
+
         def release():
             if keep:
                 self._busy = False
             else:
                 self._destroy(objs)
 
-        return Factor(solve, release)
+        return Factor(solve, release, solve_transpose)
 
     def solve(self, K, b):
         with self.factor(K) as solve:

@@ -35,7 +35,8 @@ __all__ = ["make_solver", "available_solvers", "checked_solve", "Factorization",
 class Factorization:
     """The equilibrated factorisation of K (sparse: the project's solver; dense: LAPACK LU).
 
-    ``solve(b)`` returns x with K x = b: S K S y = S b is solved, then refined while the
+    ``solve(b)`` returns x with K x = b (``solve(b, transpose=True)``: K^T x = b on the same
+    factors, S K^T S being the transpose of S K S): S K S y = S b is solved, then refined while the
     normwise backward error |S b - S K S y| / (|S K S|_inf |y| + |S b|) is above 4 eps and
     falls by half per step (at most twice, LAPACK's rule); SingularSystemError when it stays
     above 1e-8 or the solution grows more than 1e15 x b.  ``probe()`` raises
@@ -82,6 +83,7 @@ class Factorization:
         self.K = K
         self.Ks = CsrArrays(data, K.indices, K.indptr, K.shape)
         self.knorm = float(np.max(np.add.reduceat(np.abs(data), K.indptr[:-1]))) if len(data) else 0.0
+        self._knorm_t = None
         self._ctx = solver.factor(self.Ks)
         self._solve = self._ctx.__enter__()
 
@@ -92,27 +94,47 @@ class Factorization:
         self.close()
         return False
 
-    def _berr(self, bs, y):
-        rs = bs - self.s * (self.K @ (self.s * y))              # S b - S K S y
-        return rs, np.linalg.norm(rs) / (self.knorm * np.linalg.norm(y) + np.linalg.norm(bs) + 1e-300)
+    def _berr(self, bs, y, transpose=False):
+        Ky = (self.s * y) @ self.K if transpose else self.K @ (self.s * y)      # K^T v = (v^T K)^T
+        rs = bs - self.s * Ky                                   # S b - S K S y (or S K^T S y)
+        # |S K^T S|_inf = |S K S|_1: the transposed solve's norm
+        knorm = self.knorm_t if transpose else self.knorm
+        return rs, np.linalg.norm(rs) / (knorm * np.linalg.norm(y) + np.linalg.norm(bs) + 1e-300)
 
-    def solve(self, b):
-        """x with K x = b (see the class docstring); b (N,) or (N, k) (k right-hand sides,
-        solved one by one on the same factorisation)."""
+    @property
+    def knorm_t(self):
+        """|S K S|_1 (the infinity norm of the transpose), computed at its first use."""
+        if self._knorm_t is None:
+            self._knorm_t = float(np.max(np.bincount(self.Ks.indices, np.abs(self.Ks.data), self.Ks.shape[1]))) \
+                if len(self.Ks.data) else 0.0
+        return self._knorm_t
+
+    def solve(self, b, transpose=False, check=True):
+        """x with K x = b, or K^T x = b with ``transpose`` (see the class docstring); b (N,) or
+        (N, k) (k right-hand sides, solved one by one on the same factorisation).  ``check=False``
+        skips the refinement and the backward-error check (only a non-finite solution raises):
+        for an iteration that tests its answer on the true residual (``control.corrector``)."""
         if self.dense:
-            return sla.lu_solve(self.lu, b)
+            return sla.lu_solve(self.lu, b, trans=1 if transpose else 0)
         b = np.asarray(b, dtype=float)
         if b.ndim == 2:
-            return np.column_stack([self.solve(b[:, j]) for j in range(b.shape[1])]) if b.shape[1] \
-                else np.zeros_like(b)
+            return np.column_stack([self.solve(b[:, j], transpose, check) for j in range(b.shape[1])]) \
+                if b.shape[1] else np.zeros_like(b)
+        back = self._solve
+        if transpose:
+            back = self._ctx.solve_transpose
+            if back is None:
+                raise OptionError("this linear solver has no transposed solve (the built-in ones have)")
         bs = self.s * b
-        y = self._solve(bs)
-        rs, berr = self._berr(bs, y)
+        y = back(bs)
+        if not check:
+            return self.s * y
+        rs, berr = self._berr(bs, y, transpose)
         for _ in range(2):                                   # iterative refinement
             if not np.isfinite(berr) or berr <= 4 * _EPS:
                 break
-            y2 = y + self._solve(rs)
-            rs2, berr2 = self._berr(bs, y2)
+            y2 = y + back(rs)
+            rs2, berr2 = self._berr(bs, y2, transpose)
             if not berr2 < berr:
                 break
             y, rs, improved = y2, rs2, berr2 <= 0.5 * berr

@@ -1,0 +1,203 @@
+"""The commands of a control session: its design variables by name (``design.variables``:
+field components, magnetisation per region, load magnitudes, E or h per region), checked once
+for duplicate names and for two variables that set the same thing, and the values of an update
+checked against them (size, finite, bounds) before anything is assigned.
+
+Example
+-------
+>>> from core_se3 import Problem, Material, mesh
+>>> from core_se3.model import UniformField
+>>> from core_se3.design import FieldVariable
+>>> p = Problem(mesh.rectangle(1.0, 0.2, 2, 1), Material(1e3, 0.0, 0.01))
+>>> f = UniformField((0.0, 0.0, 0.5)); _ = p.add_magnetic((1.0, 0.0, 0.0), f, mu0=1.0)
+>>> cmd = Commands([FieldVariable(p, f, name="coil")])
+>>> cmd.parse({"coil": [0.0, 0.0, 0.6]})["coil"].tolist()
+[0.0, 0.0, 0.6]
+>>> cmd.parse({"cole": 1.0})
+Traceback (most recent call last):
+...
+core_se3.errors.OptionError: unknown variable 'cole'; did you mean 'coil'?; the session's variables: coil
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..design import (FieldGradientVariable, FieldVariable, LoadMagnitude, MaterialVariable, RegionMagnetisation,
+                      Variable, magnetic_loads)
+from ..errors import OptionError, did_you_mean
+from ..model import GradientField, UniformField
+
+__all__ = ["Commands", "scenario_variables"]
+
+
+def _sets(v):
+    """What a variable sets: (kind, object id) pairs; two variables sharing one conflict."""
+    if isinstance(v, FieldVariable):
+        return [("field", id(v.field))]
+    if isinstance(v, FieldGradientVariable):
+        return [("gradient", id(v.field))]
+    if isinstance(v, LoadMagnitude):
+        return [("load", id(v.load))]
+    if isinstance(v, RegionMagnetisation):
+        return [("magnet", id(ld)) for ld, _, _ in v.loads]
+    if isinstance(v, MaterialVariable):
+        return [("material " + v.prop, int(e)) for r in v.regions for e in r]
+    return [("variable", id(v))]
+
+
+class Commands:
+    """The named variables of a session (module docstring).
+
+    Parameters
+    ----------
+    variables : sequence of core_se3.design.Variable
+        Each with a unique ``name``; no two may set the same field, load, magnet or element
+        property (OptionError naming both).
+
+    Attributes
+    ----------
+    variables : dict
+        name -> Variable, in the order given.
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> from core_se3.design import LoadMagnitude
+    >>> p = Problem(mesh.rectangle(1.0, 0.2, 2, 1), Material(1e3, 0.0, 0.01))
+    >>> p.add_edge_force("x1", (0.0, 0.0, 1.0))
+    >>> Commands([LoadMagnitude(p, p.loads[0], name="P")]).values()["P"].tolist()
+    [1.0]
+    """
+
+    def __init__(self, variables):
+        self.variables = {}
+        owner = {}
+        for v in variables:
+            if not isinstance(v, Variable):
+                raise OptionError(f"a session's variables are core_se3.design variables, got {type(v).__name__}")
+            if v.name in self.variables:
+                raise OptionError(f"two variables are named {v.name!r}: give each its own name (name=...)")
+            for key in _sets(v):
+                if key in owner:
+                    raise OptionError(f"variables {owner[key]!r} and {v.name!r} set the same {key[0]}: a command "
+                                      "could give it two values; keep one of them")
+                owner[key] = v.name
+            self.variables[v.name] = v
+
+    def values(self):
+        """name -> the current values (size,) of every variable."""
+        return {k: v.value() for k, v in self.variables.items()}
+
+    def lookup(self, name):
+        """The variable of a name, or OptionError with the closest one."""
+        try:
+            return self.variables[name]
+        except KeyError:
+            raise OptionError(f"unknown variable {name!r}{did_you_mean(name, self.variables)}; the session's "
+                              f"variables: {', '.join(self.variables) or 'none'}") from None
+
+    def parse(self, values):
+        """name -> (size,) arrays of the commanded values, checked (OptionError: unknown name,
+        wrong size, not finite, outside the bounds or a norm bound)."""
+        out = {}
+        for name, x in values.items():
+            v = self.lookup(name)
+            try:
+                a = np.asarray(x, float).ravel()
+            except (TypeError, ValueError):
+                raise OptionError(f"variable {name!r}: expected {v.size} numbers, got {x!r}") from None
+            if a.size != v.size:
+                raise OptionError(f"variable {name!r} has {v.size} components ({', '.join(v.labels)}), got {a.size}")
+            if not np.all(np.isfinite(a)):
+                raise OptionError(f"variable {name!r}: the command {a.tolist()} is not finite")
+            bad = (a < v.lower) | (a > v.upper)
+            if np.any(bad):
+                i = int(np.nonzero(bad)[0][0])
+                raise OptionError(f"variable {v.labels[i]!r}: the command {a[i]:g} lies outside its bounds "
+                                  f"[{v.lower[i]:g}, {v.upper[i]:g}]")
+            for idx, top in v.norm_bounds:
+                if np.linalg.norm(a[idx]) > top * (1 + 1e-12):
+                    raise OptionError(f"variable {name!r}: the command has norm {np.linalg.norm(a[idx]):g} above "
+                                      f"its bound {top:g}")
+            out[name] = a
+        return out
+
+    def assign(self, values, problem=None, g=None, lam=None):
+        """Assign name -> values (already parsed) to the variables.  With ``problem``, ``g`` and
+        ``lam``: return the exact change of the free residual at (g, lam) that the assignment
+        makes, or None when a variable changes in which the residual is not linear (module
+        docstring of ``control.corrector``: the predictor's right-hand side without a residual
+        evaluation)."""
+        dr = None if problem is None else np.zeros((problem.mesh.n_nodes, 6))
+        for name, x in values.items():
+            v = self.variables[name]
+            if dr is not None:
+                # one variable at a time, at the others' current values: r is linear in each
+                # (the magnetic load is bilinear in field and dipoles), so the sum is exact
+                d = _linear_change(v, problem, g, lam, np.asarray(x, float))
+                dr = None if d is None else dr + d
+            v.assign(x)
+        return None if dr is None else problem.assembler().vector(dr)
+
+
+def _linear_change(v, problem, g, lam, x):
+    """r(g; v = x) - r(g; v now) (n, 6) for a variable in which r is linear, else None."""
+    if isinstance(v, FieldVariable):                      # linear in the field vector
+        full = v.full.copy()
+        full[v.free] = x
+        return np.einsum("nik,k->ni", v.dr_dB(problem, g, lam), v.vector(full) - v.vector())
+    if isinstance(v, RegionMagnetisation):                # linear in B^r per region
+        full = v.full.copy()
+        full[:, v.free] = x.reshape(len(v.regions), len(v.free))
+        return np.einsum("nijk,jk->ni", v.dr_dBr(problem, g, lam), v.Br(full) - v.Br())
+    if isinstance(v, (LoadMagnitude, FieldGradientVariable)):
+        return np.einsum("nik,k->ni", v.dr_dp(problem, g, lam), x - v.value())
+    return None
+
+
+def scenario_variables(scn):
+    """The default variables of a scenario's session: every uniform (or uniform-gradient) field
+    that magnets feel, as its vector (``FieldVariable``, named by the field: ``coil`` for
+    [fields.coil]), and every single scaled load as its magnitude (``LoadMagnitude``,
+    ``load0``, ``load1``, ... after the [[loads]] entries).
+
+    Example
+    -------
+    >>> from core_se3 import scenario
+    >>> scn = scenario.loads('''
+    ... units = "N-mm-MPa"
+    ... [mesh]
+    ... generator = "rectangle"
+    ... L = 20.0
+    ... width = 5.0
+    ... nx = 4
+    ... ny = 1
+    ... [material]
+    ... E = 1.0
+    ... nu = 0.3
+    ... h = 0.5
+    ... [[supports]]
+    ... type = "clamp"
+    ... edge = "x0"
+    ... [fields.coil]
+    ... type = "uniform"
+    ... B = [0.0, 0.0, 0.01]
+    ... [[magnets]]
+    ... Br = [0.01, 0.0, 0.0]
+    ... [[loads]]
+    ... type = "edge_force"
+    ... edge = "x1"
+    ... force = [0.0, 0.0, 1e-4]
+    ... ''')
+    >>> [v.name for v in scenario_variables(scn)]
+    ['coil', 'load0']
+    """
+    prob, out = scn.problem, []
+    for name, f in scn.fields.items():
+        uniform = isinstance(f, UniformField) and f.direction is None
+        if (uniform or isinstance(f, GradientField)) and magnetic_loads(prob, f):
+            out.append(FieldVariable(prob, f, "vector", name=name))
+    for i, built in enumerate(scn.load_objects):
+        if len(built) == 1 and callable(getattr(built[0], "scale", None)):
+            out.append(LoadMagnitude(prob, built[0], name=f"load{i}"))
+    return out

@@ -1,0 +1,310 @@
+"""The warm corrector of a control session: the problem's equilibrium equations, one held
+factorisation of the free tangent, and one sub-step of an update.
+
+Predictor.  At a converged state r(g; p) = 0, new parameters p + dp (design variables, load
+factor) leave the residual r(g; p + dp) = (dr/dp) dp + O(dp^2) -- exactly (dr/dp) dp for the
+field, the magnetisation and load magnitudes, in which r is linear.  The first increment on the
+held factors, K eta = -r(g; p + dp), is therefore the direct method's tangent predictor
+eta = S dp (``design.sensitivity``: K S = -dr/dp), in one back-substitution and without forming
+dr/dp; the residual's evaluation is the only other work.
+
+Corrector.  Modified Newton, f_k = -K_F^-1 r(g_k) on the held factors K_F: a fixed-point
+iteration that contracts by about |I - K_F^-1 K(g_k)| per iteration, each iteration a residual
+and a back-substitution, while a Newton iteration costs a tangent and a factorisation (on the
+gripper about six back-substitutions with their residuals).  Anderson acceleration (memory
+``anderson``) mixes the last increments; it matters for the longer steps, whose rate the thin
+shell's stiff membrane part slows.  The convergence test is the solver's
+(``solvers.convergence``), at the state returned: its relative residual <= max(rtol, round-off
+floor), and the increment that would leave it <= dtol ell (and shrinking: the error estimate of
+a contracting iteration) -- the solver takes the increment that led to its state instead.
+
+Escalation.  When the held factors were made at another state (an earlier update, other
+parameters) and their first correction is more than ``STALE`` of the predictor, or they do
+not converge in ``max_iter`` iterations, the sub-step starts again with the tangent factored at
+its start (and the new parameters); if that fails too, the solver's own Newton try runs from the
+start (``solvers.newton_try``: a fresh tangent at every iterate, the mixed iteration), which
+reaches further; only then does the sub-step fail.
+
+Path.  A sub-step fails (and the session splits the command) when the predictor turns a node by
+more than ``max_turn``, neither corrector converges, the tangent is singular, an element is
+distorted, or the converged increment differs from the predictor by more than
+``path_tolerance`` times the predictor (with factors made at the start): on a smooth path that
+difference is O(dp) relative, so halving the step makes it pass; a jump to another branch (a
+snap past a limit point) does not shrink with the step, and the command is refused.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from types import SimpleNamespace
+
+import numpy as np
+
+from .. import backend
+from ..errors import ElementTooDistortedError, SingularSystemError
+from ..solvers import Factorization, NewtonOptions, make_solver
+from ..solvers.convergence import increment_norm, relative_residual
+from ..solvers.newton_try import NewtonTry
+
+__all__ = ["Corrector", "SubStep", "STALE", "RESIDUAL_SHARE"]
+
+# a first correction longer than this fraction of the predictor, on factors made at another
+# state, starts the sub-step again with the tangent factored at its start (a stale predictor;
+# 0.2 cost least on the gripper's 1 % and 5 % field steps, counting a factorisation with its
+# tangent as 6 or 12 iterations, against 0.05, 0.5 and 1)
+STALE = 0.2
+# what numba saves on one residual evaluation, as a share of what it saves on a Newton iteration
+# (the 'auto' rule's unit, ``backend.iteration_saving``): on the gripper 0.83 of 2.8 ms
+RESIDUAL_SHARE = 0.3
+
+
+@dataclass
+class SubStep:
+    """The outcome of one sub-step of an update.
+
+    Attributes
+    ----------
+    ok : bool
+        Converged (and stayed on the path); ``reason``: why not.
+    g : (n, 4, 4) ndarray
+        The converged frames (the start when not ok).
+    iterations : int
+        Back-substitutions (the predictor's included); ``factorizations``: fresh ones.
+    history : list of float
+        The relative residual at every iterate.
+    predictor : (n, 6) ndarray or None
+        The first increment of the held factors' try; ``fatal``: the step is too long whatever
+        the factors (a predictor turning nodes too far, a path test failed on fresh factors).
+    residual : (nfree,) ndarray or None
+        The free residual at the converged state (the next sub-step's start).
+
+    Example
+    -------
+    >>> SubStep(False, None, "why").reason
+    'why'
+    """
+    ok: bool
+    g: np.ndarray
+    reason: str = ""
+    iterations: int = 0
+    factorizations: int = 0
+    history: list = field(default_factory=list)
+    predictor: np.ndarray = None
+    fatal: bool = False
+    residual: np.ndarray = None
+
+
+class Corrector:
+    """The equations of ``problem`` with one held factorisation (module docstring).
+
+    Attributes
+    ----------
+    F : core_se3.solvers.Factorization or None
+        The held factors; ``F_g``, ``F_stamp``: the frames and the parameter stamp they were
+        made at.
+    counts : dict
+        Residual evaluations, factorisations and back-substitutions so far.
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> from core_se3.control import ControlOptions
+    >>> p = Problem(mesh.rectangle(10.0, 1.0, 8, 1), Material(1.2e6, 0.0, 0.1))
+    >>> p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 0.1))
+    >>> c = Corrector(p, ControlOptions())
+    >>> out = c.step(p.mesh.g0, 1.0, check_path=False)      # Newton from the flat strip
+    >>> out.ok, c.counts["factorizations"] >= 1
+    (True, True)
+    """
+
+    def __init__(self, problem, options):
+        self.problem, self.opts = problem, options
+        self.asm = problem.assembler()
+        self.ell = problem.length_scale
+        self.solver = make_solver(options.linear_solver or problem.linear_solver)
+        self.auto = problem.backend_setting == "auto"
+        self.F = self.F_g = self.F_stamp = None
+        self._checked = False
+        self.counts = dict(residuals=0, factorizations=0, solves=0)
+
+    def close(self):
+        """Release the held factors."""
+        if self.F is not None:
+            self.F.close()
+        self.F = self.F_g = self.F_stamp = None
+
+    def residual(self, g, lam):
+        """(free residual, relative residual, its round-off floor) at (g, lam)."""
+        ev = self.problem.evaluate(g, lam, tangent=False)
+        self.counts["residuals"] += 1
+        if self.auto and self.problem.backend == "numpy":
+            # the 'auto' rule counts tangents (Newton's iterations); a session's work is residuals
+            backend.charge(self.problem.mesh.n_elements, RESIDUAL_SHARE)
+        if not np.all(np.isfinite(ev.r)):
+            raise FloatingPointError("non-finite residual")
+        rn, floor = relative_residual(self.asm, ev, self.ell)
+        return ev.r, rn, floor
+
+    def factor(self, g, lam, stamp=None):
+        """Evaluate the tangent at (g, lam) and hold its factors (SingularSystemError if singular);
+        ``stamp`` names the parameters it was made with (``Session`` checks it)."""
+        K = self.problem.evaluate(g, lam, tangent=True).K
+        self.close()                                  # MUMPS reuses its analysis when released first
+        self.F = Factorization(K, self.solver)
+        self.F_g, self.F_stamp, self._checked = g, stamp, False
+        self.counts["factorizations"] += 1
+
+    def increment(self, r, check=None):
+        """(eta (n, 6), |eta|_s / ell) of K_F eta = -r (``check``: ``Factorization.solve``'s
+        refinement and backward-error check; default at the first solve on new factors only:
+        a singular tangent shows there, and the corrector tests its answers on the residual)."""
+        if check is None:
+            check, self._checked = not self._checked, True
+        eta = self.asm.scatter(self.F.solve(-r, check=check))
+        self.counts["solves"] += 1
+        return eta, increment_norm(eta, self.ell)
+
+    def step(self, g, lam, stamp=None, check_path=True, r0=None):
+        """One sub-step from the frames g to the equilibrium at lam and the parameters assigned
+        now (``stamp``); a :class:`SubStep` (module docstring: held factors, then factors made
+        at g, then Newton with a fresh tangent at every iterate).  ``r0``: the free residual at
+        (g, lam) and these parameters when the caller has it (``Session``: the last one plus
+        its exact change), else it is evaluated."""
+        nf = its = 0
+        try:
+            if self.F is None:
+                self.factor(g, lam, stamp)
+                nf += 1
+            fresh = self.F_g is g and self.F_stamp == stamp
+            out = self._iterate(g, lam, check_path, fresh, r0)
+            its += out.iterations
+            if not out.ok and not out.fatal and not fresh:
+                self.factor(g, lam, stamp)                     # stale factors: again with g's
+                nf += 1
+                out = self._iterate(g, lam, check_path, True, r0)
+                its += out.iterations
+            if not out.ok and not out.fatal:
+                out = self._newton(g, lam, out.predictor, check_path)
+                nf += out.factorizations
+                its += out.iterations
+            out.iterations, out.factorizations = its, nf
+            return out
+        except (SingularSystemError, ElementTooDistortedError, FloatingPointError) as exc:
+            return SubStep(False, g, str(exc), its, nf)
+
+    def _path_error(self, predictor, total, check_path):
+        """The path test (module docstring): '' or the reason it failed."""
+        pred = increment_norm(predictor, self.ell)
+        dev = increment_norm(total - predictor, self.ell)
+        if not check_path or dev <= max(self.opts.path_tolerance * pred, 10.0 * self.opts.dtol):
+            return ""
+        return (f"the corrector moved {dev / pred:.2g} x the predictor's length away from it (more than "
+                f"path_tolerance = {self.opts.path_tolerance:g}): the equilibrium path turns sharply or the state "
+                "snapped onto another branch")
+
+    def _iterate(self, g, lam, check_path, fresh, r0=None):
+        """Predictor and corrector on the held factors: a SubStep (``fatal``: the step is too long
+        whatever the factors; ``predictor``: the first increment; ``residual``: the free residual
+        at the state returned)."""
+        opts, ell = self.opts, self.ell
+        if r0 is None:
+            r, rn, _ = self.residual(g, lam)
+        else:
+            r, rn = r0, np.nan
+        hist = [rn]
+        eta, pred = self.increment(r)                  # the predictor: S dp (module docstring)
+        turn = float(np.sqrt(np.max(np.einsum("ij,ij->i", eta[:, 3:], eta[:, 3:]))))
+        if turn > opts.max_turn:
+            return SubStep(False, g, f"the predictor turns a node by {turn:.3g} rad (more than max_turn = "
+                           f"{opts.max_turn:g})", 1, history=hist, fatal=True)
+        predictor, total = eta, eta.copy()
+        g1 = self.problem.retract(g, eta)
+        its, fn_prev = 1, pred
+        mixer = _Anderson(opts.anderson, ell)
+        while True:
+            r, rn, floor = self.residual(g1, lam)
+            hist.append(rn)
+            f, fn = self.increment(r)
+            its += 1
+            # the solver's test, at the state returned: its relative residual, and the increment
+            # that would leave it (the error estimate of a contracting iteration, or far below
+            # dtol: at the round-off floor the increments no longer contract)
+            if rn <= max(opts.rtol, floor) and fn <= opts.dtol and (fn <= 0.5 * fn_prev or fn <= 1e-3 * opts.dtol):
+                break
+            why = ""
+            if fn > pred:
+                why = f"the corrector diverges: an increment {fn / pred:.3g} x the predictor's"
+            elif its > opts.max_iter or (not fresh and its == 2 and fn > STALE * pred):
+                why = (f"no convergence in max_iter = {opts.max_iter} iterations on the held factors (residual "
+                       f"{rn:.2e}, increment {fn:.2e})")
+            if why:
+                return SubStep(False, g, why, its, history=hist, predictor=predictor)
+            eta = mixer.step(f)
+            g1 = self.problem.retract(g1, eta)
+            total += eta
+            fn_prev = fn
+        why = self._path_error(predictor, total, check_path)
+        return SubStep(not why, g1 if not why else g, why, its, history=hist, predictor=predictor,
+                       fatal=bool(why) and fresh, residual=None if why else r)
+
+    def _newton(self, g, lam, predictor, check_path):
+        """Newton with a fresh tangent at every iterate (the solver's try, ``solvers.newton_try``,
+        with its mixed iteration) from g: for the sub-steps the held factors do not carry."""
+        nopts = NewtonOptions(rtol=self.opts.rtol, dtol=self.opts.dtol, max_iter=self.opts.max_iter,
+                              linear_solver=self.opts.linear_solver, limit_check=False)
+        trial = NewtonTry(self.problem, nopts, self.solver, SimpleNamespace(t_asm=0.0, t_sol=0.0))
+        trial.first_solve = False                      # a singular tangent fails the try
+        mip = nopts.iteration == "mip" and self.problem.element.mixed
+        stress = self.problem.evaluate(g, lam, tangent=False).stress if mip else None
+        out = trial.run(g.copy(), lam, mip, stress)
+        self.counts["factorizations"] += out.solves
+        self.counts["residuals"] += len(out.hist)
+        if not out.ok:
+            return SubStep(False, g, f"Newton with a fresh tangent at every iterate failed: {out.reason}",
+                           out.solves, out.solves, out.hist)
+        why = self._path_error(predictor, out.eta_sum, check_path) if predictor is not None else ""
+        return SubStep(not why, out.g if not why else g, why, out.solves, out.solves, out.hist,
+                       residual=None if why or out.ev is None else out.ev.r)
+
+
+class _Anderson:
+    """Anderson acceleration (Walker and Ni 2011, SIAM J. Numer. Anal. 49) of the modified-Newton
+    fixed point x <- x + f(x), f = -K_F^-1 r: the step f_k - (dX + dF) gamma, gamma minimising
+    |f_k - dF gamma| over the last ``m`` differences of the increments f (dF) and of the steps
+    taken (dX), in the increment norm (rotations times ell).  The increments live in the body
+    frames of successive iterates; their differences are compared as vectors, an error of the
+    order of the corrections squared that the convergence test (on the true residual) does not
+    see.  m = 0: the plain modified Newton step f."""
+
+    def __init__(self, m, ell):
+        self.m, self.ell = m, ell
+        self.k = 0                      # pairs recorded so far (the last m are kept, in a ring)
+        self.w = self.Fd = self.Sd = self.u = self.s = None
+        self.G = np.zeros((m, m))       # Gram matrix of the kept dF (weighted)
+
+    def step(self, f):
+        """The next step from the modified-Newton increment f (n, 6)."""
+        if self.m == 0:
+            return f
+        if self.w is None:
+            self.w = np.tile([1.0, 1.0, 1.0, self.ell, self.ell, self.ell], len(f))
+            self.Fd, self.Sd = np.empty((self.m, f.size)), np.empty((self.m, f.size))
+        u = f.ravel() * self.w                          # weighted: the increment norm's inner product
+        if self.u is not None:
+            i = self.k % self.m
+            np.subtract(u, self.u, out=self.Fd[i])      # dF
+            np.add(self.s, self.Fd[i], out=self.Sd[i])  # dX + dF (the step taken, plus dF)
+            self.k += 1
+            a = min(self.k, self.m)
+            self.G[i, :a] = self.G[:a, i] = self.Fd[:a] @ self.Fd[i]
+        a = min(self.k, self.m)
+        s = u
+        if a:
+            # gamma from the normal equations (a <= m columns: a small solve); a tiny Tikhonov
+            # term keeps nearly dependent columns from blowing gamma up
+            A = self.G[:a, :a] * (1.0 + 1e-10 * np.eye(a))
+            try:
+                s = u - np.linalg.solve(A, self.Fd[:a] @ u) @ self.Sd[:a]
+            except np.linalg.LinAlgError:
+                pass
+        self.u, self.s = u, s
+        return (s / self.w).reshape(f.shape)

@@ -1,0 +1,323 @@
+"""Closed loops on a control session: a quantity (a fingertip) tracking a target trajectory by
+feedback on the Jacobian (:func:`track`), and a command trajectory planned as a sequence of
+warm-started inverse problems (:func:`plan`).
+
+Feedback (resolved-rate control by damped least squares): at every cycle k the measured y_k and
+the Jacobian J_k = dy/dx at the current state (``Session.jacobian``) give the command step
+
+    dx = s z,   z = argmin |J_k s z - gain (y*_(k+1) - y_k)|^2 + mu^2 |z|^2
+
+(s: the variables' scales, mu: ``damping``; mu = 0 takes the least-norm solution), clipped to
+the variables' bounds, and one warm update per cycle.  With gain 1 the error after the update
+is the linearisation's remainder, O(|dx|^2): the denser the samples, the closer the tracking.
+A command the session refuses (ControlError) is halved, at most ``max_halvings`` times.
+
+Planning: at every sample the inverse problem min |y(x) - y*_k| is solved by Gauss-Newton on
+the session (a Jacobian, a step, a warm update) from the previous sample's solution -- its
+equilibrium and its command, extrapolated linearly from the two samples before -- until the
+largest component of the misfit is within ``tolerance``; a step that raises the misfit, or
+that the session refuses, is halved.  A sample not reached is flagged (``Plan.reached``, and
+the message says which), never passed over.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import ControlError, OptionError
+
+__all__ = ["track", "plan", "Tracking", "Plan", "least_squares_step"]
+
+
+def least_squares_step(J, e, scale, damping=0.0):
+    """The command step dx = s z, z = argmin |J s z - e|^2 + damping^2 |z|^2 (least norm when
+    damping is 0).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> least_squares_step(np.array([[2.0, 0.0]]), np.array([1.0]), np.ones(2)).tolist()
+    [0.5, 0.0]
+    """
+    Js = J * scale[None, :]
+    if damping > 0:
+        n = Js.shape[1]
+        z = np.linalg.solve(Js.T @ Js + damping ** 2 * np.eye(n), Js.T @ e)
+    else:
+        z = np.linalg.lstsq(Js, e, rcond=None)[0]
+    return scale * z
+
+
+class _Loop:
+    """What track and plan share: the quantity's components, the variables, their commands."""
+
+    def __init__(self, session, quantity, variables, components, model=None):
+        self.s, self.model = session, model
+        self.q = session.quantity(quantity)
+        names = list(session.variables) if variables is None else list(variables)
+        self.vars = [session.commands.lookup(n) for n in names]
+        self.names = names
+        if model is not None:
+            self.qm = model.quantity(quantity)
+            sizes = [model.commands.lookup(n).size for n in names]
+            if sizes != [v.size for v in self.vars]:
+                raise OptionError(f"the model's variables {names} do not have the plant's sizes")
+        self.rows = np.arange(self.q.size) if components is None else np.asarray(components, np.int64)
+        if self.rows.size == 0 or self.rows.min() < 0 or self.rows.max() >= self.q.size:
+            raise OptionError(f"components {np.asarray(components).tolist()} outside 0 .. {self.q.size - 1}")
+        self.scale = np.concatenate([v.scale for v in self.vars])
+        self.lower = np.concatenate([v.lower for v in self.vars])
+        self.upper = np.concatenate([v.upper for v in self.vars])
+        self.split = np.cumsum([v.size for v in self.vars])[:-1]
+
+    def targets(self, targets):
+        t = np.asarray(targets, float)
+        if t.ndim != 2 or t.shape[1] != len(self.rows) or not np.all(np.isfinite(t)):
+            raise OptionError(f"targets must be a finite array (samples, {len(self.rows)}), got shape {t.shape}")
+        return t
+
+    def x(self):
+        return np.concatenate([self.s.values[n] for n in self.names])
+
+    def y(self):
+        return self.q.value(self.s.problem, self.s.g, self.s.lam)[self.rows]
+
+    def jacobian(self):
+        if self.model is not None:
+            return self.model.jacobian([self.qm], self.names).jacobian[self.rows]
+        return self.s.jacobian([self.q], self.vars).jacobian[self.rows]
+
+    def command(self, x):
+        """Update the session (and the model) to the command x (clipped to the bounds); the
+        session's State."""
+        values = dict(zip(self.names, np.split(np.clip(x, self.lower, self.upper), self.split)))
+        if self.model is not None:
+            self.model.update(**values)
+        return self.s.update(**values)
+
+    def step(self, x, dx, max_halvings):
+        """Update to x + a dx with a = 1, 1/2, ... while the session refuses; (state, a)."""
+        a = 1.0
+        for _ in range(max_halvings + 1):
+            try:
+                return self.command(x + a * dx), a
+            except ControlError as exc:
+                last = exc
+                a /= 2
+        raise ControlError(f"the loop's command step was refused {max_halvings + 1} times, down to "
+                           f"{2 * a:g} x the step: {last}")
+
+
+@dataclass
+class Tracking:
+    """The record of :func:`track`.
+
+    Attributes
+    ----------
+    targets, achieved : (K, m) ndarray
+        The target and the achieved quantity components at every sample (sample 0: the start).
+    commands : dict
+        Variable name -> (K, size) commands.
+    errors : (K,) ndarray
+        |achieved - target| (Euclidean, the quantity's units).
+    cycle_time : (K,) ndarray
+        Seconds per cycle (Jacobian, step, update; sample 0: 0).
+    iterations, factorizations : (K,) ndarray
+        What each update took.
+
+    Example
+    -------
+    >>> t = Tracking(np.zeros((2, 1)), np.zeros((2, 1)), {}, np.zeros(2), np.array([0.0, 0.01]), np.zeros(2),
+    ...              np.zeros(2))
+    >>> round(t.rate, 6), t.max_error
+    (100.0, 0.0)
+    """
+    targets: np.ndarray
+    achieved: np.ndarray
+    commands: dict
+    errors: np.ndarray
+    cycle_time: np.ndarray
+    iterations: np.ndarray
+    factorizations: np.ndarray
+
+    @property
+    def rate(self):
+        """Cycles per second (the median cycle)."""
+        return 1.0 / float(np.median(self.cycle_time[1:]))
+
+    @property
+    def max_error(self):
+        """The largest error after the start."""
+        return float(self.errors[1:].max())
+
+
+def track(session, quantity, targets, variables=None, components=None, gain=1.0, damping=0.0, max_halvings=5,
+          model=None):
+    """Track ``targets`` (K, m) with the components ``components`` of ``quantity`` (a probe name
+    or a ``design`` quantity) by Jacobian feedback, one warm update per sample (module
+    docstring).
+
+    Parameters
+    ----------
+    session : Session
+        The plant, at the start (targets[0] is recorded against the start's value): what is
+        measured and commanded.
+    variables : sequence of str, optional
+        The commanded variables (default all of the session's).
+    gain, damping : float
+        Feedback gain (1: a Newton step toward the next target) and the damping mu.
+    model : Session, optional
+        The controller's model, when it is not the plant (a model error): the Jacobian is the
+        model's, at the same commands (both sessions are updated every cycle; a probe name
+        refers to the model's probe of that name).
+
+    Returns
+    -------
+    Tracking
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import Problem, Material, mesh
+    >>> from core_se3.design import LoadMagnitude
+    >>> from core_se3.control import Session
+    >>> p = Problem(mesh.rectangle(10.0, 1.0, 8, 1), Material(1.2e6, 0.0, 0.1))
+    >>> p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 0.1)); p.add_probe("tip", "x1")
+    >>> s = Session(p, 1.0, [LoadMagnitude(p, p.loads[0], name="P")])
+    >>> z0 = s.state.probes["tip"]["x"][2]
+    >>> t = track(s, "tip", [[z0], [z0 + 0.05], [z0 + 0.1]], components=[2])
+    >>> bool(t.max_error < 1e-3)
+    True
+    """
+    lp = _Loop(session, quantity, variables, components, model)
+    T = lp.targets(targets)
+    K = len(T)
+    Y = np.zeros_like(T)
+    X = np.zeros((K, len(lp.scale)))
+    dt, its, nf = np.zeros(K), np.zeros(K, int), np.zeros(K, int)
+    Y[0], X[0] = lp.y(), lp.x()
+    for k in range(1, K):
+        t0 = time.perf_counter()
+        dx = least_squares_step(lp.jacobian(), gain * (T[k] - Y[k - 1]), lp.scale, damping)
+        st, _ = lp.step(X[k - 1], dx, max_halvings)
+        Y[k], X[k] = lp.y(), lp.x()
+        dt[k] = time.perf_counter() - t0
+        its[k], nf[k] = st.iterations, st.factorizations
+    commands = dict(zip(lp.names, np.split(X, lp.split, axis=1)))
+    return Tracking(T, Y, commands, np.linalg.norm(Y - T, axis=1), dt, its, nf)
+
+
+@dataclass
+class Plan:
+    """The record of :func:`plan`.
+
+    Attributes
+    ----------
+    targets, achieved : (K, m) ndarray
+        Targets and the quantity reached at every sample.
+    commands : dict
+        Variable name -> (K, size): the planned command trajectory.
+    misfits : (K,) ndarray
+        The largest component of |achieved - target| per sample; ``reached``: misfit <= tolerance.
+    iterations : (K,) ndarray
+        Gauss-Newton iterations (Jacobians) per sample; ``updates``: warm updates per sample.
+    tolerance : float
+        The tolerance asked; ``time`` [s]; ``message``: all reached, or which samples were not.
+
+    Example
+    -------
+    >>> Plan(np.zeros((1, 1)), np.zeros((1, 1)), {}, np.zeros(1), np.ones(1, bool), np.zeros(1), np.zeros(1),
+    ...      1e-3).all_reached
+    True
+    """
+    targets: np.ndarray
+    achieved: np.ndarray
+    commands: dict
+    misfits: np.ndarray
+    reached: np.ndarray
+    iterations: np.ndarray
+    updates: np.ndarray
+    tolerance: float
+    time: float = 0.0
+    message: str = field(default="")
+
+    @property
+    def all_reached(self):
+        return bool(np.all(self.reached))
+
+
+def plan(session, quantity, targets, tolerance, variables=None, components=None, max_iter=20, damping=0.0,
+         extrapolate=True, max_halvings=6):
+    """Plan the commands that put ``quantity`` (its ``components``) on every target of
+    ``targets`` (K, m), each an inverse problem warm-started from the one before (module
+    docstring); the session ends at the last sample.
+
+    Parameters
+    ----------
+    tolerance : float
+        The largest misfit component that counts as reached (the quantity's units).
+    max_iter : int
+        Gauss-Newton iterations per sample.
+
+    Returns
+    -------
+    Plan
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import Problem, Material, mesh
+    >>> from core_se3.design import LoadMagnitude
+    >>> from core_se3.control import Session
+    >>> p = Problem(mesh.rectangle(10.0, 1.0, 8, 1), Material(1.2e6, 0.0, 0.1))
+    >>> p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 0.1)); p.add_probe("tip", "x1")
+    >>> s = Session(p, 1.0, [LoadMagnitude(p, p.loads[0], name="P")])
+    >>> z0 = s.state.probes["tip"]["x"][2]
+    >>> pl = plan(s, "tip", [[z0 + 0.5], [z0 + 1.0]], 1e-9, components=[2])
+    >>> pl.all_reached, bool(pl.misfits.max() <= 1e-9)
+    (True, True)
+    """
+    if not (np.isfinite(tolerance) and tolerance > 0):
+        raise OptionError(f"plan: the tolerance must be positive and finite, got {tolerance!r}")
+    t0 = time.perf_counter()
+    lp = _Loop(session, quantity, variables, components)
+    T = lp.targets(targets)
+    K = len(T)
+    Y, X = np.zeros_like(T), np.zeros((K, len(lp.scale)))
+    mis, its, ups = np.zeros(K), np.zeros(K, int), np.zeros(K, int)
+    for k in range(K):
+        if extrapolate and k >= 2:
+            try:
+                lp.command(2 * X[k - 1] - X[k - 2])
+                ups[k] += 1
+            except ControlError:
+                pass                                   # start from the last sample's solution
+        x, y = lp.x(), lp.y()
+        e = np.abs(y - T[k]).max()
+        while e > tolerance and its[k] < max_iter:
+            its[k] += 1
+            dx = least_squares_step(lp.jacobian(), T[k] - y, lp.scale, damping)
+            a = 1.0
+            for _ in range(max_halvings + 1):
+                try:
+                    lp.command(x + a * dx)
+                    ups[k] += 1
+                    e_new = np.abs(lp.y() - T[k]).max()
+                except ControlError:
+                    e_new = np.inf
+                if e_new < e:
+                    break
+                a /= 2
+            else:
+                lp.command(x)                          # back to the best point of this sample
+                break
+            x, y, e = lp.x(), lp.y(), e_new
+        Y[k], X[k], mis[k] = y, x, e
+    reached = mis <= tolerance
+    bad = np.nonzero(~reached)[0]
+    msg = (f"all {K} samples within {tolerance:g}" if not len(bad) else
+           f"{len(bad)} of {K} samples not reached (first: sample {bad[0]}, misfit {mis[bad[0]]:.3g} > {tolerance:g})")
+    commands = dict(zip(lp.names, np.split(X, lp.split, axis=1)))
+    return Plan(T, Y, commands, mis, reached, its, ups, float(tolerance), time.perf_counter() - t0, msg)

@@ -1,0 +1,88 @@
+"""The controls of a control session (:class:`ControlOptions`), held once.
+
+Example
+-------
+>>> ControlOptions().max_iter, ControlOptions(max_splits=4).max_splits
+(16, 4)
+>>> ControlOptions(path_tolerance=-1.0)
+Traceback (most recent call last):
+...
+core_se3.errors.OptionError: ControlOptions.path_tolerance must be in (0, inf), got -1.0
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+
+import numpy as np
+
+from ..errors import OptionError
+
+__all__ = ["ControlOptions"]
+
+# field -> (low, high, open interval)
+_RANGES = dict(rtol=(0.0, 1.0, True), dtol=(0.0, 1.0, True), max_iter=(1, 1000, False),
+               max_factorizations=(1, 100, False), max_splits=(0, 50, False), anderson=(0, 50, False),
+               max_turn=(0.0, np.pi, True), path_tolerance=(0.0, np.inf, True))
+
+
+@dataclass(frozen=True)
+class ControlOptions:
+    """Controls of a session's warm updates (``control.Session``).
+
+    Attributes
+    ----------
+    rtol, dtol : float
+        The convergence test of the solver (``solvers.convergence``): relative residual
+        <= max(rtol, round-off floor) and last increment <= dtol ell; with the held (modified
+        Newton) factorisation also the error left after it, dn c / (1 - c) <= dtol (c the
+        observed contraction).  Default 1e-10 each, as ``NewtonOptions``.
+    max_iter : int
+        Iterations (back-substitutions) on the held factors per try of a sub-step (default 16:
+        on the gripper an iteration costs about a sixth of a factorisation and its tangent);
+        beyond it, or when an increment is longer than the predictor (divergence), the
+        sub-step starts again with the tangent factored at its start, or, if the held factors
+        were made there, is split.
+    anderson : int
+        Memory of the Anderson acceleration of the corrector (``control.corrector``; default 5,
+        0: plain modified Newton).
+    max_factorizations : int
+        Fresh factorisations per sub-step before it counts as failed (default 3).
+    max_splits : int
+        Halvings of a command change before the command is refused (default 10).
+    max_turn : float
+        The largest rotation [rad] of a node that one predictor may make (default 0.5): a
+        longer step is split before it is tried.
+    path_tolerance : float
+        A sub-step whose converged increment differs from its predictor by more than this
+        fraction of the predictor left the path (default 0.5): it is tried again with a fresh
+        factorisation at its start, then split; refused after ``max_splits``.
+    linear_solver : str or None
+        None: the problem's.
+
+    Example
+    -------
+    >>> ControlOptions(rtol=1e-12).rtol
+    1e-12
+    """
+    rtol: float = 1e-10
+    dtol: float = 1e-10
+    max_iter: int = 16
+    max_factorizations: int = 3
+    anderson: int = 5
+    max_splits: int = 10
+    max_turn: float = 0.5
+    path_tolerance: float = 0.5
+    linear_solver: str | None = None
+
+    def __post_init__(self):
+        for f in fields(self):
+            if f.name not in _RANGES:
+                continue
+            v = getattr(self, f.name)
+            lo, hi, open_ = _RANGES[f.name]
+            whole = isinstance(f.default, int)
+            ok = isinstance(v, (int, np.integer) if whole else (int, float, np.floating, np.integer)) and \
+                not isinstance(v, bool) and ((lo < v < hi) if open_ else (lo <= v <= hi))
+            if not ok:
+                br = "()" if open_ else "[]"
+                raise OptionError(f"ControlOptions.{f.name} must be in {br[0]}{lo:g}, {hi:g}{br[1]}, got {v!r}")

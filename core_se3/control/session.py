@@ -1,0 +1,395 @@
+"""A control session: an equilibrium held with its factorisation, moved warm to new commands.
+
+    s = Session.from_scenario("examples/gripper.toml")          # cold solve once, factor once
+    st = s.update(coil=[0.0, 0.0, 0.062])                         # warm, on the held factors
+    st.g, st.probes["tip_px"]["x"]
+    J = s.jacobian(["tip_px"], ["coil"])                          # d tip / d B, same factors
+
+An update follows the straight command path p(t) = p0 + t (p1 - p0), t from 0 to 1, in
+sub-steps, each a predictor and a corrector on the held factors (``control.corrector``); a
+failed sub-step (the path test, the node-turn limit, no convergence) is halved, and after
+``max_splits`` halvings the command is refused with a ControlError that names the reason --
+the session then stays where it was.  Nothing is rebuilt that did not change: the variables
+are assigned in place (the compiled loads read them at call time), the sparsity pattern, the
+compiled evaluation and the factors are kept, and probes are computed only when read.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import fields
+
+import numpy as np
+
+from ..design import ProbePosition, Quantity, Variable, sensitivity
+from ..errors import ControlError, OptionError
+from ..model.base import overrides
+from ..solvers import NewtonOptions, newton_solve
+from ..solvers.newton import MAX_LOAD_TURN
+from ..solvers.options import split_options, unknown_keywords
+from .commands import Commands, scenario_variables
+from .corrector import Corrector
+from .options import ControlOptions
+
+__all__ = ["Session", "State"]
+
+_HOOKS = ("update_multipliers", "limit_increment", "start_error")
+
+
+class State:
+    """A converged state of a session.
+
+    Attributes
+    ----------
+    g : (n, 4, 4) ndarray
+        The nodal frames; ``lam``: the load factor; ``values``: variable name -> values.
+    iterations, factorizations, substeps, splits : int
+        What the update took (back-substitutions, fresh factorisations, sub-steps of the
+        command path, halvings); ``time`` [s].
+    probes : dict
+        name -> dict(x (3,) position, u (3,) displacement, R (3, 3) rotation) of every probe
+        of the problem, computed at the first read.
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(2.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01)); p.add_probe("tip", "x1")
+    >>> State(p, p.mesh.g0, 0.0, {}).probes["tip"]["x"].tolist()
+    [2.0, 0.0, 0.0]
+    """
+
+    def __init__(self, problem, g, lam, values, iterations=0, factorizations=0, substeps=0, splits=0, time=0.0):
+        self.problem, self.g, self.lam, self.values = problem, g, float(lam), values
+        self.iterations, self.factorizations, self.substeps, self.splits = iterations, factorizations, substeps, splits
+        self.time = time
+        self._probes = None
+
+    @property
+    def probes(self):
+        if self._probes is None:
+            g0 = self.problem.mesh.g0
+            out = {}
+            for name, pr in self.problem.probes.items():
+                x, R = pr.state(self.g)
+                out[name] = dict(x=x, u=x - pr.state(g0)[0], R=R)
+            self._probes = out
+        return self._probes
+
+
+def _check_problem(problem):
+    """ControlError for what a session cannot hold."""
+    if problem.element.stateful:
+        raise ControlError(f"a control session needs a path-independent element; {problem.element_name!r} keeps an "
+                           "incremental strain (use the default element)")
+    hooked = [ld for ld in problem.loads if any(overrides(ld, h) for h in _HOOKS)]
+    if hooked:
+        raise ControlError(f"a control session does not support the load {hooked[0].name!r} (contact: its "
+                           "multipliers and step cap need load stepping, Problem.solve)")
+
+
+class Session:
+    """An equilibrium of ``problem`` at the load factor ``lam`` with its factorisation, moved warm
+    by :meth:`update` (module docstring).
+
+    Parameters
+    ----------
+    problem : core_se3.Problem
+        The problem (supports checked here).
+    lam : float
+        The load factor of the first equilibrium.
+    variables : sequence of core_se3.design.Variable
+        The commands, by their names (``FieldVariable(p, field, name="coil")``, ...).
+    g : (n, 4, 4) array, optional
+        A start near the equilibrium (default: a cold solve by load stepping from the flat state
+        in ``steps`` steps, default the problem's ``solve_defaults`` or 10).
+    options : ControlOptions, optional
+        The controls; keywords override its fields.
+
+    The session owns the values of its variables: change them by :meth:`update` (a change made
+    on the problem behind its back is seen by the corrector's residuals, but not by the state's
+    ``values`` or the predictor's start).
+
+    Attributes
+    ----------
+    state : State
+        The current equilibrium (``g``, ``lam``, ``values`` are its).
+    stats : dict
+        Totals: updates, refused, substeps, splits, iterations (``counts``: residual evaluations,
+        factorisations, back-substitutions).
+
+    Example
+    -------
+    A cantilever under a tip force: a warm update of the force's magnitude equals the cold solve.
+
+    >>> import numpy as np
+    >>> from core_se3 import Problem, Material, mesh
+    >>> from core_se3.design import LoadMagnitude
+    >>> p = Problem(mesh.rectangle(10.0, 1.0, 8, 1), Material(1.2e6, 0.0, 0.1))
+    >>> p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 1.0)); p.add_probe("tip", "x1")
+    >>> s = Session(p, 1.0, [LoadMagnitude(p, p.loads[0], name="P")])
+    >>> st = s.update(P=1.01)                             # on the factors of the first equilibrium
+    >>> cold = p.solve(steps=10).final.probes["tip"]["u"]
+    >>> bool(np.abs(st.probes["tip"]["u"] - cold).max() < 1e-8 * 10.0), st.factorizations
+    (True, 0)
+    """
+
+    def __init__(self, problem, lam=1.0, variables=(), g=None, options=None, steps=None, **kw):
+        opts, kw = split_options(ControlOptions, options, dict(kw))
+        unknown_keywords("Session", kw, [f.name for f in fields(ControlOptions)])
+        if not np.isfinite(lam):
+            raise OptionError(f"Session: the load factor must be finite, got {lam!r}")
+        _check_problem(problem)
+        problem.check_supports()
+        self.problem, self.options = problem, opts
+        self.commands = Commands(variables)
+        self._turning = [ld for ld in problem.loads if overrides(ld, "direction_turn")]
+        self._stamp = 0
+        self._corr = Corrector(problem, opts)
+        self.stats = dict(updates=0, refused=0, substeps=0, splits=0, iterations=0)
+        t0 = time.perf_counter()
+        g = self._cold(lam, steps) if g is None else np.array(g, float)
+        if g.shape != problem.mesh.g0.shape:
+            raise OptionError(f"Session: g must have the shape {problem.mesh.g0.shape}, got {g.shape}")
+        out = self._corr.step(g, lam, self._stamp, check_path=False)
+        if not out.ok:
+            raise ControlError(f"the start is not an equilibrium the corrector reaches at load factor {lam:g}: "
+                               f"{out.reason}")
+        self.state = State(problem, out.g, lam, self.commands.values(), out.iterations, out.factorizations,
+                           1, 0, time.perf_counter() - t0)
+        self._r = out.residual            # the free residual at the state (the next predictor's start)
+
+    @classmethod
+    def from_scenario(cls, scn, lam=None, variables=None, **kw):
+        """The session of a scenario (a path or a ``core_se3.scenario.Scenario``) at ``lam``
+        (default its [solver] lam_end), with ``variables`` (default
+        ``control.commands.scenario_variables``: its fields by name, its loads as load0, ...);
+        rtol, dtol and the cold solve's steps from its [solver] unless given.
+
+        Example
+        -------
+        >>> from core_se3 import scenario
+        >>> scn = scenario.loads('''
+        ... [mesh]
+        ... generator = "rectangle"
+        ... L = 10.0
+        ... width = 1.0
+        ... nx = 8
+        ... ny = 1
+        ... [material]
+        ... E = 1.2e6
+        ... nu = 0.0
+        ... h = 0.1
+        ... [[supports]]
+        ... type = "clamp"
+        ... edge = "x0"
+        ... [[loads]]
+        ... type = "edge_force"
+        ... edge = "x1"
+        ... force = [0.0, 0.0, 0.5]
+        ... ''')
+        >>> s = Session.from_scenario(scn)
+        >>> list(s.values), s.update(load0=2.0).lam
+        (['load0'], 1.0)
+        """
+        from ..scenario import Scenario, load
+        if not isinstance(scn, Scenario):
+            scn = load(scn)
+        sv = scn.solver
+        kw.setdefault("rtol", sv["rtol"])
+        kw.setdefault("dtol", sv["dtol"])
+        kw.setdefault("steps", sv["steps"])
+        variables = scenario_variables(scn) if variables is None else variables
+        return cls(scn.problem, sv["lam_end"] if lam is None else lam, variables, **kw)
+
+    # ------------------------------------------------------------------ the state ------
+    @property
+    def g(self):
+        return self.state.g
+
+    @property
+    def lam(self):
+        return self.state.lam
+
+    @property
+    def values(self):
+        return self.state.values
+
+    @property
+    def variables(self):
+        return self.commands.variables
+
+    @property
+    def counts(self):
+        """Residual evaluations, factorisations and back-substitutions so far."""
+        return dict(self._corr.counts)
+
+    def close(self):
+        """Release the factors."""
+        self._corr.close()
+
+    def _cold(self, lam, steps):
+        d = self.problem.solve_defaults
+        steps = steps or (d.get("steps") if isinstance(d.get("steps"), int) else None) or 10
+        opts = NewtonOptions(rtol=self.options.rtol, dtol=self.options.dtol,
+                             linear_solver=self.options.linear_solver or self.problem.linear_solver)
+        if lam == 0.0:
+            return self.problem.mesh.g0.copy()
+        return newton_solve(self.problem, steps=steps, lam_end=lam, options=opts).final.g
+
+    def _assign(self, values, g=None, lam=None):
+        """Assign values; with (g, lam), return the exact change of the free residual there
+        (None if not linear: ``Commands.assign``)."""
+        dr = self.commands.assign(values, None if g is None else self.problem, g, lam)
+        self._stamp += 1
+        return dr
+
+    # ------------------------------------------------------------------ updates --------
+    def update(self, lam=None, **values):
+        """Move the equilibrium to the load factor ``lam`` (default: unchanged) and new values of
+        variables (``name=values``; the others keep theirs); returns the new :class:`State`.
+
+        The command path is followed in sub-steps (module docstring); OptionError for a bad
+        command (unknown name, wrong size, not finite, outside the bounds), ControlError when
+        the path cannot be followed (the session then stays at its state before the command).
+
+        Example
+        -------
+        >>> from core_se3 import Problem, Material, mesh
+        >>> from core_se3.design import LoadMagnitude
+        >>> p = Problem(mesh.rectangle(10.0, 1.0, 8, 1), Material(1.2e6, 0.0, 0.1))
+        >>> p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 1.0))
+        >>> s = Session(p, 0.5, [LoadMagnitude(p, p.loads[0], name="P")])
+        >>> st = s.update(lam=1.0, P=2.0)
+        >>> st.lam, st.values["P"].tolist(), st.substeps >= 1
+        (1.0, [2.0], True)
+        """
+        t0 = time.perf_counter()
+        lam0 = self.lam
+        lam1 = lam0 if lam is None else lam
+        if not isinstance(lam1, (int, float, np.floating, np.integer)) or not np.isfinite(lam1):
+            raise OptionError(f"update: the load factor must be a finite number, got {lam!r}")
+        lam1 = float(lam1)
+        new = self.commands.parse(values)
+        x1 = {k: x for k, x in new.items() if not np.array_equal(x, self.values[k])}
+        if not x1 and lam1 == lam0:
+            return self.state
+        if lam1 != lam0 and self.problem.has_prescribed_motion:
+            raise ControlError("update(lam=...) with a prescribed motion of the load factor (rotate_edge, prescribe) "
+                               "is not supported by a session; change the variables only, or solve with Problem.solve")
+        x0 = {k: self.values[k] for k in x1}
+        try:
+            g, r, counts = self._follow(lam0, lam1, x0, x1)
+        except BaseException:
+            self._assign(x0)                 # refused or interrupted: the values of the state kept
+            raise
+        self.state = State(self.problem, g, lam1, self.commands.values(), *counts, time.perf_counter() - t0)
+        self._r = r
+        self._count(*counts, updates=1)
+        return self.state
+
+    def _follow(self, lam0, lam1, x0, x1):
+        """Follow the command path p0 -> p1 in sub-steps (module docstring): (frames, free
+        residual or None, (iterations, factorisations, substeps, splits)); ControlError when
+        refused."""
+        g, t, dt = self.g, 0.0, 1.0
+        its = nf = subs = splits = 0
+        r, lam_r = self._r, lam0            # the free residual at (g, lam_r) and the assigned values
+        while t < 1.0:
+            t_try = min(1.0, t + dt)
+            lam_t = lam1 if t_try == 1.0 else lam0 + t_try * (lam1 - lam0)
+            if self._turning and lam1 != lam0:
+                turn = max(ld.direction_turn(g, lam0 + t * (lam1 - lam0), lam_t) for ld in self._turning)
+                if turn > MAX_LOAD_TURN:            # a turning field: the solver's split rule
+                    dt = (t_try - t) / max(2.0, np.ceil(turn / (0.95 * MAX_LOAD_TURN)))
+                    continue
+            linear = r is not None and lam_t == lam_r
+            dr = self._assign(x1 if t_try == 1.0 else {k: x0[k] + t_try * (x1[k] - x0[k]) for k in x1},
+                              g if linear else None, lam_t)
+            r = r + dr if linear and dr is not None else None
+            out = self._corr.step(g, lam_t, self._stamp, r0=r)
+            its, nf, subs = its + out.iterations, nf + out.factorizations, subs + 1
+            if out.ok:
+                g, t, r, lam_r = out.g, t_try, out.residual, lam_t
+                if out.iterations <= 6:
+                    dt = min(2.0 * dt, 1.0)
+                continue
+            splits += 1
+            dt /= 2.0
+            if dt < 2.0 ** -self.options.max_splits:
+                self._count(its, nf, subs, splits, refused=1)
+                at = self._describe(lam0, lam1, x0, x1, t)
+                raise ControlError(
+                    f"update refused: {self._describe(lam0, lam1, x0, x1)} could not be followed beyond {at} "
+                    f"(t = {t:.6g} of the command path; the sub-step to t = {t_try:.6g} failed after "
+                    f"{self.options.max_splits} halvings): {out.reason}.  The session stays at its state "
+                    "before the command; send a smaller change, or trace the path with arc length "
+                    "(core_se3.solvers.arc_length) if it passes a limit point there")
+        return g, r, (its, nf, subs, splits)
+
+    def _count(self, its, nf, subs, splits, updates=0, refused=0):
+        st = self.stats
+        for k, v in (("updates", updates), ("refused", refused), ("substeps", subs), ("splits", splits),
+                     ("iterations", its)):
+            st[k] += v
+
+    @staticmethod
+    def _describe(lam0, lam1, x0, x1, t=None):
+        """The command p0 -> p1 (or, with t, the point p0 + t (p1 - p0) of its path) in words."""
+        def show(a):
+            return np.round(a, 12).tolist() if np.size(a) > 1 else float(np.round(np.ravel(a)[0], 12))
+        if t is not None:
+            parts = [f"{k} = {show(x0[k] + t * (x1[k] - x0[k]))}" for k in x1]
+            return ", ".join(([f"load factor {lam0 + t * (lam1 - lam0):.6g}"] if lam1 != lam0 else []) + parts)
+        parts = [f"{k} {show(x0[k])} -> {show(x1[k])}" for k in x1]
+        return "the command " + ", ".join(([f"load factor {lam0:g} -> {lam1:g}"] if lam1 != lam0 else []) + parts)
+
+    # ------------------------------------------------------------------ sensitivities --
+    def jacobian(self, quantities, variables=None, method="auto"):
+        """The total derivatives of ``quantities`` by ``variables`` at the current state
+        (``design.sensitivity``) on the session's factors: one back-substitution per variable
+        component (direct) or per quantity component (adjoint, transposed solves), whichever is
+        fewer; the factors are made afresh only when the held ones are not at this state.
+
+        Parameters
+        ----------
+        quantities : sequence
+            ``design`` quantities, or probe names (their positions, ``ProbePosition``).
+        variables : sequence, optional
+            Variable names or ``design`` variables (default all of the session's).
+        method : str
+            'auto', 'direct' or 'adjoint'.
+
+        Returns
+        -------
+        core_se3.design.Sensitivity
+            ``values`` and ``jacobian`` (nq, nx).
+
+        Example
+        -------
+        >>> from core_se3 import Problem, Material, mesh
+        >>> from core_se3.design import LoadMagnitude
+        >>> p = Problem(mesh.rectangle(10.0, 1.0, 16, 1), Material(1.2e6, 0.0, 0.1))
+        >>> p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 1e-6)); p.add_probe("tip", "x1")
+        >>> s = Session(p, 1.0, [LoadMagnitude(p, p.loads[0], name="P")])
+        >>> J = s.jacobian(["tip"]).jacobian                  # d tip / dP = P L^3 / (3 EI): linear range
+        >>> round(float(J[2, 0]) / (1e-6 * 10.0 ** 3 / 300), 2)
+        1.0
+        """
+        qs = [self.quantity(q) for q in quantities]
+        vs = list(self.variables.values()) if variables is None else \
+            [v if isinstance(v, Variable) else self.commands.lookup(v) for v in variables]
+        c = self._corr
+        if c.F is None or c.F_g is not self.g or c.F_stamp != self._stamp:
+            c.factor(self.g, self.lam, self._stamp)
+        return sensitivity(self.problem, self.g, self.lam, qs, vs, method, factorization=c.F)
+
+    def quantity(self, q):
+        """A ``design`` quantity as given, or the position of the probe named q
+        (``ProbePosition``, made once per name)."""
+        if isinstance(q, Quantity):
+            return q
+        if isinstance(q, str):
+            cache = self.__dict__.setdefault("_probe_quantities", {})
+            if q not in cache:
+                cache[q] = ProbePosition(self.problem, q)
+            return cache[q]
+        raise OptionError(f"jacobian: a quantity is a core_se3.design Quantity or a probe name, got {q!r}")
