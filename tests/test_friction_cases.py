@@ -139,3 +139,20 @@ def test_a_free_shell_may_rest_on_a_rough_floor_but_not_on_a_smooth_one(tmp_path
     assert abs(res.doc["steps"][-1]["contact"]["floor"]["force"][2] / weight - 1) < 1e-8
     with pytest.raises(CoreSE3Error, match="rigid-body motion free .translation along"):
         runner.run(scenario.from_dict(_free_strip(0.0), default_name="free"), out=str(tmp_path / "smooth"))
+
+
+def test_friction_is_refused_on_distributed_runs():
+    """A rough obstacle split over ranks (what mpirun does to each load) is refused with a
+    ContactError naming the obstacle and the fix (one process), never run with friction lost;
+    the same obstacle without friction is split."""
+    from core_se3 import Material, Problem, mesh
+    from core_se3.errors import ContactError
+    from core_se3.parallel.local import subdomain
+    from core_se3.parallel.localize import localize_load
+    p = Problem(mesh.rectangle(2.0, 1.0, 2, 1), Material(1e4, 0.0, 0.02))
+    smooth = p.add_obstacle("half_space", point=(0, 0, -0.5), normal=(0, 0, 1), name="smooth")
+    rough = p.add_obstacle("half_space", point=(0, 0, -0.5), normal=(0, 0, 1), name="rough", friction=0.3)
+    s = subdomain(p.mesh, np.array([0, 1]), rank=1, size=2)
+    assert localize_load(smooth, s)[0].nodes.tolist() == [0, 1]
+    with pytest.raises(ContactError, match="'rough': friction is not distributed over ranks yet; run it on one"):
+        localize_load(rough, s)
