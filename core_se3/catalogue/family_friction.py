@@ -9,8 +9,10 @@ the stick/slip counts of the rough obstacle) and ``measures``:
   bound sum_i N_i (n_z,i + mu sqrt(1 - n_z,i^2)) and mu sum_i N_i of the normal forces N_i
   (normals n_i from the sphere at the contact points, z the pull);
 * the walkers: the centroid's displacement along x, the feet's, the highest point; the
-  document's ``walk`` has the displacement of every cycle (the centroid between cycle ends) and
-  the quasi-static check of the last cycle (``quasi_static``).
+  document's ``walk`` has the displacement of every cycle (the centroid between cycle ends), the
+  largest motion of a node over one stored step (a snap shows as a good part of L: the
+  solver's limit check is re-based where contact changes, so it does not see one) and the
+  quasi-static check of the last cycle (``quasi_static``).
 """
 from __future__ import annotations
 
@@ -203,7 +205,14 @@ def run(case, p, prob, steps, **kw):
         xs = [doc["steps"][i]["measures"]["centroid_ux"] for i in ends]
         per = [b - a for a, b in zip(xs, xs[1:])]
         last = [st.g for st in res.steps[ends[-2]:ends[-1] + 1]] if len(ends) > 1 else []
+        # the largest motion of a node over one stored step: a snap (the strip standing up on one
+        # foot) moves nodes by a good part of L in one step however small the steps are
+        x = np.array([st.g[:, :3, 3] for st in res.steps])
+        jump = np.linalg.norm(np.diff(x, axis=0), axis=2).max(1)
+        k = int(np.argmax(jump))
         doc["walk"] = dict(per_cycle=per, per_cycle_over_L=[v / p["L"] for v in per], steps_per_cycle=steps,
+                           largest_step_motion_over_L=float(jump[k] / p["L"]),
+                           largest_step_motion_at=float(res.steps[k + 1].load_factor),
                            quasi_static=quasi_static_check(prob, p, last, 1.0 / steps) if len(last) > 2 else None)
     return doc, res
 
@@ -227,7 +236,9 @@ def report(doc):
     elif "walk" in doc:
         d = doc["walk"]
         lines.append("net displacement per cycle: " + ", ".join(f"{v:+.6g}" for v in d["per_cycle"])
-                     + f" mm ({d['steps_per_cycle']} steps per cycle)")
+                     + f" mm ({d['steps_per_cycle']} steps per cycle); largest motion of a node in one step "
+                     f"{d['largest_step_motion_over_L']:.3g} L (at load factor {d['largest_step_motion_at']:.4g}: "
+                     "above about 0.25 L the strip snapped)")
         q = d.get("quasi_static")
         if q:
             lines.append(f"quasi-static at a {q['period']:g} s cycle: largest |a|/g {q['largest_acceleration_over_g']:.2e} "
