@@ -1,7 +1,9 @@
-"""The four recipes of docs/EXTENDING.md, run as written there, each in a fresh interpreter from
+"""The eight recipes of docs/EXTENDING.md, run as written there, each in a fresh interpreter from
 outside the package: a new load type, a new element, a new applied field, a new benchmark case,
-each through the public extension points only (its checks are the recipe's own assertions:
-exact solutions, convergence rates, finite-difference tangents)."""
+a new obstacle shape, a new material law, a new support kind and a new design variable, each
+through the public extension points only (its checks are the recipe's own assertions: exact
+solutions, convergence rates, finite-difference tangents).  Recipes 5 to 8 are plugin files: each
+runs a scenario that names the file itself in ``plugins`` through the command line."""
 import os
 import re
 import subprocess
@@ -26,10 +28,13 @@ def _recipes():
 RECIPES = _recipes()
 
 
-def test_the_document_has_four_recipes():
-    assert sorted(RECIPES) == ["Recipe 1", "Recipe 2", "Recipe 3", "Recipe 4"]
+def test_the_document_has_eight_recipes():
+    assert sorted(RECIPES) == [f"Recipe {i}" for i in range(1, 9)]
     assert all("register" in code or "add_case" in code for code in RECIPES.values())
     assert all("core_se3" in code and "assert" in code for code in RECIPES.values())
+    for i in range(5, 9):                 # plugins used from a scenario file through the command line
+        code = RECIPES[f"Recipe {i}"]
+        assert "plugins = [" in code and '"-m", "core_se3"' in code and 'if __name__ == "__main__":' in code
 
 
 @pytest.mark.parametrize("name", sorted(RECIPES))

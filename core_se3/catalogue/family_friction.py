@@ -60,8 +60,13 @@ def walker_problem(p, mesh=(20, 1), element="default", linear_solver="auto"):
     scale = max(p["B0"], p["Bx"], 1e-300)
 
     def direction(lam):
-        B = path(lam)
-        return B if np.any(B != 0.0) else np.array([0.0, 0.0, 1.0])
+        # where the field is zero (the start) its direction is the one it takes next: the
+        # direction is continuous (a jump would be split into sub-steps without end)
+        for at in (lam, lam + 1e-9, 0.5 + 1e-9, 1.0):
+            B = path(at)
+            if np.any(B != 0.0):
+                return B
+        return np.array([0.0, 0.0, 1.0])
     field = UniformField((0.0, 0.0, scale), scale=lambda lam: float(np.linalg.norm(path(lam))) / scale,
                          direction=direction)
     prob.add_magnetic(Br, field, mu0=MU0_MM)

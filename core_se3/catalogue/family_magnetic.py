@@ -13,6 +13,7 @@
 from __future__ import annotations
 
 import dataclasses
+import logging
 import time
 from math import cos, pi, radians, sin
 
@@ -96,6 +97,18 @@ def critical_load(prob, lam_grid, rtol=1e-6, max_refine=20, **solve_kw):
     refinement).  No Newton solve is asked to converge *at* the singular point.  Returns
     dict(lam, history=[(lam, eig), ...]); raises LoadError when no sign change occurs.
     """
+    # the trivial path past the bifurcation, knowingly: no stop, and no warning of each crossing
+    solve_kw = dict(solve_kw, limit_check=False)
+    newton_log = logging.getLogger("core_se3.solvers.newton")
+    level = newton_log.level
+    newton_log.setLevel(logging.ERROR)
+    try:
+        return _monitor(prob, lam_grid, rtol, max_refine, solve_kw)
+    finally:
+        newton_log.setLevel(level)
+
+
+def _monitor(prob, lam_grid, rtol, max_refine, solve_kw):
     g_prev, lam_prev, e_prev = prob.mesh.g0.copy(), 0.0, None
     hist = []
     for lam in lam_grid:

@@ -67,6 +67,7 @@ def build_problem(case, p, mesh=None, element="default", linear_solver="auto"):
         else:
             raise ValueError(f"unknown load kind {ld.kind!r} of a generic case")
     prob.add_probe("tip", "x1")
+    prob.solve_defaults.update(case.extra.get("solve", {}))      # e.g. torsion: limit_check off
     return prob
 
 
@@ -160,9 +161,14 @@ def case_document(case, p, prob, res, reference_case=None):
             s["error"] = None if np.isnan(e) else float(e)
         reference = dict(entry=entry, block=block, error=err, error_at_load=at, file="elastica.json")
     from ..scenario.provenance import problem_provenance
+    extra = {}
+    if res.critical_points:             # passed by load control with limit_check off (torsion)
+        extra["critical_points"] = [dict(kind=c.kind, load_factor=float(c.lam), bracket=list(c.lam_bracket),
+                                         step=int(c.step), description=c.describe()) for c in res.critical_points]
     return result_document(case.name, "core_se3", prob.element_name,
                            {k: dict(value=v, unit=case.units.get(k, "")) for k, v in p.items()},
-                           prob.mesh, steps, res.timings, reference, provenance=problem_provenance(prob, res))
+                           prob.mesh, steps, res.timings, reference, provenance=problem_provenance(prob, res),
+                           **extra)
 
 
 def edge_wrench(prob, g, edge, point):

@@ -20,8 +20,8 @@ from ..errors import CoreSE3Error
 from ..fem import ELEMENTS
 from ..results.document import ROUNDOFF_NOTE, format_backends, format_residual
 from .common import error_code as _error_code, output_error as _output_error, progress_on as _progress_on, whole_number
-from .scenario import (add_parsers, design_run, friction_cells, friction_obstacles, scenario_run, scenario_sweep,
-                       step_table as _step_table, warmup)
+from .scenario import (add_parsers, design_run, friction_cells, friction_obstacles, kinds, scenario_run,
+                       scenario_sweep, step_table as _step_table, warmup)
 
 
 def _parse_mesh(s):
@@ -239,7 +239,7 @@ def main(argv=None):
     if getattr(args, "verbose", False):
         logging.basicConfig(level=logging.INFO, format="%(message)s", stream=sys.stderr)
         logging.getLogger("core_se3").setLevel(logging.INFO)
-    commands = dict(run=scenario_run, design=design_run, sweep=scenario_sweep, warmup=warmup)
+    commands = dict(run=scenario_run, design=design_run, sweep=scenario_sweep, warmup=warmup, kinds=kinds)
     if args.cmd in commands:
         return commands[args.cmd](args)
     if args.cmd == "bench" and args.bcmd == "list":

@@ -9,7 +9,7 @@ from ..errors import CoreSE3Error
 from ..results.document import ROUNDOFF_NOTE, format_backends, format_residual
 from .common import error_code, interrupted, output_error, whole_number
 
-__all__ = ["add_parsers", "scenario_run", "scenario_sweep", "design_run", "warmup", "step_table"]
+__all__ = ["add_parsers", "scenario_run", "scenario_sweep", "design_run", "warmup", "step_table", "kinds"]
 
 
 def add_parsers(sub):
@@ -22,6 +22,7 @@ def add_parsers(sub):
                       help="start over even if --out holds a run (deletes only that run's files)")
     srun.add_argument("--check", action="store_true", help="only validate the scenario (and estimate its memory)")
     srun.add_argument("--strict", action="store_true", help="make the plausibility warnings errors")
+    _plugin(srun)
     _common(srun, "progress bar even when not on a terminal", "no progress bar, no summary")
     dsub = sub.add_parser("design", help="optimise the [design] of a scenario file (docs/DESIGN.md)")
     dsub.add_argument("scenario", help="SCENARIO.toml with a [design] section")
@@ -32,6 +33,7 @@ def add_parsers(sub):
     dsub.add_argument("--force", action="store_true", help="write into a directory of an earlier design")
     dsub.add_argument("-q", "--quiet", action="store_true", help="no progress, no summary")
     dsub.add_argument("-v", "--verbose", action="store_true", help="log every Newton (sub-)step")
+    _plugin(dsub)
     sw = sub.add_parser("sweep", help="run a scenario over a grid of values (one CSV and plot)")
     sw.add_argument("scenario", help="SCENARIO.toml")
     sw.add_argument("--set", action="append", metavar="KEY=v1,v2,...",
@@ -43,7 +45,41 @@ def add_parsers(sub):
     sw.add_argument("--strict", action="store_true", help="make the plausibility warnings errors")
     sw.add_argument("--progress", action="store_true", help="progress line even when not on a terminal")
     sw.add_argument("-q", "--quiet", action="store_true", help="no progress line, no summary")
+    _plugin(sw)
+    kinds = sub.add_parser("kinds", help="list the registered kinds of every section and their keys",
+                           epilog="sections: generator, law, supports, loads, fields, obstacles, variables, targets")
+    kinds.add_argument("section", nargs="?", default=None, help="only this section (e.g. loads)")
+    _plugin(kinds)
     sub.add_parser("warmup", help="compile the numba kernels once into their cache (scripts/setup.sh runs it)")
+
+
+def _plugin(p):
+    p.add_argument("--plugin", action="append", metavar="FILE", default=[],
+                   help="import FILE (a .py file, or a module name) first: its registered kinds "
+                        "(loads, obstacles, material laws, ...) become usable in the scenario; repeatable")
+
+
+def _plugins(args):
+    """Import the --plugin files (relative to the working directory) before the scenario."""
+    import os
+    from ..scenario.plugins import load_plugins
+    load_plugins(getattr(args, "plugin", None) or [], os.getcwd(), None, "--plugin")
+
+
+def kinds(args):
+    """``core-se3 kinds [SECTION]``: the registered kinds and their keys (with --plugin's)."""
+    from ..scenario.schema import describe_kinds
+    try:
+        _plugins(args)
+    except CoreSE3Error as exc:
+        return error_code(exc)
+    text = describe_kinds(args.section)
+    if not text:
+        print(f"error: no section matches {args.section!r} (generator, law, supports, loads, fields, obstacles, "
+              "variables, targets)", file=sys.stderr)
+        return 2
+    print(text)
+    return 0
 
 
 def _common(p, progress, quiet):
@@ -106,6 +142,7 @@ def scenario_run(args):
     if _contradiction(args):
         return 2
     try:
+        _plugins(args)
         scn = _load_quietly(args.scenario, args.strict)
     except CoreSE3Error as exc:
         return error_code(exc)
@@ -212,6 +249,7 @@ def design_run(args):
     from .. import scenario
     from ..scenario.design_runner import run_design
     try:
+        _plugins(args)
         scn = scenario.load(args.scenario)
         if "design" not in scn.spec:
             print(f"error: {args.scenario} has no [design] section (docs/DESIGN.md)", file=sys.stderr)
@@ -257,6 +295,7 @@ def scenario_sweep(args):
     if _contradiction(args):
         return 2
     try:
+        _plugins(args)
         scn = _load_quietly(args.scenario, args.strict)
         grid, where = _grid(args, scn)
         _preamble(scn, args.quiet)

@@ -6,12 +6,13 @@ import numpy as np
 
 from ..errors import DesignError, did_you_mean
 from ..fem import Material, RegionMaterial
+from ..fem.material_kinds import ISOTROPIC
 from .variables import Variable, region_elements
 
 __all__ = ["MaterialVariable", "MATERIAL_KEYS"]
 
 
-MATERIAL_KEYS = ("E", "nu", "h", "shear_factor", "drilling", "rho")
+MATERIAL_KEYS = ISOTROPIC.keys()          # the isotropic law's keys, in Material's order
 
 
 class MaterialVariable(Variable):

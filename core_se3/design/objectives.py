@@ -32,7 +32,7 @@ from .. import lie
 from ..errors import DesignError, did_you_mean
 from ..model import Probe
 
-__all__ = ["Quantity", "NodePosition", "ProbePosition", "Orientation", "RotationAngle", "Energy",
+__all__ = ["Quantity", "NodePosition", "ProbePosition", "Orientation", "RotationAngle", "AngleInDegrees", "Energy",
            "UserQuantity", "local_jacobian", "probe_frames"]
 
 
@@ -312,6 +312,36 @@ class RotationAngle(Quantity):
         row = self.axis @ lie.dexp_inv_so3(q)
         n = problem.mesh.n_nodes
         return sp.csr_matrix((row, (np.zeros(3, int), 6 * self.frame.node + 3 + np.arange(3))), shape=(1, 6 * n))
+
+
+class AngleInDegrees(Quantity):
+    """A :class:`RotationAngle` with its value, misfit and target in degrees (a scenario's angle
+    target: an angle goes in and comes out of a scenario in degrees, and its default scale is
+    1 rad = 57.3 deg, the Python API's, so that the objective is the same).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import Problem, Material, mesh, lie
+    >>> p = Problem(mesh.rectangle(2.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
+    >>> g = lie.exp(np.array([0, 0, 0, 0, -0.5, 0])) @ p.mesh.g0            # 0.5 rad about -y
+    >>> round(float(AngleInDegrees(p, node=2, target=30.0).value(p, g, 1.0)[0]), 6)   # 28.6479 - 30
+    -1.35211
+    """
+    DEGREE = 180.0 / np.pi
+
+    def __init__(self, problem, target=None, **kw):
+        self.angle = RotationAngle(problem, target=None if target is None else np.radians(target), **kw)
+        self.target, self.name, self.size = target, self.angle.name, 1
+
+    def value(self, problem, g, lam):
+        return self.DEGREE * self.angle.value(problem, g, lam)
+
+    def jacobian(self, problem, g, lam):
+        return self.DEGREE * self.angle.jacobian(problem, g, lam)
+
+    def explicit(self, problem, g, lam, variable):
+        return self.DEGREE * self.angle.explicit(problem, g, lam, variable)
 
 
 class Energy(Quantity):

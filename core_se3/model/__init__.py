@@ -20,6 +20,7 @@ from .contact import ContactLoad, add_obstacle
 from .probes import Probe
 from .problem import SOLVERS, Evaluation, Problem
 from .supports import LabSpring, LabTiltSpring, Prescribed, RotationComponentSpring
+from .support_kinds import SUPPORTS, SupportKind, register_support, support_kind
 from .verify import tangent_fd_check, zero_modes
 
 __all__ = ["Load", "LoadEvaluation", "LoadKind", "Param", "REQUIRED", "LOADS", "register_load",
@@ -30,4 +31,5 @@ __all__ = ["Load", "LoadEvaluation", "LoadKind", "Param", "REQUIRED", "LOADS", "
            "Prescribed", "LabSpring", "LabTiltSpring", "RotationComponentSpring",
            "tangent_fd_check", "zero_modes", "overrides", "Obstacle", "ObstacleKind", "OBSTACLES",
            "register_obstacle", "obstacle_kind", "make_obstacle", "rigid_motion", "translation", "rotation",
-           "check_sdf", "HalfSpace", "Sphere", "Cylinder", "Box", "UserSDF", "ContactLoad", "add_obstacle"]
+           "check_sdf", "HalfSpace", "Sphere", "Cylinder", "Box", "UserSDF", "ContactLoad", "add_obstacle",
+           "SUPPORTS", "SupportKind", "register_support", "support_kind"]

@@ -31,7 +31,7 @@ from typing import Callable, ClassVar
 import numpy as np
 
 from ..errors import LoadError
-from ..registry import Registry
+from ..registry import REQUIRED, Kind, Param, Registry
 
 __all__ = ["Evaluation", "Load", "LoadEvaluation", "overrides", "Param", "LoadKind", "LOADS", "register_load", "load_kind",
            "REQUIRED", "linear_scale", "finite_vector", "param_error"]
@@ -109,7 +109,10 @@ class Load(abc.ABC):
     Subclasses implement :meth:`evaluate`.  Class attributes say what the solvers may assume:
     ``scales_with_load_factor`` (False for supports such as lab springs: continuation's load
     direction q = df/dlam ignores them), ``approximate_tangent`` (True when the load stiffness
-    is a finite-difference approximation).  :meth:`restraint` reports rigid-body restraints
+    is a finite-difference approximation), ``translation_invariant`` (True when the load's
+    forces do not depend on where the shell is: load stepping then iterates on positions
+    relative to the part when every load is so, ``solvers.equations.part_origin``; False here,
+    the safe default for a load that reads positions, such as an obstacle or a field gradient).  :meth:`restraint` reports rigid-body restraints
     the load provides (for the support check), :meth:`output_fields` point fields for VTU
     files, :meth:`total` the resultant lab force and moment (for reports).
 
@@ -146,6 +149,7 @@ class Load(abc.ABC):
     kind: ClassVar[str] = ""
     scales_with_load_factor: ClassVar[bool] = True
     constraint_force: ClassVar[bool] = False
+    translation_invariant: bool = False
     approximate_tangent: bool = False
     name: str = "load"
 
@@ -241,53 +245,8 @@ def overrides(load, hook):
     return getattr(type(load), hook, None) is not getattr(Load, hook)
 
 
-REQUIRED = object()
-
-
 @dataclass(frozen=True)
-class Param:
-    """One key of a load (or field) kind in a scenario file.
-
-    kind: 'vector' (3 numbers), 'number', 'bool', 'matrix3', 'table' (a sub-table with
-    ``fields``); ``default`` REQUIRED for a required key; ``nonzero`` for vectors; ``lo``: a
-    lower bound of numbers (exclusive with ``lo_open``); ``doc``: one line for the docs.
-
-    The scenario validator checks every key a kind declares from these fields, so a new kind
-    needs no validator code.
-
-    Attributes
-    ----------
-    name : str
-        The key.
-    kind : str
-        'vector', 'number', 'bool', 'matrix3' or 'table'.
-    default : object
-        The default value, or ``REQUIRED``; ``required`` (property) is True for the latter.
-    nonzero, lo, lo_open, doc, fields
-        As above.
-
-    Example
-    -------
-    >>> from core_se3.model import LOADS
-    >>> [(p.name, p.kind, p.required) for p in LOADS["pressure"].params]
-    [('p', 'number', True), ('direction', 'vector', False), ('follower', 'bool', False)]
-    """
-    name: str
-    kind: str
-    default: object = REQUIRED
-    nonzero: bool = False
-    lo: float | None = None
-    lo_open: bool = False
-    doc: str = ""
-    fields: tuple = ()
-
-    @property
-    def required(self):
-        return self.default is REQUIRED
-
-
-@dataclass(frozen=True)
-class LoadKind:
+class LoadKind(Kind):
     """A registered load kind.
 
     target: 'line' (a named line of element edges or node ids: the load is spread along it),
@@ -324,8 +283,16 @@ class LoadKind:
     doc: str = ""
     extra: dict = field(default_factory=dict)
 
+    def selection(self):
+        return (("edge", "nodes"), ("scale",)) if self.target != "elements" else ((), ("region", "scale"))
 
-LOADS = Registry("load kind")
+    def __post_init__(self):
+        super().__post_init__()
+        if self.target not in ("line", "nodes", "elements"):
+            raise TypeError(f"load kind {self.name!r}: target must be 'line', 'nodes' or 'elements'")
+
+
+LOADS = Registry("load kind", LoadKind, reserved=("scale", "edge", "nodes", "region"))
 
 
 def register_load(kind: LoadKind):
@@ -351,9 +318,7 @@ def register_load(kind: LoadKind):
     """
     if not isinstance(kind, LoadKind):
         raise TypeError("register_load needs a LoadKind")
-    if kind.target not in ("line", "nodes", "elements"):
-        raise TypeError(f"load kind {kind.name!r}: target must be 'line', 'nodes' or 'elements'")
-    return LOADS.register(kind.name, kind)
+    return LOADS.add(kind)
 
 
 def load_kind(name) -> LoadKind:

@@ -27,7 +27,7 @@ import numpy as np
 
 from .. import lie
 from ..errors import LoadError
-from ..registry import Registry
+from ..registry import Kind, Registry
 from .base import Param, finite_vector
 
 __all__ = ["MU0", "Field", "UniformField", "GradientField", "DipoleField", "UserField",
@@ -378,7 +378,7 @@ def check_field(field, x, lam=1.0, rtol=1e-8):
 
 # ------------------------------------------------------------------ registry -------------
 @dataclass(frozen=True)
-class FieldKind:
+class FieldKind(Kind):
     """A field kind of scenario files: ``params`` (the keys besides type and scale) and
     ``build(values, scale, mu0) -> Field`` (mu0: the model's vacuum permeability).
 
@@ -397,7 +397,7 @@ class FieldKind:
     doc: str = ""
 
 
-FIELDS = Registry("field kind")
+FIELDS = Registry("field kind", FieldKind, reserved=("scale",))
 
 
 def register_field(kind: FieldKind):

@@ -102,6 +102,8 @@ class NodalLoad(Load):
     [[0.0, 0.0, 1.0], [0.0, 0.0, 0.0]]
     """
 
+    translation_invariant = True          # forces from the frames' rotations and relative positions
+
     def __init__(self, n_nodes, nodes, weights, force=(0, 0, 0), moment=(0, 0, 0), follower=False,
                  scale=None, name="nodal"):
         self.n = int(n_nodes)
@@ -184,6 +186,8 @@ class SurfaceLoad(Load):
     >>> round(float(SurfaceLoad(m, 3.0, follower=True).evaluate(m.g0, 1.0).f[:, 2].sum()), 12)
     6.0
     """
+
+    translation_invariant = True          # forces from the frames' rotations and relative positions
 
     def __init__(self, mesh, q, follower=False, elements=None, scale=None, name="surface"):
         self.mesh = mesh
@@ -340,7 +344,8 @@ register_load(LoadKind("edge_force", "line", (
     Param("force", "vector", doc="total force [force]: lab vector (dead) or d1, d2, d3 components "
                                  "(follower), spread consistently along the line"),
     Param("follower", "bool", False, doc="components in each node's current frame")),
-    _edge("force"), doc="a total force spread along a line of element edges"))
+    _edge("force"), doc="a total force spread along a line of element edges: a lab vector, or components in each "
+                       "node's frame d1, d2, d3 if follower"))
 register_load(LoadKind("edge_moment", "line", (
     Param("moment", "vector", doc="total moment [force x length], spread along the line"),
     Param("follower", "bool", False, doc="components in each node's current frame")),
@@ -355,11 +360,12 @@ register_load(LoadKind("pressure", "elements", (
     Param("direction", "vector", (0.0, 0.0, 1.0), nonzero=True,
           doc="lab direction of a dead pressure (per reference area)"),
     Param("follower", "bool", False, doc="along the current normal, per current area")),
-    _pressure, _pressure_check, doc="a uniform pressure on a region"))
+    _pressure, _pressure_check, doc="dead: p along the lab direction per unit reference area; follower: along the "
+                                  "current normal d3 per unit current area"))
 register_load(LoadKind("body_force", "elements", (
     Param("q", "vector", doc="dead force per unit reference area [force/length^2]"),),
-    _body_force, doc="a dead force per unit reference area"))
+    _body_force, doc="a dead force per unit reference area (lab vector)"))
 register_load(LoadKind("gravity", "elements", (
     Param("g", "vector", (0.0, 0.0, -9.81), doc="gravitational acceleration [length/time^2]"),
     Param("rho", "number", None, lo=0.0, doc="density [mass/length^3] (default: the material's)")),
-    _gravity, doc="self-weight rho h g per unit reference area"))
+    _gravity, doc="self-weight rho h g per unit reference area (rho: the material's by default)"))

@@ -167,6 +167,7 @@ class MagneticLoad(Load):
         self.field = field
         self.name = name
         self.approximate_tangent = bool(field.approximate_hessian)
+        self.translation_invariant = bool(field.uniform)     # a field that varies in space reads x
 
     def direction_turn(self, g, lam0, lam1, samples=16):
         """The largest angle [rad] the applied field turns through at the magnetised nodes of

@@ -360,8 +360,9 @@ register_obstacle(ObstacleKind(
                                      v["inside"], motion, name),
     doc="a solid circular cylinder, infinite or capped"))
 register_obstacle(ObstacleKind(
-    "box", (Param("centre", "vector"), Param("half_sizes", "vector", doc="[length], each > 0"),
-            Param("rotation", "vector", default=[0.0, 0.0, 0.0], doc="rotation vector of its axes [rad]"),
+    "box", (Param("centre", "vector"), Param("half_sizes", "vector", doc="[length], each > 0", frame=None),
+            Param("rotation", "vector", default=[0.0, 0.0, 0.0], doc="rotation vector of its axes [rad]",
+                  frame="rotation"),
             Param("rounding", "number", default=None, lo=0.0, doc="edge radius; default 1 %")),
     lambda v, motion, name: Box(v["centre"], v["half_sizes"], v["rotation"], v["rounding"], motion, name),
     doc="a solid box with rounded edges"))

@@ -43,7 +43,7 @@ import numpy as np
 
 from .. import lie
 from ..errors import ContactError, did_you_mean
-from ..registry import Registry
+from ..registry import Kind, Registry
 
 __all__ = ["Obstacle", "ObstacleKind", "OBSTACLES", "register_obstacle", "obstacle_kind",
            "make_obstacle", "rigid_transform", "translation", "rotation", "rigid_motion", "check_sdf"]
@@ -282,7 +282,7 @@ def check_sdf(obstacle, x, lam=0.0, h=1e-6):
 
 # ----------------------------------------------------------------------------- registry
 @dataclass(frozen=True)
-class ObstacleKind:
+class ObstacleKind(Kind):
     """A registered obstacle kind.
 
     build(values, motion, name) -> Obstacle makes it from the values of its ``params``
@@ -309,7 +309,7 @@ class ObstacleKind:
     extra: dict = field(default_factory=dict)
 
 
-OBSTACLES = Registry("obstacle kind")
+OBSTACLES = Registry("obstacle kind", ObstacleKind)
 
 
 def register_obstacle(kind: ObstacleKind):

@@ -11,7 +11,9 @@ import numpy as np
 from .. import lie
 from ..assembly import Assembler
 
-__all__ = ["tangent_fd_check", "zero_modes"]
+__all__ = ["tangent_fd_check", "zero_modes", "fd_step"]
+
+FD_STEP = 1e-6
 
 
 def _all_free(problem):
@@ -19,7 +21,26 @@ def _all_free(problem):
     return Assembler(problem.mesh, np.ones(6 * problem.mesh.n_nodes, bool))
 
 
-def tangent_fd_check(problem, g, lam=1.0, h=1e-6, free_all=False):
+def fd_step(problem, h=FD_STEP):
+    """The step of :func:`tangent_fd_check`: ``h``, or a tenth of the narrowest smoothing band of
+    the problem's constraint loads (a contact's ``eps`` [length], 1e-6 h by default), whichever
+    is smaller.  Across the band the contact force law has the kinks of its C^1 ramp: a central
+    difference whose step spans one sees a jump of the stiffness, not the derivative (a correct
+    contact tangent measured 0.16 at the step 1e-6 with the band 1e-8, 4.7e-9 at 1e-9).
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(1.0, 0.1, 2, 1), Material(1e4, 0.0, 0.01))
+    >>> fd_step(p), fd_step(p.add_obstacle("half_space", point=(0, 0, -0.01), normal=(0, 0, 1)) and p)
+    (1e-06, 1e-09)
+    """
+    bands = [float(ld.eps) for ld in problem.loads
+             if getattr(ld, "constraint_force", False) and getattr(ld, "eps", None)]
+    return min([h] + [0.1 * b for b in bands])
+
+
+def tangent_fd_check(problem, g, lam=1.0, h=None, free_all=False):
     """Max relative difference between the tangent and central FD of the residual.
 
     With ``free_all`` every dof is treated as free (supports ignored).  Returns
@@ -34,7 +55,8 @@ def tangent_fd_check(problem, g, lam=1.0, h=1e-6, free_all=False):
     lam : float, optional
         Load factor.
     h : float, optional
-        Step of the central differences along g_i <- g_i exp(+-h e_k).
+        Step of the central differences along g_i <- g_i exp(+-h e_k); default :func:`fd_step`
+        (1e-6, smaller in a problem with contact: below its smoothing band).
     free_all : bool, optional
         Compare on all 6n dofs instead of the free ones.
 
@@ -55,6 +77,7 @@ def tangent_fd_check(problem, g, lam=1.0, h=1e-6, free_all=False):
     >>> bool(tangent_fd_check(p, p.apply_prescribed(g, 0.0))[0] < 1e-6)
     True
     """
+    h = fd_step(problem) if h is None else h
     asm = _all_free(problem) if free_all else problem.assembler()
     K = problem.tangent(g, lam, asm).toarray()
     Kfd = np.zeros_like(K)

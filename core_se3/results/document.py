@@ -8,7 +8,9 @@
                 "iterations", "residual", "residual_floor", "residual_history", "balance_error",
                 "attempts", "linear_solves", "backend" ('numpy'/'numba': what evaluated the step),
                 "contact": {name: {"force", "moment", "penetration",
-                ...}} (with obstacles only)}],
+                ...}} (with obstacles only),
+                "checks": {"path_check", "contraction", "travel", "path_rejections", "det_sign"}
+                (load stepping: what was checked before the state was accepted)}],
      "totals": {"attempts", "linear_solves", "iterations"},
      "timings": {"setup", "assembly", "solve", "other", "total"},
      "reference": {"entry", "block", "error", "error_at"} or null}
@@ -93,7 +95,7 @@ def step_record(st, load, axis=None, **extra):
     >>> p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 1.0)); p.add_probe("tip")
     >>> rec = step_record(p.solve(steps=1).final, dict(name="P", value=1.0, unit="N"), error=None)
     >>> list(rec), rec["load_factor"], rec["residual"] < 1e-10
-    (['load_factor', 'load', 'probes', 'iterations', 'residual', 'residual_floor', 'residual_history', 'balance_error', 'attempts', 'linear_solves', 'backend', 'error'], 1.0, True)
+    (['load_factor', 'load', 'probes', 'iterations', 'residual', 'residual_floor', 'residual_history', 'balance_error', 'attempts', 'linear_solves', 'backend', 'checks', 'error'], 1.0, True)
     """
     rec = dict(load_factor=float(st.load_factor), load=load,
                probes={name: probe_record(p, axis) for name, p in st.probes.items()},
@@ -106,6 +108,8 @@ def step_record(st, load, axis=None, **extra):
                backend=str(getattr(st, "backend", "")) or None)
     if st.contact:
         rec["contact"] = {name: contact_record(c) for name, c in st.contact.items()}
+    if getattr(st, "checks", None):
+        rec["checks"] = dict(st.checks)
     rec.update(extra)
     return rec
 

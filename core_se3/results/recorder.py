@@ -104,9 +104,12 @@ class StepRecorder:
         if unwrapped:
             self.unwrapped.update({k: np.array(v, float) for k, v in unwrapped.items()})
 
-    def probes(self, g, start=None, increments=None):
+    def probes(self, g, start=None, increments=None, origin=None):
         """name -> dict(u, R, w) at the frames g, unwrapping the rotation vectors; ``start``
-        (n, 4, 4) and ``increments`` (n, 6): the Newton try that reached g (class docstring).
+        (n, 4, 4) and ``increments`` (n, 6): the Newton try that reached g (class docstring);
+        ``origin`` (3,): g holds positions relative to it (load stepping's iterate of a part far
+        from the origin, ``solvers.equations.part_origin``), and so do the reference positions
+        the displacements are taken from: u is then as exact as for the part at the origin.
 
         Example
         -------
@@ -121,9 +124,14 @@ class StepRecorder:
         [0.0, 6.283185307]
         """
         states = {}
+        if origin is not None:
+            g0 = self.g0.copy()
+            g0[:, :3, 3] -= origin
         for name, pr in self.problem.probes.items():
             x, R = pr.state(g, compiled=self.compiled)
             x0, Rref = self.reference.get(name) or pr.state(self.g0)
+            if origin is not None:
+                x0 = pr.state(g0, compiled=self.compiled)[0]
             hint = self.unwrapped[name]
             if start is not None and increments is not None:
                 _, Rs = pr.state(start, compiled=self.compiled)
@@ -134,14 +142,17 @@ class StepRecorder:
             states[name] = ProbeState(x - x0, R @ Rref.T, self.unwrapped[name].copy())
         return states
 
-    def step(self, lam, g, iterations, history, r_int, f_ext, stability=None, start=None, increments=None):
+    def step(self, lam, g, iterations, history, r_int, f_ext, stability=None, start=None, increments=None,
+             local=None):
         """The StepResult of a converged state (internal r_int and external f_ext forces;
-        ``start``, ``increments``: as for :meth:`probes`).
+        ``start``, ``increments``: as for :meth:`probes`; ``local``: (the frames relative to
+        an origin, that origin) of the same state, which the probes read, see :meth:`probes`).
 
         The loads that are constraint forces (``Load.constraint_force``: contact) are split off
         the applied loads: ``contact`` holds each one's lab force and moment (about the origin)
         with its ``report`` scalars, and the balance sums applied, reactions and contact."""
-        probes = self.probes(g, start, increments)
+        probes = self.probes(g, start, increments) if local is None else self.probes(local[0], start, increments,
+                                                                                   local[1])
         reac = (r_int - f_ext) * self.fixed
         RF, RM, sF, sM = lab_totals(g, reac, magnitudes=True)
         AF, AM, aF, aM = lab_totals(g, f_ext, magnitudes=True)

@@ -124,6 +124,12 @@ class StepResult:
         name -> dict(force (3,), moment (3,) about the origin, scalars such as penetration) of
         each constraint-force load (contact with an obstacle): not counted in the applied
         force; the balance is applied + reactions + contact.
+    checks : dict
+        What load stepping checked before accepting the state (``solvers.step_checks``):
+        path_check (applied or not), contraction and travel of the accepted try's Newton
+        corrections (< 1 and < 1.5: ``path_measures``), path_rejections (tries refused since the
+        previous stored step), det_sign (the sign of det K at the state; None when not checked);
+        {} when not recorded (path following, the initial state).
 
     Example
     -------
@@ -150,6 +156,7 @@ class StepResult:
     contact: dict = field(default_factory=dict)   # name -> dict(force, moment, ...) of contacts
     residual_floor: float = 0.0        # round-off floor of the last relative residual
     backend: str = ""                  # the backend that evaluated the converged state ('auto' moves)
+    checks: dict = field(default_factory=dict)   # what load stepping checked (solvers.step_checks)
 
     @property
     def balance_error(self):

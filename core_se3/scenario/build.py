@@ -7,18 +7,16 @@ import numpy as np
 
 from .. import lie
 from ..errors import CoreSE3Error, ScenarioError, SingularSystemError
-from ..fem import Material, RegionMaterial
-from ..model import FIELDS, MU0, Problem
+from ..fem import RegionMaterial
+from ..fem.material_kinds import MATERIALS
+from ..model import FIELDS, LOADS, MU0, SUPPORTS, Problem
 from .geometry import selection
 from .obstacles import add_obstacles
 from .magnetisation import pattern_br
-from .physics import MATERIAL_KEYS, material_index, solve_defaults
-from .validate import join, make_scale
+from .physics import material_index, solve_defaults
+from .validate import join, make_scale, user_key
 
 __all__ = ["build_problem", "mu0_of"]
-
-ELASTIC_KEYS = ("E", "nu", "h", "shear_factor", "drilling")
-
 
 def mu0_of(units):
     """Vacuum permeability in a scenario's units: MU0 (SI, Pa) or MU0 * 1e6 (N-mm-MPa)."""
@@ -26,20 +24,25 @@ def mu0_of(units):
 
 
 def _law(v, spec, mesh, regions):
+    """The material law of the validated [material]: one law, or a RegionMaterial of the
+    distinct laws of its regions (per-region stiffness needs the default element)."""
     mat, s = spec["material"], spec["solver"]
+    kind = MATERIALS[mat.get("law", "isotropic")]
     mats, index = material_index(mat, regions, mesh.n_elements)
     used = np.unique(index)
+    stiff = [k for k in kind.keys() if k not in kind.inert]
     try:
-        if len({tuple(mats[i][k] for k in MATERIAL_KEYS) for i in used}) == 1:
-            return Material(**{k: mat[k] for k in MATERIAL_KEYS}) if len(mats) == 1 else \
-                Material(**{k: mats[used[0]][k] for k in MATERIAL_KEYS})
-        if len({tuple(mats[i][k] for k in ELASTIC_KEYS) for i in used}) > 1 and s["element"] != "default":
+        if len({tuple(mats[i].values()) for i in used}) == 1:
+            return kind.build(mats[used[0]])
+        if len({tuple(mats[i][k] for k in stiff) for i in used}) > 1 and s["element"] != "default":
             v.fail("solver.element", "per-region elastic properties need the default element")
-        return RegionMaterial([Material(**{k: m[k] for k in MATERIAL_KEYS}) for m in mats], index)
+        return RegionMaterial([kind.build(m) for m in mats], index)
     except ScenarioError:
         raise
     except CoreSE3Error as exc:
         v.fail("material", str(exc))
+    except ValueError as exc:                   # a user's law refusing its values
+        v.fail(user_key("material", kind, exc), f"{kind.name}: {exc}")
 
 
 def build_problem(v, spec, mesh, regions):
@@ -67,6 +70,8 @@ def build_problem(v, spec, mesh, regions):
         except CoreSE3Error as exc:
             param = getattr(exc, "param", None)
             v.fail(join(key, param) if param else key, str(exc))
+        except ValueError as exc:               # a user's kind refusing its values
+            v.fail(user_key(key, LOADS[ld["type"]], exc), f"{ld['type']}: {exc}")
     _loads_act(v, prob, spec["solver"]["lam_end"], prob.scenario_parts["loads"], "loads")
     if spec["magnets"]:
         _add_magnets(v, prob, spec, mesh, regions)
@@ -100,23 +105,13 @@ def _loads_act(v, prob, lam, entries, section):
 
 
 def _add_support(v, prob, mesh, sp, key):
-    """One [[supports]] entry; a conflict with an earlier one (a node moved by one and held by
-    the other) names both entries."""
-    axes = {"x": 0, "y": 1, "z": 2}
+    """One [[supports]] entry, by its kind's build; a conflict with an earlier one (a node moved
+    by one and held by the other) names both entries."""
+    kind = SUPPORTS[sp["type"]]
     nodes = selection(mesh, sp)
+    values = {k: sp[k] for k in kind.keys()}
     try:
-        if sp["type"] == "clamp":
-            prob.clamp(nodes)
-        elif sp["type"] == "fix":
-            prob.fix(nodes, sp["dofs"])
-        elif sp["type"] == "rotate":
-            point = sp["point"] if sp["point"] is not None else mesh.X[nodes].mean(0)
-            prob.rotate_edge(nodes, sp["axis"], sp["angle"], point=point,
-                             free=[axes[a] for a in sp["free"]], scale=make_scale(sp["scale"]))
-        else:
-            rot = sp["rotate"] or dict(axis=None, angle=0.0, point=None)
-            prob.move_edge(nodes, sp["translate"], rot["axis"], rot["angle"], rot["point"],
-                           free=[axes[a] for a in sp["free"]], scale=make_scale(sp["scale"]))
+        kind.build(prob, nodes, make_scale(sp["scale"]) if kind.moves else None, **values)
     except CoreSE3Error as exc:
         other = getattr(exc, "other", None)
         msg = str(exc)
@@ -124,6 +119,8 @@ def _add_support(v, prob, mesh, sp, key):
             msg = msg.replace(f"support {len(prob.supports)} (", f"{key} (").replace(
                 f"support {other} (", f"supports[{other}] (")
         v.fail(key, msg)
+    except ValueError as exc:                   # a user's kind: its own refusal, named by key
+        v.fail(user_key(key, kind, exc), f"{sp['type']}: {exc}")
 
 
 def _add_magnets(v, prob, spec, mesh, regions):
@@ -135,6 +132,8 @@ def _add_magnets(v, prob, spec, mesh, regions):
             built[name] = FIELDS[f["type"]].build(values, make_scale(f["scale"]), mu0_units)
         except CoreSE3Error as exc:
             v.fail(join("fields", name), str(exc))
+        except ValueError as exc:               # a user's kind refusing its values
+            v.fail(user_key(join("fields", name), FIELDS[f["type"]], exc), f"{f['type']}: {exc}")
     prob.scenario_parts["fields"] = built
     for i, m in enumerate(spec["magnets"]):
         key = f"magnets[{i}]"

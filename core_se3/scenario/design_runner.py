@@ -16,7 +16,8 @@ import os
 
 import numpy as np
 
-from ..design import FieldVariable, LoadMagnitude, MaterialVariable, RegionMagnetisation
+from ..design import FieldVariable
+from ..errors import ScenarioError
 from ..io import atomic_path, write_json_atomic
 from .build import mu0_of
 from .design_section import AngleInDegrees
@@ -31,6 +32,79 @@ _LOAD_KEYS = {"edge_force": ("force",), "edge_moment": ("moment",), "nodal": ("f
               "body_force": ("q",), "gravity": ("g",)}
 
 
+def _write_field(scn, doc, v):
+    names = {id(f): n for n, f in scn.fields.items()}
+    doc["fields"][names[id(v.field)]]["B"] = [float(b) for b in v.vector()]
+
+
+def _write_magnetisation(scn, doc, v):
+    names = {id(f): n for n, f in scn.fields.items()}
+    union = np.unique(np.concatenate(v.regions))
+    kept = []
+    for m in doc.get("magnets", []):
+        el = scn.regions[m["region"]] if "region" in m else np.arange(scn.mesh.n_elements)
+        if not np.all(np.isin(el, union)):
+            kept.append(m)
+    for name, Br in zip(v.region_names, v.Br()):
+        m = dict(region=name, Br=[float(b) for b in Br], field=names[id(v.field)])
+        if abs(v.mu0 - mu0_of(scn.spec["units"])) > 1e-15 * v.mu0:
+            m["mu0"] = v.mu0
+        kept.append(m)
+    doc["magnets"] = kept
+
+
+def _write_material(scn, doc, v):
+    mr = doc["material"].setdefault("regions", {})
+    for name, val in zip(v.region_names, v.value()):
+        mr.setdefault(name, {})[v.prop] = float(val)
+
+
+def _write_load(scn, doc, v):
+    i = next(j for j, lds in enumerate(scn.load_objects) if any(ld is v.load for ld in lds))
+    ld = doc["loads"][i]
+    for key in _LOAD_KEYS.get(ld["type"], ()):
+        if key in ld:
+            ld[key] = (np.asarray(ld[key], float) * v.P).tolist() if isinstance(ld[key], list) else ld[key] * v.P
+
+
+# how the built-in kinds write their values into the scenario (a user kind gives its own write)
+WRITERS = {"field": _write_field, "magnetisation": _write_magnetisation, "material": _write_material,
+           "load": _write_load}
+
+
+def writer_of(v):
+    """write(scn, doc, variable) of a design variable: its kind's own ``write``, the built-in
+    kind's, or None (a field a pose holds is written as a field)."""
+    kind = getattr(v, "scenario_kind", None)
+    if kind is None:
+        return _write_field if isinstance(v, FieldVariable) else None
+    return kind.write or WRITERS.get(kind.name)
+
+
+def relocated(doc, base_dir, out_dir):
+    """``doc`` with its relative file references (``mesh.file``, ``magnets[i].Br_file``, the
+    plugin files) rewritten relative to ``out_dir``, where the optimised scenario is written
+    (they are relative to the scenario file's ``base_dir``).
+
+    Example
+    -------
+    >>> relocated({"mesh": {"file": "grip.msh"}, "plugins": ["k.py", "pkg.mod"]}, "/a/b", "/a/b/out")
+    {'mesh': {'file': '../grip.msh'}, 'plugins': ['../k.py', 'pkg.mod']}
+    """
+    from .plugins import is_file_name
+
+    def moved(f):
+        return f if os.path.isabs(f) else os.path.relpath(os.path.join(os.path.abspath(base_dir), f), out_dir)
+    if isinstance(doc.get("mesh"), dict) and isinstance(doc["mesh"].get("file"), str):
+        doc["mesh"]["file"] = moved(doc["mesh"]["file"])
+    for m in doc.get("magnets", []):
+        if isinstance(m.get("Br_file"), str):
+            m["Br_file"] = moved(m["Br_file"])
+    if doc.get("plugins"):
+        doc["plugins"] = [moved(f) if isinstance(f, str) and is_file_name(f) else f for f in doc["plugins"]]
+    return doc
+
+
 def optimised_document(scn, design, result, k):
     """The scenario document (dicts) of pose k at the design's values, without [design].
 
@@ -43,34 +117,9 @@ def optimised_document(scn, design, result, k):
     """
     doc = copy.deepcopy(scn.raw)
     doc.pop("design", None)
-    names = {id(f): n for n, f in scn.fields.items()}
     design.assign_pose(k, result.x)
     for v in design.pose_variables(k):
-        if isinstance(v, FieldVariable):
-            doc["fields"][names[id(v.field)]]["B"] = [float(b) for b in v.vector()]
-        elif isinstance(v, RegionMagnetisation):
-            union = np.unique(np.concatenate(v.regions))
-            kept = []
-            for m in doc.get("magnets", []):
-                el = scn.regions[m["region"]] if "region" in m else np.arange(scn.mesh.n_elements)
-                if not np.all(np.isin(el, union)):
-                    kept.append(m)
-            for name, Br in zip(v.region_names, v.Br()):
-                m = dict(region=name, Br=[float(b) for b in Br], field=names[id(v.field)])
-                if abs(v.mu0 - mu0_of(scn.spec["units"])) > 1e-15 * v.mu0:
-                    m["mu0"] = v.mu0
-                kept.append(m)
-            doc["magnets"] = kept
-        elif isinstance(v, MaterialVariable):
-            mr = doc["material"].setdefault("regions", {})
-            for name, val in zip(v.region_names, v.value()):
-                mr.setdefault(name, {})[v.prop] = float(val)
-        elif isinstance(v, LoadMagnitude):
-            i = next(j for j, lds in enumerate(scn.load_objects) if any(ld is v.load for ld in lds))
-            ld = doc["loads"][i]
-            for key in _LOAD_KEYS.get(ld["type"], ()):
-                if key in ld:
-                    ld[key] = (np.asarray(ld[key], float) * v.P).tolist() if isinstance(ld[key], list) else ld[key] * v.P
+        writer_of(v)(scn, doc, v)
     doc["name"] = f"{scn.name}-optimised" + (f"-{design.poses[k].name}" if len(design.poses) > 1 else "")
     return doc
 
@@ -175,6 +224,11 @@ def _design(scn, rd, method, max_iter, progress, vtu, plots):
     ds, out = scn.spec["design"], rd.path
     root = launched_rank() == 0          # under mpirun every rank optimises the same design, rank 0 writes
     design = scn.design()
+    for i, v in enumerate(design.variables):
+        if writer_of(v) is None:
+            raise ScenarioError(f"design variable kind {v.scenario_kind.name!r} gives no write(scn, doc, variable): the "
+                                "optimised scenario could not hold its value; give the kind one", scn.file,
+                                f"design.variables[{i}].type")
     r = design.optimise(method or ds["method"], max_iter=ds["max_iter"] if max_iter is None else max_iter, tol=ds["tol"],
                         tolerance=ds["tolerance"], progress=progress, stop_at_tolerance=ds["stop_at_tolerance"])
     files = {}
@@ -189,7 +243,7 @@ def _design(scn, rd, method, max_iter, progress, vtu, plots):
         if root:
             with atomic_path(path) as tmp, open(tmp, "w") as fh:
                 fh.write(f"# written by core-se3 design from {scn.file}: pose {pose.name!r}\n")
-                fh.write(dumps(optimised_document(scn, design, r, k)))
+                fh.write(dumps(relocated(optimised_document(scn, design, r, k), scn.base_dir, out)))
         files[f"scenario{suffix}"] = path
         if plots and root:
             files[f"target{suffix}"] = _target_plot(rd.file(f"target{suffix or '_' + safe_name(pose.name)}.png"),

@@ -44,186 +44,133 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..design import (METHODS, Design, FieldVariable, LoadMagnitude, MaterialVariable, NodePosition, Orientation,
-                      Pose, ProbePosition, RegionMagnetisation, RotationAngle, Smoothness, Target)
-from ..design.objectives import Quantity
-from .. import lie
+from ..design import Design, FieldVariable, Pose, Target
+from ..design.kinds import TARGETS, VARIABLES
+from ..design.objectives import AngleInDegrees
 from ..errors import CoreSE3Error, ScenarioError, did_you_mean
-from .validate import join, show, tname
+from .schema import DESIGN, POSE, TARGET
+from .validate import join, user_key
 
 __all__ = ["design_section", "build_design", "DESIGN_KEYS", "AngleInDegrees"]
 
-DESIGN_KEYS = ("method", "max_iter", "tolerance", "tol", "stop_at_tolerance", "variables", "poses", "targets")
-VARIABLE_KEYS = {"field": ("field", "form", "plane", "free", "B_max", "pose"),
-                 "magnetisation": ("regions", "form", "planes", "free", "Br_max", "smoothness", "field"),
-                 "material": ("prop", "regions", "lower", "upper"),
-                 "load": ("load", "lower", "upper", "pose")}
-TARGET_KEYS = ("pose", "type", "probe", "node", "value", "components", "weight", "axis", "scale")
-
-
-def _names(v, d, k, key, allowed, what):
-    x = d.get(k)
-    if not isinstance(x, list) or not x or any(not isinstance(a, str) for a in x):
-        v.fail(join(key, k), f"expected a non-empty array of {what} names, got {tname(x)} {show(x)}")
-    for a in x:
-        if a not in allowed:
-            v.fail(join(key, k), f"unknown {what} {a!r}{did_you_mean(a, allowed)}; defined: {sorted(allowed) or 'none'}")
-    return x
-
-
-def _plane(v, d, k, key, default):
-    if k not in d:
-        return default
-    x = d[k]
-    if not isinstance(x, list) or len(x) != 2:
-        v.fail(join(key, k), f"expected two 3-vectors [e1, e2], got {tname(x)} {show(x)}")
-    return [v.vector({"e": e}, "e", f"{join(key, k)}[{i}]", nonzero=True) for i, e in enumerate(x)]
-
-
-class AngleInDegrees(Quantity):
-    """A scenario's angle target: a ``RotationAngle`` with its value, misfit, target and scale
-    in degrees (an angle goes in and comes out of a scenario in degrees); the scenario's default
-    scale is 1 rad = 57.3 deg (the Python API's, so the objective is the same).
-
-    Example
-    -------
-    >>> import numpy as np
-    >>> from core_se3 import Problem, Material, mesh, lie
-    >>> p = Problem(mesh.rectangle(2.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
-    >>> g = lie.exp(np.array([0, 0, 0, 0, -0.5, 0])) @ p.mesh.g0            # 0.5 rad about -y
-    >>> round(float(AngleInDegrees(p, node=2, target=30.0).value(p, g, 1.0)[0]), 6)   # 28.6479 - 30
-    -1.35211
-    """
-    DEGREE = 180.0 / np.pi
-
-    def __init__(self, problem, target=None, **kw):
-        self.angle = RotationAngle(problem, target=None if target is None else np.radians(target), **kw)
-        self.target, self.name, self.size = target, self.angle.name, 1
-
-    def value(self, problem, g, lam):
-        return self.DEGREE * self.angle.value(problem, g, lam)
-
-    def jacobian(self, problem, g, lam):
-        return self.DEGREE * self.angle.jacobian(problem, g, lam)
-
-    def explicit(self, problem, g, lam, variable):
-        return self.DEGREE * self.angle.explicit(problem, g, lam, variable)
+DESIGN_KEYS = DESIGN.keys()
 
 
 def design_section(v, doc, spec, mesh, regions):
-    """The validated [design] section (None when absent)."""
+    """The validated [design] section (None when absent): its own keys (scenario.schema.DESIGN),
+    poses, variables (core_se3.design.VARIABLES) and targets (core_se3.design.TARGETS)."""
     if "design" not in doc:
         return None
     d, key = doc["design"], "design"
-    v.table(d, key, DESIGN_KEYS, required=("variables", "targets"))
-    out = dict(method=v.string(d, "method", key, default="least_squares", choices=METHODS),
-               max_iter=v.integer(d, "max_iter", key, default=50, lo=1, hi=10_000),
-               tolerance=v.number(d, "tolerance", key, default=None, lo=0.0),
-               tol=v.number(d, "tol", key, default=1e-12, lo=0.0, lo_open=True),
-               stop_at_tolerance=v.boolean(d, "stop_at_tolerance", key, default=False))
+    v.table(d, key, DESIGN.keys(), required=("variables", "targets"))
+    out = {k: v.param(d, key, DESIGN.param(k)) for k in ("method", "max_iter", "tolerance", "tol", "stop_at_tolerance")}
+    out["poses"] = _poses(v, d, spec)
+    names = dict(field=spec["fields"], regions=regions, pose=[p["name"] for p in out["poses"]],
+                 load=spec["loads"], probe=[p["name"] for p in spec["probes"]])
+    out["variables"] = [_variable(v, t, f"design.variables[{i}]", names)
+                        for i, t in enumerate(v.array_of_tables(d, "variables"))]
+    if not out["variables"]:
+        v.fail("design.variables", "a design needs at least one variable")
+    out["targets"] = [_target(v, t, f"design.targets[{i}]", names, mesh)
+                      for i, t in enumerate(v.array_of_tables(d, "targets"))]
+    if not out["targets"]:
+        v.fail("design.targets", "a design needs at least one target")
+    return out
+
+
+def _poses(v, d, spec):
+    """[[design.poses]] (default one pose "design"): unique names, fields held at a value."""
     poses = []
     for i, t in enumerate(v.array_of_tables(d, "poses") if "poses" in d else []):
         k2 = f"design.poses[{i}]"
-        v.table(t, k2, ("name", "fields", "lam"), required=("name",))
+        v.table(t, k2, POSE.keys(), required=POSE.required())
         name = v.string(t, "name", k2)
         if name in [p["name"] for p in poses]:
             v.fail(join(k2, "name"), f"pose names must be unique, got {name!r} twice")
         fields = {}
         ft = t.get("fields", {})
         if not isinstance(ft, dict):
-            v.fail(join(k2, "fields"), f"expected a table field name -> [Bx, By, Bz], got {tname(ft)}")
+            v.fail(join(k2, "fields"), f"expected a table field name -> [Bx, By, Bz], got {v.shown(ft)}")
         for fname in ft:
             if fname not in spec["fields"]:
                 v.fail(join(join(k2, "fields"), fname), f"unknown field {fname!r}{did_you_mean(fname, spec['fields'])}; "
                        f"defined fields: {sorted(spec['fields']) or 'none'}")
             fields[fname] = v.vector(ft, fname, join(k2, "fields"))
-        poses.append(dict(name=name, fields=fields, lam=v.number(t, "lam", k2, default=1.0)))
-    if not poses:
-        poses = [dict(name="design", fields={}, lam=1.0)]
-    pnames = [p["name"] for p in poses]
-    out["poses"] = poses
+        poses.append(dict(name=name, fields=fields, lam=v.param(t, k2, POSE.param("lam"))))
+    return poses or [dict(name="design", fields={}, lam=1.0)]
 
-    def pose_ref(t, k2, default=None):
-        if "pose" not in t:
-            return default
-        name = v.string(t, "pose", k2)
-        if name not in pnames:
-            v.fail(join(k2, "pose"), f"unknown pose {name!r}{did_you_mean(name, pnames)}; poses: {', '.join(pnames)}")
-        return name
 
-    out["variables"] = []
-    for i, t in enumerate(v.array_of_tables(d, "variables")):
-        k2 = f"design.variables[{i}]"
-        typ = v.string(t, "type", k2, choices=tuple(VARIABLE_KEYS))
-        v.table(t, k2, ("type",) + VARIABLE_KEYS[typ])
-        var = dict(type=typ)
-        if typ in ("field", "magnetisation"):
-            var["form"] = v.string(t, "form", k2, default="vector", choices=("vector", "polar"))
-            if "free" in t:
-                fr = t["free"]
-                parts = ("x", "y", "z") if var["form"] == "vector" else ("magnitude", "angle")
-                if not isinstance(fr, list) or not fr or any(x not in parts for x in fr):
-                    v.fail(join(k2, "free"), f"expected a non-empty array of {', '.join(map(repr, parts))}, got {show(fr)}")
-                var["free"] = fr
-        if typ == "field":
-            var["field"] = v.string(t, "field", k2, choices=tuple(spec["fields"]) or ("(no fields defined)",))
-            var["plane"] = _plane(v, t, "plane", k2, [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
-            var["B_max"] = v.number(t, "B_max", k2, default=None, lo=0.0, lo_open=True)
-            var["pose"] = pose_ref(t, k2)
-        elif typ == "magnetisation":
-            var["regions"] = _names(v, t, "regions", k2, regions, "region")
-            pl = t.get("planes", [[[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]])
-            if not isinstance(pl, list) or len(pl) not in (1, len(var["regions"])):
-                v.fail(join(k2, "planes"), f"expected one plane [e1, e2] or one per region ({len(var['regions'])})")
-            var["planes"] = [_plane(v, {"p": p}, "p", f"{k2}.planes[{j}]", None) for j, p in enumerate(pl)]
-            var["Br_max"] = v.number(t, "Br_max", k2, default=None, lo=0.0, lo_open=True)
-            var["smoothness"] = v.number(t, "smoothness", k2, default=0.0, lo=0.0)
-            var["field"] = v.string(t, "field", k2, default=None, choices=tuple(spec["fields"]) or ("(none)",))
-        elif typ == "material":
-            var["prop"] = v.string(t, "prop", k2, choices=("E", "h"))
-            var["regions"] = _names(v, t, "regions", k2, regions, "region")
-            var["lower"] = v.number(t, "lower", k2, default=0.0)
-            var["upper"] = v.number(t, "upper", k2, default=float("inf"))
-        else:
-            var["load"] = v.integer(t, "load", k2, lo=0)
-            if var["load"] >= len(spec["loads"]):
-                v.fail(join(k2, "load"), f"there is no loads[{var['load']}] (the scenario has {len(spec['loads'])} loads)")
-            var["lower"] = v.number(t, "lower", k2, default=-float("inf"))
-            var["upper"] = v.number(t, "upper", k2, default=float("inf"))
-            var["pose"] = pose_ref(t, k2)
-        out["variables"].append(var)
-    if not out["variables"]:
-        v.fail("design.variables", "a design needs at least one variable")
-    probes = [p["name"] for p in spec["probes"]]
-    out["targets"] = []
-    for i, t in enumerate(v.array_of_tables(d, "targets")):
-        k2 = f"design.targets[{i}]"
-        v.table(t, k2, TARGET_KEYS, required=("type", "value"))
-        typ = v.string(t, "type", k2, choices=("position", "angle", "orientation"))
-        tg = dict(type=typ, pose=pose_ref(t, k2, pnames[0]), weight=v.number(t, "weight", k2, default=1.0, lo=0.0),
-                  scale=v.number(t, "scale", k2, default=None, lo=0.0, lo_open=True))
-        if ("probe" in t) == ("node" in t):
-            v.fail(k2, "give exactly one of 'probe' (a [[probes]] name) or 'node' (a node id)")
-        if "probe" in t:
-            tg["probe"] = v.string(t, "probe", k2, choices=tuple(probes) or ("(no probes defined)",))
-        else:
-            tg["node"] = v.integer(t, "node", k2, lo=0, hi=mesh.n_nodes - 1)
-        if typ == "angle":
-            tg["value"] = v.number(t, "value", k2)
-            tg["axis"] = v.vector(t, "axis", k2, default=[0.0, -1.0, 0.0], nonzero=True)
-        else:
-            tg["value"] = v.vector(t, "value", k2)
-        if "components" in t:
-            c = t["components"]
-            n = 1 if typ == "angle" else 3
-            if not isinstance(c, list) or not c or any(isinstance(x, bool) or not isinstance(x, int) or not 0 <= x < n
-                                                        for x in c):
-                v.fail(join(k2, "components"), f"expected an array of component numbers 0..{n - 1}, got {show(c)}")
-            tg["components"] = c
-        out["targets"].append(tg)
-    if not out["targets"]:
-        v.fail("design.targets", "a design needs at least one target")
-    return out
+def _refs(v, values, key, names):
+    """The keys of ``values`` that name things of the scenario (design.kinds.REFERENCE_KEYS):
+    each must exist (a did-you-mean naming the key otherwise)."""
+    for k, x in values.items():
+        if x is None or k not in names:
+            continue
+        path = join(key, k)
+        if k in ("field", "probe"):
+            if x not in names[k]:
+                v.choice_fail(path, x, tuple(names[k]) or (f"(no {k}s defined)",))
+        elif k == "regions":
+            for a in x:
+                if a not in names[k]:
+                    v.fail(path, f"unknown region {a!r}{did_you_mean(a, names[k])}; defined: {sorted(names[k]) or 'none'}")
+        elif k == "pose":
+            if x not in names[k]:
+                v.fail(path, f"unknown pose {x!r}{did_you_mean(x, names[k])}; poses: {', '.join(names[k])}")
+        elif k == "load" and x >= len(names[k]):
+            v.fail(path, f"there is no loads[{x}] (the scenario has {len(names[k])} loads)")
+
+
+def _variable(v, t, key, names):
+    """One [[design.variables]] entry: its kind's keys, the names they refer to."""
+    typ = v.string(t, "type", key, choices=tuple(VARIABLES))
+    kind = VARIABLES[typ]
+    values = v.section(t, key, kind, first=("type",))
+    _refs(v, values, key, names)
+    return dict(type=typ, **{k: x for k, x in values.items() if not (k == "free" and x is None)})
+
+
+def _target(v, t, key, names, mesh):
+    """One [[design.targets]] entry: its kind's keys and the common ones (scenario.schema.TARGET)."""
+    if "type" not in t:
+        v.fail(join(key, "type"), "missing required key")
+    typ = v.string(t, "type", key, choices=tuple(TARGETS))
+    kind = TARGETS[typ]
+    v.table(t, key, ("type",) + kind.keys() + TARGET.keys(), required=kind.required())
+    tg = dict(type=typ, pose=v.param(t, key, TARGET.param("pose")) or names["pose"][0],
+              weight=v.param(t, key, TARGET.param("weight")), scale=v.param(t, key, TARGET.param("scale")))
+    _refs(v, dict(pose=tg["pose"]), key, names)
+    if ("probe" in t) == ("node" in t):
+        v.fail(key, "give exactly one of 'probe' (a [[probes]] name) or 'node' (a node id)")
+    if "probe" in t:
+        tg["probe"] = v.param(t, key, TARGET.param("probe"))
+        _refs(v, dict(probe=tg["probe"]), key, names)
+    else:
+        tg["node"] = v.integer(t, "node", key, lo=0, hi=mesh.n_nodes - 1)
+    tg.update(v.params(t, key, kind.params))
+    v.kind_check(kind, tg, t, key)
+    if "components" in t:
+        c = t["components"]
+        if not isinstance(c, list) or not c or any(isinstance(x, bool) or not isinstance(x, int) or not 0 <= x < kind.size
+                                                    for x in c):
+            v.fail(join(key, "components"), f"expected an array of component numbers 0..{kind.size - 1}, got {v.shown(c)}")
+        tg["components"] = c
+    return tg
+
+
+class DesignContext:
+    """What a design kind's ``build`` sees (design.kinds): the problem, the regions, fields and
+    load objects of the scenario by name, the pose indices, the regularisers collected."""
+
+    def __init__(self, scn, pose_names):
+        self.problem, self.regions, self.fields, self.loads = scn.problem, scn.regions, scn.fields, scn.load_objects
+        self.pose_names, self.regularisers, self.index = pose_names, [], 0
+
+    def pose(self, name):
+        return None if name is None else self.pose_names.index(name)
+
+    def add_regulariser(self, r):
+        self.regularisers.append(r)
 
 
 def build_design(scn):
@@ -239,44 +186,44 @@ def build_design(scn):
     'method'
     """
     from .validate import Validator
-    ds, prob, v = scn.spec["design"], scn.problem, Validator(scn.file)
-    fields = scn.fields
-    pnames = [p["name"] for p in ds["poses"]]
-    variables, reg = [], []
+    ds, v = scn.spec["design"], Validator(scn.file)
+    ctx = DesignContext(scn, [p["name"] for p in ds["poses"]])
+    variables = []
     for i, var in enumerate(ds["variables"]):
-        key = f"design.variables[{i}]"
-        try:
-            if var["type"] == "field":
-                variables.append(FieldVariable(prob, fields[var["field"]], var["form"], var["plane"], var.get("free"),
-                                               var["B_max"], None if var["pose"] is None else pnames.index(var["pose"]),
-                                               name=var["field"]))
-            elif var["type"] == "magnetisation":
-                regions = [scn.regions[r] for r in var["regions"]]
-                planes = var["planes"][0] if len(var["planes"]) == 1 else var["planes"]
-                mv = RegionMagnetisation(prob, regions, var["form"], planes, var.get("free"), var["Br_max"],
-                                         None if var["field"] is None else fields[var["field"]],
-                                         name=f"magnetisation{i}")
-                mv.region_names = list(var["regions"])
-                variables.append(mv)
-                if var["smoothness"] > 0:
-                    reg.append(Smoothness(mv, var["smoothness"]))
-            elif var["type"] == "material":
-                mv = MaterialVariable(prob, [scn.regions[r] for r in var["regions"]], var["prop"], var["lower"],
-                                      var["upper"], name=f"{var['prop']}{i}")
-                mv.region_names = list(var["regions"])
-                variables.append(mv)
-            else:
-                built = scn.load_objects[var["load"]]
-                if len(built) != 1:
-                    v.fail(join(key, "load"), f"loads[{var['load']}] is {len(built)} loads (one per region): "
-                                              "a load variable needs a single load")
-                variables.append(LoadMagnitude(prob, built[0], var["lower"], var["upper"],
-                                               None if var["pose"] is None else pnames.index(var["pose"]),
-                                               name=f"load{var['load']}"))
-        except ScenarioError:
-            raise
-        except CoreSE3Error as exc:
-            v.fail(key, str(exc))
+        ctx.index = i
+        kind = VARIABLES[var["type"]]
+        variables.append(_built(v, f"design.variables[{i}]", kind, lambda: kind.build(ctx, var)))
+        variables[-1].scenario_kind = kind            # how core-se3 design writes its value back
+    poses = _design_poses(ctx, ds, variables)
+    for i, t in enumerate(ds["targets"]):
+        kind = TARGETS[t["type"]]
+        where = dict(probe=t["probe"]) if "probe" in t else dict(node=t["node"])
+        q = _built(v, f"design.targets[{i}]", kind, lambda: kind.build(ctx, t, where))
+        scale = t["scale"] if t["scale"] is not None else kind.scale
+        poses[ctx.pose(t["pose"])].targets.append(Target(q, t["weight"], scale, t.get("components"),
+                                                          name=f"targets[{i}]"))
+    try:
+        return Design(scn.problem, variables, poses, ctx.regularisers)
+    except CoreSE3Error as exc:
+        v.fail("design", str(exc))
+
+
+def _built(v, key, kind, make):
+    """``make()``, its refusal a ScenarioError naming the key."""
+    try:
+        return make()
+    except ScenarioError:
+        raise
+    except CoreSE3Error as exc:
+        param = getattr(exc, "param", None)
+        v.fail(join(key, param) if param else key, str(exc))
+    except ValueError as exc:                  # a user's kind refusing its values
+        v.fail(user_key(key, kind, exc), f"{kind.name}: {exc}")
+
+
+def _design_poses(ctx, ds, variables):
+    """The Poses of the [design]: each holds its fields at the given values, also where another
+    pose's field variable owns that field."""
     field_vars = {}
     for var, spec_var in zip(variables, ds["variables"]):
         if spec_var["type"] == "field":
@@ -286,29 +233,10 @@ def build_design(scn):
         settings = {}
         for fname, B in p["fields"].items():
             owners = [fv for fv in field_vars.get(fname, []) if fv.pose != k]
-            aux = FieldVariable(prob, fields[fname], "vector", name=fname)
+            aux = FieldVariable(ctx.problem, ctx.fields[fname], "vector", name=fname)
             settings[aux] = np.asarray(B, float)
             for fv in owners:              # the field of another pose's variable, held here
                 full = B if fv.form == "vector" else [np.hypot(B @ fv.e1, B @ fv.e2), np.arctan2(B @ fv.e2, B @ fv.e1)]
                 settings[fv] = np.asarray(full, float)[fv.free]
         poses.append(Pose(p["name"], [], settings, p["lam"]))
-    for i, t in enumerate(ds["targets"]):
-        key = f"design.targets[{i}]"
-        where = dict(probe=t["probe"]) if "probe" in t else dict(node=t["node"])
-        try:
-            if t["type"] == "position":
-                q = ProbePosition(prob, t["probe"], t["value"]) if "probe" in t else NodePosition(prob, [t["node"]], t["value"])
-            elif t["type"] == "angle":             # degrees in, degrees out (misfit, tolerance, scale)
-                q = AngleInDegrees(prob, axis=t["axis"], target=t["value"], **where)
-                t = dict(t, scale=t["scale"] if t["scale"] is not None else AngleInDegrees.DEGREE)
-            else:                           # the frame turned by the rotation vector from its reference
-                q = Orientation(prob, **where)
-                q.target = lie.exp_so3(np.asarray(t["value"], float)) @ q.target
-            poses[pnames.index(t["pose"])].targets.append(
-                Target(q, t["weight"], t["scale"], t.get("components"), name=f"targets[{i}]"))
-        except CoreSE3Error as exc:
-            v.fail(key, str(exc))
-    try:
-        return Design(prob, variables, poses, reg)
-    except CoreSE3Error as exc:
-        v.fail("design", str(exc))
+    return poses

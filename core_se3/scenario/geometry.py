@@ -10,36 +10,22 @@ import numpy as np
 from .. import mesh as M
 from ..errors import CoreSE3Error, did_you_mean
 from ..io.files import check_input_file, without_contents
+from ..mesh.generator_kinds import GENERATORS
+from ..registry import Param, Section
+from .schema import EDGE, PROBE, REGION
 from .validate import join, show, tname
 
-__all__ = ["GENERATORS", "MAX_ELEMENTS", "mesh_section", "edges_section", "regions_section",
+__all__ = ["GENERATORS", "MESH_FILE", "MAX_ELEMENTS", "mesh_section", "edges_section", "regions_section",
            "region_ref", "nodes_ref", "selection", "is_line", "probes_section"]
 
 MAX_ELEMENTS = 1_000_000
 MAX_MESH_BYTES = 2 ** 30          # 1 GiB: an ASCII Gmsh file of 10^6 quads has about 100 MB
-
-# generator -> (function, [(parameter, kind)]); kinds: pos (> 0), real, count (int >= 1), angle (> 0)
-GENERATORS = {
-    "rectangle": (M.rectangle, [("L", "pos"), ("width", "pos"), ("nx", "count"), ("ny", "count"),
-                                ("x0", "real?")]),
-    "cylinder_arch": (M.cylinder_arch, [("R", "pos"), ("angle", "pos"), ("width", "pos"),
-                                        ("nx", "count"), ("ny", "count")]),
-    "cylinder_panel": (M.cylinder_panel, [("R", "pos"), ("length", "pos"), ("theta0", "real"),
-                                          ("theta1", "real"), ("nt", "count"), ("nl", "count")]),
-    "annulus": (M.annulus, [("r_in", "pos"), ("r_out", "pos"), ("angle", "pos"), ("nr", "count"),
-                            ("nt", "count")]),
-    # outlines of soft robots (mesh/shapes.py): element size and backend instead of counts
-    "star": (M.star, [("n_arms", "arms"), ("arm_length", "pos"), ("arm_width", "pos"), ("palm", "pos?"),
-                      ("angle0", "real?"), ("size", "size"), ("backend", "backend")]),
-    "polygon": (M.polygon, [("n_sides", "arms"), ("radius", "pos"), ("angle0", "real?"), ("size", "size"),
-                            ("backend", "backend")]),
-    "rounded_rectangle": (M.rounded_rectangle, [("length", "pos"), ("width", "pos"), ("radius", "real?"),
-                                                ("size", "size"), ("backend", "backend")]),
-    "disk": (M.disk, [("radius", "pos"), ("size", "size"), ("backend", "backend")]),
-    "annulus_sector": (M.annulus_sector, [("r_in", "pos"), ("r_out", "pos"), ("angle", "pos"),
-                                          ("theta0", "real?"), ("size", "size"), ("backend", "backend")]),
-}
-
+MESH_FILE = Section("mesh file", (
+    Param("file", "string", doc="a quad mesh meshio reads (Gmsh .msh 4.1 or 2.2, .vtu, ...), relative to the scenario"),
+    Param("d1_hint", "vector", [1.0, 0.0, 0.0], nonzero=True, doc="d1 is its projection on each node's tangent plane"),
+    Param("triangles", "string", "error", choices=("error", "split"),
+          doc="a quad-dominant mesh: an error, or every cell split into quads")),
+    doc="[mesh] from a file")
 
 def mesh_section(v, d, base_dir):
     """(Mesh, spec, file digest) of the [mesh] table: a generator or a file meshio reads."""
@@ -50,10 +36,8 @@ def mesh_section(v, d, base_dir):
         v.fail(key, "give exactly one of 'generator' (" + ", ".join(GENERATORS) + ") or 'file' "
                     "(a mesh meshio reads: Gmsh .msh, .vtu, ...)")
     if "file" in d:
-        v.table(d, key, ("file", "d1_hint", "triangles"))
-        fname = v.string(d, "file", key)
-        hint = v.vector(d, "d1_hint", key, default=[1.0, 0.0, 0.0], nonzero=True)
-        tri = v.string(d, "triangles", key, default="error", choices=("error", "split"))
+        vals = v.section(d, key, MESH_FILE)
+        fname, hint, tri = vals["file"], vals["d1_hint"], vals["triangles"]
         path = fname if os.path.isabs(fname) else os.path.join(base_dir, fname)
         if not os.path.exists(path):
             v.fail(join(key, "file"), f"mesh file {fname!r} does not exist (looked for {path})")
@@ -78,41 +62,34 @@ def mesh_section(v, d, base_dir):
             spec["triangles"] = tri
         return mesh, spec, digest
     gen = v.string(d, "generator", key, choices=tuple(GENERATORS))
-    fn, params = GENERATORS[gen]
-    v.table(d, key, ("generator",) + tuple(p for p, _ in params))
-    kw = {}
-    for p, kind in params:
-        if kind == "count":
-            kw[p] = v.integer(d, p, key, lo=1, hi=100_000)
-        elif kind == "pos":
-            kw[p] = v.number(d, p, key, lo=0.0, lo_open=True)
-        elif kind == "real":
-            kw[p] = v.number(d, p, key)
-        elif kind == "real?":
-            if p in d:
-                kw[p] = v.number(d, p, key)
-        elif kind == "pos?":
-            if p in d:
-                kw[p] = v.number(d, p, key, lo=0.0, lo_open=True)
-        elif kind == "arms":
-            kw[p] = v.integer(d, p, key, lo=3, hi=64)
-        elif kind == "size":
-            kw[p] = v.number(d, p, key, lo=0.0, lo_open=True)
-        elif kind == "backend":
-            kw[p] = M.resolve_backend(v.string(d, p, key, default="auto", choices=M.BACKENDS))
-    counts = [kw[p] for p, kind in params if kind == "count"]
-    if len(counts) == 2 and counts[0] * counts[1] > MAX_ELEMENTS:
-        v.fail(key, f"{counts[0]} x {counts[1]} elements exceed the limit of {MAX_ELEMENTS}")
-    if "size" in kw:
-        extent = max(kw[p] for p, kind in params if kind == "pos")
+    kind = GENERATORS[gen]
+    values = v.section(d, key, kind, first=("generator",))
+    # a missing optional key: the function's own default (which the Param documents)
+    kw = {k: x for k, x in values.items() if k in d or kind.param(k).required or k == "backend"}
+    if "backend" in kw:
+        kw["backend"] = M.resolve_backend(kw["backend"])
+    _refuse_too_many(v, key, kind, kw)
+    try:
+        mesh = kind.build(**kw)
+    except CoreSE3Error as exc:
+        v.fail(key, f"{gen}: {exc}")
+    except ValueError as exc:                  # a user's generator
+        v.fail(key, f"{gen}: {exc}")
+    return mesh, dict(generator=gen, **kw), None
+
+
+def _refuse_too_many(v, key, kind, kw):
+    """A ScenarioError for a generator's values that make more than MAX_ELEMENTS elements
+    (the product of its ``counts``, or its largest ``extent`` over ``size`` squared)."""
+    if len(kind.counts) == 2:
+        nx, ny = (kw[p] for p in kind.counts)
+        if nx * ny > MAX_ELEMENTS:
+            v.fail(key, f"{nx} x {ny} elements exceed the limit of {MAX_ELEMENTS}")
+    if "size" in kw and kind.extent:
+        extent = max(kw[p] for p in kind.extent if p in kw)
         if (extent / kw["size"]) ** 2 > 4 * MAX_ELEMENTS:
             v.fail(join(key, "size"), f"size {kw['size']:g} makes about {(extent / kw['size']) ** 2:.3g} elements "
                                       f"on an outline {extent:g} across, over the limit of {MAX_ELEMENTS}")
-    try:
-        mesh = fn(**kw)
-    except CoreSE3Error as exc:
-        v.fail(key, f"{gen}: {exc}")
-    return mesh, dict(generator=gen, **kw), None
 
 
 def _box(v, d, key, X, scale):
@@ -139,7 +116,7 @@ def edges_section(v, doc, mesh):
         key = join("edges", name)
         if name in mesh.edges:
             v.fail(key, f"node set {name!r} is already defined by the mesh")
-        v.table(t, key, ("box", "nodes"))
+        v.table(t, key, EDGE.keys())
         if ("box" in t) == ("nodes" in t):
             v.fail(key, "give exactly one of 'box' or 'nodes'")
         if "box" in t:
@@ -227,7 +204,7 @@ def regions_section(v, doc, mesh):
         key = join("regions", name)
         if name in regions:
             v.fail(key, f"region {name!r} is already defined by the mesh file")
-        v.table(t, key, ("box", "elements"))
+        v.table(t, key, REGION.keys())
         if ("box" in t) == ("elements" in t):
             v.fail(key, "give exactly one of 'box' (element centroids inside) or 'elements'")
         if "box" in t:
@@ -287,7 +264,7 @@ def probes_section(v, doc, mesh):
     seen = set()
     for i, t in enumerate(v.array_of_tables(doc, "probes")):
         key = f"probes[{i}]"
-        v.table(t, key, ("name", "edge", "nodes"), required=("name",))
+        v.table(t, key, PROBE.keys(), required=PROBE.required())
         name = v.string(t, "name", key)
         if not name or name in seen:
             v.fail(join(key, "name"), f"probe names must be unique and non-empty, got {name!r}")

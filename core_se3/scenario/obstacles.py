@@ -8,14 +8,14 @@ from __future__ import annotations
 
 from ..errors import CoreSE3Error
 from ..model import OBSTACLES
-from ..model.contact import MODES
 from .geometry import region_ref
-from .validate import join, make_scale
+from .schema import MOTION, OBSTACLE
+from .validate import join, make_scale, user_key
 
 __all__ = ["OBSTACLE_KEYS", "MOTION_KEYS", "SIDES", "obstacles_section", "add_obstacles", "obstacles_of"]
 
-OBSTACLE_KEYS = ("type", "name", "region", "motion", "mode", "beta", "eps", "tol", "cap_depth", "side", "friction")
-MOTION_KEYS = ("translate", "axis", "angle", "point", "scale")
+OBSTACLE_KEYS = ("type",) + OBSTACLE.keys()
+MOTION_KEYS = MOTION.keys()
 SIDES = {"auto": "auto", "top": 1.0, "bottom": -1.0, "mid": 0.0}    # the contact face: auto, +d3, -d3, mid-surface
 
 
@@ -26,31 +26,25 @@ def obstacles_section(v, doc, regions):
         key = f"obstacles[{i}]"
         typ = v.string(t, "type", key, choices=tuple(OBSTACLES))
         kind = OBSTACLES[typ]
-        v.table(t, key, OBSTACLE_KEYS + tuple(p.name for p in kind.params))
+        v.table(t, key, ("type",) + OBSTACLE.keys() + kind.keys())
         o = dict(type=typ, name=v.string(t, "name", key, default=typ))
         if o["name"] in names:
             v.fail(join(key, "name"), f"obstacle names must be unique: {o['name']!r} is used twice (give 'name')")
         names.add(o["name"])
         o["params"] = v.params(t, key, kind.params)
+        v.kind_check(kind, o["params"], t, key)
         _, o["region"] = region_ref(v, t, key, regions)
-        o["mode"] = v.string(t, "mode", key, default="al", choices=MODES)
-        o["beta"] = v.number(t, "beta", key, default=1.0, lo=0.0, lo_open=True)
-        for k in ("eps", "tol", "cap_depth"):
-            o[k] = v.number(t, k, key, default=None, lo=0.0, lo_open=True)
-        o["side"] = v.string(t, "side", key, default="auto", choices=tuple(SIDES))
-        o["friction"] = v.number(t, "friction", key, default=0.0, lo=0.0)         # Coulomb's mu
+        for k in ("mode", "beta", "eps", "tol", "cap_depth", "side", "friction"):
+            o[k] = v.param(t, key, OBSTACLE.param(k))
         o["motion"] = None
         if "motion" in t:
             mk = join(key, "motion")
-            m = v.table(t["motion"], mk, MOTION_KEYS)
+            m = v.table(t["motion"], mk, MOTION.keys())
             if "translate" not in m and "axis" not in m:
                 v.fail(mk, "a motion needs 'translate' (a vector [length] at load factor 1) and/or 'axis' "
                            "with 'angle' [rad] (and 'point')")
-            o["motion"] = dict(translate=v.vector(m, "translate", mk, default=None),
-                               axis=v.vector(m, "axis", mk, default=None, nonzero=True),
-                               angle=v.number(m, "angle", mk, default=0.0),
-                               point=v.vector(m, "point", mk, default=[0.0, 0.0, 0.0]),
-                               scale=v.scale(m, mk))
+            o["motion"] = {p.name: v.param(m, mk, p) for p in MOTION.params if p.name != "scale"}
+            o["motion"]["scale"] = v.scale(m, mk)
             if o["motion"]["axis"] is not None and "angle" not in m:
                 v.fail(join(mk, "angle"), "a rotation 'axis' needs its 'angle' [rad] at load factor 1")
         out.append(o)
@@ -77,6 +71,8 @@ def add_obstacles(v, prob, spec, regions):
             if param in ("nodes", "beta", "eps", "tol", "cap_depth", "side", "mode", "type", "friction"):
                 param = None if param == "nodes" else param
             v.fail(join(key, param) if param else key, str(exc))
+        except ValueError as exc:               # a user's kind refusing its values
+            v.fail(user_key(key, OBSTACLES[o["type"]], exc), f"{o['type']}: {exc}")
 
 
 def obstacles_of(prob):

@@ -135,9 +135,8 @@ class RunState:
         """The results document (schema core-se3-result v1 and the run's fields)."""
         scn = self.scn
         mat = scn.spec["material"]
-        params = {k: dict(value=mat[k], unit="") for k in ("E", "nu", "h", "shear_factor", "drilling")}
-        if mat["rho"] is not None:
-            params["rho"] = dict(value=mat["rho"], unit="")
+        params = {k: dict(value=x, unit="") for k, x in mat.items()        # the law's keys (not None)
+                  if x is not None and not isinstance(x, (dict, str, bool))}
         extra = dict(critical_points=_critical_doc(self.critical)) if self.critical is not None else {}
         prov = dict(self.provenance)
         if "backend" in prov:                # what evaluated the steps so far

@@ -22,9 +22,12 @@ from .design_section import design_section
 from .keys import check_key, split_dotted
 from .geometry import edges_section, mesh_section, probes_section, regions_section
 from .obstacles import obstacles_section
-from .physics import (MOVING_SUPPORTS, NON_PHYSICAL, fields_section, loads_section, magnets_section,
+from ..model import SUPPORTS
+from .physics import (NON_PHYSICAL, fields_section, loads_section, magnets_section,
                       material_section, output_section, solver_section, supports_section)
 from .units import plausibility, unit_defaults, units_section
+from .plugins import load_plugins
+from .schema import SCENARIO
 from .validate import Validator
 
 try:                                  # Python >= 3.11
@@ -36,8 +39,7 @@ __all__ = ["Scenario", "load", "loads", "from_dict", "TOP_KEYS", "split_dotted"]
 
 EXTENSIBLE = ("steps", "lam_end", "load_factors")     # load control: not in the fingerprint
 MAX_SCENARIO_BYTES = 16 * 2 ** 20        # a scenario file is text of a few kB; refuse what cannot be one
-TOP_KEYS = ("name", "description", "units", "mesh", "edges", "regions", "material", "fields",
-            "magnets", "supports", "loads", "probes", "solver", "output", "obstacles", "design", "sweep")
+TOP_KEYS = SCENARIO.keys()
 
 
 class Scenario:
@@ -148,6 +150,8 @@ class Scenario:
     def load_factors(self):
         """The load factors of the requested steps (excluding the initial state lam = 0)."""
         s = self.solver
+        if s["control"] == "linear":
+            return [s["lam_end"]]                   # one solve, at the final load factor
         if s.get("load_factors") is not None:
             return list(s["load_factors"])
         return [s["lam_end"] * k / s["steps"] for k in range(1, s["steps"] + 1)]
@@ -291,7 +295,9 @@ def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario", strict=
     [True, False]
     """
     v = Validator(file, strict=strict)
-    v.table(doc, "", TOP_KEYS, required=("mesh", "material"))
+    v.table(doc, "", TOP_KEYS, required=SCENARIO.required())
+    plugins = v.param(doc, "", SCENARIO.param("plugins"))
+    digests = load_plugins(plugins, base_dir, file)        # the user's kinds, before anything reads a registry
     spec = {}
     spec["name"] = v.string(doc, "name", "", default=default_name)
     spec["description"] = v.string(doc, "description", "", default="")
@@ -313,12 +319,15 @@ def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario", strict=
     spec["solver"] = solver_section(v, doc)
     if spec["solver"]["control"] == "arclength":
         for i, sp in enumerate(spec["supports"]):
-            if sp["type"] in MOVING_SUPPORTS:
+            if SUPPORTS[sp["type"]].moves:
                 v.fail(f"supports[{i}].type", "arc length scales the loads only: a prescribed "
                        'motion is not supported with control = "arclength"')
     if spec["solver"]["control"] == "arclength" and spec["obstacles"]:
         v.fail("solver.control", 'contact with [[obstacles]] needs load control (control = "load"): arc '
                                  "length does not update the contact multipliers")
+    if spec["solver"]["control"] == "linear" and spec["obstacles"]:
+        v.fail("solver.control", 'contact with [[obstacles]] needs load control (control = "load"): a linear '
+                                 "analysis would pass through the obstacles")
     spec["output"] = output_section(v, doc)
     design = design_section(v, doc, spec, mesh, regions)
     if design is not None:
@@ -330,10 +339,13 @@ def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario", strict=
     phys["magnets"] = [{k: (dict(x, path=None) if k == "Br_table" else x) for k, x in m.items()}
                        for m in spec["magnets"]]          # a table's digest, not where it lies
     phys["solver"] = {k: x for k, x in spec["solver"].items() if k not in NON_PHYSICAL}
-    if spec["solver"]["control"] == "load":
+    if spec["solver"]["control"] != "arclength":
         # the load factors may grow on --resume (a finished run extended to a higher lam_end);
         # the runner checks that the steps done are the first steps of the new ones
         phys["solver"] = {k: x for k, x in phys["solver"].items() if k not in EXTENSIBLE}
+    if plugins:
+        spec["plugins"] = list(plugins)
+        phys["plugins"] = [list(d) for d in digests]        # a changed plugin changes the states
     blob = json.dumps(phys, sort_keys=True) + (file_digest or "")
     fp = hashlib.sha256(blob.encode()).hexdigest()
     scn = Scenario(spec, mesh, regions, problem, file, fp, doc, base_dir, default_name, strict)

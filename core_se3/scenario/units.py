@@ -38,7 +38,9 @@ E_RANGE_PA = (10.0, 7e11)          # soft gels .. tungsten carbide
 RHO_RANGE = (1.0, 2.5e4)           # kg/m^3: aerogels .. osmium
 B_MAX = 2.0                        # T: NdFeB magnets reach ~1.4 T, lab electromagnets ~2 T
 H_OVER_L_MAX = 0.3
+LINEAR_MAX = 0.1              # a linear analysis: rotations of the order of the load number
 FIRST_STEP_MAX = 1e3
+TURNS_MAX = 10                     # a bare angle [rad] over ten turns is likely degrees (360 -> 57 turns)
 # parameters of the built-in load kinds -> dimension
 _DIMENSION = {"force": "force", "moment": "moment", "p": "stress", "q": "stress", "g": "acceleration"}
 
@@ -209,6 +211,8 @@ def load_numbers(scn, lam=None):
     """
     from .physics import material_index
     spec, mesh, prob = scn.spec, scn.mesh, scn.problem
+    if "E" not in spec["material"] or "h" not in spec["material"]:
+        return []                     # a material law without E and h: no plate modulus to scale by
     mi = material_index(spec["material"], scn.regions, mesh.n_elements)
     lams = scn.load_factors() if lam is None else [lam]
     out = []
@@ -249,7 +253,7 @@ def load_numbers(scn, lam=None):
             q = abs(ld["p"]) if "p" in ld else float(np.linalg.norm(ld["q"]))
             value, formula = q * L ** 3 / D, "q L^3 / D"
         elif ld["type"] == "gravity":
-            rho = ld.get("rho") if ld.get("rho") is not None else spec["material"]["rho"]
+            rho = ld.get("rho") if ld.get("rho") is not None else spec["material"].get("rho")
             value, formula = (rho or 0.0) * h * float(np.linalg.norm(ld["g"])) * L ** 3 / D, "rho h |g| L^3 / D"
         if value is not None:
             out.append(dict(name=f"loads[{i}]", kind=ld["type"], value=s * value, span=L, E=E, h=h,
@@ -274,6 +278,22 @@ def _density_message(rho, rho_si, u, units):
             f"in {units} the density is in {u['density']} (water {1000 / u['to_kg_m3']:g})")
 
 
+def _angles(v, spec):
+    """Warn about angles [rad] of more than TURNS_MAX turns (a rotating field, a rotated edge):
+    such a turn is split into sub-steps of at most pi/4 (``solvers.splitting``), and an angle in
+    degrees by mistake turns 57 times per 360."""
+    found = [(f"fields.{name}.rotate.angle", f["rotate"]["angle"]) for name, f in spec["fields"].items()
+             if f.get("rotate") and f["rotate"].get("angle") is not None]
+    found += [(f"supports[{i}].angle", sp["angle"]) for i, sp in enumerate(spec["supports"])
+              if sp.get("angle") is not None]
+    for key, angle in found:
+        turns = abs(float(angle)) / (2 * np.pi)
+        if turns > TURNS_MAX:
+            v.warn(key, f"angle = {angle:g} rad is {turns:.3g} turns (more than {TURNS_MAX}): angles are in "
+                        f"radians (360 degrees is {2 * np.pi:.6g} rad); if so many turns are meant, the run takes "
+                        "at least 8 sub-steps per turn")
+
+
 def plausibility(v, scn):
     """Warn (``v.warn``, errors with strict) about implausible values: see docs/SCENARIOS.md."""
     spec, units = scn.spec, scn.spec["units"]
@@ -282,8 +302,8 @@ def plausibility(v, scn):
                                                for k, r in spec["material"]["regions"].items()]
     if u is not None and u["to_pa"] is not None:
         for key, mat in mats:
-            E_pa = mat["E"] * u["to_pa"]
-            if not E_RANGE_PA[0] <= E_pa <= E_RANGE_PA[1]:
+            E_pa = mat["E"] * u["to_pa"] if "E" in mat else None       # a law without E: no check
+            if E_pa is not None and not E_RANGE_PA[0] <= E_pa <= E_RANGE_PA[1]:
                 v.warn(f"{key}.E", f"E = {mat['E']:g} {u['stress']}{'' if u['to_pa'] == 1 else f' = {E_pa:.3g} Pa'} is outside the range of real "
                                    f"solids (10 Pa for soft gels to 700 GPa for tungsten carbide): with units = "
                                    f"{units!r} E is in {u['stress']} (a silicone elastomer ~{1e6 / u['to_pa']:g}, "
@@ -324,15 +344,20 @@ def plausibility(v, scn):
             if b > B_MAX and f["type"] != "dipole" or b > 1e3 * B_MAX:
                 v.warn(f"fields.{name}", f"the applied field reaches |B| = {b:g} T on the shell, above "
                                          f"{B_MAX:g} T (lab electromagnets): B is in tesla; did you give mT?")
+    _angles(v, spec)
     span = _spans(scn.mesh, scn.problem, np.arange(scn.mesh.n_nodes))
     for key, mat in mats:
-        if mat["h"] / span > H_OVER_L_MAX:
+        if mat.get("h", 0.0) / span > H_OVER_L_MAX:
             v.warn(f"{key}.h", f"h / L = {mat['h']:g} / {span:g} = {mat['h'] / span:.3g} > {H_OVER_L_MAX:g}: the "
                                "shell is thick for its span (L = the largest distance to a support); a shell "
                                "model needs h << L: check h and the mesh's length unit")
-    lam1 = scn.load_factors()[0] if scn.solver["control"] == "load" else scn.solver["dlam0"]
+    lam1 = scn.load_factors()[0] if scn.solver["control"] != "arclength" else scn.solver["dlam0"]
     for n in load_numbers(scn, lam=lam1):
-        if n["value"] > FIRST_STEP_MAX:
+        if scn.solver["control"] == "linear" and n["value"] > LINEAR_MAX:
+            v.warn(n["name"], f"the load number {n['formula']} = {n['value']:.3g} at lam_end = {lam1:g} (span L = "
+                              f"{n['span']:.4g}) is above {LINEAR_MAX:g}: rotations of that order, beyond the "
+                              'small rotations of a linear analysis; solve with control = "load"')
+        elif n["value"] > FIRST_STEP_MAX:
             v.warn(n["name"], f"the load number {n['formula']} = {n['value']:.3g} in the first step (load factor "
                               f"{lam1:g}; span L = {n['span']:.4g}) is above {FIRST_STEP_MAX:g}: the first step "
                               "bends the shell through many turns; check the units of the load (and mu0), or "

@@ -12,9 +12,9 @@ import math
 import numpy as np
 
 from ..errors import ScenarioError, ScenarioWarning, did_you_mean
-from ..model.base import REQUIRED
+from ..registry import REQUIRED
 
-__all__ = ["Validator", "join", "tname", "show", "make_scale"]
+__all__ = ["Validator", "join", "tname", "show", "make_scale", "user_key"]
 
 _REQ = REQUIRED
 
@@ -74,6 +74,11 @@ class Validator:
     def fail(self, key, msg):
         raise ScenarioError(msg, self.file, key)
 
+    @staticmethod
+    def shown(x):
+        """A value as messages show it: its TOML type and (shortened) repr."""
+        return f"{tname(x)} {show(x)}"
+
     def warn(self, key, msg):
         """An implausible value: a ScenarioWarning kept in ``warnings`` (with ``strict`` a
         ScenarioError)."""
@@ -105,7 +110,8 @@ class Validator:
             self.fail(path, f"missing required key ({what})")
         return path, k in d
 
-    def number(self, d, k, key, default=_REQ, lo=None, lo_open=False, hi=None, hi_open=False):
+    def number(self, d, k, key, default=_REQ, lo=None, lo_open=False, hi=None, hi_open=False, infinite=False):
+        """A finite number (``infinite``: +-inf too, for a bound whose default is none) in the bounds."""
         path, present = self._lookup(d, k, key, default, "a number")
         if not present:
             return default
@@ -113,7 +119,7 @@ class Validator:
         if isinstance(v, bool) or not isinstance(v, (int, float)):
             self.fail(path, f"expected a number, got {tname(v)} {show(v)}")
         v = float(v)
-        if not math.isfinite(v):
+        if not math.isfinite(v) and not (infinite and math.isinf(v)):
             self.fail(path, f"expected a finite number, got {v}")
         if lo is not None and (v <= lo if lo_open else v < lo):
             self.fail(path, f"expected a number {'>' if lo_open else '>='} {lo:g}, got {v:g}")
@@ -212,33 +218,114 @@ class Validator:
                 self.fail(join(k, name), f"expected a table, got {tname(t)} {show(t)}")
         return v
 
+    def section(self, d, key, kind, first=(), extra=(), required=()):
+        """The values of table ``d`` declared by ``kind`` (a ``registry.Kind``): unknown keys
+        refused (``first``, ``extra``: keys the section itself reads before and after the kind's,
+        e.g. ``type`` and the selection), ``required`` present, every declared key checked
+        (:meth:`params`), then the kind's check across keys."""
+        self.table(d, key, tuple(first) + kind.keys() + tuple(extra), required=required)
+        out = self.params(d, key, kind.params)
+        self.kind_check(kind, out, d, key)
+        return out
+
+    def kind_check(self, kind, values, d, key):
+        """Run ``kind.check(values, given)``; its (key, message) becomes a ScenarioError."""
+        check = getattr(kind, "check", None)
+        if check is not None:
+            bad = check(values, set(d))
+            if bad is not None:
+                self.fail(join(key, bad[0]) if bad[0] else key, bad[1])
+
     def params(self, d, key, params):
-        """Values of the declared keys ``params`` (core_se3.model.Param) of table d, defaults
+        """Values of the declared keys ``params`` (``registry.Param``) of table d, defaults
         filled in (``table`` params validated recursively; None stays None)."""
         out = {}
         for p in params:
-            if p.kind == "vector":
-                val = self.vector(d, p.name, key, default=p.default, nonzero=p.nonzero)
-                out[p.name] = list(val) if isinstance(val, tuple) else val
-            elif p.kind == "number":
-                out[p.name] = self.number(d, p.name, key, default=p.default, lo=p.lo, lo_open=p.lo_open)
-            elif p.kind == "bool":
-                out[p.name] = self.boolean(d, p.name, key, default=p.default)
-            elif p.kind == "matrix3":
-                out[p.name] = self.matrix3(d, p.name, key)
-            elif p.kind == "table":
-                if p.name not in d:
-                    if p.required:
-                        self.fail(join(key, p.name), "missing required key (a table)")
-                    out[p.name] = p.default
-                    continue
-                k2 = join(key, p.name)
-                self.table(d[p.name], k2, tuple(q.name for q in p.fields),
-                           required=tuple(q.name for q in p.fields if q.required))
-                out[p.name] = self.params(d[p.name], k2, p.fields)
-            else:
-                raise TypeError(f"unknown parameter kind {p.kind!r} of {p.name!r}")
+            out[p.name] = self.param(d, key, p)
         return out
+
+    def param(self, d, key, p):
+        """The value of one declared key (``registry.Param``) of table d (its default when absent)."""
+        if p.parse is not None:
+            if p.name not in d:
+                if p.required:
+                    self.fail(join(key, p.name), f"missing required key ({p.doc or 'see the docs'})")
+                return p.default
+            return p.parse(self, d, key)
+        if p.kind == "vector":
+            val = self.vector(d, p.name, key, n=p.n, default=p.default, nonzero=p.nonzero)
+            return list(val) if isinstance(val, (tuple, list)) else val
+        if p.kind == "number":           # a bound whose default is infinite may be given as inf
+            return self.number(d, p.name, key, default=p.default, lo=p.lo, lo_open=p.lo_open, hi=p.hi,
+                               hi_open=p.hi_open, infinite=isinstance(p.default, float) and math.isinf(p.default))
+        if p.kind == "integer":
+            return self.integer(d, p.name, key, default=p.default, lo=p.lo, hi=p.hi)
+        if p.kind == "bool":
+            return self.boolean(d, p.name, key, default=p.default)
+        if p.kind == "string":
+            return self.string(d, p.name, key, default=p.default, choices=p.choices)
+        if p.kind == "matrix3":
+            if p.name not in d and not p.required:
+                return p.default
+            return self.matrix3(d, p.name, key)
+        if p.kind == "list":
+            return self.items(d, key, p)
+        if p.kind == "any":
+            if p.name not in d:
+                if p.required:
+                    self.fail(join(key, p.name), "missing required key")
+                return p.default
+            return d[p.name]
+        if p.name not in d:                                   # a table
+            if p.required:
+                self.fail(join(key, p.name), "missing required key (a table)")
+            return p.default
+        k2 = join(key, p.name)
+        self.table(d[p.name], k2, tuple(q.name for q in p.fields),
+                   required=tuple(q.name for q in p.fields if q.required))
+        return self.params(d[p.name], k2, p.fields)
+
+    def items(self, d, key, p):
+        """An array of strings (from ``p.choices``) or integers (in [p.lo, p.hi]): at least
+        ``p.min_items``; ``p.unique`` 'error' refuses a repeat, 'sort' gives the sorted set."""
+        path, present = self._lookup(d, p.name, key, p.default, "an array")
+        if not present:
+            return list(p.default) if isinstance(p.default, (list, tuple)) else p.default
+        x = d[p.name]
+        what = p.doc or ("names" if p.item == "string" else "integers")
+        ok = isinstance(x, list) and len(x) >= p.min_items
+        if ok and p.item == "string":
+            ok = all(isinstance(a, str) and (p.choices is None or a in p.choices) for a in x)
+        elif ok:
+            ok = all(not isinstance(a, bool) and isinstance(a, int) and (p.lo is None or a >= p.lo)
+                     and (p.hi is None or a <= p.hi) for a in x)
+        if ok and p.unique == "error":
+            ok = len(set(x)) == len(x)
+        if not ok:
+            self.fail(path, f"expected {'a non-empty' if p.min_items else 'an'} array of {what}, got {show(x)}")
+        return sorted(set(x)) if p.unique == "sort" else list(x)
+
+
+def user_key(key, kind, exc):
+    """The dotted key to name for a ValueError that a kind's own build raised (a user's
+    constructor refusing a value): ``exc.param`` when it has one, else the one declared key whose
+    name the message mentions, else the entry's key.
+
+    Example
+    -------
+    >>> from core_se3.registry import Param, Section
+    >>> k = Section("torus", (Param("R", "number"), Param("r", "number")))
+    >>> user_key("obstacles[0]", k, ValueError("the tube radius r = 2 must be below R = 1")), user_key("x", k, ValueError("bad"))
+    ('obstacles[0]', 'x')
+    >>> user_key("obstacles[0]", k, ValueError("r must be > 0, got -1"))
+    'obstacles[0].r'
+    """
+    import re
+    param = getattr(exc, "param", None)
+    if param:
+        return join(key, param)
+    named = [k for k in kind.keys() if re.search(rf"(?<![\w.]){re.escape(k)}(?![\w(])", str(exc))]
+    return join(key, named[0]) if len(named) == 1 else key
 
 
 def join(key, k):

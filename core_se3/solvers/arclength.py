@@ -35,20 +35,22 @@ computations from the same bits, so an interrupted and resumed path ends in the 
 uninterrupted one.
 
 Stability (``solvers.stability``): the negative pivots of the symmetrised tangent at every
-converged point bracket limit points and bifurcations; ``branch_switch=True`` leaves a
-bifurcation along the buckling mode (the eigenvector of the smallest eigenvalue,
-orthogonalised to t) instead of continuing on the primary path.
+converged point bracket limit points and bifurcations, and the step that crossed one is
+bisected until its load factor is known to ``critical_tol`` (``solvers.critical``);
+``branch_switch=True`` leaves a bifurcation along the buckling mode (the eigenvector of the
+smallest eigenvalue, orthogonalised to t) instead of continuing on the primary path.  The
+corrector and its constraints live in ``solvers.corrector``.
 """
 from __future__ import annotations
 
 import logging
-import time
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from ..errors import ConvergenceError, CoreSE3Error, ElementTooDistortedError, SingularSystemError
-from .linalg import Factorization
+from .corrector import ArcLengthConstraint, LinearConstraint, StepFailed, correct
+from .critical import narrow
 from .options import ArcLengthOptions, split_options, unknown_keywords
 from .stability import CriticalPoint, analyse, locate_critical
 
@@ -56,70 +58,6 @@ __all__ = ["ArcState", "PathEvent", "PathInfo", "path_steps", "path_follow", "co
            "LinearConstraint", "StepFailed", "PathError", "arc_options"]
 
 log = logging.getLogger(__name__)
-
-
-# ============================================================== constraints ===============
-
-class StepFailed(Exception):
-    """A corrector that did not converge (the step is rejected and retried shorter)."""
-
-
-class _ArcLength:
-    def __init__(self, method, ds, psi_u, w):
-        self.method, self.ds, self.c2, self.w = method, ds, psi_u ** 2, w
-
-    def start(self, du, dlam):
-        self.du, self.dlam = du.copy(), dlam
-        self.du0, self.dlam0 = du.copy(), dlam                  # predictor (normal of Riks)
-
-    def dlam_for(self, sysm, state, a, b):
-        w = self.w
-        if self.method == "riks":
-            den = np.sum(w * self.du * b) + self.c2 * self.dlam
-            if den == 0:
-                raise StepFailed("Riks constraint is tangent to the path")
-            return -np.sum(w * self.du * a) / den
-        ua = self.du + a
-        A = np.sum(w * b * b) + self.c2
-        B = 2 * (np.sum(w * ua * b) + self.c2 * self.dlam)
-        Cc = np.sum(w * ua * ua) + self.c2 * self.dlam ** 2 - self.ds ** 2
-        disc = B * B - 4 * A * Cc
-        if disc < 0:
-            # complex roots: take the point of the correction line closest to the sphere
-            # (minimum of the quadratic); the next iterations return to the constraint
-            self.complex_roots = getattr(self, "complex_roots", 0) + 1
-            if self.complex_roots > 3:
-                raise StepFailed("arc-length constraint has no real root (complex roots)")
-            return -B / (2 * A)
-        roots = ((-B + np.sqrt(disc)) / (2 * A), (-B - np.sqrt(disc)) / (2 * A))
-        # choose the root whose increment makes the smallest angle with the previous one
-        score = [np.sum(w * self.du * (ua + x * b)) + self.c2 * self.dlam * (self.dlam + x)
-                 for x in roots]
-        return roots[int(np.argmax(score))]
-
-    def accept(self, x, dl):
-        self.du += x
-        self.dlam += dl
-
-
-class LinearConstraint:
-    """A linear constraint of the bordered corrector: c(state, lam) = value(state) + c_lam lam - target, linearised by row . du + c_lam dlam."""
-
-    def __init__(self, value, row, c_lam, target):
-        self.value, self.row, self.c_lam, self.target = value, row, c_lam, target
-        self.lam = None
-
-    def dlam_for(self, sysm, state, a, b):
-        c = (self.value(state) if self.value else 0.0) + self.c_lam * self.lam - self.target
-        ru = self.row(state) if self.row else None
-        num = c + (ru @ a if ru is not None else 0.0)
-        den = (ru @ b if ru is not None else 0.0) + self.c_lam
-        if den == 0 or not np.isfinite(den):
-            raise StepFailed("the controlled displacement does not respond to the load (c_u . b = 0)")
-        return -num / den
-
-    def accept(self, x, dl):
-        pass
 
 
 # ============================================================== path data ================
@@ -171,7 +109,8 @@ class ArcState:
                   critical=[dict(kind=c.kind, step=int(c.step), lam=float(c.lam),
                                  lam_bracket=[float(x) for x in c.lam_bracket],
                                  negative_eigenvalues=[None if x is None else int(x)
-                                                       for x in c.negative_eigenvalues])
+                                                       for x in c.negative_eigenvalues],
+                                 accuracy=None if c.accuracy is None else float(c.accuracy))
                             for c in self.critical],
                   unwrap=None if self.unwrap is None else
                   {k: [float(x) for x in np.asarray(v, float)] for k, v in self.unwrap.items()})
@@ -186,45 +125,13 @@ class ArcState:
     def unpack(cls, state, scalars, arrays):
         sc = scalars
         crit = [CriticalPoint(c["kind"], c["step"], c["lam"], tuple(c["lam_bracket"]),
-                              tuple(c["negative_eigenvalues"])) for c in sc.get("critical", [])]
+                              tuple(c["negative_eigenvalues"]), accuracy=c.get("accuracy"))
+                for c in sc.get("critical", [])]
         unwrap = None if sc.get("unwrap") is None else \
             {k: np.array(v, float) for k, v in sc["unwrap"].items()}
         return cls(state, sc["lam"], sc["step"], sc["ds"], sc["ds_max"], sc["ds_min"], sc["psi_u"],
                    sc["direction"], arrays.get("prev_du"), sc["prev_dl"], arrays.get("switch_mode"),
                    sc["branch_switch"], crit, sc["finished"], unwrap)
-
-
-def correct(sysm, state, lam, con, opts, timers):
-    """Newton on the bordered system from the predicted (state, lam); returns the converged
-    (state, lam, iterations, residual history, evaluation at the solution)."""
-    hist = []
-    dn = np.inf
-    for it in range(opts.max_iter + 1):
-        ta = time.perf_counter()
-        ev = sysm.evaluate(state, lam, tangent=True)
-        timers[0] += time.perf_counter() - ta
-        rn = ev["rn"]
-        hist.append(rn)
-        if it > 0 and rn <= max(opts.rtol, ev["floor"]) and dn <= opts.dtol:
-            return state, lam, it, hist, ev
-        if it == opts.max_iter:
-            raise StepFailed(f"no convergence in {opts.max_iter} iterations (residual {rn:.2e})")
-        if it > 3 and rn > opts.divergence * max(hist[0], 1e-300):
-            raise StepFailed(f"diverging (residual {rn:.2e})")
-        ts = time.perf_counter()
-        sysm.factorizations += 1
-        with Factorization(ev["K"], sysm.solver) as fac:
-            a = fac.solve(-ev["r"])
-            b = fac.solve(ev["q"])
-        timers[1] += time.perf_counter() - ts
-        if isinstance(con, LinearConstraint):
-            con.lam = lam
-        dl = con.dlam_for(sysm, state, a, b)
-        x = a + dl * b
-        dn = sysm.increment_norm(x)
-        state = sysm.update(state, x)
-        lam = lam + dl
-        con.accept(x, dl)
 
 
 def _fraction(cur, pt, why, lam_end, control_end, ctrl_val):
@@ -369,7 +276,7 @@ def path_steps(sysm, options, lam_end=1.0, control=None, control_end=None, lam_m
                 s = np.sign(np.sum(sysm.w * prev_du * t) + psi_u ** 2 * prev_dl) or 1.0
             dl *= s
             du = dl * t
-        con = _ArcLength(o.method, ds, psi_u, sysm.w)
+        con = ArcLengthConstraint(o.method, ds, psi_u, sysm.w)
         con.start(du, dl)
         reason = ""
         hist = []
@@ -430,6 +337,9 @@ def path_steps(sysm, options, lam_end=1.0, control=None, control_end=None, lam_m
             nxt = np.sum(sysm.w * con.du * pt.t) + psi_u ** 2 * con.dlam
             turned = np.sign(con.dlam0) != np.sign(nxt) if nxt != 0 else None
             cp = locate_critical(sysm, cur, pt, sysm.w * con.du / span, span, step, limit=turned)
+            if not jumped:
+                trylog.append(narrow(sysm, cur, pt, con, cp, o, timers, correct,
+                                     lambda ds: ArcLengthConstraint(o.method, ds, psi_u, sysm.w), (StepFailed,)))
             crit.append(cp)
             event = "  ** " + cp.describe()
             if cp.kind == "bifurcation" and branch_switch and cp.mode is not None:

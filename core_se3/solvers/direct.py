@@ -8,6 +8,11 @@ manager that yields ``solve(b)``; K arrives as CSR arrays of the equilibrated ta
   beams, where SuperLU's set-up costs more than the factorisation itself;
 * ``mumps``: PETSc/MUMPS LU through petsc4py (imported at the first use), with its analysis
   kept while the pattern stays; ``mumps_inertia`` counts eigenvalue signs by LDL^T.
+
+Each factor also gives the sign of det K from the factors already in hand (``Factor.sign``: the
+diagonal of U and the parities of the row and column permutations; MUMPS computes the
+determinant itself, ICNTL(33)): a change of that sign between two states of a path is an odd
+number of real eigenvalues through zero, a critical point (``solvers.newton``'s stability check).
 """
 from __future__ import annotations
 
@@ -57,11 +62,13 @@ def available_solvers():
 
 class Factor:
     """Context manager holding a factorisation; calling it solves for one right-hand side.
+    ``sign()``: +1 or -1, the sign of det K from the factors (None when the solver cannot
+    tell); it stays valid after the context closes, until the solver factors again.
     ``solve_transpose`` (None when the solver has none) solves with the transpose on the same
     factors (the adjoint sensitivities of a control session, ``core_se3.control``)."""
 
-    def __init__(self, solve, release=lambda: None, solve_transpose=None):
-        self._solve, self._release = solve, release
+    def __init__(self, solve, release=lambda: None, sign=lambda: None, solve_transpose=None):
+        self._solve, self._release, self.sign = solve, release, sign
         self.solve_transpose = solve_transpose
 
     def __enter__(self):
@@ -70,6 +77,32 @@ class Factor:
     def __exit__(self, *exc):
         self._release()
         return False
+
+
+def permutation_parity(p):
+    """+1 for an even permutation p of 0..n-1, -1 for an odd one: (-1)^(n - its cycles), the
+    cycles counted as the connected components of the graph i -> p[i] (no Python loop).
+
+    Example
+    -------
+    >>> permutation_parity([0, 1, 2]), permutation_parity([1, 0, 2]), permutation_parity([1, 2, 0])
+    (1, -1, 1)
+    """
+    from scipy.sparse.csgraph import connected_components
+    p = np.asarray(p, np.int64)
+    n = len(p)
+    if n == 0 or np.array_equal(p, np.arange(n)):
+        return 1
+    graph = sp.csr_matrix((np.ones(n), (np.arange(n), p)), shape=(n, n))
+    cycles, _ = connected_components(graph, directed=True, connection="weak")
+    return -1 if (n - cycles) % 2 else 1
+
+
+def _pivot_sign(diag):
+    """Sign of the product of the pivots (None when one is zero or not finite)."""
+    if not np.all(np.isfinite(diag)) or np.any(diag == 0):
+        return None
+    return -1 if np.count_nonzero(diag < 0) % 2 else 1
 
 
 def finite_solution(x):
@@ -104,8 +137,14 @@ class SuperLUSolver:
                 lu = spla.splu(A, permc_spec="COLAMD")
             except RuntimeError as exc:
                 raise SingularSystemError(f"tangent is singular ({exc})") from None
+
+        def sign():
+            # A = Pr^T L U Pc^T with a unit-diagonal L; det A^T = det A
+            s = _pivot_sign(lu.U.diagonal())
+            return None if s is None else s * permutation_parity(lu.perm_r) * permutation_parity(lu.perm_c)
+
         flip = "N" if trans == "T" else "T"
-        return Factor(lambda b: finite_solution(lu.solve(b, trans=trans)),
+        return Factor(lambda b: finite_solution(lu.solve(b, trans=trans)), sign=sign,
                       solve_transpose=lambda b: finite_solution(lu.solve(b, trans=flip)))
 
     def solve(self, K, b):
@@ -205,7 +244,15 @@ class BandedSolver:
             x[perm] = y
             return finite_solution(x)
 
-        return Factor(solve, solve_transpose=lambda b: solve(b, 1))   # (P K P^T)^T = P K^T P^T
+        def sign():
+            # P K P^T = Pi L U (the ordering is a similarity): U's diagonal is row kl + ku of
+            # the band storage, and each ipiv[i] != i is one row interchange (SciPy's wrapper
+            # returns LAPACK's pivots 0-based)
+            s = _pivot_sign(lu[kl + ku])
+            swaps = np.count_nonzero(ipiv != np.arange(lay.n))
+            return None if s is None else s * (-1 if swaps % 2 else 1)
+
+        return Factor(solve, sign=sign, solve_transpose=lambda b: solve(b, 1))   # (P K P^T)^T = P K^T P^T
 
     def solve(self, K, b):
         with self.factor(K) as solve:
@@ -247,6 +294,8 @@ class MumpsSolver:
         pc = ksp.getPC()
         pc.setType("lu")
         pc.setFactorSolverType("mumps")
+        pc.setFactorSetUpSolverType()
+        pc.getFactorMatrix().setMumpsIcntl(33, 1)      # the determinant (its sign: Factor.sign)
         ksp.setErrorIfNotConverged(True)
         objs = (indptr, indices, A, ksp, A.createVecLeft(), A.createVecRight(), data)
         return objs, False
@@ -294,7 +343,11 @@ class MumpsSolver:
             else:
                 self._destroy(objs)
 
-        return Factor(solve, release, solve_transpose)
+        # RINFOG(12) is the mantissa of det K (INFOG(34) its exponent of 2), read while the
+        # factor is in hand: a matrix made for one factorisation is destroyed at release
+        mantissa = ksp.getPC().getFactorMatrix().getMumpsRinfog(12)
+        det_sign = None if not np.isfinite(mantissa) or mantissa == 0 else (1 if mantissa > 0 else -1)
+        return Factor(solve, release, sign=lambda: det_sign, solve_transpose=solve_transpose)
 
     def solve(self, K, b):
         with self.factor(K) as solve:

@@ -13,10 +13,19 @@ methods on one rank's share of the mesh, with global norms and gathered frames):
   internal and external nodal forces, ``stress(g, lam)`` the mixed iteration's stresses,
   ``linear_stress(ev, eta)``;
 * the linear step: ``solve(ev, g, probe) -> x`` (K x = -r at the frames g; ``probe``: also check
-  the tangent for an unrestrained mode), ``increment(x)`` the nodal increments eta (n, 6), ``work(ev, x)`` = -r . x,
+  the tangent for an unrestrained mode), ``det_sign()`` the sign of det K of that tangent (from its
+  factors; None when unknown), ``increment(x)`` the nodal increments eta (n, 6), ``work(ev, x)`` = -r . x,
   ``residual_sq(ev)`` = |r|_s^2 and ``increment_norm(eta)`` = |eta|_s (unit-scaled norms);
 * what the problem has: ``loads`` (for the Load hooks), ``stateful``, ``mixed``, ``predictor``
   (the tangent predictor is available), ``distributed``, ``root`` (this process logs).
+
+Translation: a part far from the origin (the README cantilever at x0 = 1e4 ... 1e9) stores its
+positions to an absolute round-off eps |x0|, so the strains of an iterate carry eps |x0| / h_e
+and the residual stalls far above its floor (at x0 = 1e4 Newton failed at the first load step).
+When every load is ``translation_invariant`` (its forces do not depend on where the shell is),
+the iterate is held relative to the part's origin (:func:`part_origin`, subtracted exactly):
+``local_frames`` and ``whole_frames`` translate, the problem is evaluated on the local frames,
+and the iterations are those of the part at the origin, bit for bit.
 """
 from __future__ import annotations
 
@@ -26,7 +35,30 @@ from ..fem import ELEMENTS
 from .convergence import relative_residual, scaled_norm
 from .linalg import Factorization
 
-__all__ = ["NewtonEquations"]
+__all__ = ["NewtonEquations", "part_origin"]
+
+
+def part_origin(problem):
+    """The translation c (3,) that load stepping subtracts from the positions of ``problem``'s
+    frames (module docstring), or None: per axis the smallest reference coordinate when all of
+    them lie within a factor 2 of it (then X - c is exact, Sterbenz' lemma, and a part at x0
+    iterates as the same part at 0), else 0; None when a load is not ``translation_invariant``
+    or no axis moves.
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(10.0, 1.0, 4, 1, x0=1e9), Material(1.2e6, 0.0, 0.1))
+    >>> p.add_edge_force("x1", (0.0, 0.0, 1.0))
+    >>> part_origin(p).tolist(), part_origin(Problem(mesh.rectangle(10.0, 1.0, 4, 1), p.material))
+    ([1000000000.0, 0.0, 0.0], None)
+    """
+    if not all(getattr(ld, "translation_invariant", False) for ld in problem.loads):
+        return None
+    X = problem.mesh.g0[:, :3, 3]
+    lo, hi = X.min(0), X.max(0)
+    c = np.where((lo > 0) & (hi <= 2 * lo), lo, np.where((hi < 0) & (lo >= 2 * hi), hi, 0.0))
+    return c if np.any(c != 0) else None
 
 
 class NewtonEquations:
@@ -64,16 +96,33 @@ class NewtonEquations:
         self.loads = problem.loads
         self.stateful = ELEMENTS.lookup(problem.element_name).stateful
         self.mixed = problem.element.mixed
+        self.origin = part_origin(problem)
 
     # ------------------------------------------------------------------ frames ----------
-    def local_frames(self, g):
+    def _moved(self, g, c):
+        g = np.array(g, dtype=float)
+        g[..., :3, 3] += c
         return g
+
+    def local_frames(self, g):
+        """The iterate of whole-mesh frames: positions relative to ``origin`` (when set)."""
+        return g if self.origin is None else self._moved(g, -self.origin)
 
     def whole_frames(self, g):
-        return g
+        """The frames in the problem's coordinates of an iterate."""
+        return g if self.origin is None else self._moved(g, self.origin)
 
     def apply_prescribed(self, g, lam):
-        return self.problem.apply_prescribed(g, lam)
+        if self.origin is None:
+            return self.problem.apply_prescribed(g, lam)
+        # the targets are absolute: set them on a copy and bring only the prescribed nodes back
+        nodes = [s.nodes for s in self.problem.supports if s.target is not None]
+        if not nodes:
+            return g
+        whole = self.problem.apply_prescribed(self.whole_frames(g), lam)
+        nodes = np.concatenate(nodes)
+        g[nodes] = self._moved(whole[nodes], -self.origin)
+        return g
 
     def fixed_dofs(self):
         return self.problem.constraint_mask()
@@ -106,7 +155,13 @@ class NewtonEquations:
             x = fac.solve(-ev.r)
             if probe:
                 fac.probe()
+        self._factor = fac
         return x
+
+    def det_sign(self):
+        """Sign of det K of the tangent of the last :meth:`solve` (None: not known)."""
+        fac = getattr(self, "_factor", None)
+        return None if fac is None else fac.det_sign()
 
     def increment(self, x):
         return self.asm.scatter(x)

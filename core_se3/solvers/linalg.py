@@ -160,6 +160,26 @@ class Factorization:
             raise SingularSystemError(f"tangent is singular or nearly so (solution growth "
                                       f"{growth:.1e} for a random right-hand side)")
 
+    def det_sign(self):
+        """+1 or -1: the sign of det K from the factors in hand (None when a pivot is zero or
+        the solver cannot tell); valid after ``close()`` until the solver factors again.
+
+        Example
+        -------
+        >>> import numpy as np, scipy.sparse as sp
+        >>> K = sp.csr_matrix(np.diag([2.0, -1.0, 3.0]))
+        >>> with Factorization(K, make_solver("banded")) as F:
+        ...     pass
+        >>> F.det_sign(), Factorization(K.toarray(), None).det_sign()
+        (-1, -1)
+        """
+        if self.dense:
+            lu, piv = self.lu
+            swaps = np.count_nonzero(piv != np.arange(len(piv)))
+            neg = np.count_nonzero(np.diag(lu) < 0) + swaps
+            return -1 if neg % 2 else 1
+        return self._ctx.sign()
+
     def close(self):
         if not self.dense:
             self._ctx.__exit__(None, None, None)

@@ -6,8 +6,14 @@ per node in its body frame) and the update is g_i <- g_i exp(eta_i) with K eta =
 
 A failed try (no convergence in ``max_iter``, an edge turning by ~pi, a prescribed motion
 turning nodes by more than 0.9 pi within the step, a singular tangent after the first step, a
-non-finite residual) is cut back by half; after easy steps the increment grows again.  Only
-the requested load factors are yielded (stored); sub-steps are logged.
+non-finite residual) is cut back by half; after easy steps the increment grows again.  So is a
+converged try that fails the checks of ``solvers.step_checks``: the path check (a try whose
+Newton corrections grew may have converged onto another equilibrium) and the stability check
+(a change of the sign of det K between two accepted states is located by bisection and stops the
+run, naming the critical point).  A prescribed motion or a turning field is reached by at most
+``max_substeps`` sub-steps per requested step (``solvers.splitting``).  Only the requested load
+factors are yielded (stored, each with ``StepResult.checks``: what was checked); sub-steps are
+logged.
 
 :func:`newton_steps` yields one :class:`NewtonStep` per requested load factor and can start
 from any :class:`NewtonState` (a restart repeats the same computations from the same bits);
@@ -28,18 +34,15 @@ from .linalg import make_solver
 from .equations import NewtonEquations
 from .newton_try import NewtonTry, augmented_try, hooked_loads, tangent_predictor
 from .options import NewtonOptions, load_steps, split_options, unknown_keywords
+from .splitting import (MAX_LOAD_TURN, MAX_PRESCRIBED_TURN, check_substeps, split_prescribed,
+                        split_turning)
 from .stability import limit_point_hint
+from .step_checks import StepChecks, start_sign
 
 __all__ = ["newton_solve", "newton_steps", "requested_load_factors", "NewtonState", "NewtonStep",
            "MAX_PRESCRIBED_TURN", "MAX_LOAD_TURN"]
 
 log = logging.getLogger(__name__)
-
-MAX_PRESCRIBED_TURN = 0.9 * np.pi   # largest rotation a prescribed motion may make in one step
-# largest angle an applied load's direction (a rotating field) may turn through in one try: a
-# magnet in a field turned by more than pi/2 feels a couple that can flip it the other way, onto
-# another equilibrium (a strip following a field turned 100 deg per step did; 50 deg did not)
-MAX_LOAD_TURN = 0.25 * np.pi
 
 
 @dataclass
@@ -49,7 +52,8 @@ class NewtonState:
     lam, g: the converged state; dlam: the increment a cut-back left to carry over (None: the
     next requested one); k_ref: the stiffness of the first step (limit-point check; None until
     the first step converged); multipliers: those of the augmented loads (contact), one array
-    per load in the order of ``problem.loads`` (None: their cold start).
+    per load in the order of ``problem.loads`` (None: their cold start); det_sign: the sign of
+    det K at the state (stability check; None: found again from the next try's first tangent).
 
     Attributes
     ----------
@@ -64,18 +68,20 @@ class NewtonState:
     -------
     >>> import numpy as np
     >>> NewtonState(0.5, np.eye(4)[None], dlam=0.25).pack()      # what a checkpoint stores
-    {'lam': 0.5, 'dlam': 0.25, 'k_ref': None}
+    {'lam': 0.5, 'dlam': 0.25, 'k_ref': None, 'det_sign': None}
     """
     lam: float
     g: np.ndarray
     dlam: float | None = None
     k_ref: float | None = None
     multipliers: list | None = None
+    det_sign: int | None = None
 
     def pack(self):
         """JSON-able scalars (the frames and multipliers are stored apart)."""
         return dict(lam=float(self.lam), dlam=None if self.dlam is None else float(self.dlam),
-                    k_ref=None if self.k_ref is None else float(self.k_ref))
+                    k_ref=None if self.k_ref is None else float(self.k_ref),
+                    det_sign=None if self.det_sign is None else int(self.det_sign))
 
     def arrays(self):
         """The multipliers as named arrays for a checkpoint ({} without augmented loads);
@@ -169,36 +175,15 @@ class _Timer:
         self.t_start = time.perf_counter()
 
 
-def _split_prescribed(problem, lam, lam_try):
-    """The load factor of the next try from lam toward lam_try such that the prescribed
-    motion turns no node by more than 0.95 MAX_PRESCRIBED_TURN (a turn near pi is ambiguous for
-    the exponential update: 2 pi lands on the same frame), found by equal splitting."""
-    for _ in range(60):
-        turn = problem.prescribed_rotation(lam, lam_try)
-        if turn <= MAX_PRESCRIBED_TURN:
-            return lam_try
-        lam_try = lam + (lam_try - lam) / max(2.0, np.ceil(turn / (0.95 * MAX_PRESCRIBED_TURN)))
-    raise ElementTooDistortedError("the prescribed motion turns nodes by more than "
-                                   f"{MAX_PRESCRIBED_TURN:.3f} rad in any step from load factor {lam:.6g}")
-
-
-def _split_turning(turning, g, lam, lam_try):
-    """The load factor of the next try from lam toward lam_try such that no load of
-    ``turning`` (``Load.direction_turn``) turns its direction by more than MAX_LOAD_TURN at the
-    state g, found by equal splitting (the request is then reached by several tries)."""
-    for _ in range(60):
-        turn = max(ld.direction_turn(g, lam, lam_try) for ld in turning)
-        if turn <= MAX_LOAD_TURN:
-            return lam_try
-        lam_try = lam + (lam_try - lam) / max(2.0, np.ceil(turn / (0.95 * MAX_LOAD_TURN)))
-    return lam_try
-
-
 def _log_try(result, tries, lam_try, out, augmentation=None, quiet=False):
     """Append the log entry of a try (an augmented one, k > 0, converged and solved again);
-    ``quiet``: not to the logger (the ranks of a distributed run other than rank 0)."""
+    ``quiet``: not to the logger (the ranks of a distributed run other than rank 0).  The
+    entry keeps the relative size of every correction (``increments``), their measures
+    (``contraction``, ``travel``: ``solvers.step_checks.path_measures``) and the sign of det K
+    at its end (``det_sign``, None when not found)."""
     entry = dict(lam=lam_try, converged=out.ok, iterations=out.iterations, linear_solves=out.solves,
-                 residual_history=out.hist, reason=out.reason)
+                 residual_history=out.hist, reason=out.reason, increments=[float(x) for x in out.incs],
+                 contraction=out.contraction, travel=out.travel, det_sign=out.det_sign)
     if augmentation:
         entry["augmented"] = augmentation
     result.log.append(entry)
@@ -281,22 +266,38 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
     # function of g alone, so a restart from a NewtonState repeats the same computations)
     mip = opts.iteration == "mip" and eq.mixed and not stateful
     stress_conv = eq.stress(g, lam) if mip else None
+    # contact (a constraint-force load) is not smooth: its Newton tries contract irregularly at
+    # any step size and det K jumps as nodes touch and lift off, so both checks leave it
+    smooth = not any(getattr(ld, "constraint_force", False) for ld in eq.loads)
+    # a stateful element (the seed's) has no consistent tangent: its Newton corrections contract
+    # linearly at any step, so their growth says nothing of the path
+    checks = StepChecks(opts.path_check and smooth and not stateful, smooth and hasattr(eq, "det_sign"), opts.critical_tol,
+                        state.det_sign, stop=opts.limit_check)
+    trier.signs = checks.stability
     for target in targets:
         tries = []
         n_recorded = 0                           # tries already counted in a recorded sub-step
         # the requested increment; a cut-back increment carries over, capped by it
         dlam_nominal = target - lam
         dlam = dlam_nominal if dlam is None else np.sign(dlam_nominal) * min(abs(dlam), abs(dlam_nominal))
+        floor = abs(dlam_nominal) / 2 ** opts.max_cutbacks        # the smallest increment cut-backs allow
         stored = None
         while abs(target - lam) > 1e-14 * max(1.0, abs(target)):
             lam_try = lam + dlam if abs(dlam) < abs(target - lam) else target
             if has_targets:
-                lam_try = _split_prescribed(problem, lam, lam_try)
+                lam_split = split_prescribed(problem, lam, lam_try)
+                if lam_split != lam_try:
+                    check_substeps(lam, target, lam_split, opts.max_substeps, "the prescribed motion",
+                                   problem.prescribed_rotation(lam, lam_split), MAX_PRESCRIBED_TURN, result)
+                    lam_try = lam_split
                 if abs(lam_try - lam) < abs(dlam):
                     dlam = lam_try - lam         # the split increment carries on (and regrows)
             if turning:
-                lam_split = _split_turning(turning, g_whole, lam, lam_try)
+                lam_split, ld = split_turning(turning, g_whole, lam, lam_try)
                 if lam_split != lam_try:         # a rotating field: the split carries on too
+                    name = getattr(ld, "name", "") or ld.kind or type(ld).__name__
+                    check_substeps(lam, target, lam_split, opts.max_substeps, f"the direction of load {name!r}",
+                                   ld.direction_turn(g_whole, lam, lam_split), MAX_LOAD_TURN, result)
                     lam_try = lam_split
                     if abs(lam_try - lam) < abs(dlam):
                         dlam = lam_try - lam
@@ -308,15 +309,21 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
             stress_try = stress_conv
             if opts.predictor == "tangent" and has_targets and not stateful and eq.predictor:
                 try:
-                    g_try, stress_try = tangent_predictor(problem, g, lam, lam_try, solver, mip, trier.caps)
+                    g_try, stress_try = tangent_predictor(problem, g_whole, lam, lam_try, solver, mip, trier.caps)
+                    g_try = eq.local_frames(g_try)
                 except (SingularSystemError, ElementTooDistortedError, FloatingPointError):
-                    g_try, stress_try = problem.apply_prescribed(g.copy(), lam_try), stress_conv
+                    g_try, stress_try = eq.apply_prescribed(g.copy(), lam_try), stress_conv
             for ld in predictors:                # nodes in contact carried with a moving obstacle
                 g_try = ld.predict_start(g, lam, g_try, lam_try, eq.fixed_dofs())
             saved = [ld.multipliers() for ld in aug]
             g_start = g_try
             out = augmented_try(trier, aug, g_try, lam_try, mip, stress_try, opts.max_augmentations,
                                 lambda o, k: _log_try(result, tries, lam_try, o, augmentation=k, quiet=not eq.root))
+            if out.ok and checks.stability and checks.sign is None and out.det_sign == -1:
+                checks.sign = start_sign(eq, g, lam, stress_conv)     # was the start unstable too?
+            if out.ok:
+                out.reason = checks.judge(out, lam, lam_try)
+                out.ok = not out.reason
             if out.ok and sweeps:                # a step that passed through an obstacle: cut back
                 out.ok, out.reason = not (why := _step_error(sweeps, g, lam, out.g, lam_try)), why or out.reason
             ok, reason, hist, g_try, ev = out.ok, out.reason, out.hist, out.g, out.ev
@@ -343,6 +350,7 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
                         "displacement control (core_se3.solvers.displacement_control); the "
                         "steps before the limit point are kept in .result", result)
             if ok:
+                checks.accept(out, lam_try)
                 lam = lam_try
                 g = g_try
                 for ld in accepts:               # path-dependent loads move their history on (friction)
@@ -353,28 +361,43 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
                 at_target = abs(lam - target) <= 1e-14 * max(1.0, abs(target))
                 # the try's start and increments unwrap a probe turned by more than pi
                 turn = () if eq.distributed or np.isscalar(eta_sum) else (g_start, eta_sum)
+                local = None if getattr(eq, "origin", None) is None else (g, eq.origin)
                 if at_target or opts.record_substeps:
-                    st = rec.step(lam, g_whole, len(hist) - 1, hist, *eq.forces(ev), None, *turn)
+                    st = rec.step(lam, g_whole, len(hist) - 1, hist, *eq.forces(ev), None, *turn, local=local)
                     st.residual_floor = min(out.floor, 1e300)      # finite in JSON when all forces are 0
                     st.attempts = len(tries) - n_recorded
                     st.linear_solves = sum(t["linear_solves"] for t in tries[n_recorded:])
+                    st.checks = checks.record()
                     n_recorded = len(tries)
                     if at_target:
                         stored = st
                     else:
                         result.steps.append(st)
-                else:
+                elif local is None:
                     rec.probes(g_whole, *turn)
+                else:
+                    rec.probes(g, *turn, origin=eq.origin)
                 if len(hist) - 1 <= 6 and abs(dlam) < abs(dlam_nominal):
                     dlam = min(abs(dlam) * 2, abs(dlam_nominal)) * np.sign(dlam_nominal)
+                dlam = checks.next_increment(lam, dlam, floor)       # locating a det K sign change
             else:
                 if stateful:
                     problem.element.restore()
-                dlam = dlam / 2
-                if abs(dlam) < abs(dlam_nominal) / 2 ** opts.max_cutbacks:
+                checks.failed()
+                dlam = checks.next_increment(lam, dlam / 2, floor)
+            if checks.located(floor):
+                timer.close()
+                raise ConvergenceError(checks.critical_message(), result)
+            for cp in checks.passed(len(result.steps)):          # the index of the next stored step
+                result.critical_points.append(cp)
+                if eq.root:
+                    log.warning("load control passed a %s (limit_check off: the path goes on, unstable)",
+                                cp.describe())
+            if not ok:
+                if abs(dlam) < floor:
                     timer.close()
                     hint = next((h for h in (ld.failure_hint() for ld in hooked_loads(eq, "failure_hint")) if h),
-                                None) or (limit_point_hint(problem, g, lam, opts.linear_solver)
+                                None) or (limit_point_hint(problem, g_whole, lam, opts.linear_solver)
                                           if lam != 0.0 and not eq.distributed else None)
                     raise ConvergenceError(
                         f"Newton failed at load factor {lam_try:.6g} after {opts.max_cutbacks} cut-backs "
@@ -385,7 +408,8 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
             stored = rec.step(lam, g_whole, 0, [], *eq.forces(ev))
             stored.attempts, stored.linear_solves = 0, 0
         timer.close()
-        state = NewtonState(lam, g_whole, dlam, k_ref, [ld.multipliers() for ld in aug] if aug else None)
+        state = NewtonState(lam, g_whole, dlam, k_ref, [ld.multipliers() for ld in aug] if aug else None,
+                            checks.sign)
         yield NewtonStep(stored, state, tries)
 
 
@@ -397,12 +421,15 @@ def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, g_init=None, loa
     increment is halved (at most max_cutbacks times per requested step) and grows back.
 
     Options: a NewtonOptions, or its fields as keywords (rtol, dtol, max_iter, max_cutbacks,
-    divergence, limit_check, record_substeps, linear_solver).  limit_check: stop with a
-    ConvergenceError that suggests arc length when a converged step has jumped past a limit
-    point (snap-through): the step started where the current stiffness parameter
+    divergence, path_check, limit_check, critical_tol, max_substeps, record_substeps,
+    linear_solver, ...).  path_check: a converged try whose Newton corrections grew is cut back
+    (it may have converged onto another equilibrium; docs/STEPS.md).  limit_check: stop with a
+    ConvergenceError at a critical point: when det K changes sign between two accepted states
+    (a bifurcation, located to critical_tol), or when a converged step has jumped past a limit
+    point (snap-through: the step started where the current stiffness parameter
     S_p = k / k_0 (k = |r_0|_s^2 / (-r_0 . eta_0), the stiffness seen by the first Newton
     iterate, k_0 its value in the first step) was below 0.3, and the converged increment is
-    more than 3x that first (tangent) iterate.  Not applied to displacement-driven problems.
+    more than 3x that first (tangent) iterate; not applied to displacement-driven problems).
 
     Returns a Result whose first step is the initial state.
 

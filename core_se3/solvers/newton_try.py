@@ -16,7 +16,7 @@ Without such loads the iteration is the plain one, operation for operation.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -26,6 +26,7 @@ from ..errors import ElementTooDistortedError, LinearSolverError, SingularSystem
 from ..model.base import overrides
 from .equations import NewtonEquations
 from .linalg import Factorization
+from .step_checks import path_measures
 
 __all__ = ["NewtonTry", "TryOutcome", "augmented_try", "hooked_loads", "tangent_predictor"]
 
@@ -63,6 +64,12 @@ class TryOutcome:
     floor : float
         The round-off floor of the relative residual at the last iterate
         (``solvers.convergence.relative_residual``; 0 when not evaluated).
+    incs : list of float
+        |eta|_s / ell of every applied correction; ``contraction`` and ``travel`` their measures
+        of ``solvers.step_checks.path_measures`` (the largest over the solves of an augmented try).
+    det_sign : int or None
+        Sign of det K of the last factorised tangent (at the converged state up to the last
+        correction), when :attr:`NewtonTry.signs` asks for it.
 
     Example
     -------
@@ -79,6 +86,19 @@ class TryOutcome:
     k_step: float | None = None
     pred: float | None = None
     floor: float = 0.0
+    incs: list = field(default_factory=list)
+    det_sign: int | None = None
+
+    @property
+    def contraction(self):
+        return max(m[0] for m in self.measures)
+
+    @property
+    def travel(self):
+        return max(m[1] for m in self.measures)
+
+    def __post_init__(self):
+        self.measures = [path_measures(self.incs)]
 
     @property
     def iterations(self):
@@ -102,6 +122,9 @@ class NewtonTry:
     ----------
     first_solve : bool
         True until the first linear solve of the path (its singular tangent is an error).
+    signs : bool
+        Find the sign of det K of the last factorised tangent of a converged try (default
+        False): ``solvers.step_checks``' stability check.
 
     Example
     -------
@@ -122,6 +145,7 @@ class NewtonTry:
         self.ell = problem.length_scale
         self.stateful = self.eq.stateful
         self.first_solve = True
+        self.signs = False
         self.caps = hooked_loads(self.eq, "limit_increment")
         self.starts = hooked_loads(self.eq, "start_error")
 
@@ -143,6 +167,7 @@ class NewtonTry:
         ev = None
         floor = 0.0
         mip_try = mip
+        incs = []
         try:
             for it in range(opts.max_iter + 1):
                 ta = time.perf_counter()
@@ -195,6 +220,7 @@ class NewtonTry:
                         eta = alpha * eta
                 eta_sum = eta_sum + eta
                 dn = eq.increment_norm(eta) / ell
+                incs.append(dn)
                 if mip_try:
                     # the mixed update: stresses linear in the increment (no membrane
                     # overshoot of Dbar (z(g exp eta) - z0) in the geometric stiffness)
@@ -208,8 +234,9 @@ class NewtonTry:
             reason = str(exc)
         except (ElementTooDistortedError, FloatingPointError) as exc:
             reason = str(exc)
+        sign = eq.det_sign() if ok and self.signs and solves else None
         return TryOutcome(ok, reason, g_try, ev, hist, solves, eta_sum, k_step, pred,
-                          0.0 if floor is None else float(floor))
+                          0.0 if floor is None else float(floor), incs, sign)
 
 
 def augmented_try(trier, aug, g_try, lam_try, mip, stress, max_augmentations, record):
@@ -250,6 +277,7 @@ def augmented_try(trier, aug, g_try, lam_try, mip, stress, max_augmentations, re
         out = trier.run(out.g, lam_try, mip, out.ev.stress if mip else None)
         out.eta_sum = out.eta_sum + first.eta_sum
         out.k_step, out.pred = first.k_step, first.pred
+        out.measures += first.measures
     return out
 
 

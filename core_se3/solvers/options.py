@@ -49,8 +49,14 @@ class NewtonOptions:
     rtol, dtol: relative residual and increment tolerances (``solvers.convergence``);
     max_iter: Newton iterations per try; max_cutbacks: halvings of a failed increment per
     requested step; divergence: a try whose residual exceeds this factor times its first one
-    after 3 iterations is abandoned; limit_check: stop with a ConvergenceError suggesting arc
-    length when a step has snapped past a limit point; record_substeps: store the cut-back
+    after 3 iterations is abandoned; path_check: accept a converged try only if its Newton
+    corrections contracted (``solvers.step_checks``: a try that grew them may have converged onto
+    another equilibrium; it is cut back); limit_check: stop with a ConvergenceError when the path
+    meets a critical point: a step that snapped past a limit point (suggesting arc length), or a
+    change of the sign of det K (a bifurcation, located to ``critical_tol`` of the load factor by
+    bisection); max_substeps: the most sub-steps into which a requested step may be split to
+    keep a prescribed motion or a turning field within its turn per try (beyond it a
+    ConvergenceError names the load and the turn); record_substeps: store the cut-back
     sub-steps as steps too; linear_solver: None = the problem's; iteration: 'mip' (the mixed
     integration point Newton of Magisano, Leonetti and Garcea 2017, with an element that
     supports it: the geometric part of the tangent sees element stresses updated linearly,
@@ -68,8 +74,12 @@ class NewtonOptions:
         In [0, 50]; default 12.
     divergence : float
         >= 1; default 1e8.
-    limit_check, record_substeps : bool
-        Default True and False.
+    path_check, limit_check, record_substeps : bool
+        Default True, True and False.
+    critical_tol : float
+        In (0, 1); default 1e-3.
+    max_substeps : int
+        In [1, 10^7]; default 1000.
     linear_solver : str or None
         'auto', 'superlu', 'mumps' or None.
     iteration : str
@@ -100,6 +110,9 @@ class NewtonOptions:
     iteration: str = "mip"
     max_augmentations: int = _opt(25, 0, 1000)
     predictor: str = "none"
+    path_check: bool = True
+    critical_tol: float = _opt(1e-3, 0.0, 1.0, True)
+    max_substeps: int = _opt(1000, 1, 10_000_000)
 
     def __post_init__(self):
         _check(self)
@@ -120,8 +133,10 @@ class ArcLengthOptions:
     first ds), ds_min; max_steps: path points; target_iter: Newton iterations per step the
     step-length adaptation aims at; max_iter, rtol, dtol as for Newton; max_rejections: halvings
     of ds in a row; divergence: as for Newton; stability: count negative pivots and detect
-    critical points; branch_switch: leave the first bifurcation along its mode; land: end
-    exactly on lam_end (or the controlled displacement) by a last corrector.
+    critical points; critical_tol: the relative accuracy in the load factor to which a critical
+    point is located by bisecting the step that crossed it (``solvers.critical``);
+    branch_switch: leave the first bifurcation along its mode; land: end exactly on lam_end (or
+    the controlled displacement) by a last corrector.
 
     Attributes
     ----------
@@ -143,6 +158,8 @@ class ArcLengthOptions:
         Default 12; ``divergence``: default 1e6.
     stability, branch_switch, land : bool
         Defaults True, False, True.
+    critical_tol : float
+        In (0, 1); default 1e-3.
     linear_solver : str or None
         As for NewtonOptions.
 
@@ -172,6 +189,7 @@ class ArcLengthOptions:
     branch_switch: bool = False
     land: bool = True
     linear_solver: str | None = None
+    critical_tol: float = _opt(1e-3, 0.0, 1.0, True)
 
     def __post_init__(self):
         if self.method not in ("crisfield", "riks"):

@@ -10,8 +10,8 @@ import numpy as np
 
 from ..errors import ConvergenceError, ElementTooDistortedError, SingularSystemError
 from ..results import Result, StepRecorder
-from .arclength import (ArcState, LinearConstraint, PathError, PathInfo, StepFailed, arc_options, correct,
-                        path_steps)
+from .arclength import ArcState, PathError, PathInfo, arc_options, path_steps
+from .corrector import LinearConstraint, StepFailed, correct
 from .options import ArcLengthOptions, unknown_keywords
 from .stability import analyse, locate_critical
 from .system import ShellSystem

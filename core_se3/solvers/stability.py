@@ -157,6 +157,9 @@ class CriticalPoint:
         The negative-eigenvalue counts of the two steps (None where not counted).
     mode : ndarray or None
         The buckling mode of a bifurcation (free dofs), not in the repr.
+    accuracy : float or None
+        Relative width of the interval known to hold the critical load factor after the
+        bracket was refined (``solvers.critical``; None: not refined).
 
     Example
     -------
@@ -169,11 +172,15 @@ class CriticalPoint:
     lam_bracket: tuple
     negative_eigenvalues: tuple
     mode: np.ndarray | None = field(default=None, repr=False)
+    accuracy: float | None = None
 
     def describe(self):
         a, b = self.lam_bracket
         neg = "" if None in self.negative_eigenvalues else \
             f", negative eigenvalues {self.negative_eigenvalues[0]} -> {self.negative_eigenvalues[1]}"
+        if self.accuracy is not None:
+            return (f"{self.kind} point at lam = {self.lam:.6g} +- {self.accuracy * abs(self.lam):.2g} "
+                    f"(refined between {a:.6g} and {b:.6g}{neg})")
         return f"{self.kind} point at lam ~ {self.lam:.6g} (between {a:.6g} and {b:.6g}{neg})"
 
 

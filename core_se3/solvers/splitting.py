@@ -1,0 +1,93 @@
+"""Internal splitting of a load step (``solvers.newton``): a try may turn a prescribed motion by
+at most MAX_PRESCRIBED_TURN and an applied load's direction (a rotating field) by at most
+MAX_LOAD_TURN, so a larger requested step is reached by several equal sub-steps; their number is
+bounded by ``NewtonOptions.max_substeps``.
+
+A field turned by 1e6 rad over a step (an angle in the wrong unit, or a typo) would otherwise be
+split into about 1.3 million sub-steps of pi/4, and run for hours without output; beyond the
+bound the run stops at once with a ConvergenceError that names the load, its turn over the
+step and the bound.
+
+Example
+-------
+>>> substeps_needed(0.0, 1.0, 0.001)
+1000
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..errors import ConvergenceError, ElementTooDistortedError
+
+__all__ = ["MAX_PRESCRIBED_TURN", "MAX_LOAD_TURN", "split_prescribed", "split_turning", "substeps_needed",
+           "check_substeps"]
+
+MAX_PRESCRIBED_TURN = 0.9 * np.pi   # largest rotation a prescribed motion may make in one step
+# largest angle an applied load's direction (a rotating field) may turn through in one try: a
+# magnet in a field turned by more than pi/2 feels a couple that can flip it the other way, onto
+# another equilibrium (a strip following a field turned 100 deg per step did; 50 deg did not)
+MAX_LOAD_TURN = 0.25 * np.pi
+
+
+def split_prescribed(problem, lam, lam_try):
+    """The load factor of the next try from lam toward lam_try such that the prescribed
+    motion turns no node by more than 0.95 MAX_PRESCRIBED_TURN (a turn near pi is ambiguous for
+    the exponential update: 2 pi lands on the same frame), found by equal splitting."""
+    for _ in range(60):
+        turn = problem.prescribed_rotation(lam, lam_try)
+        if turn <= MAX_PRESCRIBED_TURN:
+            return lam_try
+        lam_try = lam + (lam_try - lam) / max(2.0, np.ceil(turn / (0.95 * MAX_PRESCRIBED_TURN)))
+    raise ElementTooDistortedError("the prescribed motion turns nodes by more than "
+                                   f"{MAX_PRESCRIBED_TURN:.3f} rad in any step from load factor {lam:.6g}")
+
+
+def split_turning(turning, g, lam, lam_try):
+    """(load factor of the next try, the load that turns most) from lam toward lam_try such
+    that no load of ``turning`` (``Load.direction_turn``) turns its direction by more than
+    MAX_LOAD_TURN at the state g, found by equal splitting (the request is then reached by
+    several tries)."""
+    for _ in range(60):
+        turns = [ld.direction_turn(g, lam, lam_try) for ld in turning]
+        k = int(np.argmax(turns))
+        if turns[k] <= MAX_LOAD_TURN:
+            return lam_try, turning[k]
+        lam_try = lam + (lam_try - lam) / max(2.0, np.ceil(turns[k] / (0.95 * MAX_LOAD_TURN)))
+    return lam_try, turning[k]
+
+
+def substeps_needed(lam, target, lam_try):
+    """The number of sub-steps of the size lam_try - lam that reach target from lam.
+
+    Example
+    -------
+    >>> substeps_needed(0.2, 1.0, 0.3)
+    8
+    """
+    return int(math.ceil(abs(target - lam) / abs(lam_try - lam) - 1e-9))
+
+
+def check_substeps(lam, target, lam_try, max_substeps, what, turn, per_try, result=None):
+    """Raise a ConvergenceError when reaching ``target`` from lam in sub-steps of lam_try - lam
+    would take more than ``max_substeps``; ``what`` names the load (or 'the prescribed motion'),
+    ``turn`` [rad] is its turn over one sub-step (the message gives the whole turn) and
+    ``per_try`` the most a try may turn; ``result`` goes with the error.
+
+    Example
+    -------
+    >>> check_substeps(0.0, 1.0, 1e-6, 10000, "load 'magnetic'", 0.7, MAX_LOAD_TURN)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.ConvergenceError: load 'magnetic' turns by about 7e+05 rad (1.1e+05 turns) ...
+    """
+    n = substeps_needed(lam, target, lam_try)
+    if n <= max_substeps:
+        return
+    total = turn * n
+    raise ConvergenceError(
+        f"{what} turns by about {total:.2g} rad ({total / (2 * np.pi):.2g} turns) between load factors "
+        f"{lam:.6g} and {target:.6g}: at most {per_try:.3g} rad per try, that is {n} sub-steps, more than max_substeps = {max_substeps}. Check the "
+        "angle and its unit (radians: 360 is 57 turns), or raise [solver] max_substeps "
+        "(NewtonOptions.max_substeps) if so many turns are meant", result)

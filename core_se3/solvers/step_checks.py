@@ -1,0 +1,266 @@
+"""The checks of every converged try of load stepping (``solvers.newton``): does the state
+continue the path, and has the path met a critical point?
+
+**Path check** (``NewtonOptions.path_check``).  A large load step can converge onto another
+equilibrium: the Zhao magnetic cantilever at A Br Ba L^2/(mu0 E I) = 14 in one step converged in
+9 iterations to a tip angle of pi (the path's is 1.5 rad), a state with two negative tangent
+eigenvalues; at 17 to a looped, *stable* state (positive-definite tangent), so the inertia of the
+converged state cannot tell every such jump.  What tells it is how Newton got there.  With the
+affine-covariant contraction of Newton's method (Deuflhard, *Newton Methods for Nonlinear
+Problems*, 2004, ch. 2 and 5), Theta_k = |eta_{k+1}| / |eta_k| of two successive corrections: if
+Newton contracts from the start of the step, the iterates stay in a ball about the first iterate
+in which the solution is unique (the later corrections add up to at most |eta_0| Theta / (1 -
+Theta)), and, the first correction growing with the load increment, the solutions for the
+smaller increments lie in smaller balls: the converged state is the continuation of the start
+state (the homotopy argument behind Deuflhard's step-size control of continuation methods).  A
+Newton that grows its corrections at the scale of the step has left that region and may end
+anywhere.  The check refuses a converged try when
+
+* a correction grows (Theta_k >= 1) where the pair is at the step's scale (the larger of the two
+  at least GROWTH_SCALE = 1/2 of the first correction), or
+* the corrections after the first add up to TRAVEL_MAX = 1.5 times the first or more (what a
+  contraction of 0.6 at every iteration would reach).
+
+A non-monotone wiggle far below the step's scale moves the iterate nowhere and is not counted:
+the quarter hemisphere of Sze et al. under load control grows a correction 3.4e-2, 7.05e-5,
+7.50e-5 at every step size (an inexact tangent of its penalty springs), which a plain Theta < 1
+refused down to the smallest cut-back (3774 tries for its 10 steps, against 10).  Measured over
+296 converged tries of the Zhao beam without the check (q = 5 ... 30, 20 to 90 elements, 1, 2
+and 4 steps; ``benchmarks/robustness.py --part candidates``): each of the 17 jumps from a state on
+the path grew a correction at the step's scale by 1.58 or more; 25 of the 269 tries that
+converged on the path did too, and 3 more travelled 1.5 times their first correction (a
+non-monotone Newton that happened to return) -- refusing those costs a cut-back, never a wrong
+answer.  The change of the negative-eigenvalue count found 10 of the 17 jumps (the looped states
+are stable), the ratio of the converged increment to the tangent predictor 1 (the predictor of a
+large step is far off on the path too), the sign of det K none (two eigenvalues at once);
+docs/STEPS.md.  A try that fails the check is cut back, not accepted.  Corrections below
+CONTRACTION_FLOOR ell are round-off and do not count.
+
+**Stability check** (``NewtonOptions.limit_check``).  The sign of det K of the last factorised
+tangent of each converged try comes from the factors in hand (``Factorization.det_sign``: pivots
+and permutation parities; free for the banded LU, an extraction of U's diagonal for SuperLU,
+MUMPS' own determinant).  Between two accepted states it changes when an odd number of real
+eigenvalues passed through zero: a critical point.  Under load control a limit point cannot be
+passed continuously (the tries beyond it fail or jump, which the path check refuses), so a
+change on the path is a bifurcation, beyond which the states depend on the step size; a long
+try that contracted onto an unstable state of another branch shows a change too.  The try is
+refused and the change located by bisection of the load factor to ``critical_tol`` (relative),
+the last try from the bracket's low end to its high end telling the two apart (the old sign
+there: a jump, the bracket is dropped); a critical point stops the run with a ConvergenceError
+naming it and what to do; with ``limit_check`` off it
+is recorded where it was passed (``Result.critical_points``, bracketed by the step, no extra
+tries) and the path goes on, unstable.  The start
+state's sign is taken to be that of the first accepted state when that is +1 (an unloaded,
+supported shell); a first state with det K < 0 costs one factorisation at the start to tell.
+
+Example
+-------
+>>> path_measures([1.0, 0.5, 0.05, 1e-6, 1e-13])[0], path_measures([1.0, 3.0, 0.2])[0]
+(0.5, 3.0)
+"""
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from ..errors import SingularSystemError
+from .stability import CriticalPoint
+
+__all__ = ["path_measures", "start_sign", "StepChecks", "CONTRACTION_MAX", "GROWTH_SCALE", "TRAVEL_MAX",
+           "CONTRACTION_FLOOR"]
+
+CONTRACTION_MAX = 1.0    # a try whose corrections grow at the step's scale is not accepted
+GROWTH_SCALE = 0.5       # ... the step's scale: half the first correction
+TRAVEL_MAX = 1.5         # the later corrections may add up to 1.5 x the first
+CONTRACTION_FLOOR = 1e-8  # corrections below this (relative to ell) are round-off: not compared
+
+
+def path_measures(incs, floor=CONTRACTION_FLOOR):
+    """(contraction, travel) of the Newton corrections of a try (relative norms ``incs``, the
+    first from the start of the step): the largest ratio |eta_{k+1}| / |eta_k| over the pairs at
+    the step's scale (the larger at least GROWTH_SCALE |eta_0|, the second above ``floor``), and
+    the sum of the corrections after the first over the first; (0.0, 0.0) for fewer than two.
+
+    Parameters
+    ----------
+    incs : sequence of float
+        |eta_k|_s / ell of the corrections of a try, in order.
+    floor : float, optional
+        Corrections below it are round-off (default CONTRACTION_FLOOR).
+
+    Returns
+    -------
+    (float, float)
+        Theta (>= CONTRACTION_MAX: the corrections grew at the step's scale) and the travel
+        (>= TRAVEL_MAX: the iterates wandered).
+
+    Example
+    -------
+    >>> [round(x, 6) for x in path_measures([1.0, 0.3, 0.01, 1e-6, 1e-12])]      # Newton
+    [0.3, 0.310001]
+    >>> [round(x, 6) for x in path_measures([1.0, 0.31, 1.05, 0.4, 0.02])]      # a jump
+    [3.387097, 1.78]
+    >>> [round(x, 3) for x in path_measures([3.4e-2, 7.05e-5, 7.5e-5, 4e-10])]  # a wiggle
+    [0.002, 0.004]
+    """
+    a = np.asarray(incs, float)
+    if len(a) < 2 or not a[0] > 0:
+        return 0.0, 0.0
+    keep = (a[1:] > floor) & (a[:-1] > 0) & (np.maximum(a[1:], a[:-1]) >= GROWTH_SCALE * a[0])
+    theta = float(np.max(a[1:][keep] / a[:-1][keep])) if np.any(keep) else 0.0
+    return theta, float(a[1:].sum() / a[0])
+
+
+def start_sign(eq, g, lam, stress=None):
+    """The sign of det K at the converged start state (g, lam) of a path (the equations ``eq``
+    of ``solvers.equations``; ``stress``: the mixed iteration's, or None): one factorisation.
+    Not the first tangent of the first try, which is at the start frames under the *next* load
+    factor -- not an equilibrium, and indefinite in a field at 135 degrees for a step of 0.05.
+    None when that tangent is singular (the first try reports it)."""
+    try:
+        ev, _, _ = eq.evaluate(g, lam, tangent=True, stress=stress, norms=False)
+        eq.solve(ev, g)
+    except (SingularSystemError, FloatingPointError):
+        return None
+    return eq.det_sign()
+
+
+class StepChecks:
+    """The path and stability checks of load stepping (module docstring) and their record.
+
+    Parameters
+    ----------
+    path, stability : bool
+        Apply the path check, the stability check (the equations give det K's sign).
+    critical_tol : float
+        Relative width in the load factor to which a det K sign change is located.
+    sign : int or None, optional
+        det K's sign at the start state (None: found with the first accepted try).
+    stop : bool, optional
+        A located sign change stops the run (``limit_check``; default True), else it is
+        recorded and passed (:meth:`passed`).
+
+    Attributes
+    ----------
+    rejected : int
+        Tries refused by the path check since the last stored step (``record`` resets it).
+    bracket : (float, float) or None
+        (last load factor with the start's sign, first with the other) while one is located;
+        ``confirmed``: the other sign was seen by a try from the low end.
+
+    Example
+    -------
+    >>> import types
+    >>> chk = StepChecks(True, True, 1e-3, sign=1)
+    >>> ok = types.SimpleNamespace(contraction=0.2, travel=0.25, det_sign=1)
+    >>> jump = types.SimpleNamespace(contraction=3.4, travel=1.8, det_sign=1)
+    >>> chk.judge(ok, 0.0, 0.5), chk.judge(jump, 0.0, 1.0)[:44]
+    ('', 'path check: the Newton corrections grew 3.4x')
+    """
+
+    def __init__(self, path, stability, critical_tol, sign=None, stop=True):
+        self.path, self.stability, self.tol, self.stop = path, stability, critical_tol, stop
+        self.sign = sign
+        self.bracket = None
+        self.confirmed = self.probing = False
+        self.crossed = []
+        self.rejected = 0
+        self.last = None
+
+    def judge(self, out, lam, lam_try):
+        """'' when the converged try ``out`` (a TryOutcome) from lam to lam_try may be accepted,
+        else why it is refused (it is cut back; ``bracket`` is set for a det K sign change)."""
+        theta, travel = out.contraction, out.travel
+        if self.path and (theta >= CONTRACTION_MAX or travel >= TRAVEL_MAX):
+            self.rejected += 1
+            what = (f"grew {theta:.3g}x from one iteration to the next" if theta >= CONTRACTION_MAX else
+                    f"added up to {travel:.3g}x the first")
+            return (f"path check: the Newton corrections {what}, so the try may have converged onto "
+                    "another equilibrium")
+        s = out.det_sign
+        if self.stability and s is not None and self.sign is None and s > 0:
+            self.sign = s                      # module docstring: the start's sign taken as +1
+        if self.stability and s is not None and self.sign is not None and s != self.sign:
+            if not self.stop:                 # recorded where it was passed (no bisection)
+                self.crossed.append(self._point(lam, lam_try))
+                return ""
+            self.bracket, self.confirmed, self.probing = (lam, lam_try), True, False
+            return (f"stability check: det K changed sign ({self.sign:+d} -> {s:+d}) between load "
+                    f"factors {lam:.6g} and {lam_try:.6g}")
+        return ""
+
+    def accept(self, out, lam_try):
+        """Record the accepted try (its sign becomes the path's).  While a sign change is being
+        located the bracket's low end moves up; a try that reached its high end with the old sign
+        shows that the change seen there came from a jump, not from the path: the bracket goes."""
+        if out.det_sign is not None:
+            self.sign = out.det_sign
+        if self.bracket is not None:
+            lo, hi = self.bracket
+            self.bracket = None if abs(hi - lam_try) <= 1e-14 * max(1.0, abs(hi)) else (lam_try, hi)
+            self.confirmed = self.probing = False
+        self.last = out
+
+    def failed(self):
+        """A try that did not converge (or that the path check refused): a probe of the
+        bracket's high end that fails cannot confirm the change there, so the bracket goes and
+        the cut-backs go on as for any failure."""
+        if self.probing:
+            self.bracket = None
+            self.probing = False
+
+    def _narrow(self, floor):
+        lo, hi = self.bracket
+        return abs(hi - lo) <= self.tol * max(abs(hi), abs(lo)) or abs(hi - lo) / 2 < floor
+
+    def next_increment(self, lam, dlam, floor):
+        """The next increment while a sign change is located, else ``dlam``: at most half the
+        bracket (bisection; a failed try halves ``dlam`` as usual), and once the bracket is
+        narrow (``critical_tol``, or half of it below ``floor``, the smallest increment the
+        cut-backs allow) but its change was seen from an older low end, a try to its high end
+        from the current one."""
+        if self.bracket is None:
+            return dlam
+        lo, hi = self.bracket
+        if self._narrow(floor):
+            self.probing = True
+            return hi - lam
+        return np.sign(hi - lam) * min(abs(dlam), abs(hi - lam) / 2)
+
+    def located(self, floor):
+        """True when the bracket is narrow (:meth:`next_increment`) and its sign change was seen
+        by a try from its low end: a critical point on the path, not a jump."""
+        return self.bracket is not None and self.confirmed and self._narrow(floor)
+
+    def critical_message(self):
+        """The ConvergenceError message of a located sign change."""
+        lo, hi = self.bracket
+        return (f"load control crossed a critical point: det K changed sign between load factors "
+                f"{lo:.7g} and {hi:.7g}, i.e. at {0.5 * (lo + hi):.7g} +- {0.5 * abs(hi - lo):.2g}. The "
+                "path went on continuously through it (its Newton tries contracted), so it is a "
+                "bifurcation: beyond it this path is unstable and the states depend on the load "
+                "steps. Trace it with arc length (core_se3.solvers.arc_length, stability=True; "
+                "branch_switch=True follows the buckled branch) or add an imperfection; "
+                "limit_check=False ([solver] limit_check = false) continues on the unstable path. "
+                "The steps before it are kept in .result")
+
+    @staticmethod
+    def _point(lo, hi, step=-1):
+        return CriticalPoint("bifurcation", step, 0.5 * (lo + hi), (lo, hi), (None, None))
+
+    def passed(self, step):
+        """The sign changes passed since the last call (``stop`` off), as CriticalPoints whose
+        ``step`` is the index of the next stored step; the list is emptied."""
+        out = [dataclasses.replace(cp, step=step) for cp in self.crossed]
+        self.crossed.clear()
+        return out
+
+    def record(self):
+        """What was checked for the stored step (``StepResult.checks``); resets the count."""
+        out = self.last
+        rec = dict(path_check=self.path, contraction=None if out is None else float(out.contraction),
+                   travel=None if out is None else float(out.travel), path_rejections=self.rejected,
+                   det_sign=self.sign if self.stability else None)
+        self.rejected = 0
+        return rec
