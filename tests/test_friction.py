@@ -12,7 +12,7 @@ from core_se3 import lie
 from core_se3 import mesh as M
 from core_se3.model import ContactLoad, HalfSpace, Sphere, tangent_fd_check, translation
 from core_se3.model.contact_law import ramp
-from core_se3.model.friction import coulomb_law
+from core_se3.model.friction import HARDENING, coulomb_law
 
 
 def test_return_mapping_is_coulomb():
@@ -25,7 +25,11 @@ def test_return_mapping_is_coulomb():
     v = rng.normal(size=(6, 3)) * 0.3
     t, dt, stick, s = coulomb_law(n, H, p, dp, v, np.zeros((6, 3)), 4.0, 0.4)
     assert stick.any() and (~stick).any()
-    assert np.all(np.linalg.norm(t, axis=1) <= 0.4 * 2.0 + 1e-12)
+    trial = 4.0 * np.linalg.norm(s, axis=1)            # |t*| = k |s| (no stored traction)
+    assert np.all(np.linalg.norm(t[stick], axis=1) < 0.4 * 2.0)
+    # on the cone, up to the hardening: |t| = mu p + HARDENING (|t*| - mu p)
+    np.testing.assert_allclose(np.linalg.norm(t[~stick], axis=1), 0.8 + HARDENING * (trial[~stick] - 0.8),
+                               rtol=1e-14)
     assert np.allclose(t[~stick] / np.linalg.norm(t[~stick], axis=1)[:, None],
                        -s[~stick] / np.linalg.norm(s[~stick], axis=1)[:, None])
 
@@ -219,3 +223,31 @@ def test_frictionless_contact_has_no_friction_state():
     p = cs.Problem(M.rectangle(1.0, 0.2, 4, 1), cs.Material(1e4, 0.0, 0.02))
     c = p.add_obstacle("half_space", point=(0, 0, -0.05), normal=(0, 0, 1))
     assert c.mu == 0 and len(c.multipliers()) == 2 * len(c.lam0) and "sticking" not in c.report(p.mesh.g0, 0.0)
+
+
+def test_friction_in_the_step_table_and_the_sweep_rows(tmp_path, capsys):
+    """The step table has the normal and tangential totals and the stick/slip counts of a rough
+    obstacle; a sweep's rows carry them, and a sweep does not warm-start a path-dependent
+    problem: pulled and partly released, each point keeps its hysteresis (a warm start, one
+    solve from another point's final state, restarts the friction history from the reference:
+    where it converges it gives the monotonic answer; here it failed and fell back)."""
+    from core_se3 import scenario
+    from core_se3.cli import scenario as cli_scenario
+    scn = scenario.loads(BAR, file="bar.toml")
+    rows = scenario.sweep(scn, {"loads[1].force[0]": [2.5, 2.0]}, out=str(tmp_path / "w"), plot=False).rows
+    assert [r["warm"] for r in rows] == [False, False]
+    cold = scenario.loads(BAR.replace("force = [2.5, 0.0, 0.0]", "force = [2.0, 0.0, 0.0]"), file="bar.toml")
+    res = cold.problem.solve()
+    assert rows[1]["tip.ux"] == pytest.approx(float(res.final.probes["tip"]["u"][0]), rel=1e-9)
+    rec = res.final.contact["table"]
+    for k in ("normal_force", "tangential_force", "sticking", "slipping", "largest_slip"):
+        assert rows[1][f"contact.table.{k}"] == pytest.approx(rec[k], rel=1e-9)
+    doc = dict(steps=[dict(step=k, load_factor=st.load_factor, probes={}, iterations=st.iterations,
+                           residual=0.0, contact={n: {q: v for q, v in c.items() if q != "multipliers"}
+                                                   for n, c in st.contact.items()})
+                      for k, st in enumerate(res.steps)])
+    cli_scenario.step_table(doc)
+    lines = capsys.readouterr().out.splitlines()
+    assert "N table" in lines[0] and "T table" in lines[0] and "stick/slip" in lines[0]
+    last = rec["sticking"], rec["slipping"]
+    assert f"{last[0]}/{last[1]}" in lines[-1].split()

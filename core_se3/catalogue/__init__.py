@@ -8,8 +8,8 @@ Example
 >>> "cantilever-shear" in catalogue.CASES, catalogue.get_case("rollup").reference.entry
 (True, '2_pure_bending_rollup_out_of_plane')
 """
-from . import cases_contact, cases_design, cases_magnetic, cases_shells, cases_sze  # noqa: F401  (register the cases)
-from . import family_contact, family_design, family_magnetic, family_sze  # noqa: F401  (register the families)
+from . import cases_contact, cases_design, cases_friction, cases_magnetic, cases_shells, cases_sze  # noqa: F401  (register the cases)
+from . import family_contact, family_design, family_friction, family_magnetic, family_sze  # noqa: F401  (register the families)
 from .case import (CASES, FAMILIES, Case, CaseLoad, Family, Reference, ResolvedLoad, Variant, add_case,
                    beam_EI, case_params, family_of, get_case, list_cases, register_family, resolve)
 from .finite_bending import drilling_for_rotation, finite_bending_moment, limit_moment

@@ -20,7 +20,8 @@ from ..errors import CoreSE3Error
 from ..fem import ELEMENTS
 from ..results.document import ROUNDOFF_NOTE, format_backends, format_residual
 from .common import error_code as _error_code, output_error as _output_error, progress_on as _progress_on, whole_number
-from .scenario import add_parsers, design_run, kinds, scenario_run, scenario_sweep, step_table as _step_table, warmup
+from .scenario import (add_parsers, design_run, friction_cells, friction_obstacles, kinds, scenario_run,
+                       scenario_sweep, step_table as _step_table, warmup)
 
 
 def _parse_mesh(s):
@@ -58,7 +59,9 @@ def _print_doc(doc):
     ref = doc["reference"]
     obstacles = list(doc["steps"][-1].get("contact", {}))    # total contact force |F| per obstacle
     print(f"{'load':>12} {'ux':>12} {'uy':>12} {'uz':>12} {'angle':>9} {'it':>3} {'try':>3} {'solves':>6} "
-          f"{'residual':>9}" + "".join(f" {'|F ' + o + '|':>12}" for o in obstacles) + ("  error" if ref else ""))
+          f"{'residual':>9}" + "".join(f" {'|F ' + o + '|':>12}" for o in obstacles)
+          + "".join(f" {'N ' + o:>12} {'T ' + o:>12} {'stick/slip':>10}" for o in friction_obstacles(doc["steps"]))
+          + ("  error" if ref else ""))
     probe = next(iter(doc["steps"][0]["probes"]))          # the case's probe ('tip', 'crown', ...)
     for s in doc["steps"]:
         u = s["probes"][probe]["u"]
@@ -68,6 +71,7 @@ def _print_doc(doc):
         for o in obstacles:
             c = s.get("contact", {}).get(o)
             line += f" {float(np.linalg.norm(c['force'])) if c else 0.0:>12.5g}"
+        line += "".join(friction_cells(s, o) for o in friction_obstacles(doc["steps"]))
         if ref and s.get("error") is not None:
             line += f"  {100 * s['error']:.3f}%"
         print(line)

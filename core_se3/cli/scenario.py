@@ -193,6 +193,8 @@ def step_table(doc):
     if probe:
         head += f" {probe + '.ux':>12} {probe + '.uy':>12} {probe + '.uz':>12}"
     head += "".join(f" {'|F ' + o + '|':>12}" for o in obstacles)
+    rough = friction_obstacles(steps)
+    head += "".join(f" {'N ' + o:>12} {'T ' + o:>12} {'stick/slip':>10}" for o in rough)
     print(head + f" {'it':>3} {'residual':>9}")
     for st in steps:
         line = f"{st['step']:>5d} {st['load_factor']:>9.4g}"
@@ -202,11 +204,43 @@ def step_table(doc):
         for o in obstacles:
             c = (st.get("contact") or {}).get(o)
             line += f" {float(np.linalg.norm(c['force'])) if c else 0.0:>12.6g}"
+        line += "".join(friction_cells(st, o) for o in rough)
         print(line + f" {st.get('iterations', 0):>3d} {format_residual(st)}")
     if any(format_residual(st).endswith("*") for st in steps):
         print(ROUNDOFF_NOTE)
     if format_backends(steps):
         print(format_backends(steps))
+
+
+def friction_obstacles(steps):
+    """The obstacles with Coulomb friction in the step records (their report has the normal
+    and tangential totals and the stick/slip counts, ``model.contact_output``).
+
+    Example
+    -------
+    >>> friction_obstacles([{"contact": {"a": {"force": [0, 0, 1]}, "b": {"normal_force": 1.0}}}])
+    ['b']
+    """
+    names = []
+    for st in steps:
+        names += [o for o, c in (st.get("contact") or {}).items() if "normal_force" in c and o not in names]
+    return names
+
+
+def friction_cells(st, o):
+    """The step table's cells of a rough obstacle: the normal and tangential totals [force] and
+    the nodes sticking / slipping ('-' where the step has no record of it).
+
+    Example
+    -------
+    >>> friction_cells({"contact": {"t": dict(normal_force=2.0, tangential_force=0.5, sticking=3, slipping=1)}}, "t")
+    '            2          0.5        3/1'
+    """
+    c = (st.get("contact") or {}).get(o)
+    if not c or "normal_force" not in c:
+        return f" {'-':>12} {'-':>12} {'-':>10}"
+    return (f" {c['normal_force']:>12.6g} {c['tangential_force']:>12.6g} "
+            f"{str(c['sticking']) + '/' + str(c['slipping']):>10}")
 
 
 def design_run(args):

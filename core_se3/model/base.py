@@ -198,6 +198,12 @@ class Load(abc.ABC):
         every contact node slips: no static equilibrium), or ''.  Named in the error."""
         return ""
 
+    def predict_start(self, g0, lam0, g, lam, fixed):
+        """Hook: the start of a Newton try at lam from the accepted state (g0, lam0), given the
+        start g so far and the supported dofs fixed (n, 6) (e.g. contact nodes carried with a
+        moving obstacle); g here."""
+        return g
+
     def accept_state(self, g, lam):
         """Hook: (g, lam) has been accepted as a step of the path (a path-dependent load moves its
         history on, e.g. friction); nothing here."""

@@ -49,7 +49,7 @@ from .. import lie
 from .base import Load, LoadEvaluation
 from .contact_faces import face_minima, face_wrench
 from .contact_output import ContactOutputs
-from .friction import coulomb_law, wrench
+from .friction import CoulombFriction, wrench
 from .contact_sweep import crossing_report
 from .contact_law import (E3, contact_wrench, nodal_areas, normal_law, ramp, ramp_inverse, reference_sides,
                           shell_diagonal_stiffness)
@@ -60,7 +60,7 @@ __all__ = ["ContactLoad", "add_obstacle", "ramp", "ramp_inverse", "normal_law", 
 
 MODES = ("al", "penalty")
 
-class ContactLoad(ContactOutputs, Load):
+class ContactLoad(ContactOutputs, CoulombFriction, Load):
     """Frictionless contact of the nodes ``nodes`` (default all nodes of ``elements``, default all)
     with one rigid ``obstacle``, as a load (module docstring); made by ``Problem.add_obstacle``.
 
@@ -79,8 +79,9 @@ class ContactLoad(ContactOutputs, Load):
         Penalty factor on the shell's nodal diagonal stiffness (default 1); or ``k`` directly.
     eps, tol : float, optional
         Band of the C^1 law and the tolerance on the gap error [length]; default 1e-6 h each.
-    side : 'auto', +1, -1 or (k,) of them
-        The contact face (module docstring).
+    side : 'auto', +1, -1, 0 or (k,) of them
+        The contact face (module docstring); 0: the mid-surface (c = 0), for a boundary edge
+        pressed end-on, whose end face touches about its middle (no moment about the node).
     cap_depth : float, optional
         The Newton step cap lets a node the linearisation does not see penetrate at most this
         far in one iterate [length]; default 0.05 h.
@@ -139,8 +140,9 @@ class ContactLoad(ContactOutputs, Load):
             s = reference_sides(obstacle, mesh.g0[self.nodes], lam_ref)
         else:
             s = np.broadcast_to(np.asarray(side, float), self.nodes.shape).copy()
-            if not np.all(np.abs(s) == 1):
-                raise contact_error("side must be 'auto', +1, -1 or one +-1 per contact node", "side")
+            if not np.all(np.isin(s, (-1.0, 0.0, 1.0))):
+                raise contact_error("side must be 'auto', +1, -1, 0 (the mid-surface) or one of them per contact "
+                                    "node", "side")
         self.h = float(h_node[self.nodes].max())
         self.side, self.c = s, s * h_node[self.nodes] / 2
         self.beta = float(beta)
@@ -229,13 +231,6 @@ class ContactLoad(ContactOutputs, Load):
         T = self.obstacle.transform(lam)
         return (x - T[:3, 3]) @ T[:3, :3]
 
-    def friction_state(self, g, lam, x, n, H, p, dp):
-        """(t, dt/dx, stick, slip) of the nodes (``model.friction.coulomb_law``), the multiplier
-        and the anchors moved with the obstacle to lam."""
-        T = self.obstacle.transform(lam)
-        v = x - (self.y_a @ T[:3, :3].T + T[:3, 3])
-        return coulomb_law(n, H, p, dp, v, self.tau @ T[:3, :3].T, self.k * self.soft[:len(self.nodes)], self.mu)
-
     def node_forces(self, g, lam):
         """Lab forces A (p n + t) (k, 3) on the contact nodes, their points x (k, 3), and dF/dx."""
         x, d, n, H, p, dp = self.state(g, lam)
@@ -301,6 +296,36 @@ class ContactLoad(ContactOutputs, Load):
         a = (d0[free][hit] + depth) / (d0[free][hit] - d1[hit])
         return float(np.clip(np.min(a), 1e-3, 1.0))
 
+    def predict_start(self, g0, lam0, g, lam, fixed):
+        """The start of a try at lam from the accepted state (g0, lam0) (the ``Load.predict_start``
+        hook; g the start so far, fixed (n, 6) the supported dofs): when the obstacle moves over
+        the increment, T_rel = T(lam) T(lam0)^-1, the nodes carrying force move with it -- a node
+        that sticks (friction) rigidly, g <- T_rel g, the others by the normal part of its
+        contact point's motion (n . (T_rel x - x)) n -- in their free dofs.  Without it the first
+        iterate of a sticking node meets the whole increment as slip (the return mapping turns it
+        into a full slip force, and Newton swings about the stuck state), and a node in contact
+        starts inside a moving obstacle, at the penalty's stiffness.  g itself when the obstacle
+        is at rest over the increment (every frictionless case of a fixed obstacle is unchanged)."""
+        T0, T1 = self.obstacle.transform(lam0), self.obstacle.transform(lam)
+        if np.array_equal(T0, T1) or not len(self.nodes):
+            return g
+        x, _, n, _, p, _ = self.state(g0, lam0)
+        on = p > 0
+        if not on.any():
+            return g
+        Trel = T1 @ lie.inv(T0[None])[0]
+        target = g[self.nodes].copy()
+        move = np.einsum("ki,ki->k", n, x @ Trel[:3, :3].T + Trel[:3, 3] - x)
+        target[:, :3, 3] += move[:, None] * n
+        stick = self.sticking(lam0, n, p)
+        target[stick] = Trel @ g[self.nodes[stick]]
+        idx = self.nodes[on]
+        eta = lie.log(lie.inv(g[idx]) @ target[on])
+        eta[fixed[idx]] = 0.0
+        g = g.copy()
+        g[idx] = g[idx] @ lie.exp(eta)
+        return g
+
     def start_error(self, g, lam):
         """Refuse a try that starts with a contact point deeper than the thickness h inside the
         obstacle (a moving obstacle that swept into the shell over the increment: from there the
@@ -326,6 +351,8 @@ class ContactLoad(ContactOutputs, Load):
         the step back.  '' when the step is clear."""
         if not len(self.nodes):
             return ""
+        if self.mu > 0 and (why := self.cone_excess(g1, lam1)):
+            return why
         thick = float(getattr(self.obstacle, "thickness", np.inf))
         depth = max(min(self.h / 2, thick / 2), 2 * self.tol)
         return crossing_report(self.obstacle, self._quads, self.contact_points(g0), self.contact_points(g1),
@@ -333,9 +360,18 @@ class ContactLoad(ContactOutputs, Load):
 
     def active_set_changed(self, g0, lam0, g1, lam1):
         """True when a node touches (gap within 10 tol) at one of the states and not at the other:
-        lift-off or touch-down over the step (the limit check re-bases its stiffness)."""
+        lift-off or touch-down over the step (the limit check re-bases its stiffness); with
+        friction also when a node in contact passes from stick to slip or back (its tangent
+        loses or regains the penalty along the slip)."""
         on0, on1 = self.gaps(g0, lam0) <= 10 * self.tol, self.gaps(g1, lam1) <= 10 * self.tol
-        return bool(self.largest(float(np.any(on0 != on1))))
+        changed = np.any(on0 != on1)
+        if self.mu > 0 and not changed:
+            _, _, n0, _, p0, _ = self.state(g0, lam0)
+            stick0 = self.sticking(lam0, n0, p0)
+            x, _, n, H, p, dp = self.state(g1, lam1)
+            stick1 = self.friction_state(g1, lam1, x, n, H, p, dp)[2] & (p > 0)
+            changed = np.any(stick0 != stick1)
+        return bool(self.largest(float(changed)))
 
     def update_multipliers(self, g, lam):
         """At a converged state: the gap error e (|d| on nodes carrying force, the penetration on
@@ -365,38 +401,6 @@ class ContactLoad(ContactOutputs, Load):
             if self.mu > 0:
                 self.tau = t @ Q
         return ratio
-
-    def _sliding(self, g, lam):
-        """(nodes in contact, of them slipping) at (g, lam): the failure hint's evidence."""
-        x, _, n, H, p, dp = self.state(g, lam)
-        _, _, stick, _ = self.friction_state(g, lam, x, n, H, p, dp)
-        on = p > 0
-        return int(on.sum()), int((on & ~stick).sum())
-
-    def failure_hint(self):
-        """'no static equilibrium: it slides' when every node in contact slipped at the last
-        evaluation (of the failed try): friction cannot hold the loads."""
-        on, slip = getattr(self, "_slide", (0, 0))
-        if self.mu > 0 and on and slip == on:
-            return (f"no static equilibrium: it slides -- all {on} contact nodes on obstacle {self.name!r} slip "
-                    f"(Coulomb friction {self.mu:g} cannot hold the loads); raise the friction, add a support, "
-                    "or prescribe the sliding motion")
-        return ""
-
-    def accept_state(self, g, lam):
-        """An accepted state (``Load.accept_state``): the friction history moves on -- the
-        multipliers become the nodes' tractions there (obstacle frame) and the anchors their
-        current points on the obstacle."""
-        if self.mu > 0:
-            x, _, n, H, p, dp = self.state(g, lam)
-            t, _, stick, slip = self.friction_state(g, lam, x, n, H, p, dp)
-            on = p > 0                   # the step's stick/slip record, before the anchors move
-            self.step_stats = dict(sticking=int(np.count_nonzero(on & stick)),
-                                   slipping=int(np.count_nonzero(on & ~stick)),
-                                   largest_slip=float(np.linalg.norm(slip[on & ~stick], axis=1).max(initial=0.0)),
-                                   stick=np.where(on, stick.astype(float), np.nan))
-            self.tau = t @ self.obstacle.transform(lam)[:3, :3]
-            self.y_a = self.placement(x, lam)
 
     def largest(self, value):
         """The largest of ``value`` over the processes that share this load: the value itself

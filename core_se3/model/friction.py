@@ -9,17 +9,19 @@ x_a = T(lam) y_a).  With the obstacle's normal n(x), P = I - n n^T and the multi
 (the tangential traction carried from the last state, stored in the obstacle's frame):
 
     v = x - x_a,   s = P v (the slip over the step),   t* = P w - k s (trial traction),
-    t = t*                      if |t*| <= mu p   (stick),
-    t = mu p t* / |t*|          otherwise         (slip: the return onto the cone),
+    t = t*                                 if |t*| < mu p   (stick),
+    t = (mu p + d (|t*| - mu p)) t* / |t*|  otherwise        (slip: the return onto the cone),
 
 p the normal pressure of the node (``contact_law.normal_law``), k the penalty [force/length^3].
 The Uzawa update tau <- Q^T t has as fixed points exactly Coulomb's law with maximal
-dissipation: s = 0 and |t| <= mu p, or |t| = mu p and s = -alpha t (alpha >= 0).
+dissipation: s = 0 and |t| <= mu p, or |t| = mu p and s = -alpha t (alpha >= 0), up to the
+hardening d = 1e-8 (|t| = mu p + d k |s| / (1 - d): 1e-8 of the penalty per unit slip over the
+step; a converged state where it exceeds 1e-3 mu p is refused).
 
 Tangent (at fixed lam; H = grad n, e = t*/|t*|):
 
     dt*/dx = -(n.w) H - n (H w)^T - k [P - (n.v) H - n (H v)^T],
-    dt/dx  = dt*/dx (stick),   mu e (p' n)^T + (mu p / |t*|) (I - e e^T) dt*/dx (slip),
+    dt/dx  = dt*/dx (stick),   (1 - d) [mu e (p' n)^T + (mu p / |t*|) (I - e e^T) dt*/dx] + d dt*/dx (slip),
 
 and the node's force A (p n + t) enters :func:`wrench` with S = A (p' n n^T + p H + dt/dx).
 
@@ -32,7 +34,7 @@ Example
 >>> t[0].tolist(), bool(stick[0])                        # k s = 0.2 < mu p = 0.5: it sticks
 ([-0.2, 0.0, 0.0], True)
 >>> t, dt, stick, s = coulomb_law(n, H, np.array([1.0]), np.array([-5.0]), 3 * v, np.zeros((1, 3)), 2.0, 0.5)
->>> t[0].tolist(), bool(stick[0])                        # 0.6 > 0.5: it slips, |t| = mu p
+>>> t[0].round(6).tolist(), bool(stick[0])               # 0.6 > 0.5: it slips, |t| = mu p
 ([-0.5, 0.0, 0.0], False)
 """
 from __future__ import annotations
@@ -42,7 +44,17 @@ import numpy as np
 from .. import lie
 from .contact_law import E3
 
-__all__ = ["coulomb_law", "wrench"]
+__all__ = ["coulomb_law", "wrench", "CoulombFriction", "STICK_MARGIN", "HARDENING", "CONE_EXCESS"]
+
+STICK_MARGIN = 1e-10        # |t*| >= (1 - STICK_MARGIN) mu p: on the cone (slip)
+# the cone hardens by HARDENING of the trial traction beyond it (|t| = mu p + HARDENING (|t*| - mu p)):
+# the slip keeps HARDENING k of stiffness along itself, so that a body whose contact nodes all
+# slip has no zero pivot and the split of a sliding between feet that slip alike (indeterminate
+# in rigid-plastic friction) is the one the residual selects, the symmetric one; a converged
+# state whose traction exceeds the cone by more than CONE_EXCESS of it is refused (the loads
+# exceed the friction: no static equilibrium)
+HARDENING = 1e-8
+CONE_EXCESS = 1e-3
 
 
 def coulomb_law(n, H, p, dp, v, w, k, mu):
@@ -60,12 +72,16 @@ def coulomb_law(n, H, p, dp, v, w, k, mu):
     T = -nw[:, None, None] * H - n[:, :, None] * Hw[:, None, :] - kk * dPv
     norm = np.linalg.norm(tt, axis=1)
     cap = mu * p
-    stick = norm <= cap
+    # a node off contact (cap 0) never sticks (no tangential stiffness), and one whose trial
+    # traction lies on the cone to round-off (it slipped over the last step) starts on the slip
+    # side: its tangent is the slip tangent, which the increment then follows
+    stick = norm < cap * (1 - STICK_MARGIN)
     e = tt / np.where(norm > 0, norm, 1.0)[:, None]
     ratio = np.where(norm > 0, cap / np.where(norm > 0, norm, 1.0), 0.0)
-    t = np.where(stick[:, None], tt, ratio[:, None] * tt)
-    slip_dt = (mu * e[:, :, None] * (dp[:, None] * n)[:, None, :]
-               + ratio[:, None, None] * (np.eye(3) - e[:, :, None] * e[:, None, :]) @ T)
+    d = HARDENING
+    t = np.where(stick[:, None], tt, ((1 - d) * ratio + d)[:, None] * tt)
+    slip_dt = ((1 - d) * (mu * e[:, :, None] * (dp[:, None] * n)[:, None, :]
+                          + ratio[:, None, None] * (np.eye(3) - e[:, :, None] * e[:, None, :]) @ T) + d * T)
     dt = np.where(stick[:, None, None], T, slip_dt)
     return t, dt, stick, s
 
@@ -93,3 +109,78 @@ def wrench(R, c, F, S):
     dF = (Rt @ S @ R) @ B
     dF[:, :, 3:] += lie.hat3(Fb)
     return np.einsum("kij,kj->ki", Bt, Fb), -Bt @ dF
+
+
+class CoulombFriction:
+    """The friction side of :class:`~core_se3.model.contact.ContactLoad` (a mixin: its state
+    ``mu``, ``tau``, ``y_a`` and the hooks of a path-dependent load; module docstring)."""
+
+    @property
+    def path_dependent(self):
+        """True with friction: the state depends on the path, not on (g, lam) alone (a sweep
+        does not warm-start it from another point's final state)."""
+        return self.mu > 0
+
+    def friction_state(self, g, lam, x, n, H, p, dp):
+        """(t, dt/dx, stick, slip) of the nodes (:func:`coulomb_law`), the multiplier and the
+        anchors moved with the obstacle to lam."""
+        T = self.obstacle.transform(lam)
+        v = x - (self.y_a @ T[:3, :3].T + T[:3, 3])
+        return coulomb_law(n, H, p, dp, v, self.tau @ T[:3, :3].T, self.k * self.soft[:len(self.nodes)], self.mu)
+
+    def sticking(self, lam, n, p):
+        """The nodes that carry force and whose stored traction lies inside the cone,
+        |P w| < mu p (1 - STICK_MARGIN), at an accepted state at lam (n, p: its normals and
+        pressures): the nodes that stuck over the last step."""
+        if self.mu <= 0:
+            return np.zeros(len(p), bool)
+        w = self.tau @ self.obstacle.transform(lam)[:3, :3].T
+        w -= np.einsum("ki,ki->k", n, w)[:, None] * n
+        return np.linalg.norm(w, axis=1) < self.mu * p * (1 - STICK_MARGIN)
+
+    def cone_excess(self, g, lam):
+        """Why the converged state (g, lam) is refused: a slipping node whose traction exceeds
+        the cone by more than CONE_EXCESS of it (the hardening has carried a load the friction
+        cannot: no static equilibrium), or ''."""
+        x, _, n, H, p, dp = self.state(g, lam)
+        t, _, stick, _ = self.friction_state(g, lam, x, n, H, p, dp)
+        cap = self.mu * p
+        over = np.where((p > 0) & ~stick, np.linalg.norm(t, axis=1) - cap * (1 + CONE_EXCESS), -1.0)
+        i = int(np.argmax(over)) if len(over) else 0
+        if len(over) and self.largest(float(over[i])) > 0:
+            return (f"obstacle {self.name!r}: the friction at node {int(self.nodes[i])} exceeds mu p by "
+                    f"{(np.linalg.norm(t[i]) / cap[i] - 1):.2g} of it (more than {CONE_EXCESS:g}): the loads exceed "
+                    "what Coulomb friction can hold there")
+        return ""
+
+    def _sliding(self, g, lam):
+        """(nodes in contact, of them slipping) at (g, lam): the failure hint's evidence."""
+        x, _, n, H, p, dp = self.state(g, lam)
+        _, _, stick, _ = self.friction_state(g, lam, x, n, H, p, dp)
+        on = p > 0
+        return int(on.sum()), int((on & ~stick).sum())
+
+    def failure_hint(self):
+        """'no static equilibrium: it slides' when every node in contact slipped at the last
+        evaluation (of the failed try): friction cannot hold the loads."""
+        on, slip = getattr(self, "_slide", (0, 0))
+        if self.mu > 0 and on and slip == on:
+            return (f"no static equilibrium: it slides -- all {on} contact nodes on obstacle {self.name!r} slip "
+                    f"(Coulomb friction {self.mu:g} cannot hold the loads); raise the friction, add a support, "
+                    "or prescribe the sliding motion")
+        return ""
+
+    def accept_state(self, g, lam):
+        """An accepted state (``Load.accept_state``): the friction history moves on -- the
+        multipliers become the nodes' tractions there (obstacle frame) and the anchors their
+        current points on the obstacle."""
+        if self.mu > 0:
+            x, _, n, H, p, dp = self.state(g, lam)
+            t, _, stick, slip = self.friction_state(g, lam, x, n, H, p, dp)
+            on = p > 0                   # the step's stick/slip record, before the anchors move
+            self.step_stats = dict(sticking=int(np.count_nonzero(on & stick)),
+                                   slipping=int(np.count_nonzero(on & ~stick)),
+                                   largest_slip=float(np.linalg.norm(slip[on & ~stick], axis=1).max(initial=0.0)),
+                                   stick=np.where(on, stick.astype(float), np.nan))
+            self.tau = t @ self.obstacle.transform(lam)[:3, :3]
+            self.y_a = self.placement(x, lam)

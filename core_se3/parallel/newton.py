@@ -61,6 +61,9 @@ class DistributedEquations:
     def apply_prescribed(self, g, lam):
         return self.run.local.apply_prescribed(g, lam)
 
+    def fixed_dofs(self):
+        return self.run.local.constraint_mask()
+
     def retract(self, g, eta):
         return self.run.retract(g, eta)
 

@@ -16,7 +16,7 @@ __all__ = ["OBSTACLE_KEYS", "MOTION_KEYS", "SIDES", "obstacles_section", "add_ob
 
 OBSTACLE_KEYS = ("type",) + OBSTACLE.keys()
 MOTION_KEYS = MOTION.keys()
-SIDES = {"auto": "auto", "top": 1.0, "bottom": -1.0}        # the contact face: auto, +d3, -d3
+SIDES = {"auto": "auto", "top": 1.0, "bottom": -1.0, "mid": 0.0}    # the contact face: auto, +d3, -d3, mid-surface
 
 
 def obstacles_section(v, doc, regions):

@@ -180,7 +180,9 @@ def supports_section(v, doc, mesh, regions):
     """[[supports]]: type (a key of core_se3.model.SUPPORTS), the node selection (edge, nodes or
     region), the kind's keys and, for a kind that moves its nodes, scale."""
     sup = v.array_of_tables(doc, "supports")
-    if not sup:
+    # a free shell may rest on obstacles (friction holds it: the rigid-motion check of the solve
+    # counts the contact nodes' restraints and names a motion left free)
+    if not sup and not doc.get("obstacles"):
         v.fail("supports", "no supports: the shell could move as a rigid body; add e.g. "
                            '[[supports]] type = "clamp", edge = "x0"')
     out = []

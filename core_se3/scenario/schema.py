@@ -96,7 +96,8 @@ OBSTACLE = Section("obstacle", (
     Param("eps", "number", None, lo=0.0, lo_open=True, doc="C1 band [length] (default 1e-6 h)"),
     Param("tol", "number", None, lo=0.0, lo_open=True, doc="gap tolerance [length] (default 1e-6 h)"),
     Param("cap_depth", "number", None, lo=0.0, lo_open=True, doc="step cap [length] (default 0.05 h)"),
-    Param("side", "string", "auto", choices=("auto", "top", "bottom"), doc="the contact face"),
+    Param("side", "string", "auto", choices=("auto", "top", "bottom", "mid"),
+          doc="the contact face (mid: the mid-surface, for an edge pressed end-on)"),
     Param("friction", "number", 0.0, lo=0.0, doc="Coulomb's coefficient mu (0: frictionless)")),
     doc="[[obstacles]]: the keys of every obstacle besides its kind's")
 

@@ -11,7 +11,8 @@ The same from the command line: ``core-se3 sweep FILE.toml --set KEY=v1,v2,... [
 a ``[sweep]`` section in the file (``KEY = [v1, v2, ...]``).
 
 Warm start: when the swept keys are values of loads, fields, magnets, material or solver (the
-same mesh and supports), load control without prescribed motion, each run after the first is
+same mesh and supports), load control without prescribed motion or friction (path dependent:
+its history is not a function of the final state), each run after the first is
 one Newton solve at the final load factor starting from the final state of the nearest
 finished run (in the swept values, scaled by each key's range); if that fails it runs the
 scenario's load steps from the reference state.  Away from limit points (a single equilibrium
@@ -289,8 +290,11 @@ def _solve(s, g_start):
     scenario's own load steps from the reference state."""
     from ..solvers import NewtonOptions, NewtonState, newton_steps
     sv = s.solver
+    # a path-dependent load (Coulomb friction) has no state of g alone: a warm start would
+    # skip its history, so such a point steps from the reference
+    path_dependent = any(getattr(ld, "path_dependent", False) for ld in s.problem.loads)
     if g_start is not None and sv["control"] == "load" and not s.problem.has_prescribed_motion \
-            and not s.problem.element.stateful:
+            and not s.problem.element.stateful and not path_dependent:
         lam = s.load_factors()[-1]
         opts = NewtonOptions(rtol=sv["rtol"], dtol=sv["dtol"], max_iter=sv["max_iter"], max_cutbacks=0,
                              linear_solver=sv["linear_solver"], iteration=sv["iteration"])

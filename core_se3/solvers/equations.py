@@ -124,6 +124,9 @@ class NewtonEquations:
         g[nodes] = self._moved(whole[nodes], -self.origin)
         return g
 
+    def fixed_dofs(self):
+        return self.problem.constraint_mask()
+
     def retract(self, g, eta):
         return self.problem.retract(g, eta)
 

@@ -259,6 +259,7 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
     sweeps = hooked_loads(eq, "step_error")                 # loads that check the whole step (contact)
     switches = hooked_loads(eq, "active_set_changed")       # loads whose tangent switches (contact)
     accepts = hooked_loads(eq, "accept_state")              # path-dependent loads (friction)
+    predictors = hooked_loads(eq, "predict_start") if not stateful else []   # starts with a moving obstacle
     for i, ld in enumerate(aug):
         ld.set_multipliers(None if state.multipliers is None else state.multipliers[i])
     # the mixed iteration's stresses start every try from those of the converged state (a
@@ -312,6 +313,8 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
                     g_try = eq.local_frames(g_try)
                 except (SingularSystemError, ElementTooDistortedError, FloatingPointError):
                     g_try, stress_try = eq.apply_prescribed(g.copy(), lam_try), stress_conv
+            for ld in predictors:                # nodes in contact carried with a moving obstacle
+                g_try = ld.predict_start(g, lam, g_try, lam_try, eq.fixed_dofs())
             saved = [ld.multipliers() for ld in aug]
             g_start = g_try
             out = augmented_try(trier, aug, g_try, lam_try, mip, stress_try, opts.max_augmentations,
