@@ -8,7 +8,9 @@ finest run that finished (4x default, else the default):
 
     d = max(max_n |x_n - x_n^ref| / U, max_n |R_n - R_n^ref|_F)
 
-U the largest nodal displacement along the reference path (the path's scale).  A cell is
+U the largest nodal displacement along the reference path (the path's scale), and the final
+load factors within 1e-6 max(1, |lam_ref|) (an arc-length path ends where its displacement
+does).  A cell is
 
 * ``= d``: the same state (d <= 1e-6);
 * ``= at tol d; ... d_t``: d > 1e-6, but solved again with Newton's rtol/dtol and every
@@ -40,6 +42,7 @@ Writes ``benchmarks/results/robustness.{md,json}`` (a part run keeps the other p
     .venv/bin/python benchmarks/robustness.py --cases rollup example:rotating-field --timeout 300
     .venv/bin/python benchmarks/robustness.py --part zhao translation critical candidates
     git worktree add /tmp/main main && .venv/bin/python benchmarks/robustness.py --part cost --baseline /tmp/main
+    .venv/bin/python benchmarks/robustness.py --part cost --baseline /tmp/main --rounds 1 --repeats 1   # ~2 x speed.py
 """
 from __future__ import annotations
 
@@ -135,7 +138,8 @@ def child(name, steps, out, tight=False):
     log = [e for e in res.log if isinstance(e, dict)]
     return dict(status="ok", lam=float(final.load_factor), scale=U, time=time.perf_counter() - t0,
                 tries=len(log), iterations=sum(int(e.get("iterations") or 0) for e in log),
-                rejected=sum("path check" in str(e.get("reason", "")) for e in log))
+                rejected=sum("path check" in str(e.get("reason", "")) for e in log),
+                critical=[f"{c.kind} at {c.lam:.6g}" for c in getattr(res, "critical_points", [])])
 
 
 def run(name, steps, timeout, workdir, tight=False):
@@ -181,9 +185,10 @@ def study(name, timeout, workdir):
             else:
                 cell["d"] = distance(g, gr, rr["scale"])
                 cell["lam_ref"] = rr["lam"]
-                cell["verdict"] = ("ref" if n == ref_n else "same" if cell["d"] <= SAME
-                                   and abs(r["lam"] - rr["lam"]) <= 1e-12 else "DIFFERS")
-                if cell["verdict"] == "DIFFERS" and abs(r["lam"] - rr["lam"]) <= 1e-12:
+                # the load factor too (an arc-length path ends where a displacement is reached)
+                same_lam = abs(r["lam"] - rr["lam"]) <= SAME * max(1.0, abs(rr["lam"]))
+                cell["verdict"] = "ref" if n == ref_n else "same" if cell["d"] <= SAME and same_lam else "DIFFERS"
+                if cell["verdict"] == "DIFFERS" and same_lam:
                     cell.update(_tolerance_rerun(name, n, ref_n, cell["d"], timeout, workdir))
         row["runs"][str(n)] = cell
     row["reference"] = ref_n
@@ -354,21 +359,21 @@ def _candidates_section(rows):
     return L
 
 
-def cost_child():
-    """Each case of benchmarks/speed.py solved once to warm up and then 3 times (the best
-    counts), with the core_se3 on PYTHONPATH: dict case -> (seconds, Newton iterations)."""
+def cost_child(repeats=3):
+    """Each case of benchmarks/speed.py solved once to warm up and then ``repeats`` times (the
+    best counts), with the core_se3 on PYTHONPATH: dict case -> (seconds, Newton iterations)."""
     sys.path.insert(0, str(ROOT / "benchmarks"))
     from speed import CASES as SPEED_CASES, _solve_once
     out = {}
     for name, (mesh, _) in SPEED_CASES.items():
         _solve_once(name, mesh)
-        runs = [_solve_once(name, mesh) for _ in range(3)]
+        runs = [_solve_once(name, mesh) for _ in range(repeats)]
         best = min(runs, key=lambda r: r["total"])
         out[name] = (best["total"], best["iterations"])
     return out
 
 
-def cost_part(baseline, rounds=3, timeout=3600):
+def cost_part(baseline, rounds=3, repeats=3, timeout=3600):
     """speed.py's cases with this tree's core_se3 and with ``baseline``'s (a checkout of main),
     alternately in ``rounds`` pairs of child processes (numba, one thread): per case the best
     time of each and their ratio."""
@@ -377,7 +382,8 @@ def cost_part(baseline, rounds=3, timeout=3600):
     seen = {"checks": [], "baseline": []}
     for _ in range(rounds):
         for which, path in (("checks", ROOT), ("baseline", Path(baseline))):
-            p = subprocess.run([sys.executable, __file__, "--cost-child"], capture_output=True, text=True,
+            p = subprocess.run([sys.executable, __file__, "--cost-child", "--repeats", str(repeats)],
+                               capture_output=True, text=True,
                                timeout=timeout, env=dict(env0, PYTHONPATH=str(path)))
             line = next((x for x in p.stdout.splitlines() if x.startswith("RESULT ")), None)
             if line is None:
@@ -390,14 +396,15 @@ def cost_part(baseline, rounds=3, timeout=3600):
         b = min(r[name][0] for r in seen["baseline"])
         rows.append(dict(case=name, checks=a, baseline=b, ratio=a / b, iterations=seen["checks"][0][name][1],
                          iterations_baseline=seen["baseline"][0][name][1]))
-    return dict(rows=rows, rounds=rounds, baseline=str(baseline))
+    return dict(rows=rows, rounds=rounds, repeats=repeats, baseline=str(baseline))
 
 
 def _cost_section(cost):
     rows = cost["rows"]
     ta, tb = sum(r["checks"] for r in rows), sum(r["baseline"] for r in rows)
     L = ["## Cost of the checks", "",
-         f"benchmarks/speed.py's cases (numba, one thread), each the best of 3 warm solves, with this tree and "
+         f"benchmarks/speed.py's cases (numba, one thread), each the best of {cost.get('repeats', 3)} warm "
+         "solve(s), with this tree and "
          f"with main's code ({cost['rounds']} alternating pairs of processes; the best of each): whole solve [s], "
          "Newton iterations (tangent assemblies).", "",
          f"**Total {ta:.3f} s against {tb:.3f} s: {ta / tb - 1:+.1%}.**", "",
@@ -447,6 +454,8 @@ def _cell(c, ref):
     if st == "ok":
         tag = "ref" if ref else {"same": "=", "tol": "= at tol"}.get(c.get("verdict"), "**DIFFERS**")
         extra = f", {c['rejected']} rejected" if c.get("rejected") else ""
+        if c.get("critical"):              # passed and recorded (limit_check off, or arc length)
+            extra += ", passed " + ", ".join(c["critical"][:2]) + (" ..." if len(c["critical"]) > 2 else "")
         d = "" if ref or "d" not in c else f" {c['d']:.0e}"
         if "d_tight" in c:
             d += f"; tolerances / {TIGHT:g}: " + (f"{c['d_tight']:.0e}" if c["d_tight"] is not None
@@ -615,15 +624,17 @@ def main():
                     choices=("steps", "zhao", "translation", "critical", "candidates", "cost"))
     ap.add_argument("--baseline", help="a checkout of main (--part cost)")
     ap.add_argument("--cost-child", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--rounds", type=int, default=3, help="alternating pairs of processes (--part cost)")
+    ap.add_argument("--repeats", type=int, default=3, help="warm solves per case and process (--part cost)")
     a = ap.parse_args()
     if a.child:
         print("RESULT " + json.dumps(child(a.child, a.steps, a.out, a.tight)))
         return 0
     if a.cost_child:
-        print("RESULT " + json.dumps(cost_child()))
+        print("RESULT " + json.dumps(cost_child(a.repeats)))
         return 0
     parts = dict(zhao=zhao_part, translation=translation_part, critical=critical_part,
-                 candidates=candidates_part, cost=lambda: cost_part(a.baseline))
+                 candidates=candidates_part, cost=lambda: cost_part(a.baseline, a.rounds, a.repeats))
     for part in a.part:
         if part in parts:
             save(**{part: parts[part]()})
