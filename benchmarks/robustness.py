@@ -8,9 +8,14 @@ finest run that finished (4x default, else the default):
 
     d = max(max_n |x_n - x_n^ref| / U, max_n |R_n - R_n^ref|_F)
 
-U the largest nodal displacement along the reference path (the path's scale).  A cell is
+U the largest nodal displacement along the reference path (the path's scale), and the final
+load factors within 1e-6 max(1, |lam_ref|) (an arc-length path ends where its displacement
+does).  A cell is
 
 * ``= d``: the same state (d <= 1e-6);
+* ``= at tol d; ... d_t``: d > 1e-6, but solved again with Newton's rtol/dtol and every
+  contact's gap tolerance divided by 100, the run and its reference agree to d_t <= 1e-6 and
+  d_t <= d / 10: the difference is the stated tolerances (a contact's 1e-6 h), not another state;
 * ``DIFFERS d``: a different state reported as converged -- a converged-looking wrong answer
   (the target is none);
 * ``stop: <message>``: the run stopped and said why (the message, shortened);
@@ -37,11 +42,13 @@ Writes ``benchmarks/results/robustness.{md,json}`` (a part run keeps the other p
     .venv/bin/python benchmarks/robustness.py --cases rollup example:rotating-field --timeout 300
     .venv/bin/python benchmarks/robustness.py --part zhao translation critical candidates
     git worktree add /tmp/main main && .venv/bin/python benchmarks/robustness.py --part cost --baseline /tmp/main
+    .venv/bin/python benchmarks/robustness.py --part cost --baseline /tmp/main --rounds 1 --repeats 1   # ~2 x speed.py
 """
 from __future__ import annotations
 
 import argparse
 import datetime
+import fcntl
 import json
 import os
 import platform
@@ -75,8 +82,21 @@ def default_steps(name):
     return int(get_case(name).steps)
 
 
-def _solve(name, steps):
-    """(Result, Problem) of a run with ``steps`` load steps."""
+TIGHT = 100.0               # the tolerance rerun of a differing cell: Newton's and contact's / 100
+
+
+def _tighten(prob):
+    """Divide the gap tolerance of every contact load of ``prob`` by TIGHT (in place)."""
+    for ld in prob.loads:
+        if hasattr(ld, "gap_error") and getattr(ld, "tol", None):
+            ld.tol /= TIGHT
+    return prob
+
+
+def _solve(name, steps, tight=False):
+    """(Result, Problem) of a run with ``steps`` load steps; ``tight``: with Newton's rtol and
+    dtol and every contact's gap tolerance divided by TIGHT."""
+    extra = dict(rtol=1e-10 / TIGHT, dtol=1e-10 / TIGHT) if tight else {}
     if name.startswith("example:"):
         import warnings
         from core_se3 import scenario
@@ -87,20 +107,26 @@ def _solve(name, steps):
         kw = dict(steps=steps)
         if s["control"] == "arclength":
             kw = dict(dlam0=s["lam_end"] / steps)
-        return scn.problem.solve(**kw), scn.problem
+        if tight:
+            _tighten(scn.problem)
+        return scn.problem.solve(**kw, **extra), scn.problem
     from core_se3.catalogue import get_case, run_case
+    if tight:
+        import core_se3.catalogue.run as R
+        build = R.build_problem
+        R.build_problem = lambda *a, **k: _tighten(build(*a, **k))
     # the arc-length cases of the Sze et al. family start from their own dlam0: set it from steps,
     # with room for the steps a small first step takes to the end of the path
     kw = dict(dlam0=1.0 / steps, max_steps=100_000) if get_case(name).extra.get("dlam0") is not None else {}
-    _, res, prob = run_case(name, steps=steps, **kw)
+    _, res, prob = run_case(name, steps=steps, **kw, **extra)
     return res, prob
 
 
-def child(name, steps, out):
+def child(name, steps, out, tight=False):
     from core_se3.errors import CoreSE3Error
     t0 = time.perf_counter()
     try:
-        res, prob = _solve(name, steps)
+        res, prob = _solve(name, steps, tight)
     except CoreSE3Error as exc:
         return dict(status="stop", message=" ".join(str(exc).split()), kind=type(exc).__name__,
                     time=time.perf_counter() - t0)
@@ -112,12 +138,13 @@ def child(name, steps, out):
     log = [e for e in res.log if isinstance(e, dict)]
     return dict(status="ok", lam=float(final.load_factor), scale=U, time=time.perf_counter() - t0,
                 tries=len(log), iterations=sum(int(e.get("iterations") or 0) for e in log),
-                rejected=sum("path check" in str(e.get("reason", "")) for e in log))
+                rejected=sum("path check" in str(e.get("reason", "")) for e in log),
+                critical=[f"{c.kind} at {c.lam:.6g}" for c in getattr(res, "critical_points", [])])
 
 
-def run(name, steps, timeout, workdir):
-    out = os.path.join(workdir, f"{name.replace(':', '_')}_{steps}.npz")
-    cmd = [sys.executable, __file__, "--child", name, "--steps", str(steps), "--out", out]
+def run(name, steps, timeout, workdir, tight=False):
+    out = os.path.join(workdir, f"{name.replace(':', '_')}_{steps}{'_tight' if tight else ''}.npz")
+    cmd = [sys.executable, __file__, "--child", name, "--steps", str(steps), "--out", out] + ["--tight"] * tight
     env = dict(os.environ, PYTHONPATH=str(ROOT))
     try:
         p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=env)
@@ -158,11 +185,26 @@ def study(name, timeout, workdir):
             else:
                 cell["d"] = distance(g, gr, rr["scale"])
                 cell["lam_ref"] = rr["lam"]
-                cell["verdict"] = ("ref" if n == ref_n else "same" if cell["d"] <= SAME
-                                   and abs(r["lam"] - rr["lam"]) <= 1e-12 else "DIFFERS")
+                # the load factor too (an arc-length path ends where a displacement is reached)
+                same_lam = abs(r["lam"] - rr["lam"]) <= SAME * max(1.0, abs(rr["lam"]))
+                cell["verdict"] = "ref" if n == ref_n else "same" if cell["d"] <= SAME and same_lam else "DIFFERS"
+                if cell["verdict"] == "DIFFERS" and same_lam:
+                    cell.update(_tolerance_rerun(name, n, ref_n, cell["d"], timeout, workdir))
         row["runs"][str(n)] = cell
     row["reference"] = ref_n
     return row
+
+
+def _tolerance_rerun(name, n, ref_n, d, timeout, workdir):
+    """A differing cell and its reference solved again with the tolerances divided by TIGHT:
+    when their distance drops below SAME and by at least TIGHT / 10, the difference was the
+    solvers' stated tolerances (verdict 'tol'), not another state."""
+    (a, ga), (b, gb) = run(name, n, timeout, workdir, True), run(name, ref_n, timeout, workdir, True)
+    if a["status"] != "ok" or b["status"] != "ok":
+        return dict(d_tight=None, tight_message=(a.get("message") or b.get("message") or "")[:200])
+    dt = distance(ga, gb, b["scale"])
+    print(f"  {name} steps={n}: d {d:.2e}, with the tolerances / {TIGHT:g}: {dt:.2e}", flush=True)
+    return dict(d_tight=dt, verdict="tol" if dt <= SAME and dt <= d * 10 / TIGHT else "DIFFERS")
 
 
 # ----------------------------------------------------------------------------- parts ------
@@ -317,21 +359,21 @@ def _candidates_section(rows):
     return L
 
 
-def cost_child():
-    """Each case of benchmarks/speed.py solved once to warm up and then 3 times (the best
-    counts), with the core_se3 on PYTHONPATH: dict case -> (seconds, Newton iterations)."""
+def cost_child(repeats=3):
+    """Each case of benchmarks/speed.py solved once to warm up and then ``repeats`` times (the
+    best counts), with the core_se3 on PYTHONPATH: dict case -> (seconds, Newton iterations)."""
     sys.path.insert(0, str(ROOT / "benchmarks"))
     from speed import CASES as SPEED_CASES, _solve_once
     out = {}
     for name, (mesh, _) in SPEED_CASES.items():
         _solve_once(name, mesh)
-        runs = [_solve_once(name, mesh) for _ in range(3)]
+        runs = [_solve_once(name, mesh) for _ in range(repeats)]
         best = min(runs, key=lambda r: r["total"])
         out[name] = (best["total"], best["iterations"])
     return out
 
 
-def cost_part(baseline, rounds=3, timeout=3600):
+def cost_part(baseline, rounds=3, repeats=3, timeout=3600):
     """speed.py's cases with this tree's core_se3 and with ``baseline``'s (a checkout of main),
     alternately in ``rounds`` pairs of child processes (numba, one thread): per case the best
     time of each and their ratio."""
@@ -340,7 +382,8 @@ def cost_part(baseline, rounds=3, timeout=3600):
     seen = {"checks": [], "baseline": []}
     for _ in range(rounds):
         for which, path in (("checks", ROOT), ("baseline", Path(baseline))):
-            p = subprocess.run([sys.executable, __file__, "--cost-child"], capture_output=True, text=True,
+            p = subprocess.run([sys.executable, __file__, "--cost-child", "--repeats", str(repeats)],
+                               capture_output=True, text=True,
                                timeout=timeout, env=dict(env0, PYTHONPATH=str(path)))
             line = next((x for x in p.stdout.splitlines() if x.startswith("RESULT ")), None)
             if line is None:
@@ -353,14 +396,15 @@ def cost_part(baseline, rounds=3, timeout=3600):
         b = min(r[name][0] for r in seen["baseline"])
         rows.append(dict(case=name, checks=a, baseline=b, ratio=a / b, iterations=seen["checks"][0][name][1],
                          iterations_baseline=seen["baseline"][0][name][1]))
-    return dict(rows=rows, rounds=rounds, baseline=str(baseline))
+    return dict(rows=rows, rounds=rounds, repeats=repeats, baseline=str(baseline))
 
 
 def _cost_section(cost):
     rows = cost["rows"]
     ta, tb = sum(r["checks"] for r in rows), sum(r["baseline"] for r in rows)
     L = ["## Cost of the checks", "",
-         f"benchmarks/speed.py's cases (numba, one thread), each the best of 3 warm solves, with this tree and "
+         f"benchmarks/speed.py's cases (numba, one thread), each the best of {cost.get('repeats', 3)} warm "
+         "solve(s), with this tree and "
          f"with main's code ({cost['rounds']} alternating pairs of processes; the best of each): whole solve [s], "
          "Newton iterations (tangent assemblies).", "",
          f"**Total {ta:.3f} s against {tb:.3f} s: {ta / tb - 1:+.1%}.**", "",
@@ -408,9 +452,14 @@ def critical_part():
 def _cell(c, ref):
     st = c["status"]
     if st == "ok":
-        tag = "ref" if ref else ("=" if c.get("verdict") == "same" else "**DIFFERS**")
+        tag = "ref" if ref else {"same": "=", "tol": "= at tol"}.get(c.get("verdict"), "**DIFFERS**")
         extra = f", {c['rejected']} rejected" if c.get("rejected") else ""
+        if c.get("critical"):              # passed and recorded (limit_check off, or arc length)
+            extra += ", passed " + ", ".join(c["critical"][:2]) + (" ..." if len(c["critical"]) > 2 else "")
         d = "" if ref or "d" not in c else f" {c['d']:.0e}"
+        if "d_tight" in c:
+            d += f"; tolerances / {TIGHT:g}: " + (f"{c['d_tight']:.0e}" if c["d_tight"] is not None
+                                                 else "stop: " + c.get("tight_message", "")[:60])
         return f"{tag}{d} ({c['iterations']} it{extra})"
     msg = c.get("message", "")
     return f"{st}: {msg[:150]}" + ("..." if len(msg) > 150 else "")
@@ -505,6 +554,7 @@ def _critical_section(rows):
 def _steps_section(rows, meta):
     n_diff = sum(c.get("verdict") == "DIFFERS" for r in rows for c in r["runs"].values())
     n_ok = sum(c.get("verdict") == "same" for r in rows for c in r["runs"].values())
+    n_tol = sum(c.get("verdict") == "tol" for r in rows for c in r["runs"].values())
     n_ref = sum(c.get("verdict") == "ref" for r in rows for c in r["runs"].values())
     n_stop = sum(c["status"] == "stop" for r in rows for c in r["runs"].values())
     L = ["# Step-size independence: every case and example with 1, 2, default and 4x default steps", "",
@@ -512,10 +562,13 @@ def _steps_section(rows, meta):
          f"{meta['solver_checks']})", "",
          f"Each final state is compared with the finest run that finished (*ref*: 4x default, else the "
          f"default): d = max(max |x - x_ref| / U, max |R - R_ref|_F), U the largest displacement along the "
-         f"reference path; `=` agrees to d <= {SAME:g}, **DIFFERS** is a converged-looking wrong answer; "
+         f"reference path; `=` agrees to d <= {SAME:g}; `= at tol`: d > {SAME:g}, but the run and its "
+         f"reference solved again with Newton's rtol/dtol and the contacts' gap tolerance divided by {TIGHT:g} "
+         f"agree to {SAME:g} and to a tenth of d (the difference is the stated tolerances, not another state); "
+         "**DIFFERS** is a converged-looking wrong answer; "
          "`stop:` the run stopped with that message. In brackets: the Newton iterations of the run (all "
          "tries) and the tries the path check rejected.", "",
-         f"**{len(rows)} cases, {n_ref} reference runs; {n_ok} runs agree with their reference, {n_stop} stopped "
+         f"**{len(rows)} cases, {n_ref} reference runs; {n_ok} runs agree with their reference, {n_tol} agree to their tolerances, {n_stop} stopped "
          f"with a message, {n_diff} differ.**", "",
          "| case | default | 1 step | 2 steps | default | 4x default |", "|---|---:|---|---|---|---|"]
     for r in rows:
@@ -538,6 +591,13 @@ def save(rows=None, **parts):
                 python=platform.python_version(), numpy=numpy.__version__, backend=default_backend(),
                 solver_checks="path_check and limit_check on (the defaults)")
     path = RESULTS / "robustness.json"
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    with open(RESULTS / ".robustness.lock", "w") as lock:     # parts may run in parallel processes
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        _merge(path, rows, meta, parts)
+
+
+def _merge(path, rows, meta, parts):
     data = json.loads(path.read_text()) if path.exists() else {}
     if rows:
         mine = {r["case"] for r in rows}
@@ -557,21 +617,24 @@ def main():
     ap.add_argument("--child", help=argparse.SUPPRESS)
     ap.add_argument("--steps", type=int, help=argparse.SUPPRESS)
     ap.add_argument("--out", help=argparse.SUPPRESS)
+    ap.add_argument("--tight", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--cases", nargs="*", default=None, help="case names or example:NAME (default all)")
     ap.add_argument("--timeout", type=float, default=900.0, help="per run [s]")
     ap.add_argument("--part", nargs="*", default=["steps"],
                     choices=("steps", "zhao", "translation", "critical", "candidates", "cost"))
     ap.add_argument("--baseline", help="a checkout of main (--part cost)")
     ap.add_argument("--cost-child", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--rounds", type=int, default=3, help="alternating pairs of processes (--part cost)")
+    ap.add_argument("--repeats", type=int, default=3, help="warm solves per case and process (--part cost)")
     a = ap.parse_args()
     if a.child:
-        print("RESULT " + json.dumps(child(a.child, a.steps, a.out)))
+        print("RESULT " + json.dumps(child(a.child, a.steps, a.out, a.tight)))
         return 0
     if a.cost_child:
-        print("RESULT " + json.dumps(cost_child()))
+        print("RESULT " + json.dumps(cost_child(a.repeats)))
         return 0
     parts = dict(zhao=zhao_part, translation=translation_part, critical=critical_part,
-                 candidates=candidates_part, cost=lambda: cost_part(a.baseline))
+                 candidates=candidates_part, cost=lambda: cost_part(a.baseline, a.rounds, a.repeats))
     for part in a.part:
         if part in parts:
             save(**{part: parts[part]()})

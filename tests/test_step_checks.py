@@ -221,3 +221,19 @@ def test_a_sign_change_seen_across_a_jump_is_not_a_critical_point():
     u1, u = res1.final.probes["tip"]["u"], res.final.probes["tip"]["u"]
     assert np.abs(u1 - u).max() <= 1e-6 * np.abs(u).max()
     assert not res1.critical_points
+
+
+def test_arc_length_ends_on_lam_end_when_landing_fails():
+    """An arc-length step that overshoots lam_end so far that landing on it fails (u' = 1 -
+    tanh^2 underflows at the overshoot: a singular tangent) ended the path past lam_end, at
+    0.999988 for 0.99, reported as finished (sze-slit-annular from dlam0 = 1: 1.0335 for 1;
+    benchmarks/results/robustness.md).  Now the step is rejected and shortened: the path ends on
+    lam_end."""
+    from core_se3.solvers import AlgebraicSystem
+    from core_se3.solvers.arclength import path_follow
+    s = AlgebraicSystem(np.tanh, lambda u: np.diag(1.0 - np.tanh(u) ** 2), [1.0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")            # the overshoot's singular tangent
+        pts, _, _, _ = path_follow(s, lam_end=0.99, dlam0=2.0)
+    assert pts[-1].lam == pytest.approx(0.99, abs=1e-12)
+    assert np.tanh(pts[-1].state[0]) == pytest.approx(0.99, abs=1e-12)

@@ -321,7 +321,19 @@ def path_steps(sysm, options, lam_end=1.0, control=None, control_end=None, lam_m
                 s2, l2, its, hist, ev = correct(sysm, st_pred, cur.lam + frac * con.dlam, lin, o, timers)
                 pt = analyse(sysm, s2, l2, o.stability, its, hist)
             except (StepFailed, ElementTooDistortedError, FloatingPointError, SingularSystemError) as exc:
-                log.info("  landing failed (%s); keeping the arc-length step", exc)
+                # the step overshot the stop value too far to land on it: a shorter step, never a
+                # path that ends past lam_end (sze-slit-annular from dlam0 = 1 ended at 1.0335)
+                reason = f"the step passed {why} at lam {pt.lam:.6g} and landing on it failed: {exc}"
+                trylog.append(dict(step=step + 1, lam=pt.lam, ds=ds, converged=False, iterations=None,
+                                   reason=reason))
+                rejections += 1
+                log.info("  step %d: ds %.4g REJECTED (%s); retry with ds/2", step + 1, ds, reason)
+                ds /= 2
+                if ds < ds_min or rejections > o.max_rejections:
+                    raise PathError(f"arc length failed at lam {cur.lam:.6g} after {rejections} "
+                                    f"rejections ({reason}): start with a smaller dlam0 or set ds_max",
+                                    info) from None
+                continue
         rejections = 0
         step += 1
         prev_du, prev_dl = con.du, con.dlam
