@@ -49,9 +49,8 @@ WIDE_FUNCTIONS = {
     "core_se3.design.magnetisation:RegionMagnetisation.__init__": "the variable's form, planes, bounds, start",
     "core_se3.design.sensitivity:sensitivity": "method and the reused evaluation, run and factorization",
     "core_se3.io.checkpoint:Checkpoint.save": "the parts of a checkpointed state",
-    "core_se3.io.plots:plot_load_deflection": "plot labels and style",
-    "core_se3.io.plots:plot_shell": "the view (elev, azim, roll) and style",
-    "core_se3.io.plots:plot_sequence": "the view (elev, azim, roll) and style",
+    "core_se3.io.plots:plot_load_deflection": "its axis labels (xlabel, ylabel); callers in catalogue/family_contact.py "
+                                              "(issue 31's file)",
     "core_se3.parallel.newton:distributed_solve": "newton_solve's signature plus partition, PETSc options, comm",
     "core_se3.results.recorder:StepRecorder.step": "the forces, stability and the probes' unwrapping data",
     "core_se3.scenario.spec:Scenario.__init__": "the parts of a built scenario",
