@@ -121,12 +121,24 @@ CASES = [
     ("magnet repeated", with_(loads=[], regions={"tip": {"box": {"x": [7.5, 10.0]}}},
                               fields={"c": {"type": "uniform", "B": [0.0, 0.0, 0.01]}},
                               magnets=[{"Br": [0.1, 0.0, 0.0], "region": "tip"}] * 2), "magnets[1]", "repeats magnets[0]"),
-    ("a magnet on clamped elements only", with_(loads=[], regions={"root": {"box": {"x": [0.0, 2.5]}}},
+    ("a magnet on clamped elements only", with_(loads=[], regions={"root": {"box": {"x": [0.0, 2.5]}},
+                                                                    "tip": {"box": {"x": [7.5, 10.0]}}},
                                                 supports=[{"type": "clamp", "region": "root"}],
                                                 fields={"c": {"type": "uniform", "B": [0.0, 0.0, 0.01]}},
                                                 magnets=[{"Br": [0.1, 0.0, 0.0], "region": "root"},
-                                                         {"Br": [0.1, 0.0, 0.0]}]),
+                                                         {"Br": [0.1, 0.0, 0.0], "region": "tip"}]),
      "magnets[0]", "it acts only on dofs that supports[0] hold"),
+    # an element has one remanent magnetisation: two magnets of one field on it would add
+    ("two magnetisations of one region", with_(loads=[], regions={"tip": {"box": {"x": [7.5, 10.0]}}},
+                                               fields={"c": {"type": "uniform", "B": [0.0, 0.0, 0.01]}},
+                                               magnets=[{"Br": [0.1, 0.0, 0.0], "region": "tip"},
+                                                        {"Br": [-0.1, 0.0, 0.0], "region": "tip"}]),
+     "magnets[1]", "magnets[0] and magnets[1] have common elements: 1, for field 'c'"),
+    ("a whole-shell magnet beside a region's", with_(loads=[], regions={"tip": {"box": {"x": [7.5, 10.0]}}},
+                                                     fields={"c": {"type": "uniform", "B": [0.0, 0.0, 0.01]}},
+                                                     magnets=[{"Br": [0.1, 0.0, 0.0]},
+                                                              {"Br": [0.0, 0.1, 0.0], "region": "tip"}]),
+     "magnets[1]", "common elements: 1 (a magnet without 'region' magnetises the whole shell)"),
 ]
 
 

@@ -150,10 +150,30 @@ def magnets_section(v, doc, regions, fields, mesh=None, base_dir="."):
         else:
             v.fail(join(key, "field"), f"several fields are defined ({', '.join(fields)}): name one")
         _refuse_repeat(v, out, m, key, "magnets", "the magnet")
+        _refuse_overlap(v, out, m, key, regions)
         out.append(m)
     if fields and not out:
         v.fail("fields", "fields are defined but no [[magnets]] use them")
     return out
+
+
+def _refuse_overlap(v, out, m, key, regions):
+    """An element has one remanent magnetisation: two magnets of the same field on common
+    elements would add their Br silently (a copied region name, a whole-shell magnet beside a
+    region's)."""
+    mine = None if m["region"] is None else set(np.asarray(regions[m["region"]]).tolist())
+    for j, o in enumerate(out):
+        if o["field"] != m["field"]:
+            continue
+        other = None if o["region"] is None else set(np.asarray(regions[o["region"]]).tolist())
+        common = (mine & other if other is not None else mine) if mine is not None else other
+        if common is None or common:
+            where = ("common elements: " + ("every element" if common is None else f"{len(common)}") +
+                     ("" if mine is not None and other is not None else
+                      " (a magnet without 'region' magnetises the whole shell)"))
+            v.fail(key, f"magnets[{j}] and {key} have {where}, for field {m['field']!r}: an element has one "
+                        "remanent magnetisation, and the two would add; give each region once (split the "
+                        "regions, or sum the Br into one magnet)")
 
 
 def supports_section(v, doc, mesh, regions):
@@ -233,6 +253,9 @@ def solver_section(v, doc):
         extra = [k for k in ARCLENGTH_DEFAULTS if k in d]
         if extra:
             v.fail(join(key, extra[0]), 'an arc-length control: only with control = "arclength"')
+        if "load_factors" in d and s["control"] == "linear":
+            v.fail(join(key, "load_factors"), 'a linear analysis (control = "linear") is one solve at lam_end: '
+                                              "give lam_end, not load factors")
         if "load_factors" in d:
             both = [k for k in ("steps", "lam_end") if k in d]
             if both:
@@ -275,6 +298,8 @@ def solve_defaults(s):
                     max_steps=s["max_steps"], target_iter=s["target_iter"],
                     ds_max_factor=s["ds_max_factor"], stability=s["stability"],
                     critical_tol=s["critical_tol"], **common)
+    if s["control"] == "linear":
+        return dict(control="linear", **common)
     out = dict(control="load", max_cutbacks=s["max_cutbacks"], iteration=s["iteration"],
                predictor=s["predictor"], path_check=s["path_check"], limit_check=s["limit_check"],
                max_substeps=s["max_substeps"], **common)

@@ -21,6 +21,7 @@ from __future__ import annotations
 import os
 import time
 from dataclasses import dataclass, field
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -32,6 +33,7 @@ from ..io.lifecycle import Terminated, held_signals, termination_as_interrupt
 from ..io.rundir import RunDirectory, safe_name
 from ..results import Result, StepRecorder, step_record
 from ..solvers import ArcLengthOptions, ArcState, NewtonOptions, NewtonState, arc_length_steps
+from ..solvers.linear import linear_solve
 from .context import on_root, run_context
 from .outputs import cell_fields, physical_record, picture, plot_probes, point_fields, unit_system_record  # noqa: F401
 from .provenance import run_provenance
@@ -168,7 +170,8 @@ def _context(scn, st):
     """The run's context (``scenario.context``); a [solver.petsc] option PETSc refuses is a
     ScenarioError naming its key."""
     try:
-        return run_context(scn.problem, scn.solver, scn.solver["control"] == "arclength", st)
+        # arc length and linear analysis run serially on every rank of an MPI launch
+        return run_context(scn.problem, scn.solver, scn.solver["control"] != "load", st)
     except OptionError as exc:
         if getattr(exc, "param", None):
             raise ScenarioError(str(exc), scn.file, f"solver.{exc.param}") from None
@@ -285,6 +288,9 @@ def _events(run, start, rec):
             yield _event(run, k, record, item, bool(item.state.finished), dict(control="arclength", arc=scalars),
                          arrays, item.state.unwrap)
         return
+    if scn.solver["control"] == "linear":
+        yield from _linear_events(run, rec)
+        return
     lams, k = scn.load_factors(), run.done
     for item in run.ctx.steps(lams[k:], opts, start, rec, run.result):
         k += 1
@@ -295,6 +301,19 @@ def _events(run, start, rec):
         arrays = {**(item.state.arrays() or {}), **(run.ctx.checkpoint_arrays() or {})} or None
         yield _event(run, k, record, item, k == len(lams), dict(newton=item.state.pack(), ranks=run.ctx.ranks),
                      arrays, rec.unwrapped)
+
+
+def _linear_events(run, rec):
+    """control = "linear": the one step of a linear analysis (``solvers.linear_solve``) at lam_end."""
+    s = run.scn.solver
+    res = linear_solve(run.scn.problem, lam_end=s["lam_end"], linear_solver=s["linear_solver"])
+    step = res.steps[-1]
+    for k, t in res.timings.items():
+        run.result.timings[k] = run.result.timings.get(k, 0.0) + t
+    record = _record(1, step, 1, 1, 0)
+    item = SimpleNamespace(step=step)
+    yield _event(run, 1, record, item, True, dict(newton=NewtonState(step.load_factor, step.g).pack(),
+                                                  ranks=run.ctx.ranks), None, rec.unwrapped)
 
 
 def _event(run, k, record, item, finished, extra, arrays, unwrap):

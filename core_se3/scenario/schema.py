@@ -107,8 +107,9 @@ def _option(name, opts, doc, **kw):
 
 
 SOLVER = Section("solver", (
-    Param("control", "string", "load", choices=("load", "arclength"),
-          doc="load stepping, or path following past limit points (`core_se3/solvers/arclength.py`)"),
+    Param("control", "string", "load", choices=("load", "arclength", "linear"),
+          doc="load stepping, path following past limit points (`core_se3/solvers/arclength.py`), or linear "
+          "analysis: one solve at the reference state, the loads at `lam_end` (`core_se3/solvers/linear.py`)"),
     Param("steps", "integer", 10, lo=1, hi=100_000, doc="equal load-factor steps from 0 to `lam_end`"),
     Param("lam_end", "number", 1.0, doc="final load factor (≠ 0)"),
     Param("load_factors", "any", None, doc="explicit load factors of the steps, e.g. `[0.05, 0.2, 0.5, 1.0]`, moving "

@@ -150,6 +150,8 @@ class Scenario:
     def load_factors(self):
         """The load factors of the requested steps (excluding the initial state lam = 0)."""
         s = self.solver
+        if s["control"] == "linear":
+            return [s["lam_end"]]                   # one solve, at the final load factor
         if s.get("load_factors") is not None:
             return list(s["load_factors"])
         return [s["lam_end"] * k / s["steps"] for k in range(1, s["steps"] + 1)]
@@ -323,6 +325,9 @@ def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario", strict=
     if spec["solver"]["control"] == "arclength" and spec["obstacles"]:
         v.fail("solver.control", 'contact with [[obstacles]] needs load control (control = "load"): arc '
                                  "length does not update the contact multipliers")
+    if spec["solver"]["control"] == "linear" and spec["obstacles"]:
+        v.fail("solver.control", 'contact with [[obstacles]] needs load control (control = "load"): a linear '
+                                 "analysis would pass through the obstacles")
     spec["output"] = output_section(v, doc)
     design = design_section(v, doc, spec, mesh, regions)
     if design is not None:
@@ -334,7 +339,7 @@ def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario", strict=
     phys["magnets"] = [{k: (dict(x, path=None) if k == "Br_table" else x) for k, x in m.items()}
                        for m in spec["magnets"]]          # a table's digest, not where it lies
     phys["solver"] = {k: x for k, x in spec["solver"].items() if k not in NON_PHYSICAL}
-    if spec["solver"]["control"] == "load":
+    if spec["solver"]["control"] != "arclength":
         # the load factors may grow on --resume (a finished run extended to a higher lam_end);
         # the runner checks that the steps done are the first steps of the new ones
         phys["solver"] = {k: x for k, x in phys["solver"].items() if k not in EXTENSIBLE}

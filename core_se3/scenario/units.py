@@ -38,6 +38,7 @@ E_RANGE_PA = (10.0, 7e11)          # soft gels .. tungsten carbide
 RHO_RANGE = (1.0, 2.5e4)           # kg/m^3: aerogels .. osmium
 B_MAX = 2.0                        # T: NdFeB magnets reach ~1.4 T, lab electromagnets ~2 T
 H_OVER_L_MAX = 0.3
+LINEAR_MAX = 0.1              # a linear analysis: rotations of the order of the load number
 FIRST_STEP_MAX = 1e3
 TURNS_MAX = 10                     # a bare angle [rad] over ten turns is likely degrees (360 -> 57 turns)
 # parameters of the built-in load kinds -> dimension
@@ -350,9 +351,13 @@ def plausibility(v, scn):
             v.warn(f"{key}.h", f"h / L = {mat['h']:g} / {span:g} = {mat['h'] / span:.3g} > {H_OVER_L_MAX:g}: the "
                                "shell is thick for its span (L = the largest distance to a support); a shell "
                                "model needs h << L: check h and the mesh's length unit")
-    lam1 = scn.load_factors()[0] if scn.solver["control"] == "load" else scn.solver["dlam0"]
+    lam1 = scn.load_factors()[0] if scn.solver["control"] != "arclength" else scn.solver["dlam0"]
     for n in load_numbers(scn, lam=lam1):
-        if n["value"] > FIRST_STEP_MAX:
+        if scn.solver["control"] == "linear" and n["value"] > LINEAR_MAX:
+            v.warn(n["name"], f"the load number {n['formula']} = {n['value']:.3g} at lam_end = {lam1:g} (span L = "
+                              f"{n['span']:.4g}) is above {LINEAR_MAX:g}: rotations of that order, beyond the "
+                              'small rotations of a linear analysis; solve with control = "load"')
+        elif n["value"] > FIRST_STEP_MAX:
             v.warn(n["name"], f"the load number {n['formula']} = {n['value']:.3g} in the first step (load factor "
                               f"{lam1:g}; span L = {n['span']:.4g}) is above {FIRST_STEP_MAX:g}: the first step "
                               "bends the shell through many turns; check the units of the load (and mu0), or "

@@ -107,6 +107,13 @@ def linear_solve(problem, lam_end=1.0, steps=None, linear_solver=None, **kw):
                      ["lam_end", "linear_solver", *NewtonOptions.__dataclass_fields__])
     if not np.isfinite(lam_end):
         raise OptionError(f"lam_end must be finite, got {lam_end!r}")
+    contact = [getattr(ld, "name", type(ld).__name__) for ld in problem.loads if getattr(ld, "constraint_force", False)]
+    if contact:
+        # a contact load is zero until a node touches: the reference tangent has none of it, and
+        # a linear answer would pass through the obstacle
+        raise OptionError(f"linear analysis cannot hold contact (obstacles {', '.join(map(str, contact))}): contact "
+                          "is nonlinear and the linear answer would pass through the obstacle; solve with load "
+                          "control (control='load') or remove the obstacles")
     t0 = time.perf_counter()
     mesh = problem.mesh
     g0 = mesh.g0
