@@ -176,6 +176,17 @@ def test_a_malformed_declaration_is_refused_where_it_is_written():
         reg.add("w")
 
 
+
+def test_every_register_function_is_the_registrys_add():
+    """register_load/field/... check what Registry.add checks: a field kind declaring the
+    section's own key 'scale' was accepted by register_field (it bypassed the reserved keys)."""
+    from core_se3.model import FieldKind, register_field, register_load
+    with pytest.raises(TypeError, match="key 'scale' is the section's own"):
+        register_field(FieldKind("scaled", (Param("scale", "number"),), lambda *a: None))
+    with pytest.raises(TypeError, match="a load kind must be a LoadKind, got str"):
+        register_load("gravity")
+
+
 def test_the_vocabulary_describes_every_section():
     """One description per section: the validator's allowed keys are the declared ones."""
     from core_se3.scenario.schema import OUTPUT, SECTIONS, SOLVER

@@ -40,114 +40,131 @@ def _corner(m, x, y):
 
 
 def sze_problem(case, p, mesh=None, element="default", linear_solver="auto"):
-    """Problem of a Sze case (see cases_sze.py for geometry, supports and loads)."""
+    """Problem of a Sze case (see cases_sze.py for geometry, supports and loads): the builder
+    of its ``shape`` (:data:`SHAPES`) on its mesh, with the probes and ``control`` (the node and
+    direction of the controlled displacement)."""
     shape = case.extra["shape"]
+    if shape not in SHAPES:
+        raise ValueError(f"unknown Sze shape {shape!r}")
     nx, ny = mesh or case.mesh
     mat = Material(p["E"], p["nu"], p["h"], drilling=p.get("drilling", 1.0))
-    if shape == "roof":
-        R, L, th = p["R"], p["L"], p["theta"]
-        full = bool(p.get("full", 0.0))
-        if full:
-            m = M.cylinder_panel(R, L, -th, th, nx, ny)
-            m.g0[:, 1, 3] -= L / 2                           # centre the roof on y = 0
-        else:
-            m = M.cylinder_panel(R, L / 2, 0.0, th, nx, ny)
-        prob = Problem(m, mat, element=element, linear_solver=linear_solver)
-        if full:
-            prob.fix("x0", (0, 1, 2))
-            prob.fix("x1", (0, 1, 2))
-            c = _corner(m, 0.0, 0.0)
-            prob.add_nodal_load(c, force=(0.0, 0.0, -p["load_max"]))
-        else:
-            # crown line x = 0: u_x (= d1) and rotations about y (d2), z (d3) fixed;
-            # mid-length y = 0: u_y (= d2) and rotations about d1, d3 fixed; x1 hinged
-            prob.fix("x0", (0, 4, 5))
-            prob.fix("y0", (1, 3, 5))
-            prob.fix("x1", (0, 1, 2))
-            c = _corner(m, 0.0, 0.0)
-            prob.add_nodal_load(c, force=(0.0, 0.0, -p["load_max"] / 4))
-        prob.add_probe("C", [c])
-        prob.control = (c, (0.0, 0.0, -1.0))
-        return prob
-    if shape == "slit-annulus":
-        m = M.annulus(p["r_in"], p["r_out"], 2 * pi, nx, ny)
-        prob = Problem(m, mat, element=element, linear_solver=linear_solver)
-        prob.clamp("y1")
-        prob.add_edge_force("y0", (0.0, 0.0, p["load_max"] * (p["r_out"] - p["r_in"])))
-        y0 = m.node_set("y0")
-        prob.add_probe("A", [int(y0[0])])
-        prob.add_probe("B", [int(y0[-1])])
-        prob.control = (int(y0[-1]), (0.0, 0.0, 1.0))
-        return prob
-    if shape in ("pullout", "pinched"):
-        R, L = p["R"], p["L"]
-        m = M.cylinder_panel(R, L / 2, 0.0, pi / 2, nx, ny)
-        prob = Problem(m, mat, element=element, linear_solver=linear_solver)
-        # symmetry planes: x = 0 (t = 0: d1 = x) and z = 0 (t = pi/2: d1 = -z): u along d1 and
-        # the rotations about d2, d3 fixed; y = L/2 (d2 = y): u_y and rotations about d1, d3
+
+    def problem(m):
+        return Problem(m, mat, element=element, linear_solver=linear_solver)
+    return SHAPES[shape](p, nx, ny, problem)
+
+
+def _probes(prob, control, direction, **probes):
+    for name, node in probes.items():
+        prob.add_probe(name, [node])
+    prob.control = (control, direction)
+    return prob
+
+
+def _roof(p, nx, ny, problem):
+    """The hinged cylindrical roof, a quarter with symmetry planes or (``full``) the whole."""
+    R, L, th = p["R"], p["L"], p["theta"]
+    if bool(p.get("full", 0.0)):
+        m = M.cylinder_panel(R, L, -th, th, nx, ny)
+        m.g0[:, 1, 3] -= L / 2                           # centre the roof on y = 0
+        prob = problem(m)
+        prob.fix("x0", (0, 1, 2))
+        prob.fix("x1", (0, 1, 2))
+        c = _corner(m, 0.0, 0.0)
+        prob.add_nodal_load(c, force=(0.0, 0.0, -p["load_max"]))
+    else:
+        m = M.cylinder_panel(R, L / 2, 0.0, th, nx, ny)
+        prob = problem(m)
+        # crown line x = 0: u_x (= d1) and rotations about y (d2), z (d3) fixed;
+        # mid-length y = 0: u_y (= d2) and rotations about d1, d3 fixed; x1 hinged
         prob.fix("x0", (0, 4, 5))
-        prob.fix("x1", (0, 4, 5))
-        prob.fix("y1", (1, 3, 5))
-        y1, x1 = m.node_set("y1"), m.node_set("x1")
-        A, B, Cn = int(y1[0]), int(y1[-1]), int(x1[0])
-        sign = 1.0 if shape == "pullout" else -1.0
-        prob.add_nodal_load(A, force=(0.0, 0.0, sign * p["load_max"] / 4))
-        if shape == "pinched":
-            # rigid diaphragm at s = 0: lab radial and circumferential directions of each node
-            # held; with diaphragm_tilt = 1 also the rotation about the cylinder axis (the normal
-            # stays normal to the circumferential tangent: MacNeal-Harder's theta_axis = 0)
-            y0 = m.node_set("y0")
-            g0 = m.g0[y0]
-            dirs = np.stack([g0[:, :3, 0], g0[:, :3, 2]], 1)        # reference d1, d3
-            k = p["k_diaphragm"] * p["E"] * p["h"]
-            prob.add_lab_support(y0, dirs, k)
-            ell = R * (pi / 2) / nx                                  # node spacing on the ring
-            if p.get("diaphragm_tilt", 0.0):
-                prob.add_lab_tilt_support(y0, g0[:, :3, 0], k * ell ** 2)
-            if p.get("diaphragm_theta_axis", 0.0):
-                # theta_y = 0 as a total-rotation-vector component (Abaqus' UR2 = 0)
-                prob.add_rotation_component_support(y0, (0.0, 1.0, 0.0), k * ell ** 2)
-            prob.add_probe("A", [A])
-            prob.add_probe("B", [B])
-            prob.control = (A, (0.0, 0.0, -1.0))
-            return prob
-        prob.add_probe("A", [A])
-        prob.add_probe("B", [B])
-        prob.add_probe("C", [Cn])
-        prob.control = (A, (0.0, 0.0, 1.0))
-        return prob
-    if shape == "hemisphere":
-        m = M.hemisphere_quarter(p["R"], p["hole_deg"], nx, ny)
-        prob = Problem(m, mat, element=element, linear_solver=linear_solver)
-        # y = 0 (f = 0, d2 = +y) and x = 0 (f = pi/2, d2 = -x): u along d2 and the rotations
-        # about d1, d3 fixed (the frame may turn about d2 only, which keeps d2 lab-fixed)
         prob.fix("y0", (1, 3, 5))
-        prob.fix("y1", (1, 3, 5))
-        A, B = int(m.node_set("y0")[-1]), int(m.node_set("y1")[-1])
-        prob.add_lab_support([A], [[0.0, 0.0, 1.0]], p["k_pin"] * p["E"] * p["h"])
-        prob.add_nodal_load(A, force=(p["load_max"] / 2, 0.0, 0.0))
-        prob.add_nodal_load(B, force=(0.0, -p["load_max"] / 2, 0.0))
-        prob.add_probe("A", [A])
-        prob.add_probe("B", [B])
-        prob.control = (A, (1.0, 0.0, 0.0))
-        return prob
-    if shape == "semicylinder":
-        m = M.cylinder_panel(p["R"], p["L"], -pi / 2, pi / 2, nx, ny)
-        prob = Problem(m, mat, element=element, linear_solver=linear_solver)
-        prob.clamp("y0")
-        # longitudinal edges t = -+pi/2: d1 = +-z, d2 = +y: u_z and the rotation about y fixed
-        prob.fix("x0", (0, 4))
-        prob.fix("x1", (0, 4))
-        y1 = m.node_set("y1")
-        if len(y1) % 2 != 1:
-            raise MeshError("sze-semicylinder needs an even number of elements around the half-circle "
-                            f"(a node at the crown, where the load acts), got {nx} (mesh {nx}x{ny})")
-        crown = int(y1[len(y1) // 2])
-        prob.add_nodal_load(crown, force=(0.0, 0.0, -p["load_max"]))
-        prob.add_probe("crown", [crown])
-        prob.control = (crown, (0.0, 0.0, -1.0))
-        return prob
-    raise ValueError(f"unknown Sze shape {shape!r}")
+        prob.fix("x1", (0, 1, 2))
+        c = _corner(m, 0.0, 0.0)
+        prob.add_nodal_load(c, force=(0.0, 0.0, -p["load_max"] / 4))
+    return _probes(prob, c, (0.0, 0.0, -1.0), C=c)
+
+
+def _slit_annulus(p, nx, ny, problem):
+    m = M.annulus(p["r_in"], p["r_out"], 2 * pi, nx, ny)
+    prob = problem(m)
+    prob.clamp("y1")
+    prob.add_edge_force("y0", (0.0, 0.0, p["load_max"] * (p["r_out"] - p["r_in"])))
+    y0 = m.node_set("y0")
+    return _probes(prob, int(y0[-1]), (0.0, 0.0, 1.0), A=int(y0[0]), B=int(y0[-1]))
+
+
+def _cylinder_octant(p, nx, ny, problem, shape):
+    """The pulled-out or pinched cylinder: an octant with its symmetry planes."""
+    R, L = p["R"], p["L"]
+    m = M.cylinder_panel(R, L / 2, 0.0, pi / 2, nx, ny)
+    prob = problem(m)
+    # symmetry planes: x = 0 (t = 0: d1 = x) and z = 0 (t = pi/2: d1 = -z): u along d1 and
+    # the rotations about d2, d3 fixed; y = L/2 (d2 = y): u_y and rotations about d1, d3
+    prob.fix("x0", (0, 4, 5))
+    prob.fix("x1", (0, 4, 5))
+    prob.fix("y1", (1, 3, 5))
+    y1, x1 = m.node_set("y1"), m.node_set("x1")
+    A, B, Cn = int(y1[0]), int(y1[-1]), int(x1[0])
+    sign = 1.0 if shape == "pullout" else -1.0
+    prob.add_nodal_load(A, force=(0.0, 0.0, sign * p["load_max"] / 4))
+    if shape == "pullout":
+        return _probes(prob, A, (0.0, 0.0, 1.0), A=A, B=B, C=Cn)
+    _diaphragm(prob, m, p, R * (pi / 2) / nx)
+    return _probes(prob, A, (0.0, 0.0, -1.0), A=A, B=B)
+
+
+def _diaphragm(prob, m, p, ell):
+    """The pinched cylinder's rigid diaphragm at s = 0: lab radial and circumferential
+    directions of each node held; with diaphragm_tilt = 1 also the rotation about the cylinder
+    axis (the normal stays normal to the circumferential tangent: MacNeal-Harder's
+    theta_axis = 0); ``ell``: the node spacing on the ring."""
+    y0 = m.node_set("y0")
+    g0 = m.g0[y0]
+    dirs = np.stack([g0[:, :3, 0], g0[:, :3, 2]], 1)        # reference d1, d3
+    k = p["k_diaphragm"] * p["E"] * p["h"]
+    prob.add_lab_support(y0, dirs, k)
+    if p.get("diaphragm_tilt", 0.0):
+        prob.add_lab_tilt_support(y0, g0[:, :3, 0], k * ell ** 2)
+    if p.get("diaphragm_theta_axis", 0.0):
+        # theta_y = 0 as a total-rotation-vector component (Abaqus' UR2 = 0)
+        prob.add_rotation_component_support(y0, (0.0, 1.0, 0.0), k * ell ** 2)
+
+
+def _hemisphere(p, nx, ny, problem):
+    m = M.hemisphere_quarter(p["R"], p["hole_deg"], nx, ny)
+    prob = problem(m)
+    # y = 0 (f = 0, d2 = +y) and x = 0 (f = pi/2, d2 = -x): u along d2 and the rotations
+    # about d1, d3 fixed (the frame may turn about d2 only, which keeps d2 lab-fixed)
+    prob.fix("y0", (1, 3, 5))
+    prob.fix("y1", (1, 3, 5))
+    A, B = int(m.node_set("y0")[-1]), int(m.node_set("y1")[-1])
+    prob.add_lab_support([A], [[0.0, 0.0, 1.0]], p["k_pin"] * p["E"] * p["h"])
+    prob.add_nodal_load(A, force=(p["load_max"] / 2, 0.0, 0.0))
+    prob.add_nodal_load(B, force=(0.0, -p["load_max"] / 2, 0.0))
+    return _probes(prob, A, (1.0, 0.0, 0.0), A=A, B=B)
+
+
+def _semicylinder(p, nx, ny, problem):
+    m = M.cylinder_panel(p["R"], p["L"], -pi / 2, pi / 2, nx, ny)
+    prob = problem(m)
+    prob.clamp("y0")
+    # longitudinal edges t = -+pi/2: d1 = +-z, d2 = +y: u_z and the rotation about y fixed
+    prob.fix("x0", (0, 4))
+    prob.fix("x1", (0, 4))
+    y1 = m.node_set("y1")
+    if len(y1) % 2 != 1:
+        raise MeshError("sze-semicylinder needs an even number of elements around the half-circle "
+                        f"(a node at the crown, where the load acts), got {nx} (mesh {nx}x{ny})")
+    crown = int(y1[len(y1) // 2])
+    prob.add_nodal_load(crown, force=(0.0, 0.0, -p["load_max"]))
+    return _probes(prob, crown, (0.0, 0.0, -1.0), crown=crown)
+
+
+# shape -> builder(p, nx, ny, problem: mesh -> Problem) of the Problem with its probes and control
+SHAPES = {"roof": _roof, "slit-annulus": _slit_annulus, "hemisphere": _hemisphere, "semicylinder": _semicylinder,
+          "pullout": lambda p, nx, ny, problem: _cylinder_octant(p, nx, ny, problem, "pullout"),
+          "pinched": lambda p, nx, ny, problem: _cylinder_octant(p, nx, ny, problem, "pinched")}
 
 
 # ------------------------------------------------------------------ run -------------------

@@ -127,6 +127,26 @@ def _check(args, scn):
     return 0
 
 
+def _open(args):
+    """The scenario file of ``run``/``sweep``, its --plugin files imported first (CoreSE3Error)."""
+    _plugins(args)
+    return _load_quietly(args.scenario, args.strict)
+
+
+def _guarded(call, kept, resume):
+    """(call(), None), or (None, the exit status) of a long run's error: a CoreSE3Error, an
+    OSError writing its outputs (``kept``: what is kept) or an interrupt (``resume``: where it
+    stopped and how to continue)."""
+    try:
+        return call(), None
+    except CoreSE3Error as exc:
+        return None, error_code(exc)
+    except OSError as exc:
+        return None, output_error(exc, kept)
+    except KeyboardInterrupt as exc:
+        return None, interrupted(exc, resume)
+
+
 def _contradiction(args):
     """--resume (continue) and --force (start over) together: an error line, exit status 2."""
     if getattr(args, "resume", False) and getattr(args, "force", False):
@@ -142,23 +162,19 @@ def scenario_run(args):
     if _contradiction(args):
         return 2
     try:
-        _plugins(args)
-        scn = _load_quietly(args.scenario, args.strict)
+        scn = _open(args)
     except CoreSE3Error as exc:
         return error_code(exc)
     _preamble(scn, args.quiet)
     if args.check:
         return _check(args, scn)
     progress = True if args.progress else (False if args.quiet else None)
-    try:
-        res = scenario.run(scn, out=args.out, resume=args.resume, progress=progress, force=args.force)
-    except CoreSE3Error as exc:
-        return error_code(exc)
-    except OSError as exc:
-        return output_error(exc, "the steps converged so far are kept where they could be written")
-    except KeyboardInterrupt as exc:
-        return interrupted(exc, "results.json says where; the checkpoint keeps the last converged step: "
-                                "continue with --resume")
+    res, code = _guarded(lambda: scenario.run(scn, out=args.out, resume=args.resume, progress=progress,
+                                              force=args.force),
+                         "the steps converged so far are kept where they could be written",
+                         "results.json says where; the checkpoint keeps the last converged step: continue with --resume")
+    if code is not None:
+        return code
     if not args.quiet:
         _summary(scn, res)
     return 0
@@ -295,19 +311,19 @@ def scenario_sweep(args):
     if _contradiction(args):
         return 2
     try:
-        _plugins(args)
-        scn = _load_quietly(args.scenario, args.strict)
+        scn = _open(args)
         grid, where = _grid(args, scn)
-        _preamble(scn, args.quiet)
-        res = scenario.sweep(scn, grid, out=args.out, progress=True if args.progress else (False if args.quiet else None),
-                             warm=not args.cold, resume=args.resume, force=args.force, where=where)
     except CoreSE3Error as exc:
         return error_code(exc)
-    except OSError as exc:
-        return output_error(exc, "the sweep's finished rows are kept in sweep.csv where it could be written")
-    except KeyboardInterrupt as exc:
-        return interrupted(exc, "the finished runs are in sweep.csv (sweep.json says where it stopped): continue "
-                                "with --resume")
+    _preamble(scn, args.quiet)
+    progress = True if args.progress else (False if args.quiet else None)
+    res, code = _guarded(lambda: scenario.sweep(scn, grid, out=args.out, progress=progress, warm=not args.cold,
+                                                resume=args.resume, force=args.force, where=where),
+                         "the sweep's finished rows are kept in sweep.csv where it could be written",
+                         "the finished runs are in sweep.csv (sweep.json says where it stopped): continue "
+                         "with --resume")
+    if code is not None:
+        return code
     failed = [r for r in res.rows if r["status"] != "complete"]
     if not args.quiet:
         print(f"{scn.name}: {len(res.rows)} runs ({len(failed)} failed, "

@@ -47,6 +47,10 @@ __all__ = ["Design", "METHODS", "Target", "Pose", "Smoothness", "DesignResult"]
 METHODS = ("least_squares", "L-BFGS-B", "SLSQP", "trust-constr")
 
 
+class _Reached(Exception):
+    """Raised by the iteration record once every misfit is within the tolerance."""
+
+
 class Design:
     """A design problem (module docstring).
 
@@ -322,31 +326,14 @@ class Design:
         >>> "SLSQP" in METHODS
         True
         """
-        import scipy.optimize as so
-        if method not in METHODS:
-            raise DesignError(f"unknown design method {method!r}; choose one of {', '.join(METHODS)}")
-        if isinstance(max_iter, bool) or not isinstance(max_iter, (int, np.integer)) or max_iter < 1:
-            raise DesignError(f"max_iter must be a whole number >= 1, got {max_iter!r}")
-        norm = [(self.slices[i].start + idx, top) for i, v in enumerate(self.variables) for idx, top in v.norm_bounds]
-        if norm and method in ("least_squares", "L-BFGS-B"):
-            raise DesignError(f"method {method!r} takes box bounds only; a norm bound (|B| <= B_max of a vector form) "
-                              "needs 'SLSQP' or 'trust-constr', or the polar form with a bound on the magnitude")
-        x0 = self.x_start() if x0 is None else np.asarray(x0, float)
-        if np.any(x0 < self.lower) or np.any(x0 > self.upper):
-            i = int(np.nonzero((x0 < self.lower) | (x0 > self.upper))[0][0])
-            raise DesignError(f"the start {x0[i]:g} of {self.labels[i]!r} lies outside its bounds "
-                              f"[{self.lower[i]:g}, {self.upper[i]:g}]")
-        sc = self.xscale
+        x0, norm = self._check_start(method, x0, max_iter)
         t0 = time.perf_counter()
-        history = []
-        last = {}
-
-        class Reached(Exception):
-            pass
+        history, last = [], {}
 
         def record(z):
-            x = z * sc
-            phi, g = self.objective(x), self.gradient(x) * sc
+            # one history entry per optimiser iteration; _Reached once every misfit is in tolerance
+            x = z * self.xscale
+            phi, g = self.objective(x), self.gradient(x) * self.xscale
             entry = dict(iteration=len(history) + 1, objective=phi, gradient_norm=float(np.linalg.norm(g)),
                          equilibrium_solves=self.solves, newton_iterations=self.newton_iterations,
                          time=time.perf_counter() - t0, x=x.tolist())
@@ -361,51 +348,85 @@ class Design:
                 entry["max_misfit"] = worst
                 if worst <= tolerance:
                     last["reached"] = z.copy()
-                    raise Reached()
+                    raise _Reached()
 
         try:
             if method == "least_squares":
-                def jac(z):
-                    J = self.jacobian(z * sc) * sc
-                    if last.get("z") is None or not np.array_equal(last["z"], z):
-                        last["z"] = z.copy()
-                        record(z)
-                    return J
-                def fun(z):
-                    F = self.residuals(z * sc)
-                    self._accept(z * sc, 0.5 * float(F @ F))
-                    return F
-                r = so.least_squares(fun, x0 / sc, jac=jac,
-                                     bounds=(self.lower / sc, self.upper / sc), method="trf",
-                                     ftol=tol, xtol=tol, gtol=tol, max_nfev=max_iter)
-                z, ok, msg, nit = r.x, r.success and r.status > 0, r.message, len(history)
+                z, ok, msg = self._least_squares(x0, tol, max_iter, record)
             else:
-                kw = {}
-                if method in ("SLSQP", "trust-constr") and norm:
-                    def cons(z):
-                        x = z * sc
-                        return np.array([top ** 2 - x[idx] @ x[idx] for idx, top in norm])
-
-                    def cons_jac(z):
-                        x = z * sc
-                        J = np.zeros((len(norm), len(z)))
-                        for j, (idx, top) in enumerate(norm):
-                            J[j, idx] = -2 * x[idx] * sc[idx]
-                        return J
-                    kw["constraints"] = [so.NonlinearConstraint(cons, 0.0, np.inf, jac=cons_jac)] \
-                        if method == "trust-constr" else [dict(type="ineq", fun=cons, jac=cons_jac)]
-                bounds = so.Bounds(self.lower / sc, self.upper / sc)
-                cb = (lambda z, *a: record(z)) if method != "trust-constr" else (lambda z, state: record(z))
-                r = so.minimize(lambda z: (self.objective(z * sc), self.gradient(z * sc) * sc), x0 / sc, jac=True,
-                                method=method, bounds=bounds, tol=tol, callback=cb,
-                                options=dict(maxiter=max_iter), **kw)
-                z, ok, msg, nit = r.x, bool(r.success), str(r.message), len(history)
-        except Reached:
-            z, ok, msg, nit = last["reached"], True, "stopped at the tolerance", len(history)
+                z, ok, msg = self._minimize(method, x0, tol, max_iter, record, norm)
+        except _Reached:
+            z, ok, msg = last["reached"], True, "stopped at the tolerance"
         except ConvergenceError as exc:
             raise ConvergenceError(f"the design stopped: an equilibrium failed ({exc}); the last design "
                                    "iterations are in the history", exc.result) from None
-        x = z * sc
+        return self._result(z * self.xscale, ok, msg, tolerance, method, history, t0)
+
+    def _check_start(self, method, x0, max_iter):
+        """The start x0 (default the variables' values) inside the bounds, and the norm bounds
+        [(indices, top)] of the vector forms (refused by the box-bounded methods)."""
+        if method not in METHODS:
+            raise DesignError(f"unknown design method {method!r}; choose one of {', '.join(METHODS)}")
+        if isinstance(max_iter, bool) or not isinstance(max_iter, (int, np.integer)) or max_iter < 1:
+            raise DesignError(f"max_iter must be a whole number >= 1, got {max_iter!r}")
+        norm = [(self.slices[i].start + idx, top) for i, v in enumerate(self.variables) for idx, top in v.norm_bounds]
+        if norm and method in ("least_squares", "L-BFGS-B"):
+            raise DesignError(f"method {method!r} takes box bounds only; a norm bound (|B| <= B_max of a vector form) "
+                              "needs 'SLSQP' or 'trust-constr', or the polar form with a bound on the magnitude")
+        x0 = self.x_start() if x0 is None else np.asarray(x0, float)
+        if np.any(x0 < self.lower) or np.any(x0 > self.upper):
+            i = int(np.nonzero((x0 < self.lower) | (x0 > self.upper))[0][0])
+            raise DesignError(f"the start {x0[i]:g} of {self.labels[i]!r} lies outside its bounds "
+                              f"[{self.lower[i]:g}, {self.upper[i]:g}]")
+        return x0, norm
+
+    def _least_squares(self, x0, tol, max_iter, record):
+        """scipy's trust-region reflective least squares on the scaled z = x / xscale; ``record``
+        called once per new Jacobian point (an iteration)."""
+        import scipy.optimize as so
+        sc, seen = self.xscale, {}
+
+        def jac(z):
+            J = self.jacobian(z * sc) * sc
+            if seen.get("z") is None or not np.array_equal(seen["z"], z):
+                seen["z"] = z.copy()
+                record(z)
+            return J
+
+        def fun(z):
+            F = self.residuals(z * sc)
+            self._accept(z * sc, 0.5 * float(F @ F))
+            return F
+        r = so.least_squares(fun, x0 / sc, jac=jac, bounds=(self.lower / sc, self.upper / sc), method="trf",
+                             ftol=tol, xtol=tol, gtol=tol, max_nfev=max_iter)
+        return r.x, r.success and r.status > 0, r.message
+
+    def _minimize(self, method, x0, tol, max_iter, record, norm):
+        """scipy.optimize.minimize on Phi with the adjoint gradient, the norm bounds as
+        constraints |x[idx]|^2 <= top^2 (SLSQP, trust-constr)."""
+        import scipy.optimize as so
+        sc, kw = self.xscale, {}
+        if method in ("SLSQP", "trust-constr") and norm:
+            def cons(z):
+                x = z * sc
+                return np.array([top ** 2 - x[idx] @ x[idx] for idx, top in norm])
+
+            def cons_jac(z):
+                x = z * sc
+                J = np.zeros((len(norm), len(z)))
+                for j, (idx, top) in enumerate(norm):
+                    J[j, idx] = -2 * x[idx] * sc[idx]
+                return J
+            kw["constraints"] = [so.NonlinearConstraint(cons, 0.0, np.inf, jac=cons_jac)] \
+                if method == "trust-constr" else [dict(type="ineq", fun=cons, jac=cons_jac)]
+        bounds = so.Bounds(self.lower / sc, self.upper / sc)
+        cb = (lambda z, *a: record(z)) if method != "trust-constr" else (lambda z, state: record(z))
+        r = so.minimize(lambda z: (self.objective(z * sc), self.gradient(z * sc) * sc), x0 / sc, jac=True,
+                        method=method, bounds=bounds, tol=tol, callback=cb, options=dict(maxiter=max_iter), **kw)
+        return r.x, bool(r.success), str(r.message)
+
+    def _result(self, x, ok, msg, tolerance, method, history, t0):
+        """The DesignResult at x, the problem left at the last pose's equilibrium."""
         mis = self.misfits(x)
         worst = max((v for d in mis.values() for v in d.values()), default=0.0)
         reached = None if tolerance is None else bool(worst <= tolerance)
@@ -416,7 +437,7 @@ class Design:
         values = {v.name: np.asarray(x[self.slices[i]]) for i, v in enumerate(self.variables)}
         states = self.solve(x)
         res = DesignResult(bool(ok), reached, msg, x, self.labels, values, self.objective(x), self.gradient(x), mis,
-                           worst, nit, self.evaluations, self.solves, self.newton_iterations,
+                           worst, len(history), self.evaluations, self.solves, self.newton_iterations,
                            time.perf_counter() - t0, method, history, list(states))
         assign_all(self.pose_variables(len(self.poses) - 1), states[-1].x)
         return res

@@ -24,6 +24,19 @@ def lumping(mesh, elements):
     return W
 
 
+def _covered_magnets(problem, elements, name):
+    """The problem's magnetic loads on the design regions' ``elements``; a magnet partly inside
+    them is a DesignError."""
+    inside = np.zeros(problem.mesh.n_elements, bool)
+    inside[elements] = True
+    old = [ld for ld in magnetic_loads(problem) if np.any(inside[ld.mag.elements])]
+    for ld in old:
+        if not np.all(inside[ld.mag.elements]):
+            raise DesignError(f"magnetisation {name!r}: a magnet covers elements inside and outside the design "
+                              "regions; make the regions cover each magnet entirely")
+    return old
+
+
 class RegionMagnetisation(Variable):
     """The residual flux density B^r [T] (lab, reference configuration) constant over each of a
     list of element regions -- what can be fabricated -- as a design variable: form 'vector'
@@ -83,13 +96,7 @@ class RegionMagnetisation(Variable):
         if len(np.unique(allel)) != len(allel):
             raise DesignError(f"magnetisation {name!r}: the regions overlap")
         k = len(self.regions)
-        inside = np.zeros(mesh.n_elements, bool)
-        inside[allel] = True
-        old = [ld for ld in magnetic_loads(problem) if np.any(inside[ld.mag.elements])]
-        for ld in old:
-            if not np.all(inside[ld.mag.elements]):
-                raise DesignError(f"magnetisation {name!r}: a magnet covers elements inside and outside the design "
-                                  "regions; make the regions cover each magnet entirely")
+        old = _covered_magnets(problem, allel, name)
         fields = {id(ld.field): ld.field for ld in old}
         if field is None:
             if len(fields) != 1:
@@ -102,47 +109,14 @@ class RegionMagnetisation(Variable):
         W = lumping(mesh, allel)                                            # (n, m_all)
         owner = np.repeat(np.arange(k), [len(r) for r in self.regions])
         self.Wr = np.stack([W[:, owner == j].sum(1) for j in range(k)], 1)  # (n, k)
-        R0 = mesh.g0[:, :3, :3]
         if start is None:
-            mom = np.zeros((mesh.n_nodes, 3))                                # lab int Br N dA
-            for ld in old:
-                mom[ld.mag.nodes] += np.einsum("kij,kj->ki", R0[ld.mag.nodes], ld.mag.mu) * ld.mag.mu0 / ld.mag.h
-            Br = np.linalg.lstsq(self.Wr, mom, rcond=None)[0] if old else np.zeros((k, 3))
-            self.start_misfit = float(np.linalg.norm(self.Wr @ Br - mom) / max(np.linalg.norm(mom), 1e-300))
+            Br, self.start_misfit = self._fitted(old)
         else:
             Br = np.array(np.broadcast_to(np.asarray(start, float), (k, 3)))
             self.start_misfit = 0.0
         problem.loads[:] = [ld for ld in problem.loads if not any(ld is o for o in old)]
-        per = getattr(problem.material, "per_element", None)
-        h_el = per("h") if per is not None else np.full(mesh.n_elements, float(problem.material.h))
-        self.loads = []
-        for t in np.unique(h_el[allel]):
-            el = allel[h_el[allel] == t]
-            mag = Magnetisation(mesh, np.tile([1.0, 0.0, 0.0], (len(el), 1)), float(t), el, self.mu0)
-            Wt = W[:, np.isin(allel, el)]
-            C = np.stack([Wt[:, owner[np.isin(allel, el)] == j].sum(1) for j in range(k)], 1)[mag.nodes]
-            self.loads.append((problem.add(MagneticLoad(mag, field, name=f"{name} (h = {t:g})")),
-                               C * (t / self.mu0), R0[mag.nodes]))
-        scale0 = max(float(np.abs(Br).max()), float(Br_max or 0.0), 1e-300)
-        if form == "vector":
-            self.parts = ["x", "y", "z"]
-            self.full = Br.copy()
-            lo, hi, sc = np.full(3, -np.inf), np.full(3, np.inf), np.full(3, scale0)
-        else:
-            pl = np.asarray(planes, float)
-            pl = np.broadcast_to(pl, (k, 2, 3)) if pl.shape == (2, 3) else pl
-            if pl.shape != (k, 2, 3):
-                raise DesignError(f"magnetisation {name!r}: planes must be one (e1, e2) or one per region ({k})")
-            self.e = np.array([plane_axes(a, b, f"magnetisation {name!r}") for a, b in pl])    # (k, 2, 3)
-            b1, b2 = np.einsum("ki,ki->k", Br, self.e[:, 0]), np.einsum("ki,ki->k", Br, self.e[:, 1])
-            off = np.linalg.norm(Br - b1[:, None] * self.e[:, 0] - b2[:, None] * self.e[:, 1], axis=1)
-            if start is None and np.any(off > 1e-9 * scale0) and old:
-                raise DesignError(f"magnetisation {name!r}: the magnets' B^r is not in the planes of the polar form")
-            self.parts = ["magnitude", "angle"]
-            self.full = np.stack([np.hypot(b1, b2), np.arctan2(b2, b1)], 1)
-            lo, hi, sc = np.array([0.0, -np.inf]), np.array([np.inf, np.inf]), np.array([scale0, 1.0])
-            if Br_max is not None:
-                hi[0] = Br_max
+        self.loads = self._own_loads(W, allel, owner, name)
+        lo, hi, sc = self._parametrise(Br, planes, Br_max, start is None and bool(old), name)
         self.free = free_index(self.parts, free, f"magnetisation {name!r}")
         nf = len(self.free)
         self.norm_bounds = []
@@ -154,6 +128,59 @@ class RegionMagnetisation(Variable):
         self._setup(name, k * nf, np.tile(lo[self.free], k), np.tile(hi[self.free], k), np.tile(sc[self.free], k),
                     labels, None)
         self.assign(self.value())
+
+    def _fitted(self, old):
+        """B^r per region (k, 3) fitted to the replaced magnets' nodal moments (least squares of
+        lab int B^r N dA), and its relative misfit (0 when B^r was constant per region)."""
+        mesh, k = self.problem.mesh, len(self.regions)
+        R0 = mesh.g0[:, :3, :3]
+        mom = np.zeros((mesh.n_nodes, 3))                                # lab int Br N dA
+        for ld in old:
+            mom[ld.mag.nodes] += np.einsum("kij,kj->ki", R0[ld.mag.nodes], ld.mag.mu) * ld.mag.mu0 / ld.mag.h
+        Br = np.linalg.lstsq(self.Wr, mom, rcond=None)[0] if old else np.zeros((k, 3))
+        return Br, float(np.linalg.norm(self.Wr @ Br - mom) / max(np.linalg.norm(mom), 1e-300))
+
+    def _own_loads(self, W, allel, owner, name):
+        """The variable's magnetic loads, one per thickness t over the regions, each with its
+        C (nodes, k) * t / mu0 and its nodes' R0: mu_i = R0_i^T sum_j C_ij B^r_j."""
+        problem, mesh, k = self.problem, self.problem.mesh, len(self.regions)
+        R0 = mesh.g0[:, :3, :3]
+        per = getattr(problem.material, "per_element", None)
+        h_el = per("h") if per is not None else np.full(mesh.n_elements, float(problem.material.h))
+        loads = []
+        for t in np.unique(h_el[allel]):
+            el = allel[h_el[allel] == t]
+            mag = Magnetisation(mesh, np.tile([1.0, 0.0, 0.0], (len(el), 1)), float(t), el, self.mu0)
+            Wt = W[:, np.isin(allel, el)]
+            C = np.stack([Wt[:, owner[np.isin(allel, el)] == j].sum(1) for j in range(k)], 1)[mag.nodes]
+            loads.append((problem.add(MagneticLoad(mag, self.field, name=f"{name} (h = {t:g})")),
+                          C * (t / self.mu0), R0[mag.nodes]))
+        return loads
+
+    def _parametrise(self, Br, planes, Br_max, fitted, name):
+        """The full parameters (``parts``, ``full``) of B^r in the variable's form and their
+        lower, upper bounds and scales; a fitted B^r off the polar form's planes is refused."""
+        k = len(self.regions)
+        scale0 = max(float(np.abs(Br).max()), float(Br_max or 0.0), 1e-300)
+        if self.form == "vector":
+            self.parts = ["x", "y", "z"]
+            self.full = Br.copy()
+            return np.full(3, -np.inf), np.full(3, np.inf), np.full(3, scale0)
+        pl = np.asarray(planes, float)
+        pl = np.broadcast_to(pl, (k, 2, 3)) if pl.shape == (2, 3) else pl
+        if pl.shape != (k, 2, 3):
+            raise DesignError(f"magnetisation {name!r}: planes must be one (e1, e2) or one per region ({k})")
+        self.e = np.array([plane_axes(a, b, f"magnetisation {name!r}") for a, b in pl])    # (k, 2, 3)
+        b1, b2 = np.einsum("ki,ki->k", Br, self.e[:, 0]), np.einsum("ki,ki->k", Br, self.e[:, 1])
+        off = np.linalg.norm(Br - b1[:, None] * self.e[:, 0] - b2[:, None] * self.e[:, 1], axis=1)
+        if fitted and np.any(off > 1e-9 * scale0):
+            raise DesignError(f"magnetisation {name!r}: the magnets' B^r is not in the planes of the polar form")
+        self.parts = ["magnitude", "angle"]
+        self.full = np.stack([np.hypot(b1, b2), np.arctan2(b2, b1)], 1)
+        lo, hi, sc = np.array([0.0, -np.inf]), np.array([np.inf, np.inf]), np.array([scale0, 1.0])
+        if Br_max is not None:
+            hi[0] = Br_max
+        return lo, hi, sc
 
     def Br(self, full=None):
         """B^r per region (k, 3) [T] of the full parameters (default the current ones)."""

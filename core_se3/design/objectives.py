@@ -346,8 +346,8 @@ class AngleInDegrees(Quantity):
 
 class Energy(Quantity):
     """The elastic energy [force x length]; its left-trivialised gradient is the internal force
-    r_int (the element's residual is dPi/d eta), its partial derivative by E or h is taken by
-    central differences at the fixed state (Richardson, exact for the polynomial dependence).
+    r_int (the element's residual is dPi/d eta), its partial derivative by E or h that of the
+    variable (``MaterialVariable.partials``: exact for the polynomial dependence).
 
     Example
     -------
@@ -369,26 +369,9 @@ class Energy(Quantity):
         return sp.csr_matrix(r.reshape(1, -1))
 
     def explicit(self, problem, g, lam, variable):
-        out = np.zeros((1, variable.size))
-        if not hasattr(variable, "_law"):
-            return out
-        x = variable.value()
-        try:
-            for j in range(variable.size):
-                d = 0.02 * x[j]
-                D = []
-                for step in (d, 2 * d):
-                    e = []
-                    for sgn in (1, -1):
-                        xx = x.copy()
-                        xx[j] += sgn * step
-                        problem.set_material(variable._law(xx))
-                        e.append(problem.element.evaluate(g, tangent=False).energy)
-                    D.append((e[0] - e[1]) / (2 * step))
-                out[0, j] = (4 * D[0] - D[1]) / 3
-        finally:
-            problem.set_material(variable._law(x))
-        return out
+        if not hasattr(variable, "partials"):           # only a material variable changes the energy
+            return np.zeros((1, variable.size))
+        return variable.partials(lambda: np.array([problem.element.evaluate(g, tangent=False).energy]))
 
 
 class UserQuantity(Quantity):

@@ -131,8 +131,7 @@ def plot_load_deflection(
 
 
 def plot_shell(path, X, quads, g, title: str | None = None, color_by_rotation: bool = True,
-               elev: float | None = None, azim: float | None = None, roll: float = 0.0,
-               surfaces=None) -> str:
+               view: tuple = (None, None, 0.0), surfaces=None) -> str:
     """3-D view of the deformed shell (faces = ``quads`` on the current positions ``g[:, :3, 3]``)
     with equal axis scaling, saved as PNG. ``X`` (reference positions, (n, 3)) is drawn as a faint
     wireframe for comparison. Faces are coloured by their mean nodal rotation angle (rad) if
@@ -146,8 +145,8 @@ def plot_shell(path, X, quads, g, title: str | None = None, color_by_rotation: b
         Reference positions; ``quads`` (m, 4); ``g`` (n, 4, 4) the current frames.
     title : str, optional
         Figure title; ``color_by_rotation``: colour by rotation angle (else one colour).
-    elev, azim, roll : float, optional
-        Camera angles [deg] (roll needs matplotlib >= 3.6).
+    view : (elev, azim, roll), optional
+        Camera angles [deg] (roll needs matplotlib >= 3.6; None: matplotlib's default).
     surfaces : list of (name, points (p, 3), quads (q, 4)), optional
         Rigid obstacles, drawn as translucent grey surfaces (``io.obstacle_surfaces``).
 
@@ -196,13 +195,13 @@ def plot_shell(path, X, quads, g, title: str | None = None, color_by_rotation: b
         ax.add_collection3d(Poly3DCollection(np.asarray(pts)[np.asarray(quads_s)], facecolor="0.55",
                                              edgecolor="0.35", linewidths=0.1, alpha=0.25))
         extra.append(np.asarray(pts))
-    _finish_3d(ax, X, cells, [phi] + extra, elev, azim, roll, title)
+    _finish_3d(ax, X, cells, [phi] + extra, view, title)
     path = ensure_parent(path)
     fig.savefig(path)
     return path
 
 
-def _finish_3d(ax, X, cells, positions, elev, azim, roll, title):
+def _finish_3d(ax, X, cells, positions, view, title):
     """The reference outline (dotted), equal axis scaling around every state, camera, labels."""
     from mpl_toolkits.mplot3d.art3d import Line3DCollection
     ref = X[cells]
@@ -215,6 +214,7 @@ def _finish_3d(ax, X, cells, positions, elev, azim, roll, title):
     ax.set_ylim(centre[1] - half, centre[1] + half)
     ax.set_zlim(centre[2] - half, centre[2] + half)
     ax.set_box_aspect((1, 1, 1))
+    elev, azim, roll = view
     if elev is not None or azim is not None or roll:
         _view(ax, elev, azim, roll)
     ax.set_xlabel("x")
@@ -233,12 +233,11 @@ def _view(ax, elev, azim, roll=0.0):
 
 
 def plot_sequence(path, X, quads, positions: Sequence[np.ndarray], labels: Sequence[str] | None = None,
-                  title: str | None = None, cmap: str = "viridis", elev: float = 20.0,
-                  azim: float = -60.0, roll: float = 0.0) -> str:
+                  title: str | None = None, cmap: str = "viridis", view: tuple = (20.0, -60.0, 0.0)) -> str:
     """Several deformed shapes of one shell in one 3-D view (e.g. the states of a load path):
     ``positions[k]`` (n, 3) are the current node positions of state k, drawn as faces coloured
     by k (``cmap``), with a legend of ``labels``; ``X`` (reference) as a dotted outline, equal
-    axis scaling; camera ``elev``, ``azim``, ``roll`` [deg]. Returns the path.
+    axis scaling; camera ``view`` = (elev, azim, roll) [deg]. Returns the path.
 
     Parameters
     ----------
@@ -247,7 +246,7 @@ def plot_sequence(path, X, quads, positions: Sequence[np.ndarray], labels: Seque
     X, quads
         The reference mesh; ``positions``: a non-empty sequence of (n, 3) arrays.
     labels : sequence of str, optional
-        One per state; ``title``, ``cmap``, ``elev``, ``azim``, ``roll`` as above.
+        One per state; ``title``, ``cmap``, ``view`` as above.
 
     Returns
     -------
@@ -284,7 +283,7 @@ def plot_sequence(path, X, quads, positions: Sequence[np.ndarray], labels: Seque
         ax.add_collection3d(faces)
         if labels is not None:
             handles.append(Patch(facecolor=colors[k], label=labels[k]))
-    _finish_3d(ax, X, cells, positions, elev, azim, roll, title)
+    _finish_3d(ax, X, cells, positions, view, title)
     if handles:
         ax.legend(handles=handles, fontsize="x-small", loc="upper left", ncol=2, framealpha=0.6)
     path = ensure_parent(path)

@@ -154,7 +154,21 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None, triangles="error"):
     """
     if triangles not in ("error", "split"):
         raise MeshError(f"triangles must be 'error' or 'split', got {triangles!r}")
-    m = read_meshio(source)
+    X, blocks, sets, qb = _cell_blocks(read_meshio(source), triangles)
+    quads, remap = _oriented_quads(X, blocks, qb)
+    X = X[remap >= 0]
+    t, d3 = _nodal_directors(X, quads, d1_hint)
+    named, regions = _named_groups(sets, blocks, qb, remap)
+    mesh = Mesh(frames_from(X, t, d3), quads, named, regions=regions)
+    for name, pred in (edges or {}).items():
+        mesh.edges[name] = np.nonzero(pred(mesh.X))[0]
+    return mesh
+
+
+def _cell_blocks(m, triangles):
+    """Points (n, 3), cell blocks [(type, cells)], named sets and the indices of the quad blocks
+    of a meshio mesh (triangles split into quads with ``triangles="split"``); other cells, or no
+    quad at all, a MeshError naming the fix."""
     X = np.asarray(m.points, float)
     if X.ndim != 2 or X.shape[1] not in (2, 3):
         raise MeshError("mesh points must be 2-D or 3-D")
@@ -184,20 +198,33 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None, triangles="error"):
                     "(e.g. gmsh.model.addPhysicalGroup(2, [...], name=\"shell\")) or set "
                     "Mesh.SaveAll = 1 before writing")
         raise MeshError("the mesh has no quad cells" + hint)
+    return X, blocks, sets, qb
+
+
+def _oriented_quads(X, blocks, qb):
+    """The quads renumbered over the points they use, and remap (point -> node, -1 for a point no
+    quad uses); quads whose orientation flips across an edge are a MeshError."""
     quads = np.concatenate([blocks[i][1] for i in qb]).astype(np.int64)
     used = np.unique(quads)
     remap = -np.ones(len(X), np.int64)
     remap[used] = np.arange(len(used))
     quads = remap[quads]
-    X = X[used]
+    n = len(used)
     # orientation consistency: each interior edge must be traversed in opposite directions
     cyc = np.stack([quads, np.roll(quads, -1, axis=1)], -1).reshape(-1, 2)
-    key = cyc[:, 0] * len(X) + cyc[:, 1]
+    key = cyc[:, 0] * n + cyc[:, 1]
     u, cnt = np.unique(key, return_counts=True)
     if np.any(cnt > 1):
         bad = u[cnt > 1][0]
-        raise MeshError(f"quad normals flip across the edge ({bad // len(X)}, {bad % len(X)}): orient "
+        raise MeshError(f"quad normals flip across the edge ({bad // n}, {bad % n}): orient "
                         "all quads consistently (same node order about the surface normal)")
+    return quads, remap
+
+
+def _nodal_directors(X, quads, d1_hint):
+    """d1 direction t (unnormalised, in the tangent plane) and d3 (unit) at each node: d3 the
+    area-weighted mean of the adjacent quads' normals, t the projection of d1_hint (the global
+    y axis where that degenerates)."""
     P = X[quads]
     nq = np.cross(P[:, 2] - P[:, 0], P[:, 3] - P[:, 1])       # 2 x area-weighted normal
     nn = np.zeros_like(X)
@@ -213,6 +240,12 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None, triangles="error"):
     if weak.any():
         alt = np.array([0.0, 1.0, 0.0]) - d3[weak, 1:2] * d3[weak]
         t[weak] = alt
+    return t, d3
+
+
+def _named_groups(sets, blocks, qb, remap):
+    """Node sets (a group of lines: ordered along the line; of vertices: those nodes) and regions
+    (a group of quads: its elements) of the named sets."""
     named, regions, offsets, off = {}, {}, {}, 0
     for i in qb:
         offsets[i], off = off, off + len(blocks[i][1])
@@ -235,7 +268,4 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None, triangles="error"):
                 named[name] = np.asarray(pts, np.int64)
         if elems:
             regions[name] = np.unique(elems)
-    mesh = Mesh(frames_from(X, t, d3), quads, named, regions=regions)
-    for name, pred in (edges or {}).items():
-        mesh.edges[name] = np.nonzero(pred(mesh.X))[0]
-    return mesh
+    return named, regions

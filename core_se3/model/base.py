@@ -316,8 +316,6 @@ def register_load(kind: LoadKind):
     ...
     ValueError: load kind 'gravity' is registered twice
     """
-    if not isinstance(kind, LoadKind):
-        raise TypeError("register_load needs a LoadKind")
     return LOADS.add(kind)
 
 

@@ -413,9 +413,7 @@ def register_field(kind: FieldKind):
     ...
     ValueError: field kind 'dipole' is registered twice
     """
-    if not isinstance(kind, FieldKind):
-        raise TypeError("register_field needs a FieldKind")
-    return FIELDS.register(kind.name, kind)
+    return FIELDS.add(kind)
 
 
 def field_kind(name) -> FieldKind:

@@ -135,8 +135,7 @@ def picture(path, scn, g, title=None, records=None, vtu_dir=None):
     m = scn.mesh
     o = scn.output
     k = o.get("picture_steps", 1)
-    view = list(o.get("view") or (20.0, -60.0))
-    elev, azim, roll = (view + [0.0])[:3]
+    view = tuple((list(o.get("view") or (20.0, -60.0)) + [0.0])[:3])       # elev, azim, roll
     with atomic_path(path) as tmp:
         if k > 1 and records and vtu_dir:
             import meshio
@@ -149,11 +148,10 @@ def picture(path, scn, g, title=None, records=None, vtu_dir=None):
                 v = meshio.read(os.path.join(vtu_dir, f"step_{r['step']:04d}.vtu"))
                 pos.append(v.points + v.point_data["displacement"])
                 labels.append(f"load factor {r['load_factor']:.3g}")
-            plot_sequence(tmp, m.X, m.quads, pos, labels, title=title or scn.name, elev=elev, azim=azim,
-                          roll=roll)
+            plot_sequence(tmp, m.X, m.quads, pos, labels, title=title or scn.name, view=view)
         else:
             from ..io import obstacle_surfaces
             lam = records[-1]["load_factor"] if records else 1.0
-            plot_shell(tmp, m.X, m.quads, g, title=title or scn.name, elev=elev, azim=azim, roll=roll,
+            plot_shell(tmp, m.X, m.quads, g, title=title or scn.name, view=view,
                        surfaces=obstacle_surfaces(obstacles_of(scn.problem), g[:, :3, 3], lam))
     return path

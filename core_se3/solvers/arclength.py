@@ -215,33 +215,11 @@ def path_steps(sysm, options, lam_end=1.0, control=None, control_end=None, lam_m
         info.critical[:] = list(start.critical)
         return
     state, lam = (sysm.initial(), 0.0) if start is None else (start.state, float(start.lam))
-    first = analyse(sysm, state, lam, o.stability)
-    cur = first
+    first = cur = analyse(sysm, state, lam, o.stability)
     ctrl_val = control[0] if control else None
-    branch_switch = o.branch_switch
-    if start is None:
-        crit = info.critical
-        tn0 = np.sqrt(np.sum(sysm.w * first.t ** 2))
-        if not np.isfinite(tn0) or tn0 == 0:
-            raise CoreSE3Error("the loads do not move the structure (K^-1 q = 0)")
-        psi_u = o.psi * tn0                       # load term of the arc length in length units
-        ds = abs(o.dlam0) * np.sqrt(tn0 ** 2 + psi_u ** 2)
-        ds_max = o.ds_max or o.ds_max_factor * ds
-        ds_min = o.ds_min or ds / 2 ** o.max_rejections
-        direction = np.sign(o.dlam0) or 1.0
-        prev_du, prev_dl = None, None
-        switch_mode = None
-        step = 0
-    else:
-        crit = info.critical
-        crit[:] = list(start.critical)
-        psi_u, ds, ds_max, ds_min = start.psi_u, start.ds, start.ds_max, start.ds_min
-        direction = start.direction
-        prev_du = None if start.prev_du is None else np.array(start.prev_du, float)
-        prev_dl = start.prev_dl
-        switch_mode = None if start.switch_mode is None else np.array(start.switch_mode, float)
-        branch_switch = start.branch_switch
-        step = int(start.step)
+    crit = info.critical
+    psi_u, ds, ds_max, ds_min, direction, prev_du, prev_dl, switch_mode, branch_switch, step = \
+        _path_start(sysm, o, first, start, crit)
 
     def finished(pt):
         if lam_end is not None and (pt.lam - lam_end) * np.sign(lam_end or 1.0) >= -1e-12 * max(1, abs(lam_end)):
@@ -261,40 +239,15 @@ def path_steps(sysm, options, lam_end=1.0, control=None, control_end=None, lam_m
     yield PathEvent(first, snapshot(first, ""), restart=start is not None)
     rejections = 0
     while step < max_steps:
-        t = cur.t
-        tn = np.sqrt(np.sum(sysm.w * t * t))
         jumped = switch_mode is not None
-        if jumped:
-            du = switch_mode * ds
-            dl = 0.0
-            switch_mode = None
-        else:
-            dl = ds / np.sqrt(tn ** 2 + psi_u ** 2)
-            if prev_du is None:
-                s = direction
-            else:
-                s = np.sign(np.sum(sysm.w * prev_du * t) + psi_u ** 2 * prev_dl) or 1.0
-            dl *= s
-            du = dl * t
+        du, dl = _predictor(sysm, cur.t, ds, psi_u, direction, prev_du, prev_dl, switch_mode)
+        switch_mode = None
         con = ArcLengthConstraint(o.method, ds, psi_u, sysm.w)
         con.start(du, dl)
-        reason = ""
-        hist = []
-        try:
-            st_pred = sysm.update(cur.state, du)
-            new_state, new_lam, its, hist, ev = correct(sysm, st_pred, cur.lam + dl, con, o, timers)
-            if not jumped and np.sum(sysm.w * con.du0 * con.du) + psi_u ** 2 * con.dlam0 * con.dlam <= 0:
-                raise StepFailed("the corrector turned back against the predictor (path reversal)")
-            if prev_du is None and not jumped and con.dlam * con.dlam0 < 0:
-                # the first step of a path starts on the stable branch through the start, so a
-                # load factor moved against the predictor's is a jump onto another branch
-                # (e.g. a looped elastica at a far too long first step), not a limit point
-                raise StepFailed("the first step moved the load factor against the requested "
-                                 "direction (the corrector jumped to another branch)")
-            pt = analyse(sysm, new_state, new_lam, o.stability, its, hist)
-        except (StepFailed, ElementTooDistortedError, FloatingPointError, SingularSystemError) as exc:
-            reason = str(exc)
-            pt = None
+        pt, reason, hist = _arc_try(sysm, cur, du, dl, con, psi_u, o, timers, jumped, first_step=prev_du is None)
+        why = None if pt is None else finished(pt)
+        if why in ("lam_end", "control_end") and o.land:
+            pt, reason = _land(sysm, cur, pt, con, why, lam_end, control, control_end, o, timers)
         trylog.append(dict(step=step + 1, lam=(cur.lam + dl) if pt is None else pt.lam, ds=ds,
                            converged=pt is not None, iterations=len(hist) - 1 if pt else None,
                            reason=reason))
@@ -308,50 +261,13 @@ def path_steps(sysm, options, lam_end=1.0, control=None, control_end=None, lam_m
                 raise PathError(f"arc length failed at lam {cur.lam:.6g} after {rejections} "
                                  f"rejections ({reason}){hint}", info)
             continue
-        why = finished(pt)
-        if why in ("lam_end", "control_end") and o.land:
-            # redo the step, ending exactly on the stop value
-            if why == "lam_end":
-                lin = LinearConstraint(None, None, 1.0, lam_end)
-            else:
-                lin = LinearConstraint(control[0], control[1], 0.0, control_end)
-            try:
-                frac = _fraction(cur, pt, why, lam_end, control_end, ctrl_val)
-                st_pred = sysm.update(cur.state, frac * con.du)
-                s2, l2, its, hist, ev = correct(sysm, st_pred, cur.lam + frac * con.dlam, lin, o, timers)
-                pt = analyse(sysm, s2, l2, o.stability, its, hist)
-            except (StepFailed, ElementTooDistortedError, FloatingPointError, SingularSystemError) as exc:
-                # the step overshot the stop value too far to land on it: a shorter step, never a
-                # path that ends past lam_end (sze-slit-annular from dlam0 = 1 ended at 1.0335)
-                reason = f"the step passed {why} at lam {pt.lam:.6g} and landing on it failed: {exc}"
-                trylog.append(dict(step=step + 1, lam=pt.lam, ds=ds, converged=False, iterations=None,
-                                   reason=reason))
-                rejections += 1
-                log.info("  step %d: ds %.4g REJECTED (%s); retry with ds/2", step + 1, ds, reason)
-                ds /= 2
-                if ds < ds_min or rejections > o.max_rejections:
-                    raise PathError(f"arc length failed at lam {cur.lam:.6g} after {rejections} "
-                                    f"rejections ({reason}): start with a smaller dlam0 or set ds_max",
-                                    info) from None
-                continue
-        rejections = 0
-        step += 1
+        rejections, step = 0, step + 1
         prev_du, prev_dl = con.du, con.dlam
-        # critical points between cur and pt
         event = ""
         changed = (pt.n_neg != cur.n_neg) if (pt.n_neg is not None and cur.n_neg is not None) \
             else (pt.sign != cur.sign)
         if o.stability and changed and not jumped:
-            span = np.sqrt(np.sum(sysm.w * con.du ** 2))
-            # dlam/ds changes sign across a limit point: the predictor's dlam at cur against the
-            # one the next predictor will take at pt (robust where q.t also passes through 0,
-            # at a turning point of the displacement conjugate to q)
-            nxt = np.sum(sysm.w * con.du * pt.t) + psi_u ** 2 * con.dlam
-            turned = np.sign(con.dlam0) != np.sign(nxt) if nxt != 0 else None
-            cp = locate_critical(sysm, cur, pt, sysm.w * con.du / span, span, step, limit=turned)
-            if not jumped:
-                trylog.append(narrow(sysm, cur, pt, con, cp, o, timers, correct,
-                                     lambda ds: ArcLengthConstraint(o.method, ds, psi_u, sysm.w), (StepFailed,)))
+            cp = _critical_between(sysm, cur, pt, con, psi_u, step, o, timers, trylog)
             crit.append(cp)
             event = "  ** " + cp.describe()
             if cp.kind == "bifurcation" and branch_switch and cp.mode is not None:
@@ -361,18 +277,109 @@ def path_steps(sysm, options, lam_end=1.0, control=None, control_end=None, lam_m
                 branch_switch = False            # switch once
                 event += " -> switching onto the bifurcated branch"
         if log.isEnabledFor(logging.INFO):
-            cv = f" control {ctrl_val(pt.state):.6g}" if ctrl_val else ""
-            neg = "" if pt.n_neg is None else f" neg.eig {pt.n_neg}"
-            if jumped:
-                event += "  (first step on the bifurcated branch)"
-            log.info(f"  step {step}: lam {pt.lam:.6g} (dlam {pt.lam - cur.lam:+.3g}) ds {ds:.4g} "
-                     f"it {pt.its} res {pt.hist[-1]:.1e}{cv} det {'+' if pt.sign >= 0 else '-'}{neg}{event}")
+            _log_point(step, cur, pt, ds, ctrl_val, event + ("  (first step on the bifurcated branch)" if jumped else ""))
         if not why:
             ds = min(ds_max, ds * float(np.clip(np.sqrt(o.target_iter / max(pt.its, 1)), 0.5, 2.0)))
         cur = pt
         yield PathEvent(pt, snapshot(pt, why))
         if why:
             break
+
+
+def _path_start(sysm, o, first, start, crit):
+    """The stepping state at the path's first point: (psi_u, ds, ds_max, ds_min, direction,
+    prev_du, prev_dl, switch_mode, branch_switch, step), from the options at the reference state
+    or from the ArcState ``start``; ``crit`` (the critical points) refilled from it."""
+    if start is None:
+        tn0 = np.sqrt(np.sum(sysm.w * first.t ** 2))
+        if not np.isfinite(tn0) or tn0 == 0:
+            raise CoreSE3Error("the loads do not move the structure (K^-1 q = 0)")
+        psi_u = o.psi * tn0                       # load term of the arc length in length units
+        ds = abs(o.dlam0) * np.sqrt(tn0 ** 2 + psi_u ** 2)
+        ds_max = o.ds_max or o.ds_max_factor * ds
+        ds_min = o.ds_min or ds / 2 ** o.max_rejections
+        return psi_u, ds, ds_max, ds_min, np.sign(o.dlam0) or 1.0, None, None, None, o.branch_switch, 0
+    crit[:] = list(start.critical)
+    prev_du = None if start.prev_du is None else np.array(start.prev_du, float)
+    switch_mode = None if start.switch_mode is None else np.array(start.switch_mode, float)
+    return (start.psi_u, start.ds, start.ds_max, start.ds_min, start.direction, prev_du, start.prev_dl,
+            switch_mode, start.branch_switch, int(start.step))
+
+
+def _predictor(sysm, t, ds, psi_u, direction, prev_du, prev_dl, switch_mode):
+    """The predictor (du, dl) of arc length ds along the tangent t (K t = q), oriented by the
+    previous step (the first by ``direction``); a bifurcation's ``switch_mode`` instead: a jump
+    ds along the mode at fixed load."""
+    if switch_mode is not None:
+        return switch_mode * ds, 0.0
+    tn = np.sqrt(np.sum(sysm.w * t * t))
+    dl = ds / np.sqrt(tn ** 2 + psi_u ** 2)
+    if prev_du is None:
+        s = direction
+    else:
+        s = np.sign(np.sum(sysm.w * prev_du * t) + psi_u ** 2 * prev_dl) or 1.0
+    dl *= s
+    return dl * t, dl
+
+
+def _arc_try(sysm, cur, du, dl, con, psi_u, o, timers, jumped, first_step):
+    """Correct the predictor (du, dl) from ``cur`` onto the constraint ``con``: the analysed
+    point (None if refused, with the reason) and the residual history."""
+    hist = []
+    try:
+        st_pred = sysm.update(cur.state, du)
+        new_state, new_lam, its, hist, ev = correct(sysm, st_pred, cur.lam + dl, con, o, timers)
+        if not jumped and np.sum(sysm.w * con.du0 * con.du) + psi_u ** 2 * con.dlam0 * con.dlam <= 0:
+            raise StepFailed("the corrector turned back against the predictor (path reversal)")
+        if first_step and not jumped and con.dlam * con.dlam0 < 0:
+            # the first step of a path starts on the stable branch through the start, so a
+            # load factor moved against the predictor's is a jump onto another branch
+            # (e.g. a looped elastica at a far too long first step), not a limit point
+            raise StepFailed("the first step moved the load factor against the requested "
+                             "direction (the corrector jumped to another branch)")
+        return analyse(sysm, new_state, new_lam, o.stability, its, hist), "", hist
+    except (StepFailed, ElementTooDistortedError, FloatingPointError, SingularSystemError) as exc:
+        return None, str(exc), hist
+
+
+def _land(sysm, cur, pt, con, why, lam_end, control, control_end, o, timers):
+    """Redo the step from ``cur`` ending exactly on the stop value (lam_end or control_end)
+    with load or displacement control: (the landed point, None), or (None, the reason) when
+    landing fails -- the step overshot too far, and is rejected and shortened, never kept as a
+    path that ends past lam_end (sze-slit-annular from dlam0 = 1 ended at 1.0335)."""
+    if why == "lam_end":
+        lin = LinearConstraint(None, None, 1.0, lam_end)
+    else:
+        lin = LinearConstraint(control[0], control[1], 0.0, control_end)
+    try:
+        frac = _fraction(cur, pt, why, lam_end, control_end, control[0] if control else None)
+        st_pred = sysm.update(cur.state, frac * con.du)
+        s2, l2, its, hist, ev = correct(sysm, st_pred, cur.lam + frac * con.dlam, lin, o, timers)
+        return analyse(sysm, s2, l2, o.stability, its, hist), None
+    except (StepFailed, ElementTooDistortedError, FloatingPointError, SingularSystemError) as exc:
+        return None, f"the step passed {why} at lam {pt.lam:.6g} and landing on it failed: {exc}"
+
+
+def _critical_between(sysm, cur, pt, con, psi_u, step, o, timers, trylog):
+    """The critical point between the converged points cur and pt (a stability change),
+    located and narrowed (its tries appended to ``trylog``)."""
+    span = np.sqrt(np.sum(sysm.w * con.du ** 2))
+    # dlam/ds changes sign across a limit point: the predictor's dlam at cur against the
+    # one the next predictor will take at pt (robust where q.t also passes through 0,
+    # at a turning point of the displacement conjugate to q)
+    nxt = np.sum(sysm.w * con.du * pt.t) + psi_u ** 2 * con.dlam
+    turned = np.sign(con.dlam0) != np.sign(nxt) if nxt != 0 else None
+    cp = locate_critical(sysm, cur, pt, sysm.w * con.du / span, span, step, limit=turned)
+    trylog.append(narrow(sysm, cur, pt, con, cp, o, timers, correct,
+                         lambda ds: ArcLengthConstraint(o.method, ds, psi_u, sysm.w), (StepFailed,)))
+    return cp
+
+
+def _log_point(step, cur, pt, ds, ctrl_val, event):
+    cv = f" control {ctrl_val(pt.state):.6g}" if ctrl_val else ""
+    neg = "" if pt.n_neg is None else f" neg.eig {pt.n_neg}"
+    log.info(f"  step {step}: lam {pt.lam:.6g} (dlam {pt.lam - cur.lam:+.3g}) ds {ds:.4g} "
+             f"it {pt.its} res {pt.hist[-1]:.1e}{cv} det {'+' if pt.sign >= 0 else '-'}{neg}{event}")
 
 
 def arc_options(options, kw, method=None):

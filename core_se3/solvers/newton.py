@@ -238,41 +238,24 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
     """
     opts = options or NewtonOptions()
     mesh = problem.mesh
-    if equations is None:
-        problem.assembler()                   # the sparsity pattern, built once before the tries
-        solver = make_solver(opts.linear_solver or problem.linear_solver)
-        eq = NewtonEquations(problem, solver)
-    else:
-        solver, eq = None, equations
+    solver, eq = _equations(problem, opts, equations)
     state = start or NewtonState(0.0, mesh.g0.copy())
     rec = recorder or StepRecorder(problem)
     result = result if result is not None else Result(mesh=mesh, element=problem.element_name)
     stateful = eq.stateful
-    has_targets = problem.has_prescribed_motion
-    driven = stateful or has_targets
+    driven = stateful or problem.has_prescribed_motion
     lam, dlam, k_ref = state.lam, state.dlam, state.k_ref
     g, g_whole = eq.local_frames(state.g), state.g     # the iterate, and the whole mesh's frames
     timer = _Timer(result)
     trier = NewtonTry(problem, opts, solver, timer, eq)
-    aug = hooked_loads(eq, "update_multipliers")            # augmented-Lagrangian loads (contact)
-    turning = hooked_loads(eq, "direction_turn")            # loads whose direction turns (fields)
-    sweeps = hooked_loads(eq, "step_error")                 # loads that check the whole step (contact)
-    switches = hooked_loads(eq, "active_set_changed")       # loads whose tangent switches (contact)
-    accepts = hooked_loads(eq, "accept_state")              # path-dependent loads (friction)
-    predictors = hooked_loads(eq, "predict_start") if not stateful else []   # starts with a moving obstacle
-    for i, ld in enumerate(aug):
+    hooks = _Hooks(eq)
+    for i, ld in enumerate(hooks.aug):
         ld.set_multipliers(None if state.multipliers is None else state.multipliers[i])
     # the mixed iteration's stresses start every try from those of the converged state (a
     # function of g alone, so a restart from a NewtonState repeats the same computations)
     mip = opts.iteration == "mip" and eq.mixed and not stateful
     stress_conv = eq.stress(g, lam) if mip else None
-    # contact (a constraint-force load) is not smooth: its Newton tries contract irregularly at
-    # any step size and det K jumps as nodes touch and lift off, so both checks leave it
-    smooth = not any(getattr(ld, "constraint_force", False) for ld in eq.loads)
-    # a stateful element (the seed's) has no consistent tangent: its Newton corrections contract
-    # linearly at any step, so their growth says nothing of the path
-    checks = StepChecks(opts.path_check and smooth and not stateful, smooth and hasattr(eq, "det_sign"), opts.critical_tol,
-                        state.det_sign, stop=opts.limit_check)
+    checks = _step_checks(opts, eq, state)
     trier.signs = checks.stability
     for target in targets:
         tries = []
@@ -284,103 +267,38 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
         stored = None
         while abs(target - lam) > 1e-14 * max(1.0, abs(target)):
             lam_try = lam + dlam if abs(dlam) < abs(target - lam) else target
-            if has_targets:
-                lam_split = split_prescribed(problem, lam, lam_try)
-                if lam_split != lam_try:
-                    check_substeps(lam, target, lam_split, opts.max_substeps, "the prescribed motion",
-                                   problem.prescribed_rotation(lam, lam_split), MAX_PRESCRIBED_TURN, result)
-                    lam_try = lam_split
-                if abs(lam_try - lam) < abs(dlam):
-                    dlam = lam_try - lam         # the split increment carries on (and regrows)
-            if turning:
-                lam_split, ld = split_turning(turning, g_whole, lam, lam_try)
-                if lam_split != lam_try:         # a rotating field: the split carries on too
-                    name = getattr(ld, "name", "") or ld.kind or type(ld).__name__
-                    check_substeps(lam, target, lam_split, opts.max_substeps, f"the direction of load {name!r}",
-                                   ld.direction_turn(g_whole, lam, lam_split), MAX_LOAD_TURN, result)
-                    lam_try = lam_split
-                    if abs(lam_try - lam) < abs(dlam):
-                        dlam = lam_try - lam
-            g_try = eq.apply_prescribed(g.copy(), lam_try)
-            if stateful:
-                # the seed element's strain is a state: save it, and feed it the prescribed motion
-                problem.element.save()
-                problem.element.update(lie.log(lie.inv(g) @ g_try))
-            stress_try = stress_conv
-            if opts.predictor == "tangent" and has_targets and not stateful and eq.predictor:
-                try:
-                    g_try, stress_try = tangent_predictor(problem, g_whole, lam, lam_try, solver, mip, trier.caps)
-                    g_try = eq.local_frames(g_try)
-                except (SingularSystemError, ElementTooDistortedError, FloatingPointError):
-                    g_try, stress_try = eq.apply_prescribed(g.copy(), lam_try), stress_conv
-            for ld in predictors:                # nodes in contact carried with a moving obstacle
-                g_try = ld.predict_start(g, lam, g_try, lam_try, eq.fixed_dofs())
-            saved = [ld.multipliers() for ld in aug]
+            lam_try, dlam = _split_step(problem, hooks.turning, g_whole, lam, lam_try, target, dlam, opts, result)
+            g_try, stress_try = _try_start(problem, eq, trier, g, g_whole, lam, lam_try, mip, stress_conv,
+                                           hooks.predictors)
+            saved = [ld.multipliers() for ld in hooks.aug]
             g_start = g_try
-            out = augmented_try(trier, aug, g_try, lam_try, mip, stress_try, opts.max_augmentations,
+            out = augmented_try(trier, hooks.aug, g_try, lam_try, mip, stress_try, opts.max_augmentations,
                                 lambda o, k: _log_try(result, tries, lam_try, o, augmentation=k, quiet=not eq.root))
-            if out.ok and checks.stability and checks.sign is None and out.det_sign == -1:
-                checks.sign = start_sign(eq, g, lam, stress_conv)     # was the start unstable too?
-            if out.ok:
-                out.reason = checks.judge(out, lam, lam_try)
-                out.ok = not out.reason
-            if out.ok and sweeps:                # a step that passed through an obstacle: cut back
-                out.ok, out.reason = not (why := _step_error(sweeps, g, lam, out.g, lam_try)), why or out.reason
-            ok, reason, hist, g_try, ev = out.ok, out.reason, out.hist, out.g, out.ev
-            k_step, pred, eta_sum = out.k_step, out.pred, out.eta_sum
-            if not ok:
-                for ld, m in zip(aug, saved):
-                    ld.set_multipliers(m)
-            _log_try(result, tries, lam_try, out, augmentation=0 if aug else None, quiet=not eq.root)
-            if ok and opts.limit_check and not driven and k_step is not None and switches and any(
-                    ld.active_set_changed(g, lam, g_try, lam_try) for ld in switches):
-                k_ref = None                     # a contact opened or closed: a new tangent, not a limit point
-            elif ok and opts.limit_check and not driven and k_step is not None:
-                if k_ref is None:
-                    k_ref = k_step
-                jump = eq.increment_norm(eta_sum)
-                if k_ref > 0 and k_step / k_ref < 0.3 and jump > 3 * pred:
-                    timer.close()
-                    raise ConvergenceError(
-                        f"load control met a limit point: the step from load factor {lam:.6g} to "
-                        f"{lam_try:.6g} started at a current stiffness S_p = {k_step / k_ref:.3g} of "
-                        f"the initial one and converged {jump / pred:.1f}x farther than its tangent "
-                        "predicted, i.e. it snapped onto another branch of the equilibrium path. "
-                        "Trace the path with arc length (core_se3.solvers.arc_length) or "
-                        "displacement control (core_se3.solvers.displacement_control); the "
-                        "steps before the limit point are kept in .result", result)
+            _judge(out, checks, eq, hooks.sweeps, g, lam, lam_try, stress_conv)
+            ok, reason, hist = out.ok, out.reason, out.hist
+            _log_try(result, tries, lam_try, out, augmentation=0 if hooks.aug else None, quiet=not eq.root)
+            if ok and opts.limit_check and not driven and out.k_step is not None:
+                k_ref = _limit_point(eq, hooks.switches, k_ref, out, g, lam, lam_try, timer, result)
             if ok:
                 checks.accept(out, lam_try)
-                lam = lam_try
-                g = g_try
-                for ld in accepts:               # path-dependent loads move their history on (friction)
+                lam, g = lam_try, out.g
+                for ld in hooks.accepts:         # path-dependent loads move their history on (friction)
                     ld.accept_state(g, lam)
                 g_whole = eq.whole_frames(g)
                 if mip:
-                    stress_conv = ev.stress
+                    stress_conv = out.ev.stress
                 at_target = abs(lam - target) <= 1e-14 * max(1.0, abs(target))
-                # the try's start and increments unwrap a probe turned by more than pi
-                turn = () if eq.distributed or np.isscalar(eta_sum) else (g_start, eta_sum)
-                local = None if getattr(eq, "origin", None) is None else (g, eq.origin)
-                if at_target or opts.record_substeps:
-                    st = rec.step(lam, g_whole, len(hist) - 1, hist, *eq.forces(ev), None, *turn, local=local)
-                    st.residual_floor = min(out.floor, 1e300)      # finite in JSON when all forces are 0
-                    st.attempts = len(tries) - n_recorded
-                    st.linear_solves = sum(t["linear_solves"] for t in tries[n_recorded:])
-                    st.checks = checks.record()
+                st = _record(rec, eq, opts, out, g_start, g, g_whole, lam, tries[n_recorded:], checks, at_target,
+                             result.steps)
+                if st is not None:               # a target's step is yielded (a sub-step's is in result.steps)
                     n_recorded = len(tries)
-                    if at_target:
-                        stored = st
-                    else:
-                        result.steps.append(st)
-                elif local is None:
-                    rec.probes(g_whole, *turn)
-                else:
-                    rec.probes(g, *turn, origin=eq.origin)
+                    stored = st if at_target else None
                 if len(hist) - 1 <= 6 and abs(dlam) < abs(dlam_nominal):
                     dlam = min(abs(dlam) * 2, abs(dlam_nominal)) * np.sign(dlam_nominal)
                 dlam = checks.next_increment(lam, dlam, floor)       # locating a det K sign change
             else:
+                for ld, m in zip(hooks.aug, saved):
+                    ld.set_multipliers(m)
                 if stateful:
                     problem.element.restore()
                 checks.failed()
@@ -388,29 +306,179 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
             if checks.located(floor):
                 timer.close()
                 raise ConvergenceError(checks.critical_message(), result)
-            for cp in checks.passed(len(result.steps)):          # the index of the next stored step
-                result.critical_points.append(cp)
-                if eq.root:
-                    log.warning("load control passed a %s (limit_check off: the path goes on, unstable)",
-                                cp.describe())
-            if not ok:
-                if abs(dlam) < floor:
-                    timer.close()
-                    hint = next((h for h in (ld.failure_hint() for ld in hooked_loads(eq, "failure_hint")) if h),
-                                None) or (limit_point_hint(problem, g_whole, lam, opts.linear_solver)
-                                          if lam != 0.0 and not eq.distributed else None)
-                    raise ConvergenceError(
-                        f"Newton failed at load factor {lam_try:.6g} after {opts.max_cutbacks} cut-backs "
-                        f"({reason}); the last converged load factor is {lam:.6g} and its state is "
-                        "kept in .result" + (f". Probable cause: {hint}" if hint else ""), result)
+            _note_passed(checks, eq, result)
+            if not ok and abs(dlam) < floor:
+                timer.close()
+                _cutbacks_exhausted(problem, eq, opts, g_whole, lam, lam_try, reason, result)
         if stored is None:                       # the target was already reached
-            ev, _, _ = eq.evaluate(g, lam, tangent=False)
-            stored = rec.step(lam, g_whole, 0, [], *eq.forces(ev))
-            stored.attempts, stored.linear_solves = 0, 0
+            stored = _unchanged_step(rec, eq, g, g_whole, lam)
         timer.close()
-        state = NewtonState(lam, g_whole, dlam, k_ref, [ld.multipliers() for ld in aug] if aug else None,
+        state = NewtonState(lam, g_whole, dlam, k_ref, [ld.multipliers() for ld in hooks.aug] if hooks.aug else None,
                             checks.sign)
         yield NewtonStep(stored, state, tries)
+
+
+def _equations(problem, opts, equations):
+    """The linear solver and the equations the tries evaluate and solve (default: the problem
+    on this process, its sparsity pattern built once before the tries)."""
+    if equations is not None:
+        return None, equations
+    problem.assembler()
+    solver = make_solver(opts.linear_solver or problem.linear_solver)
+    return solver, NewtonEquations(problem, solver)
+
+
+def _note_passed(checks, eq, result):
+    """Keep the critical points the stability check saw passed (limit_check off)."""
+    for cp in checks.passed(len(result.steps)):          # the index of the next stored step
+        result.critical_points.append(cp)
+        if eq.root:
+            log.warning("load control passed a %s (limit_check off: the path goes on, unstable)",
+                        cp.describe())
+
+
+def _unchanged_step(rec, eq, g, g_whole, lam):
+    """The StepResult of a target the path already stood at (no try)."""
+    ev, _, _ = eq.evaluate(g, lam, tangent=False)
+    stored = rec.step(lam, g_whole, 0, [], *eq.forces(ev))
+    stored.attempts, stored.linear_solves = 0, 0
+    return stored
+
+
+class _Hooks:
+    """The loads of the equations with the optional hooks load stepping calls."""
+
+    def __init__(self, eq):
+        self.aug = hooked_loads(eq, "update_multipliers")            # augmented-Lagrangian loads (contact)
+        self.turning = hooked_loads(eq, "direction_turn")            # loads whose direction turns (fields)
+        self.sweeps = hooked_loads(eq, "step_error")                 # loads that check the whole step (contact)
+        self.switches = hooked_loads(eq, "active_set_changed")       # loads whose tangent switches (contact)
+        self.accepts = hooked_loads(eq, "accept_state")              # path-dependent loads (friction)
+        # starts with a moving obstacle: nodes in contact carried along (friction)
+        self.predictors = hooked_loads(eq, "predict_start") if not eq.stateful else []
+
+
+def _step_checks(opts, eq, state):
+    """The path and stability checks (``solvers.step_checks``) of a load-stepped run."""
+    # contact (a constraint-force load) is not smooth: its Newton tries contract irregularly at
+    # any step size and det K jumps as nodes touch and lift off, so both checks leave it
+    smooth = not any(getattr(ld, "constraint_force", False) for ld in eq.loads)
+    # a stateful element (the seed's) has no consistent tangent: its Newton corrections contract
+    # linearly at any step, so their growth says nothing of the path
+    return StepChecks(opts.path_check and smooth and not eq.stateful, smooth and hasattr(eq, "det_sign"),
+                      opts.critical_tol, state.det_sign, stop=opts.limit_check)
+
+
+def _split_step(problem, turning, g_whole, lam, lam_try, target, dlam, opts, result):
+    """The try's load factor and the increment carried on, split where a prescribed motion or a
+    turning load would turn too far within the step (``solvers.splitting``)."""
+    if problem.has_prescribed_motion:
+        lam_split = split_prescribed(problem, lam, lam_try)
+        if lam_split != lam_try:
+            check_substeps(lam, target, lam_split, opts.max_substeps, "the prescribed motion",
+                           problem.prescribed_rotation(lam, lam_split), MAX_PRESCRIBED_TURN, result)
+            lam_try = lam_split
+        if abs(lam_try - lam) < abs(dlam):
+            dlam = lam_try - lam             # the split increment carries on (and regrows)
+    if turning:
+        lam_split, ld = split_turning(turning, g_whole, lam, lam_try)
+        if lam_split != lam_try:             # a rotating field: the split carries on too
+            name = getattr(ld, "name", "") or ld.kind or type(ld).__name__
+            check_substeps(lam, target, lam_split, opts.max_substeps, f"the direction of load {name!r}",
+                           ld.direction_turn(g_whole, lam, lam_split), MAX_LOAD_TURN, result)
+            lam_try = lam_split
+            if abs(lam_try - lam) < abs(dlam):
+                dlam = lam_try - lam
+    return lam_try, dlam
+
+
+def _try_start(problem, eq, trier, g, g_whole, lam, lam_try, mip, stress_conv, predictors=()):
+    """The start of a try at lam_try from the converged (g, lam) and its mixed stresses: the
+    prescribed motion applied, or the tangent predictor's state; then the ``predictors`` (loads
+    with ``predict_start``) carry their nodes in contact with a moving obstacle."""
+    g_try = eq.apply_prescribed(g.copy(), lam_try)
+    if eq.stateful:
+        # the seed element's strain is a state: save it, and feed it the prescribed motion
+        problem.element.save()
+        problem.element.update(lie.log(lie.inv(g) @ g_try))
+    stress_try = stress_conv
+    if trier.opts.predictor == "tangent" and problem.has_prescribed_motion and not eq.stateful and eq.predictor:
+        try:
+            g_try, stress_try = tangent_predictor(problem, g_whole, lam, lam_try, trier.solver, mip, trier.caps)
+            g_try = eq.local_frames(g_try)
+        except (SingularSystemError, ElementTooDistortedError, FloatingPointError):
+            g_try, stress_try = eq.apply_prescribed(g.copy(), lam_try), stress_conv
+    for ld in predictors:
+        g_try = ld.predict_start(g, lam, g_try, lam_try, eq.fixed_dofs())
+    return g_try, stress_try
+
+
+def _judge(out, checks, eq, sweeps, g, lam, lam_try, stress_conv):
+    """Refuse (out.ok False, out.reason) a converged try that fails the step checks or that a
+    load refuses (a step through an obstacle)."""
+    if out.ok and checks.stability and checks.sign is None and out.det_sign == -1:
+        checks.sign = start_sign(eq, g, lam, stress_conv)     # was the start unstable too?
+    if out.ok:
+        out.reason = checks.judge(out, lam, lam_try)
+        out.ok = not out.reason
+    if out.ok and sweeps:                    # a step that passed through an obstacle: cut back
+        out.ok, out.reason = not (why := _step_error(sweeps, g, lam, out.g, lam_try)), why or out.reason
+
+
+def _limit_point(eq, switches, k_ref, out, g, lam, lam_try, timer, result):
+    """The reference stiffness after the converged try ``out`` (None: a contact opened or
+    closed, a new tangent); a step that started soft and converged far beyond its tangent's
+    prediction snapped onto another branch: a ConvergenceError."""
+    if switches and any(ld.active_set_changed(g, lam, out.g, lam_try) for ld in switches):
+        return None
+    if k_ref is None:
+        k_ref = out.k_step
+    jump = eq.increment_norm(out.eta_sum)
+    if k_ref > 0 and out.k_step / k_ref < 0.3 and jump > 3 * out.pred:
+        timer.close()
+        raise ConvergenceError(
+            f"load control met a limit point: the step from load factor {lam:.6g} to "
+            f"{lam_try:.6g} started at a current stiffness S_p = {out.k_step / k_ref:.3g} of "
+            f"the initial one and converged {jump / out.pred:.1f}x farther than its tangent "
+            "predicted, i.e. it snapped onto another branch of the equilibrium path. "
+            "Trace the path with arc length (core_se3.solvers.arc_length) or "
+            "displacement control (core_se3.solvers.displacement_control); the "
+            "steps before the limit point are kept in .result", result)
+    return k_ref
+
+
+def _record(rec, eq, opts, out, g_start, g, g_whole, lam, tries, checks, at_target, steps):
+    """The StepResult of the accepted try ``out`` at a target, or of any sub-step with
+    record_substeps (appended to ``steps``; ``tries``: those since the last recorded one), else
+    None after moving the probes' rotation record on."""
+    # the try's start and increments unwrap a probe turned by more than pi
+    turn = () if eq.distributed or np.isscalar(out.eta_sum) else (g_start, out.eta_sum)
+    local = None if getattr(eq, "origin", None) is None else (g, eq.origin)
+    if at_target or opts.record_substeps:
+        st = rec.step(lam, g_whole, len(out.hist) - 1, out.hist, *eq.forces(out.ev), None, *turn, local=local)
+        st.residual_floor = min(out.floor, 1e300)      # finite in JSON when all forces are 0
+        st.attempts = len(tries)
+        st.linear_solves = sum(t["linear_solves"] for t in tries)
+        st.checks = checks.record()
+        if not at_target:
+            steps.append(st)
+        return st
+    if local is None:
+        rec.probes(g_whole, *turn)
+    else:
+        rec.probes(g, *turn, origin=eq.origin)
+    return None
+
+
+def _cutbacks_exhausted(problem, eq, opts, g_whole, lam, lam_try, reason, result):
+    """The ConvergenceError of a try cut back ``max_cutbacks`` times, with the likeliest cause."""
+    hint = next((h for h in (ld.failure_hint() for ld in hooked_loads(eq, "failure_hint")) if h),
+                None) or (limit_point_hint(problem, g_whole, lam, opts.linear_solver)
+                          if lam != 0.0 and not eq.distributed else None)
+    raise ConvergenceError(
+        f"Newton failed at load factor {lam_try:.6g} after {opts.max_cutbacks} cut-backs "
+        f"({reason}); the last converged load factor is {lam:.6g} and its state is "
+        "kept in .result" + (f". Probable cause: {hint}" if hint else ""), result)
 
 
 def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, g_init=None, load_factors=None,

@@ -193,18 +193,8 @@ class NewtonTry:
                     ev, _, _ = eq.evaluate(g_try, lam_try, tangent=True, stress=stress if mip_try else None,
                                            norms=False)
                 timer.t_asm += time.perf_counter() - ta
-                ts = time.perf_counter()
-                try:
-                    x = eq.solve(ev, g_try, probe=self.first_solve)
-                except SingularSystemError as exc:
-                    if self.first_solve and not isinstance(exc, LinearSolverError):
-                        raise SingularSystemError(
-                            f"{exc}: the tangent of the unloaded shell is singular -- a rigid-body "
-                            "motion is not restrained (missing or insufficient supports)") from None
-                    raise
-                timer.t_sol += time.perf_counter() - ts
+                x = self._solve(ev, g_try)
                 solves += 1
-                self.first_solve = False
                 eta = eq.increment(x)
                 if it == 0:
                     work = eq.work(ev, x)
@@ -237,6 +227,22 @@ class NewtonTry:
         sign = eq.det_sign() if ok and self.signs and solves else None
         return TryOutcome(ok, reason, g_try, ev, hist, solves, eta_sum, k_step, pred,
                           0.0 if floor is None else float(floor), incs, sign)
+
+    def _solve(self, ev, g_try):
+        """The Newton correction at the evaluation ``ev``; a singular tangent at the path's first
+        solve is a SingularSystemError naming the unrestrained rigid-body motion."""
+        ts = time.perf_counter()
+        try:
+            x = self.eq.solve(ev, g_try, probe=self.first_solve)
+        except SingularSystemError as exc:
+            if self.first_solve and not isinstance(exc, LinearSolverError):
+                raise SingularSystemError(
+                    f"{exc}: the tangent of the unloaded shell is singular -- a rigid-body "
+                    "motion is not restrained (missing or insufficient supports)") from None
+            raise
+        self.timer.t_sol += time.perf_counter() - ts
+        self.first_solve = False
+        return x
 
 
 def augmented_try(trier, aug, g_try, lam_try, mip, stress, max_augmentations, record):
