@@ -242,8 +242,7 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
     state = start or NewtonState(0.0, mesh.g0.copy())
     rec = recorder or StepRecorder(problem)
     result = result if result is not None else Result(mesh=mesh, element=problem.element_name)
-    stateful = eq.stateful
-    driven = stateful or problem.has_prescribed_motion
+    stateful, driven = eq.stateful, eq.stateful or problem.has_prescribed_motion
     lam, dlam, k_ref = state.lam, state.dlam, state.k_ref
     g, g_whole = eq.local_frames(state.g), state.g     # the iterate, and the whole mesh's frames
     timer = _Timer(result)
