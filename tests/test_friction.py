@@ -11,6 +11,8 @@ import core_se3 as cs
 from core_se3 import lie
 from core_se3 import mesh as M
 from core_se3.model import ContactLoad, HalfSpace, Sphere, tangent_fd_check, translation
+from core_se3.model.obstacle_kinds import Box, Cylinder
+from core_se3.model.obstacles import rotation
 from core_se3.model.contact_law import ramp
 from core_se3.model.friction import HARDENING, coulomb_law
 
@@ -54,14 +56,20 @@ def _friction_state(obstacle, seed=1, mu=0.3):
     return prob, cl, g, lam
 
 
-@pytest.mark.parametrize("name", ["half_space", "sphere", "moving_sphere"])
+@pytest.mark.parametrize("name", ["half_space", "sphere", "moving_sphere", "roller", "box", "turning_box"])
 def test_frictional_tangent_against_central_differences(name):
     """The non-symmetric tangent (with its moment about the node from the offset h/2, and the
     obstacle's curvature and motion) against central differences of the full residual, at a
     state with nodes sticking, slipping and free."""
     ob = {"half_space": HalfSpace((0, 0, -0.01), (0.1, 0, 1)),
           "sphere": Sphere((0.5, 0, 0.6), 0.6),
-          "moving_sphere": Sphere((0.5, 0, 0.9), 0.6, motion=translation((0, 0, -0.5)))}[name]
+          "moving_sphere": Sphere((0.5, 0, 0.9), 0.6, motion=translation((0, 0, -0.5))),
+          # every obstacle kind, and rotating ones (a roller turning about its axis drags the
+          # surface; a tilted box turning about the vertical)
+          "roller": Cylinder((0.5, 0, 0.6), (0, 1, 0), 0.6, motion=rotation((0, 1, 0), (0.5, 0, 0.6), 0.5)),
+          "box": Box((0.5, 0.3, -0.5), (0.6, 0.6, 0.5), rotation=(0.0, 0.1, 0.0)),
+          "turning_box": Box((0.5, 0.3, -0.5), (0.6, 0.6, 0.5), rotation=(0.0, 0.1, 0.0),
+                             motion=rotation((0, 0, 1), (0.5, 0.3, 0.0), 0.3))}[name]
     prob, cl, g, lam = _friction_state(ob)
     x, d, n, H, p, dp = cl.state(g, lam)
     t, dt, stick, s = cl.friction_state(g, lam, x, n, H, p, dp)
