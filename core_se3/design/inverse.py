@@ -39,7 +39,7 @@ import numpy as np
 from ..backend import launched_ranks
 from ..errors import ConvergenceError, DesignError, ParallelError
 from .equilibrium import EquilibriumOptions, assign_all, follow, solve_flat
-from .sensitivity import sensitivity
+from .sensitivity import SolveWith, sensitivity
 from .targets import DesignResult, Pose, Smoothness, Target
 
 __all__ = ["Design", "METHODS", "Target", "Pose", "Smoothness", "DesignResult"]
@@ -197,6 +197,9 @@ class Design:
     def _active(self, k):
         return [i for i, v in enumerate(self.variables) if v.pose is None or v.pose == k]
 
+    def _solve_with(self):
+        return SolveWith(linear_solver=self.options.linear_solver, run=self.distributed)
+
     def residuals(self, x):
         """The weighted misfit vector F (Phi = |F|^2 / 2), regularisation rows last."""
         states = self.solve(x)
@@ -224,7 +227,7 @@ class Design:
             act = self._active(k)
             vs = [self.variables[i] for i in act]
             s = sensitivity(self.problem, states[k].g, states[k].lam, [t.quantity for t in pose.targets], vs,
-                            self.sensitivity_method, linear_solver=self.options.linear_solver, run=self.distributed)
+                            self.sensitivity_method, solve_with=self._solve_with())
             cols = np.concatenate([np.arange(self.nx)[self.slices[i]] for i in act])
             off = 0
             for t in pose.targets:
@@ -269,7 +272,7 @@ class Design:
                 c.append(ct)
             s = sensitivity(self.problem, states[k].g, states[k].lam, [t.quantity for t in pose.targets],
                             [self.variables[i] for i in act], cotangent=np.concatenate(c),
-                            linear_solver=self.options.linear_solver, run=self.distributed)
+                            solve_with=self._solve_with())
             cols = np.concatenate([np.arange(self.nx)[self.slices[i]] for i in act])
             grad[cols] += s.jacobian[0]
         for r in self.regularisation:

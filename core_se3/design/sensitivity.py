@@ -37,7 +37,7 @@ import scipy.sparse as sp
 from ..errors import DesignError
 from ..solvers import Factorization, make_solver
 
-__all__ = ["Sensitivity", "sensitivity", "residual_derivative", "quantity_jacobian"]
+__all__ = ["Sensitivity", "SolveWith", "sensitivity", "residual_derivative", "quantity_jacobian"]
 
 
 @dataclass
@@ -110,8 +110,36 @@ def _explicit(problem, g, lam, quantities, variables):
     return np.block(blocks)
 
 
-def sensitivity(problem, g, lam, quantities, variables, method="auto", cotangent=None, linear_solver=None,
-                evaluation=None, run=None, factorization=None):
+@dataclass(frozen=True)
+class SolveWith:
+    """What the linear solves of :func:`sensitivity` use (default: one factorisation of the
+    problem's free tangent at (g, lam), by the problem's linear solver).
+
+    Parameters
+    ----------
+    linear_solver : str, optional
+        Default the problem's.
+    evaluation : core_se3.model.Evaluation, optional
+        The problem's evaluation at (g, lam) with its tangent, if already at hand.
+    run : core_se3.parallel.DistributedRun, optional
+        Solve with the tangent on the MPI ranks (a design under mpirun): the quantities and
+        the variables' derivatives are the whole problem's, the linear solves distributed.
+    factorization : core_se3.solvers.Factorization, optional
+        A factorisation of the free tangent at (g, lam) to solve with (K and K^T on the same
+        factors; a control session's, ``core_se3.control``): no tangent is evaluated or factored.
+
+    Example
+    -------
+    >>> SolveWith(linear_solver="splu").linear_solver
+    'splu'
+    """
+    linear_solver: str | None = None
+    evaluation: object = None
+    run: object = None
+    factorization: object = None
+
+
+def sensitivity(problem, g, lam, quantities, variables, method="auto", cotangent=None, solve_with=None):
     """Total derivatives of ``quantities`` by ``variables`` at the equilibrium (g, lam).
 
     Parameters
@@ -129,16 +157,8 @@ def sensitivity(problem, g, lam, quantities, variables, method="auto", cotangent
         variable component) or 'auto' (the one with fewer solves).
     cotangent : (nq,) array, optional
         Only the gradient c^T dq/dx (one adjoint solve): returned as ``jacobian`` of shape (1, nx).
-    linear_solver : str, optional
-        Default the problem's.
-    evaluation : core_se3.model.Evaluation, optional
-        The problem's evaluation at (g, lam) with its tangent, if already at hand.
-    run : core_se3.parallel.DistributedRun, optional
-        Solve with the tangent on the MPI ranks (a design under mpirun): the quantities and
-        the variables' derivatives are the whole problem's, the linear solves distributed.
-    factorization : core_se3.solvers.Factorization, optional
-        A factorisation of the free tangent at (g, lam) to solve with (K and K^T on the same
-        factors; a control session's, ``core_se3.control``): no tangent is evaluated or factored.
+    solve_with : SolveWith, optional
+        The linear solver, an evaluation at hand, a distributed run or given factors.
 
     Returns
     -------
@@ -164,9 +184,10 @@ def sensitivity(problem, g, lam, quantities, variables, method="auto", cotangent
         raise DesignError(f"sensitivity method must be 'auto', 'adjoint' or 'direct', got {method!r}")
     free = problem.assembler().free
     n = problem.mesh.n_nodes
-    solves = _distributed_solver(run, g, lam) if run is not None else \
-        _factored_solver(problem, factorization) if factorization is not None else \
-        _serial_solver(problem, g, lam, evaluation, linear_solver)
+    w = solve_with if solve_with is not None else SolveWith()
+    solves = _distributed_solver(w.run, g, lam) if w.run is not None else \
+        _factored_solver(problem, w.factorization) if w.factorization is not None else \
+        _serial_solver(problem, g, lam, w.evaluation, w.linear_solver)
     vals, Q = quantity_jacobian(problem, g, lam, quantities)
     Qh = (Q @ sp.diags(free.astype(float))).tocsr()         # dq/d eta on the free dofs
     labels = [lab for v in variables for lab in v.labels]
