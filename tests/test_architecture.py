@@ -41,17 +41,15 @@ WIDE_FUNCTIONS = {
     "core_se3.control.loop:track": "control's tracking options (gain, damping, halvings, model)",
     "core_se3.control.loop:plan": "control's planning options (tolerance, iterations, damping, extrapolation)",
     "core_se3.control.session:State.__init__": "the state's work counters (iterations, factorizations, ...)",
-    # pending a bundling of public signatures (issue 33 item 4, not done yet): keyword options
-    # with defaults that belong together (plot view, stop criteria, counters, checkpoint parts)
-    "core_se3.design.magnetisation:RegionMagnetisation.__init__": "the variable's form, planes, bounds, start",
-    "core_se3.io.checkpoint:Checkpoint.save": "the parts of a checkpointed state",
-    "core_se3.io.plots:plot_load_deflection": "its axis labels (xlabel, ylabel); callers in catalogue/family_contact.py "
-                                              "(issue 31's file)",
-    "core_se3.parallel.newton:distributed_solve": "newton_solve's signature plus partition, PETSc options, comm",
+    # callers in solvers/newton.py (issue 29, trust3, changing it now): the forces, stability and
+    # the probes' unwrapping data
     "core_se3.results.recorder:StepRecorder.step": "the forces, stability and the probes' unwrapping data",
-    "core_se3.scenario.spec:Scenario.__init__": "the parts of a built scenario",
+    # pending a bundling of public signatures (issue 33 item 4, not done yet)
+    "core_se3.parallel.newton:distributed_solve": "newton_solve's signature plus the distributed set-up (linear, "
+                                                  "petsc_options, partition: Problem.solve's keywords, "
+                                                  "solve_defaults and [solver] of a scenario) and comm",
+    "core_se3.design.magnetisation:RegionMagnetisation.__init__": "the variable's form, planes, bounds, start",
     "core_se3.scenario.sweep:sweep": "the output options (out, progress, plot, resume, force)",
-    "core_se3.scenario.validate:Validator.number": "the bounds (lo, hi and their openness) as Param's",
 }
 
 
