@@ -197,6 +197,14 @@ class Design:
     def _active(self, k):
         return [i for i, v in enumerate(self.variables) if v.pose is None or v.pose == k]
 
+    def _target_poses(self, states):
+        """(k, pose, active variables) of the poses with targets, their variables assigned the
+        values of pose k's state (``states``: of :meth:`solve`)."""
+        for k, pose in enumerate(self.poses):
+            if pose.targets:
+                assign_all(self.pose_variables(k), states[k].x)
+                yield k, pose, self._active(k)
+
     def _solve_with(self):
         return SolveWith(linear_solver=self.options.linear_solver, run=self.distributed)
 
@@ -220,11 +228,7 @@ class Design:
         if "J" in cache:
             return cache["J"]
         blocks = []
-        for k, pose in enumerate(self.poses):
-            if not pose.targets:
-                continue
-            assign_all(self.pose_variables(k), states[k].x)
-            act = self._active(k)
+        for k, pose, act in self._target_poses(states):
             vs = [self.variables[i] for i in act]
             s = sensitivity(self.problem, states[k].g, states[k].lam, [t.quantity for t in pose.targets], vs,
                             self.sensitivity_method, solve_with=self._solve_with())
@@ -259,11 +263,7 @@ class Design:
         if "grad" in cache:
             return cache["grad"]
         grad, off = np.zeros(self.nx), 0
-        for k, pose in enumerate(self.poses):
-            if not pose.targets:
-                continue
-            assign_all(self.pose_variables(k), states[k].x)
-            act = self._active(k)
+        for k, pose, act in self._target_poses(states):
             c = []
             for t in pose.targets:
                 ct = np.zeros(t.quantity.size)

@@ -185,9 +185,9 @@ def sensitivity(problem, g, lam, quantities, variables, method="auto", cotangent
     free = problem.assembler().free
     n = problem.mesh.n_nodes
     w = solve_with if solve_with is not None else SolveWith()
-    solves = _distributed_solver(w.run, g, lam) if w.run is not None else \
-        _factored_solver(problem, w.factorization) if w.factorization is not None else \
-        _serial_solver(problem, g, lam, w.evaluation, w.linear_solver)
+    solves = _without_empty(n, _distributed_solver(w.run, g, lam) if w.run is not None else
+                            _factored_solver(problem, w.factorization) if w.factorization is not None else
+                            _serial_solver(problem, g, lam, w.evaluation, w.linear_solver))
     vals, Q = quantity_jacobian(problem, g, lam, quantities)
     Qh = (Q @ sp.diags(free.astype(float))).tocsr()         # dq/d eta on the free dofs
     labels = [lab for v in variables for lab in v.labels]
@@ -211,6 +211,14 @@ def sensitivity(problem, g, lam, quantities, variables, method="auto", cotangent
     return Sensitivity(vals, E + Qh @ S.reshape(nx, -1).T, "direct", nx, labels)
 
 
+def _without_empty(n, solves):
+    """``solves`` answering an empty list of right-hand sides with no solution (0, n, 6), without
+    a factorisation or a solve."""
+    def nonempty(rhs, transpose):
+        return solves(rhs, transpose) if rhs else np.zeros((0, n, 6))
+    return nonempty
+
+
 def _serial_solver(problem, g, lam, evaluation, linear_solver):
     """solves(rhs, transpose): K x = b (or K^T x = b) for nodal right-hand sides b (n, 6) on one
     factorisation of the free tangent at (g, lam); the solutions (k, n, 6), zero on held dofs."""
@@ -219,8 +227,6 @@ def _serial_solver(problem, g, lam, evaluation, linear_solver):
     solver = make_solver(linear_solver or problem.linear_solver)
 
     def solves(rhs, transpose):
-        if not rhs:
-            return np.zeros((0, problem.mesh.n_nodes, 6))
         with Factorization(ev.K.T.tocsr() if transpose else ev.K, solver) as F:
             return np.stack([asm.scatter(F.solve(np.asarray(b).ravel()[asm.free])) for b in rhs])
     return solves
@@ -232,8 +238,6 @@ def _factored_solver(problem, F):
     asm = problem.assembler()
 
     def solves(rhs, transpose):
-        if not rhs:
-            return np.zeros((0, problem.mesh.n_nodes, 6))
         return np.stack([asm.scatter(F.solve(np.asarray(b).ravel()[asm.free], transpose)) for b in rhs])
     return solves
 
@@ -242,8 +246,6 @@ def _distributed_solver(run, g, lam):
     """:func:`_serial_solver`'s solves on the ranks of ``run`` (one MUMPS factorisation of the
     tangent at (g, lam), the loads localised for the variables' current values), gathered."""
     def solves(rhs, transpose):
-        if not rhs:
-            return np.zeros((0, len(g), 6))
         run.relocalize()
         run.evaluate(run.local_frames(g), lam, tangent=True)
         sols = run.system.solve_many([run.owned_rows(b) for b in rhs], transpose=transpose)
