@@ -49,7 +49,6 @@ WIDE_FUNCTIONS = {
                                                   "petsc_options, partition: Problem.solve's keywords, "
                                                   "solve_defaults and [solver] of a scenario) and comm",
     "core_se3.design.magnetisation:RegionMagnetisation.__init__": "the variable's form, planes, bounds, start",
-    "core_se3.scenario.sweep:sweep": "the output options (out, progress, plot, resume, force)",
 }
 
 
