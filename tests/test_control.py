@@ -411,3 +411,22 @@ def test_secant_memory_is_carried_on_small_steps_only(monkeypatch):
     s.jacobian(["tip_px"], ["coil"])                 # new factors at the state: a new mixer next
     s.update(coil=B0 * 1.051)
     assert s._corr._mix is not mixer and s._corr._mix[0] is s._corr.F
+
+
+def test_stale_factors_are_renewed_at_the_predicted_state():
+    """Held factors whose first correction exceeds STALE of the predictor are replaced by the
+    tangent at the iterate reached (the predicted state, not the start: control.corrector's
+    escalation), and the iteration continues there to the cold solve's state (1e-8 ell)."""
+    s = gripper(factor_cost=np.inf)
+    p, ell = s.problem, s.problem.length_scale
+    B0 = s.values["coil"].copy()
+    seen = 0
+    for k in range(1, 7):
+        g0 = s.g
+        st = s.update(coil=B0 * (1 + 0.05 * k))
+        if st.factorizations:
+            assert st.factorizations == 1 and st.substeps == 1
+            assert s._corr.F_g is not g0 and s._corr.F_g is not st.g        # made in between
+            seen += 1
+    assert seen >= 1
+    assert frame_error(st.g, cold(p), ell) < 1e-8

@@ -33,7 +33,12 @@ made more first corrections stale (0.48 instead of 0.29 factorisations per updat
 convergence and path tests are unchanged: only the iterates' path differs.
 
 Escalation.  When the held factors were made at another state (an earlier update, other
-parameters) and their first correction is more than ``STALE`` of the predictor, or they do
+parameters) and their first correction is more than ``STALE`` of the predictor (but shorter
+than it), the tangent is factored where the iteration stands -- the predicted state, nearer the
+solution than the start -- and the iteration goes on from there (a restart from the start on
+its tangent, as before, wasted the predictor's two iterations and kept the start's distance
+from the solution in the factors' error: on the gripper's 5 % field steps 10.33 instead of
+10.62 iterations and 0.21 instead of 0.29 factorisations per update).  When they diverge or do
 not converge in ``max_iter`` iterations, the sub-step starts again with the tangent factored at
 its start (and the new parameters); if that fails too, the solver's own Newton try runs from the
 start (``solvers.newton_try``: a fresh tangent at every iterate, the mixed iteration), which
@@ -165,6 +170,7 @@ class Corrector:
         self.cost = dict(iteration=None, factorization=None)
         self._base, self._waste, self._last_try = None, 0.0, 0
         self._mix = None                # (the factors, the Anderson mixer on them)
+        self._t_factor = 0.0            # seconds spent factoring so far
         self._moved = np.inf            # the rms nodal move / ell of the last converged try
 
     def close(self):
@@ -202,6 +208,7 @@ class Corrector:
         self.F_g, self.F_stamp, self._checked = g, stamp, False
         self.counts["factorizations"] += 1
         self._measured("factorization", time.perf_counter() - t0)
+        self._t_factor += time.perf_counter() - t0
         self._base, self._waste = None, 0.0
 
     def _measured(self, what, seconds):
@@ -255,13 +262,15 @@ class Corrector:
                 self.factor(g, lam, stamp)
                 nf += 1
             fresh = self.F_g is g and self.F_stamp == stamp
-            out = self._iterate(g, lam, check_path, fresh, r0)
+            out = self._iterate(g, lam, check_path, fresh, stamp, r0)
             its += out.iterations
+            nf += out.factorizations
             if not out.ok and not out.fatal and not fresh:
                 self.factor(g, lam, stamp)                     # stale factors: again with g's
                 nf += 1
-                out = self._iterate(g, lam, check_path, True, r0)
+                out = self._iterate(g, lam, check_path, True, stamp, r0)
                 its += out.iterations
+                nf += out.factorizations
             if not out.ok and not out.fatal:
                 out = self._newton(g, lam, out.predictor, check_path)
                 nf += out.factorizations
@@ -281,20 +290,22 @@ class Corrector:
                 f"path_tolerance = {self.opts.path_tolerance:g}): the equilibrium path turns sharply or the state "
                 "snapped onto another branch")
 
-    def _iterate(self, g, lam, check_path, fresh, r0=None):
+    def _iterate(self, g, lam, check_path, fresh, stamp, r0=None):
         """Predictor and corrector on the held factors: a SubStep (``fatal``: the step is too long
         whatever the factors; ``predictor``: the first increment; ``residual``: the free residual
         at the state returned)."""
         opts, ell = self.opts, self.ell
         t0 = time.perf_counter()
-        out = self._chord(g, lam, check_path, fresh, r0)
+        t_factor = self._t_factor
+        out = self._chord(g, lam, check_path, fresh, stamp, r0)
         if out.iterations:
-            self._measured("iteration", (time.perf_counter() - t0) / out.iterations)
+            spent = time.perf_counter() - t0 - (self._t_factor - t_factor)    # a renewal inside not counted
+            self._measured("iteration", spent / out.iterations)
         if out.ok:
             self._last_try = out.iterations
         return out
 
-    def _chord(self, g, lam, check_path, fresh, r0):
+    def _chord(self, g, lam, check_path, fresh, stamp, r0):
         """:meth:`_iterate`'s work (its docstring)."""
         opts, ell = self.opts, self.ell
         if r0 is None:
@@ -312,7 +323,7 @@ class Corrector:
         eta = mixer.step(eta)          # the predictor too: with carried pairs, a secant correction
         total = eta.copy()
         g1 = self.problem.retract(g, eta)
-        its, fn_prev = 1, pred
+        its, fn_prev, renewed = 1, pred, fresh
         while True:
             r, rn, floor = self.residual(g1, lam)
             hist.append(rn)
@@ -323,22 +334,29 @@ class Corrector:
             # dtol: at the round-off floor the increments no longer contract)
             if rn <= max(opts.rtol, floor) and fn <= opts.dtol and (fn <= 0.5 * fn_prev or fn <= 1e-3 * opts.dtol):
                 break
+            if not renewed and its == 2 and STALE * pred < fn <= pred:
+                # stale factors: the tangent factored here, at the predicted state (nearer the
+                # solution than the start), and the iteration goes on from it (module docstring)
+                self.factor(g1, lam, stamp)
+                renewed, mixer = True, self._mixer()
+                f, fn = self.increment(r)
+                its += 1
             why = ""
             if fn > pred:
                 why = f"the corrector diverges: an increment {fn / pred:.3g} x the predictor's"
-            elif its > opts.max_iter or (not fresh and its == 2 and fn > STALE * pred):
+            elif its > opts.max_iter:
                 why = (f"no convergence in max_iter = {opts.max_iter} iterations on the held factors (residual "
                        f"{rn:.2e}, increment {fn:.2e})")
             if why:
-                return SubStep(False, g, why, its, history=hist, predictor=predictor)
+                return SubStep(False, g, why, its, int(renewed and not fresh), history=hist, predictor=predictor)
             eta = mixer.step(f)
             g1 = self.problem.retract(g1, eta)
             total += eta
             fn_prev = fn
         why = self._path_error(predictor, total, check_path)
         self._moved = np.inf if why else increment_norm(total, ell) / (ell * np.sqrt(len(total)))
-        return SubStep(not why, g1 if not why else g, why, its, history=hist, predictor=predictor,
-                       fatal=bool(why) and fresh, residual=None if why else r)
+        return SubStep(not why, g1 if not why else g, why, its, int(renewed and not fresh), history=hist,
+                       predictor=predictor, fatal=bool(why) and fresh, residual=None if why else r)
 
     def _mixer(self):
         """The Anderson mixer of a try: the last try's, with its secant pairs, when it was on the
