@@ -504,3 +504,16 @@ def test_linear_stress(kind, mode):
     assert np.abs(fp - lin).max() <= 1e-4 * np.abs(lin).max()
     with pytest.raises(ValueError):
         ek.linear_stress(eta[:-1])
+
+
+@pytest.mark.parametrize("which", ["mag_uniform", "mag_gradient", "mag_several"])
+def test_batched_numpy_magnets_equal_the_loads_sum(which):
+    """The NumPy backend's batched magnetic forces (model.magnetics.magnets_force, the residual's
+    external part) equal the sum of the loads' own forces (their tangent evaluation's f) to 1e-14."""
+    from core_se3.model.magnetics import magnets_force
+    p = _loaded(which, "numpy")
+    g = _load_state(p.mesh, which)
+    fa = magnets_force(p.loads, g, 0.7)
+    fb = sum(ld.evaluate(g, 0.7, tangent=True).f for ld in p.loads)
+    assert np.abs(fb).max() > 0 and rel(fa, fb) <= 1e-14
+    assert rel(p.external(g, 0.7, tangent=False)[0], fb) <= 1e-14

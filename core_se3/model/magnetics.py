@@ -38,7 +38,7 @@ from ..fem.quadrature import shape_functions, surface_jacobian
 from .base import Load, LoadEvaluation
 from .fields import MU0, Field
 
-__all__ = ["Magnetisation", "MagneticLoad", "MU0", "compiled_magnets"]
+__all__ = ["Magnetisation", "MagneticLoad", "MU0", "compiled_magnets", "magnets_force"]
 
 
 class Magnetisation:
@@ -211,6 +211,8 @@ class MagneticLoad(Load):
         return nodes, c, f
 
     def evaluate(self, g, lam, tangent=True):
+        if not tangent:
+            return LoadEvaluation(magnets_force([self], g, lam))
         n = self.mag.mesh.n_nodes
         nodes = self.mag.nodes
         mu = self.mag.mu
@@ -221,11 +223,6 @@ class MagneticLoad(Load):
         Mb = np.cross(mu, a)
         f = np.zeros((n, 6))
         f[nodes, 3:] = Mb                                   # nodes are unique: plain assignment
-        if not tangent:
-            if not self.field.uniform:
-                A = Rt @ self.field.gradient(x, lam) @ R
-                f[nodes, :3] = np.einsum("kij,kj->ki", A, mu)
-            return LoadEvaluation(f)
         blk = np.zeros((len(nodes), 6, 6))
         mhat = lie.hat3(mu)
         blk[:, 3:, 3:] = -mhat @ lie.hat3(a)
@@ -335,3 +332,56 @@ def compiled_magnets(loads, pattern):
             np.ascontiguousarray(loads[0].mag.mu, dtype=float)
         K.magnetic_load(g, nodes, mu, B, G, H, uniform, f, data, pattern.map, tangent)
     return add
+
+
+def magnets_force(loads, g, lam):
+    """The generalised force f (n, 6) of several MagneticLoads at (g, lam), without tangent, in
+    one batch (the NumPy backend's residual: ``Problem.external``): their nodes and dipoles
+    concatenated, each distinct field evaluated once at its loads' nodes, f_w = mu x R^T B and
+    f_v = R^T G R mu (``MagneticLoad.evaluate``) for all at once, summed at shared nodes.  It
+    equals the sum of the loads' own evaluations to round-off.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import Material, Problem, mesh
+    >>> from core_se3.model.fields import UniformField
+    >>> p = Problem(mesh.rectangle(2.0, 1.0, 2, 1), Material(1.0, 0.3, 0.1))
+    >>> B = UniformField((0.0, 0.0, 1.0))
+    >>> a = p.add_magnetic((1.0, 0, 0), B, elements=[0], mu0=1.0)
+    >>> b = p.add_magnetic((0, 1.0, 0), B, elements=[1], mu0=1.0)
+    >>> f = magnets_force([a, b], p.mesh.g0, 1.0)
+    >>> bool(np.allclose(f, a.evaluate(p.mesh.g0, 1.0, False).f + b.evaluate(p.mesh.g0, 1.0, False).f))
+    True
+    """
+    fields, groups = [], []
+    for ld in loads:
+        for i, f in enumerate(fields):
+            if ld.field is f:
+                groups[i].append(ld)
+                break
+        else:
+            fields.append(ld.field)
+            groups.append([ld])
+    n = loads[0].mag.mesh.n_nodes
+    out = np.zeros((n, 6))
+    for fld, grp in zip(fields, groups):
+        nodes = np.concatenate([ld.mag.nodes for ld in grp])
+        mu = np.concatenate([ld.mag.mu for ld in grp])
+        R = g[nodes, :3, :3]
+        Rt = np.swapaxes(R, 1, 2)
+        x = g[nodes, :3, 3]
+        a = np.einsum("kij,kj->ki", Rt, fld.value(x, lam))                  # R^T B
+        _add_at(out, 3, nodes, np.cross(mu, a), len(grp) == 1)
+        if not fld.uniform:
+            _add_at(out, 0, nodes, np.einsum("kij,kj->ki", Rt @ fld.gradient(x, lam) @ R, mu), len(grp) == 1)
+    return out
+
+
+def _add_at(out, col, nodes, v, unique):
+    """out[nodes, col:col + 3] += v (k, 3), repeated nodes summed (by bincount unless unique)."""
+    if unique:
+        out[nodes, col:col + 3] += v
+        return
+    for c in range(3):
+        out[:, col + c] += np.bincount(nodes, weights=v[:, c], minlength=len(out))
