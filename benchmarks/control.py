@@ -21,12 +21,14 @@ ready (conversion not timed).  Ratios are of medians of these interleaved timing
 load of the machine falls on both alike; in brackets the same ratio of process CPU times
 (``time.process_time``: what the machine's other work inflates less), and beside the updates
 per second of wall time those per second of the process's CPU time (what one core of its own
-would give).  The factorisations per update include the renewals of aged factors
-(``control.corrector``: the ski-rental rule on measured times).  Accuracy: the
-largest over nodes of the position difference / ell and of the rotation angle between the
-updated state and a cold solve (load stepping from the flat state to rtol = dtol = 1e-12) at
-the same command, at the middle and the last command of each sequence.  Everything runs on one thread (``NUMBA_NUM_THREADS`` =
-``OPENBLAS_NUM_THREADS`` = 1 unless set): the ratios compare work on one core.
+would give).  The factorisations per update include the renewals of aged factors and of
+stale ones (``control.corrector``: the ski-rental rule with a factorisation priced at 6
+iterations; stale factors renewed at the predicted state).  Accuracy: the largest over nodes of
+the position difference / ell and of the rotation angle between the updated state and a cold
+solve (load stepping from the flat state to rtol = dtol = 1e-12) at the same command, at the
+middle and the last command of each sequence.  Everything runs on one thread
+(``NUMBA_NUM_THREADS`` = ``OPENBLAS_NUM_THREADS`` = 1 unless set): the ratios compare work on
+one core.
 """
 from __future__ import annotations
 

@@ -319,6 +319,14 @@ def _loaded(which, backend):
     elif which == "mag_superposition":
         p.add_magnetic((0.1, 0.0, 0.3), Superposition(UniformField((0.0, 0.01, 0.0)),
                                                       DipoleField((0.3, 0.0, 1.0), (-0.4, 0.0, 0.5))))
+    elif which == "mag_several":
+        # four magnets in one batch (model.magnetics.compiled_magnets): two fields, overlapping
+        # element sets (shared nodes), a uniform and a dipole field
+        B, D = UniformField((0.01, -0.02, 0.03)), DipoleField((0.0, 0.5, 2.0), (0.7, 0.1, -0.6))
+        p.add_magnetic((0.1, 0.2, 0.05), B, elements=[0, 1, 2])
+        p.add_magnetic((-0.2, 0.1, 0.0), D, elements=[1, 4])
+        p.add_magnetic((0.0, 0.3, -0.1), B, elements=[2, 3, 5])
+        p.add_magnetic((0.05, 0.0, 0.2), D, elements=[0, 5])
     elif which == "lab_springs":
         p.add_lab_support("x1", np.array([[1.0, 0.0, 0.0], [0.0, 0.6, 0.8]]), 1e3)
         p.add_lab_tilt_support("y0", np.array([0.0, 1.0, 0.0]), 50.0)
@@ -331,7 +339,7 @@ def _loaded(which, backend):
 
 
 LOADS = ["nodal_dead", "nodal_follower", "surface_dead", "surface_follower", "mag_uniform",
-         "mag_gradient", "mag_dipole", "mag_superposition", "lab_springs", "rotation_spring", "user_load"]
+         "mag_gradient", "mag_dipole", "mag_superposition", "mag_several", "lab_springs", "rotation_spring", "user_load"]
 
 
 def _load_state(mesh, which):
@@ -355,6 +363,24 @@ def test_problem_evaluation_both_backends(which):
         if tangent:
             assert np.array_equal(eb.K.indptr, ea.K.indptr) and np.array_equal(eb.K.indices, ea.K.indices)
             assert rel(eb.K.data, ea.K.data) <= TOL
+
+
+@pytest.mark.parametrize("which", ["mag_uniform", "mag_several"])
+def test_batched_magnets_equal_the_loads_sum(which):
+    """The batched compiled magnets (one field evaluation per field, one kernel call) equal the
+    sum of the loads' own compiled evaluations, residual and tangent, to 1e-14."""
+    from core_se3.model.magnetics import compiled_magnets
+    p = _loaded(which, "numba")
+    g = _load_state(p.mesh, which)
+    pattern = p.assembler().pattern()
+    n = p.mesh.n_nodes
+    fa, fb = np.zeros((n, 6)), np.zeros((n, 6))
+    da, db = pattern.new_data(), pattern.new_data()
+    compiled_magnets(p.loads, pattern)(g, 0.7, fa, da, True)
+    for ld in p.loads:
+        ld.compiled(pattern)(g, 0.7, fb, db, True)
+    assert np.abs(fb).max() > 0 and np.abs(db).max() > 0
+    assert rel(fa, fb) <= 1e-14 and rel(da, db) <= 1e-14
 
 
 def test_rotation_spring_limit():
@@ -478,3 +504,16 @@ def test_linear_stress(kind, mode):
     assert np.abs(fp - lin).max() <= 1e-4 * np.abs(lin).max()
     with pytest.raises(ValueError):
         ek.linear_stress(eta[:-1])
+
+
+@pytest.mark.parametrize("which", ["mag_uniform", "mag_gradient", "mag_several"])
+def test_batched_numpy_magnets_equal_the_loads_sum(which):
+    """The NumPy backend's batched magnetic forces (model.magnetics.magnets_force, the residual's
+    external part) equal the sum of the loads' own forces (their tangent evaluation's f) to 1e-14."""
+    from core_se3.model.magnetics import magnets_force
+    p = _loaded(which, "numpy")
+    g = _load_state(p.mesh, which)
+    fa = magnets_force(p.loads, g, 0.7)
+    fb = sum(ld.evaluate(g, 0.7, tangent=True).f for ld in p.loads)
+    assert np.abs(fb).max() > 0 and rel(fa, fb) <= 1e-14
+    assert rel(p.external(g, 0.7, tangent=False)[0], fb) <= 1e-14

@@ -18,8 +18,27 @@ shell's stiff membrane part slows.  The convergence test is the solver's
 floor), and the increment that would leave it <= dtol ell (and shrinking: the error estimate of
 a contracting iteration) -- the solver takes the increment that led to its state instead.
 
+Secant memory.  The pairs of increments Anderson records are secant information on the
+chord's error operator I - K_F^-1 K(g), which changes little while the state stays near where
+they were recorded; a control loop's small steps keep coming back to the same region.  So the
+mixer of a try on the same factors as the last one, when that try moved the nodes by at most
+``CARRY_MOVE`` ell (root-mean-square), keeps its pairs (a new sequence of iterates: no pair
+joins the last update's final state to the new predictor), and the predictor itself is mixed
+with them (a secant correction of the held factors' error in it).  Measured on the gripper
+(CPU time per update, benchmarks/results/control.md's commands): 0.1 % field steps 1.50 ->
+1.23 ms with numba and 4.33 -> 3.62 ms with NumPy (no renewals needed: the iterations stop
+growing as the factors age), 1 % steps 2.20 -> 2.00 ms; on 4x the elements 0.1 % steps 5.0 ->
+3.75 ms.  Longer steps (5 %: 3.5e-4 ell) start with a new mixer: pairs from that far away
+made more first corrections stale (0.48 instead of 0.29 factorisations per update).  The
+convergence and path tests are unchanged: only the iterates' path differs.
+
 Escalation.  When the held factors were made at another state (an earlier update, other
-parameters) and their first correction is more than ``STALE`` of the predictor, or they do
+parameters) and their first correction is more than ``STALE`` of the predictor (but shorter
+than it), the tangent is factored where the iteration stands -- the predicted state, nearer the
+solution than the start -- and the iteration goes on from there (a restart from the start on
+its tangent, as before, wasted the predictor's two iterations and kept the start's distance
+from the solution in the factors' error: on the gripper's 5 % field steps 10.33 instead of
+10.62 iterations and 0.21 instead of 0.29 factorisations per update).  When they diverge or do
 not converge in ``max_iter`` iterations, the sub-step starts again with the tangent factored at
 its start (and the new parameters); if that fails too, the solver's own Newton try runs from the
 start (``solvers.newton_try``: a fresh tangent at every iterate, the mixed iteration), which
@@ -32,8 +51,10 @@ first count, priced at the measured time of an iteration, and when their total e
 measured time of a tangent and its factorisation it factors the tangent at the converged state
 (:meth:`Corrector.settle`): the rule of ski rental (pay rent until it adds up to the price of
 buying), which costs at most twice the best schedule in hindsight.  Small steps about one state
-keep their factors; a drift away from it renews them every so often (on the gripper, 0.1 % field
-steps drifting 1.5 %: 3 renewals, 71 instead of 90 iterations).  ``ControlOptions.factor_cost``
+keep their factors; a drift away from it renews them every so often (on the gripper, 0.3 % field
+steps drifting 4.5 %, priced at 2 iterations: 3 renewals, 86 instead of 89 iterations; 0.1 %
+steps drifting 1.5 % need none since the secant memory below: 74 iterations, was 71 with 3
+renewals and 90 without).  ``ControlOptions.factor_cost``
 fixes the price in iterations instead of measuring it.  A renewal that fails (a singular
 tangent) keeps the held factors.
 
@@ -68,6 +89,11 @@ STALE = 0.2
 # what numba saves on one residual evaluation, as a share of what it saves on a Newton iteration
 # (the 'auto' rule's unit, ``backend.iteration_saving``): on the gripper 0.83 of 2.8 ms
 RESIDUAL_SHARE = 0.3
+# the Anderson pairs of the last try are carried into the next on the same factors while that
+# try moved the nodes by at most this root-mean-square length / ell (module docstring): on the
+# gripper (and on 4x its elements) 0.1 % and 1 % field steps move 7e-5 ell and gain (5 % steps,
+# 3.5e-4 ell, lose: pairs recorded that far away mislead the predictor)
+CARRY_MOVE = 1.5e-4
 
 
 @dataclass
@@ -143,6 +169,9 @@ class Corrector:
         # (of its last try) and the time spent beyond them since the factors were made
         self.cost = dict(iteration=None, factorization=None)
         self._base, self._waste, self._last_try = None, 0.0, 0
+        self._mix = None                # (the factors, the Anderson mixer on them)
+        self._t_factor = 0.0            # seconds spent factoring so far
+        self._moved = np.inf            # the rms nodal move / ell of the last converged try
 
     def close(self):
         """Release the held factors."""
@@ -179,6 +208,7 @@ class Corrector:
         self.F_g, self.F_stamp, self._checked = g, stamp, False
         self.counts["factorizations"] += 1
         self._measured("factorization", time.perf_counter() - t0)
+        self._t_factor += time.perf_counter() - t0
         self._base, self._waste = None, 0.0
 
     def _measured(self, what, seconds):
@@ -232,13 +262,15 @@ class Corrector:
                 self.factor(g, lam, stamp)
                 nf += 1
             fresh = self.F_g is g and self.F_stamp == stamp
-            out = self._iterate(g, lam, check_path, fresh, r0)
+            out = self._iterate(g, lam, check_path, fresh, stamp, r0)
             its += out.iterations
+            nf += out.factorizations
             if not out.ok and not out.fatal and not fresh:
                 self.factor(g, lam, stamp)                     # stale factors: again with g's
                 nf += 1
-                out = self._iterate(g, lam, check_path, True, r0)
+                out = self._iterate(g, lam, check_path, True, stamp, r0)
                 its += out.iterations
+                nf += out.factorizations
             if not out.ok and not out.fatal:
                 out = self._newton(g, lam, out.predictor, check_path)
                 nf += out.factorizations
@@ -258,20 +290,22 @@ class Corrector:
                 f"path_tolerance = {self.opts.path_tolerance:g}): the equilibrium path turns sharply or the state "
                 "snapped onto another branch")
 
-    def _iterate(self, g, lam, check_path, fresh, r0=None):
+    def _iterate(self, g, lam, check_path, fresh, stamp, r0=None):
         """Predictor and corrector on the held factors: a SubStep (``fatal``: the step is too long
         whatever the factors; ``predictor``: the first increment; ``residual``: the free residual
         at the state returned)."""
         opts, ell = self.opts, self.ell
         t0 = time.perf_counter()
-        out = self._chord(g, lam, check_path, fresh, r0)
+        t_factor = self._t_factor
+        out = self._chord(g, lam, check_path, fresh, stamp, r0)
         if out.iterations:
-            self._measured("iteration", (time.perf_counter() - t0) / out.iterations)
+            spent = time.perf_counter() - t0 - (self._t_factor - t_factor)    # a renewal inside not counted
+            self._measured("iteration", spent / out.iterations)
         if out.ok:
             self._last_try = out.iterations
         return out
 
-    def _chord(self, g, lam, check_path, fresh, r0):
+    def _chord(self, g, lam, check_path, fresh, stamp, r0):
         """:meth:`_iterate`'s work (its docstring)."""
         opts, ell = self.opts, self.ell
         if r0 is None:
@@ -284,10 +318,12 @@ class Corrector:
         if turn > opts.max_turn:
             return SubStep(False, g, f"the predictor turns a node by {turn:.3g} rad (more than max_turn = "
                            f"{opts.max_turn:g})", 1, history=hist, fatal=True)
-        predictor, total = eta, eta.copy()
+        mixer = self._mixer()
+        predictor = eta
+        eta = mixer.step(eta)          # the predictor too: with carried pairs, a secant correction
+        total = eta.copy()
         g1 = self.problem.retract(g, eta)
-        its, fn_prev = 1, pred
-        mixer = _Anderson(opts.anderson, ell)
+        its, fn_prev, renewed = 1, pred, fresh
         while True:
             r, rn, floor = self.residual(g1, lam)
             hist.append(rn)
@@ -298,21 +334,41 @@ class Corrector:
             # dtol: at the round-off floor the increments no longer contract)
             if rn <= max(opts.rtol, floor) and fn <= opts.dtol and (fn <= 0.5 * fn_prev or fn <= 1e-3 * opts.dtol):
                 break
+            if not renewed and its == 2 and STALE * pred < fn <= pred:
+                # stale factors: the tangent factored here, at the predicted state (nearer the
+                # solution than the start), and the iteration goes on from it (module docstring)
+                self.factor(g1, lam, stamp)
+                renewed, mixer = True, self._mixer()
+                f, fn = self.increment(r)
+                its += 1
             why = ""
             if fn > pred:
                 why = f"the corrector diverges: an increment {fn / pred:.3g} x the predictor's"
-            elif its > opts.max_iter or (not fresh and its == 2 and fn > STALE * pred):
+            elif its > opts.max_iter:
                 why = (f"no convergence in max_iter = {opts.max_iter} iterations on the held factors (residual "
                        f"{rn:.2e}, increment {fn:.2e})")
             if why:
-                return SubStep(False, g, why, its, history=hist, predictor=predictor)
+                return SubStep(False, g, why, its, int(renewed and not fresh), history=hist, predictor=predictor)
             eta = mixer.step(f)
             g1 = self.problem.retract(g1, eta)
             total += eta
             fn_prev = fn
         why = self._path_error(predictor, total, check_path)
-        return SubStep(not why, g1 if not why else g, why, its, history=hist, predictor=predictor,
-                       fatal=bool(why) and fresh, residual=None if why else r)
+        self._moved = np.inf if why else increment_norm(total, ell) / (ell * np.sqrt(len(total)))
+        return SubStep(not why, g1 if not why else g, why, its, int(renewed and not fresh), history=hist,
+                       predictor=predictor, fatal=bool(why) and fresh, residual=None if why else r)
+
+    def _mixer(self):
+        """The Anderson mixer of a try: the last try's, with its secant pairs, when it was on the
+        same factors and moved the nodes by at most ``CARRY_MOVE`` ell (rms; module docstring),
+        else a new one."""
+        m = self._mix
+        if m is None or m[0] is not self.F or not self._moved <= CARRY_MOVE:
+            self._mix = (self.F, _Anderson(self.opts.anderson, self.ell))
+        else:
+            m[1].restart()
+        self._moved = np.inf            # until this try converges
+        return self._mix[1]
 
     def _newton(self, g, lam, predictor, check_path):
         """Newton with a fresh tangent at every iterate (the solver's try, ``solvers.newton_try``,
@@ -348,6 +404,11 @@ class _Anderson:
         self.k = 0                      # pairs recorded so far (the last m are kept, in a ring)
         self.w = self.Fd = self.Sd = self.u = self.s = None
         self.G = np.zeros((m, m))       # Gram matrix of the kept dF (weighted)
+
+    def restart(self):
+        """A new sequence of iterates (new parameters): the kept pairs stay, but no pair joins
+        the last iterate to the next."""
+        self.u = self.s = None
 
     def step(self, f):
         """The next step from the modified-Newton increment f (n, 6)."""

@@ -194,7 +194,8 @@ def surface_load_follower_par(g, quads, elements, cptr, order, p, f, data, cmap,
 
 @njit(cache=True)
 def magnetic_load(g, nodes, mu, B, Gr, H, uniform, f, data, cmap, tangent):
-    """MagneticLoad on the (unique) magnetised nodes: mu (k,3) body dipoles, lab field
+    """MagneticLoad on the magnetised nodes (a node listed twice, by two loads of
+    ``model.magnetics.compiled_magnets``, receives both): mu (k,3) body dipoles, lab field
     B (k,3), gradient Gr (k,3,3) and Hessian H (k,3,3,3) at the nodes (ignored if uniform).
     With a = R^T B, A = R^T G R:  f_w = mu x a,  f_v = A mu;  -df/deta:
       [3:,3:] = -hat(mu) hat(a),  [3:,:3] = -hat(mu) A,  [:3,3:] = -(hat(A mu) - A hat(mu)),

@@ -13,6 +13,18 @@ __all__ = ["CompiledEvaluation"]
 _NO_DATA = np.zeros(0)        # the CSR data of a residual-only evaluation
 
 
+def _compiled_loads(loads, pattern):
+    """[(load, compiled add or None)]: the magnetic loads (plain ``MagneticLoad``) batched into
+    one entry (``magnetics.compiled_magnets``: one field evaluation per field and one kernel
+    call for all of them), the others one by one."""
+    from .magnetics import MagneticLoad, compiled_magnets
+    mags = [ld for ld in loads if type(ld) is MagneticLoad]
+    out = [(ld, ld.compiled(pattern)) for ld in loads if type(ld) is not MagneticLoad]
+    if mags:
+        out.append((mags, compiled_magnets(mags, pattern)))
+    return out
+
+
 class CompiledEvaluation:
     """The compiled evaluation of ``problem`` (see the module docstring)."""
 
@@ -37,7 +49,7 @@ class CompiledEvaluation:
         if self._parts is None or self._parts[0] != key:
             pattern = asm.pattern()
             kern = prob.element.compiled(pattern)
-            loads = [(ld, ld.compiled(pattern)) for ld in prob.loads] if kern is not None else []
+            loads = _compiled_loads(prob.loads, pattern) if kern is not None else []
             self._parts = (key, None if kern is None else (pattern, kern, loads))
         return self._parts[1]
 

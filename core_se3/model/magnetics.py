@@ -38,7 +38,7 @@ from ..fem.quadrature import shape_functions, surface_jacobian
 from .base import Load, LoadEvaluation
 from .fields import MU0, Field
 
-__all__ = ["Magnetisation", "MagneticLoad", "MU0"]
+__all__ = ["Magnetisation", "MagneticLoad", "MU0", "compiled_magnets", "magnets_force"]
 
 
 class Magnetisation:
@@ -211,6 +211,8 @@ class MagneticLoad(Load):
         return nodes, c, f
 
     def evaluate(self, g, lam, tangent=True):
+        if not tangent:
+            return LoadEvaluation(magnets_force([self], g, lam))
         n = self.mag.mesh.n_nodes
         nodes = self.mag.nodes
         mu = self.mag.mu
@@ -221,11 +223,6 @@ class MagneticLoad(Load):
         Mb = np.cross(mu, a)
         f = np.zeros((n, 6))
         f[nodes, 3:] = Mb                                   # nodes are unique: plain assignment
-        if not tangent:
-            if not self.field.uniform:
-                A = Rt @ self.field.gradient(x, lam) @ R
-                f[nodes, :3] = np.einsum("kij,kj->ki", A, mu)
-            return LoadEvaluation(f)
         blk = np.zeros((len(nodes), 6, 6))
         mhat = lie.hat3(mu)
         blk[:, 3:, 3:] = -mhat @ lie.hat3(a)
@@ -280,3 +277,111 @@ class MagneticLoad(Load):
         F = np.zeros((n, 3))
         F[nodes] = fv / w
         return {"magnetisation_Br": Br, "magnetic_couple": C, "magnetic_force": F}
+
+
+def compiled_magnets(loads, pattern):
+    """One compiled evaluation of several MagneticLoads (``add(g, lam, f, data, tangent)``, as
+    ``MagneticLoad.compiled``): their nodes and dipoles concatenated (grouped by field), each
+    distinct field evaluated once at all its loads' nodes, and one call of the kernel
+    ``kernels.loads.magnetic_load`` (nodes shared by two loads add up), instead of one field
+    evaluation and one kernel call per load.  The sum equals the loads' own evaluations to
+    round-off (the order of the additions at shared nodes differs).  The dipoles are read at
+    call time (a design loop may change a magnetisation).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import Material, Problem, mesh
+    >>> from core_se3.model.fields import UniformField
+    >>> p = Problem(mesh.rectangle(2.0, 1.0, 2, 1), Material(1.0, 0.3, 0.1))
+    >>> B = UniformField((0.0, 0.0, 1.0))
+    >>> a = p.add_magnetic((1.0, 0, 0), B, elements=[0], mu0=1.0)
+    >>> b = p.add_magnetic((0, 1.0, 0), B, elements=[1], mu0=1.0)
+    >>> f = np.zeros((p.mesh.n_nodes, 6))
+    >>> compiled_magnets([a, b], p.assembler().pattern())(p.mesh.g0, 1.0, f, np.zeros(0), False)
+    >>> bool(np.allclose(f, a.evaluate(p.mesh.g0, 1.0, False).f + b.evaluate(p.mesh.g0, 1.0, False).f))
+    True
+    """
+    from ..kernels import loads as K
+    from .fields import DipoleField
+    fields = []                                   # distinct fields, in order of first use
+    for ld in loads:
+        if not any(ld.field is f for f in fields):
+            fields.append(ld.field)
+    groups = [[ld for ld in loads if ld.field is f] for f in fields]
+    loads = [ld for grp in groups for ld in grp]
+    nodes = np.ascontiguousarray(np.concatenate([ld.mag.nodes for ld in loads]), dtype=np.int64)
+    ends = np.cumsum([0] + [sum(len(ld.mag.nodes) for ld in grp) for grp in groups])
+    k = len(nodes)
+    B, G, H = np.zeros((k, 3)), np.zeros((k, 3, 3)), np.zeros((k, 3, 3, 3))
+    uniform = all(f.uniform for f in fields)      # else the uniform fields' G = H = 0 (exact)
+
+    def add(g, lam, f, data, tangent):
+        x = np.ascontiguousarray(g[nodes, :3, 3])
+        for fld, lo, hi in zip(fields, ends[:-1], ends[1:]):
+            if isinstance(fld, DipoleField):
+                if K.dipole_field(x[lo:hi], fld.m, fld.x0, fld.k, fld.scale_at(lam), B[lo:hi], G[lo:hi], H[lo:hi]):
+                    raise LoadError("a point lies on the dipole: the field is singular there")
+                continue
+            B[lo:hi] = fld.value(x[lo:hi], lam)
+            if not fld.uniform:
+                G[lo:hi] = fld.gradient(x[lo:hi], lam)
+                if tangent:
+                    H[lo:hi] = fld.hessian(x[lo:hi], lam)
+        mu = np.concatenate([ld.mag.mu for ld in loads]) if len(loads) > 1 else \
+            np.ascontiguousarray(loads[0].mag.mu, dtype=float)
+        K.magnetic_load(g, nodes, mu, B, G, H, uniform, f, data, pattern.map, tangent)
+    return add
+
+
+def magnets_force(loads, g, lam):
+    """The generalised force f (n, 6) of several MagneticLoads at (g, lam), without tangent, in
+    one batch (the NumPy backend's residual: ``Problem.external``): their nodes and dipoles
+    concatenated, each distinct field evaluated once at its loads' nodes, f_w = mu x R^T B and
+    f_v = R^T G R mu (``MagneticLoad.evaluate``) for all at once, summed at shared nodes.  It
+    equals the sum of the loads' own evaluations to round-off.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import Material, Problem, mesh
+    >>> from core_se3.model.fields import UniformField
+    >>> p = Problem(mesh.rectangle(2.0, 1.0, 2, 1), Material(1.0, 0.3, 0.1))
+    >>> B = UniformField((0.0, 0.0, 1.0))
+    >>> a = p.add_magnetic((1.0, 0, 0), B, elements=[0], mu0=1.0)
+    >>> b = p.add_magnetic((0, 1.0, 0), B, elements=[1], mu0=1.0)
+    >>> f = magnets_force([a, b], p.mesh.g0, 1.0)
+    >>> bool(np.allclose(f, a.evaluate(p.mesh.g0, 1.0, False).f + b.evaluate(p.mesh.g0, 1.0, False).f))
+    True
+    """
+    fields, groups = [], []
+    for ld in loads:
+        for i, f in enumerate(fields):
+            if ld.field is f:
+                groups[i].append(ld)
+                break
+        else:
+            fields.append(ld.field)
+            groups.append([ld])
+    n = loads[0].mag.mesh.n_nodes
+    out = np.zeros((n, 6))
+    for fld, grp in zip(fields, groups):
+        nodes = np.concatenate([ld.mag.nodes for ld in grp])
+        mu = np.concatenate([ld.mag.mu for ld in grp])
+        R = g[nodes, :3, :3]
+        Rt = np.swapaxes(R, 1, 2)
+        x = g[nodes, :3, 3]
+        a = np.einsum("kij,kj->ki", Rt, fld.value(x, lam))                  # R^T B
+        _add_at(out, 3, nodes, np.cross(mu, a), len(grp) == 1)
+        if not fld.uniform:
+            _add_at(out, 0, nodes, np.einsum("kij,kj->ki", Rt @ fld.gradient(x, lam) @ R, mu), len(grp) == 1)
+    return out
+
+
+def _add_at(out, col, nodes, v, unique):
+    """out[nodes, col:col + 3] += v (k, 3), repeated nodes summed (by bincount unless unique)."""
+    if unique:
+        out[nodes, col:col + 3] += v
+        return
+    for c in range(3):
+        out[:, col + c] += np.bincount(nodes, weights=v[:, c], minlength=len(out))

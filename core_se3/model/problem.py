@@ -26,7 +26,7 @@ from .base import Evaluation, Load, load_kind
 from .compiled import CompiledEvaluation
 from .contact import add_obstacle
 from .fields import MU0
-from .magnetics import MagneticLoad, Magnetisation
+from .magnetics import MagneticLoad, Magnetisation, magnets_force
 from .probes import Probe
 from .solving import SOLVERS, dispatch, solve_linear
 from .supports import (LabSpring, LabTiltSpring, Prescribed, RotationComponentSpring, check_conflict,
@@ -359,7 +359,13 @@ class Problem:
         f = np.zeros((n, 6))
         Kn = np.zeros((n, 6, 6)) if tangent else None
         Ke = None
-        for load in self.loads:
+        loads = self.loads
+        if not tangent:                       # the magnets' forces in one batch (magnets_force)
+            mags = [ld for ld in loads if type(ld) is MagneticLoad]
+            if len(mags) > 1:
+                f += magnets_force(mags, g, lam)
+                loads = [ld for ld in loads if type(ld) is not MagneticLoad]
+        for load in loads:
             ev = load.evaluate(g, lam, tangent)
             f += ev.f
             if tangent and ev.node_blocks is not None:
