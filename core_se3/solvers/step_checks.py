@@ -140,6 +140,8 @@ class StepChecks:
     stop : bool, optional
         A located sign change stops the run (``limit_check``; default True), else it is
         recorded and passed (:meth:`passed`).
+    snap : ContactProbe, optional
+        The snap check of contact steps (``solvers.contact_probe``; None: not applied).
 
     Attributes
     ----------
@@ -159,8 +161,9 @@ class StepChecks:
     ('', 'path check: the Newton corrections grew 3.4x')
     """
 
-    def __init__(self, path, stability, critical_tol, sign=None, stop=True):
+    def __init__(self, path, stability, critical_tol, sign=None, stop=True, snap=None):
         self.path, self.stability, self.tol, self.stop = path, stability, critical_tol, stop
+        self.snap = snap                # the snap check of contact steps (solvers.contact_probe) or None
         self.sign = sign
         self.bracket = None
         self.confirmed = self.probing = False
@@ -196,6 +199,8 @@ class StepChecks:
         shows that the change seen there came from a jump, not from the path: the bracket goes."""
         if out.det_sign is not None:
             self.sign = out.det_sign
+        if self.snap is not None:
+            self.snap.accept(out.g, lam_try)
         if self.bracket is not None:
             lo, hi = self.bracket
             self.bracket = None if abs(hi - lam_try) <= 1e-14 * max(1.0, abs(hi)) else (lam_try, hi)
@@ -214,12 +219,22 @@ class StepChecks:
         lo, hi = self.bracket
         return abs(hi - lo) <= self.tol * max(abs(hi), abs(lo)) or abs(hi - lo) / 2 < floor
 
+    def new_target(self, dlam_nominal, max_cutbacks):
+        """A new requested step of ``dlam_nominal``: the smallest increment the cut-backs allow
+        (``floor``); the snap check's smallest probe follows the step too."""
+        if self.snap is not None:
+            self.snap.new_step(dlam_nominal)
+        return abs(dlam_nominal) / 2 ** max_cutbacks
+
     def next_increment(self, lam, dlam, floor):
         """The next increment while a sign change is located, else ``dlam``: at most half the
         bracket (bisection; a failed try halves ``dlam`` as usual), and once the bracket is
         narrow (``critical_tol``, or half of it below ``floor``, the smallest increment the
         cut-backs allow) but its change was seen from an older low end, a try to its high end
-        from the current one."""
+        from the current one.  A contact step being probed in halves (the snap check) caps it at
+        the probed step's end."""
+        if self.snap is not None:
+            dlam = self.snap.next_increment(lam, dlam)
         if self.bracket is None:
             return dlam
         lo, hi = self.bracket
@@ -251,7 +266,10 @@ class StepChecks:
 
     def passed(self, step):
         """The sign changes passed since the last call (``stop`` off), as CriticalPoints whose
-        ``step`` is the index of the next stored step; the list is emptied."""
+        ``step`` is the index of the next stored step, and the snaps of the snap check; the list
+        is emptied."""
+        if self.snap is not None:
+            self.crossed += self.snap.passed()
         out = [dataclasses.replace(cp, step=step) for cp in self.crossed]
         self.crossed.clear()
         return out
@@ -262,5 +280,7 @@ class StepChecks:
         rec = dict(path_check=self.path, contraction=None if out is None else float(out.contraction),
                    travel=None if out is None else float(out.travel), path_rejections=self.rejected,
                    det_sign=self.sign if self.stability else None)
+        if self.snap is not None:
+            rec.update(self.snap.record())
         self.rejected = 0
         return rec
