@@ -370,7 +370,9 @@ def _step_checks(opts, eq, state):
     # ... what contact leaves observable is the motion: the snap check (solvers.contact_probe)
     snap = ContactProbe(median_edge(eq.problem.mesh)) if opts.snap_check and not smooth and not eq.distributed else None
     return StepChecks(opts.path_check and smooth and not eq.stateful, smooth and hasattr(eq, "det_sign"),
-                      opts.critical_tol, state.det_sign, stop=opts.limit_check, snap=snap)
+                      opts.critical_tol, state.det_sign, stop=opts.limit_check, snap=snap,
+                      counting=opts.inertia_check and smooth and hasattr(eq, "inertia_count")
+                      and not any(getattr(ld, "follower", False) for ld in eq.loads))
 
 
 def _split_step(problem, turning, g_whole, lam, lam_try, target, dlam, opts, result):
@@ -422,6 +424,11 @@ def _judge(out, checks, eq, sweeps, g, lam, lam_try, stress_conv):
     load refuses (a step through an obstacle)."""
     if out.ok and checks.stability and checks.sign is None and out.det_sign == -1:
         checks.sign = start_sign(eq, g, lam, stress_conv)     # was the start unstable too?
+    if out.ok and checks.counting:           # inertia_check: the count of negative eigenvalues
+        out.count = eq.inertia_count()
+        if checks.count is None:             # ... at the start state: one factorisation there
+            start_sign(eq, g, lam, stress_conv)
+            checks.count = eq.inertia_count()
     if out.ok:
         out.reason = checks.judge(out, lam, lam_try)
         out.ok = not out.reason
