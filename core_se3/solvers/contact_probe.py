@@ -156,7 +156,7 @@ class ContactProbe:
         if not self.probes:
             return dlam
         rest = self.probes[-1].hi - lam
-        return np.sign(rest) * min(abs(dlam), abs(rest))
+        return float(np.sign(rest) * min(abs(dlam), abs(rest)))
 
     def passed(self):
         """The snaps found since the last call (the list is emptied)."""
