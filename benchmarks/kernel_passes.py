@@ -64,33 +64,25 @@ def measure(n, repeats):
     mesh, pat, ek, g = _setup(n)
     topo, cmap, data = pat.topo, pat.map, pat.new_data()
     m, nE, nn = mesh.n_elements, len(ek.edge_nodes), mesh.n_nodes
-    args = (g, ek.quads, ek.edge_nodes, ek.elem_edges, ek.sign, ek.Dbar, ek.Dsplit, ek.z0, ek.Dz0, topo, cmap,
-            ek.psi, ek.coef, ek.ang, ek.fe, ek.rE, ek.r, data, None, None, None)
-    nosplit = np.empty((0, 24, 12))
-    gargs = args[:6] + (nosplit,) + args[7:]
+    me, ed, w = ek.bundles()
+    args = (g, me, ed, topo, cmap, w, data, (None, None, None))
+    gen = ed._replace(Dsplit=np.empty((0, 24, 12)))
+    gargs = (g, me, gen, topo, cmap, w, data, (None, None, None))
     rows = {
         "tangent (whole driver)": lambda: element_tangent_serial(*args),
-        "residual (whole driver)": lambda: element_residual_serial(
-            g, ek.edge_nodes, ek.elem_edges, ek.sign, ek.Dbar, ek.Dsplit, ek.z0, ek.Dz0, topo, ek.psi, ek.coef,
-            ek.ang, ek.fe, ek.rE, ek.r),
-        "edges: logs": lambda: P.edges_log(g, ek.edge_nodes, ek.psi, ek.coef, ek.ang, 0, nE),
-        "elements: forces only": lambda: P.elements_force(ek.elem_edges, ek.sign, ek.Dbar, ek.Dsplit, ek.z0,
-                                                          ek.Dz0, ek.psi, ek.fe, 0, m),
-        "elements: forces + material blocks, scattered": lambda: P.elements_tangent(
-            None, ek.quads, ek.elem_edges, ek.sign, ek.Dbar, ek.Dsplit, ek.z0, ek.Dz0, ek.psi, ek.coef, ek.fe, cmap,
-            data, 0, m),
-        "edges: forces + geometric blocks, scattered": lambda: P.edges_tangent(
-            None, ek.edge_nodes, topo.edge_slots, ek.psi, ek.coef, ek.fe, ek.rE, None, None, cmap, data, 0, nE),
-        "nodes: residual + 1/2 adt(r), scattered": lambda: P.nodes_pass(
-            topo.node_ptr, topo.node_inc, ek.rE, ek.r, None, None, data, cmap, 0, nn),
+        "residual (whole driver)": lambda: element_residual_serial(g, me, ed, topo, w),
+        "edges: logs": lambda: P.edges_log(g, me, w, 0, nE),
+        "elements: forces only": lambda: P.elements_force(me, ed, w, 0, m),
+        "elements: forces + material blocks, scattered": lambda: P.elements_tangent(None, me, ed, w, cmap, data,
+                                                                                    0, m),
+        "edges: forces + geometric blocks, scattered": lambda: P.edges_tangent(None, me, topo, w, None, None, cmap,
+                                                                               data, 0, nE),
+        "nodes: residual + 1/2 adt(r), scattered": lambda: P.nodes_pass(topo, w, None, None, data, cmap, 0, nn),
         # the general path (a law coupling v and w: Dbar unpacked per element), on the same Dbar
         "general path: tangent (whole driver)": lambda: element_tangent_serial(*gargs),
-        "general path: residual (whole driver)": lambda: element_residual_serial(
-            g, ek.edge_nodes, ek.elem_edges, ek.sign, ek.Dbar, nosplit, ek.z0, ek.Dz0, topo, ek.psi, ek.coef,
-            ek.ang, ek.fe, ek.rE, ek.r),
+        "general path: residual (whole driver)": lambda: element_residual_serial(g, me, gen, topo, w),
         "general path: elements, forces + material blocks, scattered": lambda: P.elements_tangent(
-            None, ek.quads, ek.elem_edges, ek.sign, ek.Dbar, nosplit, ek.z0, ek.Dz0, ek.psi, ek.coef, ek.fe, cmap,
-            data, 0, m),
+            None, me, gen, w, cmap, data, 0, m),
     }
     element_tangent_serial(*args)          # the state the passes read (psi, fe, rE)
     return m, {k: _best(f, repeats) * 1e6 / m for k, f in rows.items()}

@@ -53,14 +53,17 @@ NOTES = """## Reading
   hemisphere's locking (4x4 at R/h 1e4: 0.626 -> 0.814) and leaves the roof unchanged; a
   membrane-order stiffness of the drilling hourglass (the nodal pattern the edge means do not
   see) stiffens the roof at moderate R/h (3x3 at 1e3: 1.030 -> 0.584) and locks the
-  hemisphere. Enhanced strains were not measured.
+  hemisphere. Enhanced strains were not measured here; `benchmarks/results/roof_modes.md` has
+  the roof's mechanism and the later candidates (Hughes-Brezzi, facet shear, OpenSees' quads).
 * What the coarse-mesh roof does (linear energy split at the linear solution, R/h 1e5): 2x2 puts
   99.96 % of its energy in bending, 64x64 63 % in the membrane -- an inextensional mechanism of
   the coarse mesh with (almost) no drilling energy (0.03 %); the eigenvectors of the softest
   modes are the free edge's normal displacement with the in-plane rotations that keep every
   edge twist's translation unchanged (the element ties 3 translational strain components per
-  edge: about 6 per node against 6 dofs per node). The thin hemisphere at 4x4 (R/h 1e4) locks
-  with 37 % of its energy in the membrane (15 % in the skew part), 0.1 % at 64x64.
+  edge: about 6 per node against 6 dofs per node): n free-edge mechanisms on the n x n roof, the
+  same for MITC4+'s tying set (`roof_modes.py`, docs/ELEMENTS.md). The thin hemisphere at 4x4
+  (R/h 1e4) locked, before membrane_shear, with 37 % of its energy in the membrane (15 % in the
+  skew part), 0.1 % at 64x64.
 * Kratos' thick quad on the same meshes and nodal loads: stiffer than core_se3 on the roof at
   R/h 10 (4x4 0.989 vs 0.969) and at 4x4 ... 16x16 of the standard roof and cylinder, far more
   flexible on the thin coarse roofs (2x2 at 1e5: 464 vs 110) and locked on every thin hemisphere.
@@ -94,7 +97,13 @@ def kratos_model(p, elem):
 
 def kratos_solve(python, p, elem):
     """A Result-like object (steps[0].g, final.g) of Kratos' linear solution."""
-    out = subprocess.run([python, str(ROOT / "benchmarks" / "kratos_linear.py")],
+    return peer_solve(python, "kratos_linear.py", p, elem)
+
+
+def peer_solve(python, script, p, elem):
+    """A Result-like object (steps[0].g, final.g) of a peer's linear solution: ``script`` in
+    benchmarks/ run by ``python`` on the model of :func:`kratos_model`, printing RESULT {"u"}."""
+    out = subprocess.run([python, str(ROOT / "benchmarks" / script)],
                          input=json.dumps(kratos_model(p, elem)), capture_output=True, text=True)
     for line in out.stdout.splitlines():
         if line.startswith("RESULT "):

@@ -18,7 +18,7 @@ import difflib
 __all__ = ["CoreSE3Error", "MaterialError", "MeshError", "LoadError", "SupportError",
            "SingularSystemError", "ConvergenceError", "ElementTooDistortedError", "ScenarioError",
            "CheckpointError", "OptionError", "DesignError", "ContactError", "ParallelError",
-           "LinearSolverError", "ControlError", "ScenarioWarning", "did_you_mean"]
+           "LinearSolverError", "ControlError", "ScenarioWarning", "SupportWarning", "did_you_mean"]
 
 
 def did_you_mean(name, choices):
@@ -412,5 +412,26 @@ class LinearSolverError(SingularSystemError):
     Example
     -------
     >>> issubclass(LinearSolverError, SingularSystemError)
+    True
+    """
+
+
+class SupportWarning(UserWarning):
+    """A support that did not hold what it names, measured on the solved state.
+
+    ``Problem.fix`` holds body-frame dofs *incrementally*: each Newton update g <- g exp(eta)
+    has the held components of eta zero.  When the nodes turn about an axis other than the held
+    one, the held directions turn with them (a held translation) or finite rotations about two
+    free axes do not commute (one held rotation): the held component drifts from zero at second
+    order and the state depends on the load steps (a non-holonomic support).  Issued by
+    ``Problem.solve`` when the drift exceeds ``DRIFT_TOL`` (``model.prescribed.held_dof_drift``);
+    a clamp, a pin (translations held), a hinge or a symmetry plane (the node turns about the
+    held axis only) holds exactly, and so do the lab supports ``add_lab_support`` and
+    ``add_rotation_component_support``.
+
+    Example
+    -------
+    >>> from core_se3.errors import SupportWarning
+    >>> issubclass(SupportWarning, UserWarning)
     True
     """

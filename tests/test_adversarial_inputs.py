@@ -240,8 +240,7 @@ def test_an_edited_checkpoint_is_refused(tmp_path, name, edit, fragment):
     out = str(tmp_path / "o")
     runner.run(scn, out=out)
     st = edit(Checkpoint(out).load())
-    Checkpoint(out).save(st["fingerprint"], st["step"], st["lam"], st["g"], st["unwrap"], st["records"],
-                         st["timings"], st["extra"], st["arrays"])
+    Checkpoint(out).save(st["fingerprint"], st)
     with pytest.raises(CheckpointError) as ei:
         runner.run(scn, out=out, resume=True)
     assert fragment in str(ei.value) and out in str(ei.value), str(ei.value)

@@ -110,8 +110,7 @@ def test_checkpoint_without_path_state_is_refused(tmp_path):
     with pytest.raises(runner.RunInterrupted):
         runner.run(scn, out=out, stop_after=1)
     st = Checkpoint(out).load()
-    Checkpoint(out).save(st["fingerprint"], st["step"], st["lam"], st["g"], st["unwrap"], st["records"],
-                         st["timings"], extra=dict(control="arclength"))
+    Checkpoint(out).save(st["fingerprint"], dict(st, extra=dict(control="arclength"), arrays=None))
     with pytest.raises(CheckpointError, match="no arc-length path state"):
         runner.run(scn, out=out, resume=True)
 

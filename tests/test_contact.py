@@ -17,7 +17,7 @@ from core_se3 import lie, scenario
 from core_se3 import mesh as M
 from core_se3.catalogue import contact_lift_elastica, lifted_length_from_gaps, run_case
 from core_se3.errors import ContactError, ScenarioError
-from core_se3.model import (Box, ContactLoad, Cylinder, HalfSpace, Sphere, UserSDF, check_sdf, rotation,
+from core_se3.model import (Box, ContactLaw, ContactLoad, Cylinder, HalfSpace, Sphere, UserSDF, check_sdf, rotation,
                             tangent_fd_check, translation)
 from core_se3.model.contact import contact_wrench, normal_law, ramp, ramp_inverse
 
@@ -127,7 +127,7 @@ def test_tangent_fd_in_band_and_out_of_contact(name):
     alone, at a state with nodes deep in contact, inside the C^1 band and free."""
     m, g = _state()
     prob = cs.Problem(m, cs.Material(1e4, 0.3, 0.02))
-    cl = prob.add(ContactLoad(prob, obstacles()[name], eps=0.02))      # a wide band: all states testable
+    cl = prob.add(ContactLoad(prob, obstacles()[name], law=ContactLaw(eps=0.02)))      # a wide band: all states testable
     lam = 0.6
     d = cl.gaps(g, lam)
     w = cl.k * cl.eps
@@ -144,7 +144,7 @@ def test_tangent_fd_default_band_and_penalty_mode():
     m, g = _state(2)
     for mode in ("al", "penalty"):
         prob = cs.Problem(m, cs.Material(1e4, 0.3, 0.02), backend="numpy")
-        cl = prob.add(ContactLoad(prob, Sphere((0.5, 0, 0.6), 0.6), mode=mode))
+        cl = prob.add(ContactLoad(prob, Sphere((0.5, 0, 0.6), 0.6), law=ContactLaw(mode=mode)))
         _, d, _, _, p, _ = cl.state(g, 0.0)
         assert (p > 0).any() and (p == 0).any()
         assert tangent_fd_check(prob, g, 0.0, free_all=True)[0] < 1e-7

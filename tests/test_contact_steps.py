@@ -14,7 +14,7 @@ import pytest
 import core_se3 as cs
 from core_se3 import lie
 from core_se3 import mesh as M
-from core_se3.model import Box, ContactLoad, Cylinder, Sphere, tangent_fd_check, translation
+from core_se3.model import Box, ContactLaw, ContactLoad, Cylinder, Sphere, tangent_fd_check, translation
 from core_se3.model.contact_law import ramp
 from core_se3.model.contact_sweep import crossing_report, face_grid, swept_depth
 
@@ -137,7 +137,7 @@ def test_face_sample_tangent_against_central_differences(name):
     m = M.rectangle(1.0, 0.6, 3, 2)
     g = m.g0 @ lie.exp(np.random.default_rng(1).normal(size=(m.n_nodes, 6)) * 0.08)
     prob = cs.Problem(m, cs.Material(1e4, 0.3, 0.02), backend="numpy")
-    cl = prob.add(ContactLoad(prob, _faces_obstacles()[name], eps=0.02, faces=True))
+    cl = prob.add(ContactLoad(prob, _faces_obstacles()[name], law=ContactLaw(eps=0.02, faces=True)))
     s, pf, _ = cl.face_state(g, 0.6)
     lam = cl.lam0.copy()
     lam[len(cl.nodes):] = ramp(np.maximum(0.5 * cl.kf * cl.eps + cl.kf * s["d"], 0.0), cl.kf * cl.eps)[0]

@@ -41,7 +41,7 @@ def test_cubic_snap_through_traced_through_both_limit_points(method):
     located within 1 % of +-0.19245 (parabolic interpolation across a step: measured 0.14 % and
     0.33 %, crisfield)."""
     sysm, f = cubic()
-    pts, crit, log, _ = C.path_follow(sysm, method, lam_end=None, dlam0=0.02, psi=1.0,
+    pts, crit, log, _ = C.path_follow(sysm, method=method, lam_end=None, dlam0=0.02, psi=1.0,
                                       control=(lambda u: u[0], lambda u: np.array([1.0])),
                                       control_end=3.0)
     u = np.array([p.state[0] for p in pts])
@@ -64,7 +64,7 @@ def test_cubic_displacement_control_is_exact():
     """Displacement control of u through the whole cubic: lam = f(u) at every target."""
     sysm, f = cubic()
     # displacement_control takes a Problem; the bordered corrector it uses is path_follow's
-    pts, crit, log, _ = C.path_follow(sysm, "crisfield", lam_end=None, dlam0=0.05,
+    pts, crit, log, _ = C.path_follow(sysm, method="crisfield", lam_end=None, dlam0=0.05,
                                       control=(lambda u: u[0], lambda u: np.array([1.0])),
                                       control_end=2.5)
     for p in pts:
@@ -76,12 +76,12 @@ def test_pitchfork_detected_and_branch_switch():
     eigenvalue interpolation is exact); q . t keeps its sign, so it is classed a bifurcation.
     Without switching the path stays on v = 0; with branch_switch the next steps lie on the
     secondary path lam = 1 + v^2/2, u = 1 + v^2 (to 1e-12) and are stable again."""
-    pts, crit, _, _ = C.path_follow(pitchfork(), "crisfield", lam_end=1.6, dlam0=0.15)
+    pts, crit, _, _ = C.path_follow(pitchfork(), method="crisfield", lam_end=1.6, dlam0=0.15)
     assert [c.kind for c in crit] == ["bifurcation"]
     assert abs(crit[0].lam - 1.0) < 1e-10
     assert all(abs(p.state[1]) < 1e-14 for p in pts)
     assert pts[-1].n_neg == 1                             # primary path unstable past lam = 1
-    pts, crit, _, _ = C.path_follow(pitchfork(), "crisfield", lam_end=1.6, dlam0=0.15,
+    pts, crit, _, _ = C.path_follow(pitchfork(), method="crisfield", lam_end=1.6, dlam0=0.15,
                                     branch_switch=True)
     assert [c.kind for c in crit] == ["bifurcation"]
     after = [p for p in pts if p.lam > 1.0 and abs(p.state[1]) > 0.1]

@@ -10,7 +10,7 @@ import pytest
 import core_se3 as cs
 from core_se3 import lie
 from core_se3 import mesh as M
-from core_se3.model import ContactLoad, HalfSpace, Sphere, tangent_fd_check, translation
+from core_se3.model import ContactLaw, ContactLoad, HalfSpace, Sphere, tangent_fd_check, translation
 from core_se3.model.obstacle_kinds import Box, Cylinder
 from core_se3.model.obstacles import rotation
 from core_se3.model.contact_law import ramp
@@ -40,7 +40,7 @@ def _friction_state(obstacle, seed=1, mu=0.3):
     m = M.rectangle(1.0, 0.6, 3, 2)
     g = m.g0 @ lie.exp(np.random.default_rng(seed).normal(size=(m.n_nodes, 6)) * 0.08)
     prob = cs.Problem(m, cs.Material(1e4, 0.3, 0.02), backend="numpy")
-    cl = prob.add(ContactLoad(prob, obstacle, eps=0.02, friction=mu, faces=False))
+    cl = prob.add(ContactLoad(prob, obstacle, friction=mu, law=ContactLaw(eps=0.02, faces=False)))
     lam = 0.6
     d = cl.gaps(g, lam)
     w = cl.k * cl.eps

@@ -76,7 +76,7 @@ def test_plots_nonempty_png(tmp_path, mesh):
     p1 = io.plot_load_deflection(
         tmp_path / "ld.png", loads, {"w": loads**2, "u": -0.5 * loads}, labels={"w": "tip w"},
         reference={"w": (loads[::2], loads[::2] ** 2 + 0.01), "lit": ([0, 1], [0, 0.9])},
-        xlabel="tip displacement [mm]", ylabel="P [N]", title="test")
+        axes=("tip displacement [mm]", "P [N]"), title="test")
     p2 = io.plot_shell(tmp_path / "shell.png", X, quads, g, title="deformed")
     for p in (p1, p2):
         data = open(p, "rb").read()

@@ -280,8 +280,8 @@ def plot(case, p, doc, res, path):
     else:
         curves = {"force on the sphere": np.array([np.linalg.norm(s["measures"]["force_on_sphere"]) for s in steps])}
         ref, xl = None, "contact force [N]"
-    plot_load_deflection(path, x, curves, reference=ref, xlabel=xl,
-                         ylabel=f"{case.load_name} [{case.load_unit}]", title=case.name)
+    plot_load_deflection(path, x, curves, reference=ref, axes=(xl, f"{case.load_name} [{case.load_unit}]"),
+                         title=case.name)
     shape = path[:-4] + "_shape.png" if path.endswith(".png") else path + "_shape.png"
     m = res.mesh
     g = res.final.g

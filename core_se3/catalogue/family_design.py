@@ -185,8 +185,9 @@ def plot(case, p, doc, res, path):
     h = doc["design"]["history"]
     loads = np.array([s["load"]["value"] for s in doc["steps"]])
     u = np.array([s["probes"]["tip"]["u"] for s in doc["steps"]])
-    plot_load_deflection(path, loads, {"ux": u[:, 0], "uz": u[:, 2]}, xlabel="tip displacement [mm]",
-                         ylabel=f"{doc['steps'][-1]['load']['name']} [{doc['steps'][-1]['load']['unit']}]",
+    plot_load_deflection(path, loads, {"ux": u[:, 0], "uz": u[:, 2]},
+                         axes=("tip displacement [mm]",
+                               f"{doc['steps'][-1]['load']['name']} [{doc['steps'][-1]['load']['unit']}]"),
                          title=f"{case.name}: final design ({len(h)} iterations)")
 
 

@@ -261,18 +261,18 @@ def plot(case, p, doc, res, path):
         x = np.array([v["s"] for v in m])
         plot_load_deflection(path, x, {"lateral force H": np.array([v["H"] for v in m])},
                              reference={"lateral force H": (x, np.array([v["H_exact"] for v in m]))},
-                             xlabel="lateral force [force]", ylabel="wall travel s [length]", title=case.name)
+                             axes=("lateral force [force]", "wall travel s [length]"), title=case.name)
     elif "hold" in doc:
         x = np.array([v["lift"] for v in m])
         plot_load_deflection(path, x, {"force held": np.array([v["hold"] for v in m]),
                                        "bound": np.array([v["bound"] for v in m])},
-                             xlabel="force [N]", ylabel="lift [mm]", title=case.name)
+                             axes=("force [N]", "lift [mm]"), title=case.name)
     else:
         x = np.array([s["load_factor"] for s in steps])
         plot_load_deflection(path, x, {"centroid": np.array([v["centroid_ux"] for v in m]),
                                        "rear foot": np.array([v["rear_ux"] for v in m]),
                                        "front foot": np.array([v["front_ux"] for v in m])},
-                             xlabel="displacement along x [mm]", ylabel="load factor (1 + cycles)", title=case.name)
+                             axes=("displacement along x [mm]", "load factor (1 + cycles)"), title=case.name)
     shape = path[:-4] + "_shape.png" if path.endswith(".png") else path + "_shape.png"
     g = res.final.g
     plot_shell(shape, res.mesh.X, res.mesh.quads, g, title=f"{case.name}: final shape",

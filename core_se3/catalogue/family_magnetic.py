@@ -386,8 +386,8 @@ def plot(case, p, doc, res, path):
         reference = {"ux": (q[sel], p["L"] * np.asarray(e["tip"]["u"])[sel]),
                      "uz": (q[sel], p["L"] * np.asarray(e["tip"]["v"])[sel])}
         pb = doc["perfect_branch"]["points"]
-    plot_load_deflection(path, loads, disp, reference=reference, xlabel=xl,
-                         ylabel=f"{doc['steps'][-1]['load']['name']} [{doc['steps'][-1]['load']['unit']}]",
+    plot_load_deflection(path, loads, disp, reference=reference,
+                         axes=(xl, f"{doc['steps'][-1]['load']['name']} [{doc['steps'][-1]['load']['unit']}]"),
                          title=f"{case.name} ({doc['mesh']['nx']}x{doc['mesh']['ny']})")
     if case.name == "magnetic-antiparallel":
         _overlay_points(path, [r["u"][0] for r in pb], [r["u"][2] for r in pb], [r["load"] for r in pb])
@@ -401,7 +401,7 @@ def _overlay_points(path, ux, uz, loads):
     from ..io import plot_load_deflection
     p2 = path[:-4] + "_perfect_branch.png"
     plot_load_deflection(p2, np.asarray(loads), {"ux": np.asarray(ux), "uz": np.asarray(uz)},
-                         xlabel="tip displacement [mm]", ylabel="A Br Ba L^2/(mu0 E I)",
+                         axes=("tip displacement [mm]", "A Br Ba L^2/(mu0 E I)"),
                          title="perfect post-buckled branch (tilt removed)")
 
 

@@ -116,8 +116,9 @@ def _plot_generic(case, p, doc, path, name):
         vkey = "uy" if case.extra.get("plane") == "xy" else "uz"
         reference = {"ux": (Lc[sel], r["u"][sel]), vkey: (Lc[sel], r["v"][sel])}
     shape = f"{doc['mesh']['nx']}x{doc['mesh']['ny']}"
-    plot_load_deflection(path, loads, disp, reference=reference, xlabel="tip displacement [length]",
-                         ylabel=f"{doc['steps'][-1]['load']['name']} [{doc['steps'][-1]['load']['unit']}]",
+    plot_load_deflection(path, loads, disp, reference=reference,
+                         axes=("tip displacement [length]",
+                               f"{doc['steps'][-1]['load']['name']} [{doc['steps'][-1]['load']['unit']}]"),
                          title=f"{name} ({doc['variant']}, {shape})")
 
 

@@ -302,7 +302,7 @@ def _grid(args, scn):
         grid[k.strip()] = parse_values(vals, f"--set {k.strip()}")
     if not grid and not scn.spec["sweep"]:
         raise CoreSE3Error(f"{args.scenario}: nothing to sweep: give --set KEY=v1,v2,... or a [sweep] section")
-    return (grid, "--set") if grid else (dict(scn.spec["sweep"]), "sweep")
+    return grid or None                         # None: the scenario's [sweep] section
 
 
 def scenario_sweep(args):
@@ -312,13 +312,13 @@ def scenario_sweep(args):
         return 2
     try:
         scn = _open(args)
-        grid, where = _grid(args, scn)
+        grid = _grid(args, scn)
     except CoreSE3Error as exc:
         return error_code(exc)
     _preamble(scn, args.quiet)
     progress = True if args.progress else (False if args.quiet else None)
     res, code = _guarded(lambda: scenario.sweep(scn, grid, out=args.out, progress=progress, warm=not args.cold,
-                                                resume=args.resume, force=args.force, where=where),
+                                                resume=args.resume, force=args.force),
                          "the sweep's finished rows are kept in sweep.csv where it could be written",
                          "the finished runs are in sweep.csv (sweep.json says where it stopped): continue "
                          "with --resume")

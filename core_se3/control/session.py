@@ -20,7 +20,7 @@ from dataclasses import fields
 
 import numpy as np
 
-from ..design import ProbePosition, Quantity, Variable, sensitivity
+from ..design import ProbePosition, Quantity, SolveWith, Variable, sensitivity
 from ..errors import ControlError, OptionError
 from ..model.base import overrides
 from ..solvers import NewtonOptions, newton_solve
@@ -382,7 +382,7 @@ class Session:
         c = self._corr
         if c.F is None or c.F_g is not self.g or c.F_stamp != self._stamp:
             c.factor(self.g, self.lam, self._stamp)
-        return sensitivity(self.problem, self.g, self.lam, qs, vs, method, factorization=c.F)
+        return sensitivity(self.problem, self.g, self.lam, qs, vs, method, solve_with=SolveWith(factorization=c.F))
 
     def quantity(self, q):
         """A ``design`` quantity as given, or the position of the probe named q

@@ -15,12 +15,12 @@ from .equilibrium import EquilibriumOptions, EquilibriumState, assign_all, follo
 from .inverse import METHODS, Design, DesignResult, Pose, Smoothness, Target
 from .objectives import (Energy, NodePosition, Orientation, ProbePosition, Quantity, RotationAngle,
                          UserQuantity, local_jacobian)
-from .sensitivity import Sensitivity, quantity_jacobian, residual_derivative, sensitivity
+from .sensitivity import Sensitivity, SolveWith, quantity_jacobian, residual_derivative, sensitivity
 from .magnetisation import RegionMagnetisation
 from .material import MaterialVariable
 from .variables import FieldGradientVariable, FieldVariable, LoadMagnitude, Variable, magnetic_loads, polar_vector
 
-__all__ = ["sensitivity", "Sensitivity", "residual_derivative", "quantity_jacobian",
+__all__ = ["sensitivity", "Sensitivity", "SolveWith", "residual_derivative", "quantity_jacobian",
            "Variable", "FieldVariable", "FieldGradientVariable", "RegionMagnetisation", "MaterialVariable",
            "LoadMagnitude", "magnetic_loads", "polar_vector",
            "Quantity", "NodePosition", "ProbePosition", "Orientation", "RotationAngle", "Energy",

@@ -39,7 +39,7 @@ import numpy as np
 from ..backend import launched_ranks
 from ..errors import ConvergenceError, DesignError, ParallelError
 from .equilibrium import EquilibriumOptions, assign_all, follow, solve_flat
-from .sensitivity import sensitivity
+from .sensitivity import SolveWith, sensitivity
 from .targets import DesignResult, Pose, Smoothness, Target
 
 __all__ = ["Design", "METHODS", "Target", "Pose", "Smoothness", "DesignResult"]
@@ -197,6 +197,17 @@ class Design:
     def _active(self, k):
         return [i for i, v in enumerate(self.variables) if v.pose is None or v.pose == k]
 
+    def _target_poses(self, states):
+        """(k, pose, active variables) of the poses with targets, their variables assigned the
+        values of pose k's state (``states``: of :meth:`solve`)."""
+        for k, pose in enumerate(self.poses):
+            if pose.targets:
+                assign_all(self.pose_variables(k), states[k].x)
+                yield k, pose, self._active(k)
+
+    def _solve_with(self):
+        return SolveWith(linear_solver=self.options.linear_solver, run=self.distributed)
+
     def residuals(self, x):
         """The weighted misfit vector F (Phi = |F|^2 / 2), regularisation rows last."""
         states = self.solve(x)
@@ -217,14 +228,10 @@ class Design:
         if "J" in cache:
             return cache["J"]
         blocks = []
-        for k, pose in enumerate(self.poses):
-            if not pose.targets:
-                continue
-            assign_all(self.pose_variables(k), states[k].x)
-            act = self._active(k)
+        for k, pose, act in self._target_poses(states):
             vs = [self.variables[i] for i in act]
             s = sensitivity(self.problem, states[k].g, states[k].lam, [t.quantity for t in pose.targets], vs,
-                            self.sensitivity_method, linear_solver=self.options.linear_solver, run=self.distributed)
+                            self.sensitivity_method, solve_with=self._solve_with())
             cols = np.concatenate([np.arange(self.nx)[self.slices[i]] for i in act])
             off = 0
             for t in pose.targets:
@@ -256,11 +263,7 @@ class Design:
         if "grad" in cache:
             return cache["grad"]
         grad, off = np.zeros(self.nx), 0
-        for k, pose in enumerate(self.poses):
-            if not pose.targets:
-                continue
-            assign_all(self.pose_variables(k), states[k].x)
-            act = self._active(k)
+        for k, pose, act in self._target_poses(states):
             c = []
             for t in pose.targets:
                 ct = np.zeros(t.quantity.size)
@@ -269,7 +272,7 @@ class Design:
                 c.append(ct)
             s = sensitivity(self.problem, states[k].g, states[k].lam, [t.quantity for t in pose.targets],
                             [self.variables[i] for i in act], cotangent=np.concatenate(c),
-                            linear_solver=self.options.linear_solver, run=self.distributed)
+                            solve_with=self._solve_with())
             cols = np.concatenate([np.arange(self.nx)[self.slices[i]] for i in act])
             grad[cols] += s.jacobian[0]
         for r in self.regularisation:

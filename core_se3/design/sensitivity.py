@@ -37,7 +37,7 @@ import scipy.sparse as sp
 from ..errors import DesignError
 from ..solvers import Factorization, make_solver
 
-__all__ = ["Sensitivity", "sensitivity", "residual_derivative", "quantity_jacobian"]
+__all__ = ["Sensitivity", "SolveWith", "sensitivity", "residual_derivative", "quantity_jacobian"]
 
 
 @dataclass
@@ -110,8 +110,36 @@ def _explicit(problem, g, lam, quantities, variables):
     return np.block(blocks)
 
 
-def sensitivity(problem, g, lam, quantities, variables, method="auto", cotangent=None, linear_solver=None,
-                evaluation=None, run=None, factorization=None):
+@dataclass(frozen=True)
+class SolveWith:
+    """What the linear solves of :func:`sensitivity` use (default: one factorisation of the
+    problem's free tangent at (g, lam), by the problem's linear solver).
+
+    Parameters
+    ----------
+    linear_solver : str, optional
+        Default the problem's.
+    evaluation : core_se3.model.Evaluation, optional
+        The problem's evaluation at (g, lam) with its tangent, if already at hand.
+    run : core_se3.parallel.DistributedRun, optional
+        Solve with the tangent on the MPI ranks (a design under mpirun): the quantities and
+        the variables' derivatives are the whole problem's, the linear solves distributed.
+    factorization : core_se3.solvers.Factorization, optional
+        A factorisation of the free tangent at (g, lam) to solve with (K and K^T on the same
+        factors; a control session's, ``core_se3.control``): no tangent is evaluated or factored.
+
+    Example
+    -------
+    >>> SolveWith(linear_solver="splu").linear_solver
+    'splu'
+    """
+    linear_solver: str | None = None
+    evaluation: object = None
+    run: object = None
+    factorization: object = None
+
+
+def sensitivity(problem, g, lam, quantities, variables, method="auto", cotangent=None, solve_with=None):
     """Total derivatives of ``quantities`` by ``variables`` at the equilibrium (g, lam).
 
     Parameters
@@ -129,16 +157,8 @@ def sensitivity(problem, g, lam, quantities, variables, method="auto", cotangent
         variable component) or 'auto' (the one with fewer solves).
     cotangent : (nq,) array, optional
         Only the gradient c^T dq/dx (one adjoint solve): returned as ``jacobian`` of shape (1, nx).
-    linear_solver : str, optional
-        Default the problem's.
-    evaluation : core_se3.model.Evaluation, optional
-        The problem's evaluation at (g, lam) with its tangent, if already at hand.
-    run : core_se3.parallel.DistributedRun, optional
-        Solve with the tangent on the MPI ranks (a design under mpirun): the quantities and
-        the variables' derivatives are the whole problem's, the linear solves distributed.
-    factorization : core_se3.solvers.Factorization, optional
-        A factorisation of the free tangent at (g, lam) to solve with (K and K^T on the same
-        factors; a control session's, ``core_se3.control``): no tangent is evaluated or factored.
+    solve_with : SolveWith, optional
+        The linear solver, an evaluation at hand, a distributed run or given factors.
 
     Returns
     -------
@@ -164,9 +184,10 @@ def sensitivity(problem, g, lam, quantities, variables, method="auto", cotangent
         raise DesignError(f"sensitivity method must be 'auto', 'adjoint' or 'direct', got {method!r}")
     free = problem.assembler().free
     n = problem.mesh.n_nodes
-    solves = _distributed_solver(run, g, lam) if run is not None else \
-        _factored_solver(problem, factorization) if factorization is not None else \
-        _serial_solver(problem, g, lam, evaluation, linear_solver)
+    w = solve_with if solve_with is not None else SolveWith()
+    solves = _without_empty(n, _distributed_solver(w.run, g, lam) if w.run is not None else
+                            _factored_solver(problem, w.factorization) if w.factorization is not None else
+                            _serial_solver(problem, g, lam, w.evaluation, w.linear_solver))
     vals, Q = quantity_jacobian(problem, g, lam, quantities)
     Qh = (Q @ sp.diags(free.astype(float))).tocsr()         # dq/d eta on the free dofs
     labels = [lab for v in variables for lab in v.labels]
@@ -190,6 +211,14 @@ def sensitivity(problem, g, lam, quantities, variables, method="auto", cotangent
     return Sensitivity(vals, E + Qh @ S.reshape(nx, -1).T, "direct", nx, labels)
 
 
+def _without_empty(n, solves):
+    """``solves`` answering an empty list of right-hand sides with no solution (0, n, 6), without
+    a factorisation or a solve."""
+    def nonempty(rhs, transpose):
+        return solves(rhs, transpose) if rhs else np.zeros((0, n, 6))
+    return nonempty
+
+
 def _serial_solver(problem, g, lam, evaluation, linear_solver):
     """solves(rhs, transpose): K x = b (or K^T x = b) for nodal right-hand sides b (n, 6) on one
     factorisation of the free tangent at (g, lam); the solutions (k, n, 6), zero on held dofs."""
@@ -198,8 +227,6 @@ def _serial_solver(problem, g, lam, evaluation, linear_solver):
     solver = make_solver(linear_solver or problem.linear_solver)
 
     def solves(rhs, transpose):
-        if not rhs:
-            return np.zeros((0, problem.mesh.n_nodes, 6))
         with Factorization(ev.K.T.tocsr() if transpose else ev.K, solver) as F:
             return np.stack([asm.scatter(F.solve(np.asarray(b).ravel()[asm.free])) for b in rhs])
     return solves
@@ -211,8 +238,6 @@ def _factored_solver(problem, F):
     asm = problem.assembler()
 
     def solves(rhs, transpose):
-        if not rhs:
-            return np.zeros((0, problem.mesh.n_nodes, 6))
         return np.stack([asm.scatter(F.solve(np.asarray(b).ravel()[asm.free], transpose)) for b in rhs])
     return solves
 
@@ -221,8 +246,6 @@ def _distributed_solver(run, g, lam):
     """:func:`_serial_solver`'s solves on the ranks of ``run`` (one MUMPS factorisation of the
     tangent at (g, lam), the loads localised for the variables' current values), gathered."""
     def solves(rhs, transpose):
-        if not rhs:
-            return np.zeros((0, len(g), 6))
         run.relocalize()
         run.evaluate(run.local_frames(g), lam, tangent=True)
         sols = run.system.solve_many([run.owned_rows(b) for b in rhs], transpose=transpose)

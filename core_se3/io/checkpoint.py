@@ -30,9 +30,9 @@ _ARRAY = "array_"                  # prefix of the optional named arrays (save(a
 class Checkpoint:
     """The checkpoint file of a run directory.
 
-    ``save(fingerprint, step, lam, g, unwrap, records, timings, extra=None, arrays=None)`` writes
-    the state atomically; ``load(fingerprint=None)`` returns it as a dict (fingerprint, step, lam,
-    g, unwrap, records, timings, extra, arrays) and raises
+    ``save(fingerprint, state)`` writes the state (a dict: step, lam, g, unwrap, records,
+    timings, optionally extra and arrays) atomically; ``load(fingerprint=None)`` returns it as
+    such a dict (with its fingerprint) and raises
     :class:`~core_se3.errors.CheckpointError` if it is missing, unreadable or, when a fingerprint
     is given, of another scenario; ``exists()`` tells whether there is one.
 
@@ -45,7 +45,7 @@ class Checkpoint:
     -------
     >>> import tempfile, numpy as np
     >>> ck = Checkpoint(tempfile.mkdtemp())
-    >>> ck.save("fp", 1, 0.5, np.eye(4)[None], {}, [], {})
+    >>> ck.save("fp", dict(step=1, lam=0.5, g=np.eye(4)[None], unwrap={}, records=[], timings={}))
     >>> ck.load("fp")["lam"]
     0.5
     >>> ck.load("another scenario")                # doctest: +ELLIPSIS
@@ -61,8 +61,14 @@ class Checkpoint:
     def exists(self):
         return os.path.isfile(self.path)
 
-    def save(self, fingerprint, step, lam, g, unwrap, records, timings, extra=None, arrays=None):
-        """Write the state atomically; extra: JSON-able dict; arrays: {name: float array}."""
+    def save(self, fingerprint, state):
+        """Write ``state`` atomically under ``fingerprint``: a dict with step, lam, g (n, 4, 4),
+        unwrap ({probe: (3,)}), records (JSON-able list), timings (JSON-able dict) and optionally
+        extra (JSON-able dict) and arrays ({name: float array}): what :meth:`load` returns (its
+        own fingerprint key is not read)."""
+        step, lam, g, unwrap = state["step"], state["lam"], state["g"], state["unwrap"]
+        records, timings = state["records"], state["timings"]
+        extra, arrays = state.get("extra"), state.get("arrays")
         names = sorted(unwrap)
         arrs = {_ARRAY + k: np.asarray(v, float) for k, v in (arrays or {}).items()}
         with atomic_path(self.path) as tmp:

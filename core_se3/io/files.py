@@ -108,19 +108,8 @@ def write_text_atomic(path, text):
 
 
 def write_json_atomic(path, doc):
-    """Write ``doc`` as JSON (indent 1) to ``path`` atomically (:func:`atomic_path`).
-
-    Parameters
-    ----------
-    path : str or path-like
-        The file.
-    doc : object
-        Anything ``json.dumps`` accepts.
-
-    Returns
-    -------
-    str
-        The path.
+    """:func:`write_text_atomic` of ``doc`` (anything ``json.dumps`` accepts) as JSON, indent 1;
+    returns the path.
 
     Example
     -------

@@ -44,8 +44,7 @@ def plot_load_deflection(
     displacements: Mapping[str, np.ndarray],
     labels: Mapping[str, str] | Sequence[str] | None = None,
     reference: Mapping[str, tuple[np.ndarray, np.ndarray]] | None = None,
-    xlabel: str = "displacement [length unit]",
-    ylabel: str = "load [load unit]",
+    axes: tuple[str, str] = ("displacement [length unit]", "load [load unit]"),
     title: str | None = None,
     secondary: tuple | None = None,
 ) -> str:
@@ -64,8 +63,10 @@ def plot_load_deflection(
         The PNG file.
     loads, displacements, labels, reference
         As above (ValueError for mismatched lengths).
-    xlabel, ylabel, title : str, optional
-        Axis labels and title.
+    axes : (str, str), optional
+        The x and y axis labels.
+    title : str, optional
+        The title.
 
     Returns
     -------
@@ -107,6 +108,7 @@ def plot_load_deflection(
             color, j = f"C{j % 10}", j + 1
         ax.plot(np.asarray(rv, float), np.asarray(rl, float), "o", mfc="none", ms=5, color=color,
                 label=f"{name} (reference)")
+    xlabel, ylabel = axes
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     if secondary is not None:

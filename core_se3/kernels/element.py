@@ -18,62 +18,59 @@ from numba import njit, prange
 from .element_mixed import element_linear_stress, element_linear_stress_serial, signed_edge_stress, stress_from_signed
 from .element_dbar import NSYM, packed_matvec, split_form
 from .element_ops import CHUNK, MAX_EDGE_ANGLE, check_angles
-from .element_passes import (edges_log, edges_residual, edges_tangent, edges_tangent_store, elements_force,
-                             elements_tangent, elements_tangent_store, nodes_pass)
+from .element_passes import (ElementData, ElementMesh, Workspace, edges_log, edges_residual, edges_tangent,
+                             edges_tangent_store, elements_force, elements_tangent, elements_tangent_store,
+                             nodes_pass)
 
 __all__ = ["ElementKernels", "element_residual", "element_residual_serial", "element_tangent",
            "element_tangent_serial", "element_tangent_gather", "SERIAL_BELOW"]
 
 @njit(cache=True, parallel=True)
-def element_residual(g, edge_nodes, elem_edges, elem_edge_sign, Dbar, Dsplit, z0, Dz0, topo,
-                     psi, coef, ang, fe, rE, r):
-    """Residual only.  Returns (energy, force_scale, flag, edge); r (n, 6) is written.
+def element_residual(g, mesh, ed, topo, w):
+    """Residual only.  Returns (energy, force_scale, flag, edge); w.r (n, 6) is written.
 
     energy = 1/2 sum_e dz^T Dbar dz, dz = z - z0, z = (sgn psi / 2) over the 4 edges;
     F_E = sum over elements of sgn f (f = Dbar dz); r_a += -1/2 L(-psi)^T F, r_b += 1/2 L(psi)^T F;
     force_scale = sqrt(sum |f + Dz0|^2 + |f|^2).  Dbar (m,300) packed, Dsplit (m,24,12) its
-    split form or empty (0,24,12) for the general path (``ElementKernels.split``).  Workspace:
-    psi (E,6), coef (E,3), ang (E,), fe (m,4,6), rE (E,2,6).  Parallel over edges, elements,
-    nodes (no colouring needed)."""
-    nE, m, n = edge_nodes.shape[0], elem_edges.shape[0], r.shape[0]
+    split form or empty (0,24,12) for the general path (``ElementKernels.split``): the fields of
+    ``ed`` (``ElementData``); mesh: ``ElementMesh``; workspace w (``Workspace``): psi (E,6),
+    coef (E,3), ang (E,), fe (m,4,6), rE (E,2,6), r.  Parallel over edges, elements, nodes (no
+    colouring needed)."""
+    nE, m, n = mesh.edge_nodes.shape[0], mesh.elem_edges.shape[0], w.r.shape[0]
     for ch in prange((nE + CHUNK - 1) // CHUNK):
-        edges_log(g, edge_nodes, psi, coef, ang, ch * CHUNK, min(nE, (ch + 1) * CHUNK))
-    flag, bad = check_angles(ang)
+        edges_log(g, mesh, w, ch * CHUNK, min(nE, (ch + 1) * CHUNK))
+    flag, bad = check_angles(w.ang)
     if flag:
         return 0.0, 0.0, flag, bad
     energy = 0.0
     fs = 0.0
     for ch in prange((m + CHUNK - 1) // CHUNK):
-        a, b = elements_force(elem_edges, elem_edge_sign, Dbar, Dsplit, z0, Dz0, psi, fe, ch * CHUNK,
-                              min(m, (ch + 1) * CHUNK))
+        a, b = elements_force(mesh, ed, w, ch * CHUNK, min(m, (ch + 1) * CHUNK))
         energy += a
         fs += b
     for ch in prange((nE + CHUNK - 1) // CHUNK):
-        edges_residual(topo.edge_slots, psi, coef, fe, rE, ch * CHUNK, min(nE, (ch + 1) * CHUNK))
+        edges_residual(topo, w, ch * CHUNK, min(nE, (ch + 1) * CHUNK))
     for ch in prange((n + CHUNK - 1) // CHUNK):
-        nodes_pass(topo.node_ptr, topo.node_inc, rE, r, None, None, None, None, ch * CHUNK,
-                   min(n, (ch + 1) * CHUNK))
+        nodes_pass(topo, w, None, None, None, None, ch * CHUNK, min(n, (ch + 1) * CHUNK))
     return energy, sqrt(fs), 0, -1
 
 
 @njit(cache=True)
-def element_residual_serial(g, edge_nodes, elem_edges, elem_edge_sign, Dbar, Dsplit, z0, Dz0, topo,
-                            psi, coef, ang, fe, rE, r):
+def element_residual_serial(g, mesh, ed, topo, w):
     """``element_residual`` in one thread."""
-    nE, m, n = edge_nodes.shape[0], elem_edges.shape[0], r.shape[0]
-    edges_log(g, edge_nodes, psi, coef, ang, 0, nE)
-    flag, bad = check_angles(ang)
+    nE, m, n = mesh.edge_nodes.shape[0], mesh.elem_edges.shape[0], w.r.shape[0]
+    edges_log(g, mesh, w, 0, nE)
+    flag, bad = check_angles(w.ang)
     if flag:
         return 0.0, 0.0, flag, bad
-    energy, fs = elements_force(elem_edges, elem_edge_sign, Dbar, Dsplit, z0, Dz0, psi, fe, 0, m)
-    edges_residual(topo.edge_slots, psi, coef, fe, rE, 0, nE)
-    nodes_pass(topo.node_ptr, topo.node_inc, rE, r, None, None, None, None, 0, n)
+    energy, fs = elements_force(mesh, ed, w, 0, m)
+    edges_residual(topo, w, 0, nE)
+    nodes_pass(topo, w, None, None, None, None, 0, n)
     return energy, sqrt(fs), 0, -1
 
 
 @njit(cache=True, parallel=True)
-def element_tangent(g, quads, edge_nodes, elem_edges, elem_edge_sign, Dbar, Dsplit, z0, Dz0, topo, cmap,
-                    psi, coef, ang, fe, rE, r, data, fe_geo, rEg, rg):
+def element_tangent(g, mesh, ed, topo, cmap, w, data, mixed):
     """Residual and tangent of the default element, written into the CSR ``data`` (nnz,).
 
     Coloured, fused compute + scatter (parallel within each colour, race-free):
@@ -87,18 +84,19 @@ def element_tangent(g, quads, edge_nodes, elem_edges, elem_edge_sign, Dbar, Dspl
     data is zeroed first; loads add their blocks afterwards.  Returns (energy, force_scale,
     flag, edge) like ``element_residual``; on flag = 1 nothing past pass 1 is computed.
 
-    Mixed iteration (fe_geo, rEg, rg arrays; Magisano, Leonetti and Garcea 2017): the
+    Mixed iteration (mixed = (fe_geo, rEg, rg) arrays; Magisano, Leonetti and Garcea 2017): the
     geometric part sees independent stresses, fe_geo (m,4,6) = their signed edge parts (like
     fe): pass 3 also forms F_geo = sum of fe_geo and its nodal parts into rEg (E,2,6), H is
     built with F_geo, and pass 4 sums r_geo into rg (n,6) and writes 1/2 adt(r_geo).  The
     residual, the energy and the material blocks do not change.  fe_geo = rEg = rg = None:
     the ordinary tangent (a separate compiled version: the mixed branches are pruned)."""
-    nE, n = edge_nodes.shape[0], r.shape[0]
+    fe_geo, rEg, rg = mixed
+    nE, n = mesh.edge_nodes.shape[0], w.r.shape[0]
     for i in prange(data.size):
         data[i] = 0.0
     for ch in prange((nE + CHUNK - 1) // CHUNK):
-        edges_log(g, edge_nodes, psi, coef, ang, ch * CHUNK, min(nE, (ch + 1) * CHUNK))
-    flag, bad = check_angles(ang)
+        edges_log(g, mesh, w, ch * CHUNK, min(nE, (ch + 1) * CHUNK))
+    flag, bad = check_angles(w.ang)
     if flag:
         return 0.0, 0.0, flag, bad
     energy = 0.0
@@ -107,63 +105,60 @@ def element_tangent(g, quads, edge_nodes, elem_edges, elem_edge_sign, Dbar, Dspl
     for col in range(len(cptr) - 1):
         lo, hi = cptr[col], cptr[col + 1]
         for ch in prange((hi - lo + CHUNK - 1) // CHUNK):
-            a, b = elements_tangent(order, quads, elem_edges, elem_edge_sign, Dbar, Dsplit, z0, Dz0, psi, coef, fe,
-                                    cmap, data, lo + ch * CHUNK, min(hi, lo + (ch + 1) * CHUNK))
+            a, b = elements_tangent(order, mesh, ed, w, cmap, data, lo + ch * CHUNK,
+                                    min(hi, lo + (ch + 1) * CHUNK))
             energy += a
             fs += b
     cptr, order = topo.edge_cptr, topo.edge_order
     for col in range(len(cptr) - 1):
         lo, hi = cptr[col], cptr[col + 1]
         for ch in prange((hi - lo + CHUNK - 1) // CHUNK):
-            edges_tangent(order, edge_nodes, topo.edge_slots, psi, coef, fe, rE, fe_geo, rEg, cmap, data,
-                          lo + ch * CHUNK, min(hi, lo + (ch + 1) * CHUNK))
+            edges_tangent(order, mesh, topo, w, fe_geo, rEg, cmap, data, lo + ch * CHUNK,
+                          min(hi, lo + (ch + 1) * CHUNK))
     for ch in prange((n + CHUNK - 1) // CHUNK):
-        nodes_pass(topo.node_ptr, topo.node_inc, rE, r, rEg, rg, data, cmap, ch * CHUNK,
-                   min(n, (ch + 1) * CHUNK))
+        nodes_pass(topo, w, rEg, rg, data, cmap, ch * CHUNK, min(n, (ch + 1) * CHUNK))
     return energy, sqrt(fs), 0, -1
 
 
 @njit(cache=True)
-def element_tangent_serial(g, quads, edge_nodes, elem_edges, elem_edge_sign, Dbar, Dsplit, z0, Dz0, topo, cmap,
-                           psi, coef, ang, fe, rE, r, data, fe_geo, rEg, rg):
+def element_tangent_serial(g, mesh, ed, topo, cmap, w, data, mixed):
     """``element_tangent`` in one thread, natural order (no threading overhead: small meshes);
-    the same mixed option (fe_geo, rEg, rg: arrays or None)."""
-    nE, m, n = edge_nodes.shape[0], elem_edges.shape[0], r.shape[0]
+    the same mixed option (mixed = (fe_geo, rEg, rg): arrays or None)."""
+    fe_geo, rEg, rg = mixed
+    nE, m, n = mesh.edge_nodes.shape[0], mesh.elem_edges.shape[0], w.r.shape[0]
     data[:] = 0.0
-    edges_log(g, edge_nodes, psi, coef, ang, 0, nE)
-    flag, bad = check_angles(ang)
+    edges_log(g, mesh, w, 0, nE)
+    flag, bad = check_angles(w.ang)
     if flag:
         return 0.0, 0.0, flag, bad
-    energy, fs = elements_tangent(None, quads, elem_edges, elem_edge_sign, Dbar, Dsplit, z0, Dz0, psi, coef, fe,
-                                  cmap, data, 0, m)
-    edges_tangent(None, edge_nodes, topo.edge_slots, psi, coef, fe, rE, fe_geo, rEg, cmap, data, 0, nE)
-    nodes_pass(topo.node_ptr, topo.node_inc, rE, r, rEg, rg, data, cmap, 0, n)
+    energy, fs = elements_tangent(None, mesh, ed, w, cmap, data, 0, m)
+    edges_tangent(None, mesh, topo, w, fe_geo, rEg, cmap, data, 0, nE)
+    nodes_pass(topo, w, rEg, rg, data, cmap, 0, n)
     return energy, sqrt(fs), 0, -1
 
 
 @njit(cache=True, parallel=True)
-def element_tangent_gather(g, quads, edge_nodes, elem_edges, elem_edge_sign, Dbar, Dsplit, z0, Dz0, topo, cmap,
-                           psi, coef, ang, fe, rE, r, data, fe_geo, rEg, rg, Keb, KEb):
+def element_tangent_gather(g, mesh, ed, topo, cmap, w, data, mixed, store):
     """``element_tangent`` by compute-then-gather: element blocks Keb (m,4,4,6,6) and edge
-    blocks KEb (E,2,2,6,6) are stored (parallel, no colours), then every CSR block sums its
-    contributors (``cmap.src``) and is written once (no zeroing of data needed).  The same
-    mixed option as ``element_tangent`` (fe_geo, rEg, rg: arrays or None)."""
-    nE, m, n = edge_nodes.shape[0], elem_edges.shape[0], r.shape[0]
+    blocks KEb (E,2,2,6,6) (store = (Keb, KEb)) are stored (parallel, no colours), then every
+    CSR block sums its contributors (``cmap.src``) and is written once (no zeroing of data
+    needed).  The same mixed option as ``element_tangent`` (fe_geo, rEg, rg: arrays or None)."""
+    fe_geo, rEg, rg = mixed
+    Keb, KEb = store
+    nE, m, n = mesh.edge_nodes.shape[0], mesh.elem_edges.shape[0], w.r.shape[0]
     for ch in prange((nE + CHUNK - 1) // CHUNK):
-        edges_log(g, edge_nodes, psi, coef, ang, ch * CHUNK, min(nE, (ch + 1) * CHUNK))
-    flag, bad = check_angles(ang)
+        edges_log(g, mesh, w, ch * CHUNK, min(nE, (ch + 1) * CHUNK))
+    flag, bad = check_angles(w.ang)
     if flag:
         return 0.0, 0.0, flag, bad
     energy = 0.0
     fs = 0.0
     for ch in prange((m + CHUNK - 1) // CHUNK):
-        a, b = elements_tangent_store(elem_edges, elem_edge_sign, Dbar, Dsplit, z0, Dz0, psi, coef, fe, Keb,
-                                      ch * CHUNK, min(m, (ch + 1) * CHUNK))
+        a, b = elements_tangent_store(mesh, ed, w, Keb, ch * CHUNK, min(m, (ch + 1) * CHUNK))
         energy += a
         fs += b
     for ch in prange((nE + CHUNK - 1) // CHUNK):
-        edges_tangent_store(topo.edge_slots, psi, coef, fe, rE, fe_geo, rEg, KEb, ch * CHUNK,
-                            min(nE, (ch + 1) * CHUNK))
+        edges_tangent_store(topo, w, fe_geo, rEg, KEb, ch * CHUNK, min(nE, (ch + 1) * CHUNK))
     nb = cmap.blk_a.size
     ke = Keb.reshape(-1, 6, 6)
     kE = KEb.reshape(-1, 6, 6)
@@ -194,8 +189,7 @@ def element_tangent_gather(g, quads, edge_nodes, elem_edges, elem_edge_sign, Dba
                     if cr >= 0:
                         data[rb + cs + cr] = S[i, j]
     for ch in prange((n + CHUNK - 1) // CHUNK):
-        nodes_pass(topo.node_ptr, topo.node_inc, rE, r, rEg, rg, data, cmap, ch * CHUNK,
-                   min(n, (ch + 1) * CHUNK))
+        nodes_pass(topo, w, rEg, rg, data, cmap, ch * CHUNK, min(n, (ch + 1) * CHUNK))
     return energy, sqrt(fs), 0, -1
 
 
@@ -289,14 +283,20 @@ class ElementKernels:
             f"edge {[a, b]} turns by {ang:.3f} rad (>= {MAX_EDGE_ANGLE:.3f}); the relative rotation "
             "across an element must stay below pi: refine the mesh or the load step")
 
+    def bundles(self):
+        """(ElementMesh, ElementData, Workspace): the arrays the drivers take, from the
+        attributes of the moment (``element_passes``' bundles; views, no copies)."""
+        return (ElementMesh(self.quads, self.edge_nodes, self.elem_edges, self.sign),
+                ElementData(self.Dbar, self.Dsplit, self.z0, self.Dz0),
+                Workspace(self.psi, self.coef, self.ang, self.fe, self.rE, self.r))
+
     def residual(self, g):
         """dict(energy, r (n,6) -- a view of the workspace, force_scale, stress (m,24) -- the
         displacement stresses Dbar (z - z0), a new array)."""
         g = np.ascontiguousarray(g, dtype=float)
         fn = element_residual_serial if self.mode == "serial" else element_residual
-        en, fs, flag, e = fn(g, self.edge_nodes, self.elem_edges, self.sign, self.Dbar, self.Dsplit,
-                             self.z0, self.Dz0, self.pattern.topo, self.psi, self.coef, self.ang, self.fe,
-                             self.rE, self.r)
+        mesh, ed, w = self.bundles()
+        en, fs, flag, e = fn(g, mesh, ed, self.pattern.topo, w)
         if flag:
             self._raise(e)
         return {"energy": en, "r": self.r, "force_scale": fs, "stress": stress_from_signed(self.fe, self.sign)}
@@ -317,15 +317,14 @@ class ElementKernels:
         mixed = (None, None, None)
         if stress is not None:
             mixed = (signed_edge_stress(stress, self.sign, self.fe_geo), self.rEg, self.rg)
-        args = (g, self.quads, self.edge_nodes, self.elem_edges, self.sign, self.Dbar, self.Dsplit,
-                self.z0, self.Dz0, self.pattern.topo, self.pattern.map, self.psi, self.coef, self.ang,
-                self.fe, self.rE, self.r, data, *mixed)
+        mesh, ed, w = self.bundles()
+        args = (g, mesh, ed, self.pattern.topo, self.pattern.map, w, data, mixed)
         if self.mode == "serial":
             en, fs, flag, e = element_tangent_serial(*args)
         elif self.mode == "colour":
             en, fs, flag, e = element_tangent(*args)
         else:
-            en, fs, flag, e = element_tangent_gather(*args, self.Keb, self.KEb)
+            en, fs, flag, e = element_tangent_gather(*args, (self.Keb, self.KEb))
         if flag:
             self._raise(e)
         return {"energy": en, "r": self.r, "force_scale": fs, "data": data,

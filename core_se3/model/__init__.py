@@ -16,7 +16,7 @@ from .magnetics import MagneticLoad, Magnetisation
 from .obstacles import (OBSTACLES, Obstacle, ObstacleKind, check_sdf, make_obstacle, obstacle_kind,
                         register_obstacle, rigid_motion, rotation, translation)
 from .obstacle_kinds import Box, Cylinder, HalfSpace, Sphere, UserSDF
-from .contact import ContactLoad, add_obstacle
+from .contact import ContactLaw, ContactLoad, add_obstacle
 from .probes import Probe
 from .problem import SOLVERS, Evaluation, Problem
 from .supports import LabSpring, LabTiltSpring, Prescribed, RotationComponentSpring
@@ -31,5 +31,5 @@ __all__ = ["Load", "LoadEvaluation", "LoadKind", "Param", "REQUIRED", "LOADS", "
            "Prescribed", "LabSpring", "LabTiltSpring", "RotationComponentSpring",
            "tangent_fd_check", "zero_modes", "overrides", "Obstacle", "ObstacleKind", "OBSTACLES",
            "register_obstacle", "obstacle_kind", "make_obstacle", "rigid_motion", "translation", "rotation",
-           "check_sdf", "HalfSpace", "Sphere", "Cylinder", "Box", "UserSDF", "ContactLoad", "add_obstacle",
+           "check_sdf", "HalfSpace", "Sphere", "Cylinder", "Box", "UserSDF", "ContactLaw", "ContactLoad", "add_obstacle",
            "SUPPORTS", "SupportKind", "register_support", "support_kind"]

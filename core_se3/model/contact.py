@@ -51,14 +51,13 @@ from .contact_faces import face_minima, face_wrench
 from .contact_output import ContactOutputs
 from .friction import CoulombFriction, wrench
 from .contact_sweep import crossing_report
-from .contact_law import (E3, contact_wrench, nodal_areas, normal_law, ramp, ramp_inverse, reference_sides,
-                          shell_diagonal_stiffness)
+from .contact_law import (E3, MODES, ContactLaw, as_contact_law, contact_wrench, nodal_areas, normal_law, ramp,
+                          ramp_inverse, reference_sides, shell_diagonal_stiffness)
 from .obstacles import Obstacle, contact_error, make_obstacle, rigid_motion
 
-__all__ = ["ContactLoad", "add_obstacle", "ramp", "ramp_inverse", "normal_law", "contact_wrench",
+__all__ = ["ContactLoad", "ContactLaw", "add_obstacle", "ramp", "ramp_inverse", "normal_law", "contact_wrench",
            "nodal_areas", "shell_diagonal_stiffness", "reference_sides", "MODES"]
 
-MODES = ("al", "penalty")
 
 class ContactLoad(ContactOutputs, CoulombFriction, Load):
     """Frictionless contact of the nodes ``nodes`` (default all nodes of ``elements``, default all)
@@ -72,35 +71,17 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         The obstacle; its ``name`` names the contact in reports and output fields.
     nodes, elements : array_like of int, optional
         Contact nodes, and the elements whose areas they carry.
-    mode : str
-        'al' (augmented Lagrangian: the solver's Uzawa updates drive the gap error to ``tol``;
-        default) or 'penalty' (multipliers held at k eps / 8).
-    beta : float
-        Penalty factor on the shell's nodal diagonal stiffness (default 1); or ``k`` directly.
-    eps, tol : float, optional
-        Band of the C^1 law and the tolerance on the gap error [length]; default 1e-6 h each.
     side : 'auto', +1, -1, 0 or (k,) of them
         The contact face (module docstring); 0: the mid-surface (c = 0), for a boundary edge
         pressed end-on, whose end face touches about its middle (no moment about the node).
-    cap_depth : float, optional
-        The Newton step cap lets a node the linearisation does not see penetrate at most this
-        far in one iterate [length]; default 0.05 h.
-    cold_start : float
-        Start multipliers cold_start k eps / 8 in mode 'al' (a shell resting exactly on an
-        obstacle is then restrained at the first iteration).
-    soft_start : float
-        Mode 'al': a sample that carries no force (and does not rest on the obstacle in the
-        reference state) meets the penalty soft_start k; each Uzawa
-        update at which it carries force multiplies its penalty by 10, up to k (a first contact
-        of a very flexible shell converges; the answer does not depend on the penalty).
+    lam_ref : float
+        The load factor of the reference placement that decides the 'auto' side.
     friction : float
         Coulomb's coefficient mu >= 0 of the contact nodes (``model.friction``; 0: frictionless,
         the face samples are frictionless in any case).
-    faces : 'auto', True or False
-        Face samples (``model.contact_faces``): the obstacle's closest point on each contact face
-        carries a constraint too; 'auto': when the obstacle is curved and its inradius is below
-        the largest contact element's diameter (it can fit between nodes, or a chord between
-        two nodes would cut into it by a large part of it).
+    law : ContactLaw or dict, optional
+        How the contact is enforced (``model.contact_law.ContactLaw``: mode 'al' or 'penalty',
+        beta or k, eps, tol, cap_depth, cold_start, soft_start, faces); default ContactLaw().
 
     Example
     -------
@@ -110,22 +91,48 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
     >>> c = ContactLoad(p, make_obstacle("sphere", centre=(0.5, 0.0, 0.5), radius=0.4))
     >>> c.side.tolist(), round(float(c.gaps(p.mesh.g0, 0.0).min()), 4)     # the top face, ~0.1 away
     ([1.0, 1.0, 1.0, 1.0, 1.0, 1.0], 0.1001)
+    >>> ContactLoad(p, make_obstacle("sphere", centre=(0.5, 0.0, 0.5), radius=0.4),
+    ...             law=ContactLaw(mode="penalty", eps=0.01)).eps
+    0.01
     """
 
     kind = "contact"
     scales_with_load_factor = False
     constraint_force = True
 
-    def __init__(self, problem, obstacle, nodes=None, elements=None, mode="al", beta=1.0, k=None, eps=None,
-                 tol=None, side="auto", lam_ref=0.0, cap_depth=None, cold_start=1e-2, soft_start=1e-2,
-                 faces="auto", friction=0.0):
+    def __init__(self, problem, obstacle, nodes=None, elements=None, side="auto", lam_ref=0.0, friction=0.0,
+                 law=None):
         if not isinstance(obstacle, Obstacle):
             raise contact_error(f"expected a core_se3.model.obstacles.Obstacle, got {type(obstacle).__name__}")
-        if mode not in MODES:
-            raise contact_error(f"contact mode must be 'al' or 'penalty', got {mode!r}", "mode")
+        self.law = law = as_contact_law(law)
         mesh = problem.mesh
-        self.obstacle, self.mode, self.name = obstacle, mode, obstacle.name
+        self.obstacle, self.mode, self.name = obstacle, law.mode, obstacle.name
         self.n = mesh.n_nodes
+        el, h_node = self._contact_nodes(problem, nodes, elements)
+        if isinstance(side, str) and side == "auto":
+            s = reference_sides(obstacle, mesh.g0[self.nodes], lam_ref)
+        else:
+            s = np.broadcast_to(np.asarray(side, float), self.nodes.shape).copy()
+            if not np.all(np.isin(s, (-1.0, 0.0, 1.0))):
+                raise contact_error("side must be 'auto', +1, -1, 0 (the mid-surface) or one of them per contact "
+                                    "node", "side")
+        self.h = float(h_node[self.nodes].max())
+        self.side, self.c = s, s * h_node[self.nodes] / 2
+        self.beta = float(law.beta)
+        if law.k is None:
+            self.k = self.beta * shell_diagonal_stiffness(problem)[self.nodes] / self.A
+        else:
+            self.k = np.broadcast_to(np.asarray(law.k, float), self.nodes.shape).copy()
+        if not np.all(np.isfinite(self.k)) or np.any(self.k <= 0):
+            raise contact_error("the contact penalty must be positive and finite (beta > 0)", "beta")
+        self.eps, self.tol, self.cap_depth = law.lengths(self.h)
+        self._faces(mesh, el, law.faces)
+        self._start(mesh, friction)
+
+    def _contact_nodes(self, problem, nodes, elements):
+        """The contact nodes and their areas A; returns (the contact elements, the thickest
+        contact element's h at each node)."""
+        mesh = problem.mesh
         per = getattr(problem.material, "per_element", None)
         h_el = per("h") if per is not None else np.full(mesh.n_elements, float(problem.material.h))
         el = np.arange(mesh.n_elements) if elements is None else np.asarray(elements, np.int64)
@@ -136,50 +143,31 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         self.A = area[self.nodes]
         if len(self.nodes) == 0 or np.any(self.A <= 0):
             raise contact_error("contact nodes must belong to the contact elements (zero area weight)", "nodes")
-        if isinstance(side, str) and side == "auto":
-            s = reference_sides(obstacle, mesh.g0[self.nodes], lam_ref)
-        else:
-            s = np.broadcast_to(np.asarray(side, float), self.nodes.shape).copy()
-            if not np.all(np.isin(s, (-1.0, 0.0, 1.0))):
-                raise contact_error("side must be 'auto', +1, -1, 0 (the mid-surface) or one of them per contact "
-                                    "node", "side")
-        self.h = float(h_node[self.nodes].max())
-        self.side, self.c = s, s * h_node[self.nodes] / 2
-        self.beta = float(beta)
-        if k is None:
-            self.k = self.beta * shell_diagonal_stiffness(problem)[self.nodes] / self.A
-        else:
-            self.k = np.broadcast_to(np.asarray(k, float), self.nodes.shape).copy()
-        if not np.all(np.isfinite(self.k)) or np.any(self.k <= 0):
-            raise contact_error("the contact penalty must be positive and finite (beta > 0)", "beta")
-        self.eps = 1e-6 * self.h if eps is None else float(eps)
-        self.tol = 1e-6 * self.h if tol is None else float(tol)
-        self.cap_depth = 0.05 * self.h if cap_depth is None else float(cap_depth)
-        for key in ("eps", "tol", "cap_depth"):
-            v = getattr(self, key)
-            if not (np.isfinite(v) and v > 0):
-                raise contact_error(f"contact {key} must be positive and finite, got {v}", key)
+        return el, h_node
+
+    def _faces(self, mesh, el, faces):
+        """The contact faces in contact-node positions, and the face samples (``model.contact_faces``)
+        on curved obstacles: each face's area and penalty are the means of its nodes'."""
         where = np.full(mesh.n_nodes, -1)
         where[self.nodes] = np.arange(len(self.nodes))
         quads = where[mesh.quads[el]]
         on = (quads >= 0).all(1)
         self._quads = quads[on]                     # the contact faces, in contact-node positions
         self._mesh_quads = mesh.quads
-        # face samples (model.contact_faces) on curved obstacles: each face's area and penalty
-        # are the means of its nodes'
         size = np.linalg.norm(mesh.X[mesh.quads[el, 2]] - mesh.X[mesh.quads[el, 0]], axis=1).max(initial=0.0)
         if isinstance(faces, str) and faces == "auto":
-            faces = float(getattr(obstacle, "thickness", np.inf)) < size
-        use = bool(faces) and not getattr(obstacle, "flat", False)
+            faces = float(getattr(self.obstacle, "thickness", np.inf)) < size
+        use = bool(faces) and not getattr(self.obstacle, "flat", False)
         self.face_el = el[on] if use else np.zeros(0, np.int64)
         self.face_q = self._quads if len(self.face_el) else np.zeros((0, 4), np.int64)
         self.Af, self.kf = self.A[self.face_q].mean(1), self.k[self.face_q].mean(1)
+
+    def _start(self, mesh, friction):
+        """Multipliers, soft-start factors and friction history at the reference state."""
+        cold, self.soft_start = self.law.starts()
         kk = np.concatenate([self.k, self.kf])
-        self.lam0 = (kk * self.eps / 8) * (1.0 if mode == "penalty" else float(cold_start))
+        self.lam0 = (kk * self.eps / 8) * cold
         self.lam = self.lam0.copy()
-        self.soft_start = 1.0 if mode == "penalty" else float(soft_start)
-        if not 0 < self.soft_start <= 1:
-            raise contact_error(f"soft_start must lie in (0, 1], got {soft_start}", "soft_start")
         self.soft = np.full(len(kk), self.soft_start)
         self.mu = float(friction)
         if not (np.isfinite(self.mu) and self.mu >= 0):
@@ -189,7 +177,7 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
             self.y_a0 = self.placement(self.contact_points(mesh.g0), 0.0)
             self.y_a = self.y_a0.copy()
         self.gap_error = 0.0
-        self.approximate_tangent = bool(obstacle.approximate_hessian)
+        self.approximate_tangent = bool(self.obstacle.approximate_hessian)
         self._active = np.zeros(len(self.nodes), bool)
         self._normals = np.zeros((len(self.nodes), 3))
         # a node resting on the obstacle in the reference state takes the full penalty at once
@@ -443,9 +431,9 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
                 raise contact_error(f"contact {self.name!r}: {len(lam)} multipliers for {m} samples")
 
 
-def add_obstacle(problem, obstacle, region=None, nodes=None, motion=None, name=None, mode="al", beta=1.0,
-                 eps=None, tol=None, side="auto", cap_depth=None, faces="auto", friction=0.0, **params):
-    """Add frictionless contact with a rigid obstacle to ``problem``; returns the ContactLoad.
+def add_obstacle(problem, obstacle, region=None, nodes=None, name=None, side="auto", friction=0.0, law=None,
+                 **params):
+    """Add contact with a rigid obstacle to ``problem``; returns the ContactLoad.
 
     Parameters
     ----------
@@ -457,14 +445,16 @@ def add_obstacle(problem, obstacle, region=None, nodes=None, motion=None, name=N
     region, nodes : optional
         The contact elements (a region name or ids; default all) and nodes (a node selection;
         default all nodes of those elements).
-    motion : callable or dict, optional
-        lam -> (4, 4) rigid transform, or dict(translate, axis, angle, point) of
-        :func:`~core_se3.model.obstacles.rigid_motion`; for a kind only.
     name : str, optional
-        The contact's name in reports (default the kind); ``mode``, ``beta``, ``eps``, ``tol``,
-        ``side``, ``cap_depth``, ``faces``, ``friction`` (Coulomb's mu): as for :class:`ContactLoad`.
+        The contact's name in reports (default the kind).
+    side, friction : optional
+        The contact face and Coulomb's mu: as for :class:`ContactLoad`.
+    law : ContactLaw or dict, optional
+        How the contact is enforced (mode, beta, eps, tol, cap_depth, ...; ``ContactLaw``).
     **params
-        The kind's parameters (e.g. centre, radius).
+        The kind's parameters (e.g. centre, radius) and its ``motion``: lam -> (4, 4) rigid
+        transform, or dict(translate, axis, angle, point) of
+        :func:`~core_se3.model.obstacles.rigid_motion`; for a kind only.
 
     Returns
     -------
@@ -477,10 +467,11 @@ def add_obstacle(problem, obstacle, region=None, nodes=None, motion=None, name=N
     >>> from core_se3 import Problem, Material, mesh
     >>> p = Problem(mesh.rectangle(1.0, 0.2, 2, 1), Material(1e4, 0.0, 0.02))
     >>> c = add_obstacle(p, "cylinder", point=(1.0, 0.0, -0.2), axis=(0, 1, 0), radius=0.1,
-    ...                  motion=dict(translate=(0.0, 0.0, 0.1)), name="pusher")
-    >>> c.name, round(float(c.obstacle.distance([[1.0, 0.0, 0.0]], lam=1.0)[0]), 12)
-    ('pusher', 0.0)
+    ...                  motion=dict(translate=(0.0, 0.0, 0.1)), name="pusher", law=dict(mode="penalty"))
+    >>> c.name, c.mode, round(float(c.obstacle.distance([[1.0, 0.0, 0.0]], lam=1.0)[0]), 12)
+    ('pusher', 'penalty', 0.0)
     """
+    motion = params.pop("motion", None)
     if isinstance(motion, dict):
         motion = rigid_motion(**motion)
     if isinstance(obstacle, str):
@@ -492,8 +483,7 @@ def add_obstacle(problem, obstacle, region=None, nodes=None, motion=None, name=N
         obstacle.name = name
     elements = problem.elements(region)
     sel = None if nodes is None else problem.nodes(nodes)
-    load = ContactLoad(problem, obstacle, sel, elements, mode, beta, None, eps, tol, side, 0.0, cap_depth,
-                       faces=faces, friction=friction)
+    load = ContactLoad(problem, obstacle, sel, elements, side, 0.0, friction, law)
     load.check_initial(problem.mesh, problem.mesh.g0, 0.0)
     if any(getattr(ld, "name", None) == load.name for ld in problem.loads if isinstance(ld, ContactLoad)):
         raise contact_error(f"there is already an obstacle named {load.name!r}: give each a name", "name")

@@ -1,20 +1,131 @@
-"""The pointwise pieces of the contact law (``model.contact``): the C^1 ramp and its inverse,
+"""The pointwise pieces of the contact law (``model.contact``): how it is enforced
+(:class:`ContactLaw`: mode, penalty, band, tolerance, step cap, starts, face samples), the C^1 ramp and its inverse,
 the regularised augmented-Lagrangian normal law, the generalised nodal force and tangent of a
 contact force acting on the offset face, the nodal areas, the shell's own nodal stiffness (the
 penalty scale) and the contact side of each node.  Derivations in docs/CONTACT.md.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from .. import lie
 from ..assembly import Assembler
 from ..fem.quadrature import shape_functions, surface_jacobian
+from ..errors import did_you_mean
+from .obstacles import contact_error
 
-__all__ = ["ramp", "ramp_inverse", "normal_law", "contact_wrench", "nodal_areas", "shell_diagonal_stiffness",
-           "reference_sides", "E3"]
+__all__ = ["ContactLaw", "as_contact_law", "MODES", "ramp", "ramp_inverse", "normal_law", "contact_wrench",
+           "nodal_areas", "shell_diagonal_stiffness", "reference_sides", "E3"]
 
 E3 = np.array([0.0, 0.0, 1.0])
+MODES = ("al", "penalty")
+
+
+@dataclass(frozen=True)
+class ContactLaw:
+    """How a contact is enforced: the numerical options of :class:`~core_se3.model.ContactLoad`
+    (module docstring of ``model.contact``), one record for every obstacle that shares them.
+
+    Parameters
+    ----------
+    mode : str
+        'al' (augmented Lagrangian: the solver's Uzawa updates drive the gap error to ``tol``;
+        default) or 'penalty' (multipliers held at k eps / 8).
+    beta : float
+        Penalty factor on the shell's nodal diagonal stiffness (default 1); or ``k`` directly
+        [force/length^3] (a number or one per contact node).
+    eps, tol : float, optional
+        Band of the C^1 law and the tolerance on the gap error [length]; default 1e-6 h each.
+    cap_depth : float, optional
+        The Newton step cap lets a node the linearisation does not see penetrate at most this
+        far in one iterate [length]; default 0.05 h.
+    cold_start : float
+        Start multipliers cold_start k eps / 8 in mode 'al' (a shell resting exactly on an
+        obstacle is then restrained at the first iteration).
+    soft_start : float
+        Mode 'al': a sample that carries no force (and does not rest on the obstacle in the
+        reference state) meets the penalty soft_start k; each Uzawa update at which it carries
+        force multiplies its penalty by 10, up to k (a first contact of a very flexible shell
+        converges; the answer does not depend on the penalty).
+    faces : 'auto', True or False
+        Face samples (``model.contact_faces``): the obstacle's closest point on each contact face
+        carries a constraint too; 'auto': when the obstacle is curved and its inradius is below
+        the largest contact element's diameter.
+
+    A bad value is a ContactError naming its key (``param``), at construction or, for the
+    defaults that scale with the thickness h, in :meth:`lengths`.
+
+    Example
+    -------
+    >>> law = ContactLaw(mode="penalty", eps=0.02)
+    >>> law.lengths(0.1)          # (eps, tol, cap_depth) for a shell 0.1 thick
+    (0.02, 1e-07, 0.005000000000000001)
+    >>> ContactLaw(mode="lagrange")
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.ContactError: contact mode must be 'al' or 'penalty', got 'lagrange'
+    """
+    mode: str = "al"
+    beta: float = 1.0
+    k: object = None
+    eps: float | None = None
+    tol: float | None = None
+    cap_depth: float | None = None
+    cold_start: float = 1e-2
+    soft_start: float = 1e-2
+    faces: object = "auto"
+
+    def __post_init__(self):
+        if self.mode not in MODES:
+            raise contact_error(f"contact mode must be 'al' or 'penalty', got {self.mode!r}", "mode")
+        soft = 1.0 if self.mode == "penalty" else float(self.soft_start)
+        if not 0 < soft <= 1:
+            raise contact_error(f"soft_start must lie in (0, 1], got {self.soft_start}", "soft_start")
+
+    def lengths(self, h):
+        """(eps, tol, cap_depth) [length] for a contact of thickness h: the given values, or the
+        defaults 1e-6 h, 1e-6 h, 0.05 h; a ContactError unless positive and finite."""
+        out = (1e-6 * h if self.eps is None else float(self.eps),
+               1e-6 * h if self.tol is None else float(self.tol),
+               0.05 * h if self.cap_depth is None else float(self.cap_depth))
+        for key, v in zip(("eps", "tol", "cap_depth"), out):
+            if not (np.isfinite(v) and v > 0):
+                raise contact_error(f"contact {key} must be positive and finite, got {v}", key)
+        return out
+
+    def starts(self):
+        """(multiplier start factor, soft-start factor): (1, 1) in mode 'penalty'."""
+        if self.mode == "penalty":
+            return 1.0, 1.0
+        return float(self.cold_start), float(self.soft_start)
+
+
+def as_contact_law(law):
+    """A :class:`ContactLaw` from None (the defaults), a ContactLaw or a dict of its fields; an
+    unknown field is a ContactError naming it (with the closest name).
+
+    Example
+    -------
+    >>> as_contact_law({"mode": "penalty"}).mode, as_contact_law(None).mode
+    ('penalty', 'al')
+    >>> as_contact_law({"bta": 2.0})
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.ContactError: unknown contact law option 'bta'; did you mean 'beta'?
+    """
+    if law is None:
+        return ContactLaw()
+    if isinstance(law, ContactLaw):
+        return law
+    if not isinstance(law, dict):
+        raise contact_error(f"law must be a ContactLaw or a dict of its fields, got {type(law).__name__}", "law")
+    names = list(ContactLaw.__dataclass_fields__)
+    for key in law:
+        if key not in names:
+            raise contact_error(f"unknown contact law option {key!r}{did_you_mean(key, names)}", key)
+    return ContactLaw(**law)
 
 
 def ramp(u, w):

@@ -296,8 +296,9 @@ class Box(Obstacle):
 class UserSDF(Obstacle):
     """The user's signed distance function at the placement: ``d(y) -> (k,)``, ``grad(y) ->
     (k, 3)`` and optionally ``hessian(y) -> (k, 3, 3)`` (y: (k, 3) points).  Without ``hessian``
-    it is taken by central differences of ``grad`` (step ``fd_step``, default 1e-6
-    ``length_scale``) and ``approximate_hessian`` is set.  ``surface(bounds) -> (points, quads)``
+    it is taken by central differences of ``grad`` (step ``fd_step`` [length], default 1e-6:
+    about 1e-6 of the obstacle's size -- give it for a problem not of unit size) and
+    ``approximate_hessian`` is set.  ``surface(bounds) -> (points, quads)``
     optionally draws it; ``thickness``: the solid's inradius where it is thin (default inf: only
     the nodes are checked for crossings over a step, ``model.contact_sweep``).
 
@@ -312,14 +313,14 @@ class UserSDF(Obstacle):
 
     kind = "user"
 
-    def __init__(self, d, grad, hessian=None, length_scale=1.0, fd_step=None, surface=None, motion=None,
-                 name=None, thickness=np.inf):
+    def __init__(self, d, grad, hessian=None, fd_step=1e-6, surface=None, motion=None, name=None,
+                 thickness=np.inf):
         super().__init__(motion, name)
         self.thickness = np.inf if thickness is None or np.isinf(thickness) else positive(thickness, "thickness")
         if not (callable(d) and callable(grad)) or (hessian is not None and not callable(hessian)):
             raise contact_error("UserSDF needs callables d(y), grad(y) and optionally hessian(y)")
         self.d, self.grad, self.hessian, self.draw = d, grad, hessian, surface
-        self.fd_step = fd_step or 1e-6 * positive(length_scale, "length_scale")
+        self.fd_step = positive(fd_step, "fd_step")
         self.approximate_hessian = hessian is None
 
     def local(self, y):

@@ -14,7 +14,8 @@ from .. import lie
 from ..errors import SupportError
 
 __all__ = ["Prescribed", "apply_prescribed", "prescribed_rotation", "fixed_dofs", "rigid_rotation", "rigid_motion",
-           "select_nodes", "check_conflict", "support_kind", "DOF_NAMES"]
+           "select_nodes", "check_conflict", "support_kind", "DOF_NAMES", "held_dof_drift",
+           "DRIFT_TOL"]
 
 DOF_NAMES = ("translation along d1", "translation along d2", "translation along d3", "rotation about d1",
              "rotation about d2", "rotation about d3")
@@ -269,4 +270,55 @@ def prescribed_rotation(supports, lam0, lam1, samples=16):
             total += lie.rotation_angle(np.swapaxes(prev[:, :3, :3], 1, 2) @ cur[:, :3, :3])
             prev = cur
         worst = max(worst, float(total.max()))
+    return worst
+
+
+DRIFT_TOL = 1e-8        # a held dof that drifted further is reported (SupportWarning): [rad], [of max |u|]
+
+
+def held_dof_drift(supports, g0, g):
+    """The largest drift of a dof that a support holds incrementally but not exactly, and where:
+    ``(drift, support index, node, dof)``, or None when every support holds exactly.
+
+    ``Problem.fix`` holds the body-frame components of each Newton increment g <- g exp(eta).
+    That holds the component exactly when the node can only turn about the held axis (all three
+    rotations held, or the other two): then d_k keeps its reference direction; and a pin (the
+    three translations held) keeps its position whatever it turns.  Otherwise the
+    held components drift, at second order in the rotations (errors.SupportWarning):
+
+    * a held rotation k (exactly one of three held): the component psi_k of the total rotation
+      vector psi = log(R0^T R) [rad] (increments about the two free axes do not commute);
+    * a held translation k: the displacement along the reference axis, (x - x0) . R0 e_k, over
+      the largest nodal displacement of the state (the increments follow the turning d_k).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import lie
+    >>> s = Prescribed([0], [False] * 4 + [True, False])        # rotation about d2 held
+    >>> g0 = np.eye(4)[None]
+    >>> g = g0 @ lie.exp(np.array([[0, 0, 0, 0.1, 0, 0]])) @ lie.exp(np.array([[0, 0, 0, 0, 0, 0.1]]))
+    >>> d, k, node, dof = held_dof_drift([s], g0, g)            # about d1 then d3: psi_2 = -0.005
+    >>> round(d, 6), k, node, dof
+    (0.005, 0, 0, 4)
+    """
+    u_max = max(float(np.abs(g[:, :3, 3] - g0[:, :3, 3]).max()), 1e-300)
+    worst = None
+    for k, s in enumerate(supports):
+        rot_held = np.flatnonzero(s.fixed[3:])
+        if s.target is not None or len(rot_held) == 3:
+            continue
+        R0 = g0[s.nodes, :3, :3]
+        psi = lie.log_so3(np.swapaxes(R0, 1, 2) @ g[s.nodes, :3, :3])
+        u = np.einsum("nji,nj->ni", R0, g[s.nodes, :3, 3] - g0[s.nodes, :3, 3])   # R0^T (x - x0)
+        for dof in np.flatnonzero(s.fixed):
+            axis = dof % 3
+            if dof < 3 and (s.fixed[:3].all() or len(rot_held) == 2 and axis not in rot_held):
+                continue                            # a pin, or turns about d_axis only: exact
+            if dof >= 3 and len(rot_held) != 1:
+                continue
+            drift = np.abs(psi[:, axis]) if dof >= 3 else np.abs(u[:, axis]) / u_max
+            i = int(np.argmax(drift))
+            if worst is None or drift[i] > worst[0]:
+                worst = (float(drift[i]), k, int(s.nodes[i]), int(dof))
     return worst

@@ -287,10 +287,10 @@ class Problem:
         self._compiled = None
 
     def add_obstacle(self, obstacle, region=None, nodes=None, **options):
-        """Frictionless contact with a rigid obstacle: a registered kind ('half_space', 'sphere',
-        'cylinder', 'box') with its parameters, or an Obstacle; options ``motion``, ``name``,
-        ``mode``, ``beta``, ``eps``, ``tol``, ``side``, ``cap_depth`` (``model.contact.add_obstacle``).
-        Returns the ContactLoad.
+        """Contact with a rigid obstacle: a registered kind ('half_space', 'sphere', 'cylinder',
+        'box') with its parameters and ``motion``, or an Obstacle; options ``name``, ``side``,
+        ``friction`` and ``law`` (a ``ContactLaw`` or a dict of it: mode, beta, eps, tol,
+        cap_depth, ...) (``model.contact.add_obstacle``).  Returns the ContactLoad.
 
         Example
         -------

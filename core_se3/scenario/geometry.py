@@ -13,7 +13,7 @@ from ..io.files import check_input_file, without_contents
 from ..mesh.generator_kinds import GENERATORS
 from ..registry import Param, Section
 from .schema import EDGE, PROBE, REGION
-from .validate import join, show, tname
+from .validate import Bounds, join, show, tname
 
 __all__ = ["GENERATORS", "MESH_FILE", "MAX_ELEMENTS", "mesh_section", "edges_section", "regions_section",
            "region_ref", "nodes_ref", "selection", "is_line", "probes_section"]
@@ -97,7 +97,7 @@ def _box(v, d, key, X, scale):
     v.table(d, key, ("x", "y", "z", "tol"))
     if not any(c in d for c in "xyz"):
         v.fail(key, "an empty box selects every node (not a line): give x, y and/or z = [lo, hi]")
-    tol = v.number(d, "tol", key, default=1e-9 * scale, lo=0.0)
+    tol = v.number(d, "tol", key, default=1e-9 * scale, bounds=Bounds(lo=0.0))
     mask = np.ones(len(X), bool)
     for i, c in enumerate("xyz"):
         if c in d:
@@ -181,7 +181,7 @@ def _near_nodes(v, t, key, mesh):
     v.table(t, path, ("near", "tol"), required=("near",))
     pts = t["near"]
     pts = pts if isinstance(pts, list) and pts and all(isinstance(p, list) for p in pts) else [pts]
-    tol = v.number(t, "tol", path, default=None, lo=0.0, lo_open=True)
+    tol = v.number(t, "tol", path, default=None, bounds=Bounds(lo=0.0, lo_open=True))
     out = []
     for i, p in enumerate(pts):
         x = v.vector({"near": p}, "near", path if len(pts) == 1 else f"{path}.near[{i}]")

@@ -7,7 +7,7 @@ elements ``region`` (default all), an optional rigid ``motion`` with the load fa
 from __future__ import annotations
 
 from ..errors import CoreSE3Error
-from ..model import OBSTACLES
+from ..model import OBSTACLES, ContactLaw
 from .geometry import region_ref
 from .schema import MOTION, OBSTACLE
 from .validate import join, make_scale, user_key
@@ -62,9 +62,9 @@ def add_obstacles(v, prob, spec, regions):
             motion = dict(translate=m["translate"], axis=m["axis"], angle=m["angle"], point=m["point"],
                           scale=make_scale(m["scale"]))
         try:
+            law = ContactLaw(mode=o["mode"], beta=o["beta"], eps=o["eps"], tol=o["tol"], cap_depth=o["cap_depth"])
             prob.add_obstacle(o["type"], region=regions[o["region"]] if o["region"] else None, motion=motion,
-                              name=o["name"], mode=o["mode"], beta=o["beta"], eps=o["eps"], tol=o["tol"],
-                              side=SIDES[o["side"]], cap_depth=o["cap_depth"], friction=o["friction"],
+                              name=o["name"], side=SIDES[o["side"]], friction=o["friction"], law=law,
                               **o["params"])
         except CoreSE3Error as exc:
             param = getattr(exc, "param", None)

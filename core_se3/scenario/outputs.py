@@ -108,8 +108,8 @@ def plot_probes(path, doc):
         secondary = (f"{name}" + (f" [{unit}]" if unit else ""),
                      [p.get(name, {}).get("value", np.nan) for p in phys])
     with atomic_path(path) as tmp:
-        plot_load_deflection(tmp, lam, disp, xlabel=f"probe displacement [{length}]",
-                             ylabel="load factor", title=doc["case"], secondary=secondary)
+        plot_load_deflection(tmp, lam, disp, axes=(f"probe displacement [{length}]", "load factor"),
+                             title=doc["case"], secondary=secondary)
     return path
 
 

@@ -15,7 +15,7 @@ from ..model import FIELDS, LOADS, SUPPORTS
 from .geometry import is_line, nodes_ref, region_ref
 from .magnetisation import pattern_section
 from .schema import ARCLENGTH, MAGNET, OUTPUT, PARALLEL_KEYS, SOLVER
-from .validate import join, tname, show
+from .validate import Bounds, join, tname, show
 
 __all__ = ["material_section", "material_law_keys", "material_index", "fields_section",
            "magnets_section", "supports_section", "loads_section", "solver_section",
@@ -140,7 +140,7 @@ def magnets_section(v, doc, regions, fields, mesh=None, base_dir="."):
         else:
             m["Br_frame"] = v.vector(t, "Br_frame", key)
         _, m["region"] = region_ref(v, t, key, regions)
-        m["mu0"] = v.number(t, "mu0", key, default=None, lo=0.0, lo_open=True)
+        m["mu0"] = v.number(t, "mu0", key, default=None, bounds=Bounds(lo=0.0, lo_open=True))
         if not fields:
             v.fail(key, "a magnet needs an applied field: define one in [fields.NAME]")
         if "field" in t:

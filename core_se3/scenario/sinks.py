@@ -207,8 +207,9 @@ class CheckpointSink(Sink):
             if run.root:
                 ck = Checkpoint(run.rd.path)
                 run.rd.file("checkpoint.npz")
-                ck.save(run.scn.fingerprint, ev.k, ev.lam, ev.g, ev.unwrap, run.records, run.timings(),
-                        extra=ev.extra, arrays=ev.arrays)
+                ck.save(run.scn.fingerprint, dict(step=ev.k, lam=ev.lam, g=ev.g, unwrap=ev.unwrap,
+                                                  records=run.records, timings=run.timings(), extra=ev.extra,
+                                                  arrays=ev.arrays))
             run.saved = len(run.records)      # what a resume continues from
 
 

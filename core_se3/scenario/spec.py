@@ -15,6 +15,7 @@ import hashlib
 import json
 import os
 import warnings
+from collections import namedtuple
 
 from ..errors import ScenarioError
 from .build import build_problem
@@ -41,6 +42,10 @@ EXTENSIBLE = ("steps", "lam_end", "load_factors")     # load control: not in the
 MAX_SCENARIO_BYTES = 16 * 2 ** 20        # a scenario file is text of a few kB; refuse what cannot be one
 TOP_KEYS = SCENARIO.keys()
 
+Source = namedtuple("Source", "file raw base_dir default_name strict")
+Source.__doc__ = """Where a Scenario comes from and how it was read: file (a path, "<string>" or "<dict>"),
+raw (the parsed document), base_dir (of relative paths), default_name, strict (warnings as errors)."""
+
 
 class Scenario:
     """A validated scenario: ``spec`` (normalised, JSON-serialisable), ``mesh``, named node sets
@@ -61,7 +66,9 @@ class Scenario:
     problem : core_se3.Problem
         The shell problem, supports checked.
     file : str
-        The source (a path, ``"<string>"`` or ``"<dict>"``); ``raw``: the parsed document.
+        The source (a path, ``"<string>"`` or ``"<dict>"``); ``raw``: the parsed document;
+        ``base_dir``, ``default_name``, ``strict``: how it was read (the constructor takes these
+        five as one :data:`Source`).
     fingerprint : str
         SHA-256 of the physical content (solver tolerances, limits and outputs left out).
 
@@ -92,18 +99,13 @@ class Scenario:
     (4, 2)
     """
 
-    def __init__(self, spec, mesh, regions, problem, file, fingerprint, raw, base_dir=".",
-                 default_name="scenario", strict=False):
+    def __init__(self, spec, mesh, regions, problem, fingerprint, source):
         self.spec = spec
         self.mesh = mesh
         self.regions = regions
         self.problem = problem
-        self.file = file
         self.fingerprint = fingerprint
-        self.raw = raw
-        self.base_dir = base_dir
-        self.default_name = default_name
-        self.strict = strict
+        self.file, self.raw, self.base_dir, self.default_name, self.strict = source
         self.warnings = []            # ScenarioWarning: implausible values (scenario/units.py)
         self.physical = {}            # what the fingerprint hashes (to name a changed key)
         self.mesh_digest = None
@@ -348,7 +350,7 @@ def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario", strict=
         phys["plugins"] = [list(d) for d in digests]        # a changed plugin changes the states
     blob = json.dumps(phys, sort_keys=True) + (file_digest or "")
     fp = hashlib.sha256(blob.encode()).hexdigest()
-    scn = Scenario(spec, mesh, regions, problem, file, fp, doc, base_dir, default_name, strict)
+    scn = Scenario(spec, mesh, regions, problem, fp, Source(file, doc, base_dir, default_name, strict))
     scn.physical = json.loads(json.dumps(phys))
     scn.mesh_digest = file_digest
     plausibility(v, scn)

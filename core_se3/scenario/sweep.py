@@ -160,16 +160,18 @@ def _check_values(scn, grid, where):
                                     f"{where}.{k}" if where == "sweep" else k) from None
 
 
-def sweep(scn, grid, out=None, progress=None, warm=True, plot=True, resume=False, force=False, where="--set"):
+def sweep(scn, grid=None, out=None, progress=None, warm=True, plot=True, resume=False, force=False):
     """Run ``scn`` at every point of ``grid`` (dotted key -> list of values; several keys: the
-    product), warm-starting each run from the nearest finished one.
+    product; default the scenario's own [sweep] section), warm-starting each run from the
+    nearest finished one.
 
     Parameters
     ----------
     scn : Scenario
         The base scenario.
-    grid : dict
-        Dotted key (as for ``Scenario.with_overrides``) -> values.
+    grid : dict, optional
+        Dotted key (as for ``Scenario.with_overrides``) -> values (a bad value is an error naming
+        its key, e.g. ``material.E``); default the [sweep] section (errors name ``sweep.KEY``).
     out : str, optional
         Directory of ``sweep.csv``, ``sweep.png``, ``sweep.json``, ``sweep.npz`` (default
         out/NAME-sweep).
@@ -181,8 +183,6 @@ def sweep(scn, grid, out=None, progress=None, warm=True, plot=True, resume=False
         Write ``sweep.png``.
     resume, force : bool, optional
         Continue an interrupted sweep in ``out``; start over in a directory of an earlier one.
-    where : str, optional
-        Where the grid came from ('--set' or 'sweep'), for messages.
 
     Returns
     -------
@@ -202,6 +202,11 @@ def sweep(scn, grid, out=None, progress=None, warm=True, plot=True, resume=False
     (2.0, [False, True])
     """
     from .runner import output_directory
+    where = "--set" if grid is not None else "sweep"
+    if grid is None:
+        if not scn.spec["sweep"]:
+            raise ScenarioError("nothing to sweep: give a grid or a [sweep] section", scn.file, "sweep")
+        grid = dict(scn.spec["sweep"])
     keys = list(grid)
     _check_values(scn, grid, where)
     points = list(itertools.product(*[grid[k] for k in keys]))

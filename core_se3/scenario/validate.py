@@ -8,13 +8,14 @@ or field kind declares (``core_se3.model.Param``), so that a new kind needs no v
 from __future__ import annotations
 
 import math
+from collections import namedtuple
 
 import numpy as np
 
 from ..errors import ScenarioError, ScenarioWarning, did_you_mean
 from ..registry import REQUIRED
 
-__all__ = ["Validator", "join", "tname", "show", "make_scale", "user_key"]
+__all__ = ["Validator", "Bounds", "join", "tname", "show", "make_scale", "user_key"]
 
 _REQ = REQUIRED
 
@@ -48,6 +49,18 @@ def make_scale(spec):
 
 _TYPE_NAMES = ((bool, "a boolean"), (int, "an integer"), (float, "a number"), (str, "a string"),
                (list, "an array"), (dict, "a table"))
+
+Bounds = namedtuple("Bounds", "lo lo_open hi hi_open", defaults=(None, False, None, False))
+Bounds.__doc__ = """The bounds of a number (``Validator.number``): lo, hi (None: unbounded) and whether
+each is open (excluded): ``Bounds(lo=0.0, lo_open=True)`` is "> 0".
+
+Example
+-------
+>>> Validator({}).number({"t": 0.0}, "t", "mesh", bounds=Bounds(lo=0.0, lo_open=True))
+Traceback (most recent call last):
+...
+core_se3.errors.ScenarioError: [mesh.t]: expected a number > 0, got 0
+"""
 
 
 def tname(v):
@@ -110,8 +123,11 @@ class Validator:
             self.fail(path, f"missing required key ({what})")
         return path, k in d
 
-    def number(self, d, k, key, default=_REQ, lo=None, lo_open=False, hi=None, hi_open=False, infinite=False):
-        """A finite number (``infinite``: +-inf too, for a bound whose default is none) in the bounds."""
+    def number(self, d, k, key, default=_REQ, bounds=None, infinite=False):
+        """A finite number (``infinite``: +-inf too, for a bound whose default is none) in the
+        ``bounds`` (:data:`Bounds`, or anything with their fields, e.g. a Param; default none)."""
+        lo, lo_open, hi, hi_open = (None, False, None, False) if bounds is None else \
+            (bounds.lo, bounds.lo_open, bounds.hi, bounds.hi_open)
         path, present = self._lookup(d, k, key, default, "a number")
         if not present:
             return default
@@ -256,8 +272,8 @@ class Validator:
             val = self.vector(d, p.name, key, n=p.n, default=p.default, nonzero=p.nonzero)
             return list(val) if isinstance(val, (tuple, list)) else val
         if p.kind == "number":           # a bound whose default is infinite may be given as inf
-            return self.number(d, p.name, key, default=p.default, lo=p.lo, lo_open=p.lo_open, hi=p.hi,
-                               hi_open=p.hi_open, infinite=isinstance(p.default, float) and math.isinf(p.default))
+            return self.number(d, p.name, key, default=p.default, bounds=p,
+                               infinite=isinstance(p.default, float) and math.isinf(p.default))
         if p.kind == "integer":
             return self.integer(d, p.name, key, default=p.default, lo=p.lo, hi=p.hi)
         if p.kind == "bool":

@@ -50,7 +50,7 @@ import numpy as np
 
 from ..errors import ConvergenceError, CoreSE3Error, ElementTooDistortedError, SingularSystemError
 from .corrector import ArcLengthConstraint, LinearConstraint, StepFailed, correct
-from .critical import narrow
+from .critical import Corrector, narrow
 from .options import ArcLengthOptions, split_options, unknown_keywords
 from .stability import CriticalPoint, analyse, locate_critical
 
@@ -370,8 +370,8 @@ def _critical_between(sysm, cur, pt, con, psi_u, step, o, timers, trylog):
     nxt = np.sum(sysm.w * con.du * pt.t) + psi_u ** 2 * con.dlam
     turned = np.sign(con.dlam0) != np.sign(nxt) if nxt != 0 else None
     cp = locate_critical(sysm, cur, pt, sysm.w * con.du / span, span, step, limit=turned)
-    trylog.append(narrow(sysm, cur, pt, con, cp, o, timers, correct,
-                         lambda ds: ArcLengthConstraint(o.method, ds, psi_u, sysm.w), (StepFailed,)))
+    trylog.append(narrow(sysm, cur, pt, con, cp, Corrector(
+        correct, lambda ds: ArcLengthConstraint(o.method, ds, psi_u, sysm.w), o, timers, (StepFailed,))))
     return cp
 
 
@@ -389,11 +389,11 @@ def arc_options(options, kw, method=None):
     return opts, kw
 
 
-def path_follow(sysm, method=None, lam_end=1.0, control=None, control_end=None, lam_min=None,
-                start=None, on_step=None, options=None, **kw):
+def path_follow(sysm, lam_end=1.0, control=None, control_end=None, lam_min=None, start=None, on_step=None,
+                options=None, **kw):
     """Run :func:`path_steps` to its end; returns (points, critical points, log, timers).
 
-    ``method`` and the keywords are ArcLengthOptions fields (dlam0, psi, branch_switch, ...);
+    The keywords are ArcLengthOptions fields (method, dlam0, psi, branch_switch, ...);
     ``on_step(ArcState)`` is called after the first point and after every converged point (not
     for the restart point of a resumed path, which is still the first of ``points``).
     Parameters ``sysm``, ``lam_end``, ``control``, ``control_end``, ``lam_min``, ``start`` as for
@@ -410,7 +410,7 @@ def path_follow(sysm, method=None, lam_end=1.0, control=None, control_end=None, 
     >>> [c.kind for c in crit], round(float(pts[-1].state[0]), 12)
     (['limit', 'limit'], 3.0)
     """
-    opts, kw = arc_options(options, kw, method)
+    opts, kw = arc_options(options, kw)
     unknown_keywords("path_follow", kw, ArcLengthOptions.__dataclass_fields__)
     info = PathInfo()
     points = []

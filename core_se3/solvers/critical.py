@@ -28,14 +28,31 @@ Example
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import Callable
+
 import numpy as np
 
 from ..errors import ElementTooDistortedError, SingularSystemError
 from .stability import analyse, locate_critical
 
-__all__ = ["narrow", "refine", "estimate", "bracket_width"]
+__all__ = ["Corrector", "narrow", "refine", "estimate", "bracket_width"]
 
 MAX_BISECTIONS = 40
+
+
+@dataclass(frozen=True)
+class Corrector:
+    """How :func:`refine` re-solves a part of a step: the path follower's corrector
+    ``correct(sysm, state, lam, arc, opts, timers) -> (state, lam, iterations, history, _)``,
+    ``make_constraint(ds)`` a new arc-length constraint of length ds, the options (with
+    ``critical_tol``) and timers it runs with, and ``failed``: the exceptions of a rejected
+    corrector (besides a singular tangent, a distorted element and a floating-point error)."""
+    correct: Callable
+    make_constraint: Callable
+    opts: object
+    timers: list
+    failed: tuple = ()
 
 
 def bracket_width(lam_a, lam_b, upper):
@@ -70,18 +87,18 @@ def _negatives(pt):
     return pt.n_neg if pt.n_neg is not None else (0 if pt.sign >= 0 else 1)
 
 
-def refine(sysm, cur, pt, con, limit, opts, timers, correct, make_constraint, failed=()):
+def refine(sysm, cur, pt, con, limit, corrector):
     """Bisect the step from ``cur`` to ``pt`` (PathPoints; ``con`` the step's converged arc-
     length constraint, with its increments ``du``, ``dlam``) until the critical load factor is
-    known to ``opts.critical_tol`` (module docstring); ``limit``: a limit point, not a bifurcation.
-    ``correct``, ``make_constraint(ds)``: the path follower's corrector and a new arc-length
-    constraint of length ds; ``failed``: the exception of a
-    rejected corrector (besides a singular tangent).  Returns (a, b, upper, bisections, span):
+    known to ``corrector.opts.critical_tol`` (module docstring); ``limit``: a limit point, not a
+    bifurcation; ``corrector``: a :class:`Corrector`.  Returns (a, b, upper, bisections, span):
     the final bracket (PathPoints), the tangent-line bound of a limit point (else None), the
     number of corrector solves and the bracket's length along the step [length]; a corrector
     that fails ends the refinement with the bracket so far.
     """
-    failures = (ElementTooDistortedError, FloatingPointError, SingularSystemError) + tuple(failed)
+    correct, make_constraint, opts, timers = corrector.correct, corrector.make_constraint, corrector.opts, \
+        corrector.timers
+    failures = (ElementTooDistortedError, FloatingPointError, SingularSystemError) + tuple(corrector.failed)
     w = sysm.w
     du, dl = con.du, con.dlam
     length = float(np.sqrt(np.sum(w * du * du)))
@@ -132,14 +149,15 @@ def estimate(sysm, a, b, con, span, upper, limit):
     return lam, bracket_width(a.lam, b.lam, upper)
 
 
-def narrow(sysm, cur, pt, con, cp, opts, timers, correct, make_constraint, failed=()):
+def narrow(sysm, cur, pt, con, cp, corrector):
     """Narrow the CriticalPoint ``cp`` found between the path points cur and pt (the step
-    ``con``) to ``opts.critical_tol`` (:func:`refine`): its load factor (a bifurcation: where the
+    ``con``) to ``corrector.opts.critical_tol`` (:func:`refine`; ``corrector``: a
+    :class:`Corrector`): its load factor (a bifurcation: where the
     smallest eigenvalue interpolates to zero over the final bracket, ``stability.locate_critical``,
     exact for an eigenvalue linear in the load; a limit point: :func:`estimate`), bracket and
     accuracy are updated in place.  Returns the log entry of the bisection."""
     limit = cp.kind == "limit"
-    a, b, upper, n, span = refine(sysm, cur, pt, con, limit, opts, timers, correct, make_constraint, failed)
+    a, b, upper, n, span = refine(sysm, cur, pt, con, limit, corrector)
     lam, cp.accuracy = estimate(sysm, a, b, con, span, upper, limit)
     if not limit and n:
         c = sysm.w * con.du / max(float(np.sqrt(np.sum(sysm.w * con.du ** 2))), 1e-300)

@@ -321,21 +321,20 @@ class MumpsSolver:
         if keep:
             self._kept, self._busy = objs, True
 
-        def solve(b):
+        def solved_by(ksp_solve, b):
+            """x from ``ksp.solve`` or ``ksp.solveTranspose`` on the factors for the right-hand side b."""
             bb.setArray(b)
             try:
-                ksp.solve(bb, x)
+                ksp_solve(bb, x)
             except PETSc.Error as exc:
                 raise SingularSystemError(f"tangent is singular (MUMPS: {exc})") from None
             return finite_solution(x.getArray().copy())
 
+        def solve(b):
+            return solved_by(ksp.solve, b)
+
         def solve_transpose(b):
-            bb.setArray(b)
-            try:
-                ksp.solveTranspose(bb, x)
-            except PETSc.Error as exc:
-                raise SingularSystemError(f"tangent is singular (MUMPS: {exc})") from None
-            return finite_solution(x.getArray().copy())
+            return solved_by(ksp.solveTranspose, b)
 
         def release():
             if keep:
