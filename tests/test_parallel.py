@@ -78,7 +78,8 @@ def one_rank(tmp_path_factory):
 def test_distributed_runs_agree_with_serial(request, ranks, name):
     run = request.getfixturevalue({1: "one_rank", 2: "two_ranks"}[ranks])
     prob, steps, kw = build(name)
-    ser = prob.solve(steps=steps, solver="serial", **kw)
+    # the snap check of contact steps (solvers.contact_probe) is serial only: compared without it
+    ser = prob.solve(steps=steps, solver="serial", **dict(kw, snap_check=False))
     par = run[name]
     assert run["ranks"] == ranks and par["parallel"]["ranks"] == ranks
     assert par["iterations"] == [s.iterations for s in ser.steps]

@@ -134,6 +134,52 @@ def test_limit_check_off_records_the_bifurcation_and_goes_on():
     assert res.steps[-1].load_factor == 1.0 and res.final.checks["det_sign"] == -1
 
 
+# ------------------------------------------------------------------ even crossings (inertia_check)
+def _sandwich_strip(f):
+    """The sandwich strip of docs/EXTENDING.md recipe 6 (its law taken from the recipe) under an
+    end tension f C w: its tangent loses several eigenvalues close together near N = G_c c
+    (Haringx)."""
+    import os
+    text = open(os.path.join(os.path.dirname(__file__), "..", "docs", "EXTENDING.md"), encoding="utf-8").read()
+    recipe = text[text.index("## Recipe 6"):]
+    code = recipe[recipe.index("class SandwichLaw"):recipe.index("register_material(")]
+    ns = dict(np=np, Material=Material)
+    exec(code, ns)
+    law = ns["SandwichLaw"](7.0e4, 0.5, 10.0, 50.0)
+    p = Problem(mesh.rectangle(200.0, 20.0, 8, 2), law)
+    p.clamp("x0")
+    p.add_edge_force("x1", (f * law.C * 20.0, 0.0, 0.0))
+    return p
+
+
+def _stop_bracket(p, steps, **kw):
+    with pytest.raises(ConvergenceError) as exc:
+        p.solve(steps=steps, **kw)
+    msg = str(exc.value)
+    assert "crossed a critical point" in msg
+    return [float(x) for x in msg.split("between load factors ")[1].split(",")[0].split(" and ")]
+
+
+def test_inertia_check_sees_an_even_number_of_crossings_in_one_step():
+    """The sandwich strip loaded to 0.2 C w: in one or two steps det K keeps its sign (12 and 6
+    negative eigenvalues at the ends: old code, exit 0 on the unstable uniform stretch), in five
+    steps the sign check stops at the wrong, later crossing (0.533 of the load).  With
+    ``inertia_check`` the count of negative eigenvalues of sym K changes in the first step and is
+    located like a sign change: every step count stops at the first crossing, 0.04264 (40 steps,
+    the det K sign check alone), i.e. N = 0.00853 C w."""
+    # (5 steps also ended with "Newton failed after 12 cut-backs" when the bracket's half equalled
+    # the smallest increment to the last bit: StepChecks._narrow now counts it as narrow)
+    first = 0.5 * sum(_stop_bracket(_sandwich_strip(0.2), 40))
+    assert abs(first - 0.04264) < 1e-4
+    assert _sandwich_strip(0.2).solve(steps=1).final.checks["det_sign"] == 1      # the old answer
+    assert 0.5 * sum(_stop_bracket(_sandwich_strip(0.2), 5)) > 0.5                 # the wrong crossing
+    for steps in (1, 2, 5):
+        lo, hi = _stop_bracket(_sandwich_strip(0.2), steps, inertia_check=True)
+        # located to critical_tol, or to the smallest increment the cut-backs allow (1/2**12 of
+        # the step: 5.7e-3 of the load factor in one step) when that is coarser
+        assert lo <= first <= hi and hi - lo <= max(1e-3 * hi, 2.0 / steps / 2 ** 12) * (1 + 1e-9)
+
+
 # ------------------------------------------------------------------ splitting ---------------
 def _rotating(angle, steps=4):
     p = Problem(mesh.rectangle(17.2, 5.0, 10, 1), Material(0.8969, 0.0, 0.42))

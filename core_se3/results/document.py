@@ -9,7 +9,8 @@
                 "attempts", "linear_solves", "backend" ('numpy'/'numba': what evaluated the step),
                 "contact": {name: {"force", "moment", "penetration",
                 ...}} (with obstacles only),
-                "checks": {"path_check", "contraction", "travel", "path_rejections", "det_sign"}
+                "checks": {"path_check", "contraction", "travel", "path_rejections", "det_sign",
+                           "snap_probes", "landed_elsewhere" (with contact)}
                 (load stepping: what was checked before the state was accepted)}],
      "totals": {"attempts", "linear_solves", "iterations"},
      "timings": {"setup", "assembly", "solve", "other", "total"},

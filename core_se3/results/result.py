@@ -129,7 +129,7 @@ class StepResult:
         path_check (applied or not), contraction and travel of the accepted try's Newton
         corrections (< 1 and < 1.5: ``path_measures``), path_rejections (tries refused since the
         previous stored step), det_sign (the sign of det K at the state; None when not checked);
-        {} when not recorded (path following, the initial state).
+        with contact snap_probes and landed_elsewhere (``solvers.contact_probe``); {} when not recorded (path following, the initial state).
 
     Example
     -------

@@ -136,6 +136,13 @@ SOLVER = Section("solver", (
     _option("max_substeps", _NEWTON, "load control: the most sub-steps into which a step may be split to keep a "
             "prescribed rotation or a turning field within its turn per try; beyond it the run stops naming the "
             "load and its turn", kind="integer", lo=1, hi=10_000_000),
+    _option("snap_check", _NEWTON, "load control with contact: a step that moved a node by more than an element "
+            "size is solved again in halves (a step that landed elsewhere is cut back); a jump that survives halving "
+            "to 1/64 of the step is reported as a snap in `critical_points` (docs/STEPS.md)", kind="bool"),
+    _option("inertia_check", _NEWTON, "load control: count the negative eigenvalues of the symmetric tangent at "
+            "every converged step (one more factorisation each; conservative loads only) so that an even number "
+            "crossing zero within one step, which leaves the sign of det K, stops the run like a sign change "
+            "(docs/STEPS.md)", kind="bool"),
     Param("linear", "string", "mumps", choices=PARALLEL_KEYS["linear"], doc="linear solver of a distributed run"),
     Param("partition", "string", "auto", choices=PARALLEL_KEYS["partition"], doc="partition of a distributed run"),
     Param("petsc", "table", None, doc="free-form PETSc options of a distributed run")),

@@ -34,6 +34,7 @@ import numpy as np
 from ..fem import ELEMENTS
 from .convergence import relative_residual, scaled_norm
 from .linalg import Factorization
+from .stability import inertia
 
 __all__ = ["NewtonEquations", "part_origin"]
 
@@ -162,6 +163,21 @@ class NewtonEquations:
         """Sign of det K of the tangent of the last :meth:`solve` (None: not known)."""
         fac = getattr(self, "_factor", None)
         return None if fac is None else fac.det_sign()
+
+    def inertia_count(self, asym_tol=1e-6):
+        """The number of negative eigenvalues of sym(K) of the tangent of the last :meth:`solve`
+        (``solvers.stability.inertia``: one symmetric factorisation); None when not counted:
+        no tangent, or K not symmetric to ``asym_tol`` (max |K - K^T| / max |K|): under
+        non-conservative loads (followers, dead moments on rotations) sym(K) says nothing of
+        stability (the rolled-up strip's count changes where det K's sign does not)."""
+        fac = getattr(self, "_factor", None)
+        if fac is None:
+            return None
+        K = fac.K
+        scale = abs(K).max()
+        if abs(K - K.T).max() > asym_tol * scale:
+            return None
+        return inertia(K)[1]
 
     def increment(self, x):
         return self.asm.scatter(x)

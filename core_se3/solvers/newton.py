@@ -37,6 +37,7 @@ from .options import NewtonOptions, load_steps, split_options, unknown_keywords
 from .splitting import (MAX_LOAD_TURN, MAX_PRESCRIBED_TURN, check_substeps, split_prescribed,
                         split_turning)
 from .stability import limit_point_hint
+from .contact_probe import ContactProbe, median_edge
 from .step_checks import StepChecks, start_sign
 
 __all__ = ["newton_solve", "newton_steps", "requested_load_factors", "NewtonState", "NewtonStep",
@@ -262,7 +263,7 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
         # the requested increment; a cut-back increment carries over, capped by it
         dlam_nominal = target - lam
         dlam = dlam_nominal if dlam is None else np.sign(dlam_nominal) * min(abs(dlam), abs(dlam_nominal))
-        floor = abs(dlam_nominal) / 2 ** opts.max_cutbacks        # the smallest increment cut-backs allow
+        floor = checks.new_target(dlam_nominal, opts.max_cutbacks)   # the smallest increment cut-backs allow
         stored = None
         while abs(target - lam) > 1e-14 * max(1.0, abs(target)):
             lam_try = lam + dlam if abs(dlam) < abs(target - lam) else target
@@ -331,7 +332,9 @@ def _note_passed(checks, eq, result):
     """Keep the critical points the stability check saw passed (limit_check off)."""
     for cp in checks.passed(len(result.steps)):          # the index of the next stored step
         result.critical_points.append(cp)
-        if eq.root:
+        if eq.root and cp.kind == "snap":
+            log.warning("load control passed a %s", cp.describe())
+        elif eq.root:
             log.warning("load control passed a %s (limit_check off: the path goes on, unstable)",
                         cp.describe())
 
@@ -364,8 +367,12 @@ def _step_checks(opts, eq, state):
     smooth = not any(getattr(ld, "constraint_force", False) for ld in eq.loads)
     # a stateful element (the seed's) has no consistent tangent: its Newton corrections contract
     # linearly at any step, so their growth says nothing of the path
+    # ... what contact leaves observable is the motion: the snap check (solvers.contact_probe)
+    snap = ContactProbe(median_edge(eq.problem.mesh)) if opts.snap_check and not smooth and not eq.distributed else None
     return StepChecks(opts.path_check and smooth and not eq.stateful, smooth and hasattr(eq, "det_sign"),
-                      opts.critical_tol, state.det_sign, stop=opts.limit_check)
+                      opts.critical_tol, state.det_sign, stop=opts.limit_check, snap=snap,
+                      counting=opts.inertia_check and smooth and hasattr(eq, "inertia_count")
+                      and not any(getattr(ld, "follower", False) for ld in eq.loads))
 
 
 def _split_step(problem, turning, g_whole, lam, lam_try, target, dlam, opts, result):
@@ -417,11 +424,19 @@ def _judge(out, checks, eq, sweeps, g, lam, lam_try, stress_conv):
     load refuses (a step through an obstacle)."""
     if out.ok and checks.stability and checks.sign is None and out.det_sign == -1:
         checks.sign = start_sign(eq, g, lam, stress_conv)     # was the start unstable too?
+    if out.ok and checks.counting:           # inertia_check: the count of negative eigenvalues
+        out.count = eq.inertia_count()
+        if checks.count is None:             # ... at the start state: one factorisation there
+            start_sign(eq, g, lam, stress_conv)
+            checks.count = eq.inertia_count()
     if out.ok:
         out.reason = checks.judge(out, lam, lam_try)
         out.ok = not out.reason
     if out.ok and sweeps:                    # a step that passed through an obstacle: cut back
         out.ok, out.reason = not (why := _step_error(sweeps, g, lam, out.g, lam_try)), why or out.reason
+    if out.ok and checks.snap is not None:   # a large contact step: probed in halves (a snap?)
+        out.reason = checks.snap.judge(g, out.g, lam, lam_try)
+        out.ok = not out.reason
 
 
 def _limit_point(eq, switches, k_ref, out, g, lam, lam_try, timer, result):

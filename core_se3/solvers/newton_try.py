@@ -88,6 +88,7 @@ class TryOutcome:
     floor: float = 0.0
     incs: list = field(default_factory=list)
     det_sign: int | None = None
+    count: int | None = None          # negative eigenvalues of sym K (inertia_check; set by the caller)
 
     @property
     def contraction(self):

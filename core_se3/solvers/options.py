@@ -56,7 +56,12 @@ class NewtonOptions:
     change of the sign of det K (a bifurcation, located to ``critical_tol`` of the load factor by
     bisection); max_substeps: the most sub-steps into which a requested step may be split to
     keep a prescribed motion or a turning field within its turn per try (beyond it a
-    ConvergenceError names the load and the turn); record_substeps: store the cut-back
+    ConvergenceError names the load and the turn); snap_check: with contact, solve a try that
+    moved a node by more than an element size again in halves, keep the halves' path, and report
+    a jump that survives the halving as a snap (``solvers.contact_probe``); inertia_check: count
+    the negative eigenvalues of sym K at every converged try (one more factorisation per try) so
+    that an even number of them crossing zero within one step, which leaves the sign of det K,
+    is located like a sign change (``solvers.step_checks``); record_substeps: store the cut-back
     sub-steps as steps too; linear_solver: None = the problem's; iteration: 'mip' (the mixed
     integration point Newton of Magisano, Leonetti and Garcea 2017, with an element that
     supports it: the geometric part of the tangent sees element stresses updated linearly,
@@ -74,8 +79,8 @@ class NewtonOptions:
         In [0, 50]; default 12.
     divergence : float
         >= 1; default 1e8.
-    path_check, limit_check, record_substeps : bool
-        Default True, True and False.
+    path_check, limit_check, snap_check, inertia_check, record_substeps : bool
+        Default True, True, True, False and False.
     critical_tol : float
         In (0, 1); default 1e-3.
     max_substeps : int
@@ -113,6 +118,8 @@ class NewtonOptions:
     path_check: bool = True
     critical_tol: float = _opt(1e-3, 0.0, 1.0, True)
     max_substeps: int = _opt(1000, 1, 10_000_000)
+    snap_check: bool = True
+    inertia_check: bool = False
 
     def __post_init__(self):
         _check(self)

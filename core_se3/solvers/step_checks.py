@@ -140,6 +140,12 @@ class StepChecks:
     stop : bool, optional
         A located sign change stops the run (``limit_check``; default True), else it is
         recorded and passed (:meth:`passed`).
+    snap : ContactProbe, optional
+        The snap check of contact steps (``solvers.contact_probe``; None: not applied).
+    counting : bool, optional
+        ``inertia_check``: each converged try brings the count of negative eigenvalues of sym K
+        (``out.count``), and a change of it is located like a change of the sign of det K
+        (it also sees an even number of eigenvalues crossing zero within one step).
 
     Attributes
     ----------
@@ -159,8 +165,11 @@ class StepChecks:
     ('', 'path check: the Newton corrections grew 3.4x')
     """
 
-    def __init__(self, path, stability, critical_tol, sign=None, stop=True):
+    def __init__(self, path, stability, critical_tol, sign=None, stop=True, snap=None, counting=False):
         self.path, self.stability, self.tol, self.stop = path, stability, critical_tol, stop
+        self.snap = snap                # the snap check of contact steps (solvers.contact_probe) or None
+        self.counting, self.count = counting, None   # inertia_check: negative eigenvalues of sym K
+        self.what = ""
         self.sign = sign
         self.bracket = None
         self.confirmed = self.probing = False
@@ -181,14 +190,19 @@ class StepChecks:
         s = out.det_sign
         if self.stability and s is not None and self.sign is None and s > 0:
             self.sign = s                      # module docstring: the start's sign taken as +1
+        n = getattr(out, "count", None) if self.counting else None
         if self.stability and s is not None and self.sign is not None and s != self.sign:
-            if not self.stop:                 # recorded where it was passed (no bisection)
-                self.crossed.append(self._point(lam, lam_try))
-                return ""
-            self.bracket, self.confirmed, self.probing = (lam, lam_try), True, False
-            return (f"stability check: det K changed sign ({self.sign:+d} -> {s:+d}) between load "
-                    f"factors {lam:.6g} and {lam_try:.6g}")
-        return ""
+            self.what = f"det K changed sign ({self.sign:+d} -> {s:+d})"
+        elif n is not None and self.count is not None and n != self.count:
+            self.what = (f"the number of negative eigenvalues of sym K changed ({self.count} -> {n}; det K kept "
+                         "its sign: an even number crossed zero)")
+        else:
+            return ""
+        if not self.stop:                     # recorded where it was passed (no bisection)
+            self.crossed.append(self._point(lam, lam_try))
+            return ""
+        self.bracket, self.confirmed, self.probing = (lam, lam_try), True, False
+        return f"stability check: {self.what} between load factors {lam:.6g} and {lam_try:.6g}"
 
     def accept(self, out, lam_try):
         """Record the accepted try (its sign becomes the path's).  While a sign change is being
@@ -196,6 +210,10 @@ class StepChecks:
         shows that the change seen there came from a jump, not from the path: the bracket goes."""
         if out.det_sign is not None:
             self.sign = out.det_sign
+        if getattr(out, "count", None) is not None:
+            self.count = out.count
+        if self.snap is not None:
+            self.snap.accept(out.g, lam_try)
         if self.bracket is not None:
             lo, hi = self.bracket
             self.bracket = None if abs(hi - lam_try) <= 1e-14 * max(1.0, abs(hi)) else (lam_try, hi)
@@ -212,14 +230,24 @@ class StepChecks:
 
     def _narrow(self, floor):
         lo, hi = self.bracket
-        return abs(hi - lo) <= self.tol * max(abs(hi), abs(lo)) or abs(hi - lo) / 2 < floor
+        return abs(hi - lo) <= self.tol * max(abs(hi), abs(lo)) or abs(hi - lo) / 2 < floor * (1 + 1e-9)
+
+    def new_target(self, dlam_nominal, max_cutbacks):
+        """A new requested step of ``dlam_nominal``: the smallest increment the cut-backs allow
+        (``floor``); the snap check's smallest probe follows the step too."""
+        if self.snap is not None:
+            self.snap.new_step(dlam_nominal)
+        return abs(dlam_nominal) / 2 ** max_cutbacks
 
     def next_increment(self, lam, dlam, floor):
         """The next increment while a sign change is located, else ``dlam``: at most half the
         bracket (bisection; a failed try halves ``dlam`` as usual), and once the bracket is
         narrow (``critical_tol``, or half of it below ``floor``, the smallest increment the
         cut-backs allow) but its change was seen from an older low end, a try to its high end
-        from the current one."""
+        from the current one.  A contact step being probed in halves (the snap check) caps it at
+        the probed step's end."""
+        if self.snap is not None:
+            dlam = self.snap.next_increment(lam, dlam)
         if self.bracket is None:
             return dlam
         lo, hi = self.bracket
@@ -236,7 +264,9 @@ class StepChecks:
     def critical_message(self):
         """The ConvergenceError message of a located sign change."""
         lo, hi = self.bracket
-        return (f"load control crossed a critical point: det K changed sign between load factors "
+        what = "det K changed sign" if self.what.startswith("det K") or not self.what else \
+            "the number of negative eigenvalues of sym K changed"
+        return (f"load control crossed a critical point: {what} between load factors "
                 f"{lo:.7g} and {hi:.7g}, i.e. at {0.5 * (lo + hi):.7g} +- {0.5 * abs(hi - lo):.2g}. The "
                 "path went on continuously through it (its Newton tries contracted), so it is a "
                 "bifurcation: beyond it this path is unstable and the states depend on the load "
@@ -251,7 +281,10 @@ class StepChecks:
 
     def passed(self, step):
         """The sign changes passed since the last call (``stop`` off), as CriticalPoints whose
-        ``step`` is the index of the next stored step; the list is emptied."""
+        ``step`` is the index of the next stored step, and the snaps of the snap check; the list
+        is emptied."""
+        if self.snap is not None:
+            self.crossed += self.snap.passed()
         out = [dataclasses.replace(cp, step=step) for cp in self.crossed]
         self.crossed.clear()
         return out
@@ -262,5 +295,7 @@ class StepChecks:
         rec = dict(path_check=self.path, contraction=None if out is None else float(out.contraction),
                    travel=None if out is None else float(out.travel), path_rejections=self.rejected,
                    det_sign=self.sign if self.stability else None)
+        if self.snap is not None:
+            rec.update(self.snap.record())
         self.rejected = 0
         return rec

@@ -1,0 +1,119 @@
+"""The snap check of load stepping with contact (issue 29, docs/STEPS.md,
+``core_se3.solvers.contact_probe``): a contact step that moved a node by more than an element
+size is solved again in halves; a too-big step that had landed elsewhere is cut back to the
+halves' path, and a jump that survives halving the step is reported as a snap.  Each test fails
+on the code before the check (contact steps were accepted as they converged, silently)."""
+import logging
+
+import numpy as np
+import pytest
+
+from core_se3 import Material, Problem, mesh
+from core_se3.catalogue import run_case
+from core_se3.catalogue.case import case_params, get_case
+from core_se3.catalogue.run import build_problem
+from core_se3.solvers.contact_probe import SNAP_HALVINGS, ContactProbe, median_edge
+
+
+def _largest_motion(res):
+    """The largest motion of a node over one stored step, and the load factor it ends at."""
+    x = np.array([st.g[:, :3, 3] for st in res.steps])
+    jump = np.linalg.norm(np.diff(x, axis=0), axis=2).max(1)
+    k = int(np.argmax(jump))
+    return float(jump[k]), res.steps[k + 1].load_factor
+
+
+def _jumping_cantilever():
+    """A 10 x 1 strip whose tip force jumps from 0 to 1 at load factor 0.5 (tip deflection 3 =
+    30 % of L: a discontinuity of the quasi-static path), with a sphere far below it, so the
+    problem has contact (the path and stability checks leave it)."""
+    p = Problem(mesh.rectangle(10.0, 1.0, 10, 1), Material(1.2e6, 0.0, 0.1))
+    p.clamp("x0")
+    p.add_edge_force("x1", (0.0, 0.0, 1.0), scale=lambda lam: 0.0 if lam < 0.5 else 1.0)
+    p.add_obstacle("sphere", centre=(5.0, 0.5, -20.0), radius=1.0)
+    return p
+
+
+def test_a_jump_that_survives_halving_is_reported_as_a_snap(caplog):
+    """The jump at load factor 0.5 is bracketed to 1/64 of the requested step (0.25), stored
+    as a critical point of kind 'snap' with the node and its travel, and warned about once;
+    the run goes on to the end on the state the jump lands on."""
+    prob = _jumping_cantilever()
+    with caplog.at_level(logging.WARNING):
+        res = prob.solve(steps=4)
+    assert res.steps[-1].load_factor == 1.0
+    (snap,) = res.critical_points
+    lo, hi = snap.lam_bracket
+    assert snap.kind == "snap" and lo < 0.5 <= hi and hi - lo <= 0.25 / 2 ** SNAP_HALVINGS + 1e-12
+    assert snap.travel > 3.0 and snap.node in prob.mesh.node_set("x1")
+    assert res.steps[snap.step].load_factor == 0.5           # the stored step past the snap
+    warned = [r.getMessage() for r in caplog.records if "snap between load factors" in r.getMessage()]
+    assert len(warned) == 1 and "dynamic analysis" in warned[0]
+    assert res.steps[2].checks["snap_probes"] == SNAP_HALVINGS
+
+
+def test_snap_check_off_accepts_the_jump_silently():
+    """``snap_check = False`` (the [solver] key) restores the old acceptance: one try per step."""
+    res = _jumping_cantilever().solve(steps=4, snap_check=False)
+    assert res.critical_points == [] and [st.attempts for st in res.steps[1:]] == [1, 1, 1, 1]
+
+
+def test_walker_at_mu_0p7_is_cut_back_to_its_path():
+    """The frictional walker at mu 0.7 (catalogue friction-walker, its set-up ramp to load
+    factor 1 in 10 steps): without the check one step moved a node by 1.6 L (the walker 'stood
+    up on one foot', the record of benchmarks/friction_walker.py); probed in halves, that step
+    had landed elsewhere: the halves follow a path on which no node moves more than 0.03 L per
+    stored step, and the same path as 40 steps give (to 1e-3 L at load factor 1)."""
+    case = get_case("friction-walker")
+    p = dict(case_params(case), mu=0.7, cycles=0.0)
+    ends = []
+    for n in (10, 40):
+        res = build_problem(case, p).solve(load_factors=[k / n for k in range(1, n + 1)])
+        jump, _ = _largest_motion(res)
+        assert jump < 0.05 * p["L"] and res.critical_points == []
+        ends.append(res.steps[-1].g[:, :3, 3])
+        if n == 10:
+            assert sum(st.checks["landed_elsewhere"] for st in res.steps[1:]) >= 1
+    assert np.linalg.norm(ends[0] - ends[1], axis=1).max() < 1e-3 * p["L"]
+
+
+@pytest.mark.parametrize("name, steps", [("contact-lift", 1), ("contact-propped", None), ("contact-lift", None)])
+def test_no_false_snaps_on_the_contact_catalogue(name, steps):
+    """The contact catalogue's continuous paths (one step and the default) report no snap and
+    no step that landed elsewhere."""
+    _, res, _ = run_case(name, steps=steps)
+    assert res.critical_points == []
+    assert all(st.checks["landed_elsewhere"] == 0 for st in res.steps[1:])
+
+
+def test_probe_logic_on_given_states():
+    """ContactProbe alone: a try within one element size is accepted; a larger one is probed;
+    a half that travels as far again is probed in turn; one that shrank is accepted; a jump
+    in a step of 1/64 of the requested one is a snap; the halves' end compared with the probed
+    try's state counts a step that landed elsewhere."""
+    m = mesh.rectangle(4.0, 1.0, 4, 1)
+    assert median_edge(m) == 1.0
+    g0 = m.g0.copy()
+
+    def moved(dz, node=9):
+        g = g0.copy()
+        g[node, 2, 3] += dz
+        return g
+
+    probe = ContactProbe(median_edge(m))
+    probe.new_step(1.0)
+    assert probe.judge(g0, moved(0.9), 0.0, 1.0) == ""
+    assert probe.judge(g0, moved(4.0), 0.0, 1.0).startswith("snap check")       # probed
+    assert probe.next_increment(0.0, 0.5) == 0.5 and probe.next_increment(0.75, 0.5) == 0.25
+    assert probe.judge(g0, moved(2.0), 0.0, 0.5) == ""                         # shrank: 2 <= 0.75 * 4
+    probe.accept(moved(2.0), 0.5)
+    assert probe.judge(moved(2.0), moved(4.0), 0.5, 1.0) == ""
+    probe.accept(moved(4.0), 1.0)                     # the halves end where the probed try did
+    assert probe.probes == [] and probe.record() == dict(snap_probes=1, landed_elsewhere=0)
+    probe.judge(g0, moved(4.0), 0.0, 1.0)
+    assert probe.judge(g0, moved(3.5), 0.0, 0.5).startswith("snap check")      # as far again: probed
+    probe.accept(moved(0.4), 0.25)
+    probe.accept(moved(3.5), 0.5)
+    probe.accept(moved(5.0), 1.0)                     # the halves ended 1 element size away from 4
+    assert probe.record() == dict(snap_probes=2, landed_elsewhere=1)
+    assert probe.judge(g0, moved(4.0), 0.0, 1.0 / 64) == "" and probe.passed()[0].kind == "snap"
