@@ -40,7 +40,6 @@ WIDE_FUNCTIONS = {
     # pending other work: control/ is being changed by issue 32 (control3)
     "core_se3.control.loop:track": "control's tracking options (gain, damping, halvings, model)",
     "core_se3.control.loop:plan": "control's planning options (tolerance, iterations, damping, extrapolation)",
-    "core_se3.control.session:State.__init__": "the state's work counters (iterations, factorizations, ...)",
     # callers in solvers/newton.py (issue 29, trust3, changing it now): the forces, stability and
     # the probes' unwrapping data
     "core_se3.results.recorder:StepRecorder.step": "the forces, stability and the probes' unwrapping data",

@@ -18,7 +18,7 @@ from .commands import Commands, scenario_variables
 from .corrector import Corrector, SubStep
 from .loop import Plan, Tracking, plan, track
 from .options import ControlOptions
-from .session import Session, State
+from .session import Session, State, Work
 
-__all__ = ["Session", "State", "ControlOptions", "Commands", "scenario_variables", "Corrector", "SubStep",
+__all__ = ["Session", "State", "Work", "ControlOptions", "Commands", "scenario_variables", "Corrector", "SubStep",
            "track", "plan", "Tracking", "Plan"]

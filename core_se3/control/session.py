@@ -16,7 +16,7 @@ compiled evaluation and the factors are kept, and probes are computed only when 
 from __future__ import annotations
 
 import time
-from dataclasses import fields
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -30,9 +30,33 @@ from .commands import Commands, scenario_variables
 from .corrector import Corrector
 from .options import ControlOptions
 
-__all__ = ["Session", "State"]
+__all__ = ["Session", "State", "Work"]
 
 _HOOKS = ("update_multipliers", "limit_increment", "start_error")
+
+
+@dataclass(frozen=True)
+class Work:
+    """What an update of a session took.
+
+    Attributes
+    ----------
+    iterations, factorizations, substeps, splits : int
+        Back-substitutions, fresh factorisations, sub-steps of the command path, halvings.
+    time : float
+        Wall time [s].
+
+    Example
+    -------
+    >>> Work(iterations=3, substeps=1).factorizations
+    0
+    """
+
+    iterations: int = 0
+    factorizations: int = 0
+    substeps: int = 0
+    splits: int = 0
+    time: float = 0.0
 
 
 class State:
@@ -42,9 +66,9 @@ class State:
     ----------
     g : (n, 4, 4) ndarray
         The nodal frames; ``lam``: the load factor; ``values``: variable name -> values.
-    iterations, factorizations, substeps, splits : int
-        What the update took (back-substitutions, fresh factorisations, sub-steps of the
-        command path, halvings); ``time`` [s].
+    work : Work
+        What the update took; its fields are also read as attributes of the state
+        (``iterations``, ``factorizations``, ``substeps``, ``splits``, ``time`` [s]).
     probes : dict
         name -> dict(x (3,) position, u (3,) displacement, R (3, 3) rotation) of every probe
         of the problem, computed at the first read.
@@ -53,15 +77,21 @@ class State:
     -------
     >>> from core_se3 import Problem, Material, mesh
     >>> p = Problem(mesh.rectangle(2.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01)); p.add_probe("tip", "x1")
-    >>> State(p, p.mesh.g0, 0.0, {}).probes["tip"]["x"].tolist()
-    [2.0, 0.0, 0.0]
+    >>> st = State(p, p.mesh.g0, 0.0, {}, Work(iterations=2, substeps=1))
+    >>> st.probes["tip"]["x"].tolist(), st.iterations
+    ([2.0, 0.0, 0.0], 2)
     """
 
-    def __init__(self, problem, g, lam, values, iterations=0, factorizations=0, substeps=0, splits=0, time=0.0):
+    def __init__(self, problem, g, lam, values, work=Work()):
         self.problem, self.g, self.lam, self.values = problem, g, float(lam), values
-        self.iterations, self.factorizations, self.substeps, self.splits = iterations, factorizations, substeps, splits
-        self.time = time
+        self.work = work
         self._probes = None
+
+    iterations = property(lambda self: self.work.iterations)
+    factorizations = property(lambda self: self.work.factorizations)
+    substeps = property(lambda self: self.work.substeps)
+    splits = property(lambda self: self.work.splits)
+    time = property(lambda self: self.work.time)
 
     @property
     def probes(self):
@@ -153,8 +183,8 @@ class Session:
         if not out.ok:
             raise ControlError(f"the start is not an equilibrium the corrector reaches at load factor {lam:g}: "
                                f"{out.reason}")
-        self.state = State(problem, out.g, lam, self.commands.values(), out.iterations, out.factorizations,
-                           1, 0, time.perf_counter() - t0)
+        self.state = State(problem, out.g, lam, self.commands.values(),
+                           Work(out.iterations, out.factorizations, 1, 0, time.perf_counter() - t0))
         self._r = out.residual            # the free residual at the state (the next predictor's start)
 
     @classmethod
@@ -285,7 +315,7 @@ class Session:
         if self._corr.settle(g, lam1, self._stamp, counts[0]):     # aged factors renewed here
             counts = (counts[0], counts[1] + 1) + counts[2:]
         self._count(*counts, updates=1)
-        self.state = State(self.problem, g, lam1, self.commands.values(), *counts, time.perf_counter() - t0)
+        self.state = State(self.problem, g, lam1, self.commands.values(), Work(*counts, time.perf_counter() - t0))
         return self.state
 
     def _follow(self, lam0, lam1, x0, x1):
