@@ -40,9 +40,6 @@ WIDE_FUNCTIONS = {
     # pending other work: control/ is being changed by issue 32 (control3)
     "core_se3.control.loop:track": "control's tracking options (gain, damping, halvings, model)",
     "core_se3.control.loop:plan": "control's planning options (tolerance, iterations, damping, extrapolation)",
-    # callers in solvers/newton.py (issue 29, trust3, changing it now): the forces, stability and
-    # the probes' unwrapping data
-    "core_se3.results.recorder:StepRecorder.step": "the forces, stability and the probes' unwrapping data",
     # pending a bundling of public signatures (issue 33 item 4, not done yet)
     "core_se3.parallel.newton:distributed_solve": "newton_solve's signature plus the distributed set-up (linear, "
                                                   "petsc_options, partition: Problem.solve's keywords, "

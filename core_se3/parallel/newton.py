@@ -185,7 +185,7 @@ def distributed_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, g_init=None
         result.timings["setup"] = time.perf_counter() - t0
         t1 = time.perf_counter()
         ev = run.evaluate(run.local_frames(g), lam_start, tangent=False)
-        result.steps.append(rec.step(lam_start, g, 0, [], run.gather(ev.r_int), run.gather(ev.f_ext)))
+        result.steps.append(rec.step(lam_start, g, 0, [], (run.gather(ev.r_int), run.gather(ev.f_ext))))
         result.timings["other"] = time.perf_counter() - t1
         for item in distributed_newton_steps(run, targets, opts, NewtonState(lam_start, g), rec, result):
             result.steps.append(item.step)

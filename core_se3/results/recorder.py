@@ -142,15 +142,17 @@ class StepRecorder:
             states[name] = ProbeState(x - x0, R @ Rref.T, self.unwrapped[name].copy())
         return states
 
-    def step(self, lam, g, iterations, history, r_int, f_ext, stability=None, start=None, increments=None,
-             local=None):
-        """The StepResult of a converged state (internal r_int and external f_ext forces;
-        ``start``, ``increments``: as for :meth:`probes`; ``local``: (the frames relative to
-        an origin, that origin) of the same state, which the probes read, see :meth:`probes`).
+    def step(self, lam, g, iterations, history, forces, stability=None, turn=None, local=None):
+        """The StepResult of a converged state: ``forces`` = (r_int, f_ext), the internal and
+        external generalised nodal forces (n, 6) at g; ``turn`` = (start, increments) of the
+        Newton try that reached g, as for :meth:`probes`; ``local``: (the frames relative to
+        an origin, that origin) of the same state, which the probes read, see :meth:`probes`.
 
         The loads that are constraint forces (``Load.constraint_force``: contact) are split off
         the applied loads: ``contact`` holds each one's lab force and moment (about the origin)
         with its ``report`` scalars, and the balance sums applied, reactions and contact."""
+        r_int, f_ext = forces
+        start, increments = turn if turn else (None, None)
         probes = self.probes(g, start, increments) if local is None else self.probes(local[0], start, increments,
                                                                                    local[1])
         reac = (r_int - f_ext) * self.fixed

@@ -257,7 +257,7 @@ def _record(k, st, iterations=None, substeps=1, cutbacks=0):
 def _initial_event(run, rec):
     """Step 0 of load control: the unloaded reference state."""
     g0 = run.scn.problem.mesh.g0.copy()
-    record = _record(0, rec.step(0.0, g0, 0, [], *run.ctx.initial_forces(g0)), 0, 0, 0)
+    record = _record(0, rec.step(0.0, g0, 0, [], run.ctx.initial_forces(g0)), 0, 0, 0)
     record["balance_error"] = 0.0            # the unloaded start, not an equilibrium
     record["physical"] = physical_record(run.scn, 0.0)
     extra = dict(newton=NewtonState(0.0, g0).pack(), physical=run.scn.physical, ranks=run.ctx.ranks,

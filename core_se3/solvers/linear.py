@@ -138,13 +138,13 @@ def linear_solve(problem, lam_end=1.0, steps=None, linear_solver=None, **kw):
     t = time.perf_counter()
     r_lin = (K @ eta).reshape(n, 6)
     f = f.reshape(n, 6)
-    result.steps.append(rec.step(0.0, g0, 0, [], np.zeros((n, 6)), problem.external(g0, 0.0, tangent=False)[0]))
+    result.steps.append(rec.step(0.0, g0, 0, [], (np.zeros((n, 6)), problem.external(g0, 0.0, tangent=False)[0])))
     g = linear_state(g0, eta)
     # the forces act in the reference frames: expressed in the frames of g, so that the step's
     # lab totals (R f) are the reference ones (R0 f)
     Q = np.swapaxes(g[:, :3, :3], 1, 2) @ g0[:, :3, :3]
     to_g = lambda a: np.concatenate([np.einsum("nij,nj->ni", Q, a[:, :3]), np.einsum("nij,nj->ni", Q, a[:, 3:])], 1)
-    result.steps.append(rec.step(lam_end, g, 1, [], to_g(r_lin), to_g(f)))
+    result.steps.append(rec.step(lam_end, g, 1, [], (to_g(r_lin), to_g(f))))
     result.log.append(dict(lam=lam_end, converged=True, iterations=1, reason="linear"))
     result.timings["other"] = time.perf_counter() - t
     return result

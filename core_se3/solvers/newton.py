@@ -342,7 +342,7 @@ def _note_passed(checks, eq, result):
 def _unchanged_step(rec, eq, g, g_whole, lam):
     """The StepResult of a target the path already stood at (no try)."""
     ev, _, _ = eq.evaluate(g, lam, tangent=False)
-    stored = rec.step(lam, g_whole, 0, [], *eq.forces(ev))
+    stored = rec.step(lam, g_whole, 0, [], eq.forces(ev))
     stored.attempts, stored.linear_solves = 0, 0
     return stored
 
@@ -469,7 +469,7 @@ def _record(rec, eq, opts, out, g_start, g, g_whole, lam, tries, checks, at_targ
     turn = () if eq.distributed or np.isscalar(out.eta_sum) else (g_start, out.eta_sum)
     local = None if getattr(eq, "origin", None) is None else (g, eq.origin)
     if at_target or opts.record_substeps:
-        st = rec.step(lam, g_whole, len(out.hist) - 1, out.hist, *eq.forces(out.ev), None, *turn, local=local)
+        st = rec.step(lam, g_whole, len(out.hist) - 1, out.hist, eq.forces(out.ev), None, turn, local)
         st.residual_floor = min(out.floor, 1e300)      # finite in JSON when all forces are 0
         st.attempts = len(tries)
         st.linear_solves = sum(t["linear_solves"] for t in tries)
@@ -557,7 +557,7 @@ def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, g_init=None, loa
     result.timings["setup"] = time.perf_counter() - t0
     t_start = time.perf_counter()
     ev = problem.evaluate(g, lam_start, tangent=False)
-    result.steps.append(rec.step(lam_start, g, 0, [], ev.r_int, ev.f_ext))
+    result.steps.append(rec.step(lam_start, g, 0, [], (ev.r_int, ev.f_ext)))
     result.timings["other"] = time.perf_counter() - t_start
     try:
         for item in newton_steps(problem, targets, opts, NewtonState(lam_start, g), rec, result):

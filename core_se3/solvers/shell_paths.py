@@ -54,7 +54,7 @@ def _record(rec, pt, sysm, log, counted):
     """The StepResult of a path point, with the tries (log entries) and factorisations
     (``sysm.factorizations``) since the previous one; ``counted`` = [entries, factorisations]
     already attributed, advanced here."""
-    st = rec.step(pt.lam, pt.state, pt.its, pt.hist, pt.ev["rint"], pt.ev["fext"], _stability(pt))
+    st = rec.step(pt.lam, pt.state, pt.its, pt.hist, (pt.ev["rint"], pt.ev["fext"]), _stability(pt))
     st.residual_floor = min(float(pt.ev.get("floor", 0.0)), 1e300) if pt.hist else 0.0
     st.attempts = len(log) - counted[0]
     st.linear_solves = sysm.factorizations - counted[1]
