@@ -44,7 +44,6 @@ WIDE_FUNCTIONS = {
     "core_se3.parallel.newton:distributed_solve": "newton_solve's signature plus the distributed set-up (linear, "
                                                   "petsc_options, partition: Problem.solve's keywords, "
                                                   "solve_defaults and [solver] of a scenario) and comm",
-    "core_se3.design.magnetisation:RegionMagnetisation.__init__": "the variable's form, planes, bounds, start",
 }
 
 

@@ -79,7 +79,7 @@ def test_twin_experiment_recovers_an_eight_region_magnetisation():
     X = pt.solve(steps=10, rtol=1e-12, dtol=1e-12).final.g[:, :3, 3]
     assert np.abs(X[:, 2]).max() > 0.2 * L                     # a real shape, not a flat strip
     p, f, _ = strip(np.tile([b, 0.0, 0.0], (8, 1)), regions)  # the uniform guess
-    M = RegionMagnetisation(p, regions, free=("x", "z"))
+    M = RegionMagnetisation(p, regions, dict(free=("x", "z")))
     d = Design(p, [M], [Pose("shape", [Target(NodePosition(p, np.arange(m.n_nodes), target=X))])])
     r = d.optimise(tolerance=1e-6 * L)
     assert r.reached and r.max_misfit < 1e-6 * L

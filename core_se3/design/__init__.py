@@ -16,12 +16,12 @@ from .inverse import METHODS, Design, DesignResult, Pose, Smoothness, Target
 from .objectives import (Energy, NodePosition, Orientation, ProbePosition, Quantity, RotationAngle,
                          UserQuantity, local_jacobian)
 from .sensitivity import Sensitivity, SolveWith, quantity_jacobian, residual_derivative, sensitivity
-from .magnetisation import RegionMagnetisation
+from .magnetisation import Parametrisation, RegionMagnetisation
 from .material import MaterialVariable
 from .variables import FieldGradientVariable, FieldVariable, LoadMagnitude, Variable, magnetic_loads, polar_vector
 
 __all__ = ["sensitivity", "Sensitivity", "SolveWith", "residual_derivative", "quantity_jacobian",
-           "Variable", "FieldVariable", "FieldGradientVariable", "RegionMagnetisation", "MaterialVariable",
+           "Variable", "FieldVariable", "FieldGradientVariable", "RegionMagnetisation", "Parametrisation", "MaterialVariable",
            "LoadMagnitude", "magnetic_loads", "polar_vector",
            "Quantity", "NodePosition", "ProbePosition", "Orientation", "RotationAngle", "Energy",
            "UserQuantity", "local_jacobian",

@@ -31,7 +31,7 @@ import numpy as np
 from .. import lie
 from ..errors import DesignError
 from ..registry import Kind, Param, Registry
-from .magnetisation import RegionMagnetisation
+from .magnetisation import Parametrisation, RegionMagnetisation
 from .material import MaterialVariable
 from .objectives import AngleInDegrees, NodePosition, Orientation, ProbePosition
 from .targets import Smoothness
@@ -165,9 +165,9 @@ def _field(ctx, v):
 
 def _magnetisation(ctx, v):
     planes = v["planes"][0] if len(v["planes"]) == 1 else v["planes"]
-    mv = RegionMagnetisation(ctx.problem, [ctx.regions[r] for r in v["regions"]], v["form"], planes, v.get("free"),
-                             v["Br_max"], None if v["field"] is None else ctx.fields[v["field"]],
-                             name=f"magnetisation{ctx.index}")
+    mv = RegionMagnetisation(ctx.problem, [ctx.regions[r] for r in v["regions"]],
+                             Parametrisation(v["form"], planes, v.get("free"), v["Br_max"]),
+                             None if v["field"] is None else ctx.fields[v["field"]], name=f"magnetisation{ctx.index}")
     mv.region_names = list(v["regions"])
     if v["smoothness"] > 0:
         ctx.add_regulariser(Smoothness(mv, v["smoothness"]))

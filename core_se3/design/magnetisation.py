@@ -3,6 +3,8 @@ contract and how dr/dp is computed: here analytically, the magnetic load being l
 dipoles)."""
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from .. import lie
@@ -11,7 +13,48 @@ from ..fem.quadrature import shape_functions, surface_jacobian
 from ..model import MU0, MagneticLoad, Magnetisation
 from .variables import Variable, field_at, free_index, magnetic_loads, plane_axes, polar_vector, region_elements
 
-__all__ = ["RegionMagnetisation"]
+__all__ = ["RegionMagnetisation", "Parametrisation"]
+
+
+@dataclass(frozen=True)
+class Parametrisation:
+    """How a :class:`RegionMagnetisation` parametrises B^r in each region.
+
+    Parameters
+    ----------
+    form : str
+        'vector' (3 per region) or 'polar' (magnitude and angle [rad] from e1 toward e2).
+    planes : (e1, e2) or a sequence of them, optional
+        The plane(s) of the polar form (default x and z).
+    free : sequence of str, optional
+        The free components of every region ('x', 'y', 'z' or 'magnitude', 'angle'; default all).
+    Br_max : float, optional
+        |B^r| <= Br_max [T] per region (norm bound, or the magnitude's upper bound).
+
+    Example
+    -------
+    >>> Parametrisation.of({"form": "polar", "Br_max": 0.1}).planes
+    ((1.0, 0.0, 0.0), (0.0, 0.0, 1.0))
+    """
+    form: str = "vector"
+    planes: object = ((1.0, 0.0, 0.0), (0.0, 0.0, 1.0))
+    free: object = None
+    Br_max: float | None = None
+
+    @classmethod
+    def of(cls, spec):
+        """A Parametrisation from itself, a form name ('vector', 'polar') or a dict of its fields."""
+        if isinstance(spec, cls):
+            return spec
+        if isinstance(spec, str):
+            return cls(spec)
+        if isinstance(spec, dict):
+            unknown = sorted(set(spec) - set(cls.__dataclass_fields__))
+            if unknown:
+                raise DesignError(f"magnetisation: unknown parametrisation key(s) {unknown}; the keys are "
+                                  f"{list(cls.__dataclass_fields__)}")
+            return cls(**spec)
+        raise DesignError(f"magnetisation: form must be 'vector', 'polar', a dict or a Parametrisation, got {spec!r}")
 
 
 def lumping(mesh, elements):
@@ -54,14 +97,9 @@ class RegionMagnetisation(Variable):
         The problem.
     regions : sequence
         Region names or element-id arrays (disjoint).
-    form : str
-        'vector' or 'polar'.
-    planes : (e1, e2) or a sequence of them, optional
-        The plane(s) of the polar form (default x and z).
-    free : sequence of str, optional
-        The free components of every region.
-    Br_max : float, optional
-        |B^r| <= Br_max [T] per region (norm bound, or the magnitude's upper bound).
+    form : Parametrisation, str or dict, optional
+        The form with its planes, free components and bound (:class:`Parametrisation`; a
+        form name or a dict of its fields; default 'vector', all free, unbounded).
     field : Field, optional
         The applied field (default that of the replaced magnets; needed without them).
     mu0 : float, optional
@@ -81,11 +119,15 @@ class RegionMagnetisation(Variable):
     >>> v = RegionMagnetisation(p, [[0, 1], [2, 3]])
     >>> v.value().round(12).tolist(), len(p.loads)
     ([0.2, 0.0, 0.0, 0.2, 0.0, 0.0], 1)
+    >>> q = Problem(mesh.rectangle(4.0, 0.5, 4, 1), Material(1e3, 0.0, 0.1))      # no magnet: a field given
+    >>> RegionMagnetisation(q, [[0, 1]], dict(free=("x", "z")), UniformField((0.0, 0.0, 1.0)), name="Br").labels
+    ['Br[0].x', 'Br[0].z']
     """
 
-    def __init__(self, problem, regions, form="vector", planes=((1.0, 0.0, 0.0), (0.0, 0.0, 1.0)), free=None,
-                 Br_max=None, field=None, mu0=None, start=None, name="magnetisation"):
+    def __init__(self, problem, regions, form="vector", field=None, mu0=None, start=None, name="magnetisation"):
         mesh = problem.mesh
+        spec = Parametrisation.of(form)
+        form, planes, free, Br_max = spec.form, spec.planes, spec.free, spec.Br_max
         self.problem, self.form = problem, form
         if form not in ("vector", "polar"):
             raise DesignError(f"magnetisation {name!r}: form must be 'vector' or 'polar', got {form!r}")
