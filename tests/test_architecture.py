@@ -37,9 +37,6 @@ LONG_FUNCTIONS = {}
 ELSEWHERE = ("core_se3.fem.", "core_se3.solvers.newton", "core_se3.solvers.stability", "core_se3.solvers.steps",
              "core_se3.solvers.pathcheck", "core_se3.control.")
 WIDE_FUNCTIONS = {
-    # pending other work: control/ is being changed by issue 32 (control3)
-    "core_se3.control.loop:track": "control's tracking options (gain, damping, halvings, model)",
-    "core_se3.control.loop:plan": "control's planning options (tolerance, iterations, damping, extrapolation)",
     # pending a bundling of public signatures (issue 33 item 4, not done yet)
     "core_se3.parallel.newton:distributed_solve": "newton_solve's signature plus the distributed set-up (linear, "
                                                   "petsc_options, partition: Problem.solve's keywords, "

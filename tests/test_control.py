@@ -359,6 +359,10 @@ def test_track_and_plan_reach_their_targets():
     assert tr.max_error < 1e-3 * 1.5 and tr.rate > 0
     with pytest.raises(OptionError, match="tolerance"):
         plan(s, "tip", targets, 0.0, components=[2])
+    with pytest.raises(OptionError, match="unknown PlanOptions key.*max_iters"):
+        plan(s, "tip", targets, 1e-8, components=[2], options=dict(max_iters=3))
+    with pytest.raises(OptionError, match="unknown Feedback key.*gian"):
+        track(s2, "tip", targets, components=[2], feedback=dict(gian=0.5))
 
 
 def test_default_schedule_is_deterministic():

@@ -16,9 +16,9 @@ True
 """
 from .commands import Commands, scenario_variables
 from .corrector import Corrector, SubStep
-from .loop import Plan, Tracking, plan, track
+from .loop import Feedback, Plan, PlanOptions, Tracking, plan, track
 from .options import ControlOptions
 from .session import Session, State, Work
 
 __all__ = ["Session", "State", "Work", "ControlOptions", "Commands", "scenario_variables", "Corrector", "SubStep",
-           "track", "plan", "Tracking", "Plan"]
+           "track", "plan", "Feedback", "PlanOptions", "Tracking", "Plan"]

@@ -22,13 +22,78 @@ the message says which), never passed over.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
 from ..errors import ControlError, OptionError
 
-__all__ = ["track", "plan", "Tracking", "Plan", "least_squares_step"]
+__all__ = ["track", "plan", "Feedback", "PlanOptions", "Tracking", "Plan", "least_squares_step"]
+
+
+@dataclass(frozen=True)
+class Feedback:
+    """The feedback law of :func:`track`.
+
+    Attributes
+    ----------
+    gain : float
+        Feedback gain (1: a Newton step toward the next target).
+    damping : float
+        The damping mu of the least-squares step (0: least norm).
+    max_halvings : int
+        Halvings of a command step the session refuses before the cycle fails.
+
+    Example
+    -------
+    >>> Feedback(damping=0.1).gain
+    1.0
+    """
+    gain: float = 1.0
+    damping: float = 0.0
+    max_halvings: int = 5
+
+
+@dataclass(frozen=True)
+class PlanOptions:
+    """The Gauss-Newton iteration of :func:`plan` at every sample.
+
+    Attributes
+    ----------
+    max_iter : int
+        Gauss-Newton iterations per sample.
+    damping : float
+        The damping mu of the least-squares step (0: least norm).
+    extrapolate : bool
+        Start a sample from the command extrapolated linearly from the two samples before.
+    max_halvings : int
+        Halvings of a step that raises the misfit or that the session refuses.
+
+    Example
+    -------
+    >>> PlanOptions(max_iter=5).extrapolate
+    True
+    """
+    max_iter: int = 20
+    damping: float = 0.0
+    extrapolate: bool = True
+    max_halvings: int = 6
+
+
+def _options(cls, spec, where):
+    """``cls`` from None (the defaults), an instance or a dict of its fields; OptionError naming
+    an unknown key."""
+    if spec is None:
+        return cls()
+    if isinstance(spec, cls):
+        return spec
+    if isinstance(spec, dict):
+        names = [f.name for f in fields(cls)]
+        unknown = sorted(set(spec) - set(names))
+        if unknown:
+            raise OptionError(f"{where}: unknown {cls.__name__} key(s) {unknown}; the keys are {names}")
+        return cls(**spec)
+    raise OptionError(f"{where}: expected a {cls.__name__} or a dict of its fields, got {spec!r}")
 
 
 def least_squares_step(J, e, scale, damping=0.0):
@@ -153,8 +218,7 @@ class Tracking:
         return float(self.errors[1:].max())
 
 
-def track(session, quantity, targets, variables=None, components=None, gain=1.0, damping=0.0, max_halvings=5,
-          model=None):
+def track(session, quantity, targets, variables=None, components=None, feedback=None, model=None):
     """Track ``targets`` (K, m) with the components ``components`` of ``quantity`` (a probe name
     or a ``design`` quantity) by Jacobian feedback, one warm update per sample (module
     docstring).
@@ -166,8 +230,9 @@ def track(session, quantity, targets, variables=None, components=None, gain=1.0,
         measured and commanded.
     variables : sequence of str, optional
         The commanded variables (default all of the session's).
-    gain, damping : float
-        Feedback gain (1: a Newton step toward the next target) and the damping mu.
+    feedback : Feedback or dict, optional
+        The gain, the damping mu and the halvings of a refused command (default
+        ``Feedback()``: gain 1, no damping, 5 halvings).
     model : Session, optional
         The controller's model, when it is not the plant (a model error): the Jacobian is the
         model's, at the same commands (both sessions are updated every cycle; a probe name
@@ -191,6 +256,7 @@ def track(session, quantity, targets, variables=None, components=None, gain=1.0,
     >>> bool(t.max_error < 1e-3)
     True
     """
+    fb = _options(Feedback, feedback, "track")
     lp = _Loop(session, quantity, variables, components, model)
     T = lp.targets(targets)
     K = len(T)
@@ -200,8 +266,8 @@ def track(session, quantity, targets, variables=None, components=None, gain=1.0,
     Y[0], X[0] = lp.y(), lp.x()
     for k in range(1, K):
         t0 = time.perf_counter()
-        dx = least_squares_step(lp.jacobian(), gain * (T[k] - Y[k - 1]), lp.scale, damping)
-        st, _ = lp.step(X[k - 1], dx, max_halvings)
+        dx = least_squares_step(lp.jacobian(), fb.gain * (T[k] - Y[k - 1]), lp.scale, fb.damping)
+        st, _ = lp.step(X[k - 1], dx, fb.max_halvings)
         Y[k], X[k] = lp.y(), lp.x()
         dt[k] = time.perf_counter() - t0
         its[k], nf[k] = st.iterations, st.factorizations
@@ -248,8 +314,7 @@ class Plan:
         return bool(np.all(self.reached))
 
 
-def plan(session, quantity, targets, tolerance, variables=None, components=None, max_iter=20, damping=0.0,
-         extrapolate=True, max_halvings=6):
+def plan(session, quantity, targets, tolerance, variables=None, components=None, options=None):
     """Plan the commands that put ``quantity`` (its ``components``) on every target of
     ``targets`` (K, m), each an inverse problem warm-started from the one before (module
     docstring); the session ends at the last sample.
@@ -258,8 +323,9 @@ def plan(session, quantity, targets, tolerance, variables=None, components=None,
     ----------
     tolerance : float
         The largest misfit component that counts as reached (the quantity's units).
-    max_iter : int
-        Gauss-Newton iterations per sample.
+    options : PlanOptions or dict, optional
+        Gauss-Newton iterations per sample, damping, extrapolation and halvings (default
+        ``PlanOptions()``: 20 iterations, no damping, extrapolated, 6 halvings).
 
     Returns
     -------
@@ -278,9 +344,12 @@ def plan(session, quantity, targets, tolerance, variables=None, components=None,
     >>> pl = plan(s, "tip", [[z0 + 0.5], [z0 + 1.0]], 1e-9, components=[2])
     >>> pl.all_reached, bool(pl.misfits.max() <= 1e-9)
     (True, True)
+    >>> plan(s, "tip", [[z0 + 1.5]], 1e-9, components=[2], options=dict(max_iter=1)).reached.tolist()
+    [False]
     """
     if not (np.isfinite(tolerance) and tolerance > 0):
         raise OptionError(f"plan: the tolerance must be positive and finite, got {tolerance!r}")
+    opts = _options(PlanOptions, options, "plan")
     t0 = time.perf_counter()
     lp = _Loop(session, quantity, variables, components)
     T = lp.targets(targets)
@@ -288,7 +357,7 @@ def plan(session, quantity, targets, tolerance, variables=None, components=None,
     Y, X = np.zeros_like(T), np.zeros((K, len(lp.scale)))
     mis, its, ups = np.zeros(K), np.zeros(K, int), np.zeros(K, int)
     for k in range(K):
-        if extrapolate and k >= 2:
+        if opts.extrapolate and k >= 2:
             try:
                 lp.command(2 * X[k - 1] - X[k - 2])
                 ups[k] += 1
@@ -296,11 +365,11 @@ def plan(session, quantity, targets, tolerance, variables=None, components=None,
                 pass                                   # start from the last sample's solution
         x, y = lp.x(), lp.y()
         e = np.abs(y - T[k]).max()
-        while e > tolerance and its[k] < max_iter:
+        while e > tolerance and its[k] < opts.max_iter:
             its[k] += 1
-            dx = least_squares_step(lp.jacobian(), T[k] - y, lp.scale, damping)
+            dx = least_squares_step(lp.jacobian(), T[k] - y, lp.scale, opts.damping)
             a = 1.0
-            for _ in range(max_halvings + 1):
+            for _ in range(opts.max_halvings + 1):
                 try:
                     lp.command(x + a * dx)
                     ups[k] += 1
