@@ -36,12 +36,7 @@ LONG_FUNCTIONS = {}
 # (not checked for staleness; the lead drops them after the merge)
 ELSEWHERE = ("core_se3.fem.", "core_se3.solvers.newton", "core_se3.solvers.stability", "core_se3.solvers.steps",
              "core_se3.solvers.pathcheck", "core_se3.control.")
-WIDE_FUNCTIONS = {
-    # pending a bundling of public signatures (issue 33 item 4, not done yet)
-    "core_se3.parallel.newton:distributed_solve": "newton_solve's signature plus the distributed set-up (linear, "
-                                                  "petsc_options, partition: Problem.solve's keywords, "
-                                                  "solve_defaults and [solver] of a scenario) and comm",
-}
+WIDE_FUNCTIONS = {}
 
 
 def _modules():

@@ -27,9 +27,9 @@ import numpy as np
 import pytest
 
 from core_se3 import Material, Problem, lie, mesh
-from core_se3.errors import ParallelError
+from core_se3.errors import OptionError, ParallelError
 from core_se3.model import Load, LoadEvaluation, UniformField, make_obstacle
-from core_se3.parallel import local_problem, partition_elements, rcb, subdomain
+from core_se3.parallel import RunSetup, distributed_solve, local_problem, partition_elements, rcb, subdomain
 from core_se3.parallel.comm import SerialComm
 from core_se3.parallel.system import rigid_body_modes
 
@@ -220,6 +220,25 @@ def test_one_rank_shares_the_kernels_csr_with_petsc():
     assert not dense[np.ix_(held, np.flatnonzero(free))].any() and not dense[np.ix_(free, held)].any()
     A.data[0] += 1.0                                                # no copy: PETSc sees the change
     assert M.getValue(0, int(pat.indices[0])) == dense[0, pat.indices[0]] + 1.0
+
+
+def test_the_distributed_set_up_reaches_the_run_once():
+    """Problem.solve's linear/partition keywords and setup= (a RunSetup or a dict) reach the run
+    alike; the set-up given both ways, or a set-up keyword given to distributed_solve directly,
+    is an OptionError (not one of the two silently dropped)."""
+    if importlib.util.find_spec("petsc4py") is None:
+        pytest.skip("needs petsc4py")
+    p = Problem(mesh.rectangle(2.0, 1.0, 4, 2), Material(1e4, 0.3, 0.02))
+    p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 1e-3)); p.add_probe("tip", "x1")
+    a = p.solve(steps=1, solver="distributed", linear="mumps", partition="rcb")
+    b = p.solve(steps=1, solver="distributed", setup=dict(linear="mumps", partition="rcb"))
+    c = distributed_solve(p, steps=1, setup=RunSetup(linear="mumps", partition="rcb"))
+    assert a.parallel["linear"] == b.parallel["linear"] == c.parallel["linear"] == "mumps"
+    assert np.array_equal(a.final.g, b.final.g) and np.array_equal(a.final.g, c.final.g)
+    with pytest.raises(OptionError, match="given twice"):
+        p.solve(steps=1, solver="distributed", linear="gamg", setup=dict(linear="mumps"))
+    with pytest.raises(OptionError, match="setup=RunSetup"):
+        distributed_solve(p, steps=1, linear="gamg")
 
 
 def test_a_load_without_a_distributed_form_is_refused():

@@ -41,7 +41,9 @@ def dispatch(problem, control, solver, kw):
     solver : str or None
         None, 'serial' or 'distributed'.
     kw : dict
-        The solver's keywords (the distributed set-up's are dropped for a serial solver).
+        The solver's keywords; the distributed set-up's (``linear``, ``petsc_options``,
+        ``partition``, or ``setup``: a ``parallel.RunSetup``) go to the distributed solver as
+        its ``setup`` and are dropped for a serial solver.
 
     Returns
     -------
@@ -68,8 +70,13 @@ def dispatch(problem, control, solver, kw):
         raise ParallelError(f"the distributed solver steps the load (control='load'); control "
                             f"{control!r} runs serially (drop solver='distributed')")
     if solver == "distributed" or (solver is None and control == "load" and launched_ranks() > 1):
+        given = {k: kw.pop(k) for k in DISTRIBUTED_KEYS if k in kw}
+        if given and kw.get("setup") is not None:
+            raise OptionError(f"the distributed set-up given twice, as setup= and as {', '.join(given)}=: give one")
+        if given:
+            kw["setup"] = given           # parallel.RunSetup's fields
         return check_held_dofs(problem, SOLVERS["distributed"](problem, **kw))
-    for k in DISTRIBUTED_KEYS:
+    for k in DISTRIBUTED_KEYS + ("setup",):
         kw.pop(k, None)
     return check_held_dofs(problem, SOLVERS[control](problem, **kw))
 

@@ -18,11 +18,11 @@ from ..model.problem import SOLVERS
 from .comm import SerialComm, collective, is_root, world
 from .localize import LocalView, localize_load, localize_support
 from .local import Subdomain, local_problem, subdomain
-from .newton import RUN_OPTIONS, distributed_newton_steps, distributed_solve
+from .newton import RUN_OPTIONS, RunSetup, distributed_newton_steps, distributed_solve
 from .partition import PARTITIONERS, dual_graph, node_owners, partition_elements, rcb
 from .run import DistributedRun, GlobalEvaluation
 
-__all__ = ["distributed_solve", "distributed_newton_steps", "DistributedRun", "GlobalEvaluation", "Subdomain",
+__all__ = ["distributed_solve", "RunSetup", "distributed_newton_steps", "DistributedRun", "GlobalEvaluation", "Subdomain",
            "subdomain", "local_problem", "LocalView", "localize_load", "localize_support", "partition_elements",
            "rcb", "dual_graph", "node_owners", "PARTITIONERS", "SerialComm", "world", "collective", "is_root",
            "RUN_OPTIONS"]

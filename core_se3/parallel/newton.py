@@ -13,18 +13,68 @@ records (probes, reactions, balance) are the serial recorder's and every rank ho
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass, fields
 
 import numpy as np
 
+from ..errors import OptionError, did_you_mean
 from ..results import Result, StepRecorder
 from ..solvers import NewtonOptions, NewtonState, newton_steps, requested_load_factors
 from ..solvers.options import split_options, unknown_keywords
 from .comm import is_root
 from .run import DistributedRun
 
-__all__ = ["distributed_newton_steps", "distributed_solve", "DistributedEquations", "RUN_OPTIONS"]
+__all__ = ["distributed_newton_steps", "distributed_solve", "DistributedEquations", "RunSetup", "RUN_OPTIONS"]
 
 RUN_OPTIONS = ("linear", "petsc_options", "partition")      # keywords of the distributed set-up
+
+
+@dataclass(frozen=True)
+class RunSetup:
+    """The distributed set-up of :func:`distributed_solve` (``Problem.solve``'s keywords of these
+    names, ``[solver]`` linear, petsc and partition of a scenario).
+
+    Attributes
+    ----------
+    linear : str, optional
+        'mumps' (default), 'gamg' or 'hypre' (``problem.solve_defaults['linear']`` if given).
+    petsc_options : dict, optional
+        Free-form PETSc options (``[solver.petsc]`` of a scenario file; default
+        ``problem.solve_defaults['petsc_options']``).
+    partition : str or (m,) array, optional
+        Partitioner ('auto', 'ptscotch', 'parmetis', 'rcb') or the ranks of the elements.
+    comm : mpi4py.MPI.Comm, optional
+        Default COMM_WORLD.
+
+    Example
+    -------
+    >>> RunSetup.of(dict(linear="gamg")).partition
+    'auto'
+    >>> RunSetup.of(dict(linaer="gamg"))
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.OptionError: distributed set-up: unknown key 'linaer' (the keys are linear, petsc_options, partition, comm); did you mean 'linear'?
+    """
+    linear: str | None = None
+    petsc_options: dict | None = None
+    partition: object = "auto"
+    comm: object = None
+
+    @classmethod
+    def of(cls, spec):
+        """A RunSetup from None (the defaults), itself or a dict of its fields."""
+        if spec is None:
+            return cls()
+        if isinstance(spec, cls):
+            return spec
+        names = [f.name for f in fields(cls)]
+        if not isinstance(spec, dict):
+            raise OptionError(f"distributed set-up: expected a RunSetup or a dict of {', '.join(names)}, got {spec!r}")
+        for k in spec:
+            if k not in names:
+                raise OptionError(f"distributed set-up: unknown key {k!r} (the keys are {', '.join(names)})"
+                                  f"{did_you_mean(k, names)}")
+        return cls(**spec)
 
 
 class DistributedEquations:
@@ -129,7 +179,7 @@ def distributed_newton_steps(run, targets, options=None, start=None, recorder=No
 
 
 def distributed_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, g_init=None, load_factors=None,
-                      options=None, linear=None, petsc_options=None, partition="auto", comm=None, **kw):
+                      options=None, setup=None, **kw):
     """``newton_solve`` over the MPI ranks (``Problem.solve(solver="distributed")``, and the
     default of load control under mpirun): the same arguments, plus the distributed set-up.
 
@@ -137,14 +187,10 @@ def distributed_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, g_init=None
     ----------
     problem, steps, lam_end, lam_start, g_init, load_factors, options
         As :func:`core_se3.solvers.newton_solve` (NewtonOptions fields as keywords too).
-    linear : str, optional
-        'mumps' (default), 'gamg' or 'hypre' (``problem.solve_defaults['linear']`` if given).
-    petsc_options : dict, optional
-        Free-form PETSc options (``[solver.petsc]`` of a scenario file).
-    partition : str or (m,) array, optional
-        Partitioner ('auto', 'ptscotch', 'parmetis', 'rcb') or the ranks of the elements.
-    comm : mpi4py.MPI.Comm, optional
-        Default COMM_WORLD.
+    setup : RunSetup or dict, optional
+        The linear solver, PETSc options, partition and communicator (:class:`RunSetup`;
+        ``Problem.solve`` takes ``linear``, ``petsc_options`` and ``partition`` as keywords
+        and passes them here).
 
     Returns
     -------
@@ -162,23 +208,28 @@ def distributed_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, g_init=None
     >>> p = Problem(mesh.rectangle(10.0, 1.0, 8, 1), Material(1.2e6, 0.0, 0.1))
     >>> p.clamp("x0"); p.add_edge_force("x1", (0, 0, 0.1)); p.add_probe("tip")
     >>> if importlib.util.find_spec("petsc4py"):
-    ...     res = distributed_solve(p, steps=2)
+    ...     res = distributed_solve(p, steps=2, setup=dict(linear="mumps"))
     ...     print(len(res.steps), round(float(res.final.probes["tip"]["u"][2]), 4))
     ... else:
     ...     print(3, 0.3317)
     3 0.3317
     """
     t0 = time.perf_counter()
+    run_setup = RunSetup.of(setup)
     opts, kw = split_options(NewtonOptions, options, kw)
-    unknown_keywords("distributed_solve", kw, [f for f in NewtonOptions.__dataclass_fields__] + list(RUN_OPTIONS))
+    for k in kw:
+        if k in RUN_OPTIONS or k == "comm":
+            raise OptionError(f"distributed_solve() takes {k!r} in setup=RunSetup({k}=...) or a dict (Problem.solve "
+                              "takes linear, petsc_options and partition as keywords)")
+    unknown_keywords("distributed_solve", kw, [f for f in NewtonOptions.__dataclass_fields__] + ["setup"])
     targets = requested_load_factors(steps, lam_end, lam_start, load_factors)
     mesh = problem.mesh
     g = mesh.g0.copy() if g_init is None else np.array(g_init, float)
     problem.check_supports(g)
     defaults = problem.solve_defaults
-    run = DistributedRun(problem, comm, linear or defaults.get("linear") or "mumps",
-                         petsc_options if petsc_options is not None else defaults.get("petsc_options"),
-                         partition)
+    run = DistributedRun(problem, run_setup.comm, run_setup.linear or defaults.get("linear") or "mumps",
+                         run_setup.petsc_options if run_setup.petsc_options is not None
+                         else defaults.get("petsc_options"), run_setup.partition)
     try:
         result = Result(mesh=mesh, element=problem.element_name)
         rec = StepRecorder(problem)
