@@ -171,13 +171,33 @@ def test_inertia_check_sees_an_even_number_of_crossings_in_one_step():
     # the smallest increment to the last bit: StepChecks._narrow now counts it as narrow)
     first = 0.5 * sum(_stop_bracket(_sandwich_strip(0.2), 40))
     assert abs(first - 0.04264) < 1e-4
-    assert _sandwich_strip(0.2).solve(steps=1).final.checks["det_sign"] == 1      # the old answer
-    assert 0.5 * sum(_stop_bracket(_sandwich_strip(0.2), 5)) > 0.5                 # the wrong crossing
+    assert _sandwich_strip(0.2).solve(steps=1, end_check=False).final.checks["det_sign"] == 1   # the old answer
+    assert 0.5 * sum(_stop_bracket(_sandwich_strip(0.2), 5, end_check=False)) > 0.5   # the wrong crossing
     for steps in (1, 2, 5):
         lo, hi = _stop_bracket(_sandwich_strip(0.2), steps, inertia_check=True)
         # located to critical_tol, or to the smallest increment the cut-backs allow (1/2**12 of
         # the step: 5.7e-3 of the load factor in one step) when that is coarser
         assert lo <= first <= hi and hi - lo <= max(1e-3 * hi, 2.0 / steps / 2 ** 12) * (1 + 1e-9)
+
+
+def test_the_end_check_stops_an_even_crossing_by_default():
+    """Without inertia_check (its price: a factorisation per try), the count at the end of the
+    solve (one factorisation) still sees the sandwich strip's even crossings: on the old code
+    one and two steps to 0.2 C w exit 0 on the unstable uniform stretch (12 and 6 negative
+    eigenvalues), five and ten stop at a later crossing (0.533, 0.236); now each stops naming
+    the first step over which the count rose (the count is also taken before a located sign
+    change stops the run) and keeps the steps before it.  Below the bifurcation nothing
+    changes."""
+    for steps, bracket, counts in ((1, (0.0, 1.0), (0, 12)), (2, (0.0, 0.5), (0, 6)), (5, (0.0, 0.2), (0, 4)),
+                                   (10, (0.0, 0.1), (0, 2))):
+        with pytest.raises(ConvergenceError) as exc:
+            _sandwich_strip(0.2).solve(steps=steps)
+        msg = str(exc.value)
+        assert "det K's sign did not show" in msg and "inertia_check = true" in msg
+        assert f"rose from {counts[0]} to {counts[1]} between load factors {bracket[0]:.7g} and {bracket[1]:.7g}" in msg
+        assert [s.load_factor for s in exc.value.result.steps] == [0.0]
+    res = _sandwich_strip(0.005).solve(steps=2)            # N = 0.005 C w < 0.0085 C w: stable
+    assert res.steps[-1].load_factor == 1.0 and not res.critical_points
 
 
 # ------------------------------------------------------------------ splitting ---------------

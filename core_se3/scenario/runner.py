@@ -99,7 +99,8 @@ def _options(s):
     return NewtonOptions(max_cutbacks=s["max_cutbacks"], iteration=s["iteration"],
                          predictor=s.get("predictor", "none"), path_check=s["path_check"],
                          limit_check=s["limit_check"], max_substeps=s["max_substeps"],
-                         snap_check=s["snap_check"], inertia_check=s["inertia_check"], **common)
+                         snap_check=s["snap_check"], inertia_check=s["inertia_check"], end_check=s["end_check"],
+                         **common)
 
 
 def run(scn, out=None, resume=False, progress=None, force=False, stop_after=None, verbose=False):

@@ -139,6 +139,10 @@ SOLVER = Section("solver", (
     _option("snap_check", _NEWTON, "load control with contact: a step that moved a node by more than an element "
             "size is solved again in halves (a step that landed elsewhere is cut back); a jump that survives halving "
             "to 1/64 of the step is reported as a snap in `critical_points` (docs/STEPS.md)", kind="bool"),
+    _option("end_check", _NEWTON, "load control: count the negative eigenvalues of the symmetric tangent at the end "
+            "of the solve (one factorisation; conservative loads without contact, with limit_check); more than at "
+            "the start stops the run naming the step where they rose: an even number crossing zero within a step, "
+            "which det K's sign does not show (docs/STEPS.md)", kind="bool"),
     _option("inertia_check", _NEWTON, "load control: count the negative eigenvalues of the symmetric tangent at "
             "every converged step (one more factorisation each; conservative loads only) so that an even number "
             "crossing zero within one step, which leaves the sign of det K, stops the run like a sign change "

@@ -36,7 +36,7 @@ from .newton_try import NewtonTry, augmented_try, hooked_loads, tangent_predicto
 from .options import NewtonOptions, load_steps, split_options, unknown_keywords
 from .splitting import (MAX_LOAD_TURN, MAX_PRESCRIBED_TURN, check_substeps, split_prescribed,
                         split_turning)
-from .stability import limit_point_hint
+from .stability import limit_point_hint, unseen_crossing
 from .contact_probe import ContactProbe, median_edge
 from .step_checks import StepChecks, start_sign
 
@@ -305,7 +305,7 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
                 dlam = checks.next_increment(lam, dlam / 2, floor)
             if checks.located(floor):
                 timer.close()
-                raise ConvergenceError(checks.critical_message(), result)
+                _stop_at_critical(problem, opts, checks, result)
             _note_passed(checks, eq, result)
             if not ok and abs(dlam) < floor:
                 timer.close()
@@ -562,6 +562,7 @@ def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, g_init=None, loa
     try:
         for item in newton_steps(problem, targets, opts, NewtonState(lam_start, g), rec, result):
             result.steps.append(item.step)
+        _end_check(problem, opts, result)
     except CoreSE3Error as exc:
         # any failure past the start (a load whose programme turns non-finite, a contact error)
         # keeps the converged steps, as ConvergenceError does
@@ -569,3 +570,36 @@ def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, g_init=None, loa
             exc.result = result
         raise
     return result
+
+
+def _stop_at_critical(problem, opts, checks, result):
+    """Stop at the located sign change of ``checks``, or at an earlier crossing that det K's
+    sign did not show (:func:`_end_check`)."""
+    _end_check(problem, opts, result)
+    raise ConvergenceError(checks.critical_message(), result)
+
+
+def _end_check(problem, opts, result):
+    """``end_check``: an even number of eigenvalues crossing zero within one step leaves det K's
+    sign; if the last stored state (the end, or the last before a located sign change) has more
+    negative eigenvalues of sym K than the start, stop at the step where they rose
+    (``stability.unseen_crossing``).  Only where the stability check runs (limit_check, smooth
+    conservative problems) and nothing was recorded on the way."""
+    if not (opts.end_check and opts.limit_check and not opts.inertia_check) or result.critical_points \
+            or getattr(problem.element, "stateful", False) or any(getattr(ld, "constraint_force", False) or getattr(ld, "follower", False)
+                                               for ld in problem.loads):
+        return
+    t0 = time.perf_counter()
+    found = unseen_crossing(problem, result.steps)
+    result.timings["other"] = result.timings.get("other", 0.0) + time.perf_counter() - t0
+    if found is None:
+        return
+    (lo, hi), (n_lo, n_hi) = found
+    del result.steps[[s.load_factor for s in result.steps].index(lo) + 1:]
+    raise ConvergenceError(
+        f"load control crossed a critical point that det K's sign did not show: the number of negative "
+        f"eigenvalues of sym K rose from {n_lo} to {n_hi} between load factors {lo:.7g} and {hi:.7g} (an even "
+        "number crossed zero within that step), so the states beyond it lie on an unstable path and depend on "
+        "the load steps. Locate it with inertia_check = true ([solver]) or smaller steps, or trace it with arc "
+        "length (stability=True); limit_check = false continues on the unstable path. The steps before it are "
+        "kept in .result", result)

@@ -61,7 +61,10 @@ class NewtonOptions:
     a jump that survives the halving as a snap (``solvers.contact_probe``); inertia_check: count
     the negative eigenvalues of sym K at every converged try (one more factorisation per try) so
     that an even number of them crossing zero within one step, which leaves the sign of det K,
-    is located like a sign change (``solvers.step_checks``); record_substeps: store the cut-back
+    is located like a sign change (``solvers.step_checks``); end_check: with limit_check and no
+    critical point met, count the negative eigenvalues of sym K at the end of the solve (one
+    factorisation) and, if more than at the start, stop naming the step where they rose
+    (``solvers.stability.unseen_crossing``; conservative loads, no contact); record_substeps: store the cut-back
     sub-steps as steps too; linear_solver: None = the problem's; iteration: 'mip' (the mixed
     integration point Newton of Magisano, Leonetti and Garcea 2017, with an element that
     supports it: the geometric part of the tangent sees element stresses updated linearly,
@@ -79,8 +82,8 @@ class NewtonOptions:
         In [0, 50]; default 12.
     divergence : float
         >= 1; default 1e8.
-    path_check, limit_check, snap_check, inertia_check, record_substeps : bool
-        Default True, True, True, False and False.
+    path_check, limit_check, snap_check, inertia_check, end_check, record_substeps : bool
+        Default True, True, True, False, True and False.
     critical_tol : float
         In (0, 1); default 1e-3.
     max_substeps : int
@@ -120,6 +123,7 @@ class NewtonOptions:
     max_substeps: int = _opt(1000, 1, 10_000_000)
     snap_check: bool = True
     inertia_check: bool = False
+    end_check: bool = True
 
     def __post_init__(self):
         _check(self)

@@ -21,7 +21,7 @@ from ..errors import CoreSE3Error, SingularSystemError
 from .linalg import AUTO_MUMPS_MIN, Factorization, available_solvers, mumps_inertia
 from .system import ShellSystem
 
-__all__ = ["inertia", "smallest_mode", "CriticalPoint", "PathPoint", "analyse", "locate_critical",
+__all__ = ["inertia", "negative_count", "unseen_crossing", "smallest_mode", "CriticalPoint", "PathPoint", "analyse", "locate_critical",
            "limit_point_hint"]
 
 
@@ -315,3 +315,57 @@ def limit_point_hint(problem, g, lam, linear_solver=None):
                 "(core_se3.solvers.arc_length) or displacement control "
                 "(core_se3.solvers.displacement_control)")
     return None
+
+
+def negative_count(problem, g, lam, asym_tol=1e-6):
+    """The number of negative eigenvalues of sym K at the state (g, lam) on the free dofs, or
+    None when it says nothing of stability or cannot be counted: K not symmetric to
+    ``asym_tol`` (max |K - K^T| / max |K|: non-conservative loads) or the count not available
+    (:func:`inertia`).  One tangent assembly and one symmetric factorisation.
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(1.0, 0.2, 2, 1), Material(1e3, 0.0, 0.02))
+    >>> p.clamp("x0")
+    >>> negative_count(p, p.mesh.g0, 0.0)
+    0
+    """
+    K = problem.tangent(g, lam)
+    scale = abs(K).max()
+    if scale == 0 or abs(K - K.T).max() > asym_tol * scale:
+        return None
+    return inertia(K)[1]
+
+
+def unseen_crossing(problem, steps):
+    """Load factors (lo, hi) and counts (n_lo, n_hi) of the first stored step over which the
+    number of negative eigenvalues of sym K rose, when the last stored state has more than the
+    first; None when it has not (or cannot be counted).
+
+    The sign of det K, checked at every step, misses an even number of eigenvalues crossing
+    zero within one step; this count at the end of a load-stepped solve sees them (one
+    factorisation when the end state is stable, as most are; a bisection over the stored
+    states, log2 of their number more, when it is not).  ``steps``: StepResults with ``g`` and
+    ``load_factor``, the first the start.
+    """
+    stored = [s for s in steps if getattr(s, "g", None) is not None]
+    if len(stored) < 2:
+        return None
+    count = {}
+
+    def n(i):
+        if i not in count:
+            count[i] = negative_count(problem, stored[i].g, stored[i].load_factor)
+        return count[i]
+
+    last = len(stored) - 1
+    if not n(last) or n(0) is None or n(last) is None or n(last) <= n(0):
+        return None
+    lo, hi = 0, last                       # n(lo) <= n(0) < n(hi): bisect over the stored states
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if n(mid) is None:
+            break
+        lo, hi = (mid, hi) if n(mid) <= n(0) else (lo, mid)
+    return (stored[lo].load_factor, stored[hi].load_factor), (n(lo), n(hi))
