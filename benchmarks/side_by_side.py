@@ -20,7 +20,8 @@ import subprocess
 import sys
 import tempfile
 
-MESH = {"cantilever-shear": "16x1", "rollup": "10x1", "arch-follower": "40x1", "torsion": "20x6"}
+MESH = {"cantilever-shear": "16x1", "rollup": "10x1", "arch-follower": "40x1", "torsion": "20x6",
+        "sze-hemisphere": "16x16", "plate-100x100": "100x100"}
 THREAD_VARS = ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 
 
