@@ -123,8 +123,8 @@ def condensed_stiffness(Dbar, Pm, Gam, Dj):
     >>> float(condensed_stiffness(np.einsum("mqia,mqij,mqjb->mab", P, Dj, P), P, Gam, Dj)[0, 0, 0])
     0.0
     """
-    DG = np.einsum("mqij,mqjk->mqik", Dj, Gam)
-    H = np.einsum("mqia,mqib->mab", Gam, DG)
-    L = np.einsum("mqia,mqib->mab", DG, Pm)
-    out = Dbar - np.einsum("mak,mab->mkb", L, np.linalg.solve(H, L))
+    DG = Dj @ Gam                                                           # (k, q, 12, 4)
+    H = (np.swapaxes(Gam, -1, -2) @ DG).sum(1)
+    L = (np.swapaxes(DG, -1, -2) @ Pm).sum(1)                               # (k, 4, 24)
+    out = Dbar - np.swapaxes(L, 1, 2) @ np.linalg.solve(H, L)
     return 0.5 * (out + np.swapaxes(out, 1, 2))
