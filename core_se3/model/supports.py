@@ -109,6 +109,11 @@ class LabSpring(_Spring):
         """(nodes, lab directions (k, q, 3)) that this spring holds (for the support check)."""
         return self.nodes, self.D
 
+    def round_off_scale(self, ell):
+        """k |P X| over the nodes: the terms k P x and k P X that cancel in the spring force (a stiff
+        spring far from the origin has a floor above rtol: 1e4 E h on a unit strip stalled at 4e-10)."""
+        return self.k * float(np.linalg.norm(np.einsum("nij,nj->ni", self.P, self.X0)) + ell)
+
     def compiled(self, pattern):
         """The numba kernel of this spring (``kernels.loads.lab_spring``)."""
         from ..kernels.loads import lab_spring
@@ -161,6 +166,10 @@ class LabTiltSpring(_Spring):
         self.t = np.broadcast_to(t, (len(self.nodes), 3)) if t.ndim == 1 else t
         self.k = float(k_rot)
         self.name = name
+
+    def round_off_scale(self, ell):
+        """k_rot sqrt(k) / ell: moments of order k_rot per node (rotations of order 1), as forces."""
+        return self.k * np.sqrt(len(self.nodes)) / ell
 
     def compiled(self, pattern):
         """The numba kernel of this spring (``kernels.loads.lab_tilt_spring``)."""
@@ -227,6 +236,10 @@ class RotationComponentSpring(_Spring):
         self.b = np.einsum("nji,nj->ni", self.R0, a)                   # R0^T a (body frame)
         self.k = float(k_rot)
         self.name = name
+
+    def round_off_scale(self, ell):
+        """k_rot sqrt(k) / ell: moments of order k_rot per node (rotations of order 1), as forces."""
+        return self.k * np.sqrt(len(self.nodes)) / ell
 
     def compiled(self, pattern):
         """The numba kernel of this spring (``kernels.loads.rotation_component_spring``)."""
