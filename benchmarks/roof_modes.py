@@ -242,6 +242,35 @@ def penalty(p, kind, weight=1.0):
     return sp.csr_matrix((np.concatenate(V), (np.concatenate(I), np.concatenate(J))), (6 * m.n_nodes,) * 2)
 
 
+def chord_tie(p, weight=1.0, edges=("x1",)):
+    """weight E h times the linearised chord stretch of the mesh edges that run across a free
+    edge's element row (one end on the free node set, the other not: the roof's circumferential
+    edges of the last row; the hemisphere's meridional ones), as a spring k (t . du)^2 / 2,
+    k = weight E h w / |dX| (w the edge's tributary width, the free edge's length over its
+    elements): the membrane-order tie of the free-edge row's stretch to its chord that the
+    free-edge mechanism breaks (docs/ELEMENTS.md)."""
+    m, mat = p.mesh, p.material
+    free = np.zeros(m.n_nodes, bool)
+    for name in edges:
+        free[m.node_set(name)] = True
+    E = m.edge_nodes
+    sel = free[E[:, 0]] != free[E[:, 1]]
+    a, b = E[sel, 0], E[sel, 1]
+    dX = m.X[b] - m.X[a]
+    ln = np.linalg.norm(dX, axis=1)
+    t = dX / ln[:, None]
+    fs = np.flatnonzero(free)
+    width = np.ptp(m.X[fs], axis=0).max() / max(len(fs) - 1, 1)       # the free edge's spacing
+    k = weight * mat.E * mat.h * width / ln
+    R0 = m.g0[:, :3, :3]
+    ra, rb = np.einsum("ei,eij->ej", t, R0[a]), np.einsum("ei,eij->ej", t, R0[b])   # t . R0 u_body
+    rows = np.repeat(np.arange(len(a)), 6)
+    cols = np.concatenate([6 * a[:, None] + np.arange(3), 6 * b[:, None] + np.arange(3)], 1).ravel()
+    vals = np.concatenate([-ra, rb], 1).ravel()
+    B = sp.csr_matrix((vals, (rows, cols)), (len(a), 6 * m.n_nodes))
+    return (B.T @ sp.diags(k) @ B).tocsr()
+
+
 CANDIDATES = {
     "as kept": lambda p: stiffness(p),
     "helicoidal coupling removed (alpha 0)": lambda p: stiffness(p, alpha=0.0),
@@ -338,10 +367,27 @@ See docs/ELEMENTS.md, "The coarse thin roof: free-edge mechanisms of the edge ty
 """
 
 
+def chord_tie_sweeps(weights=(1.0, 1e-2, 1e-4)):
+    """Print the roof and hemisphere sweeps with :func:`chord_tie` at each weight (the free edges:
+    the roof's x1, the hemisphere's hole x0 and equator x1), / the default element's 64x64."""
+    conv = {"roof": converged(sc.scordelis_lo, 25.0), "hemi": converged(sc.pinched_hemisphere, 10.0)}
+    for w in weights:
+        for case, build, R, edges in (("roof", sc.scordelis_lo, 25.0, ("x1",)),
+                                      ("hemi", sc.pinched_hemisphere, 10.0, ("x0", "x1"))):
+            result_of = lambda p, w=w, edges=edges: solve(p, stiffness(p) + chord_tie(p, w, edges))[0]
+            for rh, r in sweep(build, R, result_of, conv[case]).items():
+                print(f"chord tie {w:g} E h, {case}, R/h {rh:g}: "
+                      + " ".join(f"{n}x{n} {v:.3f}" for n, v in zip(MESHES, r)), flush=True)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--opensees", default=None, help="python of an OpenSeesPy 3.7.1 venv")
+    ap.add_argument("--chord-tie", action="store_true",
+                    help="only print the sweeps with the free-edge chord tie (docs/ELEMENTS.md)")
     a = ap.parse_args()
+    if a.chord_tie:
+        return chord_tie_sweeps()
     conv = {"roof": converged(sc.scordelis_lo, 25.0), "hemi": converged(sc.pinched_hemisphere, 10.0)}
     doc = dict(date=datetime.datetime.now().isoformat(timespec="seconds"), opensees="3.7.1" if a.opensees else None)
     doc["diagnosis"] = diagnosis(conv["roof"])

@@ -43,7 +43,7 @@ def test_lab_rotation_holds_the_root_exactly_and_is_path_independent(tmp_path):
     p, g1, w1 = _solve(tmp_path, STRIP, 1)
     _, g8, w8 = _solve(tmp_path, STRIP, 8)
     assert not w1 and not w8
-    assert np.abs(g1 - g8).max() < 1e-12                        # fix (0, 1, 2, 4) instead: 2.4e-6
+    assert np.abs(g1 - g8).max() < 1e-12                        # fix (0, 1, 2, 4) instead: 8.4e-7
     root, tip = p.nodes("x0"), p.nodes("x1")
     rel = np.swapaxes(p.mesh.g0[:, :3, :3], 1, 2) @ g1[:, :3, :3]
     assert np.abs(lie.log_so3(rel[root])[:, 1]).max() < 1e-6    # the lab-y rotation component, held
@@ -57,7 +57,7 @@ def test_the_same_support_held_by_fix_drifts_and_the_warning_names_the_scenario_
     doc["supports"] = [{"type": "fix", "edge": "x0", "dofs": [0, 1, 2, 4]}, STRIP["supports"][1]]
     _, g1, w1 = _solve(tmp_path, doc, 1)
     _, g8, _ = _solve(tmp_path, doc, 8)
-    assert np.abs(g1 - g8).max() > 1e-6
+    assert np.abs(g1 - g8).max() > 3e-7         # 8.4e-7 (2.4e-6 before fem/membrane_enhanced.py)
     assert len(w1) == 1
     msg = str(w1[0].message)
     assert 'type = "lab"' in msg and 'type = "lab_rotation"' in msg and "direction" in msg

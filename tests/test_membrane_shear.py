@@ -35,9 +35,11 @@ def test_thin_coarse_hemisphere_does_not_lock(rh):
 
 
 def test_thin_coarse_hemisphere_locks_without_the_mean(monkeypatch):
-    """Negative control: the tied shear's variation locks the 4x4 hemisphere at R/h 1e4 (0.626)."""
+    """Negative control: the tied shear's variation locks the 4x4 hemisphere at R/h 1e4 (0.734;
+    0.626 before the enhanced membrane modes of ``membrane_enhanced``, whose symmetric shear
+    modes relax part of it)."""
     _no_mean(monkeypatch)
-    assert _ratio(4, 1e4) < 0.7
+    assert _ratio(4, 1e4) < 0.8
 
 
 def test_flat_elements_keep_the_tied_shear_to_the_bit(monkeypatch):

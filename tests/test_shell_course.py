@@ -21,7 +21,7 @@ REF = sc.REFERENCES
 
 @pytest.mark.parametrize("kind", pt.PATCH_FIELDS)
 def test_patch_tests_on_macneal_harders_patch(kind):
-    """Measured: membrane 3e-14, bending 7e-13, drilling 2e-13 (before the membrane-drilling
+    """Measured: membrane 4e-14, bending 7e-13, drilling 2e-13 (before the membrane-drilling
     correction: 2.5, 7e-13, 2.5)."""
     m, bnd = pt.mh_patch()
     assert pt.patch_test(m, bnd, kind) < 1e-8
@@ -29,7 +29,7 @@ def test_patch_tests_on_macneal_harders_patch(kind):
 
 def test_patch_tests_on_100_random_convex_patches():
     """Every node of a 3x3 grid moved by up to 0.3 of the spacing (measured worst of 100:
-    membrane 4e-13, bending 3e-11, drilling 4e-13)."""
+    membrane 5e-13, bending 2e-11, drilling 4e-13)."""
     rng = np.random.default_rng(7)
     worst = dict.fromkeys(pt.PATCH_FIELDS, 0.0)
     for _ in range(100):
@@ -59,13 +59,13 @@ def test_parallelograms_keep_their_stiffness_to_the_bit():
 
 
 @pytest.mark.parametrize("case,build,args,ref,bar", [
-    ("roof 16x16", sc.scordelis_lo, (16,), REF["scordelis-lo"], 0.02),             # measured 0.9916
-    ("hemisphere 16x16", sc.pinched_hemisphere, (16,), REF["pinched-hemisphere"], 0.02),  # 0.9873
-    ("cylinder 32x32", sc.pinched_cylinder, (32,), REF["pinched-cylinder"], 0.02),        # 0.9903
-    ("twisted beam in-plane 12x2", sc.twisted_beam, ("in-plane",), REF["twisted-beam-in-plane"], 0.02),  # 0.9922
+    ("roof 16x16", sc.scordelis_lo, (16,), REF["scordelis-lo"], 0.02),             # measured 0.9917
+    ("hemisphere 16x16", sc.pinched_hemisphere, (16,), REF["pinched-hemisphere"], 0.02),  # 0.9877
+    ("cylinder 32x32", sc.pinched_cylinder, (32,), REF["pinched-cylinder"], 0.02),        # 0.9909
+    ("twisted beam in-plane 12x2", sc.twisted_beam, ("in-plane",), REF["twisted-beam-in-plane"], 0.02),  # 0.9924
     ("twisted beam out-of-plane 12x2", sc.twisted_beam, ("out-of-plane",), REF["twisted-beam-out-of-plane"],
-     0.03),                                                                        # 0.9745: above the 2 % goal
-    ("Cook 32x32", sc.cook_membrane, (32,), REF["cook-membrane"], 0.02),          # 1.0 (Kratos thick alike)
+     0.03),                                                                        # 0.9774: above the 2 % goal
+    ("Cook 32x32", sc.cook_membrane, (32,), REF["cook-membrane"], 0.02),          # 0.9968 (Kratos thick 0.998)
 ])
 def test_standard_case_against_its_published_value(case, build, args, ref, bar):
     p, measure = build(*args)

@@ -35,13 +35,15 @@ def _strip(steps, held=None, penalty=None):
 def test_one_held_rotation_is_path_dependent_and_the_run_says_so():
     p, g1, w1 = _strip(1, held=(4,))
     _, g8, w8 = _strip(8, held=(4,))
-    assert np.abs(g1 - g8).max() > 1e-6             # 2.4e-6 (1e-4 of the displacement 0.02)
+    # both converged equilibria: 8.4e-7 (4e-5 of the displacement 0.02; 2.4e-6 before
+    # the enhanced membrane modes of fem/membrane_enhanced.py made the 2x1 strip 9 % softer in plane)
+    assert np.abs(g1 - g8).max() > 3e-7
     assert len(w1) == 1 and len(w8) == 1
     msg = str(w1[0].message)
     assert "rotation about d2" in msg and "drifted by" in msg and "load steps" in msg
     assert "add_rotation_component_support" in msg
     drift = held_dof_drift(p.supports, p.mesh.g0, g1)[0]
-    assert drift > 1e-6                              # 1.9e-6 rad of a rotation said to be held
+    assert drift > 1e-6                              # 1.2e-6 rad of a rotation said to be held (before: 1.9e-6)
 
 
 @pytest.mark.parametrize("held", [(3, 4), (3, 4, 5), (4, 5)])

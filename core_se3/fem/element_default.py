@@ -24,7 +24,8 @@ Energy.  With the reference edge twists z0, the element energy is the quadratic 
     Pi_e = 1/2 (z - z0)^T Dbar_e (z - z0),   z = (z_b, z_t, z_l, z_r) in R^24,
 
 where Dbar_e = sum_gp j0 P_gp^T D(A_1, A_2) P_gp is computed once from the reference geometry
-(2x2 Gauss, P_gp the tying interpolation, D the resultant law of ``material``).  All
+(2x2 Gauss, P_gp the tying interpolation, D the resultant law of ``material``), with four
+enhanced membrane modes condensed per element (``membrane_enhanced``, Simo and Rifai 1990).  All
 geometric nonlinearity sits in the edge logarithms, which are computed once per mesh edge.
 
 Linearisation (exp-update g_i <- g_i exp(eta_i)).  For psi = log(g_a^-1 g_b), with
@@ -49,6 +50,7 @@ from ..errors import ElementTooDistortedError
 from ..mesh import LOCAL_EDGES
 from .element import Element, ElementEvaluation, register_element
 from .membrane_drilling import drilling_correction, reference_G, tying_correction
+from .membrane_enhanced import condensed_stiffness, membrane_enhancement
 from .membrane_shear import shear_retention, shear_tying
 from .quadrature import GAUSS_2x2
 from .resultants import element_resultants
@@ -173,7 +175,8 @@ class DefaultElement(Element):
     z0 : (m, 24) ndarray
         Reference edge twists (z_b, z_t, z_l, z_r) of every element.
     Dbar : (m, 24, 24) ndarray
-        The element stiffness on the edge twists, sum_gp j0 P^T D P.
+        The element stiffness on the edge twists, sum_gp j0 P^T D P with the enhanced membrane
+        modes condensed (``membrane_enhanced``).
     j0 : (m, 4) ndarray
         Area element at the Gauss points; ``area`` (m,) their sum, the reference area.
 
@@ -224,9 +227,12 @@ class DefaultElement(Element):
             beta = shear_retention(z0, zeta0, Dm, j0)
             self.shear_beta[sl] = beta
             Pm = shear_tying(Pm, P, z0, beta)                                  # membrane_shear
-            # Dbar = sum_q j0_q P_q^T D_q P_q, contracted pairwise (a 4-operand einsum is O(24^4 m))
-            DP = np.einsum("mqij,mqjb->mqib", Dm * j0[..., None, None], Pm)
-            self.Dbar_packed[sl] = np.einsum("mqia,mqib->mab", Pm, DP)[:, _IU[0], _IU[1]]
+            # Dbar = sum_q j0_q P_q^T D_q P_q, contracted pairwise (a 4-operand einsum is O(24^4 m)),
+            # with the enhanced membrane modes condensed (membrane_enhanced)
+            Dj = Dm * j0[..., None, None]
+            Db = np.einsum("mqia,mqib->mab", Pm, np.einsum("mqij,mqjb->mqib", Dj, Pm))
+            Db = condensed_stiffness(Db, Pm, membrane_enhancement(z0, zeta0, j0), Dj)
+            self.Dbar_packed[sl] = Db[:, _IU[0], _IU[1]]
             self.Dz0[sl] = np.einsum("mij,mj->mi", _unpack(self.Dbar_packed[sl]), z0)  # Dbar z0
         self.area = self.j0.sum(axis=1)                                 # reference area per element
         self._Dbar = None
