@@ -13,10 +13,11 @@ CASES = {"sze-hemisphere": 10, "magnetic-gripper": 20, "plate-100x100": 1,
 # the checks of accepted steps (issue 29, docs/STEPS.md): the snap check of contact steps on a
 # tip force that jumps at load factor 0.5 with an obstacle (probed, then reported as a snap)
 CASES["jumping-cantilever"] = 4
-# the end check and inertia_check: the sandwich strip of docs/EXTENDING.md recipe 6 to 0.2 C w
+# the end check, inertia_check and the stability check: the sandwich strip of docs/EXTENDING.md recipe 6 to 0.2 C w
 # stops at its even crossings (name -> steps, solve keywords)
 STOPS = {"sandwich-1": (1, {}), "sandwich-2": (2, {}), "sandwich-5": (5, {}), "sandwich-10": (10, {}),
-         "sandwich-inertia-1": (1, dict(inertia_check=True)), "sandwich-inertia-5": (5, dict(inertia_check=True))}
+         "sandwich-inertia-1": (1, dict(inertia_check=True)), "sandwich-inertia-5": (5, dict(inertia_check=True)),
+         "sandwich-sign-5": (5, dict(end_check=False))}       # det K's sign alone: the crossing at 0.533
 # designs optimised on two ranks (equilibria and sensitivities distributed) against serially
 DESIGNS = ("design-tip-angle", "design-field-direction")
 

@@ -136,8 +136,9 @@ def test_distributed_runs_stop_where_serial_runs_stop(request, ranks, name):
     sign of det K does not show, stop the distributed run as they stop the serial one -- the
     end check in 1, 2, 5 and 10 steps ("rose from 0 to 12 / 6 / 4 / 2 between load factors 0
     and 1 / 0.5 / 0.2 / 0.1", the steps before kept), inertia_check at the first crossing
-    (0.0426) -- with the same message.  On main the distributed runs exited 0 on the unstable
-    stretch (1, 2 steps) or stopped at a later crossing (5, 10 steps)."""
+    (0.0426), and without the end check the stability check at the sign change of det K in 5
+    steps (0.533, MUMPS' determinant) -- with the same message.  Before, the distributed runs
+    exited 0 at load factor 1 in all of them (neither check ran distributed)."""
     run = request.getfixturevalue({1: "one_rank", 2: "two_ranks"}[ranks])
     prob, steps, kw = build(name)
     with pytest.raises(ConvergenceError) as exc:
