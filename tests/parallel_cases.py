@@ -10,6 +10,14 @@ CASES = {"sze-hemisphere": 10, "magnetic-gripper": 20, "plate-100x100": 1,
          # contact: a cantilever propped by a plane under its tip, the magnetic gripper closing
          # on a sphere (augmented Lagrangian: Uzawa updates, step caps, every rank's nodes)
          "contact-propped": 10, "magnetic-gripper-grasp": 20}
+# the checks of accepted steps (issue 29, docs/STEPS.md): the snap check of contact steps on a
+# tip force that jumps at load factor 0.5 with an obstacle (probed, then reported as a snap)
+CASES["jumping-cantilever"] = 4
+# the end check, inertia_check and the stability check: the sandwich strip of docs/EXTENDING.md recipe 6 to 0.2 C w
+# stops at its even crossings (name -> steps, solve keywords)
+STOPS = {"sandwich-1": (1, {}), "sandwich-2": (2, {}), "sandwich-5": (5, {}), "sandwich-10": (10, {}),
+         "sandwich-inertia-1": (1, dict(inertia_check=True)), "sandwich-inertia-5": (5, dict(inertia_check=True)),
+         "sandwich-sign-5": (5, dict(end_check=False))}       # det K's sign alone: the crossing at 0.533
 # designs optimised on two ranks (equilibria and sensitivities distributed) against serially
 DESIGNS = ("design-tip-angle", "design-field-direction")
 
@@ -22,6 +30,13 @@ def build(name):
         prob.add_pressure(0.5, follower=True)
         prob.add_probe("tip", "x1")
         return prob, CASES[name], {}
+    if name == "jumping-cantilever":
+        from test_contact_snap import _jumping_cantilever
+        return _jumping_cantilever(), CASES[name], {}
+    if name in STOPS or name == "sandwich-stable":
+        from test_step_checks import _sandwich_strip
+        steps, kw = STOPS.get(name, (2, {}))
+        return _sandwich_strip(0.005 if name == "sandwich-stable" else 0.2), steps, kw
     case = get_case(name)
     return build_problem(case, case_params(case)), CASES[name], {}
 

@@ -1,7 +1,7 @@
 """Run by tests/test_parallel.py under ``mpirun -n 2`` (and ``-n 1``): the agreement cases with the
 distributed solver, and a scenario run interrupted and resumed; rank 0 writes the outcome as JSON.
 
-    mpirun -n 2 python tests/parallel_driver.py OUT.json [case ...] [design-...] [resume]
+    mpirun -n 2 python tests/parallel_driver.py OUT.json [case ...] [design-...] [sandwich-...] [counts] [resume]
 """
 import json
 import os
@@ -10,14 +10,19 @@ import tempfile
 
 import numpy as np
 
+from core_se3.errors import ConvergenceError
 from core_se3.parallel import world
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from parallel_cases import CASES, build, scenario_dict  # noqa: E402
+from parallel_cases import CASES, STOPS, build, scenario_dict  # noqa: E402
 
 
 def summary(res):
-    return dict(iterations=[int(s.iterations) for s in res.steps],
+    return dict(iterations=[int(s.iterations) for s in res.steps], attempts=[s.attempts for s in res.steps[1:]],
+                checks=[s.checks for s in res.steps[1:]],
+                critical_points=[dict(kind=cp.kind, step=cp.step, lam_bracket=list(cp.lam_bracket),
+                                      node=getattr(cp, "node", None), travel=getattr(cp, "travel", None))
+                                 for cp in res.critical_points],
                 lam=[float(s.load_factor) for s in res.steps],
                 probes=[{k: np.asarray(v["u"]).tolist() for k, v in s.probes.items()} for s in res.steps],
                 contact=[{k: np.asarray(v["force"]).tolist() for k, v in (s.contact or {}).items()} for s in res.steps],
@@ -33,13 +38,28 @@ def main(out, names):
         d = doc_d["design"]
         doc[name] = dict(variables=d["variables"], max_misfit=d["max_misfit"], reached=d["reached"],
                          iterations=d["iterations"], equilibrium_solves=d["equilibrium_solves"])
-    for name in [n for n in names if n != "resume" and not n.startswith("design-")]:
+    for name in [n for n in names if n in CASES]:
         prob, steps, kw = build(name)
         if comm.size == 1:                           # one rank: the shared-matrix path, asked for
             kw = dict(kw, solver="distributed")
         res = prob.solve(steps=steps, **kw)          # dispatches to the distributed solver
         doc[name] = summary(res)
         doc[name]["parallel"] = {k: v for k, v in res.parallel.items() if k in ("ranks", "linear")}
+    for name in [n for n in names if n in STOPS or n == "sandwich-stable"]:     # runs the checks stop
+        prob, steps, kw = build(name)
+        try:
+            res = prob.solve(steps=steps, solver="distributed", **kw)
+            doc[name] = dict(message=None, lam=[float(s.load_factor) for s in res.steps],
+                             critical_points=len(res.critical_points))
+        except ConvergenceError as exc:
+            doc[name] = dict(message=str(exc), lam=[float(s.load_factor) for s in exc.result.steps])
+    if "counts" in names:            # the ranks' inertia count at the serial states of the sandwich strip
+        from core_se3.parallel import DistributedRun
+        prob, _, _ = build("sandwich-5")
+        ser = prob.solve(steps=5, solver="serial", end_check=False, limit_check=False)
+        run = DistributedRun(prob, comm)
+        doc["counts"] = [run.negative_count(s.g, s.load_factor) for s in ser.steps]
+        run.close()
     if "resume" in names or not names:
         from core_se3 import scenario
         scn = scenario.from_dict(scenario_dict())

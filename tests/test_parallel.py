@@ -8,6 +8,11 @@
   every step and the same Newton iterations per step; a scenario run interrupted after two steps and
   resumed on two ranks ends in the bits of an uninterrupted one.  Skipped without mpi4py,
   petsc4py or mpirun.
+* The checks of accepted steps (issue 29, docs/STEPS.md) run distributed as serially: the snap
+  check of contact steps (the same probes, tries and snap as the serial run), the end check and
+  inertia_check on the sandwich strip's even crossings (the ranks count the negative eigenvalues
+  of sym K with MUMPS: the serial counts; the same stops and messages), the stability check
+  (det K's sign from MUMPS' determinant).
 * The decomposition, serially: the ranks' local problems (every load kind) sum to the whole
   problem's forces and tangent; one rank's PETSc matrix is the kernels' CSR (its free block the
   serial K_ff bit for bit, held dofs identity, no copy); partitions are balanced; the rigid-body
@@ -27,7 +32,7 @@ import numpy as np
 import pytest
 
 from core_se3 import Material, Problem, lie, mesh
-from core_se3.errors import OptionError, ParallelError
+from core_se3.errors import ConvergenceError, OptionError, ParallelError
 from core_se3.model import Load, LoadEvaluation, UniformField, make_obstacle
 from core_se3.parallel import RunSetup, distributed_solve, local_problem, partition_elements, rcb, subdomain
 from core_se3.parallel.comm import SerialComm
@@ -36,7 +41,7 @@ from core_se3.parallel.system import rigid_body_modes
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, HERE)
-from parallel_cases import CASES, DESIGNS, build  # noqa: E402
+from parallel_cases import CASES, DESIGNS, STOPS, build  # noqa: E402
 
 HAVE_MPI = (importlib.util.find_spec("mpi4py") is not None and importlib.util.find_spec("petsc4py") is not None
             and shutil.which("mpirun") is not None)
@@ -63,14 +68,14 @@ def _driver(tmp_path_factory, ranks, *names):
 
 @pytest.fixture(scope="module")
 def two_ranks(tmp_path_factory):
-    return _driver(tmp_path_factory, 2, *CASES, *DESIGNS, "resume")
+    return _driver(tmp_path_factory, 2, *CASES, *DESIGNS, *STOPS, "sandwich-stable", "counts", "resume")
 
 
 @pytest.fixture(scope="module")
 def one_rank(tmp_path_factory):
     """The distributed solver on one rank: PETSc's matrix shares the kernels' CSR of all dofs
     (parallel.matrix.SharedCsrMatrix) instead of the COO assembly of several ranks."""
-    return _driver(tmp_path_factory, 1, *CASES)
+    return _driver(tmp_path_factory, 1, *CASES, *STOPS, "sandwich-stable", "counts")
 
 
 @pytest.mark.parametrize("ranks", [1, 2])
@@ -78,11 +83,18 @@ def one_rank(tmp_path_factory):
 def test_distributed_runs_agree_with_serial(request, ranks, name):
     run = request.getfixturevalue({1: "one_rank", 2: "two_ranks"}[ranks])
     prob, steps, kw = build(name)
-    # the snap check of contact steps (solvers.contact_probe) is serial only: compared without it
-    ser = prob.solve(steps=steps, solver="serial", **dict(kw, snap_check=False))
+    ser = prob.solve(steps=steps, solver="serial", **kw)      # every check on, as distributed
     par = run[name]
     assert run["ranks"] == ranks and par["parallel"]["ranks"] == ranks
     assert par["iterations"] == [s.iterations for s in ser.steps]
+    assert par["attempts"] == [s.attempts for s in ser.steps[1:]]          # the same tries, probes included
+    for a, b in zip(par["checks"], [s.checks for s in ser.steps[1:]]):
+        assert a.keys() == b.keys() and all(a[k] == b[k] for k in a if k not in ("contraction", "travel")), (a, b)
+    assert len(par["critical_points"]) == len(ser.critical_points)
+    for a, b in zip(par["critical_points"], ser.critical_points):
+        assert a["kind"] == b.kind and a["step"] == b.step and a["lam_bracket"] == list(b.lam_bracket)
+        if b.kind == "snap":                                    # the node may differ on a tie to round-off
+            assert abs(a["travel"] / b.travel - 1) < 1e-10 and a["node"] in prob.mesh.node_set("x1")
     assert np.allclose(par["lam"], [s.load_factor for s in ser.steps], rtol=0, atol=1e-14)
     for k, st in enumerate(ser.steps[1:], start=1):
         for probe, v in st.probes.items():
@@ -92,6 +104,9 @@ def test_distributed_runs_agree_with_serial(request, ranks, name):
         for obstacle, c in (st.contact or {}).items():             # the contact force on each obstacle
             F = np.asarray(c["force"])                              # (relative to its largest on the path)
             scale = max(np.linalg.norm(s.contact[obstacle]["force"]) for s in ser.steps[1:])
+            if scale == 0:                                          # never touched (jumping-cantilever)
+                assert not np.any(par["contact"][k][obstacle])
+                continue
             err = np.linalg.norm(np.asarray(par["contact"][k][obstacle]) - F) / scale
             # the force is the penalty stiffness k A times the gap: a round-off eps |u| of the
             # positions (a different factorisation) moves it by k A eps |u|, up to 2.4e-10 of
@@ -102,6 +117,64 @@ def test_distributed_runs_agree_with_serial(request, ranks, name):
             assert err < max(1e-10, roundoff), (name, k, obstacle, err, roundoff)
     g = np.asarray(ser.final.g).ravel()[::7]
     assert np.abs(np.asarray(par["g"]) - g).max() < 1e-10 * np.abs(g).max()
+
+
+def test_contact_cases_that_probe_are_compared_with_the_snap_check():
+    """The comparison above runs the snap check on both sides on cases where it acts: the
+    gripper's grasp probes some of its steps, the jumping cantilever reports its snap."""
+    prob, steps, kw = build("magnetic-gripper-grasp")
+    res = prob.solve(steps=steps, solver="serial", **kw)
+    assert sum(s.checks["snap_probes"] for s in res.steps[1:]) >= 1
+    prob, steps, kw = build("jumping-cantilever")
+    assert [cp.kind for cp in prob.solve(steps=steps, solver="serial", **kw).critical_points] == ["snap"]
+
+
+@pytest.mark.parametrize("ranks", [1, 2])
+@pytest.mark.parametrize("name", list(STOPS))
+def test_distributed_runs_stop_where_serial_runs_stop(request, ranks, name):
+    """The sandwich strip to 0.2 C w (tests/test_step_checks.py): its even crossings, which the
+    sign of det K does not show, stop the distributed run as they stop the serial one -- the
+    end check in 1, 2, 5 and 10 steps ("rose from 0 to 12 / 6 / 4 / 2 between load factors 0
+    and 1 / 0.5 / 0.2 / 0.1", the steps before kept), inertia_check at the first crossing
+    (0.0426), and without the end check the stability check at the sign change of det K in 5
+    steps (0.533, MUMPS' determinant) -- with the same message.  Before, the distributed runs
+    exited 0 at load factor 1 in all of them (neither check ran distributed)."""
+    run = request.getfixturevalue({1: "one_rank", 2: "two_ranks"}[ranks])
+    prob, steps, kw = build(name)
+    with pytest.raises(ConvergenceError) as exc:
+        prob.solve(steps=steps, solver="serial", **kw)
+    par = run[name]
+    assert par["message"] == str(exc.value)
+    assert par["lam"] == [s.load_factor for s in exc.value.result.steps]
+    assert "crossed a critical point" in par["message"]
+    assert run["sandwich-stable"] == dict(message=None, lam=[0.0, 0.5, 1.0], critical_points=0)
+
+
+@pytest.mark.parametrize("ranks", [1, 2])
+def test_the_ranks_count_the_negative_eigenvalues_as_serially(request, ranks):
+    """MUMPS' negative pivots of the distributed sym K (never gathered) at the sandwich strip's
+    five-step states (no check stopping it) are the serial counts (stability.negative_count)."""
+    from core_se3.solvers.stability import negative_count
+    run = request.getfixturevalue({1: "one_rank", 2: "two_ranks"}[ranks])
+    prob, _, _ = build("sandwich-5")
+    ser = prob.solve(steps=5, solver="serial", end_check=False, limit_check=False)
+    counts = [negative_count(prob, s.g, s.load_factor) for s in ser.steps]
+    assert counts == [0, 4, 6, 7, 8, 12] and run["counts"] == counts
+
+
+def test_an_iterative_solver_says_which_checks_it_cannot_do(caplog):
+    """GAMG gives no determinant and no inertia: the run warns that the stability check's sign
+    test and the end check are off (not silently); MUMPS runs them without a word."""
+    if importlib.util.find_spec("petsc4py") is None:
+        pytest.skip("needs petsc4py")
+    import logging
+    prob, _, _ = build("sandwich-stable")
+    with caplog.at_level(logging.WARNING):
+        prob.solve(steps=1, solver="distributed", linear="mumps")
+        assert not [r for r in caplog.records if "is iterative" in r.getMessage()]
+        prob.solve(steps=1, solver="distributed", linear="gamg")
+    (msg,) = [r.getMessage() for r in caplog.records if "is iterative" in r.getMessage()]
+    assert "stability check" in msg and "end check" in msg and "limit_check = false" in msg
 
 
 def test_two_ranks_resume_and_output(two_ranks):

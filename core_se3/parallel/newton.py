@@ -12,6 +12,7 @@ records (probes, reactions, balance) are the serial recorder's and every rank ho
 """
 from __future__ import annotations
 
+import logging
 import time
 from dataclasses import dataclass, fields
 
@@ -20,11 +21,16 @@ import numpy as np
 from ..errors import OptionError, did_you_mean
 from ..results import Result, StepRecorder
 from ..solvers import NewtonOptions, NewtonState, newton_steps, requested_load_factors
+from ..solvers.newton import end_check
+from ..solvers.contact_probe import ContactProbe
 from ..solvers.options import split_options, unknown_keywords
 from .comm import is_root
 from .run import DistributedRun
 
-__all__ = ["distributed_newton_steps", "distributed_solve", "DistributedEquations", "RunSetup", "RUN_OPTIONS"]
+__all__ = ["distributed_newton_steps", "distributed_solve", "DistributedEquations", "DistributedContactProbe", "RunSetup",
+           "RUN_OPTIONS"]
+
+log = logging.getLogger(__name__)
 
 RUN_OPTIONS = ("linear", "petsc_options", "partition")      # keywords of the distributed set-up
 
@@ -77,6 +83,43 @@ class RunSetup:
         return cls(**spec)
 
 
+class DistributedContactProbe(ContactProbe):
+    """The snap check of contact steps (``solvers.contact_probe.ContactProbe``) on one rank's
+    share: the motion is measured on the rank's owned nodes and its largest over all ranks taken
+    (one allgather of two numbers per converged contact try), so every rank takes the serial
+    decision on the same states without gathering the frames; the node it names is the whole
+    mesh's (on ties the lowest id, as the serial ``argmax``).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from types import SimpleNamespace
+    >>> from core_se3.parallel.comm import SerialComm
+    >>> sub = SimpleNamespace(n_owned=2, nodes=np.array([4, 7, 1]))      # node 1 is a ghost
+    >>> probe = DistributedContactProbe(1.0, sub, SerialComm())
+    >>> x0 = np.zeros((2, 3)); x1 = np.array([[0.0, 0.0, 2.0], [0.0, 3.0, 0.0]])
+    >>> probe.largest_motion(x0, x1)
+    (3.0, 7)
+    """
+
+    def __init__(self, h_e, sub, comm):
+        super().__init__(h_e)
+        self.sub, self.comm = sub, comm
+
+    def positions(self, g):
+        return np.array(g[:self.sub.n_owned, :3, 3])
+
+    def largest_motion(self, x0, x1):
+        d = np.linalg.norm(x1 - x0, axis=1)
+        mine = (-1.0, -1)
+        if len(d):
+            d_max = float(d.max())
+            mine = (d_max, int(self.sub.nodes[:len(d)][d == d_max].min()))
+        every = self.comm.allgather(mine) if self.comm.size > 1 else [mine]
+        d_max = max(v for v, _ in every)
+        return d_max, min(node for v, node in every if v == d_max)
+
+
 class DistributedEquations:
     """One rank's share of a :class:`~core_se3.parallel.run.DistributedRun` as the equations
     load stepping iterates on (the interface of ``solvers.equations``): the iterate is this
@@ -97,6 +140,7 @@ class DistributedEquations:
 
     def __init__(self, run):
         self.run = run
+        self.problem = run.problem
         self.ell = run.ell
         self.loads = run.local.loads
         self.mixed = run.mixed
@@ -132,6 +176,24 @@ class DistributedEquations:
 
     def solve(self, ev, g, probe=False):
         return self.run.solve(ev, g, probe=probe)      # g: the near-null space of GAMG
+
+    def det_sign(self):
+        """Sign of det K of the tangent of the last :meth:`solve` (MUMPS' determinant; None with
+        an iterative linear solver: ``limit_check``'s sign test is then refused, docs/PARALLEL.md)."""
+        return self.run.system.det_sign()
+
+    def inertia_count(self, asym_tol=1e-6):
+        """The number of negative eigenvalues of sym(K) of the tangent of the last :meth:`solve`
+        (``solvers.equations.NewtonEquations.inertia_count``), counted by MUMPS on the ranks."""
+        return self.run.system.negative_count(asym_tol)
+
+    def negative_count(self, g, lam):
+        """The end check's count at the whole-mesh state (g, lam) (``DistributedRun.negative_count``)."""
+        return self.run.negative_count(g, lam)
+
+    def contact_probe(self, h_e):
+        """The snap check's probe of this rank's share (:class:`DistributedContactProbe`)."""
+        return DistributedContactProbe(h_e, self.run.sub, self.run.comm)
 
     def increment(self, x):
         return x                       # the solve returns the nodal increments, ghosts included
@@ -175,7 +237,22 @@ def distributed_newton_steps(run, targets, options=None, start=None, recorder=No
     >>> callable(distributed_newton_steps)
     True
     """
+    _iterative_checks(run, options or NewtonOptions())
     return newton_steps(run.problem, targets, options, start, recorder, result, equations=DistributedEquations(run))
+
+
+def _iterative_checks(run, opts):
+    """Warn (rank 0) that an iterative linear solver gives no determinant and no inertia, so
+    the stability check's det K sign test (limit_check) and the end check are off: not
+    silently.  The end check's direct factorisation of sym K would need the memory that the
+    iterative solver was chosen to avoid; inertia_check, asked for, still counts with MUMPS."""
+    if run.system.linear == "mumps" or not opts.limit_check or not is_root(run.comm):
+        return
+    log.warning("linear = %r is iterative: it gives neither the sign of det K nor the inertia, so load control's "
+                "stability check (a bifurcation on the path) and the end check (an even number of eigenvalues "
+                "crossing zero) are off in this run; the path check, the limit-point test and the snap check run. "
+                "Use linear = 'mumps' for them, inertia_check = true to count with MUMPS at every step, or "
+                "limit_check = false to silence this", run.system.linear)
 
 
 def distributed_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, g_init=None, load_factors=None,
@@ -242,6 +319,8 @@ def distributed_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, g_init=None
             result.steps.append(item.step)
         result.parallel = dict(ranks=run.comm.size, linear=run.system.linear, memory_peak=run.memory()[1],
                                linear_iterations=list(run.system.iterations), partition=run.part)
+        if run.system.linear == "mumps":                            # (iterative: warned, _iterative_checks)
+            end_check(problem, opts, result, run.negative_count)     # even crossings, counted on the ranks
     finally:
         run.close()
     return result

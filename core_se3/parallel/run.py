@@ -248,6 +248,13 @@ class DistributedRun:
         """Global sum of a . b over owned rows (n_own, 6) (b may be a local (n_loc, 6) array)."""
         return float(self.system.allsum(float(np.sum(a[:self.n_own] * b[:self.n_own])))[0])
 
+    def negative_count(self, g, lam):
+        """The number of negative eigenvalues of sym K at the whole-mesh state (g, lam) (the
+        tangent assembled on the ranks and its inertia counted there: ``DistributedSystem.
+        negative_count``), or None (K not symmetric); the end check's count."""
+        self.evaluate(self.local_frames(g), lam, tangent=True)
+        return collective(self.comm, self.system.negative_count)
+
     def memory(self):
         """Peak resident memory of this rank [bytes] (``ru_maxrss``) and of all ranks."""
         import resource

@@ -39,7 +39,8 @@ LINEAR = ("mumps", "gamg", "hypre")
 _EPS = np.finfo(float).eps
 
 _DEFAULTS = {
-    "mumps": {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"},
+    # ICNTL(33): MUMPS' determinant (its sign: load control's stability check, limit_check)
+    "mumps": {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps", "mat_mumps_icntl_33": 1},
     "gamg": {"ksp_type": "gmres", "ksp_gmres_restart": 100, "ksp_gmres_modifiedgramschmidt": True, "ksp_rtol": 1e-10, "ksp_atol": 0.0, "ksp_max_it": 2000,
              "pc_type": "gamg", "pc_gamg_type": "agg", "pc_gamg_agg_nsmooths": 1, "pc_gamg_threshold": 0.02,
              "pc_gamg_reuse_interpolation": True, "mg_levels_ksp_type": "chebyshev",
@@ -172,6 +173,7 @@ class DistributedSystem:
         except PETSc.Error as exc:
             self._refused(exc, petsc_options or {}, _DEFAULTS[linear])
         self.probed = False
+        self.scaled = False                # the matrix holds S K S (a solve equilibrated it in place)
         self.iterations = []               # Krylov iterations of every solve (iterative solvers)
 
     # ------------------------------------------------------------------ exchanges -------
@@ -218,6 +220,7 @@ class DistributedSystem:
         """The tangent from the local CSR data (nnz_local,) (it may be ``values``' own view)."""
         if data is not None and not np.shares_memory(data, self.values):
             self.values[:self.nnz_local] = data
+        self.scaled = False
         return self.K.set(self.values)
 
     def data_view(self):
@@ -237,6 +240,7 @@ class DistributedSystem:
         d.destroy()
         self.s.setArray(s)
         A.diagonalScale(self.s, self.s)                                   # S K S in place
+        self.scaled = True
         if self.linear != "mumps" and g_loc is not None:
             self._near_null(g_loc, ell)
         self.ksp.setOperators(A)
@@ -330,6 +334,68 @@ class DistributedSystem:
                                       f"solution growth {ny / max(nb, 1e-300):.1e})")
         return y
 
+    def det_sign(self):
+        """+1 or -1: the sign of det K of the last factorised tangent (MUMPS' determinant,
+        ICNTL(33), of S K S: S > 0 keeps the sign; the held dofs' identity adds +1); None with
+        an iterative solver, before a factorisation, or for a zero determinant."""
+        if self.linear != "mumps" or not self.scaled:
+            return None
+        d = self.ksp.getPC().getFactorMatrix().getMumpsRinfog(12)
+        return None if not np.isfinite(d) or d == 0 else (1 if d > 0 else -1)
+
+    def negative_count(self, asym_tol=1e-6):
+        """The number of negative eigenvalues of sym K on the free dofs (K: the assembled
+        tangent, or the one the last solve factorised), counted on the ranks, never gathered:
+        MUMPS' LDL^T of S sym(K) S (a congruence: the inertia of sym K; the held dofs' identity
+        rows count as positive) gives its negative pivots, INFOG(12) (ICNTL(13) = 1: no
+        ScaLAPACK root, whose pivots MUMPS does not count).  None, as serially
+        (``solvers.stability.negative_count``), when max |K - K^T| > asym_tol max |K| over the
+        free rows (non-conservative loads)."""
+        PETSc = self.PETSc
+        K = self.K.mat.duplicate(copy=True)
+        if self.scaled:                                  # undo the solve's S K S on the copy
+            inv = self.s.duplicate()
+            inv.setArray(1.0 / self.s.getArray(readonly=True))
+            K.diagonalScale(inv, inv)
+            inv.destroy()
+        Kt = K.transpose()
+        skew = K.duplicate(copy=True)
+        skew.axpy(-1.0, Kt)                              # (one axpy per copy: a second one on the
+        rows = self.free_own.ravel()                     # result was wrong in PETSc 3.18, measured)
+        peak = [_free_rows_max(K, rows), _free_rows_max(skew, rows)]
+        scale, asym = np.max(self.comm.allgather(peak), axis=0) if self.comm.size > 1 else peak
+        pc = PETSc.PC().create(PETSc.COMM_WORLD)
+        try:
+            if scale == 0 or asym > asym_tol * scale:
+                return None
+            K.axpy(1.0, Kt)                              # K + K^T = 2 sym K
+            return self._negative_pivots(K, pc)
+        finally:                                         # (destroying K^T first crashed PETSc 3.18)
+            for obj in (pc, skew, K, Kt):
+                obj.destroy()
+
+    def _negative_pivots(self, K, pc):
+        """MUMPS' negative pivots of S K S (K symmetric, S = |diag K|^-1/2) through ``pc``."""
+        PETSc = self.PETSc
+        d = K.getDiagonal()
+        sa = np.abs(d.getArray(readonly=True))
+        sa[sa == 0] = 1.0
+        d.setArray(1.0 / np.sqrt(sa))
+        K.diagonalScale(d, d)
+        d.destroy()
+        K.setOption(PETSc.Mat.Option.SYMMETRIC, True)
+        try:
+            pc.setOperators(K)
+            pc.setType(PETSc.PC.Type.CHOLESKY)
+            pc.setFactorSolverType("mumps")
+            pc.setFactorSetUpSolverType()
+            F = pc.getFactorMatrix()
+            F.setMumpsIcntl(13, 1)
+            pc.setUp()
+            return int(F.getMumpsInfog(12))
+        except PETSc.Error as exc:
+            raise SingularSystemError(f"the symmetric tangent could not be factorised for its inertia ({exc})") from None
+
     def _probe(self):
         rng = np.random.default_rng(12345 + self.comm.rank)
         br = rng.standard_normal(6 * self.n_own)
@@ -403,6 +469,13 @@ class DistributedSystem:
         for obj in (self.ksp, self.x, self.b, self.y, self.s, self.nodal, self.frames):
             obj.destroy()
         self.K.destroy()
+
+
+def _free_rows_max(A, rows):
+    """max |A_ij| over this rank's rows of A where ``rows`` (bool, the owned dofs) is set."""
+    indptr, _, values = A.getValuesCSR()
+    keep = np.repeat(rows, np.diff(indptr))
+    return float(np.abs(values[keep]).max()) if np.any(keep) else 0.0
 
 
 def rigid_body_modes_global(g_own, comm, ell=1.0):

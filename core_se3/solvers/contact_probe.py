@@ -123,19 +123,19 @@ class ContactProbe:
         """'' when the converged contact try from (g0, lam) to (g1, lam_try) may be accepted,
         else why it is refused (it is probed: solved again in halves).  A snap found is kept
         (:meth:`passed`) with step -1 (the caller sets the stored step's index)."""
-        d = np.linalg.norm(g1[:, :3, 3] - g0[:, :3, 3], axis=1)
-        travel = float(d.max()) / self.h_e
+        x1 = self.positions(g1)
+        d_max, node = self.largest_motion(self.positions(g0), x1)
+        travel = d_max / self.h_e
         if travel <= PROBE_TRAVEL:
             return ""
         parent = self.probes[-1] if self.probes else None
         if parent is not None and travel <= SHRINK * parent.travel:
             return ""                                        # the travel shrank with the step
         if abs(lam_try - lam) <= self.min_step:
-            node = int(np.argmax(d))
             self.snaps.append(SnapPoint("snap", -1, 0.5 * (lam + lam_try), (lam, lam_try), (None, None),
-                                        node=node, travel=float(d[node]), min_step=abs(lam_try - lam)))
+                                        node=node, travel=d_max, min_step=abs(lam_try - lam)))
             return ""
-        self.probes.append(_Probe(lam, lam_try, g1[:, :3, 3].copy(), travel))
+        self.probes.append(_Probe(lam, lam_try, x1, travel))
         self.probed += 1
         return (f"snap check: the contact step travelled {travel:.3g} element sizes: solved again in halves to "
                 "tell a continuous path from a jump")
@@ -145,11 +145,22 @@ class ContactProbe:
         comparing their states with the halves'."""
         while self.probes and abs(self.probes[-1].hi - lam) <= 1e-14 * max(1.0, abs(lam)):
             p = self.probes.pop()
-            diff = float(np.linalg.norm(g[:, :3, 3] - p.x_full, axis=1).max()) / self.h_e
+            diff = self.largest_motion(p.x_full, self.positions(g))[0] / self.h_e
             if diff > AGREE * max(p.travel, 1.0):
                 self.landed_elsewhere += 1
                 log.info("snap check: the step from %.6g to %.6g had landed %.3g element sizes away from the "
                          "path its halves followed: cut back", p.lo, p.hi, diff)
+
+    def positions(self, g):
+        """The nodal positions (n, 3) of frames g whose motion is measured (a copy)."""
+        return np.array(g[:, :3, 3])
+
+    def largest_motion(self, x0, x1):
+        """(the largest |x1 - x0| over the nodes, the node: the first with it) of positions
+        (n, 3); a distributed run takes it over all ranks (``parallel.newton``)."""
+        d = np.linalg.norm(x1 - x0, axis=1)
+        node = int(np.argmax(d))
+        return float(d[node]), node
 
     def next_increment(self, lam, dlam):
         """``dlam`` capped so that a try does not pass the end of the innermost probe."""

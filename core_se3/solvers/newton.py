@@ -40,7 +40,7 @@ from .stability import limit_point_hint, unseen_crossing
 from .contact_probe import ContactProbe, median_edge
 from .step_checks import StepChecks, start_sign
 
-__all__ = ["newton_solve", "newton_steps", "requested_load_factors", "NewtonState", "NewtonStep",
+__all__ = ["newton_solve", "newton_steps", "end_check", "requested_load_factors", "NewtonState", "NewtonStep",
            "MAX_PRESCRIBED_TURN", "MAX_LOAD_TURN"]
 
 log = logging.getLogger(__name__)
@@ -305,7 +305,7 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
                 dlam = checks.next_increment(lam, dlam / 2, floor)
             if checks.located(floor):
                 timer.close()
-                _stop_at_critical(problem, opts, checks, result)
+                _stop_at_critical(problem, opts, checks, result, getattr(eq, "negative_count", None))
             _note_passed(checks, eq, result)
             if not ok and abs(dlam) < floor:
                 timer.close()
@@ -368,7 +368,8 @@ def _step_checks(opts, eq, state):
     # a stateful element (the seed's) has no consistent tangent: its Newton corrections contract
     # linearly at any step, so their growth says nothing of the path
     # ... what contact leaves observable is the motion: the snap check (solvers.contact_probe)
-    snap = ContactProbe(median_edge(eq.problem.mesh)) if opts.snap_check and not smooth and not eq.distributed else None
+    probe = getattr(eq, "contact_probe", ContactProbe)     # a distributed run measures on its ranks
+    snap = probe(median_edge(eq.problem.mesh)) if opts.snap_check and not smooth else None
     return StepChecks(opts.path_check and smooth and not eq.stateful, smooth and hasattr(eq, "det_sign"),
                       opts.critical_tol, state.det_sign, stop=opts.limit_check, snap=snap,
                       counting=opts.inertia_check and smooth and hasattr(eq, "inertia_count")
@@ -562,7 +563,7 @@ def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, g_init=None, loa
     try:
         for item in newton_steps(problem, targets, opts, NewtonState(lam_start, g), rec, result):
             result.steps.append(item.step)
-        _end_check(problem, opts, result)
+        end_check(problem, opts, result)
     except CoreSE3Error as exc:
         # any failure past the start (a load whose programme turns non-finite, a contact error)
         # keeps the converged steps, as ConvergenceError does
@@ -572,25 +573,37 @@ def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, g_init=None, loa
     return result
 
 
-def _stop_at_critical(problem, opts, checks, result):
+def _stop_at_critical(problem, opts, checks, result, count=None):
     """Stop at the located sign change of ``checks``, or at an earlier crossing that det K's
-    sign did not show (:func:`_end_check`)."""
-    _end_check(problem, opts, result)
+    sign did not show (:func:`end_check`)."""
+    end_check(problem, opts, result, count)
     raise ConvergenceError(checks.critical_message(), result)
 
 
-def _end_check(problem, opts, result):
+def end_check(problem, opts, result, count=None):
     """``end_check``: an even number of eigenvalues crossing zero within one step leaves det K's
     sign; if the last stored state (the end, or the last before a located sign change) has more
     negative eigenvalues of sym K than the start, stop at the step where they rose
     (``stability.unseen_crossing``).  Only where the stability check runs (limit_check, smooth
-    conservative problems) and nothing was recorded on the way."""
+    conservative problems) and nothing was recorded on the way.  ``count(g, lam)``: the count
+    at a whole-mesh state (default ``stability.negative_count``; a distributed run counts on
+    its ranks, ``parallel.newton``).
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> from core_se3.solvers import NewtonOptions
+    >>> p = Problem(mesh.rectangle(10.0, 1.0, 4, 1), Material(1.2e6, 0.0, 0.1))
+    >>> p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 1.0))
+    >>> end_check(p, NewtonOptions(), newton_solve(p, steps=1, end_check=False)) is None   # stable: no stop
+    True
+    """
     if not (opts.end_check and opts.limit_check and not opts.inertia_check) or result.critical_points \
-            or getattr(problem.element, "stateful", False) or any(getattr(ld, "constraint_force", False) or getattr(ld, "follower", False)
-                                               for ld in problem.loads):
+            or (count is None and getattr(problem.element, "stateful", False)) \
+            or any(getattr(ld, "constraint_force", False) or getattr(ld, "follower", False) for ld in problem.loads):
         return
     t0 = time.perf_counter()
-    found = unseen_crossing(problem, result.steps)
+    found = unseen_crossing(problem, result.steps, count)
     result.timings["other"] = result.timings.get("other", 0.0) + time.perf_counter() - t0
     if found is None:
         return

@@ -12,6 +12,7 @@ S_p = (q . t_0)/(q . t) vanishes.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import partial
 
 import numpy as np
 import scipy.sparse as sp
@@ -338,7 +339,7 @@ def negative_count(problem, g, lam, asym_tol=1e-6):
     return inertia(K)[1]
 
 
-def unseen_crossing(problem, steps):
+def unseen_crossing(problem, steps, count=None):
     """Load factors (lo, hi) and counts (n_lo, n_hi) of the first stored step over which the
     number of negative eigenvalues of sym K rose, when the last stored state has more than the
     first; None when it has not (or cannot be counted).
@@ -347,17 +348,18 @@ def unseen_crossing(problem, steps):
     zero within one step; this count at the end of a load-stepped solve sees them (one
     factorisation when the end state is stable, as most are; a bisection over the stored
     states, log2 of their number more, when it is not).  ``steps``: StepResults with ``g`` and
-    ``load_factor``, the first the start.
+    ``load_factor``, the first the start; ``count(g, lam)``: the count at a state (default
+    :func:`negative_count` of ``problem``; a distributed run's counts on its ranks).
     """
     stored = [s for s in steps if getattr(s, "g", None) is not None]
     if len(stored) < 2:
         return None
-    count = {}
+    counted = {}
 
     def n(i):
-        if i not in count:
-            count[i] = negative_count(problem, stored[i].g, stored[i].load_factor)
-        return count[i]
+        if i not in counted:
+            counted[i] = (count or partial(negative_count, problem))(stored[i].g, stored[i].load_factor)
+        return counted[i]
 
     last = len(stored) - 1
     if not n(last) or n(0) is None or n(last) is None or n(last) <= n(0):
