@@ -49,10 +49,11 @@ def test_the_stick_slip_step_is_probed_and_refined_to_a_tight_tolerance(ref36):
     """The step in which the end starts to slip is solved again in halves (1 probe at the
     default tolerance: its halves agree to 4.9e-9); with friction_tol 1e-10 the halves miss
     the bound and the step is refined (go back, quarter steps), and the state still agrees."""
-    one = _run(1)
+    one = _run(1, friction_halving=True)
     assert one.steps[-1].checks["friction_probes"] >= 1
     assert one.steps[-1].checks["friction_error"] <= 1e-7
-    tight = _run(1, friction_tol=1e-10)
+    assert _run(1).steps[-1].checks["friction_probes"] == 0          # friction_halving is off by default
+    tight = _run(1, friction_tol=1e-10, friction_halving=True)
     chk = tight.steps[-1].checks
     assert chk["friction_refinements"] >= 1 and chk["friction_unresolved"] == 0
     assert chk["friction_error"] <= 1e-10
@@ -62,7 +63,7 @@ def test_the_stick_slip_step_is_probed_and_refined_to_a_tight_tolerance(ref36):
 def test_a_step_where_everything_sticks_is_not_probed():
     """The ramp of P (load factor 0.1 -> 0.2: the end sticks throughout) costs nothing: no
     probe, no relaxation, the same tries as without the check."""
-    on, off = _run(1), _run(1, friction_check=False)
+    on, off = _run(1, friction_halving=True), _run(1, friction_check=False)
     st_on, st_off = on.steps[2], off.steps[2]
     assert st_on.load_factor == pytest.approx(0.2)
     assert st_on.checks["friction_probes"] == 0 and st_on.checks["friction_relaxations"] == 0

@@ -141,8 +141,11 @@ SOLVER = Section("solver", (
             "to 1/64 of the step is reported as a snap in `critical_points` (docs/STEPS.md)", kind="bool"),
     _option("friction_check", _NEWTON, "load control with Coulomb friction: an accepted state whose slipping nodes' "
             "friction exceeds the cone by more than `friction_tol` (the hardening's share, which grows with the slip "
-            "of the step) is solved again at its load factor, and a step over which a node changed its stick/slip "
-            "status is solved again in halves, refined until they agree with it to `friction_tol` (docs/STEPS.md)",
+            "of the step) is solved again at its load factor (docs/STEPS.md)",
+            kind="bool"),
+    _option("friction_halving", _NEWTON, "load control with friction: also solve a step over which a node changed its "
+            "stick/slip status again in halves, refined until they agree with it to `friction_tol` of the path's "
+            "displacement scale (off: its estimate does not shrink with the step on the walkers; docs/STEPS.md)",
             kind="bool"),
     _option("friction_tol", _NEWTON, "load control with friction: the friction check's tolerance, relative to mu p "
             "(the hardening) and to the path's displacement scale (a step's halves)", lo=0.0, lo_open=True, hi=1.0,

@@ -81,11 +81,15 @@ class FrictionProbe:
     X0 : (n, 3) ndarray
         The reference positions (the displacement scale U of the distance).
     tol : float, optional
-        ``friction_tol``: the bound on the estimated error of the run, relative to U.
+        ``friction_tol``: the bound on the hardening's excess (of mu p) and on the halves'
+        estimated error (of U).
+    halving : bool, optional
+        ``friction_halving``: probe the tries that changed a node's status (else only relax).
     """
 
-    def __init__(self, loads, X0, tol=1e-7):
+    def __init__(self, loads, X0, tol=1e-7, halving=True):
         self.loads, self.X0 = loads, np.asarray(X0, float)
+        self.halving = halving
         self.tol = float(tol)
         self.U = 0.0
         self.probes, self.caps = [], []
@@ -116,7 +120,7 @@ class FrictionProbe:
 
     def begin(self, g, lam):
         """Before a try from the accepted state (g, lam): the nodes' status there."""
-        self.status = None if self._inside(lam) else [ld.slip_status(g, lam, True) for ld in self.loads]
+        self.status = None if self._inside(lam) or not self.halving else [ld.slip_status(g, lam, True) for ld in self.loads]
 
     def _changed(self, g1, lam1):
         """The first node (mesh index) whose friction the try to (g1, lam1) may not have

@@ -435,7 +435,7 @@ def _friction_probe(opts, eq):
     loads = [ld for ld in eq.loads if getattr(ld, "path_dependent", False) and hasattr(ld, "slip_status")]
     if not (opts.friction_check and loads) or eq.distributed or eq.stateful:
         return None
-    return FrictionProbe(loads, eq.problem.mesh.g0[:, :3, 3], opts.friction_tol)
+    return FrictionProbe(loads, eq.problem.mesh.g0[:, :3, 3], opts.friction_tol, halving=opts.friction_halving)
 
 
 def _split_step(problem, turning, g_whole, lam, lam_try, target, dlam, opts, result):
