@@ -272,10 +272,7 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
             g_try, stress_try = _try_start(problem, eq, trier, g, g_whole, lam, lam_try, mip, stress_conv,
                                            hooks.predictors)
             saved = [ld.multipliers() for ld in hooks.aug]
-            if checks.friction is not None:      # the friction check: the nodes' status at the start
-                checks.friction.begin(g, lam)
-            start = (lam, g, g_whole, stress_conv, saved, k_ref, list(checks.snap.probes) if checks.snap else None,
-                     len(result.steps))
+            start = _friction_start(checks, (lam, g, g_whole, stress_conv, saved, k_ref), result)
             g_start = g_try
             out = augmented_try(trier, hooks.aug, g_try, lam_try, mip, stress_try, opts.max_augmentations,
                                 lambda o, k: _log_try(result, tries, lam_try, o, augmentation=k, quiet=not eq.root))
@@ -287,12 +284,9 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
             if ok:
                 checks.accept(out, lam_try)
                 lam, g = lam_try, out.g
-                for ld in hooks.accepts:         # path-dependent loads move their history on (friction)
-                    ld.accept_state(g, lam)
-                if checks.friction is not None:  # the friction check: the hardening's excess relaxed
-                    out = _relax_friction(trier, hooks, checks.friction, out, lam, mip, opts,
-                                          lambda o, k: _log_try(result, tries, lam, o, augmentation=k, quiet=not eq.root))
-                    g = out.g
+                out = _move_history(trier, hooks, checks.friction, out, lam, mip, opts,
+                                    lambda o, k: _log_try(result, tries, lam, o, augmentation=k, quiet=not eq.root))
+                g = out.g
                 g_whole = eq.whole_frames(g)
                 if mip:
                     stress_conv = out.ev.stress
@@ -306,16 +300,9 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
                     dlam = min(abs(dlam) * 2, abs(dlam_nominal)) * np.sign(dlam_nominal)
                 dlam = checks.next_increment(lam, dlam, floor)       # locating a det K sign change
             else:
-                for ld, m in zip(hooks.aug, saved):
-                    ld.set_multipliers(m)
-                if stateful:
-                    problem.element.restore()
-                checks.failed()
-                back = checks.friction.take_back() if checks.friction is not None else None
-                if back is not None:             # the friction check: the probed step again, refined
-                    lam, g, g_whole, stress_conv, k_ref = _go_back(back, hooks, checks, result)
-                    dlam = np.sign(dlam_nominal) * abs(checks.friction.caps[-1][1])
-                dlam = checks.next_increment(lam, dlam / 2 if back is None else dlam, floor)
+                lam, g, g_whole, stress_conv, k_ref, dlam = _refused(eq, hooks, checks, saved, result, dlam_nominal,
+                                                                     (lam, g, g_whole, stress_conv, k_ref, dlam))
+                dlam = checks.next_increment(lam, dlam, floor)
             if checks.located(floor):
                 timer.close()
                 _stop_at_critical(problem, opts, checks, result)
@@ -373,11 +360,26 @@ class _Hooks:
         self.predictors = hooked_loads(eq, "predict_start") if not eq.stateful else []
 
 
-def _relax_friction(trier, hooks, friction, out, lam, mip, opts, log_try):
-    """The accepted try ``out`` at lam solved again at the same lam from its state, with the
-    friction history moved on to it, while a slipping node's friction exceeds the cone by more
-    than friction_tol (the hardening's d k |s| / mu p, which grows with the slip of the step:
-    ``solvers.friction_probe``); at most RELAXATIONS times.  Returns the last accepted try."""
+def _friction_start(checks, state, result):
+    """The friction check's record of a try's start (the nodes' status there) and the snapshot
+    it goes back to: ``state`` (lam, g, g_whole, stress_conv, multipliers, k_ref), the snap
+    check's probes and the number of stored steps; None without the check."""
+    if checks.friction is None:
+        return None
+    checks.friction.begin(state[1], state[0])
+    return state + (list(checks.snap.probes) if checks.snap else None, len(result.steps))
+
+
+def _move_history(trier, hooks, friction, out, lam, mip, opts, log_try):
+    """The accepted try ``out`` at lam: the path-dependent loads move their history on
+    (friction); then, with the friction check, it is solved again at the same lam from its
+    state while a slipping node's friction exceeds the cone by more than friction_tol (the
+    hardening's d k |s| / mu p, which grows with the slip of the step: ``solvers.friction_probe``),
+    at most RELAXATIONS times.  Returns the last accepted try."""
+    for ld in hooks.accepts:
+        ld.accept_state(out.g, lam)
+    if friction is None:
+        return out
     for _ in range(RELAXATIONS):
         excess, node = friction.excess()
         if excess <= friction.tol:
@@ -399,17 +401,27 @@ def _relax_friction(trier, hooks, friction, out, lam, mip, opts, log_try):
     return out
 
 
-def _go_back(start, hooks, checks, result):
-    """Restore the start of a probed step (the friction check refused its halves): the
-    multipliers and friction history of the loads, the snap check's probes and the sub-steps
-    recorded since; returns (lam, g, g_whole, stress_conv, k_ref) there."""
+def _refused(eq, hooks, checks, saved, result, dlam_nominal, here):
+    """A refused try from ``here`` = (lam, g, g_whole, stress_conv, k_ref, dlam): the loads'
+    multipliers (``saved``) and a stateful element restored, and the next try's start and
+    increment: half the increment from here, or, when the friction check refused the halves of a
+    probed step, the probed step's start (the multipliers and friction history of the loads,
+    the snap check's probes, the sub-steps recorded since) and its refined step."""
+    for ld, m in zip(hooks.aug, saved):
+        ld.set_multipliers(m)
+    if eq.stateful:
+        eq.problem.element.restore()
+    checks.failed()
+    start = checks.friction.take_back() if checks.friction is not None else None
+    if start is None:
+        return here[:5] + (here[5] / 2,)
     lam, g, g_whole, stress_conv, saved, k_ref, snap_probes, n_steps = start
     for ld, m in zip(hooks.aug, saved):
         ld.set_multipliers(m)
     if checks.snap is not None:
         checks.snap.probes = list(snap_probes)
     del result.steps[n_steps:]
-    return lam, g, g_whole, stress_conv, k_ref
+    return lam, g, g_whole, stress_conv, k_ref, np.sign(dlam_nominal) * abs(checks.friction.caps[-1][1])
 
 
 def _step_checks(opts, eq, state):
