@@ -33,7 +33,7 @@ import numpy as np
 from ..errors import LoadError
 from ..registry import REQUIRED, Kind, Param, Registry
 
-__all__ = ["Evaluation", "Load", "LoadEvaluation", "overrides", "Param", "LoadKind", "LOADS", "register_load", "load_kind",
+__all__ = ["Evaluation", "Load", "LoadEvaluation", "force_scale_with_loads", "overrides", "Param", "LoadKind", "LOADS", "register_load", "load_kind",
            "REQUIRED", "linear_scale", "finite_vector", "param_error"]
 
 
@@ -160,6 +160,12 @@ class Load(abc.ABC):
     def restraint(self):
         """(nodes (k,), lab unit directions (k, q, 3)) this load holds like a support, or None."""
         return None
+
+    def round_off_scale(self, ell):
+        """The size [force] of the terms that cancel in this load's nodal forces (moments / ``ell``),
+        whose round-off joins the residual's floor (``solvers.convergence``): a penalty spring
+        k (x - X) subtracts two terms of size k |X|.  0.0 here (a load without cancellation)."""
+        return 0.0
 
     def output_fields(self, g, lam):
         """Point fields (name -> (n, k)) for output; none by default."""
@@ -357,3 +363,16 @@ def finite_vector(v, name):
     if v.shape != (3,) or not np.all(np.isfinite(v)):
         raise LoadError(f"{name} must be a finite 3-vector, got {v!r}")
     return v
+
+
+def force_scale_with_loads(element_scale, loads, ell):
+    """The residual's round-off scale [force]: the element's (``Evaluation.force_scale``) and the
+    loads' cancelling terms (``Load.round_off_scale``) added in quadrature.
+
+    Example
+    -------
+    >>> force_scale_with_loads(3.0, [], 1.0)
+    3.0
+    """
+    extra = [ld.round_off_scale(ell) for ld in loads]
+    return float(np.sqrt(element_scale ** 2 + sum(e * e for e in extra))) if any(extra) else element_scale

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .base import Evaluation
+from .base import Evaluation, force_scale_with_loads
 
 __all__ = ["CompiledEvaluation"]
 
@@ -79,7 +79,8 @@ class CompiledEvaluation:
             f += ev.f
             if tangent:
                 add_blocks(data, pattern, self.problem.mesh.quads, ev.node_blocks, ev.element_blocks)
-        out_ev = Evaluation((r_int - f).ravel()[pattern.free], r_int, f, res["force_scale"], res["energy"],
+        scale = force_scale_with_loads(res["force_scale"], self.problem.loads, self.problem.length_scale)
+        out_ev = Evaluation((r_int - f).ravel()[pattern.free], r_int, f, scale, res["energy"],
                             stress=res.get("stress"))
         if tangent and self.problem.element.mixed:
             out_ev.linearization = lambda eta, g=g: self._linear_stress(kern, g, eta)

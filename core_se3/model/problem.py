@@ -22,7 +22,7 @@ from ..assembly import Assembler
 from .. import backend as _backend
 from ..errors import LoadError, MeshError, OptionError, did_you_mean
 from ..fem import ELEMENTS, make_element
-from .base import Evaluation, Load, load_kind
+from .base import Evaluation, Load, force_scale_with_loads, load_kind
 from .compiled import CompiledEvaluation
 from .contact import add_obstacle
 from .fields import MU0
@@ -400,7 +400,8 @@ class Problem:
         ev = (self.element.evaluate(g, tangent=tangent, stress=stress) if stress is not None
               else self.element.evaluate(g, tangent=tangent))
         fext, Kn_ext, Ke_ext = self.external(g, lam, tangent=tangent)
-        out = Evaluation(asm.vector(ev.r - fext), ev.r, fext, ev.force_scale, ev.energy,
+        scale = force_scale_with_loads(ev.force_scale, self.loads, self.length_scale)
+        out = Evaluation(asm.vector(ev.r - fext), ev.r, fext, scale, ev.energy,
                          stress=ev.stress, linearization=ev.linearization)
         if tangent:
             Ke = ev.element_blocks if Ke_ext is None else (

@@ -98,7 +98,8 @@ def check_held_dofs(problem, result):
             f"and its nodes turn about other axes: the held component drifted by {amount} (node "
             f"{node}), so the state depends on the load steps at that order. For an exact, path-"
             f"independent support hold the lab component: add_lab_support (translations) or "
-            f"add_rotation_component_support (a rotation-vector component); or clamp."), stacklevel=3)
+            f"add_rotation_component_support (a rotation-vector component), in a scenario file "
+            f'[[supports]] type = "lab" (a direction) or type = "lab_rotation" (an axis); or clamp.'), stacklevel=3)
     return result
 
 

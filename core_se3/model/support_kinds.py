@@ -8,12 +8,14 @@
 Example
 -------
 >>> sorted(SUPPORTS), support_kind("fix").keys(), support_kind("rotate").moves
-(['clamp', 'fix', 'prescribed', 'rotate'], ('dofs',), True)
+(['clamp', 'fix', 'lab', 'lab_rotation', 'prescribed', 'rotate'], ('dofs',), True)
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 from typing import Callable
+
+import numpy as np
 
 from ..registry import Kind, Param, Registry
 
@@ -129,3 +131,42 @@ register_support(SupportKind(
     _prescribed, _prescribed_check,
     doc="rigid motion: at load factor lam, with s = scale(lam), x -> p + Q(s angle)(x - p) + s translate (lifting "
         "an end, pushing a foot; Python: `Problem.move_edge`)", moves=True))
+
+
+# Lab-frame supports by penalty (model.supports.LabSpring, RotationComponentSpring): exact for
+# nodes that turn about any axis, unlike ``fix``, which holds the body-frame components of each
+# increment (docs/SCENARIOS.md, errors.SupportWarning).  Their stiffness is ``penalty`` times the
+# element's own scale -- E h [force/length] for translations, E h^3 [force length/rad^2] for the
+# rotation component -- so that one dimensionless default fits every unit system; the
+# constraint's error is about the reaction over that stiffness (1e-6 of a reaction / (E h) at the
+# default), well below the step table's 1e-6 of the path.
+PENALTY_DEFAULT = 1e6
+_PENALTY = Param("penalty", "number", PENALTY_DEFAULT, lo=0.0, lo_open=True,
+                 doc="stiffness / (E h) (translations) or / (E h^3) (rotations), dimensionless")
+
+
+def _unit(v):
+    v = np.asarray(v, float)
+    return v / np.linalg.norm(v)
+
+
+def _lab(problem, nodes, scale, direction, penalty):
+    m = problem.material
+    problem.add_lab_support(nodes, [_unit(direction)], penalty * m.E * m.h)
+
+
+def _lab_rotation(problem, nodes, scale, axis, penalty):
+    m = problem.material
+    problem.add_rotation_component_support(nodes, _unit(axis), penalty * m.E * m.h ** 3)
+
+
+register_support(SupportKind(
+    "lab", (Param("direction", "vector", nonzero=True, doc="lab direction of the held displacement component"),
+            _PENALTY), _lab, extra=dict(example=dict(direction=[0.0, 0.0, 1.0])),
+    doc="the lab displacement component along `direction` held at zero by penalty springs of stiffness penalty * "
+        "E h (a roller; exact however the nodes turn; Python: `Problem.add_lab_support`)"))
+register_support(SupportKind(
+    "lab_rotation", (Param("axis", "vector", nonzero=True, doc="lab axis of the held rotation component"),
+                     _PENALTY), _lab_rotation, extra=dict(example=dict(axis=[0.0, 1.0, 0.0])),
+    doc="the component along `axis` of the total rotation vector log(R R0^T) held at zero by a penalty penalty * "
+        "E h^3 (a holonomic theta_y = 0, total rotation below pi; Python: `Problem.add_rotation_component_support`)"))

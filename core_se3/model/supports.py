@@ -53,6 +53,12 @@ __all__ = ["apply_prescribed", "prescribed_rotation", "Prescribed", "LabSpring",
            "check_conflict", "support_kind", "DOF_NAMES", "rigid_motion", "mesh_parts"]
 
 
+# The residual's floor is 1e3 eps x (round-off scale) (solvers.convergence: the element's scale
+# sums many cancelling terms); a spring's force has the round-off eps k |P x| of one product, so
+# its scale enters at 1e-2 of k |P X|: a floor ten times the spring's round-off.
+SPRING_ROUND_OFF = 1e-2
+
+
 class _Spring(Load):
     """A penalty support written as a load: it does not scale with the load factor."""
     scales_with_load_factor = False
@@ -109,6 +115,13 @@ class LabSpring(_Spring):
         """(nodes, lab directions (k, q, 3)) that this spring holds (for the support check)."""
         return self.nodes, self.D
 
+    def round_off_scale(self, ell):
+        """SPRING_ROUND_OFF k |P X| over the nodes: the held components of the positions carry
+        round-off eps |P x| (their increments add to them), which the spring multiplies by k (a
+        stiff spring far from the origin: 1e4 E h on a unit strip stalled at a residual of 4e-10 =
+        eps k |P X| / |f|, above rtol 1e-10).  Nodes on the plane P X = 0 add nothing."""
+        return SPRING_ROUND_OFF * self.k * float(np.linalg.norm(np.einsum("nij,nj->ni", self.P, self.X0)))
+
     def compiled(self, pattern):
         """The numba kernel of this spring (``kernels.loads.lab_spring``)."""
         from ..kernels.loads import lab_spring
@@ -161,6 +174,11 @@ class LabTiltSpring(_Spring):
         self.t = np.broadcast_to(t, (len(self.nodes), 3)) if t.ndim == 1 else t
         self.k = float(k_rot)
         self.name = name
+
+    def round_off_scale(self, ell):
+        """SPRING_ROUND_OFF k_rot sqrt(k) / ell: the held component (of order 1 rad at most) carries
+        round-off eps, which the spring multiplies by k_rot (a moment; / ell: as a force)."""
+        return SPRING_ROUND_OFF * self.k * np.sqrt(len(self.nodes)) / ell
 
     def compiled(self, pattern):
         """The numba kernel of this spring (``kernels.loads.lab_tilt_spring``)."""
@@ -227,6 +245,11 @@ class RotationComponentSpring(_Spring):
         self.b = np.einsum("nji,nj->ni", self.R0, a)                   # R0^T a (body frame)
         self.k = float(k_rot)
         self.name = name
+
+    def round_off_scale(self, ell):
+        """SPRING_ROUND_OFF k_rot sqrt(k) / ell: the held component (of order 1 rad at most) carries
+        round-off eps, which the spring multiplies by k_rot (a moment; / ell: as a force)."""
+        return SPRING_ROUND_OFF * self.k * np.sqrt(len(self.nodes)) / ell
 
     def compiled(self, pattern):
         """The numba kernel of this spring (``kernels.loads.rotation_component_spring``)."""
