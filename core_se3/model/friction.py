@@ -170,6 +170,23 @@ class CoulombFriction:
                     "or prescribe the sliding motion")
         return ""
 
+    def slip_status(self, g, lam, start):
+        """(status, unit traction direction) of the nodes at (g, lam): 0 off contact, 1 sticking,
+        2 slipping; ``start``: (g, lam) is the accepted state the history stands at (its stored
+        traction, and how the nodes moved over the step to it), else a converged try from there
+        (its traction t).  The friction check (``solvers.friction_probe``) compares the two ends
+        of a step."""
+        x, _, n, H, p, dp = self.state(g, lam)
+        if start:
+            t = self.tau @ self.obstacle.transform(lam)[:3, :3].T
+            t = t - np.einsum("ki,ki->k", n, t)[:, None] * n
+            stick = self.sticking(lam, n, p)
+        else:
+            t, _, stick, _ = self.friction_state(g, lam, x, n, H, p, dp)
+        status = np.where(p > 0, np.where(stick, 1, 2), 0)
+        norm = np.linalg.norm(t, axis=1)
+        return status, t / np.where(norm > 0, norm, 1.0)[:, None]
+
     def accept_state(self, g, lam):
         """An accepted state (``Load.accept_state``): the friction history moves on -- the
         multipliers become the nodes' tractions there (obstacle frame) and the anchors their
@@ -178,9 +195,13 @@ class CoulombFriction:
             x, _, n, H, p, dp = self.state(g, lam)
             t, _, stick, slip = self.friction_state(g, lam, x, n, H, p, dp)
             on = p > 0                   # the step's stick/slip record, before the anchors move
+            # the hardening's share of the slipping nodes' friction, (|t| - mu p) / (mu p) = d k |s| / ((1 - d) mu p)
+            excess = np.where(on & ~stick, np.linalg.norm(t, axis=1) / np.where(on, self.mu * p, 1.0) - 1.0, 0.0)
             self.step_stats = dict(sticking=int(np.count_nonzero(on & stick)),
                                    slipping=int(np.count_nonzero(on & ~stick)),
                                    largest_slip=float(np.linalg.norm(slip[on & ~stick], axis=1).max(initial=0.0)),
-                                   stick=np.where(on, stick.astype(float), np.nan))
+                                   stick=np.where(on, stick.astype(float), np.nan),
+                                   excess=float(self.largest(float(excess.max(initial=0.0)))),
+                                   excess_node=int(self.nodes[int(np.argmax(excess))]) if len(excess) else -1)
             self.tau = t @ self.obstacle.transform(lam)[:3, :3]
             self.y_a = self.placement(x, lam)

@@ -139,6 +139,17 @@ SOLVER = Section("solver", (
     _option("snap_check", _NEWTON, "load control with contact: a step that moved a node by more than an element "
             "size is solved again in halves (a step that landed elsewhere is cut back); a jump that survives halving "
             "to 1/64 of the step is reported as a snap in `critical_points` (docs/STEPS.md)", kind="bool"),
+    _option("friction_check", _NEWTON, "load control with Coulomb friction: an accepted state whose slipping nodes' "
+            "friction exceeds the cone by more than `friction_tol` (the hardening's share, which grows with the slip "
+            "of the step) is solved again at its load factor (docs/STEPS.md)",
+            kind="bool"),
+    _option("friction_halving", _NEWTON, "load control with friction: also solve a step over which a node changed its "
+            "stick/slip status again in halves, refined until they agree with it to `friction_tol` of the path's "
+            "displacement scale (off: its estimate does not shrink with the step on the walkers; docs/STEPS.md)",
+            kind="bool"),
+    _option("friction_tol", _NEWTON, "load control with friction: the friction check's tolerance, relative to mu p "
+            "(the hardening) and to the path's displacement scale (a step's halves)", lo=0.0, lo_open=True, hi=1.0,
+            hi_open=True),
     _option("end_check", _NEWTON, "load control: count the negative eigenvalues of the symmetric tangent at the end "
             "of the solve (one factorisation; conservative loads without contact, with limit_check); more than at "
             "the start stops the run naming the step where they rose: an even number crossing zero within a step, "

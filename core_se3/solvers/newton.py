@@ -38,6 +38,7 @@ from .splitting import (MAX_LOAD_TURN, MAX_PRESCRIBED_TURN, check_substeps, spli
                         split_turning)
 from .stability import limit_point_hint, unseen_crossing
 from .contact_probe import ContactProbe, median_edge
+from .friction_probe import RELAXATIONS, FrictionProbe
 from .step_checks import StepChecks, start_sign
 
 __all__ = ["newton_solve", "newton_steps", "end_check", "requested_load_factors", "NewtonState", "NewtonStep",
@@ -271,10 +272,11 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
             g_try, stress_try = _try_start(problem, eq, trier, g, g_whole, lam, lam_try, mip, stress_conv,
                                            hooks.predictors)
             saved = [ld.multipliers() for ld in hooks.aug]
+            start = _friction_start(checks, (lam, g, g_whole, stress_conv, saved, k_ref), result)
             g_start = g_try
             out = augmented_try(trier, hooks.aug, g_try, lam_try, mip, stress_try, opts.max_augmentations,
                                 lambda o, k: _log_try(result, tries, lam_try, o, augmentation=k, quiet=not eq.root))
-            _judge(out, checks, eq, hooks.sweeps, g, lam, lam_try, stress_conv)
+            _judge(out, checks, eq, hooks.sweeps, g, lam, lam_try, stress_conv, start)
             ok, reason, hist = out.ok, out.reason, out.hist
             _log_try(result, tries, lam_try, out, augmentation=0 if hooks.aug else None, quiet=not eq.root)
             if ok and opts.limit_check and not driven and out.k_step is not None:
@@ -282,8 +284,9 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
             if ok:
                 checks.accept(out, lam_try)
                 lam, g = lam_try, out.g
-                for ld in hooks.accepts:         # path-dependent loads move their history on (friction)
-                    ld.accept_state(g, lam)
+                out = _move_history(trier, hooks, checks.friction, out, lam, mip, opts,
+                                    lambda o, k: _log_try(result, tries, lam, o, augmentation=k, quiet=not eq.root))
+                g = out.g
                 g_whole = eq.whole_frames(g)
                 if mip:
                     stress_conv = out.ev.stress
@@ -297,12 +300,9 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
                     dlam = min(abs(dlam) * 2, abs(dlam_nominal)) * np.sign(dlam_nominal)
                 dlam = checks.next_increment(lam, dlam, floor)       # locating a det K sign change
             else:
-                for ld, m in zip(hooks.aug, saved):
-                    ld.set_multipliers(m)
-                if stateful:
-                    problem.element.restore()
-                checks.failed()
-                dlam = checks.next_increment(lam, dlam / 2, floor)
+                lam, g, g_whole, stress_conv, k_ref, dlam = _refused(eq, hooks, checks, saved, result, dlam_nominal,
+                                                                     (lam, g, g_whole, stress_conv, k_ref, dlam))
+                dlam = checks.next_increment(lam, dlam, floor)
             if checks.located(floor):
                 timer.close()
                 _stop_at_critical(problem, opts, checks, result, getattr(eq, "negative_count", None))
@@ -360,8 +360,73 @@ class _Hooks:
         self.predictors = hooked_loads(eq, "predict_start") if not eq.stateful else []
 
 
+def _friction_start(checks, state, result):
+    """The friction check's record of a try's start (the nodes' status there) and the snapshot
+    it goes back to: ``state`` (lam, g, g_whole, stress_conv, multipliers, k_ref), the snap
+    check's probes and the number of stored steps; None without the check."""
+    if checks.friction is None:
+        return None
+    checks.friction.begin(state[1], state[0])
+    return state + (list(checks.snap.probes) if checks.snap else None, len(result.steps))
+
+
+def _move_history(trier, hooks, friction, out, lam, mip, opts, log_try):
+    """The accepted try ``out`` at lam: the path-dependent loads move their history on
+    (friction); then, with the friction check, it is solved again at the same lam from its
+    state while a slipping node's friction exceeds the cone by more than friction_tol (the
+    hardening's d k |s| / mu p, which grows with the slip of the step: ``solvers.friction_probe``),
+    at most RELAXATIONS times.  Returns the last accepted try."""
+    for ld in hooks.accepts:
+        ld.accept_state(out.g, lam)
+    if friction is None:
+        return out
+    for _ in range(RELAXATIONS):
+        excess, node = friction.excess()
+        if excess <= friction.tol:
+            break
+        saved = [ld.multipliers() for ld in hooks.aug]
+        again = augmented_try(trier, hooks.aug, out.g.copy(), lam, mip, out.ev.stress if mip else None,
+                              opts.max_augmentations, log_try)
+        again.reason = again.reason or f"friction check: node {node} slipped with {excess:.3g} of mu p over the cone: relaxed"
+        log_try(again, 0 if hooks.aug else None)
+        if not again.ok:
+            for ld, m in zip(hooks.aug, saved):
+                ld.set_multipliers(m)
+            break
+        friction.relaxed += 1
+        out = again
+        for ld in hooks.accepts:
+            ld.accept_state(out.g, lam)
+    friction.note_excess()
+    return out
+
+
+def _refused(eq, hooks, checks, saved, result, dlam_nominal, here):
+    """A refused try from ``here`` = (lam, g, g_whole, stress_conv, k_ref, dlam): the loads'
+    multipliers (``saved``) and a stateful element restored, and the next try's start and
+    increment: half the increment from here, or, when the friction check refused the halves of a
+    probed step, the probed step's start (the multipliers and friction history of the loads,
+    the snap check's probes, the sub-steps recorded since) and its refined step."""
+    for ld, m in zip(hooks.aug, saved):
+        ld.set_multipliers(m)
+    if eq.stateful:
+        eq.problem.element.restore()
+    checks.failed()
+    start = checks.friction.take_back() if checks.friction is not None else None
+    if start is None:
+        return here[:5] + (here[5] / 2,)
+    lam, g, g_whole, stress_conv, saved, k_ref, snap_probes, n_steps = start
+    for ld, m in zip(hooks.aug, saved):
+        ld.set_multipliers(m)
+    if checks.snap is not None:
+        checks.snap.probes = list(snap_probes)
+    del result.steps[n_steps:]
+    return lam, g, g_whole, stress_conv, k_ref, np.sign(dlam_nominal) * abs(checks.friction.caps[-1][1])
+
+
 def _step_checks(opts, eq, state):
-    """The path and stability checks (``solvers.step_checks``) of a load-stepped run."""
+    """The path and stability checks (``solvers.step_checks``) of a load-stepped run, and the
+    snap and friction checks of contact."""
     # contact (a constraint-force load) is not smooth: its Newton tries contract irregularly at
     # any step size and det K jumps as nodes touch and lift off, so both checks leave it
     smooth = not any(getattr(ld, "constraint_force", False) for ld in eq.loads)
@@ -372,8 +437,18 @@ def _step_checks(opts, eq, state):
     snap = probe(median_edge(eq.problem.mesh)) if opts.snap_check and not smooth else None
     return StepChecks(opts.path_check and smooth and not eq.stateful, smooth and hasattr(eq, "det_sign"),
                       opts.critical_tol, state.det_sign, stop=opts.limit_check, snap=snap,
+                      friction=_friction_probe(opts, eq),
                       counting=opts.inertia_check and smooth and hasattr(eq, "inertia_count")
                       and not any(getattr(ld, "follower", False) for ld in eq.loads))
+
+
+def _friction_probe(opts, eq):
+    """The friction check (``solvers.friction_probe``) of a run with Coulomb friction, else None
+    (off, no friction, a distributed run or a stateful element, whose state is not restored)."""
+    loads = [ld for ld in eq.loads if getattr(ld, "path_dependent", False) and hasattr(ld, "slip_status")]
+    if not (opts.friction_check and loads) or eq.distributed or eq.stateful:
+        return None
+    return FrictionProbe(loads, eq.problem.mesh.g0[:, :3, 3], opts.friction_tol, halving=opts.friction_halving)
 
 
 def _split_step(problem, turning, g_whole, lam, lam_try, target, dlam, opts, result):
@@ -420,9 +495,10 @@ def _try_start(problem, eq, trier, g, g_whole, lam, lam_try, mip, stress_conv, p
     return g_try, stress_try
 
 
-def _judge(out, checks, eq, sweeps, g, lam, lam_try, stress_conv):
+def _judge(out, checks, eq, sweeps, g, lam, lam_try, stress_conv, start=None):
     """Refuse (out.ok False, out.reason) a converged try that fails the step checks or that a
-    load refuses (a step through an obstacle)."""
+    load refuses (a step through an obstacle); ``start``: the snapshot of the try's start that
+    the friction check goes back to."""
     if out.ok and checks.stability and checks.sign is None and out.det_sign == -1:
         checks.sign = start_sign(eq, g, lam, stress_conv)     # was the start unstable too?
     if out.ok and checks.counting:           # inertia_check: the count of negative eigenvalues
@@ -437,6 +513,9 @@ def _judge(out, checks, eq, sweeps, g, lam, lam_try, stress_conv):
         out.ok, out.reason = not (why := _step_error(sweeps, g, lam, out.g, lam_try)), why or out.reason
     if out.ok and checks.snap is not None:   # a large contact step: probed in halves (a snap?)
         out.reason = checks.snap.judge(g, out.g, lam, lam_try)
+        out.ok = not out.reason
+    if out.ok and checks.friction is not None:   # a frictional step: its slip history's error
+        out.reason = checks.friction.judge(out.g, lam, lam_try, start)
         out.ok = not out.reason
 
 

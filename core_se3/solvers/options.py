@@ -58,7 +58,13 @@ class NewtonOptions:
     keep a prescribed motion or a turning field within its turn per try (beyond it a
     ConvergenceError names the load and the turn); snap_check: with contact, solve a try that
     moved a node by more than an element size again in halves, keep the halves' path, and report
-    a jump that survives the halving as a snap (``solvers.contact_probe``); inertia_check: count
+    a jump that survives the halving as a snap (``solvers.contact_probe``); friction_check: with
+    Coulomb friction, solve an accepted state whose slipping nodes exceed the cone by more than
+    friction_tol (the hardening) again at its load factor; friction_halving: also solve a try over
+    which a contact node changed its stick/slip status (or its slip direction) again in halves and
+    refine until the halves agree with it to friction_tol of the path's displacement scale
+    (``solvers.friction_probe``; off by default: its estimate does not shrink with the step on
+    the walkers); inertia_check: count
     the negative eigenvalues of sym K at every converged try (one more factorisation per try) so
     that an even number of them crossing zero within one step, which leaves the sign of det K,
     is located like a sign change (``solvers.step_checks``); end_check: with limit_check and no
@@ -82,8 +88,10 @@ class NewtonOptions:
         In [0, 50]; default 12.
     divergence : float
         >= 1; default 1e8.
-    path_check, limit_check, snap_check, inertia_check, end_check, record_substeps : bool
-        Default True, True, True, False, True and False.
+    path_check, limit_check, snap_check, friction_check, friction_halving, inertia_check, end_check, record_substeps : bool
+        Default True, True, True, True, False, False, True and False.
+    friction_tol : float
+        In (0, 1); default 1e-7.
     critical_tol : float
         In (0, 1); default 1e-3.
     max_substeps : int
@@ -122,6 +130,9 @@ class NewtonOptions:
     critical_tol: float = _opt(1e-3, 0.0, 1.0, True)
     max_substeps: int = _opt(1000, 1, 10_000_000)
     snap_check: bool = True
+    friction_check: bool = True
+    friction_halving: bool = False
+    friction_tol: float = _opt(1e-7, 0.0, 1.0, True)
     inertia_check: bool = False
     end_check: bool = True
 

@@ -142,6 +142,8 @@ class StepChecks:
         recorded and passed (:meth:`passed`).
     snap : ContactProbe, optional
         The snap check of contact steps (``solvers.contact_probe``; None: not applied).
+    friction : FrictionProbe, optional
+        The friction check of frictional steps (``solvers.friction_probe``; None: not applied).
     counting : bool, optional
         ``inertia_check``: each converged try brings the count of negative eigenvalues of sym K
         (``out.count``), and a change of it is located like a change of the sign of det K
@@ -165,9 +167,10 @@ class StepChecks:
     ('', 'path check: the Newton corrections grew 3.4x')
     """
 
-    def __init__(self, path, stability, critical_tol, sign=None, stop=True, snap=None, counting=False):
+    def __init__(self, path, stability, critical_tol, sign=None, stop=True, snap=None, counting=False, friction=None):
         self.path, self.stability, self.tol, self.stop = path, stability, critical_tol, stop
         self.snap = snap                # the snap check of contact steps (solvers.contact_probe) or None
+        self.friction = friction        # the friction check (solvers.friction_probe) or None
         self.counting, self.count = counting, None   # inertia_check: negative eigenvalues of sym K
         self.what = ""
         self.sign = sign
@@ -214,6 +217,8 @@ class StepChecks:
             self.count = out.count
         if self.snap is not None:
             self.snap.accept(out.g, lam_try)
+        if self.friction is not None:
+            self.friction.accept(out.g)
         if self.bracket is not None:
             lo, hi = self.bracket
             self.bracket = None if abs(hi - lam_try) <= 1e-14 * max(1.0, abs(hi)) else (lam_try, hi)
@@ -237,6 +242,8 @@ class StepChecks:
         (``floor``); the snap check's smallest probe follows the step too."""
         if self.snap is not None:
             self.snap.new_step(dlam_nominal)
+        if self.friction is not None:
+            self.friction.new_step(dlam_nominal)
         return abs(dlam_nominal) / 2 ** max_cutbacks
 
     def next_increment(self, lam, dlam, floor):
@@ -244,10 +251,12 @@ class StepChecks:
         bracket (bisection; a failed try halves ``dlam`` as usual), and once the bracket is
         narrow (``critical_tol``, or half of it below ``floor``, the smallest increment the
         cut-backs allow) but its change was seen from an older low end, a try to its high end
-        from the current one.  A contact step being probed in halves (the snap check) caps it at
-        the probed step's end."""
+        from the current one.  A contact step being probed in halves (the snap check, the
+        friction check) caps it at the probed step's end."""
         if self.snap is not None:
             dlam = self.snap.next_increment(lam, dlam)
+        if self.friction is not None:
+            dlam = self.friction.next_increment(lam, dlam)
         if self.bracket is None:
             return dlam
         lo, hi = self.bracket
@@ -297,5 +306,7 @@ class StepChecks:
                    det_sign=self.sign if self.stability else None)
         if self.snap is not None:
             rec.update(self.snap.record())
+        if self.friction is not None:
+            rec.update(self.friction.record())
         self.rejected = 0
         return rec
