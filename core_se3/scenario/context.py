@@ -11,6 +11,7 @@ import numpy as np
 
 from ..backend import launched_rank, launched_ranks
 from ..solvers import newton_steps
+from ..solvers.newton import end_check
 
 __all__ = ["RunContext", "run_context", "on_root"]
 
@@ -42,6 +43,11 @@ class RunContext:
 
     def steps(self, targets, options, start, recorder, result):
         return newton_steps(self.problem, targets, options, start=start, recorder=recorder, result=result)
+
+    def end_check(self, options, result):
+        """``solvers.end_check`` on ``result`` (its steps: the load-control path from the run's
+        start): a ConvergenceError naming the step when negative eigenvalues rose unseen."""
+        end_check(self.problem, options, result)
 
     def cell_fields(self, g):
         return self.problem.element.cell_fields(g)
@@ -86,6 +92,10 @@ class DistributedContext(RunContext):
     def steps(self, targets, options, start, recorder, result):
         from ..parallel import distributed_newton_steps
         return distributed_newton_steps(self.run, targets, options, start=start, recorder=recorder, result=result)
+
+    def end_check(self, options, result):
+        """The end check with the counts taken on the ranks (``DistributedRun.negative_count``)."""
+        end_check(self.problem, options, result, self.run.negative_count)
 
     def cell_fields(self, g):
         """The element's cell fields of the whole mesh on rank 0 (None elsewhere), each rank

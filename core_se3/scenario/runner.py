@@ -296,8 +296,10 @@ def _events(run, start, rec):
         yield from _linear_events(run, rec)
         return
     lams, k = scn.load_factors(), run.done
+    run.path = [SimpleNamespace(g=np.array(start.g), load_factor=float(start.lam))]
     for item in run.ctx.steps(lams[k:], opts, start, rec, run.result):
         k += 1
+        run.path.append(item.step)
         tries = item.tries
         record = _record(k, item.step, sum(e["iterations"] for e in tries),
                          sum(e["converged"] and not e.get("augmented") for e in tries),
@@ -401,6 +403,8 @@ def _complete(run, sinks, last):
         error = (f"arc length stopped after max_steps = {s['max_steps']} steps at load factor {lam:.6g} < "
                  f"lam_end = {s['lam_end']:g}; raise [solver] max_steps and continue with --resume (or raise "
                  "dlam0 and start over)")
+    error = error or _end_check(run)
+    status = "failed" if error else status
     with held_signals():
         for sink in sinks:
             sink.end(run, status, error)
@@ -412,6 +416,26 @@ def _complete(run, sinks, last):
     out = run.rd.path
     files = dict(results=os.path.join(out, "results.json"), checkpoint=os.path.join(out, "checkpoint.npz"))
     return _finish(run, doc, g, files)
+
+
+def _end_check(run):
+    """Load control's end check (``solvers.end_check``) over the states of this run: the message
+    of an even eigenvalue crossing that det K's sign did not show (the steps from the crossing on
+    are written already: the message names them), or None."""
+    if run.arc or run.scn.solver["control"] == "linear" or len(run.path) < 2:
+        return None
+    check = Result(mesh=run.scn.problem.mesh, element=run.scn.problem.element_name)
+    check.steps, check.critical_points = list(run.path), list(run.result.critical_points)
+    try:
+        run.ctx.end_check(_options(run.scn.solver), check)
+    except ConvergenceError as exc:
+        lo = check.steps[-1].load_factor
+        beyond = [r["step"] for r in run.records if r["load_factor"] > lo + 1e-12 * max(1.0, abs(lo))]
+        steps = f"step {beyond[0]}" if len(beyond) == 1 else f"steps {beyond[0]} to {beyond[-1]}"
+        return str(exc).replace("The steps before it are kept in .result",
+                                f"The files keep {steps} (load factors beyond {lo:.7g}) with the others: those lie "
+                                "beyond it" if beyond else "")
+    return None
 
 
 def _finish(run, doc, g, files):

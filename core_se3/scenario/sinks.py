@@ -115,6 +115,7 @@ class RunState:
     done: int = 0
     last: object = None
     saved: int = 0
+    path: list = field(default_factory=list)        # load control's states (g, load_factor): the end check's
 
     @property
     def root(self):
