@@ -128,7 +128,7 @@ def run(quick=False, seed=True):
                         rec = run_fenicsx(name, mesh, ov, steps, integration=variant)
                     out.append(dict(case=name, L_over_h=r, model=model, variant=variant,
                                     mesh=list(mesh), grid=list(m), n_dofs=rec["n_dofs"],
-                                    status=rec["status"], wall=rec["wall"],
+                                    status=rec["status"], warning=rec.get("warning"), wall=rec["wall"],
                                     iterations=rec["iterations"], attempts=rec.get("attempts"),
                                     jit=rec["timings"]["jit"],
                                     error=_error(name, r, ov, steps, rec) if rec["status"] == "ok" else None))

@@ -13,6 +13,7 @@ them explicitly (no extra reference loads), core_se3 steps uniformly by construc
 from __future__ import annotations
 
 import time
+import warnings
 
 import numpy as np
 
@@ -48,7 +49,7 @@ def run_core(name, mesh, overrides=None, steps=10, element="default", cap=None, 
     """core_se3 run of a catalogue case; ConvergenceError -> status 'failed: ...' with the
     steps that converged kept."""
     from core_se3 import catalogue
-    from core_se3.errors import CoreSE3Error, ConvergenceError
+    from core_se3.errors import CoreSE3Error, ConvergenceError, ElementWarning
     rec = _empty("core_se3", element, name, mesh, overrides)
     case = catalogue.get_case(name)
     p = catalogue.case_params(case, overrides)
@@ -60,7 +61,11 @@ def run_core(name, mesh, overrides=None, steps=10, element="default", cap=None, 
         t_setup = time.perf_counter() - t0
         rec["n_dofs"] = 6 * prob.mesh.n_nodes
         try:
-            res = prob.solve(steps=steps, **kw)
+            with warnings.catch_warnings(record=True) as said:
+                warnings.simplefilter("always", ElementWarning)
+                res = prob.solve(steps=steps, **kw)
+            # what the run said about its own answer (the element's known limits): reported
+            rec["warning"] = next((str(w.message) for w in said if issubclass(w.category, ElementWarning)), None)
         except ConvergenceError as exc:
             res = exc.result
             rec["status"] = f"failed: {exc}".split(";")[0]

@@ -43,6 +43,14 @@ NUS = (0.3, 0.45, 0.49, 0.499)
 MESH = dict(rollup=((10, 1), (5, 1)), torsion=((12, 4), (6, 2)), nu=((16, 4), (8, 2)))
 
 
+def _thin_outcome(converged, right, run):
+    """A thin-shell run's outcome; one that converged wrong but warned that its element is out of
+    its range (``core_se3.errors.ElementWarning``) reported it: 'fail', not 'WRONG'."""
+    if converged and not right and run.get("warning"):
+        return "fail"
+    return _outcome(converged, right, True, run["status"])
+
+
 def _outcome(converged, right, applicable=True, status=""):
     if not applicable or status.startswith("not available"):
         return "n/a"
@@ -150,8 +158,8 @@ def run(quick=False, seed=True, locking=None):
             what = ("torsion J vs the other model" if r["case"] == "torsion" else f"{r['case']} tip error")
             tests.append(dict(group="thin shell L/h = 1e4", model=r["model"],
                               what=f"{what}, {r['variant']} {r['mesh'][0]}×{r['mesh'][1]}",
-                              value=d, value100=d100, outcome=_outcome(conv, right, True, r["status"]),
-                              status=r["status"], tangent=None, iterations=None))
+                              value=d, value100=d100, outcome=_thin_outcome(conv, right, r),
+                              status=r.get("warning") or r["status"], tangent=None, iterations=None))
     # 3. nu -> 0.5
     mc, mf = MESH["nu"]
     for nu in (NUS[:2] if quick else NUS):

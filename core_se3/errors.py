@@ -18,7 +18,7 @@ import difflib
 __all__ = ["CoreSE3Error", "MaterialError", "MeshError", "LoadError", "SupportError",
            "SingularSystemError", "ConvergenceError", "ElementTooDistortedError", "ScenarioError",
            "CheckpointError", "OptionError", "DesignError", "ContactError", "ParallelError",
-           "LinearSolverError", "ControlError", "ScenarioWarning", "SupportWarning", "did_you_mean"]
+           "LinearSolverError", "ControlError", "ScenarioWarning", "SupportWarning", "ElementWarning", "did_you_mean"]
 
 
 def did_you_mean(name, choices):
@@ -433,5 +433,22 @@ class SupportWarning(UserWarning):
     -------
     >>> from core_se3.errors import SupportWarning
     >>> issubclass(SupportWarning, UserWarning)
+    True
+    """
+
+
+class ElementWarning(UserWarning):
+    """An element used where it is known to give wrong answers that converge.
+
+    Issued by the seed's scheme (``element = "seed"``, kept for comparison with the paper) on
+    thin meshes, where it locks: measured by ``python -m comparison`` (the locking study), with
+    element size / thickness 12.5 the cantilever, roll-up and arch do not converge, and the
+    torsion strip 10 x 4 at L/h = 1e4 (element size / thickness 1000) converged to 130 times
+    the torsion constant of the default element and of the DOLFINx reference.
+
+    Example
+    -------
+    >>> from core_se3.errors import ElementWarning
+    >>> issubclass(ElementWarning, UserWarning)
     True
     """

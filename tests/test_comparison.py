@@ -167,3 +167,14 @@ def test_arc_tip_matches_half_cylinder_entry_and_reduces_to_circle():
     cu, cv, _ = circle_tip(10.0, k)
     au, av = arc_tip(10.0, 0.0, k)
     assert au == pytest.approx(cu, abs=1e-12) and av == pytest.approx(cv, abs=1e-12)
+
+
+def test_stress_counts_a_warned_wrong_run_as_reported():
+    """A thin-shell run that converged wrong but warned (the seed's ElementWarning) is 'fail'
+    (reported), one that converged wrong silently is 'WRONG', a warned right one 'pass'."""
+    from comparison import stress
+    run = dict(status="ok", warning=None)
+    assert stress._thin_outcome(True, False, run) == "WRONG"
+    assert stress._thin_outcome(True, False, dict(run, warning="element 'seed' ... locks")) == "fail"
+    assert stress._thin_outcome(True, True, dict(run, warning="element 'seed' ... locks")) == "pass"
+    assert stress._thin_outcome(False, False, dict(status="failed: x")) == "fail"

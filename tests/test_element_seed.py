@@ -41,3 +41,19 @@ def test_seed_state_restored_after_failed_step():
     with pytest.raises(ConvergenceError):
         p.solve(steps=1, max_cutbacks=0, max_iter=3)
     assert np.array_equal(p.element.zeta, zeta_before)
+
+
+def test_seed_on_a_thin_mesh_says_it_locks():
+    """The stress study of ``python -m comparison`` (reports/REPORT.md) found the seed's torsion
+    strip 10 x 4 at L/h = 1e4 converged to 130 times the torsion constant, silently; the element
+    now warns on meshes more than SEED_THIN thicknesses per element, and not below."""
+    from core_se3.errors import ElementWarning
+    from core_se3.fem.element_seed import SEED_THIN
+    thin = Problem(mesh.rectangle(10.0, 1.0, 10, 4), Material(1.2e6, 0.0, 1e-3), element="seed")
+    with pytest.warns(ElementWarning, match="thin mesh: element size / thickness = 1e\\+03"):
+        thin.element
+    thick = Problem(mesh.rectangle(10.0, 1.0, 10, 4), Material(1.2e6, 0.0, 1.0 / SEED_THIN * 1.01), element="seed")
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ElementWarning)
+        thick.element

@@ -21,14 +21,22 @@ hourglass modes.
 """
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from .. import lie
+from ..errors import ElementWarning
 from .element import Element, ElementEvaluation, register_element
 from .element_default import DefaultElement
 from .quadrature import GAUSS_2x2, shape_functions
 
-__all__ = ["SeedElement"]
+__all__ = ["SeedElement", "SEED_THIN"]
+
+# element size / thickness above which the seed's scheme locks (ElementWarning): it converges
+# and is right at 1.25 (the locking study's L/h = 10 cantilever and arch), fails at 12.5, and
+# converged 130 times too stiff in torsion at 1000 (reports/REPORT.md, stress study)
+SEED_THIN = 10.0
 
 
 @register_element
@@ -61,6 +69,7 @@ class SeedElement(Element):
 
     def __init__(self, mesh, material):
         super().__init__(mesh, material)
+        _warn_if_thin(mesh, material)
         base = DefaultElement(mesh, material)
         # reference centroid twists = mean of the opposite edge twists (exact for the commuting
         # reference states of the catalogue: flat plates and cylinders)
@@ -117,3 +126,15 @@ class SeedElement(Element):
         adtS = lie.adt(S)                                                # (m,2,6,6)
         Kg = np.einsum("m,qi,makp,mqajpr->mijkr", w, self.N, adtS, K)
         return ElementEvaluation(self.energy(), r, fscale, element_blocks=Km + Kg)
+
+
+def _warn_if_thin(mesh, material):
+    """An ElementWarning when the median element size exceeds SEED_THIN thicknesses."""
+    x = mesh.X[mesh.edge_nodes]
+    size = float(np.median(np.linalg.norm(x[:, 1] - x[:, 0], axis=1)))
+    h = float(np.median(np.atleast_1d(getattr(material, "h", np.nan))))
+    if np.isfinite(h) and h > 0 and size > SEED_THIN * h:
+        warnings.warn(ElementWarning(
+            f"element 'seed' (the paper's scheme, kept for comparison) on a thin mesh: element size / thickness "
+            f"= {size / h:.3g} > {SEED_THIN:g}, where it locks -- it may converge to a state far too stiff (torsion "
+            f"at 1000: 130 times the torsion constant) or not converge. Use element = 'default'"), stacklevel=4)
