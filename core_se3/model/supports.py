@@ -120,7 +120,9 @@ class LabSpring(_Spring):
         round-off eps |P x| (their increments add to them), which the spring multiplies by k (a
         stiff spring far from the origin: 1e4 E h on a unit strip stalled at a residual of 4e-10 =
         eps k |P X| / |f|, above rtol 1e-10).  Nodes on the plane P X = 0 add nothing."""
-        return SPRING_ROUND_OFF * self.k * float(np.linalg.norm(np.einsum("nij,nj->ni", self.P, self.X0)))
+        if getattr(self, "_held_norm", None) is None:        # |P X| is fixed: once, not per evaluation
+            self._held_norm = float(np.linalg.norm(np.einsum("nij,nj->ni", self.P, self.X0)))
+        return SPRING_ROUND_OFF * self.k * self._held_norm
 
     def compiled(self, pattern):
         """The numba kernel of this spring (``kernels.loads.lab_spring``)."""
