@@ -295,6 +295,19 @@ def shear_locking(python, ratios=(10.0, 1e2, 1e3, 1e4)):
     return out
 
 
+def eigen_orders_mitc9(meshes=(2, 3, 4), rh_pairs=((1e4, 1e5), (1e5, 1e6)), k=12):
+    """{n: {"a/b": [K(h_a) / K(h_b) of the k lowest eigenvalues]}} of the prototype's free
+    stiffness on the n x n roof (R/h a to b, a tenfold thinner: 10 membrane order, 1000 bending
+    order)."""
+    def lowest(n, rh):
+        p, _ = sc.scordelis_lo(2 * n, h=25.0 / rh)
+        K = mitc9.stiffness(p.mesh.X, p.mesh.g0[:, :3, :3], quad9(2 * n, 2 * n), p.material.E, p.material.nu,
+                            p.material.h).toarray()
+        free = ~p.constraint_mask()[:, :5].ravel()
+        return np.linalg.eigvalsh(K[np.ix_(free, free)])[:k]
+    return {n: {f"{a:g}/{b:g}": (lowest(n, a) / lowest(n, b)).tolist() for a, b in rh_pairs} for n in meshes}
+
+
 # ------------------------------------------------------------------ load check -----------------
 def _area9(X, elems, k=20):
     """The area of the 9-node elements' quadratic surface, k x k Gauss points."""
@@ -483,6 +496,10 @@ def write(doc):
           "| element | " + " | ".join(f"L/h {float(r):g}" for r in next(iter(doc["plate"].values()))) + " |",
           "|---|" + "---:|" * len(next(iter(doc["plate"].values())))]
     L += [f"| {k} | " + " | ".join(f"{v:.4f}" for v in row.values()) + " |" for k, row in doc["plate"].items()]
+    L += ["", "Lowest eigenvalues of the MITC9 prototype's free stiffness on the roof, K(R/h a) / K(R/h b), b = 10 a "
+          "(10: membrane order, 1000: bending order):", ""]
+    L += [f"* {n}x{n}, {ab}: " + ", ".join(f"{v:.0f}" for v in r) for n, o in doc.get("orders", {}).items()
+          for ab, r in o.items()]
     L += ["", "## The roof's self-weight on 9-node elements", "",
           "Sum of the nodal loads / the exact weight 90 x 25 x 40 deg x 25 (and the 9-node sum / 90 x the area "
           "of its quadratic surface, 20x20 Gauss points):", "",
@@ -594,6 +611,7 @@ def main():
     doc["patches"].update(patch_tests_mitc9())
     doc["plate"] = shear_locking(a.opensees)
     print(doc["plate"], flush=True)
+    doc["orders"] = eigen_orders_mitc9()
     doc["loads"] = load_check()
     doc["converged"] = core_converged()
     doc["core_se3_sweeps"], doc["core_se3_from"] = core_se3_sweeps()
