@@ -109,8 +109,9 @@ def _local(G):
     return T
 
 
-def element_stiffness(Xe, V, E, nu, h, k_shear=5.0 / 6.0):
-    """(nE, 45, 45) stiffness of the MITC9 elements (dofs per node: u lab x3, alpha, beta)."""
+def element_stiffness(Xe, V, E, nu, h, k_shear=5.0 / 6.0, tied=True):
+    """(nE, 45, 45) stiffness of the MITC9 elements (dofs per node: u lab x3, alpha, beta);
+    ``tied`` False: the displacement-based 9-node element (no tying), for comparison."""
     D = np.zeros((5, 5))
     D[:2, :2] = E / (1 - nu * nu) * np.array([[1, nu], [nu, 1]])
     D[2, 2] = E / (2 * (1 + nu))
@@ -121,17 +122,17 @@ def element_stiffness(Xe, V, E, nu, h, k_shear=5.0 / 6.0):
     for r, wr in zip(g, w):
         for s, ws in zip(g, w):
             for t, wtt in zip(gt, wt):
-                B, G = tied_B(Xe, V, h, r, s, t)
+                B, G = (tied_B if tied else covariant_B)(Xe, V, h, r, s, t)
                 Bl = np.einsum("eij,ejk->eik", _local(G), B)
                 K += (wr * ws * wtt * np.linalg.det(G))[:, None, None] * np.einsum("eji,jk,ekl->eil", Bl, D, Bl)
     return K
 
 
-def stiffness(X, R0, elems, E, nu, h):
+def stiffness(X, R0, elems, E, nu, h, tied=True):
     """The global stiffness (5n x 5n, sparse) on the nodal-frame dofs (u in (d1, d2, d3), alpha,
     beta per node) of the 9-node elements ``elems`` on nodes X with frames R0 (n, 3, 3)."""
     elems = np.asarray(elems)
-    Ke = element_stiffness(X[elems], R0[elems], E, nu, h)
+    Ke = element_stiffness(X[elems], R0[elems], E, nu, h, tied=tied)
     T = np.zeros((len(elems), 9, 5, 9, 5))                 # element dofs <- nodal-frame dofs
     for i in range(9):
         T[:, i, :3, i, :3] = R0[elems[:, i]]
@@ -152,7 +153,7 @@ def solve_dofs(K, fixed, values, f):
     return x.reshape(fixed.shape)
 
 
-def solve(p, elems, force_lab=None):
+def solve(p, elems, force_lab=None, tied=True):
     """The linear MITC9 solution of core_se3's problem p on the 9-node elements ``elems``
     (supports: p's constraint mask in the nodal frames, the drilling dof dropped; loads: p's
     nodal forces and moments about d1, d2, or ``force_lab`` (n, 3) in their place): a
@@ -160,7 +161,7 @@ def solve(p, elems, force_lab=None):
     g0 = p.mesh.g0
     R0 = g0[:, :3, :3]
     mat = p.material
-    K = stiffness(p.mesh.X, R0, elems, mat.E, mat.nu, mat.h)
+    K = stiffness(p.mesh.X, R0, elems, mat.E, mat.nu, mat.h, tied)
     f_body = p.external(g0, 1.0, tangent=False)[0]
     f = np.zeros((len(g0), 5))
     f[:, :3] = f_body[:, :3] if force_lab is None else np.einsum("nji,nj->ni", R0, force_lab)
