@@ -36,7 +36,7 @@ from ..model import Problem
 from ..solvers.linear import linear_state
 
 __all__ = ["REFERENCES", "scordelis_lo", "pinched_cylinder", "pinched_hemisphere", "twisted_beam",
-           "raasch_hook", "cook_membrane", "mh_patch", "random_patch", "patch_test", "PATCH_FIELDS"]
+           "raasch_hook", "cook_membrane", "hat_integrals", "mh_patch", "random_patch", "patch_test", "PATCH_FIELDS"]
 
 REFERENCES = {
     "scordelis-lo": 0.3024, "pinched-cylinder": 1.8248e-5, "pinched-hemisphere": 0.094,
@@ -89,19 +89,53 @@ def pinched_cylinder(n, h=3.0, material=None, element="default", **kw):
     return p, lambda res: -_u(res, A, (0.0, 0.0, 1.0))
 
 
-def pinched_hemisphere(n, h=0.04, material=None, element="default", R=10.0, **kw):
+def pinched_hemisphere(n, h=0.04, material=None, element="default", R=10.0, load_arc=None, **kw):
     """Quarter of the hemisphere with an 18 deg hole (R 10, E 6.825e7, nu 0.3), radial loads 2
     alternating on the equator (1 on each loaded node of the quarter), n x n; measure: the
-    outward displacement under the outward load."""
+    outward displacement under the outward load.
+
+    ``load_arc`` [length]: spread each load uniformly over this arc of the equator from its
+    node (consistent nodal loads of the line load 1 / load_arc), instead of a point load.  A
+    shear-deformable shell has no finite displacement under a point load: it grows like
+    P ln(1/r) / (pi k G h) at a free edge (Reissner-Mindlin), so on thick shells (R/h 10) the
+    point load's mesh sequence has no limit and the spread load is the well-posed problem.
+    """
     m = G.hemisphere_quarter(R, 18.0, n, n)
     p = Problem(m, material or Material(6.825e7, 0.3, h), element=element, **kw)
     p.fix("y0", (1, 3, 5))
     p.fix("y1", (1, 3, 5))
     A, B = _node(m, "y0", -1), _node(m, "y1", -1)
     p.fix([A], (0,))                       # A on the equator: d1 = -z, the rigid z motion
-    p.add_nodal_load([A], force=(1.0, 0.0, 0.0))
-    p.add_nodal_load([B], force=(0.0, -1.0, 0.0))
+    if load_arc is None:
+        p.add_nodal_load([A], force=(1.0, 0.0, 0.0))
+        p.add_nodal_load([B], force=(0.0, -1.0, 0.0))
+    else:
+        equator = np.asarray(m.node_set("x1"))
+        equator = equator[np.argsort(np.arctan2(m.X[equator, 1], m.X[equator, 0]))]   # A ... B
+        s = R * np.arctan2(m.X[equator, 1], m.X[equator, 0])
+        w = (hat_integrals(s, load_arc) - hat_integrals(s[-1] - s[::-1], load_arc)[::-1]) / load_arc
+        for k in np.flatnonzero(w):        # outward from A, inward from B
+            p.add_nodal_load([equator[k]], force=tuple(w[k] * m.X[equator[k]] / R))
     return p, lambda res: _u(res, A, (1.0, 0.0, 0.0))
+
+
+def hat_integrals(s, a):
+    """Integrals over [0, a] of the piecewise-linear hat functions on the increasing node
+    abscissae ``s`` (s[0] = 0): the consistent nodal loads of a unit line load on [0, a].
+
+    Example
+    -------
+    >>> hat_integrals(np.array([0.0, 2.0, 4.0]), 3.0)
+    array([1.  , 1.75, 0.25])
+    """
+    w = np.zeros(len(s))
+    for k in range(len(s) - 1):
+        L, t = s[k + 1] - s[k], min(s[k + 1], a) - s[k]
+        if t <= 0:
+            break
+        w[k] += t - t * t / (2 * L)
+        w[k + 1] += t * t / (2 * L)
+    return w
 
 
 def twisted_mesh(L, w, twist, nx, ny):

@@ -14,7 +14,8 @@ from .variables import Variable, region_elements
 __all__ = ["MaterialVariable", "MATERIAL_KEYS"]
 
 
-MATERIAL_KEYS = ISOTROPIC.keys()          # the isotropic law's keys, in Material's order
+MATERIAL_KEYS = ISOTROPIC.keys()          # the isotropic law's keys (scenario keys of [material])
+_LAW_KEYS = MATERIAL_KEYS + ("classical",)  # what rebuilds a Material (by keyword)
 
 
 class MaterialVariable(Variable):
@@ -72,8 +73,8 @@ class MaterialVariable(Variable):
     def _per_element(self):
         mat, m = self.problem.material, self.problem.mesh.n_elements
         per = getattr(mat, "per_element", None)
-        return {k: (per(k) if per is not None else np.full(m, getattr(mat, k), dtype=object if k == "rho" else float))
-                for k in MATERIAL_KEYS}
+        return {k: (per(k) if per is not None else np.full(m, getattr(mat, k), dtype=object if k in ("rho", "classical") else float))
+                for k in _LAW_KEYS}
 
     def value(self):
         props = self._per_element()
@@ -83,11 +84,12 @@ class MaterialVariable(Variable):
         props = self._per_element()                 # the current law (other variables may change it)
         for r, val in zip(self.regions, x):
             props[self.prop][r] = val
-        keys = list(zip(*[props[k] for k in MATERIAL_KEYS]))
+        keys = list(zip(*[props[k] for k in _LAW_KEYS]))
         uniq = list(dict.fromkeys(keys))
-        if len(uniq) == 1:
-            return Material(*uniq[0])
-        return RegionMaterial([Material(*u) for u in uniq], np.array([uniq.index(t) for t in keys]))
+        laws = [Material(**dict(zip(_LAW_KEYS, u))) for u in uniq]
+        if len(laws) == 1:
+            return laws[0]
+        return RegionMaterial(laws, np.array([uniq.index(t) for t in keys]))
 
     def assign(self, x):
         x = np.asarray(x, float)

@@ -11,13 +11,13 @@ Example
 from .element import ELEMENTS, Element, ElementEvaluation, make_element, register_element
 from .element_default import MAX_EDGE_ANGLE, DefaultElement, edge_twists, tying_matrices
 from .element_seed import SeedElement
-from .material import Material, RegionMaterial, ResultantLaw, strain_operators
+from .material import Material, RegionMaterial, ResultantLaw, law_matrix, strain_operators
 from .material_kinds import MATERIALS, MaterialKind, material_kind, register_material
 from .quadrature import GAUSS_2x2, shape_functions, surface_jacobian
 from .resultants import element_resultants
 
 __all__ = ["Element", "ElementEvaluation", "ELEMENTS", "register_element", "make_element",
            "DefaultElement", "SeedElement", "edge_twists", "tying_matrices", "MAX_EDGE_ANGLE",
-           "Material", "RegionMaterial", "ResultantLaw", "strain_operators", "GAUSS_2x2",
+           "Material", "RegionMaterial", "ResultantLaw", "law_matrix", "strain_operators", "GAUSS_2x2",
            "shape_functions", "surface_jacobian", "element_resultants", "MATERIALS", "MaterialKind",
            "register_material", "material_kind"]

@@ -129,6 +129,10 @@ class Element(abc.ABC):
     def __init__(self, mesh, material):
         self.mesh = mesh
         self.material = material
+        X = mesh.X[mesh.quads]                                 # (m, 4, 3) reference corners
+        #: the longest reference edge of every element (m,) [length]: the size a mesh-dependent
+        #: law sees (``Material.shear_stabilisation``)
+        self.size = np.linalg.norm(X - np.roll(X, -1, axis=1), axis=2).max(axis=1)
 
     @abc.abstractmethod
     def evaluate(self, g, tangent=True) -> ElementEvaluation:

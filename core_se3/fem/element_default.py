@@ -49,6 +49,7 @@ from .. import lie
 from ..errors import ElementTooDistortedError
 from ..mesh import LOCAL_EDGES
 from .element import Element, ElementEvaluation, register_element
+from .material import law_matrix
 from .membrane_drilling import drilling_correction, reference_G, tying_correction
 from .membrane_enhanced import condensed_stiffness, membrane_enhancement
 from .membrane_shear import shear_retention, shear_tying
@@ -217,7 +218,7 @@ class DefaultElement(Element):
             law = material.restricted(sl) if step < m else material
             z0 = self.z0[sl]
             zeta0 = np.einsum("qij,mj->mqi", P, z0)                        # (k, 4gp, 12)
-            Dm, j0 = law.resultant_matrix(zeta0[..., 0:3], zeta0[..., 6:9])  # (k, 4, 12, 12)
+            Dm, j0 = law_matrix(law, zeta0[..., 0:3], zeta0[..., 6:9], self.size[sl, None])  # (k, 4, 12, 12)
             self.j0[sl] = j0
             Ek = drilling_correction(P, z0, reference_G(mesh, psi0, sl))
             self.drill_Ek[sl] = Ek

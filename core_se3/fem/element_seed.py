@@ -29,6 +29,7 @@ from .. import lie
 from ..errors import ElementWarning
 from .element import Element, ElementEvaluation, register_element
 from .element_default import DefaultElement
+from .material import law_matrix
 from .quadrature import GAUSS_2x2, shape_functions
 
 __all__ = ["SeedElement", "SEED_THIN"]
@@ -76,7 +77,7 @@ class SeedElement(Element):
         z0 = base.z0.reshape(-1, 4, 6)
         self.zeta0 = np.stack([0.5 * (z0[:, 0] + z0[:, 1]), 0.5 * (z0[:, 2] + z0[:, 3])], 1)  # (m,2,6)
         A1, A2 = self.zeta0[:, 0, :3], self.zeta0[:, 1, :3]
-        self.Dc, self.j0c = material.resultant_matrix(A1, A2)             # (m,12,12), (m,)
+        self.Dc, self.j0c = law_matrix(material, A1, A2, self.size)       # (m,12,12), (m,)
         self.N, dN = shape_functions(GAUSS_2x2)                          # (4gp,4), (4gp,2,4)
         self.dN = dN
         self.Nc, dNc = shape_functions(np.zeros((1, 2)))

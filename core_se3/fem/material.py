@@ -29,7 +29,7 @@ import numpy as np
 
 from ..errors import MaterialError, MeshError
 
-__all__ = ["Material", "RegionMaterial", "ResultantLaw", "strain_operators"]
+__all__ = ["Material", "RegionMaterial", "ResultantLaw", "law_matrix", "strain_operators"]
 
 
 @runtime_checkable
@@ -38,7 +38,9 @@ class ResultantLaw(Protocol):
 
     ``resultant_matrix(A1, A2) -> (Dmat, j0)`` with A1, A2 (..., 3) the reference tangents; see
     :meth:`Material.resultant_matrix`.  :class:`Material` (one law) and :class:`RegionMaterial`
-    (a law per element) implement it.
+    (a law per element) implement it.  A law whose stiffness depends on the element size (the
+    shear stabilisation) says so by a true ``mesh_dependent`` attribute and then takes
+    ``size=`` (the element size at the points, see :func:`law_matrix`).
 
     It is a runtime-checkable Protocol: any object with such a method is accepted (a user law,
     e.g. an orthotropic one, needs no base class).
@@ -89,6 +91,12 @@ class Material:
         symmetrised curvature (K_ab + K_ba)/2 only; :meth:`classical_shell` also sets the shear
         factor 5/6.  Measured differences (docs/ELEMENTS.md): the thick strip's torsion constant
         (the Cosserat law's is about 20 % above Saint-Venant's) and Raasch's hook.
+    shear_stabilisation : float, optional
+        alpha >= 0 of Lyly, Stenberg and Vihinen's shear stabilisation (0, the default: off):
+        on an element of size L (its longest reference edge) the transverse-shear modulus is
+        ks G h * h^2 / (h^2 + alpha L^2), which tends to ks G h as the mesh is refined.  It
+        makes coarse meshes of moderately thick shells converge faster (Kratos' thick quad uses
+        alpha = 0.1) and thin coarse meshes more flexible; docs/ELEMENTS.md measures both.
 
     Attributes
     ----------
@@ -116,9 +124,10 @@ class Material:
     drilling: float = 1.0
     rho: float | None = None
     classical: bool = False
+    shear_stabilisation: float = 0.0
 
     def __post_init__(self):
-        for name in ("E", "nu", "h", "shear_factor", "drilling"):
+        for name in ("E", "nu", "h", "shear_factor", "drilling", "shear_stabilisation"):
             v = getattr(self, name)
             if not isinstance(v, (int, float, np.floating, np.integer)) or not math.isfinite(v):
                 raise MaterialError(f"material parameter {name} must be a finite number, got {v!r}")
@@ -132,6 +141,8 @@ class Material:
             raise MaterialError(f"shear factor must be > 0, got {self.shear_factor}")
         if self.drilling < 0:
             raise MaterialError(f"drilling factor must be >= 0, got {self.drilling}")
+        if self.shear_stabilisation < 0:
+            raise MaterialError(f"shear_stabilisation (alpha) must be >= 0, got {self.shear_stabilisation}")
         if not isinstance(self.classical, (bool, np.bool_)):
             raise MaterialError(f"classical must be True or False, got {self.classical!r}")
         if self.rho is not None and (isinstance(self.rho, bool) or not isinstance(self.rho, (int, float, np.floating, np.integer))
@@ -166,6 +177,11 @@ class Material:
         """Membrane stiffness E h / (1 - nu^2)."""
         return self.E * self.h / (1.0 - self.nu ** 2)
 
+    @property
+    def mesh_dependent(self):
+        """True if the stiffness depends on the element size (``shear_stabilisation`` > 0)."""
+        return self.shear_stabilisation > 0
+
     def restricted(self, elements):
         """The law of some elements: the same (one law for all).
 
@@ -177,8 +193,12 @@ class Material:
         """
         return self
 
-    def resultant_matrix(self, A1, A2):
+    def resultant_matrix(self, A1, A2, size=None):
         """12x12 stiffness on (eps_1, eps_2) at points with reference tangents A1, A2 (..., 3).
+
+        ``size`` (broadcastable to A1.shape[:-1]) [length]: the element size at the points,
+        needed with ``shear_stabilisation`` > 0 (the shear modulus times h^2 / (h^2 + alpha
+        size^2)), ignored otherwise.
 
         Returns (Dmat, j0): ``W = 1/2 eps^T Dmat eps`` per unit reference area, and the area
         element j0 = |A1 x A2| that turns the parameter measure into reference area.
@@ -201,15 +221,50 @@ class Material:
         Dm = self.C * H
         Db = self.D * H
         Ds = self.shear_factor * self.G * self.h * Ainv
+        if self.mesh_dependent:                  # Lyly, Stenberg and Vihinen (1993)
+            if size is None:
+                raise MaterialError("shear_stabilisation needs the element size: evaluate the law through "
+                                    "fem.law_matrix(law, A1, A2, size) or an element")
+            Ds = Ds * self.shear_scale(size)[..., None, None]
         Dd = self.drilling * self.D * (1 - nu) * Ainv
         T = lambda M: np.swapaxes(M, -1, -2)
         Dmat = (T(Mm) @ Dm @ Mm + T(Ms) @ Ds @ Ms + T(Mb) @ Db @ Mb + T(Md) @ Dd @ Md)
         return Dmat, j0
 
-    def energy_density(self, eps, A1, A2):
-        """W per unit reference area for strains eps (..., 12)."""
-        Dmat, _ = self.resultant_matrix(A1, A2)
+    def shear_scale(self, size):
+        """h^2 / (h^2 + alpha size^2): the factor of the transverse-shear modulus on elements of
+        size ``size`` [length] (Lyly, Stenberg and Vihinen 1993, CMAME 110, 343-357).
+
+        Example
+        -------
+        >>> round(float(Material(1.0, 0.3, 0.1, shear_stabilisation=0.1).shear_scale(1.0)), 12)
+        0.090909090909
+        """
+        h2 = self.h * self.h
+        return h2 / (h2 + self.shear_stabilisation * np.square(np.asarray(size, float)))
+
+    def energy_density(self, eps, A1, A2, size=None):
+        """W per unit reference area for strains eps (..., 12) (``size`` as in resultant_matrix)."""
+        Dmat, _ = self.resultant_matrix(A1, A2, size)
         return 0.5 * np.einsum("...i,...ij,...j->...", eps, Dmat, eps)
+
+
+def law_matrix(law, A1, A2, size):
+    """(Dmat, j0) of a law at points with reference tangents A1, A2 on elements of size ``size``
+    (broadcastable to A1.shape[:-1]): the size goes to laws that use it (``mesh_dependent``),
+    so user laws with the two-argument ``resultant_matrix`` keep working.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> law = Material(1.0e3, 0.0, 0.1, shear_stabilisation=0.1)
+    >>> D, _ = law_matrix(law, np.array([1.0, 0, 0]), np.array([0, 1.0, 0]), 1.0)
+    >>> round(float(D[2, 2] / (law.G * law.h)), 6)                # ks G h * h^2 / (h^2 + 0.1)
+    0.090909
+    """
+    if getattr(law, "mesh_dependent", False):
+        return law.resultant_matrix(A1, A2, size=size)
+    return law.resultant_matrix(A1, A2)
 
 
 # the symmetrising projector on (x_11, x_12, x_21, x_22)
@@ -347,6 +402,12 @@ class RegionMaterial:
     classical = property(lambda self: self._uniform("classical"))
     drilling = property(lambda self: self._uniform("drilling"))
     rho = property(lambda self: self._uniform("rho"))
+    shear_stabilisation = property(lambda self: self._uniform("shear_stabilisation"))
+
+    @property
+    def mesh_dependent(self):
+        """True if any of the laws depends on the element size."""
+        return any(m.mesh_dependent for m in self.materials)
 
     def restricted(self, elements):
         """The law of the elements ``elements`` (a slice or index array) only.
@@ -360,10 +421,12 @@ class RegionMaterial:
         """
         return RegionMaterial(self.materials, self.index[elements])
 
-    def resultant_matrix(self, A1, A2):
+    def resultant_matrix(self, A1, A2, size=None):
         """(Dmat, j0) as Material.resultant_matrix, each element (leading axis) with its own law."""
         A1 = np.asarray(A1, float)
         A2 = np.asarray(A2, float)
+        if size is not None:
+            size = np.broadcast_to(np.asarray(size, float), A1.shape[:-1])
         if A1.shape[0] != len(self.index):
             raise MaterialError(f"RegionMaterial has {len(self.index)} elements, got points of {A1.shape[0]}")
         D = np.empty(A1.shape[:-1] + (12, 12))
@@ -371,5 +434,5 @@ class RegionMaterial:
         for k, mat in enumerate(self.materials):
             sel = self.index == k
             if np.any(sel):
-                D[sel], j0[sel] = mat.resultant_matrix(A1[sel], A2[sel])
+                D[sel], j0[sel] = mat.resultant_matrix(A1[sel], A2[sel], None if size is None else size[sel])
         return D, j0

@@ -88,6 +88,9 @@ ISOTROPIC = register_material(MaterialKind("isotropic", (
     Param("h", "number", lo=0.0, lo_open=True, doc="thickness, > 0"),
     Param("shear_factor", "number", 1.0, lo=0.0, lo_open=True, doc="transverse shear factor, > 0"),
     Param("drilling", "number", 1.0, lo=0.0, doc="factor on the drilling modulus D(1 - nu), >= 0"),
-    Param("rho", "number", None, lo=0.0, doc="density (for gravity), >= 0")),
-    lambda v: Material(v["E"], v["nu"], v["h"], v["shear_factor"], v["drilling"], v["rho"]),
+    Param("rho", "number", None, lo=0.0, doc="density (for gravity), >= 0"),
+    Param("shear_stabilisation", "number", 0.0, lo=0.0,
+          doc="alpha of Lyly-Stenberg-Vihinen's shear stabilisation, >= 0 (0: off; Kratos' thick quad: 0.1)")),
+    lambda v: Material(v["E"], v["nu"], v["h"], v["shear_factor"], v["drilling"], v["rho"],
+                       shear_stabilisation=v.get("shear_stabilisation", 0.0)),
     doc="the isotropic resultant law of the seed (fem.Material)", inert=("rho",)))

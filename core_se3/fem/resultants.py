@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..lie import mean_rotation
+from .material import law_matrix
 
 __all__ = ["element_resultants"]
 
@@ -56,7 +57,7 @@ def element_resultants(element, g):
     zeta0 = element.strains(mesh.g0, CENTRE)[:, 0]            # (m, 12) body frame
     zeta = element.strains(g, CENTRE)[:, 0]
     A1, A2 = zeta0[:, 0:3], zeta0[:, 6:9]
-    D, _ = element.material.resultant_matrix(A1, A2)          # (m, 12, 12)
+    D, _ = law_matrix(element.material, A1, A2, element.size)  # (m, 12, 12)
     S = np.einsum("mij,mj->mi", D, zeta - zeta0)
     s = (S[:, 0:3], S[:, 6:9])                                # force conjugates
     t = (S[:, 3:6], S[:, 9:12])                               # moment conjugates
