@@ -74,10 +74,33 @@ def test_standard_case_against_its_published_value(case, build, args, ref, bar):
 
 
 def test_raasch_hook_with_the_classical_law():
-    """Knight's 5.02 at 96x32: classical law 1.0001, the Cosserat law 0.9785 (its skew-curvature
-    stiffness)."""
+    """Knight's 5.02 at 96x32: classical law 1.0002 (1.0001 with the full drilling modulus), the
+    Cosserat law 0.9785 (its skew-curvature stiffness)."""
     p, measure = sc.raasch_hook(96, 32, material=Material.classical_shell(3300.0, 0.35, 2.0))
     assert abs(measure(p.solve_linear()) / REF["raasch-hook"] - 1.0) < 0.02
+
+
+@pytest.mark.parametrize("load, measured", [("in-plane", 0.9945), ("out-of-plane", 0.9943)])
+def test_twisted_beam_with_the_classical_law(load, measured):
+    """MacNeal and Harder's twisted beam, 12x2, with the classical law: 0.9945 / 0.9943 (the
+    Cosserat law 0.9924 / 0.9774: its drilling curvature stiffens the narrow section's in-plane
+    bending by about h^2 / ((1 + nu) w^2) = 7 %, and the out-of-plane load's deflection converges
+    to 0.9815 of the published value at 48x8; the classical law with drilling 1, as before
+    CLASSICAL_DRILLING, 0.9777)."""
+    p, measure = sc.twisted_beam(load, material=Material.classical_shell(29.0e6, 0.22, 0.32))
+    assert abs(measure(p.solve_linear()) / REF[f"twisted-beam-{load}"] - 1.0) < 0.02
+
+
+@pytest.mark.parametrize("drilling, zeros", [(None, 6), (0.0, 7)])
+def test_classical_law_keeps_six_zero_modes(drilling, zeros):
+    """A free 3x3 cylinder patch with the classical law: the six rigid modes only; at drilling 0
+    the drilling pattern is a seventh zero mode (why CLASSICAL_DRILLING is 0.01, not 0)."""
+    from core_se3.model import verify
+    m = mesh.cylinder_panel(1.0, 0.6, 0.0, 0.9, 3, 3)
+    kw = {} if drilling is None else dict(drilling=drilling)
+    p = Problem(m, Material.classical_shell(1e3, 0.3, 1e-2, **kw))
+    ev, nzero = verify.zero_modes(p, m.g0)
+    assert nzero == zeros, ev[:8]
 
 
 # ------------------------------------------------------------------ linear analysis --------
