@@ -444,7 +444,11 @@ class ElementWarning(UserWarning):
     thin meshes, where it locks: measured by ``python -m comparison`` (the locking study), with
     element size / thickness 12.5 the cantilever, roll-up and arch do not converge, and the
     torsion strip 10 x 4 at L/h = 1e4 (element size / thickness 1000) converged to 130 times
-    the torsion constant of the default element and of the DOLFINx reference.
+    the torsion constant of the default element and of the DOLFINx reference.  Issued by the
+    default element on coarse meshes of thin curved shells (an element's out-of-plane edge turn
+    phi with phi^3 L / h > 2, ``fem.element_default.COARSE_THIN_CURVED``), where a
+    membrane-dominated shell with free edges can come out spuriously flexible (the Scordelis-Lo
+    roof 2x2 at R/h 1e4: 10.9 times its deflection; docs/ELEMENTS.md).
 
     Example
     -------

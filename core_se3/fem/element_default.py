@@ -43,16 +43,18 @@ non-symmetric away from equilibrium, as the seed's E75 remarks.
 """
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from .. import lie
-from ..errors import ElementTooDistortedError
+from ..errors import ElementTooDistortedError, ElementWarning
 from ..mesh import LOCAL_EDGES
 from .element import Element, ElementEvaluation, register_element
 from .material import law_matrix
 from .membrane_drilling import drilling_correction, reference_G, tying_correction
 from .membrane_enhanced import condensed_stiffness, membrane_enhancement
-from .membrane_shear import shear_retention, shear_tying
+from .membrane_shear import curved_element_measures, shear_retention, shear_tying
 from .quadrature import GAUSS_2x2
 from .resultants import element_resultants
 
@@ -210,6 +212,7 @@ class DefaultElement(Element):
         self.j0 = np.empty((m, 4))
         self.drill_Ek = np.zeros((m, 3, 3, 4))     # the membrane-drilling correction (membrane_drilling)
         self.shear_beta = np.ones(m)               # the kept part of the tied shear (membrane_shear)
+        self.coarse_curvature = np.zeros(m)        # phi^3 L / h (warn_if_coarse_thin_curved)
         # in chunks of elements: the resultant matrices and products of one element take ~18 kB,
         # four times its Dbar (a law without ``restricted`` gets all elements at once)
         step = SETUP_CHUNK if callable(getattr(material, "restricted", None)) else max(m, 1)
@@ -227,6 +230,8 @@ class DefaultElement(Element):
                 Pm = Pm + tying_correction(P, z0, Ek)                       # (k, 4gp, 12, 24)
             beta = shear_retention(z0, zeta0, Dm, j0)
             self.shear_beta[sl] = beta
+            phi, coupling = curved_element_measures(z0, zeta0, Dm, j0)
+            self.coarse_curvature[sl] = phi ** 2 * np.sqrt(coupling / 12.0)   # phi^2 chi
             Pm = shear_tying(Pm, P, z0, beta)                                  # membrane_shear
             # Dbar = sum_q j0_q P_q^T D_q P_q, contracted pairwise (a 4-operand einsum is O(24^4 m)),
             # with the enhanced membrane modes condensed (membrane_enhanced)
@@ -237,6 +242,7 @@ class DefaultElement(Element):
             self.Dz0[sl] = np.einsum("mij,mj->mi", _unpack(self.Dbar_packed[sl]), z0)  # Dbar z0
         self.area = self.j0.sum(axis=1)                                 # reference area per element
         self._Dbar = None
+        warn_if_coarse_thin_curved(self.coarse_curvature)
 
     @property
     def Dbar(self):
@@ -408,3 +414,39 @@ class DefaultElement(Element):
         # derivative of the left-trivialised gradient along exp updates
         Kn = 0.5 * lie.adt(r_geo)
         return ElementEvaluation(energy, r, fscale, Ke, KE, Kn, stress=f, linearization=(Lp, Lm, dz))
+
+
+#: phi^3 L / h above which a mesh is "coarse, thin and curved" (warn_if_coarse_thin_curved)
+COARSE_THIN_CURVED = 2.0
+
+
+def warn_if_coarse_thin_curved(index):
+    """An ElementWarning when an element's phi^3 L / h (``index``, (m,): phi its reference edges'
+    largest out-of-plane turn [rad], L = sqrt(area), h the law's thickness) exceeds
+    COARSE_THIN_CURVED.
+
+    There the four-node mesh of a membrane-dominated shell with free edges can be spuriously
+    flexible: the edge tying leaves free-edge mechanisms of bending-order stiffness (docs/ELEMENTS.md,
+    "The coarse thin roof").  Measured on the Scordelis-Lo roof over its 64x64 value: 1.031 and
+    1.033 at phi^3 L / h = 3.5 and 2.2, 1.005 and 1.019 at 1.4 and 1.8, 110 at 1800.  Bending-
+    dominated shells (the pinched hemisphere: within 0.8 ... 1.02 up to 2.8e4) are not affected,
+    so it is a warning to check convergence, not an error.
+
+    Example
+    -------
+    >>> import warnings
+    >>> with warnings.catch_warnings(record=True) as w:
+    ...     warnings.simplefilter("always")
+    ...     warn_if_coarse_thin_curved(np.array([0.5, 35.0]))
+    >>> "phi^3 L / h = 35" in str(w[0].message)
+    True
+    """
+    worst = float(np.max(index, initial=0.0))
+    if worst > COARSE_THIN_CURVED:
+        warnings.warn(ElementWarning(
+            f"coarse mesh of a thin curved shell: an element's edges turn by phi out of its plane with "
+            f"phi^3 L / h = {worst:.3g} > {COARSE_THIN_CURVED:g} (L its size, h the thickness) on "
+            f"{int(np.sum(index > COARSE_THIN_CURVED))} element(s). Where the shell is membrane dominated and "
+            f"has free edges, four-node meshes this coarse can be spuriously flexible (the Scordelis-Lo roof "
+            f"2x2 at R/h 1e4: 10.9 times its deflection); bending-dominated shells are not affected. Check by "
+            f"refining (each halving of the element size divides phi^3 L by 16) -- docs/ELEMENTS.md"), stacklevel=5)

@@ -93,6 +93,14 @@ def shear_retention(z0, zeta0, Dmat, j0):
     >>> shear_retention(z0, zeta0, D, j0).round(4).tolist()         # chi = 0.1 * 1 / 0.01 = 10
     [1.0, 0.0289]
     """
+    phi, coupling = curved_element_measures(z0, zeta0, Dmat, j0)
+    return 1.0 / np.sqrt(1.0 + coupling)
+
+
+def curved_element_measures(z0, zeta0, Dmat, j0):
+    """(phi, 12 chi^2), each (k,): the largest out-of-plane turn of an element's reference edges
+    [rad] and the coupling ratio 12 chi^2, chi = phi L / h (L = sqrt(area), h^2 = 12 k_b / k_m
+    the thickness the law implies), as :func:`shear_retention` defines them (its parameters)."""
     n = np.cross(zeta0[..., 0:3], zeta0[..., 6:9])
     n /= np.linalg.norm(n, axis=-1)[..., None]
     nc = n.sum(axis=1)
@@ -104,7 +112,7 @@ def shear_retention(z0, zeta0, Dmat, j0):
     tr = lambda i: np.einsum("mqij,mqji->m", Pt, Dmat[..., i:i + 3, i:i + 3])   # (m,) over q
     km = tr(0) + tr(6)
     kb = tr(3) + tr(9)
-    return 1.0 / np.sqrt(1.0 + phi ** 2 * j0.sum(axis=1) * km / kb)
+    return phi, phi ** 2 * j0.sum(axis=1) * km / kb
 
 
 def shear_tying(Pm, P, z0, beta, gauss=None):
