@@ -230,6 +230,8 @@ class DefaultElement(Element):
                 Pm = Pm + tying_correction(P, z0, Ek)                       # (k, 4gp, 12, 24)
             beta = shear_retention(z0, zeta0, Dm, j0)
             self.shear_beta[sl] = beta
+            # the warning's index (its measures again: shear_retention stays the tests' and
+            # roof_modes' hook for beta; the cost is that of a few (k, 4, 3, 3) products)
             phi, coupling = curved_element_measures(z0, zeta0, Dm, j0)
             self.coarse_curvature[sl] = phi ** 2 * np.sqrt(coupling / 12.0)   # phi^2 chi
             Pm = shear_tying(Pm, P, z0, beta)                                  # membrane_shear
