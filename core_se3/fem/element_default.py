@@ -451,4 +451,6 @@ def warn_if_coarse_thin_curved(index):
             f"{int(np.sum(index > COARSE_THIN_CURVED))} element(s). Where the shell is membrane dominated and "
             f"has free edges, four-node meshes this coarse can be spuriously flexible (the Scordelis-Lo roof "
             f"2x2 at R/h 1e4: 10.9 times its deflection); bending-dominated shells are not affected. Check by "
-            f"refining (each halving of the element size divides phi^3 L by 16) -- docs/ELEMENTS.md"), stacklevel=5)
+            f"refining: `core-se3 check-mesh SCENARIO.toml` (scenario.check_mesh) compares the linear answer with "
+            f"a refined mesh's (each halving of the element size divides phi^3 L by 16) -- docs/ELEMENTS.md"),
+            stacklevel=5)
