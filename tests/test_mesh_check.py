@@ -227,3 +227,52 @@ def test_cli_exit_status_and_json(tmp_path):
     good = _cli("fine.toml", "--tol", "0.05", cwd=tmp_path)
     assert good.returncode == 0, good.stderr
     assert _cli("missing.toml", cwd=tmp_path).returncode == 2
+
+
+# ------------------------------------------------------------------ the runs themselves -----
+def cantilever(nx, force=4.0, **solver):
+    """Sze et al.'s cantilever strip under an end shear (L 10, b 1, h 0.1, E 1.2e6): 6.70 at 4."""
+    return {"name": "cantilever", "mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": nx, "ny": 1},
+            "material": {"E": 1.2e6, "nu": 0.0, "h": 0.1}, "supports": [{"type": "clamp", "edge": "x0"}],
+            "loads": [{"type": "edge_force", "edge": "x1", "force": [0.0, 0.0, force]}],
+            "probes": [{"name": "tip", "edge": "x1"}], "solver": dict({"steps": 4}, **solver)}
+
+
+def test_nonlinear_check_runs_the_scenario_on_both_meshes():
+    """The cantilever at its large-deflection load (tip 6.7 of 10): the runs on 8 and 16
+    elements agree within 1 %, and the compared state is the nonlinear one (the linear answer,
+    P L^3 / 3EI = 133, is 20 times larger)."""
+    chk = check_mesh(quiet(cantilever(8)), nonlinear=True)
+    assert chk.nonlinear and chk.converged and chk.change < 0.01
+    tip = np.asarray(chk.levels[1]["probes"]["tip"])
+    assert abs(tip[2] / 6.70 - 1) < 0.01
+    assert chk.levels[0]["energy"] is None and chk.changes[0]["energy"] is None and chk.energy_order is None
+    assert "the scenario's run" in chk.report()
+
+
+def test_nonlinear_check_keeps_the_obstacles_and_refuses_arc_length():
+    doc = cantilever(8, force=1.0)
+    doc["obstacles"] = [{"type": "half_space", "point": [0.0, 0.0, -5.0], "normal": [0.0, 0.0, 1.0]}]
+    assert check_mesh(quiet(doc), nonlinear=True).dropped == []
+    arc = cantilever(8, control="arclength", steps=None)
+    arc["solver"] = {"control": "arclength", "lam_end": 1.0}
+    with pytest.raises(OptionError, match="arc length"):
+        check_mesh(quiet(arc), nonlinear=True)
+
+
+def test_a_run_that_fails_on_the_refined_mesh_names_the_level(monkeypatch):
+    """A refined run that does not converge: a ConvergenceError naming the level and saying that
+    the coarser mesh's run converged (not a checkpoint that the check does not keep)."""
+    from core_se3.errors import ConvergenceError
+    from core_se3.scenario import runner
+    real = runner.run
+
+    def failing(s, **kw):
+        if s.mesh.n_elements > 8:
+            raise ConvergenceError("Newton failed at load factor 0.9. The checkpoint keeps step 3; rerun with --resume")
+        return real(s, **kw)
+    monkeypatch.setattr(runner, "run", failing)
+    with pytest.raises(ConvergenceError, match=r"refinement level 1 \(32 elements\): Newton failed at load factor "
+                                               r"0.9. -- the coarser mesh's run converged") as err:
+        check_mesh(quiet(cantilever(8)), nonlinear=True)
+    assert "checkpoint" not in str(err.value)

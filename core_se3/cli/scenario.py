@@ -58,6 +58,9 @@ def add_parsers(sub):
                      help="refinements after the scenario's mesh (each: four times the elements; default 1)")
     chk.add_argument("--tol", type=float, default=None, help="largest relative change accepted (default 0.05)")
     chk.add_argument("--json", default=None, metavar="PATH", help="also write the check as JSON")
+    chk.add_argument("--nonlinear", action="store_true",
+                     help="run the scenario itself (its solver, with its obstacles) on every mesh instead of "
+                          "its linear analysis")
     chk.add_argument("--strict", action="store_true", help="make the plausibility warnings errors")
     _plugin(chk)
 
@@ -349,7 +352,8 @@ def mesh_check(args):
     from ..scenario.mesh_check import DEFAULT_TOL, check_mesh
     try:
         scn = _open(args)
-        chk = check_mesh(scn, levels=args.levels, tol=DEFAULT_TOL if args.tol is None else args.tol)
+        chk = check_mesh(scn, levels=args.levels, tol=DEFAULT_TOL if args.tol is None else args.tol,
+                         nonlinear=args.nonlinear)
     except CoreSE3Error as exc:
         return error_code(exc)
     for w in scn.warnings:
