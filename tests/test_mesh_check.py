@@ -203,7 +203,7 @@ def test_contact_is_left_out_and_said():
     doc = roof(4, 100.0)
     doc["obstacles"] = [{"type": "half_space", "point": [0.0, 0.0, -100.0], "normal": [0.0, 0.0, 1.0]}]
     chk = check_mesh(quiet(doc))
-    assert chk.dropped == ["obstacles"] and "left out of the linear analysis: obstacles" in chk.report()
+    assert chk.dropped == ["obstacles"] and "left out of the check: obstacles" in chk.report()
 
 
 def _cli(*args, cwd):

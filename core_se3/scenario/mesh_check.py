@@ -58,7 +58,7 @@ class MeshCheck:
     tol : float
         The largest change accepted for the scenario's mesh.
     dropped : list of str
-        Sections left out of the linear analysis (obstacles, design, sweep).
+        Sections left out of the check (obstacles in the linear analysis, design, sweep).
     warnings : list of str
         What the element said while building each level (e.g. ElementWarning), "level k: ...".
     """
@@ -119,7 +119,7 @@ class MeshCheck:
         for w in self.warnings:
             out.append(f"note: {w}")
         if self.dropped:
-            out.append(f"note: left out of the linear analysis: {', '.join(self.dropped)}")
+            out.append(f"note: left out of the check: {', '.join(self.dropped)}")
         if self.converged:
             out.append(f"verdict: the mesh's answer changes by {100 * self.change:.3g} % under refinement, "
                        f"within {100 * self.tol:g} % (its own error is larger than the change: about 4/3 of it "
