@@ -36,7 +36,7 @@ from ..model import Problem
 from ..solvers.linear import linear_state
 
 __all__ = ["REFERENCES", "scordelis_lo", "pinched_cylinder", "pinched_hemisphere", "twisted_beam",
-           "raasch_hook", "cook_membrane", "hat_integrals", "scenario_doc", "mh_patch", "random_patch", "patch_test", "PATCH_FIELDS"]
+           "raasch_hook", "cook_membrane", "hat_integrals", "scenario_doc", "roof_free_edge_layer", "mh_patch", "random_patch", "patch_test", "PATCH_FIELDS"]
 
 REFERENCES = {
     "scordelis-lo": 0.3024, "pinched-cylinder": 1.8248e-5, "pinched-hemisphere": 0.094,
@@ -113,6 +113,34 @@ def scenario_doc(case, n, h):
                           {"type": "nodal", "edge": "B", "force": [0.0, -1.0, 0.0]}],
                 "probes": [{"name": "A", "edge": "A"}]}
     raise ValueError(f"no scenario document for {case!r}: 'scordelis-lo' or 'pinched-hemisphere'")
+
+
+def roof_free_edge_layer(mesh, u):
+    """Where the Scordelis-Lo roof's free-edge layer lies: along the mid-span line (y = L/2) of
+    a :func:`scordelis_lo` mesh with displacements ``u`` (n, 3), the arc length s from the free
+    edge at which the circumferential curvature change w'' of the normal deflection peaks, and
+    the distances within which 50 % and 90 % of w''^2 lie (finite differences of the nodal w).
+
+    A membrane-dominated cylindrical shell bends in layers along its free generators whose
+    width scales like R (h/R)^(1/4) (benchmarks/results/roof_layer.md).
+
+    Example
+    -------
+    >>> p, _ = scordelis_lo(32, h=25.0 / 1e4)
+    >>> peak, s50, s90 = roof_free_edge_layer(p.mesh, p.solve_linear().displacements())
+    >>> round(peak / (25.0 * 1e4 ** -0.25), 1)                     # about 1.5 R (h/R)^(1/4)
+    1.5
+    """
+    X = mesh.X
+    line = np.asarray(mesh.node_set("y1"))
+    theta = np.arctan2(X[line, 0], X[line, 2])
+    order = np.argsort(-theta)
+    line, theta = line[order], theta[order]
+    s = np.hypot(X[line[0], 0], X[line[0], 2]) * (theta[0] - theta)
+    w = np.einsum("ni,ni->n", u[line], np.c_[np.sin(theta), np.zeros_like(theta), np.cos(theta)])
+    k2 = np.gradient(np.gradient(w, s), s) ** 2
+    share = np.cumsum(k2) / k2.sum()
+    return float(s[np.argmax(k2)]), float(s[np.searchsorted(share, 0.5)]), float(s[np.searchsorted(share, 0.9)])
 
 
 def pinched_cylinder(n, h=3.0, material=None, element="default", **kw):
