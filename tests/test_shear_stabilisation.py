@@ -1,5 +1,7 @@
 """Lyly, Stenberg and Vihinen's shear stabilisation (``Material(..., shear_stabilisation=alpha)``,
-issue 30): the transverse-shear modulus ks G h * h^2 / (h^2 + alpha L^2) on an element of size L.
+issue 30): the transverse-shear modulus ks G h * max(h^2 / (h^2 + alpha L^2), c) on an element of
+size L, c the floor (``shear_stabilisation_floor``, default 0.05; c = 0 is Lyly-Stenberg-Vihinen's
+and Kratos' own).
 
 It is a consistent modification: its effect on the answer vanishes like L^2 (the clamped plate
 below: the difference to the unstabilised element falls by 4.00 per halving of the mesh).  Kratos'
@@ -80,6 +82,9 @@ def test_a_stabilised_element_stays_objective():
 
 
 def test_bad_or_missing_inputs_are_named():
+    for c in (-0.1, 1.5, float("nan")):
+        with pytest.raises(MaterialError, match="shear_stabilisation_floor"):
+            Material(1.0, 0.3, 0.1, shear_stabilisation=0.1, shear_stabilisation_floor=c)
     with pytest.raises(MaterialError, match="shear_stabilisation"):
         Material(1.0, 0.3, 0.1, shear_stabilisation=-0.1)
     with pytest.raises(MaterialError, match="shear_stabilisation"):
@@ -130,3 +135,33 @@ def test_designing_a_property_keeps_the_rest_of_the_law():
     laws = p.material.materials
     assert sorted(law.E for law in laws) == [1e3, 2e3]
     assert all(law.classical and law.shear_stabilisation == 0.1 and law.shear_factor == 5 / 6 for law in laws)
+
+
+def _ratio(build, n, h, **law):
+    """Deflection of ``build``'s n x n mesh with alpha = 0.1 (and ``law``) over the default law's."""
+    p0, meas = build(n, h=h)
+    base = p0.material
+    p, meas = build(n, material=Material(base.E, base.nu, h, shear_stabilisation=0.1, **law))
+    return meas(p.solve_linear()) / meas(p0.solve_linear())
+
+
+@pytest.mark.parametrize("build, n, h, uncapped", [(sc.pinched_hemisphere, 3, 1e-4, 1.051 / 0.996),
+                                                   (sc.scordelis_lo, 16, 2.5e-4, 1.124 / 0.971)])
+def test_the_floor_keeps_thin_coarse_meshes_as_the_default_element(build, n, h, uncapped):
+    """Without the floor (c = 0) the factor falls to h^2 / (alpha L^2) on thin shells, the shear
+    becomes bending-order stiff and thin coarse meshes spuriously flexible: the hemisphere 3x3 and
+    the roof 16x16 at R/h 1e5 come out 1.051 and 1.124 of their converged deflections (the default
+    element: 0.996, 0.971; benchmarks/results/capped_stabilisation.md).  With the default floor
+    0.05 they are the default element's to 0.5 %."""
+    assert abs(_ratio(build, n, h, shear_stabilisation_floor=0.0) / uncapped - 1) < 0.01
+    assert abs(_ratio(build, n, h) - 1) < 0.005
+
+
+def test_the_floor_keeps_the_thick_coarse_gain():
+    """Where the factor is above the floor the stabilisation is Lyly-Stenberg-Vihinen's: the thick
+    hemisphere 4x4 (R/h 10, factor 0.40 ... 0.51) rises from 0.925 to 0.955 of its 64x64 value
+    (MacNeal-Harder's 4x4 target 0.95), the pinched cylinder 8x8 from 0.796 to 0.870 of its
+    128x128 value (factor 0.025: the floor 0.05; Kratos' thick quad 0.850)."""
+    assert abs(_ratio(sc.pinched_hemisphere, 4, 1.0) - 0.955 / 0.925) < 0.005
+    assert abs(_ratio(sc.pinched_hemisphere, 4, 1.0, shear_stabilisation_floor=0.0) - 0.955 / 0.925) < 0.005
+    assert abs(_ratio(sc.pinched_cylinder, 8, 3.0) - 0.870 / 0.796) < 0.01

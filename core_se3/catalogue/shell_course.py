@@ -36,7 +36,7 @@ from ..model import Problem
 from ..solvers.linear import linear_state
 
 __all__ = ["REFERENCES", "scordelis_lo", "pinched_cylinder", "pinched_hemisphere", "twisted_beam",
-           "raasch_hook", "cook_membrane", "hat_integrals", "mh_patch", "random_patch", "patch_test", "PATCH_FIELDS"]
+           "raasch_hook", "cook_membrane", "hat_integrals", "scenario_doc", "roof_free_edge_layer", "mh_patch", "random_patch", "patch_test", "PATCH_FIELDS"]
 
 REFERENCES = {
     "scordelis-lo": 0.3024, "pinched-cylinder": 1.8248e-5, "pinched-hemisphere": 0.094,
@@ -72,6 +72,75 @@ def scordelis_lo(n, h=0.25, material=None, element="default", **kw):
     p.add_body_force((0.0, 0.0, -90.0))
     A = _node(m, "x1", -1)
     return p, lambda res: -_u(res, A, (0.0, 0.0, 1.0))
+
+
+def scenario_doc(case, n, h):
+    """The Scordelis-Lo roof (``case`` 'scordelis-lo') or the pinched hemisphere
+    ('pinched-hemisphere') of :func:`scordelis_lo` / :func:`pinched_hemisphere` as a scenario
+    document (``scenario.from_dict``), n x n, thickness h; its probe ``A`` is the measured node.
+
+    Example
+    -------
+    >>> import warnings
+    >>> from core_se3 import scenario
+    >>> with warnings.catch_warnings():
+    ...     warnings.simplefilter("ignore")                  # a thin roof's load number
+    ...     scn = scenario.from_dict(scenario_doc("scordelis-lo", 4, 0.25))
+    >>> u = scn.problem.solve_linear().final.probes["A"]["u"]
+    >>> round(-float(u[2]) / scordelis_lo(4)[1](scordelis_lo(4)[0].solve_linear()), 12)
+    1.0
+    """
+    if case == "scordelis-lo":
+        a = np.radians(40.0)
+        return {"name": f"scordelis-lo-{n}", "mesh": {"generator": "cylinder_panel", "R": 25.0, "length": 25.0,
+                                                      "theta0": 0.0, "theta1": float(a), "nt": n, "nl": n},
+                "material": {"E": 4.32e8, "nu": 0.0, "h": h},
+                "supports": [{"type": "fix", "edge": "x0", "dofs": [0, 4, 5]},
+                             {"type": "fix", "edge": "y1", "dofs": [1, 3, 5]},
+                             {"type": "fix", "edge": "y0", "dofs": [0, 2, 4]}],
+                "loads": [{"type": "body_force", "q": [0.0, 0.0, -90.0]}],
+                "edges": {"A": {"nodes": {"near": [25.0 * np.sin(a), 25.0, 25.0 * np.cos(a)]}}},
+                "probes": [{"name": "A", "edge": "A"}]}
+    if case == "pinched-hemisphere":
+        return {"name": f"pinched-hemisphere-{n}", "mesh": {"generator": "hemisphere_quarter", "R": 10.0,
+                                                            "hole_deg": 18.0, "nt": n, "nf": n},
+                "material": {"E": 6.825e7, "nu": 0.3, "h": h},
+                "edges": {"A": {"nodes": {"near": [10.0, 0.0, 0.0]}}, "B": {"nodes": {"near": [0.0, 10.0, 0.0]}}},
+                "supports": [{"type": "fix", "edge": "y0", "dofs": [1, 3, 5]},
+                             {"type": "fix", "edge": "y1", "dofs": [1, 3, 5]},
+                             {"type": "fix", "edge": "A", "dofs": [0]}],
+                "loads": [{"type": "nodal", "edge": "A", "force": [1.0, 0.0, 0.0]},
+                          {"type": "nodal", "edge": "B", "force": [0.0, -1.0, 0.0]}],
+                "probes": [{"name": "A", "edge": "A"}]}
+    raise ValueError(f"no scenario document for {case!r}: 'scordelis-lo' or 'pinched-hemisphere'")
+
+
+def roof_free_edge_layer(mesh, u):
+    """Where the Scordelis-Lo roof's free-edge layer lies: along the mid-span line (y = L/2) of
+    a :func:`scordelis_lo` mesh with displacements ``u`` (n, 3), the arc length s from the free
+    edge at which the circumferential curvature change w'' of the normal deflection peaks, and
+    the distances within which 50 % and 90 % of w''^2 lie (finite differences of the nodal w).
+
+    A membrane-dominated cylindrical shell bends in layers along its free generators whose
+    width scales like R (h/R)^(1/4) (benchmarks/results/roof_layer.md).
+
+    Example
+    -------
+    >>> p, _ = scordelis_lo(32, h=25.0 / 1e4)
+    >>> peak, s50, s90 = roof_free_edge_layer(p.mesh, p.solve_linear().displacements())
+    >>> round(peak / (25.0 * 1e4 ** -0.25), 1)                     # about 1.5 R (h/R)^(1/4)
+    1.5
+    """
+    X = mesh.X
+    line = np.asarray(mesh.node_set("y1"))
+    theta = np.arctan2(X[line, 0], X[line, 2])
+    order = np.argsort(-theta)
+    line, theta = line[order], theta[order]
+    s = np.hypot(X[line[0], 0], X[line[0], 2]) * (theta[0] - theta)
+    w = np.einsum("ni,ni->n", u[line], np.c_[np.sin(theta), np.zeros_like(theta), np.cos(theta)])
+    k2 = np.gradient(np.gradient(w, s), s) ** 2
+    share = np.cumsum(k2) / k2.sum()
+    return float(s[np.argmax(k2)]), float(s[np.searchsorted(share, 0.5)]), float(s[np.searchsorted(share, 0.9)])
 
 
 def pinched_cylinder(n, h=3.0, material=None, element="default", **kw):

@@ -1,7 +1,8 @@
 """Command line (the top layer): ``core-se3 bench list``, ``core-se3 bench run NAME [options]``,
 ``core-se3 run SCENARIO.toml [--out DIR] [--resume] [--strict]`` (scenario files, see
 docs/SCENARIOS.md), ``core-se3 sweep SCENARIO.toml --set KEY=v1,v2,...`` and
-``core-se3 design SCENARIO.toml [--out DIR]`` (a scenario's [design], docs/DESIGN.md) and
+``core-se3 design SCENARIO.toml [--out DIR]`` (a scenario's [design], docs/DESIGN.md),
+``core-se3 check-mesh SCENARIO.toml [--levels N] [--tol T]`` (the mesh against its refinements) and
 ``core-se3 warmup`` (compile the numba kernels once); the scenario commands live in
 ``cli.scenario``.
 
@@ -20,8 +21,8 @@ from ..errors import CoreSE3Error
 from ..fem import ELEMENTS
 from ..results.document import ROUNDOFF_NOTE, format_backends, format_residual
 from .common import error_code as _error_code, output_error as _output_error, progress_on as _progress_on, whole_number
-from .scenario import (add_parsers, design_run, friction_cells, friction_obstacles, kinds, scenario_run,
-                       scenario_sweep, step_table as _step_table, warmup)
+from .scenario import (add_parsers, design_run, friction_cells, friction_obstacles, kinds, mesh_check,
+                       scenario_run, scenario_sweep, step_table as _step_table, warmup)
 
 
 def _parse_mesh(s):
@@ -240,7 +241,8 @@ def main(argv=None):
     if getattr(args, "verbose", False):
         logging.basicConfig(level=logging.INFO, format="%(message)s", stream=sys.stderr)
         logging.getLogger("core_se3").setLevel(logging.INFO)
-    commands = dict(run=scenario_run, design=design_run, sweep=scenario_sweep, warmup=warmup, kinds=kinds)
+    commands = {"run": scenario_run, "design": design_run, "sweep": scenario_sweep, "warmup": warmup, "kinds": kinds,
+                "check-mesh": mesh_check}
     if args.cmd in commands:
         return commands[args.cmd](args)
     if args.cmd == "bench" and args.bcmd == "list":

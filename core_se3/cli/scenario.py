@@ -9,7 +9,7 @@ from ..errors import CoreSE3Error
 from ..results.document import ROUNDOFF_NOTE, format_backends, format_residual
 from .common import error_code, interrupted, output_error, whole_number
 
-__all__ = ["add_parsers", "scenario_run", "scenario_sweep", "design_run", "warmup", "step_table", "kinds"]
+__all__ = ["add_parsers", "scenario_run", "scenario_sweep", "design_run", "warmup", "step_table", "kinds", "mesh_check"]
 
 
 def add_parsers(sub):
@@ -51,6 +51,18 @@ def add_parsers(sub):
     kinds.add_argument("section", nargs="?", default=None, help="only this section (e.g. loads)")
     _plugin(kinds)
     sub.add_parser("warmup", help="compile the numba kernels once into their cache (scripts/setup.sh runs it)")
+    chk = sub.add_parser("check-mesh", help="is the mesh fine enough? the linear analysis on it and on its uniform "
+                                            "refinements, compared (exit status 4 if not)")
+    chk.add_argument("scenario", help="SCENARIO.toml")
+    chk.add_argument("--levels", type=whole_number("levels"), default=1,
+                     help="refinements after the scenario's mesh (each: four times the elements; default 1)")
+    chk.add_argument("--tol", type=float, default=None, help="largest relative change accepted (default 0.05)")
+    chk.add_argument("--json", default=None, metavar="PATH", help="also write the check as JSON")
+    chk.add_argument("--nonlinear", action="store_true",
+                     help="run the scenario itself (its solver, with its obstacles) on every mesh instead of "
+                          "its linear analysis")
+    chk.add_argument("--strict", action="store_true", help="make the plausibility warnings errors")
+    _plugin(chk)
 
 
 def _plugin(p):
@@ -331,6 +343,29 @@ def scenario_sweep(args):
         for kind, path in res.files.items():
             print(f"  wrote {kind}: {path}")
     return 3 if failed else 0
+
+
+def mesh_check(args):
+    """``core-se3 check-mesh``: the scenario's linear analysis on its mesh and refinements, the
+    table and the verdict; exit status 0 (within --tol), 4 (not converged), 2 (bad input)."""
+    import json
+    from ..scenario.mesh_check import DEFAULT_TOL, check_mesh
+    try:
+        scn = _open(args)
+        chk = check_mesh(scn, levels=args.levels, tol=DEFAULT_TOL if args.tol is None else args.tol,
+                         nonlinear=args.nonlinear)
+    except CoreSE3Error as exc:
+        return error_code(exc)
+    for w in scn.warnings:
+        print(f"warning: {w}", file=sys.stderr)
+    print(chk.report())
+    if args.json:
+        try:
+            with open(args.json, "w") as fh:
+                json.dump(chk.to_dict(), fh, indent=1)
+        except OSError as exc:
+            return output_error(exc, "the check is printed above")
+    return 0 if chk.converged else 4
 
 
 def warmup(args):

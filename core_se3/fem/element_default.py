@@ -429,7 +429,10 @@ def warn_if_coarse_thin_curved(index):
 
     There the four-node mesh of a membrane-dominated shell with free edges can be spuriously
     flexible: the edge tying leaves free-edge mechanisms of bending-order stiffness (docs/ELEMENTS.md,
-    "The coarse thin roof").  Measured on the Scordelis-Lo roof over its 64x64 value: 1.031 and
+    "The coarse thin roof").  With R = L / phi the radius the edge turn implies, the index is
+    (L / l)^4, l = R (h/R)^(1/4) the width of the layers in which such a shell bends along its free
+    edges: the element is wider than the layer it should carry (on the roof sweep every cell with
+    b / l >= 1.16 fails and every cell with b / l <= 1.10 passes; benchmarks/results/roof_layer.md).  Measured on the Scordelis-Lo roof over its 64x64 value: 1.031 and
     1.033 at phi^3 L / h = 3.5 and 2.2, 1.005 and 1.019 at 1.4 and 1.8, 110 at 1800.  Bending-
     dominated shells (the pinched hemisphere: within 0.8 ... 1.02 up to 2.8e4) are not affected,
     so it is a warning to check convergence, not an error.
@@ -451,4 +454,6 @@ def warn_if_coarse_thin_curved(index):
             f"{int(np.sum(index > COARSE_THIN_CURVED))} element(s). Where the shell is membrane dominated and "
             f"has free edges, four-node meshes this coarse can be spuriously flexible (the Scordelis-Lo roof "
             f"2x2 at R/h 1e4: 10.9 times its deflection); bending-dominated shells are not affected. Check by "
-            f"refining (each halving of the element size divides phi^3 L by 16) -- docs/ELEMENTS.md"), stacklevel=5)
+            f"refining: `core-se3 check-mesh SCENARIO.toml` (scenario.check_mesh) compares the linear answer with "
+            f"a refined mesh's (each halving of the element size divides phi^3 L by 16) -- docs/ELEMENTS.md"),
+            stacklevel=5)

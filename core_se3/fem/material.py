@@ -30,10 +30,13 @@ import numpy as np
 
 from ..errors import MaterialError, MeshError
 
-__all__ = ["Material", "RegionMaterial", "ResultantLaw", "law_matrix", "strain_operators", "CLASSICAL_DRILLING"]
+__all__ = ["Material", "RegionMaterial", "ResultantLaw", "law_matrix", "strain_operators", "CLASSICAL_DRILLING",
+           "SHEAR_STABILISATION_FLOOR"]
 
 #: the classical-shell law's factor on the drilling-curvature modulus (Material.classical_shell)
 CLASSICAL_DRILLING = 0.01
+#: the default floor c of the shear stabilisation's factor (Material.shear_stabilisation_floor)
+SHEAR_STABILISATION_FLOOR = 0.05
 
 
 @runtime_checkable
@@ -98,9 +101,16 @@ class Material:
     shear_stabilisation : float, optional
         alpha >= 0 of Lyly, Stenberg and Vihinen's shear stabilisation (0, the default: off):
         on an element of size L (its longest reference edge) the transverse-shear modulus is
-        ks G h * h^2 / (h^2 + alpha L^2), which tends to ks G h as the mesh is refined.  It
-        makes coarse meshes of moderately thick shells converge faster (Kratos' thick quad uses
-        alpha = 0.1) and thin coarse meshes more flexible; docs/ELEMENTS.md measures both.
+        ks G h * max(h^2 / (h^2 + alpha L^2), c), which tends to ks G h as the mesh is refined.
+        It makes coarse meshes of moderately thick shells converge faster (Kratos' thick quad
+        uses alpha = 0.1 without a floor); docs/ELEMENTS.md measures it.
+    shear_stabilisation_floor : float, optional
+        c in [0, 1], the floor of that factor (default ``SHEAR_STABILISATION_FLOOR`` = 0.05; only
+        with shear_stabilisation > 0).  Without it (c = 0) the factor falls to h^2 / (alpha L^2)
+        on thin shells, the transverse shear becomes bending-order stiff and coarse thin meshes
+        spuriously flexible (the thin roof 16x16 at R/h 1e5 1.124 of its converged deflection,
+        the hemisphere 3x3 1.051); with c = 0.05 the thickness sweeps are the default element's
+        and the thick coarse meshes keep the gain (benchmarks/results/capped_stabilisation.md).
 
     Attributes
     ----------
@@ -129,9 +139,10 @@ class Material:
     rho: float | None = None
     classical: bool = False
     shear_stabilisation: float = 0.0
+    shear_stabilisation_floor: float = SHEAR_STABILISATION_FLOOR
 
     def __post_init__(self):
-        for name in ("E", "nu", "h", "shear_factor", "drilling", "shear_stabilisation"):
+        for name in ("E", "nu", "h", "shear_factor", "drilling", "shear_stabilisation", "shear_stabilisation_floor"):
             v = getattr(self, name)
             if not isinstance(v, (int, float, np.floating, np.integer)) or not math.isfinite(v):
                 raise MaterialError(f"material parameter {name} must be a finite number, got {v!r}")
@@ -147,6 +158,8 @@ class Material:
             raise MaterialError(f"drilling factor must be >= 0, got {self.drilling}")
         if self.shear_stabilisation < 0:
             raise MaterialError(f"shear_stabilisation (alpha) must be >= 0, got {self.shear_stabilisation}")
+        if not 0.0 <= self.shear_stabilisation_floor <= 1.0:
+            raise MaterialError(f"shear_stabilisation_floor (c) must lie in [0, 1], got {self.shear_stabilisation_floor}")
         if not isinstance(self.classical, (bool, np.bool_)):
             raise MaterialError(f"classical must be True or False, got {self.classical!r}")
         if self.rho is not None and (isinstance(self.rho, bool) or not isinstance(self.rho, (int, float, np.floating, np.integer))
@@ -246,16 +259,19 @@ class Material:
         return Dmat, j0
 
     def shear_scale(self, size):
-        """h^2 / (h^2 + alpha size^2): the factor of the transverse-shear modulus on elements of
-        size ``size`` [length] (Lyly, Stenberg and Vihinen 1993, CMAME 110, 343-357).
+        """max(h^2 / (h^2 + alpha size^2), c): the factor of the transverse-shear modulus on
+        elements of size ``size`` [length] (Lyly, Stenberg and Vihinen 1993, CMAME 110, 343-357;
+        the floor c = ``shear_stabilisation_floor`` keeps thin shells' shear at membrane order).
 
         Example
         -------
-        >>> round(float(Material(1.0, 0.3, 0.1, shear_stabilisation=0.1).shear_scale(1.0)), 12)
-        0.090909090909
+        >>> law = Material(1.0, 0.3, 0.1, shear_stabilisation=0.1)
+        >>> [round(float(law.shear_scale(L)), 12) for L in (1.0, 10.0)]        # L/h 10: the floor
+        [0.090909090909, 0.05]
         """
         h2 = self.h * self.h
-        return h2 / (h2 + self.shear_stabilisation * np.square(np.asarray(size, float)))
+        lsv = h2 / (h2 + self.shear_stabilisation * np.square(np.asarray(size, float)))
+        return np.maximum(lsv, self.shear_stabilisation_floor)
 
     def energy_density(self, eps, A1, A2, size=None):
         """W per unit reference area for strains eps (..., 12) (``size`` as in resultant_matrix)."""
@@ -417,6 +433,7 @@ class RegionMaterial:
     drilling = property(lambda self: self._uniform("drilling"))
     rho = property(lambda self: self._uniform("rho"))
     shear_stabilisation = property(lambda self: self._uniform("shear_stabilisation"))
+    shear_stabilisation_floor = property(lambda self: self._uniform("shear_stabilisation_floor"))
 
     @property
     def mesh_dependent(self):

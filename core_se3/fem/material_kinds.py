@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 from ..registry import Kind, Param, Registry
-from .material import Material
+from .material import SHEAR_STABILISATION_FLOOR, Material
 
 __all__ = ["MaterialKind", "MATERIALS", "register_material", "material_kind", "ISOTROPIC"]
 
@@ -90,7 +90,10 @@ ISOTROPIC = register_material(MaterialKind("isotropic", (
     Param("drilling", "number", 1.0, lo=0.0, doc="factor on the drilling modulus D(1 - nu), >= 0"),
     Param("rho", "number", None, lo=0.0, doc="density (for gravity), >= 0"),
     Param("shear_stabilisation", "number", 0.0, lo=0.0,
-          doc="alpha of Lyly-Stenberg-Vihinen's shear stabilisation, >= 0 (0: off; Kratos' thick quad: 0.1)")),
+          doc="alpha of Lyly-Stenberg-Vihinen's shear stabilisation, >= 0 (0: off; Kratos' thick quad: 0.1)"),
+    Param("shear_stabilisation_floor", "number", SHEAR_STABILISATION_FLOOR, lo=0.0, hi=1.0,
+          doc="floor c of the stabilisation's factor, in [0, 1] (0: Lyly-Stenberg-Vihinen's and Kratos' own)")),
     lambda v: Material(v["E"], v["nu"], v["h"], v["shear_factor"], v["drilling"], v["rho"],
-                       shear_stabilisation=v.get("shear_stabilisation", 0.0)),
+                       shear_stabilisation=v.get("shear_stabilisation", 0.0),
+                       shear_stabilisation_floor=v.get("shear_stabilisation_floor", SHEAR_STABILISATION_FLOOR)),
     doc="the isotropic resultant law of the seed (fem.Material)", inert=("rho",)))

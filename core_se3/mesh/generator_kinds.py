@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 from ..registry import REQUIRED, Kind, Param, Registry
-from .generators import annulus, cylinder_arch, cylinder_panel, rectangle
+from .generators import annulus, cylinder_arch, cylinder_panel, hemisphere_quarter, rectangle
 from .shapes import BACKENDS, annulus_sector, disk, polygon, rounded_rectangle, star
 
 __all__ = ["GeneratorKind", "GENERATORS", "register_generator", "generator_kind"]
@@ -119,6 +119,11 @@ register_generator(GeneratorKind(
     "annulus", (_pos("r_in"), _pos("r_out"), _pos("angle", "[rad]"), _count("nr"), _count("nt")),
     annulus, doc="a flat annular sector", edges="`x0` inner, `x1` outer, `y0`/`y1` the radial edges",
     counts=("nr", "nt")))
+register_generator(GeneratorKind(
+    "hemisphere_quarter", (_pos("R", "radius"), _pos("hole_deg", "half-angle of the polar hole, in (0, 90) [deg]"),
+                           _count("nt"), _count("nf")),
+    hemisphere_quarter, doc="a quarter hemisphere with a polar hole (d3 the outward normal)",
+    edges="`x0` the hole, `x1` the equator, `y0`/`y1` on the planes y = 0 / x = 0", counts=("nt", "nf")))
 # outlines of soft robots (mesh/shapes.py): element size and backend instead of counts
 register_generator(GeneratorKind(
     "star", (Param("n_arms", "integer", lo=3, hi=64, doc=">= 3"), _pos("arm_length"), _pos("arm_width"),

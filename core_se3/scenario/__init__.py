@@ -14,7 +14,7 @@ Example
 -------
 >>> from core_se3 import scenario
 >>> sorted(scenario.GENERATORS)
-['annulus', 'annulus_sector', 'cylinder_arch', 'cylinder_panel', 'disk', 'polygon', 'rectangle', 'rounded_rectangle', 'star']
+['annulus', 'annulus_sector', 'cylinder_arch', 'cylinder_panel', 'disk', 'hemisphere_quarter', 'polygon', 'rectangle', 'rounded_rectangle', 'star']
 """
 from .geometry import GENERATORS, MAX_ELEMENTS
 from .physics import ARCLENGTH_DEFAULTS, NON_PHYSICAL, OUTPUT_DEFAULTS, SOLVER_DEFAULTS, material_index

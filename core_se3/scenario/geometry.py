@@ -15,7 +15,7 @@ from ..registry import Param, Section
 from .schema import EDGE, PROBE, REGION
 from .validate import Bounds, join, show, tname
 
-__all__ = ["GENERATORS", "MESH_FILE", "MAX_ELEMENTS", "mesh_section", "edges_section", "regions_section",
+__all__ = ["GENERATORS", "MESH_FILE", "MAX_ELEMENTS", "MAX_REFINE", "mesh_section", "refine_guard", "edges_section", "regions_section",
            "region_ref", "nodes_ref", "selection", "is_line", "probes_section"]
 
 MAX_ELEMENTS = 1_000_000
@@ -27,11 +27,42 @@ MESH_FILE = Section("mesh file", (
           doc="a quad-dominant mesh: an error, or every cell split into quads")),
     doc="[mesh] from a file")
 
+MAX_REFINE = 6
+
+
 def mesh_section(v, d, base_dir):
-    """(Mesh, spec, file digest) of the [mesh] table: a generator or a file meshio reads."""
+    """(Mesh, spec, file digest) of the [mesh] table: a generator or a file meshio reads, refined
+    ``refine`` times (``mesh.refine``: every quad into four, new frames on the SE(3) geodesics)."""
     key = "mesh"
     if not isinstance(d, dict):
         v.fail(key, f"expected a table, got {tname(d)}")
+    levels = v.integer(d, "refine", key, default=0, lo=0, hi=MAX_REFINE)
+    d = {k: x for k, x in d.items() if k != "refine"}
+    mesh, spec, digest = _unrefined_mesh(v, d, base_dir)
+    if levels:
+        if mesh.n_elements * 4 ** levels > MAX_ELEMENTS:
+            v.fail(join(key, "refine"), f"{mesh.n_elements} elements refined {levels} times make "
+                                        f"{mesh.n_elements * 4 ** levels}, over the limit of {MAX_ELEMENTS}")
+        mesh = M.refine(mesh, levels)
+        spec["refine"] = levels
+    return mesh, spec, digest
+
+
+def refine_guard(v, doc, levels):
+    """Refuse what [mesh] refine cannot carry: a magnet's Br_file (values per element or node
+    id of the unrefined mesh; the new ids would have none)."""
+    if not levels:
+        return
+    for i, t in enumerate(doc.get("magnets") or []):
+        if isinstance(t, dict) and "Br_file" in t:
+            v.fail(f"magnets[{i}].Br_file", "a table of Br per element or node id of the unrefined mesh cannot "
+                                            "follow [mesh] refine (the new ids have no value): refine the mesh "
+                                            "file and its table together, or give Br without a table")
+
+
+def _unrefined_mesh(v, d, base_dir):
+    """(Mesh, spec, file digest) of the [mesh] table without its ``refine``."""
+    key = "mesh"
     if ("generator" in d) == ("file" in d):
         v.fail(key, "give exactly one of 'generator' (" + ", ".join(GENERATORS) + ") or 'file' "
                     "(a mesh meshio reads: Gmsh .msh, .vtu, ...)")
@@ -194,9 +225,10 @@ def _near_nodes(v, t, key, mesh):
     return out
 
 
-def regions_section(v, doc, mesh):
+def regions_section(v, doc, mesh, levels=0):
     """Named element sets: the mesh's (e.g. Gmsh physical surfaces) and [regions.NAME]
-    (box of element centroids, or ids); added to mesh.regions."""
+    (box of element centroids, or ids of the unrefined mesh: with [mesh] refine = ``levels``
+    their descendants); added to mesh.regions."""
     regions = mesh.regions
     centroids = mesh.X[mesh.quads].mean(1)
     scale = mesh.length_scale
@@ -210,7 +242,8 @@ def regions_section(v, doc, mesh):
         if "box" in t:
             ids = np.nonzero(_box(v, t["box"], join(key, "box"), centroids, scale))[0]
         else:
-            ids = np.unique(_int_list(v, t, "elements", key, mesh.n_elements, what="element"))
+            n0 = mesh.n_elements // 4 ** levels
+            ids = M.descendants(np.unique(_int_list(v, t, "elements", key, n0, what="element")), levels)
         if len(ids) == 0:
             v.fail(key, "selects no elements")
         regions[name] = np.asarray(ids, np.int64)

@@ -21,7 +21,7 @@ from ..errors import ScenarioError
 from .build import build_problem
 from .design_section import design_section
 from .keys import check_key, split_dotted
-from .geometry import edges_section, mesh_section, probes_section, regions_section
+from .geometry import edges_section, mesh_section, probes_section, refine_guard, regions_section
 from .obstacles import obstacles_section
 from ..model import SUPPORTS
 from .physics import (NON_PHYSICAL, fields_section, loads_section, magnets_section,
@@ -308,7 +308,8 @@ def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario", strict=
     mesh, mspec, file_digest = mesh_section(v, doc["mesh"], base_dir)
     spec["mesh"] = mspec
     spec["edges"] = edges_section(v, doc, mesh)
-    regions = regions_section(v, doc, mesh)
+    regions = regions_section(v, doc, mesh, mspec.get("refine", 0))
+    refine_guard(v, doc, mspec.get("refine", 0))
     spec["regions"] = {k: r.tolist() for k, r in regions.items()}
     spec["material"] = material_section(v, doc["material"], regions)
     spec["fields"] = fields_section(v, doc)

@@ -88,7 +88,8 @@ def linear_solve(problem, lam_end=1.0, steps=None, linear_solver=None, **kw):
     Returns
     -------
     core_se3.Result
-        steps[0] the reference state, steps[1] the linear solution (iterations 1).
+        steps[0] the reference state, steps[1] the linear solution (iterations 1); its log entry
+        has ``energy``, the strain energy 1/2 eta^T K0 eta [force x length].
 
     Example
     -------
@@ -145,6 +146,8 @@ def linear_solve(problem, lam_end=1.0, steps=None, linear_solver=None, **kw):
     Q = np.swapaxes(g[:, :3, :3], 1, 2) @ g0[:, :3, :3]
     to_g = lambda a: np.concatenate([np.einsum("nij,nj->ni", Q, a[:, :3]), np.einsum("nij,nj->ni", Q, a[:, 3:])], 1)
     result.steps.append(rec.step(lam_end, g, 1, [], (to_g(r_lin), to_g(f))))
-    result.log.append(dict(lam=lam_end, converged=True, iterations=1, reason="linear"))
+    # the strain energy of the linear solution, 1/2 eta^T K0 eta (with the supports' penalty springs)
+    energy = 0.5 * float(eta @ (K @ eta))
+    result.log.append(dict(lam=lam_end, converged=True, iterations=1, reason="linear", energy=energy))
     result.timings["other"] = time.perf_counter() - t
     return result

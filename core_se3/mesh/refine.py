@@ -1,0 +1,132 @@
+"""Uniform refinement of a quad mesh on SE(3): every quad into four, the new frames on the
+geodesics of the reference frames.
+
+A new node at the middle of a mesh edge gets the midpoint of the SE(3) geodesic that joins the
+frames of its two ends,
+
+    g_m = g_a exp(log(g_a^-1 g_b) / 2),
+
+which is the curve the default element itself takes for a reference edge (exact edge twists,
+docs/ELEMENTS.md): a refined mesh is the coarse mesh's own geometry, sampled finer.  Where the
+frames of neighbouring nodes differ by a rotation about a fixed axis (the generators' circles:
+cylinders, arches, annuli, the hemisphere's parallels and meridians; identical frames on a
+straight edge) the geodesic is that circle or line, so the new nodes lie on the surface exactly.
+A quad's centre node is the geodesic midpoint of the two midpoints of its opposite edge pairs
+(each pair joined by its own geodesic).
+
+The old nodes keep their ids (the new ones follow: edge midpoints, then centres); element e's
+children are 4e ... 4e + 3, so after k refinements the descendants of element e are the ids
+4^k e ... 4^k (e + 1) - 1.  Named node sets that are lines (consecutive nodes joined by mesh
+edges) get the midpoints between their nodes, other node sets are kept; regions list the
+children of their elements.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .. import lie
+from ..errors import MeshError
+from .core import Mesh
+
+__all__ = ["refine", "geodesic_midpoints", "descendants"]
+
+
+def geodesic_midpoints(ga, gb):
+    """Midpoints g_a exp(log(g_a^-1 g_b) / 2) of the SE(3) geodesics from ga to gb (..., 4, 4).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import lie
+    >>> ga = np.eye(4)
+    >>> gb = lie.exp([0.0, -np.pi / 2, 0.0, 0.0, 0.0, np.pi / 2])   # quarter turn about z through (1, 0, 0)
+    >>> geodesic_midpoints(ga, gb)[:3, 3].round(12).tolist()          # on the unit circle about (1, 0, 0)
+    [0.292893218813, -0.707106781187, 0.0]
+    """
+    ga, gb = np.asarray(ga, float), np.asarray(gb, float)
+    rel = lie.log(lie.inv(ga) @ gb)
+    return ga @ lie.exp(0.5 * rel)
+
+
+def descendants(elements, levels):
+    """Element ids, after ``levels`` uniform refinements, of the descendants of ``elements``.
+
+    Example
+    -------
+    >>> descendants([0, 2], 1).tolist()
+    [0, 1, 2, 3, 8, 9, 10, 11]
+    """
+    e = np.asarray(elements, np.int64).ravel()
+    k = 4 ** int(levels)
+    return (k * e[:, None] + np.arange(k)).ravel()
+
+
+def refine(mesh, levels=1):
+    """The mesh refined ``levels`` times: every quad into four (module docstring).
+
+    Parameters
+    ----------
+    mesh : Mesh
+        The mesh (its named node sets and regions are carried over).
+    levels : int
+        Number of refinements (0: the mesh itself); each multiplies the elements by four.
+
+    Returns
+    -------
+    Mesh
+        The refined mesh (``shape`` None: its node numbering is not a structured grid's).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import mesh
+    >>> m = refine(mesh.cylinder_panel(2.0, 1.0, 0.0, np.pi / 2, 2, 1))
+    >>> m.n_elements, m.n_nodes, bool(np.allclose(np.hypot(m.X[:, 0], m.X[:, 2]), 2.0))   # on the cylinder
+    (8, 15, True)
+    >>> m.node_set("x0").tolist()                  # the line x0 with its new midpoint
+    [0, 7, 3]
+    """
+    if isinstance(levels, bool) or int(levels) != levels or levels < 0:
+        raise MeshError(f"refine needs a whole number of levels >= 0, got {levels!r}")
+    for _ in range(int(levels)):
+        mesh = _refine_once(mesh)
+    return mesh
+
+
+def _refine_once(mesh):
+    n, m = mesh.n_nodes, mesh.n_elements
+    g0, E = mesh.g0, mesh.edge_nodes
+    g_mid = geodesic_midpoints(g0[E[:, 0]], g0[E[:, 1]])              # nodes n ... n + |E| - 1
+    mid = n + mesh.elem_edges              # (m, 4) midpoint ids of the local edges bottom, top, left, right
+    g_all = np.concatenate([g0, g_mid])
+    across = geodesic_midpoints(g_all[mid[:, 0]], g_all[mid[:, 1]])    # bottom to top
+    along = geodesic_midpoints(g_all[mid[:, 2]], g_all[mid[:, 3]])     # left to right
+    g_c = geodesic_midpoints(across, along)
+    c = n + len(E) + np.arange(m)
+    q = mesh.quads
+    b, t, l, r = mid.T
+    quads = np.stack([np.stack([q[:, 0], b, c, l], 1), np.stack([b, q[:, 1], r, c], 1),
+                      np.stack([c, r, q[:, 2], t], 1), np.stack([l, c, t, q[:, 3]], 1)], 1).reshape(-1, 4)
+    edges = {name: _refined_line(mesh, np.asarray(ids, np.int64)) for name, ids in mesh.edges.items()}
+    regions = {name: descendants(ids, 1) for name, ids in mesh.regions.items()}
+    return Mesh(np.concatenate([g_all, g_c]), quads, edges, shape=None, regions=regions)
+
+
+def _refined_line(mesh, ids):
+    """A node set with the edge midpoints between consecutive nodes if it is a line (every
+    consecutive pair a mesh edge), else unchanged."""
+    if len(ids) < 2:
+        return ids
+    n = mesh.n_nodes
+    E = mesh.edge_nodes
+    codes = E[:, 0] * n + E[:, 1]
+    a, b = ids[:-1], ids[1:]
+    want = np.minimum(a, b) * n + np.maximum(a, b)
+    pos = np.searchsorted(codes, want)                                 # edge_nodes is sorted (np.unique)
+    pos = np.minimum(pos, len(codes) - 1)
+    if not np.all(codes[pos] == want):
+        return ids
+    out = np.empty(2 * len(ids) - 1, np.int64)
+    out[0::2], out[1::2] = ids, n + pos
+    return out
+

@@ -1,0 +1,272 @@
+"""Is a scenario's mesh fine enough?  Its linear analysis on the mesh and on uniform refinements
+of it, compared (``core-se3 check-mesh FILE.toml``).
+
+Each level refines every quad into four (``[mesh] refine``; the new frames on the SE(3)
+geodesics of the reference frames, ``mesh.refine``), builds the scenario anew on it and solves
+the linear analysis at the scenario's final load factor (``control = "linear"``).  The old nodes
+keep their ids, so the displacements of one level are compared with the next one's at the
+coarse mesh's nodes; with them the strain energy 1/2 eta^T K0 eta and every probe.  A mesh whose
+answer changes by more than ``tol`` under one refinement is not converged: the run on it would
+be wrong by about as much (a well-behaved mesh's error is about 4/3 of the change at second
+order).  This is what the default element's ElementWarning on coarse thin curved meshes asks
+for: a bending-dominated shell (the pinched hemisphere) passes it, the spuriously flexible
+membrane-dominated one (the Scordelis-Lo roof 2x2 at R/h 1e4) does not (docs/ELEMENTS.md).
+
+The linear check cannot see contact ([[obstacles]] are left out: a linear analysis would pass
+through them) nor large rotations, wrinkles or snap-through, which may need a finer mesh than the
+linear response does.  ``nonlinear=True`` (``--nonlinear``) runs the scenario itself instead (its
+own [solver], with its obstacles; load or displacement control) on each mesh and compares the
+final states the same way (without the energy): a gripper's grasp or a roll-up, at the price of
+the runs (the refined one has four times the elements).
+"""
+from __future__ import annotations
+
+import copy
+import math
+import tempfile
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import ConvergenceError, OptionError, ScenarioError
+from ..solvers.linear import linear_solve
+
+__all__ = ["MeshCheck", "check_mesh", "DEFAULT_TOL"]
+
+#: the relative change under one refinement above which a mesh is reported as not converged
+DEFAULT_TOL = 0.05
+
+
+@dataclass
+class MeshCheck:
+    """The linear answers on the mesh and its refinements (``check_mesh``).
+
+    Attributes
+    ----------
+    name : str
+        The scenario's name; ``lam``: the load factor compared; ``nonlinear``: the scenario's own
+        runs (True) or its linear analysis (False).
+    levels : list of dict
+        Per mesh (0: the scenario's own): ``elements``, ``dofs``, ``energy`` [force x length;
+        None for the nonlinear runs],
+        ``u_max`` (largest displacement at the coarse nodes [length]), ``probes`` (name -> u).
+    changes : list of dict
+        Per pair of consecutive meshes: the relative changes ``energy`` |U_k / U_k+1 - 1| (None
+        for the nonlinear runs),
+        ``displacement`` max |u_k - u_k+1| / max |u_k+1| at the coarse nodes, and per probe.
+    tol : float
+        The largest change accepted for the scenario's mesh.
+    dropped : list of str
+        Sections left out of the check (obstacles in the linear analysis, design, sweep).
+    warnings : list of str
+        What the element said while building each level (e.g. ElementWarning), "level k: ...".
+    """
+    name: str
+    lam: float
+    tol: float
+    nonlinear: bool = False
+    levels: list = field(default_factory=list)
+    changes: list = field(default_factory=list)
+    dropped: list = field(default_factory=list)
+    warnings: list = field(default_factory=list)
+
+    @property
+    def change(self):
+        """The largest relative change from the scenario's mesh to its first refinement."""
+        c = self.changes[0]
+        return max(x for x in [c["energy"], c["displacement"], *c["probes"].values()] if x is not None)
+
+    @property
+    def converged(self):
+        """True if that change is within ``tol``."""
+        return self.change <= self.tol
+
+    @property
+    def energy_order(self):
+        """The observed order of convergence of the energy, log2 of the ratio of its first two
+        changes (None with fewer than three meshes or a change of zero)."""
+        if len(self.changes) < 2 or self.nonlinear:
+            return None
+        a, b = (abs(self.levels[k]["energy"] - self.levels[k + 1]["energy"]) for k in (0, 1))
+        return math.log2(a / b) if a > 0 and b > 0 else None
+
+    def to_dict(self):
+        """A JSON-ready dict of the check."""
+        return dict(name=self.name, lam=self.lam, tol=self.tol, nonlinear=self.nonlinear, change=self.change,
+                    converged=self.converged,
+                    energy_order=self.energy_order, levels=self.levels, changes=self.changes,
+                    dropped=self.dropped, warnings=self.warnings)
+
+    def report(self):
+        """The check as text: one line per mesh, the changes, the verdict."""
+        probes = list(self.levels[0]["probes"])
+        head = f"{'mesh':<6}{'elements':>10}{'dofs':>10}{'energy':>14}{'max |u|':>14}" + "".join(
+            f"{'|u| ' + p:>16}" for p in probes)
+        what = "the scenario's run" if self.nonlinear else "linear analysis"
+        out = [f"{self.name}: {what} at load factor {self.lam:g} on the mesh and {len(self.levels) - 1} "
+               f"uniform refinement(s)", head]
+        for k, lv in enumerate(self.levels):
+            energy = "-" if lv["energy"] is None else f"{lv['energy']:.6g}"
+            out.append(f"{'+' + str(k) if k else 'own':<6}{lv['elements']:>10}{lv['dofs']:>10}{energy:>14}"
+                       f"{lv['u_max']:>14.6g}" + "".join(f"{np.linalg.norm(lv['probes'][p]):>16.6g}" for p in probes))
+        for k, c in enumerate(self.changes):
+            pr = "".join(f", probe {p} {100 * v:.3g} %" for p, v in c["probes"].items())
+            energy = "" if c["energy"] is None else f"energy {100 * c['energy']:.3g} %, "
+            out.append(f"change {k} -> {k + 1}: {energy}displacements at the coarse nodes {100 * c['displacement']:.3g} %{pr}")
+        if self.energy_order is not None:
+            out.append(f"observed order of the energy's convergence: {self.energy_order:.2f} (2 in the asymptotic range)")
+        for w in self.warnings:
+            out.append(f"note: {w}")
+        if self.dropped:
+            out.append(f"note: left out of the check: {', '.join(self.dropped)}")
+        if self.converged:
+            out.append(f"verdict: the mesh's answer changes by {100 * self.change:.3g} % under refinement, "
+                       f"within {100 * self.tol:g} % (its own error is larger than the change: about 4/3 of it "
+                       "where the answer converges at second order)")
+        else:
+            out.append(f"verdict: NOT converged: the mesh's answer changes by {100 * self.change:.3g} % under "
+                       f"refinement (more than {100 * self.tol:g} %): a run on this mesh would be wrong by about as "
+                       f"much; refine it ([mesh] refine = 1, or a finer mesh) and check again")
+        return "\n".join(out)
+
+
+def check_mesh(scn, levels=1, tol=DEFAULT_TOL, nonlinear=False):
+    """The linear analysis of ``scn`` on its mesh and ``levels`` uniform refinements, compared
+    (module docstring); with ``nonlinear`` the scenario's own runs.
+
+    Parameters
+    ----------
+    scn : core_se3.scenario.Scenario
+        The scenario (any control: the check solves its linear analysis at ``lam_end``).
+    levels : int
+        Refinements after the scenario's own mesh (>= 1; each has four times the elements).
+    tol : float
+        The largest relative change accepted under the first refinement.
+    nonlinear : bool
+        Run the scenario itself (its [solver], load or displacement control, and its obstacles)
+        on every mesh and compare the final states (no output files are written).
+
+    Returns
+    -------
+    MeshCheck
+
+    Raises
+    ------
+    OptionError
+        For levels < 1 or tol <= 0, a scenario that the linear analysis does not load (zero
+        energy: a scene driven by contact alone), or ``nonlinear`` with arc length.
+    ConvergenceError
+        A run of ``nonlinear`` that did not converge (the message names the mesh).
+
+    Example
+    -------
+    A cantilever strip under an end force: 8 elements are enough for 5 %.
+
+    >>> from core_se3 import scenario
+    >>> scn = scenario.from_dict({"mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 8, "ny": 1},
+    ...     "material": {"E": 1.2e6, "nu": 0.0, "h": 0.1}, "supports": [{"type": "clamp", "edge": "x0"}],
+    ...     "loads": [{"type": "edge_force", "edge": "x1", "force": [0.0, 0.0, 1e-3]}]})
+    >>> chk = check_mesh(scn)
+    >>> chk.converged, round(chk.change, 4)
+    (True, 0.0029)
+    """
+    if isinstance(levels, bool) or int(levels) != levels or levels < 1:
+        raise OptionError(f"check_mesh needs levels >= 1 (refinements), got {levels!r}")
+    if not (isinstance(tol, (int, float)) and math.isfinite(tol) and tol > 0):
+        raise OptionError(f"check_mesh needs a tolerance tol > 0, got {tol!r}")
+    if nonlinear and scn.solver["control"] == "arclength":
+        raise OptionError(f"{scn.file}: arc length ends where its path ends, at a different point on every mesh: "
+                          "compare the load-deflection curves (probes.png) of runs with [mesh] refine = 0 and 1, "
+                          "or check the linear analysis (without --nonlinear)")
+    lam = float(scn.solver.get("lam_end", 1.0))
+    out = MeshCheck(scn.name, lam, float(tol), bool(nonlinear))
+    n0 = scn.mesh.n_nodes
+    for k in range(int(levels) + 1):
+        s, out.dropped, said = _level_scenario(scn, k, nonlinear)
+        out.warnings += [f"level {k}: {w}" for w in said]
+        level, u = (_run_level if nonlinear else _linear_level)(s, lam, n0, k)
+        if k == 0 and not nonlinear and not level["energy"] > 0:
+            raise OptionError(f"{scn.file}: the linear analysis of {scn.name!r} has no strain energy (nothing loads "
+                              "the shell without its obstacles): the mesh check needs a load or a prescribed motion")
+        if k:
+            out.changes.append(_change(out.levels[-1], level, u_prev, u))
+        out.levels.append(level)
+        u_prev = u
+    return out
+
+
+def _linear_level(s, lam, n0, k):
+    """(level dict, displacements at the n0 coarse nodes) of the linear analysis of ``s``."""
+    res = linear_solve(s.problem, lam_end=lam, linear_solver=s.solver.get("linear_solver"))
+    u = res.displacements()[:n0]
+    return _level(s, float(res.log[-1]["energy"]), u, res.final.probes), u
+
+
+def _run_level(s, lam, n0, k):
+    """(level dict, displacements at the n0 coarse nodes) of the run of ``s`` (no output files)."""
+    from .runner import run
+    with tempfile.TemporaryDirectory() as d:
+        try:
+            res = run(s, out=d, progress=False)
+        except ConvergenceError as exc:
+            why = str(exc).split(" The checkpoint keeps")[0]        # the run's files are not kept here
+            coarse = (" -- the coarser mesh's run converged, so the meshes disagree on the path (a limit point or "
+                      "a snap that only the refined mesh resolves?): run the scenario with [mesh] refine = "
+                      f"{k} and look") if k else ""
+            raise ConvergenceError(f"mesh check, refinement level {k} ({s.mesh.n_elements} elements): {why}{coarse}",
+                                   getattr(exc, "result", None)) from exc
+    u = (res.g[:, :3, 3] - s.mesh.X)[:n0]
+    probes = {name: p["u"] for name, p in res.doc["steps"][-1]["probes"].items()}
+    return _level(s, None, u, probes), u
+
+
+def _level(s, energy, u, probes):
+    return dict(elements=s.mesh.n_elements, dofs=int((~s.problem.constraint_mask()).sum()), energy=energy,
+                u_max=float(np.linalg.norm(u, axis=1).max()),
+                probes={name: np.asarray(p["u"] if isinstance(p, dict) else p, float).tolist()
+                        for name, p in probes.items()})
+
+
+def _change(a, b, ua, ub):
+    """Relative changes from level a to level b (displacements ua, ub at the coarse nodes)."""
+    scale = float(np.linalg.norm(ub, axis=1).max())
+    disp = float(np.linalg.norm(ua - ub, axis=1).max()) / scale if scale > 0 else 0.0
+    probes = {}
+    for name, pa in a["probes"].items():
+        pb = np.asarray(b["probes"][name])
+        nb = float(np.linalg.norm(pb))
+        probes[name] = float(np.linalg.norm(np.asarray(pa) - pb)) / nb if nb > 0 else 0.0
+    energy = None if a["energy"] is None else abs(a["energy"] / b["energy"] - 1.0)
+    return dict(energy=energy, displacement=disp, probes=probes)
+
+
+def _level_scenario(scn, k, nonlinear):
+    """The scenario refined k more times, with a linear [solver] (or its own, ``nonlinear``);
+    (Scenario, dropped sections, the element's warnings while building it)."""
+    from .spec import from_dict
+    doc = copy.deepcopy(scn.raw)
+    doc["mesh"] = dict(doc["mesh"], refine=int(doc["mesh"].get("refine", 0)) + k)
+    if nonlinear:
+        doc["output"] = {"vtu": False, "plots": False, "picture": False}
+        dropped = [name for name in ("design", "sweep") if doc.pop(name, None)]
+    else:
+        solver = {"control": "linear", "lam_end": scn.solver.get("lam_end", 1.0)}
+        if "linear_solver" in (doc.get("solver") or {}):
+            solver["linear_solver"] = doc["solver"]["linear_solver"]
+        doc["solver"] = solver
+        dropped = [name for name in ("obstacles", "design", "sweep") if doc.pop(name, None)]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            s = from_dict(doc, file=scn.file, base_dir=scn.base_dir, default_name=scn.default_name, strict=scn.strict)
+        except ScenarioError as exc:
+            if "obstacles" not in dropped:
+                raise
+            raise OptionError(f"the mesh check leaves the obstacles out (a linear analysis would pass through "
+                              f"them), and without them the scenario is not valid: {exc}; check the runs "
+                              "themselves with --nonlinear") from None
+        s.problem.element                       # built here, so that its warnings are caught
+    # the first sentence of each: what and where (the rest explains, docs/ELEMENTS.md)
+    said = sorted({str(w.message).split(". ")[0] for w in caught if w.category.__name__ == "ElementWarning"})
+    return s, dropped, said

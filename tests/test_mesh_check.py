@@ -1,0 +1,294 @@
+"""Uniform SE(3) refinement (``mesh.refine``, ``[mesh] refine``) and the mesh check
+(``scenario.check_mesh``, ``core-se3 check-mesh``): does a coarse mesh say that it is coarse?
+
+The roof and hemisphere below are the shell course's (``catalogue.shell_course``: MacNeal and
+Harder 1985) written as scenarios; their mesh sequences are in benchmarks/results/obstacle_course.md.
+"""
+import json
+import subprocess
+import sys
+import warnings
+
+import numpy as np
+import pytest
+from scipy.spatial import cKDTree
+
+from core_se3 import mesh, scenario
+from core_se3.catalogue import shell_course as sc
+from core_se3.errors import MeshError, OptionError, ScenarioError
+from core_se3.scenario.mesh_check import check_mesh
+
+pytestmark = pytest.mark.core
+
+ROOF_ANGLE = np.radians(40.0)
+
+
+def roof(n, rh):
+    """The quarter Scordelis-Lo roof (R 25, L 50, 40 deg, self-weight 90), R/h = rh, n x n."""
+    return sc.scenario_doc("scordelis-lo", n, 25.0 / rh)
+
+
+def hemisphere(n, rh):
+    """The quarter pinched hemisphere (R 10, 18 deg hole, loads 2 alternating), R/h = rh, n x n."""
+    return sc.scenario_doc("pinched-hemisphere", n, 10.0 / rh)
+
+
+def quiet(doc):
+    """The scenario of ``doc``, its plausibility warnings silenced (thin shells under self-weight
+    have large load numbers by design)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return scenario.from_dict(doc)
+
+
+# ------------------------------------------------------------------ refinement -------------
+GENERATED = [
+    lambda n: mesh.cylinder_panel(25.0, 25.0, 0.0, ROOF_ANGLE, n, n),
+    lambda n: mesh.hemisphere_quarter(10.0, 18.0, n, n),
+    lambda n: mesh.annulus(1.0, 2.0, 1.0, n, n + 1),
+    lambda n: mesh.cylinder_arch(3.0, 2.0, 1.0, n + 1, n),
+    lambda n: mesh.rectangle(2.0, 1.0, n + 1, n),
+]
+
+
+@pytest.mark.parametrize("make", GENERATED, ids=["cylinder", "hemisphere", "annulus", "arch", "rectangle"])
+def test_refining_a_generated_mesh_gives_the_generator_s_finer_mesh(make):
+    """Where neighbouring frames differ by a rotation about a fixed axis the SE(3) geodesic is
+    the generator's circle (or line): refine(gen(n), 2) has gen(4n)'s nodes, frames and named
+    lines, to round-off.  (Chord midpoints would be off the surface by the sagitta.)"""
+    coarse = make(2)
+    r = mesh.refine(coarse, 2)
+    fine = {0: mesh.cylinder_panel(25.0, 25.0, 0.0, ROOF_ANGLE, 8, 8), 1: mesh.hemisphere_quarter(10.0, 18.0, 8, 8),
+            2: mesh.annulus(1.0, 2.0, 1.0, 8, 12), 3: mesh.cylinder_arch(3.0, 2.0, 1.0, 12, 8),
+            4: mesh.rectangle(2.0, 1.0, 12, 8)}[GENERATED.index(make)]
+    dist, idx = cKDTree(fine.X).query(r.X)
+    assert r.n_nodes == fine.n_nodes and r.n_elements == fine.n_elements == 16 * coarse.n_elements
+    assert dist.max() < 1e-12 * fine.length_scale
+    assert np.abs(r.g0 - fine.g0[idx]).max() < 1e-12 * fine.length_scale
+    assert len(np.unique(idx)) == fine.n_nodes
+    for name, ids in fine.edges.items():
+        assert idx[r.edges[name]].tolist() == np.asarray(ids).tolist()
+    assert np.array_equal(r.X[:coarse.n_nodes], coarse.X)              # old nodes keep their ids
+
+
+def test_refined_mesh_solves_like_the_finer_generated_mesh():
+    """The roof 4x4 refined once and the generator's 8x8: the same linear deflection (the same
+    nodes and frames, numbered differently)."""
+    p8, meas8 = sc.scordelis_lo(8)
+    scn = quiet(dict(roof(4, 100.0), mesh=dict(roof(4, 100.0)["mesh"], refine=1), solver={"control": "linear"}))
+    res = scn.problem.solve_linear()
+    assert abs(-res.final.probes["A"]["u"][2] / meas8(p8.solve_linear()) - 1) < 1e-9
+
+
+def test_refinement_carries_regions_lines_and_other_sets():
+    m = mesh.rectangle(3.0, 1.0, 3, 1)
+    m.regions["right"] = np.array([2])
+    m.edges["pair"] = np.array([0, 3])                 # not joined by a mesh edge: kept as is
+    m.edges["corner"] = np.array([5])
+    r = mesh.refine(m, 2)
+    assert r.regions["right"].tolist() == list(range(32, 48))
+    assert np.isclose(r.X[r.quads[r.elements("right")]][:, :, 0].mean(1).min(), 2.0 + 1 / 8)
+    assert r.edges["pair"].tolist() == [0, 3] and r.edges["corner"].tolist() == [5]
+    assert len(r.edges["x1"]) == 5 and np.allclose(r.X[r.edges["x1"], 0], 3.0)
+    assert np.all(np.diff(r.X[r.edges["x1"], 1]) > 0)                 # ordered along the line
+    assert r.shape is None
+    assert mesh.refine(m, 0) is m
+    with pytest.raises(MeshError, match="whole number"):
+        mesh.refine(m, 1.5)
+
+
+def test_refining_a_distorted_mesh_keeps_every_quad_convex_and_the_patch_test():
+    """MacNeal and Harder's distorted patch refined twice: every child is a valid (convex,
+    counter-clockwise: Mesh checks) quad, and the refined patch passes the membrane, bending and
+    drilling patch tests to 1e-8 like the patch itself."""
+    from core_se3.catalogue import patch_tests as pt
+    m, _ = pt.mh_patch()
+    r = mesh.refine(m, 2)
+    X = r.X
+    boundary = np.flatnonzero(np.isclose(X[:, 0], 0) | np.isclose(X[:, 0], 0.24) | np.isclose(X[:, 1], 0)
+                              | np.isclose(X[:, 1], 0.12))
+    assert r.n_elements == 80 and len(boundary) == 16
+    for kind in pt.PATCH_FIELDS:
+        assert pt.patch_test(r, boundary, kind) < 1e-8, kind
+
+
+# ------------------------------------------------------------------ scenario key ------------
+def test_scenario_refine_key_changes_the_mesh_and_the_fingerprint():
+    base = quiet(roof(4, 100.0))
+    ref = base.with_overrides({"mesh.refine": 1})
+    assert ref.mesh.n_elements == 4 * base.mesh.n_elements and ref.spec["mesh"]["refine"] == 1
+    assert ref.fingerprint != base.fingerprint
+    assert "refine" not in base.spec["mesh"]                          # existing scenarios: fingerprint unchanged
+    for bad, msg in ((-1, ">= 0"), (7, "<= 6"), (1.5, "integer")):
+        with pytest.raises(ScenarioError, match=r"\[mesh.refine\]"):
+            base.with_overrides({"mesh.refine": bad})
+
+
+def test_region_ids_follow_the_refinement():
+    doc = dict(roof(2, 100.0), regions={"r": {"elements": [1]}})
+    doc["mesh"] = dict(doc["mesh"], refine=2)
+    scn = quiet(doc)
+    assert scn.regions["r"].tolist() == list(range(16, 32))
+    doc["regions"] = {"r": {"elements": [4]}}                          # the unrefined mesh has 4 elements
+    with pytest.raises(ScenarioError, match=r"regions.r.elements"):
+        quiet(doc)
+
+
+def test_a_magnet_table_cannot_follow_a_refinement(tmp_path):
+    doc = dict(roof(2, 100.0), magnets=[{"Br_file": "br.csv"}])
+    doc["mesh"] = dict(doc["mesh"], refine=1)
+    with pytest.raises(ScenarioError, match=r"magnets\[0\].Br_file.*refine"):
+        scenario.from_dict(doc, base_dir=str(tmp_path))
+
+
+def test_too_many_elements_after_refinement_is_refused(monkeypatch):
+    from core_se3.scenario import geometry
+    monkeypatch.setattr(geometry, "MAX_ELEMENTS", 100)
+    doc = roof(4, 100.0)
+    doc["mesh"] = dict(doc["mesh"], refine=2)
+    with pytest.raises(ScenarioError, match=r"\[mesh.refine\]: 16 elements refined 2 times make 256"):
+        quiet(doc)
+
+
+# ------------------------------------------------------------------ the check ---------------
+def test_linear_energy_is_half_the_work_of_the_load():
+    """Clapeyron: 1/2 eta^T K0 eta = 1/2 f . u for a load-driven linear solution."""
+    p, meas = sc.scordelis_lo(4)
+    res = p.solve_linear()
+    f = p.external(p.mesh.g0, 1.0, tangent=False)[0]
+    work = float(np.sum(f[:, :3] * np.einsum("nji,nj->ni", p.mesh.g0[:, :3, :3], res.displacements())))
+    assert abs(res.log[-1]["energy"] / (0.5 * work) - 1) < 1e-10
+
+
+def test_the_spuriously_flexible_coarse_thin_roof_fails_the_check():
+    """The roof 2x2 at R/h 1e4 is 10.9 times its converged deflection (obstacle_course.md); its
+    ElementWarning fires, and the check measures it: the deflection changes 6-fold under one
+    refinement."""
+    chk = check_mesh(quiet(roof(2, 1e4)))
+    assert not chk.converged and chk.change > 5.0
+    assert chk.changes[0]["probes"]["A"] > 5.0
+    assert any("phi^3 L / h" in w for w in chk.warnings)
+    assert "NOT converged" in chk.report()
+
+
+def test_the_coarse_thin_hemisphere_passes_the_check_that_its_warning_asks_for():
+    """The pinched hemisphere 4x4 at R/h 1e4 is within 2 % of its converged value (0.980): the
+    ElementWarning (which cannot tell it from the roof) fires, the check passes it."""
+    chk = check_mesh(quiet(hemisphere(4, 1e4)))
+    assert any("phi^3 L / h" in w for w in chk.warnings)
+    assert chk.converged and chk.change < 0.03
+
+
+def test_a_converged_mesh_passes_and_two_levels_give_the_order():
+    """The roof 16x16 at R/h 100 (MacNeal-Harder's thickness): 0.37 % change; the energy's
+    observed order from 16x16, 32x32, 64x64 is about 2."""
+    chk = check_mesh(quiet(roof(16, 100.0)), levels=2)
+    assert chk.converged and chk.change < 0.01
+    assert 1.5 < chk.energy_order < 2.5
+    assert [lv["elements"] for lv in chk.levels] == [256, 1024, 4096]
+
+
+def test_check_options_and_unloaded_scenes_are_refused():
+    scn = quiet(roof(2, 100.0))
+    for kw in (dict(levels=0), dict(tol=0.0), dict(tol=float("nan"))):
+        with pytest.raises(OptionError):
+            check_mesh(scn, **kw)
+    doc = roof(2, 100.0)
+    doc["loads"] = [{"type": "body_force", "q": [0.0, 0.0, 0.0]}]
+    with pytest.raises(OptionError, match="no strain energy"):
+        check_mesh(quiet(doc))
+
+
+def test_contact_is_left_out_and_said():
+    doc = roof(4, 100.0)
+    doc["obstacles"] = [{"type": "half_space", "point": [0.0, 0.0, -100.0], "normal": [0.0, 0.0, 1.0]}]
+    chk = check_mesh(quiet(doc))
+    assert chk.dropped == ["obstacles"] and "left out of the check: obstacles" in chk.report()
+
+
+def _cli(*args, cwd):
+    return subprocess.run([sys.executable, "-m", "core_se3", "check-mesh", *args], capture_output=True, text=True,
+                          cwd=cwd)
+
+
+def _toml(doc):
+    from core_se3.scenario import dumps
+    return dumps(doc)
+
+
+def test_cli_exit_status_and_json(tmp_path):
+    (tmp_path / "coarse.toml").write_text(_toml(roof(2, 1e4)))
+    (tmp_path / "fine.toml").write_text(_toml(roof(8, 100.0)))
+    bad = _cli("coarse.toml", "--json", "coarse.json", cwd=tmp_path)
+    assert bad.returncode == 4, bad.stderr
+    assert "NOT converged" in bad.stdout
+    doc = json.loads((tmp_path / "coarse.json").read_text())
+    assert doc["converged"] is False and len(doc["levels"]) == 2
+    good = _cli("fine.toml", "--tol", "0.05", cwd=tmp_path)
+    assert good.returncode == 0, good.stderr
+    assert _cli("missing.toml", cwd=tmp_path).returncode == 2
+
+
+# ------------------------------------------------------------------ the runs themselves -----
+def cantilever(nx, force=4.0, **solver):
+    """Sze et al.'s cantilever strip under an end shear (L 10, b 1, h 0.1, E 1.2e6): 6.70 at 4."""
+    return {"name": "cantilever", "mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": nx, "ny": 1},
+            "material": {"E": 1.2e6, "nu": 0.0, "h": 0.1}, "supports": [{"type": "clamp", "edge": "x0"}],
+            "loads": [{"type": "edge_force", "edge": "x1", "force": [0.0, 0.0, force]}],
+            "probes": [{"name": "tip", "edge": "x1"}], "solver": dict({"steps": 4}, **solver)}
+
+
+def test_nonlinear_check_runs_the_scenario_on_both_meshes():
+    """The cantilever at its large-deflection load (tip 6.7 of 10): the runs on 8 and 16
+    elements agree within 1 %, and the compared state is the nonlinear one (the linear answer,
+    P L^3 / 3EI = 133, is 20 times larger)."""
+    chk = check_mesh(quiet(cantilever(8)), nonlinear=True)
+    assert chk.nonlinear and chk.converged and chk.change < 0.01
+    tip = np.asarray(chk.levels[1]["probes"]["tip"])
+    assert abs(tip[2] / 6.70 - 1) < 0.01
+    assert chk.levels[0]["energy"] is None and chk.changes[0]["energy"] is None and chk.energy_order is None
+    assert "the scenario's run" in chk.report()
+
+
+def test_nonlinear_check_keeps_the_obstacles_and_refuses_arc_length():
+    doc = cantilever(8, force=1.0)
+    doc["obstacles"] = [{"type": "half_space", "point": [0.0, 0.0, -5.0], "normal": [0.0, 0.0, 1.0]}]
+    assert check_mesh(quiet(doc), nonlinear=True).dropped == []
+    arc = cantilever(8, control="arclength", steps=None)
+    arc["solver"] = {"control": "arclength", "lam_end": 1.0}
+    with pytest.raises(OptionError, match="arc length"):
+        check_mesh(quiet(arc), nonlinear=True)
+
+
+def test_a_run_that_fails_on_the_refined_mesh_names_the_level(monkeypatch):
+    """A refined run that does not converge: a ConvergenceError naming the level and saying that
+    the coarser mesh's run converged (not a checkpoint that the check does not keep)."""
+    from core_se3.errors import ConvergenceError
+    from core_se3.scenario import runner
+    real = runner.run
+
+    def failing(s, **kw):
+        if s.mesh.n_elements > 8:
+            raise ConvergenceError("Newton failed at load factor 0.9. The checkpoint keeps step 3; rerun with --resume")
+        return real(s, **kw)
+    monkeypatch.setattr(runner, "run", failing)
+    with pytest.raises(ConvergenceError, match=r"refinement level 1 \(32 elements\): Newton failed at load factor "
+                                               r"0.9. -- the coarser mesh's run converged") as err:
+        check_mesh(quiet(cantilever(8)), nonlinear=True)
+    assert "checkpoint" not in str(err.value)
+
+
+def test_the_rotating_field_example_is_converged_in_its_width():
+    """examples/rotating-field.toml used a 20 x 1 strip: its run completed the turn, but in
+    another state than the converged one (tip z +5.4 mm against -4.65 on 80 x 16), and its
+    refinement (40 x 2) meets a limit point at load factor 0.994 that the 20 x 1 path passes
+    by -- the nonlinear check failed on it.  On the example's 40 x 8 the check passes (0.85 %)."""
+    import os
+    path = os.path.join(os.path.dirname(__file__), "..", "examples", "rotating-field.toml")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scn = scenario.load(path)
+    chk = check_mesh(scn, nonlinear=True)
+    assert chk.converged and chk.change < 0.02
+    tip = np.asarray(chk.levels[1]["probes"]["tip"])
+    assert tip[2] < -4.0                                     # below the axis, as on 80 x 16 (-4.65)
