@@ -80,7 +80,7 @@ def material_index(spec_material, regions, n_elements):
     ----------
     spec_material : dict
         The validated [material] section (E, nu, h, shear_factor, drilling, rho,
-        shear_stabilisation and ``regions``: name -> the same keys).
+        shear_stabilisation, shear_stabilisation_floor and ``regions``: name -> the same keys).
     regions : dict
         name -> element ids.
     n_elements : int
@@ -93,7 +93,8 @@ def material_index(spec_material, regions, n_elements):
 
     Example
     -------
-    >>> base = dict(E=1.0, nu=0.3, h=0.1, shear_factor=1.0, drilling=1.0, rho=None, shear_stabilisation=0.0)
+    >>> base = dict(E=1.0, nu=0.3, h=0.1, shear_factor=1.0, drilling=1.0, rho=None, shear_stabilisation=0.0,
+    ...             shear_stabilisation_floor=0.05)
     >>> mats, index = material_index(dict(base, regions={"tip": dict(base, E=2.0)}), {"tip": [2, 3]}, 4)
     >>> [m["E"] for m in mats], index.tolist()
     ([1.0, 2.0], [0, 0, 1, 1])
