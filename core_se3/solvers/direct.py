@@ -305,6 +305,20 @@ class MumpsSolver:
         for obj in objs[2:6]:
             obj.destroy()
 
+    def close(self):
+        """Free the kept PETSc matrix, solver and MUMPS factors (also when the solver is
+        collected: petsc4py does not free them with their Python objects, about 100 MB per
+        64x64 shell factorisation)."""
+        if self._kept is not None:
+            self._destroy(self._kept)
+            self._kept = None
+
+    def __del__(self):
+        try:
+            self.close()
+        except Exception:           # at interpreter exit PETSc may be finalised already
+            pass
+
     def factor(self, K):
         PETSc = self.PETSc
         K = K.tocsr()
