@@ -292,3 +292,30 @@ def test_the_rotating_field_example_is_converged_in_its_width():
     assert chk.converged and chk.change < 0.02
     tip = np.asarray(chk.levels[1]["probes"]["tip"])
     assert tip[2] < -4.0                                     # below the axis, as on 80 x 16 (-4.65)
+
+
+# ------------------------------------------------------------------ Problems built in Python --
+def test_a_problem_built_in_python_is_checked_like_its_scenario():
+    """check_problem_mesh(build, mesh): build(mesh) on the mesh and its refinements.  The roof
+    2x2 at R/h 1e4 built in Python gives the scenario's numbers to round-off (flagged, change
+    10.6)."""
+    from core_se3 import Material, Problem
+    from core_se3.scenario.mesh_check import check_problem_mesh
+
+    def roof_on(m, h=2.5e-3):
+        p = Problem(m, Material(4.32e8, 0.0, h))
+        p.fix("x0", (0, 4, 5))
+        p.fix("y1", (1, 3, 5))
+        p.fix("y0", (0, 2, 4))
+        p.add_body_force((0.0, 0.0, -90.0))
+        p.add_probe("A", lambda X: np.isclose(X[:, 1], 25.0) & np.isclose(X[:, 0], 25.0 * np.sin(ROOF_ANGLE)))
+        return p
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        python = check_problem_mesh(roof_on, mesh.cylinder_panel(25.0, 25.0, 0.0, ROOF_ANGLE, 2, 2))
+    scn = check_mesh(quiet(roof(2, 1e4)))
+    assert not python.converged
+    assert abs(python.change / scn.change - 1) < 1e-9
+    assert abs(python.changes[0]["probes"]["A"] / scn.changes[0]["probes"]["A"] - 1) < 1e-9
+    with pytest.raises(OptionError):
+        check_problem_mesh(roof_on, mesh.cylinder_panel(25.0, 25.0, 0.0, ROOF_ANGLE, 2, 2), levels=0)

@@ -30,9 +30,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import ConvergenceError, OptionError, ScenarioError
+from ..mesh import refine
 from ..solvers.linear import linear_solve
 
-__all__ = ["MeshCheck", "check_mesh", "DEFAULT_TOL"]
+__all__ = ["MeshCheck", "check_mesh", "check_problem_mesh", "DEFAULT_TOL"]
 
 #: the relative change under one refinement above which a mesh is reported as not converged
 DEFAULT_TOL = 0.05
@@ -61,6 +62,13 @@ class MeshCheck:
         Sections left out of the check (obstacles in the linear analysis, design, sweep).
     warnings : list of str
         What the element said while building each level (e.g. ElementWarning), "level k: ...".
+
+    Example
+    -------
+    >>> chk = MeshCheck("plate", 1.0, 0.05, levels=[{"energy": 1.0}, {"energy": 1.1}],
+    ...                 changes=[{"energy": abs(1 / 1.1 - 1), "displacement": 0.02, "probes": {}}])
+    >>> round(chk.change, 4), chk.converged                  # |U0/U1 - 1| = 9.1 %: more than 5 %
+    (0.0909, False)
     """
     name: str
     lam: float
@@ -171,36 +179,119 @@ def check_mesh(scn, levels=1, tol=DEFAULT_TOL, nonlinear=False):
     >>> chk.converged, round(chk.change, 4)
     (True, 0.0029)
     """
-    if isinstance(levels, bool) or int(levels) != levels or levels < 1:
-        raise OptionError(f"check_mesh needs levels >= 1 (refinements), got {levels!r}")
-    if not (isinstance(tol, (int, float)) and math.isfinite(tol) and tol > 0):
-        raise OptionError(f"check_mesh needs a tolerance tol > 0, got {tol!r}")
+    _check_options(levels, tol)
     if nonlinear and scn.solver["control"] == "arclength":
         raise OptionError(f"{scn.file}: arc length ends where its path ends, at a different point on every mesh: "
                           "compare the load-deflection curves (probes.png) of runs with [mesh] refine = 0 and 1, "
                           "or check the linear analysis (without --nonlinear)")
     lam = float(scn.solver.get("lam_end", 1.0))
     out = MeshCheck(scn.name, lam, float(tol), bool(nonlinear))
-    n0 = scn.mesh.n_nodes
-    for k in range(int(levels) + 1):
+
+    def level(k):
         s, out.dropped, said = _level_scenario(scn, k, nonlinear)
+        return (_run_level if nonlinear else _linear_level)(s, lam, scn.mesh.n_nodes, k) + (said,)
+    return _compare(out, scn.mesh.n_nodes, levels, level,
+                    f"{scn.file}: the linear analysis of {scn.name!r} has no strain energy (nothing loads the shell "
+                    "without its obstacles): the mesh check needs a load or a prescribed motion")
+
+
+def check_problem_mesh(build, mesh, levels=1, tol=DEFAULT_TOL, lam=1.0, nonlinear=False, **solve_options):
+    """:func:`check_mesh` for a Problem built in Python: ``build(mesh) -> Problem`` is called on
+    ``mesh`` and on its uniform refinements (``mesh.refine``), and the answers compared.
+
+    ``build`` must select its nodes by name (the mesh's node sets and regions, which refinement
+    carries) or by a predicate of the positions -- node ids below ``mesh.n_nodes`` keep theirs,
+    element ids do not.
+
+    Parameters
+    ----------
+    build : callable
+        mesh -> core_se3.Problem (supports, loads and probes on that mesh).
+    mesh : core_se3.mesh.Mesh
+        The mesh to check.
+    levels, tol : int, float
+        As :func:`check_mesh`.
+    lam : float
+        The load factor compared (the linear analysis at lam, or the runs to lam_end = lam).
+    nonlinear : bool
+        ``problem.solve(lam_end=lam, **solve_options)`` on every mesh instead of the linear
+        analysis (``solve_options``: steps, control, ...; for the linear analysis: linear_solver).
+
+    Returns
+    -------
+    MeshCheck
+
+    Example
+    -------
+    >>> from core_se3 import Material, Problem, mesh
+    >>> def strip(m):
+    ...     p = Problem(m, Material(1.2e6, 0.0, 0.1))
+    ...     p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 1e-3)); p.add_probe("tip", "x1")
+    ...     return p
+    >>> chk = check_problem_mesh(strip, mesh.rectangle(10.0, 1.0, 8, 1))
+    >>> chk.converged, round(chk.change, 4)                  # as the scenario's check_mesh
+    (True, 0.0029)
+    """
+    _check_options(levels, tol)
+    out = MeshCheck(getattr(build, "__name__", "problem"), float(lam), float(tol), bool(nonlinear))
+    n0 = mesh.n_nodes
+
+    def level(k):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            p = build(refine(mesh, k))
+            p.element                            # built here, so that its warnings are caught
+        if nonlinear:
+            try:
+                res = p.solve(lam_end=lam, **solve_options)
+            except ConvergenceError as exc:
+                raise ConvergenceError(_failed_level(k, p.mesh, str(exc), "build(mesh.refine(mesh, {k}))"),
+                                       getattr(exc, "result", None)) from exc
+            energy = None
+        else:
+            res = linear_solve(p, lam_end=lam, **solve_options)
+            energy = float(res.log[-1]["energy"])
+        u = res.displacements()[:n0]
+        return _level(p, energy, u, res.final.probes), u, _said(caught)
+    return _compare(out, n0, levels, level, "the linear analysis has no strain energy (nothing loads the shell): "
+                                            "the mesh check needs a load or a prescribed motion")
+
+
+def _check_options(levels, tol):
+    if isinstance(levels, bool) or int(levels) != levels or levels < 1:
+        raise OptionError(f"check_mesh needs levels >= 1 (refinements), got {levels!r}")
+    if not (isinstance(tol, (int, float)) and math.isfinite(tol) and tol > 0):
+        raise OptionError(f"check_mesh needs a tolerance tol > 0, got {tol!r}")
+
+
+def _compare(out, n0, levels, level, unloaded):
+    """Fill ``out`` with ``level(k) -> (level dict, u at the n0 coarse nodes, warnings)`` for
+    k = 0 ... levels and the changes between consecutive levels."""
+    for k in range(int(levels) + 1):
+        lv, u, said = level(k)
         out.warnings += [f"level {k}: {w}" for w in said]
-        level, u = (_run_level if nonlinear else _linear_level)(s, lam, n0, k)
-        if k == 0 and not nonlinear and not level["energy"] > 0:
-            raise OptionError(f"{scn.file}: the linear analysis of {scn.name!r} has no strain energy (nothing loads "
-                              "the shell without its obstacles): the mesh check needs a load or a prescribed motion")
+        if k == 0 and not out.nonlinear and not lv["energy"] > 0:
+            raise OptionError(unloaded)
         if k:
-            out.changes.append(_change(out.levels[-1], level, u_prev, u))
-        out.levels.append(level)
+            out.changes.append(_change(out.levels[-1], lv, u_prev, u))
+        out.levels.append(lv)
         u_prev = u
     return out
+
+
+def _failed_level(k, mesh, why, how):
+    """The message of a run that failed on refinement level k (the run's checkpoint advice cut)."""
+    why = why.split(" The checkpoint keeps")[0]          # the run's files are not kept here
+    coarse = (" -- the coarser mesh's run converged, so the meshes disagree on the path (a limit point or a snap "
+              f"that only the refined mesh resolves?): run {how.format(k=k)} and look") if k else ""
+    return f"mesh check, refinement level {k} ({mesh.n_elements} elements): {why}{coarse}"
 
 
 def _linear_level(s, lam, n0, k):
     """(level dict, displacements at the n0 coarse nodes) of the linear analysis of ``s``."""
     res = linear_solve(s.problem, lam_end=lam, linear_solver=s.solver.get("linear_solver"))
     u = res.displacements()[:n0]
-    return _level(s, float(res.log[-1]["energy"]), u, res.final.probes), u
+    return _level(s.problem, float(res.log[-1]["energy"]), u, res.final.probes), u
 
 
 def _run_level(s, lam, n0, k):
@@ -210,19 +301,15 @@ def _run_level(s, lam, n0, k):
         try:
             res = run(s, out=d, progress=False)
         except ConvergenceError as exc:
-            why = str(exc).split(" The checkpoint keeps")[0]        # the run's files are not kept here
-            coarse = (" -- the coarser mesh's run converged, so the meshes disagree on the path (a limit point or "
-                      "a snap that only the refined mesh resolves?): run the scenario with [mesh] refine = "
-                      f"{k} and look") if k else ""
-            raise ConvergenceError(f"mesh check, refinement level {k} ({s.mesh.n_elements} elements): {why}{coarse}",
+            raise ConvergenceError(_failed_level(k, s.mesh, str(exc), "the scenario with [mesh] refine = {k}"),
                                    getattr(exc, "result", None)) from exc
     u = (res.g[:, :3, 3] - s.mesh.X)[:n0]
     probes = {name: p["u"] for name, p in res.doc["steps"][-1]["probes"].items()}
-    return _level(s, None, u, probes), u
+    return _level(s.problem, None, u, probes), u
 
 
-def _level(s, energy, u, probes):
-    return dict(elements=s.mesh.n_elements, dofs=int((~s.problem.constraint_mask()).sum()), energy=energy,
+def _level(problem, energy, u, probes):
+    return dict(elements=problem.mesh.n_elements, dofs=int((~problem.constraint_mask()).sum()), energy=energy,
                 u_max=float(np.linalg.norm(u, axis=1).max()),
                 probes={name: np.asarray(p["u"] if isinstance(p, dict) else p, float).tolist()
                         for name, p in probes.items()})
@@ -267,6 +354,10 @@ def _level_scenario(scn, k, nonlinear):
                               f"them), and without them the scenario is not valid: {exc}; check the runs "
                               "themselves with --nonlinear") from None
         s.problem.element                       # built here, so that its warnings are caught
-    # the first sentence of each: what and where (the rest explains, docs/ELEMENTS.md)
-    said = sorted({str(w.message).split(". ")[0] for w in caught if w.category.__name__ == "ElementWarning"})
-    return s, dropped, said
+    return s, dropped, _said(caught)
+
+
+def _said(caught):
+    """The first sentence (what and where) of each ElementWarning caught; the rest explains
+    (docs/ELEMENTS.md)."""
+    return sorted({str(w.message).split(". ")[0] for w in caught if w.category.__name__ == "ElementWarning"})
