@@ -319,3 +319,29 @@ def test_a_problem_built_in_python_is_checked_like_its_scenario():
     assert abs(python.changes[0]["probes"]["A"] / scn.changes[0]["probes"]["A"] - 1) < 1e-9
     with pytest.raises(OptionError):
         check_problem_mesh(roof_on, mesh.cylinder_panel(25.0, 25.0, 0.0, ROOF_ANGLE, 2, 2), levels=0)
+
+
+def test_node_ids_of_a_refined_scenario_carry_their_lines():
+    """Node ids and points in a scenario are those of the unrefined mesh; with [mesh] refine a
+    line of them (a clamp by ids, a tip edge by ids or by points) gets its new nodes, as the
+    named lines do -- before, the refined clamp held the old nodes only and left the new
+    midpoint free, a weaker support that nothing reported, and the edge load was refused.  The
+    refined 4 x 1 strip is then the generator's 8 x 2 strip to round-off; isolated points
+    (not joined by an element edge) stay points."""
+    doc = {"mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 4, "ny": 1, "refine": 1},
+           "material": {"E": 1.2e6, "nu": 0.3, "h": 0.1}, "supports": [{"type": "clamp", "nodes": [0, 5]}],
+           "edges": {"tip": {"nodes": {"near": [[10.0, -0.5, 0.0], [10.0, 0.5, 0.0]]}}},
+           "loads": [{"type": "edge_force", "edge": "tip", "force": [0.0, 0.0, 1e-3]},
+                     {"type": "nodal", "nodes": [1, 7], "force": [0.0, 0.0, 1e-5]}],
+           "probes": [{"name": "t", "nodes": [4, 9]}]}
+    scn = quiet(doc)
+    assert scn.problem.supports[0].nodes.tolist() == [0, 11, 5]
+    assert scn.mesh.edges["tip"].tolist() == [4, 18, 9]
+    assert scn.spec["loads"][1]["nodes"] == [1, 7]                    # two points, not a line
+    ref = {"mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 8, "ny": 2},
+           "material": doc["material"], "supports": [{"type": "clamp", "edge": "x0"}],
+           "loads": [{"type": "edge_force", "edge": "x1", "force": [0.0, 0.0, 1e-3]}],
+           "probes": [{"name": "t", "edge": "x1"}]}
+    doc["loads"] = doc["loads"][:1]
+    u = quiet(doc).problem.solve_linear().final.probes["t"]["u"][2]
+    assert abs(u / quiet(ref).problem.solve_linear().final.probes["t"]["u"][2] - 1) < 1e-10

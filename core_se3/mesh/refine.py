@@ -28,7 +28,7 @@ from .. import lie
 from ..errors import MeshError
 from .core import Mesh
 
-__all__ = ["refine", "geodesic_midpoints", "descendants"]
+__all__ = ["refine", "refine_levels", "carry_nodes", "geodesic_midpoints", "descendants"]
 
 
 def geodesic_midpoints(ga, gb):
@@ -86,11 +86,42 @@ def refine(mesh, levels=1):
     >>> m.node_set("x0").tolist()                  # the line x0 with its new midpoint
     [0, 7, 3]
     """
+    return refine_levels(mesh, levels)[-1]
+
+
+def refine_levels(mesh, levels):
+    """[mesh, refine(mesh, 1), ..., refine(mesh, levels)] (the meshes of every level).
+
+    Example
+    -------
+    >>> from core_se3 import mesh
+    >>> [m.n_elements for m in refine_levels(mesh.rectangle(2.0, 1.0, 2, 1), 2)]
+    [2, 8, 32]
+    """
     if isinstance(levels, bool) or int(levels) != levels or levels < 0:
         raise MeshError(f"refine needs a whole number of levels >= 0, got {levels!r}")
+    meshes = [mesh]
     for _ in range(int(levels)):
-        mesh = _refine_once(mesh)
-    return mesh
+        meshes.append(_refine_once(meshes[-1]))
+    return meshes
+
+
+def carry_nodes(meshes, ids):
+    """Node ids of the unrefined mesh ``meshes[0]`` on the last of ``refine_levels``' meshes: a
+    line (consecutive nodes joined by mesh edges) gets the new nodes between its nodes, as the
+    named node sets do; other selections (points) keep their ids.
+
+    Example
+    -------
+    >>> from core_se3 import mesh
+    >>> ms = refine_levels(mesh.rectangle(2.0, 1.0, 2, 1), 1)
+    >>> carry_nodes(ms, [2, 5]).tolist(), carry_nodes(ms, [0, 5]).tolist()     # a line, two points
+    ([2, 10, 5], [0, 5])
+    """
+    ids = np.asarray(ids, np.int64)
+    for m in meshes[:-1]:
+        ids = _refined_line(m, ids)
+    return ids
 
 
 def _refine_once(mesh):

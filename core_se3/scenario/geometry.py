@@ -43,9 +43,24 @@ def mesh_section(v, d, base_dir):
         if mesh.n_elements * 4 ** levels > MAX_ELEMENTS:
             v.fail(join(key, "refine"), f"{mesh.n_elements} elements refined {levels} times make "
                                         f"{mesh.n_elements * 4 ** levels}, over the limit of {MAX_ELEMENTS}")
-        mesh = M.refine(mesh, levels)
+        lineage = M.refine_levels(mesh, levels)
+        mesh = lineage[-1]
+        # node ids and points of the file are those of the unrefined mesh (node_ids): a line of
+        # them gets its new nodes, as the named lines do
+        mesh._lineage = lineage
         spec["refine"] = levels
     return mesh, spec, digest
+
+
+def node_ids(v, t, key, mesh):
+    """The node ids of ``t['nodes']`` (ids, or ``{near = ...}`` points), given on the unrefined
+    mesh: with [mesh] refine a line of them (consecutive nodes joined by element edges) gets the
+    new nodes between them (``mesh.carry_nodes``); points stay points."""
+    lineage = getattr(mesh, "_lineage", None)
+    base = mesh if lineage is None else lineage[0]
+    ids = _near_nodes(v, t["nodes"], key, base) if isinstance(t["nodes"], dict) else \
+        _int_list(v, t, "nodes", key, base.n_nodes)
+    return ids if lineage is None else M.carry_nodes(lineage, ids).tolist()
 
 
 def refine_guard(v, doc, levels):
@@ -155,9 +170,7 @@ def edges_section(v, doc, mesh):
             nodes = _order_along(mesh, nodes)
             spec = dict(box=t["box"])
         else:
-            ids = _near_nodes(v, t["nodes"], key, mesh) if isinstance(t["nodes"], dict) else \
-                _int_list(v, t, "nodes", key, mesh.n_nodes)
-            nodes = np.asarray(ids, np.int64)
+            nodes = np.asarray(node_ids(v, t, key, mesh), np.int64)
             spec = dict(nodes=nodes.tolist())
         if len(nodes) == 0:
             v.fail(key, "selects no nodes")
@@ -278,9 +291,7 @@ def nodes_ref(v, t, key, mesh, required=True, regions=None):
                                        f"{', '.join(sorted(mesh.edges)) or 'no named edges'}")
         return dict(edge=name)
     if "nodes" in t:
-        if isinstance(t["nodes"], dict):
-            return dict(nodes=_near_nodes(v, t["nodes"], key, mesh))
-        return dict(nodes=_int_list(v, t, "nodes", key, mesh.n_nodes))
+        return dict(nodes=node_ids(v, t, key, mesh))
     if required:
         v.fail(key, "missing the node selection: give 'edge' (a named node set) or 'nodes' (ids)"
                + (" or 'region'" if regions is not None else ""))
