@@ -345,3 +345,21 @@ def test_node_ids_of_a_refined_scenario_carry_their_lines():
     doc["loads"] = doc["loads"][:1]
     u = quiet(doc).problem.solve_linear().final.probes["t"]["u"][2]
     assert abs(u / quiet(ref).problem.solve_linear().final.probes["t"]["u"][2] - 1) < 1e-10
+
+
+def test_a_python_build_that_supports_a_line_by_ids_is_refused():
+    """build(mesh) clamping the root by ids holds the old nodes only on the refined mesh: a
+    weaker support, refused by name (by a predicate of the positions it passes)."""
+    from core_se3 import Material, Problem
+    from core_se3.scenario.mesh_check import check_problem_mesh
+
+    def strip(m, by_ids):
+        p = Problem(m, Material(1.2e6, 0.3, 0.1))
+        p.clamp([0, 5] if by_ids else (lambda X: np.isclose(X[:, 0], 0.0)))
+        p.add_edge_force("x1", (0.0, 0.0, 1e-3))
+        p.add_probe("tip", "x1")
+        return p
+    m = mesh.rectangle(10.0, 1.0, 4, 1)
+    with pytest.raises(OptionError, match="holds nodes 0 and 5"):
+        check_problem_mesh(lambda mm: strip(mm, True), m)
+    assert check_problem_mesh(lambda mm: strip(mm, False), m).levels[1]["elements"] == 16

@@ -200,8 +200,9 @@ def check_problem_mesh(build, mesh, levels=1, tol=DEFAULT_TOL, lam=1.0, nonlinea
     ``mesh`` and on its uniform refinements (``mesh.refine``), and the answers compared.
 
     ``build`` must select its nodes by name (the mesh's node sets and regions, which refinement
-    carries) or by a predicate of the positions -- node ids below ``mesh.n_nodes`` keep theirs,
-    element ids do not.
+    carries) or by a predicate of the positions: node ids below ``mesh.n_nodes`` keep theirs, but
+    a line given by ids does not get its new nodes (a support that holds both ends of an element
+    edge and not the new node between them is refused), and element ids change.
 
     Parameters
     ----------
@@ -235,12 +236,17 @@ def check_problem_mesh(build, mesh, levels=1, tol=DEFAULT_TOL, lam=1.0, nonlinea
     _check_options(levels, tol)
     out = MeshCheck(getattr(build, "__name__", "problem"), float(lam), float(tol), bool(nonlinear))
     n0 = mesh.n_nodes
+    held = np.zeros((n0, 6), bool)              # the dofs the unrefined problem holds
 
     def level(k):
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             p = build(refine(mesh, k))
             p.element                            # built here, so that its warnings are caught
+        if k == 0:
+            held[:] = p.constraint_mask()
+        elif k == 1:
+            _check_held_lines(mesh, held, p.constraint_mask())
         if nonlinear:
             try:
                 res = p.solve(lam_end=lam, **solve_options)
@@ -255,6 +261,20 @@ def check_problem_mesh(build, mesh, levels=1, tol=DEFAULT_TOL, lam=1.0, nonlinea
         return _level(p, energy, u, res.final.probes), u, _said(caught)
     return _compare(out, n0, levels, level, "the linear analysis has no strain energy (nothing loads the shell): "
                                             "the mesh check needs a load or a prescribed motion")
+
+
+def _check_held_lines(mesh, held, held_refined):
+    """OptionError if a dof held at both ends of an element edge of ``mesh`` is free at the new
+    node between them (``held``, ``held_refined``: the constraint masks on the mesh and on its
+    first refinement, whose node n_nodes + e is edge e's midpoint)."""
+    E = mesh.edge_nodes
+    both = held[E[:, 0]] & held[E[:, 1]]
+    lost = both & ~held_refined[mesh.n_nodes + np.arange(len(E))]
+    if lost.any():
+        e = int(np.flatnonzero(lost.any(1))[0])
+        raise OptionError(f"build(mesh) holds nodes {E[e, 0]} and {E[e, 1]} (dofs {np.flatnonzero(lost[e]).tolist()}) "
+                          f"but not the new node between them on the refined mesh: the refined problem would be "
+                          f"supported less; select supported lines by name or by a predicate of the positions, not by ids")
 
 
 def _check_options(levels, tol):
