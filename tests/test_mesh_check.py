@@ -124,6 +124,17 @@ def test_scenario_refine_key_changes_the_mesh_and_the_fingerprint():
             base.with_overrides({"mesh.refine": bad})
 
 
+def test_region_boxes_are_selected_on_the_unrefined_mesh():
+    """A box that cuts through an element: the refined region is the descendants of the coarse
+    region (element 0 of the 4 x 1 strip, centroid x = 1.25, is out of x >= 1.5; its right
+    children, centroid 1.875, stay out), so every level of the check has the same regions."""
+    doc = {"mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 4, "ny": 1, "refine": 1},
+           "material": {"E": 1.2e6, "nu": 0.3, "h": 0.1}, "supports": [{"type": "clamp", "edge": "x0"}],
+           "regions": {"outer": {"box": {"x": [1.5, 10.0]}}},
+           "loads": [{"type": "pressure", "p": 1e-4, "region": "outer"}]}
+    assert quiet(doc).regions["outer"].tolist() == list(range(4, 16))
+
+
 def test_region_ids_follow_the_refinement():
     doc = dict(roof(2, 100.0), regions={"r": {"elements": [1]}})
     doc["mesh"] = dict(doc["mesh"], refine=2)

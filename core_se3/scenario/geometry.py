@@ -238,12 +238,14 @@ def _near_nodes(v, t, key, mesh):
     return out
 
 
-def regions_section(v, doc, mesh, levels=0):
+def regions_section(v, doc, mesh):
     """Named element sets: the mesh's (e.g. Gmsh physical surfaces) and [regions.NAME]
-    (box of element centroids, or ids of the unrefined mesh: with [mesh] refine = ``levels``
-    their descendants); added to mesh.regions."""
+    (box of element centroids, or ids), selected on the unrefined mesh: with [mesh] refine
+    their descendants (so that every level has the same regions); added to mesh.regions."""
     regions = mesh.regions
-    centroids = mesh.X[mesh.quads].mean(1)
+    lineage = getattr(mesh, "_lineage", [mesh])
+    base, levels = lineage[0], len(lineage) - 1
+    centroids = base.X[base.quads].mean(1)
     scale = mesh.length_scale
     for name, t in v.names_table(doc, "regions").items():
         key = join("regions", name)
@@ -255,8 +257,8 @@ def regions_section(v, doc, mesh, levels=0):
         if "box" in t:
             ids = np.nonzero(_box(v, t["box"], join(key, "box"), centroids, scale))[0]
         else:
-            n0 = mesh.n_elements // 4 ** levels
-            ids = M.descendants(np.unique(_int_list(v, t, "elements", key, n0, what="element")), levels)
+            ids = np.unique(_int_list(v, t, "elements", key, base.n_elements, what="element"))
+        ids = M.descendants(ids, levels)
         if len(ids) == 0:
             v.fail(key, "selects no elements")
         regions[name] = np.asarray(ids, np.int64)

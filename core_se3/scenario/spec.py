@@ -308,7 +308,7 @@ def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario", strict=
     mesh, mspec, file_digest = mesh_section(v, doc["mesh"], base_dir)
     spec["mesh"] = mspec
     spec["edges"] = edges_section(v, doc, mesh)
-    regions = regions_section(v, doc, mesh, mspec.get("refine", 0))
+    regions = regions_section(v, doc, mesh)
     refine_guard(v, doc, mspec.get("refine", 0))
     spec["regions"] = {k: r.tolist() for k, r in regions.items()}
     spec["material"] = material_section(v, doc["material"], regions)
