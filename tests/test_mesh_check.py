@@ -124,6 +124,24 @@ def test_scenario_refine_key_changes_the_mesh_and_the_fingerprint():
             base.with_overrides({"mesh.refine": bad})
 
 
+def test_a_force_per_node_is_not_multiplied_by_the_refinement():
+    """A nodal load (the same force on each selected node) on the line x1 of a 4 x 1 strip acts
+    on its 2 nodes; refined, the line has 3 -- before, the load grew by half, silently.  It now
+    acts on the unrefined mesh's nodes of the selection (the same points, the same total), and
+    an edge load (a total force along the line) is spread over the refined line."""
+    def total(load, refine):
+        doc = {"mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 4, "ny": 1, "refine": refine},
+               "material": {"E": 1.2e6, "nu": 0.3, "h": 0.1}, "supports": [{"type": "clamp", "edge": "x0"}],
+               "loads": [dict(load, edge="x1")]}
+        p = quiet(doc).problem
+        f = p.external(p.mesh.g0, 1.0, tangent=False)[0]
+        return np.einsum("nij,nj->i", p.mesh.g0[:, :3, :3], f[:, :3])
+    nodal = {"type": "nodal", "force": [0.0, 0.0, 1.0]}
+    edge = {"type": "edge_force", "force": [0.0, 0.0, 1.0]}
+    assert np.allclose(total(nodal, 1), [0.0, 0.0, 2.0]) and np.allclose(total(nodal, 0), [0.0, 0.0, 2.0])
+    assert np.allclose(total(edge, 1), [0.0, 0.0, 1.0]) and np.allclose(total(edge, 2), [0.0, 0.0, 1.0])
+
+
 def test_region_boxes_are_selected_on_the_unrefined_mesh():
     """A box that cuts through an element: the refined region is the descendants of the coarse
     region (element 0 of the 4 x 1 strip, centroid x = 1.25, is out of x >= 1.5; its right

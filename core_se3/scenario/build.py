@@ -62,6 +62,11 @@ def build_problem(v, spec, mesh, regions):
         values = {k: x for k, x in ld.items() if k not in ("type", "scale", "edge", "nodes", "region")}
         if "edge" in ld or "nodes" in ld:
             where = selection(mesh, ld)
+            lineage = getattr(mesh, "_lineage", None)
+            if lineage is not None and LOADS[ld["type"]].target == "nodes":
+                # a force per node acts on the unrefined mesh's nodes of its selection: [mesh]
+                # refine must not multiply it by the new nodes of a line
+                where = where[where < lineage[0].n_nodes]
         else:
             where = regions[ld["region"]] if ld.get("region") else None
         try:
