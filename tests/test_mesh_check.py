@@ -392,3 +392,27 @@ def test_a_python_build_that_supports_a_line_by_ids_is_refused():
     with pytest.raises(OptionError, match="holds nodes 0 and 5"):
         check_problem_mesh(lambda mm: strip(mm, True), m)
     assert check_problem_mesh(lambda mm: strip(mm, False), m).levels[1]["elements"] == 16
+
+
+def test_a_python_build_with_a_force_per_node_on_a_line_is_not_comparable():
+    """add_nodal_load on the line x1 puts the force on each of its nodes: on the refined mesh the
+    line has 3 nodes instead of 2 and the resultant grows by half.  The check says the models
+    are loaded differently (not a convergence verdict); an edge force passes."""
+    from core_se3 import Material, Problem
+    from core_se3.scenario.mesh_check import check_problem_mesh
+
+    def strip(m, per_node):
+        p = Problem(m, Material(1.2e6, 0.3, 0.1))
+        p.clamp("x0")
+        if per_node:
+            p.add_nodal_load("x1", force=(0.0, 0.0, 5e-4))
+        else:
+            p.add_edge_force("x1", (0.0, 0.0, 1e-3))
+        p.add_probe("tip", "x1")
+        return p
+    m = mesh.rectangle(10.0, 1.0, 8, 1)
+    bad = check_problem_mesh(lambda mm: strip(mm, True), m)
+    assert abs(bad.changes[0]["load"] - 1 / 3) < 1e-12 and not bad.converged          # |2 - 3| / 3
+    assert "NOT comparable" in bad.report()
+    good = check_problem_mesh(lambda mm: strip(mm, False), m)
+    assert good.converged and good.changes[0]["load"] < 1e-12

@@ -50,11 +50,12 @@ class MeshCheck:
         runs (True) or its linear analysis (False).
     levels : list of dict
         Per mesh (0: the scenario's own): ``elements``, ``dofs``, ``energy`` [force x length;
-        None for the nonlinear runs],
+        None for the nonlinear runs], ``load`` (the loads' resultant force at lam [force]),
         ``u_max`` (largest displacement at the coarse nodes [length]), ``probes`` (name -> u).
     changes : list of dict
         Per pair of consecutive meshes: the relative changes ``energy`` |U_k / U_k+1 - 1| (None
-        for the nonlinear runs),
+        for the nonlinear runs), ``load`` (of the loads' resultant force at lam, on the reference
+        geometry: the refined surface's area, or a model loaded differently),
         ``displacement`` max |u_k - u_k+1| / max |u_k+1| at the coarse nodes, and per probe.
     tol : float
         The largest change accepted for the scenario's mesh.
@@ -87,8 +88,9 @@ class MeshCheck:
 
     @property
     def converged(self):
-        """True if that change is within ``tol``."""
-        return self.change <= self.tol
+        """True if that change is within ``tol`` (and the refined model is loaded alike: its
+        load's resultant within ``tol`` too)."""
+        return self.change <= self.tol and self.changes[0].get("load", 0.0) <= self.tol
 
     @property
     def energy_order(self):
@@ -122,6 +124,9 @@ class MeshCheck:
             pr = "".join(f", probe {p} {100 * v:.3g} %" for p, v in c["probes"].items())
             energy = "" if c["energy"] is None else f"energy {100 * c['energy']:.3g} %, "
             out.append(f"change {k} -> {k + 1}: {energy}displacements at the coarse nodes {100 * c['displacement']:.3g} %{pr}")
+            if c.get("load", 0.0) > 1e-6:
+                out.append(f"  the load's resultant force changes by {100 * c['load']:.3g} % (the refined surface's "
+                           "area, or a force per node on a line, which grows with its nodes: use an edge load)")
         if self.energy_order is not None:
             out.append(f"observed order of the energy's convergence: {self.energy_order:.2f} (2 in the asymptotic range)")
         for w in self.warnings:
@@ -132,6 +137,10 @@ class MeshCheck:
             out.append(f"verdict: the mesh's answer changes by {100 * self.change:.3g} % under refinement, "
                        f"within {100 * self.tol:g} % (its own error is larger than the change: about 4/3 of it "
                        "where the answer converges at second order)")
+        elif self.changes[0].get("load", 0.0) > self.tol:
+            out.append(f"verdict: NOT comparable: the refined model is loaded differently (the resultant force "
+                       f"changes by {100 * self.changes[0]['load']:.3g} %, more than {100 * self.tol:g} %): a force "
+                       "per node on a line grows with its nodes; give it as an edge load (a total along the line)")
         else:
             out.append(f"verdict: NOT converged: the mesh's answer changes by {100 * self.change:.3g} % under "
                        f"refinement (more than {100 * self.tol:g} %): a run on this mesh would be wrong by about as "
@@ -258,7 +267,7 @@ def check_problem_mesh(build, mesh, levels=1, tol=DEFAULT_TOL, lam=1.0, nonlinea
             res = linear_solve(p, lam_end=lam, **solve_options)
             energy = float(res.log[-1]["energy"])
         u = res.displacements()[:n0]
-        return _level(p, energy, u, res.final.probes), u, _said(caught)
+        return _level(p, energy, u, res.final.probes, lam), u, _said(caught)
     return _compare(out, n0, levels, level, "the linear analysis has no strain energy (nothing loads the shell): "
                                             "the mesh check needs a load or a prescribed motion")
 
@@ -311,7 +320,7 @@ def _linear_level(s, lam, n0, k):
     """(level dict, displacements at the n0 coarse nodes) of the linear analysis of ``s``."""
     res = linear_solve(s.problem, lam_end=lam, linear_solver=s.solver.get("linear_solver"))
     u = res.displacements()[:n0]
-    return _level(s.problem, float(res.log[-1]["energy"]), u, res.final.probes), u
+    return _level(s.problem, float(res.log[-1]["energy"]), u, res.final.probes, lam), u
 
 
 def _run_level(s, lam, n0, k):
@@ -325,12 +334,14 @@ def _run_level(s, lam, n0, k):
                                    getattr(exc, "result", None)) from exc
     u = (res.g[:, :3, 3] - s.mesh.X)[:n0]
     probes = {name: p["u"] for name, p in res.doc["steps"][-1]["probes"].items()}
-    return _level(s.problem, None, u, probes), u
+    return _level(s.problem, None, u, probes, lam), u
 
 
-def _level(problem, energy, u, probes):
+def _level(problem, energy, u, probes, lam):
+    f = problem.external(problem.mesh.g0, lam, tangent=False)[0]      # in the reference frames
+    load = np.einsum("nij,nj->i", problem.mesh.g0[:, :3, :3], f[:, :3])
     return dict(elements=problem.mesh.n_elements, dofs=int((~problem.constraint_mask()).sum()), energy=energy,
-                u_max=float(np.linalg.norm(u, axis=1).max()),
+                u_max=float(np.linalg.norm(u, axis=1).max()), load=load.tolist(),
                 probes={name: np.asarray(p["u"] if isinstance(p, dict) else p, float).tolist()
                         for name, p in probes.items()})
 
@@ -345,7 +356,9 @@ def _change(a, b, ua, ub):
         nb = float(np.linalg.norm(pb))
         probes[name] = float(np.linalg.norm(np.asarray(pa) - pb)) / nb if nb > 0 else 0.0
     energy = None if a["energy"] is None else abs(a["energy"] / b["energy"] - 1.0)
-    return dict(energy=energy, displacement=disp, probes=probes)
+    fb = np.asarray(b["load"])
+    load = float(np.linalg.norm(np.asarray(a["load"]) - fb) / np.linalg.norm(fb)) if np.any(fb) else 0.0
+    return dict(energy=energy, displacement=disp, probes=probes, load=load)
 
 
 def _level_scenario(scn, k, nonlinear):
