@@ -225,14 +225,14 @@ NOTES = """## Reading (issue 30's targets, per candidate)
 """
 
 
-MEMORY = """Memory: one process grows by about 3.5 GB per candidate (about 100 linear solves) on the
-Debian venv (MUMPS), which the kernel's OOM killer stopped at 24 GB during a first run (commit
-11e8e26's); hence one process per candidate. Measured apart: the roof 64x64, `Problem.solve_linear()` six times
-with the Problem dropped and `gc.collect()` between: RSS 305 -> 969 MB (about 130 MB a solve);
-with the NumPy-2 venv (SuperLU) 187 -> 248 MB over four. tracemalloc holds the arrays allocated
-at `core_se3/solvers/direct.py:287-289` (the ones `MumpsSolver` hands to PETSc's
-`createAIJWithArrays`) after the Problems are gone, while no `MumpsSolver` object is alive: the
-PETSc matrix and KSP (with MUMPS' factors) look never destroyed. Left to the lead (core_se3)."""
+MEMORY = """Memory: when these candidates ran, one process grew by about 3.5 GB per candidate
+(about 100 linear solves) on the Debian venv (MUMPS) -- the PETSc matrix, KSP and MUMPS factors
+outlived each MumpsSolver -- so the OOM killer stopped a first run at 24 GB; hence one process per
+candidate. Fixed in a21f131 (MumpsSolver.close and __del__ free them). Measured again on
+2026-12-04, the roof 64x64 `Problem.solve_linear()` 16 times with the Problem dropped and
+`gc.collect()` between: RSS 304 -> 536 MB after 7 and 576 MB from the 9th on (a plateau: the
+allocator's pools and the bounded cache of CSR row indices, solvers/linalg.py); NumPy-2 venv
+(SuperLU) 140 -> 417 ... 447 MB, flat from the 8th."""
 
 
 def _f(x, nd=3):

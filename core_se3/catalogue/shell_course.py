@@ -53,9 +53,10 @@ def _u(result, node, direction):
     return float(np.dot(result.final.g[node, :3, 3] - result.steps[0].g[node, :3, 3], direction))
 
 
-def scordelis_lo(n, h=0.25, material=None, element="default", **kw):
+def scordelis_lo(n, h=0.25, material=None, element="default", grade=None, **kw):
     """Quarter of the Scordelis-Lo roof (R 25, L 50, 40 deg, E 4.32e8, nu 0, self-weight 90 per
     unit area), n x n; measure: the downward deflection at the middle of the free edge.
+    ``grade``: the generator's (``{"x1": fraction}`` grades toward the free edge).
 
     Example
     -------
@@ -64,7 +65,7 @@ def scordelis_lo(n, h=0.25, material=None, element="default", **kw):
     0.97
     """
     R, L = 25.0, 50.0
-    m = G.cylinder_panel(R, L / 2, 0.0, np.radians(40.0), n, n)
+    m = G.cylinder_panel(R, L / 2, 0.0, np.radians(40.0), n, n, grade=grade)
     p = Problem(m, material or Material(4.32e8, 0.0, h), element=element, **kw)
     p.fix("x0", (0, 4, 5))                 # crown x = 0: u_x, rotations about y and z
     p.fix("y1", (1, 3, 5))                 # mid-span y = L/2: u_y, rotations about d1, d3
@@ -74,10 +75,11 @@ def scordelis_lo(n, h=0.25, material=None, element="default", **kw):
     return p, lambda res: -_u(res, A, (0.0, 0.0, 1.0))
 
 
-def scenario_doc(case, n, h):
+def scenario_doc(case, n, h, grade=None):
     """The Scordelis-Lo roof (``case`` 'scordelis-lo') or the pinched hemisphere
     ('pinched-hemisphere') of :func:`scordelis_lo` / :func:`pinched_hemisphere` as a scenario
-    document (``scenario.from_dict``), n x n, thickness h; its probe ``A`` is the measured node.
+    document (``scenario.from_dict``), n x n, thickness h; its probe ``A`` is the measured node;
+    ``grade``: the generator's ``[mesh] grade`` table.
 
     Example
     -------
@@ -90,10 +92,11 @@ def scenario_doc(case, n, h):
     >>> round(-float(u[2]) / scordelis_lo(4)[1](scordelis_lo(4)[0].solve_linear()), 12)
     1.0
     """
+    mesh = {"grade": dict(grade)} if grade else {}
     if case == "scordelis-lo":
         a = np.radians(40.0)
         return {"name": f"scordelis-lo-{n}", "mesh": {"generator": "cylinder_panel", "R": 25.0, "length": 25.0,
-                                                      "theta0": 0.0, "theta1": float(a), "nt": n, "nl": n},
+                                                      "theta0": 0.0, "theta1": float(a), "nt": n, "nl": n, **mesh},
                 "material": {"E": 4.32e8, "nu": 0.0, "h": h},
                 "supports": [{"type": "fix", "edge": "x0", "dofs": [0, 4, 5]},
                              {"type": "fix", "edge": "y1", "dofs": [1, 3, 5]},
@@ -103,7 +106,7 @@ def scenario_doc(case, n, h):
                 "probes": [{"name": "A", "edge": "A"}]}
     if case == "pinched-hemisphere":
         return {"name": f"pinched-hemisphere-{n}", "mesh": {"generator": "hemisphere_quarter", "R": 10.0,
-                                                            "hole_deg": 18.0, "nt": n, "nf": n},
+                                                            "hole_deg": 18.0, "nt": n, "nf": n, **mesh},
                 "material": {"E": 6.825e7, "nu": 0.3, "h": h},
                 "edges": {"A": {"nodes": {"near": [10.0, 0.0, 0.0]}}, "B": {"nodes": {"near": [0.0, 10.0, 0.0]}}},
                 "supports": [{"type": "fix", "edge": "y0", "dofs": [1, 3, 5]},

@@ -244,7 +244,7 @@ class DefaultElement(Element):
             self.Dz0[sl] = np.einsum("mij,mj->mi", _unpack(self.Dbar_packed[sl]), z0)  # Dbar z0
         self.area = self.j0.sum(axis=1)                                 # reference area per element
         self._Dbar = None
-        warn_if_coarse_thin_curved(self.coarse_curvature)
+        warn_if_coarse_thin_curved(self.coarse_curvature, np.sqrt(self.area))
 
     @property
     def Dbar(self):
@@ -422,10 +422,10 @@ class DefaultElement(Element):
 COARSE_THIN_CURVED = 2.0
 
 
-def warn_if_coarse_thin_curved(index):
+def warn_if_coarse_thin_curved(index, size=None):
     """An ElementWarning when an element's phi^3 L / h (``index``, (m,): phi its reference edges'
-    largest out-of-plane turn [rad], L = sqrt(area), h the law's thickness) exceeds
-    COARSE_THIN_CURVED.
+    largest out-of-plane turn [rad], L = sqrt(area) (``size``, (m,), optional), h the law's
+    thickness) exceeds COARSE_THIN_CURVED.
 
     There the four-node mesh of a membrane-dominated shell with free edges can be spuriously
     flexible: the edge tying leaves free-edge mechanisms of bending-order stiffness (docs/ELEMENTS.md,
@@ -435,7 +435,12 @@ def warn_if_coarse_thin_curved(index):
     b / l >= 1.16 fails and every cell with b / l <= 1.10 passes; benchmarks/results/roof_layer.md).  Measured on the Scordelis-Lo roof over its 64x64 value: 1.031 and
     1.033 at phi^3 L / h = 3.5 and 2.2, 1.005 and 1.019 at 1.4 and 1.8, 110 at 1800.  Bending-
     dominated shells (the pinched hemisphere: within 0.8 ... 1.02 up to 2.8e4) are not affected,
-    so it is a warning to check convergence, not an error.
+    so it is a warning to check convergence, not an error.  With ``size`` it also gives the
+    layer's width l = L index^(-1/4) (the smallest over the flagged elements) and the remedy that
+    keeps the element count: a mesh graded toward the free edges, the elements along them about
+    0.7 l wide, growing by at most 1.7 (``[mesh] grade``, mesh.generators.spacing; on the roof
+    sweep every such cell is in band, the coarsest cells need a steeper growth and are erratic:
+    benchmarks/results/roof_layer.md).
 
     Example
     -------
@@ -448,6 +453,14 @@ def warn_if_coarse_thin_curved(index):
     """
     worst = float(np.max(index, initial=0.0))
     if worst > COARSE_THIN_CURVED:
+        flagged = index > COARSE_THIN_CURVED
+        layer = "" if size is None else (
+            f" Along free edges such a shell bends in a layer about l = L (phi^3 L / h)^(-1/4) = "
+            f"{float(np.min(np.asarray(size)[flagged] * index[flagged] ** -0.25)):.3g} wide here; to resolve it "
+            f"without many more elements, grade the mesh toward its free edges so that the elements along them "
+            f"are about 0.7 l wide and their neighbours grow by at most 1.7 (`[mesh] grade = {{x1 = FRACTION}}` of "
+            f"a structured generator; fewer elements than that growth needs cannot carry the layer). A mesh so "
+            f"graded still raises this warning (it cannot tell free edges from supported ones): check-mesh decides.")
         warnings.warn(ElementWarning(
             f"coarse mesh of a thin curved shell: an element's edges turn by phi out of its plane with "
             f"phi^3 L / h = {worst:.3g} > {COARSE_THIN_CURVED:g} (L its size, h the thickness) on "
@@ -455,5 +468,5 @@ def warn_if_coarse_thin_curved(index):
             f"has free edges, four-node meshes this coarse can be spuriously flexible (the Scordelis-Lo roof "
             f"2x2 at R/h 1e4: 10.9 times its deflection); bending-dominated shells are not affected. Check by "
             f"refining: `core-se3 check-mesh SCENARIO.toml` (scenario.check_mesh) compares the linear answer with "
-            f"a refined mesh's (each halving of the element size divides phi^3 L by 16) -- docs/ELEMENTS.md"),
-            stacklevel=5)
+            f"a refined mesh's (each halving of the element size divides phi^3 L by 16) -- docs/ELEMENTS.md."
+            + layer), stacklevel=5)

@@ -5,7 +5,7 @@ returning a :class:`~core_se3.mesh.Mesh` plus one ``register_generator(Generator
 Example
 -------
 >>> sorted(GENERATORS)[:3], generator_kind("rectangle").keys()
-(['annulus', 'annulus_sector', 'cylinder_arch'], ('L', 'width', 'nx', 'ny', 'x0'))
+(['annulus', 'annulus_sector', 'cylinder_arch'], ('L', 'width', 'nx', 'ny', 'x0', 'grade'))
 >>> generator_kind("rectangle").build(L=1.0, width=1.0, nx=2, ny=1).n_elements
 2
 """
@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 from ..registry import REQUIRED, Kind, Param, Registry
-from .generators import annulus, cylinder_arch, cylinder_panel, hemisphere_quarter, rectangle
+from .generators import GRADE_EDGES, annulus, cylinder_arch, cylinder_panel, hemisphere_quarter, rectangle
 from .shapes import BACKENDS, annulus_sector, disk, polygon, rounded_rectangle, star
 
 __all__ = ["GeneratorKind", "GENERATORS", "register_generator", "generator_kind"]
@@ -99,29 +99,35 @@ def _real(name, doc="", default=REQUIRED):
 
 
 _SIZE = _pos("size", "target element size [length]")
+_GRADE = Param("grade", "table", None,
+               fields=tuple(Param(e, "number", None, lo=0.0, hi=1.0, lo_open=True, hi_open=True,
+                                  doc=f"fraction of the side spanned by the elements along `{e}`")
+                            for e in GRADE_EDGES),
+               doc="elements narrower toward named edges, e.g. {x1 = 0.05}: the elements along x1 span 5 % of "
+                   "the side, the others growing geometrically (resolves free-edge layers; docs/ELEMENTS.md)")
 _BACKEND = Param("backend", "string", "auto", choices=BACKENDS,
                  doc="structured, gmsh (needs gmsh) or auto (Gmsh where installed)")
 
 register_generator(GeneratorKind(
     "rectangle", (_pos("L", "length along x"), _pos("width", "along y"), _count("nx"), _count("ny"),
-                  _real("x0", "start of the strip along x", 0.0)),
+                  _real("x0", "start of the strip along x", 0.0), _GRADE),
     rectangle, doc="a flat L x width strip in the x-y plane", edges="`x0`, `x1` (ends), `y0`, `y1` (sides)",
     counts=("nx", "ny")))
 register_generator(GeneratorKind(
-    "cylinder_arch", (_pos("R", "radius"), _pos("angle", "opening [rad]"), _pos("width"), _count("nx"), _count("ny")),
+    "cylinder_arch", (_pos("R", "radius"), _pos("angle", "opening [rad]"), _pos("width"), _count("nx"), _count("ny"), _GRADE),
     cylinder_arch, doc="a circular arch of radius R", edges="as rectangle, along the arc", counts=("nx", "ny")))
 register_generator(GeneratorKind(
     "cylinder_panel", (_pos("R", "radius"), _pos("length"), _real("theta0", "[rad]"), _real("theta1", "[rad]"),
-                       _count("nt"), _count("nl")),
+                       _count("nt"), _count("nl"), _GRADE),
     cylinder_panel, doc="a cylindrical panel", edges="`x0`/`x1` at theta0/theta1, `y0`/`y1` at s = 0/length",
     counts=("nt", "nl")))
 register_generator(GeneratorKind(
-    "annulus", (_pos("r_in"), _pos("r_out"), _pos("angle", "[rad]"), _count("nr"), _count("nt")),
+    "annulus", (_pos("r_in"), _pos("r_out"), _pos("angle", "[rad]"), _count("nr"), _count("nt"), _GRADE),
     annulus, doc="a flat annular sector", edges="`x0` inner, `x1` outer, `y0`/`y1` the radial edges",
     counts=("nr", "nt")))
 register_generator(GeneratorKind(
     "hemisphere_quarter", (_pos("R", "radius"), _pos("hole_deg", "half-angle of the polar hole, in (0, 90) [deg]"),
-                           _count("nt"), _count("nf")),
+                           _count("nt"), _count("nf"), _GRADE),
     hemisphere_quarter, doc="a quarter hemisphere with a polar hole (d3 the outward normal)",
     edges="`x0` the hole, `x1` the equator, `y0`/`y1` on the planes y = 0 / x = 0", counts=("nt", "nf")))
 # outlines of soft robots (mesh/shapes.py): element size and backend instead of counts

@@ -3,8 +3,11 @@
 Every generator returns a :class:`~core_se3.mesh.Mesh` whose nodal frames have d3 = the surface
 normal.  Parametrised patches (``rectangle``, ``cylinder_arch``, ``cylinder_panel``, ``annulus``,
 ``hemisphere_quarter``) name their four boundary lines ``x0``, ``x1`` (first parameter at its
-start and end) and ``y0``, ``y1`` (second parameter); ``cross`` (a four-arm gripper) names its
-palm, arms and arm tips.
+start and end) and ``y0``, ``y1`` (second parameter), and take ``grade``: the elements along
+named lines made narrower, their widths growing geometrically away from them (:func:`spacing`),
+to resolve the layers in which a thin shell bends along a free or supported edge
+(docs/ELEMENTS.md, "The coarse thin roof"); ``cross`` (a four-arm gripper) names its palm, arms
+and arm tips.
 """
 from __future__ import annotations
 
@@ -15,7 +18,11 @@ import numpy as np
 from ..errors import MeshError
 from .core import Mesh, frames_from
 
-__all__ = ["rectangle", "cylinder_arch", "cylinder_panel", "annulus", "hemisphere_quarter", "cross"]
+__all__ = ["rectangle", "cylinder_arch", "cylinder_panel", "annulus", "hemisphere_quarter", "cross", "spacing",
+           "GRADE_EDGES"]
+
+#: the lines a parametric patch's ``grade`` may name: (parameter axis, end)
+GRADE_EDGES = {"x0": (0, 0), "x1": (0, 1), "y0": (1, 0), "y1": (1, 1)}
 
 
 def _counts(nx, ny):
@@ -27,6 +34,80 @@ def _counts(nx, ny):
     if nx < 1 or ny < 1:
         raise MeshError(f"mesh needs at least 1x1 elements, got {nx}x{ny}")
     return int(nx), int(ny)
+
+
+def spacing(lo, hi, n, first=None, last=None):
+    """n + 1 nodes from lo to hi: uniform, or graded toward either end.
+
+    With ``first`` (``last``) the first (last) element spans that fraction of hi - lo and the
+    widths grow geometrically away from that end, w_i = first q^i; with both, the smaller of the
+    two progressions, w_i = min(first q^i, last q^(n-1-i)), and one ratio q > 0 makes the widths
+    add up to hi - lo (found by bisection on log q: the sum grows with q).
+
+    Parameters
+    ----------
+    lo, hi : float
+        The ends (any order of magnitude; hi != lo).
+    n : int
+        Elements, >= 1.
+    first, last : float, optional
+        Fractions in (0, 1) of the whole span.
+
+    Returns
+    -------
+    ndarray (n + 1,)
+        Nodes, from lo to hi.
+
+    Raises
+    ------
+    MeshError
+        A fraction outside (0, 1), or no ratio q in [1e-6, 1e6] meets them (one element, two
+        elements graded from both ends, or fractions that add to 1 or more).
+
+    Example
+    -------
+    >>> x = spacing(0.0, 1.0, 4, last=0.1)
+    >>> round(float(x[-1] - x[-2]), 12), bool(np.all(np.diff(np.diff(x)) < 0))
+    (0.1, True)
+    """
+    given = {k: v for k, v in (("first", first), ("last", last)) if v is not None}
+    for k, v in given.items():
+        if isinstance(v, bool) or not (isinstance(v, numbers.Real) and 0.0 < v < 1.0):
+            raise MeshError(f"grading: the {k} element's fraction of its side must lie in (0, 1), got {v!r}")
+    if not given:
+        return np.linspace(lo, hi, n + 1)
+    i = np.arange(n)
+
+    def widths(logq):
+        from_first = first * np.exp(logq * i) if first is not None else np.inf
+        from_last = last * np.exp(logq * (n - 1 - i)) if last is not None else np.inf
+        return np.minimum(from_first, from_last)
+    a, b = np.log(1e-6), np.log(1e6)
+    if not widths(a).sum() <= 1.0 <= widths(b).sum():
+        raise MeshError(f"grading: no geometric growth of {n} element(s) meets first = {first}, last = {last} "
+                        f"(fractions of the side): give more elements or smaller fractions")
+    for _ in range(200):                       # bisection on log q to round-off
+        c = 0.5 * (a + b)
+        a, b = (c, b) if widths(c).sum() < 1.0 else (a, c)
+    w = widths(0.5 * (a + b))
+    x = lo + (hi - lo) * np.concatenate([[0.0], np.cumsum(w / w.sum())])
+    x[-1] = hi
+    return x
+
+
+def _axes(grade, a, b, na, nb):
+    """The two parameter grids of a patch on [a0, a1] x [b0, b1] with ``grade`` ({edge: fraction},
+    :data:`GRADE_EDGES`; None values ignored)."""
+    grade = {k: v for k, v in (grade or {}).items() if v is not None}
+    unknown = sorted(set(grade) - set(GRADE_EDGES))
+    if unknown:
+        raise MeshError(f"grade: unknown edge(s) {unknown}; a parametric patch grades toward "
+                        f"{', '.join(GRADE_EDGES)}")
+    ends = [[None, None], [None, None]]
+    for name, v in grade.items():
+        axis, end = GRADE_EDGES[name]
+        ends[axis][end] = v
+    return (spacing(a[0], a[1], na, *ends[0]), spacing(b[0], b[1], nb, *ends[1]))
 
 
 def _structured(nx, ny):
@@ -52,7 +133,7 @@ def _flat(X):
     return X, np.tile([1.0, 0, 0], (n, 1)), np.tile([0, 0, 1.0], (n, 1))
 
 
-def rectangle(L, width, nx, ny, x0=0.0):
+def rectangle(L, width, nx, ny, x0=0.0, grade=None):
     """Flat strip [x0, x0+L] x [-width/2, width/2] in the x-y plane, frames = identity.
 
     Parameters
@@ -63,6 +144,9 @@ def rectangle(L, width, nx, ny, x0=0.0):
         Elements along x and along y, >= 1.
     x0 : float, optional
         x of the edge ``x0`` [length].
+    grade : dict, optional
+        {edge: fraction}: the elements along that edge (``x0``, ``x1``, ``y0``, ``y1``) span that
+        fraction of the side across it, the others growing geometrically (:func:`spacing`).
 
     Returns
     -------
@@ -79,11 +163,11 @@ def rectangle(L, width, nx, ny, x0=0.0):
     if not (L > 0 and width > 0):
         raise MeshError(f"rectangle needs L > 0 and width > 0, got {L}, {width}")
     nx, ny = _counts(nx, ny)
-    return _patch(x0 + np.linspace(0.0, L, nx + 1), np.linspace(-width / 2, width / 2, ny + 1),
-                  lambda X, Y: _flat(np.stack([X, Y, np.zeros(X.size)], -1)))
+    xs, ys = _axes(grade, (0.0, L), (-width / 2, width / 2), nx, ny)
+    return _patch(x0 + xs, ys, lambda X, Y: _flat(np.stack([X, Y, np.zeros(X.size)], -1)))
 
 
-def cylinder_arch(R, angle, width, nx, ny):
+def cylinder_arch(R, angle, width, nx, ny, grade=None):
     """Cylindrical panel of radius R bent in the x-z plane over ``angle`` [rad].
 
     The arc starts at the origin with tangent +x; the centre of curvature is (0, 0, R); the
@@ -99,6 +183,9 @@ def cylinder_arch(R, angle, width, nx, ny):
         Width along y [length].
     nx, ny : int
         Elements along the arc and across the width.
+    grade : dict, optional
+        {edge: fraction}: the elements along that edge (``x0``, ``x1``, ``y0``, ``y1``) span that
+        fraction of the side across it, the others growing geometrically (:func:`spacing`).
 
     Returns
     -------
@@ -115,13 +202,13 @@ def cylinder_arch(R, angle, width, nx, ny):
     if not (R > 0 and angle > 0 and width > 0):
         raise MeshError("cylinder_arch needs R, angle, width > 0")
     nx, ny = _counts(nx, ny)
-    return _patch(np.linspace(0.0, angle, nx + 1), np.linspace(-width / 2, width / 2, ny + 1),
+    return _patch(*_axes(grade, (0.0, angle), (-width / 2, width / 2), nx, ny),
                   lambda S, Y: (np.stack([R * np.sin(S), Y, R * (1 - np.cos(S))], -1),
                                 np.stack([np.cos(S), 0 * S, np.sin(S)], -1),
                                 np.stack([-np.sin(S), 0 * S, np.cos(S)], -1)))
 
 
-def cylinder_panel(R, length, theta0, theta1, nt, nl):
+def cylinder_panel(R, length, theta0, theta1, nt, nl, grade=None):
     """Cylindrical panel phi0 = (R sin t, s, R cos t), t in [theta0, theta1], s in [0, length].
 
     The axis is the global y axis.  xi1 = t (edges 'x0' at theta0, 'x1' at theta1), xi2 = s
@@ -137,6 +224,9 @@ def cylinder_panel(R, length, theta0, theta1, nt, nl):
         Angular range [rad], theta1 > theta0 (measured from +z toward +x).
     nt, nl : int
         Elements around and along the axis.
+    grade : dict, optional
+        {edge: fraction}: the elements along that edge (``x0``, ``x1``, ``y0``, ``y1``) span that
+        fraction of the side across it, the others growing geometrically (:func:`spacing`).
 
     Returns
     -------
@@ -152,13 +242,13 @@ def cylinder_panel(R, length, theta0, theta1, nt, nl):
     if not (R > 0 and length > 0 and theta1 > theta0):
         raise MeshError("cylinder_panel needs R > 0, length > 0 and theta1 > theta0")
     nt, nl = _counts(nt, nl)
-    return _patch(np.linspace(theta0, theta1, nt + 1), np.linspace(0.0, length, nl + 1),
+    return _patch(*_axes(grade, (theta0, theta1), (0.0, length), nt, nl),
                   lambda T, S: (np.stack([R * np.sin(T), S, R * np.cos(T)], -1),
                                 np.stack([np.cos(T), 0 * T, -np.sin(T)], -1),
                                 np.stack([np.sin(T), 0 * T, np.cos(T)], -1)))
 
 
-def annulus(r_in, r_out, angle, nr, nt):
+def annulus(r_in, r_out, angle, nr, nt, grade=None):
     """Annular sector in the x-y plane, radius r_in..r_out, polar angle 0..angle (2 pi: slit).
 
     Parameter xi1 runs along the radius, xi2 around; edges 'x0' (inner), 'x1' (outer),
@@ -173,6 +263,9 @@ def annulus(r_in, r_out, angle, nr, nt):
         space but are not joined (a slit ring, Sze et al. 2004).
     nr, nt : int
         Elements along the radius and around.
+    grade : dict, optional
+        {edge: fraction}: the elements along that edge (``x0``, ``x1``, ``y0``, ``y1``) span that
+        fraction of the side across it, the others growing geometrically (:func:`spacing`).
 
     Returns
     -------
@@ -188,13 +281,13 @@ def annulus(r_in, r_out, angle, nr, nt):
     if not (0 < r_in < r_out and 0 < angle <= 2 * np.pi):
         raise MeshError("annulus needs 0 < r_in < r_out and 0 < angle <= 2 pi")
     nr, nt = _counts(nr, nt)
-    return _patch(np.linspace(r_in, r_out, nr + 1), np.linspace(0.0, angle, nt + 1),
+    return _patch(*_axes(grade, (r_in, r_out), (0.0, angle), nr, nt),
                   lambda Rr, T: (np.stack([Rr * np.cos(T), Rr * np.sin(T), 0 * T], -1),
                                  np.stack([np.cos(T), np.sin(T), 0 * T], -1),
                                  np.tile([0, 0, 1.0], (T.size, 1))))
 
 
-def hemisphere_quarter(R, hole_deg, nt, nf):
+def hemisphere_quarter(R, hole_deg, nt, nf, grade=None):
     """Quarter of a hemisphere of radius R with a polar hole of half-angle ``hole_deg`` [deg].
 
     phi0 = R (sin t cos f, sin t sin f, cos t), polar angle t in [t_hole, pi/2], azimuth f in
@@ -210,6 +303,9 @@ def hemisphere_quarter(R, hole_deg, nt, nf):
         Half-angle of the polar hole [deg], in (0, 90).
     nt, nf : int
         Elements along the meridian and around the quarter.
+    grade : dict, optional
+        {edge: fraction}: the elements along that edge (``x0``, ``x1``, ``y0``, ``y1``) span that
+        fraction of the side across it, the others growing geometrically (:func:`spacing`).
 
     Returns
     -------
@@ -229,8 +325,7 @@ def hemisphere_quarter(R, hole_deg, nt, nf):
     def surface(T, F):
         X = R * np.stack([np.sin(T) * np.cos(F), np.sin(T) * np.sin(F), np.cos(T)], -1)
         return X, np.stack([np.cos(T) * np.cos(F), np.cos(T) * np.sin(F), -np.sin(T)], -1), X / R
-    return _patch(np.linspace(np.radians(hole_deg), np.pi / 2, nt + 1), np.linspace(0.0, np.pi / 2, nf + 1),
-                  surface)
+    return _patch(*_axes(grade, (np.radians(hole_deg), np.pi / 2), (0.0, np.pi / 2), nt, nf), surface)
 
 
 ARMS = {"px": (0, 1.0), "mx": (0, -1.0), "py": (1, 1.0), "my": (1, -1.0)}
