@@ -14,7 +14,7 @@ import pytest
 
 from core_se3 import mesh, scenario
 from core_se3.catalogue import shell_course as sc
-from core_se3.errors import ElementWarning, MeshError, ScenarioError
+from core_se3.errors import ElementWarning, MeshError, MeshWarning, ScenarioError
 from core_se3.mesh.generators import spacing
 
 pytestmark = pytest.mark.core
@@ -81,6 +81,17 @@ def test_graded_generators_keep_their_surface_and_lines(make):
     assert along_y0[-1] == along_y0.min() and along_y0[0] == along_y0.max()
 
 
+def test_a_steep_grading_warns_and_a_mild_one_does_not():
+    """Growth 9 (2 elements, the last 0.1 of the side: widths 0.9, 0.1) warns; growth 1.66
+    (4 elements, the last 0.1) does not: the thin roof's graded cells are right up to 1.7 and
+    erratic beyond 2 (benchmarks/results/roof_layer.md)."""
+    with pytest.warns(MeshWarning, match="9-fold"):
+        spacing(0.0, 1.0, 2, last=0.1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", MeshWarning)
+        spacing(0.0, 1.0, 4, last=0.1)
+
+
 def test_unknown_edges_are_refused_by_name():
     with pytest.raises(MeshError, match=r"unknown edge\(s\) \['z1'\]"):
         mesh.rectangle(1.0, 1.0, 3, 3, grade={"z1": 0.1})
@@ -128,3 +139,23 @@ def test_the_warning_estimates_the_layer_width_and_names_grading():
     assert text and "grade" in text[0]
     estimate = float(text[0].split("l = L (phi^3 L / h)^(-1/4) = ")[1].split()[0])
     assert estimate == pytest.approx(R * rh ** -0.25 * (25.0 / ARC) ** 0.375, rel=0.01)
+
+
+def test_a_steep_grading_in_a_scenario_is_a_scenario_warning_and_strict_refuses_it(tmp_path):
+    """The command line loads scenarios with Python's warnings silenced and prints the
+    scenario's own: the generator's MeshWarning must become one of them (named by file and
+    key), and ``strict`` must refuse it."""
+    from core_se3.errors import ScenarioWarning
+    from core_se3.scenario import toml_writer
+    doc = sc.scenario_doc("scordelis-lo", 3, 0.25, grade={"x1": 0.1})        # growth 2.54
+    path = tmp_path / "roof.toml"
+    path.write_text(toml_writer.dumps(doc))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scn = scenario.load(path)
+    said = [w for w in scn.warnings if isinstance(w, ScenarioWarning) and "2.54-fold" in str(w)]
+    assert said and "roof.toml" in str(said[0]) and "mesh.grade" in str(said[0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(ScenarioError, match=r"mesh\.grade.*2\.54-fold"):
+            scenario.load(path, strict=True)

@@ -12,14 +12,18 @@ and arm tips.
 from __future__ import annotations
 
 import numbers
+import warnings
 
 import numpy as np
 
-from ..errors import MeshError
+from ..errors import MeshError, MeshWarning
 from .core import Mesh, frames_from
 
 __all__ = ["rectangle", "cylinder_arch", "cylinder_panel", "annulus", "hemisphere_quarter", "cross", "spacing",
-           "GRADE_EDGES"]
+           "GRADE_EDGES", "MAX_GROWTH"]
+
+#: the growth ratio of a graded side above which ``spacing`` warns (errors.MeshWarning)
+MAX_GROWTH = 2.0
 
 #: the lines a parametric patch's ``grade`` may name: (parameter axis, end)
 GRADE_EDGES = {"x0": (0, 0), "x1": (0, 1), "y0": (1, 0), "y1": (1, 1)}
@@ -64,6 +68,11 @@ def spacing(lo, hi, n, first=None, last=None):
         A fraction outside (0, 1), or no ratio q in [1e-6, 1e6] meets them (one element, two
         elements graded from both ends, or fractions that add to 1 or more).
 
+    Warns
+    -----
+    MeshWarning
+        Neighbouring widths differ by more than ``MAX_GROWTH`` (2).
+
     Example
     -------
     >>> x = spacing(0.0, 1.0, 4, last=0.1)
@@ -90,6 +99,13 @@ def spacing(lo, hi, n, first=None, last=None):
         c = 0.5 * (a + b)
         a, b = (c, b) if widths(c).sum() < 1.0 else (a, c)
     w = widths(0.5 * (a + b))
+    growth = float(np.max(np.maximum(w[1:] / w[:-1], w[:-1] / w[1:]), initial=1.0))
+    if growth > MAX_GROWTH:
+        warnings.warn(MeshWarning(
+            f"grading: neighbouring elements differ {growth:.3g}-fold in width ({n} element(s), first = {first}, "
+            f"last = {last}); above about {MAX_GROWTH:g} a coarse element next to a fine one cannot carry what the fine "
+            f"one resolves (the thin roof graded toward its free edge: erratic beyond 2, right up to 1.7). Give the "
+            f"side more elements or a larger fraction."), stacklevel=3)
     x = lo + (hi - lo) * np.concatenate([[0.0], np.cumsum(w / w.sum())])
     x[-1] = hi
     return x

@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import hashlib
 import os
+import warnings
 
 import numpy as np
 
 from .. import mesh as M
-from ..errors import CoreSE3Error, did_you_mean
+from ..errors import CoreSE3Error, MeshWarning, did_you_mean
 from ..io.files import check_input_file, without_contents
 from ..mesh.generator_kinds import GENERATORS
 from ..registry import Param, Section
@@ -116,11 +117,21 @@ def _unrefined_mesh(v, d, base_dir):
         kw["backend"] = M.resolve_backend(kw["backend"])
     _refuse_too_many(v, key, kind, kw)
     try:
-        mesh = kind.build(**kw)
+        # the generator's own warnings (a steep grading: errors.MeshWarning) become the
+        # scenario's, named by file and key, so that the command line prints them and --strict
+        # refuses them
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", MeshWarning)
+            mesh = kind.build(**kw)
     except CoreSE3Error as exc:
         v.fail(key, f"{gen}: {exc}")
     except ValueError as exc:                  # a user's generator
         v.fail(key, f"{gen}: {exc}")
+    for w in caught:
+        if issubclass(w.category, MeshWarning):
+            v.warn(join(key, "grade") if "grade" in kw else key, f"{gen}: {w.message}")
+        else:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     return mesh, dict(generator=gen, **kw), None
 
 
