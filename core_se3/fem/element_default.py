@@ -244,6 +244,8 @@ class DefaultElement(Element):
             self.Dz0[sl] = np.einsum("mij,mj->mi", _unpack(self.Dbar_packed[sl]), z0)  # Dbar z0
         self.area = self.j0.sum(axis=1)                                 # reference area per element
         self._Dbar = None
+        #: the free-edge layer's width the flagged elements imply (None: none flagged)
+        self.layer_width = free_edge_layer_width(self.coarse_curvature, np.sqrt(self.area))
         warn_if_coarse_thin_curved(self.coarse_curvature, np.sqrt(self.area))
 
     @property
@@ -422,6 +424,28 @@ class DefaultElement(Element):
 COARSE_THIN_CURVED = 2.0
 
 
+def free_edge_layer_width(index, size):
+    """The narrowest free-edge layer the flagged elements imply, or None if none is flagged.
+
+    An element's coarse-curvature index phi^3 L / h (``index``, (m,)) is (L / l)^4 with
+    l = R (h/R)^(1/4) the width of the layers in which a membrane-dominated shell bends along
+    its free edges and R = L / phi, so l = L index^(-1/4) (``size`` (m,) = L = sqrt(area)); on
+    the roof's elements, whose circumferential width b sets the layer, this is l (L / b)^(3/4),
+    about 1.14 l (docs/ELEMENTS.md, "Graded meshes").
+
+    Example
+    -------
+    >>> round(free_edge_layer_width(np.array([1.0, 16.0]), np.array([1.0, 2.0])), 12)
+    1.0
+    >>> free_edge_layer_width(np.array([1.0]), np.array([1.0])) is None
+    True
+    """
+    flagged = np.asarray(index) > COARSE_THIN_CURVED
+    if not flagged.any():
+        return None
+    return float(np.min(np.asarray(size)[flagged] * np.asarray(index)[flagged] ** -0.25))
+
+
 def warn_if_coarse_thin_curved(index, size=None):
     """An ElementWarning when an element's phi^3 L / h (``index``, (m,): phi its reference edges'
     largest out-of-plane turn [rad], L = sqrt(area) (``size``, (m,), optional), h the law's
@@ -453,10 +477,9 @@ def warn_if_coarse_thin_curved(index, size=None):
     """
     worst = float(np.max(index, initial=0.0))
     if worst > COARSE_THIN_CURVED:
-        flagged = index > COARSE_THIN_CURVED
         layer = "" if size is None else (
             f" Along free edges such a shell bends in a layer about l = L (phi^3 L / h)^(-1/4) = "
-            f"{float(np.min(np.asarray(size)[flagged] * index[flagged] ** -0.25)):.3g} wide here; to resolve it "
+            f"{free_edge_layer_width(index, size):.3g} wide here; to resolve it "
             f"without many more elements, grade the mesh toward its free edges so that the elements along them "
             f"are about 0.7 l wide and their neighbours grow by at most 1.7 (`[mesh] grade = {{x1 = FRACTION}}` of "
             f"a structured generator; fewer elements than that growth needs cannot carry the layer). A mesh so "

@@ -145,6 +145,12 @@ class MeshCheck:
             out.append(f"verdict: NOT converged: the mesh's answer changes by {100 * self.change:.3g} % under "
                        f"refinement (more than {100 * self.tol:g} %): a run on this mesh would be wrong by about as "
                        f"much; refine it ([mesh] refine = 1, or a finer mesh) and check again")
+            layer = self.levels[0].get("layer")
+            if layer is not None:
+                out.append(f"  where this is a thin curved shell with free edges, its free-edge layer is about "
+                           f"l = {layer:.3g} wide: a mesh graded toward those edges ([mesh] grade; elements about "
+                           f"0.7 l = {0.7 * layer:.3g} wide there, growing by at most 1.7) resolves it with fewer "
+                           f"elements than refining everywhere (docs/ELEMENTS.md, \"Graded meshes\")")
         return "\n".join(out)
 
 
@@ -342,6 +348,7 @@ def _level(problem, energy, u, probes, lam):
     load = np.einsum("nij,nj->i", problem.mesh.g0[:, :3, :3], f[:, :3])
     return dict(elements=problem.mesh.n_elements, dofs=int((~problem.constraint_mask()).sum()), energy=energy,
                 u_max=float(np.linalg.norm(u, axis=1).max()), load=load.tolist(),
+                layer=getattr(problem.element, "layer_width", None),
                 probes={name: np.asarray(p["u"] if isinstance(p, dict) else p, float).tolist()
                         for name, p in probes.items()})
 
