@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import lie
+from .. import mesh as M
 from ..errors import CoreSE3Error, ScenarioError, SingularSystemError
 from ..fem import RegionMaterial
 from ..fem.material_kinds import MATERIALS
@@ -114,6 +115,12 @@ def _add_support(v, prob, mesh, sp, key):
     by one and held by the other) names both entries."""
     kind = SUPPORTS[sp["type"]]
     nodes = selection(mesh, sp)
+    lineage = getattr(mesh, "_lineage", None)
+    if lineage is not None:
+        # [mesh] refine: the new node between two held nodes of an element edge is held too (a
+        # line listed out of order, several lines in one set, a closed loop: not one line in order)
+        held = M.carry_held(lineage, nodes[nodes < lineage[0].n_nodes])
+        nodes = np.concatenate([nodes, held[~np.isin(held, nodes)]])
     values = {k: sp[k] for k in kind.keys()}
     try:
         kind.build(prob, nodes, make_scale(sp["scale"]) if kind.moves else None, **values)
