@@ -236,8 +236,12 @@ def test_contact_is_left_out_and_said():
 
 
 def _cli(*args, cwd):
+    """``core-se3 check-mesh ARGS`` of this checkout (PYTHONPATH: an installed core_se3 may be another's)."""
+    import os
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    env = dict(os.environ, PYTHONPATH=root + os.pathsep + os.environ.get("PYTHONPATH", ""))
     return subprocess.run([sys.executable, "-m", "core_se3", "check-mesh", *args], capture_output=True, text=True,
-                          cwd=cwd)
+                          cwd=cwd, env=env)
 
 
 def _toml(doc):
@@ -256,6 +260,26 @@ def test_cli_exit_status_and_json(tmp_path):
     good = _cli("fine.toml", "--tol", "0.05", cwd=tmp_path)
     assert good.returncode == 0, good.stderr
     assert _cli("missing.toml", cwd=tmp_path).returncode == 2
+
+
+def test_the_json_of_the_check_does_not_overwrite_its_inputs(tmp_path):
+    """``--json`` naming the scenario file (or its mesh file) wrote the check over it, exit status 0
+    and the user's scenario gone.  It is refused (exit 2, naming the input) and nothing is written."""
+    m = mesh.rectangle(10.0, 1.0, 8, 1)
+    _msh_with_lines(tmp_path / "strip.msh", m, {"root": [m.edges["x0"]], "tip": [m.edges["x1"]]})
+    doc = {"mesh": {"file": "strip.msh"}, "material": {"E": 1.2e6, "nu": 0.0, "h": 0.1},
+           "supports": [{"type": "clamp", "edge": "root"}],
+           "loads": [{"type": "edge_force", "edge": "tip", "force": [0.0, 0.0, 1e-3]}]}
+    (tmp_path / "s.toml").write_text(_toml(doc))
+    before = {p: (tmp_path / p).read_bytes() for p in ("s.toml", "strip.msh")}
+    for path, what in (("s.toml", "the scenario file"), ("./s.toml", "the scenario file"),
+                       ("strip.msh", "its mesh file"), (str(tmp_path / "strip.msh"), "its mesh file")):
+        r = _cli("s.toml", "--json", path, cwd=tmp_path)
+        assert r.returncode == 2 and what in r.stderr and "overwrite" in r.stderr, (path, r.returncode, r.stderr)
+        assert {p: (tmp_path / p).read_bytes() for p in before} == before
+    ok = _cli("s.toml", "--json", "check.json", cwd=tmp_path)
+    assert ok.returncode == 0, ok.stderr
+    assert json.loads((tmp_path / "check.json").read_text())["converged"] is True
 
 
 # ------------------------------------------------------------------ the runs themselves -----
