@@ -116,12 +116,20 @@ def _add_support(v, prob, mesh, sp, key):
     kind = SUPPORTS[sp["type"]]
     nodes = selection(mesh, sp)
     lineage = getattr(mesh, "_lineage", None)
+    values = {k: sp[k] for k in kind.keys()}
     if lineage is not None:
+        coarse = nodes[nodes < lineage[0].n_nodes]
         # [mesh] refine: the new node between two held nodes of an element edge is held too (a
         # line listed out of order, several lines in one set, a closed loop: not one line in order)
-        held = M.carry_held(lineage, nodes[nodes < lineage[0].n_nodes])
+        held = M.carry_held(lineage, coarse)
         nodes = np.concatenate([nodes, held[~np.isin(held, nodes)]])
-    values = {k: sp[k] for k in kind.keys()}
+        # a rotation's default point, the nodes' centroid, is that of the unrefined mesh's nodes:
+        # the refined nodes of a curved or graded line would move it at every level
+        centroid = mesh.X[coarse].mean(0).tolist() if len(coarse) else None
+        if sp["type"] == "rotate" and values.get("point") is None:
+            values["point"] = centroid
+        if sp["type"] == "prescribed" and isinstance(values.get("rotate"), dict) and values["rotate"].get("point") is None:
+            values["rotate"] = dict(values["rotate"], point=centroid)
     try:
         kind.build(prob, nodes, make_scale(sp["scale"]) if kind.moves else None, **values)
     except CoreSE3Error as exc:
