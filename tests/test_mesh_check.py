@@ -492,6 +492,25 @@ def test_a_rotation_s_default_point_is_the_unrefined_nodes_centroid():
             assert np.linalg.norm(u - given) <= 1e-12 * np.linalg.norm(given), (refine, sup["type"], u, given)
 
 
+def test_a_design_target_s_node_id_is_the_unrefined_mesh_s():
+    """Node ids in a scenario are the unrefined mesh's, but a [design] target's ``node`` was
+    checked against the refined mesh: node 10 of a 4 x 1 strip (10 nodes, 0 ... 9) with refine = 1
+    was taken silently as the refined mesh's node 10 (a new midpoint, at x = 1.25, y = -0.5, that
+    the user cannot have numbered).  It is refused by key, as the ids of
+    supports, loads and probes are; the unrefined mesh's ids stay valid and the same points."""
+    def doc(node, refine):
+        return {"mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 4, "ny": 1, "refine": refine},
+                "material": {"E": 1.2e6, "nu": 0.3, "h": 0.1}, "supports": [{"type": "clamp", "edge": "x0"}],
+                "loads": [{"type": "edge_force", "edge": "x1", "force": [0.0, 0.0, 1e-3]}],
+                "design": {"variables": [{"type": "load", "load": 0}],
+                           "targets": [{"type": "position", "node": node, "value": [10.0, 0.5, 0.1]}]}}
+    with pytest.raises(ScenarioError, match=r"design.targets\[0\].node"):
+        quiet(doc(10, 1))
+    for refine in (0, 1):
+        s = quiet(doc(9, refine))
+        assert s.spec["design"]["targets"][0]["node"] == 9 and s.mesh.X[9].tolist() == [10.0, 0.5, 0.0]
+
+
 def test_a_python_build_that_supports_a_line_by_ids_is_refused():
     """build(mesh) clamping the root by ids holds the old nodes only on the refined mesh: a
     weaker support, refused by name (by a predicate of the positions it passes)."""
