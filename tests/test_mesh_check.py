@@ -551,3 +551,38 @@ def test_a_python_build_with_a_force_per_node_on_a_line_is_not_comparable():
     assert "NOT comparable" in bad.report()
     good = check_problem_mesh(lambda mm: strip(mm, False), m)
     assert good.converged and good.changes[0]["load"] < 1e-12
+
+
+def test_a_python_build_whose_couples_change_with_the_mesh_is_not_comparable():
+    """The comparability check looked at the loads' resultant force only, so a build whose
+    couples change with the refinement passed as a discretisation question: a moment per node
+    on the line x1 (2 nodes, refined 3: the moment grows by half) and a magnet on elements
+    [0, 1] by id (refined, elements 0, 1 are two children of element 0: a quarter of the
+    magnetised area) were 'NOT converged' with the advice to refine -- which can never converge.
+    The resultant moment (about the origin; couples and the forces' moments) is compared too:
+    'NOT comparable', and the change is the couple's exactly: |2 - 3| / 3 and |1 - 1/4| / (1/4).  Loads that follow
+    the mesh (an edge moment, a magnet on every element) stay comparable (change 0)."""
+    from core_se3 import Material, Problem
+    from core_se3.model import UniformField
+    from core_se3.scenario.mesh_check import check_problem_mesh
+
+    def strip(m, how):
+        p = Problem(m, Material(1.2e6, 0.3, 0.1))
+        p.clamp("x0")
+        if how == "per node":
+            p.add_nodal_load("x1", moment=(0.0, 5e-4, 0.0))
+        elif how == "edge":
+            p.add_edge_moment("x1", (0.0, 1e-3, 0.0))
+        else:
+            p.add_magnetic((1.0, 0.0, 0.0), UniformField((0.0, 0.0, 1e-3)), mu0=1.0,
+                           elements=[0, 1] if how == "by ids" else None)
+        p.add_probe("tip", "x1")
+        return p
+    m = mesh.rectangle(10.0, 1.0, 8, 1)
+    for how, change in (("per node", 1 / 3), ("by ids", 3.0)):
+        bad = check_problem_mesh(lambda mm: strip(mm, how), m)
+        assert abs(bad.changes[0]["load"] - change) < 1e-12 and not bad.converged, (how, bad.changes[0])
+        assert "NOT comparable" in bad.report()
+    for how in ("edge", "magnet"):
+        good = check_problem_mesh(lambda mm: strip(mm, how), m)
+        assert good.changes[0]["load"] < 1e-12 and "NOT comparable" not in good.report(), (how, good.changes[0])
