@@ -142,6 +142,18 @@ def test_a_force_per_node_is_not_multiplied_by_the_refinement():
     assert np.allclose(total(edge, 1), [0.0, 0.0, 1.0]) and np.allclose(total(edge, 2), [0.0, 0.0, 1.0])
 
 
+def test_a_force_per_node_on_new_nodes_only_is_refused_with_its_cause():
+    """A nodal load acts on the unrefined mesh's nodes of its selection; a box that holds new
+    nodes only (x = 5 on a 3 x 1 strip refined once) left it none, and the error was the core's
+    'node selection array([], dtype=int64) is empty'.  It now names the load, the cause and the fix."""
+    doc = {"mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 3, "ny": 1, "refine": 1},
+           "material": {"E": 1.2e6, "nu": 0.3, "h": 0.1}, "supports": [{"type": "clamp", "edge": "x0"}],
+           "edges": {"c": {"box": {"x": [5.0, 5.0]}}},
+           "loads": [{"type": "nodal", "edge": "c", "force": [0.0, 0.0, 1e-3]}]}
+    with pytest.raises(ScenarioError, match=r"\[loads\[0\]\]: a nodal load .* unrefined mesh's nodes .* has none"):
+        quiet(doc)
+
+
 def test_region_boxes_are_selected_on_the_unrefined_mesh():
     """A box that cuts through an element: the refined region is the descendants of the coarse
     region (element 0 of the 4 x 1 strip, centroid x = 1.25, is out of x >= 1.5; its right

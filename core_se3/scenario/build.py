@@ -68,6 +68,11 @@ def build_problem(v, spec, mesh, regions):
                 # a force per node acts on the unrefined mesh's nodes of its selection: [mesh]
                 # refine must not multiply it by the new nodes of a line
                 where = where[where < lineage[0].n_nodes]
+                if len(where) == 0:
+                    v.fail(key, f"a {ld['type']} load (a force per node) acts on the unrefined mesh's nodes of its "
+                                "selection, so that [mesh] refine does not multiply it, and this selection has "
+                                "none (its nodes are new nodes of the refinement): select nodes of the unrefined "
+                                "mesh, or give the finer mesh itself instead of refine")
         else:
             where = regions[ld["region"]] if ld.get("region") else None
         try:
