@@ -442,6 +442,13 @@ def test_a_support_holds_the_new_nodes_of_every_held_element_edge(tmp_path):
                "probes": [{"name": "t", "edge": "x1"}]}
         return quiet(doc)
     named = strip({"type": "clamp", "edge": "x0"})
+    # a region's nodes are its refined elements' exactly: elements 0 and 2 of the bottom row hold
+    # both ends of element 1's bottom edge, whose new node is not theirs and stays free
+    doc = {"mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 4, "ny": 2, "refine": 1},
+           "material": {"E": 1.2e6, "nu": 0.3, "h": 0.1}, "regions": {"r": {"elements": [0, 2]}},
+           "supports": [{"type": "clamp", "region": "r"}]}
+    s = quiet(doc)
+    assert sorted(s.problem.supports[0].nodes.tolist()) == np.unique(s.mesh.quads[s.regions["r"]]).tolist()
     for ids in ([0, 10, 5], [10, 0, 5]):
         s = strip({"type": "clamp", "nodes": ids})
         assert sorted(s.problem.supports[0].nodes.tolist()) == sorted(named.mesh.edges["x0"].tolist())

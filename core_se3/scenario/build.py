@@ -124,10 +124,12 @@ def _add_support(v, prob, mesh, sp, key):
     values = {k: sp[k] for k in kind.keys()}
     if lineage is not None:
         coarse = nodes[nodes < lineage[0].n_nodes]
-        # [mesh] refine: the new node between two held nodes of an element edge is held too (a
-        # line listed out of order, several lines in one set, a closed loop: not one line in order)
-        held = M.carry_held(lineage, coarse)
-        nodes = np.concatenate([nodes, held[~np.isin(held, nodes)]])
+        if "region" not in sp:
+            # [mesh] refine: the new node between two held nodes of an element edge is held too (a
+            # line listed out of order, several lines in one set, a closed loop: not one line in
+            # order); a region's nodes are its refined elements' already
+            held = M.carry_held(lineage, coarse)
+            nodes = np.concatenate([nodes, held[~np.isin(held, nodes)]])
         # a rotation's default point, the nodes' centroid, is that of the unrefined mesh's nodes:
         # the refined nodes of a curved or graded line would move it at every level
         centroid = mesh.X[coarse].mean(0).tolist() if len(coarse) else None
