@@ -389,8 +389,9 @@ def _level_scenario(scn, k, nonlinear):
         dropped = [name for name in ("design", "sweep") if doc.pop(name, None)]
     else:
         solver = {"control": "linear", "lam_end": scn.solver.get("lam_end", 1.0)}
-        if "linear_solver" in (doc.get("solver") or {}):
-            solver["linear_solver"] = doc["solver"]["linear_solver"]
+        for k in ("linear_solver", "element"):          # the element is the model's: check the user's own
+            if k in (doc.get("solver") or {}):
+                solver[k] = doc["solver"][k]
         doc["solver"] = solver
         dropped = [name for name in ("obstacles", "design", "sweep") if doc.pop(name, None)]
     with warnings.catch_warnings(record=True) as caught:
