@@ -52,7 +52,8 @@ class MeshCheck:
         Per mesh (0: the scenario's own): ``elements``, ``dofs``, ``energy`` [force x length;
         None for the nonlinear runs], ``load`` (the loads' resultant force at lam [force]),
         ``moment`` (their resultant moment about the coarse nodes' centroid [force x length]),
-        ``length`` (the mesh's extent), ``u_max`` (largest displacement at the coarse nodes [length]), ``probes`` (name -> u).
+        ``length`` (the mesh's extent), ``u_max`` (largest displacement at the coarse nodes
+        [length]), ``probes`` (name -> u).
     changes : list of dict
         Per pair of consecutive meshes: the relative changes ``energy`` |U_k / U_k+1 - 1| (None
         for the nonlinear runs), ``load`` (of the loads' resultant force at lam, on the reference
@@ -389,9 +390,9 @@ def _level_scenario(scn, k, nonlinear):
         dropped = [name for name in ("design", "sweep") if doc.pop(name, None)]
     else:
         solver = {"control": "linear", "lam_end": scn.solver.get("lam_end", 1.0)}
-        for k in ("linear_solver", "element"):          # the element is the model's: check the user's own
-            if k in (doc.get("solver") or {}):
-                solver[k] = doc["solver"][k]
+        for key in ("linear_solver", "element"):        # the element is the model's: check the user's own
+            if key in (doc.get("solver") or {}):
+                solver[key] = doc["solver"][key]
         doc["solver"] = solver
         dropped = [name for name in ("obstacles", "design", "sweep") if doc.pop(name, None)]
     with warnings.catch_warnings(record=True) as caught:
