@@ -290,7 +290,9 @@ def _check_held_lines(mesh, held, held_refined):
         e = int(np.flatnonzero(lost.any(1))[0])
         raise OptionError(f"build(mesh) holds nodes {E[e, 0]} and {E[e, 1]} (dofs {np.flatnonzero(lost[e]).tolist()}) "
                           f"but not the new node between them on the refined mesh: the refined problem would be "
-                          f"supported less; select supported lines by name or by a predicate of the positions, not by ids")
+                          f"supported less; select supported lines by a predicate of the positions, or by the name of "
+                          f"a set that is one line in its order (a set listed out of order, of several lines or a closed "
+                          f"loop keeps its old nodes only, as ids do)")
 
 
 def _check_options(levels, tol):
