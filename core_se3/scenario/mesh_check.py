@@ -215,10 +215,11 @@ def check_problem_mesh(build, mesh, levels=1, tol=DEFAULT_TOL, lam=1.0, nonlinea
     """:func:`check_mesh` for a Problem built in Python: ``build(mesh) -> Problem`` is called on
     ``mesh`` and on its uniform refinements (``mesh.refine``), and the answers compared.
 
-    ``build`` must select its nodes by name (the mesh's node sets and regions, which refinement
-    carries) or by a predicate of the positions: node ids below ``mesh.n_nodes`` keep theirs, but
-    a line given by ids does not get its new nodes (a support that holds both ends of an element
-    edge and not the new node between them is refused), and element ids change.
+    ``build`` must select its nodes by name (the mesh's regions, and node sets that are one line
+    in their order, which refinement carries) or by a predicate of the positions: node ids below
+    ``mesh.n_nodes`` keep theirs, but a line given by ids, or a named closed loop, does not get
+    its new nodes (a support that holds both ends of an element edge and not the new node between
+    them is refused), and element ids change.
 
     Parameters
     ----------
