@@ -142,6 +142,18 @@ def test_a_force_per_node_is_not_multiplied_by_the_refinement():
     assert np.allclose(total(edge, 1), [0.0, 0.0, 1.0]) and np.allclose(total(edge, 2), [0.0, 0.0, 1.0])
 
 
+def test_a_force_per_node_on_new_nodes_only_is_refused_with_its_cause():
+    """A nodal load acts on the unrefined mesh's nodes of its selection; a box that holds new
+    nodes only (x = 5 on a 3 x 1 strip refined once) left it none, and the error was the core's
+    'node selection array([], dtype=int64) is empty'.  It now names the load, the cause and the fix."""
+    doc = {"mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 3, "ny": 1, "refine": 1},
+           "material": {"E": 1.2e6, "nu": 0.3, "h": 0.1}, "supports": [{"type": "clamp", "edge": "x0"}],
+           "edges": {"c": {"box": {"x": [5.0, 5.0]}}},
+           "loads": [{"type": "nodal", "edge": "c", "force": [0.0, 0.0, 1e-3]}]}
+    with pytest.raises(ScenarioError, match=r"\[loads\[0\]\]: a nodal load .* unrefined mesh's nodes .* has none"):
+        quiet(doc)
+
+
 def test_region_boxes_are_selected_on_the_unrefined_mesh():
     """A box that cuts through an element: the refined region is the descendants of the coarse
     region (element 0 of the 4 x 1 strip, centroid x = 1.25, is out of x >= 1.5; its right
@@ -217,6 +229,24 @@ def test_a_converged_mesh_passes_and_two_levels_give_the_order():
     assert [lv["elements"] for lv in chk.levels] == [256, 1024, 4096]
 
 
+def test_the_check_solves_the_scenario_s_own_element():
+    """The linear check rebuilt [solver] with control, lam_end and linear_solver only, so a
+    scenario with element = "seed" was checked with the default element: a verdict on another
+    model -- the roof 4 x 4 at R/h 100 'converged' (4.2 %, energy 1135 -> 1185) while its own
+    element's energy is 183 -> 316 (51 %: NOT converged).  Its levels now use the scenario's
+    element: level 0 is the scenario's own linear analysis to round-off."""
+    doc = roof(4, 100.0)
+    doc["solver"] = {"element": "seed"}
+    scn = quiet(doc)
+    assert scn.problem.element_name == "seed"
+    chk = check_mesh(scn)
+    own = scn.problem.solve_linear().log[-1]["energy"]
+    default = quiet(roof(4, 100.0)).problem.solve_linear().log[-1]["energy"]
+    assert abs(default / own - 1) > 1e-3                        # the two elements differ here
+    assert abs(chk.levels[0]["energy"] / own - 1) < 1e-12
+    assert not chk.converged and chk.change > 0.5
+
+
 def test_check_options_and_unloaded_scenes_are_refused():
     scn = quiet(roof(2, 100.0))
     for kw in (dict(levels=0), dict(tol=0.0), dict(tol=float("nan"))):
@@ -236,8 +266,12 @@ def test_contact_is_left_out_and_said():
 
 
 def _cli(*args, cwd):
+    """``core-se3 check-mesh ARGS`` of this checkout (PYTHONPATH: an installed core_se3 may be another's)."""
+    import os
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    env = dict(os.environ, PYTHONPATH=root + os.pathsep + os.environ.get("PYTHONPATH", ""))
     return subprocess.run([sys.executable, "-m", "core_se3", "check-mesh", *args], capture_output=True, text=True,
-                          cwd=cwd)
+                          cwd=cwd, env=env)
 
 
 def _toml(doc):
@@ -256,6 +290,26 @@ def test_cli_exit_status_and_json(tmp_path):
     good = _cli("fine.toml", "--tol", "0.05", cwd=tmp_path)
     assert good.returncode == 0, good.stderr
     assert _cli("missing.toml", cwd=tmp_path).returncode == 2
+
+
+def test_the_json_of_the_check_does_not_overwrite_its_inputs(tmp_path):
+    """``--json`` naming the scenario file (or its mesh file) wrote the check over it, exit status 0
+    and the user's scenario gone.  It is refused (exit 2, naming the input) and nothing is written."""
+    m = mesh.rectangle(10.0, 1.0, 8, 1)
+    _msh_with_lines(tmp_path / "strip.msh", m, {"root": [m.edges["x0"]], "tip": [m.edges["x1"]]})
+    doc = {"mesh": {"file": "strip.msh"}, "material": {"E": 1.2e6, "nu": 0.0, "h": 0.1},
+           "supports": [{"type": "clamp", "edge": "root"}],
+           "loads": [{"type": "edge_force", "edge": "tip", "force": [0.0, 0.0, 1e-3]}]}
+    (tmp_path / "s.toml").write_text(_toml(doc))
+    before = {p: (tmp_path / p).read_bytes() for p in ("s.toml", "strip.msh")}
+    for path, what in (("s.toml", "the scenario file"), ("./s.toml", "the scenario file"),
+                       ("strip.msh", "its mesh file"), (str(tmp_path / "strip.msh"), "its mesh file")):
+        r = _cli("s.toml", "--json", path, cwd=tmp_path)
+        assert r.returncode == 2 and what in r.stderr and "overwrite" in r.stderr, (path, r.returncode, r.stderr)
+        assert {p: (tmp_path / p).read_bytes() for p in before} == before
+    ok = _cli("s.toml", "--json", "check.json", cwd=tmp_path)
+    assert ok.returncode == 0, ok.stderr
+    assert json.loads((tmp_path / "check.json").read_text())["converged"] is True
 
 
 # ------------------------------------------------------------------ the runs themselves -----
@@ -376,6 +430,124 @@ def test_node_ids_of_a_refined_scenario_carry_their_lines():
     assert abs(u / quiet(ref).problem.solve_linear().final.probes["t"]["u"][2] - 1) < 1e-10
 
 
+def _msh_with_lines(path, m, groups, closed=()):
+    """Write mesh ``m`` as a Gmsh 2.2 file with physical curves ``groups`` (name -> list of node
+    lines, each a polyline of node ids; a name in ``closed`` also joins each line's ends)."""
+    import meshio
+    cells, phys, names = [("quad", m.quads)], [np.full(m.n_elements, 1)], {"shell": np.array([1, 2])}
+    for tag, (name, lines) in enumerate(groups.items(), 2):
+        segs = np.concatenate([np.stack([ln[:-1], ln[1:]], 1) if name not in closed else
+                               np.stack([ln, np.roll(ln, -1)], 1) for ln in map(np.asarray, lines)])
+        cells.append(("line", segs))
+        phys.append(np.full(len(segs), tag))
+        names[name] = np.array([tag, 1])
+    meshio.write(str(path), meshio.Mesh(m.X, cells, cell_data={"gmsh:physical": phys, "gmsh:geometrical": phys},
+                                        field_data=names), file_format="gmsh22", binary=False)
+
+
+def test_a_support_holds_the_new_nodes_of_every_held_element_edge(tmp_path):
+    """[mesh] refine carried a support's node set only when it was one line in its order: a
+    clamp by ids listed out of order ([0, 10, 5] for x0 of a 4 x 2 strip), a Gmsh physical curve
+    of two lines (both ends of a strip) or a closed loop (a hole's edge) held the old nodes
+    only, leaving the new node between two held nodes free -- a weaker support that nothing
+    reported (the strip's tip deflection 1.0108 of the clamped strip's; 6 of the 10 end nodes
+    held).  Every new node on an element edge held at both ends is now held: the same model
+    as the named lines' to round-off, the held sets exactly the nodes on the held lines."""
+    def strip(sup, refine=1):
+        doc = {"mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 4, "ny": 2, "refine": refine},
+               "material": {"E": 1.2e6, "nu": 0.3, "h": 0.1}, "supports": [sup],
+               "loads": [{"type": "edge_force", "edge": "x1", "force": [0.0, 0.0, 1e-3]}],
+               "probes": [{"name": "t", "edge": "x1"}]}
+        return quiet(doc)
+    named = strip({"type": "clamp", "edge": "x0"})
+    # a region's nodes are its refined elements' exactly: elements 0 and 2 of the bottom row hold
+    # both ends of element 1's bottom edge, whose new node is not theirs and stays free
+    doc = {"mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 4, "ny": 2, "refine": 1},
+           "material": {"E": 1.2e6, "nu": 0.3, "h": 0.1}, "regions": {"r": {"elements": [0, 2]}},
+           "supports": [{"type": "clamp", "region": "r"}]}
+    s = quiet(doc)
+    assert sorted(s.problem.supports[0].nodes.tolist()) == np.unique(s.mesh.quads[s.regions["r"]]).tolist()
+    for ids in ([0, 10, 5], [10, 0, 5]):
+        s = strip({"type": "clamp", "nodes": ids})
+        assert sorted(s.problem.supports[0].nodes.tolist()) == sorted(named.mesh.edges["x0"].tolist())
+        u = s.problem.solve_linear().final.probes["t"]["u"][2]
+        assert abs(u / named.problem.solve_linear().final.probes["t"]["u"][2] - 1) < 1e-12
+    # a Gmsh physical curve of two lines: the strip's ends
+    m = mesh.rectangle(10.0, 1.0, 4, 2)
+    _msh_with_lines(tmp_path / "strip.msh", m, {"ends": [m.edges["x0"], m.edges["x1"]]})
+    for refine in (1, 2):
+        doc = {"mesh": {"file": "strip.msh", "refine": refine}, "material": {"E": 1.2e6, "nu": 0.3, "h": 0.1},
+               "supports": [{"type": "clamp", "edge": "ends"}], "loads": [{"type": "pressure", "p": 1e-4}]}
+        s = scenario.from_dict(doc, base_dir=str(tmp_path))
+        X = s.mesh.X
+        ends = np.flatnonzero((np.abs(X[:, 0]) < 1e-12) | (np.abs(X[:, 0] - 10.0) < 1e-12))
+        assert sorted(s.problem.supports[0].nodes.tolist()) == ends.tolist()
+    # a closed loop: the hole of a ring (the slit of the annulus closed)
+    a = mesh.annulus(1.0, 2.0, 2 * np.pi, 2, 8)
+    ids = np.arange(a.n_nodes).reshape(9, 3)
+    remap = np.arange(a.n_nodes)
+    remap[ids[-1]] = ids[0]
+    keep = np.unique(remap)
+    new = np.searchsorted(keep, remap)
+    ring = mesh.Mesh(a.g0[keep], new[a.quads], {}, shape=None)
+    hole = new[a.edges["x0"]][:-1]
+    _msh_with_lines(tmp_path / "ring.msh", ring, {"hole": [hole]}, closed=("hole",))
+    P = ring.X[hole]
+    Q = np.roll(P, -1, 0)
+    for refine in (1, 2):
+        doc = {"mesh": {"file": "ring.msh", "refine": refine}, "material": {"E": 1e4, "nu": 0.3, "h": 0.05},
+               "supports": [{"type": "clamp", "edge": "hole"}], "loads": [{"type": "pressure", "p": 1e-3}]}
+        s = scenario.from_dict(doc, base_dir=str(tmp_path))
+        X = s.mesh.X[:, None, :]                                      # distance of every node to the hole's sides
+        t = np.clip(np.einsum("nki,ki->nk", X - P, Q - P) / np.einsum("ki,ki->k", Q - P, Q - P), 0.0, 1.0)
+        d = np.linalg.norm(X - (P + t[..., None] * (Q - P)), axis=2).min(1)
+        on = np.flatnonzero(d < 1e-12)
+        assert len(on) == 8 * 2 ** refine
+        assert sorted(s.problem.supports[0].nodes.tolist()) == on.tolist()
+
+
+def test_a_rotation_s_default_point_is_the_unrefined_nodes_centroid():
+    """A rotate support's default point is its nodes' centroid.  On a curved line (the inner rim
+    of a quarter annulus, 2 elements around) the refined line's nodes moved it toward the arc
+    (0.569 -> 0.603 -> 0.620 along x = y), so every level solved another problem: the linear
+    displacement of the rim's far node changed by 13.7 % (refine 1) and 23.5 % (refine 2) against
+    the same model with the coarse centroid given.  It is now the unrefined mesh's nodes'
+    centroid: the same model at every level (to round-off), for rotate and prescribed alike."""
+    def rim(refine, sup):
+        doc = {"mesh": {"generator": "annulus", "r_in": 1.0, "r_out": 2.0, "angle": np.pi / 2, "nr": 4, "nt": 2,
+                        "refine": refine},
+               "material": {"E": 1e3, "nu": 0.3, "h": 0.05}, "supports": [sup, {"type": "clamp", "edge": "x1"}],
+               "probes": [{"name": "m", "nodes": [2]}], "solver": {"control": "linear"}}
+        return quiet(doc).problem.solve_linear().final.probes["m"]["u"]
+    m = mesh.annulus(1.0, 2.0, np.pi / 2, 4, 2)
+    c = m.X[m.edges["x0"]].mean(0).tolist()
+    rot = {"axis": [0.0, 0.0, 1.0], "angle": 0.05}
+    for refine in (1, 2):
+        given = rim(refine, dict(type="rotate", edge="x0", point=c, **rot))
+        for sup in (dict(type="rotate", edge="x0", **rot), dict(type="prescribed", edge="x0", rotate=rot)):
+            u = rim(refine, sup)
+            assert np.linalg.norm(u - given) <= 1e-12 * np.linalg.norm(given), (refine, sup["type"], u, given)
+
+
+def test_a_design_target_s_node_id_is_the_unrefined_mesh_s():
+    """Node ids in a scenario are the unrefined mesh's, but a [design] target's ``node`` was
+    checked against the refined mesh: node 10 of a 4 x 1 strip (10 nodes, 0 ... 9) with refine = 1
+    was taken silently as the refined mesh's node 10 (a new midpoint, at x = 1.25, y = -0.5, that
+    the user cannot have numbered).  It is refused by key, as the ids of
+    supports, loads and probes are; the unrefined mesh's ids stay valid and the same points."""
+    def doc(node, refine):
+        return {"mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 4, "ny": 1, "refine": refine},
+                "material": {"E": 1.2e6, "nu": 0.3, "h": 0.1}, "supports": [{"type": "clamp", "edge": "x0"}],
+                "loads": [{"type": "edge_force", "edge": "x1", "force": [0.0, 0.0, 1e-3]}],
+                "design": {"variables": [{"type": "load", "load": 0}],
+                           "targets": [{"type": "position", "node": node, "value": [10.0, 0.5, 0.1]}]}}
+    with pytest.raises(ScenarioError, match=r"design.targets\[0\].node"):
+        quiet(doc(10, 1))
+    for refine in (0, 1):
+        s = quiet(doc(9, refine))
+        assert s.spec["design"]["targets"][0]["node"] == 9 and s.mesh.X[9].tolist() == [10.0, 0.5, 0.0]
+
+
 def test_a_python_build_that_supports_a_line_by_ids_is_refused():
     """build(mesh) clamping the root by ids holds the old nodes only on the refined mesh: a
     weaker support, refused by name (by a predicate of the positions it passes)."""
@@ -392,6 +564,39 @@ def test_a_python_build_that_supports_a_line_by_ids_is_refused():
     with pytest.raises(OptionError, match="holds nodes 0 and 5"):
         check_problem_mesh(lambda mm: strip(mm, True), m)
     assert check_problem_mesh(lambda mm: strip(mm, False), m).levels[1]["elements"] == 16
+
+
+def test_a_python_build_on_a_named_closed_loop_is_told_the_truth(tmp_path):
+    """check_problem_mesh refuses a build whose support loses a held edge's new node, and said
+    'select supported lines by name' -- but a named closed loop (a Gmsh hole's edge) is what lost
+    it here: mesh.refine carries a named set only as one line in its order.  The message now
+    says so and points to a predicate of the positions, with which the same build passes."""
+    from core_se3 import Material, Problem
+    from core_se3.scenario.mesh_check import check_problem_mesh
+    a = mesh.annulus(1.0, 2.0, 2 * np.pi, 2, 8)
+    ids = np.arange(a.n_nodes).reshape(9, 3)
+    remap = np.arange(a.n_nodes)
+    remap[ids[-1]] = ids[0]
+    keep = np.unique(remap)
+    new = np.searchsorted(keep, remap)
+    ring = mesh.Mesh(a.g0[keep], new[a.quads], {}, shape=None)
+    _msh_with_lines(tmp_path / "ring.msh", ring, {"hole": [new[a.edges["x0"]][:-1]]}, closed=("hole",))
+    m = mesh.from_meshio(mesh.read_meshio(str(tmp_path / "ring.msh")))
+
+    def plate(mm, where):
+        p = Problem(mm, Material(1e4, 0.3, 0.05))
+        p.clamp(where)
+        p.add_pressure(1e-3)
+        return p
+    with pytest.raises(OptionError, match="closed loop"):
+        check_problem_mesh(lambda mm: plate(mm, "hole"), m)
+    inner = m.X[m.edges["hole"]]
+    P, Q = inner, np.roll(inner, -1, 0)
+
+    def on_hole(X):                                       # on a side of the coarse hole polygon
+        t = np.clip(np.einsum("nki,ki->nk", X[:, None] - P, Q - P) / np.einsum("ki,ki->k", Q - P, Q - P), 0, 1)
+        return np.linalg.norm(X[:, None] - (P + t[..., None] * (Q - P)), axis=2).min(1) < 1e-12
+    assert check_problem_mesh(lambda mm: plate(mm, on_hole), m).levels[1]["elements"] == 4 * m.n_elements
 
 
 def test_a_python_build_with_a_force_per_node_on_a_line_is_not_comparable():
@@ -416,3 +621,38 @@ def test_a_python_build_with_a_force_per_node_on_a_line_is_not_comparable():
     assert "NOT comparable" in bad.report()
     good = check_problem_mesh(lambda mm: strip(mm, False), m)
     assert good.converged and good.changes[0]["load"] < 1e-12
+
+
+def test_a_python_build_whose_couples_change_with_the_mesh_is_not_comparable():
+    """The comparability check looked at the loads' resultant force only, so a build whose
+    couples change with the refinement passed as a discretisation question: a moment per node
+    on the line x1 (2 nodes, refined 3: the moment grows by half) and a magnet on elements
+    [0, 1] by id (refined, elements 0, 1 are two children of element 0: a quarter of the
+    magnetised area) were 'NOT converged' with the advice to refine -- which can never converge.
+    The resultant moment (about the origin; couples and the forces' moments) is compared too:
+    'NOT comparable', and the change is the couple's exactly: |2 - 3| / 3 and |1 - 1/4| / (1/4).  Loads that follow
+    the mesh (an edge moment, a magnet on every element) stay comparable (change 0)."""
+    from core_se3 import Material, Problem
+    from core_se3.model import UniformField
+    from core_se3.scenario.mesh_check import check_problem_mesh
+
+    def strip(m, how):
+        p = Problem(m, Material(1.2e6, 0.3, 0.1))
+        p.clamp("x0")
+        if how == "per node":
+            p.add_nodal_load("x1", moment=(0.0, 5e-4, 0.0))
+        elif how == "edge":
+            p.add_edge_moment("x1", (0.0, 1e-3, 0.0))
+        else:
+            p.add_magnetic((1.0, 0.0, 0.0), UniformField((0.0, 0.0, 1e-3)), mu0=1.0,
+                           elements=[0, 1] if how == "by ids" else None)
+        p.add_probe("tip", "x1")
+        return p
+    m = mesh.rectangle(10.0, 1.0, 8, 1)
+    for how, change in (("per node", 1 / 3), ("by ids", 3.0)):
+        bad = check_problem_mesh(lambda mm: strip(mm, how), m)
+        assert abs(bad.changes[0]["load"] - change) < 1e-12 and not bad.converged, (how, bad.changes[0])
+        assert "NOT comparable" in bad.report()
+    for how in ("edge", "magnet"):
+        good = check_problem_mesh(lambda mm: strip(mm, how), m)
+        assert good.changes[0]["load"] < 1e-12 and "NOT comparable" not in good.report(), (how, good.changes[0])

@@ -93,6 +93,22 @@ def test_bad_or_missing_inputs_are_named():
         Material(1.0, 0.3, 0.1, shear_stabilisation=0.1).resultant_matrix([1.0, 0, 0], [0, 1.0, 0])
 
 
+
+def test_a_boolean_is_not_a_stabilisation_value():
+    """True is 1 to Python: shear_stabilisation=True ("on") made alpha 1, ten times Kratos' 0.1
+    (on elements of L/h 3 the shear modulus times 0.10 instead of 0.53), and
+    shear_stabilisation_floor=True the floor 1, which switches the stabilisation off -- both
+    accepted silently.  A boolean for any number of the law is a MaterialError naming the key."""
+    for key in ("shear_stabilisation", "shear_stabilisation_floor", "E", "h", "drilling"):
+        kw = dict(E=1.0, nu=0.3, h=0.1, shear_stabilisation=0.1)
+        kw[key] = True
+        with pytest.raises(MaterialError, match=rf"parameter {key} must be a finite number, got True \(a boolean\)"):
+            Material(**kw)
+    with pytest.raises(MaterialError, match="shear_stabilisation_floor"):
+        Material(1.0, 0.3, 0.1, shear_stabilisation=0.1, shear_stabilisation_floor=np.True_)
+    assert Material(1.0, 0.3, 0.1, shear_stabilisation=np.float32(0.1)).mesh_dependent      # numbers still pass
+
+
 def test_regions_may_differ_in_alpha():
     """A region material: each element's own alpha (the stabilised region's Dbar differs, the
     other is the plain law's to the bit)."""

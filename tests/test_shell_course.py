@@ -7,6 +7,7 @@ field to round-off; measured <= 3e-11, bar 1e-8); the standard cases carry discr
 whose measured size (benchmarks/results/obstacle_course.md) sets each bar.
 """
 import copy
+import warnings
 
 import numpy as np
 import pytest
@@ -208,6 +209,12 @@ def test_control_linear_in_a_scenario_is_timoshenko_and_solve_linear(tmp_path):
     ({"obstacles": [{"type": "half_space", "point": [0.0, 0.0, -0.2], "normal": [0.0, 0.0, 1.0]}]},
      "solver.control", "pass through the obstacles"),
     ({"solver": {"control": "linear", "load_factors": [0.5, 1.0]}}, "solver.load_factors", "one solve at lam_end"),
+    # a design optimised the nonlinear poses and wrote a linear scenario that misses its targets
+    # (tip target z = 3 on this strip under 0.5: the optimum's linear run gave 3.31)
+    ({"loads": [{"type": "edge_force", "edge": "x1", "force": [0.0, 0.0, 0.5]}],
+      "design": {"variables": [{"type": "load", "load": 0}],
+                 "targets": [{"type": "position", "probe": "tip", "value": [9.0, 0.0, 3.0], "components": [2]}]}},
+     "solver.control", "optimises the nonlinear equilibrium"),
 ])
 def test_control_linear_refuses_what_it_cannot_hold(change, key, match):
     from core_se3 import scenario
@@ -229,6 +236,36 @@ def test_control_linear_warns_of_large_rotations():
         scn = scenario.from_dict(doc)
     assert scn.warnings
 
+
+
+@pytest.mark.parametrize("support, warned", [
+    ({"type": "rotate", "edge": "x1", "axis": [0.0, 1.0, 0.0], "angle": 3.0}, "a rotation of 3 rad"),
+    ({"type": "prescribed", "edge": "x1", "rotate": {"axis": [0.0, 1.0, 0.0], "angle": -0.5}}, "a rotation of 0.5 rad"),
+    ({"type": "prescribed", "edge": "x1", "translate": [0.0, 0.0, 5.0]}, "a translation of 5"),
+    ({"type": "rotate", "edge": "x1", "axis": [0.0, 1.0, 0.0], "angle": 0.01}, None),
+    ({"type": "prescribed", "edge": "x1", "translate": [0.0, 0.0, 0.1]}, None),
+])
+def test_control_linear_warns_of_large_prescribed_motions(support, warned):
+    """Loads beyond a linear analysis were warned of, prescribed motions were not: the free end of
+    the strip turned by 3 rad (or lifted by half the strip's length) solved silently, its linear
+    answer (the middle node 3.8 above the strip for the 3 rad turn) far from any state of the
+    shell.  A rotation above 0.1 rad, or a translation above 0.1 of the mesh's extent, is now
+    warned of at the support's key (an error with strict); small motions are not."""
+    from core_se3 import scenario
+    doc = copy.deepcopy(_LINEAR_SCENARIO)
+    doc["loads"] = []
+    doc["supports"] = [doc["supports"][0], support]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        scn = scenario.from_dict(copy.deepcopy(doc))
+    said = [str(w.message) for w in caught if "linear analysis" in str(w.message)]
+    if warned is None:
+        assert not said and not scn.warnings
+        return
+    assert len(said) == 1 and "[supports[1]]" in said[0] and warned in said[0], said
+    from core_se3.errors import ScenarioError
+    with pytest.raises(ScenarioError, match=r"supports\[1\]"):
+        scenario.from_dict(copy.deepcopy(doc), strict=True)
 
 def _clamped_plate_centre_deflection(n, material, a=10.0):
     """Quarter of a clamped a x a plate under a central point load 1 (0.25 on the quarter)."""

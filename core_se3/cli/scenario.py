@@ -352,6 +352,14 @@ def mesh_check(args):
     from ..scenario.mesh_check import DEFAULT_TOL, check_mesh
     try:
         scn = _open(args)
+    except CoreSE3Error as exc:
+        return error_code(exc)
+    clash = _input_at(args.json, scn, args) if args.json else None
+    if clash is not None:
+        print(f"error: --json {args.json!r} is {clash}: the check would overwrite it; give another path "
+              "(e.g. check.json)", file=sys.stderr)
+        return 2
+    try:
         chk = check_mesh(scn, levels=args.levels, tol=DEFAULT_TOL if args.tol is None else args.tol,
                          nonlinear=args.nonlinear)
     except CoreSE3Error as exc:
@@ -366,6 +374,27 @@ def mesh_check(args):
         except OSError as exc:
             return output_error(exc, "the check is printed above")
     return 0 if chk.converged else 4
+
+
+def _input_at(path, scn, args):
+    """What input of the scenario lies at ``path`` (its file, mesh file, magnetisation table or
+    plugin), or None."""
+    import os
+    def at(p, base):
+        return os.path.realpath(p if os.path.isabs(p) else os.path.join(base, p))
+    mine = at(path, os.getcwd())
+    spec = scn.spec
+    inputs = [("the scenario file", at(args.scenario, os.getcwd()))]
+    if "file" in spec["mesh"]:
+        inputs.append(("its mesh file", at(spec["mesh"]["file"], scn.base_dir)))
+    inputs += [(f"the magnetisation table of magnets[{i}]", at(m["Br_table"]["path"], scn.base_dir))
+               for i, m in enumerate(spec["magnets"]) if "Br_table" in m]
+    inputs += [("a plugin file", at(p, scn.base_dir)) for p in spec.get("plugins", []) if p.endswith(".py")]
+    inputs += [("a --plugin file", at(p, os.getcwd())) for p in getattr(args, "plugin", None) or [] if p.endswith(".py")]
+    for what, p in inputs:
+        if p == mine or (os.path.exists(p) and os.path.exists(mine) and os.path.samefile(p, mine)):
+            return what
+    return None
 
 
 def warmup(args):

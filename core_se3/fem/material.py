@@ -144,6 +144,12 @@ class Material:
     def __post_init__(self):
         for name in ("E", "nu", "h", "shear_factor", "drilling", "shear_stabilisation", "shear_stabilisation_floor"):
             v = getattr(self, name)
+            if isinstance(v, (bool, np.bool_)):
+                # True is the number 1 to Python: shear_stabilisation=True would be alpha = 1 (ten times
+                # Kratos' 0.1), shear_stabilisation_floor=True the floor 1 (no stabilisation at all)
+                raise MaterialError(f"material parameter {name} must be a finite number, got {v!r} (a boolean): "
+                                    f"give its value" + (", e.g. shear_stabilisation=0.1" if name == "shear_stabilisation"
+                                                         else ""))
             if not isinstance(v, (int, float, np.floating, np.integer)) or not math.isfinite(v):
                 raise MaterialError(f"material parameter {name} must be a finite number, got {v!r}")
         if self.E <= 0:

@@ -18,7 +18,8 @@ The old nodes keep their ids (the new ones follow: edge midpoints, then centres)
 children are 4e ... 4e + 3, so after k refinements the descendants of element e are the ids
 4^k e ... 4^k (e + 1) - 1.  Named node sets that are lines (consecutive nodes joined by mesh
 edges) get the midpoints between their nodes, other node sets are kept; regions list the
-children of their elements.
+children of their elements.  ``carry_held`` gives the nodes a support of such a set holds: also
+every new node between two held nodes of an element edge, whatever the set's order.
 """
 from __future__ import annotations
 
@@ -28,7 +29,7 @@ from .. import lie
 from ..errors import MeshError
 from .core import Mesh
 
-__all__ = ["refine", "refine_levels", "carry_nodes", "geodesic_midpoints", "descendants"]
+__all__ = ["refine", "refine_levels", "carry_nodes", "carry_held", "geodesic_midpoints", "descendants"]
 
 
 def geodesic_midpoints(ga, gb):
@@ -122,6 +123,30 @@ def carry_nodes(meshes, ids):
     for m in meshes[:-1]:
         ids = _refined_line(m, ids)
     return ids
+
+
+def carry_held(meshes, ids):
+    """Node ids of the unrefined mesh ``meshes[0]`` on the last of ``refine_levels``' meshes as a
+    support holds them: with every new node on an element edge both of whose ends are held,
+    whatever the order of ``ids`` (a line listed out of order, several lines in one set, a
+    closed loop such as a hole's edge).  A support that held both ends of an edge and not the
+    node between them would be weaker on the refined mesh (``carry_nodes`` keeps a set that is
+    not one line in its order as it is).
+
+    Example
+    -------
+    >>> from core_se3 import mesh
+    >>> ms = refine_levels(mesh.rectangle(2.0, 1.0, 2, 1), 1)
+    >>> carry_held(ms, [5, 2]).tolist(), carry_held(ms, [0, 2, 3, 5]).tolist()   # a line; two lines
+    ([2, 5, 10], [0, 2, 3, 5, 7, 10])
+    """
+    held = np.unique(np.asarray(ids, np.int64))
+    for m in meshes[:-1]:
+        inset = np.zeros(m.n_nodes, bool)
+        inset[held] = True
+        both = np.flatnonzero(inset[m.edge_nodes].all(1))          # edges held at both ends
+        held = np.concatenate([held, m.n_nodes + both])             # their midpoints (sorted ids)
+    return held
 
 
 def _refine_once(mesh):

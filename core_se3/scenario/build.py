@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import lie
+from .. import mesh as M
 from ..errors import CoreSE3Error, ScenarioError, SingularSystemError
 from ..fem import RegionMaterial
 from ..fem.material_kinds import MATERIALS
@@ -67,6 +68,11 @@ def build_problem(v, spec, mesh, regions):
                 # a force per node acts on the unrefined mesh's nodes of its selection: [mesh]
                 # refine must not multiply it by the new nodes of a line
                 where = where[where < lineage[0].n_nodes]
+                if len(where) == 0:
+                    v.fail(key, f"a {ld['type']} load (a force per node) acts on the unrefined mesh's nodes of its "
+                                "selection, so that [mesh] refine does not multiply it, and this selection has "
+                                "none (its nodes are new nodes of the refinement): select nodes of the unrefined "
+                                "mesh, or give the finer mesh itself instead of refine")
         else:
             where = regions[ld["region"]] if ld.get("region") else None
         try:
@@ -114,7 +120,23 @@ def _add_support(v, prob, mesh, sp, key):
     by one and held by the other) names both entries."""
     kind = SUPPORTS[sp["type"]]
     nodes = selection(mesh, sp)
+    lineage = getattr(mesh, "_lineage", None)
     values = {k: sp[k] for k in kind.keys()}
+    if lineage is not None:
+        coarse = nodes[nodes < lineage[0].n_nodes]
+        if "region" not in sp:
+            # [mesh] refine: the new node between two held nodes of an element edge is held too (a
+            # line listed out of order, several lines in one set, a closed loop: not one line in
+            # order); a region's nodes are its refined elements' already
+            held = M.carry_held(lineage, coarse)
+            nodes = np.concatenate([nodes, held[~np.isin(held, nodes)]])
+        # a rotation's default point, the nodes' centroid, is that of the unrefined mesh's nodes:
+        # the refined nodes of a curved or graded line would move it at every level
+        centroid = mesh.X[coarse].mean(0).tolist() if len(coarse) else None
+        if sp["type"] == "rotate" and values.get("point") is None:
+            values["point"] = centroid
+        if sp["type"] == "prescribed" and isinstance(values.get("rotate"), dict) and values["rotate"].get("point") is None:
+            values["rotate"] = dict(values["rotate"], point=centroid)
     try:
         kind.build(prob, nodes, make_scale(sp["scale"]) if kind.moves else None, **values)
     except CoreSE3Error as exc:

@@ -146,7 +146,9 @@ def _target(v, t, key, names, mesh):
         tg["probe"] = v.param(t, key, TARGET.param("probe"))
         _refs(v, dict(probe=tg["probe"]), key, names)
     else:
-        tg["node"] = v.integer(t, "node", key, lo=0, hi=mesh.n_nodes - 1)
+        # a node id of the unrefined mesh, as everywhere in the file (its nodes keep their ids)
+        base = getattr(mesh, "_lineage", [mesh])[0]
+        tg["node"] = v.integer(t, "node", key, lo=0, hi=base.n_nodes - 1)
     tg.update(v.params(t, key, kind.params))
     v.kind_check(kind, tg, t, key)
     if "components" in t:

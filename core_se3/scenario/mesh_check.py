@@ -51,12 +51,17 @@ class MeshCheck:
     levels : list of dict
         Per mesh (0: the scenario's own): ``elements``, ``dofs``, ``energy`` [force x length;
         None for the nonlinear runs], ``load`` (the loads' resultant force at lam [force]),
-        ``u_max`` (largest displacement at the coarse nodes [length]), ``probes`` (name -> u).
+        ``moment`` (their resultant moment about the coarse nodes' centroid [force x length]),
+        ``length`` (the mesh's extent), ``u_max`` (largest displacement at the coarse nodes
+        [length]), ``probes`` (name -> u), ``layer`` (the free-edge layer's width that the
+        default element's flagged coarse thin curved elements imply [length], else None).
     changes : list of dict
         Per pair of consecutive meshes: the relative changes ``energy`` |U_k / U_k+1 - 1| (None
         for the nonlinear runs), ``load`` (of the loads' resultant force at lam, on the reference
         geometry: the refined surface's area, or a model loaded differently),
-        ``displacement`` max |u_k - u_k+1| / max |u_k+1| at the coarse nodes, and per probe.
+        ``displacement`` max |u_k - u_k+1| / max |u_k+1| at the coarse nodes, and per probe;
+        ``load`` is also the change of the resultant moment about the coarse nodes' centroid
+        (``moment`` of the levels), over its size plus the force's times the mesh's extent.
     tol : float
         The largest change accepted for the scenario's mesh.
     dropped : list of str
@@ -125,8 +130,9 @@ class MeshCheck:
             energy = "" if c["energy"] is None else f"energy {100 * c['energy']:.3g} %, "
             out.append(f"change {k} -> {k + 1}: {energy}displacements at the coarse nodes {100 * c['displacement']:.3g} %{pr}")
             if c.get("load", 0.0) > 1e-6:
-                out.append(f"  the load's resultant force changes by {100 * c['load']:.3g} % (the refined surface's "
-                           "area, or a force per node on a line, which grows with its nodes: use an edge load)")
+                out.append(f"  the loads' resultant force or moment changes by {100 * c['load']:.3g} % (the refined "
+                           "surface's area, or a force or moment per node on a line, which grows with its nodes: use "
+                           "an edge load; or elements selected by id, which name other elements on a refined mesh)")
         if self.energy_order is not None:
             out.append(f"observed order of the energy's convergence: {self.energy_order:.2f} (2 in the asymptotic range)")
         for w in self.warnings:
@@ -138,9 +144,11 @@ class MeshCheck:
                        f"within {100 * self.tol:g} % (its own error is larger than the change: about 4/3 of it "
                        "where the answer converges at second order)")
         elif self.changes[0].get("load", 0.0) > self.tol:
-            out.append(f"verdict: NOT comparable: the refined model is loaded differently (the resultant force "
-                       f"changes by {100 * self.changes[0]['load']:.3g} %, more than {100 * self.tol:g} %): a force "
-                       "per node on a line grows with its nodes; give it as an edge load (a total along the line)")
+            out.append(f"verdict: NOT comparable: the refined model is loaded differently (the resultant force or "
+                       f"moment changes by {100 * self.changes[0]['load']:.3g} %, more than {100 * self.tol:g} %): a "
+                       "force or moment per node on a line grows with its nodes, give it as an edge load (a total "
+                       "along the line); elements selected by id are other elements on a refined mesh, select "
+                       "them by region or a predicate")
         else:
             out.append(f"verdict: NOT converged: the mesh's answer changes by {100 * self.change:.3g} % under "
                        f"refinement (more than {100 * self.tol:g} %): a run on this mesh would be wrong by about as "
@@ -214,10 +222,11 @@ def check_problem_mesh(build, mesh, levels=1, tol=DEFAULT_TOL, lam=1.0, nonlinea
     """:func:`check_mesh` for a Problem built in Python: ``build(mesh) -> Problem`` is called on
     ``mesh`` and on its uniform refinements (``mesh.refine``), and the answers compared.
 
-    ``build`` must select its nodes by name (the mesh's node sets and regions, which refinement
-    carries) or by a predicate of the positions: node ids below ``mesh.n_nodes`` keep theirs, but
-    a line given by ids does not get its new nodes (a support that holds both ends of an element
-    edge and not the new node between them is refused), and element ids change.
+    ``build`` must select its nodes by name (the mesh's regions, and node sets that are one line
+    in their order, which refinement carries) or by a predicate of the positions: node ids below
+    ``mesh.n_nodes`` keep theirs, but a line given by ids, or a named closed loop, does not get
+    its new nodes (a support that holds both ends of an element edge and not the new node between
+    them is refused), and element ids change.
 
     Parameters
     ----------
@@ -289,7 +298,9 @@ def _check_held_lines(mesh, held, held_refined):
         e = int(np.flatnonzero(lost.any(1))[0])
         raise OptionError(f"build(mesh) holds nodes {E[e, 0]} and {E[e, 1]} (dofs {np.flatnonzero(lost[e]).tolist()}) "
                           f"but not the new node between them on the refined mesh: the refined problem would be "
-                          f"supported less; select supported lines by name or by a predicate of the positions, not by ids")
+                          f"supported less; select supported lines by a predicate of the positions, or by the name of "
+                          f"a set that is one line in its order (a set listed out of order, of several lines or a closed "
+                          f"loop keeps its old nodes only, as ids do)")
 
 
 def _check_options(levels, tol):
@@ -344,11 +355,17 @@ def _run_level(s, lam, n0, k):
 
 
 def _level(problem, energy, u, probes, lam):
-    f = problem.external(problem.mesh.g0, lam, tangent=False)[0]      # in the reference frames
-    load = np.einsum("nij,nj->i", problem.mesh.g0[:, :3, :3], f[:, :3])
+    g0 = problem.mesh.g0
+    f = problem.external(g0, lam, tangent=False)[0]                   # in the reference frames
+    F = np.einsum("nij,nj->ni", g0[:, :3, :3], f[:, :3])              # lab forces and couples
+    C = np.einsum("nij,nj->ni", g0[:, :3, :3], f[:, 3:])
+    # the resultant moment about the coarse nodes' centroid (the same point at every level):
+    # couples that change with the mesh (a moment per node, a magnet on elements by id) too
+    x = g0[:, :3, 3] - g0[:len(u), :3, 3].mean(0)
+    moment = (np.cross(x, F) + C).sum(0)
     return dict(elements=problem.mesh.n_elements, dofs=int((~problem.constraint_mask()).sum()), energy=energy,
-                u_max=float(np.linalg.norm(u, axis=1).max()), load=load.tolist(),
-                layer=getattr(problem.element, "layer_width", None),
+                u_max=float(np.linalg.norm(u, axis=1).max()), load=F.sum(0).tolist(), moment=moment.tolist(),
+                length=problem.mesh.length_scale, layer=getattr(problem.element, "layer_width", None),
                 probes={name: np.asarray(p["u"] if isinstance(p, dict) else p, float).tolist()
                         for name, p in probes.items()})
 
@@ -365,6 +382,10 @@ def _change(a, b, ua, ub):
     energy = None if a["energy"] is None else abs(a["energy"] / b["energy"] - 1.0)
     fb = np.asarray(b["load"])
     load = float(np.linalg.norm(np.asarray(a["load"]) - fb) / np.linalg.norm(fb)) if np.any(fb) else 0.0
+    mb = np.asarray(b["moment"])
+    scale = float(np.linalg.norm(mb) + np.linalg.norm(fb) * b["length"])   # a force's moment over the mesh
+    if scale > 0:
+        load = max(load, float(np.linalg.norm(np.asarray(a["moment"]) - mb)) / scale)
     return dict(energy=energy, displacement=disp, probes=probes, load=load)
 
 
@@ -379,8 +400,9 @@ def _level_scenario(scn, k, nonlinear):
         dropped = [name for name in ("design", "sweep") if doc.pop(name, None)]
     else:
         solver = {"control": "linear", "lam_end": scn.solver.get("lam_end", 1.0)}
-        if "linear_solver" in (doc.get("solver") or {}):
-            solver["linear_solver"] = doc["solver"]["linear_solver"]
+        for key in ("linear_solver", "element"):        # the element is the model's: check the user's own
+            if key in (doc.get("solver") or {}):
+                solver[key] = doc["solver"][key]
         doc["solver"] = solver
         dropped = [name for name in ("obstacles", "design", "sweep") if doc.pop(name, None)]
     with warnings.catch_warnings(record=True) as caught:

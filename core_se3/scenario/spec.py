@@ -334,6 +334,11 @@ def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario", strict=
     spec["output"] = output_section(v, doc)
     design = design_section(v, doc, spec, mesh, regions)
     if design is not None:
+        if spec["solver"]["control"] == "linear":
+            v.fail("solver.control", 'a [design] optimises the nonlinear equilibrium of its poses (load stepping), '
+                                     'so control = "linear" would hold only for the optimised scenario\'s own run, '
+                                     'which would then miss the targets: use control = "load" with [design], or '
+                                     "remove [design] for a linear analysis")
         spec["design"] = design
     spec["sweep"] = sweep_section(v, doc)
     problem = build_problem(v, spec, mesh, regions)

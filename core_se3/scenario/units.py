@@ -362,5 +362,26 @@ def plausibility(v, scn):
                               f"{lam1:g}; span L = {n['span']:.4g}) is above {FIRST_STEP_MAX:g}: the first step "
                               "bends the shell through many turns; check the units of the load (and mu0), or "
                               "take more or smaller steps")
+    if scn.solver["control"] == "linear":
+        _linear_motions(v, spec, scn.solver["lam_end"], scn.mesh.length_scale)
     return None
+
+
+def _linear_motions(v, spec, lam, span):
+    """Warn of a prescribed motion (rotate, prescribed) beyond a linear analysis at ``lam``: a
+    rotation above LINEAR_MAX rad, or a translation above LINEAR_MAX of the mesh's extent (the
+    linear answer holds the support's targets exactly and the shell between them to first order:
+    a supported end turned by 3 rad is not a linear problem)."""
+    for i, sp in enumerate(spec["supports"]):
+        if sp["type"] not in ("rotate", "prescribed"):
+            continue
+        s = abs(float(make_scale(sp["scale"])(lam)))
+        rot = sp if sp["type"] == "rotate" else (sp.get("rotate") or {})
+        angle = abs(float(rot.get("angle", 0.0))) * s
+        move = float(np.linalg.norm(sp.get("translate") or [0.0, 0.0, 0.0])) * s
+        if angle > LINEAR_MAX or move > LINEAR_MAX * span:
+            what = (f"a rotation of {angle:.3g} rad" if angle > LINEAR_MAX else
+                    f"a translation of {move:.3g} ({move / span:.3g} of the mesh's extent {span:.4g})")
+            v.warn(f"supports[{i}]", f"prescribes {what} at lam_end = {lam:g}, above {LINEAR_MAX:g}: beyond the "
+                                     'small rotations of a linear analysis; solve with control = "load"')
 
