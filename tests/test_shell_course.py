@@ -238,6 +238,20 @@ def test_control_linear_warns_of_large_rotations():
 
 
 
+def test_control_linear_says_that_it_does_not_use_steps():
+    """A linear analysis is one solve at lam_end: ``steps = 4`` (intermediate states a user may
+    expect in the outputs) was silently not used; it is warned of at its key, steps = 1 is not."""
+    from core_se3 import scenario
+    doc = copy.deepcopy(_LINEAR_SCENARIO)
+    for steps, said in ((4, True), (1, False)):
+        doc["solver"] = dict(doc.get("solver") or {}, control="linear", steps=steps)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            scn = scenario.from_dict(copy.deepcopy(doc))
+        hits = [w for w in scn.warnings if "steps = 4 is not used" in str(w) and "solver.steps" in str(w)]
+        assert bool(hits) == said
+
+
 @pytest.mark.parametrize("support, warned", [
     ({"type": "rotate", "edge": "x1", "axis": [0.0, 1.0, 0.0], "angle": 3.0}, "a rotation of 3 rad"),
     ({"type": "prescribed", "edge": "x1", "rotate": {"axis": [0.0, 1.0, 0.0], "angle": -0.5}}, "a rotation of 0.5 rad"),
@@ -266,6 +280,7 @@ def test_control_linear_warns_of_large_prescribed_motions(support, warned):
     from core_se3.errors import ScenarioError
     with pytest.raises(ScenarioError, match=r"supports\[1\]"):
         scenario.from_dict(copy.deepcopy(doc), strict=True)
+
 
 def _clamped_plate_centre_deflection(n, material, a=10.0):
     """Quarter of a clamped a x a plate under a central point load 1 (0.25 on the quarter)."""

@@ -261,6 +261,10 @@ def solver_section(v, doc):
         if "load_factors" in d and s["control"] == "linear":
             v.fail(join(key, "load_factors"), 'a linear analysis (control = "linear") is one solve at lam_end: '
                                               "give lam_end, not load factors")
+        if "steps" in d and s["control"] == "linear" and s["steps"] != 1:
+            # a warning, not an error: a sweep may switch the control of a file that gives steps
+            v.warn(join(key, "steps"), f'a linear analysis (control = "linear") is one solve at lam_end: '
+                                       f'steps = {s["steps"]} is not used (one state, no intermediate load steps)')
         if "load_factors" in d:
             both = [k for k in ("steps", "lam_end") if k in d]
             if both:
