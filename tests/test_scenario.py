@@ -348,7 +348,7 @@ def test_edge_load_on_a_set_that_is_not_a_line(tmp_path):
     d = base()
     d["edges"] = {"corners": {"nodes": [0, 9]}}
     d["loads"][0]["edge"] = "corners"
-    bad(tmp_path, d, "loads[0].edge", "not a line of element edges")
+    bad(tmp_path, d, "loads[0].edge", "no element edge of the set joins")
 
 
 def test_arclength_controls_need_arclength_and_no_prescribed_rotation(tmp_path):

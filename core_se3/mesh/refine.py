@@ -17,9 +17,11 @@ A quad's centre node is the geodesic midpoint of the two midpoints of its opposi
 The old nodes keep their ids (the new ones follow: edge midpoints, then centres); element e's
 children are 4e ... 4e + 3, so after k refinements the descendants of element e are the ids
 4^k e ... 4^k (e + 1) - 1.  Named node sets that are lines (consecutive nodes joined by mesh
-edges) get the midpoints between their nodes, other node sets are kept; regions list the
-children of their elements.  ``carry_held`` gives the nodes a support of such a set holds: also
-every new node between two held nodes of an element edge, whatever the set's order.
+edges) get the midpoints between their nodes, in order (a closed loop its closing edge's too);
+other named sets the new nodes they enclose (the midpoint of every element edge with both ends
+in the set, the centre of every element with its four corners in it: several lines, a patch),
+isolated nodes stay points; regions list the children of their elements.  ``carry_held`` gives
+the same enclosed nodes for any selection of ids (what a support of them holds).
 """
 from __future__ import annotations
 
@@ -121,17 +123,17 @@ def carry_nodes(meshes, ids):
     """
     ids = np.asarray(ids, np.int64)
     for m in meshes[:-1]:
-        ids = _refined_line(m, ids)
+        ids = _refined_line(m, ids, enclose=False)
     return ids
 
 
 def carry_held(meshes, ids):
     """Node ids of the unrefined mesh ``meshes[0]`` on the last of ``refine_levels``' meshes as a
     support holds them: with every new node on an element edge both of whose ends are held,
-    whatever the order of ``ids`` (a line listed out of order, several lines in one set, a
-    closed loop such as a hole's edge).  A support that held both ends of an edge and not the
-    node between them would be weaker on the refined mesh (``carry_nodes`` keeps a set that is
-    not one line in its order as it is).
+    whatever the order of ``ids`` (a line listed out of order, several lines in one set, a closed
+    loop such as a hole's edge).  A support that held both ends of an edge and not the node
+    between them would be weaker on the refined mesh.  (Element centres are not added: ids that
+    happen to be an element's corners may be points; a named patch carries its centres.)
 
     Example
     -------
@@ -139,14 +141,25 @@ def carry_held(meshes, ids):
     >>> ms = refine_levels(mesh.rectangle(2.0, 1.0, 2, 1), 1)
     >>> carry_held(ms, [5, 2]).tolist(), carry_held(ms, [0, 2, 3, 5]).tolist()   # a line; two lines
     ([2, 5, 10], [0, 2, 3, 5, 7, 10])
+    >>> carry_held(ms, [0, 1, 3, 4]).tolist()                   # an element's corners: its edges
+    [0, 1, 3, 4, 6, 7, 9, 11]
     """
     held = np.unique(np.asarray(ids, np.int64))
     for m in meshes[:-1]:
-        inset = np.zeros(m.n_nodes, bool)
-        inset[held] = True
-        both = np.flatnonzero(inset[m.edge_nodes].all(1))          # edges held at both ends
-        held = np.concatenate([held, m.n_nodes + both])             # their midpoints (sorted ids)
+        held = np.unique(_held_once(m, held, centres=False))
     return held
+
+
+def _held_once(mesh, ids, centres=True):
+    """``ids`` followed by the new nodes of one refinement of ``mesh`` that they enclose: the
+    midpoint of every element edge with both ends in ``ids`` (node n + edge), then, with
+    ``centres``, the centre of every element with its four corners in ``ids`` (n + |E| + element)."""
+    inset = np.zeros(mesh.n_nodes, bool)
+    inset[ids] = True
+    edges = np.flatnonzero(inset[mesh.edge_nodes].all(1))
+    centres = np.flatnonzero(inset[mesh.quads].all(1)) if centres else np.zeros(0, np.int64)
+    n = mesh.n_nodes
+    return np.concatenate([ids, n + edges, n + len(mesh.edge_nodes) + centres]).astype(np.int64)
 
 
 def _refine_once(mesh):
@@ -168,21 +181,27 @@ def _refine_once(mesh):
     return Mesh(np.concatenate([g_all, g_c]), quads, edges, shape=None, regions=regions)
 
 
-def _refined_line(mesh, ids):
+def _refined_line(mesh, ids, enclose=True):
     """A node set with the edge midpoints between consecutive nodes if it is a line (every
-    consecutive pair a mesh edge), else unchanged."""
+    consecutive pair a mesh edge; a closed loop, whose last node is joined to its first, also
+    the closing edge's midpoint, last), else, with ``enclose`` (a named set), with the new nodes
+    it encloses (``_held_once``: several lines, a patch; points stay points) and without it (a
+    user's ids, which may be points that happen to be neighbours) unchanged."""
     if len(ids) < 2:
         return ids
     n = mesh.n_nodes
     E = mesh.edge_nodes
     codes = E[:, 0] * n + E[:, 1]
-    a, b = ids[:-1], ids[1:]
-    want = np.minimum(a, b) * n + np.maximum(a, b)
-    pos = np.searchsorted(codes, want)                                 # edge_nodes is sorted (np.unique)
-    pos = np.minimum(pos, len(codes) - 1)
-    if not np.all(codes[pos] == want):
-        return ids
+
+    def edge_of(a, b):                                                 # edge index, or -1
+        want = np.minimum(a, b) * n + np.maximum(a, b)
+        pos = np.minimum(np.searchsorted(codes, want), len(codes) - 1)  # edge_nodes is sorted (np.unique)
+        return np.where(codes[pos] == want, pos, -1)
+    pos = edge_of(ids[:-1], ids[1:])
+    if np.any(pos < 0):
+        return _held_once(mesh, ids) if enclose else ids
     out = np.empty(2 * len(ids) - 1, np.int64)
     out[0::2], out[1::2] = ids, n + pos
-    return out
+    closing = edge_of(ids[-1:], ids[:1])[0] if len(ids) >= 4 else -1   # quad meshes have no 3-cycles
+    return np.append(out, n + closing) if closing >= 0 else out
 

@@ -40,37 +40,58 @@ def _scale_at(load, lam):
 
 
 def edge_weights(mesh, nodes):
-    """Consistent weights (summing to 1) of a uniform line load along ordered edge nodes.
+    """Consistent weights (summing to 1) of a uniform line load along the set's element edges.
 
-    Each node gets half the length of each segment it ends (the consistent load of linear
-    shape functions along the line), normalised by the total length.
+    The line is the element edges both of whose ends are in ``nodes`` (whatever their order):
+    each node gets half the length of each such edge it ends (the consistent load of linear
+    shape functions along the line), normalised by the total length.  A set listed along one
+    line gets the load of that line; a closed loop (a hole's edge) also its closing edge; a set
+    of several lines (a Gmsh curve of two pieces) each line's share by length.  Before, the
+    consecutive nodes of the list were taken as the segments: a closed loop lost its closing
+    edge, and a set of two lines (listed by sorted id) got "segments" jumping between them.
 
     Parameters
     ----------
     mesh : core_se3.mesh.Mesh
-        The mesh (for the reference positions).
+        The mesh (for the reference positions and the element edges).
     nodes : sequence of int
-        Node ids ordered along the line (a named node set is).
+        Node ids (one node: the whole load on it).
 
     Returns
     -------
     (k,) ndarray
-        Weights; total force F on the line puts w_i F on node i.
+        Weights in the order of ``nodes``; total force F on the line puts w_i F on node i.
+
+    Raises
+    ------
+    LoadError
+        A node of the set is on none of its element edges (an isolated point: give a nodal
+        load, a force per node, for points).
 
     Example
     -------
     >>> from core_se3 import mesh
     >>> edge_weights(mesh.rectangle(1.0, 1.0, 1, 2), [0, 2, 4]).tolist()
     [0.25, 0.5, 0.25]
+    >>> edge_weights(mesh.rectangle(1.0, 1.0, 1, 2), [4, 0, 2]).tolist()     # any order
+    [0.25, 0.25, 0.5]
     """
     nodes = np.asarray(nodes)
     if len(nodes) == 1:
         return np.ones(1)
-    X = mesh.X[nodes]
-    seg = np.linalg.norm(np.diff(X, axis=0), axis=1)
+    where = np.full(mesh.n_nodes, -1)
+    where[nodes] = np.arange(len(nodes))
+    E = where[mesh.edge_nodes]
+    E = E[(E >= 0).all(1)]                                   # the set's own element edges
+    seg = np.linalg.norm(mesh.X[nodes[E[:, 1]]] - mesh.X[nodes[E[:, 0]]], axis=1)
     w = np.zeros(len(nodes))
-    w[:-1] += seg / 2
-    w[1:] += seg / 2
+    np.add.at(w, E[:, 0], seg / 2)
+    np.add.at(w, E[:, 1], seg / 2)
+    if np.any(w == 0):
+        lone = nodes[w == 0]
+        raise LoadError(f"an edge load (a total along a line) on nodes that no element edge of the set joins: "
+                        f"{lone[:5].tolist()}{' ...' if len(lone) > 5 else ''} of {len(nodes)}; select a line of "
+                        "nodes joined by element edges, or give a nodal load (a force per node) for points")
     return w / w.sum()
 
 

@@ -73,6 +73,11 @@ def build_problem(v, spec, mesh, regions):
                                 "selection, so that [mesh] refine does not multiply it, and this selection has "
                                 "none (its nodes are new nodes of the refinement): select nodes of the unrefined "
                                 "mesh, or give the finer mesh itself instead of refine")
+            elif lineage is not None and LOADS[ld["type"]].target == "line":
+                # a total along a line: the new node on every element edge between two selected
+                # nodes joins it, whatever the set's order or pieces (as the supports')
+                held = M.carry_held(lineage, where[where < lineage[0].n_nodes])
+                where = np.concatenate([where, held[~np.isin(held, where)]])
         else:
             where = regions[ld["region"]] if ld.get("region") else None
         try:

@@ -222,11 +222,10 @@ def check_problem_mesh(build, mesh, levels=1, tol=DEFAULT_TOL, lam=1.0, nonlinea
     """:func:`check_mesh` for a Problem built in Python: ``build(mesh) -> Problem`` is called on
     ``mesh`` and on its uniform refinements (``mesh.refine``), and the answers compared.
 
-    ``build`` must select its nodes by name (the mesh's regions, and node sets that are one line
-    in their order, which refinement carries) or by a predicate of the positions: node ids below
-    ``mesh.n_nodes`` keep theirs, but a line given by ids, or a named closed loop, does not get
-    its new nodes (a support that holds both ends of an element edge and not the new node between
-    them is refused), and element ids change.
+    ``build`` must select its nodes by name (the mesh's regions and node sets, which refinement
+    carries) or by a predicate of the positions: node ids below ``mesh.n_nodes`` keep theirs, but
+    a line given by ids does not get its new nodes (a support that holds both ends of an element
+    edge and not the new node between them is refused), and element ids change.
 
     Parameters
     ----------
@@ -298,9 +297,8 @@ def _check_held_lines(mesh, held, held_refined):
         e = int(np.flatnonzero(lost.any(1))[0])
         raise OptionError(f"build(mesh) holds nodes {E[e, 0]} and {E[e, 1]} (dofs {np.flatnonzero(lost[e]).tolist()}) "
                           f"but not the new node between them on the refined mesh: the refined problem would be "
-                          f"supported less; select supported lines by a predicate of the positions, or by the name of "
-                          f"a set that is one line in its order (a set listed out of order, of several lines or a closed "
-                          f"loop keeps its old nodes only, as ids do)")
+                          f"supported less; select supported lines by name (the mesh's node sets, which refinement "
+                          f"carries) or by a predicate of the positions, not by ids")
 
 
 def _check_options(levels, tol):

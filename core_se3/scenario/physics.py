@@ -8,11 +8,11 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..errors import did_you_mean
+from ..errors import LoadError, did_you_mean
 from ..fem import ELEMENTS
 from ..fem.material_kinds import MATERIALS
-from ..model import FIELDS, LOADS, SUPPORTS
-from .geometry import is_line, nodes_ref, region_ref
+from ..model import FIELDS, LOADS, SUPPORTS, edge_weights
+from .geometry import nodes_ref, region_ref
 from .magnetisation import pattern_section
 from .schema import ARCLENGTH, MAGNET, OUTPUT, PARALLEL_KEYS, SOLVER
 from .validate import Bounds, join, tname, show
@@ -226,9 +226,11 @@ def loads_section(v, doc, mesh, regions):
         ld = dict(type=typ, scale=v.scale(t, key))
         if nodal:
             ld.update(nodes_ref(v, t, key, mesh))
-            if kind.target == "line" and "edge" in ld and not is_line(mesh, mesh.edges[ld["edge"]]):
-                v.fail(join(key, "edge"), f"node set {ld['edge']!r} is not a line of element edges; "
-                                          "an edge load needs one (use type = \"nodal\")")
+            if kind.target == "line" and "edge" in ld:
+                try:                      # the set's element edges carry it (one line, pieces, a loop)
+                    edge_weights(mesh, mesh.edges[ld["edge"]])
+                except LoadError as exc:
+                    v.fail(join(key, "edge"), f"node set {ld['edge']!r}: {exc}")
         ld.update(v.params(t, key, kind.params))
         v.kind_check(kind, ld, t, key)
         if not nodal:
