@@ -72,7 +72,7 @@ CASES = [
      "probes[0].edge", "node set 'e' is not a line of element edges, so it has no midpoint"),
     ("edge force on a block of nodes", with_(edges={"e": {"box": {"x": [5.0, 10.0]}}},
                                              loads=[{"type": "edge_force", "edge": "e", "force": [0.0, 0.0, 1.0]}]),
-     "loads[0].edge", "node set 'e' is not a line of element edges"),
+     "loads[0].edge", "node set 'e': an edge load (a total along a line) on a set that is not a line of element edges"),
     ("probe on a zig-zag node set", with_(edges={"e": {"nodes": [0, 6, 2]}}, probes=[{"name": "p", "edge": "e"}]),
      "probes[0].edge", "is not a line of element edges"),
     ("rtol of one", with_(solver={"rtol": 1.0}), "solver.rtol", "expected a number < 1"),

@@ -96,3 +96,12 @@ def test_an_edge_load_on_two_lines_follows_a_refinement(tmp_path):
         on = np.flatnonzero(np.abs(X[:, 0] - x) < 1e-12)
         on = on[np.argsort(X[on, 1])]
         np.testing.assert_allclose(fz[on], [1 / 16, 1 / 8, 1 / 8, 1 / 8, 1 / 16], rtol=1e-12)
+
+
+def test_a_patch_of_nodes_is_no_line():
+    """A block of nodes (two rows of a strip) has element edges inside it: an edge load there is
+    refused, not spread over them."""
+    m = mesh.rectangle(10.0, 1.0, 4, 2)
+    block = np.flatnonzero(m.X[:, 0] > 4.0)
+    with pytest.raises(LoadError, match="not a line of element edges"):
+        edge_weights(m, block)

@@ -658,3 +658,18 @@ def test_a_python_build_whose_couples_change_with_the_mesh_is_not_comparable():
     for how in ("edge", "magnet"):
         good = check_problem_mesh(lambda mm: strip(mm, how), m)
         assert good.changes[0]["load"] < 1e-12 and "NOT comparable" not in good.report(), (how, good.changes[0])
+
+
+def test_a_support_by_ids_out_of_line_order_says_what_the_refinement_holds():
+    """Ids are points or a line: the clamp nodes = [0, 10, 5] of a 4 x 2 strip (its end x0, out
+    of order) is read as a line under [mesh] refine and holds the two new nodes between them --
+    said at the key (a ScenarioWarning), so that four pins meant as points are not silently a
+    clamped line; listed in line order, or without refine, nothing is said."""
+    def strip(ids, refine=1):
+        return quiet({"mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 4, "ny": 2, "refine": refine},
+                      "material": {"E": 1.2e6, "nu": 0.3, "h": 0.1}, "supports": [{"type": "clamp", "nodes": ids}],
+                      "loads": [{"type": "edge_force", "edge": "x1", "force": [0.0, 0.0, 1e-3]}]})
+    said = [str(w) for w in strip([0, 10, 5]).warnings if "supports[0].nodes" in str(w)]
+    assert len(said) == 1 and "2 new node(s)" in said[0]
+    assert not [w for w in strip([0, 5, 10]).warnings if "supports[0]" in str(w)]
+    assert not [w for w in strip([0, 10, 5], refine=0).warnings if "supports[0]" in str(w)]

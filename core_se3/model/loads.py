@@ -66,7 +66,7 @@ def edge_weights(mesh, nodes):
     ------
     LoadError
         A node of the set is on none of its element edges (an isolated point: give a nodal
-        load, a force per node, for points).
+        load, a force per node, for points), or on more than two (a patch of nodes).
 
     Example
     -------
@@ -83,6 +83,12 @@ def edge_weights(mesh, nodes):
     where[nodes] = np.arange(len(nodes))
     E = where[mesh.edge_nodes]
     E = E[(E >= 0).all(1)]                                   # the set's own element edges
+    degree = np.bincount(E.ravel(), minlength=len(nodes))
+    if np.any(degree > 2):                                   # a patch (or lines that cross): no line
+        k = int(np.argmax(degree))
+        raise LoadError(f"an edge load (a total along a line) on a set that is not a line of element edges: node "
+                        f"{int(nodes[k])} joins {int(degree[k])} others of the set (a patch of nodes, or lines that "
+                        "meet); select a line, or give a nodal load (a force per node) or a surface load")
     seg = np.linalg.norm(mesh.X[nodes[E[:, 1]]] - mesh.X[nodes[E[:, 0]]], axis=1)
     w = np.zeros(len(nodes))
     np.add.at(w, E[:, 0], seg / 2)

@@ -134,7 +134,13 @@ def _add_support(v, prob, mesh, sp, key):
             # line listed out of order, several lines in one set, a closed loop: not one line in
             # order); a region's nodes are its refined elements' already
             held = M.carry_held(lineage, coarse)
-            nodes = np.concatenate([nodes, held[~np.isin(held, nodes)]])
+            extra = held[~np.isin(held, nodes)]
+            if len(extra) and "nodes" in sp:
+                # ids may be points that happen to be neighbours: say what the refinement reads
+                v.warn(join(key, "nodes"), f"[mesh] refine: the support also holds {len(extra)} new node(s) between "
+                                           "neighbouring ids it holds, read as a line; if these ids are separate "
+                                           "points, give the finer mesh itself instead of refine")
+            nodes = np.concatenate([nodes, extra])
         # a rotation's default point, the nodes' centroid, is that of the unrefined mesh's nodes:
         # the refined nodes of a curved or graded line would move it at every level
         centroid = mesh.X[coarse].mean(0).tolist() if len(coarse) else None
