@@ -7,6 +7,7 @@ import pytest
 from core_se3 import Material, Problem, mesh
 from core_se3.errors import LoadError
 from core_se3.model.loads import edge_weights
+from meshes import closed_ring
 
 pytestmark = pytest.mark.core
 
@@ -28,15 +29,10 @@ def test_a_closed_loop_loads_its_closing_edge():
     """A ring's hole (a regular 8-gon of nodes, the slit of the annulus closed): every node ends
     two equal edges, so each gets 1/8.  Before, the closing edge was lost: its two nodes got
     1/14 and the others 1/7."""
-    a = mesh.annulus(1.0, 2.0, 2 * np.pi, 2, 8)
-    ids = np.arange(a.n_nodes).reshape(9, 3)
-    remap = np.arange(a.n_nodes)
-    remap[ids[-1]] = ids[0]
-    keep = np.unique(remap)
-    new = np.searchsorted(keep, remap)
-    ring = mesh.Mesh(a.g0[keep], new[a.quads], {}, shape=None)
-    hole = mesh.chain_order(np.stack([new[a.edges["x0"]][:-1], np.roll(new[a.edges["x0"]][:-1], -1)], 1))
+    ring, hole = closed_ring(nt=8)
     np.testing.assert_allclose(edge_weights(ring, hole), np.full(8, 1 / 8), rtol=1e-14)
+    np.testing.assert_allclose(edge_weights(ring, mesh.chain_order(np.stack([hole, np.roll(hole, -1)], 1))),
+                               np.full(8, 1 / 8), rtol=1e-14)         # as the Gmsh reader orders a loop
 
 
 def test_two_lines_in_one_set_share_by_length_without_jumps():

@@ -17,6 +17,7 @@ from core_se3 import mesh, scenario
 from core_se3.catalogue import shell_course as sc
 from core_se3.errors import MeshError, OptionError, ScenarioError
 from core_se3.scenario.mesh_check import check_mesh
+from meshes import closed_ring
 
 pytestmark = pytest.mark.core
 
@@ -483,14 +484,7 @@ def test_a_support_holds_the_new_nodes_of_every_held_element_edge(tmp_path):
         ends = np.flatnonzero((np.abs(X[:, 0]) < 1e-12) | (np.abs(X[:, 0] - 10.0) < 1e-12))
         assert sorted(s.problem.supports[0].nodes.tolist()) == ends.tolist()
     # a closed loop: the hole of a ring (the slit of the annulus closed)
-    a = mesh.annulus(1.0, 2.0, 2 * np.pi, 2, 8)
-    ids = np.arange(a.n_nodes).reshape(9, 3)
-    remap = np.arange(a.n_nodes)
-    remap[ids[-1]] = ids[0]
-    keep = np.unique(remap)
-    new = np.searchsorted(keep, remap)
-    ring = mesh.Mesh(a.g0[keep], new[a.quads], {}, shape=None)
-    hole = new[a.edges["x0"]][:-1]
+    ring, hole = closed_ring()
     _msh_with_lines(tmp_path / "ring.msh", ring, {"hole": [hole]}, closed=("hole",))
     P = ring.X[hole]
     Q = np.roll(P, -1, 0)
@@ -573,14 +567,8 @@ def test_a_python_build_on_a_named_closed_loop_keeps_its_support(tmp_path):
     same model as a build by a predicate of the positions (energies to round-off)."""
     from core_se3 import Material, Problem
     from core_se3.scenario.mesh_check import check_problem_mesh
-    a = mesh.annulus(1.0, 2.0, 2 * np.pi, 2, 8)
-    ids = np.arange(a.n_nodes).reshape(9, 3)
-    remap = np.arange(a.n_nodes)
-    remap[ids[-1]] = ids[0]
-    keep = np.unique(remap)
-    new = np.searchsorted(keep, remap)
-    ring = mesh.Mesh(a.g0[keep], new[a.quads], {}, shape=None)
-    _msh_with_lines(tmp_path / "ring.msh", ring, {"hole": [new[a.edges["x0"]][:-1]]}, closed=("hole",))
+    ring, hole = closed_ring()
+    _msh_with_lines(tmp_path / "ring.msh", ring, {"hole": [hole]}, closed=("hole",))
     m = mesh.from_meshio(mesh.read_meshio(str(tmp_path / "ring.msh")))
 
     def plate(mm, where):
