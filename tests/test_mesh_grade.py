@@ -175,3 +175,60 @@ def test_the_mesh_check_names_the_layer_and_the_grading_where_it_fails():
     assert bad.levels[0]["layer"] == pytest.approx(2.5 * (25.0 / ARC) ** 0.375, rel=0.01)
     assert "free-edge layer is about l = 2.86" in bad.report() and "[mesh] grade" in bad.report()
     assert good.levels[0]["layer"] is None and "[mesh] grade" not in good.report()
+
+
+def _element_warnings(p, **solve):
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        p.solve_linear(**solve)
+    return [str(w.message) for w in caught if issubclass(w.category, ElementWarning)]
+
+
+def test_a_mesh_graded_as_the_warning_says_is_not_flagged_again():
+    """The warning counts the elements along free edges only (a boundary edge with a node nothing
+    holds): on the roof 4x4 at R/h 1e4 graded as it advises (the free-edge element 0.7 l wide) the
+    wide elements are inside, and the run is silent (before: the same warning as the uniform
+    mesh's, whose advice the user had followed: 0.929 of converged, in band)."""
+    rh = 1e4
+    p, _ = sc.scordelis_lo(4, h=R / rh)
+    assert _element_warnings(p)
+    p, _ = sc.scordelis_lo(4, h=R / rh, grade={"x1": 0.7 * R * rh ** -0.25 / ARC})
+    assert p.free_edge_elements().sum() == 4                   # the column along x1
+    assert not _element_warnings(p)
+
+
+def test_coarse_curved_elements_along_held_edges_only_are_not_flagged():
+    """A thin cylinder panel held along all four edges has no free edge, so no free-edge layer:
+    its 2x2 mesh (phi^3 L / h = 1.2e3 on every element) is not flagged (before: flagged);
+    with the y1 edge left free the elements along it are, and the layer width is theirs."""
+    from core_se3 import Material, Problem
+    m = mesh.cylinder_panel(1.0, 2.0, -0.7, 0.7, 2, 2)
+    p = Problem(m, Material(1e6, 0.0, 1e-4))
+    for edge in ("x0", "x1", "y0", "y1"):
+        p.clamp(edge)
+    p.add_pressure(1.0)
+    assert p.element.coarse_curvature.min() > 1e3
+    assert not p.free_edge_elements().any() and not _element_warnings(p)
+    q = Problem(m, Material(1e6, 0.0, 1e-4))
+    for edge in ("x0", "x1", "y0"):
+        q.clamp(edge)
+    q.add_pressure(1.0)
+    assert q.free_edge_elements().sum() == 2
+    said = _element_warnings(q)
+    assert len(said) == 1 and "on 2 element(s)" in said[0]
+
+
+def test_the_distributed_solver_gives_the_same_warning():
+    """The distributed set-up builds each rank's element on its own elements, whose subdomain
+    boundaries are not free edges: it gathers the index and warns once, on the whole mesh's free
+    edges (the uniform 4x4 roof at R/h 1e4 warns, the graded one does not)."""
+    import importlib.util
+    if importlib.util.find_spec("petsc4py") is None:
+        pytest.skip("needs petsc4py")
+    rh = 1e4
+    for grade, expected in ((None, 1), ({"x1": 0.7 * R * rh ** -0.25 / ARC}, 0)):
+        p, _ = sc.scordelis_lo(4, h=R / rh, grade=grade)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            p.solve(steps=1, lam_end=1e-5, solver="distributed")
+        assert sum(issubclass(w.category, ElementWarning) for w in caught) == expected

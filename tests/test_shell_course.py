@@ -335,7 +335,7 @@ def test_coarse_thin_curved_meshes_are_flagged(n, h, warns):
     from core_se3.errors import ElementWarning
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        sc.scordelis_lo(n, h=h)[0].element
+        sc.scordelis_lo(n, h=h)[0].check_element()
     flagged = [w for w in caught if issubclass(w.category, ElementWarning)]
     assert bool(flagged) == warns, [str(w.message) for w in flagged]
     if warns:
@@ -349,7 +349,7 @@ def test_bending_dominated_hemisphere_is_not_flagged_at_its_standard_mesh():
     from core_se3.errors import ElementWarning
     with warnings.catch_warnings():
         warnings.simplefilter("error", ElementWarning)
-        sc.pinched_hemisphere(16)[0].element
+        sc.pinched_hemisphere(16)[0].check_element()
 
 
 def test_the_roofs_free_edge_layer_narrows_like_the_quarter_power_of_the_thickness():

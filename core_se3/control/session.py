@@ -114,6 +114,7 @@ def _check_problem(problem):
     if hooked:
         raise ControlError(f"a control session does not support the load {hooked[0].name!r} (contact: its "
                            "multipliers and step cap need load stepping, Problem.solve)")
+    problem.check_element(stacklevel=4)      # the coarse-mesh warning, as Problem.solve gives it
 
 
 class Session:

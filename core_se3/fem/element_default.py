@@ -212,7 +212,7 @@ class DefaultElement(Element):
         self.j0 = np.empty((m, 4))
         self.drill_Ek = np.zeros((m, 3, 3, 4))     # the membrane-drilling correction (membrane_drilling)
         self.shear_beta = np.ones(m)               # the kept part of the tied shear (membrane_shear)
-        self.coarse_curvature = np.zeros(m)        # phi^3 L / h (warn_if_coarse_thin_curved)
+        self.coarse_curvature = np.zeros(m)        # phi^3 L / h (warn_if_coarse_thin_curved, Problem.check_element)
         # in chunks of elements: the resultant matrices and products of one element take ~18 kB,
         # four times its Dbar (a law without ``restricted`` gets all elements at once)
         step = SETUP_CHUNK if callable(getattr(material, "restricted", None)) else max(m, 1)
@@ -244,9 +244,8 @@ class DefaultElement(Element):
             self.Dz0[sl] = np.einsum("mij,mj->mi", _unpack(self.Dbar_packed[sl]), z0)  # Dbar z0
         self.area = self.j0.sum(axis=1)                                 # reference area per element
         self._Dbar = None
-        #: the free-edge layer's width the flagged elements imply (None: none flagged)
-        self.layer_width = free_edge_layer_width(self.coarse_curvature, np.sqrt(self.area))
-        warn_if_coarse_thin_curved(self.coarse_curvature, np.sqrt(self.area))
+        # the coarse-curvature warning needs the supports (which edges are free): the Problem
+        # issues it when it solves (Problem.check_element)
 
     @property
     def Dbar(self):
@@ -446,24 +445,27 @@ def free_edge_layer_width(index, size):
     return float(np.min(np.asarray(size)[flagged] * np.asarray(index)[flagged] ** -0.25))
 
 
-def warn_if_coarse_thin_curved(index, size=None):
+def warn_if_coarse_thin_curved(index, size=None, stacklevel=2):
     """An ElementWarning when an element's phi^3 L / h (``index``, (m,): phi its reference edges'
     largest out-of-plane turn [rad], L = sqrt(area) (``size``, (m,), optional), h the law's
     thickness) exceeds COARSE_THIN_CURVED.
 
-    There the four-node mesh of a membrane-dominated shell with free edges can be spuriously
-    flexible: the edge tying leaves free-edge mechanisms of bending-order stiffness (docs/ELEMENTS.md,
-    "The coarse thin roof").  With R = L / phi the radius the edge turn implies, the index is
-    (L / l)^4, l = R (h/R)^(1/4) the width of the layers in which such a shell bends along its free
-    edges: the element is wider than the layer it should carry (on the roof sweep every cell with
-    b / l >= 1.16 fails and every cell with b / l <= 1.10 passes; benchmarks/results/roof_layer.md).  Measured on the Scordelis-Lo roof over its 64x64 value: 1.031 and
-    1.033 at phi^3 L / h = 3.5 and 2.2, 1.005 and 1.019 at 1.4 and 1.8, 110 at 1800.  Bending-
-    dominated shells (the pinched hemisphere: within 0.8 ... 1.02 up to 2.8e4) are not affected,
-    so it is a warning to check convergence, not an error.  With ``size`` it also gives the
-    layer's width l = L index^(-1/4) (the smallest over the flagged elements) and the remedy that
-    keeps the element count: a mesh graded toward the free edges, the elements along them about
-    0.7 l wide, growing by at most 1.7 (``[mesh] grade``, mesh.generators.spacing; on the roof
-    sweep every such cell is in band, the coarsest cells need a steeper growth and are erratic:
+    ``Problem.check_element`` calls it, when it solves, with the index of the elements along free
+    edges only (a boundary edge with a node that no support holds; the others' index 0): there
+    the four-node mesh of a membrane-dominated shell can be spuriously flexible, the edge tying
+    leaving free-edge mechanisms of bending-order stiffness (docs/ELEMENTS.md, "The coarse thin
+    roof").  With R = L / phi the radius the edge turn implies, the index is (L / l)^4,
+    l = R (h/R)^(1/4) the width of the layers in which such a shell bends along its free edges:
+    the element is wider than the layer it should carry (on the roof sweep every cell with
+    b / l >= 1.16 fails and every cell with b / l <= 1.10 passes; benchmarks/results/roof_layer.md).
+    Measured on the Scordelis-Lo roof over its 64x64 value: 1.031 and 1.033 at phi^3 L / h = 3.5
+    and 2.2, 1.005 and 1.019 at 1.4 and 1.8, 110 at 1800.  Bending-dominated shells (the pinched
+    hemisphere: within 0.8 ... 1.02 up to 2.8e4) are not affected, so it is a warning to check
+    convergence, not an error.  With ``size`` it also gives the layer's width
+    l = L index^(-1/4) (the smallest over the flagged elements) and the remedy that keeps the
+    element count: a mesh graded toward the free edges, the elements along them about 0.7 l wide,
+    growing by at most 1.7 (``[mesh] grade``, mesh.generators.spacing; on the roof sweep every
+    such cell is in band, the coarsest cells need a steeper growth and are erratic:
     benchmarks/results/roof_layer.md).
 
     Example
@@ -482,14 +484,13 @@ def warn_if_coarse_thin_curved(index, size=None):
             f"{free_edge_layer_width(index, size):.3g} wide here; to resolve it "
             f"without many more elements, grade the mesh toward its free edges so that the elements along them "
             f"are about 0.7 l wide and their neighbours grow by at most 1.7 (`[mesh] grade = {{x1 = FRACTION}}` of "
-            f"a structured generator; fewer elements than that growth needs cannot carry the layer). A mesh so "
-            f"graded still raises this warning (it cannot tell free edges from supported ones): check-mesh decides.")
+            f"a structured generator; fewer elements than that growth needs cannot carry the layer).")
         warnings.warn(ElementWarning(
-            f"coarse mesh of a thin curved shell: an element's edges turn by phi out of its plane with "
-            f"phi^3 L / h = {worst:.3g} > {COARSE_THIN_CURVED:g} (L its size, h the thickness) on "
-            f"{int(np.sum(index > COARSE_THIN_CURVED))} element(s). Where the shell is membrane dominated and "
-            f"has free edges, four-node meshes this coarse can be spuriously flexible (the Scordelis-Lo roof "
-            f"2x2 at R/h 1e4: 10.9 times its deflection); bending-dominated shells are not affected. Check by "
-            f"refining: `core-se3 check-mesh SCENARIO.toml` (scenario.check_mesh) compares the linear answer with "
-            f"a refined mesh's (each halving of the element size divides phi^3 L by 16) -- docs/ELEMENTS.md."
-            + layer), stacklevel=5)
+            f"coarse mesh of a thin curved shell: an element along a free edge turns by phi out of its plane "
+            f"with phi^3 L / h = {worst:.3g} > {COARSE_THIN_CURVED:g} (L its size, h the thickness) on "
+            f"{int(np.sum(index > COARSE_THIN_CURVED))} element(s). Where the shell is membrane dominated, "
+            f"four-node meshes this coarse along a free edge (a boundary edge no support holds) can be "
+            f"spuriously flexible (the Scordelis-Lo roof 2x2 at R/h 1e4: 10.9 times its deflection); bending-"
+            f"dominated shells are not affected. Check by refining: `core-se3 check-mesh SCENARIO.toml` "
+            f"(scenario.check_mesh) compares the linear answer with a refined mesh's (each halving of the "
+            f"element size divides phi^3 L by 16) -- docs/ELEMENTS.md." + layer), stacklevel=stacklevel + 1)

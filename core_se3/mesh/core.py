@@ -264,6 +264,21 @@ class Mesh:
                             f"distance {d[k]:.4g} > {tol:.4g} (give that point, or a larger tol)")
         return k
 
+    def boundary_edges(self):
+        """The mesh's boundary: (edge ids (k,), the element of each (k,)), the edges that belong
+        to one element only (rows of ``edge_nodes``).
+
+        Example
+        -------
+        >>> from core_se3 import mesh
+        >>> e, el = mesh.rectangle(2.0, 1.0, 2, 1).boundary_edges()
+        >>> len(e), sorted(set(el.tolist()))
+        (6, [0, 1])
+        """
+        counts = np.bincount(self.elem_edges.ravel(), minlength=len(self.edge_nodes))
+        el, local = np.nonzero(counts[self.elem_edges] == 1)
+        return self.elem_edges[el, local], el
+
     def elements(self, region=None):
         """Element ids of a named region (a name), of a list of ids, or of all elements (None)."""
         if region is None:

@@ -324,6 +324,67 @@ class Problem:
             fixed[s.nodes] |= s.fixed
         return fixed
 
+    def free_edge_elements(self):
+        """(m,) booleans: the elements along a free edge -- a boundary edge (``Mesh.boundary_edges``)
+        with a node that nothing holds: no support holds any of its dofs and no support spring
+        (``add_lab_support`` and its kin) acts on it.
+
+        Example
+        -------
+        >>> from core_se3 import Problem, Material, mesh
+        >>> p = Problem(mesh.rectangle(3.0, 1.0, 3, 1), Material(1e3, 0.0, 0.01))
+        >>> p.clamp("x0"); p.fix("x1", (2,))
+        >>> p.free_edge_elements().tolist()           # y0 and y1 are free along all three
+        [True, True, True]
+        >>> p.clamp("y0"); p.clamp("y1"); p.free_edge_elements().tolist()
+        [False, False, False]
+        """
+        held = self.constraint_mask().any(1)
+        for ld in self.loads:
+            if getattr(ld, "is_support_spring", False):
+                held[ld.nodes] = True
+        edges, owner = self.mesh.boundary_edges()
+        free = np.zeros(self.mesh.n_elements, bool)
+        free[owner[~held[self.mesh.edge_nodes[edges]].all(1)]] = True
+        return free
+
+    def check_element(self, index=None, size=None, warn=True, stacklevel=2):
+        """The element's coarse-mesh check with the supports known: an ElementWarning
+        (``fem.element_default.warn_if_coarse_thin_curved``) where an element along a free edge
+        (:meth:`free_edge_elements`) has the coarse-curvature index phi^3 L / h above 2; ``solve``
+        calls it.  Returns the free-edge layer's width l those elements imply (None: none).
+
+        Parameters
+        ----------
+        index, size : (m,) ndarray, optional
+            The element's ``coarse_curvature`` and sqrt(area) per element (default: this
+            problem's element's; the distributed solver gathers them from its ranks).  An element
+            without the index (the seed's) has nothing to check.
+        warn : bool
+            False: only the width (check-mesh's verdict).
+
+        Example
+        -------
+        >>> import warnings
+        >>> from core_se3.catalogue import shell_course as sc
+        >>> p, _ = sc.scordelis_lo(4, h=2.5e-3)                        # R/h 1e4
+        >>> with warnings.catch_warnings(record=True) as said:
+        ...     warnings.simplefilter("always")
+        ...     width = p.check_element()
+        >>> round(width, 2), len(said)                                 # 1.144 R (h/R)^(1/4)
+        (2.86, 1)
+        """
+        from ..fem.element_default import free_edge_layer_width, warn_if_coarse_thin_curved
+        if index is None:
+            index = getattr(self.element, "coarse_curvature", None)
+            if index is None:
+                return None
+            size = np.sqrt(self.element.area)
+        index = np.where(self.free_edge_elements(), index, 0.0)
+        if warn:
+            warn_if_coarse_thin_curved(index, size, stacklevel=stacklevel + 1)
+        return free_edge_layer_width(index, size)
+
     def assembler(self):
         """The sparse assembler on the free dofs (built once per set of supports)."""
         if self._assembler is None:

@@ -78,6 +78,7 @@ def dispatch(problem, control, solver, kw):
         return check_held_dofs(problem, SOLVERS["distributed"](problem, **kw))
     for k in DISTRIBUTED_KEYS + ("setup",):
         kw.pop(k, None)
+    problem.check_element(stacklevel=4)    # the coarse-mesh warning, supports known (the distributed set-up's own)
     return check_held_dofs(problem, SOLVERS[control](problem, **kw))
 
 

@@ -62,6 +62,7 @@ SPRING_ROUND_OFF = 1e-2
 class _Spring(Load):
     """A penalty support written as a load: it does not scale with the load factor."""
     scales_with_load_factor = False
+    is_support_spring = True        # its nodes are held (Problem.free_edge_elements)
 
     def _scatter(self, n, fb, blk, tangent):
         f = np.zeros((n, 6))

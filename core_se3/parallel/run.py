@@ -157,6 +157,21 @@ class DistributedRun:
         self.ell = problem.length_scale
         self.n_own = sub.n_owned
         self.mixed = self.local.element.mixed
+        self._check_element(problem, c)
+
+    def _check_element(self, problem, c):
+        """The whole mesh's coarse-mesh warning (``Problem.check_element``, which needs the whole
+        mesh's free edges): the ranks' element indices gathered on rank 0, which warns."""
+        el = self.local.element
+        index = getattr(el, "coarse_curvature", None)
+        if index is None:
+            return
+        parts = c.gather((self.sub.elements, index, np.sqrt(el.area)), root=0)
+        if c.rank == 0:
+            idx, size = np.zeros(problem.mesh.n_elements), np.ones(problem.mesh.n_elements)
+            for ids, i, s in parts:
+                idx[ids], size[ids] = i, s
+            problem.check_element(idx, size, stacklevel=5)
 
     def relocalize(self):
         """Localise the whole problem's loads again: after a change of their values in place (a

@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import ConvergenceError, OptionError, ScenarioError
+from ..errors import ConvergenceError, ElementWarning, OptionError, ScenarioError
 from ..mesh import refine
 from ..solvers.linear import linear_solve
 
@@ -265,14 +265,16 @@ def check_problem_mesh(build, mesh, levels=1, tol=DEFAULT_TOL, lam=1.0, nonlinea
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             p = build(refine(mesh, k))
-            p.element                            # built here, so that its warnings are caught
+            p.check_element()                    # the element's warnings (supports known), caught here
         if k == 0:
             held[:] = p.constraint_mask()
         elif k == 1:
             _check_held_lines(mesh, held, p.constraint_mask())
         if nonlinear:
             try:
-                res = p.solve(lam_end=lam, **solve_options)
+                with warnings.catch_warnings():         # said above, once per level
+                    warnings.simplefilter("ignore", ElementWarning)
+                    res = p.solve(lam_end=lam, **solve_options)
             except ConvergenceError as exc:
                 raise ConvergenceError(_failed_level(k, p.mesh, str(exc), "build(mesh.refine(mesh, {k}))"),
                                        getattr(exc, "result", None)) from exc
@@ -343,7 +345,9 @@ def _run_level(s, lam, n0, k):
     from .runner import run
     with tempfile.TemporaryDirectory() as d:
         try:
-            res = run(s, out=d, progress=False)
+            with warnings.catch_warnings():             # said when the level was built
+                warnings.simplefilter("ignore", ElementWarning)
+                res = run(s, out=d, progress=False)
         except ConvergenceError as exc:
             raise ConvergenceError(_failed_level(k, s.mesh, str(exc), "the scenario with [mesh] refine = {k}"),
                                    getattr(exc, "result", None)) from exc
@@ -363,7 +367,7 @@ def _level(problem, energy, u, probes, lam):
     moment = (np.cross(x, F) + C).sum(0)
     return dict(elements=problem.mesh.n_elements, dofs=int((~problem.constraint_mask()).sum()), energy=energy,
                 u_max=float(np.linalg.norm(u, axis=1).max()), load=F.sum(0).tolist(), moment=moment.tolist(),
-                length=problem.mesh.length_scale, layer=getattr(problem.element, "layer_width", None),
+                length=problem.mesh.length_scale, layer=problem.check_element(warn=False),
                 probes={name: np.asarray(p["u"] if isinstance(p, dict) else p, float).tolist()
                         for name, p in probes.items()})
 
@@ -413,11 +417,11 @@ def _level_scenario(scn, k, nonlinear):
             raise OptionError(f"the mesh check leaves the obstacles out (a linear analysis would pass through "
                               f"them), and without them the scenario is not valid: {exc}; check the runs "
                               "themselves with --nonlinear") from None
-        s.problem.element                       # built here, so that its warnings are caught
+        s.problem.check_element()               # the element's warnings (supports known), caught here
     return s, dropped, _said(caught)
 
 
 def _said(caught):
     """The first sentence (what and where) of each ElementWarning caught; the rest explains
     (docs/ELEMENTS.md)."""
-    return sorted({str(w.message).split(". ")[0] for w in caught if w.category.__name__ == "ElementWarning"})
+    return sorted({str(w.message).split(". ")[0] for w in caught if issubclass(w.category, ElementWarning)})
