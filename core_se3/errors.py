@@ -19,7 +19,7 @@ __all__ = ["CoreSE3Error", "MaterialError", "MeshError", "LoadError", "SupportEr
            "SingularSystemError", "ConvergenceError", "ElementTooDistortedError", "ScenarioError",
            "CheckpointError", "OptionError", "DesignError", "ContactError", "ParallelError",
            "LinearSolverError", "ControlError", "ScenarioWarning", "SupportWarning", "ElementWarning", "MeshWarning",
-           "did_you_mean"]
+           "AccuracyWarning", "did_you_mean"]
 
 
 def did_you_mean(name, choices):
@@ -445,11 +445,12 @@ class ElementWarning(UserWarning):
     thin meshes, where it locks: measured by ``python -m comparison`` (the locking study), with
     element size / thickness 12.5 the cantilever, roll-up and arch do not converge, and the
     torsion strip 10 x 4 at L/h = 1e4 (element size / thickness 1000) converged to 130 times
-    the torsion constant of the default element and of the DOLFINx reference.  Issued by the
-    default element on coarse meshes of thin curved shells (an element's out-of-plane edge turn
-    phi with phi^3 L / h > 2, ``fem.element_default.COARSE_THIN_CURVED``), where a
-    membrane-dominated shell with free edges can come out spuriously flexible (the Scordelis-Lo
-    roof 2x2 at R/h 1e4: 10.9 times its deflection; docs/ELEMENTS.md).
+    the torsion constant of the default element and of the DOLFINx reference.  Issued when a
+    solve starts (``Problem.check_element``) for the default element on coarse meshes of thin
+    curved shells (an element along a free edge whose out-of-plane edge turn phi has
+    phi^3 L / h > 2, ``fem.element_default.COARSE_THIN_CURVED``), where a membrane-dominated
+    shell can come out spuriously flexible (the Scordelis-Lo roof 2x2 at R/h 1e4: 10.9 times its
+    deflection; docs/ELEMENTS.md).
 
     Example
     -------
@@ -472,5 +473,22 @@ class MeshWarning(UserWarning):
     -------
     >>> from core_se3.errors import MeshWarning
     >>> issubclass(MeshWarning, UserWarning)
+    True
+    """
+
+
+class AccuracyWarning(UserWarning):
+    """A linear solution that double precision cannot give to 1e-4 (``solvers.linear``).
+
+    The factorisation is backward stable, so its error is that of the system: about its
+    condition number times the round-off.  Very thin shells are ill-conditioned (the membrane
+    stiffness exceeds the bending stiffness by (L/h)^2): the pinched hemisphere on 64x64
+    elements is good to about 1e-3 at R/h 1e5 and to 5 ... 9 % at 1e6, where different
+    factorisations of the same system differ by 1.6e-3 and 3 % (measured, issue 30).
+
+    Example
+    -------
+    >>> from core_se3.errors import AccuracyWarning
+    >>> issubclass(AccuracyWarning, UserWarning)
     True
     """

@@ -136,6 +136,32 @@ def test_linear_answer_is_linear_in_the_load_and_control_linear_is_the_same():
     assert np.abs(res.final.reaction_force + res.final.applied_force).max() <= 1e-9
 
 
+def test_linear_solution_says_how_accurate_double_precision_made_it():
+    """The factorisation is backward stable, so a linear answer's error is the condition number
+    times the round-off, and a very thin shell is ill-conditioned (membrane over bending stiffness
+    (L/h)^2).  The estimate (one more correction from the true residual) is 1e-9 at R/h 100; at
+    R/h 1e6 it exceeds ACCURACY (1e-4) for both factorisations, which warn (before: silent, the
+    64x64 at 1e6 off by 5 ... 9 %).  The estimate is the error's order of magnitude, not a bound
+    (Higham 2002, s12.1): the two answers, each wrong by about its estimate, differ by less than
+    ten times the sum of the estimates (measured: 2.1e-4 against 1.8e-3 + 3.3e-4 with NumPy 1.24's
+    SciPy, 2.8e-3 against 1.3e-3 with NumPy 2's)."""
+    from core_se3.errors import AccuracyWarning
+    from core_se3.solvers.linear import ACCURACY
+    well, meas = sc.pinched_hemisphere(16, h=0.1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", AccuracyWarning)
+        assert well.solve_linear().log[-1]["error_estimate"] < 1e-8
+    answers, estimates = [], []
+    for solver in ("superlu", "banded"):
+        p, meas = sc.pinched_hemisphere(16, h=1e-5)                      # R/h 1e6
+        with pytest.warns(AccuracyWarning, match="accurate to about"):
+            res = p.solve_linear(linear_solver=solver)
+        answers.append(meas(res))
+        estimates.append(res.log[-1]["error_estimate"])
+    assert min(estimates) > ACCURACY
+    assert abs(answers[0] / answers[1] - 1) <= 10 * sum(estimates)
+
+
 def test_linear_solve_refuses_unknown_options():
     with pytest.raises(OptionError, match="unknown option"):
         _cantilever(1.0).solve_linear(stepz=3)
