@@ -24,6 +24,7 @@ import subprocess
 import sys
 import time
 import types
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -35,6 +36,7 @@ RESULTS = ROOT / "benchmarks" / "results"
 from core_se3 import Material                                  # noqa: E402
 from core_se3.catalogue import patch_tests as pt               # noqa: E402
 from core_se3.catalogue import shell_course as sc              # noqa: E402
+from core_se3.errors import AccuracyWarning                    # noqa: E402
 
 REF = sc.REFERENCES
 NOTES = """## Reading
@@ -199,12 +201,16 @@ def sweeps(kratos):
     for case, build, R in (("Scordelis-Lo roof", sc.scordelis_lo, 25.0), ("pinched hemisphere", sc.pinched_hemisphere, 10.0)):
         for rh in SWEEP_RH:
             h = R / rh
-            conv = measure(build, None, 64, h=h)["core_se3"]
+            p, meas = build(64, h=h)
+            with warnings.catch_warnings():        # its AccuracyWarning: reported below the table
+                warnings.simplefilter("ignore", AccuracyWarning)
+                res = p.solve_linear()
+            conv, accuracy = meas(res), res.log[-1]["error_estimate"]
             row = {}
             for n in SWEEP_MESHES:
                 v = measure(build, kratos, n, h=h)
                 row[n] = {k: (None if x is None else x / conv) for k, x in v.items()}
-            out[f"{case}|{rh:g}"] = dict(converged=conv, ratios=row)
+            out[f"{case}|{rh:g}"] = dict(converged=conv, converged_error=accuracy, ratios=row)
             print(case, rh, {n: round(r["core_se3"], 3) for n, r in row.items()}, flush=True)
     return out
 
@@ -600,6 +606,11 @@ def write(doc):
                     continue
                 L.append(f"| {key.split('|')[1]} | " + " | ".join(_f(s["ratios"][str(n) if str(n) in s["ratios"] else n].get(c), 3)
                                                             for n in SWEEP_MESHES) + " |")
+            errs = [(key.split("|")[1], s["converged_error"]) for key, s in sw.items()
+                    if key.split("|")[0] == case and s.get("converged_error") is not None]
+            if c == "core_se3" and errs:
+                L += ["", "The 64x64 values' own accuracy (the linear solve's error estimate in double precision, "
+                      "docs/ELEMENTS.md \"Linear analysis\"): " + ", ".join(f"R/h {k} {e:.1e}" for k, e in errs) + "."]
     rem = doc.get("remedies", {})
     if rem:
         L += ["", "## Candidate remedies for thin curved coarse meshes", "",
