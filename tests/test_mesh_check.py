@@ -221,6 +221,45 @@ def test_the_coarse_thin_hemisphere_passes_the_check_that_its_warning_asks_for()
     assert chk.converged and chk.change < 0.03
 
 
+def _pressurised_hemisphere(m, h=0.01):
+    """The quarter hemisphere (R 10, E 6.825e7, nu 0.3; R/h 1e3 at h 0.01) clamped along its 18 deg
+    hole, free along the equator, under a unit pressure: membrane dominated (the largest
+    displacement grows like R/h: 1.6e-4, 1.9e-3, 2.4e-2 at R/h 1e2, 1e3, 1e4 on 64x64), with a
+    layer of width about sqrt(R h) along the free equator."""
+    from core_se3 import Material, Problem
+    p = Problem(m, Material(6.825e7, 0.3, h))
+    p.clamp("x0")
+    p.fix("y0", (1, 3, 5)); p.fix("y1", (1, 3, 5))
+    p.add_pressure(1.0)
+    return p
+
+
+def _largest_displacement(p):
+    res = p.solve_linear()
+    return float(np.linalg.norm(res.final.g[:, :3, 3] - p.mesh.X, axis=1).max())
+
+
+def test_a_too_stiff_coarse_mesh_is_flagged_by_the_warning_or_by_the_check():
+    """The warning's index is calibrated on the roof's layer, R (h/R)^(1/4) wide; a doubly curved
+    shell's free-edge layer is narrower, about sqrt(R h) (0.32 here), and its coarse meshes come out
+    too stiff: the pressurised hemisphere's largest displacement over the 64x64 value (itself within
+    1.3 % of 128x128's) is 0.676 on 4x4, flagged by the warning, and 0.862 on 8x8, which the
+    warning does not flag -- the mesh check does (change 0.19)."""
+    from core_se3.errors import ElementWarning
+    from core_se3.scenario import check_problem_mesh
+    make = lambda n: _pressurised_hemisphere(mesh.hemisphere_quarter(10.0, 18.0, n, n))
+    converged = _largest_displacement(make(64))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        coarse = _largest_displacement(make(4)) / converged
+    assert coarse < 0.75 and any(issubclass(w.category, ElementWarning) for w in caught)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ElementWarning)
+        assert 0.8 < _largest_displacement(make(8)) / converged < 0.9
+    chk = check_problem_mesh(_pressurised_hemisphere, mesh.hemisphere_quarter(10.0, 18.0, 8, 8))
+    assert not chk.converged and chk.change > 0.1
+
+
 def test_a_converged_mesh_passes_and_two_levels_give_the_order():
     """The roof 16x16 at R/h 100 (MacNeal-Harder's thickness): 0.37 % change; the energy's
     observed order from 16x16, 32x32, 64x64 is about 2."""

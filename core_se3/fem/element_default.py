@@ -489,8 +489,9 @@ def warn_if_coarse_thin_curved(index, size=None, stacklevel=2):
             f"coarse mesh of a thin curved shell: an element along a free edge turns by phi out of its plane "
             f"with phi^3 L / h = {worst:.3g} > {COARSE_THIN_CURVED:g} (L its size, h the thickness) on "
             f"{int(np.sum(index > COARSE_THIN_CURVED))} element(s). Where the shell is membrane dominated, "
-            f"four-node meshes this coarse along a free edge (a boundary edge no support holds) can be "
-            f"spuriously flexible (the Scordelis-Lo roof 2x2 at R/h 1e4: 10.9 times its deflection); bending-"
-            f"dominated shells are not affected. Check by refining: `core-se3 check-mesh SCENARIO.toml` "
+            f"four-node meshes this coarse along a free edge (a boundary edge no support holds) can be far off: "
+            f"spuriously flexible (the Scordelis-Lo roof 2x2 at R/h 1e4: 10.9 times its deflection) or too stiff "
+            f"(a pressurised hemisphere with a free equator, 4x4 at R/h 1e3: 0.68 of its largest displacement); "
+            f"bending-dominated shells are not affected. Check by refining: `core-se3 check-mesh SCENARIO.toml` "
             f"(scenario.check_mesh) compares the linear answer with a refined mesh's (each halving of the "
             f"element size divides phi^3 L by 16) -- docs/ELEMENTS.md." + layer), stacklevel=stacklevel + 1)
