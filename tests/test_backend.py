@@ -151,3 +151,23 @@ def test_each_step_records_the_backend_that_evaluated_it(fresh_rent, monkeypatch
     recs = [step_record(s, None) for s in res.steps]
     assert format_backends(recs) == "backend: numpy for steps 0-2, numba for steps 3-4"
     assert format_backends([step_record(s, None) for s in _cantilever().solve(steps=1).steps]) == "backend: numba"
+
+
+@needs_numba
+def test_the_compiled_evaluation_is_not_taken_for_a_new_assembler_at_an_old_address():
+    """The compiled parts were cached under the id() of the assembler they were built for, and
+    not kept alive: linear analysis evaluates on a temporary assembler of all dofs, and the
+    problem's own assembler, made next, often took its address (15 of 20 trials) and got its
+    parts -- a residual on all 162 dofs instead of the 144 free ones (a Newton solve after
+    solve_linear failed with a ValueError of mismatched sizes on the 64x64 hemisphere).  Each trial
+    frees the temporary assembler just before the problem's is made."""
+    from core_se3.assembly import Assembler
+    for _ in range(20):
+        p = Problem(mesh.rectangle(10.0, 1.0, 8, 2), Material(1.2e6, 0.3, 0.1), backend="numba")
+        p.clamp("x0")
+        p.add_nodal_load("x1", force=(0.0, 0.0, 1e-3))
+        every = Assembler(p.mesh, np.ones(6 * p.mesh.n_nodes, bool))
+        assert p.evaluate(p.mesh.g0, 0.0, assembler=every).r.size == 162
+        del every
+        asm = p.assembler()
+        assert p.evaluate(p.mesh.g0, 1.0).r.size == int(asm.free.sum()) == 144

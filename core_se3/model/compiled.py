@@ -45,8 +45,12 @@ class CompiledEvaluation:
         """(pattern, element kernels, [(load, compiled add or None)]) for the assembler, built
         once and again when the loads change; None when the element has no kernels."""
         prob = self.problem
-        key = (id(asm), id(prob.element), tuple(id(ld) for ld in prob.loads))
-        if self._parts is None or self._parts[0] != key:
+        # the key holds the objects themselves and compares identities: a key of their id()s
+        # matched a new assembler that took a freed one's address (linear analysis' temporary
+        # assembler of all dofs, then the problem's: a residual on the wrong dofs)
+        key = (asm, prob.element, *prob.loads)
+        if self._parts is None or len(self._parts[0]) != len(key) or \
+                any(a is not b for a, b in zip(self._parts[0], key)):
             pattern = asm.pattern()
             kern = prob.element.compiled(pattern)
             loads = _compiled_loads(prob.loads, pattern) if kern is not None else []
