@@ -10,12 +10,17 @@ element's material stiffness (the reference is stress free, so there is no geome
 the load-independent stiffness of the loads (penalty supports); the stiffness of follower loads,
 proportional to the load, is a geometric effect and is left out, so that the answer is linear
 in the load.  Prescribed motions enter through their targets at lam_end: the held components
-of eta_p = (R0^T (x_t - X), log(R0^T R_t)) of each held node.
+of the rigid motions of ``rotate_edge`` / ``move_edge`` linearised, eta_p = (R0^T (s t + omega x
+(X - p)), R0^T omega) with omega = s angle axis (``Prescribed.linear``: an infinitesimal rigid
+motion, which does not strain the element; the target's chord (Q - I)(X - p) would, by
+O(angle^2)), and of other targets (``prescribe``) eta_p = (R0^T (x_t - X), log(R0^T R_t)).
 
 The state reported is g_i = g0_i (exp_so3(w_i), v_i) (the rotation and the translation updated
 separately, not by the SE(3) exponential): its probes and displacements are then exactly the
 linear ones, u = R0 v, the rotation vector R0 w.  Reactions are those of the linear internal
-forces K0 eta (the forces in the reference frames).  The result has the reference state and
+forces K0 eta (the forces in the reference frames, the penalty springs' K_s eta counted with
+the applied loads, as a load-stepping step counts them); the step's force and moment totals are
+taken in the reference frames and positions, where the linear equations balance.  The result has the reference state and
 this one step, like a one-step solve.
 """
 from __future__ import annotations
@@ -58,6 +63,9 @@ def _prescribed_increments(problem, lam):
     eta = np.zeros((problem.mesh.n_nodes, 6))
     for s in problem.supports:
         if s.target is None:
+            continue
+        if getattr(s, "linear", None) is not None:          # a rigid motion, linearised
+            eta[s.nodes] = np.where(s.fixed, s.linear(lam), eta[s.nodes])
             continue
         gt = np.asarray(s.target(lam), float)
         R0 = g0[s.nodes, :3, :3]
@@ -129,6 +137,11 @@ def linear_solve(problem, lam_end=1.0, steps=None, linear_solver=None, **kw):
     t = time.perf_counter()
     ev = problem.evaluate(g0, 0.0, assembler=every)                   # K0 on all dofs
     K = ev.K.tocsr()
+    _, Kn_ext, Ke_ext = problem.external(g0, 0.0, tangent=True)
+    # the loads' own stiffness (penalty springs), -df/d eta: their linear forces f - K_ext eta
+    # belong to the applied loads (as a load-stepping step reports them), not to the internal
+    # forces, or the step's applied totals miss the springs' forces and it does not balance
+    K_ext = every.matrix(Ke_ext, None, Kn_ext)
     f = problem.external(g0, lam_end, tangent=False)[0].ravel()
     eta = _prescribed_increments(problem, lam_end).ravel()
     rhs = f[free] - K[free][:, ~free] @ eta[~free]
@@ -137,15 +150,12 @@ def linear_solve(problem, lam_end=1.0, steps=None, linear_solver=None, **kw):
     eta[free] = checked_solve(solver, K[free][:, free], rhs)
     result.timings["solve"] = time.perf_counter() - t
     t = time.perf_counter()
-    r_lin = (K @ eta).reshape(n, 6)
-    f = f.reshape(n, 6)
+    r_lin = ((K - K_ext) @ eta).reshape(n, 6)
+    f_lin = (f - K_ext @ eta).reshape(n, 6)
     result.steps.append(rec.step(0.0, g0, 0, [], (np.zeros((n, 6)), problem.external(g0, 0.0, tangent=False)[0])))
-    g = linear_state(g0, eta)
-    # the forces act in the reference frames: expressed in the frames of g, so that the step's
-    # lab totals (R f) are the reference ones (R0 f)
-    Q = np.swapaxes(g[:, :3, :3], 1, 2) @ g0[:, :3, :3]
-    to_g = lambda a: np.concatenate([np.einsum("nij,nj->ni", Q, a[:, :3]), np.einsum("nij,nj->ni", Q, a[:, 3:])], 1)
-    result.steps.append(rec.step(lam_end, g, 1, [], (to_g(r_lin), to_g(f))))
+    # the forces act in the reference frames and balance there (the linear equations): the
+    # step's totals are taken in g0 (moments with the reference positions), its probes at g
+    result.steps.append(rec.step(lam_end, linear_state(g0, eta), 1, [], (r_lin, f_lin), totals_at=g0))
     # the strain energy of the linear solution, 1/2 eta^T K0 eta (with the supports' penalty springs)
     energy = 0.5 * float(eta @ (K @ eta))
     result.log.append(dict(lam=lam_end, converged=True, iterations=1, reason="linear", energy=energy))
