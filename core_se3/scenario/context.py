@@ -33,6 +33,10 @@ class RunContext:
     def __init__(self, problem):
         self.problem = problem
         self.root = launched_rank() == 0
+        if self.root:
+            # the coarse-mesh warning, as Problem.solve gives it (the runner drives the solvers
+            # itself, not through Problem.solve; the distributed context warns in its set-up)
+            problem.check_element(stacklevel=5)
 
     def barrier(self):
         return None
