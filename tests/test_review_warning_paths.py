@@ -24,3 +24,17 @@ def test_a_scenario_run_of_the_coarse_thin_roof_warns_like_problem_solve(control
         warnings.simplefilter("always")
         scenario.run(scenario.from_dict(doc), str(tmp_path / control))
     assert sum(issubclass(w.category, ElementWarning) for w in caught) == 1
+
+
+def test_a_warm_started_sweep_point_warns_too(tmp_path):
+    # a sweep over the thickness of the roof 2x2: R/h 1e2 (no warning) then 1e4 (10.9 times its
+    # deflection), the thin point warm started by a Newton solve that skips Problem.solve: it
+    # was silent
+    doc = sc.scenario_doc("scordelis-lo", 2, 25.0 / 1e2)
+    doc.setdefault("solver", {}).update(lam_end=1e-3, steps=1)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        res = scenario.sweep(scenario.from_dict(doc), {"material.h": [0.25, 0.0025]}, out=str(tmp_path),
+                             plot=False)
+    assert [r["warm"] for r in res.rows] == [False, True]
+    assert sum(issubclass(w.category, ElementWarning) for w in caught) == 1
