@@ -124,7 +124,8 @@ def _unrefined_mesh(v, d, base_dir):
             warnings.simplefilter("always", MeshWarning)
             mesh = kind.build(**kw)
     except CoreSE3Error as exc:
-        v.fail(key, f"{gen}: {exc}")
+        # a grading the generator refuses ('grade: ...', 'grading: ...') is named at its key
+        v.fail(join(key, "grade") if "grade" in kw and str(exc).startswith("grad") else key, f"{gen}: {exc}")
     except ValueError as exc:                  # a user's generator
         v.fail(key, f"{gen}: {exc}")
     for w in caught:
