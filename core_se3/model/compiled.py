@@ -25,6 +25,11 @@ def _compiled_loads(loads, pattern):
     return out
 
 
+def _same_objects(a, b):
+    """True if the keys a and b, (assembler, element, tuple of loads), hold the same objects."""
+    return a[0] is b[0] and a[1] is b[1] and len(a[2]) == len(b[2]) and all(x is y for x, y in zip(a[2], b[2]))
+
+
 class CompiledEvaluation:
     """The compiled evaluation of ``problem`` (see the module docstring)."""
 
@@ -45,8 +50,11 @@ class CompiledEvaluation:
         """(pattern, element kernels, [(load, compiled add or None)]) for the assembler, built
         once and again when the loads change; None when the element has no kernels."""
         prob = self.problem
-        key = (id(asm), id(prob.element), tuple(id(ld) for ld in prob.loads))
-        if self._parts is None or self._parts[0] != key:
+        # the objects themselves, compared by identity: their id()s alone are reused once they are
+        # freed (a support added drops the assembler, and the next one is often allocated at the
+        # same address: the old free dofs' pattern was kept, K 144 x 144 for 141 free dofs)
+        key = (asm, prob.element, tuple(prob.loads))
+        if self._parts is None or not _same_objects(self._parts[0], key):
             pattern = asm.pattern()
             kern = prob.element.compiled(pattern)
             loads = _compiled_loads(prob.loads, pattern) if kern is not None else []
