@@ -52,3 +52,34 @@ def test_penalty_springs_count_with_the_applied_loads_and_the_step_balances(spri
     assert np.allclose(lin.applied_force, nl.applied_force / eps, rtol=1e-4, atol=1e-6)
     assert np.allclose(lin.applied_moment, nl.applied_moment / eps, rtol=1e-4, atol=1e-6)
     assert np.allclose(lin.reaction_force, nl.reaction_force / eps, rtol=1e-4, atol=1e-6)
+
+
+def test_the_linear_cell_fields_are_those_of_the_linear_strains(tmp_path):
+    # a cantilever under an end shear, linear tip deflection L/3: the strains of its linear
+    # state g0 (exp(w), v) stretch the chords, and the VTU's membrane force N11 read 1.4e4 at
+    # the tip element (the shear force is 1, the linear N11 0); the linear fields are the
+    # nonlinear ones at a tiny load, scaled
+    import meshio
+    from core_se3 import scenario
+    from core_se3.solvers.linear import linear_increments
+    p = Problem(mesh.rectangle(10.0, 1.0, 16, 1), Material(1.2e6, 0.0, 0.1))
+    p.clamp("x0")
+    p.add_edge_force("x1", (0.0, 0.0, 1.0))
+    g = p.solve_linear().final.g
+    lin = p.element.cell_fields(g, increments=linear_increments(p.mesh.g0, g))
+    eps = 1e-5
+    q = Problem(mesh.rectangle(10.0, 1.0, 16, 1), Material(1.2e6, 0.0, 0.1))
+    q.clamp("x0")
+    q.add_edge_force("x1", (0.0, 0.0, 1.0))
+    small = q.element.cell_fields(q.solve(steps=1, lam_end=eps, rtol=1e-13).final.g)
+    for k in ("N1", "M1", "N1_local", "M1_local"):
+        assert np.allclose(lin[k], small[k] / eps, rtol=0, atol=1e-4 * np.abs(lin[k]).max())
+    assert np.allclose(lin["N1_local"], [0.0, 0.0, 1.0], atol=1e-9)
+    doc = {"mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 16, "ny": 1},
+           "material": {"E": 1.2e6, "nu": 0.0, "h": 0.1}, "supports": [{"type": "clamp", "edge": "x0"}],
+           "loads": [{"type": "edge_force", "edge": "x1", "force": [0.0, 0.0, 1.0]}],
+           "solver": {"control": "linear"}}
+    res = scenario.run(scenario.from_dict(doc), str(tmp_path / "run"))
+    vtu = meshio.read(str(tmp_path / "run" / "vtu" / "step_0001.vtu"))
+    assert np.allclose(vtu.cell_data["N1_local"][0], lin["N1_local"], atol=1e-9)
+    assert res is not None

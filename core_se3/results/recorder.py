@@ -142,23 +142,22 @@ class StepRecorder:
             states[name] = ProbeState(x - x0, R @ Rref.T, self.unwrapped[name].copy())
         return states
 
-    def step(self, lam, g, iterations, history, forces, stability=None, turn=None, local=None, totals_at=None):
+    def step(self, lam, g, iterations, history, forces, stability=None, turn=None, local=None):
         """The StepResult of a converged state: ``forces`` = (r_int, f_ext), the internal and
-        external generalised nodal forces (n, 6) at g; ``turn`` = (start, increments) of the
+        external generalised nodal forces (n, 6) at g, or (r_int, f_ext, frames): the frames
+        (n, 4, 4) they act in and the moments are taken with (default g; linear analysis: the
+        reference frames, where its equations balance); ``turn`` = (start, increments) of the
         Newton try that reached g, as for :meth:`probes`; ``local``: (the frames relative to
-        an origin, that origin) of the same state, which the probes read, see :meth:`probes`;
-        ``totals_at``: the frames (n, 4, 4) the forces act in and the moments are taken with
-        (default g; linear analysis: the reference frames, where its equations balance).
+        an origin, that origin) of the same state, which the probes read, see :meth:`probes`.
 
         The loads that are constraint forces (``Load.constraint_force``: contact) are split off
         the applied loads: ``contact`` holds each one's lab force and moment (about the origin)
         with its ``report`` scalars, and the balance sums applied, reactions and contact."""
-        r_int, f_ext = forces
+        r_int, f_ext, at = forces if len(forces) == 3 else (*forces, g)
         start, increments = turn if turn else (None, None)
         probes = self.probes(g, start, increments) if local is None else self.probes(local[0], start, increments,
                                                                                    local[1])
         reac = (r_int - f_ext) * self.fixed
-        at = g if totals_at is None else totals_at
         RF, RM, sF, sM = lab_totals(at, reac, magnitudes=True)
         AF, AM, aF, aM = lab_totals(at, f_ext, magnitudes=True)
         contact = {}

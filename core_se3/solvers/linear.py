@@ -36,7 +36,7 @@ from ..results import Result, StepRecorder
 from .linalg import checked_solve, make_solver
 from .options import NewtonOptions, unknown_keywords
 
-__all__ = ["linear_solve", "linear_state"]
+__all__ = ["linear_solve", "linear_state", "linear_increments"]
 
 
 def linear_state(g0, eta):
@@ -55,6 +55,22 @@ def linear_state(g0, eta):
     h[:, :3, 3] = eta[:, :3]
     h[:, 3, 3] = 1.0
     return g0 @ h
+
+
+def linear_increments(g0, g):
+    """The increments eta (n, 6) of a linear analysis' state g = ``linear_state(g0, eta)``:
+    (R0^T (x - X), log(R0^T R)), exact while every |w| < pi.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> eta = np.array([[1.0, 2.0, 3.0, 0.0, 0.2, 0.1]])
+    >>> linear_increments(np.eye(4)[None], linear_state(np.eye(4)[None], eta)).round(12).tolist()
+    [[1.0, 2.0, 3.0, 0.0, 0.2, 0.1]]
+    """
+    RT = np.swapaxes(g0[:, :3, :3], 1, 2)
+    v = np.einsum("nij,nj->ni", RT, g[:, :3, 3] - g0[:, :3, 3])
+    return np.concatenate([v, lie.log_so3(RT @ g[:, :3, :3])], 1)
 
 
 def _prescribed_increments(problem, lam):
@@ -155,7 +171,7 @@ def linear_solve(problem, lam_end=1.0, steps=None, linear_solver=None, **kw):
     result.steps.append(rec.step(0.0, g0, 0, [], (np.zeros((n, 6)), problem.external(g0, 0.0, tangent=False)[0])))
     # the forces act in the reference frames and balance there (the linear equations): the
     # step's totals are taken in g0 (moments with the reference positions), its probes at g
-    result.steps.append(rec.step(lam_end, linear_state(g0, eta), 1, [], (r_lin, f_lin), totals_at=g0))
+    result.steps.append(rec.step(lam_end, linear_state(g0, eta), 1, [], (r_lin, f_lin, g0)))
     # the strain energy of the linear solution, 1/2 eta^T K0 eta (with the supports' penalty springs)
     energy = 0.5 * float(eta @ (K @ eta))
     result.log.append(dict(lam=lam_end, converged=True, iterations=1, reason="linear", energy=energy))
