@@ -58,3 +58,17 @@ def test_a_tilt_direction_given_as_one_row_holds_every_node_on_both_backends():
     from core_se3.errors import SupportError
     with pytest.raises(SupportError, match="direction t must be one lab direction"):
         _tilted_strip("numpy", np.ones((2, 3)))
+
+
+@pytest.mark.parametrize("backend", ["numpy", "numba"])
+def test_a_material_set_after_a_solve_is_the_one_solved_with(backend):
+    # Problem.material was a plain attribute: the element built at the first solve kept the old
+    # law, so twice E gave the same deflection (ratio 1.0 instead of 0.5), silently
+    p = Problem(mesh.rectangle(10.0, 1.0, 8, 1), Material(1.2e6, 0.0, 0.1), backend=backend)
+    p.clamp("x0")
+    p.add_edge_force("x1", (0.0, 0.0, 1e-3))
+    p.add_probe("tip", "x1")
+    u1 = p.solve_linear().final.probes["tip"]["u"][2]
+    p.material = Material(2.4e6, 0.0, 0.1)
+    assert p.element.material is p.material
+    assert p.solve_linear().final.probes["tip"]["u"][2] == pytest.approx(0.5 * u1, rel=1e-9)

@@ -101,6 +101,19 @@ class Problem:
         self.backend_setting = _backend.resolve(name)
 
     @property
+    def material(self):
+        """The resultant law; setting it (as :meth:`set_material`) drops the element built for the
+        old one and the compiled evaluation, so the next evaluation uses the new law (a law set
+        after a solve was silently ignored: the element kept the old one)."""
+        return self._material
+
+    @material.setter
+    def material(self, law):
+        self._material = law
+        self._element = None
+        self._compiled = None
+
+    @property
     def element(self):
         """The element on the whole mesh (``fem.make_element``), built at its first use."""
         if self._element is None:
@@ -282,9 +295,8 @@ class Problem:
         >>> p.set_material(Material(2e3, 0.0, 0.01)); p.material.E, p.element.material.E
         (2000.0, 2000.0)
         """
-        self.material = material
+        self.material = material                     # drops the element and the compiled evaluation
         self.element = make_element(self.element_name, self.mesh, material)
-        self._compiled = None
 
     def add_obstacle(self, obstacle, region=None, nodes=None, **options):
         """Contact with a rigid obstacle: a registered kind ('half_space', 'sphere', 'cylinder',
