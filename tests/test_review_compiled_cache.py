@@ -72,3 +72,16 @@ def test_a_material_set_after_a_solve_is_the_one_solved_with(backend):
     p.material = Material(2.4e6, 0.0, 0.1)
     assert p.element.material is p.material
     assert p.solve_linear().final.probes["tip"]["u"][2] == pytest.approx(0.5 * u1, rel=1e-9)
+
+
+def test_an_element_named_after_a_solve_is_the_one_solved_with():
+    # element_name was a plain attribute too: 'seed' set after a solve kept the default element
+    p = Problem(mesh.rectangle(10.0, 1.0, 8, 1), Material(1.2e6, 0.0, 0.1), backend="numpy")
+    p.clamp("x0")
+    p.add_edge_force("x1", (0.0, 0.0, 1e-3))
+    p.solve_linear()
+    p.element_name = "seed"
+    assert type(p.element).__name__ == type(Problem(p.mesh, p.material, element="seed").element).__name__
+    from core_se3.errors import OptionError
+    with pytest.raises(OptionError, match="did you mean 'seed'"):
+        p.element_name = "seeed"

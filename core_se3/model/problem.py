@@ -79,9 +79,7 @@ class Problem:
         self._compiled = None
         self.mesh = mesh
         self.material = material
-        ELEMENTS.lookup(element)                      # an unknown name fails here
-        self._element = None                          # built at first use (see ``element``)
-        self.element_name = element
+        self.element_name = element                   # an unknown name fails here; built at first use
         self.linear_solver = linear_solver
         self.loads = []
         self.supports = []
@@ -110,6 +108,19 @@ class Problem:
     @material.setter
     def material(self, law):
         self._material = law
+        self._element = None
+        self._compiled = None
+
+    @property
+    def element_name(self):
+        """The element's key in ``core_se3.fem.ELEMENTS``; setting it (an unknown name fails)
+        drops the element built for the old one, as setting :attr:`material` does."""
+        return self._element_name
+
+    @element_name.setter
+    def element_name(self, name):
+        ELEMENTS.lookup(name)
+        self._element_name = name
         self._element = None
         self._compiled = None
 
