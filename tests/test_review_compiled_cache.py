@@ -1,6 +1,7 @@
-"""The numba backend's compiled evaluation follows the problem's supports and loads: it was keyed
-on the id()s of the assembler and the loads, which Python reuses once they are freed (review
-finding; the test fails on the code before)."""
+"""What the problem evaluates follows what the user set (review findings; each test fails on the
+code before): the numba backend's compiled evaluation was keyed on id()s that Python reuses; a
+tilt spring's direction given as one row was read past its end by the compiled spring; a material
+or element set after a solve was ignored."""
 import importlib.util
 
 import numpy as np
