@@ -148,8 +148,10 @@ class Element(abc.ABC):
     def energy(self, g) -> float:
         """Elastic energy at the frames g."""
 
-    def cell_fields(self, g) -> dict:
-        """Per-element output fields (name -> (m, k)) for VTU files; none by default."""
+    def cell_fields(self, g, increments=None) -> dict:
+        """Per-element output fields (name -> (m, k)) for VTU files; none by default.
+        ``increments``: a linear analysis' nodal increments (n, 6) about the reference, whose
+        state g is (its fields are then the linear ones)."""
         return {}
 
     def compiled(self, pattern):

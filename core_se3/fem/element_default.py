@@ -281,9 +281,37 @@ class DefaultElement(Element):
             Pmg = Pmg + tying_correction(Pg, z0, Ek)
         return shear_tying(Pm, P, z0, self.shear_beta, gauss=(Pmg, Pg))
 
-    def cell_fields(self, g):
-        """Stress resultants at the element centres (``resultants.element_resultants``)."""
-        return element_resultants(self, g)
+    def cell_fields(self, g, increments=None):
+        """Stress resultants at the element centres (``resultants.element_resultants``); with
+        ``increments`` (n, 6), those of the linear analysis whose state g is (its strains
+        linearised about the reference: :meth:`linear_strains`)."""
+        return element_resultants(self, g, increments)
+
+    def linear_strains(self, eta, points=GAUSS_2x2):
+        """The strain twists' increments (m, npts, 12) of the nodal increments eta (n, 6) about
+        the reference frames, linearised: the tying of dz = z(dpsi / 2), dpsi the edge twists'
+        linear increments (as :meth:`linear_stress` at the reference, where z = z0).
+
+        Example
+        -------
+        >>> import numpy as np
+        >>> from core_se3 import Material, mesh
+        >>> el = DefaultElement(mesh.rectangle(2.0, 1.0, 2, 1), Material(1.0e3, 0.3, 0.1))
+        >>> X = el.mesh.X
+        >>> eta = np.zeros((6, 6)); eta[:, 5] = 0.3; eta[:, 0], eta[:, 1] = -0.3 * X[:, 1], 0.3 * X[:, 0]  # 0.3 e_z x X
+        >>> float(np.abs(el.linear_strains(eta)).max()) < 1e-15
+        True
+        """
+        psi0 = edge_twists(self.mesh.g0, self.mesh.edge_nodes)
+        Lp, Lm = lie.dexp_inv(psi0, both=True)
+        return np.einsum("mqij,mj->mqi", self.tying(points), self._element_z(0.5 * self._edge_increments(Lp, Lm, eta)))
+
+    def _edge_increments(self, Lp, Lm, eta):
+        """The edge twists' linear increments L(psi) eta_b - L(-psi) eta_a (E, 6) of the nodal
+        increments eta (n, 6)."""
+        En = self.mesh.edge_nodes
+        eta = np.asarray(eta, float).reshape(-1, 6)
+        return np.einsum("eij,ej->ei", Lp, eta[En[:, 1]]) - np.einsum("eij,ej->ei", Lm, eta[En[:, 0]])
 
     def compiled(self, pattern, mode="auto"):
         """The numba kernels of this element on ``pattern`` (``kernels.ElementKernels``), built
@@ -337,10 +365,7 @@ class DefaultElement(Element):
         True
         """
         Lp, Lm, dz = ev.linearization
-        En = self.mesh.edge_nodes
-        eta = np.asarray(eta, float).reshape(-1, 6)
-        dpsi = (np.einsum("eij,ej->ei", Lp, eta[En[:, 1]]) - np.einsum("eij,ej->ei", Lm, eta[En[:, 0]]))
-        return np.einsum("mij,mj->mi", self.Dbar, dz + self._element_z(0.5 * dpsi))
+        return np.einsum("mij,mj->mi", self.Dbar, dz + self._element_z(0.5 * self._edge_increments(Lp, Lm, eta)))
 
     def evaluate(self, g, tangent=True, stress=None):
         """Internal residual r (n, 6) in body frames and, if asked, the tangent blocks: the

@@ -25,15 +25,22 @@ __all__ = ["element_resultants"]
 CENTRE = np.zeros((1, 2))
 
 
-def element_resultants(element, g):
+def element_resultants(element, g, increments=None):
     """Cell fields (name -> (m, 3)) of the default element at state g (n, 4, 4).
 
     Parameters
     ----------
     element : DefaultElement
-        The element (its mesh and material law; anything with ``strains(g, points)``).
+        The element (its mesh and material law; anything with ``strains(g, points)``, and
+        ``linear_strains(eta, points)`` for ``increments``).
     g : (n, 4, 4) array
         Current nodal frames.
+    increments : (n, 6) array, optional
+        A linear analysis' nodal increments eta about the reference (its state g): the strains
+        are linearised (``linear_strains``) and the resultants taken in the reference frames.
+        The strains of the state itself are not the linear ones: a cantilever's linear tip
+        deflection of a third of its length stretches the chords of its linear state, whose
+        membrane force read 1.4e4 where the linear one is 0 (the shear force 1).
 
     Returns
     -------
@@ -55,14 +62,18 @@ def element_resultants(element, g):
     """
     mesh = element.mesh
     zeta0 = element.strains(mesh.g0, CENTRE)[:, 0]            # (m, 12) body frame
-    zeta = element.strains(g, CENTRE)[:, 0]
+    if increments is None:
+        eps = element.strains(g, CENTRE)[:, 0] - zeta0
+        R = mean_rotation(g[mesh.quads, :3, :3])              # current centre frame
+    else:                                                     # linear analysis: the reference frames
+        eps = element.linear_strains(increments, CENTRE)[:, 0]
+        R = mean_rotation(mesh.g0[mesh.quads, :3, :3])
     A1, A2 = zeta0[:, 0:3], zeta0[:, 6:9]
     D, _ = law_matrix(element.material, A1, A2, element.size)  # (m, 12, 12)
-    S = np.einsum("mij,mj->mi", D, zeta - zeta0)
+    S = np.einsum("mij,mj->mi", D, eps)
     s = (S[:, 0:3], S[:, 6:9])                                # force conjugates
     t = (S[:, 3:6], S[:, 9:12])                               # moment conjugates
     A = np.stack([A1, A2], 1)                                 # (m, 2, 3)
-    R = mean_rotation(g[mesh.quads, :3, :3])                 # current centre frame
     out = {}
     for k, nu in ((1, np.array([1.0, 0, 0])), (2, np.array([0, 1.0, 0]))):
         w = A @ nu                                            # (m, 2): nu . A_a

@@ -66,7 +66,9 @@ def spacing(lo, hi, n, first=None, last=None):
     ------
     MeshError
         A fraction outside (0, 1), or no ratio q in [1e-6, 1e6] meets them (one element, two
-        elements graded from both ends, or fractions that add to 1 or more).
+        elements graded from both ends, or fractions that add to 1 or more), or with both ends
+        graded one end's progression does not reach that end (its element would get another
+        width than the fraction given).
 
     Warns
     -----
@@ -99,6 +101,17 @@ def spacing(lo, hi, n, first=None, last=None):
         c = 0.5 * (a + b)
         a, b = (c, b) if widths(c).sum() < 1.0 else (a, c)
     w = widths(0.5 * (a + b))
+    # with both ends graded the widths are the smaller of the two progressions: where one end's
+    # progression stays below the other's even at that end (q < 1: fractions above the uniform
+    # width 1/n; or one fraction far larger than the other), that end's element is the other
+    # progression's and the fraction asked for would be silently replaced (first = last = 0.3 of
+    # 8 elements gave end elements of 0.096; first 0.05, last 0.5 of 6 gave a last one of 0.36)
+    for k, v, got in (("first", first, w[0]), ("last", last, w[-1])):
+        if v is not None and abs(got / w.sum() - v) > 1e-9 * v:
+            raise MeshError(f"grading: no geometric growth from both ends of {n} element(s) gives the {k} element "
+                            f"the fraction {v} asked for (it would get {got / w.sum():.3g}; first = {first}, "
+                            f"last = {last}): grade one end only, or give fractions below the uniform width "
+                            f"1/{n} = {1.0 / n:.3g} whose progressions meet inside the side")
     growth = float(np.max(np.maximum(w[1:] / w[:-1], w[:-1] / w[1:]), initial=1.0))
     if growth > MAX_GROWTH:
         warnings.warn(MeshWarning(

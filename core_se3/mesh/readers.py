@@ -7,10 +7,11 @@ from __future__ import annotations
 
 import contextlib
 import io as _io
+import warnings
 
 import numpy as np
 
-from ..errors import MeshError
+from ..errors import MeshError, MeshWarning
 from .core import Mesh, chain_order, frames_from
 from .subdivide import split_to_quads
 
@@ -162,7 +163,31 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None, triangles="error"):
     mesh = Mesh(frames_from(X, t, d3), quads, named, regions=regions)
     for name, pred in (edges or {}).items():
         mesh.edges[name] = np.nonzero(pred(mesh.X))[0]
+    _warn_coincident(X)
     return mesh
+
+
+#: nodes closer than this fraction of the mesh's extent are one point (Gmsh's Geometry.Tolerance)
+COINCIDENT = 1e-8
+
+
+def _warn_coincident(X):
+    """A MeshWarning if distinct nodes of X (n, 3) lie at one point: the quads on either side
+    do not share them, so the shell is cut there (surfaces meshed separately, or two meshes put
+    together without merging their nodes); each side of the cut is a free edge and the answer
+    that of two shells (two strips clamped at their far ends and joined that way: two
+    cantilevers).  A slit may be meant (Sze et al.'s slit ring), so it is a warning."""
+    from scipy.spatial import cKDTree
+    r = COINCIDENT * max(float(np.ptp(X, axis=0).max(initial=0.0)), 1e-300)
+    pairs = cKDTree(X).query_pairs(r, output_type="ndarray")
+    if len(pairs):
+        shown = ", ".join(f"{a}-{b}" for a, b in pairs[:4].tolist()) + (", ..." if len(pairs) > 4 else "")
+        warnings.warn(MeshWarning(
+            f"mesh file: {len(pairs)} pair(s) of distinct nodes lie at one point (nodes {shown}, within {r:.2g}): "
+            f"the elements on either side do not share them, so the shell is cut there and each side is a free "
+            f"edge (surfaces meshed without a shared curve, or meshes put together without merging their nodes). "
+            f"If the cut is not meant, merge the nodes (Gmsh: Coherence, or Geometry.Tolerance; meshio: "
+            f"remove the duplicates) and read the mesh again; a slit that is meant may stay."), stacklevel=3)
 
 
 def _cell_blocks(m, triangles):

@@ -25,6 +25,11 @@ def _compiled_loads(loads, pattern):
     return out
 
 
+def _same_objects(a, b):
+    """True if the keys a and b, (assembler, element, tuple of loads), hold the same objects."""
+    return a[0] is b[0] and a[1] is b[1] and len(a[2]) == len(b[2]) and all(x is y for x, y in zip(a[2], b[2]))
+
+
 class CompiledEvaluation:
     """The compiled evaluation of ``problem`` (see the module docstring)."""
 
@@ -45,12 +50,12 @@ class CompiledEvaluation:
         """(pattern, element kernels, [(load, compiled add or None)]) for the assembler, built
         once and again when the loads change; None when the element has no kernels."""
         prob = self.problem
-        # the key holds the objects themselves and compares identities: a key of their id()s
-        # matched a new assembler that took a freed one's address (linear analysis' temporary
-        # assembler of all dofs, then the problem's: a residual on the wrong dofs)
-        key = (asm, prob.element, *prob.loads)
-        if self._parts is None or len(self._parts[0]) != len(key) or \
-                any(a is not b for a, b in zip(self._parts[0], key)):
+        # the objects themselves, compared by identity: their id()s alone are reused once they are
+        # freed (a support added drops the assembler, or linear analysis evaluates on a temporary
+        # one of all dofs, and the next one is often allocated at the same address: the old
+        # pattern was kept, K 144 x 144 for 141 free dofs, a residual on 162 dofs for 144)
+        key = (asm, prob.element, tuple(prob.loads))
+        if self._parts is None or not _same_objects(self._parts[0], key):
             pattern = asm.pattern()
             kern = prob.element.compiled(pattern)
             loads = _compiled_loads(prob.loads, pattern) if kern is not None else []

@@ -36,6 +36,10 @@ class Prescribed:
         The held body-frame dofs: translations along d1, d2, d3, then rotations.
     target : callable, optional
         lam -> (k, 4, 4) frames of the nodes (None: the reference frames).
+    linear : callable, optional
+        lam -> (k, 6) body-frame increments (v, w) of the target linearised about the reference
+        (a rigid motion's: ``rigid_motion``), which linear analysis prescribes; None: linear
+        analysis takes the target's own (v, w) = (R0^T (x_t - X), log(R0^T R_t)).
 
     Example
     -------
@@ -47,10 +51,11 @@ class Prescribed:
     ([0, 3], [True, True, True, False, False, False], True)
     """
 
-    def __init__(self, nodes, fixed, target=None):
+    def __init__(self, nodes, fixed, target=None, linear=None):
         self.nodes = np.asarray(nodes, np.int64)
         self.fixed = np.asarray(fixed, bool)
         self.target = target
+        self.linear = linear
 
 
 def support_kind(s):
@@ -209,6 +214,15 @@ def rigid_motion(mesh, nodes, translate=(0.0, 0.0, 0.0), axis=None, angle=0.0, p
     >>> s = rigid_motion(m, [2, 5], translate=(0.0, 0.0, 0.5))
     >>> s.target(0.5)[:, :3, 3].tolist()                         # lifted by 0.25 at lam = 0.5
     [[1.0, -0.5, 0.25], [1.0, 0.5, 0.25]]
+
+    Its ``linear(lam)`` is the motion linearised about the reference, the body-frame increments
+    (R0^T (s t + s angle axis x (X - p)), R0^T s angle axis): a quarter turn about z through the
+    origin moves (1, 0.5) by (-0.5, 1) pi/2 in linear analysis (its chord would be (-1.5, 0.5)).
+
+    >>> import numpy as np
+    >>> q = rigid_motion(m, [5], axis=(0, 0, 1), angle=np.pi / 2, point=(0, 0, 0))
+    >>> (q.linear(1.0)[0] / (np.pi / 2)).round(12).tolist()
+    [-0.5, 1.0, 0.0, 0.0, 0.0, 1.0]
     """
     nodes = np.asarray(nodes, np.int64)
     g0 = mesh.g0[nodes]
@@ -228,7 +242,18 @@ def rigid_motion(mesh, nodes, translate=(0.0, 0.0, 0.0), axis=None, angle=0.0, p
             h[:3, 3] = point - h[:3, :3] @ point
         h[:3, 3] += s * t
         return h @ g0
-    return Prescribed(nodes, fixed, target)
+
+    def linear(lam):
+        # the velocity field of the motion at s = 0 times s: the infinitesimal rigid motion
+        # u = s t + omega x (X - p), omega = s angle axis, whose linear strains vanish; the
+        # target's chord (Q - I)(X - p) is not linear in the angle and, with rotation omega,
+        # strains the element by O(angle^2) (a rotated cantilever end pulled in by 4.5 % of L at 0.3 rad)
+        s = scale(lam)
+        omega = s * angle * axis if axis is not None else np.zeros(3)
+        u = s * t + np.cross(omega, g0[:, :3, 3] - point)
+        RT = np.swapaxes(g0[:, :3, :3], 1, 2)
+        return np.concatenate([RT @ u[:, :, None], RT @ np.broadcast_to(omega, u.shape)[:, :, None]], 1)[:, :, 0]
+    return Prescribed(nodes, fixed, target, linear)
 
 
 def apply_prescribed(supports, g, lam):

@@ -79,9 +79,7 @@ class Problem:
         self._compiled = None
         self.mesh = mesh
         self.material = material
-        ELEMENTS.lookup(element)                      # an unknown name fails here
-        self._element = None                          # built at first use (see ``element``)
-        self.element_name = element
+        self.element_name = element                   # an unknown name fails here; built at first use
         self.linear_solver = linear_solver
         self.loads = []
         self.supports = []
@@ -99,6 +97,32 @@ class Problem:
     @backend.setter
     def backend(self, name):
         self.backend_setting = _backend.resolve(name)
+
+    @property
+    def material(self):
+        """The resultant law; setting it (as :meth:`set_material`) drops the element built for the
+        old one and the compiled evaluation, so the next evaluation uses the new law (a law set
+        after a solve was silently ignored: the element kept the old one)."""
+        return self._material
+
+    @material.setter
+    def material(self, law):
+        self._material = law
+        self._element = None
+        self._compiled = None
+
+    @property
+    def element_name(self):
+        """The element's key in ``core_se3.fem.ELEMENTS``; setting it (an unknown name fails)
+        drops the element built for the old one, as setting :attr:`material` does."""
+        return self._element_name
+
+    @element_name.setter
+    def element_name(self, name):
+        ELEMENTS.lookup(name)
+        self._element_name = name
+        self._element = None
+        self._compiled = None
 
     @property
     def element(self):
@@ -282,9 +306,8 @@ class Problem:
         >>> p.set_material(Material(2e3, 0.0, 0.01)); p.material.E, p.element.material.E
         (2000.0, 2000.0)
         """
-        self.material = material
+        self.material = material                     # drops the element and the compiled evaluation
         self.element = make_element(self.element_name, self.mesh, material)
-        self._compiled = None
 
     def add_obstacle(self, obstacle, region=None, nodes=None, **options):
         """Contact with a rigid obstacle: a registered kind ('half_space', 'sphere', 'cylinder',

@@ -144,20 +144,22 @@ class StepRecorder:
 
     def step(self, lam, g, iterations, history, forces, stability=None, turn=None, local=None):
         """The StepResult of a converged state: ``forces`` = (r_int, f_ext), the internal and
-        external generalised nodal forces (n, 6) at g; ``turn`` = (start, increments) of the
+        external generalised nodal forces (n, 6) at g, or (r_int, f_ext, frames): the frames
+        (n, 4, 4) they act in and the moments are taken with (default g; linear analysis: the
+        reference frames, where its equations balance); ``turn`` = (start, increments) of the
         Newton try that reached g, as for :meth:`probes`; ``local``: (the frames relative to
         an origin, that origin) of the same state, which the probes read, see :meth:`probes`.
 
         The loads that are constraint forces (``Load.constraint_force``: contact) are split off
         the applied loads: ``contact`` holds each one's lab force and moment (about the origin)
         with its ``report`` scalars, and the balance sums applied, reactions and contact."""
-        r_int, f_ext = forces
+        r_int, f_ext, at = forces if len(forces) == 3 else (*forces, g)
         start, increments = turn if turn else (None, None)
         probes = self.probes(g, start, increments) if local is None else self.probes(local[0], start, increments,
                                                                                    local[1])
         reac = (r_int - f_ext) * self.fixed
-        RF, RM, sF, sM = lab_totals(g, reac, magnitudes=True)
-        AF, AM, aF, aM = lab_totals(g, f_ext, magnitudes=True)
+        RF, RM, sF, sM = lab_totals(at, reac, magnitudes=True)
+        AF, AM, aF, aM = lab_totals(at, f_ext, magnitudes=True)
         contact = {}
         cons = [ld for ld in self.problem.loads if getattr(ld, "constraint_force", False)]
         if cons:
@@ -167,7 +169,7 @@ class StepRecorder:
                 f_app -= fc
                 CF, CM = lab_totals(g, fc)
                 contact[ld.name] = dict(force=CF, moment=CM, multipliers=ld.multipliers(), **ld.report(g, lam))
-            AF, AM = lab_totals(g, f_app)
+            AF, AM = lab_totals(at, f_app)
         ell = self.ell
         return StepResult(lam, g.copy(), iterations, list(history), RF, RM, AF, AM, probes,
                           scale=(max(sF, aF, max(sM, aM) / ell), max(sM, aM, max(sF, aF) * ell)),

@@ -33,6 +33,10 @@ class RunContext:
     def __init__(self, problem):
         self.problem = problem
         self.root = launched_rank() == 0
+        if self.root:
+            # the coarse-mesh warning, as Problem.solve gives it (the runner drives the solvers
+            # itself, not through Problem.solve; the distributed context warns in its set-up)
+            problem.check_element(stacklevel=5)
 
     def barrier(self):
         return None
@@ -49,8 +53,12 @@ class RunContext:
         start): a ConvergenceError naming the step when negative eigenvalues rose unseen."""
         end_check(self.problem, options, result)
 
-    def cell_fields(self, g):
-        return self.problem.element.cell_fields(g)
+    def cell_fields(self, g, increments=None):
+        """The element's cell fields at g (``increments``: a linear analysis', see
+        ``fem.Element.cell_fields``)."""
+        if increments is None:
+            return self.problem.element.cell_fields(g)
+        return self.problem.element.cell_fields(g, increments=increments)
 
     def checkpoint_arrays(self):
         return None
@@ -97,9 +105,9 @@ class DistributedContext(RunContext):
         """The end check with the counts taken on the ranks (``DistributedRun.negative_count``)."""
         end_check(self.problem, options, result, self.run.negative_count)
 
-    def cell_fields(self, g):
+    def cell_fields(self, g, increments=None):
         """The element's cell fields of the whole mesh on rank 0 (None elsewhere), each rank
-        computing its elements'."""
+        computing its elements' (load control only: ``increments``, a linear analysis', is None)."""
         run = self.run
         mine = run.local.element.cell_fields(run.local_frames(g))
         parts = self.comm.gather((run.sub.elements, mine), root=0)

@@ -97,11 +97,19 @@ def _unrefined_mesh(v, d, base_dir):
             detail = without_contents(str(exc).split(f"{path!r}: ", 1)[-1], path)
             v.fail(join(key, "file"), f"cannot read mesh file {fname!r}: {detail}")
         try:
-            mesh = M.from_meshio(raw, d1_hint=hint, triangles=tri)
+            # the reader's warnings (nodes at one point: a cut) become the scenario's, at its key
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always", MeshWarning)
+                mesh = M.from_meshio(raw, d1_hint=hint, triangles=tri)
         except CoreSE3Error as exc:
             v.fail(join(key, "file"), f"bad mesh {fname!r}: {without_contents(str(exc), path)}")
         except Exception as exc:      # meshio objects can be malformed in many ways
             v.fail(join(key, "file"), f"bad mesh {fname!r}: {type(exc).__name__}: {without_contents(str(exc), path)}")
+        for w in caught:
+            if issubclass(w.category, MeshWarning):
+                v.warn(join(key, "file"), f"{fname}: {w.message}")
+            else:
+                warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
         with open(path, "rb") as fh:
             digest = hashlib.sha256(fh.read()).hexdigest()
         spec = dict(file=fname, d1_hint=hint)
@@ -124,7 +132,8 @@ def _unrefined_mesh(v, d, base_dir):
             warnings.simplefilter("always", MeshWarning)
             mesh = kind.build(**kw)
     except CoreSE3Error as exc:
-        v.fail(key, f"{gen}: {exc}")
+        # a grading the generator refuses ('grade: ...', 'grading: ...') is named at its key
+        v.fail(join(key, "grade") if "grade" in kw and str(exc).startswith("grad") else key, f"{gen}: {exc}")
     except ValueError as exc:                  # a user's generator
         v.fail(key, f"{gen}: {exc}")
     for w in caught:

@@ -63,9 +63,28 @@ def material_section(v, d, regions):
                 v.fail(k2, f"material regions {other!r} and {name!r} overlap: an element would get "
                            "two materials")
         out["regions"][name] = vals
+    _unused_floor(v, d, out, key)
     if law != "isotropic":
         out["law"] = law
     return out
+
+
+def _unused_floor(v, d, out, key):
+    """A warning at ``shear_stabilisation_floor`` where it is written but no law uses it: the
+    floor only bounds the stabilisation's factor (``Material.shear_scale``), so without
+    shear_stabilisation > 0 it changes nothing (a floor of 0.2 on its own left the shear modulus
+    at ks G h, silently)."""
+    name = "shear_stabilisation_floor"
+    why = (f"{name} bounds the factor of the shear stabilisation from below and has no effect without "
+           "shear_stabilisation > 0 (off here): give shear_stabilisation = alpha (Kratos' thick quad: 0.1) "
+           f"to stabilise, or remove {name}")
+    regions = d.get("regions", {})
+    inherit = [out["regions"][r]["shear_stabilisation"] for r, t in regions.items() if name not in t]
+    if name in d and out.get("shear_stabilisation") == 0 and not any(inherit):
+        v.warn(join(key, name), why)
+    for r, t in regions.items():
+        if name in t and out["regions"][r].get("shear_stabilisation") == 0:
+            v.warn(join(join(join(key, "regions"), r), name), why)
 
 
 def material_law_keys(spec_material):

@@ -32,6 +32,7 @@ from ..errors import CoreSE3Error
 from ..io import Checkpoint, Progress, atomic_path, write_json_atomic
 from ..io.lifecycle import held_signals
 from ..results import result_document
+from ..solvers.linear import linear_increments
 from .obstacles import obstacles_of
 from .outputs import unit_system_record
 
@@ -186,7 +187,13 @@ def write_step_vtu(run, k, g, lam, physical=None):
     from ..io import write_obstacles, write_vtu
     from .outputs import point_fields
     prob = run.scn.problem
-    cells = prob.element.cell_fields(g) if run.ctx is None else run.ctx.cell_fields(g)
+    # a linear analysis' state g0 (exp(w), v): its strains are not the linear ones (a cantilever's
+    # linear deflection of L/3 stretches its chords), the fields are those of its increments
+    eta = linear_increments(prob.mesh.g0, g) if run.scn.solver["control"] == "linear" else None
+    if run.ctx is not None:
+        cells = run.ctx.cell_fields(g, eta)
+    else:
+        cells = prob.element.cell_fields(g) if eta is None else prob.element.cell_fields(g, increments=eta)
     if not run.root:
         return
     values = {"load_factor": float(lam)}

@@ -10,13 +10,18 @@ element's material stiffness (the reference is stress free, so there is no geome
 the load-independent stiffness of the loads (penalty supports); the stiffness of follower loads,
 proportional to the load, is a geometric effect and is left out, so that the answer is linear
 in the load.  Prescribed motions enter through their targets at lam_end: the held components
-of eta_p = (R0^T (x_t - X), log(R0^T R_t)) of each held node.
+of the rigid motions of ``rotate_edge`` / ``move_edge`` linearised, eta_p = (R0^T (s t + omega x
+(X - p)), R0^T omega) with omega = s angle axis (``Prescribed.linear``: an infinitesimal rigid
+motion, which does not strain the element; the target's chord (Q - I)(X - p) would, by
+O(angle^2)), and of other targets (``prescribe``) eta_p = (R0^T (x_t - X), log(R0^T R_t)).
 
 The state reported is g_i = g0_i (exp_so3(w_i), v_i) (the rotation and the translation updated
 separately, not by the SE(3) exponential): its probes and displacements are then exactly the
 linear ones, u = R0 v, the rotation vector R0 w.  Reactions are those of the linear internal
-forces K0 eta (the forces in the reference frames).  The result has the reference state and
-this one step, like a one-step solve.
+forces K0 eta (the forces in the reference frames, the penalty springs' K_s eta counted with
+the applied loads, as a load-stepping step counts them); the step's force and moment totals are
+taken in the reference frames and positions, where the linear equations balance.  The result
+has the reference state and this one step, like a one-step solve.
 
 The answer's accuracy is measured, not assumed: the factorisation is backward stable (its
 residual is at round-off, ``linalg.Factorization``), but its error is the condition number times
@@ -42,7 +47,7 @@ from .convergence import scaled_norm
 from .linalg import Factorization, make_solver
 from .options import NewtonOptions, unknown_keywords
 
-__all__ = ["linear_solve", "linear_state", "ACCURACY"]
+__all__ = ["linear_solve", "linear_state", "linear_increments", "ACCURACY"]
 
 #: the estimated relative error of a linear solution above which it warns (the 4th digit)
 ACCURACY = 1e-4
@@ -66,12 +71,31 @@ def linear_state(g0, eta):
     return g0 @ h
 
 
+def linear_increments(g0, g):
+    """The increments eta (n, 6) of a linear analysis' state g = ``linear_state(g0, eta)``:
+    (R0^T (x - X), log(R0^T R)), exact while every |w| < pi.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> eta = np.array([[1.0, 2.0, 3.0, 0.0, 0.2, 0.1]])
+    >>> linear_increments(np.eye(4)[None], linear_state(np.eye(4)[None], eta)).round(12).tolist()
+    [[1.0, 2.0, 3.0, 0.0, 0.2, 0.1]]
+    """
+    RT = np.swapaxes(g0[:, :3, :3], 1, 2)
+    v = np.einsum("nij,nj->ni", RT, g[:, :3, 3] - g0[:, :3, 3])
+    return np.concatenate([v, lie.log_so3(RT @ g[:, :3, :3])], 1)
+
+
 def _prescribed_increments(problem, lam):
     """(n, 6) body-frame increments of the held dofs at lam (zero where no target moves)."""
     g0 = problem.mesh.g0
     eta = np.zeros((problem.mesh.n_nodes, 6))
     for s in problem.supports:
         if s.target is None:
+            continue
+        if getattr(s, "linear", None) is not None:          # a rigid motion, linearised
+            eta[s.nodes] = np.where(s.fixed, s.linear(lam), eta[s.nodes])
             continue
         gt = np.asarray(s.target(lam), float)
         R0 = g0[s.nodes, :3, :3]
@@ -143,6 +167,11 @@ def linear_solve(problem, lam_end=1.0, steps=None, linear_solver=None, **kw):
     t = time.perf_counter()
     ev = problem.evaluate(g0, 0.0, assembler=every)                   # K0 on all dofs
     K = ev.K.tocsr()
+    _, Kn_ext, Ke_ext = problem.external(g0, 0.0, tangent=True)
+    # the loads' own stiffness (penalty springs), -df/d eta: their linear forces f - K_ext eta
+    # belong to the applied loads (as a load-stepping step reports them), not to the internal
+    # forces, or the step's applied totals miss the springs' forces and it does not balance
+    K_ext = every.matrix(Ke_ext, None, Kn_ext)
     f = problem.external(g0, lam_end, tangent=False)[0].ravel()
     eta = _prescribed_increments(problem, lam_end).ravel()
     rhs = f[free] - K[free][:, ~free] @ eta[~free]
@@ -151,15 +180,12 @@ def linear_solve(problem, lam_end=1.0, steps=None, linear_solver=None, **kw):
     eta[free], error = _solve_measured(solver, K[free][:, free], rhs, free, problem.length_scale)
     result.timings["solve"] = time.perf_counter() - t
     t = time.perf_counter()
-    r_lin = (K @ eta).reshape(n, 6)
-    f = f.reshape(n, 6)
+    r_lin = ((K - K_ext) @ eta).reshape(n, 6)
+    f_lin = (f - K_ext @ eta).reshape(n, 6)
     result.steps.append(rec.step(0.0, g0, 0, [], (np.zeros((n, 6)), problem.external(g0, 0.0, tangent=False)[0])))
-    g = linear_state(g0, eta)
-    # the forces act in the reference frames: expressed in the frames of g, so that the step's
-    # lab totals (R f) are the reference ones (R0 f)
-    Q = np.swapaxes(g[:, :3, :3], 1, 2) @ g0[:, :3, :3]
-    to_g = lambda a: np.concatenate([np.einsum("nij,nj->ni", Q, a[:, :3]), np.einsum("nij,nj->ni", Q, a[:, 3:])], 1)
-    result.steps.append(rec.step(lam_end, g, 1, [], (to_g(r_lin), to_g(f))))
+    # the forces act in the reference frames and balance there (the linear equations): the
+    # step's totals are taken in g0 (moments with the reference positions), its probes at g
+    result.steps.append(rec.step(lam_end, linear_state(g0, eta), 1, [], (r_lin, f_lin, g0)))
     # the strain energy of the linear solution, 1/2 eta^T K0 eta (with the supports' penalty springs)
     energy = 0.5 * float(eta @ (K @ eta))
     result.log.append(dict(lam=lam_end, converged=True, iterations=1, reason="linear", energy=energy,
@@ -182,7 +208,7 @@ def _solve_measured(solver, A, b, free, ell):
         warnings.warn(AccuracyWarning(
             f"the linear solution is accurate to about {error:.1g} (relative) only: the stiffness matrix is too "
             f"ill-conditioned for double precision (a very thin shell: the membrane stiffness exceeds the bending "
-            f"stiffness by (L/h)^2; the pinched hemisphere on 64x64 elements: 1e-3 at R/h 1e5, 5 % at 1e6). "
+            f"stiffness by (L/h)^2; the pinched hemisphere on 64x64 elements: 1e-3 at R/h 1e5, 0.1 at 1e6). "
             f"Fewer elements or a thicker model are better conditioned; the estimate is log['error_estimate']."),
             stacklevel=4)
     return x, error

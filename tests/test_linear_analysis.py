@@ -1,0 +1,86 @@
+"""Linear analysis (``Problem.solve_linear``) against the nonlinear solve at a tiny load, scaled:
+prescribed rigid motions and penalty springs (review findings; each test fails on the code before)."""
+import numpy as np
+import pytest
+
+from core_se3 import Material, Problem, mesh
+
+pytestmark = pytest.mark.core
+
+def _strip(build):
+    p = Problem(mesh.rectangle(10.0, 1.0, 16, 2), Material(1.2e6, 0.3, 0.1))
+    p.add_probe("tip", "x1")
+    build(p)
+    return p
+
+
+def _linear_and_scaled(build, eps=1e-5):
+    lin = _strip(build).solve_linear().final
+    nl = _strip(build).solve(steps=1, lam_end=eps, rtol=1e-13).final
+    return lin, nl, eps
+
+
+def test_a_rotated_end_is_the_linearised_rigid_turn_not_its_chord():
+    # clamp x0, turn x1 by 0.3 rad about y through the origin: the linear tip motion is
+    # omega x X = (0, 0, -3); the old code prescribed the chord (cos 0.3 - 1, 0, -sin 0.3) * 10 =
+    # (-0.447, 0, -2.955), pulling the end in by 4.5 % of L (an axial force of E h b 0.0447 = 5.4e3)
+    lin, nl, eps = _linear_and_scaled(lambda p: (p.clamp("x0"), p.rotate_edge("x1", (0, 1, 0), 0.3)))
+    u_lin, u_nl = lin.probes["tip"]["u"], nl.probes["tip"]["u"] / eps
+    assert np.allclose(u_lin, [0.0, 0.0, -3.0], atol=1e-12)
+    assert np.allclose(u_lin, u_nl, atol=1e-4)
+    assert np.allclose(lin.probes["tip"]["rotation_vector"], [0.0, 0.3, 0.0], atol=1e-12)
+
+
+def test_a_rigidly_moved_free_strip_is_unstrained():
+    # the whole strip carried by its end's rigid twist (0.4 rad about x) and lift: no strain
+    # energy (the chord strained the end: the old energy was 92.5)
+    p = _strip(lambda p: p.move_edge("x0", translate=(0.0, 0.0, 0.2), axis=(1, 0, 0), angle=0.4))
+    res = p.solve_linear()
+    assert res.log[-1]["energy"] < 1e-16
+    assert np.allclose(res.final.probes["tip"]["u"], [0.0, 0.0, 0.2], atol=1e-10)
+
+
+@pytest.mark.parametrize("spring", ["lab", "tilt", "rotation_component"])
+def test_penalty_springs_count_with_the_applied_loads_and_the_step_balances(spring):
+    # the springs' linear forces K_s eta were counted as internal forces: the applied totals
+    # missed them (lab spring: 1 instead of 1e-4) and the step did not balance (balance_error
+    # 1.0 for the lab spring, 0.109 for the tilt and rotation-component springs)
+    add = {"lab": lambda p: p.add_lab_support("x1", [(0.0, 0.0, 1.0)], 1e3),
+           "tilt": lambda p: p.add_lab_tilt_support("x1", [(1.0, 0.0, 0.0)], 1e3),
+           "rotation_component": lambda p: p.add_rotation_component_support("x1", (0.0, 1.0, 0.0), 1e3)}[spring]
+    lin, nl, eps = _linear_and_scaled(lambda p: (p.clamp("x0"), add(p), p.add_edge_force("x1", (0.0, 0.0, 1.0))))
+    assert lin.balance_error < 1e-9
+    assert np.allclose(lin.applied_force, nl.applied_force / eps, rtol=1e-4, atol=1e-6)
+    assert np.allclose(lin.applied_moment, nl.applied_moment / eps, rtol=1e-4, atol=1e-6)
+    assert np.allclose(lin.reaction_force, nl.reaction_force / eps, rtol=1e-4, atol=1e-6)
+
+
+def test_the_linear_cell_fields_are_those_of_the_linear_strains(tmp_path):
+    # a cantilever under an end shear, linear tip deflection L/3: the strains of its linear
+    # state g0 (exp(w), v) stretch the chords, and the VTU's membrane force N11 read 1.4e4 at
+    # the tip element (the shear force is 1, the linear N11 0); the linear fields are the
+    # nonlinear ones at a tiny load, scaled
+    import meshio
+    from core_se3 import scenario
+    from core_se3.solvers.linear import linear_increments
+    p = Problem(mesh.rectangle(10.0, 1.0, 16, 1), Material(1.2e6, 0.0, 0.1))
+    p.clamp("x0")
+    p.add_edge_force("x1", (0.0, 0.0, 1.0))
+    g = p.solve_linear().final.g
+    lin = p.element.cell_fields(g, increments=linear_increments(p.mesh.g0, g))
+    eps = 1e-5
+    q = Problem(mesh.rectangle(10.0, 1.0, 16, 1), Material(1.2e6, 0.0, 0.1))
+    q.clamp("x0")
+    q.add_edge_force("x1", (0.0, 0.0, 1.0))
+    small = q.element.cell_fields(q.solve(steps=1, lam_end=eps, rtol=1e-13).final.g)
+    for k in ("N1", "M1", "N1_local", "M1_local"):
+        assert np.allclose(lin[k], small[k] / eps, rtol=0, atol=1e-4 * np.abs(lin[k]).max())
+    assert np.allclose(lin["N1_local"], [0.0, 0.0, 1.0], atol=1e-9)
+    doc = {"mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 16, "ny": 1},
+           "material": {"E": 1.2e6, "nu": 0.0, "h": 0.1}, "supports": [{"type": "clamp", "edge": "x0"}],
+           "loads": [{"type": "edge_force", "edge": "x1", "force": [0.0, 0.0, 1.0]}],
+           "solver": {"control": "linear"}}
+    res = scenario.run(scenario.from_dict(doc), str(tmp_path / "run"))
+    vtu = meshio.read(str(tmp_path / "run" / "vtu" / "step_0001.vtu"))
+    assert np.allclose(vtu.cell_data["N1_local"][0], lin["N1_local"], atol=1e-9)
+    assert res is not None
