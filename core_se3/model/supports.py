@@ -85,7 +85,6 @@ def node_directions(v, k, what):
 class _Spring(Load):
     """A penalty support written as a load: it does not scale with the load factor."""
     scales_with_load_factor = False
-    is_support_spring = True        # its nodes are held (Problem.free_edge_elements)
 
     def _scatter(self, n, fb, blk, tangent):
         f = np.zeros((n, 6))
@@ -122,6 +121,8 @@ class LabSpring(_Spring):
     >>> LabSpring(m, [0], [[0, 0, 1.0]], k=10.0).evaluate(g, 1.0).f[0, :3].tolist()
     [0.0, 0.0, -3.0]
     """
+
+    holds_translations = True       # its nodes' edges are not free (Problem.free_edge_elements)
 
     def __init__(self, mesh, nodes, dirs, k, name="lab support"):
         self.n = mesh.n_nodes
