@@ -476,7 +476,7 @@ def warn_if_coarse_thin_curved(index, size=None, stacklevel=2):
     thickness) exceeds COARSE_THIN_CURVED.
 
     ``Problem.check_element`` calls it, when it solves, with the index of the elements along free
-    edges only (a boundary edge with a node that no support holds; the others' index 0): there
+    edges only (a boundary edge with a node whose translation nothing holds; the others' index 0): there
     the four-node mesh of a membrane-dominated shell can be spuriously flexible, the edge tying
     leaving free-edge mechanisms of bending-order stiffness (docs/ELEMENTS.md, "The coarse thin
     roof").  With R = L / phi the radius the edge turn implies, the index is (L / l)^4,
@@ -514,7 +514,8 @@ def warn_if_coarse_thin_curved(index, size=None, stacklevel=2):
             f"coarse mesh of a thin curved shell: an element along a free edge turns by phi out of its plane "
             f"with phi^3 L / h = {worst:.3g} > {COARSE_THIN_CURVED:g} (L its size, h the thickness) on "
             f"{int(np.sum(index > COARSE_THIN_CURVED))} element(s). Where the shell is membrane dominated, "
-            f"four-node meshes this coarse along a free edge (a boundary edge no support holds) can be far off: "
+            f"four-node meshes this coarse along a free edge (a boundary edge whose translations no support holds) "
+            f"can be far off: "
             f"spuriously flexible (the Scordelis-Lo roof 2x2 at R/h 1e4: 10.9 times its deflection) or too stiff "
             f"(a pressurised hemisphere with a free equator, 4x4 at R/h 1e3: 0.68 of its largest displacement); "
             f"bending-dominated shells are not affected. Check by refining: `core-se3 check-mesh SCENARIO.toml` "
