@@ -8,6 +8,7 @@
 from __future__ import annotations
 
 import os
+import sys
 import tempfile
 from pathlib import Path
 
@@ -83,6 +84,31 @@ def pinned_backend(monkeypatch):
     name = pin_for_timing(dict(os.environ))          # the same choice the timing studies make
     monkeypatch.setenv("CORE_SE3_BACKEND", name)
     return name
+
+
+_THROTTLED_CLI = """
+import sys, time
+from core_se3.io import checkpoint
+save = checkpoint.Checkpoint.save
+def slow_save(self, *a, **k):
+    out = save(self, *a, **k)
+    time.sleep(%r)
+    return out
+checkpoint.Checkpoint.save = slow_save
+from core_se3.cli import main
+sys.exit(main(sys.argv[1:]))
+"""
+
+
+@pytest.fixture
+def throttled_cli():
+    """``throttled_cli(args, pause=0.3)``: the command line of a real ``core-se3 ARGS`` process
+    that pauses ``pause`` seconds after each checkpoint it writes, so that a test's signal lands
+    mid-run however busy the machine is (unthrottled, a small run can finish all its steps
+    between two of the test's polls -- CI saw exactly that once).  The run itself is unchanged."""
+    def command(args, pause=0.3):
+        return [sys.executable, "-c", _THROTTLED_CLI % float(pause), *args]
+    return command
 
 
 _SESSION_TMP = []

@@ -115,15 +115,17 @@ def test_checkpoint_without_path_state_is_refused(tmp_path):
         runner.run(scn, out=out, resume=True)
 
 
-def test_killed_arclength_process_resumes_to_the_same_state(tmp_path):
+def test_killed_arclength_process_resumes_to_the_same_state(tmp_path, throttled_cli):
     """SIGKILL a real ``core-se3 run`` of the arch after 3 path points; ``--resume`` finishes it
     with the uninterrupted frames bit for bit and keeps everything written before the kill."""
     path = write(tmp_path, ARCH)
     ref = runner.run(scenario.load(path), out=str(tmp_path / "ref"))
     n = len(ref.doc["steps"]) - 1
     out = str(tmp_path / "run")
-    cmd = [sys.executable, "-m", "core_se3", "run", path, "--out", out, "--quiet"]
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    args = ["run", path, "--out", out, "--quiet"]
+    cmd = [sys.executable, "-m", "core_se3"] + args
+    proc = subprocess.Popen(throttled_cli(args),             # the kill lands mid-run
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     ck = Checkpoint(out)
     t0 = time.time()
     while time.time() - t0 < 60 and proc.poll() is None:

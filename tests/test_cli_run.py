@@ -161,15 +161,17 @@ def test_a_resumed_run_switches_backend_where_the_uninterrupted_one_did(tmp_path
     np.testing.assert_array_equal(res.g, ref.g)            # bit for bit
 
 
-def test_killed_process_resumes_to_the_same_state(tmp_path, pinned_backend):
+def test_killed_process_resumes_to_the_same_state(tmp_path, pinned_backend, throttled_cli):
     """SIGKILL a real ``core-se3 run`` after a few steps; --resume finishes it identically."""
     doc = with_(STRIP, solver={"steps": 12}, output={"plots": False, "picture": False})
     path = write(tmp_path, doc)
     scn = scenario.load(path)
     ref = runner.run(scn, out=str(tmp_path / "ref"))
     out = str(tmp_path / "run")
-    cmd = [sys.executable, "-m", "core_se3", "run", path, "--out", out, "--quiet"]
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    args = ["run", path, "--out", out, "--quiet"]
+    cmd = [sys.executable, "-m", "core_se3"] + args
+    proc = subprocess.Popen(throttled_cli(args),             # the kill lands mid-run
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     ck = Checkpoint(out)
     t0 = time.time()
     step = -1

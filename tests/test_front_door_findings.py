@@ -206,9 +206,11 @@ def test_W11_an_interrupted_sweep_keeps_its_finished_rows_and_resumes(tmp_path, 
     assert json.load(open(tmp_path / "cut" / "sweep.json"))["status"] == "complete"
 
 
-def _start(path, out, steps_done, extra=()):
-    cmd = [sys.executable, "-m", "core_se3", "run", path, "--out", out, "-q", *extra]
-    proc = subprocess.Popen(cmd, env=env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+def _start(path, out, steps_done, throttled_cli, extra=()):
+    args = ["run", path, "--out", out, "-q", *extra]
+    cmd = [sys.executable, "-m", "core_se3", *args]
+    proc = subprocess.Popen(throttled_cli(args), env=env(),          # the signal lands mid-run
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     ck, t0 = Checkpoint(out), time.time()
     while time.time() - t0 < 120 and proc.poll() is None:
         try:
@@ -221,11 +223,12 @@ def _start(path, out, steps_done, extra=()):
 
 
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
-def test_W12_sigterm_and_ctrl_c_end_a_run_as_interrupted_and_it_resumes_bit_for_bit(tmp_path, sig, pinned_backend):
+def test_W12_sigterm_and_ctrl_c_end_a_run_as_interrupted_and_it_resumes_bit_for_bit(tmp_path, sig, pinned_backend,
+                                                                                     throttled_cli):
     path = write(tmp_path, doc(solver={"steps": 30}))
     ref = runner.run(load(doc(solver={"steps": 30})), out=str(tmp_path / "ref"))
     out = str(tmp_path / "o")
-    proc, cmd = _start(path, out, 3)
+    proc, cmd = _start(path, out, 3, throttled_cli)
     proc.send_signal(sig)
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == {signal.SIGTERM: 143, signal.SIGINT: 130}[sig], err
