@@ -107,12 +107,13 @@ def test_unreachable_target_is_reported(tmp_path, capsys):
 
 def test_gripper_design_example():
     # examples/gripper-design.toml (docs/DESIGN.md): two poses, 14 variables; bar: misfit below
-    # 1e-3 of the finger length (0.02 mm) within 60 s (the issue's); measured 13 s, 13 iterations,
-    # 38 equilibrium solves on this machine
-    import time
+    # 1e-3 of the finger length (0.02 mm) within 60 s (the issue's).  Wall time is not asserted
+    # here (a loaded CI machine would make it flaky); the work is: measured 12 iterations, 36
+    # equilibrium solves, 495 Newton iterations, 3.0 s on this machine (r.time) -- the bounds
+    # below are 1.5 times that, a regression of the optimiser or of the equilibrium path fails.
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     scn = scenario.load(os.path.join(root, "examples", "gripper-design.toml"))
-    t0 = time.perf_counter()
     r = scn.design().optimise(max_iter=40, tolerance=0.02, stop_at_tolerance=True)
-    assert r.reached and r.max_misfit < 0.02 and time.perf_counter() - t0 < 60
+    assert r.reached and r.max_misfit < 0.02
+    assert r.iterations <= 18 and r.equilibrium_solves <= 54 and r.newton_iterations <= 750
     assert r.misfit["flat"]["targets[0]"] < 1e-9          # no field: the gripper stays flat
