@@ -66,3 +66,18 @@ def test_every_public_function_and_class_has_an_example():
     assert not missing, (f"{len(missing)} public functions/classes have no docstring with an "
                          "Example ('>>>'):\n" + "\n".join(missing))
 
+
+
+def test_every_module_defines_what_its_all_lists():
+    """``from core_se3.X import *`` works for every module: each name in a module's ``__all__`` is
+    defined there (``catalogue.shell_course`` listed the patch-test functions after they had
+    moved to ``catalogue.patch_tests``: its star import raised AttributeError)."""
+    import pkgutil
+    import core_se3
+    missing = []
+    for info in pkgutil.walk_packages(core_se3.__path__, "core_se3."):
+        if info.name.endswith("__main__"):
+            continue                                   # runs the command line on import
+        mod = importlib.import_module(info.name)
+        missing += [f"{info.name}.{n}" for n in getattr(mod, "__all__", ()) if not hasattr(mod, n)]
+    assert not missing, missing

@@ -36,7 +36,7 @@ from ..model import Problem
 from ..solvers.linear import linear_state
 
 __all__ = ["REFERENCES", "scordelis_lo", "pinched_cylinder", "pinched_hemisphere", "twisted_beam",
-           "raasch_hook", "cook_membrane", "hat_integrals", "scenario_doc", "roof_free_edge_layer", "mh_patch", "random_patch", "patch_test", "PATCH_FIELDS"]
+           "raasch_hook", "cook_membrane", "hat_integrals", "scenario_doc", "roof_free_edge_layer"]
 
 REFERENCES = {
     "scordelis-lo": 0.3024, "pinched-cylinder": 1.8248e-5, "pinched-hemisphere": 0.094,
