@@ -373,7 +373,7 @@ class Problem:
         free[owner[~held[self.mesh.edge_nodes[edges]].all(1)]] = True
         return free
 
-    def check_element(self, index=None, size=None, warn=True, stacklevel=2):
+    def check_element(self, index=None, size=None, warn=True, stacklevel=2, note=""):
         """The element's coarse-mesh check with the supports known: an ElementWarning
         (``fem.element_default.warn_if_coarse_thin_curved``) where an element along a free edge
         (:meth:`free_edge_elements`) has the coarse-curvature index phi^3 L / h above 2; ``solve``
@@ -387,6 +387,10 @@ class Problem:
             without the index (the seed's) has nothing to check.
         warn : bool
             False: only the width (check-mesh's verdict).
+        stacklevel : int
+            The warning's, counted from the caller of this method.
+        note : str
+            A sentence appended to the warning (where a design met it).
 
         Example
         -------
@@ -407,7 +411,7 @@ class Problem:
             size = np.sqrt(self.element.area)
         index = np.where(self.free_edge_elements(), index, 0.0)
         if warn:
-            warn_if_coarse_thin_curved(index, size, stacklevel=stacklevel + 1)
+            warn_if_coarse_thin_curved(index, size, stacklevel=stacklevel + 1, note=note)
         return free_edge_layer_width(index, size)
 
     def assembler(self):
