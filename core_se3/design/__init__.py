@@ -11,7 +11,7 @@ Example
 >>> "sensitivity" in design.__all__ and "Design" in design.__all__
 True
 """
-from .equilibrium import EquilibriumOptions, EquilibriumState, assign_all, follow, solve_flat
+from .equilibrium import ElementCheck, EquilibriumOptions, EquilibriumState, assign_all, follow, solve_flat
 from .inverse import METHODS, Design, DesignResult, Pose, Smoothness, Target
 from .objectives import (Energy, NodePosition, Orientation, ProbePosition, Quantity, RotationAngle,
                          UserQuantity, local_jacobian)
@@ -26,4 +26,4 @@ __all__ = ["sensitivity", "Sensitivity", "SolveWith", "residual_derivative", "qu
            "Quantity", "NodePosition", "ProbePosition", "Orientation", "RotationAngle", "Energy",
            "UserQuantity", "local_jacobian",
            "Design", "DesignResult", "Pose", "Target", "Smoothness", "METHODS",
-           "EquilibriumOptions", "EquilibriumState", "follow", "solve_flat", "assign_all"]
+           "EquilibriumOptions", "EquilibriumState", "ElementCheck", "follow", "solve_flat", "assign_all"]

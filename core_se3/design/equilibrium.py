@@ -8,6 +8,12 @@ The residual is linear in most design variables (field, magnetisation, load magn
 the first Newton iterate from the old state is the tangent predictor of the direct method:
 a small design step converges in two or three iterations.
 
+Each new design point whose element changed (a material variable rebuilds it: thickness, E) has
+the element's coarse-mesh check of ``Problem.solve`` (``Problem.check_element``: an element
+along a free edge with phi^3 L / h > 2), once per accepted point, not per Newton iteration or
+substep, and said at most once per design run (:class:`ElementCheck`): an optimiser that thins
+a curved shell can otherwise walk into the coarse-mesh regime silently.
+
 Example
 -------
 >>> import numpy as np
@@ -24,16 +30,19 @@ Example
 from __future__ import annotations
 
 import time
+import warnings
+from contextlib import contextmanager
 from types import SimpleNamespace
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import ConvergenceError, ElementTooDistortedError
+from ..backend import launched_rank
+from ..errors import ConvergenceError, ElementTooDistortedError, ElementWarning
 from ..solvers import NewtonOptions, make_solver
 from ..solvers.newton_try import NewtonTry
 
-__all__ = ["EquilibriumState", "EquilibriumOptions", "follow", "solve_flat", "assign_all"]
+__all__ = ["EquilibriumState", "EquilibriumOptions", "ElementCheck", "follow", "solve_flat", "assign_all"]
 
 
 @dataclass(frozen=True)
@@ -75,6 +84,95 @@ class EquilibriumState:
     stats: dict = field(default_factory=dict)
 
 
+def design_point(variables, xs, most=6):
+    """'label = value, ...' of the values xs (one array per variable), at most ``most`` of them.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from types import SimpleNamespace
+    >>> design_point([SimpleNamespace(labels=["h[0]", "h[1]"])], [np.array([0.1, 0.25])])
+    'h[0] = 0.1, h[1] = 0.25'
+    """
+    pairs = [(lab, float(val)) for v, x in zip(variables, xs)
+             for lab, val in zip(v.labels, np.atleast_1d(np.asarray(x, float)))]
+    text = ", ".join(f"{lab} = {val:.6g}" for lab, val in pairs[:most])
+    return text + (f", ... ({len(pairs)} values)" if len(pairs) > most else "")
+
+
+class ElementCheck:
+    """The element's coarse-mesh check (``Problem.check_element``, which ``Problem.solve`` gives
+    every solve) along the equilibria of a design: at a design point whose element is not the
+    one last checked (a material variable rebuilds it for its thickness or E), once per
+    accepted point, each cause (the only one now: an element along a free edge with
+    phi^3 L / h > 2) said at most once per design run, naming the design point where it was
+    first met.  ``Design`` keeps one per run; :func:`follow` and :func:`solve_flat` make their
+    own when not given one.
+
+    Parameters
+    ----------
+    problem : core_se3.Problem, optional
+        Its element counts as checked (the state a :func:`follow` starts from was solved).
+
+    Attributes
+    ----------
+    said : dict
+        cause -> the design point ('label = value, ...') where it was said.
+
+    Example
+    -------
+    >>> import warnings
+    >>> import numpy as np
+    >>> from core_se3.catalogue import shell_course as sc
+    >>> from core_se3.design import MaterialVariable
+    >>> p, _ = sc.scordelis_lo(2, h=0.25)                      # phi^3 L / h = 1.78 on the free edge
+    >>> h, check = MaterialVariable(p, [np.arange(4)], "h"), ElementCheck()
+    >>> with warnings.catch_warnings(record=True) as said:
+    ...     warnings.simplefilter("always")
+    ...     for x in (0.25, 0.1, 0.05):                        # 4.4 and 8.9: coarse
+    ...         h.assign([x]); check(p, [h], [np.array([x])])
+    >>> len(said), check.said
+    (1, {'coarse thin curved': 'h[0] = 0.1'})
+    """
+
+    CAUSE = "coarse thin curved"
+
+    def __init__(self, problem=None):
+        self.said = {}
+        self._checked = None if problem is None else (problem.element, problem.mesh)
+
+    def reset(self):
+        """A new design run: nothing checked or said yet."""
+        self.said, self._checked = {}, None
+
+    def __call__(self, problem, variables, xs, stacklevel=2):
+        """Check ``problem``'s element at the design point xs (the variables' values) unless it
+        is the element last checked or the cause has been said (``stacklevel``: the warning's,
+        counted from the caller)."""
+        key = (problem.element, problem.mesh)
+        if self._checked is not None and all(a is b for a, b in zip(key, self._checked)):
+            return
+        self._checked = key
+        if self.CAUSE in self.said:
+            return
+        where = design_point(variables, xs)
+        note = (f"The design's equilibrium met this first at the design point {where} (said once per design run; "
+                f"the optimiser's later points may be as coarse).")
+        # every rank of a distributed design checks the same whole problem: rank 0 says it
+        if problem.check_element(warn=launched_rank() == 0, stacklevel=stacklevel + 1, note=note) is not None:
+            self.said[self.CAUSE] = where
+
+    @contextmanager
+    def quiet(self, always=False):
+        """A context in which ``Problem.solve``'s own coarse-mesh warning (an ElementWarning) is
+        dropped: always (a design's solve from the flat state, which this check covers) or once
+        this check has said it (the outputs' load paths after a design run)."""
+        with warnings.catch_warnings():
+            if always or self.said:
+                warnings.simplefilter("ignore", ElementWarning)
+            yield
+
+
 def assign_all(variables, xs):
     """Assign the values xs (one array per variable) to the variables.
 
@@ -91,8 +189,11 @@ def assign_all(variables, xs):
         v.assign(x)
 
 
-def solve_flat(problem, variables, xs, lam=1.0, options=None):
+def solve_flat(problem, variables, xs, lam=1.0, options=None, check=None):
     """Solve from the flat (reference) state by load stepping at the values xs.
+
+    The element's coarse-mesh check is ``check``'s (an :class:`ElementCheck`; default a new
+    one), which names the design point, in place of the one ``Problem.solve`` gives.
 
     Returns: EquilibriumState (``stats``: iterations, time).  ConvergenceError if it fails.
 
@@ -112,7 +213,11 @@ def solve_flat(problem, variables, xs, lam=1.0, options=None):
     kw = dict(rtol=max(opts.rtol, 1e-12), dtol=max(opts.dtol, 1e-12), max_iter=opts.max_iter)
     if opts.linear_solver:
         kw["linear_solver"] = opts.linear_solver
-    res = problem.solve(steps=opts.flat_steps, lam_end=lam, control="load", limit_check=False, **kw)
+    check = check or ElementCheck()
+    check(problem, variables, xs, stacklevel=2)
+    problem.element                                 # built (and its own warnings given) outside the quiet part
+    with check.quiet(always=True):                  # said above, with the design point
+        res = problem.solve(steps=opts.flat_steps, lam_end=lam, control="load", limit_check=False, **kw)
     its = sum(e["iterations"] for e in res.log)
     return EquilibriumState(res.final.g.copy(), lam, [np.array(x, float) for x in xs],
                             dict(iterations=its, substeps=len(res.log), cutbacks=0, restarted=True,
@@ -150,7 +255,7 @@ def _newton(problem, g, lam, opts, solver, run=None):
     return (eq.whole_frames(out.g) if eq is not None else out.g), out.iterations
 
 
-def follow(problem, variables, xs, state, options=None, run=None):
+def follow(problem, variables, xs, state, options=None, run=None, check=None):
     """Follow the equilibrium of ``state`` to the variables' values xs (module docstring).
 
     Parameters
@@ -167,6 +272,9 @@ def follow(problem, variables, xs, state, options=None, run=None):
         The controls.
     run : core_se3.parallel.DistributedRun, optional
         Solve on the MPI ranks (a design under mpirun).
+    check : ElementCheck, optional
+        The element's coarse-mesh check of the new point (a design run's; default a new one
+        that takes the problem's element at the start as checked).
 
     Returns
     -------
@@ -183,6 +291,7 @@ def follow(problem, variables, xs, state, options=None, run=None):
     """
     opts = options or EquilibriumOptions()
     t0 = time.perf_counter()
+    check = check or ElementCheck(problem)
     solver = make_solver(opts.linear_solver or problem.linear_solver)
     x0 = [np.array(x, float) for x in state.x]
     x1 = [np.array(x, float) for x in xs]
@@ -207,12 +316,13 @@ def follow(problem, variables, xs, state, options=None, run=None):
         dt /= 2
         if cuts > opts.max_cutbacks:
             try:
-                st = solve_flat(problem, variables, x1, state.lam, opts)
+                st = solve_flat(problem, variables, x1, state.lam, opts, check)
             except ConvergenceError as exc:
                 raise ConvergenceError(f"the design's equilibrium could not be followed to the new values, nor "
                                        f"solved again from the flat state: {exc}", exc.result) from None
             info = dict(iterations=its + st.stats["iterations"], substeps=subs, cutbacks=cuts, restarted=True,
                         time=time.perf_counter() - t0)
             return EquilibriumState(st.g, state.lam, x1, info), info
+    check(problem, variables, x1, stacklevel=2)     # the accepted point's element (not every substep's)
     info = dict(iterations=its, substeps=subs, cutbacks=cuts, restarted=False, time=time.perf_counter() - t0)
     return EquilibriumState(g, state.lam, x1, info), info

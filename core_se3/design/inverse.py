@@ -38,7 +38,7 @@ import numpy as np
 
 from ..backend import launched_ranks
 from ..errors import ConvergenceError, DesignError, ParallelError
-from .equilibrium import EquilibriumOptions, assign_all, follow, solve_flat
+from .equilibrium import ElementCheck, EquilibriumOptions, assign_all, follow, solve_flat
 from .sensitivity import SolveWith, sensitivity
 from .targets import DesignResult, Pose, Smoothness, Target
 
@@ -125,6 +125,9 @@ class Design:
         self.best = None
         self.solves = self.newton_iterations = self.evaluations = 0
         self._cache = None
+        # the element's coarse-mesh check of the design points (once per point whose element
+        # changed, each cause said once per run: optimise starts a new run)
+        self.element_check = ElementCheck()
 
     @property
     def distributed(self):
@@ -174,13 +177,14 @@ class Design:
             xs = self.pose_values(k, x)
             st = base[k]
             if st is None:
-                st = solve_flat(self.problem, self.pose_variables(k), xs, pose.lam, self.options)
+                st = solve_flat(self.problem, self.pose_variables(k), xs, pose.lam, self.options, self.element_check)
                 info = st.stats
             else:
                 if all(np.array_equal(a, b) for a, b in zip(st.x, xs)):
                     self.states[k] = st     # the best point's own state, not the last trial's
                     continue
-                st, info = follow(self.problem, self.pose_variables(k), xs, st, self.options, self.distributed)
+                st, info = follow(self.problem, self.pose_variables(k), xs, st, self.options, self.distributed,
+                                  self.element_check)
             self.states[k] = st
             self.solves += 1
             self.newton_iterations += info["iterations"]
@@ -330,6 +334,7 @@ class Design:
         True
         """
         x0, norm = self._check_start(method, x0, max_iter)
+        self.element_check.reset()
         t0 = time.perf_counter()
         history, last = [], {}
 

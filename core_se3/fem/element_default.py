@@ -470,10 +470,11 @@ def free_edge_layer_width(index, size):
     return float(np.min(np.asarray(size)[flagged] * np.asarray(index)[flagged] ** -0.25))
 
 
-def warn_if_coarse_thin_curved(index, size=None, stacklevel=2):
+def warn_if_coarse_thin_curved(index, size=None, stacklevel=2, note=""):
     """An ElementWarning when an element's phi^3 L / h (``index``, (m,): phi its reference edges'
     largest out-of-plane turn [rad], L = sqrt(area) (``size``, (m,), optional), h the law's
-    thickness) exceeds COARSE_THIN_CURVED.
+    thickness) exceeds COARSE_THIN_CURVED; ``note``: a sentence appended to its text (where a
+    design met it, ``design.equilibrium.ElementCheck``).
 
     ``Problem.check_element`` calls it, when it solves, with the index of the elements along free
     edges only (a boundary edge with a node whose translation nothing holds; the others' index 0): there
@@ -520,4 +521,5 @@ def warn_if_coarse_thin_curved(index, size=None, stacklevel=2):
             f"(a pressurised hemisphere with a free equator, 4x4 at R/h 1e3: 0.68 of its largest displacement); "
             f"bending-dominated shells are not affected. Check by refining: `core-se3 check-mesh SCENARIO.toml` "
             f"(scenario.check_mesh) compares the linear answer with a refined mesh's (each halving of the "
-            f"element size divides phi^3 L by 16) -- docs/ELEMENTS.md." + layer), stacklevel=stacklevel + 1)
+            f"element size divides phi^3 L by 16) -- docs/ELEMENTS.md." + layer + (" " + note if note else "")),
+        stacklevel=stacklevel + 1)

@@ -373,7 +373,7 @@ class Problem:
         free[owner[~held[self.mesh.edge_nodes[edges]].all(1)]] = True
         return free
 
-    def check_element(self, index=None, size=None, warn=True, stacklevel=2):
+    def check_element(self, index=None, size=None, warn=True, stacklevel=2, note=""):
         """The element's coarse-mesh check with the supports known: an ElementWarning
         (``fem.element_default.warn_if_coarse_thin_curved``) where an element along a free edge
         (:meth:`free_edge_elements`) has the coarse-curvature index phi^3 L / h above 2; ``solve``
@@ -387,6 +387,10 @@ class Problem:
             without the index (the seed's) has nothing to check.
         warn : bool
             False: only the width (check-mesh's verdict).
+        stacklevel : int
+            The warning's, counted from the caller of this method.
+        note : str
+            A sentence appended to the warning (where a design met it).
 
         Example
         -------
@@ -407,7 +411,7 @@ class Problem:
             size = np.sqrt(self.element.area)
         index = np.where(self.free_edge_elements(), index, 0.0)
         if warn:
-            warn_if_coarse_thin_curved(index, size, stacklevel=stacklevel + 1)
+            warn_if_coarse_thin_curved(index, size, stacklevel=stacklevel + 1, note=note)
         return free_edge_layer_width(index, size)
 
     def assembler(self):
@@ -438,14 +442,15 @@ class Problem:
         return apply_prescribed(self.supports, g, lam)
 
     # ---------------------------------------------------------------- the equations ----
-    def external(self, g, lam, tangent=True):
+    def external(self, g, lam, tangent=True, loads=None):
         """Sum of the loads at (g, lam): (f (n, 6), node blocks (n, 6, 6) or None, element
-        blocks (m, 4, 4, 6, 6) or None), the blocks being -df/d eta."""
+        blocks (m, 4, 4, 6, 6) or None), the blocks being -df/d eta; ``loads``: a subset of the
+        problem's loads to sum instead of all (linear analysis' reference stiffness)."""
         n = self.mesh.n_nodes
         f = np.zeros((n, 6))
         Kn = np.zeros((n, 6, 6)) if tangent else None
         Ke = None
-        loads = self.loads
+        loads = self.loads if loads is None else list(loads)
         if not tangent:                       # the magnets' forces in one batch (magnets_force)
             mags = [ld for ld in loads if type(ld) is MagneticLoad]
             if len(mags) > 1:
@@ -463,7 +468,7 @@ class Problem:
                 Ke[ids] += blocks
         return f, Kn, Ke
 
-    def evaluate(self, g, lam, tangent=True, assembler=None, out=None, stress=None):
+    def evaluate(self, g, lam, tangent=True, assembler=None, out=None, stress=None, loads=None):
         """The residual on the free dofs and, if asked, the tangent at (g, lam) (an
         :class:`Evaluation`); ``assembler``: another set of free dofs (default the problem's).
 
@@ -471,11 +476,13 @@ class Problem:
         loads write straight into the CSR data of the assembler's fixed pattern (``out``: a
         data array of ``assembler.pattern().nnz`` to reuse, which the returned K then shares);
         otherwise the NumPy path sums the blocks (the reference).  stress: a mixed element's
-        independent stresses for the geometric part of the tangent (the mixed iteration)."""
+        independent stresses for the geometric part of the tangent (the mixed iteration).
+        loads: a subset of the problem's loads to evaluate instead of all (on the NumPy path;
+        linear analysis' reference stiffness without the loads' geometric stiffness)."""
         asm = assembler or self.assembler()
         if stress is not None and not self.element.mixed:
             raise OptionError(f"element {self.element_name!r} has no mixed iteration (stress=)")
-        if self.backend == "numba":
+        if self.backend == "numba" and loads is None:
             if self._compiled is None:
                 self._compiled = CompiledEvaluation(self)
             out_ev = self._compiled.evaluate(asm, g, lam, tangent, out, stress)
@@ -485,8 +492,8 @@ class Problem:
             _backend.charge(self.mesh.n_elements)          # the 'auto' rule's count
         ev = (self.element.evaluate(g, tangent=tangent, stress=stress) if stress is not None
               else self.element.evaluate(g, tangent=tangent))
-        fext, Kn_ext, Ke_ext = self.external(g, lam, tangent=tangent)
-        scale = force_scale_with_loads(ev.force_scale, self.loads, self.length_scale)
+        fext, Kn_ext, Ke_ext = self.external(g, lam, tangent=tangent, loads=loads)
+        scale = force_scale_with_loads(ev.force_scale, self.loads if loads is None else loads, self.length_scale)
         out = Evaluation(asm.vector(ev.r - fext), ev.r, fext, scale, ev.energy,
                          stress=ev.stress, linearization=ev.linearization)
         if tangent:

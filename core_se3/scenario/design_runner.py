@@ -251,7 +251,8 @@ def _design(scn, rd, method, max_iter, progress, vtu, plots):
                                                     f"{scn.name}: pose {pose.name} (x target, o achieved)")
         if vtu:
             design.assign_pose(k, r.x)
-            res = scn.problem.solve(lam_end=pose.lam)          # (collective under mpirun)
+            with design.element_check.quiet():                  # a coarse mesh: said once, by the design
+                res = scn.problem.solve(lam_end=pose.lam)      # (collective under mpirun)
             if not root:
                 continue
             extra = [point_fields(scn.problem, s.g, s.load_factor) for s in res.steps]

@@ -5,11 +5,19 @@ The equations are linearised about the reference frames g0 at zero load:
 
     K0 eta = f_ext(g0, lam_end),   K0 = d r / d eta at (g0, lam = 0),
 
-with eta_i = (v_i, w_i) the body-frame displacement and rotation of node i.  K0 holds the
+with eta_i = (v_i, w_i) the body-frame displacement and rotation of node i.  K0 holds only the
 element's material stiffness (the reference is stress free, so there is no geometric part) and
-the load-independent stiffness of the loads (penalty supports); the stiffness of follower loads,
-proportional to the load, is a geometric effect and is left out, so that the answer is linear
-in the load.  Prescribed motions enter through their targets at lam_end: the held components
+the load-independent stiffness of the loads that do not scale with the load factor (penalty
+supports: ``scales_with_load_factor`` False), whatever the other loads' scales
+(``reference_stiffness``).  The stiffness of every load that scales with the load factor is
+proportional to the load, a geometric effect, and is left out, so that the answer is linear in
+the load: a follower pressure's (its normal and area turning with the shell), a magnet's body
+couple's, and a dead load's too (its lab force seen in the turning body frame, -hat(R^T F)).
+With the default scale s(lam) = lam that stiffness is zero at lam = 0 and K0 is the tangent at
+(g0, 0) bit for bit; a load with s(0) != 0 (scale "constant", a table) has it at lam = 0, and
+counting it made the answer depend on s(0) (a dead pressure at "constant" scale moved a
+cantilever's tip sideways by 1e-4 of its deflection, where the linear answer has no sideways
+motion).  Prescribed motions enter through their targets at lam_end: the held components
 of the rigid motions of ``rotate_edge`` / ``move_edge`` linearised, eta_p = (R0^T (s t + omega x
 (X - p)), R0^T omega) with omega = s angle axis (``Prescribed.linear``: an infinitesimal rigid
 motion, which does not strain the element; the target's chord (Q - I)(X - p) would, by
@@ -47,7 +55,7 @@ from .convergence import scaled_norm
 from .linalg import Factorization, make_solver
 from .options import NewtonOptions, unknown_keywords
 
-__all__ = ["linear_solve", "linear_state", "linear_increments", "ACCURACY"]
+__all__ = ["linear_solve", "linear_state", "linear_increments", "reference_stiffness", "ACCURACY"]
 
 #: the estimated relative error of a linear solution above which it warns (the 4th digit)
 ACCURACY = 1e-4
@@ -85,6 +93,54 @@ def linear_increments(g0, g):
     RT = np.swapaxes(g0[:, :3, :3], 1, 2)
     v = np.einsum("nij,nj->ni", RT, g[:, :3, 3] - g0[:, :3, 3])
     return np.concatenate([v, lie.log_so3(RT @ g[:, :3, :3])], 1)
+
+
+def reference_stiffness(problem, assembler):
+    """(K0, K_s): the stiffness of linear analysis at the reference state g0 (module docstring)
+    on the dofs of ``assembler``, and the part K_s of it that the loads hold.
+
+    K0 is the element's material stiffness plus the stiffness of the loads that do not scale
+    with the load factor (``scales_with_load_factor`` False: penalty springs), K_s that of those
+    loads alone (their linear forces count with the applied loads).  The stiffness of the loads
+    that scale with the load factor is proportional to the load and left out whatever their
+    scale at lam = 0: when it is zero there (the default scale s(lam) = lam) K0 is the problem's
+    tangent at (g0, lam = 0) as evaluated (on either backend); otherwise it is evaluated without
+    those loads (the NumPy path).
+
+    Parameters
+    ----------
+    problem : core_se3.Problem
+        The problem.
+    assembler : core_se3.assembly.Assembler
+        The dofs (linear analysis: all of them).
+
+    Returns
+    -------
+    (scipy.sparse.csr_matrix, scipy.sparse matrix)
+        K0 and K_s.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import Problem, Material, mesh
+    >>> from core_se3.assembly import Assembler
+    >>> p = Problem(mesh.rectangle(2.0, 1.0, 2, 1), Material(1e3, 0.3, 0.1), backend="numpy")
+    >>> p.clamp("x0"); p.add_pressure(5.0, follower=True, scale=lambda lam: 1.0)   # at lam = 0 too
+    >>> every = Assembler(p.mesh, np.ones(6 * p.mesh.n_nodes, bool))
+    >>> K0, Ks = reference_stiffness(p, every)
+    >>> q = Problem(mesh.rectangle(2.0, 1.0, 2, 1), Material(1e3, 0.3, 0.1), backend="numpy")
+    >>> q.clamp("x0"); q.add_pressure(5.0, follower=True)                          # s(0) = 0
+    >>> (K0 != reference_stiffness(q, every)[0]).nnz, float(abs(Ks).max())    # no springs
+    (0, 0.0)
+    """
+    g0 = problem.mesh.g0
+    springs = [ld for ld in problem.loads if not ld.scales_with_load_factor]
+    scaled = [ld for ld in problem.loads if ld.scales_with_load_factor]
+    _, Kn_p, Ke_p = problem.external(g0, 0.0, tangent=True, loads=scaled)
+    geometric = bool(np.any(Kn_p)) or (Ke_p is not None and bool(np.any(Ke_p)))
+    K = problem.evaluate(g0, 0.0, assembler=assembler, loads=springs if geometric else None).K.tocsr()
+    _, Kn_s, Ke_s = problem.external(g0, 0.0, tangent=True, loads=springs)
+    return K, assembler.matrix(Ke_s, None, Kn_s)
 
 
 def _prescribed_increments(problem, lam):
@@ -165,13 +221,11 @@ def linear_solve(problem, lam_end=1.0, steps=None, linear_solver=None, **kw):
     every = Assembler(mesh, np.ones(6 * n, bool))
     result.timings["setup"] = time.perf_counter() - t0
     t = time.perf_counter()
-    ev = problem.evaluate(g0, 0.0, assembler=every)                   # K0 on all dofs
-    K = ev.K.tocsr()
-    _, Kn_ext, Ke_ext = problem.external(g0, 0.0, tangent=True)
-    # the loads' own stiffness (penalty springs), -df/d eta: their linear forces f - K_ext eta
-    # belong to the applied loads (as a load-stepping step reports them), not to the internal
-    # forces, or the step's applied totals miss the springs' forces and it does not balance
-    K_ext = every.matrix(Ke_ext, None, Kn_ext)
+    # K0 on all dofs, and the loads' own stiffness in it (penalty springs), -df/d eta: their
+    # linear forces f - K_ext eta belong to the applied loads (as a load-stepping step reports
+    # them), not to the internal forces, or the step's applied totals miss the springs' forces
+    # and it does not balance
+    K, K_ext = reference_stiffness(problem, every)
     f = problem.external(g0, lam_end, tangent=False)[0].ravel()
     eta = _prescribed_increments(problem, lam_end).ravel()
     rhs = f[free] - K[free][:, ~free] @ eta[~free]
