@@ -492,7 +492,8 @@ class Problem:
             _backend.charge(self.mesh.n_elements)          # the 'auto' rule's count
         ev = (self.element.evaluate(g, tangent=tangent, stress=stress) if stress is not None
               else self.element.evaluate(g, tangent=tangent))
-        fext, Kn_ext, Ke_ext = self.external(g, lam, tangent=tangent, loads=loads)
+        fext, Kn_ext, Ke_ext = (self.external(g, lam, tangent=tangent) if loads is None       # the problem's loads
+                                else self.external(g, lam, tangent=tangent, loads=loads))
         scale = force_scale_with_loads(ev.force_scale, self.loads if loads is None else loads, self.length_scale)
         out = Evaluation(asm.vector(ev.r - fext), ev.r, fext, scale, ev.energy,
                          stress=ev.stress, linearization=ev.linearization)
