@@ -84,3 +84,40 @@ def test_the_linear_cell_fields_are_those_of_the_linear_strains(tmp_path):
     vtu = meshio.read(str(tmp_path / "run" / "vtu" / "step_0001.vtu"))
     assert np.allclose(vtu.cell_data["N1_local"][0], lin["N1_local"], atol=1e-9)
     assert res is not None
+
+
+def _cantilever():
+    p = Problem(mesh.rectangle(10.0, 1.0, 8, 1), Material(1.2e6, 0.0, 0.1))
+    p.clamp("x0")
+    p.add_edge_force("x1", (0.0, 0.0, 1e-3))
+    p.add_probe("tip", "x1")
+    return p
+
+
+@pytest.mark.parametrize("call", ["solve_linear", "solve"])
+def test_load_stepping_options_of_a_linear_analysis_are_named_not_dropped(call):
+    # steps=10 and max_cutbacks=3 were dropped without a word (one solve at lam_end either
+    # way); a scenario file warns of [solver] steps with control = "linear", and so does Python
+    from core_se3.errors import OptionWarning
+    p = _cantilever()
+    solve = p.solve_linear if call == "solve_linear" else (lambda **kw: p.solve(control="linear", **kw))
+    with pytest.warns(OptionWarning) as said:
+        res = solve(steps=10, max_cutbacks=3)
+    assert len(said) == 1
+    text = str(said[0].message)
+    assert "steps=10, max_cutbacks=3 not used" in text and "one solve at lam_end" in text
+    assert "control='load'" in text
+    assert len(res.steps) == 2                                  # one solve all the same
+
+
+def test_a_linear_analysis_is_quiet_for_one_step_and_for_the_problem_s_defaults():
+    # steps=1, the linear solver and lam_end are used or harmless; the problem's own defaults
+    # (a scenario's or a catalogue case's [solver], steps = 20 included) do not warn
+    import warnings
+    p = _cantilever()
+    p.solve_defaults = dict(steps=20, max_cutbacks=4, rtol=1e-8)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        u1 = p.solve_linear(steps=1, linear_solver="superlu", lam_end=2.0).final.probes["tip"]["u"]
+        u2 = p.solve(control="linear", lam_end=2.0, max_cutbacks=12, linear_solver="superlu").final.probes["tip"]["u"]
+    assert np.array_equal(u1, u2)

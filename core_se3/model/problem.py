@@ -561,7 +561,9 @@ class Problem:
         **options
             Passed to the solver: the fields of ``core_se3.solvers.NewtonOptions`` (rtol, dtol,
             max_iter, max_cutbacks, ...) and its own keywords (lam_end, load_factors, g_init,
-            ...).  Keys given here override ``solve_defaults``.
+            ...).  Keys given here override ``solve_defaults``.  With control 'linear', steps
+            other than 1 and Newton options given here (not in ``solve_defaults``) are not used:
+            an :class:`~core_se3.errors.OptionWarning` names them.
         """
         kw = dict(self.solve_defaults)
         kw.update(options)
@@ -569,6 +571,7 @@ class Problem:
             kw["steps"] = steps
         control = control or kw.pop("control", "load")
         kw.pop("control", None)
-        return dispatch(self, control, solver or kw.pop("solver", None), kw)
+        given = [*(["steps"] if steps is not None else []), *options]     # unused ones warn (OptionWarning)
+        return dispatch(self, control, solver or kw.pop("solver", None), kw, given)
 
     solve_linear = solve_linear            # linear analysis (model.solving.solve_linear)

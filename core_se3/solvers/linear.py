@@ -47,7 +47,7 @@ from .convergence import scaled_norm
 from .linalg import Factorization, make_solver
 from .options import NewtonOptions, unknown_keywords
 
-__all__ = ["linear_solve", "linear_state", "linear_increments", "ACCURACY"]
+__all__ = ["linear_solve", "linear_state", "linear_increments", "unused_options", "ACCURACY"]
 
 #: the estimated relative error of a linear solution above which it warns (the 4th digit)
 ACCURACY = 1e-4
@@ -117,11 +117,13 @@ def linear_solve(problem, lam_end=1.0, steps=None, linear_solver=None, **kw):
     lam_end : float, optional
         The load factor of the answer (the loads at lam_end on the reference geometry).
     steps : int, optional
-        Ignored (one solve); accepted so that a problem's solve defaults apply unchanged.
+        Not used (one solve); accepted so that a problem's solve defaults apply unchanged
+        (given to ``Problem.solve`` other than 1, an OptionWarning: :func:`unused_options`).
     linear_solver : str, optional
         'auto', 'banded', 'superlu' or 'mumps' (default the problem's).
     **kw
-        Fields of NewtonOptions are accepted and ignored (they control iterations).
+        Fields of NewtonOptions are accepted and not used (they control iterations; given to
+        ``Problem.solve`` other than their defaults, an OptionWarning).
 
     Returns
     -------
@@ -192,6 +194,34 @@ def linear_solve(problem, lam_end=1.0, steps=None, linear_solver=None, **kw):
                            error_estimate=error))
     result.timings["other"] = time.perf_counter() - t
     return result
+
+
+def unused_options(given):
+    """The message of an :class:`~core_se3.errors.OptionWarning` for the options of ``given`` (the
+    keywords a call gave, not a problem's ``solve_defaults``) that a linear analysis takes and does
+    not use, or None: ``steps`` other than 1, a field of NewtonOptions other than ``linear_solver``
+    that differs from its default (they control load steps and Newton iterations).
+    ``Problem.solve`` warns with it (a scenario file warns of ``[solver] steps`` the same way).
+
+    Example
+    -------
+    >>> unused_options(dict(steps=1, lam_end=2.0, linear_solver="superlu")) is None
+    True
+    >>> unused_options(dict(steps=10, max_cutbacks=3))[:43]
+    'steps=10, max_cutbacks=3 not used: a linear'
+    """
+    defaults = NewtonOptions()
+    names = [f"{k}={v!r}" for k, v in given.items()
+             if k == "steps" and v is not None and v != 1
+             or k in NewtonOptions.__dataclass_fields__ and k != "linear_solver" and v != getattr(defaults, k)]
+    if not names:
+        return None
+    return (f"{', '.join(names)} not used: a linear analysis (control='linear') is one solve at lam_end (one "
+            f"state, no load steps, no Newton iterations or cut-backs); drop the option{'s' * (len(names) > 1)}, "
+            f"or solve with load control (control='load') to step the load")
+
+
+linear_solve.unused_options = unused_options      # Problem.solve asks it (model.solving.dispatch)
 
 
 def _solve_measured(solver, A, b, free, ell):
