@@ -76,17 +76,52 @@ class Problem:
 
     def __init__(self, mesh, material, element="default", linear_solver="auto", backend=None):
         self.backend = backend
-        self._compiled = None
-        self.mesh = mesh
-        self.material = material
-        self.element_name = element                   # an unknown name fails here; built at first use
-        self.linear_solver = linear_solver
         self.loads = []
         self.supports = []
         self.probes = {}
+        self.mesh = mesh                              # sets length_scale
+        self.material = material
+        self.element_name = element                   # an unknown name fails here; built at first use
+        self.linear_solver = linear_solver
         self.solve_defaults = {}
+
+    @property
+    def mesh(self):
+        """The reference mesh.  Setting another mesh drops what was built on the old one (the
+        element, the compiled evaluation, the assembler) and sets :attr:`length_scale` to the new
+        mesh's; setting the same mesh does nothing.  Supports, loads and probes hold node ids and
+        data of the mesh they were added on: once any was added, setting another mesh raises a
+        :class:`~core_se3.errors.MeshError` (a stale support would hold the old mesh's node ids on
+        the new one) -- build a new Problem on the new mesh, or set the mesh before adding them.
+
+        Example
+        -------
+        >>> from core_se3 import Problem, Material, mesh
+        >>> p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
+        >>> p.mesh = mesh.rectangle(4.0, 1.0, 4, 1); p.element.mesh.n_elements, p.length_scale == p.mesh.length_scale
+        (4, True)
+        >>> p.clamp("x0"); p.mesh = mesh.rectangle(1.0, 1.0, 2, 1)    # doctest: +ELLIPSIS
+        Traceback (most recent call last):
+        ...
+        core_se3.errors.MeshError: cannot set another mesh on a Problem with supports, loads or probes added (1 support(s)): ...
+        """
+        return self._mesh
+
+    @mesh.setter
+    def mesh(self, new):
+        if getattr(self, "_mesh", None) is new:
+            return
+        added = [f"{len(x)} {name}" for name, x in (("support(s)", self.supports), ("load(s)", self.loads),
+                                                    ("probe(s)", self.probes)) if x]
+        if added:
+            raise MeshError(f"cannot set another mesh on a Problem with supports, loads or probes added "
+                            f"({', '.join(added)}): they refer to the old mesh's node ids and data; build a new "
+                            f"Problem on the new mesh (or set the mesh before adding them)")
+        self._mesh = new
+        self.length_scale = new.length_scale
+        self._element = None
+        self._compiled = None
         self._assembler = None
-        self.length_scale = mesh.length_scale
 
     @property
     def backend(self):
