@@ -223,13 +223,18 @@ class Problem:
         self._support(Prescribed(self.nodes(where), np.asarray(fixed, bool), target))
 
     def add_lab_support(self, where, dirs, k):
-        """Hold the lab displacement components ``dirs`` (unit rows, or one set per node) of the
-        selected nodes by penalty springs of stiffness k (supports.LabSpring)."""
+        """Hold the lab displacement components ``dirs`` of the selected nodes by penalty springs
+        of stiffness k (supports.LabSpring): ``dirs`` (q, 3) is a set of q <= 3 independent
+        directions held at *every* selected node ((3,): one), (n, q, 3) a set per node for the n
+        selected nodes -- one direction per node is (n, 1, 3), not (n, 3) (that is a set held at
+        every node, refused beyond 3 rows).  Rows are normalised."""
         return self.add(LabSpring(self.mesh, self.nodes(where), dirs, k))
 
     def add_lab_tilt_support(self, where, t, k_rot):
         """Keep the normals of the selected nodes normal to the lab directions ``t`` by a
-        rotational penalty (supports.LabTiltSpring)."""
+        rotational penalty (supports.LabTiltSpring): ``t`` (3,) or (1, 3) is one direction for
+        every selected node, (n, 3) one row per node for the n selected nodes (unlike
+        :meth:`add_lab_support`'s (q, 3), a set held at every node)."""
         return self.add(LabTiltSpring(self.mesh, self.nodes(where), t, k_rot))
 
     def add_rotation_component_support(self, where, a, k_rot):
