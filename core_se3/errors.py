@@ -478,7 +478,11 @@ class MeshWarning(UserWarning):
 
 
 class AccuracyWarning(UserWarning):
-    """A linear solution that double precision cannot give to 1e-4 (``solvers.linear``).
+    """A linear solution that double precision cannot give to 1e-4 (``solvers.linear``), or one
+    whose prescribed motion (``Problem.prescribe``) is not linear in the load factor, so that the
+    linear analysis holds the chord of its target at lam_end rather than the linearised motion
+    (give rigid motions with ``rotate_edge`` / ``move_edge``, linearised exactly, or use load
+    control).
 
     The factorisation is backward stable, so its error is that of the system: about its
     condition number times the round-off.  Very thin shells are ill-conditioned (the membrane

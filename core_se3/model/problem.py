@@ -219,7 +219,9 @@ class Problem:
         self._support(rigid_motion(self.mesh, self.nodes(where), translate, axis, angle, point, free, scale))
 
     def prescribe(self, where, target, fixed=(True,) * 6):
-        """Selected nodes follow ``target(lam) -> (k, 4, 4)`` frames on the fixed dofs."""
+        """Selected nodes follow ``target(lam) -> (k, 4, 4)`` frames on the fixed dofs.  Linear
+        analysis holds the chord of the target at lam_end (an AccuracyWarning if the target is not
+        linear in lam): give rigid motions with :meth:`rotate_edge` / :meth:`move_edge`."""
         self._support(Prescribed(self.nodes(where), np.asarray(fixed, bool), target))
 
     def add_lab_support(self, where, dirs, k):

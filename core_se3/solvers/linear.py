@@ -13,7 +13,9 @@ in the load.  Prescribed motions enter through their targets at lam_end: the hel
 of the rigid motions of ``rotate_edge`` / ``move_edge`` linearised, eta_p = (R0^T (s t + omega x
 (X - p)), R0^T omega) with omega = s angle axis (``Prescribed.linear``: an infinitesimal rigid
 motion, which does not strain the element; the target's chord (Q - I)(X - p) would, by
-O(angle^2)), and of other targets (``prescribe``) eta_p = (R0^T (x_t - X), log(R0^T R_t)).
+O(angle^2)), and of other targets (``prescribe``) eta_p = (R0^T (x_t - X), log(R0^T R_t)): the
+linearisation only of a target linear in lam, so an AccuracyWarning names a target whose
+increments at lam_end / 2 are not half those at lam_end (``NONLINEAR_TARGET``).
 
 The state reported is g_i = g0_i (exp_so3(w_i), v_i) (the rotation and the translation updated
 separately, not by the SE(3) exponential): its probes and displacements are then exactly the
@@ -88,23 +90,47 @@ def linear_increments(g0, g):
 
 
 def _prescribed_increments(problem, lam):
-    """(n, 6) body-frame increments of the held dofs at lam (zero where no target moves)."""
+    """(n, 6) body-frame increments of the held dofs at lam (zero where no target moves): a rigid
+    motion's linearised (``Prescribed.linear``), another target's chord (``linear_increments`` of
+    its frames), after an AccuracyWarning if that target is not linear in lam
+    (:func:`_warn_if_not_linear`)."""
     g0 = problem.mesh.g0
     eta = np.zeros((problem.mesh.n_nodes, 6))
-    for s in problem.supports:
+    for k, s in enumerate(problem.supports):
         if s.target is None:
             continue
         if getattr(s, "linear", None) is not None:          # a rigid motion, linearised
-            eta[s.nodes] = np.where(s.fixed, s.linear(lam), eta[s.nodes])
-            continue
-        gt = np.asarray(s.target(lam), float)
-        R0 = g0[s.nodes, :3, :3]
-        rel = np.swapaxes(R0, 1, 2)
-        ev = np.einsum("nij,nj->ni", rel, gt[:, :3, 3] - g0[s.nodes, :3, 3])
-        ew = lie.log_so3(rel @ gt[:, :3, :3])
-        e = np.concatenate([ev, ew], 1)
+            e = s.linear(lam)
+        else:
+            e = linear_increments(g0[s.nodes], np.asarray(s.target(lam), float))
+            _warn_if_not_linear(problem, k, s, e, lam)
         eta[s.nodes] = np.where(s.fixed, e, eta[s.nodes])
     return eta
+
+
+#: the relative difference between a target's increments at lam_end / 2 and half those at lam_end
+#: above which linear analysis warns that it takes the chord of a motion not linear in lam
+NONLINEAR_TARGET = 1e-6
+
+
+def _warn_if_not_linear(problem, k, s, e, lam):
+    """An AccuracyWarning if the target of support ``k`` (``Problem.prescribe``) is not linear in
+    the load factor: its held increments at lam / 2 differ from half ``e`` (those at lam) by more
+    than NONLINEAR_TARGET of their size (translations / ``length_scale``, rotations in rad).
+    Linear analysis prescribes its chord at lam, the linearisation only of a motion linear in lam
+    (a rigid rotation's chord (Q - I)(X - p) strains the shell at second order in the angle)."""
+    half = linear_increments(problem.mesh.g0[s.nodes], np.asarray(s.target(0.5 * lam), float))
+    unit = np.r_[np.full(3, 1.0 / problem.length_scale), np.ones(3)] * s.fixed
+    size = max(np.linalg.norm(half * unit), np.linalg.norm(0.5 * e * unit))
+    off = np.linalg.norm((half - 0.5 * e) * unit)
+    if size > 0 and off > NONLINEAR_TARGET * size:
+        warnings.warn(AccuracyWarning(
+            f"support {k} (prescribe, {len(s.nodes)} node(s)) prescribes a motion that is not linear in the load "
+            f"factor: its increments at lam_end / 2 differ from half those at lam_end by {off / size:.2g} "
+            f"(relative), and linear analysis prescribes the chord of the target at lam_end = {lam:g}, not the "
+            f"linearised motion (a rigid rotation's chord strains the shell at second order in the angle). Give a "
+            f"rigid motion with rotate_edge or move_edge (linearised exactly), or solve with control='load'."),
+            stacklevel=6)
 
 
 def linear_solve(problem, lam_end=1.0, steps=None, linear_solver=None, **kw):
