@@ -19,7 +19,7 @@ __all__ = ["CoreSE3Error", "MaterialError", "MeshError", "LoadError", "SupportEr
            "SingularSystemError", "ConvergenceError", "ElementTooDistortedError", "ScenarioError",
            "CheckpointError", "OptionError", "DesignError", "ContactError", "ParallelError",
            "LinearSolverError", "ControlError", "ScenarioWarning", "SupportWarning", "ElementWarning", "MeshWarning",
-           "AccuracyWarning", "did_you_mean"]
+           "AccuracyWarning", "OptionWarning", "did_you_mean"]
 
 
 def did_you_mean(name, choices):
@@ -478,7 +478,11 @@ class MeshWarning(UserWarning):
 
 
 class AccuracyWarning(UserWarning):
-    """A linear solution that double precision cannot give to 1e-4 (``solvers.linear``).
+    """A linear solution that double precision cannot give to 1e-4 (``solvers.linear``), or one
+    whose prescribed motion (``Problem.prescribe``) is not linear in the load factor, so that the
+    linear analysis holds the chord of its target at lam_end rather than the linearised motion
+    (give rigid motions with ``rotate_edge`` / ``move_edge``, linearised exactly, or use load
+    control).
 
     The factorisation is backward stable, so its error is that of the system: about its
     condition number times the round-off.  Very thin shells are ill-conditioned (the membrane
@@ -491,4 +495,28 @@ class AccuracyWarning(UserWarning):
     >>> from core_se3.errors import AccuracyWarning
     >>> issubclass(AccuracyWarning, UserWarning)
     True
+    """
+
+
+class OptionWarning(UserWarning):
+    """A solver option given that the chosen control does not use.
+
+    Issued by ``Problem.solve`` with ``control="linear"`` (and ``Problem.solve_linear``) for a
+    load-stepping option given in the call: ``steps`` other than 1 or a Newton control
+    (``NewtonOptions``: tolerances, iterations, cut-backs, ...) other than its default.  A linear
+    analysis is one solve at lam_end, so the option changes nothing; a scenario file warns of
+    ``[solver] steps`` with ``control = "linear"`` the same way (a :class:`ScenarioWarning`).
+    Drop the option, or solve with load control (``control="load"``) to step the load.
+
+    Example
+    -------
+    >>> import warnings
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
+    >>> p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 1e-3))
+    >>> with warnings.catch_warnings(record=True) as said:
+    ...     warnings.simplefilter("always")
+    ...     _ = p.solve_linear(steps=10)
+    >>> [type(w.message).__name__ for w in said]
+    ['OptionWarning']
     """

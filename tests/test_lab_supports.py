@@ -114,3 +114,42 @@ def test_a_stiff_penalty_support_converges_and_errs_like_one_over_k(penalty):
     assert it == it_exact
     err = np.abs(g - g_exact).max()
     assert 0.5e-2 / penalty < err < 5e-2 / penalty
+
+
+def _four_node_edge():
+    from core_se3 import Material, Problem, mesh
+    p = Problem(mesh.rectangle(1.0, 0.5, 2, 3), Material(1e4, 0.3, 0.05))
+    assert len(p.nodes("x1")) == 4
+    return p
+
+
+def test_one_lab_direction_per_node_is_shape_n_1_3_and_n_rows_are_refused():
+    """``add_lab_support``'s (q, 3) is a set held at every node (add_lab_tilt_support's (k, 3) is
+    one row per node): four rows meant one per node of a four-node edge were read as four
+    directions held at every node, whose sum of d d^T is no projector (here it held y and z with twice
+    the stiffness: P = diag(0, 2, 2) at every node, silently).  More than 3 rows cannot be a set
+    of lab directions: refused, naming (n, 1, 3); the per-node shape holds one each."""
+    from core_se3.errors import SupportError
+    per_node = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
+    with pytest.raises(SupportError, match=r"4 rows \(shape \(4, 3\)\).*per node give shape \(4, q, 3\).*\(4, 1, 3\)"):
+        _four_node_edge().add_lab_support("x1", per_node, 1e3)
+    spring = _four_node_edge().add_lab_support("x1", per_node[:, None, :], 1e3)
+    assert np.array_equal(spring.P, np.einsum("ni,nj->nij", per_node, per_node))
+
+
+def test_dependent_or_unnormalised_lab_directions_do_not_change_the_spring():
+    """A direction given twice doubled its spring (P = 2 e_z e_z^T), a row of length 2 quadrupled
+    it, and two rows that are not orthogonal held their plane with a stiffness that varied by
+    direction (P = D^T D, eigenvalues 1.71 and 0.29): dependent rows are refused, rows are
+    normalised and P is the projector on their span."""
+    from core_se3.errors import SupportError
+    with pytest.raises(SupportError, match="linearly dependent.*hold their common direction twice"):
+        _four_node_edge().add_lab_support("x1", [[0.0, 0.0, 1.0], [0.0, 0.0, -1.0]], 1e3)
+    with pytest.raises(SupportError, match="linearly dependent"):
+        _four_node_edge().add_lab_support("x1", np.tile([[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]]], (4, 1, 1)), 1e3)
+    assert np.array_equal(_four_node_edge().add_lab_support("x1", [[0.0, 0.0, 2.0]], 1e3).P,
+                          np.broadcast_to(np.diag([0.0, 0.0, 1.0]), (4, 3, 3)))
+    skew = _four_node_edge().add_lab_support("x1", [[1.0, 0.0, 0.0], [1.0, 1.0, 0.0]], 1e3)
+    assert np.abs(skew.P - np.diag([1.0, 1.0, 0.0])).max() < 4 * np.finfo(float).eps
+    with pytest.raises(SupportError, match=r"got shape \(2, 2, 3\)"):
+        _four_node_edge().add_lab_support("x1", np.ones((2, 2, 3)), 1e3)

@@ -137,3 +137,96 @@ def test_default_scaled_loads_keep_the_tangent_at_lam_zero_as_k0(load):
     q = _cantilever(load, lambda lam: 1.0)
     assert (reference_stiffness(q, every)[0] != K0).nnz == 0
     assert (q.evaluate(q.mesh.g0, 0.0, assembler=every).K != K0).nnz > 0
+
+
+def _tip_loaded_strip():
+    p = Problem(mesh.rectangle(10.0, 1.0, 8, 1), Material(1.2e6, 0.0, 0.1))
+    p.clamp("x0")
+    p.add_edge_force("x1", (0.0, 0.0, 1e-3))
+    p.add_probe("tip", "x1")
+    return p
+
+
+@pytest.mark.parametrize("call", ["solve_linear", "solve"])
+def test_load_stepping_options_of_a_linear_analysis_are_named_not_dropped(call):
+    # steps=10 and max_cutbacks=3 were dropped without a word (one solve at lam_end either
+    # way); a scenario file warns of [solver] steps with control = "linear", and so does Python
+    from core_se3.errors import OptionWarning
+    p = _tip_loaded_strip()
+    solve = p.solve_linear if call == "solve_linear" else (lambda **kw: p.solve(control="linear", **kw))
+    with pytest.warns(OptionWarning) as said:
+        res = solve(steps=10, max_cutbacks=3)
+    assert len(said) == 1
+    text = str(said[0].message)
+    assert "steps=10, max_cutbacks=3 not used" in text and "one solve at lam_end" in text
+    assert "control='load'" in text
+    assert len(res.steps) == 2                                  # one solve all the same
+
+
+def test_a_linear_analysis_is_quiet_for_one_step_and_for_the_problem_s_defaults():
+    # steps=1, the linear solver and lam_end are used or harmless; the problem's own defaults
+    # (a scenario's or a catalogue case's [solver], steps = 20 included) do not warn
+    import warnings
+    p = _tip_loaded_strip()
+    p.solve_defaults = dict(steps=20, max_cutbacks=4, rtol=1e-8)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        u1 = p.solve_linear(steps=1, linear_solver="superlu", lam_end=2.0).final.probes["tip"]["u"]
+        u2 = p.solve(control="linear", lam_end=2.0, max_cutbacks=12, linear_solver="superlu").final.probes["tip"]["u"]
+    assert np.array_equal(u1, u2)
+
+
+def _turned_by_prescribe(angle):
+    """The strip clamped at x0, its x1 end turned rigidly about y through the origin by
+    angle * lam, given as a target of Problem.prescribe (its frames), not as rotate_edge."""
+    from core_se3 import lie
+
+    def build(p):
+        nodes = p.nodes("x1")
+        X = p.mesh.g0[nodes]
+
+        def target(lam):
+            Q = np.eye(4)
+            Q[:3, :3] = lie.exp_so3([0.0, angle * lam, 0.0])
+            return Q @ X
+        p.clamp("x0")
+        p.prescribe("x1", target)
+    return _strip(build)
+
+
+def test_a_prescribed_target_not_linear_in_the_load_factor_is_named():
+    # the same turn as test_a_rotated_end_is_the_linearised_rigid_turn_not_its_chord, given as a
+    # target: linear analysis holds its chord (the end pulled in by 4.5 % of L), silently; now an
+    # AccuracyWarning says the motion is not linear in lam and names rotate_edge / move_edge
+    from core_se3.errors import AccuracyWarning
+    with pytest.warns(AccuracyWarning) as said:
+        lin = _turned_by_prescribe(0.3).solve_linear().final
+    assert len(said) == 1
+    text = str(said[0].message)
+    assert "support 1 (prescribe, 3 node(s)) prescribes a motion that is not linear in the load factor" in text
+    assert "rotate_edge or move_edge" in text and "control='load'" in text
+    assert lin.probes["tip"]["u"][0] == pytest.approx(10.0 * (np.cos(0.3) - 1.0), rel=1e-12)   # the chord, as said
+
+
+def test_a_prescribed_target_linear_in_the_load_factor_is_quiet():
+    # a lift linear in lam: its chord is its linearisation, as move_edge's; rotate_edge and
+    # move_edge are linearised exactly and never warn
+    import warnings
+
+    def lift(p):
+        nodes = p.nodes("x1")
+        X = p.mesh.g0[nodes]
+
+        def target(lam):
+            g = X.copy()
+            g[:, 2, 3] += 0.1 * lam
+            return g
+        p.clamp("x0")
+        p.prescribe("x1", target)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        u = _strip(lift).solve_linear().final.probes["tip"]["u"]
+        moved = _strip(lambda p: (p.clamp("x0"), p.move_edge("x1", translate=(0.0, 0.0, 0.1)))).solve_linear()
+        _strip(lambda p: (p.clamp("x0"), p.rotate_edge("x1", (0, 1, 0), 0.3))).solve_linear()
+        _turned_by_prescribe(1e-7).solve_linear()            # relative difference 2.5e-8: the chord is the tangent
+    assert np.array_equal(u, moved.final.probes["tip"]["u"]) and u[2] == 0.1

@@ -352,6 +352,32 @@ def test_the_json_of_the_check_does_not_overwrite_its_inputs(tmp_path):
     assert json.loads((tmp_path / "check.json").read_text())["converged"] is True
 
 
+def test_a_failed_check_leaves_no_earlier_verdict_in_its_json(tmp_path, monkeypatch, capsys):
+    """A check that failed (exit 2) left the JSON of an earlier check at --json PATH: a script read
+    its "converged": true as this check's.  PATH now says status "failed" and the error (written
+    atomically, as run's results.json); when the scenario does not load (its inputs unknown), only
+    an earlier check's JSON or a missing file is replaced, anything else is left alone."""
+    from core_se3 import cli
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "fine.toml").write_text(_toml(roof(8, 100.0)))
+    assert cli.main(["check-mesh", "fine.toml", "--json", "check.json"]) == 0
+    assert json.loads((tmp_path / "check.json").read_text())["converged"] is True
+    assert cli.main(["check-mesh", "fine.toml", "--tol", "0", "--json", "check.json"]) == 2      # the check refuses
+    doc = json.loads((tmp_path / "check.json").read_text())
+    assert doc == {"status": "failed", "error": "check_mesh needs a tolerance tol > 0, got 0.0",
+                   "scenario": "fine.toml", "exit_status": 2}
+    assert cli.main(["check-mesh", "fine.toml", "--json", "check.json"]) == 0
+    assert json.loads((tmp_path / "check.json").read_text())["status"] == "complete"
+    assert cli.main(["check-mesh", "missing.toml", "--json", "check.json"]) == 2                   # does not load
+    doc = json.loads((tmp_path / "check.json").read_text())
+    assert doc["status"] == "failed" and "missing.toml" in doc["error"] and "converged" not in doc
+    (tmp_path / "notes.txt").write_text("mine")
+    assert cli.main(["check-mesh", "missing.toml", "--json", "notes.txt"]) == 2
+    assert (tmp_path / "notes.txt").read_text() == "mine"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["check.json", "fine.toml", "notes.txt"]   # no temporaries
+    capsys.readouterr()
+
+
 # ------------------------------------------------------------------ the runs themselves -----
 def cantilever(nx, force=4.0, **solver):
     """Sze et al.'s cantilever strip under an end shear (L 10, b 1, h 0.1, E 1.2e6): 6.70 at 4."""

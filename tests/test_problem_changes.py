@@ -1,7 +1,7 @@
 """What the problem evaluates follows what the user set (review findings; each test fails on the
 code before): the numba backend's compiled evaluation was keyed on id()s that Python reuses; a
-tilt spring's direction given as one row was read past its end by the compiled spring; a material
-or element set after a solve was ignored."""
+tilt spring's direction given as one row was read past its end by the compiled spring; a material,
+element or mesh set after a solve was ignored."""
 import importlib.util
 
 import numpy as np
@@ -87,3 +87,48 @@ def test_an_element_named_after_a_solve_is_the_one_solved_with():
     from core_se3.errors import OptionError
     with pytest.raises(OptionError, match="did you mean 'seed'"):
         p.element_name = "seeed"
+
+
+def _cantilever_on(m, backend):
+    p = Problem(m, Material(1.2e6, 0.0, 0.1), backend=backend)
+    p.clamp("x0")
+    p.add_edge_force("x1", (0.0, 0.0, 1e-3))
+    p.add_probe("tip", "x1")
+    return p
+
+
+@pytest.mark.parametrize("backend", ["numpy", "numba"])
+def test_a_mesh_set_on_a_problem_is_the_one_solved_with(backend):
+    # Problem.mesh was a plain attribute: the element, the compiled evaluation, the assembler and
+    # length_scale built on the first mesh were kept, so a strip twice as long (same topology)
+    # solved with the old element: tip deflection 1.7e-7 instead of 2.66e-2, silently
+    p = Problem(mesh.rectangle(10.0, 1.0, 8, 1), Material(1.2e6, 0.0, 0.1), backend=backend)
+    p.evaluate(p.mesh.g0, 0.0)                         # builds the element (and the compiled parts)
+    longer = mesh.rectangle(20.0, 1.0, 8, 1)
+    p.mesh = longer
+    assert p.length_scale == longer.length_scale
+    p.clamp("x0")
+    p.add_edge_force("x1", (0.0, 0.0, 1e-3))
+    p.add_probe("tip", "x1")
+    u = p.solve_linear(linear_solver="superlu").final.probes["tip"]["u"]
+    fresh = _cantilever_on(longer, backend).solve_linear(linear_solver="superlu").final.probes["tip"]["u"]
+    assert np.array_equal(u, fresh)
+
+
+def test_a_mesh_set_after_supports_loads_or_probes_is_refused():
+    # they hold the old mesh's node ids and data: the old code solved the new mesh with them
+    from core_se3.errors import MeshError
+    m = mesh.rectangle(10.0, 1.0, 8, 1)
+    for add in (lambda p: p.clamp("x0"), lambda p: p.add_edge_force("x1", (0.0, 0.0, 1e-3)),
+                lambda p: p.add_probe("tip", "x1")):
+        p = Problem(m, Material(1.2e6, 0.0, 0.1))
+        add(p)
+        p.mesh = m                                     # the same mesh: nothing to drop
+        with pytest.raises(MeshError, match="refer to the old mesh's node ids.*build a new Problem"):
+            p.mesh = mesh.rectangle(20.0, 1.0, 8, 1)
+        assert p.mesh is m
+    p = _cantilever_on(m, "numpy")
+    res = p.solve_linear()
+    with pytest.raises(MeshError, match=r"\(1 support\(s\), 1 load\(s\), 1 probe\(s\)\)"):
+        p.mesh = mesh.rectangle(20.0, 1.0, 8, 1)
+    assert np.array_equal(p.solve_linear().final.probes["tip"]["u"], res.final.probes["tip"]["u"])

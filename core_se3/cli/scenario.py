@@ -347,13 +347,16 @@ def scenario_sweep(args):
 
 def mesh_check(args):
     """``core-se3 check-mesh``: the scenario's linear analysis on its mesh and refinements, the
-    table and the verdict; exit status 0 (within --tol), 4 (not converged), 2 (bad input)."""
-    import json
+    table and the verdict; exit status 0 (within --tol), 4 (not converged), 2 (bad input), 3 (a
+    --nonlinear run that did not converge).  --json PATH gets the check with status "complete",
+    or, when the check fails, status "failed" and the error (as ``run``'s results.json): a JSON
+    of an earlier check is never left there to be read as this one's."""
+    from ..io.files import write_json_atomic
     from ..scenario.mesh_check import DEFAULT_TOL, check_mesh
     try:
         scn = _open(args)
     except CoreSE3Error as exc:
-        return error_code(exc)
+        return _check_failed(args, exc, known_output=False)
     clash = _input_at(args.json, scn, args) if args.json else None
     if clash is not None:
         print(f"error: --json {args.json!r} is {clash}: the check would overwrite it; give another path "
@@ -363,17 +366,44 @@ def mesh_check(args):
         chk = check_mesh(scn, levels=args.levels, tol=DEFAULT_TOL if args.tol is None else args.tol,
                          nonlinear=args.nonlinear)
     except CoreSE3Error as exc:
-        return error_code(exc)
+        return _check_failed(args, exc, known_output=True)
     for w in scn.warnings:
         print(f"warning: {w}", file=sys.stderr)
     print(chk.report())
     if args.json:
         try:
-            with open(args.json, "w") as fh:
-                json.dump(chk.to_dict(), fh, indent=1)
+            write_json_atomic(args.json, dict(status="complete", **chk.to_dict()))
         except OSError as exc:
             return output_error(exc, "the check is printed above")
     return 0 if chk.converged else 4
+
+
+def _check_failed(args, exc, known_output):
+    """The exit status of a check-mesh that failed (``error_code``), after writing --json PATH
+    (atomically) as {"status": "failed", "error": ..., "scenario": ...}, so that a script does not
+    read an earlier check's verdict there.  ``known_output``: PATH is known not to be an input of
+    the scenario (``_input_at``); when the scenario did not load, its inputs are unknown and only
+    a missing file or an earlier check's JSON (a JSON object with "status" or "levels") is
+    replaced."""
+    import json
+    import os
+    from ..io.files import write_json_atomic
+    code = error_code(exc)
+    if not args.json:
+        return code
+    if not known_output and os.path.exists(args.json):
+        try:
+            with open(args.json) as fh:
+                old = json.load(fh)
+        except (OSError, ValueError):
+            return code                        # not a check's JSON: perhaps an input, left alone
+        if not (isinstance(old, dict) and ("status" in old or "levels" in old)):
+            return code
+    try:
+        write_json_atomic(args.json, dict(status="failed", error=str(exc), scenario=args.scenario, exit_status=code))
+    except OSError as err:
+        return output_error(err, "the error is printed above")
+    return code
 
 
 def _input_at(path, scn, args):

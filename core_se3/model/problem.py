@@ -76,17 +76,52 @@ class Problem:
 
     def __init__(self, mesh, material, element="default", linear_solver="auto", backend=None):
         self.backend = backend
-        self._compiled = None
-        self.mesh = mesh
-        self.material = material
-        self.element_name = element                   # an unknown name fails here; built at first use
-        self.linear_solver = linear_solver
         self.loads = []
         self.supports = []
         self.probes = {}
+        self.mesh = mesh                              # sets length_scale
+        self.material = material
+        self.element_name = element                   # an unknown name fails here; built at first use
+        self.linear_solver = linear_solver
         self.solve_defaults = {}
+
+    @property
+    def mesh(self):
+        """The reference mesh.  Setting another mesh drops what was built on the old one (the
+        element, the compiled evaluation, the assembler) and sets :attr:`length_scale` to the new
+        mesh's; setting the same mesh does nothing.  Supports, loads and probes hold node ids and
+        data of the mesh they were added on: once any was added, setting another mesh raises a
+        :class:`~core_se3.errors.MeshError` (a stale support would hold the old mesh's node ids on
+        the new one) -- build a new Problem on the new mesh, or set the mesh before adding them.
+
+        Example
+        -------
+        >>> from core_se3 import Problem, Material, mesh
+        >>> p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
+        >>> p.mesh = mesh.rectangle(4.0, 1.0, 4, 1); p.element.mesh.n_elements, p.length_scale == p.mesh.length_scale
+        (4, True)
+        >>> p.clamp("x0"); p.mesh = mesh.rectangle(1.0, 1.0, 2, 1)    # doctest: +ELLIPSIS
+        Traceback (most recent call last):
+        ...
+        core_se3.errors.MeshError: cannot set another mesh on a Problem with supports, loads or probes added (1 support(s)): ...
+        """
+        return self._mesh
+
+    @mesh.setter
+    def mesh(self, new):
+        if getattr(self, "_mesh", None) is new:
+            return
+        added = [f"{len(x)} {name}" for name, x in (("support(s)", self.supports), ("load(s)", self.loads),
+                                                    ("probe(s)", self.probes)) if x]
+        if added:
+            raise MeshError(f"cannot set another mesh on a Problem with supports, loads or probes added "
+                            f"({', '.join(added)}): they refer to the old mesh's node ids and data; build a new "
+                            f"Problem on the new mesh (or set the mesh before adding them)")
+        self._mesh = new
+        self.length_scale = new.length_scale
+        self._element = None
+        self._compiled = None
         self._assembler = None
-        self.length_scale = mesh.length_scale
 
     @property
     def backend(self):
@@ -184,17 +219,24 @@ class Problem:
         self._support(rigid_motion(self.mesh, self.nodes(where), translate, axis, angle, point, free, scale))
 
     def prescribe(self, where, target, fixed=(True,) * 6):
-        """Selected nodes follow ``target(lam) -> (k, 4, 4)`` frames on the fixed dofs."""
+        """Selected nodes follow ``target(lam) -> (k, 4, 4)`` frames on the fixed dofs.  Linear
+        analysis holds the chord of the target at lam_end (an AccuracyWarning if the target is not
+        linear in lam): give rigid motions with :meth:`rotate_edge` / :meth:`move_edge`."""
         self._support(Prescribed(self.nodes(where), np.asarray(fixed, bool), target))
 
     def add_lab_support(self, where, dirs, k):
-        """Hold the lab displacement components ``dirs`` (unit rows, or one set per node) of the
-        selected nodes by penalty springs of stiffness k (supports.LabSpring)."""
+        """Hold the lab displacement components ``dirs`` of the selected nodes by penalty springs
+        of stiffness k (supports.LabSpring): ``dirs`` (q, 3) is a set of q <= 3 independent
+        directions held at *every* selected node ((3,): one), (n, q, 3) a set per node for the n
+        selected nodes -- one direction per node is (n, 1, 3), not (n, 3) (that is a set held at
+        every node, refused beyond 3 rows).  Rows are normalised."""
         return self.add(LabSpring(self.mesh, self.nodes(where), dirs, k))
 
     def add_lab_tilt_support(self, where, t, k_rot):
         """Keep the normals of the selected nodes normal to the lab directions ``t`` by a
-        rotational penalty (supports.LabTiltSpring)."""
+        rotational penalty (supports.LabTiltSpring): ``t`` (3,) or (1, 3) is one direction for
+        every selected node, (n, 3) one row per node for the n selected nodes (unlike
+        :meth:`add_lab_support`'s (q, 3), a set held at every node)."""
         return self.add(LabTiltSpring(self.mesh, self.nodes(where), t, k_rot))
 
     def add_rotation_component_support(self, where, a, k_rot):
@@ -569,7 +611,9 @@ class Problem:
         **options
             Passed to the solver: the fields of ``core_se3.solvers.NewtonOptions`` (rtol, dtol,
             max_iter, max_cutbacks, ...) and its own keywords (lam_end, load_factors, g_init,
-            ...).  Keys given here override ``solve_defaults``.
+            ...).  Keys given here override ``solve_defaults``.  With control 'linear', steps
+            other than 1 and Newton options given here (not in ``solve_defaults``) are not used:
+            an :class:`~core_se3.errors.OptionWarning` names them.
         """
         kw = dict(self.solve_defaults)
         kw.update(options)
@@ -577,6 +621,7 @@ class Problem:
             kw["steps"] = steps
         control = control or kw.pop("control", "load")
         kw.pop("control", None)
-        return dispatch(self, control, solver or kw.pop("solver", None), kw)
+        given = [*(["steps"] if steps is not None else []), *options]     # unused ones warn (OptionWarning)
+        return dispatch(self, control, solver or kw.pop("solver", None), kw, given)
 
     solve_linear = solve_linear            # linear analysis (model.solving.solve_linear)

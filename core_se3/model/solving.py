@@ -13,7 +13,7 @@ import warnings
 from typing import Callable
 
 from ..backend import launched_ranks
-from ..errors import OptionError, ParallelError, SupportWarning, did_you_mean
+from ..errors import OptionError, OptionWarning, ParallelError, SupportWarning, did_you_mean
 from .prescribed import DOF_NAMES, DRIFT_TOL, held_dof_drift
 
 __all__ = ["SOLVERS", "DISTRIBUTED_KEYS", "dispatch", "solve_linear", "check_held_dofs"]
@@ -27,7 +27,7 @@ SOLVERS: dict[str, Callable] = {}
 'distributed' (load stepping over MPI ranks, ``core_se3.parallel``)."""
 
 
-def dispatch(problem, control, solver, kw):
+def dispatch(problem, control, solver, kw, given=()):
     """Solve ``problem`` with the solver of ``control``: the distributed one for load control
     with ``solver="distributed"``, or by default when launched among several MPI ranks
     (``backend.launched_ranks``); the serial one otherwise.
@@ -44,6 +44,10 @@ def dispatch(problem, control, solver, kw):
         The solver's keywords; the distributed set-up's (``linear``, ``petsc_options``,
         ``partition``, or ``setup``: a ``parallel.RunSetup``) go to the distributed solver as
         its ``setup`` and are dropped for a serial solver.
+    given : iterable of str, optional
+        The keys of ``kw`` that the call gave (not a problem's ``solve_defaults``): those the
+        solver takes and does not use (its ``unused_options``, e.g. ``steps`` of a linear
+        analysis) give an :class:`~core_se3.errors.OptionWarning`.
 
     Returns
     -------
@@ -78,6 +82,10 @@ def dispatch(problem, control, solver, kw):
         return check_held_dofs(problem, SOLVERS["distributed"](problem, **kw))
     for k in DISTRIBUTED_KEYS + ("setup",):
         kw.pop(k, None)
+    unused = getattr(SOLVERS[control], "unused_options", None)
+    said = unused({k: kw[k] for k in given if k in kw}) if unused is not None else None
+    if said:
+        warnings.warn(OptionWarning(said), stacklevel=3)
     problem.check_element(stacklevel=4)    # the coarse-mesh warning, supports known (the distributed set-up's own)
     return check_held_dofs(problem, SOLVERS[control](problem, **kw))
 

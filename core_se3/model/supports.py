@@ -50,7 +50,8 @@ from .prescribed import (DOF_NAMES, Prescribed, apply_prescribed, check_conflict
 
 __all__ = ["apply_prescribed", "prescribed_rotation", "Prescribed", "LabSpring", "LabTiltSpring", "RotationComponentSpring",
            "MAX_TOTAL_ROTATION", "check_rigid_motions", "fixed_dofs", "rigid_rotation", "select_nodes",
-           "check_conflict", "support_kind", "DOF_NAMES", "rigid_motion", "mesh_parts", "node_directions"]
+           "check_conflict", "support_kind", "DOF_NAMES", "rigid_motion", "mesh_parts", "node_directions",
+           "lab_direction_sets", "DEPENDENT_DIRECTIONS"]
 
 
 # The residual's floor is 1e3 eps x (round-off scale) (solvers.convergence: the element's scale
@@ -82,6 +83,53 @@ def node_directions(v, k, what):
     return np.ascontiguousarray(v / norm[:, None])
 
 
+#: the smallest singular value of a set of unit lab directions below which it is dependent
+DEPENDENT_DIRECTIONS = 1e-6
+
+
+def lab_direction_sets(dirs, k):
+    """(k, q, 3) unit lab directions of ``LabSpring``'s ``dirs``: a set (q, 3) held at every one
+    of k nodes ((3,): one direction), or a set per node (k, q, 3); a SupportError for another
+    shape, for a set of more than 3 rows (q > 3 directions cannot be independent in 3-D: a user
+    meaning one direction per node gives (k, 1, 3)), for rows that are linearly dependent
+    (smallest singular value below ``DEPENDENT_DIRECTIONS``: the spring would hold their common
+    direction twice), and for a zero or non-finite row.
+
+    Example
+    -------
+    >>> lab_direction_sets([[0.0, 0.0, 2.0]], 2).tolist()
+    [[[0.0, 0.0, 1.0]], [[0.0, 0.0, 1.0]]]
+    >>> lab_direction_sets([[1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 0, 0]], 4)     # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.SupportError: the lab support's dirs: 4 rows (shape (4, 3)) cannot be ...
+    """
+    D = np.asarray(dirs, float)
+    D = D[None] if D.ndim == 1 else D
+    if D.ndim == 2 and D.shape[-1] == 3 and len(D) > 3:
+        raise SupportError(f"the lab support's dirs: {len(D)} rows (shape {D.shape}) cannot be independent lab "
+                           f"directions held at every node (at most 3 in 3-D); for directions per node give shape "
+                           f"({k}, q, 3) (one direction per node: ({k}, 1, 3))")
+    if D.ndim == 2:
+        D = np.broadcast_to(D, (k,) + D.shape)
+    if D.ndim != 3 or D.shape[0] != k or D.shape[2] != 3 or not 1 <= D.shape[1] <= 3:
+        raise SupportError(f"the lab support's dirs must be (3,) or (q, 3) with q <= 3 (held at every node), or "
+                           f"({k}, q, 3) (a set per node, for the {k} selected node(s)), got shape {np.shape(dirs)}")
+    norm = np.linalg.norm(D, axis=2)
+    bad = ~(np.isfinite(norm) & (norm > 0))
+    if bad.any():
+        raise SupportError(f"the lab support's dirs must be non-zero finite lab directions, got "
+                           f"{D[bad][0].tolist()}")
+    D = D / norm[..., None]
+    smallest = np.linalg.svd(D, compute_uv=False)[:, -1]
+    if np.any(smallest < DEPENDENT_DIRECTIONS):
+        i = int(np.argmin(smallest))
+        raise SupportError(f"the lab support's dirs {np.round(D[i], 6).tolist()} (at selected node {i}) are linearly "
+                           f"dependent: the spring would hold their common direction twice (its stiffness "
+                           f"doubled); give independent directions (for one direction per node: shape ({k}, 1, 3))")
+    return np.ascontiguousarray(D)
+
+
 class _Spring(Load):
     """A penalty support written as a load: it does not scale with the load factor."""
     scales_with_load_factor = False
@@ -97,7 +145,8 @@ class _Spring(Load):
 
 
 class LabSpring(_Spring):
-    """Penalty on the lab displacement components ``dirs`` (rows: unit vectors, per node).
+    """Penalty on the lab displacement components ``dirs`` (the same set at every node, or a set
+    per node).
 
     Parameters
     ----------
@@ -105,8 +154,13 @@ class LabSpring(_Spring):
         The mesh.
     nodes : array_like of int
         The supported nodes (k,).
-    dirs : (q, 3) or (k, q, 3) array_like
-        Lab unit directions held at every node (or per node).
+    dirs : (3,), (q, 3) or (k, q, 3) array_like
+        Lab directions: (q, 3) is a set of q <= 3 directions held at *every* node ((3,): one);
+        (k, q, 3) is a set per node (one direction per node: (k, 1, 3)).  Each row is normalised;
+        P is the projector on the span of a node's rows.  A SupportError for another shape, for
+        more than 3 rows in a set (they cannot be independent: per-node directions are (k, q, 3)),
+        and for rows that are linearly dependent (they would hold a direction twice, doubling
+        its spring), or zero or not finite.
     k : float
         Spring stiffness [force/length] (module docstring: a few decades above E h).
     name : str, optional
@@ -127,11 +181,9 @@ class LabSpring(_Spring):
     def __init__(self, mesh, nodes, dirs, k, name="lab support"):
         self.n = mesh.n_nodes
         self.nodes = np.asarray(nodes, np.int64)
-        D = np.asarray(dirs, float)
-        if D.ndim == 2:
-            D = np.broadcast_to(D, (len(self.nodes),) + D.shape)
-        self.D = np.asarray(D, float)                                # (k, q, 3) directions
-        self.P = np.einsum("nai,naj->nij", D, D)                     # (k, 3, 3) projectors
+        self.D = lab_direction_sets(dirs, len(self.nodes))          # (k, q, 3) unit directions
+        G = np.einsum("nai,nbi->nab", self.D, self.D)                # independent rows: G invertible
+        self.P = np.einsum("nai,nab,nbj->nij", self.D, np.linalg.inv(G), self.D)   # (k, 3, 3) projectors
         self.X0 = mesh.X[self.nodes].copy()
         self.k = float(k)
         self.name = name

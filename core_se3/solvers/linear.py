@@ -21,7 +21,9 @@ motion).  Prescribed motions enter through their targets at lam_end: the held co
 of the rigid motions of ``rotate_edge`` / ``move_edge`` linearised, eta_p = (R0^T (s t + omega x
 (X - p)), R0^T omega) with omega = s angle axis (``Prescribed.linear``: an infinitesimal rigid
 motion, which does not strain the element; the target's chord (Q - I)(X - p) would, by
-O(angle^2)), and of other targets (``prescribe``) eta_p = (R0^T (x_t - X), log(R0^T R_t)).
+O(angle^2)), and of other targets (``prescribe``) eta_p = (R0^T (x_t - X), log(R0^T R_t)): the
+linearisation only of a target linear in lam, so an AccuracyWarning names a target whose
+increments at lam_end / 2 are not half those at lam_end (``NONLINEAR_TARGET``).
 
 The state reported is g_i = g0_i (exp_so3(w_i), v_i) (the rotation and the translation updated
 separately, not by the SE(3) exponential): its probes and displacements are then exactly the
@@ -55,7 +57,7 @@ from .convergence import scaled_norm
 from .linalg import Factorization, make_solver
 from .options import NewtonOptions, unknown_keywords
 
-__all__ = ["linear_solve", "linear_state", "linear_increments", "reference_stiffness", "ACCURACY"]
+__all__ = ["linear_solve", "linear_state", "linear_increments", "reference_stiffness", "unused_options", "ACCURACY"]
 
 #: the estimated relative error of a linear solution above which it warns (the 4th digit)
 ACCURACY = 1e-4
@@ -144,23 +146,47 @@ def reference_stiffness(problem, assembler):
 
 
 def _prescribed_increments(problem, lam):
-    """(n, 6) body-frame increments of the held dofs at lam (zero where no target moves)."""
+    """(n, 6) body-frame increments of the held dofs at lam (zero where no target moves): a rigid
+    motion's linearised (``Prescribed.linear``), another target's chord (``linear_increments`` of
+    its frames), after an AccuracyWarning if that target is not linear in lam
+    (:func:`_warn_if_not_linear`)."""
     g0 = problem.mesh.g0
     eta = np.zeros((problem.mesh.n_nodes, 6))
-    for s in problem.supports:
+    for k, s in enumerate(problem.supports):
         if s.target is None:
             continue
         if getattr(s, "linear", None) is not None:          # a rigid motion, linearised
-            eta[s.nodes] = np.where(s.fixed, s.linear(lam), eta[s.nodes])
-            continue
-        gt = np.asarray(s.target(lam), float)
-        R0 = g0[s.nodes, :3, :3]
-        rel = np.swapaxes(R0, 1, 2)
-        ev = np.einsum("nij,nj->ni", rel, gt[:, :3, 3] - g0[s.nodes, :3, 3])
-        ew = lie.log_so3(rel @ gt[:, :3, :3])
-        e = np.concatenate([ev, ew], 1)
+            e = s.linear(lam)
+        else:
+            e = linear_increments(g0[s.nodes], np.asarray(s.target(lam), float))
+            _warn_if_not_linear(problem, k, s, e, lam)
         eta[s.nodes] = np.where(s.fixed, e, eta[s.nodes])
     return eta
+
+
+#: the relative difference between a target's increments at lam_end / 2 and half those at lam_end
+#: above which linear analysis warns that it takes the chord of a motion not linear in lam
+NONLINEAR_TARGET = 1e-6
+
+
+def _warn_if_not_linear(problem, k, s, e, lam):
+    """An AccuracyWarning if the target of support ``k`` (``Problem.prescribe``) is not linear in
+    the load factor: its held increments at lam / 2 differ from half ``e`` (those at lam) by more
+    than NONLINEAR_TARGET of their size (translations / ``length_scale``, rotations in rad).
+    Linear analysis prescribes its chord at lam, the linearisation only of a motion linear in lam
+    (a rigid rotation's chord (Q - I)(X - p) strains the shell at second order in the angle)."""
+    half = linear_increments(problem.mesh.g0[s.nodes], np.asarray(s.target(0.5 * lam), float))
+    unit = np.r_[np.full(3, 1.0 / problem.length_scale), np.ones(3)] * s.fixed
+    size = max(np.linalg.norm(half * unit), np.linalg.norm(0.5 * e * unit))
+    off = np.linalg.norm((half - 0.5 * e) * unit)
+    if size > 0 and off > NONLINEAR_TARGET * size:
+        warnings.warn(AccuracyWarning(
+            f"support {k} (prescribe, {len(s.nodes)} node(s)) prescribes a motion that is not linear in the load "
+            f"factor: its increments at lam_end / 2 differ from half those at lam_end by {off / size:.2g} "
+            f"(relative), and linear analysis prescribes the chord of the target at lam_end = {lam:g}, not the "
+            f"linearised motion (a rigid rotation's chord strains the shell at second order in the angle). Give a "
+            f"rigid motion with rotate_edge or move_edge (linearised exactly), or solve with control='load'."),
+            stacklevel=6)
 
 
 def linear_solve(problem, lam_end=1.0, steps=None, linear_solver=None, **kw):
@@ -173,11 +199,13 @@ def linear_solve(problem, lam_end=1.0, steps=None, linear_solver=None, **kw):
     lam_end : float, optional
         The load factor of the answer (the loads at lam_end on the reference geometry).
     steps : int, optional
-        Ignored (one solve); accepted so that a problem's solve defaults apply unchanged.
+        Not used (one solve); accepted so that a problem's solve defaults apply unchanged
+        (given to ``Problem.solve`` other than 1, an OptionWarning: :func:`unused_options`).
     linear_solver : str, optional
         'auto', 'banded', 'superlu' or 'mumps' (default the problem's).
     **kw
-        Fields of NewtonOptions are accepted and ignored (they control iterations).
+        Fields of NewtonOptions are accepted and not used (they control iterations; given to
+        ``Problem.solve`` other than their defaults, an OptionWarning).
 
     Returns
     -------
@@ -246,6 +274,34 @@ def linear_solve(problem, lam_end=1.0, steps=None, linear_solver=None, **kw):
                            error_estimate=error))
     result.timings["other"] = time.perf_counter() - t
     return result
+
+
+def unused_options(given):
+    """The message of an :class:`~core_se3.errors.OptionWarning` for the options of ``given`` (the
+    keywords a call gave, not a problem's ``solve_defaults``) that a linear analysis takes and does
+    not use, or None: ``steps`` other than 1, a field of NewtonOptions other than ``linear_solver``
+    that differs from its default (they control load steps and Newton iterations).
+    ``Problem.solve`` warns with it (a scenario file warns of ``[solver] steps`` the same way).
+
+    Example
+    -------
+    >>> unused_options(dict(steps=1, lam_end=2.0, linear_solver="superlu")) is None
+    True
+    >>> unused_options(dict(steps=10, max_cutbacks=3))[:43]
+    'steps=10, max_cutbacks=3 not used: a linear'
+    """
+    defaults = NewtonOptions()
+    names = [f"{k}={v!r}" for k, v in given.items()
+             if k == "steps" and v is not None and v != 1
+             or k in NewtonOptions.__dataclass_fields__ and k != "linear_solver" and v != getattr(defaults, k)]
+    if not names:
+        return None
+    return (f"{', '.join(names)} not used: a linear analysis (control='linear') is one solve at lam_end (one "
+            f"state, no load steps, no Newton iterations or cut-backs); drop the option{'s' * (len(names) > 1)}, "
+            f"or solve with load control (control='load') to step the load")
+
+
+linear_solve.unused_options = unused_options      # Problem.solve asks it (model.solving.dispatch)
 
 
 def _solve_measured(solver, A, b, free, ell):
