@@ -165,6 +165,40 @@ def test_magnetisation_forms_agree_and_only_magnetised_nodes_are_loaded():
     assert np.allclose(Bn[load.mag.nodes], np.linalg.norm(Br)) and np.all(Bn[np.setdiff1d(np.arange(m.n_nodes), load.mag.nodes)] == 0)
 
 
+def test_magnetisation_forms_agree_on_regions_of_different_thickness(tmp_path):
+    """A shell whose thickness differs between regions gets one magnetic load per thickness; a
+    magnetisation per node (a table or a node Br_file) or a function of position used to be
+    broadcast to one row per element (ValueError / TypeError from NumPy).  Every form of the same
+    uniform B^r must give the nodal loads of the 3-vector exactly (the same integrals), h / mu0
+    taken per region: the total couple is (1/mu0) sum_regions h A Br x Ba."""
+    from core_se3 import scenario
+    from core_se3.fem.material import RegionMaterial
+    m = mesh.rectangle(0.04, 0.01, 4, 1)
+    law = RegionMaterial.from_regions(4, Material(1.0e6, 0.0, 1.0e-3), {(2, 3): Material(1.0e6, 0.0, 2.0e-3)})
+    Br, field = np.array([0.1, 0.0, 0.05]), UniformField((0.0, 0.0, 0.05))
+    loads = []
+    for form in (Br, np.tile(Br, (m.n_elements, 1)), np.tile(Br, (m.n_nodes, 1)),
+                 lambda X: np.tile(Br, (len(X), 1))):
+        p = Problem(m, law)
+        assert len(p.add_magnetic(form, field, mu0=1.0)) == 2
+        loads.append(p.external(m.g0, 1.0, tangent=False)[0])
+    for f in loads[1:]:
+        assert np.allclose(f, loads[0], rtol=1e-13, atol=1e-16)
+    _, M = _lab_totals(m.g0, loads[0])
+    assert np.allclose(M, (1.0e-3 + 2.0e-3) * 0.02 * 0.01 * np.cross(Br, field.B), rtol=1e-12)
+    with pytest.raises(LoadError, match=r"one per node \(10, 3\).*got shape \(5, 3\)"):
+        Problem(m, law).add_magnetic(np.zeros((5, 3)), field)
+    # the same through a scenario: [material.regions] thickness and a node table
+    (tmp_path / "Br.csv").write_text("node,Brx,Bry,Brz\n" + "".join(f"{i},0.1,0.0,0.05\n" for i in range(m.n_nodes)))
+    scn = scenario.loads('units = "consistent"\n[mesh]\ngenerator = "rectangle"\nL = 0.04\nwidth = 0.01\nnx = 4\nny = 1\n'
+                         '[material]\nE = 1e6\nnu = 0.0\nh = 1e-3\n[regions.tip]\nbox = { x = [0.02, 0.04] }\n'
+                         '[material.regions.tip]\nh = 2e-3\n[[supports]]\ntype = "clamp"\nedge = "x0"\n'
+                         '[fields.coil]\ntype = "uniform"\nB = [0.0, 0.0, 0.05]\n'
+                         '[[magnets]]\nBr_file = "Br.csv"\nmu0 = 1.0\n', base_dir=str(tmp_path))
+    f = scn.problem.external(m.g0, 1.0, tangent=False)[0]
+    assert np.allclose(f, loads[0], rtol=1e-13, atol=1e-16)
+
+
 @pytest.mark.parametrize("kw, match", [
     (dict(Br=(0.0, np.nan, 0.1)), "non-finite"),
     (dict(Br=np.zeros((5, 3))), "shape"),

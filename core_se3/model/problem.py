@@ -290,8 +290,18 @@ class Problem:
             return self.add(MagneticLoad(Magnetisation(self.mesh, Br, h, sel, mu0), field))
         ids = np.arange(self.mesh.n_elements) if sel is None else np.asarray(sel)
         h = h_all[ids]
-        Br = np.broadcast_to(np.asarray(Br, float), (len(ids), 3))
-        return [self.add(MagneticLoad(Magnetisation(self.mesh, Br[h == t], float(t), ids[h == t], mu0), field))
+        # one load per thickness: a table per selected element is split with the elements; a
+        # 3-vector, a table per node and a function of position hold for every part as given
+        per_element = False
+        if not callable(Br):
+            Br = np.asarray(Br, float)
+            per_element = Br.shape == (len(ids), 3)
+            if not per_element and Br.shape not in ((3,), (self.mesh.n_nodes, 3)):
+                raise LoadError(f"magnetisation Br must be a 3-vector, one per selected element ({len(ids)}, 3), "
+                                f"one per node ({self.mesh.n_nodes}, 3) or a function of position; got shape "
+                                f"{Br.shape}")
+        return [self.add(MagneticLoad(Magnetisation(self.mesh, Br[h == t] if per_element else Br, float(t),
+                                                    ids[h == t], mu0), field))
                 for t in np.unique(h)]
 
     def set_material(self, material):
