@@ -199,6 +199,30 @@ def test_magnetisation_forms_agree_on_regions_of_different_thickness(tmp_path):
     assert np.allclose(f, loads[0], rtol=1e-13, atol=1e-16)
 
 
+def test_output_fields_of_magnets_on_adjacent_regions_are_area_means_not_sums():
+    """The VTU point fields B^r_t, couple and force per unit reference area of one uniform magnet
+    split into two magnets on adjacent regions equal those of the single magnet at every node
+    (exact: the same nodal integrals over the same area).  Each load used to divide by its own
+    area share and Problem.output_fields summed them, so the nodes the regions share showed
+    2 B^r and twice the couple (1.0, 1.0, 2.0, 1.0, 1.0 T along the strip)."""
+    m = mesh.rectangle(0.04, 0.01, 4, 2)
+    field = GradientField((0.01, 0.0, 0.02), [[0.5, 0.2, 0.0], [0.2, -0.3, 0.1], [0.0, 0.1, -0.2]])
+    Br = (0.1, 0.0, 0.05)
+    g = _random_state(m, 1e-3, 0.3)
+    one = Problem(m, Material(1.0e6, 0.3, 1.0e-3))
+    one.add_magnetic(Br, field)
+    two = Problem(m, Material(1.0e6, 0.3, 1.0e-3))
+    left = np.nonzero(m.X[m.quads].mean(1)[:, 0] < 0.02)[0]
+    two.add_magnetic(Br, field, elements=left)
+    two.add_magnetic(Br, field, elements=np.setdiff1d(np.arange(m.n_elements), left))
+    a, b = one.output_fields(g, 0.7), two.output_fields(g, 0.7)
+    assert set(a) == set(b) == {"magnetisation_Br", "magnetic_couple", "magnetic_force"}
+    for k in a:
+        assert np.allclose(b[k], a[k], rtol=1e-13, atol=1e-13 * np.abs(a[k]).max()), k
+    Bn = np.linalg.norm(b["magnetisation_Br"], axis=1)
+    assert np.allclose(Bn, np.linalg.norm(Br), rtol=1e-13)         # |B^r_t| = |B^r_0| everywhere
+
+
 @pytest.mark.parametrize("kw, match", [
     (dict(Br=(0.0, np.nan, 0.1)), "non-finite"),
     (dict(Br=np.zeros((5, 3))), "shape"),

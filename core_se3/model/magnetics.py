@@ -38,7 +38,7 @@ from ..fem.quadrature import shape_functions, surface_jacobian
 from .base import Load, LoadEvaluation
 from .fields import MU0, Field
 
-__all__ = ["Magnetisation", "MagneticLoad", "MU0", "compiled_magnets", "magnets_force"]
+__all__ = ["Magnetisation", "MagneticLoad", "MU0", "compiled_magnets", "magnets_force", "magnets_output"]
 
 
 class Magnetisation:
@@ -111,6 +111,7 @@ class Magnetisation:
         self.mu = body[self.nodes]                                    # (k,3) body-frame dipoles
         self.area = area[self.nodes]                                  # nodal reference area share
         self.node_area = area                                         # (n,) of the selection
+        self.element_area = np.einsum("qi,mq->mi", N, j0)             # (m,4) int_e N_i dA
         self.total_lab = mom.sum(0) * self.h                          # int Br dV [T m^3]
 
     def _at_gauss(self, Br, N, X, quads):
@@ -265,18 +266,8 @@ class MagneticLoad(Load):
         return add
 
     def output_fields(self, g, lam):
-        """Point fields for VTU output: B^r_t [T] (area-weighted nodal value), magnetic couple and
-        force per unit reference area [N m/m^2, N/m^2] (lab components)."""
-        n = self.mag.mesh.n_nodes
-        nodes, c, fv = self.nodal(g, lam)
-        w = self.mag.area[:, None]
-        Br = np.zeros((n, 3))
-        Br[nodes] = self.mag.current(g) * (self.mag.mu0 / self.mag.h) / w
-        C = np.zeros((n, 3))
-        C[nodes] = c / w
-        F = np.zeros((n, 3))
-        F[nodes] = fv / w
-        return {"magnetisation_Br": Br, "magnetic_couple": C, "magnetic_force": F}
+        """Point fields for VTU output (``magnets_output`` of this load alone)."""
+        return magnets_output([self], g, lam)
 
 
 def compiled_magnets(loads, pattern):
@@ -376,6 +367,42 @@ def magnets_force(loads, g, lam):
         if not fld.uniform:
             _add_at(out, 0, nodes, np.einsum("kij,kj->ki", Rt @ fld.gradient(x, lam) @ R, mu), len(grp) == 1)
     return out
+
+
+def magnets_output(loads, g, lam):
+    """Point fields of several MagneticLoads for VTU output (lab components): B^r_t [T] and the
+    magnetic couple and force per unit reference area [N m/m^2, N/m^2] at every node, each the
+    sum over the loads of its nodal integral (int N_i B^r_t dA, the nodal couple and force)
+    divided by the node's share of the reference area of the magnetised elements (their union:
+    two magnets of adjacent regions share the nodes between them, and a node's value is the
+    area-weighted mean, not the sum of two means); 0 at nodes without magnetised elements.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import Material, Problem, mesh
+    >>> from core_se3.model.fields import UniformField
+    >>> p = Problem(mesh.rectangle(2.0, 1.0, 2, 1), Material(1.0, 0.3, 0.1))
+    >>> B = UniformField((0.0, 0.0, 1.0))
+    >>> a = p.add_magnetic((1.0, 0, 0), B, elements=[0], mu0=1.0)
+    >>> b = p.add_magnetic((1.0, 0, 0), B, elements=[1], mu0=1.0)
+    >>> magnets_output([a, b], p.mesh.g0, 1.0)["magnetisation_Br"][:3, 0].tolist()   # the middle node too
+    [1.0, 1.0, 1.0]
+    """
+    mesh = loads[0].mag.mesh
+    n = mesh.n_nodes
+    els = np.concatenate([ld.mag.elements for ld in loads])
+    shares = np.concatenate([ld.mag.element_area for ld in loads])
+    _, first = np.unique(els, return_index=True)              # every magnetised element once
+    area = np.bincount(mesh.quads[els[first]].ravel(), weights=shares[first].ravel(), minlength=n)
+    Br, C, F = np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3))
+    for ld in loads:
+        nodes, c, fv = ld.nodal(g, lam)
+        Br[nodes] += ld.mag.current(g) * (ld.mag.mu0 / ld.mag.h)        # int N_i B^r_t dA
+        C[nodes] += c
+        F[nodes] += fv
+    w = np.where(area > 0, area, 1.0)[:, None]
+    return {"magnetisation_Br": Br / w, "magnetic_couple": C / w, "magnetic_force": F / w}
 
 
 def _add_at(out, col, nodes, v, unique):

@@ -26,7 +26,7 @@ from .base import Evaluation, Load, force_scale_with_loads, load_kind
 from .compiled import CompiledEvaluation
 from .contact import add_obstacle
 from .fields import MU0
-from .magnetics import MagneticLoad, Magnetisation, magnets_force
+from .magnetics import MagneticLoad, Magnetisation, magnets_force, magnets_output
 from .probes import Probe
 from .solving import SOLVERS, dispatch, solve_linear
 from .supports import (LabSpring, LabTiltSpring, Prescribed, RotationComponentSpring, check_conflict,
@@ -342,9 +342,13 @@ class Problem:
 
     def output_fields(self, g, lam=1.0):
         """Extra point fields for output (name -> (n, k)) summed over the loads (magnetisation,
-        magnetic couple and force per unit area, ...; empty without such loads)."""
-        out = {}
+        magnetic couple and force per unit area, ...; empty without such loads); the magnets'
+        together (``magnetics.magnets_output``: per unit area of all the magnetised elements)."""
+        mags = [ld for ld in self.loads if isinstance(ld, MagneticLoad)]
+        out = magnets_output(mags, g, lam) if mags else {}
         for load in self.loads:
+            if isinstance(load, MagneticLoad):
+                continue
             for k, v in load.output_fields(g, lam).items():
                 out[k] = out[k] + v if k in out else v
         return out
