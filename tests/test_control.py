@@ -268,6 +268,21 @@ def test_bad_commands_and_sessions_are_clear_errors():
         ControlOptions(path_tolerance=0.0)
 
 
+def test_a_variable_named_lam_is_refused_not_shadowed_by_the_load_factor():
+    """update(lam=...) is the load factor: a variable named 'lam' could never be commanded, and
+    update(lam=2.0) meant for it moved the load factor to 2 with the variable still at 1 (state
+    lam 2.0, values {'lam': [1.0]}), a converged state at another command than the one sent."""
+    p = strip()
+    with pytest.raises(OptionError, match="cannot be named 'lam'.*load factor"):
+        Session(p, 1.0, [LoadMagnitude(p, p.loads[0], name="lam")])
+    scn = scenario.loads('units = "consistent"\n[mesh]\ngenerator = "rectangle"\nL = 1.0\nwidth = 0.2\nnx = 4\n'
+                         'ny = 1\n[material]\nE = 1e3\nnu = 0.0\nh = 0.05\n[[supports]]\ntype = "clamp"\n'
+                         'edge = "x0"\n[fields.lam]\ntype = "uniform"\nB = [0.0, 0.0, 0.3]\n'
+                         '[[magnets]]\nBr = [1.0, 0.0, 0.0]\nmu0 = 1.0\n')
+    with pytest.raises(OptionError, match=r"rename the scenario's \[fields.lam\]"):
+        Session.from_scenario(scn)
+
+
 def test_an_error_inside_an_update_keeps_the_state_and_its_values():
     """A load whose programme turns non-finite past load factor 1.5 (LoadError from the residual)
     stops the update; the session keeps its state and the variables their values."""
