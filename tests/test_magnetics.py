@@ -223,6 +223,28 @@ def test_output_fields_of_magnets_on_adjacent_regions_are_area_means_not_sums():
     assert np.allclose(Bn, np.linalg.norm(Br), rtol=1e-13)         # |B^r_t| = |B^r_0| everywhere
 
 
+def test_element_selections_are_masks_or_ids_given_once():
+    """A boolean mask over the elements was cast to the ids 0 and 1 (mask [T, F, F, T]: elements
+    1, 0, 0, 1, total dipole 0.4 instead of 0.2), a repeated id magnetised its element twice and
+    a fractional id was truncated -- all silently.  The mask now selects its True elements (the
+    same loads as their ids, exactly), and repeated or fractional ids are LoadErrors; gravity
+    uses the same selection."""
+    m = mesh.rectangle(4.0, 1.0, 4, 1)
+    field = UniformField((0.0, 0.0, 1.0))
+    mask = m.X[m.quads].mean(1)[:, 0] > 2.0                  # elements 2 and 3
+    p, q = Problem(m, Material(1e3, 0.0, 0.1)), Problem(m, Material(1e3, 0.0, 0.1))
+    a = p.add_magnetic((1.0, 0.0, 0.0), field, elements=mask, mu0=1.0)
+    q.add_magnetic((1.0, 0.0, 0.0), field, elements=[2, 3], mu0=1.0)
+    assert a.mag.elements.tolist() == [2, 3] and np.allclose(a.mag.total_lab, (0.2, 0.0, 0.0), rtol=1e-14)
+    assert np.array_equal(p.external(m.g0, 1.0, tangent=False)[0], q.external(m.g0, 1.0, tangent=False)[0])
+    for bad, match in (([0, 0, 1], "element 0 more than once"), ([0.5], "whole numbers"),
+                       (mask[:2], "one entry per element")):
+        with pytest.raises(LoadError, match=match):
+            Problem(m, Material(1e3, 0.0, 0.1)).add_magnetic((1.0, 0.0, 0.0), field, elements=bad, mu0=1.0)
+        with pytest.raises(LoadError, match=match):
+            Problem(m, Material(1e3, 0.0, 0.1, rho=1.0)).add_gravity(elements=bad)
+
+
 @pytest.mark.parametrize("kw, match", [
     (dict(Br=(0.0, np.nan, 0.1)), "non-finite"),
     (dict(Br=np.zeros((5, 3))), "shape"),

@@ -33,7 +33,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import lie
-from ..errors import LoadError
+from ..errors import LoadError, MeshError
 from ..fem.quadrature import shape_functions, surface_jacobian
 from .base import Load, LoadEvaluation
 from .fields import MU0, Field
@@ -88,9 +88,10 @@ class Magnetisation:
         self.mesh = mesh
         self.mu0 = float(mu0)
         self.h = float(h)
-        el = np.arange(mesh.n_elements) if elements is None else np.asarray(elements, np.int64).ravel()
-        if el.size == 0 or el.min() < 0 or el.max() >= mesh.n_elements:
-            raise LoadError("magnetised element selection is empty or refers to elements that do not exist")
+        try:
+            el = mesh.elements(elements)             # ids once each, or a mask (MeshError otherwise)
+        except MeshError as exc:
+            raise LoadError(f"magnetised elements: {exc}") from None
         self.elements = el
         quads = mesh.quads[el]                                       # (m,4)
         N, dN = shape_functions()                                     # (q,4), (q,2,4)
