@@ -283,6 +283,53 @@ def test_a_variable_named_lam_is_refused_not_shadowed_by_the_load_factor():
         Session.from_scenario(scn)
 
 
+def test_a_coil_field_superposed_on_a_magnets_dipole_is_a_command():
+    """A uniform coil field (and a gradient field) that the magnets feel through a Superposition
+    with a permanent magnet's dipole: update(coil=...) was refused ("no magnet of the problem is
+    in this field", DesignError) while update(lam=..., coil=...) was accepted, and the Jacobian
+    by the coil was refused.  The residual is linear in each part of the sum, so its exact change
+    and dr/dp are the part's own times the sum's scale: the warm update equals the cold solve and
+    dr/dp equals the residual's difference quotient, to round-off."""
+    from core_se3.design import FieldGradientVariable
+    from core_se3.model import DipoleField, GradientField, Superposition
+
+    def build(B, G, lam_scale=1.0):
+        p = Problem(mesh.rectangle(1.0, 0.2, 8, 1), Material(1e3, 0.0, 0.05))
+        p.clamp("x0")
+        p.add_probe("tip", "x1")
+        coil = UniformField(B)
+        grad = GradientField((0.0, 0.0, 0.0), G, x0=(0.5, 0.0, 0.0), scale=lambda lam: 0.5 * lam)
+        both = Superposition(coil, grad, DipoleField((0.0, 0.0, 2e-3), (1.3, 0.0, 0.2), mu0=1.0))
+        both.scale = lambda lam: lam_scale                   # the sum's own programme counts too
+        p.add_magnetic((1.0, 0.0, 0.0), both, mu0=1.0)
+        return p, coil, grad
+
+    G0, G1 = np.diag([0.2, -0.1, -0.1]), np.array([[0.1, 0.0, 0.05], [0.0, 0.1, 0.0], [0.05, 0.0, -0.2]])
+    q, _, qgrad = build((0.05, 0.0, 0.35), G1, 1.5)
+    c1 = FieldGradientVariable(q, qgrad).value()              # G1 in the variable's coefficients
+    p, coil, grad = build((0.0, 0.0, 0.3), G0, 1.5)
+    s = Session(p, 1.0, [FieldVariable(p, coil, name="coil"), FieldGradientVariable(p, grad, name="G")],
+                rtol=1e-12, dtol=1e-12)
+    st = s.update(coil=[0.05, 0.0, 0.35], G=c1)
+    assert np.allclose(grad.G, G1, atol=1e-15)
+    assert frame_error(st.g, cold(q), 1.0) < 1e-10
+    # dr/dp of both variables equals the change of the residual (linear: exact up to round-off)
+    g = st.g
+    r0 = p.evaluate(g, 1.0, tangent=False).r
+    for v in s.variables.values():
+        x = v.value()
+        for k in range(v.size):
+            d = np.zeros(v.size)
+            d[k] = 1e-3
+            v.assign(x + d)
+            r1 = p.evaluate(g, 1.0, tangent=False).r
+            v.assign(x)
+            col = p.assembler().vector(v.dr_dp(p, g, 1.0)[:, :, k])
+            assert np.abs((r1 - r0) / 1e-3 - col).max() <= 1e-8 * np.abs(col).max(), (v.name, k)
+    J = s.jacobian(["tip"], ["coil"]).jacobian
+    assert J.shape == (3, 3) and np.abs(J).max() > 0
+
+
 def test_an_error_inside_an_update_keeps_the_state_and_its_values():
     """A load whose programme turns non-finite past load factor 1.5 (LoadError from the residual)
     stops the update; the session keeps its state and the variables their values."""
