@@ -418,3 +418,34 @@ def test_a_field_turned_in_big_steps_is_followed_not_jumped_to_another_equilibri
     m = mesh.rectangle(2.0, 1.0, 2, 1)
     reversing = Problem(m, Material(1.0, 0.0, 0.1)).add_magnetic((1.0, 0, 0), UniformField((0, 0, 1.0), scale=lambda lam: 2 * lam - 1))
     assert reversing.direction_turn(m.g0, 0.0, 1.0) == 0.0
+
+
+def test_a_field_turning_whole_turns_between_samples_is_not_measured_as_still():
+    """direction_turn measured a step's turn at 16 samples, each at most pi (the angle between two
+    directions): 16 whole turns in one step measured 0 and 15.9 turns 0.63 rad, so the split
+    rule let the step through.  A session of examples/rotating-field.toml's strip at load factor
+    0.1 (full field, not turned) then took update(lam=1.0) -- the field turning 16 times -- in one
+    sub-step and returned its start as converged; the path meets a limit point near 0.16 (a
+    load-stepped solve stops there).  The turn of a field rotating in a plane at a constant rate
+    is 2 pi turns exactly; the session now refuses the command there."""
+    from core_se3.catalogue.family_magnetic import MU0_MM
+    from core_se3.control import Session
+    from core_se3.errors import ControlError
+
+    def strip(turns):
+        prob = Problem(mesh.rectangle(17.2, 5.0, 20, 1), Material(0.8969, 0.4801, 0.42))
+        prob.clamp("x0")
+        prob.add_probe("tip", "x1")
+        turn = rotating_direction((0.0, 1.0, 0.0), (0.0, 0.0, 1.0), turns_per_unit=turns / 0.9, lam0=0.1, lam1=1.0)
+        ld = prob.add_magnetic((0.143, 0.0, 0.0), UniformField((0.0, 0.0, 0.005), scale=lambda lam: min(1.0, lam / 0.1),
+                                                               direction=turn), mu0=MU0_MM)
+        return prob, ld
+    for turns in (1.0, 8.0, 15.9, 16.0, 32.0):
+        prob, ld = strip(turns)
+        assert ld.direction_turn(prob.mesh.g0, 0.1, 1.0) == pytest.approx(2 * np.pi * turns, rel=1e-9)
+    prob, _ = strip(16.0)
+    s = Session(prob, 0.1)
+    before = s.state
+    with pytest.raises(ControlError, match="could not be followed beyond load factor 0.1[56]"):
+        s.update(lam=1.0)
+    assert s.state is before
