@@ -330,6 +330,29 @@ def test_a_coil_field_superposed_on_a_magnets_dipole_is_a_command():
     assert J.shape == (3, 3) and np.abs(J).max() > 0
 
 
+def test_region_magnetisation_keeps_the_magnets_loads_or_refuses_mixed_mu0():
+    """RegionMagnetisation replaces the magnets on its regions by its own loads, fitted to give
+    the same nodal moments: the loads must not change (exact, B^r constant per region).  Two
+    magnets with different mu0 used to get SI's MU0 instead, silently: the couple went from
+    0.005 to 3979 (x 1/MU0).  Now a DesignError asks for mu0; given, the loads are the fit's."""
+    from core_se3.errors import DesignError
+
+    def two_magnets(mu0b):
+        p = Problem(mesh.rectangle(4.0, 0.5, 4, 1), Material(1e3, 0.0, 0.1))
+        f = UniformField((0.0, 0.0, 1.0))
+        p.add_magnetic((0.2, 0.0, 0.0), f, elements=[0, 1], mu0=1.0)
+        p.add_magnetic((0.0, 0.0, 0.1), f, elements=[2, 3], mu0=mu0b)
+        return p, p.external(p.mesh.g0, 1.0, tangent=False)[0]
+    p, f0 = two_magnets(1.0)
+    RegionMagnetisation(p, [[0, 1], [2, 3]], name="Br")
+    assert np.allclose(p.external(p.mesh.g0, 1.0, tangent=False)[0], f0, rtol=1e-13, atol=1e-16)
+    p, _ = two_magnets(2.0)
+    with pytest.raises(DesignError, match=r"different mu0 \(1, 2\).*give mu0"):
+        RegionMagnetisation(p, [[0, 1], [2, 3]], name="Br")
+    v = RegionMagnetisation(p, [[0, 1], [2, 3]], mu0=1.0, name="Br")
+    assert v.mu0 == 1.0
+
+
 def test_an_error_inside_an_update_keeps_the_state_and_its_values():
     """A load whose programme turns non-finite past load factor 1.5 (LoadError from the residual)
     stops the update; the session keeps its state and the variables their values."""
