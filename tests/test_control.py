@@ -353,6 +353,24 @@ def test_region_magnetisation_keeps_the_magnets_loads_or_refuses_mixed_mu0():
     assert v.mu0 == 1.0
 
 
+def test_plan_and_track_keep_commands_inside_a_norm_bound():
+    """A field variable with |B| <= B_max: the loops clipped their commands to the box bounds
+    only, so a step past the norm bound ended plan and track with the session's OptionError
+    ('norm 0.562588 above its bound 0.5') instead of a flagged sample.  The commands are now
+    scaled onto the bound: a reachable sample is reached, an unreachable one (the tip 2 above
+    its start, on a strip of length 1) is flagged, and every command keeps |B| <= B_max."""
+    p, f = magnetic_strip()
+    s = Session(p, 1.0, [FieldVariable(p, f, name="coil", B_max=0.5)])
+    z0 = s.state.probes["tip"]["x"][2]
+    pl = plan(s, "tip", [[z0], [z0 + 0.02], [z0 + 2.0]], 1e-8, components=[2])
+    assert pl.reached.tolist() == [True, True, False] and "sample 2" in pl.message
+    assert np.linalg.norm(pl.commands["coil"], axis=1).max() <= 0.5 * (1 + 1e-12)
+    p, f = magnetic_strip()
+    s = Session(p, 1.0, [FieldVariable(p, f, name="coil", B_max=0.5)])
+    t = track(s, "tip", [[z0], [z0 + 0.02], [z0 + 2.0]], components=[2])
+    assert t.errors[2] > 1.0 and np.linalg.norm(t.commands["coil"], axis=1).max() <= 0.5 * (1 + 1e-12)
+
+
 def test_an_error_inside_an_update_keeps_the_state_and_its_values():
     """A load whose programme turns non-finite past load factor 1.5 (LoadError from the residual)
     stops the update; the session keeps its state and the variables their values."""
