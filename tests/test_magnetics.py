@@ -449,3 +449,29 @@ def test_a_field_turning_whole_turns_between_samples_is_not_measured_as_still():
     with pytest.raises(ControlError, match="could not be followed beyond load factor 0.1[56]"):
         s.update(lam=1.0)
     assert s.state is before
+
+
+def test_a_dipole_near_a_coarse_magnet_is_reported():
+    """The nodal quadrature of a dipole's couple and force is off by about (element size /
+    distance)^2 when the dipole is within a few element sizes of the magnet.  A strip 1 x 0.1
+    clamped at x = 0 with a dipole 0.05 above its tip: refined along the strip only (160 x 1, the
+    width 0.1 one element) its tip deflection converged to 3.89e-5 against 2.12e-5 on 160 x 16
+    -- 83 % off -- without a word.  The solve now ends with a MeshWarning naming the distance in
+    element sizes and the estimate; none when the dipole is 10 sizes away or more."""
+    from core_se3.errors import MeshWarning
+
+    def strip(nx, ny, height):
+        p = Problem(mesh.rectangle(1.0, 0.1, nx, ny), Material(1e4, 0.0, 0.01))
+        p.clamp("x0")
+        p.add_magnetic((1.0, 0.0, 0.0), DipoleField((0.0, 0.0, 1.6e-8), (1.0, 0.05, height), mu0=1.0), mu0=1.0)
+        return p
+    p = strip(40, 1, 0.05)
+    with pytest.warns(MeshWarning, match=r"lies 0.5\d* element sizes from the magnetised node .* off by about"):
+        res = p.solve(steps=2)
+    from core_se3.model.magnetics import dipole_resolution
+    ratio, node, _ = dipole_resolution(p.loads, res.final.g, 1.0)
+    assert np.isclose(np.linalg.norm(res.final.g[node, :3, 3] - (1.0, 0.05, 0.05)), ratio * 0.1, rtol=1e-12)
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", MeshWarning)
+        strip(10, 1, 1.5).solve(steps=2)                      # 1.5 away, elements 0.1: 15 sizes

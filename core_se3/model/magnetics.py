@@ -38,7 +38,8 @@ from ..fem.quadrature import shape_functions, surface_jacobian
 from .base import Load, LoadEvaluation
 from .fields import MU0, Field
 
-__all__ = ["Magnetisation", "MagneticLoad", "MU0", "compiled_magnets", "magnets_force", "magnets_output"]
+__all__ = ["Magnetisation", "MagneticLoad", "MU0", "compiled_magnets", "magnets_force", "magnets_output",
+           "dipole_resolution", "DIPOLE_RESOLUTION"]
 
 
 class Magnetisation:
@@ -424,6 +425,74 @@ def magnets_output(loads, g, lam):
         F[nodes] += fv
     w = np.where(area > 0, area, 1.0)[:, None]
     return {"magnetisation_Br": Br / w, "magnetic_couple": C / w, "magnetic_force": F / w}
+
+
+DIPOLE_RESOLUTION = 10.0
+"""The distance from a dipole source to the magnetised material, in element sizes, below which
+the nodal quadrature of its loads is reported (``dipole_resolution``): the error is about
+(size / distance)^2, 1 % at 10 sizes.  Measured on a clamped strip 1 x 0.1 with a dipole 0.05
+above its tip (0.07 from the nearest nodes): 12 % at 2.8 sizes (40 x 4 elements), 2.3 % at 5.7
+(80 x 8); refined along the strip only (160 x 1, the width 0.1 one element) the tip deflection
+converged to 3.89e-5 against 2.12e-5 (160 x 16): 83 % off."""
+
+
+def _dipoles(field):
+    """The DipoleFields in ``field`` (itself, or the parts of a Superposition)."""
+    from .fields import DipoleField, Superposition
+    if isinstance(field, DipoleField):
+        return [field]
+    if isinstance(field, Superposition):
+        return [d for f in field.fields for d in _dipoles(f)]
+    return []
+
+
+def dipole_resolution(loads, g, lam):
+    """The smallest distance from a point dipole of the loads' fields (at a non-zero scale at
+    lam) to a magnetised node of the state g, in sizes of the node's largest magnetised element
+    (its longest reference edge), with that node and the dipole's position; None without
+    dipoles.
+
+    Parameters
+    ----------
+    loads : sequence of MagneticLoad
+        The magnets.
+    g : (n, 4, 4) ndarray
+        The state.
+    lam : float
+        The load factor (a dipole scaled to zero does not count).
+
+    Returns
+    -------
+    tuple or None
+        (distance / size, node id, dipole position x0).
+
+    Example
+    -------
+    >>> from core_se3 import mesh
+    >>> from core_se3.model.fields import DipoleField
+    >>> m = mesh.rectangle(1.0, 0.1, 10, 1)
+    >>> ld = MagneticLoad(Magnetisation(m, (1.0, 0, 0), h=0.01, mu0=1.0), DipoleField((0, 0, 1.0), (1.0, -0.05, 0.3)))
+    >>> ratio, node, x0 = dipole_resolution([ld], m.g0, 1.0)
+    >>> round(ratio, 6), node                               # 0.3 from the tip, elements 0.1 wide
+    (3.0, 10)
+    """
+    worst = None
+    for ld in loads:
+        dips = [d for d in _dipoles(ld.field) if d.scale_at(lam) != 0.0]
+        if not dips:
+            continue
+        mesh = ld.mag.mesh
+        X = mesh.X[mesh.quads[ld.mag.elements]]                            # (m, 4, 3)
+        edge = np.linalg.norm(X - np.roll(X, -1, axis=1), axis=2).max(1)   # longest edge
+        size = np.zeros(mesh.n_nodes)
+        np.maximum.at(size, mesh.quads[ld.mag.elements], edge[:, None])
+        x = g[ld.mag.nodes, :3, 3]
+        for d in dips:
+            ratio = np.linalg.norm(x - d.x0, axis=1) / size[ld.mag.nodes]
+            k = int(np.argmin(ratio))
+            if worst is None or ratio[k] < worst[0]:
+                worst = (float(ratio[k]), int(ld.mag.nodes[k]), d.x0)
+    return worst
 
 
 def _add_at(out, col, nodes, v, unique):
