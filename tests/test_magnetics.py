@@ -475,3 +475,39 @@ def test_a_dipole_near_a_coarse_magnet_is_reported():
     with warnings.catch_warnings():
         warnings.simplefilter("error", MeshWarning)
         strip(10, 1, 1.5).solve(steps=2)                      # 1.5 away, elements 0.1: 15 sizes
+
+
+@pytest.mark.parametrize("kind", ["uniform", "gradient", "dipole"])
+def test_equilibrium_is_objective_and_flips_with_the_field(kind):
+    """Guard (passed before): the whole solve, not only the load, is objective -- the mesh, the
+    field's sources and the magnetisation moved by a rigid motion (rotation of several turns'
+    axis, and a shift) give the moved equilibrium to round-off (measured 4e-15 of the tip
+    displacement) -- and in a uniform field, reversing B^a or B^r mirrors the equilibrium
+    (the couple changes sign), reversing both leaves it, exactly."""
+    from core_se3.mesh.core import Mesh
+    Q = lie.exp_so3(np.array([0.3, -1.1, 0.7]))
+    t = np.array([0.2, -0.5, 1.0])
+    G = np.array([[5.0, 2.0, 0.0], [2.0, -3.0, 1.0], [0.0, 1.0, -2.0]]) * 0.5
+
+    def solve(moved, Br=(1.0, 0.3, 0.5), B=(0.0, 10.0, 25.0)):
+        m = mesh.rectangle(1.0, 0.2, 8, 2)
+        q, s = (Q, t) if moved else (np.eye(3), np.zeros(3))
+        if moved:
+            H = np.eye(4)
+            H[:3, :3], H[:3, 3] = Q, t
+            m = Mesh(H @ m.g0, m.quads, dict(m.edges), m.shape, dict(m.regions))
+        p = Problem(m, Material(1e6, 0.3, 0.01))
+        p.clamp("x0")
+        p.add_probe("tip", "x1")
+        field = {"uniform": lambda: UniformField(q @ B),
+                 "gradient": lambda: GradientField(q @ B, q @ G @ q.T, x0=q @ (0.5, 0.0, 0.3) + s),
+                 "dipole": lambda: DipoleField(q @ (0.0, 0.0, 1e5), q @ (2.5, 0.1, 0.4) + s, mu0=1.0)}[kind]()
+        p.add_magnetic(q @ np.asarray(Br), field, mu0=1.0)
+        return p.solve(steps=4).final.probes["tip"]["u"]
+    u = solve(False)
+    assert np.abs(Q @ u - solve(True)).max() <= 1e-12 * np.abs(u).max()
+    if kind == "uniform":
+        mirror = np.array([1.0, -1.0, -1.0])                  # the reflection y, z -> -y, -z of the strip
+        assert np.abs(solve(False, Br=(1.0, 0.0, 0.0), B=(0.0, 0.0, -30.0))
+                      - mirror * solve(False, Br=(1.0, 0.0, 0.0), B=(0.0, 0.0, 30.0))).max() <= 1e-12
+        assert np.abs(solve(False, Br=(-1.0, -0.3, -0.5), B=(0.0, -10.0, -25.0)) - u).max() <= 1e-12 * np.abs(u).max()
