@@ -123,7 +123,7 @@ def _check_dipole_resolution(problem, state):
             f"node {node} (fewer than {DIPOLE_RESOLUTION:g}): its field changes across an element, and the nodal "
             f"quadrature of the magnetic couple and force is off by about (size / distance)^2 = "
             f"{100 / ratio ** 2:.2g} %; refine the mesh near the dipole in both directions (to "
-            f"{DIPOLE_RESOLUTION:g} sizes: 1 %) or move the dipole away"), stacklevel=4)
+            f"{DIPOLE_RESOLUTION:g} sizes: 1 %) or move the dipole away"), stacklevel=5)
 
 
 def solve_linear(problem, lam_end=1.0, **options):
