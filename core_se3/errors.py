@@ -468,6 +468,10 @@ class MeshWarning(UserWarning):
     Scordelis-Lo roof, meshes graded toward the free edge are within 0.8 ... 1.02 of the
     converged deflection wherever the growth is at most 1.7, and erratic beyond 2 (the 2x2 at
     R/h 1e3: 0.66 ... 5.6 as the first width changes; benchmarks/results/roof_layer.md).
+    Issued at the end of a solve when a point dipole lies within
+    ``model.magnetics.DIPOLE_RESOLUTION`` (10) element sizes of the magnetised material: the
+    nodal quadrature of its loads is off by about (size / distance)^2 (a strip refined along
+    its length only converged 83 % off).
 
     Example
     -------

@@ -268,6 +268,109 @@ def test_bad_commands_and_sessions_are_clear_errors():
         ControlOptions(path_tolerance=0.0)
 
 
+def test_a_variable_named_lam_is_refused_not_shadowed_by_the_load_factor():
+    """update(lam=...) is the load factor: a variable named 'lam' could never be commanded, and
+    update(lam=2.0) meant for it moved the load factor to 2 with the variable still at 1 (state
+    lam 2.0, values {'lam': [1.0]}), a converged state at another command than the one sent."""
+    p = strip()
+    with pytest.raises(OptionError, match="cannot be named 'lam'.*load factor"):
+        Session(p, 1.0, [LoadMagnitude(p, p.loads[0], name="lam")])
+    scn = scenario.loads('units = "consistent"\n[mesh]\ngenerator = "rectangle"\nL = 1.0\nwidth = 0.2\nnx = 4\n'
+                         'ny = 1\n[material]\nE = 1e3\nnu = 0.0\nh = 0.05\n[[supports]]\ntype = "clamp"\n'
+                         'edge = "x0"\n[fields.lam]\ntype = "uniform"\nB = [0.0, 0.0, 0.3]\n'
+                         '[[magnets]]\nBr = [1.0, 0.0, 0.0]\nmu0 = 1.0\n')
+    with pytest.raises(OptionError, match=r"rename the scenario's \[fields.lam\]"):
+        Session.from_scenario(scn)
+
+
+def test_a_coil_field_superposed_on_a_magnets_dipole_is_a_command():
+    """A uniform coil field (and a gradient field) that the magnets feel through a Superposition
+    with a permanent magnet's dipole: update(coil=...) was refused ("no magnet of the problem is
+    in this field", DesignError) while update(lam=..., coil=...) was accepted, and the Jacobian
+    by the coil was refused.  The residual is linear in each part of the sum, so its exact change
+    and dr/dp are the part's own times the sum's scale: the warm update equals the cold solve and
+    dr/dp equals the residual's difference quotient, to round-off."""
+    from core_se3.design import FieldGradientVariable
+    from core_se3.model import DipoleField, GradientField, Superposition
+
+    def build(B, G, lam_scale=1.0):
+        p = Problem(mesh.rectangle(1.0, 0.2, 8, 1), Material(1e3, 0.0, 0.05))
+        p.clamp("x0")
+        p.add_probe("tip", "x1")
+        coil = UniformField(B)
+        grad = GradientField((0.0, 0.0, 0.0), G, x0=(0.5, 0.0, 0.0), scale=lambda lam: 0.5 * lam)
+        both = Superposition(coil, grad, DipoleField((0.0, 0.0, 2e-3), (1.3, 0.0, 0.2), mu0=1.0))
+        both.scale = lambda lam: lam_scale                   # the sum's own programme counts too
+        p.add_magnetic((1.0, 0.0, 0.0), both, mu0=1.0)
+        return p, coil, grad
+
+    G0, G1 = np.diag([0.2, -0.1, -0.1]), np.array([[0.1, 0.0, 0.05], [0.0, 0.1, 0.0], [0.05, 0.0, -0.2]])
+    q, _, qgrad = build((0.05, 0.0, 0.35), G1, 1.5)
+    c1 = FieldGradientVariable(q, qgrad).value()              # G1 in the variable's coefficients
+    p, coil, grad = build((0.0, 0.0, 0.3), G0, 1.5)
+    s = Session(p, 1.0, [FieldVariable(p, coil, name="coil"), FieldGradientVariable(p, grad, name="G")],
+                rtol=1e-12, dtol=1e-12)
+    st = s.update(coil=[0.05, 0.0, 0.35], G=c1)
+    assert np.allclose(grad.G, G1, atol=1e-15)
+    assert frame_error(st.g, cold(q), 1.0) < 1e-10
+    # dr/dp of both variables equals the change of the residual (linear: exact up to round-off)
+    g = st.g
+    r0 = p.evaluate(g, 1.0, tangent=False).r
+    for v in s.variables.values():
+        x = v.value()
+        for k in range(v.size):
+            d = np.zeros(v.size)
+            d[k] = 1e-3
+            v.assign(x + d)
+            r1 = p.evaluate(g, 1.0, tangent=False).r
+            v.assign(x)
+            col = p.assembler().vector(v.dr_dp(p, g, 1.0)[:, :, k])
+            assert np.abs((r1 - r0) / 1e-3 - col).max() <= 1e-8 * np.abs(col).max(), (v.name, k)
+    J = s.jacobian(["tip"], ["coil"]).jacobian
+    assert J.shape == (3, 3) and np.abs(J).max() > 0
+
+
+def test_region_magnetisation_keeps_the_magnets_loads_or_refuses_mixed_mu0():
+    """RegionMagnetisation replaces the magnets on its regions by its own loads, fitted to give
+    the same nodal moments: the loads must not change (exact, B^r constant per region).  Two
+    magnets with different mu0 used to get SI's MU0 instead, silently: the couple went from
+    0.005 to 3979 (x 1/MU0).  Now a DesignError asks for mu0; given, the loads are the fit's."""
+    from core_se3.errors import DesignError
+
+    def two_magnets(mu0b):
+        p = Problem(mesh.rectangle(4.0, 0.5, 4, 1), Material(1e3, 0.0, 0.1))
+        f = UniformField((0.0, 0.0, 1.0))
+        p.add_magnetic((0.2, 0.0, 0.0), f, elements=[0, 1], mu0=1.0)
+        p.add_magnetic((0.0, 0.0, 0.1), f, elements=[2, 3], mu0=mu0b)
+        return p, p.external(p.mesh.g0, 1.0, tangent=False)[0]
+    p, f0 = two_magnets(1.0)
+    RegionMagnetisation(p, [[0, 1], [2, 3]], name="Br")
+    assert np.allclose(p.external(p.mesh.g0, 1.0, tangent=False)[0], f0, rtol=1e-13, atol=1e-16)
+    p, _ = two_magnets(2.0)
+    with pytest.raises(DesignError, match=r"different mu0 \(1, 2\).*give mu0"):
+        RegionMagnetisation(p, [[0, 1], [2, 3]], name="Br")
+    v = RegionMagnetisation(p, [[0, 1], [2, 3]], mu0=1.0, name="Br")
+    assert v.mu0 == 1.0
+
+
+def test_plan_and_track_keep_commands_inside_a_norm_bound():
+    """A field variable with |B| <= B_max: the loops clipped their commands to the box bounds
+    only, so a step past the norm bound ended plan and track with the session's OptionError
+    ('norm 0.562588 above its bound 0.5') instead of a flagged sample.  The commands are now
+    scaled onto the bound: a reachable sample is reached, an unreachable one (the tip 2 above
+    its start, on a strip of length 1) is flagged, and every command keeps |B| <= B_max."""
+    p, f = magnetic_strip()
+    s = Session(p, 1.0, [FieldVariable(p, f, name="coil", B_max=0.5)])
+    z0 = s.state.probes["tip"]["x"][2]
+    pl = plan(s, "tip", [[z0], [z0 + 0.02], [z0 + 2.0]], 1e-8, components=[2])
+    assert pl.reached.tolist() == [True, True, False] and "sample 2" in pl.message
+    assert np.linalg.norm(pl.commands["coil"], axis=1).max() <= 0.5 * (1 + 1e-12)
+    p, f = magnetic_strip()
+    s = Session(p, 1.0, [FieldVariable(p, f, name="coil", B_max=0.5)])
+    t = track(s, "tip", [[z0], [z0 + 0.02], [z0 + 2.0]], components=[2])
+    assert t.errors[2] > 1.0 and np.linalg.norm(t.commands["coil"], axis=1).max() <= 0.5 * (1 + 1e-12)
+
+
 def test_an_error_inside_an_update_keeps_the_state_and_its_values():
     """A load whose programme turns non-finite past load factor 1.5 (LoadError from the residual)
     stops the update; the session keeps its state and the variables their values."""

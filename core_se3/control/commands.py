@@ -51,8 +51,9 @@ class Commands:
     Parameters
     ----------
     variables : sequence of core_se3.design.Variable
-        Each with a unique ``name``; no two may set the same field, load, magnet or element
-        property (OptionError naming both).
+        Each with a unique ``name`` other than ``lam`` (the load factor's keyword of
+        ``Session.update``); no two may set the same field, load, magnet or element property
+        (OptionError naming both).
 
     Attributes
     ----------
@@ -77,6 +78,11 @@ class Commands:
                 raise OptionError(f"a session's variables are core_se3.design variables, got {type(v).__name__}")
             if v.name in self.variables:
                 raise OptionError(f"two variables are named {v.name!r}: give each its own name (name=...)")
+            if v.name == "lam":
+                # Session.update(lam=...) is the load factor: the variable could never be commanded
+                raise OptionError("a variable cannot be named 'lam': update(lam=...) sets the load factor, so its "
+                                  "commands would move the load factor instead; give it another name (name=..., "
+                                  "or rename the scenario's [fields.lam])")
             for key in _sets(v):
                 if key in owner:
                     raise OptionError(f"variables {owner[key]!r} and {v.name!r} set the same {key[0]}: a command "

@@ -155,9 +155,16 @@ class _Loop:
         return self.s.jacobian([self.q], self.vars).jacobian[self.rows]
 
     def command(self, x):
-        """Update the session (and the model) to the command x (clipped to the bounds); the
+        """Update the session (and the model) to the command x (clipped to the bounds, and each
+        group of components with a norm bound scaled onto it: its nearest point in the ball); the
         session's State."""
-        values = dict(zip(self.names, np.split(np.clip(x, self.lower, self.upper), self.split)))
+        parts = np.split(np.clip(x, self.lower, self.upper), self.split)
+        for v, part in zip(self.vars, parts):
+            for idx, top in v.norm_bounds:
+                n = np.linalg.norm(part[idx])
+                if n > top:
+                    part[idx] *= top / n
+        values = dict(zip(self.names, parts))
         if self.model is not None:
             self.model.update(**values)
         return self.s.update(**values)

@@ -103,7 +103,8 @@ class RegionMagnetisation(Variable):
     field : Field, optional
         The applied field (default that of the replaced magnets; needed without them).
     mu0 : float, optional
-        Vacuum permeability (default that of the replaced magnets, else MU0).
+        Vacuum permeability (default that of the replaced magnets -- a DesignError when they
+        differ -- else MU0).
     start : (k, 3) array, optional
         The starting B^r per region (lab vectors) instead of the fitted one.
     name : str
@@ -146,7 +147,12 @@ class RegionMagnetisation(Variable):
                                   if not fields else "the magnets on these regions are in different fields: give one"))
             field = next(iter(fields.values()))
         mu0s = {ld.mag.mu0 for ld in old}
-        self.mu0 = float(mu0 if mu0 is not None else (mu0s.pop() if len(mu0s) == 1 else MU0))
+        if mu0 is None and len(mu0s) > 1:
+            # one mu0 for all the regions: SI's in its place would scale the loads by mu0 / MU0
+            raise DesignError(f"magnetisation {name!r}: the magnets on these regions have different mu0 "
+                              f"({', '.join(f'{m:g}' for m in sorted(mu0s))}); the units of a model have one: "
+                              "give mu0 (or make the magnets' mu0 agree)")
+        self.mu0 = float(mu0 if mu0 is not None else (mu0s.pop() if mu0s else MU0))
         self.field = field
         W = lumping(mesh, allel)                                            # (n, m_all)
         owner = np.repeat(np.arange(k), [len(r) for r in self.regions])

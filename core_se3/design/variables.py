@@ -41,9 +41,10 @@ import numpy as np
 
 from .. import lie
 from ..errors import DesignError, did_you_mean
-from ..model import GradientField, MagneticLoad, UniformField
+from ..model import GradientField, MagneticLoad, Superposition, UniformField
 
-__all__ = ["Variable", "FieldVariable", "FieldGradientVariable", "LoadMagnitude", "magnetic_loads", "polar_vector",
+__all__ = ["Variable", "FieldVariable", "FieldGradientVariable", "LoadMagnitude", "magnetic_loads", "field_share",
+           "polar_vector",
            "region_elements", "field_at", "free_index", "plane_axes"]
 
 
@@ -98,8 +99,36 @@ def region_elements(problem, r, what):
     return ids
 
 
+def field_share(outer, field, lam):
+    """d(value of ``outer``)/d(value of ``field``) at the load factor lam: 1 when ``outer`` is
+    ``field``, its scale s(lam) times the sum of its parts' shares for a ``Superposition`` (a
+    field that is a part of the sum, e.g. a uniform coil field beside a magnet's dipole), 0 when
+    ``field`` does not enter ``outer``.
+
+    Example
+    -------
+    >>> from core_se3.model import DipoleField, Superposition, UniformField
+    >>> coil = UniformField((0.0, 0.0, 1.0))
+    >>> both = Superposition(coil, DipoleField((0, 0, 1.0), (0, 0, 1.0)))
+    >>> field_share(both, coil, 0.5), field_share(coil, UniformField((0, 0, 1.0)), 0.5)
+    (1.0, 0.0)
+    """
+    if outer is field:
+        return 1.0
+    if isinstance(outer, Superposition):
+        share = sum(field_share(f, field, lam) for f in outer.fields)
+        return outer.scale_at(lam) * share if share else 0.0
+    return 0.0
+
+
+def _enters(outer, field):
+    """True when ``field`` is ``outer`` or one of the parts of a Superposition ``outer``."""
+    return outer is field or (isinstance(outer, Superposition) and any(_enters(f, field) for f in outer.fields))
+
+
 def magnetic_loads(problem, field=None):
-    """The MagneticLoads of ``problem`` (those in ``field`` if given).
+    """The MagneticLoads of ``problem`` (those in ``field`` if given: whose applied field is
+    ``field`` or a ``Superposition`` with ``field`` among its parts).
 
     Example
     -------
@@ -110,7 +139,7 @@ def magnetic_loads(problem, field=None):
     >>> len(magnetic_loads(p, f)), len(magnetic_loads(p, UniformField((0.0, 0.0, 1.0))))
     (1, 0)
     """
-    return [ld for ld in problem.loads if isinstance(ld, MagneticLoad) and (field is None or ld.field is field)]
+    return [ld for ld in problem.loads if isinstance(ld, MagneticLoad) and (field is None or _enters(ld.field, field))]
 
 
 def field_at(ld, g, lam):
@@ -309,9 +338,10 @@ class FieldVariable(Variable):
         setattr(self.field, self._attr, self.vector())
 
     def dr_dB(self, problem, g, lam):
-        """d(r_int - f_ext)/dB (n, 6, 3): the couple f_w = mu x R^T s B of every magnetised node."""
-        out, s, loads = _field_derivative_setup(problem, self.field, lam, 3, f"field variable {self.name!r}")
-        for ld in loads:
+        """d(r_int - f_ext)/dB (n, 6, 3): the couple f_w = mu x R^T s B of every magnetised node
+        (s: the field's scale times its share in the magnet's field, ``field_share``)."""
+        out, loads = _field_derivative_setup(problem, self.field, lam, 3, f"field variable {self.name!r}")
+        for ld, s in loads:
             R = g[ld.mag.nodes, :3, :3]
             out[ld.mag.nodes, 3:, :] -= s * lie.hat3(ld.mag.mu) @ np.swapaxes(R, 1, 2)
         return out
@@ -321,12 +351,14 @@ class FieldVariable(Variable):
 
 
 def _field_derivative_setup(problem, field, lam, k, what):
-    """(zeros (n, 6, k), the field's scale at lam, the magnetic loads in ``field``): the start of
-    a field variable's dr/dp; DesignError when no magnet of the problem is in that field."""
+    """(zeros (n, 6, k), [(magnetic load in ``field``, d B_load / d B_field-at-scale-1 = the
+    field's scale at lam times its ``field_share`` in the load's field)]): the start of a field
+    variable's dr/dp; DesignError when no magnet of the problem is in that field."""
     loads = magnetic_loads(problem, field)
     if not loads:
         raise DesignError(f"{what}: no magnet of the problem is in this field")
-    return np.zeros((problem.mesh.n_nodes, 6, k)), field.scale_at(lam), loads
+    s = field.scale_at(lam)
+    return np.zeros((problem.mesh.n_nodes, 6, k)), [(ld, s * field_share(ld.field, field, lam)) for ld in loads]
 
 
 # a basis of the symmetric traceless 3x3 matrices (the gradients of curl- and divergence-free fields)
@@ -377,8 +409,8 @@ class FieldGradientVariable(Variable):
         self.field.G = np.einsum("k,kij->ij", self.c, _GBASIS)
 
     def dr_dp(self, problem, g, lam):
-        out, s, loads = _field_derivative_setup(problem, self.field, lam, 5, f"gradient variable {self.name!r}")
-        for ld in loads:
+        out, loads = _field_derivative_setup(problem, self.field, lam, 5, f"gradient variable {self.name!r}")
+        for ld, s in loads:
             nodes, mu = ld.mag.nodes, ld.mag.mu
             R = g[nodes, :3, :3]
             Rt = np.swapaxes(R, 1, 2)

@@ -280,7 +280,23 @@ class Mesh:
         return self.elem_edges[el, local], el
 
     def elements(self, region=None):
-        """Element ids of a named region (a name), of a list of ids, or of all elements (None)."""
+        """Element ids of a named region (a name), of a list of ids, of a boolean mask over the
+        elements, or of all elements (None).
+
+        Ids must be whole numbers, each given once (a repeated element would carry its load
+        twice); a mask must have one entry per element.  MeshError otherwise.
+
+        Example
+        -------
+        >>> from core_se3 import mesh
+        >>> m = mesh.rectangle(4.0, 1.0, 4, 1)
+        >>> m.elements([3, 1]).tolist(), m.elements(m.X[m.quads].mean(1)[:, 0] > 2.0).tolist()
+        ([3, 1], [2, 3])
+        >>> m.elements([1, 1])
+        Traceback (most recent call last):
+        ...
+        core_se3.errors.MeshError: element selection lists element 1 more than once: its load would act twice; give every element once
+        """
         if region is None:
             return np.arange(self.n_elements)
         if isinstance(region, str):
@@ -288,7 +304,23 @@ class Mesh:
                 raise MeshError(f"unknown region {region!r}{did_you_mean(region, self.regions)}; "
                                 f"regions: {sorted(self.regions) or 'none'}")
             return self.regions[region]
-        ids = np.asarray(region, np.int64).ravel()
+        raw = np.asarray(region)
+        if raw.dtype == bool:
+            if raw.shape != (self.n_elements,):
+                raise MeshError(f"a boolean element selection needs one entry per element ({self.n_elements}), "
+                                f"got shape {raw.shape}")
+            raw = np.nonzero(raw)[0]
+        try:
+            ids = raw.astype(np.int64).ravel()
+            whole = ids.size == raw.size and np.array_equal(ids, raw.ravel())
+        except (TypeError, ValueError):
+            whole = False
+        if not whole:
+            raise MeshError(f"element ids must be whole numbers, got {np.asarray(region).ravel()[:5].tolist()}")
         if ids.size == 0 or ids.min() < 0 or ids.max() >= self.n_elements:
             raise MeshError("element selection is empty or refers to elements that do not exist")
+        uniq, count = np.unique(ids, return_counts=True)
+        if np.any(count > 1):
+            raise MeshError(f"element selection lists element {int(uniq[count > 1][0])} more than once: its load "
+                            "would act twice; give every element once")
         return ids

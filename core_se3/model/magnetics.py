@@ -33,12 +33,13 @@ from __future__ import annotations
 import numpy as np
 
 from .. import lie
-from ..errors import LoadError
+from ..errors import LoadError, MeshError
 from ..fem.quadrature import shape_functions, surface_jacobian
 from .base import Load, LoadEvaluation
 from .fields import MU0, Field
 
-__all__ = ["Magnetisation", "MagneticLoad", "MU0", "compiled_magnets", "magnets_force"]
+__all__ = ["Magnetisation", "MagneticLoad", "MU0", "compiled_magnets", "magnets_force", "magnets_output",
+           "dipole_resolution", "DIPOLE_RESOLUTION"]
 
 
 class Magnetisation:
@@ -88,9 +89,10 @@ class Magnetisation:
         self.mesh = mesh
         self.mu0 = float(mu0)
         self.h = float(h)
-        el = np.arange(mesh.n_elements) if elements is None else np.asarray(elements, np.int64).ravel()
-        if el.size == 0 or el.min() < 0 or el.max() >= mesh.n_elements:
-            raise LoadError("magnetised element selection is empty or refers to elements that do not exist")
+        try:
+            el = mesh.elements(elements)             # ids once each, or a mask (MeshError otherwise)
+        except MeshError as exc:
+            raise LoadError(f"magnetised elements: {exc}") from None
         self.elements = el
         quads = mesh.quads[el]                                       # (m,4)
         N, dN = shape_functions()                                     # (q,4), (q,2,4)
@@ -111,6 +113,7 @@ class Magnetisation:
         self.mu = body[self.nodes]                                    # (k,3) body-frame dipoles
         self.area = area[self.nodes]                                  # nodal reference area share
         self.node_area = area                                         # (n,) of the selection
+        self.element_area = np.einsum("qi,mq->mi", N, j0)             # (m,4) int_e N_i dA
         self.total_lab = mom.sum(0) * self.h                          # int Br dV [T m^3]
 
     def _at_gauss(self, Br, N, X, quads):
@@ -176,6 +179,12 @@ class MagneticLoad(Load):
         at ``samples`` sub-steps (a whole turn in one step counts 2 pi, not 0); where the field
         vanishes it does not count.
 
+        A sample turns at most pi as measured (the angle between two directions), so a field
+        that turns by a whole number of turns between samples would measure 0: the path is
+        sampled again at 23/16 of the samples (a coprime count) and then twice as finely until
+        two estimates agree to 1 %, and the largest estimate is returned (sampling can only
+        miss turning).
+
         Example
         -------
         >>> import numpy as np
@@ -187,16 +196,32 @@ class MagneticLoad(Load):
         ...                   UniformField((0, 0, 1.0), scale=lambda lam: 1.0, direction=turn))
         >>> round(ld.direction_turn(m.g0, 0.0, 0.25), 6), round(ld.direction_turn(m.g0, 0.0, 1.0), 6)
         (1.570796, 6.283185)
+        >>> round(ld.direction_turn(m.g0, 0.0, 16.0), 6)                  # 16 turns: one a sample at 16
+        100.530965
         """
         x = g[self.mag.nodes, :3, 3]
+        best = self._turn(x, lam0, lam1, samples)
+        n = max(1, (23 * samples) // 16)
+        last = self._turn(x, lam0, lam1, n)
+        while abs(last - best) > 0.01 * max(last, best) + 1e-9 and n < 256 * samples:
+            best = max(best, last)
+            n *= 2
+            last = self._turn(x, lam0, lam1, n)
+        return max(best, last)
+
+    def _turn(self, x, lam0, lam1, samples):
+        """The turn of :meth:`direction_turn` at the points x (k, 3), sampled at ``samples``
+        sub-steps."""
         prev = self.field.unscaled(x, lam0)
         total = np.zeros(len(x))
         for t in np.linspace(lam0, lam1, samples + 1)[1:]:
             cur = self.field.unscaled(x, t)
             n = np.linalg.norm(prev, axis=1) * np.linalg.norm(cur, axis=1)
             ok = n > 0
-            cosang = np.einsum("ki,ki->k", prev[ok], cur[ok]) / n[ok]
-            total[ok] += np.arccos(np.clip(cosang, -1.0, 1.0))
+            # the angle by atan2(|a x b|, a . b): exact 0 for equal directions (arccos of a
+            # rounded cosine gives 1e-8), so an unturned field measures 0 at every count
+            total[ok] += np.arctan2(np.linalg.norm(np.cross(prev[ok], cur[ok]), axis=1),
+                                    np.einsum("ki,ki->k", prev[ok], cur[ok]))
             prev = cur
         return float(total.max()) if len(total) else 0.0
 
@@ -265,18 +290,8 @@ class MagneticLoad(Load):
         return add
 
     def output_fields(self, g, lam):
-        """Point fields for VTU output: B^r_t [T] (area-weighted nodal value), magnetic couple and
-        force per unit reference area [N m/m^2, N/m^2] (lab components)."""
-        n = self.mag.mesh.n_nodes
-        nodes, c, fv = self.nodal(g, lam)
-        w = self.mag.area[:, None]
-        Br = np.zeros((n, 3))
-        Br[nodes] = self.mag.current(g) * (self.mag.mu0 / self.mag.h) / w
-        C = np.zeros((n, 3))
-        C[nodes] = c / w
-        F = np.zeros((n, 3))
-        F[nodes] = fv / w
-        return {"magnetisation_Br": Br, "magnetic_couple": C, "magnetic_force": F}
+        """Point fields for VTU output (``magnets_output`` of this load alone)."""
+        return magnets_output([self], g, lam)
 
 
 def compiled_magnets(loads, pattern):
@@ -376,6 +391,110 @@ def magnets_force(loads, g, lam):
         if not fld.uniform:
             _add_at(out, 0, nodes, np.einsum("kij,kj->ki", Rt @ fld.gradient(x, lam) @ R, mu), len(grp) == 1)
     return out
+
+
+def magnets_output(loads, g, lam):
+    """Point fields of several MagneticLoads for VTU output (lab components): B^r_t [T] and the
+    magnetic couple and force per unit reference area [N m/m^2, N/m^2] at every node, each the
+    sum over the loads of its nodal integral (int N_i B^r_t dA, the nodal couple and force)
+    divided by the node's share of the reference area of the magnetised elements (their union:
+    two magnets of adjacent regions share the nodes between them, and a node's value is the
+    area-weighted mean, not the sum of two means); 0 at nodes without magnetised elements.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import Material, Problem, mesh
+    >>> from core_se3.model.fields import UniformField
+    >>> p = Problem(mesh.rectangle(2.0, 1.0, 2, 1), Material(1.0, 0.3, 0.1))
+    >>> B = UniformField((0.0, 0.0, 1.0))
+    >>> a = p.add_magnetic((1.0, 0, 0), B, elements=[0], mu0=1.0)
+    >>> b = p.add_magnetic((1.0, 0, 0), B, elements=[1], mu0=1.0)
+    >>> magnets_output([a, b], p.mesh.g0, 1.0)["magnetisation_Br"][:3, 0].tolist()   # the middle node too
+    [1.0, 1.0, 1.0]
+    """
+    mesh = loads[0].mag.mesh
+    n = mesh.n_nodes
+    els = np.concatenate([ld.mag.elements for ld in loads])
+    shares = np.concatenate([ld.mag.element_area for ld in loads])
+    _, first = np.unique(els, return_index=True)              # every magnetised element once
+    area = np.bincount(mesh.quads[els[first]].ravel(), weights=shares[first].ravel(), minlength=n)
+    Br, C, F = np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3))
+    for ld in loads:
+        nodes, c, fv = ld.nodal(g, lam)
+        Br[nodes] += ld.mag.current(g) * (ld.mag.mu0 / ld.mag.h)        # int N_i B^r_t dA
+        C[nodes] += c
+        F[nodes] += fv
+    w = np.where(area > 0, area, 1.0)[:, None]
+    return {"magnetisation_Br": Br / w, "magnetic_couple": C / w, "magnetic_force": F / w}
+
+
+DIPOLE_RESOLUTION = 10.0
+"""The distance from a dipole source to the magnetised material, in element sizes, below which
+the nodal quadrature of its loads is reported (``dipole_resolution``): the error is about
+(size / distance)^2, 1 % at 10 sizes.  Measured on a clamped strip 1 x 0.1 with a dipole 0.05
+above its tip (0.07 from the nearest nodes): 12 % at 2.8 sizes (40 x 4 elements), 2.3 % at 5.7
+(80 x 8); refined along the strip only (160 x 1, the width 0.1 one element) the tip deflection
+converged to 3.89e-5 against 2.12e-5 (160 x 16): 83 % off."""
+
+
+def _dipoles(field):
+    """The DipoleFields in ``field`` (itself, or the parts of a Superposition)."""
+    from .fields import DipoleField, Superposition
+    if isinstance(field, DipoleField):
+        return [field]
+    if isinstance(field, Superposition):
+        return [d for f in field.fields for d in _dipoles(f)]
+    return []
+
+
+def dipole_resolution(loads, g, lam):
+    """The smallest distance from a point dipole of the loads' fields (at a non-zero scale at
+    lam) to a magnetised node of the state g, in sizes of the node's largest magnetised element
+    (its longest reference edge), with that node and the dipole's position; None without
+    dipoles.
+
+    Parameters
+    ----------
+    loads : sequence of MagneticLoad
+        The magnets.
+    g : (n, 4, 4) ndarray
+        The state.
+    lam : float
+        The load factor (a dipole scaled to zero does not count).
+
+    Returns
+    -------
+    tuple or None
+        (distance / size, node id, dipole position x0).
+
+    Example
+    -------
+    >>> from core_se3 import mesh
+    >>> from core_se3.model.fields import DipoleField
+    >>> m = mesh.rectangle(1.0, 0.1, 10, 1)
+    >>> ld = MagneticLoad(Magnetisation(m, (1.0, 0, 0), h=0.01, mu0=1.0), DipoleField((0, 0, 1.0), (1.0, -0.05, 0.3)))
+    >>> ratio, node, x0 = dipole_resolution([ld], m.g0, 1.0)
+    >>> round(ratio, 6), node                               # 0.3 from the tip, elements 0.1 wide
+    (3.0, 10)
+    """
+    worst = None
+    for ld in loads:
+        dips = [d for d in _dipoles(ld.field) if d.scale_at(lam) != 0.0]
+        if not dips:
+            continue
+        mesh = ld.mag.mesh
+        X = mesh.X[mesh.quads[ld.mag.elements]]                            # (m, 4, 3)
+        edge = np.linalg.norm(X - np.roll(X, -1, axis=1), axis=2).max(1)   # longest edge
+        size = np.zeros(mesh.n_nodes)
+        np.maximum.at(size, mesh.quads[ld.mag.elements], edge[:, None])
+        x = g[ld.mag.nodes, :3, 3]
+        for d in dips:
+            ratio = np.linalg.norm(x - d.x0, axis=1) / size[ld.mag.nodes]
+            k = int(np.argmin(ratio))
+            if worst is None or ratio[k] < worst[0]:
+                worst = (float(ratio[k]), int(ld.mag.nodes[k]), d.x0)
+    return worst
 
 
 def _add_at(out, col, nodes, v, unique):

@@ -26,7 +26,7 @@ from .base import Evaluation, Load, force_scale_with_loads, load_kind
 from .compiled import CompiledEvaluation
 from .contact import add_obstacle
 from .fields import MU0
-from .magnetics import MagneticLoad, Magnetisation, magnets_force
+from .magnetics import MagneticLoad, Magnetisation, magnets_force, magnets_output
 from .probes import Probe
 from .solving import SOLVERS, dispatch, solve_linear
 from .supports import (LabSpring, LabTiltSpring, Prescribed, RotationComponentSpring, check_conflict,
@@ -332,8 +332,18 @@ class Problem:
             return self.add(MagneticLoad(Magnetisation(self.mesh, Br, h, sel, mu0), field))
         ids = np.arange(self.mesh.n_elements) if sel is None else np.asarray(sel)
         h = h_all[ids]
-        Br = np.broadcast_to(np.asarray(Br, float), (len(ids), 3))
-        return [self.add(MagneticLoad(Magnetisation(self.mesh, Br[h == t], float(t), ids[h == t], mu0), field))
+        # one load per thickness: a table per selected element is split with the elements; a
+        # 3-vector, a table per node and a function of position hold for every part as given
+        per_element = False
+        if not callable(Br):
+            Br = np.asarray(Br, float)
+            per_element = Br.shape == (len(ids), 3)
+            if not per_element and Br.shape not in ((3,), (self.mesh.n_nodes, 3)):
+                raise LoadError(f"magnetisation Br must be a 3-vector, one per selected element ({len(ids)}, 3), "
+                                f"one per node ({self.mesh.n_nodes}, 3) or a function of position; got shape "
+                                f"{Br.shape}")
+        return [self.add(MagneticLoad(Magnetisation(self.mesh, Br[h == t] if per_element else Br, float(t),
+                                                    ids[h == t], mu0), field))
                 for t in np.unique(h)]
 
     def set_material(self, material):
@@ -374,9 +384,13 @@ class Problem:
 
     def output_fields(self, g, lam=1.0):
         """Extra point fields for output (name -> (n, k)) summed over the loads (magnetisation,
-        magnetic couple and force per unit area, ...; empty without such loads)."""
-        out = {}
+        magnetic couple and force per unit area, ...; empty without such loads); the magnets'
+        together (``magnetics.magnets_output``: per unit area of all the magnetised elements)."""
+        mags = [ld for ld in self.loads if isinstance(ld, MagneticLoad)]
+        out = magnets_output(mags, g, lam) if mags else {}
         for load in self.loads:
+            if isinstance(load, MagneticLoad):
+                continue
             for k, v in load.output_fields(g, lam).items():
                 out[k] = out[k] + v if k in out else v
         return out

@@ -12,8 +12,10 @@ from __future__ import annotations
 import warnings
 from typing import Callable
 
+import numpy as np
+
 from ..backend import launched_ranks
-from ..errors import OptionError, OptionWarning, ParallelError, SupportWarning, did_you_mean
+from ..errors import MeshWarning, OptionError, OptionWarning, ParallelError, SupportWarning, did_you_mean
 from .prescribed import DOF_NAMES, DRIFT_TOL, held_dof_drift
 
 __all__ = ["SOLVERS", "DISTRIBUTED_KEYS", "dispatch", "solve_linear", "check_held_dofs"]
@@ -109,7 +111,27 @@ def check_held_dofs(problem, result):
             f"independent support hold the lab component: add_lab_support (translations) or "
             f"add_rotation_component_support (a rotation-vector component), in a scenario file "
             f'[[supports]] type = "lab" (a direction) or type = "lab_rotation" (an axis); or clamp.'), stacklevel=3)
+    if states:
+        _check_dipole_resolution(problem, states[-1])
     return result
+
+
+def _check_dipole_resolution(problem, state):
+    """A MeshWarning when a point dipole lies within ``magnetics.DIPOLE_RESOLUTION`` element sizes
+    of the magnetised material at the final state: the nodal quadrature of its loads is then off
+    by about (size / distance)^2, and refining along one direction only can converge to a wrong
+    answer (``DIPOLE_RESOLUTION``'s measurements)."""
+    from .magnetics import DIPOLE_RESOLUTION, MagneticLoad, dipole_resolution
+    mags = [ld for ld in problem.loads if isinstance(ld, MagneticLoad)]
+    worst = dipole_resolution(mags, state.g, state.load_factor) if mags else None
+    if worst is not None and worst[0] < DIPOLE_RESOLUTION:
+        ratio, node, x0 = worst
+        warnings.warn(MeshWarning(
+            f"the point dipole at {np.round(x0, 6).tolist()} lies {ratio:.3g} element sizes from the magnetised "
+            f"node {node} (fewer than {DIPOLE_RESOLUTION:g}): its field changes across an element, and the nodal "
+            f"quadrature of the magnetic couple and force is off by about (size / distance)^2 = "
+            f"{100 / ratio ** 2:.2g} %; refine the mesh near the dipole in both directions (to "
+            f"{DIPOLE_RESOLUTION:g} sizes: 1 %) or move the dipole away"), stacklevel=5)
 
 
 def solve_linear(problem, lam_end=1.0, **options):
