@@ -246,7 +246,7 @@ def path_steps(sysm, options, lam_end=1.0, control=None, control_end=None, lam_m
         con.start(du, dl)
         pt, reason, hist = _arc_try(sysm, cur, du, dl, con, psi_u, o, timers, jumped, first_step=prev_du is None)
         why = None if pt is None else finished(pt)
-        if passed := _passed_within(sysm, cur, pt, con, lam_end, control, control_end, why):
+        if not jumped and (passed := _passed_within(sysm, cur, pt, con, lam_end, control, control_end, why)):
             pt, why, reason = None, None, passed
         if why in ("lam_end", "control_end") and o.land:
             pt, reason = _land(sysm, cur, pt, con, why, lam_end, control, control_end, o, timers)
@@ -358,7 +358,8 @@ def _passed_within(sysm, cur, pt, con, lam_end, control, control_end, why=None):
     of it.
     Slopes along sigma = c . du (c = W du / |du|_W): dlam/dsigma = 1 / (c . t) and
     du*/dsigma = (row . t) / (c . t), t = K^-1 q at each end.  '' also for no point (``pt``
-    None) and for a point below lam_min (``why``)."""
+    None) and for a point below lam_min (``why``); not applied to the jump of a branch switch
+    (its chord is orthogonal to the tangent at ``cur``)."""
     if pt is None or why == "lam_min":
         return ""
     span = float(np.sqrt(np.sum(sysm.w * con.du ** 2)))
