@@ -8,9 +8,10 @@ torsional buckling load of a deep cantilever strip 10 % low (0.61 ... 0.74 for f
 0.01).  :func:`refine` shrinks the bracket by bisection along the step, until the critical load
 factor is known to ``critical_tol`` (relative):
 
-* the points inside the step are corrected from its start with the arc-length constraint at a
-  fraction f of its length (predictor: f times the step's converged increment), and their
-  inertia decides which half keeps the sign change; a point whose load factor the bracket's
+* the points inside the step are corrected onto the arc-length constraint at a fraction f of
+  its length from its start (predictor: from the bracket's nearer end a, at fraction f_a, the
+  step's converged increment times f - f_a, its increment from the start carried into the
+  constraint), and their inertia decides which half keeps the sign change; a point whose load factor the bracket's
   part of the path cannot reach (:func:`reachable`) has converged on another part of the path
   and is refused like a corrector that failed, and a refused fraction is halved toward the
   bracket's start (at most ``MAX_RETRIES`` times) before the refinement ends;
@@ -84,6 +85,21 @@ def reachable(lam, lam_a, lam_b, slope_a, limit):
     turn: at least the smaller end's for a maximum (``slope_a`` = dlam/dsigma at a > 0), at most
     the larger end's for a minimum.
 
+    Parameters
+    ----------
+    lam : float
+        The load factor of the candidate point.
+    lam_a, lam_b : float
+        The load factors of the bracket's ends.
+    slope_a : float
+        dlam/dsigma at the end a, along the step (its sign tells a maximum from a minimum).
+    limit : bool
+        A limit point (else a bifurcation).
+
+    Returns
+    -------
+    bool
+
     Example
     -------
     >>> reachable(0.52, -0.064, -0.102, -1.0, True), reachable(-0.12, -0.064, -0.102, -1.0, True)
@@ -140,13 +156,15 @@ def refine(sysm, cur, pt, con, limit, corrector):
         try:
             state, lam, its, hist, _ = correct(sysm, sysm.update(a.state, (fm - fa) * du), a.lam + (fm - fa) * dl,
                                                arc, opts, timers)
-            if not reachable(lam, a.lam, b.lam, 1.0 / (c @ a.t), limit):
-                # the 8x8 6.35 mm roof, Riks from dlam0 = 0.5: the midpoint of the step over the
-                # lower limit point (-0.128, between -0.064 and -0.102) converged at lam = 0.522,
-                # and the point was reported at -0.064 +- 0.018
-                raise FloatingPointError(f"the point at lam {lam:.6g} is not on the bracket's part of the path")
-            mid = analyse(sysm, state, lam, True, its, hist)
+            # the 8x8 6.35 mm roof, Riks from dlam0 = 0.5: the midpoint of the step over the lower
+            # limit point (-0.128, between -0.064 and -0.102) converged at lam = 0.522, and the
+            # point was reported at -0.064 +- 0.018
+            with np.errstate(divide="ignore"):
+                slope_a = 1.0 / (c @ a.t)
+            mid = analyse(sysm, state, lam, True, its, hist) if reachable(lam, a.lam, b.lam, slope_a, limit) else None
         except failures:
+            mid = None
+        if mid is None:
             retries += 1
             if retries > MAX_RETRIES:
                 break

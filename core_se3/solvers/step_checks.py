@@ -116,6 +116,16 @@ def path_refusal(theta, travel):
     """What the path check refuses in corrections of contraction ``theta`` and ``travel``
     (:func:`path_measures`): how they grew or wandered, or '' when they may be accepted.
 
+    Parameters
+    ----------
+    theta, travel : float
+        The contraction and travel of :func:`path_measures`.
+
+    Returns
+    -------
+    str
+        '' or the reason (thresholds CONTRACTION_MAX, TRAVEL_MAX).
+
     Example
     -------
     >>> path_refusal(3.4, 1.8), path_refusal(0.2, 1.6), path_refusal(0.2, 0.25)
