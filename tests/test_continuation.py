@@ -245,3 +245,101 @@ def test_a_far_too_long_first_step_is_retried_shorter_not_taken_onto_another_bra
     assert first.load_factor > 0.0
     assert first.probes["tip"]["u"][2] > 0.0
     assert first.stability["negative_eigenvalues"] == 0
+
+
+@pytest.fixture(scope="module")
+def roof635():
+    case = get_case("sze-hinged-roof-6.35")
+    return case, catalogue.case_params(case)
+
+
+def test_displacement_control_stops_at_a_snap_back_of_the_controlled_displacement(roof635):
+    """The 6.35 mm roof (8x8 quarter) snaps back in W_C: along the path W_C reverses near 16.94
+    (table 17.008) and turns forward again near 14.5 (table 14.451), so W_C between them has
+    three equilibria and displacement control cannot pass the reversal continuously.  Found:
+    displacement control through -W_C = 1, 2, ..., 38 converged at 17 (16 iterations, corrections
+    grown 11x) at load factor -0.126 on the far side of the loop (0.073 at 16.75), exit normal,
+    and reported a limit point at lam ~ -0.036 that the path does not have (arc length: the
+    lower limit point is at -0.1278).  Now such a step is refused by the path check and, the
+    cut-backs exhausted at the reversal, the run stops naming the snap-back and arc length; the
+    steps kept lie on the path before the reversal (load factor positive, -W_C below 17.008)
+    with the upper limit point only (0.1969, arc length's 0.19693)."""
+    case, p = roof635
+    prob = catalogue.build_problem(case, p, (8, 8))
+    node, d = prob.control
+    with pytest.raises(ConvergenceError) as exc:
+        C.displacement_control(prob, node, d, np.arange(1.0, 39.0))
+    msg = str(exc.value)
+    assert "snap-back" in msg and "arc length" in msg, msg
+    res = exc.value.result
+    w = np.array([-s.probes["C"]["u"][2] for s in res.steps])
+    lam = np.array([s.load_factor for s in res.steps])
+    assert w.max() < 17.008 and w[-1] >= 16.0
+    assert lam[1:].min() > 0.0
+    assert [c.kind for c in res.critical_points] == ["limit"]
+    assert abs(res.critical_points[0].lam - 0.19693) < 1e-3
+
+
+@pytest.mark.parametrize("method", ["crisfield", "riks"])
+def test_limit_point_refinement_stays_on_the_bracketed_part_of_the_path(roof635, method):
+    """The 6.35 mm roof's lower limit point from a long first step (dlam0 = 0.5): refined to
+    critical_tol = 1e-3 it must agree with its value on a fine path (dlam0 = 0.01, ds_max_factor
+    1: lam = -0.127783 +- 2e-6) within 1e-3 (plus the reference's 2e-6), and within the accuracy
+    it states.  Found: with Riks the bisection's midpoint of the step over the limit point
+    (between load factors -0.064 and -0.102) converged on another part of the path, at
+    lam = 0.522, was kept as a bracket end, and the point was reported at -0.0643 +- 0.018 (off
+    by 0.063); with Crisfield a midpoint at -0.089 (above both ends, so not on the step's part of
+    the path) was kept too.  Now such points are refused and the bisection predicts from the
+    bracket's nearer end: -0.12775 (Riks) and -0.12777 (Crisfield)."""
+    case, p = roof635
+    prob = catalogue.build_problem(case, p, (8, 8))
+    node, d = prob.control
+    res = C.arc_length(prob, lam_end=None, dlam0=0.5, method=method, stop_at=(node, d, 38.45))
+    cps = [c for c in res.critical_points if c.kind == "limit"]
+    assert len(cps) == 2
+    ref = -0.127783
+    low = cps[1]
+    assert abs(low.lam - ref) <= 1e-3 * abs(ref) + 2e-6, low.describe()
+    assert abs(low.lam - ref) <= low.accuracy * abs(low.lam) + 2e-6, low.describe()
+    assert low.accuracy <= 1e-3
+    assert abs(max(low.lam_bracket) - ref) < 0.01          # the bracket narrowed onto it
+
+
+@pytest.mark.parametrize("method", ["crisfield", "riks"])
+def test_arc_length_stops_where_the_path_first_reaches_lam_end(roof8, method):
+    """lam_end = 0.74 lies just below the roof's upper limit point (0.7436, 8x8 quarter), so the
+    path first reaches it before the snap, at -W_C = 10.145 (dlam0 = 0.05, steps well inside the
+    rise), and again on the far branch.  Found: from dlam0 = 0.2, 0.5 and 1.0 a step went over the
+    limit point with both ends below 0.74 and the path stopped at the far crossing, -W_C = 27.08
+    (0.2, 0.5), or landed from a step that ended past the turn at 11.43, on the descending side
+    (1.0): the final state depended on the first step.  Now a step over which the load factor
+    turned back with its tangent lines meeting above lam_end (or that reached lam_end past the
+    turn) is retried shorter: every first step ends at the same state (bar 1e-8: both are
+    converged to 1e-9)."""
+    case, p = roof8
+    w = []
+    for dlam0 in (0.05, 0.5, 1.0):
+        prob = catalogue.build_problem(case, p, (8, 8))
+        res = C.arc_length(prob, lam_end=0.74, dlam0=dlam0, method=method)
+        assert abs(res.final.load_factor - 0.74) < 1e-12
+        assert res.final.stability["negative_eigenvalues"] == 0
+        w.append(-res.final.probes["C"]["u"][2])
+    assert 10.0 < w[0] < 10.3, w
+    assert np.abs(np.array(w) - w[0]).max() < 1e-8 * w[0], w
+
+
+@pytest.mark.parametrize("dlam0", [0.2, 0.5])
+def test_arc_length_stops_where_the_controlled_displacement_first_reaches_its_end(roof635, dlam0):
+    """The 6.35 mm roof's W_C turns back near 16.94 (snap-back) and reaches 16.9 three times
+    along the path.  stop_at -W_C = 16.9 must end at the first, on the rising part of W_C at
+    load factor 0.04533 (dlam0 = 0.05, steps that resolve the turn), not on the far side of the
+    loop.  Found: from dlam0 = 0.2 and 0.5 (Riks and Crisfield) a step went over the turn with
+    both ends below 16.9 and the path stopped at the third crossing, load factor -0.12668."""
+    case, p = roof635
+    prob = catalogue.build_problem(case, p, (8, 8))
+    node, d = prob.control
+    res = C.arc_length(prob, lam_end=None, dlam0=dlam0, method="riks", stop_at=(node, d, 16.9))
+    w = np.array([-s.probes["C"]["u"][2] for s in res.steps])
+    assert abs(w[-1] - 16.9) < 1e-9
+    assert np.all(np.diff(w) > 0)                   # W_C never turned back on the way
+    assert abs(res.final.load_factor - 0.04533) < 1e-4, res.final.load_factor

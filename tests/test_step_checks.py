@@ -303,3 +303,33 @@ def test_arc_length_ends_on_lam_end_when_landing_fails():
         pts, _, _, _ = path_follow(s, lam_end=0.99, dlam0=2.0)
     assert pts[-1].lam == pytest.approx(0.99, abs=1e-12)
     assert np.tanh(pts[-1].state[0]) == pytest.approx(0.99, abs=1e-12)
+
+
+def test_a_prescribed_motion_stopped_at_a_snap_back_names_it():
+    """The 6.35 mm roof of Sze s3.8(d) (8x8 quarter) without its load, its crown pushed down by a
+    prescribed translation (-W_C = 38 lam in 38 steps): W_C turns back along the path near 16.94
+    (arc length; the table's 17.008), so no load stepping of W_C passes it.  The run stopped
+    there after 12 cut-backs with no cause named; now the failure adds that the smallest
+    eigenvalue of the tangent with the prescribed motion held has fallen to 7e-4 of its initial
+    value (below TURN_HINT = 0.05; 0.10 at -W_C = 16, still on the path) and names the snap-back
+    and arc length.  The stored steps are those before it (-W_C = 1 ... 16)."""
+    from core_se3 import catalogue
+    from core_se3.catalogue import get_case
+    case = get_case("sze-hinged-roof-6.35")
+    prob = catalogue.build_problem(case, catalogue.case_params(case), (8, 8))
+    node, _ = prob.control
+    prob.loads.clear()
+    g0 = prob.mesh.g0[[node]].copy()
+
+    def target(lam):
+        g = g0.copy()
+        g[:, 2, 3] -= 38.0 * lam
+        return g
+
+    prob.prescribe(np.array([node]), target, fixed=(False, False, True, False, False, False))
+    with pytest.raises(ConvergenceError) as exc:
+        prob.solve(steps=38)
+    msg = str(exc.value)
+    assert "snap-back" in msg and "arc length" in msg, msg
+    w = [-s.probes["C"]["u"][2] for s in exc.value.result.steps]
+    assert abs(w[-1] - 16.0) < 1e-9

@@ -246,11 +246,12 @@ def path_steps(sysm, options, lam_end=1.0, control=None, control_end=None, lam_m
         con.start(du, dl)
         pt, reason, hist = _arc_try(sysm, cur, du, dl, con, psi_u, o, timers, jumped, first_step=prev_du is None)
         why = None if pt is None else finished(pt)
+        if not jumped and (passed := _passed_within(sysm, cur, pt, con, lam_end, control, control_end, why)):
+            pt, why, reason = None, None, passed
         if why in ("lam_end", "control_end") and o.land:
             pt, reason = _land(sysm, cur, pt, con, why, lam_end, control, control_end, o, timers)
-        trylog.append(dict(step=step + 1, lam=(cur.lam + dl) if pt is None else pt.lam, ds=ds,
-                           converged=pt is not None, iterations=len(hist) - 1 if pt else None,
-                           reason=reason))
+        trylog.append(dict(step=step + 1, lam=(cur.lam + dl) if pt is None else pt.lam, ds=ds, converged=pt is not None,
+                           iterations=len(hist) - 1 if pt else None, reason=reason))
         if pt is None:
             rejections += 1
             log.info("  step %d: ds %.4g REJECTED (%s); retry with ds/2", step + 1, ds, reason)
@@ -340,6 +341,53 @@ def _arc_try(sysm, cur, du, dl, con, psi_u, o, timers, jumped, first_step):
         return analyse(sysm, new_state, new_lam, o.stability, its, hist), "", hist
     except (StepFailed, ElementTooDistortedError, FloatingPointError, SingularSystemError) as exc:
         return None, str(exc), hist
+
+
+def _passed_within(sysm, cur, pt, con, lam_end, control, control_end, why=None):
+    """Why the converged step ``cur`` -> ``pt`` (constraint ``con``) is refused, else '': a stop
+    quantity (the load factor toward lam_end, the controlled displacement ``control`` = (value,
+    row) toward ``control_end``) moved toward its end at ``cur`` and turned back within the step
+    (its slope along the chord changed sign), and either ``pt`` reached that end (``why``), so
+    that landing from ``cur`` may find the crossing after the turn instead of the first, or the
+    intersection of its tangent lines at the two ends -- an upper bound of a concave turn, or not
+    finite -- reaches the end, so that the path may have passed it inside the step and a later
+    point would stop it on another part of the path.  Found: the 8x8 roof of Sze s3.8(a) to
+    lam_end = 0.74 (limit point 0.7436) ended at -W_C = 27.08 on the far branch from
+    dlam0 >= 0.2, at 11.43 past the limit point from 1.0, at 10.15 from 0.05.  The step is
+    retried shorter until a point passes the end before the turn, or the turn is resolved short
+    of it.
+    Slopes along sigma = c . du (c = W du / |du|_W): dlam/dsigma = 1 / (c . t) and
+    du*/dsigma = (row . t) / (c . t), t = K^-1 q at each end.  '' also for no point (``pt``
+    None) and for a point below lam_min (``why``); not applied to the jump of a branch switch
+    (its chord is orthogonal to the tangent at ``cur``)."""
+    if pt is None or why == "lam_min":
+        return ""
+    span = float(np.sqrt(np.sum(sysm.w * con.du ** 2)))
+    if span == 0:
+        return ""
+    c = sysm.w * con.du / span
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ct0, ct1 = c @ cur.t, c @ pt.t
+        ends = []
+        if lam_end is not None and why in (None, "lam_end"):
+            ends.append(("lam_end", cur.lam, pt.lam, 1.0 / ct0, 1.0 / ct1, lam_end))
+        if control_end is not None and why in (None, "control_end"):
+            value, row = control
+            ends.append(("the controlled displacement's end", value(cur.state), value(pt.state),
+                         (row(cur.state) @ cur.t) / ct0, (row(pt.state) @ pt.t) / ct1, control_end))
+        for name, q0, q1, m0, m1, target in ends:
+            sense = np.sign(target - q0)
+            if not (m0 * sense > 0 and m1 * sense < 0):
+                continue                       # not turned back within the step
+            if why is not None:
+                return (f"the path passed {name} {target:.6g} and turned back within the step (ends at "
+                        f"{q0:.6g} and {q1:.6g}): landing might find the crossing after the turn")
+            sigma = (q1 - q0 - m1 * span) / (m0 - m1)
+            bound = q0 + m0 * sigma
+            if not np.isfinite(bound) or (bound - target) * sense >= 0:
+                return (f"the path may have passed {name} {target:.6g} within the step and turned back "
+                        f"(ends at {q0:.6g} and {q1:.6g}, tangent lines meeting at {bound:.6g})")
+    return ""
 
 
 def _land(sysm, cur, pt, con, why, lam_end, control, control_end, o, timers):

@@ -84,9 +84,11 @@ class LinearConstraint:
         pass
 
 
-def correct(sysm, state, lam, con, opts, timers):
+def correct(sysm, state, lam, con, opts, timers, incs=None):
     """Newton on the bordered system from the predicted (state, lam); returns the converged
-    (state, lam, iterations, residual history, evaluation at the solution)."""
+    (state, lam, iterations, residual history, evaluation at the solution).  ``incs``: a list
+    that gets the relative size (``sysm.increment_norm``) of every correction, for the path
+    check of ``solvers.step_checks.path_measures`` (displacement control)."""
     hist = []
     dn = np.inf
     for it in range(opts.max_iter + 1):
@@ -112,6 +114,8 @@ def correct(sysm, state, lam, con, opts, timers):
         dl = con.dlam_for(sysm, state, a, b)
         x = a + dl * b
         dn = sysm.increment_norm(x)
+        if incs is not None:
+            incs.append(dn)
         state = sysm.update(state, x)
         lam = lam + dl
         con.accept(x, dl)

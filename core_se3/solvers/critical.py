@@ -8,9 +8,13 @@ torsional buckling load of a deep cantilever strip 10 % low (0.61 ... 0.74 for f
 0.01).  :func:`refine` shrinks the bracket by bisection along the step, until the critical load
 factor is known to ``critical_tol`` (relative):
 
-* the points inside the step are corrected from its start with the arc-length constraint at a
-  fraction f of its length (predictor: f times the step's converged increment), and their
-  inertia decides which half keeps the sign change;
+* the points inside the step are corrected onto the arc-length constraint at a fraction f of
+  its length from its start (predictor: from the bracket's nearer end a, at fraction f_a, the
+  step's converged increment times f - f_a, its increment from the start carried into the
+  constraint), and their inertia decides which half keeps the sign change; a point whose load factor the bracket's
+  part of the path cannot reach (:func:`reachable`) has converged on another part of the path
+  and is refused like a corrector that failed, and a refused fraction is halved toward the
+  bracket's start (at most ``MAX_RETRIES`` times) before the refinement ends;
 * a **bifurcation** lies on a path whose load factor moves through it, so the load factors of
   the two ends bound it: the refinement stops when they are within ``critical_tol``;
 * a **limit point** is where the load factor turns: it lies above both ends (for a maximum)
@@ -36,9 +40,10 @@ import numpy as np
 from ..errors import ElementTooDistortedError, SingularSystemError
 from .stability import analyse, locate_critical
 
-__all__ = ["Corrector", "narrow", "refine", "estimate", "bracket_width"]
+__all__ = ["Corrector", "narrow", "refine", "estimate", "bracket_width", "reachable"]
 
 MAX_BISECTIONS = 40
+MAX_RETRIES = 4           # refused fractions halved toward the bracket's start before giving up
 
 
 @dataclass(frozen=True)
@@ -73,6 +78,38 @@ def bracket_width(lam_a, lam_b, upper):
     return (hi - lo) / max(abs(hi), abs(lo), 1e-300)
 
 
+def reachable(lam, lam_a, lam_b, slope_a, limit):
+    """Whether a point of load factor ``lam`` can lie on the part of the path between two points
+    of load factors lam_a and lam_b that holds one critical point: between them for a
+    bifurcation (the load factor moves through it), and for a limit point on the side of the
+    turn: at least the smaller end's for a maximum (``slope_a`` = dlam/dsigma at a > 0), at most
+    the larger end's for a minimum.
+
+    Parameters
+    ----------
+    lam : float
+        The load factor of the candidate point.
+    lam_a, lam_b : float
+        The load factors of the bracket's ends.
+    slope_a : float
+        dlam/dsigma at the end a, along the step (its sign tells a maximum from a minimum).
+    limit : bool
+        A limit point (else a bifurcation).
+
+    Returns
+    -------
+    bool
+
+    Example
+    -------
+    >>> reachable(0.52, -0.064, -0.102, -1.0, True), reachable(-0.12, -0.064, -0.102, -1.0, True)
+    (False, True)
+    """
+    if not limit:
+        return min(lam_a, lam_b) <= lam <= max(lam_a, lam_b)
+    return lam >= min(lam_a, lam_b) if slope_a > 0 else lam <= max(lam_a, lam_b)
+
+
 def _tangent_intersection(a, b, c, span):
     """The load factor where the tangent lines of the path at the points a and b (slopes
     1 / (c . t) in sigma = c . du) meet, or None when they are parallel."""
@@ -104,25 +141,38 @@ def refine(sysm, cur, pt, con, limit, corrector):
     length = float(np.sqrt(np.sum(w * du * du)))
     c = w * du / max(length, 1e-300)
     a, b, fa, fb = cur, pt, 0.0, 1.0
+    a_du, a_dl = 0.0 * du, 0.0             # the increment of a from cur (the constraint's)
     n = 0
 
     def upper_of(a, b):
         return _tangent_intersection(a, b, c, (fb - fa) * length) if limit else None
 
     upper = upper_of(a, b)
+    retries = 0
     while n < MAX_BISECTIONS and bracket_width(a.lam, b.lam, upper) > opts.critical_tol:
-        fm = 0.5 * (fa + fb)
+        fm = 0.5 * (fa + fb) if not retries else 0.5 * (fa + fm)
         arc = make_constraint(fm * con.ds)
-        arc.start(fm * du, fm * dl)
+        arc.start(a_du + (fm - fa) * du, a_dl + (fm - fa) * dl)
         try:
-            state, lam, its, hist, _ = correct(sysm, sysm.update(cur.state, fm * du), cur.lam + fm * dl, arc,
-                                               opts, timers)
-            mid = analyse(sysm, state, lam, True, its, hist)
+            state, lam, its, hist, _ = correct(sysm, sysm.update(a.state, (fm - fa) * du), a.lam + (fm - fa) * dl,
+                                               arc, opts, timers)
+            # the 8x8 6.35 mm roof, Riks from dlam0 = 0.5: the midpoint of the step over the lower
+            # limit point (-0.128, between -0.064 and -0.102) converged at lam = 0.522, and the
+            # point was reported at -0.064 +- 0.018
+            with np.errstate(divide="ignore"):
+                slope_a = 1.0 / (c @ a.t)
+            mid = analyse(sysm, state, lam, True, its, hist) if reachable(lam, a.lam, b.lam, slope_a, limit) else None
         except failures:
-            break
+            mid = None
+        if mid is None:
+            retries += 1
+            if retries > MAX_RETRIES:
+                break
+            continue
+        retries = 0
         n += 1
         if _negatives(mid) == _negatives(a):
-            a, fa = mid, fm
+            a, fa, a_du, a_dl = mid, fm, arc.du.copy(), arc.dlam
         else:
             b, fb = mid, fm
         upper = upper_of(a, b)

@@ -36,7 +36,7 @@ from .newton_try import NewtonTry, augmented_try, hooked_loads, tangent_predicto
 from .options import NewtonOptions, load_steps, split_options, unknown_keywords
 from .splitting import (MAX_LOAD_TURN, MAX_PRESCRIBED_TURN, check_substeps, split_prescribed,
                         split_turning)
-from .stability import limit_point_hint, unseen_crossing
+from .stability import limit_point_hint, prescribed_turn_hint, unseen_crossing
 from .contact_probe import ContactProbe, median_edge
 from .friction_probe import RELAXATIONS, FrictionProbe
 from .step_checks import StepChecks, start_sign
@@ -568,7 +568,9 @@ def _cutbacks_exhausted(problem, eq, opts, g_whole, lam, lam_try, reason, result
     """The ConvergenceError of a try cut back ``max_cutbacks`` times, with the likeliest cause."""
     hint = next((h for h in (ld.failure_hint() for ld in hooked_loads(eq, "failure_hint")) if h),
                 None) or (limit_point_hint(problem, g_whole, lam, opts.linear_solver)
-                          if lam != 0.0 and not eq.distributed else None)
+                          if lam != 0.0 and not eq.distributed else None) \
+        or (prescribed_turn_hint(problem, g_whole, lam, opts.linear_solver)
+            if lam != 0.0 and problem.has_prescribed_motion and not eq.distributed and not eq.stateful else None)
     raise ConvergenceError(
         f"Newton failed at load factor {lam_try:.6g} after {opts.max_cutbacks} cut-backs "
         f"({reason}); the last converged load factor is {lam:.6g} and its state is "

@@ -14,6 +14,7 @@ from .arclength import ArcState, PathError, PathInfo, arc_options, path_steps
 from .corrector import LinearConstraint, StepFailed, correct
 from .options import ArcLengthOptions, unknown_keywords
 from .stability import analyse, locate_critical
+from .step_checks import path_measures, path_refusal
 from .system import ShellSystem
 
 __all__ = ["PathStep", "arc_length_steps", "arc_length", "displacement_control"]
@@ -173,6 +174,33 @@ def arc_length(problem, lam_end=1.0, stop_at=None, lam_min=None, start=None, on_
     return result
 
 
+def _path_check(incs):
+    """Refuse (StepFailed: cut back) a converged displacement-control step whose corrections grew
+    or wandered (``step_checks.path_measures`` of their relative sizes ``incs``), as load
+    stepping's path check does: a corrector that left the region where it contracts from the
+    predictor may have converged past a snap-back of the controlled displacement, onto a part of
+    the path that displacement control does not reach continuously (the 8x8 6.35 mm roof from
+    -W_C = 16.75 to 17: 16 iterations, corrections grown 11x, load factor 0.073 -> -0.126 across
+    the loop of the path, reported as a limit point at -0.036 that the path does not have)."""
+    why = path_refusal(*path_measures(incs))
+    if why:
+        raise StepFailed(f"path check: the corrections {why}, so the step may have jumped to another part of the path")
+
+
+def _snap_back_hint(ct, ct0, u):
+    """The failure hint of displacement control at the last converged point (controlled value
+    ``u``): when d u / d lam = ``ct`` (= c . K^-1 q) has fallen below 0.3 of its start value
+    ``ct0`` in size, the controlled displacement is near a turning point along the path (a
+    snap-back), which displacement control cannot pass; else ''."""
+    s_u = ct / ct0 if ct0 != 0 else np.inf
+    if not abs(s_u) < 0.3:
+        return ""
+    return (f". Probable cause: d u / d lam has fallen to {s_u:.3g} of its initial value, so the controlled "
+            f"displacement is near a point where it turns back along the path (a snap-back near u = {u:.6g}), "
+            "which displacement control cannot pass; trace the path with arc length "
+            "(core_se3.solvers.arc_length, stop_at=(node, direction, value)) or control another displacement")
+
+
 def displacement_control(problem, node, direction, values, options=None, max_cutbacks=10, **kw):
     """Prescribe the displacement of ``node`` along the lab ``direction`` through ``values``
     (the load factor is the unknown that keeps it there); failed increments are halved (at
@@ -221,6 +249,7 @@ def displacement_control(problem, node, direction, values, options=None, max_cut
     try:
         counted = [0, 0]
         cur = analyse(sysm, sysm.initial(), 0.0, opts.stability)
+        ct0 = row(cur.state) @ cur.t                 # d u / d lam at the start
         result.steps.append(_record(rec, cur, sysm, result.log, counted))
         n_points = 1
         for target in values:
@@ -232,8 +261,10 @@ def displacement_control(problem, node, direction, values, options=None, max_cut
                 try:
                     dl = (tgt - u0) / (rt @ cur.t)
                     st_pred = sysm.update(cur.state, dl * cur.t)
+                    incs = []
                     s2, l2, its, hist, ev = correct(sysm, st_pred, cur.lam + dl,
-                                                     LinearConstraint(value, row, 0.0, tgt), opts, timers)
+                                                     LinearConstraint(value, row, 0.0, tgt), opts, timers, incs)
+                    _path_check(incs)
                     pt = analyse(sysm, s2, l2, opts.stability, its, hist)
                     ok, reason = True, ""
                 except (StepFailed, ElementTooDistortedError, FloatingPointError,
@@ -243,7 +274,9 @@ def displacement_control(problem, node, direction, values, options=None, max_cut
                 log.info("  u* %.6g: %s", tgt, f"lam {pt.lam:.6g} it {pt.its}" if ok else f"FAIL {reason}")
                 if not ok:
                     if len(sub) > max_cutbacks:
-                        raise PathError(f"displacement control failed at u = {tgt:.6g} ({reason})", None)
+                        raise PathError(f"displacement control failed at u = {tgt:.6g} ({reason}); the last "
+                                        f"converged u is {u0:.6g} at load factor {cur.lam:.6g}"
+                                        + _snap_back_hint(rt @ cur.t, ct0, u0), None)
                     sub.append(0.5 * (u0 + tgt))
                     continue
                 sub.pop()

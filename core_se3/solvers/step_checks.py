@@ -67,8 +67,8 @@ import numpy as np
 from ..errors import SingularSystemError
 from .stability import CriticalPoint
 
-__all__ = ["path_measures", "start_sign", "StepChecks", "CONTRACTION_MAX", "GROWTH_SCALE", "TRAVEL_MAX",
-           "CONTRACTION_FLOOR"]
+__all__ = ["path_measures", "path_refusal", "start_sign", "StepChecks", "CONTRACTION_MAX", "GROWTH_SCALE",
+           "TRAVEL_MAX", "CONTRACTION_FLOOR"]
 
 CONTRACTION_MAX = 1.0    # a try whose corrections grow at the step's scale is not accepted
 GROWTH_SCALE = 0.5       # ... the step's scale: half the first correction
@@ -110,6 +110,32 @@ def path_measures(incs, floor=CONTRACTION_FLOOR):
     keep = (a[1:] > floor) & (a[:-1] > 0) & (np.maximum(a[1:], a[:-1]) >= GROWTH_SCALE * a[0])
     theta = float(np.max(a[1:][keep] / a[:-1][keep])) if np.any(keep) else 0.0
     return theta, float(a[1:].sum() / a[0])
+
+
+def path_refusal(theta, travel):
+    """What the path check refuses in corrections of contraction ``theta`` and ``travel``
+    (:func:`path_measures`): how they grew or wandered, or '' when they may be accepted.
+
+    Parameters
+    ----------
+    theta, travel : float
+        The contraction and travel of :func:`path_measures`.
+
+    Returns
+    -------
+    str
+        '' or the reason (thresholds CONTRACTION_MAX, TRAVEL_MAX).
+
+    Example
+    -------
+    >>> path_refusal(3.4, 1.8), path_refusal(0.2, 1.6), path_refusal(0.2, 0.25)
+    ('grew 3.4x from one iteration to the next', 'added up to 1.6x the first', '')
+    """
+    if theta >= CONTRACTION_MAX:
+        return f"grew {theta:.3g}x from one iteration to the next"
+    if travel >= TRAVEL_MAX:
+        return f"added up to {travel:.3g}x the first"
+    return ""
 
 
 def start_sign(eq, g, lam, stress=None):
@@ -183,13 +209,10 @@ class StepChecks:
     def judge(self, out, lam, lam_try):
         """'' when the converged try ``out`` (a TryOutcome) from lam to lam_try may be accepted,
         else why it is refused (it is cut back; ``bracket`` is set for a det K sign change)."""
-        theta, travel = out.contraction, out.travel
-        if self.path and (theta >= CONTRACTION_MAX or travel >= TRAVEL_MAX):
+        why = path_refusal(out.contraction, out.travel) if self.path else ""
+        if why:
             self.rejected += 1
-            what = (f"grew {theta:.3g}x from one iteration to the next" if theta >= CONTRACTION_MAX else
-                    f"added up to {travel:.3g}x the first")
-            return (f"path check: the Newton corrections {what}, so the try may have converged onto "
-                    "another equilibrium")
+            return f"path check: the Newton corrections {why}, so the try may have converged onto another equilibrium"
         s = out.det_sign
         if self.stability and s is not None and self.sign is None and s > 0:
             self.sign = s                      # module docstring: the start's sign taken as +1
