@@ -10,18 +10,21 @@ x_a = T(lam) y_a).  With the obstacle's normal n(x), P = I - n n^T and the multi
 
     v = x - x_a,   s = P v (the slip over the step),   t* = P w - k s (trial traction),
     t = t*                                 if |t*| < mu p   (stick),
-    t = (mu p + d (|t*| - mu p)) t* / |t*|  otherwise        (slip: the return onto the cone),
+    t = ((1 - d) mu p + d rho |t*|) t* / |t*|  otherwise     (slip: the return onto the cone),
 
 p the normal pressure of the node (``contact_law.normal_law``), k the penalty [force/length^3].
 The Uzawa update tau <- Q^T t has as fixed points exactly Coulomb's law with maximal
 dissipation: s = 0 and |t| <= mu p, or |t| = mu p and s = -alpha t (alpha >= 0), up to the
 hardening d = 1e-8 (|t| = mu p + d k |s| / (1 - d): 1e-8 of the penalty per unit slip over the
-step; a converged state where it exceeds 1e-3 mu p is refused).
+step; a converged state where it exceeds 1e-3 mu p is refused).  The hardening acts with the slope
+rho = -p'/k of the normal law (0 off contact, 1 beyond its C^1 band): a node off the obstacle
+carries no force from it.
 
 Tangent (at fixed lam; H = grad n, e = t*/|t*|):
 
     dt*/dx = -(n.w) H - n (H w)^T - k [P - (n.v) H - n (H v)^T],
-    dt/dx  = dt*/dx (stick),   (1 - d) [mu e (p' n)^T + (mu p / |t*|) (I - e e^T) dt*/dx] + d dt*/dx (slip),
+    dt/dx  = dt*/dx (stick),
+    dt/dx  = (1 - d) [mu e (p' n)^T + (mu p / |t*|) (I - e e^T) dt*/dx] + d rho dt*/dx + d t* (drho/dx)^T (slip),
 
 and the node's force A (p n + t) enters :func:`wrench` with S = A (p' n n^T + p H + dt/dx).
 
@@ -78,10 +81,17 @@ def coulomb_law(n, H, p, dp, v, w, k, mu):
     stick = norm < cap * (1 - STICK_MARGIN)
     e = tt / np.where(norm > 0, norm, 1.0)[:, None]
     ratio = np.where(norm > 0, cap / np.where(norm > 0, norm, 1.0), 0.0)
-    d = HARDENING
-    t = np.where(stick[:, None], tt, ((1 - d) * ratio + d)[:, None] * tt)
-    slip_dt = ((1 - d) * (mu * e[:, :, None] * (dp[:, None] * n)[:, None, :]
-                          + ratio[:, None, None] * (np.eye(3) - e[:, :, None] * e[:, None, :]) @ T) + d * T)
+    # the hardening acts with the slope rho = -p'/k of the normal law (0 off contact, 1 beyond
+    # its C^1 band, continuous): a node off the obstacle carries no force from it at all, and
+    # in the band d rho / d gap = -k rho^2 / (2 p) (p = rho^2 k eps / 2 there)
+    rho = np.clip(-dp / kk[:, 0, 0], 0.0, 1.0)
+    band = (rho > 0) & (rho < 1)
+    drho = np.where(band, -kk[:, 0, 0] * rho ** 2 / (2 * np.where(band, p, 1.0)), 0.0)
+    d = HARDENING * rho
+    t = np.where(stick[:, None], tt, ((1 - HARDENING) * ratio + d)[:, None] * tt)
+    slip_dt = ((1 - HARDENING) * (mu * e[:, :, None] * (dp[:, None] * n)[:, None, :]
+                                  + ratio[:, None, None] * (np.eye(3) - e[:, :, None] * e[:, None, :]) @ T)
+               + d[:, None, None] * T + HARDENING * tt[:, :, None] * (drho[:, None] * n)[:, None, :])
     dt = np.where(stick[:, None, None], T, slip_dt)
     return t, dt, stick, s
 
