@@ -46,6 +46,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import lie
+from ..errors import did_you_mean
 from .base import Load, LoadEvaluation
 from .contact_faces import face_minima, face_wrench
 from .contact_output import ContactOutputs
@@ -473,6 +474,11 @@ def add_obstacle(problem, obstacle, region=None, nodes=None, name=None, side="au
     """
     motion = params.pop("motion", None)
     if isinstance(motion, dict):
+        keys = ("translate", "axis", "angle", "point", "scale")
+        for key in motion:
+            if key not in keys:
+                raise contact_error(f"unknown motion key {key!r}{did_you_mean(key, keys)}; a motion takes "
+                                    f"{', '.join(keys)}", key)
         motion = rigid_motion(**motion)
     if isinstance(obstacle, str):
         obstacle = make_obstacle(obstacle, motion=motion, name=name, **params)

@@ -47,6 +47,9 @@ def obstacles_section(v, doc, regions):
             o["motion"]["scale"] = v.scale(m, mk)
             if o["motion"]["axis"] is not None and "angle" not in m:
                 v.fail(join(mk, "angle"), "a rotation 'axis' needs its 'angle' [rad] at load factor 1")
+            if o["motion"]["axis"] is None and "angle" in m:
+                v.fail(join(mk, "axis"), "an 'angle' needs its rotation 'axis' (and 'point' on it): without "
+                                         "one the obstacle would not turn")
         out.append(o)
     return out
 
