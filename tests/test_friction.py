@@ -281,3 +281,19 @@ def test_a_node_off_the_obstacle_feels_no_friction():
         return p.solve(steps=1).final.g[:, :3, 3]
     smooth, rough = tip(0.0), tip(0.5)
     assert np.abs(rough - smooth).max() < 1e-12 * np.abs(smooth).max(), np.abs(rough - smooth).max()
+
+
+def test_friction_refuses_a_user_sdf_whose_gradient_is_not_unit():
+    """A user's 'SDF' with |grad d| = 1.1 (a plane z = -h/2 written as 1.1 (z + h/2)): its
+    frictionless contact is consistent (the gap and the force scale alike), but Coulomb's law
+    needs the tangent plane I - n n^T to be a projector: the plate holding on an incline at
+    0.9 of the friction angle failed with "tangent is singular", the cause unnamed.  Now a
+    ContactError at add_obstacle names the gradient's length and the fix."""
+    from core_se3.model import UserSDF
+    p = cs.Problem(M.rectangle(1.0, 1.0, 4, 4), cs.Material(1e5, 0.3, 0.01))
+    ob = UserSDF(lambda y: 1.1 * (y[:, 2] + 0.005), lambda y: np.tile([0.0, 0.0, 1.1], (len(y), 1)), name="incline")
+    from core_se3.errors import ContactError
+    with pytest.raises(ContactError, match=r"friction needs the unit normal .* \|grad d\| = 1.1 at node 0") as exc:
+        p.add_obstacle(ob, friction=0.3)
+    assert exc.value.param == "grad"
+    p.add_obstacle(ob)                     # frictionless: accepted

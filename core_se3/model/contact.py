@@ -185,7 +185,9 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         self.soft0 = self.soft.copy()
         self.soft0[:len(self.nodes)][self.gaps(mesh.g0, 0.0) <= self.tol] = 1.0
         self.soft = self.soft0.copy()
-        self.state(mesh.g0, 0.0)                    # the active set of the reference state
+        n = self.state(mesh.g0, 0.0)[2]            # the active set of the reference state
+        if self.mu > 0:
+            self.check_normals(n)
 
     # ------------------------------------------------------------------ kinematics, law
     def contact_points(self, g):

@@ -46,8 +46,9 @@ import numpy as np
 
 from .. import lie
 from .contact_law import E3
+from .obstacles import contact_error
 
-__all__ = ["coulomb_law", "wrench", "CoulombFriction", "STICK_MARGIN", "HARDENING", "CONE_EXCESS"]
+__all__ = ["coulomb_law", "wrench", "CoulombFriction", "STICK_MARGIN", "HARDENING", "CONE_EXCESS", "NORMAL_TOL"]
 
 STICK_MARGIN = 1e-10        # |t*| >= (1 - STICK_MARGIN) mu p: on the cone (slip)
 # the cone hardens by HARDENING of the trial traction beyond it (|t| = mu p + HARDENING (|t*| - mu p)):
@@ -58,6 +59,7 @@ STICK_MARGIN = 1e-10        # |t*| >= (1 - STICK_MARGIN) mu p: on the cone (slip
 # exceed the friction: no static equilibrium)
 HARDENING = 1e-8
 CONE_EXCESS = 1e-3
+NORMAL_TOL = 1e-3           # friction refuses an obstacle normal |grad d| farther than this from 1
 
 
 def coulomb_law(n, H, p, dp, v, w, k, mu):
@@ -134,9 +136,23 @@ class CoulombFriction:
     def friction_state(self, g, lam, x, n, H, p, dp):
         """(t, dt/dx, stick, slip) of the nodes (:func:`coulomb_law`), the multiplier and the
         anchors moved with the obstacle to lam."""
+        self.check_normals(n)
         T = self.obstacle.transform(lam)
         v = x - (self.y_a @ T[:3, :3].T + T[:3, 3])
         return coulomb_law(n, H, p, dp, v, self.tau @ T[:3, :3].T, self.k * self.soft[:len(self.nodes)], self.mu)
+
+    def check_normals(self, n):
+        """ContactError unless the obstacle's normals n (k, 3) at the contact nodes have unit length
+        to NORMAL_TOL: Coulomb's law needs the tangent plane I - n n^T to be a projector (a user's
+        SDF with |grad d| = 1.1 failed a plate holding on an incline with "tangent is singular")."""
+        bad = np.abs(np.einsum("ki,ki->k", n, n) - 1.0) > 2 * NORMAL_TOL
+        if bad.any():
+            i = int(np.argmax(bad))
+            raise contact_error(
+                f"obstacle {self.name!r}: friction needs the unit normal of a signed distance, but |grad d| = "
+                f"{np.linalg.norm(n[i]):.6g} at node {int(self.nodes[i])} (more than {NORMAL_TOL:g} from 1; the "
+                "tangent plane I - n n^T is then no projector): give a signed distance d with |grad d| = 1 "
+                "(a UserSDF: divide d and grad by |grad|) or use friction = 0", "grad")
 
     def sticking(self, lam, n, p):
         """The nodes that carry force and whose stored traction lies inside the cone,
