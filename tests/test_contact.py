@@ -433,3 +433,21 @@ def test_a_motion_angle_without_its_axis_is_refused():
     with pytest.raises(ContactError, match="unknown motion key 'translation'; did you mean 'translate'") as exc:
         p.add_obstacle("box", centre=(0.5, 0, -1), half_sizes=(0.2, 0.2, 0.2), motion=dict(translation=(0, 0, 0.1)))
     assert exc.value.param == "translation"
+
+
+def test_side_and_friction_take_what_they_mean():
+    """side = 'bottom' (the scenario file's word) was a bare ValueError, side = True was taken as
+    +1 (the top face) and friction = True as mu = 1, silently; now the names of [[obstacles]]
+    side are accepted and the others are ContactErrors naming the key."""
+    p = cs.Problem(M.rectangle(1.0, 0.05, 4, 1), cs.Material(1.2e6, 0.0, 0.01))
+    floor = dict(point=(0, 0, -0.5), normal=(0, 0, 1))
+    assert np.all(p.add_obstacle("half_space", side="bottom", name="a", **floor).side == -1.0)
+    assert np.all(p.add_obstacle("half_space", side="mid", name="b", **floor).side == 0.0)
+    for bad in ("Auto", True, None):
+        with pytest.raises(ContactError, match="side must be one of 'auto', 'top', 'bottom', 'mid'") as exc:
+            p.add_obstacle("half_space", side=bad, name="c", **floor)
+        assert exc.value.param == "side"
+    for bad in (True, [0.3], "0.3"):
+        with pytest.raises(ContactError, match="friction coefficient must be a number") as exc:
+            p.add_obstacle("half_space", friction=bad, name="d", **floor)
+        assert exc.value.param == "friction"

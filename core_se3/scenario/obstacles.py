@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from ..errors import CoreSE3Error
 from ..model import OBSTACLES, ContactLaw
+from ..model.contact import SIDES
 from .geometry import region_ref
 from .schema import MOTION, OBSTACLE
 from .validate import join, make_scale, user_key
@@ -16,7 +17,6 @@ __all__ = ["OBSTACLE_KEYS", "MOTION_KEYS", "SIDES", "obstacles_section", "add_ob
 
 OBSTACLE_KEYS = ("type",) + OBSTACLE.keys()
 MOTION_KEYS = MOTION.keys()
-SIDES = {"auto": "auto", "top": 1.0, "bottom": -1.0, "mid": 0.0}    # the contact face: auto, +d3, -d3, mid-surface
 
 
 def obstacles_section(v, doc, regions):
