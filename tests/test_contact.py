@@ -451,3 +451,16 @@ def test_side_and_friction_take_what_they_mean():
         with pytest.raises(ContactError, match="friction coefficient must be a number") as exc:
             p.add_obstacle("half_space", friction=bad, name="d", **floor)
         assert exc.value.param == "friction"
+
+
+def test_renaming_a_shared_obstacle_instance_keeps_the_first_contacts_name():
+    """One Obstacle instance added twice (two contacts, e.g. two regions) under two names: the
+    second name was written into the shared instance, so the first contact's obstacle -- its
+    crossing messages, its surface in vtu/obstacles -- was called by the second's name."""
+    from core_se3.model import make_obstacle
+    p = cs.Problem(M.rectangle(1.0, 0.05, 4, 1), cs.Material(1.2e6, 0.0, 0.01))
+    ob = make_obstacle("half_space", point=(0, 0, -0.5), normal=(0, 0, 1))
+    a = p.add_obstacle(ob, name="left")
+    b = p.add_obstacle(ob, name="right")
+    assert (a.name, a.obstacle.name, b.name, b.obstacle.name, ob.name) == ("left", "left", "right", "right",
+                                                                             "half_space")

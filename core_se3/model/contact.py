@@ -43,6 +43,8 @@ Example
 """
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 
 from .. import lie
@@ -497,7 +499,8 @@ def add_obstacle(problem, obstacle, region=None, nodes=None, name=None, side="au
     elif params or motion is not None:
         raise contact_error("an Obstacle instance carries its own parameters and motion: give them to its "
                             f"constructor (got {', '.join(list(params) + ['motion'] * (motion is not None))})")
-    elif name is not None:
+    elif name is not None and name != obstacle.name:
+        obstacle = copy.copy(obstacle)           # the caller's instance (maybe another contact's) keeps its name
         obstacle.name = name
     elements = problem.elements(region)
     sel = None if nodes is None else problem.nodes(nodes)
