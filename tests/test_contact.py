@@ -345,6 +345,9 @@ steps = 2
      "did you mean 'radius'"),
     ('type = "sphere"\ncentre = [5.0, 0.0, -2.0]\nradius = 1.0\nmode = "barrier"', "obstacles[0].mode",
      "unknown value 'barrier'"),
+    # an angle without its axis was dropped: the obstacle only translated
+    ('type = "box"\ncentre = [5.0, 0.0, -2.0]\nhalf_sizes = [1.0, 1.0, 1.0]\n'
+     'motion = {translate = [0.0, 0.0, 0.5], angle = 0.5}', "obstacles[0].motion.axis", "needs its rotation 'axis'"),
 ])
 def test_scenario_validation_errors(entry, key, message):
     with pytest.raises(ScenarioError) as exc:
@@ -417,3 +420,47 @@ def test_gap_estimator_between_nodes():
     gap = np.where(s > 0, ql / (24 * EI) * s ** 3 * (2 * l - s), 0.0)
     xd, nfit = lifted_length_from_gaps(xc, gap, np.where(s > 0, 0.0, 1.0))
     assert abs(xd - l) < 1e-6 * l and nfit >= 4
+
+
+def test_a_motion_angle_without_its_axis_is_refused():
+    """motion=dict(translate=..., angle=...) with no axis turned nothing (T(1) a pure translation,
+    the angle silently dropped); a misspelt motion key was a bare TypeError.  Both now name the key."""
+    p = cs.Problem(M.rectangle(1.0, 0.05, 4, 1), cs.Material(1.2e6, 0.0, 0.01))
+    with pytest.raises(ContactError, match="angle 0.5 needs its rotation axis") as exc:
+        p.add_obstacle("box", centre=(0.5, 0, -1), half_sizes=(0.2, 0.2, 0.2),
+                       motion=dict(translate=(0, 0, 0.1), angle=0.5))
+    assert exc.value.param == "axis"
+    with pytest.raises(ContactError, match="unknown motion key 'translation'; did you mean 'translate'") as exc:
+        p.add_obstacle("box", centre=(0.5, 0, -1), half_sizes=(0.2, 0.2, 0.2), motion=dict(translation=(0, 0, 0.1)))
+    assert exc.value.param == "translation"
+
+
+def test_side_and_friction_take_what_they_mean():
+    """side = 'bottom' (the scenario file's word) was a bare ValueError, side = True was taken as
+    +1 (the top face) and friction = True as mu = 1, silently; now the names of [[obstacles]]
+    side are accepted and the others are ContactErrors naming the key."""
+    p = cs.Problem(M.rectangle(1.0, 0.05, 4, 1), cs.Material(1.2e6, 0.0, 0.01))
+    floor = dict(point=(0, 0, -0.5), normal=(0, 0, 1))
+    assert np.all(p.add_obstacle("half_space", side="bottom", name="a", **floor).side == -1.0)
+    assert np.all(p.add_obstacle("half_space", side="mid", name="b", **floor).side == 0.0)
+    for bad in ("Auto", True, None):
+        with pytest.raises(ContactError, match="side must be one of 'auto', 'top', 'bottom', 'mid'") as exc:
+            p.add_obstacle("half_space", side=bad, name="c", **floor)
+        assert exc.value.param == "side"
+    for bad in (True, [0.3], "0.3"):
+        with pytest.raises(ContactError, match="friction coefficient must be a number") as exc:
+            p.add_obstacle("half_space", friction=bad, name="d", **floor)
+        assert exc.value.param == "friction"
+
+
+def test_renaming_a_shared_obstacle_instance_keeps_the_first_contacts_name():
+    """One Obstacle instance added twice (two contacts, e.g. two regions) under two names: the
+    second name was written into the shared instance, so the first contact's obstacle -- its
+    crossing messages, its surface in vtu/obstacles -- was called by the second's name."""
+    from core_se3.model import make_obstacle
+    p = cs.Problem(M.rectangle(1.0, 0.05, 4, 1), cs.Material(1.2e6, 0.0, 0.01))
+    ob = make_obstacle("half_space", point=(0, 0, -0.5), normal=(0, 0, 1))
+    a = p.add_obstacle(ob, name="left")
+    b = p.add_obstacle(ob, name="right")
+    assert (a.name, a.obstacle.name, b.name, b.obstacle.name, ob.name) == ("left", "left", "right", "right",
+                                                                             "half_space")

@@ -23,7 +23,7 @@ def test_return_mapping_is_coulomb():
     rng = np.random.default_rng(3)
     n = np.tile([0.0, 0.0, 1.0], (6, 1))
     H = np.zeros((6, 3, 3))
-    p, dp = np.full(6, 2.0), np.full(6, -3.0)
+    p, dp = np.full(6, 2.0), np.full(6, -4.0)            # beyond the C^1 band: p' = -k
     v = rng.normal(size=(6, 3)) * 0.3
     t, dt, stick, s = coulomb_law(n, H, p, dp, v, np.zeros((6, 3)), 4.0, 0.4)
     assert stick.any() and (~stick).any()
@@ -259,3 +259,41 @@ def test_friction_in_the_step_table_and_the_sweep_rows(tmp_path, capsys):
     assert "N table" in lines[0] and "T table" in lines[0] and "stick/slip" in lines[0]
     last = rec["sticking"], rec["slipping"]
     assert f"{last[0]}/{last[1]}" in lines[-1].split()
+
+
+def test_a_node_off_the_obstacle_feels_no_friction():
+    """A node off contact (p = 0) carries no force from a rough obstacle: the cone's hardening
+    acts with the slope of the normal law, 0 off contact.  Before, the hardening gave every node
+    10^-8 k |s| of its motion s over the step wherever it was: a cantilever under a tip load,
+    a rough floor 0.5 below it that it never reaches, ended 1.6e-6 (1e-5 of its deflection)
+    from the frictionless run in 1 step, 9.3e-7 in 4 steps (an answer depending on the steps);
+    now the two runs agree to round-off."""
+    n, H = np.tile([0.0, 0.0, 1.0], (2, 1)), np.zeros((2, 3, 3))
+    t, dt, stick, _ = coulomb_law(n, H, np.zeros(2), np.zeros(2), np.array([[0.3, 0.1, 0.0], [0.0, -2.0, 0.0]]),
+                                  np.zeros((2, 3)), 5.0, 0.5)
+    assert not stick.any() and np.all(t == 0.0) and np.all(dt == 0.0)
+
+    def tip(mu):
+        p = cs.Problem(M.rectangle(1.0, 0.05, 20, 1), cs.Material(1.2e6, 0.0, 0.01))
+        p.clamp("x0")
+        p.add_edge_force("x1", (0.0, 0.0, -2.5e-3))
+        p.add_obstacle("half_space", point=(0, 0, -0.5), normal=(0, 0, 1), name="floor", friction=mu)
+        return p.solve(steps=1).final.g[:, :3, 3]
+    smooth, rough = tip(0.0), tip(0.5)
+    assert np.abs(rough - smooth).max() < 1e-12 * np.abs(smooth).max(), np.abs(rough - smooth).max()
+
+
+def test_friction_refuses_a_user_sdf_whose_gradient_is_not_unit():
+    """A user's 'SDF' with |grad d| = 1.1 (a plane z = -h/2 written as 1.1 (z + h/2)): its
+    frictionless contact is consistent (the gap and the force scale alike), but Coulomb's law
+    needs the tangent plane I - n n^T to be a projector: the plate holding on an incline at
+    0.9 of the friction angle failed with "tangent is singular", the cause unnamed.  Now a
+    ContactError at add_obstacle names the gradient's length and the fix."""
+    from core_se3.model import UserSDF
+    p = cs.Problem(M.rectangle(1.0, 1.0, 4, 4), cs.Material(1e5, 0.3, 0.01))
+    ob = UserSDF(lambda y: 1.1 * (y[:, 2] + 0.005), lambda y: np.tile([0.0, 0.0, 1.1], (len(y), 1)), name="incline")
+    from core_se3.errors import ContactError
+    with pytest.raises(ContactError, match=r"friction needs the unit normal .* \|grad d\| = 1.1 at node 0") as exc:
+        p.add_obstacle(ob, friction=0.3)
+    assert exc.value.param == "grad"
+    p.add_obstacle(ob)                     # frictionless: accepted

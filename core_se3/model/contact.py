@@ -43,9 +43,12 @@ Example
 """
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 
 from .. import lie
+from ..errors import did_you_mean
 from .base import Load, LoadEvaluation
 from .contact_faces import face_minima, face_wrench
 from .contact_output import ContactOutputs
@@ -55,7 +58,9 @@ from .contact_law import (E3, MODES, ContactLaw, as_contact_law, contact_wrench,
                           ramp_inverse, reference_sides, shell_diagonal_stiffness)
 from .obstacles import Obstacle, contact_error, make_obstacle, rigid_motion
 
-__all__ = ["ContactLoad", "ContactLaw", "add_obstacle", "ramp", "ramp_inverse", "normal_law", "contact_wrench",
+SIDES = {"auto": "auto", "top": 1.0, "bottom": -1.0, "mid": 0.0}    # the contact face: auto, +d3, -d3, mid-surface
+
+__all__ = ["SIDES", "ContactLoad", "ContactLaw", "add_obstacle", "ramp", "ramp_inverse", "normal_law", "contact_wrench",
            "nodal_areas", "shell_diagonal_stiffness", "reference_sides", "MODES"]
 
 
@@ -71,7 +76,7 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         The obstacle; its ``name`` names the contact in reports and output fields.
     nodes, elements : array_like of int, optional
         Contact nodes, and the elements whose areas they carry.
-    side : 'auto', +1, -1, 0 or (k,) of them
+    side : 'auto', +1 ('top'), -1 ('bottom'), 0 ('mid') or (k,) of the numbers
         The contact face (module docstring); 0: the mid-surface (c = 0), for a boundary edge
         pressed end-on, whose end face touches about its middle (no moment about the node).
     lam_ref : float
@@ -109,9 +114,14 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         self.obstacle, self.mode, self.name = obstacle, law.mode, obstacle.name
         self.n = mesh.n_nodes
         el, h_node = self._contact_nodes(problem, nodes, elements)
+        if isinstance(side, str) and side in SIDES:
+            side = SIDES[side]
         if isinstance(side, str) and side == "auto":
             s = reference_sides(obstacle, mesh.g0[self.nodes], lam_ref)
         else:
+            if isinstance(side, str) or np.asarray(side).dtype.kind not in "iuf":      # a bool is no side
+                raise contact_error(f"side must be one of {', '.join(map(repr, SIDES))} or +1, -1, 0 (one or one "
+                                    f"per contact node), got {side!r}", "side")
             s = np.broadcast_to(np.asarray(side, float), self.nodes.shape).copy()
             if not np.all(np.isin(s, (-1.0, 0.0, 1.0))):
                 raise contact_error("side must be 'auto', +1, -1, 0 (the mid-surface) or one of them per contact "
@@ -169,6 +179,9 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         self.lam0 = (kk * self.eps / 8) * cold
         self.lam = self.lam0.copy()
         self.soft = np.full(len(kk), self.soft_start)
+        if isinstance(friction, str) or np.ndim(friction) or np.asarray(friction).dtype.kind not in "iuf":
+            raise contact_error(f"the friction coefficient must be a number >= 0 (Coulomb's mu), got {friction!r}",
+                                "friction")
         self.mu = float(friction)
         if not (np.isfinite(self.mu) and self.mu >= 0):
             raise contact_error(f"the friction coefficient must be >= 0 and finite, got {friction}", "friction")
@@ -184,7 +197,9 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         self.soft0 = self.soft.copy()
         self.soft0[:len(self.nodes)][self.gaps(mesh.g0, 0.0) <= self.tol] = 1.0
         self.soft = self.soft0.copy()
-        self.state(mesh.g0, 0.0)                    # the active set of the reference state
+        n = self.state(mesh.g0, 0.0)[2]            # the active set of the reference state
+        if self.mu > 0:
+            self.check_normals(n)
 
     # ------------------------------------------------------------------ kinematics, law
     def contact_points(self, g):
@@ -473,13 +488,19 @@ def add_obstacle(problem, obstacle, region=None, nodes=None, name=None, side="au
     """
     motion = params.pop("motion", None)
     if isinstance(motion, dict):
+        keys = ("translate", "axis", "angle", "point", "scale")
+        for key in motion:
+            if key not in keys:
+                raise contact_error(f"unknown motion key {key!r}{did_you_mean(key, keys)}; a motion takes "
+                                    f"{', '.join(keys)}", key)
         motion = rigid_motion(**motion)
     if isinstance(obstacle, str):
         obstacle = make_obstacle(obstacle, motion=motion, name=name, **params)
     elif params or motion is not None:
         raise contact_error("an Obstacle instance carries its own parameters and motion: give them to its "
                             f"constructor (got {', '.join(list(params) + ['motion'] * (motion is not None))})")
-    elif name is not None:
+    elif name is not None and name != obstacle.name:
+        obstacle = copy.copy(obstacle)           # the caller's instance (maybe another contact's) keeps its name
         obstacle.name = name
     elements = problem.elements(region)
     sel = None if nodes is None else problem.nodes(nodes)

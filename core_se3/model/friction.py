@@ -10,18 +10,21 @@ x_a = T(lam) y_a).  With the obstacle's normal n(x), P = I - n n^T and the multi
 
     v = x - x_a,   s = P v (the slip over the step),   t* = P w - k s (trial traction),
     t = t*                                 if |t*| < mu p   (stick),
-    t = (mu p + d (|t*| - mu p)) t* / |t*|  otherwise        (slip: the return onto the cone),
+    t = ((1 - d) mu p + d rho |t*|) t* / |t*|  otherwise     (slip: the return onto the cone),
 
 p the normal pressure of the node (``contact_law.normal_law``), k the penalty [force/length^3].
 The Uzawa update tau <- Q^T t has as fixed points exactly Coulomb's law with maximal
 dissipation: s = 0 and |t| <= mu p, or |t| = mu p and s = -alpha t (alpha >= 0), up to the
 hardening d = 1e-8 (|t| = mu p + d k |s| / (1 - d): 1e-8 of the penalty per unit slip over the
-step; a converged state where it exceeds 1e-3 mu p is refused).
+step; a converged state where it exceeds 1e-3 mu p is refused).  The hardening acts with the slope
+rho = -p'/k of the normal law (0 off contact, 1 beyond its C^1 band): a node off the obstacle
+carries no force from it.
 
 Tangent (at fixed lam; H = grad n, e = t*/|t*|):
 
     dt*/dx = -(n.w) H - n (H w)^T - k [P - (n.v) H - n (H v)^T],
-    dt/dx  = dt*/dx (stick),   (1 - d) [mu e (p' n)^T + (mu p / |t*|) (I - e e^T) dt*/dx] + d dt*/dx (slip),
+    dt/dx  = dt*/dx (stick),
+    dt/dx  = (1 - d) [mu e (p' n)^T + (mu p / |t*|) (I - e e^T) dt*/dx] + d rho dt*/dx + d t* (drho/dx)^T (slip),
 
 and the node's force A (p n + t) enters :func:`wrench` with S = A (p' n n^T + p H + dt/dx).
 
@@ -43,8 +46,9 @@ import numpy as np
 
 from .. import lie
 from .contact_law import E3
+from .obstacles import contact_error
 
-__all__ = ["coulomb_law", "wrench", "CoulombFriction", "STICK_MARGIN", "HARDENING", "CONE_EXCESS"]
+__all__ = ["coulomb_law", "wrench", "CoulombFriction", "STICK_MARGIN", "HARDENING", "CONE_EXCESS", "NORMAL_TOL"]
 
 STICK_MARGIN = 1e-10        # |t*| >= (1 - STICK_MARGIN) mu p: on the cone (slip)
 # the cone hardens by HARDENING of the trial traction beyond it (|t| = mu p + HARDENING (|t*| - mu p)):
@@ -55,6 +59,7 @@ STICK_MARGIN = 1e-10        # |t*| >= (1 - STICK_MARGIN) mu p: on the cone (slip
 # exceed the friction: no static equilibrium)
 HARDENING = 1e-8
 CONE_EXCESS = 1e-3
+NORMAL_TOL = 1e-3           # friction refuses an obstacle normal |grad d| farther than this from 1
 
 
 def coulomb_law(n, H, p, dp, v, w, k, mu):
@@ -78,10 +83,17 @@ def coulomb_law(n, H, p, dp, v, w, k, mu):
     stick = norm < cap * (1 - STICK_MARGIN)
     e = tt / np.where(norm > 0, norm, 1.0)[:, None]
     ratio = np.where(norm > 0, cap / np.where(norm > 0, norm, 1.0), 0.0)
-    d = HARDENING
-    t = np.where(stick[:, None], tt, ((1 - d) * ratio + d)[:, None] * tt)
-    slip_dt = ((1 - d) * (mu * e[:, :, None] * (dp[:, None] * n)[:, None, :]
-                          + ratio[:, None, None] * (np.eye(3) - e[:, :, None] * e[:, None, :]) @ T) + d * T)
+    # the hardening acts with the slope rho = -p'/k of the normal law (0 off contact, 1 beyond
+    # its C^1 band, continuous): a node off the obstacle carries no force from it at all, and
+    # in the band d rho / d gap = -k rho^2 / (2 p) (p = rho^2 k eps / 2 there)
+    rho = np.clip(-dp / kk[:, 0, 0], 0.0, 1.0)
+    band = (rho > 0) & (rho < 1)
+    drho = np.where(band, -kk[:, 0, 0] * rho ** 2 / (2 * np.where(band, p, 1.0)), 0.0)
+    d = HARDENING * rho
+    t = np.where(stick[:, None], tt, ((1 - HARDENING) * ratio + d)[:, None] * tt)
+    slip_dt = ((1 - HARDENING) * (mu * e[:, :, None] * (dp[:, None] * n)[:, None, :]
+                                  + ratio[:, None, None] * (np.eye(3) - e[:, :, None] * e[:, None, :]) @ T)
+               + d[:, None, None] * T + HARDENING * tt[:, :, None] * (drho[:, None] * n)[:, None, :])
     dt = np.where(stick[:, None, None], T, slip_dt)
     return t, dt, stick, s
 
@@ -124,9 +136,23 @@ class CoulombFriction:
     def friction_state(self, g, lam, x, n, H, p, dp):
         """(t, dt/dx, stick, slip) of the nodes (:func:`coulomb_law`), the multiplier and the
         anchors moved with the obstacle to lam."""
+        self.check_normals(n)
         T = self.obstacle.transform(lam)
         v = x - (self.y_a @ T[:3, :3].T + T[:3, 3])
         return coulomb_law(n, H, p, dp, v, self.tau @ T[:3, :3].T, self.k * self.soft[:len(self.nodes)], self.mu)
+
+    def check_normals(self, n):
+        """ContactError unless the obstacle's normals n (k, 3) at the contact nodes have unit length
+        to NORMAL_TOL: Coulomb's law needs the tangent plane I - n n^T to be a projector (a user's
+        SDF with |grad d| = 1.1 failed a plate holding on an incline with "tangent is singular")."""
+        bad = np.abs(np.einsum("ki,ki->k", n, n) - 1.0) > 2 * NORMAL_TOL
+        if bad.any():
+            i = int(np.argmax(bad))
+            raise contact_error(
+                f"obstacle {self.name!r}: friction needs the unit normal of a signed distance, but |grad d| = "
+                f"{np.linalg.norm(n[i]):.6g} at node {int(self.nodes[i])} (more than {NORMAL_TOL:g} from 1; the "
+                "tangent plane I - n n^T is then no projector): give a signed distance d with |grad d| = 1 "
+                "(a UserSDF: divide d and grad by |grad|) or use friction = 0", "grad")
 
     def sticking(self, lam, n, p):
         """The nodes that carry force and whose stored traction lies inside the cone,

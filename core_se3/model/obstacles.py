@@ -143,7 +143,14 @@ def rigid_motion(translate=None, axis=None, angle=0.0, point=(0.0, 0.0, 0.0), sc
     [0.0, 0.0, 0.5]
     >>> rigid_motion() is None
     True
+    >>> rigid_motion(translate=(0.0, 0.0, 1.0), angle=0.5)
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.ContactError: a motion's angle 0.5 needs its rotation axis (give axis = (ax, ay, az), and point on it)
     """
+    if axis is None and angle != 0.0:
+        raise contact_error(f"a motion's angle {angle:g} needs its rotation axis (give axis = (ax, ay, az), "
+                            "and point on it)", "axis")
     parts = []
     if axis is not None and angle != 0.0:
         parts.append(rotation(axis, point, angle, scale))

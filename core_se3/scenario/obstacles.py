@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from ..errors import CoreSE3Error
 from ..model import OBSTACLES, ContactLaw
+from ..model.contact import SIDES
 from .geometry import region_ref
 from .schema import MOTION, OBSTACLE
 from .validate import join, make_scale, user_key
@@ -16,7 +17,6 @@ __all__ = ["OBSTACLE_KEYS", "MOTION_KEYS", "SIDES", "obstacles_section", "add_ob
 
 OBSTACLE_KEYS = ("type",) + OBSTACLE.keys()
 MOTION_KEYS = MOTION.keys()
-SIDES = {"auto": "auto", "top": 1.0, "bottom": -1.0, "mid": 0.0}    # the contact face: auto, +d3, -d3, mid-surface
 
 
 def obstacles_section(v, doc, regions):
@@ -47,6 +47,9 @@ def obstacles_section(v, doc, regions):
             o["motion"]["scale"] = v.scale(m, mk)
             if o["motion"]["axis"] is not None and "angle" not in m:
                 v.fail(join(mk, "angle"), "a rotation 'axis' needs its 'angle' [rad] at load factor 1")
+            if o["motion"]["axis"] is None and "angle" in m:
+                v.fail(join(mk, "axis"), "an 'angle' needs its rotation 'axis' (and 'point' on it): without "
+                                         "one the obstacle would not turn")
         out.append(o)
     return out
 
