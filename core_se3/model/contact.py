@@ -163,6 +163,7 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         quads = where[mesh.quads[el]]
         on = (quads >= 0).all(1)
         self._quads = quads[on]                     # the contact faces, in contact-node positions
+        self._el = el[on]                           # their element ids
         self._mesh_quads = mesh.quads
         size = np.linalg.norm(mesh.X[mesh.quads[el, 2]] - mesh.X[mesh.quads[el, 0]], axis=1).max(initial=0.0)
         if isinstance(faces, str) and faces == "auto":
@@ -359,7 +360,31 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         thick = float(getattr(self.obstacle, "thickness", np.inf))
         depth = max(min(self.h / 2, thick / 2), 2 * self.tol)
         return crossing_report(self.obstacle, self._quads, self.contact_points(g0), self.contact_points(g1),
-                               lam0, lam1, depth, self.nodes)
+                               lam0, lam1, depth, self.nodes) or self.face_crossing(g1, lam1)
+
+    def face_crossing(self, g, lam):
+        """'' unless, with the faces not sampled (``faces = false``), a curved obstacle has crossed
+        a contact face between its nodes at (g, lam): the face's deepest point lies inside the
+        obstacle (d < -tol, below the face's nodes) and the obstacle's normal there points along
+        the face's own normal toward the obstacle side (mean of s_a d3_a) -- the point is past the
+        obstacle's medial surface, i.e. the obstacle's middle is beyond the face.  A chord that
+        merely cuts a large obstacle (nodal sampling) has the normal against the face's.  Steps
+        ending so are refused (the sweep forgives penetration present at an end state)."""
+        if len(self.face_el) or getattr(self.obstacle, "flat", False) or not len(self._quads):
+            return ""
+        on = np.nonzero(np.all(self.side[self._quads] != 0, axis=1))[0]
+        x = self.contact_points(g)
+        s = face_minima(self.obstacle, x[self._quads[on]], lam)
+        d_nodes = self.obstacle.distance(x, lam)[self._quads[on]].min(1)
+        m = np.einsum("ma,maj->mj", self.side[self._quads[on]], g[self.nodes[self._quads[on]], :3, 2])
+        past = (s["d"] < np.minimum(-self.tol, d_nodes)) & (np.einsum("mj,mj->m", s["n"], m) > 0)
+        if not past.any():
+            return ""
+        e = int(np.argmin(np.where(past, s["d"], np.inf)))
+        el = int(self._el[on[e]])
+        return (f"obstacle {self.name!r} passes through the contact face of element {el} between its nodes at "
+                f"load factor {lam:.6g} ({-float(s['d'][e]):.3g} deep, its middle beyond the face): the nodes "
+                f"alone do not feel it; set faces = true (or 'auto') in the contact law, or refine the mesh")
 
     def active_set_changed(self, g0, lam0, g1, lam1):
         """True when a node touches (gap within 10 tol) at one of the states and not at the other:
