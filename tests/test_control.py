@@ -268,6 +268,21 @@ def test_bad_commands_and_sessions_are_clear_errors():
         ControlOptions(path_tolerance=0.0)
 
 
+def test_a_non_number_command_is_refused_naming_the_variable():
+    """update(lam=True) moved the load factor to 1.0, update(P=True) set the load to 1 and
+    update(P="2") to 2.0 (NumPy's float conversion): a bool, a string or None is no command."""
+    p = strip()
+    s = Session(p, 0.5, [LoadMagnitude(p, p.loads[0], name="P")])
+    with pytest.raises(OptionError, match="load factor must be a finite number, got True"):
+        s.update(lam=True)
+    for bad in (True, "2", None, [True], np.bool_(False)):
+        with pytest.raises(OptionError, match=r"variable 'P': expected 1 number, got"):
+            s.update(P=bad)
+    assert s.state.lam == 0.5 and s.values["P"].tolist() == [1.0]
+    st = s.update(lam=np.float32(0.75), P=np.int64(2))          # NumPy numbers are numbers
+    assert st.lam == 0.75 and st.values["P"].tolist() == [2.0]
+
+
 def test_a_variable_named_lam_is_refused_not_shadowed_by_the_load_factor():
     """update(lam=...) is the load factor: a variable named 'lam' could never be commanded, and
     update(lam=2.0) meant for it moved the load factor to 2 with the variable still at 1 (state
