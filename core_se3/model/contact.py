@@ -132,12 +132,23 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         if law.k is None:
             self.k = self.beta * shell_diagonal_stiffness(problem)[self.nodes] / self.A
         else:
-            self.k = np.broadcast_to(np.asarray(law.k, float), self.nodes.shape).copy()
+            self.k = self._given_penalty(law.k)
         if not np.all(np.isfinite(self.k)) or np.any(self.k <= 0):
             raise contact_error("the contact penalty must be positive and finite (beta > 0)", "beta")
         self.eps, self.tol, self.cap_depth = law.lengths(self.h)
         self._faces(mesh, el, law.faces)
         self._start(mesh, friction)
+
+    def _given_penalty(self, k):
+        """The penalty ``k`` of the law: a number or one per contact node (k,) -> (k,); a
+        ContactError naming the key and the expected shape for anything else (a bool or a
+        string is no number)."""
+        a = np.asarray(k)
+        if a.dtype.kind not in "iuf" or a.shape not in ((), self.nodes.shape):
+            what = f"shape {a.shape}" if a.dtype.kind in "iuf" else repr(k)[:60]
+            raise contact_error(f"contact {self.name!r}: the penalty k must be a number or one per contact node, shape "
+                                f"({len(self.nodes)},) in the order of the contact nodes, got {what}", "k")
+        return np.broadcast_to(a.astype(float), self.nodes.shape).copy()
 
     def _contact_nodes(self, problem, nodes, elements):
         """The contact nodes and their areas A; returns (the contact elements, the thickest
