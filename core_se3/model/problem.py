@@ -227,9 +227,10 @@ class Problem:
     def add_lab_support(self, where, dirs, k):
         """Hold the lab displacement components ``dirs`` of the selected nodes by penalty springs
         of stiffness k (supports.LabSpring): ``dirs`` (q, 3) is a set of q <= 3 independent
-        directions held at *every* selected node ((3,): one), (n, q, 3) a set per node for the n
-        selected nodes -- one direction per node is (n, 1, 3), not (n, 3) (that is a set held at
-        every node, refused beyond 3 rows).  Rows are normalised."""
+        directions held at *every* selected node ((3,): one; (1, q, 3): the same, explicitly), (n,
+        q, 3) a set per node for the n selected nodes -- one direction per node is (n, 1, 3), not
+        (n, 3) (that is a set held at every node, refused beyond 3 rows, and refused as ambiguous
+        when q == n > 1 with different rows: give (n, 1, 3) or (1, q, 3)).  Rows are normalised."""
         return self.add(LabSpring(self.mesh, self.nodes(where), dirs, k))
 
     def add_lab_tilt_support(self, where, t, k_rot):
