@@ -44,11 +44,12 @@ Example
 from __future__ import annotations
 
 import copy
+import warnings
 
 import numpy as np
 
 from .. import lie
-from ..errors import did_you_mean
+from ..errors import AccuracyWarning, did_you_mean
 from .base import Load, LoadEvaluation
 from .contact_faces import face_minima, face_wrench
 from .contact_output import ContactOutputs
@@ -177,9 +178,16 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         self._el = el[on]                           # their element ids
         self._mesh_quads = mesh.quads
         size = np.linalg.norm(mesh.X[mesh.quads[el, 2]] - mesh.X[mesh.quads[el, 0]], axis=1).max(initial=0.0)
+        flat = getattr(self.obstacle, "flat", False)
+        self._thin = float(getattr(self.obstacle, "thickness", np.inf)) < size and not flat
         if isinstance(faces, str) and faces == "auto":
-            faces = float(getattr(self.obstacle, "thickness", np.inf)) < size
-        use = bool(faces) and not getattr(self.obstacle, "flat", False)
+            faces = self._thin
+        elif self._thin and not faces:
+            warnings.warn(AccuracyWarning(
+                f"obstacle {self.name!r} is thinner (inradius {float(self.obstacle.thickness):.3g}) than the contact "
+                f"elements (diameter up to {size:.3g}) and faces = false: it can pass between the nodes unfelt; set "
+                f"faces = true (or 'auto', the default) in the contact law, or refine the mesh"), stacklevel=5)
+        use = bool(faces) and not flat
         self.face_el = el[on] if use else np.zeros(0, np.int64)
         self.face_q = self._quads if len(self.face_el) else np.zeros((0, 4), np.int64)
         self.Af, self.kf = self.A[self.face_q].mean(1), self.k[self.face_q].mean(1)
@@ -376,11 +384,13 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
     def face_crossing(self, g, lam):
         """'' unless, with the faces not sampled (``faces = false``), a curved obstacle has crossed
         a contact face between its nodes at (g, lam): the face's deepest point lies inside the
-        obstacle (d < -tol, below the face's nodes) and the obstacle's normal there points along
-        the face's own normal toward the obstacle side (mean of s_a d3_a) -- the point is past the
-        obstacle's medial surface, i.e. the obstacle's middle is beyond the face.  A chord that
-        merely cuts a large obstacle (nodal sampling) has the normal against the face's.  Steps
-        ending so are refused (the sweep forgives penetration present at an end state)."""
+        obstacle (d < -tol, below the face's nodes) and either the obstacle's normal there points
+        along the face's own normal toward the obstacle side (mean of s_a d3_a) -- the point is
+        past the obstacle's medial surface, its middle beyond the face -- or the obstacle is
+        thinner than the elements and reaches deeper than the thickness h (through the shell).
+        A chord that merely cuts a large obstacle (nodal sampling) has the normal against the
+        face's.  Steps ending so are refused (the sweep forgives penetration present at an end
+        state)."""
         if len(self.face_el) or getattr(self.obstacle, "flat", False) or not len(self._quads):
             return ""
         on = np.nonzero(np.all(self.side[self._quads] != 0, axis=1))[0]
@@ -388,13 +398,15 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         s = face_minima(self.obstacle, x[self._quads[on]], lam)
         d_nodes = self.obstacle.distance(x, lam)[self._quads[on]].min(1)
         m = np.einsum("ma,maj->mj", self.side[self._quads[on]], g[self.nodes[self._quads[on]], :3, 2])
-        past = (s["d"] < np.minimum(-self.tol, d_nodes)) & (np.einsum("mj,mj->m", s["n"], m) > 0)
+        inside = s["d"] < np.minimum(-self.tol, d_nodes)
+        # the middle beyond the face, or a thin obstacle through the whole shell between the nodes
+        past = inside & ((np.einsum("mj,mj->m", s["n"], m) > 0) | (self._thin & (s["d"] < -self.h)))
         if not past.any():
             return ""
         e = int(np.argmin(np.where(past, s["d"], np.inf)))
         el = int(self._el[on[e]])
         return (f"obstacle {self.name!r} passes through the contact face of element {el} between its nodes at "
-                f"load factor {lam:.6g} ({-float(s['d'][e]):.3g} deep, its middle beyond the face): the nodes "
+                f"load factor {lam:.6g} ({-float(s['d'][e]):.3g} deep, through the shell): the nodes "
                 f"alone do not feel it; set faces = true (or 'auto') in the contact law, or refine the mesh")
 
     def active_set_changed(self, g0, lam0, g1, lam1):
