@@ -464,3 +464,20 @@ def test_renaming_a_shared_obstacle_instance_keeps_the_first_contacts_name():
     b = p.add_obstacle(ob, name="right")
     assert (a.name, a.obstacle.name, b.name, b.obstacle.name, ob.name) == ("left", "left", "right", "right",
                                                                              "half_space")
+
+
+def test_a_contact_penalty_of_the_wrong_shape_is_a_contact_error_naming_k():
+    """law k per node of the wrong length (5 for 6 contact nodes), a 2-D array, a string or a
+    bool: a bare NumPy broadcast ValueError, or read as a number ('1e5', True -> 1.0); now a
+    ContactError naming the key k and the shape (6,) expected.  A number or (6,) still work."""
+    for k in (np.full(5, 1e5), np.full((6, 1), 1e5), np.full((2, 3), 1e5), "1e5", True):
+        p = cs.Problem(M.rectangle(2.0, 1.0, 2, 1), cs.Material(1e4, 0.0, 0.02))
+        with pytest.raises(ContactError, match=r"penalty k must be a number or one per contact node, shape \(6,\)") \
+                as err:
+            p.add_obstacle("sphere", centre=(1.5, 0.0, -0.5), radius=0.4, law=dict(k=k))
+        assert err.value.param == "k"
+    for k, first in ((2e5, 2e5), (np.arange(1.0, 7.0) * 1e5, 1e5)):
+        p = cs.Problem(M.rectangle(2.0, 1.0, 2, 1), cs.Material(1e4, 0.0, 0.02))
+        c = p.add_obstacle("sphere", centre=(1.5, 0.0, -0.5), radius=0.4, law=dict(k=k))
+        assert c.k.shape == (6,) and c.k[0] == first
+

@@ -163,6 +163,34 @@ def test_a_ball_smaller_than_an_element_is_held_by_the_face():
     assert c.report(st.g, 1.0)["faces_in_contact"] >= 1
 
 
+def test_a_ball_through_the_face_between_nodes_is_refused_without_face_samples():
+    """The same ball raised 0.3 (through the plate) in 4 steps with faces = false: the nodes never
+    feel it, and before the run ended with the ball on the far side (zero force, no error); raised
+    0.05 it ended 0.04 through the contact face (the shell is 0.02 thick), zero force, no error.
+    Now faces = false on an obstacle thinner than the elements warns at once, naming the key, and
+    a state with the ball's middle beyond the face, or the thin ball deeper than h, is refused; a
+    ball pressed into the face short of both is the nodal sampling's chord, not a crossing."""
+    from core_se3.errors import AccuracyWarning
+
+    def plate(faces):
+        p = cs.Problem(M.rectangle(2.0, 1.0, 2, 1), cs.Material(1e4, 0.0, 0.02))
+        p.clamp("x0")
+        c = p.add_obstacle("sphere", centre=(1.5, 0.0, -0.07), radius=0.05, motion=dict(translate=(0, 0, 0.3)),
+                           name="pin", law=dict(faces=faces))
+        return p, c
+    with pytest.warns(AccuracyWarning, match="faces = false: it can pass between the nodes"):
+        p, c = plate(False)
+    g0 = p.mesh.g0
+    assert c.face_crossing(g0, 0.07) == "" and c.obstacle.distance([[1.5, 0.0, -0.01]], 0.07)[0] < -0.01
+    assert "through the shell" in c.face_crossing(g0, 0.15)         # 0.035 deep, more than h = 0.02
+    assert "element 1" in c.face_crossing(g0, 0.25)                 # centre at z = 0.005, the face at -0.01
+    with pytest.raises(cs.ConvergenceError, match="faces = true"):
+        p.solve(steps=4)
+    p, c = plate("auto")
+    st = p.solve(steps=4).final
+    assert st.contact["pin"]["force"][2] > 0 and c.face_crossing(st.g, 1.0) == ""
+
+
 # ----------------------------------------------------------------------------- lift-off
 HINGED_STRIP = """
 name = "hinged-strip"

@@ -268,6 +268,35 @@ def test_bad_commands_and_sessions_are_clear_errors():
         ControlOptions(path_tolerance=0.0)
 
 
+def test_a_non_number_command_is_refused_naming_the_variable():
+    """update(lam=True) moved the load factor to 1.0, update(P=True) set the load to 1 and
+    update(P="2") to 2.0 (NumPy's float conversion): a bool, a string or None is no command."""
+    p = strip()
+    s = Session(p, 0.5, [LoadMagnitude(p, p.loads[0], name="P")])
+    with pytest.raises(OptionError, match="load factor must be a finite number, got True"):
+        s.update(lam=True)
+    for bad in (True, "2", None, [True], np.bool_(False)):
+        with pytest.raises(OptionError, match=r"variable 'P': expected 1 number, got"):
+            s.update(P=bad)
+    assert s.state.lam == 0.5 and s.values["P"].tolist() == [1.0]
+    st = s.update(lam=np.float32(0.75), P=np.int64(2))          # NumPy numbers are numbers
+    assert st.lam == 0.75 and st.values["P"].tolist() == [2.0]
+
+
+def test_a_refused_track_leaves_plant_and_model_at_the_same_command():
+    """track(..., model=...) updated the model before the plant: a plant that refused every
+    halved step (max_turn 1e-4, no splits) left the plant at P = 1 and the model at the refused
+    P = 1.0519.  Both now end at the last accepted command, and the error says so."""
+    p, q = strip(P=0.1), strip(P=0.1)
+    plant = Session(p, 1.0, [LoadMagnitude(p, p.loads[0], name="P")], max_turn=1e-4, max_splits=0)
+    model = Session(q, 1.0, [LoadMagnitude(q, q.loads[0], name="P")])
+    z0, zm = plant.state.probes["tip"]["x"][2], model.state.probes["tip"]["x"][2]
+    with pytest.raises(ControlError, match="both stay at that command"):
+        track(plant, "tip", [[z0], [z0 + 0.5]], components=[2], model=model)
+    assert plant.values["P"].tolist() == model.values["P"].tolist() == [1.0]
+    assert abs(model.state.probes["tip"]["x"][2] - zm) < 1e-8 * 10.0       # back on its equilibrium
+
+
 def test_a_variable_named_lam_is_refused_not_shadowed_by_the_load_factor():
     """update(lam=...) is the load factor: a variable named 'lam' could never be commanded, and
     update(lam=2.0) meant for it moved the load factor to 2 with the variable still at 1 (state

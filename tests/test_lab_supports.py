@@ -137,6 +137,29 @@ def test_one_lab_direction_per_node_is_shape_n_1_3_and_n_rows_are_refused():
     assert np.array_equal(spring.P, np.einsum("ni,nj->nij", per_node, per_node))
 
 
+def test_as_many_lab_directions_as_nodes_is_refused_as_ambiguous():
+    """(q, 3) with q equal to the number of selected nodes reads two ways: np.eye(3) on a
+    three-node edge was held as the whole translation at every node (P = I), while a user
+    meaning one direction per node wanted e_i e_i^T at node i.  Refused when the rows differ,
+    naming both explicit spellings; (1, q, 3) is the set at every node, (n, 1, 3) one per node,
+    and the same (3, 3) on a four-node edge (unambiguous) still holds the set everywhere."""
+    from core_se3 import Material, Problem, mesh
+    from core_se3.errors import SupportError
+    def three_node_edge():
+        p = Problem(mesh.rectangle(1.0, 0.5, 2, 2), Material(1e4, 0.3, 0.05))
+        assert len(p.nodes("x1")) == 3
+        return p
+    with pytest.raises(SupportError, match=r"reads two ways.*\(3, 1, 3\) for one direction per node, \(1, 3, 3\)"):
+        three_node_edge().add_lab_support("x1", np.eye(3), 1e3)
+    assert np.array_equal(three_node_edge().add_lab_support("x1", np.eye(3)[None], 1e3).P,
+                          np.broadcast_to(np.eye(3), (3, 3, 3)))
+    assert np.array_equal(three_node_edge().add_lab_support("x1", np.eye(3)[:, None, :], 1e3).P,
+                          np.einsum("ni,nj->nij", np.eye(3), np.eye(3)))
+    assert np.array_equal(_four_node_edge().add_lab_support("x1", np.eye(3), 1e3).P, np.broadcast_to(np.eye(3), (4, 3, 3)))
+    same = three_node_edge().add_lab_support("x1", [[0.0, 0.0, 1.0]] * 1, 1e3)         # one row: one reading
+    assert np.array_equal(same.P, np.broadcast_to(np.diag([0.0, 0.0, 1.0]), (3, 3, 3)))
+
+
 def test_dependent_or_unnormalised_lab_directions_do_not_change_the_spring():
     """A direction given twice doubled its spring (P = 2 e_z e_z^T), a row of length 2 quadrupled
     it, and two rows that are not orthogonal held their plane with a stiffness that varied by

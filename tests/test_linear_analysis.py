@@ -163,6 +163,21 @@ def test_load_stepping_options_of_a_linear_analysis_are_named_not_dropped(call):
     assert len(res.steps) == 2                                  # one solve all the same
 
 
+def test_linear_solve_called_directly_names_its_unused_options_once():
+    # solvers.linear_solve(p, steps=10, max_cutbacks=3) dropped them without a word (only
+    # Problem.solve warned); it now warns itself, once, pointing at the caller's line, and
+    # Problem.solve does not warn a second time
+    from core_se3.errors import OptionWarning
+    from core_se3.solvers import linear_solve
+    p = _tip_loaded_strip()
+    for call in (lambda: linear_solve(p, steps=10, max_cutbacks=3),
+                 lambda: p.solve(control="linear", steps=10, max_cutbacks=3)):
+        with pytest.warns(OptionWarning) as said:
+            call()
+        assert len(said) == 1 and "steps=10, max_cutbacks=3 not used" in str(said[0].message)
+        assert said[0].filename == __file__
+
+
 def test_a_linear_analysis_is_quiet_for_one_step_and_for_the_problem_s_defaults():
     # steps=1, the linear solver and lam_end are used or harmless; the problem's own defaults
     # (a scenario's or a catalogue case's [solver], steps = 20 included) do not warn

@@ -511,3 +511,39 @@ def test_equilibrium_is_objective_and_flips_with_the_field(kind):
         assert np.abs(solve(False, Br=(1.0, 0.0, 0.0), B=(0.0, 0.0, -30.0))
                       - mirror * solve(False, Br=(1.0, 0.0, 0.0), B=(0.0, 0.0, 30.0))).max() <= 1e-12
         assert np.abs(solve(False, Br=(-1.0, -0.3, -0.5), B=(0.0, -10.0, -25.0)) - u).max() <= 1e-12 * np.abs(u).max()
+
+
+def _torus(R=3.0, r=1.0, nu=8, nv=6):
+    """A closed torus of nu x nv quads: as many nodes as elements (48)."""
+    from core_se3.mesh.core import Mesh, frames_from
+    u, v = np.meshgrid(2 * np.pi * np.arange(nu) / nu, 2 * np.pi * np.arange(nv) / nv, indexing="ij")
+    X = np.stack([(R + r * np.cos(v)) * np.cos(u), (R + r * np.cos(v)) * np.sin(u), r * np.sin(v)], -1).reshape(-1, 3)
+    d1 = np.stack([-np.sin(u), np.cos(u), 0 * u], -1).reshape(-1, 3)
+    d3 = np.stack([np.cos(v) * np.cos(u), np.cos(v) * np.sin(u), np.sin(v)], -1).reshape(-1, 3)
+    i, j = np.meshgrid(np.arange(nu), np.arange(nv), indexing="ij")
+    at = lambda a, b: (a % nu) * nv + (b % nv)                                      # noqa: E731
+    return Mesh(frames_from(X, d1, d3), np.stack([at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)],
+                                                 -1).reshape(-1, 4))
+
+
+def test_a_br_table_that_fits_per_element_and_per_node_needs_br_per():
+    """On a closed torus (48 nodes, 48 elements) a per-node Br table (B^r on node 0 alone) was
+    read per element, silently: element 0 magnetised (4 magnetised nodes) where the node table
+    magnetises the 4 elements around node 0 (9 nodes).  Now refused without Br_per, naming it;
+    Br_per='node' / 'element' pick the table; a 3-vector and unambiguous tables need no keyword."""
+    from core_se3 import Problem
+    m = _torus()
+    assert m.n_nodes == m.n_elements == 48
+    Br = np.zeros((48, 3))
+    Br[0, 2] = 1.0
+    def magnet(**kw):
+        p = Problem(m, Material(1e4, 0.3, 0.05))
+        return p.add_magnetic(Br, UniformField((0.0, 0.0, 1.0)), mu0=1.0, **kw).mag
+    with pytest.raises(LoadError, match=r"fits both.*Br_per='element' or Br_per='node'"):
+        magnet()
+    assert len(magnet(Br_per="node").nodes) == 9 and len(magnet(Br_per="element").nodes) == 4
+    with pytest.raises(LoadError, match=r"per node must have shape \(48, 3\)"):
+        Problem(m, Material(1e4, 0.3, 0.05)).add_magnetic(Br[:5], UniformField((0.0, 0.0, 1.0)), Br_per="node")
+    p = Problem(m, Material(1e4, 0.3, 0.05))
+    assert len(p.add_magnetic(Br[:10], UniformField((0.0, 0.0, 1.0)), elements=np.arange(10), mu0=1.0).mag.nodes) == 4
+    assert len(p.add_magnetic((0.0, 0.0, 1.0), UniformField((0.0, 0.0, 1.0)), mu0=1.0).mag.nodes) == 48

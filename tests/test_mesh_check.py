@@ -726,3 +726,31 @@ def test_a_support_by_ids_out_of_line_order_says_what_the_refinement_holds():
     assert len(said) == 1 and "2 new node(s)" in said[0]
     assert not [w for w in strip([0, 5, 10]).warnings if "supports[0]" in str(w)]
     assert not [w for w in strip([0, 10, 5], refine=0).warnings if "supports[0]" in str(w)]
+
+
+def test_an_interrupted_check_writes_interrupted_json_with_the_levels_done(tmp_path, monkeypatch, capsys):
+    """SIGTERM or Ctrl-C during check-mesh --json left the earlier check's JSON ("converged": true)
+    or no file at all (a traceback); now PATH says status "interrupted", the signal, and the
+    levels already computed, and the exit status is the shell's (143 / 130)."""
+    from core_se3 import cli
+    from core_se3.io.lifecycle import Terminated
+    from core_se3.scenario import mesh_check as mc
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "fine.toml").write_text(_toml(roof(8, 100.0)))
+    assert cli.main(["check-mesh", "fine.toml", "--json", "check.json"]) == 0
+    level = mc._linear_level
+
+    def stop_at_refinement(s, lam, n0, k):
+        if k == 1:
+            raise Terminated("SIGTERM")
+        return level(s, lam, n0, k)
+    monkeypatch.setattr(mc, "_linear_level", stop_at_refinement)
+    assert cli.main(["check-mesh", "fine.toml", "--json", "check.json"]) == 143
+    doc = json.loads((tmp_path / "check.json").read_text())
+    assert doc["status"] == "interrupted" and doc["signal"] == "SIGTERM" and doc["exit_status"] == 143
+    assert len(doc["levels"]) == 1 and doc["changes"] == [] and "converged" not in doc
+    monkeypatch.setattr(mc, "_linear_level", lambda *a: (_ for _ in ()).throw(KeyboardInterrupt()))
+    assert cli.main(["check-mesh", "fine.toml", "--json", "check.json"]) == 130
+    doc = json.loads((tmp_path / "check.json").read_text())
+    assert doc["status"] == "interrupted" and doc["signal"] == "SIGINT" and doc["levels"] == []
+    assert "interrupted (SIGINT)" in capsys.readouterr().err

@@ -352,6 +352,7 @@ def mesh_check(args):
     or, when the check fails, status "failed" and the error (as ``run``'s results.json): a JSON
     of an earlier check is never left there to be read as this one's."""
     from ..io.files import write_json_atomic
+    from ..io.lifecycle import termination_as_interrupt
     from ..scenario.mesh_check import DEFAULT_TOL, check_mesh
     try:
         scn = _open(args)
@@ -363,10 +364,13 @@ def mesh_check(args):
               "(e.g. check.json)", file=sys.stderr)
         return 2
     try:
-        chk = check_mesh(scn, levels=args.levels, tol=DEFAULT_TOL if args.tol is None else args.tol,
-                         nonlinear=args.nonlinear)
+        with termination_as_interrupt():
+            chk = check_mesh(scn, levels=args.levels, tol=DEFAULT_TOL if args.tol is None else args.tol,
+                             nonlinear=args.nonlinear)
     except CoreSE3Error as exc:
         return _check_failed(args, exc, known_output=True)
+    except KeyboardInterrupt as exc:
+        return _check_interrupted(args, exc)
     for w in scn.warnings:
         print(f"warning: {w}", file=sys.stderr)
     print(chk.report())
@@ -376,6 +380,30 @@ def mesh_check(args):
         except OSError as exc:
             return output_error(exc, "the check is printed above")
     return 0 if chk.converged else 4
+
+
+def _check_interrupted(args, exc):
+    """The exit status of a check-mesh ended by SIGTERM or Ctrl-C (130/143), after writing --json
+    PATH (atomically) as {"status": "interrupted", "signal": ..., "levels": the meshes done, ...},
+    as ``run`` marks its results.json: an earlier check's verdict is not left there."""
+    from ..io.files import write_json_atomic
+    name = getattr(exc, "signal_name", "SIGINT")
+    partial = getattr(exc, "mesh_check", None)
+    done = len(partial.levels) if partial is not None else 0
+    code = interrupted(exc, f"the check stopped after {done} mesh(es)" + (f"; --json {args.json} says so"
+                                                                             if args.json else ""))
+    if not args.json:
+        return code
+    doc = dict(status="interrupted", signal=name, error=f"interrupted by {name} after {done} mesh(es)",
+               scenario=args.scenario, exit_status=code)
+    if partial is not None:
+        doc.update(name=partial.name, lam=partial.lam, tol=partial.tol, nonlinear=partial.nonlinear,
+                   levels=partial.levels, changes=partial.changes, dropped=partial.dropped, warnings=partial.warnings)
+    try:
+        write_json_atomic(args.json, doc)
+    except OSError as err:
+        return output_error(err, "the check was interrupted")
+    return code
 
 
 def _check_failed(args, exc, known_output):

@@ -109,9 +109,12 @@ class Commands:
         for name, x in values.items():
             v = self.lookup(name)
             try:
+                kind = np.asarray(x).dtype.kind
                 a = np.asarray(x, float).ravel()
             except (TypeError, ValueError):
-                raise OptionError(f"variable {name!r}: expected {v.size} numbers, got {x!r}") from None
+                kind = "O"
+            if kind not in "iuf":        # a bool, a string or None is no command: not read as 1, 2.0, nan
+                raise OptionError(f"variable {name!r}: expected {v.size} number{'s' * (v.size > 1)}, got {x!r}")
             if a.size != v.size:
                 raise OptionError(f"variable {name!r} has {v.size} components ({', '.join(v.labels)}), got {a.size}")
             if not np.all(np.isfinite(a)):

@@ -165,9 +165,19 @@ class _Loop:
                 if n > top:
                     part[idx] *= top / n
         values = dict(zip(self.names, parts))
-        if self.model is not None:
-            self.model.update(**values)
-        return self.s.update(**values)
+        if self.model is None:
+            return self.s.update(**values)
+        before = {n: self.model.values[n].copy() for n in self.names}
+        self.model.update(**values)
+        try:
+            return self.s.update(**values)
+        except ControlError as exc:          # the model back to the plant's (last accepted) command
+            try:
+                self.model.update(**before)
+            except ControlError as back:
+                raise ControlError(f"{exc}; and the controller's model could not return to the plant's command "
+                                   f"(it stays at the refused one): {back}") from exc
+            raise
 
     def step(self, x, dx, max_halvings):
         """Update to x + a dx with a = 1, 1/2, ... while the session refuses; (state, a)."""
@@ -178,8 +188,9 @@ class _Loop:
             except ControlError as exc:
                 last = exc
                 a /= 2
+        same = " (the plant and the controller's model both stay at that command)" if self.model is not None else ""
         raise ControlError(f"the loop's command step was refused {max_halvings + 1} times, down to "
-                           f"{2 * a:g} x the step: {last}")
+                           f"{2 * a:g} x the step; the session stays at the last accepted command{same}: {last}")
 
 
 @dataclass

@@ -296,7 +296,8 @@ class Session:
         t0 = time.perf_counter()
         lam0 = self.lam
         lam1 = lam0 if lam is None else lam
-        if not isinstance(lam1, (int, float, np.floating, np.integer)) or not np.isfinite(lam1):
+        if (isinstance(lam1, (bool, np.bool_)) or not isinstance(lam1, (int, float, np.floating, np.integer))
+                or not np.isfinite(lam1)):
             raise OptionError(f"update: the load factor must be a finite number, got {lam!r}")
         lam1 = float(lam1)
         new = self.commands.parse(values)

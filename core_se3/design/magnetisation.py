@@ -198,7 +198,7 @@ class RegionMagnetisation(Variable):
         loads = []
         for t in np.unique(h_el[allel]):
             el = allel[h_el[allel] == t]
-            mag = Magnetisation(mesh, np.tile([1.0, 0.0, 0.0], (len(el), 1)), float(t), el, self.mu0)
+            mag = Magnetisation(mesh, np.tile([1.0, 0.0, 0.0], (len(el), 1)), float(t), el, self.mu0, "element")
             Wt = W[:, np.isin(allel, el)]
             C = np.stack([Wt[:, owner[np.isin(allel, el)] == j].sum(1) for j in range(k)], 1)[mag.nodes]
             loads.append((problem.add(MagneticLoad(mag, self.field, name=f"{name} (h = {t:g})")),

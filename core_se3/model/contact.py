@@ -44,11 +44,12 @@ Example
 from __future__ import annotations
 
 import copy
+import warnings
 
 import numpy as np
 
 from .. import lie
-from ..errors import did_you_mean
+from ..errors import AccuracyWarning, did_you_mean
 from .base import Load, LoadEvaluation
 from .contact_faces import face_minima, face_wrench
 from .contact_output import ContactOutputs
@@ -132,12 +133,23 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         if law.k is None:
             self.k = self.beta * shell_diagonal_stiffness(problem)[self.nodes] / self.A
         else:
-            self.k = np.broadcast_to(np.asarray(law.k, float), self.nodes.shape).copy()
+            self.k = self._given_penalty(law.k)
         if not np.all(np.isfinite(self.k)) or np.any(self.k <= 0):
             raise contact_error("the contact penalty must be positive and finite (beta > 0)", "beta")
         self.eps, self.tol, self.cap_depth = law.lengths(self.h)
         self._faces(mesh, el, law.faces)
         self._start(mesh, friction)
+
+    def _given_penalty(self, k):
+        """The penalty ``k`` of the law: a number or one per contact node (k,) -> (k,); a
+        ContactError naming the key and the expected shape for anything else (a bool or a
+        string is no number)."""
+        a = np.asarray(k)
+        if a.dtype.kind not in "iuf" or a.shape not in ((), self.nodes.shape):
+            what = f"shape {a.shape}" if a.dtype.kind in "iuf" else repr(k)[:60]
+            raise contact_error(f"contact {self.name!r}: the penalty k must be a number or one per contact node, shape "
+                                f"({len(self.nodes)},) in the order of the contact nodes, got {what}", "k")
+        return np.broadcast_to(a.astype(float), self.nodes.shape).copy()
 
     def _contact_nodes(self, problem, nodes, elements):
         """The contact nodes and their areas A; returns (the contact elements, the thickest
@@ -163,11 +175,19 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         quads = where[mesh.quads[el]]
         on = (quads >= 0).all(1)
         self._quads = quads[on]                     # the contact faces, in contact-node positions
+        self._el = el[on]                           # their element ids
         self._mesh_quads = mesh.quads
         size = np.linalg.norm(mesh.X[mesh.quads[el, 2]] - mesh.X[mesh.quads[el, 0]], axis=1).max(initial=0.0)
+        flat = getattr(self.obstacle, "flat", False)
+        self._thin = float(getattr(self.obstacle, "thickness", np.inf)) < size and not flat
         if isinstance(faces, str) and faces == "auto":
-            faces = float(getattr(self.obstacle, "thickness", np.inf)) < size
-        use = bool(faces) and not getattr(self.obstacle, "flat", False)
+            faces = self._thin
+        elif self._thin and not faces:
+            warnings.warn(AccuracyWarning(
+                f"obstacle {self.name!r} is thinner (inradius {float(self.obstacle.thickness):.3g}) than the contact "
+                f"elements (diameter up to {size:.3g}) and faces = false: it can pass between the nodes unfelt; set "
+                f"faces = true (or 'auto', the default) in the contact law, or refine the mesh"), stacklevel=5)
+        use = bool(faces) and not flat
         self.face_el = el[on] if use else np.zeros(0, np.int64)
         self.face_q = self._quads if len(self.face_el) else np.zeros((0, 4), np.int64)
         self.Af, self.kf = self.A[self.face_q].mean(1), self.k[self.face_q].mean(1)
@@ -359,7 +379,35 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         thick = float(getattr(self.obstacle, "thickness", np.inf))
         depth = max(min(self.h / 2, thick / 2), 2 * self.tol)
         return crossing_report(self.obstacle, self._quads, self.contact_points(g0), self.contact_points(g1),
-                               lam0, lam1, depth, self.nodes)
+                               lam0, lam1, depth, self.nodes) or self.face_crossing(g1, lam1)
+
+    def face_crossing(self, g, lam):
+        """'' unless, with the faces not sampled (``faces = false``), a curved obstacle has crossed
+        a contact face between its nodes at (g, lam): the face's deepest point lies inside the
+        obstacle (d < -tol, below the face's nodes) and either the obstacle's normal there points
+        along the face's own normal toward the obstacle side (mean of s_a d3_a) -- the point is
+        past the obstacle's medial surface, its middle beyond the face -- or the obstacle is
+        thinner than the elements and reaches deeper than the thickness h (through the shell).
+        A chord that merely cuts a large obstacle (nodal sampling) has the normal against the
+        face's.  Steps ending so are refused (the sweep forgives penetration present at an end
+        state)."""
+        if len(self.face_el) or getattr(self.obstacle, "flat", False) or not len(self._quads):
+            return ""
+        on = np.nonzero(np.all(self.side[self._quads] != 0, axis=1))[0]
+        x = self.contact_points(g)
+        s = face_minima(self.obstacle, x[self._quads[on]], lam)
+        d_nodes = self.obstacle.distance(x, lam)[self._quads[on]].min(1)
+        m = np.einsum("ma,maj->mj", self.side[self._quads[on]], g[self.nodes[self._quads[on]], :3, 2])
+        inside = s["d"] < np.minimum(-self.tol, d_nodes)
+        # the middle beyond the face, or a thin obstacle through the whole shell between the nodes
+        past = inside & ((np.einsum("mj,mj->m", s["n"], m) > 0) | (self._thin & (s["d"] < -self.h)))
+        if not past.any():
+            return ""
+        e = int(np.argmin(np.where(past, s["d"], np.inf)))
+        el = int(self._el[on[e]])
+        return (f"obstacle {self.name!r} passes through the contact face of element {el} between its nodes at "
+                f"load factor {lam:.6g} ({-float(s['d'][e]):.3g} deep, through the shell): the nodes "
+                f"alone do not feel it; set faces = true (or 'auto') in the contact law, or refine the mesh")
 
     def active_set_changed(self, g0, lam0, g1, lam1):
         """True when a node touches (gap within 10 tol) at one of the states and not at the other:

@@ -38,8 +38,31 @@ from ..fem.quadrature import shape_functions, surface_jacobian
 from .base import Load, LoadEvaluation
 from .fields import MU0, Field
 
-__all__ = ["Magnetisation", "MagneticLoad", "MU0", "compiled_magnets", "magnets_force", "magnets_output",
+__all__ = ["Magnetisation", "MagneticLoad", "table_kind", "MU0", "compiled_magnets", "magnets_force", "magnets_output",
            "dipole_resolution", "DIPOLE_RESOLUTION"]
+
+
+def table_kind(shape, m, n_nodes, per=None):
+    """'element' or 'node': which table a ``Br`` of ``shape`` is, for m selected elements and
+    n_nodes nodes (``per``: the caller's word); a LoadError for another shape, and for
+    (m, 3) == (n_nodes, 3) without ``per`` (both fit: a closed mesh).
+
+    Example
+    -------
+    >>> table_kind((4, 3), 4, 6), table_kind((6, 3), 6, 6, per="node")
+    ('element', 'node')
+    """
+    fits = [k for k, n in (("element", m), ("node", n_nodes)) if tuple(shape) == (n, 3)]
+    if per is not None and per not in fits:
+        raise LoadError(f"magnetisation Br per {per} must have shape ({m if per == 'element' else n_nodes}, 3); "
+                        f"got shape {tuple(shape)}")
+    if per is None and len(fits) == 2:
+        raise LoadError(f"magnetisation Br of shape {tuple(shape)} fits both one per selected element ({m}) and one "
+                        f"per node ({n_nodes}, a closed mesh): say which with Br_per='element' or Br_per='node'")
+    if not fits:
+        raise LoadError(f"magnetisation Br must be a 3-vector, one per selected element ({m}, 3), one "
+                        f"per node ({n_nodes}, 3) or a function of position; got shape {tuple(shape)}")
+    return per or fits[0]
 
 
 class Magnetisation:
@@ -62,6 +85,9 @@ class Magnetisation:
         The magnetised elements (default all).
     mu0 : float, optional
         Vacuum permeability in the model's units (default ``MU0``, SI).
+    Br_per : {None, 'element', 'node'}, optional
+        Which table an (k, 3) ``Br`` is; None: told by its shape, and a LoadError when the
+        selection has as many elements as the mesh has nodes (a closed mesh), where both fit.
 
     Attributes
     ----------
@@ -81,7 +107,10 @@ class Magnetisation:
     [0.0125, 0.025, 0.0125]
     """
 
-    def __init__(self, mesh, Br, h, elements=None, mu0=MU0):
+    def __init__(self, mesh, Br, h, elements=None, mu0=MU0, Br_per=None):
+        if Br_per not in (None, "element", "node"):
+            raise LoadError(f"Br_per must be 'element', 'node' or None (told by Br's shape), got {Br_per!r}")
+        self.Br_per = Br_per
         if not (np.isfinite(h) and h > 0):
             raise LoadError(f"thickness for the magnetisation must be positive, got {h}")
         if not (np.isfinite(mu0) and mu0 > 0):
@@ -127,12 +156,10 @@ class Magnetisation:
         B = np.asarray(Br, float)
         if B.shape == (3,):
             return np.broadcast_to(B, (m, N.shape[0], 3))
-        if B.shape == (m, 3):
+        per = table_kind(B.shape, m, self.mesh.n_nodes, self.Br_per)
+        if per == "element":
             return np.broadcast_to(B[:, None, :], (m, N.shape[0], 3))
-        if B.shape == (self.mesh.n_nodes, 3):
-            return np.einsum("qi,mik->mqk", N, B[quads])
-        raise LoadError(f"magnetisation Br must be a 3-vector, one per selected element ({m}, 3), one "
-                        f"per node ({self.mesh.n_nodes}, 3) or a function of position; got shape {B.shape}")
+        return np.einsum("qi,mik->mqk", N, B[quads])
 
     def current(self, g):
         """Lab dipole moments R_i mu_i (k,3) of the magnetised nodes."""

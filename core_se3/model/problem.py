@@ -26,7 +26,7 @@ from .base import Evaluation, Load, force_scale_with_loads, load_kind
 from .compiled import CompiledEvaluation
 from .contact import add_obstacle
 from .fields import MU0
-from .magnetics import MagneticLoad, Magnetisation, magnets_force, magnets_output
+from .magnetics import MagneticLoad, Magnetisation, magnets_force, magnets_output, table_kind
 from .probes import Probe
 from .solving import SOLVERS, dispatch, solve_linear
 from .supports import (LabSpring, LabTiltSpring, Prescribed, RotationComponentSpring, check_conflict,
@@ -227,9 +227,10 @@ class Problem:
     def add_lab_support(self, where, dirs, k):
         """Hold the lab displacement components ``dirs`` of the selected nodes by penalty springs
         of stiffness k (supports.LabSpring): ``dirs`` (q, 3) is a set of q <= 3 independent
-        directions held at *every* selected node ((3,): one), (n, q, 3) a set per node for the n
-        selected nodes -- one direction per node is (n, 1, 3), not (n, 3) (that is a set held at
-        every node, refused beyond 3 rows).  Rows are normalised."""
+        directions held at *every* selected node ((3,): one; (1, q, 3): the same, explicitly), (n,
+        q, 3) a set per node for the n selected nodes -- one direction per node is (n, 1, 3), not
+        (n, 3) (that is a set held at every node, refused beyond 3 rows, and refused as ambiguous
+        when q == n > 1 with different rows: give (n, 1, 3) or (1, q, 3)).  Rows are normalised."""
         return self.add(LabSpring(self.mesh, self.nodes(where), dirs, k))
 
     def add_lab_tilt_support(self, where, t, k_rot):
@@ -314,7 +315,7 @@ class Problem:
             raise LoadError(f"density must be positive and finite, got {rho}")
         self.add_load("gravity", elements, scale, g=g, rho=rho)
 
-    def add_magnetic(self, Br, field, elements=None, mu0=None):
+    def add_magnetic(self, Br, field, elements=None, mu0=None, Br_per=None):
         """Hard-magnetic material of residual flux density ``Br`` [T] (lab, reference
         configuration; 3-vector, per selected element, per node, or function of position) on
         ``elements`` (region or ids, default all) in the applied field ``field``
@@ -322,28 +323,28 @@ class Problem:
         h/mu0 (B^r_t . grad) B^a per unit reference area, with B^r_t = R_t R_0^T B^r_0
         (seed E48-E50).  ``mu0`` must match the units (fields.MU0 for Pa; MU0 * 1e6 for
         N-mm-MPa).  Where the thickness differs between elements, one load per thickness.
-        Returns the load (its ``mag.nodes`` are the magnetised nodes), or the list of loads."""
+        ``Br_per`` ('element' or 'node') says which table an array ``Br`` is: needed only when
+        the selection has as many elements as the mesh has nodes (a closed mesh: a LoadError
+        without it).  Returns the load (its ``mag.nodes`` are the magnetised nodes), or the list
+        of loads."""
         mu0 = MU0 if mu0 is None else mu0
         sel = self.elements(elements)
         per = getattr(self.material, "per_element", None)
         h_all = per("h") if per is not None else None
         if h_all is None or len(np.unique(h_all)) == 1:
             h = self.material.h if h_all is None else float(h_all[0])
-            return self.add(MagneticLoad(Magnetisation(self.mesh, Br, h, sel, mu0), field))
+            return self.add(MagneticLoad(Magnetisation(self.mesh, Br, h, sel, mu0, Br_per), field))
         ids = np.arange(self.mesh.n_elements) if sel is None else np.asarray(sel)
         h = h_all[ids]
         # one load per thickness: a table per selected element is split with the elements; a
         # 3-vector, a table per node and a function of position hold for every part as given
-        per_element = False
+        per = None                  # None: a 3-vector or a function of position
         if not callable(Br):
             Br = np.asarray(Br, float)
-            per_element = Br.shape == (len(ids), 3)
-            if not per_element and Br.shape not in ((3,), (self.mesh.n_nodes, 3)):
-                raise LoadError(f"magnetisation Br must be a 3-vector, one per selected element ({len(ids)}, 3), "
-                                f"one per node ({self.mesh.n_nodes}, 3) or a function of position; got shape "
-                                f"{Br.shape}")
+            per = None if Br.shape == (3,) else table_kind(Br.shape, len(ids), self.mesh.n_nodes, Br_per)
+        per_element = per == "element"
         return [self.add(MagneticLoad(Magnetisation(self.mesh, Br[h == t] if per_element else Br, float(t),
-                                                    ids[h == t], mu0), field))
+                                                    ids[h == t], mu0, per), field))
                 for t in np.unique(h)]
 
     def set_material(self, material):

@@ -15,7 +15,7 @@ from typing import Callable
 import numpy as np
 
 from ..backend import launched_ranks
-from ..errors import MeshWarning, OptionError, OptionWarning, ParallelError, SupportWarning, did_you_mean
+from ..errors import MeshWarning, OptionError, ParallelError, SupportWarning, did_you_mean
 from .prescribed import DOF_NAMES, DRIFT_TOL, held_dof_drift
 
 __all__ = ["SOLVERS", "DISTRIBUTED_KEYS", "dispatch", "solve_linear", "check_held_dofs"]
@@ -85,9 +85,8 @@ def dispatch(problem, control, solver, kw, given=()):
     for k in DISTRIBUTED_KEYS + ("setup",):
         kw.pop(k, None)
     unused = getattr(SOLVERS[control], "unused_options", None)
-    said = unused({k: kw[k] for k in given if k in kw}) if unused is not None else None
-    if said:
-        warnings.warn(OptionWarning(said), stacklevel=3)
+    if unused is not None:      # the solver warns of those the call gave; solve_defaults' are dropped quietly
+        kw = {k: v for k, v in kw.items() if k in given or unused({k: v}) is None}
     problem.check_element(stacklevel=4)    # the coarse-mesh warning, supports known (the distributed set-up's own)
     return check_held_dofs(problem, SOLVERS[control](problem, **kw))
 

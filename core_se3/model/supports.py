@@ -88,9 +88,10 @@ DEPENDENT_DIRECTIONS = 1e-6
 
 
 def lab_direction_sets(dirs, k):
-    """(k, q, 3) unit lab directions of ``LabSpring``'s ``dirs``: a set (q, 3) held at every one
-    of k nodes ((3,): one direction), or a set per node (k, q, 3); a SupportError for another
-    shape, for a set of more than 3 rows (q > 3 directions cannot be independent in 3-D: a user
+    """(k, q, 3) unit lab directions of ``LabSpring``'s ``dirs``: a set (q, 3) or (1, q, 3) held
+    at every one of k nodes ((3,): one direction), or a set per node (k, q, 3); a SupportError
+    for (q, 3) with q == k > 1 and rows not all equal (a set at every node or one direction per
+    node? (1, q, 3) or (k, 1, 3) says which), for another shape, for a set of more than 3 rows (q > 3 directions cannot be independent in 3-D: a user
     meaning one direction per node gives (k, 1, 3)), for rows that are linearly dependent
     (smallest singular value below ``DEPENDENT_DIRECTIONS``: the spring would hold their common
     direction twice), and for a zero or non-finite row.
@@ -106,6 +107,12 @@ def lab_direction_sets(dirs, k):
     """
     D = np.asarray(dirs, float)
     D = D[None] if D.ndim == 1 else D
+    if D.ndim == 2 and D.shape[-1] == 3 and 1 < len(D) == k <= 3 and np.ptp(D, axis=0).max() > 0:
+        raise SupportError(f"the lab support's dirs {D.tolist()}: {k} rows for {k} selected nodes reads two ways, a "
+                           f"set of {k} directions held at every node or one direction per node; say which: shape "
+                           f"({k}, 1, 3) for one direction per node, (1, {k}, 3) for the set held at every node")
+    if D.ndim == 3 and D.shape[0] == 1:               # (1, q, 3): the set held at every node, explicitly
+        D = D[0]
     if D.ndim == 2 and D.shape[-1] == 3 and len(D) > 3:
         raise SupportError(f"the lab support's dirs: {len(D)} rows (shape {D.shape}) cannot be independent lab "
                            f"directions held at every node (at most 3 in 3-D); for directions per node give shape "

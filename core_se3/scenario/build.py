@@ -176,10 +176,12 @@ def _add_magnets(v, prob, spec, mesh, regions):
     for i, m in enumerate(spec["magnets"]):
         key = f"magnets[{i}]"
         elems = regions[m["region"]] if m.get("region") else None
+        per = "element"                         # the table a pattern, a Br_file or Br_frame makes
         if "direction" in m or "Br_table" in m:
             Br = pattern_br(m, mesh, elems)
+            per = m["Br_table"]["kind"] if "Br_table" in m else per
         elif "Br" in m:
-            Br = np.asarray(m["Br"], float)
+            Br, per = np.asarray(m["Br"], float), None
         else:
             # components along the reference directors, one lab vector per element of the selection
             sel = np.arange(mesh.n_elements) if elems is None else elems
@@ -187,7 +189,7 @@ def _add_magnets(v, prob, spec, mesh, regions):
             Br = np.einsum("kij,j->ki", R0, np.asarray(m["Br_frame"], float))
         mu0 = m["mu0"] if m["mu0"] is not None else mu0_units
         try:
-            added = prob.add_magnetic(Br, built[m["field"]], elements=elems, mu0=mu0)
+            added = prob.add_magnetic(Br, built[m["field"]], elements=elems, mu0=mu0, Br_per=per)
         except CoreSE3Error as exc:
             v.fail(key, str(exc))
         prob.scenario_parts.setdefault("magnets", []).append(added if isinstance(added, list) else [added])

@@ -312,9 +312,14 @@ def _check_options(levels, tol):
 
 def _compare(out, n0, levels, level, unloaded):
     """Fill ``out`` with ``level(k) -> (level dict, u at the n0 coarse nodes, warnings)`` for
-    k = 0 ... levels and the changes between consecutive levels."""
+    k = 0 ... levels and the changes between consecutive levels.  An interrupt (Ctrl-C,
+    ``io.lifecycle.Terminated``) carries the levels done so far as its ``mesh_check``."""
     for k in range(int(levels) + 1):
-        lv, u, said = level(k)
+        try:
+            lv, u, said = level(k)
+        except KeyboardInterrupt as exc:
+            exc.mesh_check = out
+            raise
         out.warnings += [f"level {k}: {w}" for w in said]
         if k == 0 and not out.nonlinear and not lv["energy"] > 0:
             raise OptionError(unloaded)

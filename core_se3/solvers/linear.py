@@ -44,6 +44,8 @@ R/h 1e4, 1e-3 at 1e5, 0.1 at 1e6).
 """
 from __future__ import annotations
 
+import os
+import sys
 import time
 import warnings
 
@@ -51,7 +53,7 @@ import numpy as np
 
 from .. import lie
 from ..assembly import Assembler
-from ..errors import AccuracyWarning, OptionError
+from ..errors import AccuracyWarning, OptionError, OptionWarning
 from ..results import Result, StepRecorder
 from .convergence import scaled_norm
 from .linalg import Factorization, make_solver
@@ -199,13 +201,13 @@ def linear_solve(problem, lam_end=1.0, steps=None, linear_solver=None, **kw):
     lam_end : float, optional
         The load factor of the answer (the loads at lam_end on the reference geometry).
     steps : int, optional
-        Not used (one solve); accepted so that a problem's solve defaults apply unchanged
-        (given to ``Problem.solve`` other than 1, an OptionWarning: :func:`unused_options`).
+        Not used (one solve); other than 1 (and None), an OptionWarning (:func:`unused_options`;
+        ``Problem.solve`` passes it only when its call gave it, so its solve defaults are quiet).
     linear_solver : str, optional
         'auto', 'banded', 'superlu' or 'mumps' (default the problem's).
     **kw
-        Fields of NewtonOptions are accepted and not used (they control iterations; given to
-        ``Problem.solve`` other than their defaults, an OptionWarning).
+        Fields of NewtonOptions are accepted and not used (they control iterations; other than
+        their defaults, an OptionWarning).
 
     Returns
     -------
@@ -228,6 +230,9 @@ def linear_solve(problem, lam_end=1.0, steps=None, linear_solver=None, **kw):
     """
     unknown_keywords("linear_solve", {k: v for k, v in kw.items() if k not in NewtonOptions.__dataclass_fields__},
                      ["lam_end", "linear_solver", *NewtonOptions.__dataclass_fields__])
+    said = unused_options(dict(steps=steps, **kw))    # Problem.solve passes only the ones its call gave
+    if said:
+        warnings.warn(OptionWarning(said), stacklevel=_user_level())
     if not np.isfinite(lam_end):
         raise OptionError(f"lam_end must be finite, got {lam_end!r}")
     contact = [getattr(ld, "name", type(ld).__name__) for ld in problem.loads if getattr(ld, "constraint_force", False)]
@@ -302,6 +307,16 @@ def unused_options(given):
 
 
 linear_solve.unused_options = unused_options      # Problem.solve asks it (model.solving.dispatch)
+
+
+def _user_level():
+    """The ``stacklevel`` of the first frame outside core_se3 that led to the caller (a warning
+    points at the user's line whether linear_solve was called directly or by Problem.solve)."""
+    here = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    frame, level = sys._getframe(2), 2
+    while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(here + os.sep):
+        frame, level = frame.f_back, level + 1
+    return level
 
 
 def _solve_measured(solver, A, b, free, ell):
