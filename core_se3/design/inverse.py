@@ -51,6 +51,31 @@ class _Reached(Exception):
     """Raised by the iteration record once every misfit is within the tolerance."""
 
 
+def _check_conflicts(variables):
+    """DesignError when two variables set one parameter of the problem (``Variable.controls``) in
+    a pose they share (pose None: every pose): the later assignment would win and the earlier
+    variable's derivative would be that of a parameter that no longer changes the state."""
+    keys = [v.controls() for v in variables]
+    for j, v in enumerate(variables):
+        for i in range(j):
+            u = variables[i]
+            if (u.pose is None or v.pose is None or u.pose == v.pose) and keys[i] & keys[j]:
+                same = "is given twice" if u is v else f"and variable {v.name!r} both set {_said(keys[i] & keys[j])}"
+                raise DesignError(f"variable {u.name!r} {same} in the same pose: the later one would overwrite "
+                                  "the earlier one, whose derivative would then be wrong; give each parameter to one "
+                                  "variable (e.g. one FieldVariable with free=('x', 'z'), disjoint regions)")
+
+
+def _said(keys):
+    """What a set of ``Variable.controls`` keys names, for a message."""
+    k = sorted(keys, key=repr)[0]
+    if k[0] == "material":
+        return f"{k[1]} of element {k[2]}" + (f" (and {len(keys) - 1} more)" if len(keys) > 1 else "")
+    if k[0] == "magnetisation":
+        return f"the magnetisation of element {k[1]}" + (f" (and {len(keys) - 1} more)" if len(keys) > 1 else "")
+    return {"field": "the same field", "load": "the magnitude of the same load"}.get(k[0], "the same parameter")
+
+
 class Design:
     """A design problem (module docstring).
 
@@ -91,6 +116,7 @@ class Design:
             if v.pose is not None and not 0 <= v.pose < len(self.poses):
                 raise DesignError(f"variable {v.name!r} belongs to pose {v.pose}, but there are {len(self.poses)} poses")
             v.check_start()
+        _check_conflicts(self.variables)
         for r in self.regularisation:
             if not any(r.variable is v for v in self.variables):
                 raise DesignError("a smoothness term refers to a variable that is not in the design")

@@ -245,6 +245,9 @@ class RegionMagnetisation(Variable):
         _, db, da = polar_vector(self.full[:, 0], self.full[:, 1], self.e[:, 0], self.e[:, 1])
         return np.stack([db, da], 2)
 
+    def controls(self):
+        return {("magnetisation", int(e)) for r in self.regions for e in r}
+
     def value(self):
         return self.full[:, self.free].ravel().copy()
 

@@ -76,6 +76,9 @@ class MaterialVariable(Variable):
         return {k: (per(k) if per is not None else np.full(m, getattr(mat, k), dtype=object if k in ("rho", "classical") else float))
                 for k in _LAW_KEYS}
 
+    def controls(self):
+        return {("material", self.prop, int(e)) for r in self.regions for e in r}
+
     def value(self):
         props = self._per_element()
         return np.array([float(props[self.prop][r][0]) for r in self.regions])

@@ -209,6 +209,22 @@ class Variable:
         """d(r_int - f_ext)/dx (n, 6, size) at (g, lam)."""
         raise NotImplementedError
 
+    def controls(self):
+        """The parameters of the problem this variable sets (hashable keys: the field and its
+        vector, a load's magnitude, a region's E, h or magnetisation per element).  Two variables
+        of a design that both set one parameter in the same pose would overwrite each other --
+        the state follows the later one, but both get a derivative -- so ``Design`` refuses them.
+
+        Example
+        -------
+        >>> from core_se3 import Problem, Material, mesh
+        >>> p = Problem(mesh.rectangle(1.0, 0.2, 2, 1), Material(1e3, 0.0, 0.01))
+        >>> p.add_edge_force("x1", (0.0, 0.0, 1.0))
+        >>> LoadMagnitude(p, p.loads[0]).controls() == LoadMagnitude(p, p.loads[0]).controls()
+        True
+        """
+        return {("variable", id(self))}
+
     def vjp(self, problem, g, lam, mu):
         """sum_i mu_i . dr_i/dx for nodal multipliers mu (n, 6) -> (size,), or a stack of them
         (k, n, 6) -> (k, size)."""
@@ -337,6 +353,9 @@ class FieldVariable(Variable):
         self.full[self.free] = np.asarray(x, float)
         setattr(self.field, self._attr, self.vector())
 
+    def controls(self):
+        return {("field", id(self.field), self._attr)}
+
     def dr_dB(self, problem, g, lam):
         """d(r_int - f_ext)/dB (n, 6, 3): the couple f_w = mu x R^T s B of every magnetised node
         (s: the field's scale times its share in the magnet's field, ``field_share``)."""
@@ -404,6 +423,9 @@ class FieldGradientVariable(Variable):
     def value(self):
         return self.c.copy()
 
+    def controls(self):
+        return {("field", id(self.field), "G")}
+
     def assign(self, x):
         self.c = np.asarray(x, float).copy()
         self.field.G = np.einsum("k,kij->ij", self.c, _GBASIS)
@@ -453,6 +475,9 @@ class LoadMagnitude(Variable):
 
     def value(self):
         return np.array([self.P])
+
+    def controls(self):
+        return {("load", id(self.load))}
 
     def assign(self, x):
         self.P = float(np.asarray(x, float).ravel()[0])
