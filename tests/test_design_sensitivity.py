@@ -130,6 +130,21 @@ def test_bad_input():
         v.check_start()
 
 
+def test_thickness_of_a_region_in_contact_is_refused():
+    # The contact keeps the surface offset h/2 and the penalty it was built with.  Before, a
+    # thickness variable there solved with the old offset: a strip pressed onto a half-space
+    # at z = -0.1, h designed 0.02 -> 0.04, came to rest with its tip at z = -0.0901 (the old
+    # h/2 = 0.01 above the plane) where the same strip built with h = 0.04 (the optimised
+    # scenario) rests at -0.0801: 0.01 = the change of h/2, a converged-looking wrong state.
+    p = Problem(mesh.rectangle(1.0, 0.2, 8, 1), Material(1e4, 0.0, 0.02))
+    p.clamp("x0"); p.add_edge_force("x1", (0, 0, -3e-2))
+    p.add_obstacle("half_space", point=(0, 0, -0.1), normal=(0, 0, 1), region=np.arange(4, 8))
+    with pytest.raises(DesignError, match="thickness of a region in contact .obstacle 'half_space'"):
+        MaterialVariable(p, [np.arange(8)], "h")
+    MaterialVariable(p, [np.arange(3)], "h")          # off the contact elements' nodes: allowed
+    MaterialVariable(p, [np.arange(8)], "E")
+
+
 def test_partials_in_E_use_the_linearity():
     """dr/dE_j and dPi/dE_j at a rolled state (4.35 rad): the residual and the energy are linear in
     E, so one law per component (not the four of a Richardson-extrapolated central difference)
