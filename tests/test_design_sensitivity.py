@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 
 from core_se3 import Material, Problem, mesh
-from core_se3.design import (Energy, EquilibriumState, FieldGradientVariable, FieldVariable, LoadMagnitude,
+from core_se3.design import (Design, Energy, EquilibriumOptions, EquilibriumState, FieldGradientVariable, FieldVariable, LoadMagnitude,
                              MaterialVariable, NodePosition, Orientation, ProbePosition, RegionMagnetisation,
-                             RotationAngle, assign_all, follow, sensitivity)
+                             Pose, RotationAngle, Target, assign_all, follow, sensitivity, solve_flat)
 from core_se3.errors import DesignError
 from core_se3.model import GradientField, UniformField
 
@@ -174,3 +174,39 @@ def test_partials_in_E_use_the_linearity():
         assert np.abs(dr[:, :, j] - fd_r).max() < 1e-13 * np.abs(fd_r).max()
         assert abs(dPi[0, j] - (vals[0][1] - vals[1][1]) / x[j]) < 1e-13 * abs(dPi[0, j])
     assert np.array_equal(p.element.evaluate(g, tangent=False).r, r0)
+
+
+def pressed_strip(P=1.0):
+    """A cantilever pressed onto a half-space by a dead pressure (contact in mode 'al'), pushed
+    along by an end force."""
+    p = Problem(mesh.rectangle(1.0, 0.2, 8, 1), Material(1e4, 0.0, 0.02))
+    p.clamp("x0"); p.add_probe("tip")
+    p.add_pressure(-3e-2 * P, direction=(0, 0, 1))
+    p.add_obstacle("half_space", point=(0, 0, -0.1), normal=(0, 0, 1))
+    p.add_edge_force("x1", (2e-3, 0, 0))
+    return p
+
+
+def test_design_equilibria_in_contact_are_the_solver_s():
+    # A design's equilibria must be those Problem.solve (and the optimised scenario) reaches:
+    # the contact's multipliers updated until the gap error is within its tolerance
+    # (1e-6 h = 2e-8).  Before, follow() ran Newton with the multipliers last left, a penalty
+    # solution: the tip at P = 1.2 ended 1.9e-6 below the solver's (penetration 6.8e-6 = 340
+    # gap tolerances; 2.4e-11 from it now), and a pose's sensitivities used the multipliers of
+    # the pose solved last (d misfit / dE of two poses 3.5e-4 off central differences, 9e-9 now).
+    p = pressed_strip()
+    P, E = LoadMagnitude(p, p.loads[0]), MaterialVariable(p, [np.arange(8)], "E")
+    st = solve_flat(p, [P, E], [np.array([1.0]), E.value()], options=EquilibriumOptions())
+    moved, _ = follow(p, [P, E], [np.array([1.2]), E.value()], st)
+    q = pressed_strip(1.2)
+    fresh = q.solve(steps=10, rtol=1e-12, dtol=1e-12).final.g
+    assert np.abs(moved.g[:, :3, 3] - fresh[:, :3, 3]).max() < 1e-7
+    # two poses of different pressure: each pose's sensitivities with its own multipliers
+    tip, mid = ProbePosition(p, "tip"), NodePosition(p, [4])
+    d = Design(p, [E], [Pose("light", [Target(tip), Target(mid)], settings={P: [1.0]}),
+                        Pose("heavy", [Target(tip), Target(mid)], settings={P: [3.0]})])
+    x = d.x_start()
+    J = d.jacobian(x)
+    FD = np.array([(d.residuals(x + 1e-4 * x * e) - d.residuals(x - 1e-4 * x * e)) / (2e-4 * x[0])
+                   for e in np.eye(1)]).T
+    assert np.abs(J - FD).max() < 1e-6 * np.abs(FD).max()

@@ -38,7 +38,7 @@ import numpy as np
 
 from ..backend import launched_ranks
 from ..errors import ConvergenceError, DesignError, ParallelError
-from .equilibrium import ElementCheck, EquilibriumOptions, assign_all, follow, solve_flat
+from .equilibrium import ElementCheck, EquilibriumOptions, assign_all, follow, restore_multipliers, solve_flat
 from .sensitivity import SolveWith, sensitivity
 from .targets import DesignResult, Pose, Smoothness, Target
 
@@ -233,6 +233,7 @@ class Design:
         for k, pose in enumerate(self.poses):
             if pose.targets:
                 assign_all(self.pose_variables(k), states[k].x)
+                restore_multipliers(self.problem, states[k])
                 yield k, pose, self._active(k)
 
     def _solve_with(self):
@@ -474,6 +475,7 @@ class Design:
                            worst, len(history), self.evaluations, self.solves, self.newton_iterations,
                            time.perf_counter() - t0, method, history, list(states))
         assign_all(self.pose_variables(len(self.poses) - 1), states[-1].x)
+        restore_multipliers(self.problem, states[-1])
         return res
 
     def assign_pose(self, k, x):
