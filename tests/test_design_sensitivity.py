@@ -9,6 +9,8 @@ error ~1e-12 / 1e-4 = 1e-8; measured agreement is 1e-8 .. 1e-11.  The states: a 
 past pi by a follower end moment (tip rotation 4.35 rad) with a magnet in a uniform field; a
 strip under a follower pressure and a follower edge force in a uniform-gradient field (magnetic
 body force and its Hessian-free tangent); polar forms of field and magnetisation."""
+import warnings
+
 import numpy as np
 import pytest
 
@@ -16,7 +18,8 @@ from core_se3 import Material, Problem, mesh
 from core_se3.design import (Design, Energy, EquilibriumOptions, EquilibriumState, FieldGradientVariable, FieldVariable, LoadMagnitude,
                              MaterialVariable, NodePosition, Orientation, ProbePosition, RegionMagnetisation,
                              Pose, RotationAngle, Target, assign_all, follow, sensitivity, solve_flat)
-from core_se3.errors import DesignError
+from core_se3.design.sensitivity import at_the_cone
+from core_se3.errors import AccuracyWarning, DesignError
 from core_se3.model import GradientField, UniformField
 
 pytestmark = pytest.mark.core
@@ -176,13 +179,13 @@ def test_partials_in_E_use_the_linearity():
     assert np.array_equal(p.element.evaluate(g, tangent=False).r, r0)
 
 
-def pressed_strip(P=1.0):
+def pressed_strip(P=1.0, friction=0.0):
     """A cantilever pressed onto a half-space by a dead pressure (contact in mode 'al'), pushed
     along by an end force."""
     p = Problem(mesh.rectangle(1.0, 0.2, 8, 1), Material(1e4, 0.0, 0.02))
     p.clamp("x0"); p.add_probe("tip")
     p.add_pressure(-3e-2 * P, direction=(0, 0, 1))
-    p.add_obstacle("half_space", point=(0, 0, -0.1), normal=(0, 0, 1))
+    p.add_obstacle("half_space", point=(0, 0, -0.1), normal=(0, 0, 1), friction=friction)
     p.add_edge_force("x1", (2e-3, 0, 0))
     return p
 
@@ -210,3 +213,31 @@ def test_design_equilibria_in_contact_are_the_solver_s():
     FD = np.array([(d.residuals(x + 1e-4 * x * e) - d.residuals(x - 1e-4 * x * e)) / (2e-4 * x[0])
                    for e in np.eye(1)]).T
     assert np.abs(J - FD).max() < 1e-6 * np.abs(FD).max()
+
+
+def test_sensitivity_at_the_stick_slip_transition_says_it_is_one_sided():
+    # The pushed strip's end slides (mu = 0.3): at the solved state its stored traction is on
+    # the cone, where the state is not differentiable.  The sensitivities are those of
+    # continued sliding: d tip_x / d push 9.02e-5 equals the forward difference (sliding on),
+    # while a decrease sticks the end: 4.13e-5; d tip_x / d pressure -1.033e-3 against -0.890e-3
+    # for an increase.  Before, the derivatives came without a word.
+    p = pressed_strip(friction=0.3)
+    v = [LoadMagnitude(p, p.loads[0]), LoadMagnitude(p, p.loads[2])]
+    xs = [x.value() for x in v]
+    st = solve_flat(p, v, xs)
+    with pytest.warns(AccuracyWarning, match="2 frictional contact node.s. at the stick/slip transition"):
+        s = sensitivity(p, st.g, 1.0, [ProbePosition(p, "tip")], v, "direct")
+    tip = p.probes["tip"].state(st.g)[0][0]
+    one_sided = []
+    for sign in (1, -1):
+        moved, _ = follow(p, v, [xs[0], xs[1] + sign * 1e-5], st)
+        one_sided.append((p.probes["tip"].state(moved.g)[0][0] - tip) / (sign * 1e-5))
+        assert at_the_cone(p, moved.g, 1.0) == 0         # sliding on, or stuck: off the transition
+    assert abs(s.jacobian[0, 1] - one_sided[0]) < 1e-4 * abs(one_sided[0])
+    assert abs(one_sided[1] - one_sided[0]) > 0.3 * abs(one_sided[0])
+    q = pressed_strip()                                  # frictionless: no transition, no warning
+    u = [LoadMagnitude(q, q.loads[0])]
+    st = solve_flat(q, u, [u[0].value()])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", AccuracyWarning)
+        sensitivity(q, st.g, 1.0, [ProbePosition(q, "tip")], u)
