@@ -117,3 +117,51 @@ def test_gripper_design_example():
     assert r.reached and r.max_misfit < 0.02
     assert r.iterations <= 18 and r.equilibrium_solves <= 54 and r.newton_iterations <= 750
     assert r.misfit["flat"]["targets[0]"] < 1e-9          # no field: the gripper stays flat
+
+
+GRAVITY = """
+units = "N-mm-MPa"
+[mesh]
+generator = "rectangle"
+L = 100.0
+width = 10.0
+nx = 8
+ny = 1
+[material]
+E = 1000.0
+nu = 0.0
+h = 1.0
+rho = 7.85e-9
+[[supports]]
+type = "clamp"
+edge = "x0"
+[[loads]]
+type = "gravity"
+[[probes]]
+name = "tip"
+edge = "x1"
+[solver]
+steps = 2
+[design]
+tolerance = 1e-6
+[[design.variables]]
+type = "load"
+load = 0
+[[design.targets]]
+type = "position"
+probe = "tip"
+value = [0.0, 0.0, -5.0]
+components = [2]
+"""
+
+
+def test_optimised_scenario_holds_a_load_magnitude_at_its_default(tmp_path):
+    # a load variable on a gravity with the default g (-9810 mm/s^2 in N-mm-MPa): before, the
+    # optimised scenario left g out, so `core-se3 run` solved the original load (tip z -11.4
+    # for the design's -5.0); now g is written scaled, in the scenario's units
+    path = tmp_path / "sag.toml"
+    path.write_text(GRAVITY)
+    assert main(["design", str(path), "--out", str(tmp_path / "o"), "-q"]) == 0
+    scn = scenario.load(tmp_path / "o" / "optimised.toml")
+    assert scn.spec["loads"][0]["g"][2] != -9810.0
+    assert abs(scn.problem.solve().final.probes["tip"]["u"][2] + 5.0) < 1e-5
