@@ -165,3 +165,26 @@ def test_optimised_scenario_holds_a_load_magnitude_at_its_default(tmp_path):
     scn = scenario.load(tmp_path / "o" / "optimised.toml")
     assert scn.spec["loads"][0]["g"][2] != -9810.0
     assert abs(scn.problem.solve().final.probes["tip"]["u"][2] + 5.0) < 1e-5
+
+
+def test_a_pose_holds_the_field_of_a_shared_field_variable(tmp_path):
+    # [[design.poses]] fields = { coil = [0, 0, 0] } beside a field variable of every pose (no
+    # pose key): the flat pose must see no field.  Before, the shared variable was assigned
+    # after the pose's hold: the "flat" pose was bent like the other (tip z 12.32 mm at the
+    # start) and had a derivative in the field; optimised_flat.toml held the optimised field.
+    text = BASE.replace("[design]\ntolerance = 1e-6\n", "[design]\ntolerance = 1e-6\n[[design.poses]]\nname = \"flat\"\n"
+                        "fields = { coil = [0.0, 0.0, 0.0] }\n[[design.targets]]\ntype = \"position\"\npose = \"flat\"\n"
+                        "probe = \"tip\"\nvalue = [17.2, 0.0, 0.0]\n[[design.poses]]\nname = \"bent\"\n")
+    text = text.replace('[[design.targets]]\ntype = "position"\nprobe = "tip"\nvalue = [12.0',
+                        '[[design.targets]]\ntype = "position"\npose = "bent"\nprobe = "tip"\nvalue = [12.0')
+    path = tmp_path / "poses.toml"
+    path.write_text(text)
+    scn = scenario.load(path)
+    d = scn.design()
+    x = d.x_start()
+    flat = scn.problem.probes["tip"].state(d.solve(x)[0].g)[0]
+    assert np.abs(flat - [17.2, 0.0, 0.0]).max() < 1e-12
+    assert np.all(d.jacobian(x)[:3] == 0.0)                 # the flat pose's rows: no variable moves it
+    assert main(["design", str(path), "--out", str(tmp_path / "o"), "-q"]) == 0
+    held = scenario.load(tmp_path / "o" / "optimised_flat.toml")
+    assert held.spec["fields"]["coil"]["B"] == [0.0, 0.0, 0.0]

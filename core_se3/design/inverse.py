@@ -129,15 +129,7 @@ class Design:
                 t.resolve_scale(problem)
         self.all = self.variables + self.aux
         self.x0 = [v.value() for v in self.all]
-        # the order in which pose k assigns: other poses' variables (their start), the pose's
-        # fixed settings, shared variables, its own -- the later ones win on a shared field
-        nv = len(self.variables)
-        self.order = []
-        for k, pose in enumerate(self.poses):
-            others = [i for i, v in enumerate(self.variables) if v.pose is not None and v.pose != k]
-            shared = [i for i, v in enumerate(self.variables) if v.pose is None]
-            own = [i for i, v in enumerate(self.variables) if v.pose == k]
-            self.order.append(others + list(range(nv, len(self.all))) + shared + own)
+        self.order, self.held = self._orders()
         self.slices, k = [], 0
         for v in self.variables:
             self.slices.append(slice(k, k + v.size))
@@ -154,6 +146,25 @@ class Design:
         # the element's coarse-mesh check of the design points (once per point whose element
         # changed, each cause said once per run: optimise starts a new run)
         self.element_check = ElementCheck()
+
+    def _orders(self):
+        """Per pose k: the order in which it assigns the variables -- other poses' variables and
+        the other poses' fixed settings (their start), the shared variables, the pose's own fixed
+        settings, its own variables: the later ones win on a shared field -- and the shared
+        variables the pose holds (in its settings, or setting a parameter that its settings
+        hold): they keep their start there and have no derivative in that pose.  (Before, a
+        shared variable was assigned after the settings, so that a pose holding the field of a
+        shared field variable at zero was bent by the optimised field.)"""
+        nv, order, held = len(self.variables), [], []
+        for k, pose in enumerate(self.poses):
+            others = [i for i, v in enumerate(self.variables) if v.pose is not None and v.pose != k]
+            shared = [i for i, v in enumerate(self.variables) if v.pose is None]
+            own = [i for i, v in enumerate(self.variables) if v.pose == k]
+            mine = [i for i in range(nv, len(self.all)) if self.all[i] in pose.settings]
+            fixed = set().union(*[self.all[i].controls() for i in mine])
+            held.append({i for i in shared if self.variables[i] in pose.settings or self.variables[i].controls() & fixed})
+            order.append(others + [i for i in range(nv, len(self.all)) if i not in mine] + shared + mine + own)
+        return order, held
 
     @property
     def distributed(self):
@@ -184,7 +195,7 @@ class Design:
         pose, out = self.poses[k], []
         for i in self.order[k]:
             v = self.all[i]
-            if i < len(self.variables) and (v.pose is None or v.pose == k):
+            if i < len(self.variables) and (v.pose is None or v.pose == k) and i not in self.held[k]:
                 out.append(np.asarray(x[self.slices[i]], float))
             elif v in pose.settings:
                 out.append(np.broadcast_to(np.asarray(pose.settings[v], float), (v.size,)).copy())
@@ -225,7 +236,7 @@ class Design:
             self.best = (phi, list(self.solve(x)))
 
     def _active(self, k):
-        return [i for i, v in enumerate(self.variables) if v.pose is None or v.pose == k]
+        return [i for i, v in enumerate(self.variables) if (v.pose is None or v.pose == k) and i not in self.held[k]]
 
     def _target_poses(self, states):
         """(k, pose, active variables) of the poses with targets, their variables assigned the
