@@ -188,3 +188,16 @@ def test_a_pose_holds_the_field_of_a_shared_field_variable(tmp_path):
     assert main(["design", str(path), "--out", str(tmp_path / "o"), "-q"]) == 0
     held = scenario.load(tmp_path / "o" / "optimised_flat.toml")
     assert held.spec["fields"]["coil"]["B"] == [0.0, 0.0, 0.0]
+
+
+def test_design_of_a_scenario_traced_by_arc_length(tmp_path):
+    # [solver] control = "arclength": the design's solves from the flat state step the load
+    # with the scenario's Newton options.  Before, its path-following keys went along and
+    # `core-se3 design` stopped with exit 2, "newton_solve() got an unknown option 'method'".
+    path = tmp_path / "arc.toml"
+    path.write_text(BASE.replace("[solver]\nsteps = 4", '[solver]\ncontrol = "arclength"\ndlam0 = 0.25'))
+    assert main(["design", str(path), "--out", str(tmp_path / "o"), "-q"]) == 0
+    scn = scenario.load(tmp_path / "o" / "optimised.toml")
+    assert scn.problem.solve_defaults["control"] == "arclength"
+    tip = scn.problem.solve().final.probes["tip"]["u"] + np.array([17.2, 0.0, 0.0])
+    assert abs(tip[0] - 12.0) < 1e-5 and abs(tip[2] - 10.0) < 1e-5

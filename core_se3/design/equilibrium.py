@@ -206,6 +206,20 @@ def assign_all(variables, xs):
         v.assign(x)
 
 
+@contextmanager
+def _load_stepping_defaults(problem):
+    """The problem's ``solve_defaults`` (a scenario's [solver]) reduced to the options of load
+    stepping while a design solves from the flat state by load stepping: a scenario traced by
+    arc length keeps its path-following keys (method, dlam0, psi, ...) there, which load
+    stepping refused with "newton_solve() got an unknown option 'method'"."""
+    saved = problem.solve_defaults
+    problem.solve_defaults = {k: v for k, v in saved.items() if k in NewtonOptions.__dataclass_fields__}
+    try:
+        yield
+    finally:
+        problem.solve_defaults = saved
+
+
 def solve_flat(problem, variables, xs, lam=1.0, options=None, check=None):
     """Solve from the flat (reference) state by load stepping at the values xs.
 
@@ -233,7 +247,7 @@ def solve_flat(problem, variables, xs, lam=1.0, options=None, check=None):
     check = check or ElementCheck()
     check(problem, variables, xs, stacklevel=2)
     problem.element                                 # built (and its own warnings given) outside the quiet part
-    with check.quiet(always=True):                  # said above, with the design point
+    with check.quiet(always=True), _load_stepping_defaults(problem):      # said above, with the design point
         res = problem.solve(steps=opts.flat_steps, lam_end=lam, control="load", limit_check=False, **kw)
     its = sum(e["iterations"] for e in res.log)
     return EquilibriumState(res.final.g.copy(), lam, [np.array(x, float) for x in xs],
