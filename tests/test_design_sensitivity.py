@@ -133,6 +133,19 @@ def test_bad_input():
         v.check_start()
 
 
+def test_material_variable_over_a_non_uniform_region_is_refused():
+    # E 1e4 on elements 0-1 and 3e4 on 2-3, one E variable over all four: before, its value was
+    # the first element's (1e4) and the design's start set the whole region to it, silently
+    # solving another shell than the user's (a tip force: deflection 0.2163 became 0.2322)
+    from core_se3.fem import RegionMaterial
+    p = Problem(mesh.rectangle(1.0, 0.2, 4, 1), Material(1e4, 0.0, 0.02))
+    p.set_material(RegionMaterial([Material(1e4, 0.0, 0.02), Material(3e4, 0.0, 0.02)], np.array([0, 0, 1, 1])))
+    with pytest.raises(DesignError, match="E varies over region 0 .10000 .. 30000."):
+        MaterialVariable(p, [np.arange(4)], "E")
+    v = MaterialVariable(p, [np.arange(2), np.arange(2, 4)], "E")
+    assert v.value().tolist() == [1e4, 3e4]
+
+
 def test_thickness_of_a_region_in_contact_is_refused():
     # The contact keeps the surface offset h/2 and the penalty it was built with.  Before, a
     # thickness variable there solved with the old offset: a strip pressed onto a half-space

@@ -82,6 +82,12 @@ class MaterialVariable(Variable):
         if prop == "h":
             _check_thickness_loads(problem, allel, name)
         props = self._per_element()
+        for j, r in enumerate(self.regions):
+            lo, hi = float(np.min(props[prop][r])), float(np.max(props[prop][r]))
+            if hi > lo:
+                # one value per region: the start would set the whole region to its first element's
+                raise DesignError(f"material variable {name!r}: {prop} varies over region {j} ({lo:g} .. {hi:g}); a "
+                                  f"design variable is one {prop} per region: give regions on which it is uniform")
         x0 = np.array([props[prop][r].mean() for r in self.regions])
         self._setup(name, len(self.regions), 0.0 if lower is None else lower, upper, x0,
                     [f"{name}[{j}]" for j in range(len(self.regions))], None)
