@@ -149,3 +149,19 @@ def test_two_variables_setting_one_parameter_are_refused():
     two = [Pose("a", pose[0].targets), Pose("b", pose[0].targets)]
     Design(p, [FieldVariable(p, f, pose=0), FieldVariable(p, f, pose=1), Ea,
                MaterialVariable(p, [np.arange(4, 8)], "E")], two)
+
+
+def test_angle_target_past_half_a_turn_is_reached_past_it():
+    # A strip rolled by a follower end moment (tip angle 0.3 rad at P = 1), target 270 deg
+    # about -y.  Before, the angle was measured near the target (reference = target), so the
+    # start (0.3 rad) read as 360 deg and the optimiser "reached" 270 deg at P = -5.236: the
+    # strip turned by -90 deg.  Now the angle follows the states from the reference
+    # configuration: P = 15.708 (the exact M L / EI = 3 pi / 2 of pure bending).
+    from core_se3.design import LoadMagnitude, RotationAngle
+    L, w, h, E = 1.0, 0.2, 0.02, 1e4
+    p = Problem(mesh.rectangle(L, w, 16, 1), Material(E, 0.0, h))
+    p.clamp("x0")
+    p.add_edge_moment("x1", (0, -0.3 * E * w * h ** 3 / 12 / L, 0), follower=True)
+    angle = RotationAngle(p, node=int(p.mesh.node_set("x1")[0]), axis=(0, -1, 0), target=np.radians(270.0))
+    r = Design(p, [LoadMagnitude(p, p.loads[0])], [Pose("roll", [Target(angle)])]).optimise(tolerance=1e-6)
+    assert r.reached and abs(0.3 * r.x[0] - 1.5 * pi) < 1e-6

@@ -269,9 +269,15 @@ class Orientation(Quantity):
 
 class RotationAngle(Quantity):
     """The angle [rad] by which a probe (or node) has turned about the lab ``axis`` from its
-    reference frame, continuous through any number of turns near ``reference`` [rad]:
-    theta = reference + axis . log(exp(-reference axis) R R_0^T); with ``target`` [rad] the
-    misfit theta - target (and reference = target).
+    reference frame, continuous through any number of turns:
+    theta = reference + axis . log(exp(-reference axis) R R_0^T), the reference following the
+    states it is evaluated at (it starts at ``reference``, default 0: the reference
+    configuration, and becomes the value whenever that is more than a quarter turn from it), so
+    that a shell turned gradually past pi is counted past pi; with ``target`` [rad] the misfit
+    theta - target.  (Before, the reference was the target: a strip turned by -90 deg was 'on
+    target' for a target of 270 deg, and a design reached it so.)  Evaluate one RotationAngle
+    along one path (a design's pose): a state turned by more than half a turn from the last
+    reference is counted a turn short or over.
 
     Parameters: problem; probe (a name) or node (an id); axis (3,); target, reference [rad]; name.
 
@@ -293,13 +299,18 @@ class RotationAngle(Quantity):
             raise DesignError(f"target {name!r}: the axis must be a non-zero 3-vector")
         self.axis = a / np.linalg.norm(a)
         self.target = None if target is None else float(target)
-        self.reference = float(reference if reference is not None else (target or 0.0))
+        self.reference = float(reference if reference is not None else 0.0)
         self.R0 = self.frame.target
         self.name, self.size = name, 1
 
     def value(self, problem, g, lam):
         Rref = lie.exp_so3(self.reference * self.axis) @ self.R0
         th = self.reference + self.axis @ lie.log_so3(Rref.T @ self.frame._R(g))
+        if abs(th - self.reference) > 0.5 * np.pi:
+            # re-centred when the state has turned a quarter turn from the reference: the next
+            # states are counted from here (between re-centrings theta is one smooth function
+            # of R, and the jacobian its derivative; off the axis it depends on the reference)
+            self.reference = float(th)
         return np.array([th - (self.target if self.target is not None else 0.0)])
 
     def jacobian(self, problem, g, lam):
