@@ -165,3 +165,26 @@ def test_angle_target_past_half_a_turn_is_reached_past_it():
     angle = RotationAngle(p, node=int(p.mesh.node_set("x1")[0]), axis=(0, -1, 0), target=np.radians(270.0))
     r = Design(p, [LoadMagnitude(p, p.loads[0])], [Pose("roll", [Target(angle)])]).optimise(tolerance=1e-6)
     assert r.reached and abs(0.3 * r.x[0] - 1.5 * pi) < 1e-6
+
+
+def test_field_designed_from_zero():
+    # A field variable starting at B = 0 (no B_max) had the typical size 1e-300 T, so the
+    # optimisers saw a gradient 1e-300 times the true one and stopped at once ("did not reach
+    # the target: misfit 2.0e-01", x = 0).  Now 1 T: reached at Bz = 0.41907 (as from 1 mT).
+    def strip(B):
+        p = Problem(mesh.rectangle(1.0, 0.2, 8, 1), Material(1e4, 0.0, 0.02))
+        p.clamp("x0"); p.add_probe("tip")
+        f = UniformField(B)
+        p.add_magnetic((0.5, 0.0, 0.0), f, mu0=1.0)
+        return p, f
+    p, f = strip((0.0, 0.0, 0.0))
+    v = FieldVariable(p, f, free=("z",))
+    r = Design(p, [v], [Pose("a", [Target(ProbePosition(p, "tip"), components=[2], value=[0.2])])]).optimise(
+        tolerance=1e-6)
+    assert r.reached and abs(r.x[0] - 0.41907) < 1e-5
+    # a polar form with its angle fixed takes its direction from the start: none at zero
+    with pytest.raises(DesignError, match="needs a non-zero start field"):
+        FieldVariable(p, UniformField((0.0, 0.0, 0.0)), form="polar", free=("magnitude",))
+    q = Problem(mesh.rectangle(1.0, 0.2, 8, 1), Material(1e4, 0.0, 0.02))
+    with pytest.raises(DesignError, match="needs a non-zero start B.r in every region"):
+        RegionMagnetisation(q, [np.arange(8)], dict(form="polar", free=("magnitude",)), UniformField((0, 0, 1.0)))

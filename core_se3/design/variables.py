@@ -307,7 +307,9 @@ class FieldVariable(Variable):
             raise DesignError(f"field variable {name!r}: form must be 'vector' or 'polar', got {form!r}")
         self.problem, self.field, self.form = problem, field, form
         B = np.asarray(getattr(field, self._attr), float)
-        scale0 = max(float(np.linalg.norm(B)), float(B_max or 0.0), 1e-300)
+        # the typical size of the components: |B|, the bound, or 1 T from a zero field (a floor
+        # of 1e-300 made the optimisers' gradient 1e-300 x the true one: no step from B = 0)
+        scale0 = max(float(np.linalg.norm(B)), float(B_max or 0.0)) or 1.0
         if form == "vector":
             self.parts = ["x", "y", "z"]
             self.full = B.copy()
@@ -323,6 +325,9 @@ class FieldVariable(Variable):
             if B_max is not None:
                 hi[0] = B_max
         self.free = free_index(self.parts, free, f"field variable {name!r}")
+        if form == "polar" and 1 not in self.free and self.full[0] == 0:
+            raise DesignError(f"field variable {name!r}: a polar form with its angle fixed needs a non-zero start field "
+                              "(its direction): the field is zero, whose angle would be taken as 0 (along e1)")
         self.norm_bounds = []
         if B_max is not None and form == "vector":
             # |B|^2 = |free part|^2 + |fixed part|^2 <= B_max^2 (the fixed part as a constant)
