@@ -188,3 +188,22 @@ def test_field_designed_from_zero():
     q = Problem(mesh.rectangle(1.0, 0.2, 8, 1), Material(1e4, 0.0, 0.02))
     with pytest.raises(DesignError, match="needs a non-zero start B.r in every region"):
         RegionMagnetisation(q, [np.arange(8)], dict(form="polar", free=("magnitude",)), UniformField((0, 0, 1.0)))
+
+
+@pytest.mark.parametrize("make,match", [
+    (lambda p: Target(ProbePosition(p, "tip"), value=[1.0, 2.0]), r"value: expected 3 number\(s\), got \(2,\)"),
+    (lambda p: ProbePosition(p, "tip", target=[1.0, 2.0]), r"expected 3 number\(s\)"),
+    (lambda p: NodePosition(p, [1, 2], target=[[1.0, 2.0, 3.0]] * 3), r"expected 2 x 3 number\(s\)"),
+    (lambda p: Target(ProbePosition(p, "tip"), components=[]), "one or more whole numbers"),
+    (lambda p: Target(ProbePosition(p, "tip"), components=[0.5]), "one or more whole numbers"),
+    (lambda p: Target(ProbePosition(p, "tip"), value=[np.nan, 0, 0]), "must be finite"),
+    (lambda p: ProbePosition(p, "tip", target=[np.nan, 0, 0]), "must be finite"),
+    (lambda p: Target(ProbePosition(p, "tip"), scale=0.0), "finite and > 0"),
+])
+def test_bad_target_input_names_the_cause(make, match):
+    # before: bare NumPy errors (broadcast, zero-size reduction), components [0.5] read as [0],
+    # and a NaN target or a zero scale taken (a NaN or infinite objective later)
+    p = Problem(mesh.rectangle(1.0, 0.2, 4, 1), Material(1e4, 0.0, 0.02))
+    p.add_probe("tip")
+    with pytest.raises(DesignError, match=match):
+        make(p)

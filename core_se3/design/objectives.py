@@ -33,7 +33,7 @@ from ..errors import DesignError, did_you_mean
 from ..model import Probe
 
 __all__ = ["Quantity", "NodePosition", "ProbePosition", "Orientation", "RotationAngle", "AngleInDegrees", "Energy",
-           "UserQuantity", "local_jacobian", "probe_frames"]
+           "UserQuantity", "local_jacobian", "probe_frames", "target_array"]
 
 
 def local_jacobian(fn, g, nodes, ell, step=1e-4, local=None):
@@ -116,6 +116,25 @@ def _probe_local(probe, fn):
     return nodes, lambda F: fn(probe_frames(probe, F[:, ia], F[:, ib]))
 
 
+def target_array(value, shape, what):
+    """``value`` as a finite float array broadcast to ``shape``; DesignError naming ``what``
+    otherwise (a wrong length or a NaN was a bare NumPy error, or a NaN objective, later).
+
+    Example
+    -------
+    >>> target_array(0.5, (3,), "t").tolist()
+    [0.5, 0.5, 0.5]
+    """
+    try:
+        a = np.broadcast_to(np.asarray(value, float), shape).copy()
+    except (TypeError, ValueError):
+        raise DesignError(f"{what}: expected {' x '.join(map(str, shape)) or 'a'} number(s), got "
+                          f"{np.shape(value) if not isinstance(value, str) else repr(value)}") from None
+    if not np.all(np.isfinite(a)):
+        raise DesignError(f"{what}: the values must be finite, got {a.ravel().tolist()[:6]}")
+    return a
+
+
 def _nodes(problem, nodes, what):
     n = problem.mesh.n_nodes
     if isinstance(nodes, str):
@@ -183,7 +202,7 @@ class NodePosition(Quantity):
     def __init__(self, problem, nodes, target=None, name="position"):
         self.nodes = _nodes(problem, nodes, f"target {name!r}")
         self.name, self.size = name, 3 * len(self.nodes)
-        self.target = None if target is None else np.broadcast_to(np.asarray(target, float), (len(self.nodes), 3)).copy()
+        self.target = None if target is None else target_array(target, (len(self.nodes), 3), f"target {name!r}")
 
     def value(self, problem, g, lam):
         x = g[self.nodes, :3, 3]
@@ -213,7 +232,7 @@ class ProbePosition(Quantity):
     def __init__(self, problem, probe, target=None, name=None):
         self.probe = _probe(problem, probe, f"target {name or probe!r}")
         self.name, self.size = name or self.probe.name, 3
-        self.target = None if target is None else np.asarray(target, float)
+        self.target = None if target is None else target_array(target, (3,), f"target {self.name!r}")
 
     def value(self, problem, g, lam):
         x = self.probe.state(g)[0]
@@ -298,8 +317,8 @@ class RotationAngle(Quantity):
         if a.shape != (3,) or not np.linalg.norm(a) > 0:
             raise DesignError(f"target {name!r}: the axis must be a non-zero 3-vector")
         self.axis = a / np.linalg.norm(a)
-        self.target = None if target is None else float(target)
-        self.reference = float(reference if reference is not None else 0.0)
+        self.target = None if target is None else float(target_array(target, (), f"target {name!r}"))
+        self.reference = float(target_array(reference if reference is not None else 0.0, (), f"reference {name!r}"))
         self.R0 = self.frame.target
         self.name, self.size = name, 1
 
