@@ -207,3 +207,20 @@ def test_bad_target_input_names_the_cause(make, match):
     p.add_probe("tip")
     with pytest.raises(DesignError, match=match):
         make(p)
+
+
+@pytest.mark.parametrize("kw,match", [
+    (dict(x0=[1.0, 2.0]), "x0 must be 1 finite numbers .load."), (dict(x0=[np.nan]), "x0 must be 1 finite"),
+    (dict(tol=-1.0), "tol must be a finite number > 0"), (dict(tol=float("nan")), "tol must be"),
+    (dict(tolerance=-1.0), "tolerance must be a finite number >= 0"),
+])
+def test_bad_optimiser_input_names_the_key(kw, match):
+    # before: scipy's bare ValueErrors ("Inconsistent shapes between bounds and `x0`", "`x0` is
+    # infeasible", "At least one of the tolerances must be higher than machine epsilon"), a NaN
+    # tol ran to max_iter, and tolerance -1 said "did not reach the target: misfit 0 > -1"
+    from core_se3.design import LoadMagnitude
+    p = Problem(mesh.rectangle(1.0, 0.2, 4, 1), Material(1e4, 0.0, 0.02))
+    p.clamp("x0"); p.add_probe("tip"); p.add_edge_force("x1", (0, 0, 1e-3))
+    d = Design(p, [LoadMagnitude(p, p.loads[0])], [Pose("a", [Target(ProbePosition(p, "tip"), components=[2], value=[0.1])])])
+    with pytest.raises(DesignError, match=match):
+        d.optimise(**kw)

@@ -372,6 +372,11 @@ class Design:
         True
         """
         x0, norm = self._check_start(method, x0, max_iter)
+        for key, val, low in (("tol", tol, 0.0), ("tolerance", tolerance, -1.0)):
+            if (val is not None or key == "tol") and not (isinstance(val, (int, float, np.floating, np.integer))
+                                                          and not isinstance(val, bool) and np.isfinite(val)
+                                                          and val > low and val >= 0):
+                raise DesignError(f"{key} must be a finite number {'>' if key == 'tol' else '>='} 0, got {val!r}")
         self.element_check.reset()
         t0 = time.perf_counter()
         history, last = [], {}
@@ -419,7 +424,16 @@ class Design:
         if norm and method in ("least_squares", "L-BFGS-B"):
             raise DesignError(f"method {method!r} takes box bounds only; a norm bound (|B| <= B_max of a vector form) "
                               "needs 'SLSQP' or 'trust-constr', or the polar form with a bound on the magnitude")
-        x0 = self.x_start() if x0 is None else np.asarray(x0, float)
+        if x0 is None:
+            x0 = self.x_start()
+        else:
+            try:
+                x0 = np.asarray(x0, float)
+            except (TypeError, ValueError):
+                raise DesignError(f"x0 must be {self.nx} numbers ({', '.join(self.labels)}), got {x0!r}") from None
+            if x0.shape != (self.nx,) or not np.all(np.isfinite(x0)):
+                raise DesignError(f"x0 must be {self.nx} finite numbers ({', '.join(self.labels)}), got "
+                                  f"{x0.ravel().tolist()[:8]}")
         if np.any(x0 < self.lower) or np.any(x0 > self.upper):
             i = int(np.nonzero((x0 < self.lower) | (x0 > self.upper))[0][0])
             raise DesignError(f"the start {x0[i]:g} of {self.labels[i]!r} lies outside its bounds "
