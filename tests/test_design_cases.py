@@ -224,3 +224,17 @@ def test_bad_optimiser_input_names_the_key(kw, match):
     d = Design(p, [LoadMagnitude(p, p.loads[0])], [Pose("a", [Target(ProbePosition(p, "tip"), components=[2], value=[0.1])])])
     with pytest.raises(DesignError, match=match):
         d.optimise(**kw)
+
+
+def test_counts_are_those_of_the_run():
+    # a second optimise() from the same start: its counts were added to the first's (5
+    # evaluations and 5 equilibrium solves became 10 and 10, 54 Newton iterations 69)
+    from core_se3.design import LoadMagnitude
+    p = Problem(mesh.rectangle(1.0, 0.2, 4, 1), Material(1e4, 0.0, 0.02))
+    p.clamp("x0"); p.add_probe("tip"); p.add_edge_force("x1", (0, 0, 1e-3))
+    d = Design(p, [LoadMagnitude(p, p.loads[0])], [Pose("a", [Target(ProbePosition(p, "tip"), components=[2], value=[0.1])])])
+    r1 = d.optimise(tolerance=1e-8)
+    r2 = d.optimise(x0=[1.0], tolerance=1e-8)
+    assert r2.evaluations <= r1.evaluations and r2.equilibrium_solves <= r1.equilibrium_solves
+    assert r2.history[0]["equilibrium_solves"] <= r1.history[0]["equilibrium_solves"]
+    assert r2.newton_iterations <= r1.newton_iterations

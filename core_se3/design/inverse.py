@@ -378,6 +378,7 @@ class Design:
                                                           and val > low and val >= 0):
                 raise DesignError(f"{key} must be a finite number {'>' if key == 'tol' else '>='} 0, got {val!r}")
         self.element_check.reset()
+        self.solves = self.newton_iterations = self.evaluations = 0     # this run's (a second optimise)
         t0 = time.perf_counter()
         history, last = [], {}
 
