@@ -238,3 +238,19 @@ def test_counts_are_those_of_the_run():
     assert r2.evaluations <= r1.evaluations and r2.equilibrium_solves <= r1.equilibrium_solves
     assert r2.history[0]["equilibrium_solves"] <= r1.history[0]["equilibrium_solves"]
     assert r2.newton_iterations <= r1.newton_iterations
+
+
+def test_variables_without_effect_are_named():
+    # a load variable of a zero load and a magnetisation in a zero field cannot move the shell:
+    # before, the result said only "reached the target" with them at their starts
+    from core_se3.design import LoadMagnitude
+    p = Problem(mesh.rectangle(1.0, 0.2, 4, 1), Material(1e4, 0.0, 0.02))
+    p.clamp("x0"); p.add_probe("tip")
+    p.add_edge_force("x1", (0, 0, 1e-3)); p.add_edge_force("x1", (0, 0, 0.0))
+    p.add_magnetic((0.5, 0, 0), UniformField((0, 0, 0.0)), mu0=1.0)
+    v = [LoadMagnitude(p, p.loads[0], name="P"), LoadMagnitude(p, p.loads[1], name="Q"),
+         RegionMagnetisation(p, [np.arange(4)], name="m")]
+    r = Design(p, v, [Pose("a", [Target(ProbePosition(p, "tip"), components=[2], value=[0.1])])]).optimise(tolerance=1e-8)
+    assert r.reached and r.idle == ["Q", "m[0].x", "m[0].y", "m[0].z"]
+    assert r.message.endswith("without effect at the result (the residual of no pose with targets depends on them): "
+                              "Q, m[0].x, m[0].y, m[0].z") and r.document()["idle"] == r.idle

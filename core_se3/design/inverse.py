@@ -497,12 +497,33 @@ class Design:
             msg = f"reached the target: misfit {worst:.3e} <= tolerance {tolerance:.3e} ({msg})"
         values = {v.name: np.asarray(x[self.slices[i]]) for i, v in enumerate(self.variables)}
         states = self.solve(x)
+        idle = self.idle(states)
+        if idle:
+            msg += (f"; without effect at the result (the residual of no pose with targets depends on them): "
+                    f"{', '.join(idle)}")
         res = DesignResult(bool(ok), reached, msg, x, self.labels, values, self.objective(x), self.gradient(x), mis,
                            worst, len(history), self.evaluations, self.solves, self.newton_iterations,
-                           time.perf_counter() - t0, method, history, list(states))
+                           time.perf_counter() - t0, method, history, list(states), idle)
         assign_all(self.pose_variables(len(self.poses) - 1), states[-1].x)
         restore_multipliers(self.problem, states[-1])
         return res
+
+    def idle(self, states):
+        """The labels of the variables' components that change nothing at ``states`` (of
+        :meth:`solve`): dr/dx and the targets' explicit derivatives zero in every pose with
+        targets where the variable is active (a load variable of a zero load, a magnetisation
+        in poses without field, a variable only of poses without targets) -- the optimiser
+        cannot have moved them, whatever the result says."""
+        moved = np.zeros(self.nx, bool)
+        free = self.problem.assembler().free
+        for k, pose, act in self._target_poses(states):
+            g, lam = states[k].g, states[k].lam
+            for i in act:
+                v = self.variables[i]
+                d = v.dr_dp(self.problem, g, lam).reshape(-1, v.size)[free]
+                e = np.concatenate([t.quantity.explicit(self.problem, g, lam, v) for t in pose.targets])
+                moved[self.slices[i]] |= np.any(d != 0, 0) | np.any(e != 0, 0)
+        return [lab for lab, m in zip(self.labels, moved) if not m]
 
     def assign_pose(self, k, x):
         """Set the problem to pose k's values at x (e.g. before writing its outputs)."""

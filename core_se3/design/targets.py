@@ -137,7 +137,8 @@ class DesignResult:
         ``max_misfit``: the largest.
     iterations, evaluations, equilibrium_solves, newton_iterations : int
         Counts; ``time`` [s]; ``history``: one dict per iteration (objective, gradient_norm,
-        equilibrium_solves, ...); ``states``: the final EquilibriumState of every pose.
+        equilibrium_solves, ...); ``states``: the final EquilibriumState of every pose;
+        ``idle``: the labels of the components without effect at the result (``Design.idle``).
 
     Example
     -------
@@ -163,6 +164,7 @@ class DesignResult:
     method: str = ""
     history: list = field(default_factory=list)
     states: list = field(default_factory=list)
+    idle: list = field(default_factory=list)
 
     def document(self):
         """A JSON-able summary (no frames)."""
@@ -172,4 +174,5 @@ class DesignResult:
                     objective=float(self.objective), gradient=np.asarray(self.gradient).tolist(),
                     misfit=self.misfit, max_misfit=float(self.max_misfit), iterations=int(self.iterations),
                     evaluations=int(self.evaluations), equilibrium_solves=int(self.equilibrium_solves),
-                    newton_iterations=int(self.newton_iterations), time=float(self.time), history=self.history)
+                    newton_iterations=int(self.newton_iterations), time=float(self.time), history=self.history,
+                    idle=list(self.idle))
