@@ -254,3 +254,28 @@ def test_variables_without_effect_are_named():
     assert r.reached and r.idle == ["Q", "m[0].x", "m[0].y", "m[0].z"]
     assert r.message.endswith("without effect at the result (the residual of no pose with targets depends on them): "
                               "Q, m[0].x, m[0].y, m[0].z") and r.document()["idle"] == r.idle
+
+
+def test_a_design_on_another_branch_says_so():
+    # A cantilever compressed to 1.5 times its buckling load, buckled up by a small tip force;
+    # target: the tip 0.7872 up, which needs the force slightly down (-0.97 of it) on the up
+    # branch, reached along the design's path.  A solve from flat with that force (the user's
+    # run of the optimised scenario) buckles the strip down (tip z -0.789): before, the result
+    # said only "reached the target"; now the message and r.branch say so (1.57 L away).
+    from core_se3.design import LoadMagnitude
+    L, w, h, E = 1.0, 0.1, 0.01, 1e4
+    Pcr = pi ** 2 * E * w * h ** 3 / 12 / (4 * L ** 2)
+    p = Problem(mesh.rectangle(L, w, 16, 1), Material(E, 0.0, h))
+    p.clamp("x0"); p.add_probe("tip")
+    p.add_edge_force("x1", (-1.5 * Pcr, 0, 0)); p.add_edge_force("x1", (0, 0, 0.02 * Pcr))
+    d = Design(p, [LoadMagnitude(p, p.loads[1])], [Pose("up", [Target(ProbePosition(p, "tip"), components=[2],
+                                                                       value=[0.7872])])])
+    r = d.optimise(tolerance=1e-6)
+    assert r.reached and r.x[0] < 0 and abs(r.branch["up"] - 1.57) < 0.01
+    assert "pose 'up': a solve from the flat state at these values reaches another equilibrium" in r.message
+    # a design whose state a solve from flat reproduces says nothing of it
+    q = Problem(mesh.rectangle(L, w, 16, 1), Material(E, 0.0, h))
+    q.clamp("x0"); q.add_probe("tip"); q.add_edge_force("x1", (0, 0, 0.02 * Pcr))
+    r2 = Design(q, [LoadMagnitude(q, q.loads[0])], [Pose("a", [Target(ProbePosition(q, "tip"), components=[2],
+                                                                      value=[0.1])])]).optimise(tolerance=1e-6)
+    assert r2.reached and r2.branch == {} and "another equilibrium" not in r2.message

@@ -33,12 +33,14 @@ Find the tip force multiplier that puts a cantilever's tip 1.0 above the clamp l
 from __future__ import annotations
 
 import time
+import warnings
 
 import numpy as np
 
 from ..backend import launched_ranks
 from ..errors import ConvergenceError, DesignError, ParallelError
-from .equilibrium import ElementCheck, EquilibriumOptions, assign_all, follow, restore_multipliers, solve_flat
+from .equilibrium import (ElementCheck, EquilibriumOptions, EquilibriumState, assign_all, follow, multipliers,
+                          restore_multipliers, solve_flat)
 from .sensitivity import SolveWith, sensitivity
 from .targets import DesignResult, Pose, Smoothness, Target
 
@@ -497,13 +499,18 @@ class Design:
             msg = f"reached the target: misfit {worst:.3e} <= tolerance {tolerance:.3e} ({msg})"
         values = {v.name: np.asarray(x[self.slices[i]]) for i, v in enumerate(self.variables)}
         states = self.solve(x)
-        idle = self.idle(states)
+        idle, branch = self.idle(states), self.off_branch(x, states)
+        for name, dev in branch.items():
+            msg += (f"; pose {name!r}: a solve from the flat state at these values " +
+                    ("does not converge" if dev == np.inf else f"reaches another equilibrium ({dev:.3g} of the length "
+                     "scale away; a multistable shell: the design's was reached along its path, which `core-se3 run` "
+                     "of the optimised scenario does not take)"))
         if idle:
             msg += (f"; without effect at the result (the residual of no pose with targets depends on them): "
                     f"{', '.join(idle)}")
         res = DesignResult(bool(ok), reached, msg, x, self.labels, values, self.objective(x), self.gradient(x), mis,
                            worst, len(history), self.evaluations, self.solves, self.newton_iterations,
-                           time.perf_counter() - t0, method, history, list(states), idle)
+                           time.perf_counter() - t0, method, history, list(states), idle, branch)
         assign_all(self.pose_variables(len(self.poses) - 1), states[-1].x)
         restore_multipliers(self.problem, states[-1])
         return res
@@ -524,6 +531,27 @@ class Design:
                 e = np.concatenate([t.quantity.explicit(self.problem, g, lam, v) for t in pose.targets])
                 moved[self.slices[i]] |= np.any(d != 0, 0) | np.any(e != 0, 0)
         return [lab for lab, m in zip(self.labels, moved) if not m]
+
+    def off_branch(self, x, states):
+        """pose name -> the largest distance (over the length scale) between its design state
+        at x and the equilibrium a solve from the flat state at the same values reaches (the
+        user's run of the optimised scenario), for the poses where it exceeds 1e-6: on a
+        multistable shell the design may end on a branch it reached along its own path (a
+        buckled strip kept up by a force that, applied from flat, buckles it down)."""
+        out = {}
+        saved = [multipliers(self.problem)]
+        for k, pose in enumerate(self.poses):
+            try:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    st = solve_flat(self.problem, self.pose_variables(k), self.pose_values(k, x), pose.lam, self.options)
+                dev = np.abs(st.g[:, :3, 3] - states[k].g[:, :3, 3]).max() / self.problem.length_scale
+            except ConvergenceError:
+                dev = np.inf
+            if dev > 1e-6:
+                out[pose.name] = float(dev)
+        restore_multipliers(self.problem, EquilibriumState(None, None, None, multipliers=saved[0]))
+        return out
 
     def assign_pose(self, k, x):
         """Set the problem to pose k's values at x (e.g. before writing its outputs)."""

@@ -138,7 +138,9 @@ class DesignResult:
     iterations, evaluations, equilibrium_solves, newton_iterations : int
         Counts; ``time`` [s]; ``history``: one dict per iteration (objective, gradient_norm,
         equilibrium_solves, ...); ``states``: the final EquilibriumState of every pose;
-        ``idle``: the labels of the components without effect at the result (``Design.idle``).
+        ``idle``: the labels of the components without effect at the result (``Design.idle``);
+        ``branch``: pose -> distance to the equilibrium a solve from flat reaches, where the
+        design's is another (``Design.off_branch``).
 
     Example
     -------
@@ -165,6 +167,7 @@ class DesignResult:
     history: list = field(default_factory=list)
     states: list = field(default_factory=list)
     idle: list = field(default_factory=list)
+    branch: dict = field(default_factory=dict)
 
     def document(self):
         """A JSON-able summary (no frames)."""
@@ -175,4 +178,4 @@ class DesignResult:
                     misfit=self.misfit, max_misfit=float(self.max_misfit), iterations=int(self.iterations),
                     evaluations=int(self.evaluations), equilibrium_solves=int(self.equilibrium_solves),
                     newton_iterations=int(self.newton_iterations), time=float(self.time), history=self.history,
-                    idle=list(self.idle))
+                    idle=list(self.idle), branch=dict(self.branch))
