@@ -121,3 +121,161 @@ def test_scalar_methods_bounds_constraints_and_bad_input():
         Design(p3, [FieldVariable(p3, f3, form="polar", B_max=0.5)], [Pose("x", [Target(tip)])])
     with pytest.raises(DesignError, match="two or more regions"):
         Smoothness(v3, 1.0)
+
+
+def test_two_variables_setting_one_parameter_are_refused():
+    # Before: Design took them and differentiated both, but the later assignment overwrote the
+    # earlier one, so the earlier variable's column was the derivative of a parameter that no
+    # longer moved the state: FieldVariable free x beside one free z on the same field gave
+    # d(tip z)/dBx = -0.0569 where central differences give 0 (Bx is reset by the z variable);
+    # E on elements 0-3 beside E on 2-7 gave -1.81e-5 against -1.22e-5 (49 % off).
+    p = Problem(mesh.rectangle(1.0, 0.2, 8, 1), Material(1e4, 0.0, 0.02))
+    p.clamp("x0"); p.add_probe("tip"); p.add_edge_force("x1", (0.0, 0.0, 1e-3))
+    f = UniformField((0.0, 0.0, 0.2)); p.add_magnetic((0.5, 0.0, 0.0), f, mu0=1.0)
+    from core_se3.design import LoadMagnitude, MaterialVariable
+    pose = [Pose("a", [Target(ProbePosition(p, "tip"), components=[2], value=[0.3])])]
+    fx, fz = FieldVariable(p, f, free=("x",), name="fx"), FieldVariable(p, f, free=("z",), name="fz")
+    with pytest.raises(DesignError, match="'fx' and variable 'fz' both set the same field"):
+        Design(p, [fx, fz], pose)
+    with pytest.raises(DesignError, match="is given twice"):
+        Design(p, [fz, fz], pose)
+    Ea, Eb = MaterialVariable(p, [np.arange(4)], "E", name="Ea"), MaterialVariable(p, [np.arange(2, 8)], "E", name="Eb")
+    with pytest.raises(DesignError, match="both set E of element 2"):
+        Design(p, [Ea, Eb], pose)
+    P1, P2 = LoadMagnitude(p, p.loads[0], name="P1"), LoadMagnitude(p, p.loads[0], name="P2")
+    with pytest.raises(DesignError, match="magnitude of the same load"):
+        Design(p, [P1, P2], pose)
+    # the same field in two poses (a field per pose) and disjoint regions stay allowed
+    two = [Pose("a", pose[0].targets), Pose("b", pose[0].targets)]
+    Design(p, [FieldVariable(p, f, pose=0), FieldVariable(p, f, pose=1), Ea,
+               MaterialVariable(p, [np.arange(4, 8)], "E")], two)
+
+
+def test_angle_target_past_half_a_turn_is_reached_past_it():
+    # A strip rolled by a follower end moment (tip angle 0.3 rad at P = 1), target 270 deg
+    # about -y.  Before, the angle was measured near the target (reference = target), so the
+    # start (0.3 rad) read as 360 deg and the optimiser "reached" 270 deg at P = -5.236: the
+    # strip turned by -90 deg.  Now the angle follows the states from the reference
+    # configuration: P = 15.708 (the exact M L / EI = 3 pi / 2 of pure bending).
+    from core_se3.design import LoadMagnitude, RotationAngle
+    L, w, h, E = 1.0, 0.2, 0.02, 1e4
+    p = Problem(mesh.rectangle(L, w, 16, 1), Material(E, 0.0, h))
+    p.clamp("x0")
+    p.add_edge_moment("x1", (0, -0.3 * E * w * h ** 3 / 12 / L, 0), follower=True)
+    angle = RotationAngle(p, node=int(p.mesh.node_set("x1")[0]), axis=(0, -1, 0), target=np.radians(270.0))
+    r = Design(p, [LoadMagnitude(p, p.loads[0])], [Pose("roll", [Target(angle)])]).optimise(tolerance=1e-6)
+    assert r.reached and abs(0.3 * r.x[0] - 1.5 * pi) < 1e-6
+
+
+def test_field_designed_from_zero():
+    # A field variable starting at B = 0 (no B_max) had the typical size 1e-300 T, so the
+    # optimisers saw a gradient 1e-300 times the true one and stopped at once ("did not reach
+    # the target: misfit 2.0e-01", x = 0).  Now 1 T: reached at Bz = 0.41907 (as from 1 mT).
+    def strip(B):
+        p = Problem(mesh.rectangle(1.0, 0.2, 8, 1), Material(1e4, 0.0, 0.02))
+        p.clamp("x0"); p.add_probe("tip")
+        f = UniformField(B)
+        p.add_magnetic((0.5, 0.0, 0.0), f, mu0=1.0)
+        return p, f
+    p, f = strip((0.0, 0.0, 0.0))
+    v = FieldVariable(p, f, free=("z",))
+    r = Design(p, [v], [Pose("a", [Target(ProbePosition(p, "tip"), components=[2], value=[0.2])])]).optimise(
+        tolerance=1e-6)
+    assert r.reached and abs(r.x[0] - 0.41907) < 1e-5
+    # a polar form with its angle fixed takes its direction from the start: none at zero
+    with pytest.raises(DesignError, match="needs a non-zero start field"):
+        FieldVariable(p, UniformField((0.0, 0.0, 0.0)), form="polar", free=("magnitude",))
+    q = Problem(mesh.rectangle(1.0, 0.2, 8, 1), Material(1e4, 0.0, 0.02))
+    with pytest.raises(DesignError, match="needs a non-zero start B.r in every region"):
+        RegionMagnetisation(q, [np.arange(8)], dict(form="polar", free=("magnitude",)), UniformField((0, 0, 1.0)))
+
+
+@pytest.mark.parametrize("make,match", [
+    (lambda p: Target(ProbePosition(p, "tip"), value=[1.0, 2.0]), r"value: expected 3 number\(s\), got \(2,\)"),
+    (lambda p: ProbePosition(p, "tip", target=[1.0, 2.0]), r"expected 3 number\(s\)"),
+    (lambda p: NodePosition(p, [1, 2], target=[[1.0, 2.0, 3.0]] * 3), r"expected 2 x 3 number\(s\)"),
+    (lambda p: Target(ProbePosition(p, "tip"), components=[]), "one or more whole numbers"),
+    (lambda p: Target(ProbePosition(p, "tip"), components=[0.5]), "one or more whole numbers"),
+    (lambda p: Target(ProbePosition(p, "tip"), value=[np.nan, 0, 0]), "must be finite"),
+    (lambda p: ProbePosition(p, "tip", target=[np.nan, 0, 0]), "must be finite"),
+    (lambda p: Target(ProbePosition(p, "tip"), scale=0.0), "finite and > 0"),
+])
+def test_bad_target_input_names_the_cause(make, match):
+    # before: bare NumPy errors (broadcast, zero-size reduction), components [0.5] read as [0],
+    # and a NaN target or a zero scale taken (a NaN or infinite objective later)
+    p = Problem(mesh.rectangle(1.0, 0.2, 4, 1), Material(1e4, 0.0, 0.02))
+    p.add_probe("tip")
+    with pytest.raises(DesignError, match=match):
+        make(p)
+
+
+@pytest.mark.parametrize("kw,match", [
+    (dict(x0=[1.0, 2.0]), "x0 must be 1 finite numbers .load."), (dict(x0=[np.nan]), "x0 must be 1 finite"),
+    (dict(tol=-1.0), "tol must be a finite number > 0"), (dict(tol=float("nan")), "tol must be"),
+    (dict(tolerance=-1.0), "tolerance must be a finite number >= 0"),
+])
+def test_bad_optimiser_input_names_the_key(kw, match):
+    # before: scipy's bare ValueErrors ("Inconsistent shapes between bounds and `x0`", "`x0` is
+    # infeasible", "At least one of the tolerances must be higher than machine epsilon"), a NaN
+    # tol ran to max_iter, and tolerance -1 said "did not reach the target: misfit 0 > -1"
+    from core_se3.design import LoadMagnitude
+    p = Problem(mesh.rectangle(1.0, 0.2, 4, 1), Material(1e4, 0.0, 0.02))
+    p.clamp("x0"); p.add_probe("tip"); p.add_edge_force("x1", (0, 0, 1e-3))
+    d = Design(p, [LoadMagnitude(p, p.loads[0])], [Pose("a", [Target(ProbePosition(p, "tip"), components=[2], value=[0.1])])])
+    with pytest.raises(DesignError, match=match):
+        d.optimise(**kw)
+
+
+def test_counts_are_those_of_the_run():
+    # a second optimise() from the same start: its counts were added to the first's (5
+    # evaluations and 5 equilibrium solves became 10 and 10, 54 Newton iterations 69)
+    from core_se3.design import LoadMagnitude
+    p = Problem(mesh.rectangle(1.0, 0.2, 4, 1), Material(1e4, 0.0, 0.02))
+    p.clamp("x0"); p.add_probe("tip"); p.add_edge_force("x1", (0, 0, 1e-3))
+    d = Design(p, [LoadMagnitude(p, p.loads[0])], [Pose("a", [Target(ProbePosition(p, "tip"), components=[2], value=[0.1])])])
+    r1 = d.optimise(tolerance=1e-8)
+    r2 = d.optimise(x0=[1.0], tolerance=1e-8)
+    assert r2.evaluations <= r1.evaluations and r2.equilibrium_solves <= r1.equilibrium_solves
+    assert r2.history[0]["equilibrium_solves"] <= r1.history[0]["equilibrium_solves"]
+    assert r2.newton_iterations <= r1.newton_iterations
+
+
+def test_variables_without_effect_are_named():
+    # a load variable of a zero load and a magnetisation in a zero field cannot move the shell:
+    # before, the result said only "reached the target" with them at their starts
+    from core_se3.design import LoadMagnitude
+    p = Problem(mesh.rectangle(1.0, 0.2, 4, 1), Material(1e4, 0.0, 0.02))
+    p.clamp("x0"); p.add_probe("tip")
+    p.add_edge_force("x1", (0, 0, 1e-3)); p.add_edge_force("x1", (0, 0, 0.0))
+    p.add_magnetic((0.5, 0, 0), UniformField((0, 0, 0.0)), mu0=1.0)
+    v = [LoadMagnitude(p, p.loads[0], name="P"), LoadMagnitude(p, p.loads[1], name="Q"),
+         RegionMagnetisation(p, [np.arange(4)], name="m")]
+    r = Design(p, v, [Pose("a", [Target(ProbePosition(p, "tip"), components=[2], value=[0.1])])]).optimise(tolerance=1e-8)
+    assert r.reached and r.idle == ["Q", "m[0].x", "m[0].y", "m[0].z"]
+    assert r.message.endswith("without effect at the result (the residual of no pose with targets depends on them): "
+                              "Q, m[0].x, m[0].y, m[0].z") and r.document()["idle"] == r.idle
+
+
+def test_a_design_on_another_branch_says_so():
+    # A cantilever compressed to 1.5 times its buckling load, buckled up by a small tip force;
+    # target: the tip 0.7872 up, which needs the force slightly down (-0.97 of it) on the up
+    # branch, reached along the design's path.  A solve from flat with that force (the user's
+    # run of the optimised scenario) buckles the strip down (tip z -0.789): before, the result
+    # said only "reached the target"; now the message and r.branch say so (1.57 L away).
+    from core_se3.design import LoadMagnitude
+    L, w, h, E = 1.0, 0.1, 0.01, 1e4
+    Pcr = pi ** 2 * E * w * h ** 3 / 12 / (4 * L ** 2)
+    p = Problem(mesh.rectangle(L, w, 16, 1), Material(E, 0.0, h))
+    p.clamp("x0"); p.add_probe("tip")
+    p.add_edge_force("x1", (-1.5 * Pcr, 0, 0)); p.add_edge_force("x1", (0, 0, 0.02 * Pcr))
+    d = Design(p, [LoadMagnitude(p, p.loads[1])], [Pose("up", [Target(ProbePosition(p, "tip"), components=[2],
+                                                                       value=[0.7872])])])
+    r = d.optimise(tolerance=1e-6)
+    assert r.reached and r.x[0] < 0 and abs(r.branch["up"] - 1.57) < 0.01
+    assert "pose 'up': a solve from the flat state at these values reaches another equilibrium" in r.message
+    # a design whose state a solve from flat reproduces says nothing of it
+    q = Problem(mesh.rectangle(L, w, 16, 1), Material(E, 0.0, h))
+    q.clamp("x0"); q.add_probe("tip"); q.add_edge_force("x1", (0, 0, 0.02 * Pcr))
+    r2 = Design(q, [LoadMagnitude(q, q.loads[0])], [Pose("a", [Target(ProbePosition(q, "tip"), components=[2],
+                                                                      value=[0.1])])]).optimise(tolerance=1e-6)
+    assert r2.reached and r2.branch == {} and "another equilibrium" not in r2.message

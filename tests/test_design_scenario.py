@@ -117,3 +117,87 @@ def test_gripper_design_example():
     assert r.reached and r.max_misfit < 0.02
     assert r.iterations <= 18 and r.equilibrium_solves <= 54 and r.newton_iterations <= 750
     assert r.misfit["flat"]["targets[0]"] < 1e-9          # no field: the gripper stays flat
+
+
+GRAVITY = """
+units = "N-mm-MPa"
+[mesh]
+generator = "rectangle"
+L = 100.0
+width = 10.0
+nx = 8
+ny = 1
+[material]
+E = 1000.0
+nu = 0.0
+h = 1.0
+rho = 7.85e-9
+[[supports]]
+type = "clamp"
+edge = "x0"
+[[loads]]
+type = "gravity"
+[[probes]]
+name = "tip"
+edge = "x1"
+[solver]
+steps = 2
+[design]
+tolerance = 1e-6
+[[design.variables]]
+type = "load"
+load = 0
+[[design.targets]]
+type = "position"
+probe = "tip"
+value = [0.0, 0.0, -5.0]
+components = [2]
+"""
+
+
+def test_optimised_scenario_holds_a_load_magnitude_at_its_default(tmp_path):
+    # a load variable on a gravity with the default g (-9810 mm/s^2 in N-mm-MPa): before, the
+    # optimised scenario left g out, so `core-se3 run` solved the original load (tip z -11.4
+    # for the design's -5.0); now g is written scaled, in the scenario's units
+    path = tmp_path / "sag.toml"
+    path.write_text(GRAVITY)
+    assert main(["design", str(path), "--out", str(tmp_path / "o"), "-q"]) == 0
+    scn = scenario.load(tmp_path / "o" / "optimised.toml")
+    assert scn.spec["loads"][0]["g"][2] != -9810.0
+    assert abs(scn.problem.solve().final.probes["tip"]["u"][2] + 5.0) < 1e-5
+
+
+def test_a_pose_holds_the_field_of_a_shared_field_variable(tmp_path):
+    # [[design.poses]] fields = { coil = [0, 0, 0] } beside a field variable of every pose (no
+    # pose key): the flat pose must see no field.  Before, the shared variable was assigned
+    # after the pose's hold: the "flat" pose was bent like the other (tip z 12.32 mm at the
+    # start) and had a derivative in the field; optimised_flat.toml held the optimised field.
+    text = BASE.replace("[design]\ntolerance = 1e-6\n", "[design]\ntolerance = 1e-6\n[[design.poses]]\nname = \"flat\"\n"
+                        "fields = { coil = [0.0, 0.0, 0.0] }\n[[design.targets]]\ntype = \"position\"\npose = \"flat\"\n"
+                        "probe = \"tip\"\nvalue = [17.2, 0.0, 0.0]\n[[design.poses]]\nname = \"bent\"\n")
+    text = text.replace('[[design.targets]]\ntype = "position"\nprobe = "tip"\nvalue = [12.0',
+                        '[[design.targets]]\ntype = "position"\npose = "bent"\nprobe = "tip"\nvalue = [12.0')
+    path = tmp_path / "poses.toml"
+    path.write_text(text)
+    scn = scenario.load(path)
+    d = scn.design()
+    x = d.x_start()
+    flat = scn.problem.probes["tip"].state(d.solve(x)[0].g)[0]
+    assert np.abs(flat - [17.2, 0.0, 0.0]).max() < 1e-12
+    assert np.all(d.jacobian(x)[:3] == 0.0)                 # the flat pose's rows: no variable moves it
+    assert main(["design", str(path), "--out", str(tmp_path / "o"), "-q"]) == 0
+    held = scenario.load(tmp_path / "o" / "optimised_flat.toml")
+    assert held.spec["fields"]["coil"]["B"] == [0.0, 0.0, 0.0]
+
+
+def test_design_of_a_scenario_traced_by_arc_length(tmp_path):
+    # [solver] control = "arclength": the design's solves from the flat state step the load
+    # with the scenario's Newton options.  Before, its path-following keys went along and
+    # `core-se3 design` stopped with exit 2, "newton_solve() got an unknown option 'method'".
+    path = tmp_path / "arc.toml"
+    path.write_text(BASE.replace("[solver]\nsteps = 4", '[solver]\ncontrol = "arclength"\ndlam0 = 0.25'))
+    assert main(["design", str(path), "--out", str(tmp_path / "o"), "-q"]) == 0
+    scn = scenario.load(tmp_path / "o" / "optimised.toml")
+    assert scn.problem.solve_defaults["control"] == "arclength"
+    tip = scn.problem.solve().final.probes["tip"]["u"] + np.array([17.2, 0.0, 0.0])
+    assert abs(tip[0] - 12.0) < 1e-5 and abs(tip[2] - 10.0) < 1e-5

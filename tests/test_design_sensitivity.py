@@ -9,14 +9,17 @@ error ~1e-12 / 1e-4 = 1e-8; measured agreement is 1e-8 .. 1e-11.  The states: a 
 past pi by a follower end moment (tip rotation 4.35 rad) with a magnet in a uniform field; a
 strip under a follower pressure and a follower edge force in a uniform-gradient field (magnetic
 body force and its Hessian-free tangent); polar forms of field and magnetisation."""
+import warnings
+
 import numpy as np
 import pytest
 
 from core_se3 import Material, Problem, mesh
-from core_se3.design import (Energy, EquilibriumState, FieldGradientVariable, FieldVariable, LoadMagnitude,
+from core_se3.design import (Design, Energy, EquilibriumOptions, EquilibriumState, FieldGradientVariable, FieldVariable, LoadMagnitude,
                              MaterialVariable, NodePosition, Orientation, ProbePosition, RegionMagnetisation,
-                             RotationAngle, assign_all, follow, sensitivity)
-from core_se3.errors import DesignError
+                             Pose, RotationAngle, Target, assign_all, follow, sensitivity, solve_flat)
+from core_se3.design.sensitivity import at_the_cone
+from core_se3.errors import AccuracyWarning, DesignError
 from core_se3.model import GradientField, UniformField
 
 pytestmark = pytest.mark.core
@@ -130,6 +133,34 @@ def test_bad_input():
         v.check_start()
 
 
+def test_material_variable_over_a_non_uniform_region_is_refused():
+    # E 1e4 on elements 0-1 and 3e4 on 2-3, one E variable over all four: before, its value was
+    # the first element's (1e4) and the design's start set the whole region to it, silently
+    # solving another shell than the user's (a tip force: deflection 0.2163 became 0.2322)
+    from core_se3.fem import RegionMaterial
+    p = Problem(mesh.rectangle(1.0, 0.2, 4, 1), Material(1e4, 0.0, 0.02))
+    p.set_material(RegionMaterial([Material(1e4, 0.0, 0.02), Material(3e4, 0.0, 0.02)], np.array([0, 0, 1, 1])))
+    with pytest.raises(DesignError, match="E varies over region 0 .10000 .. 30000."):
+        MaterialVariable(p, [np.arange(4)], "E")
+    v = MaterialVariable(p, [np.arange(2), np.arange(2, 4)], "E")
+    assert v.value().tolist() == [1e4, 3e4]
+
+
+def test_thickness_of_a_region_in_contact_is_refused():
+    # The contact keeps the surface offset h/2 and the penalty it was built with.  Before, a
+    # thickness variable there solved with the old offset: a strip pressed onto a half-space
+    # at z = -0.1, h designed 0.02 -> 0.04, came to rest with its tip at z = -0.0901 (the old
+    # h/2 = 0.01 above the plane) where the same strip built with h = 0.04 (the optimised
+    # scenario) rests at -0.0801: 0.01 = the change of h/2, a converged-looking wrong state.
+    p = Problem(mesh.rectangle(1.0, 0.2, 8, 1), Material(1e4, 0.0, 0.02))
+    p.clamp("x0"); p.add_edge_force("x1", (0, 0, -3e-2))
+    p.add_obstacle("half_space", point=(0, 0, -0.1), normal=(0, 0, 1), region=np.arange(4, 8))
+    with pytest.raises(DesignError, match="thickness of a region in contact .obstacle 'half_space'"):
+        MaterialVariable(p, [np.arange(8)], "h")
+    MaterialVariable(p, [np.arange(3)], "h")          # off the contact elements' nodes: allowed
+    MaterialVariable(p, [np.arange(8)], "E")
+
+
 def test_partials_in_E_use_the_linearity():
     """dr/dE_j and dPi/dE_j at a rolled state (4.35 rad): the residual and the energy are linear in
     E, so one law per component (not the four of a Richardson-extrapolated central difference)
@@ -159,3 +190,67 @@ def test_partials_in_E_use_the_linearity():
         assert np.abs(dr[:, :, j] - fd_r).max() < 1e-13 * np.abs(fd_r).max()
         assert abs(dPi[0, j] - (vals[0][1] - vals[1][1]) / x[j]) < 1e-13 * abs(dPi[0, j])
     assert np.array_equal(p.element.evaluate(g, tangent=False).r, r0)
+
+
+def pressed_strip(P=1.0, friction=0.0):
+    """A cantilever pressed onto a half-space by a dead pressure (contact in mode 'al'), pushed
+    along by an end force."""
+    p = Problem(mesh.rectangle(1.0, 0.2, 8, 1), Material(1e4, 0.0, 0.02))
+    p.clamp("x0"); p.add_probe("tip")
+    p.add_pressure(-3e-2 * P, direction=(0, 0, 1))
+    p.add_obstacle("half_space", point=(0, 0, -0.1), normal=(0, 0, 1), friction=friction)
+    p.add_edge_force("x1", (2e-3, 0, 0))
+    return p
+
+
+def test_design_equilibria_in_contact_are_the_solver_s():
+    # A design's equilibria must be those Problem.solve (and the optimised scenario) reaches:
+    # the contact's multipliers updated until the gap error is within its tolerance
+    # (1e-6 h = 2e-8).  Before, follow() ran Newton with the multipliers last left, a penalty
+    # solution: the tip at P = 1.2 ended 1.9e-6 below the solver's (penetration 6.8e-6 = 340
+    # gap tolerances; 2.4e-11 from it now), and a pose's sensitivities used the multipliers of
+    # the pose solved last (d misfit / dE of two poses 3.5e-4 off central differences, 9e-9 now).
+    p = pressed_strip()
+    P, E = LoadMagnitude(p, p.loads[0]), MaterialVariable(p, [np.arange(8)], "E")
+    st = solve_flat(p, [P, E], [np.array([1.0]), E.value()], options=EquilibriumOptions())
+    moved, _ = follow(p, [P, E], [np.array([1.2]), E.value()], st)
+    q = pressed_strip(1.2)
+    fresh = q.solve(steps=10, rtol=1e-12, dtol=1e-12).final.g
+    assert np.abs(moved.g[:, :3, 3] - fresh[:, :3, 3]).max() < 1e-7
+    # two poses of different pressure: each pose's sensitivities with its own multipliers
+    tip, mid = ProbePosition(p, "tip"), NodePosition(p, [4])
+    d = Design(p, [E], [Pose("light", [Target(tip), Target(mid)], settings={P: [1.0]}),
+                        Pose("heavy", [Target(tip), Target(mid)], settings={P: [3.0]})])
+    x = d.x_start()
+    J = d.jacobian(x)
+    FD = np.array([(d.residuals(x + 1e-4 * x * e) - d.residuals(x - 1e-4 * x * e)) / (2e-4 * x[0])
+                   for e in np.eye(1)]).T
+    assert np.abs(J - FD).max() < 1e-6 * np.abs(FD).max()
+
+
+def test_sensitivity_at_the_stick_slip_transition_says_it_is_one_sided():
+    # The pushed strip's end slides (mu = 0.3): at the solved state its stored traction is on
+    # the cone, where the state is not differentiable.  The sensitivities are those of
+    # continued sliding: d tip_x / d push 9.02e-5 equals the forward difference (sliding on),
+    # while a decrease sticks the end: 4.13e-5; d tip_x / d pressure -1.033e-3 against -0.890e-3
+    # for an increase.  Before, the derivatives came without a word.
+    p = pressed_strip(friction=0.3)
+    v = [LoadMagnitude(p, p.loads[0]), LoadMagnitude(p, p.loads[2])]
+    xs = [x.value() for x in v]
+    st = solve_flat(p, v, xs)
+    with pytest.warns(AccuracyWarning, match="2 frictional contact node.s. at the stick/slip transition"):
+        s = sensitivity(p, st.g, 1.0, [ProbePosition(p, "tip")], v, "direct")
+    tip = p.probes["tip"].state(st.g)[0][0]
+    one_sided = []
+    for sign in (1, -1):
+        moved, _ = follow(p, v, [xs[0], xs[1] + sign * 1e-5], st)
+        one_sided.append((p.probes["tip"].state(moved.g)[0][0] - tip) / (sign * 1e-5))
+        assert at_the_cone(p, moved.g, 1.0) == 0         # sliding on, or stuck: off the transition
+    assert abs(s.jacobian[0, 1] - one_sided[0]) < 1e-4 * abs(one_sided[0])
+    assert abs(one_sided[1] - one_sided[0]) > 0.3 * abs(one_sided[0])
+    q = pressed_strip()                                  # frictionless: no transition, no warning
+    u = [LoadMagnitude(q, q.loads[0])]
+    st = solve_flat(q, u, [u[0].value()])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", AccuracyWarning)
+        sensitivity(q, st.g, 1.0, [ProbePosition(q, "tip")], u)

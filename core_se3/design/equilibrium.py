@@ -40,9 +40,10 @@ import numpy as np
 from ..backend import launched_rank
 from ..errors import ConvergenceError, ElementTooDistortedError, ElementWarning
 from ..solvers import NewtonOptions, make_solver
-from ..solvers.newton_try import NewtonTry
+from ..solvers.newton_try import NewtonTry, augmented_try, hooked_loads
 
-__all__ = ["EquilibriumState", "EquilibriumOptions", "ElementCheck", "follow", "solve_flat", "assign_all"]
+__all__ = ["EquilibriumState", "EquilibriumOptions", "ElementCheck", "follow", "solve_flat", "assign_all",
+           "multipliers", "restore_multipliers"]
 
 
 @dataclass(frozen=True)
@@ -82,6 +83,7 @@ class EquilibriumState:
     lam: float
     x: list
     stats: dict = field(default_factory=dict)
+    multipliers: list | None = None
 
 
 def design_point(variables, xs, most=6):
@@ -173,6 +175,21 @@ class ElementCheck:
             yield
 
 
+def multipliers(problem):
+    """The multipliers of the problem's augmented-Lagrangian loads (contact), one array per
+    load (``Load.multipliers``), or None without such loads."""
+    return [ld.multipliers() for ld in hooked_loads(problem, "update_multipliers")] or None
+
+
+def restore_multipliers(problem, state):
+    """Give the problem's augmented-Lagrangian loads the multipliers of ``state`` (an
+    EquilibriumState): the contact forces, the tangent and so the sensitivities at a state are
+    those of its own multipliers, not of the last solve's (another pose, a rejected trial)."""
+    if state.multipliers is not None:
+        for ld, m in zip(hooked_loads(problem, "update_multipliers"), state.multipliers):
+            ld.set_multipliers(m)
+
+
 def assign_all(variables, xs):
     """Assign the values xs (one array per variable) to the variables.
 
@@ -187,6 +204,20 @@ def assign_all(variables, xs):
     """
     for v, x in zip(variables, xs):
         v.assign(x)
+
+
+@contextmanager
+def _load_stepping_defaults(problem):
+    """The problem's ``solve_defaults`` (a scenario's [solver]) reduced to the options of load
+    stepping while a design solves from the flat state by load stepping: a scenario traced by
+    arc length keeps its path-following keys (method, dlam0, psi, ...) there, which load
+    stepping refused with "newton_solve() got an unknown option 'method'"."""
+    saved = problem.solve_defaults
+    problem.solve_defaults = {k: v for k, v in saved.items() if k in NewtonOptions.__dataclass_fields__}
+    try:
+        yield
+    finally:
+        problem.solve_defaults = saved
 
 
 def solve_flat(problem, variables, xs, lam=1.0, options=None, check=None):
@@ -216,12 +247,12 @@ def solve_flat(problem, variables, xs, lam=1.0, options=None, check=None):
     check = check or ElementCheck()
     check(problem, variables, xs, stacklevel=2)
     problem.element                                 # built (and its own warnings given) outside the quiet part
-    with check.quiet(always=True):                  # said above, with the design point
+    with check.quiet(always=True), _load_stepping_defaults(problem):      # said above, with the design point
         res = problem.solve(steps=opts.flat_steps, lam_end=lam, control="load", limit_check=False, **kw)
     its = sum(e["iterations"] for e in res.log)
     return EquilibriumState(res.final.g.copy(), lam, [np.array(x, float) for x in xs],
                             dict(iterations=its, substeps=len(res.log), cutbacks=0, restarted=True,
-                                 time=time.perf_counter() - t0))
+                                 time=time.perf_counter() - t0), multipliers(problem))
 
 
 def _newton(problem, g, lam, opts, solver, run=None):
@@ -249,7 +280,10 @@ def _newton(problem, g, lam, opts, solver, run=None):
             if mip else None
     except (ElementTooDistortedError, FloatingPointError):
         return None, 0
-    out = trial.run(g_start, lam, mip, stress)
+    # with the multiplier updates of a contact in mode 'al' (Uzawa, as Problem.solve): the gap
+    # error within its tolerance, not the penalty solution of the multipliers last left
+    aug = hooked_loads(eq if eq is not None else problem, "update_multipliers")
+    out = augmented_try(trial, aug, g_start, lam, mip, stress, nopts.max_augmentations, lambda o, k: None)
     if not out.ok:
         return None, out.iterations
     return (eq.whole_frames(out.g) if eq is not None else out.g), out.iterations
@@ -297,10 +331,12 @@ def follow(problem, variables, xs, state, options=None, run=None, check=None):
     x1 = [np.array(x, float) for x in xs]
     g, t, dt = state.g, 0.0, 1.0
     its = subs = cuts = 0
+    restore_multipliers(problem, state)
     if all(np.array_equal(a, b) for a, b in zip(x0, x1)):
         assign_all(variables, x1)
         info = dict(iterations=0, substeps=0, cutbacks=0, restarted=False, time=0.0)
-        return EquilibriumState(g, state.lam, x1, info), info
+        return EquilibriumState(g, state.lam, x1, info, state.multipliers), info
+    last = state
     while t < 1.0:
         t_try = min(1.0, t + dt)
         assign_all(variables, [a + t_try * (b - a) for a, b in zip(x0, x1)])
@@ -309,9 +345,11 @@ def follow(problem, variables, xs, state, options=None, run=None, check=None):
         subs += 1
         if g_new is not None:
             g, t = g_new, t_try
+            last = EquilibriumState(g, state.lam, x1, {}, multipliers(problem))
             if k <= 4:
                 dt = min(2 * dt, 1.0)
             continue
+        restore_multipliers(problem, last)          # those of the last point reached, not the failed try's
         cuts += 1
         dt /= 2
         if cuts > opts.max_cutbacks:
@@ -325,4 +363,4 @@ def follow(problem, variables, xs, state, options=None, run=None, check=None):
             return EquilibriumState(st.g, state.lam, x1, info), info
     check(problem, variables, x1, stacklevel=2)     # the accepted point's element (not every substep's)
     info = dict(iterations=its, substeps=subs, cutbacks=cuts, restarted=False, time=time.perf_counter() - t0)
-    return EquilibriumState(g, state.lam, x1, info), info
+    return EquilibriumState(g, state.lam, x1, info, last.multipliers), info

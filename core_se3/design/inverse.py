@@ -33,12 +33,14 @@ Find the tip force multiplier that puts a cantilever's tip 1.0 above the clamp l
 from __future__ import annotations
 
 import time
+import warnings
 
 import numpy as np
 
 from ..backend import launched_ranks
 from ..errors import ConvergenceError, DesignError, ParallelError
-from .equilibrium import ElementCheck, EquilibriumOptions, assign_all, follow, solve_flat
+from .equilibrium import (ElementCheck, EquilibriumOptions, EquilibriumState, assign_all, follow, multipliers,
+                          restore_multipliers, solve_flat)
 from .sensitivity import SolveWith, sensitivity
 from .targets import DesignResult, Pose, Smoothness, Target
 
@@ -49,6 +51,31 @@ METHODS = ("least_squares", "L-BFGS-B", "SLSQP", "trust-constr")
 
 class _Reached(Exception):
     """Raised by the iteration record once every misfit is within the tolerance."""
+
+
+def _check_conflicts(variables):
+    """DesignError when two variables set one parameter of the problem (``Variable.controls``) in
+    a pose they share (pose None: every pose): the later assignment would win and the earlier
+    variable's derivative would be that of a parameter that no longer changes the state."""
+    keys = [v.controls() for v in variables]
+    for j, v in enumerate(variables):
+        for i in range(j):
+            u = variables[i]
+            if (u.pose is None or v.pose is None or u.pose == v.pose) and keys[i] & keys[j]:
+                same = "is given twice" if u is v else f"and variable {v.name!r} both set {_said(keys[i] & keys[j])}"
+                raise DesignError(f"variable {u.name!r} {same} in the same pose: the later one would overwrite "
+                                  "the earlier one, whose derivative would then be wrong; give each parameter to one "
+                                  "variable (e.g. one FieldVariable with free=('x', 'z'), disjoint regions)")
+
+
+def _said(keys):
+    """What a set of ``Variable.controls`` keys names, for a message."""
+    k = sorted(keys, key=repr)[0]
+    if k[0] == "material":
+        return f"{k[1]} of element {k[2]}" + (f" (and {len(keys) - 1} more)" if len(keys) > 1 else "")
+    if k[0] == "magnetisation":
+        return f"the magnetisation of element {k[1]}" + (f" (and {len(keys) - 1} more)" if len(keys) > 1 else "")
+    return {"field": "the same field", "load": "the magnitude of the same load"}.get(k[0], "the same parameter")
 
 
 class Design:
@@ -91,6 +118,7 @@ class Design:
             if v.pose is not None and not 0 <= v.pose < len(self.poses):
                 raise DesignError(f"variable {v.name!r} belongs to pose {v.pose}, but there are {len(self.poses)} poses")
             v.check_start()
+        _check_conflicts(self.variables)
         for r in self.regularisation:
             if not any(r.variable is v for v in self.variables):
                 raise DesignError("a smoothness term refers to a variable that is not in the design")
@@ -103,15 +131,7 @@ class Design:
                 t.resolve_scale(problem)
         self.all = self.variables + self.aux
         self.x0 = [v.value() for v in self.all]
-        # the order in which pose k assigns: other poses' variables (their start), the pose's
-        # fixed settings, shared variables, its own -- the later ones win on a shared field
-        nv = len(self.variables)
-        self.order = []
-        for k, pose in enumerate(self.poses):
-            others = [i for i, v in enumerate(self.variables) if v.pose is not None and v.pose != k]
-            shared = [i for i, v in enumerate(self.variables) if v.pose is None]
-            own = [i for i, v in enumerate(self.variables) if v.pose == k]
-            self.order.append(others + list(range(nv, len(self.all))) + shared + own)
+        self.order, self.held = self._orders()
         self.slices, k = [], 0
         for v in self.variables:
             self.slices.append(slice(k, k + v.size))
@@ -128,6 +148,25 @@ class Design:
         # the element's coarse-mesh check of the design points (once per point whose element
         # changed, each cause said once per run: optimise starts a new run)
         self.element_check = ElementCheck()
+
+    def _orders(self):
+        """Per pose k: the order in which it assigns the variables -- other poses' variables and
+        the other poses' fixed settings (their start), the shared variables, the pose's own fixed
+        settings, its own variables: the later ones win on a shared field -- and the shared
+        variables the pose holds (in its settings, or setting a parameter that its settings
+        hold): they keep their start there and have no derivative in that pose.  (Before, a
+        shared variable was assigned after the settings, so that a pose holding the field of a
+        shared field variable at zero was bent by the optimised field.)"""
+        nv, order, held = len(self.variables), [], []
+        for k, pose in enumerate(self.poses):
+            others = [i for i, v in enumerate(self.variables) if v.pose is not None and v.pose != k]
+            shared = [i for i, v in enumerate(self.variables) if v.pose is None]
+            own = [i for i, v in enumerate(self.variables) if v.pose == k]
+            mine = [i for i in range(nv, len(self.all)) if self.all[i] in pose.settings]
+            fixed = set().union(*[self.all[i].controls() for i in mine])
+            held.append({i for i in shared if self.variables[i] in pose.settings or self.variables[i].controls() & fixed})
+            order.append(others + [i for i in range(nv, len(self.all)) if i not in mine] + shared + mine + own)
+        return order, held
 
     @property
     def distributed(self):
@@ -158,7 +197,7 @@ class Design:
         pose, out = self.poses[k], []
         for i in self.order[k]:
             v = self.all[i]
-            if i < len(self.variables) and (v.pose is None or v.pose == k):
+            if i < len(self.variables) and (v.pose is None or v.pose == k) and i not in self.held[k]:
                 out.append(np.asarray(x[self.slices[i]], float))
             elif v in pose.settings:
                 out.append(np.broadcast_to(np.asarray(pose.settings[v], float), (v.size,)).copy())
@@ -199,7 +238,7 @@ class Design:
             self.best = (phi, list(self.solve(x)))
 
     def _active(self, k):
-        return [i for i, v in enumerate(self.variables) if v.pose is None or v.pose == k]
+        return [i for i, v in enumerate(self.variables) if (v.pose is None or v.pose == k) and i not in self.held[k]]
 
     def _target_poses(self, states):
         """(k, pose, active variables) of the poses with targets, their variables assigned the
@@ -207,6 +246,7 @@ class Design:
         for k, pose in enumerate(self.poses):
             if pose.targets:
                 assign_all(self.pose_variables(k), states[k].x)
+                restore_multipliers(self.problem, states[k])
                 yield k, pose, self._active(k)
 
     def _solve_with(self):
@@ -334,7 +374,13 @@ class Design:
         True
         """
         x0, norm = self._check_start(method, x0, max_iter)
+        for key, val, low in (("tol", tol, 0.0), ("tolerance", tolerance, -1.0)):
+            if (val is not None or key == "tol") and not (isinstance(val, (int, float, np.floating, np.integer))
+                                                          and not isinstance(val, bool) and np.isfinite(val)
+                                                          and val > low and val >= 0):
+                raise DesignError(f"{key} must be a finite number {'>' if key == 'tol' else '>='} 0, got {val!r}")
         self.element_check.reset()
+        self.solves = self.newton_iterations = self.evaluations = 0     # this run's (a second optimise)
         t0 = time.perf_counter()
         history, last = [], {}
 
@@ -381,7 +427,16 @@ class Design:
         if norm and method in ("least_squares", "L-BFGS-B"):
             raise DesignError(f"method {method!r} takes box bounds only; a norm bound (|B| <= B_max of a vector form) "
                               "needs 'SLSQP' or 'trust-constr', or the polar form with a bound on the magnitude")
-        x0 = self.x_start() if x0 is None else np.asarray(x0, float)
+        if x0 is None:
+            x0 = self.x_start()
+        else:
+            try:
+                x0 = np.asarray(x0, float)
+            except (TypeError, ValueError):
+                raise DesignError(f"x0 must be {self.nx} numbers ({', '.join(self.labels)}), got {x0!r}") from None
+            if x0.shape != (self.nx,) or not np.all(np.isfinite(x0)):
+                raise DesignError(f"x0 must be {self.nx} finite numbers ({', '.join(self.labels)}), got "
+                                  f"{x0.ravel().tolist()[:8]}")
         if np.any(x0 < self.lower) or np.any(x0 > self.upper):
             i = int(np.nonzero((x0 < self.lower) | (x0 > self.upper))[0][0])
             raise DesignError(f"the start {x0[i]:g} of {self.labels[i]!r} lies outside its bounds "
@@ -444,11 +499,59 @@ class Design:
             msg = f"reached the target: misfit {worst:.3e} <= tolerance {tolerance:.3e} ({msg})"
         values = {v.name: np.asarray(x[self.slices[i]]) for i, v in enumerate(self.variables)}
         states = self.solve(x)
+        idle, branch = self.idle(states), self.off_branch(x, states)
+        for name, dev in branch.items():
+            msg += (f"; pose {name!r}: a solve from the flat state at these values " +
+                    ("does not converge" if dev == np.inf else f"reaches another equilibrium ({dev:.3g} of the length "
+                     "scale away; a multistable shell: the design's was reached along its path, which `core-se3 run` "
+                     "of the optimised scenario does not take)"))
+        if idle:
+            msg += (f"; without effect at the result (the residual of no pose with targets depends on them): "
+                    f"{', '.join(idle)}")
         res = DesignResult(bool(ok), reached, msg, x, self.labels, values, self.objective(x), self.gradient(x), mis,
                            worst, len(history), self.evaluations, self.solves, self.newton_iterations,
-                           time.perf_counter() - t0, method, history, list(states))
+                           time.perf_counter() - t0, method, history, list(states), idle, branch)
         assign_all(self.pose_variables(len(self.poses) - 1), states[-1].x)
+        restore_multipliers(self.problem, states[-1])
         return res
+
+    def idle(self, states):
+        """The labels of the variables' components that change nothing at ``states`` (of
+        :meth:`solve`): dr/dx and the targets' explicit derivatives zero in every pose with
+        targets where the variable is active (a load variable of a zero load, a magnetisation
+        in poses without field, a variable only of poses without targets) -- the optimiser
+        cannot have moved them, whatever the result says."""
+        moved = np.zeros(self.nx, bool)
+        free = self.problem.assembler().free
+        for k, pose, act in self._target_poses(states):
+            g, lam = states[k].g, states[k].lam
+            for i in act:
+                v = self.variables[i]
+                d = v.dr_dp(self.problem, g, lam).reshape(-1, v.size)[free]
+                e = np.concatenate([t.quantity.explicit(self.problem, g, lam, v) for t in pose.targets])
+                moved[self.slices[i]] |= np.any(d != 0, 0) | np.any(e != 0, 0)
+        return [lab for lab, m in zip(self.labels, moved) if not m]
+
+    def off_branch(self, x, states):
+        """pose name -> the largest distance (over the length scale) between its design state
+        at x and the equilibrium a solve from the flat state at the same values reaches (the
+        user's run of the optimised scenario), for the poses where it exceeds 1e-6: on a
+        multistable shell the design may end on a branch it reached along its own path (a
+        buckled strip kept up by a force that, applied from flat, buckles it down)."""
+        out = {}
+        saved = [multipliers(self.problem)]
+        for k, pose in enumerate(self.poses):
+            try:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    st = solve_flat(self.problem, self.pose_variables(k), self.pose_values(k, x), pose.lam, self.options)
+                dev = np.abs(st.g[:, :3, 3] - states[k].g[:, :3, 3]).max() / self.problem.length_scale
+            except ConvergenceError:
+                dev = np.inf
+            if dev > 1e-6:
+                out[pose.name] = float(dev)
+        restore_multipliers(self.problem, EquilibriumState(None, None, None, multipliers=saved[0]))
+        return out
 
     def assign_pose(self, k, x):
         """Set the problem to pose k's values at x (e.g. before writing its outputs)."""

@@ -166,6 +166,9 @@ class RegionMagnetisation(Variable):
         self.loads = self._own_loads(W, allel, owner, name)
         lo, hi, sc = self._parametrise(Br, planes, Br_max, start is None and bool(old), name)
         self.free = free_index(self.parts, free, f"magnetisation {name!r}")
+        if form == "polar" and 1 not in self.free and np.any(self.full[:, 0] == 0):
+            raise DesignError(f"magnetisation {name!r}: a polar form with its angles fixed needs a non-zero start B^r "
+                              f"in every region (its direction): region {int(np.argmin(self.full[:, 0]))} has none")
         nf = len(self.free)
         self.norm_bounds = []
         if Br_max is not None and form == "vector":
@@ -209,7 +212,7 @@ class RegionMagnetisation(Variable):
         """The full parameters (``parts``, ``full``) of B^r in the variable's form and their
         lower, upper bounds and scales; a fitted B^r off the polar form's planes is refused."""
         k = len(self.regions)
-        scale0 = max(float(np.abs(Br).max()), float(Br_max or 0.0), 1e-300)
+        scale0 = max(float(np.abs(Br).max()), float(Br_max or 0.0)) or 1.0       # 1 T from zero (FieldVariable)
         if self.form == "vector":
             self.parts = ["x", "y", "z"]
             self.full = Br.copy()
@@ -244,6 +247,9 @@ class RegionMagnetisation(Variable):
             return np.broadcast_to(np.eye(3), (k, 3, 3))
         _, db, da = polar_vector(self.full[:, 0], self.full[:, 1], self.e[:, 0], self.e[:, 1])
         return np.stack([db, da], 2)
+
+    def controls(self):
+        return {("magnetisation", int(e)) for r in self.regions for e in r}
 
     def value(self):
         return self.full[:, self.free].ravel().copy()

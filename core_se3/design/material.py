@@ -9,6 +9,7 @@ import numpy as np
 from ..errors import DesignError, did_you_mean
 from ..fem import Material, RegionMaterial
 from ..fem.material_kinds import ISOTROPIC
+from ..model import ContactLoad
 from .variables import Variable, region_elements
 
 __all__ = ["MaterialVariable", "MATERIAL_KEYS"]
@@ -18,13 +19,34 @@ MATERIAL_KEYS = ISOTROPIC.keys()          # the isotropic law's keys (scenario k
 _LAW_KEYS = MATERIAL_KEYS + ("classical",)  # what rebuilds a Material (by keyword)
 
 
+def _check_thickness_loads(problem, elements, name):
+    """DesignError when a load of the problem keeps the thickness of ``elements`` it was built
+    with: a magnet (its dipoles h B^r / mu0), gravity (rho g h) or a contact (its surface at h/2
+    from the mid-surface, its penalty from the shell's stiffness) on a node of those elements --
+    a thickness variable there would solve with the old thickness in those loads (a contact:
+    0.01 too deep for h 0.02 -> 0.04) while the optimised scenario, built anew, would not."""
+    touched = np.zeros(problem.mesh.n_elements, bool)
+    touched[elements] = True
+    nodes = np.zeros(problem.mesh.n_nodes, bool)
+    nodes[problem.mesh.quads[elements].ravel()] = True
+    for ld in problem.loads:
+        el = getattr(getattr(ld, "mag", None), "elements", None)
+        if (el is not None and np.any(touched[el])) or getattr(ld, "name", "") == "gravity":
+            raise DesignError(f"material variable {name!r}: the thickness of a region with a magnet or "
+                              "gravity cannot be designed (those loads keep the thickness they were built with)")
+        if isinstance(ld, ContactLoad) and np.any(nodes[ld.nodes]):
+            raise DesignError(f"material variable {name!r}: the thickness of a region in contact (obstacle "
+                              f"{ld.name!r}) cannot be designed (the contact keeps the surface offset h/2 and the "
+                              "penalty it was built with); design E there, or the thickness of regions off the contact")
+
+
 class MaterialVariable(Variable):
     """Young's modulus E or the thickness h constant over each of a list of element regions.
 
     dr/dp by :meth:`partials` of the element residual at the fixed state (module docstring):
     exact up to round-off for E (linear) and h (cubic).  A
-    thickness variable on a region that carries a magnet or gravity is refused: those loads keep
-    the thickness they were built with.
+    thickness variable on a region that carries a magnet, gravity or a contact is refused: those
+    loads keep the thickness they were built with.
 
     Parameters
     ----------
@@ -58,14 +80,14 @@ class MaterialVariable(Variable):
         if len(np.unique(allel)) != len(allel):
             raise DesignError(f"material variable {name!r}: the regions overlap")
         if prop == "h":
-            touched = np.zeros(problem.mesh.n_elements, bool)
-            touched[allel] = True
-            for ld in problem.loads:
-                el = getattr(getattr(ld, "mag", None), "elements", None)
-                if (el is not None and np.any(touched[el])) or getattr(ld, "name", "") == "gravity":
-                    raise DesignError(f"material variable {name!r}: the thickness of a region with a magnet or "
-                                      "gravity cannot be designed (those loads keep the thickness they were built with)")
+            _check_thickness_loads(problem, allel, name)
         props = self._per_element()
+        for j, r in enumerate(self.regions):
+            lo, hi = float(np.min(props[prop][r])), float(np.max(props[prop][r]))
+            if hi > lo:
+                # one value per region: the start would set the whole region to its first element's
+                raise DesignError(f"material variable {name!r}: {prop} varies over region {j} ({lo:g} .. {hi:g}); a "
+                                  f"design variable is one {prop} per region: give regions on which it is uniform")
         x0 = np.array([props[prop][r].mean() for r in self.regions])
         self._setup(name, len(self.regions), 0.0 if lower is None else lower, upper, x0,
                     [f"{name}[{j}]" for j in range(len(self.regions))], None)
@@ -75,6 +97,9 @@ class MaterialVariable(Variable):
         per = getattr(mat, "per_element", None)
         return {k: (per(k) if per is not None else np.full(m, getattr(mat, k), dtype=object if k in ("rho", "classical") else float))
                 for k in _LAW_KEYS}
+
+    def controls(self):
+        return {("material", self.prop, int(e)) for r in self.regions for e in r}
 
     def value(self):
         props = self._per_element()

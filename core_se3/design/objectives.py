@@ -33,7 +33,7 @@ from ..errors import DesignError, did_you_mean
 from ..model import Probe
 
 __all__ = ["Quantity", "NodePosition", "ProbePosition", "Orientation", "RotationAngle", "AngleInDegrees", "Energy",
-           "UserQuantity", "local_jacobian", "probe_frames"]
+           "UserQuantity", "local_jacobian", "probe_frames", "target_array"]
 
 
 def local_jacobian(fn, g, nodes, ell, step=1e-4, local=None):
@@ -116,6 +116,25 @@ def _probe_local(probe, fn):
     return nodes, lambda F: fn(probe_frames(probe, F[:, ia], F[:, ib]))
 
 
+def target_array(value, shape, what):
+    """``value`` as a finite float array broadcast to ``shape``; DesignError naming ``what``
+    otherwise (a wrong length or a NaN was a bare NumPy error, or a NaN objective, later).
+
+    Example
+    -------
+    >>> target_array(0.5, (3,), "t").tolist()
+    [0.5, 0.5, 0.5]
+    """
+    try:
+        a = np.broadcast_to(np.asarray(value, float), shape).copy()
+    except (TypeError, ValueError):
+        raise DesignError(f"{what}: expected {' x '.join(map(str, shape)) or 'a'} number(s), got "
+                          f"{np.shape(value) if not isinstance(value, str) else repr(value)}") from None
+    if not np.all(np.isfinite(a)):
+        raise DesignError(f"{what}: the values must be finite, got {a.ravel().tolist()[:6]}")
+    return a
+
+
 def _nodes(problem, nodes, what):
     n = problem.mesh.n_nodes
     if isinstance(nodes, str):
@@ -183,7 +202,7 @@ class NodePosition(Quantity):
     def __init__(self, problem, nodes, target=None, name="position"):
         self.nodes = _nodes(problem, nodes, f"target {name!r}")
         self.name, self.size = name, 3 * len(self.nodes)
-        self.target = None if target is None else np.broadcast_to(np.asarray(target, float), (len(self.nodes), 3)).copy()
+        self.target = None if target is None else target_array(target, (len(self.nodes), 3), f"target {name!r}")
 
     def value(self, problem, g, lam):
         x = g[self.nodes, :3, 3]
@@ -213,7 +232,7 @@ class ProbePosition(Quantity):
     def __init__(self, problem, probe, target=None, name=None):
         self.probe = _probe(problem, probe, f"target {name or probe!r}")
         self.name, self.size = name or self.probe.name, 3
-        self.target = None if target is None else np.asarray(target, float)
+        self.target = None if target is None else target_array(target, (3,), f"target {self.name!r}")
 
     def value(self, problem, g, lam):
         x = self.probe.state(g)[0]
@@ -269,9 +288,15 @@ class Orientation(Quantity):
 
 class RotationAngle(Quantity):
     """The angle [rad] by which a probe (or node) has turned about the lab ``axis`` from its
-    reference frame, continuous through any number of turns near ``reference`` [rad]:
-    theta = reference + axis . log(exp(-reference axis) R R_0^T); with ``target`` [rad] the
-    misfit theta - target (and reference = target).
+    reference frame, continuous through any number of turns:
+    theta = reference + axis . log(exp(-reference axis) R R_0^T), the reference following the
+    states it is evaluated at (it starts at ``reference``, default 0: the reference
+    configuration, and becomes the value whenever that is more than a quarter turn from it), so
+    that a shell turned gradually past pi is counted past pi; with ``target`` [rad] the misfit
+    theta - target.  (Before, the reference was the target: a strip turned by -90 deg was 'on
+    target' for a target of 270 deg, and a design reached it so.)  Evaluate one RotationAngle
+    along one path (a design's pose): a state turned by more than half a turn from the last
+    reference is counted a turn short or over.
 
     Parameters: problem; probe (a name) or node (an id); axis (3,); target, reference [rad]; name.
 
@@ -292,14 +317,19 @@ class RotationAngle(Quantity):
         if a.shape != (3,) or not np.linalg.norm(a) > 0:
             raise DesignError(f"target {name!r}: the axis must be a non-zero 3-vector")
         self.axis = a / np.linalg.norm(a)
-        self.target = None if target is None else float(target)
-        self.reference = float(reference if reference is not None else (target or 0.0))
+        self.target = None if target is None else float(target_array(target, (), f"target {name!r}"))
+        self.reference = float(target_array(reference if reference is not None else 0.0, (), f"reference {name!r}"))
         self.R0 = self.frame.target
         self.name, self.size = name, 1
 
     def value(self, problem, g, lam):
         Rref = lie.exp_so3(self.reference * self.axis) @ self.R0
         th = self.reference + self.axis @ lie.log_so3(Rref.T @ self.frame._R(g))
+        if abs(th - self.reference) > 0.5 * np.pi:
+            # re-centred when the state has turned a quarter turn from the reference: the next
+            # states are counted from here (between re-centrings theta is one smooth function
+            # of R, and the jacobian its derivative; off the axis it depends on the reference)
+            self.reference = float(th)
         return np.array([th - (self.target if self.target is not None else 0.0)])
 
     def jacobian(self, problem, g, lam):

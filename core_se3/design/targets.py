@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import DesignError
+from .objectives import target_array
 
 __all__ = ["Target", "Pose", "Smoothness", "DesignResult"]
 
@@ -44,14 +45,18 @@ class Target:
     def __init__(self, quantity, weight=1.0, scale=None, components=None, value=None, name=None):
         if not (np.isfinite(weight) and weight >= 0):
             raise DesignError(f"target weight must be finite and >= 0, got {weight}")
+        what = f"target {name or quantity.name!r}"
         self.quantity, self.weight = quantity, float(weight)
+        if scale is not None and not (np.isfinite(scale) and scale > 0):
+            raise DesignError(f"{what}: the scale of its misfit must be finite and > 0, got {scale}")
         self.scale = scale
-        self.components = None if components is None else np.asarray(components, np.int64)
-        if self.components is not None and (self.components.min() < 0 or self.components.max() >= quantity.size):
-            raise DesignError(f"target {name or quantity.name!r}: components {self.components.tolist()} outside "
+        self.components = None if components is None else np.asarray(components).ravel()
+        if self.components is not None and (self.components.size == 0 or self.components.dtype.kind not in "iu"
+                                            or self.components.min() < 0 or self.components.max() >= quantity.size):
+            raise DesignError(f"{what}: components {self.components.tolist()} must be one or more whole numbers in "
                               f"0 .. {quantity.size - 1}")
         n = quantity.size if self.components is None else len(self.components)
-        self.value = np.zeros(n) if value is None else np.broadcast_to(np.asarray(value, float), (n,)).copy()
+        self.value = np.zeros(n) if value is None else target_array(value, (n,), f"{what}: value")
         self.name = name or quantity.name
         self.size = n
 
@@ -132,7 +137,10 @@ class DesignResult:
         ``max_misfit``: the largest.
     iterations, evaluations, equilibrium_solves, newton_iterations : int
         Counts; ``time`` [s]; ``history``: one dict per iteration (objective, gradient_norm,
-        equilibrium_solves, ...); ``states``: the final EquilibriumState of every pose.
+        equilibrium_solves, ...); ``states``: the final EquilibriumState of every pose;
+        ``idle``: the labels of the components without effect at the result (``Design.idle``);
+        ``branch``: pose -> distance to the equilibrium a solve from flat reaches, where the
+        design's is another (``Design.off_branch``).
 
     Example
     -------
@@ -158,6 +166,8 @@ class DesignResult:
     method: str = ""
     history: list = field(default_factory=list)
     states: list = field(default_factory=list)
+    idle: list = field(default_factory=list)
+    branch: dict = field(default_factory=dict)
 
     def document(self):
         """A JSON-able summary (no frames)."""
@@ -167,4 +177,5 @@ class DesignResult:
                     objective=float(self.objective), gradient=np.asarray(self.gradient).tolist(),
                     misfit=self.misfit, max_misfit=float(self.max_misfit), iterations=int(self.iterations),
                     evaluations=int(self.evaluations), equilibrium_solves=int(self.equilibrium_solves),
-                    newton_iterations=int(self.newton_iterations), time=float(self.time), history=self.history)
+                    newton_iterations=int(self.newton_iterations), time=float(self.time), history=self.history,
+                    idle=list(self.idle), branch=dict(self.branch))

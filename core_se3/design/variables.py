@@ -209,6 +209,22 @@ class Variable:
         """d(r_int - f_ext)/dx (n, 6, size) at (g, lam)."""
         raise NotImplementedError
 
+    def controls(self):
+        """The parameters of the problem this variable sets (hashable keys: the field and its
+        vector, a load's magnitude, a region's E, h or magnetisation per element).  Two variables
+        of a design that both set one parameter in the same pose would overwrite each other --
+        the state follows the later one, but both get a derivative -- so ``Design`` refuses them.
+
+        Example
+        -------
+        >>> from core_se3 import Problem, Material, mesh
+        >>> p = Problem(mesh.rectangle(1.0, 0.2, 2, 1), Material(1e3, 0.0, 0.01))
+        >>> p.add_edge_force("x1", (0.0, 0.0, 1.0))
+        >>> LoadMagnitude(p, p.loads[0]).controls() == LoadMagnitude(p, p.loads[0]).controls()
+        True
+        """
+        return {("variable", id(self))}
+
     def vjp(self, problem, g, lam, mu):
         """sum_i mu_i . dr_i/dx for nodal multipliers mu (n, 6) -> (size,), or a stack of them
         (k, n, 6) -> (k, size)."""
@@ -291,7 +307,9 @@ class FieldVariable(Variable):
             raise DesignError(f"field variable {name!r}: form must be 'vector' or 'polar', got {form!r}")
         self.problem, self.field, self.form = problem, field, form
         B = np.asarray(getattr(field, self._attr), float)
-        scale0 = max(float(np.linalg.norm(B)), float(B_max or 0.0), 1e-300)
+        # the typical size of the components: |B|, the bound, or 1 T from a zero field (a floor
+        # of 1e-300 made the optimisers' gradient 1e-300 x the true one: no step from B = 0)
+        scale0 = max(float(np.linalg.norm(B)), float(B_max or 0.0)) or 1.0
         if form == "vector":
             self.parts = ["x", "y", "z"]
             self.full = B.copy()
@@ -307,6 +325,9 @@ class FieldVariable(Variable):
             if B_max is not None:
                 hi[0] = B_max
         self.free = free_index(self.parts, free, f"field variable {name!r}")
+        if form == "polar" and 1 not in self.free and self.full[0] == 0:
+            raise DesignError(f"field variable {name!r}: a polar form with its angle fixed needs a non-zero start field "
+                              "(its direction): the field is zero, whose angle would be taken as 0 (along e1)")
         self.norm_bounds = []
         if B_max is not None and form == "vector":
             # |B|^2 = |free part|^2 + |fixed part|^2 <= B_max^2 (the fixed part as a constant)
@@ -336,6 +357,9 @@ class FieldVariable(Variable):
         self.full = self.full.copy()
         self.full[self.free] = np.asarray(x, float)
         setattr(self.field, self._attr, self.vector())
+
+    def controls(self):
+        return {("field", id(self.field), self._attr)}
 
     def dr_dB(self, problem, g, lam):
         """d(r_int - f_ext)/dB (n, 6, 3): the couple f_w = mu x R^T s B of every magnetised node
@@ -404,6 +428,9 @@ class FieldGradientVariable(Variable):
     def value(self):
         return self.c.copy()
 
+    def controls(self):
+        return {("field", id(self.field), "G")}
+
     def assign(self, x):
         self.c = np.asarray(x, float).copy()
         self.field.G = np.einsum("k,kij->ij", self.c, _GBASIS)
@@ -453,6 +480,9 @@ class LoadMagnitude(Variable):
 
     def value(self):
         return np.array([self.P])
+
+    def controls(self):
+        return {("load", id(self.load))}
 
     def assign(self, x):
         self.P = float(np.asarray(x, float).ravel()[0])

@@ -59,12 +59,38 @@ def _write_material(scn, doc, v):
         mr.setdefault(name, {})[v.prop] = float(val)
 
 
+def _load_index(scn, v):
+    """The index of the [[loads]] entry that built the load of a load variable."""
+    return next(j for j, lds in enumerate(scn.load_objects) if any(ld is v.load for ld in lds))
+
+
 def _write_load(scn, doc, v):
-    i = next(j for j, lds in enumerate(scn.load_objects) if any(ld is v.load for ld in lds))
-    ld = doc["loads"][i]
-    for key in _LOAD_KEYS.get(ld["type"], ()):
-        if key in ld:
-            ld[key] = (np.asarray(ld[key], float) * v.P).tolist() if isinstance(ld[key], list) else ld[key] * v.P
+    # the magnitude keys of the load's type, given or at their defaults in the scenario's units
+    # (a gravity with the default g: before, an absent key was left out, and the optimised
+    # scenario had P = 1)
+    j = _load_index(scn, v)
+    ld = doc["loads"][j]
+    for key in _LOAD_KEYS[ld["type"]]:
+        val = ld.get(key, scn.spec["loads"][j].get(key))
+        if val is not None:
+            ld[key] = (np.asarray(val, float) * v.P).tolist() if isinstance(val, (list, tuple)) else val * v.P
+
+
+def _check_writable(scn, design):
+    """ScenarioError (before optimising) for a variable whose value the optimised scenario
+    could not hold: a kind without a writer, a load variable on a load type whose magnitude
+    keys are not known here (a plugin's)."""
+    for i, v in enumerate(design.variables):
+        if writer_of(v) is None:
+            raise ScenarioError(f"design variable kind {v.scenario_kind.name!r} gives no write(scn, doc, variable): the "
+                                "optimised scenario could not hold its value; give the kind one", scn.file,
+                                f"design.variables[{i}].type")
+        if writer_of(v) is _write_load:
+            j = _load_index(scn, v)
+            if scn.raw["loads"][j]["type"] not in _LOAD_KEYS:
+                raise ScenarioError(f"a load variable on [[loads]][{j}] of type {scn.raw['loads'][j]['type']!r}: the "
+                                    f"optimised scenario can scale only the magnitudes of {', '.join(sorted(_LOAD_KEYS))}",
+                                    scn.file, f"design.variables[{i}].load")
 
 
 # how the built-in kinds write their values into the scenario (a user kind gives its own write)
@@ -224,11 +250,7 @@ def _design(scn, rd, method, max_iter, progress, vtu, plots):
     ds, out = scn.spec["design"], rd.path
     root = launched_rank() == 0          # under mpirun every rank optimises the same design, rank 0 writes
     design = scn.design()
-    for i, v in enumerate(design.variables):
-        if writer_of(v) is None:
-            raise ScenarioError(f"design variable kind {v.scenario_kind.name!r} gives no write(scn, doc, variable): the "
-                                "optimised scenario could not hold its value; give the kind one", scn.file,
-                                f"design.variables[{i}].type")
+    _check_writable(scn, design)
     r = design.optimise(method or ds["method"], max_iter=ds["max_iter"] if max_iter is None else max_iter, tol=ds["tol"],
                         tolerance=ds["tolerance"], progress=progress, stop_at_tolerance=ds["stop_at_tolerance"])
     files = {}
