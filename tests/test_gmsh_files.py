@@ -40,7 +40,8 @@ def _write(path, version, binary):
 
 def plate_file(path, version=4.1, binary=0, nx=10, ny=2, surfaces=True):
     """10 x 2 plate of two 5 x 2 halves (physical surfaces 'left', 'right'), transfinite nx x ny
-    quads; physical curves 'clamped' (x = 0) and 'tip' (x = 10), physical point 'corner' (10, 2)."""
+    quads; physical curves 'clamped' (x = 0) and 'tip' (x = 10), physical point 'corner' (10, 2);
+    ``surfaces="left"``: only the left half a physical surface (so only it is saved)."""
     _start()
     occ = gmsh.model.occ
     a = occ.addRectangle(0, 0, 0, 5, 2)
@@ -63,6 +64,7 @@ def plate_file(path, version=4.1, binary=0, nx=10, ny=2, surfaces=True):
         return out
     if surfaces:
         gmsh.model.addPhysicalGroup(2, at(2, x=2.5), name="left")
+    if surfaces is True:
         gmsh.model.addPhysicalGroup(2, at(2, x=7.5), name="right")
     gmsh.model.addPhysicalGroup(1, at(1, x=0.0), name="clamped")
     gmsh.model.addPhysicalGroup(1, at(1, x=10.0), name="tip")
@@ -161,3 +163,18 @@ def test_gmsh_file_without_physical_surface_names_the_fix(tmp_path):
     path = plate_file(tmp_path / "curves.msh", surfaces=False)
     with pytest.raises(MeshError, match=r"no quad cells; .*physical groups of curves .* Mesh.SaveAll = 1"):
         M.from_meshio(path)
+
+
+def test_gmsh_curve_off_the_saved_surface_names_the_group(tmp_path):
+    """Only the left half a physical surface, so Gmsh saves only its quads, while the physical
+    curve 'tip' (x = 10) bounds the unsaved right half: its nodes belong to no quad and were
+    remapped to -1, so mesh.edges['tip'] was [-1] -- the mesh's last node, at (4, 1, 0) -- and a
+    scenario's load on 'tip' failed with "node selection array([-1]) refers to nodes that do not
+    exist".  Now a MeshError names the group and the fix."""
+    path = plate_file(tmp_path / "half.msh", surfaces="left")
+    with pytest.raises(MeshError, match=r"group 'tip' has 2 of its 2 line cell\(s\) off the shell.*Mesh.SaveAll = 1"):
+        M.from_meshio(path)
+    doc = _cantilever({"file": path})
+    with pytest.raises(ScenarioError, match=r"has 2 of its 2 line cell\(s\) off the shell"):   # the name elided:
+        # an error never shows a file's text (io.files.without_contents)
+        scenario.from_dict(doc, base_dir=str(tmp_path))

@@ -200,6 +200,10 @@ def _cell_blocks(m, triangles):
     if X.shape[1] == 2:
         X = np.c_[X, np.zeros(len(X))]
     blocks = [(c.type, np.asarray(c.data, np.int64)) for c in m.cells]
+    bad = [t for t, c in blocks if c.size and (c.min() < 0 or c.max() >= len(X))]
+    if bad:
+        raise MeshError(f"the mesh's {sorted(set(bad))} cells refer to points that do not exist (it has "
+                        f"{len(X)} points): the file is inconsistent; write it again")
     sets = _named_sets(m)
     types = {t for t, _ in blocks}
     other = sorted(types - {"quad", "line", "vertex"})
@@ -212,9 +216,11 @@ def _cell_blocks(m, triangles):
         hint = (": a quad-dominant mesh (quads and triangles) becomes all quads with triangles = "
                 "\"split\" ([mesh] triangles, or mesh.from_meshio(..., triangles=\"split\")), or in "
                 "Gmsh with Mesh.RecombineAll = 1 and Mesh.SubdivisionAlgorithm = 1"
-                if other == ["triangle"] else "")
+                if other == ["triangle"] else
+                ": second-order elements; mesh with first-order ones (Gmsh: Mesh.ElementOrder = 1)"
+                if set(other) <= {"quad8", "quad9", "line3", "triangle6", "vertex"} else "")
         raise MeshError(f"only quadrilateral shells are supported; the mesh also has {other} cells{hint}")
-    qb = [i for i, (t, _) in enumerate(blocks) if t == "quad"]
+    qb = [i for i, (t, c) in enumerate(blocks) if t == "quad" and len(c)]
     if not qb:
         hint = ""
         if types & {"line", "vertex"} and 2 not in _physical_dims(m) and _physical_dims(m):
@@ -268,6 +274,18 @@ def _nodal_directors(X, quads, d1_hint):
     return t, d3
 
 
+def _on_shell(name, segs, remap):
+    """MeshError if a group of lines has nodes that no quad uses (remapped to -1: a support or
+    load on the group would act on the mesh's last node instead)."""
+    off = np.unique(np.flatnonzero(np.asarray(segs).ravel() < 0) // 2)
+    if len(off):
+        raise MeshError(
+            f"the group {name!r} has {len(off)} of its {len(segs)} line cell(s) off the shell (their nodes "
+            f"belong to no quad): the curve is not on the meshed surface -- in Gmsh, a surface that is in no "
+            f"physical surface is not saved (add it to one, or set Mesh.SaveAll = 1), or remove the curve "
+            f"from the group")
+
+
 def _named_groups(sets, blocks, qb, remap):
     """Node sets (a group of lines: ordered along the line; of vertices: those nodes) and regions
     (a group of quads: its elements) of the named sets."""
@@ -286,6 +304,7 @@ def _named_groups(sets, blocks, qb, remap):
             elif typ == "quad":
                 elems.extend((offsets[i] + ids).tolist())
         if segs:
+            _on_shell(name, segs, remap)
             named[name] = chain_order(segs)
         elif points:
             pts = [p for p in dict.fromkeys(points) if p >= 0]     # points no quad uses are dropped
