@@ -90,6 +90,23 @@ def test_dumps_writes_numpy_scalars_as_plain_toml():
     assert tomllib.loads(scenario.dumps(doc)) == {"a": 0.5, "b": 3, "c": [0.25, True]}
 
 
+def test_dumps_writes_unicode_names_tomllib_reads(tmp_path):
+    """Region and probe names beyond ASCII (a Gmsh group 'région', 'k²') were written as bare
+    keys, and characters beyond U+FFFF (an emoji in the name) as JSON's surrogate pairs
+    '\\ud83d\\ude00': tomllib refused both ("Expected ']' at the end of a table declaration",
+    "not a Unicode scalar value"), so e.g. a design's optimised.toml could not be read back."""
+    import tomllib
+    d = base()
+    d["name"] = "gripper 😀 v2"
+    d["regions"] = {"région": {"box": {"x": [0.0, 5.0]}}, "k²": {"box": {"x": [5.0, 10.0]}}}
+    d["material"]["regions"] = {"région": {"E": 2.4e6}}
+    d["probes"][0]["name"] = "tête\x7f"
+    text = scenario.dumps(d)
+    assert tomllib.loads(text) == d
+    scn = load_text(tmp_path, text)
+    assert scn.name == "gripper 😀 v2" and sorted(scn.regions) == ["k²", "région"] and set(scn.problem.probes) == {"tête\x7f"}
+
+
 def test_scale_tables():
     f = scenario.make_scale([[0.0, 0.0], [0.5, 1.0], [1.0, 1.0]])
     assert [f(x) for x in (0.0, 0.25, 0.5, 0.9, 2.0)] == [0.0, 0.5, 1.0, 1.0, 1.0]
