@@ -6,6 +6,8 @@ against closed-form strip solutions: u = F L / (E h w) and the bent circle of ra
 """
 import copy
 import math
+import re
+import warnings
 
 import meshio
 import numpy as np
@@ -405,6 +407,30 @@ def test_mesh_file_ok(tmp_path):
     _write_quads(tmp_path / "m.vtu", X, [[0, 1, 4, 3], [1, 2, 5, 4]])
     scn = load_doc(tmp_path, _file_doc("m.vtu"))
     assert scn.mesh.n_elements == 2 and scn.spec["mesh"] == {"file": "m.vtu", "d1_hint": [1.0, 0.0, 0.0]}
+
+
+def test_mesh_file_node_ids_after_a_dropped_point_are_named(tmp_path):
+    """A file whose point 0 no quad uses (a Gmsh circle's centre, saved without physical groups):
+    the reader drops it and renumbers the rest, so nodes = [2] selects the file's point 3, at
+    (2, 0, 0), not its point 2 at (1, 0, 0) -- silently.  Now a warning at every key that selects
+    by id names the shift (strict: an error); without dropped points, or with ids before the
+    first dropped point, nothing is said."""
+    X = [[9, 9, 0], [0, 0, 0], [1, 0, 0], [2, 0, 0], [0, 1, 0], [1, 1, 0], [2, 1, 0]]
+    _write_quads(tmp_path / "m.vtu", X, [[1, 2, 5, 4], [2, 3, 6, 5]])
+    d = _file_doc("m.vtu")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        scn = load_doc(tmp_path, d)
+    assert re.search(r"\[loads\[0\].nodes\]: node ids count the mesh's nodes.*1 point\(s\) that no quad uses "
+                     r"\(point 0\).*node 2 is the file's point 3, at \(2, 0, 0\)", str(caught[-1].message))
+    assert scn.mesh.X[2].tolist() == [2.0, 0.0, 0.0]
+    assert [w.split(": ")[1] for w in map(str, scn.warnings) if "node ids" in w] == \
+        ["[supports[0].nodes]", "[loads[0].nodes]"]
+    with pytest.raises(ScenarioError, match=r"\[supports\[0\].nodes\]: node ids count"):
+        scenario.load(tmp_path / "s.toml", strict=True)
+    X[0] = [2, 2, 0]                                     # the unused point last: no renumbering
+    _write_quads(tmp_path / "m.vtu", X[1:] + [X[0]], [[0, 1, 4, 3], [1, 2, 5, 4]])
+    assert not [w for w in load_doc(tmp_path, d).warnings if "node ids" in str(w)]
 
 
 def test_mesh_file_missing(tmp_path):

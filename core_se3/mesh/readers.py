@@ -120,8 +120,9 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None, triangles="error"):
     physical point) a node set of those nodes; a group of quads (a physical surface) a region.
     ``edges`` = {name: predicate(X) -> bool mask} adds node sets.
 
-    Points that no quad uses (e.g. Gmsh geometry points) are dropped; line and vertex cells are
-    allowed.  Triangles (a quad-dominant mesh) are a MeshError naming the fixes, unless
+    Points that no quad uses (e.g. Gmsh geometry points) are dropped (``mesh.dropped_points``:
+    their ids when that renumbers the points after them, else None); line and vertex cells are
+    allowed; a group of lines off the quads is a MeshError.  Triangles (a quad-dominant mesh) are a MeshError naming the fixes, unless
     ``triangles="split"``: then every cell is split conformingly into quads (each quad into 4,
     each triangle into 3, lines into 2; :func:`~core_se3.mesh.subdivide.split_to_quads`) and the
     groups follow their cells.  Any other cell type, quads whose orientation flips across an
@@ -163,6 +164,10 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None, triangles="error"):
     mesh = Mesh(frames_from(X, t, d3), quads, named, regions=regions)
     for name, pred in (edges or {}).items():
         mesh.edges[name] = np.nonzero(pred(mesh.X))[0]
+    # the file's points that no quad uses, when dropping them renumbered the nodes after them
+    # (node ids then differ from the file's point ids: scenario.geometry says so where ids are used)
+    dropped = np.flatnonzero(remap < 0)
+    mesh.dropped_points = dropped if len(dropped) and dropped[0] < len(remap) - len(dropped) else None
     _warn_coincident(X)
     return mesh
 
