@@ -273,6 +273,21 @@ def test_a_sweep_resumed_with_other_values_is_refused(tmp_path):
         scenario.sweep(scn, {"material.E": [1e6, 3e6]}, out=str(tmp_path / "s"), plot=False, resume=True)
 
 
+def test_a_sweep_resumed_with_other_load_steps_is_refused(tmp_path):
+    """The sweep's checkpoint took the scenario's fingerprint, which leaves out steps, lam_end and
+    load_factors (a run may be extended on --resume): a sweep resumed with lam_end = 2 kept its
+    rows at lam_end = 1 as complete (test_cli_run's strip: tip.uz 5.419 at E = 1e6 reported, 7.030
+    the answer at lam_end = 2).  Now the load factors are part of the sweep's checkpoint."""
+    scn = load(with_(units=None, solver={"steps": 2}))
+    out = str(tmp_path / "s")
+    first = scenario.sweep(scn, {"material.E": [1e6]}, out=out, plot=False).rows
+    assert scenario.sweep(scn, {"material.E": [1e6]}, out=out, plot=False, resume=True).rows == first
+    for solver in ({"steps": 4, "lam_end": 2.0}, {"steps": 3}, {"load_factors": [0.5, 1.5]}):
+        other = load(with_(units=None, solver=solver))
+        with pytest.raises(CheckpointError, match="belongs to another sweep .*its load steps"):
+            scenario.sweep(other, {"material.E": [1e6]}, out=out, plot=False, resume=True)
+
+
 def test_documented_behaviours():
     """Names that would leave out/ stay under it; unit defaults; Python selections refuse repeats."""
     assert runner.output_directory(load(with_(name="/tmp/x"))) == os.path.join("out", "_tmp_x")
