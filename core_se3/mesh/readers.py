@@ -67,22 +67,29 @@ def read_meshio(source):
 
 
 def _physical_sets(raw):
-    """Named cell sets from Gmsh physical tags (``gmsh:physical`` cell data and field_data
-    name -> [tag, dim]) when the reader left ``cell_sets`` empty (Gmsh 2.2 files)."""
+    """Cell sets from Gmsh physical tags (``gmsh:physical`` cell data; names from field_data
+    name -> [tag, dim]): the named groups when the reader left ``cell_sets`` without them (Gmsh
+    2.2 files), and a group without a name (a physical tag alone) as the set named by its number,
+    e.g. "1" (it was dropped: a scenario's edge = "1" found no named edge)."""
     phys = (raw.cell_data or {}).get("gmsh:physical")
-    if raw.cell_sets or phys is None or not raw.field_data:
+    if phys is None:
         return
-    sets = {}
-    for name, fd in raw.field_data.items():
+    names = {}
+    for name, fd in (raw.field_data or {}).items():
         fd = np.asarray(fd).ravel()
-        if len(fd) < 2:
-            continue
-        tag, dim = int(fd[0]), int(fd[1])
-        blocks = [np.nonzero(np.asarray(p) == tag)[0] if _DIMS.get(cb.type) == dim else
-                  np.zeros(0, np.int64) for cb, p in zip(raw.cells, phys)]
-        if any(len(b) for b in blocks):
-            sets[str(name)] = blocks
-    raw.cell_sets = sets
+        if len(fd) >= 2:
+            names[int(fd[1]), int(fd[0])] = str(name)
+    have = any(not str(k).startswith("gmsh:") for k in (raw.cell_sets or {}))
+    sets = {}
+    for i, (cb, p) in enumerate(zip(raw.cells, phys)):
+        dim, p = _DIMS.get(cb.type), np.asarray(p).ravel()
+        for tag in (np.unique(p[p > 0]) if dim is not None else []):
+            name = names.get((dim, int(tag)))
+            if name is None or not have:
+                per = sets.setdefault(name or str(int(tag)), [np.zeros(0, np.int64)] * len(raw.cells))
+                per[i] = np.nonzero(p == tag)[0]
+    if sets:
+        raw.cell_sets = {**(raw.cell_sets or {}), **{k: v for k, v in sets.items() if k not in (raw.cell_sets or {})}}
 
 
 def _named_sets(raw):
@@ -115,7 +122,8 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None, triangles="error"):
     Nodal frames: d3 = area-weighted mean of the adjacent quads' normals (quads must be
     consistently oriented: the normal is the right-hand side of the node order); d1 = the
     projection of ``d1_hint`` on the tangent plane (the global y axis where that degenerates).
-    Named groups (Gmsh physical groups, meshio cell sets): a group of line cells (a physical
+    Named groups (Gmsh physical groups, meshio cell sets; a physical group without a name is
+    named by its number, e.g. "1"): a group of line cells (a physical
     curve) becomes a node set in ``edges``, ordered along the line; a group of vertex cells (a
     physical point) a node set of those nodes; a group of quads (a physical surface) a region.
     ``edges`` = {name: predicate(X) -> bool mask} adds node sets.
