@@ -259,6 +259,27 @@ def test_a_manifest_that_lists_files_outside_is_refused(tmp_path):
         RunDirectory(tmp_path).claim(force=True)
 
 
+def test_a_sweep_neither_continues_nor_deletes_a_runs_directory(tmp_path):
+    """A sweep given a run's --out was refused as holding 'the files of an earlier sweep
+    (checkpoint.npz, results.json, ...)' and advised --force, which deleted the run's results.json,
+    checkpoint and VTU files.  Now a directory of another kind's files is refused naming that kind,
+    with --resume and --force too; the same kind goes on as before."""
+    scn = load(with_(units=None, solver={"steps": 1}))
+    out = str(tmp_path / "o")
+    scenario.run(scn, out=out)
+    before = sorted(os.listdir(out))
+    for kw in ({}, {"force": True}, {"resume": True}):
+        with pytest.raises(RunDirectoryError, match=r"holds the files of a run \(checkpoint.npz, results.json.*not of a "
+                                                   r"sweep: a sweep neither continues \(--resume\) nor deletes"):
+            scenario.sweep(scn, {"material.E": [1e6]}, out=out, plot=False, **kw)
+    assert sorted(os.listdir(out)) == before and os.path.exists(os.path.join(out, "results.json"))
+    with RunDirectory(str(tmp_path / "sw"), "sweep").claim() as rd:
+        open(rd.file("sweep.csv"), "w").close()
+    with pytest.raises(RunDirectoryError, match=r"holds the files of a sweep \(sweep.csv\), not of a run"):
+        RunDirectory(str(tmp_path / "sw"), "run").claim(resume=True)
+    RunDirectory(out, "run").claim(force=True).release()          # the same kind starts over
+
+
 def test_a_directory_in_use_is_refused_naming_the_process(tmp_path):
     with RunDirectory(tmp_path, "run").claim():
         with pytest.raises(RunDirectoryError, match=rf"in use by another live run \(a run of process {os.getpid()}"):
