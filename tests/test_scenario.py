@@ -433,6 +433,25 @@ def test_mesh_file_node_ids_after_a_dropped_point_are_named(tmp_path):
     assert not [w for w in load_doc(tmp_path, d).warnings if "node ids" in str(w)]
 
 
+def test_mesh_file_point_sets_are_node_sets(tmp_path):
+    """An Abaqus .inp's node sets (*NSET: meshio point_sets) were dropped -- a scenario's clamp on
+    'clamped' was 'unknown edge ...; the mesh has: no named edges'.  Now they are node sets, and the
+    cantilever on the file is the generator's (the same quads): tip lift equal to round-off."""
+    from core_se3 import mesh as M
+    ref = M.rectangle(10.0, 1.0, 6, 1)
+    meshio.write(tmp_path / "strip.inp", meshio.Mesh(ref.X, [("quad", ref.quads)], point_sets={
+        "clamped": ref.edges["x0"], "tip": ref.edges["x1"], "off": np.array([0])}))
+    d = base()
+    d["mesh"] = {"file": "strip.inp"}
+    d["supports"][0]["edge"], d["loads"][0]["edge"], d["probes"][0]["edge"] = "clamped", "tip", "tip"
+    scn = load_doc(tmp_path, d)
+    assert sorted(scn.mesh.edges) == ["clamped", "off", "tip"] and scn.mesh.edges["tip"].tolist() == sorted(ref.edges["x1"])
+    d2 = base()
+    d2["mesh"] = {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 6, "ny": 1}
+    a, b = (s.problem.solve().final.probes["tip"]["u"] for s in (scn, load_doc(tmp_path, d2)))
+    assert np.abs(a - b).max() <= 1e-12 * np.abs(b).max() and abs(b[2]) > 0.1
+
+
 def test_mesh_file_missing(tmp_path):
     bad(tmp_path, _file_doc("missing.msh"), "mesh.file", "does not exist")
 

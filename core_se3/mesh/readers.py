@@ -123,7 +123,8 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None, triangles="error"):
     consistently oriented: the normal is the right-hand side of the node order); d1 = the
     projection of ``d1_hint`` on the tangent plane (the global y axis where that degenerates).
     Named groups (Gmsh physical groups, meshio cell sets; a physical group without a name is
-    named by its number, e.g. "1"): a group of line cells (a physical
+    named by its number, e.g. "1"; point sets such as Abaqus' ``*NSET`` are node sets of their
+    points): a group of line cells (a physical
     curve) becomes a node set in ``edges``, ordered along the line; a group of vertex cells (a
     physical point) a node set of those nodes; a group of quads (a physical surface) a region.
     ``edges`` = {name: predicate(X) -> bool mask} adds node sets.
@@ -164,11 +165,14 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None, triangles="error"):
     """
     if triangles not in ("error", "split"):
         raise MeshError(f"triangles must be 'error' or 'split', got {triangles!r}")
-    X, blocks, sets, qb = _cell_blocks(read_meshio(source), triangles)
+    raw = read_meshio(source)
+    X, blocks, sets, qb = _cell_blocks(raw, triangles)
     quads, remap = _oriented_quads(X, blocks, qb)
     X = X[remap >= 0]
     t, d3 = _nodal_directors(X, quads, d1_hint)
     named, regions = _named_groups(sets, blocks, qb, remap)
+    for name, nodes in _point_sets(raw, remap).items():
+        named.setdefault(name, nodes)           # a group of lines of the same name keeps its order
     mesh = Mesh(frames_from(X, t, d3), quads, named, regions=regions)
     for name, pred in (edges or {}).items():
         mesh.edges[name] = np.nonzero(pred(mesh.X))[0]
@@ -297,6 +301,22 @@ def _on_shell(name, segs, remap):
             f"belong to no quad): the curve is not on the meshed surface -- in Gmsh, a surface that is in no "
             f"physical surface is not saved (add it to one, or set Mesh.SaveAll = 1), or remove the curve "
             f"from the group")
+
+
+def _point_sets(raw, remap):
+    """Node sets of the file's point sets (Abaqus ``*NSET``, ...; they were dropped): name -> the
+    sorted ids of its points that quads use (points no quad uses are dropped, as for a group of
+    vertex cells); ids outside the file's points are a MeshError."""
+    out = {}
+    for name, ids in (raw.point_sets or {}).items():
+        ids = np.asarray(ids, np.int64).ravel()
+        if ids.size and (ids.min() < 0 or ids.max() >= len(raw.points)):
+            raise MeshError(f"the point set {str(name)!r} refers to points that do not exist (the file has "
+                            f"{len(raw.points)} points): the file is inconsistent; write it again")
+        nodes = remap[ids]
+        if (nodes >= 0).any():
+            out[str(name)] = np.unique(nodes[nodes >= 0])
+    return out
 
 
 def _named_groups(sets, blocks, qb, remap):
