@@ -280,6 +280,22 @@ def test_a_sweep_neither_continues_nor_deletes_a_runs_directory(tmp_path):
     RunDirectory(out, "run").claim(force=True).release()          # the same kind starts over
 
 
+def test_output_dir_gives_a_sweep_a_directory_of_its_own(tmp_path):
+    """With [output] dir a run, a sweep and a design of the scenario all took that directory (out/NAME
+    gets -sweep, -design): the sweep met the run's files (and its --force deleted them).  Now the
+    sweep's and the design's are DIR-sweep and DIR-design, as out/NAME-sweep."""
+    scn = load(with_(units=None, solver={"steps": 1}, output={"dir": str(tmp_path / "res"), "plots": False,
+                                                                 "picture": False}))
+    assert [runner.output_directory(scn, suffix=x) for x in ("", "-sweep", "-design")] == \
+        [str(tmp_path / "res"), str(tmp_path / "res-sweep"), str(tmp_path / "res-design")]
+    scenario.run(scn)
+    res = scenario.sweep(scn, {"material.E": [1e6]}, plot=False)
+    assert os.path.dirname(res.files["csv"]) == str(tmp_path / "res-sweep")
+    assert os.path.exists(tmp_path / "res" / "results.json")
+    here = load(with_(units=None, output={"dir": "."}))
+    assert runner.output_directory(here) == "." and runner.output_directory(here, suffix="-sweep") == os.path.join(".", "sweep")
+
+
 def test_a_directory_in_use_is_refused_naming_the_process(tmp_path):
     with RunDirectory(tmp_path, "run").claim():
         with pytest.raises(RunDirectoryError, match=rf"in use by another live run \(a run of process {os.getpid()}"):

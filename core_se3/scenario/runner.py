@@ -77,7 +77,9 @@ class RunResult:
 
 def output_directory(scn, out=None, suffix=""):
     """The run directory: ``out``, else ``[output] dir``, else ``out/NAME`` with the scenario's
-    name made safe (``io.rundir.safe_name``: a name of ``../..`` stays under ``out/``).
+    name made safe (``io.rundir.safe_name``: a name of ``../..`` stays under ``out/``); a sweep's
+    and a design's (``suffix``) beside the run's, also from ``[output] dir`` (the three shared
+    it: a sweep of a scenario with ``dir`` met its run's files).
 
     Example
     -------
@@ -87,7 +89,14 @@ def output_directory(scn, out=None, suffix=""):
     >>> output_directory(scn), output_directory(scn, suffix="-sweep")
     ('out/___etc', 'out/___etc-sweep')
     """
-    return os.fspath(out or scn.output["dir"] or os.path.join("out", safe_name(scn.name) + suffix))
+    if out:
+        return os.fspath(out)
+    if scn.output["dir"]:
+        base = os.path.normpath(os.fspath(scn.output["dir"]))
+        if suffix and os.path.basename(base) in ("", ".", ".."):      # dir = "." or "/": a folder in it
+            return os.path.join(base, suffix.lstrip("-"))
+        return base + suffix
+    return os.path.join("out", safe_name(scn.name) + suffix)
 
 
 def _options(s):
