@@ -381,6 +381,26 @@ normal = [0.0, 0.0, 1.0]
     assert v.point_data["contact_force"][:, 2].sum() == pytest.approx(last["contact"]["floor"]["force"][2], rel=1e-12)
 
 
+def test_obstacles_of_one_vtu_field_name_are_refused():
+    """Obstacles 'floor a' and 'floor_a' both write contact_gap_floor_a: the VTU summed the two
+    gaps (floor plus sphere distance at every node) under one name.  Refused, naming both."""
+    two = BASE + """[[obstacles]]
+type = "half_space"
+name = "floor a"
+point = [0.0, 0.0, -0.3]
+normal = [0.0, 0.0, 1.0]
+[[obstacles]]
+type = "sphere"
+name = "{}"
+centre = [5.0, 0.0, 3.0]
+radius = 1.0
+"""
+    with pytest.raises(ScenarioError, match=r"\[obstacles\[1\].name\]: obstacles 'floor a' and 'floor_a' have one VTU "
+                                            r"field name, contact_gap_floor_a"):
+        scenario.loads(two.format("floor_a"), file="f.toml")
+    assert len(scenario.loads(two.format("ball"), file="f.toml").spec["obstacles"]) == 2
+
+
 def test_python_api_errors():
     p = cs.Problem(M.rectangle(1.0, 1.0, 2, 1), cs.Material(1e3, 0.0, 0.01))
     with pytest.raises(ContactError, match="already intersects"):
