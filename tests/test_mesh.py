@@ -97,6 +97,17 @@ def test_meshio_bad_cells_are_named(cells, message):
         M.from_meshio(meshio.Mesh(X, cells))
 
 
+def test_meshio_d1_hint_along_the_normal_and_y():
+    """A plate normal to y with d1_hint = y: the hint degenerates and so did its fallback, the
+    global y axis -- 'g0 must be a finite (n, 4, 4) array of SE(3) frames' after a division by zero.
+    Now x is taken where y degenerates too: the frames of the hint x."""
+    import meshio
+    X = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [0, 0, 1], [1, 0, 1], [2, 0, 1]], float)
+    raw = meshio.Mesh(X, [("quad", np.array([[0, 1, 4, 3], [1, 2, 5, 4]]))])
+    m, mx = M.from_meshio(raw, d1_hint=(0.0, 1.0, 0.0)), M.from_meshio(raw, d1_hint=(1.0, 0.0, 0.0))
+    assert np.isfinite(m.g0).all() and np.array_equal(m.g0, mx.g0) and m.g0[0, :3, 0].tolist() == [1.0, 0.0, 0.0]
+
+
 def test_meshio_unreadable_file(tmp_path):
     with pytest.raises(MeshError, match="cannot read"):
         M.from_meshio(str(tmp_path / "nope.msh"))

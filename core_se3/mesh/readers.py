@@ -121,7 +121,8 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None, triangles="error"):
 
     Nodal frames: d3 = area-weighted mean of the adjacent quads' normals (quads must be
     consistently oriented: the normal is the right-hand side of the node order); d1 = the
-    projection of ``d1_hint`` on the tangent plane (the global y axis where that degenerates).
+    projection of ``d1_hint`` on the tangent plane (the global y axis where that degenerates, x
+    where y does too).
     Named groups (Gmsh physical groups, meshio cell sets; a physical group without a name is
     named by its number, e.g. "1"; point sets such as Abaqus' ``*NSET`` are node sets of their
     points): a group of line cells (a physical
@@ -272,7 +273,7 @@ def _oriented_quads(X, blocks, qb):
 def _nodal_directors(X, quads, d1_hint):
     """d1 direction t (unnormalised, in the tangent plane) and d3 (unit) at each node: d3 the
     area-weighted mean of the adjacent quads' normals, t the projection of d1_hint (the global
-    y axis where that degenerates)."""
+    y axis where that degenerates, x where y does too: a hint of y on a plate normal to y)."""
     P = X[quads]
     nq = np.cross(P[:, 2] - P[:, 0], P[:, 3] - P[:, 1])       # 2 x area-weighted normal
     nn = np.zeros_like(X)
@@ -284,10 +285,10 @@ def _nodal_directors(X, quads, d1_hint):
     d3 = nn / norm[:, None]
     hint = np.broadcast_to(np.asarray(d1_hint, float), X.shape)
     t = hint - np.einsum("ni,ni->n", hint, d3)[:, None] * d3
-    weak = np.linalg.norm(t, axis=1) < 1e-6
-    if weak.any():
-        alt = np.array([0.0, 1.0, 0.0]) - d3[weak, 1:2] * d3[weak]
-        t[weak] = alt
+    for axis in (1, 0):                 # the global y axis where the hint degenerates, x where y does too
+        weak = np.linalg.norm(t, axis=1) < 1e-6
+        if weak.any():
+            t[weak] = np.eye(3)[axis] - d3[weak, axis:axis + 1] * d3[weak]
     return t, d3
 
 
