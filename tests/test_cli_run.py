@@ -311,6 +311,20 @@ def test_pvd_of_negative_load_factors_plays_in_step_order(tmp_path):
     assert [io.read_field_data(os.path.join(out, "vtu", f))["load_factor"] for _, f in series] == [0.0, -0.2, -0.5, -1.0]
 
 
+def test_sweep_prints_each_scenario_warning_once(tmp_path, capsys):
+    """A sweep validates every value and then runs it: each point's scenario warnings came twice,
+    as raw Python warnings with an internal line of code ('return from_dict(doc, ...)'), and the
+    base scenario's again after the first lines.  Now each text once, as a 'warning:' line."""
+    doc = with_(STRIP, material={"h": 3.5}, output={"plots": False, "picture": False})
+    path = write(tmp_path, doc)
+    assert cli.main(["sweep", path, "--set", "material.h=3.5,4.0", "--out", str(tmp_path / "sw"), "-q"]) == 0
+    err = capsys.readouterr().err.splitlines()
+    thick = [ln for ln in err if "is thick for its span" in ln]
+    assert len(thick) == 2 and all(ln.startswith("warning: ") for ln in thick)
+    assert {"h / L = 3.5 / 10" in thick[0], "h / L = 4 / 10" in thick[1]} == {True}
+    assert not [ln for ln in err if "from_dict" in ln or "Warning:" in ln]
+
+
 def test_arclength_on_a_monotone_path_lands_on_the_load_control_state(tmp_path):
     arc = with_(STRIP, solver={"control": "arclength", "steps": 4}, output={"vtu": False, "plots": False,
                                                                             "picture": False})
