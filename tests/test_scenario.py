@@ -109,6 +109,19 @@ def test_dumps_writes_unicode_names_tomllib_reads(tmp_path):
     assert scn.name == "gripper 😀 v2" and sorted(scn.regions) == ["k²", "région"] and set(scn.problem.probes) == {"tête\x7f"}
 
 
+def test_load_number_messages_do_not_read_as_the_value_of_D(tmp_path):
+    """'F L^2/(D w) + M L/(D w), D = E h^3/12 = 8e+05' read as D = 8e+05 (it is 8.3e-5 for E = 1,
+    h = 0.1; 8e+05 is the load number): the definition of D is now in parentheses."""
+    d = base()
+    d["material"]["E"] = 1.0
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scn = load_doc(tmp_path, d)
+    n = scn.load_numbers()[0]
+    assert n["formula"] == "F L^2/(D w) + M L/(D w) (D = E h^3/12)"
+    assert any(f"(D = E h^3/12) = {n['value'] / 2:.3g} in the first step" in str(w) for w in scn.warnings)
+
+
 def test_scale_tables():
     f = scenario.make_scale([[0.0, 0.0], [0.5, 1.0], [1.0, 1.0]])
     assert [f(x) for x in (0.0, 0.25, 0.5, 0.9, 2.0)] == [0.0, 0.5, 1.0, 1.0, 1.0]
