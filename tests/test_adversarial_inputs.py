@@ -259,6 +259,43 @@ def test_a_manifest_that_lists_files_outside_is_refused(tmp_path):
         RunDirectory(tmp_path).claim(force=True)
 
 
+def test_a_sweep_neither_continues_nor_deletes_a_runs_directory(tmp_path):
+    """A sweep given a run's --out was refused as holding 'the files of an earlier sweep
+    (checkpoint.npz, results.json, ...)' and advised --force, which deleted the run's results.json,
+    checkpoint and VTU files.  Now a directory of another kind's files is refused naming that kind,
+    with --resume and --force too; the same kind goes on as before."""
+    scn = load(with_(units=None, solver={"steps": 1}))
+    out = str(tmp_path / "o")
+    scenario.run(scn, out=out)
+    before = sorted(os.listdir(out))
+    for kw in ({}, {"force": True}, {"resume": True}):
+        with pytest.raises(RunDirectoryError, match=r"holds the files of a run \(checkpoint.npz, results.json.*not of a "
+                                                   r"sweep: a sweep neither continues \(--resume\) nor deletes"):
+            scenario.sweep(scn, {"material.E": [1e6]}, out=out, plot=False, **kw)
+    assert sorted(os.listdir(out)) == before and os.path.exists(os.path.join(out, "results.json"))
+    with RunDirectory(str(tmp_path / "sw"), "sweep").claim() as rd:
+        open(rd.file("sweep.csv"), "w").close()
+    with pytest.raises(RunDirectoryError, match=r"holds the files of a sweep \(sweep.csv\), not of a run"):
+        RunDirectory(str(tmp_path / "sw"), "run").claim(resume=True)
+    RunDirectory(out, "run").claim(force=True).release()          # the same kind starts over
+
+
+def test_output_dir_gives_a_sweep_a_directory_of_its_own(tmp_path):
+    """With [output] dir a run, a sweep and a design of the scenario all took that directory (out/NAME
+    gets -sweep, -design): the sweep met the run's files (and its --force deleted them).  Now the
+    sweep's and the design's are DIR-sweep and DIR-design, as out/NAME-sweep."""
+    scn = load(with_(units=None, solver={"steps": 1}, output={"dir": str(tmp_path / "res"), "plots": False,
+                                                                 "picture": False}))
+    assert [runner.output_directory(scn, suffix=x) for x in ("", "-sweep", "-design")] == \
+        [str(tmp_path / "res"), str(tmp_path / "res-sweep"), str(tmp_path / "res-design")]
+    scenario.run(scn)
+    res = scenario.sweep(scn, {"material.E": [1e6]}, plot=False)
+    assert os.path.dirname(res.files["csv"]) == str(tmp_path / "res-sweep")
+    assert os.path.exists(tmp_path / "res" / "results.json")
+    here = load(with_(units=None, output={"dir": "."}))
+    assert runner.output_directory(here) == "." and runner.output_directory(here, suffix="-sweep") == os.path.join(".", "sweep")
+
+
 def test_a_directory_in_use_is_refused_naming_the_process(tmp_path):
     with RunDirectory(tmp_path, "run").claim():
         with pytest.raises(RunDirectoryError, match=rf"in use by another live run \(a run of process {os.getpid()}"):
@@ -271,6 +308,21 @@ def test_a_sweep_resumed_with_other_values_is_refused(tmp_path):
     scenario.sweep(scn, {"material.E": [1e6, 2e6]}, out=str(tmp_path / "s"), plot=False)
     with pytest.raises(CheckpointError, match="belongs to another sweep"):
         scenario.sweep(scn, {"material.E": [1e6, 3e6]}, out=str(tmp_path / "s"), plot=False, resume=True)
+
+
+def test_a_sweep_resumed_with_other_load_steps_is_refused(tmp_path):
+    """The sweep's checkpoint took the scenario's fingerprint, which leaves out steps, lam_end and
+    load_factors (a run may be extended on --resume): a sweep resumed with lam_end = 2 kept its
+    rows at lam_end = 1 as complete (test_cli_run's strip: tip.uz 5.419 at E = 1e6 reported, 7.030
+    the answer at lam_end = 2).  Now the load factors are part of the sweep's checkpoint."""
+    scn = load(with_(units=None, solver={"steps": 2}))
+    out = str(tmp_path / "s")
+    first = scenario.sweep(scn, {"material.E": [1e6]}, out=out, plot=False).rows
+    assert scenario.sweep(scn, {"material.E": [1e6]}, out=out, plot=False, resume=True).rows == first
+    for solver in ({"steps": 4, "lam_end": 2.0}, {"steps": 3}, {"load_factors": [0.5, 1.5]}):
+        other = load(with_(units=None, solver=solver))
+        with pytest.raises(CheckpointError, match="belongs to another sweep .*its load steps"):
+            scenario.sweep(other, {"material.E": [1e6]}, out=out, plot=False, resume=True)
 
 
 def test_documented_behaviours():

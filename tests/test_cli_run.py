@@ -16,7 +16,7 @@ import meshio
 import numpy as np
 import pytest
 
-from core_se3 import cli, scenario
+from core_se3 import cli, io, scenario
 from core_se3.backend import numba_available
 from core_se3.scenario import runner
 from core_se3.io import Checkpoint
@@ -291,9 +291,38 @@ def test_arclength_run_passes_the_limit_points_of_a_snapping_arch(tmp_path, pinn
     uz = [s["probes"]["crown"]["u"][2] for s in doc["steps"]]
     assert np.all(np.diff(uz) > 0)                            # while the crown keeps moving
     assert_outputs_intact(res.out)
+    series = pvd_files(os.path.join(res.out, "vtu", "series.pvd"))      # ParaView sorts by time: the
+    assert [t for t, _ in series] == [float(s["step"]) for s in doc["steps"]]   # path's order, not lam's
+    assert [io.read_field_data(os.path.join(res.out, "vtu", f))["load_factor"] for _, f in series] == lam.tolist()
     again = runner.run(scenario.load(write(tmp_path, ARCH)), out=res.out, resume=True)  # nothing left to do
     np.testing.assert_array_equal(again.g, res.g)
     assert again.doc["steps"] == doc["steps"] and again.doc["critical_points"] == doc["critical_points"]
+
+
+def test_pvd_of_negative_load_factors_plays_in_step_order(tmp_path):
+    """load_factors towards negative values: the .pvd's times were the load factors 0, -0.2,
+    -0.5, -1, which ParaView sorts, playing the run backwards from its end; now they are the
+    step numbers, with each file's load factor in its FieldData."""
+    doc = with_(STRIP, solver={"load_factors": [-0.2, -0.5, -1.0]}, output={"plots": False, "picture": False})
+    del doc["solver"]["steps"]
+    out = runner.run(scenario.load(write(tmp_path, doc)), out=str(tmp_path / "o")).out
+    series = pvd_files(os.path.join(out, "vtu", "series.pvd"))
+    assert series == [(float(k), f"step_{k:04d}.vtu") for k in range(4)]
+    assert [io.read_field_data(os.path.join(out, "vtu", f))["load_factor"] for _, f in series] == [0.0, -0.2, -0.5, -1.0]
+
+
+def test_sweep_prints_each_scenario_warning_once(tmp_path, capsys):
+    """A sweep validates every value and then runs it: each point's scenario warnings came twice,
+    as raw Python warnings with an internal line of code ('return from_dict(doc, ...)'), and the
+    base scenario's again after the first lines.  Now each text once, as a 'warning:' line."""
+    doc = with_(STRIP, material={"h": 3.5}, output={"plots": False, "picture": False})
+    path = write(tmp_path, doc)
+    assert cli.main(["sweep", path, "--set", "material.h=3.5,4.0", "--out", str(tmp_path / "sw"), "-q"]) == 0
+    err = capsys.readouterr().err.splitlines()
+    thick = [ln for ln in err if "is thick for its span" in ln]
+    assert len(thick) == 2 and all(ln.startswith("warning: ") for ln in thick)
+    assert {"h / L = 3.5 / 10" in thick[0], "h / L = 4 / 10" in thick[1]} == {True}
+    assert not [ln for ln in err if "from_dict" in ln or "Warning:" in ln]
 
 
 def test_arclength_on_a_monotone_path_lands_on_the_load_control_state(tmp_path):

@@ -16,7 +16,7 @@ import core_se3 as cs
 from core_se3 import lie, scenario
 from core_se3 import mesh as M
 from core_se3.catalogue import contact_lift_elastica, lifted_length_from_gaps, run_case
-from core_se3.errors import ContactError, ScenarioError
+from core_se3.errors import ContactError, ConvergenceError, ScenarioError
 from core_se3.model import (Box, ContactLaw, ContactLoad, Cylinder, HalfSpace, Sphere, UserSDF, check_sdf, rotation,
                             tangent_fd_check, translation)
 from core_se3.model.contact import contact_wrench, normal_law, ramp, ramp_inverse
@@ -353,6 +353,52 @@ def test_scenario_validation_errors(entry, key, message):
     with pytest.raises(ScenarioError) as exc:
         scenario.loads(BASE + "[[obstacles]]\n" + entry + "\n", file="grasp.toml")
     assert exc.value.file == "grasp.toml" and exc.value.key == key and message in str(exc.value)
+
+
+def test_a_failed_runs_last_vtu_has_the_contact_forces_of_its_step(tmp_path):
+    """A step that fails after converging sub-steps (1.5 -> 1e5: it got to 1025) moved the contact
+    multipliers on; the VTU file of the last converged step, written when the run fails, showed
+    them: contact_force summed to 512.8 where results.json has the step's 0.675.  Now the step's
+    multipliers are set again first."""
+    import meshio
+    text = BASE.replace("steps = 2", "load_factors = [0.5, 1.0, 1.5, 1e5]\nmax_cutbacks = 0\nmax_iter = 8") + """
+[output]
+vtu_every = 10
+plots = false
+picture = false
+[[obstacles]]
+type = "half_space"
+name = "floor"
+point = [0.0, 0.0, -0.3]
+normal = [0.0, 0.0, 1.0]
+"""
+    with pytest.raises(ConvergenceError, match="step 4 .* failed"):
+        scenario.run(scenario.loads(text, file="floor.toml"), out=str(tmp_path / "o"))
+    doc = json.load(open(tmp_path / "o" / "results.json"))
+    last = doc["steps"][-1]
+    assert doc["status"] == "failed" and last["step"] == 3 and last["contact"]["floor"]["force"][2] > 0.5
+    v = meshio.read(str(tmp_path / "o" / "vtu" / "step_0003.vtu"))
+    assert v.point_data["contact_force"][:, 2].sum() == pytest.approx(last["contact"]["floor"]["force"][2], rel=1e-12)
+
+
+def test_obstacles_of_one_vtu_field_name_are_refused():
+    """Obstacles 'floor a' and 'floor_a' both write contact_gap_floor_a: the VTU summed the two
+    gaps (floor plus sphere distance at every node) under one name.  Refused, naming both."""
+    two = BASE + """[[obstacles]]
+type = "half_space"
+name = "floor a"
+point = [0.0, 0.0, -0.3]
+normal = [0.0, 0.0, 1.0]
+[[obstacles]]
+type = "sphere"
+name = "{}"
+centre = [5.0, 0.0, 3.0]
+radius = 1.0
+"""
+    with pytest.raises(ScenarioError, match=r"\[obstacles\[1\].name\]: obstacles 'floor a' and 'floor_a' have one VTU "
+                                            r"field name, contact_gap_floor_a"):
+        scenario.loads(two.format("floor_a"), file="f.toml")
+    assert len(scenario.loads(two.format("ball"), file="f.toml").spec["obstacles"]) == 2
 
 
 def test_python_api_errors():

@@ -96,6 +96,21 @@ def test_bad_design_input_names_the_key(tmp_path, old, new, key):
     assert exc.value.key == key and str(path) in str(exc.value)
 
 
+def test_poses_of_one_file_name_are_refused(tmp_path):
+    """Pose names are made safe for file names ('grip é' and 'grip ü' both 'grip__'): the second
+    pose's optimised_grip__.toml and vtu/grip__/ overwrote the first's, and design.json listed one.
+    Distinct names of one file name are now refused at the second pose's name."""
+    poses = '[[design.poses]]\nname = "grip é"\n[[design.poses]]\nname = "grip ü"\n'
+    path = tmp_path / "poses.toml"
+    path.write_text(BASE.replace("[[design.variables]]", poses + "[[design.variables]]", 1).replace(
+        'components = [0, 2]', 'components = [0, 2]\npose = "grip é"'))
+    with pytest.raises(ScenarioError, match=r"poses 'grip é' and 'grip ü' have one file name, 'grip__'") as exc:
+        scenario.load(path)
+    assert exc.value.key == "design.poses[1].name"
+    path.write_text(path.read_text().replace("grip ü", "grip-u"))
+    assert [p["name"] for p in scenario.load(path).spec["design"]["poses"]] == ["grip é", "grip-u"]
+
+
 def test_unreachable_target_is_reported(tmp_path, capsys):
     path = tmp_path / "far.toml"
     path.write_text(BASE.replace("value = [12.0, 0.0, 10.0]", "value = [40.0, 0.0, 10.0]").replace(

@@ -38,9 +38,12 @@ def _write(path, version, binary):
     return str(path)
 
 
-def plate_file(path, version=4.1, binary=0, nx=10, ny=2, surfaces=True):
+def plate_file(path, version=4.1, binary=0, nx=10, ny=2, surfaces=True, names=True):
     """10 x 2 plate of two 5 x 2 halves (physical surfaces 'left', 'right'), transfinite nx x ny
-    quads; physical curves 'clamped' (x = 0) and 'tip' (x = 10), physical point 'corner' (10, 2)."""
+    quads; physical curves 'clamped' (x = 0) and 'tip' (x = 10), physical point 'corner' (10, 2);
+    ``surfaces="left"``: only the left half a physical surface (so only it is saved); ``names=False``:
+    the groups numbered (surfaces 1, 2, curves 1 (x = 0), 2 (x = 10), point 3) without names,
+    ``names="some"``: the same numbers, all named but the curve 2."""
     _start()
     occ = gmsh.model.occ
     a = occ.addRectangle(0, 0, 0, 5, 2)
@@ -61,12 +64,15 @@ def plate_file(path, version=4.1, binary=0, nx=10, ny=2, surfaces=True):
             if (x is None or abs(c[0] - x) < 1e-9) and (y is None or abs(c[1] - y) < 1e-9):
                 out.append(tag)
         return out
+    def group(dim, tags, name, number):       # names=False: tags 1, 2, ... alone (e.g. for FEniCS)
+        gmsh.model.addPhysicalGroup(dim, tags, number if names is not True else -1, name=name if names else "")
     if surfaces:
-        gmsh.model.addPhysicalGroup(2, at(2, x=2.5), name="left")
-        gmsh.model.addPhysicalGroup(2, at(2, x=7.5), name="right")
-    gmsh.model.addPhysicalGroup(1, at(1, x=0.0), name="clamped")
-    gmsh.model.addPhysicalGroup(1, at(1, x=10.0), name="tip")
-    gmsh.model.addPhysicalGroup(0, at(0, x=10.0, y=2.0), name="corner")
+        group(2, at(2, x=2.5), "left", 1)
+    if surfaces is True:
+        group(2, at(2, x=7.5), "right", 2)
+    group(1, at(1, x=0.0), "clamped", 1)
+    group(1, at(1, x=10.0), "tip" if names != "some" else "", 2)
+    group(0, at(0, x=10.0, y=2.0), "corner", 3)
     gmsh.model.mesh.generate(2)
     return _write(path, version, binary)
 
@@ -161,3 +167,38 @@ def test_gmsh_file_without_physical_surface_names_the_fix(tmp_path):
     path = plate_file(tmp_path / "curves.msh", surfaces=False)
     with pytest.raises(MeshError, match=r"no quad cells; .*physical groups of curves .* Mesh.SaveAll = 1"):
         M.from_meshio(path)
+
+
+def test_gmsh_curve_off_the_saved_surface_names_the_group(tmp_path):
+    """Only the left half a physical surface, so Gmsh saves only its quads, while the physical
+    curve 'tip' (x = 10) bounds the unsaved right half: its nodes belong to no quad and were
+    remapped to -1, so mesh.edges['tip'] was [-1] -- the mesh's last node, at (4, 1, 0) -- and a
+    scenario's load on 'tip' failed with "node selection array([-1]) refers to nodes that do not
+    exist".  Now a MeshError names the group and the fix."""
+    path = plate_file(tmp_path / "half.msh", surfaces="left")
+    with pytest.raises(MeshError, match=r"group 'tip' has 2 of its 2 line cell\(s\) off the shell.*Mesh.SaveAll = 1"):
+        M.from_meshio(path)
+    doc = _cantilever({"file": path})
+    with pytest.raises(ScenarioError, match=r"has 2 of its 2 line cell\(s\) off the shell"):   # the name elided:
+        # an error never shows a file's text (io.files.without_contents)
+        scenario.from_dict(doc, base_dir=str(tmp_path))
+
+
+@pytest.mark.parametrize("version,binary", [(4.1, 0), (2.2, 0), (2.2, 1)], ids=["4.1-ascii", "2.2-ascii", "2.2-binary"])
+def test_gmsh_groups_without_names_are_named_by_number(tmp_path, version, binary):
+    """Physical groups given by number alone (no $PhysicalNames; FEniCS scripts use tags) were
+    dropped: no node sets or regions, and a scenario's edge = "1" was 'unknown edge ... no named
+    edges'.  Now a group without a name is named by its number (curves 1, 2 and surfaces 1, 2
+    share numbers: node sets and regions are apart); named groups stay as they were."""
+    named = M.from_meshio(plate_file(tmp_path / "named.msh", version, binary))
+    m = M.from_meshio(plate_file(tmp_path / "numbered.msh", version, binary, names=False))
+    assert sorted(m.edges) == ["1", "2", "3"] and sorted(m.regions) == ["1", "2"]
+    for a, b in (("1", "clamped"), ("2", "tip"), ("3", "corner")):
+        assert m.edges[a].tolist() == named.edges[b].tolist()
+    for a, b in (("1", "left"), ("2", "right")):
+        assert m.regions[a].tolist() == named.regions[b].tolist()
+    some = M.from_meshio(plate_file(tmp_path / "some.msh", version, binary, names="some"))
+    assert sorted(some.edges) == ["2", "clamped", "corner"] and sorted(some.regions) == ["left", "right"]
+    doc = _cantilever({"file": "numbered.msh"})
+    doc["supports"][0]["edge"], doc["loads"][0]["edge"], doc["probes"][0]["edge"] = "1", "2", "2"
+    assert scenario.from_dict(doc, base_dir=str(tmp_path)).mesh.edges["2"].tolist() == named.edges["tip"].tolist()

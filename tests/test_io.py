@@ -70,6 +70,20 @@ def test_series_and_pvd(tmp_path, mesh):
     np.testing.assert_allclose(m0.point_data["displacement"], 0.0)
 
 
+def test_pvd_times_increase_strictly_for_paraview(tmp_path):
+    """ParaView sorts a collection by its times (vtkPVDReader) and shows one data set per time:
+    load factors that turn back (an arc-length path past a limit point), go negative or repeat
+    were written as the times, so the states played out of order or were hidden.  Such times
+    become the entries' positions; increasing ones stay the load factors."""
+    def times(entries):
+        p = io.write_pvd(tmp_path / "s.pvd", entries)
+        return [(float(d.get("timestep")), d.get("file")) for d in ET.parse(p).getroot().iter("DataSet")]
+    assert times([(0.0, "a.vtu"), (0.5, "b.vtu"), (1.0, "c.vtu")]) == [(0.0, "a.vtu"), (0.5, "b.vtu"), (1.0, "c.vtu")]
+    for lam in ([0.0, -0.2, -1.0], [0.0, 0.8, 0.6, 0.9], [0.0, 0.5, 0.5]):
+        got = times([(x, f"s{k}.vtu") for k, x in enumerate(lam)])
+        assert got == [(float(k), f"s{k}.vtu") for k in range(len(lam))]
+
+
 def test_plots_nonempty_png(tmp_path, mesh):
     X, quads, g0, g, *_ = mesh
     loads = np.linspace(0, 1, 5)

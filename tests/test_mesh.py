@@ -68,6 +68,46 @@ def test_meshio_triangles_rejected():
         M.from_meshio(meshio.Mesh(np.eye(3), [("triangle", np.array([[0, 1, 2]]))]))
 
 
+def test_meshio_line_group_off_the_shell_is_a_mesh_error():
+    """A group of lines through a point no quad uses: that point was remapped to -1, so the
+    edge held node -1 -- the mesh's last node -- and a support or load on it acted there."""
+    import meshio
+    ref = M.rectangle(2.0, 1.0, 2, 1)
+    X = np.vstack([ref.X, [[5.0, 5.0, 0.0]]])                  # point 6: on no quad
+    x1 = [int(i) for i in ref.edges["x1"]]
+    m = meshio.Mesh(X, [("quad", ref.quads), ("line", np.array([x1, [x1[1], 6]]))],
+                    cell_sets={"edge": [np.zeros(0, int), np.array([0, 1])]})
+    with pytest.raises(MeshError, match=r"group 'edge' has 1 of its 2 line cell\(s\) off the shell"):
+        M.from_meshio(m)
+
+
+@pytest.mark.parametrize("cells, message", [
+    ([("quad", np.array([[0, 1, 4, 3], [1, 2, 5, 9]]))], r"\['quad'\] cells refer to points that do not exist"),
+    ([("quad", np.zeros((0, 4), int))], "no quad cells"),
+    ([("quad9", np.arange(9)[None])], r"\['quad9'\] cells: second-order elements.*Mesh.ElementOrder = 1"),
+    ([("quad8", np.arange(8)[None]), ("line3", np.array([[0, 2, 1]]))], r"second-order elements"),
+])
+def test_meshio_bad_cells_are_named(cells, message):
+    """A quad naming point 9 of 9 points was a bare IndexError, an empty quad block a bare
+    ValueError (zero-size reduction), quad8/quad9 (Gmsh's second order) 'only quadrilateral
+    shells are supported' without the fix."""
+    import meshio
+    X = np.c_[np.arange(9) % 3, np.arange(9) // 3, np.zeros(9)].astype(float)
+    with pytest.raises(MeshError, match=message):
+        M.from_meshio(meshio.Mesh(X, cells))
+
+
+def test_meshio_d1_hint_along_the_normal_and_y():
+    """A plate normal to y with d1_hint = y: the hint degenerates and so did its fallback, the
+    global y axis -- 'g0 must be a finite (n, 4, 4) array of SE(3) frames' after a division by zero.
+    Now x is taken where y degenerates too: the frames of the hint x."""
+    import meshio
+    X = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [0, 0, 1], [1, 0, 1], [2, 0, 1]], float)
+    raw = meshio.Mesh(X, [("quad", np.array([[0, 1, 4, 3], [1, 2, 5, 4]]))])
+    m, mx = M.from_meshio(raw, d1_hint=(0.0, 1.0, 0.0)), M.from_meshio(raw, d1_hint=(1.0, 0.0, 0.0))
+    assert np.isfinite(m.g0).all() and np.array_equal(m.g0, mx.g0) and m.g0[0, :3, 0].tolist() == [1.0, 0.0, 0.0]
+
+
 def test_meshio_unreadable_file(tmp_path):
     with pytest.raises(MeshError, match="cannot read"):
         M.from_meshio(str(tmp_path / "nope.msh"))

@@ -6,6 +6,8 @@ against closed-form strip solutions: u = F L / (E h w) and the bent circle of ra
 """
 import copy
 import math
+import re
+import warnings
 
 import meshio
 import numpy as np
@@ -88,6 +90,36 @@ def test_dumps_writes_numpy_scalars_as_plain_toml():
     import tomllib
     doc = {"a": np.float64(0.5), "b": np.int64(3), "c": [np.float32(0.25), np.bool_(True)]}
     assert tomllib.loads(scenario.dumps(doc)) == {"a": 0.5, "b": 3, "c": [0.25, True]}
+
+
+def test_dumps_writes_unicode_names_tomllib_reads(tmp_path):
+    """Region and probe names beyond ASCII (a Gmsh group 'région', 'k²') were written as bare
+    keys, and characters beyond U+FFFF (an emoji in the name) as JSON's surrogate pairs
+    '\\ud83d\\ude00': tomllib refused both ("Expected ']' at the end of a table declaration",
+    "not a Unicode scalar value"), so e.g. a design's optimised.toml could not be read back."""
+    import tomllib
+    d = base()
+    d["name"] = "gripper 😀 v2"
+    d["regions"] = {"région": {"box": {"x": [0.0, 5.0]}}, "k²": {"box": {"x": [5.0, 10.0]}}}
+    d["material"]["regions"] = {"région": {"E": 2.4e6}}
+    d["probes"][0]["name"] = "tête\x7f"
+    text = scenario.dumps(d)
+    assert tomllib.loads(text) == d
+    scn = load_text(tmp_path, text)
+    assert scn.name == "gripper 😀 v2" and sorted(scn.regions) == ["k²", "région"] and set(scn.problem.probes) == {"tête\x7f"}
+
+
+def test_load_number_messages_do_not_read_as_the_value_of_D(tmp_path):
+    """'F L^2/(D w) + M L/(D w), D = E h^3/12 = 8e+05' read as D = 8e+05 (it is 8.3e-5 for E = 1,
+    h = 0.1; 8e+05 is the load number): the definition of D is now in parentheses."""
+    d = base()
+    d["material"]["E"] = 1.0
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scn = load_doc(tmp_path, d)
+    n = scn.load_numbers()[0]
+    assert n["formula"] == "F L^2/(D w) + M L/(D w) (D = E h^3/12)"
+    assert any(f"(D = E h^3/12) = {n['value'] / 2:.3g} in the first step" in str(w) for w in scn.warnings)
 
 
 def test_scale_tables():
@@ -388,6 +420,49 @@ def test_mesh_file_ok(tmp_path):
     _write_quads(tmp_path / "m.vtu", X, [[0, 1, 4, 3], [1, 2, 5, 4]])
     scn = load_doc(tmp_path, _file_doc("m.vtu"))
     assert scn.mesh.n_elements == 2 and scn.spec["mesh"] == {"file": "m.vtu", "d1_hint": [1.0, 0.0, 0.0]}
+
+
+def test_mesh_file_node_ids_after_a_dropped_point_are_named(tmp_path):
+    """A file whose point 0 no quad uses (a Gmsh circle's centre, saved without physical groups):
+    the reader drops it and renumbers the rest, so nodes = [2] selects the file's point 3, at
+    (2, 0, 0), not its point 2 at (1, 0, 0) -- silently.  Now a warning at every key that selects
+    by id names the shift (strict: an error); without dropped points, or with ids before the
+    first dropped point, nothing is said."""
+    X = [[9, 9, 0], [0, 0, 0], [1, 0, 0], [2, 0, 0], [0, 1, 0], [1, 1, 0], [2, 1, 0]]
+    _write_quads(tmp_path / "m.vtu", X, [[1, 2, 5, 4], [2, 3, 6, 5]])
+    d = _file_doc("m.vtu")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        scn = load_doc(tmp_path, d)
+    assert re.search(r"\[loads\[0\].nodes\]: node ids count the mesh's nodes.*1 point\(s\) that no quad uses "
+                     r"\(point 0\).*node 2 is the file's point 3, at \(2, 0, 0\)", str(caught[-1].message))
+    assert scn.mesh.X[2].tolist() == [2.0, 0.0, 0.0]
+    assert [w.split(": ")[1] for w in map(str, scn.warnings) if "node ids" in w] == \
+        ["[supports[0].nodes]", "[loads[0].nodes]"]
+    with pytest.raises(ScenarioError, match=r"\[supports\[0\].nodes\]: node ids count"):
+        scenario.load(tmp_path / "s.toml", strict=True)
+    X[0] = [2, 2, 0]                                     # the unused point last: no renumbering
+    _write_quads(tmp_path / "m.vtu", X[1:] + [X[0]], [[0, 1, 4, 3], [1, 2, 5, 4]])
+    assert not [w for w in load_doc(tmp_path, d).warnings if "node ids" in str(w)]
+
+
+def test_mesh_file_point_sets_are_node_sets(tmp_path):
+    """An Abaqus .inp's node sets (*NSET: meshio point_sets) were dropped -- a scenario's clamp on
+    'clamped' was 'unknown edge ...; the mesh has: no named edges'.  Now they are node sets, and the
+    cantilever on the file is the generator's (the same quads): tip lift equal to round-off."""
+    from core_se3 import mesh as M
+    ref = M.rectangle(10.0, 1.0, 6, 1)
+    meshio.write(tmp_path / "strip.inp", meshio.Mesh(ref.X, [("quad", ref.quads)], point_sets={
+        "clamped": ref.edges["x0"], "tip": ref.edges["x1"], "off": np.array([0])}))
+    d = base()
+    d["mesh"] = {"file": "strip.inp"}
+    d["supports"][0]["edge"], d["loads"][0]["edge"], d["probes"][0]["edge"] = "clamped", "tip", "tip"
+    scn = load_doc(tmp_path, d)
+    assert sorted(scn.mesh.edges) == ["clamped", "off", "tip"] and scn.mesh.edges["tip"].tolist() == sorted(ref.edges["x1"])
+    d2 = base()
+    d2["mesh"] = {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 6, "ny": 1}
+    a, b = (s.problem.solve().final.probes["tip"]["u"] for s in (scn, load_doc(tmp_path, d2)))
+    assert np.abs(a - b).max() <= 1e-12 * np.abs(b).max() and abs(b[2]) > 0.1
 
 
 def test_mesh_file_missing(tmp_path):

@@ -122,6 +122,34 @@ def _preamble(scn, quiet):
               f"(span L = {n['span']:.4g}, E = {n['E']:.4g}, h = {n['h']:.4g})")
 
 
+class _warnings_once:
+    """The scenario warnings of a sweep's points as ``warning: ...`` lines, each text once: every
+    value is validated and then run, so each point's warnings came twice, as Python warnings
+    showing an internal line of code, and the base scenario's (printed first) again per point."""
+
+    def __init__(self, shown=()):
+        self.shown = {str(w) for w in shown}
+
+    def __enter__(self):
+        import warnings
+        from ..errors import ScenarioWarning
+        self.old = warnings.showwarning
+
+        def show(message, category, filename, lineno, file=None, line=None):
+            if not issubclass(category, ScenarioWarning):
+                return self.old(message, category, filename, lineno, file, line)
+            if str(message) not in self.shown:
+                self.shown.add(str(message))
+                print(f"warning: {message}", file=sys.stderr)
+        warnings.showwarning = show
+        return self
+
+    def __exit__(self, *exc):
+        import warnings
+        warnings.showwarning = self.old
+        return False
+
+
 def _check(args, scn):
     """``--check``: the summary of a valid scenario, its mesh's parts and its memory estimate
     (a warning past the machine's memory)."""
@@ -329,11 +357,12 @@ def scenario_sweep(args):
         return error_code(exc)
     _preamble(scn, args.quiet)
     progress = True if args.progress else (False if args.quiet else None)
-    res, code = _guarded(lambda: scenario.sweep(scn, grid, out=args.out, progress=progress, warm=not args.cold,
-                                                resume=args.resume, force=args.force),
-                         "the sweep's finished rows are kept in sweep.csv where it could be written",
-                         "the finished runs are in sweep.csv (sweep.json says where it stopped): continue "
-                         "with --resume")
+    with _warnings_once(scn.warnings):
+        res, code = _guarded(lambda: scenario.sweep(scn, grid, out=args.out, progress=progress, warm=not args.cold,
+                                                    resume=args.resume, force=args.force),
+                             "the sweep's finished rows are kept in sweep.csv where it could be written",
+                             "the finished runs are in sweep.csv (sweep.json says where it stopped): continue "
+                             "with --resume")
     if code is not None:
         return code
     failed = [r for r in res.rows if r["status"] != "complete"]

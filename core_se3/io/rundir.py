@@ -5,6 +5,8 @@ live run at a time.
   it is created (:meth:`RunDirectory.file`), so that whatever a killed run left is known to be
   its own; ``--force`` deletes only the files of a previous run that its manifest lists (and
   their half-written temporaries), never a file this tool did not write.
+* **Another kind's files** (a run's directory given to a sweep, ...): refused, with ``resume``
+  and ``force`` too (neither continued nor deleted).
 * **Foreign files**: a new run in a directory holding files that no manifest lists is refused
   (naming them) unless ``force``; even then they are kept, and a run refuses to overwrite one of
   them (a resumed run keeps those added beside it).
@@ -107,6 +109,7 @@ class RunDirectory:
         self.previous = []
         self.existed = False            # a manifest was there: the directory of an earlier run
         self._lock = None
+        self._manifest_kind = None      # what wrote the files the manifest lists ('run', 'sweep', ...)
 
     # ------------------------------------------------------------------ claiming -------------
     def claim(self, resume=False, force=False, adopt=()):
@@ -139,6 +142,7 @@ class RunDirectory:
             listed = listed or []
             ours = set(listed) | {MANIFEST, LOCK}
             self.previous = [f for f in listed if f in present]
+            self._check_kind()
             foreign = [f for f in present if f not in ours and not self._temporary(f, ours)]
             self._check(foreign, resume, force)
             if force and not resume:
@@ -152,6 +156,15 @@ class RunDirectory:
             self.release()
             raise
         return self
+
+    def _check_kind(self):
+        """A directory of another kind's files (a run's, entered by a sweep): neither continued nor
+        deleted -- the messages would call them this kind's, and --force deleted a run's results."""
+        other = self._manifest_kind
+        if self.previous and other is not None and other != self.kind:
+            raise RunDirectoryError(
+                f"{self.path} holds the files of a {other} ({_some(self.previous)}), not of a {self.kind}: a "
+                f"{self.kind} neither continues (--resume) nor deletes (--force) them; choose another --out directory")
 
     def _check(self, foreign, resume, force):
         where = self.path
@@ -221,12 +234,14 @@ class RunDirectory:
 
     def _read_manifest(self):
         """The files the manifest lists (None without one); a damaged manifest is an error."""
+        self._manifest_kind = None
         if not os.path.exists(self.manifest_path):
             return None
         try:
             with open(self.manifest_path, "rb") as fh:
                 doc = json.loads(fh.read(1 << 24))
             files = [os.path.normpath(f) for f in doc["files"]]
+            self._manifest_kind = doc.get("kind") if isinstance(doc.get("kind"), str) else None
             if doc.get("tool") != "core-se3" or any(f.startswith("..") or os.path.isabs(f) for f in files):
                 raise ValueError("not a core-se3 manifest")
         except (OSError, ValueError, KeyError, TypeError) as exc:

@@ -18,7 +18,7 @@ import numpy as np
 from ..lie import rotation_angle
 
 __all__ = ["frame_fields", "write_vtu", "write_pvd", "write_series", "as_frames", "as_points",
-           "as_cells", "ensure_parent", "read_field_data"]
+           "as_cells", "ensure_parent", "read_field_data", "pvd_times"]
 
 _CELL_TYPES = {3: "triangle", 4: "quad"}
 
@@ -192,9 +192,31 @@ def read_field_data(path) -> dict:
     return out
 
 
+def pvd_times(times, steps=None) -> list[float]:
+    """The times of a ``.pvd`` collection: ``times`` when they increase strictly, else ``steps``
+    (default the positions 0, 1, 2, ...).
+
+    ParaView sorts a collection by its times and shows one data set per time, so load factors that
+    do not increase (an arc-length path past a limit point, load factors towards negative values,
+    a repeated value) would play the states out of order or hide some; the load factor stays in
+    each file's ``FieldData`` (``load_factor``).
+
+    Example
+    -------
+    >>> pvd_times([0.0, 0.5, 1.0]), pvd_times([0.0, -0.5, -1.0]), pvd_times([0.0, 0.7, 0.6], [0, 2, 4])
+    ([0.0, 0.5, 1.0], [0.0, 1.0, 2.0], [0.0, 2.0, 4.0])
+    """
+    t = np.asarray(times, float).ravel()
+    if np.all(np.diff(t) > 0):
+        return t.tolist()
+    return np.asarray(np.arange(len(t)) if steps is None else steps, float).ravel().tolist()
+
+
 def write_pvd(path, entries: Sequence[tuple[float, str]]) -> str:
     """Write a ParaView collection (``.pvd``) listing ``entries`` = [(time, vtu file name relative
-    to the .pvd's directory), ...]. ``time`` is the pseudo-time/load factor (any unit). Returns path.
+    to the .pvd's directory), ...]. ``time`` is the pseudo-time/load factor (any unit); times that
+    do not increase strictly are replaced by the entries' positions (:func:`pvd_times`: ParaView
+    would sort them). Returns path.
 
     Parameters
     ----------
@@ -218,7 +240,8 @@ def write_pvd(path, entries: Sequence[tuple[float, str]]) -> str:
     import xml.etree.ElementTree as ET     # at the first use: 4 ms of every start otherwise
     root = ET.Element("VTKFile", type="Collection", version="0.1", byte_order="LittleEndian")
     coll = ET.SubElement(root, "Collection")
-    for t, fname in entries:
+    entries = list(entries)
+    for t, (_, fname) in zip(pvd_times([t for t, _ in entries]), entries):
         ET.SubElement(coll, "DataSet", timestep=repr(float(t)), group="", part="0", file=os.fspath(fname))
     ET.indent(root)
     path = ensure_parent(path)

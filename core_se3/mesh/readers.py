@@ -67,22 +67,29 @@ def read_meshio(source):
 
 
 def _physical_sets(raw):
-    """Named cell sets from Gmsh physical tags (``gmsh:physical`` cell data and field_data
-    name -> [tag, dim]) when the reader left ``cell_sets`` empty (Gmsh 2.2 files)."""
+    """Cell sets from Gmsh physical tags (``gmsh:physical`` cell data; names from field_data
+    name -> [tag, dim]): the named groups when the reader left ``cell_sets`` without them (Gmsh
+    2.2 files), and a group without a name (a physical tag alone) as the set named by its number,
+    e.g. "1" (it was dropped: a scenario's edge = "1" found no named edge)."""
     phys = (raw.cell_data or {}).get("gmsh:physical")
-    if raw.cell_sets or phys is None or not raw.field_data:
+    if phys is None:
         return
-    sets = {}
-    for name, fd in raw.field_data.items():
+    names = {}
+    for name, fd in (raw.field_data or {}).items():
         fd = np.asarray(fd).ravel()
-        if len(fd) < 2:
-            continue
-        tag, dim = int(fd[0]), int(fd[1])
-        blocks = [np.nonzero(np.asarray(p) == tag)[0] if _DIMS.get(cb.type) == dim else
-                  np.zeros(0, np.int64) for cb, p in zip(raw.cells, phys)]
-        if any(len(b) for b in blocks):
-            sets[str(name)] = blocks
-    raw.cell_sets = sets
+        if len(fd) >= 2:
+            names[int(fd[1]), int(fd[0])] = str(name)
+    have = any(not str(k).startswith("gmsh:") for k in (raw.cell_sets or {}))
+    sets = {}
+    for i, (cb, p) in enumerate(zip(raw.cells, phys)):
+        dim, p = _DIMS.get(cb.type), np.asarray(p).ravel()
+        for tag in (np.unique(p[p > 0]) if dim is not None else []):
+            name = names.get((dim, int(tag)))
+            if name is None or not have:
+                per = sets.setdefault(name or str(int(tag)), [np.zeros(0, np.int64)] * len(raw.cells))
+                per[i] = np.nonzero(p == tag)[0]
+    if sets:
+        raw.cell_sets = {**(raw.cell_sets or {}), **{k: v for k, v in sets.items() if k not in (raw.cell_sets or {})}}
 
 
 def _named_sets(raw):
@@ -114,14 +121,18 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None, triangles="error"):
 
     Nodal frames: d3 = area-weighted mean of the adjacent quads' normals (quads must be
     consistently oriented: the normal is the right-hand side of the node order); d1 = the
-    projection of ``d1_hint`` on the tangent plane (the global y axis where that degenerates).
-    Named groups (Gmsh physical groups, meshio cell sets): a group of line cells (a physical
+    projection of ``d1_hint`` on the tangent plane (the global y axis where that degenerates, x
+    where y does too).
+    Named groups (Gmsh physical groups, meshio cell sets; a physical group without a name is
+    named by its number, e.g. "1"; point sets such as Abaqus' ``*NSET`` are node sets of their
+    points): a group of line cells (a physical
     curve) becomes a node set in ``edges``, ordered along the line; a group of vertex cells (a
     physical point) a node set of those nodes; a group of quads (a physical surface) a region.
     ``edges`` = {name: predicate(X) -> bool mask} adds node sets.
 
-    Points that no quad uses (e.g. Gmsh geometry points) are dropped; line and vertex cells are
-    allowed.  Triangles (a quad-dominant mesh) are a MeshError naming the fixes, unless
+    Points that no quad uses (e.g. Gmsh geometry points) are dropped (``mesh.dropped_points``:
+    their ids when that renumbers the points after them, else None); line and vertex cells are
+    allowed; a group of lines off the quads is a MeshError.  Triangles (a quad-dominant mesh) are a MeshError naming the fixes, unless
     ``triangles="split"``: then every cell is split conformingly into quads (each quad into 4,
     each triangle into 3, lines into 2; :func:`~core_se3.mesh.subdivide.split_to_quads`) and the
     groups follow their cells.  Any other cell type, quads whose orientation flips across an
@@ -155,14 +166,21 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None, triangles="error"):
     """
     if triangles not in ("error", "split"):
         raise MeshError(f"triangles must be 'error' or 'split', got {triangles!r}")
-    X, blocks, sets, qb = _cell_blocks(read_meshio(source), triangles)
+    raw = read_meshio(source)
+    X, blocks, sets, qb = _cell_blocks(raw, triangles)
     quads, remap = _oriented_quads(X, blocks, qb)
     X = X[remap >= 0]
     t, d3 = _nodal_directors(X, quads, d1_hint)
     named, regions = _named_groups(sets, blocks, qb, remap)
+    for name, nodes in _point_sets(raw, remap).items():
+        named.setdefault(name, nodes)           # a group of lines of the same name keeps its order
     mesh = Mesh(frames_from(X, t, d3), quads, named, regions=regions)
     for name, pred in (edges or {}).items():
         mesh.edges[name] = np.nonzero(pred(mesh.X))[0]
+    # the file's points that no quad uses, when dropping them renumbered the nodes after them
+    # (node ids then differ from the file's point ids: scenario.geometry says so where ids are used)
+    dropped = np.flatnonzero(remap < 0)
+    mesh.dropped_points = dropped if len(dropped) and dropped[0] < len(remap) - len(dropped) else None
     _warn_coincident(X)
     return mesh
 
@@ -200,6 +218,10 @@ def _cell_blocks(m, triangles):
     if X.shape[1] == 2:
         X = np.c_[X, np.zeros(len(X))]
     blocks = [(c.type, np.asarray(c.data, np.int64)) for c in m.cells]
+    bad = [t for t, c in blocks if c.size and (c.min() < 0 or c.max() >= len(X))]
+    if bad:
+        raise MeshError(f"the mesh's {sorted(set(bad))} cells refer to points that do not exist (it has "
+                        f"{len(X)} points): the file is inconsistent; write it again")
     sets = _named_sets(m)
     types = {t for t, _ in blocks}
     other = sorted(types - {"quad", "line", "vertex"})
@@ -212,9 +234,11 @@ def _cell_blocks(m, triangles):
         hint = (": a quad-dominant mesh (quads and triangles) becomes all quads with triangles = "
                 "\"split\" ([mesh] triangles, or mesh.from_meshio(..., triangles=\"split\")), or in "
                 "Gmsh with Mesh.RecombineAll = 1 and Mesh.SubdivisionAlgorithm = 1"
-                if other == ["triangle"] else "")
+                if other == ["triangle"] else
+                ": second-order elements; mesh with first-order ones (Gmsh: Mesh.ElementOrder = 1)"
+                if set(other) <= {"quad8", "quad9", "line3", "triangle6", "vertex"} else "")
         raise MeshError(f"only quadrilateral shells are supported; the mesh also has {other} cells{hint}")
-    qb = [i for i, (t, _) in enumerate(blocks) if t == "quad"]
+    qb = [i for i, (t, c) in enumerate(blocks) if t == "quad" and len(c)]
     if not qb:
         hint = ""
         if types & {"line", "vertex"} and 2 not in _physical_dims(m) and _physical_dims(m):
@@ -249,7 +273,7 @@ def _oriented_quads(X, blocks, qb):
 def _nodal_directors(X, quads, d1_hint):
     """d1 direction t (unnormalised, in the tangent plane) and d3 (unit) at each node: d3 the
     area-weighted mean of the adjacent quads' normals, t the projection of d1_hint (the global
-    y axis where that degenerates)."""
+    y axis where that degenerates, x where y does too: a hint of y on a plate normal to y)."""
     P = X[quads]
     nq = np.cross(P[:, 2] - P[:, 0], P[:, 3] - P[:, 1])       # 2 x area-weighted normal
     nn = np.zeros_like(X)
@@ -261,11 +285,39 @@ def _nodal_directors(X, quads, d1_hint):
     d3 = nn / norm[:, None]
     hint = np.broadcast_to(np.asarray(d1_hint, float), X.shape)
     t = hint - np.einsum("ni,ni->n", hint, d3)[:, None] * d3
-    weak = np.linalg.norm(t, axis=1) < 1e-6
-    if weak.any():
-        alt = np.array([0.0, 1.0, 0.0]) - d3[weak, 1:2] * d3[weak]
-        t[weak] = alt
+    for axis in (1, 0):                 # the global y axis where the hint degenerates, x where y does too
+        weak = np.linalg.norm(t, axis=1) < 1e-6
+        if weak.any():
+            t[weak] = np.eye(3)[axis] - d3[weak, axis:axis + 1] * d3[weak]
     return t, d3
+
+
+def _on_shell(name, segs, remap):
+    """MeshError if a group of lines has nodes that no quad uses (remapped to -1: a support or
+    load on the group would act on the mesh's last node instead)."""
+    off = np.unique(np.flatnonzero(np.asarray(segs).ravel() < 0) // 2)
+    if len(off):
+        raise MeshError(
+            f"the group {name!r} has {len(off)} of its {len(segs)} line cell(s) off the shell (their nodes "
+            f"belong to no quad): the curve is not on the meshed surface -- in Gmsh, a surface that is in no "
+            f"physical surface is not saved (add it to one, or set Mesh.SaveAll = 1), or remove the curve "
+            f"from the group")
+
+
+def _point_sets(raw, remap):
+    """Node sets of the file's point sets (Abaqus ``*NSET``, ...; they were dropped): name -> the
+    sorted ids of its points that quads use (points no quad uses are dropped, as for a group of
+    vertex cells); ids outside the file's points are a MeshError."""
+    out = {}
+    for name, ids in (raw.point_sets or {}).items():
+        ids = np.asarray(ids, np.int64).ravel()
+        if ids.size and (ids.min() < 0 or ids.max() >= len(raw.points)):
+            raise MeshError(f"the point set {str(name)!r} refers to points that do not exist (the file has "
+                            f"{len(raw.points)} points): the file is inconsistent; write it again")
+        nodes = remap[ids]
+        if (nodes >= 0).any():
+            out[str(name)] = np.unique(nodes[nodes >= 0])
+    return out
 
 
 def _named_groups(sets, blocks, qb, remap):
@@ -286,6 +338,7 @@ def _named_groups(sets, blocks, qb, remap):
             elif typ == "quad":
                 elems.extend((offsets[i] + ids).tolist())
         if segs:
+            _on_shell(name, segs, remap)
             named[name] = chain_order(segs)
         elif points:
             pts = [p for p in dict.fromkeys(points) if p >= 0]     # points no quad uses are dropped

@@ -48,6 +48,7 @@ from ..design import Design, FieldVariable, Pose, Target
 from ..design.kinds import TARGETS, VARIABLES
 from ..design.objectives import AngleInDegrees
 from ..errors import CoreSE3Error, ScenarioError, did_you_mean
+from ..io.rundir import safe_name
 from .schema import DESIGN, POSE, TARGET
 from .validate import join, user_key
 
@@ -87,6 +88,11 @@ def _poses(v, d, spec):
         name = v.string(t, "name", k2)
         if name in [p["name"] for p in poses]:
             v.fail(join(k2, "name"), f"pose names must be unique, got {name!r} twice")
+        same = [p["name"] for p in poses if safe_name(p["name"]) == safe_name(name)]
+        if same:               # the files of the one would overwrite the other's
+            v.fail(join(k2, "name"), f"poses {same[0]!r} and {name!r} have one file name, {safe_name(name)!r} "
+                                     f"(optimised_NAME.toml, vtu/NAME/): name them apart in letters, digits, "
+                                     f"'.', '_' or '-'")
         fields = {}
         ft = t.get("fields", {})
         if not isinstance(ft, dict):

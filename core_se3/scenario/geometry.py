@@ -17,7 +17,7 @@ from .schema import EDGE, PROBE, REGION
 from .validate import Bounds, join, show, tname
 
 __all__ = ["GENERATORS", "MESH_FILE", "MAX_ELEMENTS", "MAX_REFINE", "mesh_section", "refine_guard", "edges_section", "regions_section",
-           "region_ref", "nodes_ref", "selection", "is_line", "probes_section"]
+           "region_ref", "nodes_ref", "selection", "is_line", "probes_section", "renumbered_warning"]
 
 MAX_ELEMENTS = 1_000_000
 MAX_MESH_BYTES = 2 ** 30          # 1 GiB: an ASCII Gmsh file of 10^6 quads has about 100 MB
@@ -59,9 +59,32 @@ def node_ids(v, t, key, mesh):
     new nodes between them (``mesh.carry_nodes``); points stay points."""
     lineage = getattr(mesh, "_lineage", None)
     base = mesh if lineage is None else lineage[0]
-    ids = _near_nodes(v, t["nodes"], key, base) if isinstance(t["nodes"], dict) else \
-        _int_list(v, t, "nodes", key, base.n_nodes)
+    if isinstance(t["nodes"], dict):
+        ids = _near_nodes(v, t["nodes"], key, base)
+    else:
+        ids = _int_list(v, t, "nodes", key, base.n_nodes)
+        renumbered_warning(v, join(key, "nodes"), base, ids)
     return ids if lineage is None else M.carry_nodes(lineage, ids).tolist()
+
+
+def renumbered_warning(v, path, mesh, ids):
+    """Warn at ``path`` when node ``ids`` of a mesh read from a file are not the file's point ids:
+    the reader dropped points that no quad uses (``mesh.dropped_points``, e.g. a Gmsh circle's
+    centre saved without physical groups) and renumbered the points after them."""
+    dropped = getattr(mesh, "dropped_points", None)
+    if dropped is None:
+        return
+    ids = np.asarray(ids, np.int64)
+    moved = ids[ids >= dropped[0]]
+    if not len(moved):
+        return
+    k = int(moved[0])
+    point = k + int(np.searchsorted(dropped - np.arange(len(dropped)), k, side="right"))
+    shown = ", ".join(map(str, dropped[:4].tolist())) + (", ..." if len(dropped) > 4 else "")
+    v.warn(path, f"node ids count the mesh's nodes, not the mesh file's points: the file has {len(dropped)} point(s) "
+                 f"that no quad uses (point {shown}), dropped on reading, so the points after them are renumbered "
+                 f"(node {k} is the file's point {point}, at ({', '.join(f'{c:.6g}' for c in mesh.X[k])})); if the ids come from the file, "
+                 "select by position ({near = [x, y, z]}) or by a named group instead")
 
 
 def refine_guard(v, doc, levels):

@@ -68,6 +68,9 @@ def pattern_section(v, t, key, mesh, elems, base_dir):
             v.fail(join(key, "Br_file"), f"{fname}: the table misses {len(missing)} of the magnet's {len(want)} "
                                          f"{kind}s (first: {missing[:5].tolist()}); give every {kind} of its "
                                          "region once")
+        if kind == "node":
+            from .geometry import renumbered_warning
+            renumbered_warning(v, join(key, "Br_file"), mesh, ids)
         out["Br_table"] = dict(file=fname, kind=kind, sha256=digest, path=path)
         out["Br_max"] = float(np.linalg.norm(vals, axis=1).max())
     return out

@@ -19,6 +19,11 @@ OBSTACLE_KEYS = ("type",) + OBSTACLE.keys()
 MOTION_KEYS = MOTION.keys()
 
 
+def _field_key(name):
+    """An obstacle's name in its VTU fields (``model.contact_output``: contact_gap_KEY, ...)."""
+    return "".join(ch if ch.isalnum() else "_" for ch in name)
+
+
 def obstacles_section(v, doc, regions):
     """The validated [[obstacles]] entries (a list of dicts, defaults filled in)."""
     out, names = [], set()
@@ -30,6 +35,11 @@ def obstacles_section(v, doc, regions):
         o = dict(type=typ, name=v.string(t, "name", key, default=typ))
         if o["name"] in names:
             v.fail(join(key, "name"), f"obstacle names must be unique: {o['name']!r} is used twice (give 'name')")
+        same = [n for n in names if _field_key(n) == _field_key(o["name"])]
+        if same:
+            v.fail(join(key, "name"), f"obstacles {same[0]!r} and {o['name']!r} have one VTU field name, "
+                                      f"contact_gap_{_field_key(o['name'])} (the output sums the two): name them "
+                                      "apart in letters and digits")
         names.add(o["name"])
         o["params"] = v.params(t, key, kind.params)
         v.kind_check(kind, o["params"], t, key)

@@ -77,7 +77,9 @@ class RunResult:
 
 def output_directory(scn, out=None, suffix=""):
     """The run directory: ``out``, else ``[output] dir``, else ``out/NAME`` with the scenario's
-    name made safe (``io.rundir.safe_name``: a name of ``../..`` stays under ``out/``).
+    name made safe (``io.rundir.safe_name``: a name of ``../..`` stays under ``out/``); a sweep's
+    and a design's (``suffix``) beside the run's, also from ``[output] dir`` (the three shared
+    it: a sweep of a scenario with ``dir`` met its run's files).
 
     Example
     -------
@@ -87,7 +89,14 @@ def output_directory(scn, out=None, suffix=""):
     >>> output_directory(scn), output_directory(scn, suffix="-sweep")
     ('out/___etc', 'out/___etc-sweep')
     """
-    return os.fspath(out or scn.output["dir"] or os.path.join("out", safe_name(scn.name) + suffix))
+    if out:
+        return os.fspath(out)
+    if scn.output["dir"]:
+        base = os.path.normpath(os.fspath(scn.output["dir"]))
+        if suffix and os.path.basename(base) in ("", ".", ".."):      # dir = "." or "/": a folder in it
+            return os.path.join(base, suffix.lstrip("-"))
+        return base + suffix
+    return os.path.join("out", safe_name(scn.name) + suffix)
 
 
 def _options(s):
@@ -366,12 +375,25 @@ def _stopped(run, sinks, exc):
         ev = run.last if run.last is not None and last is not None and run.last.k == last["step"] else None
         if status == "failed" and ev is not None and run.scn.output["vtu"] and \
                 not os.path.exists(os.path.join(run.rd.path, "vtu", f"step_{ev.k:04d}.vtu")):
+            _multipliers_of(run, ev)
             write_step_vtu(run, ev.k, ev.g, ev.lam, ev.record.get("physical"))
             if run.root:
                 write_series_files(run, True)
         for sink in sinks:
             sink.end(run, status, msg)
     return again
+
+
+def _multipliers_of(run, ev):
+    """The contact loads' multipliers and friction history of step ``ev`` again (serial load
+    control): the sub-steps a failed step converged moved them on, and the step's VTU file
+    showed their contact forces (512.8 for 0.675 on a cantilever pushed onto a floor)."""
+    from ..solvers.newton_try import hooked_loads
+    if run.arc or run.ctx is None or run.ctx.ranks > 1:
+        return
+    ms = NewtonState.multipliers_of(ev.arrays or {})
+    for i, ld in enumerate(hooked_loads(run.scn.problem, "update_multipliers")):
+        ld.set_multipliers(None if ms is None else ms[i])
 
 
 def _failure(run, exc, last):

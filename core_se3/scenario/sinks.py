@@ -233,11 +233,13 @@ class PvdSink(Sink):
 
 
 def write_series_files(run, finished):
-    """The .pvd collections of the step files that exist."""
-    from ..io import write_pvd
+    """The .pvd collections of the step files that exist; their times are the load factors, or
+    the step numbers where those do not increase (``io.vtk.pvd_times``)."""
+    from ..io.vtk import pvd_times, write_pvd
     vtu_dir = os.path.join(run.rd.path, "vtu")
-    entries = [(r["load_factor"], f"step_{r['step']:04d}.vtu") for r in run.records
-               if os.path.exists(os.path.join(vtu_dir, f"step_{r['step']:04d}.vtu"))]
+    written = [r for r in run.records if os.path.exists(os.path.join(vtu_dir, f"step_{r['step']:04d}.vtu"))]
+    times = pvd_times([r["load_factor"] for r in written], [r["step"] for r in written])
+    entries = [(t, f"step_{r['step']:04d}.vtu") for t, r in zip(times, written)]
     with atomic_path(run.rd.file("vtu/series.pvd")) as tmp:
         write_pvd(tmp, entries)
     obst = [(t, f[:-4] + "_obstacles.vtu") for t, f in entries if os.path.exists(os.path.join(vtu_dir, f[:-4] + "_obstacles.vtu"))]

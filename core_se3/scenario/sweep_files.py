@@ -38,7 +38,10 @@ class SweepCheckpoint:
         self.rd = rd
         self.rows, self.finals, self.rent = [], [], None
         self.n = scn.mesh.n_nodes
-        self.fingerprint = hashlib.sha256(json.dumps(dict(scenario=scn.fingerprint, grid=grid, warm=bool(warm)),
+        # the load factors too: a run's fingerprint leaves them out (--resume may extend a run to a
+        # higher lam_end), but a sweep's rows are the final states at them
+        self.fingerprint = hashlib.sha256(json.dumps(dict(scenario=scn.fingerprint, grid=grid, warm=bool(warm),
+                                                          load_factors=[float(x) for x in scn.load_factors()]),
                                                      sort_keys=True, default=str).encode()).hexdigest()
 
     def add(self, row, g, rent):
@@ -68,8 +71,8 @@ class SweepCheckpoint:
             raise CheckpointError(f"cannot read the sweep checkpoint {path}: {type(exc).__name__}; start over with "
                                   "--force, or use another --out") from None
         if fp != self.fingerprint:
-            raise CheckpointError(f"{path} belongs to another sweep (the scenario, the swept values or --cold "
-                                  "changed): start over with --force, or use another --out")
+            raise CheckpointError(f"{path} belongs to another sweep (the scenario, its load steps, the swept values "
+                                  "or --cold changed): start over with --force, or use another --out")
         if not isinstance(rows, list) or any(g is not None and g.shape != (self.n, 4, 4) for g in finals):
             raise CheckpointError(f"{path} is inconsistent (its rows or frames do not fit the scenario): start over "
                                   "with --force, or use another --out")

@@ -40,7 +40,13 @@ def dumps(doc):
 
 def _dump_key(k):
     k = str(k)
-    return k if k and all(c.isalnum() or c in "-_" for c in k) else json.dumps(k)
+    return k if k and all(c.isascii() and (c.isalnum() or c in "-_") for c in k) else _dump_string(k)
+
+
+def _dump_string(s):
+    """A TOML basic string: UTF-8 as it is (a ``\\uXXXX`` escape of a character beyond U+FFFF
+    would be half a surrogate pair, which TOML refuses), control characters escaped (DEL too)."""
+    return json.dumps(s, ensure_ascii=False).replace("\x7f", "\\u007f")
 
 
 def _dump_value(x):
@@ -55,7 +61,7 @@ def _dump_value(x):
             return "inf" if x > 0 else "-inf"
         return repr(float(x))                  # float(): NumPy 2 scalars repr as np.float64(...)
     if isinstance(x, str):
-        return json.dumps(x)
+        return _dump_string(x)
     if isinstance(x, (list, tuple)):
         return "[" + ", ".join(_dump_value(y) for y in x) + "]"
     if isinstance(x, dict):

@@ -257,7 +257,7 @@ def load_numbers(scn, lam=None):
             value, formula = (rho or 0.0) * h * float(np.linalg.norm(ld["g"])) * L ** 3 / D, "rho h |g| L^3 / D"
         if value is not None:
             out.append(dict(name=f"loads[{i}]", kind=ld["type"], value=s * value, span=L, E=E, h=h,
-                            formula=formula + ", D = E h^3/12"))
+                            formula=formula + " (D = E h^3/12)"))   # not "..., D = E h^3/12 = value"
     return out
 
 
