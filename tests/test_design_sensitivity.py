@@ -146,6 +146,26 @@ def test_material_variable_over_a_non_uniform_region_is_refused():
     assert v.value().tolist() == [1e4, 3e4]
 
 
+def test_magnetisation_variable_over_a_non_uniform_magnet_is_refused():
+    # B^r (0.2, 0, 0), (0.1, 0, 0), (0, 0, 0.1), (0, 0, 0.1) on elements 0..3, one variable region
+    # per two elements: before, the per-region least-squares fit (misfit 0.151 of the nodal
+    # moments, computed and dropped) silently replaced the magnets -- the magnetic load changed by
+    # 0.162 of its largest nodal value, so the design started from another shell than the user's
+    def strip(Br):
+        p = Problem(mesh.rectangle(4.0, 0.5, 4, 1), Material(1e3, 0.0, 0.1))
+        p.add_magnetic(np.array(Br, float), UniformField((0.0, 0.0, 1.0)), elements=[0, 1, 2, 3], mu0=1.0)
+        return p, p.external(p.mesh.g0, 1.0, tangent=False)[0]
+    p, _ = strip([[0.2, 0, 0], [0.1, 0, 0], [0, 0, 0.1], [0, 0, 0.1]])
+    with pytest.raises(DesignError, match=r"B\^r varies over region 0 .*misfit of 0.151 > 1e-08"):
+        RegionMagnetisation(p, [[0, 1], [2, 3]], name="Br")
+    v = RegionMagnetisation(p, [[0, 1], [2, 3]], start=[[0.15, 0, 0], [0, 0, 0.1]], name="Br")   # a start given
+    assert v.value().tolist() == [0.15, 0, 0, 0, 0, 0.1]
+    p, f0 = strip([[0.2, 0, 0], [0.2, 0, 0], [0, 0, 0.1], [0, 0, 0.1]])         # uniform per region: kept exactly
+    v = RegionMagnetisation(p, [[0, 1], [2, 3]], name="Br")
+    assert v.start_misfit < 1e-14
+    assert np.allclose(p.external(p.mesh.g0, 1.0, tangent=False)[0], f0, rtol=1e-13, atol=1e-16)
+
+
 def test_thickness_of_a_region_in_contact_is_refused():
     # The contact keeps the surface offset h/2 and the penalty it was built with.  Before, a
     # thickness variable there solved with the old offset: a strip pressed onto a half-space
