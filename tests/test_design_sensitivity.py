@@ -181,6 +181,30 @@ def test_thickness_of_a_region_in_contact_is_refused():
     MaterialVariable(p, [np.arange(8)], "E")
 
 
+def test_E_of_a_region_in_a_penalty_contact_is_refused():
+    # A penalty contact's answer depends on its penalty k = beta K_i / A_i, built from the shell's
+    # stiffness (linear in E) and then kept.  Before, an E variable 1e4 -> 4e4 on a strip pressed
+    # onto a half-space in mode 'penalty' solved with the old k: penetration 3.4e-6 and the tip
+    # 2.6e-6 below the 8.6e-7 and the tip of the same strip built with E = 4e4 (the optimised
+    # scenario; 130 gap tolerances).  Mode 'al' converges to the Signorini answer whatever k: the
+    # same change there leaves the tip 6e-11 from the rebuilt strip's (below its tolerance 2e-8).
+    def strip(E, law):
+        p = Problem(mesh.rectangle(1.0, 0.2, 8, 1), Material(E, 0.0, 0.02))
+        p.clamp("x0"); p.add_probe("tip")
+        p.add_pressure(-3e-2, direction=(0, 0, 1))
+        p.add_obstacle("half_space", point=(0, 0, -0.1), normal=(0, 0, 1), region=np.arange(4, 8), law=law)
+        return p
+    p = strip(1e4, dict(mode="penalty"))
+    with pytest.raises(DesignError, match="E of a region in contact .obstacle 'half_space'. in mode 'penalty'"):
+        MaterialVariable(p, [np.arange(8)], "E")
+    MaterialVariable(p, [np.arange(3)], "E")                     # off the contact elements' nodes
+    MaterialVariable(strip(1e4, dict(mode="penalty", k=1e6)), [np.arange(8)], "E")     # a penalty given
+    p = strip(1e4, dict(mode="al"))
+    MaterialVariable(p, [np.arange(8)], "E").assign([4e4])
+    tip = p.solve(steps=4).final.probes["tip"]["u"][2]
+    assert abs(tip - strip(4e4, dict(mode="al")).solve(steps=4).final.probes["tip"]["u"][2]) < 2e-8
+
+
 def test_partials_in_E_use_the_linearity():
     """dr/dE_j and dPi/dE_j at a rolled state (4.35 rad): the residual and the energy are linear in
     E, so one law per component (not the four of a Richardson-extrapolated central difference)
