@@ -279,3 +279,38 @@ def test_a_design_on_another_branch_says_so():
     r2 = Design(q, [LoadMagnitude(q, q.loads[0])], [Pose("a", [Target(ProbePosition(q, "tip"), components=[2],
                                                                       value=[0.1])])]).optimise(tolerance=1e-6)
     assert r2.reached and r2.branch == {} and "another equilibrium" not in r2.message
+
+
+def test_least_squares_backs_off_a_trial_point_past_a_limit_point():
+    # The hinged roof of examples/snap-roof.toml (4 x 4 elements, load stepping) with its load at
+    # 0.2 of the example's: a crown deflection reached at 0.7 of it (multiplier 3.5, below the limit
+    # point at 0.749 of it, multiplier 3.74) is the target.  The trust-region steps 1 -> 2 -> 4 go
+    # past the limit point, where no equilibrium exists.  Before, the whole design stopped there
+    # (ConvergenceError, exit 3); now least_squares rejects the trial point (NaN residuals: trf
+    # shrinks its trust region to a quarter of the step), says so, and reaches the target: 2.5,
+    # then 3.5 (to 1e-4: the tolerance 1e-6 on the deflection 8.2), the equilibrium a solve from
+    # flat reaches too.
+    import os
+    from core_se3 import scenario
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    with open(os.path.join(root, "examples", "snap-roof.toml")) as fh:
+        src = fh.read().replace("nt = 8", "nt = 4").replace("nl = 8", "nl = 4").replace(
+            'control = "arclength"', "steps = 8").replace("dlam0 = 0.05\nds_max_factor = 3.0\nmax_steps = 100\n", "")
+    w = scenario.loads(src).problem.solve(lam_end=0.7).final.probes["crown"]["u"][2]
+    scn = scenario.loads(src.replace("force = [0.0, 0.0, -750.0]", "force = [0.0, 0.0, -150.0]") + f"""
+[design]
+tolerance = 1e-6
+[[design.variables]]
+type = "load"
+load = 0
+[[design.targets]]
+type = "position"
+probe = "crown"
+value = [0.0, 0.0, {2540.0 + float(w)!r}]
+components = [2]
+""")
+    r = scn.design().optimise("least_squares", tolerance=1e-6)
+    assert r.reached and r.success and not r.branch
+    assert r.failed and "trial point(s) rejected: their equilibrium failed" in r.message
+    assert "Newton failed" in r.failed[0]["message"] and r.failed[0]["x"][0] > 3.75     # past the limit point
+    assert abs(r.x[0] - 3.5) < 1e-4 and r.document()["failed"] == r.failed

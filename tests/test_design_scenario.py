@@ -77,6 +77,15 @@ def test_design_command_writes_and_the_optimised_scenario_reproduces(tmp_path):
     assert "design" not in scn.spec and len(scn.spec["magnets"]) == 2
     tip = scn.problem.solve().final.probes["tip"]["u"] + np.array([17.2, 0.0, 0.0])
     assert abs(tip[0] - 12.0) < 1e-5 and abs(tip[2] - 10.0) < 1e-5
+    # the components' units: the polar angles are the optimiser's radians (before, unmarked next to
+    # targets in degrees: 1.910 read as degrees is 107.5 deg off), also given in degrees, and those
+    # are the angles of the optimised scenario's B^r (what `core-se3 run` reads back)
+    res = doc["result"]
+    assert res["units"] == {"coil.B": "T", "magnetisation1[0].angle": "rad", "magnetisation1[1].angle": "rad"}
+    for j, m in enumerate(scn.spec["magnets"]):
+        lab = f"magnetisation1[{j}].angle"
+        assert res["angles_deg"][lab] == pytest.approx(np.degrees(res["components"][lab]), rel=1e-14)
+        assert res["angles_deg"][lab] == pytest.approx(np.degrees(np.arctan2(m["Br"][2], m["Br"][0])), abs=1e-9)
 
 
 @pytest.mark.parametrize("old,new,key", [

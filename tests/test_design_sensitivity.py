@@ -146,6 +146,26 @@ def test_material_variable_over_a_non_uniform_region_is_refused():
     assert v.value().tolist() == [1e4, 3e4]
 
 
+def test_magnetisation_variable_over_a_non_uniform_magnet_is_refused():
+    # B^r (0.2, 0, 0), (0.1, 0, 0), (0, 0, 0.1), (0, 0, 0.1) on elements 0..3, one variable region
+    # per two elements: before, the per-region least-squares fit (misfit 0.151 of the nodal
+    # moments, computed and dropped) silently replaced the magnets -- the magnetic load changed by
+    # 0.162 of its largest nodal value, so the design started from another shell than the user's
+    def strip(Br):
+        p = Problem(mesh.rectangle(4.0, 0.5, 4, 1), Material(1e3, 0.0, 0.1))
+        p.add_magnetic(np.array(Br, float), UniformField((0.0, 0.0, 1.0)), elements=[0, 1, 2, 3], mu0=1.0)
+        return p, p.external(p.mesh.g0, 1.0, tangent=False)[0]
+    p, _ = strip([[0.2, 0, 0], [0.1, 0, 0], [0, 0, 0.1], [0, 0, 0.1]])
+    with pytest.raises(DesignError, match=r"B\^r varies over region 0 .*misfit of 0.151 > 1e-08"):
+        RegionMagnetisation(p, [[0, 1], [2, 3]], name="Br")
+    v = RegionMagnetisation(p, [[0, 1], [2, 3]], start=[[0.15, 0, 0], [0, 0, 0.1]], name="Br")   # a start given
+    assert v.value().tolist() == [0.15, 0, 0, 0, 0, 0.1]
+    p, f0 = strip([[0.2, 0, 0], [0.2, 0, 0], [0, 0, 0.1], [0, 0, 0.1]])         # uniform per region: kept exactly
+    v = RegionMagnetisation(p, [[0, 1], [2, 3]], name="Br")
+    assert v.start_misfit < 1e-14
+    assert np.allclose(p.external(p.mesh.g0, 1.0, tangent=False)[0], f0, rtol=1e-13, atol=1e-16)
+
+
 def test_thickness_of_a_region_in_contact_is_refused():
     # The contact keeps the surface offset h/2 and the penalty it was built with.  Before, a
     # thickness variable there solved with the old offset: a strip pressed onto a half-space
@@ -159,6 +179,30 @@ def test_thickness_of_a_region_in_contact_is_refused():
         MaterialVariable(p, [np.arange(8)], "h")
     MaterialVariable(p, [np.arange(3)], "h")          # off the contact elements' nodes: allowed
     MaterialVariable(p, [np.arange(8)], "E")
+
+
+def test_E_of_a_region_in_a_penalty_contact_is_refused():
+    # A penalty contact's answer depends on its penalty k = beta K_i / A_i, built from the shell's
+    # stiffness (linear in E) and then kept.  Before, an E variable 1e4 -> 4e4 on a strip pressed
+    # onto a half-space in mode 'penalty' solved with the old k: penetration 3.4e-6 and the tip
+    # 2.6e-6 below the 8.6e-7 and the tip of the same strip built with E = 4e4 (the optimised
+    # scenario; 130 gap tolerances).  Mode 'al' converges to the Signorini answer whatever k: the
+    # same change there leaves the tip 6e-11 from the rebuilt strip's (below its tolerance 2e-8).
+    def strip(E, law):
+        p = Problem(mesh.rectangle(1.0, 0.2, 8, 1), Material(E, 0.0, 0.02))
+        p.clamp("x0"); p.add_probe("tip")
+        p.add_pressure(-3e-2, direction=(0, 0, 1))
+        p.add_obstacle("half_space", point=(0, 0, -0.1), normal=(0, 0, 1), region=np.arange(4, 8), law=law)
+        return p
+    p = strip(1e4, dict(mode="penalty"))
+    with pytest.raises(DesignError, match="E of a region in contact .obstacle 'half_space'. in mode 'penalty'"):
+        MaterialVariable(p, [np.arange(8)], "E")
+    MaterialVariable(p, [np.arange(3)], "E")                     # off the contact elements' nodes
+    MaterialVariable(strip(1e4, dict(mode="penalty", k=1e6)), [np.arange(8)], "E")     # a penalty given
+    p = strip(1e4, dict(mode="al"))
+    MaterialVariable(p, [np.arange(8)], "E").assign([4e4])
+    tip = p.solve(steps=4).final.probes["tip"]["u"][2]
+    assert abs(tip - strip(4e4, dict(mode="al")).solve(steps=4).final.probes["tip"]["u"][2]) < 2e-8
 
 
 def test_partials_in_E_use_the_linearity():

@@ -144,6 +144,7 @@ class Design:
         self.states = [None] * len(self.poses)
         self.best = None
         self.solves = self.newton_iterations = self.evaluations = 0
+        self.failed = []
         self._cache = None
         # the element's coarse-mesh check of the design points (once per point whose element
         # changed, each cause said once per run: optimise starts a new run)
@@ -381,6 +382,7 @@ class Design:
                 raise DesignError(f"{key} must be a finite number {'>' if key == 'tol' else '>='} 0, got {val!r}")
         self.element_check.reset()
         self.solves = self.newton_iterations = self.evaluations = 0     # this run's (a second optimise)
+        self.failed = []                                                # least_squares' rejected trial points
         t0 = time.perf_counter()
         history, last = [], {}
 
@@ -445,7 +447,9 @@ class Design:
 
     def _least_squares(self, x0, tol, max_iter, record):
         """scipy's trust-region reflective least squares on the scaled z = x / xscale; ``record``
-        called once per new Jacobian point (an iteration)."""
+        called once per new Jacobian point (an iteration).  A trial point whose equilibrium fails
+        (a ConvergenceError after the start) returns NaN residuals: trf rejects the step and
+        shrinks its radius to a quarter of it (scipy >= 1.10); the point goes to ``failed``."""
         import scipy.optimize as so
         sc, seen = self.xscale, {}
 
@@ -457,7 +461,17 @@ class Design:
             return J
 
         def fun(z):
-            F = self.residuals(z * sc)
+            try:
+                F = self.residuals(z * sc)
+            except ConvergenceError as exc:
+                if "nF" not in seen:                # the start: nothing to back off to
+                    raise
+                # a trial point whose equilibrium fails (past a limit point): trf takes a
+                # non-finite residual as a rejected step and shrinks its trust region to a
+                # quarter of it; never accepted, never the result
+                self.failed.append(dict(x=(z * sc).tolist(), message=str(exc)))
+                return np.full(seen["nF"], np.nan)
+            seen["nF"] = len(F)
             self._accept(z * sc, 0.5 * float(F @ F))
             return F
         r = so.least_squares(fun, x0 / sc, jac=jac, bounds=(self.lower / sc, self.upper / sc), method="trf",
@@ -500,6 +514,9 @@ class Design:
         values = {v.name: np.asarray(x[self.slices[i]]) for i, v in enumerate(self.variables)}
         states = self.solve(x)
         idle, branch = self.idle(states), self.off_branch(x, states)
+        if self.failed:
+            msg += (f"; {len(self.failed)} trial point(s) rejected: their equilibrium failed (first: "
+                    f"{self.failed[0]['message'][:200]})")
         for name, dev in branch.items():
             msg += (f"; pose {name!r}: a solve from the flat state at these values " +
                     ("does not converge" if dev == np.inf else f"reaches another equilibrium ({dev:.3g} of the length "
@@ -510,7 +527,7 @@ class Design:
                     f"{', '.join(idle)}")
         res = DesignResult(bool(ok), reached, msg, x, self.labels, values, self.objective(x), self.gradient(x), mis,
                            worst, len(history), self.evaluations, self.solves, self.newton_iterations,
-                           time.perf_counter() - t0, method, history, list(states), idle, branch)
+                           time.perf_counter() - t0, method, history, list(states), idle, branch, list(self.failed))
         assign_all(self.pose_variables(len(self.poses) - 1), states[-1].x)
         restore_multipliers(self.problem, states[-1])
         return res

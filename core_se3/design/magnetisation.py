@@ -88,7 +88,8 @@ class RegionMagnetisation(Variable):
 
     The magnets of the problem on these regions (``Problem.add_magnetic``) are replaced by this
     variable's own magnetic loads (one per thickness); their magnetisation, fitted per region
-    (least squares of the nodal moments: exact when it was constant per region), is the start.
+    (least squares of the nodal moments), is the start: a DesignError naming the region when it
+    is not constant per region (a fit misfit above 1e-8, where it would change the shell).
     The dipoles are mu_i = (h/mu0) R0_i^T sum_j C_ij B^r_j with C_ij = int_(region j) N_i dA.
 
     Parameters
@@ -159,6 +160,7 @@ class RegionMagnetisation(Variable):
         self.Wr = np.stack([W[:, owner == j].sum(1) for j in range(k)], 1)  # (n, k)
         if start is None:
             Br, self.start_misfit = self._fitted(old)
+            self._check_uniform(name)
         else:
             Br = np.array(np.broadcast_to(np.asarray(start, float), (k, 3)))
             self.start_misfit = 0.0
@@ -189,7 +191,25 @@ class RegionMagnetisation(Variable):
         for ld in old:
             mom[ld.mag.nodes] += np.einsum("kij,kj->ki", R0[ld.mag.nodes], ld.mag.mu) * ld.mag.mu0 / ld.mag.h
         Br = np.linalg.lstsq(self.Wr, mom, rcond=None)[0] if old else np.zeros((k, 3))
-        return Br, float(np.linalg.norm(self.Wr @ Br - mom) / max(np.linalg.norm(mom), 1e-300))
+        err = np.linalg.norm(self.Wr @ Br - mom, axis=1)                  # per node
+        on = self.Wr > 0                                                 # (n, k): the nodes of each region
+        own = on & (on.sum(1) == 1)[:, None]                             # ... and of it alone
+        own[:, ~own.any(0)] = on[:, ~own.any(0)]
+        self.region_misfit = np.array([np.linalg.norm(err[own[:, j]]) / max(np.linalg.norm(mom[own[:, j]]), 1e-300)
+                                       for j in range(k)])
+        return Br, float(np.linalg.norm(err) / max(np.linalg.norm(mom), 1e-300))
+
+    def _check_uniform(self, name, rtol=1e-8):
+        """DesignError when the replaced magnets' B^r is not constant over each region (the fit's
+        relative misfit of the nodal moments above ``rtol``; round-off when it is), naming the region
+        worst fitted on the nodes that are its alone: the design would start from, and its
+        optimised scenario describe, another magnetisation than the problem's."""
+        if self.start_misfit > rtol:
+            j = int(np.argmax(self.region_misfit))
+            raise DesignError(f"magnetisation {name!r}: the magnets' B^r varies over region {j} (one B^r per region "
+                              f"fits their nodal moments to a relative misfit of {self.start_misfit:.3g} > {rtol:g}, "
+                              f"{self.region_misfit[j]:.3g} on region {j}'s own nodes); a design variable is one B^r "
+                              "per region: give regions on which B^r is uniform (or a start B^r)")
 
     def _own_loads(self, W, allel, owner, name):
         """The variable's magnetic loads, one per thickness t over the regions, each with its

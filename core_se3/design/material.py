@@ -40,13 +40,32 @@ def _check_thickness_loads(problem, elements, name):
                               "penalty it was built with); design E there, or the thickness of regions off the contact")
 
 
+def _check_penalty_contacts(problem, elements, name):
+    """DesignError when a contact in mode 'penalty' takes its penalty from the shell's stiffness
+    (k = beta K_i / A_i, K_i linear in the E of the elements at node i) on a node of ``elements``:
+    the answer of a penalty contact depends on k, which keeps the E it was built with -- an E
+    variable there would solve with the old penalty (E x 4: the penetration 3.4e-6 instead of
+    the 8.6e-7 of the optimised scenario, built anew) and its derivatives would miss dk/dE.
+    Mode 'al' (its answer the Signorini one whatever k) and a penalty k given are kept."""
+    nodes = np.zeros(problem.mesh.n_nodes, bool)
+    nodes[problem.mesh.quads[elements].ravel()] = True
+    for ld in problem.loads:
+        if isinstance(ld, ContactLoad) and ld.mode == "penalty" and ld.law.k is None and np.any(nodes[ld.nodes]):
+            raise DesignError(f"material variable {name!r}: E of a region in contact (obstacle {ld.name!r}) in mode "
+                              "'penalty' with its penalty from the shell's stiffness cannot be designed (the penalty, "
+                              "and so the penetration, keeps the E it was built with); use mode 'al' (the default: "
+                              "its answer does not depend on the penalty), give the penalty k, or design E off the "
+                              "contact")
+
+
 class MaterialVariable(Variable):
     """Young's modulus E or the thickness h constant over each of a list of element regions.
 
     dr/dp by :meth:`partials` of the element residual at the fixed state (module docstring):
     exact up to round-off for E (linear) and h (cubic).  A
     thickness variable on a region that carries a magnet, gravity or a contact is refused: those
-    loads keep the thickness they were built with.
+    loads keep the thickness they were built with; so is E on a region in a penalty contact
+    whose penalty derives from the shell's stiffness (mode 'penalty' without ``k``).
 
     Parameters
     ----------
@@ -81,6 +100,8 @@ class MaterialVariable(Variable):
             raise DesignError(f"material variable {name!r}: the regions overlap")
         if prop == "h":
             _check_thickness_loads(problem, allel, name)
+        else:
+            _check_penalty_contacts(problem, allel, name)
         props = self._per_element()
         for j, r in enumerate(self.regions):
             lo, hi = float(np.min(props[prop][r])), float(np.max(props[prop][r]))

@@ -140,7 +140,8 @@ class DesignResult:
         equilibrium_solves, ...); ``states``: the final EquilibriumState of every pose;
         ``idle``: the labels of the components without effect at the result (``Design.idle``);
         ``branch``: pose -> distance to the equilibrium a solve from flat reaches, where the
-        design's is another (``Design.off_branch``).
+        design's is another (``Design.off_branch``); ``failed``: the trial points least_squares
+        rejected because their equilibrium failed (x and the message), said in ``message``.
 
     Example
     -------
@@ -168,6 +169,7 @@ class DesignResult:
     states: list = field(default_factory=list)
     idle: list = field(default_factory=list)
     branch: dict = field(default_factory=dict)
+    failed: list = field(default_factory=list)
 
     def document(self):
         """A JSON-able summary (no frames)."""
@@ -178,4 +180,4 @@ class DesignResult:
                     misfit=self.misfit, max_misfit=float(self.max_misfit), iterations=int(self.iterations),
                     evaluations=int(self.evaluations), equilibrium_solves=int(self.equilibrium_solves),
                     newton_iterations=int(self.newton_iterations), time=float(self.time), history=self.history,
-                    idle=list(self.idle), branch=dict(self.branch))
+                    idle=list(self.idle), branch=dict(self.branch), failed=list(self.failed))

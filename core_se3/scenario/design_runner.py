@@ -4,7 +4,8 @@
   values (fields, magnets per design region, material regions, load magnitudes) and without its
   [design] section -- ``core-se3 run`` reproduces the design's state;
 * ``design.json``: the result (variables, objective, gradient, misfits, history, every pose's
-  targets and achieved values: angles in degrees, as the targets give them);
+  targets and achieved values: angles in degrees, as the targets give them; the components'
+  ``units``, an angle of a polar form in rad, also in degrees in ``angles_deg``);
 * ``convergence.png``: objective and gradient norm per iteration;
 * ``target_<pose>.png``: the achieved shape with the targets and the achieved points;
 * ``vtu/<pose>/``: the VTU series of the final design's load path from the flat state.
@@ -225,6 +226,32 @@ def run_design(scn, out=None, method=None, max_iter=None, progress=False, vtu=Tr
         rd.release()
 
 
+def _component_units(scn, design):
+    """label -> unit of every component of the design's variables in the scenario's units: an
+    angle of a polar form in rad (the optimiser's), a field or B^r in the field unit, a gradient
+    in field/length, E in the stress unit, h in the length unit, a load magnitude "1" (the
+    multiplier of the load as the scenario gives it)."""
+    from .units import UNIT_SYSTEMS
+    u = UNIT_SYSTEMS.get(scn.spec.get("units") or "consistent", UNIT_SYSTEMS["consistent"])
+    by_kind = {"FieldVariable": u["field"], "RegionMagnetisation": u["field"],
+               "FieldGradientVariable": f"{u['field']}/{u['length']}", "LoadMagnitude": "1"}
+    out = {}
+    for v in design.variables:
+        kind = type(v).__name__
+        unit = u["stress"] if getattr(v, "prop", None) == "E" else u["length"] if kind == "MaterialVariable" \
+            else by_kind.get(kind, "")
+        out.update({lab: "rad" if lab.endswith(".angle") else unit for lab in v.labels})
+    return out
+
+
+def _units_document(scn, design, r):
+    """The ``units`` of design.json's components and their angles in degrees (``angles_deg``):
+    the components are the optimiser's, angles in rad, while the targets' angles are in degrees."""
+    units = _component_units(scn, design)
+    comps = dict(zip(r.labels, np.asarray(r.x, float).tolist()))
+    return dict(units=units, angles_deg={k: float(np.degrees(comps[k])) for k, un in units.items() if un == "rad"})
+
+
 def _pose_rows(scn, pose, st):
     """The achieved values and misfits of a pose's targets (angles in degrees, as given)."""
     tg, ach, rows = [], [], []
@@ -290,7 +317,8 @@ def _design(scn, rd, method, max_iter, progress, vtu, plots):
         files["convergence"] = _convergence_plot(rd.file("convergence.png"), r.history,
                                                  f"{scn.name}: {r.method}")
     from .provenance import problem_provenance
-    doc = dict(schema="core-se3-design v1", scenario=scn.file, name=scn.name, result=r.document(), poses=poses_doc,
+    doc = dict(schema="core-se3-design v1", scenario=scn.file, name=scn.name,
+               result={**r.document(), **_units_document(scn, design, r)}, poses=poses_doc,
                files={k: os.path.relpath(v, out) for k, v in files.items()}, provenance=problem_provenance(scn.problem))
     files["design"] = rd.file("design.json")
     if root:
