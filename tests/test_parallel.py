@@ -3,9 +3,9 @@
 * One and two ranks agree with the serial solver (``mpirun -n 1``, ``-n 2`` in a subprocess; one
   rank shares the kernels' CSR with PETSc, two assemble through COO): sze-hemisphere (in
   load control: the catalogue traces it by arc length, which runs serially), magnetic-gripper,
-  a 100x100 plate under follower pressure, and two contact cases (contact-propped, the
-  gripper grasping a sphere) give the same probes and contact forces to 1e-10 relative at
-  every step and the same Newton iterations per step; a scenario run interrupted after two steps and
+  a 100x100 plate under follower pressure, and three contact cases (contact-propped, the
+  gripper grasping a sphere, a ball smaller than an element held by a face sample) give the
+  same probes and contact forces to 1e-10 relative at every step and the same Newton iterations per step; a scenario run interrupted after two steps and
   resumed on two ranks ends in the bits of an uninterrupted one.  Skipped without mpi4py,
   petsc4py or mpirun.
 * The checks of accepted steps (issue 29, docs/STEPS.md) run distributed as serially: the snap
@@ -226,6 +226,9 @@ def _problem():
     p.add_lab_tilt_support([42], (1.0, 0.0, 0.0), 5.0)
     p.add_rotation_component_support([43], (0.0, 1.0, 0.0), 5.0)
     p.add(_NodalCouple(m.n_nodes, np.linspace(0.0, 1.0, m.n_nodes), (0.0, 0.2, 0.1)))
+    # a ball smaller than an element under element 21 (rank 2 of rcb's three; three of its nodes
+    # rank 1's): its face sample carries the random state below, no node touches it
+    p.add_obstacle(make_obstacle("sphere", centre=(1.375, 0.0, -0.07), radius=0.06), name="pin")
     # a sphere 0.002 below the lower face at (1, 0): the random state below presses nodes into it
     p.add_obstacle(make_obstacle("sphere", centre=(1.0, 0.0, -3.012), radius=3.0))
     return p
@@ -255,6 +258,8 @@ def test_local_problems_sum_to_the_whole(backend):
     free = p.assembler().free
     contact = p.loads[-1].evaluate(g, 0.7).f
     assert np.count_nonzero(np.abs(contact).sum(1)) >= 3           # the contact takes part
+    pin = p.loads[-2]                                              # and the face sample (alone)
+    assert (pin.face_state(g, 0.7)[1] > 0).sum() == 1 and pin.state(g, 0.7)[4].max() == 0
     assert np.abs(r_int - ev.r_int).max() < 1e-12 * np.abs(ev.r_int).max()
     assert np.abs(f_ext - ev.f_ext).max() < 1e-12 * np.abs(ev.f_ext).max()
     Kg = ev.K.toarray()

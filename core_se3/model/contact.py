@@ -163,6 +163,7 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         quads = where[mesh.quads[el]]
         on = (quads >= 0).all(1)
         self._quads = quads[on]                     # the contact faces, in contact-node positions
+        self._quad_el = el[on]                      # their elements (a rank's share: parallel.localize)
         self._mesh_quads = mesh.quads
         size = np.linalg.norm(mesh.X[mesh.quads[el, 2]] - mesh.X[mesh.quads[el, 0]], axis=1).max(initial=0.0)
         if isinstance(faces, str) and faces == "auto":
