@@ -423,3 +423,103 @@ def test_a_design_with_material_variables_under_mpirun_is_refused(monkeypatch):
     monkeypatch.setenv("OMPI_COMM_WORLD_SIZE", "2")
     with pytest.raises(ParallelError, match="material variable.*without mpirun"):
         d.distributed
+
+
+# ------------------------------------------------------------ one rank's error, every rank's ------
+class _TwoRanks:
+    """Rank ``rank`` of two, the other rank's word given: what ``allgather`` and ``bcast`` are sent
+    is kept (the other ranks wait in them)."""
+    size = 2
+
+    def __init__(self, rank=0, other=None):
+        self.rank, self.other, self.sent = rank, other, []
+
+    def allgather(self, value):
+        self.sent.append(value)
+        return [value, self.other] if self.rank == 0 else [self.other, value]
+
+    def bcast(self, value, root=0):
+        self.sent.append(value)
+        return value if self.rank == root else self.other
+
+
+def test_an_error_of_any_type_on_one_rank_reaches_every_rank():
+    """A load of one's own that fails with an IndexError on the rank that holds none of its nodes
+    (``self.nodes[0]``): ``collective`` caught only core_se3, ValueError and arithmetic errors, so
+    that rank left alone and the others waited in the next allgather forever (measured: mpirun -n 2
+    killed by its 60 s timeout); now the error goes to the allgather and every rank raises it."""
+    from core_se3.parallel import collective
+    comm = _TwoRanks(rank=0)
+
+    def fails():
+        return np.zeros(0, int)[0]
+    with pytest.raises(IndexError):
+        collective(comm, fails)
+    assert comm.sent and comm.sent[0][0] is IndexError           # the other ranks learn of it
+    other = _TwoRanks(rank=1, other=(IndexError, "index 0 is out of bounds"))
+    with pytest.raises(IndexError, match="out of bounds"):
+        collective(other, lambda: 1.0)
+
+
+def test_rank_zeros_output_error_reaches_every_rank(monkeypatch):
+    """``scenario.context.on_root`` (rank 0 claims the run directory, checks the checkpoint):
+    an OSError there (an output path under a file, a full disk) stayed on rank 0, and the other
+    ranks waited for its broadcast forever (``mpirun -n 2 core-se3 run s.toml --out FILE/sub``
+    printed the error and hung until its timeout); now it is broadcast and raised on every rank."""
+    import core_se3.parallel
+    from core_se3.scenario import context
+    monkeypatch.setattr(context, "launched_ranks", lambda: 2)
+    root = _TwoRanks(rank=0)
+    monkeypatch.setattr(core_se3.parallel, "world", lambda: root)
+
+    def claim():
+        raise NotADirectoryError(20, "Not a directory", "/tmp/file/sub")
+    with pytest.raises(NotADirectoryError):
+        context.on_root(claim)
+    assert root.sent and root.sent[0][0][0] is NotADirectoryError
+    other = _TwoRanks(rank=1, other=((NotADirectoryError, "[Errno 20] Not a directory"), None))
+    monkeypatch.setattr(core_se3.parallel, "world", lambda: other)
+    with pytest.raises(NotADirectoryError, match="Not a directory"):
+        context.on_root(claim)
+
+
+FULL_DISK = '''
+import errno, sys
+from core_se3 import scenario
+from core_se3.scenario import sinks
+from core_se3.parallel import world
+sys.path.insert(0, {here!r})
+from parallel_cases import scenario_dict
+rank, real, calls = world().rank, sinks.write_json_atomic, []
+def full(path, doc, *a, **k):                 # rank 0's disk fills up at the results of step 2
+    calls.append(path)
+    if rank == 0 and len(calls) == 3:
+        raise OSError(errno.ENOSPC, "No space left on device", path)
+    return real(path, doc, *a, **k)
+sinks.write_json_atomic = full
+try:
+    scenario.run(scenario.from_dict(scenario_dict()), out={out!r})
+except OSError as exc:
+    open({out!r} + ".rank%d" % rank, "w").write(str(exc))
+'''
+
+
+def test_a_full_disk_on_rank_zero_stops_every_rank(tmp_path):
+    """Rank 0 writes the run's files; an OSError there (a full disk at step 2's results.json) left
+    the other ranks in the next Newton step's collectives and rank 0 in the failed run's last
+    VTU gather: mpirun hung (killed by a 60 s timeout).  Now every write of rank 0 tells the
+    others its outcome: both ranks stop with the error within seconds, and results.json says
+    'failed' with the message and the steps converged before it."""
+    if not HAVE_MPI:
+        pytest.skip("needs mpi4py, petsc4py and mpirun")
+    script = tmp_path / "full.py"
+    script.write_text(FULL_DISK.format(here=HERE, out=str(tmp_path / "out")))
+    cmd = ["mpirun", "-n", "2", "-x", "PYTHONPATH", "-x", "OMP_NUM_THREADS", "-x", "NUMBA_NUM_THREADS",
+           sys.executable, str(script)]
+    p = subprocess.run(cmd, env=mpi_env(), capture_output=True, text=True, timeout=240, cwd=ROOT)
+    assert p.returncode == 0, p.stdout[-3000:] + p.stderr[-3000:]
+    for rank in (0, 1):                                              # each rank's error
+        assert "No space left on device" in (tmp_path / f"out.rank{rank}").read_text()
+    doc = json.loads((tmp_path / "out" / "results.json").read_text())
+    assert doc["status"] == "failed" and "No space left on device" in doc["error"]
+    assert [s["step"] for s in doc["steps"]] == [0, 1]

@@ -79,8 +79,6 @@ def is_root(comm=None):
     return (comm or world()).rank == 0
 
 
-# errors that one rank may meet alone: re-raised with the same type on every rank
-_COLLECTIVE = (CoreSE3Error, FloatingPointError, ValueError, ArithmeticError)
 
 
 def collective(comm, fn, *args, **kw):
@@ -109,7 +107,7 @@ def collective(comm, fn, *args, **kw):
     err, out = None, None
     try:
         out = fn(*args, **kw)
-    except _COLLECTIVE as exc:
+    except Exception as exc:           # any error one rank meets alone (an IndexError of a load of one's own too)
         err = exc
     if comm.size == 1:
         if err is not None:

@@ -367,8 +367,7 @@ def _stopped(run, sinks, exc):
         if status == "failed" and ev is not None and run.scn.output["vtu"] and \
                 not os.path.exists(os.path.join(run.rd.path, "vtu", f"step_{ev.k:04d}.vtu")):
             write_step_vtu(run, ev.k, ev.g, ev.lam, ev.record.get("physical"))
-            if run.root:
-                write_series_files(run, True)
+            on_root(lambda: write_series_files(run, True))
         for sink in sinks:
             sink.end(run, status, msg)
     return again
