@@ -34,7 +34,8 @@ import pytest
 from core_se3 import Material, Problem, lie, mesh
 from core_se3.errors import ConvergenceError, OptionError, ParallelError
 from core_se3.model import Load, LoadEvaluation, UniformField, make_obstacle
-from core_se3.parallel import RunSetup, distributed_solve, local_problem, partition_elements, rcb, subdomain
+from core_se3.parallel import (RunSetup, distributed_solve, local_problem, localize_load, partition_elements, rcb,
+                               subdomain)
 from core_se3.parallel.comm import SerialComm
 from core_se3.parallel.system import rigid_body_modes
 
@@ -523,3 +524,23 @@ def test_a_full_disk_on_rank_zero_stops_every_rank(tmp_path):
     doc = json.loads((tmp_path / "out" / "results.json").read_text())
     assert doc["status"] == "failed" and "No space left on device" in doc["error"]
     assert [s["step"] for s in doc["steps"]] == [0, 1]
+
+
+def test_a_ranks_contact_messages_name_the_whole_meshs_nodes_and_elements():
+    """A rank's part of a contact load numbers its nodes locally; its refusals named those local
+    ids: the ball rising under a strip, 'starts the increment 0.457 inside the shell at node 4'
+    on two ranks where the serial run says node 13.  Now the rank's part names the whole mesh's
+    nodes (and the elements of its faces), as the serial load does."""
+    p = Problem(mesh.rectangle(10.0, 1.0, 16, 1), Material(1e6, 0.0, 0.1))
+    p.clamp("x0")
+    whole = p.add_obstacle("sphere", centre=(8.0, 0.0, -1.1), radius=1.0, motion=dict(translate=(0, 0, 1e4)),
+                           name="ball")
+    g, lam = p.mesh.g0, 1.2207e-4                        # the ball 1.22 up: into the strip near x = 8
+    serial = whole.start_error(g, lam)
+    assert "inside the shell at node 13 " in serial
+    part = rcb(p.mesh.X[p.mesh.quads].mean(1), 2)
+    subs = [subdomain(p.mesh, part, rank, 2) for rank in range(2)]
+    parts = [localize_load(whole, sub)[0] for sub in subs]
+    assert serial in [loc.start_error(g[sub.nodes], lam) for sub, loc in zip(subs, parts)]
+    for sub, loc in zip(subs, parts):                   # the faces' elements: the rank's, by their mesh ids
+        assert np.array_equal(sub.elements[loc._quad_el], loc.face_ids)

@@ -344,7 +344,7 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         i = int(np.argmin(d))
         if d[i] < -self.h:
             return (f"obstacle {self.name!r} starts the increment {-d[i]:.3g} inside the shell at node "
-                    f"{int(self.nodes[i])} (more than the thickness {self.h:.3g}): smaller increment")
+                    f"{int(self.node_ids[i])} (more than the thickness {self.h:.3g}): smaller increment")
         return ""
 
     def step_error(self, g0, lam0, g1, lam1):
@@ -360,7 +360,7 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         thick = float(getattr(self.obstacle, "thickness", np.inf))
         depth = max(min(self.h / 2, thick / 2), 2 * self.tol)
         return crossing_report(self.obstacle, self._quads, self.contact_points(g0), self.contact_points(g1),
-                               lam0, lam1, depth, self.nodes)
+                               lam0, lam1, depth, self.node_ids, self.face_ids)
 
     def active_set_changed(self, g0, lam0, g1, lam1):
         """True when a node touches (gap within 10 tol) at one of the states and not at the other:
@@ -405,6 +405,17 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
             if self.mu > 0:
                 self.tau = t @ Q
         return ratio
+
+    @property
+    def node_ids(self):
+        """The mesh ids of the contact nodes, in messages (``nodes``; a rank's part of the load,
+        ``parallel.localize.LocalContact``, names the whole mesh's)."""
+        return self.nodes
+
+    @property
+    def face_ids(self):
+        """The mesh ids of the contact faces' elements, in messages (as :attr:`node_ids`)."""
+        return self._quad_el
 
     def largest(self, value):
         """The largest of ``value`` over the processes that share this load: the value itself

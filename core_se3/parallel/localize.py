@@ -166,6 +166,15 @@ class LocalContact(ContactLoad):
         self.face_q = self._quads if len(self.fpos) else np.zeros((0, 4), np.int64)      # as ContactLoad._faces
         self.face_el = self._quad_el if len(self.fpos) else np.zeros(0, np.int64)
         self.Af, self.kf = whole.Af[self.fpos], whole.kf[self.fpos]
+        self._ids = whole.nodes[npos], whole._quad_el[qpos]         # the whole mesh's, for messages
+
+    @property
+    def node_ids(self):
+        return self._ids[0]
+
+    @property
+    def face_ids(self):
+        return self._ids[1]
 
     def _samples(self, whole_array):
         """This rank's entries (its nodes', then its face samples') of a whole per-sample array."""
