@@ -360,7 +360,7 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         thick = float(getattr(self.obstacle, "thickness", np.inf))
         depth = max(min(self.h / 2, thick / 2), 2 * self.tol)
         return crossing_report(self.obstacle, self._quads, self.contact_points(g0), self.contact_points(g1),
-                               lam0, lam1, depth, self.node_ids, self.face_ids)
+                               lam0, lam1, depth, (self.node_ids, self.face_ids))
 
     def active_set_changed(self, g0, lam0, g1, lam1):
         """True when a node touches (gap within 10 tol) at one of the states and not at the other:
