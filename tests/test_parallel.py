@@ -544,3 +544,17 @@ def test_a_ranks_contact_messages_name_the_whole_meshs_nodes_and_elements():
     assert serial in [loc.start_error(g[sub.nodes], lam) for sub, loc in zip(subs, parts)]
     for sub, loc in zip(subs, parts):                   # the faces' elements: the rank's, by their mesh ids
         assert np.array_equal(sub.elements[loc._quad_el], loc.face_ids)
+
+
+def test_a_sweep_under_mpirun_is_refused_before_it_writes(monkeypatch, tmp_path):
+    """``mpirun -n 2 core-se3 sweep``: every rank claimed the same directory and rank 1 stopped
+    with 'is in use by another live run' (its sibling, rank 0), mpirun aborted, sweep.json stayed
+    'running' with no row.  A sweep runs its points in one process: a ParallelError on every rank
+    says so before anything is written."""
+    from core_se3 import scenario
+    from parallel_cases import scenario_dict
+    scn = scenario.from_dict(scenario_dict())
+    monkeypatch.setenv("OMPI_COMM_WORLD_SIZE", "2")
+    with pytest.raises(ParallelError, match="sweep runs its grid points .* without mpirun"):
+        scenario.sweep(scn, {"material.E": [1.2e6, 2.4e6]}, out=str(tmp_path / "sw"), plot=False)
+    assert not (tmp_path / "sw").exists()
