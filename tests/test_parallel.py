@@ -558,3 +558,22 @@ def test_a_sweep_under_mpirun_is_refused_before_it_writes(monkeypatch, tmp_path)
     with pytest.raises(ParallelError, match="sweep runs its grid points .* without mpirun"):
         scenario.sweep(scn, {"material.E": [1.2e6, 2.4e6]}, out=str(tmp_path / "sw"), plot=False)
     assert not (tmp_path / "sw").exists()
+
+
+def test_the_scenario_warnings_are_printed_once_under_mpirun(monkeypatch, capsys):
+    """``mpirun -n 2 core-se3 run`` printed each scenario warning (a load number above 1000) once
+    per rank on stderr; rank 0 prints them now, as it prints the rest of the run's report."""
+    from core_se3 import scenario
+    from core_se3.cli.scenario import _preamble
+    from parallel_cases import scenario_dict
+    spec = scenario_dict()
+    spec["loads"] = [{"type": "edge_force", "edge": "x1", "force": [0.0, 0.0, 4.0e4]}]
+    scn = scenario.from_dict(spec)
+    assert any("above 1000" in str(w) for w in scn.warnings)
+    said = []
+    for rank in ("0", "1"):
+        monkeypatch.setenv("OMPI_COMM_WORLD_SIZE", "2")
+        monkeypatch.setenv("OMPI_COMM_WORLD_RANK", rank)
+        _preamble(scn, quiet=True)
+        said.append(capsys.readouterr().err)
+    assert "above 1000" in said[0] and said[1] == ""
