@@ -11,7 +11,7 @@ import numpy as np
 from ..backend import launched_ranks
 from ..errors import CoreSE3Error, ParallelError
 
-__all__ = ["SerialComm", "world", "collective", "is_root"]
+__all__ = ["SerialComm", "world", "collective", "is_root", "petsc_comm"]
 
 
 class SerialComm:
@@ -66,6 +66,21 @@ def world():
         raise ParallelError(f"this process runs under an MPI launcher but mpi4py does not import ({exc}); "
                             "install python3-mpi4py (Debian) or run without mpirun") from None
     return MPI.COMM_WORLD
+
+
+def petsc_comm(comm):
+    """The PETSc communicator of a run on ``comm``: the mpi4py communicator itself (petsc4py takes
+    it: a sub-communicator, e.g. ``MPI.COMM_SELF`` for a run of its own on every rank), or
+    ``PETSc.COMM_SELF`` for a :class:`SerialComm` (a process that no launcher started among others).
+
+    Example
+    -------
+    >>> import importlib.util
+    >>> petsc_comm(SerialComm()).getSize() if importlib.util.find_spec("petsc4py") else 1
+    1
+    """
+    from petsc4py import PETSc
+    return PETSc.COMM_SELF if isinstance(comm, SerialComm) else PETSc.Comm(comm)
 
 
 def is_root(comm=None):
