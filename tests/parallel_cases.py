@@ -13,6 +13,9 @@ CASES = {"sze-hemisphere": 10, "magnetic-gripper": 20, "plate-100x100": 1,
 # the checks of accepted steps (issue 29, docs/STEPS.md): the snap check of contact steps on a
 # tip force that jumps at load factor 0.5 with an obstacle (probed, then reported as a snap)
 CASES["jumping-cantilever"] = 4
+# contact face samples: a ball smaller than an element pushed into the middle of a face (nodal
+# sampling lets it through; each rank carries the faces of its elements, their other nodes too)
+CASES["contact-faces"] = 4
 # the end check, inertia_check and the stability check: the sandwich strip of docs/EXTENDING.md recipe 6 to 0.2 C w
 # stops at its even crossings (name -> steps, solve keywords)
 STOPS = {"sandwich-1": (1, {}), "sandwich-2": (2, {}), "sandwich-5": (5, {}), "sandwich-10": (10, {}),
@@ -28,6 +31,13 @@ def build(name):
         prob = Problem(mesh.rectangle(1.0, 1.0, 100, 100), Material(1e6, 0.3, 0.01))
         prob.clamp("x0")
         prob.add_pressure(0.5, follower=True)
+        prob.add_probe("tip", "x1")
+        return prob, CASES[name], {}
+    if name == "contact-faces":
+        prob = Problem(mesh.rectangle(2.0, 1.0, 4, 2), Material(1e4, 0.0, 0.02))
+        prob.clamp("x0")
+        prob.add_obstacle("sphere", centre=(1.25, 0.25, -0.07), radius=0.05, motion=dict(translate=(0, 0, 0.1)),
+                          name="pin")
         prob.add_probe("tip", "x1")
         return prob, CASES[name], {}
     if name == "jumping-cantilever":

@@ -3,9 +3,9 @@
 * One and two ranks agree with the serial solver (``mpirun -n 1``, ``-n 2`` in a subprocess; one
   rank shares the kernels' CSR with PETSc, two assemble through COO): sze-hemisphere (in
   load control: the catalogue traces it by arc length, which runs serially), magnetic-gripper,
-  a 100x100 plate under follower pressure, and two contact cases (contact-propped, the
-  gripper grasping a sphere) give the same probes and contact forces to 1e-10 relative at
-  every step and the same Newton iterations per step; a scenario run interrupted after two steps and
+  a 100x100 plate under follower pressure, and three contact cases (contact-propped, the
+  gripper grasping a sphere, a ball smaller than an element held by a face sample) give the
+  same probes and contact forces to 1e-10 relative at every step and the same Newton iterations per step; a scenario run interrupted after two steps and
   resumed on two ranks ends in the bits of an uninterrupted one.  Skipped without mpi4py,
   petsc4py or mpirun.
 * The checks of accepted steps (issue 29, docs/STEPS.md) run distributed as serially: the snap
@@ -34,7 +34,8 @@ import pytest
 from core_se3 import Material, Problem, lie, mesh
 from core_se3.errors import ConvergenceError, OptionError, ParallelError
 from core_se3.model import Load, LoadEvaluation, UniformField, make_obstacle
-from core_se3.parallel import RunSetup, distributed_solve, local_problem, partition_elements, rcb, subdomain
+from core_se3.parallel import (RunSetup, distributed_solve, local_problem, localize_load, partition_elements, rcb,
+                               subdomain)
 from core_se3.parallel.comm import SerialComm
 from core_se3.parallel.system import rigid_body_modes
 
@@ -226,6 +227,9 @@ def _problem():
     p.add_lab_tilt_support([42], (1.0, 0.0, 0.0), 5.0)
     p.add_rotation_component_support([43], (0.0, 1.0, 0.0), 5.0)
     p.add(_NodalCouple(m.n_nodes, np.linspace(0.0, 1.0, m.n_nodes), (0.0, 0.2, 0.1)))
+    # a ball smaller than an element under element 21 (rank 2 of rcb's three; three of its nodes
+    # rank 1's): its face sample carries the random state below, no node touches it
+    p.add_obstacle(make_obstacle("sphere", centre=(1.375, 0.0, -0.07), radius=0.06), name="pin")
     # a sphere 0.002 below the lower face at (1, 0): the random state below presses nodes into it
     p.add_obstacle(make_obstacle("sphere", centre=(1.0, 0.0, -3.012), radius=3.0))
     return p
@@ -255,6 +259,8 @@ def test_local_problems_sum_to_the_whole(backend):
     free = p.assembler().free
     contact = p.loads[-1].evaluate(g, 0.7).f
     assert np.count_nonzero(np.abs(contact).sum(1)) >= 3           # the contact takes part
+    pin = p.loads[-2]                                              # and the face sample (alone)
+    assert (pin.face_state(g, 0.7)[1] > 0).sum() == 1 and pin.state(g, 0.7)[4].max() == 0
     assert np.abs(r_int - ev.r_int).max() < 1e-12 * np.abs(ev.r_int).max()
     assert np.abs(f_ext - ev.f_ext).max() < 1e-12 * np.abs(ev.f_ext).max()
     Kg = ev.K.toarray()
@@ -418,3 +424,199 @@ def test_a_design_with_material_variables_under_mpirun_is_refused(monkeypatch):
     monkeypatch.setenv("OMPI_COMM_WORLD_SIZE", "2")
     with pytest.raises(ParallelError, match="material variable.*without mpirun"):
         d.distributed
+
+
+# ------------------------------------------------------------ one rank's error, every rank's ------
+class _TwoRanks:
+    """Rank ``rank`` of two, the other rank's word given: what ``allgather`` and ``bcast`` are sent
+    is kept (the other ranks wait in them)."""
+    size = 2
+
+    def __init__(self, rank=0, other=None):
+        self.rank, self.other, self.sent = rank, other, []
+
+    def allgather(self, value):
+        self.sent.append(value)
+        return [value, self.other] if self.rank == 0 else [self.other, value]
+
+    def bcast(self, value, root=0):
+        self.sent.append(value)
+        return value if self.rank == root else self.other
+
+
+def test_an_error_of_any_type_on_one_rank_reaches_every_rank():
+    """A load of one's own that fails with an IndexError on the rank that holds none of its nodes
+    (``self.nodes[0]``): ``collective`` caught only core_se3, ValueError and arithmetic errors, so
+    that rank left alone and the others waited in the next allgather forever (measured: mpirun -n 2
+    killed by its 60 s timeout); now the error goes to the allgather and every rank raises it."""
+    from core_se3.parallel import collective
+    comm = _TwoRanks(rank=0)
+
+    def fails():
+        return np.zeros(0, int)[0]
+    with pytest.raises(IndexError):
+        collective(comm, fails)
+    assert comm.sent and comm.sent[0][0] is IndexError           # the other ranks learn of it
+    other = _TwoRanks(rank=1, other=(IndexError, "index 0 is out of bounds"))
+    with pytest.raises(IndexError, match="out of bounds"):
+        collective(other, lambda: 1.0)
+
+
+def test_rank_zeros_output_error_reaches_every_rank(monkeypatch):
+    """``scenario.context.on_root`` (rank 0 claims the run directory, checks the checkpoint):
+    an OSError there (an output path under a file, a full disk) stayed on rank 0, and the other
+    ranks waited for its broadcast forever (``mpirun -n 2 core-se3 run s.toml --out FILE/sub``
+    printed the error and hung until its timeout); now it is broadcast and raised on every rank."""
+    import core_se3.parallel
+    from core_se3.scenario import context
+    monkeypatch.setattr(context, "launched_ranks", lambda: 2)
+    root = _TwoRanks(rank=0)
+    monkeypatch.setattr(core_se3.parallel, "world", lambda: root)
+
+    def claim():
+        raise NotADirectoryError(20, "Not a directory", "/tmp/file/sub")
+    with pytest.raises(NotADirectoryError):
+        context.on_root(claim)
+    assert root.sent and root.sent[0][0][0] is NotADirectoryError
+    other = _TwoRanks(rank=1, other=((NotADirectoryError, "[Errno 20] Not a directory"), None))
+    monkeypatch.setattr(core_se3.parallel, "world", lambda: other)
+    with pytest.raises(NotADirectoryError, match="Not a directory"):
+        context.on_root(claim)
+
+
+FULL_DISK = '''
+import errno, sys
+from core_se3 import scenario
+from core_se3.scenario import sinks
+from core_se3.parallel import world
+sys.path.insert(0, {here!r})
+from parallel_cases import scenario_dict
+rank, real, calls = world().rank, sinks.write_json_atomic, []
+def full(path, doc, *a, **k):                 # rank 0's disk fills up at the results of step 2
+    calls.append(path)
+    if rank == 0 and len(calls) == 3:
+        raise OSError(errno.ENOSPC, "No space left on device", path)
+    return real(path, doc, *a, **k)
+sinks.write_json_atomic = full
+try:
+    scenario.run(scenario.from_dict(scenario_dict()), out={out!r})
+except OSError as exc:
+    open({out!r} + ".rank%d" % rank, "w").write(str(exc))
+'''
+
+
+def test_a_full_disk_on_rank_zero_stops_every_rank(tmp_path):
+    """Rank 0 writes the run's files; an OSError there (a full disk at step 2's results.json) left
+    the other ranks in the next Newton step's collectives and rank 0 in the failed run's last
+    VTU gather: mpirun hung (killed by a 60 s timeout).  Now every write of rank 0 tells the
+    others its outcome: both ranks stop with the error within seconds, and results.json says
+    'failed' with the message and the steps converged before it."""
+    if not HAVE_MPI:
+        pytest.skip("needs mpi4py, petsc4py and mpirun")
+    script = tmp_path / "full.py"
+    script.write_text(FULL_DISK.format(here=HERE, out=str(tmp_path / "out")))
+    cmd = ["mpirun", "-n", "2", "-x", "PYTHONPATH", "-x", "OMP_NUM_THREADS", "-x", "NUMBA_NUM_THREADS",
+           sys.executable, str(script)]
+    p = subprocess.run(cmd, env=mpi_env(), capture_output=True, text=True, timeout=240, cwd=ROOT)
+    assert p.returncode == 0, p.stdout[-3000:] + p.stderr[-3000:]
+    for rank in (0, 1):                                              # each rank's error
+        assert "No space left on device" in (tmp_path / f"out.rank{rank}").read_text()
+    doc = json.loads((tmp_path / "out" / "results.json").read_text())
+    assert doc["status"] == "failed" and "No space left on device" in doc["error"]
+    assert [s["step"] for s in doc["steps"]] == [0, 1]
+
+
+def test_a_ranks_contact_messages_name_the_whole_meshs_nodes_and_elements():
+    """A rank's part of a contact load numbers its nodes locally; its refusals named those local
+    ids: the ball rising under a strip, 'starts the increment 0.457 inside the shell at node 4'
+    on two ranks where the serial run says node 13.  Now the rank's part names the whole mesh's
+    nodes (and the elements of its faces), as the serial load does."""
+    p = Problem(mesh.rectangle(10.0, 1.0, 16, 1), Material(1e6, 0.0, 0.1))
+    p.clamp("x0")
+    whole = p.add_obstacle("sphere", centre=(8.0, 0.0, -1.1), radius=1.0, motion=dict(translate=(0, 0, 1e4)),
+                           name="ball")
+    g, lam = p.mesh.g0, 1.2207e-4                        # the ball 1.22 up: into the strip near x = 8
+    serial = whole.start_error(g, lam)
+    assert "inside the shell at node 13 " in serial
+    part = rcb(p.mesh.X[p.mesh.quads].mean(1), 2)
+    subs = [subdomain(p.mesh, part, rank, 2) for rank in range(2)]
+    parts = [localize_load(whole, sub)[0] for sub in subs]
+    assert serial in [loc.start_error(g[sub.nodes], lam) for sub, loc in zip(subs, parts)]
+    for sub, loc in zip(subs, parts):                   # the faces' elements: the rank's, by their mesh ids
+        assert np.array_equal(sub.elements[loc._quad_el], loc.face_ids)
+
+
+def test_a_sweep_under_mpirun_is_refused_before_it_writes(monkeypatch, tmp_path):
+    """``mpirun -n 2 core-se3 sweep``: every rank claimed the same directory and rank 1 stopped
+    with 'is in use by another live run' (its sibling, rank 0), mpirun aborted, sweep.json stayed
+    'running' with no row.  A sweep runs its points in one process: a ParallelError on every rank
+    says so before anything is written."""
+    from core_se3 import scenario
+    from parallel_cases import scenario_dict
+    scn = scenario.from_dict(scenario_dict())
+    monkeypatch.setenv("OMPI_COMM_WORLD_SIZE", "2")
+    with pytest.raises(ParallelError, match="sweep runs its grid points .* without mpirun"):
+        scenario.sweep(scn, {"material.E": [1.2e6, 2.4e6]}, out=str(tmp_path / "sw"), plot=False)
+    assert not (tmp_path / "sw").exists()
+
+
+def test_the_scenario_warnings_are_printed_once_under_mpirun(monkeypatch, capsys):
+    """``mpirun -n 2 core-se3 run`` printed each scenario warning (a load number above 1000) once
+    per rank on stderr; rank 0 prints them now, as it prints the rest of the run's report."""
+    from core_se3 import scenario
+    from core_se3.cli.scenario import _preamble
+    from parallel_cases import scenario_dict
+    spec = scenario_dict()
+    spec["loads"] = [{"type": "edge_force", "edge": "x1", "force": [0.0, 0.0, 4.0e4]}]
+    scn = scenario.from_dict(spec)
+    assert any("above 1000" in str(w) for w in scn.warnings)
+    said = []
+    for rank in ("0", "1"):
+        monkeypatch.setenv("OMPI_COMM_WORLD_SIZE", "2")
+        monkeypatch.setenv("OMPI_COMM_WORLD_RANK", rank)
+        _preamble(scn, quiet=True)
+        said.append(capsys.readouterr().err)
+    assert "above 1000" in said[0] and said[1] == ""
+
+
+SUB_COMMUNICATORS = '''
+import json, sys
+import numpy as np
+from mpi4py import MPI
+from core_se3 import Problem, Material, mesh
+from core_se3.parallel import RunSetup, distributed_solve
+w = MPI.COMM_WORLD
+p = Problem(mesh.rectangle(10.0, 1.0, 8, 2), Material(1.2e6, 0.3, 0.1))
+p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 1.0 + w.rank % 2))      # each group its own load
+ser = p.solve(steps=2, solver="serial")
+out = {{}}
+for name, comm in (("self", MPI.COMM_SELF), ("halves", w.Split(w.rank % 2, w.rank))):
+    try:
+        res = distributed_solve(p, steps=2, setup=RunSetup(comm=comm), inertia_check=True)
+        out[name] = [float(np.abs(res.final.g - ser.final.g).max()), res.parallel["ranks"]]
+    except Exception as exc:
+        out[name] = [type(exc).__name__ + ": " + str(exc), None]
+open({out!r} + ".%d" % w.rank, "w").write(json.dumps(out))
+'''
+
+
+def test_a_run_on_a_sub_communicator(tmp_path):
+    """``RunSetup(comm=...)``: the PETSc objects were made on PETSc.COMM_WORLD whatever the run's
+    communicator, so a run of its own on every rank (``MPI.COMM_SELF``) stopped with petsc4py's
+    'A matrix with 81 rows requires a row pointer of length 82 (given: 163)', and 4 ranks split
+    into two runs of 2 with 'the tangent of the unloaded shell is singular -- a rigid-body
+    motion is not restrained' (both wrong).  Now PETSc works on the run's ranks: each rank's
+    (each half's) run gives its own serial state to round-off, with MUMPS' inertia count on."""
+    if not HAVE_MPI:
+        pytest.skip("needs mpi4py, petsc4py and mpirun")
+    script = tmp_path / "sub.py"
+    out = str(tmp_path / "out")
+    script.write_text(SUB_COMMUNICATORS.format(out=out))
+    cmd = ["mpirun", "-n", "4", "-x", "PYTHONPATH", "-x", "OMP_NUM_THREADS", "-x", "NUMBA_NUM_THREADS",
+           sys.executable, str(script)]
+    p = subprocess.run(cmd, env=mpi_env(), capture_output=True, text=True, timeout=240, cwd=ROOT)
+    assert p.returncode == 0, p.stdout[-3000:] + p.stderr[-3000:]
+    for rank in range(4):
+        got = json.loads(open(f"{out}.{rank}").read())
+        assert got["self"][1] == 1 and got["self"][0] < 1e-10, got
+        assert got["halves"][1] == 2 and got["halves"][0] < 1e-10, got

@@ -110,8 +110,11 @@ def _load_quietly(path, strict):
 
 
 def _preamble(scn, quiet):
-    """The first lines of a run: the unit system, the warnings, the load numbers."""
+    """The first lines of a run: the unit system, the warnings, the load numbers (rank 0 of an
+    MPI launch: every rank reads the same scenario)."""
     from ..scenario.units import describe_units
+    if launched_rank() != 0:
+        return
     for w in scn.warnings:
         print(f"warning: {w}", file=sys.stderr)
     if quiet:

@@ -175,7 +175,7 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         quads = where[mesh.quads[el]]
         on = (quads >= 0).all(1)
         self._quads = quads[on]                     # the contact faces, in contact-node positions
-        self._el = el[on]                           # their element ids
+        self._quad_el = el[on]                      # their elements (a rank's share: parallel.localize)
         self._mesh_quads = mesh.quads
         size = np.linalg.norm(mesh.X[mesh.quads[el, 2]] - mesh.X[mesh.quads[el, 0]], axis=1).max(initial=0.0)
         flat = getattr(self.obstacle, "flat", False)
@@ -363,7 +363,7 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         i = int(np.argmin(d))
         if d[i] < -self.h:
             return (f"obstacle {self.name!r} starts the increment {-d[i]:.3g} inside the shell at node "
-                    f"{int(self.nodes[i])} (more than the thickness {self.h:.3g}): smaller increment")
+                    f"{int(self.node_ids[i])} (more than the thickness {self.h:.3g}): smaller increment")
         return ""
 
     def step_error(self, g0, lam0, g1, lam1):
@@ -379,7 +379,7 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         thick = float(getattr(self.obstacle, "thickness", np.inf))
         depth = max(min(self.h / 2, thick / 2), 2 * self.tol)
         return crossing_report(self.obstacle, self._quads, self.contact_points(g0), self.contact_points(g1),
-                               lam0, lam1, depth, self.nodes) or self.face_crossing(g1, lam1)
+                               lam0, lam1, depth, (self.node_ids, self.face_ids)) or self.face_crossing(g1, lam1)
 
     def face_crossing(self, g, lam):
         """'' unless, with the faces not sampled (``faces = false``), a curved obstacle has crossed
@@ -404,7 +404,7 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         if not past.any():
             return ""
         e = int(np.argmin(np.where(past, s["d"], np.inf)))
-        el = int(self._el[on[e]])
+        el = int(self.face_ids[on[e]])
         return (f"obstacle {self.name!r} passes through the contact face of element {el} between its nodes at "
                 f"load factor {lam:.6g} ({-float(s['d'][e]):.3g} deep, through the shell): the nodes "
                 f"alone do not feel it; set faces = true (or 'auto') in the contact law, or refine the mesh")
@@ -452,6 +452,17 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
             if self.mu > 0:
                 self.tau = t @ Q
         return ratio
+
+    @property
+    def node_ids(self):
+        """The mesh ids of the contact nodes, in messages (``nodes``; a rank's part of the load,
+        ``parallel.localize.LocalContact``, names the whole mesh's)."""
+        return self.nodes
+
+    @property
+    def face_ids(self):
+        """The mesh ids of the contact faces' elements, in messages (as :attr:`node_ids`)."""
+        return self._quad_el
 
     def largest(self, value):
         """The largest of ``value`` over the processes that share this load: the value itself

@@ -135,13 +135,15 @@ def face_grid(spacing, size):
     return 0.25 * np.stack([(1 - xi) * (1 - et), (1 + xi) * (1 - et), (1 + xi) * (1 + et), (1 - xi) * (1 + et)], 1)
 
 
-def crossing_report(obstacle, quads, x0, x1, lam0, lam1, depth, node_ids):
+def crossing_report(obstacle, quads, x0, x1, lam0, lam1, depth, ids):
     """Where the contact surface passes deeper than ``depth`` into the obstacle over the step:
     '' when nowhere, else a sentence naming the node or element and the depth.
 
     quads (m, 4): the contact elements in positions of x0/x1 (rows: contact points of the nodes
-    ``node_ids``, lab, at the two states).
+    ``ids``, lab, at the two states); ``ids`` may be a pair (the nodes' ids, the (m,) elements'
+    ids) that the messages name (the elements' default: their positions in quads).
     """
+    node_ids, element_ids = ids if isinstance(ids, tuple) else (ids, None)
     dn = _crossing(obstacle, x0, x1, lam0, lam1, depth)
     found, lower = dn[0], dn[1]
     i = int(np.argmin(found - dn[2]))
@@ -164,7 +166,7 @@ def crossing_report(obstacle, quads, x0, x1, lam0, lam1, depth, node_ids):
             continue
         f, _, thr = _crossing(obstacle, W @ x0[quads[e]], W @ x1[quads[e]], lam0, lam1, depth)
         if (f < thr).any():
-            return (f"the face of element {int(e)} passes through obstacle {obstacle.name!r} between the "
+            return (f"the face of element {int(e if element_ids is None else element_ids[e])} passes through obstacle {obstacle.name!r} between the "
                     f"nodes from load factor {lam0:.6g} to {lam1:.6g} ({-f.min():.3g} deep, more than "
                     f"{depth:.3g})")
     return ""

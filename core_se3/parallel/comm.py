@@ -11,7 +11,7 @@ import numpy as np
 from ..backend import launched_ranks
 from ..errors import CoreSE3Error, ParallelError
 
-__all__ = ["SerialComm", "world", "collective", "is_root"]
+__all__ = ["SerialComm", "world", "collective", "is_root", "petsc_comm"]
 
 
 class SerialComm:
@@ -68,6 +68,21 @@ def world():
     return MPI.COMM_WORLD
 
 
+def petsc_comm(comm):
+    """The PETSc communicator of a run on ``comm``: the mpi4py communicator itself (petsc4py takes
+    it: a sub-communicator, e.g. ``MPI.COMM_SELF`` for a run of its own on every rank), or
+    ``PETSc.COMM_SELF`` for a :class:`SerialComm` (a process that no launcher started among others).
+
+    Example
+    -------
+    >>> import importlib.util
+    >>> petsc_comm(SerialComm()).getSize() if importlib.util.find_spec("petsc4py") else 1
+    1
+    """
+    from petsc4py import PETSc
+    return PETSc.COMM_SELF if isinstance(comm, SerialComm) else PETSc.Comm(comm)
+
+
 def is_root(comm=None):
     """True on rank 0 (the rank that writes files and logs).
 
@@ -79,8 +94,6 @@ def is_root(comm=None):
     return (comm or world()).rank == 0
 
 
-# errors that one rank may meet alone: re-raised with the same type on every rank
-_COLLECTIVE = (CoreSE3Error, FloatingPointError, ValueError, ArithmeticError)
 
 
 def collective(comm, fn, *args, **kw):
@@ -109,7 +122,7 @@ def collective(comm, fn, *args, **kw):
     err, out = None, None
     try:
         out = fn(*args, **kw)
-    except _COLLECTIVE as exc:
+    except Exception as exc:           # any error one rank meets alone (an IndexError of a load of one's own too)
         err = exc
     if comm.size == 1:
         if err is not None:

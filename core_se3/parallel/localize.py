@@ -115,12 +115,15 @@ def _spring(ld, view, arrays):
 
 class LocalContact(ContactLoad):
     """A :class:`~core_se3.model.contact.ContactLoad` on one rank: the contact nodes it owns (each
-    node's force counts once in the sum over the ranks; a rank may own none), with the solver
+    node's force counts once in the sum over the ranks; a rank may own none) and the contact faces
+    of its elements (their face samples, and the crossing check of their paths), with the solver
     hooks made collective -- the step cap is the smallest of the ranks', a refused start is
     refused on every rank, the gap error of an Uzawa update is the largest, so that every rank
-    takes the serial decision.  The multipliers are exchanged as whole arrays (``multipliers``
-    returns, ``set_multipliers`` takes, all contact nodes), and after every update the whole
-    problem's load gets them too: the step records and checkpoints are the serial ones.
+    takes the serial decision.  A face's nodes that another rank owns come along as contact
+    nodes of zero area (they carry the face, not a nodal force: their owner applies that).  The
+    multipliers are exchanged as whole arrays (``multipliers`` returns, ``set_multipliers``
+    takes, all contact nodes' and faces'), and after every update the whole problem's load gets
+    them too: the step records and checkpoints are the serial ones.
 
     Example
     -------
@@ -132,8 +135,10 @@ class LocalContact(ContactLoad):
     >>> c = p.add_obstacle(make_obstacle("half_space", point=(0, 0, -0.5), normal=(0, 0, 1)))
     >>> s = subdomain(p.mesh, np.array([0, 1]), rank=1, size=2)
     >>> part = localize_load(c, s)[0]
-    >>> part.nodes.tolist(), part.multipliers().shape      # owned nodes; all multipliers and penalty factors
-    ([0, 1], (12,))
+    >>> part.nodes.tolist(), part.A.round(3).tolist()     # owned nodes, then the face's others (area 0)
+    ([0, 1, 2, 3], [0.25, 0.25, 0.0, 0.0])
+    >>> part.multipliers().shape                          # all multipliers and penalty factors
+    (12,)
     """
 
     def __init__(self, whole, view):                   # noqa: D107 (the whole load is built already)
@@ -143,17 +148,47 @@ class LocalContact(ContactLoad):
                                "on one process")
         self.__dict__.update(copy.copy(whole).__dict__)
         pos, loc = view.owned_local(whole.nodes)
+        qpos = view.local_elements(whole._quad_el)[0]          # the faces of this rank's elements
+        extra = np.setdiff1d(np.unique(whole._quads[qpos]), pos)  # their nodes another rank owns
+        npos = np.concatenate([pos, extra]).astype(np.int64)
         self.whole, self.pos, self.comm = whole, pos, view.comm
-        self.n, self.nodes = view.mesh.n_nodes, loc
-        for name in ("A", "side", "c", "k", "lam0", "lam", "soft", "_active", "_normals"):
-            setattr(self, name, np.array(getattr(whole, name)[pos]))
-        self._quads = self.face_q = np.zeros((0, 4), np.int64)   # nodes only: faces need the whole mesh
-        self.face_el, self.Af, self.kf = np.zeros(0, np.int64), np.zeros(0), np.zeros(0)
+        self.fpos = qpos if len(whole.face_el) else np.zeros(0, np.int64)   # face samples: as the faces
+        self.n, self.nodes = view.mesh.n_nodes, np.concatenate([loc, view.local_nodes(whole.nodes[extra])[1]])
+        for name in ("A", "side", "c", "k", "_active", "_normals"):
+            setattr(self, name, np.array(getattr(whole, name)[npos]))
+        self.A[len(pos):] = 0.0                                # a nodal force counts on its owner only
+        self._npos = npos
+        self.lam0, self.lam, self.soft = (self._samples(getattr(whole, name)) for name in ("lam0", "lam", "soft"))
+        where = np.full(len(whole.nodes), -1, np.int64)
+        where[npos] = np.arange(len(npos))
+        self._quads = where[whole._quads[qpos]]
+        self._quad_el = view.local_elements(whole._quad_el[qpos])[1]
+        self.face_q = self._quads if len(self.fpos) else np.zeros((0, 4), np.int64)      # as ContactLoad._faces
+        self.face_el = self._quad_el if len(self.fpos) else np.zeros(0, np.int64)
+        self.Af, self.kf = whole.Af[self.fpos], whole.kf[self.fpos]
+        self._ids = whole.nodes[npos], whole._quad_el[qpos]         # the whole mesh's, for messages
+
+    @property
+    def node_ids(self):
+        return self._ids[0]
+
+    @property
+    def face_ids(self):
+        return self._ids[1]
+
+    def _samples(self, whole_array):
+        """This rank's entries (its nodes', then its face samples') of a whole per-sample array."""
+        kn = len(self.whole.nodes)
+        return np.concatenate([whole_array[self._npos], whole_array[kn + self.fpos]])
 
     def _publish(self):
-        """Every rank's multipliers and the global gap error into the whole load."""
-        for pos, lam, soft in self.comm.allgather((self.pos, self.lam, self.soft)):
+        """Every rank's multipliers (of its owned nodes and its faces) and the global gap error
+        into the whole load."""
+        ko, kl, kn = len(self.pos), len(self.nodes), len(self.whole.nodes)
+        mine = (self.pos, self.fpos, self.lam[:ko], self.soft[:ko], self.lam[kl:], self.soft[kl:])
+        for pos, fpos, lam, soft, lam_f, soft_f in self.comm.allgather(mine):
             self.whole.lam[pos], self.whole.soft[pos] = lam, soft
+            self.whole.lam[kn + fpos], self.whole.soft[kn + fpos] = lam_f, soft_f
         self.whole.gap_error = self.gap_error
 
     def limit_increment(self, g, eta, lam):
@@ -178,7 +213,7 @@ class LocalContact(ContactLoad):
 
     def set_multipliers(self, lam=None):
         self.whole.set_multipliers(lam)
-        self.lam, self.soft = self.whole.lam[self.pos].copy(), self.whole.soft[self.pos].copy()
+        self.lam, self.soft = self._samples(self.whole.lam), self._samples(self.whole.soft)
 
 
 _RULES = {

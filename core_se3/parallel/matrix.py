@@ -174,7 +174,7 @@ class SharedCsrMatrix:
         if len(self.diagonal) != len(hrows):
             raise ParallelError("SharedCsrMatrix: a held dof has no diagonal entry in the pattern")
         self.zero = np.union1d(in_rows, np.flatnonzero(held[indices]))
-        self.mat = PETSc.Mat().createAIJWithArrays((N, N), (indptr, indices, self.data), comm=PETSc.COMM_WORLD)
+        self.mat = PETSc.Mat().createAIJWithArrays((N, N), (indptr, indices, self.data), comm=PETSc.COMM_SELF)
         self.mat.setBlockSizes(bsize, bsize)     # (createAIJWithArrays ignores its bsize for SeqAIJ)
         if self.mat.getType() != PETSc.Mat.Type.SEQAIJ:
             raise ParallelError("SharedCsrMatrix is for one rank (a sequential matrix)")

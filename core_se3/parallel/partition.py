@@ -20,6 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ParallelError
+from .comm import petsc_comm
 
 __all__ = ["PARTITIONERS", "rcb", "dual_graph", "partition_elements", "node_owners", "check_partition"]
 
@@ -101,9 +102,9 @@ def _petsc_partition(mesh, comm, kind):
     ptr, idx = dual_graph(mesh)
     lptr = (ptr[lo:hi + 1] - ptr[lo]).astype(PETSc.IntType)
     lidx = idx[ptr[lo]:ptr[hi]].astype(PETSc.IntType)
-    A = PETSc.Mat().createAIJ(size=((hi - lo, m), (hi - lo, m)), csr=(lptr, lidx, np.ones(len(lidx))),
-                              comm=PETSc.COMM_WORLD)
-    part = PETSc.MatPartitioning().create(PETSc.COMM_WORLD)
+    pcomm = petsc_comm(comm)
+    A = PETSc.Mat().createAIJ(size=((hi - lo, m), (hi - lo, m)), csr=(lptr, lidx, np.ones(len(lidx))), comm=pcomm)
+    part = PETSc.MatPartitioning().create(pcomm)
     iset = PETSc.IS()
     try:
         part.setAdjacency(A)

@@ -31,6 +31,7 @@ import numpy as np
 
 from .. import lie
 from ..errors import LinearSolverError, OptionError, ParallelError, SingularSystemError
+from .comm import petsc_comm
 from .matrix import CooMatrix, SharedCsrMatrix
 
 __all__ = ["LINEAR", "DistributedSystem", "rigid_body_modes"]
@@ -129,7 +130,7 @@ class DistributedSystem:
         if linear not in LINEAR:
             raise ParallelError(f"unknown linear solver {linear!r}; choose one of {', '.join(LINEAR)}")
         self.PETSc, self.comm, self.sub, self.linear = PETSc, comm, sub, linear
-        pcomm = PETSc.COMM_WORLD
+        self.pcomm = pcomm = petsc_comm(comm)        # the run's ranks (a sub-communicator too)
         n_own, n = sub.n_owned, len(sub.owner)
         self.n_own = n_own
         free = np.asarray(free, bool).reshape(-1, 6)
@@ -364,7 +365,7 @@ class DistributedSystem:
         rows = self.free_own.ravel()                     # result was wrong in PETSc 3.18, measured)
         peak = [_free_rows_max(K, rows), _free_rows_max(skew, rows)]
         scale, asym = np.max(self.comm.allgather(peak), axis=0) if self.comm.size > 1 else peak
-        pc = PETSc.PC().create(PETSc.COMM_WORLD)
+        pc = PETSc.PC().create(self.pcomm)
         try:
             if scale == 0 or asym > asym_tol * scale:
                 return None
@@ -423,7 +424,7 @@ class DistributedSystem:
             if nv > 0:
                 v.scale(1.0 / nv)
                 vecs.append(v)
-        ns = PETSc.NullSpace().create(vectors=vecs, comm=PETSc.COMM_WORLD)
+        ns = PETSc.NullSpace().create(vectors=vecs, comm=self.pcomm)
         self.K.mat.setNearNullSpace(ns)
         for v in vecs:
             v.destroy()

@@ -149,15 +149,15 @@ def run_context(problem, solver, arc=False, state=None):
 
 def on_root(fn):
     """Call ``fn()`` on rank 0 only of an MPI launch (the one process of a serial run) and raise its
-    core_se3 error on every rank, so that all ranks stop alike (e.g. an output directory that
-    holds another run).  Returns fn's value (picklable: every rank gets rank 0's).
+    error on every rank, so that all ranks stop alike (e.g. an output directory that holds another
+    run, or one that cannot be made: an OSError, which rank 0 alone meets).  Returns fn's value
+    (picklable: every rank gets rank 0's).
 
     Example
     -------
     >>> on_root(lambda: 42)
     42
     """
-    from ..errors import CoreSE3Error
     if launched_ranks() == 1:
         return fn()
     from ..parallel import world
@@ -166,11 +166,21 @@ def on_root(fn):
     if comm.rank == 0:
         try:
             out = fn()
-        except CoreSE3Error as exc:
+        except Exception as exc:           # any: the other ranks wait for rank 0's word (no hang)
             caught = exc
     err, out = comm.bcast((None if caught is None else (type(caught), str(caught)), out), root=0)
     if caught is not None:
         raise caught
     if err is not None:
-        raise err[0](err[1])
+        raise _rebuilt(*err)
     return out
+
+
+def _rebuilt(cls, message):
+    """The exception ``cls(message)`` of another rank (a CoreSE3Error with the message for a type
+    that takes other arguments)."""
+    from ..errors import CoreSE3Error
+    try:
+        return cls(message)
+    except Exception:
+        return CoreSE3Error(message)

@@ -377,8 +377,7 @@ def _stopped(run, sinks, exc):
                 not os.path.exists(os.path.join(run.rd.path, "vtu", f"step_{ev.k:04d}.vtu")):
             _multipliers_of(run, ev)
             write_step_vtu(run, ev.k, ev.g, ev.lam, ev.record.get("physical"))
-            if run.root:
-                write_series_files(run, True)
+            on_root(lambda: write_series_files(run, True))
         for sink in sinks:
             sink.end(run, status, msg)
     return again

@@ -33,6 +33,7 @@ from ..io import Checkpoint, Progress, atomic_path, write_json_atomic
 from ..io.lifecycle import held_signals
 from ..results import result_document
 from ..solvers.linear import linear_increments
+from .context import on_root
 from .obstacles import obstacles_of
 from .outputs import unit_system_record
 
@@ -194,17 +195,18 @@ def write_step_vtu(run, k, g, lam, physical=None):
         cells = run.ctx.cell_fields(g, eta)
     else:
         cells = prob.element.cell_fields(g) if eta is None else prob.element.cell_fields(g, increments=eta)
-    if not run.root:
-        return
-    values = {"load_factor": float(lam)}
-    values.update({f"{n} [{v['unit']}]" if v["unit"] else n: v["value"] for n, v in (physical or {}).items()})
-    with atomic_path(run.rd.file(f"vtu/step_{k:04d}.vtu")) as tmp:
-        write_vtu(tmp, prob.mesh.X, prob.mesh.quads, prob.mesh.g0, g, point_data=point_fields(prob, g, lam),
-                  cell_data=cells, field_data=values)
-    obstacles = obstacles_of(prob)
-    if obstacles:
-        with atomic_path(run.rd.file(f"vtu/step_{k:04d}_obstacles.vtu")) as tmp:
-            write_obstacles(tmp, obstacles, g[:, :3, 3], lam)
+
+    def write():
+        values = {"load_factor": float(lam)}
+        values.update({f"{n} [{v['unit']}]" if v["unit"] else n: v["value"] for n, v in (physical or {}).items()})
+        with atomic_path(run.rd.file(f"vtu/step_{k:04d}.vtu")) as tmp:
+            write_vtu(tmp, prob.mesh.X, prob.mesh.quads, prob.mesh.g0, g, point_data=point_fields(prob, g, lam),
+                      cell_data=cells, field_data=values)
+        obstacles = obstacles_of(prob)
+        if obstacles:
+            with atomic_path(run.rd.file(f"vtu/step_{k:04d}_obstacles.vtu")) as tmp:
+                write_obstacles(tmp, obstacles, g[:, :3, 3], lam)
+    on_root(write)              # rank 0 writes; a failure (a full disk) stops every rank alike
 
 
 class CheckpointSink(Sink):
@@ -212,12 +214,13 @@ class CheckpointSink(Sink):
 
     def step(self, run, ev):
         with held_signals():                  # the file and the count of what it holds agree
-            if run.root:
+            def save():
                 ck = Checkpoint(run.rd.path)
                 run.rd.file("checkpoint.npz")
                 ck.save(run.scn.fingerprint, dict(step=ev.k, lam=ev.lam, g=ev.g, unwrap=ev.unwrap,
                                                   records=run.records, timings=run.timings(), extra=ev.extra,
                                                   arrays=ev.arrays))
+            on_root(save)
             run.saved = len(run.records)      # what a resume continues from
 
 
@@ -228,8 +231,8 @@ class PvdSink(Sink):
         self.vtu = vtu
 
     def step(self, run, ev):
-        if run.root and self.vtu.due(ev):
-            write_series_files(run, ev.finished)
+        if self.vtu.due(ev):
+            on_root(lambda: write_series_files(run, ev.finished))
 
 
 def write_series_files(run, finished):
@@ -261,17 +264,14 @@ class DocumentSink(Sink):
     with the status and the message."""
 
     def start(self, run):
-        if run.root:
-            write_json_atomic(run.rd.file("results.json"), run.document("running"))
+        on_root(lambda: write_json_atomic(run.rd.file("results.json"), run.document("running")))
 
     def step(self, run, ev):
-        if run.root:
-            write_json_atomic(run.rd.file("results.json"), run.document(
-                "complete" if ev.finished and not run.arc else "running"))
+        on_root(lambda: write_json_atomic(run.rd.file("results.json"), run.document(
+            "complete" if ev.finished and not run.arc else "running")))
 
     def end(self, run, status, message=None):
-        if run.root:
-            write_json_atomic(run.rd.file("results.json"), run.document(status, message))
+        on_root(lambda: write_json_atomic(run.rd.file("results.json"), run.document(status, message)))
 
 
 class ProgressSink(Sink):

@@ -203,6 +203,7 @@ def sweep(scn, grid=None, out=None, progress=None, warm=True, plot=True, resume=
     (2.0, [False, True])
     """
     from .runner import output_directory
+    _one_process(scn)
     where = "--set" if grid is not None else "sweep"
     if grid is None:
         if not scn.spec["sweep"]:
@@ -232,6 +233,20 @@ def sweep(scn, grid=None, out=None, progress=None, warm=True, plot=True, resume=
             result.status = "complete"
             result.files = _write_all(rd, result, state, scn, plot)
     return result
+
+
+def _one_process(scn):
+    """A sweep runs its points one after another in one process (warm starts from the nearest
+    point's frames): under ``mpirun -n N`` (N > 1) every rank would claim the same directory and
+    all but one stopped with 'in use by another live run' (its own sibling), leaving sweep.json
+    'running' with no row.  A ParallelError on every rank instead, before anything is written."""
+    from ..backend import launched_ranks
+    from ..errors import ParallelError
+    n = launched_ranks()
+    if n > 1:
+        raise ParallelError(f"{scn.file}: a sweep runs its grid points one after another in one process; it "
+                            f"does not run under mpirun ({n} ranks): run core-se3 sweep without mpirun, or each "
+                            "point over the ranks with mpirun core-se3 run")
 
 
 def _write_all(rd, result, state, scn, plot, message=None):
