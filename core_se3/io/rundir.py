@@ -91,6 +91,8 @@ class RunDirectory:
     patterns : sequence of str, optional
         The relative names a run of this kind writes (fnmatch patterns, e.g. ``vtu/step_*.vtu``):
         a foreign file of such a name is never overwritten, even with force.
+    option : str, optional
+        The command-line option that names the directory (in the messages; default ``--out``).
 
     Example
     -------
@@ -100,8 +102,9 @@ class RunDirectory:
     True
     """
 
-    def __init__(self, path, kind="run", patterns=()):
+    def __init__(self, path, kind="run", patterns=(), option="--out"):
         self.path = os.fspath(path)
+        self.option = option
         self.kind = kind
         self.patterns = tuple(patterns)
         self.manifest_path = os.path.join(self.path, MANIFEST)
@@ -112,7 +115,7 @@ class RunDirectory:
         self._manifest_kind = None      # what wrote the files the manifest lists ('run', 'sweep', ...)
 
     # ------------------------------------------------------------------ claiming -------------
-    def claim(self, resume=False, force=False, adopt=()):
+    def claim(self, resume=False, force=False, adopt=(), replace=False):
         """Lock the directory and check what it holds.
 
         Parameters
@@ -125,6 +128,9 @@ class RunDirectory:
         adopt : sequence of str
             Patterns of files of an older version's run (no manifest) that ``resume`` takes as
             its own.
+        replace : bool
+            Start over without ``force`` where the directory holds only this tool's files (a
+            ``bench run --vtu`` directory written again); foreign files are still refused.
 
         Returns
         -------
@@ -144,6 +150,7 @@ class RunDirectory:
             self.previous = [f for f in listed if f in present]
             self._check_kind()
             foreign = [f for f in present if f not in ours and not self._temporary(f, ours)]
+            force = force or (replace and not foreign and not resume)
             self._check(foreign, resume, force)
             if force and not resume:
                 self._delete(self.previous, ours, present)
@@ -164,23 +171,23 @@ class RunDirectory:
         if self.previous and other is not None and other != self.kind:
             raise RunDirectoryError(
                 f"{self.path} holds the files of a {other} ({_some(self.previous)}), not of a {self.kind}: a "
-                f"{self.kind} neither continues (--resume) nor deletes (--force) them; choose another --out directory")
+                f"{self.kind} neither continues (--resume) nor deletes (--force) them; choose another {self.option} directory")
 
     def _check(self, foreign, resume, force):
         where = self.path
         if foreign and not force and not resume:          # a resumed run keeps files added beside it
             raise RunDirectoryError(
                 f"{where} holds files that core-se3 did not write ({_some(foreign)}): choose an empty or new "
-                f"--out directory, or --force to write beside them (--force never deletes them)")
+                f"{self.option} directory, or --force to write beside them (--force never deletes them)")
         clash = [f for f in foreign if any(fnmatch.fnmatch(f, p) for p in self.patterns)]
         if clash:
             raise RunDirectoryError(
                 f"{where} holds files that core-se3 did not write under the names a {self.kind} writes "
-                f"({_some(clash)}): --force does not overwrite them; move them away or choose another --out")
+                f"({_some(clash)}): --force does not overwrite them; move them away or choose another {self.option}")
         if self.previous and not resume and not force:
             raise RunDirectoryError(
                 f"{where} holds the files of an earlier {self.kind} ({_some(self.previous)}): continue it with "
-                "--resume, start over with --force, or choose another --out directory")
+                f"--resume, start over with --force, or choose another {self.option} directory")
 
     def start_over(self):
         """Delete the files of the earlier run (a resume of a run that stopped before it saved
@@ -226,7 +233,7 @@ class RunDirectory:
             if exc.errno not in (errno.EAGAIN, errno.EACCES):
                 raise
             raise RunDirectoryError(f"{self.path} is in use by another live run ({_holder(path)}): wait for it "
-                                    "to end, or choose another --out directory") from None
+                                    f"to end, or choose another {self.option} directory") from None
         os.ftruncate(fd, 0)
         os.write(fd, json.dumps(dict(pid=os.getpid(), kind=self.kind, started=time.strftime(
             "%Y-%m-%d %H:%M:%S"))).encode())
@@ -246,7 +253,7 @@ class RunDirectory:
                 raise ValueError("not a core-se3 manifest")
         except (OSError, ValueError, KeyError, TypeError) as exc:
             raise RunDirectoryError(f"{self.manifest_path} is damaged ({type(exc).__name__}): it lists the files "
-                                    "of the run that wrote this directory; choose another --out") from None
+                                    f"of the run that wrote this directory; choose another {self.option}") from None
         return files
 
     def _write_manifest(self):

@@ -271,7 +271,7 @@ def series_files(rd, vdir, steps, lams):
     if obst:                         # the obstacles' surfaces as a series of their own
         with atomic_path(rd.file(f"{vdir}/obstacles.pvd")) as tmp:
             write_pvd(tmp, obst)
-    return os.path.join(rd.path, vdir, "series.pvd")
+    return os.path.join(rd.path, os.path.normpath(f"{vdir}/series.pvd"))
 
 
 class ProvenanceSink(Sink):
