@@ -111,6 +111,37 @@ sys.stdin.read()
     assert runner.run(load(), out=out, force=True).status == "complete"
 
 
+def test_a_refused_run_leaves_no_lock_file_in_the_users_directory(tmp_path, monkeypatch):
+    """A run refused by a directory of the user's files (notes.txt) left .core-se3.lock in it.
+    The refusing process deletes the lock file it created (still holding it); one that opened
+    that file just before and locks it after finds it gone and locks the name's new file (here
+    simulated: the file deleted between the open and the flock), so two runs never both hold one."""
+    from core_se3.io import rundir
+    d = tmp_path / "mine"
+    d.mkdir()
+    (d / "notes.txt").write_text("mine")
+    with pytest.raises(RunDirectoryError, match=r"did not write \(notes.txt\)"):
+        runner.run(load(), out=str(d))
+    assert sorted(os.listdir(d)) == ["notes.txt"]
+    real, calls = os.open, []
+
+    def open_then_deleted(path, flags, *mode):
+        fd = real(path, flags, *mode)
+        if path.endswith(rundir.LOCK) and not calls:
+            calls.append(path)
+            os.unlink(path)                  # a refusing run deletes the file this one opened
+        return fd
+    monkeypatch.setattr(rundir.os, "open", open_then_deleted)
+    with RunDirectory(str(tmp_path / "o"), "run").claim() as rd:
+        monkeypatch.setattr(rundir.os, "open", real)
+        assert calls and os.path.exists(os.path.join(rd.path, rundir.LOCK))
+        with pytest.raises(RunDirectoryError, match="in use by another live run"):
+            RunDirectory(rd.path, "run").claim()
+    with RunDirectory(str(tmp_path / "o"), "run").claim(force=True):
+        pass                                 # the file of a run that ran stays
+    assert os.path.exists(tmp_path / "o" / rundir.LOCK)
+
+
 # ----------------------------------------------------------------------------- each sink alone
 @pytest.fixture
 def state(tmp_path):

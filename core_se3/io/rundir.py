@@ -12,7 +12,9 @@ live run at a time.
   them (a resumed run keeps those added beside it).
 * **Lock** (``.core-se3.lock``): an exclusive ``flock`` held while the run lives, released by
   the kernel when its process ends however it ends (so a killed run leaves no stale lock); a
-  second run on the same directory is refused, naming the first one's process.
+  second run on the same directory is refused, naming the first one's process.  A run that
+  refuses the directory deletes the lock file if it created it (the user's directory is left as
+  it was); the file of a run that ran stays.
 
 Example
 -------
@@ -112,6 +114,7 @@ class RunDirectory:
         self.previous = []
         self.existed = False            # a manifest was there: the directory of an earlier run
         self._lock = None
+        self._created = False           # this process created the lock file (a refusal deletes it)
         self._manifest_kind = None      # what wrote the files the manifest lists ('run', 'sweep', ...)
 
     # ------------------------------------------------------------------ claiming -------------
@@ -160,6 +163,11 @@ class RunDirectory:
             self.files = [f for f in listed if f in present]
             self._write_manifest()
         except BaseException:
+            if self._created and self._lock is not None:     # a refusal leaves the directory as it was
+                try:
+                    os.unlink(os.path.join(self.path, LOCK))   # still locked: see _take_lock
+                except OSError:
+                    pass
             self.release()
             raise
         return self
@@ -223,17 +231,33 @@ class RunDirectory:
 
     # ------------------------------------------------------------------ internals ------------
     def _take_lock(self):
+        """flock the lock file.  A process that refuses deletes the file it created, still holding
+        it: one that opened it before then and locks it after finds its file gone from the
+        directory (another inode at the name, or none) and tries again on the name's file."""
         import fcntl
         path = os.path.join(self.path, LOCK)
-        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError as exc:
+        for _ in range(100):
+            try:
+                fd, self._created = os.open(path, os.O_RDWR | os.O_CREAT | os.O_EXCL, 0o644), True
+            except FileExistsError:
+                try:
+                    fd, self._created = os.open(path, os.O_RDWR), False
+                except FileNotFoundError:    # deleted by a refusing run in between
+                    continue
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError as exc:
+                os.close(fd)
+                if exc.errno not in (errno.EAGAIN, errno.EACCES):
+                    raise
+                raise RunDirectoryError(f"{self.path} is in use by another live run ({_holder(path)}): wait for it "
+                                        f"to end, or choose another {self.option} directory") from None
+            if _same_file(fd, path):
+                break
             os.close(fd)
-            if exc.errno not in (errno.EAGAIN, errno.EACCES):
-                raise
-            raise RunDirectoryError(f"{self.path} is in use by another live run ({_holder(path)}): wait for it "
-                                    f"to end, or choose another {self.option} directory") from None
+        else:
+            raise RunDirectoryError(f"{path} keeps being deleted and created: another process is at it; choose "
+                                    f"another {self.option} directory")
         os.ftruncate(fd, 0)
         os.write(fd, json.dumps(dict(pid=os.getpid(), kind=self.kind, started=time.strftime(
             "%Y-%m-%d %H:%M:%S"))).encode())
@@ -279,6 +303,15 @@ class RunDirectory:
                 os.unlink(os.path.join(self.path, f))
             except FileNotFoundError:
                 pass
+
+
+def _same_file(fd, path):
+    """The open file ``fd`` is the one at ``path`` now."""
+    try:
+        a, b = os.fstat(fd), os.stat(path)
+    except FileNotFoundError:
+        return False
+    return (a.st_dev, a.st_ino) == (b.st_dev, b.st_ino)
 
 
 def _some(names, k=5):
