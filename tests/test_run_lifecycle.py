@@ -246,6 +246,25 @@ def test_a_run_on_two_ranks_records_how_it_ran(tmp_path):
     assert sum(bench["partition"]["elements_per_rank"]) == 16
 
 
+def test_a_failed_run_on_two_ranks_writes_its_last_steps_contact_forces(tmp_path):
+    """A run on 2 ranks whose step 4 (1.5 -> 1e5) fails after converging sub-steps: the VTU file of
+    step 3 written at the failure showed the sub-steps' contact forces, 512.8 for the step's 0.675
+    in results.json (the serial run's was restored, the distributed one's not).  Now it is 0.675."""
+    import meshio
+    doc = dict(STRIP, mesh={"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 8, "ny": 1},
+               loads=[{"type": "edge_force", "edge": "x1", "force": [0.0, 0.0, -0.5]}],
+               obstacles=[{"type": "half_space", "name": "floor", "point": [0.0, 0.0, -0.3], "normal": [0.0, 0.0, 1.0]}],
+               solver={"load_factors": [0.5, 1.0, 1.5, 1e5], "max_cutbacks": 0, "max_iter": 8},
+               output={"vtu_every": 10, "plots": False, "picture": False})
+    r = _mpirun(tmp_path, doc, "--out", "o")
+    assert r.returncode != 0 and "step 4 (load factor 1.5 -> 100000) failed" in r.stderr, r.stderr[-3000:]
+    res = json.load(open(tmp_path / "o" / "results.json"))
+    last = res["steps"][-1]
+    assert res["provenance"]["ranks"] == 2 and last["step"] == 3 and last["contact"]["floor"]["force"][2] > 0.5
+    v = meshio.read(str(tmp_path / "o" / "vtu" / "step_0003.vtu"))
+    assert v.point_data["contact_force"][:, 2].sum() == pytest.approx(last["contact"]["floor"]["force"][2], rel=1e-12)
+
+
 def test_C4_petsc_options_it_refuses_are_one_error_line_naming_the_key(tmp_path):
     doc = dict(STRIP, mesh={"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 8, "ny": 2},
                solver={"steps": 1, "linear": "gamg", "petsc": {"ksp_rtol": 1e-9, "pc_gamg_threshold": "abc"}},
