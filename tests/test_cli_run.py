@@ -395,13 +395,37 @@ def test_steps_below_one_are_refused_not_replaced_by_the_default(capsys):
 
 def test_an_unwritable_output_path_is_one_error_line(tmp_path, capsys):
     """An output under a regular file (so no directory can be made there): exit status 2 and
-    one 'error: cannot write the outputs' line, for bench run (after its table is printed) and
-    for a scenario run, instead of an OSError traceback."""
+    one 'error: cannot write the outputs' line, for bench run (its --vtu directory claimed before
+    it solves) and for a scenario run, instead of an OSError traceback."""
     blocker = tmp_path / "a-file"
     blocker.write_text("")
     assert cli.main(["bench", "run", "cantilever-shear", "--mesh", "4x1", "--steps", "2",
                      "--vtu", str(blocker / "vtu")]) == 2
-    out, err = capsys.readouterr()
-    assert "reactions balance" in out and err.strip().startswith("error: cannot write the outputs")
+    out, err = capsys.readouterr()           # its --vtu directory is claimed before the solve, as a run's
+    assert "reactions balance" not in out and err.strip().startswith("error: cannot write the outputs")
+    assert err.strip().endswith("nothing was solved")
     assert cli.main(["run", write(tmp_path, STRIP), "--out", str(blocker / "run"), "-q"]) == 2
     assert capsys.readouterr().err.strip().startswith("error: cannot write the outputs")
+
+
+def test_bench_run_vtu_follows_the_run_directory_rules_and_writes_a_runs_files(tmp_path, capsys):
+    """``bench run --vtu DIR`` wrote over any file in DIR (a user's series.pvd replaced) and its
+    files had neither stress resultants nor FieldData.  Now DIR is a run directory (``io.rundir``):
+    files core-se3 did not write are refused (kept beside with --force, never overwritten), a
+    second bench replaces its own files, and the files are core-se3 run's (``step_files``)."""
+    from core_se3.io.vtk import read_field_data
+    out = tmp_path / "vtu"
+    out.mkdir()
+    (out / "series.pvd").write_text("mine")
+    args = ["bench", "run", "cantilever-shear", "--mesh", "4x1", "--steps", "2", "-q", "--vtu", str(out)]
+    assert cli.main(args) == 2
+    assert "did not write (series.pvd)" in capsys.readouterr().err and (out / "series.pvd").read_text() == "mine"
+    assert cli.main(args + ["--force"]) == 2                      # never over it
+    assert "--force does not overwrite them" in capsys.readouterr().err and (out / "series.pvd").read_text() == "mine"
+    (out / "series.pvd").rename(out / "notes.txt")
+    assert cli.main(args + ["--force"]) == 0 and cli.main(args + ["--force"]) == 0    # beside; its own replaced
+    assert (out / "notes.txt").read_text() == "mine"
+    m = meshio.read(str(out / "step_0002.vtu"))
+    assert "M1" in m.cell_data and "N1" in m.cell_data
+    assert read_field_data(str(out / "step_0002.vtu"))["load_factor"] == pytest.approx(1.0, abs=1e-12)
+    assert [f for _, f in pvd_files(str(out / "series.pvd"))] == [f"step_{k:04d}.vtu" for k in range(3)]

@@ -401,6 +401,21 @@ radius = 1.0
     assert len(scenario.loads(two.format("ball"), file="f.toml").spec["obstacles"]) == 2
 
 
+def test_python_obstacles_of_one_vtu_field_name_are_refused():
+    """Problem.add_obstacle took 'floor a' and 'floor_a': contact_gap_floor_a read 3.07 at the
+    flat plate's corner nodes, the floor's gap 0.995 plus the sphere's 2.077.  The check of the
+    scenario's [[obstacles]] now holds for the Python API too (one helper)."""
+    p = cs.Problem(M.rectangle(1.0, 1.0, 2, 1), cs.Material(1e3, 0.0, 0.01))
+    p.add_obstacle("half_space", point=(0, 0, -1), normal=(0, 0, 1), name="floor a")
+    with pytest.raises(ContactError, match=r"obstacles 'floor a' and 'floor_a' have one VTU field name, "
+                                           r"contact_gap_floor_a") as ei:
+        p.add_obstacle("sphere", centre=(0.5, 0.0, 3.0), radius=1.0, name="floor_a")
+    assert ei.value.param == "name" and len(p.loads) == 1
+    p.add_obstacle("sphere", centre=(0.5, 0.0, 3.0), radius=1.0, name="ball")
+    gap = p.output_fields(p.mesh.g0, 1.0)["contact_gap_floor_a"]          # 1 - h/2 from the mid-surface
+    np.testing.assert_allclose(gap, 0.995, rtol=0, atol=1e-12)
+
+
 def test_python_api_errors():
     p = cs.Problem(M.rectangle(1.0, 1.0, 2, 1), cs.Material(1e3, 0.0, 0.01))
     with pytest.raises(ContactError, match="already intersects"):

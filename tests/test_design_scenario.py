@@ -225,3 +225,71 @@ def test_design_of_a_scenario_traced_by_arc_length(tmp_path):
     assert scn.problem.solve_defaults["control"] == "arclength"
     tip = scn.problem.solve().final.probes["tip"]["u"] + np.array([17.2, 0.0, 0.0])
     assert abs(tip[0] - 12.0) < 1e-5 and abs(tip[2] - 10.0) < 1e-5
+
+
+FLOOR = """
+[mesh]
+generator = "rectangle"
+L = 10.0
+width = 1.0
+nx = 8
+ny = 1
+[material]
+E = 1.2e6
+nu = 0.0
+h = 0.1
+[[supports]]
+type = "clamp"
+edge = "x0"
+[[loads]]
+type = "edge_force"
+edge = "x1"
+force = [0.0, 0.0, -0.4]
+[[obstacles]]
+type = "half_space"
+name = "floor"
+point = [0.0, 0.0, -0.3]
+normal = [0.0, 0.0, 1.0]
+[[probes]]
+name = "mid"
+nodes = [4]
+[solver]
+steps = 4
+[output]
+plots = false
+picture = false
+[design]
+tolerance = 1e-6
+[[design.variables]]
+type = "load"
+load = 0
+[[design.targets]]
+type = "position"
+probe = "mid"
+value = [0.0, 0.0, -0.07794]
+components = [2]
+"""
+
+
+def test_a_designs_vtu_has_each_steps_contact_forces_and_a_runs_fields(tmp_path):
+    """The design's VTU series evaluated the contact fields of every step with the last step's
+    multipliers: contact_force summed to 0.4303 at step 1 of 4 where the step carries 0.0510
+    (0.4302, 0.4302 for 0.1774, 0.3038 at steps 2, 3).  Now each step's multipliers are set first, and the files are
+    written by the run's writer (``scenario.sinks.step_files``): stress resultants, FieldData
+    load_factor and the obstacles' series too."""
+    import meshio
+    from core_se3.io.vtk import read_field_data
+    path = tmp_path / "floor.toml"
+    path.write_text(FLOOR)
+    out = tmp_path / "d"
+    assert main(["design", str(path), "--out", str(out), "-q"]) == 0
+    res = scenario.load(out / "optimised.toml").problem.solve()
+    vdir = out / "vtu" / "design"
+    files = [meshio.read(str(vdir / f"step_{k:04d}.vtu")) for k in range(len(res.steps))]
+    forces = [v.point_data["contact_force"][:, 2].sum() for v in files]
+    np.testing.assert_allclose(forces, [s.contact["floor"]["force"][2] for s in res.steps], rtol=1e-6, atol=1e-12)
+    assert 0.0 < forces[1] < 0.2 * forces[-1]                  # the push grows the contact force fourfold
+    for k, (v, s) in enumerate(zip(files, res.steps)):
+        assert "M1" in v.cell_data and read_field_data(str(vdir / f"step_{k:04d}.vtu"))["load_factor"] == \
+            pytest.approx(s.load_factor, abs=1e-12)
+    assert (vdir / "obstacles.pvd").exists() and (vdir / "step_0004_obstacles.vtu").exists()

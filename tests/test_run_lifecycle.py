@@ -111,6 +111,37 @@ sys.stdin.read()
     assert runner.run(load(), out=out, force=True).status == "complete"
 
 
+def test_a_refused_run_leaves_no_lock_file_in_the_users_directory(tmp_path, monkeypatch):
+    """A run refused by a directory of the user's files (notes.txt) left .core-se3.lock in it.
+    The refusing process deletes the lock file it created (still holding it); one that opened
+    that file just before and locks it after finds it gone and locks the name's new file (here
+    simulated: the file deleted between the open and the flock), so two runs never both hold one."""
+    from core_se3.io import rundir
+    d = tmp_path / "mine"
+    d.mkdir()
+    (d / "notes.txt").write_text("mine")
+    with pytest.raises(RunDirectoryError, match=r"did not write \(notes.txt\)"):
+        runner.run(load(), out=str(d))
+    assert sorted(os.listdir(d)) == ["notes.txt"]
+    real, calls = os.open, []
+
+    def open_then_deleted(path, flags, *mode):
+        fd = real(path, flags, *mode)
+        if path.endswith(rundir.LOCK) and not calls:
+            calls.append(path)
+            os.unlink(path)                  # a refusing run deletes the file this one opened
+        return fd
+    monkeypatch.setattr(rundir.os, "open", open_then_deleted)
+    with RunDirectory(str(tmp_path / "o"), "run").claim() as rd:
+        monkeypatch.setattr(rundir.os, "open", real)
+        assert calls and os.path.exists(os.path.join(rd.path, rundir.LOCK))
+        with pytest.raises(RunDirectoryError, match="in use by another live run"):
+            RunDirectory(rd.path, "run").claim()
+    with RunDirectory(str(tmp_path / "o"), "run").claim(force=True):
+        pass                                 # the file of a run that ran stays
+    assert os.path.exists(tmp_path / "o" / rundir.LOCK)
+
+
 # ----------------------------------------------------------------------------- each sink alone
 @pytest.fixture
 def state(tmp_path):
@@ -213,6 +244,25 @@ def test_a_run_on_two_ranks_records_how_it_ran(tmp_path):
     bench = json.load(open(tmp_path / "b.json"))["provenance"]
     assert bench["ranks"] == 2 and bench["linear_solver"]["used"] == "mumps" and len(bench["peak_memory"]) == 2
     assert sum(bench["partition"]["elements_per_rank"]) == 16
+
+
+def test_a_failed_run_on_two_ranks_writes_its_last_steps_contact_forces(tmp_path):
+    """A run on 2 ranks whose step 4 (1.5 -> 1e5) fails after converging sub-steps: the VTU file of
+    step 3 written at the failure showed the sub-steps' contact forces, 512.8 for the step's 0.675
+    in results.json (the serial run's was restored, the distributed one's not).  Now it is 0.675."""
+    import meshio
+    doc = dict(STRIP, mesh={"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 8, "ny": 1},
+               loads=[{"type": "edge_force", "edge": "x1", "force": [0.0, 0.0, -0.5]}],
+               obstacles=[{"type": "half_space", "name": "floor", "point": [0.0, 0.0, -0.3], "normal": [0.0, 0.0, 1.0]}],
+               solver={"load_factors": [0.5, 1.0, 1.5, 1e5], "max_cutbacks": 0, "max_iter": 8},
+               output={"vtu_every": 10, "plots": False, "picture": False})
+    r = _mpirun(tmp_path, doc, "--out", "o")
+    assert r.returncode != 0 and "step 4 (load factor 1.5 -> 100000) failed" in r.stderr, r.stderr[-3000:]
+    res = json.load(open(tmp_path / "o" / "results.json"))
+    last = res["steps"][-1]
+    assert res["provenance"]["ranks"] == 2 and last["step"] == 3 and last["contact"]["floor"]["force"][2] > 0.5
+    v = meshio.read(str(tmp_path / "o" / "vtu" / "step_0003.vtu"))
+    assert v.point_data["contact_force"][:, 2].sum() == pytest.approx(last["contact"]["floor"]["force"][2], rel=1e-12)
 
 
 def test_C4_petsc_options_it_refuses_are_one_error_line_naming_the_key(tmp_path):

@@ -135,15 +135,34 @@ def _case_plot(name, overrides, doc, res, path):
         _plot_generic(case, p, doc, path, name)
 
 
+BENCH_FILES = ("step_*.vtu", "series.pvd", "obstacles.pvd")     # a bench's --vtu names (never over foreign ones)
+
+
 def bench_run(args):
     """``core-se3 bench run``; with ``--plot`` matplotlib is imported by a forked worker while the
     case solves (``io.worker.PlotProcess``; not under MPI)."""
+    from ..io.rundir import RunDirectory
     from ..io.worker import PlotProcess
-    with PlotProcess(enabled=bool(args.plot) and launched_ranks() == 1) as plots:
-        return _bench_run(args, plots)
+    from ..scenario.context import on_root
+    rd = RunDirectory(args.vtu, "bench", BENCH_FILES, option="--vtu") if args.vtu else None
+    try:       # a run directory's rules: never over a file it did not write; its own earlier files go
+        if rd is not None:
+            on_root(lambda: rd.claim(force=args.force, replace=True))
+    except CoreSE3Error as exc:
+        if launched_rank() == 0:
+            print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:
+        return _output_error(exc, "nothing was solved")
+    try:
+        with PlotProcess(enabled=bool(args.plot) and launched_ranks() == 1) as plots:
+            return _bench_run(args, plots, rd)
+    finally:
+        if rd is not None:
+            rd.release()
 
 
-def _bench_run(args, plots):
+def _bench_run(args, plots, rd):
     from ..catalogue import family_of, get_case, run_case
     from ..io import LogProgress, Progress
     try:
@@ -170,39 +189,24 @@ def _bench_run(args, plots):
         for line in fam.report(doc):
             print(line)
     try:
-        _write_bench_outputs(args, doc, res, prob, plots)
+        _write_bench_outputs(args, doc, res, prob, plots, rd)
     except OSError as exc:
         return _output_error(exc, "the solve finished and its table above is complete")
     return 0
 
 
-def _write_bench_outputs(args, doc, res, prob, plots):
-    """The --json, --vtu and --plot outputs of ``bench run`` (the plot drawn by the worker)."""
+def _write_bench_outputs(args, doc, res, prob, plots, rd):
+    """The --json, --vtu (in the claimed RunDirectory ``rd``) and --plot outputs of ``bench run``
+    (the plot drawn by the worker)."""
     from ..results import write_json
     if args.json:
         os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
         write_json(args.json, doc)
         print(f"wrote {args.json}")
-    if args.vtu:
-        from ..io import write_series
-        from ..results import restore_multipliers
-        from ..scenario import point_fields
-        extra = []
-        for s in res.steps:
-            restore_multipliers(prob, s)                 # contact forces of that step
-            extra.append(point_fields(prob, s.g, s.load_factor))
-        paths = write_series(args.vtu, prob.mesh.X, prob.mesh.quads, prob.mesh.g0,
-                             [s.g for s in res.steps], [s.load_factor for s in res.steps],
-                             point_data_per_step=extra)
-        print(f"wrote {len(paths) - 1} VTU files and {paths[-1]}")
-        from ..io import write_obstacles, write_pvd
-        from ..scenario.obstacles import obstacles_of
-        obstacles = obstacles_of(prob)
-        if obstacles:                     # the obstacles' surfaces per step, a series of their own
-            names = [f"obstacles_{k:04d}.vtu" for k in range(len(res.steps))]
-            for name, s in zip(names, res.steps):
-                write_obstacles(os.path.join(args.vtu, name), obstacles, s.g[:, :3, 3], s.load_factor)
-            print(f"wrote {write_pvd(os.path.join(args.vtu, 'obstacles.pvd'), [(s.load_factor, n) for s, n in zip(res.steps, names)])}")
+    if args.vtu:                          # the files of core-se3 run's vtu/ (scenario.sinks.step_files)
+        from ..scenario.sinks import write_path_vtu
+        pvd = write_path_vtu(rd, ".", prob, res.steps)
+        print(f"wrote {len(res.steps)} VTU files and {pvd}")
     if args.plot:
         plots.wait()
         print(f"wrote {args.plot}")
@@ -223,7 +227,10 @@ def _bench_parsers(sub):
     run.add_argument("--linear", choices=["mumps", "gamg", "hypre"], default=None,
                      help="linear solver of a distributed run (mpirun -n N, N > 1; docs/PARALLEL.md)")
     run.add_argument("--json", default=None)
-    run.add_argument("--vtu", default=None, help="directory for VTU files and series.pvd")
+    run.add_argument("--vtu", default=None, help="directory for VTU files and series.pvd (its earlier bench files "
+                     "are replaced; files core-se3 did not write are refused, kept with --force)")
+    run.add_argument("--force", action="store_true", help="write the VTU files beside files core-se3 did not write "
+                     "(never over them)")
     run.add_argument("--plot", default=None, help="PNG load-deflection plot")
     run.add_argument("-v", "--verbose", action="store_true", help="log every Newton (sub-)step")
     run.add_argument("--progress", action="store_true", help="progress line even when not on a terminal")

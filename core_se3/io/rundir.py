@@ -12,7 +12,9 @@ live run at a time.
   them (a resumed run keeps those added beside it).
 * **Lock** (``.core-se3.lock``): an exclusive ``flock`` held while the run lives, released by
   the kernel when its process ends however it ends (so a killed run leaves no stale lock); a
-  second run on the same directory is refused, naming the first one's process.
+  second run on the same directory is refused, naming the first one's process.  A run that
+  refuses the directory deletes the lock file if it created it (the user's directory is left as
+  it was); the file of a run that ran stays.
 
 Example
 -------
@@ -91,6 +93,8 @@ class RunDirectory:
     patterns : sequence of str, optional
         The relative names a run of this kind writes (fnmatch patterns, e.g. ``vtu/step_*.vtu``):
         a foreign file of such a name is never overwritten, even with force.
+    option : str, optional
+        The command-line option that names the directory (in the messages; default ``--out``).
 
     Example
     -------
@@ -100,8 +104,9 @@ class RunDirectory:
     True
     """
 
-    def __init__(self, path, kind="run", patterns=()):
+    def __init__(self, path, kind="run", patterns=(), option="--out"):
         self.path = os.fspath(path)
+        self.option = option
         self.kind = kind
         self.patterns = tuple(patterns)
         self.manifest_path = os.path.join(self.path, MANIFEST)
@@ -109,10 +114,11 @@ class RunDirectory:
         self.previous = []
         self.existed = False            # a manifest was there: the directory of an earlier run
         self._lock = None
+        self._created = False           # this process created the lock file (a refusal deletes it)
         self._manifest_kind = None      # what wrote the files the manifest lists ('run', 'sweep', ...)
 
     # ------------------------------------------------------------------ claiming -------------
-    def claim(self, resume=False, force=False, adopt=()):
+    def claim(self, resume=False, force=False, adopt=(), replace=False):
         """Lock the directory and check what it holds.
 
         Parameters
@@ -125,6 +131,9 @@ class RunDirectory:
         adopt : sequence of str
             Patterns of files of an older version's run (no manifest) that ``resume`` takes as
             its own.
+        replace : bool
+            Start over without ``force`` where the directory holds only this tool's files (a
+            ``bench run --vtu`` directory written again); foreign files are still refused.
 
         Returns
         -------
@@ -144,6 +153,7 @@ class RunDirectory:
             self.previous = [f for f in listed if f in present]
             self._check_kind()
             foreign = [f for f in present if f not in ours and not self._temporary(f, ours)]
+            force = force or (replace and not foreign and not resume)
             self._check(foreign, resume, force)
             if force and not resume:
                 self._delete(self.previous, ours, present)
@@ -153,6 +163,11 @@ class RunDirectory:
             self.files = [f for f in listed if f in present]
             self._write_manifest()
         except BaseException:
+            if self._created and self._lock is not None:     # a refusal leaves the directory as it was
+                try:
+                    os.unlink(os.path.join(self.path, LOCK))   # still locked: see _take_lock
+                except OSError:
+                    pass
             self.release()
             raise
         return self
@@ -164,23 +179,23 @@ class RunDirectory:
         if self.previous and other is not None and other != self.kind:
             raise RunDirectoryError(
                 f"{self.path} holds the files of a {other} ({_some(self.previous)}), not of a {self.kind}: a "
-                f"{self.kind} neither continues (--resume) nor deletes (--force) them; choose another --out directory")
+                f"{self.kind} neither continues (--resume) nor deletes (--force) them; choose another {self.option} directory")
 
     def _check(self, foreign, resume, force):
         where = self.path
         if foreign and not force and not resume:          # a resumed run keeps files added beside it
             raise RunDirectoryError(
                 f"{where} holds files that core-se3 did not write ({_some(foreign)}): choose an empty or new "
-                f"--out directory, or --force to write beside them (--force never deletes them)")
+                f"{self.option} directory, or --force to write beside them (--force never deletes them)")
         clash = [f for f in foreign if any(fnmatch.fnmatch(f, p) for p in self.patterns)]
         if clash:
             raise RunDirectoryError(
                 f"{where} holds files that core-se3 did not write under the names a {self.kind} writes "
-                f"({_some(clash)}): --force does not overwrite them; move them away or choose another --out")
+                f"({_some(clash)}): --force does not overwrite them; move them away or choose another {self.option}")
         if self.previous and not resume and not force:
             raise RunDirectoryError(
                 f"{where} holds the files of an earlier {self.kind} ({_some(self.previous)}): continue it with "
-                "--resume, start over with --force, or choose another --out directory")
+                f"--resume, start over with --force, or choose another {self.option} directory")
 
     def start_over(self):
         """Delete the files of the earlier run (a resume of a run that stopped before it saved
@@ -216,17 +231,33 @@ class RunDirectory:
 
     # ------------------------------------------------------------------ internals ------------
     def _take_lock(self):
+        """flock the lock file.  A process that refuses deletes the file it created, still holding
+        it: one that opened it before then and locks it after finds its file gone from the
+        directory (another inode at the name, or none) and tries again on the name's file."""
         import fcntl
         path = os.path.join(self.path, LOCK)
-        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError as exc:
+        for _ in range(100):
+            try:
+                fd, self._created = os.open(path, os.O_RDWR | os.O_CREAT | os.O_EXCL, 0o644), True
+            except FileExistsError:
+                try:
+                    fd, self._created = os.open(path, os.O_RDWR), False
+                except FileNotFoundError:    # deleted by a refusing run in between
+                    continue
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError as exc:
+                os.close(fd)
+                if exc.errno not in (errno.EAGAIN, errno.EACCES):
+                    raise
+                raise RunDirectoryError(f"{self.path} is in use by another live run ({_holder(path)}): wait for it "
+                                        f"to end, or choose another {self.option} directory") from None
+            if _same_file(fd, path):
+                break
             os.close(fd)
-            if exc.errno not in (errno.EAGAIN, errno.EACCES):
-                raise
-            raise RunDirectoryError(f"{self.path} is in use by another live run ({_holder(path)}): wait for it "
-                                    "to end, or choose another --out directory") from None
+        else:
+            raise RunDirectoryError(f"{path} keeps being deleted and created: another process is at it; choose "
+                                    f"another {self.option} directory")
         os.ftruncate(fd, 0)
         os.write(fd, json.dumps(dict(pid=os.getpid(), kind=self.kind, started=time.strftime(
             "%Y-%m-%d %H:%M:%S"))).encode())
@@ -246,7 +277,7 @@ class RunDirectory:
                 raise ValueError("not a core-se3 manifest")
         except (OSError, ValueError, KeyError, TypeError) as exc:
             raise RunDirectoryError(f"{self.manifest_path} is damaged ({type(exc).__name__}): it lists the files "
-                                    "of the run that wrote this directory; choose another --out") from None
+                                    f"of the run that wrote this directory; choose another {self.option}") from None
         return files
 
     def _write_manifest(self):
@@ -272,6 +303,15 @@ class RunDirectory:
                 os.unlink(os.path.join(self.path, f))
             except FileNotFoundError:
                 pass
+
+
+def _same_file(fd, path):
+    """The open file ``fd`` is the one at ``path`` now."""
+    try:
+        a, b = os.fstat(fd), os.stat(path)
+    except FileNotFoundError:
+        return False
+    return (a.st_dev, a.st_ino) == (b.st_dev, b.st_ino)
 
 
 def _some(names, k=5):

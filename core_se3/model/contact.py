@@ -52,7 +52,7 @@ from .. import lie
 from ..errors import AccuracyWarning, did_you_mean
 from .base import Load, LoadEvaluation
 from .contact_faces import face_minima, face_wrench
-from .contact_output import ContactOutputs
+from .contact_output import ContactOutputs, field_key, field_key_clash
 from .friction import CoulombFriction, wrench
 from .contact_sweep import crossing_report
 from .contact_law import (E3, MODES, ContactLaw, as_contact_law, contact_wrench, nodal_areas, normal_law, ramp,
@@ -565,6 +565,12 @@ def add_obstacle(problem, obstacle, region=None, nodes=None, name=None, side="au
     sel = None if nodes is None else problem.nodes(nodes)
     load = ContactLoad(problem, obstacle, sel, elements, side, 0.0, friction, law)
     load.check_initial(problem.mesh, problem.mesh.g0, 0.0)
-    if any(getattr(ld, "name", None) == load.name for ld in problem.loads if isinstance(ld, ContactLoad)):
+    names = [ld.name for ld in problem.loads if isinstance(ld, ContactLoad)]
+    if load.name in names:
         raise contact_error(f"there is already an obstacle named {load.name!r}: give each a name", "name")
+    same = field_key_clash(names, load.name)
+    if same is not None:
+        raise contact_error(f"obstacles {same!r} and {load.name!r} have one VTU field name, contact_gap_"
+                            f"{field_key(load.name)} (the output sums the two): name them apart in letters and "
+                            "digits", "name")
     return problem.add(load)

@@ -7,7 +7,31 @@ import numpy as np
 
 from .obstacles import contact_error
 
-__all__ = ["ContactOutputs"]
+__all__ = ["ContactOutputs", "field_key", "field_key_clash"]
+
+
+def field_key(name):
+    """An obstacle's name in its VTU fields: contact_gap_KEY, friction_traction_KEY, ...
+
+    Example
+    -------
+    >>> field_key("floor a")
+    'floor_a'
+    """
+    return "".join(ch if ch.isalnum() else "_" for ch in name)
+
+
+def field_key_clash(names, name):
+    """The one of ``names`` (obstacle names) whose VTU fields ``name``'s would overwrite -- the
+    output adds them up under one name -- or None; ``Problem.add_obstacle`` and a scenario's
+    [[obstacles]] refuse it.
+
+    Example
+    -------
+    >>> field_key_clash(["floor a", "ball"], "floor_a")
+    'floor a'
+    """
+    return next((n for n in names if n != name and field_key(n) == field_key(name)), None)
 
 
 class ContactOutputs:
@@ -79,7 +103,7 @@ class ContactOutputs:
             nq = self.nodes[self.face_q]
             np.add.at(F, nq.ravel(), (s["N"][:, :, None] * ((self.Af * pf)[:, None] * s["n"])[:, None, :]).reshape(-1, 3))
             np.add.at(P, nq.ravel(), (s["N"] * (self.Af * pf)[:, None] / self.A[self.face_q]).ravel())
-        key = "".join(ch if ch.isalnum() else "_" for ch in self.name)
+        key = field_key(self.name)
         out = {f"contact_gap_{key}": gap, "contact_force": F, "contact_pressure": P}
         if self.mu > 0:                     # the friction traction (lab) and 1 stick / 0 slip
             t, _, stick, _ = self.friction_state(g, lam, x, n, H, p, dp)

@@ -8,7 +8,8 @@
   ``units``, an angle of a polar form in rad, also in degrees in ``angles_deg``);
 * ``convergence.png``: objective and gradient norm per iteration;
 * ``target_<pose>.png``: the achieved shape with the targets and the achieved points;
-* ``vtu/<pose>/``: the VTU series of the final design's load path from the flat state.
+* ``vtu/<pose>/``: the VTU series of the final design's load path from the flat state, written as a
+  run writes its steps (each step's contact fields, stress resultants, FieldData, obstacles).
 """
 from __future__ import annotations
 
@@ -27,7 +28,8 @@ from .toml_writer import dumps
 __all__ = ["run_design", "optimised_document", "DESIGN_FILES"]
 
 # the names a design writes (a foreign file of such a name is never overwritten)
-DESIGN_FILES = ("optimised*.toml", "design.json", "convergence.png", "target_*.png", "vtu/*/step_*.vtu", "vtu/*/series.pvd")
+DESIGN_FILES = ("optimised*.toml", "design.json", "convergence.png", "target_*.png", "vtu/*/step_*.vtu", "vtu/*/series.pvd",
+                "vtu/*/obstacles.pvd")
 
 _LOAD_KEYS = {"edge_force": ("force",), "edge_moment": ("moment",), "nodal": ("force", "moment"), "pressure": ("p",),
               "body_force": ("q",), "gravity": ("g",)}
@@ -271,9 +273,8 @@ def _pose_rows(scn, pose, st):
 
 def _design(scn, rd, method, max_iter, progress, vtu, plots):
     from ..backend import launched_rank
-    from ..io import write_series
     from ..io.rundir import safe_name
-    from .runner import point_fields
+    from .sinks import write_path_vtu
     ds, out = scn.spec["design"], rd.path
     root = launched_rank() == 0          # under mpirun every rank optimises the same design, rank 0 writes
     design = scn.design()
@@ -302,17 +303,8 @@ def _design(scn, rd, method, max_iter, progress, vtu, plots):
             design.assign_pose(k, r.x)
             with design.element_check.quiet():                  # a coarse mesh: said once, by the design
                 res = scn.problem.solve(lam_end=pose.lam)      # (collective under mpirun)
-            if not root:
-                continue
-            extra = [point_fields(scn.problem, s.g, s.load_factor) for s in res.steps]
-            vdir = os.path.join("vtu", safe_name(pose.name))
-            for i in range(len(res.steps)):
-                rd.file(os.path.join(vdir, f"step_{i:04d}.vtu"))
-            rd.file(os.path.join(vdir, "series.pvd"))
-            paths = write_series(os.path.join(out, vdir), scn.mesh.X, scn.mesh.quads, scn.mesh.g0,
-                                 [s.g for s in res.steps], [s.load_factor for s in res.steps],
-                                 point_data_per_step=extra)
-            files[f"vtu_{pose.name}"] = paths[-1]
+            if root:                         # each step's own contact state, as a run writes it
+                files[f"vtu_{pose.name}"] = write_path_vtu(rd, f"vtu/{safe_name(pose.name)}", scn.problem, res.steps)
     if plots and r.history and root:
         files["convergence"] = _convergence_plot(rd.file("convergence.png"), r.history,
                                                  f"{scn.name}: {r.method}")

@@ -9,6 +9,7 @@ from __future__ import annotations
 from ..errors import CoreSE3Error
 from ..model import OBSTACLES, ContactLaw
 from ..model.contact import SIDES
+from ..model.contact_output import field_key, field_key_clash
 from .geometry import region_ref
 from .schema import MOTION, OBSTACLE
 from .validate import join, make_scale, user_key
@@ -17,11 +18,6 @@ __all__ = ["OBSTACLE_KEYS", "MOTION_KEYS", "SIDES", "obstacles_section", "add_ob
 
 OBSTACLE_KEYS = ("type",) + OBSTACLE.keys()
 MOTION_KEYS = MOTION.keys()
-
-
-def _field_key(name):
-    """An obstacle's name in its VTU fields (``model.contact_output``: contact_gap_KEY, ...)."""
-    return "".join(ch if ch.isalnum() else "_" for ch in name)
 
 
 def obstacles_section(v, doc, regions):
@@ -35,10 +31,10 @@ def obstacles_section(v, doc, regions):
         o = dict(type=typ, name=v.string(t, "name", key, default=typ))
         if o["name"] in names:
             v.fail(join(key, "name"), f"obstacle names must be unique: {o['name']!r} is used twice (give 'name')")
-        same = [n for n in names if _field_key(n) == _field_key(o["name"])]
-        if same:
-            v.fail(join(key, "name"), f"obstacles {same[0]!r} and {o['name']!r} have one VTU field name, "
-                                      f"contact_gap_{_field_key(o['name'])} (the output sums the two): name them "
+        same = field_key_clash(sorted(names), o["name"])       # the check of Problem.add_obstacle
+        if same is not None:
+            v.fail(join(key, "name"), f"obstacles {same!r} and {o['name']!r} have one VTU field name, "
+                                      f"contact_gap_{field_key(o['name'])} (the output sums the two): name them "
                                       "apart in letters and digits")
         names.add(o["name"])
         o["params"] = v.params(t, key, kind.params)

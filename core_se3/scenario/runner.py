@@ -384,11 +384,13 @@ def _stopped(run, sinks, exc):
 
 
 def _multipliers_of(run, ev):
-    """The contact loads' multipliers and friction history of step ``ev`` again (serial load
-    control): the sub-steps a failed step converged moved them on, and the step's VTU file
-    showed their contact forces (512.8 for 0.675 on a cantilever pushed onto a floor)."""
+    """The contact loads' multipliers and friction history of step ``ev`` again (load control):
+    the sub-steps a failed step converged moved them on, and the step's VTU file showed their
+    contact forces (512.8 for 0.675 on a cantilever pushed onto a floor).  Under mpirun the whole
+    problem's loads (those the VTU's point fields read on rank 0; ``parallel.localize``) get them
+    on every rank."""
     from ..solvers.newton_try import hooked_loads
-    if run.arc or run.ctx is None or run.ctx.ranks > 1:
+    if run.arc or run.ctx is None:
         return
     ms = NewtonState.multipliers_of(ev.arrays or {})
     for i, ld in enumerate(hooked_loads(run.scn.problem, "update_multipliers")):

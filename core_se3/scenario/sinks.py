@@ -39,7 +39,7 @@ from .outputs import unit_system_record
 
 __all__ = ["StepEvent", "RunState", "VtuSink", "CheckpointSink", "PvdSink", "DocumentSink", "ProgressSink",
            "StopAfter", "RunInterrupted", "PHASES", "RUN_FILES", "ProvenanceSink", "write_step_vtu",
-           "write_series_files"]
+           "write_series_files", "step_files", "series_files", "write_path_vtu"]
 
 PHASES = ("setup", "assembly", "solve", "other")
 # the names a scenario run writes (a foreign file of such a name is never overwritten)
@@ -185,8 +185,6 @@ class VtuSink(Sink):
 
 def write_step_vtu(run, k, g, lam, physical=None):
     """The VTU file of step k (module docstring of ``scenario.sinks``)."""
-    from ..io import write_obstacles, write_vtu
-    from .outputs import point_fields
     prob = run.scn.problem
     # a linear analysis' state g0 (exp(w), v): its strains are not the linear ones (a cantilever's
     # linear deflection of L/3 stretches its chords), the fields are those of its increments
@@ -195,18 +193,38 @@ def write_step_vtu(run, k, g, lam, physical=None):
         cells = run.ctx.cell_fields(g, eta)
     else:
         cells = prob.element.cell_fields(g) if eta is None else prob.element.cell_fields(g, increments=eta)
+    # rank 0 writes; a failure (a full disk) stops every rank alike
+    on_root(lambda: step_files(run.rd, "vtu", prob, k, g, lam, cells, physical))
 
-    def write():
-        values = {"load_factor": float(lam)}
-        values.update({f"{n} [{v['unit']}]" if v["unit"] else n: v["value"] for n, v in (physical or {}).items()})
-        with atomic_path(run.rd.file(f"vtu/step_{k:04d}.vtu")) as tmp:
-            write_vtu(tmp, prob.mesh.X, prob.mesh.quads, prob.mesh.g0, g, point_data=point_fields(prob, g, lam),
-                      cell_data=cells, field_data=values)
-        obstacles = obstacles_of(prob)
-        if obstacles:
-            with atomic_path(run.rd.file(f"vtu/step_{k:04d}_obstacles.vtu")) as tmp:
-                write_obstacles(tmp, obstacles, g[:, :3, 3], lam)
-    on_root(write)              # rank 0 writes; a failure (a full disk) stops every rank alike
+
+def step_files(rd, vdir, prob, k, g, lam, cells, physical=None):
+    """``vdir/step_k.vtu`` in the run directory ``rd`` (frames, the loads' point fields, the stress
+    resultants ``cells``, FieldData load_factor and the ``physical`` record's values) and
+    ``vdir/step_k_obstacles.vtu`` beside it: the one writer of a run's, a design's and ``bench run
+    --vtu``'s step files, each registered in ``rd``'s manifest and written atomically."""
+    from ..io import write_obstacles, write_vtu
+    from .outputs import point_fields
+    values = {"load_factor": float(lam)}
+    values.update({f"{n} [{v['unit']}]" if v["unit"] else n: v["value"] for n, v in (physical or {}).items()})
+    with atomic_path(rd.file(f"{vdir}/step_{k:04d}.vtu")) as tmp:
+        write_vtu(tmp, prob.mesh.X, prob.mesh.quads, prob.mesh.g0, g, point_data=point_fields(prob, g, lam),
+                  cell_data=cells, field_data=values)
+    obstacles = obstacles_of(prob)
+    if obstacles:
+        with atomic_path(rd.file(f"{vdir}/step_{k:04d}_obstacles.vtu")) as tmp:
+            write_obstacles(tmp, obstacles, g[:, :3, 3], lam)
+
+
+def write_path_vtu(rd, vdir, prob, steps):
+    """The VTU files of a solved path (``Result.steps``: a design's pose, ``bench run --vtu``) in
+    ``rd``'s folder ``vdir``, as a run writes its steps (:func:`step_files`, :func:`series_files`),
+    each step's contact multipliers set again first (its contact fields, not the last step's).
+    Returns the path of ``series.pvd``."""
+    from ..results import restore_multipliers
+    for k, s in enumerate(steps):
+        restore_multipliers(prob, s)
+        step_files(rd, vdir, prob, k, s.g, s.load_factor, prob.element.cell_fields(s.g))
+    return series_files(rd, vdir, list(range(len(steps))), [s.load_factor for s in steps])
 
 
 class CheckpointSink(Sink):
@@ -236,19 +254,27 @@ class PvdSink(Sink):
 
 
 def write_series_files(run, finished):
-    """The .pvd collections of the step files that exist; their times are the load factors, or
-    the step numbers where those do not increase (``io.vtk.pvd_times``)."""
-    from ..io.vtk import pvd_times, write_pvd
+    """The .pvd collections of the step files that exist (:func:`series_files`)."""
     vtu_dir = os.path.join(run.rd.path, "vtu")
     written = [r for r in run.records if os.path.exists(os.path.join(vtu_dir, f"step_{r['step']:04d}.vtu"))]
-    times = pvd_times([r["load_factor"] for r in written], [r["step"] for r in written])
-    entries = [(t, f"step_{r['step']:04d}.vtu") for t, r in zip(times, written)]
-    with atomic_path(run.rd.file("vtu/series.pvd")) as tmp:
+    series_files(run.rd, "vtu", [r["step"] for r in written], [r["load_factor"] for r in written])
+
+
+def series_files(rd, vdir, steps, lams):
+    """``vdir/series.pvd`` over the files of ``steps`` (and ``vdir/obstacles.pvd`` over their
+    obstacles' files where written); their times are the load factors ``lams``, or the step
+    numbers where those do not increase (``io.vtk.pvd_times``).  Returns the series' path."""
+    from ..io.vtk import pvd_times, write_pvd
+    times = pvd_times(lams, steps)
+    entries = [(t, f"step_{k:04d}.vtu") for t, k in zip(times, steps)]
+    with atomic_path(rd.file(f"{vdir}/series.pvd")) as tmp:
         write_pvd(tmp, entries)
-    obst = [(t, f[:-4] + "_obstacles.vtu") for t, f in entries if os.path.exists(os.path.join(vtu_dir, f[:-4] + "_obstacles.vtu"))]
+    obst = [(t, f[:-4] + "_obstacles.vtu") for t, f in entries
+            if os.path.exists(os.path.join(rd.path, vdir, f[:-4] + "_obstacles.vtu"))]
     if obst:                         # the obstacles' surfaces as a series of their own
-        with atomic_path(run.rd.file("vtu/obstacles.pvd")) as tmp:
+        with atomic_path(rd.file(f"{vdir}/obstacles.pvd")) as tmp:
             write_pvd(tmp, obst)
+    return os.path.join(rd.path, os.path.normpath(f"{vdir}/series.pvd"))
 
 
 class ProvenanceSink(Sink):
