@@ -75,3 +75,41 @@ def test_bad_support_input_names_the_cause():
     p = _strip()
     p.fix("x0", np.array([0, 5]))
     assert p.constraint_mask()[p.nodes("x0")][:, [0, 5]].all() and not p.constraint_mask()[:, 1:5].any()
+
+
+def test_a_node_selection_by_fractional_ids_or_by_a_mask_is_read_as_meant():
+    """select_nodes cast any array to int64: ids [2.7, 5.2] held nodes 2 and 5 silently, and a
+    boolean mask over the nodes (X[:, 0] == 1.0) was read as the ids 0 and 1 ('lists node 0 4
+    times'); a predicate returning floats selected every node where it is non-zero.  Now a mask
+    selects its True nodes (as Mesh.elements does), fractional ids and a predicate that is not
+    one boolean per node are refused naming the cause."""
+    from core_se3.errors import MeshError, SupportError
+    p = _strip()
+    x1 = p.nodes("x1").tolist()
+    assert p.nodes(np.isclose(p.mesh.X[:, 0], p.mesh.X[:, 0].max())).tolist() == x1
+    assert p.nodes(np.array(x1, float)).tolist() == x1                 # whole floats are ids
+    with pytest.raises(SupportError, match="whole numbers"):
+        p.nodes([x1[0] + 0.7])
+    with pytest.raises(SupportError, match="one entry per node"):
+        p.nodes(np.ones(3, bool))
+    for pred in (lambda X: X[:, 0] - 1.0, lambda X: X == 0.0):
+        with pytest.raises(MeshError, match="one boolean per node"):
+            p.clamp(pred)
+    assert not p.supports
+
+
+def test_a_probe_on_a_predicate_is_the_midpoint_of_the_line_not_of_the_ids():
+    """On a refined mesh the new nodes come after the old ones, so a predicate's nodes in id
+    order put the probe of the edge x = 4 (y in [-0.5, 0.5]) at the corner y = 0.5 instead of
+    the middle y = 0; the probe now orders the nodes along their line, and a set that is no
+    line (a patch) is refused instead of recording one of its nodes."""
+    from core_se3.errors import OptionError
+    m = mesh.refine(mesh.rectangle(4.0, 1.0, 4, 2))
+    p = Problem(m, Material(1e3, 0.0, 0.01))
+    p.add_probe("by_name", "x1")
+    p.add_probe("by_predicate", lambda X: np.isclose(X[:, 0], 4.0))
+    p.add_probe("two_nodes", m.edges["x1"][[0, -1]])                    # halfway between two nodes
+    for name in p.probes:
+        assert np.allclose(p.probes[name].state(m.g0)[0], [4.0, 0.0, 0.0]), name
+    with pytest.raises(OptionError, match="not a line of element edges"):
+        p.add_probe("patch", lambda X: X[:, 0] < 1.1)

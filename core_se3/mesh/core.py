@@ -226,7 +226,12 @@ class Mesh:
         """Node ids of a named node set, of the elements of a named region, or of the nodes
         whose reference position satisfies a predicate ``pred(X) -> bool mask``."""
         if callable(name_or_pred):
-            return np.nonzero(name_or_pred(self.X))[0]
+            mask = np.asarray(name_or_pred(self.X))
+            if mask.shape != (self.n_nodes,) or mask.dtype != bool:
+                raise MeshError(f"a node predicate must return one boolean per node, shape ({self.n_nodes},), got "
+                                f"{mask.dtype} of shape {mask.shape} (compare a coordinate: lambda X: "
+                                "np.isclose(X[:, 0], 1.0), not lambda X: X == 1.0 or X[:, 0] - 1.0)")
+            return np.nonzero(mask)[0]
         if name_or_pred in self.edges:
             return np.asarray(self.edges[name_or_pred])
         if name_or_pred in self.regions:

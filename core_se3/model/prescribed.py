@@ -123,7 +123,7 @@ def select_nodes(mesh, where):
     if isinstance(where, str) or callable(where):
         nodes = mesh.node_set(where)
     else:
-        nodes = np.atleast_1d(np.asarray(where, np.int64))
+        nodes = _node_ids(mesh, where)
     if len(nodes) == 0:
         raise SupportError(f"node selection {where!r} is empty")
     if nodes.min() < 0 or nodes.max() >= mesh.n_nodes:
@@ -134,6 +134,27 @@ def select_nodes(mesh, where):
         raise SupportError(f"node selection {np.asarray(where).tolist() if not callable(where) else where!r} lists "
                            f"node {int(ids[k])} {int(counts[k])} times: list every node once (a nodal load would be "
                            f"applied {int(counts[k])} times)")
+    return nodes
+
+
+def _node_ids(mesh, where):
+    """Ids of a list of node ids or of a boolean mask over the nodes; a SupportError for ids that
+    are not whole numbers (2.7 was read as node 2) or a mask of the wrong length (a mask was read
+    as the ids 0 and 1)."""
+    raw = np.atleast_1d(np.asarray(where))
+    if raw.dtype == bool:
+        if raw.shape != (mesh.n_nodes,):
+            raise SupportError(f"a boolean node selection needs one entry per node ({mesh.n_nodes}), got shape "
+                               f"{raw.shape}")
+        return np.nonzero(raw)[0]
+    try:
+        nodes = raw.astype(np.int64).ravel()
+        whole = raw.ndim == 1 and np.array_equal(nodes, raw)
+    except (TypeError, ValueError):
+        whole = False
+    if not whole:
+        raise SupportError(f"node ids must be whole numbers in a flat list, got {raw.ravel()[:5].tolist()}"
+                           f"{' ...' if raw.size > 5 else ''} (a point by its coordinates: Problem.node_at)")
     return nodes
 
 

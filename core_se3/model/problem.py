@@ -27,7 +27,7 @@ from .compiled import CompiledEvaluation
 from .contact import add_obstacle
 from .fields import MU0
 from .magnetics import MagneticLoad, Magnetisation, magnets_force, magnets_output, table_kind
-from .probes import Probe
+from .probes import Probe, along_line
 from .solving import SOLVERS, dispatch, solve_linear
 from .supports import (LabSpring, LabTiltSpring, Prescribed, RotationComponentSpring, check_conflict,
                        check_rigid_motions, apply_prescribed, fixed_dofs, prescribed_rotation, rigid_motion,
@@ -378,10 +378,11 @@ class Problem:
         return add_obstacle(self, obstacle, region, nodes, **options)
 
     def add_probe(self, name, where="x1"):
-        """Record the midpoint of an edge (or a node) at every step (names are unique)."""
+        """Record the midpoint of an edge (or a node) at every step (names are unique): the
+        selected nodes ordered along the line they form (``probes.along_line``)."""
         if name in self.probes:
             raise OptionError(f"a probe named {name!r} exists already; give this one another name")
-        self.probes[name] = Probe.edge_midpoint(name, self.nodes(where))
+        self.probes[name] = Probe.edge_midpoint(name, along_line(self.mesh, self.nodes(where), name))
 
     def output_fields(self, g, lam=1.0):
         """Extra point fields for output (name -> (n, k)) summed over the loads (magnetisation,
