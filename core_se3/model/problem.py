@@ -300,7 +300,7 @@ class Problem:
 
     def add_pressure(self, p, direction=None, follower=False, scale=None, elements=None):
         """Pressure p [force/length^2]: follower -> along the current normal per current area;
-        dead -> along the lab ``direction`` (default +z) per reference area."""
+        dead -> along the lab ``direction`` (default +z; normalised) per reference area."""
         kw = {} if direction is None else dict(direction=direction)
         self.add_load("pressure", elements, scale, p=p, follower=follower, **kw)
 
