@@ -113,3 +113,23 @@ def test_a_probe_on_a_predicate_is_the_midpoint_of_the_line_not_of_the_ids():
         assert np.allclose(p.probes[name].state(m.g0)[0], [4.0, 0.0, 0.0]), name
     with pytest.raises(OptionError, match="not a line of element edges"):
         p.add_probe("patch", lambda X: X[:, 0] < 1.1)
+
+
+def test_a_scenario_probe_on_nodes_that_are_no_line_is_refused_by_its_key(tmp_path):
+    """[[probes]] nodes = [3, 10, 17] (three nodes no element edge joins) was valid and recorded
+    node 10, the middle of the list, as 'the midpoint'; now a ScenarioError naming
+    probes[0].nodes, as an edge that is no line already was."""
+    from core_se3 import scenario
+    from core_se3.errors import ScenarioError
+    doc = {"mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 10, "ny": 1},
+           "material": {"E": 1.2e6, "nu": 0.0, "h": 0.1}, "supports": [{"type": "clamp", "edge": "x0"}],
+           "loads": [{"type": "edge_force", "edge": "x1", "force": [0.0, 0.0, 1.0]}],
+           "probes": [{"name": "odd", "nodes": [3, 10, 17]}]}
+    path = tmp_path / "probe.toml"
+    path.write_text(scenario.dumps(doc))
+    with pytest.raises(ScenarioError, match="not a line of element edges") as ei:
+        scenario.load(path)
+    assert ei.value.key == "probes[0].nodes"
+    doc["probes"] = [{"name": "line", "nodes": [10, 21]}, {"name": "two", "nodes": [0, 21]}]
+    path.write_text(scenario.dumps(doc))
+    assert sorted(scenario.load(path).problem.probes) == ["line", "two"]
