@@ -133,3 +133,25 @@ def test_a_scenario_probe_on_nodes_that_are_no_line_is_refused_by_its_key(tmp_pa
     doc["probes"] = [{"name": "line", "nodes": [10, 21]}, {"name": "two", "nodes": [0, 21]}]
     path.write_text(scenario.dumps(doc))
     assert sorted(scenario.load(path).problem.probes) == ["line", "two"]
+
+
+def test_a_free_direction_of_a_rotated_edge_must_be_parallel_to_the_rotation_axis():
+    """The free translation of a rigid motion is a body dof, which turns with the nodes.
+    rotate_edge('x1', axis y, -0.8 rad, free x) was accepted (x perpendicular to the axis), and
+    the end slid along its turned d1 = (0.70, 0, 0.72): z = -0.4167 where the motion holds z = 0,
+    the same at 1, 4 and 16 steps.  Now a SupportError; free along the axis still works (a twist
+    about x, free in x: the end stays on the axis, y and z held)."""
+    from core_se3.errors import SupportError
+    p = _strip()
+    with pytest.raises(SupportError, match="must be parallel to the rotation axis"):
+        p.rotate_edge("x1", (0.0, 1.0, 0.0), -0.8, point=(10.0, 0.0, 0.0), free=(0,))
+    with pytest.raises(SupportError, match="must be parallel to the rotation axis"):
+        p.move_edge("x1", axis=(0.0, 0.0, 1.0), angle=0.3, free=(1,))
+    p.move_edge("x1", translate=(0.0, 0.0, 1.0), free=(0,))              # no rotation: any body axis
+    q = _strip()
+    q.clamp("x0")
+    q.rotate_edge("x1", (1.0, 0.0, 0.0), 0.5, point=(0.0, 0.0, 0.0), free=(0,))
+    g = q.solve(steps=2).final.g
+    x1 = q.nodes("x1")
+    R = np.array([[1, 0, 0], [0, np.cos(0.5), -np.sin(0.5)], [0, np.sin(0.5), np.cos(0.5)]])
+    assert np.allclose(g[x1, 1:3, 3], (q.mesh.X[x1] @ R.T)[:, 1:], atol=1e-12)

@@ -207,8 +207,8 @@ class Problem:
         """Rigidly rotate the selected nodes about ``axis`` through ``point`` by angle*scale(lam).
 
         ``free``: lab translation directions (0 = x, 1 = y, 2 = z) left free; each must stay
-        aligned with a body axis of every selected node (true for rotations about a frame
-        axis, e.g. a strip end twisted about the strip axis).
+        aligned with a body axis of every selected node: a body axis parallel to the rotation
+        axis (e.g. a strip end twisted about the strip axis, free along it).
         """
         self._support(rigid_motion(self.mesh, self.nodes(where), (0.0, 0.0, 0.0), axis, angle, point, free, scale))
 
