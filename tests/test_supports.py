@@ -155,3 +155,22 @@ def test_a_free_direction_of_a_rotated_edge_must_be_parallel_to_the_rotation_axi
     x1 = q.nodes("x1")
     R = np.array([[1, 0, 0], [0, np.cos(0.5), -np.sin(0.5)], [0, np.sin(0.5), np.cos(0.5)]])
     assert np.allclose(g[x1, 1:3, 3], (q.mesh.X[x1] @ R.T)[:, 1:], atol=1e-12)
+
+
+@pytest.mark.parametrize("target, match", [
+    (lambda lam: np.eye(4), r"must return \(2, 4, 4\) frames \(one per node\), got shape \(4, 4\)"),
+    (lambda lam: np.broadcast_to(np.eye(4), (3, 4, 4)), r"got shape \(3, 4, 4\)"),
+    (lambda lam: np.full((2, 4, 4), np.nan), "is not a frame"),
+    (lambda lam: np.broadcast_to(np.diag([1.0 + lam, 1.0, 1.0, 1.0]), (2, 4, 4)), "is not a frame"),
+])
+def test_a_prescribed_target_that_is_not_one_frame_per_node_is_a_support_error(target, match):
+    """Problem.prescribe(where, target): a target of shape (4, 4) failed as a bare IndexError, one
+    for 3 nodes on an edge of 2 as a NumPy broadcast ValueError, NaN frames after 12 cut-backs
+    ('non-finite residual') and a stretched frame after 12 cut-backs ('edge turns by 3.095 rad').
+    Each is now a SupportError naming the shape or the frame, at the first load factor asked."""
+    from core_se3.errors import SupportError
+    p = Problem(mesh.rectangle(10.0, 1.0, 4, 1), Material(1.2e6, 0.0, 0.1))
+    p.clamp("x0")
+    p.prescribe("x1", target)
+    with pytest.raises(SupportError, match=match):
+        p.solve(steps=2)

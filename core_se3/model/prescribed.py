@@ -13,7 +13,7 @@ import numpy as np
 from .. import lie
 from ..errors import SupportError
 
-__all__ = ["Prescribed", "apply_prescribed", "prescribed_rotation", "fixed_dofs", "rigid_rotation", "rigid_motion",
+__all__ = ["Prescribed", "checked_target", "apply_prescribed", "prescribed_rotation", "fixed_dofs", "rigid_rotation", "rigid_motion",
            "select_nodes", "check_conflict", "support_kind", "DOF_NAMES", "held_dof_drift",
            "DRIFT_TOL"]
 
@@ -54,8 +54,41 @@ class Prescribed:
     def __init__(self, nodes, fixed, target=None, linear=None):
         self.nodes = np.asarray(nodes, np.int64)
         self.fixed = np.asarray(fixed, bool)
-        self.target = target
+        self.target = None if target is None else checked_target(target, len(self.nodes))
         self.linear = linear
+
+
+def checked_target(target, k):
+    """``target`` (lam -> frames) returning its (k, 4, 4) frames checked: the shape, finite, a
+    rotation part orthonormal with determinant +1 (to 1e-9) and the last row (0, 0, 0, 1); a
+    SupportError naming the load factor otherwise.  Unchecked, a target of shape (4, 4) failed as
+    a bare IndexError, one for another number of nodes as a NumPy broadcast error, and NaN or a
+    non-rotation (a stretched frame) as 12 cut-backs of 'non-finite residual' or 'edge turns'.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> checked_target(lambda lam: np.eye(4), 2)(0.5)
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.SupportError: a prescribed target must return (2, 4, 4) frames (one per node), got shape (4, 4) at load factor 0.5
+    """
+    def frames(lam):
+        G = np.asarray(target(lam), float)
+        if G.shape != (k, 4, 4):
+            raise SupportError(f"a prescribed target must return ({k}, 4, 4) frames (one per node), got shape "
+                               f"{G.shape} at load factor {lam:g}")
+        R = G[:, :3, :3]
+        bad = (~np.isfinite(G).all((1, 2)) | (np.abs(np.swapaxes(R, 1, 2) @ R - np.eye(3)).max((1, 2)) > 1e-9)
+               | (np.linalg.det(np.where(np.isfinite(R), R, 0.0)) < 0) | (np.abs(G[:, 3] - [0.0, 0.0, 0.0, 1.0]).max(1) > 1e-12))
+        if np.any(bad):
+            i = int(np.argmax(bad))
+            raise SupportError(f"a prescribed target at load factor {lam:g} is not a frame (a finite rigid motion: "
+                               f"rotation R with R^T R = I, det R = 1, last row 0 0 0 1) at its node {i}: "
+                               f"{np.round(G[i], 6).tolist()}")
+        return G
+    frames.unchecked = target
+    return frames
 
 
 def support_kind(s):
