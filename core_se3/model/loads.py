@@ -32,7 +32,11 @@ __all__ = ["NodalLoad", "SurfaceLoad", "edge_weights"]
 def _scale_at(load, lam):
     """The load's scale(lam) as a finite float, else a LoadError naming the load (a NaN from a
     user's programme would otherwise surface as a non-finite residual and a storm of cut-backs)."""
-    s = float(load.scale(lam))
+    try:
+        s = float(load.scale(lam))
+    except (TypeError, ValueError):
+        raise LoadError(f"load {load.name!r}: its scale(lam) must return one number, got "
+                        f"{load.scale(lam)!r} at load factor {lam:.6g}") from None
     if not np.isfinite(s):
         raise LoadError(f"load {load.name!r}: its scale(lam) is {s} at load factor {lam:.6g}; the "
                         "load-factor programme must return finite numbers")

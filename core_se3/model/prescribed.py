@@ -291,6 +291,9 @@ def rigid_motion(mesh, nodes, translate=(0.0, 0.0, 0.0), axis=None, angle=0.0, p
     point = g0[:, :3, 3].mean(0) if point is None else point
     axis, angle, point = rigid_rotation(axis, angle, point) if axis is not None else (None, 0.0, np.zeros(3))
     fixed = _free_dofs(g0, axis if angle != 0 else None, free)
+    if scale is not None and not callable(scale):
+        raise SupportError(f"a rigid motion's scale must be a function of the load factor (lam -> s; default s = "
+                           f"lam), got {scale!r}")
     scale = scale or (lambda lam: lam)
 
     def target(lam):

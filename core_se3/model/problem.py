@@ -267,6 +267,9 @@ class Problem:
         ['SurfaceLoad']
         """
         k = load_kind(kind)
+        if scale is not None and not callable(scale):
+            raise LoadError(f"load kind {kind!r}: scale must be a function of the load factor (lam -> s; default "
+                            f"s = lam, constant: lambda lam: 1.0), got {scale!r}")
         names = {p.name for p in k.params}
         for key in values:
             if key not in names:
