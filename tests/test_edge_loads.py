@@ -101,3 +101,28 @@ def test_a_patch_of_nodes_is_no_line():
     block = np.flatnonzero(m.X[:, 0] > 4.0)
     with pytest.raises(LoadError, match="not a line of element edges"):
         edge_weights(m, block)
+
+
+@pytest.mark.parametrize("scale", [2.0, "constant", [[0.0, 0.0], [1.0, 1.0]]])
+def test_a_load_or_motion_scale_that_is_no_function_is_refused_where_it_is_given(scale):
+    """Problem.add_edge_force(..., scale=2.0) (or the scenario's spellings 'constant' or a table)
+    was accepted and the solve failed with a bare "TypeError: 'float' object is not callable";
+    rotate_edge the same.  Now a LoadError / SupportError at the call naming scale."""
+    from core_se3.errors import LoadError, SupportError
+    p = Problem(mesh.rectangle(10.0, 1.0, 4, 1), Material(1.2e6, 0.0, 0.1))
+    with pytest.raises(LoadError, match="scale must be a function of the load factor"):
+        p.add_edge_force("x1", (0.0, 0.0, 1.0), scale=scale)
+    with pytest.raises(SupportError, match="scale must be a function of the load factor"):
+        p.rotate_edge("x1", (1.0, 0.0, 0.0), 0.1, scale=scale)
+    assert not p.loads and not p.supports
+
+
+def test_a_load_scale_returning_an_array_is_named():
+    """scale = lambda lam: np.array([lam, lam]) failed as 'TypeError: only size-1 arrays can be
+    converted to Python scalars' inside the solve; now a LoadError naming the load."""
+    from core_se3.errors import LoadError
+    p = Problem(mesh.rectangle(10.0, 1.0, 4, 1), Material(1.2e6, 0.0, 0.1))
+    p.clamp("x0")
+    p.add_edge_force("x1", (0.0, 0.0, 1.0), scale=lambda lam: np.array([lam, lam]))
+    with pytest.raises(LoadError, match="'edge force': its scale.lam. must return one number"):
+        p.solve(steps=2)

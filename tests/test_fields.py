@@ -91,3 +91,20 @@ def test_field_on_the_dipole_and_user_field_with_curl_are_rejected():
     u = UserField(lambda x: x @ W.T, lambda x: np.broadcast_to(W, x.shape[:-1] + (3, 3)))
     with pytest.raises(LoadError, match="curl"):
         check_field(u, X)
+
+
+def test_a_rotating_direction_from_a_zero_axis_or_start_is_refused_where_it_is_made():
+    """rotating_direction((0, 0, 0), (1, 0, 0)) returned a function giving NaN at every load
+    factor (a RuntimeWarning at construction); the error came at the first evaluation, naming
+    'field direction at load factor 0.5', not the axis.  Now a LoadError naming it at once."""
+    import warnings
+    from core_se3.errors import LoadError
+    from core_se3.model.fields import rotating_direction
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for axis, start, what in (((0, 0, 0), (1, 0, 0), "rotation axis"), ((0, 0, 1), (0, 0, 0), "start direction")):
+            with pytest.raises(LoadError, match=f"the {what} is the zero vector"):
+                rotating_direction(axis, start)
+        with pytest.raises(LoadError, match="must be finite"):
+            rotating_direction((0, 0, 1), (1, 0, 0), turns_per_unit=float("nan"))
+        assert np.allclose(rotating_direction((0, 0, 2), (3, 0, 0), 0.25)(1.0), [0, 1, 0])

@@ -176,3 +176,24 @@ def test_dependent_or_unnormalised_lab_directions_do_not_change_the_spring():
     assert np.abs(skew.P - np.diag([1.0, 1.0, 0.0])).max() < 4 * np.finfo(float).eps
     with pytest.raises(SupportError, match=r"got shape \(2, 2, 3\)"):
         _four_node_edge().add_lab_support("x1", np.ones((2, 2, 3)), 1e3)
+
+
+def test_lab_supports_on_a_mesh_with_material_regions_take_the_stiffness_around_their_nodes(tmp_path):
+    """With [material.regions] of another E (a documented feature) every `lab` or `lab_rotation`
+    support failed to load: "E differs between regions ([10000.0, 20000.0]); use
+    per_element('E')" -- a Python hint in a scenario file.  The penalty is now times the E h
+    (E h^3) of the elements around the supported nodes, and the lab pin of a two-material strip
+    matches the exact pin (fix 0, 1, 2) as on one material."""
+    doc = copy.deepcopy(STRIP)
+    doc["regions"] = {"tip": {"elements": [1]}}
+    doc["material"]["regions"] = {"tip": {"E": 2e4}}
+    root_turn = {"type": "lab_rotation", "edge": "x0", "axis": [1.0, 0.0, 0.0], "penalty": 1.0}
+    doc["supports"] = [{"type": "fix", "edge": "x0", "dofs": [0, 1, 2]}, root_turn,
+                       {"type": "fix", "edge": "x1", "dofs": [0, 1, 2]}]
+    doc["loads"] = [{"type": "edge_moment", "edge": "x1", "moment": [0.0, 0.1, 0.02]}]
+    p, g_fix, _ = _solve(tmp_path, doc, 2)
+    assert p.loads[0].k == pytest.approx(1e4 * 0.05 ** 3)                      # the root element's E h^3
+    doc["supports"][2:] = [{"type": "lab", "edge": "x1", "direction": d} for d in np.eye(3).tolist()]
+    p, g_lab, _ = _solve(tmp_path, doc, 2)
+    assert [ld.k for ld in p.loads[1:4]] == [1e6 * 2e4 * 0.05] * 3             # the tip element's E h
+    assert np.abs(g_lab - g_fix).max() < 1e-7

@@ -120,3 +120,30 @@ def test_meshio_garbage_file_is_a_mesh_error(tmp_path):
     path.write_text("not a mesh\n")
     with pytest.raises(MeshError, match="garbage.msh"):
         M.from_meshio(str(path))
+
+
+def test_an_arch_or_panel_angle_beyond_a_turn_is_refused():
+    """The generators' angles are radians: cylinder_arch(1, 180, 0.5, 400, 2) (180 meant as
+    degrees) built 1203 nodes winding 28.6 turns over each other, and cylinder_panel(theta0=-90,
+    theta1=90) likewise, with no error (annulus already refused more than 2 pi).  Now a
+    MeshError naming the angle and its value in radians; a full turn is still a slit ring."""
+    for build in (lambda: M.cylinder_arch(1.0, 180.0, 0.5, 400, 2),
+                  lambda: M.cylinder_panel(1.0, 1.0, -90.0, 90.0, 400, 2),
+                  lambda: M.annulus(0.5, 1.0, 180.0, 2, 400)):
+        with pytest.raises(MeshError, match=r"must be in \(0, 2 pi\] \[rad\], got 180 \(3.14159 if 180 is in degrees"):
+            build()
+    with pytest.raises(MeshError, match="winds the surface over itself"):
+        M.cylinder_arch(1.0, 3 * np.pi, 0.5, 16, 2)
+    ring = M.cylinder_arch(1.0, 2 * np.pi, 0.5, 16, 2)
+    assert np.allclose(ring.X[ring.node_set("x0")], ring.X[ring.node_set("x1")])
+
+
+def test_a_quad_flat_to_round_off_is_refused_at_the_mesh():
+    """annulus(0.5, 1, 2 pi, 1, 2): each of the two elements spans half a turn, its four corners
+    on the x axis (the sine of every corner 2.4e-16, from sin(pi)), and passed the mesh check
+    (corner cross products > 0 by round-off); the solve then failed with 'edge turns by 3.142
+    rad: refine the mesh or the load step'.  A corner whose sine is at round-off is degenerate."""
+    with pytest.raises(MeshError, match=r"quads \[0, 1\] are degenerate"):
+        M.annulus(0.5, 1.0, 2 * np.pi, 1, 2)
+    assert M.annulus(0.5, 1.0, 2 * np.pi, 1, 3).n_elements == 3         # a third of a turn each: fine
+    assert M.rectangle(1e6, 1e-6, 1, 1).n_elements == 1                  # an aspect ratio of 1e12: fine

@@ -75,3 +75,102 @@ def test_bad_support_input_names_the_cause():
     p = _strip()
     p.fix("x0", np.array([0, 5]))
     assert p.constraint_mask()[p.nodes("x0")][:, [0, 5]].all() and not p.constraint_mask()[:, 1:5].any()
+
+
+def test_a_node_selection_by_fractional_ids_or_by_a_mask_is_read_as_meant():
+    """select_nodes cast any array to int64: ids [2.7, 5.2] held nodes 2 and 5 silently, and a
+    boolean mask over the nodes (X[:, 0] == 1.0) was read as the ids 0 and 1 ('lists node 0 4
+    times'); a predicate returning floats selected every node where it is non-zero.  Now a mask
+    selects its True nodes (as Mesh.elements does), fractional ids and a predicate that is not
+    one boolean per node are refused naming the cause."""
+    from core_se3.errors import MeshError, SupportError
+    p = _strip()
+    x1 = p.nodes("x1").tolist()
+    assert p.nodes(np.isclose(p.mesh.X[:, 0], p.mesh.X[:, 0].max())).tolist() == x1
+    assert p.nodes(np.array(x1, float)).tolist() == x1                 # whole floats are ids
+    with pytest.raises(SupportError, match="whole numbers"):
+        p.nodes([x1[0] + 0.7])
+    with pytest.raises(SupportError, match="one entry per node"):
+        p.nodes(np.ones(3, bool))
+    for pred in (lambda X: X[:, 0] - 1.0, lambda X: X == 0.0):
+        with pytest.raises(MeshError, match="one boolean per node"):
+            p.clamp(pred)
+    assert not p.supports
+
+
+def test_a_probe_on_a_predicate_is_the_midpoint_of_the_line_not_of_the_ids():
+    """On a refined mesh the new nodes come after the old ones, so a predicate's nodes in id
+    order put the probe of the edge x = 4 (y in [-0.5, 0.5]) at the corner y = 0.5 instead of
+    the middle y = 0; the probe now orders the nodes along their line, and a set that is no
+    line (a patch) is refused instead of recording one of its nodes."""
+    from core_se3.errors import OptionError
+    m = mesh.refine(mesh.rectangle(4.0, 1.0, 4, 2))
+    p = Problem(m, Material(1e3, 0.0, 0.01))
+    p.add_probe("by_name", "x1")
+    p.add_probe("by_predicate", lambda X: np.isclose(X[:, 0], 4.0))
+    p.add_probe("two_nodes", m.edges["x1"][[0, -1]])                    # halfway between two nodes
+    for name in p.probes:
+        assert np.allclose(p.probes[name].state(m.g0)[0], [4.0, 0.0, 0.0]), name
+    with pytest.raises(OptionError, match="not a line of element edges"):
+        p.add_probe("patch", lambda X: X[:, 0] < 1.1)
+
+
+def test_a_scenario_probe_on_nodes_that_are_no_line_is_refused_by_its_key(tmp_path):
+    """[[probes]] nodes = [3, 10, 17] (three nodes no element edge joins) was valid and recorded
+    node 10, the middle of the list, as 'the midpoint'; now a ScenarioError naming
+    probes[0].nodes, as an edge that is no line already was."""
+    from core_se3 import scenario
+    from core_se3.errors import ScenarioError
+    doc = {"mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 10, "ny": 1},
+           "material": {"E": 1.2e6, "nu": 0.0, "h": 0.1}, "supports": [{"type": "clamp", "edge": "x0"}],
+           "loads": [{"type": "edge_force", "edge": "x1", "force": [0.0, 0.0, 1.0]}],
+           "probes": [{"name": "odd", "nodes": [3, 10, 17]}]}
+    path = tmp_path / "probe.toml"
+    path.write_text(scenario.dumps(doc))
+    with pytest.raises(ScenarioError, match="not a line of element edges") as ei:
+        scenario.load(path)
+    assert ei.value.key == "probes[0].nodes"
+    doc["probes"] = [{"name": "line", "nodes": [10, 21]}, {"name": "two", "nodes": [0, 21]}]
+    path.write_text(scenario.dumps(doc))
+    assert sorted(scenario.load(path).problem.probes) == ["line", "two"]
+
+
+def test_a_free_direction_of_a_rotated_edge_must_be_parallel_to_the_rotation_axis():
+    """The free translation of a rigid motion is a body dof, which turns with the nodes.
+    rotate_edge('x1', axis y, -0.8 rad, free x) was accepted (x perpendicular to the axis), and
+    the end slid along its turned d1 = (0.70, 0, 0.72): z = -0.4167 where the motion holds z = 0,
+    the same at 1, 4 and 16 steps.  Now a SupportError; free along the axis still works (a twist
+    about x, free in x: the end stays on the axis, y and z held)."""
+    from core_se3.errors import SupportError
+    p = _strip()
+    with pytest.raises(SupportError, match="must be parallel to the rotation axis"):
+        p.rotate_edge("x1", (0.0, 1.0, 0.0), -0.8, point=(10.0, 0.0, 0.0), free=(0,))
+    with pytest.raises(SupportError, match="must be parallel to the rotation axis"):
+        p.move_edge("x1", axis=(0.0, 0.0, 1.0), angle=0.3, free=(1,))
+    p.move_edge("x1", translate=(0.0, 0.0, 1.0), free=(0,))              # no rotation: any body axis
+    q = _strip()
+    q.clamp("x0")
+    q.rotate_edge("x1", (1.0, 0.0, 0.0), 0.5, point=(0.0, 0.0, 0.0), free=(0,))
+    g = q.solve(steps=2).final.g
+    x1 = q.nodes("x1")
+    R = np.array([[1, 0, 0], [0, np.cos(0.5), -np.sin(0.5)], [0, np.sin(0.5), np.cos(0.5)]])
+    assert np.allclose(g[x1, 1:3, 3], (q.mesh.X[x1] @ R.T)[:, 1:], atol=1e-12)
+
+
+@pytest.mark.parametrize("target, match", [
+    (lambda lam: np.eye(4), r"must return \(2, 4, 4\) frames \(one per node\), got shape \(4, 4\)"),
+    (lambda lam: np.broadcast_to(np.eye(4), (3, 4, 4)), r"got shape \(3, 4, 4\)"),
+    (lambda lam: np.full((2, 4, 4), np.nan), "is not a frame"),
+    (lambda lam: np.broadcast_to(np.diag([1.0 + lam, 1.0, 1.0, 1.0]), (2, 4, 4)), "is not a frame"),
+])
+def test_a_prescribed_target_that_is_not_one_frame_per_node_is_a_support_error(target, match):
+    """Problem.prescribe(where, target): a target of shape (4, 4) failed as a bare IndexError, one
+    for 3 nodes on an edge of 2 as a NumPy broadcast ValueError, NaN frames after 12 cut-backs
+    ('non-finite residual') and a stretched frame after 12 cut-backs ('edge turns by 3.095 rad').
+    Each is now a SupportError naming the shape or the frame, at the first load factor asked."""
+    from core_se3.errors import SupportError
+    p = Problem(mesh.rectangle(10.0, 1.0, 4, 1), Material(1.2e6, 0.0, 0.1))
+    p.clamp("x0")
+    p.prescribe("x1", target)
+    with pytest.raises(SupportError, match=match):
+        p.solve(steps=2)

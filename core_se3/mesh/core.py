@@ -58,6 +58,10 @@ def frames_from(X, d1, d3):
     return g
 
 
+#: the sine of a quad's corner angle at or below which the quad is degenerate (round-off)
+DEGENERATE_SINE = 1e-10
+
+
 def chain_order(segments):
     """Order the nodes of line segments [(a, b), ...] along the line they form (sorted ids if
     they do not form one line).
@@ -210,15 +214,19 @@ class Mesh:
             raise MeshError("an edge is shared by more than two quads (non-manifold mesh)")
 
     def _check_geometry(self):
-        # every quad must be convex with positive area about the mean of its nodal normals
+        # every quad must be convex with positive area about the mean of its nodal normals; a
+        # corner whose sine is round-off (an annulus of two elements round a full turn: its
+        # quads' corners on one line, sine 2.4e-16) is degenerate too
         X = self.X[self.quads]                                   # (m,4,3)
         nrm = self.g0[self.quads][:, :, :3, 2].sum(1)
+        nrm /= np.maximum(np.linalg.norm(nrm, axis=1), 1e-300)[:, None]
         for k in range(4):
             e1 = X[:, (k + 1) % 4] - X[:, k]
             e2 = X[:, (k + 3) % 4] - X[:, k]
             c = np.einsum("mi,mi->m", np.cross(e1, e2), nrm)
-            if np.any(c <= 0):
-                bad = np.nonzero(c <= 0)[0][:5]
+            flat = c <= DEGENERATE_SINE * np.linalg.norm(e1, axis=1) * np.linalg.norm(e2, axis=1)
+            if np.any(flat):
+                bad = np.nonzero(flat)[0][:5]
                 raise MeshError(f"quads {bad.tolist()} are degenerate, non-convex or listed clockwise "
                                 f"about their normal (corner {k})")
 
@@ -226,7 +234,12 @@ class Mesh:
         """Node ids of a named node set, of the elements of a named region, or of the nodes
         whose reference position satisfies a predicate ``pred(X) -> bool mask``."""
         if callable(name_or_pred):
-            return np.nonzero(name_or_pred(self.X))[0]
+            mask = np.asarray(name_or_pred(self.X))
+            if mask.shape != (self.n_nodes,) or mask.dtype != bool:
+                raise MeshError(f"a node predicate must return one boolean per node, shape ({self.n_nodes},), got "
+                                f"{mask.dtype} of shape {mask.shape} (compare a coordinate: lambda X: "
+                                "np.isclose(X[:, 0], 1.0), not lambda X: X == 1.0 or X[:, 0] - 1.0)")
+            return np.nonzero(mask)[0]
         if name_or_pred in self.edges:
             return np.asarray(self.edges[name_or_pred])
         if name_or_pred in self.regions:

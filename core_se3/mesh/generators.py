@@ -162,6 +162,16 @@ def _flat(X):
     return X, np.tile([1.0, 0, 0], (n, 1)), np.tile([0, 0, 1.0], (n, 1))
 
 
+def _one_turn(generator, what, angle):
+    """A MeshError unless 0 < angle <= 2 pi: the angles of the generators are radians, and an
+    angle of more than a turn (180 meant as degrees: 28.6 turns) wound the surface over itself
+    -- a mesh that solves, its elements overlapping in space."""
+    if not 0 < angle <= 2 * np.pi + 1e-12:
+        hint = f" ({np.radians(angle):.6g} if {angle:g} is in degrees)" if 30 <= angle <= 360 else ""
+        raise MeshError(f"{generator}: {what} must be in (0, 2 pi] [rad], got {angle:g}{hint}: a larger angle "
+                        "winds the surface over itself")
+
+
 def rectangle(L, width, nx, ny, x0=0.0, grade=None):
     """Flat strip [x0, x0+L] x [-width/2, width/2] in the x-y plane, frames = identity.
 
@@ -230,6 +240,7 @@ def cylinder_arch(R, angle, width, nx, ny, grade=None):
     """
     if not (R > 0 and angle > 0 and width > 0):
         raise MeshError("cylinder_arch needs R, angle, width > 0")
+    _one_turn("cylinder_arch", "angle", angle)
     nx, ny = _counts(nx, ny)
     return _patch(*_axes(grade, (0.0, angle), (-width / 2, width / 2), nx, ny),
                   lambda S, Y: (np.stack([R * np.sin(S), Y, R * (1 - np.cos(S))], -1),
@@ -270,6 +281,7 @@ def cylinder_panel(R, length, theta0, theta1, nt, nl, grade=None):
     """
     if not (R > 0 and length > 0 and theta1 > theta0):
         raise MeshError("cylinder_panel needs R > 0, length > 0 and theta1 > theta0")
+    _one_turn("cylinder_panel", "theta1 - theta0", theta1 - theta0)
     nt, nl = _counts(nt, nl)
     return _patch(*_axes(grade, (theta0, theta1), (0.0, length), nt, nl),
                   lambda T, S: (np.stack([R * np.sin(T), S, R * np.cos(T)], -1),
@@ -307,8 +319,9 @@ def annulus(r_in, r_out, angle, nr, nt, grade=None):
     >>> len(m.node_set("y0")), m.n_elements
     (3, 16)
     """
-    if not (0 < r_in < r_out and 0 < angle <= 2 * np.pi):
-        raise MeshError("annulus needs 0 < r_in < r_out and 0 < angle <= 2 pi")
+    if not 0 < r_in < r_out:
+        raise MeshError(f"annulus needs 0 < r_in < r_out, got {r_in}, {r_out}")
+    _one_turn("annulus", "angle", angle)
     nr, nt = _counts(nr, nt)
     return _patch(*_axes(grade, (r_in, r_out), (0.0, angle), nr, nt),
                   lambda Rr, T: (np.stack([Rr * np.cos(T), Rr * np.sin(T), 0 * T], -1),

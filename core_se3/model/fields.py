@@ -162,6 +162,12 @@ def rotating_direction(axis, start, turns_per_unit=1.0, lam0=0.0, lam1=None):
     """
     axis = finite_vector(axis, "rotation axis")
     start = finite_vector(start, "start direction")
+    for v, what in ((axis, "rotation axis"), (start, "start direction")):
+        if not np.any(v):
+            raise LoadError(f"rotating_direction: the {what} is the zero vector (a NaN field direction at every "
+                            "load factor); give a non-zero 3-vector")
+    if not (np.isfinite(turns_per_unit) and np.isfinite(lam0)):
+        raise LoadError(f"rotating_direction: turns_per_unit and lam0 must be finite, got {turns_per_unit}, {lam0}")
     a = axis / np.linalg.norm(axis)
     s = start / np.linalg.norm(start)
     angle = 2 * pi * turns_per_unit

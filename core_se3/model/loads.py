@@ -32,7 +32,11 @@ __all__ = ["NodalLoad", "SurfaceLoad", "edge_weights"]
 def _scale_at(load, lam):
     """The load's scale(lam) as a finite float, else a LoadError naming the load (a NaN from a
     user's programme would otherwise surface as a non-finite residual and a storm of cut-backs)."""
-    s = float(load.scale(lam))
+    try:
+        s = float(load.scale(lam))
+    except (TypeError, ValueError):
+        raise LoadError(f"load {load.name!r}: its scale(lam) must return one number, got "
+                        f"{load.scale(lam)!r} at load factor {lam:.6g}") from None
     if not np.isfinite(s):
         raise LoadError(f"load {load.name!r}: its scale(lam) is {s} at load factor {lam:.6g}; the "
                         "load-factor programme must return finite numbers")
@@ -327,7 +331,7 @@ def _pressure(problem, elements, scale, p, direction=(0.0, 0.0, 1.0), follower=F
     if not np.any(d):
         raise LoadError("pressure direction must be a non-zero 3-vector (the lab direction of a dead "
                         "pressure), got (0, 0, 0)")
-    return SurfaceLoad(problem.mesh, p * d, False, elements, scale, "dead pressure")
+    return SurfaceLoad(problem.mesh, p * d / np.linalg.norm(d), False, elements, scale, "dead pressure")
 
 
 def _pressure_check(values, given):
@@ -385,7 +389,7 @@ register_load(LoadKind("nodal", "nodes", (
 register_load(LoadKind("pressure", "elements", (
     Param("p", "number", doc="pressure [force/length^2]"),
     Param("direction", "vector", (0.0, 0.0, 1.0), nonzero=True,
-          doc="lab direction of a dead pressure (per reference area)"),
+          doc="lab direction of a dead pressure (per reference area; its length does not matter)"),
     Param("follower", "bool", False, doc="along the current normal, per current area")),
     _pressure, _pressure_check, doc="dead: p along the lab direction per unit reference area; follower: along the "
                                   "current normal d3 per unit current area"))

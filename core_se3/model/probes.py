@@ -6,8 +6,39 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import lie
+from ..errors import OptionError
+from ..mesh.core import chain_order
 
-__all__ = ["Probe"]
+__all__ = ["Probe", "along_line"]
+
+
+def along_line(mesh, nodes, name="probe"):
+    """The node set ordered along the line of element edges it forms (as given if consecutive
+    nodes are joined already); an OptionError naming the probe if three or more nodes form no
+    line (a patch, scattered points: no midpoint to record).  Before, a predicate's nodes were
+    taken in id order: on a refined or Gmsh mesh the "midpoint" of an edge was a corner.
+
+    Example
+    -------
+    >>> from core_se3 import mesh
+    >>> m = mesh.refine(mesh.rectangle(4.0, 1.0, 4, 2))
+    >>> along_line(m, [4, 9, 14, 23, 32]).tolist()            # id order is not the line's
+    [4, 23, 9, 32, 14]
+    """
+    nodes = np.asarray(nodes, np.int64)
+    if len(nodes) < 3:
+        return nodes
+    key = {tuple(e) for e in np.sort(mesh.edge_nodes, 1).tolist()}
+    if all(tuple(sorted(p)) in key for p in zip(nodes[:-1].tolist(), nodes[1:].tolist())):
+        return nodes
+    inset = np.zeros(mesh.n_nodes, bool)
+    inset[nodes] = True
+    segs = mesh.edge_nodes[inset[mesh.edge_nodes].all(1)]
+    order = chain_order([tuple(e) for e in segs.tolist()]) if len(segs) else np.array([], np.int64)
+    if len(segs) in (len(nodes) - 1, len(nodes)) and sorted(order.tolist()) == sorted(nodes.tolist()):
+        return order
+    raise OptionError(f"probe {name!r}: its {len(nodes)} nodes are not a line of element edges, so they have no "
+                      "midpoint to record; select a line (an edge's nodes), one node, or two nodes")
 
 
 @dataclass

@@ -27,7 +27,7 @@ from .compiled import CompiledEvaluation
 from .contact import add_obstacle
 from .fields import MU0
 from .magnetics import MagneticLoad, Magnetisation, magnets_force, magnets_output, table_kind
-from .probes import Probe
+from .probes import Probe, along_line
 from .solving import SOLVERS, dispatch, solve_linear
 from .supports import (LabSpring, LabTiltSpring, Prescribed, RotationComponentSpring, check_conflict,
                        check_rigid_motions, apply_prescribed, fixed_dofs, prescribed_rotation, rigid_motion,
@@ -207,8 +207,8 @@ class Problem:
         """Rigidly rotate the selected nodes about ``axis`` through ``point`` by angle*scale(lam).
 
         ``free``: lab translation directions (0 = x, 1 = y, 2 = z) left free; each must stay
-        aligned with a body axis of every selected node (true for rotations about a frame
-        axis, e.g. a strip end twisted about the strip axis).
+        aligned with a body axis of every selected node: a body axis parallel to the rotation
+        axis (e.g. a strip end twisted about the strip axis, free along it).
         """
         self._support(rigid_motion(self.mesh, self.nodes(where), (0.0, 0.0, 0.0), axis, angle, point, free, scale))
 
@@ -267,6 +267,9 @@ class Problem:
         ['SurfaceLoad']
         """
         k = load_kind(kind)
+        if scale is not None and not callable(scale):
+            raise LoadError(f"load kind {kind!r}: scale must be a function of the load factor (lam -> s; default "
+                            f"s = lam, constant: lambda lam: 1.0), got {scale!r}")
         names = {p.name for p in k.params}
         for key in values:
             if key not in names:
@@ -300,7 +303,7 @@ class Problem:
 
     def add_pressure(self, p, direction=None, follower=False, scale=None, elements=None):
         """Pressure p [force/length^2]: follower -> along the current normal per current area;
-        dead -> along the lab ``direction`` (default +z) per reference area."""
+        dead -> along the lab ``direction`` (default +z; normalised) per reference area."""
         kw = {} if direction is None else dict(direction=direction)
         self.add_load("pressure", elements, scale, p=p, follower=follower, **kw)
 
@@ -378,10 +381,11 @@ class Problem:
         return add_obstacle(self, obstacle, region, nodes, **options)
 
     def add_probe(self, name, where="x1"):
-        """Record the midpoint of an edge (or a node) at every step (names are unique)."""
+        """Record the midpoint of an edge (or a node) at every step (names are unique): the
+        selected nodes ordered along the line they form (``probes.along_line``)."""
         if name in self.probes:
             raise OptionError(f"a probe named {name!r} exists already; give this one another name")
-        self.probes[name] = Probe.edge_midpoint(name, self.nodes(where))
+        self.probes[name] = Probe.edge_midpoint(name, along_line(self.mesh, self.nodes(where), name))
 
     def output_fields(self, g, lam=1.0):
         """Extra point fields for output (name -> (n, k)) summed over the loads (magnetisation,

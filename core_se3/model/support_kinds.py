@@ -19,7 +19,7 @@ import numpy as np
 
 from ..registry import Kind, Param, Registry
 
-__all__ = ["SupportKind", "SUPPORTS", "register_support", "support_kind", "AXES"]
+__all__ = ["SupportKind", "SUPPORTS", "register_support", "support_kind", "AXES", "support_stiffness"]
 
 AXES = {"x": 0, "y": 1, "z": 2}
 
@@ -150,14 +150,33 @@ def _unit(v):
     return v / np.linalg.norm(v)
 
 
+def support_stiffness(problem, nodes, power):
+    """E h^power of the material at the supported nodes: the largest over the elements around
+    them (with [material.regions] of different E or h the law has no single E: a lab support
+    failed with 'E differs between regions; use per_element('E')').
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, RegionMaterial, mesh
+    >>> law = RegionMaterial.from_regions(2, Material(1e3, 0.0, 0.1), {(1,): Material(2e3, 0.0, 0.1)})
+    >>> p = Problem(mesh.rectangle(2.0, 1.0, 2, 1), law)
+    >>> support_stiffness(p, p.nodes("x0"), 1), support_stiffness(p, p.nodes("x1"), 1)
+    (100.0, 200.0)
+    """
+    per = getattr(problem.material, "per_element", None)
+    if per is None:
+        return float(problem.material.E * problem.material.h ** power)
+    around = np.isin(problem.mesh.quads, nodes).any(1)
+    E, h = np.asarray(per("E"), float)[around], np.asarray(per("h"), float)[around]
+    return float(np.max(E * h ** power))
+
+
 def _lab(problem, nodes, scale, direction, penalty):
-    m = problem.material
-    problem.add_lab_support(nodes, [_unit(direction)], penalty * m.E * m.h)
+    problem.add_lab_support(nodes, [_unit(direction)], penalty * support_stiffness(problem, nodes, 1))
 
 
 def _lab_rotation(problem, nodes, scale, axis, penalty):
-    m = problem.material
-    problem.add_rotation_component_support(nodes, _unit(axis), penalty * m.E * m.h ** 3)
+    problem.add_rotation_component_support(nodes, _unit(axis), penalty * support_stiffness(problem, nodes, 3))
 
 
 register_support(SupportKind(

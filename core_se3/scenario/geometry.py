@@ -12,6 +12,7 @@ from .. import mesh as M
 from ..errors import CoreSE3Error, MeshWarning, did_you_mean
 from ..io.files import check_input_file, without_contents
 from ..mesh.generator_kinds import GENERATORS
+from ..model.probes import along_line
 from ..registry import Param, Section
 from .schema import EDGE, PROBE, REGION
 from .validate import Bounds, join, show, tname
@@ -362,5 +363,9 @@ def probes_section(v, doc, mesh):
         if "edge" in sel and not is_line(mesh, mesh.edges[sel["edge"]]):
             v.fail(join(key, "edge"), f"node set {sel['edge']!r} is not a line of element edges, so it has no "
                                       "midpoint to record: select a line (or one node, nodes = [ID])")
+        try:
+            along_line(mesh, selection(mesh, sel), name)
+        except CoreSE3Error as exc:
+            v.fail(join(key, next(k for k in ("edge", "nodes", "region") if k in sel)), str(exc))
         out.append(dict(name=name, **sel))
     return out
