@@ -309,7 +309,8 @@ def tangent_predictor(problem, g, lam, lam_try, solver, mip, caps=()):
     >>> from core_se3.solvers import make_solver
     >>> p = Problem(mesh.rectangle(10.0, 1.0, 8, 1), Material(1.2e6, 0.0, 0.1))
     >>> g1 = p.mesh.g0[p.mesh.node_set("x1")].copy()
-    >>> p.clamp("x0"); p.prescribe("x1", lambda lam: g1 + lam * np.pad([[0, 0, 0, 0.1]], ((2, 0), (0, 0)))[None, 2:])
+    >>> lift = np.zeros((4, 4)); lift[2, 3] = 0.1             # the translation's z component
+    >>> p.clamp("x0"); p.prescribe("x1", lambda lam: g1 + lam * lift)
     >>> g, _ = tangent_predictor(p, p.mesh.g0, 0.0, 1.0, make_solver("auto"), False)
     >>> bool(0.0 < g[4, 2, 3] < 0.1)                   # the mid-span node moved up
     True
