@@ -197,3 +197,47 @@ def test_lab_supports_on_a_mesh_with_material_regions_take_the_stiffness_around_
     p, g_lab, _ = _solve(tmp_path, doc, 2)
     assert [ld.k for ld in p.loads[1:4]] == [1e6 * 2e4 * 0.05] * 3             # the tip element's E h
     assert np.abs(g_lab - g_fix).max() < 1e-7
+
+
+def _propped_cantilever():
+    """A clamp at x0 and a lab roller (a penalty spring on z) at x1 under an edge force 4 on z
+    at x1: the roller carries nearly all of it."""
+    from core_se3 import Material, Problem, mesh
+    p = Problem(mesh.rectangle(1.0, 0.2, 8, 2), Material(1e4, 0.3, 0.02))
+    p.clamp("x0")
+    p.add_lab_support("x1", (0, 0, 1), 1e6)
+    p.add_edge_force("x1", (0, 0, 4.0))
+    return p
+
+
+@pytest.mark.parametrize("linear", [False, True])
+def test_a_penalty_roller_reports_its_force_as_a_support_reaction(linear):
+    """The reactions are what the supports exert, the clamp's and the roller spring's: before,
+    the spring's force counted with the applied loads, and reaction_force was the clamp's alone,
+    -4.8e-9 on z (applied 4.8e-9) under the edge force 4, in both load stepping and linear
+    analysis.  Now reaction = -applied edge force to round-off (1e-10 of 4), and the moment
+    about the origin too (the force acts at x = 1)."""
+    p = _propped_cantilever()
+    st = (p.solve_linear() if linear else p.solve(steps=2)).steps[-1]
+    assert np.abs(st.applied_force - [0, 0, 4.0]).max() < 1e-10 * 4
+    assert np.abs(st.reaction_force + [0, 0, 4.0]).max() < 1e-10 * 4
+    assert np.abs(st.applied_moment - [0, -4.0, 0]).max() < 1e-10 * 4
+    assert np.abs(st.reaction_moment + st.applied_moment).max() < 1e-10 * 4
+    assert st.balance_error < 1e-10
+
+
+def test_a_scenario_lab_support_reaction_balances_the_edge_moment(tmp_path):
+    """The STRIP scenario (a body-frame fix at x0, a lab roller on z at x1, a lab_rotation spring
+    at x0) under an edge moment at x1 alone: the reactions' force is zero (the fix's and the
+    roller's z forces form a couple) and their moment is minus the applied edge moment (0.1, 0,
+    0.2), a dead lab moment.  Before, the springs' forces counted as applied: applied_force was
+    (0, 0, -0.00684) (the roller's) where no force is applied, and applied_moment (0.00022, 0,
+    0.19999): the lab_rotation spring's couple had absorbed the x moment 0.1 of the load."""
+    path = tmp_path / "strip.toml"
+    path.write_text(scenario.dumps(STRIP))
+    st = scenario.load(path).problem.solve(steps=1).final
+    M = np.array(STRIP["loads"][0]["moment"])
+    assert np.abs(st.applied_force).max() < 1e-12
+    assert np.abs(st.reaction_force).max() < 1e-10 * np.abs(M).max()
+    assert np.abs(st.applied_moment - M).max() < 1e-12 * np.abs(M).max()
+    assert np.abs(st.reaction_moment + st.applied_moment).max() < 1e-10 and st.balance_error < 1e-10

@@ -119,8 +119,10 @@ class Load(abc.ABC):
     Add an instance to a problem with ``Problem.add(load)``; register a kind
     (:func:`register_load`) to make it available by name and in scenario files.
 
-    Loads that are constraint forces (``constraint_force = True``: contact) are reported apart
-    from the applied loads, per load name (``StepResult.contact``), with the scalars of
+    Loads that are supports (``support_force = True``: the penalty springs of
+    ``model.supports``) are reported with the support reactions (``StepResult.reaction_force``),
+    not with the applied loads.  Loads that are constraint forces (``constraint_force = True``:
+    contact) are reported apart from the applied loads, per load name (``StepResult.contact``), with the scalars of
     :meth:`report`.  Solver hooks, optional (load-stepped Newton calls a hook only on the loads
     whose class overrides it, see :func:`overrides`; without them its path is unchanged):
     :meth:`limit_increment` caps a Newton increment; :meth:`start_error` refuses the start of a
@@ -149,6 +151,7 @@ class Load(abc.ABC):
     kind: ClassVar[str] = ""
     scales_with_load_factor: ClassVar[bool] = True
     constraint_force: ClassVar[bool] = False
+    support_force: ClassVar[bool] = False
     translation_invariant: bool = False
     approximate_tangent: bool = False
     name: str = "load"

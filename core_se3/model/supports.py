@@ -138,8 +138,10 @@ def lab_direction_sets(dirs, k):
 
 
 class _Spring(Load):
-    """A penalty support written as a load: it does not scale with the load factor."""
+    """A penalty support written as a load: it does not scale with the load factor, and its
+    forces are support reactions (``support_force``), not applied loads, in the results."""
     scales_with_load_factor = False
+    support_force = True
 
     def _scatter(self, n, fb, blk, tangent):
         f = np.zeros((n, 6))

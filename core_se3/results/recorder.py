@@ -142,6 +142,29 @@ class StepRecorder:
             states[name] = ProbeState(x - x0, R @ Rref.T, self.unwrapped[name].copy())
         return states
 
+    def support_forces(self, g, lam):
+        """The generalised nodal forces (n, 6) of the supports' penalty springs (the problem's
+        loads with ``support_force``) at the frames g: the support reactions that the springs
+        exert (zero without springs).
+
+        Example
+        -------
+        A lab spring k = 100 on z at the tip nodes, the tip lifted by 0.01: -1 on z at each.
+
+        >>> import numpy as np
+        >>> from core_se3 import Problem, Material, mesh
+        >>> p = Problem(mesh.rectangle(1.0, 1.0, 1, 1), Material(1e3, 0.0, 0.01))
+        >>> _ = p.add_lab_support("x1", (0, 0, 1), 100.0)
+        >>> g = p.mesh.g0.copy(); g[p.nodes("x1"), 2, 3] = 0.01
+        >>> StepRecorder(p).support_forces(g, 1.0)[:, 2].round(12).tolist()
+        [0.0, -1.0, 0.0, -1.0]
+        """
+        f = np.zeros((len(g), 6))
+        for ld in self.problem.loads:
+            if getattr(ld, "support_force", False):
+                f += ld.evaluate(g, lam, tangent=False).f
+        return f
+
     def step(self, lam, g, iterations, history, forces, stability=None, turn=None, local=None):
         """The StepResult of a converged state: ``forces`` = (r_int, f_ext), the internal and
         external generalised nodal forces (n, 6) at g, or (r_int, f_ext, frames): the frames
@@ -150,26 +173,35 @@ class StepRecorder:
         Newton try that reached g, as for :meth:`probes`; ``local``: (the frames relative to
         an origin, that origin) of the same state, which the probes read, see :meth:`probes`.
 
-        The loads that are constraint forces (``Load.constraint_force``: contact) are split off
-        the applied loads: ``contact`` holds each one's lab force and moment (about the origin)
-        with its ``report`` scalars, and the balance sums applied, reactions and contact."""
-        r_int, f_ext, at = forces if len(forces) == 3 else (*forces, g)
+        The supports' penalty springs (``Load.support_force``) are support reactions: their
+        forces, part of f_ext, count with the reactions, not the applied loads (a fourth entry of
+        ``forces``, (n, 6) in the same frames, gives them: linear analysis, whose springs' forces
+        are those of the linear equations; default: evaluated at g).  The loads that are
+        constraint forces (``Load.constraint_force``: contact) are split off the applied loads:
+        ``contact`` holds each one's lab force and moment (about the origin) with its ``report``
+        scalars, and the balance sums applied, reactions and contact.  The balance's scales are
+        the largest sums of nodal magnitudes of the reactions (with the springs or without) and
+        of the loads (f_ext, or the applied loads alone)."""
+        r_int, f_ext, at, f_sup = (*forces, g, None)[:4] if len(forces) == 2 else (*forces, None)[:4]
         start, increments = turn if turn else (None, None)
         probes = self.probes(g, start, increments) if local is None else self.probes(local[0], start, increments,
                                                                                    local[1])
         reac = (r_int - f_ext) * self.fixed
-        RF, RM, sF, sM = lab_totals(at, reac, magnitudes=True)
-        AF, AM, aF, aM = lab_totals(at, f_ext, magnitudes=True)
+        f_sup = self.support_forces(g, lam) if f_sup is None else f_sup
+        f_app = np.array(f_ext, float) - f_sup
+        RF, RM, sF, sM = lab_totals(at, reac + f_sup, magnitudes=True)
+        # the scales: the largest nodal magnitudes of either split (a spring's force and the load
+        # on the same node cancel in f_ext, the Dirichlet reactions alone may be ~0)
+        mags = [lab_totals(at, f, magnitudes=True)[2:] for f in (reac, f_ext, f_app)]
+        sF, sM = max(sF, mags[0][0]), max(sM, mags[0][1])
+        aF, aM = max(m[0] for m in mags[1:]), max(m[1] for m in mags[1:])
         contact = {}
-        cons = [ld for ld in self.problem.loads if getattr(ld, "constraint_force", False)]
-        if cons:
-            f_app = np.array(f_ext, float)
-            for ld in cons:
-                fc = ld.evaluate(g, lam, tangent=False).f
-                f_app -= fc
-                CF, CM = lab_totals(g, fc)
-                contact[ld.name] = dict(force=CF, moment=CM, multipliers=ld.multipliers(), **ld.report(g, lam))
-            AF, AM = lab_totals(at, f_app)
+        for ld in (ld for ld in self.problem.loads if getattr(ld, "constraint_force", False)):
+            fc = ld.evaluate(g, lam, tangent=False).f
+            f_app -= fc
+            CF, CM = lab_totals(g, fc)
+            contact[ld.name] = dict(force=CF, moment=CM, multipliers=ld.multipliers(), **ld.report(g, lam))
+        AF, AM = lab_totals(at, f_app)
         ell = self.ell
         return StepResult(lam, g.copy(), iterations, list(history), RF, RM, AF, AM, probes,
                           scale=(max(sF, aF, max(sM, aM) / ell), max(sM, aM, max(sF, aF) * ell)),

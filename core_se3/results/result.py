@@ -107,9 +107,12 @@ class StepResult:
         this floor exceeds it: the state is converged to round-off (see
         :func:`core_se3.results.format_residual`).
     reaction_force, reaction_moment : (3,) ndarray
-        Total lab reaction of the supports [force], its moment about the origin [force x length].
+        Total lab reaction of the supports [force], its moment about the origin [force x length]:
+        of the held dofs and of the penalty-spring supports (``Load.support_force``: lab,
+        tilt and rotation-component springs) alike.
     applied_force, applied_moment : (3,) ndarray
-        The same of the applied loads; at equilibrium they cancel the reactions
+        The same of the applied loads (the supports' springs not among them); at equilibrium
+        they cancel the reactions
         (``balance_error``, relative to ``scale``, the sums of the nodal magnitudes).
     probes : dict
         name -> :class:`ProbeState` (u (3,) [length], rotation (3, 3), rotation_vector (3,) [rad]

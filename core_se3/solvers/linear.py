@@ -28,8 +28,8 @@ increments at lam_end / 2 are not half those at lam_end (``NONLINEAR_TARGET``).
 The state reported is g_i = g0_i (exp_so3(w_i), v_i) (the rotation and the translation updated
 separately, not by the SE(3) exponential): its probes and displacements are then exactly the
 linear ones, u = R0 v, the rotation vector R0 w.  Reactions are those of the linear internal
-forces K0 eta (the forces in the reference frames, the penalty springs' K_s eta counted with
-the applied loads, as a load-stepping step counts them); the step's force and moment totals are
+forces K0 eta (the forces in the reference frames) and of the supports' penalty springs, -K_s eta
+(as a load-stepping step counts them: ``StepRecorder.step``), the applied loads f_ext alone; the step's force and moment totals are
 taken in the reference frames and positions, where the linear equations balance.  The result
 has the reference state and this one step, like a one-step solve.
 
@@ -145,6 +145,19 @@ def reference_stiffness(problem, assembler):
     K = problem.evaluate(g0, 0.0, assembler=assembler, loads=springs if geometric else None).K.tocsr()
     _, Kn_s, Ke_s = problem.external(g0, 0.0, tangent=True, loads=springs)
     return K, assembler.matrix(Ke_s, None, Kn_s)
+
+
+def _support_forces(problem, assembler, lam, eta):
+    """(n, 6) linear forces f_s(g0, lam) - K_s eta of the supports' penalty springs (the loads with
+    ``support_force``; K_s their stiffness at g0 on the dofs of ``assembler``): the support
+    reactions they exert in the linear equations, which the step reports with the reactions."""
+    sup = [ld for ld in problem.loads if getattr(ld, "support_force", False)]
+    n = problem.mesh.n_nodes
+    if not sup:
+        return np.zeros((n, 6))
+    f = problem.external(problem.mesh.g0, lam, tangent=False, loads=sup)[0]
+    _, Kn, Ke = problem.external(problem.mesh.g0, 0.0, tangent=True, loads=sup)
+    return f - (assembler.matrix(Ke, None, Kn) @ eta).reshape(n, 6)
 
 
 def _prescribed_increments(problem, lam):
@@ -269,10 +282,11 @@ def linear_solve(problem, lam_end=1.0, steps=None, linear_solver=None, **kw):
     t = time.perf_counter()
     r_lin = ((K - K_ext) @ eta).reshape(n, 6)
     f_lin = (f - K_ext @ eta).reshape(n, 6)
+    f_sup = _support_forces(problem, every, lam_end, eta)
     result.steps.append(rec.step(0.0, g0, 0, [], (np.zeros((n, 6)), problem.external(g0, 0.0, tangent=False)[0])))
     # the forces act in the reference frames and balance there (the linear equations): the
     # step's totals are taken in g0 (moments with the reference positions), its probes at g
-    result.steps.append(rec.step(lam_end, linear_state(g0, eta), 1, [], (r_lin, f_lin, g0)))
+    result.steps.append(rec.step(lam_end, linear_state(g0, eta), 1, [], (r_lin, f_lin, g0, f_sup)))
     # the strain energy of the linear solution, 1/2 eta^T K0 eta (with the supports' penalty springs)
     energy = 0.5 * float(eta @ (K @ eta))
     result.log.append(dict(lam=lam_end, converged=True, iterations=1, reason="linear", energy=energy,
