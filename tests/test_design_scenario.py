@@ -293,3 +293,16 @@ def test_a_designs_vtu_has_each_steps_contact_forces_and_a_runs_fields(tmp_path)
         assert "M1" in v.cell_data and read_field_data(str(vdir / f"step_{k:04d}.vtu"))["load_factor"] == \
             pytest.approx(s.load_factor, abs=1e-12)
     assert (vdir / "obstacles.pvd").exists() and (vdir / "step_0004_obstacles.vtu").exists()
+
+
+def test_a_design_error_names_the_region_as_the_scenario_does(tmp_path):
+    """B^r not uniform over the design region 'root' (0.143 on x < 4.3, 0.1 beyond): the error
+    said 'region 0' (its index in the variable's list), a name the scenario never uses."""
+    two = BASE.replace("[[magnets]]\nBr = [0.143, 0.0, 0.0]",
+                       '[regions.a]\nbox = { x = [0.0, 4.3] }\n[regions.b]\nbox = { x = [4.3, 17.2] }\n'
+                       '[[magnets]]\nBr = [0.143, 0.0, 0.0]\nregion = "a"\n[[magnets]]\nBr = [0.1, 0.0, 0.0]\nregion = "b"')
+    assert two != BASE
+    path = tmp_path / "two.toml"
+    path.write_text(two)
+    with pytest.raises(ScenarioError, match=r"B\^r varies over region 'root' .* on region 'root''s own nodes"):
+        scenario.load(path).design()
