@@ -293,3 +293,37 @@ def test_a_designs_vtu_has_each_steps_contact_forces_and_a_runs_fields(tmp_path)
         assert "M1" in v.cell_data and read_field_data(str(vdir / f"step_{k:04d}.vtu"))["load_factor"] == \
             pytest.approx(s.load_factor, abs=1e-12)
     assert (vdir / "obstacles.pvd").exists() and (vdir / "step_0004_obstacles.vtu").exists()
+
+
+def test_a_design_error_names_the_region_as_the_scenario_does(tmp_path):
+    """B^r not uniform over the design region 'root' (0.143 on x < 4.3, 0.1 beyond): the error
+    said 'region 0' (its index in the variable's list), a name the scenario never uses."""
+    two = BASE.replace("[[magnets]]\nBr = [0.143, 0.0, 0.0]",
+                       '[regions.a]\nbox = { x = [0.0, 4.3] }\n[regions.b]\nbox = { x = [4.3, 17.2] }\n'
+                       '[[magnets]]\nBr = [0.143, 0.0, 0.0]\nregion = "a"\n[[magnets]]\nBr = [0.1, 0.0, 0.0]\nregion = "b"')
+    assert two != BASE
+    path = tmp_path / "two.toml"
+    path.write_text(two)
+    with pytest.raises(ScenarioError, match=r"B\^r varies over region 'root' .* on region 'root''s own nodes"):
+        scenario.load(path).design()
+
+
+def test_a_designs_vtu_field_data_holds_the_designed_loads(tmp_path):
+    """A design's VTU FieldData held only load_factor, not the physical record a run writes beside
+    it (a run of the scenario before the design would show the coil's 0.002 T).  Now each step's
+    record at the design's values: the optimised scenario's record, read back from its file."""
+    from core_se3.io.vtk import read_field_data
+    from core_se3.scenario.outputs import physical_record
+    path = tmp_path / "strip.toml"
+    path.write_text(BASE)
+    out = tmp_path / "out"
+    assert main(["design", str(path), "--out", str(out), "-q"]) == 0
+    opt = scenario.load(out / "optimised.toml")
+    steps = sorted((out / "vtu" / "design").glob("step_*.vtu"))
+    assert len(steps) == 5
+    for f in steps:
+        data = read_field_data(str(f))
+        want = physical_record(opt, data["load_factor"])
+        assert {k.split(" [")[0] for k in data} - {"load_factor"} == set(want)
+        assert data["fields.coil.B [T]"] == pytest.approx(want["fields.coil.B"]["value"], rel=1e-12, abs=1e-15)
+    assert abs(data["fields.coil.B [T]"] - 0.002) > 5e-5     # the designed coil (1.925e-3 T), not the 0.002 T before

@@ -620,3 +620,32 @@ def test_a_run_on_a_sub_communicator(tmp_path):
         got = json.loads(open(f"{out}.{rank}").read())
         assert got["self"][1] == 1 and got["self"][0] < 1e-10, got
         assert got["halves"][1] == 2 and got["halves"][0] < 1e-10, got
+
+
+def test_the_final_state_warnings_are_printed_once_under_mpirun(monkeypatch):
+    """``mpirun -n 2`` printed Problem.solve's SupportWarning (a held dof that drifted) and the
+    dipole MeshWarning once per rank (the same final state on every rank).  Rank 0 prints them now;
+    the others warn unprinted, so that ``-W error`` stops every rank, not rank 0 alone (a hang)."""
+    import warnings
+    from core_se3.errors import SupportWarning
+    from core_se3.model.solving import check_held_dofs
+    p = Problem(mesh.rectangle(1.0, 0.5, 2, 1), Material(1e4, 0.3, 0.05))
+    p.fix("x0", (0, 1, 2, 4))                       # the root's rotation about d2 held by fix: it drifts
+    p.add_lab_support("x1", [[0.0, 0.0, 1.0]], 1e6)
+    p.add_edge_moment("x1", (0.1, 0.0, 0.2))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = p.solve(steps=1)
+    monkeypatch.setenv("OMPI_COMM_WORLD_SIZE", "2")
+    shown = {}
+    for rank in ("0", "1"):
+        monkeypatch.setenv("OMPI_COMM_WORLD_RANK", rank)
+        with warnings.catch_warnings():
+            warnings.simplefilter("always")
+            warnings.showwarning = lambda message, *args, **kw: shown.setdefault(rank, []).append(str(message))
+            check_held_dofs(p, res)
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", SupportWarning)
+            with pytest.raises(SupportWarning, match="drifted by"):
+                check_held_dofs(p, res)
+    assert len(shown["0"]) == 1 and "drifted by" in shown["0"][0] and "1" not in shown

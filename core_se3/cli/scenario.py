@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 
 from ..backend import launched_rank
-from ..errors import CoreSE3Error
+from ..errors import CoreSE3Error, MeshWarning, ScenarioWarning, SupportWarning
 from ..results.document import ROUNDOFF_NOTE, format_backends, format_residual
 from .common import error_code, interrupted, output_error, whole_number
 
@@ -125,21 +125,28 @@ def _preamble(scn, quiet):
               f"(span L = {n['span']:.4g}, E = {n['E']:.4g}, h = {n['h']:.4g})")
 
 
+# the warnings a run prints as ``warning:`` lines: the scenario's and those Problem.solve gives on
+# its final state (model.solving.warn_final_state)
+_RUN_WARNINGS = (ScenarioWarning, SupportWarning, MeshWarning)
+
+
 class _warnings_once:
     """The scenario warnings of a sweep's points as ``warning: ...`` lines, each text once: every
     value is validated and then run, so each point's warnings came twice, as Python warnings
-    showing an internal line of code, and the base scenario's (printed first) again per point."""
+    showing an internal line of code, and the base scenario's (printed first) again per point.
+    ``categories``: the warnings so printed (default ScenarioWarning; a run adds those of its
+    final state, ``model.solving.warn_final_state``)."""
 
-    def __init__(self, shown=()):
+    def __init__(self, shown=(), categories=(ScenarioWarning,)):
         self.shown = {str(w) for w in shown}
+        self.categories = categories
 
     def __enter__(self):
         import warnings
-        from ..errors import ScenarioWarning
         self.old = warnings.showwarning
 
         def show(message, category, filename, lineno, file=None, line=None):
-            if not issubclass(category, ScenarioWarning):
+            if not issubclass(category, self.categories):
                 return self.old(message, category, filename, lineno, file, line)
             if str(message) not in self.shown:
                 self.shown.add(str(message))
@@ -212,10 +219,12 @@ def scenario_run(args):
     if args.check:
         return _check(args, scn)
     progress = True if args.progress else (False if args.quiet else None)
-    res, code = _guarded(lambda: scenario.run(scn, out=args.out, resume=args.resume, progress=progress,
-                                              force=args.force),
-                         "the steps converged so far are kept where they could be written",
-                         "results.json says where; the checkpoint keeps the last converged step: continue with --resume")
+    with _warnings_once(scn.warnings, _RUN_WARNINGS):
+        res, code = _guarded(lambda: scenario.run(scn, out=args.out, resume=args.resume, progress=progress,
+                                                  force=args.force),
+                             "the steps converged so far are kept where they could be written",
+                             "results.json says where; the checkpoint keeps the last converged step: continue "
+                             "with --resume")
     if code is not None:
         return code
     if not args.quiet:
@@ -360,7 +369,7 @@ def scenario_sweep(args):
         return error_code(exc)
     _preamble(scn, args.quiet)
     progress = True if args.progress else (False if args.quiet else None)
-    with _warnings_once(scn.warnings):
+    with _warnings_once(scn.warnings, _RUN_WARNINGS):
         res, code = _guarded(lambda: scenario.sweep(scn, grid, out=args.out, progress=progress, warm=not args.cold,
                                                     resume=args.resume, force=args.force),
                              "the sweep's finished rows are kept in sweep.csv where it could be written",

@@ -165,20 +165,17 @@ def _field(ctx, v):
 
 def _magnetisation(ctx, v):
     planes = v["planes"][0] if len(v["planes"]) == 1 else v["planes"]
-    mv = RegionMagnetisation(ctx.problem, [ctx.regions[r] for r in v["regions"]],
+    mv = RegionMagnetisation(ctx.problem, {r: ctx.regions[r] for r in v["regions"]},
                              Parametrisation(v["form"], planes, v.get("free"), v["Br_max"]),
                              None if v["field"] is None else ctx.fields[v["field"]], name=f"magnetisation{ctx.index}")
-    mv.region_names = list(v["regions"])
     if v["smoothness"] > 0:
         ctx.add_regulariser(Smoothness(mv, v["smoothness"]))
     return mv
 
 
 def _material(ctx, v):
-    mv = MaterialVariable(ctx.problem, [ctx.regions[r] for r in v["regions"]], v["prop"], v["lower"], v["upper"],
-                          name=f"{v['prop']}{ctx.index}")
-    mv.region_names = list(v["regions"])
-    return mv
+    return MaterialVariable(ctx.problem, {r: ctx.regions[r] for r in v["regions"]}, v["prop"], v["lower"], v["upper"],
+                            name=f"{v['prop']}{ctx.index}")
 
 
 def _load(ctx, v):

@@ -11,7 +11,8 @@ from .. import lie
 from ..errors import DesignError
 from ..fem.quadrature import shape_functions, surface_jacobian
 from ..model import MU0, MagneticLoad, Magnetisation
-from .variables import Variable, field_at, free_index, magnetic_loads, plane_axes, polar_vector, region_elements
+from .variables import (Variable, field_at, free_index, magnetic_loads, named_regions, plane_axes, polar_vector,
+                        region_elements, region_label)
 
 __all__ = ["RegionMagnetisation", "Parametrisation"]
 
@@ -96,8 +97,9 @@ class RegionMagnetisation(Variable):
     ----------
     problem : core_se3.Problem
         The problem.
-    regions : sequence
-        Region names or element-id arrays (disjoint).
+    regions : sequence or dict
+        Region names or element-id arrays (disjoint), or a dict name -> element ids (a
+        scenario's regions: messages name them; ``region_names``).
     form : Parametrisation, str or dict, optional
         The form with its planes, free components and bound (:class:`Parametrisation`; a
         form name or a dict of its fields; default 'vector', all free, unbounded).
@@ -133,6 +135,7 @@ class RegionMagnetisation(Variable):
         self.problem, self.form = problem, form
         if form not in ("vector", "polar"):
             raise DesignError(f"magnetisation {name!r}: form must be 'vector' or 'polar', got {form!r}")
+        self.region_names, regions = named_regions(regions)
         self.regions = [region_elements(problem, r, f"magnetisation {name!r}") for r in regions]
         if not self.regions:
             raise DesignError(f"magnetisation {name!r}: no regions")
@@ -170,7 +173,8 @@ class RegionMagnetisation(Variable):
         self.free = free_index(self.parts, free, f"magnetisation {name!r}")
         if form == "polar" and 1 not in self.free and np.any(self.full[:, 0] == 0):
             raise DesignError(f"magnetisation {name!r}: a polar form with its angles fixed needs a non-zero start B^r "
-                              f"in every region (its direction): region {int(np.argmin(self.full[:, 0]))} has none")
+                              f"in every region (its direction): "
+                              f"{region_label(self.region_names, int(np.argmin(self.full[:, 0])))} has none")
         nf = len(self.free)
         self.norm_bounds = []
         if Br_max is not None and form == "vector":
@@ -206,9 +210,10 @@ class RegionMagnetisation(Variable):
         optimised scenario describe, another magnetisation than the problem's."""
         if self.start_misfit > rtol:
             j = int(np.argmax(self.region_misfit))
-            raise DesignError(f"magnetisation {name!r}: the magnets' B^r varies over region {j} (one B^r per region "
+            where = region_label(self.region_names, j)
+            raise DesignError(f"magnetisation {name!r}: the magnets' B^r varies over {where} (one B^r per region "
                               f"fits their nodal moments to a relative misfit of {self.start_misfit:.3g} > {rtol:g}, "
-                              f"{self.region_misfit[j]:.3g} on region {j}'s own nodes); a design variable is one B^r "
+                              f"{self.region_misfit[j]:.3g} on {where}'s own nodes); a design variable is one B^r "
                               "per region: give regions on which B^r is uniform (or a start B^r)")
 
     def _own_loads(self, W, allel, owner, name):

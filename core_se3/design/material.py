@@ -10,7 +10,7 @@ from ..errors import DesignError, did_you_mean
 from ..fem import Material, RegionMaterial
 from ..fem.material_kinds import ISOTROPIC
 from ..model import ContactLoad
-from .variables import Variable, region_elements
+from .variables import Variable, named_regions, region_elements, region_label
 
 __all__ = ["MaterialVariable", "MATERIAL_KEYS"]
 
@@ -71,8 +71,9 @@ class MaterialVariable(Variable):
     ----------
     problem : core_se3.Problem
         The problem (default element; any law, it becomes a RegionMaterial).
-    regions : sequence
-        Region names or element-id arrays (disjoint).
+    regions : sequence or dict
+        Region names or element-id arrays (disjoint), or a dict name -> element ids (a
+        scenario's regions: messages name them; ``region_names``).
     prop : str
         'E' or 'h'.
     lower, upper : float, optional
@@ -94,6 +95,7 @@ class MaterialVariable(Variable):
         if prop not in ("E", "h"):
             raise DesignError(f"material variable {name!r}: prop must be 'E' or 'h', got {prop!r}{did_you_mean(prop, ('E', 'h'))}")
         self.problem, self.prop = problem, prop
+        self.region_names, regions = named_regions(regions)
         self.regions = [region_elements(problem, r, f"material variable {name!r}") for r in regions]
         allel = np.concatenate(self.regions)
         if len(np.unique(allel)) != len(allel):
@@ -107,7 +109,8 @@ class MaterialVariable(Variable):
             lo, hi = float(np.min(props[prop][r])), float(np.max(props[prop][r]))
             if hi > lo:
                 # one value per region: the start would set the whole region to its first element's
-                raise DesignError(f"material variable {name!r}: {prop} varies over region {j} ({lo:g} .. {hi:g}); a "
+                raise DesignError(f"material variable {name!r}: {prop} varies over "
+                                  f"{region_label(self.region_names, j)} ({lo:g} .. {hi:g}); a "
                                   f"design variable is one {prop} per region: give regions on which it is uniform")
         x0 = np.array([props[prop][r].mean() for r in self.regions])
         self._setup(name, len(self.regions), 0.0 if lower is None else lower, upper, x0,

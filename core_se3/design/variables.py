@@ -45,7 +45,7 @@ from ..model import GradientField, MagneticLoad, Superposition, UniformField
 
 __all__ = ["Variable", "FieldVariable", "FieldGradientVariable", "LoadMagnitude", "magnetic_loads", "field_share",
            "polar_vector",
-           "region_elements", "field_at", "free_index", "plane_axes"]
+           "region_elements", "named_regions", "region_label", "field_at", "free_index", "plane_axes"]
 
 
 def polar_vector(b, angle, e1, e2):
@@ -97,6 +97,35 @@ def region_elements(problem, r, what):
         raise DesignError(f"{what}: element ids {np.asarray(r).ravel()[:5].tolist()} do not exist (the mesh has "
                           f"{problem.mesh.n_elements} elements)")
     return ids
+
+
+def named_regions(regions):
+    """(names, regions) of a variable's ``regions``: a mapping name -> region (a scenario's
+    regions by name) or a sequence of region names or element ids; ``names[j]`` is region j's
+    name, None for ids (its messages then name it by its index: :func:`region_label`).
+
+    Example
+    -------
+    >>> named_regions({"root": [0], "tip": [1]})
+    (['root', 'tip'], [[0], [1]])
+    >>> named_regions(["tip", [0, 1]])[0]
+    ['tip', None]
+    """
+    if isinstance(regions, dict):
+        return list(regions), list(regions.values())
+    regions = list(regions)
+    return [r if isinstance(r, str) else None for r in regions], regions
+
+
+def region_label(names, j):
+    """How messages call region ``j``: by its name (``named_regions``) where known, else its index.
+
+    Example
+    -------
+    >>> region_label(["root", None], 0), region_label(["root", None], 1)
+    ("region 'root'", 'region 1')
+    """
+    return f"region {names[j]!r}" if names[j] is not None else f"region {j}"
 
 
 def field_share(outer, field, lam):

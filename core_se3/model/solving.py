@@ -14,11 +14,11 @@ from typing import Callable
 
 import numpy as np
 
-from ..backend import launched_ranks
+from ..backend import launched_rank, launched_ranks
 from ..errors import MeshWarning, OptionError, ParallelError, SupportWarning, did_you_mean
 from .prescribed import DOF_NAMES, DRIFT_TOL, held_dof_drift
 
-__all__ = ["SOLVERS", "DISTRIBUTED_KEYS", "dispatch", "solve_linear", "check_held_dofs"]
+__all__ = ["SOLVERS", "DISTRIBUTED_KEYS", "dispatch", "solve_linear", "check_held_dofs", "warn_final_state"]
 
 # keywords of the distributed set-up (a scenario's [solver] linear, petsc, partition), which
 # the serial solvers do not take
@@ -92,30 +92,50 @@ def dispatch(problem, control, solver, kw, given=()):
 
 
 def check_held_dofs(problem, result):
-    """``result``, after a :class:`~core_se3.errors.SupportWarning` if a support let a dof it
-    holds drift more than ``DRIFT_TOL`` on the final state (``prescribed.held_dof_drift``): it
-    holds the body-frame components of each increment while its nodes turn about other axes, so
-    it is not holonomic and the state depends on the load steps at that order (measured on the
-    Sze et al. semicylinder's edges, u_z and the rotation about y held with ``fix``: 4.9e-4 rad
-    of drift, 3.3e-6 rad between 1 and 160 load steps)."""
+    """``result``, after the warnings of its final state (:func:`warn_final_state`)."""
     states = [s for s in getattr(result, "steps", []) if getattr(s, "g", None) is not None]
-    worst = held_dof_drift(problem.supports, problem.mesh.g0, states[-1].g) if states else None
+    if states:
+        warn_final_state(problem, states[-1], stacklevel=5)     # Problem.solve's caller
+    return result
+
+
+def warn_final_state(problem, state, stacklevel=2):
+    """The warnings of a final state (``Problem.solve``, a scenario run): a
+    :class:`~core_se3.errors.SupportWarning` if a support let a dof it holds drift more than
+    ``DRIFT_TOL`` (``prescribed.held_dof_drift``): it holds the body-frame components of each
+    increment while its nodes turn about other axes, so it is not holonomic and the state depends
+    on the load steps at that order (measured on the Sze et al. semicylinder's edges, u_z and the
+    rotation about y held with ``fix``: 4.9e-4 rad of drift, 3.3e-6 rad between 1 and 160 load
+    steps); a MeshWarning for a point dipole too close to the magnet (``_check_dipole_resolution``).
+    ``state``: .g and .load_factor.  Under an MPI launch every rank warns (``-W error`` stops
+    them all) and rank 0 alone prints (:func:`_warn`)."""
+    worst = held_dof_drift(problem.supports, problem.mesh.g0, state.g)
     if worst is not None and worst[0] > DRIFT_TOL:
         drift, k, node, dof = worst
         amount = f"{drift:.2g} rad" if dof >= 3 else f"{drift:.2g} of the largest displacement"
-        warnings.warn(SupportWarning(
+        _warn(SupportWarning(
             f"support {k} holds the {DOF_NAMES[dof]} of its nodes in the turning body frame (fix), "
             f"and its nodes turn about other axes: the held component drifted by {amount} (node "
             f"{node}), so the state depends on the load steps at that order. For an exact, path-"
             f"independent support hold the lab component: add_lab_support (translations) or "
             f"add_rotation_component_support (a rotation-vector component), in a scenario file "
-            f'[[supports]] type = "lab" (a direction) or type = "lab_rotation" (an axis); or clamp.'), stacklevel=3)
-    if states:
-        _check_dipole_resolution(problem, states[-1])
-    return result
+            f'[[supports]] type = "lab" (a direction) or type = "lab_rotation" (an axis); or clamp.'), stacklevel)
+    _check_dipole_resolution(problem, state, stacklevel + 1)
 
 
-def _check_dipole_resolution(problem, state):
+def _warn(warning, stacklevel):
+    """warnings.warn(warning) from ``stacklevel`` frames above the caller; on ranks other than 0
+    of an MPI launch (the same state on every rank) not printed, but still raised under ``-W
+    error`` (every rank then stops, none waits for another)."""
+    if launched_rank() == 0:
+        warnings.warn(warning, stacklevel=stacklevel + 1)
+        return
+    with warnings.catch_warnings():          # the filters kept (an error stays an error)
+        warnings.showwarning = lambda *args, **kw: None
+        warnings.warn(warning, stacklevel=stacklevel + 1)
+
+
+def _check_dipole_resolution(problem, state, stacklevel):
     """A MeshWarning when a point dipole lies within ``magnetics.DIPOLE_RESOLUTION`` element sizes
     of the magnetised material at the final state: the nodal quadrature of its loads is then off
     by about (size / distance)^2, and refining along one direction only can converge to a wrong
@@ -125,12 +145,12 @@ def _check_dipole_resolution(problem, state):
     worst = dipole_resolution(mags, state.g, state.load_factor) if mags else None
     if worst is not None and worst[0] < DIPOLE_RESOLUTION:
         ratio, node, x0 = worst
-        warnings.warn(MeshWarning(
+        _warn(MeshWarning(
             f"the point dipole at {np.round(x0, 6).tolist()} lies {ratio:.3g} element sizes from the magnetised "
             f"node {node} (fewer than {DIPOLE_RESOLUTION:g}): its field changes across an element, and the nodal "
             f"quadrature of the magnetic couple and force is off by about (size / distance)^2 = "
             f"{100 / ratio ** 2:.2g} %; refine the mesh near the dipole in both directions (to "
-            f"{DIPOLE_RESOLUTION:g} sizes: 1 %) or move the dipole away"), stacklevel=5)
+            f"{DIPOLE_RESOLUTION:g} sizes: 1 %) or move the dipole away"), stacklevel)
 
 
 def solve_linear(problem, lam_end=1.0, **options):

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import copy
 import os
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -23,6 +24,7 @@ from ..errors import ScenarioError
 from ..io import atomic_path, write_json_atomic
 from .build import mu0_of
 from .design_section import AngleInDegrees
+from .outputs import physical_record
 from .toml_writer import dumps
 
 __all__ = ["run_design", "optimised_document", "DESIGN_FILES"]
@@ -151,6 +153,18 @@ def optimised_document(scn, design, result, k):
         writer_of(v)(scn, doc, v)
     doc["name"] = f"{scn.name}-optimised" + (f"-{design.poses[k].name}" if len(design.poses) > 1 else "")
     return doc
+
+
+def designed_spec(scn, design, result, k):
+    """The validated spec of pose k with the design's field and load values (their writers,
+    :func:`optimised_document`'s, applied to ``scn.spec``): its physical record is the design's."""
+    spec = copy.deepcopy(scn.spec)
+    design.assign_pose(k, result.x)
+    for v in design.pose_variables(k):
+        write = writer_of(v)
+        if write in (_write_field, _write_load):          # the quantities of the physical record
+            write(scn, spec, v)
+    return spec
 
 
 def _convergence_plot(path, history, title):
@@ -304,7 +318,9 @@ def _design(scn, rd, method, max_iter, progress, vtu, plots):
             with design.element_check.quiet():                  # a coarse mesh: said once, by the design
                 res = scn.problem.solve(lam_end=pose.lam)      # (collective under mpirun)
             if root:                         # each step's own contact state, as a run writes it
-                files[f"vtu_{pose.name}"] = write_path_vtu(rd, f"vtu/{safe_name(pose.name)}", scn.problem, res.steps)
+                spec = designed_spec(scn, design, r, k)
+                files[f"vtu_{pose.name}"] = write_path_vtu(rd, f"vtu/{safe_name(pose.name)}", scn.problem, res.steps,
+                                                           lambda lam: physical_record(SimpleNamespace(spec=spec), lam))
     if plots and r.history and root:
         files["convergence"] = _convergence_plot(rd.file("convergence.png"), r.history,
                                                  f"{scn.name}: {r.method}")

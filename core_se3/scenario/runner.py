@@ -31,6 +31,7 @@ from ..fem import ELEMENTS
 from ..io import Checkpoint, write_json_atomic
 from ..io.lifecycle import Terminated, held_signals, termination_as_interrupt
 from ..io.rundir import RunDirectory, safe_name
+from ..model.solving import warn_final_state
 from ..results import Result, StepRecorder, step_record
 from ..solvers import ArcLengthOptions, ArcState, NewtonOptions, NewtonState, arc_length_steps
 from ..solvers.linear import linear_solve
@@ -414,7 +415,8 @@ def _failure(run, exc, last):
 def _complete(run, sinks, last):
     """The end of a run whose steps ran out (``last``: the last event, or the restart state of
     a resumed run with nothing left to do): an arc-length path that stopped short of lam_end fails
-    (its message says what to raise), else status complete; then the plots."""
+    (its message says what to raise), else status complete, with the warnings ``Problem.solve``
+    gives on its final state (``model.solving.warn_final_state``); then the plots."""
     scn, s = run.scn, run.scn.solver
     if isinstance(last, StepEvent):
         lam, g = last.lam, last.g
@@ -436,6 +438,7 @@ def _complete(run, sinks, last):
     if status == "failed":
         raise ConvergenceError(error + f"; the {len(run.records) - 1} converged steps are written in "
                                f"{run.rd.path} (the checkpoint keeps the last one)", run.result)
+    warn_final_state(scn.problem, SimpleNamespace(g=g, load_factor=lam), stacklevel=5)   # run()'s caller
     out = run.rd.path
     files = dict(results=os.path.join(out, "results.json"), checkpoint=os.path.join(out, "checkpoint.npz"))
     return _finish(run, doc, g, files)

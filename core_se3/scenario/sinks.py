@@ -215,15 +215,17 @@ def step_files(rd, vdir, prob, k, g, lam, cells, physical=None):
             write_obstacles(tmp, obstacles, g[:, :3, 3], lam)
 
 
-def write_path_vtu(rd, vdir, prob, steps):
+def write_path_vtu(rd, vdir, prob, steps, physical=None):
     """The VTU files of a solved path (``Result.steps``: a design's pose, ``bench run --vtu``) in
     ``rd``'s folder ``vdir``, as a run writes its steps (:func:`step_files`, :func:`series_files`),
     each step's contact multipliers set again first (its contact fields, not the last step's).
-    Returns the path of ``series.pvd``."""
+    ``physical``: lam -> the step's physical record (``outputs.physical_record``; a design's at
+    its values), or None.  Returns the path of ``series.pvd``."""
     from ..results import restore_multipliers
     for k, s in enumerate(steps):
         restore_multipliers(prob, s)
-        step_files(rd, vdir, prob, k, s.g, s.load_factor, prob.element.cell_fields(s.g))
+        step_files(rd, vdir, prob, k, s.g, s.load_factor, prob.element.cell_fields(s.g),
+                   None if physical is None else physical(s.load_factor))
     return series_files(rd, vdir, list(range(len(steps))), [s.load_factor for s in steps])
 
 

@@ -309,6 +309,7 @@ def _solve(s, g_start):
     """Solve one grid point: (final StepResult, steps, iterations, warm).  Warm: one Newton
     solve at the final load factor from ``g_start``; cold (and on a failed warm start): the
     scenario's own load steps from the reference state."""
+    from ..model.solving import warn_final_state
     from ..solvers import NewtonOptions, NewtonState, newton_steps
     sv = s.solver
     # a path-dependent load (Coulomb friction) has no state of g alone: a warm start would
@@ -327,6 +328,7 @@ def _solve(s, g_start):
         try:
             items = list(newton_steps(s.problem, [lam], opts, start=NewtonState(lam * (1 - 1e-9), g_start)))
             its = sum(e["iterations"] for e in items[-1].tries)
+            warn_final_state(s.problem, items[-1].step, stacklevel=4)     # as Problem.solve (a cold point)
             return items[-1].step, 1, its, True
         except (ConvergenceError, CoreSE3Error):
             pass
