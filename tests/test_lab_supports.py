@@ -241,3 +241,21 @@ def test_a_scenario_lab_support_reaction_balances_the_edge_moment(tmp_path):
     assert np.abs(st.reaction_force).max() < 1e-10 * np.abs(M).max()
     assert np.abs(st.applied_moment - M).max() < 1e-12 * np.abs(M).max()
     assert np.abs(st.reaction_moment + st.applied_moment).max() < 1e-10 and st.balance_error < 1e-10
+
+
+def test_results_json_carries_the_support_reactions_and_the_applied_loads(tmp_path):
+    """A scenario's results.json gives each step's lab totals of the support reactions (held dofs
+    and penalty springs) and of the applied loads, as the Python StepResult does: the STRIP under
+    its edge moment M alone, the reactions' moment -M and force 0, the applied moment M exactly
+    (a dead lab moment).  Before, results.json had neither (a scenario user could not read a
+    reaction at all)."""
+    import json
+    path = tmp_path / "strip.toml"
+    path.write_text(scenario.dumps(STRIP))
+    scenario.load(path).run(out=tmp_path / "out", progress=False)
+    last = json.loads((tmp_path / "out" / "results.json").read_text())["steps"][-1]
+    M = np.array(STRIP["loads"][0]["moment"])
+    assert np.abs(np.array(last["applied"]["moment"]) - M).max() < 1e-12 * np.abs(M).max()
+    assert np.abs(np.array(last["applied"]["force"])).max() < 1e-12
+    assert np.abs(np.array(last["reactions"]["moment"]) + M).max() < 1e-10 * np.abs(M).max()
+    assert np.abs(np.array(last["reactions"]["force"])).max() < 1e-10 * np.abs(M).max()

@@ -5,7 +5,10 @@
      "steps": [{"load_factor", "load": {"name", "value", "unit"},
                 "probes": {name: {"u": [ux, uy, uz], "rotation_angle", "rotation_vector",
                                   "rotation": 3x3}},
-                "iterations", "residual", "residual_floor", "residual_history", "balance_error",
+                "iterations", "residual", "residual_floor", "residual_history",
+                "reactions": {"force", "moment"}, "applied": {"force", "moment"} (lab totals of the
+                support reactions -- held dofs and penalty springs -- and of the applied loads;
+                moments about the origin), "balance_error",
                 "attempts", "linear_solves", "backend" ('numpy'/'numba': what evaluated the step),
                 "contact": {name: {"force", "moment", "penetration",
                 ...}} (with obstacles only),
@@ -72,7 +75,9 @@ def probe_record(p, axis=None):
 
 def step_record(st, load, axis=None, **extra):
     """JSON form of a StepResult: load factor, the reported load (dict name, value, unit, ...),
-    probes, Newton iterations and residuals, balance error, then ``extra`` keys.
+    probes, Newton iterations and residuals, the lab totals of the support reactions (held dofs
+    and penalty springs) and of the applied loads (``reactions``, ``applied``: force, and moment
+    about the origin), balance error, then ``extra`` keys.
 
     Parameters
     ----------
@@ -96,7 +101,9 @@ def step_record(st, load, axis=None, **extra):
     >>> p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 1.0)); p.add_probe("tip")
     >>> rec = step_record(p.solve(steps=1).final, dict(name="P", value=1.0, unit="N"), error=None)
     >>> list(rec), rec["load_factor"], rec["residual"] < 1e-10
-    (['load_factor', 'load', 'probes', 'iterations', 'residual', 'residual_floor', 'residual_history', 'balance_error', 'attempts', 'linear_solves', 'backend', 'checks', 'error'], 1.0, True)
+    (['load_factor', 'load', 'probes', 'iterations', 'residual', 'residual_floor', 'residual_history', 'reactions', 'applied', 'balance_error', 'attempts', 'linear_solves', 'backend', 'checks', 'error'], 1.0, True)
+    >>> [[round(f, 9) + 0.0 for f in rec[k]["force"]] for k in ("reactions", "applied")]   # held by the clamp
+    [[0.0, 0.0, -1.0], [0.0, 0.0, 1.0]]
     """
     rec = dict(load_factor=float(st.load_factor), load=load,
                probes={name: probe_record(p, axis) for name, p in st.probes.items()},
@@ -104,6 +111,10 @@ def step_record(st, load, axis=None, **extra):
                residual=float(st.residual_history[-1]) if st.residual_history else 0.0,
                residual_floor=float(getattr(st, "residual_floor", 0.0)),
                residual_history=[float(x) for x in st.residual_history],
+               reactions=dict(force=np.asarray(st.reaction_force, float).tolist(),
+                              moment=np.asarray(st.reaction_moment, float).tolist()),
+               applied=dict(force=np.asarray(st.applied_force, float).tolist(),
+                            moment=np.asarray(st.applied_moment, float).tolist()),
                balance_error=float(st.balance_error), attempts=int(st.attempts),
                linear_solves=None if st.linear_solves is None else int(st.linear_solves),
                backend=str(getattr(st, "backend", "")) or None)
