@@ -61,7 +61,9 @@ def build_problem(v, spec, mesh, regions):
     for i, ld in enumerate(spec["loads"]):
         key = f"loads[{i}]"
         values = {k: x for k, x in ld.items() if k not in ("type", "scale", "edge", "nodes", "region")}
-        if "edge" in ld or "nodes" in ld:
+        if isinstance(ld.get("edge"), list):
+            where = list(ld["edge"])              # a union of named lines, each along its own edges
+        elif "edge" in ld or "nodes" in ld:
             where = selection(mesh, ld)
             lineage = getattr(mesh, "_lineage", None)
             if lineage is not None and LOADS[ld["type"]].target == "nodes":

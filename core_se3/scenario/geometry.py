@@ -345,7 +345,9 @@ def nodes_ref(v, t, key, mesh, required=True, regions=None):
 
 
 def selection(mesh, s):
-    """Node ids of a validated selection."""
+    """Node ids of a validated selection (a union of named lines: their nodes, each once)."""
+    if isinstance(s.get("edge"), list):
+        return np.unique(np.concatenate([mesh.edges[n] for n in s["edge"]]))
     return mesh.edges[s["edge"]] if "edge" in s else np.asarray(s["nodes"], np.int64)
 
 
