@@ -18,10 +18,12 @@ Every load is scaled by a function of the load factor (``scale(lam)``, linear by
 """
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from .. import lie
-from ..errors import LoadError
+from ..errors import LoadError, LoadWarning
 from ..fem.quadrature import shape_functions, surface_jacobian
 from .base import (Load, LoadEvaluation, LoadKind, Param, finite_vector, linear_scale, param_error,
                    register_load)
@@ -409,6 +411,11 @@ def _gravity(problem, elements, scale, g=(0.0, 0.0, -9.81), rho=None):
         raise param_error("gravity needs a density on every loaded element: give 'rho' to the "
                           "load or to the material (Material(..., rho=...), [material] rho)", "rho")
     gv = np.asarray(g, float)
+    if not np.any(dens):
+        whose = f"the load's rho = {rho:g}" if rho is not None else "the material's rho (Material(..., rho=...), " \
+                                                                     "[material] rho) is 0"
+        warnings.warn(LoadWarning(f"gravity on {len(sel)} element(s) of zero mass adds nothing: {whose}; give a "
+                                  "positive density, or drop the gravity load"), stacklevel=4)
     return [SurfaceLoad(mesh, r * t * gv, False, sel[(dens == r) & (h == t)], scale, "gravity")
             for r, t in sorted(set(zip(dens.tolist(), h.tolist()))) if r != 0]
 

@@ -316,7 +316,7 @@ def plausibility(v, scn):
         for i, ld in enumerate(spec["loads"]):
             if ld["type"] == "gravity" and ld.get("rho") is not None:
                 r = ld["rho"] * u["to_kg_m3"]
-                if not RHO_RANGE[0] <= r <= RHO_RANGE[1]:
+                if ld["rho"] > 0 and not RHO_RANGE[0] <= r <= RHO_RANGE[1]:      # 0: build's zero-mass warning
                     v.warn(f"loads[{i}].rho", _density_message(ld["rho"], r, u, units))
             if ld["type"] == "gravity":
                 gmag = float(np.linalg.norm(ld["g"]))
