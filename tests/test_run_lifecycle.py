@@ -235,7 +235,7 @@ def test_a_run_on_two_ranks_records_how_it_ran(tmp_path):
     r = _mpirun(tmp_path, doc, "--out", "o")
     assert r.returncode == 0, r.stderr[-3000:]
     prov = json.load(open(tmp_path / "o" / "results.json"))["provenance"]
-    assert prov["ranks"] == 2 and prov["linear_solver"]["used"] == "mumps"
+    assert prov["ranks"] == 2 and prov["linear_solver"]["used"] == "mumps" and prov["solve"] == "distributed"
     assert prov["partition"]["method"] == "auto" and sum(prov["partition"]["elements_per_rank"]) == 16
     assert len(prov["peak_memory"]) == 2 and min(prov["peak_memory"]) > 1e7
     r = _mpirun(tmp_path, doc, "--json", "b.json", command=("bench", "run", "cantilever-shear", "--mesh", "8x2",
@@ -244,6 +244,23 @@ def test_a_run_on_two_ranks_records_how_it_ran(tmp_path):
     bench = json.load(open(tmp_path / "b.json"))["provenance"]
     assert bench["ranks"] == 2 and bench["linear_solver"]["used"] == "mumps" and len(bench["peak_memory"]) == 2
     assert sum(bench["partition"]["elements_per_rank"]) == 16
+
+
+def test_a_linear_run_on_two_ranks_records_that_every_rank_solved_it(tmp_path):
+    """A linear analysis under mpirun -n 2 runs serially on every rank (docs/PARALLEL.md); its
+    results.json said ranks = 1, as if launched alone.  Now ranks = 2 (the job's size) and solve
+    = 'serial on every rank' (a load-control run: 'distributed'; serially: 'serial'), with no
+    partition; the answer is the serial one to round-off."""
+    doc = dict(STRIP, solver={"control": "linear"}, output={"vtu": False, "plots": False, "picture": False})
+    r = _mpirun(tmp_path, doc, "--out", "o")
+    assert r.returncode == 0, r.stderr[-3000:]
+    res = json.load(open(tmp_path / "o" / "results.json"))
+    prov = res["provenance"]
+    assert prov["ranks"] == 2 and prov["solve"] == "serial on every rank" and prov["partition"] is None
+    serial = runner.run(load(dict(STRIP, solver={"control": "linear"})), out=str(tmp_path / "serial"))
+    assert serial.doc["provenance"]["ranks"] == 1 and serial.doc["provenance"]["solve"] == "serial"
+    assert res["steps"][-1]["probes"]["tip"]["u"] == pytest.approx(serial.doc["steps"][-1]["probes"]["tip"]["u"],
+                                                                   rel=1e-10, abs=1e-14)
 
 
 def test_a_failed_run_on_two_ranks_writes_its_last_steps_contact_forces(tmp_path):
