@@ -302,6 +302,11 @@ def regions_section(v, doc, mesh):
             ids = np.nonzero(_box(v, t["box"], join(key, "box"), centroids, scale))[0]
         else:
             ids = np.unique(_int_list(v, t, "elements", key, base.n_elements, what="element"))
+            if getattr(base, "element_numbering", None):
+                v.warn(join(key, "elements"), f"{base.element_numbering}; if the ids come from the file (Gmsh shows "
+                                              "its tags), select the elements by a physical surface (a region of "
+                                              "the file, by name) or a box instead; ids from core_se3's own output "
+                                              "(a VTU file's cell ids, a message) are right")
         ids = M.descendants(ids, levels)
         if len(ids) == 0:
             v.fail(key, "selects no elements")
