@@ -111,6 +111,25 @@ sys.stdin.read()
     assert runner.run(load(), out=out, force=True).status == "complete"
 
 
+def test_a_lock_file_is_there_only_while_a_run_lives(tmp_path):
+    """A completed run left .core-se3.lock (with its dead pid) in the output directory, as did a
+    failed one.  Now a run that ends, complete or failed, deletes it; a stale file of a killed run
+    (no process holds it) does not block the next run, which takes it and deletes it at its end."""
+    import json as _json
+    from core_se3.errors import ConvergenceError
+    from core_se3.io import rundir
+    out = tmp_path / "o"
+    assert runner.run(load(), out=str(out)).status == "complete"
+    assert not (out / rundir.LOCK).exists()
+    (out / rundir.LOCK).write_text(_json.dumps({"pid": 999999999, "kind": "run", "started": "then"}))
+    assert runner.run(load(), out=str(out), force=True).status == "complete"
+    assert not (out / rundir.LOCK).exists()
+    failing = load(dict(STRIP, solver={"steps": 1, "max_iter": 1, "max_cutbacks": 0}))
+    with pytest.raises(ConvergenceError):
+        runner.run(failing, out=str(out), force=True)
+    assert json.load(open(out / "results.json"))["status"] == "failed" and not (out / rundir.LOCK).exists()
+
+
 def test_a_refused_run_leaves_no_lock_file_in_the_users_directory(tmp_path, monkeypatch):
     """A run refused by a directory of the user's files (notes.txt) left .core-se3.lock in it.
     The refusing process deletes the lock file it created (still holding it); one that opened
@@ -138,8 +157,8 @@ def test_a_refused_run_leaves_no_lock_file_in_the_users_directory(tmp_path, monk
         with pytest.raises(RunDirectoryError, match="in use by another live run"):
             RunDirectory(rd.path, "run").claim()
     with RunDirectory(str(tmp_path / "o"), "run").claim(force=True):
-        pass                                 # the file of a run that ran stays
-    assert os.path.exists(tmp_path / "o" / rundir.LOCK)
+        pass
+    assert not os.path.exists(tmp_path / "o" / rundir.LOCK)          # a run that ended leaves none
 
 
 # ----------------------------------------------------------------------------- each sink alone
