@@ -40,7 +40,7 @@ def peak_memory():
 
 
 def provenance(problem=None, result=None, ranks=None, linear=None, partition=None, memory=None, backends=None,
-               linear_used=None, solve=None):
+               linear_used=None):
     """The provenance record of a result (module docstring).
 
     Parameters
@@ -58,17 +58,16 @@ def provenance(problem=None, result=None, ranks=None, linear=None, partition=Non
         The backend of every step.
     linear_used : str, optional
         What a serial 'auto' linear solver resolved to (``scenario.provenance.linear_solver_used``).
-    solve : str, optional
-        How it ran: 'distributed' (over the ranks), 'serial' (one process) or 'serial on every
-        rank' (under mpirun, a control that runs serially: every rank solves the whole problem,
-        rank 0 writes); default from ``result`` and the launcher.
 
     Returns
     -------
     dict
         package, version, python, numpy, backend {setting, used}, ranks, linear_solver
         {setting, used}, partition (None serially), peak_memory [bytes] per rank (rank 0's alone
-        when every rank solved the whole problem) and solve (how it ran, above).
+        when every rank solved the whole problem) and solve: how it ran, 'distributed' (over the
+        ranks: a ``result.parallel`` record or a ``partition``), 'serial' (one process) or 'serial
+        on every rank' (under mpirun, a control that runs serially: every rank solves the whole
+        problem, rank 0 writes).
     """
     import sys
     from ..backend import launched_ranks
@@ -83,8 +82,7 @@ def provenance(problem=None, result=None, ranks=None, linear=None, partition=Non
     linear = linear or par.get("linear")
     lin_used = linear or linear_used
     part = partition if partition is not None else par.get("partition")
-    if solve is None:
-        solve = "distributed" if par else ("serial" if int(ranks) == 1 else "serial on every rank")
+    solve = "distributed" if par or part is not None else ("serial" if int(ranks) == 1 else "serial on every rank")
     return dict(package="core_se3", version=version, python=platform.python_version(), numpy=np.__version__,
                 backend=dict(setting=getattr(problem, "backend_setting", None), used=used),
                 ranks=int(ranks), linear_solver=dict(setting=setting if linear is None else linear, used=lin_used),

@@ -25,16 +25,14 @@ class RunContext:
     >>> from core_se3 import Problem, Material, mesh
     >>> p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
     >>> ctx = RunContext(p)
-    >>> ctx.root, ctx.ranks, ctx.solve
-    (True, 1, 'serial')
+    >>> ctx.root, ctx.ranks
+    (True, 1)
     """
 
     def __init__(self, problem):
         self.problem = problem
         self.root = launched_rank() == 0
-        # under mpirun every rank solves the whole problem: the job's size, and how it ran
-        self.ranks = launched_ranks()
-        self.solve = "serial" if self.ranks == 1 else "serial on every rank"
+        self.ranks = launched_ranks()      # under mpirun every rank solves the whole problem
         if self.root:
             # the coarse-mesh warning, as Problem.solve gives it (the runner drives the solvers
             # itself, not through Problem.solve; the distributed context warns in its set-up)
@@ -90,7 +88,6 @@ class DistributedContext(RunContext):
         self.comm = comm
         self.root = comm.rank == 0
         self.ranks = comm.size
-        self.solve = "distributed"
 
     def barrier(self):
         self.comm.Barrier()

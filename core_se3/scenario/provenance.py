@@ -57,8 +57,7 @@ def run_provenance(scn, ctx):
     prob = scn.problem
     run = getattr(ctx, "run", None)
     if run is None:
-        return provenance(prob, ranks=ctx.ranks, linear_used=linear_solver_used(prob), solve=ctx.solve)
+        return provenance(prob, ranks=ctx.ranks, linear_used=linear_solver_used(prob))
     part = dict(method=scn.solver.get("partition", "auto"),
                 elements_per_rank=np.bincount(np.asarray(run.part, np.int64).ravel()).tolist())
-    return provenance(prob, ranks=ctx.ranks, linear=run.system.linear, partition=part, memory=ranks_memory(ctx),
-                      solve=ctx.solve)
+    return provenance(prob, ranks=ctx.ranks, linear=run.system.linear, partition=part, memory=ranks_memory(ctx))
