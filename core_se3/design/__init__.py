@@ -12,7 +12,7 @@ Example
 True
 """
 from .equilibrium import ElementCheck, EquilibriumOptions, EquilibriumState, assign_all, follow, solve_flat
-from .inverse import METHODS, Design, DesignResult, Pose, Smoothness, Target
+from .inverse import EQUILIBRIA, METHODS, Design, DesignResult, Pose, Smoothness, Target
 from .objectives import (Energy, NodePosition, Orientation, ProbePosition, Quantity, RotationAngle,
                          UserQuantity, local_jacobian)
 from .sensitivity import Sensitivity, SolveWith, quantity_jacobian, residual_derivative, sensitivity
@@ -25,5 +25,5 @@ __all__ = ["sensitivity", "Sensitivity", "SolveWith", "residual_derivative", "qu
            "LoadMagnitude", "magnetic_loads", "polar_vector",
            "Quantity", "NodePosition", "ProbePosition", "Orientation", "RotationAngle", "Energy",
            "UserQuantity", "local_jacobian",
-           "Design", "DesignResult", "Pose", "Target", "Smoothness", "METHODS",
+           "Design", "DesignResult", "Pose", "Target", "Smoothness", "METHODS", "EQUILIBRIA",
            "EquilibriumOptions", "EquilibriumState", "ElementCheck", "follow", "solve_flat", "assign_all"]

@@ -220,8 +220,12 @@ def _load_stepping_defaults(problem):
         problem.solve_defaults = saved
 
 
-def solve_flat(problem, variables, xs, lam=1.0, options=None, check=None):
+def solve_flat(problem, variables, xs, lam=1.0, options=None, check=None, as_run=False):
     """Solve from the flat (reference) state by load stepping at the values xs.
+
+    ``as_run``: with the problem's own steps and stability check (its ``solve_defaults``: a
+    scenario's [solver], what ``core-se3 run`` of the optimised scenario does: a critical point
+    on the path stops it with a ConvergenceError), not ``options.flat_steps`` and none.
 
     The element's coarse-mesh check is ``check``'s (an :class:`ElementCheck`; default a new
     one), which names the design point, in place of the one ``Problem.solve`` gives.
@@ -247,8 +251,12 @@ def solve_flat(problem, variables, xs, lam=1.0, options=None, check=None):
     check = check or ElementCheck()
     check(problem, variables, xs, stacklevel=2)
     problem.element                                 # built (and its own warnings given) outside the quiet part
+    steps, limit = opts.flat_steps, False
+    if as_run:
+        steps = problem.solve_defaults.get("steps", steps)
+        limit = problem.solve_defaults.get("limit_check", True)
     with check.quiet(always=True), _load_stepping_defaults(problem):      # said above, with the design point
-        res = problem.solve(steps=opts.flat_steps, lam_end=lam, control="load", limit_check=False, **kw)
+        res = problem.solve(steps=steps, lam_end=lam, control="load", limit_check=limit, **kw)
     its = sum(e["iterations"] for e in res.log)
     return EquilibriumState(res.final.g.copy(), lam, [np.array(x, float) for x in xs],
                             dict(iterations=its, substeps=len(res.log), cutbacks=0, restarted=True,

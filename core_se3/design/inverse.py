@@ -5,8 +5,10 @@
 over one or several poses (one magnetisation shared by all, a field per pose: Lum et al. 2016's
 problem), m_t the misfit of a target (``design.objectives`` with a ``target``), s_t its scale
 (the problem's length for positions, 1 rad for angles), D the differences of neighbouring
-regions' values (smoothness, :class:`Smoothness`).  Every evaluation starts from the last
-equilibrium of its pose (``design.equilibrium.follow``).
+regions' values (smoothness, :class:`Smoothness`).  Every evaluation starts from the
+equilibrium of its pose at the best point so far (``design.equilibrium.follow``), or with
+``equilibria='ramp'`` solves it from the flat state by load stepping, as ``core-se3 run`` of
+the optimised scenario does (``design.equilibrium.solve_flat``).
 
 Optimisers (scipy.optimize): 'least_squares' (trust-region reflective Gauss-Newton on the
 misfit vector, its Jacobian by the direct or adjoint method, whichever needs fewer solves:
@@ -44,9 +46,10 @@ from .equilibrium import (ElementCheck, EquilibriumOptions, EquilibriumState, as
 from .sensitivity import SolveWith, sensitivity
 from .targets import DesignResult, Pose, Smoothness, Target
 
-__all__ = ["Design", "METHODS", "Target", "Pose", "Smoothness", "DesignResult"]
+__all__ = ["Design", "METHODS", "EQUILIBRIA", "Target", "Pose", "Smoothness", "DesignResult"]
 
 METHODS = ("least_squares", "L-BFGS-B", "SLSQP", "trust-constr")
+EQUILIBRIA = ("follow", "ramp")
 
 
 class _Reached(Exception):
@@ -78,6 +81,21 @@ def _said(keys):
     return {"field": "the same field", "load": "the magnitude of the same load"}.get(k[0], "the same parameter")
 
 
+def _branch_message(branch, notes, equilibria):
+    """The result message's part on the poses whose solve from the flat state does not reach
+    the design's equilibrium (``Design.off_branch``)."""
+    msg = ""
+    for name, dev in branch.items():
+        msg += f"; pose {name!r}: a solve from the flat state at these values " + (
+            f"stops ({notes.get(name, '')[:200]})" if dev == np.inf else
+            f"reaches another equilibrium ({dev:.3g} of the length scale away; a multistable shell: the design's "
+            "was reached along its path, which `core-se3 run` of the optimised scenario does not take")
+        if equilibria == "follow":
+            msg += "; equilibria = 'ramp' designs with the equilibria that ramp reaches"
+        msg += ")" if dev != np.inf else ""
+    return msg
+
+
 class Design:
     """A design problem (module docstring).
 
@@ -95,6 +113,13 @@ class Design:
         The equilibrium solves' controls.
     sensitivity_method : str
         'auto', 'adjoint' or 'direct' for the least-squares Jacobian.
+    equilibria : str
+        'follow': every evaluation follows the equilibrium of its pose at the best point so far
+        (cheap; on a multistable shell it may end on a branch that a ramp of the loads from the
+        flat state does not reach: the result's ``branch`` says so).  'ramp': every evaluation
+        solves its pose from the flat state by load stepping, as ``core-se3 run`` of the
+        optimised scenario does, so the optimiser sees only the equilibria a ramp reaches (a
+        design whose ramp meets a limit point is a rejected trial point).
 
     Example
     -------
@@ -104,8 +129,12 @@ class Design:
     'least_squares'
     """
 
-    def __init__(self, problem, variables, poses, regularisation=(), options=None, sensitivity_method="auto"):
+    def __init__(self, problem, variables, poses, regularisation=(), options=None, sensitivity_method="auto",
+                 equilibria="follow"):
         self.problem, self.variables, self.poses = problem, list(variables), list(poses)
+        if equilibria not in EQUILIBRIA:
+            raise DesignError(f"equilibria must be one of {', '.join(map(repr, EQUILIBRIA))}, got {equilibria!r}")
+        self.equilibria = equilibria
         self.run = None             # under mpirun: the ranks' share of the problem (``distributed``)
         self.regularisation = list(regularisation)
         self.options = options or EquilibriumOptions()
@@ -145,6 +174,7 @@ class Design:
         self.best = None
         self.solves = self.newton_iterations = self.evaluations = 0
         self.failed = []
+        self.branch_notes = {}      # pose name -> why its solve from the flat state stopped (off_branch)
         self._cache = None
         # the element's coarse-mesh check of the design points (once per point whose element
         # changed, each cause said once per run: optimise starts a new run)
@@ -216,13 +246,17 @@ class Design:
         for k, pose in enumerate(self.poses):
             xs = self.pose_values(k, x)
             st = base[k]
-            if st is None:
-                st = solve_flat(self.problem, self.pose_variables(k), xs, pose.lam, self.options, self.element_check)
+            if st is not None and all(np.array_equal(a, b) for a, b in zip(st.x, xs)):
+                self.states[k] = st         # the best point's own state, not the last trial's
+                continue
+            if st is None or self.equilibria == "ramp":
+                # the equilibrium a ramp of the loads from the flat state reaches, with the run's
+                # steps and stability check in mode 'ramp' (a limit or bifurcation point on the
+                # way: a ConvergenceError, a rejected trial point of least_squares)
+                st = solve_flat(self.problem, self.pose_variables(k), xs, pose.lam, self.options, self.element_check,
+                                as_run=self.equilibria == "ramp")
                 info = st.stats
             else:
-                if all(np.array_equal(a, b) for a, b in zip(st.x, xs)):
-                    self.states[k] = st     # the best point's own state, not the last trial's
-                    continue
                 st, info = follow(self.problem, self.pose_variables(k), xs, st, self.options, self.distributed,
                                   self.element_check)
             self.states[k] = st
@@ -517,11 +551,7 @@ class Design:
         if self.failed:
             msg += (f"; {len(self.failed)} trial point(s) rejected: their equilibrium failed (first: "
                     f"{self.failed[0]['message'][:200]})")
-        for name, dev in branch.items():
-            msg += (f"; pose {name!r}: a solve from the flat state at these values " +
-                    ("does not converge" if dev == np.inf else f"reaches another equilibrium ({dev:.3g} of the length "
-                     "scale away; a multistable shell: the design's was reached along its path, which `core-se3 run` "
-                     "of the optimised scenario does not take)"))
+        msg += _branch_message(branch, self.branch_notes, self.equilibria)
         if idle:
             msg += (f"; without effect at the result (the residual of no pose with targets depends on them): "
                     f"{', '.join(idle)}")
@@ -552,19 +582,21 @@ class Design:
     def off_branch(self, x, states):
         """pose name -> the largest distance (over the length scale) between its design state
         at x and the equilibrium a solve from the flat state at the same values reaches (the
-        user's run of the optimised scenario), for the poses where it exceeds 1e-6: on a
+        user's run of the optimised scenario: its steps and stability check), for the poses where
+        it exceeds 1e-6 (inf where that solve stops: ``branch_notes`` says why): on a
         multistable shell the design may end on a branch it reached along its own path (a
         buckled strip kept up by a force that, applied from flat, buckles it down)."""
-        out = {}
+        out, self.branch_notes = {}, {}
         saved = [multipliers(self.problem)]
         for k, pose in enumerate(self.poses):
             try:
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore")
-                    st = solve_flat(self.problem, self.pose_variables(k), self.pose_values(k, x), pose.lam, self.options)
+                    st = solve_flat(self.problem, self.pose_variables(k), self.pose_values(k, x), pose.lam, self.options,
+                                    as_run=True)
                 dev = np.abs(st.g[:, :3, 3] - states[k].g[:, :3, 3]).max() / self.problem.length_scale
-            except ConvergenceError:
-                dev = np.inf
+            except ConvergenceError as exc:
+                dev, self.branch_notes[pose.name] = np.inf, str(exc)
             if dev > 1e-6:
                 out[pose.name] = float(dev)
         restore_multipliers(self.problem, EquilibriumState(None, None, None, multipliers=saved[0]))

@@ -7,6 +7,7 @@ and built into a :class:`core_se3.design.Design`.
     max_iter = 50
     tolerance = 0.02                # largest misfit that counts as reaching the targets
     stop_at_tolerance = false       # stop at the first iteration within the tolerance
+    equilibria = "follow"           # or "ramp": each evaluation solved from the flat state
 
     [[design.poses]]                # optional (default: one pose "design")
     name = "grasp"
@@ -64,7 +65,8 @@ def design_section(v, doc, spec, mesh, regions):
         return None
     d, key = doc["design"], "design"
     v.table(d, key, DESIGN.keys(), required=("variables", "targets"))
-    out = {k: v.param(d, key, DESIGN.param(k)) for k in ("method", "max_iter", "tolerance", "tol", "stop_at_tolerance")}
+    out = {k: v.param(d, key, DESIGN.param(k)) for k in ("method", "max_iter", "tolerance", "tol", "stop_at_tolerance",
+                                                          "equilibria")}
     out["poses"] = _poses(v, d, spec)
     names = dict(field=spec["fields"], regions=regions, pose=[p["name"] for p in out["poses"]],
                  load=spec["loads"], probe=[p["name"] for p in spec["probes"]])
@@ -211,7 +213,7 @@ def build_design(scn):
         poses[ctx.pose(t["pose"])].targets.append(Target(q, t["weight"], scale, t.get("components"),
                                                           name=f"targets[{i}]"))
     try:
-        return Design(scn.problem, variables, poses, ctx.regularisers)
+        return Design(scn.problem, variables, poses, ctx.regularisers, equilibria=ds["equilibria"])
     except CoreSE3Error as exc:
         v.fail("design", str(exc))
 

@@ -17,7 +17,7 @@ Example
 """
 from __future__ import annotations
 
-from ..design import METHODS
+from ..design import EQUILIBRIA, METHODS
 from ..fem import ELEMENTS
 from ..fem.material_kinds import MATERIALS
 from ..mesh import BACKENDS  # noqa: F401  (the generators' backends; documented with them)
@@ -194,6 +194,9 @@ DESIGN = Section("design", (
           "each target's unit: length, or degrees for angles)"),
     Param("tol", "number", 1e-12, lo=0.0, lo_open=True, doc="the optimiser's own tolerance"),
     Param("stop_at_tolerance", "bool", False, doc="stop at the first iteration within tolerance"),
+    Param("equilibria", "string", "follow", choices=EQUILIBRIA,
+          doc='"follow": each evaluation continues from the best point\'s equilibria; "ramp": each solves from the '
+              'flat state by load stepping, as `core-se3 run` of the optimised scenario'),
     Param("variables", "any", doc="[[design.variables]]"), Param("poses", "any", None, doc="[[design.poses]]"),
     Param("targets", "any", doc="[[design.targets]]")),
     doc="[design]: an inverse problem on the scenario's shell")
