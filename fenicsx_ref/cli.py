@@ -53,8 +53,13 @@ def main(argv=None):
     from .solver import _import_dolfinx
     _import_dolfinx()
     logging.disable(logging.INFO)  # silence the FFCx/CFFI/setuptools build chatter
-    r = run_case(a.name, mesh=a.mesh, overrides=_parse_set(a.set), steps=a.steps,
-                 integration=a.integration, shear_factor=a.shear_factor, cell=a.cell)
+    from core_se3.errors import CoreSE3Error
+    try:
+        r = run_case(a.name, mesh=a.mesh, overrides=_parse_set(a.set), steps=a.steps,
+                     integration=a.integration, shear_factor=a.shear_factor, cell=a.cell)
+    except (CoreSE3Error, KeyError) as exc:  # a bad input, named by the message
+        print(f"error: {type(exc).__name__}: {exc.args[0] if exc.args else exc}", file=sys.stderr)
+        return 2
     if a.name == "torsion":  # the small-twist torsion constant, as core_se3 reports it
         from core_se3.catalogue.references import elastica_entry
         from .solver import torsion_constant
@@ -91,8 +96,12 @@ def main(argv=None):
             print(line)
         if r["reference"]:
             ref = r["reference"]
-            print(f"reference {ref['entry']}: error {ref['error']:.3e} ({ref['n_points']} points"
-                  + (f"; {ref['measure']}" if "measure" in ref else "") + ")")
+            if ref["error"] is None:
+                print(f"reference {ref['entry']}: {ref.get('note', 'no reference load on the path')}")
+            else:
+                print(f"reference {ref['entry']}: error {ref['error']:.3e} ({ref['n_points']} points"
+                      + (f"; {ref['measure']}" if "measure" in ref else "")
+                      + ("" if r["status"] == "ok" else "; over the converged part of the path only") + ")")
         if "torsion" in r:
             t = r["torsion"]
             print(f"small-twist torsion constant J = T L/(G angle) = {t['J']:.5e}, from the interior "
