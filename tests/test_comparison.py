@@ -178,3 +178,21 @@ def test_stress_counts_a_warned_wrong_run_as_reported():
     assert stress._thin_outcome(True, False, dict(run, warning="element 'seed' ... locks")) == "fail"
     assert stress._thin_outcome(True, True, dict(run, warning="element 'seed' ... locks")) == "pass"
     assert stress._thin_outcome(False, False, dict(status="failed: x")) == "fail"
+
+
+def test_report_torsion_finding_does_not_cite_psri_equal_to_full_as_evidence():
+    """REPORT.md said the torsion torque ratio was 'unchanged ... by fenicsx_ref's integration
+    (full vs PSRI differ by 2.1e-14 %)'.  On the 20x6 grid of the 1 x 0.25 strip the Q2 cells
+    (diameter 0.065) are smaller than h = 0.1, so PSRI's alpha = min(1, (h/h_e)^2) = 1: the two
+    runs are the same scheme, equal by construction, and prove nothing.  The text now says so;
+    on the coarse 10x3 grid (h_e = 0.130 > h) there is nothing to add."""
+    from comparison.report import _findings, _psri_alpha_note
+    row = dict(case="torsion", nu=0.0, overrides=dict(angle=pi / 2, nu=0.0),
+               levels=[dict(mesh_fx=[10, 3], torque_ratio=[1.105], dist_full_psri=1e-3),
+                       dict(mesh_fx=[20, 6], torque_ratio=[1.103], dist_full_psri=2e-16)])
+    assert _psri_alpha_note(dict(row, levels=row["levels"][:1])) == ""
+    assert "= 1" in _psri_alpha_note(row) and "0.065" in _psri_alpha_note(row)
+    text = "\n".join(_findings(dict(agreement=dict(cases=[row]), stress=dict(tests=[]),
+                                    locking=dict(runs=[]))))
+    assert "unchanged by refinement and by fenicsx_ref's integration" not in text
+    assert "does not test locking" in text
