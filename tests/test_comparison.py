@@ -196,3 +196,20 @@ def test_report_torsion_finding_does_not_cite_psri_equal_to_full_as_evidence():
                                     locking=dict(runs=[]))))
     assert "unchanged by refinement and by fenicsx_ref's integration" not in text
     assert "does not test locking" in text
+
+
+def test_agreement_levels_refine_the_width_where_nu_makes_it_vary():
+    """With nu = 0.3 a strip's deflection varies across the width (anticlastic bending); the two
+    grid levels must refine that direction too, else the 'fine grid' distance is the common
+    width error: it was fx 16x2 / core 32x4 on both levels, 0.11 % (cantilever) and 0.22 %
+    (follower pressure), which fall to 0.054 % and 0.065 % on 16x4 / 32x8."""
+    from comparison.agreement import CASES, _mesh_core, _nu_mesh
+    for name, _, _, _, meshes in CASES:
+        if name == "torsion":
+            continue
+        m = [_nu_mesh(name, mm, 0.3, lev) for lev, mm in enumerate(meshes)]
+        assert m[1][0] > m[0][0], (name, m)
+        if m[1][1] > 1:
+            assert m[1][1] > m[0][1], (name, m)          # refined across the width as well
+        assert _mesh_core(m[1]) == (2 * m[1][0], 2 * m[1][1])
+    assert _nu_mesh("cantilever-shear", (16, 1), 0.0, 1) == (16, 1)   # nu = 0: uniform across
