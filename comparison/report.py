@@ -54,11 +54,14 @@ def _run_or_load(study, mod, quick, seed, reuse, **kw):
         except OSError:
             pass
     t0 = time.perf_counter()
-    commit = environment()["commit"]
+    env = environment()
     data = mod.run(quick=quick, seed=seed, **kw)
     dt = time.perf_counter() - t0
     data["wall_time"] = dt
-    data["commit"] = commit  # the code the study ran (others may commit while it runs)
+    data["commit"] = env["commit"]  # the code the study ran (others may commit while it runs)
+    # the machine the study's times were measured on (a --reuse render may run elsewhere)
+    data["machine"] = dict(cpu=env["cpu"], cores=env["cores"], load_start=env["load"][0],
+                           load_end=os.getloadavg()[0])
     common.save(study, data)
     return data, dt
 
@@ -300,6 +303,17 @@ def jit_total(data):
     return t
 
 
+def _machines(data, walls):
+    """Per study: the CPU and load its times were measured with ('not recorded' for data
+    written before the studies stored it: then the CPU row above need not be theirs)."""
+    out = []
+    for k in walls:
+        m = data[k].get("machine")
+        out.append(f"{k}: not recorded" if not m else
+                   f"{k}: {m['cpu']} ({m['cores']} cores), {m['load_start']:.1f} / {m['load_end']:.1f}")
+    return "; ".join(out)
+
+
 def render(data, walls, total, env0, env1, fx_ok, fx_why, figs, quick, reuse=False):
     L = []
     L.append("# core_se3 against fenicsx_ref: agreement, locking, cost of accuracy, stability\n")
@@ -315,7 +329,8 @@ def render(data, walls, total, env0, env1, fx_ok, fx_why, figs, quick, reuse=Fal
         L.append(f"**fenicsx_ref was not available** ({fx_why}): its columns are empty / 'not available'.\n")
     L.append("## Machine and libraries\n")
     L.append(markdown_table(["item", "value"], [
-        ["CPU", f"{env0['cpu']} ({env0['cores']} logical cores, shared with other jobs)"],
+        ["CPU " + ("when rendered" if reuse else "of this run"),
+         f"{env0['cpu']} ({env0['cores']} logical cores, shared with other jobs)"],
         ["load average " + ("when rendered (not during the studies)" if reuse else "at start / end"),
          f"{env0['load'][0]:.2f} / {env1['load'][0]:.2f}"],
         ["platform", env0["platform"]], ["Python", env0["python"]], ["NumPy", env0["numpy"]],
@@ -325,6 +340,7 @@ def render(data, walls, total, env0, env1, fx_ok, fx_why, figs, quick, reuse=Fal
          f"{jit_total(data):.0f} s (cache: FENICSX_REF_JIT_CACHE = "
          f"{os.environ.get('FENICSX_REF_JIT_CACHE', '~/.cache/fenicsx_ref/jit')})"],
         ["commit at the start of each study", ", ".join(f"{k} {data[k].get('commit', '?')}" for k in walls)],
+        ["machine of each study's times (CPU, load average at start / end)", _machines(data, walls)],
         ["study wall times", ", ".join(f"{k} {v / 60:.1f} min" if v else f"{k} (?)"
                                        for k, v in walls.items())]]))
     L.append("\n## Summary\n")

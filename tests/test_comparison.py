@@ -213,3 +213,18 @@ def test_agreement_levels_refine_the_width_where_nu_makes_it_vary():
             assert m[1][1] > m[0][1], (name, m)          # refined across the width as well
         assert _mesh_core(m[1]) == (2 * m[1][0], 2 * m[1][1])
     assert _nu_mesh("cantilever-shear", (16, 1), 0.0, 1) == (16, 1)   # nu = 0: uniform across
+
+
+def test_study_data_records_the_machine_its_times_were_measured_on(tmp_path, monkeypatch):
+    """REPORT.md's CPU row was the machine that rendered the page: after `report --reuse` on
+    another host it said 'AMD EPYC' above pareto times measured on an Intel Xeon.  Each study's
+    data now stores its own CPU and load; data without it is shown as 'not recorded'."""
+    import types
+    from comparison import common, report
+    monkeypatch.setattr(common, "OUT", str(tmp_path))
+    mod = types.SimpleNamespace(run=lambda quick, seed: dict(runs=[]))
+    data, _ = report._run_or_load("fake", mod, quick=True, seed=False, reuse=False)
+    m = common.load("fake")["machine"]
+    assert m["cpu"] == report.environment()["cpu"] and m["cores"] >= 1 and m["load_start"] >= 0
+    row = report._machines({"fake": data, "old": {}}, {"fake": 1.0, "old": None})
+    assert m["cpu"] in row and "old: not recorded" in row
