@@ -62,3 +62,12 @@ def test_literature_table_for_other_parameters_is_not_compared():
     assert r["reference"]["error"] is None and "E = 2.0685e+07" in r["reference"]["note"]
     ok = run_case("sze-semicylinder", mesh=(4, 4), overrides=dict(load_max=500.0), steps=2)
     assert ok["reference"]["error"] is not None and ok["reference"]["path_complete"] is True
+
+
+def test_failed_path_flags_its_reference_error_as_partial():
+    """A path that fails keeps the error of its converged steps: roll-up to k = 0.45 by the load
+    factors 1/9 (k = 0.05, a table load) and 1 with no cut-backs fails at the second step and
+    reported reference error 1.8e-4 over one point with nothing in `reference` saying so."""
+    r = run_case("rollup", mesh=(4, 1), overrides=dict(k=0.45), load_factors=[1 / 9, 1.0], max_cuts=0)
+    assert r["status"].startswith("failed") and len(r["steps"]) == 1
+    assert r["reference"]["n_points"] == 1 and r["reference"]["path_complete"] is False
