@@ -159,6 +159,12 @@ def run_case(name, mesh=None, overrides=None, steps=None, integration="psri", sh
     nx, ny = (int(n) for n in mesh)
     length, width, box = case_domain(case, params)
     rot_loads = [ld for ld in loads if ld["kind"] == "edge_rotation"]
+    axes = [np.asarray(ld["direction"], float) for ld in loads if ld["kind"] == "edge_moment"]
+    if any(np.linalg.norm(np.cross(axes[0], b)) > 1e-12 * np.linalg.norm(b) for b in axes[1:]):
+        raise NotImplementedError(
+            f"case {name!r}: edge moments about more than one axis rotate the edge about a moving "
+            "axis, where m . delta(theta) is not their virtual work (fenicsx_ref carries planar moments "
+            "only); use core_se3")
 
     # ----- load factors -------------------------------------------------------------------------
     lam0, lam1 = case.lam_range

@@ -71,3 +71,13 @@ def test_failed_path_flags_its_reference_error_as_partial():
     r = run_case("rollup", mesh=(4, 1), overrides=dict(k=0.45), load_factors=[1 / 9, 1.0], max_cuts=0)
     assert r["status"].startswith("failed") and len(r["steps"]) == 1
     assert r["reference"]["n_points"] == 1 and r["reference"]["path_complete"] is False
+
+
+@pytest.mark.parametrize("name, words", [("inplane-rollup", "drilling"), ("torsion-rollup", "more than one axis")])
+def test_moments_the_director_model_cannot_carry_are_refused(name, words):
+    """inplane-rollup's moment about the surface normal was dropped without a word (status 'ok',
+    tip u = 0, reference error 1.0); torsion-rollup's two follower moments (axes y and x) were
+    applied as m . delta(theta), not their virtual work once the axis moves, and the run
+    returned its converged steps up to lambda = 0.2 before failing."""
+    with pytest.raises(NotImplementedError, match=words):
+        run_case(name, mesh=(8, 2), steps=2)
