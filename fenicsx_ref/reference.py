@@ -50,7 +50,7 @@ def case_domain(case, p):
 _GEOMETRY_KEYS = ("L", "width", "R")
 
 
-def check_inputs(case, p, mesh, steps=None, shear_factor=1.0, load_factors=None):
+def check_inputs(case, p, mesh, steps=None, shear_factor=1.0, load_factors=None, cell="quadrilateral"):
     """Reject what the shell cannot solve before any DOLFINx work, naming the input.
 
     Parameters
@@ -65,6 +65,8 @@ def check_inputs(case, p, mesh, steps=None, shear_factor=1.0, load_factors=None)
         k_s > 0.
     load_factors : list of float, optional
         Explicit load factors, finite.
+    cell : str
+        'quadrilateral' or 'triangle'.
 
     Raises
     ------
@@ -75,7 +77,7 @@ def check_inputs(case, p, mesh, steps=None, shear_factor=1.0, load_factors=None)
     core_se3.errors.LoadError
         Any other parameter (loads, switches) not finite.
     core_se3.errors.OptionError
-        steps < 1, non-finite load factors.
+        steps < 1, non-finite load factors, an unknown cell.
     """
     from core_se3.errors import LoadError, MaterialError, MeshError, OptionError
     where = f"case {case.name!r}"
@@ -102,6 +104,8 @@ def check_inputs(case, p, mesh, steps=None, shear_factor=1.0, load_factors=None)
         raise MeshError(f"{where}: mesh must be (nx, ny) with integers >= 1, got {mesh!r} (e.g. --mesh 16x1)")
     if steps is not None and not (int(steps) == steps and steps >= 1):
         raise OptionError(f"{where}: steps must be an integer >= 1, got {steps!r}")
+    if cell not in ("quadrilateral", "triangle"):
+        raise OptionError(f"{where}: cell must be 'quadrilateral' (Q2) or 'triangle' (P2), got {cell!r}")
     if load_factors is not None and not np.all(np.isfinite(np.asarray(load_factors, float))):
         raise OptionError(f"{where}: load_factors must be finite, got {list(load_factors)!r}")
 

@@ -150,7 +150,7 @@ def run_case(name, mesh=None, overrides=None, steps=None, integration="psri", sh
     case = get_case(name)
     params = case_params(case, overrides or {})
     mesh = tuple(mesh) if mesh is not None else tuple(case.mesh)
-    check_inputs(case, params, mesh, steps, shear_factor, load_factors)
+    check_inputs(case, params, mesh, steps, shear_factor, load_factors, cell)
     loads, ref = apply_variant(case, params)
     skipped = reference_mismatch(ref, params)
     if skipped:  # a table for other parameters: no error rather than a wrong one (as core_se3)

@@ -28,6 +28,7 @@ from fenicsx_ref import run_case
     (dict(mesh=(2.5, 1)), MeshError, "mesh"),
     (dict(steps=0), OptionError, "steps"),
     (dict(shear_factor=0.0), MaterialError, "shear_factor"),
+    (dict(cell="tri"), OptionError, "cell"),
 ])
 def test_bad_inputs_are_named_errors_not_bare_or_silent(kw, exc, words):
     kw.setdefault("mesh", (4, 1))
