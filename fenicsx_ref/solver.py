@@ -77,6 +77,10 @@ def _import_dolfinx():
     from petsc4py import PETSc
 
 
+def _comm_size():
+    return MPI.COMM_WORLD.size
+
+
 def _tip_evaluator(model, point=None):
     """Returns f(w) -> (u (3,), theta (3,)) at the parameter point (s, y) of the probe
     (default: 'tip' = midpoint of the free edge x1)."""
@@ -144,6 +148,11 @@ def run_case(name, mesh=None, overrides=None, steps=None, integration="psri", sh
     """
     _import_dolfinx()
     from .model import ShellModel
+    if _comm_size() > 1:  # every rank raises here, before any collective call: no hang
+        from core_se3.errors import ParallelError
+        raise ParallelError(f"fenicsx_ref runs serial only (its probes and point loads are evaluated "
+                            f"on the local process; under {_comm_size()} MPI processes one rank found no "
+                            "probe cell: IndexError); run it without mpirun")
 
     timer = _Timer()
     t_start = time.perf_counter()

@@ -82,3 +82,15 @@ def test_moments_the_director_model_cannot_carry_are_refused(name, words):
     returned its converged steps up to lambda = 0.2 before failing."""
     with pytest.raises(NotImplementedError, match=words):
         run_case(name, mesh=(8, 2), steps=2)
+
+
+def test_mpi_run_is_refused_on_every_rank(monkeypatch):
+    """Under `mpirun -n 2` the rank without the tip cell died with a bare IndexError (index 0 is
+    out of bounds) while the other waited in a collective.  Now every rank raises ParallelError
+    before any collective call."""
+    from core_se3.errors import ParallelError
+    import fenicsx_ref.solver as solver
+    solver._import_dolfinx()
+    monkeypatch.setattr(solver, "_comm_size", lambda: 2)
+    with pytest.raises(ParallelError, match="serial only"):
+        run_case("cantilever-shear", mesh=(4, 1), steps=1)
