@@ -49,7 +49,7 @@ def environment():
 def _run_or_load(study, mod, quick, seed, reuse, **kw):
     if reuse:
         try:
-            data = common.load(study)
+            data = common.load(study, quick)
             return data, data.get("wall_time")
         except OSError:
             pass
@@ -62,7 +62,7 @@ def _run_or_load(study, mod, quick, seed, reuse, **kw):
     # the machine the study's times were measured on (a --reuse render may run elsewhere)
     data["machine"] = dict(cpu=env["cpu"], cores=env["cores"], load_start=env["load"][0],
                            load_end=os.getloadavg()[0])
-    common.save(study, data)
+    common.save(study, data, quick)
     return data, dt
 
 
@@ -76,7 +76,7 @@ def build(quick=False, seed=True, reuse=False):
     data["stress"], walls["stress"] = _run_or_load("stress", stress, quick, seed, reuse, locking=data["locking"])
     figs = {}
     for study, mod in (("agreement", agreement), ("locking", locking), ("pareto", pareto)):
-        p = common.figure_path(f"{study}.png")
+        p = common.figure_path(f"{common.stem(study, quick)}.png")
         mod.plot(data[study], p)
         figs[study] = os.path.relpath(p, common.OUT)
     total = time.perf_counter() - t0
@@ -84,7 +84,7 @@ def build(quick=False, seed=True, reuse=False):
         total = sum(v for v in walls.values() if v) + total
     env1 = environment()
     text = render(data, walls, total, env0, env1, fx_ok, fx_why, figs, quick, reuse)
-    path = os.path.normpath(os.path.join(common.OUT, "REPORT.md"))
+    path = os.path.normpath(os.path.join(common.OUT, f"{common.stem('REPORT', quick)}.md"))
     with open(path, "w", encoding="utf-8") as f:
         f.write(text)
     return path

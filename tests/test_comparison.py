@@ -223,8 +223,27 @@ def test_study_data_records_the_machine_its_times_were_measured_on(tmp_path, mon
     from comparison import common, report
     monkeypatch.setattr(common, "OUT", str(tmp_path))
     mod = types.SimpleNamespace(run=lambda quick, seed: dict(runs=[]))
-    data, _ = report._run_or_load("fake", mod, quick=True, seed=False, reuse=False)
+    data, _ = report._run_or_load("fake", mod, quick=False, seed=False, reuse=False)
     m = common.load("fake")["machine"]
     assert m["cpu"] == report.environment()["cpu"] and m["cores"] >= 1 and m["load_start"] >= 0
     row = report._machines({"fake": data, "old": {}}, {"fake": 1.0, "old": None})
     assert m["cpu"] in row and "old: not recorded" in row
+
+
+def test_quick_run_does_not_overwrite_the_full_study_data(tmp_path, monkeypatch):
+    """`python -m comparison agreement --quick` (3 of 8 cases, for development) wrote
+    reports/data/agreement.json over the full study, and a later `report --reuse` rendered those 3
+    cases as the published agreement.  Quick runs now write agreement-quick.json."""
+    import json
+    from comparison import __main__ as cli, agreement, common
+    monkeypatch.setattr(common, "OUT", str(tmp_path))
+    (tmp_path / "data").mkdir()
+    full = tmp_path / "data" / "agreement.json"
+    full.write_text(json.dumps(dict(cases=["the full study"])))
+    monkeypatch.setattr(agreement, "run", lambda quick, seed: dict(cases=["quick"], quick=quick))
+    monkeypatch.setattr(agreement, "markdown", lambda data: ("", {}))
+    monkeypatch.setattr(agreement, "plot", lambda data, path: None)
+    monkeypatch.setattr("core_se3.backend.pin_for_timing", lambda: None)
+    assert cli.main(["agreement", "--quick", "--no-seed"]) == 0
+    assert json.loads(full.read_text()) == dict(cases=["the full study"])
+    assert common.load("agreement", quick=True)["cases"] == ["quick"]
