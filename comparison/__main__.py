@@ -20,7 +20,7 @@ def main(argv=None):
     pin_for_timing()          # time the compiled product, not 'auto''s NumPy start
     ap = argparse.ArgumentParser(prog="python -m comparison", description=__doc__.splitlines()[0])
     ap.add_argument("study", choices=STUDIES + ("report",))
-    ap.add_argument("--quick", action="store_true", help="a few cases only (development)")
+    ap.add_argument("--quick", action="store_true", help="a few cases only (development; writes <study>-quick.json, REPORT-quick.md)")
     ap.add_argument("--no-seed", action="store_true", help="skip the seed-element runs")
     ap.add_argument("--reuse", action="store_true",
                     help="report: reuse reports/data/<study>.json where present instead of rerunning")
