@@ -94,6 +94,11 @@ def main(argv=None):
             if "reactions" in s:
                 line += f" {s['reactions'][0]['moment_about_axis']:12.6g}"
             print(line)
+        trunc = r["options"].get("reference_truncated_at")
+        if trunc:  # the case's load range was shortened (|theta| reaches pi beyond it)
+            from core_se3.catalogue import get_case
+            print(f"path ends at load factor {trunc['load_factor']:.6g} (the case's range ends at "
+                  f"{get_case(a.name).lam_range[1]:g}): {trunc['reason']}")
         if r["reference"]:
             ref = r["reference"]
             if ref["error"] is None:
