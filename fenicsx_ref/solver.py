@@ -36,7 +36,10 @@ class _Problem:
                 dofs = dolfinx.fem.locate_dofs_geometrical(
                     [Vi, Vc], lambda X, p=point: np.isclose(X[0], p[0]) & np.isclose(X[1], p[1]))[0]
                 if len(dofs) != 1:
-                    raise ValueError(f"point load at {point}: no unique node there (found {len(dofs)})")
+                    from core_se3.errors import MeshError
+                    raise MeshError(f"point load at (s, y) = {tuple(point)}: no unique mesh node there "
+                                    f"(found {len(dofs)}); the degree-2 grid has nodes at every half "
+                                    "cell: choose nx, ny that put one at the point")
                 self.point_dofs.append((int(dofs[0]), float(vec[i])))
         self.residuals = []
 

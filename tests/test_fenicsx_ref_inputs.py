@@ -94,3 +94,14 @@ def test_mpi_run_is_refused_on_every_rank(monkeypatch):
     monkeypatch.setattr(solver, "_comm_size", lambda: 2)
     with pytest.raises(ParallelError, match="serial only"):
         run_case("cantilever-shear", mesh=(4, 1), steps=1)
+
+
+def test_point_load_off_the_nodes_is_a_mesh_error_and_an_odd_nx_crown_is_a_node():
+    """The README said the semicylinder needs an even nx for its crown load; the Q2 grid has a
+    node at every half cell, so nx = 5 has one (and runs).  A point between nodes is a MeshError
+    saying how to fix it (was a plain ValueError)."""
+    from core_se3.errors import MeshError
+    with pytest.raises(MeshError, match="half cell"):
+        run_case("cantilever-shear", mesh=(4, 1), steps=1, point_loads=[((3.3, 0.1), (0.0, 0.0, 1.0))])
+    r = run_case("sze-semicylinder", mesh=(5, 4), overrides=dict(load_max=200.0), steps=1)
+    assert r["status"] == "ok" and r["steps"][-1]["probes"]["crown"]["u"][2] < 0
