@@ -13,7 +13,10 @@ def _parse_set(items):
         if "=" not in it:
             raise SystemExit(f"--set expects KEY=VALUE, got {it!r}")
         k, v = it.split("=", 1)
-        out[k.strip()] = float(v)
+        try:
+            out[k.strip()] = float(v)
+        except ValueError:
+            raise SystemExit(f"--set {k.strip()}: the value must be a number, got {v!r}") from None
     return out
 
 
@@ -57,7 +60,7 @@ def main(argv=None):
     try:
         r = run_case(a.name, mesh=a.mesh, overrides=_parse_set(a.set), steps=a.steps,
                      integration=a.integration, shear_factor=a.shear_factor, cell=a.cell)
-    except (CoreSE3Error, KeyError) as exc:  # a bad input, named by the message
+    except (CoreSE3Error, KeyError, NotImplementedError) as exc:  # a bad input / a case it cannot run
         print(f"error: {type(exc).__name__}: {exc.args[0] if exc.args else exc}", file=sys.stderr)
         return 2
     if a.name == "torsion":  # the small-twist torsion constant, as core_se3 reports it
