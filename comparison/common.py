@@ -7,7 +7,7 @@ import time
 
 import numpy as np
 
-__all__ = ["OUT", "save", "load", "planar", "reference_path", "progress"]
+__all__ = ["OUT", "stem", "save", "load", "planar", "reference_path", "progress"]
 
 OUT = os.environ.get("COMPARISON_OUT", os.path.join(os.path.dirname(__file__), "..", "reports"))
 
@@ -18,14 +18,20 @@ def _path(*parts):
     return p
 
 
-def save(study, data):
-    """reports/data/<study>.json"""
-    with open(_path("data", f"{study}.json"), "w", encoding="utf-8") as f:
+def stem(study, quick=False):
+    """File stem of a study's data and figure: a ``--quick`` (development) run writes
+    ``<study>-quick``, never over the full study that reports/REPORT.md is rendered from."""
+    return f"{study}-quick" if quick else study
+
+
+def save(study, data, quick=False):
+    """reports/data/<study>.json (``<study>-quick.json`` for a quick run)"""
+    with open(_path("data", f"{stem(study, quick)}.json"), "w", encoding="utf-8") as f:
         json.dump(data, f, indent=1, default=float)
 
 
-def load(study):
-    with open(_path("data", f"{study}.json"), encoding="utf-8") as f:
+def load(study, quick=False):
+    with open(_path("data", f"{stem(study, quick)}.json"), encoding="utf-8") as f:
         return json.load(f)
 
 

@@ -18,6 +18,14 @@ Observed rate p: least-squares slope of log error against log element size on th
 converged runs above the model's floor.  Time to 1 %, 0.1 %, 0.01 %: interpolated in log-log
 between the runs that bracket it, else extrapolated along t = C e^q fitted to the three most
 accurate runs while their errors still fall, else 'not reached' (a floor).
+
+Run-to-run spread: the times are wall times on a 2-core machine shared with other jobs; the
+fastest of the repeats removes warm-up, not contention.  Two earlier complete runs of this
+study (e2a5c2b on an Intel Xeon at load average about 1.2; 68e8b24 on an AMD EPYC at load 2-6)
+gave the same errors and times to 0.1 % whose ratios fenicsx_ref / core_se3 were
+4.3 / 6.2 / 9.0 / 8.3 and 2.7 / 4.9 / 8.9 / 12 (cantilever / pressure / arch / roll-up): read the
+ratios to a factor of about 1.6; core_se3 was the faster on every case in both.  The machine
+and load of the run shown are in the table at the top.
 """
 from __future__ import annotations
 

@@ -49,17 +49,20 @@ def environment():
 def _run_or_load(study, mod, quick, seed, reuse, **kw):
     if reuse:
         try:
-            data = common.load(study)
+            data = common.load(study, quick)
             return data, data.get("wall_time")
         except OSError:
             pass
     t0 = time.perf_counter()
-    commit = environment()["commit"]
+    env = environment()
     data = mod.run(quick=quick, seed=seed, **kw)
     dt = time.perf_counter() - t0
     data["wall_time"] = dt
-    data["commit"] = commit  # the code the study ran (others may commit while it runs)
-    common.save(study, data)
+    data["commit"] = env["commit"]  # the code the study ran (others may commit while it runs)
+    # the machine the study's times were measured on (a --reuse render may run elsewhere)
+    data["machine"] = dict(cpu=env["cpu"], cores=env["cores"], load_start=env["load"][0],
+                           load_end=os.getloadavg()[0])
+    common.save(study, data, quick)
     return data, dt
 
 
@@ -73,7 +76,7 @@ def build(quick=False, seed=True, reuse=False):
     data["stress"], walls["stress"] = _run_or_load("stress", stress, quick, seed, reuse, locking=data["locking"])
     figs = {}
     for study, mod in (("agreement", agreement), ("locking", locking), ("pareto", pareto)):
-        p = common.figure_path(f"{study}.png")
+        p = common.figure_path(f"{common.stem(study, quick)}.png")
         mod.plot(data[study], p)
         figs[study] = os.path.relpath(p, common.OUT)
     total = time.perf_counter() - t0
@@ -81,7 +84,7 @@ def build(quick=False, seed=True, reuse=False):
         total = sum(v for v in walls.values() if v) + total
     env1 = environment()
     text = render(data, walls, total, env0, env1, fx_ok, fx_why, figs, quick, reuse)
-    path = os.path.normpath(os.path.join(common.OUT, "REPORT.md"))
+    path = os.path.normpath(os.path.join(common.OUT, f"{common.stem('REPORT', quick)}.md"))
     with open(path, "w", encoding="utf-8") as f:
         f.write(text)
     return path
@@ -195,6 +198,24 @@ def _torsion_thin(data):
             "(clamp and rigid end edge hold the warping), the same in both models.")
 
 
+def _psri_alpha_note(row):
+    """': the same scheme there' when PSRI's full-rule fraction alpha = min(1, (h/h_e)^2) is 1
+    on the row's fine grid (cells smaller than the thickness), so full = PSRI by construction."""
+    from math import hypot
+    from core_se3.catalogue import case_params, get_case
+    case = get_case(row["case"])
+    p = case_params(case, row["overrides"])
+    nx, ny = row["levels"][-1]["mesh_fx"]
+    if case.geometry != "strip":
+        return ""
+    he = hypot(p["L"] / nx, p["width"] / ny)  # Q2 cell diameter (rectangles)
+    if p["h"] < he:
+        return ""
+    return (f": the same scheme on the {nx}×{ny} grid, whose cells (diameter {he:.3g}) are smaller "
+            f"than the thickness {p['h']:g}, so PSRI's α = min(1, (h/h_e)²) = 1 -- their agreement "
+            "does not test locking")
+
+
 def _findings(data):
     """Explanations attached to measured disagreements (text conditioned on the data)."""
     out = []
@@ -206,10 +227,10 @@ def _findings(data):
         full = ", ".join(pct(r["levels"][-1].get("dist_full_psri")) for r in tor)
         out.append(
             f"* **torsion** is the case that disagrees: core_se3's end torque at π/2 is {ratios} times "
-            f"fenicsx_ref's (coarse grids: {coarse}), unchanged by refinement and by fenicsx_ref's "
-            f"integration (full vs PSRI differ by {full}), so it is not discretisation error. core_se3 "
+            f"fenicsx_ref's (coarse grids: {coarse}), unchanged by refinement, so it is not discretisation "
+            f"error. (fenicsx_ref's full and PSRI runs differ by {full}{_psri_alpha_note(tor[-1])}.) core_se3 "
             "applies the plate bending law to the unsymmetrised Cosserat curvature K_αβ = (d₃ × Γ_α)·A_β "
-            "(docs/CONVENTIONS, core_se3/material.py), which penalises its skew part; a Reissner–Mindlin "
+            "(docs/CONVENTIONS, core_se3/fem/material.py), which penalises its skew part; a Reissner–Mindlin "
             "director shell (fenicsx_ref) leaves it free. On this narrow, thick strip (w/h = 2.5) that "
             "stiffens the twist (README: J = 7.62e-5 on 20×6 vs 6.94e-5 with the skew part symmetrised). "
             "The probe of this case is the axial end shortening, a second-order (Wagner) effect of the "
@@ -282,6 +303,17 @@ def jit_total(data):
     return t
 
 
+def _machines(data, walls):
+    """Per study: the CPU and load its times were measured with ('not recorded' for data
+    written before the studies stored it: then the CPU row above need not be theirs)."""
+    out = []
+    for k in walls:
+        m = data[k].get("machine")
+        out.append(f"{k}: not recorded" if not m else
+                   f"{k}: {m['cpu']} ({m['cores']} cores), {m['load_start']:.1f} / {m['load_end']:.1f}")
+    return "; ".join(out)
+
+
 def render(data, walls, total, env0, env1, fx_ok, fx_why, figs, quick, reuse=False):
     L = []
     L.append("# core_se3 against fenicsx_ref: agreement, locking, cost of accuracy, stability\n")
@@ -297,7 +329,8 @@ def render(data, walls, total, env0, env1, fx_ok, fx_why, figs, quick, reuse=Fal
         L.append(f"**fenicsx_ref was not available** ({fx_why}): its columns are empty / 'not available'.\n")
     L.append("## Machine and libraries\n")
     L.append(markdown_table(["item", "value"], [
-        ["CPU", f"{env0['cpu']} ({env0['cores']} logical cores, shared with other jobs)"],
+        ["CPU " + ("when rendered" if reuse else "of this run"),
+         f"{env0['cpu']} ({env0['cores']} logical cores, shared with other jobs)"],
         ["load average " + ("when rendered (not during the studies)" if reuse else "at start / end"),
          f"{env0['load'][0]:.2f} / {env1['load'][0]:.2f}"],
         ["platform", env0["platform"]], ["Python", env0["python"]], ["NumPy", env0["numpy"]],
@@ -307,6 +340,7 @@ def render(data, walls, total, env0, env1, fx_ok, fx_why, figs, quick, reuse=Fal
          f"{jit_total(data):.0f} s (cache: FENICSX_REF_JIT_CACHE = "
          f"{os.environ.get('FENICSX_REF_JIT_CACHE', '~/.cache/fenicsx_ref/jit')})"],
         ["commit at the start of each study", ", ".join(f"{k} {data[k].get('commit', '?')}" for k in walls)],
+        ["machine of each study's times (CPU, load average at start / end)", _machines(data, walls)],
         ["study wall times", ", ".join(f"{k} {v / 60:.1f} min" if v else f"{k} (?)"
                                        for k, v in walls.items())]]))
     L.append("\n## Summary\n")

@@ -13,7 +13,10 @@ def _parse_set(items):
         if "=" not in it:
             raise SystemExit(f"--set expects KEY=VALUE, got {it!r}")
         k, v = it.split("=", 1)
-        out[k.strip()] = float(v)
+        try:
+            out[k.strip()] = float(v)
+        except ValueError:
+            raise SystemExit(f"--set {k.strip()}: the value must be a number, got {v!r}") from None
     return out
 
 
@@ -53,8 +56,13 @@ def main(argv=None):
     from .solver import _import_dolfinx
     _import_dolfinx()
     logging.disable(logging.INFO)  # silence the FFCx/CFFI/setuptools build chatter
-    r = run_case(a.name, mesh=a.mesh, overrides=_parse_set(a.set), steps=a.steps,
-                 integration=a.integration, shear_factor=a.shear_factor, cell=a.cell)
+    from core_se3.errors import CoreSE3Error
+    try:
+        r = run_case(a.name, mesh=a.mesh, overrides=_parse_set(a.set), steps=a.steps,
+                     integration=a.integration, shear_factor=a.shear_factor, cell=a.cell)
+    except (CoreSE3Error, KeyError, NotImplementedError) as exc:  # a bad input / a case it cannot run
+        print(f"error: {type(exc).__name__}: {exc.args[0] if exc.args else exc}", file=sys.stderr)
+        return 2
     if a.name == "torsion":  # the small-twist torsion constant, as core_se3 reports it
         from core_se3.catalogue.references import elastica_entry
         from .solver import torsion_constant
@@ -89,10 +97,19 @@ def main(argv=None):
             if "reactions" in s:
                 line += f" {s['reactions'][0]['moment_about_axis']:12.6g}"
             print(line)
+        trunc = r["options"].get("reference_truncated_at")
+        if trunc:  # the case's load range was shortened (|theta| reaches pi beyond it)
+            from core_se3.catalogue import get_case
+            print(f"path ends at load factor {trunc['load_factor']:.6g} (the case's range ends at "
+                  f"{get_case(a.name).lam_range[1]:g}): {trunc['reason']}")
         if r["reference"]:
             ref = r["reference"]
-            print(f"reference {ref['entry']}: error {ref['error']:.3e} ({ref['n_points']} points"
-                  + (f"; {ref['measure']}" if "measure" in ref else "") + ")")
+            if ref["error"] is None:
+                print(f"reference {ref['entry']}: {ref.get('note', 'no reference load on the path')}")
+            else:
+                print(f"reference {ref['entry']}: error {ref['error']:.3e} ({ref['n_points']} points"
+                      + (f"; {ref['measure']}" if "measure" in ref else "")
+                      + ("" if r["status"] == "ok" else "; over the converged part of the path only") + ")")
         if "torsion" in r:
             t = r["torsion"]
             print(f"small-twist torsion constant J = T L/(G angle) = {t['J']:.5e}, from the interior "

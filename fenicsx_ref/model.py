@@ -228,8 +228,17 @@ class ShellModel:
         """Total moment ``total`` about lab ``direction``, spread along ``edge``.
 
         Virtual work m . delta(theta): exact for rotations about a fixed axis (all planar cases);
-        the follower flag then changes nothing.  Only the part of ``direction`` tangent to the
-        reference surface is carried (no drilling rotation in this model)."""
+        the follower flag then changes nothing.  A component of ``direction`` along the surface
+        normal (drilling) is refused: this model has no drilling rotation."""
+        a = np.asarray(direction, float)
+        (xa, _), (xb, _) = self.box
+        ss = {"x0": [xa], "x1": [xb]}.get(edge, np.linspace(xa, xb, 65))
+        normal = max(abs(a @ self.frame_np(s)[2]) for s in ss)
+        if normal > 1e-12 * np.linalg.norm(a):
+            raise NotImplementedError(
+                f"edge moment on {edge!r} about {tuple(a)} has a component {normal:.3g} along the "
+                "surface normal (a drilling moment): this 2-parameter director model has no drilling "
+                "rotation and would drop it silently; use core_se3")
         m = self._const(total / self.edge_length[edge])
         vec = ufl.as_vector([float(a) for a in direction])
         dtheta = self.v_beta[0] * self.t1 + self.v_beta[1] * self.t2

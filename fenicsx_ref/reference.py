@@ -18,7 +18,8 @@ from core_se3.catalogue.measures import curve_deviation, curve_columns, errors_a
 from core_se3.catalogue.references import elastica_entry, literature_entry
 
 __all__ = ["case_params", "apply_variant", "case_length", "case_domain", "reference_entry",
-           "reference_load_factors", "reference_error", "literature_error"]
+           "reference_load_factors", "reference_error", "literature_error", "check_inputs",
+           "reference_mismatch"]
 
 reference_entry = elastica_entry
 
@@ -44,6 +45,78 @@ def case_domain(case, p):
         S = pi * p["R"]
         return S, p["L"], ((-S / 2, 0.0), (S / 2, p["L"]))
     raise NotImplementedError(f"fenicsx_ref: geometry {case.geometry!r}")
+
+
+_GEOMETRY_KEYS = ("L", "width", "R")
+
+
+def check_inputs(case, p, mesh, steps=None, shear_factor=1.0, load_factors=None, cell="quadrilateral"):
+    """Reject what the shell cannot solve before any DOLFINx work, naming the input.
+
+    Parameters
+    ----------
+    case : Case
+        The catalogue case; ``p`` its parameters (:func:`case_params`).
+    mesh : (int, int)
+        Elements along the two parameter directions, each >= 1.
+    steps : int, optional
+        Uniform load steps, >= 1.
+    shear_factor : float
+        k_s > 0.
+    load_factors : list of float, optional
+        Explicit load factors, finite.
+    cell : str
+        'quadrilateral' or 'triangle'.
+
+    Raises
+    ------
+    core_se3.errors.MaterialError
+        E <= 0, h <= 0, nu outside (-1, 0.5) (the project's material range), k_s <= 0, non-finite.
+    core_se3.errors.MeshError
+        A length (L, width, R) <= 0 or non-finite, or a mesh count < 1.
+    core_se3.errors.LoadError
+        Any other parameter (loads, switches) not finite.
+    core_se3.errors.OptionError
+        steps < 1, non-finite load factors, an unknown cell.
+    """
+    from core_se3.errors import LoadError, MaterialError, MeshError, OptionError
+    where = f"case {case.name!r}"
+    for k, v in p.items():
+        if not np.isfinite(v):
+            cls = MaterialError if k in ("E", "nu", "h") else MeshError if k in _GEOMETRY_KEYS else LoadError
+            raise cls(f"{where}: parameter {k} = {v} is not finite; set a finite value (--set {k}=...)")
+    bad = [(k, "> 0") for k in ("E", "h") if k in p and not p[k] > 0]
+    if "nu" in p and not -1.0 < p["nu"] < 0.5:
+        bad.append(("nu", "in (-1, 0.5)"))
+    if bad:
+        k, rng = bad[0]
+        raise MaterialError(f"{where}: {k} = {p[k]:g} must be {rng}; set it with --set {k}=...")
+    if not (np.isfinite(shear_factor) and shear_factor > 0):
+        raise MaterialError(f"{where}: shear_factor = {shear_factor} must be finite and > 0")
+    for k in _GEOMETRY_KEYS:
+        if k in p and not p[k] > 0:
+            raise MeshError(f"{where}: the length {k} = {p[k]:g} must be > 0")
+    try:
+        ok = len(mesh) == 2 and all(int(n) == n and n >= 1 for n in mesh)
+    except TypeError:
+        ok = False
+    if not ok:
+        raise MeshError(f"{where}: mesh must be (nx, ny) with integers >= 1, got {mesh!r} (e.g. --mesh 16x1)")
+    if steps is not None and not (int(steps) == steps and steps >= 1):
+        raise OptionError(f"{where}: steps must be an integer >= 1, got {steps!r}")
+    if cell not in ("quadrilateral", "triangle"):
+        raise OptionError(f"{where}: cell must be 'quadrilateral' (Q2) or 'triangle' (P2), got {cell!r}")
+    if load_factors is not None and not np.all(np.isfinite(np.asarray(load_factors, float))):
+        raise OptionError(f"{where}: load_factors must be finite, got {list(load_factors)!r}")
+
+
+def reference_mismatch(ref, p):
+    """"" when the reference entry holds for the parameters p, else why not (the catalogue's
+    ``Reference.applies``, e.g. a table in physical units computed for another E or h: an
+    error against it would measure the change of parameters, not the model)."""
+    if ref is None or ref.applies is None:
+        return ""
+    return ref.applies(p, reference_entry(ref.entry).get("params", {}))
 
 
 def apply_variant(case, p):
@@ -103,8 +176,15 @@ def reference_error(case, p, ref, steps, lam_tol=1e-9):
 
 def literature_error(case, p, steps, probe):
     """The catalogue's curve deviation (``measures.curve_deviation``) of the computed path
-    against the literature table of the case."""
-    P_max = float(literature_entry(case.extra["literature"])["parameters"]["P_max"])
+    against the literature table of the case; error None with a note when the case's parameters
+    (E, nu, h, R, L) are not the table's."""
+    table = literature_entry(case.extra["literature"])["parameters"]
+    from core_se3.catalogue.cases_shells import same_params
+    why = same_params(p, table)
+    if why:  # the table is for the published parameters: a distance to it would measure the change
+        return {"entry": case.extra["literature"], "file": "literature.json", "error": None,
+                "note": f"not compared: {why}"}
+    P_max = float(table["P_max"])
     lams = [s["load"]["value"] / P_max for s in steps]
     col = curve_columns(case)[0]
     dev, per, info = curve_deviation(case, lams, [{col["probe"]: s["probes"][probe]["u"]} for s in steps])

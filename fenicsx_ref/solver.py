@@ -8,8 +8,8 @@ import numpy as np
 
 from core_se3.catalogue import get_case
 
-from .reference import (apply_variant, case_domain, case_params, literature_error, reference_error,
-                        reference_load_factors)
+from .reference import (apply_variant, case_domain, case_params, check_inputs, literature_error,
+                        reference_error, reference_load_factors, reference_mismatch)
 
 __all__ = ["run_case", "torsion_constant"]
 
@@ -36,7 +36,10 @@ class _Problem:
                 dofs = dolfinx.fem.locate_dofs_geometrical(
                     [Vi, Vc], lambda X, p=point: np.isclose(X[0], p[0]) & np.isclose(X[1], p[1]))[0]
                 if len(dofs) != 1:
-                    raise ValueError(f"point load at {point}: no unique node there (found {len(dofs)})")
+                    from core_se3.errors import MeshError
+                    raise MeshError(f"point load at (s, y) = {tuple(point)}: no unique mesh node there "
+                                    f"(found {len(dofs)}); the degree-2 grid has nodes at every half "
+                                    "cell: choose nx, ny that put one at the point")
                 self.point_dofs.append((int(dofs[0]), float(vec[i])))
         self.residuals = []
 
@@ -75,6 +78,30 @@ def _import_dolfinx():
     import dolfinx.nls.petsc
     from mpi4py import MPI
     from petsc4py import PETSc
+
+
+_LOAD_KINDS = ("edge_force", "edge_moment", "pressure", "point_force", "edge_rotation")
+
+
+def _check_supported(case, loads):
+    """NotImplementedError naming what of the case this model cannot represent (before the
+    inputs are checked: a case it cannot run should not be reported as a bad mesh)."""
+    if case.geometry not in ("strip", "arch", "semicylinder"):
+        raise NotImplementedError(f"fenicsx_ref: case {case.name!r} has geometry {case.geometry!r}; "
+                                  "it supports 'strip', 'arch' and 'semicylinder'")
+    family = case.extra.get("family")
+    if family not in (None, "sze"):  # contact, friction, magnetic, design: built by core_se3's family
+        raise NotImplementedError(f"fenicsx_ref: case {case.name!r} belongs to core_se3's {family!r} "
+                                  "family (obstacles, fields or design variables built there), which "
+                                  "this model does not represent")
+    bad = sorted({ld["kind"] for ld in loads} - set(_LOAD_KINDS))
+    if bad:
+        raise NotImplementedError(f"fenicsx_ref: case {case.name!r} has load kind(s) {', '.join(bad)}; "
+                                  f"it implements {', '.join(_LOAD_KINDS)}")
+
+
+def _comm_size():
+    return MPI.COMM_WORLD.size
 
 
 def _tip_evaluator(model, point=None):
@@ -144,15 +171,33 @@ def run_case(name, mesh=None, overrides=None, steps=None, integration="psri", sh
     """
     _import_dolfinx()
     from .model import ShellModel
+    if _comm_size() > 1:  # every rank raises here, before any collective call: no hang
+        from core_se3.errors import ParallelError
+        raise ParallelError(f"fenicsx_ref runs serial only (its probes and point loads are evaluated "
+                            f"on the local process; under {_comm_size()} MPI processes one rank found no "
+                            "probe cell: IndexError); run it without mpirun")
 
     timer = _Timer()
     t_start = time.perf_counter()
     case = get_case(name)
     params = case_params(case, overrides or {})
     loads, ref = apply_variant(case, params)
-    nx, ny = mesh if mesh is not None else case.mesh
+    _check_supported(case, loads)
+    mesh = tuple(mesh) if mesh is not None else tuple(case.mesh)
+    check_inputs(case, params, mesh, steps, shear_factor, load_factors, cell)
+    skipped = reference_mismatch(ref, params)
+    if skipped:  # a table for other parameters: no error rather than a wrong one (as core_se3)
+        skipped, ref = dict(entry=ref.entry, block=ref.block, error=None, file="elastica.json",
+                            note=f"not compared: {skipped}"), None
+    nx, ny = (int(n) for n in mesh)
     length, width, box = case_domain(case, params)
     rot_loads = [ld for ld in loads if ld["kind"] == "edge_rotation"]
+    axes = [np.asarray(ld["direction"], float) for ld in loads if ld["kind"] == "edge_moment"]
+    if any(np.linalg.norm(np.cross(axes[0], b)) > 1e-12 * np.linalg.norm(b) for b in axes[1:]):
+        raise NotImplementedError(
+            f"case {name!r}: edge moments about more than one axis rotate the edge about a moving "
+            "axis, where m . delta(theta) is not their virtual work (fenicsx_ref carries planar moments "
+            "only); use core_se3")
 
     # ----- load factors -------------------------------------------------------------------------
     lam0, lam1 = case.lam_range
@@ -307,11 +352,14 @@ def run_case(name, mesh=None, overrides=None, steps=None, integration="psri", sh
     tt = timer.t
     tt["other"] = max(0.0, t_total - tt["setup"] - tt["jit"] - tt["assembly"] - tt["solve"])
 
-    reference = None
+    reference = skipped or None
     if ref is not None:
         reference = reference_error(case, params, ref, steps_out)
     elif case.extra.get("literature"):
         reference = literature_error(case, params, steps_out, probe)
+    if reference is not None and reference.get("error") is not None:
+        # a failed path: the error covers only the steps that converged
+        reference["path_complete"] = status == "ok"
     n_dofs = model.V.dofmap.index_map.size_global * model.V.dofmap.index_map_bs
     result = {
         "schema": "core-se3-result", "version": 1, "case": name, "model": "fenicsx_ref",

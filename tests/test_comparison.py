@@ -178,3 +178,72 @@ def test_stress_counts_a_warned_wrong_run_as_reported():
     assert stress._thin_outcome(True, False, dict(run, warning="element 'seed' ... locks")) == "fail"
     assert stress._thin_outcome(True, True, dict(run, warning="element 'seed' ... locks")) == "pass"
     assert stress._thin_outcome(False, False, dict(status="failed: x")) == "fail"
+
+
+def test_report_torsion_finding_does_not_cite_psri_equal_to_full_as_evidence():
+    """REPORT.md said the torsion torque ratio was 'unchanged ... by fenicsx_ref's integration
+    (full vs PSRI differ by 2.1e-14 %)'.  On the 20x6 grid of the 1 x 0.25 strip the Q2 cells
+    (diameter 0.065) are smaller than h = 0.1, so PSRI's alpha = min(1, (h/h_e)^2) = 1: the two
+    runs are the same scheme, equal by construction, and prove nothing.  The text now says so;
+    on the coarse 10x3 grid (h_e = 0.130 > h) there is nothing to add."""
+    from comparison.report import _findings, _psri_alpha_note
+    row = dict(case="torsion", nu=0.0, overrides=dict(angle=pi / 2, nu=0.0),
+               levels=[dict(mesh_fx=[10, 3], torque_ratio=[1.105], dist_full_psri=1e-3),
+                       dict(mesh_fx=[20, 6], torque_ratio=[1.103], dist_full_psri=2e-16)])
+    assert _psri_alpha_note(dict(row, levels=row["levels"][:1])) == ""
+    assert "= 1" in _psri_alpha_note(row) and "0.065" in _psri_alpha_note(row)
+    text = "\n".join(_findings(dict(agreement=dict(cases=[row]), stress=dict(tests=[]),
+                                    locking=dict(runs=[]))))
+    assert "unchanged by refinement and by fenicsx_ref's integration" not in text
+    assert "does not test locking" in text
+
+
+def test_agreement_levels_refine_the_width_where_nu_makes_it_vary():
+    """With nu = 0.3 a strip's deflection varies across the width (anticlastic bending); the two
+    grid levels must refine that direction too, else the 'fine grid' distance is the common
+    width error: it was fx 16x2 / core 32x4 on both levels, 0.11 % (cantilever) and 0.22 %
+    (follower pressure), which fall to 0.054 % and 0.065 % on 16x4 / 32x8."""
+    from comparison.agreement import CASES, _mesh_core, _nu_mesh
+    for name, _, _, _, meshes in CASES:
+        if name == "torsion":
+            continue
+        m = [_nu_mesh(name, mm, 0.3, lev) for lev, mm in enumerate(meshes)]
+        assert m[1][0] > m[0][0], (name, m)
+        if m[1][1] > 1:
+            assert m[1][1] > m[0][1], (name, m)          # refined across the width as well
+        assert _mesh_core(m[1]) == (2 * m[1][0], 2 * m[1][1])
+    assert _nu_mesh("cantilever-shear", (16, 1), 0.0, 1) == (16, 1)   # nu = 0: uniform across
+
+
+def test_study_data_records_the_machine_its_times_were_measured_on(tmp_path, monkeypatch):
+    """REPORT.md's CPU row was the machine that rendered the page: after `report --reuse` on
+    another host it said 'AMD EPYC' above pareto times measured on an Intel Xeon.  Each study's
+    data now stores its own CPU and load; data without it is shown as 'not recorded'."""
+    import types
+    from comparison import common, report
+    monkeypatch.setattr(common, "OUT", str(tmp_path))
+    mod = types.SimpleNamespace(run=lambda quick, seed: dict(runs=[]))
+    data, _ = report._run_or_load("fake", mod, quick=False, seed=False, reuse=False)
+    m = common.load("fake")["machine"]
+    assert m["cpu"] == report.environment()["cpu"] and m["cores"] >= 1 and m["load_start"] >= 0
+    row = report._machines({"fake": data, "old": {}}, {"fake": 1.0, "old": None})
+    assert m["cpu"] in row and "old: not recorded" in row
+
+
+def test_quick_run_does_not_overwrite_the_full_study_data(tmp_path, monkeypatch):
+    """`python -m comparison agreement --quick` (3 of 8 cases, for development) wrote
+    reports/data/agreement.json over the full study, and a later `report --reuse` rendered those 3
+    cases as the published agreement.  Quick runs now write agreement-quick.json."""
+    import json
+    from comparison import __main__ as cli, agreement, common
+    monkeypatch.setattr(common, "OUT", str(tmp_path))
+    (tmp_path / "data").mkdir()
+    full = tmp_path / "data" / "agreement.json"
+    full.write_text(json.dumps(dict(cases=["the full study"])))
+    monkeypatch.setattr(agreement, "run", lambda quick, seed: dict(cases=["quick"], quick=quick))
+    monkeypatch.setattr(agreement, "markdown", lambda data: ("", {}))
+    monkeypatch.setattr(agreement, "plot", lambda data, path: None)
+    monkeypatch.setattr("core_se3.backend.pin_for_timing", lambda: None)
+    assert cli.main(["agreement", "--quick", "--no-seed"]) == 0
+    assert json.loads(full.read_text()) == dict(cases=["the full study"])
+    assert common.load("agreement", quick=True)["cases"] == ["quick"]
