@@ -517,3 +517,30 @@ def test_batched_numpy_magnets_equal_the_loads_sum(which):
     fb = sum(ld.evaluate(g, 0.7, tangent=True).f for ld in p.loads)
     assert np.abs(fb).max() > 0 and rel(fa, fb) <= 1e-14
     assert rel(p.external(g, 0.7, tangent=False)[0], fb) <= 1e-14
+
+
+@pytest.mark.parametrize("backend", ["numpy", "numba"])
+def test_a_state_of_the_wrong_shape_is_refused(backend):
+    """The kernels index the frames and increments by node id without bounds checks: a state of
+    fewer frames than nodes (another mesh's, or a slice) read memory past its end on numba (an
+    'edge turns by inf rad', or a plausible residual from a view), a short eta in retract gave
+    frames of garbage without an error, and NumPy raised a bare IndexError.  Both backends now
+    refuse the shapes with a MeshError naming them."""
+    from core_se3.errors import MeshError
+    p = _loaded("nodal_dead", backend)
+    n = p.mesh.n_nodes
+    g = _load_state(p.mesh, "nodal_dead")
+    for bad in (g[:-3].copy(), np.concatenate([g, g[:2]]), g[:, :3].copy(), g.reshape(n, 16)):
+        with pytest.raises(MeshError, match=rf"shape \({', '.join(map(str, bad.shape))}\) for a mesh of {n} nodes"):
+            p.evaluate(bad, 0.7)
+        with pytest.raises(MeshError, match="a state of frames"):
+            p.residual(bad, 0.7)
+    with pytest.raises(MeshError, match=rf"increments of shape \({n - 3}, 6\)"):
+        p.retract(g, np.zeros((n - 3, 6)))
+    with pytest.raises(MeshError, match=rf"frames of shape \({n}, 3, 4\)"):
+        p.retract(g[:, :3].copy(), np.zeros((n, 6)))
+    # the right shapes in another dtype or layout: the same answer as float64 C order
+    ref = p.evaluate(g, 0.7)
+    for ok in (np.asfortranarray(g), g.tolist(), np.repeat(g, 2, axis=0)[::2]):
+        assert rel(p.evaluate(ok, 0.7).r, ref.r) <= TOL
+    assert rel(p.retract(g, np.zeros((n, 6))), g) <= TOL

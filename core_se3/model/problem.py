@@ -36,6 +36,18 @@ from .supports import (LabSpring, LabTiltSpring, Prescribed, RotationComponentSp
 __all__ = ["Problem", "Evaluation", "SOLVERS"]
 
 
+def _frames(g, n_nodes):
+    """The state ``g`` as a float array of one 4x4 frame per node, else a MeshError naming the
+    shapes: the compiled kernels index the frames by node id without bounds checks, so a state of
+    fewer frames than nodes read memory past its end (a misleading 'edge turns by inf rad', or a
+    plausible residual), and NumPy failed with a bare IndexError."""
+    g = np.asarray(g, dtype=float)
+    if g.shape != (n_nodes, 4, 4):
+        raise MeshError(f"a state of frames of shape {g.shape} for a mesh of {n_nodes} nodes: give one 4x4 "
+                        f"frame per node, shape ({n_nodes}, 4, 4) (the mesh of this problem, not another's)")
+    return g
+
+
 class Problem:
     """A shell problem.
 
@@ -541,6 +553,7 @@ class Problem:
         loads: a subset of the problem's loads to evaluate instead of all (on the NumPy path;
         linear analysis' reference stiffness without the loads' geometric stiffness)."""
         asm = assembler or self.assembler()
+        g = _frames(g, self.mesh.n_nodes)
         if stress is not None and not self.element.mixed:
             raise OptionError(f"element {self.element_name!r} has no mixed iteration (stress=)")
         if self.backend == "numba" and loads is None:
@@ -567,7 +580,8 @@ class Problem:
 
     def retract(self, g, eta):
         """The exponential update g_i exp(eta_i) of nodal frames g (n, 4, 4) by twists eta
-        (n, 6) (the paper's Algorithm 1); compiled with the numba backend.
+        (n, 6) (the paper's Algorithm 1); compiled with the numba backend.  A MeshError when the
+        shapes do not match.
 
         Example
         -------
@@ -578,6 +592,11 @@ class Problem:
         >>> np.round(p.retract(p.mesh.g0, eta)[0, :3, 0], 12).tolist()
         [0.0, 1.0, 0.0]
         """
+        g, eta = np.asarray(g, dtype=float), np.asarray(eta, dtype=float)
+        if g.ndim != 3 or g.shape[1:] != (4, 4) or eta.shape != (len(g), 6):
+            raise MeshError(f"retract: frames of shape {g.shape} and increments of shape {eta.shape}; give k frames "
+                            "(k, 4, 4) and one twist (v, w) per frame, (k, 6) (the compiled update reads eta[i] for "
+                            "every frame i, past the end of a shorter eta)")
         if self.backend == "numba":
             from ..kernels.lie import retract
             out = np.empty_like(g, dtype=float)
