@@ -84,7 +84,7 @@ class CompiledEvaluation:
             if add is not None:
                 add(g, lam, f, data, tangent)
                 continue
-            ev = ld.evaluate(g, lam, tangent)
+            ev = ld.evaluate(g, lam, tangent).checked(ld, len(f), len(self.problem.mesh.quads))
             f += ev.f
             if tangent:
                 add_blocks(data, pattern, self.problem.mesh.quads, ev.node_blocks, ev.element_blocks)

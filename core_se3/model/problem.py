@@ -530,7 +530,7 @@ class Problem:
                 f += magnets_force(mags, g, lam)
                 loads = [ld for ld in loads if type(ld) is not MagneticLoad]
         for load in loads:
-            ev = load.evaluate(g, lam, tangent)
+            ev = load.evaluate(g, lam, tangent).checked(load, n, self.mesh.n_elements)
             f += ev.f
             if tangent and ev.node_blocks is not None:
                 Kn += ev.node_blocks
@@ -538,7 +538,10 @@ class Problem:
                 if Ke is None:
                     Ke = np.zeros((self.mesh.n_elements, 4, 4, 6, 6))
                 ids, blocks = ev.element_blocks
-                Ke[ids] += blocks
+                if len(np.unique(ids)) == len(ids):
+                    Ke[ids] += blocks
+                else:                        # an element listed twice adds twice (as the compiled backend)
+                    np.add.at(Ke, ids, blocks)
         return f, Kn, Ke
 
     def evaluate(self, g, lam, tangent=True, assembler=None, out=None, stress=None, loads=None):
