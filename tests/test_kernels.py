@@ -605,3 +605,23 @@ def test_element_blocks_of_a_repeated_element_add_up_on_both_backends():
         # the block eye(3) at (corner 0, corner 1) of element 4, twice
         assert abs((K[backend, "repeated_element"] - K[backend, "no_element_blocks"]).sum() - 6.0) <= 1e-9
     assert rel(K["numba", "repeated_element"], K["numpy", "repeated_element"]) <= TOL
+
+
+def test_the_tangent_out_array_is_checked():
+    """Problem.evaluate(..., out=data) on numba: the kernels write the tangent into ``out`` by
+    position without bounds checks.  Before, a short array was written past its end (then a bare
+    scipy ValueError, or a crash), an int array truncated K to whole numbers (3.6e-3 of |K| off,
+    silently), a float32 one rounded it (7e-8).  Now each is an OptionError; a right array that
+    is not zero is overwritten, and K shares it."""
+    from core_se3.errors import OptionError
+    p = _loaded("surface_follower", "numba")
+    g = p.apply_prescribed(_load_state(p.mesh, "surface_follower"), 0.7)
+    ref = p.evaluate(g, 0.7).K.copy()
+    nnz = p.assembler().pattern().nnz
+    for bad in (np.zeros(nnz // 2), np.zeros(nnz, np.float32), np.zeros(nnz, np.int64), np.zeros(2 * nnz)[::2],
+                list(np.zeros(nnz))):
+        with pytest.raises(OptionError, match=f"float64 array of the pattern's {nnz} entries"):
+            p.evaluate(g, 0.7, out=bad)
+    out = np.full(nnz, 7.0)
+    K = p.evaluate(g, 0.7, out=out).K
+    assert np.shares_memory(K.data, out) and abs(K - ref).max() <= TOL * abs(ref).max()

@@ -550,7 +550,8 @@ class Problem:
 
         With the numba backend and an element that has compiled kernels, the element and the
         loads write straight into the CSR data of the assembler's fixed pattern (``out``: a
-        data array of ``assembler.pattern().nnz`` to reuse, which the returned K then shares);
+        float64 data array of ``assembler.pattern().nnz`` to reuse, which the returned K then
+        shares; another array is an OptionError);
         otherwise the NumPy path sums the blocks (the reference).  stress: a mixed element's
         independent stresses for the geometric part of the tangent (the mixed iteration).
         loads: a subset of the problem's loads to evaluate instead of all (on the NumPy path;
