@@ -625,3 +625,27 @@ def test_the_tangent_out_array_is_checked():
     out = np.full(nnz, 7.0)
     K = p.evaluate(g, 0.7, out=out).K
     assert np.shares_memory(K.data, out) and abs(K - ref).max() <= TOL * abs(ref).max()
+
+
+def test_load_and_support_ids_outside_the_mesh_are_refused():
+    """A NodalLoad, SurfaceLoad or penalty spring built directly with ids outside the mesh: the
+    kernels write their forces by id without bounds checks, so a node 99 of 12 crashed numba
+    (NumPy: a bare IndexError) and a node -1 loaded the last node on both backends, silently.
+    Now a LoadError (SupportError for a spring) naming the load and the range, at construction."""
+    from core_se3.errors import LoadError, SupportError
+    from core_se3.model.loads import SurfaceLoad
+    from core_se3.model.supports import LabSpring, LabTiltSpring
+    mesh = M.rectangle(1.5, 1.0, 3, 2)
+    n, m = mesh.n_nodes, mesh.n_elements
+    for nodes in ([3, 99], [3, -1], [3.5], [[3, 4]], [True, False]):
+        with pytest.raises(LoadError, match=r"load 'nodal': nodes must be"):
+            NodalLoad(n, nodes, np.ones(np.size(nodes)), force=(0.0, 0.0, 1.0))
+        with pytest.raises(SupportError, match=r"support 'lab support': nodes must be"):
+            LabSpring(mesh, np.array(nodes), np.array([[0.0, 0.0, 1.0]]), 10.0)
+        with pytest.raises(SupportError, match=r"support 'lab tilt support': nodes must be"):
+            LabTiltSpring(mesh, np.array(nodes), np.array([0.0, 0.0, 1.0]), 10.0)
+    for follower, q in ((True, 2.0), (False, (0.0, 0.0, 2.0))):
+        for elements in ([0, m], [-1]):
+            with pytest.raises(LoadError, match=rf"elements must be ids 0 \.\.\. {m - 1} of the mesh"):
+                SurfaceLoad(mesh, q, follower, elements=elements)
+    assert NodalLoad(n, np.array([n - 1]), [1.0]).nodes.tolist() == [n - 1]     # the last node: fine

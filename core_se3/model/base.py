@@ -33,7 +33,7 @@ import numpy as np
 from ..errors import LoadError
 from ..registry import REQUIRED, Kind, Param, Registry
 
-__all__ = ["Evaluation", "Load", "LoadEvaluation", "force_scale_with_loads", "overrides", "Param", "LoadKind", "LOADS", "register_load", "load_kind",
+__all__ = ["Evaluation", "Load", "LoadEvaluation", "force_scale_with_loads", "mesh_ids", "overrides", "Param", "LoadKind", "LOADS", "register_load", "load_kind",
            "REQUIRED", "linear_scale", "finite_vector", "param_error"]
 
 
@@ -71,6 +71,34 @@ class Evaluation:
     K: object = None
     stress: np.ndarray | None = None
     linearization: object = None
+
+
+def mesh_ids(ids, n, what, error=LoadError):
+    """``ids`` as an int64 array (k,) of whole numbers 0 <= id < n, else ``error`` naming
+    ``what`` (e.g. "load 'nodal': nodes") and the range.  The compiled kernels write a load's
+    forces by these ids without bounds checks: an id past the mesh crashed the process (NumPy: a
+    bare IndexError), a negative one acted on a node counted from the end (on both backends).
+
+    Example
+    -------
+    >>> mesh_ids([3, 1], 4, "nodes").tolist()
+    [3, 1]
+    >>> mesh_ids([3, -1], 4, "load 'nodal': nodes")
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.LoadError: load 'nodal': nodes must be ids 0 ... 3 of the mesh, got -1 ... 3
+    """
+    raw = np.asarray(ids)
+    try:
+        out = raw.astype(np.int64).ravel()
+        whole = raw.ndim <= 1 and raw.dtype.kind != "b" and np.array_equal(out, raw.ravel())
+    except (TypeError, ValueError):
+        whole = False
+    if not whole:
+        raise error(f"{what} must be whole numbers (k,), got {raw.ravel()[:5].tolist()} of shape {raw.shape}")
+    if out.size and (out.min() < 0 or out.max() >= n):
+        raise error(f"{what} must be ids 0 ... {n - 1} of the mesh, got {out.min()} ... {out.max()}")
+    return out
 
 
 @dataclass
