@@ -649,3 +649,27 @@ def test_load_and_support_ids_outside_the_mesh_are_refused():
             with pytest.raises(LoadError, match=rf"elements must be ids 0 \.\.\. {m - 1} of the mesh"):
                 SurfaceLoad(mesh, q, follower, elements=elements)
     assert NodalLoad(n, np.array([n - 1]), [1.0]).nodes.tolist() == [n - 1]     # the last node: fine
+
+
+@pytest.mark.parametrize("backend", ["numpy", "numba"])
+def test_stresses_and_increments_of_the_wrong_shape_are_refused(backend):
+    """The mixed iteration's element stresses (Problem.evaluate(stress=S)) and the increments of
+    Problem.linear_stress are read by size: transposed, (24, m) and (6, n) were read as (m, 24)
+    and (n, 6) in the wrong order (the mixed tangent 35 % off, silently, on both backends), a
+    short one was a bare broadcast or index error on NumPy.  Now a MeshError naming the shapes;
+    (m, 24) and flat arrays give the same answer."""
+    from core_se3.errors import MeshError
+    p = _loaded("surface_follower", backend)
+    g = p.apply_prescribed(_load_state(p.mesh, "surface_follower"), 0.7)
+    ev = p.evaluate(g, 0.7)
+    S, n, m = ev.stress, p.mesh.n_nodes, p.mesh.n_elements
+    eta = np.random.default_rng(4).normal(size=(n, 6))
+    ref, lin = p.evaluate(g, 0.7, stress=S).K, p.linear_stress(ev, eta)
+    for bad in (S.T.copy(), S[:-1], S[:, :23]):
+        with pytest.raises(MeshError, match=rf"element stresses of shape .* shape \({m}, 24\)"):
+            p.evaluate(g, 0.7, stress=bad)
+    for bad in (eta.T.copy(), eta[:-1]):
+        with pytest.raises(MeshError, match=rf"increments eta of shape .* shape \({n}, 6\)"):
+            p.linear_stress(ev, bad)
+    assert rel(p.evaluate(g, 0.7, stress=S.ravel()).K.data, ref.data) == 0.0
+    assert rel(p.linear_stress(ev, eta.ravel()), lin) == 0.0
