@@ -673,3 +673,23 @@ def test_stresses_and_increments_of_the_wrong_shape_are_refused(backend):
             p.linear_stress(ev, bad)
     assert rel(p.evaluate(g, 0.7, stress=S.ravel()).K.data, ref.data) == 0.0
     assert rel(p.linear_stress(ev, eta.ravel()), lin) == 0.0
+
+
+@pytest.mark.parametrize("backend", ["numpy", "numba"])
+def test_an_assembler_of_another_mesh_is_refused(backend):
+    """Problem.evaluate(assembler=...) of another mesh with as many nodes (15, other quads): its
+    pattern and slots put the blocks on the wrong node pairs, K 75 % off on NumPy and 120 % on
+    numba, silently; of a bigger mesh, a bare IndexError / broadcast error.  Now a MeshError; an
+    assembler of an equal mesh (another object, the same quads) is the problem's own."""
+    from core_se3.errors import MeshError
+    mesh = M.rectangle(2.0, 1.0, 4, 2)
+    p = Problem(mesh, Material(1.0e4, 0.3, 0.1), backend=backend)
+    p.clamp("x0")
+    g = p.apply_prescribed(_load_state(mesh, "user_load"), 0.7)
+    free = np.ones(6 * mesh.n_nodes, bool)
+    for other in (M.rectangle(2.0, 1.0, 2, 4), M.rectangle(2.0, 1.0, 6, 2)):
+        with pytest.raises(MeshError, match="the assembler is of another mesh"):
+            p.evaluate(g, 0.7, assembler=Assembler(other, np.ones(6 * other.n_nodes, bool)))
+    ref = p.evaluate(g, 0.7, assembler=Assembler(mesh, free)).K
+    same = p.evaluate(g, 0.7, assembler=Assembler(M.rectangle(2.0, 1.0, 4, 2), free)).K
+    assert abs(same - ref).max() <= TOL * abs(ref).max()

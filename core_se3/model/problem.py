@@ -570,6 +570,13 @@ class Problem:
         loads: a subset of the problem's loads to evaluate instead of all (on the NumPy path;
         linear analysis' reference stiffness without the loads' geometric stiffness)."""
         asm = assembler or self.assembler()
+        if asm.mesh is not self.mesh and not (asm.mesh.n_nodes == self.mesh.n_nodes
+                                              and np.array_equal(asm.mesh.quads, self.mesh.quads)):
+            # its pattern and slots are another mesh's: K was assembled on the wrong node pairs
+            # (75 % off on NumPy, 120 % on numba for 15 nodes in other quads, silently)
+            raise MeshError(f"the assembler is of another mesh ({asm.mesh.n_nodes} nodes, {asm.mesh.n_elements} "
+                            f"elements; this problem's: {self.mesh.n_nodes}, {self.mesh.n_elements}, or other quads): "
+                            "build it on this problem's mesh, Assembler(problem.mesh, free)")
         g = _frames(g, self.mesh.n_nodes)
         if stress is not None and not self.element.mixed:
             raise OptionError(f"element {self.element_name!r} has no mixed iteration (stress=)")
