@@ -96,9 +96,10 @@ class MeshError(CoreSE3Error, ValueError):
     """Degenerate or inconsistent mesh (zero-area or inverted quads, bad connectivity, ...).
 
     Raised when a :class:`~core_se3.mesh.Mesh` is built (frames not in SE(3), collapsed, clockwise
-    or non-convex quads, a non-manifold edge), by the generators and the file reader, and when a
-    node set or region name is unknown (with the closest name).  Fix the mesh or the name the
-    message gives.
+    or non-convex quads, a non-manifold edge), by the generators and the file reader, when a
+    node set or region name is unknown (with the closest name), and when a state (frames g,
+    increments eta) given to ``Problem.evaluate`` or ``retract`` does not have one entry per node
+    of the mesh.  Fix the mesh, the name or the array the message gives.
 
     Example
     -------

@@ -517,3 +517,220 @@ def test_batched_numpy_magnets_equal_the_loads_sum(which):
     fb = sum(ld.evaluate(g, 0.7, tangent=True).f for ld in p.loads)
     assert np.abs(fb).max() > 0 and rel(fa, fb) <= 1e-14
     assert rel(p.external(g, 0.7, tangent=False)[0], fb) <= 1e-14
+
+
+@pytest.mark.parametrize("backend", ["numpy", "numba"])
+def test_a_state_of_the_wrong_shape_is_refused(backend):
+    """The kernels index the frames and increments by node id without bounds checks: a state of
+    fewer frames than nodes (another mesh's, or a slice) read memory past its end on numba (an
+    'edge turns by inf rad', or a plausible residual from a view), a short eta in retract gave
+    frames of garbage without an error, and NumPy raised a bare IndexError.  Both backends now
+    refuse the shapes with a MeshError naming them."""
+    from core_se3.errors import MeshError
+    p = _loaded("nodal_dead", backend)
+    n = p.mesh.n_nodes
+    g = _load_state(p.mesh, "nodal_dead")
+    for bad in (g[:-3].copy(), np.concatenate([g, g[:2]]), g[:, :3].copy(), g.reshape(n, 16)):
+        with pytest.raises(MeshError, match=rf"shape \({', '.join(map(str, bad.shape))}\) for a mesh of {n} nodes"):
+            p.evaluate(bad, 0.7)
+        with pytest.raises(MeshError, match="a state of frames"):
+            p.residual(bad, 0.7)
+    with pytest.raises(MeshError, match=rf"increments of shape \({n - 3}, 6\)"):
+        p.retract(g, np.zeros((n - 3, 6)))
+    with pytest.raises(MeshError, match=rf"frames of shape \({n}, 3, 4\)"):
+        p.retract(g[:, :3].copy(), np.zeros((n, 6)))
+    # the right shapes in another dtype or layout: the same answer as float64 C order
+    ref = p.evaluate(g, 0.7)
+    for ok in (np.asfortranarray(g), g.tolist(), np.repeat(g, 2, axis=0)[::2]):
+        assert rel(p.evaluate(ok, 0.7).r, ref.r) <= TOL
+    assert rel(p.retract(g, np.zeros((n, 6))), g) <= TOL
+
+
+class _ShapedLoad(_UserLoad):
+    """_UserLoad returning its arrays in another shape (``mode``), or element blocks with a
+    repeated element id."""
+
+    def __init__(self, n, nodes, moment, mode):
+        super().__init__(n, nodes, moment)
+        self.mode = mode
+
+    def evaluate(self, g, lam, tangent=True):
+        ev = super().evaluate(g, lam, tangent)
+        ids, Ke = ev.element_blocks
+        if self.mode == "f_one_node":                     # a (6,) force: broadcast onto every node
+            return LoadEvaluation(ev.f[self.nodes[0]], ev.node_blocks, ev.element_blocks)
+        if self.mode == "blocks_of_the_loaded_nodes":     # (k, 6, 6): numba put them on nodes 0..k-1
+            return LoadEvaluation(ev.f, ev.node_blocks[self.nodes], ev.element_blocks)
+        if self.mode == "one_block":                      # (1, 6, 6): NumPy broadcast it, numba node 0
+            return LoadEvaluation(ev.f, ev.node_blocks[self.nodes[:1]], ev.element_blocks)
+        if self.mode == "element_past_the_mesh":          # numba wrote out of bounds (the process died)
+            return LoadEvaluation(ev.f, ev.node_blocks, (np.array([0, 99]), Ke))
+        if self.mode == "no_element_blocks":
+            return LoadEvaluation(ev.f, ev.node_blocks)
+        return LoadEvaluation(ev.f, ev.node_blocks, (np.array([4, 4]), Ke))     # "repeated_element"
+
+
+@pytest.mark.parametrize("mode", ["f_one_node", "blocks_of_the_loaded_nodes", "one_block", "element_past_the_mesh"])
+@pytest.mark.parametrize("backend", ["numpy", "numba"])
+def test_a_user_load_of_the_wrong_shapes_is_refused(mode, backend):
+    """A user load's LoadEvaluation of other shapes than (n, 6), (n, 6, 6), (ids, (k, 4, 4, 6, 6))
+    with ids of the mesh's elements is a LoadError naming the load and the shapes, on both
+    backends.  Before: 'one_block' differed by 1.4e-3 of |K| between the backends, the blocks of
+    the loaded nodes were a bare broadcast error on NumPy and landed on other nodes on numba, a
+    (6,) force acted on every node on both, an element id past the mesh crashed numba."""
+    from core_se3.errors import LoadError
+    mesh = M.rectangle(1.5, 1.0, 3, 2)
+    p = Problem(mesh, Material(1.0e4, 0.3, 0.1), backend=backend)
+    p.clamp("x0")
+    p.add(_ShapedLoad(mesh.n_nodes, [5, 6, 9], (0.3, -0.2, 0.9), mode))
+    g = _load_state(mesh, "user_load")
+    with pytest.raises(LoadError, match=r"load 'load' \(_ShapedLoad\): its evaluate returned"):
+        p.evaluate(g, 0.7)
+
+
+def test_element_blocks_of_a_repeated_element_add_up_on_both_backends():
+    """Element blocks listing an element twice add twice on both backends (NumPy's Ke[ids] +=
+    blocks kept one of them: the element part summed to 3 on NumPy, 6 on numba)."""
+    mesh = M.rectangle(1.5, 1.0, 3, 2)
+    g = _load_state(mesh, "user_load")
+    K = {}
+    for backend in ("numpy", "numba"):
+        for mode in ("repeated_element", "no_element_blocks"):
+            p = Problem(mesh, Material(1.0e4, 0.3, 0.1), backend=backend)
+            p.clamp("x0")
+            p.add(_ShapedLoad(mesh.n_nodes, [5, 6, 9], (0.3, -0.2, 0.9), mode))
+            K[backend, mode] = p.evaluate(g, 0.7).K.toarray()
+    assert not np.isin(mesh.quads[4, :2], mesh.node_set("x0")).any()           # its blocks (0, 1) are free
+    for backend in ("numpy", "numba"):
+        # the block eye(3) at (corner 0, corner 1) of element 4, twice
+        assert abs((K[backend, "repeated_element"] - K[backend, "no_element_blocks"]).sum() - 6.0) <= 1e-9
+    assert rel(K["numba", "repeated_element"], K["numpy", "repeated_element"]) <= TOL
+
+
+def test_the_tangent_out_array_is_checked():
+    """Problem.evaluate(..., out=data) on numba: the kernels write the tangent into ``out`` by
+    position without bounds checks.  Before, a short array was written past its end (then a bare
+    scipy ValueError, or a crash), an int array truncated K to whole numbers (3.6e-3 of |K| off,
+    silently), a float32 one rounded it (7e-8).  Now each is an OptionError; a right array that
+    is not zero is overwritten, and K shares it."""
+    from core_se3.errors import OptionError
+    p = _loaded("surface_follower", "numba")
+    g = p.apply_prescribed(_load_state(p.mesh, "surface_follower"), 0.7)
+    ref = p.evaluate(g, 0.7).K.copy()
+    nnz = p.assembler().pattern().nnz
+    for bad in (np.zeros(nnz // 2), np.zeros(nnz, np.float32), np.zeros(nnz, np.int64), np.zeros(2 * nnz)[::2],
+                list(np.zeros(nnz))):
+        with pytest.raises(OptionError, match=f"float64 array of the pattern's {nnz} entries"):
+            p.evaluate(g, 0.7, out=bad)
+    out = np.full(nnz, 7.0)
+    K = p.evaluate(g, 0.7, out=out).K
+    assert np.shares_memory(K.data, out) and abs(K - ref).max() <= TOL * abs(ref).max()
+
+
+def test_load_and_support_ids_outside_the_mesh_are_refused():
+    """A NodalLoad, SurfaceLoad or penalty spring built directly with ids outside the mesh: the
+    kernels write their forces by id without bounds checks, so a node 99 of 12 crashed numba
+    (NumPy: a bare IndexError) and a node -1 loaded the last node on both backends, silently.
+    Now a LoadError (SupportError for a spring) naming the load and the range, at construction."""
+    from core_se3.errors import LoadError, SupportError
+    from core_se3.model.loads import SurfaceLoad
+    from core_se3.model.supports import LabSpring, LabTiltSpring
+    mesh = M.rectangle(1.5, 1.0, 3, 2)
+    n, m = mesh.n_nodes, mesh.n_elements
+    for nodes in ([3, 99], [3, -1], [3.5], [[3, 4]], [True, False]):
+        with pytest.raises(LoadError, match=r"load 'nodal': nodes must be"):
+            NodalLoad(n, nodes, np.ones(np.size(nodes)), force=(0.0, 0.0, 1.0))
+        with pytest.raises(SupportError, match=r"support 'lab support': nodes must be"):
+            LabSpring(mesh, np.array(nodes), np.array([[0.0, 0.0, 1.0]]), 10.0)
+        with pytest.raises(SupportError, match=r"support 'lab tilt support': nodes must be"):
+            LabTiltSpring(mesh, np.array(nodes), np.array([0.0, 0.0, 1.0]), 10.0)
+    for follower, q in ((True, 2.0), (False, (0.0, 0.0, 2.0))):
+        for elements in ([0, m], [-1]):
+            with pytest.raises(LoadError, match=rf"elements must be ids 0 \.\.\. {m - 1} of the mesh"):
+                SurfaceLoad(mesh, q, follower, elements=elements)
+    assert NodalLoad(n, np.array([n - 1]), [1.0]).nodes.tolist() == [n - 1]     # the last node: fine
+
+
+@pytest.mark.parametrize("backend", ["numpy", "numba"])
+def test_stresses_and_increments_of_the_wrong_shape_are_refused(backend):
+    """The mixed iteration's element stresses (Problem.evaluate(stress=S)) and the increments of
+    Problem.linear_stress are read by size: transposed, (24, m) and (6, n) were read as (m, 24)
+    and (n, 6) in the wrong order (the mixed tangent 35 % off, silently, on both backends), a
+    short one was a bare broadcast or index error on NumPy.  Now a MeshError naming the shapes;
+    (m, 24) and flat arrays give the same answer."""
+    from core_se3.errors import MeshError
+    p = _loaded("surface_follower", backend)
+    g = p.apply_prescribed(_load_state(p.mesh, "surface_follower"), 0.7)
+    ev = p.evaluate(g, 0.7)
+    S, n, m = ev.stress, p.mesh.n_nodes, p.mesh.n_elements
+    eta = np.random.default_rng(4).normal(size=(n, 6))
+    ref, lin = p.evaluate(g, 0.7, stress=S).K, p.linear_stress(ev, eta)
+    for bad in (S.T.copy(), S[:-1], S[:, :23]):
+        with pytest.raises(MeshError, match=rf"element stresses of shape .* shape \({m}, 24\)"):
+            p.evaluate(g, 0.7, stress=bad)
+    for bad in (eta.T.copy(), eta[:-1]):
+        with pytest.raises(MeshError, match=rf"increments eta of shape .* shape \({n}, 6\)"):
+            p.linear_stress(ev, bad)
+    assert rel(p.evaluate(g, 0.7, stress=S.ravel()).K.data, ref.data) == 0.0
+    assert rel(p.linear_stress(ev, eta.ravel()), lin) == 0.0
+
+
+@pytest.mark.parametrize("backend", ["numpy", "numba"])
+def test_an_assembler_of_another_mesh_is_refused(backend):
+    """Problem.evaluate(assembler=...) of another mesh with as many nodes (15, other quads): its
+    pattern and slots put the blocks on the wrong node pairs, K 75 % off on NumPy and 120 % on
+    numba, silently; of a bigger mesh, a bare IndexError / broadcast error.  Now a MeshError; an
+    assembler of an equal mesh (another object, the same quads) is the problem's own."""
+    from core_se3.errors import MeshError
+    mesh = M.rectangle(2.0, 1.0, 4, 2)
+    p = Problem(mesh, Material(1.0e4, 0.3, 0.1), backend=backend)
+    p.clamp("x0")
+    g = p.apply_prescribed(_load_state(mesh, "user_load"), 0.7)
+    free = np.ones(6 * mesh.n_nodes, bool)
+    for other in (M.rectangle(2.0, 1.0, 2, 4), M.rectangle(2.0, 1.0, 6, 2)):
+        with pytest.raises(MeshError, match="the assembler is of another mesh"):
+            p.evaluate(g, 0.7, assembler=Assembler(other, np.ones(6 * other.n_nodes, bool)))
+    ref = p.evaluate(g, 0.7, assembler=Assembler(mesh, free)).K
+    same = p.evaluate(g, 0.7, assembler=Assembler(M.rectangle(2.0, 1.0, 4, 2), free)).K
+    assert abs(same - ref).max() <= TOL * abs(ref).max()
+
+
+THREADED = """
+import sys
+import numpy as np
+from core_se3 import lie, mesh as M, Problem, Material
+from core_se3.fem import RegionMaterial
+from core_se3.model.fields import DipoleField
+m = M.rectangle(4.0, 4.0, 40, 40)
+rng = np.random.default_rng(0)
+g = m.g0 @ lie.exp(np.concatenate([0.02 * rng.normal(size=(m.n_nodes, 3)), 0.3 * rng.normal(size=(m.n_nodes, 3))], 1))
+mat = RegionMaterial.from_regions(m.n_elements, Material(1e4, 0.3, 0.1),
+                                  [(np.arange(0, m.n_elements, 3), Material(3e4, 0.2, 0.05))])
+p = Problem(m, mat, backend=sys.argv[1])
+p.clamp("x0")
+p.add_pressure(2.0, follower=True)
+p.add_edge_force("x1", (1.0, 2.0, 3.0))
+p.add_magnetic((0.1, 0.0, 0.2), DipoleField((0.0, 0.5, 2.0), (0.7, 0.1, -0.6)), mu0=1e-3)
+e = p.evaluate(g, 0.7)
+np.savez(sys.argv[2], r=e.r, K=e.K.data)
+"""
+
+
+def test_one_and_two_threads_agree_to_the_bit(tmp_path):
+    """The parallel drivers (1600 elements: the element kernels' colour / gather drivers and the
+    follower pressure's, above their serial thresholds) give the same residual and tangent with
+    one and two numba threads, bit for bit (race-free colouring; measured equal), and agree with
+    NumPy to round-off (8e-15 measured).  Each count in its own interpreter (NUMBA_NUM_THREADS is
+    read at numba's start)."""
+    import os
+    import subprocess
+    import sys
+    out = {}
+    for name, backend, threads in (("t1", "numba", "1"), ("t2", "numba", "2"), ("np", "numpy", "1")):
+        env = dict(os.environ, NUMBA_NUM_THREADS=threads, CORE_SE3_BACKEND=backend)
+        r = subprocess.run([sys.executable, "-c", THREADED, backend, str(tmp_path / f"{name}.npz")], env=env,
+                           capture_output=True, text=True, timeout=900)
+        assert r.returncode == 0, r.stderr[-2000:]
+        out[name] = np.load(tmp_path / f"{name}.npz")
+    assert np.array_equal(out["t1"]["r"], out["t2"]["r"]) and np.array_equal(out["t1"]["K"], out["t2"]["K"])
+    assert rel(out["t2"]["r"], out["np"]["r"]) <= TOL and rel(out["t2"]["K"], out["np"]["K"]) <= TOL

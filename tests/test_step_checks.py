@@ -252,6 +252,39 @@ def test_a_part_far_from_the_origin_iterates_as_at_the_origin():
         assert np.abs(res.final.g[:, 0, 3] - x0 - ref.final.g[:, 0, 3]).max() <= 1e-15 * x0
 
 
+def test_path_following_of_a_part_far_from_the_origin_iterates_as_at_the_origin():
+    """Arc length and displacement control hold the iterate relative to the part too
+    (ShellSystem): before, the README cantilever at x0 = 1e4 failed in both at the first step
+    (arc length after 13 rejections, residual stalled at 3.3e-3; displacement control at u =
+    1e-3, 1.7e-3), at 1e9 with residuals 2.6e-2 and 1.0; now x0 = 1e4 and 1e9 take the same
+    iterations as x0 = 0 and the same probe displacements, to the last bit.  A resumed path
+    (ArcState in the problem's coordinates) goes on as the unbroken one (to the round-off of the
+    stored frames)."""
+    from core_se3.solvers import arc_length, arc_length_steps, displacement_control
+    p0 = _readme_cantilever(0.0)
+    k = int(p0.mesh.node_set("x1")[0])
+    runs = {"arc": lambda p: arc_length(p, lam_end=1.0, dlam0=0.2),
+            "disp": lambda p: displacement_control(p, k, (0.0, 0.0, 1.0), [1.0, 2.0, 3.0])}
+    for name, run in runs.items():
+        ref = run(p0)
+        for x0 in (1e4, 1e9):
+            res = run(_readme_cantilever(x0))
+            assert [s.iterations for s in res.steps] == [s.iterations for s in ref.steps], (name, x0)
+            assert [s.load_factor for s in res.steps] == [s.load_factor for s in ref.steps], (name, x0)
+            np.testing.assert_array_equal(res.final.probes["tip"]["u"], ref.final.probes["tip"]["u"])
+            assert np.abs(res.final.g[:, 0, 3] - x0 - ref.final.g[:, 0, 3]).max() <= 1e-15 * x0
+    far = _readme_cantilever(1e9)
+    steps = list(arc_length_steps(far, lam_end=1.0, dlam0=0.2))
+    assert steps[1].state.state[0, 0, 3] == 1e9                       # the restart state: whole frames
+    resumed = list(arc_length_steps(_readme_cantilever(1e9), lam_end=1.0, dlam0=0.2, start=steps[1].state))
+    # the restart frames hold the positions to eps x0 = 2.2e-7 (0.6 m elements): the resumed
+    # path agrees to that, not to the last bit
+    lam_r, lam_s = np.array([s.step.load_factor for s in resumed]), np.array([s.step.load_factor for s in steps[2:]])
+    assert len(lam_r) == len(lam_s) and np.abs(lam_r - lam_s).max() <= 1e-6
+    u_r, u_s = resumed[-1].step.probes["tip"]["u"], steps[-1].step.probes["tip"]["u"]
+    assert np.abs(u_r - u_s).max() <= 1e-6 * np.abs(u_s).max()
+
+
 # ------------------------------------------------------------------ critical points ---------
 def _ltb_strip():
     p = Problem(mesh.rectangle(10.0, 1.0, 40, 4), Material(1.2e6, 0.0, 0.05))

@@ -33,7 +33,7 @@ import numpy as np
 from ..errors import LoadError
 from ..registry import REQUIRED, Kind, Param, Registry
 
-__all__ = ["Evaluation", "Load", "LoadEvaluation", "force_scale_with_loads", "overrides", "Param", "LoadKind", "LOADS", "register_load", "load_kind",
+__all__ = ["Evaluation", "Load", "LoadEvaluation", "force_scale_with_loads", "mesh_ids", "overrides", "Param", "LoadKind", "LOADS", "register_load", "load_kind",
            "REQUIRED", "linear_scale", "finite_vector", "param_error"]
 
 
@@ -73,6 +73,34 @@ class Evaluation:
     linearization: object = None
 
 
+def mesh_ids(ids, n, what, error=LoadError):
+    """``ids`` as an int64 array (k,) of whole numbers 0 <= id < n, else ``error`` naming
+    ``what`` (e.g. "load 'nodal': nodes") and the range.  The compiled kernels write a load's
+    forces by these ids without bounds checks: an id past the mesh crashed the process (NumPy: a
+    bare IndexError), a negative one acted on a node counted from the end (on both backends).
+
+    Example
+    -------
+    >>> mesh_ids([3, 1], 4, "nodes").tolist()
+    [3, 1]
+    >>> mesh_ids([3, -1], 4, "load 'nodal': nodes")
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.LoadError: load 'nodal': nodes must be ids 0 ... 3 of the mesh, got -1 ... 3
+    """
+    raw = np.asarray(ids)
+    try:
+        out = raw.astype(np.int64).ravel()
+        whole = raw.ndim <= 1 and raw.dtype.kind != "b" and np.array_equal(out, raw.ravel())
+    except (TypeError, ValueError):
+        whole = False
+    if not whole:
+        raise error(f"{what} must be whole numbers (k,), got {raw.ravel()[:5].tolist()} of shape {raw.shape}")
+    if out.size and (out.min() < 0 or out.max() >= n):
+        raise error(f"{what} must be ids 0 ... {n - 1} of the mesh, got {out.min()} ... {out.max()}")
+    return out
+
+
 @dataclass
 class LoadEvaluation:
     """Generalised nodal forces of one load and the blocks of -df/d eta.
@@ -101,6 +129,44 @@ class LoadEvaluation:
     f: np.ndarray
     node_blocks: np.ndarray | None = None
     element_blocks: tuple | None = None
+
+    def checked(self, load, n_nodes, n_elements):
+        """This evaluation after checking its shapes against the mesh (``load``: for the
+        message); a LoadError naming the load and the shapes otherwise.  A user load's arrays
+        of another shape were misread: a force (6,) or blocks (1, 6, 6) broadcast onto every
+        node by NumPy, the blocks of the k loaded nodes (k, 6, 6) scattered onto nodes 0..k-1 by
+        the compiled backend (NumPy: a bare broadcast error), and element ids past the mesh
+        written out of bounds by it (a crash).
+
+        Example
+        -------
+        >>> import numpy as np
+        >>> from core_se3.model import NodalLoad
+        >>> LoadEvaluation(np.zeros(6)).checked(NodalLoad(4, [3], [1.0]), 4, 1)
+        Traceback (most recent call last):
+        ...
+        core_se3.errors.LoadError: load 'nodal' (NodalLoad): its evaluate returned f of shape (6,); a LoadEvaluation holds f (n_nodes, 6) = (4, 6) (every node, zero where the load does not act), node_blocks (4, 6, 6) or None, element_blocks (ids (k,) of elements 0..0, blocks (k, 4, 4, 6, 6)) or None
+        """
+        what = None
+        ids = blocks = None
+        if np.shape(self.f) != (n_nodes, 6):
+            what = f"f of shape {np.shape(self.f)}"
+        elif self.node_blocks is not None and np.shape(self.node_blocks) != (n_nodes, 6, 6):
+            what = f"node_blocks of shape {np.shape(self.node_blocks)}"
+        elif self.element_blocks is not None:
+            ids, blocks = self.element_blocks
+            ids = np.asarray(ids)
+            if ids.ndim != 1 or np.shape(blocks) != (len(ids), 4, 4, 6, 6):
+                what = f"element_blocks of shapes {ids.shape} (ids) and {np.shape(blocks)} (blocks)"
+            elif len(ids) and (ids.dtype.kind not in "iu" or ids.min() < 0 or ids.max() >= n_elements):
+                what = f"element ids {ids.min()} ... {ids.max()} (of dtype {ids.dtype})"
+        if what is None:
+            return self
+        name = getattr(load, "name", None)
+        raise LoadError(f"load {name!r} ({type(load).__name__}): its evaluate returned {what}; a LoadEvaluation holds f (n_nodes, 6) = "
+                        f"({n_nodes}, 6) (every node, zero where the load does not act), node_blocks ({n_nodes}, 6, 6) "
+                        f"or None, element_blocks (ids (k,) of elements 0..{n_elements - 1}, blocks (k, 4, 4, 6, 6)) or "
+                        "None")
 
 
 class Load(abc.ABC):

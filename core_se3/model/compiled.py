@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..errors import OptionError
 from .base import Evaluation, force_scale_with_loads
 
 __all__ = ["CompiledEvaluation"]
@@ -22,6 +23,19 @@ def _compiled_loads(loads, pattern):
     out = [(ld, ld.compiled(pattern)) for ld in loads if type(ld) is not MagneticLoad]
     if mags:
         out.append((mags, compiled_magnets(mags, pattern)))
+    return out
+
+
+def _checked_out(out, nnz):
+    """``out`` if it is a writable C-contiguous float64 array of nnz entries (the kernels write
+    the tangent into it by position, without bounds checks: a shorter array was written past its
+    end, a float32 or strided one crashed the process), else an OptionError."""
+    ok = (isinstance(out, np.ndarray) and out.dtype == np.float64 and out.shape == (nnz,)
+          and out.flags.c_contiguous and out.flags.writeable)
+    if not ok:
+        raise OptionError(f"out must be a writable C-contiguous float64 array of the pattern's {nnz} entries "
+                          f"(assembler.pattern().new_data()), got {type(out).__name__} "
+                          f"{getattr(out, 'dtype', '')} of shape {getattr(out, 'shape', None)}")
     return out
 
 
@@ -72,7 +86,7 @@ class CompiledEvaluation:
         pattern, kern, loads = parts
         g = np.ascontiguousarray(g, dtype=float)
         if tangent:
-            data = out if out is not None else pattern.new_data()
+            data = pattern.new_data() if out is None else _checked_out(out, pattern.nnz)
             res = kern.tangent(g, data, stress=stress)
         else:
             data = _NO_DATA
@@ -84,7 +98,7 @@ class CompiledEvaluation:
             if add is not None:
                 add(g, lam, f, data, tangent)
                 continue
-            ev = ld.evaluate(g, lam, tangent)
+            ev = ld.evaluate(g, lam, tangent).checked(ld, len(f), len(self.problem.mesh.quads))
             f += ev.f
             if tangent:
                 add_blocks(data, pattern, self.problem.mesh.quads, ev.node_blocks, ev.element_blocks)

@@ -25,7 +25,7 @@ import numpy as np
 from .. import lie
 from ..errors import LoadError, LoadWarning
 from ..fem.quadrature import shape_functions, surface_jacobian
-from .base import (Load, LoadEvaluation, LoadKind, Param, finite_vector, linear_scale, param_error,
+from .base import (Load, LoadEvaluation, LoadKind, Param, finite_vector, linear_scale, mesh_ids, param_error,
                    register_load)
 
 __all__ = ["NodalLoad", "SurfaceLoad", "edge_weights", "line_shares"]
@@ -189,7 +189,7 @@ class NodalLoad(Load):
     def __init__(self, n_nodes, nodes, weights, force=(0, 0, 0), moment=(0, 0, 0), follower=False,
                  scale=None, name="nodal"):
         self.n = int(n_nodes)
-        self.nodes = np.asarray(nodes, np.int64)
+        self.nodes = mesh_ids(nodes, self.n, f"load {name!r}: nodes")
         self.weights = np.asarray(weights, float)
         self.force = finite_vector(force, "force")
         self.moment = finite_vector(moment, "moment")
@@ -276,7 +276,8 @@ class SurfaceLoad(Load):
         self.follower = bool(follower)
         self.scale = scale or linear_scale
         self.name = name
-        self.elements = np.arange(mesh.n_elements) if elements is None else np.asarray(elements)
+        self.elements = (np.arange(mesh.n_elements) if elements is None else
+                         mesh_ids(elements, mesh.n_elements, f"load {name!r}: elements"))
         self.N, self.dN = shape_functions()
         if self.follower:
             q = float(q)

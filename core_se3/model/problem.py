@@ -37,6 +37,31 @@ from .supports import (LabSpring, LabTiltSpring, Prescribed, RotationComponentSp
 __all__ = ["Problem", "Evaluation", "SOLVERS"]
 
 
+def _frames(g, n_nodes):
+    """The state ``g`` as a float array of one 4x4 frame per node, else a MeshError naming the
+    shapes: the compiled kernels index the frames by node id without bounds checks, so a state of
+    fewer frames than nodes read memory past its end (a misleading 'edge turns by inf rad', or a
+    plausible residual), and NumPy failed with a bare IndexError."""
+    g = np.asarray(g, dtype=float)
+    if g.shape != (n_nodes, 4, 4):
+        raise MeshError(f"a state of frames of shape {g.shape} for a mesh of {n_nodes} nodes: give one 4x4 "
+                        f"frame per node, shape ({n_nodes}, 4, 4) (the mesh of this problem, not another's)")
+    return g
+
+
+def _per_row(a, rows, cols, what, per):
+    """``a`` as a float array (rows, cols), given so or flat (rows * cols,), else a MeshError
+    naming the shapes: a (cols, rows) array has the size and was read as (rows, cols) in the
+    wrong order (the mixed tangent of transposed stresses 35 % off, silently)."""
+    a = np.asarray(a, dtype=float)
+    if a.shape == (rows * cols,):
+        return a.reshape(rows, cols)
+    if a.shape != (rows, cols):
+        raise MeshError(f"{what} of shape {a.shape}: give one row of {cols} per {per}, shape ({rows}, {cols}) "
+                        f"(or flat, ({rows * cols},))")
+    return a
+
+
 class Problem:
     """A shell problem.
 
@@ -534,7 +559,7 @@ class Problem:
                 f += magnets_force(mags, g, lam)
                 loads = [ld for ld in loads if type(ld) is not MagneticLoad]
         for load in loads:
-            ev = load.evaluate(g, lam, tangent)
+            ev = load.evaluate(g, lam, tangent).checked(load, n, self.mesh.n_elements)
             f += ev.f
             if tangent and ev.node_blocks is not None:
                 Kn += ev.node_blocks
@@ -542,7 +567,10 @@ class Problem:
                 if Ke is None:
                     Ke = np.zeros((self.mesh.n_elements, 4, 4, 6, 6))
                 ids, blocks = ev.element_blocks
-                Ke[ids] += blocks
+                if len(np.unique(ids)) == len(ids):
+                    Ke[ids] += blocks
+                else:                        # an element listed twice adds twice (as the compiled backend)
+                    np.add.at(Ke, ids, blocks)
         return f, Kn, Ke
 
     def evaluate(self, g, lam, tangent=True, assembler=None, out=None, stress=None, loads=None):
@@ -551,14 +579,25 @@ class Problem:
 
         With the numba backend and an element that has compiled kernels, the element and the
         loads write straight into the CSR data of the assembler's fixed pattern (``out``: a
-        data array of ``assembler.pattern().nnz`` to reuse, which the returned K then shares);
+        float64 data array of ``assembler.pattern().nnz`` to reuse, which the returned K then
+        shares; another array is an OptionError);
         otherwise the NumPy path sums the blocks (the reference).  stress: a mixed element's
         independent stresses for the geometric part of the tangent (the mixed iteration).
         loads: a subset of the problem's loads to evaluate instead of all (on the NumPy path;
         linear analysis' reference stiffness without the loads' geometric stiffness)."""
         asm = assembler or self.assembler()
+        if asm.mesh is not self.mesh and not (asm.mesh.n_nodes == self.mesh.n_nodes
+                                              and np.array_equal(asm.mesh.quads, self.mesh.quads)):
+            # its pattern and slots are another mesh's: K was assembled on the wrong node pairs
+            # (75 % off on NumPy, 120 % on numba for 15 nodes in other quads, silently)
+            raise MeshError(f"the assembler is of another mesh ({asm.mesh.n_nodes} nodes, {asm.mesh.n_elements} "
+                            f"elements; this problem's: {self.mesh.n_nodes}, {self.mesh.n_elements}, or other quads): "
+                            "build it on this problem's mesh, Assembler(problem.mesh, free)")
+        g = _frames(g, self.mesh.n_nodes)
         if stress is not None and not self.element.mixed:
             raise OptionError(f"element {self.element_name!r} has no mixed iteration (stress=)")
+        if stress is not None:
+            stress = _per_row(stress, self.mesh.n_elements, 24, "element stresses", "element")
         if self.backend == "numba" and loads is None:
             if self._compiled is None:
                 self._compiled = CompiledEvaluation(self)
@@ -583,7 +622,8 @@ class Problem:
 
     def retract(self, g, eta):
         """The exponential update g_i exp(eta_i) of nodal frames g (n, 4, 4) by twists eta
-        (n, 6) (the paper's Algorithm 1); compiled with the numba backend.
+        (n, 6) (the paper's Algorithm 1); compiled with the numba backend.  A MeshError when the
+        shapes do not match.
 
         Example
         -------
@@ -594,6 +634,11 @@ class Problem:
         >>> np.round(p.retract(p.mesh.g0, eta)[0, :3, 0], 12).tolist()
         [0.0, 1.0, 0.0]
         """
+        g, eta = np.asarray(g, dtype=float), np.asarray(eta, dtype=float)
+        if g.ndim != 3 or g.shape[1:] != (4, 4) or eta.shape != (len(g), 6):
+            raise MeshError(f"retract: frames of shape {g.shape} and increments of shape {eta.shape}; give k frames "
+                            "(k, 4, 4) and one twist (v, w) per frame, (k, 6) (the compiled update reads eta[i] for "
+                            "every frame i, past the end of a shorter eta)")
         if self.backend == "numba":
             from ..kernels.lie import retract
             out = np.empty_like(g, dtype=float)
@@ -615,6 +660,7 @@ class Problem:
         >>> round(float(f[1, 6]), 9)                            # N = E h eps on the right element
         1.0
         """
+        eta = _per_row(eta, self.mesh.n_nodes, 6, "increments eta", "node")
         lin = ev.linearization
         if callable(lin):
             return lin(eta)

@@ -44,7 +44,7 @@ import numpy as np
 
 from .. import lie
 from ..errors import ElementTooDistortedError, SingularSystemError, SupportError
-from .base import Load, LoadEvaluation
+from .base import Load, LoadEvaluation, mesh_ids
 from .prescribed import (DOF_NAMES, Prescribed, apply_prescribed, check_conflict, fixed_dofs,  # noqa: F401
                          prescribed_rotation, rigid_motion, rigid_rotation, select_nodes, support_kind)
 
@@ -189,7 +189,7 @@ class LabSpring(_Spring):
 
     def __init__(self, mesh, nodes, dirs, k, name="lab support"):
         self.n = mesh.n_nodes
-        self.nodes = np.asarray(nodes, np.int64)
+        self.nodes = mesh_ids(nodes, self.n, f"support {name!r}: nodes", SupportError)
         self.D = lab_direction_sets(dirs, len(self.nodes))          # (k, q, 3) unit directions
         G = np.einsum("nai,nbi->nab", self.D, self.D)                # independent rows: G invertible
         self.P = np.einsum("nai,nab,nbj->nij", self.D, np.linalg.inv(G), self.D)   # (k, 3, 3) projectors
@@ -257,7 +257,7 @@ class LabTiltSpring(_Spring):
 
     def __init__(self, mesh, nodes, t, k_rot, name="lab tilt support"):
         self.n = mesh.n_nodes
-        self.nodes = np.asarray(nodes, np.int64)
+        self.nodes = mesh_ids(nodes, self.n, f"support {name!r}: nodes", SupportError)
         self.t = node_directions(t, len(self.nodes), "the lab tilt support's direction t")
         self.k = float(k_rot)
         self.name = name
@@ -325,7 +325,7 @@ class RotationComponentSpring(_Spring):
 
     def __init__(self, mesh, nodes, a, k_rot, name="rotation component support"):
         self.n = mesh.n_nodes
-        self.nodes = np.asarray(nodes, np.int64)
+        self.nodes = mesh_ids(nodes, self.n, f"support {name!r}: nodes", SupportError)
         a = node_directions(a, len(self.nodes), "the rotation component support's axis a")
         self.R0 = mesh.g0[self.nodes, :3, :3].copy()
         self.b = np.einsum("nji,nj->ni", self.R0, a)                   # R0^T a (body frame)

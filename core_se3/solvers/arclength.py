@@ -66,7 +66,8 @@ log = logging.getLogger(__name__)
 class ArcState:
     """What the arc-length follower carries from one converged point to the next (a restart).
 
-    state: the converged point (ShellSystem: nodal frames g (n, 4, 4)); lam its load factor;
+    state: the converged point (ShellSystem: nodal frames g (n, 4, 4), in the problem's
+    coordinates: ``ShellSystem.whole``); lam its load factor;
     step: converged points so far (0 = the first point of the path); ds: the arc length of the
     next step (already adapted), ds_max, ds_min its bounds; psi_u = psi |t_0|_W (length units);
     direction: sign of the first predictor's dlam; prev_du (free dofs), prev_dl: the last
@@ -214,7 +215,7 @@ def path_steps(sysm, options, lam_end=1.0, control=None, control_end=None, lam_m
     if start is not None and start.finished and not (start.finished == "max_steps" and start.step < max_steps):
         info.critical[:] = list(start.critical)
         return
-    state, lam = (sysm.initial(), 0.0) if start is None else (start.state, float(start.lam))
+    state, lam = (sysm.initial(), 0.0) if start is None else (sysm.local(start.state), float(start.lam))
     first = cur = analyse(sysm, state, lam, o.stability)
     ctrl_val = control[0] if control else None
     crit = info.critical
@@ -232,7 +233,7 @@ def path_steps(sysm, options, lam_end=1.0, control=None, control_end=None, lam_m
         return None
 
     def snapshot(pt, why):
-        return ArcState(pt.state, pt.lam, step, ds, ds_max, ds_min, psi_u, direction, prev_du, prev_dl,
+        return ArcState(sysm.whole(pt.state), pt.lam, step, ds, ds_max, ds_min, psi_u, direction, prev_du, prev_dl,
                         switch_mode, branch_switch, list(crit),
                         why or ("max_steps" if step >= max_steps else ""))
 

@@ -34,32 +34,10 @@ import numpy as np
 from ..fem import ELEMENTS
 from .convergence import relative_residual, scaled_norm
 from .linalg import Factorization
+from .origin import part_origin
 from .stability import inertia
 
 __all__ = ["NewtonEquations", "part_origin"]
-
-
-def part_origin(problem):
-    """The translation c (3,) that load stepping subtracts from the positions of ``problem``'s
-    frames (module docstring), or None: per axis the smallest reference coordinate when all of
-    them lie within a factor 2 of it (then X - c is exact, Sterbenz' lemma, and a part at x0
-    iterates as the same part at 0), else 0; None when a load is not ``translation_invariant``
-    or no axis moves.
-
-    Example
-    -------
-    >>> from core_se3 import Problem, Material, mesh
-    >>> p = Problem(mesh.rectangle(10.0, 1.0, 4, 1, x0=1e9), Material(1.2e6, 0.0, 0.1))
-    >>> p.add_edge_force("x1", (0.0, 0.0, 1.0))
-    >>> part_origin(p).tolist(), part_origin(Problem(mesh.rectangle(10.0, 1.0, 4, 1), p.material))
-    ([1000000000.0, 0.0, 0.0], None)
-    """
-    if not all(getattr(ld, "translation_invariant", False) for ld in problem.loads):
-        return None
-    X = problem.mesh.g0[:, :3, 3]
-    lo, hi = X.min(0), X.max(0)
-    c = np.where((lo > 0) & (hi <= 2 * lo), lo, np.where((hi < 0) & (lo >= 2 * hi), hi, 0.0))
-    return c if np.any(c != 0) else None
 
 
 class NewtonEquations:

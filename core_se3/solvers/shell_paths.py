@@ -55,7 +55,13 @@ def _record(rec, pt, sysm, log, counted):
     """The StepResult of a path point, with the tries (log entries) and factorisations
     (``sysm.factorizations``) since the previous one; ``counted`` = [entries, factorisations]
     already attributed, advanced here."""
-    st = rec.step(pt.lam, pt.state, pt.its, pt.hist, (pt.ev["rint"], pt.ev["fext"]), _stability(pt))
+    g, forces, local = pt.state, (pt.ev["rint"], pt.ev["fext"]), None
+    if sysm.origin is not None:                 # a state relative to the part (ShellSystem.whole)
+        g, local = sysm.whole(pt.state), (pt.state, sysm.origin)          # the probes read the exact positions
+        if not pt.hist:                         # the start point, recorded at the whole frames as newton_solve
+            ev = sysm.problem.evaluate(g, pt.lam, tangent=False)         # does (there r_int = 0 exactly)
+            forces = (ev.r_int, ev.f_ext)
+    st = rec.step(pt.lam, g, pt.its, pt.hist, forces, _stability(pt), local=local)
     st.residual_floor = min(float(pt.ev.get("floor", 0.0)), 1e300) if pt.hist else 0.0
     st.attempts = len(log) - counted[0]
     st.linear_solves = sysm.factorizations - counted[1]

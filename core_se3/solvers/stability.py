@@ -306,8 +306,8 @@ def limit_point_hint(problem, g, lam, linear_solver=None):
     """
     try:
         sysm = ShellSystem(problem, linear_solver, difference="backward")
-        p0 = analyse(sysm, problem.mesh.g0.copy(), 0.0, False)
-        p1 = analyse(sysm, np.asarray(g, float), lam, False)
+        p0 = analyse(sysm, sysm.initial(), 0.0, False)
+        p1 = analyse(sysm, sysm.local(g), lam, False)
     except (CoreSE3Error, FloatingPointError, ValueError):
         return None
     sp_ = p0.qt / p1.qt if p1.qt != 0 else 0.0

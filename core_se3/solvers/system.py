@@ -12,6 +12,7 @@ import numpy as np
 from ..errors import CoreSE3Error
 from ..model.base import overrides
 from .convergence import relative_residual, scaled_norm
+from .origin import part_origin
 from .linalg import make_solver
 
 __all__ = ["ShellSystem", "AlgebraicSystem"]
@@ -20,7 +21,11 @@ __all__ = ["ShellSystem", "AlgebraicSystem"]
 class ShellSystem:
     """A Problem seen by the path follower: free-dof residual, tangent, load direction q.
 
-    The state is the array of nodal frames g (n, 4, 4).  Prescribed motions (rotate_edge,
+    The state is the array of nodal frames g (n, 4, 4), held relative to the part's origin when
+    every load is translation invariant (``solvers.equations.part_origin``, as load stepping
+    does): :meth:`initial` and the states of the path are in those coordinates, :meth:`whole`
+    and :meth:`local` convert (a part at x0 = 1e4 stored its iterates to eps |x0| and arc length
+    and displacement control failed at their first step).  Prescribed motions (rotate_edge,
     prescribe with a target) must not depend on lam: arc length scales the loads only.  q is
     the central difference of f_ext in lam at the current g (exact for linearly scaled loads,
     dead or follower); ``difference='backward'`` uses the one-sided difference.
@@ -68,6 +73,7 @@ class ShellSystem:
             raise CoreSE3Error(f"path following does not support the load {hooked[0].name!r} (contact with an "
                                "obstacle: its multipliers and step cap need load stepping); use newton_solve")
         self.problem = problem
+        self.origin = part_origin(problem)
         problem.check_supports()
         self.asm = problem.assembler()
         self.solver = make_solver(linear_solver or problem.linear_solver)
@@ -78,7 +84,20 @@ class ShellSystem:
         self.w = w[self.asm.free]
 
     def initial(self):
-        return self.problem.mesh.g0.copy()
+        return self.local(self.problem.mesh.g0)
+
+    def _moved(self, g, c):
+        g = np.array(g, dtype=float)
+        g[..., :3, 3] += c
+        return g
+
+    def local(self, g):
+        """Frames of the problem (a copy) in the system's coordinates: relative to the origin."""
+        return np.array(g, dtype=float) if self.origin is None else self._moved(g, -self.origin)
+
+    def whole(self, g):
+        """A state of the system in the problem's coordinates (for results and restarts)."""
+        return g if self.origin is None else self._moved(g, self.origin)
 
     def update(self, g, x):
         return self.problem.retract(g, self.asm.scatter(x))
@@ -112,7 +131,7 @@ class ShellSystem:
         """(value(g), row(g)): u = d . (phi_k - X_k) and its linearisation on the free dofs."""
         d = np.asarray(direction, float)
         d = d / np.linalg.norm(d)
-        X0 = self.problem.mesh.X[node].copy()
+        X0 = self.initial()[node, :3, 3].copy()          # the reference position, in the state's coordinates
         free_k = self.asm.free.reshape(-1, 6)[node]
         if not free_k[:3].any():
             raise CoreSE3Error(f"node {node} has no free translation to control")
@@ -166,6 +185,14 @@ class AlgebraicSystem:
 
     def initial(self):
         return self.u0.copy()
+
+    def local(self, u):
+        """A copy of u (the algebraic state has no origin to move)."""
+        return np.array(u, dtype=float)
+
+    def whole(self, u):
+        """u itself."""
+        return u
 
     def update(self, u, x):
         return u + x
