@@ -566,3 +566,29 @@ def test_stale_factors_are_renewed_at_the_predicted_state():
             seen += 1
     assert seen >= 1
     assert frame_error(st.g, cold(p), ell) < 1e-8
+
+
+def test_a_session_warns_when_its_state_comes_near_a_point_dipole():
+    """Problem.solve ends with a MeshWarning when a point dipole lies within DIPOLE_RESOLUTION
+    element sizes of the magnetised material (its nodal quadrature is then off by about
+    (size / distance)^2); a session said nothing, at its start or when an update brought the
+    material there (before: a strip with a dipole 1.9 element sizes from its tip, 40 x 4, was
+    silent in a session while Problem.solve warned; its tip moves 10 % on 80 x 8).  Now the
+    session warns once when the state gets there, not at every update of a control loop, and
+    again after it has left and come back."""
+    import warnings
+    from core_se3.errors import MeshWarning
+    from core_se3.model import DipoleField, Superposition
+    p = strip(nx=20, P=1e-3)                              # 10 x 1, elements 0.5 x 1: size 1
+    f = Superposition(UniformField((0.0, 0.0, 1e-9)), DipoleField((0.0, 0.0, 1e-9), (10.0, 0.0, 8.0), mu0=1.0))
+    p.add_magnetic((1.0, 0.0, 0.0), f, mu0=1.0)
+    # the start: the tip 8.01 sizes below the dipole (under 10): warned once, as Problem.solve does
+    with pytest.warns(MeshWarning, match=r"lies 8\.0\d element sizes from the magnetised node"):
+        s = Session(p, 1.0, [LoadMagnitude(p, p.loads[0], name="P")])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", MeshWarning)
+        s.update(P=1.1)                                   # still near: no warning at every update
+        s.update(P=-1e3)                                  # the tip bends away, beyond 10 sizes
+        assert s.state.probes["tip"]["x"][2] < -2.5
+    with pytest.warns(MeshWarning, match="element sizes from the magnetised node"):
+        s.update(P=1.2)                                   # back near the dipole: warned again

@@ -16,6 +16,7 @@ compiled evaluation and the factors are kept, and probes are computed only when 
 from __future__ import annotations
 
 import time
+import warnings
 from dataclasses import dataclass, fields
 
 import numpy as np
@@ -23,6 +24,8 @@ import numpy as np
 from ..design import ProbePosition, Quantity, SolveWith, Variable, sensitivity
 from ..errors import ControlError, OptionError
 from ..model.base import overrides
+from ..model.magnetics import MagneticLoad, dipole_sources
+from ..model.solving import dipole_warning
 from ..solvers import NewtonOptions, newton_solve
 from ..solvers.newton import MAX_LOAD_TURN
 from ..solvers.options import split_options, unknown_keywords
@@ -173,6 +176,9 @@ class Session:
         self.problem, self.options = problem, opts
         self.commands = Commands(variables)
         self._turning = [ld for ld in problem.loads if overrides(ld, "direction_turn")]
+        # magnets in the field of a point dipole: their states are checked for its resolution
+        self._near = [ld for ld in problem.loads if isinstance(ld, MagneticLoad) and dipole_sources(ld.field)]
+        self._unresolved = False
         self._stamp = 0
         self._corr = Corrector(problem, opts)
         self.stats = dict(updates=0, refused=0, substeps=0, splits=0, iterations=0)
@@ -187,6 +193,7 @@ class Session:
         self.state = State(problem, out.g, lam, self.commands.values(),
                            Work(out.iterations, out.factorizations, 1, 0, time.perf_counter() - t0))
         self._r = out.residual            # the free residual at the state (the next predictor's start)
+        self._check_resolution()
 
     @classmethod
     def from_scenario(cls, scn, lam=None, variables=None, **kw):
@@ -318,7 +325,20 @@ class Session:
             counts = (counts[0], counts[1] + 1) + counts[2:]
         self._count(*counts, updates=1)
         self.state = State(self.problem, g, lam1, self.commands.values(), Work(*counts, time.perf_counter() - t0))
+        self._check_resolution()
         return self.state
+
+    def _check_resolution(self):
+        """A MeshWarning when the state comes within ``magnetics.DIPOLE_RESOLUTION`` element sizes
+        of a point dipole (``model.solving.dipole_warning``, as ``Problem.solve`` warns at its
+        final state): once when it gets there, again only after it has left (not at every update
+        of a control loop)."""
+        if not self._near:
+            return
+        warning = dipole_warning(self._near, self.g, self.lam)
+        if warning is not None and not self._unresolved:
+            warnings.warn(warning, stacklevel=3)
+        self._unresolved = warning is not None
 
     def _follow(self, lam0, lam1, x0, x1):
         """Follow the command path p0 -> p1 in sub-steps (module docstring): (frames, free
