@@ -265,6 +265,7 @@ class DipoleField(Field):
 
     def _hessian(self, x, lam, h=1e-30):
         x = np.asarray(x, float)
+        self._r(x)                   # a point on the dipole: the complex step (r2 = -h^2) would miss it
         out = np.empty(x.shape[:-1] + (3, 3, 3))
         for k in range(3):
             xc = x.astype(complex)
@@ -300,7 +301,12 @@ class UserField(Field):
         self.fd_step = fd_step
 
     def _call(self, fn, x, shape, what):
-        out = np.asarray(fn(x), float)
+        got = fn(x)
+        try:
+            out = np.asarray(got, float)
+        except (TypeError, ValueError):
+            raise LoadError(f"user field {what} must return numbers of shape {x.shape[:-1] + shape}, got "
+                            f"{type(got).__name__} {str(got)[:60]!r}") from None
         if out.shape != x.shape[:-1] + shape:
             raise LoadError(f"user field {what} returned shape {out.shape}, expected {x.shape[:-1] + shape}")
         if not np.all(np.isfinite(out)):
