@@ -209,8 +209,8 @@ class MagneticLoad(Load):
         A sample turns at most pi as measured (the angle between two directions), so a field
         that turns by a whole number of turns between samples would measure 0: the path is
         sampled again at 23/16 of the samples (a coprime count) and then twice as finely until
-        two estimates agree to 1 %, and the largest estimate is returned (sampling can only
-        miss turning).
+        two estimates agree to 1 % (or 4096 samples are reached), and the largest estimate is
+        returned (sampling can only miss turning).
 
         Example
         -------
@@ -230,7 +230,7 @@ class MagneticLoad(Load):
         best = self._turn(x, lam0, lam1, samples)
         n = max(1, (23 * samples) // 16)
         last = self._turn(x, lam0, lam1, n)
-        while abs(last - best) > 0.01 * max(last, best) + 1e-9 and n < 256 * samples:
+        while abs(last - best) > 0.01 * max(last, best) + 1e-9 and n < 4096:
             best = max(best, last)
             n *= 2
             last = self._turn(x, lam0, lam1, n)
