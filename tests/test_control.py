@@ -566,3 +566,66 @@ def test_stale_factors_are_renewed_at_the_predicted_state():
             seen += 1
     assert seen >= 1
     assert frame_error(st.g, cold(p), ell) < 1e-8
+
+
+def test_a_session_warns_when_its_state_comes_near_a_point_dipole():
+    """Problem.solve ends with a MeshWarning when a point dipole lies within DIPOLE_RESOLUTION
+    element sizes of the magnetised material (its nodal quadrature is then off by about
+    (size / distance)^2); a session said nothing, at its start or when an update brought the
+    material there (before: a strip with a dipole 1.9 element sizes from its tip, 40 x 4, was
+    silent in a session while Problem.solve warned; its tip moves 10 % on 80 x 8).  Now the
+    session warns once when the state gets there, not at every update of a control loop, and
+    again after it has left and come back."""
+    import warnings
+    from core_se3.errors import MeshWarning
+    from core_se3.model import DipoleField, Superposition
+    p = strip(nx=20, P=1e-3)                              # 10 x 1, elements 0.5 x 1: size 1
+    f = Superposition(UniformField((0.0, 0.0, 1e-9)), DipoleField((0.0, 0.0, 1e-9), (10.0, 0.0, 8.0), mu0=1.0))
+    p.add_magnetic((1.0, 0.0, 0.0), f, mu0=1.0)
+    # the start: the tip 8.01 sizes below the dipole (under 10): warned once, as Problem.solve does
+    with pytest.warns(MeshWarning, match=r"lies 8\.0\d element sizes from the magnetised node"):
+        s = Session(p, 1.0, [LoadMagnitude(p, p.loads[0], name="P")])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", MeshWarning)
+        s.update(P=1.1)                                   # still near: no warning at every update
+        s.update(P=-1e3)                                  # the tip bends away, beyond 10 sizes
+        assert s.state.probes["tip"]["x"][2] < -2.5
+    with pytest.warns(MeshWarning, match="element sizes from the magnetised node"):
+        s.update(P=1.2)                                   # back near the dipole: warned again
+
+
+def test_a_command_past_a_bifurcation_is_not_returned_as_the_tracked_equilibrium():
+    """A strip magnetised along x in an antiparallel field (the magnetic-antiparallel case): the
+    straight state buckles at a critical field (load factor 0.642 of B = 0.8 here) -- a
+    bifurcation, where the straight path goes on smoothly, so the path test does not see it.
+    Problem.solve stops there ('crossed a critical point'); a session went from 0.5 to 1.0 in one
+    sub-step and returned the straight, unstable state (smallest tangent eigenvalue -7e-5) as
+    converged, with a Jacobian d tip_z / d B_z = -2.8 that is no response of the plant.  Now
+    its Jacobian there is refused (det K changed sign since the start), and with
+    stability_check every update is checked: refused, the session kept at its state."""
+    def antiparallel():
+        p = Problem(mesh.rectangle(1.0, 0.2, 16, 1), Material(1e3, 0.0, 0.05))
+        p.clamp("x0")
+        p.add_probe("tip")
+        f = UniformField((-0.8, 0.0, 0.0))
+        p.add_magnetic((1.0, 0.0, 0.0), f, mu0=1.0)
+        return p, f
+    p, f = antiparallel()
+    s = Session(p, 0.5, [FieldVariable(p, f, name="B")], steps=5)
+    J = s.jacobian(["tip"]).jacobian                      # below the critical point: fine
+    s.update(lam=1.0)                                     # not checked without factors there
+    with pytest.raises(ControlError, match="lies past a critical point: det K changed sign"):
+        s.jacobian(["tip"])
+    s.update(lam=0.5)                                     # back below it: the Jacobian again
+    assert np.abs(s.jacobian(["tip"]).jacobian - J).max() <= 1e-8 * np.abs(J).max()
+    p, f = antiparallel()
+    s = Session(p, 0.5, [FieldVariable(p, f, name="B")], steps=5, stability_check=True)
+    assert s.update(lam=0.6).factorizations == 1          # checked: a factorisation there
+    before = s.state
+    for command in (dict(lam=1.0), dict(B=[-1.6, 0.0, 0.0])):
+        with pytest.raises(ControlError, match="leads past a critical point: det K changed sign"):
+            s.update(**command)
+        assert s.state is before and s.lam == 0.6 and np.array_equal(s.values["B"], [-0.8, 0.0, 0.0])
+        assert np.array_equal(f.B, [-0.8, 0.0, 0.0])
+    with pytest.raises(OptionError, match="stability_check must be true or false"):
+        ControlOptions(stability_check="yes")

@@ -547,3 +547,49 @@ def test_a_br_table_that_fits_per_element_and_per_node_needs_br_per():
     p = Problem(m, Material(1e4, 0.3, 0.05))
     assert len(p.add_magnetic(Br[:10], UniformField((0.0, 0.0, 1.0)), elements=np.arange(10), mu0=1.0).mag.nodes) == 4
     assert len(p.add_magnetic((0.0, 0.0, 1.0), UniformField((0.0, 0.0, 1.0)), mu0=1.0).mag.nodes) == 48
+
+
+_DIPOLE_SCENE = '''units = "{u}"
+[mesh]
+generator = "rectangle"
+L = {L}
+width = {w}
+nx = 10
+ny = 2
+[material]
+E = {E}
+nu = 0.3
+h = {h}
+[[supports]]
+type = "clamp"
+edge = "x0"
+[fields.magnet]
+type = "dipole"
+m = [0.0, 0.0, {m}]
+x0 = [{L}, {y0}, 0.05{z0}]
+[[magnets]]
+Br = [0.1, 0.0, 0.0]
+[[probes]]
+name = "tip"
+edge = "x1"
+'''
+
+
+def test_a_dipole_scene_in_si_and_in_n_mm_mpa_agree_and_the_python_dipole_needs_mu0_times_1e3():
+    """A strip 20 x 5 x 0.5 mm (E = 1 MPa, B^r = 0.1 T) under a 1 A m^2 dipole 50 mm above its
+    tip: the scenario in SI (m, Pa, A m^2) and in N-mm-MPa (mm, MPa, A mm^2; the magnets' mu0
+    MU0 * 1e6, the dipole's MU0 * 1e3) give the same tip displacement to round-off (observed
+    3e-16).  The Python dipole in mm: MU0 * 1e3 gives the SI field in T; the magnets' MU0 * 1e6,
+    which the docs used to name for every N-mm-MPa model, gives 1000 times it."""
+    from core_se3 import scenario
+    si = scenario.loads(_DIPOLE_SCENE.format(u="SI", L=0.02, w=0.005, E=1e6, h=0.0005, m=1.0, y0=0.0025, z0=""))
+    mm = scenario.loads(_DIPOLE_SCENE.format(u="N-mm-MPa", L=20.0, w=5.0, E=1.0, h=0.5, m=1e6, y0=2.5, z0="e3"))
+    a, b = (s.problem.solve(steps=4).final.probes["tip"]["u"] for s in (si, mm))
+    assert abs(b[2]) > 0.1                                    # a visible deflection [mm]
+    assert np.abs(1e3 * a - b).max() <= 1e-12 * np.abs(b).max()
+    x = np.array([[0.01, 0.002, 0.003]])
+    B_si = DipoleField((0.0, 0.0, 1.0), (0.02, 0.0025, 0.05)).value(x, 1.0)
+    B_mm = DipoleField((0.0, 0.0, 1e6), (20.0, 2.5, 50.0), mu0=MU0 * 1e3).value(1e3 * x, 1.0)
+    assert np.abs(B_mm - B_si).max() <= 1e-14 * np.abs(B_si).max()
+    fd = mm.problem.scenario_parts["fields"]["magnet"]
+    assert fd.k == MU0 * 1e3 / (4 * np.pi)                    # the scenario's dipole in mm

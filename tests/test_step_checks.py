@@ -10,7 +10,7 @@ import scipy.sparse as sp
 
 from core_se3 import Material, Problem, mesh, scenario
 from core_se3.catalogue import run_case
-from core_se3.errors import ConvergenceError
+from core_se3.errors import ConvergenceError, MeshWarning
 from core_se3.model.fields import UniformField, rotating_direction
 from core_se3.solvers import NewtonOptions, arc_length, make_solver
 from core_se3.solvers.direct import available_solvers
@@ -217,6 +217,31 @@ def test_a_field_turned_by_1e6_rad_stops_at_once_naming_the_load():
     # a bound the user raises: the same turn would be accepted (the check only counts)
     opts = NewtonOptions(max_substeps=10_000_000)
     assert opts.max_substeps == 10_000_000
+
+
+def test_a_coil_reversing_against_a_magnets_dipole_is_not_counted_as_66_turns():
+    """A strip in a coil's field ramped with the load factor plus a permanent magnet's dipole
+    (constant): where the two nearly cancel at a node the net field reverses there in a short
+    stretch of the load factor (its whole turn over the path is 2.99 rad).  The first try's
+    length, extrapolated to the end, counted 1596 tries: 'turns by about 4.1e+02 rad (66 turns)
+    ... more than max_substeps = 1000', and solve(steps=5) stopped.  Now a count that high is
+    checked on the turn left, measured whole: 36 tries, the tip of 80 steps to 1e-10 of the
+    length (the 1e6 rad field above still stops at once)."""
+    from core_se3.model.fields import DipoleField, Superposition
+
+    def strip():
+        p = Problem(mesh.rectangle(1.0, 0.1, 20, 2), Material(1e3, 0.0, 0.01))
+        p.clamp("x0")
+        p.add_probe("tip")
+        f = Superposition(UniformField((0.0, 0.0, 1e-5)),
+                          DipoleField((0.0, 0.0, 1e-7), (1.0, 0.05, 0.05), mu0=1.0, scale=lambda lam: 1.0))
+        return p, p.add_magnetic((1.0, 0.0, 0.0), f, mu0=1.0)
+    p, ld = strip()
+    assert 2.5 < ld.direction_turn(p.mesh.g0, 0.0, 1.0) < np.pi
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", MeshWarning)        # the dipole is 1 element size away
+        tip = [strip()[0].solve(steps=n).final.probes["tip"]["u"] for n in (5, 80)]
+    assert abs(tip[1][2]) > 5e-4 and np.abs(tip[0] - tip[1]).max() < 1e-10         # length 1
 
 
 def test_angles_of_more_than_ten_turns_are_warned_about():

@@ -240,6 +240,17 @@ class Corrector:
             return False
         return True
 
+    def det_sign(self):
+        """The sign of det K of the held factors (+1, -1; None without factors or when the
+        linear solver cannot tell): its change between two converged states means a critical
+        point (a bifurcation or limit point) lies between them."""
+        if self.F is None:
+            return None
+        try:
+            return self.F.det_sign()
+        except (TypeError, AttributeError, NotImplementedError):      # a solver without the sign
+            return None
+
     def increment(self, r, check=None):
         """(eta (n, 6), |eta|_s / ell) of K_F eta = -r (``check``: ``Factorization.solve``'s
         refinement and backward-error check; default at the first solve on new factors only:

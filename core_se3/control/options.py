@@ -66,6 +66,13 @@ class ControlOptions:
         same states bit for bit on every machine; None: the ratio of the two times measured as
         the session runs (adapts to the machine, but the schedule, and the states' last bits,
         then vary from run to run); inf: never renewed for ageing alone.
+    stability_check : bool
+        True: every update factors the tangent at its converged state (one more factorisation
+        per update, unless the factors were renewed there) and refuses a state whose det K
+        has another sign than at the session's start -- a critical point crossed, e.g. a
+        bifurcation, which the path test does not see (the path goes on smoothly, unstable).
+        False (default): that check runs where factors are made at a converged state anyway:
+        a renewal, and every :meth:`Session.jacobian` (which ``track`` takes every cycle).
     linear_solver : str or None
         None: the problem's.
 
@@ -83,9 +90,12 @@ class ControlOptions:
     max_turn: float = 0.5
     path_tolerance: float = 0.5
     factor_cost: float | None = 6.0
+    stability_check: bool = False
     linear_solver: str | None = None
 
     def __post_init__(self):
+        if not isinstance(self.stability_check, (bool, np.bool_)):
+            raise OptionError(f"ControlOptions.stability_check must be true or false, got {self.stability_check!r}")
         for f in fields(self):
             if f.name not in _RANGES:
                 continue

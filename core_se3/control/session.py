@@ -16,13 +16,16 @@ compiled evaluation and the factors are kept, and probes are computed only when 
 from __future__ import annotations
 
 import time
+import warnings
 from dataclasses import dataclass, fields
 
 import numpy as np
 
 from ..design import ProbePosition, Quantity, SolveWith, Variable, sensitivity
-from ..errors import ControlError, OptionError
+from ..errors import ControlError, ElementTooDistortedError, OptionError, SingularSystemError
 from ..model.base import overrides
+from ..model.magnetics import MagneticLoad, dipole_sources
+from ..model.solving import dipole_warning
 from ..solvers import NewtonOptions, newton_solve
 from ..solvers.newton import MAX_LOAD_TURN
 from ..solvers.options import split_options, unknown_keywords
@@ -173,6 +176,9 @@ class Session:
         self.problem, self.options = problem, opts
         self.commands = Commands(variables)
         self._turning = [ld for ld in problem.loads if overrides(ld, "direction_turn")]
+        # magnets in the field of a point dipole: their states are checked for its resolution
+        self._near = [ld for ld in problem.loads if isinstance(ld, MagneticLoad) and dipole_sources(ld.field)]
+        self._unresolved = False
         self._stamp = 0
         self._corr = Corrector(problem, opts)
         self.stats = dict(updates=0, refused=0, substeps=0, splits=0, iterations=0)
@@ -187,6 +193,8 @@ class Session:
         self.state = State(problem, out.g, lam, self.commands.values(),
                            Work(out.iterations, out.factorizations, 1, 0, time.perf_counter() - t0))
         self._r = out.residual            # the free residual at the state (the next predictor's start)
+        self._sign = self._corr.det_sign()  # det K's sign at the start: a change means a critical point
+        self._check_resolution()
 
     @classmethod
     def from_scenario(cls, scn, lam=None, variables=None, **kw):
@@ -313,12 +321,54 @@ class Session:
         except BaseException:
             self._assign(x0)                 # refused or interrupted: the values of the state kept
             raise
+        if self._corr.settle(g, lam1, self._stamp, counts[0]) or self._factor_for_check(g, lam1):
+            counts = (counts[0], counts[1] + 1) + counts[2:]      # factors at the new state: checked
+            why = self._crossed(g, lam1)
+            if why:
+                self._assign(x0)
+                self._count(*counts, refused=1)
+                raise ControlError(f"update refused: {self._describe(lam0, lam1, x0, x1)} leads past a critical "
+                                   f"point: {why}.  The session stays at its state before the command")
         self._r = r
-        if self._corr.settle(g, lam1, self._stamp, counts[0]):     # aged factors renewed here
-            counts = (counts[0], counts[1] + 1) + counts[2:]
         self._count(*counts, updates=1)
         self.state = State(self.problem, g, lam1, self.commands.values(), Work(*counts, time.perf_counter() - t0))
+        self._check_resolution()
         return self.state
+
+    def _factor_for_check(self, g, lam):
+        """With ``stability_check``: factor the tangent at the converged state g (True), for
+        :meth:`_crossed`; a singular tangent there keeps the held factors (False)."""
+        if not self.options.stability_check or self._sign is None or self._corr.F_g is g:
+            return False
+        try:
+            self._corr.factor(g, lam, self._stamp, keep=True)
+        except (SingularSystemError, ElementTooDistortedError):
+            return False
+        return True
+
+    def _crossed(self, g, lam):
+        """'' or why the state g at lam lies past a critical point: the sign of det K of the held
+        factors, made at g, differs from the session's start (a bifurcation, where the path goes
+        on smoothly and the path test does not see it, or a limit point)."""
+        sign = self._corr.det_sign() if self._corr.F_g is g else None
+        if sign is None or self._sign is None or sign == self._sign:
+            return ""
+        return (f"det K changed sign between the session's start and the state at load factor {lam:.6g} (a "
+                "bifurcation or limit point lies between them), so that equilibrium is unstable and not the one the "
+                "body takes; go back, or trace the path with arc length (core_se3.solvers.arc_length) and a "
+                "perturbation")
+
+    def _check_resolution(self):
+        """A MeshWarning when the state comes within ``magnetics.DIPOLE_RESOLUTION`` element sizes
+        of a point dipole (``model.solving.dipole_warning``, as ``Problem.solve`` warns at its
+        final state): once when it gets there, again only after it has left (not at every update
+        of a control loop)."""
+        if not self._near:
+            return
+        warning = dipole_warning(self._near, self.g, self.lam)
+        if warning is not None and not self._unresolved:
+            warnings.warn(warning, stacklevel=3)
+        self._unresolved = warning is not None
 
     def _follow(self, lam0, lam1, x0, x1):
         """Follow the command path p0 -> p1 in sub-steps (module docstring): (frames, free
@@ -414,6 +464,10 @@ class Session:
         c = self._corr
         if c.F is None or c.F_g is not self.g or c.F_stamp != self._stamp:
             c.factor(self.g, self.lam, self._stamp)
+        why = self._crossed(self.g, self.lam)
+        if why:
+            raise ControlError(f"jacobian: the session's state lies past a critical point: {why}; its Jacobian is "
+                               "not the plant's response")
         return sensitivity(self.problem, self.g, self.lam, qs, vs, method, solve_with=SolveWith(factorization=c.F))
 
     def quantity(self, q):

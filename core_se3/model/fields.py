@@ -35,7 +35,10 @@ __all__ = ["MU0", "Field", "UniformField", "GradientField", "DipoleField", "User
            "register_field", "field_kind"]
 
 MU0 = 4e-7 * pi
-"""Vacuum permeability [N/A^2] for SI stresses (Pa).  For N-mm-MPa models use MU0 * 1e6."""
+"""Vacuum permeability [N/A^2] for SI stresses (Pa).  For N-mm-MPa models a magnet's mu0
+(``Problem.add_magnetic``: loads h B^r x B^a / mu0 in N/mm) is MU0 * 1e6, but a
+``DipoleField``'s (B = mu0 m / (4 pi r^3) in T with m in A mm^2, r in mm) is MU0 * 1e3, as a
+scenario's units = "N-mm-MPa" sets them."""
 
 
 
@@ -224,7 +227,9 @@ class DipoleField(Field):
 
     Curl- and divergence-free everywhere except at x0, which must lie outside the body.
     The Hessian is the complex-step derivative of the closed-form gradient (exact to round-off).
-    ``mu0`` must match the model's units (see ``MU0``).
+    ``mu0`` must match the model's length unit: MU0 (SI) for m in A m^2 and lengths in m,
+    MU0 * 1e3 for m in A mm^2 and lengths in mm (not the magnets' MU0 * 1e6 of N-mm-MPa: that
+    would make the field 1000 times too strong).
 
     Parameters: m (3,) moment [A length^2] at x0 (3,) [length]; scale s(lam); mu0 (default SI).
 
@@ -265,6 +270,7 @@ class DipoleField(Field):
 
     def _hessian(self, x, lam, h=1e-30):
         x = np.asarray(x, float)
+        self._r(x)                   # a point on the dipole: the complex step (r2 = -h^2) would miss it
         out = np.empty(x.shape[:-1] + (3, 3, 3))
         for k in range(3):
             xc = x.astype(complex)
@@ -300,7 +306,12 @@ class UserField(Field):
         self.fd_step = fd_step
 
     def _call(self, fn, x, shape, what):
-        out = np.asarray(fn(x), float)
+        got = fn(x)
+        try:
+            out = np.asarray(got, float)
+        except (TypeError, ValueError):
+            raise LoadError(f"user field {what} must return numbers of shape {x.shape[:-1] + shape}, got "
+                            f"{type(got).__name__} {str(got)[:60]!r}") from None
         if out.shape != x.shape[:-1] + shape:
             raise LoadError(f"user field {what} returned shape {out.shape}, expected {x.shape[:-1] + shape}")
         if not np.all(np.isfinite(out)):

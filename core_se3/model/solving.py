@@ -18,7 +18,8 @@ from ..backend import launched_rank, launched_ranks
 from ..errors import MeshWarning, OptionError, ParallelError, SupportWarning, did_you_mean
 from .prescribed import DOF_NAMES, DRIFT_TOL, held_dof_drift
 
-__all__ = ["SOLVERS", "DISTRIBUTED_KEYS", "dispatch", "solve_linear", "check_held_dofs", "warn_final_state"]
+__all__ = ["SOLVERS", "DISTRIBUTED_KEYS", "dispatch", "solve_linear", "check_held_dofs", "warn_final_state",
+           "dipole_warning"]
 
 # keywords of the distributed set-up (a scenario's [solver] linear, petsc, partition), which
 # the serial solvers do not take
@@ -137,20 +138,44 @@ def _warn(warning, stacklevel):
 
 def _check_dipole_resolution(problem, state, stacklevel):
     """A MeshWarning when a point dipole lies within ``magnetics.DIPOLE_RESOLUTION`` element sizes
-    of the magnetised material at the final state: the nodal quadrature of its loads is then off
-    by about (size / distance)^2, and refining along one direction only can converge to a wrong
-    answer (``DIPOLE_RESOLUTION``'s measurements)."""
-    from .magnetics import DIPOLE_RESOLUTION, MagneticLoad, dipole_resolution
+    of the magnetised material at the final state (:func:`dipole_warning`)."""
+    from .magnetics import MagneticLoad
     mags = [ld for ld in problem.loads if isinstance(ld, MagneticLoad)]
-    worst = dipole_resolution(mags, state.g, state.load_factor) if mags else None
-    if worst is not None and worst[0] < DIPOLE_RESOLUTION:
-        ratio, node, x0 = worst
-        _warn(MeshWarning(
-            f"the point dipole at {np.round(x0, 6).tolist()} lies {ratio:.3g} element sizes from the magnetised "
-            f"node {node} (fewer than {DIPOLE_RESOLUTION:g}): its field changes across an element, and the nodal "
-            f"quadrature of the magnetic couple and force is off by about (size / distance)^2 = "
-            f"{100 / ratio ** 2:.2g} %; refine the mesh near the dipole in both directions (to "
-            f"{DIPOLE_RESOLUTION:g} sizes: 1 %) or move the dipole away"), stacklevel)
+    warning = dipole_warning(mags, state.g, state.load_factor) if mags else None
+    if warning is not None:
+        _warn(warning, stacklevel)
+
+
+def dipole_warning(loads, g, lam):
+    """The MeshWarning of a state g at load factor lam whose magnetised material lies within
+    ``magnetics.DIPOLE_RESOLUTION`` element sizes of a point dipole of the MagneticLoads
+    ``loads``, else None: the nodal quadrature of the dipole's loads is then off by about
+    (size / distance)^2, and refining along one direction only can converge to a wrong answer
+    (``DIPOLE_RESOLUTION``'s measurements).  ``Problem.solve`` warns with it at its final state,
+    a control session (``control.Session``) at every state that comes within that distance.
+
+    Example
+    -------
+    >>> from core_se3 import mesh
+    >>> from core_se3.model import MagneticLoad, Magnetisation, DipoleField
+    >>> m = mesh.rectangle(1.0, 0.1, 10, 1)
+    >>> ld = MagneticLoad(Magnetisation(m, (1.0, 0, 0), h=0.01, mu0=1.0), DipoleField((0, 0, 1.0), (1.0, -0.05, 0.3)))
+    >>> str(dipole_warning([ld], m.g0, 1.0))[:58]
+    'the point dipole at [1.0, -0.05, 0.3] lies 3 element sizes'
+    >>> dipole_warning([ld], m.g0, 0.0) is None                # scaled to zero
+    True
+    """
+    from .magnetics import DIPOLE_RESOLUTION, dipole_resolution
+    worst = dipole_resolution(loads, g, lam)
+    if worst is None or worst[0] >= DIPOLE_RESOLUTION:
+        return None
+    ratio, node, x0 = worst
+    return MeshWarning(
+        f"the point dipole at {np.round(x0, 6).tolist()} lies {ratio:.3g} element sizes from the magnetised "
+        f"node {node} (fewer than {DIPOLE_RESOLUTION:g}): its field changes across an element, and the nodal "
+        f"quadrature of the magnetic couple and force is off by about (size / distance)^2 = "
+        f"{100 / ratio ** 2:.2g} %; refine the mesh near the dipole in both directions (to "
+        f"{DIPOLE_RESOLUTION:g} sizes: 1 %) or move the dipole away")
 
 
 def solve_linear(problem, lam_end=1.0, **options):

@@ -21,6 +21,7 @@ from any :class:`NewtonState` (a restart repeats the same computations from the 
 """
 from __future__ import annotations
 
+import inspect
 import logging
 import time
 from dataclasses import dataclass
@@ -35,7 +36,7 @@ from .equations import NewtonEquations
 from .newton_try import NewtonTry, augmented_try, hooked_loads, tangent_predictor
 from .options import NewtonOptions, load_steps, split_options, unknown_keywords
 from .splitting import (MAX_LOAD_TURN, MAX_PRESCRIBED_TURN, check_substeps, split_prescribed,
-                        split_turning)
+                        split_turning, substeps_needed)
 from .stability import limit_point_hint, prescribed_turn_hint, unseen_crossing
 from .contact_probe import ContactProbe, median_edge
 from .friction_probe import RELAXATIONS, FrictionProbe
@@ -268,7 +269,7 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
         stored = None
         while abs(target - lam) > 1e-14 * max(1.0, abs(target)):
             lam_try = lam + dlam if abs(dlam) < abs(target - lam) else target
-            lam_try, dlam = _split_step(problem, hooks.turning, g_whole, lam, lam_try, target, dlam, opts, result)
+            lam_try, dlam = _split_step(problem, hooks, g_whole, lam, lam_try, target, dlam, opts, result)
             g_try, stress_try = _try_start(problem, eq, trier, g, g_whole, lam, lam_try, mip, stress_conv,
                                            hooks.predictors)
             saved = [ld.multipliers() for ld in hooks.aug]
@@ -345,6 +346,10 @@ def _unchanged_step(rec, eq, g, g_whole, lam):
     stored = rec.step(lam, g_whole, 0, [], eq.forces(ev))
     stored.attempts, stored.linear_solves = 0, 0
     return stored
+
+
+# the most samples of the field's direction over the rest of a load step (``_turn_left_fits``)
+TURN_SAMPLES = 1 << 16
 
 
 class _Hooks:
@@ -451,9 +456,10 @@ def _friction_probe(opts, eq):
     return FrictionProbe(loads, eq.problem.mesh.g0[:, :3, 3], opts.friction_tol, halving=opts.friction_halving)
 
 
-def _split_step(problem, turning, g_whole, lam, lam_try, target, dlam, opts, result):
+def _split_step(problem, hooks, g_whole, lam, lam_try, target, dlam, opts, result):
     """The try's load factor and the increment carried on, split where a prescribed motion or a
-    turning load would turn too far within the step (``solvers.splitting``)."""
+    turning load (``hooks.turning``) would turn too far within the step (``solvers.splitting``)."""
+    turning = hooks.turning
     if problem.has_prescribed_motion:
         lam_split = split_prescribed(problem, lam, lam_try)
         if lam_split != lam_try:
@@ -466,12 +472,34 @@ def _split_step(problem, turning, g_whole, lam, lam_try, target, dlam, opts, res
         lam_split, ld = split_turning(turning, g_whole, lam, lam_try)
         if lam_split != lam_try:             # a rotating field: the split carries on too
             name = getattr(ld, "name", "") or ld.kind or type(ld).__name__
-            check_substeps(lam, target, lam_split, opts.max_substeps, f"the direction of load {name!r}",
-                           ld.direction_turn(g_whole, lam, lam_split), MAX_LOAD_TURN, result)
+            if not _turn_left_fits(hooks, g_whole, lam, lam_split, target, opts.max_substeps):
+                check_substeps(lam, target, lam_split, opts.max_substeps, f"the direction of load {name!r}",
+                               ld.direction_turn(g_whole, lam, lam_split), MAX_LOAD_TURN, result)
             lam_try = lam_split
             if abs(lam_try - lam) < abs(dlam):
                 dlam = lam_try - lam
     return lam_try, dlam
+
+
+def _turn_left_fits(hooks, g, lam, lam_split, target, max_substeps):
+    """Whether the turning loads' turn left from lam to target fits in ``max_substeps`` tries of
+    at most 0.95 MAX_LOAD_TURN.  The first try's length, extrapolated to the target, counts a turn
+    concentrated in a short stretch (a coil's field reversing against a magnet's where the two
+    nearly cancel) as if it went on all the way: 66 turns for a field that turns by less than pi.
+    So when that count is too high the turn left is measured whole, at 4 max_substeps samples (a
+    turn that fits is resolved: <= 0.19 rad a sample; one of 1e6 rad cannot pass for it), once
+    per load step (``hooks.turn_fits``: the target it fits to); at most ``TURN_SAMPLES``."""
+    if substeps_needed(lam, target, lam_split) <= max_substeps or getattr(hooks, "turn_fits", None) == target:
+        return True
+    samples = 4 * max_substeps
+    if samples > TURN_SAMPLES:
+        return False                             # too many to sample: the extrapolation decides
+    whole = max(ld.direction_turn(g, lam, target, **({"samples": samples} if "samples" in
+                                  inspect.signature(ld.direction_turn).parameters else {})) for ld in hooks.turning)
+    if np.ceil(whole / (0.95 * MAX_LOAD_TURN)) > max_substeps:
+        return False
+    hooks.turn_fits = target
+    return True
 
 
 def _try_start(problem, eq, trier, g, g_whole, lam, lam_try, mip, stress_conv, predictors=()):
