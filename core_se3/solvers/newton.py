@@ -363,6 +363,7 @@ class _Hooks:
         self.accepts = hooked_loads(eq, "accept_state")              # path-dependent loads (friction)
         # starts with a moving obstacle: nodes in contact carried along (friction)
         self.predictors = hooked_loads(eq, "predict_start") if not eq.stateful else []
+        self.turn_fits = None        # the target the turn left was measured to fit to (_turn_left_fits)
 
 
 def _friction_start(checks, state, result):
@@ -489,7 +490,7 @@ def _turn_left_fits(hooks, g, lam, lam_split, target, max_substeps):
     So when that count is too high the turn left is measured whole, at 4 max_substeps samples (a
     turn that fits is resolved: <= 0.19 rad a sample; one of 1e6 rad cannot pass for it), once
     per load step (``hooks.turn_fits``: the target it fits to); at most ``TURN_SAMPLES``."""
-    if substeps_needed(lam, target, lam_split) <= max_substeps or getattr(hooks, "turn_fits", None) == target:
+    if substeps_needed(lam, target, lam_split) <= max_substeps or hooks.turn_fits == target:
         return True
     samples = 4 * max_substeps
     if samples > TURN_SAMPLES:
