@@ -60,6 +60,28 @@ def test_cubic_snap_through_traced_through_both_limit_points(method):
         assert min(c.lam_bracket) - 0.01 <= c.lam <= max(c.lam_bracket) + 0.01 * LAM_LIMIT + 0.05
 
 
+@pytest.mark.parametrize("method", ["crisfield", "riks"])
+@pytest.mark.parametrize("dlam0", [2.0, 3.0, 5.0])
+def test_two_limit_points_within_one_step_are_found(method, dlam0):
+    """The cubic from a first step so long that it reaches the last rising branch (dlam0 = 2:
+    u = 0 -> 2.58; 3 and 5: straight to u = 3): the load factor rose, fell to -0.19245 and rose
+    again inside the step, both ends stable (0 negative eigenvalues) and rising, so no count
+    changed.  Found: the path ended at u = 3 and reported no critical point.  Now the step whose
+    rise is too small for its end slopes (critical.hidden_turns) is retried shorter and both
+    limit points are located to critical_tol (the exact +-1/(3 sqrt 3); bar 1e-3 and the
+    accuracy each states)."""
+    sysm, f = cubic()
+    pts, crit, log, _ = C.path_follow(sysm, method=method, lam_end=None, dlam0=dlam0, psi=1.0,
+                                      control=(lambda u: u[0], lambda u: np.array([1.0])),
+                                      control_end=3.0)
+    assert abs(pts[-1].state[0] - 3.0) < 1e-12
+    assert [c.kind for c in crit] == ["limit", "limit"], [c.describe() for c in crit]
+    for c, exact in zip(crit, (LAM_LIMIT, -LAM_LIMIT)):
+        assert abs(c.lam - exact) <= 1e-3 * LAM_LIMIT, c.describe()
+        assert abs(c.lam - exact) <= c.accuracy * abs(c.lam) + 1e-12, c.describe()
+    assert any("turned twice" in e["reason"] for e in log if e.get("reason"))
+
+
 def test_cubic_displacement_control_is_exact():
     """Displacement control of u through the whole cubic: lam = f(u) at every target."""
     sysm, f = cubic()
@@ -343,3 +365,42 @@ def test_arc_length_stops_where_the_controlled_displacement_first_reaches_its_en
     assert abs(w[-1] - 16.9) < 1e-9
     assert np.all(np.diff(w) > 0)                   # W_C never turned back on the way
     assert abs(res.final.load_factor - 0.04533) < 1e-4, res.final.load_factor
+
+
+@pytest.mark.parametrize("method", ["crisfield", "riks"])
+def test_a_first_step_over_the_snap_through_and_back_finds_both_limit_points(roof8, method):
+    """The 8x8 roof of Sze s3.8(a) to -W_C = 29.374 from dlam0 = 5: the first step went from the
+    unloaded state over both limit points to the far branch (load factor 0 -> 1.157 (Crisfield),
+    2.009 (Riks), 0 negative eigenvalues at both ends) and the run reported none.  Now both are
+    found and agree with their values refined to 1e-7 on the path from dlam0 = 0.05 (0.7435513,
+    0.1704150) within critical_tol = 1e-3; the end state is the same (bar 1e-8: converged to
+    1e-9)."""
+    case, p = roof8
+    prob = catalogue.build_problem(case, p, (8, 8))
+    node, d = prob.control
+    res = C.arc_length(prob, lam_end=None, dlam0=5.0, method=method, stop_at=(node, d, 29.374))
+    assert [c.kind for c in res.critical_points] == ["limit", "limit"]
+    for c, ref in zip(res.critical_points, (0.7435513, 0.1704150)):
+        assert abs(c.lam - ref) <= 1e-3 * ref, c.describe()
+    assert abs(res.final.load_factor - 1.1078501) < 1e-6
+
+
+@pytest.mark.parametrize("values", [list(np.arange(4.0, 29.0, 4.0)), [25.0, 29.0], [29.0]])
+def test_displacement_control_locates_limit_points_to_critical_tol(roof8, values):
+    """The 8x8 roof by displacement control of -W_C in steps of 4, in two steps (25, 29) and in
+    one: its limit points agree with their values refined to 1e-7 by arc length (0.7435513,
+    0.1704150) within critical_tol = 1e-3, and within the accuracy each states.  Found: the
+    estimate from the step's ends was kept -- 0.741093 and 0.159700 (3.3e-3 and 6.3e-2 off) from
+    steps of 4, and from (25, 29) or one step no critical point at all (the step from 0 to 25
+    passes both: 0 negative eigenvalues at its ends).  Now the step is bisected in the controlled
+    displacement as arc length bisects its step (critical.narrow), and a step whose load factor
+    rises too little for its end slopes is halved (critical.turned_twice)."""
+    case, p = roof8
+    prob = catalogue.build_problem(case, p, (8, 8))
+    node, d = prob.control
+    dc = C.displacement_control(prob, node, d, values)
+    assert len(dc.steps) == len(values) + 1                  # the requested values only
+    assert [c.kind for c in dc.critical_points] == ["limit", "limit"], [c.describe() for c in dc.critical_points]
+    for c, ref in zip(dc.critical_points, (0.7435513, 0.1704150)):
+        assert abs(c.lam - ref) <= 1e-3 * ref, c.describe()
+        assert c.accuracy <= 1e-3 and abs(c.lam - ref) <= c.accuracy * c.lam + 1e-6, c.describe()

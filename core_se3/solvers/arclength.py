@@ -50,7 +50,7 @@ import numpy as np
 
 from ..errors import ConvergenceError, CoreSE3Error, ElementTooDistortedError, SingularSystemError
 from .corrector import ArcLengthConstraint, LinearConstraint, StepFailed, correct
-from .critical import Corrector, narrow
+from .critical import Corrector, narrow, turned_twice
 from .options import ArcLengthOptions, split_options, unknown_keywords
 from .stability import CriticalPoint, analyse, locate_critical
 
@@ -246,7 +246,8 @@ def path_steps(sysm, options, lam_end=1.0, control=None, control_end=None, lam_m
         con.start(du, dl)
         pt, reason, hist = _arc_try(sysm, cur, du, dl, con, psi_u, o, timers, jumped, first_step=prev_du is None)
         why = None if pt is None else finished(pt)
-        if not jumped and (passed := _passed_within(sysm, cur, pt, con, lam_end, control, control_end, why)):
+        if not jumped and (passed := _passed_within(sysm, cur, pt, con, lam_end, control, control_end, why)
+                           or turned_twice(sysm, cur, pt, None if pt is None else con.du)):
             pt, why, reason = None, None, passed
         if why in ("lam_end", "control_end") and o.land:
             pt, reason = _land(sysm, cur, pt, con, why, lam_end, control, control_end, o, timers)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import logging
 import time
 from dataclasses import dataclass
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -12,6 +13,7 @@ from ..errors import ConvergenceError, ElementTooDistortedError, SingularSystemE
 from ..results import Result, StepRecorder
 from .arclength import ArcState, PathError, PathInfo, arc_options, path_steps
 from .corrector import LinearConstraint, StepFailed, correct
+from .critical import Corrector, narrow, turned_twice
 from .options import ArcLengthOptions, unknown_keywords
 from .stability import analyse, locate_critical
 from .step_checks import path_measures, path_refusal
@@ -201,6 +203,40 @@ def _snap_back_hint(ct, ct0, u):
             "(core_se3.solvers.arc_length, stop_at=(node, direction, value)) or control another displacement")
 
 
+def _control_constraint(value, row, target, du, dlam):
+    """The constraint of a displacement-control step to ``target`` that accumulates the step's
+    increment from the predictor (du, dlam) on."""
+    lin = LinearConstraint(value, row, 0.0, target)
+    lin.start(du, dlam)
+    return lin
+
+
+def _checked_correct(sysm, state, lam, con, opts, timers):
+    """The corrector of a displacement-control step with the path check (:func:`_path_check`)."""
+    incs = []
+    out = correct(sysm, state, lam, con, opts, timers, incs)
+    _path_check(incs)
+    return out
+
+
+def _control_critical(sysm, cur, pt, lin, control, opts, timers, step):
+    """The critical point between the displacement-control points cur and pt (the step's
+    converged constraint ``lin``; ``control`` = (value, row)), classified and located by
+    ``stability.locate_critical`` and narrowed to ``opts.critical_tol`` by ``critical.narrow``,
+    bisecting the controlled displacement as arc length bisects its step.  Before, its estimate
+    from the step's ends was the result: the LTB strip's bifurcation (0.742037) from two steps at
+    0.6076, the 8x8 roof's limit points (0.743551, 0.170415) from steps of 4 in -W_C at 0.7411 and
+    0.1597."""
+    value, row = control
+    u0 = value(cur.state)
+    cp = locate_critical(sysm, cur, pt, row(cur.state), value(pt.state) - u0, step)
+    step_con = SimpleNamespace(du=lin.du, dlam=lin.dlam, ds=lin.target - u0)
+    narrow(sysm, cur, pt, step_con, cp, Corrector(
+        _checked_correct, lambda x: _control_constraint(value, row, u0 + x, 0.0 * lin.du, 0.0), opts, timers,
+        (StepFailed,)))
+    return cp
+
+
 def displacement_control(problem, node, direction, values, options=None, max_cutbacks=10, **kw):
     """Prescribe the displacement of ``node`` along the lab ``direction`` through ``values``
     (the load factor is the unknown that keeps it there); failed increments are halved (at
@@ -260,12 +296,12 @@ def displacement_control(problem, node, direction, values, options=None, max_cut
                 rt = row(cur.state)
                 try:
                     dl = (tgt - u0) / (rt @ cur.t)
-                    st_pred = sysm.update(cur.state, dl * cur.t)
-                    incs = []
-                    s2, l2, its, hist, ev = correct(sysm, st_pred, cur.lam + dl,
-                                                     LinearConstraint(value, row, 0.0, tgt), opts, timers, incs)
-                    _path_check(incs)
+                    lin = _control_constraint(value, row, tgt, dl * cur.t, dl)
+                    s2, l2, its, hist, ev = _checked_correct(sysm, sysm.update(cur.state, dl * cur.t), cur.lam + dl,
+                                                             lin, opts, timers)
                     pt = analyse(sysm, s2, l2, opts.stability, its, hist)
+                    if tgt != u0 and (why := turned_twice(sysm, cur, pt, lin.du)):   # a repeated value: no step
+                        raise StepFailed(why)
                     ok, reason = True, ""
                 except (StepFailed, ElementTooDistortedError, FloatingPointError,
                         SingularSystemError, ZeroDivisionError) as exc:
@@ -283,8 +319,7 @@ def displacement_control(problem, node, direction, values, options=None, max_cut
                 changed = (pt.n_neg != cur.n_neg) if (pt.n_neg is not None and cur.n_neg is not None) \
                     else (pt.sign != cur.sign)
                 if opts.stability and changed:
-                    crit.append(locate_critical(sysm, cur, pt, row(cur.state),
-                                                value(pt.state) - value(cur.state), n_points))
+                    crit.append(_control_critical(sysm, cur, pt, lin, (value, row), opts, timers, n_points))
                     log.info("  ** %s", crit[-1].describe())
                 cur = pt
                 if not sub:
