@@ -10,13 +10,15 @@ benchmark of Sze et al. (2004) s3.8(a), core_se3/data/literature.json ``sze3.8a_
 * pitchfork from V = u^2/2 + v^2 (1 - u)/2 + v^4/4 under load lam on u: primary path v = 0,
   u = lam, bifurcation at lam = 1; secondary path u = 1 + v^2, lam = 1 + v^2/2.
 """
+import warnings
+
 import numpy as np
 import pytest
 import scipy.sparse as sp
 
 from core_se3 import catalogue, solvers as C
 from core_se3.catalogue import get_case
-from core_se3.errors import ConvergenceError, CoreSE3Error
+from core_se3.errors import ConvergenceError, CoreSE3Error, OptionError, PathWarning
 
 LAM_LIMIT = 1 / (3 * np.sqrt(3))
 
@@ -230,6 +232,50 @@ def test_bad_input(roof8):
         C.arc_length(prob, max_iter=0)
     assert "rejections" in str(exc.value)
     assert len(exc.value.result.steps) == 1
+
+
+def _strip():
+    from core_se3 import Material, Problem, mesh
+    p = Problem(mesh.rectangle(10.0, 1.0, 4, 1), Material(1.2e6, 0.0, 0.1))
+    p.clamp("x0")
+    p.add_edge_force("x1", (0.0, 0.0, 1.0))
+    return p
+
+
+@pytest.mark.parametrize("kw, match", [
+    (dict(dlam0=0.0), "dlam0 must be a finite non-zero number"),
+    (dict(dlam0=float("nan")), "dlam0 must be a finite non-zero number"),
+    (dict(dlam0="0.1"), "dlam0 must be a finite non-zero number"),
+    (dict(dlam0=-0.1), "away from lam_end"),
+    (dict(ds_max=-1.0), "ds_max must be None or a finite arc length > 0"),
+    (dict(ds_min=float("nan")), "ds_min must be None or a finite arc length > 0"),
+    (dict(ds_min=2.0, ds_max=1.0), "ds_min = 2.0 exceeds ds_max = 1.0"),
+    (dict(ds_max=1e-6), "ds_max = 1e-06 does not admit the first arc length"),
+    (dict(ds_min=10.0), "ds_min = 10 does not admit the first arc length"),
+    (dict(max_steps=2.5), "max_steps must be a whole number"),
+    (dict(critical_tol=float("nan")), "critical_tol must be"),         # refused before too
+])
+def test_arc_length_refuses_bad_controls_naming_the_key(kw, match):
+    """Arc-length controls that cannot mean what they say are refused with an OptionError naming
+    the key.  Found (lam_end = 1 on a cantilever strip): dlam0 = 0 failed after 13 rejections as a
+    'path reversal', NaN as a load's NaN scale, '0.1' with a bare TypeError; dlam0 = -0.1 traced
+    200 steps away from lam_end, to lam = -5.3e6, and ds_max = -1 turned every step after the
+    first back (200 steps, to -0.38), both returned without a word; ds_max = 1e-6 under the
+    first arc length (0.64) ended after 200 steps at lam = 0.05; a NaN or too large ds_min and
+    max_steps = 2.5 (3 steps) were taken."""
+    with pytest.raises(OptionError, match=match):
+        C.arc_length(_strip(), lam_end=1.0, **kw)
+
+
+def test_arc_length_warns_when_its_steps_run_out_short_of_its_end():
+    """A path that stops after max_steps short of lam_end says so (PathWarning), naming where it
+    stopped; one that reaches lam_end does not."""
+    with pytest.warns(PathWarning, match="max_steps = 2 points at load factor 0.1146"):
+        res = C.arc_length(_strip(), lam_end=1.0, dlam0=0.05, max_steps=2)
+    assert len(res.steps) == 3
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert C.arc_length(_strip(), lam_end=1.0, dlam0=0.5).final.load_factor == 1.0
 
 
 def test_limit_point_hint_on_the_failure_path(roof8):

@@ -48,7 +48,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..errors import ConvergenceError, CoreSE3Error, ElementTooDistortedError, SingularSystemError
+from ..errors import ConvergenceError, CoreSE3Error, ElementTooDistortedError, OptionError, SingularSystemError
 from .corrector import ArcLengthConstraint, LinearConstraint, StepFailed, correct
 from .critical import Corrector, narrow, turned_twice
 from .options import ArcLengthOptions, split_options, unknown_keywords
@@ -208,6 +208,11 @@ def path_steps(sysm, options, lam_end=1.0, control=None, control_end=None, lam_m
     ([0.0, 0.625, 1.0], 'lam_end', 0.682327804)
     """
     o = options
+    if start is None and lam_end is not None and lam_end * o.dlam0 < 0:
+        # the scenario file refuses it ([solver] dlam0); from Python, dlam0 = -0.1 to lam_end = 1
+        # traced 200 steps away from it, to lam = -5.3e6, and returned them without a word
+        raise OptionError(f"dlam0 = {o.dlam0:g} starts the path away from lam_end = {lam_end:g}: give dlam0 the "
+                          "sign of lam_end (or lam_end=None with stop_at / lam_min)")
     info = PathInfo() if info is None else info
     timers, trylog = info.timers, info.log
     max_steps = o.max_steps
@@ -300,6 +305,12 @@ def _path_start(sysm, o, first, start, crit):
         ds = abs(o.dlam0) * np.sqrt(tn0 ** 2 + psi_u ** 2)
         ds_max = o.ds_max or o.ds_max_factor * ds
         ds_min = o.ds_min or ds / 2 ** o.max_rejections
+        if not ds_min <= ds <= ds_max:
+            # ds_max = 1e-6 under the first arc length: the first step took it whole, the next 199
+            # ds_max, and the path stopped at lam = 0.05 of lam_end = 1
+            key, v = ("ds_max", ds_max) if ds > ds_max else ("ds_min", ds_min)
+            raise OptionError(f"{key} = {v:.6g} does not admit the first arc length {ds:.6g} that dlam0 = "
+                              f"{o.dlam0:g} sets: change dlam0 or {key}")
         return psi_u, ds, ds_max, ds_min, np.sign(o.dlam0) or 1.0, None, None, None, o.branch_switch, 0
     crit[:] = list(start.critical)
     prev_du = None if start.prev_du is None else np.array(start.prev_du, float)

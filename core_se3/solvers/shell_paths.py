@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import logging
 import time
+import warnings
 from dataclasses import dataclass
 from types import SimpleNamespace
 
 import numpy as np
 
-from ..errors import ConvergenceError, ElementTooDistortedError, SingularSystemError
+from ..errors import ConvergenceError, ElementTooDistortedError, PathWarning, SingularSystemError
 from ..results import Result, StepRecorder
 from .arclength import ArcState, PathError, PathInfo, arc_options, path_steps
 from .corrector import LinearConstraint, StepFailed, correct
@@ -169,10 +170,17 @@ def arc_length(problem, lam_end=1.0, stop_at=None, lam_min=None, start=None, on_
     (True, [])
     """
     result = Result(mesh=problem.mesh, element=problem.element_name)
+    item = None
     for item in arc_length_steps(problem, lam_end, stop_at, lam_min, start, result, options, **kw):
         result.steps.append(item.step)
         if on_step:
             on_step(result, item.state)
+    if item is not None and item.state.finished == "max_steps" and (lam_end is not None or stop_at is not None):
+        end = f"lam_end = {lam_end:g}" if stop_at is None else f"stop_at value {stop_at[2]:g}"
+        warnings.warn(PathWarning(
+            f"arc length stopped after max_steps = {item.state.step} points at load factor "
+            f"{item.step.load_factor:.6g}, short of {end}: raise max_steps (or dlam0, ds_max), or continue with "
+            "start= its last ArcState"), stacklevel=2)
     return result
 
 
