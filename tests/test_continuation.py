@@ -84,6 +84,26 @@ def test_two_limit_points_within_one_step_are_found(method, dlam0):
     assert any("turned twice" in e["reason"] for e in log if e.get("reason"))
 
 
+@pytest.mark.parametrize("dlam0", [0.1, 0.15])
+def test_a_step_with_a_load_term_does_not_jump_back_over_the_loop(dlam0):
+    """Riks with psi = 3 on the cubic: past the upper limit point, on the way down to the lower
+    one (u = 1.45, lam = -0.18), a step converged at u = -1.1, lam = -3.6 -- back across the
+    whole loop, onto the curve below the start: its displacement ran against the predictor's
+    and only the load term, which dominates at psi = 3, kept the increment's projection positive.
+    Found: the path ran on to lam = -162 (-243) until max_steps, never reaching u = 3, and
+    reported a 'bifurcation' at -0.270 (-0.251) of a one-dof system.  Now the displacement part
+    must not turn back either (the path-reversal check of psi = 0, with the load term): the path
+    ends at u = 3 with both limit points at +-0.19245 (1e-3), u never below its start."""
+    sysm, f = cubic()
+    pts, crit, _, _ = C.path_follow(sysm, method="riks", lam_end=None, dlam0=dlam0, psi=3.0,
+                                    control=(lambda u: u[0], lambda u: np.array([1.0])), control_end=3.0)
+    u = np.array([p.state[0] for p in pts])
+    assert abs(u[-1] - 3.0) < 1e-12 and u.min() >= 0.0
+    assert [c.kind for c in crit] == ["limit", "limit"], [c.describe() for c in crit]
+    for c, exact in zip(crit, (LAM_LIMIT, -LAM_LIMIT)):
+        assert abs(c.lam - exact) <= 1e-3 * LAM_LIMIT, c.describe()
+
+
 def test_cubic_displacement_control_is_exact():
     """Displacement control of u through the whole cubic: lam = f(u) at every target."""
     sysm, f = cubic()

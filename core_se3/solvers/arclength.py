@@ -26,7 +26,8 @@ converged state, Dlam = +-ds / sqrt(|t|_W^2 + psi^2 u_ref^2), signed so that the
 continues the previous one (positive projection).  ds adapts: ds *= clip(sqrt(n_target / n),
 1/2, 2) after a converged step of n iterations; a failed step (no convergence, complex root,
 an edge turning by pi, a singular tangent, a converged increment pointing against its
-predictor) is rejected and retried with ds / 2.
+predictor -- with the load term, or in its displacements alone --, a step over which the load
+factor may have turned twice, ``critical.turned_twice``) is rejected and retried with ds / 2.
 
 Restart: every converged point comes with an ``ArcState`` (the point, the next ds, the
 previous increment that signs the next predictor, the pending branch switch, the critical
@@ -342,7 +343,10 @@ def _arc_try(sysm, cur, du, dl, con, psi_u, o, timers, jumped, first_step):
     try:
         st_pred = sysm.update(cur.state, du)
         new_state, new_lam, its, hist, ev = correct(sysm, st_pred, cur.lam + dl, con, o, timers)
-        if not jumped and np.sum(sysm.w * con.du0 * con.du) + psi_u ** 2 * con.dlam0 * con.dlam <= 0:
+        # the displacements alone too: with psi = 3 the load term kept the projection of a Riks
+        # step on the cubic positive while it ran back over the loop (u = 1.45 -> -1.1)
+        back = np.sum(sysm.w * con.du0 * con.du)
+        if not jumped and min(back, back + psi_u ** 2 * con.dlam0 * con.dlam) <= 0:
             raise StepFailed("the corrector turned back against the predictor (path reversal)")
         if first_step and not jumped and con.dlam * con.dlam0 < 0:
             # the first step of a path starts on the stable branch through the start, so a
