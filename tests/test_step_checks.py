@@ -134,6 +134,32 @@ def test_limit_check_off_records_the_bifurcation_and_goes_on():
     assert res.steps[-1].load_factor == 1.0 and res.final.checks["det_sign"] == -1
 
 
+def _column_scenario(steps):
+    return scenario.from_dict(dict(
+        mesh=dict(generator="rectangle", L=10.0, width=1.0, nx=10, ny=1), material=dict(E=1.2e6, nu=0.0, h=0.1),
+        supports=[dict(type="clamp", edge="x0")], loads=[dict(type="edge_force", edge="x1", force=[-4.0, 0.0, 0.0])],
+        solver=dict(steps=steps, limit_check=False), output=dict(vtu=False, plots=False, picture=False)))
+
+
+@pytest.mark.parametrize("stop_after", [None, 2, 3])
+def test_a_scenario_writes_the_critical_points_load_control_passed(tmp_path, stop_after):
+    """The compressed strip as a scenario, [solver] limit_check = false, 4 steps: the bifurcation
+    passed between 0.5 and 0.75 (Euler ~0.617) is in results.json's critical_points, as the key's
+    documentation says, with the stored step that passed it (3), once -- also when the run was
+    interrupted before (2) or after (3) that step and resumed.  Found: results.json had no
+    critical_points for load control (Result.critical_points had it)."""
+    out = str(tmp_path / "run")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        if stop_after is not None:
+            with pytest.raises(scenario.RunInterrupted):
+                scenario.run(_column_scenario(4), out=out, stop_after=stop_after)
+        res = scenario.run(_column_scenario(4), out=out, resume=stop_after is not None)
+    (cp,) = res.doc["critical_points"]
+    assert cp["kind"] == "bifurcation" and cp["bracket"] == [0.5, 0.75] and cp["step"] == 3
+    assert res.doc["steps"][-1]["load_factor"] == 1.0
+
+
 # ------------------------------------------------------------------ even crossings (inertia_check)
 def _sandwich_strip(f):
     """The sandwich strip of docs/EXTENDING.md recipe 6 (its law taken from the recipe) under an

@@ -107,12 +107,7 @@ class ArcState:
                   ds_min=float(self.ds_min), psi_u=float(self.psi_u), direction=float(self.direction),
                   prev_dl=None if self.prev_dl is None else float(self.prev_dl),
                   branch_switch=bool(self.branch_switch), finished=str(self.finished or ""),
-                  critical=[dict(kind=c.kind, step=int(c.step), lam=float(c.lam),
-                                 lam_bracket=[float(x) for x in c.lam_bracket],
-                                 negative_eigenvalues=[None if x is None else int(x)
-                                                       for x in c.negative_eigenvalues],
-                                 accuracy=None if c.accuracy is None else float(c.accuracy))
-                            for c in self.critical],
+                  critical=[c.pack() for c in self.critical],
                   unwrap=None if self.unwrap is None else
                   {k: [float(x) for x in np.asarray(v, float)] for k, v in self.unwrap.items()})
         arrays = {}
@@ -125,9 +120,7 @@ class ArcState:
     @classmethod
     def unpack(cls, state, scalars, arrays):
         sc = scalars
-        crit = [CriticalPoint(c["kind"], c["step"], c["lam"], tuple(c["lam_bracket"]),
-                              tuple(c["negative_eigenvalues"]), accuracy=c.get("accuracy"))
-                for c in sc.get("critical", [])]
+        crit = [CriticalPoint.unpack(c) for c in sc.get("critical", [])]
         unwrap = None if sc.get("unwrap") is None else \
             {k: np.array(v, float) for k, v in sc["unwrap"].items()}
         return cls(state, sc["lam"], sc["step"], sc["ds"], sc["ds_max"], sc["ds_min"], sc["psi_u"],

@@ -177,6 +177,18 @@ class CriticalPoint:
     mode: np.ndarray | None = field(default=None, repr=False)
     accuracy: float | None = None
 
+    def pack(self):
+        """A JSON-able dict of the point (not its mode); :meth:`unpack` inverts it (a checkpoint's)."""
+        return dict(kind=self.kind, step=int(self.step), lam=float(self.lam),
+                    lam_bracket=[float(x) for x in self.lam_bracket],
+                    negative_eigenvalues=[None if x is None else int(x) for x in self.negative_eigenvalues],
+                    accuracy=None if self.accuracy is None else float(self.accuracy))
+
+    @classmethod
+    def unpack(cls, d):
+        return cls(d["kind"], d["step"], d["lam"], tuple(d["lam_bracket"]), tuple(d["negative_eigenvalues"]),
+                   accuracy=d.get("accuracy"))
+
     def describe(self):
         a, b = self.lam_bracket
         neg = "" if None in self.negative_eigenvalues else \
