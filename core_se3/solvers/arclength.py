@@ -202,11 +202,6 @@ def path_steps(sysm, options, lam_end=1.0, control=None, control_end=None, lam_m
     ([0.0, 0.625, 1.0], 'lam_end', 0.682327804)
     """
     o = options
-    if start is None and lam_end is not None and lam_end * o.dlam0 < 0:
-        # the scenario file refuses it ([solver] dlam0); from Python, dlam0 = -0.1 to lam_end = 1
-        # traced 200 steps away from it, to lam = -5.3e6, and returned them without a word
-        raise OptionError(f"dlam0 = {o.dlam0:g} starts the path away from lam_end = {lam_end:g}: give dlam0 the "
-                          "sign of lam_end (or lam_end=None with stop_at / lam_min)")
     info = PathInfo() if info is None else info
     timers, trylog = info.timers, info.log
     max_steps = o.max_steps
@@ -218,7 +213,7 @@ def path_steps(sysm, options, lam_end=1.0, control=None, control_end=None, lam_m
     ctrl_val = control[0] if control else None
     crit = info.critical
     psi_u, ds, ds_max, ds_min, direction, prev_du, prev_dl, switch_mode, branch_switch, step = \
-        _path_start(sysm, o, first, start, crit)
+        _path_start(sysm, o, first, start, crit, lam_end)
 
     def finished(pt):
         if lam_end is not None and (pt.lam - lam_end) * np.sign(lam_end or 1.0) >= -1e-12 * max(1, abs(lam_end)):
@@ -238,15 +233,14 @@ def path_steps(sysm, options, lam_end=1.0, control=None, control_end=None, lam_m
     yield PathEvent(first, snapshot(first, ""), restart=start is not None)
     rejections = 0
     while step < max_steps:
-        jumped = switch_mode is not None
         du, dl = _predictor(sysm, cur.t, ds, psi_u, direction, prev_du, prev_dl, switch_mode)
-        switch_mode = None
+        jumped, switch_mode = switch_mode is not None, None
         con = ArcLengthConstraint(o.method, ds, psi_u, sysm.w)
         con.start(du, dl)
         pt, reason, hist = _arc_try(sysm, cur, du, dl, con, psi_u, o, timers, jumped, first_step=prev_du is None)
         why = None if pt is None else finished(pt)
         if not jumped and (passed := _passed_within(sysm, cur, pt, con, lam_end, control, control_end, why)
-                           or turned_twice(sysm, cur, pt, None if pt is None else con.du)):
+                           or turned_twice(sysm, cur, pt, con.du)):
             pt, why, reason = None, None, passed
         if why in ("lam_end", "control_end") and o.land:
             pt, reason = _land(sysm, cur, pt, con, why, lam_end, control, control_end, o, timers)
@@ -287,11 +281,17 @@ def path_steps(sysm, options, lam_end=1.0, control=None, control_end=None, lam_m
             break
 
 
-def _path_start(sysm, o, first, start, crit):
+def _path_start(sysm, o, first, start, crit, lam_end):
     """The stepping state at the path's first point: (psi_u, ds, ds_max, ds_min, direction,
     prev_du, prev_dl, switch_mode, branch_switch, step), from the options at the reference state
-    or from the ArcState ``start``; ``crit`` (the critical points) refilled from it."""
+    (checked against each other and ``lam_end``) or from the ArcState ``start``; ``crit`` (the
+    critical points) refilled from it."""
     if start is None:
+        if lam_end is not None and lam_end * o.dlam0 < 0:
+            # the scenario file refuses it ([solver] dlam0); from Python, dlam0 = -0.1 to lam_end = 1
+            # traced 200 steps away from it, to lam = -5.3e6, and returned them without a word
+            raise OptionError(f"dlam0 = {o.dlam0:g} starts the path away from lam_end = {lam_end:g}: give dlam0 "
+                              "the sign of lam_end (or lam_end=None with stop_at / lam_min)")
         tn0 = np.sqrt(np.sum(sysm.w * first.t ** 2))
         if not np.isfinite(tn0) or tn0 == 0:
             raise CoreSE3Error("the loads do not move the structure (K^-1 q = 0)")
