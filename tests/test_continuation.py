@@ -287,6 +287,36 @@ def test_arc_length_refuses_bad_controls_naming_the_key(kw, match):
         C.arc_length(_strip(), lam_end=1.0, **kw)
 
 
+@pytest.mark.parametrize("node, direction, values, match", [
+    (-1, (0.0, 0.0, 1.0), [1.0], "controlled node must be a node number in \\[0, 9\\], got -1"),
+    (10 ** 6, (0.0, 0.0, 1.0), [1.0], "controlled node must be a node number"),
+    (2.5, (0.0, 0.0, 1.0), [1.0], "controlled node must be a node number"),
+    (None, (0.0, 0.0, 0.0), [1.0], "controlled direction must be 3 finite lab components"),
+    (None, (0.0, 0.0, float("nan")), [1.0], "controlled direction must be 3 finite lab components"),
+    (None, (0.0, 1.0), [1.0], "controlled direction must be 3 finite lab components"),
+    (None, (0.0, 0.0, 1.0), [float("nan")], "values must be finite numbers"),
+    (None, (0.0, 0.0, 1.0), "abc", "values must be finite numbers"),
+])
+def test_displacement_control_refuses_a_bad_node_direction_or_value(node, direction, values, match):
+    """Found: node -1 controlled the last node without a word; 10**6 and 2.5 failed with a bare
+    IndexError, a 2-component direction with a bare matmul ValueError, 'abc' with a bare
+    ValueError; a zero or NaN direction and a NaN value surfaced as "load 'edge force': its
+    scale(lam) is nan", naming a load that is fine.  Now OptionError names what is wrong."""
+    p = _strip()
+    node = int(p.mesh.node_set("x1")[0]) if node is None else node
+    with pytest.raises(OptionError, match=match):
+        C.displacement_control(p, node, direction, values)
+
+
+@pytest.mark.parametrize("direction, value", [((0.0, 0.0, 0.0), 1.0), ((0.0, 0.0, 1.0), float("nan"))])
+def test_arc_length_refuses_a_stop_at_it_could_never_reach(direction, value):
+    """stop_at with a zero direction or a NaN value never stopped the path (it ran to max_steps
+    and returned); now OptionError."""
+    p = _strip()
+    with pytest.raises(OptionError, match="controlled direction|stop_at's value"):
+        C.arc_length(p, lam_end=None, stop_at=(int(p.mesh.node_set("x1")[0]), direction, value), max_steps=5)
+
+
 def test_arc_length_warns_when_its_steps_run_out_short_of_its_end():
     """A path that stops after max_steps short of lam_end says so (PathWarning), naming where it
     stopped; one that reaches lam_end does not."""

@@ -10,7 +10,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from ..errors import ConvergenceError, ElementTooDistortedError, PathWarning, SingularSystemError
+from ..errors import ConvergenceError, ElementTooDistortedError, OptionError, PathWarning, SingularSystemError
 from ..results import Result, StepRecorder
 from .arclength import ArcState, PathError, PathInfo, arc_options, path_steps
 from .corrector import LinearConstraint, StepFailed, correct
@@ -108,6 +108,8 @@ def arc_length_steps(problem, lam_end=1.0, stop_at=None, lam_min=None, start=Non
     unknown_keywords("arc_length", kw, ArcLengthOptions.__dataclass_fields__)
     sysm = ShellSystem(problem, opts.linear_solver)
     control = sysm.node_displacement(stop_at[0], stop_at[1]) if stop_at else None
+    if stop_at:
+        _finite_values([stop_at[2]], "stop_at's value")
     result = result if result is not None else Result(mesh=problem.mesh, element=problem.element_name)
     rec = StepRecorder(problem, start.unwrap if start is not None else None)
     info = PathInfo(log=result.log)
@@ -211,6 +213,18 @@ def _snap_back_hint(ct, ct0, u):
             "(core_se3.solvers.arc_length, stop_at=(node, direction, value)) or control another displacement")
 
 
+def _finite_values(values, what):
+    """The controlled displacements as a list of finite floats, else OptionError naming ``what``
+    (before: NaN surfaced as a load's NaN scale, 'abc' as a bare ValueError)."""
+    try:
+        out = [float(v) for v in np.atleast_1d(np.asarray(values, dtype=object))]
+    except (TypeError, ValueError):
+        out = [np.nan]
+    if not np.all(np.isfinite(out)):
+        raise OptionError(f"{what} must be finite numbers [length], got {values!r}")
+    return out
+
+
 def _control_constraint(value, row, target, du, dlam):
     """The constraint of a displacement-control step to ``target`` that accumulates the step's
     increment from the predictor (du, dlam) on."""
@@ -285,7 +299,7 @@ def displacement_control(problem, node, direction, values, options=None, max_cut
     unknown_keywords("displacement_control", kw, ArcLengthOptions.__dataclass_fields__)
     sysm = ShellSystem(problem, opts.linear_solver)
     value, row = sysm.node_displacement(node, direction)
-    values = [float(v) for v in np.atleast_1d(values)]
+    values = _finite_values(values, "displacement_control values")
     result = Result(mesh=problem.mesh, element=problem.element_name)
     rec = StepRecorder(problem)
     timers = [0.0, 0.0]
