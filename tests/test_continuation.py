@@ -104,6 +104,40 @@ def test_a_step_with_a_load_term_does_not_jump_back_over_the_loop(dlam0):
         assert abs(c.lam - exact) <= 1e-3 * LAM_LIMIT, c.describe()
 
 
+def test_a_non_conservative_load_reports_no_critical_point_where_k_is_regular():
+    """Beck's column: a cantilever strip (10 x 1 x 0.1, EI = 100) under a compressive follower end
+    force 15 EI/L^2, below its flutter load 20.05 EI/L^2; it has no static instability (K stays
+    regular along the straight path: its smallest |eigenvalue| grows from 0.027 to 0.115).
+    Found: 'bifurcation point at lam = 0.65918 +- 0.0002', where an eigenvalue of sym(K) -- which
+    says nothing of stability with a non-symmetric K -- passed zero.  Now a non-symmetric tangent
+    (stability.stability_of) is judged by the sign of det K itself: no critical point."""
+    from core_se3 import Material, Problem, mesh
+    p = Problem(mesh.rectangle(10.0, 1.0, 20, 1), Material(1.2e6, 0.0, 0.1))
+    p.clamp("x0")
+    p.add_edge_force("x1", (-15.0, 0.0, 0.0), follower=True)
+    res = C.arc_length(p, lam_end=1.0, dlam0=0.1)
+    assert res.final.load_factor == 1.0
+    assert res.critical_points == []
+    assert all(st.stability["det_sign"] == 1 for st in res.steps)
+
+
+def test_a_limit_point_of_a_non_symmetric_system_is_where_det_k_vanishes():
+    """r = (u - 3/2 u^2 + 1/2 u^3 + c v, v - d u) - lam (1, 0), c = 0.5, d = -0.2: K is not
+    symmetric, the path v = d u has lam = (1 + c d) u - 3/2 u^2 + 1/2 u^3 with limit points where
+    det K = 0, +0.1529822 and -0.3529822 (sym K is singular elsewhere); both are found within
+    critical_tol and the accuracy each states (main, by sym K's inertia: 0.152906 +- 1.3e-4)."""
+    c, d = 0.5, -0.2
+    f = lambda x: np.array([x[0] - 1.5 * x[0] ** 2 + 0.5 * x[0] ** 3 + c * x[1], x[1] - d * x[0]])
+    jac = lambda x: np.array([[1 - 3 * x[0] + 1.5 * x[0] ** 2, c], [-d, 1.0]])
+    us = 1 + np.array([-1.0, 1.0]) * np.sqrt(1 - 2 * (1 + c * d) / 3)
+    exact = (1 + c * d) * us - 1.5 * us ** 2 + 0.5 * us ** 3
+    pts, crit, _, _ = C.path_follow(C.AlgebraicSystem(f, jac, [1.0, 0.0]), lam_end=None, dlam0=0.02, psi=1.0,
+                                    control=(lambda x: x[0], lambda x: np.array([1.0, 0.0])), control_end=3.0)
+    assert [cp.kind for cp in crit] == ["limit", "limit"]
+    for cp, ex in zip(crit, exact):
+        assert abs(cp.lam - ex) <= min(1e-3, cp.accuracy) * abs(ex) + 1e-12, cp.describe()
+
+
 def test_cubic_displacement_control_is_exact():
     """Displacement control of u through the whole cubic: lam = f(u) at every target."""
     sysm, f = cubic()
