@@ -138,6 +138,20 @@ def test_a_limit_point_of_a_non_symmetric_system_is_where_det_k_vanishes():
         assert abs(cp.lam - ex) <= min(1e-3, cp.accuracy) * abs(ex) + 1e-12, cp.describe()
 
 
+@pytest.mark.parametrize("method", ["crisfield", "riks"])
+@pytest.mark.parametrize("lam_end, u_first", [(0.1, 0.12111493375002719), (0.19, 0.3702470653010267)])
+def test_lam_end_is_met_where_the_path_first_reaches_it_past_two_hidden_turns(method, lam_end, u_first):
+    """The cubic to lam_end = 0.1 (0.19), first reached at u = 0.1211 (0.3702), before the upper
+    limit point, from dlam0 = 2 (psi = 0): the first step went over both limit points to
+    u = 2.09 (2.15) and landed there on the last crossing -- both ends rising, so the test of a
+    step that passed the end and turned back saw no turn.  Now the step that may have turned twice
+    is halved and the path ends on the first crossing (bar 1e-9: converged to 1e-12)."""
+    sysm, f = cubic()
+    pts, _, _, _ = C.path_follow(sysm, method=method, lam_end=lam_end, dlam0=2.0, psi=0.0)
+    assert abs(pts[-1].lam - lam_end) < 1e-12
+    assert abs(pts[-1].state[0] - u_first) < 1e-9, pts[-1].state
+
+
 def test_cubic_displacement_control_is_exact():
     """Displacement control of u through the whole cubic: lam = f(u) at every target."""
     sysm, f = cubic()

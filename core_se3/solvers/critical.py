@@ -165,8 +165,8 @@ def turned_twice(sysm, cur, pt, du):
     reported no critical point (from dlam0 = 0.05: limit points at 0.7436 and 0.1704); so did its
     displacement control from -W_C = 0 (or 5) to 25.  The step is retried shorter, until its
     ends bracket one turn at a time."""
-    if pt is None or (pt.n_neg, pt.sign) != (cur.n_neg, cur.sign):
-        return ""
+    if pt is None or pt.sign != cur.sign or None not in (pt.n_neg, cur.n_neg) and pt.n_neg != cur.n_neg:
+        return ""                     # a change the counts (or det K's sign) see
     span = float(np.sqrt(np.sum(sysm.w * du ** 2)))
     if span == 0:
         return ""
