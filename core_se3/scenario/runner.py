@@ -301,6 +301,8 @@ def _events(run, start, rec):
             k = item.state.step
             scalars, arrays = item.state.pack()
             record = _record(k, item.step, substeps=1 if k else 0)
+            st = item.step.stability               # the inertia that brackets the critical points
+            record["stability"] = dict(det_sign=int(st["det_sign"]), negative_eigenvalues=st["negative_eigenvalues"])
             run.critical = list(item.state.critical)
             yield _event(run, k, record, item, bool(item.state.finished), dict(control="arclength", arc=scalars),
                          arrays, item.state.unwrap)
