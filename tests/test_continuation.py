@@ -512,20 +512,24 @@ def test_arc_length_stops_where_the_controlled_displacement_first_reaches_its_en
 
 
 @pytest.mark.parametrize("method", ["crisfield", "riks"])
-def test_a_first_step_over_the_snap_through_and_back_finds_both_limit_points(roof8, method):
+@pytest.mark.parametrize("psi", [0.0, 1.0])
+def test_a_first_step_over_the_snap_through_and_back_finds_both_limit_points(roof8, method, psi):
     """The 8x8 roof of Sze s3.8(a) to -W_C = 29.374 from dlam0 = 5: the first step went from the
     unloaded state over both limit points to the far branch (load factor 0 -> 1.157 (Crisfield),
     2.009 (Riks), 0 negative eigenvalues at both ends) and the run reported none.  Now both are
     found and agree with their values refined to 1e-7 on the path from dlam0 = 0.05 (0.7435513,
-    0.1704150) within critical_tol = 1e-3; the end state is the same (bar 1e-8: converged to
-    1e-9)."""
+    0.1704150) within critical_tol = 1e-3, and state that accuracy; the end state is the same
+    (bar 1e-8: converged to 1e-9).  With psi = 1 (Riks) the lower limit point lies in the last
+    step, landed on -W_C = 29.374: it was narrowed along the step that overshot, not the landed
+    one, and stopped after 40 bisections at a stated accuracy of 1.8e-3 (arclength._land now
+    hands the landed step's increments on)."""
     case, p = roof8
     prob = catalogue.build_problem(case, p, (8, 8))
     node, d = prob.control
-    res = C.arc_length(prob, lam_end=None, dlam0=5.0, method=method, stop_at=(node, d, 29.374))
+    res = C.arc_length(prob, lam_end=None, dlam0=5.0, method=method, psi=psi, stop_at=(node, d, 29.374))
     assert [c.kind for c in res.critical_points] == ["limit", "limit"]
     for c, ref in zip(res.critical_points, (0.7435513, 0.1704150)):
-        assert abs(c.lam - ref) <= 1e-3 * ref, c.describe()
+        assert abs(c.lam - ref) <= 1e-3 * ref and c.accuracy <= 1e-3, c.describe()
     assert abs(res.final.load_factor - 1.1078501) < 1e-6
 
 

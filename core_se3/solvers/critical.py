@@ -33,6 +33,7 @@ Example
 """
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass
 from typing import Callable
 
@@ -43,6 +44,8 @@ from .stability import analyse, locate_critical
 
 __all__ = ["Corrector", "narrow", "refine", "estimate", "bracket_width", "reachable", "hidden_turns",
            "turned_twice"]
+
+log = logging.getLogger(__name__)
 
 MAX_BISECTIONS = 40
 MAX_RETRIES = 4           # refused fractions halved toward the bracket's start before giving up
@@ -289,5 +292,9 @@ def narrow(sysm, cur, pt, con, cp, corrector):
         lam = float(np.clip(locate_critical(sysm, a, b, c, span, cp.step, limit=False).lam, lo, hi))
     cp.lam = lam if n or limit else cp.lam
     cp.lam_bracket = (a.lam, b.lam)
+    if cp.accuracy > corrector.opts.critical_tol:
+        log.warning("the %s point near lam = %.6g is located only to %.2g (critical_tol %.2g): the bisection of "
+                    "its step stopped after %d solves; a smaller step (dlam0, ds_max) brackets it closer",
+                    cp.kind, cp.lam, cp.accuracy, corrector.opts.critical_tol, n)
     return dict(step=cp.step, refine=cp.kind, bisections=n, lam=cp.lam, accuracy=cp.accuracy,
                 converged=True, iterations=0, reason="")
