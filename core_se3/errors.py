@@ -19,7 +19,7 @@ __all__ = ["CoreSE3Error", "MaterialError", "MeshError", "LoadError", "SupportEr
            "SingularSystemError", "ConvergenceError", "ElementTooDistortedError", "ScenarioError",
            "CheckpointError", "OptionError", "DesignError", "ContactError", "ParallelError",
            "LinearSolverError", "ControlError", "ScenarioWarning", "SupportWarning", "ElementWarning", "MeshWarning",
-           "AccuracyWarning", "OptionWarning", "PathWarning", "did_you_mean"]
+           "AccuracyWarning", "OptionWarning", "LoadWarning", "PathWarning", "did_you_mean"]
 
 
 def did_you_mean(name, choices):
@@ -523,6 +523,20 @@ class OptionWarning(UserWarning):
     ...     _ = p.solve_linear(steps=10)
     >>> [type(w.message).__name__ for w in said]
     ['OptionWarning']
+    """
+
+
+class LoadWarning(UserWarning):
+    """A load asked for that adds nothing: gravity on elements whose density is zero (the load's
+    ``rho``, or the material's ``rho``).  Zero is a valid density (a sweep that starts from a
+    weightless shell), so it is not refused; give a positive ``rho`` (to the load, or
+    ``Material(..., rho=...)``, ``[material] rho``), or drop the load.
+
+    Example
+    -------
+    >>> from core_se3.errors import LoadWarning
+    >>> issubclass(LoadWarning, UserWarning)
+    True
     """
 
 

@@ -241,6 +241,30 @@ def test_resume_refuses_a_changed_scenario(tmp_path, capsys):
         runner.run(scenario.load(write(tmp_path, changed)), out=str(tmp_path / "empty"), resume=True)
 
 
+def test_a_renamed_scenario_resumes_its_run(tmp_path, pinned_backend):
+    """``name`` labels a run (results' name, titles, the default out/NAME) and changes no
+    mechanics, but it was in the fingerprint: a run renamed from 'strip' and extended from 2 to 4
+    steps was refused ("name changed from 'strip' to 'strip-2'").  Now the fingerprint leaves it
+    out: the renamed run resumes from step 2 and ends in the state of the uninterrupted run to the
+    bit; a checkpoint of the version that hashed the name (same name) still resumes."""
+    out = str(tmp_path / "o")
+    quiet = {"vtu": False, "plots": False, "picture": False}
+    first = with_(STRIP, solver={"steps": 2}, output=quiet)
+    runner.run(scenario.load(write(tmp_path, first)), out=out)
+    renamed = with_(STRIP, name="strip-2", solver={"steps": 4, "lam_end": 2.0}, output=quiet)
+    scn = scenario.load(write(tmp_path, renamed))
+    assert scn.fingerprint == scenario.load(write(tmp_path, with_(renamed, name="other"))).fingerprint
+    res = runner.run(scn, out=out, resume=True)
+    whole = runner.run(scenario.load(write(tmp_path, renamed)), out=str(tmp_path / "whole"))
+    assert res.status == "complete" and len(res.doc["steps"]) == 5 and res.doc["case"] == "strip-2"
+    np.testing.assert_array_equal(res.g, whole.g)             # bit for bit
+    ck = Checkpoint(out)
+    st = ck.load()
+    st["fingerprint"], st["extra"]["physical"]["name"] = scn.named_fingerprint, "strip-2"
+    from core_se3.scenario.resume import check_same_scenario
+    check_same_scenario(ck.path, st, scn)                # an older version's checkpoint
+
+
 def test_existing_run_needs_resume_or_force(tmp_path, capsys):
     out = str(tmp_path / "out")
     path = write(tmp_path, with_(STRIP, output={"vtu": False, "plots": False, "picture": False}))

@@ -126,3 +126,34 @@ def test_a_load_scale_returning_an_array_is_named():
     p.add_edge_force("x1", (0.0, 0.0, 1.0), scale=lambda lam: np.array([lam, lam]))
     with pytest.raises(LoadError, match="'edge force': its scale.lam. must return one number"):
         p.solve(steps=2)
+
+
+def test_a_union_of_named_lines_loads_those_lines_only():
+    """Both ends of a strip one element long (2 x 1, refined once in the scenario): one node set
+    of both ends is a closed loop through the strip's sides, and a third of the total (1/6 on
+    each side's midpoint) acted at mid-length.  Named one by one (``edge = ["x0", "x1"]``, or
+    ``where=["x0", "x1"]``) each end keeps its own element edges: 1/8, 1/4, 1/8 on each end and
+    nothing on the sides; the unequal ends of a trapezoid share the total by length (1 : 3)."""
+    from core_se3 import scenario
+    doc = {"mesh": {"generator": "rectangle", "L": 2.0, "width": 1.0, "nx": 1, "ny": 1, "refine": 1},
+           "material": {"E": 1.2e6, "nu": 0.3, "h": 0.1}, "supports": [{"type": "clamp", "nodes": [0]}],
+           "loads": [{"type": "edge_force", "edge": ["x0", "x1"], "force": [0.0, 0.0, 1.0]}]}
+    s = scenario.from_dict(doc)
+    fz = s.problem.external(s.mesh.g0, 1.0, tangent=False)[0][:, 2]
+    X = s.mesh.X
+    assert fz.sum() == pytest.approx(1.0, rel=1e-14)
+    assert np.abs(fz[np.abs(X[:, 0] - 1.0) < 1e-12]).max() == 0.0            # nothing on the sides
+    for x in (0.0, 2.0):
+        on = np.flatnonzero(np.abs(X[:, 0] - x) < 1e-12)
+        np.testing.assert_allclose(fz[on[np.argsort(X[on, 1])]], [1 / 8, 1 / 4, 1 / 8], rtol=1e-14)
+    g0 = np.stack([np.eye(4)] * 4)
+    g0[:, :3, 3] = [[0, 0, 0], [1, -1, 0], [1, 2, 0], [0, 1, 0]]      # ends 1 (x = 0) and 3 (x = 1)
+    trap = mesh.Mesh(g0, [[0, 1, 2, 3]], edges={"a": [0, 3], "b": [1, 2], "ab": [0, 3, 2]})
+    p = Problem(trap, Material(1.2e6, 0.3, 0.1))
+    p.add_edge_force(["a", "b"], (0.0, 0.0, 4.0))
+    f = p.external(trap.g0, 1.0, tangent=False)[0][:, 2]
+    np.testing.assert_allclose(f, [0.5, 1.5, 1.5, 0.5], rtol=1e-14)
+    with pytest.raises(LoadError, match="share the element edge"):
+        p.add_edge_force(["a", "ab"], (0.0, 0.0, 1.0))
+    with pytest.raises(LoadError, match="names a line twice"):
+        p.add_edge_force(["a", "a"], (0.0, 0.0, 1.0))

@@ -202,3 +202,39 @@ def test_gmsh_groups_without_names_are_named_by_number(tmp_path, version, binary
     doc = _cantilever({"file": "numbered.msh"})
     doc["supports"][0]["edge"], doc["loads"][0]["edge"], doc["probes"][0]["edge"] = "1", "2", "2"
     assert scenario.from_dict(doc, base_dir=str(tmp_path)).mesh.edges["2"].tolist() == named.edges["tip"].tolist()
+
+
+def test_element_ids_on_a_gmsh_file_warn_that_they_are_not_the_files_tags(tmp_path):
+    """A strip of 4 quads saved by Gmsh with two boundary lines first: Gmsh tags the quads 3 ... 6
+    (lines 1, 2), meshio keeps no tags, and core_se3 numbers the quads 0 ... 3.  A region
+    `elements = [3]` copied from Gmsh (the quad at x in [0, 1]) selected the quad at x in [3, 4],
+    silently.  The ids stay core_se3's (its VTU cell ids and messages use them), but on a Gmsh
+    file (or one with other cells, or split triangles) they now warn at the key, pointing at
+    physical surfaces and boxes; a VTU file of quads alone (whose cell ids they are) warns not."""
+    import meshio
+    import warnings
+    m = M.rectangle(4.0, 1.0, 4, 1)
+    lines = np.array([m.edges["x0"], m.edges["x1"]])
+    cells = [("line", lines), ("quad", m.quads)]
+    meshio.write(str(tmp_path / "strip.msh"),
+                 meshio.Mesh(m.X, cells, cell_data={"gmsh:physical": [np.array([2, 3]), np.full(4, 1)],
+                                                    "gmsh:geometrical": [np.array([2, 3]), np.full(4, 1)]},
+                             field_data={"shell": np.array([1, 2]), "clamped": np.array([2, 1]),
+                                         "tip": np.array([3, 1])}),
+                 file_format="gmsh22", binary=False)
+    meshio.write(str(tmp_path / "strip.vtu"), meshio.Mesh(m.X, [("quad", m.quads)]))
+    doc = {"mesh": {"file": "strip.msh"}, "material": {"E": 1e6, "nu": 0.3, "h": 0.01},
+           "supports": [{"type": "clamp", "edge": "clamped"}], "regions": {"picked": {"elements": [3]}},
+           "loads": [{"type": "pressure", "p": 1.0, "region": "picked"}]}
+    with pytest.warns(UserWarning):
+        s = scenario.from_dict(doc, base_dir=str(tmp_path))
+    assert s.mesh.X[s.mesh.quads[s.regions["picked"]]].mean(1)[0, 0] == pytest.approx(3.5)   # core_se3's id 3
+    hit = [w for w in s.warnings if w.key == "regions.picked.elements"]
+    assert hit and "not the file's element numbers" in str(hit[0]) and "physical surface" in str(hit[0])
+    with pytest.raises(ScenarioError, match="Gmsh mesh, whose element tags count every element"):
+        scenario.from_dict(doc, base_dir=str(tmp_path), strict=True)
+    doc["mesh"]["file"] = "strip.vtu"
+    doc["supports"] = [{"type": "clamp", "nodes": [0, 5]}]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert not scenario.from_dict(doc, base_dir=str(tmp_path)).warnings

@@ -259,3 +259,28 @@ def test_results_json_carries_the_support_reactions_and_the_applied_loads(tmp_pa
     assert np.abs(np.array(last["applied"]["force"])).max() < 1e-12
     assert np.abs(np.array(last["reactions"]["moment"]) + M).max() < 1e-10 * np.abs(M).max()
     assert np.abs(np.array(last["reactions"]["force"])).max() < 1e-10 * np.abs(M).max()
+
+
+def test_the_step_table_shows_the_total_support_reaction(tmp_path, capsys):
+    """`core-se3 run`'s step table showed no reaction although results.json has each step's
+    (one lab total of the held dofs and springs).  Now a column |R| [force unit]: a cantilever
+    under a tip force of 2 N in two steps, |R| = 0, 1, 2 N, as results.json's reactions."""
+    import json
+    from core_se3 import cli
+    doc = {"name": "cantilever", "units": "SI",
+           "mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 4, "ny": 1},
+           "material": {"E": 1.2e6, "nu": 0.0, "h": 0.1}, "supports": [{"type": "clamp", "edge": "x0"}],
+           "loads": [{"type": "edge_force", "edge": "x1", "force": [0.0, 0.0, 2.0]}], "solver": {"steps": 2},
+           "output": {"vtu": False, "plots": False, "picture": False}}
+    path = tmp_path / "c.toml"
+    path.write_text(scenario.dumps(doc))
+    assert cli.main(["run", str(path), "--out", str(tmp_path / "o")]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    head = next(i for i, ln in enumerate(lines) if ln.lstrip().startswith("step"))
+    cols = lines[head].split()
+    assert "|R|" in cols and cols[cols.index("|R|") + 1] == "[N]"
+    at = lines[head].index("[N]", lines[head].index("|R|")) + 3           # the column's right end
+    shown = [float(ln[at - 12:at]) for ln in lines[head + 1:head + 4]]
+    steps = json.loads((tmp_path / "o" / "results.json").read_text())["steps"]
+    np.testing.assert_allclose(shown, [np.linalg.norm(s["reactions"]["force"]) for s in steps], rtol=1e-5, atol=1e-12)
+    np.testing.assert_allclose(shown, [0.0, 1.0, 2.0], rtol=1e-9, atol=1e-12)

@@ -111,6 +111,25 @@ sys.stdin.read()
     assert runner.run(load(), out=out, force=True).status == "complete"
 
 
+def test_a_lock_file_is_there_only_while_a_run_lives(tmp_path):
+    """A completed run left .core-se3.lock (with its dead pid) in the output directory, as did a
+    failed one.  Now a run that ends, complete or failed, deletes it; a stale file of a killed run
+    (no process holds it) does not block the next run, which takes it and deletes it at its end."""
+    import json as _json
+    from core_se3.errors import ConvergenceError
+    from core_se3.io import rundir
+    out = tmp_path / "o"
+    assert runner.run(load(), out=str(out)).status == "complete"
+    assert not (out / rundir.LOCK).exists()
+    (out / rundir.LOCK).write_text(_json.dumps({"pid": 999999999, "kind": "run", "started": "then"}))
+    assert runner.run(load(), out=str(out), force=True).status == "complete"
+    assert not (out / rundir.LOCK).exists()
+    failing = load(dict(STRIP, solver={"steps": 1, "max_iter": 1, "max_cutbacks": 0}))
+    with pytest.raises(ConvergenceError):
+        runner.run(failing, out=str(out), force=True)
+    assert json.load(open(out / "results.json"))["status"] == "failed" and not (out / rundir.LOCK).exists()
+
+
 def test_a_refused_run_leaves_no_lock_file_in_the_users_directory(tmp_path, monkeypatch):
     """A run refused by a directory of the user's files (notes.txt) left .core-se3.lock in it.
     The refusing process deletes the lock file it created (still holding it); one that opened
@@ -138,8 +157,8 @@ def test_a_refused_run_leaves_no_lock_file_in_the_users_directory(tmp_path, monk
         with pytest.raises(RunDirectoryError, match="in use by another live run"):
             RunDirectory(rd.path, "run").claim()
     with RunDirectory(str(tmp_path / "o"), "run").claim(force=True):
-        pass                                 # the file of a run that ran stays
-    assert os.path.exists(tmp_path / "o" / rundir.LOCK)
+        pass
+    assert not os.path.exists(tmp_path / "o" / rundir.LOCK)          # a run that ended leaves none
 
 
 # ----------------------------------------------------------------------------- each sink alone
@@ -235,7 +254,7 @@ def test_a_run_on_two_ranks_records_how_it_ran(tmp_path):
     r = _mpirun(tmp_path, doc, "--out", "o")
     assert r.returncode == 0, r.stderr[-3000:]
     prov = json.load(open(tmp_path / "o" / "results.json"))["provenance"]
-    assert prov["ranks"] == 2 and prov["linear_solver"]["used"] == "mumps"
+    assert prov["ranks"] == 2 and prov["linear_solver"]["used"] == "mumps" and prov["solve"] == "distributed"
     assert prov["partition"]["method"] == "auto" and sum(prov["partition"]["elements_per_rank"]) == 16
     assert len(prov["peak_memory"]) == 2 and min(prov["peak_memory"]) > 1e7
     r = _mpirun(tmp_path, doc, "--json", "b.json", command=("bench", "run", "cantilever-shear", "--mesh", "8x2",
@@ -244,6 +263,23 @@ def test_a_run_on_two_ranks_records_how_it_ran(tmp_path):
     bench = json.load(open(tmp_path / "b.json"))["provenance"]
     assert bench["ranks"] == 2 and bench["linear_solver"]["used"] == "mumps" and len(bench["peak_memory"]) == 2
     assert sum(bench["partition"]["elements_per_rank"]) == 16
+
+
+def test_a_linear_run_on_two_ranks_records_that_every_rank_solved_it(tmp_path):
+    """A linear analysis under mpirun -n 2 runs serially on every rank (docs/PARALLEL.md); its
+    results.json said ranks = 1, as if launched alone.  Now ranks = 2 (the job's size) and solve
+    = 'serial on every rank' (a load-control run: 'distributed'; serially: 'serial'), with no
+    partition; the answer is the serial one to round-off."""
+    doc = dict(STRIP, solver={"control": "linear"}, output={"vtu": False, "plots": False, "picture": False})
+    r = _mpirun(tmp_path, doc, "--out", "o")
+    assert r.returncode == 0, r.stderr[-3000:]
+    res = json.load(open(tmp_path / "o" / "results.json"))
+    prov = res["provenance"]
+    assert prov["ranks"] == 2 and prov["solve"] == "serial on every rank" and prov["partition"] is None
+    serial = runner.run(load(dict(STRIP, solver={"control": "linear"})), out=str(tmp_path / "serial"))
+    assert serial.doc["provenance"]["ranks"] == 1 and serial.doc["provenance"]["solve"] == "serial"
+    assert res["steps"][-1]["probes"]["tip"]["u"] == pytest.approx(serial.doc["steps"][-1]["probes"]["tip"]["u"],
+                                                                   rel=1e-10, abs=1e-14)
 
 
 def test_a_failed_run_on_two_ranks_writes_its_last_steps_contact_forces(tmp_path):

@@ -18,3 +18,33 @@ def test_a_dead_pressure_is_p_per_area_whatever_the_length_of_its_direction(dire
     p = Problem(mesh.rectangle(2.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
     d = np.asarray(direction) / np.linalg.norm(direction)
     assert np.allclose(_total(p, p.add_load("pressure", p=1.0, direction=direction)), 2.0 * d, rtol=1e-14)
+
+
+def test_gravity_on_zero_mass_warns_naming_rho():
+    """Gravity on a shell of density 0 added no load at all, silently (the run solved an unloaded
+    shell: every displacement 0).  Zero stays valid (a sweep may start weightless), but the load
+    that adds nothing now warns, naming rho: a LoadWarning in Python, a ScenarioWarning at
+    material.rho or loads[i].rho in a scenario (an error with strict).  A positive density warns
+    not, and its total is rho h g A exactly."""
+    import warnings
+    from core_se3 import scenario
+    from core_se3.errors import LoadWarning, ScenarioError
+    p = Problem(mesh.rectangle(2.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01, rho=0.0))
+    with pytest.warns(LoadWarning, match="zero mass adds nothing: the material's rho"):
+        assert p.add_load("gravity") == []
+    with pytest.warns(LoadWarning, match="the load's rho = 0"):
+        p.add_load("gravity", rho=0.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert np.allclose(_total(p, p.add_load("gravity", rho=3.0)), (0.0, 0.0, -9.81 * 3.0 * 0.01 * 2.0), rtol=1e-14)
+    doc = {"units": "SI", "mesh": {"generator": "rectangle", "L": 1.0, "width": 1.0, "nx": 2, "ny": 1},
+           "material": {"E": 1e6, "nu": 0.3, "h": 0.01, "rho": 0.0}, "supports": [{"type": "clamp", "edge": "x0"}],
+           "loads": [{"type": "gravity"}, {"type": "edge_force", "edge": "x1", "force": [0.0, 0.0, 1e-3]}]}
+    with pytest.warns(UserWarning):
+        s = scenario.from_dict(doc)
+    assert [w.key for w in s.warnings] == ["material.rho"] and "rho" in str(s.warnings[0])
+    doc["loads"][0]["rho"] = 0.0
+    with pytest.warns(UserWarning):
+        assert [w.key for w in scenario.from_dict(doc).warnings] == ["loads[0].rho"]
+    with pytest.raises(ScenarioError, match="zero mass adds nothing"):
+        scenario.from_dict(doc, strict=True)

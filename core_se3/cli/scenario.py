@@ -250,7 +250,8 @@ def _summary(scn, res):
 
 def step_table(doc):
     """One line per step: load factor, the physical loads (with units), the first probe, the
-    total contact force |F| of every obstacle, iterations and residual."""
+    total contact force |F| of every obstacle, the total support reaction |R| (its force, lab
+    total of the held dofs and springs), iterations and residual."""
     import numpy as np
     steps = doc["steps"]
     phys = list((steps[-1].get("physical") or {}).items())
@@ -263,6 +264,10 @@ def step_table(doc):
     head += "".join(f" {'|F ' + o + '|':>12}" for o in obstacles)
     rough = friction_obstacles(steps)
     head += "".join(f" {'N ' + o:>12} {'T ' + o:>12} {'stick/slip':>10}" for o in rough)
+    reacts = any("reactions" in st for st in steps)
+    if reacts:
+        unit = (doc.get("unit_system") or {}).get("force")
+        head += f" {'|R|' + (' [' + unit + ']' if unit else ''):>12}"
     print(head + f" {'it':>3} {'residual':>9}")
     for st in steps:
         line = f"{st['step']:>5d} {st['load_factor']:>9.4g}"
@@ -273,6 +278,9 @@ def step_table(doc):
             c = (st.get("contact") or {}).get(o)
             line += f" {float(np.linalg.norm(c['force'])) if c else 0.0:>12.6g}"
         line += "".join(friction_cells(st, o) for o in rough)
+        if reacts:
+            r = st.get("reactions")
+            line += f" {float(np.linalg.norm(r['force'])):>12.6g}" if r else f" {'-':>12}"
         print(line + f" {st.get('iterations', 0):>3d} {format_residual(st)}")
     if any(format_residual(st).endswith("*") for st in steps):
         print(ROUNDOFF_NOTE)

@@ -181,8 +181,8 @@ def _material(ctx, v):
 def _load(ctx, v):
     built = ctx.loads[v["load"]]
     if len(built) != 1:
-        exc = DesignError(f"loads[{v['load']}] is {len(built)} loads (one per region): a load variable needs a "
-                          "single load")
+        exc = DesignError(f"loads[{v['load']}] is {len(built)} loads (one per region, or per line of an edge = "
+                          "[...] union): a load variable needs a single load")
         exc.param = "load"
         raise exc
     return LoadMagnitude(ctx.problem, built[0], v["lower"], v["upper"], ctx.pose(v["pose"]), name=f"load{v['load']}")

@@ -13,8 +13,9 @@ live run at a time.
 * **Lock** (``.core-se3.lock``): an exclusive ``flock`` held while the run lives, released by
   the kernel when its process ends however it ends (so a killed run leaves no stale lock); a
   second run on the same directory is refused, naming the first one's process.  A run that
-  refuses the directory deletes the lock file if it created it (the user's directory is left as
-  it was); the file of a run that ran stays.
+  ends (complete, failed, interrupted, or refusing the directory) deletes the lock file, still
+  holding it, so the file is there only while a run lives; a killed run's file stays, unlocked,
+  and the next run takes it.
 
 Example
 -------
@@ -114,7 +115,6 @@ class RunDirectory:
         self.previous = []
         self.existed = False            # a manifest was there: the directory of an earlier run
         self._lock = None
-        self._created = False           # this process created the lock file (a refusal deletes it)
         self._manifest_kind = None      # what wrote the files the manifest lists ('run', 'sweep', ...)
 
     # ------------------------------------------------------------------ claiming -------------
@@ -163,12 +163,7 @@ class RunDirectory:
             self.files = [f for f in listed if f in present]
             self._write_manifest()
         except BaseException:
-            if self._created and self._lock is not None:     # a refusal leaves the directory as it was
-                try:
-                    os.unlink(os.path.join(self.path, LOCK))   # still locked: see _take_lock
-                except OSError:
-                    pass
-            self.release()
+            self.release()                      # deletes the lock file: the directory as it was
             raise
         return self
 
@@ -217,8 +212,17 @@ class RunDirectory:
         return os.path.join(self.path, rel)
 
     def release(self):
-        """Drop the lock (the kernel drops it too when the process ends)."""
+        """Drop the lock and delete its file, still holding it (a process that opened the file
+        before and locks it after finds it gone and locks the name's new file: ``_take_lock``), so
+        that a lock file is there only while a run lives.  A killed run's file stays, unlocked (the
+        kernel drops the lock when the process ends): the next run takes it."""
         if self._lock is not None:
+            path = os.path.join(self.path, LOCK)
+            if _same_file(self._lock, path):
+                try:
+                    os.unlink(path)
+                except OSError:
+                    pass
             os.close(self._lock)
             self._lock = None
 
@@ -231,18 +235,18 @@ class RunDirectory:
 
     # ------------------------------------------------------------------ internals ------------
     def _take_lock(self):
-        """flock the lock file.  A process that refuses deletes the file it created, still holding
-        it: one that opened it before then and locks it after finds its file gone from the
+        """flock the lock file.  A process that ends deletes the file, still holding it
+        (:meth:`release`): one that opened it before then and locks it after finds its file gone from the
         directory (another inode at the name, or none) and tries again on the name's file."""
         import fcntl
         path = os.path.join(self.path, LOCK)
         for _ in range(100):
             try:
-                fd, self._created = os.open(path, os.O_RDWR | os.O_CREAT | os.O_EXCL, 0o644), True
+                fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_EXCL, 0o644)
             except FileExistsError:
                 try:
-                    fd, self._created = os.open(path, os.O_RDWR), False
-                except FileNotFoundError:    # deleted by a refusing run in between
+                    fd = os.open(path, os.O_RDWR)
+                except FileNotFoundError:    # deleted by a run ending in between
                     continue
             try:
                 fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)

@@ -130,6 +130,9 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None, triangles="error"):
     physical point) a node set of those nodes; a group of quads (a physical surface) a region.
     ``edges`` = {name: predicate(X) -> bool mask} adds node sets.
 
+    Element ids are the quads counted from 0 in the order read, not the file's element numbers
+    (meshio keeps no Gmsh tags): ``mesh.element_numbering`` says why they differ (a Gmsh file,
+    other cells, split triangles), else None.
     Points that no quad uses (e.g. Gmsh geometry points) are dropped (``mesh.dropped_points``:
     their ids when that renumbers the points after them, else None); line and vertex cells are
     allowed; a group of lines off the quads is a MeshError.  Triangles (a quad-dominant mesh) are a MeshError naming the fixes, unless
@@ -181,8 +184,25 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None, triangles="error"):
     # (node ids then differ from the file's point ids: scenario.geometry says so where ids are used)
     dropped = np.flatnonzero(remap < 0)
     mesh.dropped_points = dropped if len(dropped) and dropped[0] < len(remap) - len(dropped) else None
+    mesh.element_numbering = _element_numbering(raw, blocks, qb)
     _warn_coincident(X)
     return mesh
+
+
+def _element_numbering(raw, blocks, qb):
+    """Why the mesh's element ids (its quads counted from 0 in the order read) are not the ids the
+    file shows, or None when they are (a file of quads only that is no Gmsh file: VTU cell ids).
+    meshio keeps no element tags, so ids cannot be mapped back: Gmsh numbers every element
+    (points, lines, quads) from 1."""
+    gmsh = any(str(k).startswith("gmsh:") for k in (raw.cell_data or {}))
+    other = sum(len(c) for i, (t, c) in enumerate(blocks) if i not in qb)
+    split = sum(len(blocks[i][1]) for i in qb) != sum(len(c.data) for c in raw.cells if c.type == "quad")
+    if not (gmsh or other or split):
+        return None
+    why = ("the file is a Gmsh mesh, whose element tags count every element (points, lines, quads) from 1" if gmsh
+           else "its cells were split into quads (triangles = \"split\")" if split
+           else f"the file has {other} cells that are not quads, not counted")
+    return f"element ids count the mesh's quads from 0 in the order read, not the file's element numbers: {why}"
 
 
 #: nodes closer than this fraction of the mesh's extent are one point (Gmsh's Geometry.Tolerance)

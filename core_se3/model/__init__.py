@@ -11,7 +11,7 @@ from .base import LOADS, REQUIRED, Load, LoadEvaluation, LoadKind, Param, load_k
 from .fields import (FIELDS, MU0, DipoleField, Field, FieldKind, GradientField, Superposition,
                      UniformField, UserField, check_field, field_kind, register_field,
                      rotating_direction)
-from .loads import NodalLoad, SurfaceLoad, edge_weights
+from .loads import NodalLoad, SurfaceLoad, edge_weights, line_shares
 from .magnetics import MagneticLoad, Magnetisation
 from .obstacles import (OBSTACLES, Obstacle, ObstacleKind, check_sdf, make_obstacle, obstacle_kind,
                         register_obstacle, rigid_motion, rotation, translation)
@@ -26,7 +26,7 @@ from .verify import tangent_fd_check, zero_modes
 __all__ = ["Load", "LoadEvaluation", "LoadKind", "Param", "REQUIRED", "LOADS", "register_load",
            "load_kind", "Field", "FieldKind", "FIELDS", "register_field", "field_kind", "MU0",
            "UniformField", "GradientField", "DipoleField", "UserField", "Superposition",
-           "check_field", "rotating_direction", "NodalLoad", "SurfaceLoad", "edge_weights",
+           "check_field", "rotating_direction", "NodalLoad", "SurfaceLoad", "edge_weights", "line_shares",
            "Magnetisation", "MagneticLoad", "Probe", "Problem", "Evaluation", "SOLVERS",
            "Prescribed", "LabSpring", "LabTiltSpring", "RotationComponentSpring",
            "tangent_fd_check", "zero_modes", "overrides", "Obstacle", "ObstacleKind", "OBSTACLES",

@@ -18,15 +18,17 @@ Every load is scaled by a function of the load factor (``scale(lam)``, linear by
 """
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from .. import lie
-from ..errors import LoadError
+from ..errors import LoadError, LoadWarning
 from ..fem.quadrature import shape_functions, surface_jacobian
 from .base import (Load, LoadEvaluation, LoadKind, Param, finite_vector, linear_scale, param_error,
                    register_load)
 
-__all__ = ["NodalLoad", "SurfaceLoad", "edge_weights"]
+__all__ = ["NodalLoad", "SurfaceLoad", "edge_weights", "line_shares"]
 
 
 def _scale_at(load, lam):
@@ -80,7 +82,13 @@ def edge_weights(mesh, nodes):
     >>> edge_weights(mesh.rectangle(1.0, 1.0, 1, 2), [4, 0, 2]).tolist()     # any order
     [0.25, 0.25, 0.5]
     """
-    nodes = np.asarray(nodes)
+    w = _edge_lengths(mesh, np.asarray(nodes))
+    return w / w.sum()
+
+
+def _edge_lengths(mesh, nodes):
+    """Half the length of each element edge of the set that a node ends, summed per node (the
+    unnormalised weights of :func:`edge_weights`; one node: 1)."""
     if len(nodes) == 1:
         return np.ones(1)
     where = np.full(mesh.n_nodes, -1)
@@ -102,7 +110,50 @@ def edge_weights(mesh, nodes):
         raise LoadError(f"an edge load (a total along a line) on nodes that no element edge of the set joins: "
                         f"{lone[:5].tolist()}{' ...' if len(lone) > 5 else ''} of {len(nodes)}; select a line of "
                         "nodes joined by element edges, or give a nodal load (a force per node) for points")
-    return w / w.sum()
+    return w
+
+
+def line_shares(mesh, names):
+    """The share of each named line of a union in a total along them all: its length over theirs.
+
+    A union of lines given as one node set is a line of its own element edges: both ends of a
+    strip one element long joined by its sides into a closed loop, and the load spread onto the
+    sides.  Named one by one, each line keeps its own element edges.
+
+    Parameters
+    ----------
+    mesh : core_se3.mesh.Mesh
+        The mesh (its named node sets).
+    names : sequence of str
+        Names of node sets, each a line of element edges (:func:`edge_weights`).
+
+    Returns
+    -------
+    (k,) ndarray
+        The shares, summing to 1.  LoadError for a name given twice, or lines sharing an
+        element edge (its part of the load would count twice).
+
+    Example
+    -------
+    >>> from core_se3 import mesh
+    >>> line_shares(mesh.rectangle(2.0, 1.0, 1, 1), ["x0", "y0"]).tolist()
+    [0.3333333333333333, 0.6666666666666666]
+    """
+    names = list(names)
+    if len(set(names)) < len(names):
+        raise LoadError(f"a union of lines {names} names a line twice: its load would count twice; name each once")
+    sets = [np.asarray(mesh.node_set(n)) for n in names]
+    own = [np.isin(mesh.edge_nodes, nodes).all(1) for nodes in sets]          # each line's element edges
+    shared = np.nonzero(np.sum(own, 0) > 1)[0]
+    if len(shared):
+        a, b = [n for n, o in zip(names, own) if o[shared[0]]][:2]
+        raise LoadError(f"lines {a!r} and {b!r} share the element edge {mesh.edge_nodes[shared[0]].tolist()}: its "
+                        "part of the load would count twice; name lines that meet at most at a node")
+    lone = [n for n, nodes in zip(names, sets) if len(nodes) < 2]
+    if lone:
+        raise LoadError(f"node set {lone[0]!r} of a union of lines is one node, no line: give points a nodal load")
+    lengths = np.array([_edge_lengths(mesh, nodes).sum() for nodes in sets])
+    return lengths / lengths.sum()
 
 
 class NodalLoad(Load):
@@ -360,6 +411,11 @@ def _gravity(problem, elements, scale, g=(0.0, 0.0, -9.81), rho=None):
         raise param_error("gravity needs a density on every loaded element: give 'rho' to the "
                           "load or to the material (Material(..., rho=...), [material] rho)", "rho")
     gv = np.asarray(g, float)
+    if not np.any(dens):
+        whose = f"the load's rho = {rho:g}" if rho is not None else "the material's rho (Material(..., rho=...), " \
+                                                                     "[material] rho) is 0"
+        warnings.warn(LoadWarning(f"gravity on {len(sel)} element(s) of zero mass adds nothing: {whose}; give a "
+                                  "positive density, or drop the gravity load"), stacklevel=4)
     return [SurfaceLoad(mesh, r * t * gv, False, sel[(dens == r) & (h == t)], scale, "gravity")
             for r, t in sorted(set(zip(dens.tolist(), h.tolist()))) if r != 0]
 

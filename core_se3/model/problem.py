@@ -22,10 +22,11 @@ from ..assembly import Assembler
 from .. import backend as _backend
 from ..errors import LoadError, MeshError, OptionError, did_you_mean
 from ..fem import ELEMENTS, make_element
-from .base import Evaluation, Load, force_scale_with_loads, load_kind
+from .base import Evaluation, Load, force_scale_with_loads, linear_scale, load_kind
 from .compiled import CompiledEvaluation
 from .contact import add_obstacle
 from .fields import MU0
+from .loads import line_shares
 from .magnetics import MagneticLoad, Magnetisation, magnets_force, magnets_output, table_kind
 from .probes import Probe, along_line
 from .solving import SOLVERS, dispatch, solve_linear
@@ -256,7 +257,9 @@ class Problem:
     def add_load(self, kind, where=None, scale=None, check=True, **values):
         """Add a load of a registered kind (``core_se3.model.LOADS``) on ``where`` (a line or
         node selection for 'line'/'nodes' kinds, a region or element ids for 'elements' kinds,
-        default all); returns the list of loads added.  ``check=False`` skips the kind's
+        default all; for 'line' kinds also a list of line names, e.g. ["x0", "x1"]: each line
+        along its own element edges, with its share of the total by length); returns the list
+        of loads added.  ``check=False`` skips the kind's
         cross-key check (a scenario file has run it on the keys its user wrote).
 
         Example
@@ -283,10 +286,23 @@ class Problem:
             bad = k.check(full, set(values))
             if bad is not None:
                 raise LoadError(bad[1])
+        if k.target == "line" and _names(where):
+            return self._add_on_lines(k, where, scale, full)
         selection = self.nodes(where) if k.target in ("line", "nodes") else self.elements(where)
         built = k.build(self, selection, scale, **full)
         built = built if isinstance(built, (list, tuple)) else [built]
         return [self.add(ld) for ld in built]
+
+    def _add_on_lines(self, kind, names, scale, values):
+        """A 'line' load on a union of named lines: one load per line, its scale times the line's
+        share of the length (``loads.line_shares``), so that each line keeps its own element edges
+        (one node set of both ends of a one-element strip closed a loop through its sides)."""
+        base = scale or linear_scale
+        added = []
+        for name, share in zip(names, line_shares(self.mesh, names)):
+            built = kind.build(self, self.nodes(name), lambda lam, f=float(share): f * base(lam), **values)
+            added += [self.add(ld) for ld in (built if isinstance(built, (list, tuple)) else [built])]
+        return added
 
     def add_edge_force(self, where, total_force, follower=False, scale=None):
         """Total force distributed consistently along an edge (lab vector if dead; components
@@ -644,3 +660,8 @@ class Problem:
         return dispatch(self, control, solver or kw.pop("solver", None), kw, given)
 
     solve_linear = solve_linear            # linear analysis (model.solving.solve_linear)
+
+
+def _names(where):
+    """True for a list or tuple of names (a union of named lines)."""
+    return isinstance(where, (list, tuple)) and len(where) > 0 and all(isinstance(w, str) for w in where)

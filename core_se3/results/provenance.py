@@ -63,7 +63,11 @@ def provenance(problem=None, result=None, ranks=None, linear=None, partition=Non
     -------
     dict
         package, version, python, numpy, backend {setting, used}, ranks, linear_solver
-        {setting, used}, partition (None serially) and peak_memory [bytes] per rank.
+        {setting, used}, partition (None serially), peak_memory [bytes] per rank (rank 0's alone
+        when every rank solved the whole problem) and solve: how it ran, 'distributed' (over the
+        ranks: a ``result.parallel`` record or a ``partition``), 'serial' (one process) or 'serial
+        on every rank' (under mpirun, a control that runs serially: every rank solves the whole
+        problem, rank 0 writes).
     """
     import sys
     from ..backend import launched_ranks
@@ -78,10 +82,12 @@ def provenance(problem=None, result=None, ranks=None, linear=None, partition=Non
     linear = linear or par.get("linear")
     lin_used = linear or linear_used
     part = partition if partition is not None else par.get("partition")
+    solve = "distributed" if par or part is not None else ("serial" if int(ranks) == 1 else "serial on every rank")
     return dict(package="core_se3", version=version, python=platform.python_version(), numpy=np.__version__,
                 backend=dict(setting=getattr(problem, "backend_setting", None), used=used),
                 ranks=int(ranks), linear_solver=dict(setting=setting if linear is None else linear, used=lin_used),
-                partition=_partition(part), peak_memory=[None if m is None else float(m) for m in np.ravel(mem)])
+                partition=_partition(part), peak_memory=[None if m is None else float(m) for m in np.ravel(mem)],
+                solve=solve)
 
 
 def _partition(part):

@@ -3,11 +3,13 @@ the same registries and Problem methods as the Python API; failures of the core'
 become ScenarioErrors keyed to the section that caused them."""
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from .. import lie
 from .. import mesh as M
-from ..errors import CoreSE3Error, ScenarioError, SingularSystemError
+from ..errors import CoreSE3Error, LoadWarning, ScenarioError, SingularSystemError
 from ..fem import RegionMaterial
 from ..fem.material_kinds import MATERIALS
 from ..model import FIELDS, LOADS, MU0, SUPPORTS, Problem
@@ -61,7 +63,9 @@ def build_problem(v, spec, mesh, regions):
     for i, ld in enumerate(spec["loads"]):
         key = f"loads[{i}]"
         values = {k: x for k, x in ld.items() if k not in ("type", "scale", "edge", "nodes", "region")}
-        if "edge" in ld or "nodes" in ld:
+        if isinstance(ld.get("edge"), list):
+            where = list(ld["edge"])              # a union of named lines, each along its own edges
+        elif "edge" in ld or "nodes" in ld:
             where = selection(mesh, ld)
             lineage = getattr(mesh, "_lineage", None)
             if lineage is not None and LOADS[ld["type"]].target == "nodes":
@@ -81,7 +85,14 @@ def build_problem(v, spec, mesh, regions):
         else:
             where = regions[ld["region"]] if ld.get("region") else None
         try:
-            added = prob.add_load(ld["type"], where, make_scale(ld["scale"]), check=False, **values)
+            with warnings.catch_warnings(record=True) as said:
+                warnings.simplefilter("always", LoadWarning)
+                added = prob.add_load(ld["type"], where, make_scale(ld["scale"]), check=False, **values)
+            for w in said:                        # a load that adds nothing, located in the file
+                if issubclass(w.category, LoadWarning):
+                    v.warn(join(key, "rho") if ld.get("rho") is not None else "material.rho", str(w.message))
+                else:
+                    warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
             prob.scenario_parts["loads"].append(added)
         except CoreSE3Error as exc:
             param = getattr(exc, "param", None)

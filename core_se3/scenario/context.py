@@ -28,11 +28,11 @@ class RunContext:
     >>> ctx.root, ctx.ranks
     (True, 1)
     """
-    ranks = 1
 
     def __init__(self, problem):
         self.problem = problem
         self.root = launched_rank() == 0
+        self.ranks = launched_ranks()      # under mpirun every rank solves the whole problem
         if self.root:
             # the coarse-mesh warning, as Problem.solve gives it (the runner drives the solvers
             # itself, not through Problem.solve; the distributed context warns in its set-up)

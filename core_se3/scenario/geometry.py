@@ -302,6 +302,11 @@ def regions_section(v, doc, mesh):
             ids = np.nonzero(_box(v, t["box"], join(key, "box"), centroids, scale))[0]
         else:
             ids = np.unique(_int_list(v, t, "elements", key, base.n_elements, what="element"))
+            if getattr(base, "element_numbering", None):
+                v.warn(join(key, "elements"), f"{base.element_numbering}; if the ids come from the file (Gmsh shows "
+                                              "its tags), select the elements by a physical surface (a region of "
+                                              "the file, by name) or a box instead; ids from core_se3's own output "
+                                              "(a VTU file's cell ids, a message) are right")
         ids = M.descendants(ids, levels)
         if len(ids) == 0:
             v.fail(key, "selects no elements")
@@ -345,7 +350,9 @@ def nodes_ref(v, t, key, mesh, required=True, regions=None):
 
 
 def selection(mesh, s):
-    """Node ids of a validated selection."""
+    """Node ids of a validated selection (a union of named lines: their nodes, each once)."""
+    if isinstance(s.get("edge"), list):
+        return np.unique(np.concatenate([mesh.edges[n] for n in s["edge"]]))
     return mesh.edges[s["edge"]] if "edge" in s else np.asarray(s["nodes"], np.int64)
 
 

@@ -11,7 +11,7 @@ import numpy as np
 from ..errors import LoadError, did_you_mean
 from ..fem import ELEMENTS
 from ..fem.material_kinds import MATERIALS
-from ..model import FIELDS, LOADS, SUPPORTS, edge_weights
+from ..model import FIELDS, LOADS, SUPPORTS, edge_weights, line_shares
 from .geometry import nodes_ref, region_ref
 from .magnetisation import pattern_section
 from .schema import ARCLENGTH, MAGNET, OUTPUT, PARALLEL_KEYS, SOLVER
@@ -231,6 +231,30 @@ def _refuse_repeat(v, done, entry, key, section, what):
                         "load meant twice, double its value)")
 
 
+def _line_union(v, t, key, mesh):
+    """A line load's ``edge = ["x0", "x1"]``: a union of named lines, each along its own element
+    edges (``model.loads.line_shares``)."""
+    path = join(key, "edge")
+    if "nodes" in t:
+        v.fail(key, "give one of 'edge' or 'nodes', not 'edge' and 'nodes'")
+    names = t["edge"]
+    if not names or not all(isinstance(n, str) for n in names):
+        v.fail(path, f"expected a name or an array of names of lines, got {show(names)}")
+    for n in names:
+        if n not in mesh.edges:
+            v.fail(path, f"unknown edge {n!r}{did_you_mean(n, mesh.edges)}; the mesh has: "
+                         f"{', '.join(sorted(mesh.edges)) or 'no named edges'}")
+        try:
+            edge_weights(mesh, mesh.edges[n])
+        except LoadError as exc:
+            v.fail(path, f"node set {n!r}: {exc}")
+    try:
+        line_shares(mesh, names)
+    except LoadError as exc:
+        v.fail(path, str(exc))
+    return dict(edge=list(names))
+
+
 def loads_section(v, doc, mesh, regions):
     """[[loads]]: type (a key of core_se3.model.LOADS), scale, the selection the kind's target
     needs (edge/nodes, or region) and the kind's parameters, checked by its own check."""
@@ -243,7 +267,9 @@ def loads_section(v, doc, mesh, regions):
         v.table(t, key, ("type",) + (("edge", "nodes") if nodal else ()) + kind.keys()
                 + ("scale",) + (() if nodal else ("region",)))
         ld = dict(type=typ, scale=v.scale(t, key))
-        if nodal:
+        if kind.target == "line" and isinstance(t.get("edge"), list):
+            ld.update(_line_union(v, t, key, mesh))
+        elif nodal:
             ld.update(nodes_ref(v, t, key, mesh))
             if kind.target == "line" and "edge" in ld:
                 try:                      # the set's element edges carry it (one line, pieces, a loop)

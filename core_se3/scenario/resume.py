@@ -49,9 +49,11 @@ def _short(x):
 def check_same_scenario(path, state, scn):
     """CheckpointError unless the checkpoint's fingerprint is the scenario's; it names the
     changed keys (from the scenario content the checkpoint keeps)."""
-    if state["fingerprint"] == scn.fingerprint:
+    if state["fingerprint"] in (scn.fingerprint, getattr(scn, "named_fingerprint", None)):
         return
     old = state["extra"].get("physical")
+    if old is not None and "name" in old:           # an older version's, which hashed the name too
+        old = {k: x for k, x in old.items() if k != "name"}
     what = ""
     if old is not None:
         diff = changed_keys(old, scn.physical)

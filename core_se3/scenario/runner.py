@@ -14,7 +14,7 @@ one live run at a time (``io.rundir``); SIGTERM and Ctrl-C end a run with ``stat
 
 Run directory:  results.json (schema core-se3-result v1 plus status/scenario/provenance fields),
 checkpoint.npz, vtu/step_NNNN.vtu + vtu/series.pvd, probes.png, shell.png,
-.core-se3-manifest.json, .core-se3.lock.
+.core-se3-manifest.json, and .core-se3.lock while the run lives.
 """
 from __future__ import annotations
 
@@ -140,7 +140,7 @@ def run(scn, out=None, resume=False, progress=None, force=False, stop_after=None
     ...     "output": {"vtu": False, "plots": False, "picture": False}})
     >>> res = run(scn, out=tempfile.mkdtemp())
     >>> [s["load_factor"] for s in res.doc["steps"]], sorted(os.listdir(res.out))
-    ([0.0, 0.5, 1.0], ['.core-se3-manifest.json', '.core-se3.lock', 'checkpoint.npz', 'results.json'])
+    ([0.0, 0.5, 1.0], ['.core-se3-manifest.json', 'checkpoint.npz', 'results.json'])
     """
     t0 = time.perf_counter()
     prob, s = scn.problem, scn.solver

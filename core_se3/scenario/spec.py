@@ -343,7 +343,8 @@ def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario", strict=
     spec["sweep"] = sweep_section(v, doc)
     problem = build_problem(v, spec, mesh, regions)
     units_section(v, doc, spec)
-    phys = {k: spec[k] for k in spec if k not in ("output", "description", "sweep")}
+    # the name labels the run (results' "scenario", titles, the default out/NAME): no mechanics
+    phys = {k: spec[k] for k in spec if k not in ("output", "description", "sweep", "name")}
     phys["magnets"] = [{k: (dict(x, path=None) if k == "Br_table" else x) for k, x in m.items()}
                        for m in spec["magnets"]]          # a table's digest, not where it lies
     phys["solver"] = {k: x for k, x in spec["solver"].items() if k not in NON_PHYSICAL}
@@ -357,6 +358,9 @@ def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario", strict=
     blob = json.dumps(phys, sort_keys=True) + (file_digest or "")
     fp = hashlib.sha256(blob.encode()).hexdigest()
     scn = Scenario(spec, mesh, regions, problem, fp, Source(file, doc, base_dir, default_name, strict))
+    # a checkpoint of a version that hashed the name too (same scenario, same name) still resumes
+    scn.named_fingerprint = hashlib.sha256((json.dumps(dict(phys, name=spec["name"]), sort_keys=True)
+                                            + (file_digest or "")).encode()).hexdigest()
     scn.physical = json.loads(json.dumps(phys))
     scn.mesh_digest = file_digest
     plausibility(v, scn)

@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..model import FIELDS, MU0
+from .geometry import selection
 from .validate import make_scale
 
 __all__ = ["UNIT_SYSTEMS", "UNIT_DEFAULTS", "unit_defaults", "units_section", "unit_of", "physical_loads", "load_numbers",
@@ -232,7 +233,7 @@ def load_numbers(scn, lam=None):
     for i, ld in enumerate(spec["loads"]):
         s = float(np.abs(_scale_values(ld["scale"], lams)).max())
         if "edge" in ld or "nodes" in ld:
-            nodes = mesh.edges[ld["edge"]] if "edge" in ld else np.asarray(ld["nodes"])
+            nodes = selection(mesh, ld)
             elems = np.nonzero(np.isin(mesh.quads, nodes).any(1))[0]
         else:
             elems = scn.regions[ld["region"]] if ld.get("region") else None
@@ -315,7 +316,7 @@ def plausibility(v, scn):
         for i, ld in enumerate(spec["loads"]):
             if ld["type"] == "gravity" and ld.get("rho") is not None:
                 r = ld["rho"] * u["to_kg_m3"]
-                if not RHO_RANGE[0] <= r <= RHO_RANGE[1]:
+                if ld["rho"] > 0 and not RHO_RANGE[0] <= r <= RHO_RANGE[1]:      # 0: build's zero-mass warning
                     v.warn(f"loads[{i}].rho", _density_message(ld["rho"], r, u, units))
             if ld["type"] == "gravity":
                 gmag = float(np.linalg.norm(ld["g"]))
