@@ -19,7 +19,7 @@ __all__ = ["CoreSE3Error", "MaterialError", "MeshError", "LoadError", "SupportEr
            "SingularSystemError", "ConvergenceError", "ElementTooDistortedError", "ScenarioError",
            "CheckpointError", "OptionError", "DesignError", "ContactError", "ParallelError",
            "LinearSolverError", "ControlError", "ScenarioWarning", "SupportWarning", "ElementWarning", "MeshWarning",
-           "AccuracyWarning", "OptionWarning", "LoadWarning", "did_you_mean"]
+           "AccuracyWarning", "OptionWarning", "LoadWarning", "PathWarning", "did_you_mean"]
 
 
 def did_you_mean(name, choices):
@@ -537,5 +537,20 @@ class LoadWarning(UserWarning):
     -------
     >>> from core_se3.errors import LoadWarning
     >>> issubclass(LoadWarning, UserWarning)
+    True
+    """
+
+
+class PathWarning(UserWarning):
+    """An arc-length path (``solvers.arc_length``) that stopped after ``max_steps`` points short
+    of the end it was given (``lam_end``, ``stop_at``): its Result ends where the steps ran out,
+    not at that end.  Before, it was returned without a word (ds_max = 1e-6 to lam_end = 1: 200
+    steps ending at lam = 0.05).  Raise max_steps (a resumed path continues from its last
+    ArcState), or the arc length (dlam0, ds_max).  A scenario file's run fails instead, saying so.
+
+    Example
+    -------
+    >>> from core_se3.errors import PathWarning
+    >>> issubclass(PathWarning, UserWarning)
     True
     """

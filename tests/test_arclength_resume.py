@@ -102,6 +102,21 @@ def test_interrupted_arclength_run_resumes_to_the_same_state(tmp_path):
         runner.run(changed, out=out, resume=True)
 
 
+def test_arclength_results_carry_each_points_stability_and_each_critical_points_accuracy(tmp_path):
+    """The snapping arch's results.json: every path point has its stability (det K's sign and the
+    count of negative eigenvalues of sym K), so that a reader sees where the counts change, and
+    each critical point its accuracy (<= critical_tol 1e-3) and the counts at its bracket's ends.
+    Found: neither was written (the accuracy only inside the description's text)."""
+    res = runner.run(scenario.load(write(tmp_path, ARCH)), out=str(tmp_path / "run"))
+    counts = [s["stability"]["negative_eigenvalues"] for s in res.doc["steps"]]
+    assert counts[0] == 0 and max(counts) == 1 and counts[-1] == 0
+    assert all(s["stability"]["det_sign"] == (-1) ** n for s, n in zip(res.doc["steps"], counts))
+    first, second = res.doc["critical_points"]
+    assert first["negative_eigenvalues"] == [0, 1] and second["negative_eigenvalues"] == [1, 0]
+    assert 0 < first["accuracy"] <= 1e-3 and 0 < second["accuracy"] <= 1e-3
+    assert counts[first["step"] - 1] == 0 and counts[first["step"]] == 1
+
+
 def test_checkpoint_without_path_state_is_refused(tmp_path):
     """An arc-length checkpoint without the follower state (as written before resume existed)
     is refused with a message naming the cause, not resumed from the wrong state."""

@@ -10,13 +10,15 @@ benchmark of Sze et al. (2004) s3.8(a), core_se3/data/literature.json ``sze3.8a_
 * pitchfork from V = u^2/2 + v^2 (1 - u)/2 + v^4/4 under load lam on u: primary path v = 0,
   u = lam, bifurcation at lam = 1; secondary path u = 1 + v^2, lam = 1 + v^2/2.
 """
+import warnings
+
 import numpy as np
 import pytest
 import scipy.sparse as sp
 
 from core_se3 import catalogue, solvers as C
 from core_se3.catalogue import get_case
-from core_se3.errors import ConvergenceError, CoreSE3Error
+from core_se3.errors import ConvergenceError, CoreSE3Error, OptionError, PathWarning
 
 LAM_LIMIT = 1 / (3 * np.sqrt(3))
 
@@ -58,6 +60,96 @@ def test_cubic_snap_through_traced_through_both_limit_points(method):
     assert abs(crit[1].lam + LAM_LIMIT) < 0.01 * LAM_LIMIT
     for c in crit:                                       # bracketed by the two steps
         assert min(c.lam_bracket) - 0.01 <= c.lam <= max(c.lam_bracket) + 0.01 * LAM_LIMIT + 0.05
+
+
+@pytest.mark.parametrize("method", ["crisfield", "riks"])
+@pytest.mark.parametrize("dlam0", [2.0, 3.0, 5.0])
+def test_two_limit_points_within_one_step_are_found(method, dlam0):
+    """The cubic from a first step so long that it reaches the last rising branch (dlam0 = 2:
+    u = 0 -> 2.58; 3 and 5: straight to u = 3): the load factor rose, fell to -0.19245 and rose
+    again inside the step, both ends stable (0 negative eigenvalues) and rising, so no count
+    changed.  Found: the path ended at u = 3 and reported no critical point.  Now the step whose
+    rise is too small for its end slopes (critical.hidden_turns) is retried shorter and both
+    limit points are located to critical_tol (the exact +-1/(3 sqrt 3); bar 1e-3 and the
+    accuracy each states)."""
+    sysm, f = cubic()
+    pts, crit, log, _ = C.path_follow(sysm, method=method, lam_end=None, dlam0=dlam0, psi=1.0,
+                                      control=(lambda u: u[0], lambda u: np.array([1.0])),
+                                      control_end=3.0)
+    assert abs(pts[-1].state[0] - 3.0) < 1e-12
+    assert [c.kind for c in crit] == ["limit", "limit"], [c.describe() for c in crit]
+    for c, exact in zip(crit, (LAM_LIMIT, -LAM_LIMIT)):
+        assert abs(c.lam - exact) <= 1e-3 * LAM_LIMIT, c.describe()
+        assert abs(c.lam - exact) <= c.accuracy * abs(c.lam) + 1e-12, c.describe()
+    assert any("turned twice" in e["reason"] for e in log if e.get("reason"))
+
+
+@pytest.mark.parametrize("dlam0", [0.1, 0.15])
+def test_a_step_with_a_load_term_does_not_jump_back_over_the_loop(dlam0):
+    """Riks with psi = 3 on the cubic: past the upper limit point, on the way down to the lower
+    one (u = 1.45, lam = -0.18), a step converged at u = -1.1, lam = -3.6 -- back across the
+    whole loop, onto the curve below the start: its displacement ran against the predictor's
+    and only the load term, which dominates at psi = 3, kept the increment's projection positive.
+    Found: the path ran on to lam = -162 (-243) until max_steps, never reaching u = 3, and
+    reported a 'bifurcation' at -0.270 (-0.251) of a one-dof system.  Now the displacement part
+    must not turn back either (the path-reversal check of psi = 0, with the load term): the path
+    ends at u = 3 with both limit points at +-0.19245 (1e-3), u never below its start."""
+    sysm, f = cubic()
+    pts, crit, _, _ = C.path_follow(sysm, method="riks", lam_end=None, dlam0=dlam0, psi=3.0,
+                                    control=(lambda u: u[0], lambda u: np.array([1.0])), control_end=3.0)
+    u = np.array([p.state[0] for p in pts])
+    assert abs(u[-1] - 3.0) < 1e-12 and u.min() >= 0.0
+    assert [c.kind for c in crit] == ["limit", "limit"], [c.describe() for c in crit]
+    for c, exact in zip(crit, (LAM_LIMIT, -LAM_LIMIT)):
+        assert abs(c.lam - exact) <= 1e-3 * LAM_LIMIT, c.describe()
+
+
+def test_a_non_conservative_load_reports_no_critical_point_where_k_is_regular():
+    """Beck's column: a cantilever strip (10 x 1 x 0.1, EI = 100) under a compressive follower end
+    force 15 EI/L^2, below its flutter load 20.05 EI/L^2; it has no static instability (K stays
+    regular along the straight path: its smallest |eigenvalue| grows from 0.027 to 0.115).
+    Found: 'bifurcation point at lam = 0.65918 +- 0.0002', where an eigenvalue of sym(K) -- which
+    says nothing of stability with a non-symmetric K -- passed zero.  Now a non-symmetric tangent
+    (stability.stability_of) is judged by the sign of det K itself: no critical point."""
+    from core_se3 import Material, Problem, mesh
+    p = Problem(mesh.rectangle(10.0, 1.0, 20, 1), Material(1.2e6, 0.0, 0.1))
+    p.clamp("x0")
+    p.add_edge_force("x1", (-15.0, 0.0, 0.0), follower=True)
+    res = C.arc_length(p, lam_end=1.0, dlam0=0.1)
+    assert res.final.load_factor == 1.0
+    assert res.critical_points == []
+    assert all(st.stability["det_sign"] == 1 for st in res.steps)
+
+
+def test_a_limit_point_of_a_non_symmetric_system_is_where_det_k_vanishes():
+    """r = (u - 3/2 u^2 + 1/2 u^3 + c v, v - d u) - lam (1, 0), c = 0.5, d = -0.2: K is not
+    symmetric, the path v = d u has lam = (1 + c d) u - 3/2 u^2 + 1/2 u^3 with limit points where
+    det K = 0, +0.1529822 and -0.3529822 (sym K is singular elsewhere); both are found within
+    critical_tol and the accuracy each states (main, by sym K's inertia: 0.152906 +- 1.3e-4)."""
+    c, d = 0.5, -0.2
+    f = lambda x: np.array([x[0] - 1.5 * x[0] ** 2 + 0.5 * x[0] ** 3 + c * x[1], x[1] - d * x[0]])
+    jac = lambda x: np.array([[1 - 3 * x[0] + 1.5 * x[0] ** 2, c], [-d, 1.0]])
+    us = 1 + np.array([-1.0, 1.0]) * np.sqrt(1 - 2 * (1 + c * d) / 3)
+    exact = (1 + c * d) * us - 1.5 * us ** 2 + 0.5 * us ** 3
+    pts, crit, _, _ = C.path_follow(C.AlgebraicSystem(f, jac, [1.0, 0.0]), lam_end=None, dlam0=0.02, psi=1.0,
+                                    control=(lambda x: x[0], lambda x: np.array([1.0, 0.0])), control_end=3.0)
+    assert [cp.kind for cp in crit] == ["limit", "limit"]
+    for cp, ex in zip(crit, exact):
+        assert abs(cp.lam - ex) <= min(1e-3, cp.accuracy) * abs(ex) + 1e-12, cp.describe()
+
+
+@pytest.mark.parametrize("method", ["crisfield", "riks"])
+@pytest.mark.parametrize("lam_end, u_first", [(0.1, 0.12111493375002719), (0.19, 0.3702470653010267)])
+def test_lam_end_is_met_where_the_path_first_reaches_it_past_two_hidden_turns(method, lam_end, u_first):
+    """The cubic to lam_end = 0.1 (0.19), first reached at u = 0.1211 (0.3702), before the upper
+    limit point, from dlam0 = 2 (psi = 0): the first step went over both limit points to
+    u = 2.09 (2.15) and landed there on the last crossing -- both ends rising, so the test of a
+    step that passed the end and turned back saw no turn.  Now the step that may have turned twice
+    is halved and the path ends on the first crossing (bar 1e-9: converged to 1e-12)."""
+    sysm, f = cubic()
+    pts, _, _, _ = C.path_follow(sysm, method=method, lam_end=lam_end, dlam0=2.0, psi=0.0)
+    assert abs(pts[-1].lam - lam_end) < 1e-12
+    assert abs(pts[-1].state[0] - u_first) < 1e-9, pts[-1].state
 
 
 def test_cubic_displacement_control_is_exact():
@@ -210,6 +302,80 @@ def test_bad_input(roof8):
     assert len(exc.value.result.steps) == 1
 
 
+def _strip():
+    from core_se3 import Material, Problem, mesh
+    p = Problem(mesh.rectangle(10.0, 1.0, 4, 1), Material(1.2e6, 0.0, 0.1))
+    p.clamp("x0")
+    p.add_edge_force("x1", (0.0, 0.0, 1.0))
+    return p
+
+
+@pytest.mark.parametrize("kw, match", [
+    (dict(dlam0=0.0), "dlam0 must be a finite non-zero number"),
+    (dict(dlam0=float("nan")), "dlam0 must be a finite non-zero number"),
+    (dict(dlam0="0.1"), "dlam0 must be a finite non-zero number"),
+    (dict(dlam0=-0.1), "away from lam_end"),
+    (dict(ds_max=-1.0), "ds_max must be None or a finite arc length > 0"),
+    (dict(ds_min=float("nan")), "ds_min must be None or a finite arc length > 0"),
+    (dict(ds_min=2.0, ds_max=1.0), "ds_min = 2.0 exceeds ds_max = 1.0"),
+    (dict(ds_max=1e-6), "ds_max = 1e-06 does not admit the first arc length"),
+    (dict(ds_min=10.0), "ds_min = 10 does not admit the first arc length"),
+    (dict(max_steps=2.5), "max_steps must be a whole number"),
+    (dict(critical_tol=float("nan")), "critical_tol must be"),         # refused before too
+])
+def test_arc_length_refuses_bad_controls_naming_the_key(kw, match):
+    """Arc-length controls that cannot mean what they say are refused with an OptionError naming
+    the key.  Found (lam_end = 1 on a cantilever strip): dlam0 = 0 failed after 13 rejections as a
+    'path reversal', NaN as a load's NaN scale, '0.1' with a bare TypeError; dlam0 = -0.1 traced
+    200 steps away from lam_end, to lam = -5.3e6, and ds_max = -1 turned every step after the
+    first back (200 steps, to -0.38), both returned without a word; ds_max = 1e-6 under the
+    first arc length (0.64) ended after 200 steps at lam = 0.05; a NaN or too large ds_min and
+    max_steps = 2.5 (3 steps) were taken."""
+    with pytest.raises(OptionError, match=match):
+        C.arc_length(_strip(), lam_end=1.0, **kw)
+
+
+@pytest.mark.parametrize("node, direction, values, match", [
+    (-1, (0.0, 0.0, 1.0), [1.0], "controlled node must be a node number in \\[0, 9\\], got -1"),
+    (10 ** 6, (0.0, 0.0, 1.0), [1.0], "controlled node must be a node number"),
+    (2.5, (0.0, 0.0, 1.0), [1.0], "controlled node must be a node number"),
+    (None, (0.0, 0.0, 0.0), [1.0], "controlled direction must be 3 finite lab components"),
+    (None, (0.0, 0.0, float("nan")), [1.0], "controlled direction must be 3 finite lab components"),
+    (None, (0.0, 1.0), [1.0], "controlled direction must be 3 finite lab components"),
+    (None, (0.0, 0.0, 1.0), [float("nan")], "values must be finite numbers"),
+    (None, (0.0, 0.0, 1.0), "abc", "values must be finite numbers"),
+])
+def test_displacement_control_refuses_a_bad_node_direction_or_value(node, direction, values, match):
+    """Found: node -1 controlled the last node without a word; 10**6 and 2.5 failed with a bare
+    IndexError, a 2-component direction with a bare matmul ValueError, 'abc' with a bare
+    ValueError; a zero or NaN direction and a NaN value surfaced as "load 'edge force': its
+    scale(lam) is nan", naming a load that is fine.  Now OptionError names what is wrong."""
+    p = _strip()
+    node = int(p.mesh.node_set("x1")[0]) if node is None else node
+    with pytest.raises(OptionError, match=match):
+        C.displacement_control(p, node, direction, values)
+
+
+@pytest.mark.parametrize("direction, value", [((0.0, 0.0, 0.0), 1.0), ((0.0, 0.0, 1.0), float("nan"))])
+def test_arc_length_refuses_a_stop_at_it_could_never_reach(direction, value):
+    """stop_at with a zero direction or a NaN value never stopped the path (it ran to max_steps
+    and returned); now OptionError."""
+    p = _strip()
+    with pytest.raises(OptionError, match="controlled direction|stop_at's value"):
+        C.arc_length(p, lam_end=None, stop_at=(int(p.mesh.node_set("x1")[0]), direction, value), max_steps=5)
+
+
+def test_arc_length_warns_when_its_steps_run_out_short_of_its_end():
+    """A path that stops after max_steps short of lam_end says so (PathWarning), naming where it
+    stopped; one that reaches lam_end does not."""
+    with pytest.warns(PathWarning, match="max_steps = 2 points at load factor 0.1146"):
+        res = C.arc_length(_strip(), lam_end=1.0, dlam0=0.05, max_steps=2)
+    assert len(res.steps) == 3
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert C.arc_length(_strip(), lam_end=1.0, dlam0=0.5).final.load_factor == 1.0
+
+
 def test_limit_point_hint_on_the_failure_path(roof8):
     """The message added when load control exhausts its cut-backs: at the roof's state with
     -W_C = 10 (just before the limit point, P/P_max = 0.74) the current stiffness parameter
@@ -343,3 +509,46 @@ def test_arc_length_stops_where_the_controlled_displacement_first_reaches_its_en
     assert abs(w[-1] - 16.9) < 1e-9
     assert np.all(np.diff(w) > 0)                   # W_C never turned back on the way
     assert abs(res.final.load_factor - 0.04533) < 1e-4, res.final.load_factor
+
+
+@pytest.mark.parametrize("method", ["crisfield", "riks"])
+@pytest.mark.parametrize("psi", [0.0, 1.0])
+def test_a_first_step_over_the_snap_through_and_back_finds_both_limit_points(roof8, method, psi):
+    """The 8x8 roof of Sze s3.8(a) to -W_C = 29.374 from dlam0 = 5: the first step went from the
+    unloaded state over both limit points to the far branch (load factor 0 -> 1.157 (Crisfield),
+    2.009 (Riks), 0 negative eigenvalues at both ends) and the run reported none.  Now both are
+    found and agree with their values refined to 1e-7 on the path from dlam0 = 0.05 (0.7435513,
+    0.1704150) within critical_tol = 1e-3, and state that accuracy; the end state is the same
+    (bar 1e-8: converged to 1e-9).  With psi = 1 (Riks) the lower limit point lies in the last
+    step, landed on -W_C = 29.374: it was narrowed along the step that overshot, not the landed
+    one, and stopped after 40 bisections at a stated accuracy of 1.8e-3 (arclength._land now
+    hands the landed step's increments on)."""
+    case, p = roof8
+    prob = catalogue.build_problem(case, p, (8, 8))
+    node, d = prob.control
+    res = C.arc_length(prob, lam_end=None, dlam0=5.0, method=method, psi=psi, stop_at=(node, d, 29.374))
+    assert [c.kind for c in res.critical_points] == ["limit", "limit"]
+    for c, ref in zip(res.critical_points, (0.7435513, 0.1704150)):
+        assert abs(c.lam - ref) <= 1e-3 * ref and c.accuracy <= 1e-3, c.describe()
+    assert abs(res.final.load_factor - 1.1078501) < 1e-6
+
+
+@pytest.mark.parametrize("values", [list(np.arange(4.0, 29.0, 4.0)), [25.0, 29.0], [29.0]])
+def test_displacement_control_locates_limit_points_to_critical_tol(roof8, values):
+    """The 8x8 roof by displacement control of -W_C in steps of 4, in two steps (25, 29) and in
+    one: its limit points agree with their values refined to 1e-7 by arc length (0.7435513,
+    0.1704150) within critical_tol = 1e-3, and within the accuracy each states.  Found: the
+    estimate from the step's ends was kept -- 0.741093 and 0.159700 (3.3e-3 and 6.3e-2 off) from
+    steps of 4, and from (25, 29) or one step no critical point at all (the step from 0 to 25
+    passes both: 0 negative eigenvalues at its ends).  Now the step is bisected in the controlled
+    displacement as arc length bisects its step (critical.narrow), and a step whose load factor
+    rises too little for its end slopes is halved (critical.turned_twice)."""
+    case, p = roof8
+    prob = catalogue.build_problem(case, p, (8, 8))
+    node, d = prob.control
+    dc = C.displacement_control(prob, node, d, values)
+    assert len(dc.steps) == len(values) + 1                  # the requested values only
+    assert [c.kind for c in dc.critical_points] == ["limit", "limit"], [c.describe() for c in dc.critical_points]
+    for c, ref in zip(dc.critical_points, (0.7435513, 0.1704150)):
+        assert abs(c.lam - ref) <= 1e-3 * ref, c.describe()
+        assert c.accuracy <= 1e-3 and abs(c.lam - ref) <= c.accuracy * c.lam + 1e-6, c.describe()

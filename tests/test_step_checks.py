@@ -12,7 +12,7 @@ from core_se3 import Material, Problem, mesh, scenario
 from core_se3.catalogue import run_case
 from core_se3.errors import ConvergenceError, MeshWarning
 from core_se3.model.fields import UniformField, rotating_direction
-from core_se3.solvers import NewtonOptions, arc_length, make_solver
+from core_se3.solvers import NewtonOptions, arc_length, displacement_control, make_solver
 from core_se3.solvers.direct import available_solvers
 from core_se3.solvers.linalg import Factorization
 from core_se3.solvers.step_checks import path_measures
@@ -132,6 +132,32 @@ def test_limit_check_off_records_the_bifurcation_and_goes_on():
     (cp,) = res.critical_points
     assert cp.kind == "bifurcation" and cp.lam_bracket == (0.5, 1.0) and cp.step == 2
     assert res.steps[-1].load_factor == 1.0 and res.final.checks["det_sign"] == -1
+
+
+def _column_scenario(steps):
+    return scenario.from_dict(dict(
+        mesh=dict(generator="rectangle", L=10.0, width=1.0, nx=10, ny=1), material=dict(E=1.2e6, nu=0.0, h=0.1),
+        supports=[dict(type="clamp", edge="x0")], loads=[dict(type="edge_force", edge="x1", force=[-4.0, 0.0, 0.0])],
+        solver=dict(steps=steps, limit_check=False), output=dict(vtu=False, plots=False, picture=False)))
+
+
+@pytest.mark.parametrize("stop_after", [None, 2, 3])
+def test_a_scenario_writes_the_critical_points_load_control_passed(tmp_path, stop_after):
+    """The compressed strip as a scenario, [solver] limit_check = false, 4 steps: the bifurcation
+    passed between 0.5 and 0.75 (Euler ~0.617) is in results.json's critical_points, as the key's
+    documentation says, with the stored step that passed it (3), once -- also when the run was
+    interrupted before (2) or after (3) that step and resumed.  Found: results.json had no
+    critical_points for load control (Result.critical_points had it)."""
+    out = str(tmp_path / "run")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        if stop_after is not None:
+            with pytest.raises(scenario.RunInterrupted):
+                scenario.run(_column_scenario(4), out=out, stop_after=stop_after)
+        res = scenario.run(_column_scenario(4), out=out, resume=stop_after is not None)
+    (cp,) = res.doc["critical_points"]
+    assert cp["kind"] == "bifurcation" and cp["bracket"] == [0.5, 0.75] and cp["step"] == 3
+    assert res.doc["steps"][-1]["load_factor"] == 1.0
 
 
 # ------------------------------------------------------------------ even crossings (inertia_check)
@@ -331,6 +357,20 @@ def test_arc_length_locates_a_bifurcation_whatever_the_first_step():
         lams.append(cp.lam)
     assert max(lams) - min(lams) <= 1e-3 * min(lams)
     assert abs(lams[0] / 0.742 - 1) < 2e-3
+
+
+def test_displacement_control_locates_a_bifurcation_to_critical_tol():
+    """The deep strip's lateral-torsional buckling by displacement control of the tip's in-plane
+    deflection (0.0669 at lam = 1 on the primary path) in two steps: the bifurcation agrees with
+    its value refined to 1e-7 by arc length (0.7420368) within critical_tol = 1e-3.  Found: the
+    smallest eigenvalue interpolated over the step from 0.5 to 1.0 was the result, 0.6076 (18 %
+    low; 0.7371 from four steps).  Now the step is bisected as arc length's is."""
+    p = _ltb_strip()
+    k = int(p.mesh.node_set("x1")[0])
+    res = displacement_control(p, k, (0.0, 1.0, 0.0), [0.0334, 0.0669])
+    (cp,) = res.critical_points
+    assert cp.kind == "bifurcation" and cp.accuracy <= 1e-3
+    assert abs(cp.lam - 0.7420368) <= 1e-3 * 0.7420368, cp.describe()
 
 
 def test_a_sign_change_seen_across_a_jump_is_not_a_critical_point():

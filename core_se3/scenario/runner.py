@@ -18,6 +18,7 @@ checkpoint.npz, vtu/step_NNNN.vtu + vtu/series.pvd, probes.png, shell.png,
 """
 from __future__ import annotations
 
+import dataclasses
 import os
 import time
 from dataclasses import dataclass, field
@@ -33,7 +34,7 @@ from ..io.lifecycle import Terminated, held_signals, termination_as_interrupt
 from ..io.rundir import RunDirectory, safe_name
 from ..model.solving import warn_final_state
 from ..results import Result, StepRecorder, step_record
-from ..solvers import ArcLengthOptions, ArcState, NewtonOptions, NewtonState, arc_length_steps
+from ..solvers import ArcLengthOptions, ArcState, CriticalPoint, NewtonOptions, NewtonState, arc_length_steps
 from ..solvers.linear import linear_solve
 from .context import on_root, run_context
 from .outputs import cell_fields, physical_record, picture, plot_probes, point_fields, unit_system_record  # noqa: F401
@@ -208,7 +209,7 @@ def _resume_state(scn, rd):
 
 def _run(scn, rd, ctx, st, progress, stop_after, t0):
     run = RunState(scn, rd, ctx, result=Result(mesh=scn.problem.mesh, element=scn.problem.element_name),
-                   critical=[] if scn.solver["control"] == "arclength" else None,
+                   critical=None if scn.solver["control"] == "linear" else [],
                    provenance=run_provenance(scn, ctx))
     start, unwrap = _restore(run, st) if st is not None else (None, None)
     rec = StepRecorder(scn.problem, unwrap)
@@ -254,6 +255,8 @@ def _restore(run, st):
         run.critical = list(start.critical)
     else:
         nw = st["extra"].get("newton", {})
+        run.critical = [CriticalPoint.unpack(c) for c in st["extra"].get("critical", [])]
+        run.critical_before = len(run.critical)       # the earlier sessions'; this one's follow
         start = NewtonState(st["lam"], st["g"], nw.get("dlam"), nw.get("k_ref"), NewtonState.multipliers_of(st["arrays"]))
     return start, st["unwrap"]
 
@@ -298,6 +301,8 @@ def _events(run, start, rec):
             k = item.state.step
             scalars, arrays = item.state.pack()
             record = _record(k, item.step, substeps=1 if k else 0)
+            st = item.step.stability               # the inertia that brackets the critical points
+            record["stability"] = dict(det_sign=int(st["det_sign"]), negative_eigenvalues=st["negative_eigenvalues"])
             run.critical = list(item.state.critical)
             yield _event(run, k, record, item, bool(item.state.finished), dict(control="arclength", arc=scalars),
                          arrays, item.state.unwrap)
@@ -310,12 +315,17 @@ def _events(run, start, rec):
     for item in run.ctx.steps(lams[k:], opts, start, rec, run.result):
         k += 1
         run.path.append(item.step)
+        # the critical points load control passed (limit_check off; contact snaps): results.json's
+        # critical_points, as [solver] limit_check and snap_check say -- before, only arc length's
+        new = run.result.critical_points[len(run.critical) - run.critical_before:]
+        run.critical += [dataclasses.replace(c, step=k) for c in new]   # the stored step that passed it
         tries = item.tries
         record = _record(k, item.step, sum(e["iterations"] for e in tries),
                          sum(e["converged"] and not e.get("augmented") for e in tries),
                          sum(not e["converged"] for e in tries))
         arrays = {**(item.state.arrays() or {}), **(run.ctx.checkpoint_arrays() or {})} or None
-        yield _event(run, k, record, item, k == len(lams), dict(newton=item.state.pack(), ranks=run.ctx.ranks),
+        yield _event(run, k, record, item, k == len(lams), dict(newton=item.state.pack(), ranks=run.ctx.ranks,
+                                                                critical=[c.pack() for c in run.critical]),
                      arrays, rec.unwrapped)
 
 

@@ -99,7 +99,8 @@ class RunState:
     """What the sinks of one run share: the scenario, its directory (``io.RunDirectory``), the
     run context (who writes, ``scenario.context``), the step records so far, the timings of
     earlier sessions (``base``), the solver's Result (this session's timings), the critical
-    points of an arc-length path, and the provenance of the run.
+    points of the path (arc length; load control: those it passed, limit_check off, and contact
+    snaps), and the provenance of the run.
 
     Example
     -------
@@ -113,6 +114,7 @@ class RunState:
     base: dict = field(default_factory=dict)
     result: object = None
     critical: list | None = None
+    critical_before: int = 0                         # of ``critical``: a resumed load control's earlier ones
     provenance: dict = field(default_factory=dict)
     done: int = 0
     last: object = None
@@ -155,7 +157,9 @@ class RunState:
 
 def _critical_doc(cps):
     return [dict(kind=c.kind, load_factor=float(c.lam), bracket=[float(x) for x in c.lam_bracket],
-                 step=int(c.step), description=c.describe()) for c in cps]
+                 step=int(c.step), accuracy=None if c.accuracy is None else float(c.accuracy),
+                 negative_eigenvalues=[None if n is None else int(n) for n in c.negative_eigenvalues],
+                 description=c.describe()) for c in cps]
 
 
 class Sink:

@@ -26,7 +26,8 @@ converged state, Dlam = +-ds / sqrt(|t|_W^2 + psi^2 u_ref^2), signed so that the
 continues the previous one (positive projection).  ds adapts: ds *= clip(sqrt(n_target / n),
 1/2, 2) after a converged step of n iterations; a failed step (no convergence, complex root,
 an edge turning by pi, a singular tangent, a converged increment pointing against its
-predictor) is rejected and retried with ds / 2.
+predictor -- with the load term, or in its displacements alone --, a step over which the load
+factor may have turned twice, ``critical.turned_twice``) is rejected and retried with ds / 2.
 
 Restart: every converged point comes with an ``ArcState`` (the point, the next ds, the
 previous increment that signs the next predictor, the pending branch switch, the critical
@@ -48,9 +49,9 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..errors import ConvergenceError, CoreSE3Error, ElementTooDistortedError, SingularSystemError
+from ..errors import ConvergenceError, CoreSE3Error, ElementTooDistortedError, OptionError, SingularSystemError
 from .corrector import ArcLengthConstraint, LinearConstraint, StepFailed, correct
-from .critical import Corrector, narrow
+from .critical import Corrector, narrow, turned_twice
 from .options import ArcLengthOptions, split_options, unknown_keywords
 from .stability import CriticalPoint, analyse, locate_critical
 
@@ -107,12 +108,7 @@ class ArcState:
                   ds_min=float(self.ds_min), psi_u=float(self.psi_u), direction=float(self.direction),
                   prev_dl=None if self.prev_dl is None else float(self.prev_dl),
                   branch_switch=bool(self.branch_switch), finished=str(self.finished or ""),
-                  critical=[dict(kind=c.kind, step=int(c.step), lam=float(c.lam),
-                                 lam_bracket=[float(x) for x in c.lam_bracket],
-                                 negative_eigenvalues=[None if x is None else int(x)
-                                                       for x in c.negative_eigenvalues],
-                                 accuracy=None if c.accuracy is None else float(c.accuracy))
-                            for c in self.critical],
+                  critical=[c.pack() for c in self.critical],
                   unwrap=None if self.unwrap is None else
                   {k: [float(x) for x in np.asarray(v, float)] for k, v in self.unwrap.items()})
         arrays = {}
@@ -125,9 +121,7 @@ class ArcState:
     @classmethod
     def unpack(cls, state, scalars, arrays):
         sc = scalars
-        crit = [CriticalPoint(c["kind"], c["step"], c["lam"], tuple(c["lam_bracket"]),
-                              tuple(c["negative_eigenvalues"]), accuracy=c.get("accuracy"))
-                for c in sc.get("critical", [])]
+        crit = [CriticalPoint.unpack(c) for c in sc.get("critical", [])]
         unwrap = None if sc.get("unwrap") is None else \
             {k: np.array(v, float) for k, v in sc["unwrap"].items()}
         return cls(state, sc["lam"], sc["step"], sc["ds"], sc["ds_max"], sc["ds_min"], sc["psi_u"],
@@ -220,7 +214,7 @@ def path_steps(sysm, options, lam_end=1.0, control=None, control_end=None, lam_m
     ctrl_val = control[0] if control else None
     crit = info.critical
     psi_u, ds, ds_max, ds_min, direction, prev_du, prev_dl, switch_mode, branch_switch, step = \
-        _path_start(sysm, o, first, start, crit)
+        _path_start(sysm, o, first, start, crit, lam_end)
 
     def finished(pt):
         if lam_end is not None and (pt.lam - lam_end) * np.sign(lam_end or 1.0) >= -1e-12 * max(1, abs(lam_end)):
@@ -240,14 +234,14 @@ def path_steps(sysm, options, lam_end=1.0, control=None, control_end=None, lam_m
     yield PathEvent(first, snapshot(first, ""), restart=start is not None)
     rejections = 0
     while step < max_steps:
-        jumped = switch_mode is not None
         du, dl = _predictor(sysm, cur.t, ds, psi_u, direction, prev_du, prev_dl, switch_mode)
-        switch_mode = None
+        jumped, switch_mode = switch_mode is not None, None
         con = ArcLengthConstraint(o.method, ds, psi_u, sysm.w)
         con.start(du, dl)
         pt, reason, hist = _arc_try(sysm, cur, du, dl, con, psi_u, o, timers, jumped, first_step=prev_du is None)
         why = None if pt is None else finished(pt)
-        if not jumped and (passed := _passed_within(sysm, cur, pt, con, lam_end, control, control_end, why)):
+        if not jumped and (passed := _passed_within(sysm, cur, pt, con, lam_end, control, control_end, why)
+                           or turned_twice(sysm, cur, pt, con.du)):
             pt, why, reason = None, None, passed
         if why in ("lam_end", "control_end") and o.land:
             pt, reason = _land(sysm, cur, pt, con, why, lam_end, control, control_end, o, timers)
@@ -288,11 +282,17 @@ def path_steps(sysm, options, lam_end=1.0, control=None, control_end=None, lam_m
             break
 
 
-def _path_start(sysm, o, first, start, crit):
+def _path_start(sysm, o, first, start, crit, lam_end):
     """The stepping state at the path's first point: (psi_u, ds, ds_max, ds_min, direction,
     prev_du, prev_dl, switch_mode, branch_switch, step), from the options at the reference state
-    or from the ArcState ``start``; ``crit`` (the critical points) refilled from it."""
+    (checked against each other and ``lam_end``) or from the ArcState ``start``; ``crit`` (the
+    critical points) refilled from it."""
     if start is None:
+        if lam_end is not None and lam_end * o.dlam0 < 0:
+            # the scenario file refuses it ([solver] dlam0); from Python, dlam0 = -0.1 to lam_end = 1
+            # traced 200 steps away from it, to lam = -5.3e6, and returned them without a word
+            raise OptionError(f"dlam0 = {o.dlam0:g} starts the path away from lam_end = {lam_end:g}: give dlam0 "
+                              "the sign of lam_end (or lam_end=None with stop_at / lam_min)")
         tn0 = np.sqrt(np.sum(sysm.w * first.t ** 2))
         if not np.isfinite(tn0) or tn0 == 0:
             raise CoreSE3Error("the loads do not move the structure (K^-1 q = 0)")
@@ -300,6 +300,12 @@ def _path_start(sysm, o, first, start, crit):
         ds = abs(o.dlam0) * np.sqrt(tn0 ** 2 + psi_u ** 2)
         ds_max = o.ds_max or o.ds_max_factor * ds
         ds_min = o.ds_min or ds / 2 ** o.max_rejections
+        if not ds_min <= ds <= ds_max:
+            # ds_max = 1e-6 under the first arc length: the first step took it whole, the next 199
+            # ds_max, and the path stopped at lam = 0.05 of lam_end = 1
+            key, v = ("ds_max", ds_max) if ds > ds_max else ("ds_min", ds_min)
+            raise OptionError(f"{key} = {v:.6g} does not admit the first arc length {ds:.6g} that dlam0 = "
+                              f"{o.dlam0:g} sets: change dlam0 or {key}")
         return psi_u, ds, ds_max, ds_min, np.sign(o.dlam0) or 1.0, None, None, None, o.branch_switch, 0
     crit[:] = list(start.critical)
     prev_du = None if start.prev_du is None else np.array(start.prev_du, float)
@@ -331,7 +337,10 @@ def _arc_try(sysm, cur, du, dl, con, psi_u, o, timers, jumped, first_step):
     try:
         st_pred = sysm.update(cur.state, du)
         new_state, new_lam, its, hist, ev = correct(sysm, st_pred, cur.lam + dl, con, o, timers)
-        if not jumped and np.sum(sysm.w * con.du0 * con.du) + psi_u ** 2 * con.dlam0 * con.dlam <= 0:
+        # the displacements alone too: with psi = 3 the load term kept the projection of a Riks
+        # step on the cubic positive while it ran back over the loop (u = 1.45 -> -1.1)
+        back = np.sum(sysm.w * con.du0 * con.du)
+        if not jumped and min(back, back + psi_u ** 2 * con.dlam0 * con.dlam) <= 0:
             raise StepFailed("the corrector turned back against the predictor (path reversal)")
         if first_step and not jumped and con.dlam * con.dlam0 < 0:
             # the first step of a path starts on the stable branch through the start, so a
@@ -395,7 +404,10 @@ def _land(sysm, cur, pt, con, why, lam_end, control, control_end, o, timers):
     """Redo the step from ``cur`` ending exactly on the stop value (lam_end or control_end)
     with load or displacement control: (the landed point, None), or (None, the reason) when
     landing fails -- the step overshot too far, and is rejected and shortened, never kept as a
-    path that ends past lam_end (sze-slit-annular from dlam0 = 1 ended at 1.0335)."""
+    path that ends past lam_end (sze-slit-annular from dlam0 = 1 ended at 1.0335).  The step's
+    increments and length in ``con`` become the landed step's: a critical point inside it is
+    narrowed along it (before, along the step that overshot, toward another end: the 8x8 roof
+    with psi = 1 from dlam0 = 5, Riks, took 40 bisections to a stated accuracy of 1.8e-3)."""
     if why == "lam_end":
         lin = LinearConstraint(None, None, 1.0, lam_end)
     else:
@@ -403,8 +415,12 @@ def _land(sysm, cur, pt, con, why, lam_end, control, control_end, o, timers):
     try:
         frac = _fraction(cur, pt, why, lam_end, control_end, control[0] if control else None)
         st_pred = sysm.update(cur.state, frac * con.du)
+        lin.start(frac * con.du, frac * con.dlam)
         s2, l2, its, hist, ev = correct(sysm, st_pred, cur.lam + frac * con.dlam, lin, o, timers)
-        return analyse(sysm, s2, l2, o.stability, its, hist), None
+        landed = analyse(sysm, s2, l2, o.stability, its, hist)
+        con.du, con.dlam = lin.du, lin.dlam
+        con.ds = float(np.sqrt(np.sum(sysm.w * lin.du ** 2) + con.c2 * lin.dlam ** 2))
+        return landed, None
     except (StepFailed, ElementTooDistortedError, FloatingPointError, SingularSystemError) as exc:
         return None, f"the step passed {why} at lam {pt.lam:.6g} and landing on it failed: {exc}"
 

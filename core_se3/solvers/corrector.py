@@ -70,6 +70,13 @@ class LinearConstraint:
     def __init__(self, value, row, c_lam, target):
         self.value, self.row, self.c_lam, self.target = value, row, c_lam, target
         self.lam = None
+        self.du = self.dlam = None
+
+    def start(self, du, dlam):
+        """Accumulate the step's increment (``du``, ``dlam``) from the predictor (du, dlam) on, as
+        the arc-length constraint does (displacement control's critical points are refined
+        along it, ``solvers.critical``)."""
+        self.du, self.dlam = du.copy(), dlam
 
     def dlam_for(self, sysm, state, a, b):
         c = (self.value(state) if self.value else 0.0) + self.c_lam * self.lam - self.target
@@ -81,7 +88,9 @@ class LinearConstraint:
         return -num / den
 
     def accept(self, x, dl):
-        pass
+        if self.du is not None:
+            self.du += x
+            self.dlam += dl
 
 
 def correct(sysm, state, lam, con, opts, timers, incs=None):

@@ -1,4 +1,5 @@
-"""Critical points of a traced path to a stated tolerance in the load factor (arc length).
+"""Critical points of a traced path to a stated tolerance in the load factor (arc length and
+displacement control), and the steps that may hide two of them.
 
 A critical point is first bracketed by two converged points of the path whose counts of
 negative tangent eigenvalues differ (``solvers.stability``).  The bracket is as wide as the
@@ -32,6 +33,7 @@ Example
 """
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass
 from typing import Callable
 
@@ -40,7 +42,10 @@ import numpy as np
 from ..errors import ElementTooDistortedError, SingularSystemError
 from .stability import analyse, locate_critical
 
-__all__ = ["Corrector", "narrow", "refine", "estimate", "bracket_width", "reachable"]
+__all__ = ["Corrector", "narrow", "refine", "estimate", "bracket_width", "reachable", "hidden_turns",
+           "turned_twice"]
+
+log = logging.getLogger(__name__)
 
 MAX_BISECTIONS = 40
 MAX_RETRIES = 4           # refused fractions halved toward the bracket's start before giving up
@@ -110,6 +115,74 @@ def reachable(lam, lam_a, lam_b, slope_a, limit):
     return lam >= min(lam_a, lam_b) if slope_a > 0 else lam <= max(lam_a, lam_b)
 
 
+def hidden_turns(lam_a, lam_b, slope_a, slope_b, span):
+    """Whether the load factor may turn twice within a step whose ends agree (the same count of
+    negative eigenvalues, the load factor moving the same way at both): the cubic through the
+    ends' load factors lam_a, lam_b with the path's slopes dlam/dsigma there (``slope_a``,
+    ``slope_b``; sigma along the step's chord, of length ``span``) has a maximum and a minimum
+    inside the step.  Its slope is the quadratic p(x) = S_a + B x + A x^2 on x = sigma/span in
+    [0, 1], S = slope span, whose mean is the rise lam_b - lam_a: A = 3 (S_a + S_b) - 6 (lam_b -
+    lam_a), B = S_b - S_a - A; two turns when its extremum lies inside and has the other sign.
+    A step over a snap-through and back (the 8x8 roof of Sze s3.8(a) from its unloaded state
+    to the far branch in one arc-length step: both limit points, 0 -> 1 -> 0 negative
+    eigenvalues) rises only 1.16 where the end slopes would give 6.5 and 8.3 (p = -2.0 at
+    x = 0.48); a step on a smooth path has the cubic's shape as it shrinks, so that a test that
+    refuses it ends.
+
+    Parameters
+    ----------
+    lam_a, lam_b : float
+        The load factors at the step's ends.
+    slope_a, slope_b : float
+        dlam/dsigma at the ends (1 / (c . t) for the chord's unit direction c, t = K^-1 q).
+    span : float
+        The chord's length (sigma at the far end).
+
+    Returns
+    -------
+    bool
+
+    Example
+    -------
+    >>> hidden_turns(0.0, 1.16, 6.52, 8.25, 1.0), hidden_turns(0.0, 1.0, 1.2, 0.8, 1.0)
+    (True, False)
+    """
+    sa, sb, rise = slope_a * span, slope_b * span, lam_b - lam_a
+    if not np.isfinite(sa + sb + rise) or sa * sb <= 0:
+        return False                  # a single turn (or an infinite slope): not this test's
+    A = 3.0 * (sa + sb) - 6.0 * rise
+    if A == 0:
+        return False
+    B = sb - sa - A
+    x = -B / (2.0 * A)
+    return bool(0.0 < x < 1.0 and (sa - B * B / (4.0 * A)) * sa < 0)
+
+
+def turned_twice(sysm, cur, pt, du):
+    """Why the converged step from the PathPoint ``cur`` to ``pt`` (its increment ``du`` on the
+    free dofs) is refused, else '': its ends have the same count of negative eigenvalues (or sign
+    of det K) and the load factor moving the same way along the step, yet it rises so little for
+    their slopes that the path may have turned twice inside it (:func:`hidden_turns`) -- two
+    limit points that no count sees.  Found: the 8x8 roof of Sze s3.8(a) from dlam0 = 5 went from
+    the unloaded state over the snap-through to the far branch in its first arc-length step and
+    reported no critical point (from dlam0 = 0.05: limit points at 0.7436 and 0.1704); so did its
+    displacement control from -W_C = 0 (or 5) to 25.  The step is retried shorter, until its
+    ends bracket one turn at a time."""
+    if pt is None or pt.sign != cur.sign or None not in (pt.n_neg, cur.n_neg) and pt.n_neg != cur.n_neg:
+        return ""                     # a change the counts (or det K's sign) see
+    span = float(np.sqrt(np.sum(sysm.w * du ** 2)))
+    if span == 0:
+        return ""
+    c = sysm.w * du / span
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s0, s1 = 1.0 / (c @ cur.t), 1.0 / (c @ pt.t)
+    if not hidden_turns(cur.lam, pt.lam, s0, s1, span):
+        return ""
+    return (f"the load factor may have turned twice within the step (from {cur.lam:.6g} to {pt.lam:.6g}, rising "
+            f"{pt.lam - cur.lam:.3g} where its slopes at the ends give {s0 * span:.3g} and {s1 * span:.3g}): "
+            "two limit points that the counts of negative eigenvalues at the ends do not see")
+
+
 def _tangent_intersection(a, b, c, span):
     """The load factor where the tangent lines of the path at the points a and b (slopes
     1 / (c . t) in sigma = c . du) meet, or None when they are parallel."""
@@ -142,10 +215,14 @@ def refine(sysm, cur, pt, con, limit, corrector):
     c = w * du / max(length, 1e-300)
     a, b, fa, fb = cur, pt, 0.0, 1.0
     a_du, a_dl = 0.0 * du, 0.0             # the increment of a from cur (the constraint's)
+    b_du = du                              # and of b: sigma from a to b is c . (b_du - a_du)
     n = 0
 
     def upper_of(a, b):
-        return _tangent_intersection(a, b, c, (fb - fa) * length) if limit else None
+        # the span along the chord, not (fb - fa) length: a point at a fraction of the arc
+        # length (with its load term, psi > 0) is not at that fraction of the chord (the
+        # cubic from dlam0 = 5, Riks: the lower limit point bound -0.192443 above the exact -0.192450)
+        return _tangent_intersection(a, b, c, float(c @ (b_du - a_du))) if limit else None
 
     upper = upper_of(a, b)
     retries = 0
@@ -174,9 +251,9 @@ def refine(sysm, cur, pt, con, limit, corrector):
         if _negatives(mid) == _negatives(a):
             a, fa, a_du, a_dl = mid, fm, arc.du.copy(), arc.dlam
         else:
-            b, fb = mid, fm
+            b, fb, b_du = mid, fm, arc.du.copy()
         upper = upper_of(a, b)
-    return a, b, upper, n, (fb - fa) * length
+    return a, b, upper, n, float(c @ (b_du - a_du))
 
 
 def estimate(sysm, a, b, con, span, upper, limit):
@@ -215,5 +292,9 @@ def narrow(sysm, cur, pt, con, cp, corrector):
         lam = float(np.clip(locate_critical(sysm, a, b, c, span, cp.step, limit=False).lam, lo, hi))
     cp.lam = lam if n or limit else cp.lam
     cp.lam_bracket = (a.lam, b.lam)
+    if cp.accuracy > corrector.opts.critical_tol:
+        log.warning("the %s point near lam = %.6g is located only to %.2g (critical_tol %.2g): the bisection of "
+                    "its step stopped after %d solves; a smaller step (dlam0, ds_max) brackets it closer",
+                    cp.kind, cp.lam, cp.accuracy, corrector.opts.critical_tol, n)
     return dict(step=cp.step, refine=cp.kind, bisections=n, lam=cp.lam, accuracy=cp.accuracy,
                 converged=True, iterations=0, reason="")

@@ -10,10 +10,11 @@ Example
 >>> NewtonOptions(rtol=-1.0)
 Traceback (most recent call last):
 ...
-core_se3.errors.OptionError: NewtonOptions.rtol must be in (0, 1), got -1.0
+core_se3.errors.OptionError: NewtonOptions.rtol must be a number in (0, 1), got -1.0
 """
 from __future__ import annotations
 
+import math
 import numbers
 from dataclasses import dataclass, field, fields, replace
 
@@ -32,10 +33,13 @@ def _check(opts):
         lo, hi = f.metadata.get("range", (None, None))
         if lo is None or v is None:
             continue
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not (lo < v < hi if f.metadata.get("open")
-                                                                        else lo <= v <= hi):
+        whole = f.type not in ("int", int) or (isinstance(v, numbers.Real) and float(v).is_integer())
+        if isinstance(v, bool) or not isinstance(v, numbers.Real) or not whole or \
+                not (lo < v < hi if f.metadata.get("open") else lo <= v <= hi):
             br = "()" if f.metadata.get("open") else "[]"
-            raise OptionError(f"{type(opts).__name__}.{f.name} must be in {br[0]}{lo:g}, {hi:g}{br[1]}, got {v!r}")
+            what = "a whole number" if f.type in ("int", int) else "a number"
+            raise OptionError(f"{type(opts).__name__}.{f.name} must be {what} in {br[0]}{lo:g}, {hi:g}{br[1]}, "
+                              f"got {v!r}")
 
 
 def _opt(default, lo=None, hi=None, open_=False, doc=""):
@@ -217,6 +221,27 @@ class ArcLengthOptions:
         if self.method not in ("crisfield", "riks"):
             raise OptionError(f"ArcLengthOptions.method must be 'crisfield' or 'riks', got {self.method!r}")
         _check(self)
+        _check_lengths(self)
+
+
+def _real(v):
+    return isinstance(v, numbers.Real) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def _check_lengths(o):
+    """dlam0 a finite non-zero number (its sign the direction), ds_max and ds_min None or finite
+    and positive, ds_min <= ds_max.  Before, dlam0 = 0 failed after 13 rejections as a 'path
+    reversal', NaN as a load's NaN scale, ds_max = -1 turned every step after the first back
+    (lam_end = 1 never reached: 200 steps down to -0.38), and a negative or NaN ds_min was taken."""
+    if not _real(o.dlam0) or o.dlam0 == 0:
+        raise OptionError(f"ArcLengthOptions.dlam0 must be a finite non-zero number (the load factor of the first "
+                          f"predictor, its sign the direction), got {o.dlam0!r}")
+    for name in ("ds_max", "ds_min"):
+        v = getattr(o, name)
+        if v is not None and not (_real(v) and v > 0):
+            raise OptionError(f"ArcLengthOptions.{name} must be None or a finite arc length > 0, got {v!r}")
+    if o.ds_max is not None and o.ds_min is not None and o.ds_min > o.ds_max:
+        raise OptionError(f"ArcLengthOptions.ds_min = {o.ds_min!r} exceeds ds_max = {o.ds_max!r}")
 
 
 def split_options(cls, options, kwargs):

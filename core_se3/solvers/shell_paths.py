@@ -4,14 +4,17 @@ from __future__ import annotations
 
 import logging
 import time
+import warnings
 from dataclasses import dataclass
+from types import SimpleNamespace
 
 import numpy as np
 
-from ..errors import ConvergenceError, ElementTooDistortedError, SingularSystemError
+from ..errors import ConvergenceError, ElementTooDistortedError, OptionError, PathWarning, SingularSystemError
 from ..results import Result, StepRecorder
 from .arclength import ArcState, PathError, PathInfo, arc_options, path_steps
 from .corrector import LinearConstraint, StepFailed, correct
+from .critical import Corrector, narrow, turned_twice
 from .options import ArcLengthOptions, unknown_keywords
 from .stability import analyse, locate_critical
 from .step_checks import path_measures, path_refusal
@@ -111,6 +114,8 @@ def arc_length_steps(problem, lam_end=1.0, stop_at=None, lam_min=None, start=Non
     unknown_keywords("arc_length", kw, ArcLengthOptions.__dataclass_fields__)
     sysm = ShellSystem(problem, opts.linear_solver)
     control = sysm.node_displacement(stop_at[0], stop_at[1]) if stop_at else None
+    if stop_at:
+        _finite_values([stop_at[2]], "stop_at's value")
     result = result if result is not None else Result(mesh=problem.mesh, element=problem.element_name)
     rec = StepRecorder(problem, start.unwrap if start is not None else None)
     info = PathInfo(log=result.log)
@@ -173,10 +178,17 @@ def arc_length(problem, lam_end=1.0, stop_at=None, lam_min=None, start=None, on_
     (True, [])
     """
     result = Result(mesh=problem.mesh, element=problem.element_name)
+    item = None
     for item in arc_length_steps(problem, lam_end, stop_at, lam_min, start, result, options, **kw):
         result.steps.append(item.step)
         if on_step:
             on_step(result, item.state)
+    if item is not None and item.state.finished == "max_steps" and (lam_end is not None or stop_at is not None):
+        end = f"lam_end = {lam_end:g}" if stop_at is None else f"stop_at value {stop_at[2]:g}"
+        warnings.warn(PathWarning(
+            f"arc length stopped after max_steps = {item.state.step} points at load factor "
+            f"{item.step.load_factor:.6g}, short of {end}: raise max_steps (or dlam0, ds_max), or continue with "
+            "start= its last ArcState"), stacklevel=2)
     return result
 
 
@@ -205,6 +217,52 @@ def _snap_back_hint(ct, ct0, u):
             f"displacement is near a point where it turns back along the path (a snap-back near u = {u:.6g}), "
             "which displacement control cannot pass; trace the path with arc length "
             "(core_se3.solvers.arc_length, stop_at=(node, direction, value)) or control another displacement")
+
+
+def _finite_values(values, what):
+    """The controlled displacements as a list of finite floats, else OptionError naming ``what``
+    (before: NaN surfaced as a load's NaN scale, 'abc' as a bare ValueError)."""
+    try:
+        out = [float(v) for v in np.atleast_1d(np.asarray(values, dtype=object))]
+    except (TypeError, ValueError):
+        out = [np.nan]
+    if not np.all(np.isfinite(out)):
+        raise OptionError(f"{what} must be finite numbers [length], got {values!r}")
+    return out
+
+
+def _control_constraint(value, row, target, du, dlam):
+    """The constraint of a displacement-control step to ``target`` that accumulates the step's
+    increment from the predictor (du, dlam) on."""
+    lin = LinearConstraint(value, row, 0.0, target)
+    lin.start(du, dlam)
+    return lin
+
+
+def _checked_correct(sysm, state, lam, con, opts, timers):
+    """The corrector of a displacement-control step with the path check (:func:`_path_check`)."""
+    incs = []
+    out = correct(sysm, state, lam, con, opts, timers, incs)
+    _path_check(incs)
+    return out
+
+
+def _control_critical(sysm, cur, pt, lin, control, opts, timers, step):
+    """The critical point between the displacement-control points cur and pt (the step's
+    converged constraint ``lin``; ``control`` = (value, row)), classified and located by
+    ``stability.locate_critical`` and narrowed to ``opts.critical_tol`` by ``critical.narrow``,
+    bisecting the controlled displacement as arc length bisects its step.  Before, its estimate
+    from the step's ends was the result: the LTB strip's bifurcation (0.742037) from two steps at
+    0.6076, the 8x8 roof's limit points (0.743551, 0.170415) from steps of 4 in -W_C at 0.7411 and
+    0.1597."""
+    value, row = control
+    u0 = value(cur.state)
+    cp = locate_critical(sysm, cur, pt, row(cur.state), value(pt.state) - u0, step)
+    step_con = SimpleNamespace(du=lin.du, dlam=lin.dlam, ds=lin.target - u0)
+    narrow(sysm, cur, pt, step_con, cp, Corrector(
+        _checked_correct, lambda x: _control_constraint(value, row, u0 + x, 0.0 * lin.du, 0.0), opts, timers,
+        (StepFailed,)))
+    return cp
 
 
 def displacement_control(problem, node, direction, values, options=None, max_cutbacks=10, **kw):
@@ -247,7 +305,7 @@ def displacement_control(problem, node, direction, values, options=None, max_cut
     unknown_keywords("displacement_control", kw, ArcLengthOptions.__dataclass_fields__)
     sysm = ShellSystem(problem, opts.linear_solver)
     value, row = sysm.node_displacement(node, direction)
-    values = [float(v) for v in np.atleast_1d(values)]
+    values = _finite_values(values, "displacement_control values")
     result = Result(mesh=problem.mesh, element=problem.element_name)
     rec = StepRecorder(problem)
     timers = [0.0, 0.0]
@@ -266,12 +324,12 @@ def displacement_control(problem, node, direction, values, options=None, max_cut
                 rt = row(cur.state)
                 try:
                     dl = (tgt - u0) / (rt @ cur.t)
-                    st_pred = sysm.update(cur.state, dl * cur.t)
-                    incs = []
-                    s2, l2, its, hist, ev = correct(sysm, st_pred, cur.lam + dl,
-                                                     LinearConstraint(value, row, 0.0, tgt), opts, timers, incs)
-                    _path_check(incs)
+                    lin = _control_constraint(value, row, tgt, dl * cur.t, dl)
+                    s2, l2, its, hist, ev = _checked_correct(sysm, sysm.update(cur.state, dl * cur.t), cur.lam + dl,
+                                                             lin, opts, timers)
                     pt = analyse(sysm, s2, l2, opts.stability, its, hist)
+                    if tgt != u0 and (why := turned_twice(sysm, cur, pt, lin.du)):   # a repeated value: no step
+                        raise StepFailed(why)
                     ok, reason = True, ""
                 except (StepFailed, ElementTooDistortedError, FloatingPointError,
                         SingularSystemError, ZeroDivisionError) as exc:
@@ -289,8 +347,7 @@ def displacement_control(problem, node, direction, values, options=None, max_cut
                 changed = (pt.n_neg != cur.n_neg) if (pt.n_neg is not None and cur.n_neg is not None) \
                     else (pt.sign != cur.sign)
                 if opts.stability and changed:
-                    crit.append(locate_critical(sysm, cur, pt, row(cur.state),
-                                                value(pt.state) - value(cur.state), n_points))
+                    crit.append(_control_critical(sysm, cur, pt, lin, (value, row), opts, timers, n_points))
                     log.info("  ** %s", crit[-1].describe())
                 cur = pt
                 if not sub:

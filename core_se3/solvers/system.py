@@ -7,9 +7,11 @@ updates (tests).  Both give ``evaluate(state, lam, tangent) -> dict(r, K, q, rn,
 """
 from __future__ import annotations
 
+import numbers
+
 import numpy as np
 
-from ..errors import CoreSE3Error
+from ..errors import CoreSE3Error, OptionError
 from ..model.base import overrides
 from .convergence import relative_residual, scaled_norm
 from .origin import part_origin
@@ -128,8 +130,20 @@ class ShellSystem:
         return np.sqrt(np.sum(self.w * x * x)) / self.ell
 
     def node_displacement(self, node, direction):
-        """(value(g), row(g)): u = d . (phi_k - X_k) and its linearisation on the free dofs."""
-        d = np.asarray(direction, float)
+        """(value(g), row(g)): u = d . (phi_k - X_k) and its linearisation on the free dofs.  A node
+        that is not one of the mesh's (a negative index controlled the last node) or a direction
+        that is not three finite numbers of non-zero length is an OptionError (before: an
+        IndexError, a NaN that surfaced as a load's NaN scale, or a stop_at never reached)."""
+        n_nodes = self.problem.mesh.n_nodes
+        if isinstance(node, bool) or not isinstance(node, numbers.Integral) or not 0 <= node < n_nodes:
+            raise OptionError(f"the controlled node must be a node number in [0, {n_nodes - 1}], got {node!r}")
+        try:
+            d = np.asarray(direction, float)
+        except (TypeError, ValueError):
+            d = np.full(1, np.nan)
+        if d.shape != (3,) or not np.all(np.isfinite(d)) or not np.linalg.norm(d) > 0:
+            raise OptionError(f"the controlled direction must be 3 finite lab components of non-zero length, "
+                              f"got {direction!r}")
         d = d / np.linalg.norm(d)
         X0 = self.initial()[node, :3, 3].copy()          # the reference position, in the state's coordinates
         free_k = self.asm.free.reshape(-1, 6)[node]
