@@ -629,3 +629,34 @@ def test_a_command_past_a_bifurcation_is_not_returned_as_the_tracked_equilibrium
         assert np.array_equal(f.B, [-0.8, 0.0, 0.0])
     with pytest.raises(OptionError, match="stability_check must be true or false"):
         ControlOptions(stability_check="yes")
+
+
+def test_a_session_of_a_part_far_from_the_origin_iterates_as_at_the_origin():
+    """The README cantilever (tests/test_step_checks) translated to x0 = 1e4 and 1e9: before, a
+    session could not start (the corrector worked on the whole frames, whose positions carry
+    eps x0: 'the start is not an equilibrium', residual 4.8e-7 at 1e4, 2.6e-2 at 1e9); its
+    Jacobian on the whole frames was 9e-4 off at 1e9 (the probe's finite differences of absolute
+    positions).  Now the session holds its frames relative to the part as load stepping does:
+    from the flat start (stored exactly: the mesh's coordinates are multiples of 2^-4) its
+    updates take the same iterations, reach the same probe displacements and the same Jacobian
+    to the last bit; from a cold start the positions are stored to eps x0 (2.2e-7 at 1e9), and
+    the states agree to that."""
+    from test_step_checks import _readme_cantilever
+
+    def run(x0, lam=0.0):
+        p = _readme_cantilever(x0)
+        s = Session(p, lam, [LoadMagnitude(p, p.loads[0], name="P")])
+        its = [s.update(lam=0.5).iterations, s.update(P=4.4).iterations]
+        return s, its, s.state.probes["tip"]["u"], s.jacobian(["tip"])
+
+    s0, its0, u0, J0 = run(0.0)
+    for x0 in (1e4, 1e9):
+        s, its, u, J = run(x0)
+        assert its == its0
+        np.testing.assert_array_equal(u, u0)
+        np.testing.assert_array_equal(J.jacobian, J0.jacobian)
+        assert np.abs(J.values - J0.values - [x0, 0.0, 0.0]).max() <= 1e-15 * x0      # absolute positions
+        assert np.abs(s.g[:, 0, 3] - x0 - s0.g[:, 0, 3]).max() <= 1e-15 * x0
+        cold_far, cold = run(x0, 0.5), run(0.0, 0.5)
+        assert np.abs(cold_far[2] - cold[2]).max() <= 1e-15 * x0
+        assert np.abs(cold_far[3].jacobian - cold[3].jacobian).max() <= 1e-14 * x0 * np.abs(cold[3].jacobian).max()
