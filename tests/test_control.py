@@ -660,3 +660,58 @@ def test_a_session_of_a_part_far_from_the_origin_iterates_as_at_the_origin():
         cold_far, cold = run(x0, 0.5), run(0.0, 0.5)
         assert np.abs(cold_far[2] - cold[2]).max() <= 1e-15 * x0
         assert np.abs(cold_far[3].jacobian - cold[3].jacobian).max() <= 1e-14 * x0 * np.abs(cold[3].jacobian).max()
+
+
+def _antiparallel(B=0.8):
+    """A strip magnetised along x in an antiparallel field: the straight state is an equilibrium
+    at every field, stable below the critical field (load factor 0.642 of B = 0.8), unstable
+    above (det K < 0: one tangent eigenvalue crossed zero)."""
+    p = Problem(mesh.rectangle(1.0, 0.2, 16, 1), Material(1e3, 0.0, 0.05))
+    p.clamp("x0")
+    p.add_probe("tip")
+    f = UniformField((-B, 0.0, 0.0))
+    p.add_magnetic((1.0, 0.0, 0.0), f, mu0=1.0)
+    return p, f
+
+
+def test_the_critical_point_check_compares_with_the_last_accepted_state_and_says_which_way():
+    """A session started on the unstable branch (the straight antiparallel strip at load factor
+    1.0, det K < 0, as arc length past a critical point would hand it over) and moved back below
+    the critical field (0.5: det K > 0) crosses a critical point: refused, but before the
+    message called the stable state at 0.5 'unstable and not the one the body takes'.  Now
+    each direction is named: negative -> positive, and positive -> negative (then unstable)."""
+    p, f = _antiparallel()
+    s = Session(p, 1.0, [FieldVariable(p, f, name="B")], g=p.mesh.g0, stability_check=True)
+    assert s._sign == -1
+    with pytest.raises(ControlError) as exc:
+        s.update(lam=0.5)
+    msg = str(exc.value)
+    assert "det K changed sign from negative at the session's start (load factor 1) to positive" in msg
+    assert "unstable branch" in msg and "is unstable" not in msg
+    assert s.lam == 1.0 and s.update(lam=0.9).lam == 0.9         # on the branch: accepted
+    assert "load factor 0.9" in s._sign_at
+    p, f = _antiparallel()
+    s = Session(p, 0.5, [FieldVariable(p, f, name="B")], steps=5, stability_check=True)
+    s.update(lam=0.6)
+    with pytest.raises(ControlError, match=r"from positive at the last accepted state where it was known \(load "
+                                           r"factor 0.6\) to negative .* so that equilibrium is unstable"):
+        s.update(lam=1.0)
+
+
+def test_a_singular_tangent_at_the_new_state_is_refused_under_the_stability_check(monkeypatch):
+    """With stability_check, a tangent that cannot be factored at the converged state (singular:
+    a critical point exactly there) skipped the check and the state was accepted silently.  Now
+    the update is refused naming the singular tangent, and the session keeps its state.  (The
+    factorisation is made to fail as an exactly singular tangent fails it: no physical command
+    lands on a critical point to the last bit.)"""
+    from core_se3.errors import SingularSystemError
+    p, f = _antiparallel()
+    s = Session(p, 0.5, [FieldVariable(p, f, name="B")], steps=5, stability_check=True)
+    before = s.state
+
+    def singular(*a, **k):
+        raise SingularSystemError("tangent is singular (zero pivot)")
+    monkeypatch.setattr(s._corr, "factor", singular)
+    with pytest.raises(ControlError, match=r"ends where the tangent cannot be factored \(tangent is singular"):
+        s.update(lam=0.55)
+    assert s.state is before and s.lam == 0.5 and np.array_equal(f.B, [-0.8, 0.0, 0.0])

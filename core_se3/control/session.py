@@ -237,7 +237,9 @@ class Session:
         self._g = out.g                   # the corrector's frames of the state (relative to the origin)
         self.state = self._state(out.g, lam, Work(out.iterations, out.factorizations, 1, 0, time.perf_counter() - t0))
         self._r = out.residual            # the free residual at the state (the next predictor's start)
-        self._sign = self._corr.det_sign()  # det K's sign at the start: a change means a critical point
+        # det K's sign at the last accepted state where it is known (and that state, in words): a
+        # change between accepted states means a critical point crossed
+        self._sign, self._sign_at = self._corr.det_sign(), f"the session's start (load factor {lam:.6g})"
         self._check_resolution()
 
     @classmethod
@@ -382,42 +384,62 @@ class Session:
         except BaseException:
             self._assign(x0)                 # refused or interrupted: the values of the state kept
             raise
-        if self._corr.settle(g, lam1, self._stamp, counts[0]) or self._factor_for_check(g, lam1):
+        factored, why = self._checked(g, lam1, self._corr.settle(g, lam1, self._stamp, counts[0]))
+        if factored:
             counts = (counts[0], counts[1] + 1) + counts[2:]      # factors at the new state: checked
-            why = self._crossed(g, lam1)
-            if why:
-                self._assign(x0)
-                self._count(*counts, refused=1)
-                raise ControlError(f"update refused: {self._describe(lam0, lam1, x0, x1)} leads past a critical "
-                                   f"point: {why}.  The session stays at its state before the command")
+        if why:
+            self._assign(x0)
+            self._count(*counts, refused=1)
+            raise ControlError(f"update refused: {self._describe(lam0, lam1, x0, x1)} {why}.  The session stays at "
+                               "its state before the command")
+        self._note_sign(g, lam1)
         self._r, self._g = r, g
         self._count(*counts, updates=1)
         self.state = self._state(g, lam1, Work(*counts, time.perf_counter() - t0))
         self._check_resolution()
         return self.state
 
-    def _factor_for_check(self, g, lam):
-        """With ``stability_check``: factor the tangent at the converged state g (True), for
-        :meth:`_crossed`; a singular tangent there keeps the held factors (False)."""
-        if not self.options.stability_check or self._sign is None or self._corr.F_g is g:
-            return False
-        try:
-            self._corr.factor(g, lam, self._stamp, keep=True)
-        except (SingularSystemError, ElementTooDistortedError):
-            return False
-        return True
+    def _checked(self, g, lam, renewed):
+        """(factored, why) for the converged state g of an update: with factors made there (a
+        renewal, or with ``stability_check`` made here: ``factored``), '' or why the state is
+        refused -- a critical point crossed (:meth:`_crossed`), or, with ``stability_check``, a
+        singular tangent at g (before, a singular tangent skipped the check and the state was
+        accepted)."""
+        if not renewed:
+            if not self.options.stability_check or self._sign is None or self._corr.F_g is g:
+                return False, ""
+            try:
+                self._corr.factor(g, lam, self._stamp, keep=True)
+            except (SingularSystemError, ElementTooDistortedError) as exc:
+                return False, (f"ends where the tangent cannot be factored ({exc}): a critical point (bifurcation "
+                               f"or limit point) at load factor {lam:.6g} itself, where the equilibrium does not "
+                               "follow the commands smoothly and its stability is not known")
+        why = self._crossed(g, lam)
+        return True, f"leads past a critical point: {why}" if why else ""
 
     def _crossed(self, g, lam):
         """'' or why the state g at lam lies past a critical point: the sign of det K of the held
-        factors, made at g, differs from the session's start (a bifurcation, where the path goes
-        on smoothly and the path test does not see it, or a limit point)."""
+        factors, made at g, differs from that at the last accepted state where it is known (a
+        bifurcation, where the path goes on smoothly and the path test does not see it, or a limit
+        point); worded by the direction of the change."""
         sign = self._corr.det_sign() if self._corr.F_g is g else None
         if sign is None or self._sign is None or sign == self._sign:
             return ""
-        return (f"det K changed sign between the session's start and the state at load factor {lam:.6g} (a "
-                "bifurcation or limit point lies between them), so that equilibrium is unstable and not the one the "
-                "body takes; go back, or trace the path with arc length (core_se3.solvers.arc_length) and a "
-                "perturbation")
+        word = {1: "positive", -1: "negative"}
+        why = (f"det K changed sign from {word[self._sign]} at {self._sign_at} to {word[sign]} at the state at load "
+               f"factor {lam:.6g}: a critical point (a bifurcation or limit point) lies between them")
+        if sign < 0:
+            return (why + ", so that equilibrium is unstable and not the one the body takes; go back, or trace the "
+                    "path with arc length (core_se3.solvers.arc_length) and a perturbation")
+        return (why + "; the states before were on an unstable branch, and the path followed from them need not be "
+                "the one the body takes through the critical point; trace it with arc length "
+                "(core_se3.solvers.arc_length)")
+
+    def _note_sign(self, g, lam):
+        """Record det K's sign at the accepted state g (when factors were made there)."""
+        sign = self._corr.det_sign() if self._corr.F_g is g else None
+        if sign is not None:
+            self._sign, self._sign_at = sign, f"the last accepted state where it was known (load factor {lam:.6g})"
 
     def _check_resolution(self):
         """A MeshWarning when the state comes within ``magnetics.DIPOLE_RESOLUTION`` element sizes
