@@ -715,3 +715,27 @@ def test_a_singular_tangent_at_the_new_state_is_refused_under_the_stability_chec
     with pytest.raises(ControlError, match=r"ends where the tangent cannot be factored \(tangent is singular"):
         s.update(lam=0.55)
     assert s.state is before and s.lam == 0.5 and np.array_equal(f.B, [-0.8, 0.0, 0.0])
+
+
+def test_plan_falls_back_when_an_extrapolated_command_lands_past_a_critical_point():
+    """A clamped column under an axial tip force P 1e-3 (Euler load between 5 and 5.5): the
+    plan of the tip's shortening at P = 3, 4.5, 5 extrapolates sample 2's command to P = 6, past
+    the critical load; the session accepts it (the straight path goes on smoothly) and its
+    Jacobian there is refused (det K changed sign).  Before, that ControlError propagated out of
+    plan() and the samples planned so far were lost; now the sample starts again from the last
+    sample's solution and is reached (the shortening is linear in P on the straight branch)."""
+    p = Problem(mesh.rectangle(1.0, 0.2, 16, 1), Material(1e3, 0.0, 0.05))
+    p.clamp("x0")
+    p.add_probe("tip")
+    p.add_edge_force("x1", (-1e-3, 0.0, 0.0))
+    s = Session(p, 1.0, [LoadMagnitude(p, p.loads[0], name="P")])
+    x_tip = s.state.probes["tip"]["x"][0] + 1e-4                  # P = 0 (EA = 10)
+    targets = [[x_tip - 1e-4 * P] for P in (3.0, 4.5, 5.0)]
+    pl = plan(s, "tip", targets, 1e-10, components=[0])
+    assert pl.all_reached, pl.message
+    assert np.abs(pl.commands["P"].ravel() - [3.0, 4.5, 5.0]).max() < 1e-4
+    assert s.jacobian(["tip"]).jacobian[0, 0] < 0                 # below the critical load: a Jacobian
+    s.update(P=6.0)                                               # past it: no Jacobian from here
+    pl = plan(s, "tip", targets[:2], 1e-10, components=[0])
+    assert not pl.reached.any() and np.isnan(pl.commands["P"]).all()
+    assert "planning stopped at sample 0: jacobian: the session's state lies past a critical point" in pl.message
