@@ -297,6 +297,25 @@ def test_a_refused_track_leaves_plant_and_model_at_the_same_command():
     assert abs(model.state.probes["tip"]["x"][2] - zm) < 1e-8 * 10.0       # back on its equilibrium
 
 
+def test_an_interrupted_plant_leaves_plant_and_model_at_the_same_command():
+    """track(..., model=...): the model went back to the plant's command only when the plant
+    raised a ControlError; an interrupt (or any other exception) in the plant's update left the
+    model at the new command P = 2.51 and the plant at P = 1.  Now both end at the last
+    accepted command whatever the plant raises, and the exception is re-raised."""
+    p, q = strip(P=0.1), strip(P=0.1)
+    plant = Session(p, 1.0, [LoadMagnitude(p, p.loads[0], name="P")])
+    model = Session(q, 1.0, [LoadMagnitude(q, q.loads[0], name="P")])
+    z0, zm = plant.state.probes["tip"]["x"][2], model.state.probes["tip"]["x"][2]
+
+    def interrupted(*a, **k):
+        raise KeyboardInterrupt
+    plant._follow = interrupted
+    with pytest.raises(KeyboardInterrupt):
+        track(plant, "tip", [[z0], [z0 + 0.5]], components=[2], model=model)
+    assert plant.values["P"].tolist() == model.values["P"].tolist() == [1.0]
+    assert abs(model.state.probes["tip"]["x"][2] - zm) < 1e-8 * 10.0       # back on its equilibrium
+
+
 def test_a_variable_named_lam_is_refused_not_shadowed_by_the_load_factor():
     """update(lam=...) is the load factor: a variable named 'lam' could never be commanded, and
     update(lam=2.0) meant for it moved the load factor to 2 with the variable still at 1 (state

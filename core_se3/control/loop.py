@@ -174,10 +174,14 @@ class _Loop:
         self.model.update(**values)
         try:
             return self.s.update(**values)
-        except ControlError as exc:          # the model back to the plant's (last accepted) command
-            try:
+        except BaseException as exc:         # whatever the plant raised (before: only a ControlError), the
+            try:                             # model back to the plant's (last accepted) command, re-raised
                 self.model.update(**before)
             except ControlError as back:
+                if not isinstance(exc, ControlError):
+                    raise ControlError(f"the plant raised {type(exc).__name__}: {exc}; and the controller's model "
+                                       f"could not return to the plant's command (it stays at the new one): "
+                                       f"{back}") from exc
                 raise ControlError(f"{exc}; and the controller's model could not return to the plant's command "
                                    f"(it stays at the refused one): {back}") from exc
             raise
