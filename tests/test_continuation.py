@@ -16,7 +16,7 @@ import scipy.sparse as sp
 
 from core_se3 import catalogue, solvers as C
 from core_se3.catalogue import get_case
-from core_se3.errors import ConvergenceError, CoreSE3Error
+from core_se3.errors import ConvergenceError, CoreSE3Error, OptionError
 
 LAM_LIMIT = 1 / (3 * np.sqrt(3))
 
@@ -343,3 +343,22 @@ def test_arc_length_stops_where_the_controlled_displacement_first_reaches_its_en
     assert abs(w[-1] - 16.9) < 1e-9
     assert np.all(np.diff(w) > 0)                   # W_C never turned back on the way
     assert abs(res.final.load_factor - 0.04533) < 1e-4, res.final.load_factor
+
+
+def test_displacement_control_without_its_node_direction_or_values_names_them():
+    """Problem.solve(control='displacement') without node / direction / values was a bare
+    TypeError ('displacement_control() missing 3 required positional arguments'), and a misspelt
+    node= ('nod') was reported as node missing without the misspelling.  Now an OptionError names
+    the missing keys, a misspelling's correction and an example call."""
+    from core_se3 import Material, Problem, mesh
+    p = Problem(mesh.rectangle(10.0, 1.0, 4, 1), Material(1.2e6, 0.0, 0.1))
+    p.clamp("x0")
+    p.add_edge_force("x1", (0.0, 0.0, 1.0))
+    for kw, missing in ((dict(), "node, direction, values"), (dict(node=3), "direction, values"),
+                        (dict(node=3, direction=(0, 0, 1)), "values")):
+        with pytest.raises(OptionError, match=f"displacement control: missing {missing}.  Give the controlled node"):
+            p.solve(control="displacement", **kw)
+    with pytest.raises(OptionError, match="missing node; unknown keyword 'nod'; did you mean 'node'"):
+        p.solve(control="displacement", nod=3, direction=(0, 0, 1), values=[0.1])
+    res = p.solve(control="displacement", node=3, direction=(0, 0, 1), values=[0.5])   # given: solved
+    assert abs(res.final.g[3, 2, 3] - 0.5) < 1e-9
