@@ -552,3 +552,22 @@ def test_displacement_control_locates_limit_points_to_critical_tol(roof8, values
     for c, ref in zip(dc.critical_points, (0.7435513, 0.1704150)):
         assert abs(c.lam - ref) <= 1e-3 * ref, c.describe()
         assert c.accuracy <= 1e-3 and abs(c.lam - ref) <= c.accuracy * c.lam + 1e-6, c.describe()
+
+
+def test_displacement_control_without_its_node_direction_or_values_names_them():
+    """Problem.solve(control='displacement') without node / direction / values was a bare
+    TypeError ('displacement_control() missing 3 required positional arguments'), and a misspelt
+    node= ('nod') was reported as node missing without the misspelling.  Now an OptionError names
+    the missing keys, a misspelling's correction and an example call."""
+    from core_se3 import Material, Problem, mesh
+    p = Problem(mesh.rectangle(10.0, 1.0, 4, 1), Material(1.2e6, 0.0, 0.1))
+    p.clamp("x0")
+    p.add_edge_force("x1", (0.0, 0.0, 1.0))
+    for kw, missing in ((dict(), "node, direction, values"), (dict(node=3), "direction, values"),
+                        (dict(node=3, direction=(0, 0, 1)), "values")):
+        with pytest.raises(OptionError, match=f"displacement control: missing {missing}.  Give the controlled node"):
+            p.solve(control="displacement", **kw)
+    with pytest.raises(OptionError, match="missing node; unknown keyword 'nod'; did you mean 'node'"):
+        p.solve(control="displacement", nod=3, direction=(0, 0, 1), values=[0.1])
+    res = p.solve(control="displacement", node=3, direction=(0, 0, 1), values=[0.5])   # given: solved
+    assert abs(res.final.g[3, 2, 3] - 0.5) < 1e-9

@@ -297,6 +297,25 @@ def test_a_refused_track_leaves_plant_and_model_at_the_same_command():
     assert abs(model.state.probes["tip"]["x"][2] - zm) < 1e-8 * 10.0       # back on its equilibrium
 
 
+def test_an_interrupted_plant_leaves_plant_and_model_at_the_same_command():
+    """track(..., model=...): the model went back to the plant's command only when the plant
+    raised a ControlError; an interrupt (or any other exception) in the plant's update left the
+    model at the new command P = 2.51 and the plant at P = 1.  Now both end at the last
+    accepted command whatever the plant raises, and the exception is re-raised."""
+    p, q = strip(P=0.1), strip(P=0.1)
+    plant = Session(p, 1.0, [LoadMagnitude(p, p.loads[0], name="P")])
+    model = Session(q, 1.0, [LoadMagnitude(q, q.loads[0], name="P")])
+    z0, zm = plant.state.probes["tip"]["x"][2], model.state.probes["tip"]["x"][2]
+
+    def interrupted(*a, **k):
+        raise KeyboardInterrupt
+    plant._follow = interrupted
+    with pytest.raises(KeyboardInterrupt):
+        track(plant, "tip", [[z0], [z0 + 0.5]], components=[2], model=model)
+    assert plant.values["P"].tolist() == model.values["P"].tolist() == [1.0]
+    assert abs(model.state.probes["tip"]["x"][2] - zm) < 1e-8 * 10.0       # back on its equilibrium
+
+
 def test_a_variable_named_lam_is_refused_not_shadowed_by_the_load_factor():
     """update(lam=...) is the load factor: a variable named 'lam' could never be commanded, and
     update(lam=2.0) meant for it moved the load factor to 2 with the variable still at 1 (state
@@ -629,3 +648,113 @@ def test_a_command_past_a_bifurcation_is_not_returned_as_the_tracked_equilibrium
         assert np.array_equal(f.B, [-0.8, 0.0, 0.0])
     with pytest.raises(OptionError, match="stability_check must be true or false"):
         ControlOptions(stability_check="yes")
+
+
+def test_a_session_of_a_part_far_from_the_origin_iterates_as_at_the_origin():
+    """The README cantilever (tests/test_step_checks) translated to x0 = 1e4 and 1e9: before, a
+    session could not start (the corrector worked on the whole frames, whose positions carry
+    eps x0: 'the start is not an equilibrium', residual 4.8e-7 at 1e4, 2.6e-2 at 1e9); its
+    Jacobian on the whole frames was 9e-4 off at 1e9 (the probe's finite differences of absolute
+    positions).  Now the session holds its frames relative to the part as load stepping does:
+    from the flat start (stored exactly: the mesh's coordinates are multiples of 2^-4) its
+    updates take the same iterations, reach the same probe displacements and the same Jacobian
+    to the last bit; from a cold start the positions are stored to eps x0 (2.2e-7 at 1e9), and
+    the states agree to that."""
+    from test_step_checks import _readme_cantilever
+
+    def run(x0, lam=0.0):
+        p = _readme_cantilever(x0)
+        s = Session(p, lam, [LoadMagnitude(p, p.loads[0], name="P")])
+        its = [s.update(lam=0.5).iterations, s.update(P=4.4).iterations]
+        return s, its, s.state.probes["tip"]["u"], s.jacobian(["tip"])
+
+    s0, its0, u0, J0 = run(0.0)
+    for x0 in (1e4, 1e9):
+        s, its, u, J = run(x0)
+        assert its == its0
+        np.testing.assert_array_equal(u, u0)
+        np.testing.assert_array_equal(J.jacobian, J0.jacobian)
+        assert np.abs(J.values - J0.values - [x0, 0.0, 0.0]).max() <= 1e-15 * x0      # absolute positions
+        assert np.abs(s.g[:, 0, 3] - x0 - s0.g[:, 0, 3]).max() <= 1e-15 * x0
+        cold_far, cold = run(x0, 0.5), run(0.0, 0.5)
+        assert np.abs(cold_far[2] - cold[2]).max() <= 1e-15 * x0
+        assert np.abs(cold_far[3].jacobian - cold[3].jacobian).max() <= 1e-14 * x0 * np.abs(cold[3].jacobian).max()
+
+
+def _antiparallel(B=0.8):
+    """A strip magnetised along x in an antiparallel field: the straight state is an equilibrium
+    at every field, stable below the critical field (load factor 0.642 of B = 0.8), unstable
+    above (det K < 0: one tangent eigenvalue crossed zero)."""
+    p = Problem(mesh.rectangle(1.0, 0.2, 16, 1), Material(1e3, 0.0, 0.05))
+    p.clamp("x0")
+    p.add_probe("tip")
+    f = UniformField((-B, 0.0, 0.0))
+    p.add_magnetic((1.0, 0.0, 0.0), f, mu0=1.0)
+    return p, f
+
+
+def test_the_critical_point_check_compares_with_the_last_accepted_state_and_says_which_way():
+    """A session started on the unstable branch (the straight antiparallel strip at load factor
+    1.0, det K < 0, as arc length past a critical point would hand it over) and moved back below
+    the critical field (0.5: det K > 0) crosses a critical point: refused, but before the
+    message called the stable state at 0.5 'unstable and not the one the body takes'.  Now
+    each direction is named: negative -> positive, and positive -> negative (then unstable)."""
+    p, f = _antiparallel()
+    s = Session(p, 1.0, [FieldVariable(p, f, name="B")], g=p.mesh.g0, stability_check=True)
+    assert s._sign == -1
+    with pytest.raises(ControlError) as exc:
+        s.update(lam=0.5)
+    msg = str(exc.value)
+    assert "det K changed sign from negative at the session's start (load factor 1) to positive" in msg
+    assert "unstable branch" in msg and "is unstable" not in msg
+    assert s.lam == 1.0 and s.update(lam=0.9).lam == 0.9         # on the branch: accepted
+    assert "load factor 0.9" in s._sign_at
+    p, f = _antiparallel()
+    s = Session(p, 0.5, [FieldVariable(p, f, name="B")], steps=5, stability_check=True)
+    s.update(lam=0.6)
+    with pytest.raises(ControlError, match=r"from positive at the last accepted state where it was known \(load "
+                                           r"factor 0.6\) to negative .* so that equilibrium is unstable"):
+        s.update(lam=1.0)
+
+
+def test_a_singular_tangent_at_the_new_state_is_refused_under_the_stability_check(monkeypatch):
+    """With stability_check, a tangent that cannot be factored at the converged state (singular:
+    a critical point exactly there) skipped the check and the state was accepted silently.  Now
+    the update is refused naming the singular tangent, and the session keeps its state.  (The
+    factorisation is made to fail as an exactly singular tangent fails it: no physical command
+    lands on a critical point to the last bit.)"""
+    from core_se3.errors import SingularSystemError
+    p, f = _antiparallel()
+    s = Session(p, 0.5, [FieldVariable(p, f, name="B")], steps=5, stability_check=True)
+    before = s.state
+
+    def singular(*a, **k):
+        raise SingularSystemError("tangent is singular (zero pivot)")
+    monkeypatch.setattr(s._corr, "factor", singular)
+    with pytest.raises(ControlError, match=r"ends where the tangent cannot be factored \(tangent is singular"):
+        s.update(lam=0.55)
+    assert s.state is before and s.lam == 0.5 and np.array_equal(f.B, [-0.8, 0.0, 0.0])
+
+
+def test_plan_falls_back_when_an_extrapolated_command_lands_past_a_critical_point():
+    """A clamped column under an axial tip force P 1e-3 (Euler load between 5 and 5.5): the
+    plan of the tip's shortening at P = 3, 4.5, 5 extrapolates sample 2's command to P = 6, past
+    the critical load; the session accepts it (the straight path goes on smoothly) and its
+    Jacobian there is refused (det K changed sign).  Before, that ControlError propagated out of
+    plan() and the samples planned so far were lost; now the sample starts again from the last
+    sample's solution and is reached (the shortening is linear in P on the straight branch)."""
+    p = Problem(mesh.rectangle(1.0, 0.2, 16, 1), Material(1e3, 0.0, 0.05))
+    p.clamp("x0")
+    p.add_probe("tip")
+    p.add_edge_force("x1", (-1e-3, 0.0, 0.0))
+    s = Session(p, 1.0, [LoadMagnitude(p, p.loads[0], name="P")])
+    x_tip = s.state.probes["tip"]["x"][0] + 1e-4                  # P = 0 (EA = 10)
+    targets = [[x_tip - 1e-4 * P] for P in (3.0, 4.5, 5.0)]
+    pl = plan(s, "tip", targets, 1e-10, components=[0])
+    assert pl.all_reached, pl.message
+    assert np.abs(pl.commands["P"].ravel() - [3.0, 4.5, 5.0]).max() < 1e-4
+    assert s.jacobian(["tip"]).jacobian[0, 0] < 0                 # below the critical load: a Jacobian
+    s.update(P=6.0)                                               # past it: no Jacobian from here
+    pl = plan(s, "tip", targets[:2], 1e-10, components=[0])
+    assert not pl.reached.any() and np.isnan(pl.commands["P"]).all()
+    assert "planning stopped at sample 0: jacobian: the session's state lies past a critical point" in pl.message

@@ -1,5 +1,7 @@
 """Hard-magnetic loads: load stiffness by finite differences, conservation, objectivity, totals,
 and the Zhao et al. 2019 cantilevers against the planar elastica (core_se3/data/elastica.json)."""
+import re
+
 import numpy as np
 import pytest
 
@@ -593,3 +595,26 @@ def test_a_dipole_scene_in_si_and_in_n_mm_mpa_agree_and_the_python_dipole_needs_
     assert np.abs(B_mm - B_si).max() <= 1e-14 * np.abs(B_si).max()
     fd = mm.problem.scenario_parts["fields"]["magnet"]
     assert fd.k == MU0 * 1e3 / (4 * np.pi)                    # the scenario's dipole in mm
+
+
+@pytest.mark.parametrize("backend", ["numpy", "numba"])
+def test_a_node_on_a_point_dipole_is_named_with_both_positions(backend):
+    """A magnetised node exactly at a point dipole's position: the LoadError said only 'a point
+    lies on the dipole' (no node, no position, on every evaluation path).  Now it names the node,
+    its position and the dipole's: the residual, the tangent, and the dipole inside a
+    superposition."""
+    pytest.importorskip("numba") if backend == "numba" else None
+    m = mesh.rectangle(0.02, 0.01, 4, 2)
+    node = 7
+    x0 = m.g0[node, :3, 3].tolist()
+    for field in (DipoleField((0.0, 0.0, 1e-3), x0), Superposition(UniformField((0, 0, 1e-3)),
+                                                                  DipoleField((0.0, 0.0, 1e-3), x0))):
+        p = Problem(m, Material(1.0e6, 0.3, 1.0e-3), backend=backend)
+        p.clamp("x0")
+        p.add_magnetic((0.1, 0.0, 0.0), field)
+        for tangent in (False, True):
+            with pytest.raises(LoadError, match=re.escape(f"magnetised node {node} (at {x0}) lies on the point "
+                                                          f"dipole at x0 = {x0}")):
+                p.evaluate(m.g0, 1.0, tangent=tangent)
+    with pytest.raises(LoadError, match=re.escape(f"point 1 (at {x0}) lies on the dipole at x0 = {x0}")):
+        DipoleField((0.0, 0.0, 1e-3), x0).value(np.array([[0.0, 0.0, 0.0], x0]), 1.0)

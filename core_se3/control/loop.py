@@ -16,8 +16,11 @@ Planning: at every sample the inverse problem min |y(x) - y*_k| is solved by Gau
 the session (a Jacobian, a step, a warm update) from the previous sample's solution -- its
 equilibrium and its command, extrapolated linearly from the two samples before -- until the
 largest component of the misfit is within ``tolerance``; a step that raises the misfit, or
-that the session refuses, is halved.  A sample not reached is flagged (``Plan.reached``, and
-the message says which), never passed over.
+that the session refuses, or whose state's Jacobian it refuses (past a critical point), is
+halved, and an extrapolation whose state's Jacobian is refused falls back to the last sample's
+solution.  A sample not reached is flagged (``Plan.reached``, and the message says which),
+never passed over; when not even the last sample's solution has a Jacobian, planning stops
+and returns what it planned with the reason.
 """
 from __future__ import annotations
 
@@ -171,10 +174,14 @@ class _Loop:
         self.model.update(**values)
         try:
             return self.s.update(**values)
-        except ControlError as exc:          # the model back to the plant's (last accepted) command
-            try:
+        except BaseException as exc:         # whatever the plant raised (before: only a ControlError), the
+            try:                             # model back to the plant's (last accepted) command, re-raised
                 self.model.update(**before)
             except ControlError as back:
+                if not isinstance(exc, ControlError):
+                    raise ControlError(f"the plant raised {type(exc).__name__}: {exc}; and the controller's model "
+                                       f"could not return to the plant's command (it stays at the new one): "
+                                       f"{back}") from exc
                 raise ControlError(f"{exc}; and the controller's model could not return to the plant's command "
                                    f"(it stays at the refused one): {back}") from exc
             raise
@@ -293,6 +300,57 @@ def track(session, quantity, targets, variables=None, components=None, feedback=
     return Tracking(T, Y, commands, np.linalg.norm(Y - T, axis=1), dt, its, nf)
 
 
+def _sample(lp, target, tolerance, opts, guess, previous):
+    """Gauss-Newton on the session toward ``target`` (module docstring) from the command
+    ``guess`` (the extrapolation; None: from the session's state) or, when the session refuses
+    it or its Jacobian (a state past a critical point), from ``previous`` (the last sample's
+    solution); (iterations, updates, command, quantity, misfit) at the best command found, where
+    the session ends.  A step whose state the session or its Jacobian refuses is
+    halved, as one that raises the misfit: before, a Jacobian refused there propagated out of
+    :func:`plan` and lost the samples planned so far.  ControlError when no Jacobian is had."""
+    ups = 0
+    if guess is not None:
+        try:
+            lp.command(guess)
+            ups += 1
+        except ControlError:
+            pass                                   # start from the last sample's solution
+    y = lp.y()
+    e, its, J = np.abs(y - target).max(), 0, None
+    if e > tolerance and opts.max_iter > 0:
+        try:
+            J = lp.jacobian()
+        except ControlError:
+            if previous is None or np.array_equal(lp.x(), previous):
+                raise
+            lp.command(previous)                   # the extrapolation went past a critical point
+            ups += 1
+            y = lp.y()
+            e, J = np.abs(y - target).max(), lp.jacobian()
+    x = lp.x()
+    while e > tolerance and its < opts.max_iter:
+        its += 1
+        dx = least_squares_step(J, target - y, lp.scale, opts.damping)
+        a = 1.0
+        for _ in range(opts.max_halvings + 1):
+            try:
+                lp.command(x + a * dx)
+                ups += 1
+                e_new = np.abs(lp.y() - target).max()
+                # the next iteration's Jacobian, here: refused past a critical point, as the step
+                J_new = lp.jacobian() if tolerance < e_new < e and its < opts.max_iter else None
+            except ControlError:
+                e_new = np.inf
+            if e_new < e:
+                break
+            a /= 2
+        else:
+            lp.command(x)                          # back to the best point of this sample
+            break
+        x, y, e, J = lp.x(), lp.y(), e_new, J_new
+    return its, ups, x, y, e
+
+
 @dataclass
 class Plan:
     """The record of :func:`plan`.
@@ -308,7 +366,9 @@ class Plan:
     iterations : (K,) ndarray
         Gauss-Newton iterations (Jacobians) per sample; ``updates``: warm updates per sample.
     tolerance : float
-        The tolerance asked; ``time`` [s]; ``message``: all reached, or which samples were not.
+        The tolerance asked; ``time`` [s]; ``message``: all reached, or which samples were not
+        (and, when planning stopped -- no Jacobian even at the last sample's solution -- where
+        and why: the samples from there on have NaN commands and an infinite misfit).
 
     Example
     -------
@@ -374,37 +434,19 @@ def plan(session, quantity, targets, tolerance, variables=None, components=None,
     K = len(T)
     Y, X = np.zeros_like(T), np.zeros((K, len(lp.scale)))
     mis, its, ups = np.zeros(K), np.zeros(K, int), np.zeros(K, int)
+    stopped = ""
     for k in range(K):
-        if opts.extrapolate and k >= 2:
-            try:
-                lp.command(2 * X[k - 1] - X[k - 2])
-                ups[k] += 1
-            except ControlError:
-                pass                                   # start from the last sample's solution
-        x, y = lp.x(), lp.y()
-        e = np.abs(y - T[k]).max()
-        while e > tolerance and its[k] < opts.max_iter:
-            its[k] += 1
-            dx = least_squares_step(lp.jacobian(), T[k] - y, lp.scale, opts.damping)
-            a = 1.0
-            for _ in range(opts.max_halvings + 1):
-                try:
-                    lp.command(x + a * dx)
-                    ups[k] += 1
-                    e_new = np.abs(lp.y() - T[k]).max()
-                except ControlError:
-                    e_new = np.inf
-                if e_new < e:
-                    break
-                a /= 2
-            else:
-                lp.command(x)                          # back to the best point of this sample
-                break
-            x, y, e = lp.x(), lp.y(), e_new
-        Y[k], X[k], mis[k] = y, x, e
+        guess = 2 * X[k - 1] - X[k - 2] if opts.extrapolate and k >= 2 else None
+        try:
+            its[k], ups[k], X[k], Y[k], mis[k] = _sample(lp, T[k], tolerance, opts, guess, X[k - 1] if k else None)
+        except ControlError as exc:     # no Jacobian even at the last sample's solution: the progress kept
+            Y[k:], X[k:], mis[k:] = np.nan, np.nan, np.inf
+            stopped = f"; planning stopped at sample {k}: {exc}"
+            break
     reached = mis <= tolerance
     bad = np.nonzero(~reached)[0]
     msg = (f"all {K} samples within {tolerance:g}" if not len(bad) else
-           f"{len(bad)} of {K} samples not reached (first: sample {bad[0]}, misfit {mis[bad[0]]:.3g} > {tolerance:g})")
+           f"{len(bad)} of {K} samples not reached (first: sample {bad[0]}, misfit {mis[bad[0]]:.3g} > {tolerance:g})"
+           + stopped)
     commands = dict(zip(lp.names, np.split(X, lp.split, axis=1)))
     return Plan(T, Y, commands, mis, reached, its, ups, float(tolerance), time.perf_counter() - t0, msg)

@@ -69,8 +69,10 @@ class ControlOptions:
     stability_check : bool
         True: every update factors the tangent at its converged state (one more factorisation
         per update, unless the factors were renewed there) and refuses a state whose det K
-        has another sign than at the session's start -- a critical point crossed, e.g. a
-        bifurcation, which the path test does not see (the path goes on smoothly, unstable).
+        has another sign than at the last accepted state where it is known (the start at
+        first) -- a critical point crossed, e.g. a bifurcation, which the path test does not
+        see (the path goes on smoothly) -- or whose tangent is singular (a critical point
+        there).
         False (default): that check runs where factors are made at a converged state anyway:
         a renewal, and every :meth:`Session.jacobian` (which ``track`` takes every cycle).
     linear_solver : str or None

@@ -12,6 +12,13 @@ failed sub-step (the path test, the node-turn limit, no convergence) is halved, 
 the session then stays where it was.  Nothing is rebuilt that did not change: the variables
 are assigned in place (the compiled loads read them at call time), the sparsity pattern, the
 compiled evaluation and the factors are kept, and probes are computed only when read.
+
+A part far from the origin is held relative to it, as load stepping and path following hold
+their iterates (``solvers.origin.part_origin``): the corrector's frames are the part's positions
+minus that origin (exact), so the updates iterate as those of the part at the origin, bit for
+bit; the states' frames ``g`` are in the problem's coordinates (to their round-off eps |x0|),
+their probe displacements as exact as at the origin.  Before, the README cantilever at
+x0 = 1e4 could not start a session (the residual stalled at 4.8e-7; 2.6e-2 at 1e9).
 """
 from __future__ import annotations
 
@@ -29,6 +36,7 @@ from ..model.solving import dipole_warning
 from ..solvers import NewtonOptions, newton_solve
 from ..solvers.newton import MAX_LOAD_TURN
 from ..solvers.options import split_options, unknown_keywords
+from ..solvers.origin import part_origin
 from .commands import Commands, scenario_variables
 from .corrector import Corrector
 from .options import ControlOptions
@@ -75,6 +83,10 @@ class State:
     probes : dict
         name -> dict(x (3,) position, u (3,) displacement, R (3, 3) rotation) of every probe
         of the problem, computed at the first read.
+    local : tuple, optional
+        (frames relative to an origin, that origin (3,)) of the same state, for a part far from
+        the origin (``solvers.origin.part_origin``): the displacements are read from them, as
+        exact as for the part at the origin.
 
     Example
     -------
@@ -85,9 +97,9 @@ class State:
     ([2.0, 0.0, 0.0], 2)
     """
 
-    def __init__(self, problem, g, lam, values, work=Work()):
+    def __init__(self, problem, g, lam, values, work=Work(), local=None):
         self.problem, self.g, self.lam, self.values = problem, g, float(lam), values
-        self.work = work
+        self.work, self._local = work, local
         self._probes = None
 
     iterations = property(lambda self: self.work.iterations)
@@ -99,13 +111,44 @@ class State:
     @property
     def probes(self):
         if self._probes is None:
-            g0 = self.problem.mesh.g0
+            g0, gu = self.problem.mesh.g0, self.g
+            if self._local is not None:              # u from the positions relative to the part
+                gu, g0 = self._local[0], g0.copy()
+                g0[:, :3, 3] -= self._local[1]
             out = {}
             for name, pr in self.problem.probes.items():
                 x, R = pr.state(self.g)
-                out[name] = dict(x=x, u=x - pr.state(g0)[0], R=R)
+                out[name] = dict(x=x, u=pr.state(gu)[0] - pr.state(g0)[0], R=R)
             self._probes = out
         return self._probes
+
+
+class _OnPart(Quantity):
+    """A quantity of a session whose frames are relative to a far part's origin (module
+    docstring): its value at the problem's frames (a position is absolute), its derivatives at
+    the session's, exact as for the part at the origin, when the quantity is
+    ``translation_invariant`` (else at the problem's: a ``UserQuantity`` may use absolute
+    positions)."""
+
+    def __init__(self, q, origin):
+        self.q, self.origin, self.name, self.size = q, origin, q.name, q.size
+
+    def _whole(self, g):
+        g = np.array(g, float)
+        g[..., :3, 3] += self.origin
+        return g
+
+    def _at(self, g):
+        return g if getattr(self.q, "translation_invariant", False) else self._whole(g)
+
+    def value(self, problem, g, lam):
+        return self.q.value(problem, self._whole(g), lam)
+
+    def jacobian(self, problem, g, lam):
+        return self.q.jacobian(problem, self._at(g), lam)
+
+    def explicit(self, problem, g, lam, variable):
+        return self.q.explicit(problem, self._at(g), lam, variable)
 
 
 def _check_problem(problem):
@@ -181,19 +224,22 @@ class Session:
         self._unresolved = False
         self._stamp = 0
         self._corr = Corrector(problem, opts)
+        self._origin = part_origin(problem)   # the corrector's frames are relative to it (module docstring)
         self.stats = dict(updates=0, refused=0, substeps=0, splits=0, iterations=0)
         t0 = time.perf_counter()
         g = self._cold(lam, steps) if g is None else np.array(g, float)
         if g.shape != problem.mesh.g0.shape:
             raise OptionError(f"Session: g must have the shape {problem.mesh.g0.shape}, got {g.shape}")
-        out = self._corr.step(g, lam, self._stamp, check_path=False)
+        out = self._corr.step(self._local(g), lam, self._stamp, check_path=False)
         if not out.ok:
             raise ControlError(f"the start is not an equilibrium the corrector reaches at load factor {lam:g}: "
                                f"{out.reason}")
-        self.state = State(problem, out.g, lam, self.commands.values(),
-                           Work(out.iterations, out.factorizations, 1, 0, time.perf_counter() - t0))
+        self._g = out.g                   # the corrector's frames of the state (relative to the origin)
+        self.state = self._state(out.g, lam, Work(out.iterations, out.factorizations, 1, 0, time.perf_counter() - t0))
         self._r = out.residual            # the free residual at the state (the next predictor's start)
-        self._sign = self._corr.det_sign()  # det K's sign at the start: a change means a critical point
+        # det K's sign at the last accepted state where it is known (and that state, in words): a
+        # change between accepted states means a critical point crossed
+        self._sign, self._sign_at = self._corr.det_sign(), f"the session's start (load factor {lam:.6g})"
         self._check_resolution()
 
     @classmethod
@@ -274,6 +320,23 @@ class Session:
             return self.problem.mesh.g0.copy()
         return newton_solve(self.problem, steps=steps, lam_end=lam, options=opts).final.g
 
+    def _local(self, g):
+        """A copy of the problem's frames g in the corrector's coordinates: the positions relative
+        to the part's origin (module docstring)."""
+        g = np.array(g, float)
+        if self._origin is not None:
+            g[..., :3, 3] -= self._origin
+        return g
+
+    def _state(self, g, lam, work):
+        """The State of the corrector's frames g: in the problem's coordinates, with g for the
+        probes' displacements when it is relative to an origin."""
+        if self._origin is None:
+            return State(self.problem, g, lam, self.commands.values(), work)
+        whole = g.copy()
+        whole[..., :3, 3] += self._origin
+        return State(self.problem, whole, lam, self.commands.values(), work, (g, self._origin))
+
     def _assign(self, values, g=None, lam=None):
         """Assign values; with (g, lam), return the exact change of the free residual there
         (None if not linear: ``Commands.assign``)."""
@@ -321,42 +384,62 @@ class Session:
         except BaseException:
             self._assign(x0)                 # refused or interrupted: the values of the state kept
             raise
-        if self._corr.settle(g, lam1, self._stamp, counts[0]) or self._factor_for_check(g, lam1):
+        factored, why = self._checked(g, lam1, self._corr.settle(g, lam1, self._stamp, counts[0]))
+        if factored:
             counts = (counts[0], counts[1] + 1) + counts[2:]      # factors at the new state: checked
-            why = self._crossed(g, lam1)
-            if why:
-                self._assign(x0)
-                self._count(*counts, refused=1)
-                raise ControlError(f"update refused: {self._describe(lam0, lam1, x0, x1)} leads past a critical "
-                                   f"point: {why}.  The session stays at its state before the command")
-        self._r = r
+        if why:
+            self._assign(x0)
+            self._count(*counts, refused=1)
+            raise ControlError(f"update refused: {self._describe(lam0, lam1, x0, x1)} {why}.  The session stays at "
+                               "its state before the command")
+        self._note_sign(g, lam1)
+        self._r, self._g = r, g
         self._count(*counts, updates=1)
-        self.state = State(self.problem, g, lam1, self.commands.values(), Work(*counts, time.perf_counter() - t0))
+        self.state = self._state(g, lam1, Work(*counts, time.perf_counter() - t0))
         self._check_resolution()
         return self.state
 
-    def _factor_for_check(self, g, lam):
-        """With ``stability_check``: factor the tangent at the converged state g (True), for
-        :meth:`_crossed`; a singular tangent there keeps the held factors (False)."""
-        if not self.options.stability_check or self._sign is None or self._corr.F_g is g:
-            return False
-        try:
-            self._corr.factor(g, lam, self._stamp, keep=True)
-        except (SingularSystemError, ElementTooDistortedError):
-            return False
-        return True
+    def _checked(self, g, lam, renewed):
+        """(factored, why) for the converged state g of an update: with factors made there (a
+        renewal, or with ``stability_check`` made here: ``factored``), '' or why the state is
+        refused -- a critical point crossed (:meth:`_crossed`), or, with ``stability_check``, a
+        singular tangent at g (before, a singular tangent skipped the check and the state was
+        accepted)."""
+        if not renewed:
+            if not self.options.stability_check or self._sign is None or self._corr.F_g is g:
+                return False, ""
+            try:
+                self._corr.factor(g, lam, self._stamp, keep=True)
+            except (SingularSystemError, ElementTooDistortedError) as exc:
+                return False, (f"ends where the tangent cannot be factored ({exc}): a critical point (bifurcation "
+                               f"or limit point) at load factor {lam:.6g} itself, where the equilibrium does not "
+                               "follow the commands smoothly and its stability is not known")
+        why = self._crossed(g, lam)
+        return True, f"leads past a critical point: {why}" if why else ""
 
     def _crossed(self, g, lam):
         """'' or why the state g at lam lies past a critical point: the sign of det K of the held
-        factors, made at g, differs from the session's start (a bifurcation, where the path goes
-        on smoothly and the path test does not see it, or a limit point)."""
+        factors, made at g, differs from that at the last accepted state where it is known (a
+        bifurcation, where the path goes on smoothly and the path test does not see it, or a limit
+        point); worded by the direction of the change."""
         sign = self._corr.det_sign() if self._corr.F_g is g else None
         if sign is None or self._sign is None or sign == self._sign:
             return ""
-        return (f"det K changed sign between the session's start and the state at load factor {lam:.6g} (a "
-                "bifurcation or limit point lies between them), so that equilibrium is unstable and not the one the "
-                "body takes; go back, or trace the path with arc length (core_se3.solvers.arc_length) and a "
-                "perturbation")
+        word = {1: "positive", -1: "negative"}
+        why = (f"det K changed sign from {word[self._sign]} at {self._sign_at} to {word[sign]} at the state at load "
+               f"factor {lam:.6g}: a critical point (a bifurcation or limit point) lies between them")
+        if sign < 0:
+            return (why + ", so that equilibrium is unstable and not the one the body takes; go back, or trace the "
+                    "path with arc length (core_se3.solvers.arc_length) and a perturbation")
+        return (why + "; the states before were on an unstable branch, and the path followed from them need not be "
+                "the one the body takes through the critical point; trace it with arc length "
+                "(core_se3.solvers.arc_length)")
+
+    def _note_sign(self, g, lam):
+        """Record det K's sign at the accepted state g (when factors were made there)."""
+        sign = self._corr.det_sign() if self._corr.F_g is g else None
+        if sign is not None:
+            self._sign, self._sign_at = sign, f"the last accepted state where it was known (load factor {lam:.6g})"
 
     def _check_resolution(self):
         """A MeshWarning when the state comes within ``magnetics.DIPOLE_RESOLUTION`` element sizes
@@ -374,7 +457,7 @@ class Session:
         """Follow the command path p0 -> p1 in sub-steps (module docstring): (frames, free
         residual or None, (iterations, factorisations, substeps, splits)); ControlError when
         refused."""
-        g, t, dt = self.g, 0.0, 1.0
+        g, t, dt = self._g, 0.0, 1.0
         its = nf = subs = splits = 0
         r, lam_r = self._r, lam0            # the free residual at (g, lam_r) and the assigned values
         while t < 1.0:
@@ -462,13 +545,15 @@ class Session:
         vs = list(self.variables.values()) if variables is None else \
             [v if isinstance(v, Variable) else self.commands.lookup(v) for v in variables]
         c = self._corr
-        if c.F is None or c.F_g is not self.g or c.F_stamp != self._stamp:
-            c.factor(self.g, self.lam, self._stamp)
-        why = self._crossed(self.g, self.lam)
+        if c.F is None or c.F_g is not self._g or c.F_stamp != self._stamp:
+            c.factor(self._g, self.lam, self._stamp)
+        why = self._crossed(self._g, self.lam)
         if why:
             raise ControlError(f"jacobian: the session's state lies past a critical point: {why}; its Jacobian is "
                                "not the plant's response")
-        return sensitivity(self.problem, self.g, self.lam, qs, vs, method, solve_with=SolveWith(factorization=c.F))
+        if self._origin is not None:        # on the frames relative to the part (module docstring)
+            qs = [_OnPart(q, self._origin) for q in qs]
+        return sensitivity(self.problem, self._g, self.lam, qs, vs, method, solve_with=SolveWith(factorization=c.F))
 
     def quantity(self, q):
         """A ``design`` quantity as given, or the position of the probe named q

@@ -163,6 +163,11 @@ class Quantity:
     """Base class (module docstring): ``value`` (size,) and ``jacobian`` (size, 6 n) sparse;
     ``explicit(problem, g, lam, variable)`` (size, variable.size): the partial derivative at
     fixed g (zero unless the quantity depends on parameters directly, e.g. the energy on E).
+    ``translation_invariant``: True when ``jacobian`` and ``explicit`` do not change with a
+    translation of all frames (the value may move with it, as a position does): a control
+    session evaluates them on its frames relative to a far part's origin (exact there), the
+    value on the problem's (``control.session``); False (the default, and a ``UserQuantity``'s):
+    all at the problem's frames.
 
     Example
     -------
@@ -175,6 +180,7 @@ class Quantity:
 
     name = "quantity"
     size = 1
+    translation_invariant = False
 
     def value(self, problem, g, lam):
         raise NotImplementedError
@@ -198,6 +204,8 @@ class NodePosition(Quantity):
     >>> NodePosition(p, [5]).value(p, p.mesh.g0, 1.0).tolist()
     [2.0, 0.5, 0.0]
     """
+
+    translation_invariant = True          # positions move with a translation, their derivatives do not
 
     def __init__(self, problem, nodes, target=None, name="position"):
         self.nodes = _nodes(problem, nodes, f"target {name!r}")
@@ -229,6 +237,8 @@ class ProbePosition(Quantity):
     [2.0, 0.0, 0.0]
     """
 
+    translation_invariant = True          # positions move with a translation, their derivatives do not
+
     def __init__(self, problem, probe, target=None, name=None):
         self.probe = _probe(problem, probe, f"target {name or probe!r}")
         self.name, self.size = name or self.probe.name, 3
@@ -258,6 +268,8 @@ class Orientation(Quantity):
     >>> Orientation(p, node=2).value(p, g, 1.0).round(12).tolist()
     [0.0, 0.3, 0.0]
     """
+
+    translation_invariant = True
 
     def __init__(self, problem, node=None, probe=None, target=None, name="orientation"):
         if (node is None) == (probe is None):
@@ -310,6 +322,8 @@ class RotationAngle(Quantity):
     4.0
     """
 
+    translation_invariant = True
+
     def __init__(self, problem, probe=None, node=None, axis=(0.0, -1.0, 0.0), target=None, reference=None,
                  name="angle"):
         self.frame = Orientation(problem, node=node, probe=probe, name=name)
@@ -360,6 +374,8 @@ class AngleInDegrees(Quantity):
     """
     DEGREE = 180.0 / np.pi
 
+    translation_invariant = True
+
     def __init__(self, problem, target=None, **kw):
         self.angle = RotationAngle(problem, target=None if target is None else np.radians(target), **kw)
         self.target, self.name, self.size = target, self.angle.name, 1
@@ -390,6 +406,8 @@ class Energy(Quantity):
     """
 
     name, size = "energy", 1
+
+    translation_invariant = True
 
     def value(self, problem, g, lam):
         return np.array([problem.element.evaluate(g, tangent=False).energy])

@@ -250,8 +250,11 @@ class DipoleField(Field):
     def _r(self, x):
         r = x - self.x0
         r2 = np.einsum("...i,...i->...", r, r)
-        if np.any(np.abs(r2) == 0):
-            raise LoadError("a point lies on the dipole: the field is singular there")
+        on = np.abs(r2) == 0
+        if np.any(on):
+            k = np.unravel_index(int(np.argmax(on)), on.shape)
+            raise LoadError(f"point {k[0] if len(k) == 1 else tuple(map(int, k))} (at {np.real(x[k]).tolist()}) lies on "
+                            f"the dipole at x0 = {self.x0.tolist()}: the field is singular there")
         return r, r2
 
     def _value(self, x, lam):

@@ -30,6 +30,8 @@ and the blocks returned are -d f / d eta, as for every load (loads.py).
 """
 from __future__ import annotations
 
+from contextlib import contextmanager
+
 import numpy as np
 
 from .. import lie
@@ -39,7 +41,7 @@ from .base import Load, LoadEvaluation
 from .fields import MU0, Field
 
 __all__ = ["Magnetisation", "MagneticLoad", "table_kind", "MU0", "compiled_magnets", "magnets_force", "magnets_output",
-           "dipole_resolution", "DIPOLE_RESOLUTION", "dipole_sources"]
+           "dipole_resolution", "DIPOLE_RESOLUTION", "dipole_sources", "on_dipole"]
 
 
 def table_kind(shape, m, n_nodes, per=None):
@@ -257,10 +259,11 @@ class MagneticLoad(Load):
         nodes = self.mag.nodes
         m = self.mag.current(g)
         x = g[nodes, :3, 3]
-        B = self.field.value(x, lam)
+        with _dipole_nodes(self.field, x, nodes):
+            B = self.field.value(x, lam)
+            f = None if self.field.uniform else np.einsum("kij,kj->ki", self.field.gradient(x, lam), m)
         c = np.cross(m, B)
-        f = np.zeros_like(c) if self.field.uniform else np.einsum("kij,kj->ki", self.field.gradient(x, lam), m)
-        return nodes, c, f
+        return nodes, c, np.zeros_like(c) if f is None else f
 
     def evaluate(self, g, lam, tangent=True):
         if not tangent:
@@ -271,7 +274,8 @@ class MagneticLoad(Load):
         R = g[nodes, :3, :3]
         Rt = np.swapaxes(R, 1, 2)
         x = g[nodes, :3, 3]
-        a = np.einsum("kij,kj->ki", Rt, self.field.value(x, lam))            # R^T B
+        with _dipole_nodes(self.field, x, nodes):
+            a = np.einsum("kij,kj->ki", Rt, self.field.value(x, lam))            # R^T B
         Mb = np.cross(mu, a)
         f = np.zeros((n, 6))
         f[nodes, 3:] = Mb                                   # nodes are unique: plain assignment
@@ -304,13 +308,14 @@ class MagneticLoad(Load):
             x = np.ascontiguousarray(g[nodes, :3, 3])
             if isinstance(fld, DipoleField):
                 if K.dipole_field(x, fld.m, fld.x0, fld.k, fld.scale_at(lam), B, G, H):
-                    raise LoadError("a point lies on the dipole: the field is singular there")
+                    raise on_dipole(fld, x, nodes)
             else:
-                B[:] = fld.value(x, lam)
-                if not fld.uniform:
-                    G[:] = fld.gradient(x, lam)
-                    if tangent:
-                        H[:] = fld.hessian(x, lam)
+                with _dipole_nodes(fld, x, nodes):                   # a dipole in a superposition
+                    B[:] = fld.value(x, lam)
+                    if not fld.uniform:
+                        G[:] = fld.gradient(x, lam)
+                        if tangent:
+                            H[:] = fld.hessian(x, lam)
             # the dipoles are read at call time (a design loop may change the magnetisation)
             mu = np.ascontiguousarray(self.mag.mu, dtype=float)
             K.magnetic_load(g, nodes, mu, B, G, H, bool(fld.uniform), f, data, pattern.map, tangent)
@@ -363,13 +368,14 @@ def compiled_magnets(loads, pattern):
         for fld, lo, hi in zip(fields, ends[:-1], ends[1:]):
             if isinstance(fld, DipoleField):
                 if K.dipole_field(x[lo:hi], fld.m, fld.x0, fld.k, fld.scale_at(lam), B[lo:hi], G[lo:hi], H[lo:hi]):
-                    raise LoadError("a point lies on the dipole: the field is singular there")
+                    raise on_dipole(fld, x[lo:hi], nodes[lo:hi])
                 continue
-            B[lo:hi] = fld.value(x[lo:hi], lam)
-            if not fld.uniform:
-                G[lo:hi] = fld.gradient(x[lo:hi], lam)
-                if tangent:
-                    H[lo:hi] = fld.hessian(x[lo:hi], lam)
+            with _dipole_nodes(fld, x[lo:hi], nodes[lo:hi]):         # a dipole in a superposition
+                B[lo:hi] = fld.value(x[lo:hi], lam)
+                if not fld.uniform:
+                    G[lo:hi] = fld.gradient(x[lo:hi], lam)
+                    if tangent:
+                        H[lo:hi] = fld.hessian(x[lo:hi], lam)
         mu = np.concatenate([ld.mag.mu for ld in loads]) if len(loads) > 1 else \
             np.ascontiguousarray(loads[0].mag.mu, dtype=float)
         K.magnetic_load(g, nodes, mu, B, G, H, uniform, f, data, pattern.map, tangent)
@@ -413,10 +419,12 @@ def magnets_force(loads, g, lam):
         R = g[nodes, :3, :3]
         Rt = np.swapaxes(R, 1, 2)
         x = g[nodes, :3, 3]
-        a = np.einsum("kij,kj->ki", Rt, fld.value(x, lam))                  # R^T B
+        with _dipole_nodes(fld, x, nodes):
+            B, G = fld.value(x, lam), None if fld.uniform else fld.gradient(x, lam)
+        a = np.einsum("kij,kj->ki", Rt, B)                                  # R^T B
         _add_at(out, 3, nodes, np.cross(mu, a), len(grp) == 1)
-        if not fld.uniform:
-            _add_at(out, 0, nodes, np.einsum("kij,kj->ki", Rt @ fld.gradient(x, lam) @ R, mu), len(grp) == 1)
+        if G is not None:
+            _add_at(out, 0, nodes, np.einsum("kij,kj->ki", Rt @ G @ R, mu), len(grp) == 1)
     return out
 
 
@@ -463,6 +471,40 @@ the nodal quadrature of its loads is reported (``dipole_resolution``): the error
 above its tip (0.07 from the nearest nodes): 12 % at 2.8 sizes (40 x 4 elements), 2.3 % at 5.7
 (80 x 8); refined along the strip only (160 x 1, the width 0.1 one element) the tip deflection
 converged to 3.89e-5 against 2.12e-5 (160 x 16): 83 % off."""
+
+
+def on_dipole(field, x, nodes):
+    """The LoadError of the first of ``nodes`` whose position (its row of x (k, 3)) is that of a
+    point dipole of ``field`` (``dipole_sources``), naming the node, its position and the
+    dipole's (before: 'a point lies on the dipole', no node, no position); a plain one if none
+    is (the caller's field said so).
+
+    Example
+    -------
+    >>> from core_se3.model.fields import DipoleField
+    >>> str(on_dipole(DipoleField((0, 0, 1.0), (1.0, 0, 0)), np.array([[0.0, 0, 0], [1.0, 0, 0]]), [3, 7]))[:38]
+    'magnetised node 7 (at [1.0, 0.0, 0.0])'
+    """
+    for d in dipole_sources(field):
+        r = x - d.x0
+        hit = np.nonzero(np.einsum("ki,ki->k", r, r) == 0)[0]
+        if len(hit):
+            k = int(hit[0])
+            return LoadError(f"magnetised node {int(nodes[k])} (at {x[k].tolist()}) lies on the point dipole at "
+                             f"x0 = {d.x0.tolist()}: the field is singular there; move the dipole off the body")
+    return LoadError("a point lies on a dipole of the field: the field is singular there")
+
+
+@contextmanager
+def _dipole_nodes(field, x, nodes):
+    """A LoadError of a point dipole of the field at the points x (the positions of ``nodes``)
+    re-raised naming the node (:func:`on_dipole`)."""
+    try:
+        yield
+    except LoadError as exc:
+        if "lies on the dipole" not in str(exc):
+            raise
+        raise on_dipole(field, x, nodes) from exc
 
 
 def dipole_sources(field):

@@ -10,7 +10,8 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from ..errors import ConvergenceError, ElementTooDistortedError, OptionError, PathWarning, SingularSystemError
+from ..errors import (ConvergenceError, ElementTooDistortedError, OptionError, PathWarning, SingularSystemError,
+                      did_you_mean)
 from ..results import Result, StepRecorder
 from .arclength import ArcState, PathError, PathInfo, arc_options, path_steps
 from .corrector import LinearConstraint, StepFailed, correct
@@ -265,7 +266,21 @@ def _control_critical(sysm, cur, pt, lin, control, opts, timers, step):
     return cp
 
 
-def displacement_control(problem, node, direction, values, options=None, max_cutbacks=10, **kw):
+
+
+def _required(given, kw):
+    """OptionError naming the missing ones of displacement control's node, direction and values
+    (with a misspelt keyword's correction)."""
+    missing = [k for k, v in given.items() if v is None]
+    if not missing:
+        return
+    hints = "".join(f"; unknown keyword {k!r}{did_you_mean(k, missing)}" for k in kw if did_you_mean(k, missing))
+    raise OptionError(f"displacement control: missing {', '.join(missing)}{hints}.  Give the controlled node "
+                      "(an id), the lab direction (3,) of its displacement and the displacements to reach, e.g. "
+                      "solve(control='displacement', node=k, direction=(0, 0, 1), values=[0.1, 0.2])")
+
+
+def displacement_control(problem, node=None, direction=None, values=None, options=None, max_cutbacks=10, **kw):
     """Prescribe the displacement of ``node`` along the lab ``direction`` through ``values``
     (the load factor is the unknown that keeps it there); failed increments are halved (at
     most ``max_cutbacks`` times).  Records every requested value; ``result.critical_points`` as
@@ -277,7 +292,9 @@ def displacement_control(problem, node, direction, values, options=None, max_cut
     problem : core_se3.Problem
         The problem (loads scaled by lam).
     node : int
-        The controlled node (with a free translation).
+        The controlled node (with a free translation); ``node``, ``direction`` and ``values``
+        are required (an OptionError names the missing ones: ``Problem.solve(control=
+        'displacement')`` without them was a bare TypeError).
     direction : (3,) array_like
         Lab direction of the controlled displacement (normalised).
     values : float or sequence of float
@@ -301,6 +318,7 @@ def displacement_control(problem, node, direction, values, options=None, max_cut
     ([0.0, 1.0, 2.0], [0.0, 0.308, 0.636])
     """
     t0 = time.perf_counter()
+    _required(dict(node=node, direction=direction, values=values), kw)
     opts, kw = arc_options(options, kw)
     unknown_keywords("displacement_control", kw, ArcLengthOptions.__dataclass_fields__)
     sysm = ShellSystem(problem, opts.linear_solver)
