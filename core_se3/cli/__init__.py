@@ -84,7 +84,9 @@ def _print_doc(doc):
         print(f"reference {ref['file']}:{ref['entry']}: {ref.get('note', 'not compared')}")
     elif ref:
         print(f"reference {ref['file']}:{ref['entry']} [{ref['block']}]: error {100 * ref['error']:.3f}% "
-              "(max over the path of |u - u_ref| / max |u_ref|)")
+              f"({ref.get('measure', 'max over the path of |u - u_ref| / max |u_ref|')})")
+        if ref.get("note"):                  # e.g. partial: steps beyond the table not compared
+            print(f"  {ref['note']}")
     if "torsion" in doc:
         t = doc["torsion"]
         print(f"small-twist torsion constant J = {t['J']:.4e} (mesh {t['mesh'][0]}x{t['mesh'][1]}); "
