@@ -69,13 +69,15 @@ def test_run_past_the_table_says_which_steps_were_compared(name, over, steps, n_
 
 @pytest.mark.parametrize("name, over, before", [("cantilever-shear", dict(nu=0.3), 0.0052),
                                                 ("pressure-strip", dict(nu=0.3), 0.0047),
-                                                ("rollup", dict(nu=0.3, k=0.5), 0.0043)])
+                                                ("rollup", dict(nu=0.3, k=0.5), 0.0043),
+                                                ("arch-follower", dict(nu=0.3, direction=1.0), 0.0046)])
 def test_rod_master_curves_are_not_compared_at_nonzero_nu(name, over, before):
     """The rod elastica (EI = E w h^3 / 12) is the strip's exact reduction only at nu = 0: the
     roll-up circle is met to 1.5e-5 at k = 0.5 with nu = 0, but with --set nu=0.3 the runs
     reported the Poisson stiffening as the error (cantilever 0.52 %, pressure strip 0.47 %,
-    roll-up 0.43 %: `before`).  Now not compared, naming nu (as magnetic-cantilever does)."""
+    roll-up 0.43 %, the arch's rod entry (EA = E A, kGA = G A: nu = 0) 0.46 % against 0.11 % at
+    nu = 0: `before`).  Now not compared, naming nu (as magnetic-cantilever does)."""
     ref = run_case(name, overrides=over)[0]["reference"]
     assert ref["error"] is None, (ref["error"], before)
     assert ref["note"].startswith("not compared") and "nu = 0.3" in ref["note"]
-    assert run_case(name, overrides={k: v for k, v in over.items() if k != "nu"})[0]["reference"]["error"] < 2e-3
+    assert run_case(name, overrides={k: v for k, v in over.items() if k != "nu"})[0]["reference"]["error"] < 1.5e-3

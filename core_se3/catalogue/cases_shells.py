@@ -69,9 +69,16 @@ def same_params(p, data):
     return ""
 
 
+def _same_rod(p, data):
+    """same_params, and nu = 0 (rod_nu0) for a rod entry that states no nu: the arch entries'
+    EA = E A, kGA = G A hold for the shell with nu = 0 only (arch-follower direction=1 at
+    nu = 0.3: 0.46 % against 0.11 % at nu = 0, 40x1)."""
+    return same_params(p, data) or ("" if "nu" in data else rod_nu0(p, data))
+
+
 def _physical(entry, block="tip"):
     return Reference(entry=entry, load_to_ref=lambda p, P: P, length=lambda p: 1.0, block=block,
-                     applies=same_params)
+                     applies=_same_rod)
 
 
 def _rollup_M(p):
