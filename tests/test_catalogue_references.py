@@ -128,3 +128,13 @@ def test_antiparallel_elastica_is_not_compared_at_nonzero_nu():
     assert doc["critical"]["error"] is None and "nu = 0.3" in doc["critical"]["note"]
     assert doc["perfect_branch"]["max_error_over_L_at_load_ge_1p3_critical"] is None
     assert all(r["error_over_L"] is None for r in doc["perfect_branch"]["points"])
+
+
+@pytest.mark.parametrize("over, words", [(dict(nu=0.3), "nu = 0.480074"), (dict(L=17.24), "L = 17.2,")])
+def test_magnetic_bracket_is_for_the_entrys_own_parameters(over, words):
+    """magnetic-cantilever's beam/plate bracket picks its Zhao entry by L and h rounded
+    (L17.2mm_h0.42mm) and checked E and Br only: --set nu=0.3 was checked against the nu = 0.48
+    plate bound and L = 17.24 against L = 17.2, both reported all_inside True.  Now not
+    compared, naming the parameter."""
+    b = run_case("magnetic-cantilever", overrides=over)[0]["bracket"]
+    assert b["all_inside"] is None and words in b["not_compared"]

@@ -234,9 +234,17 @@ def _bracket(p, doc):
         e = elastica_entry(zhao_entry_name(p))
     except KeyError:
         return None
-    if p["nu"] == 0.0 or p["field_angle_deg"] != 90.0 or abs(p["Br"] - e["params"]["Br_T"]) > 1e-12 \
-            or abs(p["E"] * 1e6 - e["params"]["E_Pa"]) > 1e-6 * e["params"]["E_Pa"]:
+    if p["nu"] == 0.0 or p["field_angle_deg"] != 90.0:
         return None
+    # the entry is found by L and h rounded (L17.2mm_h0.42mm): its bounds hold at its own
+    # parameters only (--set nu=0.3 was checked 'inside' the nu = 0.48 plate bound, L = 17.24
+    # against L = 17.2)
+    q = e["params"]
+    table = dict(L=1e3 * q["L_m"], h=1e3 * q["h_m"], E=1e-6 * q["E_Pa"], nu=q["nu"], Br=q["Br_T"])
+    for k, v in table.items():
+        if abs(p[k] - v) > 1e-9 * abs(v):
+            return dict(entry=zhao_entry_name(p), all_inside=None,
+                        not_compared=f"not compared: the entry is for {k} = {v:.6g}, the run has {k} = {p[k]:.6g}")
     L = np.asarray(e["load"])
     beam = CubicSpline(L, e["tip"]["v"])
     plate = CubicSpline(L, e["tip_plate"]["v"])
@@ -372,7 +380,8 @@ def report(doc):
         lines.append(f"error up to A Br Ba L^2/(mu0 E I) = 20: {100 * ref['error_up_to_load_20']:.3f}%")
     if "bracket" in doc:
         b = doc["bracket"]
-        lines.append(f"tip deflection between {b['entry']} tip_plate and tip at every field: {b['all_inside']}")
+        lines.append(f"tip deflection between {b['entry']} tip_plate and tip at every field: "
+                     + (b["not_compared"] if b["all_inside"] is None else str(b["all_inside"])))
     if "critical" in doc:
         c = doc["critical"]
         if c["error"] is None:
@@ -405,7 +414,7 @@ def plot(case, p, doc, res, path):
             sel = Ba <= p["Ba_max"] + 1e-12
             reference = {"ux": (Ba[sel], p["L"] * np.asarray(e["tip"]["u"])[sel]),
                          "uz": (Ba[sel], p["L"] * np.asarray(e["tip"]["v"])[sel])}
-        elif "bracket" in doc:
+        elif doc.get("bracket", {}).get("all_inside") is not None:
             e = elastica_entry(doc["bracket"]["entry"])
             reference = {"uz": (np.asarray(e["load"]), np.asarray(e["tip"]["v"])),
                          "uz plate stiffness": (np.asarray(e["load"]), np.asarray(e["tip_plate"]["v"]))}
