@@ -138,3 +138,12 @@ def test_magnetic_bracket_is_for_the_entrys_own_parameters(over, words):
     compared, naming the parameter."""
     b = run_case("magnetic-cantilever", overrides=over)[0]["bracket"]
     assert b["all_inside"] is None and words in b["not_compared"]
+
+
+def test_torsion_plate_values_are_for_the_runs_strip():
+    """The torsion document printed the seed strip's (w = 0.25, h = 0.1) Mindlin and thin-plate
+    J (6.41e-5, 8.33e-5) beside J = 1.97e-4 of a --set width=0.5 strip.  Now the thin-plate
+    w h^3/3 of the run's strip (1.667e-4) and no Mindlin value, with the reason."""
+    t = run_case("torsion", mesh=(10, 4), steps=1, overrides=dict(width=0.5, angle=0.1))[0]["torsion"]
+    assert t["J_mindlin_ks1"] is None and "width = 0.25" in t["note"]
+    assert abs(t["J_kirchhoff_plate"] - 0.5 * 0.1 ** 3 / 3) < 1e-15

@@ -90,7 +90,10 @@ def _print_doc(doc):
     if "torsion" in doc:
         t = doc["torsion"]
         print(f"small-twist torsion constant J = {t['J']:.4e} (mesh {t['mesh'][0]}x{t['mesh'][1]}); "
-              f"Mindlin plate ks=1: {t['J_mindlin_ks1']:.4e}, thin plate w h^3/3: {t['J_kirchhoff_plate']:.4e}")
+              + ("" if t["J_mindlin_ks1"] is None else f"Mindlin plate ks=1: {t['J_mindlin_ks1']:.4e}, ")
+              + f"thin plate w h^3/3: {t['J_kirchhoff_plate']:.4e}")
+        if t["J_mindlin_ks1"] is None:
+            print(f"  {t['note']}")
     tot = doc.get("totals") or {}
     if tot.get("linear_solves") is not None:
         print(f"cost: {tot['attempts']} Newton tries, {tot['iterations']} iterations of the stored tries, "
