@@ -53,6 +53,16 @@ def test_sze_path_ended_early_is_flagged_partial():
     assert "P/P_max = 0.08" in ref["note"]
 
 
+def test_sze_points_beyond_the_table_are_left_out():
+    """--set load_max=500 runs the hemisphere past the table's P_max = 400: the points at P/P_max
+    = 1.06, 1.25 were measured against the table's end point (11.05 % on 4x4, with P / load_max
+    as the axis), and the last point inside (0.93) stops short of the table's end.  Now those
+    two are left out and counted, and the comparison is flagged partial (up to 0.9287)."""
+    ref = run_case("sze-hemisphere", mesh=(4, 4), overrides=dict(load_max=500.0))[0]["reference"]
+    assert ref["n_beyond_table"] == 2 and ref["path_complete"] is False
+    assert "up to P/P_max = 0.9287" in ref["note"]
+
+
 @pytest.mark.parametrize("name, over, steps, n_beyond", [("cantilever-shear", dict(load_max=20.0), 4, 2),
                                                          ("arch-follower", dict(load_max=4000.0), 4, 1)])
 def test_run_past_the_table_says_which_steps_were_compared(name, over, steps, n_beyond):

@@ -251,7 +251,9 @@ def table_comparison(case, p, lams, probes):
     col = curve_columns(case)[0]
     u_end = col["sign"] * probes[-1][col["probe"]][col["component"]]
     u_tab = float(curves[0][2][-1])
-    complete = bool(x.max() >= top * (1 - 1e-9)) if by_load else bool(abs(u_end) >= abs(u_tab) * (1 - 1e-6))
+    # by the load: a compared point at the table's largest load (a path run past it by load_max >
+    # P_max whose last point inside stops short, e.g. 0.93 of 1, is partial too)
+    complete = bool(x[keep].max() >= top * (1 - 1e-9)) if by_load else bool(abs(u_end) >= abs(u_tab) * (1 - 1e-6))
     out = dict(base, error=dev, deviation=dev, curves=info, path_complete=complete,
                n_beyond_table=int((~keep).sum()),
                measure="max distance of computed points to the table polyline in (P/P_max, u/u_max), "
@@ -259,7 +261,7 @@ def table_comparison(case, p, lams, probes):
     if not complete:
         out["note"] = (f"partial: the path ended at P/P_max = {x[-1]:.4g} ({col['column']} = {u_end:.4g}), the "
                        f"table goes to P/P_max = {float(curves[0][1][-1]):.4g} ({u_tab:.4g}); the deviation "
-                       "covers the computed part only")
+                       f"covers the computed part only (up to P/P_max = {x[keep].max():.4g})")
     return out, [None if np.isnan(d) else float(d) for d in per_step]
 
 
