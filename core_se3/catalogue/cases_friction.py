@@ -32,6 +32,7 @@ from math import pi, sqrt, tan
 
 import numpy as np
 
+from ..errors import LoadError
 from .case import Case, CaseLoad, add_case
 
 __all__ = ["PUSH_PARAMS", "HOLD_PARAMS", "WALKER_PARAMS", "push_formula", "walker_field", "RAMP"]
@@ -49,6 +50,10 @@ def push_formula(p):
     >>> round(r["kL"], 6), round(r["s_star"] / PUSH_PARAMS["L"], 6)
     (0.496729, 0.027379)
     """
+    if not 0.0 < p["P_ratio"] < 1.0:       # tan kL changes sign at the buckling load (kL = pi/2)
+        raise LoadError(f"friction-pushed-cantilever: P_ratio = {p['P_ratio']:g} must lie in (0, 1): the end "
+                        "load P = P_ratio pi^2 EI/(4 L^2) must stay below the cantilever's buckling load, where "
+                        "the strip would buckle before the wall moves (e.g. --set P_ratio=0.5)")
     EI = p["E"] * p["width"] * p["h"] ** 3 / 12.0
     P = p["P_ratio"] * pi ** 2 * EI / (4.0 * p["L"] ** 2)
     k = sqrt(P / EI)

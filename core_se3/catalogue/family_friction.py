@@ -122,9 +122,17 @@ def _push_measures(prob, p, st, r):
     H_ex, u_ex = min(s / r["f"], p["mu"] * r["P"]), min(s, r["s_star"])
     out = dict(s=s, u=u, u_exact=u_ex, H=H, H_exact=H_ex, N=N, N_exact=r["P"] * min(lam / RAMP, 1.0),
                regime="press" if s == 0 else "stick" if s < r["s_star"] else "slip")
-    if s > 0:
+    if p["nu"] != 0.0:
+        out.update(u_exact=None, H_exact=None, not_compared=NU_NOTE.format(nu=p["nu"]))
+    elif s > 0:
         out.update(u_error=u / u_ex - 1.0, H_error=H / H_ex - 1.0)
     return out
+
+
+# the beam-column formula (EI = E w h^3/12) is the strip's exact reduction at nu = 0 only: at
+# nu = 0.3 the stick-regime H was reported 0.83 % off (0.075 % at nu = 0)
+NU_NOTE = ("not compared: the beam-column formula (EI = E w h^3/12) is exact for the strip at nu = 0 "
+           "only; the run has nu = {nu:g}")
 
 
 def hold_bound(c, g, lam, mu):
@@ -197,9 +205,11 @@ def run(case, p, prob, steps, **kw):
     m = [s["measures"] for s in doc["steps"][1:]]
     if r is not None:
         doc["push"] = dict(P=r["P"], kL=r["kL"], s_star=r["s_star"], H_slip=p["mu"] * r["P"],
-                           **{f"largest_{q}_error_{reg}": max((abs(x[f"{q}_error"]) for x in m if x["regime"] == reg),
+                           **{f"largest_{q}_error_{reg}": max((abs(x[f"{q}_error"]) for x in m if x["regime"] == reg and f"{q}_error" in x),
                                                               default=None)
                               for q in ("u", "H") for reg in ("stick", "slip")})
+        if p["nu"] != 0.0:
+            doc["push"]["note"] = NU_NOTE.format(nu=p["nu"])
     elif case.name == "friction-gripper-hold":
         best = max(m, key=lambda x: x["hold"])
         doc["hold"] = dict(largest_hold=best["hold"], lift=best["lift"], bound=best["bound"], ratio=best["ratio"],
@@ -230,7 +240,9 @@ def report(doc):
                      f"{d['H_slip']:.6g}")
         for s in doc["steps"][1:]:
             m = s["measures"]
-            if m["regime"] != "press":
+            if m["regime"] != "press" and "not_compared" in m:
+                lines.append(f"s {m['s']:.5g} ({m['regime']}): u {m['u']:.6g}, H {m['H']:.6g}: {m['not_compared']}")
+            elif m["regime"] != "press":
                 lines.append(f"s {m['s']:.5g} ({m['regime']}): u {m['u']:.6g} (exact {m['u_exact']:.6g}, "
                              f"{100 * m['u_error']:+.3f}%), H {m['H']:.6g} (exact {m['H_exact']:.6g}, "
                              f"{100 * m['H_error']:+.3f}%), N/P {m['N'] / m['N_exact']:.6f}")
@@ -260,7 +272,8 @@ def plot(case, p, doc, res, path):
     if "push" in doc:
         x = np.array([v["s"] for v in m])
         plot_load_deflection(path, x, {"lateral force H": np.array([v["H"] for v in m])},
-                             reference={"lateral force H": (x, np.array([v["H_exact"] for v in m]))},
+                             reference={"lateral force H": (x, np.array([np.nan if v["H_exact"] is None else v["H_exact"]
+                                                                          for v in m]))},
                              axes=("lateral force [force]", "wall travel s [length]"), title=case.name)
     elif "hold" in doc:
         x = np.array([v["lift"] for v in m])

@@ -234,9 +234,17 @@ def _bracket(p, doc):
         e = elastica_entry(zhao_entry_name(p))
     except KeyError:
         return None
-    if p["nu"] == 0.0 or p["field_angle_deg"] != 90.0 or abs(p["Br"] - e["params"]["Br_T"]) > 1e-12 \
-            or abs(p["E"] * 1e6 - e["params"]["E_Pa"]) > 1e-6 * e["params"]["E_Pa"]:
+    if p["nu"] == 0.0 or p["field_angle_deg"] != 90.0:
         return None
+    # the entry is found by L and h rounded (L17.2mm_h0.42mm): its bounds hold at its own
+    # parameters only (--set nu=0.3 was checked 'inside' the nu = 0.48 plate bound, L = 17.24
+    # against L = 17.2)
+    q = e["params"]
+    table = dict(L=1e3 * q["L_m"], h=1e3 * q["h_m"], E=1e-6 * q["E_Pa"], nu=q["nu"], Br=q["Br_T"])
+    for k, v in table.items():
+        if abs(p[k] - v) > 1e-9 * abs(v):
+            return dict(entry=zhao_entry_name(p), all_inside=None,
+                        not_compared=f"not compared: the entry is for {k} = {v:.6g}, the run has {k} = {p[k]:.6g}")
     L = np.asarray(e["load"])
     beam = CubicSpline(L, e["tip"]["v"])
     plate = CubicSpline(L, e["tip_plate"]["v"])
@@ -304,8 +312,13 @@ def _run_antiparallel(case, p, prob, steps, **kw):
         pts.append(dict(load=q, u=s["probes"]["tip"]["u"], rotation_angle=s["probes"]["tip"]["rotation_angle"],
                         error_over_L=_tip_error_L(p, s, entry), iterations=s["iterations"]))
     errs = [r["error_over_L"] for r in pts if r["load"] >= 1.3 * q_cr - 1e-12]
-    doc["critical"] = dict(load=q_cr, field_T=cr["lam"] * Ba_max, exact=pi ** 2 / 4,
-                           error=q_cr / (pi ** 2 / 4) - 1, monitor=cr["history"],
+    why = antiparallel_mismatch(p)
+    if why:                                  # the elastica's numbers are for another problem
+        errs = []
+        for r in pts:
+            r["error_over_L"] = None
+    doc["critical"] = dict(load=q_cr, field_T=cr["lam"] * Ba_max, exact=None if why else pi ** 2 / 4,
+                           error=None if why else q_cr / (pi ** 2 / 4) - 1, monitor=cr["history"],
                            method="smallest eigenvalue of the symmetric unit-scaled tangent on the perfect "
                                   "trivial path; sign change bracketed and refined by bisection with a "
                                   "linearised-tangent estimate inside the bracket")
@@ -313,8 +326,30 @@ def _run_antiparallel(case, p, prob, steps, **kw):
     doc["perfect_branch"] = dict(reference_entry=entry, points=pts,
                                  max_error_over_L_at_load_ge_1p3_critical=max(errs) if errs else None,
                                  note="tilt removed at load_max, then the perfect field decreased")
+    if why:
+        doc["critical"]["note"] = doc["perfect_branch"]["not_compared"] = why
     doc["timings"]["monitor_and_perfect_branch"] = time.perf_counter() - t0 - doc["timings"]["total"]
     return doc, res
+
+
+def antiparallel_mismatch(p):
+    """"" when the antiparallel elastica (critical load pi^2/4, 3_magnetic_antiparallel_field)
+    holds for the parameters p, else why not: it is the beam with EI = E w h^3/12 (the strip's
+    exact reduction at nu = 0) in a field at 180 deg (nu = 0.3 was reported +1.4 % off pi^2/4,
+    the branch 2.1 % of L, against -0.02 % and 0.32 % at nu = 0).
+
+    Example
+    -------
+    >>> antiparallel_mismatch(dict(nu=0.0, field_angle_deg=180.0)), antiparallel_mismatch(dict(nu=0.0, field_angle_deg=170.0))[:40]
+    ('', 'not compared: the antiparallel elastica ')
+    """
+    if p["field_angle_deg"] != 180.0:
+        return (f"not compared: the antiparallel elastica (critical load pi^2/4) is for the field at 180 deg; the "
+                f"run has field_angle_deg = {p['field_angle_deg']:g}")
+    if p["nu"] != 0.0:
+        return (f"not compared: the elastica (EI = E w h^3/12) is exact for the strip at nu = 0 only; the run has "
+                f"nu = {p['nu']:g}")
+    return ""
 
 
 def _run_predict(case, p, prob, steps, **kw):
@@ -345,11 +380,15 @@ def report(doc):
         lines.append(f"error up to A Br Ba L^2/(mu0 E I) = 20: {100 * ref['error_up_to_load_20']:.3f}%")
     if "bracket" in doc:
         b = doc["bracket"]
-        lines.append(f"tip deflection between {b['entry']} tip_plate and tip at every field: {b['all_inside']}")
+        lines.append(f"tip deflection between {b['entry']} tip_plate and tip at every field: "
+                     + (b["not_compared"] if b["all_inside"] is None else str(b["all_inside"])))
     if "critical" in doc:
         c = doc["critical"]
-        lines.append(f"critical load {c['load']:.6f} (field {1e3 * c['field_T']:.4f} mT) vs pi^2/4 = "
-                     f"{c['exact']:.6f}: {100 * c['error']:+.3f}%")
+        if c["error"] is None:
+            lines.append(f"critical load {c['load']:.6f} (field {1e3 * c['field_T']:.4f} mT): {c['note']}")
+        else:
+            lines.append(f"critical load {c['load']:.6f} (field {1e3 * c['field_T']:.4f} mT) vs pi^2/4 = "
+                         f"{c['exact']:.6f}: {100 * c['error']:+.3f}%")
         pb = doc["perfect_branch"]
         if pb["max_error_over_L_at_load_ge_1p3_critical"] is not None:
             lines.append(f"perfect post-buckled branch vs {pb['reference_entry']}: max |tip - ref| / L = "
@@ -375,21 +414,21 @@ def plot(case, p, doc, res, path):
             sel = Ba <= p["Ba_max"] + 1e-12
             reference = {"ux": (Ba[sel], p["L"] * np.asarray(e["tip"]["u"])[sel]),
                          "uz": (Ba[sel], p["L"] * np.asarray(e["tip"]["v"])[sel])}
-        elif "bracket" in doc:
+        elif doc.get("bracket", {}).get("all_inside") is not None:
             e = elastica_entry(doc["bracket"]["entry"])
             reference = {"uz": (np.asarray(e["load"]), np.asarray(e["tip"]["v"])),
                          "uz plate stiffness": (np.asarray(e["load"]), np.asarray(e["tip_plate"]["v"]))}
-    if case.name == "magnetic-antiparallel":
+    if case.name == "magnetic-antiparallel" and not antiparallel_mismatch(p):
         e = elastica_entry("3_magnetic_antiparallel_field")
         q = np.asarray(e["load"])
         sel = q <= p["load_max"] + 1e-12
         reference = {"ux": (q[sel], p["L"] * np.asarray(e["tip"]["u"])[sel]),
                      "uz": (q[sel], p["L"] * np.asarray(e["tip"]["v"])[sel])}
-        pb = doc["perfect_branch"]["points"]
     plot_load_deflection(path, loads, disp, reference=reference,
                          axes=(xl, f"{doc['steps'][-1]['load']['name']} [{doc['steps'][-1]['load']['unit']}]"),
                          title=f"{case.name} ({doc['mesh']['nx']}x{doc['mesh']['ny']})")
     if case.name == "magnetic-antiparallel":
+        pb = doc["perfect_branch"]["points"]
         _overlay_points(path, [r["u"][0] for r in pb], [r["u"][2] for r in pb], [r["load"] for r in pb])
     shape = path[:-4] + "_shape.png" if path.endswith(".png") else path + "_shape.png"
     prob_mesh = res.mesh

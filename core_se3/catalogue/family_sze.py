@@ -26,7 +26,7 @@ from .case import Family, register_family
 from .measures import curve_columns, curve_deviation, table_curves
 from .references import literature_entry
 
-__all__ = ["sze_problem", "run_sze", "document"]
+__all__ = ["sze_problem", "run_sze", "document", "table_scale", "table_comparison"]
 
 
 # ------------------------------------------------------------------ build -----------------
@@ -196,29 +196,94 @@ def run_sze(case, p, prob, steps, **kw):
     return document(case, p, prob, res), res
 
 
+# the tables' parameter names (literature.json "parameters") -> the cases' keys; P_max is the
+# table's load scale, not a parameter the run must share
+_TABLE_KEYS = {"R_inner": "r_in", "R_outer": "r_out", "L_total": "L", "half_angle_rad": "theta",
+               "hole_half_angle_deg": "hole_deg"}
+
+
+def table_scale(case, p):
+    """(P_max, why) of a case's table: P_max the load its P/P_max column is normalised by (the
+    published problem's, ``parameters.P_max`` of literature.json; the case's default
+    ``load_max`` where the table states none, e.g. s3.8(d)), ``why`` "" when the table holds at
+    the parameters p (E, nu, h, R, L, ... as published), else which one differs.
+
+    Example
+    -------
+    >>> from .case import get_case, case_params
+    >>> c = get_case("sze-hinged-roof")
+    >>> table_scale(c, case_params(c, {"load_max": 1000}))
+    (3000.0, '')
+    >>> table_scale(c, case_params(c, {"h": 6.35}))[1]
+    'the reference entry is for h = 12.7, the run has h = 6.35'
+    """
+    from .cases_shells import same_params
+    t = literature_entry(case.extra["literature"]).get("parameters", {})
+    P_max = t.get("P_max", t.get("P_max_per_unit_length", case.params["load_max"]))
+    why = same_params(p, {_TABLE_KEYS.get(k, k): v for k, v in t.items() if not k.startswith("P_max")})
+    return float(P_max), why
+
+
+def table_comparison(case, p, lams, probes):
+    """The ``reference`` block of a Sze run and its per-step deviations (None: not compared).
+
+    lams: the steps' load factors (P = lam load_max); probes: per step {probe: u (3,)}.  The
+    table's axis is P / P_max with the table's own P_max (:func:`table_scale`); at parameters
+    other than the table's nothing is compared (``note`` says why).  Points beyond the table's
+    largest load on a path stopped by the load (``load_max`` above the table's) are left out
+    (``n_beyond_table``); ``path_complete`` is False when the path ended before the table's end
+    (the deviation then covers the computed part only).
+    """
+    P_max, why = table_scale(case, p)
+    entry = case.extra["literature"]
+    base = dict(entry=entry, file="literature.json", block=",".join(c["column"] for c in curve_columns(case)),
+                P_max=P_max, n_points=len(lams))
+    if why:
+        return dict(base, error=None, deviation=None, note=f"not compared: {why}"), [None] * len(lams)
+    x = np.asarray(lams, float) * p["load_max"] / P_max
+    curves = table_curves(case)
+    by_load = case.extra.get("stop") != "table_end_displacement"
+    top = max(float(tl.max()) for _, tl, _ in curves)
+    keep = (x <= top * (1 + 1e-9)) if by_load else np.ones(len(x), bool)
+    dev, per, info = curve_deviation(case, x[keep], [pr for pr, k in zip(probes, keep) if k])
+    per_step = np.full(len(x), np.nan)
+    per_step[keep] = per
+    col = curve_columns(case)[0]
+    u_end = col["sign"] * probes[-1][col["probe"]][col["component"]]
+    u_tab = float(curves[0][2][-1])
+    # by the load: a compared point at the table's largest load (a path run past it by load_max >
+    # P_max whose last point inside stops short, e.g. 0.93 of 1, is partial too)
+    complete = bool(x[keep].max() >= top * (1 - 1e-9)) if by_load else bool(abs(u_end) >= abs(u_tab) * (1 - 1e-6))
+    out = dict(base, error=dev, deviation=dev, curves=info, path_complete=complete,
+               n_beyond_table=int((~keep).sum()),
+               measure="max distance of computed points to the table polyline in (P/P_max, u/u_max), "
+                       "u_max per column")
+    if not complete:
+        out["note"] = (f"partial: the path ended at P/P_max = {x[-1]:.4g} ({col['column']} = {u_end:.4g}), the "
+                       f"table goes to P/P_max = {float(curves[0][1][-1]):.4g} ({u_tab:.4g}); the deviation "
+                       f"covers the computed part only (up to P/P_max = {x[keep].max():.4g})")
+    return out, [None if np.isnan(d) else float(d) for d in per_step]
+
+
 def document(case, p, prob, res):
-    """Result document (schema core-se3-result) with the curve deviation as the error."""
+    """Result document (schema core-se3-result) with the curve deviation as the error
+    (:func:`table_comparison`)."""
+    P_max, _ = table_scale(case, p)
     steps = []
     for st in res.steps:
         value = case.load_value(p, st.load_factor)
         load = dict(name=case.load_name, value=float(value), unit=case.load_unit,
-                    reference_entry=case.extra["literature"], reference_value=float(st.load_factor))
+                    reference_entry=case.extra["literature"], reference_value=float(value) / P_max)
         extra = {}
         if st.stability is not None:
             extra["stability"] = dict(det_sign=int(st.stability["det_sign"]),
                                       negative_eigenvalues=st.stability["negative_eigenvalues"])
         steps.append(step_record(st, load, **extra))
-    dev, per_step, info = curve_deviation(case, [st.load_factor for st in res.steps],
-                                          [{k: v["u"] for k, v in st.probes.items()} for st in res.steps])
+    reference, per_step = table_comparison(case, p, [st.load_factor for st in res.steps],
+                                           [{k: v["u"] for k, v in st.probes.items()} for st in res.steps])
     for s, d in zip(steps, per_step):
-        s["error"] = float(d)
-    e = literature_entry(case.extra["literature"])
-    reference = dict(entry=case.extra["literature"], file="literature.json",
-                     block=",".join(c["column"] for c in curve_columns(case)), error=dev, deviation=dev,
-                     measure="max distance of computed points to the table polyline in "
-                             "(P/P_max, u/u_max), u_max per column",
-                     P_max=float(p["load_max"]), curves=info, n_points=len(steps),
-                     unverified=e.get("unverified_fields", []))
+        s["error"] = d
+    reference["unverified"] = literature_entry(case.extra["literature"]).get("unverified_fields", [])
     t = dict(res.timings)
     t.setdefault("setup", 0.0)
     extra = {}
@@ -237,18 +302,21 @@ def plot(case, p, doc, res, path):
     from ..io.vtk import ensure_parent
     fig = new_figure()
     ax = fig.add_subplot(111)
-    lam = np.array([s["load_factor"] for s in doc["steps"]])
+    ref = doc["reference"]
+    x = np.array([s["load"]["reference_value"] for s in doc["steps"]])          # P / P_max of the table
     for (col, tl, tu), c in zip(table_curves(case), curve_columns(case)):
         u = np.array([c["sign"] * s["probes"][c["probe"]]["u"][c["component"]] for s in doc["steps"]])
-        line, = ax.plot(u, lam, "o-", ms=3, label=f"core_se3 {col}")
+        line, = ax.plot(u, x, "o-", ms=3, label=f"core_se3 {col}")
         ax.plot(tu, tl, "--", color="k" if len(curve_columns(case)) == 1 else line.get_color(), lw=1,
                 label=f"Sze 2004 {col}")
     for cp in doc.get("critical_points", []):
-        ax.axhline(cp["load_factor"], color="0.8", lw=0.6)
+        ax.axhline(cp["load_factor"] * p["load_max"] / ref["P_max"], color="0.8", lw=0.6)
     ax.set_xlabel("displacement")
-    ax.set_ylabel("P / P_max" + (f"  (P_max = {p['load_max']:g})"))
-    ax.set_title(f"{case.name} ({doc['mesh']['nx']}x{doc['mesh']['ny']}): deviation "
-                 f"{100 * doc['reference']['deviation']:.2f} %")
+    ax.set_ylabel(f"P / P_max  (P_max = {ref['P_max']:g})")
+    dev = ref["deviation"]
+    ax.set_title(f"{case.name} ({doc['mesh']['nx']}x{doc['mesh']['ny']}): "
+                 + (ref["note"] if dev is None else f"deviation {100 * dev:.2f} %"
+                    + ("" if ref["path_complete"] else " (partial path)")))
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
     fig.savefig(ensure_parent(path), dpi=120, bbox_inches="tight")
@@ -256,16 +324,23 @@ def plot(case, p, doc, res, path):
 
 def report(doc):
     ref = doc["reference"]
-    lines = [f"curve deviation (max distance to the table polyline in (P/P_max, u/u_max)): "
-             f"{100 * ref['deviation']:.2f} % over {ref['n_points']} points"]
+    if ref["deviation"] is None:
+        return [f"curve deviation: {ref['note']}"]
+    lines = [f"curve deviation (max distance to the table polyline in (P/P_max, u/u_max), P_max = "
+             f"{ref['P_max']:g}): {100 * ref['deviation']:.2f} % over {ref['n_points']} points"]
+    if ref.get("note"):
+        lines.append(f"  {ref['note']}")
+    if ref.get("n_beyond_table"):
+        lines.append(f"  {ref['n_beyond_table']} points beyond the table's largest load left out")
     for c in ref["curves"]:
         lines.append(f"  {c['column']}: {100 * c['deviation']:.2f} % (worst at P/P_max = "
                      f"{c['at']['P_over_Pmax']:.4g}, u = {c['at']['u']:.4g}); end computed "
                      f"({c['computed_end']['P_over_Pmax']:.4g}, {c['computed_end']['u']:.4g}), "
                      f"table ({c['table_end']['P_over_Pmax']:.4g}, {c['table_end']['u']:.4g})")
+    scale = doc["params"]["load_max"]["value"] / ref["P_max"]
     for cp in doc.get("critical_points", []):
-        lines.append(f"  {cp['kind']} point at P/P_max ~ {cp['load_factor']:.5g} (bracket "
-                     f"{cp['bracket'][0]:.5g} .. {cp['bracket'][1]:.5g})")
+        lines.append(f"  {cp['kind']} point at P/P_max ~ {scale * cp['load_factor']:.5g} (bracket "
+                     f"{scale * cp['bracket'][0]:.5g} .. {scale * cp['bracket'][1]:.5g})")
     if ref.get("unverified"):
         lines.append(f"  table fields marked unverified: {ref['unverified']}")
     return lines

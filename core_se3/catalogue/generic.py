@@ -159,7 +159,8 @@ def case_document(case, p, prob, res, reference_case=None):
         err, at, errs = error_against_reference(loads_ref, disps, r)
         for s, e in zip(steps, errs):
             s["error"] = None if np.isnan(e) else float(e)
-        reference = dict(entry=entry, block=block, error=err, error_at_load=at, file="elastica.json")
+        reference = dict(entry=entry, block=block, error=err, error_at_load=at, file="elastica.json",
+                         **_coverage(errs, r["load"], loads_ref))
     from ..scenario.provenance import problem_provenance
     extra = {}
     if res.critical_points:             # passed by load control with limit_check off (torsion)
@@ -169,6 +170,21 @@ def case_document(case, p, prob, res, reference_case=None):
                            {k: dict(value=v, unit=case.units.get(k, "")) for k, v in p.items()},
                            prob.mesh, steps, res.timings, reference, provenance=problem_provenance(prob, res),
                            **extra)
+
+
+def _coverage(errs, table_loads, loads_ref):
+    """n_points (the steps compared) and n_beyond_table, with a ``note`` when some steps lie
+    outside the table's load range (a run past the table's end, e.g. ``--set load_max`` above
+    it): the error then covers the compared part of the path only."""
+    n_out = int(np.isnan(errs).sum())
+    out = dict(n_points=len(errs) - n_out, n_beyond_table=n_out)
+    if n_out:
+        x = np.asarray(loads_ref, float)[~np.isnan(errs)]
+        out["note"] = (f"partial: the table's loads run from {np.min(table_loads):g} to {np.max(table_loads):g} "
+                       f"(reference axis), the path to {np.asarray(loads_ref, float)[-1]:g}; {n_out} of "
+                       f"{len(errs)} steps lie beyond it and are not compared (compared up to "
+                       f"{x[np.argmax(np.abs(x))]:g})")
+    return out
 
 
 def edge_wrench(prob, g, edge, point):

@@ -84,11 +84,16 @@ def _print_doc(doc):
         print(f"reference {ref['file']}:{ref['entry']}: {ref.get('note', 'not compared')}")
     elif ref:
         print(f"reference {ref['file']}:{ref['entry']} [{ref['block']}]: error {100 * ref['error']:.3f}% "
-              "(max over the path of |u - u_ref| / max |u_ref|)")
+              f"({ref.get('measure', 'max over the path of |u - u_ref| / max |u_ref|')})")
+        if ref.get("note"):                  # e.g. partial: steps beyond the table not compared
+            print(f"  {ref['note']}")
     if "torsion" in doc:
         t = doc["torsion"]
         print(f"small-twist torsion constant J = {t['J']:.4e} (mesh {t['mesh'][0]}x{t['mesh'][1]}); "
-              f"Mindlin plate ks=1: {t['J_mindlin_ks1']:.4e}, thin plate w h^3/3: {t['J_kirchhoff_plate']:.4e}")
+              + ("" if t["J_mindlin_ks1"] is None else f"Mindlin plate ks=1: {t['J_mindlin_ks1']:.4e}, ")
+              + f"thin plate w h^3/3: {t['J_kirchhoff_plate']:.4e}")
+        if t["J_mindlin_ks1"] is None:
+            print(f"  {t['note']}")
     tot = doc.get("totals") or {}
     if tot.get("linear_solves") is not None:
         print(f"cost: {tot['attempts']} Newton tries, {tot['iterations']} iterations of the stored tries, "
