@@ -15,7 +15,7 @@ import numpy as np
 
 from core_se3.catalogue import case_params, resolve
 from core_se3.catalogue.measures import curve_deviation, curve_columns, errors_at_table_loads
-from core_se3.catalogue.references import elastica_entry, literature_entry
+from core_se3.catalogue.references import elastica_entry
 
 __all__ = ["case_params", "apply_variant", "case_length", "case_domain", "reference_entry",
            "reference_load_factors", "reference_error", "literature_error", "check_inputs",
@@ -177,14 +177,14 @@ def reference_error(case, p, ref, steps, lam_tol=1e-9):
 def literature_error(case, p, steps, probe):
     """The catalogue's curve deviation (``measures.curve_deviation``) of the computed path
     against the literature table of the case; error None with a note when the case's parameters
-    (E, nu, h, R, L) are not the table's."""
-    table = literature_entry(case.extra["literature"])["parameters"]
-    from core_se3.catalogue.cases_shells import same_params
-    why = same_params(p, table)
+    are not the table's.  The table's scale P_max and its parameter names (``L_total``,
+    ``half_angle_rad``, ``R_inner``, ...) are read by core_se3's ``family_sze.table_scale``, the one
+    mapping onto the case keys."""
+    from core_se3.catalogue.family_sze import table_scale
+    P_max, why = table_scale(case, p)
     if why:  # the table is for the published parameters: a distance to it would measure the change
         return {"entry": case.extra["literature"], "file": "literature.json", "error": None,
                 "note": f"not compared: {why}"}
-    P_max = float(table["P_max"])
     lams = [s["load"]["value"] / P_max for s in steps]
     col = curve_columns(case)[0]
     dev, per, info = curve_deviation(case, lams, [{col["probe"]: s["probes"][probe]["u"]} for s in steps])
