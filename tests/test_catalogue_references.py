@@ -157,3 +157,18 @@ def test_torsion_plate_values_are_for_the_runs_strip():
     t = run_case("torsion", mesh=(10, 4), steps=1, overrides=dict(width=0.5, angle=0.1))[0]["torsion"]
     assert t["J_mindlin_ks1"] is None and "width = 0.25" in t["note"]
     assert abs(t["J_kirchhoff_plate"] - 0.5 * 0.1 ** 3 / 3) < 1e-15
+
+
+def test_curved_rollup_circle_is_compared_at_any_E_and_R():
+    """curved-rollup's exact answer is the circle of curvature 1/R + M/EI: the state depends on
+    M R / EI only and lengths scale with R, so the R = 10/(2 pi), EI = 1000 table holds at any
+    E, h, width and R (nu = 0: the rod's EI).  It was refused ("not compared: ... E = 1.2e+07")
+    when E or R changed; now re-evaluated at the run's parameters: with E doubled the run is the
+    same scaled problem (error 7.0e-6 both), with R = 2 the error is 5.5e-6 (10x1); nu = 0.3 is
+    still not compared (the plate's EI)."""
+    base = run_case("curved-rollup")[0]["reference"]["error"]
+    stiff = run_case("curved-rollup", overrides=dict(E=2.4e7))[0]["reference"]
+    assert stiff["error"] is not None and abs(stiff["error"] - base) < 1e-9 * max(base, 1e-6)
+    wide = run_case("curved-rollup", overrides=dict(R=2.0))[0]["reference"]
+    assert wide["error"] is not None and wide["error"] < 1e-4
+    assert run_case("curved-rollup", overrides=dict(nu=0.3))[0]["reference"]["error"] is None

@@ -85,14 +85,15 @@ def _rollup_M(p):
     return p["k"] * 2.0 * pi * beam_EI(p) / p["L"]
 
 
-def _circle(entry, EI):
-    """The exact roll-up circle of a table in physical units, carried to any parameters by
-    similarity: the state depends on k = M L / (2 pi EI) only, lengths scale with L."""
+def _circle(entry, EI, key="L"):
+    """The exact circle of a table in physical units under an end moment, carried to any
+    parameters by similarity: the state depends on M a / EI only and lengths scale with a, the
+    length ``key`` (the straight strip's L; the arch's radius R: curvature 1/R + M/EI)."""
     def data():
         return elastica_entry(entry)["params"]
     return Reference(entry=entry, block="tip",
-                     load_to_ref=lambda p, M: M * (p["L"] / EI(p)) * (data()["EI"] / data()["L"]),
-                     length=lambda p: p["L"] / data()["L"],
+                     load_to_ref=lambda p, M: M * (p[key] / EI(p)) * (data()["EI"] / data()[key]),
+                     length=lambda p: p[key] / data()[key],
                      applies=rod_nu0)
 
 
@@ -216,7 +217,7 @@ add_case(Case(
     units=_DIM, mesh=(10, 1), steps=8,
     loads=(CaseLoad("edge_moment", "x1", (0.0, -1.0, 0.0), lambda p: p["k"] * 2 * pi * beam_EI(p) / 10.0),),
     load_name="M", load_unit="force*length", load_value=lambda p, lam: lam * p["k"] * 2 * pi * beam_EI(p) / 10.0,
-    reference=_physical("4_arch_halfcircle_end_moment_R10over2pi"),
+    reference=_circle("4_arch_halfcircle_end_moment_R10over2pi", beam_EI, "R"),
     notes="Run with --set k=-1 for the opening branch.",
 ))
 
