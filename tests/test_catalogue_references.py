@@ -172,3 +172,16 @@ def test_curved_rollup_circle_is_compared_at_any_E_and_R():
     wide = run_case("curved-rollup", overrides=dict(R=2.0))[0]["reference"]
     assert wide["error"] is not None and wide["error"] < 1e-4
     assert run_case("curved-rollup", overrides=dict(nu=0.3))[0]["reference"]["error"] is None
+
+
+def test_unreached_design_reports_no_error():
+    """design-tip-angle with --set max_iter=1 stops after one iteration with the message 'did not
+    reach the target' (misfit 0.124 rad), but its design block reported error -22.02 % for Ba as
+    if it were the case's accuracy.  Now error None, a 'not reached' note, and the iterate's
+    distance from the exact Ba as iterate_deviation; the default run (reached) keeps its error
+    (+0.0073 %)."""
+    d = run_case("design-tip-angle", overrides=dict(max_iter=1))[0]["design"]
+    assert not d["reached"] and d["error"]["Ba"] is None and d["note"].startswith("not reached")
+    assert abs(d["iterate_deviation"]["Ba"] + 0.22) < 0.01
+    ok = run_case("design-tip-angle")[0]["design"]
+    assert ok["reached"] and abs(ok["error"]["Ba"]) < 5e-3 and "iterate_deviation" not in ok

@@ -158,8 +158,7 @@ def run(case, p, prob, steps, **kw):
     values = convert(r.x)
     doc["reference"] = None
     doc["design"] = dict(
-        variables=values, units=units, exact=exact,
-        error={k: values[k] / exact[k] - 1 for k in values},
+        variables=values, units=units, exact=exact, **_design_error(values, exact, r),
         objective=r.objective, max_misfit=r.max_misfit, reached=r.reached, success=r.success, message=r.message,
         iterations=r.iterations, equilibrium_solves=r.equilibrium_solves, newton_iterations=r.newton_iterations,
         time=t_design, method=r.method, history=r.history,
@@ -169,12 +168,27 @@ def run(case, p, prob, steps, **kw):
     return doc, res
 
 
+def _design_error(values, exact, r):
+    """``error`` (relative, per variable) of a design that reached its target; of one that did
+    not (max_iter, a stalled optimiser) ``error`` None per variable and the last iterate's
+    distance from the exact answer as ``iterate_deviation`` with a ``note``: that distance
+    measures the unfinished iteration, not the model's accuracy."""
+    dev = {k: values[k] / exact[k] - 1 for k in values}
+    if r.reached:
+        return dict(error=dev)
+    return dict(error={k: None for k in values}, iterate_deviation=dev,
+                note="not reached: the target was not met (see message), so no error is reported; "
+                     "iterate_deviation is the last iterate's distance from the exact answer")
+
+
 def report(doc):
     d = doc["design"]
     lines = []
     for k, v in d["variables"].items():
-        lines.append(f"design: {k} = {v:.8g} {d['units'][k]}  (exact {d['exact'][k]:.8g}: error "
-                     f"{100 * d['error'][k]:+.4f} %)")
+        e = d["error"][k]
+        acc = (f"error {100 * e:+.4f} %" if e is not None else
+               f"not reached: the last iterate lies {100 * d['iterate_deviation'][k]:+.4f} % from it, not an accuracy")
+        lines.append(f"design: {k} = {v:.8g} {d['units'][k]}  (exact {d['exact'][k]:.8g}: {acc})")
     lines.append(f"design: {d['iterations']} iterations, {d['equilibrium_solves']} equilibrium solves, "
                  f"{d['newton_iterations']} Newton iterations, {d['time']:.2f} s; {d['message']}")
     return lines
