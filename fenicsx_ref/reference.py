@@ -19,7 +19,7 @@ from core_se3.catalogue.references import elastica_entry
 
 __all__ = ["case_params", "apply_variant", "case_length", "case_domain", "reference_entry",
            "reference_load_factors", "reference_error", "literature_error", "check_inputs",
-           "reference_mismatch"]
+           "reference_mismatch", "check_springs"]
 
 reference_entry = elastica_entry
 
@@ -108,6 +108,28 @@ def check_inputs(case, p, mesh, steps=None, shear_factor=1.0, load_factors=None,
         raise OptionError(f"{where}: cell must be 'quadrilateral' (Q2) or 'triangle' (P2), got {cell!r}")
     if load_factors is not None and not np.all(np.isfinite(np.asarray(load_factors, float))):
         raise OptionError(f"{where}: load_factors must be finite, got {list(load_factors)!r}")
+
+
+#: penalty springs of core_se3's builders that fenicsx_ref replaces by exact (Dirichlet) supports:
+#: the semicylinder's pinned edges, u_z (k_pin E h) and the rotation about y (k_rot E h^3)
+_SPRINGS = ("k_pin", "k_rot")
+
+
+def check_springs(case, p):
+    """NotImplementedError when a support spring is softer than the case's own value.
+
+    fenicsx_ref holds those supports exactly (the rigid limit).  The catalogue's values are
+    that limit (sze-semicylinder 16x16 in core_se3: crown -u_z(P_max) 1.6809849 with k_pin = 1e3,
+    k_rot = 1e5; 1.6809841 with 1e6, 1e8: 4e-7), as is any stiffer value; a softer one is a
+    different problem (k_pin = 1: 1.6814934; k_rot = 1e-2: a limit point at P = 646) that this
+    model would replace silently by the rigid one."""
+    soft = [(k, p[k], case.params[k]) for k in _SPRINGS if k in p and k in case.params and p[k] < case.params[k]]
+    if soft:
+        k, v, v0 = soft[0]
+        raise NotImplementedError(
+            f"fenicsx_ref: case {case.name!r} has {k} = {v:g} below the catalogue's {v0:g}: fenicsx_ref "
+            f"holds that support exactly (the rigid limit {k} -> infinity, which {v0:g} and stiffer "
+            f"values reproduce), not as a spring; run a softer {k} with core_se3 or drop --set {k}")
 
 
 def reference_mismatch(ref, p):

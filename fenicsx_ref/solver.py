@@ -8,8 +8,8 @@ import numpy as np
 
 from core_se3.catalogue import get_case
 
-from .reference import (apply_variant, case_domain, case_params, check_inputs, literature_error,
-                        reference_error, reference_load_factors, reference_mismatch)
+from .reference import (apply_variant, case_domain, case_params, check_inputs, check_springs,
+                        literature_error, reference_error, reference_load_factors, reference_mismatch)
 
 __all__ = ["run_case", "torsion_constant"]
 
@@ -185,6 +185,7 @@ def run_case(name, mesh=None, overrides=None, steps=None, integration="psri", sh
     _check_supported(case, loads)
     mesh = tuple(mesh) if mesh is not None else tuple(case.mesh)
     check_inputs(case, params, mesh, steps, shear_factor, load_factors, cell)
+    check_springs(case, params)
     skipped = reference_mismatch(ref, params)
     if skipped:  # a table for other parameters: no error rather than a wrong one (as core_se3)
         skipped, ref = dict(entry=ref.entry, block=ref.block, error=None, file="elastica.json",
