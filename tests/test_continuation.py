@@ -571,3 +571,30 @@ def test_displacement_control_without_its_node_direction_or_values_names_them():
         p.solve(control="displacement", nod=3, direction=(0, 0, 1), values=[0.1])
     res = p.solve(control="displacement", node=3, direction=(0, 0, 1), values=[0.5])   # given: solved
     assert abs(res.final.g[3, 2, 3] - 0.5) < 1e-9
+
+
+def test_a_step_whose_interior_no_corrector_reaches_is_refused_not_a_critical_point(tmp_path):
+    """The Scordelis-Lo roof 2x2 at R/h 1e4 (a near-mechanism: smallest tangent eigenvalue 0.045
+    against 1e8) traced by arc length to 1e-3 of its self-weight: its second step went from lam
+    5.2e-5 to an unstable state at -1.4e-5 (det K < 0), was kept, and reported a 'bifurcation
+    point near lam = 7.57e-06 located only to 0.64 after 0 solves' -- no point inside the step
+    reached it -- then limit points at -1.1e-5, -1.3e-4, 7.5e-4, ... and failed at lam -0.055.
+    Load stepping meets no critical point up to 1e-3.  Now such a step is refused and halved
+    (its ends lie on two branches): the path reaches 1e-3 with no critical point, at the load-
+    stepped state."""
+    import json
+    import warnings
+    from core_se3 import scenario
+    from core_se3.catalogue import shell_course as sc
+    doc = sc.scenario_doc("scordelis-lo", 2, 25.0 / 1e4)
+    doc.setdefault("solver", {}).update(control="arclength", lam_end=1e-3)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")                       # the coarse thin roof's ElementWarning
+        scenario.run(scenario.from_dict(doc), str(tmp_path / "arc"))
+        ref = scenario.from_dict(doc).problem.solve(steps=20, lam_end=1e-3)
+    res = json.loads(next((tmp_path / "arc").rglob("results.json")).read_text())
+    assert res["critical_points"] == []
+    assert [s["load_factor"] for s in res["steps"]][-1] == pytest.approx(1e-3, rel=1e-12)
+    u_ref = ref.final.probes["A"]["u"]
+    u_arc = res["steps"][-1]["probes"]["A"]["u"]
+    assert np.abs(np.asarray(u_arc) - u_ref).max() <= 1e-6 * np.abs(u_ref).max()

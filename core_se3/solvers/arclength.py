@@ -245,6 +245,10 @@ def path_steps(sysm, options, lam_end=1.0, control=None, control_end=None, lam_m
             pt, why, reason = None, None, passed
         if why in ("lam_end", "control_end") and o.land:
             pt, reason = _land(sysm, cur, pt, con, why, lam_end, control, control_end, o, timers)
+        cp = None
+        if pt is not None and o.stability and not jumped and _stability_changed(cur, pt):
+            cp, reason = _critical_between(sysm, cur, pt, con, psi_u, step + 1, o, timers, trylog)
+            pt = None if reason else pt
         trylog.append(dict(step=step + 1, lam=(cur.lam + dl) if pt is None else pt.lam, ds=ds, converged=pt is not None,
                            iterations=len(hist) - 1 if pt else None, reason=reason))
         if pt is None:
@@ -260,10 +264,7 @@ def path_steps(sysm, options, lam_end=1.0, control=None, control_end=None, lam_m
         rejections, step = 0, step + 1
         prev_du, prev_dl = con.du, con.dlam
         event = ""
-        changed = (pt.n_neg != cur.n_neg) if (pt.n_neg is not None and cur.n_neg is not None) \
-            else (pt.sign != cur.sign)
-        if o.stability and changed and not jumped:
-            cp = _critical_between(sysm, cur, pt, con, psi_u, step, o, timers, trylog)
+        if cp is not None:
             crit.append(cp)
             event = "  ** " + cp.describe()
             if cp.kind == "bifurcation" and branch_switch and cp.mode is not None:
@@ -425,9 +426,22 @@ def _land(sysm, cur, pt, con, why, lam_end, control, control_end, o, timers):
         return None, f"the step passed {why} at lam {pt.lam:.6g} and landing on it failed: {exc}"
 
 
+def _stability_changed(cur, pt):
+    """Whether the count of negative eigenvalues (where both are counted), else the sign of det K,
+    differs between the path points cur and pt."""
+    if pt.n_neg is not None and cur.n_neg is not None:
+        return pt.n_neg != cur.n_neg
+    return pt.sign != cur.sign
+
+
 def _critical_between(sysm, cur, pt, con, psi_u, step, o, timers, trylog):
-    """The critical point between the converged points cur and pt (a stability change),
-    located and narrowed (its tries appended to ``trylog``)."""
+    """(the critical point between the converged points cur and pt (a stability change), located
+    and narrowed (its tries appended to ``trylog``); why the step is refused, else '').  A step
+    whose interior no corrector reaches while its bracket is wider than critical_tol is refused:
+    its ends lie on two branches, not on one path through a critical point -- the 2x2 roof at R/h
+    1e4 (a near-mechanism) stepped from lam 5.2e-5 to an unstable state at -1.4e-5 and reported a
+    'bifurcation' there 'located only to 0.64 after 0 solves', then limit points the load-stepped
+    path does not have."""
     span = np.sqrt(np.sum(sysm.w * con.du ** 2))
     # dlam/ds changes sign across a limit point: the predictor's dlam at cur against the
     # one the next predictor will take at pt (robust where q.t also passes through 0,
@@ -435,9 +449,14 @@ def _critical_between(sysm, cur, pt, con, psi_u, step, o, timers, trylog):
     nxt = np.sum(sysm.w * con.du * pt.t) + psi_u ** 2 * con.dlam
     turned = np.sign(con.dlam0) != np.sign(nxt) if nxt != 0 else None
     cp = locate_critical(sysm, cur, pt, sysm.w * con.du / span, span, step, limit=turned)
-    trylog.append(narrow(sysm, cur, pt, con, cp, Corrector(
-        correct, lambda ds: ArcLengthConstraint(o.method, ds, psi_u, sysm.w), o, timers, (StepFailed,))))
-    return cp
+    entry = narrow(sysm, cur, pt, con, cp, Corrector(
+        correct, lambda ds: ArcLengthConstraint(o.method, ds, psi_u, sysm.w), o, timers, (StepFailed,)),
+        untraced_ok=False)
+    trylog.append(entry)
+    if entry["bisections"] == 0 and cp.accuracy > o.critical_tol:
+        return cp, (f"no point inside the step reaches the {cp.kind} point its ends bracket (lam {cur.lam:.6g} "
+                    f"to {pt.lam:.6g}): the corrector jumped to another branch")
+    return cp, ""
 
 
 def _log_point(step, cur, pt, ds, ctrl_val, event):
