@@ -117,3 +117,20 @@ def test_probe_logic_on_given_states():
     probe.accept(moved(5.0), 1.0)                     # the halves ended 1 element size away from 4
     assert probe.record() == dict(snap_probes=2, landed_elsewhere=1)
     assert probe.judge(g0, moved(4.0), 0.0, 1.0 / 64) == "" and probe.passed()[0].kind == "snap"
+
+
+def test_a_snap_keeps_its_node_and_travel_through_a_checkpoint():
+    """A snap as a checkpoint stores it (``pack``, JSON) and ``--resume`` reads it back
+    (``CriticalPoint.unpack``): still a SnapPoint with its node, travel and step, so the resumed
+    run's results.json describes the same snap.  Before, it came back a plain CriticalPoint (node
+    and travel lost; described as 'snap point at lam ~ 0.5')."""
+    import json
+
+    from core_se3.scenario.sinks import _critical_doc
+    from core_se3.solvers.stability import CriticalPoint
+    res = _jumping_cantilever().solve(steps=4)
+    (snap,) = res.critical_points
+    back = CriticalPoint.unpack(json.loads(json.dumps(snap.pack())))
+    assert type(back) is type(snap) and back == snap and back.describe() == snap.describe()
+    (doc,) = _critical_doc([back])
+    assert doc["node"] == snap.node and doc["travel"] == snap.travel and doc["description"].startswith("snap between")
