@@ -134,3 +134,32 @@ def test_a_snap_keeps_its_node_and_travel_through_a_checkpoint():
     assert type(back) is type(snap) and back == snap and back.describe() == snap.describe()
     (doc,) = _critical_doc([back])
     assert doc["node"] == snap.node and doc["travel"] == snap.travel and doc["description"].startswith("snap between")
+
+
+def test_a_resumed_scenario_writes_the_snap_it_found_before_the_interruption(tmp_path):
+    """The jumping cantilever as a scenario (the tip force's scale table jumps from 0 to 1 at
+    load factor 0.5, a sphere far below), 4 steps, interrupted after step 3 (past the snap) and
+    resumed: results.json's snap is the uninterrupted run's -- node 10, travel 3.063, its
+    description.  Before, the resumed run wrote 'snap point at lam ~ 0.501953 (between 0.5 and
+    0.503906)' with no node nor travel."""
+    import warnings
+
+    from core_se3 import scenario
+
+    def scn():
+        return scenario.from_dict(dict(
+            mesh=dict(generator="rectangle", L=10.0, width=1.0, nx=10, ny=1), material=dict(E=1.2e6, nu=0.0, h=0.1),
+            supports=[dict(type="clamp", edge="x0")],
+            loads=[dict(type="edge_force", edge="x1", force=[0.0, 0.0, 1.0],
+                        scale=[[0.0, 0.0], [0.5, 0.0], [0.5000001, 1.0], [1.0, 1.0]])],
+            obstacles=[dict(type="sphere", centre=[5.0, 0.5, -20.0], radius=1.0)],
+            solver=dict(steps=4), output=dict(vtu=False, plots=False, picture=False)))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        whole = scenario.run(scn(), out=str(tmp_path / "whole")).doc["critical_points"]
+        with pytest.raises(scenario.RunInterrupted):
+            scenario.run(scn(), out=str(tmp_path / "cut"), stop_after=3)
+        resumed = scenario.run(scn(), out=str(tmp_path / "cut"), resume=True).doc["critical_points"]
+    assert [c["description"] for c in resumed] == [c["description"] for c in whole]
+    (snap,) = whole
+    assert snap["kind"] == "snap" and snap["step"] == 3 and snap["travel"] > 3.0 and resumed == whole
