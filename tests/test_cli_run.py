@@ -108,6 +108,18 @@ def test_run_writes_results_vtu_series_and_plots(tmp_path, capsys):
             assert fh.read(8) == b"\x89PNG\r\n\x1a\n"
 
 
+def test_the_run_summary_names_a_critical_point_it_passed_as_not_located(tmp_path, capsys):
+    """The strip compressed past Euler's load (~0.617 of 4 N) in 2 steps, limit_check = false:
+    the printed summary names the bifurcation passed between steps 1 and 2 as not located (only
+    its bracket, load factors 0.5 .. 1, is known).  Before, the summary said nothing of it (the
+    warning shows only with -v) and results.json read 'bifurcation point at lam ~ 0.75'."""
+    doc = with_(STRIP, mesh={"nx": 10}, loads=[{"type": "edge_force", "edge": "x1", "force": [-4.0, 0.0, 0.0]}],
+                solver={"steps": 2, "limit_check": False}, output={"vtu": False, "plots": False, "picture": False})
+    assert cli.main(["run", write(tmp_path, doc), "--out", str(tmp_path / "out")]) == 0
+    (line,) = [x for x in capsys.readouterr().out.splitlines() if "critical point" in x]
+    assert line.startswith("  critical point between steps 1 and 2: bifurcation point not located: lam between 0.5 and 1")
+
+
 def test_progress_bar_only_when_asked_or_on_a_terminal(tmp_path, capsys):
     scn = scenario.load(write(tmp_path, with_(STRIP, solver={"steps": 2}, output={"vtu": False, "plots": False,
                                                                                   "picture": False})))

@@ -117,3 +117,49 @@ def test_probe_logic_on_given_states():
     probe.accept(moved(5.0), 1.0)                     # the halves ended 1 element size away from 4
     assert probe.record() == dict(snap_probes=2, landed_elsewhere=1)
     assert probe.judge(g0, moved(4.0), 0.0, 1.0 / 64) == "" and probe.passed()[0].kind == "snap"
+
+
+def test_a_snap_keeps_its_node_and_travel_through_a_checkpoint():
+    """A snap as a checkpoint stores it (``pack``, JSON) and ``--resume`` reads it back
+    (``CriticalPoint.unpack``): still a SnapPoint with its node, travel and step, so the resumed
+    run's results.json describes the same snap.  Before, it came back a plain CriticalPoint (node
+    and travel lost; described as 'snap point at lam ~ 0.5')."""
+    import json
+
+    from core_se3.scenario.sinks import _critical_doc
+    from core_se3.solvers.stability import CriticalPoint
+    res = _jumping_cantilever().solve(steps=4)
+    (snap,) = res.critical_points
+    back = CriticalPoint.unpack(json.loads(json.dumps(snap.pack())))
+    assert type(back) is type(snap) and back == snap and back.describe() == snap.describe()
+    (doc,) = _critical_doc([back])
+    assert doc["node"] == snap.node and doc["travel"] == snap.travel and doc["description"].startswith("snap between")
+
+
+def test_a_resumed_scenario_writes_the_snap_it_found_before_the_interruption(tmp_path):
+    """The jumping cantilever as a scenario (the tip force's scale table jumps from 0 to 1 at
+    load factor 0.5, a sphere far below), 4 steps, interrupted after step 3 (past the snap) and
+    resumed: results.json's snap is the uninterrupted run's -- node 10, travel 3.063, its
+    description.  Before, the resumed run wrote 'snap point at lam ~ 0.501953 (between 0.5 and
+    0.503906)' with no node nor travel."""
+    import warnings
+
+    from core_se3 import scenario
+
+    def scn():
+        return scenario.from_dict(dict(
+            mesh=dict(generator="rectangle", L=10.0, width=1.0, nx=10, ny=1), material=dict(E=1.2e6, nu=0.0, h=0.1),
+            supports=[dict(type="clamp", edge="x0")],
+            loads=[dict(type="edge_force", edge="x1", force=[0.0, 0.0, 1.0],
+                        scale=[[0.0, 0.0], [0.5, 0.0], [0.5000001, 1.0], [1.0, 1.0]])],
+            obstacles=[dict(type="sphere", centre=[5.0, 0.5, -20.0], radius=1.0)],
+            solver=dict(steps=4), output=dict(vtu=False, plots=False, picture=False)))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        whole = scenario.run(scn(), out=str(tmp_path / "whole")).doc["critical_points"]
+        with pytest.raises(scenario.RunInterrupted):
+            scenario.run(scn(), out=str(tmp_path / "cut"), stop_after=3)
+        resumed = scenario.run(scn(), out=str(tmp_path / "cut"), resume=True).doc["critical_points"]
+    assert [c["description"] for c in resumed] == [c["description"] for c in whole]
+    (snap,) = whole
+    assert snap["kind"] == "snap" and snap["step"] == 3 and snap["travel"] > 3.0 and resumed == whole

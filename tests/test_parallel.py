@@ -649,3 +649,44 @@ def test_the_final_state_warnings_are_printed_once_under_mpirun(monkeypatch):
             with pytest.raises(SupportWarning, match="drifted by"):
                 check_held_dofs(p, res)
     assert len(shown["0"]) == 1 and "drifted by" in shown["0"][0] and "1" not in shown
+
+
+_CRITICAL_RUN = '''
+import json, sys, warnings
+from core_se3 import scenario
+scn = scenario.from_dict(dict(
+    mesh=dict(generator="rectangle", L=10.0, width=1.0, nx=10, ny=1), material=dict(E=1.2e6, nu=0.0, h=0.1),
+    supports=[dict(type="clamp", edge="x0")], loads=[dict(type="edge_force", edge="x1", force=[-4.0, 0.0, 0.0])],
+    solver=dict(steps=4, limit_check=False), output=dict(vtu=False, plots=False, picture=False)))
+warnings.simplefilter("ignore")
+whole = scenario.run(scn, out=sys.argv[1] + "/whole")
+try:
+    scenario.run(scn, out=sys.argv[1] + "/cut", stop_after=2)
+except scenario.RunInterrupted:
+    pass
+scenario.run(scn, out=sys.argv[1] + "/cut", resume=True)
+'''
+
+
+@pytest.mark.parametrize("ranks", [0, 2])
+def test_a_distributed_load_control_writes_the_serial_critical_points(tmp_path, ranks):
+    """The compressed strip as a scenario (limit_check = false, 4 steps) on two ranks, whole and
+    interrupted after step 2 then resumed: results.json's critical_points (the bifurcation passed
+    between 0.5 and 0.75, Euler ~0.617, at stored step 3, with its description) are the serial
+    run's, and its provenance says the steps were solved distributed."""
+    if ranks and not HAVE_MPI:
+        pytest.skip("needs mpi4py, petsc4py and mpirun")
+    script = tmp_path / "run.py"
+    script.write_text(_CRITICAL_RUN)
+    cmd = [sys.executable, str(script), str(tmp_path)]
+    if ranks:
+        cmd = ["mpirun", "-n", str(ranks), "-x", "PYTHONPATH", "-x", "OMP_NUM_THREADS", "-x", "NUMBA_NUM_THREADS"] + cmd
+    p = subprocess.run(cmd, env=mpi_env(), capture_output=True, text=True, timeout=600, cwd=ROOT)
+    assert p.returncode == 0, p.stdout[-3000:] + p.stderr[-3000:]
+    docs = [json.loads((tmp_path / d / "results.json").read_text()) for d in ("whole", "cut")]
+    for doc in docs:
+        (cp,) = doc["critical_points"]
+        assert cp["kind"] == "bifurcation" and cp["bracket"] == [0.5, 0.75] and cp["step"] == 3
+        assert cp["accuracy"] is None and "not located" in cp["description"]
+        assert doc["provenance"]["solve"] == ("distributed" if ranks else "serial")
+    assert docs[0]["critical_points"] == docs[1]["critical_points"]

@@ -134,6 +134,39 @@ def test_limit_check_off_records_the_bifurcation_and_goes_on():
     assert res.steps[-1].load_factor == 1.0 and res.final.checks["det_sign"] == -1
 
 
+def test_a_passed_bifurcation_known_only_by_its_bracket_says_it_was_not_located(tmp_path):
+    """limit_check off, 2 steps: the bifurcation (Euler ~0.617) is known only to lie between the
+    steps 0.5 and 1.  Its description -- the warning, results.json's ``description`` -- says it was
+    not located and that the bracket is its accuracy; before it read 'bifurcation point at lam ~
+    0.75 (between 0.5 and 1)', a value 22 % off that reads as located."""
+    res = _column().solve(steps=2, limit_check=False)
+    (cp,) = res.critical_points
+    assert cp.accuracy is None and cp.lam_bracket == (0.5, 1.0)
+    text = cp.describe()
+    assert text.startswith("bifurcation point not located: lam between 0.5 and 1") and "bracket only" in text
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        doc = scenario.run(_column_scenario(2), out=str(tmp_path / "run")).doc
+    (c,) = doc["critical_points"]
+    assert c["accuracy"] is None and "not located" in c["description"] and "bracket only" in c["description"]
+
+
+def test_a_first_load_on_the_start_states_buckling_load_is_not_called_a_missing_support():
+    """The clamped strip on 6 elements compressed by 4 in 2 steps: the first evaluation, at the
+    straight state under load factor 0.5, has a singular tangent (smallest eigenvalue 1.6e-11;
+    0.073 at lam 0: 0.5 is the straight 6-element strip's linearised buckling load).  The error
+    names the load and what to do; before, it said 'the tangent of the unloaded shell is singular
+    -- a rigid-body motion is not restrained (missing or insufficient supports)' of a clamped strip."""
+    from core_se3.errors import SingularSystemError
+    p = Problem(mesh.rectangle(10.0, 1.0, 6, 1), Material(1.2e6, 0.0, 0.1))
+    p.clamp("x0")
+    p.add_edge_force("x1", (-4.0, 0.0, 0.0))
+    with pytest.raises(SingularSystemError) as exc:
+        p.solve(steps=2, limit_check=False)
+    msg = str(exc.value)
+    assert "critical (buckling) load" in msg and "load factor 0.5" in msg and "supports" not in msg
+
+
 def _column_scenario(steps):
     return scenario.from_dict(dict(
         mesh=dict(generator="rectangle", L=10.0, width=1.0, nx=10, ny=1), material=dict(E=1.2e6, nu=0.0, h=0.1),

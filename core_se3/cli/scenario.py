@@ -244,6 +244,8 @@ def _summary(scn, res):
         f = c["force"]
         print(f"  contact {name}: force ({f[0]:.6g}, {f[1]:.6g}, {f[2]:.6g}) on the shell"
               + (f", {c['nodes_in_contact']} nodes in contact" if "nodes_in_contact" in c else ""))
+    for c in res.doc.get("critical_points") or []:     # passed (limit_check off), snaps, arc length's
+        print(f"  critical point between steps {c['step'] - 1} and {c['step']}: {c['description']}")
     for kind, path in res.files.items():
         print(f"  wrote {kind}: {path}")
 

@@ -159,7 +159,7 @@ def _critical_doc(cps):
     return [dict(kind=c.kind, load_factor=float(c.lam), bracket=[float(x) for x in c.lam_bracket],
                  step=int(c.step), accuracy=None if c.accuracy is None else float(c.accuracy),
                  negative_eigenvalues=[None if n is None else int(n) for n in c.negative_eigenvalues],
-                 description=c.describe()) for c in cps]
+                 description=c.describe(), **c.extras()) for c in cps]
 
 
 class Sink:

@@ -245,10 +245,9 @@ def path_steps(sysm, options, lam_end=1.0, control=None, control_end=None, lam_m
             pt, why, reason = None, None, passed
         if why in ("lam_end", "control_end") and o.land:
             pt, reason = _land(sysm, cur, pt, con, why, lam_end, control, control_end, o, timers)
-        cp = None
-        if pt is not None and o.stability and not jumped and _stability_changed(cur, pt):
-            cp, reason = _critical_between(sysm, cur, pt, con, psi_u, step + 1, o, timers, trylog)
-            pt = None if reason else pt
+        cp, refused = (None, "") if pt is None or jumped else \
+            _critical_between(sysm, cur, pt, con, psi_u, step + 1, o, timers, trylog)
+        pt, reason = (None, refused) if refused else (pt, reason)
         trylog.append(dict(step=step + 1, lam=(cur.lam + dl) if pt is None else pt.lam, ds=ds, converged=pt is not None,
                            iterations=len(hist) - 1 if pt else None, reason=reason))
         if pt is None:
@@ -441,7 +440,9 @@ def _critical_between(sysm, cur, pt, con, psi_u, step, o, timers, trylog):
     its ends lie on two branches, not on one path through a critical point -- the 2x2 roof at R/h
     1e4 (a near-mechanism) stepped from lam 5.2e-5 to an unstable state at -1.4e-5 and reported a
     'bifurcation' there 'located only to 0.64 after 0 solves', then limit points the load-stepped
-    path does not have."""
+    path does not have.  (None, '') when the stability did not change (or is not checked)."""
+    if not (o.stability and _stability_changed(cur, pt)):
+        return None, ""
     span = np.sqrt(np.sum(sysm.w * con.du ** 2))
     # dlam/ds changes sign across a limit point: the predictor's dlam at cur against the
     # one the next predictor will take at pt (robust where q.t also passes through 0,

@@ -65,7 +65,7 @@ def median_edge(mesh):
 
 
 @dataclasses.dataclass
-class SnapPoint(CriticalPoint):
+class SnapPoint(CriticalPoint, kind="snap"):
     """A snap of load stepping with contact: a jump of the quasi-static path that a step of
     ``min_step`` still made.  ``node``: the node that moved most, by ``travel`` (length)."""
     node: int = -1

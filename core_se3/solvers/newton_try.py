@@ -194,7 +194,7 @@ class NewtonTry:
                     ev, _, _ = eq.evaluate(g_try, lam_try, tangent=True, stress=stress if mip_try else None,
                                            norms=False)
                 timer.t_asm += time.perf_counter() - ta
-                x = self._solve(ev, g_try)
+                x = self._solve(ev, g_try, lam_try)
                 solves += 1
                 eta = eq.increment(x)
                 if it == 0:
@@ -229,21 +229,41 @@ class NewtonTry:
         return TryOutcome(ok, reason, g_try, ev, hist, solves, eta_sum, k_step, pred,
                           0.0 if floor is None else float(floor), incs, sign)
 
-    def _solve(self, ev, g_try):
+    def _solve(self, ev, g_try, lam_try=0.0):
         """The Newton correction at the evaluation ``ev``; a singular tangent at the path's first
-        solve is a SingularSystemError naming the unrestrained rigid-body motion."""
+        solve is a SingularSystemError naming the unrestrained rigid-body motion -- or, when the
+        tangent without the load (lam = 0) is regular, the first load as a critical load of the
+        start state (:meth:`_loaded_singularity`)."""
         ts = time.perf_counter()
         try:
             x = self.eq.solve(ev, g_try, probe=self.first_solve)
         except SingularSystemError as exc:
             if self.first_solve and not isinstance(exc, LinearSolverError):
-                raise SingularSystemError(
+                raise SingularSystemError(self._loaded_singularity(g_try, lam_try) or (
                     f"{exc}: the tangent of the unloaded shell is singular -- a rigid-body "
-                    "motion is not restrained (missing or insufficient supports)") from None
+                    "motion is not restrained (missing or insufficient supports)")) from None
             raise
         self.timer.t_sol += time.perf_counter() - ts
         self.first_solve = False
         return x
+
+
+    def _loaded_singularity(self, g_try, lam_try):
+        """The message of a first tangent singular under the load factor ``lam_try`` only (its
+        lam = 0 tangent at the same state solves), else ''.  A clamped 6-element strip under an
+        end compression whose first step of 0.5 lands on the straight strip's buckling load (K's
+        smallest eigenvalue 0.073 at lam 0, 1.6e-11 at 0.5) was said to have missing supports."""
+        if lam_try == 0.0:
+            return ""
+        ev0, _, _ = self.eq.evaluate(g_try, 0.0, tangent=True)
+        try:
+            self.eq.solve(ev0, g_try, probe=True)
+        except SingularSystemError:
+            return ""
+        return (f"the tangent at the start state is singular under the first step's load factor {lam_try:.6g} "
+                "but not without the load: that load is a critical (buckling) load of the start state, not a "
+                "missing support. Take another first step (steps, or a first load factor off it), add an "
+                "imperfection, or trace the path with arc length (control = \"arclength\", stability = true)")
 
 
 def augmented_try(trier, aug, g_try, lam_try, mip, stress, max_augmentations, record):

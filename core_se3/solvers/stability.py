@@ -11,7 +11,7 @@ S_p = (q . t_0)/(q . t) vanishes.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from functools import partial
 
 import numpy as np
@@ -167,8 +167,11 @@ class CriticalPoint:
 
     Example
     -------
-    >>> CriticalPoint("limit", 5, 0.742, (0.74, 0.745), (0, 1)).describe()
-    'limit point at lam ~ 0.742 (between 0.74 and 0.745, negative eigenvalues 0 -> 1)'
+    >>> print(CriticalPoint("limit", 5, 0.742, (0.74, 0.745), (0, 1)).describe())  # doctest: +NORMALIZE_WHITESPACE
+    limit point not located: lam between 0.74 and 0.745 (bracket only, not narrowed: its accuracy is the
+    bracket; estimate ~ 0.742, negative eigenvalues 0 -> 1)
+    >>> CriticalPoint.unpack(CriticalPoint("limit", 5, 0.742, (0.74, 0.745), (0, 1), accuracy=1e-4).pack()).describe()
+    'limit point at lam = 0.742 +- 7.4e-05 (refined between 0.74 and 0.745, negative eigenvalues 0 -> 1)'
     """
     kind: str                # 'limit' or 'bifurcation'
     step: int                # first step past the critical point
@@ -178,26 +181,50 @@ class CriticalPoint:
     mode: np.ndarray | None = field(default=None, repr=False)
     accuracy: float | None = None
 
+    def __init_subclass__(cls, kind=None, **kw):
+        """A subclass ``class SnapPoint(CriticalPoint, kind="snap")`` is what :meth:`unpack`
+        makes of a packed point of that kind (with its own fields)."""
+        super().__init_subclass__(**kw)
+        if kind is not None:
+            _KINDS[kind] = cls
+
+    def extras(self):
+        """The JSON-able fields a subclass adds (a snap's node, travel, min_step; {} here)."""
+        base = {f.name for f in fields(CriticalPoint)}
+        vals = {f.name: getattr(self, f.name) for f in fields(self) if f.name not in base}
+        return {k: v.item() if isinstance(v, np.generic) else v for k, v in vals.items()}
+
     def pack(self):
-        """A JSON-able dict of the point (not its mode); :meth:`unpack` inverts it (a checkpoint's)."""
+        """A JSON-able dict of the point (not its mode) with a subclass's fields (:meth:`extras`);
+        :meth:`unpack` inverts it (a checkpoint's): a resumed run's snap is still a snap, with
+        its node and travel."""
         return dict(kind=self.kind, step=int(self.step), lam=float(self.lam),
                     lam_bracket=[float(x) for x in self.lam_bracket],
                     negative_eigenvalues=[None if x is None else int(x) for x in self.negative_eigenvalues],
-                    accuracy=None if self.accuracy is None else float(self.accuracy))
+                    accuracy=None if self.accuracy is None else float(self.accuracy), **self.extras())
 
     @classmethod
     def unpack(cls, d):
-        return cls(d["kind"], d["step"], d["lam"], tuple(d["lam_bracket"]), tuple(d["negative_eigenvalues"]),
-                   accuracy=d.get("accuracy"))
+        klass = _KINDS.get(d["kind"], cls)
+        extra = {f.name: d[f.name] for f in fields(klass) if f.name not in _BASE_PACKED and f.name in d}
+        return klass(d["kind"], d["step"], d["lam"], tuple(d["lam_bracket"]), tuple(d["negative_eigenvalues"]),
+                     accuracy=d.get("accuracy"), **extra)
 
     def describe(self):
+        """One line for a person.  A point not narrowed (``accuracy`` None: load control's
+        bracket, limit_check off) says so plainly: it is known only to lie in the bracket."""
         a, b = self.lam_bracket
         neg = "" if None in self.negative_eigenvalues else \
             f", negative eigenvalues {self.negative_eigenvalues[0]} -> {self.negative_eigenvalues[1]}"
         if self.accuracy is not None:
             return (f"{self.kind} point at lam = {self.lam:.6g} +- {self.accuracy * abs(self.lam):.2g} "
                     f"(refined between {a:.6g} and {b:.6g}{neg})")
-        return f"{self.kind} point at lam ~ {self.lam:.6g} (between {a:.6g} and {b:.6g}{neg})"
+        return (f"{self.kind} point not located: lam between {a:.6g} and {b:.6g} (bracket only, not narrowed: "
+                f"its accuracy is the bracket; estimate ~ {self.lam:.6g}{neg})")
+
+
+_KINDS = {}                  # kind -> CriticalPoint subclass (__init_subclass__)
+_BASE_PACKED = {"kind", "step", "lam", "lam_bracket", "negative_eigenvalues", "mode", "accuracy"}
 
 
 @dataclass
