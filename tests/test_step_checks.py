@@ -464,3 +464,29 @@ def test_a_prescribed_motion_stopped_at_a_snap_back_names_it():
     assert "snap-back" in msg and "arc length" in msg, msg
     w = [-s.probes["C"]["u"][2] for s in exc.value.result.steps]
     assert abs(w[-1] - 16.0) < 1e-9
+
+
+def test_the_negative_eigenvalues_are_counted_on_a_shell_held_on_symmetry_planes():
+    """The Scordelis-Lo roof 16x16 under its self-weight, held on its symmetry planes: the
+    tangent's skew part lies in the held nodes' diagonal blocks (their reactions' 1/2 ad* term:
+    4.1e-5 of max |K| there, 4.1e-15 outside), yet it was read as a non-conservative load's, so the
+    end check's count (``negative_count``), load stepping's inertia_check and arc length's counts
+    were None -- switched off without a word on a conservative problem.  Now they count (0: the
+    roof is stable), and a follower load's skew part still switches them off."""
+    import warnings
+    from core_se3.catalogue import shell_course as sc
+    from core_se3 import scenario
+    from core_se3.solvers import stability
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        p = scenario.from_dict(sc.scenario_doc("scordelis-lo", 16, 0.25)).problem
+        g = p.solve(steps=4).final.g
+    K = p.tangent(g, 1.0)
+    assert abs(K - K.T).max() > 1e-5 * abs(K).max()                    # the reactions' skew part
+    assert stability.asymmetry(K, p.assembler().free) < 1e-12
+    assert stability.negative_count(p, g, 1.0) == 0
+    p.add_edge_force("x1", (0.0, 0.0, -1e4), follower=True)             # a follower: not conservative
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        g = p.solve(steps=4).final.g
+    assert stability.negative_count(p, g, 1.0) is None

@@ -351,7 +351,7 @@ class DistributedSystem:
         rows count as positive) gives its negative pivots, INFOG(12) (ICNTL(13) = 1: no
         ScaLAPACK root, whose pivots MUMPS does not count).  None, as serially
         (``solvers.stability.negative_count``), when max |K - K^T| > asym_tol max |K| over the
-        free rows (non-conservative loads)."""
+        free rows outside the held nodes' diagonal blocks (non-conservative loads)."""
         PETSc = self.PETSc
         K = self.K.mat.duplicate(copy=True)
         if self.scaled:                                  # undo the solve's S K S on the copy
@@ -363,7 +363,8 @@ class DistributedSystem:
         skew = K.duplicate(copy=True)
         skew.axpy(-1.0, Kt)                              # (one axpy per copy: a second one on the
         rows = self.free_own.ravel()                     # result was wrong in PETSc 3.18, measured)
-        peak = [_free_rows_max(K, rows), _free_rows_max(skew, rows)]
+        held = np.repeat(~self.free_own.all(axis=1), 6)
+        peak = [_free_rows_max(K, rows), _free_rows_max(skew, rows, held)]
         scale, asym = np.max(self.comm.allgather(peak), axis=0) if self.comm.size > 1 else peak
         pc = PETSc.PC().create(self.pcomm)
         try:
@@ -472,10 +473,16 @@ class DistributedSystem:
         self.K.destroy()
 
 
-def _free_rows_max(A, rows):
-    """max |A_ij| over this rank's rows of A where ``rows`` (bool, the owned dofs) is set."""
-    indptr, _, values = A.getValuesCSR()
-    keep = np.repeat(rows, np.diff(indptr))
+def _free_rows_max(A, rows, held=None):
+    """max |A_ij| over this rank's rows of A where ``rows`` (bool, the owned dofs) is set; with
+    ``held`` (bool per owned dof: its node is held by a support) not in a held node's diagonal
+    block (``solvers.stability.asymmetry``: the reactions' skew term lives there)."""
+    indptr, cols, values = A.getValuesCSR()
+    counts = np.diff(indptr)
+    keep = np.repeat(rows, counts)
+    if held is not None:
+        row = A.getOwnershipRange()[0] + np.repeat(np.arange(len(counts)), counts)
+        keep &= ~(np.repeat(held, counts) & (cols // 6 == row // 6))
     return float(np.abs(values[keep]).max()) if np.any(keep) else 0.0
 
 

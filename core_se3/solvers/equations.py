@@ -35,7 +35,7 @@ from ..fem import ELEMENTS
 from .convergence import relative_residual, scaled_norm
 from .linalg import Factorization
 from .origin import part_origin
-from .stability import inertia
+from .stability import asymmetry, inertia
 
 __all__ = ["NewtonEquations", "part_origin"]
 
@@ -152,8 +152,7 @@ class NewtonEquations:
         if fac is None:
             return None
         K = fac.K
-        scale = abs(K).max()
-        if abs(K - K.T).max() > asym_tol * scale:
+        if asymmetry(K, self.asm.free) > asym_tol:
             return None
         return inertia(K)[1]
 
