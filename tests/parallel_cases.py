@@ -62,3 +62,18 @@ def scenario_dict():
             "probes": [{"name": "tip", "edge": "x1"}],
             "solver": {"steps": 4},
             "output": {"vtu": True, "plots": False, "picture": False}}
+
+
+def roof_on_symmetry_planes(follower=False):
+    """The Scordelis-Lo roof 4x4 under its self-weight, held on its symmetry planes (the held
+    nodes' tangent blocks carry their reactions' skew part, solvers.stability.asymmetry); with
+    ``follower`` also a follower edge force (not conservative)."""
+    import warnings
+    from core_se3 import scenario
+    from core_se3.catalogue import shell_course as sc
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        prob = scenario.from_dict(sc.scenario_doc("scordelis-lo", 4, 0.25)).problem
+    if follower:
+        prob.add_edge_force("x1", (0.0, 0.0, -1e5), follower=True)
+    return prob

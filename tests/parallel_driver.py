@@ -1,7 +1,7 @@
 """Run by tests/test_parallel.py under ``mpirun -n 2`` (and ``-n 1``): the agreement cases with the
 distributed solver, and a scenario run interrupted and resumed; rank 0 writes the outcome as JSON.
 
-    mpirun -n 2 python tests/parallel_driver.py OUT.json [case ...] [design-...] [sandwich-...] [counts] [resume]
+    mpirun -n 2 python tests/parallel_driver.py OUT.json [case ...] [design-...] [sandwich-...] [counts] [first-step-buckling] [roof-counts] [resume]
 """
 import json
 import os
@@ -10,11 +10,11 @@ import tempfile
 
 import numpy as np
 
-from core_se3.errors import ConvergenceError
+from core_se3.errors import ConvergenceError, SingularSystemError
 from core_se3.parallel import world
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from parallel_cases import CASES, STOPS, build, scenario_dict  # noqa: E402
+from parallel_cases import CASES, STOPS, build, roof_on_symmetry_planes, scenario_dict  # noqa: E402
 
 
 def summary(res):
@@ -53,6 +53,21 @@ def main(out, names):
                              critical_points=len(res.critical_points))
         except ConvergenceError as exc:
             doc[name] = dict(message=str(exc), lam=[float(s.load_factor) for s in exc.result.steps])
+    if "first-step-buckling" in names:    # a first load step exactly on the strip's buckling load
+        from test_step_checks import _first_step_on_buckling_load
+        try:
+            _first_step_on_buckling_load().solve(steps=2, limit_check=False, solver="distributed")
+            doc["first-step-buckling"] = None
+        except SingularSystemError as exc:
+            doc["first-step-buckling"] = dict(error=type(exc).__name__, message=str(exc))
+    if "roof-counts" in names:       # the ranks' counts on a shell held on symmetry planes (serial states)
+        from core_se3.parallel import DistributedRun
+        for follower in (False, True):
+            prob = roof_on_symmetry_planes(follower)
+            ser = prob.solve(steps=4, solver="serial")
+            run = DistributedRun(prob, comm)
+            doc["roof-counts" + "-follower" * follower] = [run.negative_count(s.g, s.load_factor) for s in ser.steps]
+            run.close()
     if "counts" in names:            # the ranks' inertia count at the serial states of the sandwich strip
         from core_se3.parallel import DistributedRun
         prob, _, _ = build("sandwich-5")

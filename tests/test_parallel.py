@@ -27,6 +27,7 @@ import os
 import shutil
 import subprocess
 import sys
+import warnings
 
 import numpy as np
 import pytest
@@ -161,6 +162,46 @@ def test_the_ranks_count_the_negative_eigenvalues_as_serially(request, ranks):
     ser = prob.solve(steps=5, solver="serial", end_check=False, limit_check=False)
     counts = [negative_count(prob, s.g, s.load_factor) for s in ser.steps]
     assert counts == [0, 4, 6, 7, 8, 12] and run["counts"] == counts
+
+
+@pytest.fixture(scope="module")
+def two_ranks_small(tmp_path_factory):
+    return _driver(tmp_path_factory, 2, "first-step-buckling", "roof-counts")
+
+
+def test_a_first_step_on_the_buckling_load_stops_two_ranks_as_it_stops_one(two_ranks_small):
+    """The clamped 6-element strip compressed exactly to its buckling load in its first step
+    (its equilibrated tangent's condition number 5e16): the serial run stops with a
+    SingularSystemError naming the critical load; two ranks went on to load factor 1.  The
+    random right-hand side of the first solve's probe grew by 3.6e15 serially, 1.6e15 on one
+    rank, 6.3e14 on two (limit 1e15: its share of the null direction is ~1/sqrt(n)); the probe's
+    second solve (inverse iteration) grows by 5.8e16 / 8.9e15 / 7.3e15."""
+    from test_step_checks import _first_step_on_buckling_load
+    from core_se3.errors import SingularSystemError
+    with pytest.raises(SingularSystemError) as exc:
+        _first_step_on_buckling_load().solve(steps=2, limit_check=False, solver="serial")
+    assert two_ranks_small["first-step-buckling"] == dict(error="SingularSystemError", message=str(exc.value))
+    assert "critical (buckling) load" in str(exc.value)
+
+
+@pytest.mark.parametrize("follower", [False, True])
+def test_two_ranks_count_on_a_shell_held_on_symmetry_planes(two_ranks_small, follower):
+    """The Scordelis-Lo roof 4x4 held on its symmetry planes: max |K - K^T| is 2.3e-5 of max |K|,
+    all in the held nodes' diagonal blocks (the reactions' 1/2 ad*; 7e-16 outside them). The ranks
+    leave those blocks out of the asymmetry test as serially, so they count its negative
+    eigenvalues (0 at every step, the serial counts); with a follower edge force (1.7e-5 lam
+    outside them) they give None past the unloaded start as serially.  Found: the ranks' K - K^T
+    was 0 (petsc4py's ``K.transpose()`` transposes K in place and returns it), so the test could
+    not fail and a follower load was counted (0 at every step on 1 and 2 ranks, serially None)."""
+    from core_se3.solvers.stability import negative_count
+    from parallel_cases import roof_on_symmetry_planes
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")                  # the symmetry planes' drift warning
+        prob = roof_on_symmetry_planes(follower)
+        ser = prob.solve(steps=4, solver="serial")
+    counts = [negative_count(prob, s.g, s.load_factor) for s in ser.steps]
+    assert counts == ([0] + [None] * 4 if follower else [0] * 5)
+    assert two_ranks_small["roof-counts" + "-follower" * follower] == counts
 
 
 def test_an_iterative_solver_says_which_checks_it_cannot_do(caplog):

@@ -31,6 +31,7 @@ import numpy as np
 
 from .. import lie
 from ..errors import LinearSolverError, OptionError, ParallelError, SingularSystemError
+from ..solvers.linalg import PROBE_GROWTH
 from .comm import petsc_comm
 from .matrix import CooMatrix, SharedCsrMatrix
 
@@ -359,10 +360,10 @@ class DistributedSystem:
             inv.setArray(1.0 / self.s.getArray(readonly=True))
             K.diagonalScale(inv, inv)
             inv.destroy()
-        Kt = K.transpose()
-        skew = K.duplicate(copy=True)
-        skew.axpy(-1.0, Kt)                              # (one axpy per copy: a second one on the
-        rows = self.free_own.ravel()                     # result was wrong in PETSc 3.18, measured)
+        Kt = K.transpose(PETSc.Mat())                    # a new matrix: K.transpose() transposes K in
+        skew = K.duplicate(copy=True)                    # place and returns K itself (K - K^T was 0,
+        skew.axpy(-1.0, Kt)                              # a follower load's count not None, 2 K^T's)
+        rows = self.free_own.ravel()
         held = np.repeat(~self.free_own.all(axis=1), 6)
         peak = [_free_rows_max(K, rows), _free_rows_max(skew, rows, held)]
         scale, asym = np.max(self.comm.allgather(peak), axis=0) if self.comm.size > 1 else peak
@@ -372,7 +373,7 @@ class DistributedSystem:
                 return None
             K.axpy(1.0, Kt)                              # K + K^T = 2 sym K
             return self._negative_pivots(K, pc)
-        finally:                                         # (destroying K^T first crashed PETSc 3.18)
+        finally:
             for obj in (pc, skew, K, Kt):
                 obj.destroy()
 
@@ -405,7 +406,11 @@ class DistributedSystem:
         yr = self._apply(self.b, self.y)
         sq = self.allsum(float(yr @ yr), float(br @ br))
         growth = np.sqrt(sq[0] / sq[1])
-        if not np.isfinite(growth) or growth > 1e15:
+        if np.isfinite(growth) and growth > 0:          # one step of inverse iteration (serially too:
+            self.b.setArray(yr / np.sqrt(sq[0]))         # solvers.linalg.PROBE_GROWTH)
+            y2 = self._apply(self.b, self.y)
+            growth = max(growth, np.sqrt(self.allsum(float(y2 @ y2))[0]))
+        if not np.isfinite(growth) or growth > PROBE_GROWTH:
             raise SingularSystemError(f"tangent is singular or nearly so (solution growth {growth:.1e} for a "
                                       "random right-hand side)")
 
