@@ -3,6 +3,7 @@ import numpy as np
 import pytest
 
 from core_se3 import Material, Problem, mesh
+from core_se3.errors import LoadError
 
 
 def _total(problem, loads):
@@ -34,6 +35,12 @@ def test_gravity_on_zero_mass_warns_naming_rho():
         assert p.add_load("gravity") == []
     with pytest.warns(LoadWarning, match="the load's rho = 0"):
         p.add_load("gravity", rho=0.0)
+    with pytest.warns(LoadWarning, match="the load's rho = 0"):     # the other spelling: it refused
+        assert p.add_gravity(rho=0.0) == []                          # (LoadError 'must be positive')
+    for bad in (-1.0, np.nan, np.inf):                               # both spellings refuse these
+        for add in (lambda r: p.add_gravity(rho=r), lambda r: p.add_load("gravity", rho=r)):
+            with pytest.raises(LoadError, match="density must be non-negative and finite"):
+                add(bad)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert np.allclose(_total(p, p.add_load("gravity", rho=3.0)), (0.0, 0.0, -9.81 * 3.0 * 0.01 * 2.0), rtol=1e-14)

@@ -354,10 +354,10 @@ class Problem:
 
     def add_gravity(self, rho=None, g=(0.0, 0.0, -9.81), elements=None, scale=None):
         """Self-weight: dead body force rho h g per unit reference area (rho [mass/length^3],
-        default the material's; g [length/time^2] lab vector; default SI, -z)."""
-        if rho is not None and not (np.isfinite(rho) and rho > 0):
-            raise LoadError(f"density must be positive and finite, got {rho}")
-        self.add_load("gravity", elements, scale, g=g, rho=rho)
+        default the material's; g [length/time^2] lab vector; default SI, -z).  The same load as
+        ``add_load("gravity", ...)``: a negative or non-finite rho is a LoadError, rho = 0 adds
+        nothing with a LoadWarning naming rho (a sweep may start weightless).  Returns the loads."""
+        return self.add_load("gravity", elements, scale, g=g, rho=rho)
 
     def add_magnetic(self, Br, field, elements=None, mu0=None, Br_per=None):
         """Hard-magnetic material of residual flux density ``Br`` [T] (lab, reference
