@@ -495,6 +495,33 @@ lam_end = 0.5
     assert frame_error(st.g, cold(ref), ref.length_scale) < 1e-8
 
 
+def test_a_session_commands_an_edge_load_on_a_union_of_lines(tmp_path):
+    """An edge force on the union of the lines x1 and y1 builds one load per line, and
+    ``Session.from_scenario`` left such an entry out without a word (its variables were [], where
+    the documentation says every [[loads]] entry is ``load0``, ``load1``, ...).  Now it is
+    ``load0``, one multiplier of both lines' loads: the session at load0 = 1 is the state of
+    ``core-se3 run`` (scenario.run) of the file, and after update(load0 = 2) the state of a run of
+    the file with the force doubled (both to the solvers' tolerance)."""
+    def doc(fz):
+        return {"name": "union", "units": "consistent",
+                "mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 8, "ny": 2},
+                "material": {"E": 1.2e6, "nu": 0.0, "h": 0.1}, "supports": [{"type": "clamp", "edge": "x0"}],
+                "loads": [{"type": "edge_force", "edge": ["x1", "y1"], "force": [0.0, 0.0, fz]}],
+                "solver": {"steps": 4, "rtol": 1e-12, "dtol": 1e-12},
+                "output": {"vtu": False, "plots": False, "picture": False}}
+    scn = scenario.from_dict(doc(0.5))
+    assert [len(b) for b in scn.load_objects] == [2]                    # one load per line
+    s = Session.from_scenario(scn)
+    assert list(s.variables) == ["load0"]
+    run = scenario.run(scenario.from_dict(doc(0.5)), out=str(tmp_path / "one"))
+    ell = scn.problem.length_scale
+    assert frame_error(s.g, np.asarray(run.g), ell) < 1e-8
+    st = s.update(load0=2.0)
+    run2 = scenario.run(scenario.from_dict(doc(1.0)), out=str(tmp_path / "two"))
+    assert frame_error(st.g, np.asarray(run2.g), ell) < 1e-8
+    assert frame_error(np.asarray(run.g), np.asarray(run2.g), ell) > 1e-2       # the command moved it
+
+
 def test_track_and_plan_reach_their_targets():
     """A tip force commanded to lift the strip's tip along a straight line: the plan is within
     its tolerance at every sample, the feedback loop within the linearisation's remainder."""

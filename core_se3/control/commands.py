@@ -37,7 +37,7 @@ def _sets(v):
     if isinstance(v, FieldGradientVariable):
         return [("gradient", id(v.field))]
     if isinstance(v, LoadMagnitude):
-        return [("load", id(v.load))]
+        return [("load", id(ld)) for ld in v.loads]
     if isinstance(v, RegionMagnetisation):
         return [("magnet", id(ld)) for ld, _, _ in v.loads]
     if isinstance(v, MaterialVariable):
@@ -167,8 +167,9 @@ def _linear_change(v, problem, g, lam, x):
 def scenario_variables(scn):
     """The default variables of a scenario's session: every uniform (or uniform-gradient) field
     that magnets feel, as its vector (``FieldVariable``, named by the field: ``coil`` for
-    [fields.coil]), and every single scaled load as its magnitude (``LoadMagnitude``,
-    ``load0``, ``load1``, ... after the [[loads]] entries).
+    [fields.coil]), and every [[loads]] entry of scaled loads as its magnitude (``LoadMagnitude``,
+    ``load0``, ``load1``, ... after the entries; one multiplier for all the loads an entry built:
+    an edge load on a union of lines, gravity on several densities or thicknesses).
 
     Example
     -------
@@ -206,7 +207,7 @@ def scenario_variables(scn):
         uniform = isinstance(f, UniformField) and f.direction is None
         if (uniform or isinstance(f, GradientField)) and magnetic_loads(prob, f):
             out.append(FieldVariable(prob, f, "vector", name=name))
-    for i, built in enumerate(scn.load_objects):
-        if len(built) == 1 and callable(getattr(built[0], "scale", None)):
-            out.append(LoadMagnitude(prob, built[0], name=f"load{i}"))
+    for i, built in enumerate(scn.load_objects):      # an entry of several loads (an edge load on a
+        if built and all(callable(getattr(ld, "scale", None)) for ld in built):     # union of lines) is one
+            out.append(LoadMagnitude(prob, built if len(built) > 1 else built[0], name=f"load{i}"))
     return out

@@ -486,8 +486,10 @@ class LoadMagnitude(Variable):
     ----------
     problem : core_se3.Problem
         The problem holding ``load``.
-    load : core_se3.model.Load
-        A load with a ``scale`` attribute (edge, nodal, surface loads).
+    load : core_se3.model.Load or sequence of them
+        A load with a ``scale`` attribute (edge, nodal, surface loads), or the loads one input
+        built (an edge load on a union of lines: one per line; gravity: one per density and
+        thickness), all scaled by the one P.
     lower, upper : float, optional
         Bounds of P; ``pose``: its pose; ``name``: its name.
 
@@ -502,27 +504,34 @@ class LoadMagnitude(Variable):
     """
 
     def __init__(self, problem, load, lower=-np.inf, upper=np.inf, pose=None, name="load"):
-        if not any(ld is load for ld in problem.loads) or not callable(getattr(load, "scale", None)):
+        loads = list(load) if isinstance(load, (list, tuple)) else [load]
+        if not loads or not all(any(ld is x for x in problem.loads) and callable(getattr(ld, "scale", None))
+                                for ld in loads):
             raise DesignError(f"load variable {name!r}: the load is not one of the problem's scaled loads")
-        self.problem, self.load, self.base, self.P = problem, load, load.scale, 1.0
+        self.problem, self.loads, self.P = problem, loads, 1.0
+        self.load, self.bases = loads[0], [ld.scale for ld in loads]
+        self.base = self.bases[0]
         self._setup(name, 1, lower, upper, 1.0, [name], pose)
 
     def value(self):
         return np.array([self.P])
 
     def controls(self):
-        return {("load", id(self.load))}
+        return {("load", id(ld)) for ld in self.loads}
 
     def assign(self, x):
-        self.P = float(np.asarray(x, float).ravel()[0])
-        base, P = self.base, self.P
-        self.load.scale = lambda lam: P * base(lam)
+        self.P = P = float(np.asarray(x, float).ravel()[0])
+        for ld, base in zip(self.loads, self.bases):
+            ld.scale = (lambda b: lambda lam: P * b(lam))(base)
 
     def dr_dp(self, problem, g, lam):
-        cur = self.load.scale
-        self.load.scale = self.base
+        cur = [ld.scale for ld in self.loads]
+        f = 0.0
         try:
-            f = self.load.evaluate(g, lam, tangent=False).f
+            for ld, base in zip(self.loads, self.bases):
+                ld.scale = base
+                f = f + ld.evaluate(g, lam, tangent=False).f
         finally:
-            self.load.scale = cur
+            for ld, c in zip(self.loads, cur):
+                ld.scale = c
         return -f[:, :, None]
