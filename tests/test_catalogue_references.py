@@ -104,6 +104,25 @@ def test_propped_formula_is_not_compared_once_more_than_the_tip_touches():
     assert all(m[k]["R_error"] is None and "only the tip touches" in m[k]["not_compared"] for k in (0.5, 1.0))
 
 
+def test_propped_formula_is_not_compared_at_large_deflection():
+    """The formula is small-deflection beam theory.  With g = 0.2 L and q scaled with it (q_l L^4/
+    (8 EI) = 2 g at lam = 1, only the tip touches) the run was compared against it and reported
+    R_error -34 % at lam = 0.55 and -2.9 % at 1 (a correct model: the rotations shift R by about
+    0.85 (g/L)^2 3 EI g/L^3).  Now not compared where that is above 0.2 % of R, with the reason;
+    before contact R = 0 as the formula says, and at g = 0.02 L compared from lam = 0.6 on
+    (-0.13 % there, +0.005 % at lam = 1)."""
+    m = {round(s["load_factor"], 6): s["measures"]
+         for s in run_case("contact-propped", overrides=dict(g=0.2, q=0.32), steps=20)[0]["steps"][1:]}
+    assert m[0.5]["R_formula"] == 0 and m[0.5]["R"] == 0
+    for k in (0.55, 1.0):
+        assert len(m[k]["nodes_with_force"]) == 2 and m[k]["R"] > 0                    # the tip only
+        assert m[k]["R_error"] is None and "small-deflection" in m[k]["not_compared"] and "0.2" in m[k]["not_compared"]
+    m = {round(s["load_factor"], 6): s["measures"]
+         for s in run_case("contact-propped", overrides=dict(g=0.02, q=0.032), steps=20)[0]["steps"][1:]}
+    assert m[0.55]["R_error"] is None and "small-deflection" in m[0.55]["not_compared"]
+    assert all(abs(m[k]["R_error"]) < 2e-3 and "not_compared" not in m[k] for k in (0.6, 0.8, 1.0))
+
+
 @pytest.mark.parametrize("name, key", [("contact-propped", "R_error"), ("contact-lift", "l_error_formula")])
 def test_contact_beam_formulas_are_not_compared_at_nonzero_nu(name, key):
     """strip_EI is the plate's E w h^3/(12 (1 - nu^2)); the free-edged strip at nu = 0.3 is

@@ -27,7 +27,8 @@ from .measures import lifted_length_from_gaps
 from .references import contact_lift_elastica
 from .spline import CubicSpline
 
-__all__ = ["strip_EI", "lift_formula", "lift_elastica", "propped_formula", "propped_mismatch", "contact_of"]
+__all__ = ["strip_EI", "lift_formula", "lift_elastica", "propped_formula", "propped_mismatch", "contact_of",
+           "PROPPED_GEOMETRIC_ERROR"]
 
 
 def strip_EI(p):
@@ -214,11 +215,23 @@ _NU_NOTE = ("not compared: the formulas and the elastica are for a beam (EI = E 
             "exact reduction at nu = 0); at nu = {nu:g} the strip's stiffness lies between that and the plate's")
 
 
+# The propped formula is small-deflection beam theory: in contact the tip is held g below its
+# start, and the rotations shift R by about -0.85 (g/L)^2 3 EI g / L^3 whatever the load (40x1,
+# the tip only touching, 20 steps to q_l L^4/(8 EI) = 2 g: R -2.9 % at lam = 1 and -34 % at 0.55
+# for g/L = 0.2; -0.66 / -8.2 % at 0.1; -0.13 / -2.1 % at 0.05; +0.022 / -0.029 % at the default
+# 0.01, its mesh's error), so relative to R = 3 EI (w - g)/L^3 (w = q_l L^4/(8 EI)) it is about
+# 0.85 (g/L)^2 g/(w - g): compared while that is below PROPPED_GEOMETRIC_ERROR.
+PROPPED_GEOMETRIC_ERROR = 2e-3
+
+
 def propped_mismatch(p, lam):
     """"" when the propped formula (:func:`propped_formula`) holds at load factor lam, else why
-    not: nu != 0 (the beam is the strip only at nu = 0), or the free deflection so large that
+    not: nu != 0 (the beam is the strip only at nu = 0), the free deflection so large that
     the strip rests on the plane beyond its tip (tip-only contact needs q_l L^4 / (72 EI) <= g,
-    docs/CONTACT.md; g = 0.001 at lam = 1: R 27 % above the formula, 16 nodes touching).
+    docs/CONTACT.md; g = 0.001 at lam = 1: R 27 % above the formula, 16 nodes touching), or the
+    rotations' effect on R, about 0.85 (g/L)^2 g/(q_l L^4/(8 EI) - g), above
+    PROPPED_GEOMETRIC_ERROR (small deflection: g = 0.2 L, the tip only touching, R 2.9 % below
+    the formula at q_l L^4/(8 EI) = 2 g, 34 % below at 1.1 g).
 
     Example
     -------
@@ -232,6 +245,13 @@ def propped_mismatch(p, lam):
     if w72 > p["g"] * (1 + 1e-12):
         return (f"not compared: the formula holds while only the tip touches (q_l L^4/(72 EI) <= g); here "
                 f"q_l L^4/(72 EI) = {w72:.4g} > g = {p['g']:g}")
+    over = lam * p["q"] * p["width"] * p["L"] ** 4 / (8.0 * strip_EI(p)) - p["g"]      # w - g
+    est = 0.85 * (p["g"] / p["L"]) ** 2 * p["g"] / over if over > 0 else 0.0
+    if est > PROPPED_GEOMETRIC_ERROR:
+        return (f"not compared: the formula is small-deflection beam theory; in contact the tip is held "
+                f"g/L = {p['g'] / p['L']:.3g} below its start, and the rotations' effect on R, about "
+                f"0.85 (g/L)^2 g/(q_l L^4/(8 EI) - g), is {est:.2%} here (compared below "
+                f"{PROPPED_GEOMETRIC_ERROR:.1%})")
     return ""
 
 
