@@ -33,6 +33,7 @@ import numpy as np
 import pytest
 
 from core_se3 import Material, Problem, lie, mesh
+from core_se3.errors import ConvergenceError
 from core_se3.errors import ConvergenceError, OptionError, ParallelError
 from core_se3.model import Load, LoadEvaluation, UniformField, make_obstacle
 from core_se3.parallel import (RunSetup, distributed_solve, local_problem, localize_load, partition_elements, rcb,
@@ -169,19 +170,19 @@ def two_ranks_small(tmp_path_factory):
     return _driver(tmp_path_factory, 2, "first-step-buckling", "roof-counts")
 
 
-def test_a_first_step_on_the_buckling_load_stops_two_ranks_as_it_stops_one(two_ranks_small):
-    """The clamped 6-element strip compressed exactly to its buckling load in its first step
-    (its equilibrated tangent's condition number 5e16): the serial run stops with a
-    SingularSystemError naming the critical load; two ranks went on to load factor 1.  The
-    random right-hand side of the first solve's probe grew by 3.6e15 serially, 1.6e15 on one
-    rank, 6.3e14 on two (limit 1e15: its share of the null direction is ~1/sqrt(n)); the probe's
-    second solve (inverse iteration) grows by 5.8e16 / 8.9e15 / 7.3e15."""
+def test_a_first_step_onto_the_start_tangents_singular_load_goes_on_two_ranks_as_on_one(two_ranks_small):
+    """The clamped 6-element strip whose first step lands on its start tangent's singular load
+    (P = 2 EI/L^2, the equilibrated condition number 5e16; not a critical point of the path:
+    tests/test_step_checks.py): serially the try is cut back and the run stops at Euler's
+    bifurcation; two ranks do the same, step for step, with the same message.  Found: two ranks
+    went on to load factor 1 (the first solve's random right-hand side grew 6.3e14 there, 3.6e15
+    serially, against the limit 1e15), and the serial run stopped at 0.5 calling it a buckling load."""
     from test_step_checks import _first_step_on_buckling_load
-    from core_se3.errors import SingularSystemError
-    with pytest.raises(SingularSystemError) as exc:
-        _first_step_on_buckling_load().solve(steps=2, limit_check=False, solver="serial")
-    assert two_ranks_small["first-step-buckling"] == dict(error="SingularSystemError", message=str(exc.value))
-    assert "critical (buckling) load" in str(exc.value)
+    with pytest.raises(ConvergenceError) as exc:
+        _first_step_on_buckling_load().solve(steps=2, solver="serial")
+    lam = [float(s.load_factor) for s in exc.value.result.steps]
+    assert two_ranks_small["first-step-buckling"] == dict(error="ConvergenceError", message=str(exc.value), lam=lam)
+    assert "bifurcation" in str(exc.value)
 
 
 @pytest.mark.parametrize("follower", [False, True])

@@ -2,6 +2,7 @@
 sign of det K from the factors, bounded splitting, translation invariance, and critical points
 of arc length located to a tolerance whatever the first step.  Each test fails on the code
 before these checks."""
+import re
 import warnings
 
 import numpy as np
@@ -153,22 +154,25 @@ def test_a_passed_bifurcation_known_only_by_its_bracket_says_it_was_not_located(
     assert c["accuracy"] is None and "not located" in c["description"] and "bracket only" in c["description"]
 
 
-def test_a_first_load_on_the_start_states_buckling_load_is_not_called_a_missing_support():
-    """The clamped strip on 6 elements compressed by 4 in 2 steps: the first evaluation, at the
-    straight state under load factor 0.5, has a singular tangent (smallest eigenvalue 1.6e-11;
-    0.073 at lam 0: the start state's tangent under an end compression P is singular at
-    P = 2 EI/L^2 on any mesh: 6, 10, 20 elements, equilibrated condition number 5e16).  It
-    stops on 6, 10 and 20 elements and on 2 ranks alike: the first solve's random right-hand side
-    grew by 3.6e15, 3.9e14, 6.8e14 (limit 1e15), so 10 and 20 elements went on; the probe's
-    second solve (inverse iteration) grows by 5.8e16, 7.5e15, 1.9e16.  The error
-    names the load and what to do; before, it said 'the tangent of the unloaded shell is singular
-    -- a rigid-body motion is not restrained (missing or insufficient supports)' of a clamped strip."""
-    from core_se3.errors import SingularSystemError
-    for nx in (6, 10, 20):
-        with pytest.raises(SingularSystemError) as exc:
-            _first_step_on_buckling_load(nx).solve(steps=2, limit_check=False)
+def test_a_first_step_onto_the_start_tangents_singular_load_is_cut_back_not_called_buckling():
+    """The clamped strip compressed by 4 in 2 steps: the first evaluation, at the straight state
+    under load factor 0.5, has a singular tangent (smallest eigenvalue 1.6e-11, 0.073 at lam 0).
+    That is the try's first Newton iterate (off equilibrium the tangent carries 1/2 ad* of the
+    residual: singular at P = 2 EI/L^2 on any mesh), not the path: the straight strip is stable
+    there (Euler's load pi^2 EI/(4 L^2) = 2.467, lam 0.6168).  The try is cut back and load
+    control goes on to Euler's bifurcation, located to critical_tol on 6, 10 and 20 elements.
+    Before: 6 elements stopped at 0.5 with 'a critical (buckling) load of the start state' (and,
+    before that, 'missing supports'); 10 and 20 went on only because the first solve's random
+    right-hand side grew 3.9e14 / 6.8e14 (limit 1e15)."""
+    for nx, tol in ((6, 0.01), (10, 0.003), (20, 0.001)):        # the beam's discretisation error
+        with pytest.raises(ConvergenceError) as exc:
+            _first_step_on_buckling_load(nx).solve(steps=2)
         msg = str(exc.value)
-        assert "critical (buckling) load" in msg and "load factor 0.5" in msg and "supports" not in msg
+        assert "bifurcation" in msg and "buckling load" not in msg and "supports" not in msg
+        lo, hi = (float(x) for x in re.search(r"between load factors ([0-9.]+) and ([0-9.]+)", msg).groups())
+        assert hi - lo <= 1e-3 * hi and abs(0.5 * (lo + hi) / 0.6168 - 1) < tol
+        lam = [s.load_factor for s in exc.value.result.steps]
+        assert lam[:2] == [0.0, 0.5]                                 # past the start tangent's singular load
 
 
 def _first_step_on_buckling_load(nx=6):

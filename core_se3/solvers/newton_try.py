@@ -220,7 +220,7 @@ class NewtonTry:
                 if self.stateful:
                     problem.element.update(eta)
         except SingularSystemError as exc:
-            if self.first_solve:
+            if self.first_solve and not isinstance(exc, _LoadedFirstTangent):
                 raise
             reason = str(exc)
         except (ElementTooDistortedError, FloatingPointError) as exc:
@@ -232,27 +232,36 @@ class NewtonTry:
     def _solve(self, ev, g_try, lam_try=0.0):
         """The Newton correction at the evaluation ``ev``; a singular tangent at the path's first
         solve is a SingularSystemError naming the unrestrained rigid-body motion -- or, when the
-        tangent without the load (lam = 0) is regular, the first load as a critical load of the
-        start state (:meth:`_loaded_singularity`)."""
+        tangent without the load (lam = 0) is regular, a failed try that is cut back
+        (:class:`_LoadedFirstTangent`, :meth:`_loaded_singularity`)."""
         ts = time.perf_counter()
         try:
             x = self.eq.solve(ev, g_try, probe=self.first_solve)
         except SingularSystemError as exc:
             if self.first_solve and not isinstance(exc, LinearSolverError):
-                raise SingularSystemError(self._loaded_singularity(g_try, lam_try) or (
+                loaded = self._loaded_singularity(g_try, lam_try)
+                if loaded:
+                    raise _LoadedFirstTangent(loaded) from None
+                raise SingularSystemError(
                     f"{exc}: the tangent of the unloaded shell is singular -- a rigid-body "
-                    "motion is not restrained (missing or insufficient supports)")) from None
+                    "motion is not restrained (missing or insufficient supports)") from None
             raise
         self.timer.t_sol += time.perf_counter() - ts
         self.first_solve = False
         return x
 
-
     def _loaded_singularity(self, g_try, lam_try):
-        """The message of a first tangent singular under the load factor ``lam_try`` only (its
-        lam = 0 tangent at the same state solves), else ''.  A clamped 6-element strip under an
-        end compression whose first step of 0.5 lands on the straight strip's buckling load (K's
-        smallest eigenvalue 0.073 at lam 0, 1.6e-11 at 0.5) was said to have missing supports."""
+        """The reason of a first tangent singular under the load factor ``lam_try`` only (its
+        lam = 0 tangent at the same state solves), else ''.
+
+        Off equilibrium the left-trivialised tangent carries 1/2 ad* of the residual, here the
+        whole first increment of the load: a clamped strip under an end compression P has a
+        singular start tangent at P = 2 EI/L^2 on any mesh, where the straight strip is stable
+        (Euler's load is pi^2 EI/(4 L^2)).  That is a property of the try's first Newton
+        iterate, not of the path (the path's critical points are the stability checks'), so the
+        try fails and the increment is cut back.  Before, the run stopped, calling the load a
+        critical (buckling) load of the start state (and, earlier, a missing support).
+        """
         if lam_try == 0.0:
             return ""
         ev0, _, _ = self.eq.evaluate(g_try, 0.0, tangent=True)
@@ -260,10 +269,17 @@ class NewtonTry:
             self.eq.solve(ev0, g_try, probe=True)
         except SingularSystemError:
             return ""
-        return (f"the tangent at the start state is singular under the first step's load factor {lam_try:.6g} "
-                "but not without the load: that load is a critical (buckling) load of the start state, not a "
-                "missing support. Take another first step (steps, or a first load factor off it), add an "
-                "imperfection, or trace the path with arc length (control = \"arclength\", stability = true)")
+        return (f"the first Newton tangent of the step (at its start state, under load factor {lam_try:.6g}) "
+                "is singular, but not without the load: a property of this increment's first iterate "
+                "(off equilibrium the tangent carries 1/2 ad* of the residual), not a critical point of "
+                "the path; the increment is cut back. If the cut-backs run out: take another first step "
+                "(steps, or a first load factor off it)")
+
+
+class _LoadedFirstTangent(SingularSystemError):
+    """The first tangent of a path is singular under the try's load increment only (regular
+    without the load): a failed try, cut back like one that did not converge
+    (:meth:`NewtonTry._loaded_singularity`)."""
 
 
 def augmented_try(trier, aug, g_try, lam_try, mip, stress, max_augmentations, record):
