@@ -174,6 +174,7 @@ class Design:
         self.best = None
         self.solves = self.newton_iterations = self.evaluations = 0
         self.failed = []
+        self.trials = self.accepted = 0
         self.branch_notes = {}      # pose name -> why its solve from the flat state stopped (off_branch)
         self._cache = None
         # the element's coarse-mesh check of the design points (once per point whose element
@@ -384,7 +385,9 @@ class Design:
         x0 : (nx,) array, optional
             The start (checked against the bounds).
         max_iter : int
-            Iterations (least_squares: function evaluations).
+            Iterations (least_squares: evaluations, scipy's ``max_nfev``: the start and every
+            trial point, the rejected ones too -- each costs its equilibrium solves; the result
+            gives ``iterations`` and ``rejected`` apart).
         tol : float
             The optimiser's tolerance (ftol, xtol and gtol of least_squares; tol of minimize).
         tolerance : float, optional
@@ -417,6 +420,7 @@ class Design:
         self.element_check.reset()
         self.solves = self.newton_iterations = self.evaluations = 0     # this run's (a second optimise)
         self.failed = []                                                # least_squares' rejected trial points
+        self.trials = self.accepted = 0         # least_squares' evaluations, and those it accepted (the start too)
         t0 = time.perf_counter()
         history, last = [], {}
 
@@ -491,10 +495,12 @@ class Design:
             J = self.jacobian(z * sc) * sc
             if seen.get("z") is None or not np.array_equal(seen["z"], z):
                 seen["z"] = z.copy()
+                self.accepted += 1
                 record(z)
             return J
 
         def fun(z):
+            self.trials += 1
             try:
                 F = self.residuals(z * sc)
             except ConvergenceError as exc:
@@ -510,6 +516,11 @@ class Design:
             return F
         r = so.least_squares(fun, x0 / sc, jac=jac, bounds=(self.lower / sc, self.upper / sc), method="trf",
                              ftol=tol, xtol=tol, gtol=tol, max_nfev=max_iter)
+        if r.status == 0:           # scipy's "maximum number of function evaluations": say what they were
+            rej = self.trials - self.accepted
+            return r.x, False, (f"max_iter = {max_iter} evaluations spent: the start, {self.accepted - 1} accepted "
+                                f"step(s) and {rej} rejected trial point(s) ({len(self.failed)} of them because "
+                                "their equilibrium failed); least_squares counts every evaluation")
         return r.x, r.success and r.status > 0, r.message
 
     def _minimize(self, method, x0, tol, max_iter, record, norm):
@@ -557,7 +568,8 @@ class Design:
                     f"{', '.join(idle)}")
         res = DesignResult(bool(ok), reached, msg, x, self.labels, values, self.objective(x), self.gradient(x), mis,
                            worst, len(history), self.evaluations, self.solves, self.newton_iterations,
-                           time.perf_counter() - t0, method, history, list(states), idle, branch, list(self.failed))
+                           time.perf_counter() - t0, method, history, list(states), idle, branch, list(self.failed),
+                           self.trials - self.accepted if method == "least_squares" else None)
         assign_all(self.pose_variables(len(self.poses) - 1), states[-1].x)
         restore_multipliers(self.problem, states[-1])
         return res
