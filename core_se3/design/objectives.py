@@ -41,7 +41,10 @@ def local_jacobian(fn, g, nodes, ell, step=1e-4, local=None):
     differences in eta (translations step * ell, rotations step), Richardson-extrapolated.
     ``local``: the same function of the frames of ``nodes`` alone, batched,
     (M, len(nodes), 4, 4) -> (M, k): all 24 len(nodes) perturbed evaluations in one call (no
-    copy of g per perturbation).
+    copy of g per perturbation), given the nodes' frames relative to the first one's position
+    (so ``local`` must be a function whose differences a common translation does not change: a
+    position, an orientation): the differences are then those of the part's size, not of its
+    distance from the origin (before, 9e-4 off for a probe of a part at x0 = 1e9).
 
     Returns: scipy.sparse (k, 6 n).
 
@@ -66,10 +69,12 @@ def local_jacobian(fn, g, nodes, ell, step=1e-4, local=None):
         E[p, 0, :, j] = h[j] * np.array([1.0, -1.0])
         E[p, 1, :, j] = 2 * h[j] * np.array([1.0, -1.0])
     if local is not None:
-        F = np.broadcast_to(g[nodes], (len(pairs), 2, 2) + g[nodes].shape).copy()
+        gn = np.array(g[nodes], float)
+        gn[:, :3, 3] -= gn[0, :3, 3].copy()                             # relative to the part (docstring)
+        F = np.broadcast_to(gn, (len(pairs), 2, 2) + gn.shape).copy()
         X = lie.exp(E.reshape(-1, 6)).reshape(len(pairs), 2, 2, 4, 4)
         for a in range(len(nodes)):                                     # the pairs 6a .. 6a + 5
-            F[6 * a:6 * a + 6, :, :, a] = g[nodes[a]] @ X[6 * a:6 * a + 6]
+            F[6 * a:6 * a + 6, :, :, a] = gn[a] @ X[6 * a:6 * a + 6]
         vals = np.asarray(local(F.reshape((-1,) + F.shape[3:]))).reshape(len(pairs), 2, 2, -1)
     else:
         vals = []
