@@ -202,6 +202,27 @@ def test_optimised_scenario_holds_a_load_magnitude_at_its_default(tmp_path):
     assert abs(scn.problem.solve().final.probes["tip"]["u"][2] + 5.0) < 1e-5
 
 
+def test_a_second_design_of_one_scenario_starts_from_the_file_and_writes_it_right(tmp_path):
+    # run_design twice on one Scenario (a notebook re-running its design cell, a script writing
+    # two output directories): the first design leaves the problem at its values (the gravity
+    # scaled by 0.4337).  Before, the second design was built on that problem: its load variable
+    # started at 1 relative to the scaled gravity ("reached" at once) and optimised.toml wrote
+    # 1 x the file's g = -9810, which `core-se3 run` sags 11.43 for the design's 5.0.  Now each
+    # design is built on the problem as the file gives it: the same result, the same file.
+    from core_se3.scenario.design_runner import run_design
+    path = tmp_path / "sag.toml"
+    path.write_text(GRAVITY)
+    scn = scenario.load(path)
+    docs = []
+    for k in (1, 2):
+        r, files = run_design(scn, out=tmp_path / f"o{k}", vtu=False, plots=False)
+        assert r.reached and abs(r.x[0] - 0.4337) < 1e-4
+        opt = scenario.load(files["scenario"])
+        assert abs(opt.problem.solve().final.probes["tip"]["u"][2] + 5.0) < 1e-5
+        docs.append(opt.spec["loads"][0]["g"])
+    assert docs[0] == docs[1]
+
+
 def test_a_pose_holds_the_field_of_a_shared_field_variable(tmp_path):
     # [[design.poses]] fields = { coil = [0, 0, 0] } beside a field variable of every pose (no
     # pose key): the flat pose must see no field.  Before, the shared variable was assigned
