@@ -105,6 +105,25 @@ def test_bad_design_input_names_the_key(tmp_path, old, new, key):
     assert exc.value.key == key and str(path) in str(exc.value)
 
 
+@pytest.mark.parametrize("old,new,match", [
+    ('free = ["magnitude"]\nB_max = 0.05', 'free = ["angle"]\nB_max = 0.001',
+     "variable 'coil': the start field has magnitude 0.002 above B_max = 0.001"),
+    ('form = "polar"\nfree = ["angle"]', 'form = "polar"\nfree = ["angle"]\nBr_max = 0.1',
+     "variable 'magnetisation1': the start B\\^r of region 'root' has magnitude 0.143 above Br_max = 0.1"),
+])
+def test_a_bound_that_excludes_a_fixed_start_is_refused(tmp_path, old, new, match):
+    # a polar form whose magnitude is not free, started above its bound (B_max, Br_max): before,
+    # the design kept the magnitude there (0.002 T with B_max = 0.001, 0.143 T with Br_max = 0.1),
+    # "reached the target" and wrote it to optimised.toml -- the bound silently dropped, where a
+    # free magnitude or a vector form is refused ("outside its bounds", "norm ... above the bound")
+    assert old in BASE
+    path = tmp_path / "bad.toml"
+    path.write_text(BASE.replace(old, new, 1))
+    with pytest.raises(ScenarioError, match=match) as exc:
+        scenario.load(path).design()
+    assert exc.value.key == "design" and str(path) in str(exc.value)
+
+
 def test_poses_of_one_file_name_are_refused(tmp_path):
     """Pose names are made safe for file names ('grip é' and 'grip ü' both 'grip__'): the second
     pose's optimised_grip__.toml and vtu/grip__/ overwrote the first's, and design.json listed one.
