@@ -124,6 +124,28 @@ def test_a_bound_that_excludes_a_fixed_start_is_refused(tmp_path, old, new, matc
     assert exc.value.key == "design" and str(path) in str(exc.value)
 
 
+@pytest.mark.parametrize("where,components,held", [
+    ("node = 0", "components = [0, 2]", "[0, 2]"),          # node 0 of the clamped edge (x0)
+    ('probe = "tip"', "components = [0, 2]", None),         # the tip: free
+])
+def test_a_target_on_held_nodes_is_refused(tmp_path, where, components, held):
+    # a position target on a clamped node (a node id taken for the tip's): before, the design ran
+    # and said only "did not reach the target: misfit 1.000e+00 > tolerance 1.000e-06".  (A target
+    # with some free components, a whole shape with its clamped nodes, is the user's: the twin
+    # experiment of test_design_cases targets every node.)
+    text = BASE.replace('probe = "tip"\nvalue = [12.0, 0.0, 10.0]\ncomponents = [0, 2]', f"{where}\nvalue = [1.0, 0.0, 1.0]"
+                        f"\n{components}")
+    path = tmp_path / "held.toml"
+    path.write_text(text)
+    if held is None:
+        scenario.load(path).design()
+        return
+    with pytest.raises(ScenarioError, match=rf"target 'targets\[0\]' of pose 'design': its component\(s\) "
+                                            rf"\{held[:-1]}\] are held by the supports") as exc:
+        scenario.load(path).design()
+    assert exc.value.key == "design"
+
+
 def test_poses_of_one_file_name_are_refused(tmp_path):
     """Pose names are made safe for file names ('grip é' and 'grip ü' both 'grip__'): the second
     pose's optimised_grip__.toml and vtu/grip__/ overwrote the first's, and design.json listed one.

@@ -43,6 +43,7 @@ from ..backend import launched_ranks
 from ..errors import ConvergenceError, DesignError, ParallelError
 from .equilibrium import (ElementCheck, EquilibriumOptions, EquilibriumState, assign_all, follow, multipliers,
                           restore_multipliers, solve_flat)
+from .objectives import AngleInDegrees, NodePosition, Orientation, ProbePosition, RotationAngle
 from .sensitivity import SolveWith, sensitivity
 from .targets import DesignResult, Pose, Smoothness, Target
 
@@ -69,6 +70,26 @@ def _check_conflicts(variables):
                 raise DesignError(f"variable {u.name!r} {same} in the same pose: the later one would overwrite "
                                   "the earlier one, whose derivative would then be wrong; give each parameter to one "
                                   "variable (e.g. one FieldVariable with free=('x', 'z'), disjoint regions)")
+
+
+def _check_targets_move(problem, poses):
+    """DesignError for a target on nodes, a probe or a frame whose supports hold every component
+    it counts (a clamped node's position): no design moves it, and before, the design ran and
+    said only "did not reach the target: misfit 1.000e+00" (a target on node 0 of a strip clamped
+    there, e.g. a node id mistaken for the tip's).  A target with some free components (a whole
+    shape, its clamped nodes included) is the user's.  Checked on the reference state, where these
+    quantities' derivatives in the free dofs vanish only for held dofs."""
+    free = problem.assembler().free.astype(float)
+    for pose in poses:
+        for t in pose.targets:
+            if not isinstance(t.quantity, (NodePosition, ProbePosition, Orientation, RotationAngle, AngleInDegrees)):
+                continue
+            J = (t.quantity.jacobian(problem, problem.mesh.g0, pose.lam).multiply(free[None, :])).tocsr()[t.rows()]
+            held = np.asarray(abs(J).sum(1)).ravel() == 0
+            if np.all(held):
+                raise DesignError(f"target {t.name!r} of pose {pose.name!r}: its component(s) "
+                                  f"{t.rows().tolist()} are held by the supports: no design variable moves them; "
+                                  "target a free node or probe")
 
 
 def _said(keys):
@@ -158,6 +179,7 @@ class Design:
                     self.aux.append(v)
             for t in pose.targets:
                 t.resolve_scale(problem)
+        _check_targets_move(problem, self.poses)
         self.all = self.variables + self.aux
         self.x0 = [v.value() for v in self.all]
         self.order, self.held = self._orders()
