@@ -39,7 +39,7 @@ import warnings
 from ..errors import AccuracyWarning, DesignError
 from ..model import ContactLoad
 from ..solvers import Factorization, make_solver
-from ..solvers.origin import part_origin
+from ..solvers.origin import frames_origin, part_origin
 from .objectives import Quantity
 
 __all__ = ["Sensitivity", "SolveWith", "sensitivity", "residual_derivative", "quantity_jacobian", "at_the_cone",
@@ -275,8 +275,7 @@ def on_the_part(problem, g, quantities):
     2.0
     """
     c = part_origin(problem)
-    x = np.asarray(g)[:, :3, 3]
-    if c is None or not np.all(np.abs(x - c) <= 0.5 * np.abs(c), where=(c != 0)):
+    if c is None or frames_origin(problem, g, c) is None:
         return g, quantities                # a near part, or frames already relative (a control session's)
     g = np.array(g, float)
     g[:, :3, 3] -= c
