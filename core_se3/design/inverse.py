@@ -540,9 +540,12 @@ class Design:
                              ftol=tol, xtol=tol, gtol=tol, max_nfev=max_iter)
         if r.status == 0:           # scipy's "maximum number of function evaluations": say what they were
             rej = self.trials - self.accepted
-            return r.x, False, (f"max_iter = {max_iter} evaluations spent: the start, {self.accepted - 1} accepted "
-                                f"step(s) and {rej} rejected trial point(s) ({len(self.failed)} of them because "
-                                "their equilibrium failed); least_squares counts every evaluation")
+            spent = f"max_iter = {max_iter} evaluations spent: the start"
+            if not rej:
+                return r.x, False, f"{spent} and {self.accepted - 1} accepted step(s)"
+            return r.x, False, (f"{spent}, {self.accepted - 1} accepted step(s) and {rej} rejected trial point(s) "
+                                f"({len(self.failed)} of them because their equilibrium failed); least_squares "
+                                "counts every evaluation")
         return r.x, r.success and r.status > 0, r.message
 
     def _minimize(self, method, x0, tol, max_iter, record, norm):
