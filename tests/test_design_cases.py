@@ -281,15 +281,9 @@ def test_a_design_on_another_branch_says_so():
     assert r2.reached and r2.branch == {} and "another equilibrium" not in r2.message
 
 
-def test_least_squares_backs_off_a_trial_point_past_a_limit_point():
-    # The hinged roof of examples/snap-roof.toml (4 x 4 elements, load stepping) with its load at
-    # 0.2 of the example's: a crown deflection reached at 0.7 of it (multiplier 3.5, below the limit
-    # point at 0.749 of it, multiplier 3.74) is the target.  The trust-region steps 1 -> 2 -> 4 go
-    # past the limit point, where no equilibrium exists.  Before, the whole design stopped there
-    # (ConvergenceError, exit 3); now least_squares rejects the trial point (NaN residuals: trf
-    # shrinks its trust region to a quarter of the step), says so, and reaches the target: 2.5,
-    # then 3.5 (to 1e-4: the tolerance 1e-6 on the deflection 8.2), the equilibrium a solve from
-    # flat reaches too.
+def _snap_roof_design():
+    """The load-multiplier design of the hinged roof (4 x 4 elements) whose trust-region steps go
+    past its limit point (test_least_squares_backs_off_a_trial_point_past_a_limit_point)."""
     import os
     from core_se3 import scenario
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -297,7 +291,7 @@ def test_least_squares_backs_off_a_trial_point_past_a_limit_point():
         src = fh.read().replace("nt = 8", "nt = 4").replace("nl = 8", "nl = 4").replace(
             'control = "arclength"', "steps = 8").replace("dlam0 = 0.05\nds_max_factor = 3.0\nmax_steps = 100\n", "")
     w = scenario.loads(src).problem.solve(lam_end=0.7).final.probes["crown"]["u"][2]
-    scn = scenario.loads(src.replace("force = [0.0, 0.0, -750.0]", "force = [0.0, 0.0, -150.0]") + f"""
+    return scenario.loads(src.replace("force = [0.0, 0.0, -750.0]", "force = [0.0, 0.0, -150.0]") + f"""
 [design]
 tolerance = 1e-6
 [[design.variables]]
@@ -308,9 +302,37 @@ type = "position"
 probe = "crown"
 value = [0.0, 0.0, {2540.0 + float(w)!r}]
 components = [2]
-""")
-    r = scn.design().optimise("least_squares", tolerance=1e-6)
+""").design()
+
+
+def test_least_squares_backs_off_a_trial_point_past_a_limit_point():
+    # The hinged roof of examples/snap-roof.toml (4 x 4 elements, load stepping) with its load at
+    # 0.2 of the example's: a crown deflection reached at 0.7 of it (multiplier 3.5, below the limit
+    # point at 0.749 of it, multiplier 3.74) is the target.  The trust-region steps 1 -> 2 -> 4 go
+    # past the limit point, where no equilibrium exists.  Before, the whole design stopped there
+    # (ConvergenceError, exit 3); now least_squares rejects the trial point (NaN residuals: trf
+    # shrinks its trust region to a quarter of the step), says so, and reaches the target: 2.5,
+    # then 3.5 (to 1e-4: the tolerance 1e-6 on the deflection 8.2), the equilibrium a solve from
+    # flat reaches too.
+    r = _snap_roof_design().optimise("least_squares", tolerance=1e-6)
     assert r.reached and r.success and not r.branch
     assert r.failed and "trial point(s) rejected: their equilibrium failed" in r.message
     assert "Newton failed" in r.failed[0]["message"] and r.failed[0]["x"][0] > 3.75     # past the limit point
     assert abs(r.x[0] - 3.5) < 1e-4 and r.document()["failed"] == r.failed
+    # the start, 3 accepted steps (2, 2.5, 3.5) and the rejected 4: 5 evaluations
+    assert (r.iterations, r.rejected, r.evaluations) == (4, 1, 5) and r.document()["rejected"] == 1
+
+
+def test_max_iter_of_least_squares_counts_the_rejected_trial_points_and_says_so():
+    # least_squares' max_iter is scipy's max_nfev (docs/DESIGN.md): every evaluation counts, a
+    # rejected trial point too (its equilibrium solves are spent).  On the snap roof the budget
+    # of 3 buys the start, one accepted step (to 2) and the rejected 4 (past the limit point):
+    # before, the result said only "The maximum number of function evaluations is exceeded."
+    # with iterations 2, and the rejected trial points were not counted apart (nor those that
+    # did not decrease Phi, which are not in ``failed``).
+    r = _snap_roof_design().optimise("least_squares", tolerance=1e-6, max_iter=3)
+    assert not r.reached and not r.success and abs(r.x[0] - 2.0) < 1e-12
+    assert (r.iterations, r.rejected, r.evaluations, len(r.failed)) == (2, 1, 3, 1)
+    assert ("max_iter = 3 evaluations spent: the start, 1 accepted step(s) and 1 rejected trial point(s) (1 of them "
+            "because their equilibrium failed)") in r.message
+    assert r.document()["rejected"] == 1

@@ -105,6 +105,47 @@ def test_bad_design_input_names_the_key(tmp_path, old, new, key):
     assert exc.value.key == key and str(path) in str(exc.value)
 
 
+@pytest.mark.parametrize("old,new,match", [
+    ('free = ["magnitude"]\nB_max = 0.05', 'free = ["angle"]\nB_max = 0.001',
+     "variable 'coil': the start field has magnitude 0.002 above B_max = 0.001"),
+    ('form = "polar"\nfree = ["angle"]', 'form = "polar"\nfree = ["angle"]\nBr_max = 0.1',
+     "variable 'magnetisation1': the start B\\^r of region 'root' has magnitude 0.143 above Br_max = 0.1"),
+])
+def test_a_bound_that_excludes_a_fixed_start_is_refused(tmp_path, old, new, match):
+    # a polar form whose magnitude is not free, started above its bound (B_max, Br_max): before,
+    # the design kept the magnitude there (0.002 T with B_max = 0.001, 0.143 T with Br_max = 0.1),
+    # "reached the target" and wrote it to optimised.toml -- the bound silently dropped, where a
+    # free magnitude or a vector form is refused ("outside its bounds", "norm ... above the bound")
+    assert old in BASE
+    path = tmp_path / "bad.toml"
+    path.write_text(BASE.replace(old, new, 1))
+    with pytest.raises(ScenarioError, match=match) as exc:
+        scenario.load(path).design()
+    assert exc.value.key == "design" and str(path) in str(exc.value)
+
+
+@pytest.mark.parametrize("where,components,held", [
+    ("node = 0", "components = [0, 2]", "[0, 2]"),          # node 0 of the clamped edge (x0)
+    ('probe = "tip"', "components = [0, 2]", None),         # the tip: free
+])
+def test_a_target_on_held_nodes_is_refused(tmp_path, where, components, held):
+    # a position target on a clamped node (a node id taken for the tip's): before, the design ran
+    # and said only "did not reach the target: misfit 1.000e+00 > tolerance 1.000e-06".  (A target
+    # with some free components, a whole shape with its clamped nodes, is the user's: the twin
+    # experiment of test_design_cases targets every node.)
+    text = BASE.replace('probe = "tip"\nvalue = [12.0, 0.0, 10.0]\ncomponents = [0, 2]', f"{where}\nvalue = [1.0, 0.0, 1.0]"
+                        f"\n{components}")
+    path = tmp_path / "held.toml"
+    path.write_text(text)
+    if held is None:
+        scenario.load(path).design()
+        return
+    with pytest.raises(ScenarioError, match=rf"target 'targets\[0\]' of pose 'design': its component\(s\) "
+                                            rf"\{held[:-1]}\] are held by the supports") as exc:
+        scenario.load(path).design()
+    assert exc.value.key == "design"
+
+
 def test_poses_of_one_file_name_are_refused(tmp_path):
     """Pose names are made safe for file names ('grip é' and 'grip ü' both 'grip__'): the second
     pose's optimised_grip__.toml and vtu/grip__/ overwrote the first's, and design.json listed one.
@@ -200,6 +241,27 @@ def test_optimised_scenario_holds_a_load_magnitude_at_its_default(tmp_path):
     scn = scenario.load(tmp_path / "o" / "optimised.toml")
     assert scn.spec["loads"][0]["g"][2] != -9810.0
     assert abs(scn.problem.solve().final.probes["tip"]["u"][2] + 5.0) < 1e-5
+
+
+def test_a_second_design_of_one_scenario_starts_from_the_file_and_writes_it_right(tmp_path):
+    # run_design twice on one Scenario (a notebook re-running its design cell, a script writing
+    # two output directories): the first design leaves the problem at its values (the gravity
+    # scaled by 0.4337).  Before, the second design was built on that problem: its load variable
+    # started at 1 relative to the scaled gravity ("reached" at once) and optimised.toml wrote
+    # 1 x the file's g = -9810, which `core-se3 run` sags 11.43 for the design's 5.0.  Now each
+    # design is built on the problem as the file gives it: the same result, the same file.
+    from core_se3.scenario.design_runner import run_design
+    path = tmp_path / "sag.toml"
+    path.write_text(GRAVITY)
+    scn = scenario.load(path)
+    docs = []
+    for k in (1, 2):
+        r, files = run_design(scn, out=tmp_path / f"o{k}", vtu=False, plots=False)
+        assert r.reached and abs(r.x[0] - 0.4337) < 1e-4
+        opt = scenario.load(files["scenario"])
+        assert abs(opt.problem.solve().final.probes["tip"]["u"][2] + 5.0) < 1e-5
+        docs.append(opt.spec["loads"][0]["g"])
+    assert docs[0] == docs[1]
 
 
 def test_a_pose_holds_the_field_of_a_shared_field_variable(tmp_path):

@@ -298,3 +298,41 @@ def test_sensitivity_at_the_stick_slip_transition_says_it_is_one_sided():
     with warnings.catch_warnings():
         warnings.simplefilter("error", AccuracyWarning)
         sensitivity(q, st.g, 1.0, [ProbePosition(q, "tip")], u)
+
+
+def test_sensitivities_of_a_part_far_from_the_origin_are_those_at_the_origin():
+    # The README cantilever (10 x 1, 16 elements, tip force 4) translated to x0 = 1e9.  Its state is stored to the ulp of 1e9 (1.2e-7); taken relative to
+    # the part (an exact subtraction) it is a state of the part at x0 = 0.  Before, the
+    # sensitivities at 1e9 differed from those of that same state at 0 by 1.2e-4 relative (the
+    # probe's finite differences of absolute positions: 8.4e-4 on its Jacobian dq/d eta) and 1e-5
+    # (a node's: the tangent evaluated on the absolute frames).  Now the probe's differences are
+    # taken relative to the part and the tangent, the variables' and the quantities' derivatives
+    # on the frames relative to the part's origin: they agree to round-off (1e-12).  (With the
+    # state solved at 0 they agree only as the states do: the far state's positions, rounded by
+    # up to 1.2e-7, put membrane strains of 2e-7 in it, E h 2e-7 = 0.02 of membrane force, and its
+    # sensitivities differ by up to 5e-5 -- the stored state's round-off, not the sensitivities'.)
+    def make(x0):
+        p = Problem(mesh.rectangle(10.0, 1.0, 16, 1, x0=x0), Material(E=1.2e6, nu=0.0, h=0.1), backend="numpy")
+        p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 4.0)); p.add_probe("tip", "x1")
+        p.add_edge_force("x1", (0.0, 1.0, 0.0), follower=True)
+        return p
+
+    def sens(p, g):
+        q = [ProbePosition(p, "tip"), Orientation(p, probe="tip"), RotationAngle(p, probe="tip"), NodePosition(p, [20])]
+        v = [LoadMagnitude(p, p.loads[0]), LoadMagnitude(p, p.loads[1], name="Q")]
+        dq = np.vstack([qq.jacobian(p, g, 1.0).toarray() for qq in q])
+        return [sensitivity(p, g, 1.0, q, v, m) for m in ("adjoint", "direct")], dq
+
+    p0 = make(0.0)
+    g0 = p0.solve(steps=10).final.g
+    far = make(1e9)
+    gf = far.solve(steps=10).final.g
+    gr = gf.copy(); gr[:, 0, 3] -= 1e9                     # exact: the far state relative to the part
+    assert np.abs(gr - g0).max() < 2e-7                    # the positions' rounding at 1e9
+    (ar, dr), qr = sens(p0, gr)
+    (af, df), qf = sens(far, gf)
+    assert np.abs(qf - qr).max() <= 1e-13 * np.abs(qr).max()
+    scale = np.abs(ar.jacobian).max(0)
+    for s_far, s_rel in ((af, ar), (df, dr)):
+        assert np.all(np.abs(s_far.jacobian - s_rel.jacobian).max(0) <= 1e-12 * scale)
+        np.testing.assert_allclose(s_far.values - s_rel.values, np.r_[1e9, 0, 0, np.zeros(4), 1e9, 0, 0], atol=1e-6)

@@ -29,6 +29,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from ..design import ProbePosition, Quantity, SolveWith, Variable, sensitivity
+from ..design.sensitivity import OnPart
 from ..errors import ControlError, ElementTooDistortedError, OptionError, SingularSystemError
 from ..model.base import overrides
 from ..model.magnetics import MagneticLoad, dipole_sources
@@ -121,34 +122,6 @@ class State:
                 out[name] = dict(x=x, u=pr.state(gu)[0] - pr.state(g0)[0], R=R)
             self._probes = out
         return self._probes
-
-
-class _OnPart(Quantity):
-    """A quantity of a session whose frames are relative to a far part's origin (module
-    docstring): its value at the problem's frames (a position is absolute), its derivatives at
-    the session's, exact as for the part at the origin, when the quantity is
-    ``translation_invariant`` (else at the problem's: a ``UserQuantity`` may use absolute
-    positions)."""
-
-    def __init__(self, q, origin):
-        self.q, self.origin, self.name, self.size = q, origin, q.name, q.size
-
-    def _whole(self, g):
-        g = np.array(g, float)
-        g[..., :3, 3] += self.origin
-        return g
-
-    def _at(self, g):
-        return g if getattr(self.q, "translation_invariant", False) else self._whole(g)
-
-    def value(self, problem, g, lam):
-        return self.q.value(problem, self._whole(g), lam)
-
-    def jacobian(self, problem, g, lam):
-        return self.q.jacobian(problem, self._at(g), lam)
-
-    def explicit(self, problem, g, lam, variable):
-        return self.q.explicit(problem, self._at(g), lam, variable)
 
 
 def _check_problem(problem):
@@ -552,7 +525,7 @@ class Session:
             raise ControlError(f"jacobian: the session's state lies past a critical point: {why}; its Jacobian is "
                                "not the plant's response")
         if self._origin is not None:        # on the frames relative to the part (module docstring)
-            qs = [_OnPart(q, self._origin) for q in qs]
+            qs = [OnPart(q, self._origin) for q in qs]
         return sensitivity(self.problem, self._g, self.lam, qs, vs, method, solve_with=SolveWith(factorization=c.F))
 
     def quantity(self, q):

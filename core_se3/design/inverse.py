@@ -43,6 +43,7 @@ from ..backend import launched_ranks
 from ..errors import ConvergenceError, DesignError, ParallelError
 from .equilibrium import (ElementCheck, EquilibriumOptions, EquilibriumState, assign_all, follow, multipliers,
                           restore_multipliers, solve_flat)
+from .objectives import AngleInDegrees, NodePosition, Orientation, ProbePosition, RotationAngle
 from .sensitivity import SolveWith, sensitivity
 from .targets import DesignResult, Pose, Smoothness, Target
 
@@ -69,6 +70,26 @@ def _check_conflicts(variables):
                 raise DesignError(f"variable {u.name!r} {same} in the same pose: the later one would overwrite "
                                   "the earlier one, whose derivative would then be wrong; give each parameter to one "
                                   "variable (e.g. one FieldVariable with free=('x', 'z'), disjoint regions)")
+
+
+def _check_targets_move(problem, poses):
+    """DesignError for a target on nodes, a probe or a frame whose supports hold every component
+    it counts (a clamped node's position): no design moves it, and before, the design ran and
+    said only "did not reach the target: misfit 1.000e+00" (a target on node 0 of a strip clamped
+    there, e.g. a node id mistaken for the tip's).  A target with some free components (a whole
+    shape, its clamped nodes included) is the user's.  Checked on the reference state, where these
+    quantities' derivatives in the free dofs vanish only for held dofs."""
+    free = problem.assembler().free.astype(float)
+    for pose in poses:
+        for t in pose.targets:
+            if not isinstance(t.quantity, (NodePosition, ProbePosition, Orientation, RotationAngle, AngleInDegrees)):
+                continue
+            J = (t.quantity.jacobian(problem, problem.mesh.g0, pose.lam).multiply(free[None, :])).tocsr()[t.rows()]
+            held = np.asarray(abs(J).sum(1)).ravel() == 0
+            if np.all(held):
+                raise DesignError(f"target {t.name!r} of pose {pose.name!r}: its component(s) "
+                                  f"{t.rows().tolist()} are held by the supports: no design variable moves them; "
+                                  "target a free node or probe")
 
 
 def _said(keys):
@@ -158,6 +179,7 @@ class Design:
                     self.aux.append(v)
             for t in pose.targets:
                 t.resolve_scale(problem)
+        _check_targets_move(problem, self.poses)
         self.all = self.variables + self.aux
         self.x0 = [v.value() for v in self.all]
         self.order, self.held = self._orders()
@@ -174,6 +196,7 @@ class Design:
         self.best = None
         self.solves = self.newton_iterations = self.evaluations = 0
         self.failed = []
+        self.trials = self.accepted = 0
         self.branch_notes = {}      # pose name -> why its solve from the flat state stopped (off_branch)
         self._cache = None
         # the element's coarse-mesh check of the design points (once per point whose element
@@ -384,7 +407,9 @@ class Design:
         x0 : (nx,) array, optional
             The start (checked against the bounds).
         max_iter : int
-            Iterations (least_squares: function evaluations).
+            Iterations (least_squares: evaluations, scipy's ``max_nfev``: the start and every
+            trial point, the rejected ones too -- each costs its equilibrium solves; the result
+            gives ``iterations`` and ``rejected`` apart).
         tol : float
             The optimiser's tolerance (ftol, xtol and gtol of least_squares; tol of minimize).
         tolerance : float, optional
@@ -417,6 +442,7 @@ class Design:
         self.element_check.reset()
         self.solves = self.newton_iterations = self.evaluations = 0     # this run's (a second optimise)
         self.failed = []                                                # least_squares' rejected trial points
+        self.trials = self.accepted = 0         # least_squares' evaluations, and those it accepted (the start too)
         t0 = time.perf_counter()
         history, last = [], {}
 
@@ -491,10 +517,12 @@ class Design:
             J = self.jacobian(z * sc) * sc
             if seen.get("z") is None or not np.array_equal(seen["z"], z):
                 seen["z"] = z.copy()
+                self.accepted += 1
                 record(z)
             return J
 
         def fun(z):
+            self.trials += 1
             try:
                 F = self.residuals(z * sc)
             except ConvergenceError as exc:
@@ -510,6 +538,14 @@ class Design:
             return F
         r = so.least_squares(fun, x0 / sc, jac=jac, bounds=(self.lower / sc, self.upper / sc), method="trf",
                              ftol=tol, xtol=tol, gtol=tol, max_nfev=max_iter)
+        if r.status == 0:           # scipy's "maximum number of function evaluations": say what they were
+            rej = self.trials - self.accepted
+            spent = f"max_iter = {max_iter} evaluations spent: the start"
+            if not rej:
+                return r.x, False, f"{spent} and {self.accepted - 1} accepted step(s)"
+            return r.x, False, (f"{spent}, {self.accepted - 1} accepted step(s) and {rej} rejected trial point(s) "
+                                f"({len(self.failed)} of them because their equilibrium failed); least_squares "
+                                "counts every evaluation")
         return r.x, r.success and r.status > 0, r.message
 
     def _minimize(self, method, x0, tol, max_iter, record, norm):
@@ -557,7 +593,8 @@ class Design:
                     f"{', '.join(idle)}")
         res = DesignResult(bool(ok), reached, msg, x, self.labels, values, self.objective(x), self.gradient(x), mis,
                            worst, len(history), self.evaluations, self.solves, self.newton_iterations,
-                           time.perf_counter() - t0, method, history, list(states), idle, branch, list(self.failed))
+                           time.perf_counter() - t0, method, history, list(states), idle, branch, list(self.failed),
+                           self.trials - self.accepted if method == "least_squares" else None)
         assign_all(self.pose_variables(len(self.poses) - 1), states[-1].x)
         restore_multipliers(self.problem, states[-1])
         return res

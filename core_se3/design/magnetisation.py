@@ -176,7 +176,7 @@ class RegionMagnetisation(Variable):
                               f"in every region (its direction): "
                               f"{region_label(self.region_names, int(np.argmin(self.full[:, 0])))} has none")
         nf = len(self.free)
-        self.norm_bounds = []
+        self.norm_bounds, self.Br_max = [], Br_max
         if Br_max is not None and form == "vector":
             if nf != 3:
                 raise DesignError(f"magnetisation {name!r}: a norm bound Br_max needs all three components free")
@@ -185,6 +185,17 @@ class RegionMagnetisation(Variable):
         self._setup(name, k * nf, np.tile(lo[self.free], k), np.tile(hi[self.free], k), np.tile(sc[self.free], k),
                     labels, None)
         self.assign(self.value())
+
+    def start_excess(self):
+        """The first region whose start |B^r| lies above Br_max (its magnitude held fixed there:
+        before, a polar form with free = ['angle'] kept 0.143 T with Br_max = 0.1 and wrote it)."""
+        m = np.linalg.norm(self.Br(), axis=1)
+        over = np.nonzero(m > self.Br_max * (1 + 1e-12))[0] if self.Br_max is not None else []
+        if len(over):
+            j = int(over[0])
+            return (f"the start B^r of {region_label(self.region_names, j)} has magnitude {m[j]:g} above Br_max = "
+                    f"{self.Br_max:g} (its fixed components keep it there); lower the magnets' B^r or raise Br_max")
+        return None
 
     def _fitted(self, old):
         """B^r per region (k, 3) fitted to the replaced magnets' nodal moments (least squares of

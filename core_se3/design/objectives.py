@@ -31,17 +31,22 @@ import scipy.sparse as sp
 from .. import lie
 from ..errors import DesignError, did_you_mean
 from ..model import Probe
+from ..solvers.origin import frames_origin
 
 __all__ = ["Quantity", "NodePosition", "ProbePosition", "Orientation", "RotationAngle", "AngleInDegrees", "Energy",
            "UserQuantity", "local_jacobian", "probe_frames", "target_array"]
 
 
-def local_jacobian(fn, g, nodes, ell, step=1e-4, local=None):
+def local_jacobian(fn, g, nodes, ell, step=1e-4, local=None, origin=None):
     """Left-trivialised derivative of fn(g) -> (k,) over the dofs of ``nodes`` by central
     differences in eta (translations step * ell, rotations step), Richardson-extrapolated.
     ``local``: the same function of the frames of ``nodes`` alone, batched,
     (M, len(nodes), 4, 4) -> (M, k): all 24 len(nodes) perturbed evaluations in one call (no
-    copy of g per perturbation).
+    copy of g per perturbation).  ``origin`` (3,): ``local`` is given the frames with their
+    positions relative to it (an exact subtraction for a far part's ``solvers.origin.frames_origin``;
+    ``local`` a function whose differences a common translation does not change: a position, an
+    orientation), so that the differences are those of the part's size, not of its distance from
+    the origin (a probe of a part at x0 = 1e9 was 8.4e-4 off).
 
     Returns: scipy.sparse (k, 6 n).
 
@@ -66,10 +71,13 @@ def local_jacobian(fn, g, nodes, ell, step=1e-4, local=None):
         E[p, 0, :, j] = h[j] * np.array([1.0, -1.0])
         E[p, 1, :, j] = 2 * h[j] * np.array([1.0, -1.0])
     if local is not None:
-        F = np.broadcast_to(g[nodes], (len(pairs), 2, 2) + g[nodes].shape).copy()
+        gn = np.array(g[nodes], float)
+        if origin is not None:
+            gn[:, :3, 3] -= origin                                      # relative to the part (docstring)
+        F = np.broadcast_to(gn, (len(pairs), 2, 2) + gn.shape).copy()
         X = lie.exp(E.reshape(-1, 6)).reshape(len(pairs), 2, 2, 4, 4)
         for a in range(len(nodes)):                                     # the pairs 6a .. 6a + 5
-            F[6 * a:6 * a + 6, :, :, a] = g[nodes[a]] @ X[6 * a:6 * a + 6]
+            F[6 * a:6 * a + 6, :, :, a] = gn[a] @ X[6 * a:6 * a + 6]
         vals = np.asarray(local(F.reshape((-1,) + F.shape[3:]))).reshape(len(pairs), 2, 2, -1)
     else:
         vals = []
@@ -114,6 +122,14 @@ def _probe_local(probe, fn):
     nodes = sorted({probe.node_a, probe.node_b})
     ia, ib = nodes.index(probe.node_a), nodes.index(probe.node_b)
     return nodes, lambda F: fn(probe_frames(probe, F[:, ia], F[:, ib]))
+
+
+def _probe_jacobian(problem, probe, g, fn):
+    """:func:`local_jacobian` of fn(probe frames) -> (M, k), translation invariant: fn's
+    differences do not change with a common translation; the frames of a far part are taken
+    relative to its origin (``solvers.origin.frames_origin``)."""
+    nodes, local = _probe_local(probe, fn)
+    return local_jacobian(None, g, nodes, problem.length_scale, local=local, origin=frames_origin(problem, g[nodes]))
 
 
 def target_array(value, shape, what):
@@ -249,8 +265,7 @@ class ProbePosition(Quantity):
         return x if self.target is None else x - self.target
 
     def jacobian(self, problem, g, lam):
-        nodes, local = _probe_local(self.probe, lambda G: G[:, :3, 3])
-        return local_jacobian(None, g, nodes, problem.length_scale, local=local)
+        return _probe_jacobian(problem, self.probe, g, lambda G: G[:, :3, 3])
 
 
 class Orientation(Quantity):
@@ -291,8 +306,7 @@ class Orientation(Quantity):
     def jacobian(self, problem, g, lam):
         n = problem.mesh.n_nodes
         if self.node is None:
-            nodes, local = _probe_local(self.probe, lambda G: lie.log_so3(self.target.T @ G[:, :3, :3]))
-            return local_jacobian(None, g, nodes, problem.length_scale, local=local)
+            return _probe_jacobian(problem, self.probe, g, lambda G: lie.log_so3(self.target.T @ G[:, :3, :3]))
         J = lie.dexp_inv_so3(self.value(problem, g, lam))            # log(Q exp(e w)) = q + J_r^-1(q) e w
         rows, cols = np.repeat(np.arange(3), 3), np.tile(6 * self.node + 3 + np.arange(3), 3)
         return sp.csr_matrix((J.ravel(), (rows, cols)), shape=(3, 6 * n))
@@ -351,8 +365,8 @@ class RotationAngle(Quantity):
         Rref = lie.exp_so3(self.reference * self.axis) @ self.R0
         q = lie.log_so3(Rref.T @ self.frame._R(g))
         if self.frame.node is None:
-            nodes, local = _probe_local(self.frame.probe, lambda G: (lie.log_so3(Rref.T @ G[:, :3, :3]) @ self.axis)[:, None])
-            return local_jacobian(None, g, nodes, problem.length_scale, local=local)
+            return _probe_jacobian(problem, self.frame.probe, g,
+                                   lambda G: (lie.log_so3(Rref.T @ G[:, :3, :3]) @ self.axis)[:, None])
         row = self.axis @ lie.dexp_inv_so3(q)
         n = problem.mesh.n_nodes
         return sp.csr_matrix((row, (np.zeros(3, int), 6 * self.frame.node + 3 + np.arange(3))), shape=(1, 6 * n))

@@ -141,7 +141,10 @@ class DesignResult:
         ``idle``: the labels of the components without effect at the result (``Design.idle``);
         ``branch``: pose -> distance to the equilibrium a solve from flat reaches, where the
         design's is another (``Design.off_branch``); ``failed``: the trial points least_squares
-        rejected because their equilibrium failed (x and the message), said in ``message``.
+        rejected because their equilibrium failed (x and the message), said in ``message``;
+        ``rejected``: every trial point least_squares rejected (those, and those that did not
+        decrease Phi; None for the other methods).  least_squares' ``iterations`` are the start
+        and its accepted steps: with ``max_iter`` = N evaluations, N = iterations + rejected.
 
     Example
     -------
@@ -170,6 +173,7 @@ class DesignResult:
     idle: list = field(default_factory=list)
     branch: dict = field(default_factory=dict)
     failed: list = field(default_factory=list)
+    rejected: int | None = None
 
     def document(self):
         """A JSON-able summary (no frames)."""
@@ -180,4 +184,5 @@ class DesignResult:
                     misfit=self.misfit, max_misfit=float(self.max_misfit), iterations=int(self.iterations),
                     evaluations=int(self.evaluations), equilibrium_solves=int(self.equilibrium_solves),
                     newton_iterations=int(self.newton_iterations), time=float(self.time), history=self.history,
-                    idle=list(self.idle), branch=dict(self.branch), failed=list(self.failed))
+                    idle=list(self.idle), branch=dict(self.branch), failed=list(self.failed),
+                    rejected=self.rejected)

@@ -271,6 +271,15 @@ class Variable:
             n = float(np.linalg.norm(x[idx]))
             if n > top * (1 + 1e-12):
                 raise DesignError(f"variable {self.name!r}: the start has norm {n:g} above the bound {top:g}")
+        excess = self.start_excess()
+        if excess:
+            raise DesignError(f"variable {self.name!r}: {excess}")
+
+    def start_excess(self):
+        """What of the start, fixed components included, exceeds a bound of the variable that the
+        free components' bounds do not hold (a polar form's magnitude kept fixed above B_max):
+        a sentence, or None."""
+        return None
 
 
 def free_index(parts, free, what):
@@ -357,13 +366,22 @@ class FieldVariable(Variable):
         if form == "polar" and 1 not in self.free and self.full[0] == 0:
             raise DesignError(f"field variable {name!r}: a polar form with its angle fixed needs a non-zero start field "
                               "(its direction): the field is zero, whose angle would be taken as 0 (along e1)")
-        self.norm_bounds = []
+        self.norm_bounds, self.B_max = [], B_max
         if B_max is not None and form == "vector":
             # |B|^2 = |free part|^2 + |fixed part|^2 <= B_max^2 (the fixed part as a constant)
             fixed = np.setdiff1d(np.arange(3), self.free)
             self.norm_bounds = [(np.arange(len(self.free)), float(np.sqrt(max(B_max ** 2 - B[fixed] @ B[fixed], 0.0))))]
         self._setup(name, len(self.free), lo[self.free], hi[self.free], sc[self.free],
                     [f"{name}.{'B' if p == 'magnitude' else p}" for p in np.array(self.parts)[self.free]], pose)
+
+    def start_excess(self):
+        """The start field's magnitude above B_max (the magnitude or components held fixed there:
+        before, the design kept a fixed magnitude of 0.002 T with B_max = 0.001 and wrote it)."""
+        m = float(np.linalg.norm(self.vector()))
+        if self.B_max is not None and m > self.B_max * (1 + 1e-12):
+            return (f"the start field has magnitude {m:g} above B_max = {self.B_max:g} (its fixed components keep "
+                    "it there); lower the start field or raise B_max")
+        return None
 
     def vector(self, full=None):
         """The field vector [T] of the full parameters (default the current ones)."""

@@ -189,7 +189,8 @@ OUTPUT = Section("output", (
 
 DESIGN = Section("design", (
     Param("method", "string", "least_squares", choices=METHODS, doc="the optimiser"),
-    Param("max_iter", "integer", 50, lo=1, hi=10_000, doc="iterations (least squares: evaluations)"),
+    Param("max_iter", "integer", 50, lo=1, hi=10_000,
+          doc="iterations (least squares: evaluations, rejected trial points included)"),
     Param("tolerance", "number", None, lo=0.0, doc="the largest misfit that counts as reaching the targets (in "
           "each target's unit: length, or degrees for angles)"),
     Param("tol", "number", 1e-12, lo=0.0, lo_open=True, doc="the optimiser's own tolerance"),
