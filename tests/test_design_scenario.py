@@ -400,3 +400,24 @@ def test_a_designs_vtu_field_data_holds_the_designed_loads(tmp_path):
         assert {k.split(" [")[0] for k in data} - {"load_factor"} == set(want)
         assert data["fields.coil.B [T]"] == pytest.approx(want["fields.coil.B"]["value"], rel=1e-12, abs=1e-15)
     assert abs(data["fields.coil.B [T]"] - 0.002) > 5e-5     # the designed coil (1.925e-3 T), not the 0.002 T before
+
+
+UNION = GRAVITY.replace('''[[loads]]
+type = "gravity"''', '''[[loads]]
+type = "edge_force"
+edge = ["x1", "y1"]
+force = [0.0, 0.0, -0.01]''').replace("ny = 1", "ny = 2")
+
+
+def test_a_load_variable_scales_an_edge_load_on_a_union_of_lines(tmp_path):
+    # an edge force on the union of the lines x1 and y1 builds one load per line; a load variable
+    # on it was refused ("a load variable needs a single load") although the optimised scenario
+    # scales the entry as a whole.  Now it is one multiplier of both lines' loads: the design
+    # reaches its tip target and `core-se3 run` of optimised.toml gives the design's tip
+    path = tmp_path / "union.toml"
+    path.write_text(UNION)
+    assert main(["design", str(path), "--out", str(tmp_path / "o"), "-q"]) == 0
+    scn = scenario.load(tmp_path / "o" / "optimised.toml")
+    P = scn.spec["loads"][0]["force"][2] / -0.01
+    assert abs(P - 1.0) > 0.05                                       # the design moved it
+    assert abs(scn.problem.solve().final.probes["tip"]["u"][2] + 5.0) < 1e-5

@@ -31,12 +31,14 @@ def test_gravity_on_zero_mass_warns_naming_rho():
     from core_se3 import scenario
     from core_se3.errors import LoadWarning, ScenarioError
     p = Problem(mesh.rectangle(2.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01, rho=0.0))
-    with pytest.warns(LoadWarning, match="zero mass adds nothing: the material's rho"):
+    with pytest.warns(LoadWarning, match="zero mass adds nothing: the material's rho") as rec:
         assert p.add_load("gravity") == []
+    assert [w.filename for w in rec] == [__file__]                   # the caller's line (was 'sys', beyond it)
     with pytest.warns(LoadWarning, match="the load's rho = 0"):
         p.add_load("gravity", rho=0.0)
-    with pytest.warns(LoadWarning, match="the load's rho = 0"):     # the other spelling: it refused
+    with pytest.warns(LoadWarning, match="the load's rho = 0") as rec:   # the other spelling: it refused
         assert p.add_gravity(rho=0.0) == []                          # (LoadError 'must be positive')
+    assert [w.filename for w in rec] == [__file__]                   # said at the caller's line
     for bad in (-1.0, np.nan, np.inf):                               # both spellings refuse these
         for add in (lambda r: p.add_gravity(rho=r), lambda r: p.add_load("gravity", rho=r)):
             with pytest.raises(LoadError, match="density must be non-negative and finite"):

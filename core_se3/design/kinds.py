@@ -29,7 +29,6 @@ from typing import Callable
 import numpy as np
 
 from .. import lie
-from ..errors import DesignError
 from ..registry import Kind, Param, Registry
 from .magnetisation import Parametrisation, RegionMagnetisation
 from .material import MaterialVariable
@@ -179,13 +178,10 @@ def _material(ctx, v):
 
 
 def _load(ctx, v):
-    built = ctx.loads[v["load"]]
-    if len(built) != 1:
-        exc = DesignError(f"loads[{v['load']}] is {len(built)} loads (one per region, or per line of an edge = "
-                          "[...] union): a load variable needs a single load")
-        exc.param = "load"
-        raise exc
-    return LoadMagnitude(ctx.problem, built[0], v["lower"], v["upper"], ctx.pose(v["pose"]), name=f"load{v['load']}")
+    # every load the entry built (an edge load on a union of lines: one per line; gravity: one
+    # per density and thickness) under one multiplier, as the file's entry is scaled
+    return LoadMagnitude(ctx.problem, list(ctx.loads[v["load"]]), v["lower"], v["upper"], ctx.pose(v["pose"]),
+                         name=f"load{v['load']}")
 
 
 _REGIONS = Param("regions", "list", item="string", min_items=1, doc="region names")

@@ -416,7 +416,7 @@ def _gravity(problem, elements, scale, g=(0.0, 0.0, -9.81), rho=None):
         whose = f"the load's rho = {rho:g}" if rho is not None else "the material's rho (Material(..., rho=...), " \
                                                                      "[material] rho) is 0"
         warnings.warn(LoadWarning(f"gravity on {len(sel)} element(s) of zero mass adds nothing: {whose}; give a "
-                                  "positive density, or drop the gravity load"), stacklevel=4)
+                                  "positive density, or drop the gravity load"), stacklevel=3)
     return [SurfaceLoad(mesh, r * t * gv, False, sel[(dens == r) & (h == t)], scale, "gravity")
             for r, t in sorted(set(zip(dens.tolist(), h.tolist()))) if r != 0]
 

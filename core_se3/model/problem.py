@@ -15,6 +15,8 @@ depend on the solvers.
 """
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from .. import lie
@@ -357,7 +359,12 @@ class Problem:
         default the material's; g [length/time^2] lab vector; default SI, -z).  The same load as
         ``add_load("gravity", ...)``: a negative or non-finite rho is a LoadError, rho = 0 adds
         nothing with a LoadWarning naming rho (a sweep may start weightless).  Returns the loads."""
-        return self.add_load("gravity", elements, scale, g=g, rho=rho)
+        with warnings.catch_warnings(record=True) as seen:       # said at the caller's line, not here
+            warnings.simplefilter("always")
+            loads = self.add_load("gravity", elements, scale, g=g, rho=rho)
+        for w in seen:
+            warnings.warn(w.message, stacklevel=2)
+        return loads
 
     def add_magnetic(self, Br, field, elements=None, mu0=None, Br_per=None):
         """Hard-magnetic material of residual flux density ``Br`` [T] (lab, reference
