@@ -421,3 +421,13 @@ def test_a_load_variable_scales_an_edge_load_on_a_union_of_lines(tmp_path):
     P = scn.spec["loads"][0]["force"][2] / -0.01
     assert abs(P - 1.0) > 0.05                                       # the design moved it
     assert abs(scn.problem.solve().final.probes["tip"]["u"][2] + 5.0) < 1e-5
+
+
+def test_targets_all_of_weight_zero_are_refused(tmp_path):
+    from core_se3.scenario.design_runner import run_design
+    # every target of weight 0: Phi = 0 for every design.  Before, the design ran its equilibria
+    # and said only "did not reach the target"; now a ScenarioError names the weight
+    path = tmp_path / "w0.toml"
+    path.write_text(GRAVITY + "weight = 0.0\n")
+    with pytest.raises(ScenarioError, match="weight is 0"):
+        run_design(scenario.load(path), out=tmp_path / "o", vtu=False, plots=False)

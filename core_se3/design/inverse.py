@@ -164,6 +164,10 @@ class Design:
             raise DesignError("a design needs at least one variable")
         if not self.poses or not any(p.targets for p in self.poses):
             raise DesignError("a design needs at least one pose with a target")
+        if not any(t.weight > 0 for p in self.poses for t in p.targets):
+            # Phi = 0 for every x: nothing to optimise, and "did not reach" would be all it said
+            raise DesignError("every target's weight is 0: the objective does not depend on the design; give a "
+                              "target a positive weight ([[design.targets]] weight, default 1)")
         for v in self.variables:
             if v.pose is not None and not 0 <= v.pose < len(self.poses):
                 raise DesignError(f"variable {v.name!r} belongs to pose {v.pose}, but there are {len(self.poses)} poses")
