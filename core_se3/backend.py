@@ -14,7 +14,13 @@ that reaches the start cost, the process switches to numba for good (the problem
 evaluation).  The total is then at most about twice the better of the two fixed choices, for any
 sequence of solves: one short run pays no numba start, a sweep or design loop of hundreds of
 solves runs on numba after its first few.  The rule counts work, not time, so a script takes the
-same path in every run.  A distributed run (``launched_ranks() > 1``) takes numba at once.
+same path in every run with the same kernel cache state -- a cold cache raises the start cost
+(:data:`NUMBA_COLD_START_COST`) and so moves the switch later, and the two backends differ by
+round-off, which a long design loop can carry into a different iterate within its tolerance
+(the gripper design example, measured: misfit 6.4e-5 mm on NumPy, 1.9e-2 on numba, 5.6e-3 on
+'auto', tolerance 2e-2).  For runs to repeat bit for bit across machines and caches, fix the
+backend (``CORE_SE3_BACKEND=numba``).  A distributed run (``launched_ranks() > 1``) takes
+numba at once.
 
 Example
 -------
