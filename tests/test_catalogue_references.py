@@ -10,6 +10,7 @@ docs and ``catalogue.measures`` (Sze: max distance to the table polyline in (P/P
 """
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from core_se3.catalogue import run_case
@@ -183,14 +184,34 @@ def test_curved_rollup_circle_is_compared_at_any_E_and_R():
     M R / EI only and lengths scale with R, so the R = 10/(2 pi), EI = 1000 table holds at any
     E, h, width and R (nu = 0: the rod's EI).  It was refused ("not compared: ... E = 1.2e+07")
     when E or R changed; now re-evaluated at the run's parameters: with E doubled the run is the
-    same scaled problem (error 7.0e-6 both), with R = 2 the error is 5.5e-6 (10x1); nu = 0.3 is
-    still not compared (the plate's EI)."""
+    same scaled problem (error 7.0e-6 both), with R = 2 too (the moment k EI / R: 7.0e-6; it was
+    k 2 pi EI / 10, a different point of the circle at another R, 5.5e-6); nu = 0.3 is still not
+    compared (the plate's EI)."""
     base = run_case("curved-rollup")[0]["reference"]["error"]
     stiff = run_case("curved-rollup", overrides=dict(E=2.4e7))[0]["reference"]
     assert stiff["error"] is not None and abs(stiff["error"] - base) < 1e-9 * max(base, 1e-6)
     wide = run_case("curved-rollup", overrides=dict(R=2.0))[0]["reference"]
     assert wide["error"] is not None and wide["error"] < 1e-4
     assert run_case("curved-rollup", overrides=dict(nu=0.3))[0]["reference"]["error"] is None
+
+
+@pytest.mark.parametrize("s", [1e-3, 1e3])
+def test_curved_rollup_in_other_units_is_the_same_problem(s):
+    """curved-rollup with every length times s and E / s^2 (mm -> m: s = 1e-3) is the same arch
+    under the same moment: displacements times s (observed 5e-16), the same error 7.0e-6 and
+    iterations.  Its moment was k 2 pi EI / 10, the 10 a length of the default units: in metres
+    the arch got 1e-3 of its moment in units of EI / R (displacement 0.9996 off the mm run's,
+    reference error inf); now k EI / R."""
+    from core_se3.catalogue import case_params, get_case
+    p = case_params(get_case("curved-rollup"), None)
+    ov = {k: (v / s ** 2 if k == "E" else v * s) for k, v in p.items() if k in ("E", "h", "width", "R")}
+    d0, r0, p0 = run_case("curved-rollup")
+    d, r, pr = run_case("curved-rollup", overrides=ov)
+    u0 = r0.final.g[:, :3, 3] - p0.mesh.g0[:, :3, 3]
+    u = r.final.g[:, :3, 3] - pr.mesh.g0[:, :3, 3]
+    assert np.abs(u / s - u0).max() <= 1e-12 * np.abs(u0).max()
+    assert [st.iterations for st in r.steps] == [st.iterations for st in r0.steps]
+    assert abs(d["reference"]["error"] - d0["reference"]["error"]) <= 1e-9 * d0["reference"]["error"]
 
 
 def test_unreached_design_reports_no_error():

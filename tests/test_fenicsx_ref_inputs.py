@@ -155,7 +155,7 @@ def test_semicylinder_support_springs_softer_than_rigid_are_refused(over, words)
 
 
 def test_curved_rollup_reference_rescales_with_E():
-    """curved-rollup's circle (curvature 1/R + M/EI) holds at any E (the load M = k 2 pi EI/10
+    """curved-rollup's circle (curvature 1/R + M/EI) holds at any E (the load M = k EI / R
     scales with it): with E doubled fenicsx_ref reported 'not compared' and, without the
     reference's cap below |theta| = pi, ran on to 'failed at load factor 0.4995'.  Now compared:
     the same error as at the table's E (1.02e-3 on 20x1), status ok."""

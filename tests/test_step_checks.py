@@ -507,3 +507,40 @@ def test_the_negative_eigenvalues_are_counted_on_a_shell_held_on_symmetry_planes
         warnings.simplefilter("ignore")
         g = p.solve(steps=4).final.g
     assert stability.negative_count(p, g, 1.0) is None
+
+
+def test_asymmetry_is_unit_free_and_separates_non_conservative_loads():
+    """``stability.asymmetry`` decides whether sym K's inertia says anything (conservative loads).
+    It was max |K - K^T| / max |K|, whose blocks carry force/length, force and force*length: the
+    rolled-up strip under its dead end moment measured 6.3e-4 in its units but 6.3e-10 in metres
+    (E x 1e6, lengths x 1e-3), below ASYM_TOL 1e-6, so load control counted sym K's eigenvalues of
+    a non-conservative problem and stopped on a spurious 'critical point' (ConvergenceError at
+    lam 0.5 .. 0.58); the arch under a follower force measured 1.3e-7 in its own units.  Now the
+    skew part is Jacobi-scaled (|K_ij - K_ji| / sqrt|K_ii K_jj|): the same in any units (9.2e-3),
+    5.1e-5 for the follower arch, <= 3.0e-14 on the catalogue's conservative problems."""
+    from core_se3.catalogue import case_params, get_case
+    from core_se3.solvers import stability
+    p = case_params(get_case("rollup"), None)
+    m_units = {k: (v / 1e-6 if k == "E" else v * 1e-3) for k, v in p.items() if k in ("E", "h", "L", "width")}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        doc0, res0, prob0 = run_case("rollup")
+        doc, res, prob = run_case("rollup", overrides=m_units)           # before: ConvergenceError
+    assert len(res.steps) == len(res0.steps) and res.final.load_factor == 1.0
+    u0 = res0.final.g[:, :3, 3] - prob0.mesh.g0[:, :3, 3]
+    u = res.final.g[:, :3, 3] - prob.mesh.g0[:, :3, 3]
+    assert np.abs(u / 1e-3 - u0).max() <= 1e-12 * np.abs(u0).max()
+    K0, K = prob0.tangent(res0.final.g, 1.0), prob.tangent(res.final.g, 1.0)
+    a0, a = stability.asymmetry(K0, prob0.assembler().free), stability.asymmetry(K, prob.assembler().free)
+    assert a0 > 1e3 * stability.ASYM_TOL and abs(a - a0) <= 1e-9 * a0
+    # a change of units scales the translation and rotation dofs: the measure does not see it
+    free = prob0.assembler().free
+    for a_t, a_r in ((1e-3, 1.0), (1.0, 1e4), (1e8, 1e-8)):
+        D = sp.diags(np.tile([a_t] * 3 + [a_r] * 3, prob0.mesh.n_nodes)[free])
+        assert abs(stability.asymmetry(D @ K0 @ D, free) - a0) <= 1e-9 * a0
+    # the follower arch is not conservative in its own units either
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        _, res_a, prob_a = run_case("arch-follower", steps=3)
+    Ka = prob_a.tangent(res_a.final.g, res_a.final.load_factor)
+    assert stability.asymmetry(Ka, prob_a.assembler().free) > 10 * stability.ASYM_TOL

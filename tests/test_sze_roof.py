@@ -119,3 +119,24 @@ def test_hinged_roof_6p35_snap_back():
     ratio = cps[1].lam / cps[0].lam
     assert abs(ratio - (-0.1288 / 0.1953)) < 0.03 * 0.660, ratio
     assert doc["reference"]["unverified"]               # reported, flagged
+
+
+@pytest.mark.parametrize("s", [1e-3, 1e3])
+def test_roof_in_other_units_stops_at_the_same_point(roof127, s):
+    """The 12.7 roof with every length times s (mm -> m: s = 1e-3, E x 1e6; m -> km: s = 1e3)
+    is the same problem: the path stops at the table's end displacement times s
+    (``stop_length_ratio``: the rise's ratio), in as many steps and iterations, with the
+    displacements times s (observed 1.5e-14, load factors to 3e-12).  Before, the stop stayed
+    29.374 in any unit: mm -> m ran to max_steps (401 steps, 18.6 times the displacement), m -> km
+    stopped after 2 steps."""
+    doc0, res0, prob0 = roof127
+    p = catalogue.case_params(get_case("sze-hinged-roof"), None)
+    ov = dict(E=p["E"] / s ** 2, h=p["h"] * s, R=p["R"] * s, L=p["L"] * s)
+    doc, res, prob = catalogue.run_case("sze-hinged-roof", mesh=(8, 8), overrides=ov)
+    assert len(res.steps) == len(res0.steps)
+    assert [st.iterations for st in res.steps] == [st.iterations for st in res0.steps]
+    u0 = res0.final.g[:, :3, 3] - prob0.mesh.g0[:, :3, 3]
+    u = res.final.g[:, :3, 3] - prob.mesh.g0[:, :3, 3]
+    assert np.abs(u / s - u0).max() <= 1e-10 * np.abs(u0).max()
+    lam0, lam = [st.load_factor for st in res0.steps], [st.load_factor for st in res.steps]
+    assert np.abs(np.subtract(lam, lam0)).max() <= 1e-9

@@ -211,12 +211,14 @@ add_case(Case(
 add_case(Case(
     name="curved-rollup",
     description="Half-cylinder of radius 10/(2 pi) (arc length 5) under an end moment, "
-                "M = k 2 pi EI / 10, k from -1 to 2.",
+                "M = k EI / R (= k 2 pi EI / 10 at that radius), k from -1 to 2.",
     geometry="arch",
     params=dict(E=1.2e7, nu=0.0, h=0.1, R=10.0 / (2 * pi), width=1.0, k=2.0),
     units=_DIM, mesh=(10, 1), steps=8,
-    loads=(CaseLoad("edge_moment", "x1", (0.0, -1.0, 0.0), lambda p: p["k"] * 2 * pi * beam_EI(p) / 10.0),),
-    load_name="M", load_unit="force*length", load_value=lambda p, lam: lam * p["k"] * 2 * pi * beam_EI(p) / 10.0,
+    # k EI / R, not k 2 pi EI / 10: the 10 was a length in the default units (the same arch in
+    # metres, every length x 1e-3, got 1e-3 of its moment in units of EI / R)
+    loads=(CaseLoad("edge_moment", "x1", (0.0, -1.0, 0.0), lambda p: p["k"] * beam_EI(p) / p["R"]),),
+    load_name="M", load_unit="force*length", load_value=lambda p, lam: lam * p["k"] * beam_EI(p) / p["R"],
     reference=_circle("4_arch_halfcircle_end_moment_R10over2pi", beam_EI, "R"),
     notes="Run with --set k=-1 for the opening branch.",
 ))

@@ -26,7 +26,7 @@ from .case import Family, register_family
 from .measures import curve_columns, curve_deviation, table_curves
 from .references import literature_entry
 
-__all__ = ["sze_problem", "run_sze", "document", "table_scale", "table_comparison"]
+__all__ = ["sze_problem", "run_sze", "document", "table_scale", "table_comparison", "stop_length_ratio"]
 
 
 # ------------------------------------------------------------------ build -----------------
@@ -186,7 +186,7 @@ def run_sze(case, p, prob, steps, **kw):
         stop_at, lam_end = None, 1.0
         if x.get("stop") == "table_end_displacement":
             (_, _, tu), = table_curves(case)[:1]
-            stop_at, lam_end = (node, direction, float(tu[-1])), None
+            stop_at, lam_end = (node, direction, float(tu[-1]) * stop_length_ratio(case, p)), None
         dlam0 = kw.pop("dlam0", x.get("dlam0", 1.0 / max(steps, 1)))
         res = arc_length(prob, lam_end=lam_end, dlam0=dlam0, stop_at=stop_at,
                          ds_max=kw.pop("ds_max", None),
@@ -194,6 +194,28 @@ def run_sze(case, p, prob, steps, **kw):
                          target_iter=kw.pop("target_iter", x.get("target_iter", 5)),
                          psi=kw.pop("psi", x.get("psi", 0.0)), max_steps=kw.pop("max_steps", 400), **kw)
     return document(case, p, prob, res), res
+
+
+def stop_length_ratio(case, p):
+    """The factor on a table's end displacement where a path stops (``stop =
+    "table_end_displacement"``): the roof's rise R (1 - cos theta) at the parameters p over the
+    table's, so that the path ends at the same point of a roof in other units (every length times
+    s: the stop times s; before, mm -> m ran to max_steps past the snap, m -> km stopped after two
+    steps) or of another rise (the snap carries the crown to about twice the rise); 1 for a shape
+    without R and theta.
+
+    Example
+    -------
+    >>> from .case import get_case, case_params
+    >>> c = get_case("sze-hinged-roof")
+    >>> stop_length_ratio(c, case_params(c, None)), round(stop_length_ratio(c, case_params(c, {"R": 2.54})), 15)
+    (1.0, 0.001)
+    """
+    t = {_TABLE_KEYS.get(k, k): v for k, v in literature_entry(case.extra["literature"]).get("parameters", {}).items()}
+    if not all(k in t and k in p for k in ("R", "theta")):
+        return 1.0
+    rise = lambda q: q["R"] * (1.0 - np.cos(q["theta"]))
+    return float(rise(p) / rise(t))
 
 
 # the tables' parameter names (literature.json "parameters") -> the cases' keys; P_max is the

@@ -263,8 +263,8 @@ class ElementKernels:
         """From a ``DefaultElement``-like object (attributes mesh, Dbar_packed, z0, Dz0).
 
         The reference edge twists z0 are recomputed by these kernels at the reference frames
-        g0, so that the reference state is stress free to the last bit in this backend too (the
-        kernels form Ra^T (pb - pa), the NumPy element log(ga^-1 gb): they differ by round-off).
+        g0, so that the reference state is stress free to the last bit in this backend too (both
+        form Ra^T (pb - pa), the NumPy element with ``lie.relative``; their logs differ by round-off).
         """
         mesh = element.mesh
         self = cls(mesh.quads, mesh.edge_nodes, mesh.elem_edges, mesh.elem_edge_sign,

@@ -351,8 +351,9 @@ class DistributedSystem:
         MUMPS' LDL^T of S sym(K) S (a congruence: the inertia of sym K; the held dofs' identity
         rows count as positive) gives its negative pivots, INFOG(12) (ICNTL(13) = 1: no
         ScaLAPACK root, whose pivots MUMPS does not count).  None, as serially
-        (``solvers.stability.negative_count``), when max |K - K^T| > asym_tol max |K| over the
-        free rows outside the held nodes' diagonal blocks (non-conservative loads)."""
+        (``solvers.stability.negative_count``), when the Jacobi-scaled skew part
+        max |K_ij - K_ji| / sqrt(|K_ii K_jj|) exceeds asym_tol over the free rows outside the held
+        nodes' diagonal blocks (non-conservative loads; ``solvers.stability.asymmetry``)."""
         PETSc = self.PETSc
         K = self.K.mat.duplicate(copy=True)
         if self.scaled:                                  # undo the solve's S K S on the copy
@@ -360,6 +361,13 @@ class DistributedSystem:
             inv.setArray(1.0 / self.s.getArray(readonly=True))
             K.diagonalScale(inv, inv)
             inv.destroy()
+        d = K.getDiagonal()                              # Jacobi scaling (stability.asymmetry): a
+        sa = np.abs(d.getArray(readonly=True))           # congruence, the inertia is kept
+        top = sa.reshape(-1, 6).max(axis=0, initial=0.0)          # per component, as serially
+        top = np.max(self.comm.allgather(top), axis=0) if self.comm.size > 1 else top
+        d.setArray(1.0 / np.sqrt(np.maximum(sa, 1e-16 * np.tile(top, len(sa) // 6) + 1e-300)))
+        K.diagonalScale(d, d)
+        d.destroy()
         Kt = K.transpose(PETSc.Mat())                    # a new matrix: K.transpose() transposes K in
         skew = K.duplicate(copy=True)                    # place and returns K itself (K - K^T was 0,
         skew.axpy(-1.0, Kt)                              # a follower load's count not None, 2 K^T's)
@@ -369,7 +377,7 @@ class DistributedSystem:
         scale, asym = np.max(self.comm.allgather(peak), axis=0) if self.comm.size > 1 else peak
         pc = PETSc.PC().create(self.pcomm)
         try:
-            if scale == 0 or asym > asym_tol * scale:
+            if scale == 0 or asym > asym_tol:
                 return None
             K.axpy(1.0, Kt)                              # K + K^T = 2 sym K
             return self._negative_pivots(K, pc)

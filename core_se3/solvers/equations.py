@@ -145,7 +145,7 @@ class NewtonEquations:
     def inertia_count(self, asym_tol=1e-6):
         """The number of negative eigenvalues of sym(K) of the tangent of the last :meth:`solve`
         (``solvers.stability.inertia``: one symmetric factorisation); None when not counted:
-        no tangent, or K not symmetric to ``asym_tol`` (max |K - K^T| / max |K|): under
+        no tangent, or K not symmetric to ``asym_tol`` (``stability.asymmetry``, Jacobi-scaled): under
         non-conservative loads (followers, dead moments on rotations) sym(K) says nothing of
         stability (the rolled-up strip's count changes where det K's sign does not)."""
         fac = getattr(self, "_factor", None)
