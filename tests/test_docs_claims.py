@@ -9,7 +9,10 @@ of misleading a user who reads the docs first.
   arc-length keys of docs/SCENARIOS.md (``[solver]``), the signature of ``arc_length`` in
   docs/PATHFOLLOWING.md, the options of docs/CONTROL.md (``ControlOptions``), the contact law of
   docs/CONTACT.md (``ContactLaw``), and the constants README.md quotes;
-* the keys docs/SCENARIOS.md says a resume may change (the fingerprint's ``NON_PHYSICAL``).
+* the keys docs/SCENARIOS.md says a resume may change (the fingerprint's ``NON_PHYSICAL``);
+* the Python fragments of README.md, docs/CONTACT.md, docs/CONTROL.md, docs/PATHFOLLOWING.md and
+  docs/SCENARIOS.md run as written and give what their comments say (docs/EXTENDING.md's run in
+  tests/test_extending.py; docs/DESIGN.md's are sketches on names they do not define).
 
 The scenario schema's own tables are generated and checked by tests/test_kind_contracts.py."""
 import argparse
@@ -183,7 +186,7 @@ def test_pathfollowing_signature_states_arc_length_defaults():
     import inspect
     from core_se3.solvers import arc_length
     params = inspect.signature(arc_length).parameters
-    others = set(stated) - set(code) - {"verbose"}
+    others = set(stated) - set(code)          # arc_length's own (lam_end, stop_at, lam_min); verbose was removed
     assert others <= set(params), others
     assert all(same(doc_value(stated[k]), params[k].default) for k in others if k in ("lam_end", "lam_min"))
 
@@ -242,3 +245,36 @@ def test_a_wrong_default_in_a_doc_fails_the_comparison():
     assert not same(doc_value(rows["end_check"]), defaults(NewtonOptions)["end_check"])
     stated = dict(re.findall(r"`(\w+)`\s+\(`?([-+\w.\"]+)", arclength_paragraph().replace("(200)", "(100)")))
     assert not same(doc_value(stated["max_steps"]), {p.name: p.default for p in ARCLENGTH.params}["max_steps"])
+
+
+def python_blocks(path):
+    return re.findall(r"```python\n(.*?)```", read(path), flags=re.S)
+
+
+FRAGMENTS = [(p, i) for p in ("README.md", "docs/CONTACT.md", "docs/CONTROL.md", "docs/PATHFOLLOWING.md",
+                              "docs/SCENARIOS.md") for i in range(len(python_blocks(p)))]
+
+
+@pytest.mark.parametrize("path,i", FRAGMENTS, ids=[f"{p}[{i}]" for p, i in FRAGMENTS])
+def test_documented_python_fragment_runs_and_says_what_its_comments_say(path, i, monkeypatch, capsys):
+    """README's contact fragment ran on the magnetic strip of the fragment before it (a ball a
+    metre above a 17 mm strip: no contact) and PATHFOLLOWING's passed ``verbose=True``, an
+    OptionError since the per-step report became logging; CONTROL's "(6, 3)" is ``J.jacobian``."""
+    import logging
+    monkeypatch.chdir(ROOT)                       # the fragments read examples/*.toml
+    root, core = logging.getLogger(), logging.getLogger("core_se3")
+    saved = root.handlers[:], root.level, core.level
+    ns = {}
+    try:
+        exec(compile(python_blocks(path)[i], f"{path}[{i}]", "exec"), ns)
+    finally:
+        root.handlers[:] = saved[0]
+        root.setLevel(saved[1])
+        core.setLevel(saved[2])
+    if "ball" in python_blocks(path)[i]:
+        force = ns["st"].contact["ball"]["force"]
+        assert np.allclose(force, [1.337, 0.0, -1.227], atol=1e-3) and ns["st"].balance_error < 1e-9, force
+    if "s.jacobian" in python_blocks(path)[i]:
+        assert ns["J"].jacobian.shape == (6, 3)
+    if "critical_points" in python_blocks(path)[i]:
+        assert ns["res"].critical_points[0].describe().startswith("limit point at lam = 0.742123 +- 0.00019")
