@@ -278,3 +278,13 @@ def test_documented_python_fragment_runs_and_says_what_its_comments_say(path, i,
         assert ns["J"].jacobian.shape == (6, 3)
     if "critical_points" in python_blocks(path)[i]:
         assert ns["res"].critical_points[0].describe().startswith("limit point at lam = 0.742123 +- 0.00019")
+
+
+def test_the_compile_costs_the_auto_backend_counts_are_the_documented_ones():
+    from core_se3.backend import NUMBA_COLD_START_COST, NUMBA_START_COST
+    text = read("docs/SCENARIOS.md")
+    m = re.search(r"numba's start is ([\d.]+) s with the compiled kernels in\s+their cache and about (\d+) s of "
+                  r"compilation with an empty cache", text)
+    assert m, "docs/SCENARIOS.md: the sentence on numba's start moved"
+    assert same(float(m.group(1)), NUMBA_START_COST) and same(float(m.group(2)), NUMBA_COLD_START_COST)
+    assert re.search(rf"With a cold cache `auto` counts the {NUMBA_COLD_START_COST:.0f} s", text)
