@@ -288,3 +288,30 @@ def test_the_compile_costs_the_auto_backend_counts_are_the_documented_ones():
     assert m, "docs/SCENARIOS.md: the sentence on numba's start moved"
     assert same(float(m.group(1)), NUMBA_START_COST) and same(float(m.group(2)), NUMBA_COLD_START_COST)
     assert re.search(rf"With a cold cache `auto` counts the {NUMBA_COLD_START_COST:.0f} s", text)
+
+
+def module_constant(name):
+    """The value of a module-level constant ``NAME = ...`` of core_se3 (found in the source, then
+    imported), or None when no module defines it."""
+    import importlib
+    pkg = os.path.join(ROOT, "core_se3")
+    for path in sorted(glob.glob(os.path.join(pkg, "**", "*.py"), recursive=True)):
+        if re.search(rf"^{name}\s*=", read(path), flags=re.M):
+            module = os.path.relpath(path, ROOT)[:-3].replace(os.sep, ".").removesuffix(".__init__")
+            return getattr(importlib.import_module(module), name)
+    return None
+
+
+def test_every_constant_a_doc_quotes_with_its_value_has_that_value():
+    """`CARRY_MOVE` = 1.5e-4, `GROWTH_SCALE` = 1/2, ...: each named constant the docs quote with a
+    value is a module constant of that value."""
+    quoted = [(path, n, v) for path in DOCS
+              for n, v in re.findall(r"`([A-Z][A-Z0-9_]{2,})` ?= ?([0-9][0-9.e+-]*(?:/[0-9]+)?)", read(path))]
+    assert len(quoted) >= 6
+    wrong = []
+    for path, name, value in quoted:
+        num, _, den = value.rstrip(".").partition("/")
+        code = module_constant(name)
+        if code is None or not same(float(num) / float(den or 1), code):
+            wrong.append((path, name, value, code))
+    assert not wrong, f"(doc, constant, doc's value, code's value): {wrong}"
