@@ -315,3 +315,13 @@ def test_every_constant_a_doc_quotes_with_its_value_has_that_value():
         if code is None or not same(float(num) / float(den or 1), code):
             wrong.append((path, name, value, code))
     assert not wrong, f"(doc, constant, doc's value, code's value): {wrong}"
+
+
+def test_every_exception_and_warning_the_docs_name_exists():
+    """A renamed exception leaves the docs telling users to catch a name that is not there."""
+    import builtins
+    import core_se3.errors as errors
+    named = {(n, path) for path in DOCS for n in re.findall(r"\b([A-Z][A-Za-z]+(?:Error|Warning))\b", read(path))}
+    assert len({n for n, _ in named}) >= 15
+    missing = sorted((n, p) for n, p in named if not hasattr(errors, n) and not hasattr(builtins, n))
+    assert not missing, missing
