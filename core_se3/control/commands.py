@@ -112,7 +112,8 @@ class Commands:
                 kind = np.asarray(x).dtype.kind
                 a = np.asarray(x, float).ravel()
                 # NumPy makes [0, 0, True] an integer array: look at the entries themselves
-                if any(isinstance(e, (bool, np.bool_)) for e in np.asarray(x, dtype=object).ravel()):
+                if not isinstance(x, np.ndarray) and any(isinstance(e, (bool, np.bool_))
+                                                         for e in np.asarray(x, dtype=object).ravel()):
                     kind = "b"
             except (TypeError, ValueError):
                 kind = "O"
