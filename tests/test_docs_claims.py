@@ -8,7 +8,9 @@ of misleading a user who reads the docs first.
 * the defaults the prose states: the switches table of docs/STEPS.md (``NewtonOptions``), the
   arc-length keys of docs/SCENARIOS.md (``[solver]``), the signature of ``arc_length`` in
   docs/PATHFOLLOWING.md, the options of docs/CONTROL.md (``ControlOptions``), the contact law of
-  docs/CONTACT.md (``ContactLaw``), and the constants README.md quotes;
+  docs/CONTACT.md (``ContactLaw``), the constants README.md quotes, the start costs of the 'auto'
+  backend docs/SCENARIOS.md states, and every constant quoted as ```NAME` = value``;
+* every exception and warning class the docs name exists;
 * the keys docs/SCENARIOS.md says a resume may change (the fingerprint's ``NON_PHYSICAL``);
 * the Python fragments of README.md, docs/CONTACT.md, docs/CONTROL.md, docs/PATHFOLLOWING.md and
   docs/SCENARIOS.md run as written and give what their comments say (docs/EXTENDING.md's run in
@@ -324,4 +326,13 @@ def test_every_exception_and_warning_the_docs_name_exists():
     named = {(n, path) for path in DOCS for n in re.findall(r"\b([A-Z][A-Za-z]+(?:Error|Warning))\b", read(path))}
     assert len({n for n, _ in named}) >= 15
     missing = sorted((n, p) for n, p in named if not hasattr(errors, n) and not hasattr(builtins, n))
+    assert not missing, missing
+
+
+def test_the_readme_layout_names_every_doc():
+    """README's layout lists what docs/ holds: STEPS and PARALLEL were missing from it."""
+    layout = read("README.md").split("## Layout", 1)[1].split("`docs/` —", 1)[1].split("\n* ", 1)[0].lower()
+    words = {"pathfollowing": "path following", "steps": "steps", "parallel": "parallel"}
+    missing = [d for d in DOCS[1:] if words.get(os.path.basename(d)[:-3].lower(), os.path.basename(d)[:-3].lower())
+               not in layout]
     assert not missing, missing
