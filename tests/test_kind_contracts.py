@@ -149,8 +149,11 @@ def test_the_recipes_kinds_pass_the_contracts(tmp_path):
 
 WITHOUT_TOMLLIB = """
 import importlib, sys
-sys.modules["tomli"] = importlib.import_module("tomllib")    # the backport pyproject installs on 3.10
-sys.modules["tomllib"] = None                                # Python 3.10 has no tomllib
+try:                                       # 3.11+: tomllib stands in for the backport pyproject installs on 3.10
+    sys.modules.setdefault("tomli", importlib.import_module("tomllib"))
+except ModuleNotFoundError:                # Python 3.10: tomli itself
+    pass
+sys.modules["tomllib"] = None              # Python 3.10 has no tomllib
 from core_se3.model import LOADS
 from core_se3.scenario.contracts import check_kind
 print(sorted(check_kind("loads", LOADS["edge_force"])))
