@@ -146,6 +146,9 @@ def test_steps_switches_table_states_newton_options_defaults():
     wrong = [(k, v, code.get(k, "no such option")) for k, v in rows
              if k not in code or not same(doc_value(v), code[k])]
     assert not wrong, f"docs/STEPS.md 'Switches' (key, doc, code): {wrong}"
+    from core_se3.scenario.schema import SOLVER
+    keys = {p.name for p in SOLVER.params} | {p.name for p in ARCLENGTH.params}      # "[solver]" in its header
+    assert {k for k, _ in rows} <= keys, {k for k, _ in rows} - keys
 
 
 def arclength_paragraph():
