@@ -339,3 +339,14 @@ def test_the_readme_layout_names_every_doc():
     missing = [d for d in DOCS[1:] if words.get(os.path.basename(d)[:-3].lower(), os.path.basename(d)[:-3].lower())
                not in layout]
     assert not missing, missing
+
+
+def test_scenarios_prose_states_the_mesh_and_support_defaults():
+    """`refine = k` (0 ... MAX_REFINE, default 0) and the supports' default penalty 1e6, stated in
+    docs/SCENARIOS.md's prose, outside the generated tables."""
+    from core_se3.model.support_kinds import PENALTY_DEFAULT
+    from core_se3.scenario.geometry import MAX_REFINE
+    text = read("docs/SCENARIOS.md")
+    m = re.search(r"`refine = k` \(a whole number, 0 \.\.\. (\d+); default 0\)", text)
+    assert m and int(m.group(1)) == MAX_REFINE
+    assert same(float(re.search(r"so the\s+default ([\d.e+]+) fits every unit system", text).group(1)), PENALTY_DEFAULT)
