@@ -350,3 +350,28 @@ def test_scenarios_prose_states_the_mesh_and_support_defaults():
     m = re.search(r"`refine = k` \(a whole number, 0 \.\.\. (\d+); default 0\)", text)
     assert m and int(m.group(1)) == MAX_REFINE
     assert same(float(re.search(r"so the\s+default ([\d.e+]+) fits every unit system", text).group(1)), PENALTY_DEFAULT)
+
+
+# dotted names in the docs that are not core_se3's: other packages, result-document keys, scenario
+# keys, local variables of the fragments, files
+NOT_CODE = {"scipy", "p", "part", "step", "reference", "parameters", "prob", "reactions", "scn", "regions",
+            "roof_modes", "result", "st", "res", "s", "doc", "ex_elast_rmshell_scordelis_lo_roof",
+            "ex_elast_rmshell_pinched_cylinder", "sze36_48x48_d"}
+
+
+def test_every_dotted_name_starts_with_a_module_of_core_se3():
+    """`bench_magnetic.MU0_MM`, `solver.newton_solve`, `mesh_shapes.hemisphere_quarter`: names
+    under modules that do not exist (catalogue.family_magnetic, solvers, mesh.generators)."""
+    import pkgutil
+    import core_se3
+    modules = {m.name.rsplit(".", 1)[1] for m in pkgutil.walk_packages(core_se3.__path__, "core_se3.")} | {"core_se3"}
+    unknown = set()
+    for path in DOCS:
+        text = re.sub(r"```.*?```", "", read(path), flags=re.S)
+        for span in re.findall(r"`([^`\n]+)`", text):
+            m = re.match(r"^([a-z_][a-z0-9_]*)\.[A-Za-z_]\w*", span.strip())
+            if m and not re.search(r"\.(py|md|toml|json|png|msh|vtu|npz|pvd|csv|txt|sh|dat|m)\b", span):
+                first = m.group(1)
+                if first not in modules and first not in NOT_CODE and not hasattr(core_se3, first):
+                    unknown.add((path, span[:60]))
+    assert not unknown, sorted(unknown)
