@@ -73,11 +73,11 @@ def _fd_tangent(p, g, h=1e-6):
         for a in range(4):
             for b in range(4):
                 K[6 * q[k, a]:6 * q[k, a] + 6, 6 * q[k, b]:6 * q[k, b] + 6] += ev.element_blocks[k, a, b]
-    for E, (a, b) in enumerate(p.mesh.edge_nodes):
+    for E, (a, b) in enumerate(p.mesh.edge_nodes if ev.edge_blocks is not None else ()):   # the seed: none
         for i, A in enumerate((a, b)):
             for j, B in enumerate((a, b)):
                 K[6 * A:6 * A + 6, 6 * B:6 * B + 6] += ev.edge_blocks[E, i, j]
-    for i in range(n):
+    for i in range(n if ev.node_blocks is not None else 0):
         K[6 * i:6 * i + 6, 6 * i:6 * i + 6] += ev.node_blocks[i]
     Kfd = np.zeros_like(K)
     for j in range(6 * n):

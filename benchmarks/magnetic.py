@@ -67,7 +67,9 @@ def main():
         dt = time.perf_counter() - t
         u = np.asarray(doc["steps"][-1]["probes"]["tip"]["u"])
         out[name] = dict(tip=u.tolist(), angle=doc["steps"][-1]["probes"]["tip"]["rotation_angle"], time=dt)
-        lines.append(f"\n`{name}` (prediction, {doc['mesh']['nx']}x{doc['mesh']['ny']}): tip displacement "
+        m = doc["mesh"]
+        grid = f"{m['nx']}x{m['ny']}" if m.get("nx") else f"{m['n_elements']} elements"    # the gripper: no grid
+        lines.append(f"\n`{name}` (prediction, {grid}): tip displacement "
                      f"{np.round(u, 3).tolist()} mm, rotation {out[name]['angle']:.3f} rad at the largest field; {dt:.1f} s.")
     os.makedirs(os.path.join(HERE, "results"), exist_ok=True)
     with open(os.path.join(HERE, "results", "magnetic.md"), "w") as f:

@@ -17,7 +17,9 @@ if ! "$PY" -c "import venv, ensurepip" >/dev/null 2>&1; then
     $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends python3-venv
 fi
 
-if [ -x "$VENV/bin/python" ] && "$VENV/bin/python" -c "import sys" 2>/dev/null; then
+# reuse a working venv of Python >= 3.10 (pyproject's requires-python; one of an older Python, e.g.
+# made with PYTHON=python3.9, is recreated with $PY instead of failing in pip below)
+if [ -x "$VENV/bin/python" ] && "$VENV/bin/python" -c "import sys; sys.exit(sys.version_info < (3, 10))" 2>/dev/null; then
     echo "==> reusing $VENV"
 else
     echo "==> creating $VENV with $("$PY" -c 'import sys; print(sys.executable, sys.version.split()[0])')"

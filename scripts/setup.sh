@@ -26,8 +26,10 @@ $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-reco
 SYSPY=/usr/bin/python3
 VENV="$ROOT/.venv"
 
-# Recreate the venv if it is missing or broken (e.g. made by another interpreter).
-if [ -x "$VENV/bin/python" ] && "$VENV/bin/python" -c "import sys; sys.exit(0 if sys.base_prefix == '/usr' else 1)" 2>/dev/null; then
+# Recreate the venv if it is missing or broken (made by another interpreter, or without the system
+# site packages: DOLFINx and petsc4py would be missing from it and the check below would fail).
+if [ -x "$VENV/bin/python" ] && "$VENV/bin/python" -c "import sys; sys.exit(0 if sys.base_prefix == '/usr' else 1)" 2>/dev/null \
+        && grep -qx "include-system-site-packages = true" "$VENV/pyvenv.cfg" 2>/dev/null; then
     echo "==> reusing $VENV"
 else
     echo "==> creating $VENV (system site packages)"

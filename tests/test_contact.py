@@ -530,8 +530,10 @@ def test_renaming_a_shared_obstacle_instance_keeps_the_first_contacts_name():
 def test_a_contact_penalty_of_the_wrong_shape_is_a_contact_error_naming_k():
     """law k per node of the wrong length (5 for 6 contact nodes), a 2-D array, a string or a
     bool: a bare NumPy broadcast ValueError, or read as a number ('1e5', True -> 1.0); now a
-    ContactError naming the key k and the shape (6,) expected.  A number or (6,) still work."""
-    for k in (np.full(5, 1e5), np.full((6, 1), 1e5), np.full((2, 3), 1e5), "1e5", True):
+    ContactError naming the key k and the shape (6,) expected.  A number or (6,) still work.  A bool
+    among numbers (NumPy makes [1e5, ..., True] a float array) was read as a penalty of 1.0 on that
+    node (docs/CONTACT.md: a bool is a ContactError naming k)."""
+    for k in (np.full(5, 1e5), np.full((6, 1), 1e5), np.full((2, 3), 1e5), "1e5", True, [1e5] * 5 + [True]):
         p = cs.Problem(M.rectangle(2.0, 1.0, 2, 1), cs.Material(1e4, 0.0, 0.02))
         with pytest.raises(ContactError, match=r"penalty k must be a number or one per contact node, shape \(6,\)") \
                 as err:

@@ -283,6 +283,19 @@ def test_a_non_number_command_is_refused_naming_the_variable():
     assert st.lam == 0.75 and st.values["P"].tolist() == [2.0]
 
 
+def test_a_bool_inside_a_vector_command_is_refused():
+    """docs/CONTROL.md: a bool is no command.  A bool among numbers was read as 1: NumPy makes
+    [0, 0, True] an integer array, so update(B=[0, 0, True]) commanded a field of 1 along z (the
+    gripper's coil: 1 T instead of its 60 mT), converged and kept."""
+    p, f = magnetic_strip()
+    s = Session(p, 1.0, [FieldVariable(p, f, name="B")])
+    for bad in ([0.0, 0.0, True], (0, np.bool_(True), 0.3), [False, 0.0, 0.3]):
+        with pytest.raises(OptionError, match=r"variable 'B': expected 3 numbers, got"):
+            s.update(B=bad)
+    assert s.values["B"].tolist() == [0.0, 0.0, 0.3]
+    assert s.update(B=[0, 0, np.int64(0)]).values["B"].tolist() == [0.0, 0.0, 0.0]     # integers are numbers
+
+
 def test_a_refused_track_leaves_plant_and_model_at_the_same_command():
     """track(..., model=...) updated the model before the plant: a plant that refused every
     halved step (max_turn 1e-4, no splits) left the plant at P = 1 and the model at the refused

@@ -12,7 +12,10 @@ Derivations: docs/CONTACT.md "Friction" and "Walking"."""
 from __future__ import annotations
 
 import os
-import tomllib
+try:
+    import tomllib
+except ModuleNotFoundError:     # Python 3.10 (README: the core tests run on any Python >= 3.10)
+    import tomli as tomllib
 
 import numpy as np
 import pytest

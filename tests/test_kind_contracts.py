@@ -145,3 +145,26 @@ def test_the_recipes_kinds_pass_the_contracts(tmp_path):
                        cwd=tmp_path, timeout=900)
     assert r.returncode == 0, r.stderr[-3000:]
     assert r.stdout.count("fd_tangent") == 3, r.stdout
+
+
+WITHOUT_TOMLLIB = """
+import importlib, sys
+try:                                       # 3.11+: tomllib stands in for the backport pyproject installs on 3.10
+    sys.modules.setdefault("tomli", importlib.import_module("tomllib"))
+except ModuleNotFoundError:                # Python 3.10: tomli itself
+    pass
+sys.modules["tomllib"] = None              # Python 3.10 has no tomllib
+from core_se3.model import LOADS
+from core_se3.scenario.contracts import check_kind
+print(sorted(check_kind("loads", LOADS["edge_force"])))
+"""
+
+
+def test_check_kind_runs_on_python_3_10_without_tomllib():
+    """pyproject supports Python >= 3.10 (tomli there, as scenario.spec reads it); the contracts'
+    round trip imported tomllib itself, so a plugin author's ``check_kind`` on 3.10 stopped with
+    "ModuleNotFoundError: No module named 'tomllib'"."""
+    r = subprocess.run([sys.executable, "-c", WITHOUT_TOMLLIB], capture_output=True, text=True, cwd=ROOT,
+                       env=dict(os.environ, PYTHONPATH=ROOT), timeout=600)
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert "round_trip" in r.stdout and "frame_invariance" in r.stdout

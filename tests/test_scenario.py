@@ -72,7 +72,7 @@ def test_dumps_roundtrip_and_fingerprint(tmp_path):
     d["loads"][0]["scale"] = [[0.0, 0.0], [0.5, 1.0], [1.0, 1.0]]
     d["edges"] = {"mid": {"box": {"x": [5.0, 5.0]}}}
     a = load_doc(tmp_path, d)
-    import tomllib
+    from core_se3.scenario.spec import tomllib
     assert tomllib.loads(scenario.dumps(d)) == d
     # solver tolerances and outputs do not change the fingerprint; physics does
     d2 = copy.deepcopy(d)
@@ -87,7 +87,7 @@ def test_dumps_roundtrip_and_fingerprint(tmp_path):
 
 
 def test_dumps_writes_numpy_scalars_as_plain_toml():
-    import tomllib
+    from core_se3.scenario.spec import tomllib
     doc = {"a": np.float64(0.5), "b": np.int64(3), "c": [np.float32(0.25), np.bool_(True)]}
     assert tomllib.loads(scenario.dumps(doc)) == {"a": 0.5, "b": 3, "c": [0.25, True]}
 
@@ -97,7 +97,7 @@ def test_dumps_writes_unicode_names_tomllib_reads(tmp_path):
     keys, and characters beyond U+FFFF (an emoji in the name) as JSON's surrogate pairs
     '\\ud83d\\ude00': tomllib refused both ("Expected ']' at the end of a table declaration",
     "not a Unicode scalar value"), so e.g. a design's optimised.toml could not be read back."""
-    import tomllib
+    from core_se3.scenario.spec import tomllib
     d = base()
     d["name"] = "gripper 😀 v2"
     d["regions"] = {"région": {"box": {"x": [0.0, 5.0]}}, "k²": {"box": {"x": [5.0, 10.0]}}}

@@ -4,7 +4,10 @@ drift from the code."""
 import copy
 import os
 import re
-import tomllib
+try:
+    import tomllib
+except ModuleNotFoundError:     # Python 3.10 (README: the core tests run on any Python >= 3.10)
+    import tomli as tomllib
 import warnings
 
 import numpy as np

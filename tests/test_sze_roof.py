@@ -7,11 +7,11 @@ quarter roof (symmetry supports, load P/4 at the corner), cases sze-hinged-roof 
 sze-hinged-roof-6.35 in core_se3/cases_sze.py.  Measure: the largest distance of a computed
 point to the table polyline in (P/P_max, -W_C/max(-W_C)).
 
-Full meshes (16x16 quarter = 32x32 roof, benchmarks/sze.py) give 0.98 %; the 8x8 quarter used
-here 2.46 %, 12x12 1.44 %, 24x24 0.52 % (the error falls with the mesh, ~h^1.3): on 8x8 the
+Full meshes (16x16 quarter = 32x32 roof, benchmarks/sze.py) give 0.97 %; the 8x8 quarter used
+here 2.44 %, 12x12 1.44 %, 24x24 0.52 % (the error falls with the mesh, ~h^1.3): on 8x8 the
 worst point is the end of the stiff far branch, where P/P_max rises steeply with W_C.
-The 6.35 roof's full mesh is the quarter 32x32 (1.73 % on the stated, unverified scale
-P_max = 3000 of s3.8a; 3.43 % on 16x16, 7.55 % on 8x8).
+The 6.35 roof's full mesh is the quarter 32x32 (1.72 % on the stated, unverified scale
+P_max = 3000 of s3.8a; 3.38 % on 16x16, 7.35 % on 8x8; benchmarks/results/sze.md, 2026-12-05).
 """
 import numpy as np
 import pytest
@@ -49,7 +49,7 @@ def test_table_points_have_zero_deviation():
 def test_hinged_roof_12p7_curve_within_3_percent(roof127):
     """h = 12.7 on the 8x8 quarter: the path snaps through (lam rises to the upper limit point,
     falls to the lower one, rises again) and ends at the table's last deflection 29.374.
-    Deviation bar 3 % (the acceptance bar; measured 2.46 % on this coarse mesh, 0.98 % at the
+    Deviation bar 3 % (the acceptance bar; measured 2.44 % on this coarse mesh, 0.97 % at the
     full 16x16 mesh, see the module docstring)."""
     doc, res, prob = roof127
     ref = doc["reference"]

@@ -242,12 +242,18 @@ def _bench_parsers(sub):
     run.add_argument("-q", "--quiet", action="store_true", help="no progress line")
 
 
-def main(argv=None):
+def parser():
+    """The ``core-se3`` argument parser, every subcommand with its options (tests/test_docs_claims.py
+    parses every command line of the docs with it)."""
     ap = argparse.ArgumentParser(prog="core-se3", description="Geometrically exact Cosserat shells on SE(3)")
     sub = ap.add_subparsers(dest="cmd", required=True)
     _bench_parsers(sub)
     add_parsers(sub)
-    args = ap.parse_args(argv)
+    return ap
+
+
+def main(argv=None):
+    args = parser().parse_args(argv)
     if launched_rank() != 0 and args.cmd in ("run", "bench"):     # under mpirun: rank 0 prints
         sys.stdout = open(os.devnull, "w")
     if getattr(args, "verbose", False):

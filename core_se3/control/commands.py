@@ -111,6 +111,10 @@ class Commands:
             try:
                 kind = np.asarray(x).dtype.kind
                 a = np.asarray(x, float).ravel()
+                # NumPy makes [0, 0, True] an integer array: look at the entries themselves
+                if not isinstance(x, np.ndarray) and any(isinstance(e, (bool, np.bool_))
+                                                         for e in np.asarray(x, dtype=object).ravel()):
+                    kind = "b"
             except (TypeError, ValueError):
                 kind = "O"
             if kind not in "iuf":        # a bool, a string or None is no command: not read as 1, 2.0, nan

@@ -145,8 +145,11 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         ContactError naming the key and the expected shape for anything else (a bool or a
         string is no number)."""
         a = np.asarray(k)
-        if a.dtype.kind not in "iuf" or a.shape not in ((), self.nodes.shape):
-            what = f"shape {a.shape}" if a.dtype.kind in "iuf" else repr(k)[:60]
+        # NumPy reads [1e5, ..., True] as floats: a bool among the numbers is none either
+        boolean = not isinstance(k, np.ndarray) and any(isinstance(e, (bool, np.bool_))
+                                                         for e in np.asarray(k, dtype=object).ravel())
+        if boolean or a.dtype.kind not in "iuf" or a.shape not in ((), self.nodes.shape):
+            what = f"shape {a.shape}" if a.dtype.kind in "iuf" and not boolean else repr(k)[:60]
             raise contact_error(f"contact {self.name!r}: the penalty k must be a number or one per contact node, shape "
                                 f"({len(self.nodes)},) in the order of the contact nodes, got {what}", "k")
         return np.broadcast_to(a.astype(float), self.nodes.shape).copy()

@@ -33,7 +33,7 @@ import numpy as np
 
 from .. import lie
 from ..errors import ScenarioError
-from .spec import from_dict as _from_dict
+from .spec import from_dict as _from_dict, tomllib     # tomllib, or the tomli backport on Python 3.10
 from .toml_writer import dumps
 
 __all__ = ["BASE", "SECTIONS", "example_values", "scenario_with", "round_trip", "missing_keys", "fd_tangent",
@@ -173,7 +173,6 @@ def round_trip(section, kind):
     """0.0 when the scenario with the kind survives dumps -> TOML -> validation unchanged and
     the kind's writer (``Kind.entry``) gives back its validated values; an AssertionError
     naming the difference otherwise."""
-    import tomllib
     doc, key = scenario_with(section, kind, example_values(section, kind))
     spec = from_dict(doc).spec
     again = from_dict(tomllib.loads(dumps(doc))).spec
