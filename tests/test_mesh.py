@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from core_se3 import mesh as M
-from core_se3.errors import MeshError
+from core_se3.errors import MeshError, MeshWarning
 
 
 def test_frames_are_orthonormal_with_normal_third_axis():
@@ -146,4 +146,21 @@ def test_a_quad_flat_to_round_off_is_refused_at_the_mesh():
     with pytest.raises(MeshError, match=r"quads \[0, 1\] are degenerate"):
         M.annulus(0.5, 1.0, 2 * np.pi, 1, 2)
     assert M.annulus(0.5, 1.0, 2 * np.pi, 1, 3).n_elements == 3         # a third of a turn each: fine
-    assert M.rectangle(1e6, 1e-6, 1, 1).n_elements == 1                  # an aspect ratio of 1e12: fine
+    with pytest.warns(MeshWarning, match="from the origin"):           # an aspect ratio of 1e12: not
+        assert M.rectangle(1e6, 1e-6, 1, 1).n_elements == 1              # degenerate, but 1e12 widths out
+
+
+def test_a_mesh_far_from_the_origin_warns_of_its_round_off():
+    """Positions are stored absolutely, to eps |X|: a cantilever whose tip moves 1e-3 of an edge,
+    8e9 edges from the origin, is 4.7e-4 off the same cantilever at the origin, 3.4 % at 8e11
+    (converged: nothing said).  A mesh farther than FAR_FROM_ORIGIN (1e10) of its shortest edge
+    now warns; at 1e9 edges (the far-part tests) it does not."""
+    import warnings
+    for x0, warns in ((0.0, False), (1e9, False), (1e11, True)):
+        m = M.rectangle(10.0, 1.0, 8, 1)
+        g = m.g0.copy()
+        g[:, 0, 3] += x0
+        with warnings.catch_warnings(record=True) as rec:
+            warnings.simplefilter("always")
+            M.Mesh(g, m.quads, dict(m.edges))
+        assert [("from the origin" in str(w.message)) for w in rec] == ([True] if warns else [])
