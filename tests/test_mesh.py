@@ -151,9 +151,9 @@ def test_a_quad_flat_to_round_off_is_refused_at_the_mesh():
 
 
 def test_a_mesh_far_from_the_origin_warns_of_its_round_off():
-    """Positions are stored absolutely, to eps |X|: a cantilever whose tip moves 1e-3 of an edge,
-    8e9 edges from the origin, is 4.7e-4 off the same cantilever at the origin, 3.4 % at 8e11
-    (converged: nothing said).  A mesh farther than FAR_FROM_ORIGIN (1e10) of its shortest edge
+    """Positions are stored absolutely, to eps |X|: a cantilever of shortest edge 0.5 and tip
+    deflection 1.3e-3 placed at 1e10 is 4.7e-4 off the same cantilever at the origin, 3.4 % at
+    1e12 (converged: nothing said).  A mesh farther than FAR_FROM_ORIGIN (1e10) of its shortest edge
     now warns; at 1e9 edges (the far-part tests) it does not."""
     import warnings
     for x0, warns in ((0.0, False), (1e9, False), (1e11, True)):
