@@ -483,7 +483,9 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
 
     def set_multipliers(self, lam=None):
         """Set the multipliers (None: back to the cold start); the nodes' alone (k,) leave the
-        face samples' at the cold start."""
+        face samples' at the cold start.  A restore starts the friction's step record afresh
+        (``accept_state``: the relaxations of one accepted state add up)."""
+        self._step_at = None
         self.lam = self.lam0.copy()
         self.soft = self.soft0.copy()
         if self.mu > 0:
