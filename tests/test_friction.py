@@ -192,6 +192,28 @@ def test_a_clamped_strip_on_a_table_sliding_under_it():
     assert abs(tip[0] / tip[1] - 1) < 1e-6 and abs(tip[1] / (0.5 * 9.81 / (2 * 100.0)) - 1) < 0.01, tip
 
 
+def test_face_samples_of_a_rough_obstacle_warn_that_they_carry_no_friction():
+    """Friction acts at the nodes; face samples (on by 'auto' for an obstacle thinner than the
+    elements) are frictionless.  A free strip (24 x 1, elements 0.05 x 0.1) on two rough
+    rollers (radius 0.05, mu 0.3) pressed by a third was carried by face samples alone (0 nodes
+    in contact): mu was silently lost, and the strip slid along the rollers' axes by 1.3e-5 in
+    1 step and 5.0e-3 in 5 (nothing resists it); with faces = false the nodes carry it, no slide.
+    Now adding such an obstacle warns, naming the loss and the fixes."""
+    from core_se3.errors import AccuracyWarning
+    import warnings
+
+    def roller(**kw):
+        p = cs.Problem(M.rectangle(1.2, 0.1, 24, 1), cs.Material(1e5, 0.0, 0.01))
+        return p.add_obstacle("cylinder", point=(0.3, 0, -0.055), axis=(0, 1, 0), radius=0.05, name="left", **kw)
+    with pytest.warns(AccuracyWarning, match="friction 0.3 acts at the contact nodes only.*faces = false"):
+        roller(friction=0.3)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", AccuracyWarning)
+        roller(friction=0.0)                                   # frictionless: the samples lose nothing
+        with pytest.warns(AccuracyWarning, match="thinner"):   # nodes only: the usual warning alone
+            roller(friction=0.3, law=dict(faces=False))
+
+
 # ----------------------------------------------------------------------------- scenario, restart
 BAR = """
 name = "rough-bar"

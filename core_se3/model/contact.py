@@ -205,6 +205,13 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         self.mu = float(friction)
         if not (np.isfinite(self.mu) and self.mu >= 0):
             raise contact_error(f"the friction coefficient must be >= 0 and finite, got {friction}", "friction")
+        if self.mu > 0 and len(self.face_el):
+            warnings.warn(AccuracyWarning(
+                f"obstacle {self.name!r}: friction {self.mu:g} acts at the contact nodes only, and this obstacle is "
+                "felt by face samples too (faces = true, or 'auto' on an obstacle thinner than the elements), which "
+                "are frictionless: where it touches a face between the nodes its friction is lost (a free strip on "
+                "two rough rollers slid along their axes, unresisted); refine the mesh so that the nodes carry the "
+                "contact, or set faces = false"), stacklevel=5)
         if self.mu > 0:          # the history: tangential multipliers (obstacle frame) and anchors
             self.tau = np.zeros((len(self.nodes), 3))
             self.y_a0 = self.placement(self.contact_points(mesh.g0), 0.0)
