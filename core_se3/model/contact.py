@@ -137,6 +137,7 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         if not np.all(np.isfinite(self.k)) or np.any(self.k <= 0):
             raise contact_error("the contact penalty must be positive and finite (beta > 0)", "beta")
         self.eps, self.tol, self.cap_depth = law.lengths(self.h)
+        self._held = getattr(problem, "constraint_mask", None)      # the supports, for failure_hint
         self._faces(mesh, el, law.faces)
         self._start(mesh, friction)
 
@@ -453,12 +454,28 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         if self.mode != "al":
             return 0.0
         ratio = self.gap_error / self.tol
+        kn = len(self.nodes)
+        i = int(np.argmax(err[:kn])) if kn else 0
+        self._stuck = (int(self.nodes[i]), float(-d[i])) if ratio > 1.0 and kn and d[i] < -self.tol else None
         if ratio > 1.0:
             self.lam = p
             self.soft = np.where(p > 0, np.minimum(1.0, 10 * self.soft), self.soft_start)
             if self.mu > 0:
                 self.tau = t @ Q
         return ratio
+
+    def failure_hint(self):
+        """Why the failed try could not converge, from the contact's side: friction's 'it slides'
+        (``CoulombFriction.failure_hint``), or an obstacle pressing into a node whose translations a
+        support holds (the multiplier updates ran out with that node deepest inside: no state has
+        it outside; the message said only "raise max_augmentations or the tolerance"), or ''."""
+        hint = super().failure_hint()
+        stuck = getattr(self, "_stuck", None)
+        if hint or stuck is None or self._held is None or not self._held()[stuck[0], :3].all():
+            return hint
+        return (f"obstacle {self.name!r} presses {stuck[1]:.3g} into node {stuck[0]}, whose translations a support "
+                "holds: no equilibrium has the node outside it; keep the obstacle's motion off the held nodes "
+                "(or release them)")
 
     @property
     def node_ids(self):
