@@ -214,6 +214,28 @@ def test_face_samples_of_a_rough_obstacle_warn_that_they_carry_no_friction():
             roller(friction=0.3, law=dict(faces=False))
 
 
+def test_the_normal_force_of_a_rough_obstacle_counts_its_face_samples():
+    """A strip on two rough rollers (radius 0.05, faces 'auto'), pressed down between them by a
+    third: the face samples carry the whole contact (no node touches).  The reported
+    normal_force summed the nodes' alone: 0 for a roller pushing with 1.9e-3; now it is the
+    samples' force (frictionless: the obstacle's whole force)."""
+    import warnings
+
+    from core_se3.errors import AccuracyWarning
+    p = cs.Problem(M.rectangle(1.2, 0.1, 24, 1), cs.Material(1e5, 0.0, 0.01))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", AccuracyWarning)       # the face samples carry no friction
+        for x0, name in ((0.3, "left"), (0.9, "right")):
+            p.add_obstacle("cylinder", point=(x0, 0, -0.055), axis=(0, 1, 0), radius=0.05, name=name, friction=0.3)
+        p.add_obstacle("cylinder", point=(0.6, 0, 0.055), axis=(0, 1, 0), radius=0.05, name="top", friction=0.3,
+                       motion=dict(translate=(0.0, 0.0, -0.01)))
+    rec = p.solve(steps=1).final.contact
+    for name in ("left", "right", "top"):
+        assert rec[name]["nodes_in_contact"] == 0 and rec[name]["faces_in_contact"] > 0
+        force = np.linalg.norm(rec[name]["force"])
+        assert force > 9e-4 and abs(rec[name]["normal_force"] / force - 1) < 1e-12, (name, rec[name]["normal_force"])
+
+
 # ----------------------------------------------------------------------------- scenario, restart
 BAR = """
 name = "rough-bar"
