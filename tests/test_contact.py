@@ -544,3 +544,18 @@ def test_a_contact_penalty_of_the_wrong_shape_is_a_contact_error_naming_k():
         c = p.add_obstacle("sphere", centre=(1.5, 0.0, -0.5), radius=0.4, law=dict(k=k))
         assert c.k.shape == (6,) and c.k[0] == first
 
+
+
+def test_an_obstacle_pressing_into_a_clamped_node_is_named():
+    """A plane rising 0.3 under a clamped strip reaches the clamped nodes at load factor 0.317:
+    no state has them outside it.  The run stopped with "constraint error 6.84e+03 x its
+    tolerance after 25 multiplier updates (raise NewtonOptions.max_augmentations or the
+    tolerance)", a fix that cannot help; now the error names the obstacle, the held node and
+    the cause."""
+    p = cs.Problem(M.rectangle(1.0, 0.1, 20, 1), cs.Material(1e5, 0.0, 0.01))
+    p.clamp("x0")
+    p.add_obstacle("half_space", point=(0, 0, -0.1), normal=(0, 0, 1), name="lift", motion=dict(translate=(0, 0, 0.3)))
+    with pytest.raises(cs.ConvergenceError, match=r"obstacle 'lift' presses .* into node (0|21), whose translations a "
+                                                   r"support holds") as exc:
+        p.solve(steps=1)
+    assert "the last converged load factor is 0.316" in str(exc.value)

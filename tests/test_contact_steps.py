@@ -163,6 +163,28 @@ def test_a_ball_smaller_than_an_element_is_held_by_the_face():
     assert c.report(st.g, 1.0)["faces_in_contact"] >= 1
 
 
+def test_a_roller_across_the_strip_lifts_it_in_one_step_or_ten():
+    """A cylinder (radius 0.1, thinner than the 0.05 x 0.1 elements' diameter 0.112: face samples
+    on by 'auto') lying across a clamped strip, axis along the width, rises 0.1 under it.  Along
+    the axis d is flat on a face: a line of minima, where the sample's coordinate was set by the
+    sign of round-off and jumped between the face's two long edges at every evaluation (xi_2 =
+    -1, +1, -1, ...): Newton stalled at a residual of 0.54 at first contact with 1 or 10 steps
+    (ConvergenceError at load factor 0.1).  Now the sample stays on the face's middle line, and
+    1 and 10 steps end alike (frictionless: path independent)."""
+    def lift(steps):
+        p = cs.Problem(M.rectangle(1.0, 0.1, 20, 1), cs.Material(1e5, 0.0, 0.01))
+        p.clamp("x0")
+        c = p.add_obstacle("cylinder", point=(0.7, 0, -0.115), axis=(0, 1, 0), radius=0.1, name="roller",
+                           motion=dict(translate=(0.0, 0.0, 0.1)))
+        res = p.solve(steps=steps)
+        assert res.steps[-1].load_factor == pytest.approx(1.0) and len(c.face_el)
+        s, pf, _ = c.face_state(res.final.g, 1.0)
+        assert np.all(s["xi"][pf > 0, 1] == 0.0) and (pf > 0).any()      # the middle line
+        return res.final.g[:, :3, 3]
+    one, ten = lift(1), lift(10)
+    assert one[20, 2] > 0.14 and np.abs(one - ten).max() < 1e-9, np.abs(one - ten).max()
+
+
 def test_a_ball_through_the_face_between_nodes_is_refused_without_face_samples():
     """The same ball raised 0.3 (through the plate) in 4 steps with faces = false: the nodes never
     feel it, and before the run ended with the ball on the far side (zero force, no error); raised

@@ -137,6 +137,7 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         if not np.all(np.isfinite(self.k)) or np.any(self.k <= 0):
             raise contact_error("the contact penalty must be positive and finite (beta > 0)", "beta")
         self.eps, self.tol, self.cap_depth = law.lengths(self.h)
+        self._held = getattr(problem, "constraint_mask", None)      # the supports, for failure_hint
         self._faces(mesh, el, law.faces)
         self._start(mesh, friction)
 
@@ -208,6 +209,13 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         self.mu = float(friction)
         if not (np.isfinite(self.mu) and self.mu >= 0):
             raise contact_error(f"the friction coefficient must be >= 0 and finite, got {friction}", "friction")
+        if self.mu > 0 and len(self.face_el):
+            warnings.warn(AccuracyWarning(
+                f"obstacle {self.name!r}: friction {self.mu:g} acts at the contact nodes only, and this obstacle is "
+                "felt by face samples too (faces = true, or 'auto' on an obstacle thinner than the elements), which "
+                "are frictionless: where it touches a face between the nodes its friction is lost (a free strip on "
+                "two rough rollers slid along their axes, unresisted); refine the mesh so that the nodes carry the "
+                "contact, or set faces = false"), stacklevel=5)
         if self.mu > 0:          # the history: tangential multipliers (obstacle frame) and anchors
             self.tau = np.zeros((len(self.nodes), 3))
             self.y_a0 = self.placement(self.contact_points(mesh.g0), 0.0)
@@ -449,12 +457,28 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         if self.mode != "al":
             return 0.0
         ratio = self.gap_error / self.tol
+        kn = len(self.nodes)
+        i = int(np.argmax(err[:kn])) if kn else 0
+        self._stuck = (int(self.nodes[i]), float(-d[i])) if ratio > 1.0 and kn and d[i] < -self.tol else None
         if ratio > 1.0:
             self.lam = p
             self.soft = np.where(p > 0, np.minimum(1.0, 10 * self.soft), self.soft_start)
             if self.mu > 0:
                 self.tau = t @ Q
         return ratio
+
+    def failure_hint(self):
+        """Why the failed try could not converge, from the contact's side: friction's 'it slides'
+        (``CoulombFriction.failure_hint``), or an obstacle pressing into a node whose translations a
+        support holds (the multiplier updates ran out with that node deepest inside: no state has
+        it outside; the message said only "raise max_augmentations or the tolerance"), or ''."""
+        hint = super().failure_hint()
+        stuck = getattr(self, "_stuck", None)
+        if hint or stuck is None or self._held is None or not self._held()[stuck[0], :3].all():
+            return hint
+        return (f"obstacle {self.name!r} presses {stuck[1]:.3g} into node {stuck[0]}, whose translations a support "
+                "holds: no equilibrium has the node outside it; keep the obstacle's motion off the held nodes "
+                "(or release them)")
 
     @property
     def node_ids(self):
@@ -486,7 +510,9 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
 
     def set_multipliers(self, lam=None):
         """Set the multipliers (None: back to the cold start); the nodes' alone (k,) leave the
-        face samples' at the cold start."""
+        face samples' at the cold start.  A restore starts the friction's step record afresh
+        (``accept_state``: the relaxations of one accepted state add up)."""
+        self._step_at = None
         self.lam = self.lam0.copy()
         self.soft = self.soft0.copy()
         if self.mu > 0:

@@ -58,6 +58,19 @@ def face_shape(xi):
     return N, dN
 
 
+def _flat(M, G, J, tol=1e-9):
+    """The face coordinates (m, 2) along which d is flat to second order at the iterate: no slope
+    (|dd/dxi_j| <= tol |x_,j|) and no curvature (M_jj <= tol tr M), e.g. along the axis of a
+    cylinder lying across the face.  The minimiser is a line there: the sample keeps its
+    coordinate (the face's middle line), else the round-off's sign of the slope sent it to
+    xi_j = +1 or -1 at every evaluation (a roller across a strip jumped from edge to edge of
+    the face and Newton stalled at a residual of 0.5 at first contact)."""
+    edge = np.sqrt(np.einsum("mij,mij->mj", J, J))
+    diag = M[:, [0, 1], [0, 1]]
+    tr = np.abs(diag).sum(1, keepdims=True)
+    return (np.abs(G) <= tol * edge) & (np.abs(diag) <= tol * tr)
+
+
 def face_minima(obstacle, xq, lam, iters=16):
     """The obstacle's closest point on each bilinear face with corners xq (m, 4, 3) at lam.
 
@@ -78,8 +91,9 @@ def face_minima(obstacle, xq, lam, iters=16):
         M = np.einsum("mij,mik,mkl->mjl", J, H, J)
         M[:, 0, 1] += np.einsum("mi,mi->m", n, x_ab)
         M[:, 1, 0] = M[:, 0, 1]
-        # a bound coordinate stays fixed while its gradient pushes outward (projected Newton)
-        fixed = (np.abs(xi) >= 1.0) & (G * np.sign(xi) < 0)
+        # a bound coordinate stays fixed while its gradient pushes outward (projected Newton), and
+        # one along which d is flat (a line of minima) stays where it is
+        fixed = ((np.abs(xi) >= 1.0) & (G * np.sign(xi) < 0)) | _flat(M, G, J)
         Mf = np.where(fixed[:, :, None] | fixed[:, None, :], 0.0, M)
         Mf[:, [0, 1], [0, 1]] = np.where(fixed, 1.0, Mf[:, [0, 1], [0, 1]])
         Gf = np.where(fixed, 0.0, G)
@@ -97,7 +111,7 @@ def face_minima(obstacle, xq, lam, iters=16):
     M = np.einsum("mij,mik,mkl->mjl", J, H, J)
     M[:, 0, 1] += np.einsum("mi,mi->m", n, x_ab)
     M[:, 1, 0] = M[:, 0, 1]
-    free = np.abs(xi) < 1.0 - 1e-12
+    free = (np.abs(xi) < 1.0 - 1e-12) & ~_flat(M, np.einsum("mij,mi->mj", J, n), J)
     Mf = np.where(free[:, :, None] & free[:, None, :], M, 0.0)
     Mf[:, [0, 1], [0, 1]] = np.where(free, Mf[:, [0, 1], [0, 1]], 1.0)
     det = Mf[:, 0, 0] * Mf[:, 1, 1] - Mf[:, 0, 1] ** 2

@@ -83,9 +83,10 @@ class ContactOutputs:
             rec = getattr(self, "step_stats", None) or dict(
                 sticking=int(np.count_nonzero(on & stick)), slipping=int(np.count_nonzero(on & ~stick)),
                 largest_slip=float(np.linalg.norm(slip[on & ~stick], axis=1).max(initial=0.0)))
+            # the normal force of the face samples too (frictionless: their whole force)
+            Fn = ((self.A * p)[:, None] * n).sum(0) + (self.face_forces(g, lam)[0].sum(0) if len(self.face_el) else 0.0)
             out.update(sticking=rec["sticking"], slipping=rec["slipping"], largest_slip=rec["largest_slip"],
-                       tangential_force=float(np.linalg.norm(Ft)),
-                       normal_force=float(np.linalg.norm(((self.A * p)[:, None] * n).sum(0))))
+                       tangential_force=float(np.linalg.norm(Ft)), normal_force=float(np.linalg.norm(Fn)))
         return out
 
     def output_fields(self, g, lam):

@@ -147,9 +147,9 @@ SOLVER = Section("solver", (
             "stick/slip status again in halves, refined until they agree with it to `friction_tol` of the path's "
             "displacement scale (off: its estimate does not shrink with the step on the walkers; docs/STEPS.md)",
             kind="bool"),
-    _option("friction_tol", _NEWTON, "load control with friction: the friction check's tolerance, relative to mu p "
-            "(the hardening) and to the path's displacement scale (a step's halves)", lo=0.0, lo_open=True, hi=1.0,
-            hi_open=True),
+    _option("friction_tol", _NEWTON, "load control with friction: the friction check's tolerance, relative to the "
+            "largest nodal friction A mu p (the hardening's excess force) and to the path's displacement scale "
+            "(a step's halves)", lo=0.0, lo_open=True, hi=1.0, hi_open=True),
     _option("end_check", _NEWTON, "load control: count the negative eigenvalues of the symmetric tangent at the end "
             "of the solve (one factorisation; conservative loads without contact, with limit_check); more than at "
             "the start stops the run naming the step where they rose: an even number crossing zero within a step, "
