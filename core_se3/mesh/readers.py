@@ -138,7 +138,9 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None, triangles="error"):
     allowed; a group of lines off the quads is a MeshError.  Triangles (a quad-dominant mesh) are a MeshError naming the fixes, unless
     ``triangles="split"``: then every cell is split conformingly into quads (each quad into 4,
     each triangle into 3, lines into 2; :func:`~core_se3.mesh.subdivide.split_to_quads`) and the
-    groups follow their cells.  Any other cell type, quads whose orientation flips across an
+    groups follow their cells.  Quads oriented oppositely across a cut (distinct nodes at one
+    point) or between separate parts (opposite mean normals) are a MeshWarning, as are distinct
+    nodes at one point.  Any other cell type, quads whose orientation flips across an
     edge, and a file without quads (Gmsh saves only the elements of physical groups: a file
     with physical curves but no physical surface has none) are MeshErrors.
 
@@ -185,7 +187,7 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None, triangles="error"):
     dropped = np.flatnonzero(remap < 0)
     mesh.dropped_points = dropped if len(dropped) and dropped[0] < len(remap) - len(dropped) else None
     mesh.element_numbering = _element_numbering(raw, blocks, qb)
-    _warn_coincident(X)
+    _warn_orientation(X, quads, _warn_coincident(X))
     return mesh
 
 
@@ -226,6 +228,73 @@ def _warn_coincident(X):
             f"edge (surfaces meshed without a shared curve, or meshes put together without merging their nodes). "
             f"If the cut is not meant, merge the nodes (Gmsh: Coherence, or Geometry.Tolerance; meshio: "
             f"remove the duplicates) and read the mesh again; a slit that is meant may stay."), stacklevel=3)
+    return pairs
+
+
+#: parts whose area-weighted mean unit normals have a dot product below this face opposite ways
+OPPOSITE = -0.5
+
+
+def _warn_orientation(X, quads, pairs):
+    """MeshWarnings for quads oriented oppositely where the edge check cannot see it (the normal
+    d3 is the right-hand side of each quad's node order, and a follower pressure, a follower
+    force along d3 and a magnet's ``Br_frame`` act along it): across a cut (nodes at one point,
+    ``pairs``: taken as one node, an edge then traversed twice the same way), and between
+    separate parts (mean unit normals, each part at least half flat, with a dot product below
+    OPPOSITE).  Two parts may face each other on purpose (two jaws), so these are warnings."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    n = len(X)
+    one = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n)) if len(pairs) else None
+    rep = connected_components(one, directed=False)[1] if one is not None else np.arange(n)
+    cyc = np.stack([rep[quads], np.roll(rep[quads], -1, axis=1)], -1).reshape(-1, 2)
+    cyc = cyc[cyc[:, 0] != cyc[:, 1]]
+    u, first, cnt = np.unique(cyc[:, 0] * n + cyc[:, 1], return_index=True, return_counts=True)
+    if np.any(cnt > 1):
+        a, b = cyc[first[np.argmax(cnt > 1)]]
+        at = ", ".join(f"{k}-{'-'.join(map(str, np.flatnonzero(rep == rep[k])[1:]))}" for k in
+                       (np.flatnonzero(rep == a)[0], np.flatnonzero(rep == b)[0]))
+        warnings.warn(MeshWarning(
+            f"mesh file: the quads on either side of the cut at nodes {at} (distinct nodes at one point) are "
+            f"oriented oppositely: their normals d3 (the right-hand side of the node order) point opposite ways, "
+            f"so a follower pressure, a follower force along d3 or a magnet's Br_frame acts opposite ways on the two "
+            f"sides; orient all quads consistently (Gmsh: gmsh.model.mesh.reverse on one surface) and merge the "
+            f"nodes"), stacklevel=3)
+    _warn_opposite_parts(X, quads, rep, cyc)
+
+
+def _warn_opposite_parts(X, quads, rep, cyc):
+    """The MeshWarning of _warn_orientation for separate parts facing opposite ways (cyc: the
+    quads' edges between merged nodes ``rep``)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    n = len(X)
+    k, part = connected_components(coo_matrix((np.ones(len(cyc)), (cyc[:, 0], cyc[:, 1])), shape=(n, n)),
+                                   directed=False)
+    if k < 2:
+        return
+    P = X[quads]
+    nq = np.cross(P[:, 2] - P[:, 0], P[:, 3] - P[:, 1])        # 2 x area-weighted normal
+    of = part[rep[quads[:, 0]]]
+    total, area = np.zeros((n, 3)), np.zeros(n)
+    np.add.at(total, of, nq)
+    np.add.at(area, of, np.linalg.norm(nq, axis=1))
+    parts = np.unique(of)
+    mean = total[parts] / np.maximum(area[parts], 1e-300)[:, None]
+    flat = np.linalg.norm(mean, axis=1) > 0.5
+    unit = mean / np.maximum(np.linalg.norm(mean, axis=1), 1e-300)[:, None]
+    dots = np.where(np.outer(flat, flat), unit @ unit.T, 1.0)
+    if dots.min() >= OPPOSITE:
+        return
+    i, j = np.unravel_index(np.argmin(dots), dots.shape)
+    show = [f"the part of quad {int(np.flatnonzero(of == parts[m])[0])} ({int(np.sum(of == parts[m]))} quads, mean "
+            f"normal {np.round(unit[m], 3).tolist()})" for m in (i, j)]
+    warnings.warn(MeshWarning(
+        f"mesh file: the mesh has {k} separate parts, and {show[0]} faces opposite to {show[1]}: the normal d3 "
+        f"is the right-hand side of each quad's node order, so a follower pressure, a follower force along d3 or "
+        f"a magnet's Br_frame acts opposite ways on the two. If they should face the same way, reverse one part's "
+        f"node order (Gmsh: gmsh.model.mesh.reverse on its surface); parts that face each other on purpose may "
+        f"stay"), stacklevel=3)
 
 
 def _cell_blocks(m, triangles):
