@@ -312,6 +312,7 @@ def _cell_blocks(m, triangles):
         raise MeshError(f"the mesh's {sorted(set(bad))} cells refer to points that do not exist (it has "
                         f"{len(X)} points): the file is inconsistent; write it again")
     sets = _named_sets(m)
+    blocks = _merge_repeated(m, blocks, sets)
     types = {t for t, _ in blocks}
     other = sorted(types - {"quad", "line", "vertex"})
     if other == ["triangle"] and triangles == "split" and "quad" in types | {"triangle"}:
@@ -337,6 +338,37 @@ def _cell_blocks(m, triangles):
                     "Mesh.SaveAll = 1 before writing")
         raise MeshError("the mesh has no quad cells" + hint)
     return X, blocks, sets, qb
+
+
+def _merge_repeated(raw, blocks, sets):
+    """The cell blocks with each repeated cell (the same nodes in the same order) once, ``sets``
+    updated in place to the kept cells.  Gmsh MSH 2.2 writes an element once per physical group
+    it is in (a surface in the groups "shell" and "magnet" gave every quad twice, and the reader
+    said the normals flip); a repeated quad in another file is a MeshError (its stiffness and
+    loads would count twice)."""
+    gmsh = "gmsh:physical" in (raw.cell_data or {})
+    out = []
+    for i, (typ, cells) in enumerate(blocks):
+        if len(cells) < 2 or cells.ndim != 2:
+            out.append((typ, cells))
+            continue
+        _, first, inv = np.unique(cells, axis=0, return_index=True, return_inverse=True)
+        if len(first) == len(cells):
+            out.append((typ, cells))
+            continue
+        if typ == "quad" and not gmsh:
+            twice = np.flatnonzero(np.bincount(inv.ravel()) > 1)[0]
+            a, b = np.flatnonzero(inv.ravel() == twice)[:2]
+            raise MeshError(f"quad cells {a} and {b} of a block list the same nodes {cells[a].tolist()}: an element "
+                            f"given twice would count its stiffness and loads twice; remove the repeated cells")
+        rank = np.empty(len(first), np.int64)
+        rank[np.argsort(first)] = np.arange(len(first))     # the kept cells in the order first read
+        new = rank[inv.ravel()]
+        out.append((typ, cells[np.sort(first)]))
+        for per in sets.values():
+            if i < len(per) and per[i] is not None:
+                per[i] = np.unique(new[per[i]])
+    return out
 
 
 def _oriented_quads(X, blocks, qb):
