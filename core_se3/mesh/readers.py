@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import contextlib
 import io as _io
+import os
 import warnings
 
 import numpy as np
@@ -63,7 +64,53 @@ def read_meshio(source):
         if not isinstance(exc, SystemExit):
             why = f"{type(exc).__name__}: {exc}" + (f" ({why})" if why else "")
         raise MeshError(f"cannot read mesh {source!r}: {why or 'meshio could not read it'}") from None
+    _warn_shared_names(source, raw)
     return raw
+
+
+def _gmsh_physical_names(path):
+    """[(dim, tag, name)] of a Gmsh file's $PhysicalNames section (text in ASCII and binary
+    files, near the start), [] where there is none or it cannot be parsed."""
+    with open(path, "rb") as fh:
+        head = fh.read(1 << 22)
+    a = head.find(b"$PhysicalNames")
+    b = head.find(b"$EndPhysicalNames", a)
+    if a < 0 or b < 0:
+        return []
+    out = []
+    try:
+        for line in head[a:b].decode("utf-8", "replace").splitlines()[2:]:
+            dim, tag, name = line.split(maxsplit=2)
+            out.append((int(dim), int(tag), name.strip().strip('"')))
+    except ValueError:
+        return []
+    return out
+
+
+def _warn_shared_names(source, raw):
+    """A MeshWarning for a name that a Gmsh file gives to several physical groups (a curve and a
+    point, or two surfaces): meshio keeps one group per name, the others come named by their
+    numbers, so ``edge = "NAME"`` found one of them (a region's name used for a point group of
+    the same name selected every node of the region)."""
+    if not isinstance(source, (str, bytes)) and not hasattr(source, "__fspath__"):
+        return
+    if not str(os.fspath(source)).lower().endswith(".msh"):
+        return
+    groups = {}
+    for dim, tag, name in _gmsh_physical_names(source):
+        groups.setdefault(name, []).append((dim, tag))
+    kinds = ("point", "curve", "surface", "volume")
+    for name, tags in groups.items():
+        if len(tags) < 2:
+            continue
+        kept = tuple(int(x) for x in np.asarray((raw.field_data or {}).get(name, [-1, -1])).ravel()[:2][::-1])
+        others = [f"the {kinds[d] if 0 <= d < 4 else 'group'} {t} as {str(t)!r}" for d, t in tags if (d, t) != kept]
+        warnings.warn(MeshWarning(
+            f"mesh file: {len(tags)} physical groups are named {name!r} ("
+            + ", ".join(f"{kinds[d] if 0 <= d < 4 else 'group'} {t}" for d, t in tags)
+            + f"): a name selects one group, so {name!r} is the "
+            + (f"{kinds[kept[0]]} {kept[1]}" if 0 <= kept[0] < 4 else "first") + " and the others come by number ("
+            + ", ".join(others) + "); give each physical group its own name"), stacklevel=3)
 
 
 def _physical_sets(raw):
@@ -124,8 +171,10 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None, triangles="error"):
     projection of ``d1_hint`` on the tangent plane (the global y axis where that degenerates, x
     where y does too).
     Named groups (Gmsh physical groups, meshio cell sets; a physical group without a name is
-    named by its number, e.g. "1"; point sets such as Abaqus' ``*NSET`` are node sets of their
-    points): a group of line cells (a physical
+    named by its number, e.g. "1", as is every group but one of a name that a Gmsh file gives to
+    several groups, with a MeshWarning; point sets such as Abaqus' ``*NSET`` are node sets of
+    their points; an element repeated in a Gmsh file (MSH 2.2: once per group) is read once):
+    a group of line cells (a physical
     curve) becomes a node set in ``edges``, ordered along the line; a group of vertex cells (a
     physical point) a node set of those nodes; a group of quads (a physical surface) a region.
     ``edges`` = {name: predicate(X) -> bool mask} adds node sets.
