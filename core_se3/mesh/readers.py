@@ -169,7 +169,8 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None, triangles="error"):
     Nodal frames: d3 = area-weighted mean of the adjacent quads' normals (quads must be
     consistently oriented: the normal is the right-hand side of the node order); d1 = the
     projection of ``d1_hint`` on the tangent plane (the global y axis where that degenerates, x
-    where y does too).
+    where y does too); d1 turning by more than D1_TURN_MAX = 30 deg within a quad (a hint nearly
+    normal to the shell there) is a MeshWarning: the answer depends on it.
     Named groups (Gmsh physical groups, meshio cell sets; a physical group without a name is
     named by its number, e.g. "1", as is every group but one of a name that a Gmsh file gives to
     several groups, with a MeshWarning; point sets such as Abaqus' ``*NSET`` are node sets of
@@ -237,7 +238,38 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None, triangles="error"):
     mesh.dropped_points = dropped if len(dropped) and dropped[0] < len(remap) - len(dropped) else None
     mesh.element_numbering = _element_numbering(raw, blocks, qb)
     _warn_orientation(X, quads, _warn_coincident(X))
+    _warn_turning_d1(mesh)
     return mesh
+
+
+#: d1 turning by more than this within a quad [deg] moves the answer by about 1 % (0.5 % at 14 deg)
+D1_TURN_MAX = 30.0
+
+
+def _warn_turning_d1(mesh):
+    """A MeshWarning where the nodal d1 (d1_hint projected on each node's tangent plane) turns
+    by more than D1_TURN_MAX degrees about the normal within one quad: the hint is nearly normal
+    to the shell there (a tube about z with the default hint +x flips d1 by 180 deg along the
+    line where d3 = +x).  The elements interpolate in the nodal frames, so the answer depends on
+    it even for an isotropic material: on a half cylinder (tests/test_mesh_file_frames.py) a turn
+    of 14 deg moved the tip by 0.5 % of its travel, 40 deg by 1.4 %, 79 deg by 4.6 %, and 180 deg
+    stops the solve (ElementTooDistortedError: "refine the mesh or the load step")."""
+    P = mesh.X[mesh.quads]
+    nq = np.cross(P[:, 2] - P[:, 0], P[:, 3] - P[:, 1])
+    nq /= np.linalg.norm(nq, axis=1, keepdims=True)
+    d1 = mesh.g0[mesh.quads][:, :, :3, 0]
+    t = d1 - np.einsum("eki,ei->ek", d1, nq)[..., None] * nq[:, None]
+    t /= np.maximum(np.linalg.norm(t, axis=2, keepdims=True), 1e-300)
+    turn = np.degrees(np.arccos(np.clip(np.einsum("eki,eli->ekl", t, t).min(axis=(1, 2)), -1.0, 1.0)))
+    bad = np.flatnonzero(turn > D1_TURN_MAX)
+    if len(bad):
+        k = bad[np.argmax(turn[bad])]
+        warnings.warn(MeshWarning(
+            f"mesh file: the first director d1 (d1_hint projected on the tangent plane) turns by {turn[k]:.0f} deg "
+            f"within quad {k} (nodes {mesh.quads[k].tolist()}; {len(bad)} quad(s) above {D1_TURN_MAX:g} deg): d1_hint "
+            f"is nearly normal to the shell there, and the elements' answer depends on d1 turning within them, "
+            f"for any material (1 % at 40 deg, 5 % at 80 deg; 180 deg cannot be solved). Give a d1_hint that lies along the "
+            f"shell everywhere (e.g. a tube's or a fold's axis), or one hint per node"), stacklevel=3)
 
 
 def _element_numbering(raw, blocks, qb):
