@@ -461,6 +461,11 @@ def _oriented_quads(X, blocks, qb):
     remap[used] = np.arange(len(used))
     quads = remap[quads]
     n = len(used)
+    inf = used[~np.isfinite(X[used]).all(axis=1)]
+    if len(inf):
+        raise MeshError(f"mesh points {inf[:5].tolist()}{' ...' if len(inf) > 5 else ''} ({len(inf)} of the quads' "
+                        f"{n}) have coordinates that are not finite (nan or inf): the file is damaged or was "
+                        f"written from a failed computation; write it again")
     # orientation consistency: each interior edge must be traversed in opposite directions
     cyc = np.stack([quads, np.roll(quads, -1, axis=1)], -1).reshape(-1, 2)
     key = cyc[:, 0] * n + cyc[:, 1]
@@ -483,7 +488,11 @@ def _nodal_directors(X, quads, d1_hint):
         np.add.at(nn, quads[:, k], nq)
     norm = np.linalg.norm(nn, axis=1)
     if np.any(norm <= 0):
-        raise MeshError("degenerate quads: a node has no well-defined normal")
+        nodes = np.flatnonzero(norm <= 0)
+        around = np.flatnonzero(np.isin(quads, nodes).any(axis=1))
+        raise MeshError(f"degenerate quads: node(s) {nodes[:5].tolist()} have no normal (the quads at them, "
+                        f"{around[:5].tolist()}{' ...' if len(around) > 5 else ''}, have zero area or their normals "
+                        f"cancel): remove collapsed quads or merge the nodes that coincide")
     d3 = nn / norm[:, None]
     hint = np.broadcast_to(np.asarray(d1_hint, float), X.shape)
     t = hint - np.einsum("ni,ni->n", hint, d3)[:, None] * d3
