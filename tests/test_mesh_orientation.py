@@ -25,10 +25,10 @@ def _two_strips(flip, gap):
     return meshio.Mesh(np.r_[X, X + [0.0, 1.0 + gap, 0.0]], [("quad", np.r_[q, q2[:, ::-1] if flip else q2])])
 
 
-def _read(raw):
+def _read(raw, hint=(1.0, 0.0, 0.0)):
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        m = from_meshio(raw)
+        m = from_meshio(raw, d1_hint=hint)
     return m, [str(w.message) for w in caught if issubclass(w.category, MeshWarning)]
 
 
@@ -67,12 +67,12 @@ def test_a_cut_between_opposite_orientations_is_a_mesh_warning():
 
 
 def test_parts_that_face_each_other_only_by_curvature_are_silent():
-    # a closed cylinder-like band of 8 quads is one part whose mean normal vanishes, and two
-    # separate strips at right angles (normals +z and +x) are not opposite
+    # a closed cylinder-like band of 8 quads (d1 along its axis) is one part whose mean normal
+    # vanishes, and two separate strips at right angles (normals +z and +x) are not opposite
     th = np.linspace(0.0, 2 * np.pi, 9)[:-1]
     X = np.r_[np.c_[np.cos(th), np.sin(th), np.zeros(8)], np.c_[np.cos(th), np.sin(th), np.ones(8)]]
     band = np.array([[i, (i + 1) % 8, (i + 1) % 8 + 8, i + 8] for i in range(8)])
-    assert _read(meshio.Mesh(X, [("quad", band)]))[1] == []
+    assert _read(meshio.Mesh(X, [("quad", band)]), hint=(0.0, 0.0, 1.0))[1] == []
     flat = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0.0]])
     wall = np.array([[3, 0, 0], [3, 1, 0], [3, 1, 1], [3, 0, 1.0]])
     assert _read(meshio.Mesh(np.r_[flat, wall], [("quad", np.array([[0, 1, 2, 3], [4, 5, 6, 7]]))]))[1] == []
