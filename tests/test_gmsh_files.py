@@ -12,7 +12,7 @@ import pytest
 
 from core_se3 import mesh as M
 from core_se3 import scenario
-from core_se3.errors import MeshError, ScenarioError
+from core_se3.errors import MeshError, MeshWarning, ScenarioError
 
 try:                                    # the wheel needs X11/OpenGL libraries: an OSError without them
     import gmsh
@@ -117,6 +117,102 @@ def test_gmsh_formats_groups_of_curves_surfaces_points(tmp_path, version, binary
                                            [[10.0, 2, 0], [10.0, 1, 0], [10.0, 0, 0]])   # ordered
     assert m.X[m.edges["corner"]].tolist() == [[10.0, 2.0, 0.0]]
     assert np.allclose(m.g0[:, :3, 2], [0, 0, 1])              # normals +z
+
+
+def overlapping_groups_file(path, version, binary):
+    """The 10 x 2 plate of two 5 x 2 halves, every element in two physical groups: surfaces
+    'left', 'right' and 'shell' (both), the curve x = 10 in 'tip' and 'loaded', the corner point
+    (10, 2) in 'corner' and 'probe'."""
+    _start()
+    occ = gmsh.model.occ
+    a, b = occ.addRectangle(0, 0, 0, 5, 2), occ.addRectangle(5, 0, 0, 5, 2)
+    occ.fragment([(2, a)], [(2, b)])
+    occ.synchronize()
+    for _, tag in gmsh.model.getEntities(1):
+        x0, _, _, x1, _, _ = gmsh.model.getBoundingBox(1, tag)
+        gmsh.model.mesh.setTransfiniteCurve(tag, 3 if abs(x1 - x0) < 1e-5 else 6)
+    surf = {}
+    for _, tag in gmsh.model.getEntities(2):
+        gmsh.model.mesh.setTransfiniteSurface(tag)
+        gmsh.model.mesh.setRecombine(2, tag)
+        surf["left" if occ.getCenterOfMass(2, tag)[0] < 5 else "right"] = tag
+    tip = [t for _, t in gmsh.model.getEntities(1) if abs(occ.getCenterOfMass(1, t)[0] - 10) < 1e-9]
+    corner = [t for _, t in gmsh.model.getEntities(0) if np.allclose(gmsh.model.getValue(0, t, []), [10, 2, 0])]
+    for name, tag in surf.items():
+        gmsh.model.addPhysicalGroup(2, [tag], name=name)
+    gmsh.model.addPhysicalGroup(2, list(surf.values()), name="shell")
+    for name in ("tip", "loaded"):
+        gmsh.model.addPhysicalGroup(1, tip, name=name)
+    for name in ("corner", "probe"):
+        gmsh.model.addPhysicalGroup(0, corner, name=name)
+    gmsh.model.mesh.generate(2)
+    return _write(path, version, binary)
+
+
+@pytest.mark.parametrize("version,binary", FORMATS, ids=["4.1-ascii", "4.1-binary", "2.2-ascii", "2.2-binary"])
+def test_gmsh_elements_in_two_groups_are_read_once(tmp_path, version, binary):
+    """MSH 2.2 writes an element once per physical group it is in: every quad of a surface in
+    'left' and 'shell' came twice (40 quads for 20), and the reader refused the file with "quad
+    normals flip across the edge" (the repeated quads run their edges the same way); MSH 4.1
+    writes it once.  Every format now gives the same mesh."""
+    m = M.from_meshio(overlapping_groups_file(tmp_path / "two.msh", version, binary))
+    assert m.n_elements == 20 and m.n_nodes == 33
+    assert sorted(m.regions) == ["left", "right", "shell"] and m.regions["shell"].tolist() == list(range(20))
+    assert sorted(np.r_[m.regions["left"], m.regions["right"]].tolist()) == list(range(20))
+    assert np.all(m.X[m.quads].mean(1)[m.regions["left"], 0] < 5)
+    for name in ("tip", "loaded"):
+        assert m.X[m.edges[name], 1].tolist() in ([0.0, 1.0, 2.0], [2.0, 1.0, 0.0])     # ordered, once each
+        assert np.allclose(m.X[m.edges[name], 0], 10.0)
+    assert m.X[m.edges["corner"]].tolist() == m.X[m.edges["probe"]].tolist() == [[10.0, 2.0, 0.0]]
+
+
+def shared_name_file(path, version=4.1, binary=0):
+    """A 4 x 1 plate of 4 x 1 quads whose physical surface and the point (4, 1) are both named
+    'plate' (Gmsh allows one name for groups of different dimensions), curve x = 0 'clamped'."""
+    _start()
+    s = gmsh.model.occ.addRectangle(0, 0, 0, 4, 1)
+    gmsh.model.occ.synchronize()
+    for _, tag in gmsh.model.getEntities(1):
+        gmsh.model.mesh.setTransfiniteCurve(tag, 5 if gmsh.model.occ.getMass(1, tag) > 2 else 2)
+    gmsh.model.mesh.setTransfiniteSurface(s)
+    gmsh.model.mesh.setRecombine(2, s)
+    corner = [t for _, t in gmsh.model.getEntities(0) if np.allclose(gmsh.model.getValue(0, t, []), [4, 1, 0])]
+    left = [t for _, t in gmsh.model.getEntities(1) if abs(gmsh.model.occ.getCenterOfMass(1, t)[0]) < 1e-9]
+    gmsh.model.addPhysicalGroup(2, [s], 7, name="plate")
+    gmsh.model.addPhysicalGroup(0, corner, 9, name="plate")
+    gmsh.model.addPhysicalGroup(1, left, 8, name="clamped")
+    gmsh.model.mesh.generate(2)
+    return _write(path, version, binary)
+
+
+@pytest.mark.parametrize("version,binary", FORMATS, ids=["4.1-ascii", "4.1-binary", "2.2-ascii", "2.2-binary"])
+def test_gmsh_one_name_for_groups_of_two_dimensions_is_a_mesh_warning(tmp_path, version, binary):
+    """meshio keeps one group per name: the point 'plate' came as the set '9', and a support on
+    'plate' meant for the corner held every node of the surface (10 of 10), silently before."""
+    path = shared_name_file(tmp_path / "plate.msh", version, binary)
+    with pytest.warns(MeshWarning) as caught:
+        m = M.from_meshio(path)
+    said = [str(w.message) for w in caught if "physical groups are named" in str(w.message)]
+    assert len(said) == 1 and "2 physical groups are named 'plate' (point 9, surface 7)" in said[0]
+    assert "'plate' is the surface 7" in said[0] and "the point 9 as '9'" in said[0]
+    assert len(m.node_set("plate")) == m.n_nodes == 10 and m.X[m.edges["9"]].tolist() == [[4.0, 1.0, 0.0]]
+
+
+def test_a_scenario_names_the_mesh_file_key_for_a_shared_group_name(tmp_path):
+    shared_name_file(tmp_path / "plate.msh")
+    doc = {"mesh": {"file": "plate.msh"}, "material": {"E": 1e6, "nu": 0.3, "h": 0.05},
+           "supports": [{"type": "clamp", "edge": "clamped"}],
+           "loads": [{"type": "nodal", "nodes": {"near": [4.0, 1.0, 0.0]}, "force": [0.0, 0.0, 1e-6]}]}
+    with pytest.warns(Warning):
+        scn = scenario.from_dict(doc, base_dir=str(tmp_path))
+    assert any("mesh.file" in w and "named 'plate'" in w for w in map(str, scn.warnings))
+
+
+def test_a_quad_listed_twice_outside_gmsh_is_a_mesh_error():
+    import meshio
+    X = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0.0]])
+    with pytest.raises(MeshError, match=r"quad cells 0 and 1 .* list the same nodes \[0, 1, 2, 3\]"):
+        M.from_meshio(meshio.Mesh(X, [("quad", np.array([[0, 1, 2, 3], [0, 1, 2, 3]]))]))
 
 
 @pytest.mark.parametrize("version,binary", [(4.1, 0), (2.2, 1)], ids=["4.1-ascii", "2.2-binary"])

@@ -97,6 +97,22 @@ def test_meshio_bad_cells_are_named(cells, message):
         M.from_meshio(meshio.Mesh(X, cells))
 
 
+def test_meshio_bad_points_are_named():
+    """A point at nan was 'g0 must be a finite (n, 4, 4) array of SE(3) frames', a quad of zero
+    area (all four nodes on one line) 'a node has no well-defined normal': neither named the
+    points or quads."""
+    import meshio
+    X = np.c_[np.arange(9) % 3, np.arange(9) // 3, np.zeros(9)].astype(float)
+    q = np.array([[0, 1, 4, 3], [1, 2, 5, 4], [3, 4, 7, 6], [4, 5, 8, 7]])
+    Xn = X.copy()
+    Xn[8, 0] = np.nan
+    with pytest.raises(MeshError, match=r"mesh points \[8\] \(1 of the quads' 9\) have coordinates that are not finite"):
+        M.from_meshio(meshio.Mesh(Xn, [("quad", q)]))
+    line = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0.0]])
+    with pytest.raises(MeshError, match=r"node\(s\) \[0, 1, 2, 3\] have no normal \(the quads at them, \[0\]"):
+        M.from_meshio(meshio.Mesh(line, [("quad", np.array([[0, 1, 2, 3]]))]))
+
+
 def test_meshio_d1_hint_along_the_normal_and_y():
     """A plate normal to y with d1_hint = y: the hint degenerates and so did its fallback, the
     global y axis -- 'g0 must be a finite (n, 4, 4) array of SE(3) frames' after a division by zero.

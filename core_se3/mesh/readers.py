@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import contextlib
 import io as _io
+import os
 import warnings
 
 import numpy as np
@@ -63,7 +64,53 @@ def read_meshio(source):
         if not isinstance(exc, SystemExit):
             why = f"{type(exc).__name__}: {exc}" + (f" ({why})" if why else "")
         raise MeshError(f"cannot read mesh {source!r}: {why or 'meshio could not read it'}") from None
+    _warn_shared_names(source, raw)
     return raw
+
+
+def _gmsh_physical_names(path):
+    """[(dim, tag, name)] of a Gmsh file's $PhysicalNames section (text in ASCII and binary
+    files, near the start), [] where there is none or it cannot be parsed."""
+    with open(path, "rb") as fh:
+        head = fh.read(1 << 22)
+    a = head.find(b"$PhysicalNames")
+    b = head.find(b"$EndPhysicalNames", a)
+    if a < 0 or b < 0:
+        return []
+    out = []
+    try:
+        for line in head[a:b].decode("utf-8", "replace").splitlines()[2:]:
+            dim, tag, name = line.split(maxsplit=2)
+            out.append((int(dim), int(tag), name.strip().strip('"')))
+    except ValueError:
+        return []
+    return out
+
+
+def _warn_shared_names(source, raw):
+    """A MeshWarning for a name that a Gmsh file gives to several physical groups (a curve and a
+    point, or two surfaces): meshio keeps one group per name, the others come named by their
+    numbers, so ``edge = "NAME"`` found one of them (a region's name used for a point group of
+    the same name selected every node of the region)."""
+    if not isinstance(source, (str, bytes)) and not hasattr(source, "__fspath__"):
+        return
+    if not str(os.fspath(source)).lower().endswith(".msh"):
+        return
+    groups = {}
+    for dim, tag, name in _gmsh_physical_names(source):
+        groups.setdefault(name, []).append((dim, tag))
+    kinds = ("point", "curve", "surface", "volume")
+    for name, tags in groups.items():
+        if len(tags) < 2:
+            continue
+        kept = tuple(int(x) for x in np.asarray((raw.field_data or {}).get(name, [-1, -1])).ravel()[:2][::-1])
+        others = [f"the {kinds[d] if 0 <= d < 4 else 'group'} {t} as {str(t)!r}" for d, t in tags if (d, t) != kept]
+        warnings.warn(MeshWarning(
+            f"mesh file: {len(tags)} physical groups are named {name!r} ("
+            + ", ".join(f"{kinds[d] if 0 <= d < 4 else 'group'} {t}" for d, t in tags)
+            + f"): a name selects one group, so {name!r} is the "
+            + (f"{kinds[kept[0]]} {kept[1]}" if 0 <= kept[0] < 4 else "first") + " and the others come by number ("
+            + ", ".join(others) + "); give each physical group its own name"), stacklevel=3)
 
 
 def _physical_sets(raw):
@@ -122,10 +169,13 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None, triangles="error"):
     Nodal frames: d3 = area-weighted mean of the adjacent quads' normals (quads must be
     consistently oriented: the normal is the right-hand side of the node order); d1 = the
     projection of ``d1_hint`` on the tangent plane (the global y axis where that degenerates, x
-    where y does too).
+    where y does too); d1 turning by more than D1_TURN_MAX = 30 deg within a quad (a hint nearly
+    normal to the shell there) is a MeshWarning: the answer depends on it.
     Named groups (Gmsh physical groups, meshio cell sets; a physical group without a name is
-    named by its number, e.g. "1"; point sets such as Abaqus' ``*NSET`` are node sets of their
-    points): a group of line cells (a physical
+    named by its number, e.g. "1", as is every group but one of a name that a Gmsh file gives to
+    several groups, with a MeshWarning; point sets such as Abaqus' ``*NSET`` are node sets of
+    their points; an element repeated in a Gmsh file (MSH 2.2: once per group) is read once):
+    a group of line cells (a physical
     curve) becomes a node set in ``edges``, ordered along the line; a group of vertex cells (a
     physical point) a node set of those nodes; a group of quads (a physical surface) a region.
     ``edges`` = {name: predicate(X) -> bool mask} adds node sets.
@@ -138,7 +188,9 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None, triangles="error"):
     allowed; a group of lines off the quads is a MeshError.  Triangles (a quad-dominant mesh) are a MeshError naming the fixes, unless
     ``triangles="split"``: then every cell is split conformingly into quads (each quad into 4,
     each triangle into 3, lines into 2; :func:`~core_se3.mesh.subdivide.split_to_quads`) and the
-    groups follow their cells.  Any other cell type, quads whose orientation flips across an
+    groups follow their cells.  Quads oriented oppositely across a cut (distinct nodes at one
+    point) or between separate parts (opposite mean normals) are a MeshWarning, as are distinct
+    nodes at one point.  Any other cell type, quads whose orientation flips across an
     edge, and a file without quads (Gmsh saves only the elements of physical groups: a file
     with physical curves but no physical surface has none) are MeshErrors.
 
@@ -185,8 +237,39 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None, triangles="error"):
     dropped = np.flatnonzero(remap < 0)
     mesh.dropped_points = dropped if len(dropped) and dropped[0] < len(remap) - len(dropped) else None
     mesh.element_numbering = _element_numbering(raw, blocks, qb)
-    _warn_coincident(X)
+    _warn_orientation(X, quads, _warn_coincident(X))
+    _warn_turning_d1(mesh)
     return mesh
+
+
+#: d1 turning by more than this within a quad [deg] moves the answer by about 1 % (0.5 % at 14 deg)
+D1_TURN_MAX = 30.0
+
+
+def _warn_turning_d1(mesh):
+    """A MeshWarning where the nodal d1 (d1_hint projected on each node's tangent plane) turns
+    by more than D1_TURN_MAX degrees about the normal within one quad: the hint is nearly normal
+    to the shell there (a tube about z with the default hint +x flips d1 by 180 deg along the
+    line where d3 = +x).  The elements interpolate in the nodal frames, so the answer depends on
+    it even for an isotropic material: on a half cylinder (tests/test_mesh_file_frames.py) a turn
+    of 14 deg moved the tip by 0.5 % of its travel, 40 deg by 1.4 %, 79 deg by 4.6 %, and 180 deg
+    stops the solve (ElementTooDistortedError: "refine the mesh or the load step")."""
+    P = mesh.X[mesh.quads]
+    nq = np.cross(P[:, 2] - P[:, 0], P[:, 3] - P[:, 1])
+    nq /= np.linalg.norm(nq, axis=1, keepdims=True)
+    d1 = mesh.g0[mesh.quads][:, :, :3, 0]
+    t = d1 - np.einsum("eki,ei->ek", d1, nq)[..., None] * nq[:, None]
+    t /= np.maximum(np.linalg.norm(t, axis=2, keepdims=True), 1e-300)
+    turn = np.degrees(np.arccos(np.clip(np.einsum("eki,eli->ekl", t, t).min(axis=(1, 2)), -1.0, 1.0)))
+    bad = np.flatnonzero(turn > D1_TURN_MAX)
+    if len(bad):
+        k = bad[np.argmax(turn[bad])]
+        warnings.warn(MeshWarning(
+            f"mesh file: the first director d1 (d1_hint projected on the tangent plane) turns by {turn[k]:.0f} deg "
+            f"within quad {k} (nodes {mesh.quads[k].tolist()}; {len(bad)} quad(s) above {D1_TURN_MAX:g} deg): d1_hint "
+            f"is nearly normal to the shell there, and the elements' answer depends on d1 turning within them, "
+            f"for any material (1 % at 40 deg, 5 % at 80 deg; 180 deg cannot be solved). Give a d1_hint that lies along the "
+            f"shell everywhere (e.g. a tube's or a fold's axis), or one hint per node"), stacklevel=3)
 
 
 def _element_numbering(raw, blocks, qb):
@@ -226,6 +309,73 @@ def _warn_coincident(X):
             f"edge (surfaces meshed without a shared curve, or meshes put together without merging their nodes). "
             f"If the cut is not meant, merge the nodes (Gmsh: Coherence, or Geometry.Tolerance; meshio: "
             f"remove the duplicates) and read the mesh again; a slit that is meant may stay."), stacklevel=3)
+    return pairs
+
+
+#: parts whose area-weighted mean unit normals have a dot product below this face opposite ways
+OPPOSITE = -0.5
+
+
+def _warn_orientation(X, quads, pairs):
+    """MeshWarnings for quads oriented oppositely where the edge check cannot see it (the normal
+    d3 is the right-hand side of each quad's node order, and a follower pressure, a follower
+    force along d3 and a magnet's ``Br_frame`` act along it): across a cut (nodes at one point,
+    ``pairs``: taken as one node, an edge then traversed twice the same way), and between
+    separate parts (mean unit normals, each part at least half flat, with a dot product below
+    OPPOSITE).  Two parts may face each other on purpose (two jaws), so these are warnings."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    n = len(X)
+    one = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n)) if len(pairs) else None
+    rep = connected_components(one, directed=False)[1] if one is not None else np.arange(n)
+    cyc = np.stack([rep[quads], np.roll(rep[quads], -1, axis=1)], -1).reshape(-1, 2)
+    cyc = cyc[cyc[:, 0] != cyc[:, 1]]
+    u, first, cnt = np.unique(cyc[:, 0] * n + cyc[:, 1], return_index=True, return_counts=True)
+    if np.any(cnt > 1):
+        a, b = cyc[first[np.argmax(cnt > 1)]]
+        at = ", ".join(f"{k}-{'-'.join(map(str, np.flatnonzero(rep == rep[k])[1:]))}" for k in
+                       (np.flatnonzero(rep == a)[0], np.flatnonzero(rep == b)[0]))
+        warnings.warn(MeshWarning(
+            f"mesh file: the quads on either side of the cut at nodes {at} (distinct nodes at one point) are "
+            f"oriented oppositely: their normals d3 (the right-hand side of the node order) point opposite ways, "
+            f"so a follower pressure, a follower force along d3 or a magnet's Br_frame acts opposite ways on the two "
+            f"sides; orient all quads consistently (Gmsh: gmsh.model.mesh.reverse on one surface) and merge the "
+            f"nodes"), stacklevel=3)
+    _warn_opposite_parts(X, quads, rep, cyc)
+
+
+def _warn_opposite_parts(X, quads, rep, cyc):
+    """The MeshWarning of _warn_orientation for separate parts facing opposite ways (cyc: the
+    quads' edges between merged nodes ``rep``)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    n = len(X)
+    k, part = connected_components(coo_matrix((np.ones(len(cyc)), (cyc[:, 0], cyc[:, 1])), shape=(n, n)),
+                                   directed=False)
+    if k < 2:
+        return
+    P = X[quads]
+    nq = np.cross(P[:, 2] - P[:, 0], P[:, 3] - P[:, 1])        # 2 x area-weighted normal
+    of = part[rep[quads[:, 0]]]
+    total, area = np.zeros((n, 3)), np.zeros(n)
+    np.add.at(total, of, nq)
+    np.add.at(area, of, np.linalg.norm(nq, axis=1))
+    parts = np.unique(of)
+    mean = total[parts] / np.maximum(area[parts], 1e-300)[:, None]
+    flat = np.linalg.norm(mean, axis=1) > 0.5
+    unit = mean / np.maximum(np.linalg.norm(mean, axis=1), 1e-300)[:, None]
+    dots = np.where(np.outer(flat, flat), unit @ unit.T, 1.0)
+    if dots.min() >= OPPOSITE:
+        return
+    i, j = np.unravel_index(np.argmin(dots), dots.shape)
+    show = [f"the part of quad {int(np.flatnonzero(of == parts[m])[0])} ({int(np.sum(of == parts[m]))} quads, mean "
+            f"normal {np.round(unit[m], 3).tolist()})" for m in (i, j)]
+    warnings.warn(MeshWarning(
+        f"mesh file: the mesh has {k} separate parts, and {show[0]} faces opposite to {show[1]}: the normal d3 "
+        f"is the right-hand side of each quad's node order, so a follower pressure, a follower force along d3 or "
+        f"a magnet's Br_frame acts opposite ways on the two. If they should face the same way, reverse one part's "
+        f"node order (Gmsh: gmsh.model.mesh.reverse on its surface); parts that face each other on purpose may "
+        f"stay"), stacklevel=3)
 
 
 def _cell_blocks(m, triangles):
@@ -243,6 +393,7 @@ def _cell_blocks(m, triangles):
         raise MeshError(f"the mesh's {sorted(set(bad))} cells refer to points that do not exist (it has "
                         f"{len(X)} points): the file is inconsistent; write it again")
     sets = _named_sets(m)
+    blocks = _merge_repeated(m, blocks, sets)
     types = {t for t, _ in blocks}
     other = sorted(types - {"quad", "line", "vertex"})
     if other == ["triangle"] and triangles == "split" and "quad" in types | {"triangle"}:
@@ -270,6 +421,37 @@ def _cell_blocks(m, triangles):
     return X, blocks, sets, qb
 
 
+def _merge_repeated(raw, blocks, sets):
+    """The cell blocks with each repeated cell (the same nodes in the same order) once, ``sets``
+    updated in place to the kept cells.  Gmsh MSH 2.2 writes an element once per physical group
+    it is in (a surface in the groups "shell" and "magnet" gave every quad twice, and the reader
+    said the normals flip); a repeated quad in another file is a MeshError (its stiffness and
+    loads would count twice)."""
+    gmsh = "gmsh:physical" in (raw.cell_data or {})
+    out = []
+    for i, (typ, cells) in enumerate(blocks):
+        if len(cells) < 2 or cells.ndim != 2:
+            out.append((typ, cells))
+            continue
+        _, first, inv = np.unique(cells, axis=0, return_index=True, return_inverse=True)
+        if len(first) == len(cells):
+            out.append((typ, cells))
+            continue
+        if typ == "quad" and not gmsh:
+            twice = np.flatnonzero(np.bincount(inv.ravel()) > 1)[0]
+            a, b = np.flatnonzero(inv.ravel() == twice)[:2]
+            raise MeshError(f"quad cells {a} and {b} of a block list the same nodes {cells[a].tolist()}: an element "
+                            f"given twice would count its stiffness and loads twice; remove the repeated cells")
+        rank = np.empty(len(first), np.int64)
+        rank[np.argsort(first)] = np.arange(len(first))     # the kept cells in the order first read
+        new = rank[inv.ravel()]
+        out.append((typ, cells[np.sort(first)]))
+        for per in sets.values():
+            if i < len(per) and per[i] is not None:
+                per[i] = np.unique(new[per[i]])
+    return out
+
+
 def _oriented_quads(X, blocks, qb):
     """The quads renumbered over the points they use, and remap (point -> node, -1 for a point no
     quad uses); quads whose orientation flips across an edge are a MeshError."""
@@ -279,6 +461,11 @@ def _oriented_quads(X, blocks, qb):
     remap[used] = np.arange(len(used))
     quads = remap[quads]
     n = len(used)
+    inf = used[~np.isfinite(X[used]).all(axis=1)]
+    if len(inf):
+        raise MeshError(f"mesh points {inf[:5].tolist()}{' ...' if len(inf) > 5 else ''} ({len(inf)} of the quads' "
+                        f"{n}) have coordinates that are not finite (nan or inf): the file is damaged or was "
+                        f"written from a failed computation; write it again")
     # orientation consistency: each interior edge must be traversed in opposite directions
     cyc = np.stack([quads, np.roll(quads, -1, axis=1)], -1).reshape(-1, 2)
     key = cyc[:, 0] * n + cyc[:, 1]
@@ -301,7 +488,11 @@ def _nodal_directors(X, quads, d1_hint):
         np.add.at(nn, quads[:, k], nq)
     norm = np.linalg.norm(nn, axis=1)
     if np.any(norm <= 0):
-        raise MeshError("degenerate quads: a node has no well-defined normal")
+        nodes = np.flatnonzero(norm <= 0)
+        around = np.flatnonzero(np.isin(quads, nodes).any(axis=1))
+        raise MeshError(f"degenerate quads: node(s) {nodes[:5].tolist()} have no normal (the quads at them, "
+                        f"{around[:5].tolist()}{' ...' if len(around) > 5 else ''}, have zero area or their normals "
+                        f"cancel): remove collapsed quads or merge the nodes that coincide")
     d3 = nn / norm[:, None]
     hint = np.broadcast_to(np.asarray(d1_hint, float), X.shape)
     t = hint - np.einsum("ni,ni->n", hint, d3)[:, None] * d3

@@ -115,16 +115,19 @@ def _unrefined_mesh(v, d, base_dir):
         why = check_input_file(path, MAX_MESH_BYTES, "a mesh file")
         if why is not None:
             v.fail(join(key, "file"), why)
+        # the reader's warnings (nodes at one point: a cut) become the scenario's, at its key
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", MeshWarning)
+            try:
+                raw = M.read_meshio(path)
+            except CoreSE3Error as exc:
+                detail = without_contents(str(exc).split(f"{path!r}: ", 1)[-1], path)
+                v.fail(join(key, "file"), f"cannot read mesh file {fname!r}: {detail}")
         try:
-            raw = M.read_meshio(path)
-        except CoreSE3Error as exc:
-            detail = without_contents(str(exc).split(f"{path!r}: ", 1)[-1], path)
-            v.fail(join(key, "file"), f"cannot read mesh file {fname!r}: {detail}")
-        try:
-            # the reader's warnings (nodes at one point: a cut) become the scenario's, at its key
-            with warnings.catch_warnings(record=True) as caught:
+            with warnings.catch_warnings(record=True) as later:
                 warnings.simplefilter("always", MeshWarning)
                 mesh = M.from_meshio(raw, d1_hint=hint, triangles=tri)
+            caught += later
         except CoreSE3Error as exc:
             v.fail(join(key, "file"), f"bad mesh {fname!r}: {without_contents(str(exc), path)}")
         except Exception as exc:      # meshio objects can be malformed in many ways

@@ -361,11 +361,22 @@ def plausibility(v, scn):
         elif n["value"] > FIRST_STEP_MAX:
             v.warn(n["name"], f"the load number {n['formula']} = {n['value']:.3g} in the first step (load factor "
                               f"{lam1:g}; span L = {n['span']:.4g}) is above {FIRST_STEP_MAX:g}: the first step "
-                              "bends the shell through many turns; check the units of the load (and mu0), or "
-                              "take more or smaller steps")
+                              "bends the shell through many turns; check the units of the load (and mu0)"
+                              + _file_length(spec, u) + ", or take more or smaller steps")
     if scn.solver["control"] == "linear":
         _linear_motions(v, spec, scn.solver["lam_end"], scn.mesh.length_scale)
     return None
+
+
+def _file_length(spec, u):
+    """For a mesh read from a file: a reminder that its coordinates are lengths in the scenario's
+    unit (a Gmsh file in mm read with units = "SI" is 1000 times too large: a load number
+    L^2 h^-2 goes up 10^6 times, and this warning was the only sign, blaming the load)."""
+    if "file" not in spec["mesh"]:
+        return ""
+    unit = u["length"] if u is not None else "the scenario's length unit"
+    return (f" and the mesh file's length unit (its coordinates are read as {unit}: a file in mm read with "
+            f"units = \"SI\" is 1000 times too large)")
 
 
 def _linear_motions(v, spec, lam, span):
