@@ -49,6 +49,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 import core_se3 as cs                                          # noqa: E402
 from core_se3.errors import ConvergenceError, CoreSE3Error, MeshError   # noqa: E402
 from core_se3.solvers.convergence import relative_residual, scaled_norm   # noqa: E402
+from core_se3.solvers.stability import negative_count   # noqa: E402
 
 EQ_TOL = 10.0
 FRAME_TOL = 1e-9
@@ -355,7 +356,10 @@ def run_one(spec, rng, backend, record):
         info["nd"] = newton_distance(p2, st.g, st.load_factor)
         if not res.critical_points and n in (1, 16):
             info["min_eig"] = min_eig(p2, st.g, st.load_factor)
-            info["end_check"] = not any(getattr(ld, "follower", False) for ld in p.loads)
+            # the end check counted (it says stable): no follower load and sym K a stability
+            # measure (K symmetric to the package's ASYM_TOL: not a dead moment's asymmetric K)
+            info["end_check"] = not any(getattr(ld, "follower", False) for ld in p.loads) and \
+                negative_count(p2, st.g, st.load_factor) is not None
         finals[n] = (st.g, info["nd"], p.length_scale)
     # path independence
     if len(finals) > 1 and all(not out["runs"][n].get("crit") for n in finals):
@@ -471,6 +475,12 @@ def tally(rec):
                  max((a for _, a in crit if a is not None), default=float("nan")),
                  sum(a is None for _, a in crit))
     t["violations"] = [(i, violations(o)) for i, o in enumerate(rec) if violations(o)]
+    # exit ok on a state sym K calls unstable where the package claims nothing (non-symmetric K)
+    t["unclaimed_unstable"] = [(i, n, r["min_eig"]) for i, o in enumerate(rec) for n, r in o.get("runs", {}).items()
+                               if r["ok"] and "min_eig" in r and not r["end_check"] and r["min_eig"] < -STAB_TOL]
+    # some step counts end ok where others fail: the ok ones may have passed a limit point by a jump
+    t["mixed"] = [(i, [n for n, r in o["runs"].items() if r["ok"]]) for i, o in enumerate(rec)
+                  if "runs" in o and 0 < sum(r["ok"] for r in o["runs"].values()) < len(o["runs"])]
     return t
 
 
@@ -501,11 +511,17 @@ def report(rec, n, seed, seconds):
               f"after cut-backs, {t['one_critical']} stopped at a reported critical point, {t['one_failed']} "
               f"failed (no convergence / an element turning by pi: {t['all_failed']} problems failed at every "
               "step count).", "",
-              f"Stable ends: smallest lambda_min / lambda_max of sym K {t['stab_smallest']:.3g} (all >= 0).  "
+              f"Ends reported stable: smallest lambda_min / lambda_max of sym K {t['stab_smallest']:.3g}.  "
               f"Critical points reported (runs stopped at one): {t['crit'][0]}; lambda_min / lambda_max of sym K "
               f"at the last state kept before them >= {t['crit'][1]:.3g} (stable), and at 1.25 x the bracket "
               f"beyond them (followed in 64 steps with the checks off) <= {t['crit'][2]:.3g} (unstable: the "
               f"point is real; {t['crit'][3]} not followed).", ""]
+    lines += [f"Not checked as stable (the package counts nothing: a follower load, or a dead moment whose K is "
+              f"not symmetric), yet exit ok on a state whose sym K has a negative eigenvalue: "
+              f"{len(t['unclaimed_unstable'])} solves " + ", ".join(f"problem {i} ({n} steps, {v:.2g})"
+                                                          for i, n, v in t["unclaimed_unstable"][:12]) + ".", "",
+              f"Problems where some step counts end ok and others fail: {len(t['mixed'])} " +
+              ", ".join(f"{i} (ok: {ns})" for i, ns in t["mixed"][:12]) + ".", ""]
     if t["errors"]:
         lines += ["Errors (not ConvergenceError):", ""] + [f"* {e}" for e in t["errors"]] + [""]
     lines += ["Violations:" if t["violations"] else "Violations: none.", ""]
