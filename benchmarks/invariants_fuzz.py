@@ -57,6 +57,28 @@ STAB_TOL = 1e-9
 STEPS = (1, 2, 4, 16)
 
 
+# what the campaign found (seed 4), for the report
+FINDINGS = [
+    "Findings (seed 4; the numbers before the fix are of the same campaign on the code before it):", "",
+    "* problem 38 (clamped 2x2 cylindrical panel, oblique compressive edge force, conservative): the "
+    "one- and two-step solves exited ok 1.40 ell from the 4-, 16- and 128-step answer, on a stable "
+    "state (lambda_min/lambda_max 3.5e-6). The cut-back try 0.219 -> 0.3125 converged with corrections "
+    "9.15, 2.28, 2.85, 2.93, 1.39 ... ell: growth below half the first correction, which the path check "
+    "exempted. Fixed (solvers/step_checks.py: the step's scale is capped at pi ell); now 1, 2, 4, 16 agree "
+    "to 1e-14 ell (tests/test_step_checks.py::test_one_step_oblique_panel_ends_where_sixteen_steps_do).",
+    "* problem 82 (clamped plate, follower pressure + 5 Euler loads 1 % off-axis; not conservative): the "
+    "one-step solve exits ok 1.97 ell from the 2-, 4-, 16- and 256-step answer; its try 0.578 -> 0.613 "
+    "grows a correction 0.017 -> 0.439 ell (25x), just below half the first (0.951). Not fixed: "
+    "GROWTH_SCALE 0.4 catches it but doubles the quarter hemisphere's tries (strict xfail "
+    "test_one_step_compressed_plate_ends_where_sixteen_steps_do).",
+    "* problem 144 (clamped strip, dead pressure + dead edge moment of 1.9 turns): 4, 16 and 64 steps stop "
+    "at a limit point near 0.70 of the load (no convergence beyond), but 1 and 2 steps exit ok at 1.0 on "
+    "a state whose sym K has 2 negative eigenvalues (lambda_min/lambda_max -5.6e-6): the try 0.5 -> 1 "
+    "contracted monotonically (Theta 0.04) from a first correction of 15.5 ell. The end check does not "
+    "count there (the dead moment makes K non-symmetric, max|K - K^T| / max|K| 1.1e-5 > ASYM_TOL), so "
+    "nothing is said. Not fixed.", ""]
+
+
 # ------------------------------------------------------------------ random problems ---
 def random_mesh_spec(rng):
     """(generator name, arguments, characteristic length L, width b)."""
@@ -522,6 +544,7 @@ def report(rec, n, seed, seconds):
                                                           for i, n, v in t["unclaimed_unstable"][:12]) + ".", "",
               f"Problems where some step counts end ok and others fail: {len(t['mixed'])} " +
               ", ".join(f"{i} (ok: {ns})" for i, ns in t["mixed"][:12]) + ".", ""]
+    lines += FINDINGS
     if t["errors"]:
         lines += ["Errors (not ConvergenceError):", ""] + [f"* {e}" for e in t["errors"]] + [""]
     lines += ["Violations:" if t["violations"] else "Violations: none.", ""]
