@@ -66,6 +66,70 @@ def test_path_measures_count_growth_at_the_step_scale_only():
     assert path_measures([0.5]) == (0.0, 0.0)
 
 
+def test_growth_beyond_pi_ell_counts_whatever_the_first_correction():
+    """A first correction of many ell (rotations past pi) holds other equilibria in its ball: a
+    growth at a few ell counts even below half of it.  The corrections of the try that jumped
+    (the panel below, 0.219 -> 0.3125 of its load): Theta 0.25 counted at 1/2 of 9.15 ell."""
+    assert path_measures([9.15416, 2.27637, 2.85071, 2.93294, 1.3877, 1.16847, 0.31542])[0] > 1.0
+    assert path_measures([4.16, 1.21, 1.32, 0.226, 0.428])[0] < 1.0     # the hemisphere's zig-zag
+
+
+def _oblique_panel(steps):
+    """A clamped cylindrical panel 2 x 2 (one inner node moved) under a compressive edge force
+    oblique to its free edge (benchmarks/invariants_fuzz.py, seed 4, problem 38)."""
+    m = mesh.cylinder_panel(0.1637278128039579, 0.10498708007622841, -0.5771916919432326,
+                            0.5771916919432326, 2, 2)
+    g0 = m.g0.copy()
+    g0[4, :3, 3] += (0.0021330031819409363, 0.0007595369649474951, 0.0)
+    p = Problem(mesh.Mesh(g0, m.quads, m.edges, shape=m.shape),
+                Material(E=5977.117247077262, nu=0.37797630667687593, h=0.0039032364467068642))
+    p.clamp("x0")
+    p.add_edge_force("x1", (-0.0011243807732677624, -2.766229201817546e-06, 5.018295416958634e-06))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return p, p.solve(steps=steps)
+
+
+def test_one_step_oblique_panel_ends_where_sixteen_steps_do():
+    """In one step (cut back to 0.125, 0.219, 0.3125, ...) it exited 'ok' on a stable state 1.40
+    ell from the 16-step (and 128-step) answer: the try 0.219 -> 0.3125 converged with corrections
+    9.15, 2.28, 2.85, 2.93 ... ell onto another equilibrium.  Now that try is refused; all agree
+    to round-off (1e-14 ell)."""
+    p, r16 = _oblique_panel(16)
+    for steps in (1, 2):
+        _, res = _oblique_panel(steps)
+        assert np.abs(res.final.g - r16.final.g).max() < 1e-9 * p.length_scale
+
+
+def _compressed_plate(steps):
+    """A clamped plate 4 x 2 (three inner nodes moved) under a follower pressure and an edge force
+    of about 5 Euler loads 1 % off its axis (benchmarks/invariants_fuzz.py, seed 4, problem 82)."""
+    m = mesh.rectangle(6.128727735321672, 1.936039187878415, 4, 2)
+    g0 = m.g0.copy()
+    g0[[6, 7, 8], :3, 3] += [[0.049468317539284934, 0.07703383891764673, 0.0],
+                             [-0.045667939820909886, 0.074140452088936, 0.0],
+                             [-0.056386096952471654, -0.029040266767528824, 0.0]]
+    p = Problem(mesh.Mesh(g0, m.quads, m.edges, shape=m.shape),
+                Material(E=95821335112.07649, nu=0.24161289977156608, h=0.10110366534437852))
+    p.clamp("x0")
+    p.add_pressure(8.048088877146736, follower=True)
+    p.add_edge_force("x1", (-1831882.0087996104, 12849.889693128865, 7805.068975530234))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return p, p.solve(steps=steps)
+
+
+@pytest.mark.xfail(strict=True, reason="known: the cut-back try 0.578 -> 0.613 of the one-step solve converges "
+                   "with corrections 0.951, 0.032, 0.021, 0.056, 0.017, 0.439 ... ell onto another equilibrium "
+                   "(0.81 ell off, 1.97 ell at the end); the growth 0.017 -> 0.439 (25x) lies just below "
+                   "GROWTH_SCALE = 1/2 of the first correction.  GROWTH_SCALE 0.4 catches it but doubles the "
+                   "quarter hemisphere's tries (10 -> 19): a threshold trade-off to settle, not fixed here")
+def test_one_step_compressed_plate_ends_where_sixteen_steps_do():
+    p, r16 = _compressed_plate(16)
+    _, res = _compressed_plate(1)
+    assert np.abs(res.final.g - r16.final.g).max() < 1e-9 * p.length_scale
+
+
 def test_a_shell_with_an_inexact_tangent_is_not_cut_back_forever():
     """The quarter hemisphere (penalty springs) in load control: its Newton repeats a correction
     of the order of 1e-3 of the first at every step size; counting it refused every try down to the

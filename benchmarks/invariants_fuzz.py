@@ -1,0 +1,572 @@
+"""Physics-invariant fuzzer: random valid small shell problems, every successful answer checked
+independently (equilibrium on the other backend, global balance, path independence over 1, 2, 4
+and 16 load steps, frame invariance under a random rigid motion, stability of a state reported
+stable).  Writes benchmarks/results/invariants_fuzz.md.
+
+    .venv/bin/python benchmarks/invariants_fuzz.py [--n 60] [--seed 1]
+
+The problem generator and the checks are also used by tests/test_invariants_fuzz.py (a few
+seeded problems).  What each check measures and its tolerance:
+
+1. equilibrium: the relative residual (``solvers.convergence.relative_residual``) of the
+   returned state at the returned load factor, evaluated on the OTHER backend, over the Newton
+   tolerance max(rtol, round-off floor); must be <= EQ_TOL (10: the backends agree to 1e-12).
+2. balance: lab totals of the reactions (r_int - f_ext at the held dofs, other backend) plus the
+   applied loads (recomputed from the load data, not from the package: lam F for edge and nodal
+   forces, rho h g A for gravity, p A n for dead pressure), force and moment about the origin,
+   relative to the sum of the nodal force magnitudes (moments: that x the part's size, plus the
+   reported scale); tolerance 10 sqrt(free dofs) max(rtol, floor) x the residual's scale (the
+   lab sum of a free residual at the Newton tolerance).  Also the reported ``StepResult.balance_error``.
+3. path independence: the largest nodal distance (positions / ell, rotations) between the final
+   states of 1, 2, 4 and 16 load steps; tolerance: 100 x the Newton-step distance of each state
+   to its own exact equilibrium (|K^-1 r| in unit-scaled norm, dense) plus 1e-9 (round-off).
+4. frame invariance: the problem moved by a random rotation Q and translation (size of the part,
+   and 1e6 x it): the final frames must be Q g + t; measured as above relative to ell,
+   tolerance 1e-9 + 10 x (the Newton distance of the solved state, and the distance a random
+   perturbation of the reference positions by 4 eps |t| moves it: the moved reference mesh is
+   itself rounded by |t| eps, which a thin shell's conditioning amplifies -- h/L 1e-3 at
+   |t| = 1e6 L: 1e-7 ell).
+5. stability: where the run reports a stable end (end check ran, no critical point), the
+   smallest eigenvalue of sym K at the free dofs (dense, rotations scaled by ell) over its
+   largest must be >= -STAB_TOL (1e-9: round-off of a dense eigensolve).  Where a run stops at
+   a reported critical point: the same at the last state kept before it (>= -STAB_TOL), and
+   beyond it (the bracket's high end + 1/4 bracket, followed in 64 steps with the checks off)
+   <= STAB_TOL: the point is real.
+3. is judged on conservative problems (dead forces, dead pressure, gravity); a path difference of
+   a problem with a follower pressure or a dead moment (no potential) is listed, marked so.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+
+import numpy as np
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+
+import core_se3 as cs                                          # noqa: E402
+from core_se3.errors import ConvergenceError, CoreSE3Error, MeshError   # noqa: E402
+from core_se3.solvers.convergence import relative_residual, scaled_norm   # noqa: E402
+from core_se3.solvers.stability import negative_count   # noqa: E402
+
+EQ_TOL = 10.0
+FRAME_TOL = 1e-9
+STAB_TOL = 1e-9
+STEPS = (1, 2, 4, 16)
+
+
+# what the campaign found (seed 4), for the report
+FINDINGS = [
+    "Findings (seed 4; the numbers before the fix are of the same campaign on the code before it):", "",
+    "* problem 38 (clamped 2x2 cylindrical panel, oblique compressive edge force, conservative): the "
+    "one- and two-step solves exited ok 1.40 ell from the 4-, 16- and 128-step answer, on a stable "
+    "state (lambda_min/lambda_max 3.5e-6). The cut-back try 0.219 -> 0.3125 converged with corrections "
+    "9.15, 2.28, 2.85, 2.93, 1.39 ... ell: growth below half the first correction, which the path check "
+    "exempted. Fixed (solvers/step_checks.py: the step's scale is capped at pi ell); now 1, 2, 4, 16 agree "
+    "to 1e-14 ell (tests/test_step_checks.py::test_one_step_oblique_panel_ends_where_sixteen_steps_do).",
+    "* problem 82 (clamped plate, follower pressure + 5 Euler loads 1 % off-axis; not conservative): the "
+    "one-step solve exits ok 1.97 ell from the 2-, 4-, 16- and 256-step answer; its try 0.578 -> 0.613 "
+    "grows a correction 0.017 -> 0.439 ell (25x), just below half the first (0.951). Not fixed: "
+    "GROWTH_SCALE 0.4 catches it but doubles the quarter hemisphere's tries (strict xfail "
+    "test_one_step_compressed_plate_ends_where_sixteen_steps_do).",
+    "* problem 144 (clamped strip, dead pressure + dead edge moment of 1.9 turns): 4, 16 and 64 steps stop "
+    "at a limit point near 0.70 of the load (no convergence beyond), but 1 and 2 steps exit ok at 1.0 on "
+    "a state whose sym K has 2 negative eigenvalues (lambda_min/lambda_max -5.6e-6): the try 0.5 -> 1 "
+    "contracted monotonically (Theta 0.04) from a first correction of 15.5 ell. The end check does not "
+    "count there (the dead moment makes K non-symmetric, max|K - K^T| / max|K| 1.1e-5 > ASYM_TOL), so "
+    "nothing is said. Not fixed.", ""]
+
+
+# ------------------------------------------------------------------ random problems ---
+def random_mesh_spec(rng):
+    """(generator name, arguments, characteristic length L, width b)."""
+    kind = rng.choice(["rectangle", "rectangle", "cylinder_panel", "annulus"])
+    if kind == "rectangle":
+        L = float(10 ** rng.uniform(-1, 1))
+        b = L * rng.uniform(0.1, 0.6)
+        return kind, (L, b, int(rng.integers(2, 7)), int(rng.integers(1, 3))), L, b
+    if kind == "cylinder_panel":
+        R = float(10 ** rng.uniform(-1, 1))
+        ang = rng.uniform(0.3, 2.0)
+        length = R * rng.uniform(0.3, 1.0)
+        # the panel's curved edges run along t: x0/x1 are the straight edges s in [0, length]
+        return kind, (R, length, -ang / 2, ang / 2, int(rng.integers(2, 6)), int(rng.integers(1, 3))), \
+            R * ang, length
+    r_in = float(10 ** rng.uniform(-1, 1))
+    r_out = r_in * rng.uniform(1.3, 2.0)
+    ang = rng.uniform(0.5, 2.5)
+    return kind, (r_in, r_out, ang, int(rng.integers(1, 3)), int(rng.integers(2, 6))), \
+        r_in * ang, r_out - r_in
+
+
+def random_problem(rng):
+    """A spec (dict) of a random valid small problem: mesh, perturbation, material, supports,
+    loads with magnitudes from tiny to tip rotations of about 2 pi."""
+    kind, args, L, b = random_mesh_spec(rng)
+    E = float(10 ** rng.uniform(3, 11))
+    nu = float(rng.uniform(0.0, 0.49))
+    h = float(L * 10 ** rng.uniform(-3, -1))
+    D = E * h ** 3 / 12 / (1 - nu ** 2) * b          # bending stiffness of the strip (EI)
+    # the load edge across from the supported one: x0 -> x1 for rectangle/panel/annulus
+    support = rng.choice(["clamp", "clamp+pin", "pin-pin"])
+    # the load parameter (P L^2 / EI, M L / EI, q b L^3 / EI): tiny to tip rotations of ~2 pi
+    alpha = float(10 ** rng.uniform(-4, np.log10(30.0 if support == "clamp" else 300.0)))
+    loads = []
+    n_loads = int(rng.integers(1, 3))
+    for _ in range(n_loads):
+        lk = rng.choice(["edge_force", "nodal", "pressure", "gravity", "edge_moment", "follower_pressure",
+                         "compress", "rollup"]
+                        if support == "clamp" else ["pressure", "gravity", "nodal_mid", "follower_pressure"])
+        d = rng.normal(size=3)
+        d /= np.linalg.norm(d)
+        if lk == "compress":                    # along the strip, up to 5 Euler loads, 1 % off-axis
+            e = np.array([-1.0, 0.0, 0.0]) + 0.01 * d
+            loads.append(("edge_force", "x1", (rng.uniform(0.1, 5.0) * np.pi ** 2 / 4 * D / L ** 2 * e).tolist()))
+        elif lk == "rollup":                    # about the width axis, up to two turns
+            loads.append(("edge_moment", "x1", [0.0, rng.uniform(-4, 4) * np.pi * D / L, 0.0]))
+        elif lk == "edge_force":                  # P L^2 / EI = alpha
+            loads.append(("edge_force", "x1", (alpha * D / L ** 2 * d).tolist()))
+        elif lk == "edge_moment":               # M L / EI = alpha (dead: not conservative in 3D)
+            loads.append(("edge_moment", "x1", (min(alpha, 2 * np.pi) * D / L * d).tolist()))
+        elif lk == "nodal":
+            loads.append(("nodal", "x1", (alpha * D / L ** 2 * d / 2).tolist()))
+        elif lk == "nodal_mid":
+            loads.append(("nodal", "y1", (alpha * D / L ** 2 * d / 3).tolist()))
+        elif lk == "pressure":                  # q b L^3 / EI = alpha
+            loads.append(("pressure", float(alpha * D / L ** 3 / b), d.tolist()))
+        elif lk == "follower_pressure":
+            loads.append(("follower_pressure", float(alpha * D / L ** 3 / b * rng.choice([-1, 1]))))
+        else:
+            loads.append(("gravity", float(alpha * D / L ** 3 / b / h), d.tolist()))
+    return dict(mesh=(kind, args), L=L, perturb=float(rng.uniform(0.0, 0.2)), pseed=int(rng.integers(1 << 30)),
+                E=E, nu=nu, h=h, support=support, loads=loads, alpha=alpha)
+
+
+def _mesh(spec, T=None, noise=0.0):
+    kind, args = spec["mesh"]
+    m = getattr(cs.mesh, kind)(*args)
+    g0 = m.g0.copy()
+    a = spec["perturb"]
+    if a > 0 and m.shape is not None:
+        nx, ny = m.shape
+        ids = np.arange(m.n_nodes).reshape(ny + 1, nx + 1)
+        inner = ids[1:-1, 1:-1].ravel()
+        rs = np.random.default_rng(spec["pseed"])
+        # in the tangent plane, by up to a * the local element size: quads stay convex for a < 0.25
+        hloc = min(spec["L"] / nx, np.linalg.norm(m.X[ids[1, 0]] - m.X[ids[0, 0]]))
+        for i in inner:
+            c = rs.uniform(-a, a, 2) * hloc
+            g0[i, :3, 3] += c[0] * g0[i, :3, 0] + c[1] * g0[i, :3, 1]
+    if T is not None:
+        g0 = T @ g0
+    if noise:                            # positions rounded at the size of a far-moved part
+        g0[:, :3, 3] += np.random.default_rng(7).uniform(-noise, noise, (len(g0), 3))
+    return cs.mesh.Mesh(g0, m.quads, {k: v.copy() for k, v in m.edges.items()}, shape=m.shape)
+
+
+def build(spec, T=None, backend="numpy", noise=0.0):
+    """The Problem of ``spec`` moved by the rigid motion T (4x4; None: identity); ``noise``: a
+    random perturbation of the reference positions of that size [length]."""
+    Q = np.eye(3) if T is None else T[:3, :3]
+    p = cs.Problem(_mesh(spec, T, noise), cs.Material(E=spec["E"], nu=spec["nu"], h=spec["h"], rho=1.0),
+                   backend=backend)
+    s = spec["support"]
+    if s in ("clamp", "clamp+pin"):
+        p.clamp("x0")
+    if s == "clamp+pin":
+        p.fix("x1", (0, 1, 2))
+    if s == "pin-pin":
+        p.fix("x0", (0, 1, 2))
+        p.fix("x1", (0, 1, 2))
+    for ld in spec["loads"]:
+        if ld[0] == "edge_force":
+            p.add_edge_force(ld[1], Q @ np.array(ld[2]))
+        elif ld[0] == "edge_moment":
+            p.add_edge_moment(ld[1], Q @ np.array(ld[2]))
+        elif ld[0] == "nodal":
+            p.add_nodal_load(ld[1], force=Q @ np.array(ld[2]))
+        elif ld[0] == "pressure":
+            p.add_pressure(ld[1], direction=Q @ np.array(ld[2]))
+        elif ld[0] == "follower_pressure":
+            p.add_pressure(ld[1], follower=True)
+        else:
+            p.add_gravity(rho=ld[1], g=Q @ np.array(ld[2]))
+    return p
+
+
+def conservative(spec):
+    """Dead forces and pressure: a potential exists; a dead moment or a follower pressure on an
+    open shell does not have one (sym K is then the package's own stability measure only)."""
+    return all(ld[0] in ("edge_force", "nodal", "pressure", "gravity") for ld in spec["loads"])
+
+
+# ------------------------------------------------------------------ the checks --------
+def lab_totals(g, f):
+    """Lab force and moment about the origin of body-frame nodal 6-vectors f at frames g."""
+    R, x = g[:, :3, :3], g[:, :3, 3]
+    F = np.einsum("nij,nj->ni", R, f[:, :3])
+    M = np.cross(x, F) + np.einsum("nij,nj->ni", R, f[:, 3:])
+    return F, M
+
+
+def bilinear_area(X):
+    """Total area of bilinear quads (m, 4, 3) by the 2 x 2 Gauss rule (what the dead surface
+    loads integrate; exact for plane quads), written here from the corner positions."""
+    total = 0.0
+    for a in (-3 ** -0.5, 3 ** -0.5):
+        for b in (-3 ** -0.5, 3 ** -0.5):
+            x1 = ((1 - b) * (X[:, 1] - X[:, 0]) + (1 + b) * (X[:, 2] - X[:, 3])) / 4
+            x2 = ((1 - a) * (X[:, 3] - X[:, 0]) + (1 + a) * (X[:, 2] - X[:, 1])) / 4
+            total += np.linalg.norm(np.cross(x1, x2), axis=1).sum()
+    return total
+
+
+def applied_totals(p, spec, g, lam):
+    """The applied lab force and moment about the origin, from the load data (dead loads) or the
+    load's own evaluation (followers: their direction is the state's)."""
+    F = np.zeros(3)
+    M = np.zeros(3)
+    Q = p.mesh.g0[0, :3, :3] @ _mesh(spec).g0[0, :3, :3].T
+    area = bilinear_area(p.mesh.X[p.mesh.quads])
+    x = g[:, :3, 3]
+    for ld, load in zip(spec["loads"], p.loads):
+        f = load.evaluate(g, lam, tangent=False).f
+        Fi, Mi = lab_totals(g, f)
+        if ld[0] == "edge_force":
+            F += lam * Q @ np.array(ld[2])
+        elif ld[0] == "nodal":
+            F += lam * Q @ np.array(ld[2]) * len(p.nodes(ld[1]))
+        elif ld[0] == "pressure":
+            F += lam * ld[1] * area * Q @ np.array(ld[2]) / np.linalg.norm(ld[2])
+        elif ld[0] == "gravity":
+            F += lam * ld[1] * spec["h"] * area * Q @ np.array(ld[2])
+        else:
+            F += Fi.sum(0)
+        M += Mi.sum(0)
+    # the dead loads' moment: positions x cross the nodal lab forces of the load evaluation
+    return F, M, np.abs(x).max()
+
+
+def state_distance(g1, g2, ell):
+    """Largest nodal distance of two states: |x1 - x2| / ell and the rotation angle between."""
+    dx = np.linalg.norm(g1[:, :3, 3] - g2[:, :3, 3], axis=1).max() / ell
+    # |R1 - R2|_F / sqrt(2) = 2 sin(angle / 2): no arccos, whose round-off near 1 is 1e-8
+    dR = np.linalg.norm(g1[:, :3, :3] - g2[:, :3, :3], axis=(1, 2)).max() / np.sqrt(2)
+    return max(dx, float(dR))
+
+
+def dense_tangent(p, g, lam):
+    """Dense tangent on the free dofs, rotations scaled by ell (D K D, D = diag(1, 1/ell))."""
+    ell = p.length_scale
+    K = p.tangent(g, lam).toarray()
+    free = ~p.constraint_mask().ravel()
+    d = np.tile([1.0, 1, 1, 1 / ell, 1 / ell, 1 / ell], p.mesh.n_nodes)[free]
+    return d[:, None] * K * d[None, :], d
+
+
+def newton_distance(p, g, lam):
+    """|K^-1 r| / ell (unit-scaled): how far the state is from its own exact equilibrium."""
+    Ks, d = dense_tangent(p, g, lam)
+    r = p.residual(g, lam)
+    try:
+        x = np.linalg.solve(Ks, d * r) * d
+    except np.linalg.LinAlgError:
+        return np.inf
+    free = ~p.constraint_mask().ravel()
+    eta = np.zeros(6 * p.mesh.n_nodes)
+    eta[free] = x
+    return scaled_norm(eta, p.length_scale, moment=False) / p.length_scale
+
+
+def check_equilibrium(spec, res, backend, rtol):
+    other = "numba" if backend == "numpy" else "numpy"
+    p = build(spec, backend=other)
+    st = res.final
+    ev = p.evaluate(st.g, st.load_factor, tangent=False)
+    rn, floor = relative_residual(p.assembler(), ev, p.length_scale)
+    # the balance's tolerance from the Newton tolerance: the lab sum of the free residual is at
+    # most sqrt(free dofs) x |r|, and |r| <= max(rtol, floor) x the residual's scale
+    ell = p.length_scale
+    S = max(scaled_norm(ev.f_ext, ell), scaled_norm(ev.r_int, ell))
+    tol_abs = 10 * np.sqrt(len(ev.r)) * max(rtol, floor) * S
+    return float(rn / max(rtol, floor)), p, ev, tol_abs
+
+
+def check_balance(spec, p, ev, st, tol_abs):
+    """(my balance error, reported balance_error, |my reaction - reported|, all relative to the
+    sum of the nodal force magnitudes, and the tolerance, the same relative)."""
+    fixed = p.constraint_mask()
+    reac = (ev.r_int - ev.f_ext) * fixed
+    RFn, RMn = lab_totals(st.g, reac)
+    RF, RM = RFn.sum(0), RMn.sum(0)
+    AF, AM, xmax = applied_totals(p, spec, st.g, st.load_factor)
+    Fi, _ = lab_totals(st.g, ev.f_ext)
+    sF = max(np.linalg.norm(Fi, axis=1).sum(), np.linalg.norm(RFn, axis=1).sum(), 1e-300)
+    sM = sF * max(p.length_scale, xmax)
+    mine = max(np.linalg.norm(RF + AF) / sF, np.linalg.norm(RM + AM) / sM)
+    vs = max(np.linalg.norm(RF - st.reaction_force) / sF, np.linalg.norm(RM - st.reaction_moment) / sM,
+             np.linalg.norm(AF - st.applied_force) / sF)
+    return float(mine), float(st.balance_error), float(vs), float(tol_abs / sF + 1e-13)
+
+
+def min_eig(p, g, lam):
+    Ks, _ = dense_tangent(p, g, lam)
+    w = np.linalg.eigvalsh((Ks + Ks.T) / 2)
+    return float(w[0] / np.abs(w).max())
+
+
+def eig_beyond(spec, err, backend):
+    """lambda_min / lambda_max of sym K just beyond a reported critical point (the bracket's high
+    end of the message, followed in 64 steps with the checks off): negative if it is one."""
+    import re
+    m = re.search(r"between load factors ([-+0-9.e]+) and ([-+0-9.e]+)", err)
+    if not m:
+        return None
+    lo, hi = float(m.group(1)), float(m.group(2))
+    p = build(spec, backend=backend)
+    try:
+        res = p.solve(steps=64, lam_end=hi + 0.25 * (hi - lo), limit_check=False, end_check=False)
+    except ConvergenceError:
+        return None
+    return min_eig(p, res.final.g, res.final.load_factor)
+
+
+def random_motion(rng, size):
+    A = rng.normal(size=(3, 3))
+    Q, Rr = np.linalg.qr(A)
+    Q = Q * np.sign(np.diag(Rr))
+    if np.linalg.det(Q) < 0:
+        Q[:, 0] *= -1
+    T = np.eye(4)
+    T[:3, :3] = Q
+    T[:3, 3] = rng.normal(size=3) * size
+    return T
+
+
+def solve(spec, steps, backend, T=None):
+    p = build(spec, T, backend)
+    try:
+        return p, p.solve(steps=steps), None
+    except ConvergenceError as exc:
+        return p, getattr(exc, "result", None), str(exc)
+
+
+def run_one(spec, rng, backend, record):
+    """Solve ``spec`` with 1, 2, 4, 16 steps and apply every check; appends to ``record``."""
+    out = dict(spec=spec, backend=backend, runs={})
+    rtol = cs.NewtonOptions().rtol
+    finals = {}
+    for n in STEPS:
+        p, res, err = solve(spec, n, backend)
+        ok = err is None
+        info = dict(ok=ok, err=None if ok else err[:200], attempts=None)
+        if res is not None and len(res.steps) > 1:
+            info["attempts"] = res.steps[1].attempts
+        out["runs"][n] = info
+        if not ok:
+            if "critical point" in err and res is not None and len(res.steps) > 1:
+                st = res.steps[-1]
+                info["crit_min_eig_before"] = min_eig(p, st.g, st.load_factor)
+                info["crit_min_eig_after"] = eig_beyond(spec, err, backend)
+            continue
+        st = res.final
+        eq, p2, ev, tol_abs = check_equilibrium(spec, res, backend, rtol)
+        mine, reported, vs, btol = check_balance(spec, p2, ev, st, tol_abs)
+        info.update(eq=eq, bal=mine, bal_reported=reported, bal_vs=vs, bal_tol=btol, crit=len(res.critical_points))
+        info["nd"] = newton_distance(p2, st.g, st.load_factor)
+        if not res.critical_points and n in (1, 16):
+            info["min_eig"] = min_eig(p2, st.g, st.load_factor)
+            # the end check counted (it says stable): no follower load and sym K a stability
+            # measure (K symmetric to the package's ASYM_TOL: not a dead moment's asymmetric K)
+            info["end_check"] = not any(getattr(ld, "follower", False) for ld in p.loads) and \
+                negative_count(p2, st.g, st.load_factor) is not None
+        finals[n] = (st.g, info["nd"], p.length_scale)
+    # path independence
+    if len(finals) > 1 and all(not out["runs"][n].get("crit") for n in finals):
+        ref = finals[max(finals)]
+        out["path"] = {n: (state_distance(g, ref[0], ref[2]), 100 * (nd + ref[1]) + 1e-9)
+                       for n, (g, nd, _) in finals.items() if n != max(finals)}
+    # frame invariance on the 16-step solve (or the largest that succeeded)
+    if finals:
+        n = max(finals)
+        out["frame"] = {}
+        for size in (1.0, 1e6):
+            T = random_motion(rng, size * spec["L"])
+            p, res, err = solve(spec, n, backend, T)
+            if err is not None:
+                out["frame"][size] = (None, err[:200])
+                continue
+            g_exp = T @ finals[n][0]
+            # the moved reference mesh itself is rounded (|t| eps): what a perturbation of the
+            # reference positions by 4 eps |t| moves the solved state by (K^-1 of the residual
+            # it makes) is what round-off allows
+            noise = 4 * np.finfo(float).eps * np.linalg.norm(T[:3, 3])
+            nd_moved = newton_distance(build(spec, None, "numpy", noise), finals[n][0], res.final.load_factor)
+            out["frame"][size] = (state_distance(res.final.g, g_exp, finals[n][2]),
+                                  FRAME_TOL + 10 * (finals[n][1] + nd_moved))
+    record.append(out)
+    return out
+
+
+def campaign(n, seed, log=print):
+    rng = np.random.default_rng(seed)
+    record = []
+    t0 = time.perf_counter()
+    for i in range(n):
+        spec = random_problem(rng)
+        backend = "numpy" if i % 2 == 0 else "numba"
+        try:
+            run_one(spec, rng, backend, record)
+        except MeshError as exc:
+            record.append(dict(spec=spec, skipped=str(exc)[:200]))
+        except CoreSE3Error as exc:
+            record.append(dict(spec=spec, error=f"{type(exc).__name__}: {str(exc)[:300]}"))
+        if log:
+            log(f"{i} {time.perf_counter() - t0:.1f}s {summary_line(record[-1])}")
+    return record
+
+
+def summary_line(o):
+    if "skipped" in o or "error" in o:
+        return o.get("skipped") or o.get("error")
+    s = " ".join(f"{n}:{'ok' if r['ok'] else 'X'}" for n, r in o["runs"].items())
+    worst = violations(o)
+    return s + ("  VIOLATIONS " + "; ".join(worst) if worst else "")
+
+
+def violations(o):
+    v = []
+    for n, r in o.get("runs", {}).items():
+        if not r["ok"]:
+            continue
+        if r["eq"] > EQ_TOL:
+            v.append(f"eq[{n}]={r['eq']:.3g}")
+        if max(r["bal"], r["bal_reported"], r["bal_vs"]) > r["bal_tol"]:
+            v.append(f"bal[{n}]={r['bal']:.3g}/{r['bal_reported']:.3g}/{r['bal_vs']:.3g}>{r['bal_tol']:.3g}")
+        if "min_eig" in r and r["end_check"] and r["min_eig"] < -STAB_TOL:
+            v.append(f"stab[{n}]={r['min_eig']:.3g}")
+    for n, r in o.get("runs", {}).items():
+        if "crit_min_eig_before" in r and (r["crit_min_eig_before"] < -STAB_TOL or (
+                r["crit_min_eig_after"] is not None and r["crit_min_eig_after"] > STAB_TOL)):
+            v.append(f"crit[{n}]={r['crit_min_eig_before']:.3g}->{r['crit_min_eig_after']}")
+    for n, (d, tol) in o.get("path", {}).items():
+        if d > tol:      # a follower load or a dead moment has no potential: noted, not a violation
+            v.append(f"path[{n}]={d:.3g}>{tol:.3g}" + ("" if conservative(o["spec"]) else " (not conservative)"))
+    for s, (d, tol) in o.get("frame", {}).items():
+        if d is not None and d > tol:
+            v.append(f"frame[{s:g}]={d:.3g}>{tol:.3g}")
+    return v
+
+
+def _worst(rows):
+    """(count, worst value, its tolerance) of (value, tolerance) rows, worst by value / tolerance."""
+    rows = [r for r in rows if r[0] is not None]
+    if not rows:
+        return 0, float("nan"), float("nan")
+    v, t = max(rows, key=lambda r: r[0] / r[1])
+    return len(rows), v, t
+
+
+def tally(rec):
+    """The campaign's counts and worst discrepancies per check (a dict)."""
+    runs = [(o, n, r) for o in rec for n, r in o.get("runs", {}).items()]
+    ok = [(o, n, r) for o, n, r in runs if r["ok"]]
+    one = [o["runs"][1] for o in rec if "runs" in o]
+    t = dict(problems=len(rec), skipped=sum("skipped" in o for o in rec), errors=[o["error"] for o in rec if "error" in o],
+             solves=len(runs), solved=len(ok),
+             one_first_try=sum(r["ok"] and r["attempts"] == 1 for r in one),
+             one_cut_back=sum(r["ok"] and (r["attempts"] or 0) > 1 for r in one),
+             one_critical=sum((not r["ok"]) and "critical point" in r["err"] for r in one),
+             one_failed=sum((not r["ok"]) and "critical point" not in r["err"] for r in one),
+             all_failed=sum(all(not r["ok"] for r in o["runs"].values()) for o in rec if "runs" in o))
+    t["eq"] = _worst([(r["eq"], EQ_TOL) for _, _, r in ok])
+    t["bal"] = _worst([(max(r["bal"], r["bal_vs"]), r["bal_tol"]) for _, _, r in ok])
+    t["bal_reported"] = _worst([(r["bal_reported"], r["bal_tol"]) for _, _, r in ok])
+    t["path"] = _worst([(d, tol) for o in rec for d, tol in o.get("path", {}).values()])
+    for size in (1.0, 1e6):
+        t[f"frame{size:g}"] = _worst([o["frame"][size][:2] for o in rec if size in o.get("frame", {})
+                                      and o["frame"][size][0] is not None])
+    stab = [(-r["min_eig"], STAB_TOL) for _, _, r in ok if "min_eig" in r and r["end_check"]]
+    t["stab"] = _worst(stab)
+    t["stab_smallest"] = min((-v for v, _ in stab), default=float("nan"))
+    crit = [(r["crit_min_eig_before"], r["crit_min_eig_after"]) for o in rec for r in o.get("runs", {}).values()
+            if "crit_min_eig_before" in r]
+    t["crit"] = (len(crit), min((b for b, _ in crit), default=float("nan")),
+                 max((a for _, a in crit if a is not None), default=float("nan")),
+                 sum(a is None for _, a in crit))
+    t["violations"] = [(i, violations(o)) for i, o in enumerate(rec) if violations(o)]
+    # exit ok on a state sym K calls unstable where the package claims nothing (non-symmetric K)
+    t["unclaimed_unstable"] = [(i, n, r["min_eig"]) for i, o in enumerate(rec) for n, r in o.get("runs", {}).items()
+                               if r["ok"] and "min_eig" in r and not r["end_check"] and r["min_eig"] < -STAB_TOL]
+    # some step counts end ok where others fail: the ok ones may have passed a limit point by a jump
+    t["mixed"] = [(i, [n for n, r in o["runs"].items() if r["ok"]]) for i, o in enumerate(rec)
+                  if "runs" in o and 0 < sum(r["ok"] for r in o["runs"].values()) < len(o["runs"])]
+    return t
+
+
+def report(rec, n, seed, seconds):
+    """The campaign as markdown."""
+    t = tally(rec)
+    lines = [f"# Physics-invariant fuzz campaign (`benchmarks/invariants_fuzz.py --n {n} --seed {seed}`)", "",
+             f"{t['problems']} random problems ({t['skipped']} skipped: a perturbed quad not convex), "
+             f"{t['solves']} load-stepped solves (1, 2, 4, 16 steps each), {t['solved']} exited ok; "
+             f"{seconds:.0f} s on one core.  Meshes: rectangle, cylinder_panel, annulus (2-12 quads, inner "
+             "nodes moved by up to 0.2 of an element in the tangent plane); E 1e3-1e11, nu 0-0.49, h/L "
+             "1e-3-1e-1; supports: clamp x0, clamp x0 + pin x1, pin x0 + pin x1; loads: dead edge and nodal "
+             "forces, edge moments (dead, up to 2 pi EI/L; roll-ups to two turns), dead and follower "
+             "pressure, gravity, compressive edge forces to 5 Euler loads 1 % off-axis; load parameter "
+             "1e-4 ... 30 (clamped) or 300 (pinned).  Backends alternate (numpy / numba), each answer "
+             "checked on the other.", "",
+             "| check | count | worst | tolerance |", "|---|---:|---:|---:|"]
+    rows = [("1 equilibrium on the other backend (relative residual / Newton tol.)", t["eq"]),
+            ("2 balance, recomputed (reactions from r_int, applied from the load data)", t["bal"]),
+            ("2 balance, reported `StepResult.balance_error`", t["bal_reported"]),
+            ("3 path independence, 1/2/4 vs 16 steps (distance / ell)", t["path"]),
+            ("4 frame invariance, |t| = part size (distance / ell)", t["frame1"]),
+            ("4 frame invariance, |t| = 1e6 x part size (distance / ell)", t["frame1e+06"]),
+            ("5 stability of a state reported stable (-lambda_min / lambda_max of sym K)", t["stab"])]
+    for name, (c, v, tol) in rows:
+        lines.append(f"| {name} | {c} | {v:.3g} | {tol:.3g} |")
+    lines += ["", f"One-step solves: {t['one_first_try']} accepted at the first try, {t['one_cut_back']} accepted "
+              f"after cut-backs, {t['one_critical']} stopped at a reported critical point, {t['one_failed']} "
+              f"failed (no convergence / an element turning by pi: {t['all_failed']} problems failed at every "
+              "step count).", "",
+              f"Ends reported stable: smallest lambda_min / lambda_max of sym K {t['stab_smallest']:.3g}.  "
+              f"Critical points reported (runs stopped at one): {t['crit'][0]}; lambda_min / lambda_max of sym K "
+              f"at the last state kept before them >= {t['crit'][1]:.3g} (stable), and at 1.25 x the bracket "
+              f"beyond them (followed in 64 steps with the checks off) <= {t['crit'][2]:.3g} (unstable: the "
+              f"point is real; {t['crit'][3]} not followed).", ""]
+    lines += [f"Not checked as stable (the package counts nothing: a follower load, or a dead moment whose K is "
+              f"not symmetric), yet exit ok on a state whose sym K has a negative eigenvalue: "
+              f"{len(t['unclaimed_unstable'])} solves " + ", ".join(f"problem {i} ({n} steps, {v:.2g})"
+                                                          for i, n, v in t["unclaimed_unstable"][:12]) + ".", "",
+              f"Problems where some step counts end ok and others fail: {len(t['mixed'])} " +
+              ", ".join(f"{i} (ok: {ns})" for i, ns in t["mixed"][:12]) + ".", ""]
+    lines += FINDINGS
+    if t["errors"]:
+        lines += ["Errors (not ConvergenceError):", ""] + [f"* {e}" for e in t["errors"]] + [""]
+    lines += ["Violations:" if t["violations"] else "Violations: none.", ""]
+    for i, v in t["violations"]:
+        lines.append(f"* problem {i}: {'; '.join(v)} -- {rec[i]['spec']}")
+    return "\n".join(lines) + "\n"
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--n", type=int, default=250)
+    ap.add_argument("--seed", type=int, default=4)
+    ap.add_argument("--out", default=os.path.join(os.path.dirname(os.path.abspath(__file__)), "results",
+                                                  "invariants_fuzz.md"))
+    a = ap.parse_args()
+    t0 = time.perf_counter()
+    rec = campaign(a.n, a.seed)
+    text = report(rec, a.n, a.seed, time.perf_counter() - t0)
+    with open(a.out, "w") as fh:
+        fh.write(text)
+    print(text)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,44 @@
+"""Property: a successful solve of a random valid problem is right, checked independently
+(benchmarks/invariants_fuzz.py, whose full campaign is in benchmarks/results/invariants_fuzz.md):
+the residual on the other backend at the Newton tolerance, reactions + applied loads = 0 (force
+and moment about the origin, the applied loads recomputed from the load data), 1, 2, 4 and 16
+load steps ending on the same state, the problem moved by a random rigid motion (translations of
+the part's size and 1e6 times it) moving its answer exactly, and sym K at an end reported stable
+positive semi-definite.  Tolerances: the module docstring of the benchmark."""
+import sys
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).parents[1] / "benchmarks"))
+import invariants_fuzz as fuzz  # noqa: E402
+
+
+@pytest.mark.parametrize("seed", [4, 5])
+def test_random_problems_keep_every_invariant(seed):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")              # coarse-mesh warnings of the random shells
+        rec = fuzz.campaign(3, seed, log=None)
+    checked = [o for o in rec if "runs" in o]
+    assert checked and not [o.get("error") for o in rec if "error" in o]
+    assert sum(r["ok"] for o in checked for r in o["runs"].values()) >= 4
+    assert {n: fuzz.violations(o) for n, o in enumerate(checked) if fuzz.violations(o)} == {}
+    t = fuzz.tally(rec)
+    assert t["path"][0] > 0 and t["frame1e+06"][0] > 0 and t["stab"][0] > 0
+
+
+def test_the_checks_see_a_wrong_answer():
+    """The checks can fail: a state off the equilibrium (one free node of the converged state
+    moved by 1e-6 ell) fails the equilibrium check, and the start state is far from the end."""
+    rng = np.random.default_rng(4)
+    spec = fuzz.random_problem(rng)
+    p = fuzz.build(spec)
+    res = p.solve(steps=2)
+    g = res.final.g.copy()
+    free = np.nonzero(~p.constraint_mask().any(1))[0]
+    g[free[0], 2, 3] += 1e-6 * p.length_scale
+    res.final.g = g
+    assert fuzz.check_equilibrium(spec, res, "numpy", 1e-10)[0] > fuzz.EQ_TOL
+    assert fuzz.state_distance(g, p.mesh.g0, p.length_scale) > 1e-3
