@@ -21,7 +21,7 @@ from ..mesh import Mesh, frames_from
 from ..model import Problem
 from ..solvers.linear import linear_state
 
-__all__ = ["PATCH_FIELDS", "flat_mesh", "mh_patch", "random_patch", "patch_field", "patch_test"]
+__all__ = ["PATCH_FIELDS", "flat_mesh", "mh_patch", "random_patch", "patch_field", "patch_test", "turned_frames"]
 
 PATCH_FIELDS = ("membrane", "bending", "drilling")
 EPS = 1e-3
@@ -40,6 +40,24 @@ def mh_patch():
     X = [[0, 0], [.24, 0], [.24, .12], [0, .12], [.04, .02], [.18, .03], [.16, .08], [.08, .08]]
     quads = [[4, 5, 6, 7], [0, 1, 5, 4], [1, 2, 6, 5], [7, 6, 2, 3], [0, 4, 7, 3]]
     return flat_mesh(X, quads), np.arange(4)
+
+
+def turned_frames(mesh, angles):
+    """The flat ``mesh`` with its nodal frames turned about the normal by ``angles`` (n,) [rad]:
+    the same quads, d1 = (cos a, sin a, 0).  The element's answer depends on this choice where
+    the angles differ from node to node (docs/ELEMENTS.md, "Nodal frames").
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> mesh, bnd = mh_patch()
+    >>> m = turned_frames(mesh, np.full(mesh.n_nodes, 0.3))        # all alike: exact still
+    >>> bool(patch_test(m, bnd, "membrane") < 1e-8)
+    True
+    """
+    X, a = mesh.X, np.asarray(angles, float)
+    d1 = np.c_[np.cos(a), np.sin(a), np.zeros_like(a)]
+    return Mesh(frames_from(X, d1, np.tile([0.0, 0.0, 1.0], (len(X), 1))), mesh.quads)
 
 
 def _convex(X, quads):
@@ -96,15 +114,18 @@ def patch_test(mesh, boundary, kind, material=None, element="default", backend=N
     material = material or Material(1.0e6, 0.25, 0.001)
     p = Problem(mesh, material, element=element, backend=backend)
     exact = patch_field(kind, mesh.X)
+    # the nodal increments in the nodes' own frames (the field is given in the lab)
+    R0 = mesh.g0[:, :3, :3]
+    local = np.concatenate([np.einsum("nji,nj->ni", R0, exact[:, :3]), np.einsum("nji,nj->ni", R0, exact[:, 3:])], 1)
     # the boundary on the field times lam: linear in lam, so the linear analysis' chord is its
     # linearisation (a constant target is not linear in lam, and linear analysis warns of it)
-    p.prescribe(boundary, lambda lam: linear_state(mesh.g0[boundary], lam * exact[boundary]))
+    p.prescribe(boundary, lambda lam: linear_state(mesh.g0[boundary], lam * local[boundary]))
     res = p.solve_linear()
     inner = np.setdiff1d(np.arange(mesh.n_nodes), boundary)
     g = res.final.g[inner]
     du = np.abs(g[:, :3, 3] - mesh.X[inner] - exact[inner, :3]).max()
-    R = np.swapaxes(mesh.g0[inner, :3, :3], 1, 2) @ g[:, :3, :3]
+    R = np.swapaxes(R0[inner], 1, 2) @ g[:, :3, :3]
     from ..lie import log_so3
-    dw = np.abs(log_so3(R) - exact[inner, 3:]).max()
+    dw = np.abs(log_so3(R) - local[inner, 3:]).max()
     size = np.ptp(mesh.X, axis=0).max()
     return max(du / (EPS * size), dw / EPS)
