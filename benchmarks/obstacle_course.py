@@ -37,6 +37,7 @@ from core_se3 import Material                                  # noqa: E402
 from core_se3.catalogue import patch_tests as pt               # noqa: E402
 from core_se3.catalogue import shell_course as sc              # noqa: E402
 from core_se3.errors import AccuracyWarning                    # noqa: E402
+from core_se3.mesh import generators as mesh_generators        # noqa: E402
 
 REF = sc.REFERENCES
 NOTES = """## Reading
@@ -167,6 +168,19 @@ def patches(n_random=100):
         for k in pt.PATCH_FIELDS:
             worst[k] = max(worst[k], pt.patch_test(m, b, k))
     out[f"{n_random} random convex 3x3"] = worst
+    # the nodal frames turned about the normal (issue 30, open; docs/ELEMENTS.md "Nodal frames"):
+    # alike at every node the tests stay exact; turning from node to node they fail
+    out["MacNeal-Harder, frames turned alike by 0.3 rad"] = {
+        k: pt.patch_test(pt.turned_frames(mesh, np.full(mesh.n_nodes, 0.3)), bnd, k) for k in pt.PATCH_FIELDS}
+    for amp in (1e-3, 1e-2, 0.1):
+        turned = pt.turned_frames(mesh, np.random.default_rng(1).uniform(-amp, amp, mesh.n_nodes))
+        out[f"MacNeal-Harder, frames turned at random by up to {amp:g} rad"] = {
+            k: pt.patch_test(turned, bnd, k) for k in pt.PATCH_FIELDS}
+    for n in (3, 6, 12):
+        a = mesh_generators.annulus(6.0, 10.0, 1.0, n, n)
+        ab = np.unique(np.concatenate([a.node_set(e) for e in ("x0", "x1", "y0", "y1")]))
+        out[f"annulus sector of 1 rad {n}x{n}, the generator's radial frames"] = {
+            k: pt.patch_test(a, ab, k) for k in pt.PATCH_FIELDS}
     return out
 
 
