@@ -40,6 +40,14 @@ taken by complex-step differentiation of the closed form of dexp_inv: exact to r
 The derivative of the left-trivialised gradient r along exp-updates is the symmetric Hessian
 plus 1/2 adt(r_i) on each node's diagonal block (BCH to second order), so the tangent is
 non-symmetric away from equilibrium, as the seed's E75 remarks.
+
+Frames.  The element is built on the frames g Q, Q = Rz(alpha) a constant turn about each node's
+normal (``mesh.gauge``: the least-turn gauge, ``Mesh.gauge_angles``), for a law that is in-plane
+isotropic: the tying averages edge twists that are each constant in their own geodesic's frame,
+so frames turning about the normal from node to node would enter the strains (the patch tests
+with random nodal turns: error 0.7 x the turn).  With eta~ = Ad_{Q^-1} eta the forces and blocks
+return to the user's frames by constant rotations, r = Ad_{Q^-1}^T r~, K_ab = Ad_{Q_a^-1}^T K~_ab
+Ad_{Q_b^-1}; where alpha = 0 (frames that do not turn about the normal) nothing is done.
 """
 from __future__ import annotations
 
@@ -50,6 +58,7 @@ import numpy as np
 from .. import lie
 from ..errors import ElementTooDistortedError, ElementWarning
 from ..mesh import LOCAL_EDGES
+from ..mesh.gauge import turned_about_normal
 from .element import Element, ElementEvaluation, register_element
 from .material import law_matrix
 from .membrane_drilling import drilling_correction, reference_G, tying_correction
@@ -68,7 +77,7 @@ def _unpack(Dp):
     D[:, _IU[1], _IU[0]] = Dp
     return D
 
-__all__ = ["DefaultElement", "edge_twists", "tying_matrices", "MAX_EDGE_ANGLE"]
+__all__ = ["DefaultElement", "edge_twists", "tying_matrices", "element_gauge", "MAX_EDGE_ANGLE"]
 
 MAX_EDGE_ANGLE = 0.97 * np.pi   # beyond this the log's cut at pi is too close
 SETUP_CHUNK = 4096              # elements per block of the reference stiffness set-up
@@ -103,6 +112,29 @@ def tying_matrices(points=GAUSS_2x2):
         P[q, 6:, 12:18] = 0.5 * (1 - x) * I
         P[q, 6:, 18:24] = 0.5 * (1 + x) * I
     return P
+
+
+def element_gauge(mesh, material):
+    """Q (n, 4, 4): the turns Rz(alpha) about the nodal normals on which the element builds its
+    frames (g Q; module docstring), or None where there are none to make: the mesh's frames do
+    not turn about the normal (``Mesh.gauge_angles`` all 0), or the law is not in-plane isotropic
+    (its material axis is the user's d1: ``ResultantLaw``).
+
+    Example
+    -------
+    >>> from core_se3 import mesh, Material
+    >>> law = Material(1.0e3, 0.3, 0.01)
+    >>> element_gauge(mesh.rectangle(1.0, 1.0, 2, 2), law) is None
+    True
+    >>> element_gauge(mesh.annulus(1.0, 2.0, 1.0, 2, 2), law).shape
+    (9, 4, 4)
+    """
+    if not getattr(material, "in_plane_isotropic", False):
+        return None
+    alpha = mesh.gauge_angles
+    if not alpha.any():
+        return None
+    return turned_about_normal(np.broadcast_to(np.eye(4), (len(alpha), 4, 4)), alpha)
 
 
 def edge_twists(g, edge_nodes):
@@ -203,7 +235,8 @@ class DefaultElement(Element):
     def __init__(self, mesh, material):
         super().__init__(mesh, material)
         self._kernels = None
-        psi0 = edge_twists(mesh.g0, mesh.edge_nodes)
+        self.gauge = element_gauge(mesh, material)
+        psi0 = edge_twists(self.frames(mesh.g0), mesh.edge_nodes)
         self.z0 = self._element_z(0.5 * psi0)                          # (m, 24)
         P = tying_matrices()
         m = len(self.z0)
@@ -258,6 +291,37 @@ class DefaultElement(Element):
         return self._Dbar
 
     # ----------------------------------------------------------------------------------
+    def frames(self, g):
+        """The element's frames g Q (n, 4, 4) of the nodal frames g (module docstring, "Frames"):
+        g itself where there is no gauge."""
+        return g if self.gauge is None else g @ self.gauge
+
+    def to_element_frames(self, eta):
+        """Nodal increments eta (n, 6) in the element's frames: Ad_{Q^-1} eta (R_Q^T v, R_Q^T w)."""
+        if self.gauge is None:
+            return eta
+        eta = np.asarray(eta, float).reshape(-1, 6)
+        R = self.gauge[:, :3, :3]
+        return np.concatenate([np.einsum("nji,nj->ni", R, eta[:, :3]), np.einsum("nji,nj->ni", R, eta[:, 3:])], 1)
+
+    def _to_user(self, r):
+        """Nodal forces r~ (n, 6) of the element's frames in the user's: Ad_{Q^-1}^T r~."""
+        if self.gauge is None:
+            return r
+        R = self.gauge[:, :3, :3]
+        return np.concatenate([np.einsum("nij,nj->ni", R, r[:, :3]), np.einsum("nij,nj->ni", R, r[:, 3:])], 1)
+
+    def _blocks_to_user(self, Ke, KE):
+        """The element and edge blocks of the element's frames in the user's: T_a K~_ab T_b^T,
+        T = Ad_{Q^-1}^T = blockdiag(R_Q, R_Q) (module docstring)."""
+        if self.gauge is None:
+            return Ke, KE
+        T = np.zeros((len(self.gauge), 6, 6))
+        T[:, :3, :3] = T[:, 3:, 3:] = self.gauge[:, :3, :3]
+        Te, TE = T[self.mesh.quads], T[self.mesh.edge_nodes]
+        return (np.einsum("maij,mabjk,mblk->mabil", Te, Ke, Te, optimize=True),
+                np.einsum("eaij,eabjk,eblk->eabil", TE, KE, TE, optimize=True))
+
     def _element_z(self, zE):
         """Per-element edge twists (m, 24) from per-mesh-edge values (E, 6), with signs."""
         m = self.mesh
@@ -266,7 +330,7 @@ class DefaultElement(Element):
     def strains(self, g, points=GAUSS_2x2):
         """Strain twists (zeta_1, zeta_2) (m, npts, 12) at natural points of every element (the
         tying with the membrane-drilling correction, ``membrane_drilling``)."""
-        z = self._element_z(0.5 * edge_twists(g, self.mesh.edge_nodes))
+        z = self._element_z(0.5 * edge_twists(self.frames(g), self.mesh.edge_nodes))
         return np.einsum("mqij,mj->mqi", self.tying(points), z)
 
     def tying(self, points=GAUSS_2x2):
@@ -303,15 +367,15 @@ class DefaultElement(Element):
         >>> float(np.abs(el.linear_strains(eta)).max()) < 1e-15
         True
         """
-        psi0 = edge_twists(self.mesh.g0, self.mesh.edge_nodes)
+        psi0 = edge_twists(self.frames(self.mesh.g0), self.mesh.edge_nodes)
         Lp, Lm = lie.dexp_inv(psi0, both=True)
         return np.einsum("mqij,mj->mqi", self.tying(points), self._element_z(0.5 * self._edge_increments(Lp, Lm, eta)))
 
     def _edge_increments(self, Lp, Lm, eta):
         """The edge twists' linear increments L(psi) eta_b - L(-psi) eta_a (E, 6) of the nodal
-        increments eta (n, 6)."""
+        increments eta (n, 6) (of the user's frames: turned into the element's here)."""
         En = self.mesh.edge_nodes
-        eta = np.asarray(eta, float).reshape(-1, 6)
+        eta = self.to_element_frames(np.asarray(eta, float).reshape(-1, 6))
         return np.einsum("eij,ej->ei", Lp, eta[En[:, 1]]) - np.einsum("eij,ej->ei", Lm, eta[En[:, 0]])
 
     def compiled(self, pattern, mode="auto"):
@@ -327,7 +391,7 @@ class DefaultElement(Element):
         return kern
 
     def energy(self, g):
-        z = self._element_z(0.5 * edge_twists(g, self.mesh.edge_nodes))
+        z = self._element_z(0.5 * edge_twists(self.frames(g), self.mesh.edge_nodes))
         dz = z - self.z0
         return 0.5 * np.einsum("mi,mij,mj->", dz, self.Dbar, dz)
 
@@ -379,7 +443,7 @@ class DefaultElement(Element):
         evaluation's ``stress`` is Dbar (z(g) - z0) (m, 24)."""
         mesh = self.mesh
         En = mesh.edge_nodes
-        h = _relative_frames(g, En)
+        h = _relative_frames(self.frames(g), En)
         psi = _checked_log(h, En)
         Lp, Lm = lie.dexp_inv(psi, both=True)                          # L(psi), L(-psi)
         z = self._element_z(0.5 * psi)
@@ -389,7 +453,7 @@ class DefaultElement(Element):
         sgn = mesh.elem_edge_sign
         nE = len(En)
         F = self._edge_forces(f)                                       # conjugate to mesh-edge z
-        r = self._nodal_forces(F, Lp, Lm)
+        r = self._to_user(self._nodal_forces(F, Lp, Lm))
         # size of the terms that cancel in Dbar (z - z0): the residual's round-off floor
         fz = f + self.Dz0
         fscale = np.sqrt(np.einsum("mi,mi->", fz, fz) + np.einsum("mi,mi->", f, f))
@@ -398,7 +462,7 @@ class DefaultElement(Element):
         r_geo = r
         if stress is not None:                 # mixed iteration: geometric part from the stresses
             F = self._edge_forces(np.asarray(stress, float).reshape(-1, 24))
-            r_geo = self._nodal_forces(F, Lp, Lm)
+            r_geo = self._to_user(self._nodal_forces(F, Lp, Lm))
         # blocks of CHUNK elements/edges (a loop over ~n/2048 blocks, not over elements)
         m_el = mesh.n_elements
         pos = sgn > 0
@@ -440,7 +504,8 @@ class DefaultElement(Element):
             H[:, :6, 6:] += np.swapaxes(Hba, 1, 2)
             KE[s:e] = H.reshape(c, 2, 6, 2, 6).transpose(0, 1, 3, 2, 4)
 
-        # derivative of the left-trivialised gradient along exp updates
+        # derivative of the left-trivialised gradient along exp updates (user's frames)
+        Ke, KE = self._blocks_to_user(Ke, KE)
         Kn = 0.5 * lie.adt(r_geo)
         return ElementEvaluation(energy, r, fscale, Ke, KE, Kn, stress=f, linearization=(Lp, Lm, dz))
 

@@ -50,7 +50,10 @@ class ResultantLaw(Protocol):
     ``size=`` (the element size at the points, see :func:`law_matrix`).
 
     It is a runtime-checkable Protocol: any object with such a method is accepted (a user law,
-    e.g. an orthotropic one, needs no base class).
+    e.g. an orthotropic one, needs no base class).  A law the same in every in-plane direction
+    says so by a true ``in_plane_isotropic`` attribute (:class:`Material`, :class:`RegionMaterial`
+    of them): the default element may then build its frames turned about the normal from the
+    user's (``mesh.gauge``); a law without it keeps the user's d1 as its material axis.
 
     Example
     -------
@@ -228,6 +231,9 @@ class Material:
         """
         return self
 
+    #: the law is the same in every in-plane direction (``ResultantLaw``; ``mesh.gauge``)
+    in_plane_isotropic = True
+
     def resultant_matrix(self, A1, A2, size=None):
         """12x12 stiffness on (eps_1, eps_2) at points with reference tangents A1, A2 (..., 3).
 
@@ -404,6 +410,9 @@ class RegionMaterial:
             raise MaterialError("RegionMaterial needs a list of core_se3.Material")
         if self.index.ndim != 1 or self.index.min() < 0 or self.index.max() >= len(self.materials):
             raise MaterialError("RegionMaterial index must give one material per element")
+
+    #: every law is in-plane isotropic (``ResultantLaw``): the materials are :class:`Material`
+    in_plane_isotropic = True
 
     @classmethod
     def from_regions(cls, n_elements, base, regions):

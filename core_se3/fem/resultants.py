@@ -64,10 +64,18 @@ def element_resultants(element, g, increments=None):
     zeta0 = element.strains(mesh.g0, CENTRE)[:, 0]            # (m, 12) body frame
     if increments is None:
         eps = element.strains(g, CENTRE)[:, 0] - zeta0
-        R = mean_rotation(g[mesh.quads, :3, :3])              # current centre frame
+        frames = g                                            # current centre frame
     else:                                                     # linear analysis: the reference frames
         eps = element.linear_strains(increments, CENTRE)[:, 0]
-        R = mean_rotation(mesh.g0[mesh.quads, :3, :3])
+        frames = mesh.g0
+    R = mean_rotation(frames[mesh.quads, :3, :3])
+    C = None
+    to_element = getattr(element, "frames", None)
+    if to_element is not None and to_element(frames) is not frames:
+        # the strains are in the element's frames (turned about the normal, ``mesh.gauge``):
+        # C = Re^T R takes the user's centre frame R into the element's Re
+        Re = mean_rotation(to_element(frames)[mesh.quads, :3, :3])
+        C, R = np.einsum("mji,mjk->mik", Re, R), Re
     A1, A2 = zeta0[:, 0:3], zeta0[:, 6:9]
     D, _ = law_matrix(element.material, A1, A2, element.size)  # (m, 12, 12)
     S = np.einsum("mij,mj->mi", D, eps)
@@ -76,11 +84,11 @@ def element_resultants(element, g, increments=None):
     A = np.stack([A1, A2], 1)                                 # (m, 2, 3)
     out = {}
     for k, nu in ((1, np.array([1.0, 0, 0])), (2, np.array([0, 1.0, 0]))):
-        w = A @ nu                                            # (m, 2): nu . A_a
+        w = A @ nu if C is None else np.einsum("mai,mi->ma", A, C[:, :, k - 1])   # (m, 2): nu . A_a
         n_loc = w[:, :1] * s[0] + w[:, 1:] * s[1]
         m_loc = w[:, :1] * t[0] + w[:, 1:] * t[1]
         out[f"N{k}"] = np.einsum("mij,mj->mi", R, n_loc)
         out[f"M{k}"] = np.einsum("mij,mj->mi", R, m_loc)
-        out[f"N{k}_local"] = n_loc
-        out[f"M{k}_local"] = m_loc
+        out[f"N{k}_local"] = n_loc if C is None else np.einsum("mji,mj->mi", C, n_loc)
+        out[f"M{k}_local"] = m_loc if C is None else np.einsum("mji,mj->mi", C, m_loc)
     return out

@@ -185,6 +185,7 @@ class Mesh:
                 raise MeshError(f"region {name!r} must list existing element ids")
             self.regions[name] = ids
         self._build_edges()
+        self._gauge_angles = None
         self._check_geometry()
         self._check_origin()
 
@@ -192,6 +193,24 @@ class Mesh:
     def X(self):
         """Reference positions (n, 3)."""
         return self.g0[:, :3, 3]
+
+    @property
+    def gauge_angles(self):
+        """The least-turn gauge (n,) [rad]: the turns about the nodal normals on which the default
+        element builds its frames (``mesh.gauge``), computed at the first use; 0 where the frames
+        turn nowhere about the normal.  A sub-mesh of a partition is given its whole mesh's
+        angles (``parallel.local.subdomain``), so that every rank's element is the serial one."""
+        if self._gauge_angles is None:
+            from .gauge import least_turn_angles
+            self._gauge_angles = least_turn_angles(self.g0, self.edge_nodes)
+        return self._gauge_angles
+
+    @gauge_angles.setter
+    def gauge_angles(self, alpha):
+        alpha = np.asarray(alpha, float)
+        if alpha.shape != (self.n_nodes,) or not np.isfinite(alpha).all():
+            raise MeshError(f"gauge_angles must be {self.n_nodes} finite angles, got shape {alpha.shape}")
+        self._gauge_angles = alpha
 
     @property
     def n_nodes(self):

@@ -122,6 +122,7 @@ def subdomain(mesh, part, rank, size):
     sub = Subdomain(part, owner, rank, size, mesh.quads)
     # nodes that no element uses belong to rank 0 (and stay out of the sub-mesh's quads)
     sub.mesh = Mesh(mesh.g0[sub.nodes], sub.g2l[mesh.quads[sub.elements]])
+    sub.mesh.gauge_angles = mesh.gauge_angles[sub.nodes]      # the serial element's frames
     return sub
 
 
