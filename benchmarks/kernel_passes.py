@@ -77,7 +77,7 @@ def measure(n, repeats):
                                                                                     0, m),
         "edges: forces + geometric blocks, scattered": lambda: P.edges_tangent(None, me, topo, w, None, None, cmap,
                                                                                data, 0, nE),
-        "nodes: residual + 1/2 adt(r), scattered": lambda: P.nodes_pass(topo, w, None, None, data, cmap, 0, nn),
+        "nodes: residual + 1/2 adt(r), scattered": lambda: P.nodes_pass(topo, me.Rq, w, None, None, data, cmap, 0, nn),
         # the general path (a law coupling v and w: Dbar unpacked per element), on the same Dbar
         "general path: tangent (whole driver)": lambda: element_tangent_serial(*gargs),
         "general path: residual (whole driver)": lambda: element_residual_serial(g, me, gen, topo, w),

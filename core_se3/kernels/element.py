@@ -51,7 +51,7 @@ def element_residual(g, mesh, ed, topo, w):
     for ch in prange((nE + CHUNK - 1) // CHUNK):
         edges_residual(topo, w, ch * CHUNK, min(nE, (ch + 1) * CHUNK))
     for ch in prange((n + CHUNK - 1) // CHUNK):
-        nodes_pass(topo, w, None, None, None, None, ch * CHUNK, min(n, (ch + 1) * CHUNK))
+        nodes_pass(topo, mesh.Rq, w, None, None, None, None, ch * CHUNK, min(n, (ch + 1) * CHUNK))
     return energy, sqrt(fs), 0, -1
 
 
@@ -65,7 +65,7 @@ def element_residual_serial(g, mesh, ed, topo, w):
         return 0.0, 0.0, flag, bad
     energy, fs = elements_force(mesh, ed, w, 0, m)
     edges_residual(topo, w, 0, nE)
-    nodes_pass(topo, w, None, None, None, None, 0, n)
+    nodes_pass(topo, mesh.Rq, w, None, None, None, None, 0, n)
     return energy, sqrt(fs), 0, -1
 
 
@@ -116,7 +116,7 @@ def element_tangent(g, mesh, ed, topo, cmap, w, data, mixed):
             edges_tangent(order, mesh, topo, w, fe_geo, rEg, cmap, data, lo + ch * CHUNK,
                           min(hi, lo + (ch + 1) * CHUNK))
     for ch in prange((n + CHUNK - 1) // CHUNK):
-        nodes_pass(topo, w, rEg, rg, data, cmap, ch * CHUNK, min(n, (ch + 1) * CHUNK))
+        nodes_pass(topo, mesh.Rq, w, rEg, rg, data, cmap, ch * CHUNK, min(n, (ch + 1) * CHUNK))
     return energy, sqrt(fs), 0, -1
 
 
@@ -133,7 +133,7 @@ def element_tangent_serial(g, mesh, ed, topo, cmap, w, data, mixed):
         return 0.0, 0.0, flag, bad
     energy, fs = elements_tangent(None, mesh, ed, w, cmap, data, 0, m)
     edges_tangent(None, mesh, topo, w, fe_geo, rEg, cmap, data, 0, nE)
-    nodes_pass(topo, w, rEg, rg, data, cmap, 0, n)
+    nodes_pass(topo, mesh.Rq, w, rEg, rg, data, cmap, 0, n)
     return energy, sqrt(fs), 0, -1
 
 
@@ -158,7 +158,7 @@ def element_tangent_gather(g, mesh, ed, topo, cmap, w, data, mixed, store):
         energy += a
         fs += b
     for ch in prange((nE + CHUNK - 1) // CHUNK):
-        edges_tangent_store(topo, w, fe_geo, rEg, KEb, ch * CHUNK, min(nE, (ch + 1) * CHUNK))
+        edges_tangent_store(mesh, topo, w, fe_geo, rEg, KEb, ch * CHUNK, min(nE, (ch + 1) * CHUNK))
     nb = cmap.blk_a.size
     ke = Keb.reshape(-1, 6, 6)
     kE = KEb.reshape(-1, 6, 6)
@@ -189,7 +189,7 @@ def element_tangent_gather(g, mesh, ed, topo, cmap, w, data, mixed, store):
                     if cr >= 0:
                         data[rb + cs + cr] = S[i, j]
     for ch in prange((n + CHUNK - 1) // CHUNK):
-        nodes_pass(topo, w, rEg, rg, data, cmap, ch * CHUNK, min(n, (ch + 1) * CHUNK))
+        nodes_pass(topo, mesh.Rq, w, rEg, rg, data, cmap, ch * CHUNK, min(n, (ch + 1) * CHUNK))
     return energy, sqrt(fs), 0, -1
 
 
@@ -208,6 +208,10 @@ class ElementKernels:
     Dbar (m,300) (the upper triangles, row by row: ``DefaultElement.Dbar_packed``), z0 (m,24),
     Dz0 (m,24) : DefaultElement's constant data
     pattern : Pattern of the free dofs
+    gauge : (n, 4, 4) array or None
+        The constant turns Q of the element's frames g Q about the nodal normals
+        (``fem.element_default``, "Frames"): the drivers take g Q and return forces and blocks
+        in the user's frames; None (the default) where there are none.
     mode : 'auto' (serial below SERIAL_BELOW elements, else 'gather'), 'serial', 'colour', 'gather'
     error : exception class raised when an edge turns by more than MAX_EDGE_ANGLE
 
@@ -223,8 +227,10 @@ class ElementKernels:
     """
 
     def __init__(self, quads, edge_nodes, elem_edges, elem_edge_sign, Dbar, z0, Dz0, pattern,
-                 mode="auto", error=RuntimeError):
+                 mode="auto", error=RuntimeError, gauge=None):
         c = np.ascontiguousarray
+        self.gauge = None if gauge is None else c(gauge, dtype=float)
+        self.Rq = np.empty((0, 3, 3)) if gauge is None else c(self.gauge[:, :3, :3])
         self.quads = c(quads, dtype=np.int64)
         self.edge_nodes = c(edge_nodes, dtype=np.int64)
         self.elem_edges = c(elem_edges, dtype=np.int64)
@@ -268,13 +274,18 @@ class ElementKernels:
         """
         mesh = element.mesh
         self = cls(mesh.quads, mesh.edge_nodes, mesh.elem_edges, mesh.elem_edge_sign,
-                   element.Dbar_packed, element.z0, element.Dz0, pattern, **kw)
+                   element.Dbar_packed, element.z0, element.Dz0, pattern, gauge=getattr(element, "gauge", None), **kw)
         self.residual(np.ascontiguousarray(mesh.g0, dtype=float))
         z0 = (self.sign[..., None] * (0.5 * self.psi)[self.elem_edges]).reshape(-1, 24)
         self.z0 = np.ascontiguousarray(z0)
         self.Dz0 = np.empty_like(self.z0)
         packed_matvec(self.Dbar, self.z0, self.Dz0)
         return self
+
+    def _element_frames(self, g):
+        """g Q (contiguous): the element's frames of the nodal frames g (``gauge``)."""
+        g = np.ascontiguousarray(g, dtype=float)
+        return g if self.gauge is None else np.ascontiguousarray(g @ self.gauge)
 
     def _raise(self, e):
         a, b = self.edge_nodes[e].tolist()
@@ -286,14 +297,14 @@ class ElementKernels:
     def bundles(self):
         """(ElementMesh, ElementData, Workspace): the arrays the drivers take, from the
         attributes of the moment (``element_passes``' bundles; views, no copies)."""
-        return (ElementMesh(self.quads, self.edge_nodes, self.elem_edges, self.sign),
+        return (ElementMesh(self.quads, self.edge_nodes, self.elem_edges, self.sign, self.Rq),
                 ElementData(self.Dbar, self.Dsplit, self.z0, self.Dz0),
                 Workspace(self.psi, self.coef, self.ang, self.fe, self.rE, self.r))
 
     def residual(self, g):
         """dict(energy, r (n,6) -- a view of the workspace, force_scale, stress (m,24) -- the
         displacement stresses Dbar (z - z0), a new array)."""
-        g = np.ascontiguousarray(g, dtype=float)
+        g = self._element_frames(g)
         fn = element_residual_serial if self.mode == "serial" else element_residual
         mesh, ed, w = self.bundles()
         en, fs, flag, e = fn(g, mesh, ed, self.pattern.topo, w)
@@ -309,7 +320,7 @@ class ElementKernels:
         the tangent (edge blocks and 1/2 adt(r)) is built from their forces (the mixed
         iteration, ``DefaultElement.evaluate(g, stress=...)``); r, energy and the material
         blocks stay those of Dbar (z(g) - z0)."""
-        g = np.ascontiguousarray(g, dtype=float)
+        g = self._element_frames(g)
         if data is None:
             if self._data is None:
                 self._data = self.pattern.new_data()
@@ -343,6 +354,10 @@ class ElementKernels:
         eta = np.ascontiguousarray(eta, dtype=float).reshape(-1, 6)
         if eta.shape[0] != self.r.shape[0]:
             raise ValueError(f"eta must have {self.r.shape[0]} rows of 6, got {eta.shape[0]}")
+        if self.gauge is not None:                 # Ad_{Q^-1} eta: the element's frames
+            R = self.Rq
+            eta = np.ascontiguousarray(np.concatenate([np.einsum("nji,nj->ni", R, eta[:, :3]),
+                                                       np.einsum("nji,nj->ni", R, eta[:, 3:])], 1))
         out = np.empty((len(self.quads), 24))
         fn = element_linear_stress_serial if self.mode == "serial" else element_linear_stress
         fn(self.quads, self.elem_edges, self.sign, self.Dbar, self.z0, self.psi, self.coef, eta, out)

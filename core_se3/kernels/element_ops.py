@@ -415,3 +415,39 @@ def check_angles(ang):
     if ang[k] > MAX_EDGE_ANGLE:
         return 1, k
     return 0, -1
+
+
+@njit(cache=True)
+def rotate_blocks(K, nodes, Rq, S):
+    """K (6k, 6k) <- T K T^T in place, T = blockdiag(R, R) of the rotations Rq (n, 3, 3) of the
+    k ``nodes``: blocks of the element's frames (turned about the normals, ``mesh.gauge``) in the
+    user's (``fem.element_default``, "Frames"); Rq empty (0, 3, 3): no gauge, nothing done.
+    S (3, 3): scratch.  The 3x3 block (I, J) belongs to node I // 2, part I % 2 (v or w)."""
+    if Rq.shape[0] == 0:
+        return
+    nb = 2 * nodes.size
+    for I in range(nb):
+        A = Rq[nodes[I // 2]]
+        for J in range(nb):
+            B = Rq[nodes[J // 2]]
+            i0, j0 = 3 * I, 3 * J
+            for i in range(3):                     # S = K_IJ B^T
+                for j in range(3):
+                    S[i, j] = K[i0 + i, j0] * B[j, 0] + K[i0 + i, j0 + 1] * B[j, 1] + K[i0 + i, j0 + 2] * B[j, 2]
+            for i in range(3):                     # K_IJ = A S
+                for j in range(3):
+                    K[i0 + i, j0 + j] = A[i, 0] * S[0, j] + A[i, 1] * S[1, j] + A[i, 2] * S[2, j]
+
+
+@njit(cache=True)
+def rotate_wrench(r, nd, Rq):
+    """r[nd] (6,) <- (R r_v, R r_w), R = Rq[nd]: a nodal force of the element's frames in the
+    user's (Rq empty: nothing done)."""
+    if Rq.shape[0] == 0:
+        return
+    R = Rq[nd]
+    for k in (0, 3):
+        x, y, z = r[nd, k], r[nd, k + 1], r[nd, k + 2]
+        for i in range(3):
+            r[nd, k + i] = R[i, 0] * x + R[i, 1] * y + R[i, 2] * z
+

@@ -6,7 +6,8 @@ written once.  Each pass allocates its own small scratch arrays.
 The arrays travel in three named bundles (namedtuples of arrays: numba compiles their fields
 as it does separate arguments, and the loops below read them unchanged):
 
-* ``ElementMesh`` -- the topology (quads, edge_nodes, elem_edges, sgn);
+* ``ElementMesh`` -- the topology (quads, edge_nodes, elem_edges, sgn) and the rotations Rq of
+  the element's frames (``fem.element_default``, "Frames"; empty without a gauge);
 * ``ElementData`` -- the elements' constant data (Dbar packed, its split form Dsplit, the
   reference edge twists z0 and Dbar z0);
 * ``Workspace`` -- the state a call writes (psi, coef, ang per edge, fe per element side,
@@ -31,14 +32,15 @@ from numba import njit
 from .csr import scatter
 from .element_dbar import element_D
 from .element_ops import (edge_F, edge_KE, edge_pass1, edge_residual, element_force, element_G,
-                          element_Ke, node_Kn, node_residual)
+                          element_Ke, node_Kn, node_residual, rotate_blocks, rotate_wrench)
 
 __all__ = ["ElementMesh", "ElementData", "Workspace", "edges_log", "elements_force", "edges_residual", "nodes_pass", "elements_tangent",
            "edges_tangent", "elements_tangent_store", "edges_tangent_store"]
 
-ElementMesh = namedtuple("ElementMesh", "quads edge_nodes elem_edges sgn")
+ElementMesh = namedtuple("ElementMesh", "quads edge_nodes elem_edges sgn Rq")
 ElementMesh.__doc__ = """The default element's topology (int64): quads (m, 4), edge_nodes (E, 2), elem_edges
-(m, 4), sgn (m, 4) the orientation of each element side's edge (+1/-1)."""
+(m, 4), sgn (m, 4) the orientation of each element side's edge (+1/-1); Rq (n, 3, 3) the turns of
+the element's frames about the normals (g Q, ``mesh.gauge``), or empty (0, 3, 3) without them."""
 ElementData = namedtuple("ElementData", "Dbar Dsplit z0 Dz0")
 ElementData.__doc__ = """The elements' constant data: Dbar (m, 300) packed, Dsplit its split form (m, 24, 12)
 or (m, 24, 16), or empty (0, 24, 12) for the general path; z0 (m, 24) the reference edge
@@ -67,7 +69,7 @@ def edges_log(g, mesh, w, lo, hi):
 def elements_force(mesh, ed, w, lo, hi):
     """Elements lo..hi: f = Dbar (z - z0) into w.fe (signed per edge; Dbar packed (m, 300),
     Dsplit its split form or empty); returns (energy, |f+Dz0|^2+|f|^2)."""
-    _, _, elem_edges, sgn = mesh
+    _, _, elem_edges, sgn, _ = mesh
     Dbar, Dsplit, z0, Dz0 = ed
     psi, fe = w.psi, w.fe
     z = np.empty(24)
@@ -94,16 +96,18 @@ def edges_residual(topo, w, lo, hi):
 
 
 @njit(cache=True)
-def nodes_pass(topo, w, rEg, rg, data, cmap, lo, hi):
-    """Nodes lo..hi: r = sum of the edge ends; with data, the nodal block 1/2 adt(r) (mixed:
-    r_geo from rEg into rg, and 1/2 adt(r_geo))."""
+def nodes_pass(topo, Rq, w, rEg, rg, data, cmap, lo, hi):
+    """Nodes lo..hi: r = sum of the edge ends, in the user's frames (Rq: ``rotate_wrench``); with
+    data, the nodal block 1/2 adt(r) (mixed: r_geo from rEg into rg, and 1/2 adt(r_geo))."""
     node_ptr, node_inc, rE, r = topo.node_ptr, topo.node_inc, w.rE, w.r
     K6 = np.empty((6, 6))
     for nd in range(lo, hi):
         node_residual(nd, node_ptr, node_inc, rE, r)
+        rotate_wrench(r, nd, Rq)
         if data is not None:
             if rEg is not None:
                 node_residual(nd, node_ptr, node_inc, rEg, rg)
+                rotate_wrench(rg, nd, Rq)
                 node_Kn(nd, rg, data, cmap, K6)
             else:
                 node_Kn(nd, r, data, cmap, K6)
@@ -113,36 +117,39 @@ def nodes_pass(topo, w, rEg, rg, data, cmap, lo, hi):
 # reference-count update per read (about +30 % on the element pass, measured); the passes
 # unpack their bundles once, before their loops
 @njit(cache=True)
-def _element_blocks(el, elem_edges, sgn, Dbar, Dsplit, z0, Dz0, psi, coef, fe, z, f, G, TT, TTt, KeT, D):
+def _element_blocks(el, quads, elem_edges, sgn, Rq, Dbar, Dsplit, z0, Dz0, psi, coef, fe, z, f, G, TT, TTt, KeT,
+                    D, S3):
     """Forces and KeT = (G^T Dbar G)^T of element el (Dbar: ``element_D``, the split form or
-    unpacked into D); returns (energy, force scale part)."""
+    unpacked into D), in the user's frames (Rq: ``rotate_blocks``); returns (energy, force
+    scale part)."""
     Dr = element_D(Dbar, Dsplit, el, D)
     a, b = element_force(el, elem_edges, sgn, Dr, z0, Dz0, psi, z, f, fe)
     element_G(el, elem_edges, sgn, psi, coef, G)
     element_Ke(Dr, G, TT, TTt, KeT)
+    rotate_blocks(KeT, quads[el], Rq, S3)
     return a, b
 
 
 @njit(cache=True)
 def _element_scratch():
     return (np.empty(24), np.empty(24), np.empty((4, 2, 6, 6)), np.empty((24, 24)), np.empty((24, 24)),
-            np.empty((24, 24)), np.empty((24, 24)))
+            np.empty((24, 24)), np.empty((24, 24)), np.empty((3, 3)))
 
 
 @njit(cache=True)
 def elements_tangent(order, mesh, ed, w, cmap, data, lo, hi):
     """Elements lo..hi (through order): forces and material blocks, scattered into data.
     Ke = KeT^T = KeT up to round-off (Dbar is symmetric): KeT is read row-wise (contiguous)."""
-    quads, _, elem_edges, sgn = mesh
+    quads, _, elem_edges, sgn, Rq = mesh
     Dbar, Dsplit, z0, Dz0 = ed
     psi, coef, fe = w.psi, w.coef, w.fe
-    z, f, G, TT, TTt, KeT, D = _element_scratch()
+    z, f, G, TT, TTt, KeT, D, S3 = _element_scratch()
     en = 0.0
     fs = 0.0
     for i in range(lo, hi):
         el = _item(order, i)
-        a, b = _element_blocks(el, elem_edges, sgn, Dbar, Dsplit, z0, Dz0, psi, coef, fe, z, f, G, TT, TTt, KeT,
-                               D)
+        a, b = _element_blocks(el, quads, elem_edges, sgn, Rq, Dbar, Dsplit, z0, Dz0, psi, coef, fe, z, f, G, TT,
+                               TTt, KeT, D, S3)
         en += a
         fs += b
         for A in range(4):
@@ -155,15 +162,15 @@ def elements_tangent(order, mesh, ed, w, cmap, data, lo, hi):
 @njit(cache=True)
 def elements_tangent_store(mesh, ed, w, Keb, lo, hi):
     """Elements lo..hi: forces, and the material blocks stored in Keb (m,4,4,6,6)."""
-    _, _, elem_edges, sgn = mesh
+    quads, _, elem_edges, sgn, Rq = mesh
     Dbar, Dsplit, z0, Dz0 = ed
     psi, coef, fe = w.psi, w.coef, w.fe
-    z, f, G, TT, TTt, KeT, D = _element_scratch()
+    z, f, G, TT, TTt, KeT, D, S3 = _element_scratch()
     en = 0.0
     fs = 0.0
     for el in range(lo, hi):
-        a, b = _element_blocks(el, elem_edges, sgn, Dbar, Dsplit, z0, Dz0, psi, coef, fe, z, f, G, TT, TTt, KeT,
-                               D)
+        a, b = _element_blocks(el, quads, elem_edges, sgn, Rq, Dbar, Dsplit, z0, Dz0, psi, coef, fe, z, f, G, TT,
+                               TTt, KeT, D, S3)
         en += a
         fs += b
         for A in range(4):
@@ -177,9 +184,10 @@ def elements_tangent_store(mesh, ed, w, Keb, lo, hi):
 # mixed = "fe_geo is not None": pruned at compile time (one version per argument types); a
 # run-time flag cost ~10 % in the serial driver (measured)
 @njit(cache=True)
-def _edge_blocks(e, edge_slots, psi, coef, fe, rE, fe_geo, rEg, F, Fg, Lp, Lm, Ad, Jm, Y, H, p):
-    """F_e, the nodal residual parts and the geometric block H of edge e; mixed (fe_geo
-    given): H from F_geo = edge sum of fe_geo (into Fg), whose nodal parts go to rEg[e]."""
+def _edge_blocks(e, edge_nodes, edge_slots, Rq, psi, coef, fe, rE, fe_geo, rEg, F, Fg, Lp, Lm, Ad, Jm, Y, H, p, S3):
+    """F_e, the nodal residual parts and the geometric block H of edge e (in the user's frames:
+    Rq, ``rotate_blocks``); mixed (fe_geo given): H from F_geo = edge sum of fe_geo (into Fg),
+    whose nodal parts go to rEg[e]."""
     edge_F(e, edge_slots, fe, F)
     edge_residual(e, psi, coef, F, rE)
     if fe_geo is not None:
@@ -188,6 +196,7 @@ def _edge_blocks(e, edge_slots, psi, coef, fe, rE, fe_geo, rEg, F, Fg, Lp, Lm, A
         edge_KE(e, psi, coef, Fg, Lp, Lm, Ad, Jm, Y, H, p)
     else:
         edge_KE(e, psi, coef, F, Lp, Lm, Ad, Jm, Y, H, p)
+    rotate_blocks(H, edge_nodes[e], Rq, S3)
 
 
 @njit(cache=True)
@@ -195,18 +204,19 @@ def _edge_scratch(mixed):
     F = np.empty(6)
     Fg = np.empty(6) if mixed else F
     return F, Fg, np.empty((6, 6)), np.empty((6, 6)), np.empty((6, 6)), np.empty((6, 6)), \
-        np.empty((12, 6)), np.empty((12, 12)), np.empty(6)
+        np.empty((12, 6)), np.empty((12, 12)), np.empty(6), np.empty((3, 3))
 
 
 @njit(cache=True)
 def edges_tangent(order, mesh, topo, w, fe_geo, rEg, cmap, data, lo, hi):
     """Edges lo..hi (through order): residual parts and geometric blocks, scattered into data."""
-    edge_nodes, edge_slots = mesh.edge_nodes, topo.edge_slots
+    edge_nodes, edge_slots, Rq = mesh.edge_nodes, topo.edge_slots, mesh.Rq
     psi, coef, fe, rE = w.psi, w.coef, w.fe, w.rE
-    F, Fg, Lp, Lm, Ad, Jm, Y, H, p = _edge_scratch(fe_geo is not None)
+    F, Fg, Lp, Lm, Ad, Jm, Y, H, p, S3 = _edge_scratch(fe_geo is not None)
     for i in range(lo, hi):
         e = _item(order, i)
-        _edge_blocks(e, edge_slots, psi, coef, fe, rE, fe_geo, rEg, F, Fg, Lp, Lm, Ad, Jm, Y, H, p)
+        _edge_blocks(e, edge_nodes, edge_slots, Rq, psi, coef, fe, rE, fe_geo, rEg, F, Fg, Lp, Lm, Ad, Jm, Y, H, p,
+                     S3)
         for I in range(2):
             for J in range(2):
                 scatter(data, cmap, cmap.edge_blk[e, I, J], edge_nodes[e, I], edge_nodes[e, J], H,
@@ -214,13 +224,14 @@ def edges_tangent(order, mesh, topo, w, fe_geo, rEg, cmap, data, lo, hi):
 
 
 @njit(cache=True)
-def edges_tangent_store(topo, w, fe_geo, rEg, KEb, lo, hi):
+def edges_tangent_store(mesh, topo, w, fe_geo, rEg, KEb, lo, hi):
     """Edges lo..hi: residual parts, and the geometric blocks stored in KEb (E,2,2,6,6)."""
-    edge_slots = topo.edge_slots
+    edge_nodes, edge_slots, Rq = mesh.edge_nodes, topo.edge_slots, mesh.Rq
     psi, coef, fe, rE = w.psi, w.coef, w.fe, w.rE
-    F, Fg, Lp, Lm, Ad, Jm, Y, H, p = _edge_scratch(fe_geo is not None)
+    F, Fg, Lp, Lm, Ad, Jm, Y, H, p, S3 = _edge_scratch(fe_geo is not None)
     for e in range(lo, hi):
-        _edge_blocks(e, edge_slots, psi, coef, fe, rE, fe_geo, rEg, F, Fg, Lp, Lm, Ad, Jm, Y, H, p)
+        _edge_blocks(e, edge_nodes, edge_slots, Rq, psi, coef, fe, rE, fe_geo, rEg, F, Fg, Lp, Lm, Ad, Jm, Y, H, p,
+                     S3)
         for I in range(2):
             for J in range(2):
                 for r in range(6):
