@@ -309,6 +309,37 @@ def test_local_problems_sum_to_the_whole(backend):
     assert np.abs(K[np.ix_(free, free)] - Kg).max() < 1e-12 * np.abs(Kg).max()
 
 
+@pytest.mark.parametrize("backend", ["numpy", "numba"])
+def test_every_ranks_element_is_built_on_the_serial_gauge(backend):
+    """Nodal frames turning about the normal (an annulus, d1 at random): each rank's element is
+    built on the whole mesh's gauge (``Mesh.gauge_angles`` of its nodes, not its sub-mesh's own,
+    which differs by a constant per part), and the local forces and tangents sum to the serial ones."""
+    from core_se3.mesh.gauge import turned_about_normal
+    a = mesh.annulus(1.0, 2.0, 1.0, 4, 6)
+    m = mesh.Mesh(turned_about_normal(a.g0, np.random.default_rng(2).uniform(-1, 1, a.n_nodes)), a.quads,
+                  edges=a.edges)
+    p = Problem(m, Material(1e4, 0.3, 0.05), backend=backend)
+    p.clamp("x0")
+    g = m.g0 @ lie.exp(0.05 * np.random.default_rng(3).standard_normal((m.n_nodes, 6)))
+    ev = p.evaluate(g, 1.0)
+    part = rcb(m.X[m.quads].mean(1), 2)
+    r_int, K = np.zeros((m.n_nodes, 6)), np.zeros((6 * m.n_nodes, 6 * m.n_nodes))
+    for rank in range(2):
+        sub = subdomain(m, part, rank, 2)
+        loc = local_problem(p, sub)
+        loc.backend = backend
+        assert np.array_equal(loc.element.gauge, p.element.gauge[sub.nodes])
+        le = loc.evaluate(g[sub.nodes], 1.0)
+        np.add.at(r_int, sub.nodes, le.r_int)
+        dof = (6 * sub.nodes[:, None] + np.arange(6)).ravel()[loc.assembler().free]
+        Kl = le.K.tocoo()
+        np.add.at(K, (dof[Kl.row], dof[Kl.col]), Kl.data)
+    free = p.assembler().free
+    assert np.abs(r_int - ev.r_int).max() < 1e-12 * np.abs(ev.r_int).max()
+    Kg = ev.K.toarray()
+    assert np.abs(K[np.ix_(free, free)] - Kg).max() < 1e-12 * np.abs(Kg).max()
+
+
 def test_one_rank_shares_the_kernels_csr_with_petsc():
     """One rank: PETSc's matrix is the compiled evaluation's CSR of all dofs, not a copy; after
     ``set`` its free block is the serial tangent K_ff entry for entry and every held dof is an
