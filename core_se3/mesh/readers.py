@@ -169,8 +169,9 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None, triangles="error"):
     Nodal frames: d3 = area-weighted mean of the adjacent quads' normals (quads must be
     consistently oriented: the normal is the right-hand side of the node order); d1 = the
     projection of ``d1_hint`` on the tangent plane (the global y axis where that degenerates, x
-    where y does too); d1 turning by more than D1_TURN_MAX = 30 deg within a quad (a hint nearly
-    normal to the shell there) is a MeshWarning: the answer depends on it.
+    where y does too); on flat and developable parts the element makes the frames parallel
+    (``mesh.gauge``), on a doubly curved part d1 turning by more than D1_TURN_MAX = 30 deg within
+    a quad (a hint nearly normal to the shell there) is a MeshWarning: the answer depends on it.
     Named groups (Gmsh physical groups, meshio cell sets; a physical group without a name is
     named by its number, e.g. "1", as is every group but one of a name that a Gmsh file gives to
     several groups, with a MeshWarning; point sets such as Abaqus' ``*NSET`` are node sets of
@@ -242,22 +243,27 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None, triangles="error"):
     return mesh
 
 
-#: d1 turning by more than this within a quad [deg] moves the answer by about 1 % (0.5 % at 14 deg)
+#: the element's d1 turning by more than this within a quad [deg] (on a doubly curved part, which
+#: keeps the user's frames: ``mesh.gauge``) warns
 D1_TURN_MAX = 30.0
 
 
 def _warn_turning_d1(mesh):
-    """A MeshWarning where the nodal d1 (d1_hint projected on each node's tangent plane) turns
-    by more than D1_TURN_MAX degrees about the normal within one quad: the hint is nearly normal
-    to the shell there (a tube about z with the default hint +x flips d1 by 180 deg along the
-    line where d3 = +x).  The elements interpolate in the nodal frames, so the answer depends on
-    it even for an isotropic material: on a half cylinder (tests/test_mesh_file_frames.py) a turn
-    of 14 deg moved the tip by 0.5 % of its travel, 40 deg by 1.4 %, 79 deg by 4.6 %, and 180 deg
-    stops the solve (ElementTooDistortedError: "refine the mesh or the load step")."""
+    """A MeshWarning where the element's d1 turns by more than D1_TURN_MAX degrees about the
+    normal within one quad.  The nodal d1 is d1_hint projected on each node's tangent plane, which
+    turns fast where the hint is nearly normal to the shell (a tube about z with the default hint
+    +x flips d1 by 180 deg along the line where d3 = +x).  The element builds its frames in the
+    least-turn gauge (``mesh.gauge``), which undoes any such turn on flat and developable parts
+    (on a half cylinder, tests/test_mesh_file_frames.py, a hint 3 deg off the normal, d1 turning by
+    79 deg, had moved the tip by 4.6 % of its travel and a flip by 180 deg stopped the solve; both
+    now give the answer of a good hint to 6e-12).  A doubly curved part keeps the user's frames, so
+    there the hint still matters (a spherical cap whose d1 flips within a quad cannot be solved:
+    ElementTooDistortedError), and this warning says so."""
+    from .gauge import turned_about_normal
     P = mesh.X[mesh.quads]
     nq = np.cross(P[:, 2] - P[:, 0], P[:, 3] - P[:, 1])
     nq /= np.linalg.norm(nq, axis=1, keepdims=True)
-    d1 = mesh.g0[mesh.quads][:, :, :3, 0]
+    d1 = turned_about_normal(mesh.g0, mesh.gauge_angles)[mesh.quads][:, :, :3, 0]
     t = d1 - np.einsum("eki,ei->ek", d1, nq)[..., None] * nq[:, None]
     t /= np.maximum(np.linalg.norm(t, axis=2, keepdims=True), 1e-300)
     turn = np.degrees(np.arccos(np.clip(np.einsum("eki,eli->ekl", t, t).min(axis=(1, 2)), -1.0, 1.0)))
@@ -267,9 +273,10 @@ def _warn_turning_d1(mesh):
         warnings.warn(MeshWarning(
             f"mesh file: the first director d1 (d1_hint projected on the tangent plane) turns by {turn[k]:.0f} deg "
             f"within quad {k} (nodes {mesh.quads[k].tolist()}; {len(bad)} quad(s) above {D1_TURN_MAX:g} deg): d1_hint "
-            f"is nearly normal to the shell there, and the elements' answer depends on d1 turning within them, "
-            f"for any material (1 % at 40 deg, 5 % at 80 deg; 180 deg cannot be solved). Give a d1_hint that lies along the "
-            f"shell everywhere (e.g. a tube's or a fold's axis), or one hint per node"), stacklevel=3)
+            f"is nearly normal to the shell there, and on a doubly curved shell (whose frames the element cannot make "
+            f"parallel) its answer depends on d1 turning within the quads, for any material (a flip by 180 deg cannot be "
+            f"solved). Give a d1_hint that lies along the shell everywhere (e.g. a dome's meridians or parallels), or one "
+            f"hint per node"), stacklevel=3)
 
 
 def _element_numbering(raw, blocks, qb):
