@@ -31,12 +31,23 @@ def _rigid(rng, angle, vscale=1.0):
 
 
 def _meshes():
-    return {"flat": rectangle(1.5, 1.0, 3, 2), "cylinder": cylinder_arch(1.0, 1.2, 0.8, 3, 2)}
+    """Flat and cylindrical meshes, and the same with d1 turned at random about the normal by up
+    to 1 rad (the element then works on its least-turn gauge's frames, ``mesh.gauge``)."""
+    from core_se3.mesh.gauge import turned_about_normal
+    out = {"flat": rectangle(1.5, 1.0, 3, 2), "cylinder": cylinder_arch(1.0, 1.2, 0.8, 3, 2)}
+    for kind in ("flat", "cylinder"):
+        m = out[kind]
+        turns = np.random.default_rng(4).uniform(-1.0, 1.0, m.n_nodes)
+        out[f"{kind}, d1 at random"] = Mesh(turned_about_normal(m.g0, turns), m.quads, edges=m.edges)
+    return out
+
+
+KINDS = ["flat", "cylinder", "flat, d1 at random", "cylinder, d1 at random"]
 
 
 # ------------------------------------------------------------------- a. objectivity ---------
 
-@pytest.mark.parametrize("kind", ["flat", "cylinder"])
+@pytest.mark.parametrize("kind", KINDS)
 def test_objectivity_under_large_rigid_motions(kind):
     """g_i <- h g_i with |w| up to 20 pi + 0.7 and translations up to 10 (mesh size ~1.5).
 
@@ -96,7 +107,7 @@ def _large_rotation_state(rng, mesh):
 FD_TOL = 1e-6
 
 
-@pytest.mark.parametrize("kind", ["flat", "cylinder"])
+@pytest.mark.parametrize("kind", KINDS)
 @pytest.mark.parametrize("loads", ["none", "dead", "follower", "pressure_dead",
                                    "pressure_follower", "all"])
 def test_tangent_matches_finite_differences(kind, loads):
