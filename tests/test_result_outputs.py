@@ -5,6 +5,8 @@ import pytest
 
 from core_se3 import scenario
 
+pytestmark = pytest.mark.core
+
 E, H, L, W = 1.2e6, 0.1, 10.0, 1.0
 M_PI = np.pi * E * W * H ** 3 / 12 / L          # the end moment that rolls the strip's tip by pi
 

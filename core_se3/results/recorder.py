@@ -142,6 +142,28 @@ class StepRecorder:
             states[name] = ProbeState(x - x0, R @ Rref.T, self.unwrapped[name].copy())
         return states
 
+    def linear_probes(self, eta):
+        """name -> ProbeState of a linear analysis' increments eta (n, 6) about the reference
+        (``Probe.linear``: the probes linearised, u and the rotation vector linear in the load,
+        between nodes too); its rotation is exp of that vector.
+
+        Example
+        -------
+        >>> import numpy as np
+        >>> from core_se3 import Problem, Material, mesh
+        >>> p = Problem(mesh.rectangle(1.0, 1.0, 1, 1), Material(1e3, 0.0, 0.01)); p.add_probe("tip")
+        >>> eta = np.zeros((4, 6)); eta[:, 2] = 0.5
+        >>> StepRecorder(p).linear_probes(eta)["tip"]["u"].round(12).tolist()
+        [0.0, 0.0, 0.5]
+        """
+        from .. import lie
+        out = {}
+        for name, pr in self.problem.probes.items():
+            u, w = pr.linear(self.g0, eta)
+            self.unwrapped[name] = w
+            out[name] = ProbeState(u, lie.exp_so3(w), w.copy())
+        return out
+
     def support_forces(self, g, lam):
         """The generalised nodal forces (n, 6) of the supports' penalty springs (the problem's
         loads with ``support_force``) at the frames g: the support reactions that the springs
