@@ -32,3 +32,20 @@ def test_a_warm_sweep_row_keeps_the_turns_of_a_roll_up(tmp_path):
         assert [r["tip.rotation"] for r in rows] == [pytest.approx(1.2 * np.pi, rel=1e-9),
                                                       pytest.approx(1.3 * np.pi, rel=1e-9)]
         np.testing.assert_allclose(rows[1]["tip.rotation_vector"], [0.0, -1.3 * np.pi, 0.0], atol=1e-9)
+
+
+def test_a_solve_continued_from_a_step_keeps_its_probes_turns():
+    """Pure bending (exact): rolled to 1.2 pi, then continued to 1.3 pi from the stored step
+    (``g_init=StepResult``): 1.2 pi and 1.3 pi, as one solve to 1.3 pi reads; bare frames still
+    start from the angle modulo 2 pi (0.8 pi and 0.7 pi, said in the docstring).  Before, a
+    StepResult was refused with a bare TypeError (float() of a StepResult)."""
+    from core_se3 import Material, Problem, mesh
+    p = Problem(mesh.rectangle(L, W, 8, 1), Material(E, 0.0, H))
+    p.clamp("x0")
+    p.add_edge_moment("x1", (0.0, -M_PI, 0.0))
+    p.add_probe("tip")
+    first = p.solve(steps=12, lam_end=1.2).final
+    on = p.solve(steps=1, lam_start=1.2, lam_end=1.3, g_init=first)
+    assert [s.probes["tip"]["rotation_angle"] / np.pi for s in on.steps] == [pytest.approx(1.2, rel=1e-9),
+                                                                             pytest.approx(1.3, rel=1e-9)]
+    np.testing.assert_allclose(on.final.probes["tip"]["rotation_vector"], [0.0, -1.3 * np.pi, 0.0], atol=1e-9)

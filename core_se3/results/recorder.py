@@ -10,7 +10,29 @@ import numpy as np
 
 from .result import ProbeState, StepResult, unwrap_rotation
 
-__all__ = ["StepRecorder", "lab_totals", "restore_multipliers"]
+__all__ = ["StepRecorder", "lab_totals", "restore_multipliers", "initial_state"]
+
+
+def initial_state(g_init, g0):
+    """(frames, unwrapped) of a solve's start: ``g_init`` None (the reference frames g0), frames
+    (n, 4, 4), or a :class:`StepResult` -- its frames and its probes' unwrapped rotation vectors
+    (name -> (3,)), which the solve continues.  From bare frames the probes' rotations start
+    from their value modulo 2 pi: a strip's tip rolled to 1.2 pi and continued to 1.3 pi read
+    0.8 pi and 0.7 pi.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> g, w = initial_state(None, np.eye(4)[None])
+    >>> g.shape, w
+    ((1, 4, 4), None)
+    """
+    if g_init is None:
+        return np.array(g0, float), None
+    if isinstance(g_init, StepResult):
+        return np.array(g_init.g, float), {name: np.asarray(p["rotation_vector"], float)
+                                           for name, p in g_init.probes.items()}
+    return np.array(g_init, float), None
 
 
 def lab_totals(g, f, magnitudes=False):
