@@ -128,3 +128,28 @@ def test_a_curved_panels_moment_is_the_end_moment_at_large_rotation():
     cf = p.element.cell_fields(p.solve(steps=4).final.g)
     assert np.abs(cf["M1"] - [0.0, M, 0.0]).max() < 1e-10 * M
     assert np.abs(cf["N1"]).max() < 1e-9 * M
+
+
+def test_a_probe_on_a_closed_loop_is_refused():
+    """The rim of a quad (its 4 nodes, a closed loop of element edges) has no midpoint: the probe
+    sat at (2, 0, 0) for the ids [0, 1, 3, 2] and at (1, 0.5, 0) for the same nodes listed as
+    [1, 3, 2, 0]; a tube's end ring likewise.  Now refused, naming the probe and the way out."""
+    from core_se3 import Material, Problem
+    from core_se3.errors import OptionError, ScenarioError
+    from core_se3.mesh.core import Mesh, frames_from
+    for ids in ([0, 1, 3, 2], [1, 3, 2, 0]):
+        with pytest.raises(ScenarioError, match=r"probes\[0\]\.nodes.*closed loop.*nodes = \[ID\]"):
+            scenario.from_dict({"mesh": {"generator": "rectangle", "L": 2.0, "width": 1.0, "nx": 1, "ny": 1},
+                                "material": {"E": 1e4, "nu": 0.3, "h": 0.05},
+                                "supports": [{"type": "clamp", "nodes": [0, 2]}],
+                                "probes": [{"name": "rim", "nodes": ids}]})
+    t = 2 * np.pi * np.arange(8) / 8                              # a tube, 8 around, 2 along
+    X = np.array([[np.sin(a), y, np.cos(a)] for y in (0.0, 1.0, 2.0) for a in t])
+    d1 = np.array([[np.cos(a), 0.0, -np.sin(a)] for _ in range(3) for a in t])
+    quads = [[8 * j + i, 8 * j + (i + 1) % 8, 8 * (j + 1) + (i + 1) % 8, 8 * (j + 1) + i] for j in range(2) for i in range(8)]
+    m = Mesh(frames_from(X, d1, np.cross(d1, [0.0, 1.0, 0.0])), np.array(quads), {"end": 16 + np.arange(8)})
+    p = Problem(m, Material(1e4, 0.3, 0.05))
+    with pytest.raises(OptionError, match="probe 'end': its 8 nodes form a closed loop"):
+        p.add_probe("end", "end")
+    p.add_probe("arc", m.edges["end"][:5])                        # an open part of it: its middle node
+    assert p.probes["arc"].node_a == p.probes["arc"].node_b == 18

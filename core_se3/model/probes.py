@@ -28,17 +28,29 @@ def along_line(mesh, nodes, name="probe"):
     nodes = np.asarray(nodes, np.int64)
     if len(nodes) < 3:
         return nodes
-    key = {tuple(e) for e in np.sort(mesh.edge_nodes, 1).tolist()}
-    if all(tuple(sorted(p)) in key for p in zip(nodes[:-1].tolist(), nodes[1:].tolist())):
-        return nodes
     inset = np.zeros(mesh.n_nodes, bool)
     inset[nodes] = True
     segs = mesh.edge_nodes[inset[mesh.edge_nodes].all(1)]
     order = chain_order([tuple(e) for e in segs.tolist()]) if len(segs) else np.array([], np.int64)
-    if len(segs) in (len(nodes) - 1, len(nodes)) and sorted(order.tolist()) == sorted(nodes.tolist()):
+    chained = sorted(order.tolist()) == sorted(nodes.tolist())
+    if len(segs) == len(nodes) and chained:
+        _closed_loop(name, len(nodes))
+    key = {tuple(e) for e in np.sort(mesh.edge_nodes, 1).tolist()}
+    if all(tuple(sorted(p)) in key for p in zip(nodes[:-1].tolist(), nodes[1:].tolist())):
+        return nodes
+    if len(segs) == len(nodes) - 1 and chained:
         return order
     raise OptionError(f"probe {name!r}: its {len(nodes)} nodes are not a line of element edges, so they have no "
                       "midpoint to record; select a line (an edge's nodes), one node, or two nodes")
+
+
+def _closed_loop(name, k):
+    """OptionError for a probe on a closed loop of element edges: a loop has no midpoint, and the
+    probe sat wherever the listed order put it (a tube's end ring of 8 nodes: (0.38, 2, -0.92) or
+    (0.38, 2, 0.92) for the same nodes listed from another start)."""
+    raise OptionError(f"probe {name!r}: its {k} nodes form a closed loop of element edges (a hole's or a tube's "
+                      "rim), which has no midpoint to record; select one node of it (nodes = [ID]), two nodes, or "
+                      "an open part of the loop")
 
 
 @dataclass
