@@ -29,9 +29,10 @@ The state reported is g_i = g0_i (exp_so3(w_i), v_i) (the rotation and the trans
 separately, not by the SE(3) exponential): its displacements are then exactly the linear ones,
 u = R0 v, the rotation vector R0 w; the probes are the linearised probe maps
 (``Probe.linear``: a probe between two nodes is not a function of the nodal displacements
-alone, and the geodesic point of the linear state was not linear in the load).  Reactions are those of the linear internal
-forces K0 eta (the forces in the reference frames) and of the supports' penalty springs, -K_s eta
-(as a load-stepping step counts them: ``StepRecorder.step``), the applied loads f_ext alone; the step's force and moment totals are
+alone, and the geodesic point of the linear state was not linear in the load).  Reactions are
+those of the linear internal forces K0 eta (the forces in the reference frames) and of the
+supports' penalty springs, -K_s eta (as a load-stepping step counts them:
+``StepRecorder.step``), the applied loads f_ext alone; the step's force and moment totals are
 taken in the reference frames and positions, where the linear equations balance.  The result
 has the reference state and this one step, like a one-step solve.
 
