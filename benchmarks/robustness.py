@@ -329,8 +329,22 @@ def _theta_all(incs):
     return float(np.max(a[1:][keep] / a[:-1][keep])) if np.any(keep) else 0.0
 
 
-CANDIDATES = (("the path check (growth at the step's scale, or travel >= 1.5)",
-               lambda r: r["contraction"] >= 1.0 or r["travel"] >= 1.5),
+def _path_check(r):
+    """The path check of this tree on a try's recorded corrections (the row's ``contraction`` is
+    the tree's that recorded it)."""
+    from core_se3.solvers.step_checks import path_measures, path_refusal
+    return bool(path_refusal(*path_measures(r["increments"])))
+
+
+def _reach(r):
+    """A growth of a correction by GROWTH_REACH of the step's scale (min(|eta_0|, pi ell))."""
+    from core_se3.solvers.step_checks import GROWTH_CAP, GROWTH_REACH
+    a = np.asarray(r["increments"], float)
+    return len(a) > 1 and np.max(a[1:] - a[:-1]) >= GROWTH_REACH * min(a[0], GROWTH_CAP)
+
+
+CANDIDATES = (("the path check (growth at the step's scale or by a quarter of it, or travel >= 1.5)", _path_check),
+              ("a growth by a quarter of the step's scale (GROWTH_REACH) alone", _reach),
               ("any growth of a correction (Theta_k >= 1 at any scale)", lambda r: r["theta_all"] >= 1.0),
               ("negative-eigenvalue count changed", lambda r: r["n1"] != r["n0"]),
               ("det K sign changed", lambda r: r["s1"] != r["s0"]),

@@ -11,7 +11,12 @@ reference surface), per unit reference length of the cut:
 this is n(nu) = N^ab nu_a A_b, the usual traction).  Reported for the two cuts nu = the
 reference directors d1 and d2 at the centre, as lab vectors ``N1``, ``N2`` (force/length)
 and ``M1``, ``M2`` (moment/length, = force), and as components along the current directors
-(``N1_local`` = (N11, N12, Q1), ``N2_local`` = (N21, N22, Q2), ``M1_local``, ``M2_local``).
+(``N1_local`` = (N11, N12, Q1), ``N2_local`` = (N21, N22, Q2), ``M1_local``, ``M2_local``: a
+moment's components along d1, d2, d3 -- twisting, bending, drilling for the cut normal to d1).
+Sign: the force and moment that the material on the +nu side exerts on the material behind the
+cut (a cantilever along x under a tip force P on z, width w: N1 = (0, 0, P/w),
+M1 = (0, -(L - x) P/w, 0); tests/test_result_outputs.py checks these on rectangles, a distorted
+mesh and a cylinder panel).
 """
 from __future__ import annotations
 

@@ -698,10 +698,11 @@ class Problem:
             'serial'; other controls run serially on every rank.
         **options
             Passed to the solver: the fields of ``core_se3.solvers.NewtonOptions`` (rtol, dtol,
-            max_iter, max_cutbacks, ...) and its own keywords (lam_end, load_factors, g_init,
-            ...).  Keys given here override ``solve_defaults``.  With control 'linear', steps
-            other than 1 and Newton options given here (not in ``solve_defaults``) are not used:
-            an :class:`~core_se3.errors.OptionWarning` names them.
+            max_iter, max_cutbacks, ...) and its own keywords (lam_end, load_factors, g_init:
+            frames, or a StepResult to continue with its probes' unwrapped rotations, ...).
+            Keys given here override ``solve_defaults``.  With control 'linear', steps other
+            than 1 and Newton options given here (not in ``solve_defaults``) are not used: an
+            :class:`~core_se3.errors.OptionWarning` names them.
         """
         kw = dict(self.solve_defaults)
         kw.update(options)

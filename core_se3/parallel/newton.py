@@ -19,7 +19,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from ..errors import OptionError, did_you_mean
-from ..results import Result, StepRecorder
+from ..results import Result, StepRecorder, initial_state
 from ..solvers import NewtonOptions, NewtonState, newton_steps, requested_load_factors
 from ..solvers.newton import end_check
 from ..solvers.contact_probe import ContactProbe
@@ -301,7 +301,7 @@ def distributed_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, g_init=None
     unknown_keywords("distributed_solve", kw, [f for f in NewtonOptions.__dataclass_fields__] + ["setup"])
     targets = requested_load_factors(steps, lam_end, lam_start, load_factors)
     mesh = problem.mesh
-    g = mesh.g0.copy() if g_init is None else np.array(g_init, float)
+    g, unwrap = initial_state(g_init, mesh.g0)
     problem.check_supports(g)
     defaults = problem.solve_defaults
     run = DistributedRun(problem, run_setup.comm, run_setup.linear or defaults.get("linear") or "mumps",
@@ -309,7 +309,7 @@ def distributed_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, g_init=None
                          else defaults.get("petsc_options"), run_setup.partition)
     try:
         result = Result(mesh=mesh, element=problem.element_name)
-        rec = StepRecorder(problem)
+        rec = StepRecorder(problem, unwrap)
         result.timings["setup"] = time.perf_counter() - t0
         t1 = time.perf_counter()
         ev = run.evaluate(run.local_frames(g), lam_start, tangent=False)

@@ -10,7 +10,29 @@ import numpy as np
 
 from .result import ProbeState, StepResult, unwrap_rotation
 
-__all__ = ["StepRecorder", "lab_totals", "restore_multipliers"]
+__all__ = ["StepRecorder", "lab_totals", "restore_multipliers", "initial_state"]
+
+
+def initial_state(g_init, g0):
+    """(frames, unwrapped) of a solve's start: ``g_init`` None (the reference frames g0), frames
+    (n, 4, 4), or a :class:`StepResult` -- its frames and its probes' unwrapped rotation vectors
+    (name -> (3,)), which the solve continues.  From bare frames the probes' rotations start
+    from their value modulo 2 pi: a strip's tip rolled to 1.2 pi and continued to 1.3 pi read
+    0.8 pi and 0.7 pi.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> g, w = initial_state(None, np.eye(4)[None])
+    >>> g.shape, w
+    ((1, 4, 4), None)
+    """
+    if g_init is None:
+        return np.array(g0, float), None
+    if isinstance(g_init, StepResult):
+        return np.array(g_init.g, float), {name: np.asarray(p["rotation_vector"], float)
+                                           for name, p in g_init.probes.items()}
+    return np.array(g_init, float), None
 
 
 def lab_totals(g, f, magnitudes=False):
@@ -141,6 +163,28 @@ class StepRecorder:
             self.unwrapped[name] = unwrap_rotation(R @ Rref.T, hint, self._log)
             states[name] = ProbeState(x - x0, R @ Rref.T, self.unwrapped[name].copy())
         return states
+
+    def linear_probes(self, eta):
+        """name -> ProbeState of a linear analysis' increments eta (n, 6) about the reference
+        (``Probe.linear``: the probes linearised, u and the rotation vector linear in the load,
+        between nodes too); its rotation is exp of that vector.
+
+        Example
+        -------
+        >>> import numpy as np
+        >>> from core_se3 import Problem, Material, mesh
+        >>> p = Problem(mesh.rectangle(1.0, 1.0, 1, 1), Material(1e3, 0.0, 0.01)); p.add_probe("tip")
+        >>> eta = np.zeros((4, 6)); eta[:, 2] = 0.5
+        >>> StepRecorder(p).linear_probes(eta)["tip"]["u"].round(12).tolist()
+        [0.0, 0.0, 0.5]
+        """
+        from .. import lie
+        out = {}
+        for name, pr in self.problem.probes.items():
+            u, w = pr.linear(self.g0, eta)
+            self.unwrapped[name] = w
+            out[name] = ProbeState(u, lie.exp_so3(w), w.copy())
+        return out
 
     def support_forces(self, g, lam):
         """The generalised nodal forces (n, 6) of the supports' penalty springs (the problem's

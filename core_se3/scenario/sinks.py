@@ -191,27 +191,36 @@ def write_step_vtu(run, k, g, lam, physical=None):
     """The VTU file of step k (module docstring of ``scenario.sinks``)."""
     prob = run.scn.problem
     # a linear analysis' state g0 (exp(w), v): its strains are not the linear ones (a cantilever's
-    # linear deflection of L/3 stretches its chords), the fields are those of its increments
-    eta = linear_increments(prob.mesh.g0, g) if run.scn.solver["control"] == "linear" else None
+    # linear deflection of L/3 stretches its chords), the fields are those of its increments; its
+    # loads are those at the reference (a magnet's couple of the turned B^r is not what was solved)
+    linear = run.scn.solver["control"] == "linear"
+    eta = linear_increments(prob.mesh.g0, g) if linear else None
     if run.ctx is not None:
         cells = run.ctx.cell_fields(g, eta)
     else:
         cells = prob.element.cell_fields(g) if eta is None else prob.element.cell_fields(g, increments=eta)
+    loads_at = prob.mesh.g0 if linear else None
     # rank 0 writes; a failure (a full disk) stops every rank alike
-    on_root(lambda: step_files(run.rd, "vtu", prob, k, g, lam, cells, physical))
+    on_root(lambda: step_files((run.rd, "vtu"), prob, k, g, lam, cells, physical, loads_at))
 
 
-def step_files(rd, vdir, prob, k, g, lam, cells, physical=None):
-    """``vdir/step_k.vtu`` in the run directory ``rd`` (frames, the loads' point fields, the stress
-    resultants ``cells``, FieldData load_factor and the ``physical`` record's values) and
+def step_files(where, prob, k, g, lam, cells, physical=None, loads_at=None):
+    """``vdir/step_k.vtu`` in the run directory ``rd``, ``where = (rd, vdir)`` (frames, the loads'
+    point fields, the stress resultants ``cells``, FieldData load_factor and the ``physical``
+    record's values) and
     ``vdir/step_k_obstacles.vtu`` beside it: the one writer of a run's, a design's and ``bench run
-    --vtu``'s step files, each registered in ``rd``'s manifest and written atomically."""
+    --vtu``'s step files, each registered in ``rd``'s manifest and written atomically.
+    ``loads_at``: the frames at which the loads' point fields are evaluated (default g; a linear
+    analysis' are the reference frames, where its loads were taken: at its state a magnet's
+    couple of the turned B^r read +6.9e-5 where the solved couple is -8.0e-5)."""
     from ..io import write_obstacles, write_vtu
     from .outputs import point_fields
+    rd, vdir = where
     values = {"load_factor": float(lam)}
     values.update({f"{n} [{v['unit']}]" if v["unit"] else n: v["value"] for n, v in (physical or {}).items()})
+    fields = point_fields(prob, g if loads_at is None else loads_at, lam)
     with atomic_path(rd.file(f"{vdir}/step_{k:04d}.vtu")) as tmp:
-        write_vtu(tmp, prob.mesh.X, prob.mesh.quads, prob.mesh.g0, g, point_data=point_fields(prob, g, lam),
+        write_vtu(tmp, prob.mesh.X, prob.mesh.quads, prob.mesh.g0, g, point_data=fields,
                   cell_data=cells, field_data=values)
     obstacles = obstacles_of(prob)
     if obstacles:
@@ -228,7 +237,7 @@ def write_path_vtu(rd, vdir, prob, steps, physical=None):
     from ..results import restore_multipliers
     for k, s in enumerate(steps):
         restore_multipliers(prob, s)
-        step_files(rd, vdir, prob, k, s.g, s.load_factor, prob.element.cell_fields(s.g),
+        step_files((rd, vdir), prob, k, s.g, s.load_factor, prob.element.cell_fields(s.g),
                    None if physical is None else physical(s.load_factor))
     return series_files(rd, vdir, list(range(len(steps))), [s.load_factor for s in steps])
 

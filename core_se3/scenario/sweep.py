@@ -53,7 +53,7 @@ WARM_SECTIONS = ("loads", "fields", "magnets", "material", "solver")
 @dataclass
 class SweepResult:
     """What a sweep left: ``keys`` (the swept keys), ``rows`` (one dict per grid point: the swept
-    values, status, warm, steps, iterations, every probe's final ux, uy, uz and rotation, every
+    values, status, warm, steps, iterations, every probe's final ux, uy, uz, rotation and rotation_vector, every
     obstacle's contact force and report), ``files`` (csv, plot, status), ``status``.
 
     Example
@@ -124,14 +124,24 @@ def parse_values(text, key="--set"):
 
 
 def _nearest(done, point, spans):
-    best, dist = None, np.inf
-    for pt, g in done:
+    """(frames, row) of the finished point nearest to ``point`` ((None, None) if none)."""
+    best, dist = (None, None), np.inf
+    for pt, (g, row) in done:
         if g is None:
             continue
         d = sum(_distance(a, b, s) for a, b, s in zip(pt, point, spans))
         if d < dist:
-            best, dist = g, d
+            best, dist = (g, row), d
     return best
+
+
+def _unwrapped(row):
+    """name -> the unwrapped rotation vector of every probe of a finished row (``NAME.rotation_vector``;
+    None for no row, and a probe missing from a row of an older checkpoint starts at zero)."""
+    if row is None:
+        return None
+    tail = ".rotation_vector"
+    return {k[:-len(tail)]: np.asarray(v, float) for k, v in row.items() if k.endswith(tail)}
 
 
 def _distance(a, b, span):
@@ -268,9 +278,10 @@ def _run_points(scn, keys, points, state, warm, progress):
         for i, pt in enumerate(points):
             if i < len(state.rows):
                 continue
-            done = [(p, g) for p, g in zip(points, state.finals)]
-            g_start = _nearest(done, pt, spans) if can_warm and done else None
-            row, g = point_row(scn.with_overrides(dict(zip(keys, pt))), dict(zip(keys, pt)), g_start)
+            done = [(p, (g, r)) for p, g, r in zip(points, state.finals, state.rows)]
+            g_start, near = _nearest(done, pt, spans) if can_warm and done else (None, None)
+            row, g = point_row(scn.with_overrides(dict(zip(keys, pt))), dict(zip(keys, pt)), g_start,
+                               _unwrapped(near))
             with held_signals():
                 state.add(row, g, rent_state())
                 write_csv(state.rd.file("sweep.csv"), keys, state.rows)
@@ -280,14 +291,16 @@ def _run_points(scn, keys, points, state, warm, progress):
         bar.close()
 
 
-def point_row(s, values, g_start=None):
+def point_row(s, values, g_start=None, unwrap=None):
     """Solve one grid point (the scenario ``s`` with the swept ``values``): (row, final frames or
     None).  The row holds the values, status, warm, steps, iterations, every probe's final
-    displacement and rotation, every obstacle's contact force, moment and report; a failed
-    point its error."""
+    displacement, rotation (angle) and rotation_vector (unwrapped along the path, as in
+    results.json), every obstacle's contact force, moment and report; a failed point its error.
+    ``g_start``: the frames of a warm start, ``unwrap`` (name -> (3,)): its probes' unwrapped
+    rotation vectors, which the warm solve continues (a roll-up past pi kept its turns)."""
     row = dict(values)
     try:
-        final, nsteps, its, warm_used = _solve(s, g_start)
+        final, nsteps, its, warm_used = _solve(s, g_start, unwrap)
     except (ConvergenceError, CoreSE3Error) as exc:
         row.update(status="failed", warm=g_start is not None, error=str(exc).split("\n")[0][:200])
         return row, None
@@ -296,6 +309,7 @@ def point_row(s, values, g_start=None):
         for c, x in zip("xyz", p["u"]):
             row[f"{name}.u{c}"] = float(x)
         row[f"{name}.rotation"] = float(np.linalg.norm(p["rotation_vector"]))
+        row[f"{name}.rotation_vector"] = [float(x) for x in p["rotation_vector"]]
     for name, c in (final.contact or {}).items():
         rec = contact_record(c)
         for q in ("force", "moment"):
@@ -305,11 +319,14 @@ def point_row(s, values, g_start=None):
     return row, final.g
 
 
-def _solve(s, g_start):
+def _solve(s, g_start, unwrap=None):
     """Solve one grid point: (final StepResult, steps, iterations, warm).  Warm: one Newton
-    solve at the final load factor from ``g_start``; cold (and on a failed warm start): the
-    scenario's own load steps from the reference state."""
+    solve at the final load factor from ``g_start``, its probes' rotations unwrapped on from
+    ``unwrap`` (the start's: from zero, a tip rolled to 1.3 pi warm-started from 1.2 pi read
+    2 pi - 1.3 pi = 0.7 pi, where the cold run reads 1.3 pi); cold (and on a failed warm start):
+    the scenario's own load steps from the reference state."""
     from ..model.solving import warn_final_state
+    from ..results import StepRecorder
     from ..solvers import NewtonOptions, NewtonState, newton_steps
     sv = s.solver
     # a path-dependent load (Coulomb friction) has no state of g alone: a warm start would
@@ -326,7 +343,8 @@ def _solve(s, g_start):
         opts = NewtonOptions(rtol=sv["rtol"], dtol=sv["dtol"], max_iter=sv["max_iter"], max_cutbacks=0,
                              linear_solver=sv["linear_solver"], iteration=sv["iteration"])
         try:
-            items = list(newton_steps(s.problem, [lam], opts, start=NewtonState(lam * (1 - 1e-9), g_start)))
+            items = list(newton_steps(s.problem, [lam], opts, start=NewtonState(lam * (1 - 1e-9), g_start),
+                                      recorder=StepRecorder(s.problem, unwrap)))
             its = sum(e["iterations"] for e in items[-1].tries)
             warn_final_state(s.problem, items[-1].step, stacklevel=4)     # as Problem.solve (a cold point)
             return items[-1].step, 1, its, True

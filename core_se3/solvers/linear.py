@@ -26,10 +26,13 @@ linearisation only of a target linear in lam, so an AccuracyWarning names a targ
 increments at lam_end / 2 are not half those at lam_end (``NONLINEAR_TARGET``).
 
 The state reported is g_i = g0_i (exp_so3(w_i), v_i) (the rotation and the translation updated
-separately, not by the SE(3) exponential): its probes and displacements are then exactly the
-linear ones, u = R0 v, the rotation vector R0 w.  Reactions are those of the linear internal
-forces K0 eta (the forces in the reference frames) and of the supports' penalty springs, -K_s eta
-(as a load-stepping step counts them: ``StepRecorder.step``), the applied loads f_ext alone; the step's force and moment totals are
+separately, not by the SE(3) exponential): its displacements are then exactly the linear ones,
+u = R0 v, the rotation vector R0 w; the probes are the linearised probe maps
+(``Probe.linear``: a probe between two nodes is not a function of the nodal displacements
+alone, and the geodesic point of the linear state was not linear in the load).  Reactions are
+those of the linear internal forces K0 eta (the forces in the reference frames) and of the
+supports' penalty springs, -K_s eta (as a load-stepping step counts them:
+``StepRecorder.step``), the applied loads f_ext alone; the step's force and moment totals are
 taken in the reference frames and positions, where the linear equations balance.  The result
 has the reference state and this one step, like a one-step solve.
 
@@ -287,6 +290,7 @@ def linear_solve(problem, lam_end=1.0, steps=None, linear_solver=None, **kw):
     # the forces act in the reference frames and balance there (the linear equations): the
     # step's totals are taken in g0 (moments with the reference positions), its probes at g
     result.steps.append(rec.step(lam_end, linear_state(g0, eta), 1, [], (r_lin, f_lin, g0, f_sup)))
+    result.steps[-1].probes = rec.linear_probes(eta.reshape(n, 6))      # linear between nodes too
     # the strain energy of the linear solution, 1/2 eta^T K0 eta (with the supports' penalty springs)
     energy = 0.5 * float(eta @ (K @ eta))
     result.log.append(dict(lam=lam_end, converged=True, iterations=1, reason="linear", energy=energy,

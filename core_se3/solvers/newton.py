@@ -30,7 +30,7 @@ import numpy as np
 
 from .. import lie
 from ..errors import ConvergenceError, CoreSE3Error, ElementTooDistortedError, OptionError, SingularSystemError
-from ..results import Result, StepRecorder
+from ..results import Result, StepRecorder, initial_state
 from .linalg import make_solver
 from .equations import NewtonEquations
 from .newton_try import NewtonTry, augmented_try, hooked_loads, tangent_predictor
@@ -634,8 +634,10 @@ def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, g_init=None, loa
         Number of equal load increments.
     lam_end, lam_start : float, optional
         End and start of the load factor.
-    g_init : (n, 4, 4) array, optional
-        Initial frames (default the reference ones).
+    g_init : (n, 4, 4) array or StepResult, optional
+        Initial frames (default the reference ones), or a stored step to continue: its frames
+        and its probes' rotations, unwrapped on (``results.initial_state``; from bare frames a
+        probe turned past pi starts from its angle modulo 2 pi).
     load_factors : sequence of float, optional
         Explicit load factors instead of steps and lam_end.
     options : NewtonOptions, optional
@@ -660,10 +662,10 @@ def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, g_init=None, loa
     unknown_keywords("newton_solve", kw, [f for f in NewtonOptions.__dataclass_fields__])
     targets = requested_load_factors(steps, lam_end, lam_start, load_factors)
     mesh = problem.mesh
-    g = mesh.g0.copy() if g_init is None else np.array(g_init, float)
+    g, unwrap = initial_state(g_init, mesh.g0)
     problem.check_supports(g)
     result = Result(mesh=mesh, element=problem.element_name)
-    rec = StepRecorder(problem)
+    rec = StepRecorder(problem, unwrap)
     make_solver(opts.linear_solver or problem.linear_solver)         # fail early on a bad name
     result.timings["setup"] = time.perf_counter() - t0
     t_start = time.perf_counter()

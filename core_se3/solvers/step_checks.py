@@ -19,7 +19,9 @@ anywhere.  The check refuses a converged try when
 * a correction grows (Theta_k >= 1) where the pair is at the step's scale (the larger of the two
   at least GROWTH_SCALE = 1/2 of the first correction, or of GROWTH_CAP = pi ell when the first
   is larger: a correction of rotations of more than pi is no longer local, SO(3) has diameter
-  pi, so a ball that large holds other equilibria whatever Theta), or
+  pi, so a ball that large holds other equilibria whatever Theta), or where the growth itself,
+  |eta_{k+1}| - |eta_k|, is at least GROWTH_REACH = 1/4 of that scale (a correction many times
+  the one before it that carries the iterate a quarter of the step away), or
 * the corrections after the first add up to TRAVEL_MAX = 1.5 times the first or more (what a
   contraction of 0.6 at every iteration would reach).
 
@@ -42,7 +44,18 @@ converged from 0.219 to 0.3125 of the load with corrections 9.15, 2.28, 2.85, 2.
 (Theta 0.25 at the step's scale then) onto a stable state 2.0 ell off the path, and its one-step
 solve exited 'ok' 1.4 ell from the 16- and 128-step answers (benchmarks/invariants_fuzz.py); the
 quarter hemisphere's zig-zag below (1.09 at 1.3 ell of a first 4.2 ell) stays below the capped
-scale (10 tries).  A try that fails the check is cut back, not accepted.  Corrections below
+scale (10 tries).  The reach: a clamped plate under a follower pressure and about 5 Euler
+loads (tests/test_step_checks.py::test_one_step_compressed_plate_ends_where_sixteen_steps_do)
+converged from 0.578 to 0.613 of the load with corrections 0.951, 0.032, 0.021, 0.056, 0.017,
+0.435 ... ell (25x, but 0.46 of the first) onto another state, and its one-step solve exited
+'ok' 1.97 ell from the 2- to 256-step answers; the growth, 0.418 ell, is 0.44 of the step's
+scale, where no try accepted before grew by more than 0.126 of it on the Zhao tries and the
+quarter hemisphere (0.256 -> 0.522 of a first 2.1 ell), one of the fuzz campaign's 14 641 by 0.335
+(no outcome changed), and the Zhao jumps by 6.8 or more; the catalogue keeps its iterations
+(docs/STEPS.md).  The same rule refuses a jump across a limit point that confirmed a sign change
+of det K, reported as a bifurcation (fuzz problem 108).  GROWTH_SCALE 0.4 would
+catch the plate too but refused the hemisphere's zig-zag (19 tries instead of 10).  A try that
+fails the check is cut back, not accepted.  Corrections below
 CONTRACTION_FLOOR ell are round-off and do not count.
 
 **Stability check** (``NewtonOptions.limit_check``).  The sign of det K of the last factorised
@@ -77,20 +90,22 @@ from ..errors import SingularSystemError
 from .stability import CriticalPoint
 
 __all__ = ["path_measures", "path_refusal", "start_sign", "StepChecks", "CONTRACTION_MAX", "GROWTH_SCALE",
-           "TRAVEL_MAX", "CONTRACTION_FLOOR", "GROWTH_CAP"]
+           "TRAVEL_MAX", "CONTRACTION_FLOOR", "GROWTH_CAP",
+           "GROWTH_REACH"]
 
 CONTRACTION_MAX = 1.0    # a try whose corrections grow at the step's scale is not accepted
 GROWTH_SCALE = 0.5       # ... the step's scale: half the first correction
 TRAVEL_MAX = 1.5         # the later corrections may add up to 1.5 x the first
 CONTRACTION_FLOOR = 1e-8  # corrections below this (relative to ell) are round-off: not compared
 GROWTH_CAP = np.pi       # ... of at most pi ell: a ball of radius pi ell holds every orientation
+GROWTH_REACH = 0.25      # ... or a growth by a quarter of the step's scale, whatever the pair's size
 
 
 def path_measures(incs, floor=CONTRACTION_FLOOR):
     """(contraction, travel) of the Newton corrections of a try (relative norms ``incs``, the
     first from the start of the step): the largest ratio |eta_{k+1}| / |eta_k| over the pairs at
-    the step's scale (the larger at least GROWTH_SCALE min(|eta_0|, GROWTH_CAP), the second above
-    ``floor``), and the sum of the corrections after the first over the first; (0.0, 0.0) for
+    the step's scale (the larger at least GROWTH_SCALE min(|eta_0|, GROWTH_CAP), or the growth
+    at least GROWTH_REACH of that minimum; the second above ``floor``), and the sum of the corrections after the first over the first; (0.0, 0.0) for
     fewer than two.
 
     Parameters
@@ -114,14 +129,19 @@ def path_measures(incs, floor=CONTRACTION_FLOOR):
     [3.387097, 1.78]
     >>> [round(x, 3) for x in path_measures([3.4e-2, 7.05e-5, 7.5e-5, 4e-10])]  # a wiggle
     [0.002, 0.004]
+    >>> round(path_measures([0.951, 0.032, 0.021, 0.056, 0.017, 0.435, 0.006])[0], 1)   # a reach
+    25.6
     """
     a = np.asarray(incs, float)
     if len(a) < 2 or not a[0] > 0:
         return 0.0, 0.0
     # the step's scale is capped (GROWTH_CAP): a first correction of many ell (a ball that holds
     # other equilibria) would exempt any growth below half of it
-    scale = GROWTH_SCALE * min(a[0], GROWTH_CAP)
-    keep = (a[1:] > floor) & (a[:-1] > 0) & (np.maximum(a[1:], a[:-1]) >= scale)
+    step = min(a[0], GROWTH_CAP)
+    # ... or the growth itself reaches GROWTH_REACH of it: a correction far larger than the
+    # one before it that carries the iterate a quarter of the step away (module docstring)
+    big = (np.maximum(a[1:], a[:-1]) >= GROWTH_SCALE * step) | (a[1:] - a[:-1] >= GROWTH_REACH * step)
+    keep = (a[1:] > floor) & (a[:-1] > 0) & big
     theta = float(np.max(a[1:][keep] / a[:-1][keep])) if np.any(keep) else 0.0
     return theta, float(a[1:].sum() / a[0])
 
