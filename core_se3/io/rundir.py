@@ -4,7 +4,8 @@ live run at a time.
 * **Manifest** (``.core-se3-manifest.json``): every file a run writes is listed there *before*
   it is created (:meth:`RunDirectory.file`), so that whatever a killed run left is known to be
   its own; ``--force`` deletes only the files of a previous run that its manifest lists (and
-  their half-written temporaries), never a file this tool did not write.
+  their half-written temporaries, and the folders they leave empty: a design run again with
+  fewer poses kept an empty ``vtu/<old pose>``), never a file this tool did not write.
 * **Another kind's files** (a run's directory given to a sweep, ...): refused, with ``resume``
   and ``force`` too (neither continued nor deleted).
 * **Foreign files**: a new run in a directory holding files that no manifest lists is refused
