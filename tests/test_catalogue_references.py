@@ -225,3 +225,25 @@ def test_unreached_design_reports_no_error():
     assert abs(d["iterate_deviation"]["Ba"] + 0.22) < 0.01
     ok = run_case("design-tip-angle")[0]["design"]
     assert ok["reached"] and abs(ok["error"]["Ba"]) < 5e-3 and "iterate_deviation" not in ok
+
+
+@pytest.mark.parametrize("name, over, a", [
+    ("cantilever-shear-steel", dict(L=1.0, h=0.01, width=0.2, E=2.0e11, load_max=33333.333333333336), 1e-3),
+    ("arch-follower", dict(R=500.0, h=24.495, width=4.0825, E=7.2e4), 1e3)])
+def test_a_run_in_other_units_is_compared_with_the_table_carried_over(name, over, a):
+    """A table in physical units (the steel strip in N-mm-MPa, the arch in SI) against the same
+    problem in other units (--set of every dimensional parameter: the strip in SI, the arch in
+    N-mm-MPa): before, 'not compared: the reference entry is for E = 200000, the run has E =
+    2e+11'.  The table now carries over by similarity (lengths x a, forces x E-scale a^2): the
+    error equals the run in the table's units to round-off (measured 4e-16 of the path), and a
+    parameter that changes the problem (h alone) is still refused."""
+    doc0 = run_case(name, steps=3)[0]
+    doc1 = run_case(name, steps=3, overrides=over)[0]
+    assert doc0["reference"]["error"] is not None and doc1["reference"]["error"] is not None
+    assert abs(doc1["reference"]["error"] - doc0["reference"]["error"]) <= 1e-9 * doc0["reference"]["error"]
+    for s0, s1 in zip(doc0["steps"], doc1["steps"]):
+        assert abs(s1["load"]["reference_value"] - s0["load"]["reference_value"]) <= 1e-12 * abs(s0["load"]["reference_value"])
+        u0, u1 = np.asarray(s0["probes"]["tip"]["u"]), np.asarray(s1["probes"]["tip"]["u"]) / a
+        assert np.abs(u1 - u0).max() <= 1e-12 * max(np.abs(u0).max(), 1e-300)
+    doc2 = run_case(name, steps=1, overrides=dict(over, h=1.1 * over["h"]))[0]
+    assert doc2["reference"]["error"] is None and "the reference entry is for" in doc2["reference"]["note"]

@@ -236,3 +236,34 @@ def test_units_and_size_scale_out(scale):
     u, it = run(scale, E_factor, F_factor)
     assert it == it0
     assert np.abs(u / scale - u0).max() <= 1e-13 * np.abs(u0).max()
+
+
+def test_seed_update_of_a_far_part_sees_only_the_prescribed_motion():
+    """The seed element's strain state is fed log(g^-1 g_try) at the start of a try with a
+    prescribed motion (``newton._try_start``).  A part 1e9 from the origin, turned, whose
+    right edge is lifted by 1e-3: the nodes that do not move get exactly 0 (before, inv(g) @ g
+    gave them 1.2e-7 of translation -- 1.2e-4 of the lift, a spurious strain of 1e-7 per try
+    that the stateful element keeps), the lifted ones the lift R^T dz to edge round-off."""
+    from types import SimpleNamespace
+    from core_se3.solvers.newton import _try_start
+    Q = _rigid([1.2, -0.8, 1.5], 2.19, np.array([3e9, -1e9, 2e9]) / 3.7)
+    m = _moved(mesh.rectangle(10.0, 1.0, 8, 2), Q)
+    right = m.node_set("x1")
+    lift = Q[:3, :3] @ [0.0, 0.0, 1e-3]
+
+    def apply_prescribed(g, lam):
+        g[right, :3, 3] += lam * lift
+        return g
+
+    fed = []
+    problem = SimpleNamespace(element=SimpleNamespace(save=lambda: None, update=fed.append))
+    eq = SimpleNamespace(apply_prescribed=apply_prescribed, stateful=True)
+    trier = SimpleNamespace(opts=SimpleNamespace(predictor="none"))
+    _try_start(problem, eq, trier, m.g0, m.g0, 0.0, 1.0, False, None)
+    eta = fed[0]
+    still = np.setdiff1d(np.arange(m.n_nodes), right)
+    assert np.all(eta[still] == 0.0)
+    moved = m.g0[right, :3, 3] + lift                       # the stored lifted positions
+    exact = np.einsum("kji,kj->ki", m.g0[right, :3, :3], moved - m.g0[right, :3, 3])
+    assert np.abs(eta[right, :3] - exact).max() <= 4 * np.finfo(float).eps * 1e-3
+    assert np.all(eta[right, 3:] == 0.0)

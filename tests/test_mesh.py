@@ -1,4 +1,6 @@
 """Meshes: structured generators, frames, validation, and import through meshio."""
+import re
+
 import numpy as np
 import pytest
 
@@ -111,6 +113,27 @@ def test_meshio_bad_points_are_named():
     line = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0.0]])
     with pytest.raises(MeshError, match=r"node\(s\) \[0, 1, 2, 3\] have no normal \(the quads at them, \[0\]"):
         M.from_meshio(meshio.Mesh(line, [("quad", np.array([[0, 1, 2, 3]]))]))
+
+
+@pytest.mark.parametrize("order, before", [([1, 6, 2, 5], "quad normals flip across the edge (6, 2)"),
+                                           ([1, 2, 5, 6], "degenerate, non-convex or listed clockwise")])
+def test_a_bow_tie_quad_is_named_with_its_node_order_and_the_fix(order, before):
+    """A strip of three quads whose middle one lists its nodes across itself (a bow-tie, two edges
+    crossing): the reader said '{before}' -- flipped normals or a clockwise quad, not what is
+    wrong.  Now: the quad, its node order, the crossing edges and the order around its boundary;
+    a Mesh built directly says the same (its node ids)."""
+    import meshio
+    from core_se3.mesh.core import Mesh
+    X = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0], [0, 1, 0], [1, 1, 0], [2, 1, 0], [3, 1, 0.0]])
+    q = np.array([[0, 1, 5, 4], order, [2, 3, 7, 6]])
+    with pytest.raises(MeshError, match=r"quad cell 1 is self-intersecting \(a bow-tie\): its node order "
+                                        + re.escape(str(order)) + r" crosses its edges .*boundary, \[1, 2, 6, 5\]"):
+        M.from_meshio(meshio.Mesh(X, [("quad", q)]))
+    m = M.rectangle(3.0, 1.0, 3, 1)
+    bad = m.quads.copy()
+    bad[1] = bad[1][[0, 1, 3, 2]]
+    with pytest.raises(MeshError, match=r"quad 1 is self-intersecting \(a bow-tie\)"):
+        Mesh(g0=m.g0, quads=bad, edges=m.edges, shape=m.shape)
 
 
 def test_meshio_d1_hint_along_the_normal_and_y():

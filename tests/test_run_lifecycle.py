@@ -62,6 +62,23 @@ def test_force_deletes_only_the_files_of_the_earlier_run(tmp_path):
                                           "vtu/step_0001.vtu"]
 
 
+def test_force_leaves_no_empty_folder_of_the_earlier_run(tmp_path):
+    """A design run again with fewer poses (--force): the earlier run's vtu/<pose> files went but
+    their folders stayed, empty (vtu/second read as a pose of this run).  Now the folders that
+    held only its files go too; one holding a user's file stays, with the file."""
+    d = str(tmp_path / "out")
+    with RunDirectory(d, "design").claim() as rd:
+        for f in ("vtu/first/step_0000.vtu", "vtu/second/step_0000.vtu", "vtu/third/step_0000.vtu", "design.json"):
+            path = rd.file(f)
+            os.makedirs(os.path.dirname(path), exist_ok=True)
+            open(path, "w").close()
+    open(os.path.join(d, "vtu", "third", "notes.txt"), "w").close()       # the user's
+    with RunDirectory(d, "design").claim(force=True) as rd:
+        assert sorted(os.listdir(d)) == [MANIFEST, ".core-se3.lock", "vtu"]
+        assert os.listdir(os.path.join(d, "vtu")) == ["third"]
+        assert os.listdir(os.path.join(d, "vtu", "third")) == ["notes.txt"]
+
+
 def test_a_resume_keeps_the_files_added_beside_the_run(tmp_path):
     out = tmp_path / "o"
     scn = load()

@@ -1,4 +1,7 @@
 """Supports: a rigid-body motion left free is reported by name before any solve (issue 2, item 8)."""
+import json
+import warnings
+
 import numpy as np
 import pytest
 
@@ -174,3 +177,27 @@ def test_a_prescribed_target_that_is_not_one_frame_per_node_is_a_support_error(t
     p.prescribe("x1", target)
     with pytest.raises(SupportError, match=match):
         p.solve(steps=2)
+
+
+@pytest.mark.parametrize("distance", [0.0, 1e8, 1e9])
+def test_a_free_rotation_of_a_far_turned_part_is_named(distance):
+    """A strip pinned along its edge x0 (translations held) is free to turn about that edge.
+    Turned and placed 1e8 or 1e9 from the origin, the rigid-motion check missed it (the modes'
+    lever arms were formed as -R^T p + R^T c, eps |p| off, and the free mode's singular value
+    came out above 1e-10 of the largest); the solve then stopped with the generic 'tangent is
+    singular' message.  Now named at every distance, with the edge's direction."""
+    from core_se3 import lie
+    from core_se3.mesh.core import Mesh
+    Q = np.eye(4)
+    Q[:3, :3] = lie.exp_so3(2.19 * np.array([1.2, -0.8, 1.5]) / np.linalg.norm([1.2, -0.8, 1.5]))
+    Q[:3, 3] = np.array([3.0, -1.0, 2.0]) / 3.7 * distance
+    m0 = mesh.rectangle(10.0, 1.0, 8, 2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")                     # the far-from-origin MeshWarning
+        m = Mesh(g0=Q @ m0.g0, quads=m0.quads, edges=m0.edges, shape=m0.shape)
+    p = Problem(m, Material(1.2e6, 0.3, 0.1))
+    p.fix("x0", dofs=(0, 1, 2))
+    with pytest.raises(SingularSystemError, match=r"rigid-body motion free \(rotation about") as exc:
+        p.check_supports()
+    axis = np.array(json.loads(str(exc.value).split("rotation about ")[1].split(" through")[0]))
+    assert abs(abs(axis @ Q[:3, 1]) - 1.0) < 2e-3                  # the edge's direction (3 digits)

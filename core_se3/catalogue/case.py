@@ -14,7 +14,8 @@ Planar reference solutions (x-y plane of ``elastica.json``) map onto the shell a
 ``u -> ux``, ``v -> uz`` and ``theta ->`` rotation about -y (counter-clockwise in the x-z plane).
 
 Units: every case is in one consistent unit system, stated in ``units``; the unit strings are
-reported in results and never converted.
+reported in results and never converted (a table in physical units carries over to the same
+case in other units by similarity: ``cases_shells.similarity``).
 
 A new case is one :func:`add_case` call (in a module of its own, or a user's script); a new
 family of cases with its own builder and runner is a :class:`Family` and one

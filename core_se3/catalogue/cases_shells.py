@@ -42,6 +42,13 @@ _UNITS = ("MPa", "Pa", "mm", "m", "m2", "m4", "N", "Nmm2")      # unit suffixes 
 _NAMES = {"w": "width", "width": "width"}
 
 
+def _param_name(key):
+    """The case parameter an entry's key names (its unit suffix dropped: 'E_MPa' -> 'E', 'w_mm' -> 'width')."""
+    base, _, unit = key.rpartition("_")
+    name = base if unit in _UNITS and base else key
+    return _NAMES.get(name, name)
+
+
 def same_params(p, data):
     """"" when every parameter the reference entry states (``data``: E, nu, L, h, w, R, and the
     section's A, I, EI, with or without a unit suffix such as ``E_MPa``) has the case's value
@@ -60,9 +67,7 @@ def same_params(p, data):
         if "E" in p:
             q.setdefault("EI", p["E"] * q["I"])
     for key, v in data.items():
-        base, _, unit = key.rpartition("_")
-        name = base if unit in _UNITS and base else key
-        name = _NAMES.get(name, name)
+        name = _param_name(key)
         if name in q and isinstance(v, (int, float)) and not isinstance(v, bool):
             if abs(q[name] - v) > 1e-4 * max(abs(q[name]), abs(v)):
                 return f"the reference entry is for {name} = {v:g}, the run has {name} = {q[name]:g}"
@@ -76,9 +81,51 @@ def _same_rod(p, data):
     return same_params(p, data) or ("" if "nu" in data else rod_nu0(p, data))
 
 
+_LENGTHS = ("L", "R", "h", "width")           # the case parameters of dimension length
+
+
+def similarity(p, data):
+    """(a, s): the length and stress scales of the run ``p`` against a reference entry's
+    ``data`` (its L, else R; its E), 1 where the entry states none.  A run in other units (or
+    a scaled copy: L, h, width, R times a, E times s) is the same problem; the table holds for
+    it with lengths times a and forces times s a^2 (:func:`_physical`).
+
+    Example
+    -------
+    >>> similarity({"L": 1.0, "E": 2.0e11, "h": 0.01}, {"L_mm": 1000.0, "E_MPa": 2.0e5, "h_mm": 10.0})
+    (0.001, 1000000.0)
+    """
+    named = {_param_name(k): v for k, v in data.items()}
+    key = next((k for k in ("L", "R") if k in p and isinstance(named.get(k), (int, float)) and named[k]), None)
+    a = p[key] / named[key] if key else 1.0
+    s = p["E"] / named["E"] if "E" in p and isinstance(named.get("E"), (int, float)) and named["E"] else 1.0
+    return a, s
+
+
+def _in_reference_units(p, data):
+    """The run's parameters carried to the entry's units by :func:`similarity`."""
+    a, s = similarity(p, data)
+    return {k: (v / a if k in _LENGTHS else v / s if k == "E" else v) for k, v in p.items()}
+
+
+def _similar_rod(p, data):
+    """:func:`_same_rod` of the run carried to the entry's units: a run in other units (mm for
+    m, MPa for Pa, ...) or scaled as a whole is compared, not refused (before: 'not compared:
+    the reference entry is for E = 200000, the run has E = 2e+11' for the steel strip in SI)."""
+    return _same_rod(_in_reference_units(p, data), data)
+
+
 def _physical(entry, block="tip"):
-    return Reference(entry=entry, load_to_ref=lambda p, P: P, length=lambda p: 1.0, block=block,
-                     applies=_same_rod)
+    """A table in physical units (the entry's), carried to a similar run (:func:`similarity`):
+    loads / (s a^2), displacements times a; exactly the table at the entry's own parameters."""
+    def scales(p):
+        return similarity(p, elastica_entry(entry)["params"])
+
+    def load_to_ref(p, P):
+        a, s = scales(p)
+        return P / (s * a * a)
+    return Reference(entry=entry, load_to_ref=load_to_ref, length=lambda p: scales(p)[0], block=block,
+                     applies=_similar_rod)
 
 
 def _rollup_M(p):

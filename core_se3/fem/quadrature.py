@@ -67,5 +67,9 @@ def surface_jacobian(X, dN):
     >>> surface_jacobian(X, shape_functions()[1]).round(12).tolist()   # area 2 = 4 points x 0.5
     [[0.5, 0.5, 0.5, 0.5]]
     """
-    a = np.einsum("qai,mij->mqaj", dN, X)                      # (m, q, 2, 3) tangents a_1, a_2
+    X = np.asarray(X)
+    # the corners relative to the first (dN's rows sum to 0): a_1, a_2 from differences of
+    # nearby positions, exact, not from sums of positions of size |X| (eps |X| / h of them lost
+    # for a part far from the origin: the areas, and so the dipoles, 8.9e-8 off at 1e9)
+    a = np.einsum("qai,mij->mqaj", dN, X - X[:, :1])          # (m, q, 2, 3) tangents a_1, a_2
     return np.linalg.norm(np.cross(a[:, :, 0], a[:, :, 1]), axis=-1)

@@ -4,7 +4,8 @@ live run at a time.
 * **Manifest** (``.core-se3-manifest.json``): every file a run writes is listed there *before*
   it is created (:meth:`RunDirectory.file`), so that whatever a killed run left is known to be
   its own; ``--force`` deletes only the files of a previous run that its manifest lists (and
-  their half-written temporaries), never a file this tool did not write.
+  their half-written temporaries, and the folders they leave empty: a design run again with
+  fewer poses kept an empty ``vtu/<old pose>``), never a file this tool did not write.
 * **Another kind's files** (a run's directory given to a sweep, ...): refused, with ``resume``
   and ``force`` too (neither continued nor deleted).
 * **Foreign files**: a new run in a directory holding files that no manifest lists is refused
@@ -302,10 +303,21 @@ class RunDirectory:
         return m is not None and os.path.join(d, m.group("name")) in ours
 
     def _delete(self, files, ours, present):
-        for f in list(files) + [p for p in present if p not in ours and self._temporary(p, ours)]:
+        """Delete the listed files and the half-written temporaries of ``ours``, then the folders
+        that held them and are left empty (a re-run with fewer poses: an empty ``vtu/<old pose>``
+        read as a pose of this run); a folder holding anything else stays."""
+        gone = list(files) + [p for p in present if p not in ours and self._temporary(p, ours)]
+        for f in gone:
             try:
                 os.unlink(os.path.join(self.path, f))
             except FileNotFoundError:
+                pass
+        folders = {os.path.dirname(f) for f in gone}
+        for d in sorted({os.path.join(*p.split(os.sep)[:k]) for p in folders if p
+                         for k in range(1, len(p.split(os.sep)) + 1)}, key=len, reverse=True):
+            try:
+                os.rmdir(os.path.join(self.path, d))             # only when empty
+            except OSError:
                 pass
 
 

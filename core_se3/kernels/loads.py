@@ -121,8 +121,9 @@ def _follower_element(g, quads, el, p, f, data, cmap, tangent, a, nrm, dF, K6, T
         for k in range(2):
             for c in range(3):
                 acc = 0.0
+                x0 = g[quads[el, 0], c, 3]        # relative to the first corner (exact differences)
                 for j in range(4):
-                    acc += _DNQ[qq, k, j] * g[quads[el, j], c, 3]
+                    acc += _DNQ[qq, k, j] * (g[quads[el, j], c, 3] - x0)
                 a[qq, k, c] = acc
         n0, n1, n2 = cross3(a[qq, 0, 0], a[qq, 0, 1], a[qq, 0, 2], a[qq, 1, 0], a[qq, 1, 1], a[qq, 1, 2])
         nrm[qq, 0], nrm[qq, 1], nrm[qq, 2] = n0, n1, n2

@@ -16,7 +16,7 @@ import numpy as np
 
 from ..errors import MeshError, MeshWarning, did_you_mean
 
-__all__ = ["Mesh", "frames_from", "LOCAL_EDGES", "chain_order"]
+__all__ = ["Mesh", "frames_from", "LOCAL_EDGES", "chain_order", "bow_tie_error"]
 
 # local edges of a quad in its own orientation: bottom, top (direction xi1), left, right (xi2)
 LOCAL_EDGES = np.array([[0, 1], [3, 2], [0, 3], [1, 2]])
@@ -61,6 +61,50 @@ def frames_from(X, d1, d3):
 
 #: the sine of a quad's corner angle at or below which the quad is degenerate (round-off)
 DEGENERATE_SINE = 1e-10
+
+
+def _corner_turns(P):
+    """Turns (m, 4) of the corners k + 1 of quads with corners P (m, 4, 3) about the quad's
+    plane (the sign of (e_k x e_k+1) . n, n the largest of those cross products), 0 where the
+    corner's sine is round-off."""
+    e = np.roll(P, -1, axis=1) - P                                   # edges k -> k + 1
+    turn = np.cross(e, np.roll(e, -1, axis=1))                       # at corner k + 1
+    size = np.linalg.norm(turn, axis=-1)
+    ref = turn[np.arange(len(P)), np.argmax(size, axis=1)]
+    s = np.einsum("mki,mi->mk", turn, ref)
+    lens = np.linalg.norm(e, axis=-1)
+    tol = DEGENERATE_SINE * lens * np.roll(lens, -1, axis=1) * np.linalg.norm(ref, axis=-1)[:, None]
+    return np.where(np.abs(s) > tol, np.sign(s), 0.0)
+
+
+def bow_tie_error(quads, P, what="quad"):
+    """The message of the first self-intersecting (bow-tie) quad among ``quads`` (m, 4) node
+    ids with corners P (m, 4, 3), or "": its corners turn two one way, two the other (a convex
+    quad's all alike, a non-convex one's three to one), so that two of its edges cross -- not
+    flipped normals nor a clockwise quad, which is what the orientation checks would say.
+
+    Example
+    -------
+    >>> P = np.array([[[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0.0]]])
+    >>> print(bow_tie_error(np.array([[4, 5, 6, 7]]), P))
+    quad 0 is self-intersecting (a bow-tie): its node order [4, 5, 6, 7] crosses its edges (5, 6) and (7, 4); list its nodes around its boundary, [4, 5, 7, 6] (reversed if its neighbours run the other way)
+    """
+    t = _corner_turns(P)
+    bad = np.flatnonzero(((t > 0).sum(1) == 2) & ((t < 0).sum(1) == 2))
+    if not len(bad):
+        return ""
+    i = int(bad[0])
+    a, b, c, d = (int(v) for v in quads[i])
+    fixes = [((a, b, d, c), [0, 1, 3, 2], f"({b}, {c}) and ({d}, {a})"),
+             ((a, c, b, d), [0, 2, 1, 3], f"({a}, {b}) and ({c}, {d})")]
+    order, cross = next(((o, x) for o, k, x in fixes if abs(_corner_turns(P[i:i + 1, k]).sum()) == 4),
+                        (fixes[0][0], fixes[0][2]))
+    more = f" ({len(bad)} such {what}s: {bad[:5].tolist()}{' ...' if len(bad) > 5 else ''})" if len(bad) > 1 else ""
+    return (f"{what} {i} is self-intersecting (a bow-tie): its node order {[a, b, c, d]} crosses its edges "
+            f"{cross}{more}; list its nodes around its boundary, {list(order)} (reversed if its neighbours "
+            "run the other way)")
+
+
 # positions are stored absolutely, to eps |X|: a mesh farther from the origin than this many of
 # its shortest edges keeps its displacements to eps |X| only (a cantilever 10 x 1 on 8 x 2
 # elements, shortest edge 0.5, tip deflection 1.3e-3, placed at 1e8 / 1e10 / 1e12: 4e-6 / 4.7e-4 /
@@ -258,6 +302,9 @@ class Mesh:
         # corner whose sine is round-off (an annulus of two elements round a full turn: its
         # quads' corners on one line, sine 2.4e-16) is degenerate too
         X = self.X[self.quads]                                   # (m,4,3)
+        why = bow_tie_error(self.quads, X)
+        if why:
+            raise MeshError(why)
         nrm = self.g0[self.quads][:, :, :3, 2].sum(1)
         nrm /= np.maximum(np.linalg.norm(nrm, axis=1), 1e-300)[:, None]
         for k in range(4):

@@ -13,7 +13,7 @@ import warnings
 import numpy as np
 
 from ..errors import MeshError, MeshWarning
-from .core import Mesh, chain_order, frames_from
+from .core import Mesh, bow_tie_error, chain_order, frames_from
 from .subdivide import split_to_quads
 
 __all__ = ["from_meshio", "read_meshio"]
@@ -463,6 +463,9 @@ def _oriented_quads(X, blocks, qb):
     """The quads renumbered over the points they use, and remap (point -> node, -1 for a point no
     quad uses); quads whose orientation flips across an edge are a MeshError."""
     quads = np.concatenate([blocks[i][1] for i in qb]).astype(np.int64)
+    why = bow_tie_error(quads, X[quads], "quad cell") if np.isfinite(X[quads]).all() else ""
+    if why:                         # before the orientation checks, which would call it a flip
+        raise MeshError(f"mesh file: {why} (point ids of the file)")
     used = np.unique(quads)
     remap = -np.ones(len(X), np.int64)
     remap[used] = np.arange(len(used))

@@ -47,7 +47,7 @@ def geodesic_midpoints(ga, gb):
     [0.292893218813, -0.707106781187, 0.0]
     """
     ga, gb = np.asarray(ga, float), np.asarray(gb, float)
-    rel = lie.log(lie.inv(ga) @ gb)
+    rel = lie.log(lie.relative(ga, gb))
     return ga @ lie.exp(0.5 * rel)
 
 

@@ -354,7 +354,7 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         stick = self.sticking(lam0, n, p)
         target[stick] = Trel @ g[self.nodes[stick]]
         idx = self.nodes[on]
-        eta = lie.log(lie.inv(g[idx]) @ target[on])
+        eta = lie.log(lie.relative(g[idx], target[on]))
         eta[fixed[idx]] = 0.0
         g = g.copy()
         g[idx] = g[idx] @ lie.exp(eta)

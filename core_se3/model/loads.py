@@ -331,7 +331,9 @@ class SurfaceLoad(Load):
         p = s * self.p
         phi = g[quads, :3, 3]                                            # (m,4,3)
         R = g[quads, :3, :3]
-        a = np.einsum("qai,mij->mqaj", self.dN, phi)                     # (m,q,2,3)
+        # tangents from the corners relative to the first (exact differences: a far part's
+        # eps |x| / h stays out of the normal, as in fem.quadrature.surface_jacobian)
+        a = np.einsum("qai,mij->mqaj", self.dN, phi - phi[:, :1])         # (m,q,2,3)
         nrm = np.cross(a[:, :, 0], a[:, :, 1])                          # (m,q,3)
         F = p * np.einsum("qi,mqk->mik", self.N, nrm)                    # (m,4,3) lab
         Fb = np.einsum("maji,maj->mai", R, F)                            # R^T F

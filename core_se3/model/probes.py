@@ -92,7 +92,7 @@ class Probe:
             geodesic_point(np.ascontiguousarray(ga, dtype=float), np.ascontiguousarray(gb, dtype=float),
                            1.0 - self.wa, gm)
             return gm[:3, 3].copy(), gm[:3, :3].copy()
-        rel = lie.log(lie.inv(ga) @ gb)
+        rel = lie.log(lie.relative(ga, gb))
         gm = ga @ lie.exp((1.0 - self.wa) * rel)
         return gm[:3, 3].copy(), gm[:3, :3].copy()
 

@@ -444,9 +444,12 @@ def _free_motion(problem, g, fixed, part):
     ('rotation about ... through ...', 'translation along ...'), or None."""
     ell = problem.length_scale
     c = g[part, :3, 3].mean(0)
-    h = np.eye(4)
-    h[:3, 3] = -c                                   # rigid motions about the part's centroid
-    modes = lie.Ad(lie.inv(g) @ lie.inv(h))         # (n, 6, 6): column k = mode k at node i
+    # rigid motions about the part's centroid: Ad of (h g)^-1, h the translation by -c, the
+    # positions differenced first (inv(g) @ inv(h) lost eps |x| of the lever arms: a pinned
+    # edge's free rotation went unseen 1e8 from the origin)
+    hg = np.array(g, float)
+    hg[:, :3, 3] -= c
+    modes = lie.Ad(lie.inv(hg))                     # (n, 6, 6): column k = mode k at node i
     # dimensionless: translations of the modes by ell, nodal translations over ell (rotations
     # as they are), so that every entry is O(1) whatever the mesh's size (a lever arm x - c of
     # a rotation mode scaled by ell^2 made a clamp of a 10^4-long strip look singular)
@@ -471,10 +474,14 @@ def _free_motion(problem, g, fixed, part):
         return None
     v = Vt[-1] * scale
     tr, rot = v[:3], v[3:]
+    lead = rot if np.linalg.norm(rot) * ell > 1e-8 * np.linalg.norm(tr) else tr
+    tr, rot = (tr, rot) if lead[np.argmax(np.abs(lead))] > 0 else (-tr, -rot)   # the SVD's sign: one spelling
     if np.linalg.norm(rot) * ell > 1e-8 * np.linalg.norm(tr):
         # twist (tr, rot) about the centroid c: screw axis through c + rot x tr / |rot|^2
         pt = c + np.cross(rot, tr) / (rot @ rot)
-        return f"rotation about {np.round(rot / np.linalg.norm(rot), 3).tolist()} through {np.round(pt, 4).tolist()}"
-    return f"translation along {np.round(tr / np.linalg.norm(tr), 3).tolist()}"
+        # (+ 0.0: no '-0.0' of a component the sign turned)
+        return (f"rotation about {(np.round(rot / np.linalg.norm(rot), 3) + 0.0).tolist()} through "
+                f"{(np.round(pt, 4) + 0.0).tolist()}")
+    return f"translation along {(np.round(tr / np.linalg.norm(tr), 3) + 0.0).tolist()}"
 
 

@@ -511,7 +511,7 @@ def _try_start(problem, eq, trier, g, g_whole, lam, lam_try, mip, stress_conv, p
     if eq.stateful:
         # the seed element's strain is a state: save it, and feed it the prescribed motion
         problem.element.save()
-        problem.element.update(lie.log(lie.inv(g) @ g_try))
+        problem.element.update(lie.log(lie.relative(g, g_try)))
     stress_try = stress_conv
     if trier.opts.predictor == "tangent" and problem.has_prescribed_motion and not eq.stateful and eq.predictor:
         try:

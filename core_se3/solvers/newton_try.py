@@ -362,7 +362,7 @@ def tangent_predictor(problem, g, lam, lam_try, solver, mip, caps=()):
             x = np.zeros((len(s.nodes), 6))
             x[:, :3] = np.einsum("kji,kj->ki", a[:, :3, :3], b[:, :3, 3] - a[:, :3, 3])
         else:
-            x = lie.log(lie.inv(a) @ b)
+            x = lie.log(lie.relative(a, b))
         xi[s.nodes] = np.where(s.fixed, x, 0.0)
     full = Assembler(problem.mesh, np.ones(6 * n, bool))
     ev = problem.evaluate(g, lam_try, tangent=True, assembler=full)
