@@ -32,7 +32,7 @@ from numba import njit
 from .csr import scatter
 from .element_dbar import element_D
 from .element_ops import (edge_F, edge_KE, edge_pass1, edge_residual, element_force, element_G,
-                          element_Ke, node_Kn, node_residual, rotate_blocks, rotate_wrench)
+                          element_Ke, node_Kn, node_residual, rotate_blocks, rotate_G, rotate_wrench)
 
 __all__ = ["ElementMesh", "ElementData", "Workspace", "edges_log", "elements_force", "edges_residual", "nodes_pass", "elements_tangent",
            "edges_tangent", "elements_tangent_store", "edges_tangent_store"]
@@ -118,22 +118,22 @@ def nodes_pass(topo, Rq, w, rEg, rg, data, cmap, lo, hi):
 # unpack their bundles once, before their loops
 @njit(cache=True)
 def _element_blocks(el, quads, elem_edges, sgn, Rq, Dbar, Dsplit, z0, Dz0, psi, coef, fe, z, f, G, TT, TTt, KeT,
-                    D, S3):
+                    D):
     """Forces and KeT = (G^T Dbar G)^T of element el (Dbar: ``element_D``, the split form or
-    unpacked into D), in the user's frames (Rq: ``rotate_blocks``); returns (energy, force
-    scale part)."""
+    unpacked into D), in the user's frames (Rq: ``rotate_G``); returns (energy, force scale
+    part)."""
     Dr = element_D(Dbar, Dsplit, el, D)
     a, b = element_force(el, elem_edges, sgn, Dr, z0, Dz0, psi, z, f, fe)
     element_G(el, elem_edges, sgn, psi, coef, G)
+    rotate_G(G, quads[el], Rq)
     element_Ke(Dr, G, TT, TTt, KeT)
-    rotate_blocks(KeT, quads[el], Rq, S3)
     return a, b
 
 
 @njit(cache=True)
 def _element_scratch():
     return (np.empty(24), np.empty(24), np.empty((4, 2, 6, 6)), np.empty((24, 24)), np.empty((24, 24)),
-            np.empty((24, 24)), np.empty((24, 24)), np.empty((3, 3)))
+            np.empty((24, 24)), np.empty((24, 24)))
 
 
 @njit(cache=True)
@@ -143,13 +143,13 @@ def elements_tangent(order, mesh, ed, w, cmap, data, lo, hi):
     quads, _, elem_edges, sgn, Rq = mesh
     Dbar, Dsplit, z0, Dz0 = ed
     psi, coef, fe = w.psi, w.coef, w.fe
-    z, f, G, TT, TTt, KeT, D, S3 = _element_scratch()
+    z, f, G, TT, TTt, KeT, D = _element_scratch()
     en = 0.0
     fs = 0.0
     for i in range(lo, hi):
         el = _item(order, i)
         a, b = _element_blocks(el, quads, elem_edges, sgn, Rq, Dbar, Dsplit, z0, Dz0, psi, coef, fe, z, f, G, TT,
-                               TTt, KeT, D, S3)
+                               TTt, KeT, D)
         en += a
         fs += b
         for A in range(4):
@@ -165,12 +165,12 @@ def elements_tangent_store(mesh, ed, w, Keb, lo, hi):
     quads, _, elem_edges, sgn, Rq = mesh
     Dbar, Dsplit, z0, Dz0 = ed
     psi, coef, fe = w.psi, w.coef, w.fe
-    z, f, G, TT, TTt, KeT, D, S3 = _element_scratch()
+    z, f, G, TT, TTt, KeT, D = _element_scratch()
     en = 0.0
     fs = 0.0
     for el in range(lo, hi):
         a, b = _element_blocks(el, quads, elem_edges, sgn, Rq, Dbar, Dsplit, z0, Dz0, psi, coef, fe, z, f, G, TT,
-                               TTt, KeT, D, S3)
+                               TTt, KeT, D)
         en += a
         fs += b
         for A in range(4):
