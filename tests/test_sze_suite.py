@@ -10,22 +10,26 @@ Measure: the largest distance of a computed point to the table polyline in
 Measured deviations (core-se3 bench run NAME --mesh ..., default element):
 
     sze-semicylinder   12x12 3.87 %   16x16 2.09 %   24x24 1.11 %   (table mesh 40x40: benchmarks)
-    sze-slit-annular   6x30  1.53 %   (table mesh 10x80: benchmarks)
+    sze-slit-annular   6x30  2.01 %   8x40  1.31 %   10x80 0.77 %   (the table's mesh)
 
 The semi-cylinder's error falls as ~h^1.6..2 (stiffer coarse meshes: the end deflection is
 2.1 % low on 16x16), so its coarse bar is 2.5 % on 16x16; the annulus meets the 2 %
-acceptance bar already on the coarse 6x30 mesh, which is its test bar.
+acceptance bar on 8x40, its test mesh (6x30 met it, 1.53 %, before the least-turn gauge of the
+nodal frames removed the radial frames' defect, which had made the coarse mesh more flexible).
 """
 
 from core_se3 import catalogue
 
 
-def test_slit_annular_plate_6x30_within_2_percent():
-    """Slit annulus, 6x30 (radial x around), arc length to P_max = 0.8: both curves within 2 %
-    (measured W_A 1.53 %, W_B 1.24 %); end deflections within 2.5 % of the table's 13.891 and
-    17.528 (measured 13.66 and 17.30, the coarse mesh is stiffer); equilibrium with reactions
-    balancing the load to 1e-6 (the residual floor of this very flexible plate is ~1e-8)."""
-    doc, res, prob = catalogue.run_case("sze-slit-annular", mesh=(6, 30))
+def test_slit_annular_plate_8x40_within_2_percent():
+    """Slit annulus, 8x40 (radial x around), arc length to P_max = 0.8: both curves within 2 %
+    (measured W_A 1.31 %, W_B 1.04 %); end deflections within 2.5 % of the table's 13.891 and
+    17.528 (measured 13.69 and 17.33, the coarse mesh is stiffer); equilibrium with reactions
+    balancing the load to 1e-6 (the residual floor of this very flexible plate is ~1e-8).
+    The 6x30 mesh this test took gives 2.01 % / 1.60 % since the element builds its frames in the
+    least-turn gauge (docs/ELEMENTS.md, "Nodal frames"): before, the generator's radial frames,
+    turning 0.21 rad per element, had made it more flexible (1.53 % / 1.24 %)."""
+    doc, res, prob = catalogue.run_case("sze-slit-annular", mesh=(8, 40))
     ref = doc["reference"]
     assert ref["entry"] == "sze3.3_slit_annular_plate"
     assert ref["deviation"] <= 0.02, ref["curves"]
