@@ -112,16 +112,25 @@ def reaction_owners(problem):
     return owner
 
 
-def _reaction_record(parts, at):
-    """name -> dict(force, moment, point, moment_about_point) from name -> [(nodes, F, M)]: the
-    parts' sums, the current centroid of their nodes and the moment about it."""
+def _part(at, nodes, rows, f):
+    """One support's share: (its nodes, their positions, then the positions, lab forces and lab
+    moments of the nodes ``rows`` it acts on, from their forces f (k, 6): body components in the
+    frames ``at``)."""
+    R, x = at[rows, :3, :3], at[rows, :3, 3]
+    F = np.einsum("nij,nj->ni", R, f[:, :3])
+    return nodes, at[nodes, :3, 3], x, F, np.einsum("nij,nj->ni", R, f[:, 3:])
+
+
+def _reaction_record(parts):
+    """name -> dict(force, moment, point, moment_about_point) from name -> [``_part`` tuples]:
+    the sums about the origin and about the centroid of the distinct nodes (the positions
+    differenced first: exact for a part far from the origin)."""
     out = {}
     for name, items in parts.items():
-        nodes = np.unique(np.concatenate([it[0] for it in items]))
-        F = np.sum([it[1] for it in items], axis=0)
-        M = np.sum([it[2] for it in items], axis=0)
-        c = at[nodes, :3, 3].mean(0) if len(nodes) else np.zeros(3)
-        out[name] = dict(force=F, moment=M, point=c, moment_about_point=M - np.cross(c, F))
+        nodes, X, x, F, m = (np.concatenate([it[i] for it in items]) for i in range(5))
+        c = X[np.unique(nodes, return_index=True)[1]].mean(0) if len(nodes) else np.zeros(3)
+        out[name] = dict(force=F.sum(0), moment=(m + np.cross(x, F)).sum(0), point=c,
+                         moment_about_point=(m + np.cross(x - c, F)).sum(0))
     return out
 
 
@@ -282,13 +291,14 @@ class StepRecorder:
         parts = {}
         for i, s in enumerate(self.problem.supports):
             f = np.where(self.owner[s.nodes] == i, reac[s.nodes], 0.0)
-            parts.setdefault(self.names[0][i], []).append((s.nodes, *lab_totals(at[s.nodes], f)))
+            parts.setdefault(self.names[0][i], []).append(_part(at, s.nodes, s.nodes, f))
         sup = (ld for ld in self.problem.loads if getattr(ld, "support_force", False))
         for name, ld, f in zip(self.names[1], sup, springs):
+            rows = np.flatnonzero(np.any(f != 0.0, axis=1))
             nodes = getattr(ld, "nodes", None)
-            nodes = np.flatnonzero(np.any(f != 0.0, axis=1)) if nodes is None else np.asarray(nodes, np.int64)
-            parts.setdefault(name, []).append((nodes, *lab_totals(at, f)))
-        return _reaction_record(parts, at)
+            nodes = rows if nodes is None else np.asarray(nodes, np.int64).ravel()
+            parts.setdefault(name, []).append(_part(at, nodes, rows, f[rows]))
+        return _reaction_record(parts)
 
     def step(self, lam, g, iterations, history, forces, stability=None, turn=None, local=None):
         """The StepResult of a converged state: ``forces`` = (r_int, f_ext), the internal and
