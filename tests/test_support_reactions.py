@@ -260,3 +260,26 @@ def test_a_sweep_writes_each_supports_reaction(tmp_path):
         assert float(r["supports[1].Mx"]) == pytest.approx(T, rel=1e-7)
         assert float(r["supports[0].Mx"]) == pytest.approx(-T, rel=1e-7)
         assert abs(float(r["supports[1].Fx"])) < 1e-9 * T
+
+
+def test_named_supports_and_one_name_for_two_pieces():
+    # Python names: the clamp given in two pieces under one name reports as one support, with
+    # the numbers of the clamp given whole, and its centroid that of all its nodes
+    def build(split):
+        p = Problem(mesh.rectangle(L, W, 20, 4), Material(E, NU, H))
+        x0 = p.nodes("x0")
+        if split:
+            p.clamp(x0[:2], name="root")
+            p.clamp(x0[2:], name="root")
+        else:
+            p.clamp(x0, name="root")
+        p.rotate_edge("x1", (1, 0, 0), 0.3, point=(L, 0, 0), free=[0], name="twist")
+        p.add_lab_support([10], (0, 0, 1), 1e3, name="prop")
+        return p
+    a, b = (build(split).solve(steps=2).final.support_reactions for split in (True, False))
+    assert list(a) == list(b) == ["root", "twist", "prop"]
+    for name in a:
+        for key in ("force", "moment", "point", "moment_about_point"):
+            assert np.allclose(a[name][key], b[name][key], rtol=1e-12, atol=1e-14), (name, key)
+    assert np.allclose(a["root"]["point"], [0.0, 0.0, 0.0], atol=1e-15)
+    assert a["twist"]["moment_about_point"][0] > 0.0 > a["root"]["moment_about_point"][0]
