@@ -134,6 +134,24 @@ def _reaction_record(parts):
     return out
 
 
+def _spring_list(springs, count):
+    """The springs' forces given to ``StepRecorder.step``: a list of ``count`` (n, 6) arrays (an
+    (n, 6) array alone, the older form, is the one spring's); a ValueError otherwise -- a total
+    of several springs cannot be split between them.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> len(_spring_list(np.zeros((4, 6)), 1)), len(_spring_list([np.zeros((4, 6))] * 2, 2))
+    (1, 2)
+    """
+    out = [springs] if isinstance(springs, np.ndarray) and springs.ndim == 2 else list(springs)
+    if len(out) != count:
+        raise ValueError(f"StepRecorder.step: the springs' forces must be a list of {count} (n, 6) arrays, one per "
+                         f"spring support (Load.support_force), got {len(out)}")
+    return out
+
+
 def _compiled_log(R):
     """log_so3 of one rotation by the compiled kernel (the NumPy routine's twin, ~100x faster
     on a single 3x3 matrix: a probe is unwrapped after every converged state)."""
@@ -323,7 +341,7 @@ class StepRecorder:
         probes = self.probes(g, start, increments) if local is None else self.probes(local[0], start, increments,
                                                                                    local[1])
         reac = (r_int - f_ext) * self.fixed
-        springs = self.spring_forces(g, lam) if springs is None else list(springs)
+        springs = self.spring_forces(g, lam) if springs is None else _spring_list(springs, len(self.names[1]))
         f_sup = np.sum(springs, axis=0) if springs else np.zeros_like(reac)
         f_app = np.array(f_ext, float) - f_sup
         RF, RM, sF, sM = lab_totals(at, reac + f_sup, magnitudes=True)
