@@ -240,6 +240,10 @@ def _summary(scn, res):
     for name, p in last["probes"].items():
         u = p["u"]
         print(f"  probe {name}: u = ({u[0]:.6g}, {u[1]:.6g}, {u[2]:.6g}), rotation {p['rotation_angle']:.6g} rad")
+    for name, r in (last.get("support_reactions") or {}).items():
+        f, m, c = r["force"], r["moment_about_point"], r["point"]
+        print(f"  support {name}: force ({f[0]:.6g}, {f[1]:.6g}, {f[2]:.6g}), moment ({m[0]:.6g}, {m[1]:.6g}, "
+              f"{m[2]:.6g}) about its nodes' centroid ({c[0]:.6g}, {c[1]:.6g}, {c[2]:.6g}) on the shell")
     for name, c in (last.get("contact") or {}).items():
         f = c["force"]
         print(f"  contact {name}: force ({f[0]:.6g}, {f[1]:.6g}, {f[2]:.6g}) on the shell"

@@ -41,6 +41,12 @@ class Prescribed:
         (a rigid motion's: ``rigid_motion``), which linear analysis prescribes; None: linear
         analysis takes the target's own (v, w) = (R0^T (x_t - X), log(R0^T R_t)).
 
+    Attributes
+    ----------
+    name : str or None
+        The key of its reaction in ``StepResult.support_reactions`` (None: ``supports[i]``, its
+        index in ``Problem.supports``; scenario files set the entry's ``supports[i]``).
+
     Example
     -------
     >>> from core_se3 import Problem, Material, mesh
@@ -56,6 +62,7 @@ class Prescribed:
         self.fixed = np.asarray(fixed, bool)
         self.target = None if target is None else checked_target(target, len(self.nodes))
         self.linear = linear
+        self.name = None
 
 
 def checked_target(target, k):

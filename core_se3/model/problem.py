@@ -218,60 +218,73 @@ class Problem:
             raise LoadError(str(exc)) from None
 
     # ---------------------------------------------------------------- supports ---------
-    def _support(self, s):
+    def _support(self, s, name=None):
+        """Add the Prescribed ``s`` (named ``name``: the key of its reaction in
+        ``StepResult.support_reactions``; None: ``supports[i]``, its index)."""
         check_conflict(self.supports, s)          # a node moved by two supports: refused
+        s.name = None if name is None else str(name)
         self.supports.append(s)
         self._assembler = None
 
-    def clamp(self, where):
-        """Fix position and rotation of the selected nodes at their reference values."""
-        self._support(Prescribed(self.nodes(where), np.ones(6, bool)))
+    def clamp(self, where, name=None):
+        """Fix position and rotation of the selected nodes at their reference values (``name``:
+        of its reaction in ``StepResult.support_reactions``, default ``supports[i]``; so for
+        every support)."""
+        self._support(Prescribed(self.nodes(where), np.ones(6, bool)), name)
 
-    def fix(self, where, dofs):
+    def fix(self, where, dofs, name=None):
         """Fix selected body-frame dofs (0-2 translations along d1..d3, 3-5 rotations)."""
-        self._support(Prescribed(self.nodes(where), fixed_dofs(dofs)))
+        self._support(Prescribed(self.nodes(where), fixed_dofs(dofs)), name)
 
-    def rotate_edge(self, where, axis, angle, point=(0.0, 0.0, 0.0), free=(), scale=None):
+    def rotate_edge(self, where, axis, angle, point=(0.0, 0.0, 0.0), free=(), scale=None, name=None):
         """Rigidly rotate the selected nodes about ``axis`` through ``point`` by angle*scale(lam).
 
         ``free``: lab translation directions (0 = x, 1 = y, 2 = z) left free; each must stay
         aligned with a body axis of every selected node: a body axis parallel to the rotation
         axis (e.g. a strip end twisted about the strip axis, free along it).
         """
-        self._support(rigid_motion(self.mesh, self.nodes(where), (0.0, 0.0, 0.0), axis, angle, point, free, scale))
+        self._support(rigid_motion(self.mesh, self.nodes(where), (0.0, 0.0, 0.0), axis, angle, point, free, scale),
+                      name)
 
-    def move_edge(self, where, translate=(0.0, 0.0, 0.0), axis=None, angle=0.0, point=None, free=(), scale=None):
+    def move_edge(self, where, translate=(0.0, 0.0, 0.0), axis=None, angle=0.0, point=None, free=(), scale=None,
+                  name=None):
         """Move the selected nodes rigidly: rotated by angle*s about ``axis`` through ``point``
         (default their centroid), then translated by s*translate, s = scale(lam) (default lam);
         ``free`` as for :meth:`rotate_edge` (``supports.rigid_motion``)."""
-        self._support(rigid_motion(self.mesh, self.nodes(where), translate, axis, angle, point, free, scale))
+        self._support(rigid_motion(self.mesh, self.nodes(where), translate, axis, angle, point, free, scale), name)
 
-    def prescribe(self, where, target, fixed=(True,) * 6):
+    def prescribe(self, where, target, fixed=(True,) * 6, name=None):
         """Selected nodes follow ``target(lam) -> (k, 4, 4)`` frames on the fixed dofs.  Linear
         analysis holds the chord of the target at lam_end (an AccuracyWarning if the target is not
         linear in lam): give rigid motions with :meth:`rotate_edge` / :meth:`move_edge`."""
-        self._support(Prescribed(self.nodes(where), np.asarray(fixed, bool), target))
+        self._support(Prescribed(self.nodes(where), np.asarray(fixed, bool), target), name)
 
-    def add_lab_support(self, where, dirs, k):
+    def add_lab_support(self, where, dirs, k, name=None):
         """Hold the lab displacement components ``dirs`` of the selected nodes by penalty springs
         of stiffness k (supports.LabSpring): ``dirs`` (q, 3) is a set of q <= 3 independent
         directions held at *every* selected node ((3,): one; (1, q, 3): the same, explicitly), (n,
         q, 3) a set per node for the n selected nodes -- one direction per node is (n, 1, 3), not
         (n, 3) (that is a set held at every node, refused beyond 3 rows, and refused as ambiguous
-        when q == n > 1 with different rows: give (n, 1, 3) or (1, q, 3)).  Rows are normalised."""
-        return self.add(LabSpring(self.mesh, self.nodes(where), dirs, k))
+        when q == n > 1 with different rows: give (n, 1, 3) or (1, q, 3)).  Rows are normalised.
+        ``name``: of its reaction (``StepResult.support_reactions``; default ``loads[j]``)."""
+        return self._spring(LabSpring(self.mesh, self.nodes(where), dirs, k), name)
 
-    def add_lab_tilt_support(self, where, t, k_rot):
+    def _spring(self, spring, name):
+        spring.support_name = None if name is None else str(name)
+        return self.add(spring)
+
+    def add_lab_tilt_support(self, where, t, k_rot, name=None):
         """Keep the normals of the selected nodes normal to the lab directions ``t`` by a
         rotational penalty (supports.LabTiltSpring): ``t`` (3,) or (1, 3) is one direction for
         every selected node, (n, 3) one row per node for the n selected nodes (unlike
-        :meth:`add_lab_support`'s (q, 3), a set held at every node)."""
-        return self.add(LabTiltSpring(self.mesh, self.nodes(where), t, k_rot))
+        :meth:`add_lab_support`'s (q, 3), a set held at every node); ``name`` as there."""
+        return self._spring(LabTiltSpring(self.mesh, self.nodes(where), t, k_rot), name)
 
-    def add_rotation_component_support(self, where, a, k_rot):
+    def add_rotation_component_support(self, where, a, k_rot, name=None):
         """Hold the lab component ``a`` of the total rotation vector of the selected nodes at
-        zero by a rotational penalty (supports.RotationComponentSpring)."""
-        return self.add(RotationComponentSpring(self.mesh, self.nodes(where), a, k_rot))
+        zero by a rotational penalty (supports.RotationComponentSpring); ``name`` as for
+        :meth:`add_lab_support`."""
+        return self._spring(RotationComponentSpring(self.mesh, self.nodes(where), a, k_rot), name)
 
     # ---------------------------------------------------------------- loads ------------
     def add(self, load):

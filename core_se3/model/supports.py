@@ -139,9 +139,12 @@ def lab_direction_sets(dirs, k):
 
 class _Spring(Load):
     """A penalty support written as a load: it does not scale with the load factor, and its
-    forces are support reactions (``support_force``), not applied loads, in the results."""
+    forces are support reactions (``support_force``), not applied loads, in the results, where
+    ``support_name`` (None: ``loads[j]``, its index in ``Problem.loads``) names its own
+    (``StepResult.support_reactions``)."""
     scales_with_load_factor = False
     support_force = True
+    support_name = None
 
     def _scatter(self, n, fb, blk, tangent):
         f = np.zeros((n, 6))

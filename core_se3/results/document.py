@@ -101,7 +101,7 @@ def step_record(st, load, axis=None, **extra):
     >>> p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 1.0)); p.add_probe("tip")
     >>> rec = step_record(p.solve(steps=1).final, dict(name="P", value=1.0, unit="N"), error=None)
     >>> list(rec), rec["load_factor"], rec["residual"] < 1e-10
-    (['load_factor', 'load', 'probes', 'iterations', 'residual', 'residual_floor', 'residual_history', 'reactions', 'applied', 'balance_error', 'attempts', 'linear_solves', 'backend', 'checks', 'error'], 1.0, True)
+    (['load_factor', 'load', 'probes', 'iterations', 'residual', 'residual_floor', 'residual_history', 'reactions', 'applied', 'balance_error', 'attempts', 'linear_solves', 'backend', 'support_reactions', 'checks', 'error'], 1.0, True)
     >>> [[round(f, 9) + 0.0 for f in rec[k]["force"]] for k in ("reactions", "applied")]   # held by the clamp
     [[0.0, 0.0, -1.0], [0.0, 0.0, 1.0]]
     """
@@ -118,6 +118,9 @@ def step_record(st, load, axis=None, **extra):
                balance_error=float(st.balance_error), attempts=int(st.attempts),
                linear_solves=None if st.linear_solves is None else int(st.linear_solves),
                backend=str(getattr(st, "backend", "")) or None)
+    if getattr(st, "support_reactions", None):
+        rec["support_reactions"] = {name: {k: np.asarray(v, float).tolist() for k, v in r.items()}
+                                    for name, r in st.support_reactions.items()}
     if st.contact:
         rec["contact"] = {name: contact_record(c) for name, c in st.contact.items()}
     if getattr(st, "checks", None):

@@ -10,7 +10,8 @@ import numpy as np
 
 from .result import ProbeState, StepResult, unwrap_rotation
 
-__all__ = ["StepRecorder", "lab_totals", "restore_multipliers", "initial_state"]
+__all__ = ["StepRecorder", "lab_totals", "restore_multipliers", "initial_state", "support_names",
+           "reaction_owners"]
 
 
 def initial_state(g_init, g0):
@@ -69,6 +70,88 @@ def lab_totals(g, f, magnitudes=False):
     return F.sum(0), M.sum(0)
 
 
+def support_names(problem):
+    """The names of the problem's supports, the keys of ``StepResult.support_reactions``: (names
+    of ``problem.supports``, names of its penalty-spring loads (``Load.support_force``) in the
+    order of ``problem.loads``).  A held support's is its ``name`` (scenario files:
+    ``supports[i]``, the entry's index), else ``supports[i]`` with i its index in
+    ``problem.supports``; a spring's is its ``support_name``, else ``loads[j]`` with j its index
+    in ``problem.loads``.  Supports of one name (an entry that adds several) share one reaction.
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
+    >>> p.clamp("x0"); p.add_edge_force("x1", (0, 0, 1.0)); _ = p.add_lab_support("x1", (0, 0, 1), 1.0)
+    >>> support_names(p)
+    (['supports[0]'], ['loads[1]'])
+    """
+    held = [getattr(s, "name", None) or f"supports[{i}]" for i, s in enumerate(problem.supports)]
+    springs = [getattr(ld, "support_name", None) or f"loads[{j}]" for j, ld in enumerate(problem.loads)
+               if getattr(ld, "support_force", False)]
+    return held, springs
+
+
+def reaction_owners(problem):
+    """(n, 6) ints: the index in ``problem.supports`` of the support that a held dof's reaction is
+    reported with -- the first support holding that dof of that node (two supports may both hold
+    a dof at its reference value: ``supports.check_conflict``) -- and -1 on free dofs.
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(1.0, 1.0, 1, 1), Material(1e3, 0.0, 0.01))
+    >>> p.fix("x0", [2]); p.clamp([0])
+    >>> reaction_owners(p)[[0, 2]].tolist()             # node 0: z to the fix, the rest to the clamp
+    [[1, 1, 0, 1, 1, 1], [-1, -1, 0, -1, -1, -1]]
+    """
+    owner = np.full((problem.mesh.n_nodes, 6), -1, np.int64)
+    for i in range(len(problem.supports) - 1, -1, -1):          # the first holding a dof wins
+        s = problem.supports[i]
+        owner[np.ix_(s.nodes, np.flatnonzero(s.fixed))] = i
+    return owner
+
+
+def _part(at, nodes, rows, f):
+    """One support's share: (its nodes, their positions, then the positions, lab forces and lab
+    moments of the nodes ``rows`` it acts on, from their forces f (k, 6): body components in the
+    frames ``at``)."""
+    R, x = at[rows, :3, :3], at[rows, :3, 3]
+    F = np.einsum("nij,nj->ni", R, f[:, :3])
+    return nodes, at[nodes, :3, 3], x, F, np.einsum("nij,nj->ni", R, f[:, 3:])
+
+
+def _reaction_record(parts):
+    """name -> dict(force, moment, point, moment_about_point) from name -> [``_part`` tuples]:
+    the sums about the origin and about the centroid of the distinct nodes (the positions
+    differenced first: exact for a part far from the origin)."""
+    out = {}
+    for name, items in parts.items():
+        nodes, X, x, F, m = (np.concatenate([it[i] for it in items]) for i in range(5))
+        c = X[np.unique(nodes, return_index=True)[1]].mean(0) if len(nodes) else np.zeros(3)
+        out[name] = dict(force=F.sum(0), moment=(m + np.cross(x, F)).sum(0), point=c,
+                         moment_about_point=(m + np.cross(x - c, F)).sum(0))
+    return out
+
+
+def _spring_list(springs, count):
+    """The springs' forces given to ``StepRecorder.step``: a list of ``count`` (n, 6) arrays (an
+    (n, 6) array alone, the older form, is the one spring's); a ValueError otherwise -- a total
+    of several springs cannot be split between them.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> len(_spring_list(np.zeros((4, 6)), 1)), len(_spring_list([np.zeros((4, 6))] * 2, 2))
+    (1, 2)
+    """
+    out = [springs] if isinstance(springs, np.ndarray) and springs.ndim == 2 else list(springs)
+    if len(out) != count:
+        raise ValueError(f"StepRecorder.step: the springs' forces must be a list of {count} (n, 6) arrays, one per "
+                         f"spring support (Load.support_force), got {len(out)}")
+    return out
+
+
 def _compiled_log(R):
     """log_so3 of one rotation by the compiled kernel (the NumPy routine's twin, ~100x faster
     on a single 3x3 matrix: a probe is unwrapped after every converged state)."""
@@ -120,6 +203,8 @@ class StepRecorder:
         self.fixed = problem.constraint_mask()
         self.ell = problem.length_scale
         self.compiled = getattr(problem, "backend", "numpy") == "numba"
+        self.owner = reaction_owners(problem)
+        self.names = support_names(problem)
         self.reference = {name: pr.state(self.g0, compiled=self.compiled) for name, pr in problem.probes.items()}
         self.unwrapped = {name: np.zeros(3) for name in problem.probes}
         self._log = _compiled_log if self.compiled else None
@@ -204,10 +289,34 @@ class StepRecorder:
         [0.0, -1.0, 0.0, -1.0]
         """
         f = np.zeros((len(g), 6))
-        for ld in self.problem.loads:
-            if getattr(ld, "support_force", False):
-                f += ld.evaluate(g, lam, tangent=False).f
+        for fs in self.spring_forces(g, lam):
+            f += fs
         return f
+
+    def spring_forces(self, g, lam):
+        """The list of the (n, 6) forces of each penalty-spring support (``support_force``), in the
+        order of ``problem.loads``: their sum is :meth:`support_forces`."""
+        return [ld.evaluate(g, lam, tangent=False).f for ld in self.problem.loads
+                if getattr(ld, "support_force", False)]
+
+    def support_reactions(self, at, reac, springs):
+        """name -> dict(force, moment, point, moment_about_point) of every support (``support_names``):
+        the lab force and moment about the origin that it exerts on the shell -- the held dofs'
+        reactions ``reac`` (n, 6) (internal minus external force, body components in the frames
+        ``at``) that it owns (:func:`reaction_owners`), or a spring's forces (``springs``: their
+        list) -- and the moment about ``point``, the centroid of its nodes in ``at``.  Their sum
+        is the total reaction."""
+        parts = {}
+        for i, s in enumerate(self.problem.supports):
+            f = np.where(self.owner[s.nodes] == i, reac[s.nodes], 0.0)
+            parts.setdefault(self.names[0][i], []).append(_part(at, s.nodes, s.nodes, f))
+        sup = (ld for ld in self.problem.loads if getattr(ld, "support_force", False))
+        for name, ld, f in zip(self.names[1], sup, springs):
+            rows = np.flatnonzero(np.any(f != 0.0, axis=1))
+            nodes = getattr(ld, "nodes", None)
+            nodes = rows if nodes is None else np.asarray(nodes, np.int64).ravel()
+            parts.setdefault(name, []).append(_part(at, nodes, rows, f[rows]))
+        return _reaction_record(parts)
 
     def step(self, lam, g, iterations, history, forces, stability=None, turn=None, local=None):
         """The StepResult of a converged state: ``forces`` = (r_int, f_ext), the internal and
@@ -219,19 +328,21 @@ class StepRecorder:
 
         The supports' penalty springs (``Load.support_force``) are support reactions: their
         forces, part of f_ext, count with the reactions, not the applied loads (a fourth entry of
-        ``forces``, (n, 6) in the same frames, gives them: linear analysis, whose springs' forces
-        are those of the linear equations; default: evaluated at g).  The loads that are
+        ``forces``, the list of each spring's (n, 6) forces in the same frames, gives them: linear
+        analysis, whose springs' forces are those of the linear equations; default: evaluated at
+        g).  Each support's share is ``support_reactions`` (:meth:`support_reactions`).  The loads that are
         constraint forces (``Load.constraint_force``: contact) are split off the applied loads:
         ``contact`` holds each one's lab force and moment (about the origin) with its ``report``
         scalars, and the balance sums applied, reactions and contact.  The balance's scales are
         the largest sums of nodal magnitudes of the reactions (with the springs or without) and
         of the loads (f_ext, or the applied loads alone)."""
-        r_int, f_ext, at, f_sup = (*forces, g, None)[:4] if len(forces) == 2 else (*forces, None)[:4]
+        r_int, f_ext, at, springs = (*forces, g, None)[:4] if len(forces) == 2 else (*forces, None)[:4]
         start, increments = turn if turn else (None, None)
         probes = self.probes(g, start, increments) if local is None else self.probes(local[0], start, increments,
                                                                                    local[1])
         reac = (r_int - f_ext) * self.fixed
-        f_sup = self.support_forces(g, lam) if f_sup is None else f_sup
+        springs = self.spring_forces(g, lam) if springs is None else _spring_list(springs, len(self.names[1]))
+        f_sup = np.sum(springs, axis=0) if springs else np.zeros_like(reac)
         f_app = np.array(f_ext, float) - f_sup
         RF, RM, sF, sM = lab_totals(at, reac + f_sup, magnitudes=True)
         # the scales: the largest nodal magnitudes of either split (a spring's force and the load
@@ -250,7 +361,8 @@ class StepRecorder:
         return StepResult(lam, g.copy(), iterations, list(history), RF, RM, AF, AM, probes,
                           scale=(max(sF, aF, max(sM, aM) / ell), max(sM, aM, max(sF, aF) * ell)),
                           stability=stability, contact=contact,
-                          backend=str(getattr(self.problem, "backend", "")))
+                          backend=str(getattr(self.problem, "backend", "")),
+                          support_reactions=self.support_reactions(at, reac, springs))
 
 
 def restore_multipliers(problem, step):

@@ -133,6 +133,13 @@ class StepResult:
         corrections (< 1 and < 1.5: ``path_measures``), path_rejections (tries refused since the
         previous stored step), det_sign (the sign of det K at the state; None when not checked);
         with contact snap_probes and landed_elsewhere (``solvers.contact_probe``); {} when not recorded (path following, the initial state).
+    support_reactions : dict
+        name -> dict(force (3,), moment (3,) about the origin, point (3,), moment_about_point (3,))
+        of every support (held dofs and penalty springs; names: ``results.support_names``, a
+        scenario's ``supports[i]``): the lab force and moment it exerts on the shell, the
+        centroid of its nodes in the state (linear analysis: in the reference) and the moment
+        about that centroid.  A dof held by two supports reports with the first
+        (``results.reaction_owners``).  They sum to ``reaction_force`` / ``reaction_moment``.
 
     Example
     -------
@@ -160,6 +167,7 @@ class StepResult:
     residual_floor: float = 0.0        # round-off floor of the last relative residual
     backend: str = ""                  # the backend that evaluated the converged state ('auto' moves)
     checks: dict = field(default_factory=dict)   # what load stepping checked (solvers.step_checks)
+    support_reactions: dict = field(default_factory=dict)   # name -> dict(force, moment, ...) per support
 
     @property
     def balance_error(self):

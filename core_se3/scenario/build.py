@@ -159,8 +159,10 @@ def _add_support(v, prob, mesh, sp, key):
             values["point"] = centroid
         if sp["type"] == "prescribed" and isinstance(values.get("rotate"), dict) and values["rotate"].get("point") is None:
             values["rotate"] = dict(values["rotate"], point=centroid)
+    counts = len(prob.supports), len(prob.loads)
     try:
         kind.build(prob, nodes, make_scale(sp["scale"]) if kind.moves else None, **values)
+        _name_supports(prob, counts, key)
     except CoreSE3Error as exc:
         other = getattr(exc, "other", None)
         msg = str(exc)
@@ -170,6 +172,16 @@ def _add_support(v, prob, mesh, sp, key):
         v.fail(key, msg)
     except ValueError as exc:                   # a user's kind: its own refusal, named by key
         v.fail(user_key(key, kind, exc), f"{sp['type']}: {exc}")
+
+
+def _name_supports(prob, counts, key):
+    """Name what the entry ``key`` (``supports[i]``) added -- the supports and penalty-spring
+    loads past ``counts`` -- by it: its reaction's key in the results (``support_reactions``)."""
+    for s in prob.supports[counts[0]:]:
+        s.name = key
+    for ld in prob.loads[counts[1]:]:
+        if getattr(ld, "support_force", False):
+            ld.support_name = key
 
 
 def _add_magnets(v, prob, spec, mesh, regions):

@@ -295,7 +295,9 @@ def point_row(s, values, g_start=None, unwrap=None):
     """Solve one grid point (the scenario ``s`` with the swept ``values``): (row, final frames or
     None).  The row holds the values, status, warm, steps, iterations, every probe's final
     displacement, rotation (angle) and rotation_vector (unwrapped along the path, as in
-    results.json), every obstacle's contact force, moment and report; a failed point its error.
+    results.json), every support's force and moment about its nodes' centroid
+    (``supports[i].Fx`` ... ``supports[i].Mz``: ``StepResult.support_reactions``), every
+    obstacle's contact force, moment and report; a failed point its error.
     ``g_start``: the frames of a warm start, ``unwrap`` (name -> (3,)): its probes' unwrapped
     rotation vectors, which the warm solve continues (a roll-up past pi kept its turns)."""
     row = dict(values)
@@ -310,6 +312,9 @@ def point_row(s, values, g_start=None, unwrap=None):
             row[f"{name}.u{c}"] = float(x)
         row[f"{name}.rotation"] = float(np.linalg.norm(p["rotation_vector"]))
         row[f"{name}.rotation_vector"] = [float(x) for x in p["rotation_vector"]]
+    for name, r in (final.support_reactions or {}).items():       # force, moment about its centroid
+        for q, key in (("F", "force"), ("M", "moment_about_point")):
+            row.update({f"{name}.{q}{comp}": float(x) for comp, x in zip("xyz", r[key])})
     for name, c in (final.contact or {}).items():
         rec = contact_record(c)
         for q in ("force", "moment"):

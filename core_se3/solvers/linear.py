@@ -151,16 +151,16 @@ def reference_stiffness(problem, assembler):
 
 
 def _support_forces(problem, assembler, lam, eta):
-    """(n, 6) linear forces f_s(g0, lam) - K_s eta of the supports' penalty springs (the loads with
-    ``support_force``; K_s their stiffness at g0 on the dofs of ``assembler``): the support
-    reactions they exert in the linear equations, which the step reports with the reactions."""
-    sup = [ld for ld in problem.loads if getattr(ld, "support_force", False)]
-    n = problem.mesh.n_nodes
-    if not sup:
-        return np.zeros((n, 6))
-    f = problem.external(problem.mesh.g0, lam, tangent=False, loads=sup)[0]
-    _, Kn, Ke = problem.external(problem.mesh.g0, 0.0, tangent=True, loads=sup)
-    return f - (assembler.matrix(Ke, None, Kn) @ eta).reshape(n, 6)
+    """The list of the (n, 6) linear forces f_s(g0, lam) - K_s eta of each of the supports' penalty
+    springs (the loads with ``support_force``; K_s its stiffness at g0 on the dofs of
+    ``assembler``): the support reactions they exert in the linear equations, which the step
+    reports with the reactions (each with its support: ``StepResult.support_reactions``)."""
+    n, out = problem.mesh.n_nodes, []
+    for ld in (ld for ld in problem.loads if getattr(ld, "support_force", False)):
+        f = problem.external(problem.mesh.g0, lam, tangent=False, loads=[ld])[0]
+        _, Kn, Ke = problem.external(problem.mesh.g0, 0.0, tangent=True, loads=[ld])
+        out.append(f - (assembler.matrix(Ke, None, Kn) @ eta).reshape(n, 6))
+    return out
 
 
 def _prescribed_increments(problem, lam):
