@@ -100,5 +100,5 @@ def far_part_hint(problem):
     return (f"the part lies {d:.3g} from the origin ({d / h:.2g} element sizes) and {names} "
             f"{'is' if len(fixed) == 1 else 'are'} not translation invariant, so the iterate is held in the "
             f"problem's coordinates, whose positions carry a round-off eps |x0| = {eps:.2g} ({eps / h:.2g} of an "
-            "element) that Newton stalls on (docs/STEPS.md, 'Translation invariance'); place the part and its "
+            "element) that can stall Newton (docs/STEPS.md, 'Translation invariance'); place the part and its "
             "obstacles (or fields, springs) near the origin")
