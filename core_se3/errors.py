@@ -18,7 +18,7 @@ import difflib
 __all__ = ["CoreSE3Error", "MaterialError", "MeshError", "LoadError", "SupportError",
            "SingularSystemError", "ConvergenceError", "ElementTooDistortedError", "ScenarioError",
            "CheckpointError", "OptionError", "DesignError", "ContactError", "ParallelError",
-           "LinearSolverError", "ControlError", "ScenarioWarning", "SupportWarning", "ElementWarning", "MeshWarning",
+           "LinearSolverError", "ControlError", "ResultFileError", "ScenarioWarning", "SupportWarning", "ElementWarning", "MeshWarning",
            "AccuracyWarning", "OptionWarning", "LoadWarning", "PathWarning", "did_you_mean"]
 
 
@@ -357,6 +357,31 @@ class ControlError(CoreSE3Error):
     >>> issubclass(ControlError, CoreSE3Error)
     True
     """
+
+
+class ResultFileError(CoreSE3Error, ValueError):
+    """A file that is not a result document (``core_se3.results.read_json``): not JSON, a top
+    level that is not a JSON object (a list, a number, a string), or an object of another schema
+    or version.  ``file`` names the file; the message says what was found and what was expected.
+    Pass the ``result.json`` a run wrote (``core-se3 run``, ``core-se3 bench run``).
+
+    Parameters
+    ----------
+    message : str
+        What was found and what was expected.
+    file : str, optional
+        The file.
+
+    Example
+    -------
+    >>> exc = ResultFileError("top level is a list, expected a JSON object", "r.json")
+    >>> str(exc), exc.file, isinstance(exc, ValueError)
+    ('r.json: top level is a list, expected a JSON object', 'r.json', True)
+    """
+
+    def __init__(self, message, file=None):
+        self.file, self.detail = file, message
+        super().__init__(f"{file}: {message}" if file is not None else message)
 
 
 class ScenarioWarning(UserWarning):

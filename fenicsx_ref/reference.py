@@ -199,17 +199,20 @@ def reference_error(case, p, ref, steps, lam_tol=1e-9):
 def literature_error(case, p, steps, probe):
     """The catalogue's curve deviation (``measures.curve_deviation``) of the computed path
     against the literature table of the case; error None with a note when the case's parameters
-    are not the table's.  The table's scale P_max and its parameter names (``L_total``,
-    ``half_angle_rad``, ``R_inner``, ...) are read by core_se3's ``family_sze.table_scale``, the one
-    mapping onto the case keys."""
-    from core_se3.catalogue.family_sze import table_scale
+    are not the table's (a run in other units is compared in the table's units, ``u_max`` too).
+    The table's scale P_max and its parameter names (``L_total``, ``half_angle_rad``,
+    ``R_inner``, ...) are read by core_se3's ``family_sze.table_scale``, the one mapping onto the
+    case keys."""
+    from core_se3.catalogue.family_sze import table_scale, table_units
     P_max, why = table_scale(case, p)
     if why:  # the table is for the published parameters: a distance to it would measure the change
         return {"entry": case.extra["literature"], "file": "literature.json", "error": None,
                 "note": f"not compared: {why}"}
     lams = [s["load"]["value"] / P_max for s in steps]
     col = curve_columns(case)[0]
-    dev, per, info = curve_deviation(case, lams, [{col["probe"]: s["probes"][probe]["u"]} for s in steps])
+    a = table_units(case, p)[0]          # a run in other units: P_max is in its units, u / a in the table's
+    dev, per, info = curve_deviation(case, lams, [{col["probe"]: np.asarray(s["probes"][probe]["u"], float) / a}
+                                                  for s in steps])
     out = {"entry": case.extra["literature"], "file": "literature.json", "column": col["column"],
            "measure": "max distance to the tabulated curve in (P/P_max, u/u_max)",
            "error": dev if len(steps) else None, "n_points": len(steps), "P_max": P_max,

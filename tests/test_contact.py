@@ -559,3 +559,36 @@ def test_an_obstacle_pressing_into_a_clamped_node_is_named():
                                                    r"support holds") as exc:
         p.solve(steps=1)
     assert "the last converged load factor is 0.316" in str(exc.value)
+
+
+def test_a_far_part_with_an_obstacle_names_the_distance_when_newton_stalls():
+    """A 1 x 1 plate of 0.25 elements, clamped on two edges and pressed, under a small sphere it
+    does not reach: converged at 1e2 and 1e3 from the origin (iterations as at the origin) and
+    stalled at the first step from 1e4 on (the obstacle is not translation invariant, so the
+    iterate is held in the problem's coordinates: docs/STEPS.md).  The ConvergenceError said only
+    'no convergence in 30 iterations (residual 8.06e-04)'; it now names the distance, the load
+    and the fix.  (The face samples' Jacobians at 1e9 are off by 5.5e-7 relative, their gaps by
+    1.8e-7 = 1.5 ulp of the positions: differencing the corners first leaves the gaps, forces
+    and tangents as far off, which the obstacle's evaluation at the far points sets.)"""
+    import warnings
+    from core_se3.errors import ConvergenceError
+    from core_se3.mesh.core import Mesh
+    m0 = M.rectangle(1.0, 1.0, 4, 4)
+
+    def solve(shift):
+        g0 = m0.g0.copy()
+        g0[:, :3, 3] += shift
+        p = cs.Problem(Mesh(g0=g0, quads=m0.quads, edges=m0.edges, shape=m0.shape), cs.Material(1e4, 0.3, 0.02))
+        p.clamp("x0")
+        p.clamp("x1")
+        p.add_pressure(-3.0)
+        p.add_obstacle("sphere", centre=tuple(np.array([0.40, 0.10, 0.071]) + shift), radius=0.06, name="ball",
+                       law=dict(faces=True))
+        return p.solve(steps=2, max_cutbacks=2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        its = [s.iterations for s in solve(np.zeros(3)).steps]
+        assert [s.iterations for s in solve(np.array([1e3, 5e2, -2.5e2])).steps] == its
+        with pytest.raises(ConvergenceError, match=r"the part lies 1\.15e\+04 from the origin .*'ball' \(ContactLoad\) "
+                                                   r"is not translation invariant.*near the origin"):
+            solve(np.array([1e4, 5e3, -2.5e3]))

@@ -184,3 +184,22 @@ def test_a_linear_runs_vtu_shows_the_magnetic_loads_it_solved(tmp_path):
                                rtol=1e-12, atol=1e-12 * abs(couple))
     np.testing.assert_allclose(st["applied"]["moment"], [0.0, couple * 40.0 * 5.0, 0.0], rtol=1e-12,
                                atol=1e-12 * abs(couple))
+
+
+@pytest.mark.parametrize("text, found", [("[1, 2]", "an array (a list)"), ("3.5", "a number"), ('"r.json"', "a string"),
+                                          ("null", "null"), ("{bad", "not JSON")])
+def test_read_json_names_the_file_of_a_document_that_is_not_an_object(tmp_path, text, found):
+    """A result file whose top level is a list, a number, a string or null failed with a bare
+    AttributeError ('list' object has no attribute 'get'), and text that is not JSON with a
+    JSONDecodeError that did not name the file: now a ResultFileError (a ValueError) naming the
+    file, what it holds and what was expected."""
+    from core_se3.errors import ResultFileError
+    from core_se3.results import read_json, write_json, result_document
+    path = tmp_path / "result.json"
+    path.write_text(text)
+    with pytest.raises(ResultFileError, match="core-se3-result") as info:
+        read_json(path)
+    assert info.value.file == str(path) and str(path) in str(info.value) and found in str(info.value)
+    assert isinstance(info.value, ValueError)
+    write_json(path, result_document("demo", "core_se3", "default", {}, {"nx": None}, [], {}))
+    assert read_json(path)["case"] == "demo"

@@ -81,12 +81,12 @@ def _same_rod(p, data):
     return same_params(p, data) or ("" if "nu" in data else rod_nu0(p, data))
 
 
-_LENGTHS = ("L", "R", "h", "width")           # the case parameters of dimension length
+_LENGTHS = ("L", "R", "h", "width", "r_in", "r_out")     # the case parameters of dimension length
 
 
 def similarity(p, data):
     """(a, s): the length and stress scales of the run ``p`` against a reference entry's
-    ``data`` (its L, else R; its E), 1 where the entry states none.  A run in other units (or
+    ``data`` (its L, else R, else the annulus' r_out; its E), 1 where the entry states none.  A run in other units (or
     a scaled copy: L, h, width, R times a, E times s) is the same problem; the table holds for
     it with lengths times a and forces times s a^2 (:func:`_physical`).
 
@@ -96,7 +96,7 @@ def similarity(p, data):
     (0.001, 1000000.0)
     """
     named = {_param_name(k): v for k, v in data.items()}
-    key = next((k for k in ("L", "R") if k in p and isinstance(named.get(k), (int, float)) and named[k]), None)
+    key = next((k for k in ("L", "R", "r_out") if k in p and isinstance(named.get(k), (int, float)) and named[k]), None)
     a = p[key] / named[key] if key else 1.0
     s = p["E"] / named["E"] if "E" in p and isinstance(named.get("E"), (int, float)) and named["E"] else 1.0
     return a, s
@@ -108,11 +108,34 @@ def _in_reference_units(p, data):
     return {k: (v / a if k in _LENGTHS else v / s if k == "E" else v) for k, v in p.items()}
 
 
+def similar_params(p, data):
+    """:func:`same_params` of the run carried to the entry's units (:func:`similarity`): "" for
+    the entry's problem in any units, else why not -- the first parameter that differs as the
+    run states it, and, for a run in other units, the one that differs in the entry's units.
+
+    Example
+    -------
+    >>> similar_params({"R": 10000.0, "h": 40.0, "E": 68.25}, {"R": 10.0, "h": 0.04, "E": 6.825e7})
+    ''
+    >>> similar_params({"R": 12.0, "h": 0.04}, {"R": 10.0, "h": 0.04})    # doctest: +NORMALIZE_WHITESPACE
+    'the reference entry is for R = 10, the run has R = 12; nor is it that problem in other units
+     (lengths x 1.2, E x 1: in its units the reference entry is for h = 0.04, the run has h = 0.0333333)'
+    """
+    why = same_params(_in_reference_units(p, data), data)
+    if not why:
+        return ""
+    a, s = similarity(p, data)
+    raw = same_params(p, data)
+    if (a, s) == (1.0, 1.0) or not raw:
+        return raw or why
+    return f"{raw}; nor is it that problem in other units (lengths x {a:g}, E x {s:g}: in its units {why})"
+
+
 def _similar_rod(p, data):
     """:func:`_same_rod` of the run carried to the entry's units: a run in other units (mm for
     m, MPa for Pa, ...) or scaled as a whole is compared, not refused (before: 'not compared:
     the reference entry is for E = 200000, the run has E = 2e+11' for the steel strip in SI)."""
-    return _same_rod(_in_reference_units(p, data), data)
+    return similar_params(p, data) or ("" if "nu" in data else rod_nu0(p, data))
 
 
 def _physical(entry, block="tip"):

@@ -26,7 +26,7 @@ from .case import Family, register_family
 from .measures import curve_columns, curve_deviation, table_curves
 from .references import literature_entry
 
-__all__ = ["sze_problem", "run_sze", "document", "table_scale", "table_comparison", "stop_length_ratio"]
+__all__ = ["sze_problem", "run_sze", "document", "table_scale", "table_units", "table_comparison", "stop_length_ratio"]
 
 
 # ------------------------------------------------------------------ build -----------------
@@ -224,11 +224,34 @@ _TABLE_KEYS = {"R_inner": "r_in", "R_outer": "r_out", "L_total": "L", "half_angl
                "hole_half_angle_deg": "hole_deg"}
 
 
+def table_units(case, p):
+    """(a, f): the length scale of the run ``p`` against its table and the scale of its load
+    (``load_max``: a force, f = s a^2; the slit annulus' line force, f = s a), by similarity
+    (``cases_shells.similarity``: lengths times a, E times s).  A run in other units (``--set``
+    of every dimensional parameter) is the table's problem: its loads are the table's times f,
+    its displacements times a.  The penalty factors (``k_pin``, ``k_rot``, ``k_diaphragm``) are
+    stiffnesses over E h (E h^3), dimensionless: they carry over unchanged.
+
+    Example
+    -------
+    >>> from .case import get_case, case_params
+    >>> c = get_case("sze-hemisphere")
+    >>> a, f = table_units(c, case_params(c, {"R": 10000.0, "h": 40.0, "E": 68.25}))
+    >>> round(a, 12), round(f, 12)
+    (1000.0, 1.0)
+    """
+    from .cases_shells import similarity
+    t = {_TABLE_KEYS.get(k, k): v for k, v in literature_entry(case.extra["literature"]).get("parameters", {}).items()}
+    a, s = similarity(p, t)
+    return a, s * a ** (1 if case.units.get("load_max") == "force/length" else 2)
+
+
 def table_scale(case, p):
     """(P_max, why) of a case's table: P_max the load its P/P_max column is normalised by (the
     published problem's, ``parameters.P_max`` of literature.json; the case's default
-    ``load_max`` where the table states none, e.g. s3.8(d)), ``why`` "" when the table holds at
-    the parameters p (E, nu, h, R, L, ... as published), else which one differs.
+    ``load_max`` where the table states none, e.g. s3.8(d)) in the run's units (times the load
+    scale of :func:`table_units`), ``why`` "" when the table holds at the parameters p (E, nu,
+    h, R, L, ... as published, or all of them in other units), else which one differs.
 
     Example
     -------
@@ -238,20 +261,25 @@ def table_scale(case, p):
     (3000.0, '')
     >>> table_scale(c, case_params(c, {"h": 6.35}))[1]
     'the reference entry is for h = 12.7, the run has h = 6.35'
+    >>> P, why = table_scale(c, case_params(c, {"R": 2.54, "L": 0.508, "h": 0.0127, "E": 3.10275e9}))
+    >>> round(P, 9), why
+    (3000.0, '')
     """
-    from .cases_shells import same_params
-    t = literature_entry(case.extra["literature"]).get("parameters", {})
+    from .cases_shells import similar_params
+    t = {_TABLE_KEYS.get(k, k): v for k, v in literature_entry(case.extra["literature"]).get("parameters", {}).items()}
     P_max = t.get("P_max", t.get("P_max_per_unit_length", case.params["load_max"]))
-    why = same_params(p, {_TABLE_KEYS.get(k, k): v for k, v in t.items() if not k.startswith("P_max")})
-    return float(P_max), why
+    why = similar_params(p, {k: v for k, v in t.items() if not k.startswith("P_max")})
+    return float(P_max) * table_units(case, p)[1], why
 
 
 def table_comparison(case, p, lams, probes):
     """The ``reference`` block of a Sze run and its per-step deviations (None: not compared).
 
     lams: the steps' load factors (P = lam load_max); probes: per step {probe: u (3,)}.  The
-    table's axis is P / P_max with the table's own P_max (:func:`table_scale`); at parameters
-    other than the table's nothing is compared (``note`` says why).  Points beyond the table's
+    table's axis is P / P_max with the table's own P_max (:func:`table_scale`); a run in other
+    units is compared in the table's (its displacements / ``length_scale``, :func:`table_units`;
+    the block's u values are the table's units); at parameters other than the table's nothing is
+    compared (``note`` says why).  Points beyond the table's
     largest load on a path stopped by the load (``load_max`` above the table's) are left out
     (``n_beyond_table``); ``path_complete`` is False when the path ended before the table's end
     (the deviation then covers the computed part only).
@@ -262,6 +290,10 @@ def table_comparison(case, p, lams, probes):
                 P_max=P_max, n_points=len(lams))
     if why:
         return dict(base, error=None, deviation=None, note=f"not compared: {why}"), [None] * len(lams)
+    a, f = table_units(case, p)
+    if (a, f) != (1.0, 1.0):            # a run in other units: the table's displacements x a, loads x f
+        base.update(length_scale=a, load_scale=f)
+        probes = [{k: np.asarray(u, float) / a for k, u in pr.items()} for pr in probes]
     x = np.asarray(lams, float) * p["load_max"] / P_max
     curves = table_curves(case)
     by_load = case.extra.get("stop") != "table_end_displacement"
@@ -330,7 +362,7 @@ def plot(case, p, doc, res, path):
     for (col, tl, tu), c in zip(table_curves(case), curve_columns(case)):
         u = np.array([c["sign"] * s["probes"][c["probe"]]["u"][c["component"]] for s in doc["steps"]])
         line, = ax.plot(u, x, "o-", ms=3, label=f"core_se3 {col}")
-        ax.plot(tu, tl, "--", color="k" if len(curve_columns(case)) == 1 else line.get_color(), lw=1,
+        ax.plot(tu * ref.get("length_scale", 1.0), tl, "--", color="k" if len(curve_columns(case)) == 1 else line.get_color(), lw=1,
                 label=f"Sze 2004 {col}")
     for cp in doc.get("critical_points", []):
         ax.axhline(cp["load_factor"] * p["load_max"] / ref["P_max"], color="0.8", lw=0.6)

@@ -30,6 +30,8 @@ import json
 
 import numpy as np
 
+from ..errors import ResultFileError
+
 __all__ = ["SCHEMA", "VERSION", "read_json", "write_json", "probe_record", "step_record", "format_residual",
            "ROUNDOFF_NOTE", "contact_record",
            "mesh_record", "timing_record", "step_totals", "result_document"]
@@ -316,8 +318,10 @@ def write_json(path, doc):
 def read_json(path):
     """Read a document, checking its schema and version.
 
-    Parameters: path (str or path-like).  Returns: the document (dict); ValueError for another
-    schema or version.
+    Parameters: path (str or path-like).  Returns: the document (dict).  Raises
+    :class:`~core_se3.errors.ResultFileError` (a ``ValueError``) naming the file for text that is
+    not JSON, a top level that is not an object (a list, a number, a string) and an object of
+    another schema or version.
 
     Example
     -------
@@ -327,12 +331,24 @@ def read_json(path):
     >>> read_json(path)                   # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    ValueError: ...other.json: not a core-se3-result document
+    core_se3.errors.ResultFileError: ...other.json: not a core-se3-result document (its schema is 'something-else')
     """
     with open(path) as fh:
-        doc = json.load(fh)
+        try:
+            doc = json.load(fh)
+        except json.JSONDecodeError as exc:
+            raise ResultFileError(f"not JSON ({exc}); expected a {SCHEMA} document", str(path)) from None
+    if not isinstance(doc, dict):
+        raise ResultFileError(f"the top level is {_json_kind(doc)}; expected a JSON object (a {SCHEMA} "
+                              f"document, as written by write_json)", str(path))
     if doc.get("schema") != SCHEMA:
-        raise ValueError(f"{path}: not a {SCHEMA} document")
+        raise ResultFileError(f"not a {SCHEMA} document (its schema is {doc.get('schema')!r})", str(path))
     if doc.get("version") != VERSION:
-        raise ValueError(f"{path}: schema version {doc.get('version')} (this code reads {VERSION})")
+        raise ResultFileError(f"schema version {doc.get('version')!r} (this code reads {VERSION})", str(path))
     return doc
+
+
+def _json_kind(value):
+    """The JSON name of a decoded value's type, with its article (``an array (a list)``, ...)."""
+    kinds = ((bool, "a boolean"), (list, "an array (a list)"), (str, "a string"), ((int, float), "a number"))
+    return next((name for cls, name in kinds if isinstance(value, cls)), "null")

@@ -35,6 +35,7 @@ from .linalg import make_solver
 from .equations import NewtonEquations
 from .newton_try import NewtonTry, augmented_try, hooked_loads, tangent_predictor
 from .options import NewtonOptions, load_steps, split_options, unknown_keywords
+from .origin import far_part_hint
 from .splitting import (MAX_LOAD_TURN, MAX_PRESCRIBED_TURN, check_substeps, split_prescribed,
                         split_turning, substeps_needed)
 from .stability import limit_point_hint, prescribed_turn_hint, unseen_crossing
@@ -596,7 +597,7 @@ def _record(rec, eq, opts, out, g_start, g, g_whole, lam, tries, checks, at_targ
 def _cutbacks_exhausted(problem, eq, opts, g_whole, lam, lam_try, reason, result):
     """The ConvergenceError of a try cut back ``max_cutbacks`` times, with the likeliest cause."""
     hint = next((h for h in (ld.failure_hint() for ld in hooked_loads(eq, "failure_hint")) if h),
-                None) or (limit_point_hint(problem, g_whole, lam, opts.linear_solver)
+                None) or far_part_hint(problem) or (limit_point_hint(problem, g_whole, lam, opts.linear_solver)
                           if lam != 0.0 and not eq.distributed else None) \
         or (prescribed_turn_hint(problem, g_whole, lam, opts.linear_solver)
             if lam != 0.0 and problem.has_prescribed_motion and not eq.distributed and not eq.stateful else None)

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["part_origin", "mesh_origin", "frames_origin"]
+__all__ = ["part_origin", "mesh_origin", "frames_origin", "far_part_hint"]
 
 
 def part_origin(problem):
@@ -65,3 +65,40 @@ def frames_origin(problem, g, origin=None):
         return None
     x = np.asarray(g)[..., :3, 3]
     return c if np.all(np.abs(x - c) <= 0.5 * np.abs(c), where=(c != 0)) else None
+
+
+def far_part_hint(problem):
+    """Why Newton may stall on a part far from the origin, or "": the part lies more than 1000
+    element sizes from the origin (:func:`mesh_origin`) and a load is not ``translation_invariant``
+    (an obstacle, a spring to a lab point, a field that varies in space), so the iterate is held
+    in the problem's coordinates, whose positions carry a round-off eps |x0| that the strains see
+    as eps |x0| / h_e (a 1 x 1 plate of 0.25 elements, pressed, with an obstacle: converged at
+    1e3 from the origin, stalled at the first step at 1e4, 1e6).  Without such a load the
+    iterate is held relative to the part (:func:`part_origin`) and nothing is said.
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(1.0, 1.0, 4, 4, x0=1e6), Material(1e4, 0.3, 0.02))
+    >>> far_part_hint(p)
+    ''
+    >>> _ = p.add_obstacle("sphere", centre=(1e6 + 0.4, 0.1, 0.071), radius=0.06, name="ball")
+    >>> far_part_hint(p)[:60]
+    'the part lies 1e+06 from the origin (4e+06 element sizes) an'
+    """
+    c = mesh_origin(problem)
+    fixed = [ld for ld in problem.loads if not getattr(ld, "translation_invariant", False)]
+    if c is None or not fixed:
+        return ""
+    x = problem.mesh.X[problem.mesh.edge_nodes]
+    h = float(np.median(np.linalg.norm(x[:, 1] - x[:, 0], axis=1))) or problem.length_scale
+    d = float(np.linalg.norm(c))
+    if d < 1e3 * h:
+        return ""
+    names = ", ".join(f"{getattr(ld, 'name', 'load')!r} ({type(ld).__name__})" for ld in fixed[:3])
+    eps = np.finfo(float).eps * d
+    return (f"the part lies {d:.3g} from the origin ({d / h:.2g} element sizes) and {names} "
+            f"{'is' if len(fixed) == 1 else 'are'} not translation invariant, so the iterate is held in the "
+            f"problem's coordinates, whose positions carry a round-off eps |x0| = {eps:.2g} ({eps / h:.2g} of an "
+            "element) that can stall Newton (docs/STEPS.md, 'Translation invariance'); place the part and its "
+            "obstacles (or fields, springs) near the origin")
