@@ -408,8 +408,8 @@ def _corner_turns(g0, N, dN, jw, curved):
     u = b / nb[..., None]
     v = np.cross(u, [0.0, 0.0, 1.0])                                   # sin(angle) x axis
     c = u[..., 2]
-    if np.any(c <= 0.5):
-        raise LoadError("follower pressure on a curved element whose frames' d3 is more than 60 degrees off the "
+    if np.any(c <= 0.0):
+        raise LoadError("follower pressure on a curved element whose frames' d3 is 90 degrees or more off the "
                         "normal of its corners' quad: check the mesh's frames (d3 the shell's normal)")
     V = lie.hat3(v)
     Q = np.eye(3) + V + np.einsum("...ij,...jk->...ik", V, V) / (1.0 + c)[..., None, None]   # Rodrigues: u -> e3
