@@ -122,3 +122,22 @@ def test_the_curved_follower_pressure_is_objective_and_the_backends_agree():
     assert abs(eb.K - ea.K).max() < 1e-12 * abs(ea.K).max()
     moved = pa.evaluate(lie.exp([3.0, -1.0, 2.0, 0.4, -0.9, 1.3]) @ g, 0.7, tangent=False)
     assert np.abs(moved.f_ext - ea.f_ext).max() < 1e-13 * scale
+
+
+@pytest.mark.parametrize("n", [6, 12])
+def test_a_cylinder_blown_up_by_a_follower_pressure_reaches_the_exact_radius(n):
+    """Nonlinear: the panel of the hoop test (E h = 200, nu = 0) under a follower pressure p per
+    current area with p R / (E h) = 0.1: the hoop force N = E h (R'/R - 1) balances p R', so
+    R' = R / (1 - p R / (E h)) = R / 0.9 exactly (the element's strain is linear in the stretch
+    of its arcs).  The corners' turns are constant in the body frames and the chords' shape is
+    that of the reference, so the load stays exact: round-off (2e-16); over the chords
+    7.39e-4 low at 6 elements, 1.85e-4 at 12."""
+    m = _panel(n)
+    e, h = 1.0e3, 0.2
+    pb = Problem(m, Material(e, 0.0, h))
+    pb.fix(np.concatenate([m.edges["x0"], m.edges["x1"]]), [0, 4])
+    pb.fix([int(m.edges["y0"][0])], [1])
+    pb.add_pressure(0.1 * e * h / R, follower=True)
+    g = pb.solve(steps=5, limit_check=False).final.g
+    r = np.linalg.norm(g[:, [0, 2], 3], axis=1)
+    assert np.abs(r / (R / 0.9) - 1.0).max() < 1e-13
