@@ -141,3 +141,35 @@ def test_a_cylinder_blown_up_by_a_follower_pressure_reaches_the_exact_radius(n):
     g = pb.solve(steps=5, limit_check=False).final.g
     r = np.linalg.norm(g[:, [0, 2], 3], axis=1)
     assert np.abs(r / (R / 0.9) - 1.0).max() < 1e-13
+
+
+@pytest.mark.parametrize("backend", ["numpy", "numba"])
+def test_a_curved_panels_local_problems_sum_to_the_whole(backend):
+    """Distributed: each rank's loads take the element's j0 of its own elements (parallel.localize):
+    the external forces and tangents of three ranks' local problems of a cylinder panel under a
+    follower pressure and gravity on part of it sum to the serial ones (1e-12)."""
+    from core_se3.parallel import local_problem, rcb, subdomain
+    m = mesh.cylinder_panel(R, L, -ANGLE / 2, ANGLE / 2, 6, 4)
+    pb = Problem(m, Material(E, 0.3, H, rho=2.0), backend=backend)
+    pb.clamp("x0")
+    pb.add_pressure(3.0, follower=True)
+    pb.add_gravity(elements=np.arange(0, m.n_elements, 3))
+    assert pb.loads[0].turns is not None
+    g = m.g0 @ lie.exp(0.05 * np.random.default_rng(3).standard_normal((m.n_nodes, 6)))
+    ev = pb.evaluate(g, 0.7)
+    n = m.n_nodes
+    part = rcb(m.X[m.quads].mean(1), 3)
+    f_ext, K = np.zeros((n, 6)), np.zeros((6 * n, 6 * n))
+    for rank in range(3):
+        sub = subdomain(m, part, rank, 3)
+        loc = local_problem(pb, sub)
+        loc.backend = backend
+        le = loc.evaluate(g[sub.nodes], 0.7)
+        np.add.at(f_ext, sub.nodes, le.f_ext)
+        dof = (6 * sub.nodes[:, None] + np.arange(6)).ravel()[loc.assembler().free]
+        Kl = le.K.tocoo()
+        np.add.at(K, (dof[Kl.row], dof[Kl.col]), Kl.data)
+    free = pb.assembler().free
+    assert np.abs(f_ext - ev.f_ext).max() < 1e-12 * np.abs(ev.f_ext).max()
+    Kg = ev.K.toarray()
+    assert np.abs(K[np.ix_(free, free)] - Kg).max() < 1e-12 * np.abs(Kg).max()
