@@ -304,7 +304,7 @@ class SurfaceLoad(Load):
             if not np.isfinite(q):
                 raise LoadError(f"load {name}: pressure must be finite, got {q}")
             self.p = q
-            self.turns = _corner_turns(mesh.g0[mesh.quads[self.elements]], self.N, self.dN, jw, curved)
+            self.turns = _corner_turns(mesh.g0[mesh.quads[self.elements]], self.N, self.dN, jw, curved, self.elements)
         else:
             self.q = finite_vector(q, "surface load")
             self.node_w = np.einsum("qi,mq->mi", self.N, jw)           # int N_i dA, (m,4)
@@ -394,11 +394,11 @@ class SurfaceLoad(Load):
         return LoadEvaluation(f, None, (self.elements, Ke))
 
 
-def _corner_turns(g0, N, dN, jw, curved):
+def _corner_turns(g0, N, dN, jw, curved, elements):
     """C (k, 4, 3, 3) of a follower pressure's corners (module docstring, "Curved elements"), or
     None where no element is curved: the turn of the reference body-frame force per unit
     pressure b_i = R_i^T int N_i a_1 x a_2 dxi onto d3 (e3 of the frame), times
-    (int N_i jw dxi) / |b_i|; the identity on flat elements."""
+    (int N_i jw dxi) / |b_i|; the identity on flat elements (``elements``: the ids, for the error)."""
     if not curved.any():
         return None
     phi, R = g0[..., :3, 3], g0[..., :3, :3]
@@ -409,8 +409,9 @@ def _corner_turns(g0, N, dN, jw, curved):
     v = np.cross(u, [0.0, 0.0, 1.0])                                   # sin(angle) x axis
     c = u[..., 2]
     if np.any(c <= 0.0):
-        raise LoadError("follower pressure on a curved element whose frames' d3 is 90 degrees or more off the "
-                        "normal of its corners' quad: check the mesh's frames (d3 the shell's normal)")
+        e = int(elements[np.argmax((c <= 0.0).any(axis=1))])
+        raise LoadError(f"follower pressure on curved element {e}: a corner's frame d3 is 90 degrees or more off "
+                        "the normal of the quad of its corners; check the mesh's frames (d3 the shell's normal)")
     V = lie.hat3(v)
     Q = np.eye(3) + V + np.einsum("...ij,...jk->...ik", V, V) / (1.0 + c)[..., None, None]   # Rodrigues: u -> e3
     C = (np.einsum("qi,mq->mi", N, jw) / nb)[..., None, None] * Q
