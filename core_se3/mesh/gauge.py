@@ -125,7 +125,7 @@ def least_turn_angles(g0, edge_nodes):
     >>> a = least_turn_angles(m.g0, m.edge_nodes)
     >>> float(np.abs(normal_turns(turned_about_normal(m.g0, a), m.edge_nodes)).max()) < 1e-14
     True
-    >>> least_turn_angles(mesh.rectangle(1.0, 1.0, 2, 2).g0, mesh.rectangle(1.0, 1.0, 2, 2).edge_nodes).any()
+    >>> bool(least_turn_angles(mesh.rectangle(1.0, 1.0, 2, 2).g0, mesh.rectangle(1.0, 1.0, 2, 2).edge_nodes).any())
     False
     """
     n, E = len(g0), len(edge_nodes)
