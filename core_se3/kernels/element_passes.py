@@ -103,11 +103,13 @@ def nodes_pass(topo, Rq, w, rEg, rg, data, cmap, lo, hi):
     K6 = np.empty((6, 6))
     for nd in range(lo, hi):
         node_residual(nd, node_ptr, node_inc, rE, r)
-        rotate_wrench(r, nd, Rq)
+        if Rq.shape[0]:
+            rotate_wrench(r, nd, Rq)
         if data is not None:
             if rEg is not None:
                 node_residual(nd, node_ptr, node_inc, rEg, rg)
-                rotate_wrench(rg, nd, Rq)
+                if Rq.shape[0]:
+                    rotate_wrench(rg, nd, Rq)
                 node_Kn(nd, rg, data, cmap, K6)
             else:
                 node_Kn(nd, r, data, cmap, K6)
@@ -125,7 +127,8 @@ def _element_blocks(el, quads, elem_edges, sgn, Rq, Dbar, Dsplit, z0, Dz0, psi, 
     Dr = element_D(Dbar, Dsplit, el, D)
     a, b = element_force(el, elem_edges, sgn, Dr, z0, Dz0, psi, z, f, fe)
     element_G(el, elem_edges, sgn, psi, coef, G)
-    rotate_G(G, quads[el], Rq)
+    if Rq.shape[0]:                  # the gauge's frames only (no view made without one)
+        rotate_G(G, quads[el], Rq)
     element_Ke(Dr, G, TT, TTt, KeT)
     return a, b
 
@@ -196,7 +199,8 @@ def _edge_blocks(e, edge_nodes, edge_slots, Rq, psi, coef, fe, rE, fe_geo, rEg, 
         edge_KE(e, psi, coef, Fg, Lp, Lm, Ad, Jm, Y, H, p)
     else:
         edge_KE(e, psi, coef, F, Lp, Lm, Ad, Jm, Y, H, p)
-    rotate_blocks(H, edge_nodes[e], Rq, S3)
+    if Rq.shape[0]:
+        rotate_blocks(H, edge_nodes[e], Rq, S3)
 
 
 @njit(cache=True)
