@@ -225,6 +225,32 @@ def test_output_fields_of_magnets_on_adjacent_regions_are_area_means_not_sums():
     assert np.allclose(Bn, np.linalg.norm(Br), rtol=1e-13)         # |B^r_t| = |B^r_0| everywhere
 
 
+def test_output_br_of_one_material_in_two_fields_is_its_br_not_the_sum():
+    """The walker's spelling (examples/walker.toml): a magnet per field on each region, the
+    same B^r, against one magnet per region in the superposed field -- the same loads, so the
+    same couple, force and B^r_t at every node (exact but for the additions' order).  Before,
+    the VTU field magnetisation_Br summed the two magnets of a region over its area: 0.156 T
+    where the material has 0.078 (the couple was right)."""
+    m = mesh.rectangle(4.0, 1.5, 8, 2)
+    V = UniformField((0.0, 0.0, 0.003))
+    H = GradientField((0.0005, 0.0, 0.0), [[0.01, 0.0, 0.0], [0.0, -0.01, 0.0], [0.0, 0.0, 0.0]])
+    rear = np.nonzero(m.X[m.quads].mean(1)[:, 0] < 2.0)[0]
+    parts = [(rear, (0.078, 0.0, 0.0156)), (np.setdiff1d(np.arange(m.n_elements), rear), (-0.078, 0.0, 0.0156))]
+    two, one = (Problem(m, Material(0.07, 0.0, 0.2)) for _ in range(2))
+    for els, Br in parts:
+        for f in (V, H):
+            two.add_magnetic(Br, f, elements=els, mu0=MU0 * 1e6)
+        one.add_magnetic(Br, Superposition(V, H), elements=els, mu0=MU0 * 1e6)
+    g = _random_state(m, 1e-2, 0.3)
+    a, b = one.output_fields(g, 0.7), two.output_fields(g, 0.7)
+    for k in a:
+        assert np.allclose(b[k], a[k], rtol=1e-13, atol=1e-13 * np.abs(a[k]).max()), (k, b[k][:2], a[k][:2])
+    Bn = np.linalg.norm(b["magnetisation_Br"], axis=1)
+    mid = np.abs(m.X[:, 0] - 2.0) < 1e-12              # where +x and -x meet: the mean, (0, 0, 0.0156)
+    assert np.allclose(Bn[~mid], np.hypot(0.078, 0.0156), rtol=1e-13)
+    assert np.allclose(Bn[mid], 0.0156, rtol=1e-12)
+
+
 def test_element_selections_are_masks_or_ids_given_once():
     """A boolean mask over the elements was cast to the ids 0 and 1 (mask [T, F, F, T]: elements
     1, 0, 0, 1, total dipole 0.4 instead of 0.2), a repeated id magnetised its element twice and
