@@ -88,6 +88,36 @@ def test_design_command_writes_and_the_optimised_scenario_reproduces(tmp_path):
         assert res["angles_deg"][lab] == pytest.approx(np.degrees(np.arctan2(m["Br"][2], m["Br"][0])), abs=1e-9)
 
 
+def test_a_magnetisation_in_two_fields_is_designed_and_written_in_both(tmp_path):
+    """One material in two fields, a magnet per field (examples/walker.toml's spelling).  Before,
+    the magnetisation variable (``field = "coil"``; without it a DesignError asked for one) dropped
+    the magnets of the other field and started from the sum of the two B^r (0.286 T), and the
+    optimised scenario had the material in the coil only.  Now the design acts in both fields
+    and the optimised scenario writes a magnet per region and field, which `run` reproduces."""
+    spec = BASE.replace('[[magnets]]\nBr = [0.143, 0.0, 0.0]\n',
+                        '[fields.side]\ntype = "uniform"\nB = [0.0005, 0.0, 0.0]\n'
+                        '[[magnets]]\nBr = [0.143, 0.0, 0.0]\nfield = "coil"\n'
+                        '[[magnets]]\nBr = [0.143, 0.0, 0.0]\nfield = "side"\n')
+    spec = spec.replace('regions = ["root", "free"]\n', 'regions = ["root", "free"]\nfield = "coil"\n')
+    assert spec.count("[[magnets]]") == 2 and 'field = "coil"\n' in spec.split("[design]")[1]
+    path = tmp_path / "two.toml"
+    path.write_text(spec)
+    scn = scenario.load(path)
+    design = scn.design()
+    mv = design.variables[1]
+    assert [np.linalg.norm(b) for b in mv.Br()] == pytest.approx([0.143, 0.143], rel=1e-12)
+    out = tmp_path / "out"
+    assert main(["design", str(path), "--out", str(out), "-q"]) == 0
+    doc = json.loads((out / "design.json").read_text())
+    assert doc["result"]["reached"] and doc["result"]["max_misfit"] < 1e-6
+    opt = scenario.load(out / "optimised.toml")
+    mags = opt.spec["magnets"]
+    assert sorted((m["region"], m["field"]) for m in mags) == [("free", "coil"), ("free", "side"),
+                                                               ("root", "coil"), ("root", "side")]
+    tip = opt.problem.solve().final.probes["tip"]["u"] + np.array([17.2, 0.0, 0.0])
+    assert abs(tip[0] - 12.0) < 1e-5 and abs(tip[2] - 10.0) < 1e-5
+
+
 @pytest.mark.parametrize("old,new,key", [
     ('probe = "tip"\nvalue', 'probe = "tpi"\nvalue', "design.targets[0].probe"),
     ('regions = ["root", "free"]', 'regions = ["root", "fre"]', "design.variables[1].regions"),

@@ -14,7 +14,7 @@ import warnings
 import numpy as np
 import pytest
 
-from core_se3 import Material, Problem, mesh
+from core_se3 import Material, Problem, lie, mesh
 from core_se3.design import (Design, Energy, EquilibriumOptions, EquilibriumState, FieldGradientVariable, FieldVariable, LoadMagnitude,
                              MaterialVariable, NodePosition, Orientation, ProbePosition, RegionMagnetisation,
                              Pose, RotationAngle, Target, assign_all, follow, sensitivity, solve_flat)
@@ -164,6 +164,34 @@ def test_magnetisation_variable_over_a_non_uniform_magnet_is_refused():
     v = RegionMagnetisation(p, [[0, 1], [2, 3]], name="Br")
     assert v.start_misfit < 1e-14
     assert np.allclose(p.external(p.mesh.g0, 1.0, tangent=False)[0], f0, rtol=1e-13, atol=1e-16)
+
+
+def test_magnetisation_of_one_material_in_two_fields_keeps_both_fields():
+    """The walker's spelling (examples/walker.toml): a magnet per field on each region, the same
+    B^r.  Before, the variable (field given: without it a DesignError asked for one) dropped the
+    magnets of the other field and fitted their sum: the start was 0.156 T instead of 0.078 and
+    the magnetic load changed by 1.00 of its largest nodal value.  Now it acts in both fields,
+    the loads are kept (to round-off), its sensitivities (in both fields) match re-solves, and
+    a field other than the magnets' is refused."""
+    m = mesh.rectangle(4.0, 1.5, 8, 1)
+    V, H = UniformField((0.0, 0.0, 0.003)), UniformField((0.0005, 0.0, 0.0004))
+    rear, front = np.arange(4), np.arange(4, 8)
+    p = Problem(m, Material(0.07, 0.0, 0.2))
+    p.clamp("x0")
+    p.add_probe("tip", "x1")
+    for els, Br in ((rear, (0.078, 0.0, 0.0156)), (front, (-0.078, 0.0, 0.0156))):
+        for f in (V, H):
+            p.add_magnetic(Br, f, elements=els, mu0=1.2566370614359173)
+    g = p.mesh.g0 @ lie.exp(np.random.default_rng(2).normal(size=(m.n_nodes, 6)) * 0.1)
+    f0 = p.external(g, 1.0, tangent=False)[0]
+    with pytest.raises(DesignError, match="other field"):
+        RegionMagnetisation(p, [rear, front], field=UniformField((0.0, 0.0, 1.0)))
+    v = RegionMagnetisation(p, [rear, front], field=V)
+    assert np.allclose(v.value(), [0.078, 0.0, 0.0156, -0.078, 0.0, 0.0156], rtol=1e-13, atol=1e-16)
+    assert [ld.field for ld in p.loads] == [V, H]
+    assert np.abs(p.external(g, 1.0, tangent=False)[0] - f0).max() <= 1e-13 * np.abs(f0).max()
+    res = p.solve(steps=2, rtol=1e-12, dtol=1e-12)
+    check(p, [v], [ProbePosition(p, "tip")], res.final.g)
 
 
 def test_thickness_of_a_region_in_contact_is_refused():

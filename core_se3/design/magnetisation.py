@@ -81,6 +81,26 @@ def _covered_magnets(problem, elements, name):
     return old
 
 
+def _fields_of(old, field, name):
+    """The applied fields of a RegionMagnetisation: those of the replaced magnets ``old`` (one
+    material put in several fields by a magnet per field, as examples/walker.toml), ``field``
+    first when given (it must be one of them: before, the magnets of the other fields were
+    dropped and their B^r added into the fitted start); [field] without magnets."""
+    fields = []
+    for ld in old:
+        if not any(ld.field is f for f in fields):
+            fields.append(ld.field)
+    if field is None:
+        if not fields:
+            raise DesignError(f"magnetisation {name!r}: no magnet on these regions: give the applied field")
+        return fields
+    if fields and not any(field is f for f in fields):
+        raise DesignError(f"magnetisation {name!r}: the magnets on these regions are in {len(fields)} other "
+                          "field(s) than the one given: the variable replaces them in their own fields; give one "
+                          "of them or none")
+    return [field] + [f for f in fields if f is not field]
+
+
 class RegionMagnetisation(Variable):
     """The residual flux density B^r [T] (lab, reference configuration) constant over each of a
     list of element regions -- what can be fabricated -- as a design variable: form 'vector'
@@ -104,7 +124,10 @@ class RegionMagnetisation(Variable):
         The form with its planes, free components and bound (:class:`Parametrisation`; a
         form name or a dict of its fields; default 'vector', all free, unbounded).
     field : Field, optional
-        The applied field (default that of the replaced magnets; needed without them).
+        The applied field: needed without magnets on the regions; with them, one of their fields
+        or None.  The variable acts in every field of the replaced magnets (one material put
+        in several fields by a magnet per field, ``examples/walker.toml``: its B^r, fitted to
+        each field's magnets, is one); ``fields`` lists them, ``field`` is the first.
     mu0 : float, optional
         Vacuum permeability (default that of the replaced magnets -- a DesignError when they
         differ -- else MU0).
@@ -144,12 +167,8 @@ class RegionMagnetisation(Variable):
             raise DesignError(f"magnetisation {name!r}: the regions overlap")
         k = len(self.regions)
         old = _covered_magnets(problem, allel, name)
-        fields = {id(ld.field): ld.field for ld in old}
-        if field is None:
-            if len(fields) != 1:
-                raise DesignError(f"magnetisation {name!r}: " + ("no magnet on these regions: give the applied field"
-                                  if not fields else "the magnets on these regions are in different fields: give one"))
-            field = next(iter(fields.values()))
+        self.fields = _fields_of(old, field, name)
+        field = self.fields[0]
         mu0s = {ld.mag.mu0 for ld in old}
         if mu0 is None and len(mu0s) > 1:
             # one mu0 for all the regions: SI's in its place would scale the loads by mu0 / MU0
@@ -200,19 +219,27 @@ class RegionMagnetisation(Variable):
     def _fitted(self, old):
         """B^r per region (k, 3) fitted to the replaced magnets' nodal moments (least squares of
         lab int B^r N dA), and its relative misfit (0 when B^r was constant per region)."""
-        mesh, k = self.problem.mesh, len(self.regions)
-        R0 = mesh.g0[:, :3, :3]
-        mom = np.zeros((mesh.n_nodes, 3))                                # lab int Br N dA
-        for ld in old:
-            mom[ld.mag.nodes] += np.einsum("kij,kj->ki", R0[ld.mag.nodes], ld.mag.mu) * ld.mag.mu0 / ld.mag.h
-        Br = np.linalg.lstsq(self.Wr, mom, rcond=None)[0] if old else np.zeros((k, 3))
-        err = np.linalg.norm(self.Wr @ Br - mom, axis=1)                  # per node
+        k = len(self.regions)
+        # one material in several fields (a magnet per field): each field's moments, fitted by one B^r
+        moms = np.stack([mom_f for mom_f in (self._moments([ld for ld in old if ld.field is f]) for f in self.fields)])
+        Br = np.linalg.lstsq(self.Wr, moms.mean(0), rcond=None)[0] if old else np.zeros((k, 3))
+        err = np.sqrt(np.sum((self.Wr @ Br - moms) ** 2, axis=(0, 2)))   # per node
+        mom = np.sqrt(np.sum(moms ** 2, axis=0))
         on = self.Wr > 0                                                 # (n, k): the nodes of each region
         own = on & (on.sum(1) == 1)[:, None]                             # ... and of it alone
         own[:, ~own.any(0)] = on[:, ~own.any(0)]
         self.region_misfit = np.array([np.linalg.norm(err[own[:, j]]) / max(np.linalg.norm(mom[own[:, j]]), 1e-300)
                                        for j in range(k)])
         return Br, float(np.linalg.norm(err) / max(np.linalg.norm(mom), 1e-300))
+
+    def _moments(self, old):
+        """(n, 3) the lab nodal moments int B^r N dA of the magnets ``old``."""
+        mesh = self.problem.mesh
+        R0 = mesh.g0[:, :3, :3]
+        mom = np.zeros((mesh.n_nodes, 3))
+        for ld in old:
+            mom[ld.mag.nodes] += np.einsum("kij,kj->ki", R0[ld.mag.nodes], ld.mag.mu) * ld.mag.mu0 / ld.mag.h
+        return mom
 
     def _check_uniform(self, name, rtol=1e-8):
         """DesignError when the replaced magnets' B^r is not constant over each region (the fit's
@@ -224,8 +251,11 @@ class RegionMagnetisation(Variable):
             where = region_label(self.region_names, j)
             raise DesignError(f"magnetisation {name!r}: the magnets' B^r varies over {where} (one B^r per region "
                               f"fits their nodal moments to a relative misfit of {self.start_misfit:.3g} > {rtol:g}, "
-                              f"{self.region_misfit[j]:.3g} on {where}'s own nodes); a design variable is one B^r "
-                              "per region: give regions on which B^r is uniform (or a start B^r)")
+                              f"{self.region_misfit[j]:.3g} on {where}'s own nodes"
+                              + (f"; or differs between the {len(self.fields)} fields the magnets put it in"
+                                 if len(self.fields) > 1 else "") +
+                              "); a design variable is one B^r per region: give regions on which B^r is uniform "
+                              "(or a start B^r)")
 
     def _own_loads(self, W, allel, owner, name):
         """The variable's magnetic loads, one per thickness t over the regions, each with its
@@ -237,11 +267,12 @@ class RegionMagnetisation(Variable):
         loads = []
         for t in np.unique(h_el[allel]):
             el = allel[h_el[allel] == t]
-            mag = Magnetisation(mesh, np.tile([1.0, 0.0, 0.0], (len(el), 1)), float(t), el, self.mu0, "element")
             Wt = W[:, np.isin(allel, el)]
-            C = np.stack([Wt[:, owner[np.isin(allel, el)] == j].sum(1) for j in range(k)], 1)[mag.nodes]
-            loads.append((problem.add(MagneticLoad(mag, self.field, name=f"{name} (h = {t:g})")),
-                          C * (t / self.mu0), R0[mag.nodes]))
+            for i, field in enumerate(self.fields):                   # the material in each of its fields
+                mag = Magnetisation(mesh, np.tile([1.0, 0.0, 0.0], (len(el), 1)), float(t), el, self.mu0, "element")
+                C = np.stack([Wt[:, owner[np.isin(allel, el)] == j].sum(1) for j in range(k)], 1)[mag.nodes]
+                label = f"{name} (h = {t:g})" + (f" field {i}" if len(self.fields) > 1 else "")
+                loads.append((problem.add(MagneticLoad(mag, field, name=label)), C * (t / self.mu0), R0[mag.nodes]))
         return loads
 
     def _parametrise(self, Br, planes, Br_max, fitted, name):

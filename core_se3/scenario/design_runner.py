@@ -51,10 +51,11 @@ def _write_magnetisation(scn, doc, v):
         if not np.all(np.isin(el, union)):
             kept.append(m)
     for name, Br in zip(v.region_names, v.Br()):
-        m = dict(region=name, Br=[float(b) for b in Br], field=names[id(v.field)])
-        if abs(v.mu0 - mu0_of(scn.spec["units"])) > 1e-15 * v.mu0:
-            m["mu0"] = v.mu0
-        kept.append(m)
+        for field in v.fields:                     # the material in each field of its magnets
+            m = dict(region=name, Br=[float(b) for b in Br], field=names[id(field)])
+            if abs(v.mu0 - mu0_of(scn.spec["units"])) > 1e-15 * v.mu0:
+                m["mu0"] = v.mu0
+            kept.append(m)
     doc["magnets"] = kept
 
 
