@@ -161,7 +161,7 @@ def pinched_cylinder(n, h=3.0, material=None, element="default", **kw):
     return p, lambda res: -_u(res, A, (0.0, 0.0, 1.0))
 
 
-def pinched_hemisphere(n, h=0.04, material=None, element="default", R=10.0, load_arc=None, **kw):
+def pinched_hemisphere(n, h=0.04, material=None, element="default", R=10.0, load_arc=None, transform=None, **kw):
     """Quarter of the hemisphere with an 18 deg hole (R 10, E 6.825e7, nu 0.3), radial loads 2
     alternating on the equator (1 on each loaded node of the quarter), n x n; measure: the
     outward displacement under the outward load.
@@ -171,8 +171,14 @@ def pinched_hemisphere(n, h=0.04, material=None, element="default", R=10.0, load
     shear-deformable shell has no finite displacement under a point load: it grows like
     P ln(1/r) / (pi k G h) at a free edge (Reissner-Mindlin), so on thick shells (R/h 10) the
     point load's mesh sequence has no limit and the spread load is the well-posed problem.
+
+    ``transform``: a function Mesh -> Mesh applied to the generated mesh (the same nodes and node
+    sets; frames turned or interior nodes moved: ``benchmarks/curved_frames.py``).  The supports
+    hold body-frame dofs of the symmetry edges, so a transform keeps the frames of those nodes.
     """
     m = G.hemisphere_quarter(R, 18.0, n, n)
+    if transform is not None:
+        m = transform(m)
     p = Problem(m, material or Material(6.825e7, 0.3, h), element=element, **kw)
     p.fix("y0", (1, 3, 5))
     p.fix("y1", (1, 3, 5))

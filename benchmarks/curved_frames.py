@@ -1,0 +1,400 @@
+"""Doubly curved shells: how the nodal frames and distorted meshes lock thin coarse meshes
+(issue 30; docs/ELEMENTS.md, "Doubly curved shells: frames and distorted meshes").
+
+    .venv/bin/python benchmarks/curved_frames.py      -> benchmarks/results/curved_frames.md
+
+The least-turn gauge (``core_se3/mesh/gauge.py``) makes the element independent of the user's d1
+on flat and developable parts; a doubly curved part keeps the user's frames.  This script
+measures what that costs:
+
+1. One element of a sphere: the eigenvalues of its linear stiffness that scale like h^3 (bending
+   order: K(h) / K(h/10) ~ 1000) against those that scale like h (membrane order, ~10), for the
+   generator's meridian d1 and for d1 turned about the normals in the four nodal patterns.
+2. The pinched quarter hemisphere (MacNeal and Harder's case, R/h 10 / 250 / 1e4): the interior
+   frames turned smoothly (alpha = A sin 2 theta), the interior nodes moved at random along the
+   sphere (meridian d1 at the moved nodes), and per-element frames that make every element's
+   edge geodesics meet at a parallelogram's corner angles (a prototype: blocks of a mesh whose
+   elements own their nodes, turned back and assembled), each over the generator's own value.
+3. The whole hemisphere (hole clamped, equator free, four alternating loads) with d1 the
+   projection of a constant hint (a mesh file's default) against the meridians.
+"""
+from __future__ import annotations
+
+import datetime
+import os
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+os.environ.setdefault("CORE_SE3_BACKEND", "numpy")      # the per-element prototype swaps the element
+
+from core_se3 import Material, Problem, lie, mesh                      # noqa: E402
+from core_se3.catalogue import shell_course as sc                       # noqa: E402
+from core_se3.fem.element import ElementEvaluation                      # noqa: E402
+from core_se3.fem.element_default import DefaultElement                 # noqa: E402
+from core_se3.mesh.gauge import turned_about_normal                     # noqa: E402
+
+OUT = Path(__file__).parent / "results" / "curved_frames.md"
+R = 10.0
+
+
+# ---------------------------------------------------------------- 1. one element of a sphere
+def sphere_element(lat=(0.2, 0.6), lon=(0.3, 0.7)):
+    """Positions, normals and meridian d1 (toward the pole) of the quad lat x lon on the sphere R."""
+    pts = [(lat[0], lon[0]), (lat[0], lon[1]), (lat[1], lon[1]), (lat[1], lon[0])]
+    X = np.array([[R * np.cos(a) * np.cos(b), R * np.cos(a) * np.sin(b), R * np.sin(a)] for a, b in pts])
+    merid = np.array([[-np.sin(a) * np.cos(b), -np.sin(a) * np.sin(b), np.cos(a)] for a, b in pts])
+    return X, X / R, merid
+
+
+def element_stiffness(g, h):
+    """The linear stiffness (24, 24) of the one element on frames g (4, 4, 4), built as given."""
+    el = DefaultElement(mesh.Mesh(g, np.array([[0, 1, 2, 3]])), Material(1.0, 0.3, h))
+    el.gauge = None
+    B = el.evaluate(g).element_blocks[0]
+    return np.transpose(B, (0, 2, 1, 3)).reshape(24, 24)
+
+
+def bending_order_count(g):
+    """How many non-rigid eigenvalues fall 1000-fold with h / 10 (> 300-fold counted)."""
+    e1 = np.sort(np.abs(np.linalg.eigvalsh(element_stiffness(g, 1e-2))))
+    e2 = np.sort(np.abs(np.linalg.eigvalsh(element_stiffness(g, 1e-3))))
+    return int((e1[6:] / e2[6:] > 300.0).sum())
+
+
+def helix_corner_angles(g):
+    """Interior angles [deg] (4,) at which the edge geodesics exp(t log(g_a^-1 g_b)) of the quad
+    meet (their tangents R_a v and R_b v, v the twist's translation)."""
+    t_out, t_in = [], []
+    for a, b in ((0, 1), (1, 2), (2, 3), (3, 0)):
+        v = lie.log(lie.relative(g[a], g[b]))[:3]
+        t_out.append(g[a][:3, :3] @ v)
+        t_in.append(g[b][:3, :3] @ v)
+    ang = [np.arccos(np.clip(-t_in[k - 1] @ t_out[k] / np.linalg.norm(t_in[k - 1]) / np.linalg.norm(t_out[k]), -1, 1))
+           for k in range(4)]
+    return np.degrees(ang)
+
+
+def one_element_rows():
+    X, d3, merid = sphere_element()
+    g0 = mesh.frames_from(X, merid, d3)
+    rows = [("meridian (the generator's)", g0)]
+    for name, pat in (("all alike", (1, 1, 1, 1)), ("alternating", (1, -1, 1, -1)),
+                      ("one node", (1, 0, 0, 0)), ("bottom vs top", (1, 1, -1, -1)),
+                      ("left vs right", (1, -1, -1, 1))):
+        for a in (0.01, 0.05):
+            rows.append((f"{name} {pat}, {a} rad", turned_about_normal(g0, a * np.array(pat, float))))
+    rows.append(("projection of (1, 0.3, 0.2) (a file's hint)",
+                 mesh.frames_from(X, np.tile([1.0, 0.3, 0.2], (4, 1)), d3)))
+    return [(name, bending_order_count(g), helix_corner_angles(g)) for name, g in rows]
+
+
+# ---------------------------------------------------------------- 2. the pinched quarter hemisphere
+def _interior(m):
+    """Nodes on none of the quarter's four edges (the supports hold body-frame dofs of two)."""
+    inside = np.ones(m.n_nodes, bool)
+    for s in ("y0", "y1", "x0", "x1"):
+        inside[np.asarray(m.node_set(s))] = False
+    return inside
+
+
+def turned_smoothly(amplitude):
+    """Transform: the interior frames turned about their normals by A sin 2 theta (theta the longitude)."""
+    def transform(m):
+        theta = np.arctan2(m.X[:, 1], m.X[:, 0])
+        alpha = _interior(m) * amplitude * np.sin(2.0 * theta)
+        return mesh.Mesh(turned_about_normal(m.g0, alpha), m.quads, edges=m.edges)
+    return transform
+
+
+def jittered(fraction, n, seed=1):
+    """Transform: the interior nodes moved along the sphere by up to ``fraction`` of the grid
+    spacing in latitude and longitude at random; d1 the meridian at the moved node."""
+    def transform(m):
+        rng = np.random.default_rng(seed)
+        inside = _interior(m)
+        lat = np.arcsin(np.clip(m.X[:, 2] / R, -1.0, 1.0)) + inside * rng.uniform(-fraction, fraction, m.n_nodes) * (
+            (np.pi / 2 - np.radians(18.0)) / n)
+        lon = np.arctan2(m.X[:, 1], m.X[:, 0]) + inside * rng.uniform(-fraction, fraction, m.n_nodes) * (np.pi / 2 / n)
+        X = R * np.stack([np.cos(lat) * np.cos(lon), np.cos(lat) * np.sin(lon), np.sin(lat)], 1)
+        merid = np.stack([-np.sin(lat) * np.cos(lon), -np.sin(lat) * np.sin(lon), np.cos(lat)], 1)
+        d1 = np.einsum("ni,ni->n", m.g0[:, :3, 0], merid)[:, None] * merid       # the generator's sense
+        return mesh.Mesh(mesh.frames_from(X, d1, X / R), m.quads, edges=m.edges)
+    return transform
+
+
+def parallelogram_defects(g):
+    """Per element (m, 2) of element frames g (m, 4, 4, 4): corner angle 0 minus 2 and 1 minus 3
+    [rad] of its edge geodesics (``helix_corner_angles``, all elements at once), wrapped to (-pi, pi]."""
+    a, b = g, np.roll(g, -1, axis=1)                                     # edge k: node k -> k + 1
+    v = lie.log(lie.relative(a, b))[..., :3]
+    t_out = np.einsum("mkij,mkj->mki", a[..., :3, :3], v)
+    t_in = np.roll(np.einsum("mkij,mkj->mki", b[..., :3, :3], v), 1, axis=1)   # at node k: edge k - 1's end
+    n = g[..., :3, 2]
+    ang = np.arctan2(np.einsum("mki,mki->mk", n, np.cross(t_out, -t_in)), np.einsum("mki,mki->mk", t_out, -t_in))
+    d = np.stack([ang[:, 0] - ang[:, 2], ang[:, 1] - ang[:, 3]], 1)
+    return (d + np.pi) % (2 * np.pi) - np.pi
+
+
+def element_turns(ge, iters=30, eps=1e-7):
+    """alpha (4,): turns of one element's frames that zero its parallelogram defect (least norm, Newton)."""
+    alpha = np.zeros(4)
+    for _ in range(iters):
+        d = parallelogram_defects(turned_about_normal(ge, alpha)[None])[0]
+        J = np.stack([(parallelogram_defects(turned_about_normal(ge, alpha + eps * np.eye(4)[k])[None])[0] - d) / eps
+                      for k in range(4)], 1)
+        step = -np.linalg.pinv(J) @ d
+        alpha += step
+        if np.abs(step).max() < 1e-13:
+            break
+    return alpha
+
+
+class PerElementFrames:
+    """The default element with every element on its own frames g_a Rz(alpha_ea) (``element_turns``):
+    a mesh whose elements own their nodes gives the blocks, turned back to the user's frames.
+    Linear analysis only (the blocks at the reference state)."""
+
+    def __init__(self, problem):
+        self._base, m = problem.element, problem.mesh
+        ge = m.g0[m.quads]
+        self.alpha = np.array([element_turns(e) for e in ge])
+        g = turned_about_normal(ge.reshape(-1, 4, 4), self.alpha.ravel())
+        self._own = DefaultElement(mesh.Mesh(g, np.arange(len(g)).reshape(-1, 4)), problem.material)
+        self._own.gauge = None
+
+    def __getattr__(self, name):
+        return getattr(self._base, name)
+
+    def evaluate(self, g, tangent=True, stress=None):
+        Ke = self._own.evaluate(self._own.mesh.g0).element_blocks
+        Rz = turned_about_normal(np.broadcast_to(np.eye(4), (self.alpha.size, 4, 4)), self.alpha.ravel())
+        Rz = Rz.reshape(self.alpha.shape + (4, 4))[..., :3, :3]
+        T = np.zeros(self.alpha.shape + (6, 6))
+        T[..., :3, :3] = T[..., 3:, 3:] = Rz
+        K = np.einsum("maij,mabjk,mblk->mabil", T, Ke, T)
+        n, E = self._base.mesh.n_nodes, len(self._base.mesh.edge_nodes)
+        return ElementEvaluation(0.0, np.zeros((n, 6)), 1.0, K, np.zeros((E, 2, 2, 6, 6)), np.zeros((n, 6, 6)))
+
+
+def quarter(n, h, transform=None, per_element=False):
+    """The pinched quarter hemisphere's outward deflection under its load."""
+    p, measure = sc.pinched_hemisphere(n, h=h, transform=transform)
+    if per_element:
+        p._element = PerElementFrames(p)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return measure(p.solve_linear())
+
+
+def quarter_rows(meshes=(4, 8, 16), thicknesses=(1.0, 0.04, 1e-3)):
+    rows = []
+    for h in thicknesses:
+        for n in meshes:
+            base = quarter(n, h)
+            cells = [quarter(n, h, turned_smoothly(a)) / base for a in (0.1, 0.3, 1.0)]
+            cells += [quarter(n, h, jittered(f, n)) / base for f in (0.1, 0.2, 0.3)]
+            cells += [quarter(n, h, jittered(f, n), per_element=True) / base for f in (0.1, 0.3)]
+            cells += [quarter(n, h, turned_smoothly(0.3), per_element=True) / base]
+            rows.append((R / h, n, cells))
+            print(f"quarter R/h {R / h:g} {n}x{n}", np.round(cells, 4), flush=True)
+    return rows
+
+
+# ---------------------------------------------------------------- 3. the whole hemisphere
+def whole_hemisphere(n):
+    """Frames (N, 4, 4) and quads of the whole hemisphere with the 18 deg hole: four quarters turned
+    about z, coincident nodes merged (meridian d1 throughout)."""
+    q = mesh.hemisphere_quarter(R, 18.0, n, n)
+    gs, qs = [], []
+    for k in range(4):
+        Q = np.eye(4)
+        Q[:3, :3] = lie.exp_so3([0.0, 0.0, k * np.pi / 2])
+        gs.append(Q @ q.g0)
+        qs.append(q.quads + k * q.n_nodes)
+    g = np.concatenate(gs)
+    _, first, inverse = np.unique(np.round(g[:, :3, 3], 9), axis=0, return_index=True, return_inverse=True)
+    return g[first], inverse.ravel()[np.concatenate(qs)]
+
+
+def whole(n, h, hint=None):
+    """Outward deflection under the load at (R, 0, 0): hole clamped, equator free, radial loads
+    +1 / -1 / +1 / -1 at longitudes 0, 90, 180, 270 deg; d1 the meridians or the projected hint.
+    Returns the deflection and whether an ElementWarning was issued."""
+    g, quads = whole_hemisphere(n)
+    X = g[:, :3, 3]
+    if hint is not None:
+        g = mesh.frames_from(X, np.tile(np.asarray(hint, float), (len(X), 1)), g[:, :3, 2])
+    p = Problem(mesh.Mesh(g, quads), Material(6.825e7, 0.3, h))
+    p.fix(list(np.flatnonzero(X[:, 2] > X[:, 2].max() - 1e-9)), (0, 1, 2, 3, 4, 5))
+    ring = np.flatnonzero(np.abs(X[:, 2]) < 1e-9)
+    loaded = []
+    for k in range(4):
+        target = R * np.array([np.cos(k * np.pi / 2), np.sin(k * np.pi / 2), 0.0])
+        node = ring[np.argmin(np.linalg.norm(X[ring] - target, axis=1))]
+        p.add_nodal_load([node], force=tuple((-1) ** k * X[node] / R))
+        loaded.append(node)
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        u = p.solve_linear().displacements()
+    warned = any(type(w.message).__name__ == "ElementWarning" for w in seen)
+    return float(u[loaded[0]] @ X[loaded[0]] / R), warned
+
+
+def whole_rows(meshes=(4, 8, 16), thicknesses=(0.04, 1e-3)):
+    rows = []
+    for h in thicknesses:
+        for n in meshes:
+            base, warned_base = whole(n, h)
+            value, warned = whole(n, h, hint=(1.0, 0.3, 0.2))
+            rows.append((R / h, n, base, value / base, warned_base, warned))
+            print(f"whole R/h {R / h:g} {n}x{n}", base, value / base, warned, flush=True)
+    return rows
+
+
+# ---------------------------------------------------------------- report
+def report(one, quarter_table, whole_table, nodal, cap):
+    lines = [
+        "# Doubly curved shells: the nodal frames and distorted meshes (issue 30)", "",
+        f"`python benchmarks/curved_frames.py` on {datetime.datetime.now().isoformat(timespec='seconds')} "
+        "(linear analysis, NumPy backend; docs/ELEMENTS.md, \"Doubly curved shells\").", "",
+        "## One element of a sphere", "",
+        "R 10, latitude 0.2 ... 0.6, longitude 0.3 ... 0.7 rad. Bending-order eigenvalues: non-rigid eigenvalues "
+        "of the linear stiffness that fall more than 300-fold from h = 0.01 to 0.001 (the others fall 10-fold: "
+        "membrane order). Corner angles: where the element's edge geodesics meet (node order (lat0, lon0), "
+        "(lat0, lon1), (lat1, lon1), (lat1, lon0)); d1 turned about the normals by a x the pattern.", "",
+        "| nodal d1 | bending-order eigenvalues | corner angles of the edge geodesics [deg] |",
+        "|---|---:|---|"]
+    lines += [f"| {name} | {count} | {' / '.join(f'{a:.3f}' for a in ang)} |" for name, count, ang in one]
+    lines += [
+        "", "## The pinched quarter hemisphere", "",
+        "Deflection / the generator's own value on the same mesh (meridian d1). Turned: the interior frames "
+        "turned by A sin 2 theta. Moved: the interior nodes moved at random by up to the fraction of the grid "
+        "spacing (meridian d1 at the moved nodes). Per element: every element on its own frames whose edge "
+        "geodesics meet at a parallelogram's corners (`element_turns`).", "",
+        "| R/h | mesh | turned 0.1 | turned 0.3 | turned 1 | moved 0.1 | moved 0.2 | moved 0.3 "
+        "| per element, moved 0.1 | per element, moved 0.3 | per element, turned 0.3 |",
+        "|---:|---|" + "---:|" * 9]
+    lines += [f"| {rh:g} | {n}x{n} | " + " | ".join(f"{c:.4f}" for c in cells) + " |" for rh, n, cells in quarter_table]
+    lines += [
+        "", "## The whole hemisphere: meridian d1 against a mesh file's projected hint", "",
+        "Hole clamped, equator free, four alternating radial unit loads; n x n per quarter; hint (1, 0.3, 0.2) "
+        "projected on the tangent planes (`mesh.from_meshio`'s rule). ElementWarning: the coarse-curvature warning "
+        "was issued.", "",
+        "| R/h | mesh | meridian d1 | projected hint / meridian | ElementWarning (meridian / hint) |",
+        "|---:|---|---:|---:|---|"]
+    lines += [f"| {rh:g} | {n}x{n} | {b:.5g} | {r:.4f} | {wb} / {w} |" for rh, n, b, r, wb, w in whole_table]
+    lines += [
+        "", "## Nodal turns that zero the parallelogram defects", "",
+        "Least squares over one turn per node (`nodal_parallelogram_turns`, Gauss-Newton): the largest defect "
+        "(corner angle 0 minus 2, 1 minus 3, of any element) before and after.", "",
+        "| mesh, frames | largest defect before [rad] | after [rad] | |", "|---|---:|---:|---|"]
+    lines += [f"| {name} | {before:.3g} | {after:.2g} | {note} |" for name, before, after, note in nodal]
+    before, after, ang0, ang1, count = cap
+    lines += [
+        "", "The cubed-sphere cap's corner element (4x4, half-angle 1 rad, d1 along the grid), its turns chosen to "
+        f"make the eighth non-rigid eigenvalue smallest (`cap_element_optimum`): that eigenvalue / the largest "
+        f"{before:.2e} -> {after:.2e} ({count} of bending order); the corner angles of its edge geodesics "
+        f"{' / '.join(f'{a:.2f}' for a in ang0)} -> {' / '.join(f'{a:.2f}' for a in ang1)} deg."]
+    return "\n".join(lines) + "\n"
+
+
+def main():
+    one = one_element_rows()
+    for name, count, ang in one:
+        print(f"{name:45s} {count}  {np.round(ang, 3)}", flush=True)
+    q = quarter_rows()
+    w = whole_rows()
+    nodal = nodal_rows()
+    for row in nodal:
+        print(*row, flush=True)
+    cap = cap_element_optimum()
+    print("cap element", cap, flush=True)
+    OUT.write_text(report(one, q, w, nodal, cap))
+    print("wrote", OUT)
+
+
+
+# ---------------------------------------------------------------- 4. nodal turns with no defect
+def nodal_parallelogram_turns(g0, quads, iters=40, eps=1e-7):
+    """alpha (n,): nodal turns that minimise the elements' parallelogram defects in least squares
+    (Gauss-Newton from 0, steps limited to 0.3 rad) and the largest defect left [rad]."""
+    import scipy.sparse as sp
+    from scipy.sparse.linalg import spsolve
+    n, m = len(g0), len(quads)
+    alpha = np.zeros(n)
+    for _ in range(iters):
+        ge = turned_about_normal(g0, alpha)[quads]
+        d = parallelogram_defects(ge).ravel()
+        vals = []
+        for k in range(4):                                   # the element-local derivatives
+            turn = np.zeros((m, 4))
+            turn[:, k] = eps
+            gp = turned_about_normal(ge.reshape(-1, 4, 4), turn.ravel()).reshape(ge.shape)
+            vals.append((parallelogram_defects(gp).ravel() - d) / eps)
+        J = sp.csr_matrix((np.concatenate(vals), (np.tile(np.arange(2 * m), 4),
+                                                  np.concatenate([np.repeat(quads[:, k], 2) for k in range(4)]))),
+                          shape=(2 * m, n))
+        step = spsolve((J.T @ J + 1e-10 * sp.identity(n)).tocsc(), -(J.T @ d))
+        alpha += step * min(1.0, 0.3 / max(np.abs(step).max(), 1e-300))
+        if np.abs(step).max() < 1e-12:
+            break
+    return alpha, float(np.abs(parallelogram_defects(turned_about_normal(g0, alpha)[quads])).max())
+
+
+def cubed_cap(n, half=0.6):
+    """A spherical cap (R, half-angle ``half`` along the axes) meshed by the gnomonic projection of
+    an n x n square; d1 along the grid's first direction."""
+    u = np.tan(half) * np.linspace(-1.0, 1.0, n + 1)
+    U, V = np.meshgrid(u, u, indexing="ij")
+    D = np.stack([U, V, np.ones_like(U)], -1)
+    X = R * D / np.linalg.norm(D, axis=-1, keepdims=True)
+    d1 = np.gradient(X, axis=0).reshape(-1, 3)
+    idx = np.arange((n + 1) ** 2).reshape(n + 1, n + 1)
+    quads = np.stack([idx[:-1, :-1], idx[1:, :-1], idx[1:, 1:], idx[:-1, 1:]], -1).reshape(-1, 4)
+    X = X.reshape(-1, 3)
+    return mesh.frames_from(X, d1, X / R), quads
+
+
+def nodal_rows():
+    rows = []
+    for n in (3, 4):
+        g, quads = whole_hemisphere(n)
+        theta = np.arctan2(g[:, 1, 3], g[:, 0, 3])
+        turned = 0.3 * np.sin(2 * theta) + 0.02 * np.cos(3 * theta) * g[:, 2, 3]
+        alpha, left = nodal_parallelogram_turns(turned_about_normal(g, turned), quads)
+        back = alpha + turned
+        rows.append((f"whole hemisphere {n}x{n} per quarter, meridian d1 turned by 0.3 sin 2 theta + ...",
+                     float(np.abs(parallelogram_defects(turned_about_normal(g, turned)[quads])).max()), left,
+                     f"net turn from the meridians: spread {np.ptp(back):.1e} rad"))
+    for n in (4, 8):
+        g, quads = cubed_cap(n)
+        alpha, left = nodal_parallelogram_turns(g, quads)
+        rows.append((f"cubed-sphere cap {n}x{n}, d1 along the grid", float(np.abs(parallelogram_defects(g[quads])).max()),
+                     left, f"largest turn {np.abs(alpha).max():.2f} rad"))
+    return rows
+
+
+def cap_element_optimum():
+    """The cubed-sphere cap's corner element (4x4, half-angle 1 rad, d1 along the grid): the turns
+    of nodes 1 ... 3 that make its eighth non-rigid eigenvalue smallest (Powell, within 0.4 rad),
+    and the corner angles of its edge geodesics there; the eigenvalue / the largest, before and after."""
+    from scipy.optimize import minimize
+    g, quads = cubed_cap(4, half=1.0)
+    ge = g[quads[0]]
+
+    def eighth(a):
+        e = np.sort(np.abs(np.linalg.eigvalsh(element_stiffness(turned_about_normal(ge, np.r_[0.0, a]), 1e-3))))
+        return np.log(e[13] / e[-1])
+
+    r = minimize(eighth, np.zeros(3), method="Powell", bounds=[(-0.4, 0.4)] * 3,
+                 options=dict(xtol=1e-10, ftol=1e-12, maxiter=4000))
+    r = minimize(eighth, r.x, method="Powell", bounds=[(-0.4, 0.4)] * 3, options=dict(xtol=1e-12, ftol=1e-14))
+    best = turned_about_normal(ge, np.r_[0.0, r.x])
+    return (np.exp(eighth(np.zeros(3))), np.exp(r.fun), helix_corner_angles(ge), helix_corner_angles(best),
+            bending_order_count(best))
+
+
+if __name__ == "__main__":
+    main()
