@@ -100,8 +100,8 @@ _BAD_LOAD_ARGUMENTS = [
     (lambda p: p.add_load("pressure", p="x"), "p must be a number"),
     (lambda p: p.add_pressure(1.0, follower="yes"), "follower must be True or False"),
     (lambda p: p.add_gravity(rho="x"), "rho must be a number"),
-    (lambda p: p.add_gravity(g="down"), "g must be a vector of 3 finite numbers"),
-    (lambda p: p.add_body_force((1.0, 2.0)), "q must be a vector of 3 finite numbers"),
+    (lambda p: p.add_gravity(g="down"), "g must be a finite 3-vector"),
+    (lambda p: p.add_body_force((1.0, 2.0)), "q must be a finite 3-vector"),
     # a bad selection: SupportError ("node ids ...") or a LoadError without the argument before
     (lambda p: p.add_edge_force([1.5], (1.0, 0.0, 0.0)), r"the selection \[1.5\] \(a line or node set name"),
     (lambda p: p.add_nodal_load(None, force=(1.0, 0.0, 0.0)), r"the selection None"),

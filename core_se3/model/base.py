@@ -457,7 +457,7 @@ def check_given(kind, values):
             except (TypeError, ValueError):
                 a = None
             ok = a is not None and a.shape == (p.n,) and bool(np.all(np.isfinite(a)))
-            what = f"a vector of {p.n} finite numbers"
+            what = "a finite 3-vector" if p.n == 3 else f"a vector of {p.n} finite numbers"
         elif p.kind == "bool":
             ok, what = isinstance(v, (bool, np.bool_)), "True or False"
         else:

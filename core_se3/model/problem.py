@@ -396,7 +396,8 @@ class Problem:
         ``Br_per`` ('element' or 'node') says which table an array ``Br`` is: needed only when
         the selection has as many elements as the mesh has nodes (a closed mesh: a LoadError
         without it).  Returns the load (its ``mag.nodes`` are the magnetised nodes), or the list
-        of loads."""
+        of loads.  A Br that is zero on every selected element adds nothing, with a LoadWarning
+        (a sweep may start at zero); Br, mu0 or elements of the wrong type are a LoadError."""
         mu0 = MU0 if mu0 is None else mu0
         try:
             sel = self.elements(elements)
