@@ -249,7 +249,10 @@ class ElementTooDistortedError(CoreSE3Error):
     Raised by the default element when an edge turns by more than ``MAX_EDGE_ANGLE`` (0.97 pi),
     by a prescribed motion that turns nodes by more than 0.9 pi within one step, and by a
     ``RotationComponentSpring`` whose node has turned by nearly pi.  The solvers treat it as a
-    failed try and cut the step back; if it persists, refine the mesh (or the load step).
+    failed try and cut the step back; if it persists, refine the mesh (or the load step).  At the
+    reference frames (the element's build) the turn is the user's frames, and the message names
+    the two nodes, the turn and its axis, and asks for consistent frames (d1 along the shell, a
+    mesh file's ``d1_hint``) instead.
 
     Example
     -------

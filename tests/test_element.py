@@ -349,3 +349,32 @@ def test_reference_stiffness_set_up_in_chunks_is_bit_identical(monkeypatch):
         assert m.n_elements > 7
         for name in ("Dbar", "j0", "Dz0", "area"):
             assert np.array_equal(getattr(whole, name), getattr(blocks, name)), name
+
+
+class _OrthotropicLike(Material):
+    """A law whose material axis is the user's d1 (not in-plane isotropic): the element keeps
+    the user's frames (no least-turn gauge), as for an orthotropic law."""
+    in_plane_isotropic = False
+
+
+def test_reference_frames_turning_by_pi_name_the_frames_not_the_mesh():
+    """d1 reversed at one node (a pi turn about the normal): the element's build stopped with
+    'edge [2, 3] turns by 3.142 rad ...: refine the mesh or the load step', advice that cannot
+    help at the reference; now it names the nodes' frames, the turn and the fix (consistent d1,
+    d1_hint).  A deformed state turning an edge by 0.985 pi keeps the step advice."""
+    from core_se3.errors import ElementTooDistortedError
+    m = rectangle(1.0, 0.2, 4, 1)
+    g0 = m.g0.copy()
+    g0[3, :3, :2] *= -1.0                                  # node 3: d1, d2 reversed, d3 kept
+    flipped = Mesh(g0, m.quads, edges=m.edges)
+    with pytest.raises(ElementTooDistortedError) as ref:
+        Problem(flipped, _OrthotropicLike(1e6, 0.3, 0.01)).element
+    msg = str(ref.value)
+    assert "reference frames of nodes 2 and 3" in msg and "180 deg" in msg and "(the normal d3)" in msg, msg
+    assert "d1_hint" in msg and "refine the mesh" not in msg, msg
+    el = Problem(m, _OrthotropicLike(1e6, 0.3, 0.01)).element     # consistent frames: builds
+    g = m.g0.copy()
+    g[3] = g[3] @ lie.exp(np.r_[0, 0, 0, 0, 0, 0.985 * np.pi])
+    with pytest.raises(ElementTooDistortedError, match="refine the mesh or the load step") as deformed:
+        el.evaluate(g)
+    assert "reference frames" not in str(deformed.value)

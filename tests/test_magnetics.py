@@ -1,6 +1,7 @@
 """Hard-magnetic loads: load stiffness by finite differences, conservation, objectivity, totals,
 and the Zhao et al. 2019 cantilevers against the planar elastica (core_se3/data/elastica.json)."""
 import re
+import warnings
 
 import numpy as np
 import pytest
@@ -8,7 +9,7 @@ import pytest
 from core_se3 import Material, Problem, lie, mesh
 from core_se3.catalogue import run_case
 from core_se3.catalogue.cases_magnetic import ZHAO_BEAMS
-from core_se3.errors import LoadError
+from core_se3.errors import LoadError, LoadWarning
 from core_se3.model.fields import MU0, DipoleField, GradientField, Superposition, UniformField, rotating_direction
 from core_se3.model.verify import tangent_fd_check
 
@@ -279,6 +280,11 @@ def test_element_selections_are_masks_or_ids_given_once():
     (dict(field="0.05 T"), "Field"),
     (dict(mu0=-1.0), "mu0"),
     (dict(elements=[10 ** 6]), "do not exist"),
+    # a string where numbers belong: NumPy's bare ValueError / TypeError before, naming nothing
+    (dict(Br="x"), "Br must be numbers"),
+    (dict(Br=("a", "b", "c")), "Br must be numbers"),
+    (dict(mu0="x"), "mu0 must be a positive number"),
+    (dict(elements="nope"), r"elements='nope' \(a region name or element ids\): unknown region"),
 ])
 def test_bad_magnetic_input_raises_load_error(kw, match):
     m = mesh.rectangle(0.03, 0.01, 6, 2)
@@ -287,6 +293,31 @@ def test_bad_magnetic_input_raises_load_error(kw, match):
     args.update(kw)
     with pytest.raises(LoadError, match=match):
         p.add_magnetic(**args)
+
+
+def test_zero_magnetisation_warns_naming_the_magnet(tmp_path):
+    """Br = 0 (a user's slip, or the start of a sweep) adds no load: before, silently (no
+    magnetised node, no warning); now a LoadWarning in Python, and in a scenario file a
+    ScenarioWarning naming magnets[i].Br and the region.  A non-zero Br says nothing."""
+    m = mesh.rectangle(0.03, 0.01, 6, 2)
+    m.regions["tip"] = np.array([5, 11])
+    p = Problem(m, Material(1.0e6, 0.3, 1.0e-3))
+    with pytest.warns(LoadWarning, match="Br is zero on elements='tip'"):
+        ld = p.add_magnetic((0.0, 0.0, 0.0), UniformField((0, 0, 0.05)), elements="tip")
+    assert len(ld.mag.nodes) == 0
+    with pytest.warns(LoadWarning, match="Br is zero on the whole shell"):
+        p.add_magnetic(lambda X: 0.0 * X, UniformField((0, 0, 0.05)))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        p.add_magnetic((0.0, 0.0, 1e-9), UniformField((0, 0, 0.05)))
+    from core_se3 import scenario
+    text = ('name = "z"\nunits = "SI"\n[mesh]\ngenerator = "rectangle"\nL = 0.03\nwidth = 0.01\nnx = 6\nny = 2\n'
+            '[regions.tip]\nbox = { x = [0.025, 0.03] }\n[material]\nE = 1e6\nnu = 0.3\nh = 1e-3\n'
+            '[[supports]]\ntype = "clamp"\nedge = "x0"\n[fields.b]\ntype = "uniform"\nB = [0.0, 0.0, 0.05]\n'
+            '[[magnets]]\nregion = "tip"\nBr = [0.0, 0.0, 0.0]\n')
+    (tmp_path / "z.toml").write_text(text)
+    said = [str(w) for w in scenario.load(tmp_path / "z.toml").warnings]
+    assert any("[magnets[0].Br]" in w and "Br is zero on region 'tip'" in w for w in said), said
 
 
 def test_gravity_total_and_bad_density():

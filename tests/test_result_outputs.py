@@ -203,3 +203,35 @@ def test_read_json_names_the_file_of_a_document_that_is_not_an_object(tmp_path, 
     assert isinstance(info.value, ValueError)
     write_json(path, result_document("demo", "core_se3", "default", {}, {"nx": None}, [], {}))
     assert read_json(path)["case"] == "demo"
+
+
+def test_each_step_reports_its_largest_newton_correction(tmp_path, capsys):
+    """The step table and results.json showed only each step's residual; the size of its Newton
+    corrections (computed for the step checks, kept only in the solver's log) was not shown.  Now
+    ``max_correction`` (|eta|_s / ell) per step and a 'correction' column: for the first step from
+    the reference it is the first correction, K0^-1 f: the linear analysis' increments at the same
+    load factor (0.42641, equal to 1e-9); '-' at the start."""
+    import json
+
+    from core_se3 import cli
+    from core_se3.solvers.convergence import increment_norm
+    from core_se3.solvers.linear import linear_increments
+    doc = {"name": "cantilever", "mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 4, "ny": 1},
+           "material": {"E": 1.2e6, "nu": 0.0, "h": 0.1}, "supports": [{"type": "clamp", "edge": "x0"}],
+           "loads": [{"type": "edge_force", "edge": "x1", "force": [0.0, 0.0, 1.0]}], "solver": {"steps": 3},
+           "output": {"vtu": False, "plots": False, "picture": False}}
+    path = tmp_path / "c.toml"
+    path.write_text(scenario.dumps(doc))
+    assert cli.main(["run", str(path), "--out", str(tmp_path / "o")]) == 0
+    steps = json.loads((tmp_path / "o" / "results.json").read_text())["steps"]
+    p = scenario.load(path).problem
+    lin = p.solve(control="linear", lam_end=1.0 / 3.0).final.g
+    first = increment_norm(linear_increments(p.mesh.g0, lin), p.length_scale)
+    assert steps[0]["max_correction"] is None
+    assert abs(steps[1]["max_correction"] - first) <= 1e-9 * first and 0.3 < first < 0.5, (steps[1], first)
+    assert all(0.0 < s["max_correction"] < 1.0 for s in steps[1:])
+    lines = capsys.readouterr().out.splitlines()
+    head = next(i for i, ln in enumerate(lines) if ln.lstrip().startswith("step"))
+    assert lines[head].split()[-1] == "correction"
+    shown = [ln.split()[-1] for ln in lines[head + 1:head + 5]]
+    assert shown[0] == "-" and [float(x) for x in shown[1:]] == [float(f"{s['max_correction']:.2e}") for s in steps[1:]]

@@ -601,3 +601,29 @@ def test_explicit_load_factors(tmp_path):
     d = base()
     d["solver"] = {"control": "arclength", "load_factors": [0.5, 1.0]}
     bad(tmp_path, d, "solver.load_factors", 'control = "load"')
+
+
+def test_a_shell_thinner_than_h_over_L_1e_4_warns_of_a_unit_slip(tmp_path):
+    """A thickness in m with lengths in mm (1000 times too thin) was silent whenever no load number
+    flagged it (a prescribed rotation, or a load scaled by the same slip): the strip of span 10
+    with h = 1e-4 (h/L 2e-5) said nothing.  Now a warning at material.h (and a region's h) naming
+    the ratio and the slip; h/L = 1e-4 itself (the package's thin benchmarks) stays silent, and
+    --strict makes it an error.  Both ends held: L = 5, the largest distance to a support."""
+    d = base()
+    d["units"] = "N-mm-MPa"
+    d["material"]["E"] = 1.2
+    d["loads"] = []
+    d["supports"].append({"type": "rotate", "edge": "x1", "axis": [0.0, 1.0, 0.0], "angle": 0.5})
+    d["material"]["h"] = 1e-4
+    said = [str(w) for w in load_doc(tmp_path, d).warnings]
+    assert any("[material.h]: h / L = 0.0001 / 5 = 2e-05 (L/h = 5e+04) < 0.0001" in w and "h is in mm" in w
+               and "1000 times too thin" in w for w in said), said
+    d["material"]["h"] = 5e-4                                          # h/L = 1e-4: silent
+    assert not [w for w in load_doc(tmp_path, d).warnings if "h / L" in str(w)]
+    d["regions"] = {"tip": {"box": {"x": [5.0, 10.0]}}}
+    d["material"]["regions"] = {"tip": {"h": 1e-6}}
+    said = [str(w) for w in load_doc(tmp_path, d).warnings]
+    assert [w for w in said if "h / L" in w][0].split(": ")[1] == "[material.regions.tip.h]", said
+    (tmp_path / "t.toml").write_text(scenario.dumps(d))
+    with pytest.raises(ScenarioError, match=r"\[material.regions.tip.h\].*with --strict"):
+        scenario.load(tmp_path / "t.toml", strict=True)

@@ -91,3 +91,29 @@ def test_area_loads_of_a_far_part_equal_those_of_the_part_at_the_origin(backend_
         p.add_pressure(3.0, follower=True)
         r.append(p.evaluate(gm, 1.0, tangent=False).r)
     assert np.abs(r[0] - r[1]).max() <= 1e-12 * np.abs(r[1]).max()
+
+
+_BAD_LOAD_ARGUMENTS = [
+    # a string where a number, a bool or a vector belongs: NumPy's bare TypeError / ValueError, or
+    # follower="yes" taken as True (follower="no" too); now a LoadError naming the argument
+    (lambda p: p.add_pressure("x"), "p must be a number"),
+    (lambda p: p.add_load("pressure", p="x"), "p must be a number"),
+    (lambda p: p.add_pressure(1.0, follower="yes"), "follower must be True or False"),
+    (lambda p: p.add_gravity(rho="x"), "rho must be a number"),
+    (lambda p: p.add_gravity(g="down"), "g must be a finite 3-vector"),
+    (lambda p: p.add_body_force((1.0, 2.0)), "q must be a finite 3-vector"),
+    # a bad selection: SupportError ("node ids ...") or a LoadError without the argument before
+    (lambda p: p.add_edge_force([1.5], (1.0, 0.0, 0.0)), r"the selection \[1.5\] \(a line or node set name"),
+    (lambda p: p.add_nodal_load(None, force=(1.0, 0.0, 0.0)), r"the selection None"),
+    (lambda p: p.add_edge_force("nope", (1.0, 0.0, 0.0)), r"the selection 'nope'.*unknown node set 'nope'"),
+    (lambda p: p.add_pressure(1.0, elements="x1"), r"the selection 'x1' \(a region name or element ids\)"),
+]
+
+
+@pytest.mark.parametrize("call, match", _BAD_LOAD_ARGUMENTS)
+def test_bad_load_arguments_are_load_errors_naming_them(call, match):
+    p = Problem(mesh.rectangle(1.0, 0.2, 4, 1), Material(1e6, 0.3, 0.01, rho=1000.0))
+    p.clamp("x0")
+    with pytest.raises(LoadError, match=match):
+        call(p)
+    assert not p.loads                                   # nothing half-added

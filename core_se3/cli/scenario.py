@@ -257,7 +257,8 @@ def _summary(scn, res):
 def step_table(doc):
     """One line per step: load factor, the physical loads (with units), the first probe, the
     total contact force |F| of every obstacle, the total support reaction |R| (its force, lab
-    total of the held dofs and springs), iterations and residual."""
+    total of the held dofs and springs), iterations, residual and the step's largest Newton
+    correction |eta|_s / ell (``max_correction``; '-' where not counted)."""
     import numpy as np
     steps = doc["steps"]
     phys = list((steps[-1].get("physical") or {}).items())
@@ -274,7 +275,8 @@ def step_table(doc):
     if reacts:
         unit = (doc.get("unit_system") or {}).get("force")
         head += f" {'|R|' + (' [' + unit + ']' if unit else ''):>12}"
-    print(head + f" {'it':>3} {'residual':>9}")
+    moved = any(st.get("max_correction") is not None for st in steps)
+    print(head + f" {'it':>3} {'residual':>9}" + (f" {'correction':>10}" if moved else ""))
     for st in steps:
         line = f"{st['step']:>5d} {st['load_factor']:>9.4g}"
         line += "".join(f" {(st.get('physical') or {}).get(k, {}).get('value', float('nan')):>22.6g}" for k, _ in phys)
@@ -287,7 +289,11 @@ def step_table(doc):
         if reacts:
             r = st.get("reactions")
             line += f" {float(np.linalg.norm(r['force'])):>12.6g}" if r else f" {'-':>12}"
-        print(line + f" {st.get('iterations', 0):>3d} {format_residual(st)}")
+        line += f" {st.get('iterations', 0):>3d} {format_residual(st)}"
+        if moved:
+            c = st.get("max_correction")
+            line += f" {c:>10.2e}" if c is not None else f" {'-':>10}"
+        print(line)
     if any(format_residual(st).endswith("*") for st in steps):
         print(ROUNDOFF_NOTE)
     if format_backends(steps):

@@ -137,7 +137,7 @@ def element_gauge(mesh, material):
     return turned_about_normal(np.broadcast_to(np.eye(4), (len(alpha), 4, 4)), alpha)
 
 
-def edge_twists(g, edge_nodes):
+def edge_twists(g, edge_nodes, reference=False):
     """psi_e = log(g_a^-1 g_b) for all edges (E, 6); raises if an edge turns by ~pi.
 
     Parameters
@@ -146,6 +146,10 @@ def edge_twists(g, edge_nodes):
         Nodal frames.
     edge_nodes : (E, 2) array of int
         The edges (a, b), e.g. ``mesh.edge_nodes``.
+    reference : bool, optional
+        ``g`` are the reference frames (the element's build): an edge turning by ~pi there is
+        the user's frames (d1 reversed between nodes, a vortex of the d1 field), and the error
+        says so instead of "refine the mesh or the load step".
 
     Returns
     -------
@@ -161,7 +165,7 @@ def edge_twists(g, edge_nodes):
     >>> m.edge_nodes.tolist(), edge_twists(m.g0, m.edge_nodes)[:, :3].tolist()
     ([[0, 1], [0, 2], [1, 3], [2, 3]], [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]])
     """
-    return _checked_log(_relative_frames(g, edge_nodes), edge_nodes)
+    return _checked_log(_relative_frames(g, edge_nodes), edge_nodes, g if reference else None)
 
 
 def _relative_frames(g, edge_nodes):
@@ -170,16 +174,33 @@ def _relative_frames(g, edge_nodes):
     return lie.relative(g[edge_nodes[:, 0]], g[edge_nodes[:, 1]])
 
 
-def _checked_log(h, edge_nodes):
-    """psi = log(h) (E, 6); ElementTooDistortedError where an edge turns by ~pi."""
+def _checked_log(h, edge_nodes, g_ref=None):
+    """psi = log(h) (E, 6); ElementTooDistortedError where an edge turns by ~pi (``g_ref``: the
+    reference frames, whose turn is the user's frames, not the mesh or the load step)."""
     psi = lie.log(h)
     ang = np.linalg.norm(psi[:, 3:], axis=1)
     if ang.size and ang.max() > MAX_EDGE_ANGLE:
         e = int(np.argmax(ang))
+        a, b = edge_nodes[e].tolist()
+        if g_ref is not None:
+            raise ElementTooDistortedError(_reference_turn_message(g_ref, a, b, psi[e, 3:]))
         raise ElementTooDistortedError(
-            f"edge {edge_nodes[e].tolist()} turns by {ang[e]:.3f} rad (>= {MAX_EDGE_ANGLE:.3f}); the "
+            f"edge {[a, b]} turns by {ang[e]:.3f} rad (>= {MAX_EDGE_ANGLE:.3f}); the "
             "relative rotation across an element must stay below pi: refine the mesh or the load step")
     return psi
+
+
+def _reference_turn_message(g, a, b, w):
+    """The error for the reference frames of nodes a, b turning by |w| ~ pi (w in a's frame)."""
+    R = g[a, :3, :3]
+    axis = R @ w / np.linalg.norm(w)
+    about = " (the normal d3)" if abs(axis @ R[:, 2]) > 0.99 else ""
+    return (f"the reference frames of nodes {a} and {b} (an element edge) turn by {np.linalg.norm(w):.3f} rad "
+            f"({np.degrees(np.linalg.norm(w)):.0f} deg, >= {MAX_EDGE_ANGLE:.3f} rad) about "
+            f"({axis[0]:.3g}, {axis[1]:.3g}, {axis[2]:.3g}){about}: the nodal frames given (their d1, "
+            f"e.g. d1 reversed at one node or a vortex of the d1 field) must turn little across an element; "
+            "give consistent frames (d1 along the shell: Mesh(g0=...), a mesh file's d1_hint) -- neither a "
+            "finer mesh nor a smaller load step changes this")
 
 
 def _dexp_inv_jacobian_T(psi, F, h=1e-30):
@@ -236,7 +257,7 @@ class DefaultElement(Element):
         super().__init__(mesh, material)
         self._kernels = None
         self.gauge = element_gauge(mesh, material)
-        psi0 = edge_twists(self.frames(mesh.g0), mesh.edge_nodes)
+        psi0 = edge_twists(self.frames(mesh.g0), mesh.edge_nodes, reference=True)
         self.z0 = self._element_z(0.5 * psi0)                          # (m, 24)
         P = tying_matrices()
         m = len(self.z0)
@@ -367,7 +388,7 @@ class DefaultElement(Element):
         >>> float(np.abs(el.linear_strains(eta)).max()) < 1e-15
         True
         """
-        psi0 = edge_twists(self.frames(self.mesh.g0), self.mesh.edge_nodes)
+        psi0 = edge_twists(self.frames(self.mesh.g0), self.mesh.edge_nodes, reference=True)
         Lp, Lm = lie.dexp_inv(psi0, both=True)
         return np.einsum("mqij,mj->mqi", self.tying(points), self._element_z(0.5 * self._edge_increments(Lp, Lm, eta)))
 

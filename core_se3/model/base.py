@@ -34,7 +34,7 @@ from ..errors import LoadError
 from ..registry import REQUIRED, Kind, Param, Registry
 
 __all__ = ["Evaluation", "Load", "LoadEvaluation", "force_scale_with_loads", "mesh_ids", "overrides", "Param", "LoadKind", "LOADS", "register_load", "load_kind",
-           "REQUIRED", "linear_scale", "finite_vector", "param_error"]
+           "REQUIRED", "linear_scale", "finite_vector", "param_error", "check_given"]
 
 
 def linear_scale(lam):
@@ -432,6 +432,39 @@ def finite_vector(v, name):
     if v.shape != (3,) or not np.all(np.isfinite(v)):
         raise LoadError(f"{name} must be a finite 3-vector, got {v!r}")
     return v
+
+
+def check_given(kind, values):
+    """The values a caller gives a load kind in Python, checked against its Params (a scenario
+    file's validator checks its own): a number, a bool, a vector of ``n`` finite numbers; a
+    LoadError naming the key (``param``) instead of NumPy's TypeError on a string, and a
+    string taken as True (``follower="no"``).
+
+    Example
+    -------
+    >>> check_given(load_kind("pressure"), {"p": "2"})
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.LoadError: load kind 'pressure': p must be a number (pressure [force/length^2]), got '2'
+    """
+    for p in kind.params:
+        v = values.get(p.name)
+        if v is None or p.kind not in ("number", "bool", "vector"):
+            continue
+        if p.kind == "vector":
+            try:
+                a = np.asarray(v, float)
+            except (TypeError, ValueError):
+                a = None
+            ok = a is not None and a.shape == (p.n,) and bool(np.all(np.isfinite(a)))
+            what = "a finite 3-vector" if p.n == 3 else f"a vector of {p.n} finite numbers"
+        elif p.kind == "bool":
+            ok, what = isinstance(v, (bool, np.bool_)), "True or False"
+        else:
+            ok = not isinstance(v, (str, bytes, bool, np.bool_)) and np.ndim(v) == 0 and np.asarray(v).dtype.kind in "iuf"
+            what = "a number"
+        if not ok:
+            raise param_error(f"load kind {kind.name!r}: {p.name} must be {what} ({p.doc}), got {v!r}", p.name)
 
 
 def force_scale_with_loads(element_scale, loads, ell):

@@ -40,7 +40,7 @@ from ..fem.quadrature import shape_functions, surface_jacobian
 from .base import Load, LoadEvaluation
 from .fields import MU0, Field
 
-__all__ = ["Magnetisation", "MagneticLoad", "table_kind", "MU0", "compiled_magnets", "magnets_force", "magnets_output",
+__all__ = ["Magnetisation", "MagneticLoad", "table_kind", "br_numbers", "MU0", "compiled_magnets", "magnets_force", "magnets_output",
            "dipole_resolution", "DIPOLE_RESOLUTION", "dipole_sources", "on_dipole"]
 
 
@@ -65,6 +65,21 @@ def table_kind(shape, m, n_nodes, per=None):
         raise LoadError(f"magnetisation Br must be a 3-vector, one per selected element ({m}, 3), one "
                         f"per node ({n_nodes}, 3) or a function of position; got shape {tuple(shape)}")
     return per or fits[0]
+
+
+def br_numbers(Br):
+    """``Br`` as an array of floats, or a LoadError naming it (not NumPy's ValueError on 'x').
+
+    Example
+    -------
+    >>> br_numbers([0, 0, 1]).tolist()
+    [0.0, 0.0, 1.0]
+    """
+    try:
+        return np.asarray(Br, float)
+    except (TypeError, ValueError):
+        raise LoadError(f"magnetisation Br must be numbers [T]: a 3-vector, a table (k, 3) or a function of "
+                        f"position, got {Br!r}") from None
 
 
 class Magnetisation:
@@ -113,10 +128,10 @@ class Magnetisation:
         if Br_per not in (None, "element", "node"):
             raise LoadError(f"Br_per must be 'element', 'node' or None (told by Br's shape), got {Br_per!r}")
         self.Br_per = Br_per
-        if not (np.isfinite(h) and h > 0):
-            raise LoadError(f"thickness for the magnetisation must be positive, got {h}")
-        if not (np.isfinite(mu0) and mu0 > 0):
-            raise LoadError(f"mu0 must be positive, got {mu0}")
+        if not (_real(h) and np.isfinite(h) and h > 0):
+            raise LoadError(f"thickness for the magnetisation must be a positive number, got {h!r}")
+        if not (_real(mu0) and np.isfinite(mu0) and mu0 > 0):
+            raise LoadError(f"mu0 must be a positive number (fields.MU0 in SI), got {mu0!r}")
         self.mesh = mesh
         self.mu0 = float(mu0)
         self.h = float(h)
@@ -155,7 +170,7 @@ class Magnetisation:
             if out.shape != (m * N.shape[0], 3):
                 raise LoadError(f"magnetisation function returned shape {out.shape}, expected {(m * N.shape[0], 3)}")
             return out.reshape(m, -1, 3)
-        B = np.asarray(Br, float)
+        B = br_numbers(Br)
         if B.shape == (3,):
             return np.broadcast_to(B, (m, N.shape[0], 3))
         per = table_kind(B.shape, m, self.mesh.n_nodes, self.Br_per)
@@ -324,6 +339,11 @@ class MagneticLoad(Load):
     def output_fields(self, g, lam):
         """Point fields for VTU output (``magnets_output`` of this load alone)."""
         return magnets_output([self], g, lam)
+
+
+def _real(x):
+    """A real number (not a string, a bool or an array)."""
+    return not isinstance(x, (str, bytes, bool, np.bool_)) and np.ndim(x) == 0 and np.asarray(x).dtype.kind in "iuf"
 
 
 def compiled_magnets(loads, pattern):

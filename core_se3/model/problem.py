@@ -22,14 +22,14 @@ import numpy as np
 from .. import lie
 from ..assembly import Assembler
 from .. import backend as _backend
-from ..errors import LoadError, MeshError, OptionError, did_you_mean
+from ..errors import LoadError, LoadWarning, MeshError, OptionError, SupportError, did_you_mean
 from ..fem import ELEMENTS, make_element
-from .base import Evaluation, Load, force_scale_with_loads, linear_scale, load_kind
+from .base import Evaluation, Load, check_given, force_scale_with_loads, linear_scale, load_kind
 from .compiled import CompiledEvaluation
 from .contact import add_obstacle
 from .fields import MU0
 from .loads import line_shares
-from .magnetics import MagneticLoad, Magnetisation, magnets_force, magnets_output, table_kind
+from .magnetics import MagneticLoad, Magnetisation, br_numbers, magnets_force, magnets_output, table_kind
 from .probes import Probe, along_line
 from .solving import SOLVERS, dispatch, solve_linear
 from .supports import (LabSpring, LabTiltSpring, Prescribed, RotationComponentSpring, check_conflict,
@@ -321,6 +321,7 @@ class Problem:
         for p in k.params:
             if p.required and p.name not in values:
                 raise LoadError(f"load kind {kind!r} needs {p.name!r}")
+        check_given(k, values)
         full = {p.name: values.get(p.name, p.default) for p in k.params}
         if check and k.check is not None:
             bad = k.check(full, set(values))
@@ -328,7 +329,12 @@ class Problem:
                 raise LoadError(bad[1])
         if k.target == "line" and _names(where):
             return self._add_on_lines(k, where, scale, full)
-        selection = self.nodes(where) if k.target in ("line", "nodes") else self.elements(where)
+        try:
+            selection = self.nodes(where) if k.target in ("line", "nodes") else self.elements(where)
+        except (LoadError, MeshError, SupportError) as exc:     # the selection's own words, for a load
+            what = "a line or node set name, a predicate or node ids" if k.target != "elements" else \
+                "a region name or element ids"
+            raise LoadError(f"load kind {kind!r}: the selection {where!r} ({what}): {exc}") from None
         built = k.build(self, selection, scale, **full)
         built = built if isinstance(built, (list, tuple)) else [built]
         return [self.add(ld) for ld in built]
@@ -390,9 +396,28 @@ class Problem:
         ``Br_per`` ('element' or 'node') says which table an array ``Br`` is: needed only when
         the selection has as many elements as the mesh has nodes (a closed mesh: a LoadError
         without it).  Returns the load (its ``mag.nodes`` are the magnetised nodes), or the list
-        of loads."""
+        of loads.  A Br that is zero on every selected element adds nothing, with a LoadWarning
+        (a sweep may start at zero); Br, mu0 or elements of the wrong type are a LoadError."""
         mu0 = MU0 if mu0 is None else mu0
-        sel = self.elements(elements)
+        try:
+            sel = self.elements(elements)
+        except LoadError as exc:
+            raise LoadError(f"add_magnetic: elements={elements!r} (a region name or element ids): {exc}") from None
+        with warnings.catch_warnings(record=True) as seen:     # said at the caller's line, not here
+            warnings.simplefilter("always")
+            added = self._add_magnetic(Br, field, sel, mu0, Br_per)
+        for w in seen:
+            warnings.warn(w.message, stacklevel=2)
+        built = added if isinstance(added, list) else [added]
+        if not any(len(ld.mag.nodes) for ld in built):
+            where = "the whole shell" if elements is None else f"elements={elements!r}"
+            warnings.warn(LoadWarning(f"add_magnetic: Br is zero on {where}: the magnet adds no load (a sweep may "
+                                      "start at zero); give its residual flux density [T], or drop the magnet"),
+                          stacklevel=2)
+        return added
+
+    def _add_magnetic(self, Br, field, sel, mu0, Br_per):
+        """``add_magnetic`` on the element ids ``sel`` (None: all): one load, or one per thickness."""
         per = getattr(self.material, "per_element", None)
         h_all = per("h") if per is not None else None
         if h_all is None or len(np.unique(h_all)) == 1:
@@ -404,7 +429,7 @@ class Problem:
         # 3-vector, a table per node and a function of position hold for every part as given
         per = None                  # None: a 3-vector or a function of position
         if not callable(Br):
-            Br = np.asarray(Br, float)
+            Br = br_numbers(Br)
             per = None if Br.shape == (3,) else table_kind(Br.shape, len(ids), self.mesh.n_nodes, Br_per)
         per_element = per == "element"
         return [self.add(MagneticLoad(Magnetisation(self.mesh, Br[h == t] if per_element else Br, float(t),

@@ -6,6 +6,8 @@
                 "probes": {name: {"u": [ux, uy, uz], "rotation_angle", "rotation_vector",
                                   "rotation": 3x3}},
                 "iterations", "residual", "residual_floor", "residual_history",
+                "max_correction" (the step's largest Newton correction |eta|_s / ell; null where not
+                counted: linear analysis, arc length, the start),
                 "reactions": {"force", "moment"}, "applied": {"force", "moment"} (lab totals of the
                 support reactions -- held dofs and penalty springs -- and of the applied loads;
                 moments about the origin), "balance_error",
@@ -103,7 +105,7 @@ def step_record(st, load, axis=None, **extra):
     >>> p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 1.0)); p.add_probe("tip")
     >>> rec = step_record(p.solve(steps=1).final, dict(name="P", value=1.0, unit="N"), error=None)
     >>> list(rec), rec["load_factor"], rec["residual"] < 1e-10
-    (['load_factor', 'load', 'probes', 'iterations', 'residual', 'residual_floor', 'residual_history', 'reactions', 'applied', 'balance_error', 'attempts', 'linear_solves', 'backend', 'support_reactions', 'checks', 'error'], 1.0, True)
+    (['load_factor', 'load', 'probes', 'iterations', 'residual', 'residual_floor', 'residual_history', 'max_correction', 'reactions', 'applied', 'balance_error', 'attempts', 'linear_solves', 'backend', 'support_reactions', 'checks', 'error'], 1.0, True)
     >>> [[round(f, 9) + 0.0 for f in rec[k]["force"]] for k in ("reactions", "applied")]   # held by the clamp
     [[0.0, 0.0, -1.0], [0.0, 0.0, 1.0]]
     """
@@ -113,6 +115,7 @@ def step_record(st, load, axis=None, **extra):
                residual=float(st.residual_history[-1]) if st.residual_history else 0.0,
                residual_floor=float(getattr(st, "residual_floor", 0.0)),
                residual_history=[float(x) for x in st.residual_history],
+               max_correction=None if getattr(st, "max_correction", None) is None else float(st.max_correction),
                reactions=dict(force=np.asarray(st.reaction_force, float).tolist(),
                               moment=np.asarray(st.reaction_moment, float).tolist()),
                applied=dict(force=np.asarray(st.applied_force, float).tolist(),

@@ -99,6 +99,11 @@ class StepResult:
         Newton iterations of the step; ``residual_history``: the relative residual of each.
     backend : str
         'numpy' or 'numba': the backend that evaluated the converged state (``core_se3.backend``).
+    max_correction : float or None
+        The largest Newton correction |eta|_s / ell (relative to the length scale, rotations
+        times ell: ``solvers.convergence.increment_norm``) of the converged tries since the
+        previous stored step -- how far the step moved the state; None where not counted
+        (linear analysis, arc length, the start).
     residual_floor : float
         The round-off floor of the last relative residual: 1e3 eps times the element's force
         scale over the residual's scale (``solvers.convergence.relative_residual``; 0 when not
@@ -165,6 +170,7 @@ class StepResult:
     linear_solves: int | None = 0      # linear solves of those tries (None: not counted)
     contact: dict = field(default_factory=dict)   # name -> dict(force, moment, ...) of contacts
     residual_floor: float = 0.0        # round-off floor of the last relative residual
+    max_correction: float | None = None   # largest |eta|_s / ell of the step's converged tries
     backend: str = ""                  # the backend that evaluated the converged state ('auto' moves)
     checks: dict = field(default_factory=dict)   # what load stepping checked (solvers.step_checks)
     support_reactions: dict = field(default_factory=dict)   # name -> dict(force, moment, ...) per support

@@ -212,7 +212,18 @@ def _add_magnets(v, prob, spec, mesh, regions):
             Br = np.einsum("kij,j->ki", R0, np.asarray(m["Br_frame"], float))
         mu0 = m["mu0"] if m["mu0"] is not None else mu0_units
         try:
-            added = prob.add_magnetic(Br, built[m["field"]], elements=elems, mu0=mu0, Br_per=per)
+            with warnings.catch_warnings(record=True) as said:
+                warnings.simplefilter("always", LoadWarning)
+                added = prob.add_magnetic(Br, built[m["field"]], elements=elems, mu0=mu0, Br_per=per)
         except CoreSE3Error as exc:
             v.fail(key, str(exc))
+        for w in said:                            # a magnet that adds nothing (Br = 0), located in the file
+            if issubclass(w.category, LoadWarning):
+                given = next((k for k in ("Br_frame", "Br_table") if k in m), "Br")
+                where = f"region {m['region']!r}" if m.get("region") else "the whole shell"
+                v.warn(join(key, "Br_file" if given == "Br_table" else given),
+                       f"Br is zero on {where}: the magnet adds no load (a sweep may start at zero); give its "
+                       "residual flux density [T], or drop the magnet")
+            else:
+                warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
         prob.scenario_parts.setdefault("magnets", []).append(added if isinstance(added, list) else [added])

@@ -39,6 +39,10 @@ E_RANGE_PA = (10.0, 7e11)          # soft gels .. tungsten carbide
 RHO_RANGE = (1.0, 2.5e4)           # kg/m^3: aerogels .. osmium
 B_MAX = 2.0                        # T: NdFeB magnets reach ~1.4 T, lab electromagnets ~2 T
 H_OVER_L_MAX = 0.3
+# thinner than h/L 1e-4 (L/h 1e4) is beyond this package's own thin benchmarks (Scordelis-Lo R/h
+# 1e4, in span h/L 1e-4) and real soft-robotic and engineering shells (L/h 10 .. 1e3), and is
+# where a thickness in m with lengths in mm (1000 times too thin) puts any shell of L/h >= 10
+H_OVER_L_MIN = 1e-4
 LINEAR_MAX = 0.1              # a linear analysis: rotations of the order of the load number
 FIRST_STEP_MAX = 1e3
 TURNS_MAX = 10                     # a bare angle [rad] over ten turns is likely degrees (360 -> 57 turns)
@@ -279,6 +283,16 @@ def _density_message(rho, rho_si, u, units):
             f"in {units} the density is in {u['density']} (water {1000 / u['to_kg_m3']:g})")
 
 
+def _thin_message(h, span, u):
+    """The warning for a shell of thickness h [length] thinner than H_OVER_L_MIN of its span."""
+    unit = u["length"] if u is not None and u["to_pa"] is not None else "the mesh's length unit"
+    return (f"h / L = {h:g} / {span:g} = {h / span:.3g} (L/h = {span / h:.3g}) < {H_OVER_L_MIN:g}: thinner than "
+            f"real shells other than foils and films (L = the largest distance to a support); h is in {unit}, "
+            f"as the mesh: a thickness given in m with lengths in mm is 1000 times too thin.  If it is meant: its "
+            f"bending stiffness is (h/L)^2 = {(h / span) ** 2:.2g} of its membrane stiffness, and beyond L/h 1e5 "
+            "double precision limits the solution's accuracy (errors.AccuracyWarning)")
+
+
 def _angles(v, spec):
     """Warn about angles [rad] of more than TURNS_MAX turns (a rotating field, a rotated edge):
     such a turn is split into sub-steps of at most pi/4 (``solvers.splitting``), and an angle in
@@ -352,6 +366,8 @@ def plausibility(v, scn):
             v.warn(f"{key}.h", f"h / L = {mat['h']:g} / {span:g} = {mat['h'] / span:.3g} > {H_OVER_L_MAX:g}: the "
                                "shell is thick for its span (L = the largest distance to a support); a shell "
                                "model needs h << L: check h and the mesh's length unit")
+        elif 0.0 < mat.get("h", 0.0) / span < H_OVER_L_MIN:
+            v.warn(f"{key}.h", _thin_message(mat["h"], span, u))
     lam1 = scn.load_factors()[0] if scn.solver["control"] != "arclength" else scn.solver["dlam0"]
     for n in load_numbers(scn, lam=lam1):
         if scn.solver["control"] == "linear" and n["value"] > LINEAR_MAX:

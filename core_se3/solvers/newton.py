@@ -583,6 +583,7 @@ def _record(rec, eq, opts, out, g_start, g, g_whole, lam, tries, checks, at_targ
         st.residual_floor = min(out.floor, 1e300)      # finite in JSON when all forces are 0
         st.attempts = len(tries)
         st.linear_solves = sum(t["linear_solves"] for t in tries)
+        st.max_correction = max((x for t in tries if t["converged"] for x in t["increments"]), default=0.0)
         st.checks = checks.record()
         if not at_target:
             steps.append(st)
