@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from core_se3 import scenario
-from core_se3.errors import ScenarioError
+from core_se3.errors import ConvergenceError, ScenarioError
 
 BASE = {
     "name": "strip",
@@ -601,3 +601,28 @@ def test_explicit_load_factors(tmp_path):
     d = base()
     d["solver"] = {"control": "arclength", "load_factors": [0.5, 1.0]}
     bad(tmp_path, d, "solver.load_factors", 'control = "load"')
+
+
+@pytest.mark.parametrize("tol", [None, 0.05])
+def test_critical_tol_applies_to_load_control(tmp_path, tol):
+    """[solver] critical_tol, the accuracy to which load control's limit_check locates a critical
+    point (its documented `limit_check` key says so; NewtonOptions.critical_tol), is read under
+    control = "load": the strip compressed by 4 (the 6-element bifurcation at load factor 0.6203) in 2 steps
+    stops at the bifurcation with a bracket of relative width <= critical_tol -- 7.9e-4 at the
+    default 1e-3, 0.05 (0.594 .. 0.625) at 0.05.  Before, the file's critical_tol was refused
+    ('an arc-length control: only with control = "arclength"') and load control kept 1e-3."""
+    d = base()
+    d["mesh"]["nx"] = 6
+    d["loads"] = [{"type": "edge_force", "edge": "x1", "force": [-4.0, 0.0, 0.0]}]
+    d["output"] = {"vtu": False, "plots": False, "picture": False}
+    if tol is not None:
+        d["solver"]["critical_tol"] = tol
+    scn = load_doc(tmp_path, d)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(ConvergenceError) as exc:
+            scenario.run(scn, out=str(tmp_path / "out"))
+    lo, hi = (float(x) for x in re.search(r"between load factors ([0-9.]+) and ([0-9.]+)", str(exc.value)).groups())
+    width = (hi - lo) / hi
+    want = tol or 1e-3
+    assert lo < 0.6203 < hi and want / 2 < width <= want * (1 + 1e-6), (lo, hi)

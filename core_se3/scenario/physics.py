@@ -298,8 +298,8 @@ def solver_section(v, doc):
     if s["lam_end"] == 0:
         v.fail(join(key, "lam_end"), "expected a non-zero final load factor, got 0")
     for name in ("rtol", "dtol", "max_iter", "max_cutbacks", "element", "linear_solver", "iteration", "predictor",
-                 "path_check", "limit_check", "max_substeps", "snap_check", "inertia_check", "end_check",
-                 "friction_check", "friction_tol", "friction_halving"):
+                 "path_check", "limit_check", "critical_tol", "max_substeps", "snap_check", "inertia_check",
+                 "end_check", "friction_check", "friction_tol", "friction_halving"):
         s[name] = v.param(d, key, SOLVER.param(name))
     if s["control"] != "arclength":
         extra = [k for k in ARCLENGTH_DEFAULTS if k in d]
@@ -358,7 +358,7 @@ def solve_defaults(s):
         return dict(control="linear", **common)
     out = dict(control="load", max_cutbacks=s["max_cutbacks"], iteration=s["iteration"],
                predictor=s["predictor"], path_check=s["path_check"], limit_check=s["limit_check"],
-               max_substeps=s["max_substeps"], snap_check=s["snap_check"], inertia_check=s["inertia_check"],
+               critical_tol=s["critical_tol"], max_substeps=s["max_substeps"], snap_check=s["snap_check"], inertia_check=s["inertia_check"],
                end_check=s["end_check"], friction_check=s["friction_check"], friction_tol=s["friction_tol"],
                friction_halving=s["friction_halving"], **common)
     out.update(linear=s.get("linear", "mumps"), petsc_options=dict(s.get("petsc") or {}),
