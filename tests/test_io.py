@@ -158,3 +158,26 @@ def test_plot_worker_submit_returns_before_the_png_and_wait_collects_it(tmp_path
         with pytest.raises(ValueError, match="later"):
             plots.wait()
     assert (tmp_path / "kept.json").exists()
+
+
+def test_a_mesh_file_error_keeps_its_advice_and_hides_the_files_text(tmp_path):
+    """A quad-dominant VTU (4 quads and a triangle) in a scenario: the refusal names the other
+    cells and the fix, ``triangles = "split"``, which then reads it (4 x 4 + 3 quads).  Before,
+    io.files.without_contents cut every quoted passage, the reader's own advice too: '... the
+    mesh also has [...] cells: ... becomes all quads with triangles = ... (... triangles=...)'.
+    A quoted passage that is the file's text (a name the file holds) is still cut."""
+    from core_se3 import scenario
+    from core_se3.errors import ScenarioError
+    X = np.array([[i * 2.5, j, 0.0] for i in range(5) for j in range(2)] + [[11.0, 0.5, 0.0]])
+    quads = np.array([[2 * i, 2 * i + 2, 2 * i + 3, 2 * i + 1] for i in range(4)])
+    meshio.write(tmp_path / "plate.vtu", meshio.Mesh(X, [("quad", quads), ("triangle", np.array([[8, 10, 9]]))]))
+    doc = {"mesh": {"file": "plate.vtu"}, "edges": {"root": {"box": {"x": [0.0, 0.0]}}},
+           "material": {"E": 1.2e6, "nu": 0.3, "h": 0.1}, "supports": [{"type": "clamp", "edge": "root"}]}
+    with pytest.raises(ScenarioError) as exc:
+        scenario.from_dict(doc, base_dir=str(tmp_path))
+    msg = str(exc.value)
+    assert "['triangle'] cells" in msg and 'triangles = "split"' in msg and "[...]" not in msg, msg
+    doc["mesh"]["triangles"] = "split"
+    assert scenario.from_dict(doc, base_dir=str(tmp_path)).mesh.n_elements == 4 * 4 + 3
+    (tmp_path / "named.txt").write_text("a group named 'palm_secret'\n")
+    assert io.without_contents("unknown group 'palm_secret'", str(tmp_path / "named.txt")) == "unknown group ..."
