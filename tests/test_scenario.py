@@ -626,3 +626,27 @@ def test_critical_tol_applies_to_load_control(tmp_path, tol):
     width = (hi - lo) / hi
     want = tol or 1e-3
     assert lo < 0.6203 < hi and want / 2 < width <= want * (1 + 1e-6), (lo, hi)
+
+
+@pytest.mark.parametrize("control", ["arclength", "linear"])
+def test_a_load_control_switch_under_another_control_warns(tmp_path, control):
+    """[solver] switches that only load control reads (max_cutbacks, inertia_check, ...) given
+    with control = "arclength" or "linear" are not used: a warning names the key, and --strict
+    refuses the file.  Before, `inertia_check = true` on an arc-length path (which counts its own
+    pivots) or `max_cutbacks = 20` were accepted without a word."""
+    d = base()
+    d["solver"] = {"control": control, "max_cutbacks": 20, "inertia_check": True}
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        scn = load_doc(tmp_path, d)
+    text = [str(w.message) for w in said]
+    for key in ("solver.max_cutbacks", "solver.inertia_check"):
+        assert any(f"[{key}]: a switch of load control" in t and f'control = "{control}"' in t for t in text), text
+    assert sum("switch of load control" in str(w) for w in scn.warnings) == 2      # Scenario.warnings lists them
+    with pytest.raises(ScenarioError, match=r"\[solver\.max_cutbacks\]"):
+        scenario.from_dict(d, file="s.toml", strict=True)
+    d["solver"] = {"control": "load", "max_cutbacks": 20, "inertia_check": True}
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        load_doc(tmp_path, d)
+    assert not [w for w in said if "switch of load control" in str(w.message)]
