@@ -465,3 +465,17 @@ def test_bench_run_vtu_follows_the_run_directory_rules_and_writes_a_runs_files(t
     assert "M1" in m.cell_data and "N1" in m.cell_data
     assert read_field_data(str(out / "step_0002.vtu"))["load_factor"] == pytest.approx(1.0, abs=1e-12)
     assert [f for _, f in pvd_files(str(out / "series.pvd"))] == [f"step_{k:04d}.vtu" for k in range(3)]
+
+
+@pytest.mark.parametrize("cmd", [["run", "S"], ["sweep", "S", "--set", "material.E=1e6"], ["bench", "run", "cantilever"]])
+def test_progress_and_quiet_together_are_a_usage_error(tmp_path, capsys, cmd):
+    """--progress (draw the line) and -q (no line, no summary) contradict each other (the usage
+    line reads [--progress | -q]): both is a usage error, exit status 2, before anything runs.
+    Before, `run --progress -q` ran and drew the progress line that -q was to silence."""
+    path = write(tmp_path, with_(STRIP, solver={"steps": 1}))
+    args = [path if a == "S" else a for a in cmd] + ["--out" if cmd[0] != "bench" else "--vtu", str(tmp_path / "o"),
+                                                     "--progress", "-q"]
+    with pytest.raises(SystemExit) as exc:
+        cli.main(args)
+    assert exc.value.code == 2 and "not allowed with argument --progress" in capsys.readouterr().err
+    assert not os.path.exists(tmp_path / "o")

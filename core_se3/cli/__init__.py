@@ -238,8 +238,9 @@ def _bench_parsers(sub):
                      "(never over them)")
     run.add_argument("--plot", default=None, help="PNG load-deflection plot")
     run.add_argument("-v", "--verbose", action="store_true", help="log every Newton (sub-)step")
-    run.add_argument("--progress", action="store_true", help="progress line even when not on a terminal")
-    run.add_argument("-q", "--quiet", action="store_true", help="no progress line")
+    both = run.add_mutually_exclusive_group()        # one or the other: both is a usage error
+    both.add_argument("--progress", action="store_true", help="progress line even when not on a terminal")
+    both.add_argument("-q", "--quiet", action="store_true", help="no progress line")
 
 
 def parser():

@@ -43,8 +43,7 @@ def add_parsers(sub):
     sw.add_argument("--resume", action="store_true", help="continue an interrupted sweep in --out")
     sw.add_argument("--force", action="store_true", help="start over in a directory of an earlier sweep")
     sw.add_argument("--strict", action="store_true", help="make the plausibility warnings errors")
-    sw.add_argument("--progress", action="store_true", help="progress line even when not on a terminal")
-    sw.add_argument("-q", "--quiet", action="store_true", help="no progress line, no summary")
+    _progress_or_quiet(sw, "progress line even when not on a terminal", "no progress line, no summary")
     _plugin(sw)
     kinds = sub.add_parser("kinds", help="list the registered kinds of every section and their keys",
                            epilog="sections: generator, law, supports, loads, fields, obstacles, variables, targets")
@@ -94,9 +93,15 @@ def kinds(args):
     return 0
 
 
+def _progress_or_quiet(p, progress, quiet):
+    """--progress and -q/--quiet, one or the other (both: a usage error, exit status 2)."""
+    both = p.add_mutually_exclusive_group()
+    both.add_argument("--progress", action="store_true", help=progress)
+    both.add_argument("-q", "--quiet", action="store_true", help=quiet)
+
+
 def _common(p, progress, quiet):
-    p.add_argument("--progress", action="store_true", help=progress)
-    p.add_argument("-q", "--quiet", action="store_true", help=quiet)
+    _progress_or_quiet(p, progress, quiet)
     p.add_argument("-v", "--verbose", action="store_true", help="log every Newton (sub-)step")
 
 
