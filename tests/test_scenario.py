@@ -650,3 +650,24 @@ def test_a_load_control_switch_under_another_control_warns(tmp_path, control):
         warnings.simplefilter("always")
         load_doc(tmp_path, d)
     assert not [w for w in said if "switch of load control" in str(w.message)]
+
+
+def test_a_byte_order_mark_is_read_past(tmp_path):
+    """Windows editors save a scenario, and spreadsheets a UTF-8 CSV, with a byte order mark
+    (EF BB BF) first.  A scenario with one was refused ('not valid TOML: Invalid statement (at
+    line 1, column 1)') and a Br_file table with one read its header as '\\ufeffelement' ('expected
+    the header element,Brx,Bry,Brz ... its first row has 4 fields').  Both now read as without it:
+    the same fingerprint, the same magnetisation."""
+    d = base()
+    d.update(units="SI", fields={"c": {"type": "uniform", "B": [0.0, 0.0, 0.01]}},
+             magnets=[{"Br_file": "br.csv"}])
+    table = "element,Brx,Bry,Brz\n" + "".join(f"{e},0.{e + 1},0,0\n" for e in range(4))
+    (tmp_path / "br.csv").write_bytes(table.encode())
+    plain = load_doc(tmp_path, d)
+    (tmp_path / "br.csv").write_bytes(b"\xef\xbb\xbf" + table.encode())
+    marked = load_doc(tmp_path, d)
+    mu = plain.problem.loads[-1].mag.mu
+    assert np.ptp(mu[:, 0]) > 0 and np.array_equal(mu, marked.problem.loads[-1].mag.mu)
+    src = (tmp_path / "s.toml").read_bytes()
+    (tmp_path / "bom.toml").write_bytes(b"\xef\xbb\xbf" + src)
+    assert scenario.load(tmp_path / "bom.toml").fingerprint == marked.fingerprint
