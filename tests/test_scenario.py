@@ -671,3 +671,16 @@ def test_a_byte_order_mark_is_read_past(tmp_path):
     src = (tmp_path / "s.toml").read_bytes()
     (tmp_path / "bom.toml").write_bytes(b"\xef\xbb\xbf" + src)
     assert scenario.load(tmp_path / "bom.toml").fingerprint == marked.fingerprint
+
+
+def test_sweep_csv_writes_a_swept_vector_as_its_shortest_decimals(tmp_path):
+    """sweep.csv wrote a swept vector [0, 0, 0.1] as '0;0;0.10000000000000001' (%.17g) while a
+    swept number 0.1 read '0.1' (repr); both read back exactly, and now both are the shortest."""
+    d = base()
+    d["solver"] = {"steps": 1}
+    d["output"] = {"plots": False}
+    scenario.sweep(load_doc(tmp_path, d), {"loads[0].force": [[0.0, 0.0, 0.1]], "material.nu": [0.1]},
+                   out=str(tmp_path / "sw"), plot=False)
+    head, row = (tmp_path / "sw" / "sweep.csv").read_text().splitlines()[:2]
+    cells = dict(zip(head.split(","), row.split(",")))
+    assert cells["loads[0].force"] == "0.0;0.0;0.1" and cells["material.nu"] == "0.1", cells
