@@ -684,3 +684,30 @@ def test_sweep_csv_writes_a_swept_vector_as_its_shortest_decimals(tmp_path):
     head, row = (tmp_path / "sw" / "sweep.csv").read_text().splitlines()[:2]
     cells = dict(zip(head.split(","), row.split(",")))
     assert cells["loads[0].force"] == "0.0;0.0;0.1" and cells["material.nu"] == "0.1", cells
+
+
+@pytest.mark.parametrize("where,key", [("prescribed", "supports[1].rotate.angle"),
+                                       ("motion", "obstacles[0].motion.angle"), ("box", "obstacles[0].rotation")])
+def test_an_angle_in_degrees_warns_wherever_an_angle_is_given(tmp_path, where, key):
+    """360 (degrees meant) as a prescribed support's rotate.angle or an obstacle's motion.angle is
+    57.3 turns in radians, and [0, 0, 90] as a box's rotation vector 14.3 turns: each warns at its
+    key, as a rotate support's angle and a field's rotate.angle did (docs/SCENARIOS.md); before,
+    these three were accepted without a word.  The same keys at 3.0 rad say nothing."""
+    def doc(angle):
+        d = base()
+        d["loads"] = [{"type": "pressure", "p": 0.001}]
+        if where == "prescribed":
+            d["supports"].append({"type": "prescribed", "edge": "x1",
+                                  "rotate": {"axis": [1.0, 0.0, 0.0], "angle": angle}})
+        else:
+            ob = {"type": "box", "centre": [5.0, 0.0, -5.0], "half_sizes": [1.0, 1.0, 1.0]}
+            ob.update({"motion": {"axis": [1.0, 0.0, 0.0], "angle": angle, "point": [5.0, 0.0, -5.0]}}
+                      if where == "motion" else {"rotation": [0.0, 0.0, angle / 4]})
+            d["obstacles"] = [ob]
+        return d
+    for angle, said in ((360.0, True), (3.0, False)):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            load_doc(tmp_path, doc(angle))
+        hits = [str(w.message) for w in caught if f"[{key}]" in str(w.message) and "radians" in str(w.message)]
+        assert bool(hits) == said, (angle, [str(w.message)[:90] for w in caught])

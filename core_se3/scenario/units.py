@@ -280,19 +280,30 @@ def _density_message(rho, rho_si, u, units):
 
 
 def _angles(v, spec):
-    """Warn about angles [rad] of more than TURNS_MAX turns (a rotating field, a rotated edge):
-    such a turn is split into sub-steps of at most pi/4 (``solvers.splitting``), and an angle in
-    degrees by mistake turns 57 times per 360."""
+    """Warn about angles [rad] of more than TURNS_MAX turns (a rotating field, a rotated edge, a
+    prescribed motion's or an obstacle's turn, a box's orientation): such a turn is split into
+    sub-steps of at most pi/4 (``solvers.splitting``), and an angle in degrees by mistake turns 57
+    times per 360."""
     found = [(f"fields.{name}.rotate.angle", f["rotate"]["angle"]) for name, f in spec["fields"].items()
              if f.get("rotate") and f["rotate"].get("angle") is not None]
     found += [(f"supports[{i}].angle", sp["angle"]) for i, sp in enumerate(spec["supports"])
               if sp.get("angle") is not None]
+    found += [(f"supports[{i}].rotate.angle", sp["rotate"]["angle"]) for i, sp in enumerate(spec["supports"])
+              if isinstance(sp.get("rotate"), dict) and sp["rotate"].get("angle") is not None]
+    for i, ob in enumerate(spec.get("obstacles") or ()):
+        if (ob.get("motion") or {}).get("angle") is not None:
+            found.append((f"obstacles[{i}].motion.angle", ob["motion"]["angle"]))
+        turn = float(np.linalg.norm(ob.get("params", {}).get("rotation") or 0.0))
+        if turn > 2 * np.pi:           # an orientation needs no more than half a turn: degrees?
+            v.warn(f"obstacles[{i}].rotation", f"the rotation vector's angle is {turn:g} rad, more than a turn: "
+                                              f"it is in radians (90 degrees is {np.pi / 2:.6g} rad)")
     for key, angle in found:
         turns = abs(float(angle)) / (2 * np.pi)
         if turns > TURNS_MAX:
             v.warn(key, f"angle = {angle:g} rad is {turns:.3g} turns (more than {TURNS_MAX}): angles are in "
-                        f"radians (360 degrees is {2 * np.pi:.6g} rad); if so many turns are meant, the run takes "
-                        "at least 8 sub-steps per turn")
+                        f"radians (360 degrees is {2 * np.pi:.6g} rad)" + (
+                            "" if key.startswith("obstacles") else
+                            "; if so many turns are meant, the run takes at least 8 sub-steps per turn"))
 
 
 def plausibility(v, scn):
