@@ -711,3 +711,23 @@ def test_an_angle_in_degrees_warns_wherever_an_angle_is_given(tmp_path, where, k
             load_doc(tmp_path, doc(angle))
         hits = [str(w.message) for w in caught if f"[{key}]" in str(w.message) and "radians" in str(w.message)]
         assert bool(hits) == said, (angle, [str(w.message)[:90] for w in caught])
+
+
+@pytest.mark.parametrize("where,key,home", [
+    ("top", "steps", "a key of [solver]"), ("top", "E", "a key of [material]"),
+    ("solver", "units", "a top-level key: put it before the first [table] header"),
+    ("solver", "vtu", "a key of [output]"), ("mesh", "rho", "a key of [material]"),
+    ("material", "refine", "a key of [mesh]")])
+def test_a_key_in_the_wrong_table_names_its_table(tmp_path, where, key, home):
+    """A key written in another table -- most often a top-level key after a [table] header, which
+    TOML makes part of that table -- is refused naming the table it belongs to.  Before, the
+    suggestion was a near spelling of this table's keys or nothing: a top-level `steps = 4` read
+    "unknown key 'steps'; did you mean 'sweep'?", `units = "SI"` after [solver] "unknown key
+    'units'" alone."""
+    d = base()
+    value = {"steps": 4, "E": 1.0, "units": "SI", "vtu": False, "rho": 1.0, "refine": 1}[key]
+    (d if where == "top" else d[where]).update({key: value})
+    bad(tmp_path, d, key if where == "top" else f"{where}.{key}", f"unknown key {key!r}; it is {home}")
+    d = base()
+    d["material"]["shear_factr"] = 0.8                            # a misspelling still gets its near key
+    bad(tmp_path, d, "material.shear_factr", "did you mean 'shear_factor'")
