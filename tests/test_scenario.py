@@ -731,3 +731,21 @@ def test_a_key_in_the_wrong_table_names_its_table(tmp_path, where, key, home):
     d = base()
     d["material"]["shear_factr"] = 0.8                            # a misspelling still gets its near key
     bad(tmp_path, d, "material.shear_factr", "did you mean 'shear_factor'")
+
+
+@pytest.mark.parametrize("E,h,key", [(1.2e6, 1e-300, "material.h"), (1.2e6, 1e-110, "material.h"),
+                                     (1e-155, 0.1, "material.E"), (1e308, 100.0, "material.E")])
+def test_a_stiffness_double_precision_cannot_hold_is_refused(tmp_path, E, h, key):
+    """E and h whose membrane stiffness E h or bending stiffness E h^3/12 lies outside 1e-150 ..
+    1e300 (units far off the problem's scale: it under- or overflows) are refused at their key,
+    and by Material.  Before: h = 1e-300 and 1e-110 passed validation into a bare
+    ZeroDivisionError (the load number's E h^3/12 = 0; in Python the solve called the shell
+    unsupported, 'a rigid-body motion is not restrained'); E = 1e-155 loaded and failed with a
+    singular tangent, E = 1e308 at h = 100 with a non-finite residual, after 12 cut-backs."""
+    from core_se3 import Material
+    from core_se3.errors import MaterialError
+    d = base()
+    d["material"].update(E=E, h=h)
+    bad(tmp_path, d, key, "stiffness", "under- or overflows")
+    with pytest.raises(MaterialError, match="stiffness"):
+        Material(E, 0.0, h)
