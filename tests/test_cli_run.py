@@ -479,3 +479,19 @@ def test_progress_and_quiet_together_are_a_usage_error(tmp_path, capsys, cmd):
         cli.main(args)
     assert exc.value.code == 2 and "not allowed with argument --progress" in capsys.readouterr().err
     assert not os.path.exists(tmp_path / "o")
+
+
+def test_sweep_set_says_it_replaces_the_files_sweep_section(tmp_path, capsys):
+    """`core-se3 sweep FILE --set KEY=...` on a file with a [sweep] section runs the --set grid
+    alone; a note on stderr names the section's keys that are not run.  Before, the file's
+    [sweep] (here material.nu = [0.0, 0.3]) was dropped without a word: 2 rows, not 4 or 2 x 2."""
+    doc = with_(STRIP, solver={"steps": 1}, output={"vtu": False, "plots": False, "picture": False})
+    doc["sweep"] = {"material.nu": [0.0, 0.3]}
+    path = write(tmp_path, doc)
+    assert cli.main(["sweep", path, "--set", "material.E=1e6,2e6", "--out", str(tmp_path / "sw"), "-q"]) == 0
+    err = capsys.readouterr().err
+    assert "--set replaces the scenario's [sweep] section (material.nu)" in err, err
+    rows = (tmp_path / "sw" / "sweep.csv").read_text().splitlines()
+    assert rows[0].startswith("material.E,") and len(rows) == 3
+    assert cli.main(["sweep", path, "--out", str(tmp_path / "sw2"), "-q"]) == 0      # the section alone: no note
+    assert "replaces" not in capsys.readouterr().err

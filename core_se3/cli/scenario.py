@@ -373,6 +373,9 @@ def _grid(args, scn):
         grid[k.strip()] = parse_values(vals, f"--set {k.strip()}")
     if not grid and not scn.spec["sweep"]:
         raise CoreSE3Error(f"{args.scenario}: nothing to sweep: give --set KEY=v1,v2,... or a [sweep] section")
+    if grid and scn.spec["sweep"]:              # one grid or the other: say which is dropped
+        print(f"note: {args.scenario}: --set replaces the scenario's [sweep] section "
+              f"({', '.join(scn.spec['sweep'])}): its values are not run", file=sys.stderr)
     return grid or None                         # None: the scenario's [sweep] section
 
 

@@ -177,7 +177,8 @@ ARCLENGTH = Section("arclength", (
     doc='[solver] keys of control = "arclength"')
 
 OUTPUT = Section("output", (
-    Param("dir", "string", None, doc="output directory (default out/NAME; --out wins)"),
+    Param("dir", "string", None, doc="output directory, relative to the working directory as --out is (the "
+          "scenario's input files are relative to the scenario file); default out/NAME; --out wins"),
     Param("vtu", "bool", True, doc="VTU series"),
     Param("vtu_every", "integer", 1, lo=1, doc="write every k-th step (and the last)"),
     Param("plots", "bool", True, doc="probes.png"),
