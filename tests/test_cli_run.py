@@ -467,7 +467,8 @@ def test_bench_run_vtu_follows_the_run_directory_rules_and_writes_a_runs_files(t
     assert [f for _, f in pvd_files(str(out / "series.pvd"))] == [f"step_{k:04d}.vtu" for k in range(3)]
 
 
-@pytest.mark.parametrize("cmd", [["run", "S"], ["sweep", "S", "--set", "material.E=1e6"], ["bench", "run", "cantilever-shear"]])
+@pytest.mark.parametrize("cmd", [["run", "S"], ["sweep", "S", "--set", "material.E=1e6"],
+                                 ["bench", "run", "cantilever-shear"]])
 def test_progress_and_quiet_together_are_a_usage_error(tmp_path, capsys, cmd):
     """--progress (draw the line) and -q (no line, no summary) contradict each other (the usage
     line reads [--progress | -q]): both is a usage error, exit status 2, before anything runs.
