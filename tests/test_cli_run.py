@@ -496,3 +496,21 @@ def test_sweep_set_says_it_replaces_the_files_sweep_section(tmp_path, capsys):
     assert rows[0].startswith("material.E,") and len(rows) == 3
     assert cli.main(["sweep", path, "--out", str(tmp_path / "sw2"), "-q"]) == 0      # the section alone: no note
     assert "replaces" not in capsys.readouterr().err
+
+
+def test_check_mesh_json_never_overwrites_a_file_that_is_not_a_check(tmp_path, capsys):
+    """check-mesh --json PATH replaces an earlier check's JSON, and refuses (exit 2, the file
+    intact) any other existing file: another scenario's mesh, a run's results.json, notes.
+    Before, only the scenario's own inputs were protected: `--json other.vtu` wrote the JSON over
+    a mesh file of another scenario."""
+    path = write(tmp_path, with_(STRIP, solver={"steps": 1}))
+    mesh = tmp_path / "other.vtu"
+    meshio.write(mesh, meshio.Mesh(np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]),
+                                   [("quad", [[0, 1, 2, 3]])]))
+    before = mesh.read_bytes()
+    assert cli.main(["check-mesh", path, "--json", str(mesh)]) == 2
+    assert mesh.read_bytes() == before and "not an earlier check's JSON" in capsys.readouterr().err
+    out = tmp_path / "check.json"
+    assert cli.main(["check-mesh", path, "--json", str(out)]) == 0           # new, then replaced
+    assert cli.main(["check-mesh", path, "--json", str(out)]) == 0
+    assert json.loads(out.read_text())["status"] == "complete"

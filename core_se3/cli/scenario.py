@@ -421,7 +421,8 @@ def mesh_check(args):
         scn = _open(args)
     except CoreSE3Error as exc:
         return _check_failed(args, exc, known_output=False)
-    clash = _input_at(args.json, scn, args) if args.json else None
+    clash = (_input_at(args.json, scn, args) or (None if _earlier_check(args.json) else
+                                                  "a file that is not an earlier check's JSON")) if args.json else None
     if clash is not None:
         print(f"error: --json {args.json!r} is {clash}: the check would overwrite it; give another path "
               "(e.g. check.json)", file=sys.stderr)
@@ -476,25 +477,32 @@ def _check_failed(args, exc, known_output):
     the scenario (``_input_at``); when the scenario did not load, its inputs are unknown and only
     a missing file or an earlier check's JSON (a JSON object with "status" or "levels") is
     replaced."""
-    import json
-    import os
     from ..io.files import write_json_atomic
     code = error_code(exc)
     if not args.json:
         return code
-    if not known_output and os.path.exists(args.json):
-        try:
-            with open(args.json) as fh:
-                old = json.load(fh)
-        except (OSError, ValueError):
-            return code                        # not a check's JSON: perhaps an input, left alone
-        if not (isinstance(old, dict) and ("status" in old or "levels" in old)):
-            return code
+    if not known_output and not _earlier_check(args.json):
+        return code                            # not a check's JSON: perhaps an input, left alone
     try:
         write_json_atomic(args.json, dict(status="failed", error=str(exc), scenario=args.scenario, exit_status=code))
     except OSError as err:
         return output_error(err, "the error is printed above")
     return code
+
+
+def _earlier_check(path):
+    """True if ``path`` is missing or holds an earlier check's JSON (an object with "status" or
+    "levels", not a run's results.json): --json may replace it; any other file is the user's."""
+    import json
+    import os
+    if not os.path.exists(path):
+        return True
+    try:
+        with open(path) as fh:
+            old = json.load(fh)
+    except (OSError, ValueError):
+        return False
+    return isinstance(old, dict) and ("status" in old or "levels" in old) and "schema" not in old
 
 
 def _input_at(path, scn, args):
