@@ -514,3 +514,16 @@ def test_check_mesh_json_never_overwrites_a_file_that_is_not_a_check(tmp_path, c
     assert cli.main(["check-mesh", path, "--json", str(out)]) == 0           # new, then replaced
     assert cli.main(["check-mesh", path, "--json", str(out)]) == 0
     assert json.loads(out.read_text())["status"] == "complete"
+
+
+def test_bench_plot_of_an_unknown_image_format_is_refused_before_the_solve(tmp_path, capsys):
+    """`bench run CASE --plot notes.toml`: matplotlib has no '.toml' writer.  Before, the case
+    solved and printed its table, then the plot worker raised a bare ValueError ("Format 'toml' is
+    not supported") with a traceback, exit status 1.  Now: exit 2 at once, naming the formats, the
+    file untouched."""
+    notes = tmp_path / "notes.toml"
+    notes.write_text("mine\n")
+    assert cli.main(["bench", "run", "cantilever-shear", "--plot", str(notes), "-q"]) == 2
+    out = capsys.readouterr()
+    assert "writes no '.toml' images" in out.err and "png" in out.err and "load" not in out.out
+    assert notes.read_text() == "mine\n"

@@ -143,12 +143,29 @@ def _case_plot(name, overrides, doc, res, path):
 BENCH_FILES = ("step_*.vtu", "series.pvd", "obstacles.pvd")     # a bench's --vtu names (never over foreign ones)
 
 
+def _plot_format_error(path):
+    """Why matplotlib cannot write the image ``path`` (an extension it has no writer for), or
+    None: checked before the case solves, not after (a bare ValueError from savefig)."""
+    ext = os.path.splitext(path)[1].lower().lstrip(".")
+    if not ext:
+        return None                            # matplotlib's default format (png)
+    from matplotlib.backend_bases import FigureCanvasBase
+    known = FigureCanvasBase.get_supported_filetypes()
+    return None if ext in known else (f"--plot {path!r}: matplotlib writes no '.{ext}' images (it writes "
+                                      f"{', '.join(sorted(known))}): give a path such as plot.png")
+
+
 def bench_run(args):
     """``core-se3 bench run``; with ``--plot`` matplotlib is imported by a forked worker while the
     case solves (``io.worker.PlotProcess``; not under MPI)."""
     from ..io.rundir import RunDirectory
     from ..io.worker import PlotProcess
     from ..scenario.context import on_root
+    bad = _plot_format_error(args.plot) if args.plot else None
+    if bad is not None:
+        if launched_rank() == 0:
+            print(f"error: {bad}", file=sys.stderr)
+        return 2
     rd = RunDirectory(args.vtu, "bench", BENCH_FILES, option="--vtu") if args.vtu else None
     try:       # a run directory's rules: never over a file it did not write; its own earlier files go
         if rd is not None:
