@@ -527,3 +527,20 @@ def test_bench_plot_of_an_unknown_image_format_is_refused_before_the_solve(tmp_p
     out = capsys.readouterr()
     assert "writes no '.toml' images" in out.err and "png" in out.err and "load" not in out.out
     assert notes.read_text() == "mine\n"
+
+
+def test_bench_json_never_overwrites_a_file_that_is_not_a_bench_json(tmp_path, capsys):
+    """`bench run CASE --json PATH` replaces an earlier bench JSON and refuses (exit 2, before the
+    solve, the file intact) anything else: a scenario file, a run's results.json.  Before, it
+    wrote the case's document over them (a scenario file became JSON)."""
+    path = write(tmp_path, with_(STRIP, solver={"steps": 1}, output={"vtu": False, "plots": False, "picture": False}))
+    scenario_text = open(path).read()
+    run = runner.run(scenario.load(path), out=str(tmp_path / "run"))
+    results = open(run.files["results"]).read()
+    for target in (path, run.files["results"]):
+        assert cli.main(["bench", "run", "cantilever-shear", "--json", target, "-q"]) == 2
+        assert "not an earlier bench run's JSON" in capsys.readouterr().err
+    assert open(path).read() == scenario_text and open(run.files["results"]).read() == results
+    out = str(tmp_path / "case.json")
+    assert cli.main(["bench", "run", "cantilever-shear", "--json", out, "-q"]) == 0
+    assert cli.main(["bench", "run", "cantilever-shear", "--json", out, "-q"]) == 0      # its own: replaced

@@ -155,13 +155,30 @@ def _plot_format_error(path):
                                       f"{', '.join(sorted(known))}): give a path such as plot.png")
 
 
+def _json_target_error(path):
+    """Why --json may not write ``path``: an existing file that is not an earlier ``bench run``
+    JSON (a scenario, a run's results.json, notes: the user's), else None."""
+    import json
+    if not os.path.exists(path):
+        return None
+    try:
+        with open(path) as fh:
+            old = json.load(fh)
+    except (OSError, ValueError):
+        old = None
+    if isinstance(old, dict) and old.get("schema") == "core-se3-result" and "case" in old and "scenario" not in old:
+        return None                            # (a run's results.json names its scenario)
+    return f"--json {path!r} is a file that is not an earlier bench run's JSON: give another path (e.g. case.json)"
+
+
 def bench_run(args):
     """``core-se3 bench run``; with ``--plot`` matplotlib is imported by a forked worker while the
     case solves (``io.worker.PlotProcess``; not under MPI)."""
     from ..io.rundir import RunDirectory
     from ..io.worker import PlotProcess
     from ..scenario.context import on_root
-    bad = _plot_format_error(args.plot) if args.plot else None
+    bad = (_plot_format_error(args.plot) if args.plot else None) or (_json_target_error(args.json) if args.json
+                                                                      else None)
     if bad is not None:
         if launched_rank() == 0:
             print(f"error: {bad}", file=sys.stderr)
