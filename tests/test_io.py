@@ -181,3 +181,16 @@ def test_a_mesh_file_error_keeps_its_advice_and_hides_the_files_text(tmp_path):
     assert scenario.from_dict(doc, base_dir=str(tmp_path)).mesh.n_elements == 4 * 4 + 3
     (tmp_path / "named.txt").write_text("a group named 'palm_secret'\n")
     assert io.without_contents("unknown group 'palm_secret'", str(tmp_path / "named.txt")) == "unknown group ..."
+
+
+@pytest.mark.parametrize("kind,advice", [("run", True), ("sweep", True), ("design", False)])
+def test_an_earlier_directory_is_refused_with_the_options_its_command_has(tmp_path, kind, advice):
+    """A second `core-se3 design` into its own earlier --out read 'continue it with --resume,
+    start over with --force, ...', but design has no --resume (argparse: unrecognized
+    arguments).  Only run and sweep, which continue, are told to; all are told --force."""
+    from core_se3.io.rundir import RunDirectory, RunDirectoryError
+    with RunDirectory(str(tmp_path), kind).claim() as rd:
+        open(rd.file("a.json"), "w").write("{}")
+    with pytest.raises(RunDirectoryError) as exc:
+        RunDirectory(str(tmp_path), kind).claim()
+    assert ("--resume" in str(exc.value)) == advice and "--force" in str(exc.value)
