@@ -194,3 +194,20 @@ def test_an_earlier_directory_is_refused_with_the_options_its_command_has(tmp_pa
     with pytest.raises(RunDirectoryError) as exc:
         RunDirectory(str(tmp_path), kind).claim()
     assert ("--resume" in str(exc.value)) == advice and "--force" in str(exc.value)
+
+
+def test_an_output_path_that_is_a_file_is_refused_by_name(tmp_path):
+    """scenario.run(scn, out=FILE) raised a bare FileExistsError from os.makedirs (the CLI: 'cannot
+    write the outputs ([Errno 17] File exists ...): the steps converged so far are kept where
+    they could be written' when nothing had run).  Now a RunDirectoryError says that --out is a
+    file, and the file is untouched."""
+    from core_se3 import scenario
+    from core_se3.io.rundir import RunDirectoryError
+    scn = scenario.from_dict({"mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 2, "ny": 1},
+                              "material": {"E": 1.2e6, "nu": 0.0, "h": 0.1},
+                              "supports": [{"type": "clamp", "edge": "x0"}], "solver": {"steps": 1}})
+    f = tmp_path / "notes.txt"
+    f.write_text("mine")
+    with pytest.raises(RunDirectoryError, match="is a file, not a directory"):
+        scenario.run(scn, out=str(f))
+    assert f.read_text() == "mine"

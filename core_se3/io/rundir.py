@@ -143,6 +143,9 @@ class RunDirectory:
         RunDirectory
             self, locked.
         """
+        if os.path.exists(self.path) and not os.path.isdir(self.path):
+            raise RunDirectoryError(f"{self.option} {self.path!r} is a file, not a directory: nothing was written; "
+                                    f"choose a directory (new or of an earlier {self.kind})")
         os.makedirs(self.path, exist_ok=True)
         self._take_lock()
         try:
