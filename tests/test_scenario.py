@@ -749,3 +749,29 @@ def test_a_stiffness_double_precision_cannot_hold_is_refused(tmp_path, E, h, key
     bad(tmp_path, d, key, "stiffness", "under- or overflows")
     with pytest.raises(MaterialError, match="stiffness"):
         Material(E, 0.0, h)
+
+
+def test_a_load_or_rotation_that_the_run_never_reaches_warns(tmp_path):
+    """A scale table whose ramp lies past lam_end ([[2, 0], [3, 1]] with lam_end = 1) is 0 at
+    every step: the load does nothing -- the strip's tip stays at 0 -- and a field's rotate with
+    start = 2 never turns it.  Each now warns at its key; before, both were accepted without a
+    word.  The same keys within the run say nothing."""
+    def said(d):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            scn = load_doc(tmp_path, d)
+        return scn, [str(w.message) for w in caught]
+    d = base()
+    d["loads"][0]["scale"] = [[2.0, 0.0], [3.0, 1.0]]
+    scn, text = said(d)
+    assert any("[loads[0].scale]: the scale is 0 at every load factor of the run (0.5 .. 1)" in t for t in text)
+    assert np.abs(scn.problem.solve().final.probes["tip"]["u"]).max() == 0.0       # it acts nowhere
+    d["loads"][0]["scale"] = [[0.0, 0.0], [0.5, 1.0]]
+    assert not [t for t in said(d)[1] if "scale is 0" in t]
+    d = base()
+    d.update(units="SI", fields={"c": {"type": "uniform", "B": [0.0, 0.0, 0.001],
+                                       "rotate": {"axis": [0.0, 1.0, 0.0], "angle": 1.0, "start": 2.0, "end": 3.0}}},
+             magnets=[{"Br": [0.1, 0.0, 0.0]}])
+    assert any("[fields.c.rotate]: the field's rotation has not begun" in t for t in said(d)[1])
+    d["fields"]["c"]["rotate"].update(start=0.5, end=1.0)
+    assert not [t for t in said(d)[1] if "not begun" in t]
