@@ -199,13 +199,23 @@ def without_contents(message, path, head_bytes=1 << 16):
 
 
 def _absent(text, path):
-    """True if ``text`` (not blank) is certainly not in the file ``path`` (searched whole, mapped
-    into memory, as UTF-8 and Latin-1); False if it is, or the file cannot be read."""
-    import mmap
+    """True if ``text`` (not blank) is certainly not in the file ``path``: searched whole, in
+    chunks, ignoring ASCII case (a reader may quote a name in another case), as UTF-8 and
+    Latin-1; False if it is there, or the file cannot be read."""
     if not text.strip():
         return False
+    needles = {text.lower().encode(enc, "replace") for enc in ("utf-8", "latin-1")}
+    keep = max(map(len, needles)) - 1
     try:
-        with open(path, "rb") as fh, mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ) as mm:
-            return all(mm.find(text.encode(enc, "replace")) < 0 for enc in ("utf-8", "latin-1"))
-    except (OSError, ValueError):        # unreadable, or empty (mmap of 0 bytes)
+        with open(path, "rb") as fh:
+            tail = b""
+            while True:
+                chunk = fh.read(1 << 24)
+                if not chunk:
+                    return True
+                buf = tail + chunk.lower()
+                if any(x in buf for x in needles):
+                    return False
+                tail = buf[len(buf) - keep:] if keep else b""
+    except OSError:
         return False
