@@ -465,3 +465,82 @@ def test_bench_run_vtu_follows_the_run_directory_rules_and_writes_a_runs_files(t
     assert "M1" in m.cell_data and "N1" in m.cell_data
     assert read_field_data(str(out / "step_0002.vtu"))["load_factor"] == pytest.approx(1.0, abs=1e-12)
     assert [f for _, f in pvd_files(str(out / "series.pvd"))] == [f"step_{k:04d}.vtu" for k in range(3)]
+
+
+@pytest.mark.parametrize("cmd", [["run", "S"], ["sweep", "S", "--set", "material.E=1e6"],
+                                 ["bench", "run", "cantilever-shear"]])
+def test_progress_and_quiet_together_are_a_usage_error(tmp_path, capsys, cmd):
+    """--progress (draw the line) and -q (no line, no summary) contradict each other (the usage
+    line reads [--progress | -q]): both is a usage error, exit status 2, before anything runs.
+    Before, `run --progress -q` ran and drew the progress line that -q was to silence."""
+    path = write(tmp_path, with_(STRIP, solver={"steps": 1}))
+    args = [path if a == "S" else a for a in cmd] + ["--out" if cmd[0] != "bench" else "--vtu", str(tmp_path / "o"),
+                                                     "--progress", "-q"]
+    with pytest.raises(SystemExit) as exc:
+        cli.main(args)
+    assert exc.value.code == 2 and "not allowed with argument --progress" in capsys.readouterr().err
+    assert not os.path.exists(tmp_path / "o")
+
+
+def test_sweep_set_says_it_replaces_the_files_sweep_section(tmp_path, capsys):
+    """`core-se3 sweep FILE --set KEY=...` on a file with a [sweep] section runs the --set grid
+    alone; a note on stderr names the section's keys that are not run.  Before, the file's
+    [sweep] (here material.nu = [0.0, 0.3]) was dropped without a word: 2 rows, not 4 or 2 x 2."""
+    doc = with_(STRIP, solver={"steps": 1}, output={"vtu": False, "plots": False, "picture": False})
+    doc["sweep"] = {"material.nu": [0.0, 0.3]}
+    path = write(tmp_path, doc)
+    assert cli.main(["sweep", path, "--set", "material.E=1e6,2e6", "--out", str(tmp_path / "sw"), "-q"]) == 0
+    err = capsys.readouterr().err
+    assert "--set replaces the scenario's [sweep] section (material.nu)" in err, err
+    rows = (tmp_path / "sw" / "sweep.csv").read_text().splitlines()
+    assert rows[0].startswith("material.E,") and len(rows) == 3
+    assert cli.main(["sweep", path, "--out", str(tmp_path / "sw2"), "-q"]) == 0      # the section alone: no note
+    assert "replaces" not in capsys.readouterr().err
+
+
+def test_check_mesh_json_never_overwrites_a_file_that_is_not_a_check(tmp_path, capsys):
+    """check-mesh --json PATH replaces an earlier check's JSON, and refuses (exit 2, the file
+    intact) any other existing file: another scenario's mesh, a run's results.json, notes.
+    Before, only the scenario's own inputs were protected: `--json other.vtu` wrote the JSON over
+    a mesh file of another scenario."""
+    path = write(tmp_path, with_(STRIP, solver={"steps": 1}))
+    mesh = tmp_path / "other.vtu"
+    meshio.write(mesh, meshio.Mesh(np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]),
+                                   [("quad", [[0, 1, 2, 3]])]))
+    before = mesh.read_bytes()
+    assert cli.main(["check-mesh", path, "--json", str(mesh)]) == 2
+    assert mesh.read_bytes() == before and "not an earlier check's JSON" in capsys.readouterr().err
+    out = tmp_path / "check.json"
+    assert cli.main(["check-mesh", path, "--json", str(out)]) == 0           # new, then replaced
+    assert cli.main(["check-mesh", path, "--json", str(out)]) == 0
+    assert json.loads(out.read_text())["status"] == "complete"
+
+
+def test_bench_plot_of_an_unknown_image_format_is_refused_before_the_solve(tmp_path, capsys):
+    """`bench run CASE --plot notes.toml`: matplotlib has no '.toml' writer.  Before, the case
+    solved and printed its table, then the plot worker raised a bare ValueError ("Format 'toml' is
+    not supported") with a traceback, exit status 1.  Now: exit 2 at once, naming the formats, the
+    file untouched."""
+    notes = tmp_path / "notes.toml"
+    notes.write_text("mine\n")
+    assert cli.main(["bench", "run", "cantilever-shear", "--plot", str(notes), "-q"]) == 2
+    out = capsys.readouterr()
+    assert "writes no '.toml' images" in out.err and "png" in out.err and "load" not in out.out
+    assert notes.read_text() == "mine\n"
+
+
+def test_bench_json_never_overwrites_a_file_that_is_not_a_bench_json(tmp_path, capsys):
+    """`bench run CASE --json PATH` replaces an earlier bench JSON and refuses (exit 2, before the
+    solve, the file intact) anything else: a scenario file, a run's results.json.  Before, it
+    wrote the case's document over them (a scenario file became JSON)."""
+    path = write(tmp_path, with_(STRIP, solver={"steps": 1}, output={"vtu": False, "plots": False, "picture": False}))
+    scenario_text = open(path).read()
+    run = runner.run(scenario.load(path), out=str(tmp_path / "run"))
+    results = open(run.files["results"]).read()
+    for target in (path, run.files["results"]):
+        assert cli.main(["bench", "run", "cantilever-shear", "--json", target, "-q"]) == 2
+        assert "not an earlier bench run's JSON" in capsys.readouterr().err
+    assert open(path).read() == scenario_text and open(run.files["results"]).read() == results
+    out = str(tmp_path / "case.json")
+    assert cli.main(["bench", "run", "cantilever-shear", "--json", out, "-q"]) == 0
+    assert cli.main(["bench", "run", "cantilever-shear", "--json", out, "-q"]) == 0      # its own: replaced

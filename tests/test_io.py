@@ -158,3 +158,56 @@ def test_plot_worker_submit_returns_before_the_png_and_wait_collects_it(tmp_path
         with pytest.raises(ValueError, match="later"):
             plots.wait()
     assert (tmp_path / "kept.json").exists()
+
+
+def test_a_mesh_file_error_keeps_its_advice_and_hides_the_files_text(tmp_path):
+    """A quad-dominant VTU (4 quads and a triangle) in a scenario: the refusal names the other
+    cells and the fix, ``triangles = "split"``, which then reads it (4 x 4 + 3 quads).  Before,
+    io.files.without_contents cut every quoted passage, the reader's own advice too: '... the
+    mesh also has [...] cells: ... becomes all quads with triangles = ... (... triangles=...)'.
+    A quoted passage that is the file's text (a name the file holds) is still cut."""
+    from core_se3 import scenario
+    from core_se3.errors import ScenarioError
+    X = np.array([[i * 2.5, j, 0.0] for i in range(5) for j in range(2)] + [[11.0, 0.5, 0.0]])
+    quads = np.array([[2 * i, 2 * i + 2, 2 * i + 3, 2 * i + 1] for i in range(4)])
+    meshio.write(tmp_path / "plate.vtu", meshio.Mesh(X, [("quad", quads), ("triangle", np.array([[8, 10, 9]]))]))
+    doc = {"mesh": {"file": "plate.vtu"}, "edges": {"root": {"box": {"x": [0.0, 0.0]}}},
+           "material": {"E": 1.2e6, "nu": 0.3, "h": 0.1}, "supports": [{"type": "clamp", "edge": "root"}]}
+    with pytest.raises(ScenarioError) as exc:
+        scenario.from_dict(doc, base_dir=str(tmp_path))
+    msg = str(exc.value)
+    assert "['triangle'] cells" in msg and 'triangles = "split"' in msg and "[...]" not in msg, msg
+    doc["mesh"]["triangles"] = "split"
+    assert scenario.from_dict(doc, base_dir=str(tmp_path)).mesh.n_elements == 4 * 4 + 3
+    (tmp_path / "named.txt").write_text("a group named 'palm_secret'\n")
+    assert io.without_contents("unknown group 'palm_secret'", str(tmp_path / "named.txt")) == "unknown group ..."
+
+
+@pytest.mark.parametrize("kind,advice", [("run", True), ("sweep", True), ("design", False)])
+def test_an_earlier_directory_is_refused_with_the_options_its_command_has(tmp_path, kind, advice):
+    """A second `core-se3 design` into its own earlier --out read 'continue it with --resume,
+    start over with --force, ...', but design has no --resume (argparse: unrecognized
+    arguments).  Only run and sweep, which continue, are told to; all are told --force."""
+    from core_se3.io.rundir import RunDirectory, RunDirectoryError
+    with RunDirectory(str(tmp_path), kind).claim() as rd:
+        open(rd.file("a.json"), "w").write("{}")
+    with pytest.raises(RunDirectoryError) as exc:
+        RunDirectory(str(tmp_path), kind).claim()
+    assert ("--resume" in str(exc.value)) == advice and "--force" in str(exc.value)
+
+
+def test_an_output_path_that_is_a_file_is_refused_by_name(tmp_path):
+    """scenario.run(scn, out=FILE) raised a bare FileExistsError from os.makedirs (the CLI: 'cannot
+    write the outputs ([Errno 17] File exists ...): the steps converged so far are kept where
+    they could be written' when nothing had run).  Now a RunDirectoryError says that --out is a
+    file, and the file is untouched."""
+    from core_se3 import scenario
+    from core_se3.io.rundir import RunDirectoryError
+    scn = scenario.from_dict({"mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 2, "ny": 1},
+                              "material": {"E": 1.2e6, "nu": 0.0, "h": 0.1},
+                              "supports": [{"type": "clamp", "edge": "x0"}], "solver": {"steps": 1}})
+    f = tmp_path / "notes.txt"
+    f.write_text("mine")
+    with pytest.raises(RunDirectoryError, match="is a file, not a directory"):
+        scenario.run(scn, out=str(f))
+    assert f.read_text() == "mine"

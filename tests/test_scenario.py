@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from core_se3 import scenario
-from core_se3.errors import ScenarioError
+from core_se3.errors import ConvergenceError, ScenarioError
 
 BASE = {
     "name": "strip",
@@ -627,3 +627,177 @@ def test_a_shell_thinner_than_h_over_L_1e_4_warns_of_a_unit_slip(tmp_path):
     (tmp_path / "t.toml").write_text(scenario.dumps(d))
     with pytest.raises(ScenarioError, match=r"\[material.regions.tip.h\].*with --strict"):
         scenario.load(tmp_path / "t.toml", strict=True)
+
+
+@pytest.mark.parametrize("tol", [None, 0.05])
+def test_critical_tol_applies_to_load_control(tmp_path, tol):
+    """[solver] critical_tol, the accuracy to which load control's limit_check locates a critical
+    point (its documented `limit_check` key says so; NewtonOptions.critical_tol), is read under
+    control = "load": the strip compressed by 4 (the 6-element bifurcation at load factor 0.6203) in 2 steps
+    stops at the bifurcation with a bracket of relative width <= critical_tol -- 7.9e-4 at the
+    default 1e-3, 0.05 (0.594 .. 0.625) at 0.05.  Before, the file's critical_tol was refused
+    ('an arc-length control: only with control = "arclength"') and load control kept 1e-3."""
+    d = base()
+    d["mesh"]["nx"] = 6
+    d["loads"] = [{"type": "edge_force", "edge": "x1", "force": [-4.0, 0.0, 0.0]}]
+    d["output"] = {"vtu": False, "plots": False, "picture": False}
+    if tol is not None:
+        d["solver"]["critical_tol"] = tol
+    scn = load_doc(tmp_path, d)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(ConvergenceError) as exc:
+            scenario.run(scn, out=str(tmp_path / "out"))
+    lo, hi = (float(x) for x in re.search(r"between load factors ([0-9.]+) and ([0-9.]+)", str(exc.value)).groups())
+    width = (hi - lo) / hi
+    want = tol or 1e-3
+    assert lo < 0.6203 < hi and want / 2 < width <= want * (1 + 1e-6), (lo, hi)
+
+
+@pytest.mark.parametrize("control", ["arclength", "linear"])
+def test_a_load_control_switch_under_another_control_warns(tmp_path, control):
+    """[solver] switches that only load control reads (max_cutbacks, inertia_check, ...) given
+    with control = "arclength" or "linear" are not used: a warning names the key, and --strict
+    refuses the file.  Before, `inertia_check = true` on an arc-length path (which counts its own
+    pivots) or `max_cutbacks = 20` were accepted without a word."""
+    d = base()
+    d["solver"] = {"control": control, "max_cutbacks": 20, "inertia_check": True}
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        scn = load_doc(tmp_path, d)
+    text = [str(w.message) for w in said]
+    for key in ("solver.max_cutbacks", "solver.inertia_check"):
+        assert any(f"[{key}]: a switch of load control" in t and f'control = "{control}"' in t for t in text), text
+    assert sum("switch of load control" in str(w) for w in scn.warnings) == 2      # Scenario.warnings lists them
+    with pytest.raises(ScenarioError, match=r"\[solver\.max_cutbacks\]"):
+        scenario.from_dict(d, file="s.toml", strict=True)
+    d["solver"] = {"control": "load", "max_cutbacks": 20, "inertia_check": True}
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        load_doc(tmp_path, d)
+    assert not [w for w in said if "switch of load control" in str(w.message)]
+
+
+def test_a_byte_order_mark_is_read_past(tmp_path):
+    """Windows editors save a scenario, and spreadsheets a UTF-8 CSV, with a byte order mark
+    (EF BB BF) first.  A scenario with one was refused ('not valid TOML: Invalid statement (at
+    line 1, column 1)') and a Br_file table with one read its header as '\\ufeffelement' ('expected
+    the header element,Brx,Bry,Brz ... its first row has 4 fields').  Both now read as without it:
+    the same fingerprint, the same magnetisation."""
+    d = base()
+    d.update(units="SI", fields={"c": {"type": "uniform", "B": [0.0, 0.0, 0.01]}},
+             magnets=[{"Br_file": "br.csv"}])
+    table = "element,Brx,Bry,Brz\n" + "".join(f"{e},0.{e + 1},0,0\n" for e in range(4))
+    (tmp_path / "br.csv").write_bytes(table.encode())
+    plain = load_doc(tmp_path, d)
+    (tmp_path / "br.csv").write_bytes(b"\xef\xbb\xbf" + table.encode())
+    marked = load_doc(tmp_path, d)
+    mu = plain.problem.loads[-1].mag.mu
+    assert np.ptp(mu[:, 0]) > 0 and np.array_equal(mu, marked.problem.loads[-1].mag.mu)
+    src = (tmp_path / "s.toml").read_bytes()
+    (tmp_path / "bom.toml").write_bytes(b"\xef\xbb\xbf" + src)
+    assert scenario.load(tmp_path / "bom.toml").fingerprint == marked.fingerprint
+
+
+def test_sweep_csv_writes_a_swept_vector_as_its_shortest_decimals(tmp_path):
+    """sweep.csv wrote a swept vector [0, 0, 0.1] as '0;0;0.10000000000000001' (%.17g) while a
+    swept number 0.1 read '0.1' (repr); both read back exactly, and now both are the shortest."""
+    d = base()
+    d["solver"] = {"steps": 1}
+    d["output"] = {"plots": False}
+    scenario.sweep(load_doc(tmp_path, d), {"loads[0].force": [[0.0, 0.0, 0.1]], "material.nu": [0.1]},
+                   out=str(tmp_path / "sw"), plot=False)
+    head, row = (tmp_path / "sw" / "sweep.csv").read_text().splitlines()[:2]
+    cells = dict(zip(head.split(","), row.split(",")))
+    assert cells["loads[0].force"] == "0.0;0.0;0.1" and cells["material.nu"] == "0.1", cells
+
+
+@pytest.mark.parametrize("where,key", [("prescribed", "supports[1].rotate.angle"),
+                                       ("motion", "obstacles[0].motion.angle"), ("box", "obstacles[0].rotation")])
+def test_an_angle_in_degrees_warns_wherever_an_angle_is_given(tmp_path, where, key):
+    """360 (degrees meant) as a prescribed support's rotate.angle or an obstacle's motion.angle is
+    57.3 turns in radians, and [0, 0, 90] as a box's rotation vector 14.3 turns: each warns at its
+    key, as a rotate support's angle and a field's rotate.angle did (docs/SCENARIOS.md); before,
+    these three were accepted without a word.  The same keys at 3.0 rad say nothing."""
+    def doc(angle):
+        d = base()
+        d["loads"] = [{"type": "pressure", "p": 0.001}]
+        if where == "prescribed":
+            d["supports"].append({"type": "prescribed", "edge": "x1",
+                                  "rotate": {"axis": [1.0, 0.0, 0.0], "angle": angle}})
+        else:
+            ob = {"type": "box", "centre": [5.0, 0.0, -5.0], "half_sizes": [1.0, 1.0, 1.0]}
+            ob.update({"motion": {"axis": [1.0, 0.0, 0.0], "angle": angle, "point": [5.0, 0.0, -5.0]}}
+                      if where == "motion" else {"rotation": [0.0, 0.0, angle / 4]})
+            d["obstacles"] = [ob]
+        return d
+    for angle, said in ((360.0, True), (3.0, False)):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            load_doc(tmp_path, doc(angle))
+        hits = [str(w.message) for w in caught if f"[{key}]" in str(w.message) and "radians" in str(w.message)]
+        assert bool(hits) == said, (angle, [str(w.message)[:90] for w in caught])
+
+
+@pytest.mark.parametrize("where,key,home", [
+    ("top", "steps", "a key of [solver]"), ("top", "E", "a key of [material]"),
+    ("solver", "units", "a top-level key: put it before the first [table] header"),
+    ("solver", "vtu", "a key of [output]"), ("mesh", "rho", "a key of [material]"),
+    ("material", "refine", "a key of [mesh]")])
+def test_a_key_in_the_wrong_table_names_its_table(tmp_path, where, key, home):
+    """A key written in another table -- most often a top-level key after a [table] header, which
+    TOML makes part of that table -- is refused naming the table it belongs to.  Before, the
+    suggestion was a near spelling of this table's keys or nothing: a top-level `steps = 4` read
+    "unknown key 'steps'; did you mean 'sweep'?", `units = "SI"` after [solver] "unknown key
+    'units'" alone."""
+    d = base()
+    value = {"steps": 4, "E": 1.0, "units": "SI", "vtu": False, "rho": 1.0, "refine": 1}[key]
+    (d if where == "top" else d[where]).update({key: value})
+    bad(tmp_path, d, key if where == "top" else f"{where}.{key}", f"unknown key {key!r}; it is {home}")
+    d = base()
+    d["material"]["shear_factr"] = 0.8                            # a misspelling still gets its near key
+    bad(tmp_path, d, "material.shear_factr", "did you mean 'shear_factor'")
+
+
+@pytest.mark.parametrize("E,h,key", [(1.2e6, 1e-300, "material.h"), (1.2e6, 1e-110, "material.h"),
+                                     (1e-155, 0.1, "material.E"), (1e308, 100.0, "material.E")])
+def test_a_stiffness_double_precision_cannot_hold_is_refused(tmp_path, E, h, key):
+    """E and h whose membrane stiffness E h or bending stiffness E h^3/12 lies outside 1e-150 ..
+    1e300 (units far off the problem's scale: it under- or overflows) are refused at their key,
+    and by Material.  Before: h = 1e-300 and 1e-110 passed validation into a bare
+    ZeroDivisionError (the load number's E h^3/12 = 0; in Python the solve called the shell
+    unsupported, 'a rigid-body motion is not restrained'); E = 1e-155 loaded and failed with a
+    singular tangent, E = 1e308 at h = 100 with a non-finite residual, after 12 cut-backs."""
+    from core_se3 import Material
+    from core_se3.errors import MaterialError
+    d = base()
+    d["material"].update(E=E, h=h)
+    bad(tmp_path, d, key, "stiffness", "under- or overflows")
+    with pytest.raises(MaterialError, match="stiffness"):
+        Material(E, 0.0, h)
+
+
+def test_a_load_or_rotation_that_the_run_never_reaches_warns(tmp_path):
+    """A scale table whose ramp lies past lam_end ([[2, 0], [3, 1]] with lam_end = 1) is 0 at
+    every step: the load does nothing -- the strip's tip stays at 0 -- and a field's rotate with
+    start = 2 never turns it.  Each now warns at its key; before, both were accepted without a
+    word.  The same keys within the run say nothing."""
+    def said(d):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            scn = load_doc(tmp_path, d)
+        return scn, [str(w.message) for w in caught]
+    d = base()
+    d["loads"][0]["scale"] = [[2.0, 0.0], [3.0, 1.0]]
+    scn, text = said(d)
+    assert any("[loads[0].scale]: the scale is 0 at every load factor of the run (0.5 .. 1)" in t for t in text)
+    assert np.abs(scn.problem.solve().final.probes["tip"]["u"]).max() == 0.0       # it acts nowhere
+    d["loads"][0]["scale"] = [[0.0, 0.0], [0.5, 1.0]]
+    assert not [t for t in said(d)[1] if "scale is 0" in t]
+    d = base()
+    d.update(units="SI", fields={"c": {"type": "uniform", "B": [0.0, 0.0, 0.001],
+                                       "rotate": {"axis": [0.0, 1.0, 0.0], "angle": 1.0, "start": 2.0, "end": 3.0}}},
+             magnets=[{"Br": [0.1, 0.0, 0.0]}])
+    assert any("[fields.c.rotate]: the field's rotation has not begun" in t for t in said(d)[1])
+    d["fields"]["c"]["rotate"].update(start=0.5, end=1.0)
+    assert not [t for t in said(d)[1] if "not begun" in t]

@@ -143,12 +143,46 @@ def _case_plot(name, overrides, doc, res, path):
 BENCH_FILES = ("step_*.vtu", "series.pvd", "obstacles.pvd")     # a bench's --vtu names (never over foreign ones)
 
 
+def _plot_format_error(path):
+    """Why matplotlib cannot write the image ``path`` (an extension it has no writer for), or
+    None: checked before the case solves, not after (a bare ValueError from savefig)."""
+    ext = os.path.splitext(path)[1].lower().lstrip(".")
+    if not ext:
+        return None                            # matplotlib's default format (png)
+    from matplotlib.backend_bases import FigureCanvasBase
+    known = FigureCanvasBase.get_supported_filetypes()
+    return None if ext in known else (f"--plot {path!r}: matplotlib writes no '.{ext}' images (it writes "
+                                      f"{', '.join(sorted(known))}): give a path such as plot.png")
+
+
+def _json_target_error(path):
+    """Why --json may not write ``path``: an existing file that is not an earlier ``bench run``
+    JSON (a scenario, a run's results.json, notes: the user's), else None."""
+    import json
+    if not os.path.exists(path):
+        return None
+    try:
+        with open(path) as fh:
+            old = json.load(fh)
+    except (OSError, ValueError):
+        old = None
+    if isinstance(old, dict) and old.get("schema") == "core-se3-result" and "case" in old and "scenario" not in old:
+        return None                            # (a run's results.json names its scenario)
+    return f"--json {path!r} is a file that is not an earlier bench run's JSON: give another path (e.g. case.json)"
+
+
 def bench_run(args):
     """``core-se3 bench run``; with ``--plot`` matplotlib is imported by a forked worker while the
     case solves (``io.worker.PlotProcess``; not under MPI)."""
     from ..io.rundir import RunDirectory
     from ..io.worker import PlotProcess
     from ..scenario.context import on_root
+    bad = (_plot_format_error(args.plot) if args.plot else None) or (_json_target_error(args.json) if args.json
+                                                                      else None)
+    if bad is not None:
+        if launched_rank() == 0:
+            print(f"error: {bad}", file=sys.stderr)
+        return 2
     rd = RunDirectory(args.vtu, "bench", BENCH_FILES, option="--vtu") if args.vtu else None
     try:       # a run directory's rules: never over a file it did not write; its own earlier files go
         if rd is not None:
@@ -238,8 +272,9 @@ def _bench_parsers(sub):
                      "(never over them)")
     run.add_argument("--plot", default=None, help="PNG load-deflection plot")
     run.add_argument("-v", "--verbose", action="store_true", help="log every Newton (sub-)step")
-    run.add_argument("--progress", action="store_true", help="progress line even when not on a terminal")
-    run.add_argument("-q", "--quiet", action="store_true", help="no progress line")
+    both = run.add_mutually_exclusive_group()        # one or the other: both is a usage error
+    both.add_argument("--progress", action="store_true", help="progress line even when not on a terminal")
+    both.add_argument("-q", "--quiet", action="store_true", help="no progress line")
 
 
 def parser():

@@ -43,8 +43,7 @@ def add_parsers(sub):
     sw.add_argument("--resume", action="store_true", help="continue an interrupted sweep in --out")
     sw.add_argument("--force", action="store_true", help="start over in a directory of an earlier sweep")
     sw.add_argument("--strict", action="store_true", help="make the plausibility warnings errors")
-    sw.add_argument("--progress", action="store_true", help="progress line even when not on a terminal")
-    sw.add_argument("-q", "--quiet", action="store_true", help="no progress line, no summary")
+    _progress_or_quiet(sw, "progress line even when not on a terminal", "no progress line, no summary")
     _plugin(sw)
     kinds = sub.add_parser("kinds", help="list the registered kinds of every section and their keys",
                            epilog="sections: generator, law, supports, loads, fields, obstacles, variables, targets")
@@ -94,9 +93,15 @@ def kinds(args):
     return 0
 
 
+def _progress_or_quiet(p, progress, quiet):
+    """--progress and -q/--quiet, one or the other (both: a usage error, exit status 2)."""
+    both = p.add_mutually_exclusive_group()
+    both.add_argument("--progress", action="store_true", help=progress)
+    both.add_argument("-q", "--quiet", action="store_true", help=quiet)
+
+
 def _common(p, progress, quiet):
-    p.add_argument("--progress", action="store_true", help=progress)
-    p.add_argument("-q", "--quiet", action="store_true", help=quiet)
+    _progress_or_quiet(p, progress, quiet)
     p.add_argument("-v", "--verbose", action="store_true", help="log every Newton (sub-)step")
 
 
@@ -374,6 +379,9 @@ def _grid(args, scn):
         grid[k.strip()] = parse_values(vals, f"--set {k.strip()}")
     if not grid and not scn.spec["sweep"]:
         raise CoreSE3Error(f"{args.scenario}: nothing to sweep: give --set KEY=v1,v2,... or a [sweep] section")
+    if grid and scn.spec["sweep"]:              # one grid or the other: say which is dropped
+        print(f"note: {args.scenario}: --set replaces the scenario's [sweep] section "
+              f"({', '.join(scn.spec['sweep'])}): its values are not run", file=sys.stderr)
     return grid or None                         # None: the scenario's [sweep] section
 
 
@@ -419,7 +427,8 @@ def mesh_check(args):
         scn = _open(args)
     except CoreSE3Error as exc:
         return _check_failed(args, exc, known_output=False)
-    clash = _input_at(args.json, scn, args) if args.json else None
+    clash = (_input_at(args.json, scn, args) or (None if _earlier_check(args.json) else
+                                                  "a file that is not an earlier check's JSON")) if args.json else None
     if clash is not None:
         print(f"error: --json {args.json!r} is {clash}: the check would overwrite it; give another path "
               "(e.g. check.json)", file=sys.stderr)
@@ -474,25 +483,32 @@ def _check_failed(args, exc, known_output):
     the scenario (``_input_at``); when the scenario did not load, its inputs are unknown and only
     a missing file or an earlier check's JSON (a JSON object with "status" or "levels") is
     replaced."""
-    import json
-    import os
     from ..io.files import write_json_atomic
     code = error_code(exc)
     if not args.json:
         return code
-    if not known_output and os.path.exists(args.json):
-        try:
-            with open(args.json) as fh:
-                old = json.load(fh)
-        except (OSError, ValueError):
-            return code                        # not a check's JSON: perhaps an input, left alone
-        if not (isinstance(old, dict) and ("status" in old or "levels" in old)):
-            return code
+    if not known_output and not _earlier_check(args.json):
+        return code                            # not a check's JSON: perhaps an input, left alone
     try:
         write_json_atomic(args.json, dict(status="failed", error=str(exc), scenario=args.scenario, exit_status=code))
     except OSError as err:
         return output_error(err, "the error is printed above")
     return code
+
+
+def _earlier_check(path):
+    """True if ``path`` is missing or holds an earlier check's JSON (an object with "status" or
+    "levels", not a run's results.json): --json may replace it; any other file is the user's."""
+    import json
+    import os
+    if not os.path.exists(path):
+        return True
+    try:
+        with open(path) as fh:
+            old = json.load(fh)
+    except (OSError, ValueError):
+        return False
+    return isinstance(old, dict) and ("status" in old or "levels" in old) and "schema" not in old
 
 
 def _input_at(path, scn, args):

@@ -31,12 +31,35 @@ import numpy as np
 from ..errors import MaterialError, MeshError
 
 __all__ = ["Material", "RegionMaterial", "ResultantLaw", "law_matrix", "strain_operators", "CLASSICAL_DRILLING",
-           "SHEAR_STABILISATION_FLOOR"]
+           "SHEAR_STABILISATION_FLOOR", "STIFFNESS_RANGE", "stiffness_range_error"]
 
 #: the classical-shell law's factor on the drilling-curvature modulus (Material.classical_shell)
 CLASSICAL_DRILLING = 0.01
 #: the default floor c of the shear stabilisation's factor (Material.shear_stabilisation_floor)
 SHEAR_STABILISATION_FLOOR = 0.05
+#: the range of E h and E h^3/12 that double precision solves: below, the squares in the residual's
+#: norms underflow (a strip at E = 1e-155, h = 0.1 had a singular tangent); above, the tangent
+#: overflows (E = 1e308, h = 100: a non-finite residual); E h = 1e299 solved, to 9e-12
+STIFFNESS_RANGE = (1e-150, 1e300)
+
+
+def stiffness_range_error(E, h):
+    """A message when the membrane stiffness E h or the bending stiffness E h^3/12 lies outside
+    STIFFNESS_RANGE (E or h in units far from the problem's: the stiffness under- or overflows,
+    and the solve fails with a singular tangent or no convergence), else None.
+
+    Example
+    -------
+    >>> stiffness_range_error(1.2e6, 0.1) is None, stiffness_range_error(1.2e6, 1e-120)[:43]
+    (True, 'the bending stiffness E h^3/12 = 0 (E = 1.2')
+    """
+    lo, hi = STIFFNESS_RANGE
+    for what, value in (("membrane stiffness E h", E * h), ("bending stiffness E h^3/12", E * h ** 3 / 12)):
+        if not lo <= value <= hi:
+            return (f"the {what} = {value:g} (E = {E:g}, h = {h:g}) lies outside {lo:g} .. {hi:g}, where double "
+                    "precision can solve it (it under- or overflows): give E and h in units near the problem's "
+                    "scale (e.g. N, mm, MPa)")
+    return None
 
 
 @runtime_checkable
@@ -163,6 +186,8 @@ class Material:
             raise MaterialError(f"Poisson's ratio nu must lie in (-1, 0.5), got {self.nu}")
         if self.h <= 0:
             raise MaterialError(f"thickness h must be > 0, got {self.h}")
+        if stiffness_range_error(self.E, self.h):
+            raise MaterialError(stiffness_range_error(self.E, self.h))
         if self.shear_factor <= 0:
             raise MaterialError(f"shear factor must be > 0, got {self.shear_factor}")
         if self.drilling < 0:

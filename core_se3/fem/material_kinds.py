@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 from ..registry import Kind, Param, Registry
-from .material import SHEAR_STABILISATION_FLOOR, Material
+from .material import SHEAR_STABILISATION_FLOOR, STIFFNESS_RANGE, Material, stiffness_range_error
 
 __all__ = ["MaterialKind", "MATERIALS", "register_material", "material_kind", "ISOTROPIC"]
 
@@ -82,6 +82,13 @@ def material_kind(name) -> MaterialKind:
     return MATERIALS.lookup(name)
 
 
+def _stiffness_check(v):
+    """(key, message) of an E and h whose stiffness double precision cannot solve, or None."""
+    msg = stiffness_range_error(v["E"], v["h"])
+    lo, hi = STIFFNESS_RANGE
+    return None if msg is None else ("h" if lo <= v["E"] <= hi else "E", msg)
+
+
 ISOTROPIC = register_material(MaterialKind("isotropic", (
     Param("E", "number", lo=0.0, lo_open=True, doc="Young's modulus, > 0"),
     Param("nu", "number", lo=-1.0, lo_open=True, hi=0.5, hi_open=True, doc="Poisson's ratio, in (-1, 0.5)"),
@@ -96,4 +103,5 @@ ISOTROPIC = register_material(MaterialKind("isotropic", (
     lambda v: Material(v["E"], v["nu"], v["h"], v["shear_factor"], v["drilling"], v["rho"],
                        shear_stabilisation=v.get("shear_stabilisation", 0.0),
                        shear_stabilisation_floor=v.get("shear_stabilisation_floor", SHEAR_STABILISATION_FLOOR)),
+    lambda v, given: _stiffness_check(v),
     doc="the isotropic resultant law of the seed (fem.Material)", inert=("rho",)))

@@ -166,11 +166,13 @@ def read_input_file(path, limit, what="an input file"):
 
 
 def without_contents(message, path, head_bytes=1 << 16):
-    """An error message about the file ``path`` without any text of that file: quoted passages
-    and what follows 'found' are cut (readers quote the line they failed on), and if any 8
-    characters of what is left (the path aside) still occur in the file's first 64 KiB, the
-    detail goes entirely.  An error message must never show a file's contents (a scenario
-    may name any file as its mesh).
+    """An error message about the file ``path`` without any text of that file: a quoted passage
+    whose text occurs anywhere in the file (readers quote the line they failed on, a group's
+    name), or any quoted passage when the file cannot be read, becomes '...', and so does what
+    follows 'found'; if any 8 characters of what is left (the path aside) still occur in the
+    file's first 64 KiB, the detail goes entirely.  A quoted passage that is not in the file --
+    the reader's own advice, such as ``triangles = "split"`` -- stays.  An error message must
+    never show a file's contents (a scenario may name any file as its mesh).
 
     Example
     -------
@@ -178,9 +180,12 @@ def without_contents(message, path, head_bytes=1 << 16):
     >>> p = write_text_atomic(os.path.join(tempfile.mkdtemp(), "m.msh"), "SECRET TOKEN 42\\n")
     >>> without_contents("ReadError: Unexpected line 'SECRET TOKEN 42'", p)
     'ReadError: Unexpected line ...'
+    >>> without_contents('it has triangles: set triangles = "split"', p)
+    'it has triangles: set triangles = "split"'
     """
     import re
-    msg = re.sub(r"(['\"]).*?\1", "...", str(message))
+    msg = re.sub(r"(['\"]).*?\1", lambda m: m.group(0) if _absent(m.group(0)[1:-1], path) else "...",
+                 str(message))
     msg = re.sub(r"\bfound\b.*", "found ...", msg)
     try:
         with open(path, "rb") as fh:
@@ -191,3 +196,26 @@ def without_contents(message, path, head_bytes=1 << 16):
     if any(rest[i:i + 8] in head for i in range(max(len(rest) - 7, 0)) if rest[i:i + 8].strip()):
         return "its contents are not a mesh this reader knows"
     return msg
+
+
+def _absent(text, path):
+    """True if ``text`` (not blank) is certainly not in the file ``path``: searched whole, in
+    chunks, ignoring ASCII case (a reader may quote a name in another case), as UTF-8 and
+    Latin-1; False if it is there, or the file cannot be read."""
+    if not text.strip():
+        return False
+    needles = {text.lower().encode(enc, "replace") for enc in ("utf-8", "latin-1")}
+    keep = max(map(len, needles)) - 1
+    try:
+        with open(path, "rb") as fh:
+            tail = b""
+            while True:
+                chunk = fh.read(1 << 24)
+                if not chunk:
+                    return True
+                buf = tail + chunk.lower()
+                if any(x in buf for x in needles):
+                    return False
+                tail = buf[len(buf) - keep:] if keep else b""
+    except OSError:
+        return False

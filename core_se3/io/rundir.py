@@ -50,6 +50,8 @@ __all__ = ["RunDirectory", "RunDirectoryError", "safe_name", "MANIFEST", "LOCK"]
 
 MANIFEST = ".core-se3-manifest.json"
 LOCK = ".core-se3.lock"
+#: the kinds of directory whose command continues an earlier one (core-se3 run and sweep --resume)
+RESUMABLE = ("run", "sweep")
 _TMP = re.compile(r"^\.(?P<name>.+)\.[a-z0-9_]{8}\.tmp")    # io.files.atomic_path's temporaries
 
 
@@ -141,6 +143,9 @@ class RunDirectory:
         RunDirectory
             self, locked.
         """
+        if os.path.exists(self.path) and not os.path.isdir(self.path):
+            raise RunDirectoryError(f"{self.option} {self.path!r} is a file, not a directory: nothing was written; "
+                                    f"choose a directory (new or of an earlier {self.kind})")
         os.makedirs(self.path, exist_ok=True)
         self._take_lock()
         try:
@@ -189,9 +194,10 @@ class RunDirectory:
                 f"{where} holds files that core-se3 did not write under the names a {self.kind} writes "
                 f"({_some(clash)}): --force does not overwrite them; move them away or choose another {self.option}")
         if self.previous and not resume and not force:
+            go_on = "continue it with --resume, " if self.kind in RESUMABLE else ""    # (a design starts over)
             raise RunDirectoryError(
-                f"{where} holds the files of an earlier {self.kind} ({_some(self.previous)}): continue it with "
-                f"--resume, start over with --force, or choose another {self.option} directory")
+                f"{where} holds the files of an earlier {self.kind} ({_some(self.previous)}): {go_on}start over "
+                f"with --force, or choose another {self.option} directory")
 
     def start_over(self):
         """Delete the files of the earlier run (a resume of a run that stopped before it saved

@@ -88,7 +88,8 @@ def _read_table(v, key, fname, path):
         data = read_input_file(path, MAX_TABLE_BYTES, "a magnetisation table")
     except (ValueError, OSError) as exc:
         v.fail(key, str(exc))
-    rows = [r for r in csv.reader(data.decode("utf-8", "replace").splitlines()) if r and not r[0].startswith("#")]
+    text = data.decode("utf-8-sig", "replace")     # without the byte order mark of a spreadsheet's UTF-8 CSV
+    rows = [r for r in csv.reader(text.splitlines()) if r and not r[0].startswith("#")]
     head = [c.strip() for c in rows[0]] if rows else []
     if head not in (["element", "Brx", "Bry", "Brz"], ["node", "Brx", "Bry", "Brz"]):
         v.fail(key, f"{fname}: expected the header element,Brx,Bry,Brz or node,Brx,Bry,Brz as its first row "

@@ -29,6 +29,9 @@ SOLVER_DEFAULTS = {p.name: p.default for p in SOLVER.params
 # arc-length keys, with ArcLengthOptions' defaults (dlam0: lam_end / steps)
 ARCLENGTH_DEFAULTS = {p.name: p.default for p in ARCLENGTH.params}
 OUTPUT_DEFAULTS = {p.name: p.default for p in OUTPUT.params if p.name != "dir"}
+# [solver] keys that only load control reads (arc length and linear analysis have none of them)
+LOAD_CONTROL_ONLY = ("max_cutbacks", "iteration", "predictor", "path_check", "limit_check", "max_substeps",
+                     "snap_check", "friction_check", "friction_halving", "friction_tol", "end_check", "inertia_check")
 # solver keys that do not change the converged states (left out of the --resume fingerprint);
 # max_steps only decides where an arc-length path stops, so a resume may raise it
 NON_PHYSICAL = ("rtol", "dtol", "max_iter", "max_cutbacks", "linear_solver", "max_steps", "iteration",
@@ -298,9 +301,13 @@ def solver_section(v, doc):
     if s["lam_end"] == 0:
         v.fail(join(key, "lam_end"), "expected a non-zero final load factor, got 0")
     for name in ("rtol", "dtol", "max_iter", "max_cutbacks", "element", "linear_solver", "iteration", "predictor",
-                 "path_check", "limit_check", "max_substeps", "snap_check", "inertia_check", "end_check",
-                 "friction_check", "friction_tol", "friction_halving"):
+                 "path_check", "limit_check", "critical_tol", "max_substeps", "snap_check", "inertia_check",
+                 "end_check", "friction_check", "friction_tol", "friction_halving"):
         s[name] = v.param(d, key, SOLVER.param(name))
+    for name in LOAD_CONTROL_ONLY if s["control"] != "load" else ():
+        if name in d:           # a warning, not an error: a sweep may switch the control of the file
+            v.warn(join(key, name), f'a switch of load control: control = "{s["control"]}" does not use it '
+                                    f'(the run goes on without it); remove it, or use control = "load"')
     if s["control"] != "arclength":
         extra = [k for k in ARCLENGTH_DEFAULTS if k in d]
         if extra:
@@ -358,7 +365,7 @@ def solve_defaults(s):
         return dict(control="linear", **common)
     out = dict(control="load", max_cutbacks=s["max_cutbacks"], iteration=s["iteration"],
                predictor=s["predictor"], path_check=s["path_check"], limit_check=s["limit_check"],
-               max_substeps=s["max_substeps"], snap_check=s["snap_check"], inertia_check=s["inertia_check"],
+               critical_tol=s["critical_tol"], max_substeps=s["max_substeps"], snap_check=s["snap_check"], inertia_check=s["inertia_check"],
                end_check=s["end_check"], friction_check=s["friction_check"], friction_tol=s["friction_tol"],
                friction_halving=s["friction_halving"], **common)
     out.update(linear=s.get("linear", "mumps"), petsc_options=dict(s.get("petsc") or {}),

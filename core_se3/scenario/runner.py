@@ -109,7 +109,8 @@ def _options(s):
                                 stability=s["stability"], critical_tol=s["critical_tol"], **common)
     return NewtonOptions(max_cutbacks=s["max_cutbacks"], iteration=s["iteration"],
                          predictor=s.get("predictor", "none"), path_check=s["path_check"],
-                         limit_check=s["limit_check"], max_substeps=s["max_substeps"],
+                         limit_check=s["limit_check"], critical_tol=s["critical_tol"],
+                         max_substeps=s["max_substeps"],
                          snap_check=s["snap_check"], inertia_check=s["inertia_check"], end_check=s["end_check"],
                          friction_check=s["friction_check"], friction_tol=s["friction_tol"],
                          friction_halving=s["friction_halving"],

@@ -133,6 +133,9 @@ SOLVER = Section("solver", (
     _option("limit_check", _NEWTON, "load control: stop at a critical point, naming it: a step that snapped past a "
             "limit point, or a change of the sign of det K (a bifurcation, located to `critical_tol` of the load "
             "factor); false records it in `critical_points` and goes on along the unstable path", kind="bool"),
+    _option("critical_tol", _NEWTON, "both controls: the relative accuracy in the load factor to which a critical "
+            "point is located (the step that crossed it bisected; load control: with limit_check)", lo=0.0,
+            lo_open=True, hi=1.0, hi_open=True),
     _option("max_substeps", _NEWTON, "load control: the most sub-steps into which a step may be split to keep a "
             "prescribed rotation or a turning field within its turn per try; beyond it the run stops naming the "
             "load and its turn", kind="integer", lo=1, hi=10_000_000),
@@ -170,13 +173,12 @@ ARCLENGTH = Section("arclength", (
     _option("psi", _ARC, "weight of the load term", lo=0.0),
     _option("target_iter", _ARC, "iterations the arc length adapts toward", kind="integer", lo=1, hi=100),
     _option("ds_max_factor", _ARC, "largest arc length over the first", lo=1.0),
-    _option("stability", _ARC, "count negative pivots, report critical points", kind="bool"),
-    _option("critical_tol", _ARC, "load-factor bracket to which a critical point is located", lo=0.0, lo_open=True,
-            hi=1.0, hi_open=True)),
+    _option("stability", _ARC, "count negative pivots, report critical points", kind="bool")),
     doc='[solver] keys of control = "arclength"')
 
 OUTPUT = Section("output", (
-    Param("dir", "string", None, doc="output directory (default out/NAME; --out wins)"),
+    Param("dir", "string", None, doc="output directory, relative to the working directory as --out is (the "
+          "scenario's input files are relative to the scenario file); default out/NAME; --out wins"),
     Param("vtu", "bool", True, doc="VTU series"),
     Param("vtu_every", "integer", 1, lo=1, doc="write every k-th step (and the last)"),
     Param("plots", "bool", True, doc="probes.png"),

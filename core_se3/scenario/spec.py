@@ -242,7 +242,7 @@ def load(path, strict=False):
     except OSError as exc:
         raise ScenarioError(f"cannot read the scenario file: {exc.strerror or exc}", path) from None
     try:
-        text = data.decode("utf-8")
+        text = data.decode("utf-8-sig")      # a byte order mark (Windows editors write one) is not TOML's
     except UnicodeDecodeError as exc:
         raise ScenarioError(f"not UTF-8 text ({exc.reason} at byte {exc.start})", path) from None
     return loads(text, file=path, base_dir=os.path.dirname(os.path.abspath(path)), strict=strict)

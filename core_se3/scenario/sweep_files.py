@@ -92,10 +92,12 @@ def columns(rows):
 
 
 def _cell(v):
-    if isinstance(v, (list, tuple)):
-        return ";".join(f"{x:.17g}" for x in v)
-    if isinstance(v, float):
-        return repr(v)
+    """A CSV cell: a vector as ``x;y;z``; floats as their shortest exact decimal (0.1, not the
+    0.10000000000000001 of %.17g: both read back to the same float)."""
+    if isinstance(v, (list, tuple, np.ndarray)):
+        return ";".join(_cell(x) for x in v)
+    if isinstance(v, (float, np.floating)):
+        return repr(float(v))
     return str(v)
 
 

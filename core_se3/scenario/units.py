@@ -294,19 +294,30 @@ def _thin_message(h, span, u):
 
 
 def _angles(v, spec):
-    """Warn about angles [rad] of more than TURNS_MAX turns (a rotating field, a rotated edge):
-    such a turn is split into sub-steps of at most pi/4 (``solvers.splitting``), and an angle in
-    degrees by mistake turns 57 times per 360."""
+    """Warn about angles [rad] of more than TURNS_MAX turns (a rotating field, a rotated edge, a
+    prescribed motion's or an obstacle's turn, a box's orientation): such a turn is split into
+    sub-steps of at most pi/4 (``solvers.splitting``), and an angle in degrees by mistake turns 57
+    times per 360."""
     found = [(f"fields.{name}.rotate.angle", f["rotate"]["angle"]) for name, f in spec["fields"].items()
              if f.get("rotate") and f["rotate"].get("angle") is not None]
     found += [(f"supports[{i}].angle", sp["angle"]) for i, sp in enumerate(spec["supports"])
               if sp.get("angle") is not None]
+    found += [(f"supports[{i}].rotate.angle", sp["rotate"]["angle"]) for i, sp in enumerate(spec["supports"])
+              if isinstance(sp.get("rotate"), dict) and sp["rotate"].get("angle") is not None]
+    for i, ob in enumerate(spec.get("obstacles") or ()):
+        if (ob.get("motion") or {}).get("angle") is not None:
+            found.append((f"obstacles[{i}].motion.angle", ob["motion"]["angle"]))
+        turn = float(np.linalg.norm(ob.get("params", {}).get("rotation") or 0.0))
+        if turn > 2 * np.pi:           # an orientation needs no more than half a turn: degrees?
+            v.warn(f"obstacles[{i}].rotation", f"the rotation vector's angle is {turn:g} rad, more than a turn: "
+                                              f"it is in radians (90 degrees is {np.pi / 2:.6g} rad)")
     for key, angle in found:
         turns = abs(float(angle)) / (2 * np.pi)
         if turns > TURNS_MAX:
             v.warn(key, f"angle = {angle:g} rad is {turns:.3g} turns (more than {TURNS_MAX}): angles are in "
-                        f"radians (360 degrees is {2 * np.pi:.6g} rad); if so many turns are meant, the run takes "
-                        "at least 8 sub-steps per turn")
+                        f"radians (360 degrees is {2 * np.pi:.6g} rad)" + (
+                            "" if key.startswith("obstacles") else
+                            "; if so many turns are meant, the run takes at least 8 sub-steps per turn"))
 
 
 def plausibility(v, scn):
@@ -360,6 +371,7 @@ def plausibility(v, scn):
                 v.warn(f"fields.{name}", f"the applied field reaches |B| = {b:g} T on the shell, above "
                                          f"{B_MAX:g} T (lab electromagnets): B is in tesla; did you give mT?")
     _angles(v, spec)
+    _idle(v, scn)
     span = _spans(scn.mesh, scn.problem, np.arange(scn.mesh.n_nodes))
     for key, mat in mats:
         if mat.get("h", 0.0) / span > H_OVER_L_MAX:
@@ -382,6 +394,31 @@ def plausibility(v, scn):
     if scn.solver["control"] == "linear":
         _linear_motions(v, spec, scn.solver["lam_end"], scn.mesh.length_scale)
     return None
+
+
+def _idle(v, scn):
+    """Warn about a load, field or prescribed motion whose ``scale`` is 0 at every load factor of
+    the run (a table ramping beyond lam_end: it acts nowhere), and a field's ``rotate`` that has
+    not begun at any step (its start at or past lam_end: it never turns).  Load control and
+    linear analysis (an arc-length path's load factors are not known beforehand)."""
+    if scn.solver["control"] == "arclength":
+        return
+    spec, lams = scn.spec, np.array(scn.load_factors(), float)
+    scaled = [(f"loads[{i}].scale", ld.get("scale")) for i, ld in enumerate(spec["loads"])]
+    scaled += [(f"supports[{i}].scale", sp.get("scale")) for i, sp in enumerate(spec["supports"])]
+    scaled += [(f"fields.{name}.scale", f.get("scale")) for name, f in spec["fields"].items()]
+    where = f"at every load factor of the run ({lams.min():g} .. {lams.max():g})"
+    for key, sc in scaled:
+        if sc is not None and all(make_scale(sc)(lam) == 0 for lam in lams):
+            v.warn(key, f"the scale is 0 {where}: it acts nowhere; move its table's ramp into the run "
+                        "or raise lam_end")
+    for name, f in spec["fields"].items():
+        r = f.get("rotate")
+        if r and r.get("angle"):
+            turn = np.clip((lams - r.get("start", 0.0)) / (r.get("end", 1.0) - r.get("start", 0.0)), 0.0, 1.0)
+            if turn.max() == 0:
+                v.warn(f"fields.{name}.rotate", f"the field's rotation has not begun {where} (start = "
+                                                f"{r.get('start', 0.0):g}): it never turns; move start into the run")
 
 
 def _file_length(spec, u):

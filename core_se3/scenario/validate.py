@@ -15,9 +15,33 @@ import numpy as np
 from ..errors import ScenarioError, ScenarioWarning, did_you_mean
 from ..registry import REQUIRED
 
-__all__ = ["Validator", "Bounds", "join", "tname", "show", "make_scale", "user_key"]
+__all__ = ["Validator", "Bounds", "join", "tname", "show", "make_scale", "user_key", "elsewhere"]
 
 _REQ = REQUIRED
+
+
+def elsewhere(k):
+    """'; it is a key of [solver]' when ``k`` is a key of another table of the scenario (the top
+    level, [mesh], [material], [solver], [output], [design]), else '': a key written in the wrong
+    table, as often after a [table] header that TOML makes it part of.
+
+    Example
+    -------
+    >>> elsewhere("steps"), elsewhere("nosuch")
+    ('; it is a key of [solver]', '')
+    >>> elsewhere("units")[:55]
+    '; it is a top-level key: put it before the first [table'
+    """
+    from ..fem.material_kinds import MATERIALS
+    from .schema import ARCLENGTH, DESIGN, OUTPUT, SCENARIO, SOLVER
+    if k in SCENARIO.keys() and k not in ("name", "description"):
+        return ("; it is a top-level key: put it before the first [table] header (TOML makes a key after a "
+                "header part of that table)")
+    homes = [("[mesh]", ("generator", "file", "d1_hint", "triangles", "refine", "grade")),
+             ("[material]", tuple(x for law in MATERIALS.values() for x in law.keys()) + ("law",)),
+             ("[solver]", SOLVER.keys() + ARCLENGTH.keys()), ("[output]", OUTPUT.keys()), ("[design]", DESIGN.keys())]
+    found = [name for name, keys in homes if k in keys]
+    return f"; it is a key of {' and '.join(found)}" if found else ""
 
 
 def make_scale(spec):
@@ -109,8 +133,8 @@ class Validator:
             self.fail(key, f"expected a table, got {tname(d)} {show(d)}")
         for k in d:
             if k not in allowed:
-                self.fail(join(key, k), f"unknown key {k!r}{did_you_mean(k, allowed)} (allowed here: "
-                                        f"{', '.join(allowed)})")
+                self.fail(join(key, k), f"unknown key {k!r}{elsewhere(k) or did_you_mean(k, allowed)} (allowed "
+                                        f"here: {', '.join(allowed)})")
         for k in required:
             if k not in d:
                 self.fail(join(key, k), "missing required key")
