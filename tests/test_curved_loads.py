@@ -173,3 +173,16 @@ def test_a_curved_panels_local_problems_sum_to_the_whole(backend):
     assert np.abs(f_ext - ev.f_ext).max() < 1e-12 * np.abs(ev.f_ext).max()
     Kg = ev.K.toarray()
     assert np.abs(K[np.ix_(free, free)] - Kg).max() < 1e-12 * np.abs(Kg).max()
+
+
+def test_adding_an_area_load_does_not_build_the_element():
+    """The loads take the element's area element from its class (``reference_area``, the same
+    numbers to the bit): building the element (its stiffness on the whole mesh) when a load is
+    added would cost every rank of a distributed run, which holds the whole Problem."""
+    from core_se3.fem.element_default import DefaultElement
+    m = mesh.cylinder_panel(1.0, 1.0, 0.0, 1.2, 6, 3)
+    p = Problem(m, Material(1e3, 0.0, 0.01))
+    p.add_pressure(1.0, follower=True)
+    p.add_pressure(1.0)
+    assert p._element is None
+    assert np.array_equal(DefaultElement.reference_area(m, p.material), p.element.j0)

@@ -281,6 +281,26 @@ class DefaultElement(Element):
         # the coarse-curvature warning needs the supports (which edges are free): the Problem
         # issues it when it solves (Problem.check_element)
 
+    @staticmethod
+    def reference_area(mesh, material):
+        """j0 (m, 4): the area element at the 2x2 Gauss points of the element's reference geometry
+        (its tied tangents A_1, A_2 of the reference edge twists, in the frames of
+        :func:`element_gauge`), as the element's ``j0`` -- without building the element's
+        stiffness (a load needs only this: ``model.loads.element_area``).
+
+        Example
+        -------
+        >>> from core_se3 import mesh, Material
+        >>> m = mesh.cylinder_panel(1.0, 1.0, 0.0, 1.2, 3, 1)
+        >>> round(float(DefaultElement.reference_area(m, Material(1e3, 0.0, 0.01)).sum()), 12)  # 1.2 x 1
+        1.2
+        """
+        Q = element_gauge(mesh, material)
+        psi0 = edge_twists(mesh.g0 if Q is None else mesh.g0 @ Q, mesh.edge_nodes)
+        z0 = (mesh.elem_edge_sign[..., None] * (0.5 * psi0)[mesh.elem_edges]).reshape(-1, 24)
+        zeta0 = np.einsum("qij,mj->mqi", tying_matrices(), z0)
+        return np.linalg.norm(np.cross(zeta0[..., 0:3], zeta0[..., 6:9]), axis=-1)
+
     @property
     def Dbar(self):
         """The element stiffness Dbar (m, 24, 24) on the element edge twists (module docstring),

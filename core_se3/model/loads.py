@@ -38,6 +38,7 @@ import numpy as np
 
 from .. import lie
 from ..errors import LoadError, LoadWarning
+from ..fem import ELEMENTS
 from ..fem.quadrature import shape_functions, surface_jacobian
 from .base import (Load, LoadEvaluation, LoadKind, Param, finite_vector, linear_scale, mesh_ids, param_error,
                    register_load)
@@ -443,8 +444,9 @@ def _nodal_check(values, given):
 
 def element_area(problem, elements):
     """The problem's element's own area element (k, 4) at the Gauss points of ``elements`` (its
-    ``j0``: the default element's, of its exact-arc geometry), or None for an element without one
-    (the bilinear quads' are then used: SurfaceLoad).
+    ``j0``: the default element's, of its exact-arc geometry, from its class's ``reference_area``
+    without building it), or None for an element without one (the bilinear quads' are then used:
+    SurfaceLoad).
 
     Example
     -------
@@ -454,9 +456,13 @@ def element_area(problem, elements):
     >>> round(float(element_area(p, np.arange(3)).sum()), 12)          # the exact area 1.2 x 1
     1.2
     """
-    j0 = getattr(problem.element, "j0", None)
-    if j0 is None:
+    # the element's class gives it from the geometry (``reference_area``): building the element
+    # (its stiffness on the whole mesh) here would cost every rank of a distributed run, which
+    # holds the whole Problem but builds only its own elements
+    area = getattr(ELEMENTS.get(problem.element_name), "reference_area", None)
+    if area is None:
         return None
+    j0 = area(problem.mesh, problem.material)
     sel = np.arange(problem.mesh.n_elements) if elements is None else np.asarray(elements)
     return np.asarray(j0)[sel]
 
