@@ -166,24 +166,80 @@ _PANEL_108 = {"mesh": ("cylinder_panel", (0.2314910529772749, 0.1882968871319146
               "alpha": 242.9710429321577}
 
 
-def test_a_limit_point_is_not_called_a_bifurcation_after_a_jump_across_it():
+def _panel_108(chords):
+    """Fuzz problem 108; ``chords``: its two pressures integrated over the bilinear quads between
+    the nodes (``SurfaceLoad`` without the element's j0, as every pressure was before the area
+    loads took the element's own geometry), else as ``add_pressure`` gives them."""
+    import copy
+    import sys
+    from pathlib import Path
+    sys.path.insert(0, str(Path(__file__).parents[1] / "benchmarks"))
+    import invariants_fuzz as fuzz
+    from core_se3.model.loads import SurfaceLoad
+    if not chords:
+        return fuzz.build(_PANEL_108)
+    spec = copy.deepcopy(_PANEL_108)
+    (_, pf), (_, pd, d) = spec.pop("loads")
+    spec["loads"] = []
+    p = fuzz.build(spec)
+    p.add(SurfaceLoad(p.mesh, pf, True, name="follower pressure"))
+    p.add(SurfaceLoad(p.mesh, pd * np.asarray(d) / np.linalg.norm(d), False, name="dead pressure"))
+    return p
+
+
+def test_a_limit_point_is_not_called_a_bifurcation_after_a_jump_across_it(monkeypatch):
     """Arc length finds a limit point at 0.290822 +- 0.00026 of this panel's load (the largest load
     factor on the path 0.290828).  In 4 and 16 steps the try from 0.290741 to 0.2910156, beyond it,
     converged with corrections 0.035, 0.0125, 0.0038, 0.0152 ... ell (a growth of 0.33 of the step's
     scale, its pair just below half of it) onto another state and confirmed the sign change of det K
     there: the run stopped calling the point a bifurcation the path 'went on continuously through'.
-    That try is now refused (GROWTH_REACH): the run fails at the limit point and says so."""
-    import sys
-    from pathlib import Path
-    sys.path.insert(0, str(Path(__file__).parents[1] / "benchmarks"))
-    import invariants_fuzz as fuzz
+    That try is now refused (GROWTH_REACH): the run fails at the limit point and says so.
+
+    The panel's pressures are the chords' (``_panel_108``): on the element's own geometry (its
+    3 elements turn by 0.499 rad each) the follower pressure is 1 / 0.959 and the dead one
+    1 / 0.990 of the chords' and, the two nearly balancing, the path changes: it meets a real
+    bifurcation first (the next test).  Scaling the follower pressure by 0.90 ... 0.97 (2 to 16
+    steps), or it by 0.955 ... 0.965 and the dead one by 0.99 ... 1.0 (lam_end 0.8 ... 1.2, 3 and 4
+    steps), gave no panel whose outcome GROWTH_REACH decides (the jumps grow at the step's scale
+    or the point is a bifurcation); with the chords' pressures it does: without it the jump is
+    called a bifurcation."""
+    from core_se3.solvers import step_checks
+
+    def run():
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            with pytest.raises(ConvergenceError) as exc:
+                _panel_108(chords=True).solve(steps=4)
+        return exc.value
+    err = run()
+    msg = str(err)
+    assert "limit point" in msg and "bifurcation" not in msg, msg
+    assert err.result.steps[-1].load_factor <= 0.290828
+    monkeypatch.setattr(step_checks, "GROWTH_REACH", np.inf)         # the rule is what tells them apart
+    assert "bifurcation" in str(run())
+
+
+def test_panel_108_on_its_elements_geometry_meets_a_bifurcation_the_run_names():
+    """With the pressures on the element's own geometry (``add_pressure``) the panel's path has a
+    bifurcation, not a limit point, where load control stops: arc length passes a det K sign
+    change at 0.285694 +- 0.00012 with the load factor still rising (to a limit point at 0.3956);
+    16 and 128 load steps to 0.2858887, beyond it, end 4e-15 ell apart and 3e-4 ell from the arc-
+    length path (its step there 3.7e-3 ell): the path goes on continuously through it.  Load
+    control in 4 steps names it a bifurcation at 0.2857666 +- 0.00012; its last try, 0.2856445 to
+    0.2858887 (corrections 0.0188, 0.0049, 0.0093, 0.0027 ... ell: a growth of 0.235 of the step's
+    scale, just below GROWTH_REACH), lands on that path and is rightly kept."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         with pytest.raises(ConvergenceError) as exc:
-            fuzz.build(_PANEL_108).solve(steps=4)
+            _panel_108(chords=False).solve(steps=4)
+        arc = arc_length(_panel_108(chords=False), lam_end=0.35, dlam0=0.01)
     msg = str(exc.value)
-    assert "limit point" in msg and "bifurcation" not in msg, msg
-    assert exc.value.result.steps[-1].load_factor <= 0.290828
+    assert "bifurcation" in msg and "limit point" not in msg, msg
+    lam = float(re.search(r"i\.e\. at ([0-9.]+) \+- ([0-9.]+)", msg).group(1))
+    kinds = [(c.kind, c.lam) for c in arc.critical_points]
+    assert len(kinds) == 1 and kinds[0][0] == "bifurcation", kinds
+    assert abs(kinds[0][1] - lam) <= 2.5e-4
+    assert max(s.load_factor for s in arc.steps) >= 0.3                # the path rises on through it
 
 
 def test_a_shell_with_an_inexact_tangent_is_not_cut_back_forever():

@@ -115,8 +115,9 @@ _DNQ = np.stack([0.25 * _XS * (1 + _GPTS[:, 1:] * _YS), 0.25 * _YS * (1 + _GPTS[
 
 
 @njit(cache=True)
-def _follower_element(g, quads, el, p, f, data, cmap, tangent, a, nrm, dF, K6, T):
-    """One element of the follower pressure (see surface_load_follower)."""
+def _follower_element(g, quads, el, p, f, data, cmap, tangent, a, nrm, dF, K6, T, C, turned, U):
+    """One element of the follower pressure (see surface_load_follower); C (4, 3, 3) its
+    corners' constant body-frame turns where ``turned`` (a curved element), U (3, 6) a workspace."""
     for qq in range(4):
         for k in range(2):
             for c in range(3):
@@ -135,11 +136,18 @@ def _follower_element(g, quads, el, p, f, data, cmap, tangent, a, nrm, dF, K6, T
             F1 += _NQ[qq, i] * nrm[qq, 1]
             F2 += _NQ[qq, i] * nrm[qq, 2]
         B0, B1, B2 = _RtX(g, ni, p * F0, p * F1, p * F2)
-        f[ni, 0] += B0
-        f[ni, 1] += B1
-        f[ni, 2] += B2
-        if not tangent:
-            continue
+        if turned:
+            f[ni, 0] += C[i, 0, 0] * B0 + C[i, 0, 1] * B1 + C[i, 0, 2] * B2
+            f[ni, 1] += C[i, 1, 0] * B0 + C[i, 1, 1] * B1 + C[i, 1, 2] * B2
+            f[ni, 2] += C[i, 2, 0] * B0 + C[i, 2, 1] * B1 + C[i, 2, 2] * B2
+            if not tangent:
+                continue
+        else:
+            f[ni, 0] += B0
+            f[ni, 1] += B1
+            f[ni, 2] += B2
+            if not tangent:
+                continue
         for j in range(4):
             nj = quads[el, j]
             dF[:, :] = 0.0
@@ -158,27 +166,36 @@ def _follower_element(g, quads, el, p, f, data, cmap, tangent, a, nrm, dF, K6, T
                     K6[r, c] = -(g[ni, 0, r] * T[0, c] + g[ni, 1, r] * T[1, c] + g[ni, 2, r] * T[2, c])
             if i == j:
                 hat_add(K6, 0, 3, B0, B1, B2, -1.0)
+            if turned:                               # the force rows turned: C_i K6[:3, :]
+                for r in range(3):
+                    for c in range(6):
+                        U[r, c] = C[i, r, 0] * K6[0, c] + C[i, r, 1] * K6[1, c] + C[i, r, 2] * K6[2, c]
+                K6[:3, :] = U
             scatter(data, cmap, cmap.elem_blk[el, i, j], ni, nj, K6, 0, 0, False, 1.0)
 
 
 @njit(cache=True)
-def surface_load_follower(g, quads, elements, cptr, order, p, f, data, cmap, tangent):
+def surface_load_follower(g, quads, elements, cptr, order, p, turns, turned, f, data, cmap, tangent):
     """SurfaceLoad, follower pressure p (already scaled) per current area along a_1 x a_2:
     with a_k = sum_j dN_j/dxi_k phi_j at the Gauss points, F_i = p sum_q N_i a_1 x a_2 (lab),
     f_i += R_i^T F_i;  -df/deta:  block (i,i)[:3,3:] = -hat(R_i^T F_i) and
     block (i,j)[:3,:3] = -R_i^T dF_ij R_j,  dF_ij = p sum_q N_i (-dN_j/dx hat(a_2) + dN_j/dy hat(a_1)).
+    Where ``turned``, the force of corner i of the t-th loaded element and its block rows are turned
+    by the constant turns[t, i] (3, 3) (SurfaceLoad.turns: curved elements' area and normal).
     Serial; ``surface_load_follower_par`` runs the colours in parallel (same arguments)."""
     a = np.empty((4, 2, 3))
     nrm = np.empty((4, 3))
     dF = np.empty((3, 3))
     K6 = np.empty((6, 6))
     T = np.empty((3, 3))
+    U = np.empty((3, 6))
     for t in range(elements.size):
-        _follower_element(g, quads, elements[t], p, f, data, cmap, tangent, a, nrm, dF, K6, T)
+        _follower_element(g, quads, elements[t], p, f, data, cmap, tangent, a, nrm, dF, K6, T,
+                          turns[t if turned else 0], turned, U)
 
 
 @njit(cache=True, parallel=True)
-def surface_load_follower_par(g, quads, elements, cptr, order, p, f, data, cmap, tangent):
+def surface_load_follower_par(g, quads, elements, cptr, order, p, turns, turned, f, data, cmap, tangent):
     """``surface_load_follower`` in parallel within each colour (chunks of CHUNK elements)."""
     for col in range(len(cptr) - 1):
         lo, hi = cptr[col], cptr[col + 1]
@@ -189,8 +206,11 @@ def surface_load_follower_par(g, quads, elements, cptr, order, p, f, data, cmap,
             dF = np.empty((3, 3))
             K6 = np.empty((6, 6))
             T = np.empty((3, 3))
+            U = np.empty((3, 6))
             for t in range(lo + ch * CHUNK, min(hi, lo + (ch + 1) * CHUNK)):
-                _follower_element(g, quads, elements[order[t]], p, f, data, cmap, tangent, a, nrm, dF, K6, T)
+                pos = order[t]
+                _follower_element(g, quads, elements[pos], p, f, data, cmap, tangent, a, nrm, dF, K6, T,
+                                  turns[pos if turned else 0], turned, U)
 
 
 @njit(cache=True)

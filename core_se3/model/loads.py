@@ -14,6 +14,20 @@ Virtual work in the left trivialisation: a lab force F at a node does F . delta 
   unit parameter area (bilinear positions): nodal forces int N_i p a_1 x a_2 dxi, with load
   stiffness from the rotation of R^T and from the change of a_1 x a_2.
 
+Curved elements.  The bilinear quad between the nodes is a chord of a curved element: its area
+element |a_1 x a_2| and its normal are not the element's (the default element's edges are exact
+arcs, helicoidal, and its area element j0 = |A_1 x A_2| of the tied reference tangents is exact on
+a cylinder).  Integrated over the chords, a cylinder's pressure gave the hoop force p R
+sin(dtheta)/dtheta (6.65e-3 low at 0.2 rad per element) and a curved panel's weight was low by
+sin(dtheta/2)/(dtheta/2).  Given the element's j0 (``SurfaceLoad(j0=...)``, the registered kinds
+pass ``DefaultElement.j0``), a dead load's nodal weights are int N_i j0 dxi (the total load is q
+times the element's area), and a follower pressure's body-frame nodal force of corner i is turned
+and scaled by a constant C_i (3, 3) that takes its reference value R_i^T int N_i a_1 x a_2 dxi onto
+(int N_i j0 dxi) d3_i, the element's area share along its normal (the frame's d3): a uniform
+pressure on a cylinder gives p R exactly, at any element size.  Flat elements (whose j0 agrees
+with the bilinear one to round-off, 6e-16) keep the bilinear weights, so flat meshes are unchanged
+to the bit.
+
 Every load is scaled by a function of the load factor (``scale(lam)``, linear by default).
 """
 from __future__ import annotations
@@ -24,11 +38,12 @@ import numpy as np
 
 from .. import lie
 from ..errors import LoadError, LoadWarning
+from ..fem import ELEMENTS
 from ..fem.quadrature import shape_functions, surface_jacobian
 from .base import (Load, LoadEvaluation, LoadKind, Param, finite_vector, linear_scale, mesh_ids, param_error,
                    register_load)
 
-__all__ = ["NodalLoad", "SurfaceLoad", "edge_weights", "line_shares"]
+__all__ = ["NodalLoad", "SurfaceLoad", "edge_weights", "line_shares", "element_area"]
 
 
 def _scale_at(load, lam):
@@ -257,6 +272,10 @@ class SurfaceLoad(Load):
         The loaded elements (default all).
     scale : callable, optional
         s(lam), default lam; ``name``: for reports.
+    j0 : (k, 4) array_like, optional
+        The element's own area element at the 2x2 Gauss points of the k loaded elements (the
+        default element's ``j0``, from its exact-arc geometry); default the bilinear quads'.
+        On curved elements the loads use it (module docstring, "Curved elements").
 
     Example
     -------
@@ -271,7 +290,7 @@ class SurfaceLoad(Load):
 
     translation_invariant = True          # forces from the frames' rotations and relative positions
 
-    def __init__(self, mesh, q, follower=False, elements=None, scale=None, name="surface"):
+    def __init__(self, mesh, q, follower=False, elements=None, scale=None, name="surface", j0=None):
         self.mesh = mesh
         self.follower = bool(follower)
         self.scale = scale or linear_scale
@@ -279,15 +298,30 @@ class SurfaceLoad(Load):
         self.elements = (np.arange(mesh.n_elements) if elements is None else
                          mesh_ids(elements, mesh.n_elements, f"load {name!r}: elements"))
         self.N, self.dN = shape_functions()
+        self.j0 = None if j0 is None else np.asarray(j0, float)
+        jw, curved = self._area_element(mesh)
         if self.follower:
             q = float(q)
             if not np.isfinite(q):
                 raise LoadError(f"load {name}: pressure must be finite, got {q}")
             self.p = q
+            self.turns = _corner_turns(mesh.g0[mesh.quads[self.elements]], self.N, self.dN, jw, curved, self.elements)
         else:
             self.q = finite_vector(q, "surface load")
-            j0 = surface_jacobian(mesh.X[mesh.quads[self.elements]], self.dN)
-            self.node_w = np.einsum("qi,mq->mi", self.N, j0)           # int N_i dA, (m,4)
+            self.node_w = np.einsum("qi,mq->mi", self.N, jw)           # int N_i dA, (m,4)
+
+    def _area_element(self, mesh):
+        """The area element (k, 4) the load integrates with: the element's ``j0`` on curved
+        elements, the bilinear quads' elsewhere (bit for bit), and the curved mask (k,)."""
+        jb = surface_jacobian(mesh.X[mesh.quads[self.elements]], self.dN)
+        if self.j0 is None:
+            return jb, np.zeros(len(jb), bool)
+        if self.j0.shape != jb.shape or not np.all(np.isfinite(self.j0) & (self.j0 > 0)):
+            raise LoadError(f"load {self.name!r}: j0 must be positive and finite, (k, 4) for the k = {len(jb)} loaded "
+                            f"elements' Gauss points, got shape {self.j0.shape}")
+        # a flat element's tied j0 is the bilinear one to round-off (<= 6.3e-16 relative)
+        curved = np.any(np.abs(self.j0 - jb) > 16 * np.finfo(float).eps * jb, axis=1)
+        return np.where(curved[:, None], self.j0, jb), curved
 
     def compiled(self, pattern):
         """The numba kernels of this load (``kernels.loads.surface_load_*``; the follower
@@ -304,9 +338,12 @@ class SurfaceLoad(Load):
                                     pattern.map, tangent)
             return add
         run = K.surface_load_follower_par if len(el) >= 1500 else K.surface_load_follower
+        turned = self.turns is not None
+        turns = np.ascontiguousarray(self.turns if turned else np.zeros((1, 4, 3, 3)))
 
         def add(g, lam, f, data, tangent):
-            run(g, quads, el, cptr, order, _scale_at(self, lam) * self.p, f, data, pattern.map, tangent)
+            run(g, quads, el, cptr, order, _scale_at(self, lam) * self.p, turns, turned, f, data, pattern.map,
+                tangent)
         return add
 
     def evaluate(self, g, lam, tangent=True):
@@ -337,8 +374,10 @@ class SurfaceLoad(Load):
         nrm = np.cross(a[:, :, 0], a[:, :, 1])                          # (m,q,3)
         F = p * np.einsum("qi,mqk->mik", self.N, nrm)                    # (m,4,3) lab
         Fb = np.einsum("maji,maj->mai", R, F)                            # R^T F
+        C = self.turns
+        Fc = Fb if C is None else np.einsum("makl,mal->mak", C, Fb)     # curved elements: C_i R^T F
         for k in range(3):
-            f[:, k] += np.bincount(quads.ravel(), weights=Fb[..., k].ravel(), minlength=n)
+            f[:, k] += np.bincount(quads.ravel(), weights=Fc[..., k].ravel(), minlength=n)
         if not tangent:
             return LoadEvaluation(f)
         # load stiffness: -d(R_i^T F_i)/d eta; rotation part on node i, position part couples i, j
@@ -351,7 +390,34 @@ class SurfaceLoad(Load):
         dF = p * (np.einsum("qi,qj,mqkl->mijkl", self.N, -self.dN[:, 0], A2)
                   + np.einsum("qi,qj,mqkl->mijkl", self.N, self.dN[:, 1], A1))
         Ke[..., :3, :3] = -np.einsum("miak,mijab,mjbc->mijkc", R, dF, R)
+        if C is not None:
+            Ke[..., :3, :] = np.einsum("mikl,mijlc->mijkc", C, Ke[..., :3, :])
         return LoadEvaluation(f, None, (self.elements, Ke))
+
+
+def _corner_turns(g0, N, dN, jw, curved, elements):
+    """C (k, 4, 3, 3) of a follower pressure's corners (module docstring, "Curved elements"), or
+    None where no element is curved: the turn of the reference body-frame force per unit
+    pressure b_i = R_i^T int N_i a_1 x a_2 dxi onto d3 (e3 of the frame), times
+    (int N_i jw dxi) / |b_i|; the identity on flat elements (``elements``: the ids, for the error)."""
+    if not curved.any():
+        return None
+    phi, R = g0[..., :3, 3], g0[..., :3, :3]
+    a = np.einsum("qai,mij->mqaj", dN, phi - phi[:, :1])
+    b = np.einsum("maji,maj->mai", R, np.einsum("qi,mqk->mik", N, np.cross(a[:, :, 0], a[:, :, 1])))
+    nb = np.linalg.norm(b, axis=-1)
+    u = b / nb[..., None]
+    v = np.cross(u, [0.0, 0.0, 1.0])                                   # sin(angle) x axis
+    c = u[..., 2]
+    if np.any(c <= 0.0):
+        e = int(elements[np.argmax((c <= 0.0).any(axis=1))])
+        raise LoadError(f"follower pressure on curved element {e}: a corner's frame d3 is 90 degrees or more off "
+                        "the normal of the quad of its corners; check the mesh's frames (d3 the shell's normal)")
+    V = lie.hat3(v)
+    Q = np.eye(3) + V + np.einsum("...ij,...jk->...ik", V, V) / (1.0 + c)[..., None, None]   # Rodrigues: u -> e3
+    C = (np.einsum("qi,mq->mi", N, jw) / nb)[..., None, None] * Q
+    C[~curved] = np.eye(3)
+    return C
 
 
 # ------------------------------------------------------------------ registered kinds -------
@@ -376,16 +442,42 @@ def _nodal_check(values, given):
     return None
 
 
+def element_area(problem, elements):
+    """The problem's element's own area element (k, 4) at the Gauss points of ``elements`` (its
+    ``j0``: the default element's, of its exact-arc geometry, from its class's ``reference_area``
+    without building it), or None for an element without one (the bilinear quads' are then used:
+    SurfaceLoad).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.cylinder_panel(1.0, 1.0, 0.0, 1.2, 3, 1), Material(1e3, 0.0, 0.01))
+    >>> round(float(element_area(p, np.arange(3)).sum()), 12)          # the exact area 1.2 x 1
+    1.2
+    """
+    # the element's class gives it from the geometry (``reference_area``): building the element
+    # (its stiffness on the whole mesh) here would cost every rank of a distributed run, which
+    # holds the whole Problem but builds only its own elements
+    area = getattr(ELEMENTS.get(problem.element_name), "reference_area", None)
+    if area is None:
+        return None
+    j0 = area(problem.mesh, problem.material)
+    sel = np.arange(problem.mesh.n_elements) if elements is None else np.asarray(elements)
+    return np.asarray(j0)[sel]
+
+
 def _pressure(problem, elements, scale, p, direction=(0.0, 0.0, 1.0), follower=False):
     if not np.isfinite(p):
         raise LoadError(f"pressure must be finite, got {p}")
+    j0 = element_area(problem, elements)
     if follower:
-        return SurfaceLoad(problem.mesh, p, True, elements, scale, "follower pressure")
+        return SurfaceLoad(problem.mesh, p, True, elements, scale, "follower pressure", j0)
     d = np.array([0, 0, 1.0]) if direction is None else finite_vector(direction, "pressure direction")
     if not np.any(d):
         raise LoadError("pressure direction must be a non-zero 3-vector (the lab direction of a dead "
                         "pressure), got (0, 0, 0)")
-    return SurfaceLoad(problem.mesh, p * d / np.linalg.norm(d), False, elements, scale, "dead pressure")
+    return SurfaceLoad(problem.mesh, p * d / np.linalg.norm(d), False, elements, scale, "dead pressure", j0)
 
 
 def _pressure_check(values, given):
@@ -396,7 +488,7 @@ def _pressure_check(values, given):
 
 
 def _body_force(problem, elements, scale, q):
-    return SurfaceLoad(problem.mesh, q, False, elements, scale, "body force")
+    return SurfaceLoad(problem.mesh, q, False, elements, scale, "body force", element_area(problem, elements))
 
 
 def _gravity(problem, elements, scale, g=(0.0, 0.0, -9.81), rho=None):
@@ -419,7 +511,9 @@ def _gravity(problem, elements, scale, g=(0.0, 0.0, -9.81), rho=None):
                                                                      "[material] rho) is 0"
         warnings.warn(LoadWarning(f"gravity on {len(sel)} element(s) of zero mass adds nothing: {whose}; give a "
                                   "positive density, or drop the gravity load"), stacklevel=3)
-    return [SurfaceLoad(mesh, r * t * gv, False, sel[(dens == r) & (h == t)], scale, "gravity")
+    j0 = element_area(problem, sel)
+    return [SurfaceLoad(mesh, r * t * gv, False, sel[(dens == r) & (h == t)], scale, "gravity",
+                        None if j0 is None else j0[(dens == r) & (h == t)])
             for r, t in sorted(set(zip(dens.tolist(), h.tolist()))) if r != 0]
 
 

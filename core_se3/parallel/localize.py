@@ -82,7 +82,7 @@ def _surface(ld, view):
     if not len(pos):
         return []
     q = ld.p if ld.follower else ld.q
-    return [SurfaceLoad(view.mesh, q, ld.follower, loc, ld.scale, ld.name)]
+    return [SurfaceLoad(view.mesh, q, ld.follower, loc, ld.scale, ld.name, None if ld.j0 is None else ld.j0[pos])]
 
 
 def _magnetic(ld, view):

@@ -43,7 +43,7 @@ from ..errors import ElementTooDistortedError, SingularSystemError
 from .stability import analyse, locate_critical
 
 __all__ = ["Corrector", "narrow", "refine", "estimate", "bracket_width", "reachable", "hidden_turns",
-           "turned_twice"]
+           "turned_twice", "untraced", "MAX_BISECTIONS"]
 
 log = logging.getLogger(__name__)
 
@@ -256,6 +256,25 @@ def refine(sysm, cur, pt, con, limit, corrector):
     return a, b, upper, n, float(c @ (b_du - a_du))
 
 
+def untraced(bisections, accuracy, opts):
+    """Whether the bisection of a step (``bisections`` corrector solves, the critical point then
+    known to ``accuracy``; ``opts.critical_tol``) shows that its ends lie on two branches: no
+    point inside the step reached the critical point (0 solves), or all MAX_BISECTIONS halvings
+    ran -- the bracket shrank to 2^-40 of the step while its ends' load factors stayed
+    farther apart than critical_tol, a jump of the load factor no continuous path makes (the
+    2x2 roof at R/h 1e4: interior points up to 1 - 2^-40 of the step at lam 4.0e-6, its end at
+    -1.5e-5, 1.35 steps away along the chord).
+
+    Example
+    -------
+    >>> from types import SimpleNamespace
+    >>> o = SimpleNamespace(critical_tol=1e-3)
+    >>> untraced(0, 0.64, o), untraced(MAX_BISECTIONS, 0.64, o), untraced(12, 0.64, o), untraced(40, 1e-4, o)
+    (True, True, False, False)
+    """
+    return accuracy > opts.critical_tol and (bisections == 0 or bisections >= MAX_BISECTIONS)
+
+
 def estimate(sysm, a, b, con, span, upper, limit):
     """(critical load factor, relative accuracy) from the final bracket of :func:`refine` (its
     length ``span`` along the step ``con``): a bifurcation at the middle of its ends' load
@@ -293,7 +312,7 @@ def narrow(sysm, cur, pt, con, cp, corrector, untraced_ok=True):
         lam = float(np.clip(locate_critical(sysm, a, b, c, span, cp.step, limit=False).lam, lo, hi))
     cp.lam = lam if n or limit else cp.lam
     cp.lam_bracket = (a.lam, b.lam)
-    if cp.accuracy > corrector.opts.critical_tol and (n or untraced_ok):
+    if cp.accuracy > corrector.opts.critical_tol and (untraced_ok or not untraced(n, cp.accuracy, corrector.opts)):
         log.warning("the %s point near lam = %.6g is located only to %.2g (critical_tol %.2g): the bisection of "
                     "its step stopped after %d solves; a smaller step (dlam0, ds_max) brackets it closer",
                     cp.kind, cp.lam, cp.accuracy, corrector.opts.critical_tol, n)
