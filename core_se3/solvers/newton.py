@@ -41,7 +41,7 @@ from .splitting import (MAX_LOAD_TURN, MAX_PRESCRIBED_TURN, check_substeps, spli
 from .stability import limit_point_hint, prescribed_turn_hint, unseen_crossing
 from .contact_probe import ContactProbe, median_edge
 from .friction_probe import RELAXATIONS, FrictionProbe
-from .step_checks import StepChecks, largest_turn, start_sign
+from .step_checks import PROBE_TURN, StepChecks, start_sign
 
 __all__ = ["newton_solve", "newton_steps", "end_check", "requested_load_factors", "NewtonState", "NewtonStep",
            "MAX_PRESCRIBED_TURN", "MAX_LOAD_TURN"]
@@ -437,8 +437,8 @@ def _refused(eq, hooks, checks, saved, result, dlam_nominal, here):
 
 
 def _step_checks(opts, eq, state):
-    """The path and stability checks (``solvers.step_checks``) of a load-stepped run, and the
-    snap and friction checks of contact."""
+    """The path and stability checks (``solvers.step_checks``) of a load-stepped run, the
+    midpoint probe, and the snap and friction checks of contact."""
     # contact (a constraint-force load) is not smooth: its Newton tries contract irregularly at
     # any step size and det K jumps as nodes touch and lift off, so both checks leave it
     smooth = not any(getattr(ld, "constraint_force", False) for ld in eq.loads)
@@ -447,12 +447,14 @@ def _step_checks(opts, eq, state):
     # ... what contact leaves observable is the motion: the snap check (solvers.contact_probe)
     probe = getattr(eq, "contact_probe", ContactProbe)     # a distributed run measures on its ranks
     snap = probe(median_edge(eq.problem.mesh)) if opts.snap_check and not smooth else None
-    return StepChecks(opts.path_check and smooth and not eq.stateful, smooth and hasattr(eq, "det_sign"),
-                      opts.critical_tol, state.det_sign, stop=opts.limit_check, snap=snap,
-                      friction=_friction_probe(opts, eq),
-                      probe=opts.midpoint_probe and not eq.stateful and not eq.distributed,
-                      counting=opts.inertia_check and smooth and hasattr(eq, "inertia_count")
-                      and not any(getattr(ld, "follower", False) for ld in eq.loads))
+    checks = StepChecks(opts.path_check and smooth and not eq.stateful, smooth and hasattr(eq, "det_sign"),
+                        opts.critical_tol, state.det_sign, stop=opts.limit_check, snap=snap,
+                        friction=_friction_probe(opts, eq),
+                        counting=opts.inertia_check and smooth and hasattr(eq, "inertia_count")
+                        and not any(getattr(ld, "follower", False) for ld in eq.loads))
+    # the midpoint probe of a try that turned a node past pi (a stateful element's state is not restored)
+    checks.probe = opts.midpoint_probe and opts.limit_check and not eq.stateful
+    return checks
 
 
 def _friction_probe(opts, eq):
@@ -548,9 +550,10 @@ def _judge(out, checks, eq, hooks, here, start=None, prober=None):
     if out.ok:
         out.reason = checks.judge(out, lam, lam_try)
         out.ok = not out.reason
-    if out.ok and prober is not None and checks.wants_probe(out):   # a try that turned a node past pi
+    turn = eq.largest_turn(out.eta_sum) if out.ok and prober is not None and checks.wants_probe() else 0.0
+    if turn > PROBE_TURN:                    # a try that turned a node past pi: the midpoint probe
         out.probe = _midpoint_probe(prober, eq, hooks, here)
-        out.reason = checks.judge_probe(out.probe, lam, lam_try, largest_turn(out.eta_sum))
+        out.reason = checks.judge_probe(out.probe, lam, lam_try, turn)
         out.ok = not out.reason
     if out.ok and sweeps:                    # a step that passed through an obstacle: cut back
         out.ok, out.reason = not (why := _step_error(sweeps, g, lam, out.g, lam_try)), why or out.reason
@@ -570,8 +573,8 @@ def _midpoint_probe(prober, eq, hooks, here):
     trier, mip = prober
     g, lam, lam_try, stress_conv = here
     lam_mid = 0.5 * (lam + lam_try)
-    g_mid, stress_mid = _try_start(eq.problem, eq, trier, g, eq.whole_frames(g), lam, lam_mid, mip, stress_conv,
-                                   hooks.predictors)
+    g_whole = eq.whole_frames(g) if eq.predictor else g      # the tangent predictor's only (serial)
+    g_mid, stress_mid = _try_start(eq.problem, eq, trier, g, g_whole, lam, lam_mid, mip, stress_conv, hooks.predictors)
     return trier.run(g_mid, lam_mid, mip, stress_mid)
 
 

@@ -93,7 +93,7 @@ cut-backs then meet the limit point as 4 to 64 steps do).  A probe that does not
 cannot vouch for the try: cut back too.  The probe costs a Newton solve of its own (3 to 6
 iterations on the catalogue's one-step cases, the roll-up's 4 doubling its 4), only for tries
 that turn a node past pi (none at the catalogue's default steps, where the roll-up turns pi/2
-a step); not in distributed runs.
+a step); a distributed run probes as a serial one (the turn the largest over the ranks).
 
 Example
 -------
@@ -244,12 +244,13 @@ class StepChecks:
         ``inertia_check``: each converged try brings the count of negative eigenvalues of sym K
         (``out.count``), and a change of it is located like a change of the sign of det K
         (it also sees an even number of eigenvalues crossing zero within one step).
-    probe : bool, optional
-        ``midpoint_probe``: a try that turns a node by more than PROBE_TURN is probed at its
-        midpoint (:meth:`wants_probe`, :meth:`judge_probe`; with the stability check only).
 
     Attributes
     ----------
+    probe : bool
+        ``midpoint_probe`` (with ``limit_check``; default False, set by the caller): a try that
+        turns a node by more than PROBE_TURN is probed at its midpoint (:meth:`wants_probe`,
+        :meth:`judge_probe`; with the stability check only).
     rejected : int
         Tries refused by the path check since the last stored step (``record`` resets it).
     bracket : (float, float) or None
@@ -266,8 +267,7 @@ class StepChecks:
     ('', 'path check: the Newton corrections grew 3.4x')
     """
 
-    def __init__(self, path, stability, critical_tol, sign=None, stop=True, snap=None, counting=False, friction=None,
-                 probe=False):
+    def __init__(self, path, stability, critical_tol, sign=None, stop=True, snap=None, counting=False, friction=None):
         self.path, self.stability, self.tol, self.stop = path, stability, critical_tol, stop
         self.snap = snap                # the snap check of contact steps (solvers.contact_probe) or None
         self.friction = friction        # the friction check (solvers.friction_probe) or None
@@ -279,7 +279,7 @@ class StepChecks:
         self.crossed = []
         self.rejected = 0
         self.last = None
-        self.probe = probe
+        self.probe = False
         self.probes = self.probe_iterations = 0    # since the last stored step
 
     def judge(self, out, lam, lam_try):
@@ -306,12 +306,11 @@ class StepChecks:
         self.bracket, self.confirmed, self.probing = (lam, lam_try), True, False
         return f"stability check: {self.what} between load factors {lam:.6g} and {lam_try:.6g}"
 
-    def wants_probe(self, out):
-        """Whether the converged try ``out``, which passed :meth:`judge`, is to be probed at its
-        midpoint: ``probe`` and the stability check on, the path's sign known, and its converged
-        increment turning a node by more than PROBE_TURN (module docstring)."""
-        return bool(self.probe and self.stability and self.sign is not None
-                    and largest_turn(out.eta_sum) > PROBE_TURN)
+    def wants_probe(self):
+        """Whether a converged try that passed :meth:`judge` is to be probed at its midpoint when
+        its converged increment turns a node by more than PROBE_TURN (module docstring):
+        ``probe`` and the stability check on, and the path's sign known."""
+        return bool(self.probe and self.stability and self.sign is not None)
 
     def judge_probe(self, probe, lam, lam_try, turn):
         """'' when the midpoint probe ``probe`` (the TryOutcome of a try from lam to the midpoint
