@@ -21,6 +21,9 @@ CASES["contact-faces"] = 4
 STOPS = {"sandwich-1": (1, {}), "sandwich-2": (2, {}), "sandwich-5": (5, {}), "sandwich-10": (10, {}),
          "sandwich-inertia-1": (1, dict(inertia_check=True)), "sandwich-inertia-5": (5, dict(inertia_check=True)),
          "sandwich-sign-5": (5, dict(end_check=False))}       # det K's sign alone: the crossing at 0.533
+# the midpoint probe: fuzz problem 144 (tests/test_step_checks.py) in one step, whose long try over
+# a limit point is refused by the probe (name -> steps, solve keywords)
+PROBES = {"fuzz-144-1": (1, {})}
 # designs optimised on two ranks (equilibria and sensitivities distributed) against serially
 DESIGNS = ("design-tip-angle", "design-field-direction")
 
@@ -43,6 +46,9 @@ def build(name):
     if name == "jumping-cantilever":
         from test_contact_snap import _jumping_cantilever
         return _jumping_cantilever(), CASES[name], {}
+    if name in PROBES:
+        from test_step_checks import _fuzz_strip_144
+        return _fuzz_strip_144(), *PROBES[name]
     if name in STOPS or name == "sandwich-stable":
         from test_step_checks import _sandwich_strip
         steps, kw = STOPS.get(name, (2, {}))

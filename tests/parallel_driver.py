@@ -1,7 +1,7 @@
 """Run by tests/test_parallel.py under ``mpirun -n 2`` (and ``-n 1``): the agreement cases with the
 distributed solver, and a scenario run interrupted and resumed; rank 0 writes the outcome as JSON.
 
-    mpirun -n 2 python tests/parallel_driver.py OUT.json [case ...] [design-...] [sandwich-...] [counts] [first-step-buckling] [roof-counts] [resume]
+    mpirun -n 2 python tests/parallel_driver.py OUT.json [case ...] [design-...] [sandwich-...] [fuzz-144-...] [counts] [first-step-buckling] [roof-counts] [resume]
 """
 import json
 import os
@@ -14,7 +14,7 @@ from core_se3.errors import ConvergenceError, SingularSystemError
 from core_se3.parallel import world
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from parallel_cases import CASES, STOPS, build, roof_on_symmetry_planes, scenario_dict  # noqa: E402
+from parallel_cases import CASES, PROBES, STOPS, build, roof_on_symmetry_planes, scenario_dict  # noqa: E402
 
 
 def summary(res):
@@ -45,7 +45,7 @@ def main(out, names):
         res = prob.solve(steps=steps, **kw)          # dispatches to the distributed solver
         doc[name] = summary(res)
         doc[name]["parallel"] = {k: v for k, v in res.parallel.items() if k in ("ranks", "linear")}
-    for name in [n for n in names if n in STOPS or n == "sandwich-stable"]:     # runs the checks stop
+    for name in [n for n in names if n in STOPS or n in PROBES or n == "sandwich-stable"]:   # runs the checks stop
         prob, steps, kw = build(name)
         try:
             res = prob.solve(steps=steps, solver="distributed", **kw)

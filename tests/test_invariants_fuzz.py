@@ -42,3 +42,19 @@ def test_the_checks_see_a_wrong_answer():
     res.final.g = g
     assert fuzz.check_equilibrium(spec, res, "numpy", 1e-10)[0] > fuzz.EQ_TOL
     assert fuzz.state_distance(g, p.mesh.g0, p.length_scale) > 1e-3
+
+
+def test_loads_that_cancel_keep_the_balance_check_s_scale():
+    """Two follower pressures +-q on a pinned annulus (the shifted seed-4 campaign's problem 183)
+    cancel: f_ext = 0 and the reactions are round-off (5e-26).  Relative to the sum of the nodal
+    forces, floored at 1e-300, that read 5e274 (a 'violation'); each load's own magnitude is the
+    scale now, and the balance is at round-off."""
+    q = 1.1234211120885231e-09
+    spec = dict(mesh=("annulus", (1.5612844304784201, 2.899333294955783, 2.085902431998667, 1, 5)),
+                L=3.2566869905765903, perturb=0.001918166394232479, pseed=293416936, E=34686.56733224245,
+                nu=0.42263078605198073, h=0.003971554339445271, support="pin-pin",
+                loads=[("follower_pressure", -q), ("follower_pressure", q)], alpha=0.00017601709969814144)
+    res = fuzz.build(spec, backend="numba").solve(steps=1)          # solved on numba, checked on numpy
+    _, p2, ev, tol_abs = fuzz.check_equilibrium(spec, res, "numba", 1e-10)
+    mine, reported, vs, tol = fuzz.check_balance(spec, p2, ev, res.final, tol_abs)
+    assert max(mine, reported, vs) <= tol

@@ -24,6 +24,7 @@
 import importlib.util
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -44,7 +45,7 @@ from core_se3.parallel.system import rigid_body_modes
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, HERE)
-from parallel_cases import CASES, DESIGNS, STOPS, build  # noqa: E402
+from parallel_cases import CASES, DESIGNS, PROBES, STOPS, build  # noqa: E402
 
 HAVE_MPI = (importlib.util.find_spec("mpi4py") is not None and importlib.util.find_spec("petsc4py") is not None
             and shutil.which("mpirun") is not None)
@@ -151,6 +152,25 @@ def test_distributed_runs_stop_where_serial_runs_stop(request, ranks, name):
     assert par["lam"] == [s.load_factor for s in exc.value.result.steps]
     assert "crossed a critical point" in par["message"]
     assert run["sandwich-stable"] == dict(message=None, lam=[0.0, 0.5, 1.0], critical_points=0)
+
+
+@pytest.mark.parametrize("name", list(PROBES))
+def test_the_midpoint_probe_refuses_on_the_ranks_as_serially(tmp_path_factory, name):
+    """The midpoint probe (docs/STEPS.md) runs distributed as serially: fuzz problem 144's try
+    0.5 -> 1 turns a node by 6.0 rad (the largest over the two ranks), its probe at 0.75 lands on
+    det K -1 (MUMPS' determinant), and the run stops at the limit point with the serial message
+    -- but for the residual of its last try, which wanders for 30 iterations near the limit point
+    (8.88e-2 serially, 8.87e-2 on two ranks: round-off)."""
+    par = _driver(tmp_path_factory, 2, name)[name]
+    prob, steps, kw = build(name)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(ConvergenceError) as exc:
+            prob.solve(steps=steps, solver="serial", **kw)
+    def masked(m):
+        return re.sub(r"residual [0-9.e+-]+", "residual R", m)
+    assert masked(par["message"]) == masked(str(exc.value)) and "after 12 cut-backs" in par["message"]
+    assert par["lam"] == [s.load_factor for s in exc.value.result.steps]
 
 
 @pytest.mark.parametrize("ranks", [1, 2])

@@ -45,15 +45,70 @@ def test_one_step_zhao_beam_ends_on_the_elastica(q, nx):
 
 
 def test_without_the_path_check_the_jump_is_accepted():
-    """The same run with path_check off lands on the wrong state (what the check prevents)."""
-    doc, res, _ = _zhao(17, 40, path_check=False)
+    """The same run with path_check and midpoint_probe off lands on the wrong state (what the
+    checks prevent).  With the probe alone the jump is refused too: the try turned a node by
+    4.39 rad, its probe 0 -> 0.5 does not converge (an element turns by pi), it is cut back and
+    the cut-backs land on the elastica."""
+    doc, res, _ = _zhao(17, 40, path_check=False, midpoint_probe=False)
     assert doc["reference"]["error"] > 0.5 and res.log[0]["converged"] and res.log[0]["contraction"] > 3
+    doc, res, _ = _zhao(17, 40, path_check=False)
+    assert res.log[0]["reason"].startswith("midpoint probe") and not res.log[0]["midpoint_probe"]["converged"]
+    assert doc["reference"]["error"] < 0.005
 
 
 def test_one_step_rollup_keeps_its_iterations():
-    """The roll-up to 2 pi in one step contracts at once (Theta < 0.1): 4 iterations, one try."""
+    """The roll-up in one step contracts at once (Theta < 0.1): 4 iterations, one try.  Its
+    converged increment turns the tip past pi, so the midpoint probe runs too: a try from the
+    flat strip to half the moment, 4 more Newton iterations (28.2, 1.78, 1.4e-9 ... ell), det K +1
+    as on the path -- 8 linear solves in all, against 4 with midpoint_probe off."""
     doc, res, _ = run_case("rollup", steps=1)
-    assert len(res.log) == 1 and res.log[0]["iterations"] <= 5 and doc["reference"]["error"] < 1e-12
+    assert len(res.log) == 1 and res.log[0]["iterations"] == 4 and doc["reference"]["error"] < 1e-12
+    probe = res.log[0]["midpoint_probe"]
+    assert probe["converged"] and probe["det_sign"] == 1 and probe["iterations"] == 4
+    assert res.final.checks["midpoint_probes"] == 1 and res.final.checks["probe_iterations"] == 4
+    assert res.final.linear_solves == 8
+    doc_off, res_off, _ = run_case("rollup", steps=1, midpoint_probe=False)
+    assert res_off.final.linear_solves == 4 and "midpoint_probe" not in res_off.log[0]
+    assert np.array_equal(res_off.final.g, res.final.g)
+
+
+def _fuzz_strip_144():
+    """A clamped strip 5 x 2 (its four inner nodes moved) under a dead pressure and a dead end
+    moment of 1.9 turns (benchmarks/invariants_fuzz.py, seed 4, problem 144)."""
+    m = mesh.rectangle(0.44761960125930955, 0.2544472431567919, 5, 2)
+    g0 = m.g0.copy()
+    g0[[7, 8, 9, 10], :3, 3] += [[0.007196496522220874, 0.004509266984213194, 0.0],
+                                 [0.006656615246067699, 0.004148399770708501, 0.0],
+                                 [-0.0037722843859819832, -0.004219913497637306, 0.0],
+                                 [-0.0020540157169191553, 0.00435072954661461, 0.0]]
+    p = Problem(mesh.Mesh(g0, m.quads, m.edges, shape=m.shape),
+                Material(E=9403657.000003621, nu=0.21800779161573836, h=0.007998715156835508, rho=1.0))
+    p.clamp("x0")
+    p.add_pressure(0.04529166965900603, direction=(0.15296855214681812, -0.8983184652594932, 0.4118550194278744))
+    p.add_edge_moment("x1", (0.0, -2.845960815518026, 0.0))
+    return p
+
+
+@pytest.mark.parametrize("steps", [1, 2])
+def test_a_long_try_over_a_limit_point_is_refused_by_the_midpoint_probe(steps):
+    """Problem 144 has a limit point at 0.7004 of its load (arc length); 4, 16 and 64 steps stop
+    there.  In 1 and 2 steps the try 0.5 -> 1 contracted (corrections 15.5, 0.63, 0.28, 0.013 ...
+    ell) onto a state with det K +1 (sym K: 2 negative eigenvalues, lambda_min / lambda_max
+    -5.6e-6) and the solve exited ok at 1.0, off the path.  The try turned a node by 6.0 rad:
+    probed, a try from 0.5 to 0.75 converges (7.73, 0.32, 0.025 ... ell) onto det K -1, so it is
+    cut back, and the cut-backs stop at the limit point as 4 steps do."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(ConvergenceError, match="after 12 cut-backs") as info:
+            _fuzz_strip_144().solve(steps=steps)
+        res = info.value.result
+        refused = [e for e in res.log if e["reason"].startswith("midpoint probe")]
+        assert len(refused) == 1 and refused[0]["lam"] == 1.0 and refused[0]["midpoint_probe"]["det_sign"] == -1
+        assert "converged onto a state with det K -1" in refused[0]["reason"] and "arc length" in refused[0]["reason"]
+        last = float(re.search(r"the last converged load factor is ([0-9.]+)", str(info.value)).group(1))
+        assert 0.69 < last < 0.7004
+        # what the probe prevents: without it the solve exits ok at the full load
+        assert _fuzz_strip_144().solve(steps=steps, midpoint_probe=False).final.load_factor == 1.0
 
 
 def test_the_count_of_sym_k_is_no_refusal_criterion_for_a_dead_moment():

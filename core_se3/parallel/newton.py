@@ -24,6 +24,7 @@ from ..solvers import NewtonOptions, NewtonState, newton_steps, requested_load_f
 from ..solvers.newton import end_check
 from ..solvers.contact_probe import ContactProbe
 from ..solvers.options import split_options, unknown_keywords
+from ..solvers.step_checks import largest_turn
 from .comm import is_root
 from .run import DistributedRun
 
@@ -206,6 +207,12 @@ class DistributedEquations:
 
     def increment_norm(self, eta):
         return float(np.sqrt(self.run.increment_sq(eta)))
+
+    def largest_turn(self, eta):
+        """The largest nodal rotation [rad] of the increment ``eta`` over the ranks (every rank
+        gets the same: the midpoint probe's trigger, ``solvers.step_checks``)."""
+        mine = largest_turn(np.asarray(eta)[:self.run.n_own]) if np.ndim(eta) == 2 else 0.0
+        return max(self.run.comm.allgather(mine)) if self.run.comm.size > 1 else mine
 
 
 def distributed_newton_steps(run, targets, options=None, start=None, recorder=None, result=None):

@@ -112,6 +112,7 @@ def _options(s):
                          limit_check=s["limit_check"], critical_tol=s["critical_tol"],
                          max_substeps=s["max_substeps"],
                          snap_check=s["snap_check"], inertia_check=s["inertia_check"], end_check=s["end_check"],
+                         midpoint_probe=s.get("midpoint_probe", True),
                          friction_check=s["friction_check"], friction_tol=s["friction_tol"],
                          friction_halving=s["friction_halving"],
                          **common)

@@ -16,6 +16,7 @@ methods on one rank's share of the mesh, with global norms and gathered frames):
   the tangent for an unrestrained mode), ``det_sign()`` the sign of det K of that tangent (from its
   factors; None when unknown), ``increment(x)`` the nodal increments eta (n, 6), ``work(ev, x)`` = -r . x,
   ``residual_sq(ev)`` = |r|_s^2 and ``increment_norm(eta)`` = |eta|_s (unit-scaled norms);
+  ``largest_turn(eta)`` its largest nodal rotation (the midpoint probe's trigger);
 * what the problem has: ``loads`` (for the Load hooks), ``stateful``, ``mixed``, ``predictor``
   (the tangent predictor is available), ``distributed``, ``root`` (this process logs).
 
@@ -36,6 +37,7 @@ from .convergence import relative_residual, scaled_norm
 from .linalg import Factorization
 from .origin import part_origin
 from .stability import asymmetry, inertia
+from .step_checks import largest_turn
 
 __all__ = ["NewtonEquations", "part_origin"]
 
@@ -167,3 +169,7 @@ class NewtonEquations:
 
     def increment_norm(self, eta):
         return scaled_norm(eta, self.ell, moment=False)
+
+    def largest_turn(self, eta):
+        """The largest nodal rotation [rad] of the increment ``eta`` (``step_checks.largest_turn``)."""
+        return largest_turn(eta)

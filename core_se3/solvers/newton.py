@@ -41,7 +41,7 @@ from .splitting import (MAX_LOAD_TURN, MAX_PRESCRIBED_TURN, check_substeps, spli
 from .stability import limit_point_hint, prescribed_turn_hint, unseen_crossing
 from .contact_probe import ContactProbe, median_edge
 from .friction_probe import RELAXATIONS, FrictionProbe
-from .step_checks import StepChecks, start_sign
+from .step_checks import PROBE_TURN, StepChecks, start_sign
 
 __all__ = ["newton_solve", "newton_steps", "end_check", "requested_load_factors", "NewtonState", "NewtonStep",
            "MAX_PRESCRIBED_TURN", "MAX_LOAD_TURN"]
@@ -190,6 +190,11 @@ def _log_try(result, tries, lam_try, out, augmentation=None, quiet=False):
                  contraction=out.contraction, travel=out.travel, det_sign=out.det_sign)
     if augmentation:
         entry["augmented"] = augmentation
+    if getattr(out, "probe", None) is not None:      # the midpoint probe's try (its solves counted here)
+        p = out.probe
+        entry["midpoint_probe"] = dict(converged=p.ok, iterations=p.iterations, linear_solves=p.solves,
+                                       increments=[float(x) for x in p.incs], det_sign=p.det_sign)
+        entry["linear_solves"] += p.solves
     result.log.append(entry)
     tries.append(entry)
     if quiet:
@@ -278,7 +283,7 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
             g_start = g_try
             out = augmented_try(trier, hooks.aug, g_try, lam_try, mip, stress_try, opts.max_augmentations,
                                 lambda o, k: _log_try(result, tries, lam_try, o, augmentation=k, quiet=not eq.root))
-            _judge(out, checks, eq, hooks.sweeps, g, lam, lam_try, stress_conv, start)
+            _judge(out, checks, eq, hooks, (g, lam, lam_try, stress_conv), start, (trier, mip))
             ok, reason, hist = out.ok, out.reason, out.hist
             _log_try(result, tries, lam_try, out, augmentation=0 if hooks.aug else None, quiet=not eq.root)
             if ok and opts.limit_check and not driven and out.k_step is not None:
@@ -432,8 +437,8 @@ def _refused(eq, hooks, checks, saved, result, dlam_nominal, here):
 
 
 def _step_checks(opts, eq, state):
-    """The path and stability checks (``solvers.step_checks``) of a load-stepped run, and the
-    snap and friction checks of contact."""
+    """The path and stability checks (``solvers.step_checks``) of a load-stepped run, the
+    midpoint probe, and the snap and friction checks of contact."""
     # contact (a constraint-force load) is not smooth: its Newton tries contract irregularly at
     # any step size and det K jumps as nodes touch and lift off, so both checks leave it
     smooth = not any(getattr(ld, "constraint_force", False) for ld in eq.loads)
@@ -442,11 +447,14 @@ def _step_checks(opts, eq, state):
     # ... what contact leaves observable is the motion: the snap check (solvers.contact_probe)
     probe = getattr(eq, "contact_probe", ContactProbe)     # a distributed run measures on its ranks
     snap = probe(median_edge(eq.problem.mesh)) if opts.snap_check and not smooth else None
-    return StepChecks(opts.path_check and smooth and not eq.stateful, smooth and hasattr(eq, "det_sign"),
-                      opts.critical_tol, state.det_sign, stop=opts.limit_check, snap=snap,
-                      friction=_friction_probe(opts, eq),
-                      counting=opts.inertia_check and smooth and hasattr(eq, "inertia_count")
-                      and not any(getattr(ld, "follower", False) for ld in eq.loads))
+    checks = StepChecks(opts.path_check and smooth and not eq.stateful, smooth and hasattr(eq, "det_sign"),
+                        opts.critical_tol, state.det_sign, stop=opts.limit_check, snap=snap,
+                        friction=_friction_probe(opts, eq),
+                        counting=opts.inertia_check and smooth and hasattr(eq, "inertia_count")
+                        and not any(getattr(ld, "follower", False) for ld in eq.loads))
+    # the midpoint probe of a try that turned a node past pi (a stateful element's state is not restored)
+    checks.probe = opts.midpoint_probe and opts.limit_check and not eq.stateful
+    return checks
 
 
 def _friction_probe(opts, eq):
@@ -525,10 +533,13 @@ def _try_start(problem, eq, trier, g, g_whole, lam, lam_try, mip, stress_conv, p
     return g_try, stress_try
 
 
-def _judge(out, checks, eq, sweeps, g, lam, lam_try, stress_conv, start=None):
-    """Refuse (out.ok False, out.reason) a converged try that fails the step checks or that a
-    load refuses (a step through an obstacle); ``start``: the snapshot of the try's start that
-    the friction check goes back to."""
+def _judge(out, checks, eq, hooks, here, start=None, prober=None):
+    """Refuse (out.ok False, out.reason) a converged try that fails the step checks, the midpoint
+    probe (``prober``: the (NewtonTry, mip) to probe with) or that a load refuses (a step through
+    an obstacle); ``here``: (g, lam, lam_try, stress_conv) of the try; ``start``: the snapshot of
+    the try's start that the friction check goes back to."""
+    g, lam, lam_try, stress_conv = here
+    sweeps = hooks.sweeps
     if out.ok and checks.stability and checks.sign is None and out.det_sign == -1:
         checks.sign = start_sign(eq, g, lam, stress_conv)     # was the start unstable too?
     if out.ok and checks.counting:           # inertia_check: the count of negative eigenvalues
@@ -539,6 +550,11 @@ def _judge(out, checks, eq, sweeps, g, lam, lam_try, stress_conv, start=None):
     if out.ok:
         out.reason = checks.judge(out, lam, lam_try)
         out.ok = not out.reason
+    turn = eq.largest_turn(out.eta_sum) if out.ok and prober is not None and checks.wants_probe() else 0.0
+    if turn > PROBE_TURN:                    # a try that turned a node past pi: the midpoint probe
+        out.probe = _midpoint_probe(prober, eq, hooks, here)
+        out.reason = checks.judge_probe(out.probe, lam, lam_try, turn)
+        out.ok = not out.reason
     if out.ok and sweeps:                    # a step that passed through an obstacle: cut back
         out.ok, out.reason = not (why := _step_error(sweeps, g, lam, out.g, lam_try)), why or out.reason
     if out.ok and checks.snap is not None:   # a large contact step: probed in halves (a snap?)
@@ -547,6 +563,19 @@ def _judge(out, checks, eq, sweeps, g, lam, lam_try, stress_conv, start=None):
     if out.ok and checks.friction is not None:   # a frictional step: its slip history's error
         out.reason = checks.friction.judge(out.g, lam, lam_try, start)
         out.ok = not out.reason
+
+
+def _midpoint_probe(prober, eq, hooks, here):
+    """The midpoint probe of a long try (``solvers.step_checks``): a try from its start state to
+    the midpoint of its load increment, started and iterated as a cut-back from there would be
+    (the prescribed motion, the predictors, the mixed stresses of the start); its TryOutcome
+    brings the sign of det K where it converged."""
+    trier, mip = prober
+    g, lam, lam_try, stress_conv = here
+    lam_mid = 0.5 * (lam + lam_try)
+    g_whole = eq.whole_frames(g) if eq.predictor else g      # the tangent predictor's only (serial)
+    g_mid, stress_mid = _try_start(eq.problem, eq, trier, g, g_whole, lam, lam_mid, mip, stress_conv, hooks.predictors)
+    return trier.run(g_mid, lam_mid, mip, stress_mid)
 
 
 def _limit_point(eq, switches, k_ref, out, g, lam, lam_try, timer, result):

@@ -89,6 +89,7 @@ class TryOutcome:
     incs: list = field(default_factory=list)
     det_sign: int | None = None
     count: int | None = None          # negative eigenvalues of sym K (inertia_check; set by the caller)
+    probe: object = None              # the midpoint probe's TryOutcome (solvers.step_checks; set by the caller)
 
     @property
     def contraction(self):

@@ -74,7 +74,11 @@ class NewtonOptions:
     is located like a sign change (``solvers.step_checks``); end_check: with limit_check and no
     critical point met, count the negative eigenvalues of sym K at the end of the solve (one
     factorisation) and, if more than at the start, stop naming the step where they rose
-    (``solvers.stability.unseen_crossing``; conservative loads, no contact); record_substeps: store the cut-back
+    (``solvers.stability.unseen_crossing``; conservative loads, no contact); midpoint_probe: with
+    limit_check, a converged try that turned a node by more than pi is probed by a try from
+    its start to its midpoint load, and cut back when that converges onto det K of the other sign
+    (it jumped over a critical point) or does not converge (``solvers.step_checks``; one more
+    Newton solve per such try); record_substeps: store the cut-back
     sub-steps as steps too; linear_solver: None = the problem's; iteration: 'mip' (the mixed
     integration point Newton of Magisano, Leonetti and Garcea 2017, with an element that
     supports it: the geometric part of the tangent sees element stresses updated linearly,
@@ -92,8 +96,8 @@ class NewtonOptions:
         In [0, 50]; default 12.
     divergence : float
         >= 1; default 1e8.
-    path_check, limit_check, snap_check, friction_check, friction_halving, inertia_check, end_check, record_substeps : bool
-        Default True, True, True, True, False, False, True and False.
+    path_check, limit_check, snap_check, friction_check, friction_halving, inertia_check, end_check, midpoint_probe, record_substeps : bool
+        Default True, True, True, True, False, False, True, True and False.
     friction_tol : float
         In (0, 1); default 1e-7.
     critical_tol : float
@@ -139,6 +143,7 @@ class NewtonOptions:
     friction_tol: float = _opt(1e-7, 0.0, 1.0, True)
     inertia_check: bool = False
     end_check: bool = True
+    midpoint_probe: bool = True
 
     def __post_init__(self):
         _check(self)

@@ -75,6 +75,26 @@ tries) and the path goes on, unstable.  The start
 state's sign is taken to be that of the first accepted state when that is +1 (an unloaded,
 supported shell); a first state with det K < 0 costs one factorisation at the start to tell.
 
+**Midpoint probe** (``NewtonOptions.midpoint_probe``).  Both checks look at the two ends of a
+try; a try that turns a node by more than PROBE_TURN = pi can pass them and still have jumped:
+fuzz problem 144 (``benchmarks/invariants_fuzz.py``, seed 4: a clamped 5 x 2 strip under a dead
+pressure and a dead end moment of 1.9 turns) has a limit point at 0.7004 of its load, yet its
+try 0.5 -> 1 contracted (corrections 15.5, 0.63, 0.28, 0.013 ... ell: Theta < 0.5) onto a state
+with det K > 0 again -- two negative eigenvalues of sym K, off the path (stepping back from it
+fails at 0.795) -- and 1 and 2 load steps exited ok there.  Its corrections look like the
+one-step roll-up's (56.4, 2.14, 6e-9 ell, exact to 1e-12), and with a dead moment the count of
+sym K rises on the right path too (docs/STEPS.md), so the ends cannot tell them apart.  The
+middle can: such a try (its converged increment turns a node by more than pi) is probed by a
+try from its start to its midpoint load, started and iterated as a cut-back would be (the
+mixed stresses of the start).  It converged onto det K of the other sign (problem 144: 7.73,
+0.32, 0.025 ... ell, det K -1 at 0.75): an odd number of eigenvalues crossed zero in the first
+half and again in the second, the long try jumped over a critical point and is cut back (the
+cut-backs then meet the limit point as 4 to 64 steps do).  A probe that does not converge
+cannot vouch for the try: cut back too.  The probe costs a Newton solve of its own (3 to 6
+iterations on the catalogue's one-step cases, the roll-up's 4 doubling its 4), only for tries
+that turn a node past pi (none at the catalogue's default steps, where the roll-up turns pi/2
+a step); a distributed run probes as a serial one (the turn the largest over the ranks).
+
 Example
 -------
 >>> path_measures([1.0, 0.5, 0.05, 1e-6, 1e-13])[0], path_measures([1.0, 3.0, 0.2])[0]
@@ -89,9 +109,9 @@ import numpy as np
 from ..errors import SingularSystemError
 from .stability import CriticalPoint
 
-__all__ = ["path_measures", "path_refusal", "start_sign", "StepChecks", "CONTRACTION_MAX", "GROWTH_SCALE",
-           "TRAVEL_MAX", "CONTRACTION_FLOOR", "GROWTH_CAP",
-           "GROWTH_REACH"]
+__all__ = ["path_measures", "path_refusal", "start_sign", "largest_turn", "StepChecks", "CONTRACTION_MAX",
+           "GROWTH_SCALE", "TRAVEL_MAX", "CONTRACTION_FLOOR", "GROWTH_CAP",
+           "GROWTH_REACH", "PROBE_TURN"]
 
 CONTRACTION_MAX = 1.0    # a try whose corrections grow at the step's scale is not accepted
 GROWTH_SCALE = 0.5       # ... the step's scale: half the first correction
@@ -99,6 +119,7 @@ TRAVEL_MAX = 1.5         # the later corrections may add up to 1.5 x the first
 CONTRACTION_FLOOR = 1e-8  # corrections below this (relative to ell) are round-off: not compared
 GROWTH_CAP = np.pi       # ... of at most pi ell: a ball of radius pi ell holds every orientation
 GROWTH_REACH = 0.25      # ... or a growth by a quarter of the step's scale, whatever the pair's size
+PROBE_TURN = np.pi       # a try that turns a node by more than this [rad] is probed at its midpoint
 
 
 def path_measures(incs, floor=CONTRACTION_FLOOR):
@@ -172,6 +193,21 @@ def path_refusal(theta, travel):
     return ""
 
 
+def largest_turn(eta_sum):
+    """The largest nodal rotation [rad] of a try's converged increment ``eta_sum`` ((n, 6): the
+    sum of its Newton corrections, translations then rotations, unwrapped past pi); 0.0 when it
+    is not known per node (a scalar: a distributed run's rank).
+
+    Example
+    -------
+    >>> largest_turn(np.array([[5.0, 0, 0, 0, 0, 0], [0, 0, 0, 0, 3.0, 4.0]])), largest_turn(0.0)
+    (5.0, 0.0)
+    """
+    if np.isscalar(eta_sum) or np.ndim(eta_sum) != 2:
+        return 0.0
+    return float(np.sqrt((np.asarray(eta_sum)[:, 3:] ** 2).sum(axis=1)).max(initial=0.0))
+
+
 def start_sign(eq, g, lam, stress=None):
     """The sign of det K at the converged start state (g, lam) of a path (the equations ``eq``
     of ``solvers.equations``; ``stress``: the mixed iteration's, or None): one factorisation.
@@ -211,6 +247,10 @@ class StepChecks:
 
     Attributes
     ----------
+    probe : bool
+        ``midpoint_probe`` (with ``limit_check``; default False, set by the caller): a try that
+        turns a node by more than PROBE_TURN is probed at its midpoint (:meth:`wants_probe`,
+        :meth:`judge_probe`; with the stability check only).
     rejected : int
         Tries refused by the path check since the last stored step (``record`` resets it).
     bracket : (float, float) or None
@@ -239,6 +279,8 @@ class StepChecks:
         self.crossed = []
         self.rejected = 0
         self.last = None
+        self.probe = False
+        self.probes = self.probe_iterations = 0    # since the last stored step
 
     def judge(self, out, lam, lam_try):
         """'' when the converged try ``out`` (a TryOutcome) from lam to lam_try may be accepted,
@@ -263,6 +305,34 @@ class StepChecks:
             return ""
         self.bracket, self.confirmed, self.probing = (lam, lam_try), True, False
         return f"stability check: {self.what} between load factors {lam:.6g} and {lam_try:.6g}"
+
+    def wants_probe(self):
+        """Whether a converged try that passed :meth:`judge` is to be probed at its midpoint when
+        its converged increment turns a node by more than PROBE_TURN (module docstring):
+        ``probe`` and the stability check on, and the path's sign known."""
+        return bool(self.probe and self.stability and self.sign is not None)
+
+    def judge_probe(self, probe, lam, lam_try, turn):
+        """'' when the midpoint probe ``probe`` (the TryOutcome of a try from lam to the midpoint
+        of lam -> lam_try) vouches for the long try, else why it is refused (cut back): the
+        probe converged onto det K of the other sign than the path's, or did not converge.
+        ``turn``: the long try's largest nodal rotation [rad]."""
+        self.probes += 1
+        self.probe_iterations += probe.iterations
+        mid = 0.5 * (lam + lam_try)
+        head = (f"midpoint probe: the try from load factor {lam:.6g} to {lam_try:.6g} turned a node by "
+                f"{turn:.3g} rad (> pi) and converged with det K {self.sign:+d}, but ")
+        tail = ("; it is cut back. If the cut-backs run out: more load steps, or trace the path with arc "
+                "length (core_se3.solvers.arc_length, stability=True); midpoint_probe = false ([solver]) "
+                "skips the probe")
+        if not probe.ok:
+            return head + f"a try from its start to the midpoint {mid:.6g} did not converge ({probe.reason[:120]}), " \
+                "so nothing vouches that it stayed on the path" + tail
+        if probe.det_sign is not None and probe.det_sign != self.sign:
+            return head + (f"a try from its start to the midpoint {mid:.6g} converged onto a state with det K "
+                           f"{probe.det_sign:+d}: an odd number of eigenvalues crossed zero in each half, so it "
+                           "jumped over a critical point (a limit point or a bifurcation) onto another branch") + tail
+        return ""
 
     def accept(self, out, lam_try):
         """Record the accepted try (its sign becomes the path's).  While a sign change is being
@@ -361,9 +431,11 @@ class StepChecks:
         rec = dict(path_check=self.path, contraction=None if out is None else float(out.contraction),
                    travel=None if out is None else float(out.travel), path_rejections=self.rejected,
                    det_sign=self.sign if self.stability else None)
+        if self.probe:
+            rec.update(midpoint_probes=self.probes, probe_iterations=self.probe_iterations)
         if self.snap is not None:
             rec.update(self.snap.record())
         if self.friction is not None:
             rec.update(self.friction.record())
-        self.rejected = 0
+        self.rejected = self.probes = self.probe_iterations = 0
         return rec
