@@ -139,3 +139,56 @@ def test_a_cylinder_panel_does_not_depend_on_the_users_d1(backend):
                    edges=m.edges)
     u0 = corner(m)
     assert np.abs(corner(mt) - u0).max() < 1e-10 * np.abs(u0).max()
+
+
+# ---------------------------------------------------------------- doubly curved parts: no locking
+def _interior(m):
+    inside = np.ones(m.n_nodes, bool)
+    for s in ("x0", "x1", "y0", "y1"):
+        inside[np.asarray(m.node_set(s))] = False
+    return inside
+
+
+def _turned_inside(m):
+    """The quarter hemisphere's interior frames turned by 0.3 sin 2 theta (the symmetry edges, whose
+    body-frame dofs the supports hold, keep the generator's frames)."""
+    alpha = _interior(m) * 0.3 * np.sin(2.0 * np.arctan2(m.X[:, 1], m.X[:, 0]))
+    return mesh.Mesh(turned_about_normal(m.g0, alpha), m.quads, edges=m.edges)
+
+
+def _moved_inside(m, n=4):
+    """The quarter's interior nodes moved along the sphere at random by up to 0.1 of the spacing
+    (meridian d1 at the moved nodes)."""
+    rng, inside = np.random.default_rng(1), _interior(m)
+    lat = np.arcsin(m.X[:, 2] / 10.0) + inside * rng.uniform(-0.1, 0.1, m.n_nodes) * np.radians(72.0) / n
+    lon = np.arctan2(m.X[:, 1], m.X[:, 0]) + inside * rng.uniform(-0.1, 0.1, m.n_nodes) * (np.pi / 2 / n)
+    X = 10.0 * np.stack([np.cos(lat) * np.cos(lon), np.cos(lat) * np.sin(lon), np.sin(lat)], 1)
+    merid = np.stack([-np.sin(lat) * np.cos(lon), -np.sin(lat) * np.sin(lon), np.cos(lat)], 1)
+    d1 = np.einsum("ni,ni->n", m.g0[:, :3, 0], merid)[:, None] * merid
+    return mesh.Mesh(mesh.frames_from(X, d1, X / 10.0), m.quads, edges=m.edges)
+
+
+@pytest.mark.parametrize("backend", ["numpy", "numba"])
+def test_a_thin_hemisphere_with_turned_or_moved_nodes_does_not_lock(backend):
+    """The pinched hemisphere 4x4 at R/h 1e4 (docs/ELEMENTS.md, "Doubly curved shells"): with its
+    interior frames turned by 0.3 sin 2 theta it gave 0.072 of the generator's deflection, with its
+    interior nodes moved by 0.1 of the spacing 0.13 of the same mesh unmoved -- locked by the
+    membrane-drilling correction, which saw the bending rotations times the curvature at full
+    strength.  Kept with the shear's beta: 0.98 and 0.93.  The bar, 0.9: locking is a factor; the
+    few % left are the tying's own dependence on the edge curves the frames make (a 16x16 is within
+    1 %)."""
+    def val(transform=None):
+        p, meas = sc.pinched_hemisphere(4, h=1e-3, transform=transform, backend=backend)
+        return meas(p.solve_linear())
+    base = val()
+    assert val(_turned_inside) / base > 0.9 and val(_moved_inside) / base > 0.9
+
+
+def test_the_thin_hemisphere_has_no_dip_at_6x6():
+    """The pinched hemisphere at R/h 1e5: the 6x6 mesh gave 0.836 of the 16x16 value (a dip between
+    0.979 at 4x4 and 0.982 at 8x8 over the 64x64); with the drilling correction kept with beta,
+    1.005.  The 16x16 is within 1e-3 of the 64x64 (the sweep), so 2 % is the 6x6's own error."""
+    def val(n):
+        p, meas = sc.pinched_hemisphere(n, h=1e-4)
+        return meas(p.solve_linear())
+    assert val(6) / val(16) == pytest.approx(1.0, abs=0.02)

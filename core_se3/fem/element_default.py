@@ -278,13 +278,17 @@ class DefaultElement(Element):
             zeta0 = np.einsum("qij,mj->mqi", P, z0)                        # (k, 4gp, 12)
             Dm, j0 = law_matrix(law, zeta0[..., 0:3], zeta0[..., 6:9], self.size[sl, None])  # (k, 4, 12, 12)
             self.j0[sl] = j0
-            Ek = drilling_correction(P, z0, reference_G(mesh, psi0, sl))
+            beta = shear_retention(z0, zeta0, Dm, j0)
+            self.shear_beta[sl] = beta
+            # the drilling correction sees the bending rotations times the curvature of a curved
+            # element at membrane order; it is kept with the factor beta that membrane_shear keeps
+            # of the same coupling in the tied shear (1 on flat elements: docs/ELEMENTS.md,
+            # "Doubly curved shells")
+            Ek = drilling_correction(P, z0, reference_G(mesh, psi0, sl)) * beta[:, None, None, None]
             self.drill_Ek[sl] = Ek
             Pm = np.broadcast_to(P, (len(z0),) + P.shape)
             if Ek.any():
                 Pm = Pm + tying_correction(P, z0, Ek)                       # (k, 4gp, 12, 24)
-            beta = shear_retention(z0, zeta0, Dm, j0)
-            self.shear_beta[sl] = beta
             # the warning's index (its measures again: shear_retention stays the tests' and
             # roof_modes' hook for beta; the cost is that of a few (k, 4, 3, 3) products)
             phi, coupling = curved_element_measures(z0, zeta0, Dm, j0)
