@@ -43,25 +43,32 @@ def test_sze_table_for_other_parameters_is_not_compared():
 
 
 def test_sze_path_ended_early_is_flagged_partial():
-    """Arc length stopped by max_steps = 5 at P/P_max = 0.088 (of 1): the deviation 0.41 %
-    over those 6 points was reported like a full path's (the default 4x4 run is 14 % off at
-    the end).  Now path_complete False and a note saying where the path and the table end."""
+    """Arc length stopped by max_steps = 5 at P/P_max = 0.088 (of 1; 0.090 since the element's
+    drilling correction is kept with beta): the deviation 0.41 % over those 6 points was reported
+    like a full path's (the default 4x4 run is 14 % off at the end).  Now path_complete False and
+    a note saying where the path and the table end."""
     import warnings
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")           # the PathWarning of max_steps
         ref = run_case("sze-hemisphere", mesh=(4, 4), max_steps=5)[0]["reference"]
     assert ref["path_complete"] is False and ref["note"].startswith("partial")
-    assert "P/P_max = 0.08" in ref["note"]
+    import re
+    ended = re.search(r"ended at P/P_max = ([0-9.]+)", ref["note"])
+    assert ended and 0.05 < float(ended.group(1)) < 0.2 and f"up to P/P_max = {ended.group(1)}" in ref["note"]
 
 
 def test_sze_points_beyond_the_table_are_left_out():
     """--set load_max=500 runs the hemisphere past the table's P_max = 400: the points at P/P_max
     = 1.06, 1.25 were measured against the table's end point (11.05 % on 4x4, with P / load_max
     as the axis), and the last point inside (0.93) stops short of the table's end.  Now those
-    two are left out and counted, and the comparison is flagged partial (up to 0.9287)."""
+    two are left out and counted, and the comparison is flagged partial (up to 0.9287).  Since the
+    element's drilling correction is kept with beta the arc-length steps differ: three points
+    beyond, the last inside at 0.9466."""
+    import re
     ref = run_case("sze-hemisphere", mesh=(4, 4), overrides=dict(load_max=500.0))[0]["reference"]
-    assert ref["n_beyond_table"] == 2 and ref["path_complete"] is False
-    assert "up to P/P_max = 0.9287" in ref["note"]
+    assert ref["n_beyond_table"] >= 2 and ref["path_complete"] is False
+    inside = re.search(r"up to P/P_max = ([0-9.]+)\)", ref["note"])
+    assert inside and 0.9 < float(inside.group(1)) < 1.0
 
 
 @pytest.mark.parametrize("name, over, steps, n_beyond", [("cantilever-shear", dict(load_max=20.0), 4, 2),
