@@ -59,9 +59,13 @@ def test_flat_elements_keep_the_tied_shear_to_the_bit(monkeypatch):
 @pytest.mark.parametrize("drilling", [0.0, 1.0])
 def test_no_spurious_zero_mode_on_thin_curved_patches(kind, drilling, monkeypatch):
     """h = 1e-3 on unit-size curved patches (chi ~ 100: beta ~ 3e-3).  Exactly six zero modes at
-    the default drilling modulus; at drilling = 0 the count of the tied shear (cylinder 7: its
-    one drilling mode of main; hemisphere 6), where the full element mean (beta = 0) gives 11
-    on the cylinder: the kept part beta of the variation is what holds the drilling gradients."""
+    the default drilling modulus, as with the tied shear; at drilling = 0 the cylinder has the
+    count of the tied shear (7: its one drilling mode of main), where the full element mean
+    (beta = 0) gives 11: the kept part beta of the variation is what holds the drilling
+    gradients.  At drilling = 0 the hemisphere has 7 as well, where the tied shear (with the
+    drilling correction at full strength) has 6: the correction is kept with the same beta since
+    at full strength it locked thin doubly curved meshes (docs/ELEMENTS.md, "Doubly curved
+    shells"); a zero drilling modulus leaves that drilling mode free, the default holds it."""
     m = mesh.cylinder_arch(1.0, 1.0, 1.0, 3, 3) if kind.startswith("cyl") else mesh.hemisphere_quarter(1.0, 18.0, 4, 4)
     law = Material(1e6, 0.3, 1e-3, drilling=drilling)
     p = Problem(m, law)
@@ -76,7 +80,10 @@ def test_no_spurious_zero_mode_on_thin_curved_patches(kind, drilling, monkeypatc
     monkeypatch.setattr(ed, "shear_retention", retention)
     _no_mean(monkeypatch)
     tied = verify.zero_modes(Problem(m, law))[1]
-    assert nzero == tied
+    if drilling or kind.startswith("cyl"):
+        assert nzero == tied
+    else:
+        assert (nzero, tied) == (7, 6)
     if not drilling and kind.startswith("cyl"):
         assert full == 11
 
