@@ -158,14 +158,10 @@ def _plot_format_error(path):
 def _json_target_error(path):
     """Why --json may not write ``path``: an existing file that is not an earlier ``bench run``
     JSON (a scenario, a run's results.json, notes: the user's), else None."""
-    import json
-    if not os.path.exists(path):
+    from .common import existing_json
+    exists, old = existing_json(path)
+    if not exists:
         return None
-    try:
-        with open(path) as fh:
-            old = json.load(fh)
-    except (OSError, ValueError):
-        old = None
     if isinstance(old, dict) and old.get("schema") == "core-se3-result" and "case" in old and "scenario" not in old:
         return None                            # (a run's results.json names its scenario)
     return f"--json {path!r} is a file that is not an earlier bench run's JSON: give another path (e.g. case.json)"

@@ -75,3 +75,18 @@ def whole_number(what):
             raise argparse.ArgumentTypeError(f"{what} must be at least 1, got {n}")
         return n
     return parse
+
+
+def existing_json(path):
+    """(exists, value) of the file ``path``: False, None where there is none; True, None where it
+    is not readable JSON; else True and the parsed value (what --json may overwrite is decided
+    from it: ``bench run``'s and ``check-mesh``'s own earlier outputs only)."""
+    import json
+    import os
+    if not os.path.exists(path):
+        return False, None
+    try:
+        with open(path) as fh:
+            return True, json.load(fh)
+    except (OSError, ValueError):
+        return True, None

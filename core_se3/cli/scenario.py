@@ -499,15 +499,10 @@ def _check_failed(args, exc, known_output):
 def _earlier_check(path):
     """True if ``path`` is missing or holds an earlier check's JSON (an object with "status" or
     "levels", not a run's results.json): --json may replace it; any other file is the user's."""
-    import json
-    import os
-    if not os.path.exists(path):
+    from .common import existing_json
+    exists, old = existing_json(path)
+    if not exists:
         return True
-    try:
-        with open(path) as fh:
-            old = json.load(fh)
-    except (OSError, ValueError):
-        return False
     return isinstance(old, dict) and ("status" in old or "levels" in old) and "schema" not in old
 
 
