@@ -167,11 +167,23 @@ class _warnings_once:
 
 def _check(args, scn):
     """``--check``: the summary of a valid scenario, its mesh's parts and its memory estimate
-    (a warning past the machine's memory)."""
+    (a warning past the machine's memory); a [sweep] section's values and points validated as
+    ``core-se3 sweep`` validates them before its first run (``scenario.check_sweep``: a bad
+    value passed --check and stopped the sweep)."""
     from ..scenario.memory import estimate, machine_memory
+    from ..scenario.sweep import check_sweep
+    points = None
+    if scn.spec["sweep"]:
+        try:
+            with _warnings_once(scn.warnings):
+                points = check_sweep(scn)[1]
+        except CoreSE3Error as exc:
+            return error_code(exc)
     print(f"{args.scenario}: valid ({scn.mesh.n_elements} elements, {scn.mesh.n_nodes} nodes, "
           f"{len(scn.spec['supports'])} supports, {len(scn.spec['loads'])} loads, "
           f"{len(scn.spec['magnets'])} magnets, {scn.solver['steps']} steps)")
+    if points is not None:
+        print(f"  sweep: {len(points)} point(s) of {', '.join(scn.spec['sweep'])} valid (core-se3 sweep runs them)")
     est = estimate(scn)
     print(f"  memory: about {est.bytes / 2 ** 30:.3g} GiB ({est.describe()})")
     have = machine_memory()

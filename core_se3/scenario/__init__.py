@@ -20,7 +20,7 @@ from .geometry import GENERATORS, MAX_ELEMENTS
 from .physics import ARCLENGTH_DEFAULTS, NON_PHYSICAL, OUTPUT_DEFAULTS, SOLVER_DEFAULTS, material_index
 from .runner import RunInterrupted, RunResult, cell_fields, picture, plot_probes, point_fields, run
 from .spec import TOP_KEYS, Scenario, from_dict, load, loads
-from .sweep import SweepResult, sweep
+from .sweep import SweepResult, check_sweep, sweep
 from .mesh_check import MeshCheck, check_mesh, check_problem_mesh
 from .units import UNIT_SYSTEMS
 from .toml_writer import dumps
@@ -29,5 +29,5 @@ from .validate import make_scale
 __all__ = ["Scenario", "load", "loads", "from_dict", "dumps", "make_scale", "run", "RunResult",
            "RunInterrupted", "GENERATORS", "TOP_KEYS", "SOLVER_DEFAULTS", "ARCLENGTH_DEFAULTS",
            "OUTPUT_DEFAULTS", "NON_PHYSICAL", "MAX_ELEMENTS", "material_index", "point_fields",
-           "cell_fields", "picture", "plot_probes", "sweep", "SweepResult", "UNIT_SYSTEMS", "check_mesh",
+           "cell_fields", "picture", "plot_probes", "sweep", "check_sweep", "SweepResult", "UNIT_SYSTEMS", "check_mesh",
            "check_problem_mesh", "MeshCheck"]

@@ -19,8 +19,10 @@ scenario's load steps from the reference state.  Away from limit points (a singl
 branch) both give the same state to the Newton tolerances; ``warm=False`` (``--cold``) always
 steps from the reference.  The CSV records which runs were warm-started.
 
-Lifecycle: every value is validated before the first run; ``sweep.csv`` (and the checkpoint
-``sweep.npz``: the finished rows and their final states) are rewritten after every finished run,
+Lifecycle: every value and every point of the grid are validated before the first run
+(:func:`check_sweep`, also ``core-se3 run --check`` of a file with a [sweep]); ``sweep.csv`` (and
+the checkpoint ``sweep.npz``: the finished rows and their final states) are rewritten after
+every finished run,
 so that an interrupted sweep (SIGTERM, Ctrl-C, a kill) keeps them, and ``resume=True``
 (``--resume``) continues with the next point, warm-started from the same states: the rows of a
 resumed sweep are those of an uninterrupted one, bit for bit.  ``sweep.json`` holds the status
@@ -45,7 +47,7 @@ from ..results.document import contact_record
 from .keys import check_key
 from .sweep_files import SWEEP_FILES, SweepCheckpoint, write_csv, write_plot, write_status
 
-__all__ = ["sweep", "SweepResult", "parse_values", "WARM_SECTIONS", "point_row"]
+__all__ = ["sweep", "check_sweep", "SweepResult", "parse_values", "WARM_SECTIONS", "point_row"]
 
 WARM_SECTIONS = ("loads", "fields", "magnets", "material", "solver")
 
@@ -171,6 +173,58 @@ def _check_values(scn, grid, where):
                                     f"{where}.{k}" if where == "sweep" else k) from None
 
 
+def check_sweep(scn, grid=None):
+    """Validate a sweep without solving, as :func:`sweep` does before its first run: every value
+    of every key (one override at a time: the error names the value and its key), then, with
+    several keys, every point of the grid (values valid one by one may not be together: a mesh
+    ``nx = 2`` and a node set at x = 2.5, where that mesh has no node; such a point stopped the
+    sweep when its turn came, after the runs before it).
+
+    Parameters
+    ----------
+    scn : Scenario
+        The base scenario.
+    grid : dict, optional
+        Dotted key -> values (``--set``; errors name the key); default the scenario's [sweep]
+        section (errors name ``sweep.KEY``, or ``sweep`` for a point).
+
+    Returns
+    -------
+    (dict, list)
+        The grid and its points (tuples of values in the grid's key order).
+
+    Example
+    -------
+    >>> from core_se3 import scenario
+    >>> scn = scenario.from_dict({"mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 4, "ny": 1},
+    ...     "material": {"E": 1.2e6, "nu": 0.0, "h": 0.1}, "supports": [{"type": "clamp", "edge": "x0"}],
+    ...     "edges": {"mid": {"box": {"x": [5.0, 5.0]}}}, "loads": [{"type": "nodal", "edge": "mid"}]})
+    >>> check_sweep(scn, {"mesh.nx": [2, 4]})[1]
+    [(2,), (4,)]
+    >>> check_sweep(scn, {"mesh.nx": [2, 4], "edges.mid.box.x": [[5.0, 5.0], [2.5, 2.5]]})  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.ScenarioError: <dict>: [--set]: the swept point mesh.nx = 2, edges.mid.box.x = [2.5, 2.5]: [edges.mid]: selects no nodes
+    """
+    where = "--set" if grid is not None else "sweep"
+    if grid is None:
+        if not scn.spec["sweep"]:
+            raise ScenarioError("nothing to sweep: give a grid or a [sweep] section", scn.file, "sweep")
+        grid = dict(scn.spec["sweep"])
+    keys = list(grid)
+    _check_values(scn, grid, where)
+    points = list(itertools.product(*[grid[k] for k in keys]))
+    if len(keys) > 1:
+        for pt in points:
+            try:
+                scn.with_overrides(dict(zip(keys, pt)))
+            except ScenarioError as exc:
+                said = f"[{exc.key}]: " if exc.key else ""
+                raise ScenarioError(f"the swept point {', '.join(f'{k} = {x!r}' for k, x in zip(keys, pt))}: "
+                                    f"{said}{exc.detail}", scn.file, where) from None
+    return grid, points
+
+
 def sweep(scn, grid=None, out=None, progress=None, warm=True, plot=True, resume=False, force=False):
     """Run ``scn`` at every point of ``grid`` (dotted key -> list of values; several keys: the
     product; default the scenario's own [sweep] section), warm-starting each run from the
@@ -183,6 +237,7 @@ def sweep(scn, grid=None, out=None, progress=None, warm=True, plot=True, resume=
     grid : dict, optional
         Dotted key (as for ``Scenario.with_overrides``) -> values (a bad value is an error naming
         its key, e.g. ``material.E``); default the [sweep] section (errors name ``sweep.KEY``).
+        Every value and every point is validated before the first run (:func:`check_sweep`).
     out : str, optional
         Directory of ``sweep.csv``, ``sweep.png``, ``sweep.json``, ``sweep.npz`` (default
         out/NAME-sweep).
@@ -214,14 +269,8 @@ def sweep(scn, grid=None, out=None, progress=None, warm=True, plot=True, resume=
     """
     from .runner import output_directory
     _one_process(scn)
-    where = "--set" if grid is not None else "sweep"
-    if grid is None:
-        if not scn.spec["sweep"]:
-            raise ScenarioError("nothing to sweep: give a grid or a [sweep] section", scn.file, "sweep")
-        grid = dict(scn.spec["sweep"])
+    grid, points = check_sweep(scn, grid)
     keys = list(grid)
-    _check_values(scn, grid, where)
-    points = list(itertools.product(*[grid[k] for k in keys]))
     rd = RunDirectory(output_directory(scn, out, "-sweep"), "sweep", SWEEP_FILES)
     with termination_as_interrupt(), rd.claim(resume=resume, force=force, adopt=SWEEP_FILES):
         state = SweepCheckpoint(rd, scn, grid, warm)
