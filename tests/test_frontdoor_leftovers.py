@@ -75,3 +75,38 @@ def test_run_check_of_a_valid_sweep_says_its_points(tmp_path, capsys):
     assert "sweep: 6 point(s) of mesh.nx, material.E valid" in capsys.readouterr().out
     grid, points = scenario.check_sweep(load(doc(sweep={"mesh.nx": [4, 8], "material.E": [1e6, 2e6, 3e6]})))
     assert list(grid) == ["mesh.nx", "material.E"] and len(points) == 6 and points[1] == (4, 2e6)
+
+
+# ================================================================== (b) --resume with nothing to resume
+def test_sweep_resume_where_there_is_no_sweep_is_refused(tmp_path, capsys):
+    """``sweep --resume`` into a directory that does not exist, or holds no sweep, started a fresh
+    sweep silently (exit 0: a misspelt --out ran the whole grid again, elsewhere); ``run --resume``
+    refused, but created the directory.  Now both refuse, naming the directory, and create nothing."""
+    path = write(tmp_path, doc())
+    for cmd, extra in (("run", []), ("sweep", ["--set", "material.E=1e6,2e6"])):
+        new = tmp_path / f"new-{cmd}"
+        assert cli.main([cmd, path, "--resume", "--out", str(new), "-q", *extra]) == 2
+        err = capsys.readouterr().err
+        assert f"nothing to resume: --out '{new}' does not exist (no earlier {cmd} there)" in err, err
+        assert not os.path.exists(new)
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    assert cli.main(["sweep", path, "--resume", "--out", str(empty), "-q", "--set", "material.E=1e6,2e6"]) == 2
+    assert f"nothing to resume: {empty} holds no sweep" in capsys.readouterr().err
+    assert not os.path.exists(empty / "sweep.csv")
+    with pytest.raises(CheckpointError, match="nothing to resume"):
+        scenario.sweep(load(doc()), {"material.E": [1e6]}, out=str(tmp_path / "py"), plot=False, resume=True)
+
+
+def test_sweep_resume_of_a_sweep_stopped_before_its_first_row_starts_over(tmp_path):
+    """As a run stopped before its first checkpoint: the earlier sweep's files are there, no
+    sweep.npz yet; the resume runs the grid from its first point."""
+    from core_se3.io.rundir import RunDirectory
+    from core_se3.scenario.sweep_files import SWEEP_FILES
+    out = str(tmp_path / "sw")
+    with RunDirectory(out, "sweep", SWEEP_FILES).claim() as rd:      # what a sweep killed in its first run left
+        with open(rd.file("sweep.json"), "w") as fh:
+            json.dump({"status": "running", "rows": 0}, fh)
+    res = scenario.sweep(load(doc()), {"material.E": [1e6, 2e6]}, out=out, plot=False, resume=True)
+    assert [r["status"] for r in res.rows] == ["complete", "complete"]
+    assert len(list(csv.DictReader(open(os.path.join(out, "sweep.csv"))))) == 2

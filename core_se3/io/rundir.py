@@ -127,7 +127,8 @@ class RunDirectory:
         Parameters
         ----------
         resume : bool
-            Continue the run whose files the manifest lists (they stay).
+            Continue the run whose files the manifest lists (they stay); a directory that does
+            not exist is a RunDirectoryError (nothing to continue; it is not created).
         force : bool
             Start over: delete the files a previous run of this tool listed, write beside foreign
             files (never over them).
@@ -146,6 +147,10 @@ class RunDirectory:
         if os.path.exists(self.path) and not os.path.isdir(self.path):
             raise RunDirectoryError(f"{self.option} {self.path!r} is a file, not a directory: nothing was written; "
                                     f"choose a directory (new or of an earlier {self.kind})")
+        if resume and not os.path.exists(self.path):      # (it was created, and a sweep started afresh)
+            raise RunDirectoryError(f"nothing to resume: {self.option} {self.path!r} does not exist (no earlier "
+                                    f"{self.kind} there); give the directory of the {self.kind} to continue, or "
+                                    "start one without --resume")
         os.makedirs(self.path, exist_ok=True)
         self._take_lock()
         try:

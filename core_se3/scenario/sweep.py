@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..backend import rent_state, restore_rent
-from ..errors import ConvergenceError, CoreSE3Error, ElementWarning, ScenarioError
+from ..errors import CheckpointError, ConvergenceError, CoreSE3Error, ElementWarning, ScenarioError
 from ..io.lifecycle import Terminated, held_signals, termination_as_interrupt
 from ..io.rundir import RunDirectory
 from ..results.document import contact_record
@@ -198,7 +198,7 @@ def check_sweep(scn, grid=None):
     >>> from core_se3 import scenario
     >>> scn = scenario.from_dict({"mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 4, "ny": 1},
     ...     "material": {"E": 1.2e6, "nu": 0.0, "h": 0.1}, "supports": [{"type": "clamp", "edge": "x0"}],
-    ...     "edges": {"mid": {"box": {"x": [5.0, 5.0]}}}, "loads": [{"type": "nodal", "edge": "mid"}]})
+    ...     "edges": {"mid": {"box": {"x": [5.0, 5.0]}}}, "probes": [{"name": "mid", "edge": "mid"}]})
     >>> check_sweep(scn, {"mesh.nx": [2, 4]})[1]
     [(2,), (4,)]
     >>> check_sweep(scn, {"mesh.nx": [2, 4], "edges.mid.box.x": [[5.0, 5.0], [2.5, 2.5]]})  # doctest: +ELLIPSIS
@@ -248,7 +248,9 @@ def sweep(scn, grid=None, out=None, progress=None, warm=True, plot=True, resume=
     plot : bool, optional
         Write ``sweep.png``.
     resume, force : bool, optional
-        Continue an interrupted sweep in ``out``; start over in a directory of an earlier one.
+        Continue an interrupted sweep in ``out`` (a CheckpointError where ``out`` holds no sweep:
+        nothing to resume; one stopped before its first row starts over); start over in a
+        directory of an earlier one.
 
     Returns
     -------
@@ -273,6 +275,10 @@ def sweep(scn, grid=None, out=None, progress=None, warm=True, plot=True, resume=
     keys = list(grid)
     rd = RunDirectory(output_directory(scn, out, "-sweep"), "sweep", SWEEP_FILES)
     with termination_as_interrupt(), rd.claim(resume=resume, force=force, adopt=SWEEP_FILES):
+        if resume and not rd.previous and not os.path.exists(os.path.join(rd.path, "sweep.npz")):
+            raise CheckpointError(f"nothing to resume: {rd.path} holds no sweep (no sweep.npz, no file of an "
+                                  "earlier sweep); give the directory of the sweep to continue, or start one "
+                                  "without --resume")
         state = SweepCheckpoint(rd, scn, grid, warm)
         result = SweepResult(keys, state.rows, status="running")
         try:
