@@ -9,7 +9,7 @@ import pytest
 from core_se3 import Material, Problem, lie, mesh
 from core_se3.catalogue import run_case
 from core_se3.catalogue.cases_magnetic import ZHAO_BEAMS
-from core_se3.errors import LoadError, LoadWarning
+from core_se3.errors import LoadError, LoadWarning, ScenarioError
 from core_se3.model.fields import MU0, DipoleField, GradientField, Superposition, UniformField, rotating_direction
 from core_se3.model.verify import tangent_fd_check
 
@@ -318,6 +318,44 @@ def test_zero_magnetisation_warns_naming_the_magnet(tmp_path):
     (tmp_path / "z.toml").write_text(text)
     said = [str(w) for w in scenario.load(tmp_path / "z.toml").warnings]
     assert any("[magnets[0].Br]" in w and "Br is zero on region 'tip'" in w for w in said), said
+
+
+def test_zero_applied_field_warns_naming_the_field(tmp_path):
+    """A magnet in a field of B = 0 (a slip, a misspelt value, the start of a sweep) adds no load
+    at any load factor: before, silently (no warning in Python or in a file, load number 0, every
+    step converged at u = 0); now a LoadWarning in Python and a ScenarioWarning at fields.NAME.B,
+    as a zero Br; a field zero only at some points (a gradient's) or a tiny one says nothing, and
+    [design] varying the field may start at zero."""
+    from core_se3 import scenario
+    from core_se3.model.fields import GradientField
+    m = mesh.rectangle(0.03, 0.01, 6, 2)
+    p = Problem(m, Material(1.0e6, 0.3, 1.0e-3))
+    p.clamp("x0")
+    with pytest.warns(LoadWarning, match="the applied field is zero on the whole shell"):
+        p.add_magnetic((0.1, 0.0, 0.0), UniformField((0.0, 0.0, 0.0)))
+    with pytest.warns(LoadWarning, match="the applied field is zero on elements=\\[0, 1\\]"):
+        p.add_magnetic((0.1, 0.0, 0.0), GradientField((0.0, 0.0, 0.0), np.zeros((3, 3))), elements=[0, 1])
+    assert np.abs(p.solve(steps=1).final.g - m.g0).max() == 0.0         # indeed no load
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        p.add_magnetic((0.1, 0.0, 0.0), UniformField((0.0, 0.0, 1e-12)))
+        p.add_magnetic((0.1, 0.0, 0.0), GradientField((0.0, 0.0, 0.0), np.diag([1e-3, -1e-3, 0.0]),
+                                                       x0=(0.0, 0.0, 0.0)))
+    base = {"name": "z", "units": "SI", "mesh": {"generator": "rectangle", "L": 0.03, "width": 0.01, "nx": 6, "ny": 2},
+            "regions": {"tip": {"box": {"x": [0.025, 0.03]}}}, "material": {"E": 1e6, "nu": 0.3, "h": 1e-3},
+            "supports": [{"type": "clamp", "edge": "x0"}], "fields": {"b": {"type": "uniform", "B": [0.0, 0.0, 0.0]}},
+            "magnets": [{"region": "tip", "Br": [0.1, 0.0, 0.0]}], "probes": [{"name": "tip", "edge": "x1"}]}
+    (tmp_path / "z.toml").write_text(scenario.dumps(base))
+    said = [str(w) for w in scenario.load(tmp_path / "z.toml").warnings]
+    assert len(said) == 1 and "[fields.b.B]: the applied field 'b' is zero on region 'tip'" in said[0], said
+    assert "magnets[0] in it adds no load" in said[0]
+    with pytest.raises(ScenarioError, match=r"\[fields.b.B\]: the applied field 'b' is zero"):
+        scenario.load(tmp_path / "z.toml", strict=True)
+    ok = dict(base, fields={"b": {"type": "uniform", "B": [0.0, 0.0, 0.01]}})
+    assert scenario.from_dict(ok).warnings == []
+    design = dict(base, design={"variables": [{"type": "field", "field": "b", "free": ["z"]}],
+                                "targets": [{"type": "position", "probe": "tip", "value": [0.03, 0.0, 0.001]}]})
+    assert scenario.from_dict(design).warnings == []
 
 
 def test_gravity_total_and_bad_density():

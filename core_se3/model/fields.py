@@ -31,7 +31,7 @@ from ..registry import Kind, Registry
 from .base import Param, finite_vector
 
 __all__ = ["MU0", "Field", "UniformField", "GradientField", "DipoleField", "UserField",
-           "Superposition", "rotating_direction", "check_field", "FieldKind", "FIELDS",
+           "Superposition", "rotating_direction", "check_field", "field_vanishes", "FieldKind", "FIELDS",
            "register_field", "field_kind"]
 
 MU0 = 4e-7 * pi
@@ -394,6 +394,34 @@ def check_field(field, x, lam=1.0, rtol=1e-8):
         raise LoadError(f"applied field is not curl- and divergence-free in the body: relative "
                         f"|curl B| {curl:.2e}, |div B| {div:.2e}")
     return curl, div
+
+
+def field_vanishes(field, x, lams=(0.5, 1.0)):
+    """True if the field at scale 1 (``Field.unscaled``) and its gradient are zero at every point
+    x (k, 3) at each load factor of ``lams``: a magnet there takes no couple h/mu0 B^r x B^a and
+    no force h/mu0 (B^r . grad) B^a at any scale (a B of zeros; a scale that is zero is the other
+    way to a field that acts nowhere).  False where there are no points or the field cannot be
+    evaluated there (its own error comes with the load).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> x = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+    >>> field_vanishes(UniformField((0.0, 0.0, 0.0)), x), field_vanishes(UniformField((0.0, 0.0, 1e-9)), x)
+    (True, False)
+    >>> field_vanishes(GradientField((0.0, 0.0, 0.0), np.diag([1.0, -1.0, 0.0])), x)    # zero at x = 0 only
+    False
+    """
+    x = np.asarray(x, float).reshape(-1, 3)
+    if not len(x):
+        return False
+    try:
+        for lam in lams:
+            if np.any(field.unscaled(x, lam) != 0) or (not field.uniform and np.any(field._gradient(x, lam) != 0)):
+                return False
+    except LoadError:
+        return False
+    return True
 
 
 # ------------------------------------------------------------------ registry -------------

@@ -27,7 +27,7 @@ from ..fem import ELEMENTS, make_element
 from .base import Evaluation, Load, check_given, force_scale_with_loads, linear_scale, load_kind
 from .compiled import CompiledEvaluation
 from .contact import add_obstacle
-from .fields import MU0
+from .fields import MU0, field_vanishes
 from .loads import line_shares
 from .magnetics import MagneticLoad, Magnetisation, br_numbers, magnets_force, magnets_output, table_kind
 from .probes import Probe, along_line
@@ -397,7 +397,9 @@ class Problem:
         the selection has as many elements as the mesh has nodes (a closed mesh: a LoadError
         without it).  Returns the load (its ``mag.nodes`` are the magnetised nodes), or the list
         of loads.  A Br that is zero on every selected element adds nothing, with a LoadWarning
-        (a sweep may start at zero); Br, mu0 or elements of the wrong type are a LoadError."""
+        (a sweep may start at zero), and so does a field that is zero (value and gradient at
+        scale 1, ``fields.field_vanishes``) at every magnetised node; Br, mu0 or elements of the
+        wrong type are a LoadError."""
         mu0 = MU0 if mu0 is None else mu0
         try:
             sel = self.elements(elements)
@@ -409,11 +411,18 @@ class Problem:
         for w in seen:
             warnings.warn(w.message, stacklevel=2)
         built = added if isinstance(added, list) else [added]
-        if not any(len(ld.mag.nodes) for ld in built):
-            where = "the whole shell" if elements is None else f"elements={elements!r}"
+        where = "the whole shell" if elements is None else f"elements={elements!r}"
+        nodes = np.unique(np.concatenate([np.asarray(ld.mag.nodes, np.int64) for ld in built]))
+        if not len(nodes):
             warnings.warn(LoadWarning(f"add_magnetic: Br is zero on {where}: the magnet adds no load (a sweep may "
                                       "start at zero); give its residual flux density [T], or drop the magnet"),
                           stacklevel=2)
+        elif field_vanishes(field, self.mesh.X[nodes]):
+            said = LoadWarning(f"add_magnetic: the applied field is zero on {where} (its value and gradient at "
+                               "every magnetised node): the magnet adds no load (a sweep may start at zero); give "
+                               "the field's B [T], or drop the magnet")
+            said.cause = "field"            # (the scenario names the field's key)
+            warnings.warn(said, stacklevel=2)
         return added
 
     def _add_magnetic(self, Br, field, sel, mu0, Br_per):

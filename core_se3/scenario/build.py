@@ -218,7 +218,9 @@ def _add_magnets(v, prob, spec, mesh, regions):
         except CoreSE3Error as exc:
             v.fail(key, str(exc))
         for w in said:                            # a magnet that adds nothing (Br = 0), located in the file
-            if issubclass(w.category, LoadWarning):
+            if issubclass(w.category, LoadWarning) and getattr(w.message, "cause", None) == "field":
+                _zero_field(v, spec, key, m)
+            elif issubclass(w.category, LoadWarning):
                 given = next((k for k in ("Br_frame", "Br_table") if k in m), "Br")
                 where = f"region {m['region']!r}" if m.get("region") else "the whole shell"
                 v.warn(join(key, "Br_file" if given == "Br_table" else given),
@@ -227,3 +229,22 @@ def _add_magnets(v, prob, spec, mesh, regions):
             else:
                 warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
         prob.scenario_parts.setdefault("magnets", []).append(added if isinstance(added, list) else [added])
+
+
+def _zero_field(v, spec, key, m):
+    """The warning of a magnet whose applied field is zero on it (value and gradient: a B of
+    zeros): it adds no load at any load factor, as a zero Br; named at the field's B (its
+    ``m``, or the field, for other kinds).  Not where [design] varies the field or its poses set
+    it (an optimisation may start at zero)."""
+    name = m["field"]
+    design = spec.get("design") or {}
+    if any(x.get("type") == "field" and x.get("field") == name for x in design.get("variables", [])) or \
+            any(name in (p.get("fields") or {}) for p in design.get("poses", [])):
+        return
+    f = spec["fields"][name]
+    given = next((k for k in ("B", "m") if k in f), None)
+    where = f"region {m['region']!r}" if m.get("region") else "the whole shell"
+    v.warn(join(join("fields", name), given) if given else join("fields", name),
+           f"the applied field {name!r} is zero on {where} at every load factor (its value and gradient): "
+           f"{key} in it adds no load (a sweep may start at zero); give the field's flux density [T], or drop "
+           "the magnet")
