@@ -274,8 +274,10 @@ def _summary(scn, res):
 def step_table(doc):
     """One line per step: load factor, the physical loads (with units), the first probe, the
     total contact force |F| of every obstacle, the total support reaction |R| (its force, lab
-    total of the held dofs and springs), iterations, residual and the step's largest Newton
-    correction |eta|_s / ell (``max_correction``; '-' where not counted)."""
+    total of the held dofs and springs), iterations, the relative residual, its force and moment
+    parts |r_F|, |r_M| (norms on the free dofs, in the force and moment units:
+    ``residual_force``, ``residual_moment``) and the step's largest Newton correction
+    |eta|_s / ell (``max_correction``; '-' where not counted)."""
     import numpy as np
     steps = doc["steps"]
     phys = list((steps[-1].get("physical") or {}).items())
@@ -293,7 +295,13 @@ def step_table(doc):
         unit = (doc.get("unit_system") or {}).get("force")
         head += f" {'|R|' + (' [' + unit + ']' if unit else ''):>12}"
     moved = any(st.get("max_correction") is not None for st in steps)
-    print(head + f" {'it':>3} {'residual':>9}" + (f" {'correction':>10}" if moved else ""))
+    parts = any(st.get("residual_force") is not None for st in steps)
+    head += f" {'it':>3} {'residual':>9}"
+    if parts:
+        us = doc.get("unit_system") or {}
+        head += "".join(f" {name + (' [' + us[dim] + ']' if us.get(dim) else ''):>12}"
+                        for name, dim in (("|r_F|", "force"), ("|r_M|", "moment")))
+    print(head + (f" {'correction':>10}" if moved else ""))
     for st in steps:
         line = f"{st['step']:>5d} {st['load_factor']:>9.4g}"
         line += "".join(f" {(st.get('physical') or {}).get(k, {}).get('value', float('nan')):>22.6g}" for k, _ in phys)
@@ -307,6 +315,9 @@ def step_table(doc):
             r = st.get("reactions")
             line += f" {float(np.linalg.norm(r['force'])):>12.6g}" if r else f" {'-':>12}"
         line += f" {st.get('iterations', 0):>3d} {format_residual(st)}"
+        if parts:
+            line += "".join(f" {st[k]:>12.2e}" if st.get(k) is not None else f" {'-':>12}"
+                            for k in ("residual_force", "residual_moment"))
         if moved:
             c = st.get("max_correction")
             line += f" {c:>10.2e}" if c is not None else f" {'-':>10}"

@@ -5,7 +5,9 @@
      "steps": [{"load_factor", "load": {"name", "value", "unit"},
                 "probes": {name: {"u": [ux, uy, uz], "rotation_angle", "rotation_vector",
                                   "rotation": 3x3}},
-                "iterations", "residual", "residual_floor", "residual_history",
+                "iterations", "residual", "residual_force", "residual_moment" (the norms of the
+                force and moment parts of the residual on the free dofs, in force and force x
+                length; null where not recorded), "residual_floor", "residual_history",
                 "max_correction" (the step's largest Newton correction |eta|_s / ell; null where not
                 counted: linear analysis, arc length, the start),
                 "reactions": {"force", "moment"}, "applied": {"force", "moment"} (lab totals of the
@@ -105,7 +107,7 @@ def step_record(st, load, axis=None, **extra):
     >>> p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 1.0)); p.add_probe("tip")
     >>> rec = step_record(p.solve(steps=1).final, dict(name="P", value=1.0, unit="N"), error=None)
     >>> list(rec), rec["load_factor"], rec["residual"] < 1e-10
-    (['load_factor', 'load', 'probes', 'iterations', 'residual', 'residual_floor', 'residual_history', 'max_correction', 'reactions', 'applied', 'balance_error', 'attempts', 'linear_solves', 'backend', 'support_reactions', 'checks', 'error'], 1.0, True)
+    (['load_factor', 'load', 'probes', 'iterations', 'residual', 'residual_force', 'residual_moment', 'residual_floor', 'residual_history', 'max_correction', 'reactions', 'applied', 'balance_error', 'attempts', 'linear_solves', 'backend', 'support_reactions', 'checks', 'error'], 1.0, True)
     >>> [[round(f, 9) + 0.0 for f in rec[k]["force"]] for k in ("reactions", "applied")]   # held by the clamp
     [[0.0, 0.0, -1.0], [0.0, 0.0, 1.0]]
     """
@@ -113,6 +115,8 @@ def step_record(st, load, axis=None, **extra):
                probes={name: probe_record(p, axis) for name, p in st.probes.items()},
                iterations=int(st.iterations),
                residual=float(st.residual_history[-1]) if st.residual_history else 0.0,
+               residual_force=_number(getattr(st, "residual_force", None)),
+               residual_moment=_number(getattr(st, "residual_moment", None)),
                residual_floor=float(getattr(st, "residual_floor", 0.0)),
                residual_history=[float(x) for x in st.residual_history],
                max_correction=None if getattr(st, "max_correction", None) is None else float(st.max_correction),
@@ -132,6 +136,11 @@ def step_record(st, load, axis=None, **extra):
         rec["checks"] = dict(st.checks)
     rec.update(extra)
     return rec
+
+
+def _number(x):
+    """A float, or None for None (a record without the value)."""
+    return None if x is None else float(x)
 
 
 ROUNDOFF_NOTE = ("* the loads vanish at this state (internal and external forces are round-off): the "

@@ -11,7 +11,7 @@ import numpy as np
 from .result import ProbeState, StepResult, unwrap_rotation
 
 __all__ = ["StepRecorder", "lab_totals", "restore_multipliers", "initial_state", "support_names",
-           "reaction_owners"]
+           "reaction_owners", "residual_parts"]
 
 
 def initial_state(g_init, g0):
@@ -358,11 +358,31 @@ class StepRecorder:
             contact[ld.name] = dict(force=CF, moment=CM, multipliers=ld.multipliers(), **ld.report(g, lam))
         AF, AM = lab_totals(at, f_app)
         ell = self.ell
-        return StepResult(lam, g.copy(), iterations, list(history), RF, RM, AF, AM, probes,
-                          scale=(max(sF, aF, max(sM, aM) / ell), max(sM, aM, max(sF, aF) * ell)),
-                          stability=stability, contact=contact,
-                          backend=str(getattr(self.problem, "backend", "")),
-                          support_reactions=self.support_reactions(at, reac, springs))
+        st = StepResult(lam, g.copy(), iterations, list(history), RF, RM, AF, AM, probes,
+                        scale=(max(sF, aF, max(sM, aM) / ell), max(sM, aM, max(sF, aF) * ell)),
+                        stability=stability, contact=contact,
+                        backend=str(getattr(self.problem, "backend", "")),
+                        support_reactions=self.support_reactions(at, reac, springs))
+        st.residual_force, st.residual_moment = residual_parts(r_int, f_ext, self.fixed)
+        return st
+
+
+def residual_parts(r_int, f_ext, fixed):
+    """(|r_F|, |r_M|): the Euclidean norms of the force and of the moment parts of the residual
+    r = r_int - f_ext (n, 6) on the free dofs (``fixed`` (n, 6) the held ones) [force], [force x
+    length] -- from the forces the step records, no further assembly.  The relative residual of
+    the convergence test is sqrt(|r_F|^2 + (|r_M| / ell)^2) over its force scale
+    (``solvers.convergence.relative_residual``); the parts say which converged, in their units.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> r = np.array([[3.0, 0, 4.0, 0, 0, 2.0], [9.0, 9.0, 9.0, 9.0, 9.0, 9.0]])
+    >>> residual_parts(r, np.zeros_like(r), np.array([[False] * 6, [True] * 6]))
+    (5.0, 2.0)
+    """
+    r = np.where(fixed, 0.0, np.asarray(r_int, float) - np.asarray(f_ext, float))
+    return float(np.sqrt(np.einsum("ij,ij->", r[:, :3], r[:, :3]))), float(np.sqrt(np.einsum("ij,ij->", r[:, 3:], r[:, 3:])))
 
 
 def restore_multipliers(problem, step):

@@ -111,6 +111,11 @@ class StepResult:
         external forces are round-off themselves, so the relative residual is of order 1 and
         this floor exceeds it: the state is converged to round-off (see
         :func:`core_se3.results.format_residual`).
+    residual_force, residual_moment : float or None
+        The Euclidean norms of the force [force] and moment [force x length] parts of the
+        residual r_int - f_ext on the free dofs at the state (``results.recorder.residual_parts``;
+        the relative ``residual_history`` combines them over a force scale, moments / ell); None
+        when not recorded.
     reaction_force, reaction_moment : (3,) ndarray
         Total lab reaction of the supports [force], its moment about the origin [force x length]:
         of the held dofs and of the penalty-spring supports (``Load.support_force``: lab,
@@ -174,6 +179,8 @@ class StepResult:
     backend: str = ""                  # the backend that evaluated the converged state ('auto' moves)
     checks: dict = field(default_factory=dict)   # what load stepping checked (solvers.step_checks)
     support_reactions: dict = field(default_factory=dict)   # name -> dict(force, moment, ...) per support
+    residual_force: float | None = None    # |r| of the free force dofs [force]
+    residual_moment: float | None = None   # |r| of the free moment dofs [force x length]
 
     @property
     def balance_error(self):
