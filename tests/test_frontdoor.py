@@ -374,7 +374,7 @@ def test_sweep_input_errors(tmp_path):
 
 def test_shape_generator_errors():
     bad(doc(mesh__n_arms=2), "mesh.n_arms", "expected an integer >= 3, got 2")
-    bad(doc(mesh__palm=1.0), "mesh", "palm circumradius 1 is too small for 4 arms of width 6")
+    bad(doc(mesh__palm=1.0), "mesh.palm", "palm circumradius 1 is too small for 4 arms of width 6")   # at its key
     bad(doc(mesh__size=1e-4), "mesh.size", "over the limit of 1000000")
     bad(doc(mesh__backend="gmesh"), "mesh.backend", "did you mean 'gmsh'?")
     with pytest.raises(MeshError, match="0 <= radius <= min"):

@@ -110,3 +110,38 @@ def test_sweep_resume_of_a_sweep_stopped_before_its_first_row_starts_over(tmp_pa
     res = scenario.sweep(load(doc()), {"material.E": [1e6, 2e6]}, out=out, plot=False, resume=True)
     assert [r["status"] for r in res.rows] == ["complete", "complete"]
     assert len(list(csv.DictReader(open(os.path.join(out, "sweep.csv"))))) == 2
+
+
+# ================================================================== (e) adversarial pass
+def test_a_generators_orientation_in_degrees_warns():
+    """A star's ``angle0 = 45`` meant as degrees was read as 45 rad: arm 0 silently at 58.31
+    degrees (45 rad modulo a turn).  An orientation needs no more than a turn: now a warning at
+    mesh.angle0 (theta0 likewise) saying the radians and where the mesh lands; 0.785 rad says
+    nothing and puts the arm at 45 degrees."""
+    import numpy as np
+    star = {"generator": "star", "n_arms": 4, "arm_length": 10.0, "arm_width": 2.0, "size": 1.0,
+            "backend": "structured"}
+    said = {}
+    for a, where in ((45.0, 58.31), (np.radians(45.0), 45.0)):
+        scn = load(doc(mesh=dict(star, angle0=a), edges={}, probes=[], loads=[],
+                       supports=[{"type": "clamp", "region": "palm"}]))
+        tip = scn.mesh.X[scn.mesh.node_set("tip_0")].mean(0)
+        assert np.degrees(np.arctan2(tip[1], tip[0])) == pytest.approx(where, abs=0.01)
+        said[a] = [str(w) for w in scn.warnings if "[mesh.angle0]" in str(w)]
+    assert said[np.radians(45.0)] == [] and len(said[45.0]) == 1
+    assert ("angle0 = 45 rad is more than a turn: it is in radians (45 degrees is 0.785398 rad; 45 rad places the "
+            "mesh at 58.31 degrees)") in said[45.0][0]
+    sector = {"generator": "annulus_sector", "r_in": 1.0, "r_out": 2.0, "angle": 1.0, "size": 0.5, "theta0": 30.0,
+              "backend": "structured"}
+    assert any("[mesh.theta0]" in str(w) for w in load(doc(mesh=sector, edges={}, probes=[], loads=[],
+                                                             supports=[{"type": "clamp", "edge": "start"}])).warnings)
+
+
+def test_a_generators_refused_value_is_named_at_its_key():
+    """An arch of angle = 90 (degrees meant) was refused at [mesh] with 'cylinder_arch: cylinder_arch:
+    angle must be ...' (the generator said twice, the key not named); now at mesh.angle, once."""
+    arch = {"generator": "cylinder_arch", "R": 5.0, "angle": 90.0, "width": 1.0, "nx": 8, "ny": 1}
+    with pytest.raises(ScenarioError) as ei:
+        load(doc(mesh=arch, edges={}, probes=[]))
+    assert ei.value.key == "mesh.angle" and str(ei.value).count("cylinder_arch") == 1
+    assert "got 90 (1.5708 if 90 is in degrees)" in str(ei.value)

@@ -15,7 +15,7 @@ from ..mesh.generator_kinds import GENERATORS
 from ..model.probes import along_line
 from ..registry import Param, Section
 from .schema import EDGE, PROBE, REGION
-from .validate import Bounds, join, show, tname
+from .validate import Bounds, join, show, tname, user_key
 
 __all__ = ["GENERATORS", "MESH_FILE", "MAX_ELEMENTS", "MAX_REFINE", "mesh_section", "refine_guard", "edges_section", "regions_section",
            "region_ref", "nodes_ref", "selection", "is_line", "probes_section", "renumbered_warning"]
@@ -159,10 +159,14 @@ def _unrefined_mesh(v, d, base_dir):
             warnings.simplefilter("always", MeshWarning)
             mesh = kind.build(**kw)
     except CoreSE3Error as exc:
-        # a grading the generator refuses ('grade: ...', 'grading: ...') is named at its key
-        v.fail(join(key, "grade") if "grade" in kw and str(exc).startswith("grad") else key, f"{gen}: {exc}")
+        # a grading the generator refuses ('grade: ...', 'grading: ...') is named at its key, and
+        # a value its message names alone at that key ('angle must be in (0, 2 pi] [rad], got 90':
+        # mesh.angle, not [mesh]); the message says the generator once
+        msg = str(exc)
+        v.fail(join(key, "grade") if "grade" in kw and msg.startswith("grad") else user_key(key, kind, exc),
+               msg if msg.startswith(gen) else f"{gen}: {msg}")
     except ValueError as exc:                  # a user's generator
-        v.fail(key, f"{gen}: {exc}")
+        v.fail(user_key(key, kind, exc), f"{gen}: {exc}")
     for w in caught:
         if issubclass(w.category, MeshWarning):
             v.warn(join(key, "grade") if "grade" in kw else key, f"{gen}: {w.message}")

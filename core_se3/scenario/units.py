@@ -297,7 +297,8 @@ def _angles(v, spec):
     """Warn about angles [rad] of more than TURNS_MAX turns (a rotating field, a rotated edge, a
     prescribed motion's or an obstacle's turn, a box's orientation): such a turn is split into
     sub-steps of at most pi/4 (``solvers.splitting``), and an angle in degrees by mistake turns 57
-    times per 360."""
+    times per 360; and about a generator's orientation (``angle0``, ``theta0``) of more than a
+    turn (a star's angle0 = 45 meant as degrees put arm 0 at 58.3 degrees, silently)."""
     found = [(f"fields.{name}.rotate.angle", f["rotate"]["angle"]) for name, f in spec["fields"].items()
              if f.get("rotate") and f["rotate"].get("angle") is not None]
     found += [(f"supports[{i}].angle", sp["angle"]) for i, sp in enumerate(spec["supports"])
@@ -311,6 +312,12 @@ def _angles(v, spec):
         if turn > 2 * np.pi:           # an orientation needs no more than half a turn: degrees?
             v.warn(f"obstacles[{i}].rotation", f"the rotation vector's angle is {turn:g} rad, more than a turn: "
                                               f"it is in radians (90 degrees is {np.pi / 2:.6g} rad)")
+    for name in ("angle0", "theta0"):          # a generator's orientation (star, polygon, sectors, panels)
+        a = spec["mesh"].get(name)
+        if a is not None and abs(float(a)) > 2 * np.pi:
+            v.warn(f"mesh.{name}", f"{name} = {a:g} rad is more than a turn: it is in radians ({a:g} degrees is "
+                                   f"{np.radians(a):.6g} rad; {a:g} rad places the mesh at {np.degrees(a) % 360:.4g} "
+                                   "degrees)")
     for key, angle in found:
         turns = abs(float(angle)) / (2 * np.pi)
         if turns > TURNS_MAX:
