@@ -145,3 +145,24 @@ def test_a_generators_refused_value_is_named_at_its_key():
         load(doc(mesh=arch, edges={}, probes=[]))
     assert ei.value.key == "mesh.angle" and str(ei.value).count("cylinder_arch") == 1
     assert "got 90 (1.5708 if 90 is in degrees)" in str(ei.value)
+
+
+def test_an_empty_input_file_is_refused_as_empty(tmp_path):
+    """An empty mesh file (a Gmsh export not yet saved) failed with meshio's bare NumPy message
+    'cannot read mesh file 'empty.msh': ValueError: need at least one array to concatenate'; now
+    each input file (mesh, magnetisation table, scenario) that is empty says so, at its key."""
+    (tmp_path / "empty.msh").write_bytes(b"")
+    (tmp_path / "empty.csv").write_bytes(b"")
+    (tmp_path / "empty.toml").write_bytes(b"")
+    cases = [(doc(mesh={"file": "empty.msh"}, edges={}, probes=[], loads=[]), "mesh.file"),
+             (doc(units="SI", fields={"c": {"type": "uniform", "B": [0.0, 0.0, 0.01]}},
+                  magnets=[{"Br_file": "empty.csv"}]), "magnets[0].Br_file")]
+    for d, key in cases:
+        with pytest.raises(ScenarioError) as ei:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                scenario.from_dict(d, file=str(tmp_path / "s.toml"), base_dir=str(tmp_path))
+        assert ei.value.key == key and "is empty (0 bytes)" in str(ei.value), str(ei.value)
+        assert "concatenate" not in str(ei.value)
+    with pytest.raises(ScenarioError, match=r"is empty \(0 bytes\)"):
+        scenario.load(tmp_path / "empty.toml")

@@ -122,9 +122,9 @@ def write_json_atomic(path, doc):
 
 
 def check_input_file(path, limit, what="an input file"):
-    """None if ``path`` is a regular file of at most ``limit`` bytes, else the reason it is not
-    read (a device such as /dev/zero, a pipe, a directory, a missing or oversized file): input
-    files are read only when they are regular and bounded.
+    """None if ``path`` is a regular file of 1 to ``limit`` bytes, else the reason it is not
+    read (a device such as /dev/zero, a pipe, a directory, a missing, empty or oversized file):
+    input files are read only when they are regular and bounded.
 
     Example
     -------
@@ -141,6 +141,8 @@ def check_input_file(path, limit, what="an input file"):
     if st.st_size > limit:
         return (f"{path!r} has {st.st_size / 2 ** 20:.1f} MiB, more than the {limit / 2 ** 20:.0f} MiB {what} may "
                 "have: is it the right file?")
+    if st.st_size == 0:                 # (an empty mesh file failed in meshio with a bare NumPy error)
+        return f"{path!r} is empty (0 bytes): is it the right file, and was it saved?"
     return None
 
 
