@@ -166,3 +166,37 @@ def test_an_empty_input_file_is_refused_as_empty(tmp_path):
         assert "concatenate" not in str(ei.value)
     with pytest.raises(ScenarioError, match=r"is empty \(0 bytes\)"):
         scenario.load(tmp_path / "empty.toml")
+
+
+def test_a_resume_whose_checkpoint_was_deleted_keeps_the_runs_results(tmp_path, capsys):
+    """A finished run whose checkpoint.npz was deleted (it is the large file: to save space) was
+    started over by --resume without a word (exit 0): every step solved again, its results.json
+    and VTU files replaced -- and, the scenario's check being the checkpoint's, by those of an
+    edited scenario too (E doubled: tip uz 2.975 replaced by 1.597, no --force asked).  Now
+    refused, naming the steps that would be lost; --force starts over as asked; a run stopped
+    before its first checkpoint (no step recorded) still starts over."""
+    path = write(tmp_path, doc(solver={"steps": 2}))
+    out = tmp_path / "o"
+    assert cli.main(["run", path, "--out", str(out), "-q"]) == 0
+    (out / "checkpoint.npz").unlink()
+    before = (out / "results.json").read_bytes()
+    assert cli.main(["run", path, "--out", str(out), "--resume", "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "checkpoint.npz is missing, but" in err and "records 2 converged step(s) to load factor 1 (status " \
+                                                     "'complete')" in err, err
+    assert (out / "results.json").read_bytes() == before
+    assert cli.main(["run", path, "--out", str(out), "--force", "-q"]) == 0
+    assert json.loads((out / "results.json").read_text())["status"] == "complete"
+
+
+def test_a_sweep_resume_whose_checkpoint_was_deleted_keeps_its_rows(tmp_path):
+    """As a run's: sweep.csv with 2 finished rows, sweep.npz deleted: the resume started over
+    silently, ran every point again and rewrote sweep.csv (whatever the scenario had become: the
+    checkpoint holds the check); now refused, the CSV kept."""
+    out = str(tmp_path / "sw")
+    scenario.sweep(load(doc()), {"material.E": [1e6, 2e6]}, out=out, plot=False)
+    os.unlink(os.path.join(out, "sweep.npz"))
+    before = open(os.path.join(out, "sweep.csv")).read()
+    with pytest.raises(CheckpointError, match=r"sweep.npz is missing, but sweep.csv holds 2 finished row\(s\)"):
+        scenario.sweep(load(doc()), {"material.E": [1e6, 2e6]}, out=out, plot=False, resume=True)
+    assert open(os.path.join(out, "sweep.csv")).read() == before

@@ -197,16 +197,41 @@ def _context(scn, st):
 
 def _resume_state(scn, rd):
     """The checkpoint to continue from, checked against the scenario (None: a run stopped before
-    its first checkpoint, whose files go: it starts over)."""
+    its first checkpoint, whose files go: it starts over).  A run whose results.json holds
+    converged steps but whose checkpoint is gone (deleted to save space) is refused: it was
+    started over silently, its results and VTU files replaced."""
     ck = Checkpoint(rd.path)
-    if on_root(lambda: not ck.exists() and rd.existed and (rd.start_over() or True)):
+    lost = _lost_checkpoint(rd) if rd.existed and not ck.exists() else None
+    if on_root(lambda: not ck.exists() and rd.existed and lost is None and (rd.start_over() or True)):
         return None
     if not ck.exists():
-        raise CheckpointError(f"no checkpoint to resume from: {ck.path} does not exist (run without --resume first)")
+        raise CheckpointError(lost or f"no checkpoint to resume from: {ck.path} does not exist (run without --resume "
+                                      "first)")
     st = ck.load()
     check_checkpoint(ck.path, st, scn)
     restore_rent(st["extra"].get("backend"))
     return st
+
+
+def _lost_checkpoint(rd):
+    """The refusal of a resume whose run made progress (results.json records converged steps past
+    the start: the checkpoint is written before each step's record) but whose checkpoint is
+    missing; None where there is nothing to lose (no or an unreadable results.json, or no step
+    past the start)."""
+    import json
+    path = os.path.join(rd.path, "results.json")
+    try:
+        with open(path) as fh:
+            doc = json.load(fh)
+        done = [r for r in doc.get("steps") or [] if int(r.get("step", 0)) > 0]
+    except (OSError, ValueError, TypeError, AttributeError):
+        return None
+    if not done:
+        return None
+    return (f"cannot resume: {os.path.join(rd.path, 'checkpoint.npz')} is missing, but {path} records {len(done)} "
+            f"converged step(s) to load factor {float(done[-1].get('load_factor', float('nan'))):g} (status "
+            f"{doc.get('status')!r}): they cannot be continued without it, and --resume would replace them; start "
+            "over with --force, or use another --out")
 
 
 def _run(scn, rd, ctx, st, progress, stop_after, t0):

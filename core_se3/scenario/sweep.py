@@ -275,10 +275,8 @@ def sweep(scn, grid=None, out=None, progress=None, warm=True, plot=True, resume=
     keys = list(grid)
     rd = RunDirectory(output_directory(scn, out, "-sweep"), "sweep", SWEEP_FILES)
     with termination_as_interrupt(), rd.claim(resume=resume, force=force, adopt=SWEEP_FILES):
-        if resume and not rd.previous and not os.path.exists(os.path.join(rd.path, "sweep.npz")):
-            raise CheckpointError(f"nothing to resume: {rd.path} holds no sweep (no sweep.npz, no file of an "
-                                  "earlier sweep); give the directory of the sweep to continue, or start one "
-                                  "without --resume")
+        if resume:
+            _resumable(rd)
         state = SweepCheckpoint(rd, scn, grid, warm)
         result = SweepResult(keys, state.rows, status="running")
         try:
@@ -298,6 +296,27 @@ def sweep(scn, grid=None, out=None, progress=None, warm=True, plot=True, resume=
             result.status = "complete"
             result.files = _write_all(rd, result, state, scn, plot)
     return result
+
+
+def _resumable(rd):
+    """A CheckpointError where a resume in ``rd`` has nothing to continue from: no sweep there
+    (before, a fresh sweep started silently), or finished rows in sweep.csv without the
+    checkpoint sweep.npz (deleted: the resume started over, replacing them).  A sweep stopped
+    before its first row (its sweep.json, no row) starts over."""
+    if os.path.exists(os.path.join(rd.path, "sweep.npz")):
+        return
+    if not rd.previous:
+        raise CheckpointError(f"nothing to resume: {rd.path} holds no sweep (no sweep.npz, no file of an earlier "
+                              "sweep); give the directory of the sweep to continue, or start one without --resume")
+    try:
+        with open(os.path.join(rd.path, "sweep.csv")) as fh:
+            rows = sum(1 for line in fh if line.strip()) - 1
+    except OSError:
+        rows = 0
+    if rows > 0:
+        raise CheckpointError(f"cannot resume: {os.path.join(rd.path, 'sweep.npz')} is missing, but sweep.csv holds "
+                              f"{rows} finished row(s): they cannot be continued without it, and --resume would "
+                              "replace them; start over with --force, or use another --out")
 
 
 def _one_process(scn):
