@@ -200,3 +200,16 @@ def test_a_sweep_resume_whose_checkpoint_was_deleted_keeps_its_rows(tmp_path):
     with pytest.raises(CheckpointError, match=r"sweep.npz is missing, but sweep.csv holds 2 finished row\(s\)"):
         scenario.sweep(load(doc()), {"material.E": [1e6, 2e6]}, out=out, plot=False, resume=True)
     assert open(os.path.join(out, "sweep.csv")).read() == before
+
+
+@pytest.mark.parametrize("angle,said", [(45.0, True), (30.0, True), (60.0, True), (2 * 3.141592653589793, False),
+                                        (4 * 3.141592653589793, False)])
+def test_a_rotation_angle_in_degrees_warns_below_ten_turns(angle, said):
+    """A support's ``angle = 45`` meant as degrees is 7.2 turns in radians (30: 4.8, 60: 9.5): the
+    warning began at ten turns, so these common degree values turned the edge silently.  Now at
+    three turns; one or two turns (a roll-up) say nothing."""
+    d = doc(supports=[{"type": "clamp", "edge": "x0"},
+                      {"type": "rotate", "edge": "x1", "axis": [1.0, 0.0, 0.0], "angle": angle, "free": ["x"]}],
+            loads=[], edges={}, probes=[])
+    hits = [str(w) for w in load(d).warnings if "[supports[1].angle]" in str(w) and "radians" in str(w)]
+    assert bool(hits) == said, hits
