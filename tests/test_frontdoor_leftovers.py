@@ -213,3 +213,37 @@ def test_a_rotation_angle_in_degrees_warns_below_ten_turns(angle, said):
             loads=[], edges={}, probes=[])
     hits = [str(w) for w in load(d).warnings if "[supports[1].angle]" in str(w) and "radians" in str(w)]
     assert bool(hits) == said, hits
+
+
+def test_a_sweep_interrupted_before_its_first_row_does_not_advise_resume(tmp_path, capsys, monkeypatch):
+    """Ctrl-C while a sweep validated its grid (many points of a large mesh take a while) said
+    'the finished runs are in sweep.csv (sweep.json says where it stopped): continue with
+    --resume' -- there was no sweep.csv, and --resume finds nothing to continue.  Now it says so;
+    after a finished row the advice is --resume, as before."""
+    import sys
+    sw = sys.modules["core_se3.scenario.sweep"]        # (scenario.sweep is the function)
+    path = write(tmp_path, doc())
+    real = sw._check_values
+
+    def stop(*a, **k):
+        raise KeyboardInterrupt
+    monkeypatch.setattr(sw, "_check_values", stop)
+    assert cli.main(["sweep", path, "--set", "material.E=1e6,2e6", "--out", str(tmp_path / "sw"), "-q"]) == 130
+    err = capsys.readouterr().err
+    assert "stopped before its first finished run: nothing to continue" in err and "--resume" not in \
+        err.replace("without --resume", ""), err
+    monkeypatch.setattr(sw, "_check_values", real)
+    calls = []
+
+    def second(*a, **k):
+        if calls:
+            raise KeyboardInterrupt
+        calls.append(1)
+        return sw_point_row(*a, **k)
+    sw_point_row = sw.point_row
+    monkeypatch.setattr(sw, "point_row", second)
+    assert cli.main(["sweep", path, "--set", "material.E=1e6,2e6", "--out", str(tmp_path / "sw2"), "-q"]) == 130
+    assert "continue with --resume" in capsys.readouterr().err
+    monkeypatch.setattr(sw, "point_row", sw_point_row)
+    assert cli.main(["sweep", path, "--set", "material.E=1e6,2e6", "--out", str(tmp_path / "sw2"), "-q",
+                     "--resume"]) == 0

@@ -203,7 +203,7 @@ def _open(args):
 def _guarded(call, kept, resume):
     """(call(), None), or (None, the exit status) of a long run's error: a CoreSE3Error, an
     OSError writing its outputs (``kept``: what is kept) or an interrupt (``resume``: where it
-    stopped and how to continue)."""
+    stopped and how to continue, or a function giving it when the interrupt comes)."""
     try:
         return call(), None
     except CoreSE3Error as exc:
@@ -211,7 +211,18 @@ def _guarded(call, kept, resume):
     except OSError as exc:
         return None, output_error(exc, kept)
     except KeyboardInterrupt as exc:
-        return None, interrupted(exc, resume)
+        return None, interrupted(exc, resume() if callable(resume) else resume)
+
+
+def _sweep_stopped(scn, out):
+    """What an interrupted sweep left: its finished rows (sweep.npz in its directory: continue
+    with --resume), or nothing yet (stopped while it validated its grid or ran its first point:
+    --resume would find nothing to continue)."""
+    import os
+    from ..scenario.runner import output_directory
+    if os.path.exists(os.path.join(output_directory(scn, out, "-sweep"), "sweep.npz")):
+        return ("the finished runs are in sweep.csv (sweep.json says where it stopped): continue with --resume")
+    return "it stopped before its first finished run: nothing to continue; run it again (without --resume)"
 
 
 def _contradiction(args):
@@ -424,8 +435,7 @@ def scenario_sweep(args):
         res, code = _guarded(lambda: scenario.sweep(scn, grid, out=args.out, progress=progress, warm=not args.cold,
                                                     resume=args.resume, force=args.force),
                              "the sweep's finished rows are kept in sweep.csv where it could be written",
-                             "the finished runs are in sweep.csv (sweep.json says where it stopped): continue "
-                             "with --resume")
+                             lambda: _sweep_stopped(scn, args.out))
     if code is not None:
         return code
     failed = [r for r in res.rows if r["status"] != "complete"]

@@ -305,7 +305,7 @@ def _resumable(rd):
     before its first row (its sweep.json, no row) starts over."""
     if os.path.exists(os.path.join(rd.path, "sweep.npz")):
         return
-    if not rd.previous:
+    if not rd.previous and not rd.existed:      # (a manifest alone: a sweep killed as it began)
         raise CheckpointError(f"nothing to resume: {rd.path} holds no sweep (no sweep.npz, no file of an earlier "
                               "sweep); give the directory of the sweep to continue, or start one without --resume")
     try:
