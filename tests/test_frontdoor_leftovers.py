@@ -247,3 +247,20 @@ def test_a_sweep_interrupted_before_its_first_row_does_not_advise_resume(tmp_pat
     monkeypatch.setattr(sw, "point_row", sw_point_row)
     assert cli.main(["sweep", path, "--set", "material.E=1e6,2e6", "--out", str(tmp_path / "sw2"), "-q",
                      "--resume"]) == 0
+
+
+def test_an_integer_beyond_64_bits_is_refused_naming_its_key(tmp_path, capsys):
+    """TOML's integers are 64-bit, Python's reader keeps any length: ``E = 1`` and 400 zeros (a
+    stuck key) stopped ``run --check`` with a traceback, 'OverflowError: int too large to convert
+    to float'.  Now an error at material.E (exit 2); a vector's entry, a --set value too."""
+    text = scenario.dumps(doc()).replace("E = 1200000.0", "E = 1" + "0" * 400)
+    assert "E = 1000" in text
+    (tmp_path / "big.toml").write_text(text)
+    assert cli.main(["run", str(tmp_path / "big.toml"), "--check"]) == 2
+    assert "[material.E]: an integer of 401 digits, beyond TOML's 64-bit integers" in capsys.readouterr().err
+    with pytest.raises(ScenarioError) as ei:
+        load(doc(loads=[{"type": "edge_force", "edge": "x1", "force": [0, 0, 10 ** 30]}]))
+    assert ei.value.key == "loads[0].force[2]"
+    assert cli.main(["sweep", write(tmp_path, doc()), "--set", "material.E=1" + "0" * 30, "--out",
+                     str(tmp_path / "sw"), "-q"]) == 2
+    assert "beyond TOML's 64-bit integers" in capsys.readouterr().err

@@ -307,6 +307,7 @@ def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario", strict=
     """
     v = Validator(file, strict=strict)
     v.table(doc, "", TOP_KEYS, required=SCENARIO.required())
+    _huge_integers(v, doc)
     plugins = v.param(doc, "", SCENARIO.param("plugins"))
     digests = load_plugins(plugins, base_dir, file)        # the user's kinds, before anything reads a registry
     spec = {}
@@ -377,6 +378,20 @@ def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario", strict=
     for w in scn.warnings:
         warnings.warn(w, stacklevel=2)
     return scn
+
+
+def _huge_integers(v, doc, key=""):
+    """A ScenarioError at the first integer beyond TOML's 64-bit ones: Python's TOML reader keeps
+    any length, and ``E = 1`` followed by 400 zeros stopped every command with a bare
+    'OverflowError: int too large to convert to float'."""
+    items = doc.items() if isinstance(doc, dict) else enumerate(doc)
+    for k, x in items:
+        here = f"{key}[{k}]" if isinstance(k, int) else (f"{key}.{k}" if key else str(k))
+        if isinstance(x, (dict, list)):
+            _huge_integers(v, x, here)
+        elif isinstance(x, int) and not isinstance(x, bool) and not -2 ** 63 <= x < 2 ** 63:
+            v.fail(here, f"an integer of {len(str(abs(x)))} digits, beyond TOML's 64-bit integers (and any "
+                         "number this key takes): check the value")
 
 
 def sweep_section(v, doc):
