@@ -264,3 +264,36 @@ def test_an_integer_beyond_64_bits_is_refused_naming_its_key(tmp_path, capsys):
     assert cli.main(["sweep", write(tmp_path, doc()), "--set", "material.E=1" + "0" * 30, "--out",
                      str(tmp_path / "sw"), "-q"]) == 2
     assert "beyond TOML's 64-bit integers" in capsys.readouterr().err
+
+
+def test_a_refused_sweep_resume_leaves_the_earlier_status_alone(tmp_path):
+    """``sweep --resume`` with other values is refused (its checkpoint belongs to another
+    sweep), but it had first rewritten the earlier sweep's sweep.json: 'complete', 2 rows became
+    'running', 0 rows, with no process running.  Now the checkpoint is read first."""
+    out = str(tmp_path / "sw")
+    scenario.sweep(load(doc()), {"material.E": [1e6, 2e6]}, out=out, plot=False)
+    before = open(os.path.join(out, "sweep.json")).read()
+    with pytest.raises(CheckpointError, match="belongs to another sweep"):
+        scenario.sweep(load(doc()), {"material.E": [1e6, 3e6]}, out=out, plot=False, resume=True)
+    assert open(os.path.join(out, "sweep.json")).read() == before
+
+
+def test_a_sweep_stopped_by_an_error_says_failed_not_running(tmp_path, monkeypatch):
+    """An error no point catches (a full disk writing sweep.csv, a MemoryError) left sweep.json
+    'running' with 0 rows for ever; now 'failed', the error named, the finished row counted."""
+    import sys
+    sw = sys.modules["core_se3.scenario.sweep"]
+    real, calls = sw.point_row, []
+
+    def second(*a, **k):
+        if calls:
+            raise MemoryError("no room")
+        calls.append(1)
+        return real(*a, **k)
+    monkeypatch.setattr(sw, "point_row", second)
+    out = str(tmp_path / "sw")
+    with pytest.raises(MemoryError):
+        scenario.sweep(load(doc()), {"material.E": [1e6, 2e6]}, out=out, plot=False)
+    status = json.load(open(os.path.join(out, "sweep.json")))
+    assert status["status"] == "failed" and status["rows"] == 1
+    assert "failed after 1 of 2 runs: MemoryError: no room" in status["error"]

@@ -279,11 +279,13 @@ def sweep(scn, grid=None, out=None, progress=None, warm=True, plot=True, resume=
             _resumable(rd)
         state = SweepCheckpoint(rd, scn, grid, warm)
         result = SweepResult(keys, state.rows, status="running")
+        with held_signals():
+            # the checkpoint read first: one of another sweep is refused before sweep.json is
+            # touched (it turned a complete sweep's status into 'running' with 0 rows)
+            if resume:
+                result.rows = state.load().rows
+            write_status(rd.file("sweep.json"), result, scn, state)     # from the start
         try:
-            with held_signals():
-                write_status(rd.file("sweep.json"), result, scn, state)     # from the start
-                if resume:
-                    result.rows = state.load().rows
             _run_points(scn, keys, points, state, warm, progress)
         except KeyboardInterrupt as exc:
             what = exc.describe() if isinstance(exc, Terminated) else "Ctrl-C (SIGINT)"
@@ -291,6 +293,9 @@ def sweep(scn, grid=None, out=None, progress=None, warm=True, plot=True, resume=
                 result.status = "interrupted"
                 result.files = _write_all(rd, result, state, scn, plot, f"interrupted by {what} after {len(state.rows)} "
                                           f"of {len(points)} runs: the finished rows are kept; continue with --resume")
+            raise
+        except Exception as exc:              # (a full disk, no memory): not left 'running'
+            _failed(rd, result, state, scn, exc, len(points))
             raise
         with held_signals():                  # the last files complete, then a signal that came
             result.status = "complete"
@@ -331,6 +336,20 @@ def _one_process(scn):
         raise ParallelError(f"{scn.file}: a sweep runs its grid points one after another in one process; it "
                             f"does not run under mpirun ({n} ranks): run core-se3 sweep without mpirun, or each "
                             "point over the ranks with mpirun core-se3 run")
+
+
+def _failed(rd, result, state, scn, exc, n):
+    """sweep.json of a sweep stopped by an error its points do not catch (an OSError writing its
+    files, a MemoryError): status 'failed' and the error, its finished rows kept (sweep.json
+    said 'running' for ever).  Written as far as it can be: the error itself may be the disk's."""
+    with held_signals():
+        result.status = "failed"
+        try:
+            write_status(rd.file("sweep.json"), result, scn, state,
+                         f"failed after {len(state.rows)} of {n} runs: {type(exc).__name__}: {exc}; the finished "
+                         "rows are kept: continue with --resume")
+        except OSError:
+            pass
 
 
 def _write_all(rd, result, state, scn, plot, message=None):
