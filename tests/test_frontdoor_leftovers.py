@@ -297,3 +297,19 @@ def test_a_sweep_stopped_by_an_error_says_failed_not_running(tmp_path, monkeypat
     status = json.load(open(os.path.join(out, "sweep.json")))
     assert status["status"] == "failed" and status["rows"] == 1
     assert "failed after 1 of 2 runs: MemoryError: no room" in status["error"]
+
+
+def test_a_hemisphere_hole_in_radians_warns():
+    """``hole_deg`` is the one generator angle in degrees: 0.314 (the benchmark's 18 degrees given
+    in radians) made a 0.3-degree hole, its elements 190 times longer than wide, silently.  Now a
+    warning at mesh.hole_deg below a degree; the benchmark's 18 says nothing."""
+    import numpy as np
+    hits = {}
+    for hole, aspect in ((0.3, 190.36), (18.0, 2.595)):
+        scn = load(doc(mesh={"generator": "hemisphere_quarter", "R": 10.0, "hole_deg": hole, "nt": 4, "nf": 4},
+                       edges={}, probes=[], loads=[]))
+        X = scn.mesh.X[scn.mesh.quads]
+        a, b = (np.linalg.norm(X[:, k] - X[:, 0], axis=1) for k in (1, 3))
+        assert (np.maximum(a, b) / np.minimum(a, b)).max() == pytest.approx(aspect, rel=1e-3)
+        hits[hole] = [str(w) for w in scn.warnings if "[mesh.hole_deg]" in str(w)]
+    assert hits[18.0] == [] and len(hits[0.3]) == 1 and "0.3 rad is 17.19 degrees" in hits[0.3][0]

@@ -319,6 +319,11 @@ def _angles(v, spec):
             v.warn(f"mesh.{name}", f"{name} = {a:g} rad is more than a turn: it is in radians ({a:g} degrees is "
                                    f"{np.radians(a):.6g} rad; {a:g} rad places the mesh at {np.degrees(a) % 360:.4g} "
                                    "degrees)")
+    hole = spec["mesh"].get("hole_deg") if spec["mesh"].get("generator") == "hemisphere_quarter" else None
+    if hole is not None and hole < 1.0:         # the one angle in degrees: radians by mistake?
+        v.warn("mesh.hole_deg", f"hole_deg = {hole:g} degrees: hole_deg is in degrees ({hole:g} rad is "
+                                f"{np.degrees(hole):.4g} degrees); a hole under a degree makes the elements at it "
+                                "slivers (at 0.3 degrees and nt = nf: 190 times longer than wide)")
     for key, angle in found:
         turns = abs(float(angle)) / (2 * np.pi)
         if turns > TURNS_MAX:
