@@ -81,7 +81,8 @@ def test_run_check_of_a_valid_sweep_says_its_points(tmp_path, capsys):
 def test_sweep_resume_where_there_is_no_sweep_is_refused(tmp_path, capsys):
     """``sweep --resume`` into a directory that does not exist, or holds no sweep, started a fresh
     sweep silently (exit 0: a misspelt --out ran the whole grid again, elsewhere); ``run --resume``
-    refused, but created the directory.  Now both refuse, naming the directory, and create nothing."""
+    refused, but created the directory (and, in a user's directory, left its manifest there).  Now
+    both refuse, naming the directory, and create nothing."""
     path = write(tmp_path, doc())
     for cmd, extra in (("run", []), ("sweep", ["--set", "material.E=1e6,2e6"])):
         new = tmp_path / f"new-{cmd}"
@@ -94,6 +95,13 @@ def test_sweep_resume_where_there_is_no_sweep_is_refused(tmp_path, capsys):
     assert cli.main(["sweep", path, "--resume", "--out", str(empty), "-q", "--set", "material.E=1e6,2e6"]) == 2
     assert f"nothing to resume: {empty} holds no sweep" in capsys.readouterr().err
     assert not os.path.exists(empty / "sweep.csv")
+    mine = tmp_path / "mine"                   # a user's directory: --resume by mistake left a manifest there
+    mine.mkdir()
+    (mine / "notes.txt").write_text("mine")
+    for cmd, extra in (("run", []), ("sweep", ["--set", "material.E=1e6"])):
+        assert cli.main([cmd, path, "--resume", "--out", str(mine), "-q", *extra]) == 2
+        assert f"nothing to resume: {mine} holds no {cmd} (no file core-se3 wrote)" in capsys.readouterr().err
+        assert os.listdir(mine) == ["notes.txt"]
     with pytest.raises(CheckpointError, match="nothing to resume"):
         scenario.sweep(load(doc()), {"material.E": [1e6]}, out=str(tmp_path / "py"), plot=False, resume=True)
 

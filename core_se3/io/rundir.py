@@ -159,6 +159,10 @@ class RunDirectory:
             present = self._walk()
             if listed is None and resume:       # a run of an older version: its files by name
                 listed = [f for f in present if any(fnmatch.fnmatch(f, p) for p in adopt)]
+                if not listed:                  # refused before a manifest is left among the user's files
+                    raise RunDirectoryError(f"nothing to resume: {self.path} holds no {self.kind} (no file core-se3 "
+                                            f"wrote); give the directory of the {self.kind} to continue, or start one "
+                                            "without --resume")
             listed = listed or []
             ours = set(listed) | {MANIFEST, LOCK}
             self.previous = [f for f in listed if f in present]
