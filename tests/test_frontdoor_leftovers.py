@@ -321,3 +321,22 @@ def test_a_hemisphere_hole_in_radians_warns():
         assert (np.maximum(a, b) / np.minimum(a, b)).max() == pytest.approx(aspect, rel=1e-3)
         hits[hole] = [str(w) for w in scn.warnings if "[mesh.hole_deg]" in str(w)]
     assert hits[18.0] == [] and len(hits[0.3]) == 1 and "0.3 rad is 17.19 degrees" in hits[0.3][0]
+
+
+@pytest.mark.parametrize("cmd", ["run", "sweep", "check-mesh"])
+def test_ctrl_c_while_a_scenario_is_read_is_one_line(tmp_path, capsys, monkeypatch, cmd):
+    """Ctrl-C while a scenario was read and validated (a large mesh file, a refinement, a sweep's
+    grid) ended ``run``, ``sweep`` and ``check-mesh`` with a Python traceback; now one line and
+    exit status 130, as an interrupted run's, saying that nothing was written."""
+    from core_se3.cli import scenario as cs
+
+    def stop(*a, **k):
+        raise KeyboardInterrupt
+    monkeypatch.setattr(cs, "_load_quietly", stop)
+    path = write(tmp_path, doc())
+    extra = {"run": [], "sweep": ["--set", "material.E=1e6"], "check-mesh": []}[cmd]
+    assert cli.main([cmd, path, *extra]) == 130
+    err = capsys.readouterr().err
+    said = "the check stopped after 0 mesh(es)" if cmd == "check-mesh" else \
+        "it stopped while reading and checking the scenario: nothing was written"
+    assert f"interrupted (SIGINT): {said}" in err and "Traceback" not in err

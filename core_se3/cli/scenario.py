@@ -130,6 +130,10 @@ def _preamble(scn, quiet):
               f"(span L = {n['span']:.4g}, E = {n['E']:.4g}, h = {n['h']:.4g})")
 
 
+# what an interrupt while a scenario is read and validated (a large mesh file, a refinement) left:
+# one line, exit status 130/143, not a traceback
+_UNREAD = "it stopped while reading and checking the scenario: nothing was written"
+
 # the warnings a run prints as ``warning:`` lines: the scenario's and those Problem.solve gives on
 # its final state (model.solving.warn_final_state)
 _RUN_WARNINGS = (ScenarioWarning, SupportWarning, MeshWarning)
@@ -179,6 +183,8 @@ def _check(args, scn):
                 points = check_sweep(scn)[1]
         except CoreSE3Error as exc:
             return error_code(exc)
+        except KeyboardInterrupt as exc:
+            return interrupted(exc, "it stopped while checking the [sweep] points: nothing was written")
     print(f"{args.scenario}: valid ({scn.mesh.n_elements} elements, {scn.mesh.n_nodes} nodes, "
           f"{len(scn.spec['supports'])} supports, {len(scn.spec['loads'])} loads, "
           f"{len(scn.spec['magnets'])} magnets, {scn.solver['steps']} steps)")
@@ -243,6 +249,8 @@ def scenario_run(args):
         scn = _open(args)
     except CoreSE3Error as exc:
         return error_code(exc)
+    except KeyboardInterrupt as exc:
+        return interrupted(exc, _UNREAD)
     _preamble(scn, args.quiet)
     if args.check:
         return _check(args, scn)
@@ -429,6 +437,8 @@ def scenario_sweep(args):
         grid = _grid(args, scn)
     except CoreSE3Error as exc:
         return error_code(exc)
+    except KeyboardInterrupt as exc:
+        return interrupted(exc, _UNREAD)
     _preamble(scn, args.quiet)
     progress = True if args.progress else (False if args.quiet else None)
     with _warnings_once(scn.warnings, _RUN_WARNINGS):
@@ -460,6 +470,9 @@ def mesh_check(args):
         scn = _open(args)
     except CoreSE3Error as exc:
         return _check_failed(args, exc, known_output=False)
+    except KeyboardInterrupt as exc:        # --json PATH replaced only where it is an earlier check's
+        return _check_interrupted(args, exc) if not args.json or _earlier_check(args.json) else \
+            interrupted(exc, _UNREAD)
     clash = (_input_at(args.json, scn, args) or (None if _earlier_check(args.json) else
                                                   "a file that is not an earlier check's JSON")) if args.json else None
     if clash is not None:
