@@ -340,3 +340,30 @@ def test_ctrl_c_while_a_scenario_is_read_is_one_line(tmp_path, capsys, monkeypat
     said = "the check stopped after 0 mesh(es)" if cmd == "check-mesh" else \
         "it stopped while reading and checking the scenario: nothing was written"
     assert f"interrupted (SIGINT): {said}" in err and "Traceback" not in err
+
+
+def test_a_users_files_in_a_linked_folder_are_never_overwritten(tmp_path):
+    """``vtu`` a link to a user's folder holding step_0001.vtu ('MY DATA'): the directory's walk
+    did not enter linked folders, so the claim saw no foreign file and the run -- even with
+    --force, which promises never to overwrite one -- replaced the user's file by its VTU.  Now
+    the walk enters linked folders (each real folder once: a link back to an ancestor does not
+    loop), the run is refused, and a file this tool did not write found at a name it is about to
+    write (one put there during the run) is refused too."""
+    from core_se3.errors import CheckpointError as RunDirError
+    from core_se3.io.rundir import RunDirectory
+    user = tmp_path / "user"
+    user.mkdir()
+    (user / "step_0001.vtu").write_text("MY DATA")
+    out = tmp_path / "o"
+    out.mkdir()
+    os.symlink(user, out / "vtu")
+    os.symlink(out, user / "back")                   # a loop through the link
+    path = write(tmp_path, doc(output={"vtu": True, "plots": False, "picture": False}, solver={"steps": 2}))
+    for extra in ([], ["--force"]):
+        assert cli.main(["run", path, "--out", str(out), "-q", *extra]) == 2
+        assert (user / "step_0001.vtu").read_text() == "MY DATA"
+    with RunDirectory(str(tmp_path / "r"), "run").claim() as rd:
+        (tmp_path / "r" / "results.json").write_text("the user's, put there during the run")
+        with pytest.raises(RunDirError, match="holds results.json, which core-se3 did not write"):
+            rd.file("results.json")
+    assert (tmp_path / "r" / "results.json").read_text() == "the user's, put there during the run"

@@ -223,6 +223,11 @@ class RunDirectory:
         if rel.startswith("..") or os.path.isabs(rel):
             raise ValueError(f"{relative!r} is not inside the run directory")
         if rel not in self.files:
+            # the last guard of a file this tool did not write: one the claim could not see (in a
+            # folder linked in from elsewhere) or put there since
+            if os.path.lexists(os.path.join(self.path, rel)):
+                raise RunDirectoryError(f"{self.path} holds {rel}, which core-se3 did not write: the {self.kind} "
+                                        f"would overwrite it; move it away, or choose another {self.option}")
             self.files.append(rel)
             self._write_manifest()
         return os.path.join(self.path, rel)
@@ -304,8 +309,16 @@ class RunDirectory:
         write_json_atomic(self.manifest_path, dict(tool="core-se3", kind=self.kind, files=sorted(self.files)))
 
     def _walk(self):
-        out = []
-        for root, dirs, files in os.walk(self.path):
+        """Every file under the directory, through folders linked in from elsewhere too (a ``vtu``
+        that is a link to a user's folder: its files were overwritten, even with --force), each
+        real folder once (a link to an ancestor does not loop)."""
+        out, seen = [], set()
+        for root, dirs, files in os.walk(self.path, followlinks=True):
+            real = os.path.realpath(root)
+            if real in seen:
+                dirs[:] = []
+                continue
+            seen.add(real)
             for f in files:
                 out.append(os.path.relpath(os.path.join(root, f), self.path))
         return sorted(out)
