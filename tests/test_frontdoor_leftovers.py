@@ -367,3 +367,20 @@ def test_a_users_files_in_a_linked_folder_are_never_overwritten(tmp_path):
         with pytest.raises(RunDirError, match="holds results.json, which core-se3 did not write"):
             rd.file("results.json")
     assert (tmp_path / "r" / "results.json").read_text() == "the user's, put there during the run"
+
+
+def test_the_walk_enters_only_the_linked_folders_a_run_writes(tmp_path):
+    """The walk that finds the user's files follows a link only into a folder the run writes
+    (vtu), not into a linked data set beside the run (it would list every file of it)."""
+    from core_se3.io.rundir import RunDirectory
+    from core_se3.scenario.sinks import RUN_FILES
+    data = tmp_path / "data"
+    (data / "deep").mkdir(parents=True)
+    (data / "deep" / "x.bin").write_text("")
+    out = tmp_path / "o"
+    out.mkdir()
+    os.symlink(data, out / "dataset")
+    os.symlink(data, out / "vtu")
+    rd = RunDirectory(str(out), "run", RUN_FILES)
+    assert rd._walk() == [os.path.join("vtu", "deep", "x.bin")]
+    assert rd._written_in("vtu") and not rd._written_in("dataset") and not rd._written_in("vtu/deep")

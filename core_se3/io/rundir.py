@@ -309,9 +309,10 @@ class RunDirectory:
         write_json_atomic(self.manifest_path, dict(tool="core-se3", kind=self.kind, files=sorted(self.files)))
 
     def _walk(self):
-        """Every file under the directory, through folders linked in from elsewhere too (a ``vtu``
-        that is a link to a user's folder: its files were overwritten, even with --force), each
-        real folder once (a link to an ancestor does not loop)."""
+        """Every file under the directory, and those of folders linked in from elsewhere where
+        the run writes (a ``vtu`` that is a link to a user's folder: its files were overwritten,
+        even with --force), each real folder once (a link to an ancestor does not loop); other
+        linked folders are not entered (a link to a large data set beside the run)."""
         out, seen = [], set()
         for root, dirs, files in os.walk(self.path, followlinks=True):
             real = os.path.realpath(root)
@@ -319,9 +320,18 @@ class RunDirectory:
                 dirs[:] = []
                 continue
             seen.add(real)
+            rel = os.path.relpath(root, self.path)
+            dirs[:] = [d for d in dirs if not os.path.islink(os.path.join(root, d))
+                       or self._written_in(os.path.normpath(os.path.join(rel, d)))]
             for f in files:
                 out.append(os.path.relpath(os.path.join(root, f), self.path))
         return sorted(out)
+
+    def _written_in(self, folder):
+        """True if the run writes into ``folder`` (relative) or below it (its ``patterns``)."""
+        parts = folder.split(os.sep)
+        return any(len(p.split("/")) > len(parts) and all(fnmatch.fnmatch(a, b) for a, b in zip(parts, p.split("/")))
+                   for p in self.patterns)
 
     @staticmethod
     def _temporary(f, ours):
