@@ -384,3 +384,14 @@ def test_the_walk_enters_only_the_linked_folders_a_run_writes(tmp_path):
     rd = RunDirectory(str(out), "run", RUN_FILES)
     assert rd._walk() == [os.path.join("vtu", "deep", "x.bin")]
     assert rd._written_in("vtu") and not rd._written_in("dataset") and not rd._written_in("vtu/deep")
+
+
+@pytest.mark.parametrize("solver,said", [({"control": "linear"}, "a linear analysis at load factor 1)"),
+                                         ({"load_factors": [0.25, 0.5, 1.5]}, "3 steps to load factor 1.5)"),
+                                         ({"steps": 4, "lam_end": 2.0}, "4 steps to load factor 2)")])
+def test_run_check_states_the_solve_it_validated(tmp_path, capsys, solver, said):
+    """--check's summary gave '[solver] steps' whatever the solve: '10 steps' (the default of an
+    unused key) for a linear analysis, and for explicit load_factors; now the solve itself."""
+    path = write(tmp_path, doc(solver=solver))
+    assert cli.main(["run", path, "--check", "-q"]) == 0
+    assert said in capsys.readouterr().out

@@ -187,7 +187,7 @@ def _check(args, scn):
             return interrupted(exc, "it stopped while checking the [sweep] points: nothing was written")
     print(f"{args.scenario}: valid ({scn.mesh.n_elements} elements, {scn.mesh.n_nodes} nodes, "
           f"{len(scn.spec['supports'])} supports, {len(scn.spec['loads'])} loads, "
-          f"{len(scn.spec['magnets'])} magnets, {scn.solver['steps']} steps)")
+          f"{len(scn.spec['magnets'])} magnets, {_path_summary(scn)})")
     if points is not None:
         print(f"  sweep: {len(points)} point(s) of {', '.join(scn.spec['sweep'])} valid (core-se3 sweep runs them)")
     est = estimate(scn)
@@ -198,6 +198,18 @@ def _check(args, scn):
               f"machine's {have / 2 ** 30:.3g} GiB: coarsen the mesh, or run it on more memory (mpirun -n N "
               "shares it over the ranks' machines)", file=sys.stderr)
     return 0
+
+
+def _path_summary(scn):
+    """The solve --check announces: the load steps (their number, from load_factors too), a linear
+    analysis or an arc-length path, to the final load factor (it said '10 steps', the default of
+    an unused key, for a linear analysis)."""
+    s, lams = scn.solver, scn.load_factors()
+    if s["control"] == "linear":
+        return f"a linear analysis at load factor {lams[-1]:g}"
+    if s["control"] == "arclength":
+        return f"arc length to load factor {s['lam_end']:g}, at most {s['max_steps']} points"
+    return f"{len(lams)} steps to load factor {lams[-1]:g}"
 
 
 def _open(args):
@@ -227,7 +239,7 @@ def _sweep_stopped(scn, out):
     import os
     from ..scenario.runner import output_directory
     if os.path.exists(os.path.join(output_directory(scn, out, "-sweep"), "sweep.npz")):
-        return ("the finished runs are in sweep.csv (sweep.json says where it stopped): continue with --resume")
+        return "the finished runs are in sweep.csv (sweep.json says where it stopped): continue with --resume"
     return "it stopped before its first finished run: nothing to continue; run it again (without --resume)"
 
 
