@@ -349,7 +349,7 @@ def _note_passed(checks, eq, result):
 def _unchanged_step(rec, eq, g, g_whole, lam):
     """The StepResult of a target the path already stood at (no try)."""
     ev, _, _ = eq.evaluate(g, lam, tangent=False)
-    stored = rec.step(lam, g_whole, 0, [], eq.forces(ev))
+    stored = rec.step(lam, g_whole, 0, [], eq.forces(ev), local=_local(eq, g))
     stored.attempts, stored.linear_solves = 0, 0
     return stored
 
@@ -463,7 +463,9 @@ def _friction_probe(opts, eq):
     loads = [ld for ld in eq.loads if getattr(ld, "path_dependent", False) and hasattr(ld, "slip_status")]
     if not (opts.friction_check and loads) or eq.distributed or eq.stateful:
         return None
-    return FrictionProbe(loads, eq.problem.mesh.g0[:, :3, 3], opts.friction_tol, halving=opts.friction_halving)
+    # the displacements it scales by are taken in the iterate's coordinates (a far part's: relative)
+    return FrictionProbe(loads, eq.local_frames(eq.problem.mesh.g0)[:, :3, 3], opts.friction_tol,
+                         halving=opts.friction_halving)
 
 
 def _split_step(problem, hooks, g_whole, lam, lam_try, target, dlam, opts, result):
@@ -600,13 +602,19 @@ def _limit_point(eq, switches, k_ref, out, g, lam, lam_try, timer, result):
     return k_ref
 
 
+def _local(eq, g):
+    """The recorder's ``local`` of the iterate g: None when it is held in the problem's
+    coordinates, else (g, its origin, the loads evaluated on it: ``NewtonEquations.loads``)."""
+    return None if getattr(eq, "origin", None) is None else (g, eq.origin, eq.loads)
+
+
 def _record(rec, eq, opts, out, g_start, g, g_whole, lam, tries, checks, at_target, steps):
     """The StepResult of the accepted try ``out`` at a target, or of any sub-step with
     record_substeps (appended to ``steps``; ``tries``: those since the last recorded one), else
     None after moving the probes' rotation record on."""
     # the try's start and increments unwrap a probe turned by more than pi
     turn = () if eq.distributed or np.isscalar(out.eta_sum) else (g_start, out.eta_sum)
-    local = None if getattr(eq, "origin", None) is None else (g, eq.origin)
+    local = _local(eq, g)
     if at_target or opts.record_substeps:
         st = rec.step(lam, g_whole, len(out.hist) - 1, out.hist, eq.forces(out.ev), None, turn, local)
         st.residual_floor = min(out.floor, 1e300)      # finite in JSON when all forces are 0
