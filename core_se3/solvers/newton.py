@@ -259,6 +259,7 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
     hooks = _Hooks(eq)
     for i, ld in enumerate(hooks.aug):
         ld.set_multipliers(None if state.multipliers is None else state.multipliers[i])
+    _close_steps(hooks)                          # the start is a stored state: slips count from it
     # the mixed iteration's stresses start every try from those of the converged state (a
     # function of g alone, so a restart from a NewtonState repeats the same computations)
     mip = opts.iteration == "mip" and eq.mixed and not stateful
@@ -302,6 +303,7 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
                              result.steps)
                 if st is not None:               # a target's step is yielded (a sub-step's is in result.steps)
                     n_recorded = len(tries)
+                    _close_steps(hooks)
                     stored = st if at_target else None
                 if len(hist) - 1 <= 6 and abs(dlam) < abs(dlam_nominal):
                     dlam = min(abs(dlam) * 2, abs(dlam_nominal)) * np.sign(dlam_nominal)
@@ -370,6 +372,15 @@ class _Hooks:
         # starts with a moving obstacle: nodes in contact carried along (friction)
         self.predictors = hooked_loads(eq, "predict_start") if not eq.stateful else []
         self.turn_fits = None        # the target the turn left was measured to fit to (_turn_left_fits)
+
+
+def _close_steps(hooks):
+    """A state was stored: the path-dependent loads count the next step's slip from it
+    (``CoulombFriction.close_step``: a stored step's slip runs through all its sub-steps)."""
+    for ld in hooks.accepts:
+        close = getattr(ld, "close_step", None)
+        if close is not None:
+            close()
 
 
 def _friction_start(checks, state, result):
