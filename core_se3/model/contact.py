@@ -480,15 +480,6 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
                 "holds: no equilibrium has the node outside it; keep the obstacle's motion off the held nodes "
                 "(or release them)")
 
-    def relocated(self, c, g0):
-        """This load in the coordinates x' = x - c of a part far from the origin, evaluated on
-        frames relative to c (``model.contact_frame.RelocatedContact``; g0 the reference frames
-        in them), or None when the obstacle cannot be relocated (``Obstacle.relocated``: a user's
-        SDF of absolute coordinates)."""
-        from .contact_frame import RelocatedContact
-        obstacle = self.obstacle.relocated(c)
-        return None if obstacle is None else RelocatedContact(self, c, obstacle, g0)
-
     @property
     def node_ids(self):
         """The mesh ids of the contact nodes, in messages (``nodes``; a rank's part of the load,

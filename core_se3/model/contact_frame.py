@@ -24,14 +24,14 @@ import numpy as np
 
 from .contact import ContactLoad
 
-__all__ = ["RelocatedContact"]
+__all__ = ["RelocatedContact", "relocated_contact"]
 
 _PUBLISHED = ("gap_error", "step_stats", "_step_at", "_step_slip", "_step_stick", "_lam_update", "_stuck")
 
 
 class RelocatedContact(ContactLoad):
     """The contact load ``whole`` in coordinates x' = x - c, evaluated on frames whose positions
-    are relative to c (module docstring); made by ``ContactLoad.relocated``.
+    are relative to c (module docstring); made by :func:`relocated_contact`.
 
     Parameters
     ----------
@@ -51,7 +51,7 @@ class RelocatedContact(ContactLoad):
     >>> p = Problem(mesh.rectangle(1.0, 0.2, 2, 1, x0=1e6), Material(1e4, 0.0, 0.02))
     >>> c = p.add_obstacle("half_space", point=(0, 0, -0.05), normal=(0, 0, 1), friction=0.3)
     >>> g0 = p.mesh.g0.copy(); g0[:, 0, 3] -= 1e6
-    >>> near = c.relocated(np.array([1e6, 0.0, 0.0]), g0)
+    >>> near = relocated_contact(c, np.array([1e6, 0.0, 0.0]), g0)
     >>> near.y_a0[:, 0].tolist(), bool(np.allclose(near.multipliers(), c.multipliers()))
     ([0.0, 0.5, 1.0, 0.0, 0.5, 1.0], True)
     """
@@ -100,3 +100,25 @@ class RelocatedContact(ContactLoad):
     def accept_state(self, g, lam):
         super().accept_state(g, lam)
         self._publish()
+
+
+def relocated_contact(load, c, g0):
+    """The contact load ``load`` in the coordinates x' = x - c of a part far from the origin,
+    evaluated on frames relative to c (:class:`RelocatedContact`; g0 the reference frames in
+    them), or None: ``load`` is no ContactLoad, or its obstacle cannot be relocated
+    (``Obstacle.relocated``: a user's SDF of absolute coordinates).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import Problem, Material, mesh
+    >>> from core_se3.model import UserSDF
+    >>> p = Problem(mesh.rectangle(1.0, 0.2, 2, 1, x0=1e6), Material(1e4, 0.0, 0.02))
+    >>> lid = p.add_obstacle(UserSDF(lambda y: 1.0 - y[:, 2], lambda y: np.tile([0.0, 0.0, -1.0], (len(y), 1))))
+    >>> relocated_contact(lid, np.array([1e6, 0.0, 0.0]), p.mesh.g0) is None
+    True
+    """
+    if not isinstance(load, ContactLoad):
+        return None
+    obstacle = load.obstacle.relocated(c)
+    return None if obstacle is None else RelocatedContact(load, c, obstacle, g0)

@@ -257,9 +257,7 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
     timer = _Timer(result)
     trier = NewtonTry(problem, opts, solver, timer, eq)
     hooks = _Hooks(eq)
-    for i, ld in enumerate(hooks.aug):
-        ld.set_multipliers(None if state.multipliers is None else state.multipliers[i])
-    _close_steps(hooks)                          # the start is a stored state: slips count from it
+    _start_loads(hooks, state)
     # the mixed iteration's stresses start every try from those of the converged state (a
     # function of g alone, so a restart from a NewtonState repeats the same computations)
     mip = opts.iteration == "mip" and eq.mixed and not stateful
@@ -372,6 +370,14 @@ class _Hooks:
         # starts with a moving obstacle: nodes in contact carried along (friction)
         self.predictors = hooked_loads(eq, "predict_start") if not eq.stateful else []
         self.turn_fits = None        # the target the turn left was measured to fit to (_turn_left_fits)
+
+
+def _start_loads(hooks, state):
+    """The loads' multipliers of the start ``state`` (None: their cold start); the start is a
+    stored state, the next step's slip counts from it."""
+    for i, ld in enumerate(hooks.aug):
+        ld.set_multipliers(None if state.multipliers is None else state.multipliers[i])
+    _close_steps(hooks)
 
 
 def _close_steps(hooks):

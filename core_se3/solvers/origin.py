@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..model.contact_frame import relocated_contact
+
 __all__ = ["part_origin", "mesh_origin", "frames_origin", "relocation", "far_part_hint"]
 
 
@@ -51,9 +53,9 @@ def relocation(problem):
     """(c, loads): the origin load stepping holds ``problem``'s iterate relative to, and the loads
     to evaluate on such frames. c = :func:`part_origin` when every load is translation
     invariant (loads None: the problem's own); else :func:`mesh_origin`, when each load that is
-    not has a form in the coordinates x' = x - c, ``load.relocated(c, g0)`` (g0 the reference
-    frames in them; contact with an obstacle of a built-in kind,
-    ``model.contact_frame.RelocatedContact``), loads the problem's with those in their place;
+    not has a form in the coordinates x' = x - c (contact with an obstacle of a built-in kind,
+    ``model.contact_frame.relocated_contact``, or a load's own method ``relocated(c, g0)``, g0
+    the reference frames in them), loads the problem's with those in their place;
     (None, None) otherwise (the iterate is held in the problem's coordinates).
 
     Example
@@ -75,12 +77,20 @@ def relocation(problem):
     g0[:, :3, 3] -= c
     loads = []
     for ld in problem.loads:
-        move = getattr(ld, "relocated", None)
-        moved = ld if getattr(ld, "translation_invariant", False) else move(c, g0) if callable(move) else None
+        moved = _relocated(ld, c, g0)
         if moved is None:
             return None, None
         loads.append(moved)
     return c, loads
+
+
+def _relocated(load, c, g0):
+    """``load`` in the coordinates x' = x - c (itself when translation invariant; a load's own
+    ``relocated(c, g0)``, or contact's, ``model.contact_frame.relocated_contact``), or None."""
+    if getattr(load, "translation_invariant", False):
+        return load
+    move = getattr(load, "relocated", None)
+    return move(c, g0) if callable(move) else relocated_contact(load, c, g0)
 
 
 def frames_origin(problem, g, origin=None):
@@ -132,8 +142,7 @@ def far_part_hint(problem):
         return ""
     g0 = problem.mesh.g0.copy()
     g0[:, :3, 3] -= c
-    fixed = [ld for ld in problem.loads if not getattr(ld, "translation_invariant", False)
-             and not (callable(getattr(ld, "relocated", None)) and ld.relocated(c, g0) is not None)]
+    fixed = [ld for ld in problem.loads if _relocated(ld, c, g0) is None]
     x = problem.mesh.X[problem.mesh.edge_nodes]
     h = float(np.median(np.linalg.norm(x[:, 1] - x[:, 0], axis=1))) or problem.length_scale
     d = float(np.linalg.norm(c))
