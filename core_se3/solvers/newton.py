@@ -449,7 +449,9 @@ def _refused(eq, hooks, checks, saved, result, dlam_nominal, here):
         ld.set_multipliers(m)
     if checks.snap is not None:
         checks.snap.probes = list(snap_probes)
-    del result.steps[n_steps:]
+    if len(result.steps) > n_steps:          # recorded sub-steps taken back: the start was the last stored
+        del result.steps[n_steps:]
+        _close_steps(hooks)
     return lam, g, g_whole, stress_conv, k_ref, np.sign(dlam_nominal) * abs(checks.friction.caps[-1][1])
 
 
