@@ -12,9 +12,12 @@ lengths from the origin stalled Newton at its first step).
 The relocated load is a copy of the problem's (``whole``) that owns the state during the solve
 and hands it back after each change (multipliers, penalty factors, tractions, anchors moved by
 +c, the gap error and the step's stick/slip record), so that the problem's load reports the
-state as ever; :meth:`RelocatedContact.multipliers` and ``set_multipliers`` speak the whole
-load's convention (anchors in the problem's coordinates): restart points and checkpoints are
-the same in either form.
+state as ever.  Its own :meth:`~RelocatedContact.multipliers` (the solver's saves and restores
+of a try) keep the anchors relative to c, exactly; restart points and records take the whole
+load's (anchors in the problem's coordinates, ``whole.multipliers()``), and a start from one
+comes in through :meth:`~RelocatedContact.from_whole`.  (Saved and restored through the whole
+load's form, the anchors moved by eps |c| at every refused try: a clamped node resting on a
+rough floor at d = 0 then counted as slipping by 6e-11 at 1e6 from the origin.)
 """
 from __future__ import annotations
 
@@ -52,7 +55,7 @@ class RelocatedContact(ContactLoad):
     >>> c = p.add_obstacle("half_space", point=(0, 0, -0.05), normal=(0, 0, 1), friction=0.3)
     >>> g0 = p.mesh.g0.copy(); g0[:, 0, 3] -= 1e6
     >>> near = relocated_contact(c, np.array([1e6, 0.0, 0.0]), g0)
-    >>> near.y_a0[:, 0].tolist(), bool(np.allclose(near.multipliers(), c.multipliers()))
+    >>> near.y_a0[:, 0].tolist(), bool(np.allclose(near.whole.multipliers(), c.multipliers()))
     ([0.0, 0.5, 1.0, 0.0, 0.5, 1.0], True)
     """
 
@@ -61,7 +64,7 @@ class RelocatedContact(ContactLoad):
         self.whole, self.shift, self.obstacle = whole, np.asarray(c, float), obstacle
         if self.mu > 0:
             self.y_a0 = self.placement(self.contact_points(g0), 0.0)
-        ContactLoad.set_multipliers(self, self._anchors_moved(whole.multipliers(), -self.shift))
+        ContactLoad.set_multipliers(self, self.from_whole(whole.multipliers()))
 
     def _anchors_moved(self, m, shift):
         """The multipliers ``m`` (the :meth:`multipliers` layout) with the anchors moved by
@@ -82,14 +85,15 @@ class RelocatedContact(ContactLoad):
             if key in self.__dict__:
                 setattr(w, key, getattr(self, key))
 
-    def multipliers(self):
-        """:meth:`ContactLoad.multipliers` in the whole load's coordinates (anchors moved by +c)."""
-        return self._anchors_moved(super().multipliers(), self.shift)
+    def from_whole(self, m):
+        """The whole load's multipliers ``m`` (a restart point: anchors in the problem's
+        coordinates) in this load's (anchors relative to c), for :meth:`set_multipliers`."""
+        return None if m is None else self._anchors_moved(m, -self.shift)
 
     def set_multipliers(self, lam=None):
-        """:meth:`ContactLoad.set_multipliers` from the whole load's coordinates; the state is
-        handed to the whole load."""
-        super().set_multipliers(None if lam is None else self._anchors_moved(lam, -self.shift))
+        """:meth:`ContactLoad.set_multipliers` (this load's coordinates); the state is handed to
+        the whole load."""
+        super().set_multipliers(lam)
         self._publish()
 
     def update_multipliers(self, g, lam):

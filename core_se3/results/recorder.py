@@ -359,7 +359,9 @@ class StepRecorder:
             fc = ld.evaluate(frames, lam, tangent=False).f
             f_app -= fc
             CF, CM = lab_totals(g, fc)
-            contact[ld.name] = dict(force=CF, moment=CM, multipliers=ld.multipliers(), **ld.report(frames, lam))
+            # the multipliers as the problem's load holds them (a relocated one's ``whole``)
+            contact[ld.name] = dict(force=CF, moment=CM, multipliers=getattr(ld, "whole", ld).multipliers(),
+                                    **ld.report(frames, lam))
         AF, AM = lab_totals(at, f_app)
         ell = self.ell
         return StepResult(lam, g.copy(), iterations, list(history), RF, RM, AF, AM, probes,

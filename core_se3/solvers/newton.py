@@ -320,7 +320,7 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
         if stored is None:                       # the target was already reached
             stored = _unchanged_step(rec, eq, g, g_whole, lam)
         timer.close()
-        state = NewtonState(lam, g_whole, dlam, k_ref, [ld.multipliers() for ld in hooks.aug] if hooks.aug else None,
+        state = NewtonState(lam, g_whole, dlam, k_ref, [_whole(ld).multipliers() for ld in hooks.aug] if hooks.aug else None,
                             checks.sign)
         yield NewtonStep(stored, state, tries)
 
@@ -373,11 +373,19 @@ class _Hooks:
 
 
 def _start_loads(hooks, state):
-    """The loads' multipliers of the start ``state`` (None: their cold start); the start is a
-    stored state, the next step's slip counts from it."""
+    """The loads' multipliers of the start ``state`` (None: their cold start; a restart point's
+    are the problem's loads', taken into a relocated load's coordinates); the start is a stored
+    state, the next step's slip counts from it."""
     for i, ld in enumerate(hooks.aug):
-        ld.set_multipliers(None if state.multipliers is None else state.multipliers[i])
+        m = None if state.multipliers is None else state.multipliers[i]
+        ld.set_multipliers(ld.from_whole(m) if hasattr(ld, "from_whole") else m)
     _close_steps(hooks)
+
+
+def _whole(load):
+    """The problem's load of an equations' load (itself, or the ``whole`` of a relocated or a
+    rank's contact, ``model.contact_frame``): restart points take its multipliers."""
+    return getattr(load, "whole", load)
 
 
 def _close_steps(hooks):
