@@ -83,6 +83,31 @@ def test_the_friction_keys_are_solver_options():
 def test_the_relaxations_keep_the_slip_of_the_step():
     """The friction check solves the slid state again at its load factor (33 relaxations in the
     1-step slide); the reported largest slip is the step's (the relaxations add up), as without
-    the check: main reported the last relaxation's alone, 1.6e-7 for the step's 1.711e-3."""
-    slip = [_run(1, **kw).steps[-1].contact["wall"]["largest_slip"] for kw in ({}, dict(friction_check=False))]
-    assert slip[1] > 1e-3 and abs(slip[0] / slip[1] - 1) < 1e-6, slip
+    the check: main reported the last relaxation's alone, 1.6e-7 for the step's 1.711e-3 (then
+    the last of its 16 sub-steps; now the step's whole slip: the wall's travel less the end's
+    final deflection, in either run -- they end 1.7e-5 apart, the hardening's error without the
+    check)."""
+    from core_se3.catalogue.cases_friction import PUSH_PARAMS, push_formula
+    travel = push_formula(PUSH_PARAMS)["travel"]
+    for kw in ({}, dict(friction_check=False)):
+        end = _run(1, **kw).steps[-1]
+        whole = travel - float(end.g[[40, 81], 2, 3].mean())
+        assert whole > 1e-3 and abs(end.contact["wall"]["largest_slip"] / whole - 1) < 1e-9, kw
+
+
+def test_the_largest_slip_of_a_step_is_its_whole_slip_however_it_was_split():
+    """While the end slides, the wall moves travel / 9 = 6.0843e-3 a step (9 steps of the slide)
+    and the end stays at s*: its slip over a step is the wall's motion.  The solver splits each
+    such step in 4 (cut-backs), and ``largest_slip`` was the last part's: 1.521e-3; in 1 step of
+    the slide (split in 16) 1.711e-3 for the end's whole slip, the travel less the end's final
+    deflection, 2.74045e-2.  Now the slip counts from the last stored step (``close_step``)
+    through every sub-step: both to 1e-9."""
+    from core_se3.catalogue.cases_friction import PUSH_PARAMS, push_formula
+    travel = push_formula(PUSH_PARAMS)["travel"]
+    nine, one = _run(9), _run(1)
+    for st in nine.steps[-4:]:
+        assert st.attempts > 4 and abs(st.contact["wall"]["largest_slip"] / (travel / 9) - 1) < 1e-9, \
+            st.contact["wall"]["largest_slip"]
+    end = one.steps[-1]
+    whole = travel - float(end.g[[40, 81], 2, 3].mean())
+    assert abs(end.contact["wall"]["largest_slip"] / whole - 1) < 1e-9, (end.contact["wall"]["largest_slip"], whole)

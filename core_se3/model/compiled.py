@@ -49,7 +49,7 @@ class CompiledEvaluation:
 
     def __init__(self, problem):
         self.problem = problem
-        self._parts = None
+        self._parts = self._frame_parts = None
         self._state = None            # (kernels, g) of the kernels' last evaluation
 
     def _linear_stress(self, kern, g, eta):
@@ -60,27 +60,33 @@ class CompiledEvaluation:
             self._state = (kern, g)
         return kern.linear_stress(np.ascontiguousarray(eta, dtype=float))
 
-    def parts(self, asm):
+    def parts(self, asm, loads=None):
         """(pattern, element kernels, [(load, compiled add or None)]) for the assembler, built
-        once and again when the loads change; None when the element has no kernels."""
+        once and again when the loads change; None when the element has no kernels.  ``loads``:
+        the problem's restated in other coordinates (``Problem.evaluate``'s frame_loads)."""
         prob = self.problem
+        slot = "_parts" if loads is None else "_frame_parts"     # each kept: no rebuilds as they alternate
+        loads = prob.loads if loads is None else loads
         # the objects themselves, compared by identity: their id()s alone are reused once they are
         # freed (a support added drops the assembler, or linear analysis evaluates on a temporary
         # one of all dofs, and the next one is often allocated at the same address: the old
         # pattern was kept, K 144 x 144 for 141 free dofs, a residual on 162 dofs for 144)
-        key = (asm, prob.element, tuple(prob.loads))
-        if self._parts is None or not _same_objects(self._parts[0], key):
+        key = (asm, prob.element, tuple(loads))
+        parts = getattr(self, slot)
+        if parts is None or not _same_objects(parts[0], key):
             pattern = asm.pattern()
             kern = prob.element.compiled(pattern)
-            loads = _compiled_loads(prob.loads, pattern) if kern is not None else []
-            self._parts = (key, None if kern is None else (pattern, kern, loads))
-        return self._parts[1]
+            loads = _compiled_loads(loads, pattern) if kern is not None else []
+            parts = (key, None if kern is None else (pattern, kern, loads))
+            setattr(self, slot, parts)
+        return parts[1]
 
-    def evaluate(self, asm, g, lam, tangent, out, stress=None):
+    def evaluate(self, asm, g, lam, tangent, out, stress=None, loads=None):
         """The problem's Evaluation at (g, lam), or None when the element has no kernels
-        (stress: a mixed element's independent stresses, see ``Problem.evaluate``)."""
+        (stress: a mixed element's independent stresses; loads: frame_loads, see
+        ``Problem.evaluate``)."""
         from ..kernels import add_blocks
-        parts = self.parts(asm)
+        parts = self.parts(asm, loads)
         if parts is None:
             return None
         pattern, kern, loads = parts

@@ -224,6 +224,27 @@ class CoulombFriction:
         norm = np.linalg.norm(t, axis=1)
         return status, t / np.where(norm > 0, norm, 1.0)[:, None]
 
+    def close_step(self):
+        """The state just accepted is a stored step (load stepping records it): the slip of the
+        next step counts from here (:meth:`step_slip`)."""
+        if self.mu > 0:
+            self._y_rec = self.y_a.copy()
+
+    def step_slip(self, x, n, lam, slip):
+        """The slip (k, 3) of the nodes at x (normals n) over the stored step that ends at lam:
+        their tangential motion relative to the obstacle since the last stored step
+        (:meth:`close_step`: the points of the obstacle they were at then, carried with it to
+        lam), through every sub-step the solver split the step into; ``slip`` (that of the last
+        accepted state alone) without a stored step to count from.  The step's ``largest_slip``
+        was its last sub-step's: the pushed cantilever sliding in 9 steps reported 1.52e-3 for
+        the wall's 6.08e-3 a step (each step split in 4), in 1 step 1.71e-3 for 2.7e-2."""
+        y = getattr(self, "_y_rec", None)
+        if y is None or len(y) != len(x):
+            return slip
+        T = self.obstacle.transform(lam)
+        v = x - (y @ T[:3, :3].T + T[:3, 3])
+        return v - np.einsum("ki,ki->k", n, v)[:, None] * n
+
     def accept_state(self, g, lam):
         """An accepted state (``Load.accept_state``): the friction history moves on -- the
         multipliers become the nodes' tractions there (obstacle frame) and the anchors their
@@ -240,9 +261,10 @@ class CoulombFriction:
             on = p > 0                   # the step's stick/slip record, before the anchors move
             # the hardening's share of the slipping nodes' friction (of the largest nodal friction)
             excess = self.hardening_excess(t, p, stick)
+            slid = np.linalg.norm(self.step_slip(x, n, lam, slip), axis=1)
             self.step_stats = dict(sticking=int(np.count_nonzero(on & stick)),
                                    slipping=int(np.count_nonzero(on & ~stick)),
-                                   largest_slip=float(np.linalg.norm(slip[on & ~stick], axis=1).max(initial=0.0)),
+                                   largest_slip=float(slid[on & (~stick | (slid > self.tol))].max(initial=0.0)),
                                    stick=np.where(on, stick.astype(float), np.nan),
                                    excess=float(self.largest(float(excess.max(initial=0.0)))),
                                    excess_node=int(self.nodes[int(np.argmax(excess))]) if len(excess) else -1)

@@ -97,6 +97,7 @@ class HalfSpace(Obstacle):
 
     kind = "half_space"
     flat = True                       # d is bilinear on a bilinear face: the nodes suffice
+    position_attribute = "point"     # relocated() moves it
 
     def __init__(self, point, normal, motion=None, name=None):
         super().__init__(motion, name)
@@ -128,6 +129,7 @@ class Sphere(Obstacle):
     """
 
     kind = "sphere"
+    position_attribute = "centre"     # relocated() moves it
 
     def __init__(self, centre, radius, inside=False, motion=None, name=None):
         super().__init__(motion, name)
@@ -166,6 +168,7 @@ class Cylinder(Obstacle):
     """
 
     kind = "cylinder"
+    position_attribute = "point"     # relocated() moves it
 
     def __init__(self, point, axis, radius, length=None, rounding=None, inside=False, motion=None,
                  name=None):
@@ -250,6 +253,7 @@ class Box(Obstacle):
     """
 
     kind = "box"
+    position_attribute = "centre"     # relocated() moves it
 
     def __init__(self, centre, half_sizes, rotation=None, rounding=None, motion=None, name=None):
         super().__init__(motion, name)

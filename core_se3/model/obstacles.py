@@ -36,6 +36,7 @@ Example
 """
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -46,7 +47,7 @@ from ..errors import ContactError, did_you_mean
 from ..registry import Kind, Registry
 
 __all__ = ["Obstacle", "ObstacleKind", "OBSTACLES", "register_obstacle", "obstacle_kind",
-           "make_obstacle", "rigid_transform", "translation", "rotation", "rigid_motion", "check_sdf"]
+           "make_obstacle", "rigid_transform", "translation", "rotation", "rigid_motion", "conjugated", "check_sdf"]
 
 
 def contact_error(message, param=None):
@@ -164,6 +165,27 @@ def rigid_motion(translate=None, axis=None, angle=0.0, point=(0.0, 0.0, 0.0), sc
     return lambda lam: tr(lam) @ rot(lam)
 
 
+def conjugated(motion, c):
+    """The motion ``motion`` seen in coordinates x' = x - c: lam -> S(-c) T(lam) S(c), S(v) the
+    translation by v, i.e. [[Q, t + Q c - c], [0, 1]] (a translation keeps its t exactly: Q c - c
+    = 0 for Q = I).
+
+    Example
+    -------
+    >>> T = conjugated(rotation((0.0, 0.0, 1.0), (1e6 + 1.0, 0.0, 0.0), np.pi), (1e6, 0.0, 0.0))(1.0)
+    >>> (np.round(T @ [0.0, 0.0, 0.0, 1.0], 9) + 0.0).tolist()     # about x' = 1: the origin goes to x' = 2
+    [2.0, 0.0, 0.0, 1.0]
+    """
+    c = np.asarray(c, float)
+
+    def T(lam):
+        out = np.array(motion(lam), float)
+        if out.shape == (4, 4):              # else left to Obstacle.transform's check, which names it
+            out[:3, 3] += out[:3, :3] @ c - c
+        return out
+    return T
+
+
 # ----------------------------------------------------------------------------- base class
 class Obstacle:
     """Base class of rigid obstacles (module docstring for the conventions).
@@ -204,6 +226,7 @@ class Obstacle:
     approximate_hessian = False
     thickness = np.inf
     flat = False
+    position_attribute = None        # the attribute holding the placement's point (for relocated)
 
     def __init__(self, motion=None, name=None):
         if motion is not None and not callable(motion):
@@ -236,6 +259,32 @@ class Obstacle:
     def distance(self, x, lam=0.0):
         """d (k,) at lab points x (k, 3) [length]."""
         return self.evaluate(x, lam)[0]
+
+    def relocated(self, c):
+        """This obstacle in the coordinates x' = x - c of a part far from the origin (load
+        stepping holds its iterate so, ``solvers.origin.relocation``): a copy with its placement
+        point (the attribute ``position_attribute`` names) moved by -c and its motion
+        :func:`conjugated`, so that the gaps of points near the part are taken without forming
+        their absolute positions; None when the kind names no placement point (a ``UserSDF`` of
+        absolute coordinates).
+
+        Example
+        -------
+        >>> from core_se3.model import make_obstacle
+        >>> ball = make_obstacle("sphere", centre=(1e6 + 0.5, 0.0, 0.0), radius=0.25)
+        >>> near = ball.relocated((1e6, 0.0, 0.0))
+        >>> near.centre.tolist(), float(near.distance([[0.5, 0.0, 0.3]])[0])
+        ([0.5, 0.0, 0.0], 0.04999999999999999)
+        """
+        key = self.position_attribute
+        if key is None:
+            return None
+        c = np.asarray(c, float)
+        moved = copy.copy(self)
+        setattr(moved, key, np.asarray(getattr(self, key), float) - c)
+        if self.motion is not None:
+            moved.motion = conjugated(self.motion, c)
+        return moved
 
     def local(self, y):
         """(d, n, H) at points y (k, 3) in the placement's (lab) coordinates."""

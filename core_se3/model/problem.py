@@ -627,7 +627,7 @@ class Problem:
                     np.add.at(Ke, ids, blocks)
         return f, Kn, Ke
 
-    def evaluate(self, g, lam, tangent=True, assembler=None, out=None, stress=None, loads=None):
+    def evaluate(self, g, lam, tangent=True, assembler=None, out=None, stress=None, loads=None, frame_loads=None):
         """The residual on the free dofs and, if asked, the tangent at (g, lam) (an
         :class:`Evaluation`); ``assembler``: another set of free dofs (default the problem's).
 
@@ -638,7 +638,10 @@ class Problem:
         otherwise the NumPy path sums the blocks (the reference).  stress: a mixed element's
         independent stresses for the geometric part of the tangent (the mixed iteration).
         loads: a subset of the problem's loads to evaluate instead of all (on the NumPy path;
-        linear analysis' reference stiffness without the loads' geometric stiffness)."""
+        linear analysis' reference stiffness without the loads' geometric stiffness).
+        frame_loads: the problem's loads restated in the coordinates of g, one for one (a far
+        part's iterate relative to its origin, ``solvers.origin.relocation``), evaluated in their
+        place on either backend."""
         asm = assembler or self.assembler()
         if asm.mesh is not self.mesh and not (asm.mesh.n_nodes == self.mesh.n_nodes
                                               and np.array_equal(asm.mesh.quads, self.mesh.quads)):
@@ -655,13 +658,14 @@ class Problem:
         if self.backend == "numba" and loads is None:
             if self._compiled is None:
                 self._compiled = CompiledEvaluation(self)
-            out_ev = self._compiled.evaluate(asm, g, lam, tangent, out, stress)
+            out_ev = self._compiled.evaluate(asm, g, lam, tangent, out, stress, frame_loads)
             if out_ev is not None:
                 return out_ev
         if tangent and self.backend_setting == "auto":
             _backend.charge(self.mesh.n_elements)          # the 'auto' rule's count
         ev = (self.element.evaluate(g, tangent=tangent, stress=stress) if stress is not None
               else self.element.evaluate(g, tangent=tangent))
+        loads = frame_loads if loads is None else loads
         fext, Kn_ext, Ke_ext = (self.external(g, lam, tangent=tangent) if loads is None       # the problem's loads
                                 else self.external(g, lam, tangent=tangent, loads=loads))
         scale = force_scale_with_loads(ev.force_scale, self.loads if loads is None else loads, self.length_scale)

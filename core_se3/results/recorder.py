@@ -324,7 +324,10 @@ class StepRecorder:
         (n, 4, 4) they act in and the moments are taken with (default g; linear analysis: the
         reference frames, where its equations balance); ``turn`` = (start, increments) of the
         Newton try that reached g, as for :meth:`probes`; ``local``: (the frames relative to
-        an origin, that origin) of the same state, which the probes read, see :meth:`probes`.
+        an origin, that origin) of the same state, which the probes read, see :meth:`probes`,
+        and optionally the problem's loads restated on those frames (a far part's contact,
+        ``solvers.origin.relocation``), whose forces and reports are then read there (from g, a
+        stiff contact penalty k turns the positions' round-off eps |x0| into forces k eps |x0|).
 
         The supports' penalty springs (``Load.support_force``) are support reactions: their
         forces, part of f_ext, count with the reactions, not the applied loads (a fourth entry of
@@ -351,11 +354,14 @@ class StepRecorder:
         sF, sM = max(sF, mags[0][0]), max(sM, mags[0][1])
         aF, aM = max(m[0] for m in mags[1:]), max(m[1] for m in mags[1:])
         contact = {}
-        for ld in (ld for ld in self.problem.loads if getattr(ld, "constraint_force", False)):
-            fc = ld.evaluate(g, lam, tangent=False).f
+        frames, loads = (local[0], local[2]) if local is not None and len(local) > 2 else (g, self.problem.loads)
+        for ld in (ld for ld in loads if getattr(ld, "constraint_force", False)):
+            fc = ld.evaluate(frames, lam, tangent=False).f
             f_app -= fc
             CF, CM = lab_totals(g, fc)
-            contact[ld.name] = dict(force=CF, moment=CM, multipliers=ld.multipliers(), **ld.report(g, lam))
+            # the multipliers as the problem's load holds them (a relocated one's ``whole``)
+            contact[ld.name] = dict(force=CF, moment=CM, multipliers=getattr(ld, "whole", ld).multipliers(),
+                                    **ld.report(frames, lam))
         AF, AM = lab_totals(at, f_app)
         ell = self.ell
         st = StepResult(lam, g.copy(), iterations, list(history), RF, RM, AF, AM, probes,

@@ -26,7 +26,11 @@ and the residual stalls far above its floor (at x0 = 1e4 Newton failed at the fi
 When every load is ``translation_invariant`` (its forces do not depend on where the shell is),
 the iterate is held relative to the part's origin (:func:`part_origin`, subtracted exactly):
 ``local_frames`` and ``whole_frames`` translate, the problem is evaluated on the local frames,
-and the iterations are those of the part at the origin, bit for bit.
+and the iterations are those of the part at the origin, bit for bit.  A load that reads
+positions but has a form relative to the part (contact with an obstacle of a built-in kind:
+``solvers.origin.relocation``) is evaluated in that form (``loads``: the problem's with those in
+their place; ``model.contact_frame``), and the run is that of the part at the origin to the
+round-off of the translated input.
 """
 from __future__ import annotations
 
@@ -35,7 +39,7 @@ import numpy as np
 from ..fem import ELEMENTS
 from .convergence import relative_residual, scaled_norm
 from .linalg import Factorization
-from .origin import part_origin
+from .origin import part_origin, relocation
 from .stability import asymmetry, inertia
 from .step_checks import largest_turn
 
@@ -74,10 +78,10 @@ class NewtonEquations:
         self.problem, self.solver = problem, solver
         self.asm = problem.assembler()
         self.ell = problem.length_scale
-        self.loads = problem.loads
         self.stateful = ELEMENTS.lookup(problem.element_name).stateful
         self.mixed = problem.element.mixed
-        self.origin = part_origin(problem)
+        self.origin, self._relocated = relocation(problem)
+        self.loads = problem.loads if self._relocated is None else self._relocated
 
     # ------------------------------------------------------------------ frames ----------
     def _moved(self, g, c):
@@ -113,7 +117,7 @@ class NewtonEquations:
 
     # ------------------------------------------------------------------ equations -------
     def evaluate(self, g, lam, tangent=True, stress=None, norms=True):
-        ev = self.problem.evaluate(g, lam, tangent=tangent, stress=stress)
+        ev = self.problem.evaluate(g, lam, tangent=tangent, stress=stress, frame_loads=self._relocated)
         if not norms:                    # the tangent of a state whose residual was just measured
             return ev, None, None
         if not np.all(np.isfinite(ev.r)):
@@ -125,7 +129,7 @@ class NewtonEquations:
         return ev.r_int, ev.f_ext
 
     def stress(self, g, lam):
-        return self.problem.evaluate(g, lam, tangent=False).stress
+        return self.problem.evaluate(g, lam, tangent=False, frame_loads=self._relocated).stress
 
     def linear_stress(self, ev, eta):
         return self.problem.linear_stress(ev, eta)

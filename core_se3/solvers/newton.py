@@ -257,8 +257,7 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
     timer = _Timer(result)
     trier = NewtonTry(problem, opts, solver, timer, eq)
     hooks = _Hooks(eq)
-    for i, ld in enumerate(hooks.aug):
-        ld.set_multipliers(None if state.multipliers is None else state.multipliers[i])
+    _start_loads(hooks, state)
     # the mixed iteration's stresses start every try from those of the converged state (a
     # function of g alone, so a restart from a NewtonState repeats the same computations)
     mip = opts.iteration == "mip" and eq.mixed and not stateful
@@ -302,6 +301,7 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
                              result.steps)
                 if st is not None:               # a target's step is yielded (a sub-step's is in result.steps)
                     n_recorded = len(tries)
+                    _close_steps(hooks)
                     stored = st if at_target else None
                 if len(hist) - 1 <= 6 and abs(dlam) < abs(dlam_nominal):
                     dlam = min(abs(dlam) * 2, abs(dlam_nominal)) * np.sign(dlam_nominal)
@@ -320,7 +320,7 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
         if stored is None:                       # the target was already reached
             stored = _unchanged_step(rec, eq, g, g_whole, lam)
         timer.close()
-        state = NewtonState(lam, g_whole, dlam, k_ref, [ld.multipliers() for ld in hooks.aug] if hooks.aug else None,
+        state = NewtonState(lam, g_whole, dlam, k_ref, [_whole(ld).multipliers() for ld in hooks.aug] if hooks.aug else None,
                             checks.sign)
         yield NewtonStep(stored, state, tries)
 
@@ -349,7 +349,7 @@ def _note_passed(checks, eq, result):
 def _unchanged_step(rec, eq, g, g_whole, lam):
     """The StepResult of a target the path already stood at (no try)."""
     ev, _, _ = eq.evaluate(g, lam, tangent=False)
-    stored = rec.step(lam, g_whole, 0, [], eq.forces(ev))
+    stored = rec.step(lam, g_whole, 0, [], eq.forces(ev), local=_local(eq, g))
     stored.attempts, stored.linear_solves = 0, 0
     return stored
 
@@ -370,6 +370,31 @@ class _Hooks:
         # starts with a moving obstacle: nodes in contact carried along (friction)
         self.predictors = hooked_loads(eq, "predict_start") if not eq.stateful else []
         self.turn_fits = None        # the target the turn left was measured to fit to (_turn_left_fits)
+
+
+def _start_loads(hooks, state):
+    """The loads' multipliers of the start ``state`` (None: their cold start; a restart point's
+    are the problem's loads', taken into a relocated load's coordinates); the start is a stored
+    state, the next step's slip counts from it."""
+    for i, ld in enumerate(hooks.aug):
+        m = None if state.multipliers is None else state.multipliers[i]
+        ld.set_multipliers(ld.from_whole(m) if hasattr(ld, "from_whole") else m)
+    _close_steps(hooks)
+
+
+def _whole(load):
+    """The problem's load of an equations' load (itself, or the ``whole`` of a relocated or a
+    rank's contact, ``model.contact_frame``): restart points take its multipliers."""
+    return getattr(load, "whole", load)
+
+
+def _close_steps(hooks):
+    """A state was stored: the path-dependent loads count the next step's slip from it
+    (``CoulombFriction.close_step``: a stored step's slip runs through all its sub-steps)."""
+    for ld in hooks.accepts:
+        close = getattr(ld, "close_step", None)
+        if close is not None:
+            close()
 
 
 def _friction_start(checks, state, result):
@@ -432,7 +457,9 @@ def _refused(eq, hooks, checks, saved, result, dlam_nominal, here):
         ld.set_multipliers(m)
     if checks.snap is not None:
         checks.snap.probes = list(snap_probes)
-    del result.steps[n_steps:]
+    if len(result.steps) > n_steps:          # recorded sub-steps taken back: the start was the last stored
+        del result.steps[n_steps:]
+        _close_steps(hooks)
     return lam, g, g_whole, stress_conv, k_ref, np.sign(dlam_nominal) * abs(checks.friction.caps[-1][1])
 
 
@@ -463,7 +490,9 @@ def _friction_probe(opts, eq):
     loads = [ld for ld in eq.loads if getattr(ld, "path_dependent", False) and hasattr(ld, "slip_status")]
     if not (opts.friction_check and loads) or eq.distributed or eq.stateful:
         return None
-    return FrictionProbe(loads, eq.problem.mesh.g0[:, :3, 3], opts.friction_tol, halving=opts.friction_halving)
+    # the displacements it scales by are taken in the iterate's coordinates (a far part's: relative)
+    return FrictionProbe(loads, eq.local_frames(eq.problem.mesh.g0)[:, :3, 3], opts.friction_tol,
+                         halving=opts.friction_halving)
 
 
 def _split_step(problem, hooks, g_whole, lam, lam_try, target, dlam, opts, result):
@@ -600,13 +629,19 @@ def _limit_point(eq, switches, k_ref, out, g, lam, lam_try, timer, result):
     return k_ref
 
 
+def _local(eq, g):
+    """The recorder's ``local`` of the iterate g: None when it is held in the problem's
+    coordinates, else (g, its origin, the loads evaluated on it: ``NewtonEquations.loads``)."""
+    return None if getattr(eq, "origin", None) is None else (g, eq.origin, eq.loads)
+
+
 def _record(rec, eq, opts, out, g_start, g, g_whole, lam, tries, checks, at_target, steps):
     """The StepResult of the accepted try ``out`` at a target, or of any sub-step with
     record_substeps (appended to ``steps``; ``tries``: those since the last recorded one), else
     None after moving the probes' rotation record on."""
     # the try's start and increments unwrap a probe turned by more than pi
     turn = () if eq.distributed or np.isscalar(out.eta_sum) else (g_start, out.eta_sum)
-    local = None if getattr(eq, "origin", None) is None else (g, eq.origin)
+    local = _local(eq, g)
     if at_target or opts.record_substeps:
         st = rec.step(lam, g_whole, len(out.hist) - 1, out.hist, eq.forces(out.ev), None, turn, local)
         st.residual_floor = min(out.floor, 1e300)      # finite in JSON when all forces are 0

@@ -8,7 +8,9 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["part_origin", "mesh_origin", "frames_origin", "far_part_hint"]
+from ..model.contact_frame import relocated_contact
+
+__all__ = ["part_origin", "mesh_origin", "frames_origin", "relocation", "far_part_hint"]
 
 
 def part_origin(problem):
@@ -47,6 +49,50 @@ def mesh_origin(problem):
     return c if np.any(c != 0) else None
 
 
+def relocation(problem):
+    """(c, loads): the origin load stepping holds ``problem``'s iterate relative to, and the loads
+    to evaluate on such frames. c = :func:`part_origin` when every load is translation
+    invariant (loads None: the problem's own); else :func:`mesh_origin`, when each load that is
+    not has a form in the coordinates x' = x - c (contact with an obstacle of a built-in kind,
+    ``model.contact_frame.relocated_contact``, or a load's own method ``relocated(c, g0)``, g0
+    the reference frames in them), loads the problem's with those in their place;
+    (None, None) otherwise (the iterate is held in the problem's coordinates).
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(1.0, 1.0, 4, 4, x0=1e6), Material(1e4, 0.3, 0.02))
+    >>> _ = p.add_obstacle("sphere", centre=(1e6 + 0.4, 0.1, 0.071), radius=0.06, name="ball")
+    >>> c, loads = relocation(p)
+    >>> c.tolist(), loads[0].obstacle.centre.round(9).tolist()     # 1e6 + 0.4 is stored to eps 1e6
+    ([1000000.0, 0.0, 0.0], [0.4, 0.1, 0.071])
+    """
+    c = part_origin(problem)
+    if c is not None or not problem.loads:
+        return c, None
+    c = mesh_origin(problem)
+    if c is None:
+        return None, None
+    g0 = problem.mesh.g0.copy()
+    g0[:, :3, 3] -= c
+    loads = []
+    for ld in problem.loads:
+        moved = _relocated(ld, c, g0)
+        if moved is None:
+            return None, None
+        loads.append(moved)
+    return c, loads
+
+
+def _relocated(load, c, g0):
+    """``load`` in the coordinates x' = x - c (itself when translation invariant; a load's own
+    ``relocated(c, g0)``, or contact's, ``model.contact_frame.relocated_contact``), or None."""
+    if getattr(load, "translation_invariant", False):
+        return load
+    move = getattr(load, "relocated", None)
+    return move(c, g0) if callable(move) else relocated_contact(load, c, g0)
+
+
 def frames_origin(problem, g, origin=None):
     """``origin`` (default :func:`mesh_origin`) when the positions of the frames ``g`` lie near
     it (within half of it on each axis it moves: a far part's frames in the problem's
@@ -69,31 +115,38 @@ def frames_origin(problem, g, origin=None):
 
 def far_part_hint(problem):
     """Why Newton may stall on a part far from the origin, or "": the part lies more than 1000
-    element sizes from the origin (:func:`mesh_origin`) and a load is not ``translation_invariant``
-    (an obstacle, a spring to a lab point, a field that varies in space), so the iterate is held
-    in the problem's coordinates, whose positions carry a round-off eps |x0| that the strains see
-    as eps |x0| / h_e (a 1 x 1 plate of 0.25 elements, pressed, with an obstacle: converged at
-    1e3 from the origin, stalled at the first step at 1e4, 1e6).  Without such a load the
-    iterate is held relative to the part (:func:`part_origin`) and nothing is said.
+    element sizes from the origin (:func:`mesh_origin`) and a load is neither
+    ``translation_invariant`` nor has a form relative to the part (:func:`relocation`: a user's
+    SDF, a spring to a lab point, a field that varies in space), so the iterate is held in the
+    problem's coordinates, whose positions carry a round-off eps |x0| that the strains see as
+    eps |x0| / h_e (a 1 x 1 plate of 0.25 elements, pressed, under a user's SDF: converged at
+    1e3 from the origin, stalled at the first step at 1e4, 1e6).  Otherwise the iterate is held
+    relative to the part and nothing is said.
 
     Example
     -------
+    >>> import numpy as np
     >>> from core_se3 import Problem, Material, mesh
+    >>> from core_se3.model import UserSDF
     >>> p = Problem(mesh.rectangle(1.0, 1.0, 4, 4, x0=1e6), Material(1e4, 0.3, 0.02))
-    >>> far_part_hint(p)
-    ''
     >>> _ = p.add_obstacle("sphere", centre=(1e6 + 0.4, 0.1, 0.071), radius=0.06, name="ball")
+    >>> far_part_hint(p)                       # a built-in obstacle is evaluated relative to the part
+    ''
+    >>> _ = p.add_obstacle(UserSDF(lambda y: 1.0 - y[:, 2], lambda y: np.tile([0.0, 0.0, -1.0], (len(y), 1))),
+    ...                    name="lid")
     >>> far_part_hint(p)[:60]
     'the part lies 1e+06 from the origin (4e+06 element sizes) an'
     """
     c = mesh_origin(problem)
-    fixed = [ld for ld in problem.loads if not getattr(ld, "translation_invariant", False)]
-    if c is None or not fixed:
+    if c is None or relocation(problem)[0] is not None:
         return ""
+    g0 = problem.mesh.g0.copy()
+    g0[:, :3, 3] -= c
+    fixed = [ld for ld in problem.loads if _relocated(ld, c, g0) is None]
     x = problem.mesh.X[problem.mesh.edge_nodes]
     h = float(np.median(np.linalg.norm(x[:, 1] - x[:, 0], axis=1))) or problem.length_scale
     d = float(np.linalg.norm(c))
-    if d < 1e3 * h:
+    if d < 1e3 * h or not fixed:
         return ""
     names = ", ".join(f"{getattr(ld, 'name', 'load')!r} ({type(ld).__name__})" for ld in fixed[:3])
     eps = np.finfo(float).eps * d
@@ -101,4 +154,4 @@ def far_part_hint(problem):
             f"{'is' if len(fixed) == 1 else 'are'} not translation invariant, so the iterate is held in the "
             f"problem's coordinates, whose positions carry a round-off eps |x0| = {eps:.2g} ({eps / h:.2g} of an "
             "element) that can stall Newton (docs/STEPS.md, 'Translation invariance'); place the part and its "
-            "obstacles (or fields, springs) near the origin")
+            "obstacles (or fields, springs) near the origin, or give the obstacle as a built-in kind")
