@@ -76,7 +76,7 @@ state's sign is taken to be that of the first accepted state when that is +1 (an
 supported shell); a first state with det K < 0 costs one factorisation at the start to tell.
 
 **Midpoint probe** (``NewtonOptions.midpoint_probe``).  Both checks look at the two ends of a
-try; a try that turns a node by more than PROBE_TURN = pi can pass them and still have jumped:
+try; a try that turns a node by about pi or more can pass them and still have jumped:
 fuzz problem 144 (``benchmarks/invariants_fuzz.py``, seed 4: a clamped 5 x 2 strip under a dead
 pressure and a dead end moment of 1.9 turns) has a limit point at 0.7004 of its load, yet its
 try 0.5 -> 1 contracted (corrections 15.5, 0.63, 0.28, 0.013 ... ell: Theta < 0.5) onto a state
@@ -84,7 +84,10 @@ with det K > 0 again -- two negative eigenvalues of sym K, off the path (steppin
 fails at 0.795) -- and 1 and 2 load steps exited ok there.  Its corrections look like the
 one-step roll-up's (56.4, 2.14, 6e-9 ell, exact to 1e-12), and with a dead moment the count of
 sym K rises on the right path too (docs/STEPS.md), so the ends cannot tell them apart.  The
-middle can: such a try (its converged increment turns a node by more than pi) is probed by a
+middle can: such a try (its converged increment turns a node by more than PROBE_TURN = 0.95 pi,
+within 9 degrees of the cut locus of SO(3) or past it: a margin, so that a try turning exactly pi,
+as ``curved-rollup`` in 2 steps does to round-off, 3.1415926535897927 rad, is probed whichever
+way the last bit falls; before, at PROBE_TURN = pi, round-off decided) is probed by a
 try from its start to its midpoint load, started and iterated as a cut-back would be (the
 mixed stresses of the start).  It converged onto det K of the other sign (problem 144: 7.73,
 0.32, 0.025 ... ell, det K -1 at 0.75): an odd number of eigenvalues crossed zero in the first
@@ -119,7 +122,7 @@ TRAVEL_MAX = 1.5         # the later corrections may add up to 1.5 x the first
 CONTRACTION_FLOOR = 1e-8  # corrections below this (relative to ell) are round-off: not compared
 GROWTH_CAP = np.pi       # ... of at most pi ell: a ball of radius pi ell holds every orientation
 GROWTH_REACH = 0.25      # ... or a growth by a quarter of the step's scale, whatever the pair's size
-PROBE_TURN = np.pi       # a try that turns a node by more than this [rad] is probed at its midpoint
+PROBE_TURN = 0.95 * np.pi  # a try that turns a node by more than this [rad] is probed at its midpoint
 
 
 def path_measures(incs, floor=CONTRACTION_FLOOR):
@@ -321,7 +324,7 @@ class StepChecks:
         self.probe_iterations += probe.iterations
         mid = 0.5 * (lam + lam_try)
         head = (f"midpoint probe: the try from load factor {lam:.6g} to {lam_try:.6g} turned a node by "
-                f"{turn:.3g} rad (> pi) and converged with det K {self.sign:+d}, but ")
+                f"{turn:.3g} rad (> 0.95 pi) and converged with det K {self.sign:+d}, but ")
         tail = ("; it is cut back. If the cut-backs run out: more load steps, or trace the path with arc "
                 "length (core_se3.solvers.arc_length, stability=True); midpoint_probe = false ([solver]) "
                 "skips the probe")
