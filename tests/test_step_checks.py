@@ -72,21 +72,22 @@ def test_one_step_rollup_keeps_its_iterations():
     assert np.array_equal(res_off.final.g, res.final.g)
 
 
-@pytest.mark.parametrize("name, steps, iterations", [("curved-rollup", 2, 6), ("rollup", 6, 19)])
-def test_a_try_that_turns_a_node_by_pi_is_probed_whichever_way_round_off_falls(name, steps, iterations):
+@pytest.mark.parametrize("name, steps", [("curved-rollup", 2), ("rollup", 6)])
+def test_a_try_that_turns_a_node_by_pi_is_probed_whichever_way_round_off_falls(name, steps):
     """A roll-up stepped by exactly pi a step turns its tip by pi to round-off: curved-rollup in
     2 steps by 3.1415926535897927 and ...913 rad (an ulp or two below pi), rollup in 6 steps by
     pi, pi, pi, pi + 4e-16, pi - 5e-15, pi + 5e-15.  With the trigger at pi the last bit decided:
     curved-rollup was not probed, rollup in 6 steps probed its 4th and 6th steps only.  The
     trigger has a margin (PROBE_TURN = 0.95 pi): every such step is probed (3 Newton iterations
-    each), the tries and their iterations unchanged, none refused."""
+    each), the tries and their iterations (6 and 19) unchanged, none refused."""
     from core_se3.solvers.step_checks import PROBE_TURN
     assert 0.9 * np.pi < PROBE_TURN < np.pi * (1 - 1e-6)
     doc, res, _ = run_case(name, steps=steps)
+    _, off, _ = run_case(name, steps=steps, midpoint_probe=False)
     assert [s.checks["midpoint_probes"] for s in res.steps[1:]] == [1] * steps
-    assert sum(s.iterations for s in res.steps) == iterations and len(res.log) == steps
+    assert [s.iterations for s in res.steps] == [s.iterations for s in off.steps] and len(res.log) == steps
     assert all(e["midpoint_probe"]["converged"] and e["midpoint_probe"]["det_sign"] == 1 for e in res.log)
-    assert all(s.checks["probe_iterations"] == 3 for s in res.steps[1:])
+    assert np.array_equal(res.final.g, off.final.g)
 
 
 def _fuzz_strip_144():
