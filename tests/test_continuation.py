@@ -446,6 +446,31 @@ def test_displacement_control_stops_at_a_snap_back_of_the_controlled_displacemen
     assert abs(res.critical_points[0].lam - 0.19693) < 1e-3
 
 
+@pytest.mark.parametrize("values", [[15.0, 18.0], [16.0, 18.5]])
+def test_displacement_control_refuses_a_step_whose_critical_point_its_bisection_does_not_close_on(roof635, values):
+    """The 6.35 mm roof (8x8 quarter) in one displacement-control step across the snap-back of
+    -W_C (it turns back at 16.94): from 15 (load factor 0.184, one negative eigenvalue) to 18 the
+    step converged on the far side of the loop (-0.122, none); no point inside it reached the
+    lower limit point its ends bracket (0 solves), and the run exited normally, reporting a limit
+    point 'near -0.1255 located only to 0.57' (arc length: -0.12778).  From 16 to 18.5 a sub-step
+    16.94 -> 17.25 jumped likewise, its bisection closing to 0.51 after 1 solve.  As arc length
+    refuses such a step (critical.untraced), displacement control now refuses a step whose
+    critical point is not located to critical_tol and halves it: the run stops at the snap-back
+    as steps of 1 do, naming it and arc length, with the upper limit point only."""
+    case, p = roof635
+    prob = catalogue.build_problem(case, p, (8, 8))
+    node, d = prob.control
+    with pytest.raises(ConvergenceError) as exc:
+        C.displacement_control(prob, node, d, values)
+    msg = str(exc.value)
+    assert "snap-back" in msg and "arc length" in msg, msg
+    res = exc.value.result
+    w = np.array([-s.probes["C"]["u"][2] for s in res.steps])
+    assert w.max() < 17.008 and np.all(np.array([s.load_factor for s in res.steps[1:]]) > 0.0)
+    assert [c.kind for c in res.critical_points] == ["limit"]
+    assert abs(res.critical_points[0].lam - 0.19693) < 1e-3
+
+
 @pytest.mark.parametrize("method", ["crisfield", "riks"])
 def test_limit_point_refinement_stays_on_the_bracketed_part_of_the_path(roof635, method):
     """The 6.35 mm roof's lower limit point from a long first step (dlam0 = 0.5): refined to

@@ -72,6 +72,24 @@ def test_one_step_rollup_keeps_its_iterations():
     assert np.array_equal(res_off.final.g, res.final.g)
 
 
+@pytest.mark.parametrize("name, steps", [("curved-rollup", 2), ("rollup", 6)])
+def test_a_try_that_turns_a_node_by_pi_is_probed_whichever_way_round_off_falls(name, steps):
+    """A roll-up stepped by exactly pi a step turns its tip by pi to round-off: curved-rollup in
+    2 steps by 3.1415926535897927 and ...913 rad (an ulp or two below pi), rollup in 6 steps by
+    pi, pi, pi, pi + 4e-16, pi - 5e-15, pi + 5e-15.  With the trigger at pi the last bit decided:
+    curved-rollup was not probed, rollup in 6 steps probed its 4th and 6th steps only.  The
+    trigger has a margin (PROBE_TURN = 0.95 pi): every such step is probed (3 Newton iterations
+    each), the tries and their iterations (6 and 19) unchanged, none refused."""
+    from core_se3.solvers.step_checks import PROBE_TURN
+    assert 0.9 * np.pi < PROBE_TURN < np.pi * (1 - 1e-6)
+    doc, res, _ = run_case(name, steps=steps)
+    _, off, _ = run_case(name, steps=steps, midpoint_probe=False)
+    assert [s.checks["midpoint_probes"] for s in res.steps[1:]] == [1] * steps
+    assert [s.iterations for s in res.steps] == [s.iterations for s in off.steps] and len(res.log) == steps
+    assert all(e["midpoint_probe"]["converged"] and e["midpoint_probe"]["det_sign"] == 1 for e in res.log)
+    assert np.array_equal(res.final.g, off.final.g)
+
+
 def _fuzz_strip_144():
     """A clamped strip 5 x 2 (its four inner nodes moved) under a dead pressure and a dead end
     moment of 1.9 turns (benchmarks/invariants_fuzz.py, seed 4, problem 144)."""
@@ -109,6 +127,40 @@ def test_a_long_try_over_a_limit_point_is_refused_by_the_midpoint_probe(steps):
         assert 0.69 < last < 0.7004
         # what the probe prevents: without it the solve exits ok at the full load
         assert _fuzz_strip_144().solve(steps=steps, midpoint_probe=False).final.load_factor == 1.0
+
+
+def _fuzz_panel_177():
+    """A 3 x 1 cylindrical panel (R/h 1240), clamped on x0 and pinned on x1, under a dead pressure
+    (benchmarks/invariants_fuzz.py, seed 5, problem 177): a limit point at 0.607643 +- 0.00052 of
+    the load (arc length)."""
+    p = Problem(mesh.cylinder_panel(0.40115115487002156, 0.16296229852984703, -0.3104180227372994,
+                                    0.3104180227372994, 3, 1),
+                Material(E=533611619.6309353, nu=0.04734222007885219, h=0.0003235678601587087, rho=1.0))
+    p.clamp("x0")
+    p.fix("x1", (0, 1, 2))
+    p.add_pressure(23.368707229878428, direction=(-0.9231435205145561, 0.27482395844596713, -0.2688453689318093))
+    return p
+
+
+@pytest.mark.parametrize("steps", [1, 4])
+def test_a_try_past_the_limit_point_its_current_stiffness_announces_is_probed(steps):
+    """Fuzz problem 177: 16 steps fail at its limit point ('met a limit point', last converged
+    0.607559).  In 1, 2 and 4 steps the try 0.5 -> 0.75 (turn 0.18 rad, corrections 0.17, 0.11,
+    0.025 ... ell) converged with det K +1 onto another branch (stepping back from it fails at
+    0.660), and after it the runs failed at 0.7555, naming a limit point there, with that state kept
+    (4 steps stored it as their step at 0.75).  The current stiffness S_p at 0.5 (0.17 of the first
+    step's, 0.45 at 0.25) extrapolates to zero at 0.51 -- 0.54, within the try: it is probed, its
+    probe at 0.625 does not converge, it is cut back, and so is the cut-back try 0.5625 -> 0.6875
+    (S_p 0.13, zero at 0.628); the runs stop at the limit point as 16 steps do."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(ConvergenceError, match="limit point") as info:
+            _fuzz_panel_177().solve(steps=steps)
+    res = info.value.result
+    last = float(re.search(r"the last converged load factor is ([0-9.]+)", str(info.value)).group(1))
+    assert 0.6 < last < 0.6077 and max(s.load_factor for s in res.steps) < 0.6077
+    refused = [e for e in res.log if e["reason"].startswith("midpoint probe")]
+    assert refused and all("current stiffness" in e["reason"] for e in refused)
 
 
 def test_the_count_of_sym_k_is_no_refusal_criterion_for_a_dead_moment():

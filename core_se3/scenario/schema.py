@@ -157,7 +157,8 @@ SOLVER = Section("solver", (
             "of the solve (one factorisation; conservative loads without contact, with limit_check); more than at "
             "the start stops the run naming the step where they rose: an even number crossing zero within a step, "
             "which det K's sign does not show (docs/STEPS.md)", kind="bool"),
-    _option("midpoint_probe", _NEWTON, "load control: a converged step that turned a node by more than pi is "
+    _option("midpoint_probe", _NEWTON, "load control: a converged step that turned a node by more than 0.95 pi, "
+            "or passed the load factor where the current stiffness extrapolates to zero (a limit point ahead), is "
             "checked by a step from its start to its midpoint load (one more Newton solve); det K of the other sign "
             "there (a jump over a critical point) or no convergence cuts it back (with limit_check; docs/STEPS.md)",
             kind="bool"),

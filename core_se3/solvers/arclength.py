@@ -456,7 +456,7 @@ def _critical_between(sysm, cur, pt, con, psi_u, step, o, timers, trylog):
     cp = locate_critical(sysm, cur, pt, sysm.w * con.du / span, span, step, limit=turned)
     entry = narrow(sysm, cur, pt, con, cp, Corrector(
         correct, lambda ds: ArcLengthConstraint(o.method, ds, psi_u, sysm.w), o, timers, (StepFailed,)),
-        untraced_ok=False)
+        refused=untraced)
     trylog.append(entry)
     if untraced(entry["bisections"], cp.accuracy, o):
         how = ("no point inside the step reaches" if entry["bisections"] == 0 else

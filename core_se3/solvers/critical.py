@@ -295,14 +295,16 @@ def estimate(sysm, a, b, con, span, upper, limit):
     return lam, bracket_width(a.lam, b.lam, upper)
 
 
-def narrow(sysm, cur, pt, con, cp, corrector, untraced_ok=True):
+def narrow(sysm, cur, pt, con, cp, corrector, refused=None):
     """Narrow the CriticalPoint ``cp`` found between the path points cur and pt (the step
     ``con``) to ``corrector.opts.critical_tol`` (:func:`refine`; ``corrector``: a
     :class:`Corrector`): its load factor (a bifurcation: where the
     smallest eigenvalue interpolates to zero over the final bracket, ``stability.locate_critical``,
     exact for an eigenvalue linear in the load; a limit point: :func:`estimate`), bracket and
-    accuracy are updated in place.  Returns the log entry of the bisection.  ``untraced_ok``
-    False: a step whose interior no corrector reached is the caller's to refuse, not warned of."""
+    accuracy are updated in place.  Returns the log entry of the bisection.  ``refused``:
+    ``refused(bisections, accuracy, opts)`` True for a point the caller refuses the step for
+    (arc length: :func:`untraced`; displacement control: any point not located to critical_tol),
+    which is then not warned of; None: every point kept, one not located warned of."""
     limit = cp.kind == "limit"
     a, b, upper, n, span = refine(sysm, cur, pt, con, limit, corrector)
     lam, cp.accuracy = estimate(sysm, a, b, con, span, upper, limit)
@@ -312,7 +314,7 @@ def narrow(sysm, cur, pt, con, cp, corrector, untraced_ok=True):
         lam = float(np.clip(locate_critical(sysm, a, b, c, span, cp.step, limit=False).lam, lo, hi))
     cp.lam = lam if n or limit else cp.lam
     cp.lam_bracket = (a.lam, b.lam)
-    if cp.accuracy > corrector.opts.critical_tol and (untraced_ok or not untraced(n, cp.accuracy, corrector.opts)):
+    if cp.accuracy > corrector.opts.critical_tol and not (refused and refused(n, cp.accuracy, corrector.opts)):
         log.warning("the %s point near lam = %.6g is located only to %.2g (critical_tol %.2g): the bisection of "
                     "its step stopped after %d solves; a smaller step (dlam0, ds_max) brackets it closer",
                     cp.kind, cp.lam, cp.accuracy, corrector.opts.critical_tol, n)

@@ -41,7 +41,7 @@ from .splitting import (MAX_LOAD_TURN, MAX_PRESCRIBED_TURN, check_substeps, spli
 from .stability import limit_point_hint, prescribed_turn_hint, unseen_crossing
 from .contact_probe import ContactProbe, median_edge
 from .friction_probe import RELAXATIONS, FrictionProbe
-from .step_checks import PROBE_TURN, StepChecks, start_sign
+from .step_checks import StepChecks, start_sign
 
 __all__ = ["newton_solve", "newton_steps", "end_check", "requested_load_factors", "NewtonState", "NewtonStep",
            "MAX_PRESCRIBED_TURN", "MAX_LOAD_TURN"]
@@ -288,7 +288,7 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
             if ok and opts.limit_check and not driven and out.k_step is not None:
                 k_ref = _limit_point(eq, hooks.switches, k_ref, out, g, lam, lam_try, timer, result)
             if ok:
-                checks.accept(out, lam_try)
+                checks.accept(out, lam_try, lam)
                 lam, g = lam_try, out.g
                 out = _move_history(trier, hooks, checks.friction, out, lam, mip, opts,
                                     lambda o, k: _log_try(result, tries, lam, o, augmentation=k, quiet=not eq.root))
@@ -481,6 +481,9 @@ def _step_checks(opts, eq, state):
                         and not any(getattr(ld, "follower", False) for ld in eq.loads))
     # the midpoint probe of a try that turned a node past pi (a stateful element's state is not restored)
     checks.probe = opts.midpoint_probe and opts.limit_check and not eq.stateful
+    # ... and of a try that passes a limit point ahead (the current stiffness of load control: not
+    # with a prescribed motion, whose load factor is no load's)
+    checks.stiffness = not (eq.stateful or eq.problem.has_prescribed_motion)
     return checks
 
 
@@ -579,10 +582,12 @@ def _judge(out, checks, eq, hooks, here, start=None, prober=None):
     if out.ok:
         out.reason = checks.judge(out, lam, lam_try)
         out.ok = not out.reason
-    turn = eq.largest_turn(out.eta_sum) if out.ok and prober is not None and checks.wants_probe() else 0.0
-    if turn > PROBE_TURN:                    # a try that turned a node past pi: the midpoint probe
+    probe = out.ok and prober is not None and checks.wants_probe()
+    # a try that turned a node by about pi or more, or passed a limit point ahead: the midpoint probe
+    trigger = checks.probe_trigger(eq.largest_turn(out.eta_sum), out.k_step, lam, lam_try) if probe else ""
+    if trigger:
         out.probe = _midpoint_probe(prober, eq, hooks, here)
-        out.reason = checks.judge_probe(out.probe, lam, lam_try, turn)
+        out.reason = checks.judge_probe(out.probe, lam, lam_try, trigger)
         out.ok = not out.reason
     if out.ok and sweeps:                    # a step that passed through an obstacle: cut back
         out.ok, out.reason = not (why := _step_error(sweeps, g, lam, out.g, lam_try)), why or out.reason

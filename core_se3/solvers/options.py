@@ -75,8 +75,9 @@ class NewtonOptions:
     critical point met, count the negative eigenvalues of sym K at the end of the solve (one
     factorisation) and, if more than at the start, stop naming the step where they rose
     (``solvers.stability.unseen_crossing``; conservative loads, no contact); midpoint_probe: with
-    limit_check, a converged try that turned a node by more than pi is probed by a try from
-    its start to its midpoint load, and cut back when that converges onto det K of the other sign
+    limit_check, a converged try that turned a node by more than 0.95 pi, or passed the load factor
+    where the current stiffness extrapolates to zero, is probed by a try from its start to its
+    midpoint load, and cut back when that converges onto det K of the other sign
     (it jumped over a critical point) or does not converge (``solvers.step_checks``; one more
     Newton solve per such try); record_substeps: store the cut-back
     sub-steps as steps too; linear_solver: None = the problem's; iteration: 'mip' (the mixed

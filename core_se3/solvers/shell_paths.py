@@ -248,6 +248,13 @@ def _checked_correct(sysm, state, lam, con, opts, timers):
     return out
 
 
+def _unlocated(bisections, accuracy, opts):
+    """Whether a critical point of a displacement-control step, bisected in ``bisections``
+    corrector solves, stays wider than ``opts.critical_tol`` (``accuracy``): the step is refused
+    (:func:`_control_critical`)."""
+    return accuracy > opts.critical_tol
+
+
 def _control_critical(sysm, cur, pt, lin, control, opts, timers, step):
     """The critical point between the displacement-control points cur and pt (the step's
     converged constraint ``lin``; ``control`` = (value, row)), classified and located by
@@ -255,17 +262,49 @@ def _control_critical(sysm, cur, pt, lin, control, opts, timers, step):
     bisecting the controlled displacement as arc length bisects its step.  Before, its estimate
     from the step's ends was the result: the LTB strip's bifurcation (0.742037) from two steps at
     0.6076, the 8x8 roof's limit points (0.743551, 0.170415) from steps of 4 in -W_C at 0.7411 and
-    0.1597."""
+    0.1597.
+
+    A step whose bisection does not close on the point (no interior point corrected, or the
+    bracket still wider than critical_tol when the interior points fail) is refused (StepFailed:
+    halved): the displacement-control path is continuous in the controlled displacement through
+    a critical point of K, so its interior points exist; a step that jumped across a snap-back of
+    the controlled displacement has none between its two branches.  Before, the 8x8 6.35 mm roof
+    from -W_C = 15 to 18 (near branch, load factor 0.184, to the far one, -0.122; W_C turns back
+    at 16.94) was kept, with a 'limit point near -0.1255 located only to 0.57 after 0 solves'
+    (arc length: -0.12778), and from 16 to 18.5 ('only to 0.51 after 1 solves'); the run exited
+    normally over the snap-back that steps of 1 stop at."""
     value, row = control
     u0 = value(cur.state)
     cp = locate_critical(sysm, cur, pt, row(cur.state), value(pt.state) - u0, step)
     step_con = SimpleNamespace(du=lin.du, dlam=lin.dlam, ds=lin.target - u0)
-    narrow(sysm, cur, pt, step_con, cp, Corrector(
+    entry = narrow(sysm, cur, pt, step_con, cp, Corrector(
         _checked_correct, lambda x: _control_constraint(value, row, u0 + x, 0.0 * lin.du, 0.0), opts, timers,
-        (StepFailed,)))
+        (StepFailed,)), refused=_unlocated)
+    if _unlocated(entry["bisections"], cp.accuracy, opts):
+        raise StepFailed(f"{entry['bisections']} bisections of the step from u = {u0:.6g} (load factor "
+                         f"{cur.lam:.6g}) to {value(pt.state):.6g} ({pt.lam:.6g}) do not close on the {cp.kind} "
+                         f"point its ends bracket (located only to {cp.accuracy:.2g}): the step jumped to "
+                         "another part of the path")
     return cp
 
 
+def _control_step(sysm, cur, tgt, control, opts, timers, n_points):
+    """The displacement-control step from the PathPoint ``cur`` to the controlled value ``tgt``:
+    (the converged PathPoint, its critical point or None); a refused step raises StepFailed
+    (the path check, two hidden turns, a critical point its bisection does not close on)."""
+    value, row = control
+    u0 = value(cur.state)
+    dl = (tgt - u0) / (row(cur.state) @ cur.t)
+    lin = _control_constraint(value, row, tgt, dl * cur.t, dl)
+    s2, l2, its, hist, ev = _checked_correct(sysm, sysm.update(cur.state, dl * cur.t), cur.lam + dl, lin, opts,
+                                             timers)
+    pt = analyse(sysm, s2, l2, opts.stability, its, hist)
+    if tgt != u0 and (why := turned_twice(sysm, cur, pt, lin.du)):   # a repeated value: no step
+        raise StepFailed(why)
+    changed = (pt.n_neg != cur.n_neg) if (pt.n_neg is not None and cur.n_neg is not None) else (pt.sign != cur.sign)
+    if not (opts.stability and changed):
+        return pt, None
+    return pt, _control_critical(sysm, cur, pt, lin, control, opts, timers, n_points)
 
 
 def _required(given, kw):
@@ -341,13 +380,7 @@ def displacement_control(problem, node=None, direction=None, values=None, option
                 u0 = value(cur.state)
                 rt = row(cur.state)
                 try:
-                    dl = (tgt - u0) / (rt @ cur.t)
-                    lin = _control_constraint(value, row, tgt, dl * cur.t, dl)
-                    s2, l2, its, hist, ev = _checked_correct(sysm, sysm.update(cur.state, dl * cur.t), cur.lam + dl,
-                                                             lin, opts, timers)
-                    pt = analyse(sysm, s2, l2, opts.stability, its, hist)
-                    if tgt != u0 and (why := turned_twice(sysm, cur, pt, lin.du)):   # a repeated value: no step
-                        raise StepFailed(why)
+                    pt, cp = _control_step(sysm, cur, tgt, (value, row), opts, timers, n_points)
                     ok, reason = True, ""
                 except (StepFailed, ElementTooDistortedError, FloatingPointError,
                         SingularSystemError, ZeroDivisionError) as exc:
@@ -362,11 +395,9 @@ def displacement_control(problem, node=None, direction=None, values=None, option
                     sub.append(0.5 * (u0 + tgt))
                     continue
                 sub.pop()
-                changed = (pt.n_neg != cur.n_neg) if (pt.n_neg is not None and cur.n_neg is not None) \
-                    else (pt.sign != cur.sign)
-                if opts.stability and changed:
-                    crit.append(_control_critical(sysm, cur, pt, lin, (value, row), opts, timers, n_points))
-                    log.info("  ** %s", crit[-1].describe())
+                if cp is not None:
+                    crit.append(cp)
+                    log.info("  ** %s", cp.describe())
                 cur = pt
                 if not sub:
                     result.steps.append(_record(rec, pt, sysm, result.log, counted))

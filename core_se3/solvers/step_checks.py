@@ -76,7 +76,7 @@ state's sign is taken to be that of the first accepted state when that is +1 (an
 supported shell); a first state with det K < 0 costs one factorisation at the start to tell.
 
 **Midpoint probe** (``NewtonOptions.midpoint_probe``).  Both checks look at the two ends of a
-try; a try that turns a node by more than PROBE_TURN = pi can pass them and still have jumped:
+try; a try that turns a node by about pi or more can pass them and still have jumped:
 fuzz problem 144 (``benchmarks/invariants_fuzz.py``, seed 4: a clamped 5 x 2 strip under a dead
 pressure and a dead end moment of 1.9 turns) has a limit point at 0.7004 of its load, yet its
 try 0.5 -> 1 contracted (corrections 15.5, 0.63, 0.28, 0.013 ... ell: Theta < 0.5) onto a state
@@ -84,7 +84,10 @@ with det K > 0 again -- two negative eigenvalues of sym K, off the path (steppin
 fails at 0.795) -- and 1 and 2 load steps exited ok there.  Its corrections look like the
 one-step roll-up's (56.4, 2.14, 6e-9 ell, exact to 1e-12), and with a dead moment the count of
 sym K rises on the right path too (docs/STEPS.md), so the ends cannot tell them apart.  The
-middle can: such a try (its converged increment turns a node by more than pi) is probed by a
+middle can: such a try (its converged increment turns a node by more than PROBE_TURN = 0.95 pi,
+within 9 degrees of the cut locus of SO(3) or past it: a margin, so that a try turning exactly pi,
+as ``curved-rollup`` in 2 steps does to round-off, 3.1415926535897927 rad, is probed whichever
+way the last bit falls; before, at PROBE_TURN = pi, round-off decided) is probed by a
 try from its start to its midpoint load, started and iterated as a cut-back would be (the
 mixed stresses of the start).  It converged onto det K of the other sign (problem 144: 7.73,
 0.32, 0.025 ... ell, det K -1 at 0.75): an odd number of eigenvalues crossed zero in the first
@@ -92,8 +95,23 @@ half and again in the second, the long try jumped over a critical point and is c
 cut-backs then meet the limit point as 4 to 64 steps do).  A probe that does not converge
 cannot vouch for the try: cut back too.  The probe costs a Newton solve of its own (3 to 6
 iterations on the catalogue's one-step cases, the roll-up's 4 doubling its 4), only for tries
-that turn a node past pi (none at the catalogue's default steps, where the roll-up turns pi/2
-a step); a distributed run probes as a serial one (the turn the largest over the ranks).
+that turn a node past 0.95 pi (none at the catalogue's default steps, where the roll-up turns
+pi/2 a step); a distributed run probes as a serial one (the turn the largest over the ranks).
+
+A try that turns little can jump a limit point too: fuzz problem 177 (seed 5: a clamped and
+pinned 3 x 1 cylindrical panel under a dead pressure, limit point at 0.6076) in 1, 2 and 4 steps
+converged from 0.5 to 0.75 (turn 0.18 rad, Theta 0.65) onto another branch and failed at 0.7555,
+naming a limit point there.  Load control announces a limit point ahead: the current stiffness
+S_p (Bergan's, ``TryOutcome.k_step`` over the first accepted try's) falls to zero there like the
+square root of the distance in the load (the load is quadratic in the path's displacement at a
+limit point), so S_p^2 of the last two accepted tries' starts, extrapolated linearly, gives its
+load factor (:meth:`StepChecks.limit_ahead`): a try that passes it is probed as well.  Problem
+177's try 0.5 -> 0.75 (S_p 0.45 at 0.25, 0.17 at 0.5: zero at 0.51 -- 0.54) and its cut-back retry
+0.5625 -> 0.6875 (zero at 0.628) are probed, their probes at 0.625 do not converge, and the runs
+stop at the limit point as 16 steps do.  Not with a prescribed motion (its load factor is no
+load's).  On the catalogue (1 and 2 steps and the default) it probes magnetic-antiparallel's
+default run 4 times (17 iterations), magnetic-plate's once (3) and sze-semicylinder's once (5),
+none refused, the tries and iterations unchanged.
 
 Example
 -------
@@ -119,7 +137,7 @@ TRAVEL_MAX = 1.5         # the later corrections may add up to 1.5 x the first
 CONTRACTION_FLOOR = 1e-8  # corrections below this (relative to ell) are round-off: not compared
 GROWTH_CAP = np.pi       # ... of at most pi ell: a ball of radius pi ell holds every orientation
 GROWTH_REACH = 0.25      # ... or a growth by a quarter of the step's scale, whatever the pair's size
-PROBE_TURN = np.pi       # a try that turns a node by more than this [rad] is probed at its midpoint
+PROBE_TURN = 0.95 * np.pi  # a try that turns a node by more than this [rad] is probed at its midpoint
 
 
 def path_measures(incs, floor=CONTRACTION_FLOOR):
@@ -281,6 +299,9 @@ class StepChecks:
         self.last = None
         self.probe = False
         self.probes = self.probe_iterations = 0    # since the last stored step
+        # the current stiffness (Bergan's, TryOutcome.k_step) at the start of the last accepted try
+        # over the first's: (load factor, S_p), and the first's k_step (``stiffness``: tracked)
+        self.stiffness, self.stiff, self.k_first = False, None, None
 
     def judge(self, out, lam, lam_try):
         """'' when the converged try ``out`` (a TryOutcome) from lam to lam_try may be accepted,
@@ -312,16 +333,56 @@ class StepChecks:
         ``probe`` and the stability check on, and the path's sign known."""
         return bool(self.probe and self.stability and self.sign is not None)
 
-    def judge_probe(self, probe, lam, lam_try, turn):
+    def limit_ahead(self, k_step, lam, lam_try):
+        """(S_p, the load factor where it extrapolates to zero) when the current stiffness S_p =
+        ``k_step`` / the first accepted try's has fallen since the last accepted try started, and
+        its square, linear in the load factor near a limit point (where the load is quadratic
+        in the path's displacement), extrapolates to zero within the try from lam to lam_try; else
+        None (module docstring)."""
+        if not self.stiffness or self.stiff is None or not self.k_first or k_step is None:
+            return None
+        (lam0, s0), s = self.stiff, k_step / self.k_first
+        if not (0.0 < s < s0) or lam == lam0:
+            return None
+        lam_c = lam + s * s * (lam - lam0) / (s0 * s0 - s * s)
+        ahead = (lam_c - lam) * np.sign(lam_try - lam)
+        return (s, lam_c) if 0.0 <= ahead < abs(lam_try - lam) and (lam - lam0) * (lam_try - lam) > 0 else None
+
+    def probe_trigger(self, turn, k_step, lam, lam_try):
+        """Why a converged try from lam to lam_try is probed at its midpoint (module docstring),
+        else '': its converged increment turns a node by more than PROBE_TURN (``turn`` [rad]), or
+        it passes the load factor where the current stiffness at its start (``k_step``,
+        TryOutcome's) extrapolates to zero (:meth:`limit_ahead`).
+
+        Example
+        -------
+        >>> chk = StepChecks(True, True, 1e-3, sign=1)
+        >>> chk.stiffness, chk.k_first, chk.stiff = True, 2.0, (0.5, 0.1774)
+        >>> chk.probe_trigger(6.0, 1.0, 0.0, 1.0)
+        'turned a node by 6 rad (> 0.95 pi)'
+        >>> chk.probe_trigger(0.18, 2 * 0.1268, 0.5625, 0.6875)[:60]
+        'passed the load factor 0.627784 where the current stiffness '
+        >>> chk.probe_trigger(0.18, 2 * 0.1268, 0.5625, 0.59375)
+        ''
+        """
+        if turn > PROBE_TURN:
+            return f"turned a node by {turn:.3g} rad (> 0.95 pi)"
+        ahead = self.limit_ahead(k_step, lam, lam_try)
+        if ahead is not None:
+            return (f"passed the load factor {ahead[1]:.6g} where the current stiffness S_p = {ahead[0]:.3g} at its "
+                    "start extrapolates to zero (a limit point ahead)")
+        return ""
+
+    def judge_probe(self, probe, lam, lam_try, trigger):
         """'' when the midpoint probe ``probe`` (the TryOutcome of a try from lam to the midpoint
         of lam -> lam_try) vouches for the long try, else why it is refused (cut back): the
         probe converged onto det K of the other sign than the path's, or did not converge.
-        ``turn``: the long try's largest nodal rotation [rad]."""
+        ``trigger``: why the long try was probed (:meth:`probe_trigger`)."""
         self.probes += 1
         self.probe_iterations += probe.iterations
         mid = 0.5 * (lam + lam_try)
-        head = (f"midpoint probe: the try from load factor {lam:.6g} to {lam_try:.6g} turned a node by "
-                f"{turn:.3g} rad (> pi) and converged with det K {self.sign:+d}, but ")
+        head = (f"midpoint probe: the try from load factor {lam:.6g} to {lam_try:.6g} {trigger} and converged "
+                f"with det K {self.sign:+d}, but ")
         tail = ("; it is cut back. If the cut-backs run out: more load steps, or trace the path with arc "
                 "length (core_se3.solvers.arc_length, stability=True); midpoint_probe = false ([solver]) "
                 "skips the probe")
@@ -334,12 +395,17 @@ class StepChecks:
                            "jumped over a critical point (a limit point or a bifurcation) onto another branch") + tail
         return ""
 
-    def accept(self, out, lam_try):
-        """Record the accepted try (its sign becomes the path's).  While a sign change is being
+    def accept(self, out, lam_try, lam=None):
+        """Record the accepted try from ``lam`` (its sign becomes the path's, its current stiffness
+        the last).  While a sign change is being
         located the bracket's low end moves up; a try that reached its high end with the old sign
         shows that the change seen there came from a jump, not from the path: the bracket goes."""
         if out.det_sign is not None:
             self.sign = out.det_sign
+        k = getattr(out, "k_step", None)
+        if self.stiffness and lam is not None and k is not None and np.isfinite(k):
+            self.k_first = k if self.k_first is None else self.k_first
+            self.stiff = (lam, k / self.k_first) if self.k_first > 0 else None
         if getattr(out, "count", None) is not None:
             self.count = out.count
         if self.snap is not None:
