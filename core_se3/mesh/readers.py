@@ -162,16 +162,22 @@ def _physical_dims(raw):
     return dims
 
 
-def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None, triangles="error"):
+def from_meshio(source, d1_hint=None, edges=None, triangles="error"):
     """Mesh from any quad surface mesh meshio reads (file name or ``meshio.Mesh``): Gmsh MSH 4.1
     and 2.2, ASCII and binary, VTU, ...
 
     Nodal frames: d3 = area-weighted mean of the adjacent quads' normals (quads must be
-    consistently oriented: the normal is the right-hand side of the node order); d1 = the
-    projection of ``d1_hint`` on the tangent plane (the global y axis where that degenerates, x
-    where y does too); on flat and developable parts the element makes the frames parallel
-    (``mesh.gauge``), on a doubly curved part d1 turning by more than D1_TURN_MAX = 30 deg within
-    a quad (a hint nearly normal to the shell there) is a MeshWarning: the answer depends on it.
+    consistently oriented: the normal is the right-hand side of the node order).  Without a
+    ``d1_hint``, d1 = the projection of +x on flat and developable parts (where the element makes
+    the frames parallel whatever d1 is: ``mesh.gauge``), and on doubly curved parts (domes,
+    spheres, bellows, whose frames it keeps as given) d1 along the mesh's own edges
+    (:func:`~core_se3.mesh.cross_field.edge_aligned_d1`: a lat-long mesh gets its meridian or
+    parallel frames; the projection of a constant hint locked the thin whole hemisphere, R/h 1e4:
+    0.30 / 0.47 / 0.93 of the meridian frames' deflection on 4x4 / 8x8 / 16x16 per quarter).
+    With a ``d1_hint``, d1 = its projection on the tangent plane everywhere (the global y axis
+    where that degenerates, x where y does too); on a doubly curved part d1 turning by more than
+    D1_TURN_MAX = 30 deg within a quad (a hint nearly normal to the shell there) is then a
+    MeshWarning: the answer depends on it.
     Named groups (Gmsh physical groups, meshio cell sets; a physical group without a name is
     named by its number, e.g. "1", as is every group but one of a name that a Gmsh file gives to
     several groups, with a MeshWarning; point sets such as Abaqus' ``*NSET`` are node sets of
@@ -200,7 +206,9 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None, triangles="error"):
     source : str, path-like or meshio.Mesh
         The file (or mesh); see :func:`read_meshio`.
     d1_hint : (3,) or (n, 3) array_like, optional
-        Lab direction of the first director (default +x).
+        Lab direction of the first director, projected on each node's tangent plane (per node:
+        e.g. a dome's meridians).  Default None: +x on flat and developable parts, along the
+        mesh's edges on doubly curved ones.
     edges : dict, optional
         Extra node sets: name -> predicate of the reference positions X (n, 3) returning a
         boolean mask.
@@ -219,6 +227,18 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None, triangles="error"):
     >>> m = from_meshio(path)
     >>> sorted(m.regions)[:2], "tip_px" in m.edges
     (['finger_mx', 'finger_my'], True)
+
+    A lat-long dome written without frames comes back with d1 along its meridians (or parallels):
+
+    >>> import meshio, numpy as np
+    >>> lat, lon = np.meshgrid(np.linspace(0.0, 1.2, 5), np.linspace(0.0, 2 * np.pi, 17)[:-1], indexing="ij")
+    >>> X = np.stack([np.cos(lat) * np.cos(lon), np.cos(lat) * np.sin(lon), np.sin(lat)], -1).reshape(-1, 3)
+    >>> i = np.arange(80).reshape(5, 16)
+    >>> q = np.stack([i[:-1], np.roll(i, -1, 1)[:-1], np.roll(i, -1, 1)[1:], i[1:]], -1).reshape(-1, 4)
+    >>> dome = from_meshio(meshio.Mesh(X, [("quad", q)]))
+    >>> lon_dir = np.stack([-np.sin(lon), np.cos(lon), 0 * lon], -1).reshape(-1, 3)     # the parallels
+    >>> bool(np.all(np.minimum(*[abs(1 - abs(np.sum(dome.g0[:, :3, k] * lon_dir, 1))) for k in (0, 1)]) < 1e-12))
+    True
     """
     if triangles not in ("error", "split"):
         raise MeshError(f"triangles must be 'error' or 'split', got {triangles!r}")
@@ -226,11 +246,13 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None, triangles="error"):
     X, blocks, sets, qb = _cell_blocks(raw, triangles)
     quads, remap = _oriented_quads(X, blocks, qb)
     X = X[remap >= 0]
-    t, d3 = _nodal_directors(X, quads, d1_hint)
+    t, d3 = _nodal_directors(X, quads, DEFAULT_HINT if d1_hint is None else d1_hint)
     named, regions = _named_groups(sets, blocks, qb, remap)
     for name, nodes in _point_sets(raw, remap).items():
         named.setdefault(name, nodes)           # a group of lines of the same name keeps its order
     mesh = Mesh(frames_from(X, t, d3), quads, named, regions=regions)
+    if d1_hint is None:
+        _edge_frames_where_curved(mesh)
     for name, pred in (edges or {}).items():
         mesh.edges[name] = np.nonzero(pred(mesh.X))[0]
     # the file's points that no quad uses, when dropping them renumbered the nodes after them
@@ -239,8 +261,33 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None, triangles="error"):
     mesh.dropped_points = dropped if len(dropped) and dropped[0] < len(remap) - len(dropped) else None
     mesh.element_numbering = _element_numbering(raw, blocks, qb)
     _warn_orientation(X, quads, _warn_coincident(X))
-    _warn_turning_d1(mesh)
+    if d1_hint is not None:                # the default's d1 follows the edges (jumps at irregular nodes)
+        _warn_turning_d1(mesh)
     return mesh
+
+
+#: the lab direction whose projection is d1 on flat and developable parts when no d1_hint is given
+DEFAULT_HINT = (1.0, 0.0, 0.0)
+
+
+def _edge_frames_where_curved(mesh):
+    """Without a d1_hint: on the doubly curved parts (those whose frames the least-turn gauge
+    cannot make parallel, ``mesh.gauge``), d1 along the mesh's own edges
+    (:func:`~core_se3.mesh.cross_field.edge_aligned_d1`) instead of DEFAULT_HINT's projection,
+    in place; flat and developable parts keep it (the gauge decides there, and their angles are
+    kept: the same element to the bit).  A projected constant hint locked the thin whole
+    hemisphere (R/h 1e4: 0.30 / 0.47 / 0.93 of its meridian frames' deflection on 4x4 / 8x8 /
+    16x16 per quarter); the edges' own directions are its meridians (docs/ELEMENTS.md, "Nodal
+    frames")."""
+    from .cross_field import edge_aligned_d1
+    from .gauge import least_turn_gauge
+    alpha, curved = least_turn_gauge(mesh.g0, mesh.edge_nodes)
+    if not curved.any():
+        return
+    d3 = mesh.g0[:, :3, 2]
+    d1 = edge_aligned_d1(mesh.X, mesh.quads, d3, edges=mesh.edge_nodes)
+    mesh.g0[curved] = frames_from(mesh.X[curved], d1[curved], d3[curved])
+    mesh.gauge_angles = alpha
 
 
 #: the element's d1 turning by more than this within a quad [deg] (on a doubly curved part, which
