@@ -12,14 +12,15 @@ they do not lock (nor do the parallels: the same answer).
 The field.  At each node a 4-fold symmetric direction (a "cross"), as the complex number
 z = exp(4 i theta) of an angle theta in the node's tangent plane: the node's own z is the mean of
 exp(4 i theta) over the two edges leaving it in each adjacent quad (a corner of two orthogonal
-edges gives both the same number); then ``CROSS_PASSES`` passes of z <- own + CROSS_SMOOTHING x the
-mean of the neighbours' unit z, each carried over its edge by keeping its angle to the edge
-(the chord a -> b at a, b -> a at b), which smooths the field where nodes are moved at random
-(the quarter hemisphere at R/h 1e4, interior nodes moved by 0.1 / 0.3 of the spacing, 16x16:
-0.934 / 0.731 of the generator's deflection unsmoothed, 0.961 / 0.811 smoothed, 0.963 / 0.803 on
-the meridians with the same normals; ``benchmarks/curved_frames.py``).  d1 lies at a quarter of
-z's argument.  On a lat-long mesh of a surface of revolution the chords on either side of a node
-along a parallel are mirror images about its meridian plane, so the field is the meridians' to
+edges gives both the same number; at a boundary node, over its boundary edges alone, and kept);
+then ``CROSS_PASSES`` passes of z <- own + CROSS_SMOOTHING x the mean of the neighbours' unit z
+at the interior nodes, each carried over its edge by keeping its angle to the edge (the chord
+a -> b at a, b -> a at b), which smooths the field where nodes are moved at random (the quarter
+hemisphere at R/h 1e4, interior nodes moved by 0.1 / 0.3 of the spacing, 16x16: 0.934 / 0.731 of
+the generator's deflection unsmoothed, 0.961 / 0.809 smoothed, 0.963 / 0.803 on the meridians
+with the same normals; ``benchmarks/curved_frames.py``).  d1 lies at a quarter of z's argument.
+On a lat-long mesh of a surface of revolution the chords on either side of a node along a
+parallel are mirror images about its meridian plane, so the field is the meridians' to
 round-off.  Of the four directions of a node's cross, the one taken is that closest to its
 parent's along a minimum spanning tree of the mesh edges weighted by the crosses' mismatch, so
 that neighbours agree where the field is smooth (around an irregular node, whose cross turns by

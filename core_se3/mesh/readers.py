@@ -282,12 +282,12 @@ def _edge_frames_where_curved(mesh):
     from .cross_field import edge_aligned_d1
     from .gauge import least_turn_gauge
     alpha, curved = least_turn_gauge(mesh.g0, mesh.edge_nodes)
+    mesh.gauge_angles = alpha                  # the element's gauge (it would compute the same)
     if not curved.any():
         return
     d3 = mesh.g0[:, :3, 2]
     d1 = edge_aligned_d1(mesh.X, mesh.quads, d3, edges=mesh.edge_nodes)
     mesh.g0[curved] = frames_from(mesh.X[curved], d1[curved], d3[curved])
-    mesh.gauge_angles = alpha
 
 
 #: the element's d1 turning by more than this within a quad [deg] (on a doubly curved part, which
