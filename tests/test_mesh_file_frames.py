@@ -169,3 +169,17 @@ def test_flat_and_developable_files_keep_the_projection_of_x_to_the_bit():
             warnings.simplefilter("ignore", MeshWarning)
             a, b = from_meshio(raw), from_meshio(raw, d1_hint=(1.0, 0.0, 0.0))
         assert np.array_equal(a.g0, b.g0) and np.array_equal(a.gauge_angles, b.gauge_angles)
+
+
+def test_the_default_frames_of_a_dome_turn_with_the_mesh():
+    # the default d1 of a doubly curved part comes from the mesh's edges alone (the choice among the
+    # four directions of each node's cross too: the chord to a neighbour), so a rigidly turned file
+    # gives the turned frames (measured 7e-16); before, the projection of the lab's +x did not turn
+    from core_se3 import lie
+    Q = lie.exp_so3(np.array([0.7, -1.1, 0.4]))
+    X, q, _ = _whole_hemisphere(6)
+    a = from_meshio(meshio.Mesh(X, [("quad", q)]))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", MeshWarning)
+        b = from_meshio(meshio.Mesh(X @ Q.T, [("quad", q)]))
+    assert np.abs(Q @ a.g0[:, :3, :3] - b.g0[:, :3, :3]).max() < 1e-12
