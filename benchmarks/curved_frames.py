@@ -341,7 +341,7 @@ def main():
     cap = cap_element_optimum()
     print("cap element", cap, flush=True)
     text = report(one, q, w, nodal, cap, alternating_rows())
-    files = (whole_file_rows(), quarter_file_rows(), cap_file_rows(), gmsh_rows())
+    files = (whole_file_rows(), quarter_file_rows(), cap_file_rows(), gmsh_rows(), sphere_rows())
     OUT.write_text(text + file_report(*files))
     print("wrote", OUT)
 
@@ -645,6 +645,58 @@ def gmsh_rows(sizes=((1.6, "16x16"), (0.8, "32x32")), thicknesses=(0.04, 1e-3), 
     return rows, [name for name, _ in hints]
 
 
+def cubed_sphere(n):
+    """Points (N, 3) and outward quads of the closed sphere R meshed by the six faces of a cube
+    (n x n each) projected on it."""
+    u = np.linspace(-1.0, 1.0, n + 1)
+    U, V = np.meshgrid(u, u, indexing="ij")
+    pts, quads = [], []
+    for ax in range(3):
+        for sgn in (1.0, -1.0):
+            P = np.zeros((n + 1, n + 1, 3))
+            P[..., ax], P[..., (ax + 1) % 3], P[..., (ax + 2) % 3] = sgn, U, sgn * V
+            idx = len(pts) * (n + 1) ** 2 + np.arange((n + 1) ** 2).reshape(n + 1, n + 1)
+            quads.append(np.stack([idx[:-1, :-1], idx[1:, :-1], idx[1:, 1:], idx[:-1, 1:]], -1).reshape(-1, 4))
+            pts.append(P.reshape(-1, 3))
+    X = np.concatenate(pts)
+    X = R * X / np.linalg.norm(X, axis=1, keepdims=True)
+    _, first, inv = np.unique(np.round(X, 9), axis=0, return_index=True, return_inverse=True)
+    q = inv.ravel()[np.concatenate(quads)]
+    P = X[first][q]
+    out = np.einsum("ei,ei->e", np.cross(P[:, 2] - P[:, 0], P[:, 3] - P[:, 1]), P.mean(1)) > 0
+    return X[first], np.where(out[:, None], q, q[:, ::-1])
+
+
+def sphere_rows(meshes=(4, 8, 16, 24), h=0.1):
+    """The closed cubed sphere read from a file, pinched (a unit load down at the top node, the
+    bottom node clamped): the deflection on each of FILE_HINTS (nan: ElementTooDistortedError)
+    and the largest turn [deg] of d1 across an edge on the default frames."""
+    from core_se3.errors import ElementTooDistortedError
+    rows = []
+    for n in meshes:
+        X, q = cubed_sphere(n)
+        cells = []
+        for _, kw in FILE_HINTS:
+            m, _ = through_file(mesh.Mesh(mesh.frames_from(X, np.cross(X, [0.3, 0.5, 0.7]), X), q), **kw)
+            p = Problem(m, Material(6.825e7, 0.3, h))
+            top, bottom = int(np.argmax(m.X[:, 2])), int(np.argmin(m.X[:, 2]))
+            p.fix([bottom], (0, 1, 2, 3, 4, 5))
+            p.add_nodal_load([top], force=(0.0, 0.0, -1.0))
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                try:
+                    cells.append(float(p.solve_linear().displacements()[top, 2]))
+                except ElementTooDistortedError:
+                    cells.append(float("nan"))
+            if not kw:
+                e = m.edge_nodes
+                worst = np.degrees(np.arccos(np.clip(np.einsum("ei,ei->e", m.g0[e[:, 0], :3, 0],
+                                                               m.g0[e[:, 1], :3, 0]), -1.0, 1.0))).max()
+        rows.append((n, len(q), cells, worst))
+        print(f"sphere {n}x{n} per face", cells, worst, flush=True)
+    return rows, R / h
+
+
 def quad_turns(m):
     """The largest turn [deg] of d1 about the quad's normal between two nodes of each quad."""
     P = m.X[m.quads]
@@ -656,9 +708,9 @@ def quad_turns(m):
     return np.degrees(np.arccos(np.clip(np.einsum("eki,eli->ekl", t, t).min(axis=(1, 2)), -1.0, 1.0)))
 
 
-def file_report(whole_f, quarter_f, cap_f, gmsh_f):
+def file_report(whole_f, quarter_f, cap_f, gmsh_f, sphere_f):
     """The markdown of section 6 (``whole_file_rows``, ``quarter_file_rows``, ``cap_file_rows``,
-    ``gmsh_rows``)."""
+    ``gmsh_rows``, ``sphere_rows``)."""
     names = [name for name, _ in FILE_HINTS]
     lines = [
         "", "## A mesh file's default frames: d1 along the mesh's edges", "",
@@ -715,6 +767,16 @@ def file_report(whole_f, quarter_f, cap_f, gmsh_f):
         "|---:|---|---:|---:|" + "---:|" * len(hint_names) + "---|---:|"]
     lines += [f"| {rh:g} | {like} | {m} | {ref:.5g} | " + " | ".join(f"{c:.4f}" for c in cells)
               + f" | {' / '.join(map(str, said))} | {turning} |" for rh, like, m, ref, cells, said, turning in rows]
+    rows, rh = sphere_f
+    lines += [
+        "", "### A closed sphere (`cubed_sphere`) from a file", "",
+        f"R/h {rh:g}, pinched: a unit load down at the top node, the bottom node clamped; the deflection there "
+        "(a point load's: it grows with the mesh). nan: no answer (ElementTooDistortedError: d1 turns by about "
+        "180 deg across an element). Largest turn: of the default's d1 across an edge (`HALF_TURN` = 135 deg).",
+        "", "| mesh per face | quads | " + " | ".join(names) + " | largest turn [deg] |",
+        "|---|---:|" + "---:|" * len(names) + "---:|"]
+    lines += [f"| {n}x{n} | {m} | " + " | ".join(f"{c:.4g}" for c in cells) + f" | {worst:.1f} |"
+              for n, m, cells, worst in rows]
     return "\n".join(lines) + "\n"
 
 

@@ -297,7 +297,9 @@ D1_TURN_MAX = 30.0
 
 def _warn_turning_d1(mesh):
     """A MeshWarning where the element's d1 turns by more than D1_TURN_MAX degrees about the
-    normal within one quad.  The nodal d1 is d1_hint projected on each node's tangent plane, which
+    normal within one quad, for a given d1_hint (the default's d1 follows the edges, and turns by a
+    quarter turn across a few quads about irregular nodes on purpose: ``mesh.cross_field``).  The
+    nodal d1 is d1_hint projected on each node's tangent plane, which
     turns fast where the hint is nearly normal to the shell (a tube about z with the default hint
     +x flips d1 by 180 deg along the line where d3 = +x).  The element builds its frames in the
     least-turn gauge (``mesh.gauge``), which undoes any such turn on flat and developable parts
