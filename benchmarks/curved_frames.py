@@ -530,11 +530,20 @@ def _quarter_file(n, fraction, kw, seed=1):
     return transform
 
 
+def _exact_normals(transform):
+    """Transform: ``transform``'s mesh with the sphere's exact normals X / R (its d1 projected)."""
+    def exact(m):
+        out = transform(m)
+        return mesh.Mesh(mesh.frames_from(out.X, out.g0[:, :3, 0], out.X / R), out.quads, edges=out.edges)
+    return exact
+
+
 def quarter_file_rows(meshes=(4, 8, 16), thicknesses=(0.04, 1e-3), fractions=(0.0, 0.1, 0.3), seeds=(1,),
                       more_seeds=((1e-3, 8, (2, 3, 4)), (1e-3, 16, (2, 3, 4)))):
     """The pinched quarter hemisphere with interior nodes moved (``jittered``, ``seed``) read from a
-    file: each of FILE_HINTS and the file's normals with the generator's (meridian) d1 per node,
-    over the generator's own value on the moved mesh (meridian d1, exact normals); ``more_seeds``:
+    file: each of FILE_HINTS, the file's normals with the generator's (meridian) d1 per node, and
+    the default's and +x's d1 on the exact normals X / R, over the generator's own value on the
+    moved mesh (meridian d1, exact normals); ``more_seeds``:
     (h, n, seeds) of the moved meshes also run with other random moves."""
     cases = [(h, n, f, seed) for h in thicknesses for n in meshes for f in fractions for seed in seeds]
     cases += [(h, n, f, seed) for h, n, extra in more_seeds for f in fractions if f for seed in extra]
@@ -543,6 +552,7 @@ def quarter_file_rows(meshes=(4, 8, 16), thicknesses=(0.04, 1e-3), fractions=(0.
         base = quarter(n, h, jittered(f, n, seed) if f else None)
         kws = [kw for _, kw in FILE_HINTS] + [dict(d1_hint="generator")]
         cells = [quarter(n, h, _quarter_file(n, f, kw, seed)) / base for kw in kws]
+        cells += [quarter(n, h, _exact_normals(_quarter_file(n, f, kw, seed))) / base for kw in kws[:2]]
         rows.append((R / h, n, f, seed, base, cells))
         print(f"quarter file R/h {R / h:g} {n}x{n} moved {f} seed {seed}", base, np.round(cells, 4), flush=True)
     return rows
@@ -743,9 +753,11 @@ def file_report(whole_f, quarter_f, cap_f, gmsh_f, sphere_f):
         "Interior nodes moved by up to the fraction of the spacing (`jittered`, the seed given), written and read "
         "back; the symmetry edges keep the generator's frames (the supports hold body-frame dofs), the file's "
         "frames all turned by the quarter turn closest to the generator's there. Over the generator's value on "
-        "the moved mesh (meridian d1, exact normals).", "",
-        "| R/h | mesh | moved | seed | generator | " + " | ".join(names) + " | file normals, meridian d1 |",
-        "|---:|---|---:|---:|---:|" + "---:|" * (len(names) + 1)]
+        "the moved mesh (meridian d1, exact normals). The last two columns put the file's d1 (the default's, "
+        "+x's) on the sphere's exact normals: the frames' share alone.", "",
+        "| R/h | mesh | moved | seed | generator | " + " | ".join(names) + " | file normals, meridian d1 "
+        "| default's d1, exact normals | +x's d1, exact normals |",
+        "|---:|---|---:|---:|---:|" + "---:|" * (len(names) + 3)]
     lines += [f"| {rh:g} | {n}x{n} | {f:g} | {seed} | {b:.5g} | " + " | ".join(f"{c:.4f}" for c in cells) + " |"
               for rh, n, f, seed, b, cells in quarter_f]
     lines += [
