@@ -143,10 +143,11 @@ def test_a_lat_long_dome_from_a_file_gets_its_meridian_or_parallel_frames():
 def test_a_thin_dome_from_a_file_is_solved_like_the_generators(backend):
     # the whole hemisphere at R/h 1e4 written without frames and read back: the default frames are
     # the meridians', so the deflection is the file read with the meridians per node (the same normals;
-    # measured equal to 1e-9) and within 3 % of the generator's exact frames (0.9776 / 1.0222 on 4x4 /
-    # 8x8: the file's averaged normals; 0.9858 / 1.0338 at R/h 250, benchmarks/results/curved_frames.md).
-    # Before, the default's projected +x, normal to the shell at the loaded point, gave -0.107 / 1.172
-    # of the generator's, and a hint (1, 0.3, 0.2) 0.319 / 0.355
+    # measured equal to 1e-9), and with the normals of quadrics fitted to the nodes' rings it is the
+    # generator's (exact frames) to 6.8e-4 / 2.4e-4 on 4x4 / 8x8 (the quads' mean normals, one-sided
+    # at the free equator, gave 0.9776 / 1.0222; benchmarks/results/curved_frames.md).  Before, the
+    # default's projected +x, normal to the shell at the loaded point, gave -0.107 / 1.172 of the
+    # generator's, and a hint (1, 0.3, 0.2) 0.319 / 0.355
     from core_se3.mesh import Mesh, frames_from
     h = 1e-3
     for n in (4, 8):
@@ -156,7 +157,7 @@ def test_a_thin_dome_from_a_file_is_solved_like_the_generators(backend):
         meridians = _whole_deflection(from_meshio(raw, d1_hint=merid), h, backend)
         generator = _whole_deflection(Mesh(frames_from(X, merid, X), q), h, backend)
         assert abs(got / meridians - 1.0) < 1e-6, (n, got, meridians)
-        assert abs(got / generator - 1.0) < 0.03, (n, got, generator)
+        assert abs(got / generator - 1.0) < 5e-3, (n, got, generator)
 
 
 def test_flat_and_developable_files_keep_the_projection_of_x_to_the_bit():
@@ -173,8 +174,9 @@ def test_flat_and_developable_files_keep_the_projection_of_x_to_the_bit():
 
 def test_the_default_frames_of_a_dome_turn_with_the_mesh():
     # the default d1 of a doubly curved part comes from the mesh's edges alone (the choice among the
-    # four directions of each node's cross too: the chord to a neighbour), so a rigidly turned file
-    # gives the turned frames (measured 7e-16); before, the projection of the lab's +x did not turn
+    # four directions of each node's cross too: the chord to a neighbour), and the normals from a
+    # quadric fitted to each node's ring, so a rigidly turned file gives the turned frames (measured
+    # 5e-12: the fit's 1e-12 regularisation); before, the projection of the lab's +x did not turn
     from core_se3 import lie
     Q = lie.exp_so3(np.array([0.7, -1.1, 0.4]))
     X, q, _ = _whole_hemisphere(6)
@@ -182,7 +184,7 @@ def test_the_default_frames_of_a_dome_turn_with_the_mesh():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", MeshWarning)
         b = from_meshio(meshio.Mesh(X @ Q.T, [("quad", q)]))
-    assert np.abs(Q @ a.g0[:, :3, :3] - b.g0[:, :3, :3]).max() < 1e-12
+    assert np.abs(Q @ a.g0[:, :3, :3] - b.g0[:, :3, :3]).max() < 1e-10
 
 
 def _cubed_sphere(n, R=10.0):
@@ -214,7 +216,8 @@ def test_a_closed_sphere_from_a_file_can_be_solved_on_the_default_frames():
     # and a field along the edges (quarter turns about the cube's corners) left an edge whose ends'
     # d1 differed by 179 deg where two quarter-turn cuts met (16 x 16 per face: the same error).
     # Now no edge's d1 turns by more than HALF_TURN = 135 deg (measured 134.6), and the pinched
-    # sphere is solved: its deflection within 4 % of the hint (1, 0.3, 0.2)'s (measured 3.9 %)
+    # sphere is solved: its deflection within 4 % of the hint (1, 0.3, 0.2)'s (measured 0.5 %; 3.9 %
+    # with the quads' mean normals)
     from core_se3 import Problem
     X, q = _cubed_sphere(16)
     raw = meshio.Mesh(X, [("quad", q)])
@@ -236,3 +239,22 @@ def test_a_closed_sphere_from_a_file_can_be_solved_on_the_default_frames():
         warnings.simplefilter("ignore", MeshWarning)
         other = pinched(from_meshio(raw, d1_hint=(1.0, 0.3, 0.2)))
     assert abs(pinched(m) / other - 1.0) < 0.04
+
+
+def test_the_normals_of_a_doubly_curved_file_mesh_are_fitted_to_its_nodes():
+    # the whole hemisphere with its interior nodes moved along the sphere at random by up to 0.3 of
+    # the spacing: the mean of the quads' normals is off the sphere's by up to 6.1 / 3.0 deg on 8x8 /
+    # 16x16 (which made a thin quarter of such a mesh 0.64 ... 0.81 of the exact normals' deflection),
+    # the quadric fitted to each node's ring by 0.34 / 0.14 deg
+    R = 10.0
+    for n in (8, 16):
+        X, q, _ = _whole_hemisphere(n, R)
+        rng = np.random.default_rng(1)
+        lat, lon = np.arcsin(X[:, 2] / R), np.arctan2(X[:, 1], X[:, 0])
+        inside = (lat > 1e-9) & (lat < np.radians(72.0) - 1e-9)
+        lat = lat + inside * rng.uniform(-0.3, 0.3, len(X)) * np.radians(72.0) / n
+        lon = lon + inside * rng.uniform(-0.3, 0.3, len(X)) * np.pi / 2 / n
+        X = R * np.stack([np.cos(lat) * np.cos(lon), np.cos(lat) * np.sin(lon), np.sin(lat)], 1)
+        m = from_meshio(meshio.Mesh(X, [("quad", q)]))
+        off = np.degrees(np.arccos(np.clip(np.einsum("ni,ni->n", m.g0[:, :3, 2], X / R), -1.0, 1.0)))
+        assert off.max() < 0.5, (n, off.max())

@@ -167,7 +167,9 @@ def from_meshio(source, d1_hint=None, edges=None, triangles="error"):
     and 2.2, ASCII and binary, VTU, ...
 
     Nodal frames: d3 = area-weighted mean of the adjacent quads' normals (quads must be
-    consistently oriented: the normal is the right-hand side of the node order).  Without a
+    consistently oriented: the normal is the right-hand side of the node order), on doubly curved
+    parts the normal of a quadric fitted to each node's ring (the mean is off by half an element's
+    angle at a boundary and by the distortion inside, which thin domes feel).  Without a
     ``d1_hint``, d1 = the projection of +x on flat and developable parts (where the element makes
     the frames parallel whatever d1 is: ``mesh.gauge``), and on doubly curved parts (domes,
     spheres, bellows, whose frames it keeps as given) d1 along the mesh's own edges
@@ -251,8 +253,7 @@ def from_meshio(source, d1_hint=None, edges=None, triangles="error"):
     for name, nodes in _point_sets(raw, remap).items():
         named.setdefault(name, nodes)           # a group of lines of the same name keeps its order
     mesh = Mesh(frames_from(X, t, d3), quads, named, regions=regions)
-    if d1_hint is None:
-        _edge_frames_where_curved(mesh)
+    _curved_part_frames(mesh, d1_hint)
     for name, pred in (edges or {}).items():
         mesh.edges[name] = np.nonzero(pred(mesh.X))[0]
     # the file's points that no quad uses, when dropping them renumbered the nodes after them
@@ -270,24 +271,72 @@ def from_meshio(source, d1_hint=None, edges=None, triangles="error"):
 DEFAULT_HINT = (1.0, 0.0, 0.0)
 
 
-def _edge_frames_where_curved(mesh):
-    """Without a d1_hint: on the doubly curved parts (those whose frames the least-turn gauge
-    cannot make parallel, ``mesh.gauge``), d1 along the mesh's own edges
-    (:func:`~core_se3.mesh.cross_field.edge_aligned_d1`) instead of DEFAULT_HINT's projection,
-    in place; flat and developable parts keep it (the gauge decides there, and their angles are
-    kept: the same element to the bit).  A projected constant hint locked the thin whole
-    hemisphere (R/h 1e4: 0.30 / 0.47 / 0.93 of its meridian frames' deflection on 4x4 / 8x8 /
-    16x16 per quarter); the edges' own directions are its meridians (docs/ELEMENTS.md, "Nodal
-    frames")."""
+def _curved_part_frames(mesh, d1_hint):
+    """The frames of the doubly curved parts (those whose frames the least-turn gauge cannot make
+    parallel, ``mesh.gauge``), in place: d3 the normal of a quadric fitted to each node's ring
+    (``_fitted_normals``), and without a d1_hint d1 along the mesh's own edges
+    (:func:`~core_se3.mesh.cross_field.edge_aligned_d1`) instead of DEFAULT_HINT's projection.
+    Flat and developable parts keep theirs (the gauge decides there, and their angles are kept:
+    the same element to the bit).  A projected constant hint locked the thin whole hemisphere
+    (R/h 1e4: 0.30 / 0.47 / 0.93 of its meridian frames' deflection on 4x4 / 8x8 / 16x16 per
+    quarter); the edges' own directions are its meridians (docs/ELEMENTS.md, "Nodal frames")."""
     from .cross_field import edge_aligned_d1
     from .gauge import least_turn_gauge
     alpha, curved = least_turn_gauge(mesh.g0, mesh.edge_nodes)
     mesh.gauge_angles = alpha                  # the element's gauge (it would compute the same)
     if not curved.any():
         return
-    d3 = mesh.g0[:, :3, 2]
-    d1 = edge_aligned_d1(mesh.X, mesh.quads, d3, edges=mesh.edge_nodes)
+    d3 = mesh.g0[:, :3, 2].copy()
+    d3[curved] = _fitted_normals(mesh.X, mesh.quads, d3)[curved]
+    if d1_hint is None:
+        d1 = edge_aligned_d1(mesh.X, mesh.quads, d3, edges=mesh.edge_nodes)
+    else:
+        d1 = _projected_hint(d1_hint, d3)
     mesh.g0[curved] = frames_from(mesh.X[curved], d1[curved], d3[curved])
+
+
+#: the largest turn [deg] of a fitted normal from the quads' mean normal (else the mean is kept)
+FIT_TURN_MAX = 30.0
+
+
+def _fitted_normals(X, quads, d3):
+    """Unit normals (n, 3): at each node the normal at the node of the quadric z = d x + e y +
+    a x^2 + b x y + c y^2 (8 neighbours or more in its quads; with fewer, at a boundary, z = d x +
+    e y + k (x^2 + y^2); fewer than 3: none) fitted (least squares) to the neighbours in the frame
+    of its quads' mean normal d3; where there is none, or it turns from d3 by more than
+    FIT_TURN_MAX, d3.  The mean of the quads' normals is off by half an element's angle at a
+    boundary and by the mesh's distortion inside: the thin whole hemisphere from a file (R/h 1e4,
+    4x4) gave 0.978 of its exact normals' deflection, a quarter with interior nodes moved by 0.3
+    of the spacing (16x16) 0.64 ... 0.81; with the fitted normals 1.001 and 1.00 ... 1.01
+    (benchmarks/results/curved_frames.md)."""
+    n = len(X)
+    pairs = np.concatenate([np.stack([quads[:, i], quads[:, j]], 1) for i in range(4) for j in range(4) if i != j])
+    key = np.unique(pairs[:, 0] * n + pairs[:, 1])
+    a, b = key // n, key % n
+    t1 = np.cross(d3, np.where(np.abs(d3[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]]))
+    t1 /= np.linalg.norm(t1, axis=1, keepdims=True)
+    t2 = np.cross(d3, t1)
+    V = X[b] - X[a]
+    L = np.sqrt(np.bincount(a, np.einsum("pi,pi->p", V, V), n) / np.maximum(np.bincount(a, minlength=n), 1))
+    x, y, z = (np.einsum("pi,pi->p", V, t[a]) / L[a] for t in (t1, t2, d3))
+    count = np.bincount(a, minlength=n)
+    slopes = []
+    for A in (np.stack([x, y, x * x, x * y, y * y], 1), np.stack([x, y, x * x + y * y], 1)):
+        k = A.shape[1]
+        AtA, Atz = np.zeros((n, k, k)), np.zeros((n, k))
+        np.add.at(AtA, a, A[:, :, None] * A[:, None, :])
+        np.add.at(Atz, a, A * z[:, None])
+        AtA[count < k] = np.eye(k)
+        slopes.append(np.linalg.solve(AtA + 1e-12 * np.eye(k), Atz[..., None])[..., :2, 0])
+    # a ring all round (8 neighbours on a regular mesh): the full quadric; a boundary node's
+    # one-sided ring: one curvature (the full one extrapolates: 10 deg off on a cubed cap's edge)
+    ok = count >= 3
+    c = np.where((count >= 8)[:, None], slopes[0], slopes[1])
+    v = d3 - c[:, :1] * t1 - c[:, 1:2] * t2
+    v /= np.linalg.norm(v, axis=1, keepdims=True)
+    keep = ~ok | (np.einsum("ni,ni->n", v, d3) < np.cos(np.radians(FIT_TURN_MAX)))
+    v[keep] = d3[keep]
+    return v
 
 
 #: the element's d1 turning by more than this within a quad [deg] (on a doubly curved part, which
@@ -553,13 +602,19 @@ def _nodal_directors(X, quads, d1_hint):
                         f"{around[:5].tolist()}{' ...' if len(around) > 5 else ''}, have zero area or their normals "
                         f"cancel): remove collapsed quads or merge the nodes that coincide")
     d3 = nn / norm[:, None]
-    hint = np.broadcast_to(np.asarray(d1_hint, float), X.shape)
+    return _projected_hint(d1_hint, d3), d3
+
+
+def _projected_hint(d1_hint, d3):
+    """d1_hint (3,) or (n, 3) projected on the planes normal to d3 (n, 3) (unnormalised; the global
+    y axis where that degenerates, x where y does too: a hint of y on a plate normal to y)."""
+    hint = np.broadcast_to(np.asarray(d1_hint, float), d3.shape)
     t = hint - np.einsum("ni,ni->n", hint, d3)[:, None] * d3
-    for axis in (1, 0):                 # the global y axis where the hint degenerates, x where y does too
+    for axis in (1, 0):
         weak = np.linalg.norm(t, axis=1) < 1e-6
         if weak.any():
             t[weak] = np.eye(3)[axis] - d3[weak, axis:axis + 1] * d3[weak]
-    return t, d3
+    return t
 
 
 def _on_shell(name, segs, remap):
