@@ -324,8 +324,10 @@ def _fitted_normals(X, quads, d3):
     for A in (np.stack([x, y, x * x, x * y, y * y], 1), np.stack([x, y, x * x + y * y], 1)):
         k = A.shape[1]
         AtA, Atz = np.zeros((n, k, k)), np.zeros((n, k))
-        np.add.at(AtA, a, A[:, :, None] * A[:, None, :])
-        np.add.at(Atz, a, A * z[:, None])
+        for i in range(k):                     # per entry: memory of the pairs, not 25 times it
+            Atz[:, i] = np.bincount(a, A[:, i] * z, n)
+            for j in range(i, k):
+                AtA[:, i, j] = AtA[:, j, i] = np.bincount(a, A[:, i] * A[:, j], n)
         AtA[count < k] = np.eye(k)
         slopes.append(np.linalg.solve(AtA + 1e-12 * np.eye(k), Atz[..., None])[..., :2, 0])
     # a ring all round (8 neighbours on a regular mesh): the full quadric; a boundary node's
