@@ -727,7 +727,7 @@ def file_report(whole_f, quarter_f, cap_f, gmsh_f, sphere_f):
         "`mesh.from_meshio` without a `d1_hint`: on doubly curved parts d1 along the mesh's own edges "
         "(`core_se3/mesh/cross_field.py`); flat and developable parts keep the projection of +x (the gauge "
         "decides there). Each mesh written through meshio with points and quads only (no frames) and read back; "
-        "the file's normals d3 are the area-weighted means of the quads' (the generators': exact).", "",
+        "the file's normals d3 on doubly curved parts are those of quadrics fitted to the nodes' rings (`readers._fitted_normals`; the generators': exact). 'nan': no answer (ElementTooDistortedError: the hint is the normal somewhere, and d1 flips there).", "",
         "### The whole hemisphere (`whole`) from a file", "",
         "Over the generator's meridian frames on the same mesh. 'file normals, meridian d1': the file read with "
         "the meridians as a per-node hint; 'parallels': those frames turned by 90 deg alike; 'generator, "
