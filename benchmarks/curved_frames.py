@@ -16,7 +16,12 @@ measures what that costs:
    edge geodesics meet at a parallelogram's corner angles (a prototype: blocks of a mesh whose
    elements own their nodes, turned back and assembled), each over the generator's own value.
 3. The whole hemisphere (hole clamped, equator free, four alternating loads) with d1 the
-   projection of a constant hint (a mesh file's default) against the meridians.
+   projection of a constant hint (a mesh file's former default) against the meridians.
+4. and 5. Nodal turns that zero the elements' parallelogram defects; the alternating turns.
+6. A mesh file's default frames (``mesh.from_meshio`` without a d1_hint: d1 along the mesh's
+   edges on doubly curved parts, ``mesh.cross_field``): the whole hemisphere, the quarter with
+   moved nodes, the cubed-sphere cap and Gmsh's unstructured dome, each written through meshio
+   without frames and read back, against the hints +x and (1, 0.3, 0.2).
 """
 from __future__ import annotations
 
@@ -179,13 +184,18 @@ class PerElementFrames:
 
 
 def quarter(n, h, transform=None, per_element=False):
-    """The pinched quarter hemisphere's outward deflection under its load."""
+    """The pinched quarter hemisphere's outward deflection under its load (nan where frames that
+    flip across an element cannot be solved: ElementTooDistortedError)."""
+    from core_se3.errors import ElementTooDistortedError
     p, measure = sc.pinched_hemisphere(n, h=h, transform=transform)
     if per_element:
         p._element = PerElementFrames(p)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return measure(p.solve_linear())
+        try:
+            return measure(p.solve_linear())
+        except ElementTooDistortedError:
+            return float("nan")
 
 
 def quarter_rows(meshes=(4, 8, 16), thicknesses=(1.0, 0.04, 1e-3)):
@@ -226,7 +236,13 @@ def whole(n, h, hint=None):
     X = g[:, :3, 3]
     if hint is not None:
         g = mesh.frames_from(X, np.tile(np.asarray(hint, float), (len(X), 1)), g[:, :3, 2])
-    p = Problem(mesh.Mesh(g, quads), Material(6.825e7, 0.3, h))
+    return whole_solve(mesh.Mesh(g, quads), h)
+
+
+def whole_solve(m, h):
+    """``whole``'s deflection and ElementWarning on a given mesh of the whole hemisphere."""
+    X = m.X
+    p = Problem(m, Material(6.825e7, 0.3, h))
     p.fix(list(np.flatnonzero(X[:, 2] > X[:, 2].max() - 1e-9)), (0, 1, 2, 3, 4, 5))
     ring = np.flatnonzero(np.abs(X[:, 2]) < 1e-9)
     loaded = []
@@ -235,9 +251,13 @@ def whole(n, h, hint=None):
         node = ring[np.argmin(np.linalg.norm(X[ring] - target, axis=1))]
         p.add_nodal_load([node], force=tuple((-1) ** k * X[node] / R))
         loaded.append(node)
+    from core_se3.errors import ElementTooDistortedError
     with warnings.catch_warnings(record=True) as seen:
         warnings.simplefilter("always")
-        u = p.solve_linear().displacements()
+        try:
+            u = p.solve_linear().displacements()
+        except ElementTooDistortedError:          # frames that flip across an element
+            return float("nan"), False
     warned = any(type(w.message).__name__ == "ElementWarning" for w in seen)
     return float(u[loaded[0]] @ X[loaded[0]] / R), warned
 
@@ -320,7 +340,9 @@ def main():
         print(*row, flush=True)
     cap = cap_element_optimum()
     print("cap element", cap, flush=True)
-    OUT.write_text(report(one, q, w, nodal, cap, alternating_rows()))
+    text = report(one, q, w, nodal, cap, alternating_rows())
+    files = (whole_file_rows(), quarter_file_rows(), cap_file_rows(), gmsh_rows(), sphere_rows())
+    OUT.write_text(text + file_report(*files))
     print("wrote", OUT)
 
 
@@ -438,6 +460,336 @@ def alternating_rows(meshes=(3, 4, 5), turns=(-0.1, -0.03, 0.03, 0.1), h=1e-3):
         rows.append((n, defect, [quarter(n, h, gauged(b)) / base for b in turns]))
         print("alternating", rows[-1], flush=True)
     return rows, turns, R / h
+
+
+
+# ---------------------------------------------------------------- 6. a mesh file's default frames
+def through_file(m, **kw):
+    """The mesh ``m`` written through meshio (points and quads only: no frames) and read back with
+    ``mesh.from_meshio(path, **kw)``; (Mesh, the MeshWarnings' texts)."""
+    import tempfile
+
+    import meshio
+    with tempfile.TemporaryDirectory() as tmp:
+        path = os.path.join(tmp, "shell.vtu")
+        meshio.write(path, meshio.Mesh(m.X, [("quad", m.quads)]))
+        with warnings.catch_warnings(record=True) as seen:
+            warnings.simplefilter("always")
+            out = mesh.from_meshio(path, **kw)
+    return out, [str(w.message) for w in seen if type(w.message).__name__ == "MeshWarning"]
+
+
+#: the frames of a file compared: the new default (None: d1 along the mesh's edges on doubly curved
+#: parts), main's default hint +x and the hint of sections 3
+FILE_HINTS = (("default (edges)", {}), ("hint +x (the old default)", dict(d1_hint=(1.0, 0.0, 0.0))),
+              ("hint (1, 0.3, 0.2)", dict(d1_hint=(1.0, 0.3, 0.2))))
+
+
+def whole_file_rows(meshes=(4, 8, 16, 32), thicknesses=(0.04, 1e-3), reference=64):
+    """The whole hemisphere (``whole``) written to a file without frames and read back: each of
+    FILE_HINTS, the file's normals with the meridian d1 per node and with the parallels (turned by
+    90 deg), and the generator's parallels, over the generator's meridian frames; and the
+    generator's meridian frames on ``reference`` x ``reference`` per quarter (``refs``: R/h -> value)."""
+    rows, refs = [], {}
+    for h in thicknesses:
+        refs[R / h] = whole(reference, h)[0]
+        for n in meshes:
+            g, quads = whole_hemisphere(n)
+            base, _ = whole(n, h)
+            gen = mesh.Mesh(g, quads)
+            cells, said = [], []
+            for _, kw in FILE_HINTS:
+                fm, w = through_file(gen, **kw)
+                cells.append(whole_solve(fm, h)[0] / base)
+                said.append(len(w))
+            fm, _ = through_file(gen, d1_hint=g[:, :3, 0])
+            cells.append(whole_solve(fm, h)[0] / base)
+            quarter_turn = np.full(len(g), np.pi / 2)
+            cells.append(whole_solve(mesh.Mesh(turned_about_normal(fm.g0, quarter_turn), quads), h)[0] / base)
+            cells.append(whole_solve(mesh.Mesh(turned_about_normal(g, quarter_turn), quads), h)[0] / base)
+            rows.append((R / h, n, base, cells, said))
+            print(f"whole file R/h {R / h:g} {n}x{n}", base, np.round(cells, 4), said, flush=True)
+    return rows, refs
+
+
+def _quarter_file(n, fraction, kw, seed=1):
+    """Transform: the quarter with moved interior nodes (``jittered``) through a file read with
+    ``kw``; the symmetry edges' nodes keep the generator's frames (the supports hold body-frame
+    dofs there), the file's frames all turned by the quarter turn that brings them closest to
+    the generator's on those nodes (a turn of all frames alike does not matter: section 6)."""
+    def transform(m):
+        moved = jittered(fraction, n, seed)(m) if fraction else m
+        given = dict(kw, d1_hint=moved.g0[:, :3, 0]) if isinstance(kw.get("d1_hint"), str) else kw
+        fm, _ = through_file(moved, **given)
+        edge = ~_interior(moved)
+        score = [np.einsum("ni,ni->n", turned_about_normal(fm.g0, np.full(m.n_nodes, k * np.pi / 2))[edge, :3, 0],
+                           moved.g0[edge, :3, 0]).sum() for k in range(4)]
+        g = turned_about_normal(fm.g0, np.full(m.n_nodes, np.argmax(score) * np.pi / 2))
+        g[edge] = moved.g0[edge]
+        return mesh.Mesh(g, m.quads, edges=m.edges)
+    return transform
+
+
+def _exact_normals(transform):
+    """Transform: ``transform``'s mesh with the sphere's exact normals X / R (its d1 projected)."""
+    def exact(m):
+        out = transform(m)
+        return mesh.Mesh(mesh.frames_from(out.X, out.g0[:, :3, 0], out.X / R), out.quads, edges=out.edges)
+    return exact
+
+
+def quarter_file_rows(meshes=(4, 8, 16), thicknesses=(0.04, 1e-3), fractions=(0.0, 0.1, 0.3), seeds=(1,),
+                      more_seeds=((1e-3, 8, (2, 3, 4)), (1e-3, 16, (2, 3, 4)))):
+    """The pinched quarter hemisphere with interior nodes moved (``jittered``, ``seed``) read from a
+    file: each of FILE_HINTS, the file's normals with the generator's (meridian) d1 per node, and
+    the default's and +x's d1 on the exact normals X / R, over the generator's own value on the
+    moved mesh (meridian d1, exact normals); ``more_seeds``:
+    (h, n, seeds) of the moved meshes also run with other random moves."""
+    cases = [(h, n, f, seed) for h in thicknesses for n in meshes for f in fractions for seed in seeds]
+    cases += [(h, n, f, seed) for h, n, extra in more_seeds for f in fractions if f for seed in extra]
+    rows = []
+    for h, n, f, seed in cases:
+        base = quarter(n, h, jittered(f, n, seed) if f else None)
+        kws = [kw for _, kw in FILE_HINTS] + [dict(d1_hint="generator")]
+        cells = [quarter(n, h, _quarter_file(n, f, kw, seed)) / base for kw in kws]
+        cells += [quarter(n, h, _exact_normals(_quarter_file(n, f, kw, seed))) / base for kw in kws[:2]]
+        rows.append((R / h, n, f, seed, base, cells))
+        print(f"quarter file R/h {R / h:g} {n}x{n} moved {f} seed {seed}", base, np.round(cells, 4), flush=True)
+    return rows
+
+
+def cap_solve(m, n, h):
+    """The cubed-sphere cap (``cubed_cap``, half-angle 0.6; its node order) on the mesh ``m``: one
+    side clamped, three free, a radial unit load at the middle of the opposite side; the deflection
+    (benchmarks/curved_locking.py's ``cap``)."""
+    X = m.X
+    p = Problem(m, Material(6.825e7, 0.3, h))
+    idx = np.arange(len(X)).reshape(n + 1, n + 1)
+    p.fix(list(idx[0]), (0, 1, 2, 3, 4, 5))
+    node = int(idx[n, n // 2])
+    p.add_nodal_load([node], force=tuple(X[node] / R))
+    from core_se3.errors import ElementTooDistortedError
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        try:
+            u = p.solve_linear().displacements()
+        except ElementTooDistortedError:          # frames that flip across an element
+            return float("nan")
+    return float(u[node] @ X[node] / R)
+
+
+def cap_file_rows(meshes=(4, 8, 16), thicknesses=(0.04, 1e-3)):
+    """The cubed-sphere cap read from a file: each of FILE_HINTS and the file's normals with the
+    generator's d1 per node, over the generator's frames (d1 along the grid)."""
+    rows = []
+    for h in thicknesses:
+        for n in meshes:
+            g, quads = cubed_cap(n)
+            gen = mesh.Mesh(g, quads)
+            base = cap_solve(gen, n, h)
+            cells = [cap_solve(through_file(gen, **kw)[0], n, h) / base for _, kw in FILE_HINTS]
+            cells.append(cap_solve(through_file(gen, d1_hint=g[:, :3, 0])[0], n, h) / base)
+            rows.append((R / h, n, base, cells))
+            print(f"cap file R/h {R / h:g} {n}x{n}", base, np.round(cells, 4), flush=True)
+    return rows
+
+
+def gmsh_dome(size, path):
+    """Write an unstructured quad mesh of the whole hemisphere with the 18 deg hole (``whole``)
+    made by Gmsh (Frontal-Delaunay for quads, Blossom recombination, every cell subdivided into
+    quads on the sphere) to ``path``: four quarter patches (so that the loaded points are nodes)."""
+    import gmsh
+    gmsh.initialize(readConfigFiles=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.add("dome")
+        occ = gmsh.model.occ
+        arc = occ.addCircle(0, 0, 0, R, angle1=0.0, angle2=np.radians(72.0))
+        occ.rotate([(1, arc)], 0, 0, 0, 1, 0, 0, np.pi / 2)
+        for k in range(4):
+            c = occ.copy([(1, arc)])
+            occ.rotate(c, 0, 0, 0, 0, 0, 1, k * np.pi / 2)
+            occ.revolve(c, 0, 0, 0, 0, 0, 1, np.pi / 2)
+        occ.remove([(1, arc)])
+        occ.removeAllDuplicates()
+        occ.synchronize()
+        gmsh.model.addPhysicalGroup(2, [t for _, t in gmsh.model.getEntities(2)], name="shell")
+        for opt, val in (("Mesh.MeshSizeMax", size), ("Mesh.MeshSizeMin", size / 4), ("Mesh.Algorithm", 8),
+                         ("Mesh.RecombineAll", 1), ("Mesh.RecombinationAlgorithm", 1),
+                         ("Mesh.SubdivisionAlgorithm", 1), ("Mesh.MshFileVersion", 4.1)):
+            gmsh.option.setNumber(opt, val)
+        gmsh.model.mesh.generate(2)
+        gmsh.write(path)
+    finally:
+        gmsh.finalize()
+
+
+def gmsh_rows(sizes=((1.6, "16x16"), (0.8, "32x32")), thicknesses=(0.04, 1e-3), reference=64):
+    """The whole hemisphere (``whole``) on Gmsh's unstructured quads read from a file: each of
+    FILE_HINTS and the hint +z (the meridians' projection on this sphere), over the generator's
+    meridian frames on ``reference`` x ``reference`` per quarter; also the number of the
+    default's quads in which d1 turns by more than D1_TURN_MAX."""
+    import tempfile
+
+    from core_se3.mesh.readers import D1_TURN_MAX
+    rows = []
+    hints = FILE_HINTS + (("hint +z (meridians)", dict(d1_hint=(0.0, 0.0, 1.0))),)
+    for h in thicknesses:
+        ref, _ = whole(reference, h)
+        for size, like in sizes:
+            with tempfile.TemporaryDirectory() as tmp:
+                path = os.path.join(tmp, "dome.msh")
+                gmsh_dome(size, path)
+                cells, said = [], []
+                for _, kw in hints:
+                    with warnings.catch_warnings(record=True) as seen:
+                        warnings.simplefilter("always")
+                        m = mesh.from_meshio(path, triangles="split", **kw)
+                    cells.append(whole_solve(m, h)[0] / ref)
+                    said.append(sum(type(w.message).__name__ == "MeshWarning" for w in seen))
+                m = mesh.from_meshio(path, triangles="split")
+            turns = quad_turns(m)
+            rows.append((R / h, like, m.n_elements, ref, cells, said, int((turns > D1_TURN_MAX).sum())))
+            print(f"gmsh R/h {R / h:g} {like} ({m.n_elements} quads)", ref, np.round(cells, 4), said, rows[-1][-1],
+                  flush=True)
+    return rows, [name for name, _ in hints]
+
+
+def cubed_sphere(n):
+    """Points (N, 3) and outward quads of the closed sphere R meshed by the six faces of a cube
+    (n x n each) projected on it."""
+    u = np.linspace(-1.0, 1.0, n + 1)
+    U, V = np.meshgrid(u, u, indexing="ij")
+    pts, quads = [], []
+    for ax in range(3):
+        for sgn in (1.0, -1.0):
+            P = np.zeros((n + 1, n + 1, 3))
+            P[..., ax], P[..., (ax + 1) % 3], P[..., (ax + 2) % 3] = sgn, U, sgn * V
+            idx = len(pts) * (n + 1) ** 2 + np.arange((n + 1) ** 2).reshape(n + 1, n + 1)
+            quads.append(np.stack([idx[:-1, :-1], idx[1:, :-1], idx[1:, 1:], idx[:-1, 1:]], -1).reshape(-1, 4))
+            pts.append(P.reshape(-1, 3))
+    X = np.concatenate(pts)
+    X = R * X / np.linalg.norm(X, axis=1, keepdims=True)
+    _, first, inv = np.unique(np.round(X, 9), axis=0, return_index=True, return_inverse=True)
+    q = inv.ravel()[np.concatenate(quads)]
+    P = X[first][q]
+    out = np.einsum("ei,ei->e", np.cross(P[:, 2] - P[:, 0], P[:, 3] - P[:, 1]), P.mean(1)) > 0
+    return X[first], np.where(out[:, None], q, q[:, ::-1])
+
+
+def sphere_rows(meshes=(4, 8, 16, 24), h=0.1):
+    """The closed cubed sphere read from a file, pinched (a unit load down at the top node, the
+    bottom node clamped): the deflection on each of FILE_HINTS (nan: ElementTooDistortedError)
+    and the largest turn [deg] of d1 across an edge on the default frames."""
+    from core_se3.errors import ElementTooDistortedError
+    rows = []
+    for n in meshes:
+        X, q = cubed_sphere(n)
+        cells = []
+        for _, kw in FILE_HINTS:
+            m, _ = through_file(mesh.Mesh(mesh.frames_from(X, np.cross(X, [0.3, 0.5, 0.7]), X), q), **kw)
+            p = Problem(m, Material(6.825e7, 0.3, h))
+            top, bottom = int(np.argmax(m.X[:, 2])), int(np.argmin(m.X[:, 2]))
+            p.fix([bottom], (0, 1, 2, 3, 4, 5))
+            p.add_nodal_load([top], force=(0.0, 0.0, -1.0))
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                try:
+                    cells.append(float(p.solve_linear().displacements()[top, 2]))
+                except ElementTooDistortedError:
+                    cells.append(float("nan"))
+            if not kw:
+                e = m.edge_nodes
+                worst = np.degrees(np.arccos(np.clip(np.einsum("ei,ei->e", m.g0[e[:, 0], :3, 0],
+                                                               m.g0[e[:, 1], :3, 0]), -1.0, 1.0))).max()
+        rows.append((n, len(q), cells, worst))
+        print(f"sphere {n}x{n} per face", cells, worst, flush=True)
+    return rows, R / h
+
+
+def quad_turns(m):
+    """The largest turn [deg] of d1 about the quad's normal between two nodes of each quad."""
+    P = m.X[m.quads]
+    nq = np.cross(P[:, 2] - P[:, 0], P[:, 3] - P[:, 1])
+    nq /= np.linalg.norm(nq, axis=1, keepdims=True)
+    d1 = m.g0[m.quads][:, :, :3, 0]
+    t = d1 - np.einsum("eki,ei->ek", d1, nq)[..., None] * nq[:, None]
+    t /= np.linalg.norm(t, axis=2, keepdims=True)
+    return np.degrees(np.arccos(np.clip(np.einsum("eki,eli->ekl", t, t).min(axis=(1, 2)), -1.0, 1.0)))
+
+
+def file_report(whole_f, quarter_f, cap_f, gmsh_f, sphere_f):
+    """The markdown of section 6 (``whole_file_rows``, ``quarter_file_rows``, ``cap_file_rows``,
+    ``gmsh_rows``, ``sphere_rows``)."""
+    names = [name for name, _ in FILE_HINTS]
+    lines = [
+        "", "## A mesh file's default frames: d1 along the mesh's edges", "",
+        "`mesh.from_meshio` without a `d1_hint`: on doubly curved parts d1 along the mesh's own edges "
+        "(`core_se3/mesh/cross_field.py`); flat and developable parts keep the projection of +x (the gauge "
+        "decides there). Each mesh written through meshio with points and quads only (no frames) and read back; "
+        "the file's normals d3 on doubly curved parts are those of quadrics fitted to the nodes' rings (`readers._fitted_normals`; the generators': exact). 'nan': no answer (ElementTooDistortedError: the hint is the normal somewhere, and d1 flips there).", "",
+        "### The whole hemisphere (`whole`) from a file", "",
+        "Over the generator's meridian frames on the same mesh. 'file normals, meridian d1': the file read with "
+        "the meridians as a per-node hint; 'parallels': those frames turned by 90 deg alike; 'generator, "
+        "parallels': the generator's frames turned by 90 deg. MeshWarnings: how many the reader gave for "
+        "each of the first three columns.", "",
+        "| R/h | mesh | meridian d1 (generator) | " + " | ".join(names)
+        + " | file normals, meridian d1 | file normals, parallels | generator, parallels | MeshWarnings |",
+        "|---:|---|---:|" + "---:|" * (len(names) + 3) + "---|"]
+    rows, refs = whole_f
+    lines += [f"| {rh:g} | {n}x{n} | {b:.5g} | " + " | ".join(f"{c:.4f}" for c in cells)
+              + f" | {' / '.join(map(str, said))} |" for rh, n, b, cells, said in rows]
+    lines += [
+        "", "The same over the generator's meridian frames on 64x64 per quarter (" + ", ".join(
+            f"R/h {rh:g}: {v:.5g}" for rh, v in refs.items()) + "): the meridian frames and the default converge "
+        "from below, the hint +x goes over and comes back (its d1 turns about the loaded point, where +x is "
+        "the normal).", "",
+        "| R/h | mesh | meridian d1 (generator) | default (edges) | hint +x (the old default) | hint (1, 0.3, 0.2) |",
+        "|---:|---|---:|---:|---:|---:|"]
+    lines += [f"| {rh:g} | {n}x{n} | {b / refs[rh]:.4f} | " + " | ".join(f"{c * b / refs[rh]:.4f}" for c in cells[:3])
+              + " |" for rh, n, b, cells, said in rows]
+    lines += [
+        "", "### The pinched quarter hemisphere, interior nodes moved at random, from a file", "",
+        "Interior nodes moved by up to the fraction of the spacing (`jittered`, the seed given), written and read "
+        "back; the symmetry edges keep the generator's frames (the supports hold body-frame dofs), the file's "
+        "frames all turned by the quarter turn closest to the generator's there. Over the generator's value on "
+        "the moved mesh (meridian d1, exact normals). The last two columns put the file's d1 (the default's, "
+        "+x's) on the sphere's exact normals: the frames' share alone.", "",
+        "| R/h | mesh | moved | seed | generator | " + " | ".join(names) + " | file normals, meridian d1 "
+        "| default's d1, exact normals | +x's d1, exact normals |",
+        "|---:|---|---:|---:|---:|" + "---:|" * (len(names) + 3)]
+    lines += [f"| {rh:g} | {n}x{n} | {f:g} | {seed} | {b:.5g} | " + " | ".join(f"{c:.4f}" for c in cells) + " |"
+              for rh, n, f, seed, b, cells in quarter_f]
+    lines += [
+        "", "### The cubed-sphere cap (`cubed_cap`, half-angle 0.6; benchmarks/curved_locking.py's `cap`) from a file",
+        "", "Over the generator's frames (d1 along the grid's first direction, exact normals).", "",
+        "| R/h | mesh | generator | " + " | ".join(names) + " | file normals, the grid's d1 |",
+        "|---:|---|---:|" + "---:|" * (len(names) + 1)]
+    lines += [f"| {rh:g} | {n}x{n} | {b:.5g} | " + " | ".join(f"{c:.4f}" for c in cells) + " |"
+              for rh, n, b, cells in cap_f]
+    rows, hint_names = gmsh_f
+    lines += [
+        "", "### The whole hemisphere on Gmsh's unstructured quads", "",
+        "`gmsh_dome` (Frontal-Delaunay for quads, Blossom recombination, every cell subdivided into quads on the "
+        "sphere; element sizes 1.6 and 0.8, about the quads of 16x16 and 32x32 per quarter), read with "
+        "triangles = \"split\"; over the generator's meridian frames on 64x64 per quarter. Turning quads: "
+        "the default's quads in which d1 turns by more than 30 deg (around irregular nodes; the reader warns "
+        "of these for a given hint only).", "",
+        "| R/h | mesh | quads | 64x64 | " + " | ".join(hint_names) + " | MeshWarnings | turning quads |",
+        "|---:|---|---:|---:|" + "---:|" * len(hint_names) + "---|---:|"]
+    lines += [f"| {rh:g} | {like} | {m} | {ref:.5g} | " + " | ".join(f"{c:.4f}" for c in cells)
+              + f" | {' / '.join(map(str, said))} | {turning} |" for rh, like, m, ref, cells, said, turning in rows]
+    rows, rh = sphere_f
+    lines += [
+        "", "### A closed sphere (`cubed_sphere`) from a file", "",
+        f"R/h {rh:g}, pinched: a unit load down at the top node, the bottom node clamped; the deflection there "
+        "(a point load's: it grows with the mesh). nan: no answer (ElementTooDistortedError: d1 turns by about "
+        "180 deg across an element). Largest turn: of the default's d1 across an edge (`HALF_TURN` = 135 deg).",
+        "", "| mesh per face | quads | " + " | ".join(names) + " | largest turn [deg] |",
+        "|---|---:|" + "---:|" * len(names) + "---:|"]
+    lines += [f"| {n}x{n} | {m} | " + " | ".join(f"{c:.4g}" for c in cells) + f" | {worst:.1f} |"
+              for n, m, cells, worst in rows]
+    return "\n".join(lines) + "\n"
 
 
 if __name__ == "__main__":

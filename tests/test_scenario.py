@@ -415,11 +415,36 @@ def _file_doc(fname):
     return d
 
 
+def test_mesh_file_of_a_dome_without_d1_hint_takes_its_edges(tmp_path):
+    """[mesh] file without d1_hint: a doubly curved part takes d1 along the mesh's edges (the
+    reader's default: a lat-long dome's parallels or meridians; before, the projection of +x,
+    which locked thin domes), and a given d1_hint is projected as before."""
+    from core_se3.mesh import from_meshio
+    lat, lon = np.meshgrid(np.linspace(0.0, 1.2, 4), np.linspace(0.0, 2 * np.pi, 13)[:-1], indexing="ij")
+    X = np.stack([np.cos(lat) * np.cos(lon), np.cos(lat) * np.sin(lon), np.sin(lat)], -1).reshape(-1, 3)
+    i = np.arange(48).reshape(4, 12)
+    q = np.stack([i[:-1], np.roll(i, -1, 1)[:-1], np.roll(i, -1, 1)[1:], i[1:]], -1).reshape(-1, 4)
+    _write_quads(tmp_path / "dome.vtu", X, q)
+    par = np.stack([-np.sin(lon), np.cos(lon), 0 * lon], -1).reshape(-1, 3)
+    for hint, along in ((None, True), ([1.0, 0.0, 0.0], False)):
+        d = _file_doc("dome.vtu")
+        if hint is not None:
+            d["mesh"]["d1_hint"] = hint
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            scn = load_doc(tmp_path, d)
+            direct = from_meshio(str(tmp_path / "dome.vtu"), d1_hint=hint)
+        cos = np.abs(np.einsum("ni,ni->n", scn.mesh.g0[:, :3, 0], par))
+        assert np.array_equal(scn.mesh.g0, direct.g0)
+        assert (np.minimum(1.0 - cos, cos).max() < 1e-12) == along
+        assert ("d1_hint" in scn.spec["mesh"]) == (hint is not None)
+
+
 def test_mesh_file_ok(tmp_path):
     X = [[0, 0, 0], [1, 0, 0], [2, 0, 0], [0, 1, 0], [1, 1, 0], [2, 1, 0]]
     _write_quads(tmp_path / "m.vtu", X, [[0, 1, 4, 3], [1, 2, 5, 4]])
     scn = load_doc(tmp_path, _file_doc("m.vtu"))
-    assert scn.mesh.n_elements == 2 and scn.spec["mesh"] == {"file": "m.vtu", "d1_hint": [1.0, 0.0, 0.0]}
+    assert scn.mesh.n_elements == 2 and scn.spec["mesh"] == {"file": "m.vtu"}      # no d1_hint: none kept
 
 
 def test_mesh_file_node_ids_after_a_dropped_point_are_named(tmp_path):

@@ -42,7 +42,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 from scipy.sparse.linalg import spsolve
 
-__all__ = ["normal_turns", "least_turn_angles", "turned_about_normal", "GAUGE_TOL", "GAUGE_ITERATIONS",
+__all__ = ["normal_turns", "least_turn_angles", "least_turn_gauge", "turned_about_normal", "GAUGE_TOL", "GAUGE_ITERATIONS",
            "PARALLEL_TOL"]
 
 #: edges turning less than this about the normal [rad] need no gauge (patch-test error ~0.7 x turn)
@@ -128,11 +128,39 @@ def least_turn_angles(g0, edge_nodes):
     >>> bool(least_turn_angles(mesh.rectangle(1.0, 1.0, 2, 2).g0, mesh.rectangle(1.0, 1.0, 2, 2).edge_nodes).any())
     False
     """
+    return least_turn_gauge(g0, edge_nodes)[0]
+
+
+def least_turn_gauge(g0, edge_nodes):
+    """The gauge angles of :func:`least_turn_angles` and which nodes lie on a doubly curved part
+    (one whose frames the gauge cannot make parallel: it keeps the user's frames, angles 0).
+
+    Parameters
+    ----------
+    g0 : (n, 4, 4) array
+        Nodal frames.
+    edge_nodes : (E, 2) array of int
+        The mesh edges.
+
+    Returns
+    -------
+    alpha : (n,) ndarray
+        :func:`least_turn_angles`.
+    curved : (n,) ndarray of bool
+        The nodes of the connected parts on which the gauge would leave a turn above PARALLEL_TOL.
+
+    Example
+    -------
+    >>> from core_se3 import mesh
+    >>> m = mesh.hemisphere_quarter(10.0, 18.0, 2, 2)
+    >>> bool(least_turn_gauge(m.g0, m.edge_nodes)[1].all())
+    True
+    """
     n, E = len(g0), len(edge_nodes)
     alpha = np.zeros(n)
     omega = normal_turns(g0, edge_nodes)
     if E == 0 or np.abs(omega).max() <= GAUGE_TOL:
-        return alpha
+        return alpha, np.zeros(n, bool)
     rows = np.repeat(np.arange(E), 2)
     B = sp.csr_matrix((np.tile([-1.0, 1.0], E), (rows, edge_nodes.ravel())), shape=(E, n))
     n_parts, part = connected_components(B.T @ B, directed=False)
@@ -149,5 +177,6 @@ def least_turn_angles(g0, edge_nodes):
     # a part whose frames cannot all be made parallel (doubly curved) keeps the user's frames
     left = np.zeros(n_parts)
     np.maximum.at(left, part[edge_nodes[:, 0]], np.abs(omega))
-    alpha[left[part] > PARALLEL_TOL] = 0.0
-    return alpha
+    curved = left[part] > PARALLEL_TOL
+    alpha[curved] = 0.0
+    return alpha, curved

@@ -162,16 +162,24 @@ def _physical_dims(raw):
     return dims
 
 
-def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None, triangles="error"):
+def from_meshio(source, d1_hint=None, edges=None, triangles="error"):
     """Mesh from any quad surface mesh meshio reads (file name or ``meshio.Mesh``): Gmsh MSH 4.1
     and 2.2, ASCII and binary, VTU, ...
 
     Nodal frames: d3 = area-weighted mean of the adjacent quads' normals (quads must be
-    consistently oriented: the normal is the right-hand side of the node order); d1 = the
-    projection of ``d1_hint`` on the tangent plane (the global y axis where that degenerates, x
-    where y does too); on flat and developable parts the element makes the frames parallel
-    (``mesh.gauge``), on a doubly curved part d1 turning by more than D1_TURN_MAX = 30 deg within
-    a quad (a hint nearly normal to the shell there) is a MeshWarning: the answer depends on it.
+    consistently oriented: the normal is the right-hand side of the node order), on doubly curved
+    parts the normal of a quadric fitted to each node's ring (the mean is off by half an element's
+    angle at a boundary and by the distortion inside, which thin domes feel).  Without a
+    ``d1_hint``, d1 = the projection of +x on flat and developable parts (where the element makes
+    the frames parallel whatever d1 is: ``mesh.gauge``), and on doubly curved parts (domes,
+    spheres, bellows, whose frames it keeps as given) d1 along the mesh's own edges
+    (:func:`~core_se3.mesh.cross_field.edge_aligned_d1`: a lat-long mesh gets its meridian or
+    parallel frames; the projection of a constant hint locked the thin whole hemisphere, R/h 1e4:
+    0.30 / 0.47 / 0.93 of the meridian frames' deflection on 4x4 / 8x8 / 16x16 per quarter).
+    With a ``d1_hint``, d1 = its projection on the tangent plane everywhere (the global y axis
+    where that degenerates, x where y does too); on a doubly curved part d1 turning by more than
+    D1_TURN_MAX = 30 deg within a quad (a hint nearly normal to the shell there) is then a
+    MeshWarning: the answer depends on it.
     Named groups (Gmsh physical groups, meshio cell sets; a physical group without a name is
     named by its number, e.g. "1", as is every group but one of a name that a Gmsh file gives to
     several groups, with a MeshWarning; point sets such as Abaqus' ``*NSET`` are node sets of
@@ -200,7 +208,9 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None, triangles="error"):
     source : str, path-like or meshio.Mesh
         The file (or mesh); see :func:`read_meshio`.
     d1_hint : (3,) or (n, 3) array_like, optional
-        Lab direction of the first director (default +x).
+        Lab direction of the first director, projected on each node's tangent plane (per node:
+        e.g. a dome's meridians).  Default None: +x on flat and developable parts, along the
+        mesh's edges on doubly curved ones.
     edges : dict, optional
         Extra node sets: name -> predicate of the reference positions X (n, 3) returning a
         boolean mask.
@@ -219,6 +229,18 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None, triangles="error"):
     >>> m = from_meshio(path)
     >>> sorted(m.regions)[:2], "tip_px" in m.edges
     (['finger_mx', 'finger_my'], True)
+
+    A lat-long dome written without frames comes back with d1 along its meridians (or parallels):
+
+    >>> import meshio, numpy as np
+    >>> lat, lon = np.meshgrid(np.linspace(0.0, 1.2, 5), np.linspace(0.0, 2 * np.pi, 17)[:-1], indexing="ij")
+    >>> X = np.stack([np.cos(lat) * np.cos(lon), np.cos(lat) * np.sin(lon), np.sin(lat)], -1).reshape(-1, 3)
+    >>> i = np.arange(80).reshape(5, 16)
+    >>> q = np.stack([i[:-1], np.roll(i, -1, 1)[:-1], np.roll(i, -1, 1)[1:], i[1:]], -1).reshape(-1, 4)
+    >>> dome = from_meshio(meshio.Mesh(X, [("quad", q)]))
+    >>> lon_dir = np.stack([-np.sin(lon), np.cos(lon), 0 * lon], -1).reshape(-1, 3)     # the parallels
+    >>> bool(np.all(np.minimum(*[abs(1 - abs(np.sum(dome.g0[:, :3, k] * lon_dir, 1))) for k in (0, 1)]) < 1e-12))
+    True
     """
     if triangles not in ("error", "split"):
         raise MeshError(f"triangles must be 'error' or 'split', got {triangles!r}")
@@ -226,11 +248,12 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None, triangles="error"):
     X, blocks, sets, qb = _cell_blocks(raw, triangles)
     quads, remap = _oriented_quads(X, blocks, qb)
     X = X[remap >= 0]
-    t, d3 = _nodal_directors(X, quads, d1_hint)
+    t, d3 = _nodal_directors(X, quads, DEFAULT_HINT if d1_hint is None else d1_hint)
     named, regions = _named_groups(sets, blocks, qb, remap)
     for name, nodes in _point_sets(raw, remap).items():
         named.setdefault(name, nodes)           # a group of lines of the same name keeps its order
     mesh = Mesh(frames_from(X, t, d3), quads, named, regions=regions)
+    _curved_part_frames(mesh, d1_hint)
     for name, pred in (edges or {}).items():
         mesh.edges[name] = np.nonzero(pred(mesh.X))[0]
     # the file's points that no quad uses, when dropping them renumbered the nodes after them
@@ -239,8 +262,83 @@ def from_meshio(source, d1_hint=(1.0, 0.0, 0.0), edges=None, triangles="error"):
     mesh.dropped_points = dropped if len(dropped) and dropped[0] < len(remap) - len(dropped) else None
     mesh.element_numbering = _element_numbering(raw, blocks, qb)
     _warn_orientation(X, quads, _warn_coincident(X))
-    _warn_turning_d1(mesh)
+    if d1_hint is not None:                # the default's d1 follows the edges (jumps at irregular nodes)
+        _warn_turning_d1(mesh)
     return mesh
+
+
+#: the lab direction whose projection is d1 on flat and developable parts when no d1_hint is given
+DEFAULT_HINT = (1.0, 0.0, 0.0)
+
+
+def _curved_part_frames(mesh, d1_hint):
+    """The frames of the doubly curved parts (those whose frames the least-turn gauge cannot make
+    parallel, ``mesh.gauge``), in place: d3 the normal of a quadric fitted to each node's ring
+    (``_fitted_normals``), and without a d1_hint d1 along the mesh's own edges
+    (:func:`~core_se3.mesh.cross_field.edge_aligned_d1`) instead of DEFAULT_HINT's projection.
+    Flat and developable parts keep theirs (the gauge decides there, and their angles are kept:
+    the same element to the bit).  A projected constant hint locked the thin whole hemisphere
+    (R/h 1e4: 0.30 / 0.47 / 0.93 of its meridian frames' deflection on 4x4 / 8x8 / 16x16 per
+    quarter); the edges' own directions are its meridians (docs/ELEMENTS.md, "Nodal frames")."""
+    from .cross_field import edge_aligned_d1
+    from .gauge import least_turn_gauge
+    alpha, curved = least_turn_gauge(mesh.g0, mesh.edge_nodes)
+    mesh.gauge_angles = alpha                  # the element's gauge (it would compute the same)
+    if not curved.any():
+        return
+    d3 = mesh.g0[:, :3, 2].copy()
+    d3[curved] = _fitted_normals(mesh.X, mesh.quads, d3)[curved]
+    if d1_hint is None:
+        d1 = edge_aligned_d1(mesh.X, mesh.quads, d3, edges=mesh.edge_nodes)
+    else:
+        d1 = _projected_hint(d1_hint, d3)
+    mesh.g0[curved] = frames_from(mesh.X[curved], d1[curved], d3[curved])
+
+
+#: the largest turn [deg] of a fitted normal from the quads' mean normal (else the mean is kept)
+FIT_TURN_MAX = 30.0
+
+
+def _fitted_normals(X, quads, d3):
+    """Unit normals (n, 3): at each node the normal at the node of the quadric z = d x + e y +
+    a x^2 + b x y + c y^2 (8 neighbours or more in its quads; with fewer, at a boundary, z = d x +
+    e y + k (x^2 + y^2); fewer than 3: none) fitted (least squares) to the neighbours in the frame
+    of its quads' mean normal d3; where there is none, or it turns from d3 by more than
+    FIT_TURN_MAX, d3.  The mean of the quads' normals is off by half an element's angle at a
+    boundary and by the mesh's distortion inside: the thin whole hemisphere from a file (R/h 1e4,
+    4x4) gave 0.978 of its exact normals' deflection, a quarter with interior nodes moved by 0.3
+    of the spacing (16x16) 0.64 ... 0.81; with the fitted normals 1.001 and 1.00 ... 1.01
+    (benchmarks/results/curved_frames.md)."""
+    n = len(X)
+    pairs = np.concatenate([np.stack([quads[:, i], quads[:, j]], 1) for i in range(4) for j in range(4) if i != j])
+    key = np.unique(pairs[:, 0] * n + pairs[:, 1])
+    a, b = key // n, key % n
+    t1 = np.cross(d3, np.where(np.abs(d3[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]]))
+    t1 /= np.linalg.norm(t1, axis=1, keepdims=True)
+    t2 = np.cross(d3, t1)
+    V = X[b] - X[a]
+    L = np.sqrt(np.bincount(a, np.einsum("pi,pi->p", V, V), n) / np.maximum(np.bincount(a, minlength=n), 1))
+    x, y, z = (np.einsum("pi,pi->p", V, t[a]) / L[a] for t in (t1, t2, d3))
+    count = np.bincount(a, minlength=n)
+    slopes = []
+    for A in (np.stack([x, y, x * x, x * y, y * y], 1), np.stack([x, y, x * x + y * y], 1)):
+        k = A.shape[1]
+        AtA, Atz = np.zeros((n, k, k)), np.zeros((n, k))
+        for i in range(k):                     # per entry: memory of the pairs, not 25 times it
+            Atz[:, i] = np.bincount(a, A[:, i] * z, n)
+            for j in range(i, k):
+                AtA[:, i, j] = AtA[:, j, i] = np.bincount(a, A[:, i] * A[:, j], n)
+        AtA[count < k] = np.eye(k)
+        slopes.append(np.linalg.solve(AtA + 1e-12 * np.eye(k), Atz[..., None])[..., :2, 0])
+    # a ring all round (8 neighbours on a regular mesh): the full quadric; a boundary node's
+    # one-sided ring: one curvature (the full one extrapolates: 10 deg off on a cubed cap's edge)
+    ok = count >= 3
+    c = np.where((count >= 8)[:, None], slopes[0], slopes[1])
+    v = d3 - c[:, :1] * t1 - c[:, 1:2] * t2
+    v /= np.linalg.norm(v, axis=1, keepdims=True)
+    keep = ~ok | (np.einsum("ni,ni->n", v, d3) < np.cos(np.radians(FIT_TURN_MAX)))
+    v[keep] = d3[keep]
+    return v
 
 
 #: the element's d1 turning by more than this within a quad [deg] (on a doubly curved part, which
@@ -250,7 +348,9 @@ D1_TURN_MAX = 30.0
 
 def _warn_turning_d1(mesh):
     """A MeshWarning where the element's d1 turns by more than D1_TURN_MAX degrees about the
-    normal within one quad.  The nodal d1 is d1_hint projected on each node's tangent plane, which
+    normal within one quad, for a given d1_hint (the default's d1 follows the edges, and turns by a
+    quarter turn across a few quads about irregular nodes on purpose: ``mesh.cross_field``).  The
+    nodal d1 is d1_hint projected on each node's tangent plane, which
     turns fast where the hint is nearly normal to the shell (a tube about z with the default hint
     +x flips d1 by 180 deg along the line where d3 = +x).  The element builds its frames in the
     least-turn gauge (``mesh.gauge``), which undoes any such turn on flat and developable parts
@@ -504,13 +604,19 @@ def _nodal_directors(X, quads, d1_hint):
                         f"{around[:5].tolist()}{' ...' if len(around) > 5 else ''}, have zero area or their normals "
                         f"cancel): remove collapsed quads or merge the nodes that coincide")
     d3 = nn / norm[:, None]
-    hint = np.broadcast_to(np.asarray(d1_hint, float), X.shape)
+    return _projected_hint(d1_hint, d3), d3
+
+
+def _projected_hint(d1_hint, d3):
+    """d1_hint (3,) or (n, 3) projected on the planes normal to d3 (n, 3) (unnormalised; the global
+    y axis where that degenerates, x where y does too: a hint of y on a plate normal to y)."""
+    hint = np.broadcast_to(np.asarray(d1_hint, float), d3.shape)
     t = hint - np.einsum("ni,ni->n", hint, d3)[:, None] * d3
-    for axis in (1, 0):                 # the global y axis where the hint degenerates, x where y does too
+    for axis in (1, 0):
         weak = np.linalg.norm(t, axis=1) < 1e-6
         if weak.any():
             t[weak] = np.eye(3)[axis] - d3[weak, axis:axis + 1] * d3[weak]
-    return t, d3
+    return t
 
 
 def _on_shell(name, segs, remap):

@@ -24,7 +24,9 @@ MAX_ELEMENTS = 1_000_000
 MAX_MESH_BYTES = 2 ** 30          # 1 GiB: an ASCII Gmsh file of 10^6 quads has about 100 MB
 MESH_FILE = Section("mesh file", (
     Param("file", "string", doc="a quad mesh meshio reads (Gmsh .msh 4.1 or 2.2, .vtu, ...), relative to the scenario"),
-    Param("d1_hint", "vector", [1.0, 0.0, 0.0], nonzero=True, doc="d1 is its projection on each node's tangent plane"),
+    Param("d1_hint", "vector", None, nonzero=True,
+          doc="d1 is its projection on each node's tangent plane; none: +x on flat and developable parts, along "
+              "the mesh's edges on doubly curved ones (domes)"),
     Param("triangles", "string", "error", choices=("error", "split"),
           doc="a quad-dominant mesh: an error, or every cell split into quads")),
     doc="[mesh] from a file")
@@ -139,7 +141,7 @@ def _unrefined_mesh(v, d, base_dir):
                 warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
         with open(path, "rb") as fh:
             digest = hashlib.sha256(fh.read()).hexdigest()
-        spec = dict(file=fname, d1_hint=hint)
+        spec = dict(file=fname) if hint is None else dict(file=fname, d1_hint=hint)
         if tri != "error":
             spec["triangles"] = tri
         return mesh, spec, digest
