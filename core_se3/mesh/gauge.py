@@ -40,7 +40,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
-from scipy.sparse.linalg import spsolve
+from scipy.sparse.linalg import splu
 
 __all__ = ["normal_turns", "least_turn_angles", "least_turn_gauge", "turned_about_normal", "GAUGE_TOL", "GAUGE_ITERATIONS",
            "PARALLEL_TOL"]
@@ -166,9 +166,11 @@ def least_turn_gauge(g0, edge_nodes):
     n_parts, part = connected_components(B.T @ B, directed=False)
     held = np.unique(part, return_index=True)[1]               # the first node of every part
     free = np.setdiff1d(np.arange(n), held)
-    L = (B.T @ B).tocsr()[free][:, free].tocsc()
+    # the graph Laplacian with one node of each part held, factorised once (every part with an
+    # edge has a free node); each pass solves with it
+    lu = splu((B.T @ B).tocsr()[free][:, free].tocsc())
     for _ in range(GAUGE_ITERATIONS):          # until the turns stop falling (or vanish)
-        step = np.atleast_1d(spsolve(L, (B.T @ omega)[free]))
+        step = lu.solve((B.T @ omega)[free])
         alpha[free] -= step
         omega = normal_turns(turned_about_normal(g0, alpha), edge_nodes)
         if np.abs(step).max() <= GAUGE_TOL:
