@@ -486,10 +486,9 @@ def _step_checks(opts, eq, state):
     # ... and of a try that passes a limit point ahead (the current stiffness of load control: not
     # with a prescribed motion, whose load factor is no load's)
     checks.stiffness = not (eq.stateful or eq.problem.has_prescribed_motion)
-    # the refine check of a try of many iterations (its parts compare whole states: serial runs;
-    # the loads' multipliers of an augmented try are not restored after its parts)
-    checks.refine = opts.refine_check and checks.path and not getattr(eq, "distributed", False) and \
-        not hooked_loads(eq, "update_multipliers")
+    # the refine check of a try of many iterations (not with augmented loads: the multipliers of
+    # an augmented try are not those of its parts)
+    checks.refine = opts.refine_check and checks.path and not hooked_loads(eq, "update_multipliers")
     return checks
 
 
@@ -596,8 +595,8 @@ def _judge(out, checks, eq, hooks, here, start=None, prober=None):
         out.reason = checks.judge_probe(out.probe, lam, lam_try, trigger)
         out.ok = not out.reason
     if out.ok and prober is not None and checks.wants_refinement(out):   # many iterations: solved again in parts
-        out.refined = _refined_end(prober, eq, hooks, here)
-        out.reason = checks.judge_refinement(out, out.refined, lam, lam_try, eq.problem.length_scale)
+        out.refined = _refined_end(prober, eq, hooks, here, out.g)
+        out.reason = checks.judge_refinement(out, out.refined, lam, lam_try)
         out.ok = not out.reason
     if out.ok and sweeps:                    # a step that passed through an obstacle: cut back
         out.ok, out.reason = not (why := _step_error(sweeps, g, lam, out.g, lam_try)), why or out.reason
@@ -622,24 +621,26 @@ def _midpoint_probe(prober, eq, hooks, here):
     return trier.run(g_mid, lam_mid, mip, stress_mid)
 
 
-def _refined_end(prober, eq, hooks, here):
-    """The refine check's parts of a long try (``solvers.step_checks``): REFINE_PARTS tries from
-    its start state, each from the last one's converged state and stresses, started as a
-    cut-back would be; (the end state or None, their Newton iterations, why a part did not
-    converge or was refused by the path check, else '')."""
+def _refined_end(prober, eq, hooks, here, g_long):
+    """The refine check's parts of a long try (``solvers.step_checks``) that ended at ``g_long``:
+    REFINE_PARTS tries from its start state, each from the last one's converged state and
+    stresses, started as a cut-back would be; (the distance of their end from ``g_long`` in ell,
+    over the ranks, or None, their Newton iterations, why a part did not converge or was refused
+    by the path check, else '')."""
     trier, mip = prober
     g, lam, lam_try, stress = here
     iterations = 0
     for k in range(1, REFINE_PARTS + 1):
         lam_a, lam_b = lam + (lam_try - lam) * (k - 1) / REFINE_PARTS, lam + (lam_try - lam) * k / REFINE_PARTS
-        g_b, stress_b = _try_start(eq.problem, eq, trier, g, g, lam_a, lam_b, mip, stress, hooks.predictors)
+        g_whole = eq.whole_frames(g) if eq.predictor else g      # the tangent predictor's only (serial)
+        g_b, stress_b = _try_start(eq.problem, eq, trier, g, g_whole, lam_a, lam_b, mip, stress, hooks.predictors)
         part = trier.run(g_b, lam_b, mip, stress_b)
         iterations += part.iterations
         why = part.reason if not part.ok else path_refusal(part.contraction, part.travel)
         if why:
             return None, iterations, f"part {k}, {lam_a:.6g} -> {lam_b:.6g}: {why[:120]}"
         g, stress = part.g, (part.ev.stress if mip else None)
-    return g, iterations, ""
+    return eq.state_gap(g, g_long), iterations, ""
 
 
 def _limit_point(eq, switches, k_ref, out, g, lam, lam_try, timer, result):

@@ -440,24 +440,24 @@ class StepChecks:
         it took more than REFINE_ITERATIONS Newton iterations (module docstring)."""
         return bool(self.refine and self.path and out.iterations > REFINE_ITERATIONS)
 
-    def judge_refinement(self, out, parts, lam, lam_try, ell):
+    def judge_refinement(self, out, parts, lam, lam_try):
         """'' when the parts' end agrees with the long try ``out`` to REFINE_TOL ell, else why it
-        is refused (cut back).  ``parts``: (the parts' end state or None, their Newton iterations,
-        why a part failed or '') of :func:`solvers.newton._refined_end`.
+        is refused (cut back).  ``parts``: (the distance of the parts' end from the try's
+        (:func:`state_gap`) or None when a part failed, their Newton iterations, why a part failed
+        or '') of ``solvers.newton._refined_end``.
 
         Example
         -------
         >>> import types
         >>> chk = StepChecks(True, True, 1e-3, sign=1)
-        >>> g = np.tile(np.eye(4), (2, 1, 1)); h = g.copy(); h[1, 2, 3] = 0.25
-        >>> out = types.SimpleNamespace(iterations=11, g=g)
-        >>> chk.judge_refinement(out, (g.copy(), 20, ""), 0.0, 0.25, 1.0)
+        >>> out = types.SimpleNamespace(iterations=11)
+        >>> chk.judge_refinement(out, (1e-14, 20, ""), 0.0, 0.25)
         ''
-        >>> why = chk.judge_refinement(out, (h, 20, ""), 0.0, 0.25, 1.0)
-        >>> why[:62], "ends 0.25 ell from it" in why, chk.refinements, chk.refine_iterations
+        >>> why = chk.judge_refinement(out, (0.12, 20, ""), 0.0, 0.25)
+        >>> why[:62], "ends 0.12 ell from it" in why, chk.refinements, chk.refine_iterations
         ('refine check: the try from load factor 0 to 0.25 took 11 Newto', True, 2, 40)
         """
-        g_end, iterations, why = parts
+        gap, iterations, why = parts
         self.refinements += 1
         self.refine_iterations += iterations
         head = (f"refine check: the try from load factor {lam:.6g} to {lam_try:.6g} took {out.iterations} Newton "
@@ -465,9 +465,8 @@ class StepChecks:
                 "its start ")
         tail = ("; it is cut back. If the cut-backs run out: more load steps, or trace the path with arc length "
                 "(core_se3.solvers.arc_length, stability=True); refine_check = false ([solver]) skips the check")
-        if g_end is None:
+        if gap is None:
             return head + f"did not get there ({why}), so nothing vouches that it stayed on the path" + tail
-        gap = state_gap(g_end, out.g, ell)
         if gap <= REFINE_TOL:
             return ""
         return head + (f"ends {gap:.3g} ell from it (more than {REFINE_TOL:g} ell): the try converged onto "
