@@ -129,7 +129,7 @@ half 0 -> 0.125 of 158 jumps as its try does (the halves end 1.5e-14 ell from it
 parts of the catalogue's legitimate tries agree to 3.3e-14 ell.  The iterations, not Theta or a
 cut-back, are the trigger: the catalogue's one-step tries contract by up to 0.83 and take at
 most 7 iterations, so none is solved again; at the default steps 4 tries of 8 or 9 iterations are
-(docs/STEPS.md).  Serial runs without augmented loads only (the parts compare whole states).
+(docs/STEPS.md).  Not with augmented loads; a distributed run takes the distance over its ranks.
 
 Example
 -------
