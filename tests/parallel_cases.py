@@ -16,6 +16,9 @@ CASES["jumping-cantilever"] = 4
 # contact face samples: a ball smaller than an element pushed into the middle of a face (nodal
 # sampling lets it through; each rank carries the faces of its elements, their other nodes too)
 CASES["contact-faces"] = 4
+# the refine check: fuzz problem 158 (tests/test_step_checks.py) in one step, whose try 0 -> 0.25
+# of 11 iterations onto another equilibrium is refused by its 4 parts (their end 0.12 ell off)
+CASES["fuzz-158-1"] = 1
 # the end check, inertia_check and the stability check: the sandwich strip of docs/EXTENDING.md recipe 6 to 0.2 C w
 # stops at its even crossings (name -> steps, solve keywords)
 STOPS = {"sandwich-1": (1, {}), "sandwich-2": (2, {}), "sandwich-5": (5, {}), "sandwich-10": (10, {}),
@@ -46,6 +49,9 @@ def build(name):
     if name == "jumping-cantilever":
         from test_contact_snap import _jumping_cantilever
         return _jumping_cantilever(), CASES[name], {}
+    if name == "fuzz-158-1":
+        from test_step_checks import _ANNULUS_158, _fuzz_problem
+        return _fuzz_problem(_ANNULUS_158), CASES[name], {}
     if name in PROBES:
         from test_step_checks import _fuzz_strip_144
         return _fuzz_strip_144(), *PROBES[name]

@@ -16,7 +16,7 @@ from core_se3.model.fields import UniformField, rotating_direction
 from core_se3.solvers import NewtonOptions, arc_length, displacement_control, make_solver
 from core_se3.solvers.direct import available_solvers
 from core_se3.solvers.linalg import Factorization
-from core_se3.solvers.step_checks import path_measures
+from core_se3.solvers.step_checks import path_measures, state_gap
 
 ZHAO = dict(nu=0.0, L=17.2, h=0.42)
 
@@ -161,6 +161,60 @@ def test_a_try_past_the_limit_point_its_current_stiffness_announces_is_probed(st
     assert 0.6 < last < 0.6077 and max(s.load_factor for s in res.steps) < 0.6077
     refused = [e for e in res.log if e["reason"].startswith("midpoint probe")]
     assert refused and all("current stiffness" in e["reason"] for e in refused)
+
+
+# benchmarks/invariants_fuzz.py, seed 8, problems 158 and 206: one-step answers off the path that
+# neither the path check nor the midpoint probe sees (docs/STEPS.md)
+_ANNULUS_158 = {"mesh": ("annulus", (0.19820654962114895, 0.3119974961870658, 0.5730164961304531, 2, 2)),
+                "L": 0.11357562257401756, "perturb": 0.07988844578558214, "pseed": 1052288158,
+                "E": 1019.8135393878902, "nu": 0.12057236232992696, "h": 0.00020637736181889618, "support": "clamp",
+                "loads": [("edge_force", "x1", [4.4043074957918465e-09, -4.2081028373951467e-10,
+                                                1.1239693391170171e-08]),
+                          ("edge_force", "x1", [-5.779342735438861e-08, 9.79835660707923e-11,
+                                                2.461205805926261e-10])],
+                "alpha": 1.8063962014984463}
+_PLATE_206 = {"mesh": ("rectangle", (0.10549003466104424, 0.029132301687481838, 2, 2)), "L": 0.10549003466104424,
+              "perturb": 0.0016338780053809954, "pseed": 182272822, "E": 335730710.9599362,
+              "nu": 0.47619974747245764, "h": 0.00011828718002590931, "support": "clamp",
+              "loads": [("edge_moment", "x1", [-6.20073236620597e-05, -1.3005919081961277e-05,
+                                               -4.123896581755797e-05]),
+                        ("gravity", 1971.3417472557571, [-0.07521320646433102, 0.9942643417831738,
+                                                         -0.07603546693370118])],
+              "alpha": 4.571112118447354}
+
+
+def _fuzz_problem(spec):
+    import sys
+    from pathlib import Path
+    sys.path.insert(0, str(Path(__file__).parents[1] / "benchmarks"))
+    import invariants_fuzz as fuzz
+    return fuzz.build(spec)
+
+
+@pytest.mark.parametrize("spec, steps, off", [(_ANNULUS_158, 1, 1.05), (_ANNULUS_158, 2, 1.05),
+                                              (_ANNULUS_158, 4, 1.05), (_PLATE_206, 1, 1.89),
+                                              (_PLATE_206, 2, 1.89)])
+def test_a_try_of_many_iterations_onto_another_equilibrium_is_refused_by_its_parts(spec, steps, off):
+    """Problem 158 (a clamped 2 x 2 annulus under two dead edge forces; conservative, no critical
+    point) in 1, 2 and 4 steps converged from 0 to 0.25 in 11 iterations (corrections 1.53, 0.737,
+    0.322, 0.308, 0.165, 0.186 ... ell: Theta 0.481, travel 1.14, turn 0.30 rad; the midpoint probe
+    vouched) onto a stable state 0.142 ell off the path, and exited ok 1.05 ell from the 16- and
+    256-step answers; problem 206 (a clamped 2 x 2 plate, dead end moment and gravity) in 1 and 2
+    steps in 8 iterations (Theta 0.359 and 0.557), 1.89 ell off.  Solved again in 4 parts, the try
+    0 -> 0.25 of 158 ends 0.120 ell from it (the parts of the legitimate tries of the catalogue
+    agree to 3e-14 ell), so it is cut back, and every run ends where 16 steps do."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        p = _fuzz_problem(spec)
+        r16 = p.solve(steps=16)
+        res = _fuzz_problem(spec).solve(steps=steps)
+        ell = p.length_scale
+        assert state_gap(res.final.g, r16.final.g, ell) < 1e-9
+        refused = [e for e in res.log if e["reason"].startswith("refine check")]
+        assert any("ell from it" in e["reason"] for e in refused) and "arc length" in refused[0]["reason"]
+        # what the check prevents: without it the run exits ok on a state that far off the path
+        wrong = _fuzz_problem(spec).solve(steps=steps, refine_check=False)
+        assert wrong.final.load_factor == 1.0 and state_gap(wrong.final.g, r16.final.g, ell) > 0.9 * off
 
 
 def test_the_count_of_sym_k_is_no_refusal_criterion_for_a_dead_moment():

@@ -24,7 +24,7 @@ from ..solvers import NewtonOptions, NewtonState, newton_steps, requested_load_f
 from ..solvers.newton import end_check
 from ..solvers.contact_probe import ContactProbe
 from ..solvers.options import split_options, unknown_keywords
-from ..solvers.step_checks import largest_turn
+from ..solvers.step_checks import largest_turn, state_gap
 from .comm import is_root
 from .run import DistributedRun
 
@@ -212,6 +212,13 @@ class DistributedEquations:
         """The largest nodal rotation [rad] of the increment ``eta`` over the ranks (every rank
         gets the same: the midpoint probe's trigger, ``solvers.step_checks``)."""
         mine = largest_turn(np.asarray(eta)[:self.run.n_own]) if np.ndim(eta) == 2 else 0.0
+        return max(self.run.comm.allgather(mine)) if self.run.comm.size > 1 else mine
+
+    def state_gap(self, g1, g2):
+        """The largest nodal distance of two states in ell over the ranks (their own nodes; every
+        rank gets the same: the refine check, ``solvers.step_checks``)."""
+        n = self.run.n_own
+        mine = state_gap(g1[:n], g2[:n], self.ell)
         return max(self.run.comm.allgather(mine)) if self.run.comm.size > 1 else mine
 
 

@@ -32,13 +32,13 @@ OUTPUT_DEFAULTS = {p.name: p.default for p in OUTPUT.params if p.name != "dir"}
 # [solver] keys that only load control reads (arc length and linear analysis have none of them)
 LOAD_CONTROL_ONLY = ("max_cutbacks", "iteration", "predictor", "path_check", "limit_check", "max_substeps",
                      "snap_check", "friction_check", "friction_halving", "friction_tol", "end_check", "inertia_check",
-                     "midpoint_probe")
+                     "midpoint_probe", "refine_check")
 # solver keys that do not change the converged states (left out of the --resume fingerprint);
 # max_steps only decides where an arc-length path stops, so a resume may raise it
 NON_PHYSICAL = ("rtol", "dtol", "max_iter", "max_cutbacks", "linear_solver", "max_steps", "iteration",
                 "predictor", "linear", "petsc", "partition", "path_check", "limit_check", "max_substeps",
-                "critical_tol", "snap_check", "inertia_check", "end_check", "midpoint_probe", "friction_check",
-                "friction_tol", "friction_halving")
+                "critical_tol", "snap_check", "inertia_check", "end_check", "midpoint_probe", "refine_check",
+                "friction_check", "friction_tol", "friction_halving")
 
 
 def material_section(v, d, regions):
@@ -303,7 +303,7 @@ def solver_section(v, doc):
         v.fail(join(key, "lam_end"), "expected a non-zero final load factor, got 0")
     for name in ("rtol", "dtol", "max_iter", "max_cutbacks", "element", "linear_solver", "iteration", "predictor",
                  "path_check", "limit_check", "critical_tol", "max_substeps", "snap_check", "inertia_check",
-                 "end_check", "midpoint_probe", "friction_check", "friction_tol", "friction_halving"):
+                 "end_check", "midpoint_probe", "refine_check", "friction_check", "friction_tol", "friction_halving"):
         s[name] = v.param(d, key, SOLVER.param(name))
     for name in LOAD_CONTROL_ONLY if s["control"] != "load" else ():
         if name in d:           # a warning, not an error: a sweep may switch the control of the file
@@ -368,6 +368,7 @@ def solve_defaults(s):
                predictor=s["predictor"], path_check=s["path_check"], limit_check=s["limit_check"],
                critical_tol=s["critical_tol"], max_substeps=s["max_substeps"], snap_check=s["snap_check"],
                inertia_check=s["inertia_check"], end_check=s["end_check"], midpoint_probe=s["midpoint_probe"],
+               refine_check=s["refine_check"],
                friction_check=s["friction_check"], friction_tol=s["friction_tol"],
                friction_halving=s["friction_halving"], **common)
     out.update(linear=s.get("linear", "mumps"), petsc_options=dict(s.get("petsc") or {}),

@@ -113,6 +113,7 @@ def _options(s):
                          max_substeps=s["max_substeps"],
                          snap_check=s["snap_check"], inertia_check=s["inertia_check"], end_check=s["end_check"],
                          midpoint_probe=s.get("midpoint_probe", True),
+                         refine_check=s.get("refine_check", True),
                          friction_check=s["friction_check"], friction_tol=s["friction_tol"],
                          friction_halving=s["friction_halving"],
                          **common)

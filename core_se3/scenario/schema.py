@@ -162,6 +162,10 @@ SOLVER = Section("solver", (
             "checked by a step from its start to its midpoint load (one more Newton solve); det K of the other sign "
             "there (a jump over a critical point) or no convergence cuts it back (with limit_check; docs/STEPS.md)",
             kind="bool"),
+    _option("refine_check", _NEWTON, "load control: a converged step of more than 7 Newton iterations is solved "
+            "again in 4 parts from its start (about 4 more Newton solves); an end more than 1e-6 of the length "
+            "scale from the step's (it converged onto another equilibrium) cuts it back (path_check on, no contact; "
+            "docs/STEPS.md)", kind="bool"),
     _option("inertia_check", _NEWTON, "load control: count the negative eigenvalues of the symmetric tangent at "
             "every converged step (one more factorisation each; conservative loads only) so that an even number "
             "crossing zero within one step, which leaves the sign of det K, stops the run like a sign change "

@@ -17,6 +17,7 @@ methods on one rank's share of the mesh, with global norms and gathered frames):
   factors; None when unknown), ``increment(x)`` the nodal increments eta (n, 6), ``work(ev, x)`` = -r . x,
   ``residual_sq(ev)`` = |r|_s^2 and ``increment_norm(eta)`` = |eta|_s (unit-scaled norms);
   ``largest_turn(eta)`` its largest nodal rotation (the midpoint probe's trigger);
+  ``state_gap(g1, g2)`` the largest nodal distance of two states in ell (the refine check);
 * what the problem has: ``loads`` (for the Load hooks), ``stateful``, ``mixed``, ``predictor``
   (the tangent predictor is available), ``distributed``, ``root`` (this process logs).
 
@@ -41,7 +42,7 @@ from .convergence import relative_residual, scaled_norm
 from .linalg import Factorization
 from .origin import part_origin, relocation
 from .stability import asymmetry, inertia
-from .step_checks import largest_turn
+from .step_checks import largest_turn, state_gap
 
 __all__ = ["NewtonEquations", "part_origin"]
 
@@ -177,3 +178,7 @@ class NewtonEquations:
     def largest_turn(self, eta):
         """The largest nodal rotation [rad] of the increment ``eta`` (``step_checks.largest_turn``)."""
         return largest_turn(eta)
+
+    def state_gap(self, g1, g2):
+        """The largest nodal distance of two states in ell (``step_checks.state_gap``)."""
+        return state_gap(g1, g2, self.ell)

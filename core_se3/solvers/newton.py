@@ -41,7 +41,7 @@ from .splitting import (MAX_LOAD_TURN, MAX_PRESCRIBED_TURN, check_substeps, spli
 from .stability import limit_point_hint, prescribed_turn_hint, unseen_crossing
 from .contact_probe import ContactProbe, median_edge
 from .friction_probe import RELAXATIONS, FrictionProbe
-from .step_checks import StepChecks, start_sign
+from .step_checks import REFINE_PARTS, StepChecks, path_refusal, start_sign
 
 __all__ = ["newton_solve", "newton_steps", "end_check", "requested_load_factors", "NewtonState", "NewtonStep",
            "MAX_PRESCRIBED_TURN", "MAX_LOAD_TURN"]
@@ -195,6 +195,8 @@ def _log_try(result, tries, lam_try, out, augmentation=None, quiet=False):
         entry["midpoint_probe"] = dict(converged=p.ok, iterations=p.iterations, linear_solves=p.solves,
                                        increments=[float(x) for x in p.incs], det_sign=p.det_sign)
         entry["linear_solves"] += p.solves
+    if getattr(out, "refined", None) is not None:    # the refine check's parts (their iterations)
+        entry["refine_check"] = dict(iterations=out.refined[1], failed=out.refined[2])
     result.log.append(entry)
     tries.append(entry)
     if quiet:
@@ -484,6 +486,9 @@ def _step_checks(opts, eq, state):
     # ... and of a try that passes a limit point ahead (the current stiffness of load control: not
     # with a prescribed motion, whose load factor is no load's)
     checks.stiffness = not (eq.stateful or eq.problem.has_prescribed_motion)
+    # the refine check of a try of many iterations (not with augmented loads: the multipliers of
+    # an augmented try are not those of its parts)
+    checks.refine = opts.refine_check and checks.path and not hooked_loads(eq, "update_multipliers")
     return checks
 
 
@@ -589,6 +594,10 @@ def _judge(out, checks, eq, hooks, here, start=None, prober=None):
         out.probe = _midpoint_probe(prober, eq, hooks, here)
         out.reason = checks.judge_probe(out.probe, lam, lam_try, trigger)
         out.ok = not out.reason
+    if out.ok and prober is not None and checks.wants_refinement(out):   # many iterations: solved again in parts
+        out.refined = _refined_end(prober, eq, hooks, here, out.g)
+        out.reason = checks.judge_refinement(out, out.refined, lam, lam_try)
+        out.ok = not out.reason
     if out.ok and sweeps:                    # a step that passed through an obstacle: cut back
         out.ok, out.reason = not (why := _step_error(sweeps, g, lam, out.g, lam_try)), why or out.reason
     if out.ok and checks.snap is not None:   # a large contact step: probed in halves (a snap?)
@@ -610,6 +619,28 @@ def _midpoint_probe(prober, eq, hooks, here):
     g_whole = eq.whole_frames(g) if eq.predictor else g      # the tangent predictor's only (serial)
     g_mid, stress_mid = _try_start(eq.problem, eq, trier, g, g_whole, lam, lam_mid, mip, stress_conv, hooks.predictors)
     return trier.run(g_mid, lam_mid, mip, stress_mid)
+
+
+def _refined_end(prober, eq, hooks, here, g_long):
+    """The refine check's parts of a long try (``solvers.step_checks``) that ended at ``g_long``:
+    REFINE_PARTS tries from its start state, each from the last one's converged state and
+    stresses, started as a cut-back would be; (the distance of their end from ``g_long`` in ell,
+    over the ranks, or None, their Newton iterations, why a part did not converge or was refused
+    by the path check, else '')."""
+    trier, mip = prober
+    g, lam, lam_try, stress = here
+    iterations = 0
+    for k in range(1, REFINE_PARTS + 1):
+        lam_a, lam_b = lam + (lam_try - lam) * (k - 1) / REFINE_PARTS, lam + (lam_try - lam) * k / REFINE_PARTS
+        g_whole = eq.whole_frames(g) if eq.predictor else g      # the tangent predictor's only (serial)
+        g_b, stress_b = _try_start(eq.problem, eq, trier, g, g_whole, lam_a, lam_b, mip, stress, hooks.predictors)
+        part = trier.run(g_b, lam_b, mip, stress_b)
+        iterations += part.iterations
+        why = part.reason if not part.ok else path_refusal(part.contraction, part.travel)
+        if why:
+            return None, iterations, f"part {k}, {lam_a:.6g} -> {lam_b:.6g}: {why[:120]}"
+        g, stress = part.g, (part.ev.stress if mip else None)
+    return eq.state_gap(g, g_long), iterations, ""
 
 
 def _limit_point(eq, switches, k_ref, out, g, lam, lam_try, timer, result):

@@ -79,7 +79,10 @@ class NewtonOptions:
     where the current stiffness extrapolates to zero, is probed by a try from its start to its
     midpoint load, and cut back when that converges onto det K of the other sign
     (it jumped over a critical point) or does not converge (``solvers.step_checks``; one more
-    Newton solve per such try); record_substeps: store the cut-back
+    Newton solve per such try); refine_check: a converged try of more than 7 Newton iterations
+    (path check on, no contact) is solved again in 4 parts from its start and cut back when
+    their end is more than 1e-6 ell from its own (it converged onto another equilibrium;
+    ``solvers.step_checks``); record_substeps: store the cut-back
     sub-steps as steps too; linear_solver: None = the problem's; iteration: 'mip' (the mixed
     integration point Newton of Magisano, Leonetti and Garcea 2017, with an element that
     supports it: the geometric part of the tangent sees element stresses updated linearly,
@@ -97,7 +100,7 @@ class NewtonOptions:
         In [0, 50]; default 12.
     divergence : float
         >= 1; default 1e8.
-    path_check, limit_check, snap_check, friction_check, friction_halving, inertia_check, end_check, midpoint_probe, record_substeps : bool
+    path_check, limit_check, snap_check, friction_check, friction_halving, inertia_check, end_check, midpoint_probe, refine_check, record_substeps : bool
         Default True, True, True, True, False, False, True, True and False.
     friction_tol : float
         In (0, 1); default 1e-7.
@@ -145,6 +148,7 @@ class NewtonOptions:
     inertia_check: bool = False
     end_check: bool = True
     midpoint_probe: bool = True
+    refine_check: bool = True
 
     def __post_init__(self):
         _check(self)

@@ -113,6 +113,24 @@ load's).  On the catalogue (1 and 2 steps and the default) it probes magnetic-an
 default run 4 times (17 iterations), magnetic-plate's once (3) and sze-semicylinder's once (5),
 none refused, the tries and iterations unchanged.
 
+**Refine check** (``NewtonOptions.refine_check``).  A try can converge onto another equilibrium
+with contracting corrections, a small turn and no sign change: fuzz problem 158
+(``benchmarks/invariants_fuzz.py``, seed 8: a clamped 2 x 2 annulus under two dead edge forces,
+no critical point) in 1, 2 and 4 steps converged from 0 to 0.25 in 11 iterations (corrections
+1.53, 0.737, 0.322, 0.308, 0.165, 0.186 ... ell: Theta 0.481, travel 1.14, turn 0.30 rad, its
+midpoint probe vouching) onto a stable state 0.142 ell off the path and exited ok 1.05 ell from
+the 16-step answer; problem 206 (a clamped plate, dead end moment and gravity) in 1 and 2 steps
+in 8 iterations, 1.89 ell off.  A try of more than REFINE_ITERATIONS Newton iterations is solved
+again in REFINE_PARTS parts from its start (:meth:`StepChecks.judge_refinement`), each a try from
+the last one's converged state and path-checked, and cut back when their end is more than
+REFINE_TOL ell from its own (:func:`state_gap`) or a part fails.  Two halves do not suffice: the
+half 0 -> 0.125 of 158 jumps as its try does (the halves end 1.5e-14 ell from it); four parts end
+0.120 ell from it, and 1, 2 and 4 steps end where 16 steps do (1.5e-14 to 1.8e-14 ell).  The
+parts of the catalogue's legitimate tries agree to 3.3e-14 ell.  The iterations, not Theta or a
+cut-back, are the trigger: the catalogue's one-step tries contract by up to 0.83 and take at
+most 7 iterations, so none is solved again; at the default steps 4 tries of 8 or 9 iterations are
+(docs/STEPS.md).  Not with augmented loads; a distributed run takes the distance over its ranks.
+
 Example
 -------
 >>> path_measures([1.0, 0.5, 0.05, 1e-6, 1e-13])[0], path_measures([1.0, 3.0, 0.2])[0]
@@ -129,7 +147,7 @@ from .stability import CriticalPoint
 
 __all__ = ["path_measures", "path_refusal", "start_sign", "largest_turn", "StepChecks", "CONTRACTION_MAX",
            "GROWTH_SCALE", "TRAVEL_MAX", "CONTRACTION_FLOOR", "GROWTH_CAP",
-           "GROWTH_REACH", "PROBE_TURN"]
+           "GROWTH_REACH", "PROBE_TURN", "REFINE_ITERATIONS", "REFINE_PARTS", "REFINE_TOL", "state_gap"]
 
 CONTRACTION_MAX = 1.0    # a try whose corrections grow at the step's scale is not accepted
 GROWTH_SCALE = 0.5       # ... the step's scale: half the first correction
@@ -138,6 +156,9 @@ CONTRACTION_FLOOR = 1e-8  # corrections below this (relative to ell) are round-o
 GROWTH_CAP = np.pi       # ... of at most pi ell: a ball of radius pi ell holds every orientation
 GROWTH_REACH = 0.25      # ... or a growth by a quarter of the step's scale, whatever the pair's size
 PROBE_TURN = 0.95 * np.pi  # a try that turns a node by more than this [rad] is probed at its midpoint
+REFINE_ITERATIONS = 7    # a try of more Newton iterations than this is solved again in parts ...
+REFINE_PARTS = 4         # ... this many, each from the last one's converged state ...
+REFINE_TOL = 1e-6        # ... and refused when their end is farther than this [ell] from its own
 
 
 def path_measures(incs, floor=CONTRACTION_FLOOR):
@@ -226,6 +247,22 @@ def largest_turn(eta_sum):
     return float(np.sqrt((np.asarray(eta_sum)[:, 3:] ** 2).sum(axis=1)).max(initial=0.0))
 
 
+def state_gap(g1, g2, ell):
+    """The largest nodal distance of two states (n, 4, 4) in ell: |x1 - x2| / ell and the angle
+    between the frames, as 2 sin(angle / 2) = |R1 - R2|_F / sqrt(2) (no arccos, whose round-off
+    near 1 is 1e-8).
+
+    Example
+    -------
+    >>> g = np.tile(np.eye(4), (2, 1, 1)); h = g.copy(); h[1, 0, 3] = 0.5
+    >>> state_gap(g, h, 2.0)
+    0.25
+    """
+    dx = np.linalg.norm(g1[:, :3, 3] - g2[:, :3, 3], axis=1).max(initial=0.0) / ell
+    dR = np.linalg.norm(g1[:, :3, :3] - g2[:, :3, :3], axis=(1, 2)).max(initial=0.0) / np.sqrt(2)
+    return float(max(dx, dR))
+
+
 def start_sign(eq, g, lam, stress=None):
     """The sign of det K at the converged start state (g, lam) of a path (the equations ``eq``
     of ``solvers.equations``; ``stress``: the mixed iteration's, or None): one factorisation.
@@ -299,6 +336,8 @@ class StepChecks:
         self.last = None
         self.probe = False
         self.probes = self.probe_iterations = 0    # since the last stored step
+        self.refine = False
+        self.refinements = self.refine_iterations = 0    # refine check: since the last stored step
         # the current stiffness (Bergan's, TryOutcome.k_step) at the start of the last accepted try
         # over the first's: (load factor, S_p), and the first's k_step (``stiffness``: tracked)
         self.stiffness, self.stiff, self.k_first = False, None, None
@@ -394,6 +433,44 @@ class StepChecks:
                            f"{probe.det_sign:+d}: an odd number of eigenvalues crossed zero in each half, so it "
                            "jumped over a critical point (a limit point or a bifurcation) onto another branch") + tail
         return ""
+
+    def wants_refinement(self, out):
+        """Whether the converged try ``out`` that passed the other checks is to be solved again in
+        REFINE_PARTS parts (``refine``, set by the caller: ``refine_check`` with the path check):
+        it took more than REFINE_ITERATIONS Newton iterations (module docstring)."""
+        return bool(self.refine and self.path and out.iterations > REFINE_ITERATIONS)
+
+    def judge_refinement(self, out, parts, lam, lam_try):
+        """'' when the parts' end agrees with the long try ``out`` to REFINE_TOL ell, else why it
+        is refused (cut back).  ``parts``: (the distance of the parts' end from the try's
+        (:func:`state_gap`) or None when a part failed, their Newton iterations, why a part failed
+        or '') of ``solvers.newton._refined_end``.
+
+        Example
+        -------
+        >>> import types
+        >>> chk = StepChecks(True, True, 1e-3, sign=1)
+        >>> out = types.SimpleNamespace(iterations=11)
+        >>> chk.judge_refinement(out, (1e-14, 20, ""), 0.0, 0.25)
+        ''
+        >>> why = chk.judge_refinement(out, (0.12, 20, ""), 0.0, 0.25)
+        >>> why[:62], "ends 0.12 ell from it" in why, chk.refinements, chk.refine_iterations
+        ('refine check: the try from load factor 0 to 0.25 took 11 Newto', True, 2, 40)
+        """
+        gap, iterations, why = parts
+        self.refinements += 1
+        self.refine_iterations += iterations
+        head = (f"refine check: the try from load factor {lam:.6g} to {lam_try:.6g} took {out.iterations} Newton "
+                f"iterations (> {REFINE_ITERATIONS}), and the same step solved again in {REFINE_PARTS} parts from "
+                "its start ")
+        tail = ("; it is cut back. If the cut-backs run out: more load steps, or trace the path with arc length "
+                "(core_se3.solvers.arc_length, stability=True); refine_check = false ([solver]) skips the check")
+        if gap is None:
+            return head + f"did not get there ({why}), so nothing vouches that it stayed on the path" + tail
+        if gap <= REFINE_TOL:
+            return ""
+        return head + (f"ends {gap:.3g} ell from it (more than {REFINE_TOL:g} ell): the try converged onto "
+                       "another equilibrium than the path's") + tail
 
     def accept(self, out, lam_try, lam=None):
         """Record the accepted try from ``lam`` (its sign becomes the path's, its current stiffness
@@ -499,9 +576,11 @@ class StepChecks:
                    det_sign=self.sign if self.stability else None)
         if self.probe:
             rec.update(midpoint_probes=self.probes, probe_iterations=self.probe_iterations)
+        if self.refinements:
+            rec.update(refinements=self.refinements, refine_iterations=self.refine_iterations)
         if self.snap is not None:
             rec.update(self.snap.record())
         if self.friction is not None:
             rec.update(self.friction.record())
-        self.rejected = self.probes = self.probe_iterations = 0
+        self.rejected = self.probes = self.probe_iterations = self.refinements = self.refine_iterations = 0
         return rec
