@@ -2,7 +2,9 @@
 plane, so where the hint is nearly normal to the shell d1 turns fast, up to 180 deg within one
 quad.  The elements interpolate in the nodal frames, so that changed the answer for an isotropic
 material without a word (review finding; the warning tests fail on the code before)."""
+import sys
 import warnings
+from pathlib import Path
 
 import meshio
 import numpy as np
@@ -11,6 +13,9 @@ import pytest
 from core_se3 import Material, Problem
 from core_se3.errors import MeshWarning
 from core_se3.mesh.readers import from_meshio
+
+sys.path.insert(0, str(Path(__file__).parents[1] / "benchmarks"))
+from curved_frames import cubed_sphere  # noqa: E402  (the closed cubed sphere, R 10)
 
 pytestmark = pytest.mark.core
 
@@ -187,29 +192,6 @@ def test_the_default_frames_of_a_dome_turn_with_the_mesh():
     assert np.abs(Q @ a.g0[:, :3, :3] - b.g0[:, :3, :3]).max() < 1e-10
 
 
-def _cubed_sphere(n, R=10.0):
-    """Points and outward quads of the sphere R meshed by the six faces of a cube (n x n each)
-    projected on it: eight nodes of valence 3, about which a field along the edges turns by a
-    quarter turn."""
-    u = np.linspace(-1.0, 1.0, n + 1)
-    U, V = np.meshgrid(u, u, indexing="ij")
-    pts, quads = [], []
-    for ax in range(3):
-        for sgn in (1.0, -1.0):
-            P = np.zeros((n + 1, n + 1, 3))
-            P[..., ax], P[..., (ax + 1) % 3], P[..., (ax + 2) % 3] = sgn, U, sgn * V
-            idx = len(pts) * (n + 1) ** 2 + np.arange((n + 1) ** 2).reshape(n + 1, n + 1)
-            quads.append(np.stack([idx[:-1, :-1], idx[1:, :-1], idx[1:, 1:], idx[:-1, 1:]], -1).reshape(-1, 4))
-            pts.append(P.reshape(-1, 3))
-    X = np.concatenate(pts)
-    X = R * X / np.linalg.norm(X, axis=1, keepdims=True)
-    _, first, inv = np.unique(np.round(X, 9), axis=0, return_index=True, return_inverse=True)
-    q = inv.ravel()[np.concatenate(quads)]
-    P = X[first][q]
-    out = np.einsum("ei,ei->e", np.cross(P[:, 2] - P[:, 0], P[:, 3] - P[:, 1]), P.mean(1)) > 0
-    return X[first], np.where(out[:, None], q, q[:, ::-1])
-
-
 def test_a_closed_sphere_from_a_file_can_be_solved_on_the_default_frames():
     # a closed surface needs turns of d1 somewhere: the projected +x spins about the two points
     # where it is the normal (a flip by 180 deg within quads: ElementTooDistortedError, no answer),
@@ -219,7 +201,7 @@ def test_a_closed_sphere_from_a_file_can_be_solved_on_the_default_frames():
     # sphere is solved: its deflection within 4 % of the hint (1, 0.3, 0.2)'s (measured 0.5 %; 3.9 %
     # with the quads' mean normals)
     from core_se3 import Problem
-    X, q = _cubed_sphere(16)
+    X, q = cubed_sphere(16)
     raw = meshio.Mesh(X, [("quad", q)])
     m = from_meshio(raw)
     e = m.edge_nodes
