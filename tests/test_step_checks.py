@@ -212,6 +212,11 @@ def test_a_try_of_many_iterations_onto_another_equilibrium_is_refused_by_its_par
         assert state_gap(res.final.g, r16.final.g, ell) < 1e-9
         refused = [e for e in res.log if e["reason"].startswith("refine check")]
         assert any("ell from it" in e["reason"] for e in refused) and "arc length" in refused[0]["reason"]
+        # the parts' solves are the try's too (a try's linear_solves counts its Newton solves and its checks')
+        for e in res.log:
+            if "refine_check" in e:
+                own = e["linear_solves"] - e["refine_check"]["linear_solves"] - e.get("midpoint_probe", {}).get("linear_solves", 0)
+                assert e["refine_check"]["linear_solves"] >= e["refine_check"]["iterations"] > 0 and own >= e["iterations"]
         # what the check prevents: without it the run exits ok on a state that far off the path
         wrong = _fuzz_problem(spec).solve(steps=steps, refine_check=False)
         assert wrong.final.load_factor == 1.0 and state_gap(wrong.final.g, r16.final.g, ell) > 0.9 * off

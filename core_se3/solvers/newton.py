@@ -196,7 +196,8 @@ def _log_try(result, tries, lam_try, out, augmentation=None, quiet=False):
                                        increments=[float(x) for x in p.incs], det_sign=p.det_sign)
         entry["linear_solves"] += p.solves
     if getattr(out, "refined", None) is not None:    # the refine check's parts (their iterations)
-        entry["refine_check"] = dict(iterations=out.refined[1], failed=out.refined[2])
+        entry["refine_check"] = dict(iterations=out.refined[1], failed=out.refined[2], linear_solves=out.refined[3])
+        entry["linear_solves"] += out.refined[3]
     result.log.append(entry)
     tries.append(entry)
     if quiet:
@@ -596,7 +597,7 @@ def _judge(out, checks, eq, hooks, here, start=None, prober=None):
         out.ok = not out.reason
     if out.ok and prober is not None and checks.wants_refinement(out):   # many iterations: solved again in parts
         out.refined = _refined_end(prober, eq, hooks, here, out.g)
-        out.reason = checks.judge_refinement(out, out.refined, lam, lam_try)
+        out.reason = checks.judge_refinement(out, out.refined[:3], lam, lam_try)
         out.ok = not out.reason
     if out.ok and sweeps:                    # a step that passed through an obstacle: cut back
         out.ok, out.reason = not (why := _step_error(sweeps, g, lam, out.g, lam_try)), why or out.reason
@@ -626,21 +627,21 @@ def _refined_end(prober, eq, hooks, here, g_long):
     REFINE_PARTS tries from its start state, each from the last one's converged state and
     stresses, started as a cut-back would be; (the distance of their end from ``g_long`` in ell,
     over the ranks, or None, their Newton iterations, why a part did not converge or was refused
-    by the path check, else '')."""
+    by the path check, else '', their linear solves)."""
     trier, mip = prober
     g, lam, lam_try, stress = here
-    iterations = 0
+    iterations = solves = 0
     for k in range(1, REFINE_PARTS + 1):
         lam_a, lam_b = lam + (lam_try - lam) * (k - 1) / REFINE_PARTS, lam + (lam_try - lam) * k / REFINE_PARTS
         g_whole = eq.whole_frames(g) if eq.predictor else g      # the tangent predictor's only (serial)
         g_b, stress_b = _try_start(eq.problem, eq, trier, g, g_whole, lam_a, lam_b, mip, stress, hooks.predictors)
         part = trier.run(g_b, lam_b, mip, stress_b)
-        iterations += part.iterations
+        iterations, solves = iterations + part.iterations, solves + part.solves
         why = part.reason if not part.ok else path_refusal(part.contraction, part.travel)
         if why:
-            return None, iterations, f"part {k}, {lam_a:.6g} -> {lam_b:.6g}: {why[:120]}"
+            return None, iterations, f"part {k}, {lam_a:.6g} -> {lam_b:.6g}: {why[:120]}", solves
         g, stress = part.g, (part.ev.stress if mip else None)
-    return eq.state_gap(g, g_long), iterations, ""
+    return eq.state_gap(g, g_long), iterations, "", solves
 
 
 def _limit_point(eq, switches, k_ref, out, g, lam, lam_try, timer, result):

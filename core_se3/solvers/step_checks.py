@@ -444,7 +444,8 @@ class StepChecks:
         """'' when the parts' end agrees with the long try ``out`` to REFINE_TOL ell, else why it
         is refused (cut back).  ``parts``: (the distance of the parts' end from the try's
         (:func:`state_gap`) or None when a part failed, their Newton iterations, why a part failed
-        or '') of ``solvers.newton._refined_end``.
+        or ''): the first three of ``solvers.newton._refined_end``'s (the fourth, their linear solves, is
+        counted in the try's ``linear_solves``).
 
         Example
         -------
