@@ -317,6 +317,16 @@ def test_consistent_units_need_mu0():
     bad(doc(units="consistent"), "magnets[0].mu0", 'with units = "consistent" every magnet needs mu0')
 
 
+def test_a_density_in_g_per_cm3_written_in_si_units_warns():
+    """Silicone's 1.07 g/cm^3 written as rho = 1.07 with units = "SI" is 1.07 kg/m^3 -- air's density,
+    a thousandth of the gravity load; it passed the old range (1 .. 25 000 kg/m^3) silently."""
+    grav = doc(STRIP, units="SI", loads=[{"type": "gravity", "rho": 1.07, "g": [0.0, 0.0, -9.81]}], material__E=1e6)
+    warns(grav, "loads[0].rho", "rho = 1.07 kg/m^3 is outside the densities of real solids (10 to 25 000",
+          "a density in g/cm^3 is 1000 times too small: 1.07 g/cm^3 is 1070 kg/m^3")
+    grav["loads"][0]["rho"] = 1070.0                                  # silicone in kg/m^3: no warning
+    assert not [w for w in load(grav).warnings if "rho" in w.key]
+
+
 def test_implausible_density_gravity_mu0_dipole_field_thickness_first_step():
     grav = doc(STRIP, units="N-mm-MPa", loads=[{"type": "gravity", "rho": 1000.0, "g": [0.0, 0.0, -9.81]}],
                material__E=1.0)

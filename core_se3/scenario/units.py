@@ -36,7 +36,7 @@ UNIT_SYSTEMS = {
 _CHOICES = ('units = "SI" (N, m, Pa, kg/m^3, T), units = "N-mm-MPa" (N, mm, MPa, t/mm^3, T) or '
             'units = "consistent" (your own consistent units; then every magnet needs its mu0)')
 E_RANGE_PA = (10.0, 7e11)          # soft gels .. tungsten carbide
-RHO_RANGE = (1.0, 2.5e4)           # kg/m^3: aerogels .. osmium
+RHO_RANGE = (10.0, 2.5e4)          # kg/m^3: the lightest foams .. osmium (1.2 kg/m^3 is air, or 1.2 g/cm^3)
 B_MAX = 2.0                        # T: NdFeB magnets reach ~1.4 T, lab electromagnets ~2 T
 H_OVER_L_MAX = 0.3
 # thinner than h/L 1e-4 (L/h 1e4) is beyond this package's own thin benchmarks (Scordelis-Lo R/h
@@ -280,8 +280,10 @@ def _br_magnitude(m, mesh):
 def _density_message(rho, rho_si, u, units):
     """The warning for a density rho [the system's unit] of rho_si kg/m^3 outside real solids'."""
     si = '' if u['to_kg_m3'] == 1 else f' = {rho_si:.3g} kg/m^3'
-    return (f"rho = {rho:g} {u['density']}{si} is outside the densities of real solids (1 to 25 000 kg/m^3): "
-            f"in {units} the density is in {u['density']} (water {1000 / u['to_kg_m3']:g})")
+    gcm3 = (f"; a density in g/cm^3 is 1000 times too small: {rho_si:g} g/cm^3 is "
+            f"{rho_si * 1000 / u['to_kg_m3']:g} {u['density']}" if 0.1 <= rho_si < RHO_RANGE[0] else "")
+    return (f"rho = {rho:g} {u['density']}{si} is outside the densities of real solids (10 to 25 000 kg/m^3): "
+            f"in {units} the density is in {u['density']} (water {1000 / u['to_kg_m3']:g}){gcm3}")
 
 
 def _thin_message(h, span, u):
