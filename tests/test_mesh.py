@@ -203,3 +203,18 @@ def test_a_mesh_far_from_the_origin_warns_of_its_round_off():
             warnings.simplefilter("always")
             M.Mesh(g, m.quads, dict(m.edges))
         assert [("from the origin" in str(w.message)) for w in rec] == ([True] if warns else [])
+
+
+@pytest.mark.parametrize("x0", [1e17, 1e300])
+def test_a_mesh_whose_edges_are_below_its_positions_round_off_says_so(x0):
+    """A 1 x 0.2 strip placed 1e17 (or 1e300) from the origin has edges of 0 in double precision
+    (eps |X| = 22): it was refused as 'degenerate, non-convex or listed clockwise', which sends the
+    user to the node order; the error now names the distance and the fix."""
+    with pytest.raises(MeshError, match=r"degenerate.*the mesh lies 1e\+(17|300) from the origin, where positions "
+                                        r"are stored to eps \|X\| = .*translate the mesh toward the origin"):
+        M.rectangle(1.0, 0.2, 4, 1, x0=x0)
+    meshio = pytest.importorskip("meshio")
+    X = np.array([[0, 0, 0], [1, 0, 0], [1, 0, 0], [0, 1, 0.0]])          # a collapsed quad at the origin
+    with pytest.raises(MeshError) as ei:
+        M.from_meshio(meshio.Mesh(X, [("quad", np.array([[0, 1, 2, 3]]))]))
+    assert "from the origin" not in str(ei.value)

@@ -112,6 +112,19 @@ def bow_tie_error(quads, P, what="quad"):
 FAR_FROM_ORIGIN = 1e10
 
 
+def _round_off_note(X_all, X_bad):
+    """The reason a quad is degenerate when it is the positions' round-off: eps |X| is more than
+    1e-3 of its longest edge (a strip placed 1e17 from the origin has edges along x of 0)."""
+    far, eps = float(np.abs(X_all).max()), np.finfo(float).eps
+    edges = np.linalg.norm(X_bad - np.roll(X_bad, 1, axis=1), axis=-1)
+    edge = float(edges.min())
+    if not np.isfinite(far) or eps * far <= 1e-3 * float(edges.max()):
+        return ""
+    return (f": the mesh lies {far:.3g} from the origin, where positions are stored to eps |X| = "
+            f"{np.finfo(float).eps * far:.2g}, and this quad's shortest edge is {edge:.2g}; translate the mesh "
+            "toward the origin (core_se3 keeps positions absolutely)")
+
+
 def chain_order(segments):
     """Order the nodes of line segments [(a, b), ...] along the line they form (sorted ids if
     they do not form one line).
@@ -315,7 +328,7 @@ class Mesh:
             if np.any(flat):
                 bad = np.nonzero(flat)[0][:5]
                 raise MeshError(f"quads {bad.tolist()} are degenerate, non-convex or listed clockwise "
-                                f"about their normal (corner {k})")
+                                f"about their normal (corner {k}){_round_off_note(self.X, X[bad])}")
 
     def node_set(self, name_or_pred):
         """Node ids of a named node set, of the elements of a named region, or of the nodes
