@@ -111,6 +111,33 @@ def test_magnetic_load_is_objective():
     assert np.abs(K1 - K2).max() <= 1e-12 * np.abs(K1).max()
 
 
+@pytest.mark.parametrize("turning", [False, True])
+def test_a_lab_fixed_field_does_not_turn_with_the_body(turning):
+    """The complement of objectivity: the body turned by Q in a lab-fixed uniform field (its
+    magnetisation turning with it, B^r_t = R_t R_0^T B^r_0) sees, in its own frames, the field
+    turned by Q^T -- f(Q g; B) = f(g; Q^T B), loads and load stiffness -- and not the field it saw
+    before (its couple changes by 1.25 of itself here, 0.14 in the turning field); with a field
+    turning with lam (fields.rotating_direction) alike.  Measured 1.8e-16 .. 2.5e-16."""
+    Q = lie.exp_so3(np.array([2.0, -7.0, 13.0]))
+    B = np.array([0.0, 0.02, 0.05])
+    if turning:
+        field = lambda R: UniformField(R @ B, direction=(lambda d: lambda lam: R @ d(lam))(      # noqa: E731
+            rotating_direction((0.3, 1.0, 0.2), (1.0, 0.0, 0.0), 0.37)))
+    else:
+        field = lambda R: UniformField(R @ B)                                                    # noqa: E731
+    p, _ = _plate(field(np.eye(3)))
+    q, _ = _plate(field(Q.T))
+    g = _random_state(p.mesh)
+    T = np.eye(4)
+    T[:3, :3] = Q
+    f1, K1, _ = p.external(T @ g, 0.8)
+    f2, K2, _ = q.external(g, 0.8)
+    f0 = p.external(g, 0.8)[0]
+    assert np.abs(f1 - f2).max() <= 1e-12 * np.abs(f1).max()
+    assert np.abs(K1 - K2).max() <= 1e-12 * np.abs(K1).max()
+    assert np.abs(f1 - f0)[:, 3:].max() > 0.1 * np.abs(f0[:, 3:]).max()
+
+
 def _lab_totals(g, f):
     R = g[:, :3, :3]
     F = np.einsum("nij,nj->ni", R, f[:, :3])

@@ -11,6 +11,7 @@ from .. import lie
 from ..errors import DesignError
 from ..fem.quadrature import shape_functions, surface_jacobian
 from ..model import MU0, MagneticLoad, Magnetisation
+from ..model.loads import curved_area, element_area
 from .variables import (Variable, field_at, free_index, magnetic_loads, named_regions, plane_axes, polar_vector,
                         region_elements, region_label)
 
@@ -58,11 +59,12 @@ class Parametrisation:
         raise DesignError(f"magnetisation: form must be 'vector', 'polar', a dict or a Parametrisation, got {spec!r}")
 
 
-def lumping(mesh, elements):
-    """(n, m) weights int_e N_i dA of the nodes i of the elements (reference area shares)."""
+def lumping(mesh, elements, j0=None):
+    """(n, m) weights int_e N_i dA of the nodes i of the elements (reference area shares), with
+    the element's own area element ``j0`` (m, 4) on curved elements, as ``Magnetisation``."""
     N, dN = shape_functions()
     quads = mesh.quads[elements]
-    w = np.einsum("qi,mq->mi", N, surface_jacobian(mesh.X[quads], dN))          # (m, 4)
+    w = np.einsum("qi,mq->mi", N, curved_area(surface_jacobian(mesh.X[quads], dN), j0, "magnetisation")[0])
     W = np.zeros((mesh.n_nodes, len(elements)))
     np.add.at(W, (quads, np.broadcast_to(np.arange(len(elements))[:, None], quads.shape)), w)
     return W
@@ -177,7 +179,8 @@ class RegionMagnetisation(Variable):
                               "give mu0 (or make the magnets' mu0 agree)")
         self.mu0 = float(mu0 if mu0 is not None else (mu0s.pop() if mu0s else MU0))
         self.field = field
-        W = lumping(mesh, allel)                                            # (n, m_all)
+        self.j0 = element_area(problem, allel)                              # None: the bilinear quads'
+        W = lumping(mesh, allel, self.j0)                                   # (n, m_all)
         owner = np.repeat(np.arange(k), [len(r) for r in self.regions])
         self.Wr = np.stack([W[:, owner == j].sum(1) for j in range(k)], 1)  # (n, k)
         if start is None:
@@ -269,7 +272,8 @@ class RegionMagnetisation(Variable):
             el = allel[h_el[allel] == t]
             Wt = W[:, np.isin(allel, el)]
             for i, field in enumerate(self.fields):                   # the material in each of its fields
-                mag = Magnetisation(mesh, np.tile([1.0, 0.0, 0.0], (len(el), 1)), float(t), el, self.mu0, "element")
+                mag = Magnetisation(mesh, np.tile([1.0, 0.0, 0.0], (len(el), 1)), float(t), el, self.mu0, "element",
+                                    None if self.j0 is None else self.j0[np.isin(allel, el)])
                 C = np.stack([Wt[:, owner[np.isin(allel, el)] == j].sum(1) for j in range(k)], 1)[mag.nodes]
                 label = f"{name} (h = {t:g})" + (f" field {i}" if len(self.fields) > 1 else "")
                 loads.append((problem.add(MagneticLoad(mag, field, name=label)), C * (t / self.mu0), R0[mag.nodes]))

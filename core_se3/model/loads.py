@@ -43,7 +43,7 @@ from ..fem.quadrature import shape_functions, surface_jacobian
 from .base import (Load, LoadEvaluation, LoadKind, Param, finite_vector, linear_scale, mesh_ids, param_error,
                    register_load)
 
-__all__ = ["NodalLoad", "SurfaceLoad", "edge_weights", "line_shares", "element_area"]
+__all__ = ["NodalLoad", "SurfaceLoad", "edge_weights", "line_shares", "element_area", "curved_area"]
 
 
 def _scale_at(load, lam):
@@ -311,17 +311,9 @@ class SurfaceLoad(Load):
             self.node_w = np.einsum("qi,mq->mi", self.N, jw)           # int N_i dA, (m,4)
 
     def _area_element(self, mesh):
-        """The area element (k, 4) the load integrates with: the element's ``j0`` on curved
-        elements, the bilinear quads' elsewhere (bit for bit), and the curved mask (k,)."""
-        jb = surface_jacobian(mesh.X[mesh.quads[self.elements]], self.dN)
-        if self.j0 is None:
-            return jb, np.zeros(len(jb), bool)
-        if self.j0.shape != jb.shape or not np.all(np.isfinite(self.j0) & (self.j0 > 0)):
-            raise LoadError(f"load {self.name!r}: j0 must be positive and finite, (k, 4) for the k = {len(jb)} loaded "
-                            f"elements' Gauss points, got shape {self.j0.shape}")
-        # a flat element's tied j0 is the bilinear one to round-off (<= 6.3e-16 relative)
-        curved = np.any(np.abs(self.j0 - jb) > 16 * np.finfo(float).eps * jb, axis=1)
-        return np.where(curved[:, None], self.j0, jb), curved
+        """The area element (k, 4) the load integrates with and the curved mask (k,):
+        :func:`curved_area` of the bilinear quads' and the element's ``j0``."""
+        return curved_area(surface_jacobian(mesh.X[mesh.quads[self.elements]], self.dN), self.j0, f"load {self.name!r}")
 
     def compiled(self, pattern):
         """The numba kernels of this load (``kernels.loads.surface_load_*``; the follower
@@ -440,6 +432,32 @@ def _nodal_check(values, given):
     if "force" not in given and "moment" not in given:
         return None, "a nodal load needs 'force' and/or 'moment'"
     return None
+
+
+def curved_area(jb, j0, what="load"):
+    """The area element (k, 4) that the area loads and the magnets (``Magnetisation``) integrate
+    with: the element's own ``j0`` (its exact-arc geometry, :func:`element_area`) on curved
+    elements, the bilinear quads' ``jb`` elsewhere (bit for bit: a flat element's tied j0 is the
+    bilinear one to round-off, <= 6.3e-16 relative); and the curved mask (k,).  ``j0`` None:
+    ``jb`` everywhere.  A ``j0`` of another shape, or not positive and finite, is a LoadError
+    naming ``what``.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> jb = np.full((2, 4), 0.25)
+    >>> jw, curved = curved_area(jb, np.array([[0.25] * 4, [0.26] * 4]))
+    >>> jw[:, 0].tolist(), curved.tolist()
+    ([0.25, 0.26], [False, True])
+    """
+    if j0 is None:
+        return jb, np.zeros(len(jb), bool)
+    j0 = np.asarray(j0, float)
+    if j0.shape != jb.shape or not np.all(np.isfinite(j0) & (j0 > 0)):
+        raise LoadError(f"{what}: j0 must be positive and finite, (k, 4) for the k = {len(jb)} loaded "
+                        f"elements' Gauss points, got shape {j0.shape}")
+    curved = np.any(np.abs(j0 - jb) > 16 * np.finfo(float).eps * jb, axis=1)
+    return np.where(curved[:, None], j0, jb), curved
 
 
 def element_area(problem, elements):

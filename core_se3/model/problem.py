@@ -28,7 +28,7 @@ from .base import Evaluation, Load, check_given, force_scale_with_loads, linear_
 from .compiled import CompiledEvaluation
 from .contact import add_obstacle
 from .fields import MU0, field_vanishes
-from .loads import line_shares
+from .loads import element_area, line_shares
 from .magnetics import MagneticLoad, Magnetisation, br_numbers, magnets_force, magnets_output, table_kind
 from .probes import Probe, along_line
 from .solving import SOLVERS, dispatch, solve_linear
@@ -429,10 +429,11 @@ class Problem:
         """``add_magnetic`` on the element ids ``sel`` (None: all): one load, or one per thickness."""
         per = getattr(self.material, "per_element", None)
         h_all = per("h") if per is not None else None
+        ids = np.arange(self.mesh.n_elements) if sel is None else np.asarray(sel)
+        j0 = element_area(self, ids)                 # the element's own area on curved elements
         if h_all is None or len(np.unique(h_all)) == 1:
             h = self.material.h if h_all is None else float(h_all[0])
-            return self.add(MagneticLoad(Magnetisation(self.mesh, Br, h, sel, mu0, Br_per), field))
-        ids = np.arange(self.mesh.n_elements) if sel is None else np.asarray(sel)
+            return self.add(MagneticLoad(Magnetisation(self.mesh, Br, h, sel, mu0, Br_per, j0), field))
         h = h_all[ids]
         # one load per thickness: a table per selected element is split with the elements; a
         # 3-vector, a table per node and a function of position hold for every part as given
@@ -442,7 +443,8 @@ class Problem:
             per = None if Br.shape == (3,) else table_kind(Br.shape, len(ids), self.mesh.n_nodes, Br_per)
         per_element = per == "element"
         return [self.add(MagneticLoad(Magnetisation(self.mesh, Br[h == t] if per_element else Br, float(t),
-                                                    ids[h == t], mu0, per), field))
+                                                    ids[h == t], mu0, per, None if j0 is None else j0[h == t]),
+                                      field))
                 for t in np.unique(h)]
 
     def set_material(self, material):
