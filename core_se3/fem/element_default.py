@@ -60,6 +60,7 @@ from ..errors import ElementTooDistortedError, ElementWarning
 from ..mesh import LOCAL_EDGES
 from ..mesh.gauge import turned_about_normal
 from .element import Element, ElementEvaluation, register_element
+from .frame_turns import check_frame_turns
 from .material import law_matrix
 from .membrane_drilling import drilling_correction, reference_G, tying_correction
 from .membrane_enhanced import condensed_stiffness, membrane_enhancement
@@ -302,6 +303,7 @@ class DefaultElement(Element):
             self.Dbar_packed[sl] = Db[:, _IU[0], _IU[1]]
             self.Dz0[sl] = np.einsum("mij,mj->mi", _unpack(self.Dbar_packed[sl]), z0)  # Dbar z0
         self.area = self.j0.sum(axis=1)                                 # reference area per element
+        check_frame_turns(mesh.X, mesh.quads, self.frames(mesh.g0), self.j0, stacklevel=5)
         self._Dbar = None
         # the coarse-curvature warning needs the supports (which edges are free): the Problem
         # issues it when it solves (Problem.check_element)
