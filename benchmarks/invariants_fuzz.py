@@ -13,7 +13,9 @@ seeded problems).  What each check measures and its tolerance:
    tolerance max(rtol, round-off floor); must be <= EQ_TOL (10: the backends agree to 1e-12).
 2. balance: lab totals of the reactions (r_int - f_ext at the held dofs, other backend) plus the
    applied loads (recomputed from the load data, not from the package: lam F for edge and nodal
-   forces, rho h g A for gravity, p A n for dead pressure), force and moment about the origin,
+   forces, rho h g A for gravity, p A n for dead pressure, A the elements' own area: their exact
+   arcs' area element, written here -- on a curved panel the flat quads between the nodes are
+   3.4 % smaller at 0.6 rad an element), force and moment about the origin,
    relative to the sum of the nodal force magnitudes (of the total and of each load: loads that
    cancel keep their scale; moments: that x the part's size, plus the
    reported scale); tolerance 10 sqrt(free dofs) max(rtol, floor) x the residual's scale (the
@@ -241,16 +243,55 @@ def lab_totals(g, f):
     return F, M
 
 
-def bilinear_area(X):
-    """Total area of bilinear quads (m, 4, 3) by the 2 x 2 Gauss rule (what the dead surface
-    loads integrate; exact for plane quads), written here from the corner positions."""
-    total = 0.0
-    for a in (-3 ** -0.5, 3 ** -0.5):
-        for b in (-3 ** -0.5, 3 ** -0.5):
-            x1 = ((1 - b) * (X[:, 1] - X[:, 0]) + (1 + b) * (X[:, 2] - X[:, 3])) / 4
-            x2 = ((1 - a) * (X[:, 3] - X[:, 0]) + (1 + a) * (X[:, 2] - X[:, 1])) / 4
-            total += np.linalg.norm(np.cross(x1, x2), axis=1).sum()
-    return total
+def _screw_translation(h):
+    """The translational part v (E, 3) of log h of relative frames h (E, 4, 4) -- the velocity of
+    the screw motion (helicoidal arc) from one frame onto the other, in the first frame's
+    components; written here (axis-angle from the skew part, V^-1 in closed form, a series below
+    1e-4 rad), not the package's ``lie.log``."""
+    R, t = h[:, :3, :3], h[:, :3, 3]
+    a = 0.5 * np.stack([R[:, 2, 1] - R[:, 1, 2], R[:, 0, 2] - R[:, 2, 0], R[:, 1, 0] - R[:, 0, 1]], 1)
+    s, c = np.linalg.norm(a, axis=1), 0.5 * (np.trace(R, axis1=1, axis2=2) - 1.0)
+    th = np.arctan2(s, c)
+    w = a * np.where(s > 1e-300, th / np.maximum(s, 1e-300), 1.0)[:, None]     # the rotation vector
+    small = th < 1e-4
+    ths = np.where(small, 1.0, th)
+    # V^-1 = I - W/2 + k W^2, k = (1 - th sin th / (2 (1 - cos th))) / th^2 = (1 - (th/2) cot(th/2)) / th^2
+    # -> 1/12 + th^2/720 (1 - cos th itself would cost eps / th^2: 5e-14 of a panel's area at 0.1 rad)
+    k = np.where(small, 1.0 / 12 + th ** 2 / 720, (1.0 - 0.5 * ths / np.tan(0.5 * ths)) / ths ** 2)
+    wxt = np.cross(w, t)
+    return t - 0.5 * wxt + k[:, None] * np.cross(w, wxt)
+
+
+def element_areas(mesh):
+    """Area element (m, 4) at the 2 x 2 Gauss points of the elements' own geometry, written here
+    from the load data's definition (docs/SCENARIOS.md, model/loads.py "Curved elements"): |A_1 x
+    A_2| of the tangents A_1 = ((1 - y) v_b + (1 + y) v_t) / 4, A_2 = ((1 - x) v_l + (1 + x) v_r) / 4
+    tied to the edges' screw velocities v (exact arcs: exact on a cylinder), in the frames turned
+    by the mesh's gauge about their normals; on a flat element that is the bilinear quad's area
+    element to round-off.  The exact area of a cylinder panel with its nodes on the cylinder
+    (tests/test_invariants_fuzz.py)."""
+    alpha = mesh.gauge_angles
+    c, s = np.cos(alpha), np.sin(alpha)
+    Rz = np.zeros((len(alpha), 4, 4))
+    Rz[:, 0, 0], Rz[:, 0, 1], Rz[:, 1, 0], Rz[:, 1, 1], Rz[:, 2, 2], Rz[:, 3, 3] = c, -s, s, c, 1.0, 1.0
+    g = mesh.g0 @ Rz
+    q = mesh.quads
+
+    def v(a, b):                         # edge a -> b of every element: the screw velocity in a's frame
+        Ra = g[q[:, a], :3, :3]
+        h = np.zeros((len(q), 4, 4))     # R_a^T (p_b - p_a): no eps |p| of a part far from the origin
+        h[:, :3, :3] = np.einsum("mji,mjk->mik", Ra, g[q[:, b], :3, :3])
+        h[:, :3, 3] = np.einsum("mji,mj->mi", Ra, g[q[:, b], :3, 3] - g[q[:, a], :3, 3])
+        return _screw_translation(h)
+
+    vb, vt, vl, vr = v(0, 1), v(3, 2), v(0, 3), v(1, 2)
+    j = []
+    for x, y in ((-1, -1), (1, -1), (1, 1), (-1, 1)):           # counter-clockwise
+        x, y = x * 3 ** -0.5, y * 3 ** -0.5
+        A1 = ((1 - y) * vb + (1 + y) * vt) / 4
+        A2 = ((1 - x) * vl + (1 + x) * vr) / 4
+        j.append(np.linalg.norm(np.cross(A1, A2), axis=1))
+    return np.stack(j, 1)
 
 
 def applied_totals(p, spec, g, lam):
@@ -262,7 +303,7 @@ def applied_totals(p, spec, g, lam):
     each = 0.0
     M = np.zeros(3)
     Q = p.mesh.g0[0, :3, :3] @ _mesh(spec).g0[0, :3, :3].T
-    area = bilinear_area(p.mesh.X[p.mesh.quads])
+    area = element_areas(p.mesh).sum()
     x = g[:, :3, 3]
     for ld, load in zip(spec["loads"], p.loads):
         f = load.evaluate(g, lam, tangent=False).f
