@@ -1,7 +1,7 @@
 """Physics-invariant fuzzer: random valid small shell problems, every successful answer checked
 independently (equilibrium on the other backend, global balance, path independence over 1, 2, 4
 and 16 load steps, frame invariance under a random rigid motion, stability of a state reported
-stable).  Writes benchmarks/results/invariants_fuzz.md.
+stable).  Writes benchmarks/results/invariants_fuzz.md (seed 4; other seeds: _seed<N>.md).
 
     .venv/bin/python benchmarks/invariants_fuzz.py [--n 60] [--seed 1]
 
@@ -112,8 +112,10 @@ FINDINGS[4] = [
     "tests/test_invariants_fuzz.py::test_loads_that_cancel_keep_the_balance_check_s_scale).",
     "* re-run on main at 976f7af with the checks of wt-fuzz9 (2026-12-05; the area loads on curved elements "
     "now take the element's own area, and a follower pressure its nodal normals): the balance check's fix "
-    "changes no number of this campaign (worst 3.81e-18, reported 3.65e-12, as before); the package's changes "
-    "do: problem 108 (see above; its follower and dead pressure are area loads on a curved panel) now stops at "
+    "changes no number of this campaign (worst 3.81e-18 as before); the reported balance's scale with each "
+    "load's own magnitudes (seed 10's finding) lowers its worst 3.65e-12 -> 3.45e-12; the package's changes "
+    "since the campaign change the rest: problem 108 (see above; its follower and dead pressure are area "
+    "loads on a curved panel) now stops at "
     "every step count at a 'bifurcation' between 0.2856445 and 0.2858887 (1 step: 0.2861328) 'the path went "
     "on continuously through', counted as 2 critical points here (4 and 16 steps; sym K 2.7e-8 before, -2.3e-8 "
     "beyond), and one one-step solve 'stopped at a reported critical point' (0 before); the frame check's "
@@ -148,7 +150,10 @@ FINDINGS[9] = [
     "* 9 problems fail at every step count: 4, 41, 151, 207, 243 (roll-ups: an element edge turning past "
     "3.047 rad at 0.35 ... 0.99 of the load, at 1 and 16 steps alike), 73, 203, 205, 220 (pinned or "
     "clamped panels, no convergence at the same load factor to 5e-4 at 1 and 16 steps: 0.599, 0.509, "
-    "0.104, 0.500); no mixed outcomes, no critical points reported.", ""]
+    "0.104, 0.500); no mixed outcomes, no critical points reported.",
+    "* the reported balance's scale now holds each applied load's own nodal magnitudes (seed 10's finding): "
+    "this campaign's worst reported balance (by its ratio to the tolerance) 4.4e-7 of 7.2e-3 -> 1.2e-7 of "
+    "4.9e-3, every state the same.", ""]
 FINDINGS[10] = [
     "Findings (seed 10, on main at 976f7af; 'before' is the same campaign on the code before the fix):", "",
     "* the package's reported balance (`StepResult.balance_error`), problems 65 (clamped and pinned 2x1 "
@@ -159,7 +164,7 @@ FINDINGS[10] = [
     "was round-off too -- the fuzzer's problem 183 of seed 4, in the package. Fixed (results/recorder.py: "
     "own_magnitudes, each applied load's own nodal magnitudes are part of the scale): 1.2e-17 and 7e-29 "
     "(tests/test_solver.py::test_loads_that_cancel_report_their_balance_at_round_off: a clamped panel, "
-    "+-0.3, 0.23 -> 7e-16).",
+    "+-0.3, 0.23 -> 7e-16); the campaign's worst reported balance 1.0 (tolerance 6.4e-6) -> 6.0e-10 (1.9e-5).",
     "* problem 45 (clamped 4x1 cylindrical panel, dead edge moment + oblique edge force; not conservative) "
     "exits ok on a state whose sym K has 2 negative eigenvalues (-2.7e-8): 1, 16 and 256 steps end on it "
     "(to 1.1e-13 ell), K's eigenvalues all in the right half-plane (min Re / max |.| 3.9e-9), det K of one "
@@ -692,9 +697,11 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--n", type=int, default=250)
     ap.add_argument("--seed", type=int, default=4)
-    ap.add_argument("--out", default=os.path.join(os.path.dirname(os.path.abspath(__file__)), "results",
-                                                  "invariants_fuzz.md"))
+    ap.add_argument("--out", default=None, help="default results/invariants_fuzz.md (seed 4), "
+                    "results/invariants_fuzz_seed<N>.md (other seeds)")
     a = ap.parse_args()
+    a.out = a.out or os.path.join(os.path.dirname(os.path.abspath(__file__)), "results",
+                                  "invariants_fuzz.md" if a.seed == 4 else f"invariants_fuzz_seed{a.seed}.md")
     t0 = time.perf_counter()
     rec = campaign(a.n, a.seed)
     text = report(rec, a.n, a.seed, time.perf_counter() - t0)

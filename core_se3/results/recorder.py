@@ -85,7 +85,8 @@ def own_magnitudes(g, loads, lam):
     >>> [float(v) for v in own_magnitudes(p.mesh.g0, p.loads, 1.0)]    # 2 x 2 x the area
     [4.0, 0.0]
     """
-    applied = [ld for ld in loads if not (getattr(ld, "support_force", False) or getattr(ld, "constraint_force", False))]
+    applied = [ld for ld in loads
+               if not (getattr(ld, "support_force", False) or getattr(ld, "constraint_force", False))]
     if len(applied) < 2:
         return 0.0, 0.0
     f = np.stack([ld.evaluate(g, lam, tangent=False).f for ld in applied])
