@@ -446,6 +446,27 @@ def test_an_error_inside_an_update_keeps_the_state_and_its_values():
     assert s.update(P=1.5).values["P"].tolist() == [1.5]
 
 
+def test_an_interrupt_while_factoring_the_new_state_keeps_the_state_and_its_values():
+    """With the stability check an update factors its converged state (a renewal does too); an
+    interrupt there (Ctrl-C in a control loop) left the problem's field at the new command, 0.32,
+    under the state of the old one, 0.31: the command back to 0.31 then returned that state with
+    the field still 0.32 in the problem (1.5e-2 from the equilibrium the problem held, and every
+    Jacobian and update after it taken on the wrong field).  Now the values go back with the state."""
+    p, f = magnetic_strip()
+    s = Session(p, 1.0, [FieldVariable(p, f, name="B")], stability_check=True, rtol=1e-12, dtol=1e-12)
+    before = s.update(B=[0.0, 0.0, 0.31])
+
+    def interrupted(*a, **k):
+        raise KeyboardInterrupt
+    factor, s._corr.factor = s._corr.factor, interrupted
+    with pytest.raises(KeyboardInterrupt):
+        s.update(B=[0.0, 0.0, 0.32])
+    s._corr.factor = factor
+    assert s.state is before and f.B.tolist() == [0.0, 0.0, 0.31] and s.variables["B"].value().tolist() == [0.0, 0.0, 0.31]
+    assert s.update(B=[0.0, 0.0, 0.31]) is before and frame_error(s.g, cold(p), 1.0) < 1e-10
+    assert frame_error(s.update(B=[0.0, 0.0, 0.32]).g, cold(p), 1.0) < 1e-10
+
+
 def test_backends_give_the_same_updates():
     states = []
     for backend in ("numpy", "numba"):

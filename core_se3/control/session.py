@@ -354,10 +354,12 @@ class Session:
         x0 = {k: self.values[k] for k in x1}
         try:
             g, r, counts = self._follow(lam0, lam1, x0, x1)
+            # the renewal and the stability check factor at g: an error or interrupt there too
+            # keeps the values of the state (before, the problem kept the new ones under the old state)
+            factored, why = self._checked(g, lam1, self._corr.settle(g, lam1, self._stamp, counts[0]))
         except BaseException:
             self._assign(x0)                 # refused or interrupted: the values of the state kept
             raise
-        factored, why = self._checked(g, lam1, self._corr.settle(g, lam1, self._stamp, counts[0]))
         if factored:
             counts = (counts[0], counts[1] + 1) + counts[2:]      # factors at the new state: checked
         if why:
