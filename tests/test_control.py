@@ -123,6 +123,21 @@ def test_aged_factors_are_renewed_at_converged_states():
     assert frame_error(g2, ginf, s2.problem.length_scale) < 1e-10
 
 
+def test_a_factorisation_priced_at_its_measured_time_is_an_option():
+    """``factor_cost=None`` (docs/CONTROL.md: the price of a renewal measured as the session runs)
+    was refused, 'must be in [0, inf], got None': the option check looked at the default (6).
+    Now None is a setting: the measured branch of the rule runs and the states equal cold solves."""
+    assert ControlOptions(factor_cost=None).factor_cost is None
+    with pytest.raises(OptionError, match="max_iter"):
+        ControlOptions(max_iter=None)
+    p, f = magnetic_strip()
+    s = Session(p, 1.0, [FieldVariable(p, f, name="B")], factor_cost=None, rtol=1e-12, dtol=1e-12)
+    for k in range(1, 9):
+        st = s.update(B=[0.0, 0.0, 0.3 * (1 + 0.02 * k)])
+    assert s.options.factor_cost is None and s._corr.cost["factorization"] > 0
+    assert frame_error(st.g, cold(p), 1.0) < 1e-10
+
+
 def test_jacobian_equals_central_differences_of_cold_solves():
     """d(tip positions)/dB on the gripper, direct and adjoint (transposed solves on the same
     factors), against central differences of cold solves (h = 1e-4 |B|): 1e-6 relative."""
