@@ -283,6 +283,27 @@ def test_bad_commands_and_sessions_are_clear_errors():
         ControlOptions(path_tolerance=0.0)
 
 
+def test_a_sessions_load_factor_and_the_jacobians_names_are_read_as_given():
+    """Session(p, "1") and Session(p, None) failed with NumPy's TypeError (isfinite), an array
+    with its ValueError, and Session(p, True) started at load factor 1.0 (update refuses a bool);
+    jacobian(q, "PB") iterated the string: the Jacobian by the variables P and B, (3, 4), for
+    a name that is neither, and jacobian("tip") looked for the probe 't'; jacobian(q, []) failed
+    with NumPy's reshape error.  Now: OptionError, one name is a list of one."""
+    p, f = magnetic_strip()
+    p.add_edge_force("x1", (0.0, 0.01, 0.0))
+    for lam in ("1", None, True, np.array([1.0, 0.5]), np.nan):
+        with pytest.raises(OptionError, match="Session: the load factor must be a finite number"):
+            Session(p, lam, [FieldVariable(p, f, name="B")])
+    s = Session(p, 1.0, [FieldVariable(p, f, name="B"), LoadMagnitude(p, p.loads[-1], name="P")])
+    with pytest.raises(OptionError, match="unknown variable 'PB'; did you mean"):
+        s.jacobian(["tip"], "PB")
+    with pytest.raises(OptionError, match="no variables to differentiate by .*B, P"):
+        s.jacobian(["tip"], [])
+    J = s.jacobian("tip", "P")
+    assert J.jacobian.shape == (3, 1) and np.array_equal(J.jacobian, s.jacobian(["tip"], ["P"]).jacobian)
+    assert s.jacobian(ProbePosition(p, "tip"), s.variables["B"]).jacobian.shape == (3, 3)
+
+
 def test_a_non_number_command_is_refused_naming_the_variable():
     """update(lam=True) moved the load factor to 1.0, update(P=True) set the load to 1 and
     update(P="2") to 2.0 (NumPy's float conversion): a bool, a string or None is no command."""

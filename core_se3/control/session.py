@@ -124,6 +124,22 @@ class State:
         return self._probes
 
 
+def _load_factor(lam, who):
+    """lam as a float, or OptionError: a bool, a string, None, an array or a non-finite number
+    is no load factor (before, Session read True as 1.0 and failed on '1' or None with NumPy's
+    TypeError)."""
+    if (isinstance(lam, (bool, np.bool_)) or not isinstance(lam, (int, float, np.floating, np.integer))
+            or not np.isfinite(lam)):
+        raise OptionError(f"{who}: the load factor must be a finite number, got {lam!r}")
+    return float(lam)
+
+
+def _items(x):
+    """A sequence argument as a list: one name (a string) or one object is a list of one (before,
+    jacobian(q, "PB") iterated the string: the variables P and B)."""
+    return [x] if isinstance(x, (str, Quantity, Variable)) else list(x)
+
+
 def _check_problem(problem):
     """ControlError for what a session cannot hold."""
     if problem.element.stateful:
@@ -185,8 +201,7 @@ class Session:
     def __init__(self, problem, lam=1.0, variables=(), g=None, options=None, steps=None, **kw):
         opts, kw = split_options(ControlOptions, options, dict(kw))
         unknown_keywords("Session", kw, [f.name for f in fields(ControlOptions)])
-        if not np.isfinite(lam):
-            raise OptionError(f"Session: the load factor must be finite, got {lam!r}")
+        lam = _load_factor(lam, "Session")
         _check_problem(problem)
         problem.check_supports()
         self.problem, self.options = problem, opts
@@ -339,11 +354,7 @@ class Session:
         """
         t0 = time.perf_counter()
         lam0 = self.lam
-        lam1 = lam0 if lam is None else lam
-        if (isinstance(lam1, (bool, np.bool_)) or not isinstance(lam1, (int, float, np.floating, np.integer))
-                or not np.isfinite(lam1)):
-            raise OptionError(f"update: the load factor must be a finite number, got {lam!r}")
-        lam1 = float(lam1)
+        lam1 = lam0 if lam is None else _load_factor(lam, "update")
         new = self.commands.parse(values)
         x1 = {k: x for k, x in new.items() if not np.array_equal(x, self.values[k])}
         if not x1 and lam1 == lam0:
@@ -494,9 +505,11 @@ class Session:
         Parameters
         ----------
         quantities : sequence
-            ``design`` quantities, or probe names (their positions, ``ProbePosition``).
+            ``design`` quantities, or probe names (their positions, ``ProbePosition``); one
+            name or quantity alone is a list of one.
         variables : sequence, optional
-            Variable names or ``design`` variables (default all of the session's).
+            Variable names or ``design`` variables (default all of the session's; one alone
+            is a list of one; an empty list is an OptionError).
         method : str
             'auto', 'direct' or 'adjoint'.
 
@@ -516,9 +529,12 @@ class Session:
         >>> round(float(J[2, 0]) / (1e-6 * 10.0 ** 3 / 300), 2)
         1.0
         """
-        qs = [self.quantity(q) for q in quantities]
+        qs = [self.quantity(q) for q in _items(quantities)]
         vs = list(self.variables.values()) if variables is None else \
-            [v if isinstance(v, Variable) else self.commands.lookup(v) for v in variables]
+            [v if isinstance(v, Variable) else self.commands.lookup(v) for v in _items(variables)]
+        if not vs:
+            raise OptionError("jacobian: no variables to differentiate by (the session's: "
+                              f"{', '.join(self.variables) or 'none'}); name at least one")
         c = self._corr
         if c.F is None or c.F_g is not self._g or c.F_stamp != self._stamp:
             c.factor(self._g, self.lam, self._stamp)
