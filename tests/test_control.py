@@ -304,6 +304,23 @@ def test_a_sessions_load_factor_and_the_jacobians_names_are_read_as_given():
     assert s.jacobian(ProbePosition(p, "tip"), s.variables["B"]).jacobian.shape == (3, 3)
 
 
+def test_a_loops_variables_given_as_one_name_are_that_variable():
+    """track(..., variables="PB") iterated the string and commanded both P and B (a name that
+    is neither); variables="coil" was refused as 'unknown variable c'; a variable object was a
+    TypeError.  Now one name is a list of one, and the session's variable objects are accepted."""
+    p, f = magnetic_strip()
+    p.add_edge_force("x1", (0.0, 0.01, 0.0))
+    s = Session(p, 1.0, [FieldVariable(p, f, name="B"), LoadMagnitude(p, p.loads[-1], name="P")])
+    z0 = s.state.probes["tip"]["x"][2]
+    with pytest.raises(OptionError, match="unknown variable 'PB'; did you mean 'P'"):
+        track(s, "tip", [[z0], [z0 + 0.01]], variables="PB", components=[2])
+    t = track(s, "tip", [[z0], [z0 + 0.01]], variables=s.variables["B"], components=[2])
+    assert list(t.commands) == ["B"] and abs(t.errors[-1]) < 0.02 * 0.01       # one Newton step: O(dx^2) left
+    assert s.values["P"].tolist() == [1.0]
+    with pytest.raises(OptionError, match="not the session's variable"):
+        track(s, "tip", [[z0 + 0.01]], variables=[FieldVariable(p, f, name="B")], components=[2])
+
+
 def test_a_non_number_command_is_refused_naming_the_variable():
     """update(lam=True) moved the load factor to 1.0, update(P=True) set the load to 1 and
     update(P="2") to 2.0 (NumPy's float conversion): a bool, a string or None is no command."""

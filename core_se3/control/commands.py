@@ -102,6 +102,32 @@ class Commands:
             raise OptionError(f"unknown variable {name!r}{did_you_mean(name, self.variables)}; the session's "
                               f"variables: {', '.join(self.variables) or 'none'}") from None
 
+    def pick(self, variables=None):
+        """The variables named by ``variables``: None (all), one name or variable, or a sequence
+        of them (a string is one name: before, a loop's variables="PB" commanded P and B); a
+        variable object must be one of these (OptionError otherwise).
+
+        Example
+        -------
+        >>> from core_se3 import Problem, Material, mesh
+        >>> from core_se3.design import LoadMagnitude
+        >>> p = Problem(mesh.rectangle(1.0, 0.2, 2, 1), Material(1e3, 0.0, 0.01))
+        >>> p.add_edge_force("x1", (0.0, 0.0, 1.0))
+        >>> [v.name for v in Commands([LoadMagnitude(p, p.loads[0], name="P")]).pick("P")]
+        ['P']
+        """
+        if variables is None:
+            return list(self.variables.values())
+        items = [variables] if isinstance(variables, (str, Variable)) else list(variables)
+        out = []
+        for v in items:
+            mine = self.lookup(v.name if isinstance(v, Variable) else v)
+            if isinstance(v, Variable) and v is not mine:
+                raise OptionError(f"the variable {v.name!r} given is not the session's variable of that name; pass "
+                                  "its name")
+            out.append(mine)
+        return out
+
     def parse(self, values):
         """name -> (size,) arrays of the commanded values, checked (OptionError: unknown name,
         wrong size, not finite, outside the bounds or a norm bound)."""

@@ -124,9 +124,8 @@ class _Loop:
     def __init__(self, session, quantity, variables, components, model=None):
         self.s, self.model = session, model
         self.q = session.quantity(quantity)
-        names = list(session.variables) if variables is None else list(variables)
-        self.vars = [session.commands.lookup(n) for n in names]
-        self.names = names
+        self.vars = session.commands.pick(variables)
+        self.names = names = [v.name for v in self.vars]
         if model is not None:
             self.qm = model.quantity(quantity)
             sizes = [model.commands.lookup(n).size for n in names]
@@ -254,7 +253,7 @@ def track(session, quantity, targets, variables=None, components=None, feedback=
         The plant, at the start (targets[0] is recorded against the start's value): what is
         measured and commanded.
     variables : sequence of str, optional
-        The commanded variables (default all of the session's).
+        The commanded variables (default all of the session's; one name alone is a list of one).
     feedback : Feedback or dict, optional
         The gain, the damping mu and the halvings of a refused command (default
         ``Feedback()``: gain 1, no damping, 5 halvings).
