@@ -582,6 +582,39 @@ lam_end = 0.5
     assert frame_error(st.g, cold(ref), ref.length_scale) < 1e-8
 
 
+def test_a_scenario_field_named_like_a_load_says_to_rename_the_field():
+    """[fields.load0] and the first [[loads]] entry (load0) are two variables of one name; the
+    error said 'give each its own name (name=...)', which a scenario's session cannot do."""
+    scn = scenario.loads("""
+units = "SI"
+[mesh]
+generator = "rectangle"
+L = 1.0
+width = 0.2
+nx = 8
+ny = 1
+[material]
+E = 1e6
+nu = 0.0
+h = 0.05
+[[supports]]
+type = "clamp"
+edge = "x0"
+[fields.load0]
+type = "uniform"
+B = [0.0, 0.0, 0.03]
+[[magnets]]
+Br = [0.1, 0.0, 0.0]
+field = "load0"
+[[loads]]
+type = "edge_force"
+edge = "x1"
+force = [0.0, 0.01, 0.0]
+""")
+    with pytest.raises(OptionError, match=r"two variables are named 'load0'.*rename \[fields.load0\]"):
+        Session.from_scenario(scn)
+
+
 def test_a_session_commands_an_edge_load_on_a_union_of_lines(tmp_path):
     """An edge force on the union of the lines x1 and y1 builds one load per line, and
     ``Session.from_scenario`` left such an entry out without a word (its variables were [], where

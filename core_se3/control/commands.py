@@ -77,7 +77,8 @@ class Commands:
             if not isinstance(v, Variable):
                 raise OptionError(f"a session's variables are core_se3.design variables, got {type(v).__name__}")
             if v.name in self.variables:
-                raise OptionError(f"two variables are named {v.name!r}: give each its own name (name=...)")
+                raise OptionError(f"two variables are named {v.name!r}: give each its own name (name=...; in a "
+                                  f"scenario rename [fields.{v.name}]: its [[loads]] entries are load0, load1, ...)")
             if v.name == "lam":
                 # Session.update(lam=...) is the load factor: the variable could never be commanded
                 raise OptionError("a variable cannot be named 'lam': update(lam=...) sets the load factor, so its "
