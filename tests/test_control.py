@@ -663,6 +663,24 @@ def test_track_and_plan_reach_their_targets():
         track(s2, "tip", targets, components=[2], feedback=dict(gian=0.5))
 
 
+def test_loop_options_out_of_range_are_clear_errors():
+    """Feedback(max_halvings=-1) ended a refused cycle in an UnboundLocalError, gain='1' in NumPy's
+    UFuncTypeError; a negative or NaN damping was read as none, PlanOptions(extrapolate='no') as
+    True and max_iter=-1 as zero iterations.  Now each is an OptionError naming the field."""
+    p = strip(P=0.1)
+    s = Session(p, 1.0, [LoadMagnitude(p, p.loads[0], name="P")])
+    z0 = s.state.probes["tip"]["x"][2]
+    for bad in (dict(max_halvings=-1), dict(gain="1"), dict(gain=-1.0), dict(damping=np.nan), dict(damping=-0.5),
+                dict(max_halvings=2.5)):
+        with pytest.raises(OptionError, match=f"Feedback.{next(iter(bad))} must be"):
+            track(s, "tip", [[z0], [z0 + 0.05]], components=[2], feedback=bad)
+    for bad in (dict(max_iter=-1), dict(damping=np.nan), dict(max_halvings=-2), dict(extrapolate="no")):
+        with pytest.raises(OptionError, match=f"PlanOptions.{next(iter(bad))} must be"):
+            plan(s, "tip", [[z0 + 0.1]], 1e-9, components=[2], options=bad)
+    assert s.stats["updates"] == 0
+    assert plan(s, "tip", [[z0 + 0.1]], 1e-9, components=[2], options=dict(max_iter=0)).reached.tolist() == [False]
+
+
 def test_default_schedule_is_deterministic():
     """The default renewal price is a fixed number of iterations, not a measured time: two
     sessions given the same drifting commands renew at the same updates and end bit for bit

@@ -56,6 +56,9 @@ class Feedback:
     damping: float = 0.0
     max_halvings: int = 5
 
+    def __post_init__(self):
+        _check_fields(self, gain=(0.0, False), damping=(0.0, True), max_halvings=(0, True))
+
 
 @dataclass(frozen=True)
 class PlanOptions:
@@ -81,6 +84,26 @@ class PlanOptions:
     damping: float = 0.0
     extrapolate: bool = True
     max_halvings: int = 6
+
+    def __post_init__(self):
+        _check_fields(self, max_iter=(0, True), damping=(0.0, True), max_halvings=(0, True))
+        if not isinstance(self.extrapolate, (bool, np.bool_)):
+            raise OptionError(f"PlanOptions.extrapolate must be true or false, got {self.extrapolate!r}")
+
+
+def _check_fields(opts, **lows):
+    """OptionError unless every named field is a finite number above its low end (name -> (low,
+    low allowed)), a whole one where the default is whole: before, Feedback(max_halvings=-1) ended
+    in an UnboundLocalError, gain='1' in NumPy's UFuncTypeError, and a negative or NaN damping,
+    PlanOptions(extrapolate='no') were read as no damping and as True."""
+    for name, (low, closed) in lows.items():
+        v, whole = getattr(opts, name), isinstance(low, int)
+        ok = isinstance(v, (int, np.integer) if whole else (int, float, np.integer, np.floating)) and \
+            not isinstance(v, (bool, np.bool_)) and np.isfinite(v) and (v >= low if closed else v > low)
+        if not ok:
+            kind = "a whole number" if whole else "a finite number"
+            raise OptionError(f"{type(opts).__name__}.{name} must be {kind} {'>=' if closed else '>'} {low:g}, "
+                              f"got {v!r}")
 
 
 def _options(cls, spec, where):
