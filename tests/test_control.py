@@ -882,6 +882,34 @@ def test_the_critical_point_check_compares_with_the_last_accepted_state_and_says
         s.update(lam=1.0)
 
 
+def test_the_start_sign_is_taken_at_the_converged_start_not_at_the_guess():
+    """The snap roof at load factor 0.627 has a stable state (crown -6.77) and, past its limit
+    point, an unstable one (-14.02, det K < 0, from arc length).  From a guess halfway between
+    them (det K < 0 there) the session's start converges onto the far, stable branch (crown
+    -26.2, det K > 0); the sign it recorded was the guess's, so the session refused its own
+    start's Jacobian as 'past a critical point' (from negative to positive).  Now the sign is
+    that of the converged start (one more factorisation, for a given g only)."""
+    from core_se3 import solvers
+    roof = os.path.join(EXAMPLES, "snap-roof.toml")
+    p = scenario.load(roof).problem
+    arc = solvers.arc_length(p, lam_end=None, dlam0=0.05, stop_at=(0, (0.0, 0.0, -1.0), 14.0))
+    unstable = arc.steps[-1]
+    lam = unstable.load_factor
+    assert 0.6 < lam < 0.66 and unstable.probes["crown"]["u"][2] < -13.9
+    stable = Session(p, lam, []).g
+    g = stable.copy()
+    g[:, :3, 3] = 0.5 * (stable[:, :3, 3] + unstable.g[:, :3, 3])
+    w = lie.log_so3(np.swapaxes(stable[:, :3, :3], 1, 2) @ unstable.g[:, :3, :3])
+    g[:, :3, :3] = stable[:, :3, :3] @ lie.exp_so3(0.5 * w)
+    s = Session(p, lam, [LoadMagnitude(p, p.loads[0], name="P")], g=g)
+    assert s.state.probes["crown"]["u"][2] < -20.0                 # the far branch
+    assert s._sign == 1 and s._corr.F_g is s._g
+    J = s.jacobian(["crown"]).jacobian                              # was refused
+    h = 1e-4
+    up, down = (s.update(P=1.0 + d).probes["crown"]["x"][2] for d in (h, -h))
+    assert abs(J[2, 0] - (up - down) / (2 * h)) < 1e-6 * abs(J[2, 0])
+
+
 def test_a_singular_tangent_at_the_new_state_is_refused_under_the_stability_check(monkeypatch):
     """With stability_check, a tangent that cannot be factored at the converged state (singular:
     a critical point exactly there) skipped the check and the state was accepted silently.  Now

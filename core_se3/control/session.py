@@ -215,6 +215,7 @@ class Session:
         self._origin = part_origin(problem)   # the corrector's frames are relative to it (module docstring)
         self.stats = dict(updates=0, refused=0, substeps=0, splits=0, iterations=0)
         t0 = time.perf_counter()
+        given = g is not None
         g = self._cold(lam, steps) if g is None else np.array(g, float)
         if g.shape != problem.mesh.g0.shape:
             raise OptionError(f"Session: g must have the shape {problem.mesh.g0.shape}, got {g.shape}")
@@ -223,12 +224,29 @@ class Session:
             raise ControlError(f"the start is not an equilibrium the corrector reaches at load factor {lam:g}: "
                                f"{out.reason}")
         self._g = out.g                   # the corrector's frames of the state (relative to the origin)
-        self.state = self._state(out.g, lam, Work(out.iterations, out.factorizations, 1, 0, time.perf_counter() - t0))
         self._r = out.residual            # the free residual at the state (the next predictor's start)
-        # det K's sign at the last accepted state where it is known (and that state, in words): a
-        # change between accepted states means a critical point crossed
-        self._sign, self._sign_at = self._corr.det_sign(), f"the session's start (load factor {lam:.6g})"
+        nf = out.factorizations + self._start_sign(given, lam)
+        self.state = self._state(out.g, lam, Work(out.iterations, nf, 1, 0, time.perf_counter() - t0))
         self._check_resolution()
+
+    def _start_sign(self, given, lam):
+        """Record det K's sign at the start (the last accepted state where it is known, and that
+        state in words: a change between accepted states means a critical point crossed); 1 if
+        it factored for it.  From a given g the factors are made at the converged start (before,
+        the sign was the guess's: the snap roof at load factor 0.627 from a guess halfway between
+        its stable and its unstable state, det K < 0 there, converged onto the far, stable branch,
+        det K > 0, and the session then refused every Jacobian as 'past a critical point')."""
+        c, factored = self._corr, 0
+        if given and c.F_g is not self._g:
+            try:
+                c.factor(self._g, lam, self._stamp, keep=True)
+                factored = 1
+            except (SingularSystemError, ElementTooDistortedError):
+                pass                         # a critical point at the start: its sign is not known
+        known = c.F_g is self._g or not given        # a cold start converged where its factors are
+        self._sign = c.det_sign() if known else None
+        self._sign_at = f"the session's start (load factor {lam:.6g})"
+        return factored
 
     @classmethod
     def from_scenario(cls, scn, lam=None, variables=None, **kw):
