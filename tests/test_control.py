@@ -321,6 +321,20 @@ def test_a_loops_variables_given_as_one_name_are_that_variable():
         track(s, "tip", [[z0 + 0.01]], variables=[FieldVariable(p, f, name="B")], components=[2])
 
 
+def test_a_variable_of_another_problem_is_refused():
+    """A LoadMagnitude made on a copy of the problem: its command was refused after 10 halvings as
+    'the equilibrium path turns sharply' (the predictor expected the load to change, the residual
+    did not), and the Jacobian by it was the copy's load's, -0.958 and 2.48 for the tip's x and z,
+    where the session's state does not depend on it at all.  Now an OptionError says so."""
+    q, q2 = strip(), strip()
+    with pytest.raises(OptionError, match="'P' was made on another Problem"):
+        Session(q, 1.0, [LoadMagnitude(q2, q2.loads[0], name="P")])
+    s = Session(q, 1.0, [LoadMagnitude(q, q.loads[0], name="P")])
+    with pytest.raises(OptionError, match="'P2' was made on another Problem"):
+        s.jacobian(["tip"], [LoadMagnitude(q2, q2.loads[0], name="P2")])
+    assert np.abs(s.jacobian(["tip"], [LoadMagnitude(q, q.loads[0], name="P2")]).jacobian[2]).max() > 1.0
+
+
 def test_a_non_number_command_is_refused_naming_the_variable():
     """update(lam=True) moved the load factor to 1.0, update(P=True) set the load to 1 and
     update(P="2") to 2.0 (NumPy's float conversion): a bool, a string or None is no command."""

@@ -54,6 +54,8 @@ class Commands:
         Each with a unique ``name`` other than ``lam`` (the load factor's keyword of
         ``Session.update``); no two may set the same field, load, magnet or element property
         (OptionError naming both).
+    problem : core_se3.Problem, optional
+        The session's problem: a variable made on another is refused (:meth:`check`).
 
     Attributes
     ----------
@@ -70,12 +72,11 @@ class Commands:
     [1.0]
     """
 
-    def __init__(self, variables):
-        self.variables = {}
+    def __init__(self, variables, problem=None):
+        self.variables, self.problem = {}, problem
         owner = {}
         for v in variables:
-            if not isinstance(v, Variable):
-                raise OptionError(f"a session's variables are core_se3.design variables, got {type(v).__name__}")
+            self.check(v)
             if v.name in self.variables:
                 raise OptionError(f"two variables are named {v.name!r}: give each its own name (name=...; in a "
                                   f"scenario rename [fields.{v.name}]: its [[loads]] entries are load0, load1, ...)")
@@ -90,6 +91,16 @@ class Commands:
                                       "could give it two values; keep one of them")
                 owner[key] = v.name
             self.variables[v.name] = v
+
+    def check(self, v):
+        """OptionError unless v is a design variable of the session's problem: one made on another
+        Problem sets nothing the session solves (before, its command was refused as 'the path
+        turns sharply', and its Jacobian was that of the other problem's load, not zero)."""
+        if not isinstance(v, Variable):
+            raise OptionError(f"a session's variables are core_se3.design variables, got {type(v).__name__}")
+        if self.problem is not None and getattr(v, "problem", self.problem) is not self.problem:
+            raise OptionError(f"the variable {v.name!r} was made on another Problem than the session's: make it on "
+                              "the session's problem (session.problem)")
 
     def values(self):
         """name -> the current values (size,) of every variable."""

@@ -205,7 +205,7 @@ class Session:
         _check_problem(problem)
         problem.check_supports()
         self.problem, self.options = problem, opts
-        self.commands = Commands(variables)
+        self.commands = Commands(variables, problem)
         self._turning = [ld for ld in problem.loads if overrides(ld, "direction_turn")]
         # magnets in the field of a point dipole: their states are checked for its resolution
         self._near = [ld for ld in problem.loads if isinstance(ld, MagneticLoad) and dipole_sources(ld.field)]
@@ -550,6 +550,8 @@ class Session:
         qs = [self.quantity(q) for q in _items(quantities)]
         vs = list(self.variables.values()) if variables is None else \
             [v if isinstance(v, Variable) else self.commands.lookup(v) for v in _items(variables)]
+        for v in vs:
+            self.commands.check(v)
         if not vs:
             raise OptionError("jacobian: no variables to differentiate by (the session's: "
                               f"{', '.join(self.variables) or 'none'}); name at least one")
