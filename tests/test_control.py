@@ -335,6 +335,22 @@ def test_a_variable_of_another_problem_is_refused():
     assert np.abs(s.jacobian(["tip"], [LoadMagnitude(q, q.loads[0], name="P2")]).jacobian[2]).max() > 1.0
 
 
+def test_a_magnetisation_command_in_another_shape_is_refused_not_reordered():
+    """Two regions' B^r given as (3, 2), components by regions, was read flat in the order of the
+    labels (Br[0].x, Br[0].y, ...): region 0 got (1, 1, 0) for (1, 0, 0.1).  Now any array of
+    more than one axis must have the variable's shape (regions, components)."""
+    p, f = magnetic_strip()
+    s = Session(p, 1.0, [RegionMagnetisation(p, [np.arange(4), np.arange(4, 8)], name="Br")])
+    want = np.array([[1.0, 0.0, 0.1], [1.0, 0.0, -0.1]])
+    with pytest.raises(OptionError, match=r"'Br': a command of shape \(3, 2\).*shape \(2, 3\)"):
+        s.update(Br=want.T)
+    assert s.stats["updates"] == 0
+    assert s.update(Br=want).values["Br"].tolist() == want.ravel().tolist()
+    assert s.update(Br=want.ravel() * 1.01).values["Br"].tolist() == (want.ravel() * 1.01).tolist()
+    s2 = Session(p, 1.0, [FieldVariable(p, f, name="B")])
+    assert s2.update(B=[[0.0, 0.0, 0.31]]).values["B"].tolist() == [0.0, 0.0, 0.31]
+
+
 def test_a_non_number_command_is_refused_naming_the_variable():
     """update(lam=True) moved the load factor to 1.0, update(P=True) set the load to 1 and
     update(P="2") to 2.0 (NumPy's float conversion): a bool, a string or None is no command."""

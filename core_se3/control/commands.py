@@ -159,6 +159,7 @@ class Commands:
                 raise OptionError(f"variable {name!r}: expected {v.size} number{'s' * (v.size > 1)}, got {x!r}")
             if a.size != v.size:
                 raise OptionError(f"variable {name!r} has {v.size} components ({', '.join(v.labels)}), got {a.size}")
+            _check_shape(v, np.shape(x))
             if not np.all(np.isfinite(a)):
                 raise OptionError(f"variable {name!r}: the command {a.tolist()} is not finite")
             bad = (a < v.lower) | (a > v.upper)
@@ -189,6 +190,18 @@ class Commands:
                 dr = None if d is None else dr + d
             v.assign(x)
         return None if dr is None else problem.assembler().vector(dr)
+
+
+def _check_shape(v, shape):
+    """OptionError for a command array of more than one axis (beyond axes of length 1) whose shape
+    is not the variable's own -- (regions, components) of a magnetisation: its entries would be
+    read in another order (before, a magnetisation of two regions given as (3, 2), components by
+    regions, set region 0 to (1, 1, 0) for (1, 0, 0.1) and (1, 0, -0.1))."""
+    own = (len(v.regions), len(v.free)) if isinstance(v, RegionMagnetisation) else (v.size,)
+    axes = tuple(n for n in shape if n != 1)
+    if len(axes) > 1 and axes != tuple(n for n in own if n != 1):
+        raise OptionError(f"variable {v.name!r}: a command of shape {tuple(shape)} is read in the order of its "
+                          f"components ({', '.join(v.labels)}); give that flat list or an array of shape {own}")
 
 
 def _linear_change(v, problem, g, lam, x):
