@@ -351,6 +351,22 @@ def test_a_magnetisation_command_in_another_shape_is_refused_not_reordered():
     assert s2.update(B=[[0.0, 0.0, 0.31]]).values["B"].tolist() == [0.0, 0.0, 0.31]
 
 
+def test_a_load_added_after_the_session_was_made_is_refused():
+    """A session refuses contact when it is made; a ceiling added to the problem after it was
+    followed as a bare penalty (no multiplier updates): the README strip's tip at P = 3 came out
+    at z = 3.96047 where Problem.solve gives 3.95925, and the update looked converged.  Now an
+    update or a Jacobian after the problem's loads changed is a ControlError naming them."""
+    p = strip(P=1.0)
+    s = Session(p, 1.0, [LoadMagnitude(p, p.loads[0], name="P")])
+    before = s.state
+    p.add_obstacle("half_space", point=(0, 0, 4.0), normal=(0, 0, -1), name="ceiling")
+    with pytest.raises(ControlError, match="loads changed after the session was made .*added: ceiling"):
+        s.update(P=3.0)
+    with pytest.raises(ControlError, match="jacobian: the problem's loads changed"):
+        s.jacobian(["tip"])
+    assert s.state is before and s.values["P"].tolist() == [1.0]
+
+
 def test_a_non_number_command_is_refused_naming_the_variable():
     """update(lam=True) moved the load factor to 1.0, update(P=True) set the load to 1 and
     update(P="2") to 2.0 (NumPy's float conversion): a bool, a string or None is no command."""
