@@ -268,7 +268,8 @@ def test_bad_commands_and_sessions_are_clear_errors():
         Session(p, 1.0, [FieldVariable(p, f, name="a"), FieldVariable(p, f, "polar", name="b")])
     with pytest.raises(OptionError, match="two variables are named 'a'"):
         q = strip()
-        Session(q, 1.0, [LoadMagnitude(q, q.loads[0], name="a"), FieldVariable(p, f, name="a")])
+        q.add_edge_force("x1", (0.0, 0.1, 0.0))
+        Session(q, 1.0, [LoadMagnitude(q, q.loads[0], name="a"), LoadMagnitude(q, q.loads[1], name="a")])
     with pytest.raises(OptionError, match="unknown option 'rtl'"):
         Session(p, 1.0, rtl=1e-9)
     c = strip()
