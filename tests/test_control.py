@@ -728,6 +728,23 @@ def test_loop_options_out_of_range_are_clear_errors():
     assert plan(s, "tip", [[z0 + 0.1]], 1e-9, components=[2], options=dict(max_iter=0)).reached.tolist() == [False]
 
 
+def test_a_loops_tolerance_and_components_are_read_as_given():
+    """plan's tolerance '1e-3' or None ended in NumPy's TypeError and True planned to within 1
+    ('all samples within 1'); components [2.5] was read as 2, and 2, ['z'], [[2]] ended in
+    NumPy's or LAPACK's errors.  Now: OptionError naming the argument; one index is a list of one."""
+    p = strip(P=0.1)
+    s = Session(p, 1.0, [LoadMagnitude(p, p.loads[0], name="P")])
+    z0 = s.state.probes["tip"]["x"][2]
+    for tol in ("1e-3", None, True, np.array([1e-3, 1e-3])):
+        with pytest.raises(OptionError, match="plan: the tolerance must be a positive finite number"):
+            plan(s, "tip", [[z0 + 0.1]], tol, components=[2])
+    for comps in ([2.5], ["z"], [[2]], [3], [True]):
+        with pytest.raises(OptionError, match="components must be indices of the quantity's 3 components"):
+            track(s, "tip", [[z0], [z0 + 0.01]], components=comps)
+    assert s.stats["updates"] == 0
+    assert track(s, "tip", [[z0], [z0 + 0.01]], components=2).max_error < 0.02 * 0.01
+
+
 def test_default_schedule_is_deterministic():
     """The default renewal price is a fixed number of iterations, not a measured time: two
     sessions given the same drifting commands renew at the same updates and end bit for bit

@@ -122,6 +122,23 @@ def _options(cls, spec, where):
     raise OptionError(f"{where}: expected a {cls.__name__} or a dict of its fields, got {spec!r}")
 
 
+def _components(components, size):
+    """The quantity's rows picked by ``components`` (an index or a list of them in 0 .. size-1), or
+    OptionError (before, [2.5] was read as 2, and 2, ['z'] or [[2]] ended in NumPy's or LAPACK's
+    errors)."""
+    c = [components] if isinstance(components, (int, np.integer)) else components
+    try:
+        rows = np.asarray(c)
+    except (TypeError, ValueError):
+        rows = np.asarray([], float)
+    whole = rows.ndim == 1 and rows.size and all(isinstance(i, (int, np.integer)) and not isinstance(i, (bool, np.bool_))
+                                                 for i in rows.tolist())
+    if not whole or rows.min() < 0 or rows.max() >= size:
+        raise OptionError(f"components must be indices of the quantity's {size} components, 0 .. {size - 1} (an "
+                          f"index or a list of them), got {components!r}")
+    return rows.astype(np.int64)
+
+
 def least_squares_step(J, e, scale, damping=0.0):
     """The command step dx = s z, z = argmin |J s z - e|^2 + damping^2 |z|^2 (least norm when
     damping is 0).
@@ -154,9 +171,7 @@ class _Loop:
             sizes = [model.commands.lookup(n).size for n in names]
             if sizes != [v.size for v in self.vars]:
                 raise OptionError(f"the model's variables {names} do not have the plant's sizes")
-        self.rows = np.arange(self.q.size) if components is None else np.asarray(components, np.int64)
-        if self.rows.size == 0 or self.rows.min() < 0 or self.rows.max() >= self.q.size:
-            raise OptionError(f"components {np.asarray(components).tolist()} outside 0 .. {self.q.size - 1}")
+        self.rows = np.arange(self.q.size) if components is None else _components(components, self.q.size)
         self.scale = np.concatenate([v.scale for v in self.vars])
         self.lower = np.concatenate([v.lower for v in self.vars])
         self.upper = np.concatenate([v.upper for v in self.vars])
@@ -447,8 +462,10 @@ def plan(session, quantity, targets, tolerance, variables=None, components=None,
     >>> plan(s, "tip", [[z0 + 1.5]], 1e-9, components=[2], options=dict(max_iter=1)).reached.tolist()
     [False]
     """
-    if not (np.isfinite(tolerance) and tolerance > 0):
-        raise OptionError(f"plan: the tolerance must be positive and finite, got {tolerance!r}")
+    if (isinstance(tolerance, (bool, np.bool_)) or not isinstance(tolerance, (int, float, np.integer, np.floating))
+            or not (np.isfinite(tolerance) and tolerance > 0)):
+        # before, '1e-3' or None ended in NumPy's TypeError and True planned to within 1
+        raise OptionError(f"plan: the tolerance must be a positive finite number, got {tolerance!r}")
     opts = _options(PlanOptions, options, "plan")
     t0 = time.perf_counter()
     lp = _Loop(session, quantity, variables, components)
