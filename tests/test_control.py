@@ -1015,3 +1015,25 @@ def test_plan_falls_back_when_an_extrapolated_command_lands_past_a_critical_poin
     pl = plan(s, "tip", targets[:2], 1e-10, components=[0])
     assert not pl.reached.any() and np.isnan(pl.commands["P"]).all()
     assert "planning stopped at sample 0: jacobian: the session's state lies past a critical point" in pl.message
+
+
+def test_a_session_of_an_arc_length_scenario_past_its_limit_point_says_how_to_start_it(tmp_path):
+    """The snap roof (examples/snap-roof.toml, [solver] control = "arclength") at its lam_end:
+    the session's cold start steps the load and stops at the limit point (0.742); the error
+    said to use arc length, which a session cannot be told to do.  It now says to start the
+    session from the arc-length run's state -- and that start works."""
+    import warnings
+    from pathlib import Path
+    from core_se3 import scenario
+    from core_se3.control import Session
+    from core_se3.errors import ConvergenceError
+    path = str(Path(__file__).parents[1] / "examples" / "snap-roof.toml")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(ConvergenceError, match=r'control = "arclength": the session\'s cold start steps the load '
+                                                   r"factor .* Session.from_scenario\(path, lam=r.doc\['steps'\]"):
+            Session.from_scenario(path)
+        r = scenario.load(path).run(out=str(tmp_path / "run"))
+        lam = r.doc["steps"][-1]["load_factor"]
+        s = Session.from_scenario(path, lam=lam, g=r.g)
+    assert s.lam == lam and float(abs(s.g - r.g).max()) < 1e-8 * 2540.0

@@ -30,7 +30,7 @@ import numpy as np
 
 from ..design import ProbePosition, Quantity, SolveWith, Variable, sensitivity
 from ..design.sensitivity import OnPart
-from ..errors import ControlError, ElementTooDistortedError, OptionError, SingularSystemError
+from ..errors import ControlError, ConvergenceError, ElementTooDistortedError, OptionError, SingularSystemError
 from ..model.base import overrides
 from ..model.magnetics import MagneticLoad, dipole_sources
 from ..model.solving import dipole_warning
@@ -290,7 +290,18 @@ class Session:
         kw.setdefault("dtol", sv["dtol"])
         kw.setdefault("steps", sv["steps"])
         variables = scenario_variables(scn) if variables is None else variables
-        return cls(scn.problem, sv["lam_end"] if lam is None else lam, variables, **kw)
+        try:
+            return cls(scn.problem, sv["lam_end"] if lam is None else lam, variables, **kw)
+        except ConvergenceError as exc:
+            if sv.get("control") != "arclength" or kw.get("g") is not None:
+                raise
+            # the cold start steps the load; a scenario traced by arc length may pass a limit point
+            raise ConvergenceError(
+                f"{exc} -- the scenario's [solver] control = \"arclength\": the session's cold start steps the "
+                "load factor and cannot pass a limit point; start it from a state of the arc-length run "
+                "(r = scenario.load(path).run(out=DIR); Session.from_scenario(path, lam=r.doc['steps'][-1]"
+                "['load_factor'], g=r.g)), or at a load factor before the limit point",
+                getattr(exc, "result", None)) from exc
 
     # ------------------------------------------------------------------ the state ------
     @property
