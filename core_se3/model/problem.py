@@ -477,10 +477,13 @@ class Problem:
 
     def add_probe(self, name, where="x1"):
         """Record the midpoint of an edge (or a node) at every step (names are unique): the
-        selected nodes ordered along the line they form (``probes.along_line``)."""
+        selected nodes ordered along the line they form (``probes.along_line``), halfway along
+        the geodesic of their frames in the mesh's least-turn gauge (``Probe``: the user's choice
+        of d1 at each node does not move it)."""
         if name in self.probes:
             raise OptionError(f"a probe named {name!r} exists already; give this one another name")
-        self.probes[name] = Probe.edge_midpoint(name, along_line(self.mesh, self.nodes(where), name))
+        line = along_line(self.mesh, self.nodes(where), name)
+        self.probes[name] = Probe.edge_midpoint(name, line, self.mesh.gauge_angles if len(line) % 2 == 0 else None)
 
     def output_fields(self, g, lam=1.0):
         """Extra point fields for output (name -> (n, k)) summed over the loads (magnetisation,
