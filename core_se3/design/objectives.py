@@ -115,7 +115,7 @@ def probe_frames(probe, ga, gb):
     if probe.node_a == probe.node_b or probe.wa == 1.0:
         return np.array(ga, float)
     ga, gb = probe.ends(ga, gb)
-    return ga @ lie.exp((1.0 - probe.wa) * lie.log(lie.relative(ga, gb)))
+    return probe.unturn(ga @ lie.exp((1.0 - probe.wa) * lie.log(lie.relative(ga, gb))))
 
 
 def _probe_local(probe, fn):

@@ -70,7 +70,9 @@ class Probe:
     the user chose differently (a turn about the normal: a choice of the user, not of the shell)
     is a screw that bows out of the edge: on a flat 10 x 1 strip (8 x 1 elements) whose tip
     nodes' d1 differ by 1 rad (pi/2) the tip probe read a deflection 1.9 % (3.1 %) below its
-    nodes' own, converged and without a word.
+    nodes' own, converged and without a word.  The frame at the point is turned back by the mean
+    turn (:meth:`unturn`), so that where the two turns are equal the probe is exactly the
+    geodesic of the user's frames (frame included).
 
     Parameters
     ----------
@@ -103,6 +105,12 @@ class Probe:
         of the probe's geodesic."""
         return _turn(ga, float(self.turns[0])), _turn(gb, float(self.turns[1]))
 
+    def unturn(self, gm):
+        """The frame ``gm`` on the geodesic of :meth:`ends` turned back by the weighted mean of
+        ``turns``: the probe's frame as the user's frames give it where the turns are equal
+        (exactly the geodesic of the user's frames there; only the position depends on them)."""
+        return _turn(gm, -(self.wa * float(self.turns[0]) + (1.0 - self.wa) * float(self.turns[1])))
+
     def state(self, g, compiled=False):
         """(position (3,), rotation (3, 3)) of the probe at the frames g (``compiled``: with the
         numba kernel ``kernels.lie.geodesic_point``, the same to round-off)."""
@@ -115,9 +123,9 @@ class Probe:
             gm = np.empty((4, 4))
             geodesic_point(np.ascontiguousarray(ga, dtype=float), np.ascontiguousarray(gb, dtype=float),
                            1.0 - self.wa, gm)
-            return gm[:3, 3].copy(), gm[:3, :3].copy()
-        rel = lie.log(lie.relative(ga, gb))
-        gm = ga @ lie.exp((1.0 - self.wa) * rel)
+        else:
+            gm = ga @ lie.exp((1.0 - self.wa) * lie.log(lie.relative(ga, gb)))
+        gm = self.unturn(gm)
         return gm[:3, 3].copy(), gm[:3, :3].copy()
 
     def linear(self, g0, eta):
@@ -148,7 +156,7 @@ class Probe:
             psi = lie.log(lie.relative(ga, gb))
             dpsi = lie.dexp_inv(psi) @ (eb - lie.Ad(lie.exp(-psi)) @ ea)
             em = lie.Ad(lie.exp(-t * psi)) @ ea + t * lie.dexp(t * psi) @ dpsi
-            g0m = ga @ lie.exp(t * psi)
+            g0m = ga @ lie.exp(t * psi)           # (R0 em: lab vectors, whichever turn of g0m)
         R0 = g0m[:3, :3]
         return R0 @ em[:3], R0 @ em[3:]
 

@@ -243,8 +243,7 @@ class StepRecorder:
             if start is not None and increments is not None:
                 _, Rs = pr.state(start, compiled=self.compiled)
                 ws = unwrap_rotation(Rs @ Rref.T, hint, self._log)
-                ea, eb = pr.body_increments(increments[pr.node_a], increments[pr.node_b])
-                eta_w = pr.wa * ea[3:] + (1.0 - pr.wa) * eb[3:]
+                eta_w = pr.wa * increments[pr.node_a, 3:] + (1.0 - pr.wa) * increments[pr.node_b, 3:]
                 hint = ws + Rs @ eta_w
             self.unwrapped[name] = unwrap_rotation(R @ Rref.T, hint, self._log)
             states[name] = ProbeState(x - x0, R @ Rref.T, self.unwrapped[name].copy())
