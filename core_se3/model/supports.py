@@ -412,6 +412,20 @@ def _describe_part(mesh, i, nodes, elements):
             f"{np.round(x.max(0), 4).tolist()})")
 
 
+def _check_orphans(mesh, fixed):
+    """SingularSystemError for nodes of no element that the supports do not hold in full: nothing
+    gives them stiffness (a Mesh built by hand with a node no quad lists; the readers drop such
+    nodes).  Before, the part check failed on them with a bare IndexError."""
+    used = np.zeros(mesh.n_nodes, bool)
+    used[mesh.quads.ravel()] = True
+    loose = np.flatnonzero(~used & ~fixed.all(axis=1))
+    if len(loose):
+        raise SingularSystemError(
+            f"node(s) {loose[:5].tolist()}{' ...' if len(loose) > 5 else ''} ({len(loose)} in all, the first at "
+            f"{np.round(mesh.X[loose[0]], 4).tolist()}) belong to no element: nothing holds them and the tangent is "
+            "singular; remove them from the mesh's g0 (renumbering the quads), or clamp them")
+
+
 def check_rigid_motions(problem, g):
     """Raise SingularSystemError if the supports leave a rigid-body motion free (SupportError
     if they leave nothing free), part by part of a mesh of disconnected parts (naming the part).
@@ -426,6 +440,7 @@ def check_rigid_motions(problem, g):
     if fixed.all():
         raise SupportError(f"the supports hold every degree of freedom of all {len(fixed)} nodes: there "
                            "is nothing to solve; select fewer nodes (e.g. clamp one edge)")
+    _check_orphans(problem.mesh, fixed)
     k, nodes, elements = mesh_parts(problem.mesh)
     for i in range(k):
         what = _free_motion(problem, g, fixed, nodes == i)
