@@ -241,3 +241,27 @@ def test_a_design_probe_target_uses_the_probes_own_frames():
     x, R = pr.state(g0)
     assert np.allclose(F[:3, 3], x, atol=1e-14) and np.allclose(F[:3, :3], R, atol=1e-14)
     assert np.allclose(x, m.X[[8, 17]].mean(0), atol=1e-14)               # the chord's midpoint
+
+
+@pytest.mark.parametrize("kind", ["pair", "random"])
+def test_a_vortex_of_the_users_d1_is_named(kind):
+    """Frames whose d1 wind by a full turn round an element (each edge turning less than pi) have a
+    vortex no gauge removes: a specific error naming the elements and the fix.  Before, a vortex
+    pair on a strip was "degenerate reference geometry ... zero-area or collapsed element", and
+    random d1 (uniform in +-3 rad, seed 0) NaN strains and a ConvergenceError "non-finite
+    residual" at load factor 1.2e-4."""
+    from core_se3.errors import ElementTooDistortedError
+    from core_se3.mesh import Mesh
+    m = mesh.rectangle(10.0, 1.0, 4 if kind == "pair" else 8, 1)
+    if kind == "pair":      # +1 round element 1, -1 round element 2, every edge turning pi/2 at most
+        turns = np.array([0, 0, 0.5, 0, 0, -0.5, 1.5, 1.0, -0.5, -0.5]) * np.pi
+    else:
+        turns = np.random.default_rng(0).uniform(-3.0, 3.0, m.n_nodes)
+    g0 = m.g0.copy()
+    g0[:, :3, :3] = lie.exp_so3(np.c_[np.zeros((m.n_nodes, 2)), turns])
+    p = Problem(Mesh(g0, m.quads, edges=m.edges), Material(1.2e6, 0.0, 0.1))
+    p.clamp("x0")
+    p.add_edge_force("x1", (0.0, 0.0, 1.0))
+    with pytest.raises(ElementTooDistortedError, match=r"wind about the normal round element\(s\) \[" +
+                       ("1, 2" if kind == "pair" else "0, 5") + r"\].*d1 varying smoothly"):
+        p.solve(steps=2)
