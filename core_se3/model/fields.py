@@ -245,6 +245,12 @@ class DipoleField(Field):
         super().__init__(scale)
         self.m = finite_vector(m, "dipole moment m")
         self.x0 = finite_vector(x0, "dipole position x0")
+        # a negative mu0 reversed the field (a magnet pulled the wrong way, converged and silent),
+        # zero took it away, NaN made every residual NaN
+        if (isinstance(mu0, (str, bytes, bool, np.bool_)) or np.ndim(mu0) != 0
+                or np.asarray(mu0).dtype.kind not in "iuf" or not (np.isfinite(mu0) and mu0 > 0)):
+            raise LoadError(f"dipole mu0 must be a positive number (fields.MU0 for lengths in m, MU0 * 1e3 for "
+                            f"mm), got {mu0!r}")
         self.k = mu0 / (4 * pi)
 
     def _r(self, x):
