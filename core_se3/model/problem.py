@@ -27,7 +27,7 @@ from ..fem import ELEMENTS, make_element
 from .base import Evaluation, Load, check_given, force_scale_with_loads, linear_scale, load_kind
 from .compiled import CompiledEvaluation
 from .contact import add_obstacle
-from .fields import MU0, field_vanishes
+from .fields import FIELD_DEFECT_TOL, MU0, field_defect, field_vanishes
 from .loads import line_shares
 from .magnetics import MagneticLoad, Magnetisation, br_numbers, magnets_force, magnets_output, table_kind
 from .probes import Probe, along_line
@@ -62,6 +62,24 @@ def _per_row(a, rows, cols, what, per):
         raise MeshError(f"{what} of shape {a.shape}: give one row of {cols} per {per}, shape ({rows}, {cols}) "
                         f"(or flat, ({rows * cols},))")
     return a
+
+
+def _warn_field_defect(field, x, where):
+    """LoadWarning (at add_magnetic's caller) for an applied field with a curl or a divergence at
+    the magnetised points ``x`` (``fields.field_defect``): a user field the magnets' loads are
+    not right for (a user field with a curl as large as its gradient was taken as given, and the
+    magnets' force (B^r . grad) B^a missed its m x curl B part, converged and silent)."""
+    try:
+        curl, div = field_defect(field, x)
+    except LoadError:
+        return                                   # (the field's own error comes with the load)
+    if max(curl, div) > FIELD_DEFECT_TOL:
+        said = LoadWarning(f"add_magnetic: the applied field has a curl or a divergence on {where} (relative "
+                           f"|curl B| {curl:.2e}, |div B| {div:.2e}, to |grad B|, above {FIELD_DEFECT_TOL:g}): the "
+                           "magnets' couple and force hold for a field without currents or sources in the body only, "
+                           "so the answer misses their part; give a curl- and divergence-free field (fields.check_field)")
+        said.cause = "field_defect"
+        warnings.warn(said, stacklevel=3)
 
 
 class Problem:
@@ -423,6 +441,8 @@ class Problem:
                                "the field's B [T], or drop the magnet")
             said.cause = "field"            # (the scenario names the field's key)
             warnings.warn(said, stacklevel=2)
+        else:
+            _warn_field_defect(field, self.mesh.X[nodes], where)
         return added
 
     def _add_magnetic(self, Br, field, sel, mu0, Br_per):
