@@ -197,7 +197,7 @@ class LabSpring(_Spring):
         G = np.einsum("nai,nbi->nab", self.D, self.D)                # independent rows: G invertible
         self.P = np.einsum("nai,nab,nbj->nij", self.D, np.linalg.inv(G), self.D)   # (k, 3, 3) projectors
         self.X0 = mesh.X[self.nodes].copy()
-        self.k = float(k)
+        self.k = spring_stiffness(k, "k", name)
         self.name = name
 
     def restraint(self):
@@ -262,7 +262,7 @@ class LabTiltSpring(_Spring):
         self.n = mesh.n_nodes
         self.nodes = mesh_ids(nodes, self.n, f"support {name!r}: nodes", SupportError)
         self.t = node_directions(t, len(self.nodes), "the lab tilt support's direction t")
-        self.k = float(k_rot)
+        self.k = spring_stiffness(k_rot, "k_rot", name)
         self.name = name
 
     def round_off_scale(self, ell):
@@ -332,7 +332,7 @@ class RotationComponentSpring(_Spring):
         a = node_directions(a, len(self.nodes), "the rotation component support's axis a")
         self.R0 = mesh.g0[self.nodes, :3, :3].copy()
         self.b = np.einsum("nji,nj->ni", self.R0, a)                   # R0^T a (body frame)
-        self.k = float(k_rot)
+        self.k = spring_stiffness(k_rot, "k_rot", name)
         self.name = name
 
     def round_off_scale(self, ell):
@@ -380,6 +380,17 @@ class RotationComponentSpring(_Spring):
                                    + c[:, None, None] * np.einsum("nim,nmj->nij", D, Jinv))
         return self._scatter(self.n, np.concatenate([np.zeros_like(gv), -self.k * c[:, None] * gv], 1),
                              blk, tangent)
+
+
+def spring_stiffness(k, what, name):
+    """A spring support's stiffness as a float: a positive finite real number, else a SupportError
+    naming it (a negative k pushed the nodes away from the held value -- a converged answer of a
+    destabilised shell, silently --, NaN gave NaN residuals, "1" was read as 1.0)."""
+    if isinstance(k, (str, bytes, bool, np.bool_)) or np.ndim(k) != 0 or np.asarray(k).dtype.kind not in "iuf" \
+            or not (np.isfinite(k) and k > 0):
+        raise SupportError(f"{name}: the stiffness {what} must be a positive number (the penalty that holds the "
+                           f"support), got {k!r}")
+    return float(k)
 
 
 def mesh_parts(mesh):
