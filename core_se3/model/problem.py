@@ -28,7 +28,7 @@ from .base import Evaluation, Load, check_given, force_scale_with_loads, linear_
 from .compiled import CompiledEvaluation
 from .contact import add_obstacle
 from .fields import FIELD_DEFECT_TOL, MU0, field_defect, field_vanishes
-from .loads import line_shares
+from .loads import line_shares, material_per_element
 from .magnetics import MagneticLoad, Magnetisation, br_numbers, magnets_force, magnets_output, table_kind
 from .probes import Probe, along_line
 from .solving import SOLVERS, dispatch, solve_linear
@@ -62,6 +62,38 @@ def _per_row(a, rows, cols, what, per):
         raise MeshError(f"{what} of shape {a.shape}: give one row of {cols} per {per}, shape ({rows}, {cols}) "
                         f"(or flat, ({rows * cols},))")
     return a
+
+
+def _warn_thickness_loads(problem, old, new):
+    """LoadWarning (at the caller of ``Problem.material = ...`` / ``set_material``) when the new
+    law changes the thickness while loads built on the old one are on the problem: a magnet (its
+    dipoles h B^r / mu0), gravity (rho h g) or a contact (its face at h/2) keep the old h -- a
+    cantilever under gravity given h 0.1 -> 0.2 deflected 1533 instead of the 3066 of a problem
+    built with h 0.2 (linear), as documented but without a word."""
+    m = problem.mesh.n_elements
+    try:
+        changed = material_per_element(old, "h", m) != material_per_element(new, "h", m)
+    except (AttributeError, TypeError, ValueError):
+        return                                   # (a law without h: the element will say so)
+    if not changed.any():
+        return
+    nodes = np.zeros(problem.mesh.n_nodes, bool)
+    nodes[problem.mesh.quads[changed].ravel()] = True
+    kept = set()
+    for ld in problem.loads:         # the loads on the changed elements (as design.material's check)
+        el = getattr(getattr(ld, "mag", None), "elements", None)
+        if el is not None and np.any(changed[el]):
+            kept.add("magnet")
+        elif getattr(ld, "name", "") == "gravity" and np.any(changed[getattr(ld, "elements", slice(None))]):
+            kept.add("gravity")
+        elif type(ld).__name__ == "ContactLoad" and np.any(nodes[ld.nodes]):
+            kept.add("contact")
+    if kept:
+        kept = sorted(kept)
+        warnings.warn(LoadWarning(f"the new material changes the thickness h on {int(changed.sum())} element(s), but the "
+                                  f"problem's {', '.join(kept)} load(s) keep the h they were built with (their h B^r / "
+                                  "mu0, rho h g, h/2 face): build the Problem anew with the new material, or set the "
+                                  "material before adding those loads"), stacklevel=3)
 
 
 def _warn_field_defect(field, x, where):
@@ -188,9 +220,12 @@ class Problem:
 
     @material.setter
     def material(self, law):
+        old = getattr(self, "_material", None)
         self._material = law
         self._element = None
         self._compiled = None
+        if old is not None and self.loads:
+            _warn_thickness_loads(self, old, law)
 
     @property
     def element_name(self):
@@ -477,7 +512,11 @@ class Problem:
         >>> p.set_material(Material(2e3, 0.0, 0.01)); p.material.E, p.element.material.E
         (2000.0, 2000.0)
         """
-        self.material = material                     # drops the element and the compiled evaluation
+        with warnings.catch_warnings(record=True) as seen:       # said at the caller's line, not here
+            warnings.simplefilter("always")
+            self.material = material                 # drops the element and the compiled evaluation
+        for w in seen:
+            warnings.warn(w.message, stacklevel=2)
         self.element = make_element(self.element_name, self.mesh, material)
 
     def add_obstacle(self, obstacle, region=None, nodes=None, **options):
