@@ -380,9 +380,12 @@ class Mesh:
         ...
         core_se3.errors.MeshError: no node at [0.5, -0.5, 0.0]: the nearest is node 0 at [0.0, -0.5, 0.0], at distance 0.5 > 0.25 (give that point, or a larger tol)
         """
-        p = np.asarray(x, float)
+        try:
+            p = np.asarray(x, float)
+        except (TypeError, ValueError):          # ('abc': a bare ValueError of NumPy before)
+            p = np.full(1, np.nan)
         if p.shape != (3,) or not np.all(np.isfinite(p)):
-            raise MeshError(f"a point must be three finite coordinates [x, y, z], got {np.asarray(x).tolist()}")
+            raise MeshError(f"a point must be three finite coordinates [x, y, z], got {x!r}")
         d = np.linalg.norm(self.X - p, axis=1)
         k = int(np.argmin(d))
         if tol is None:

@@ -22,8 +22,9 @@ import numpy as np
 from .. import lie
 from ..assembly import Assembler
 from .. import backend as _backend
-from ..errors import LoadError, LoadWarning, MeshError, OptionError, SupportError, did_you_mean
+from ..errors import LoadError, LoadWarning, MaterialError, MeshError, OptionError, SupportError, did_you_mean
 from ..fem import ELEMENTS, make_element
+from ..mesh import Mesh
 from .base import Evaluation, Load, check_given, force_scale_with_loads, linear_scale, load_kind
 from .compiled import CompiledEvaluation
 from .contact import add_obstacle
@@ -189,6 +190,9 @@ class Problem:
     def mesh(self, new):
         if getattr(self, "_mesh", None) is new:
             return
+        if not isinstance(new, Mesh):           # (a bare AttributeError before)
+            raise MeshError(f"a Problem's mesh must be a core_se3.mesh.Mesh (a generator's, mesh.read_meshio's or "
+                            f"Mesh(g0, quads)), got {type(new).__name__}")
         added = [f"{len(x)} {name}" for name, x in (("support(s)", self.supports), ("load(s)", self.loads),
                                                     ("probe(s)", self.probes)) if x]
         if added:
@@ -220,6 +224,9 @@ class Problem:
 
     @material.setter
     def material(self, law):
+        if not callable(getattr(law, "resultant_matrix", None)):      # (a bare AttributeError at first use)
+            raise MaterialError(f"a Problem's material must be a resultant law (core_se3.Material, RegionMaterial, "
+                                f"Material.classical_shell(...)), got {type(law).__name__}")
         old = getattr(self, "_material", None)
         self._material = law
         self._element = None
