@@ -678,3 +678,18 @@ def test_contact_far_from_the_origin_is_the_contact_at_the_origin(case):
     assert np.abs(far["u"] - near["u"]).max() <= 4 * eps_t, np.abs(far["u"] - near["u"]).max() / eps_t
     dF = np.abs(far["F"] - near["F"]).max() / np.abs(near["F"]).max()
     assert dF <= 4 * eps_t / u_scale, dF / (eps_t / u_scale)
+
+
+@pytest.mark.parametrize("options, match", [
+    (dict(motion=dict(axis=(0, 1, 0), angle="abc")), r"a motion's angle must be a finite number \[rad\], got 'abc'"),
+    (dict(motion=dict(translate=(0, 0, 1), scale=2.0)), r"a motion's scale must be a function of the load factor"),
+    (dict(motion=dict(translate="abc")), r"translation vector must be a finite 3-vector, got 'abc'"),
+])
+def test_an_obstacle_motion_of_the_wrong_type_is_a_contact_error(options, match):
+    """A motion's angle 'abc' was a bare ValueError of float(), a scale of 2.0 a bare TypeError
+    ('float' object is not callable) at the first evaluation, a translation 'abc' a bare
+    ValueError of NumPy: now ContactErrors naming the key."""
+    from core_se3.errors import ContactError
+    p = cs.Problem(M.rectangle(10.0, 1.0, 16, 1), cs.Material(E=1.2e6, nu=0.0, h=0.1))
+    with pytest.raises(ContactError, match=match):
+        p.add_obstacle("sphere", centre=(0.0, 0.0, 11.0), radius=10.0, **options)

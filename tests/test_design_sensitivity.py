@@ -383,3 +383,40 @@ def test_thickness_derivatives_next_to_the_kink_of_the_shear_stabilisation_floor
     variables = [MaterialVariable(p, [np.arange(nx)], "h")]
     g = p.solve(steps=2, rtol=1e-12, dtol=1e-12).final.g
     check(p, variables, [NodePosition(p, [int(m.node_set("x1")[0])])], g)
+
+
+def _design_strip():
+    p = Problem(mesh.rectangle(0.0172, 0.005, 10, 1), Material(E=0.8969e6, nu=0.0, h=0.42e-3))
+    p.clamp("x0")
+    p.add_probe("tip", "x1")
+    f = UniformField((0.0, 0.0, 0.01))
+    p.add_magnetic(Br=(0.143, 0.0, 0.0), field=f)
+    return p, f
+
+
+def test_sensitivities_at_a_state_that_is_no_equilibrium_are_refused():
+    """sensitivity() at the reference frames of the loaded strip (relative residual 0.987) gave a
+    jacobian, silently; now a DesignError.  A converged state still gives one."""
+    from core_se3.errors import DesignError
+    p, f = _design_strip()
+    res = p.solve(load_factors=[0.5, 1.0])
+    q, v = [ProbePosition(p, "tip")], [FieldVariable(p, f)]
+    assert sensitivity(p, res.final.g, 1.0, q, v).jacobian.shape == (3, 3)
+    with pytest.raises(DesignError, match=r"need an equilibrium: the state given has a relative residual 0.98"):
+        sensitivity(p, p.mesh.g0, 1.0, q, v)
+
+
+def test_design_inputs_of_the_wrong_kind_are_design_errors():
+    """A probe's name as a quantity was a bare AttributeError; no variables a bare ValueError of
+    a reshape (now the (3, 0) jacobian); a field no magnet is in was taken (every derivative 0,
+    the variable ignored); node 1.5 was read as node 1."""
+    from core_se3.errors import DesignError
+    p, f = _design_strip()
+    g = p.solve(steps=2).final.g
+    with pytest.raises(DesignError, match="quantities must be design Quantity objects"):
+        sensitivity(p, g, 1.0, ["tip"], [FieldVariable(p, f)])
+    assert sensitivity(p, g, 1.0, [ProbePosition(p, "tip")], [], method="direct").jacobian.shape == (3, 0)
+    with pytest.raises(DesignError, match="no magnet of the problem is in this field"):
+        FieldVariable(p, UniformField((0.0, 0.0, 0.01)))
+    with pytest.raises(DesignError, match=r"node ids must be whole numbers, got \[1.5\]"):
+        NodePosition(p, [1.5])

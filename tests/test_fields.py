@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from core_se3.errors import LoadError
-from core_se3.model.fields import (DipoleField, GradientField, UniformField, UserField, check_field,
+from core_se3.model.fields import (MU0, DipoleField, GradientField, UniformField, UserField, check_field,
                              rotating_direction)
 
 RNG = np.random.default_rng(7)
@@ -133,3 +133,12 @@ def test_a_user_field_returning_no_numbers_is_a_load_error(returns):
     f = UserField(returns, lambda x: np.zeros(x.shape + (3,)))
     with pytest.raises(LoadError, match=r"user field value must return numbers of shape \(1, 3\)"):
         f.value(np.zeros((1, 3)), 1.0)
+
+
+@pytest.mark.parametrize("mu0", [-MU0, 0.0, float("nan"), "1e-6", True])
+def test_a_dipole_with_a_mu0_that_is_no_positive_number_is_refused(mu0):
+    """DipoleField(mu0=-MU0) was the reversed field (a magnet pulled the other way, converged and
+    silent), mu0 = 0 no field at all, NaN NaN residuals, "1e-6" a bare TypeError at first use."""
+    from core_se3.errors import LoadError
+    with pytest.raises(LoadError, match="dipole mu0 must be a positive number"):
+        DipoleField((0.0, 0.0, 1.0), (0.0, 0.0, 0.0), mu0=mu0)

@@ -284,3 +284,18 @@ def test_the_step_table_shows_the_total_support_reaction(tmp_path, capsys):
     steps = json.loads((tmp_path / "o" / "results.json").read_text())["steps"]
     np.testing.assert_allclose(shown, [np.linalg.norm(s["reactions"]["force"]) for s in steps], rtol=1e-5, atol=1e-12)
     np.testing.assert_allclose(shown, [0.0, 1.0, 2.0], rtol=1e-9, atol=1e-12)
+
+
+@pytest.mark.parametrize("k", [-0.5, 0.0, float("nan"), "1", True])
+def test_a_spring_support_of_no_positive_stiffness_is_refused(k):
+    """add_lab_support with k = -0.5 pushed the tip of a cantilever (force 0.01 up: 0.0332 free,
+    0.0077 on k = 0.5) to -0.0143, converged and silent; NaN gave NaN residuals, "1" was read as
+    1.0.  The tilt and rotation-component springs take the same check."""
+    from core_se3 import Material, Problem, mesh
+    from core_se3.errors import SupportError
+    p = Problem(mesh.rectangle(10.0, 1.0, 8, 1), Material(1.2e6, 0.0, 0.1))
+    for add in (lambda: p.add_lab_support("x1", (0.0, 0.0, 1.0), k),
+                lambda: p.add_lab_tilt_support("x1", (0.0, 1.0, 0.0), k),
+                lambda: p.add_rotation_component_support("x1", (0.0, 0.0, 1.0), k)):
+        with pytest.raises(SupportError, match="must be a positive number"):
+            add()

@@ -740,3 +740,26 @@ def test_a_node_on_a_point_dipole_is_named_with_both_positions(backend):
                 p.evaluate(m.g0, 1.0, tangent=tangent)
     with pytest.raises(LoadError, match=re.escape(f"point 1 (at {x0}) lies on the dipole at x0 = {x0}")):
         DipoleField((0.0, 0.0, 1e-3), x0).value(np.array([[0.0, 0.0, 0.0], x0]), 1.0)
+
+
+def test_a_user_field_with_a_curl_in_the_body_is_said_at_add_magnetic():
+    """The magnets' couple and force (B^r . grad) B^a hold for a field without currents or sources
+    in the body; a UserField with a curl as large as its gradient was taken as given (check_field
+    existed, nothing called it).  Now add_magnetic warns, naming the curl; a curl-free user field
+    and the built-in fields say nothing."""
+    from core_se3.model.fields import UserField
+    c = 10.0
+    value = lambda x: np.c_[np.zeros(len(x)), np.zeros(len(x)), 0.01 + c * x[:, 0]]
+    curl = UserField(value, lambda x: np.broadcast_to(np.array([[0, 0, 0], [0, 0, 0], [c, 0, 0.0]]), x.shape + (3,)))
+    free = UserField(lambda x: value(x) + np.c_[c * x[:, 2], 0 * x[:, :2]],
+                     lambda x: np.broadcast_to(np.array([[0, 0, c], [0, 0, 0], [c, 0, 0.0]]), x.shape + (3,)))
+    said = {}
+    for name, field in (("curl", curl), ("free", free), ("gradient", GradientField((0, 0, 0.01), np.diag([c, -c, 0.0])))):
+        p = Problem(mesh.rectangle(0.0172, 0.005, 10, 1), Material(E=0.8969e6, nu=0.0, h=0.42e-3))
+        with warnings.catch_warnings(record=True) as seen:
+            warnings.simplefilter("always")
+            p.add_magnetic(Br=(0.143, 0.0, 0.0), field=field)
+        said[name] = [str(w.message) for w in seen if issubclass(w.category, LoadWarning)]
+        assert all(w.filename == __file__ for w in seen)                  # said at the caller's line
+    assert len(said["curl"]) == 1 and re.search(r"relative \|curl B\| 1\.00e\+00, \|div B\| 0\.00e\+00", said["curl"][0])
+    assert said["free"] == [] and said["gradient"] == []

@@ -227,3 +227,13 @@ def test_degenerate_tangents_raise_mesh_error(A1, A2):
     with pytest.raises(MeshError):
         strain_operators(np.stack([e1, A1]), np.stack([e2, A2]))     # one bad point in a batch
     assert math.isfinite(m.resultant_matrix(e1, e2)[1])
+
+
+@pytest.mark.parametrize("index", [[0.5] * 8, [True] * 8, [], [[0] * 8]])
+def test_a_region_material_index_that_is_no_list_of_law_ids_is_refused(index):
+    """RegionMaterial([A, B], [0.5] * 8) was read as law 0 everywhere and [True] * 8 as law 1
+    (the strip twice as stiff: tip 1.615 against 3.007), silently; an empty index was a bare
+    ValueError of np.min."""
+    from core_se3 import RegionMaterial
+    with pytest.raises(MaterialError, match="RegionMaterial index must give one law per element"):
+        RegionMaterial([Material(1.2e6, 0.0, 0.1), Material(2.4e6, 0.0, 0.1)], index)

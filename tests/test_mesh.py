@@ -218,3 +218,33 @@ def test_a_mesh_whose_edges_are_below_its_positions_round_off_says_so(x0):
     with pytest.raises(MeshError) as ei:
         M.from_meshio(meshio.Mesh(X, [("quad", np.array([[0, 1, 2, 3]]))]))
     assert "from the origin" not in str(ei.value)
+
+
+@pytest.mark.parametrize("edges, regions, match", [
+    ({"tip": [4, 4]}, {}, r"node set 'tip' lists node 4 2 times"),
+    ({}, {"r": [3, 3]}, r"region 'r' lists element 3 2 times"),
+    ({"tip": [99]}, {}, r"node set 'tip' must list existing node ids \(0 \.\. 9\)"),
+    ({"tip": [0.5, 1.7]}, {}, r"node set 'tip' must be whole numbers"),
+    ({}, {"r": [0.5]}, r"region 'r' must be whole numbers"),
+])
+def test_a_named_set_listing_an_id_twice_or_not_an_id_is_refused(edges, regions, match):
+    """A named node set or region of a Mesh built by hand is checked as ids given directly are:
+    before, a region listing element 3 twice doubled its pressure (tip deflection 16.06 against
+    8.03) and its gravity, a node set listing node 4 twice doubled a nodal load (7.88 against
+    3.94), and a region's 0.5 was read as element 0 -- all silently."""
+    m = M.rectangle(10.0, 1.0, 4, 1)
+    with pytest.raises(MeshError, match=match):
+        M.Mesh(m.g0, m.quads, edges={**m.edges, **edges}, regions=regions)
+
+
+def test_quads_that_are_not_whole_ids_and_frames_that_are_not_homogeneous_are_refused():
+    """Quads of 0.7 were read as node 0 (a shifted connectivity, silently), and frames whose last
+    row is not [0, 0, 0, 1] were taken (a position typed into the last row was dropped)."""
+    m = M.rectangle(10.0, 1.0, 4, 1)
+    with pytest.raises(MeshError, match="quads must be whole numbers"):
+        M.Mesh(m.g0, m.quads + 0.7)
+    g0 = m.g0.copy()
+    g0[:, 3, :3] = g0[:, :3, 3]
+    with pytest.raises(MeshError, match=r"last rows must be \[0, 0, 0, 1\].*node 0's is \[0.0, -0.5, 0.0, 1.0\]"):
+        M.Mesh(g0, m.quads)
+    assert M.Mesh(m.g0, m.quads.astype(float)).quads.dtype == np.int64       # whole floats are ids

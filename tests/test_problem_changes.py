@@ -132,3 +132,57 @@ def test_a_mesh_set_after_supports_loads_or_probes_is_refused():
     with pytest.raises(MeshError, match=r"\(1 support\(s\), 1 load\(s\), 1 probe\(s\)\)"):
         p.mesh = mesh.rectangle(20.0, 1.0, 8, 1)
     assert np.array_equal(p.solve_linear().final.probes["tip"]["u"], res.final.probes["tip"]["u"])
+
+
+def test_a_new_thickness_under_loads_built_on_the_old_one_is_said():
+    """Gravity, magnets and contact keep the thickness they were built with (set_material's
+    docstring): a cantilever under gravity given h 0.1 -> 0.2 deflected 1533 where a problem built
+    with h 0.2 deflects 3066 (linear), without a word.  Now a LoadWarning at the caller's line; a
+    new E, or a new h with no such load, says nothing."""
+    import warnings
+    from core_se3.errors import LoadWarning
+
+    def said(change, gravity=True):
+        p = Problem(mesh.rectangle(10.0, 1.0, 8, 1), Material(1.2e6, 0.0, 0.1))
+        p.clamp("x0")
+        p.add_edge_force("x1", (0.0, 0.0, 1.0))
+        if gravity:
+            p.add_gravity(rho=1000.0)
+        with warnings.catch_warnings(record=True) as seen:
+            warnings.simplefilter("always")
+            change(p)
+        assert all(w.filename == __file__ for w in seen)
+        return [str(w.message) for w in seen if issubclass(w.category, LoadWarning)]
+
+    for change in (lambda p: p.set_material(Material(1.2e6, 0.0, 0.2)),
+                   lambda p: setattr(p, "material", Material(1.2e6, 0.0, 0.2))):
+        assert len(said(change)) == 1 and "gravity load(s) keep the h they were built with" in said(change)[0]
+    assert said(lambda p: p.set_material(Material(2.4e6, 0.0, 0.1))) == []
+    assert said(lambda p: p.set_material(Material(1.2e6, 0.0, 0.2)), gravity=False) == []
+
+
+@pytest.mark.parametrize("args, error, match", [
+    (("m", Material(1e6, 0.0, 0.1)), "MeshError", "a Problem's mesh must be a core_se3.mesh.Mesh"),
+    ((None, {"E": 1e6}), "MaterialError", "a Problem's material must be a resultant law"),
+    ((None, None), "MaterialError", "a Problem's material must be a resultant law"),
+])
+def test_a_problem_of_no_mesh_or_no_material_is_refused_by_name(args, error, match):
+    """Problem("m", ...) was a bare AttributeError ('str' object has no attribute 'length_scale'),
+    Problem(mesh, {"E": ...}) and Problem(mesh, None) bare AttributeErrors at the first solve."""
+    import core_se3.errors as errors
+    m = args[0] if args[0] is not None else mesh.rectangle(10.0, 1.0, 4, 1)
+    with pytest.raises(getattr(errors, error), match=match):
+        Problem(m, args[1])
+
+
+def test_a_point_or_a_linear_load_factor_that_is_no_number_is_refused_by_name():
+    """Mesh.node_at("abc") was a bare ValueError of NumPy, solve_linear(lam_end="1") a bare
+    TypeError of np.isfinite."""
+    from core_se3.errors import MeshError, OptionError
+    p = Problem(mesh.rectangle(10.0, 1.0, 4, 1), Material(1e6, 0.0, 0.1))
+    with pytest.raises(MeshError, match="a point must be three finite coordinates"):
+        p.node_at("abc")
+    p.clamp("x0")
+    p.add_edge_force("x1", (0.0, 0.0, 1.0))
+    with pytest.raises(OptionError, match="lam_end must be finite, got '1'"):
+        p.solve_linear(lam_end="1")

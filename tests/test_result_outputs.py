@@ -276,3 +276,24 @@ def test_each_step_reports_the_force_and_moment_parts_of_its_residual(tmp_path, 
     assert "residual    |r_F| [N] |r_M| [N mm] correction" in head, head
     lin = p.solve(control="linear").final           # K eta = f solved to round-off: eps cond(K) |f|, cond ~ 1e6
     assert 0.0 < lin.residual_force < 1e-8 * 1e-3 and 0.0 < lin.residual_moment < 1e-8 * 1e-3 * 10
+
+
+def test_a_step_or_a_probe_a_result_does_not_have_is_named():
+    """Result.displacements(5) of a 3-step result was a bare IndexError (1.5: a TypeError), and
+    step.probes['tpi'] a bare KeyError: now an OptionError naming the steps, and an
+    UnknownProbeError (an OptionError and a KeyError) naming the closest probe."""
+    from core_se3 import Material, Problem, mesh
+    from core_se3.errors import OptionError
+    p = Problem(mesh.rectangle(10.0, 1.0, 4, 1), Material(1e6, 0.0, 0.1))
+    p.clamp("x0")
+    p.add_edge_force("x1", (0.0, 0.0, 1.0))
+    p.add_probe("tip", "x1")
+    r = p.solve(steps=2)
+    for k in (5, -10, 1.5):
+        with pytest.raises(OptionError, match=r"is not stored: the result has 3 steps"):
+            r.displacements(k)
+    with pytest.raises(KeyError, match=r"no probe 'tpi'; did you mean 'tip'\?"):
+        r.final.probes["tpi"]
+    with pytest.raises(OptionError):
+        r.final.probes["tpi"]
+    assert r.displacements(-1).shape == (10, 3) and r.final.probes.get("tpi") is None

@@ -538,3 +538,55 @@ def test_mumps_frees_its_factors_when_closed_or_collected():
     del s
     gc.collect()
     assert A.handle == 0
+
+
+@pytest.mark.parametrize("kw, match", [
+    (dict(lam_start=1.0), r"lam_end = lam_start = 1.0: the steps would not move the load"),
+    (dict(lam_end="1"), r"need a finite lam_end \(a load factor\), got '1'"),
+    (dict(lam_start=float("nan")), r"need a finite lam_start \(a load factor\), got nan"),
+])
+def test_load_factors_that_step_nowhere_or_are_no_numbers_are_refused(kw, match):
+    """steps from lam_start = 1 to lam_end = 1 were returned at once: 2 'converged' steps of the
+    unloaded reference state at load factor 1 (0 iterations, tip 0 against 3.007, balance error
+    1); a string lam_end failed with a bare TypeError of np.isfinite, a NaN lam_start as a load's
+    scale."""
+    from core_se3.errors import OptionError
+    p = Problem(rectangle(10.0, 1.0, 8, 1), Material(1.2e6, 0.0, 0.1))
+    p.clamp("x0")
+    p.add_edge_force("x1", (0.0, 0.0, 1.0))
+    with pytest.raises(OptionError, match=match):
+        p.solve(steps=2, **kw)
+
+
+def test_an_arc_length_path_to_a_nan_load_factor_is_refused():
+    """lam_end = NaN never stopped an arc-length path: it ran to max_steps (a tip deflection of 428
+    on a strip of length 10, returned as the path's end)."""
+    from core_se3.errors import OptionError
+    p = Problem(rectangle(10.0, 1.0, 8, 1), Material(1.2e6, 0.0, 0.1))
+    p.clamp("x0")
+    p.add_edge_force("x1", (0.0, 0.0, 1.0))
+    with pytest.raises(OptionError, match=r"lam_end must be a finite load factor \(or None\), got nan"):
+        p.solve(control="arclength", lam_end=float("nan"))
+
+
+@pytest.mark.parametrize("bad, match", [
+    ("short", r"g_init of shape \(5, 4, 4\) for a mesh of 18 nodes"),
+    ("nan", r"g_init has non-finite entries"),
+    ("scaled", r"g_init: the frames of nodes \[0, 1, 2, 3, 4\] are not proper rigid frames"),
+])
+def test_start_frames_that_are_no_state_of_the_mesh_are_refused_by_name(bad, match):
+    """g_init of another mesh failed with a bare IndexError, NaN frames with a LinAlgError ('SVD
+    did not converge'), rotations scaled by 1.1 as a ConvergenceError 'edge turns by 3.191 rad
+    ... refine the mesh or the load step'; a StepResult and its frames still continue a solve."""
+    from core_se3.errors import OptionError
+    p = Problem(rectangle(10.0, 1.0, 8, 1), Material(1.2e6, 0.0, 0.1))
+    p.clamp("x0")
+    p.add_edge_force("x1", (0.0, 0.0, 1.0))
+    first = p.solve(steps=2).final
+    g = {"short": np.zeros((5, 4, 4)), "nan": np.full((18, 4, 4), np.nan), "scaled": first.g.copy()}[bad]
+    if bad == "scaled":
+        g[:, :3, :3] *= 1.1
+    with pytest.raises(OptionError, match=match):
+        p.solve(steps=2, g_init=g)
+    on = [p.solve(steps=1, lam_start=1.0, lam_end=2.0, g_init=start).final.g for start in (first, first.g)]
+    assert np.array_equal(on[0], on[1])

@@ -114,7 +114,8 @@ def probe_frames(probe, ga, gb):
     """
     if probe.node_a == probe.node_b or probe.wa == 1.0:
         return np.array(ga, float)
-    return ga @ lie.exp((1.0 - probe.wa) * lie.log(lie.relative(ga, gb)))
+    ga, gb = probe.ends(ga, gb)
+    return probe.unturn(ga @ lie.exp((1.0 - probe.wa) * lie.log(lie.relative(ga, gb))))
 
 
 def _probe_local(probe, fn):
@@ -158,7 +159,13 @@ def _nodes(problem, nodes, what):
             return np.asarray(problem.mesh.node_set(nodes), np.int64)
         except Exception as exc:                     # MeshError with the closest name
             raise DesignError(f"{what}: {exc}") from None
-    ids = np.atleast_1d(np.asarray(nodes, np.int64))
+    raw = np.atleast_1d(np.asarray(nodes))
+    try:
+        ids = raw.astype(np.int64)
+    except (TypeError, ValueError):
+        ids = None
+    if ids is None or raw.dtype == bool or not np.array_equal(ids, raw):       # (1.5 was read as node 1)
+        raise DesignError(f"{what}: node ids must be whole numbers, got {raw.ravel()[:5].tolist()}")
     bad = ids[(ids < 0) | (ids >= n)]
     if ids.size == 0 or bad.size:
         raise DesignError(f"node ids {bad[:5].tolist() if bad.size else []} do not exist (the mesh has {n} nodes: "

@@ -39,11 +39,21 @@ import warnings
 from ..errors import AccuracyWarning, DesignError
 from ..model import ContactLoad
 from ..solvers import Factorization, make_solver
+from ..solvers.convergence import relative_residual
 from ..solvers.origin import frames_origin, part_origin
 from .objectives import Quantity
 
 __all__ = ["Sensitivity", "SolveWith", "sensitivity", "residual_derivative", "quantity_jacobian", "at_the_cone",
            "OnPart"]
+
+
+#: the relative residual (``solvers.convergence.relative_residual``) above which a state given to
+#: :func:`sensitivity` is no equilibrium: the solvers converge to 1e-10 by default; a converged
+#: state 1e9 from the origin, taken relative to its part, keeps 2.3e-3 of its positions' round-off
+#: (tests/test_design_sensitivity.py), a loaded problem's reference state about 1 (a state of load
+#: factor 0.9 taken at 1 only 0.047 on the magnetic strip: the bar catches wrong states, not
+#: slightly wrong load factors)
+EQUILIBRIUM_TOL = 0.05
 
 
 @dataclass
@@ -188,6 +198,7 @@ def sensitivity(problem, g, lam, quantities, variables, method="auto", cotangent
     """
     if method not in ("auto", "adjoint", "direct"):
         raise DesignError(f"sensitivity method must be 'auto', 'adjoint' or 'direct', got {method!r}")
+    _check_kinds(quantities, variables)
     free = problem.assembler().free
     n = problem.mesh.n_nodes
     _warn_at_the_cone(problem, g, lam)
@@ -217,7 +228,8 @@ def sensitivity(problem, g, lam, quantities, variables, method="auto", cotangent
     Rp = np.concatenate([v.dr_dp(problem, g, lam).reshape(n, 6, v.size) for v in variables], 2) if variables \
         else np.zeros((n, 6, 0))
     S = solves([-Rp[:, :, j] for j in range(nx)], False)                                   # (nx, n, 6)
-    return Sensitivity(vals, E + Qh @ S.reshape(nx, -1).T, "direct", nx, labels)
+    # (no variables: the (nq, 0) jacobian; the reshape of no solutions was a bare ValueError)
+    return Sensitivity(vals, E + Qh @ S.reshape(nx, 6 * n).T, "direct", nx, labels)
 
 
 class OnPart(Quantity):
@@ -310,6 +322,19 @@ def at_the_cone(problem, g, lam):
     return count
 
 
+def _check_kinds(quantities, variables):
+    """DesignError unless ``quantities`` are Quantity objects and ``variables`` Variable objects
+    (a probe's name was a bare AttributeError at its first use)."""
+    from .variables import Variable
+    bad = [q for q in quantities if not isinstance(q, Quantity)]
+    if bad:
+        raise DesignError(f"sensitivity: quantities must be design Quantity objects (ProbePosition(problem, "
+                          f"'tip'), NodePosition, Orientation, ...), got {bad[0]!r}")
+    if not all(isinstance(v, Variable) for v in variables):
+        raise DesignError(f"sensitivity: variables must be design Variable objects (FieldVariable, "
+                          f"RegionMagnetisation, MaterialVariable, LoadMagnitude), got {list(variables)!r}")
+
+
 def _warn_at_the_cone(problem, g, lam):
     """An AccuracyWarning when the state has frictional contact nodes at the stick/slip
     transition (:func:`at_the_cone`): the derivatives are one-sided there."""
@@ -335,6 +360,12 @@ def _serial_solver(problem, g, lam, evaluation, linear_solver):
     factorisation of the free tangent at (g, lam); the solutions (k, n, 6), zero on held dofs."""
     asm = problem.assembler()
     ev = evaluation if evaluation is not None and evaluation.K is not None else problem.evaluate(g, lam, tangent=True)
+    rn, floor = relative_residual(asm, ev, problem.length_scale)
+    if rn > max(EQUILIBRIUM_TOL, 10.0 * floor):
+        # (the reference frames of a loaded cantilever at lam = 1 gave a jacobian, silently)
+        raise DesignError(f"sensitivities need an equilibrium: the state given has a relative residual {rn:.3g} at "
+                          f"load factor {lam!r} (above {EQUILIBRIUM_TOL:g}); pass a converged state of the problem as "
+                          "it is now (result.final.g and its load factor, solved after the variables were set)")
     solver = make_solver(linear_solver or problem.linear_solver)
 
     def solves(rhs, transpose):

@@ -371,6 +371,10 @@ class FieldVariable(Variable):
             # |B|^2 = |free part|^2 + |fixed part|^2 <= B_max^2 (the fixed part as a constant)
             fixed = np.setdiff1d(np.arange(3), self.free)
             self.norm_bounds = [(np.arange(len(self.free)), float(np.sqrt(max(B_max ** 2 - B[fixed] @ B[fixed], 0.0))))]
+        if not magnetic_loads(problem, field):
+            # (a field object no magnet uses: every derivative 0, the variable ignored, silently)
+            raise DesignError(f"field variable {name!r}: no magnet of the problem is in this field (an equal field "
+                              "is not the same one); pass the field object given to Problem.add_magnetic")
         self._setup(name, len(self.free), lo[self.free], hi[self.free], sc[self.free],
                     [f"{name}.{'B' if p == 'magnitude' else p}" for p in np.array(self.parts)[self.free]], pose)
 

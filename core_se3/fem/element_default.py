@@ -78,7 +78,8 @@ def _unpack(Dp):
     D[:, _IU[1], _IU[0]] = Dp
     return D
 
-__all__ = ["DefaultElement", "edge_twists", "tying_matrices", "element_gauge", "MAX_EDGE_ANGLE"]
+__all__ = ["DefaultElement", "edge_twists", "tying_matrices", "element_gauge", "check_vortices", "MAX_EDGE_ANGLE",
+           "VORTEX_TURN"]
 
 MAX_EDGE_ANGLE = 0.97 * np.pi   # beyond this the log's cut at pi is too close
 SETUP_CHUNK = 4096              # elements per block of the reference stiffness set-up
@@ -204,6 +205,65 @@ def _reference_turn_message(g, a, b, w):
             "finer mesh nor a smaller load step changes this")
 
 
+def _cancelling_normals(A):
+    """(k,) bool: the elements whose tied normals A_1 x A_2 (A (k, 4, 6) at the Gauss points)
+    vanish somewhere (strain_operators' MeshError) or cancel (the element's mean normal,
+    membrane_shear's, NaN): the cases that failed; normals that merely differ (a closed sphere's
+    vortices) build a sound element."""
+    n = np.cross(A[..., 0:3], A[..., 3:6])
+    size = np.linalg.norm(A[..., 0:3], axis=-1) * np.linalg.norm(A[..., 3:6], axis=-1)
+    j = np.linalg.norm(n, axis=-1)
+    unit = n / np.maximum(j, 1e-300)[..., None]
+    return (j <= 1e-10 * size).any(1) | (np.linalg.norm(unit.sum(axis=1), axis=-1) <= 1e-8)
+
+
+#: the turn about the normal around an element [rad] above which its reference frames wind (a
+#: vortex of d1: 2 pi); a curved element's holonomy (area x Gaussian curvature) stays far below
+VORTEX_TURN = 1.5 * np.pi
+
+
+def check_vortices(mesh, g, z0):
+    """ElementTooDistortedError for elements whose tied tangents A_1 x A_2 (of the reference
+    edge twists ``z0`` (m, 24), at the Gauss points) vanish or cancel over the element, naming a vortex of
+    the user's d1 round them when the frames ``g`` wind about the normal there (their edges'
+    turns adding up to a full turn, each edge less than pi: no gauge removes it).  A vortex
+    alone is no error (a closed sphere's frames must have some, and its elements are sound);
+    before, the degenerate ones failed far from their cause: "degenerate reference geometry ...
+    zero-area or collapsed element", or NaN strains and a ConvergenceError "non-finite residual"
+    at load factor 1.2e-4 (random d1 on a flat strip).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import mesh, lie
+    >>> m = mesh.rectangle(1.0, 1.0, 1, 1)                        # quad [0, 1, 3, 2]
+    >>> g = m.g0.copy(); g[:, :3, :3] = lie.exp_so3(np.c_[np.zeros((4, 2)), [0.0, 1.6, 4.7, 3.1]])
+    >>> z0 = 0.5 * (m.elem_edge_sign[..., None] * edge_twists(g, m.edge_nodes)[m.elem_edges]).reshape(-1, 24)
+    >>> check_vortices(m, g, z0)                                      # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.ElementTooDistortedError: the reference frames wind about the normal round element(s) [0]...
+    """
+    P = tying_matrices()[:, [0, 1, 2, 6, 7, 8]]                          # the rows of A_1, A_2
+    flipped = np.concatenate([_cancelling_normals(np.einsum("qij,mj->mqi", P, z0[s:s + SETUP_CHUNK]))
+                              for s in range(0, len(z0), SETUP_CHUNK)])
+    if not flipped.any():
+        return
+    from ..mesh.gauge import normal_turns
+    omega = normal_turns(g, mesh.edge_nodes)[mesh.elem_edges] * mesh.elem_edge_sign   # (m, 4) b, t, l, r
+    turn = omega[:, 0] + omega[:, 3] - omega[:, 1] - omega[:, 2]     # counter-clockwise round the quad
+    bad = np.flatnonzero(flipped & (np.abs(turn) > VORTEX_TURN))
+    if len(bad):
+        e = int(bad[0])
+        raise ElementTooDistortedError(
+            f"the reference frames wind about the normal round element(s) {bad[:5].tolist()}"
+            f"{' ...' if len(bad) > 5 else ''}: their d1 turn by {turn[e]:.3f} rad ({np.degrees(turn[e]):.0f} deg) "
+            f"going round element {e} (nodes {mesh.quads[e].tolist()}), a vortex of the d1 field given on which "
+            "the element's tangents degenerate (their normals vanish or cancel); give consistent frames (d1 varying "
+            "smoothly along the shell: Mesh(g0=...), mesh.frames_from, a mesh file's d1_hint) -- neither a finer "
+            "mesh nor a smaller load step changes this")
+
+
 def _dexp_inv_jacobian_T(psi, F, h=1e-30):
     """J (E, 6, 6) with J[:, :, k] = d/dpsi_k (dexp_inv(psi)^T F), by complex step of the closed
     vector form (exact to round-off: no subtraction)."""
@@ -261,6 +321,7 @@ class DefaultElement(Element):
         psi0 = edge_twists(self.frames(mesh.g0), mesh.edge_nodes, reference=True)
         self.z0 = self._element_z(0.5 * psi0)                          # (m, 24)
         P = tying_matrices()
+        check_vortices(mesh, self.frames(mesh.g0), self.z0)
         m = len(self.z0)
         # Dbar is symmetric: its upper triangles are kept (300 of 576 entries, ``Dbar_packed``)
         self.Dbar_packed = np.empty((m, len(_IU[0])))

@@ -430,11 +430,18 @@ class RegionMaterial:
 
     def __init__(self, materials, index):
         self.materials = list(materials)
-        self.index = np.asarray(index, np.int64)
+        raw = np.asarray(index)
         if not self.materials or any(not isinstance(m, Material) for m in self.materials):
             raise MaterialError("RegionMaterial needs a list of core_se3.Material")
-        if self.index.ndim != 1 or self.index.min() < 0 or self.index.max() >= len(self.materials):
-            raise MaterialError("RegionMaterial index must give one material per element")
+        # (0.5 was read as law 0 and True as law 1, silently; an empty index was a bare ValueError)
+        if raw.ndim != 1 or raw.size == 0 or raw.dtype.kind not in "iuf" or not np.all(np.isfinite(raw)) \
+                or not np.array_equal(raw, np.round(raw)):
+            raise MaterialError(f"RegionMaterial index must give one law per element, whole numbers 0 .. "
+                                f"{len(self.materials) - 1}, got {raw.ravel()[:6].tolist()} (shape {raw.shape})")
+        self.index = raw.astype(np.int64)
+        if self.index.min() < 0 or self.index.max() >= len(self.materials):
+            raise MaterialError(f"RegionMaterial index must give one law per element: 0 .. {len(self.materials) - 1} "
+                                f"for {len(self.materials)} materials, got {self.index.min()} .. {self.index.max()}")
 
     #: every law is in-plane isotropic (``ResultantLaw``): the materials are :class:`Material`
     in_plane_isotropic = True
@@ -501,7 +508,8 @@ class RegionMaterial:
         if size is not None:
             size = np.broadcast_to(np.asarray(size, float), A1.shape[:-1])
         if A1.shape[0] != len(self.index):
-            raise MaterialError(f"RegionMaterial has {len(self.index)} elements, got points of {A1.shape[0]}")
+            raise MaterialError(f"RegionMaterial has a law for {len(self.index)} elements, the mesh (or its part) "
+                                f"{A1.shape[0]}: give its index one law per element of the mesh")
         D = np.empty(A1.shape[:-1] + (12, 12))
         j0 = np.empty(A1.shape[:-1])
         for k, mat in enumerate(self.materials):

@@ -59,6 +59,31 @@ def frames_from(X, d1, d3):
     return g
 
 
+def _whole(a, what):
+    """``a`` as an int64 array, else a MeshError: ids that are not whole numbers (a quad of 0.7
+    was read as node 0, a region's 0.5 as element 0)."""
+    raw = np.asarray(a)
+    ids = raw.astype(np.int64) if raw.size else np.zeros(raw.shape, np.int64)
+    if raw.dtype == bool or (raw.size and not np.array_equal(ids, raw)):
+        raise MeshError(f"{what} must be whole numbers (ids), got {raw.ravel()[:6].tolist()}")
+    return ids
+
+
+def _set_ids(ids, count, what, kind):
+    """A named set's ids (k,) checked: whole numbers, existing, each once (a region listing an
+    element twice doubled its pressure or gravity, a node set listing a node twice its nodal
+    load, silently: the ids given directly were refused so, the named ones were not)."""
+    ids = _whole(ids, what)
+    if ids.ndim != 1 or len(ids) == 0 or ids.min() < 0 or ids.max() >= count:
+        raise MeshError(f"{what} must list existing {kind} ids (0 .. {count - 1}), got "
+                        f"{np.asarray(ids).ravel()[:6].tolist()}")
+    uniq, counts = np.unique(ids, return_counts=True)
+    if counts.max() > 1:
+        raise MeshError(f"{what} lists {kind} {int(uniq[np.argmax(counts)])} {int(counts.max())} times: a load on it "
+                        f"would act {int(counts.max())} times; list every {kind} once")
+    return ids
+
+
 #: the sine of a quad's corner angle at or below which the quad is degenerate (round-off)
 DEGENERATE_SINE = 1e-10
 
@@ -221,13 +246,17 @@ class Mesh:
 
     def __post_init__(self):
         self.g0 = np.asarray(self.g0, float)
-        self.quads = np.asarray(self.quads, dtype=np.int64)
+        self.quads = _whole(self.quads, "quads")
         n = self.g0.shape[0]
         if self.g0.shape != (n, 4, 4) or not np.all(np.isfinite(self.g0)):
             raise MeshError("g0 must be a finite (n, 4, 4) array of SE(3) frames")
         R = self.g0[:, :3, :3]
         if np.abs(R @ np.swapaxes(R, 1, 2) - np.eye(3)).max() > 1e-8 or np.any(np.linalg.det(R) < 0):
             raise MeshError("reference rotations are not proper orthonormal matrices")
+        if np.any(self.g0[:, 3] != [0.0, 0.0, 0.0, 1.0]):
+            k = int(np.flatnonzero(np.any(self.g0[:, 3] != [0.0, 0.0, 0.0, 1.0], axis=1))[0])
+            raise MeshError(f"the frames' last rows must be [0, 0, 0, 1] (homogeneous 4x4 frames), node {k}'s is "
+                            f"{self.g0[k, 3].tolist()}: the position is the last column, g0[:, :3, 3]")
         if self.quads.ndim != 2 or self.quads.shape[1] != 4 or len(self.quads) == 0:
             raise MeshError("quads must be an (m, 4) integer array with m >= 1")
         if self.quads.min() < 0 or self.quads.max() >= n:
@@ -237,10 +266,10 @@ class Mesh:
             bad = np.nonzero(np.any(s[:, 1:] == s[:, :-1], axis=1))[0][:5]
             raise MeshError(f"quads {bad.tolist()} repeat a node (collapsed element)")
         for name, ids in self.regions.items():
-            ids = np.asarray(ids, np.int64)
-            if ids.ndim != 1 or len(ids) == 0 or ids.min() < 0 or ids.max() >= len(self.quads):
-                raise MeshError(f"region {name!r} must list existing element ids")
-            self.regions[name] = ids
+            self.regions[name] = _set_ids(ids, len(self.quads), f"region {name!r}", "element")
+        for name, ids in self.edges.items():
+            if np.size(ids):                   # (an empty set is refused where it is used)
+                _set_ids(ids, n, f"node set {name!r}", "node")
         self._build_edges()
         self._gauge_angles = None
         self._check_geometry()
@@ -364,9 +393,12 @@ class Mesh:
         ...
         core_se3.errors.MeshError: no node at [0.5, -0.5, 0.0]: the nearest is node 0 at [0.0, -0.5, 0.0], at distance 0.5 > 0.25 (give that point, or a larger tol)
         """
-        p = np.asarray(x, float)
+        try:
+            p = np.asarray(x, float)
+        except (TypeError, ValueError):          # ('abc': a bare ValueError of NumPy before)
+            p = np.full(1, np.nan)
         if p.shape != (3,) or not np.all(np.isfinite(p)):
-            raise MeshError(f"a point must be three finite coordinates [x, y, z], got {np.asarray(x).tolist()}")
+            raise MeshError(f"a point must be three finite coordinates [x, y, z], got {x!r}")
         d = np.linalg.norm(self.X - p, axis=1)
         k = int(np.argmin(d))
         if tol is None:

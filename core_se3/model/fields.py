@@ -31,7 +31,7 @@ from ..registry import Kind, Registry
 from .base import Param, finite_vector
 
 __all__ = ["MU0", "Field", "UniformField", "GradientField", "DipoleField", "UserField",
-           "Superposition", "rotating_direction", "check_field", "field_vanishes", "FieldKind", "FIELDS",
+           "Superposition", "rotating_direction", "check_field", "field_vanishes", "field_defect", "FIELD_DEFECT_TOL", "FieldKind", "FIELDS",
            "register_field", "field_kind"]
 
 MU0 = 4e-7 * pi
@@ -245,6 +245,12 @@ class DipoleField(Field):
         super().__init__(scale)
         self.m = finite_vector(m, "dipole moment m")
         self.x0 = finite_vector(x0, "dipole position x0")
+        # a negative mu0 reversed the field (a magnet pulled the wrong way, converged and silent),
+        # zero took it away, NaN made every residual NaN
+        if (isinstance(mu0, (str, bytes, bool, np.bool_)) or np.ndim(mu0) != 0
+                or np.asarray(mu0).dtype.kind not in "iuf" or not (np.isfinite(mu0) and mu0 > 0)):
+            raise LoadError(f"dipole mu0 must be a positive number (fields.MU0 for lengths in m, MU0 * 1e3 for "
+                            f"mm), got {mu0!r}")
         self.k = mu0 / (4 * pi)
 
     def _r(self, x):
@@ -393,6 +399,38 @@ def check_field(field, x, lam=1.0, rtol=1e-8):
     if curl > rtol or div > rtol:
         raise LoadError(f"applied field is not curl- and divergence-free in the body: relative "
                         f"|curl B| {curl:.2e}, |div B| {div:.2e}")
+    return curl, div
+
+
+#: the relative curl or divergence of an applied field in the body above which add_magnetic warns
+FIELD_DEFECT_TOL = 1e-6
+
+
+def field_defect(field, x, lams=(0.5, 1.0)):
+    """(relative |curl B|, relative |div B|): the largest at the points x (k, 3) over the load
+    factors ``lams``, relative to the largest |grad B| there (0 for a uniform field or where the
+    gradient vanishes).  The magnets' loads assume both zero: the couple and the force
+    (B^r . grad) B^a are those of a field without currents or sources in the body, and a user
+    field with a curl gives converged answers that miss the m x curl B part of the force
+    (``Problem.add_magnetic`` warns above ``FIELD_DEFECT_TOL``; ``check_field`` raises).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> f = UserField(lambda x: np.c_[0 * x[:, :2], x[:, 0]], lambda x: np.broadcast_to([[0, 0, 0], [0, 0, 0], [1.0, 0, 0]], x.shape + (3,)))
+    >>> field_defect(f, np.zeros((2, 3)))
+    (1.0, 0.0)
+    """
+    x = np.asarray(x, float).reshape(-1, 3)
+    curl = div = 0.0
+    if field.uniform or not len(x):
+        return curl, div
+    for lam in lams:
+        G = field.gradient(x, lam)
+        g = np.abs(G).max()
+        if g > 0:
+            curl = max(curl, float(np.abs(G - np.swapaxes(G, -1, -2)).max() / g))
+            div = max(div, float(np.abs(np.trace(G, axis1=-2, axis2=-1)).max() / g))
     return curl, div
 
 

@@ -59,7 +59,10 @@ def contact_error(message, param=None):
 
 def vector3(v, name):
     """A finite 3-vector, or a ContactError naming ``name``."""
-    a = np.asarray(v, float)
+    try:
+        a = np.asarray(v, float)
+    except (TypeError, ValueError):             # ('abc': a bare ValueError of NumPy before)
+        a = np.full(1, np.nan)
     if a.shape != (3,) or not np.all(np.isfinite(a)):
         raise contact_error(f"{name} must be a finite 3-vector, got {v!r}", name.rsplit(" ", 1)[-1])
     return a
@@ -108,8 +111,19 @@ def translation(vector, scale=None):
     [0.0, 0.0, 0.5]
     """
     v = vector3(vector, "translation vector")
-    scale = scale or (lambda lam: lam)
+    scale = _motion_scale(scale)
     return lambda lam: rigid_transform(None, scale(lam) * v)
+
+
+def _motion_scale(scale):
+    """The motion's programme s(lam) (None: s = lam), or a ContactError: a number was a bare
+    TypeError ('float' object is not callable) at the first evaluation."""
+    if scale is None:
+        return lambda lam: lam
+    if not callable(scale):
+        raise contact_error(f"a motion's scale must be a function of the load factor (lam -> s; default s = lam), "
+                            f"got {scale!r}", "scale")
+    return scale
 
 
 def rotation(axis, point, angle, scale=None):
@@ -124,8 +138,14 @@ def rotation(axis, point, angle, scale=None):
     """
     a = unit3(axis, "rotation axis")
     p = vector3(point, "rotation point")
+    try:
+        ok = not isinstance(angle, (bool, str, bytes)) and np.isfinite(float(angle))
+    except (TypeError, ValueError):
+        ok = False
+    if not ok:                                  # ('abc': a bare ValueError of float() before)
+        raise contact_error(f"a motion's angle must be a finite number [rad], got {angle!r}", "angle")
     angle = float(angle)
-    scale = scale or (lambda lam: lam)
+    scale = _motion_scale(scale)
 
     def T(lam):
         Q = lie.exp_so3(angle * scale(lam) * a)

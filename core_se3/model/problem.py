@@ -22,13 +22,14 @@ import numpy as np
 from .. import lie
 from ..assembly import Assembler
 from .. import backend as _backend
-from ..errors import LoadError, LoadWarning, MeshError, OptionError, SupportError, did_you_mean
+from ..errors import LoadError, LoadWarning, MaterialError, MeshError, OptionError, SupportError, did_you_mean
 from ..fem import ELEMENTS, make_element
+from ..mesh import Mesh
 from .base import Evaluation, Load, check_given, force_scale_with_loads, linear_scale, load_kind
 from .compiled import CompiledEvaluation
 from .contact import add_obstacle
-from .fields import MU0, field_vanishes
-from .loads import element_area, line_shares
+from .fields import FIELD_DEFECT_TOL, MU0, field_defect, field_vanishes
+from .loads import element_area, line_shares, material_per_element
 from .magnetics import MagneticLoad, Magnetisation, br_numbers, magnets_force, magnets_output, table_kind
 from .probes import Probe, along_line
 from .solving import SOLVERS, dispatch, solve_linear
@@ -62,6 +63,56 @@ def _per_row(a, rows, cols, what, per):
         raise MeshError(f"{what} of shape {a.shape}: give one row of {cols} per {per}, shape ({rows}, {cols}) "
                         f"(or flat, ({rows * cols},))")
     return a
+
+
+def _warn_thickness_loads(problem, old, new):
+    """LoadWarning (at the caller of ``Problem.material = ...`` / ``set_material``) when the new
+    law changes the thickness while loads built on the old one are on the problem: a magnet (its
+    dipoles h B^r / mu0), gravity (rho h g) or a contact (its face at h/2) keep the old h -- a
+    cantilever under gravity given h 0.1 -> 0.2 deflected 1533 instead of the 3066 of a problem
+    built with h 0.2 (linear), as documented but without a word."""
+    m = problem.mesh.n_elements
+    try:
+        changed = material_per_element(old, "h", m) != material_per_element(new, "h", m)
+    except (AttributeError, TypeError, ValueError):
+        return                                   # (a law without h: the element will say so)
+    if not changed.any():
+        return
+    nodes = np.zeros(problem.mesh.n_nodes, bool)
+    nodes[problem.mesh.quads[changed].ravel()] = True
+    kept = set()
+    for ld in problem.loads:         # the loads on the changed elements (as design.material's check)
+        el = getattr(getattr(ld, "mag", None), "elements", None)
+        if el is not None and np.any(changed[el]):
+            kept.add("magnet")
+        elif getattr(ld, "name", "") == "gravity" and np.any(changed[getattr(ld, "elements", slice(None))]):
+            kept.add("gravity")
+        elif type(ld).__name__ == "ContactLoad" and np.any(nodes[ld.nodes]):
+            kept.add("contact")
+    if kept:
+        kept = sorted(kept)
+        warnings.warn(LoadWarning(f"the new material changes the thickness h on {int(changed.sum())} element(s), but the "
+                                  f"problem's {', '.join(kept)} load(s) keep the h they were built with (their h B^r / "
+                                  "mu0, rho h g, h/2 face): build the Problem anew with the new material, or set the "
+                                  "material before adding those loads"), stacklevel=3)
+
+
+def _warn_field_defect(field, x, where):
+    """LoadWarning (at add_magnetic's caller) for an applied field with a curl or a divergence at
+    the magnetised points ``x`` (``fields.field_defect``): a user field the magnets' loads are
+    not right for (a user field with a curl as large as its gradient was taken as given, and the
+    magnets' force (B^r . grad) B^a missed its m x curl B part, converged and silent)."""
+    try:
+        curl, div = field_defect(field, x)
+    except LoadError:
+        return                                   # (the field's own error comes with the load)
+    if max(curl, div) > FIELD_DEFECT_TOL:
+        said = LoadWarning(f"add_magnetic: the applied field has a curl or a divergence on {where} (relative "
+                           f"|curl B| {curl:.2e}, |div B| {div:.2e}, to |grad B|, above {FIELD_DEFECT_TOL:g}): the "
+                           "magnets' couple and force hold for a field without currents or sources in the body only, "
+                           "so the answer misses their part; give a curl- and divergence-free field (fields.check_field)")
+        said.cause = "field_defect"
+        warnings.warn(said, stacklevel=3)
 
 
 class Problem:
@@ -139,6 +190,9 @@ class Problem:
     def mesh(self, new):
         if getattr(self, "_mesh", None) is new:
             return
+        if not isinstance(new, Mesh):           # (a bare AttributeError before)
+            raise MeshError(f"a Problem's mesh must be a core_se3.mesh.Mesh (a generator's, mesh.read_meshio's or "
+                            f"Mesh(g0, quads)), got {type(new).__name__}")
         added = [f"{len(x)} {name}" for name, x in (("support(s)", self.supports), ("load(s)", self.loads),
                                                     ("probe(s)", self.probes)) if x]
         if added:
@@ -170,9 +224,15 @@ class Problem:
 
     @material.setter
     def material(self, law):
+        if not callable(getattr(law, "resultant_matrix", None)):      # (a bare AttributeError at first use)
+            raise MaterialError(f"a Problem's material must be a resultant law (core_se3.Material, RegionMaterial, "
+                                f"Material.classical_shell(...)), got {type(law).__name__}")
+        old = getattr(self, "_material", None)
         self._material = law
         self._element = None
         self._compiled = None
+        if old is not None and self.loads:
+            _warn_thickness_loads(self, old, law)
 
     @property
     def element_name(self):
@@ -423,6 +483,8 @@ class Problem:
                                "the field's B [T], or drop the magnet")
             said.cause = "field"            # (the scenario names the field's key)
             warnings.warn(said, stacklevel=2)
+        else:
+            _warn_field_defect(field, self.mesh.X[nodes], where)
         return added
 
     def _add_magnetic(self, Br, field, sel, mu0, Br_per):
@@ -459,7 +521,11 @@ class Problem:
         >>> p.set_material(Material(2e3, 0.0, 0.01)); p.material.E, p.element.material.E
         (2000.0, 2000.0)
         """
-        self.material = material                     # drops the element and the compiled evaluation
+        with warnings.catch_warnings(record=True) as seen:       # said at the caller's line, not here
+            warnings.simplefilter("always")
+            self.material = material                 # drops the element and the compiled evaluation
+        for w in seen:
+            warnings.warn(w.message, stacklevel=2)
         self.element = make_element(self.element_name, self.mesh, material)
 
     def add_obstacle(self, obstacle, region=None, nodes=None, **options):
@@ -479,10 +545,13 @@ class Problem:
 
     def add_probe(self, name, where="x1"):
         """Record the midpoint of an edge (or a node) at every step (names are unique): the
-        selected nodes ordered along the line they form (``probes.along_line``)."""
+        selected nodes ordered along the line they form (``probes.along_line``), halfway along
+        the geodesic of their frames in the mesh's least-turn gauge (``Probe``: the user's choice
+        of d1 at each node does not move it)."""
         if name in self.probes:
             raise OptionError(f"a probe named {name!r} exists already; give this one another name")
-        self.probes[name] = Probe.edge_midpoint(name, along_line(self.mesh, self.nodes(where), name))
+        line = along_line(self.mesh, self.nodes(where), name)
+        self.probes[name] = Probe.edge_midpoint(name, line, self.mesh.gauge_angles if len(line) % 2 == 0 else None)
 
     def output_fields(self, g, lam=1.0):
         """Extra point fields for output (name -> (n, k)) summed over the loads (magnetisation,

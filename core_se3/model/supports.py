@@ -197,7 +197,7 @@ class LabSpring(_Spring):
         G = np.einsum("nai,nbi->nab", self.D, self.D)                # independent rows: G invertible
         self.P = np.einsum("nai,nab,nbj->nij", self.D, np.linalg.inv(G), self.D)   # (k, 3, 3) projectors
         self.X0 = mesh.X[self.nodes].copy()
-        self.k = float(k)
+        self.k = spring_stiffness(k, "k", name)
         self.name = name
 
     def restraint(self):
@@ -262,7 +262,7 @@ class LabTiltSpring(_Spring):
         self.n = mesh.n_nodes
         self.nodes = mesh_ids(nodes, self.n, f"support {name!r}: nodes", SupportError)
         self.t = node_directions(t, len(self.nodes), "the lab tilt support's direction t")
-        self.k = float(k_rot)
+        self.k = spring_stiffness(k_rot, "k_rot", name)
         self.name = name
 
     def round_off_scale(self, ell):
@@ -332,7 +332,7 @@ class RotationComponentSpring(_Spring):
         a = node_directions(a, len(self.nodes), "the rotation component support's axis a")
         self.R0 = mesh.g0[self.nodes, :3, :3].copy()
         self.b = np.einsum("nji,nj->ni", self.R0, a)                   # R0^T a (body frame)
-        self.k = float(k_rot)
+        self.k = spring_stiffness(k_rot, "k_rot", name)
         self.name = name
 
     def round_off_scale(self, ell):
@@ -382,6 +382,17 @@ class RotationComponentSpring(_Spring):
                              blk, tangent)
 
 
+def spring_stiffness(k, what, name):
+    """A spring support's stiffness as a float: a positive finite real number, else a SupportError
+    naming it (a negative k pushed the nodes away from the held value -- a converged answer of a
+    destabilised shell, silently --, NaN gave NaN residuals, "1" was read as 1.0)."""
+    if isinstance(k, (str, bytes, bool, np.bool_)) or np.ndim(k) != 0 or np.asarray(k).dtype.kind not in "iuf" \
+            or not (np.isfinite(k) and k > 0):
+        raise SupportError(f"{name}: the stiffness {what} must be a positive number (the penalty that holds the "
+                           f"support), got {k!r}")
+    return float(k)
+
+
 def mesh_parts(mesh):
     """The connected parts of a mesh (quads joined through shared nodes): (number of parts,
     (n,) part of every node, (m,) part of every element), parts numbered by their first node.
@@ -412,6 +423,20 @@ def _describe_part(mesh, i, nodes, elements):
             f"{np.round(x.max(0), 4).tolist()})")
 
 
+def _check_orphans(mesh, fixed):
+    """SingularSystemError for nodes of no element that the supports do not hold in full: nothing
+    gives them stiffness (a Mesh built by hand with a node no quad lists; the readers drop such
+    nodes).  Before, the part check failed on them with a bare IndexError."""
+    used = np.zeros(mesh.n_nodes, bool)
+    used[mesh.quads.ravel()] = True
+    loose = np.flatnonzero(~used & ~fixed.all(axis=1))
+    if len(loose):
+        raise SingularSystemError(
+            f"node(s) {loose[:5].tolist()}{' ...' if len(loose) > 5 else ''} ({len(loose)} in all, the first at "
+            f"{np.round(mesh.X[loose[0]], 4).tolist()}) belong to no element: nothing holds them and the tangent is "
+            "singular; remove them from the mesh's g0 (renumbering the quads), or clamp them")
+
+
 def check_rigid_motions(problem, g):
     """Raise SingularSystemError if the supports leave a rigid-body motion free (SupportError
     if they leave nothing free), part by part of a mesh of disconnected parts (naming the part).
@@ -426,6 +451,7 @@ def check_rigid_motions(problem, g):
     if fixed.all():
         raise SupportError(f"the supports hold every degree of freedom of all {len(fixed)} nodes: there "
                            "is nothing to solve; select fewer nodes (e.g. clamp one edge)")
+    _check_orphans(problem.mesh, fixed)
     k, nodes, elements = mesh_parts(problem.mesh)
     for i in range(k):
         what = _free_motion(problem, g, fixed, nodes == i)

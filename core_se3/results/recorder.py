@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..errors import OptionError
 from .result import ProbeState, StepResult, unwrap_rotation
 
 __all__ = ["StepRecorder", "lab_totals", "own_magnitudes", "restore_multipliers", "initial_state",
@@ -31,9 +32,33 @@ def initial_state(g_init, g0):
     if g_init is None:
         return np.array(g0, float), None
     if isinstance(g_init, StepResult):
-        return np.array(g_init.g, float), {name: np.asarray(p["rotation_vector"], float)
-                                           for name, p in g_init.probes.items()}
-    return np.array(g_init, float), None
+        return _checked_start(g_init.g, len(g0)), {name: np.asarray(p["rotation_vector"], float)
+                                                    for name, p in g_init.probes.items()}
+    return _checked_start(g_init, len(g0)), None
+
+
+def _checked_start(g, n):
+    """The start frames ``g_init`` as a float (n, 4, 4) array of proper rigid frames, else an
+    OptionError naming what is wrong: before, frames of another mesh failed with a bare
+    IndexError, NaN frames with a LinAlgError ('SVD did not converge'), rotations scaled by 1.1
+    as a ConvergenceError 'edge turns by 3.191 rad ... refine the mesh or the load step'."""
+    try:
+        g = np.array(g, float)
+    except (TypeError, ValueError):
+        raise OptionError(f"g_init must be frames (n, 4, 4) or a StepResult, got {type(g).__name__}") from None
+    if g.shape != (n, 4, 4):
+        raise OptionError(f"g_init of shape {g.shape} for a mesh of {n} nodes: give one 4x4 frame per node, shape "
+                          f"({n}, 4, 4) (a state of this problem's mesh, e.g. result.final.g or result.final)")
+    if not np.all(np.isfinite(g)):
+        raise OptionError(f"g_init has non-finite entries (node {int(np.argmax(~np.isfinite(g).all(axis=(1, 2))))})")
+    R = g[:, :3, :3]
+    bad = (np.abs(R @ np.swapaxes(R, 1, 2) - np.eye(3)).max(axis=(1, 2)) > 1e-8) | (np.linalg.det(R) < 0) \
+        | np.any(g[:, 3] != [0.0, 0.0, 0.0, 1.0], axis=1)
+    if bad.any():
+        raise OptionError(f"g_init: the frames of nodes {np.flatnonzero(bad)[:5].tolist()} are not proper rigid "
+                          "frames [[R, x], [0, 1]] with R a rotation (orthonormal, det +1): give a state of a solve "
+                          "(result.final.g), or frames built by core_se3.lie")
+    return g
 
 
 def lab_totals(g, f, magnitudes=False):

@@ -6,8 +6,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import lie
+from ..errors import OptionError, did_you_mean
 
-__all__ = ["StepResult", "Result", "unwrap_rotation", "ProbeState"]
+__all__ = ["StepResult", "Result", "unwrap_rotation", "ProbeState", "ProbeTable", "UnknownProbeError"]
 
 
 def unwrap_rotation(R, w_prev, log=None):
@@ -80,6 +81,36 @@ class ProbeState(dict):
 
     def get(self, key, default=None):
         return self[key] if key in self or key in self.ALIASES else default
+
+
+class UnknownProbeError(OptionError, KeyError):
+    """A probe name a step does not have (``StepResult.probes[name]``): an :class:`OptionError`
+    that is also the ``KeyError`` a dict raises, naming the probes there are.
+
+    Example
+    -------
+    >>> issubclass(UnknownProbeError, KeyError), str(UnknownProbeError("no probe 'x'"))
+    (True, "no probe 'x'")
+    """
+
+    __str__ = BaseException.__str__
+
+
+class ProbeTable(dict):
+    """name -> ProbeState of a step: a dict whose missing name is an :class:`UnknownProbeError`
+    naming the closest probe and all of them (a bare KeyError 'tip' before).
+
+    Example
+    -------
+    >>> ProbeTable(tip=1)["tpi"]
+    Traceback (most recent call last):
+    ...
+    core_se3.results.result.UnknownProbeError: no probe 'tpi'; did you mean 'tip'?; the probes: tip (Problem.add_probe adds one)
+    """
+
+    def __missing__(self, key):
+        raise UnknownProbeError(f"no probe {key!r}{did_you_mean(key, self)}; the probes: "
+                                f"{', '.join(map(str, self)) or 'none'} (Problem.add_probe adds one)")
 
 
 @dataclass
@@ -182,6 +213,10 @@ class StepResult:
     residual_force: float | None = None    # |r| of the free force dofs [force]
     residual_moment: float | None = None   # |r| of the free moment dofs [force x length]
 
+    def __post_init__(self):
+        if not isinstance(self.probes, ProbeTable):
+            self.probes = ProbeTable(self.probes)
+
     @property
     def balance_error(self):
         """|reactions + applied (+ contact)| relative to the sum of the nodal force (moment)
@@ -235,7 +270,11 @@ class Result:
         return self.steps[-1] if self.steps else None
 
     def displacements(self, k=-1):
-        """Nodal displacements (n, 3) of stored step k."""
+        """Nodal displacements (n, 3) of stored step k (an OptionError naming the steps there are
+        for another k: a bare IndexError or TypeError before)."""
+        n = len(self.steps)
+        if isinstance(k, (bool, np.bool_)) or not isinstance(k, (int, np.integer)) or not -n <= k < n:
+            raise OptionError(f"step {k!r} is not stored: the result has {n} steps (k = 0 .. {n - 1}, or -1 the last)")
         return self.steps[k].g[:, :3, 3] - self.mesh.X
 
     def timing_table(self):

@@ -220,6 +220,8 @@ def _add_magnets(v, prob, spec, mesh, regions):
         for w in said:                            # a magnet that adds nothing (Br = 0), located in the file
             if issubclass(w.category, LoadWarning) and getattr(w.message, "cause", None) == "field":
                 _zero_field(v, spec, key, m)
+            elif issubclass(w.category, LoadWarning) and getattr(w.message, "cause", None) == "field_defect":
+                v.warn(join("fields", m["field"]), str(w.message).replace("add_magnetic: ", "", 1))
             elif issubclass(w.category, LoadWarning):
                 given = next((k for k in ("Br_frame", "Br_table") if k in m), "Br")
                 where = f"region {m['region']!r}" if m.get("region") else "the whole shell"

@@ -249,8 +249,9 @@ def linear_solve(problem, lam_end=1.0, steps=None, linear_solver=None, **kw):
     said = unused_options(dict(steps=steps, **kw))    # Problem.solve passes only the ones its call gave
     if said:
         warnings.warn(OptionWarning(said), stacklevel=_user_level())
-    if not np.isfinite(lam_end):
-        raise OptionError(f"lam_end must be finite, got {lam_end!r}")
+    if isinstance(lam_end, (str, bytes, bool, np.bool_)) or np.ndim(lam_end) != 0 \
+            or np.asarray(lam_end).dtype.kind not in "iuf" or not np.isfinite(lam_end):
+        raise OptionError(f"lam_end must be finite, got {lam_end!r}")     # ('1': a bare TypeError before)
     contact = [getattr(ld, "name", type(ld).__name__) for ld in problem.loads if getattr(ld, "constraint_force", False)]
     if contact:
         # a contact load is zero until a node touches: the reference tangent has none of it, and

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import inspect
 import logging
+import numbers
 import time
 from dataclasses import dataclass
 
@@ -150,6 +151,7 @@ def requested_load_factors(steps=10, lam_end=1.0, lam_start=0.0, factors=None):
     >>> requested_load_factors(4, 1.0).tolist(), requested_load_factors(factors=[0.1, 0.5, 2.0]).tolist()
     ([0.25, 0.5, 0.75, 1.0], [0.1, 0.5, 2.0])
     """
+    lam_start = _finite_factor(lam_start, "lam_start")
     if factors is not None:
         targets = np.asarray(factors, float).ravel()
         incr = np.diff(np.r_[lam_start, targets])
@@ -159,9 +161,20 @@ def requested_load_factors(steps=10, lam_end=1.0, lam_start=0.0, factors=None):
                               f"(no repeats, no reversals), got {list(targets)}")
         return targets
     steps = load_steps(steps)
-    if not np.isfinite(lam_end):
-        raise OptionError(f"need a finite lam_end, got {lam_end!r}")
+    lam_end = _finite_factor(lam_end, "lam_end")
+    if lam_end == lam_start:
+        raise OptionError(f"lam_end = lam_start = {lam_end!r}: the steps would not move the load, and they were "
+                          "returned at once as 'converged' steps of the unsolved start state (0 iterations, balance "
+                          "error 1); give the lam_end to step to (and lam_start the load factor of the start state)")
     return lam_start + (lam_end - lam_start) * np.arange(1, steps + 1) / steps
+
+
+def _finite_factor(value, name):
+    """A load factor as a float: a finite real number, else an OptionError naming it (a string
+    lam_end failed with a bare TypeError of np.isfinite, a NaN lam_start as a load's scale)."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real) or not np.isfinite(value):
+        raise OptionError(f"need a finite {name} (a load factor), got {value!r}")
+    return float(value)
 
 
 class _Timer:

@@ -3,6 +3,7 @@ returns a Result) and displacement control, on the algorithm of ``solvers.arclen
 from __future__ import annotations
 
 import logging
+import numbers
 import time
 import warnings
 from dataclasses import dataclass
@@ -117,6 +118,11 @@ def arc_length_steps(problem, lam_end=1.0, stop_at=None, lam_min=None, start=Non
     control = sysm.node_displacement(stop_at[0], stop_at[1]) if stop_at else None
     if stop_at:
         _finite_values([stop_at[2]], "stop_at's value")
+    for value, name in ((lam_end, "lam_end"), (lam_min, "lam_min")):
+        # a NaN lam_end never stopped the path (it ran to max_steps: a tip deflection of 428 on a strip of 10)
+        if value is not None and (isinstance(value, bool) or not isinstance(value, numbers.Real)
+                                  or not np.isfinite(value)):
+            raise OptionError(f"{name} must be a finite load factor (or None), got {value!r}")
     result = result if result is not None else Result(mesh=problem.mesh, element=problem.element_name)
     rec = StepRecorder(problem, start.unwrap if start is not None else None)
     info = PathInfo(log=result.log)
