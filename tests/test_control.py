@@ -123,6 +123,21 @@ def test_aged_factors_are_renewed_at_converged_states():
     assert frame_error(g2, ginf, s2.problem.length_scale) < 1e-10
 
 
+def test_a_factorisation_priced_at_its_measured_time_is_an_option():
+    """``factor_cost=None`` (docs/CONTROL.md: the price of a renewal measured as the session runs)
+    was refused, 'must be in [0, inf], got None': the option check looked at the default (6).
+    Now None is a setting: the measured branch of the rule runs and the states equal cold solves."""
+    assert ControlOptions(factor_cost=None).factor_cost is None
+    with pytest.raises(OptionError, match="max_iter"):
+        ControlOptions(max_iter=None)
+    p, f = magnetic_strip()
+    s = Session(p, 1.0, [FieldVariable(p, f, name="B")], factor_cost=None, rtol=1e-12, dtol=1e-12)
+    for k in range(1, 9):
+        st = s.update(B=[0.0, 0.0, 0.3 * (1 + 0.02 * k)])
+    assert s.options.factor_cost is None and s._corr.cost["factorization"] > 0
+    assert frame_error(st.g, cold(p), 1.0) < 1e-10
+
+
 def test_jacobian_equals_central_differences_of_cold_solves():
     """d(tip positions)/dB on the gripper, direct and adjoint (transposed solves on the same
     factors), against central differences of cold solves (h = 1e-4 |B|): 1e-6 relative."""
@@ -253,7 +268,8 @@ def test_bad_commands_and_sessions_are_clear_errors():
         Session(p, 1.0, [FieldVariable(p, f, name="a"), FieldVariable(p, f, "polar", name="b")])
     with pytest.raises(OptionError, match="two variables are named 'a'"):
         q = strip()
-        Session(q, 1.0, [LoadMagnitude(q, q.loads[0], name="a"), FieldVariable(p, f, name="a")])
+        q.add_edge_force("x1", (0.0, 0.1, 0.0))
+        Session(q, 1.0, [LoadMagnitude(q, q.loads[0], name="a"), LoadMagnitude(q, q.loads[1], name="a")])
     with pytest.raises(OptionError, match="unknown option 'rtl'"):
         Session(p, 1.0, rtl=1e-9)
     c = strip()
@@ -266,6 +282,90 @@ def test_bad_commands_and_sessions_are_clear_errors():
         Session(seed, 0.0)
     with pytest.raises(OptionError, match="path_tolerance"):
         ControlOptions(path_tolerance=0.0)
+
+
+def test_a_sessions_load_factor_and_the_jacobians_names_are_read_as_given():
+    """Session(p, "1") and Session(p, None) failed with NumPy's TypeError (isfinite), an array
+    with its ValueError, and Session(p, True) started at load factor 1.0 (update refuses a bool);
+    jacobian(q, "PB") iterated the string: the Jacobian by the variables P and B, (3, 4), for
+    a name that is neither, and jacobian("tip") looked for the probe 't'; jacobian(q, []) failed
+    with NumPy's reshape error.  Now: OptionError, one name is a list of one."""
+    p, f = magnetic_strip()
+    p.add_edge_force("x1", (0.0, 0.01, 0.0))
+    for lam in ("1", None, True, np.array([1.0, 0.5]), np.nan):
+        with pytest.raises(OptionError, match="Session: the load factor must be a finite number"):
+            Session(p, lam, [FieldVariable(p, f, name="B")])
+    s = Session(p, 1.0, [FieldVariable(p, f, name="B"), LoadMagnitude(p, p.loads[-1], name="P")])
+    with pytest.raises(OptionError, match="unknown variable 'PB'; did you mean"):
+        s.jacobian(["tip"], "PB")
+    with pytest.raises(OptionError, match="no variables to differentiate by .*B, P"):
+        s.jacobian(["tip"], [])
+    J = s.jacobian("tip", "P")
+    assert J.jacobian.shape == (3, 1) and np.array_equal(J.jacobian, s.jacobian(["tip"], ["P"]).jacobian)
+    assert s.jacobian(ProbePosition(p, "tip"), s.variables["B"]).jacobian.shape == (3, 3)
+
+
+def test_a_loops_variables_given_as_one_name_are_that_variable():
+    """track(..., variables="PB") iterated the string and commanded both P and B (a name that
+    is neither); variables="coil" was refused as 'unknown variable c'; a variable object was a
+    TypeError.  Now one name is a list of one, and the session's variable objects are accepted."""
+    p, f = magnetic_strip()
+    p.add_edge_force("x1", (0.0, 0.01, 0.0))
+    s = Session(p, 1.0, [FieldVariable(p, f, name="B"), LoadMagnitude(p, p.loads[-1], name="P")])
+    z0 = s.state.probes["tip"]["x"][2]
+    with pytest.raises(OptionError, match="unknown variable 'PB'; did you mean 'P'"):
+        track(s, "tip", [[z0], [z0 + 0.01]], variables="PB", components=[2])
+    t = track(s, "tip", [[z0], [z0 + 0.01]], variables=s.variables["B"], components=[2])
+    assert list(t.commands) == ["B"] and abs(t.errors[-1]) < 0.02 * 0.01       # one Newton step: O(dx^2) left
+    assert s.values["P"].tolist() == [1.0]
+    with pytest.raises(OptionError, match="not the session's variable"):
+        track(s, "tip", [[z0 + 0.01]], variables=[FieldVariable(p, f, name="B")], components=[2])
+
+
+def test_a_variable_of_another_problem_is_refused():
+    """A LoadMagnitude made on a copy of the problem: its command was refused after 10 halvings as
+    'the equilibrium path turns sharply' (the predictor expected the load to change, the residual
+    did not), and the Jacobian by it was the copy's load's, -0.958 and 2.48 for the tip's x and z,
+    where the session's state does not depend on it at all.  Now an OptionError says so."""
+    q, q2 = strip(), strip()
+    with pytest.raises(OptionError, match="'P' was made on another Problem"):
+        Session(q, 1.0, [LoadMagnitude(q2, q2.loads[0], name="P")])
+    s = Session(q, 1.0, [LoadMagnitude(q, q.loads[0], name="P")])
+    with pytest.raises(OptionError, match="'P2' was made on another Problem"):
+        s.jacobian(["tip"], [LoadMagnitude(q2, q2.loads[0], name="P2")])
+    assert np.abs(s.jacobian(["tip"], [LoadMagnitude(q, q.loads[0], name="P2")]).jacobian[2]).max() > 1.0
+
+
+def test_a_magnetisation_command_in_another_shape_is_refused_not_reordered():
+    """Two regions' B^r given as (3, 2), components by regions, was read flat in the order of the
+    labels (Br[0].x, Br[0].y, ...): region 0 got (1, 1, 0) for (1, 0, 0.1).  Now any array of
+    more than one axis must have the variable's shape (regions, components)."""
+    p, f = magnetic_strip()
+    s = Session(p, 1.0, [RegionMagnetisation(p, [np.arange(4), np.arange(4, 8)], name="Br")])
+    want = np.array([[1.0, 0.0, 0.1], [1.0, 0.0, -0.1]])
+    with pytest.raises(OptionError, match=r"'Br': a command of shape \(3, 2\).*shape \(2, 3\)"):
+        s.update(Br=want.T)
+    assert s.stats["updates"] == 0
+    assert s.update(Br=want).values["Br"].tolist() == want.ravel().tolist()
+    assert s.update(Br=want.ravel() * 1.01).values["Br"].tolist() == (want.ravel() * 1.01).tolist()
+    s2 = Session(p, 1.0, [FieldVariable(p, f, name="B")])
+    assert s2.update(B=[[0.0, 0.0, 0.31]]).values["B"].tolist() == [0.0, 0.0, 0.31]
+
+
+def test_a_load_added_after_the_session_was_made_is_refused():
+    """A session refuses contact when it is made; a ceiling added to the problem after it was
+    followed as a bare penalty (no multiplier updates): the README strip's tip at P = 3 came out
+    at z = 3.96047 where Problem.solve gives 3.95925, and the update looked converged.  Now an
+    update or a Jacobian after the problem's loads changed is a ControlError naming them."""
+    p = strip(P=1.0)
+    s = Session(p, 1.0, [LoadMagnitude(p, p.loads[0], name="P")])
+    before = s.state
+    p.add_obstacle("half_space", point=(0, 0, 4.0), normal=(0, 0, -1), name="ceiling")
+    with pytest.raises(ControlError, match="loads changed after the session was made .*added: ceiling"):
+        s.update(P=3.0)
+    with pytest.raises(ControlError, match="jacobian: the problem's loads changed"):
+        s.jacobian(["tip"])
+    assert s.state is before and s.values["P"].tolist() == [1.0]
 
 
 def test_a_non_number_command_is_refused_naming_the_variable():
@@ -446,6 +546,27 @@ def test_an_error_inside_an_update_keeps_the_state_and_its_values():
     assert s.update(P=1.5).values["P"].tolist() == [1.5]
 
 
+def test_an_interrupt_while_factoring_the_new_state_keeps_the_state_and_its_values():
+    """With the stability check an update factors its converged state (a renewal does too); an
+    interrupt there (Ctrl-C in a control loop) left the problem's field at the new command, 0.32,
+    under the state of the old one, 0.31: the command back to 0.31 then returned that state with
+    the field still 0.32 in the problem (1.5e-2 from the equilibrium the problem held, and every
+    Jacobian and update after it taken on the wrong field).  Now the values go back with the state."""
+    p, f = magnetic_strip()
+    s = Session(p, 1.0, [FieldVariable(p, f, name="B")], stability_check=True, rtol=1e-12, dtol=1e-12)
+    before = s.update(B=[0.0, 0.0, 0.31])
+
+    def interrupted(*a, **k):
+        raise KeyboardInterrupt
+    factor, s._corr.factor = s._corr.factor, interrupted
+    with pytest.raises(KeyboardInterrupt):
+        s.update(B=[0.0, 0.0, 0.32])
+    s._corr.factor = factor
+    assert s.state is before and f.B.tolist() == [0.0, 0.0, 0.31] and s.variables["B"].value().tolist() == [0.0, 0.0, 0.31]
+    assert s.update(B=[0.0, 0.0, 0.31]) is before and frame_error(s.g, cold(p), 1.0) < 1e-10
+    assert frame_error(s.update(B=[0.0, 0.0, 0.32]).g, cold(p), 1.0) < 1e-10
+
+
 def test_backends_give_the_same_updates():
     states = []
     for backend in ("numpy", "numba"):
@@ -508,6 +629,39 @@ lam_end = 0.5
     assert frame_error(st.g, cold(ref), ref.length_scale) < 1e-8
 
 
+def test_a_scenario_field_named_like_a_load_says_to_rename_the_field():
+    """[fields.load0] and the first [[loads]] entry (load0) are two variables of one name; the
+    error said 'give each its own name (name=...)', which a scenario's session cannot do."""
+    scn = scenario.loads("""
+units = "SI"
+[mesh]
+generator = "rectangle"
+L = 1.0
+width = 0.2
+nx = 8
+ny = 1
+[material]
+E = 1e6
+nu = 0.0
+h = 0.05
+[[supports]]
+type = "clamp"
+edge = "x0"
+[fields.load0]
+type = "uniform"
+B = [0.0, 0.0, 0.03]
+[[magnets]]
+Br = [0.1, 0.0, 0.0]
+field = "load0"
+[[loads]]
+type = "edge_force"
+edge = "x1"
+force = [0.0, 0.01, 0.0]
+""")
+    with pytest.raises(OptionError, match=r"two variables are named 'load0'.*rename \[fields.load0\]"):
+        Session.from_scenario(scn)
+
+
 def test_a_session_commands_an_edge_load_on_a_union_of_lines(tmp_path):
     """An edge force on the union of the lines x1 and y1 builds one load per line, and
     ``Session.from_scenario`` left such an entry out without a word (its variables were [], where
@@ -554,6 +708,41 @@ def test_track_and_plan_reach_their_targets():
         plan(s, "tip", targets, 1e-8, components=[2], options=dict(max_iters=3))
     with pytest.raises(OptionError, match="unknown Feedback key.*gian"):
         track(s2, "tip", targets, components=[2], feedback=dict(gian=0.5))
+
+
+def test_loop_options_out_of_range_are_clear_errors():
+    """Feedback(max_halvings=-1) ended a refused cycle in an UnboundLocalError, gain='1' in NumPy's
+    UFuncTypeError; a negative or NaN damping was read as none, PlanOptions(extrapolate='no') as
+    True and max_iter=-1 as zero iterations.  Now each is an OptionError naming the field."""
+    p = strip(P=0.1)
+    s = Session(p, 1.0, [LoadMagnitude(p, p.loads[0], name="P")])
+    z0 = s.state.probes["tip"]["x"][2]
+    for bad in (dict(max_halvings=-1), dict(gain="1"), dict(gain=-1.0), dict(damping=np.nan), dict(damping=-0.5),
+                dict(max_halvings=2.5)):
+        with pytest.raises(OptionError, match=f"Feedback.{next(iter(bad))} must be"):
+            track(s, "tip", [[z0], [z0 + 0.05]], components=[2], feedback=bad)
+    for bad in (dict(max_iter=-1), dict(damping=np.nan), dict(max_halvings=-2), dict(extrapolate="no")):
+        with pytest.raises(OptionError, match=f"PlanOptions.{next(iter(bad))} must be"):
+            plan(s, "tip", [[z0 + 0.1]], 1e-9, components=[2], options=bad)
+    assert s.stats["updates"] == 0
+    assert plan(s, "tip", [[z0 + 0.1]], 1e-9, components=[2], options=dict(max_iter=0)).reached.tolist() == [False]
+
+
+def test_a_loops_tolerance_and_components_are_read_as_given():
+    """plan's tolerance '1e-3' or None ended in NumPy's TypeError and True planned to within 1
+    ('all samples within 1'); components [2.5] was read as 2, and 2, ['z'], [[2]] ended in
+    NumPy's or LAPACK's errors.  Now: OptionError naming the argument; one index is a list of one."""
+    p = strip(P=0.1)
+    s = Session(p, 1.0, [LoadMagnitude(p, p.loads[0], name="P")])
+    z0 = s.state.probes["tip"]["x"][2]
+    for tol in ("1e-3", None, True, np.array([1e-3, 1e-3])):
+        with pytest.raises(OptionError, match="plan: the tolerance must be a positive finite number"):
+            plan(s, "tip", [[z0 + 0.1]], tol, components=[2])
+    for comps in ([2.5], ["z"], [[2]], [3], [True]):
+        with pytest.raises(OptionError, match="components must be indices of the quantity's 3 components"):
+            track(s, "tip", [[z0], [z0 + 0.01]], components=comps)
+    assert s.stats["updates"] == 0
+    assert track(s, "tip", [[z0], [z0 + 0.01]], components=2).max_error < 0.02 * 0.01
 
 
 def test_default_schedule_is_deterministic():
@@ -757,6 +946,34 @@ def test_the_critical_point_check_compares_with_the_last_accepted_state_and_says
         s.update(lam=1.0)
 
 
+def test_the_start_sign_is_taken_at_the_converged_start_not_at_the_guess():
+    """The snap roof at load factor 0.627 has a stable state (crown -6.77) and, past its limit
+    point, an unstable one (-14.02, det K < 0, from arc length).  From a guess halfway between
+    them (det K < 0 there) the session's start converges onto the far, stable branch (crown
+    -26.2, det K > 0); the sign it recorded was the guess's, so the session refused its own
+    start's Jacobian as 'past a critical point' (from negative to positive).  Now the sign is
+    that of the converged start (one more factorisation, for a given g only)."""
+    from core_se3 import solvers
+    roof = os.path.join(EXAMPLES, "snap-roof.toml")
+    p = scenario.load(roof).problem
+    arc = solvers.arc_length(p, lam_end=None, dlam0=0.05, stop_at=(0, (0.0, 0.0, -1.0), 14.0))
+    unstable = arc.steps[-1]
+    lam = unstable.load_factor
+    assert 0.6 < lam < 0.66 and unstable.probes["crown"]["u"][2] < -13.9
+    stable = Session(p, lam, []).g
+    g = stable.copy()
+    g[:, :3, 3] = 0.5 * (stable[:, :3, 3] + unstable.g[:, :3, 3])
+    w = lie.log_so3(np.swapaxes(stable[:, :3, :3], 1, 2) @ unstable.g[:, :3, :3])
+    g[:, :3, :3] = stable[:, :3, :3] @ lie.exp_so3(0.5 * w)
+    s = Session(p, lam, [LoadMagnitude(p, p.loads[0], name="P")], g=g)
+    assert s.state.probes["crown"]["u"][2] < -20.0                 # the far branch
+    assert s._sign == 1 and s._corr.F_g is s._g
+    J = s.jacobian(["crown"]).jacobian                              # was refused
+    h = 1e-4
+    up, down = (s.update(P=1.0 + d).probes["crown"]["x"][2] for d in (h, -h))
+    assert abs(J[2, 0] - (up - down) / (2 * h)) < 1e-6 * abs(J[2, 0])
+
+
 def test_a_singular_tangent_at_the_new_state_is_refused_under_the_stability_check(monkeypatch):
     """With stability_check, a tangent that cannot be factored at the converged state (singular:
     a critical point exactly there) skipped the check and the state was accepted silently.  Now
@@ -798,3 +1015,25 @@ def test_plan_falls_back_when_an_extrapolated_command_lands_past_a_critical_poin
     pl = plan(s, "tip", targets[:2], 1e-10, components=[0])
     assert not pl.reached.any() and np.isnan(pl.commands["P"]).all()
     assert "planning stopped at sample 0: jacobian: the session's state lies past a critical point" in pl.message
+
+
+def test_a_session_of_an_arc_length_scenario_past_its_limit_point_says_how_to_start_it(tmp_path):
+    """The snap roof (examples/snap-roof.toml, [solver] control = "arclength") at its lam_end:
+    the session's cold start steps the load and stops at the limit point (0.742); the error
+    said to use arc length, which a session cannot be told to do.  It now says to start the
+    session from the arc-length run's state -- and that start works."""
+    import warnings
+    from pathlib import Path
+    from core_se3 import scenario
+    from core_se3.control import Session
+    from core_se3.errors import ConvergenceError
+    path = str(Path(__file__).parents[1] / "examples" / "snap-roof.toml")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(ConvergenceError, match=r'control = "arclength": the session\'s cold start steps the load '
+                                                   r"factor .* Session.from_scenario\(path, lam=r.doc\['steps'\]"):
+            Session.from_scenario(path)
+        r = scenario.load(path).run(out=str(tmp_path / "run"))
+        lam = r.doc["steps"][-1]["load_factor"]
+        s = Session.from_scenario(path, lam=lam, g=r.g)
+    assert s.lam == lam and float(abs(s.g - r.g).max()) < 1e-8 * 2540.0

@@ -4,6 +4,8 @@ the frames the user gives (which in-plane direction is d1) do not change the ans
 Each test fails on the element built on the user's frames as given (the gauge switched off), the
 code before it: see test_shell_course's negative control for the patch tests.
 """
+import warnings
+
 import numpy as np
 import pytest
 
@@ -192,3 +194,38 @@ def test_the_thin_hemisphere_has_no_dip_at_6x6():
         p, meas = sc.pinched_hemisphere(n, h=1e-4)
         return meas(p.solve_linear())
     assert val(6) / val(16) == pytest.approx(1.0, abs=0.02)
+
+
+@pytest.mark.parametrize("backend", ["numpy", "numba"])
+def test_quarter_turns_of_d1_on_a_doubly_curved_shell_change_nothing(backend):
+    # a 4-fold field of d1 (a mesh file's default frames) jumps by quarter turns across cuts; for
+    # an in-plane isotropic law which of its four directions a node takes is no choice of the
+    # shell.  The quarter hemisphere with every node's d1 turned by a random multiple of 90 deg:
+    # before, the elements across the turns took their edges as arcs of 90 deg (their area from
+    # their frames 3 ... 25 % of their quads'; now refused); the element takes the quarter turns
+    # (fem.element_default, "Cuts"): the displacements are the generator's frames' to 1.7e-11 /
+    # 1.3e-11 (NumPy / numba), and the resultants (lab; local where an element's first node kept its
+    # d1) to 5e-16 (1.66 off without the resultants' frames of the cuts)
+    from core_se3.fem.resultants import element_resultants
+
+    def solve(m):
+        p = Problem(m, Material(6.825e7, 0.3, 0.04), backend=backend)
+        X = m.X
+        p.fix(list(np.flatnonzero(X[:, 2] > X[:, 2].max() - 1e-9)), range(6))
+        p.add_nodal_load([int(np.argmax(X[:, 0]))], force=(1.0, 0.0, 0.0))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return p, p.solve_linear().displacements()
+
+    m, turned = mesh.hemisphere_quarter(10.0, 18.0, 6, 6), mesh.hemisphere_quarter(10.0, 18.0, 6, 6)
+    alpha = np.random.default_rng(3).integers(0, 4, m.n_nodes) * np.pi / 2
+    turned.g0 = turned_about_normal(turned.g0, alpha)
+    (p1, u1), (p2, u2) = solve(m), solve(turned)
+    assert np.abs(u1 - u2).max() < 1e-9 * np.abs(u1).max()
+    eta = np.random.default_rng(1).standard_normal((m.n_nodes, 6)) * 1e-3
+    T = np.einsum("nji,njk->nik", turned.g0[:, :3, :3], m.g0[:, :3, :3])      # the same lab increments
+    eta2 = np.concatenate([np.einsum("nij,nj->ni", T, eta[:, :3]), np.einsum("nij,nj->ni", T, eta[:, 3:])], 1)
+    a, b = element_resultants(p1.element, m.g0, eta), element_resultants(p2.element, turned.g0, eta2)
+    kept = alpha[m.quads[:, 0]] == 0
+    for k in ("N1", "N2", "M1", "M2", "N1_local", "M2_local"):
+        assert np.abs(a[k][kept] - b[k][kept]).max() < 1e-12 * np.abs(a[k]).max(), k

@@ -54,6 +54,8 @@ class Commands:
         Each with a unique ``name`` other than ``lam`` (the load factor's keyword of
         ``Session.update``); no two may set the same field, load, magnet or element property
         (OptionError naming both).
+    problem : core_se3.Problem, optional
+        The session's problem: a variable made on another is refused (:meth:`check`).
 
     Attributes
     ----------
@@ -70,14 +72,14 @@ class Commands:
     [1.0]
     """
 
-    def __init__(self, variables):
-        self.variables = {}
+    def __init__(self, variables, problem=None):
+        self.variables, self.problem = {}, problem
         owner = {}
         for v in variables:
-            if not isinstance(v, Variable):
-                raise OptionError(f"a session's variables are core_se3.design variables, got {type(v).__name__}")
+            self.check(v)
             if v.name in self.variables:
-                raise OptionError(f"two variables are named {v.name!r}: give each its own name (name=...)")
+                raise OptionError(f"two variables are named {v.name!r}: give each its own name (name=...; in a "
+                                  f"scenario rename [fields.{v.name}]: its [[loads]] entries are load0, load1, ...)")
             if v.name == "lam":
                 # Session.update(lam=...) is the load factor: the variable could never be commanded
                 raise OptionError("a variable cannot be named 'lam': update(lam=...) sets the load factor, so its "
@@ -90,6 +92,16 @@ class Commands:
                 owner[key] = v.name
             self.variables[v.name] = v
 
+    def check(self, v):
+        """OptionError unless v is a design variable of the session's problem: one made on another
+        Problem sets nothing the session solves (before, its command was refused as 'the path
+        turns sharply', and its Jacobian was that of the other problem's load, not zero)."""
+        if not isinstance(v, Variable):
+            raise OptionError(f"a session's variables are core_se3.design variables, got {type(v).__name__}")
+        if self.problem is not None and getattr(v, "problem", self.problem) is not self.problem:
+            raise OptionError(f"the variable {v.name!r} was made on another Problem than the session's: make it on "
+                              "the session's problem (session.problem)")
+
     def values(self):
         """name -> the current values (size,) of every variable."""
         return {k: v.value() for k, v in self.variables.items()}
@@ -101,6 +113,32 @@ class Commands:
         except KeyError:
             raise OptionError(f"unknown variable {name!r}{did_you_mean(name, self.variables)}; the session's "
                               f"variables: {', '.join(self.variables) or 'none'}") from None
+
+    def pick(self, variables=None):
+        """The variables named by ``variables``: None (all), one name or variable, or a sequence
+        of them (a string is one name: before, a loop's variables="PB" commanded P and B); a
+        variable object must be one of these (OptionError otherwise).
+
+        Example
+        -------
+        >>> from core_se3 import Problem, Material, mesh
+        >>> from core_se3.design import LoadMagnitude
+        >>> p = Problem(mesh.rectangle(1.0, 0.2, 2, 1), Material(1e3, 0.0, 0.01))
+        >>> p.add_edge_force("x1", (0.0, 0.0, 1.0))
+        >>> [v.name for v in Commands([LoadMagnitude(p, p.loads[0], name="P")]).pick("P")]
+        ['P']
+        """
+        if variables is None:
+            return list(self.variables.values())
+        items = [variables] if isinstance(variables, (str, Variable)) else list(variables)
+        out = []
+        for v in items:
+            mine = self.lookup(v.name if isinstance(v, Variable) else v)
+            if isinstance(v, Variable) and v is not mine:
+                raise OptionError(f"the variable {v.name!r} given is not the session's variable of that name; pass "
+                                  "its name")
+            out.append(mine)
+        return out
 
     def parse(self, values):
         """name -> (size,) arrays of the commanded values, checked (OptionError: unknown name,
@@ -121,6 +159,7 @@ class Commands:
                 raise OptionError(f"variable {name!r}: expected {v.size} number{'s' * (v.size > 1)}, got {x!r}")
             if a.size != v.size:
                 raise OptionError(f"variable {name!r} has {v.size} components ({', '.join(v.labels)}), got {a.size}")
+            _check_shape(v, np.shape(x))
             if not np.all(np.isfinite(a)):
                 raise OptionError(f"variable {name!r}: the command {a.tolist()} is not finite")
             bad = (a < v.lower) | (a > v.upper)
@@ -151,6 +190,18 @@ class Commands:
                 dr = None if d is None else dr + d
             v.assign(x)
         return None if dr is None else problem.assembler().vector(dr)
+
+
+def _check_shape(v, shape):
+    """OptionError for a command array of more than one axis (beyond axes of length 1) whose shape
+    is not the variable's own -- (regions, components) of a magnetisation: its entries would be
+    read in another order (before, a magnetisation of two regions given as (3, 2), components by
+    regions, set region 0 to (1, 1, 0) for (1, 0, 0.1) and (1, 0, -0.1))."""
+    own = (len(v.regions), len(v.free)) if isinstance(v, RegionMagnetisation) else (v.size,)
+    axes = tuple(n for n in shape if n != 1)
+    if len(axes) > 1 and axes != tuple(n for n in own if n != 1):
+        raise OptionError(f"variable {v.name!r}: a command of shape {tuple(shape)} is read in the order of its "
+                          f"components ({', '.join(v.labels)}); give that flat list or an array of shape {own}")
 
 
 def _linear_change(v, problem, g, lam, x):

@@ -56,6 +56,9 @@ class Feedback:
     damping: float = 0.0
     max_halvings: int = 5
 
+    def __post_init__(self):
+        _check_fields(self, gain=(0.0, False), damping=(0.0, True), max_halvings=(0, True))
+
 
 @dataclass(frozen=True)
 class PlanOptions:
@@ -82,6 +85,26 @@ class PlanOptions:
     extrapolate: bool = True
     max_halvings: int = 6
 
+    def __post_init__(self):
+        _check_fields(self, max_iter=(0, True), damping=(0.0, True), max_halvings=(0, True))
+        if not isinstance(self.extrapolate, (bool, np.bool_)):
+            raise OptionError(f"PlanOptions.extrapolate must be true or false, got {self.extrapolate!r}")
+
+
+def _check_fields(opts, **lows):
+    """OptionError unless every named field is a finite number above its low end (name -> (low,
+    low allowed)), a whole one where the default is whole: before, Feedback(max_halvings=-1) ended
+    in an UnboundLocalError, gain='1' in NumPy's UFuncTypeError, and a negative or NaN damping,
+    PlanOptions(extrapolate='no') were read as no damping and as True."""
+    for name, (low, closed) in lows.items():
+        v, whole = getattr(opts, name), isinstance(low, int)
+        ok = isinstance(v, (int, np.integer) if whole else (int, float, np.integer, np.floating)) and \
+            not isinstance(v, (bool, np.bool_)) and np.isfinite(v) and (v >= low if closed else v > low)
+        if not ok:
+            kind = "a whole number" if whole else "a finite number"
+            raise OptionError(f"{type(opts).__name__}.{name} must be {kind} {'>=' if closed else '>'} {low:g}, "
+                              f"got {v!r}")
+
 
 def _options(cls, spec, where):
     """``cls`` from None (the defaults), an instance or a dict of its fields; OptionError naming
@@ -97,6 +120,23 @@ def _options(cls, spec, where):
             raise OptionError(f"{where}: unknown {cls.__name__} key(s) {unknown}; the keys are {names}")
         return cls(**spec)
     raise OptionError(f"{where}: expected a {cls.__name__} or a dict of its fields, got {spec!r}")
+
+
+def _components(components, size):
+    """The quantity's rows picked by ``components`` (an index or a list of them in 0 .. size-1), or
+    OptionError (before, [2.5] was read as 2, and 2, ['z'] or [[2]] ended in NumPy's or LAPACK's
+    errors)."""
+    c = [components] if isinstance(components, (int, np.integer)) else components
+    try:
+        rows = np.asarray(c)
+    except (TypeError, ValueError):
+        rows = np.asarray([], float)
+    whole = rows.ndim == 1 and rows.size and all(isinstance(i, (int, np.integer)) and not isinstance(i, (bool, np.bool_))
+                                                 for i in rows.tolist())
+    if not whole or rows.min() < 0 or rows.max() >= size:
+        raise OptionError(f"components must be indices of the quantity's {size} components, 0 .. {size - 1} (an "
+                          f"index or a list of them), got {components!r}")
+    return rows.astype(np.int64)
 
 
 def least_squares_step(J, e, scale, damping=0.0):
@@ -124,17 +164,14 @@ class _Loop:
     def __init__(self, session, quantity, variables, components, model=None):
         self.s, self.model = session, model
         self.q = session.quantity(quantity)
-        names = list(session.variables) if variables is None else list(variables)
-        self.vars = [session.commands.lookup(n) for n in names]
-        self.names = names
+        self.vars = session.commands.pick(variables)
+        self.names = names = [v.name for v in self.vars]
         if model is not None:
             self.qm = model.quantity(quantity)
             sizes = [model.commands.lookup(n).size for n in names]
             if sizes != [v.size for v in self.vars]:
                 raise OptionError(f"the model's variables {names} do not have the plant's sizes")
-        self.rows = np.arange(self.q.size) if components is None else np.asarray(components, np.int64)
-        if self.rows.size == 0 or self.rows.min() < 0 or self.rows.max() >= self.q.size:
-            raise OptionError(f"components {np.asarray(components).tolist()} outside 0 .. {self.q.size - 1}")
+        self.rows = np.arange(self.q.size) if components is None else _components(components, self.q.size)
         self.scale = np.concatenate([v.scale for v in self.vars])
         self.lower = np.concatenate([v.lower for v in self.vars])
         self.upper = np.concatenate([v.upper for v in self.vars])
@@ -254,7 +291,7 @@ def track(session, quantity, targets, variables=None, components=None, feedback=
         The plant, at the start (targets[0] is recorded against the start's value): what is
         measured and commanded.
     variables : sequence of str, optional
-        The commanded variables (default all of the session's).
+        The commanded variables (default all of the session's; one name alone is a list of one).
     feedback : Feedback or dict, optional
         The gain, the damping mu and the halvings of a refused command (default
         ``Feedback()``: gain 1, no damping, 5 halvings).
@@ -425,8 +462,10 @@ def plan(session, quantity, targets, tolerance, variables=None, components=None,
     >>> plan(s, "tip", [[z0 + 1.5]], 1e-9, components=[2], options=dict(max_iter=1)).reached.tolist()
     [False]
     """
-    if not (np.isfinite(tolerance) and tolerance > 0):
-        raise OptionError(f"plan: the tolerance must be positive and finite, got {tolerance!r}")
+    if (isinstance(tolerance, (bool, np.bool_)) or not isinstance(tolerance, (int, float, np.integer, np.floating))
+            or not (np.isfinite(tolerance) and tolerance > 0)):
+        # before, '1e-3' or None ended in NumPy's TypeError and True planned to within 1
+        raise OptionError(f"plan: the tolerance must be a positive finite number, got {tolerance!r}")
     opts = _options(PlanOptions, options, "plan")
     t0 = time.perf_counter()
     lp = _Loop(session, quantity, variables, components)

@@ -30,7 +30,7 @@ import numpy as np
 
 from ..design import ProbePosition, Quantity, SolveWith, Variable, sensitivity
 from ..design.sensitivity import OnPart
-from ..errors import ControlError, ElementTooDistortedError, OptionError, SingularSystemError
+from ..errors import ControlError, ConvergenceError, ElementTooDistortedError, OptionError, SingularSystemError
 from ..model.base import overrides
 from ..model.magnetics import MagneticLoad, dipole_sources
 from ..model.solving import dipole_warning
@@ -124,6 +124,22 @@ class State:
         return self._probes
 
 
+def _load_factor(lam, who):
+    """lam as a float, or OptionError: a bool, a string, None, an array or a non-finite number
+    is no load factor (before, Session read True as 1.0 and failed on '1' or None with NumPy's
+    TypeError)."""
+    if (isinstance(lam, (bool, np.bool_)) or not isinstance(lam, (int, float, np.floating, np.integer))
+            or not np.isfinite(lam)):
+        raise OptionError(f"{who}: the load factor must be a finite number, got {lam!r}")
+    return float(lam)
+
+
+def _items(x):
+    """A sequence argument as a list: one name (a string) or one object is a list of one (before,
+    jacobian(q, "PB") iterated the string: the variables P and B)."""
+    return [x] if isinstance(x, (str, Quantity, Variable)) else list(x)
+
+
 def _check_problem(problem):
     """ControlError for what a session cannot hold."""
     if problem.element.stateful:
@@ -185,12 +201,12 @@ class Session:
     def __init__(self, problem, lam=1.0, variables=(), g=None, options=None, steps=None, **kw):
         opts, kw = split_options(ControlOptions, options, dict(kw))
         unknown_keywords("Session", kw, [f.name for f in fields(ControlOptions)])
-        if not np.isfinite(lam):
-            raise OptionError(f"Session: the load factor must be finite, got {lam!r}")
+        lam = _load_factor(lam, "Session")
         _check_problem(problem)
         problem.check_supports()
         self.problem, self.options = problem, opts
-        self.commands = Commands(variables)
+        self.commands = Commands(variables, problem)
+        self._loads = list(problem.loads)    # what the lists below and the part's origin were made of
         self._turning = [ld for ld in problem.loads if overrides(ld, "direction_turn")]
         # magnets in the field of a point dipole: their states are checked for its resolution
         self._near = [ld for ld in problem.loads if isinstance(ld, MagneticLoad) and dipole_sources(ld.field)]
@@ -200,6 +216,7 @@ class Session:
         self._origin = part_origin(problem)   # the corrector's frames are relative to it (module docstring)
         self.stats = dict(updates=0, refused=0, substeps=0, splits=0, iterations=0)
         t0 = time.perf_counter()
+        given = g is not None
         g = self._cold(lam, steps) if g is None else np.array(g, float)
         if g.shape != problem.mesh.g0.shape:
             raise OptionError(f"Session: g must have the shape {problem.mesh.g0.shape}, got {g.shape}")
@@ -208,12 +225,29 @@ class Session:
             raise ControlError(f"the start is not an equilibrium the corrector reaches at load factor {lam:g}: "
                                f"{out.reason}")
         self._g = out.g                   # the corrector's frames of the state (relative to the origin)
-        self.state = self._state(out.g, lam, Work(out.iterations, out.factorizations, 1, 0, time.perf_counter() - t0))
         self._r = out.residual            # the free residual at the state (the next predictor's start)
-        # det K's sign at the last accepted state where it is known (and that state, in words): a
-        # change between accepted states means a critical point crossed
-        self._sign, self._sign_at = self._corr.det_sign(), f"the session's start (load factor {lam:.6g})"
+        nf = out.factorizations + self._start_sign(given, lam)
+        self.state = self._state(out.g, lam, Work(out.iterations, nf, 1, 0, time.perf_counter() - t0))
         self._check_resolution()
+
+    def _start_sign(self, given, lam):
+        """Record det K's sign at the start (the last accepted state where it is known, and that
+        state in words: a change between accepted states means a critical point crossed); 1 if
+        it factored for it.  From a given g the factors are made at the converged start (before,
+        the sign was the guess's: the snap roof at load factor 0.627 from a guess halfway between
+        its stable and its unstable state, det K < 0 there, converged onto the far, stable branch,
+        det K > 0, and the session then refused every Jacobian as 'past a critical point')."""
+        c, factored = self._corr, 0
+        if given and c.F_g is not self._g:
+            try:
+                c.factor(self._g, lam, self._stamp, keep=True)
+                factored = 1
+            except (SingularSystemError, ElementTooDistortedError):
+                pass                         # a critical point at the start: its sign is not known
+        known = c.F_g is self._g or not given        # a cold start converged where its factors are
+        self._sign = c.det_sign() if known else None
+        self._sign_at = f"the session's start (load factor {lam:.6g})"
+        return factored
 
     @classmethod
     def from_scenario(cls, scn, lam=None, variables=None, **kw):
@@ -256,7 +290,18 @@ class Session:
         kw.setdefault("dtol", sv["dtol"])
         kw.setdefault("steps", sv["steps"])
         variables = scenario_variables(scn) if variables is None else variables
-        return cls(scn.problem, sv["lam_end"] if lam is None else lam, variables, **kw)
+        try:
+            return cls(scn.problem, sv["lam_end"] if lam is None else lam, variables, **kw)
+        except ConvergenceError as exc:
+            if sv.get("control") != "arclength" or kw.get("g") is not None:
+                raise
+            # the cold start steps the load; a scenario traced by arc length may pass a limit point
+            raise ConvergenceError(
+                f"{exc} -- the scenario's [solver] control = \"arclength\": the session's cold start steps the "
+                "load factor and cannot pass a limit point; start it from a state of the arc-length run "
+                "(r = scenario.load(path).run(out=DIR); Session.from_scenario(path, lam=r.doc['steps'][-1]"
+                "['load_factor'], g=r.g)), or at a load factor before the limit point",
+                getattr(exc, "result", None)) from exc
 
     # ------------------------------------------------------------------ the state ------
     @property
@@ -317,6 +362,20 @@ class Session:
         self._stamp += 1
         return dr
 
+    def _check_loads(self, what):
+        """ControlError when the problem's loads are no longer those the session was made with: a
+        load added after it (a contact, which a session refuses, was followed as a bare penalty:
+        the README strip's tip 1.2e-3 from Problem.solve's; a new magnet near a point dipole or a
+        turning load escaped the session's checks) or removed."""
+        now = self.problem.loads
+        if len(now) == len(self._loads) and all(a is b for a, b in zip(now, self._loads)):
+            return
+        added = [ld.name for ld in now if not any(ld is x for x in self._loads)]
+        removed = [ld.name for ld in self._loads if not any(ld is x for x in now)]
+        raise ControlError(f"{what}: the problem's loads changed after the session was made (added: "
+                           f"{', '.join(added) or 'none'}; removed: {', '.join(removed) or 'none'}); make a new "
+                           "Session of the problem as it is now")
+
     # ------------------------------------------------------------------ updates --------
     def update(self, lam=None, **values):
         """Move the equilibrium to the load factor ``lam`` (default: unchanged) and new values of
@@ -338,12 +397,9 @@ class Session:
         (1.0, [2.0], True)
         """
         t0 = time.perf_counter()
+        self._check_loads("update")
         lam0 = self.lam
-        lam1 = lam0 if lam is None else lam
-        if (isinstance(lam1, (bool, np.bool_)) or not isinstance(lam1, (int, float, np.floating, np.integer))
-                or not np.isfinite(lam1)):
-            raise OptionError(f"update: the load factor must be a finite number, got {lam!r}")
-        lam1 = float(lam1)
+        lam1 = lam0 if lam is None else _load_factor(lam, "update")
         new = self.commands.parse(values)
         x1 = {k: x for k, x in new.items() if not np.array_equal(x, self.values[k])}
         if not x1 and lam1 == lam0:
@@ -354,10 +410,12 @@ class Session:
         x0 = {k: self.values[k] for k in x1}
         try:
             g, r, counts = self._follow(lam0, lam1, x0, x1)
+            # the renewal and the stability check factor at g: an error or interrupt there too
+            # keeps the values of the state (before, the problem kept the new ones under the old state)
+            factored, why = self._checked(g, lam1, self._corr.settle(g, lam1, self._stamp, counts[0]))
         except BaseException:
             self._assign(x0)                 # refused or interrupted: the values of the state kept
             raise
-        factored, why = self._checked(g, lam1, self._corr.settle(g, lam1, self._stamp, counts[0]))
         if factored:
             counts = (counts[0], counts[1] + 1) + counts[2:]      # factors at the new state: checked
         if why:
@@ -492,9 +550,11 @@ class Session:
         Parameters
         ----------
         quantities : sequence
-            ``design`` quantities, or probe names (their positions, ``ProbePosition``).
+            ``design`` quantities, or probe names (their positions, ``ProbePosition``); one
+            name or quantity alone is a list of one.
         variables : sequence, optional
-            Variable names or ``design`` variables (default all of the session's).
+            Variable names or ``design`` variables (default all of the session's; one alone
+            is a list of one; an empty list is an OptionError).
         method : str
             'auto', 'direct' or 'adjoint'.
 
@@ -514,9 +574,15 @@ class Session:
         >>> round(float(J[2, 0]) / (1e-6 * 10.0 ** 3 / 300), 2)
         1.0
         """
-        qs = [self.quantity(q) for q in quantities]
+        self._check_loads("jacobian")
+        qs = [self.quantity(q) for q in _items(quantities)]
         vs = list(self.variables.values()) if variables is None else \
-            [v if isinstance(v, Variable) else self.commands.lookup(v) for v in variables]
+            [v if isinstance(v, Variable) else self.commands.lookup(v) for v in _items(variables)]
+        for v in vs:
+            self.commands.check(v)
+        if not vs:
+            raise OptionError("jacobian: no variables to differentiate by (the session's: "
+                              f"{', '.join(self.variables) or 'none'}); name at least one")
         c = self._corr
         if c.F is None or c.F_g is not self._g or c.F_stamp != self._stamp:
             c.factor(self._g, self.lam, self._stamp)

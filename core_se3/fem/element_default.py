@@ -63,10 +63,10 @@ v-w blocks stay exactly zero) and the strains, the resultants and the area take 
 cross field's singular node (a cubed sphere's valence-3 corners) the turns cannot close in one of
 its elements, which compares its sides in frames turned to its first node's by their actual
 angles.  Without cuts (every k = 0) nothing is done (the code paths of before, to the bit).  On
-the closed cubed sphere read from a file (R 10): the element's area within 2.6 / 2.6 / 3.5 % of
+the closed cubed sphere read from a file (R 10): the element's area within 2.6 / 2.6 / 2.6 % of
 its quad's on 4 / 8 / 16 per face (0.03 of it before on 17 / 56 / 90 elements) and a pressurised
 sphere's radial displacement within -3.4 / +5.9 % of the membrane value on 16 per face
-(-1.7 / +2.4 % on 24: O(h^2), the error at the cube's corners; -5.7 ... 7.2 times it before).
+(-1.6 / +2.3 % on 24: O(h^2), largest round the cube's corners; -5.7 ... 7.2 times it before).
 """
 from __future__ import annotations
 
@@ -79,6 +79,7 @@ from ..errors import ElementTooDistortedError, ElementWarning
 from ..mesh import LOCAL_EDGES
 from ..mesh.gauge import corner_turns, edge_matching, quarter_turns, turned_about_normal
 from .element import Element, ElementEvaluation, register_element
+from .frame_turns import check_frame_turns
 from .material import law_matrix
 from .membrane_drilling import drilling_correction, reference_G, tying_correction
 from .membrane_enhanced import condensed_stiffness, membrane_enhancement
@@ -238,6 +239,25 @@ def _reference_turn_message(g, a, b, w):
             "finer mesh nor a smaller load step changes this")
 
 
+def corner_frame_turns(mesh, g0, matching):
+    """S (m, 4, 3, 3): the turns about the normal of every element's nodal frames g0 (n, 4, 4) in
+    which it compares its sides (g0_i S_i; module docstring, "Cuts", and :func:`side_turns`):
+    the quarter turns of ``mesh.gauge.corner_turns``, or in an element round which the edges'
+    quarter turns ``matching`` (E,) do not close, Rz(-phi_i), phi_i the angle of node i's d1 in
+    the first node's frame."""
+    S = quarter_turns(corner_turns(g0, mesh.quads))
+    ks = mesh.elem_edge_sign * matching[mesh.elem_edges]                                 # q_lb - q_la per side
+    open_ = np.flatnonzero((ks[:, 0] + ks[:, 3] - ks[:, 2] - ks[:, 1]) % 4)
+    if open_.size:
+        R = g0[mesh.quads[open_], :3, :3]
+        d1 = np.einsum("mji,mnj->mni", R[:, 0], R[:, :, :, 0])
+        phi = np.arctan2(d1[..., 1], d1[..., 0])
+        c, s = np.cos(phi), np.sin(phi)
+        S[open_, :, 0, 0] = S[open_, :, 1, 1] = c
+        S[open_, :, 0, 1], S[open_, :, 1, 0] = s, -s
+    return S
+
+
 def side_turns(mesh, g0, matching):
     """C (m, 24, 24): the element edge twists in each element's own gauge, C z (module
     docstring, "Cuts"), of the element's reference frames g0 (n, 4, 4) and the edges' quarter
@@ -259,16 +279,7 @@ def side_turns(mesh, g0, matching):
     [[0, 1, 0], [-1, 0, 0], [0, 0, 1]]
     """
     first = np.where(mesh.elem_edge_sign > 0, LOCAL_EDGES[:, 0], LOCAL_EDGES[:, 1])       # (m, 4)
-    S = quarter_turns(np.take_along_axis(corner_turns(g0, mesh.quads), first, 1))       # (m, 4, 3, 3)
-    ks = mesh.elem_edge_sign * matching[mesh.elem_edges]                                 # q_lb - q_la per side
-    open_ = np.flatnonzero((ks[:, 0] + ks[:, 3] - ks[:, 2] - ks[:, 1]) % 4)
-    if open_.size:
-        R = g0[mesh.quads[open_], :3, :3]
-        d1 = np.einsum("mji,mnj->mni", R[:, 0], R[:, :, :, 0])
-        phi = np.take_along_axis(np.arctan2(d1[..., 1], d1[..., 0]), first[open_], 1)
-        c, s = np.cos(phi), np.sin(phi)
-        S[open_, :, 0, 0] = S[open_, :, 1, 1] = c
-        S[open_, :, 0, 1], S[open_, :, 1, 0] = s, -s
+    S = np.take_along_axis(corner_frame_turns(mesh, g0, matching), first[..., None, None], 1)   # (m, 4, 3, 3)
     C = np.zeros((len(S), 8, 3, 8, 3))
     k = np.arange(8)
     C[:, k, :, k, :] = np.repeat(np.swapaxes(S, -1, -2), 2, axis=1).transpose(1, 0, 2, 3)
@@ -382,6 +393,7 @@ class DefaultElement(Element):
             self.Dbar_packed[sl] = Db[:, _IU[0], _IU[1]]
             self.Dz0[sl] = np.einsum("mij,mj->mi", _unpack(self.Dbar_packed[sl]), self.z0[sl])  # Dbar z0
         self.area = self.j0.sum(axis=1)                                 # reference area per element
+        check_frame_turns(mesh.X, mesh.quads, self.corner_frames(mesh.g0), self.j0, stacklevel=5)
         self._Dbar = None
         # the coarse-curvature warning needs the supports (which edges are free): the Problem
         # issues it when it solves (Problem.check_element)
@@ -450,6 +462,16 @@ class DefaultElement(Element):
         Te, TE = T[self.mesh.quads], T[self.mesh.edge_nodes]
         return (np.einsum("maij,mabjk,mblk->mabil", Te, Ke, Te, optimize=True),
                 np.einsum("eaij,eabjk,eblk->eabil", TE, KE, TE, optimize=True))
+
+    def corner_frames(self, g):
+        """The frames each element compares its sides in, (m, 4, 4, 4) (module docstring, "Cuts"),
+        or the element's frames g Q (n, 4, 4) without cuts."""
+        if self._C is None:
+            return self.frames(g)
+        S = np.zeros((len(self._C), 4, 4, 4))
+        S[:, :, :3, :3] = corner_frame_turns(self.mesh, self.frames(self.mesh.g0), self.matching)
+        S[:, :, 3, 3] = 1.0
+        return self.frames(g)[self.mesh.quads] @ S
 
     def _gauged(self, z):
         """Element edge twists z (m, 24) in the element's own gauge, C z (module docstring,

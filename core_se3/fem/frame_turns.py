@@ -1,0 +1,131 @@
+"""Frames that turn about the normal within an element: the check of the element's reference
+geometry (issue 30, doubly curved shells).
+
+Why.  The default element ties its strains along its edges in the nodal frames it builds on
+(``element_default``, "Frames": the user's frames turned by the least-turn gauge, which keeps the
+user's frames on doubly curved parts).  Its reference tangents are the translational parts of
+the edge twists log(g_a^-1 g_b): an edge whose end frames turn by t about the normal is joined
+by a helix whose tangent is turned by about t / 2 from the chord, so the element's area element
+j0 = |A_1 x A_2| falls with the turns of its edges against each other.  On a closed sphere read
+from a file (no field of d1 without such turns exists on it) the elements across the cross
+field's cuts (d1 turning by 90 deg and more) had j0 3 to 25 % of their quads' area, and a
+pressurised sphere displaced by -5.7 ... 7.2 times the exact p R^2 (1 - nu) / (2 E h) at
+16 x 16 per face -- solved, converged, silent.
+
+The check (at the element's build, :func:`check_frame_turns`).  Measured on the closed cubed
+sphere, on Gmsh's unstructured domes and on the generators' meshes: every element whose frames
+turn by at most 60 deg about its normal between two of its nodes has j0 within 0.94 ... 1.04 of
+its bilinear quad's area (the generators' hemisphere: turns up to 37 deg at 2 x 2, area 1.00 ...
+1.03); above 60 deg the area ratio is anything from 0.03 to 1.04.  So:
+
+* an element whose area from its frames is below MIN_AREA_RATIO = 0.5 of its quad's is an
+  ElementTooDistortedError (its stiffness is not that of the shell; the sphere's cut elements);
+* an element turning by more than MAX_NORMAL_TURN = 60 deg, or with an area ratio below
+  WARN_AREA_RATIO = 0.9, is an ElementWarning naming it (Gmsh's domes: 33 and 25 elements of
+  turns up to 87 deg, area ratios down to 0.74, whose pinched deflections came out within 5 %
+  and 0.7 % of the meridian frames' -- right where measured, not shown right everywhere).
+"""
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+
+from .. import lie
+from ..errors import ElementTooDistortedError, ElementWarning
+
+__all__ = ["frame_turns", "check_frame_turns", "MAX_NORMAL_TURN", "WARN_AREA_RATIO", "MIN_AREA_RATIO"]
+
+#: [deg] the largest turn about the normal between two nodes' frames of one element left silent
+MAX_NORMAL_TURN = 60.0
+#: the element's area from its frames over its bilinear quad's below which it warns
+WARN_AREA_RATIO = 0.9
+#: ... below which it is an error
+MIN_AREA_RATIO = 0.5
+
+_PAIRS = ((0, 1), (1, 2), (2, 3), (3, 0), (0, 2), (1, 3))
+
+
+def frame_turns(g, quads):
+    """The largest turn [deg] about the element's mean normal between the frames of two of its
+    nodes (m,): |log(R_a^T R_b) . n| over the node pairs of each quad.
+
+    Parameters
+    ----------
+    g : (n, 4, 4) array
+        The frames the element builds on; or (m, 4, 4, 4) those of each element's nodes (an
+        element across a cross field's cuts: ``element_default``, "Cuts").
+    quads : (m, 4) array of int
+        The elements' nodes.
+
+    Returns
+    -------
+    (m,) ndarray
+        Turns [deg].
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from core_se3 import mesh
+    >>> from core_se3.mesh.gauge import turned_about_normal
+    >>> m = mesh.rectangle(1.0, 1.0, 1, 1)
+    >>> frame_turns(turned_about_normal(m.g0, np.radians([0.0, 90.0, 0.0, 0.0])), m.quads).round(6).tolist()
+    [90.0]
+    """
+    g = np.asarray(g, float)
+    ge = g if g.ndim == 4 else g[quads]                                # (m, 4, 4, 4)
+    n = ge[:, :, :3, 2].sum(1)
+    n /= np.maximum(np.linalg.norm(n, axis=1), 1e-300)[:, None]
+    turn = np.zeros(len(ge))
+    for a, b in _PAIRS:                                                # six pairs, vectorised over elements
+        w = lie.log(lie.relative(ge[:, a], ge[:, b]))[:, 3:]           # in a's frame
+        na = np.einsum("mji,mj->mi", ge[:, a, :3, :3], n)
+        turn = np.maximum(turn, np.abs(np.einsum("mi,mi->m", w, na)))
+    return np.degrees(turn)
+
+
+def check_frame_turns(X, quads, g, j0, stacklevel=3):
+    """ElementTooDistortedError / ElementWarning for elements whose frames turn about their normal
+    so that the element's reference geometry is not its quad's (module docstring).
+
+    Parameters
+    ----------
+    X : (n, 3) array
+        Reference positions.
+    quads : (m, 4) array of int
+        The elements' nodes.
+    g : (n, 4, 4) or (m, 4, 4, 4) array
+        The frames the element builds on (``DefaultElement.frames(mesh.g0)``), or those of each
+        element's nodes (``frame_turns``).
+    j0 : (m, 4) array
+        The element's area element at its Gauss points (its area: the sum).
+    stacklevel : int
+        The warning's.
+
+    Example
+    -------
+    >>> from core_se3 import mesh, Material
+    >>> from core_se3.fem.element_default import DefaultElement
+    >>> m = mesh.hemisphere_quarter(10.0, 18.0, 2, 2)
+    >>> check_frame_turns(m.X, m.quads, m.g0, DefaultElement.reference_area(m, Material(1e3, 0.3, 0.1)))  # silent
+    """
+    P = np.asarray(X, float)[quads]
+    chord = 0.5 * np.linalg.norm(np.cross(P[:, 2] - P[:, 0], P[:, 3] - P[:, 1]), axis=1)
+    ratio = np.asarray(j0, float).sum(1) / np.maximum(chord, 1e-300)
+    turn = frame_turns(g, quads)
+    bad = np.flatnonzero((turn > MAX_NORMAL_TURN) | (ratio < WARN_AREA_RATIO))
+    if not len(bad):
+        return
+    k = int(bad[np.argmin(ratio[bad])])
+    what = (f"{len(bad)} element(s) (e.g. {bad[:5].tolist()}) whose nodes' frames turn about the normal by up to "
+            f"{turn[bad].max():.0f} deg (element {k}: {turn[k]:.0f} deg, nodes {np.asarray(quads)[k].tolist()}); the "
+            f"element ties its strains along its edges in these frames, and its area from them is {ratio[k]:.2f} of "
+            f"its quad's (frames turning by at most {MAX_NORMAL_TURN:g} deg give 0.94 ... 1.04)")
+    fix = ("give frames whose d1 turns little within every element (d1 along the shell: a dome's meridians or "
+           "parallels); a closed doubly curved surface (a sphere) has no such field of d1 (docs/ELEMENTS.md, "
+           "'A mesh file's default frames')")
+    if ratio[k] < MIN_AREA_RATIO:
+        raise ElementTooDistortedError(f"{what}: below {MIN_AREA_RATIO:g}, the element's stiffness is not the "
+                                       f"shell's there (a pressurised sphere came out -5.7 ... 7.2 times the exact "
+                                       f"displacement); {fix}")
+    warnings.warn(ElementWarning(f"{what}: the answer near them depends on the frames; {fix}"), stacklevel=stacklevel)
