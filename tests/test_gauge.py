@@ -4,6 +4,8 @@ the frames the user gives (which in-plane direction is d1) do not change the ans
 Each test fails on the element built on the user's frames as given (the gauge switched off), the
 code before it: see test_shell_course's negative control for the patch tests.
 """
+import warnings
+
 import numpy as np
 import pytest
 
@@ -243,14 +245,7 @@ def test_a_design_probe_target_uses_the_probes_own_frames():
     assert np.allclose(x, m.X[[8, 17]].mean(0), atol=1e-14)               # the chord's midpoint
 
 
-@pytest.mark.parametrize("kind", ["pair", "random"])
-def test_a_vortex_of_the_users_d1_is_named(kind):
-    """Frames whose d1 wind by a full turn round an element (each edge turning less than pi) have a
-    vortex no gauge removes: a specific error naming the elements and the fix.  Before, a vortex
-    pair on a strip was "degenerate reference geometry ... zero-area or collapsed element", and
-    random d1 (uniform in +-3 rad, seed 0) NaN strains and a ConvergenceError "non-finite
-    residual" at load factor 1.2e-4."""
-    from core_se3.errors import ElementTooDistortedError
+def _vortex_strip_tip(kind, parallel=False):
     from core_se3.mesh import Mesh
     m = mesh.rectangle(10.0, 1.0, 4 if kind == "pair" else 8, 1)
     if kind == "pair":      # +1 round element 1, -1 round element 2, every edge turning pi/2 at most
@@ -258,10 +253,65 @@ def test_a_vortex_of_the_users_d1_is_named(kind):
     else:
         turns = np.random.default_rng(0).uniform(-3.0, 3.0, m.n_nodes)
     g0 = m.g0.copy()
-    g0[:, :3, :3] = lie.exp_so3(np.c_[np.zeros((m.n_nodes, 2)), turns])
+    g0[:, :3, :3] = lie.exp_so3(np.c_[np.zeros((m.n_nodes, 2)), 0 * turns if parallel else turns])
     p = Problem(Mesh(g0, m.quads, edges=m.edges), Material(1.2e6, 0.0, 0.1))
     p.clamp("x0")
     p.add_edge_force("x1", (0.0, 0.0, 1.0))
-    with pytest.raises(ElementTooDistortedError, match=r"wind about the normal round element\(s\) \[" +
-                       ("1, 2" if kind == "pair" else "0, 5") + r"\].*d1 varying smoothly"):
-        p.solve(steps=2)
+    return p.solve(steps=2).final.g[m.node_set("x1"), :3, 3]
+
+
+@pytest.mark.parametrize("kind", ["pair", "random"])
+def test_a_vortex_of_the_users_d1_is_solved_or_said(kind):
+    """Frames whose d1 wind by a full turn round an element (each edge turning less than pi) have a
+    vortex no gauge removes.  Before, a vortex pair on a strip was "degenerate reference geometry
+    ... zero-area or collapsed element", and random d1 (uniform in +-3 rad, seed 0) NaN strains and
+    a ConvergenceError "non-finite residual" at load factor 1.2e-4; then a specific error (the
+    tangents degenerate).  With the quarter turns across cuts (fem.element_default, "Cuts") the
+    pair, whose turns are quarter turns, is the parallel frames' strip to round-off; random d1
+    leaves turns of up to 49 deg within flat elements (the tip's deflection 0.11 % off, its nodes 7.8e-3
+    apart in plane), which the element says (fem.frame_turns, FLAT_TURN)."""
+    from core_se3.errors import ElementWarning
+    ref = _vortex_strip_tip(kind, parallel=True)
+    if kind == "pair":
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", ElementWarning)
+            assert np.abs(_vortex_strip_tip(kind) - ref).max() < 1e-12 * np.abs(ref).max()
+        return
+    with pytest.warns(ElementWarning, match=r"6 element\(s\) .* by up to 49 deg.* on a flat element"):
+        tip = _vortex_strip_tip(kind)
+    assert 3e-4 < np.abs(tip - ref)[:, 2].max() / np.abs(ref[:, 2]).max() < 3e-3    # measured 1.1e-3
+
+
+@pytest.mark.parametrize("backend", ["numpy", "numba"])
+def test_quarter_turns_of_d1_on_a_doubly_curved_shell_change_nothing(backend):
+    # a 4-fold field of d1 (a mesh file's default frames) jumps by quarter turns across cuts; for
+    # an in-plane isotropic law which of its four directions a node takes is no choice of the
+    # shell.  The quarter hemisphere with every node's d1 turned by a random multiple of 90 deg:
+    # before, the elements across the turns took their edges as arcs of 90 deg (their area from
+    # their frames 3 ... 25 % of their quads'; now refused); the element takes the quarter turns
+    # (fem.element_default, "Cuts"): the displacements are the generator's frames' to 1.7e-11 /
+    # 1.3e-11 (NumPy / numba), and the resultants (lab; local where an element's first node kept its
+    # d1) to 5e-16 (1.66 off without the resultants' frames of the cuts)
+    from core_se3.fem.resultants import element_resultants
+
+    def solve(m):
+        p = Problem(m, Material(6.825e7, 0.3, 0.04), backend=backend)
+        X = m.X
+        p.fix(list(np.flatnonzero(X[:, 2] > X[:, 2].max() - 1e-9)), range(6))
+        p.add_nodal_load([int(np.argmax(X[:, 0]))], force=(1.0, 0.0, 0.0))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return p, p.solve_linear().displacements()
+
+    m, turned = mesh.hemisphere_quarter(10.0, 18.0, 6, 6), mesh.hemisphere_quarter(10.0, 18.0, 6, 6)
+    alpha = np.random.default_rng(3).integers(0, 4, m.n_nodes) * np.pi / 2
+    turned.g0 = turned_about_normal(turned.g0, alpha)
+    (p1, u1), (p2, u2) = solve(m), solve(turned)
+    assert np.abs(u1 - u2).max() < 1e-9 * np.abs(u1).max()
+    eta = np.random.default_rng(1).standard_normal((m.n_nodes, 6)) * 1e-3
+    T = np.einsum("nji,njk->nik", turned.g0[:, :3, :3], m.g0[:, :3, :3])      # the same lab increments
+    eta2 = np.concatenate([np.einsum("nij,nj->ni", T, eta[:, :3]), np.einsum("nij,nj->ni", T, eta[:, 3:])], 1)
+    a, b = element_resultants(p1.element, m.g0, eta), element_resultants(p2.element, turned.g0, eta2)
+    kept = alpha[m.quads[:, 0]] == 0
+    for k in ("N1", "N2", "M1", "M2", "N1_local", "M2_local"):
+        assert np.abs(a[k][kept] - b[k][kept]).max() < 1e-12 * np.abs(a[k]).max(), k

@@ -55,19 +55,24 @@ ROUND_OFF = 1e-12     # size of Ek (strain per radian) below which it is round-o
 def reference_G(mesh, psi0, elements=slice(None)):
     """G0 (k, 24, 24): dz/deta of the elements ``elements`` (a slice) at the reference edge
     twists psi0 (E, 6) (the element's G = dz/deta, ``element_default``: rows the 24 edge-twist
-    components, columns the four nodes' 6 dofs)."""
+    components, columns the four nodes' 6 dofs); psi0 (k, 4, 6) per element side instead (each
+    oriented as its mesh edge): those of the element's own gauge across a cross field's cuts
+    (``element_default``, "Cuts")."""
     ids = mesh.elem_edges[elements]
-    Lp, Lm = lie.dexp_inv(psi0[np.unique(ids)], both=True)
-    inv = np.searchsorted(np.unique(ids), ids)
     pos = (mesh.elem_edge_sign[elements] > 0)[..., None, None]
-    Lp, Lm, ids = Lp, Lm, inv
-    Lloc_p = np.where(pos, Lp[ids], Lm[ids])
-    Lloc_m = np.where(pos, Lm[ids], Lp[ids])
-    G = np.zeros((len(ids), 4, 6, 4, 6))
+    if psi0.ndim == 3:
+        Lp, Lm = (L.reshape(ids.shape + (6, 6)) for L in lie.dexp_inv(psi0.reshape(-1, 6), both=True))
+    else:
+        Lp, Lm = lie.dexp_inv(psi0[np.unique(ids)], both=True)
+        inv = np.searchsorted(np.unique(ids), ids)
+        Lp, Lm = Lp[inv], Lm[inv]
+    Lloc_p = np.where(pos, Lp, Lm)
+    Lloc_m = np.where(pos, Lm, Lp)
+    G = np.zeros((len(pos), 4, 6, 4, 6))
     for k, (la, lb) in enumerate(LOCAL_EDGES):
         G[:, k, :, la, :] = -0.5 * Lloc_m[:, k]
         G[:, k, :, lb, :] = 0.5 * Lloc_p[:, k]
-    return G.reshape(len(ids), 24, 24)
+    return G.reshape(len(pos), 24, 24)
 
 
 def drilling_correction(P, z0, G0):

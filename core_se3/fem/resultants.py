@@ -76,7 +76,12 @@ def element_resultants(element, g, increments=None):
     R = mean_rotation(frames[mesh.quads, :3, :3])
     C = None
     to_element = getattr(element, "frames", None)
-    if to_element is not None and to_element(frames) is not frames:
+    if getattr(element, "matching", None) is not None:
+        # across a cross field's cuts the nodes' d1 of an element differ by quarter turns: the
+        # strains and the resultants are in the frames it compares its sides in (those of its
+        # first node's d1 family, ``element_default``, "Cuts")
+        R = mean_rotation(element.corner_frames(frames)[..., :3, :3])
+    elif to_element is not None and to_element(frames) is not frames:
         # the strains are in the element's frames (turned about the normal, ``mesh.gauge``):
         # C = Re^T R takes the user's centre frame R into the element's Re
         Re = mean_rotation(to_element(frames)[mesh.quads, :3, :3])

@@ -49,7 +49,7 @@ def element_residual(g, mesh, ed, topo, w):
         energy += a
         fs += b
     for ch in prange((nE + CHUNK - 1) // CHUNK):
-        edges_residual(topo, w, ch * CHUNK, min(nE, (ch + 1) * CHUNK))
+        edges_residual(topo, mesh.Rk, w, ch * CHUNK, min(nE, (ch + 1) * CHUNK))
     for ch in prange((n + CHUNK - 1) // CHUNK):
         nodes_pass(topo, mesh.Rq, w, None, None, None, None, ch * CHUNK, min(n, (ch + 1) * CHUNK))
     return energy, sqrt(fs), 0, -1
@@ -64,7 +64,7 @@ def element_residual_serial(g, mesh, ed, topo, w):
     if flag:
         return 0.0, 0.0, flag, bad
     energy, fs = elements_force(mesh, ed, w, 0, m)
-    edges_residual(topo, w, 0, nE)
+    edges_residual(topo, mesh.Rk, w, 0, nE)
     nodes_pass(topo, mesh.Rq, w, None, None, None, None, 0, n)
     return energy, sqrt(fs), 0, -1
 
@@ -196,6 +196,17 @@ def element_tangent_gather(g, mesh, ed, topo, cmap, w, data, mixed, store):
 # ------------------------------------------------------------------------------------------
 # Python wrapper of the element kernels
 # ------------------------------------------------------------------------------------------
+def _quarter_turns(k):
+    """Rz(k pi/2) (E, 3, 3) of the quarter turns k (E,), exact (``mesh.gauge.quarter_turns``)."""
+    k = np.asarray(k, dtype=np.int64) % 4
+    c, s = np.array([1.0, 0.0, -1.0, 0.0])[k], np.array([0.0, 1.0, 0.0, -1.0])[k]
+    R = np.zeros((len(k), 3, 3))
+    R[:, 0, 0] = R[:, 1, 1] = c
+    R[:, 1, 0], R[:, 0, 1] = s, -s
+    R[:, 2, 2] = 1.0
+    return R
+
+
 SERIAL_BELOW = 1500   # elements: below this the serial driver is faster (threading overhead)
 
 
@@ -212,6 +223,9 @@ class ElementKernels:
         The constant turns Q of the element's frames g Q about the nodal normals
         (``fem.element_default``, "Frames"): the drivers take g Q and return forces and blocks
         in the user's frames; None (the default) where there are none.
+    matching : (E,) int array or None
+        The edges' quarter turns across a cross field's cuts (``fem.element_default``, "Cuts":
+        psi = log(g_a^-1 g_b Rz(k pi/2))); None (the default) where there are none.
     mode : 'auto' (serial below SERIAL_BELOW elements, else 'gather'), 'serial', 'colour', 'gather'
     error : exception class raised when an edge turns by more than MAX_EDGE_ANGLE
 
@@ -227,8 +241,9 @@ class ElementKernels:
     """
 
     def __init__(self, quads, edge_nodes, elem_edges, elem_edge_sign, Dbar, z0, Dz0, pattern,
-                 mode="auto", error=RuntimeError, gauge=None):
+                 mode="auto", error=RuntimeError, gauge=None, matching=None):
         c = np.ascontiguousarray
+        self.Rk = np.empty((0, 3, 3)) if matching is None else _quarter_turns(matching)
         self.gauge = None if gauge is None else c(gauge, dtype=float)
         self.Rq = np.empty((0, 3, 3)) if gauge is None else c(self.gauge[:, :3, :3])
         self.quads = c(quads, dtype=np.int64)
@@ -274,7 +289,8 @@ class ElementKernels:
         """
         mesh = element.mesh
         self = cls(mesh.quads, mesh.edge_nodes, mesh.elem_edges, mesh.elem_edge_sign,
-                   element.Dbar_packed, element.z0, element.Dz0, pattern, gauge=getattr(element, "gauge", None), **kw)
+                   element.Dbar_packed, element.z0, element.Dz0, pattern, gauge=getattr(element, "gauge", None),
+                   matching=getattr(element, "matching", None), **kw)
         self.residual(np.ascontiguousarray(mesh.g0, dtype=float))
         z0 = (self.sign[..., None] * (0.5 * self.psi)[self.elem_edges]).reshape(-1, 24)
         self.z0 = np.ascontiguousarray(z0)
@@ -297,7 +313,7 @@ class ElementKernels:
     def bundles(self):
         """(ElementMesh, ElementData, Workspace): the arrays the drivers take, from the
         attributes of the moment (``element_passes``' bundles; views, no copies)."""
-        return (ElementMesh(self.quads, self.edge_nodes, self.elem_edges, self.sign, self.Rq),
+        return (ElementMesh(self.quads, self.edge_nodes, self.elem_edges, self.sign, self.Rq, self.Rk),
                 ElementData(self.Dbar, self.Dsplit, self.z0, self.Dz0),
                 Workspace(self.psi, self.coef, self.ang, self.fe, self.rE, self.r))
 
@@ -360,5 +376,5 @@ class ElementKernels:
                                                        np.einsum("nji,nj->ni", R, eta[:, 3:])], 1))
         out = np.empty((len(self.quads), 24))
         fn = element_linear_stress_serial if self.mode == "serial" else element_linear_stress
-        fn(self.quads, self.elem_edges, self.sign, self.Dbar, self.z0, self.psi, self.coef, eta, out)
+        fn(self.quads, self.elem_edges, self.sign, self.Rk, self.Dbar, self.z0, self.psi, self.coef, eta, out)
         return out

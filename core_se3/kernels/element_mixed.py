@@ -15,12 +15,14 @@ __all__ = ["element_linear_stress", "element_linear_stress_serial", "signed_edge
 
 
 @njit(cache=True, parallel=True)
-def element_linear_stress(quads, elem_edges, elem_edge_sign, Dbar, z0, psi, coef, eta, out):
+def element_linear_stress(quads, elem_edges, elem_edge_sign, Rk, Dbar, z0, psi, coef, eta, out):
     """Linearised element stresses, parallel over elements.
 
     Parameters
     ----------
     quads (m,4), elem_edges (m,4), elem_edge_sign (m,4) : mesh topology
+    Rk (E,3,3) : the edges' quarter turns across a cross field's cuts, or empty (0,3,3)
+        (``element_ops.match_G``)
     Dbar (m,300) packed (``element_ops.unpack_sym``), z0 (m,24) : the element's constant data
     psi (E,6), coef (E,3) : edge twists and their coefficients at the state (the workspace of
         the last ``element_residual``/``element_tangent`` call)
@@ -34,17 +36,17 @@ def element_linear_stress(quads, elem_edges, elem_edge_sign, Dbar, z0, psi, coef
         w = np.empty(24)
         D = np.empty((24, 24))
         for el in range(ch * CHUNK, min(m, (ch + 1) * CHUNK)):
-            element_stress_lin(el, quads, elem_edges, elem_edge_sign, Dbar, z0, psi, coef, eta, G, w, D, out)
+            element_stress_lin(el, quads, elem_edges, elem_edge_sign, Rk, Dbar, z0, psi, coef, eta, G, w, D, out)
 
 
 @njit(cache=True)
-def element_linear_stress_serial(quads, elem_edges, elem_edge_sign, Dbar, z0, psi, coef, eta, out):
+def element_linear_stress_serial(quads, elem_edges, elem_edge_sign, Rk, Dbar, z0, psi, coef, eta, out):
     """``element_linear_stress`` in one thread (same parameters)."""
     G = np.empty((4, 2, 6, 6))
     w = np.empty(24)
     D = np.empty((24, 24))
     for el in range(quads.shape[0]):
-        element_stress_lin(el, quads, elem_edges, elem_edge_sign, Dbar, z0, psi, coef, eta, G, w, D, out)
+        element_stress_lin(el, quads, elem_edges, elem_edge_sign, Rk, Dbar, z0, psi, coef, eta, G, w, D, out)
 
 
 def signed_edge_stress(stress, sign, out):

@@ -75,9 +75,19 @@ _NODE_INC = np.array([[[0, 0], [2, 0]], [[0, 1], [3, 0]], [[1, 1], [3, 1]], [[1,
 
 
 @njit(cache=True, inline="always")
-def edge_pass1(g, En, e, R, psi, coef):
-    """psi_e = log(g_a^-1 g_b), coef_e = (c, dc, ddc)(|w|^2); returns the turn angle |w|."""
-    log_se3(g[En[e, 0]], g[En[e, 1]], R, psi[e])
+def edge_pass1(g, En, e, R, psi, coef, Rk, gb):
+    """psi_e = log(g_a^-1 g_b), coef_e = (c, dc, ddc)(|w|^2); returns the turn angle |w|.  Rk
+    (E, 3, 3) non-empty: log(g_a^-1 g_b Rk[e]) across a cross field's cuts (``match_G``; gb
+    (4, 4) scratch)."""
+    if Rk.shape[0] == 0:
+        log_se3(g[En[e, 0]], g[En[e, 1]], R, psi[e])
+    else:
+        b = g[En[e, 1]]
+        for i in range(4):
+            for j in range(3):
+                gb[i, j] = b[i, 0] * Rk[e, 0, j] + b[i, 1] * Rk[e, 1, j] + b[i, 2] * Rk[e, 2, j]
+            gb[i, 3] = b[i, 3]
+        log_se3(g[En[e, 0]], gb, R, psi[e])
     w0, w1, w2 = psi[e, 3], psi[e, 4], psi[e, 5]
     s = w0 * w0 + w1 * w1 + w2 * w2
     coef[e, 0] = coef_c(s)
@@ -256,13 +266,15 @@ def element_G(el, elem_edges, sgn, psi, coef, G):
 
 
 @njit(cache=True)
-def element_stress_lin(el, quads, elem_edges, sgn, Dbar, z0, psi, coef, eta, G, w, D, out):
+def element_stress_lin(el, quads, elem_edges, sgn, Rk, Dbar, z0, psi, coef, eta, G, w, D, out):
     """out[el] = Dbar (z - z0 + G eta) (24,): the element's stresses linearised in the nodal
     increments eta (n, 6); the z increment of local edge k (nodes la, lb of _LOCAL_EDGES) is
     G[k,0] eta_la + G[k,1] eta_lb (``element_G``: = sgn_k/2 (L(psi) eta_b - L(-psi) eta_a) of
-    the mesh edge a -> b).  Dbar packed (m, 300); workspace G (4,2,6,6), w (24,), D (24,24)."""
+    the mesh edge a -> b; across a cut: ``match_G``).  Dbar packed (m, 300); workspace G (4,2,6,6),
+    w (24,), D (24,24)."""
     unpack_sym(Dbar, el, D)
     element_G(el, elem_edges, sgn, psi, coef, G)
+    match_G(G, el, elem_edges, sgn, Rk)
     for k in range(4):
         e = elem_edges[el, k]
         sk = 0.5 * sgn[el, k]
@@ -437,6 +449,57 @@ def rotate_blocks(K, nodes, Rq, S):
             for i in range(3):                     # K_IJ = A S
                 for j in range(3):
                     K[i0 + i, j0 + j] = A[i, 0] * S[0, j] + A[i, 1] * S[1, j] + A[i, 2] * S[2, j]
+
+
+@njit(cache=True, inline="always")
+def _times_turn_T(M, r0, r1, c0, R):
+    """M[r0:r1, c0:c0+3] <- M[r0:r1, c0:c0+3] R^T (in place)."""
+    for i in range(r0, r1):
+        a0, a1, a2 = M[i, c0], M[i, c0 + 1], M[i, c0 + 2]
+        for j in range(3):
+            M[i, c0 + j] = a0 * R[j, 0] + a1 * R[j, 1] + a2 * R[j, 2]
+
+
+@njit(cache=True, inline="always")
+def _turn_times(M, r0, c0, c1, R):
+    """M[r0:r0+3, c0:c1] <- R M[r0:r0+3, c0:c1] (in place)."""
+    for j in range(c0, c1):
+        a0, a1, a2 = M[r0, j], M[r0 + 1, j], M[r0 + 2, j]
+        for i in range(3):
+            M[r0 + i, j] = R[i, 0] * a0 + R[i, 1] * a1 + R[i, 2] * a2
+
+
+@njit(cache=True)
+def match_G(G, el, elem_edges, sgn, Rk):
+    """G[k, end] (6, 6) <- G[k, end] blockdiag(R^T, R^T) at the end of each side k of element el
+    that is its mesh edge's node b, R = Rk[edge]: the edge twist log(g_a^-1 g_b R) across a cross
+    field's cut (``fem.element_default``, "Cuts"); Rk empty (0, 3, 3): nothing done."""
+    if Rk.shape[0] == 0:
+        return
+    for k in range(4):
+        e = elem_edges[el, k]
+        M = G[k, 1] if sgn[el, k] > 0 else G[k, 0]
+        _times_turn_T(M, 0, 6, 0, Rk[e])
+        _times_turn_T(M, 0, 6, 3, Rk[e])
+
+
+@njit(cache=True)
+def match_edge(e, Rk, rE, H):
+    """Node b's force rE[e, 1] <- blockdiag(R, R) rE[e, 1] and, with H (12, 12), b's rows and
+    columns of the edge block turned likewise (R = Rk[e]: ``match_G``); Rk empty: nothing done."""
+    if Rk.shape[0] == 0:
+        return
+    R = Rk[e]
+    r = rE[e, 1]
+    for o in range(0, 6, 3):
+        a0, a1, a2 = r[o], r[o + 1], r[o + 2]
+        for i in range(3):
+            r[o + i] = R[i, 0] * a0 + R[i, 1] * a1 + R[i, 2] * a2
+    if H is not None:
+        _turn_times(H, 6, 0, 12, R)
+        _turn_times(H, 9, 0, 12, R)
+        _times_turn_T(H, 0, 12, 6, R)
+        _times_turn_T(H, 0, 12, 9, R)
 
 
 @njit(cache=True)

@@ -32,15 +32,18 @@ from numba import njit
 from .csr import scatter
 from .element_dbar import element_D
 from .element_ops import (edge_F, edge_KE, edge_pass1, edge_residual, element_force, element_G,
-                          element_Ke, node_Kn, node_residual, rotate_blocks, rotate_G, rotate_wrench)
+                          element_Ke, match_edge, match_G, node_Kn, node_residual, rotate_blocks, rotate_G,
+                          rotate_wrench)
 
 __all__ = ["ElementMesh", "ElementData", "Workspace", "edges_log", "elements_force", "edges_residual", "nodes_pass", "elements_tangent",
            "edges_tangent", "elements_tangent_store", "edges_tangent_store"]
 
-ElementMesh = namedtuple("ElementMesh", "quads edge_nodes elem_edges sgn Rq")
+ElementMesh = namedtuple("ElementMesh", "quads edge_nodes elem_edges sgn Rq Rk")
 ElementMesh.__doc__ = """The default element's topology (int64): quads (m, 4), edge_nodes (E, 2), elem_edges
 (m, 4), sgn (m, 4) the orientation of each element side's edge (+1/-1); Rq (n, 3, 3) the turns of
-the element's frames about the normals (g Q, ``mesh.gauge``), or empty (0, 3, 3) without them."""
+the element's frames about the normals (g Q, ``mesh.gauge``), or empty (0, 3, 3) without them; Rk
+(E, 3, 3) the quarter turns of the edges across a cross field's cuts (``fem.element_default``,
+"Cuts": log(g_a^-1 g_b Rk)), or empty (0, 3, 3) without cuts."""
 ElementData = namedtuple("ElementData", "Dbar Dsplit z0 Dz0")
 ElementData.__doc__ = """The elements' constant data: Dbar (m, 300) packed, Dsplit its split form (m, 24, 12)
 or (m, 24, 16), or empty (0, 24, 12) for the general path; z0 (m, 24) the reference edge
@@ -59,17 +62,18 @@ def _item(order, i):
 @njit(cache=True)
 def edges_log(g, mesh, w, lo, hi):
     """Edges lo..hi: psi = log(g_a^-1 g_b), its coefficients, the turn angle into w.ang."""
-    edge_nodes, psi, coef, ang = mesh.edge_nodes, w.psi, w.coef, w.ang
+    edge_nodes, Rk, psi, coef, ang = mesh.edge_nodes, mesh.Rk, w.psi, w.coef, w.ang
     R = np.empty((3, 3))
+    gb = np.empty((4, 4))
     for e in range(lo, hi):
-        ang[e] = edge_pass1(g, edge_nodes, e, R, psi, coef)
+        ang[e] = edge_pass1(g, edge_nodes, e, R, psi, coef, Rk, gb)
 
 
 @njit(cache=True)
 def elements_force(mesh, ed, w, lo, hi):
     """Elements lo..hi: f = Dbar (z - z0) into w.fe (signed per edge; Dbar packed (m, 300),
     Dsplit its split form or empty); returns (energy, |f+Dz0|^2+|f|^2)."""
-    _, _, elem_edges, sgn, _ = mesh
+    _, _, elem_edges, sgn, _, _ = mesh
     Dbar, Dsplit, z0, Dz0 = ed
     psi, fe = w.psi, w.fe
     z = np.empty(24)
@@ -86,13 +90,15 @@ def elements_force(mesh, ed, w, lo, hi):
 
 
 @njit(cache=True)
-def edges_residual(topo, w, lo, hi):
-    """Edges lo..hi: F = sum of the sides' fe, nodal parts r_a, r_b into w.rE."""
+def edges_residual(topo, Rk, w, lo, hi):
+    """Edges lo..hi: F = sum of the sides' fe, nodal parts r_a, r_b into w.rE (Rk: across the
+    cuts, ``match_edge``)."""
     edge_slots, psi, coef, fe, rE = topo.edge_slots, w.psi, w.coef, w.fe, w.rE
     F = np.empty(6)
     for e in range(lo, hi):
         edge_F(e, edge_slots, fe, F)
         edge_residual(e, psi, coef, F, rE)
+        match_edge(e, Rk, rE, None)
 
 
 @njit(cache=True)
@@ -119,14 +125,15 @@ def nodes_pass(topo, Rq, w, rEg, rg, data, cmap, lo, hi):
 # reference-count update per read (about +30 % on the element pass, measured); the passes
 # unpack their bundles once, before their loops
 @njit(cache=True)
-def _element_blocks(el, quads, elem_edges, sgn, Rq, Dbar, Dsplit, z0, Dz0, psi, coef, fe, z, f, G, TT, TTt, KeT,
-                    D):
+def _element_blocks(el, quads, elem_edges, sgn, Rq, Rk, Dbar, Dsplit, z0, Dz0, psi, coef, fe, z, f, G, TT, TTt,
+                    KeT, D):
     """Forces and KeT = (G^T Dbar G)^T of element el (Dbar: ``element_D``, the split form or
-    unpacked into D), in the user's frames (Rq: ``rotate_G``); returns (energy, force scale
-    part)."""
+    unpacked into D), across the cuts (Rk: ``match_G``), in the user's frames (Rq:
+    ``rotate_G``); returns (energy, force scale part)."""
     Dr = element_D(Dbar, Dsplit, el, D)
     a, b = element_force(el, elem_edges, sgn, Dr, z0, Dz0, psi, z, f, fe)
     element_G(el, elem_edges, sgn, psi, coef, G)
+    match_G(G, el, elem_edges, sgn, Rk)
     if Rq.shape[0]:                  # the gauge's frames only (no view made without one)
         rotate_G(G, quads[el], Rq)
     element_Ke(Dr, G, TT, TTt, KeT)
@@ -143,7 +150,7 @@ def _element_scratch():
 def elements_tangent(order, mesh, ed, w, cmap, data, lo, hi):
     """Elements lo..hi (through order): forces and material blocks, scattered into data.
     Ke = KeT^T = KeT up to round-off (Dbar is symmetric): KeT is read row-wise (contiguous)."""
-    quads, _, elem_edges, sgn, Rq = mesh
+    quads, _, elem_edges, sgn, Rq, Rk = mesh
     Dbar, Dsplit, z0, Dz0 = ed
     psi, coef, fe = w.psi, w.coef, w.fe
     z, f, G, TT, TTt, KeT, D = _element_scratch()
@@ -151,7 +158,7 @@ def elements_tangent(order, mesh, ed, w, cmap, data, lo, hi):
     fs = 0.0
     for i in range(lo, hi):
         el = _item(order, i)
-        a, b = _element_blocks(el, quads, elem_edges, sgn, Rq, Dbar, Dsplit, z0, Dz0, psi, coef, fe, z, f, G, TT,
+        a, b = _element_blocks(el, quads, elem_edges, sgn, Rq, Rk, Dbar, Dsplit, z0, Dz0, psi, coef, fe, z, f, G, TT,
                                TTt, KeT, D)
         en += a
         fs += b
@@ -165,14 +172,14 @@ def elements_tangent(order, mesh, ed, w, cmap, data, lo, hi):
 @njit(cache=True)
 def elements_tangent_store(mesh, ed, w, Keb, lo, hi):
     """Elements lo..hi: forces, and the material blocks stored in Keb (m,4,4,6,6)."""
-    quads, _, elem_edges, sgn, Rq = mesh
+    quads, _, elem_edges, sgn, Rq, Rk = mesh
     Dbar, Dsplit, z0, Dz0 = ed
     psi, coef, fe = w.psi, w.coef, w.fe
     z, f, G, TT, TTt, KeT, D = _element_scratch()
     en = 0.0
     fs = 0.0
     for el in range(lo, hi):
-        a, b = _element_blocks(el, quads, elem_edges, sgn, Rq, Dbar, Dsplit, z0, Dz0, psi, coef, fe, z, f, G, TT,
+        a, b = _element_blocks(el, quads, elem_edges, sgn, Rq, Rk, Dbar, Dsplit, z0, Dz0, psi, coef, fe, z, f, G, TT,
                                TTt, KeT, D)
         en += a
         fs += b
@@ -187,18 +194,21 @@ def elements_tangent_store(mesh, ed, w, Keb, lo, hi):
 # mixed = "fe_geo is not None": pruned at compile time (one version per argument types); a
 # run-time flag cost ~10 % in the serial driver (measured)
 @njit(cache=True)
-def _edge_blocks(e, edge_nodes, edge_slots, Rq, psi, coef, fe, rE, fe_geo, rEg, F, Fg, Lp, Lm, Ad, Jm, Y, H, p, S3):
-    """F_e, the nodal residual parts and the geometric block H of edge e (in the user's frames:
-    Rq, ``rotate_blocks``); mixed (fe_geo given): H from F_geo = edge sum of fe_geo (into Fg),
-    whose nodal parts go to rEg[e]."""
+def _edge_blocks(e, edge_nodes, edge_slots, Rq, Rk, psi, coef, fe, rE, fe_geo, rEg, F, Fg, Lp, Lm, Ad, Jm, Y, H, p,
+                 S3):
+    """F_e, the nodal residual parts and the geometric block H of edge e (across the cuts: Rk,
+    ``match_edge``; in the user's frames: Rq, ``rotate_blocks``); mixed (fe_geo given): H from
+    F_geo = edge sum of fe_geo (into Fg), whose nodal parts go to rEg[e]."""
     edge_F(e, edge_slots, fe, F)
     edge_residual(e, psi, coef, F, rE)
     if fe_geo is not None:
         edge_F(e, edge_slots, fe_geo, Fg)
         edge_residual(e, psi, coef, Fg, rEg)
         edge_KE(e, psi, coef, Fg, Lp, Lm, Ad, Jm, Y, H, p)
+        match_edge(e, Rk, rEg, None)
     else:
         edge_KE(e, psi, coef, F, Lp, Lm, Ad, Jm, Y, H, p)
+    match_edge(e, Rk, rE, H)
     if Rq.shape[0]:
         rotate_blocks(H, edge_nodes[e], Rq, S3)
 
@@ -214,12 +224,12 @@ def _edge_scratch(mixed):
 @njit(cache=True)
 def edges_tangent(order, mesh, topo, w, fe_geo, rEg, cmap, data, lo, hi):
     """Edges lo..hi (through order): residual parts and geometric blocks, scattered into data."""
-    edge_nodes, edge_slots, Rq = mesh.edge_nodes, topo.edge_slots, mesh.Rq
+    edge_nodes, edge_slots, Rq, Rk = mesh.edge_nodes, topo.edge_slots, mesh.Rq, mesh.Rk
     psi, coef, fe, rE = w.psi, w.coef, w.fe, w.rE
     F, Fg, Lp, Lm, Ad, Jm, Y, H, p, S3 = _edge_scratch(fe_geo is not None)
     for i in range(lo, hi):
         e = _item(order, i)
-        _edge_blocks(e, edge_nodes, edge_slots, Rq, psi, coef, fe, rE, fe_geo, rEg, F, Fg, Lp, Lm, Ad, Jm, Y, H, p,
+        _edge_blocks(e, edge_nodes, edge_slots, Rq, Rk, psi, coef, fe, rE, fe_geo, rEg, F, Fg, Lp, Lm, Ad, Jm, Y, H, p,
                      S3)
         for I in range(2):
             for J in range(2):
@@ -230,11 +240,11 @@ def edges_tangent(order, mesh, topo, w, fe_geo, rEg, cmap, data, lo, hi):
 @njit(cache=True)
 def edges_tangent_store(mesh, topo, w, fe_geo, rEg, KEb, lo, hi):
     """Edges lo..hi: residual parts, and the geometric blocks stored in KEb (E,2,2,6,6)."""
-    edge_nodes, edge_slots, Rq = mesh.edge_nodes, topo.edge_slots, mesh.Rq
+    edge_nodes, edge_slots, Rq, Rk = mesh.edge_nodes, topo.edge_slots, mesh.Rq, mesh.Rk
     psi, coef, fe, rE = w.psi, w.coef, w.fe, w.rE
     F, Fg, Lp, Lm, Ad, Jm, Y, H, p, S3 = _edge_scratch(fe_geo is not None)
     for e in range(lo, hi):
-        _edge_blocks(e, edge_nodes, edge_slots, Rq, psi, coef, fe, rE, fe_geo, rEg, F, Fg, Lp, Lm, Ad, Jm, Y, H, p,
+        _edge_blocks(e, edge_nodes, edge_slots, Rq, Rk, psi, coef, fe, rE, fe_geo, rEg, F, Fg, Lp, Lm, Ad, Jm, Y, H, p,
                      S3)
         for I in range(2):
             for J in range(2):

@@ -27,9 +27,16 @@ that neighbours agree where the field is smooth (around an irregular node, whose
 a quarter turn around it, some edge must see the jump); each part starts at its first node with
 the direction closest to the chord to its first neighbour, so that the frames turn with the mesh.
 Where two such quarter-turn cuts meet, neighbours can end half a turn apart (a closed cubed
-sphere, 16 x 16 per face: 180 deg, which the element refuses: ElementTooDistortedError); the
-nodes of such an edge take the quarter turn, or else the angle, that makes the cube of their
-edges' turns least (``HALF_TURN``: at most 134.8 deg left on 16 x 16 and 24 x 24).
+sphere, 16 x 16 per face: 180 deg): the element takes every edge between its end frames turned
+by the quarter turn that leaves them least turned about the normal (``mesh.gauge.edge_matching``,
+``fem.element_default``, "Cuts"), so any quarter turns are kept as they are.  (The nodes of
+such edges once took the quarter turn, or else the angle, that made the cube of their edges'
+turns least: at most 134.8 deg left, but an arbitrary angle on some nodes, whose elements' area
+came out 0.46 of their quads' on the 16 x 16 sphere.)  An irregular interior node at an edge
+turning by more than ``SETTLE_TURN`` about the normal, modulo quarter turns (a singular node of
+the field: the cube's valence-3 corners, whose three edges the field cannot follow), takes the
+angle that makes the cube of its edges' turns least, modulo quarter turns (the elements round
+them on the closed cubed sphere: area within 2.6 % of their quads').
 """
 from __future__ import annotations
 
@@ -37,7 +44,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import breadth_first_order, connected_components, minimum_spanning_tree
 
-__all__ = ["edge_aligned_d1", "CROSS_PASSES", "CROSS_SMOOTHING", "HALF_TURN"]
+__all__ = ["edge_aligned_d1", "CROSS_PASSES", "CROSS_SMOOTHING", "SETTLE_TURN"]
 
 #: smoothing passes of the cross field (each a Jacobi step; the weight below makes 30 converge to
 #: about 1e-3)
@@ -117,43 +124,6 @@ def _quarter_turns(edges, d1, d2, root_choice):
     return total % 4
 
 
-#: a neighbour's d1 turned by more than this [deg] (a half turn, which a 4-fold field can leave where
-#: two of its quarter-turn cuts meet, on a closed cubed sphere; the element cannot take 174.6 deg)
-#: is undone node by node
-HALF_TURN = 135.0
-
-
-def _cubed_turns(cand, D_nb):
-    """Sum over the neighbours of the cube of the turn [rad] between each candidate d1 (c, 3) and
-    the neighbours' d1 (k, 3): (c,)."""
-    return (np.arccos(np.clip(cand @ D_nb.T, -1.0, 1.0)) ** 3).sum(axis=1)
-
-
-def _without_half_turns(edges, d1, d2, k):
-    """d1 (n, 3) of the quarter turns k, with the nodes at an edge whose d1 turn by more than
-    HALF_TURN moved to the quarter turn that makes the cube of their edges' turns least, and a
-    node where every quarter turn leaves one (its neighbours' d1 point four ways) to the angle
-    that does (a few nodes: a loop over them)."""
-    n = len(d1)
-    adj = sp.csr_matrix((np.ones(2 * len(edges)), (np.r_[edges[:, 0], edges[:, 1]], np.r_[edges[:, 1], edges[:, 0]])),
-                        shape=(n, n))
-    D = np.cos(k * np.pi / 2)[:, None] * d1 + np.sin(k * np.pi / 2)[:, None] * d2
-    for turns in (np.arange(4) * np.pi / 2, np.radians(np.arange(360.0))):
-        for _ in range(20):
-            bad = np.unique(edges[np.einsum("ei,ei->e", D[edges[:, 0]], D[edges[:, 1]]) < np.cos(np.radians(HALF_TURN))])
-            moved = False
-            for v in bad:
-                nb = adj.indices[adj.indptr[v]:adj.indptr[v + 1]]
-                cand = np.cos(turns)[:, None] * d1[v] + np.sin(turns)[:, None] * d2[v]
-                cost, now = _cubed_turns(cand, D[nb]), _cubed_turns(D[v][None], D[nb])[0]
-                j = int(np.argmin(cost))
-                if cost[j] < now - 1e-12:
-                    D[v], moved = cand[j], True
-            if not moved:
-                break
-    return D
-
-
 def edge_aligned_d1(X, quads, d3, edges=None):
     """Unit d1 (n, 3) in each node's tangent plane along the mesh's own edges (module docstring).
 
@@ -199,4 +169,51 @@ def edge_aligned_d1(X, quads, d3, edges=None):
     # at a part's first node: the quarter turn closest to the chord to its neighbour (r)
     k = _quarter_turns(edges, d1, d2, np.argmax(np.stack([np.cos(phi), -np.sin(phi), -np.cos(phi), np.sin(phi)], 1),
                                                 axis=1))
-    return _without_half_turns(edges, d1, d2, k)
+    # where two quarter-turn cuts meet, neighbours can be half a turn apart: the element matches
+    # every edge's frames by the quarter turn that leaves them least turned (``mesh.gauge.edge_matching``)
+    D = np.cos(k * np.pi / 2)[:, None] * d1 + np.sin(k * np.pi / 2)[:, None] * d2
+    return _settled(quads, edges, D, d3)
+
+
+#: an irregular interior node (not 4 quads round it) at an edge turning by more than this [deg]
+#: about the normal, modulo quarter turns, takes the angle that makes the cube of its edges' turns
+#: least (a singular node of the field: a closed cubed sphere's corners)
+SETTLE_TURN = 30.0
+
+
+def _quarter_rests(D, d3, v, nb, turns=None):
+    """|turn| [rad] about v's normal, modulo quarter turns, from v's d1 (turned by ``turns`` (c,):
+    (c, k)) to the d1 of its neighbours nb (k,): the angle of each in v's tangent basis."""
+    d2 = np.cross(d3[v], D[v])
+    ang = np.arctan2(D[nb] @ d2, D[nb] @ D[v])
+    t = np.zeros(1) if turns is None else turns
+    return np.abs(np.angle(np.exp(4j * (ang[None, :] - t[:, None])))) / 4.0
+
+
+def _settled(quads, edges, D, d3):
+    """D (n, 3) with the irregular interior nodes at an edge turning by more than SETTLE_TURN about
+    the normal, modulo quarter turns, moved to the angle (in 1 deg steps) that makes the cube of
+    their edges' turns least, node by node (a few nodes: a loop over them), a few sweeps."""
+    n = len(D)
+    adj = sp.csr_matrix((np.ones(2 * len(edges)), (np.r_[edges[:, 0], edges[:, 1]], np.r_[edges[:, 1], edges[:, 0]])),
+                        shape=(n, n))
+    cyc = np.sort(np.stack([quads, np.roll(quads, -1, axis=1)], -1).reshape(-1, 2), axis=1)
+    key, count = np.unique(cyc[:, 0] * n + cyc[:, 1], return_counts=True)
+    boundary = np.zeros(n, bool)
+    boundary[key[count == 1] // n] = True
+    boundary[key[count == 1] % n] = True
+    irregular = np.flatnonzero((np.bincount(quads.ravel(), minlength=n) != 4) & ~boundary)
+    turns = np.radians(np.arange(90.0))
+    for _ in range(5):
+        moved = False
+        for v in irregular:
+            nb = adj.indices[adj.indptr[v]:adj.indptr[v + 1]]
+            if _quarter_rests(D, d3, v, nb).max() <= np.radians(SETTLE_TURN):
+                continue
+            cost = (_quarter_rests(D, d3, v, nb, turns) ** 3).sum(axis=1)
+            j = int(np.argmin(cost))
+            if cost[j] < cost[0] - 1e-12:
+                D[v], moved = np.cos(turns[j]) * D[v] + np.sin(turns[j]) * np.cross(d3[v], D[v]), True
+        if not moved:
+            break
+    return D

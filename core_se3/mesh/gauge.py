@@ -43,7 +43,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.sparse.linalg import splu
 
 __all__ = ["normal_turns", "least_turn_angles", "least_turn_gauge", "turned_about_normal", "GAUGE_TOL", "GAUGE_ITERATIONS",
-           "PARALLEL_TOL"]
+           "PARALLEL_TOL", "quarter_turns", "edge_matching", "corner_turns"]
 
 #: edges turning less than this about the normal [rad] need no gauge (patch-test error ~0.7 x turn)
 GAUGE_TOL = 1e-10
@@ -182,3 +182,76 @@ def least_turn_gauge(g0, edge_nodes):
     curved = left[part] > PARALLEL_TOL
     alpha[curved] = 0.0
     return alpha, curved
+
+
+# ------------------------------------------------------------------------------------------
+# Quarter-turn matchings across the cuts of a cross field
+# ------------------------------------------------------------------------------------------
+#: cos and sin of k quarter turns, exactly (k = 0, 1, 2, 3)
+_QC, _QS = np.array([1.0, 0.0, -1.0, 0.0]), np.array([0.0, 1.0, 0.0, -1.0])
+
+
+def quarter_turns(k):
+    """Rz(k pi/2) (..., 3, 3) of integers k, exact (entries 0, 1, -1).
+
+    Example
+    -------
+    >>> quarter_turns(1)[:2, :2].tolist()
+    [[0.0, -1.0], [1.0, 0.0]]
+    """
+    k = np.asarray(k) % 4
+    R = np.zeros(k.shape + (3, 3))
+    R[..., 0, 0] = R[..., 1, 1] = _QC[k]
+    R[..., 1, 0], R[..., 0, 1] = _QS[k], -_QS[k]
+    R[..., 2, 2] = 1.0
+    return R
+
+
+def edge_matching(g0, edge_nodes):
+    """k (E,) int in {0, 1, 2, 3}: the quarter turn Rz(k pi/2), on the right of b's frame, that
+    leaves the least turn about the normal between the frames of each edge (a, b), or None where
+    every k is 0 (every mesh whose neighbouring d1 turn by less than 45 deg: no cut).
+
+    A 4-fold direction field (``mesh.cross_field``, a mesh file's default frames) has no single
+    d1 on a closed or branched surface (a sphere: hairy ball): its d1 jumps by quarter turns
+    across cuts, and an edge across one is taken between g_a and g_b Rz(k pi/2) (the element:
+    ``fem.element_default``, "Cuts").  The turn is the angle of b's d1 in a's tangent basis.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> g = np.stack([np.eye(4), np.eye(4)]); g[1, :3, :3] = quarter_turns(3)   # b's d1 along -y
+    >>> edge_matching(g, np.array([[0, 1]])).tolist()
+    [1]
+    >>> edge_matching(g[[0, 0]], np.array([[0, 1]])) is None
+    True
+    """
+    Ra, Rb = g0[edge_nodes[:, 0], :3, :3], g0[edge_nodes[:, 1], :3, :3]
+    d1 = np.einsum("eji,ej->ei", Ra, Rb[:, :, 0])             # b's d1 in a's frame
+    k = (-np.rint(np.arctan2(d1[:, 1], d1[:, 0]) / (0.5 * np.pi)).astype(np.int64)) % 4
+    return k if k.any() else None
+
+
+def corner_turns(g0, quads):
+    """q (m, 4) int: the quarter turns Rz(q pi/2) of every element's nodal frames (g_i Rz(q_i pi/2))
+    that leave each least turned about the normal from its element's first node's: the frames in
+    which the element compares its edge twists across a cross field's cuts
+    (``fem.element_default``, "Cuts").
+
+    Where the edges' quarter-turn matchings (:func:`edge_matching`) close round an element (its
+    d1 has no singular point inside) these are the matchings' turns along its edges whenever its
+    frames turn by less than 45 deg from its first node's; round an element where they do not
+    close (a cross field's singular node, whose quarter turn of d1 shows in one of the elements
+    round it: a closed cubed sphere's valence-3 corners), each node takes the least turn.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> g = np.repeat(np.eye(4)[None], 4, axis=0)
+    >>> g[2, :3, :3] = quarter_turns(1)                       # node 2's d1 along y
+    >>> corner_turns(g, np.array([[0, 1, 2, 3]])).tolist()
+    [[0, 0, 3, 0]]
+    """
+    R = g0[quads, :3, :3]                                     # (m, 4, 3, 3)
+    d1 = np.einsum("mji,mnj->mni", R[:, 0], R[:, :, :, 0])    # each node's d1 in the first node's frame
+    return (-np.rint(np.arctan2(d1[..., 1], d1[..., 0]) / (0.5 * np.pi)).astype(np.int64)) % 4
