@@ -429,6 +429,17 @@ def test_python_api_errors():
         p.add_obstacle("half_space", point=(0, 0, -2), normal=(0, 0, 1))
 
 
+def test_a_ball_between_the_check_points_of_an_element_is_found_at_load_0():
+    """A ball of radius 0.05 through the 1 x 1 element of a plate (h 0.01) at (0.25, 0.25),
+    between the 3 x 3 points of the check of the undeformed shell (0.35 away from the nearest):
+    accepted before, the solve then ended with zero force, penetration 0 and the ball through the
+    plate.  The check takes each face's deepest point too: the ball lies 0.045 inside the face."""
+    p = cs.Problem(M.rectangle(1.0, 1.0, 1, 1), cs.Material(1e4, 0.0, 0.01))
+    with pytest.raises(ContactError, match="already intersects .* element 0 lies 0.045 inside"):
+        p.add_obstacle("sphere", centre=(0.25, 0.25, 0.0), radius=0.05, name="ball")
+    p.add_obstacle("sphere", centre=(0.25, 0.25, -0.06), radius=0.05, name="below")     # clear: 0.005 away
+
+
 def test_scenario_run_writes_contact_outputs(tmp_path):
     text = BASE + """
 [[obstacles]]
