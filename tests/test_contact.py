@@ -440,6 +440,22 @@ def test_a_ball_between_the_check_points_of_an_element_is_found_at_load_0():
     p.add_obstacle("sphere", centre=(0.25, 0.25, -0.06), radius=0.05, name="below")     # clear: 0.005 away
 
 
+def test_a_shell_pinched_between_two_obstacles_is_named():
+    """A strip (h 0.01) on a floor under a ball that comes down 0.002 from 0.001 above node 17: from
+    load factor 0.5 on the room between the two is less than h, and no state exists (the shell is
+    not squeezed through its thickness).  The run stopped with "raise max_augmentations or the
+    tolerance", which cannot help; now the hint names the node and the two obstacles."""
+    h = 0.01
+    p = cs.Problem(M.rectangle(0.5, 0.1, 10, 2), cs.Material(1e5, 0.0, h))
+    p.clamp("x0")
+    p.add_obstacle("half_space", point=(0, 0, -h / 2), normal=(0, 0, 1), name="floor")
+    p.add_obstacle("sphere", centre=(0.3, 0, h / 2 + 0.201), radius=0.2, name="lid",
+                   motion=dict(translate=(0, 0, -0.002)))
+    with pytest.raises(cs.ConvergenceError, match="node 17 is pinched between obstacles '(floor|lid)' and "
+                                                  "'(floor|lid)': the room between them there is 0.0099"):
+        p.solve(steps=2)
+
+
 def test_scenario_run_writes_contact_outputs(tmp_path):
     text = BASE + """
 [[obstacles]]

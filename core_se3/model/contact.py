@@ -138,6 +138,7 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
             raise contact_error("the contact penalty must be positive and finite (beta > 0)", "beta")
         self.eps, self.tol, self.cap_depth = law.lengths(self.h)
         self._held = getattr(problem, "constraint_mask", None)      # the supports, for failure_hint
+        self._loads = getattr(problem, "loads", [])                   # the other obstacles, for failure_hint
         self._faces(mesh, el, law.faces)
         self._start(mesh, friction)
 
@@ -243,7 +244,7 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         d, n, H = self.obstacle.evaluate(x, lam)
         kn = len(self.nodes)
         p, dp = normal_law(d, self.lam[:kn], self.k * self.soft[:kn], self.eps)
-        self._active, self._normals = (p > 0) | (dp < 0), n
+        self._active, self._normals, self._gaps = (p > 0) | (dp < 0), n, d
         return x, d, n, H, p, dp
 
     def face_state(self, g, lam):
@@ -469,16 +470,39 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
 
     def failure_hint(self):
         """Why the failed try could not converge, from the contact's side: friction's 'it slides'
-        (``CoulombFriction.failure_hint``), or an obstacle pressing into a node whose translations a
+        (``CoulombFriction.failure_hint``), a node pinched between this obstacle and another
+        (:meth:`pinch`), or an obstacle pressing into a node whose translations a
         support holds (the multiplier updates ran out with that node deepest inside: no state has
         it outside; the message said only "raise max_augmentations or the tolerance"), or ''."""
         hint = super().failure_hint()
         stuck = getattr(self, "_stuck", None)
-        if hint or stuck is None or self._held is None or not self._held()[stuck[0], :3].all():
+        if hint or stuck is None:
+            return hint
+        if pinch := self.pinch(stuck[0]):
+            return pinch
+        if self._held is None or not self._held()[stuck[0], :3].all():
             return hint
         return (f"obstacle {self.name!r} presses {stuck[1]:.3g} into node {stuck[0]}, whose translations a support "
                 "holds: no equilibrium has the node outside it; keep the obstacle's motion off the held nodes "
                 "(or release them)")
+
+    def pinch(self, node):
+        """'' unless mesh node ``node`` is pressed at the last evaluation by this obstacle and by
+        another on its other face (normals opposed): the room between the two there is then less
+        than the shell's thickness, which no state can have (the shell is not squeezed through its
+        thickness; the multiplier updates ran out with "raise max_augmentations")."""
+        i = np.nonzero(self.nodes == node)[0]
+        for other in self._loads:
+            j = np.nonzero(other.nodes == node)[0] if isinstance(other, ContactLoad) and other is not self else []
+            if not len(i) or not len(j) or not hasattr(other, "_gaps") or not other._active[j[0]]:
+                continue
+            i, j = i[0], j[0]
+            if self._normals[i] @ other._normals[j] < 0 and self.c[i] != other.c[j]:
+                room = self._gaps[i] + other._gaps[j] + abs(self.c[i] - other.c[j])
+                return (f"node {int(node)} is pinched between obstacles {self.name!r} and {other.name!r}: the room "
+                        f"between them there is {room:.6g}, less than the shell's thickness {abs(self.c[i] - other.c[j]):.6g} "
+                        "(a shell is not squeezed through its thickness); keep the obstacles at least h apart")
+        return ""
 
     @property
     def node_ids(self):
