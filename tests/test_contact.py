@@ -456,6 +456,22 @@ def test_a_shell_pinched_between_two_obstacles_is_named():
         p.solve(steps=2)
 
 
+def test_a_ball_too_large_for_the_round_off_is_named():
+    """A ball of radius 1e5 under the tip of a strip (h 0.01, tol 1e-8) that a pressure bends onto
+    it: d = |y - centre| - R carries a round-off of 1e5 * 2.2e-16 = 2.2e-11, which the contact
+    stiffness turns into residual noise (the tangent 1.8e-3 off central differences at first
+    contact; a half-space at the same place converges in 10 steps, balance 1.5e-11).  The run
+    stopped with a bare "no convergence in 30 iterations"; now the hint names the round-off and
+    the half-space."""
+    p = cs.Problem(M.rectangle(1.0, 0.05, 40, 1), cs.Material(1.2e6, 0.0, 0.01))
+    p.clamp("x0")
+    p.add_pressure(0.016, direction=(0, 0, -1))
+    p.add_obstacle("sphere", centre=(1.0, 0, -0.015 - 1e5), radius=1e5, name="o")
+    with pytest.raises(cs.ConvergenceError, match="centre lies 1e\\+05 from the contact nodes, so its distances carry "
+                                                  "a round-off of 2.2e-11 .* use a half_space"):
+        p.solve(steps=10)
+
+
 def test_scenario_run_writes_contact_outputs(tmp_path):
     text = BASE + """
 [[obstacles]]
