@@ -429,6 +429,49 @@ def test_python_api_errors():
         p.add_obstacle("half_space", point=(0, 0, -2), normal=(0, 0, 1))
 
 
+def test_a_ball_between_the_check_points_of_an_element_is_found_at_load_0():
+    """A ball of radius 0.05 through the 1 x 1 element of a plate (h 0.01) at (0.25, 0.25),
+    between the 3 x 3 points of the check of the undeformed shell (0.35 away from the nearest):
+    accepted before, the solve then ended with zero force, penetration 0 and the ball through the
+    plate.  The check takes each face's deepest point too: the ball lies 0.045 inside the face."""
+    p = cs.Problem(M.rectangle(1.0, 1.0, 1, 1), cs.Material(1e4, 0.0, 0.01))
+    with pytest.raises(ContactError, match="already intersects .* element 0 lies 0.045 inside"):
+        p.add_obstacle("sphere", centre=(0.25, 0.25, 0.0), radius=0.05, name="ball")
+    p.add_obstacle("sphere", centre=(0.25, 0.25, -0.06), radius=0.05, name="below")     # clear: 0.005 away
+
+
+def test_a_shell_pinched_between_two_obstacles_is_named():
+    """A strip (h 0.01) on a floor under a ball that comes down 0.002 from 0.001 above node 17: from
+    load factor 0.5 on the room between the two is less than h, and no state exists (the shell is
+    not squeezed through its thickness).  The run stopped with "raise max_augmentations or the
+    tolerance", which cannot help; now the hint names the node and the two obstacles."""
+    h = 0.01
+    p = cs.Problem(M.rectangle(0.5, 0.1, 10, 2), cs.Material(1e5, 0.0, h))
+    p.clamp("x0")
+    p.add_obstacle("half_space", point=(0, 0, -h / 2), normal=(0, 0, 1), name="floor")
+    p.add_obstacle("sphere", centre=(0.3, 0, h / 2 + 0.201), radius=0.2, name="lid",
+                   motion=dict(translate=(0, 0, -0.002)))
+    with pytest.raises(cs.ConvergenceError, match="node 17 is pinched between obstacles '(floor|lid)' and "
+                                                  "'(floor|lid)': the room between them there is 0.0099"):
+        p.solve(steps=2)
+
+
+def test_a_ball_too_large_for_the_round_off_is_named():
+    """A ball of radius 1e5 under the tip of a strip (h 0.01, tol 1e-8) that a pressure bends onto
+    it: d = |y - centre| - R carries a round-off of 1e5 * 2.2e-16 = 2.2e-11, which the contact
+    stiffness turns into residual noise (the tangent 1.8e-3 off central differences at first
+    contact; a half-space at the same place converges in 10 steps, balance 1.5e-11).  The run
+    stopped with a bare "no convergence in 30 iterations"; now the hint names the round-off and
+    the half-space."""
+    p = cs.Problem(M.rectangle(1.0, 0.05, 40, 1), cs.Material(1.2e6, 0.0, 0.01))
+    p.clamp("x0")
+    p.add_pressure(0.016, direction=(0, 0, -1))
+    p.add_obstacle("sphere", centre=(1.0, 0, -0.015 - 1e5), radius=1e5, name="o")
+    with pytest.raises(cs.ConvergenceError, match="centre lies 1e\\+05 from the contact nodes, so its distances carry "
+                                                  "a round-off of 2.2e-11 .* use a half_space"):
+        p.solve(steps=10)
+
+
 def test_scenario_run_writes_contact_outputs(tmp_path):
     text = BASE + """
 [[obstacles]]

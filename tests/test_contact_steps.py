@@ -163,6 +163,23 @@ def test_a_ball_smaller_than_an_element_is_held_by_the_face():
     assert c.report(st.g, 1.0)["faces_in_contact"] >= 1
 
 
+@pytest.mark.parametrize("where", [(1.25, 0.25), (1.1, -0.4)])
+def test_a_ball_off_the_middle_of_an_element_is_found_by_the_face(where):
+    """The same ball under the point (1.25, 0.25) (or (1.1, -0.4)) of the 1 x 1 element: seen
+    from the face's centre the ball's d is cone-like, a full Newton step of the face minimiser
+    overshot to a corner and back, and the sample was never found: the ball rose 0.1 through the
+    plate (0.08 of it above the contact face, the shell 0.02 thick) with zero force, penetration
+    0 and no error.  Now the steps are halved until d decreases: the face sample holds it."""
+    p = cs.Problem(M.rectangle(2.0, 1.0, 2, 1), cs.Material(1e4, 0.0, 0.02))
+    p.clamp("x0")
+    c = p.add_obstacle("sphere", centre=(*where, -0.07), radius=0.05, motion=dict(translate=(0, 0, 0.1)),
+                       name="pin")
+    st = p.solve(steps=4).final
+    assert st.contact["pin"]["force"][2] > 2e-4 and st.balance_error < 1e-8
+    assert _surface_depth(c, st.g, 1.0, 0.01) > -10 * c.tol
+    assert c.report(st.g, 1.0)["faces_in_contact"] == 1
+
+
 def test_a_roller_across_the_strip_lifts_it_in_one_step_or_ten():
     """A cylinder (radius 0.1, thinner than the 0.05 x 0.1 elements' diameter 0.112: face samples
     on by 'auto') lying across a clamped strip, axis along the width, rises 0.1 under it.  Along
@@ -183,6 +200,22 @@ def test_a_roller_across_the_strip_lifts_it_in_one_step_or_ten():
         return res.final.g[:, :3, 3]
     one, ten = lift(1), lift(10)
     assert one[20, 2] > 0.14 and np.abs(one - ten).max() < 1e-9, np.abs(one - ten).max()
+
+
+def test_a_roller_oblique_to_the_strip_lifts_it():
+    """The same roller with its axis oblique to the elements, (0.3, 1, 0): d is flat along the
+    axis, which is no face coordinate, so the face minimiser's M is singular and the bounded
+    gradient steps (or a Newton step clipped per coordinate, turned into an ascent) swung between
+    edges: Newton stopped at load factor 0.1104 after 12 cut-backs (residual 1.11).  With the line
+    search it completes in 10 steps, and 1 step ends within 2e-13 of them."""
+    p = cs.Problem(M.rectangle(1.0, 0.1, 20, 1), cs.Material(1e5, 0.0, 0.01))
+    p.clamp("x0")
+    c = p.add_obstacle("cylinder", point=(0.7, 0, -0.115), axis=(0.3, 1, 0), radius=0.1, name="roller",
+                       motion=dict(translate=(0.0, 0.0, 0.1)))
+    st = p.solve(steps=10).final
+    assert st.load_factor == pytest.approx(1.0) and st.balance_error < 1e-8
+    assert st.g[20, 2, 3] == pytest.approx(0.152299200258, abs=1e-9)      # the 1-step run's tip
+    assert _surface_depth(c, st.g, 1.0, 0.01) > -10 * c.tol
 
 
 def test_a_ball_through_the_face_between_nodes_is_refused_without_face_samples():

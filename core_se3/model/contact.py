@@ -138,6 +138,8 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
             raise contact_error("the contact penalty must be positive and finite (beta > 0)", "beta")
         self.eps, self.tol, self.cap_depth = law.lengths(self.h)
         self._held = getattr(problem, "constraint_mask", None)      # the supports, for failure_hint
+        self._loads = getattr(problem, "loads", [])                   # the other obstacles, for failure_hint
+        self._X = mesh.X[self.nodes]                                    # the contact nodes, for failure_hint
         self._faces(mesh, el, law.faces)
         self._start(mesh, friction)
 
@@ -243,7 +245,7 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         d, n, H = self.obstacle.evaluate(x, lam)
         kn = len(self.nodes)
         p, dp = normal_law(d, self.lam[:kn], self.k * self.soft[:kn], self.eps)
-        self._active, self._normals = (p > 0) | (dp < 0), n
+        self._active, self._normals, self._gaps = (p > 0) | (dp < 0), n, d
         return x, d, n, H, p, dp
 
     def face_state(self, g, lam):
@@ -469,16 +471,59 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
 
     def failure_hint(self):
         """Why the failed try could not converge, from the contact's side: friction's 'it slides'
-        (``CoulombFriction.failure_hint``), or an obstacle pressing into a node whose translations a
+        (``CoulombFriction.failure_hint``), distances carrying round-off above the tolerance
+        (:meth:`roundoff_hint`), a node pinched between this obstacle and another
+        (:meth:`pinch`), or an obstacle pressing into a node whose translations a
         support holds (the multiplier updates ran out with that node deepest inside: no state has
         it outside; the message said only "raise max_augmentations or the tolerance"), or ''."""
-        hint = super().failure_hint()
+        hint = super().failure_hint() or self.roundoff_hint()
         stuck = getattr(self, "_stuck", None)
-        if hint or stuck is None or self._held is None or not self._held()[stuck[0], :3].all():
+        if hint or stuck is None:
+            return hint
+        if pinch := self.pinch(stuck[0]):
+            return pinch
+        if self._held is None or not self._held()[stuck[0], :3].all():
             return hint
         return (f"obstacle {self.name!r} presses {stuck[1]:.3g} into node {stuck[0]}, whose translations a support "
                 "holds: no equilibrium has the node outside it; keep the obstacle's motion off the held nodes "
                 "(or release them)")
+
+    def roundoff_hint(self):
+        """'' unless the obstacle's placement point (a ball's centre) lies so far from the contact
+        nodes (rho) that its distances carry a round-off of rho * 2.2e-16 above 1e-4 of ``tol``: the
+        contact stiffness turns that jitter into residual noise above Newton's tolerance (a ball of
+        radius 1e5 under a strip with h = 0.01 stopped at first contact, "no convergence in 30
+        iterations", its tangent 1.8e-3 off central differences; a half-space converges)."""
+        key = getattr(self.obstacle, "position_attribute", None)
+        if key is None or getattr(self.obstacle, "flat", False) or not len(self.nodes):
+            return ""
+        rho = float(np.linalg.norm(self._X - np.asarray(getattr(self.obstacle, key), float), axis=1).max())
+        if rho * np.finfo(float).eps <= 1e-4 * self.tol:
+            return ""
+        return (f"obstacle {self.name!r}: its {key} lies {rho:.3g} from the contact nodes, so its distances carry a "
+                f"round-off of {rho * np.finfo(float).eps:.2g} (the contact tolerance is {self.tol:.2g}), which its "
+                "stiffness turns into residual noise above Newton's tolerance; for a surface this flat over the part "
+                "use a half_space (or a smaller radius)")
+
+    def pinch(self, node):
+        """'' unless mesh node ``node`` is pressed at the last evaluation by this obstacle and by
+        another on its other face (normals opposed): the room between the two there is then less
+        than the shell's thickness, which no state can have (the shell is not squeezed through its
+        thickness; the multiplier updates ran out with "raise max_augmentations")."""
+        i = np.nonzero(self.nodes == node)[0]
+        if getattr(self, "whole", None) is not None:      # a rank's part (its node ids are local): not checked
+            return ""
+        for other in self._loads:
+            j = np.nonzero(other.nodes == node)[0] if isinstance(other, ContactLoad) and other is not self else []
+            if not len(i) or not len(j) or not hasattr(other, "_gaps") or not other._active[j[0]]:
+                continue
+            i, j = i[0], j[0]
+            if self._normals[i] @ other._normals[j] < 0 and self.c[i] != other.c[j]:
+                room = self._gaps[i] + other._gaps[j] + abs(self.c[i] - other.c[j])
+                return (f"node {int(node)} is pinched between obstacles {self.name!r} and {other.name!r}: the room "
+                        f"between them there is {room:.6g}, less than the shell's thickness {abs(self.c[i] - other.c[j]):.6g} "
+                        "(a shell is not squeezed through its thickness); keep the obstacles at least h apart")
+        return ""
 
     @property
     def node_ids(self):

@@ -71,8 +71,42 @@ def _flat(M, G, J, tol=1e-9):
     return (np.abs(G) <= tol * edge) & (np.abs(diag) <= tol * tr)
 
 
+def _descend(obstacle, xq, lam, xi, step, dnH, slope, halvings=12):
+    """The iterate xi + a step (clipped to the square), a = 1, 1/2, 1/4, ... the first at which d
+    decreases by at least 1e-4 of its first-order prediction (Armijo; slope (m, 2): dd/dxi), per
+    face (xi itself where none does or the step is no descent; a move of at most 1e-8 is taken),
+    with its (d, n, H); dnH: those at xi.  The step is scaled, not clipped per coordinate, to
+    length 1: clipping turned a Newton step (-7.6, 0.46) into an ascent (-1, 0.46)."""
+    d, n, H = dnH
+    a = np.ones(len(xi))
+    todo = np.einsum("mj,mj->m", slope, step) < 0        # else no descent along the step: xi stays
+    xi, d, n, H = xi.copy(), d.copy(), n.copy(), H.copy()
+    for _ in range(halvings + 1):
+        new = np.clip(xi[todo] + a[todo, None] * step[todo], -1.0, 1.0)
+        dt, nt, Ht = obstacle.evaluate(np.einsum("ma,mai->mi", face_shape(new)[0], xq[todo]), lam)
+        move = new - xi[todo]
+        pred = np.einsum("mj,mj->m", slope[todo], move)
+        # a step of 1e-8 is Newton's last (quadratic convergence): taken as it is
+        tiny = np.abs(move).max(1, initial=0.0) <= 1e-8
+        ok = tiny | ((pred < 0) & (dt <= d[todo] + 1e-4 * pred))
+        idx = np.nonzero(todo)[0]
+        xi[idx[ok]], d[idx[ok]], n[idx[ok]], H[idx[ok]] = new[ok], dt[ok], nt[ok], Ht[ok]
+        todo[idx[ok]] = False
+        a[todo] *= 0.5
+        if not todo.any():
+            break
+    return xi, d, n, H
+
+
 def face_minima(obstacle, xq, lam, iters=16):
     """The obstacle's closest point on each bilinear face with corners xq (m, 4, 3) at lam.
+
+    Projected Newton from the face's centre, each step halved (up to 12 times) until d
+    decreases enough (Armijo; else the iterate stays): seen from afar a ball's d on the face is cone-like, its
+    curvature along the direction to the ball ~ z^2 / rho^3, so a full Newton step from an offset
+    r beyond the height z lands at -r^3 / z^2: the iterate swung between the face's centre and a
+    corner (a ball of radius 0.05 under the point (0.25, 0.25) of a 1 x 1 face was never found,
+    and rose through the plate with zero force and no error).
 
     Returns a dict of arrays: xi (m, 2), x (m, 3), d (m,), n (m, 3), H (m, 3, 3), N (m, 4),
     dN (m, 4, 2), J (m, 3, 2), Minv (m, 2, 2) (the inverse Hessian on the free coordinates, 0 on
@@ -81,12 +115,10 @@ def face_minima(obstacle, xq, lam, iters=16):
     m = len(xq)
     xi = np.zeros((m, 2))
     x_ab = 0.25 * np.einsum("a,mai->mi", CORNERS[:, 0] * CORNERS[:, 1], xq)      # d2x/dxi deta
-    fixed = np.zeros((m, 2), bool)
+    d, n, H = obstacle.evaluate(np.einsum("ma,mai->mi", face_shape(xi)[0], xq), lam)
     for _ in range(iters):
         N, dN = face_shape(xi)
-        x = np.einsum("ma,mai->mi", N, xq)
         J = np.einsum("maj,mai->mij", dN, xq)
-        d, n, H = obstacle.evaluate(x, lam)
         G = np.einsum("mij,mi->mj", J, n)
         M = np.einsum("mij,mik,mkl->mjl", J, H, J)
         M[:, 0, 1] += np.einsum("mi,mi->m", n, x_ab)
@@ -103,7 +135,8 @@ def face_minima(obstacle, xq, lam, iters=16):
         # Newton where M is positive definite, else a bounded gradient step
         step = np.where(pd[:, None], -np.linalg.solve(np.where(pd[:, None, None], Mf, np.eye(2)), Gf[:, :, None])[:, :, 0],
                         -0.5 * np.sign(Gf))
-        xi = np.clip(xi + np.clip(step, -1.0, 1.0), -1.0, 1.0)
+        xi, d, n, H = _descend(obstacle, xq, lam, xi, step / np.maximum(1.0, np.abs(step).max(1, keepdims=True)),
+                               (d, n, H), Gf)
     N, dN = face_shape(xi)
     x = np.einsum("ma,mai->mi", N, xq)
     J = np.einsum("maj,mai->mij", dN, xq)

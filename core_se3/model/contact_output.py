@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .contact_faces import face_minima
 from .obstacles import contact_error
 
 __all__ = ["ContactOutputs", "field_key", "field_key_clash"]
@@ -117,8 +118,11 @@ class ContactOutputs:
 
     def check_initial(self, mesh, g, lam=0.0):
         """ContactError when the obstacle intersects the contact surface at (g, lam) by more than
-        tol: at the nodes and at 3 x 3 points of every element (the bilinear surface through the
-        contact points), so that an obstacle between nodes is found too."""
+        tol: at the nodes, at 3 x 3 points of every element (the bilinear surface through the
+        contact points) and, on a curved obstacle, at each face's deepest point
+        (``contact_faces.face_minima``), so that an obstacle between nodes is found too (a ball of
+        radius 0.05 through a 1 x 1 element at (0.25, 0.25) was between the 3 x 3 points:
+        accepted, it held the plate at no force from there on)."""
         where = np.full(self.n, -1)
         where[self.nodes] = np.arange(len(self.nodes))
         el = np.nonzero((where[mesh.quads] >= 0).all(1))[0]
@@ -129,10 +133,14 @@ class ContactOutputs:
         N = 0.25 * np.stack([(1 - xi) * (1 - et), (1 + xi) * (1 - et), (1 + xi) * (1 + et), (1 - xi) * (1 + et)], 1)
         pts = np.einsum("qa,mai->mqi", N, x[mesh.quads[el]]).reshape(-1, 3)
         d = self.obstacle.distance(np.concatenate([x[self.nodes], pts]), lam)
+        if not getattr(self.obstacle, "flat", False) and len(el):
+            # and each face's deepest point: a ball smaller than the grid's spacing through a face
+            d = np.concatenate([d, face_minima(self.obstacle, x[mesh.quads[el]], lam)["d"]])
         i = int(np.argmin(d))
         if d[i] < -self.tol:
-            at = (f"node {int(self.nodes[i])}" if i < len(self.nodes) else
-                  f"element {int(el[(i - len(self.nodes)) // 9])}")
+            k = i - len(self.nodes)
+            at = (f"node {int(self.nodes[i])}" if k < 0 else
+                  f"element {int(el[k // 9] if k < 9 * len(el) else el[k - 9 * len(el)])}")
             raise contact_error(
                 f"obstacle {self.name!r} already intersects the undeformed shell: its contact surface at {at} "
                 f"lies {-d[i]:.4g} inside it (tolerance {self.tol:.3g}); move or shrink the obstacle, or start "
