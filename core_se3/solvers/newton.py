@@ -312,7 +312,11 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
             else:
                 lam, g, g_whole, stress_conv, k_ref, dlam = _refused(eq, hooks, checks, saved, result, dlam_nominal,
                                                                      (lam, g, g_whole, stress_conv, k_ref, dlam))
-                dlam = checks.next_increment(lam, dlam, floor)
+                if checks.located(floor) and (why := _jumped_across(trier, eq, hooks, checks, out,
+                                                                    (g, lam, stress_conv), mip, result)):
+                    reason = why                         # a jump, not a critical point: cut back as usual
+                else:
+                    dlam = checks.next_increment(lam, dlam, floor)
             if checks.located(floor):
                 timer.close()
                 _stop_at_critical(problem, opts, checks, result, getattr(eq, "negative_count", None))
@@ -620,6 +624,31 @@ def _midpoint_probe(prober, eq, hooks, here):
     g_whole = eq.whole_frames(g) if eq.predictor else g      # the tangent predictor's only (serial)
     g_mid, stress_mid = _try_start(eq.problem, eq, trier, g, g_whole, lam, lam_mid, mip, stress_conv, hooks.predictors)
     return trier.run(g_mid, lam_mid, mip, stress_mid)
+
+
+def _jumped_across(trier, eq, hooks, checks, out, here, mip, result):
+    """The return check of a located sign change (``StepChecks.judge_return``): the try ``out``
+    from the current state ``here`` = (g, lam, stress_conv) to the bracket's high end converged
+    with the other sign; a try from its end back to lam must land on g, else it jumped across a
+    limit point, and why is returned (the bracket dropped, the reason logged with the try), else ''."""
+    g, lam, stress = here
+    lam_hi = checks.bracket[1]
+    g_hi = out.g
+    g_back, stress_back = _try_start(eq.problem, eq, trier, g_hi, eq.whole_frames(g_hi) if eq.predictor else g_hi,
+                                     lam_hi, lam, mip, out.ev.stress if mip and out.ev is not None else None,
+                                     hooks.predictors)
+    back = trier.run(g_back, lam, mip, stress_back)
+    gap = (eq.state_gap(g_hi, g), eq.state_gap(back.g, g)) if back.ok else None
+    why = checks.judge_return(back, gap, lam, lam_hi)
+    entry = result.log[-1] if result.log else {}
+    entry["return_check"] = dict(converged=back.ok, iterations=back.iterations, linear_solves=back.solves,
+                                 increments=[float(x) for x in back.incs], gap=None if gap is None else list(gap))
+    entry["linear_solves"] = entry.get("linear_solves", 0) + back.solves
+    if why:
+        entry["reason"] = why
+        if eq.root:
+            log.info("  lam %.6g: %s", lam_hi, why)
+    return why
 
 
 def _refined_end(prober, eq, hooks, here, g_long):
