@@ -312,11 +312,8 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
             else:
                 lam, g, g_whole, stress_conv, k_ref, dlam = _refused(eq, hooks, checks, saved, result, dlam_nominal,
                                                                      (lam, g, g_whole, stress_conv, k_ref, dlam))
-                if checks.located(floor) and (why := _jumped_across(trier, eq, hooks, checks, out,
-                                                                    (g, lam, stress_conv), mip, result)):
-                    reason = why                         # a jump, not a critical point: cut back as usual
-                else:
-                    dlam = checks.next_increment(lam, dlam, floor)
+                dlam, reason = _after_refusal(trier, eq, hooks, checks, out, (g, lam, stress_conv, dlam, floor), mip,
+                                              result)
             if checks.located(floor):
                 timer.close()
                 _stop_at_critical(problem, opts, checks, result, getattr(eq, "negative_count", None))
@@ -624,6 +621,18 @@ def _midpoint_probe(prober, eq, hooks, here):
     g_whole = eq.whole_frames(g) if eq.predictor else g      # the tangent predictor's only (serial)
     g_mid, stress_mid = _try_start(eq.problem, eq, trier, g, g_whole, lam, lam_mid, mip, stress_conv, hooks.predictors)
     return trier.run(g_mid, lam_mid, mip, stress_mid)
+
+
+def _after_refusal(trier, eq, hooks, checks, out, here, mip, result):
+    """The next increment and the reason of the refused try ``out`` from ``here`` = (g, lam,
+    stress_conv, the cut-back's dlam, floor): while a sign change of det K is located, the
+    bisection's (``StepChecks.next_increment``); a located one whose sides do not connect (the
+    return check, :func:`_jumped_across`) is dropped, the cut-back's dlam kept and the reason
+    the return check's."""
+    g, lam, stress, dlam, floor = here
+    if checks.located(floor) and (why := _jumped_across(trier, eq, hooks, checks, out, (g, lam, stress), mip, result)):
+        return dlam, why
+    return checks.next_increment(lam, dlam, floor), out.reason
 
 
 def _jumped_across(trier, eq, hooks, checks, out, here, mip, result):
