@@ -485,6 +485,9 @@ def _step_checks(opts, eq, state):
                         and not any(getattr(ld, "follower", False) for ld in eq.loads))
     # the midpoint probe of a try that turned a node past pi (a stateful element's state is not restored)
     checks.probe = opts.midpoint_probe and opts.limit_check and not eq.stateful
+    # ... and the return check of a located sign change (the stateful element's state at the far
+    # side is not kept: its located changes are reported unverified, as before)
+    checks.returning = not eq.stateful
     # ... and of a try that passes a limit point ahead (the current stiffness of load control: not
     # with a prescribed motion, whose load factor is no load's)
     checks.stiffness = not (eq.stateful or eq.problem.has_prescribed_motion)
@@ -630,7 +633,8 @@ def _after_refusal(trier, eq, hooks, checks, out, here, mip, result):
     return check, :func:`_jumped_across`) is dropped, the cut-back's dlam kept and the reason
     the return check's."""
     g, lam, stress, dlam, floor = here
-    if checks.located(floor) and (why := _jumped_across(trier, eq, hooks, checks, out, (g, lam, stress), mip, result)):
+    if checks.located(floor) and checks.returning and \
+            (why := _jumped_across(trier, eq, hooks, checks, out, (g, lam, stress), mip, result)):
         return dlam, why
     return checks.next_increment(lam, dlam, floor), out.reason
 

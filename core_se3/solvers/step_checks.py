@@ -322,6 +322,9 @@ class StepChecks:
         ``midpoint_probe`` (with ``limit_check``; default False, set by the caller): a try that
         turns a node by more than PROBE_TURN is probed at its midpoint (:meth:`wants_probe`,
         :meth:`judge_probe`; with the stability check only).
+    returning : bool
+        Apply the return check to a located sign change (:meth:`judge_return`; default True, off
+        for a stateful element, whose state on the far side is not kept).
     rejected : int
         Tries refused by the path check since the last stored step (``record`` resets it).
     bracket : (float, float) or None
@@ -353,6 +356,7 @@ class StepChecks:
         self.probe = False
         self.probes = self.probe_iterations = 0    # since the last stored step
         self.refine = False
+        self.returning = True       # the return check of a located sign change (judge_return)
         self.refinements = self.refine_iterations = 0    # refine check: since the last stored step
         # the current stiffness (Bergan's, TryOutcome.k_step) at the start of the last accepted try
         # over the first's: (load factor, S_p), and the first's k_step (``stiffness``: tracked)
