@@ -296,8 +296,9 @@ def returns(sysm, a, b, opts, timers):
     0.285577 to 0.285812, across the limit point onto another branch with det K of the other sign,
     and was kept as a 'bifurcation at 0.285694 +- 0.00012': b's state solved back at 0.285577 grows
     its Newton corrections 4.2x (the path check) on its way from b, 0.0136 ell from a (a real
-    bifurcation's return lands within 1e-15 ell: the deep strip's 5e-16 to 9e-16 ell for ends 4e-6
-    to 6e-6 ell apart, the cubic's 0, docs/STEPS.md).  A correction that fails or grows (the path
+    bifurcation's return lands within 1.6e-7 of the ends' distance: the deep strip's 5e-16 to 9e-16
+    ell for ends 4e-6 to 6e-6 ell apart, the whole hinged roof's 4.2e-12 of 2.6e-5, the cubic's 0,
+    docs/STEPS.md).  A correction that fails or grows (the path
     check, ``step_checks.path_refusal``) does not connect them either."""
     incs = []
     try:

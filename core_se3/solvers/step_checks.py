@@ -174,7 +174,7 @@ REFINE_ITERATIONS = 7    # a try of more Newton iterations than this is solved a
 REFINE_PARTS = 4         # ... this many, each from the last one's converged state ...
 REFINE_TOL = 1e-6        # ... and refused when their end is farther than this [ell] from its own
 RETURN_TOL = 1e-6        # a located sign change's far side, solved back, lands this near [ell] (as REFINE_TOL)
-RETURN_SHARE = 0.01      # ... or within this share of the two sides' distance (measured: <= 2e-10 against 0.85)
+RETURN_SHARE = 0.01      # ... or within this share of the two sides' distance (measured: <= 1.6e-7 against 0.85)
 
 
 def path_measures(incs, floor=CONTRACTION_FLOOR):
