@@ -658,7 +658,7 @@ def _jumped_across(trier, eq, hooks, checks, out, here, mip, result):
                                  increments=[float(x) for x in back.incs], gap=None if gap is None else list(gap))
     entry["linear_solves"] = entry.get("linear_solves", 0) + back.solves
     if why:
-        entry["reason"] = why
+        entry["reason"] = "; ".join(x for x in (entry.get("reason"), why) if x)
         if eq.root:
             log.info("  lam %.6g: %s", lam_hi, why)
     return why

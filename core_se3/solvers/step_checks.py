@@ -529,8 +529,8 @@ class StepChecks:
         ``lam_hi`` connects its two sides, else why not, the bracket then dropped (a jump across a
         limit point: module docstring).  ``back``: the TryOutcome of the return try, from the
         state the confirming try converged onto at ``lam_hi`` back to ``lam``; ``gap``: the
-        distance of its end from the current state and of the confirming try's end from it
-        (:func:`state_gap`, ell), or None when it did not converge.
+        distances from the current state of the confirming try's end and of the return's end
+        (:func:`state_gap`, ell), or None when the return did not converge.
 
         Example
         -------
@@ -538,13 +538,14 @@ class StepChecks:
         >>> chk = StepChecks(True, True, 1e-3, sign=1)
         >>> chk.bracket, chk.confirmed = (0.2856445, 0.2858887), True
         >>> ok = types.SimpleNamespace(ok=True, reason="", contraction=0.1, travel=0.11)
-        >>> chk.judge_return(ok, (2e-14, 3e-3), 0.2856445, 0.2858887), chk.bracket
+        >>> chk.judge_return(ok, (6.1e-3, 2.3e-14), 0.2856445, 0.2858887), chk.bracket
         ('', (0.2856445, 0.2858887))
-        >>> chk.judge_return(ok, (2.9e-2, 3.1e-2), 0.2856445, 0.2858887)[:57], chk.bracket
-        ('return check: the try from the state at load factor 0.28', None)
+        >>> why = chk.judge_return(ok, (0.0133, 0.0112), 0.2856445, 0.2858887)
+        >>> why[:50], "ended 0.0112 ell from the state there" in why, chk.bracket
+        ('return check: the try from the state at load facto', True, None)
         """
         there, back_gap = (None, None) if gap is None else gap
-        why = back.reason[:120] if not back.ok else path_refusal(back.contraction, back.travel)
+        why = (back.reason[:120] or "no convergence") if not back.ok else path_refusal(back.contraction, back.travel)
         if not why and back_gap <= max(RETURN_TOL, RETURN_SHARE * there):
             return ""
         head = (f"return check: the try from the state at load factor {lam_hi:.7g} on the far side of the det K "
