@@ -124,8 +124,23 @@ FINDINGS[4] = [
     "its initial; sym K 3.4e-9 at 0.2856856), arc length with dlam0 = ds_max = 0.002 finds a limit point at "
     "0.2857135 +- 1e-5, the path's largest load factor (with 0.01 / 0.02 it reads a 'bifurcation' at 0.28578 "
     "+- 0.00025); the try 0.2856445 -> 0.2858887 of the 16-step run converged beyond it (increments 0.0188, "
-    "0.0049, 0.0093, 0.0027 ... ell, contraction 0.26, travel 0.96) with det K -1. Not fixed here "
-    "(solvers/step_checks.py and stability.py are another engineer's this session): reported to the lead.", ""]
+    "0.0049, 0.0093, 0.0027 ... ell, contraction 0.26, travel 0.96) with det K -1. "
+    "Fixed (wt-path7, the return check: docs/STEPS.md, solvers/step_checks.py, solvers/critical.py): a "
+    "located sign change of det K is called a bifurcation only when its two sides connect -- the state "
+    "beyond it, solved back to the near side's load factor, must land on the near side's state (to 1e-6 "
+    "ell or 1 % of their distance). That try's end, solved back at 0.2856445, lands 0.0112 ell from the "
+    "state there, the sides 0.0133 ell apart (the real bifurcations' returns: at most 2e-10 of the sides' "
+    "distance); the bracket is dropped, and 1, 2, 4 and 16 steps now fail at the limit point saying so "
+    "('Newton failed at load factor 0.285889 / 0.285767 / 0.285767 / 0.285721 after 12 cut-backs ... the "
+    "last converged load factor is 0.285645 / 0.285645 / 0.285706 / 0.285706 ... load control has met a "
+    "limit point'; arc length, dlam0 = 0.002, ds_max_factor 1: 0.2857128 +- 3.2e-6); arc length from "
+    "dlam0 = 0.01, which read a 'bifurcation at 0.285694 +- 0.00012' from a step across the limit point, "
+    "refuses that step and reports the limit point at 0.285713 +- 9.5e-6 "
+    "(tests/test_step_checks.py::test_panel_108_on_its_elements_geometry_stops_at_its_limit_point_and_names_it, "
+    "::test_arc_length_reads_panel_108s_limit_point_from_a_step_across_it). The campaign re-run on this "
+    "branch against main at 0bbe3ee (250 problems each): every number and outcome the same but problem "
+    "108's -- one-step solves 'stopped at a reported critical point' 1 -> 0 (failed 10 -> 11), critical "
+    "points reported 2 -> 0 (the counts above are this re-run's).", ""]
 FINDINGS[9] = [
     "Findings (seed 9, on main at 976f7af; 'before' is the same campaign with the check before its fix):", "",
     "* the balance check's, not the package's: 23 problems, every one a cylindrical panel under a dead "

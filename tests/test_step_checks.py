@@ -363,11 +363,14 @@ def test_a_limit_point_is_not_called_a_bifurcation_after_a_jump_across_it(monkey
 
     The panel's pressures are the chords' (``_panel_108``): on the element's own geometry (its
     3 elements turn by 0.499 rad each) the follower pressure is 1 / 0.959 and the dead one
-    1 / 0.990 of the chords' and, the two nearly balancing, the path changes: it meets a real
-    bifurcation first (the next test).  Scaling the follower pressure by 0.90 ... 0.97 (2 to 16
+    1 / 0.990 of the chords' and, the two nearly balancing, the path changes: its limit point
+    moves to 0.2857128 (the next tests; read there as a bifurcation before the return check).  Scaling the follower pressure by 0.90 ... 0.97 (2 to 16
     steps), or it by 0.955 ... 0.965 and the dead one by 0.99 ... 1.0 (lam_end 0.8 ... 1.2, 3 and 4
     steps), gave no panel whose outcome GROWTH_REACH decides (the jumps grow at the step's scale
-    or the point is a bifurcation); with the chords' pressures it does: without it the jump is
+    or the point is a bifurcation); with the chords' pressures it does.  The return check (a
+    located sign change's far side solved back to its near side must land there) refuses the same
+    try on its own: its end solved back at 0.290741 grows its Newton corrections (the path check)
+    and lands 0.0093 ell from the state there, the sides 0.020 ell apart; without both the jump is
     called a bifurcation."""
     from core_se3.solvers import step_checks
 
@@ -381,31 +384,60 @@ def test_a_limit_point_is_not_called_a_bifurcation_after_a_jump_across_it(monkey
     msg = str(err)
     assert "limit point" in msg and "bifurcation" not in msg, msg
     assert err.result.steps[-1].load_factor <= 0.290828
-    monkeypatch.setattr(step_checks, "GROWTH_REACH", np.inf)         # the rule is what tells them apart
+    monkeypatch.setattr(step_checks, "GROWTH_REACH", np.inf)         # the return check tells them apart too
+    err = run()
+    assert "limit point" in str(err) and "bifurcation" not in str(err), str(err)
+    assert any(e.get("return_check") and "return check" in e["reason"] for e in err.result.log)
+    monkeypatch.setattr(step_checks.StepChecks, "judge_return", lambda *a: "")   # neither: a 'bifurcation'
     assert "bifurcation" in str(run())
 
 
-def test_panel_108_on_its_elements_geometry_meets_a_bifurcation_the_run_names():
+_LIMIT_108 = 0.2857128    # arc length, dlam0 = 0.002, ds_max_factor 1: +- 3.2e-6, the path's largest load factor
+
+
+@pytest.mark.parametrize("steps", [1, 4, 16])
+def test_panel_108_on_its_elements_geometry_stops_at_its_limit_point_and_names_it(steps):
     """With the pressures on the element's own geometry (``add_pressure``) the panel's path has a
-    bifurcation, not a limit point, where load control stops: arc length passes a det K sign
-    change at 0.285694 +- 0.00012 with the load factor still rising (to a limit point at 0.3956);
-    16 and 128 load steps to 0.2858887, beyond it, end 4e-15 ell apart and 3e-4 ell from the arc-
-    length path (its step there 3.7e-3 ell): the path goes on continuously through it.  Load
-    control in 4 steps names it a bifurcation at 0.2857666 +- 0.00012; its last try, 0.2856445 to
-    0.2858887 (corrections 0.0188, 0.0049, 0.0093, 0.0027 ... ell: a growth of 0.235 of the step's
-    scale, just below GROWTH_REACH), lands on that path and is rightly kept."""
+    limit point at 0.2857128 +- 3.2e-6 (arc length from dlam0 = 0.002 with ds_max_factor 1: the
+    largest load factor of the path, which turns back down to a second limit point at 0.141985;
+    load control in 4000 steps, checks off, fails there with S_p 2.2e-4 of its start).  1, 4 and
+    16 steps stopped at a 'bifurcation' between 0.2856445 and 0.2858887 (1 step: 0.2861328) that
+    'the path went on continuously through': the try 0.2856445 -> 0.2858887 converged beyond the
+    limit point onto another branch (corrections 0.0188, 0.0049, 0.0093, 0.0027 ... ell, Theta
+    0.26, travel 0.96: the path check lets it through) with det K -1 and confirmed the sign change.
+    Now the located change is checked for continuity (the return check): that state solved back at
+    0.2856445 lands 0.0112 ell from the state there, the two sides being 0.0133 ell apart (a real
+    bifurcation's return lands within 1e-17 ell), so the bracket is dropped and the runs fail at
+    the limit point, its load factor between the last converged one and the failed one, saying
+    'limit point'."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         with pytest.raises(ConvergenceError) as exc:
-            _panel_108(chords=False).solve(steps=4)
-        arc = arc_length(_panel_108(chords=False), lam_end=0.35, dlam0=0.01)
+            _panel_108(chords=False).solve(steps=steps)
     msg = str(exc.value)
-    assert "bifurcation" in msg and "limit point" not in msg, msg
-    lam = float(re.search(r"i\.e\. at ([0-9.]+) \+- ([0-9.]+)", msg).group(1))
-    kinds = [(c.kind, c.lam) for c in arc.critical_points]
-    assert len(kinds) == 1 and kinds[0][0] == "bifurcation", kinds
-    assert abs(kinds[0][1] - lam) <= 2.5e-4
-    assert max(s.load_factor for s in arc.steps) >= 0.3                # the path rises on through it
+    assert "limit point" in msg and "bifurcation" not in msg, msg
+    failed = float(re.search(r"Newton failed at load factor ([0-9.]+)", msg).group(1))
+    last = float(re.search(r"the last converged load factor is ([0-9.]+)", msg).group(1))
+    assert last <= _LIMIT_108 + 1e-5 and failed >= _LIMIT_108 - 1e-5, (last, failed)
+    assert failed - last <= 2.5e-4                 # the smallest increment of 1 step's cut-backs: 2^-12
+
+
+def test_arc_length_reads_panel_108s_limit_point_from_a_step_across_it():
+    """From dlam0 = 0.01 arc length stepped from 0.285577 to 0.285812, across the limit point
+    (0.2857128) onto another branch with det K of the other sign and the load factor rising at both
+    ends, and reported a 'bifurcation at 0.285694 +- 0.00012' on a path rising on to 0.35.  The
+    bracket's far end solved back at 0.285577 (load control) grows its Newton corrections 4.2x (the
+    path check) and does not reach its near end, 0.0136 ell away: the ends do not connect, so the
+    step is refused and halved (``critical.returns``; the deep strip's ends, 4e-6 ell apart, connect
+    to 9e-16 ell); the shorter steps follow the path over its limit point and report it at 0.285713
+    +- 9.5e-6."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        arc = arc_length(_panel_108(chords=False), lam_end=0.35, dlam0=0.01)
+    first = arc.critical_points[0]
+    assert first.kind == "limit", [cp.describe() for cp in arc.critical_points]
+    assert abs(first.lam - _LIMIT_108) <= first.accuracy * first.lam + 1e-5
+    assert not [cp for cp in arc.critical_points if cp.kind == "bifurcation"]
 
 
 def test_a_shell_with_an_inexact_tangent_is_not_cut_back_forever():

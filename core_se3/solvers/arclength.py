@@ -458,6 +458,8 @@ def _critical_between(sysm, cur, pt, con, psi_u, step, o, timers, trylog):
         correct, lambda ds: ArcLengthConstraint(o.method, ds, psi_u, sysm.w), o, timers, (StepFailed,)),
         refused=untraced)
     trylog.append(entry)
+    if entry["jumped"]:                 # a bifurcation's ends that do not connect (critical.returns)
+        return cp, entry["jumped"]
     if untraced(entry["bisections"], cp.accuracy, o):
         how = ("no point inside the step reaches" if entry["bisections"] == 0 else
                f"{entry['bisections']} bisections inside the step do not close on")

@@ -40,10 +40,12 @@ from typing import Callable
 import numpy as np
 
 from ..errors import ElementTooDistortedError, SingularSystemError
+from .corrector import LinearConstraint, StepFailed, correct
 from .stability import analyse, locate_critical
+from .step_checks import RETURN_SHARE, RETURN_TOL, path_measures, path_refusal, state_gap
 
 __all__ = ["Corrector", "narrow", "refine", "estimate", "bracket_width", "reachable", "hidden_turns",
-           "turned_twice", "untraced", "MAX_BISECTIONS"]
+           "turned_twice", "untraced", "returns", "MAX_BISECTIONS"]
 
 log = logging.getLogger(__name__)
 
@@ -275,6 +277,45 @@ def untraced(bisections, accuracy, opts):
     return accuracy > opts.critical_tol and (bisections == 0 or bisections >= MAX_BISECTIONS)
 
 
+def _gap(sysm, s1, s2):
+    """The distance of two states of ``sysm``: the largest nodal distance in ell of two frames
+    (n, 4, 4) (``step_checks.state_gap``), else the largest difference of the unknowns."""
+    if np.ndim(s1) == 3:
+        return state_gap(s1, s2, sysm.ell)
+    return float(np.max(np.abs(np.asarray(s1, float) - np.asarray(s2, float)), initial=0.0))
+
+
+def returns(sysm, a, b, opts, timers):
+    """'' when the two ends a, b (PathPoints) of a bifurcation's final bracket connect, else why
+    not: the states of a path that goes on continuously through a bifurcation are a function of
+    the load factor there, so a load-controlled correction from b back to a's load factor lands
+    on a (to RETURN_TOL ell, or RETURN_SHARE of their distance); a step that jumped across a
+    limit point onto another branch lands on that branch, as far from a as b is.  Found: fuzz
+    problem 108 (a 3 x 1 cylindrical panel under a follower and a dead pressure; limit point at
+    0.285713, the path's largest load factor, from dlam0 = 0.002) from dlam0 = 0.01 stepped from
+    0.285577 to 0.285812, across the limit point onto another branch with det K of the other sign,
+    and was kept as a 'bifurcation at 0.285694 +- 0.00012': b's state solved back at 0.285577 grows
+    its Newton corrections 4.2x (the path check) on its way from b, 0.0136 ell from a (a real
+    bifurcation's return lands within 1.6e-7 of the ends' distance: the deep strip's 5e-16 to 9e-16
+    ell for ends 4e-6 to 6e-6 ell apart, the whole hinged roof's 4.2e-12 of 2.6e-5, the cubic's 0,
+    docs/STEPS.md).  A correction that fails or grows (the path
+    check, ``step_checks.path_refusal``) does not connect them either."""
+    incs = []
+    try:
+        state, _, _, _, _ = correct(sysm, b.state, a.lam, LinearConstraint(None, None, 1.0, a.lam), opts, timers,
+                                    incs)
+        why = path_refusal(*path_measures(incs))
+    except (StepFailed, ElementTooDistortedError, FloatingPointError, SingularSystemError) as exc:
+        why = str(exc)
+    there = _gap(sysm, a.state, b.state)
+    back = None if why else _gap(sysm, state, a.state)
+    if back is not None and back <= max(RETURN_TOL, RETURN_SHARE * there):
+        return ""
+    how = f"did not get there ({why[:120]})" if why else f"ends {back:.3g} from it ({there:.3g} between the ends)"
+    return (f"the bracket's end at lam {b.lam:.7g} solved back at {a.lam:.7g} (load control) {how}: its ends do not "
+            "connect, the step jumped across a limit point onto another branch")
+
+
 def estimate(sysm, a, b, con, span, upper, limit):
     """(critical load factor, relative accuracy) from the final bracket of :func:`refine` (its
     length ``span`` along the step ``con``): a bifurcation at the middle of its ends' load
@@ -314,9 +355,12 @@ def narrow(sysm, cur, pt, con, cp, corrector, refused=None):
         lam = float(np.clip(locate_critical(sysm, a, b, c, span, cp.step, limit=False).lam, lo, hi))
     cp.lam = lam if n or limit else cp.lam
     cp.lam_bracket = (a.lam, b.lam)
-    if cp.accuracy > corrector.opts.critical_tol and not (refused and refused(n, cp.accuracy, corrector.opts)):
+    dropped = refused is not None and refused(n, cp.accuracy, corrector.opts)
+    # a bifurcation's ends must connect (a step across a limit point onto another branch does not)
+    jumped = "" if limit or dropped else returns(sysm, a, b, corrector.opts, corrector.timers)
+    if cp.accuracy > corrector.opts.critical_tol and not jumped and not dropped:
         log.warning("the %s point near lam = %.6g is located only to %.2g (critical_tol %.2g): the bisection of "
                     "its step stopped after %d solves; a smaller step (dlam0, ds_max) brackets it closer",
                     cp.kind, cp.lam, cp.accuracy, corrector.opts.critical_tol, n)
     return dict(step=cp.step, refine=cp.kind, bisections=n, lam=cp.lam, accuracy=cp.accuracy,
-                converged=True, iterations=0, reason="")
+                converged=True, iterations=0, reason="", jumped=jumped)

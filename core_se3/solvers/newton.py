@@ -325,7 +325,8 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
             else:
                 lam, g, g_whole, stress_conv, k_ref, dlam = _refused(eq, hooks, checks, saved, result, dlam_nominal,
                                                                      (lam, g, g_whole, stress_conv, k_ref, dlam))
-                dlam = checks.next_increment(lam, dlam, floor)
+                dlam, reason = _after_refusal(trier, eq, hooks, checks, out, (g, lam, stress_conv, dlam, floor), mip,
+                                              result)
             if checks.located(floor):
                 timer.close()
                 _stop_at_critical(problem, opts, checks, result, getattr(eq, "negative_count", None))
@@ -497,6 +498,9 @@ def _step_checks(opts, eq, state):
                         and not any(getattr(ld, "follower", False) for ld in eq.loads))
     # the midpoint probe of a try that turned a node past pi (a stateful element's state is not restored)
     checks.probe = opts.midpoint_probe and opts.limit_check and not eq.stateful
+    # ... and the return check of a located sign change (the stateful element's state at the far
+    # side is not kept: its located changes are reported unverified, as before)
+    checks.returning = not eq.stateful
     # ... and of a try that passes a limit point ahead (the current stiffness of load control: not
     # with a prescribed motion, whose load factor is no load's)
     checks.stiffness = not (eq.stateful or eq.problem.has_prescribed_motion)
@@ -633,6 +637,44 @@ def _midpoint_probe(prober, eq, hooks, here):
     g_whole = eq.whole_frames(g) if eq.predictor else g      # the tangent predictor's only (serial)
     g_mid, stress_mid = _try_start(eq.problem, eq, trier, g, g_whole, lam, lam_mid, mip, stress_conv, hooks.predictors)
     return trier.run(g_mid, lam_mid, mip, stress_mid)
+
+
+def _after_refusal(trier, eq, hooks, checks, out, here, mip, result):
+    """The next increment and the reason of the refused try ``out`` from ``here`` = (g, lam,
+    stress_conv, the cut-back's dlam, floor): while a sign change of det K is located, the
+    bisection's (``StepChecks.next_increment``); a located one whose sides do not connect (the
+    return check, :func:`_jumped_across`) is dropped, the cut-back's dlam kept and the reason
+    the return check's."""
+    g, lam, stress, dlam, floor = here
+    if checks.located(floor) and checks.returning and \
+            (why := _jumped_across(trier, eq, hooks, checks, out, (g, lam, stress), mip, result)):
+        return dlam, why
+    return checks.next_increment(lam, dlam, floor), out.reason
+
+
+def _jumped_across(trier, eq, hooks, checks, out, here, mip, result):
+    """The return check of a located sign change (``StepChecks.judge_return``): the try ``out``
+    from the current state ``here`` = (g, lam, stress_conv) to the bracket's high end converged
+    with the other sign; a try from its end back to lam must land on g, else it jumped across a
+    limit point, and why is returned (the bracket dropped, the reason logged with the try), else ''."""
+    g, lam, stress = here
+    lam_hi = checks.bracket[1]
+    g_hi = out.g
+    g_back, stress_back = _try_start(eq.problem, eq, trier, g_hi, eq.whole_frames(g_hi) if eq.predictor else g_hi,
+                                     lam_hi, lam, mip, out.ev.stress if mip and out.ev is not None else None,
+                                     hooks.predictors)
+    back = trier.run(g_back, lam, mip, stress_back)
+    gap = (eq.state_gap(g_hi, g), eq.state_gap(back.g, g)) if back.ok else None
+    why = checks.judge_return(back, gap, lam, lam_hi)
+    entry = result.log[-1] if result.log else {}
+    entry["return_check"] = dict(converged=back.ok, iterations=back.iterations, linear_solves=back.solves,
+                                 increments=[float(x) for x in back.incs], gap=None if gap is None else list(gap))
+    entry["linear_solves"] = entry.get("linear_solves", 0) + back.solves
+    if why:
+        entry["reason"] = "; ".join(x for x in (entry.get("reason"), why) if x)
+        if eq.root:
+            log.info("  lam %.6g: %s", lam_hi, why)
+    return why
 
 
 def _refined_end(prober, eq, hooks, here, g_long):

@@ -286,6 +286,8 @@ def _control_critical(sysm, cur, pt, lin, control, opts, timers, step):
     entry = narrow(sysm, cur, pt, step_con, cp, Corrector(
         _checked_correct, lambda x: _control_constraint(value, row, u0 + x, 0.0 * lin.du, 0.0), opts, timers,
         (StepFailed,)), refused=_unlocated)
+    if entry["jumped"]:                  # a bifurcation's ends that do not connect (critical.returns)
+        raise StepFailed(entry["jumped"])
     if _unlocated(entry["bisections"], cp.accuracy, opts):
         raise StepFailed(f"{entry['bisections']} bisections of the step from u = {u0:.6g} (load factor "
                          f"{cur.lam:.6g}) to {value(pt.state):.6g} ({pt.lam:.6g}) do not close on the {cp.kind} "

@@ -68,8 +68,21 @@ change on the path is a bifurcation, beyond which the states depend on the step 
 try that contracted onto an unstable state of another branch shows a change too.  The try is
 refused and the change located by bisection of the load factor to ``critical_tol`` (relative),
 the last try from the bracket's low end to its high end telling the two apart (the old sign
-there: a jump, the bracket is dropped); a critical point stops the run with a ConvergenceError
-naming it and what to do; with ``limit_check`` off it
+there: a jump, the bracket is dropped).  That the path went on continuously through the change
+is then verified, not assumed (the **return check**, :meth:`StepChecks.judge_return`): the state
+the confirming try converged onto at the high end, solved back to the low end (one more try),
+must land on the low end's state (to RETURN_TOL ell or RETURN_SHARE of the two sides' distance):
+the states of a path through a bifurcation are a function of the load factor there; a try that
+jumped across a limit point lands on another branch, as far from the low end as the high end is,
+and the bracket is dropped and the try cut back.  Found: fuzz problem 108 (seed 4: a 3 x 1
+cylindrical panel under a follower and a dead pressure; limit point at 0.2857128, the largest
+load factor of its path by arc length) in 1, 4 and 16 steps stopped at a 'bifurcation' between
+0.2856445 and 0.2858887 (1 step: 0.2861328): the try across it converged (corrections 0.0188,
+0.0049, 0.0093, 0.0027 ... ell, Theta 0.26: the path check lets it through) onto another branch
+with det K -1; solved back at 0.2856445 it lands 0.0112 ell from the state there, the sides 0.0133
+ell apart.  The returns of real bifurcations land within 2.1e-11 of the sides' distance (the
+Euler strips' 1e-17 ... 1e-19 ell of 1e-8 ... 1e-4, the torsion strip's 2.3e-14 of 6.1e-3).  A
+critical point stops the run with a ConvergenceError naming it and what to do; with ``limit_check`` off it
 is recorded where it was passed (``Result.critical_points``, bracketed by the step, no extra
 tries) and the path goes on, unstable.  The start
 state's sign is taken to be that of the first accepted state when that is +1 (an unloaded,
@@ -147,7 +160,8 @@ from .stability import CriticalPoint
 
 __all__ = ["path_measures", "path_refusal", "start_sign", "largest_turn", "StepChecks", "CONTRACTION_MAX",
            "GROWTH_SCALE", "TRAVEL_MAX", "CONTRACTION_FLOOR", "GROWTH_CAP",
-           "GROWTH_REACH", "PROBE_TURN", "REFINE_ITERATIONS", "REFINE_PARTS", "REFINE_TOL", "state_gap"]
+           "GROWTH_REACH", "PROBE_TURN", "REFINE_ITERATIONS", "REFINE_PARTS", "REFINE_TOL", "RETURN_TOL",
+           "RETURN_SHARE", "state_gap"]
 
 CONTRACTION_MAX = 1.0    # a try whose corrections grow at the step's scale is not accepted
 GROWTH_SCALE = 0.5       # ... the step's scale: half the first correction
@@ -159,6 +173,8 @@ PROBE_TURN = 0.95 * np.pi  # a try that turns a node by more than this [rad] is 
 REFINE_ITERATIONS = 7    # a try of more Newton iterations than this is solved again in parts ...
 REFINE_PARTS = 4         # ... this many, each from the last one's converged state ...
 REFINE_TOL = 1e-6        # ... and refused when their end is farther than this [ell] from its own
+RETURN_TOL = 1e-6        # a located sign change's far side, solved back, lands this near [ell] (as REFINE_TOL)
+RETURN_SHARE = 0.01      # ... or within this share of the two sides' distance (measured: <= 1.6e-7 against 0.85)
 
 
 def path_measures(incs, floor=CONTRACTION_FLOOR):
@@ -306,6 +322,9 @@ class StepChecks:
         ``midpoint_probe`` (with ``limit_check``; default False, set by the caller): a try that
         turns a node by more than PROBE_TURN is probed at its midpoint (:meth:`wants_probe`,
         :meth:`judge_probe`; with the stability check only).
+    returning : bool
+        Apply the return check to a located sign change (:meth:`judge_return`; default True, off
+        for a stateful element, whose state on the far side is not kept).
     rejected : int
         Tries refused by the path check since the last stored step (``record`` resets it).
     bracket : (float, float) or None
@@ -337,6 +356,7 @@ class StepChecks:
         self.probe = False
         self.probes = self.probe_iterations = 0    # since the last stored step
         self.refine = False
+        self.returning = True       # the return check of a located sign change (judge_return)
         self.refinements = self.refine_iterations = 0    # refine check: since the last stored step
         # the current stiffness (Bergan's, TryOutcome.k_step) at the start of the last accepted try
         # over the first's: (load factor, S_p), and the first's k_step (``stiffness``: tracked)
@@ -503,6 +523,38 @@ class StepChecks:
         if self.probing:
             self.bracket = None
             self.probing = False
+
+    def judge_return(self, back, gap, lam, lam_hi):
+        """'' when the located sign change between ``lam`` (the current state's load factor) and
+        ``lam_hi`` connects its two sides, else why not, the bracket then dropped (a jump across a
+        limit point: module docstring).  ``back``: the TryOutcome of the return try, from the
+        state the confirming try converged onto at ``lam_hi`` back to ``lam``; ``gap``: the
+        distances from the current state of the confirming try's end and of the return's end
+        (:func:`state_gap`, ell), or None when the return did not converge.
+
+        Example
+        -------
+        >>> import types
+        >>> chk = StepChecks(True, True, 1e-3, sign=1)
+        >>> chk.bracket, chk.confirmed = (0.2856445, 0.2858887), True
+        >>> ok = types.SimpleNamespace(ok=True, reason="", contraction=0.1, travel=0.11)
+        >>> chk.judge_return(ok, (6.1e-3, 2.3e-14), 0.2856445, 0.2858887), chk.bracket
+        ('', (0.2856445, 0.2858887))
+        >>> why = chk.judge_return(ok, (0.0133, 0.0112), 0.2856445, 0.2858887)
+        >>> why[:50], "ended 0.0112 ell from the state there" in why, chk.bracket
+        ('return check: the try from the state at load facto', True, None)
+        """
+        there, back_gap = (None, None) if gap is None else gap
+        why = (back.reason[:120] or "no convergence") if not back.ok else path_refusal(back.contraction, back.travel)
+        if not why and back_gap <= max(RETURN_TOL, RETURN_SHARE * there):
+            return ""
+        head = (f"return check: the try from the state at load factor {lam_hi:.7g} on the far side of the det K "
+                f"sign change back to {lam:.7g} ")
+        why = (f"did not get there ({why})" if why else
+               f"ended {back_gap:.3g} ell from the state there (the two sides {there:.3g} ell apart)")
+        self.bracket, self.confirmed, self.probing = None, False, False
+        return head + why + (": the sides do not connect, the try across it jumped (a limit point, which load "
+                             "control cannot pass); the bracket is dropped and the try cut back")
 
     def _narrow(self, floor):
         lo, hi = self.bracket
