@@ -784,7 +784,7 @@ def file_report(whole_f, quarter_f, cap_f, gmsh_f, sphere_f):
         "", "### A closed sphere (`cubed_sphere`) from a file", "",
         f"R/h {rh:g}, pinched: a unit load down at the top node, the bottom node clamped; the deflection there "
         "(a point load's: it grows with the mesh). nan: no answer (ElementTooDistortedError: d1 turns by about "
-        "180 deg across an element). Largest turn: of the default's d1 across an edge (`HALF_TURN` = 135 deg).",
+        "180 deg across an element). Largest turn: of the default's d1 across an edge.",
         "", "| mesh per face | quads | " + " | ".join(names) + " | largest turn [deg] |",
         "|---|---:|" + "---:|" * len(names) + "---:|"]
     lines += [f"| {n}x{n} | {m} | " + " | ".join(f"{c:.4g}" for c in cells) + f" | {worst:.1f} |"
