@@ -86,6 +86,7 @@ from .membrane_enhanced import condensed_stiffness, membrane_enhancement
 from .membrane_shear import curved_element_measures, shear_retention, shear_tying
 from .quadrature import GAUSS_2x2
 from .resultants import element_resultants
+from .warp import check_warp
 
 _IU = np.triu_indices(24)                # the upper triangle of a 24x24 matrix, row by row
 
@@ -455,6 +456,7 @@ class DefaultElement(Element):
             self.Dz0[sl] = np.einsum("mij,mj->mi", _unpack(self.Dbar_packed[sl]), self.z0[sl])  # Dbar z0
         self.area = self.j0.sum(axis=1)                                 # reference area per element
         check_frame_turns(mesh.X, mesh.quads, self.corner_frames(mesh.g0), self.j0, stacklevel=5)
+        check_warp(mesh.X, mesh.quads, mesh.g0, stacklevel=5)               # warped quads (fem/warp.py)
         self._Dbar = None
         # the coarse-curvature warning needs the supports (which edges are free): the Problem
         # issues it when it solves (Problem.check_element)
