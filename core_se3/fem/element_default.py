@@ -66,7 +66,9 @@ angles.  Without cuts (every k = 0) nothing is done (the code paths of before, t
 the closed cubed sphere read from a file (R 10): the element's area within 2.6 / 2.6 / 2.6 % of
 its quad's on 4 / 8 / 16 per face (0.03 of it before on 17 / 56 / 90 elements) and a pressurised
 sphere's radial displacement within -3.4 / +5.9 % of the membrane value on 16 per face
-(-1.6 / +2.3 % on 24: O(h^2), largest round the cube's corners; -5.7 ... 7.2 times it before).
+(-1.6 / +2.3 % on 24, -0.9 / +1.2 % on 32: O(h^2); largest at the midpoints of the cube's edges,
+where two faces' grids meet at a kink, and as large with a hint's frames there; at the cube's 8
+valence-3 corners -3.4 / -1.6 / -0.9 %, O(h^2) too, as the face centres; -5.7 ... 7.2 times it before).
 """
 from __future__ import annotations
 
