@@ -81,7 +81,7 @@ from ..errors import ElementTooDistortedError, ElementWarning
 from ..mesh import LOCAL_EDGES
 from ..mesh.gauge import corner_turns, edge_matching, quarter_turns, turned_about_normal
 from .element import Element, ElementEvaluation, register_element
-from .frame_turns import check_frame_turns
+from .frame_turns import check_frame_turns, check_node_windings
 from .material import law_matrix
 from .membrane_drilling import drilling_correction, reference_G, tying_correction
 from .membrane_enhanced import condensed_stiffness, membrane_enhancement
@@ -459,6 +459,8 @@ class DefaultElement(Element):
         self.area = self.j0.sum(axis=1)                                 # reference area per element
         check_frame_turns(mesh.X, mesh.quads, self.corner_frames(mesh.g0), self.j0, stacklevel=5)
         check_warp(mesh.X, mesh.quads, mesh.g0, stacklevel=5)               # warped quads (fem/warp.py)
+        if self.matching is not None:                                   # d1 spinning about a node (Cuts)
+            check_node_windings(mesh, self.matching, stacklevel=5)
         self._Dbar = None
         # the coarse-curvature warning needs the supports (which edges are free): the Problem
         # issues it when it solves (Problem.check_element)

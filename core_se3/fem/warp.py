@@ -66,7 +66,7 @@ def quad_warp(X, quads, g):
     >>> m = mesh.rectangle(1.0, 1.0, 1, 1)
     >>> m.X[3, 2] = 0.2                              # a corner lifted, the normals left along z
     >>> [round(float(w), 3) for w in np.concatenate(quad_warp(m.X, m.quads, m.g0))]
-    [0.05, 0.05]
+    [0.049, 0.049]
     """
     P = np.asarray(X, float)[quads]
     N = np.asarray(g, float)[quads][:, :, :3, 2]
