@@ -11,16 +11,18 @@ normals that cannot follow nodal-scale bumps) is a reference geometry the helice
 Measured (linear, a hyperbolic paraboloid z = c x y, 1 x 1, h 0.01, clamped on one side, a tip
 force; over its 32 x 32 with exact normals): with the exact normals the warp explained to 0.015
 of the quad's size and the answer that of a coarse mesh (c = 2, 2 x 2: warp 0.18 of the size,
-0.97; c = 4, 2 x 2: 0.72); with the normals left along z (the warp unexplained) 0.98 / 0.94 /
-0.47 / 0.22 at an unexplained warp of 0.06 / 0.11 / 0.18 / 0.22 of the size.  A flat plate whose
-interior nodes are moved off its plane at random (normals along z, or read from a file) at an
+0.97; c = 4, 2 x 2: 0.72); with the normals left along z (the warp unexplained), at 0.06 of the
+size as with the exact ones (0.94 / 0.98 on two meshes), at 0.11 0.90 / 0.94 (exact normals 0.95 /
+0.98), at 0.18 0.47 / 0.72 (0.97 / 0.94), at 0.22 0.22 (0.72).  A flat plate whose interior nodes
+are moved off its plane at random (normals along z; read from a file about the same) at an
 unexplained warp of 0.02 / 0.07 / 0.20 of the size came out 0.96 / 0.77 / 0.45 of the flat one
-(8 x 8, h 0.01; at h 0.1: 1.000 / 1.000 / 1.006, so part of it is the bumps' own stiffness).
+(8 x 8, h 0.01, edges held, pressed; at h 0.1: 1.000 / 1.000 / 1.006, so part of it is the bumps' own stiffness).
 Every catalogue case's mesh, the generators' (hemisphere, cylinders, Scordelis-Lo, the twisted
 beam: warp 0.024 of the size on 12 x 2, 0.049 on 6 x 1, all explained to 3e-4), the closed
 cubed sphere, the cubed cap, the whole and the moved-node quarter hemisphere from files and
 Gmsh's unstructured domes have an unexplained warp of at most 0.0125 of the size (the quarter
-with nodes moved by 0.3 of the spacing, 4 x 4).
+with nodes moved by 0.3 of the spacing, 4 x 4); the twisted beam twisted by 720 deg instead of 90
+on 12 x 2, warped by 0.19 of the size, 0.015 (its tip 0.947 of its 96 x 8's: a coarse mesh's).
 
 The check (at the element's build, :func:`check_warp`): an element whose unexplained warp is
 above WARN_WARP = 0.05 of its size (four times the most of the meshes above; below where the
