@@ -1037,3 +1037,21 @@ def test_a_session_of_an_arc_length_scenario_past_its_limit_point_says_how_to_st
         lam = r.doc["steps"][-1]["load_factor"]
         s = Session.from_scenario(path, lam=lam, g=r.g)
     assert s.lam == lam and float(abs(s.g - r.g).max()) < 1e-8 * 2540.0
+
+
+def test_a_session_at_load_factor_0_names_loads_that_do_not_vanish_there():
+    """Session(p, lam=0) starts from the reference state, the equilibrium of loads that vanish at
+    load factor 0.  A load of constant scale (tip force 4, EI = 100: the tip turns 2 rad) was
+    refused as 'the start is not an equilibrium the corrector reaches', as if a given start
+    were wrong; the message now names the load that does not vanish and what to do.  A small
+    one (0.5) the corrector reaches: the cold solve's tip, 1.6154032 (to 1e-7)."""
+    def strip(P):
+        p = Problem(mesh.rectangle(10.0, 1.0, 8, 1), Material(1.2e6, 0.0, 0.1))
+        p.clamp("x0")
+        p.add_load("edge_force", "x1", scale=lambda lam: 1.0, force=(0.0, 0.0, P))
+        p.add_probe("tip", "x1")
+        return p
+    with pytest.raises(ControlError, match=r"1 load\(s\) do not vanish at load factor 0 .*edge force .*give g, a "
+                                           r"state in equilibrium at load factor 0"):
+        Session(strip(4.0), lam=0.0)
+    assert abs(Session(strip(0.5), lam=0.0).state.probes["tip"]["u"][2] - 1.61540322) < 1e-7
