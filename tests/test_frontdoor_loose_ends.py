@@ -9,7 +9,7 @@ import warnings
 import pytest
 
 from core_se3 import scenario
-from core_se3.errors import ScenarioError
+from core_se3.errors import AngleWarning, ScenarioError
 
 QUIET = {"vtu": False, "plots": False, "picture": False}
 STRIP = {"name": "strip", "mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 4, "ny": 1},
@@ -40,3 +40,67 @@ def test_a_linear_solver_this_machine_lacks_is_named_at_its_key(monkeypatch):
     with pytest.raises(ScenarioError, match=r"\[solver.linear_solver\]: linear_solver 'mumps' needs petsc4py, not "
                                             r"installed here; the choices on this machine: auto, banded, superlu"):
         load(doc(solver={"steps": 1, "linear_solver": "mumps"}))
+
+
+def _angle_warnings(fn):
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        fn()
+    return [w for w in said if issubclass(w.category, AngleWarning)], said
+
+
+@pytest.mark.parametrize("what", ["rotate_edge", "move_edge", "box", "star", "polygon", "sector", "motion", "field",
+                                  "command"])
+def test_an_angle_in_degrees_warns_in_the_python_api(what):
+    """rotate_edge(angle=90) meant a quarter turn and rolled the edge 14.3 times, a box rotated
+    by (0, 0, 90) or a star's angle0 = 45 landed at 90 rad and 45 rad -- silently, where a
+    scenario file warned.  Every angle entering the Python API now gives one AngleWarning, said
+    at the caller's line, the same value in radians (a turn, a half turn) nothing."""
+    import numpy as np
+    from core_se3 import Material, Problem, mesh
+    from core_se3.model import obstacles
+    from core_se3.model.fields import field_kind
+    from core_se3.model.obstacle_kinds import Box
+
+    def make(angle):
+        p = Problem(mesh.rectangle(10.0, 1.0, 4, 1), Material(1.2e6, 0.0, 0.1))
+        calls = {"rotate_edge": lambda: p.rotate_edge("x1", (1.0, 0.0, 0.0), angle),
+                 "move_edge": lambda: p.move_edge("x1", axis=(1.0, 0.0, 0.0), angle=angle),
+                 "box": lambda: Box((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), rotation=(0.0, 0.0, angle / 2)),
+                 "star": lambda: mesh.star(4, 10.0, 2.0, size=2.0, backend="structured", angle0=angle / 2),
+                 "polygon": lambda: mesh.polygon(5, 1.0, size=0.5, backend="structured", angle0=angle / 2),
+                 "sector": lambda: mesh.annulus_sector(1.0, 2.0, 1.0, size=0.5, backend="structured",
+                                                      theta0=angle / 2),
+                 "motion": lambda: obstacles.rigid_motion(axis=(0.0, 0.0, 1.0), angle=angle),
+                 "field": lambda: field_kind("uniform").build(
+                     {"B": (0.0, 0.0, 1.0), "rotate": {"axis": (1.0, 0.0, 0.0), "angle": angle, "start": 0.0,
+                                                       "end": 1.0}}, None, 1.0),
+                 "command": lambda: _polar_session().update(B=[0.3, angle])}
+        return calls[what]
+
+    found, said = _angle_warnings(make(90.0))
+    assert len(found) == 1 and found[0].filename == __file__, [str(w.message) for w in said]
+    assert "in radians (90 degrees is 1.5708 rad)" in str(found[0].message) or \
+        "in radians (45 degrees is 0.785398 rad)" in str(found[0].message)
+    assert _angle_warnings(make(2 * np.pi))[0] == []
+
+
+def _polar_session():
+    from core_se3 import Material, Problem, mesh
+    from core_se3.control import Session
+    from core_se3.design import FieldVariable
+    from core_se3.model import UniformField
+    p = Problem(mesh.rectangle(1.0, 0.2, 4, 1), Material(1e3, 0.0, 0.05))
+    p.clamp("x0")
+    f = UniformField((0.0, 0.0, 1e-3))
+    p.add_magnetic((1.0, 0.0, 0.0), f, mu0=1.0)
+    return Session(p, 1.0, [FieldVariable(p, f, "polar", name="B")])
+
+
+def test_a_scenario_angle_in_degrees_is_said_once_at_its_key():
+    """The scenario's warning names the key; the layers below (now warning too) stay quiet."""
+    d = doc(supports=[{"type": "clamp", "edge": "x0"},
+                      {"type": "rotate", "edge": "x1", "axis": [1.0, 0.0, 0.0], "angle": 90.0, "free": ["x"]}],
+            loads=[], probes=[])
+    found, said = _angle_warnings(lambda: scenario.from_dict(d, file="s.toml"))
+    assert found == [] and [str(w.message) for w in said if "[supports[1].angle]" in str(w.message)] != []

@@ -40,7 +40,7 @@ import warnings
 import numpy as np
 
 from ..backend import launched_ranks
-from ..errors import ConvergenceError, DesignError, ParallelError
+from ..errors import ConvergenceError, DesignError, ParallelError, warn_angle
 from .equilibrium import (ElementCheck, EquilibriumOptions, EquilibriumState, assign_all, follow, multipliers,
                           restore_multipliers, solve_flat)
 from .objectives import AngleInDegrees, NodePosition, Orientation, ProbePosition, RotationAngle
@@ -503,6 +503,9 @@ class Design:
             if x0.shape != (self.nx,) or not np.all(np.isfinite(x0)):
                 raise DesignError(f"x0 must be {self.nx} finite numbers ({', '.join(self.labels)}), got "
                                   f"{x0.ravel().tolist()[:8]}")
+            for lab, x in zip(self.labels, x0):        # a polar form's angle [rad]: degrees?
+                if lab.endswith(".angle"):
+                    warn_angle(x, f"x0's {lab}")
         if np.any(x0 < self.lower) or np.any(x0 > self.upper):
             i = int(np.nonzero((x0 < self.lower) | (x0 > self.upper))[0][0])
             raise DesignError(f"the start {x0[i]:g} of {self.labels[i]!r} lies outside its bounds "
