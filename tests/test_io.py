@@ -225,3 +225,17 @@ def test_an_output_path_that_is_a_file_is_refused_by_name(tmp_path):
     with pytest.raises(RunDirectoryError, match="is a file, not a directory"):
         scenario.run(scn, out=str(f))
     assert f.read_text() == "mine"
+
+
+def test_a_cut_short_checkpoint_says_what_to_do(tmp_path):
+    """A checkpoint cut to half its bytes (a copy interrupted, a full disk) was refused as
+    'cannot read checkpoint ...: File is not a zip file', without the way on; now it says the
+    file is damaged and how to start over."""
+    from core_se3.errors import CheckpointError
+    ck = io.Checkpoint(tmp_path)
+    ck.save("fp", dict(step=1, lam=0.5, g=np.tile(np.eye(4), (50, 1, 1)), unwrap={}, records=[], timings={}))
+    data = open(ck.path, "rb").read()
+    open(ck.path, "wb").write(data[:len(data) // 2])
+    with pytest.raises(CheckpointError, match=r"checkpoint\.npz: .*cut-short file.*without --resume \(and with "
+                                              r"--force\) to start over"):
+        ck.load("fp")
