@@ -104,3 +104,17 @@ def test_a_scenario_angle_in_degrees_is_said_once_at_its_key():
             loads=[], probes=[])
     found, said = _angle_warnings(lambda: scenario.from_dict(d, file="s.toml"))
     assert found == [] and [str(w.message) for w in said if "[supports[1].angle]" in str(w.message)] != []
+
+
+def test_a_sweeps_columns_have_their_units_in_sweep_json(tmp_path):
+    """sweep.csv's columns (tip.uz, supports[0].Fz, ...) came without units, and sweep.json did not
+    say them either (results.json does): with units = "N-mm-MPa" a reader could not tell mm
+    from m.  sweep.json now holds the unit system and the unit of every computed column."""
+    import json
+    d = doc(units="N-mm-MPa", material={"E": 1.2e3, "nu": 0.0, "h": 0.1})
+    res = scenario.sweep(load(d), {"loads[0].force[2]": [1e-3, 2e-3]}, out=str(tmp_path / "sw"), plot=False)
+    st = json.load(open(tmp_path / "sw" / "sweep.json"))
+    assert st["unit_system"]["name"] == "N-mm-MPa" and len(res.rows) == 2
+    cu = st["column_units"]
+    assert (cu["tip.uz"], cu["tip.rotation"], cu["supports[0].Fz"], cu["supports[0].My"]) == ("mm", "rad", "N", "N mm")
+    assert "loads[0].force[2]" not in cu and "status" not in cu
