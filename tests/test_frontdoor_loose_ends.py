@@ -118,3 +118,20 @@ def test_a_sweeps_columns_have_their_units_in_sweep_json(tmp_path):
     cu = st["column_units"]
     assert (cu["tip.uz"], cu["tip.rotation"], cu["supports[0].Fz"], cu["supports[0].My"]) == ("mm", "rad", "N", "N mm")
     assert "loads[0].force[2]" not in cu and "status" not in cu
+
+
+def test_a_json_path_that_is_a_directory_is_called_one(tmp_path, capsys):
+    """--json DIR (an existing directory) was refused as 'a file that is not an earlier bench
+    run's JSON' (check-mesh: '... check's JSON: the check would overwrite it'): it is a directory,
+    and the way on is a file's path in it."""
+    from core_se3 import cli
+    d = tmp_path / "results"
+    d.mkdir()
+    scn = tmp_path / "s.toml"
+    scn.write_text(scenario.dumps(doc()))
+    for args, name in ((["bench", "run", "cantilever-shear", "--json", str(d)], "case.json"),
+                       (["check-mesh", str(scn), "--json", str(d)], "check.json")):
+        assert cli.main(args) == 2
+        err = capsys.readouterr().err
+        assert f"--json {str(d)!r} is a directory: give the path of a file (e.g. {str(d / name)!r})" in err, err
+    assert list(d.iterdir()) == []

@@ -164,6 +164,8 @@ def _json_target_error(path):
         return None
     if isinstance(old, dict) and old.get("schema") == "core-se3-result" and "case" in old and "scenario" not in old:
         return None                            # (a run's results.json names its scenario)
+    if os.path.isdir(path):
+        return f"--json {path!r} is a directory: give the path of a file (e.g. {os.path.join(path, 'case.json')!r})"
     return f"--json {path!r} is a file that is not an earlier bench run's JSON: give another path (e.g. case.json)"
 
 
