@@ -635,7 +635,13 @@ def angle_in_degrees(angle, path=True):
 def warn_angle(angle, what, path=True):
     """An :class:`AngleWarning` about ``what`` (e.g. ``"rotate_edge: angle"``) where
     :func:`angle_in_degrees` has a message, said at the first line outside core_se3 (the user's
-    call, however deep the angle entered); returns ``angle``."""
+    call, however deep the angle entered); returns ``angle``.
+
+    Example
+    -------
+    >>> warn_angle(1.5, "rotate_edge: angle")        # a quarter turn in radians: nothing said
+    1.5
+    """
     msg = angle_in_degrees(angle, path)
     if msg is not None:
         import os
