@@ -218,6 +218,10 @@ def test_linear_solver_refused_when_the_problem_is_made(monkeypatch):
     with pytest.raises(OptionError, match=r"'mumps' needs petsc4py, not installed here; the choices on this "
                                           r"machine: auto, banded, superlu$"):
         Problem(rectangle(L, WIDTH, 4, 1), Material(E, 0.0, H), linear_solver="mumps")
+    p = Problem(rectangle(L, WIDTH, 4, 1), Material(E, 0.0, H))
+    with pytest.raises(OptionError, match="unknown linear_solver 'lu'"):
+        p.linear_solver = "lu"                        # set later: checked the same way, the old one kept
+    assert p.linear_solver == "auto"
 
 
 def _unit_square_frames(X):

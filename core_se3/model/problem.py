@@ -163,8 +163,18 @@ class Problem:
         self.mesh = mesh                              # sets length_scale
         self.material = material
         self.element_name = element                   # an unknown name fails here; built at first use
-        self.linear_solver = check_linear_solver(linear_solver)
+        self.linear_solver = linear_solver            # an unknown or unavailable name fails here
         self.solve_defaults = {}
+
+    @property
+    def linear_solver(self):
+        """The linear solver's name; setting it checks it (``model.solving.check_linear_solver``:
+        an OptionError naming the choices on this machine, not a failure when a solve begins)."""
+        return self._linear_solver
+
+    @linear_solver.setter
+    def linear_solver(self, name):
+        self._linear_solver = check_linear_solver(name)
 
     @property
     def mesh(self):
