@@ -327,7 +327,9 @@ def json_text(doc):
     """
     try:
         return json.dumps(doc, indent=1, allow_nan=False)
-    except ValueError:                    # (the walk only where a number is not finite)
+    except ValueError as exc:             # (the walk only where a number is not finite)
+        if "Out of range float" not in str(exc):
+            raise                         # (a circular reference)
         found = {}
         clean = _finite(doc, "", found)
         if not isinstance(clean, dict):
