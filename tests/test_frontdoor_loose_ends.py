@@ -135,3 +135,44 @@ def test_a_json_path_that_is_a_directory_is_called_one(tmp_path, capsys):
         err = capsys.readouterr().err
         assert f"--json {str(d)!r} is a directory: give the path of a file (e.g. {str(d / name)!r})" in err, err
     assert list(d.iterdir()) == []
+
+
+def test_a_bench_json_that_cannot_be_written_keeps_the_earlier_one(tmp_path, capsys, monkeypatch):
+    """bench run --json wrote in place: a disk that filled while it wrote left the earlier
+    document of the same path cut short (not JSON).  Now it is written beside and moved into
+    place, so the earlier one stays whole and the error says the solve's table is complete."""
+    import builtins
+    import errno
+    import json
+    from core_se3 import cli
+    path = tmp_path / "case.json"
+    assert cli.main(["bench", "run", "cantilever-shear", "--steps", "2", "-q", "--json", str(path)]) == 0
+    before = path.read_text()
+    real_open = builtins.open
+
+    class Full:
+        def __init__(self, fh):
+            self.fh = fh
+
+        def write(self, text):
+            self.fh.write(text[:100])
+            raise OSError(errno.ENOSPC, "No space left on device")
+
+        def __getattr__(self, name):
+            return getattr(self.fh, name)
+
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exc):
+            self.fh.close()
+
+    def full_disk(file, mode="r", *args, **kw):
+        fh = real_open(file, mode, *args, **kw)
+        return Full(fh) if "w" in mode and str(tmp_path) in str(file) else fh
+    monkeypatch.setattr(builtins, "open", full_disk)
+    assert cli.main(["bench", "run", "cantilever-shear", "--steps", "2", "-q", "--json", str(path)]) != 0
+    monkeypatch.undo()
+    assert "No space left on device" in capsys.readouterr().err
+    assert path.read_text() == before and json.loads(before)["case"] == "cantilever-shear"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["case.json"]          # no half-written temporary
