@@ -148,9 +148,14 @@ def _start_refused(problem, lam, given, reason):
     head = f"the start is not an equilibrium the corrector reaches at load factor {lam:g}: {reason}"
     if lam != 0.0 or given:
         return head
-    g0 = problem.mesh.g0
-    loads = [(ld, float(np.abs(ld.evaluate(g0, 0.0, False).f).max())) for ld in problem.loads]
-    on = [f"{getattr(ld, 'name', type(ld).__name__)} (largest nodal value {f:.3g})" for ld, f in loads if f > 0.0]
+    on = []
+    for ld in problem.loads:
+        try:
+            f = float(np.abs(ld.evaluate(problem.mesh.g0, 0.0, False).f).max())
+        except Exception:                    # (a load that cannot say: the plain message)
+            continue
+        if f > 0.0:
+            on.append(f"{getattr(ld, 'name', type(ld).__name__)} (largest nodal value {f:.3g})")
     if not on:
         return head
     return (f"Session at load factor 0 starts from the reference state, the equilibrium where the loads vanish, "
