@@ -18,8 +18,8 @@ from ..backend import launched_rank, launched_ranks
 from ..errors import MeshWarning, OptionError, ParallelError, SupportWarning, did_you_mean
 from .prescribed import DOF_NAMES, DRIFT_TOL, held_dof_drift
 
-__all__ = ["SOLVERS", "LINEAR_SOLVERS", "check_linear_solver", "DISTRIBUTED_KEYS", "dispatch", "solve_linear", "check_held_dofs", "warn_final_state",
-           "dipole_warning"]
+__all__ = ["SOLVERS", "LINEAR_SOLVERS", "check_linear_solver", "DISTRIBUTED_KEYS", "dispatch", "solve_linear",
+           "check_held_dofs", "warn_final_state", "dipole_warning"]
 
 # keywords of the distributed set-up (a scenario's [solver] linear, petsc, partition), which
 # the serial solvers do not take

@@ -36,9 +36,9 @@ import numpy as np
 
 from ..errors import ResultFileError
 
-__all__ = ["SCHEMA", "VERSION", "NON_FINITE", "read_json", "write_json", "json_text", "probe_record", "step_record", "format_residual",
-           "ROUNDOFF_NOTE", "contact_record",
-           "mesh_record", "timing_record", "step_totals", "result_document"]
+__all__ = ["SCHEMA", "VERSION", "NON_FINITE", "read_json", "write_json", "json_text", "probe_record", "step_record",
+           "format_residual", "ROUNDOFF_NOTE", "contact_record", "mesh_record", "timing_record", "step_totals",
+           "result_document"]
 
 SCHEMA = "core-se3-result"
 VERSION = 1
