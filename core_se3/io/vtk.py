@@ -263,6 +263,11 @@ def write_series(
     in ``directory`` (created if needed). ``frames_per_step[k]`` is the (n, 4, 4) state at
     ``times[k]``. Returns the written paths: the .vtu files in order, then the .pvd last.
 
+    The directory holds one series of ``prefix``: the files ``{prefix}_NNNN.vtu`` of an earlier,
+    longer series written there are deleted (ParaView groups ``step_*.vtu`` as one series, so a
+    run of 10 steps after one of 20 showed the old steps 10-19 as part of the new run); files of
+    other names are left alone.
+
     Parameters
     ----------
     directory : str or path-like
@@ -301,6 +306,18 @@ def write_series(
         paths.append(write_vtu(os.path.join(directory, fname), X, quads, g0, g, pdata))
         entries.append((float(t), fname))
     paths.append(write_pvd(os.path.join(directory, "series.pvd"), entries))
+    _delete_stale_steps(directory, prefix, len(entries))
     return paths
+
+
+def _delete_stale_steps(directory, prefix, count):
+    """Delete ``{prefix}_NNNN.vtu`` (the names :func:`write_series` gives) numbered ``count`` or
+    more in ``directory``: the steps of an earlier, longer series."""
+    import re
+    pattern = re.compile(re.escape(prefix) + r"_(\d{4,})\.vtu")
+    for name in os.listdir(directory):
+        m = pattern.fullmatch(name)
+        if m and int(m.group(1)) >= count and name == f"{prefix}_{int(m.group(1)):04d}.vtu":
+            os.unlink(os.path.join(directory, name))
 
 
