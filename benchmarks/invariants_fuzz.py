@@ -211,9 +211,11 @@ def random_mesh_spec(rng):
         r_in * ang, r_out - r_in
 
 
-def random_problem(rng):
+def random_problem(rng, extended=False):
     """A spec (dict) of a random valid small problem: mesh, perturbation, material, supports,
-    loads with magnitudes from tiny to tip rotations of about 2 pi."""
+    loads with magnitudes from tiny to tip rotations of about 2 pi; ``extended``: also a law
+    and a feature of the extended families (:func:`random_extension`, drawn after the rest:
+    the base problems of a seed are drawn as without it)."""
     kind, args, L, b = random_mesh_spec(rng)
     E = float(10 ** rng.uniform(3, 11))
     nu = float(rng.uniform(0.0, 0.49))
@@ -250,8 +252,45 @@ def random_problem(rng):
             loads.append(("follower_pressure", float(alpha * D / L ** 3 / b * rng.choice([-1, 1]))))
         else:
             loads.append(("gravity", float(alpha * D / L ** 3 / b / h), d.tolist()))
-    return dict(mesh=(kind, args), L=L, perturb=float(rng.uniform(0.0, 0.2)), pseed=int(rng.integers(1 << 30)),
+    spec = dict(mesh=(kind, args), L=L, perturb=float(rng.uniform(0.0, 0.2)), pseed=int(rng.integers(1 << 30)),
                 E=E, nu=nu, h=h, support=support, loads=loads, alpha=alpha)
+    if extended:
+        random_extension(rng, spec, D, b)
+    return spec
+
+
+EXTENDED_FROM = 11          # seeds from 11 on draw the extended families (4, 9, 10: the base problems)
+
+
+def random_extension(rng, spec, D, b):
+    """The extended families, into ``spec``: the law ('law': the seed's Cosserat law, the
+    classical shell, the shear stabilisation alpha, or two regions of E and E x ratio) and one
+    feature ('extra'): a hard magnet in a uniform field (dead, or turning by up to a quarter turn
+    about a random axis as the load grows: body couples up to M L / EI ~ 10), a rigid half-space
+    below the shell it is pressed onto by a dead pressure (penalty contact), or (clamped
+    problems) the x1 edge turned rigidly about its centroid by up to pi about a random axis or
+    the strip's axis (prescribed rotation).  Every one conservative: path independence holds."""
+    L, h = spec["L"], spec["h"]
+    law = str(rng.choice(["cosserat", "classical_shell", "shear_stabilisation", "regions"]))
+    spec["law"] = (law, float(10 ** rng.uniform(-2, 0)) if law == "shear_stabilisation" else
+                   float(10 ** rng.uniform(-2, 2)) if law == "regions" else None)
+    kinds = ["none", "magnet", "magnet_turning", "contact"] + (["rotate_edge"] * 2 if spec["support"] == "clamp" else [])
+    kind = str(rng.choice(kinds))
+    d = rng.normal(size=(3, 3))
+    d /= np.linalg.norm(d, axis=1)[:, None]
+    if kind in ("magnet", "magnet_turning"):
+        # couple per area h / mu0 |Br| |B| = a EI / (b L^2): a tip rotation of about a / 2
+        a = float(10 ** rng.uniform(-3, 1))
+        Bmag = a * D / (b * L ** 2) * cs.model.fields.MU0 / h
+        turn = float(rng.uniform(-0.25, 0.25)) if kind == "magnet_turning" else 0.0
+        spec["extra"] = (kind, dict(Br=d[0].tolist(), B=(Bmag * d[1]).tolist(), axis=d[2].tolist(), turns=turn))
+    elif kind == "contact":
+        # a plane below the shell (along minus its mean normal) by gap L, a dead pressure onto it
+        q = float(spec["alpha"] * D / L ** 3 / b)
+        spec["extra"] = (kind, dict(gap=float(10 ** rng.uniform(-2.5, -0.5)), q=q))
+    elif kind == "rotate_edge":
+        angle = float(rng.uniform(-np.pi, np.pi) * 10 ** rng.uniform(-2, 0))
+        spec["extra"] = (kind, dict(axis=d[2].tolist(), strip_axis=bool(rng.random() < 0.5), angle=angle))
 
 
 def _mesh(spec, T=None, noise=0.0):
@@ -280,8 +319,8 @@ def build(spec, T=None, backend="numpy", noise=0.0):
     """The Problem of ``spec`` moved by the rigid motion T (4x4; None: identity); ``noise``: a
     random perturbation of the reference positions of that size [length]."""
     Q = np.eye(3) if T is None else T[:3, :3]
-    p = cs.Problem(_mesh(spec, T, noise), cs.Material(E=spec["E"], nu=spec["nu"], h=spec["h"], rho=1.0),
-                   backend=backend)
+    m = _mesh(spec, T, noise)
+    p = cs.Problem(m, _material(spec, m), backend=backend)
     s = spec["support"]
     if s in ("clamp", "clamp+pin"):
         p.clamp("x0")
@@ -303,13 +342,65 @@ def build(spec, T=None, backend="numpy", noise=0.0):
             p.add_pressure(ld[1], follower=True)
         else:
             p.add_gravity(rho=ld[1], g=Q @ np.array(ld[2]))
+    if "extra" in spec:
+        _add_extra(p, spec, T)
     return p
+
+
+def _material(spec, mesh):
+    """The spec's law (the seed's Material without 'law')."""
+    law, a = spec.get("law", ("cosserat", None))
+    E, nu, h = spec["E"], spec["nu"], spec["h"]
+    if law == "classical_shell":
+        return cs.Material.classical_shell(E, nu, h, rho=1.0)
+    if law == "shear_stabilisation":
+        return cs.Material(E=E, nu=nu, h=h, rho=1.0, shear_stabilisation=a)
+    base = cs.Material(E=E, nu=nu, h=h, rho=1.0)
+    if law == "regions":                  # the elements of the first half of the list: E x a
+        half = np.arange(mesh.n_elements // 2 + 1)
+        return cs.RegionMaterial.from_regions(mesh.n_elements, base, {tuple(half): cs.Material(E=E * a, nu=nu, h=h,
+                                                                                                rho=1.0)})
+    return base
+
+
+def _add_extra(p, spec, T):
+    """The spec's feature of the extended families, moved by T (None: identity)."""
+    kind, v = spec["extra"]
+    T = np.eye(4) if T is None else T
+    Q = T[:3, :3]
+    if kind in ("magnet", "magnet_turning"):
+        direction = None
+        if kind == "magnet_turning":
+            direction = cs.model.fields.rotating_direction(Q @ np.array(v["axis"]), Q @ np.array(v["B"]),
+                                                           turns_per_unit=v["turns"])
+        p.add_magnetic(Q @ np.array(v["Br"]), cs.model.fields.UniformField(Q @ np.array(v["B"]),
+                                                                           direction=direction))
+    elif kind == "contact":
+        n, point = _contact_plane(_mesh(spec), v["gap"] * spec["L"])
+        n = Q @ n
+        p.add_pressure(v["q"], direction=-n)
+        p.add_obstacle("half_space", point=T[:3, :3] @ point + T[:3, 3], normal=n, law=dict(mode="penalty"))
+    elif kind == "rotate_edge":
+        X = _mesh(spec).X
+        c1, c0 = X[p.nodes("x1")].mean(0), X[p.nodes("x0")].mean(0)
+        axis = c1 - c0 if v["strip_axis"] else np.array(v["axis"])
+        p.rotate_edge("x1", Q @ axis, v["angle"], point=Q @ c1 + T[:3, 3])
+
+
+def _contact_plane(mesh, gap):
+    """(normal, point) of the half-space below the reference shell: normal its mean d3, the
+    plane ``gap`` below its lowest node along it."""
+    n = mesh.g0[:, :3, 2].mean(0)
+    n /= np.linalg.norm(n)
+    x = mesh.X
+    low = x[np.argmin(x @ n)]
+    return n, low - gap * n
 
 
 def conservative(spec):
     """Dead forces and pressure: a potential exists; a dead moment or a follower pressure on an
     open shell does not have one (sym K is then the package's own stability measure only)."""
-    return all(ld[0] in ("edge_force", "nodal", "pressure", "gravity") for ld in spec["loads"])
+    return all(ld[0] in ("edge_force", "nodal", "pressure", "gravity") for ld in spec["loads"])  # extras: all are
 
 
 # ------------------------------------------------------------------ the checks --------
@@ -376,14 +467,21 @@ def applied_totals(p, spec, g, lam):
     """The applied lab force and moment about the origin, from the load data (dead loads) or the
     load's own evaluation (followers: their direction is the state's), the largest |x|, and the
     sum of every load's own nodal force magnitudes (loads that cancel, two follower pressures
-    +-q, still have a scale)."""
-    F = np.zeros(3)
+    +-q, still have a scale), and the lab force of the constraint forces among them (contact,
+    which ``StepResult`` reports apart: its ``applied_force`` is the rest)."""
+    F, M, C = np.zeros(3), np.zeros(3), np.zeros(3)
     each = 0.0
-    M = np.zeros(3)
     Q = p.mesh.g0[0, :3, :3] @ _mesh(spec).g0[0, :3, :3].T
     area = element_areas(p.mesh).sum()
     x = g[:, :3, 3]
-    for ld, load in zip(spec["loads"], p.loads):
+    entries = list(spec["loads"])
+    kind, v = spec.get("extra", (None, None))
+    if kind == "contact":                # its dead pressure from the load data, the contact evaluated
+        entries += [("pressure", v["q"], (-_contact_plane(_mesh(spec), 0.0)[0]).tolist()), ("evaluated",)]
+    elif kind in ("magnet", "magnet_turning"):
+        entries += [("evaluated",)]
+    assert len(entries) == len(p.loads), (entries, p.loads)
+    for ld, load in zip(entries, p.loads):
         f = load.evaluate(g, lam, tangent=False).f
         Fi, Mi = lab_totals(g, f)
         each += np.linalg.norm(Fi, axis=1).sum()
@@ -397,9 +495,11 @@ def applied_totals(p, spec, g, lam):
             F += lam * ld[1] * spec["h"] * area * Q @ np.array(ld[2])
         else:
             F += Fi.sum(0)
+            if getattr(load, "constraint_force", False):     # contact: reported apart from the loads
+                C += Fi.sum(0)
         M += Mi.sum(0)
     # the dead loads' moment: positions x cross the nodal lab forces of the load evaluation
-    return F, M, np.abs(x).max(), each
+    return F, M, np.abs(x).max(), each, C
 
 
 def state_distance(g1, g2, ell):
@@ -454,7 +554,7 @@ def check_balance(spec, p, ev, st, tol_abs):
     reac = (ev.r_int - ev.f_ext) * fixed
     RFn, RMn = lab_totals(st.g, reac)
     RF, RM = RFn.sum(0), RMn.sum(0)
-    AF, AM, xmax, each = applied_totals(p, spec, st.g, st.load_factor)
+    AF, AM, xmax, each, CF = applied_totals(p, spec, st.g, st.load_factor)
     Fi, _ = lab_totals(st.g, ev.f_ext)
     # the loads' own magnitudes too: two follower pressures +-q cancel (f_ext = 0, reactions at
     # round-off), where the 1e-300 floor alone made a reaction of 5e-26 a 'violation' of 5e274
@@ -462,7 +562,7 @@ def check_balance(spec, p, ev, st, tol_abs):
     sM = sF * max(p.length_scale, xmax)
     mine = max(np.linalg.norm(RF + AF) / sF, np.linalg.norm(RM + AM) / sM)
     vs = max(np.linalg.norm(RF - st.reaction_force) / sF, np.linalg.norm(RM - st.reaction_moment) / sM,
-             np.linalg.norm(AF - st.applied_force) / sF)
+             np.linalg.norm(AF - CF - st.applied_force) / sF)
     return float(mine), float(st.balance_error), float(vs), float(tol_abs / sF + 1e-13)
 
 
@@ -565,12 +665,15 @@ def run_one(spec, rng, backend, record):
     return out
 
 
-def campaign(n, seed, log=print):
+def campaign(n, seed, log=print, extended=None):
+    """``n`` random problems of ``seed``, each solved and checked (:func:`run_one`); ``extended``
+    (default: seed >= EXTENDED_FROM) draws the extended families too."""
     rng = np.random.default_rng(seed)
+    extended = seed >= EXTENDED_FROM if extended is None else extended
     record = []
     t0 = time.perf_counter()
     for i in range(n):
-        spec = random_problem(rng)
+        spec = random_problem(rng, extended)
         backend = "numpy" if i % 2 == 0 else "numba"
         try:
             run_one(spec, rng, backend, record)
@@ -661,6 +764,30 @@ def tally(rec):
     return t
 
 
+EXTENDED_TEXT = ("  Extended families (seeds from 11 on, `random_extension`): the law drawn among the seed's Cosserat "
+                 "law, `Material.classical_shell`, shear_stabilisation 0.01-1 and a `RegionMaterial` (half the "
+                 "elements E x 0.01-100); and one feature of: none, a hard magnet (random Br) in a uniform field "
+                 "(dead, or turning up to a quarter turn about a random axis; couples to M L / EI ~ 10), a rigid "
+                 "half-space below the shell (0.003-0.3 L) it is pressed onto by a dead pressure (penalty "
+                 "contact), or (clamped problems) the x1 edge turned rigidly by up to pi about its centroid "
+                 "(about the strip's axis or a random one).  Counts of each: the table below the checks.")
+
+
+def family_counts(rec):
+    """{law or feature: (problems, solves ok, solves)} of an extended campaign."""
+    out = {}
+    for o in rec:
+        if "law" not in o["spec"]:
+            continue
+        runs = list(o.get("runs", {}).values())
+        for key in (o["spec"]["law"][0], o["spec"].get("extra", ("none",))[0]):
+            c = out.setdefault(key, [0, 0, 0])
+            c[0] += 1
+            c[1] += sum(r["ok"] for r in runs)
+            c[2] += len(runs)
+    return out
+
+
 def report(rec, n, seed, seconds):
     """The campaign as markdown."""
     t = tally(rec)
@@ -673,7 +800,7 @@ def report(rec, n, seed, seconds):
              "forces, edge moments (dead, up to 2 pi EI/L; roll-ups to two turns), dead and follower "
              "pressure, gravity, compressive edge forces to 5 Euler loads 1 % off-axis; load parameter "
              "1e-4 ... 30 (clamped) or 300 (pinned).  Backends alternate (numpy / numba), each answer "
-             "checked on the other.", "",
+             "checked on the other." + (EXTENDED_TEXT if seed >= EXTENDED_FROM else ""), "",
              "| check | count | worst | tolerance |", "|---|---:|---:|---:|"]
     rows = [("1 equilibrium on the other backend (relative residual / Newton tol.)", t["eq"]),
             ("2 balance, recomputed (reactions from r_int, applied from the load data)", t["bal"]),
@@ -699,6 +826,10 @@ def report(rec, n, seed, seconds):
                                                           for i, n, v in t["unclaimed_unstable"][:12]) + ".", "",
               f"Problems where some step counts end ok and others fail: {len(t['mixed'])} " +
               ", ".join(f"{i} (ok: {ns})" for i, ns in t["mixed"][:12]) + ".", ""]
+    fam = family_counts(rec)
+    if fam:
+        lines += ["| extended family | problems | solves ok / solves |", "|---|---:|---:|"]
+        lines += [f"| {k} | {c[0]} | {c[1]} / {c[2]} |" for k, c in fam.items()] + [""]
     lines += FINDINGS.get(seed, [])
     if t["errors"]:
         lines += ["Errors (not ConvergenceError):", ""] + [f"* {e}" for e in t["errors"]] + [""]
