@@ -285,7 +285,7 @@ def random_extension(rng, spec, D, b):
         turn = float(rng.uniform(-0.25, 0.25)) if kind == "magnet_turning" else 0.0
         spec["extra"] = (kind, dict(Br=d[0].tolist(), B=(Bmag * d[1]).tolist(), axis=d[2].tolist(), turns=turn))
     elif kind == "contact":
-        # a plane below the shell (along minus its mean normal) by gap L, a dead pressure onto it
+        # a plane below the shell's face (along minus its mean normal) by gap L, a dead pressure onto it
         q = float(spec["alpha"] * D / L ** 3 / b)
         spec["extra"] = (kind, dict(gap=float(10 ** rng.uniform(-2.5, -0.5)), q=q))
     elif kind == "rotate_edge":
@@ -376,7 +376,7 @@ def _add_extra(p, spec, T):
         p.add_magnetic(Q @ np.array(v["Br"]), cs.model.fields.UniformField(Q @ np.array(v["B"]),
                                                                            direction=direction))
     elif kind == "contact":
-        n, point = _contact_plane(_mesh(spec), v["gap"] * spec["L"])
+        n, point = _contact_plane(_mesh(spec), v["gap"] * spec["L"] + spec["h"] / 2)
         n = Q @ n
         p.add_pressure(v["q"], direction=-n)
         p.add_obstacle("half_space", point=T[:3, :3] @ point + T[:3, 3], normal=n, law=dict(mode="penalty"))
@@ -389,7 +389,7 @@ def _add_extra(p, spec, T):
 
 def _contact_plane(mesh, gap):
     """(normal, point) of the half-space below the reference shell: normal its mean d3, the
-    plane ``gap`` below its lowest node along it."""
+    plane ``gap`` below its lowest node along it (the caller adds h / 2: the shell's face)."""
     n = mesh.g0[:, :3, 2].mean(0)
     n /= np.linalg.norm(n)
     x = mesh.X
