@@ -572,6 +572,15 @@ def min_eig(p, g, lam):
     return float(w[0] / np.abs(w).max())
 
 
+def claims_stable(p, g, lam):
+    """Whether a run ending ok at (g, lam) without a critical point claims a stable end: the end
+    check counted there -- no follower load, no contact (a constraint force, which
+    ``solvers.newton.end_check`` leaves alone) and sym K a stability measure (K symmetric to the
+    package's ASYM_TOL: not a dead moment's asymmetric K)."""
+    return not any(getattr(ld, "follower", False) or getattr(ld, "constraint_force", False) for ld in p.loads) \
+        and negative_count(p, g, lam) is not None
+
+
 def eig_beyond(spec, err, backend):
     """lambda_min / lambda_max of sym K just beyond a reported critical point (the bracket's high
     end of the message, followed in 64 steps with the checks off): negative if it is one."""
@@ -633,10 +642,7 @@ def run_one(spec, rng, backend, record):
         info["nd"] = newton_distance(p2, st.g, st.load_factor)
         if not res.critical_points and n in (1, 16):
             info["min_eig"] = min_eig(p2, st.g, st.load_factor)
-            # the end check counted (it says stable): no follower load and sym K a stability
-            # measure (K symmetric to the package's ASYM_TOL: not a dead moment's asymmetric K)
-            info["end_check"] = not any(getattr(ld, "follower", False) for ld in p.loads) and \
-                negative_count(p2, st.g, st.load_factor) is not None
+            info["end_check"] = claims_stable(p2, st.g, st.load_factor)
         finals[n] = (st.g, info["nd"], p.length_scale)
     # path independence
     if len(finals) > 1 and all(not out["runs"][n].get("crit") for n in finals):
