@@ -220,8 +220,9 @@ FINDINGS[11] = [
     "0.37 ... 0.92 of the load), 164, 168, 223 (no convergence at the same load factor to 2e-4 at 1 and 16 "
     "steps), 104 (a thin clamped 4 x 2 plate, h/L 1.4e-3, whose x1 edge is turned by 0.305 rad about a random "
     "axis through its centroid, 0.196 rad of it in its plane: the path check refuses every try from 2.4e-4 "
-    "of the load on, at every step count -- an in-plane turn of a wide thin edge wrinkles it at once; not "
-    "followed further). No mixed outcomes, no critical points reported.",
+    "of the load on, at every step count; sym K lambda_min / lambda_max falls 2.2e-8, 1.1e-8, 5.7e-9 at "
+    "1e-4, 2e-4, 2.4e-4 of the load, a critical point near 2.8e-4 of the turn (the turn alone fails at "
+    "2.7e-4 alike, the loads without it solve): the in-plane turn of a wide thin edge buckles it at once). No mixed outcomes, no critical points reported.",
     "* nothing found by the other checks on the extended families: equilibrium on the other backend, balance "
     "(the magnets' couples, the contact and the prescribed rotation's reactions), frame invariance (the "
     "magnet's Br, field and turning axis, the obstacle and the rotation's axis and centre moved with the "
