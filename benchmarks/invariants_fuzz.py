@@ -37,6 +37,17 @@ seeded problems).  What each check measures and its tolerance:
    <= STAB_TOL: the point is real.
 3. is judged on conservative problems (dead forces, dead pressure, gravity); a path difference of
    a problem with a follower pressure or a dead moment (no potential) is listed, marked so.
+
+Seeds from EXTENDED_FROM (11) on also draw the extended families (``random_extension``, drawn
+after the rest of each problem, so seeds 4, 9 and 10 draw the problems of their reports): the
+law (the seed's, the classical shell, the shear stabilisation, a RegionMaterial) and one feature
+-- a hard magnet in a dead or turning uniform field, penalty contact with a half-space the shell
+is pressed onto, or a prescribed rotation of the x1 edge -- each conservative.  The checks take
+them as they are: the magnet's and the contact's forces from their own evaluation (the contact
+compared with ``StepResult.contact``, which the package reports apart from the applied loads),
+the prescribed rotation's reactions with the supports', and the motion of 4. applied to Br, the
+field and its turning axis, the obstacle and the rotation's axis and centre.  A run with
+contact claims no stable end (the package's end check leaves it): 5. does not judge it.
 """
 from __future__ import annotations
 
