@@ -927,8 +927,8 @@ def report(rec, n, seed, seconds):
               f"at the last state kept before them >= {t['crit'][1]:.3g} (stable), and at 1.25 x the bracket "
               f"beyond them (followed in 64 steps with the checks off) <= {t['crit'][2]:.3g} (unstable: the "
               f"point is real; {t['crit'][3]} not followed).", ""]
-    lines += [f"Not checked as stable (the package counts nothing: a follower load, or a dead moment whose K is "
-              f"not symmetric), yet exit ok on a state whose sym K has a negative eigenvalue: "
+    lines += [f"Not checked as stable (the package counts nothing: a follower load, contact, or a dead moment whose "
+              f"K is not symmetric), yet exit ok on a state whose sym K has a negative eigenvalue: "
               f"{len(t['unclaimed_unstable'])} solves " + ", ".join(f"problem {i} ({n} steps, {v:.2g})"
                                                           for i, n, v in t["unclaimed_unstable"][:12]) + ".", "",
               f"Problems where some step counts end ok and others fail: {len(t['mixed'])} " +
