@@ -47,7 +47,9 @@ them as they are: the magnet's and the contact's forces from their own evaluatio
 compared with ``StepResult.contact``, which the package reports apart from the applied loads),
 the prescribed rotation's reactions with the supports', and the motion of 4. applied to Br, the
 field and its turning axis, the obstacle and the rotation's axis and centre.  A run with
-contact claims no stable end (the package's end check leaves it): 5. does not judge it.
+contact claims no stable end (the package's end check leaves it): 5. does not judge it.  Seeds
+from CLOSED_FROM (13) on draw closed shells for half the problems (``random_closed_problem``: a
+cubed sphere read as a file's mesh, its cross-field frames with quarter-turn cuts).
 """
 from __future__ import annotations
 
@@ -363,6 +365,66 @@ def random_problem(rng, extended=False):
 EXTENDED_FROM = 11          # seeds from 11 on draw the extended families (4, 9, 10: the base problems)
 
 
+CLOSED_FROM = 13           # seeds from 13 on: half the problems closed shells (11, 12: none)
+
+
+def cubed_sphere(R, n):
+    """(X, quads) of a closed sphere of radius R: a cube's faces n x n each, projected, the
+    shared nodes merged, every quad oriented outward -- a file's mesh (``mesh.from_meshio``)."""
+    t = np.linspace(-1.0, 1.0, n + 1)
+    U, V = np.meshgrid(t, t, indexing="ij")
+    pts, quads = [], []
+    for axis in range(3):
+        for sign in (-1.0, 1.0):
+            a, b = [k for k in range(3) if k != axis]
+            P = np.zeros((n + 1, n + 1, 3))
+            P[..., axis], P[..., a], P[..., b] = sign, U, V
+            ids = len(pts) + np.arange((n + 1) ** 2).reshape(n + 1, n + 1)
+            pts.extend(P.reshape(-1, 3))
+            q = np.stack([ids[:-1, :-1], ids[1:, :-1], ids[1:, 1:], ids[:-1, 1:]], -1).reshape(-1, 4)
+            quads.extend(q if sign * (1 if (b - a) % 3 == 1 else -1) > 0 else q[:, ::-1])
+    X = np.array(pts)
+    _, first, inverse = np.unique(np.round(X, 12), axis=0, return_index=True, return_inverse=True)
+    order = np.argsort(first)
+    renum = np.empty(len(order), np.int64)
+    renum[order] = np.arange(len(order))
+    X = X[first[order]]
+    Q = renum[np.asarray(inverse).ravel()[np.array(quads)]]
+    return R * X / np.linalg.norm(X, axis=1)[:, None], Q
+
+
+def random_closed_problem(rng):
+    """A closed shell (seeds >= CLOSED_FROM): a cubed sphere (2 x 2 or 4 x 4 quads a face) read
+    as a file's mesh (its frames the reader's cross field, with quarter-turn cuts), clamped at
+    its south pole (x0), under one or two of: a follower pressure (inflation, or external
+    pressure to 3 classical buckling pressures 2 E h^2 / (R^2 sqrt(3 (1 - nu^2)))), a force at
+    the north pole (x1); with the extended families' law and feature (random_extension; its
+    half-space is dropped: the clamped pole is the lowest point).  No dead area loads: the
+    check's area element (exact arcs in the nodal frames) does not hold across the cuts."""
+    R = float(10 ** rng.uniform(-1, 1))
+    n = int(rng.choice([2, 4]))
+    E = float(10 ** rng.uniform(3, 11))
+    nu = float(rng.uniform(0.0, 0.49))
+    h = float(R * 10 ** rng.uniform(-2.5, -1))
+    p_cr = 2 * E * h ** 2 / (R ** 2 * np.sqrt(3 * (1 - nu ** 2)))
+    alpha = float(10 ** rng.uniform(-3, np.log10(3.0)))
+    loads = []
+    for _ in range(int(rng.integers(1, 3))):
+        lk = str(rng.choice(["follower_pressure", "nodal"]))
+        d = rng.normal(size=3)
+        d /= np.linalg.norm(d)
+        if lk == "follower_pressure":
+            loads.append((lk, float(alpha * p_cr * rng.choice([-1, 1]))))
+        else:
+            loads.append((lk, "x1", (alpha * p_cr * R ** 2 * d).tolist()))
+    spec = dict(mesh=("cubed_sphere", (R, n)), L=float(np.pi * R / 2), perturb=0.0, pseed=0, E=E, nu=nu, h=h,
+                support="clamp", loads=loads, alpha=alpha)
+    random_extension(rng, spec, E * h ** 3 / 12 / (1 - nu ** 2) * R, R)
+    if spec.get("extra", ("",))[0] == "contact":
+        del spec["extra"]
+    return spec
+
+
 def random_extension(rng, spec, D, b):
     """The extended families, into ``spec``: the law ('law': the seed's Cosserat law, the
     classical shell, the shear stabilisation alpha, or two regions of E and E x ratio) and one
@@ -396,7 +458,15 @@ def random_extension(rng, spec, D, b):
 
 def _mesh(spec, T=None, noise=0.0):
     kind, args = spec["mesh"]
-    m = getattr(cs.mesh, kind)(*args)
+    if kind == "cubed_sphere":           # read as a file's mesh; its poles are x0 and x1
+        import meshio
+        R = args[0]
+        X, quads = cubed_sphere(*args)
+        m = cs.mesh.from_meshio(meshio.Mesh(X, [("quad", quads)]),
+                                edges={"x0": lambda X: X[:, 2] < -(1 - 1e-9) * R,
+                                       "x1": lambda X: X[:, 2] > (1 - 1e-9) * R})
+    else:
+        m = getattr(cs.mesh, kind)(*args)
     g0 = m.g0.copy()
     a = spec["perturb"]
     if a > 0 and m.shape is not None:
@@ -780,7 +850,10 @@ def campaign(n, seed, log=print, extended=None):
     record = []
     t0 = time.perf_counter()
     for i in range(n):
-        spec = random_problem(rng, extended)
+        if seed >= CLOSED_FROM and rng.random() < 0.5:
+            spec = random_closed_problem(rng)
+        else:
+            spec = random_problem(rng, extended)
         backend = "numpy" if i % 2 == 0 else "numba"
         try:
             run_one(spec, rng, backend, record)
@@ -880,6 +953,13 @@ EXTENDED_TEXT = ("  Extended families (seeds from 11 on, `random_extension`): th
                  "(about the strip's axis or a random one).  Counts of each: the table below the checks.")
 
 
+CLOSED_TEXT = ("  Closed shells (seeds from 13 on, half the problems, `random_closed_problem`): a cubed sphere, "
+               "2 x 2 or 4 x 4 quads a face, read as a file's mesh (`mesh.from_meshio`: cross-field frames with "
+               "quarter-turn cuts), clamped at its south pole, under a follower pressure (inflation, or external "
+               "to 3 classical buckling pressures) and/or a force at its north pole, with the law and feature "
+               "above (no half-space).")
+
+
 def family_counts(rec):
     """{law or feature: (problems, solves ok, solves)} of an extended campaign."""
     out = {}
@@ -907,7 +987,8 @@ def report(rec, n, seed, seconds):
              "forces, edge moments (dead, up to 2 pi EI/L; roll-ups to two turns), dead and follower "
              "pressure, gravity, compressive edge forces to 5 Euler loads 1 % off-axis; load parameter "
              "1e-4 ... 30 (clamped) or 300 (pinned).  Backends alternate (numpy / numba), each answer "
-             "checked on the other." + (EXTENDED_TEXT if seed >= EXTENDED_FROM else ""), "",
+             "checked on the other." + (EXTENDED_TEXT if seed >= EXTENDED_FROM else "") +
+             (CLOSED_TEXT if seed >= CLOSED_FROM else ""), "",
              "| check | count | worst | tolerance |", "|---|---:|---:|---:|"]
     rows = [("1 equilibrium on the other backend (relative residual / Newton tol.)", t["eq"]),
             ("2 balance, recomputed (reactions from r_int, applied from the load data)", t["bal"]),
