@@ -268,8 +268,10 @@ def test_a_vortex_of_the_users_d1_is_solved_or_said(kind):
     a ConvergenceError "non-finite residual" at load factor 1.2e-4; then a specific error (the
     tangents degenerate).  With the quarter turns across cuts (fem.element_default, "Cuts") the
     pair, whose turns are quarter turns, is the parallel frames' strip to round-off; random d1
-    leaves turns of up to 49 deg within flat elements (the tip's deflection 0.11 % off, its nodes 7.8e-3
-    apart in plane), which the element says (fem.frame_turns, FLAT_TURN)."""
+    leaves turns of up to 49 deg within flat elements (the tip's deflection 0.32 % off, its nodes 9.6e-3
+    apart in plane; 0.11 % when a side of the two elements round which the quarter turns do not close
+    took its mesh edge's first node's frame, which made the answer depend on the node numbering:
+    fem.element_default.side_turns), which the element says (fem.frame_turns, FLAT_TURN)."""
     from core_se3.errors import ElementWarning
     ref = _vortex_strip_tip(kind, parallel=True)
     if kind == "pair":
@@ -279,7 +281,7 @@ def test_a_vortex_of_the_users_d1_is_solved_or_said(kind):
         return
     with pytest.warns(ElementWarning, match=r"6 element\(s\) .* by up to 49 deg.* on a flat element"):
         tip = _vortex_strip_tip(kind)
-    assert 3e-4 < np.abs(tip - ref)[:, 2].max() / np.abs(ref[:, 2]).max() < 3e-3    # measured 1.1e-3
+    assert 1e-3 < np.abs(tip - ref)[:, 2].max() / np.abs(ref[:, 2]).max() < 1e-2    # measured 3.2e-3
 
 
 @pytest.mark.parametrize("backend", ["numpy", "numba"])

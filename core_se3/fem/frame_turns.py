@@ -129,7 +129,7 @@ def check_frame_turns(X, quads, g, j0, stacklevel=3):
             f"its quad's (frames turning by at most {MAX_NORMAL_TURN:g} deg give 0.94 ... 1.04)"
             + (f"; on a flat element (its frames left turned by {FLAT_TURN:g} deg or more: the user's d1 winds round "
                "a point, which no gauge removes) the answer depends on them (a strip with random d1 in +-3 rad: "
-               "its tip deflection 0.11 % off that of parallel frames)" if flat[k] else ""))
+               "its tip deflection 0.32 % off that of parallel frames)" if flat[k] else ""))
     fix = ("give frames whose d1 turns little within every element (d1 along the shell: a dome's meridians or "
            "parallels); a closed doubly curved surface (a sphere) has no such field of d1 (docs/ELEMENTS.md, "
            "'A mesh file's default frames')")
