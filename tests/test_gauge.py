@@ -317,3 +317,30 @@ def test_quarter_turns_of_d1_on_a_doubly_curved_shell_change_nothing(backend):
     kept = alpha[m.quads[:, 0]] == 0
     for k in ("N1", "N2", "M1", "M2", "N1_local", "M2_local"):
         assert np.abs(a[k][kept] - b[k][kept]).max() < 1e-12 * np.abs(a[k]).max(), k
+
+
+def test_a_probe_between_nodes_whose_d1_differ_by_quarter_turns_reads_the_generators():
+    # a probe halfway along an edge joined its nodes' frames by their SE(3) geodesic, which across a
+    # cut of a cross field (d1 turned by 90 or 180 deg: a mesh file's default frames on a doubly
+    # curved shell) is a screw bowing off the edge: on the quarter hemisphere with d1 turned at
+    # random by quarter turns, a probe on an equator edge whose nodes' d1 differ by 180 deg read its
+    # reference point 1.3 off the edge (the element's size 2.6) and, 3 steps to a tip force of 3000,
+    # u = (3.40, 0.86, 4.09) for the generator frames' (4.26, 0.84, 4.54), rotation 1.549 for
+    # 1.239 rad, converged and silent.  The probe now takes the edge's quarter turn (Probe.
+    # edge_midpoint, as the element does): the generator's to 4e-15
+    m, turned = mesh.hemisphere_quarter(10.0, 18.0, 6, 6), mesh.hemisphere_quarter(10.0, 18.0, 6, 6)
+    turned.g0 = turned_about_normal(turned.g0, np.random.default_rng(3).integers(0, 4, m.n_nodes) * np.pi / 2)
+    a, b = 6, 13                                          # on the equator, d1 at 270 and 90 deg
+    X = m.X
+    out = []
+    for mm in (m, turned):
+        p = Problem(mm, Material(6.825e7, 0.3, 0.04))
+        p.fix(list(np.flatnonzero(X[:, 2] > X[:, 2].max() - 1e-9)), range(6))
+        p.add_nodal_load([int(np.argmax(X[:, 0]))], force=(3000.0, 0.0, 0.0))
+        p.add_probe("edge", lambda Y: np.isin(np.arange(len(Y)), [a, b]))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            pr = p.solve(steps=3).final.probes["edge"]
+        out.append(np.r_[p.probes["edge"].state(mm.g0)[0], pr["u"], pr["rotation_vector"]])
+    assert turned.g0[a, :3, 0] @ turned.g0[b, :3, 0] < -0.9            # their d1 half a turn apart
+    assert np.abs(out[0] - out[1]).max() < 1e-12 * np.abs(out[0]).max()
