@@ -344,3 +344,32 @@ def test_a_probe_between_nodes_whose_d1_differ_by_quarter_turns_reads_the_genera
         out.append(np.r_[p.probes["edge"].state(mm.g0)[0], pr["u"], pr["rotation_vector"]])
     assert turned.g0[a, :3, 0] @ turned.g0[b, :3, 0] < -0.9            # their d1 half a turn apart
     assert np.abs(out[0] - out[1]).max() < 1e-12 * np.abs(out[0]).max()
+
+
+def test_resultants_of_a_gauged_part_beside_a_part_with_cuts_are_across_the_users_d1():
+    # the resultants are reported across the user's d1 and d2 where the element builds its frames
+    # in the least-turn gauge (an annulus' radial d1), and in the frames an element compares its
+    # sides in where its nodes' d1 differ by quarter turns (a cut).  With both in one mesh (the
+    # annulus beside a quarter hemisphere whose d1 are turned by random quarter turns) the annulus'
+    # were reported across the gauge's d1 instead: N1 / N2 35 % / 52 % off those of the annulus
+    # alone.  Now both parts' are those of each part alone (measured 4e-16)
+    from core_se3.fem.resultants import element_resultants
+    from core_se3.mesh import Mesh
+    a = mesh.annulus(1.0, 2.0, 1.0, 4, 6)
+    q = mesh.hemisphere_quarter(10.0, 18.0, 4, 4)
+    q.g0 = turned_about_normal(q.g0, np.random.default_rng(3).integers(0, 4, q.n_nodes) * np.pi / 2)
+    g = q.g0.copy()
+    g[:, 0, 3] += 50.0
+    both = Mesh(np.concatenate([a.g0, g]), np.concatenate([a.quads, q.quads + a.n_nodes]))
+    law = Material(1e6, 0.3, 0.02)
+    eta = np.random.default_rng(0).standard_normal((both.n_nodes, 6)) * 1e-3
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        alone = [Problem(mm, law).element for mm in (a, q)]
+        whole = Problem(both, law).element
+    assert alone[0].gauge is not None and alone[1].matching is not None
+    got = element_resultants(whole, both.g0, eta)
+    parts = (element_resultants(alone[0], a.g0, eta[:a.n_nodes]), element_resultants(alone[1], q.g0, eta[a.n_nodes:]))
+    for k, ref in got.items():
+        for sl, part in ((slice(0, a.n_elements), parts[0][k]), (slice(a.n_elements, None), parts[1][k])):
+            assert np.abs(ref[sl] - part).max() < 1e-12 * np.abs(part).max(), k
