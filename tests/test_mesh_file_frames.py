@@ -315,6 +315,25 @@ def test_a_closed_sphere_from_a_file_does_not_depend_on_its_node_numbering():
         assert np.abs(el.Dbar - whole.Dbar[sub.elements]).max() < 1e-13 * np.abs(whole.Dbar).max()
 
 
+def test_a_closed_sphere_from_a_file_refines_on_the_sphere():
+    # refinement (mesh.refine, check-mesh's finer meshes) puts a new node at the geodesic midpoint
+    # of an edge's frames; across the default frames' cuts, d1 turned by 90 or 180 deg, that
+    # geodesic is a screw off the surface: the closed sphere (4 and 8 per face) refined to
+    # non-convex quads (MeshError, so check-mesh could not check it) and the quarter hemisphere
+    # with d1 turned by random quarter turns to bow-ties.  The midpoints now take the edge's
+    # quarter turn (mesh.refine.matched_midpoints): the refined sphere's nodes within 4.8e-3 of it
+    # (4 per face; its edges' chord midpoints up to 0.27 inside), the quarter's those of the
+    # generator's frames to 2e-15
+    from core_se3 import mesh as M
+    from core_se3.mesh.gauge import turned_about_normal
+    from core_se3.mesh.refine import refine
+    r = refine(_closed_sphere(4))
+    assert np.abs(np.linalg.norm(r.X, axis=1) - 10.0).max() < 6e-3
+    m, turned = M.hemisphere_quarter(10.0, 18.0, 6, 6), M.hemisphere_quarter(10.0, 18.0, 6, 6)
+    turned.g0 = turned_about_normal(turned.g0, np.random.default_rng(3).integers(0, 4, m.n_nodes) * np.pi / 2)
+    assert np.abs(refine(m).X - refine(turned).X).max() < 1e-12
+
+
 def test_a_closed_sphere_from_a_file_warns_only_at_the_spin_points_of_a_hint():
     # no field of d1 on a sphere is free of turns (hairy ball): the default's quarter-turn cuts
     # and the hint's two spin points left elements whose nodes' d1 turn by 90 ... 180 deg, whose
