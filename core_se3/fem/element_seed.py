@@ -26,7 +26,7 @@ import warnings
 import numpy as np
 
 from .. import lie
-from ..errors import ElementWarning
+from ..errors import ElementTooDistortedError, ElementWarning
 from .element import Element, ElementEvaluation, register_element
 from .element_default import DefaultElement
 from .material import law_matrix
@@ -38,6 +38,23 @@ __all__ = ["SeedElement", "SEED_THIN"]
 # and is right at 1.25 (the locking study's L/h = 10 cantilever and arch), fails at 12.5, and
 # converged 130 times too stiff in torsion at 1000 (reports/REPORT.md, stress study)
 SEED_THIN = 10.0
+
+
+def _refuse_cuts(mesh, base):
+    """ElementTooDistortedError: the frames of an element edge (in the default element's gauge)
+    turn by more than 45 deg about the normal, the quarter turns of a cross field's cuts that the
+    default element matches (``element_default``, "Cuts") and this element, which interpolates its
+    nodes' increments and frames as given, cannot: on the quarter hemisphere with d1 turned by
+    random quarter turns its linear answer was 0.35 of the generator frames' with an
+    AccuracyWarning of 0.006 only."""
+    e = int(np.flatnonzero(base.matching)[0])
+    a, b = mesh.edge_nodes[e].tolist()
+    raise ElementTooDistortedError(
+        f"element 'seed' cannot take nodal frames that turn by quarter turns about the normal across an element "
+        f"edge ({int(np.count_nonzero(base.matching))} edges, e.g. nodes {a} and {b}, whose d1 differ by about "
+        f"{90 * min(int(base.matching[e]), 4 - int(base.matching[e]))} deg: the cuts of a cross field, e.g. a mesh file's default frames on a doubly curved shell): it "
+        "interpolates its nodes' frames and increments as given; use the default element (it matches them) or frames "
+        "whose d1 turns little (Mesh(g0=...), a mesh file's d1_hint)")
 
 
 @register_element
@@ -72,6 +89,8 @@ class SeedElement(Element):
         super().__init__(mesh, material)
         _warn_if_thin(mesh, material)
         base = DefaultElement(mesh, material)
+        if base.matching is not None:
+            _refuse_cuts(mesh, base)
         # reference centroid twists = mean of the opposite edge twists (exact for the commuting
         # reference states of the catalogue: flat plates and cylinders)
         z0 = base.z0.reshape(-1, 4, 6)
