@@ -334,6 +334,28 @@ def test_a_closed_sphere_from_a_file_refines_on_the_sphere():
     assert np.abs(refine(m).X - refine(turned).X).max() < 1e-12
 
 
+def test_a_law_that_does_not_say_it_is_isotropic_is_named_on_a_closed_sphere():
+    # a user's law (fem.ResultantLaw: any object with resultant_matrix) keeps each node's d1 as its
+    # material axis unless it says it is in-plane isotropic; on the closed sphere from a file,
+    # whose default d1 jump by quarter and half turns across cuts, such a law was refused with the
+    # frames blamed only ("give consistent frames").  The error now names the law and the
+    # attribute; with it the law is the isotropic Material's answer
+    from core_se3.errors import ElementTooDistortedError
+
+    class UserLaw:
+        h = 0.1
+
+        def resultant_matrix(self, A1, A2, size=None):
+            return Material(6.825e7, 0.3, 0.1).resultant_matrix(A1, A2)
+
+    m = _closed_sphere(4)
+    with pytest.raises(ElementTooDistortedError, match=r"The law \(UserLaw\) does not say it is in-plane isotropic"):
+        Problem(m, UserLaw()).element
+    UserLaw.in_plane_isotropic = True
+    a, b = Problem(m, UserLaw()).element, Problem(m, Material(6.825e7, 0.3, 0.1)).element
+    assert np.array_equal(a.Dbar, b.Dbar)
+
+
 def test_a_closed_sphere_from_a_file_warns_only_at_the_spin_points_of_a_hint():
     # no field of d1 on a sphere is free of turns (hairy ball): the default's quarter-turn cuts
     # and the hint's two spin points left elements whose nodes' d1 turn by 90 ... 180 deg, whose

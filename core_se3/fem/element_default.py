@@ -166,6 +166,21 @@ def _matching(g0, edge_nodes, material):
     return edge_matching(g0, edge_nodes)
 
 
+def _axis_law_note(material, g0, mesh):
+    """A sentence for an error on reference frames that turn by quarter turns across element
+    edges (a cross field's cuts) under a law that does not say it is in-plane isotropic (its
+    ``in_plane_isotropic`` attribute): the element keeps the user's d1 as its material axis and
+    takes no quarter turns -- a user's isotropic law without the attribute was refused on a
+    closed sphere from a file with the frames blamed only; "" otherwise."""
+    if getattr(material, "in_plane_isotropic", False) or edge_matching(g0, mesh.edge_nodes) is None:
+        return ""
+    return (f". The law ({type(material).__name__}) does not say it is in-plane isotropic (a true "
+            "in_plane_isotropic attribute, fem.ResultantLaw), so its material axis is each node's d1 as given and "
+            "the element takes no quarter turns across the cuts of a cross field (a mesh file's default frames on a "
+            "doubly curved shell); if the law is the same in every in-plane direction, say so "
+            "(in_plane_isotropic = True) and the element matches them")
+
+
 def edge_twists(g, edge_nodes, reference=False, matching=None):
     """psi_e = log(g_a^-1 g_b) for all edges (E, 6); raises if an edge turns by ~pi.
 
@@ -423,7 +438,10 @@ class DefaultElement(Element):
         self.gauge = element_gauge(mesh, material)
         # the quarter turns across a cross field's cuts (module docstring, "Cuts"): None without
         self.matching = _matching(self.frames(mesh.g0), mesh.edge_nodes, material)
-        psi0 = edge_twists(self.frames(mesh.g0), mesh.edge_nodes, reference=True, matching=self.matching)
+        try:
+            psi0 = edge_twists(self.frames(mesh.g0), mesh.edge_nodes, reference=True, matching=self.matching)
+        except ElementTooDistortedError as exc:
+            raise ElementTooDistortedError(str(exc) + _axis_law_note(material, self.frames(mesh.g0), mesh)) from None
         self.z0 = self._element_z(0.5 * psi0)                          # (m, 24)
         self._C = None if self.matching is None else side_turns(mesh, self.frames(mesh.g0), self.matching)   # (m, 24, 24)
         P = tying_matrices()
