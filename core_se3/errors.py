@@ -14,12 +14,15 @@ Example
 from __future__ import annotations
 
 import difflib
+import math
+import warnings
 
 __all__ = ["CoreSE3Error", "MaterialError", "MeshError", "LoadError", "SupportError",
            "SingularSystemError", "ConvergenceError", "ElementTooDistortedError", "ScenarioError",
            "CheckpointError", "OptionError", "DesignError", "ContactError", "ParallelError",
            "LinearSolverError", "ControlError", "ResultFileError", "ScenarioWarning", "SupportWarning", "ElementWarning", "MeshWarning",
-           "AccuracyWarning", "OptionWarning", "LoadWarning", "PathWarning", "did_you_mean"]
+           "AccuracyWarning", "OptionWarning", "LoadWarning", "PathWarning", "AngleWarning", "did_you_mean",
+           "angle_in_degrees", "warn_angle", "TURNS_MAX"]
 
 
 def did_you_mean(name, choices):
@@ -582,3 +585,69 @@ class PathWarning(UserWarning):
     >>> issubclass(PathWarning, UserWarning)
     True
     """
+
+
+#: a path's angle [rad] (a prescribed rotation, an obstacle's or a field's turn) of more than
+#: TURNS_MAX turns is likely degrees (360 -> 57 turns, 45 -> 7.2, 30 -> 4.8); real paths turn 1 or 2
+TURNS_MAX = 3
+
+
+class AngleWarning(UserWarning):
+    """An angle [rad] so large that it is likely in degrees: an orientation (a box obstacle's
+    rotation vector, a mesh generator's ``angle0``) of more than a turn, or the turn of a path
+    (``Problem.rotate_edge`` / ``move_edge``, an obstacle's rotating motion) of more than
+    :data:`TURNS_MAX` turns.  Every angle of core_se3 is in radians (the one exception, a
+    scenario's ``hole_deg``, says so in its name); ``rotate_edge(..., angle=90)`` meant a quarter
+    turn and rolled the edge 14.3 times.  Give the angle in radians (``numpy.radians``).  A
+    scenario file says the same as a :class:`ScenarioWarning` naming its key.
+
+    Example
+    -------
+    >>> import warnings
+    >>> with warnings.catch_warnings(record=True) as said:
+    ...     warnings.simplefilter("always")
+    ...     _ = warn_angle(90.0, "rotate_edge: angle")
+    >>> print(said[0].message)
+    rotate_edge: angle = 90 rad is 14.3 turns (more than 3): angles are in radians (90 degrees is 1.5708 rad)
+    """
+
+
+def angle_in_degrees(angle, path=True):
+    """The message for an angle [rad] that is likely degrees (:class:`AngleWarning`), else None:
+    a path's angle beyond :data:`TURNS_MAX` turns, an orientation's (``path`` False) beyond one.
+
+    Example
+    -------
+    >>> angle_in_degrees(2 * math.pi), angle_in_degrees(45.0, path=False)
+    (None, '45 rad is more than a turn: angles are in radians (45 degrees is 0.785398 rad)')
+    """
+    try:
+        a = float(angle)
+    except (TypeError, ValueError):
+        return None                          # (not a number: the caller's own error says so)
+    turns = abs(a) / (2 * math.pi)
+    if turns > (TURNS_MAX if path else 1) and math.isfinite(a):
+        said = f"{a:g} rad is {turns:.3g} turns (more than {TURNS_MAX})" if path else f"{a:g} rad is more than a turn"
+        return f"{said}: angles are in radians ({a:g} degrees is {math.radians(a):.6g} rad)"
+    return None
+
+
+def warn_angle(angle, what, path=True):
+    """An :class:`AngleWarning` about ``what`` (e.g. ``"rotate_edge: angle"``) where
+    :func:`angle_in_degrees` has a message, said at the first line outside core_se3 (the user's
+    call, however deep the angle entered); returns ``angle``.
+
+    Example
+    -------
+    >>> warn_angle(1.5, "rotate_edge: angle")        # a quarter turn in radians: nothing said
+    1.5
+    """
+    msg = angle_in_degrees(angle, path)
+    if msg is not None:
+        import os
+        import sys
+        here, f, level = os.path.dirname(os.path.abspath(__file__)) + os.sep, sys._getframe(0), 1
+        while f.f_back is not None and os.path.abspath(f.f_code.co_filename).startswith(here):
+            f, level = f.f_back, level + 1
+        warnings.warn(AngleWarning(f"{what} = {msg}"), stacklevel=level)
+    return angle

@@ -336,3 +336,32 @@ def test_max_iter_of_least_squares_counts_the_rejected_trial_points_and_says_so(
     assert ("max_iter = 3 evaluations spent: the start, 1 accepted step(s) and 1 rejected trial point(s) (1 of them "
             "because their equilibrium failed)") in r.message
     assert r.document()["rejected"] == 1
+
+
+def test_a_poses_setting_is_checked_against_its_variables_shape():
+    """A pose's fixed value of a two-region magnetisation given by region, (2, 3), failed at the
+    first solve with a bare NumPy ValueError ('input operand has more dimensions than allowed by
+    the axis remapping'), as did the transposed (3, 2), one region's 3-vector and a string; NaN
+    ran 12 cut-backs of 'non-finite residual'.  Now the (2, 3) array is the setting, by region
+    (the labels' order), and the others are DesignErrors naming the pose, the variable and the
+    shapes it takes, when the design is made."""
+    p = Problem(mesh.rectangle(1.0, 0.2, 8, 1), Material(1e3, 0.0, 0.05))
+    p.clamp("x0")
+    p.add_probe("tip")
+    f = UniformField((0.0, 0.0, 0.3))
+    p.add_magnetic((1.0, 0.0, 0.0), f, mu0=1.0)
+    m = RegionMagnetisation(p, [np.arange(4), np.arange(4, 8)], name="Br")
+    target = p.mesh.X[p.nodes("x1")].mean(0) + [0.0, 0.0, 0.1]
+
+    def design(setting):
+        return Design(p, [FieldVariable(p, f, name="B")],
+                      [Pose("a", [Target(ProbePosition(p, "tip", target=target))], settings={m: setting})])
+    want = np.array([[1.0, 0.0, 0.1], [1.0, 0.0, -0.1]])
+    d = design(want)
+    d.solve(d.x_start())
+    assert m.value().tolist() == want.ravel().tolist()
+    for bad, said in ((want.T, r"array of shape \(2, 3\), got shape \(3, 2\) \(components by regions\?"),
+                      ([1.0, 0.0, 0.1], r"got shape \(3,\)"), ("abc", "must be numbers"),
+                      ([np.nan] * 6, "is not finite")):
+        with pytest.raises(DesignError, match=r"pose 'a': the setting of 'Br' \(Br\[0\].x, .*" + said):
+            design(bad)

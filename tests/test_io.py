@@ -70,6 +70,32 @@ def test_series_and_pvd(tmp_path, mesh):
     np.testing.assert_allclose(m0.point_data["displacement"], 0.0)
 
 
+def test_series_written_again_shorter_leaves_no_old_steps(tmp_path, mesh):
+    """A series of 5 steps written where one of 10 was kept step_0005 ... step_0009.vtu of the
+    old run beside the new files: ParaView groups step_*.vtu as one series and showed the old
+    steps as part of the new run.  They go; a file of another name stays."""
+    X, quads, g0, g, *_ = mesh
+    d = tmp_path / "series"
+    io.write_series(d, X, quads, g0, [g] * 10, np.arange(10.0))
+    (d / "notes.txt").write_text("mine")
+    (d / "other_0007.vtu").write_text("mine")
+    io.write_series(d, X, quads, g0, [g0] * 5, np.arange(5.0))
+    assert sorted(p.name for p in d.iterdir()) == ["notes.txt", "other_0007.vtu", "series.pvd"] + [
+        f"step_{k:04d}.vtu" for k in range(5)]
+
+
+def test_a_series_into_a_file_is_refused_and_the_file_kept(tmp_path, mesh):
+    """write_series into a path that is a user's file failed with a bare FileExistsError from
+    os.makedirs; now an OptionError that names the path, the file untouched."""
+    from core_se3.errors import OptionError
+    X, quads, g0, g, *_ = mesh
+    f = tmp_path / "results"
+    f.write_text("mine")
+    with pytest.raises(OptionError, match="is a file, not a directory"):
+        io.write_series(f, X, quads, g0, [g], [0.0])
+    assert f.read_text() == "mine"
+
+
 def test_pvd_times_increase_strictly_for_paraview(tmp_path):
     """ParaView sorts a collection by its times (vtkPVDReader) and shows one data set per time:
     load factors that turn back (an arc-length path past a limit point), go negative or repeat
@@ -211,3 +237,17 @@ def test_an_output_path_that_is_a_file_is_refused_by_name(tmp_path):
     with pytest.raises(RunDirectoryError, match="is a file, not a directory"):
         scenario.run(scn, out=str(f))
     assert f.read_text() == "mine"
+
+
+def test_a_cut_short_checkpoint_says_what_to_do(tmp_path):
+    """A checkpoint cut to half its bytes (a copy interrupted, a full disk) was refused as
+    'cannot read checkpoint ...: File is not a zip file', without the way on; now it says the
+    file is damaged and how to start over."""
+    from core_se3.errors import CheckpointError
+    ck = io.Checkpoint(tmp_path)
+    ck.save("fp", dict(step=1, lam=0.5, g=np.tile(np.eye(4), (50, 1, 1)), unwrap={}, records=[], timings={}))
+    data = open(ck.path, "rb").read()
+    open(ck.path, "wb").write(data[:len(data) // 2])
+    with pytest.raises(CheckpointError, match=r"checkpoint\.npz: .*cut-short file.*without --resume \(and with "
+                                              r"--force\) to start over"):
+        ck.load("fp")

@@ -297,3 +297,30 @@ def test_a_step_or_a_probe_a_result_does_not_have_is_named():
     with pytest.raises(OptionError):
         r.final.probes["tpi"]
     assert r.displacements(-1).shape == (10, 3) and r.final.probes.get("tpi") is None
+
+
+def test_result_documents_are_strict_json_with_their_non_finite_numbers_named(tmp_path):
+    """write_json and io.write_json_atomic (results.json) wrote a NaN or an infinity as the
+    bare words NaN / Infinity: not JSON, refused by strict readers (JSON.parse, jq, Go, serde).
+    They are null now, named by their JSON pointer under 'non_finite'; read_json puts them back."""
+    import json
+    from core_se3 import io
+    from core_se3.results import SCHEMA, VERSION, read_json, write_json
+
+    def strict(path):
+        def refuse(word):
+            raise ValueError(f"{word} is not JSON")
+        return json.loads(open(path).read(), parse_constant=refuse)
+
+    doc = dict(schema=SCHEMA, version=VERSION, steps=[dict(probes={"a/b": {"u": [1.0, float("nan"), 2.0]}})],
+               balance_error=float("inf"))
+    for path, writer in ((tmp_path / "r.json", write_json), (tmp_path / "a.json", io.write_json_atomic)):
+        writer(path, doc)
+        text = strict(path)
+        assert text["steps"][0]["probes"]["a/b"]["u"] == [1.0, None, 2.0] and text["balance_error"] is None
+        assert text["non_finite"] == {"/steps/0/probes/a~1b/u/1": "NaN", "/balance_error": "Infinity"}
+        back = read_json(path)
+        assert np.isnan(back["steps"][0]["probes"]["a/b"]["u"][1]) and back["balance_error"] == np.inf
+        assert "non_finite" not in back and back["steps"][0]["probes"]["a/b"]["u"][::2] == [1.0, 2.0]
+    assert "non_finite" not in strict(write_json(tmp_path / "f.json", dict(doc, balance_error=0.0, steps=[]))
+                                      or tmp_path / "f.json")

@@ -204,6 +204,26 @@ def test_insufficient_supports_raise_singular_system_error(solver):
         p.solve(steps=1)
 
 
+def test_linear_solver_refused_when_the_problem_is_made(monkeypatch):
+    """Problem(linear_solver="lu") -- or "mumps" where petsc4py is missing (the NumPy 2
+    environment) -- was accepted and refused only when a solve began, after the supports, loads
+    and probes were set up.  Now the Problem refuses it, naming the choices on this machine."""
+    from core_se3.errors import OptionError
+    from core_se3.model.solving import LINEAR_SOLVERS
+    with pytest.raises(OptionError, match=r"unknown linear_solver 'lu'; the choices on this machine: auto, banded"):
+        Problem(rectangle(L, WIDTH, 4, 1), Material(E, 0.0, H), linear_solver="lu")
+    with pytest.raises(OptionError, match=r"did you mean 'superlu'\?"):
+        Problem(rectangle(L, WIDTH, 4, 1), Material(E, 0.0, H), linear_solver="SuperLU")
+    monkeypatch.setitem(LINEAR_SOLVERS, "mumps", lambda: "needs petsc4py, not installed here")
+    with pytest.raises(OptionError, match=r"'mumps' needs petsc4py, not installed here; the choices on this "
+                                          r"machine: auto, banded, superlu$"):
+        Problem(rectangle(L, WIDTH, 4, 1), Material(E, 0.0, H), linear_solver="mumps")
+    p = Problem(rectangle(L, WIDTH, 4, 1), Material(E, 0.0, H))
+    with pytest.raises(OptionError, match="unknown linear_solver 'lu'"):
+        p.linear_solver = "lu"                        # set later: checked the same way, the old one kept
+    assert p.linear_solver == "auto"
+
+
 def _unit_square_frames(X):
     n = len(X)
     g0 = np.tile(np.eye(4), (n, 1, 1))

@@ -511,6 +511,25 @@ def test_limit_check_off_records_the_bifurcation_and_goes_on():
     assert res.steps[-1].load_factor == 1.0 and res.final.checks["det_sign"] == -1
 
 
+@pytest.mark.parametrize("steps", [1, 4, 16])
+def test_limit_check_off_names_a_limit_point_jumped_across_a_limit_point(steps):
+    """limit_check off, fuzz problem 108 to 0.35 of its load: its path has a limit point at
+    0.2857128 (arc length, ``_LIMIT_108``), where 1, 4 and 16 load steps jump onto another
+    branch between 0.2854 and 0.286084, and the run recorded and logged 'load control passed a
+    bifurcation point' there.  The passed change's return check (the state beyond solved back
+    at 0.2854: its Newton corrections grow, 0.0198, 0.0103, 0.0709 ... ell, the path check's
+    refusal: the step's ends do not connect) now names it a limit point; the return's try is in the step's log.  The Euler column's passed crossing still
+    returns and stays a bifurcation (the tests above and below)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = _panel_108(chords=False).solve(steps=steps, lam_end=0.35, limit_check=False)
+    (cp,) = res.critical_points
+    lo, hi = cp.lam_bracket
+    assert cp.kind == "limit" and lo <= _LIMIT_108 <= hi, cp.describe()
+    back = [e["return_check"] for e in res.log if "return_check" in e]
+    assert len(back) == 1 and back[0]["linear_solves"] > 0
+
+
 def test_a_passed_bifurcation_known_only_by_its_bracket_says_it_was_not_located(tmp_path):
     """limit_check off, 2 steps: the bifurcation (Euler ~0.561) is known only to lie between the
     steps 0.5 and 1.  Its description -- the warning, results.json's ``description`` -- says it was

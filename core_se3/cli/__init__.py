@@ -164,6 +164,8 @@ def _json_target_error(path):
         return None
     if isinstance(old, dict) and old.get("schema") == "core-se3-result" and "case" in old and "scenario" not in old:
         return None                            # (a run's results.json names its scenario)
+    if os.path.isdir(path):
+        return f"--json {path!r} is a directory: give the path of a file (e.g. {os.path.join(path, 'case.json')!r})"
     return f"--json {path!r} is a file that is not an earlier bench run's JSON: give another path (e.g. case.json)"
 
 
@@ -233,10 +235,9 @@ def _bench_run(args, plots, rd):
 def _write_bench_outputs(args, doc, res, prob, plots, rd):
     """The --json, --vtu (in the claimed RunDirectory ``rd``) and --plot outputs of ``bench run``
     (the plot drawn by the worker)."""
-    from ..results import write_json
-    if args.json:
-        os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
-        write_json(args.json, doc)
+    from ..io import write_json_atomic
+    if args.json:                         # written beside and moved into place: a full disk keeps the earlier one
+        write_json_atomic(args.json, doc)
         print(f"wrote {args.json}")
     if args.vtu:                          # the files of core-se3 run's vtu/ (scenario.sinks.step_files)
         from ..scenario.sinks import write_path_vtu

@@ -2,6 +2,7 @@
 ``warmup`` (docs/SCENARIOS.md, docs/DESIGN.md)."""
 from __future__ import annotations
 
+import os
 import sys
 
 from ..backend import launched_rank
@@ -488,7 +489,9 @@ def mesh_check(args):
     clash = (_input_at(args.json, scn, args) or (None if _earlier_check(args.json) else
                                                   "a file that is not an earlier check's JSON")) if args.json else None
     if clash is not None:
-        print(f"error: --json {args.json!r} is {clash}: the check would overwrite it; give another path "
+        print(f"error: --json {args.json!r} is a directory: give the path of a file (e.g. "
+              f"{os.path.join(args.json, 'check.json')!r})" if os.path.isdir(args.json) else
+              f"error: --json {args.json!r} is {clash}: the check would overwrite it; give another path "
               "(e.g. check.json)", file=sys.stderr)
         return 2
     try:

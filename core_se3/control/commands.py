@@ -24,7 +24,7 @@ import numpy as np
 
 from ..design import (FieldGradientVariable, FieldVariable, LoadMagnitude, MaterialVariable, RegionMagnetisation,
                       Variable, magnetic_loads)
-from ..errors import OptionError, did_you_mean
+from ..errors import OptionError, did_you_mean, warn_angle
 from ..model import GradientField, UniformField
 
 __all__ = ["Commands", "scenario_variables"]
@@ -162,6 +162,9 @@ class Commands:
             _check_shape(v, np.shape(x))
             if not np.all(np.isfinite(a)):
                 raise OptionError(f"variable {name!r}: the command {a.tolist()} is not finite")
+            for lab, x in zip(v.labels, a):              # a polar form's angle [rad]: degrees?
+                if lab.endswith(".angle"):
+                    warn_angle(x, f"the command {lab}")
             bad = (a < v.lower) | (a > v.upper)
             if np.any(bad):
                 i = int(np.nonzero(bad)[0][0])

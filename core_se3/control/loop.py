@@ -29,6 +29,7 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
+from ..design import LoadMagnitude
 from ..errors import ControlError, OptionError
 
 __all__ = ["track", "plan", "Feedback", "PlanOptions", "Tracking", "Plan", "least_squares_step"]
@@ -158,6 +159,41 @@ def least_squares_step(J, e, scale, damping=0.0):
     return scale * z
 
 
+def _check_model_variable(v, w):
+    """OptionError unless the model's variable ``w`` commands what the plant's ``v`` of the same
+    name does, entry by entry: the same kind and components (labels), the same loads, and regions
+    in the same order -- each model region nearest (reference centroids; the model's mesh may be
+    another) to the plant's region of its index.  Before, names and sizes were compared only: a
+    model whose magnetisation listed the plant's two regions the other way round gave the tip's
+    Jacobian by the other magnet (0.085 off in 0.18), and the loop commanded with it."""
+    what = f"track(model=...): the model's variable {v.name!r}"
+    if type(w) is not type(v) or list(w.labels) != list(v.labels):
+        raise OptionError(f"{what} ({type(w).__name__}: {', '.join(w.labels)}) is not the plant's "
+                          f"({type(v).__name__}: {', '.join(v.labels)}): make it of the same kind, form and components")
+    loads = [[getattr(ld, "name", type(ld).__name__) for ld in x.loads] for x in (v, w)] \
+        if isinstance(v, LoadMagnitude) else [[], []]
+    if loads[0] != loads[1]:
+        raise OptionError(f"{what} scales the loads {loads[1]}, the plant's {loads[0]}: give it the same loads, "
+                          "in the same order")
+    if hasattr(v, "regions") and hasattr(w, "regions"):
+        cp, cm = _centroids(v), _centroids(w)
+        if len(cp) != len(cm):
+            raise OptionError(f"{what} has {len(cm)} regions, the plant's {len(cp)}")
+        near = np.argmin(np.linalg.norm(cm[:, None] - cp[None], axis=2), axis=1)
+        if np.any(near != np.arange(len(cp))):
+            k = int(np.nonzero(near != np.arange(len(cp)))[0][0])
+            raise OptionError(f"{what}: its region {k} lies where the plant's region {int(near[k])} is (reference "
+                              f"centroids {np.round(cm[k], 6).tolist()} and {np.round(cp[near[k]], 6).tolist()}): "
+                              "list the regions in the plant's order, so that each entry commands the same magnet "
+                              "or part in both")
+
+
+def _centroids(v):
+    """The reference centroids (k, 3) of a region variable's regions."""
+    m = v.problem.mesh
+    return np.array([m.X[m.quads[np.asarray(r, int)]].reshape(-1, 3).mean(0) for r in v.regions])
+
+
 class _Loop:
     """What track and plan share: the quantity's components, the variables, their commands."""
 
@@ -171,6 +207,8 @@ class _Loop:
             sizes = [model.commands.lookup(n).size for n in names]
             if sizes != [v.size for v in self.vars]:
                 raise OptionError(f"the model's variables {names} do not have the plant's sizes")
+            for v in self.vars:
+                _check_model_variable(v, model.commands.lookup(v.name))
         self.rows = np.arange(self.q.size) if components is None else _components(components, self.q.size)
         self.scale = np.concatenate([v.scale for v in self.vars])
         self.lower = np.concatenate([v.lower for v in self.vars])

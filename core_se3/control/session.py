@@ -140,6 +140,31 @@ def _items(x):
     return [x] if isinstance(x, (str, Quantity, Variable)) else list(x)
 
 
+def _start_refused(problem, lam, given, reason):
+    """Why a session could not start.  At load factor 0 without a given g the start is the
+    reference state, the equilibrium of loads that vanish there: loads that do not (a constant
+    scale) were reported as 'the start is not an equilibrium the corrector reaches', as if the
+    user had given a wrong start -- they are named now."""
+    head = f"the start is not an equilibrium the corrector reaches at load factor {lam:g}: {reason}"
+    if lam != 0.0 or given:
+        return head
+    on = []
+    for ld in problem.loads:
+        try:
+            f = float(np.abs(ld.evaluate(problem.mesh.g0, 0.0, False).f).max())
+        except Exception:                    # (a load that cannot say: the plain message)
+            continue
+        if f > 0.0:
+            on.append(f"{getattr(ld, 'name', type(ld).__name__)} (largest nodal value {f:.3g})")
+    if not on:
+        return head
+    return (f"Session at load factor 0 starts from the reference state, the equilibrium where the loads vanish, "
+            f"but {len(on)} load(s) do not vanish at load factor 0 (their scale there is not 0): {', '.join(on[:3])}"
+            f"{' ...' if len(on) > 3 else ''}; the corrector could not reach their equilibrium from the reference "
+            f"state ({reason}).  Start the session at a load factor that load stepping reaches from 0 (loads that "
+            "scale with it: the default scale), or give g, a state in equilibrium at load factor 0")
+
+
 def _check_problem(problem):
     """ControlError for what a session cannot hold."""
     if problem.element.stateful:
@@ -222,8 +247,7 @@ class Session:
             raise OptionError(f"Session: g must have the shape {problem.mesh.g0.shape}, got {g.shape}")
         out = self._corr.step(self._local(g), lam, self._stamp, check_path=False)
         if not out.ok:
-            raise ControlError(f"the start is not an equilibrium the corrector reaches at load factor {lam:g}: "
-                               f"{out.reason}")
+            raise ControlError(_start_refused(problem, lam, given, out.reason))
         self._g = out.g                   # the corrector's frames of the state (relative to the origin)
         self._r = out.residual            # the free residual at the state (the next predictor's start)
         nf = out.factorizations + self._start_sign(given, lam)

@@ -40,7 +40,7 @@ import warnings
 import numpy as np
 
 from ..backend import launched_ranks
-from ..errors import ConvergenceError, DesignError, ParallelError
+from ..errors import ConvergenceError, DesignError, ParallelError, warn_angle
 from .equilibrium import (ElementCheck, EquilibriumOptions, EquilibriumState, assign_all, follow, multipliers,
                           restore_multipliers, solve_flat)
 from .objectives import AngleInDegrees, NodePosition, Orientation, ProbePosition, RotationAngle
@@ -70,6 +70,32 @@ def _check_conflicts(variables):
                 raise DesignError(f"variable {u.name!r} {same} in the same pose: the later one would overwrite "
                                   "the earlier one, whose derivative would then be wrong; give each parameter to one "
                                   "variable (e.g. one FieldVariable with free=('x', 'z'), disjoint regions)")
+
+
+def _setting(pose, v, value):
+    """A pose's fixed value of ``v`` as (size,) numbers in the order of ``v.labels``: one number
+    (every component), ``v.size`` numbers, or an array of the variable's own shape (regions,
+    components); DesignError otherwise.  Before, a (regions, components) array, one of another
+    size or a string failed at the first solve with a bare NumPy ValueError, and NaN as 12
+    cut-backs of 'non-finite residual'."""
+    k = len(getattr(v, "regions", ())) or 1
+    own = (k, v.size // k) if k > 1 and v.size % k == 0 else (v.size,)
+    what = f"pose {pose.name!r}: the setting of {v.name!r} ({', '.join(v.labels)})"
+    try:
+        a = np.asarray(value, float)
+        ok = not isinstance(value, (bool, str, bytes)) and np.asarray(value).dtype.kind in "iuf"
+    except (TypeError, ValueError):
+        ok = False
+    if not ok:
+        raise DesignError(f"{what} must be numbers, got {value!r}")
+    shape, mine = (tuple(s for s in x if s != 1) for x in (a.shape, own))     # (axes of length 1 aside)
+    if len(shape) > 1 and shape != mine or len(shape) <= 1 and a.size not in (1, v.size):
+        raise DesignError(f"{what} must be one number, {v.size} numbers or an array of shape {own}, got shape "
+                          f"{a.shape}" + (" (components by regions? give them by region)" if a.shape == own[::-1]
+                                          else ""))
+    if not np.all(np.isfinite(a)):
+        raise DesignError(f"{what} is not finite: {a.ravel().tolist()}")
+    return np.broadcast_to(a.ravel(), (v.size,)).copy()
 
 
 def _check_targets_move(problem, poses):
@@ -179,6 +205,7 @@ class Design:
         self.aux = []
         for pose in self.poses:
             for v in pose.settings:
+                pose.settings[v] = _setting(pose, v, pose.settings[v])
                 if not any(v is u for u in self.variables + self.aux):
                     self.aux.append(v)
             for t in pose.targets:
@@ -503,6 +530,9 @@ class Design:
             if x0.shape != (self.nx,) or not np.all(np.isfinite(x0)):
                 raise DesignError(f"x0 must be {self.nx} finite numbers ({', '.join(self.labels)}), got "
                                   f"{x0.ravel().tolist()[:8]}")
+            for lab, x in zip(self.labels, x0):        # a polar form's angle [rad]: degrees?
+                if lab.endswith(".angle"):
+                    warn_angle(x, f"x0's {lab}")
         if np.any(x0 < self.lower) or np.any(x0 > self.upper):
             i = int(np.nonzero((x0 < self.lower) | (x0 > self.upper))[0][0])
             raise DesignError(f"the start {x0[i]:g} of {self.labels[i]!r} lies outside its bounds "

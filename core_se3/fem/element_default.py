@@ -66,7 +66,9 @@ angles.  Without cuts (every k = 0) nothing is done (the code paths of before, t
 the closed cubed sphere read from a file (R 10): the element's area within 2.0 / 1.4 / 1.3 % of
 its quad's on 4 / 8 / 16 per face (0.03 of it before on 17 / 56 / 90 elements) and a pressurised
 sphere's radial displacement within -3.4 / +5.9 % of the membrane value on 16 per face
-(-1.4 / +2.3 % on 24: O(h^2), largest round the cube's corners; -5.7 ... 7.2 times it before).
+(-1.4 / +2.3 % on 24, -0.7 / +1.2 % on 32: O(h^2); largest at the midpoints of the cube's edges,
+where two faces' grids meet at a kink, and as large with a hint's frames there; at the cube's 8
+valence-3 corners -3.0 / -1.3 / -0.7 %, O(h^2) too, as the face centres; -5.7 ... 7.2 times it before).
 """
 from __future__ import annotations
 
@@ -79,13 +81,14 @@ from ..errors import ElementTooDistortedError, ElementWarning
 from ..mesh import LOCAL_EDGES
 from ..mesh.gauge import corner_turns, edge_matching, quarter_turns, turned_about_normal
 from .element import Element, ElementEvaluation, register_element
-from .frame_turns import check_frame_turns
+from .frame_turns import check_frame_turns, check_node_windings
 from .material import law_matrix
 from .membrane_drilling import drilling_correction, reference_G, tying_correction
 from .membrane_enhanced import condensed_stiffness, membrane_enhancement
 from .membrane_shear import curved_element_measures, shear_retention, shear_tying
 from .quadrature import GAUSS_2x2
 from .resultants import element_resultants
+from .warp import check_warp
 
 _IU = np.triu_indices(24)                # the upper triangle of a 24x24 matrix, row by row
 
@@ -494,6 +497,9 @@ class DefaultElement(Element):
             self.Dz0[sl] = np.einsum("mij,mj->mi", _unpack(self.Dbar_packed[sl]), self.z0[sl])  # Dbar z0
         self.area = self.j0.sum(axis=1)                                 # reference area per element
         check_frame_turns(mesh.X, mesh.quads, self.corner_frames(mesh.g0), self.j0, stacklevel=5)
+        check_warp(mesh.X, mesh.quads, mesh.g0, stacklevel=5)               # warped quads (fem/warp.py)
+        if self.matching is not None:                                   # d1 spinning about a node (Cuts)
+            check_node_windings(mesh, self.matching, stacklevel=5)
         self._Dbar = None
         # the coarse-curvature warning needs the supports (which edges are free): the Problem
         # issues it when it solves (Problem.check_element)

@@ -100,7 +100,9 @@ class Checkpoint:
                              arrays={k[len(_ARRAY):]: np.array(z[k]) for k in z.files
                                      if k.startswith(_ARRAY)})
         except Exception as exc:
-            raise CheckpointError(f"cannot read checkpoint {self.path}: {exc}") from None
+            raise CheckpointError(f"cannot read checkpoint {self.path}: {exc} (a damaged or cut-short file, or not "
+                                  "a checkpoint of core-se3); the run's other files are kept: run without --resume "
+                                  "(and with --force) to start over, or use another --out") from None
         if fingerprint is not None and state["fingerprint"] != fingerprint:
             raise CheckpointError(
                 f"checkpoint {self.path} belongs to a different scenario (the mesh, material, "

@@ -13,9 +13,10 @@ Example
 from __future__ import annotations
 
 import contextlib
-import json
 import os
 import tempfile
+
+from ..results.document import json_text
 
 __all__ = ["atomic_path", "write_text_atomic", "write_json_atomic", "check_input_file", "read_input_file",
            "without_contents"]
@@ -108,8 +109,9 @@ def write_text_atomic(path, text):
 
 
 def write_json_atomic(path, doc):
-    """:func:`write_text_atomic` of ``doc`` (anything ``json.dumps`` accepts) as JSON, indent 1;
-    returns the path.
+    """:func:`write_text_atomic` of ``doc`` (anything ``json.dumps`` accepts) as strict JSON,
+    indent 1 (a NaN or infinite number as null, named under ``non_finite``:
+    ``results.document.json_text``); returns the path.
 
     Example
     -------
@@ -118,7 +120,7 @@ def write_json_atomic(path, doc):
     >>> json.load(open(p))
     {'status': 'running', 'step': 3}
     """
-    return write_text_atomic(path, json.dumps(doc, indent=1))
+    return write_text_atomic(path, json_text(doc))
 
 
 def check_input_file(path, limit, what="an input file"):

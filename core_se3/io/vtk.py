@@ -15,6 +15,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
+from ..errors import OptionError
 from ..lie import rotation_angle
 
 __all__ = ["frame_fields", "write_vtu", "write_pvd", "write_series", "as_frames", "as_points",
@@ -263,6 +264,11 @@ def write_series(
     in ``directory`` (created if needed). ``frames_per_step[k]`` is the (n, 4, 4) state at
     ``times[k]``. Returns the written paths: the .vtu files in order, then the .pvd last.
 
+    The directory holds one series of ``prefix``: the files ``{prefix}_NNNN.vtu`` of an earlier,
+    longer series written there are deleted (ParaView groups ``step_*.vtu`` as one series, so a
+    run of 10 steps after one of 20 showed the old steps 10-19 as part of the new run); files of
+    other names are left alone.
+
     Parameters
     ----------
     directory : str or path-like
@@ -293,6 +299,9 @@ def write_series(
     if point_data_per_step is not None and len(point_data_per_step) != len(times):
         raise ValueError("point_data_per_step must have one mapping per step")
     directory = os.fspath(directory)
+    if os.path.exists(directory) and not os.path.isdir(directory):
+        raise OptionError(f"write_series: directory {directory!r} is a file, not a directory: nothing was written; "
+                          "give the path of a directory (the series' .vtu files and series.pvd go in it)")
     os.makedirs(directory, exist_ok=True)
     paths, entries = [], []
     for k, (g, t) in enumerate(zip(frames_per_step, times)):
@@ -301,6 +310,18 @@ def write_series(
         paths.append(write_vtu(os.path.join(directory, fname), X, quads, g0, g, pdata))
         entries.append((float(t), fname))
     paths.append(write_pvd(os.path.join(directory, "series.pvd"), entries))
+    _delete_stale_steps(directory, prefix, len(entries))
     return paths
+
+
+def _delete_stale_steps(directory, prefix, count):
+    """Delete ``{prefix}_NNNN.vtu`` (the names :func:`write_series` gives) numbered ``count`` or
+    more in ``directory``: the steps of an earlier, longer series."""
+    import re
+    pattern = re.compile(re.escape(prefix) + r"_(\d{4,})\.vtu")
+    for name in os.listdir(directory):
+        m = pattern.fullmatch(name)
+        if m and int(m.group(1)) >= count and name == f"{prefix}_{int(m.group(1)):04d}.vtu":
+            os.unlink(os.path.join(directory, name))
 
 

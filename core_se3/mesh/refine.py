@@ -12,7 +12,13 @@ frames of neighbouring nodes differ by a rotation about a fixed axis (the genera
 cylinders, arches, annuli, the hemisphere's parallels and meridians; identical frames on a
 straight edge) the geodesic is that circle or line, so the new nodes lie on the surface exactly.
 A quad's centre node is the geodesic midpoint of the two midpoints of its opposite edge pairs
-(each pair joined by its own geodesic).
+(each pair joined by its own geodesic).  Across a cross field's cuts (a mesh file's default
+frames on a closed surface, whose d1 jump by quarter turns: ``mesh.gauge.edge_matching``) the
+far frame is taken turned by the quarter turn that leaves it least turned about the normal, as
+the element takes it (``fem.element_default``, "Cuts"): the geodesic of frames a quarter or half
+turn apart is a helix off the surface (before, refining the closed cubed sphere from a file made
+quads that "are degenerate, non-convex or listed clockwise", a MeshError, so ``check-mesh``
+could not run on it).  Where no edge jumps (every generator's mesh) nothing changes.
 
 The old nodes keep their ids (the new ones follow: edge midpoints, then centres); element e's
 children are 4e ... 4e + 3, so after k refinements the descendants of element e are the ids
@@ -30,9 +36,9 @@ import numpy as np
 from .. import lie
 from ..errors import MeshError
 from .core import Mesh
+from .gauge import edge_matching, quarter_turns
 
-__all__ = ["refine", "refine_levels", "carry_nodes", "carry_held", "geodesic_midpoints", "matched_midpoints",
-           "descendants"]
+__all__ = ["refine", "refine_levels", "carry_nodes", "carry_held", "geodesic_midpoints", "descendants"]
 
 
 def geodesic_midpoints(ga, gb):
@@ -52,32 +58,15 @@ def geodesic_midpoints(ga, gb):
     return ga @ lie.exp(0.5 * rel)
 
 
-def matched_midpoints(ga, gb):
-    """Geodesic midpoints (k, 4, 4) of frame pairs ga, gb (k, 4, 4), b's frame turned first by the
-    quarter turn about its normal that leaves the two least turned (``gauge.edge_matching``, as
-    the default element joins an edge across a cross field's cuts): where the frames' d1 differ by
-    about 90 or 180 deg (a mesh file's default frames on a closed doubly curved shell) the
-    geodesic of the frames as given is a screw off the surface -- the closed cubed sphere 4 x 4
-    per face refined to non-convex quads (a MeshError), a quarter hemisphere whose d1 are turned by
-    random quarter turns to bow-ties.  Elsewhere (turns below 45 deg) :func:`geodesic_midpoints`
-    to the bit.
-
-    Example
-    -------
-    >>> import numpy as np
-    >>> from core_se3.mesh.gauge import turned_about_normal
-    >>> g = turned_about_normal(np.repeat(np.eye(4)[None], 2, 0), np.array([0.0, np.pi]))
-    >>> g[1, 0, 3] = 2.0                                       # d1 reversed at the second
-    >>> matched_midpoints(g[:1], g[1:])[0, :3, 3].round(12).tolist(), geodesic_midpoints(g[0], g[1])[:3, 3].round(12).tolist()
-    ([1.0, 0.0, 0.0], [1.0, -1.0, 0.0])
-    """
-    from .gauge import edge_matching, quarter_turns
-    ga, gb = np.asarray(ga, float), np.array(gb, float)
+def _matched(ga, gb):
+    """gb (k, 4, 4) turned about its normals by the quarter turns that leave each least turned from
+    ga (``mesh.gauge.edge_matching``: a cross field's cuts); gb itself where none is."""
     k = edge_matching(np.concatenate([ga, gb]), np.stack([np.arange(len(ga)), len(ga) + np.arange(len(ga))], 1))
-    if k is not None:
-        on = k != 0
-        gb[on, :3, :3] = gb[on, :3, :3] @ quarter_turns(k[on])
-    return geodesic_midpoints(ga, gb)
+    if k is None:
+        return gb
+    out = gb.copy()
+    out[:, :3, :3] = gb[:, :3, :3] @ quarter_turns(k)
+    return out
 
 
 def descendants(elements, levels):
@@ -194,12 +183,14 @@ def _held_once(mesh, ids, centres=True):
 def _refine_once(mesh):
     n, m = mesh.n_nodes, mesh.n_elements
     g0, E = mesh.g0, mesh.edge_nodes
-    g_mid = matched_midpoints(g0[E[:, 0]], g0[E[:, 1]])               # nodes n ... n + |E| - 1
+    def middle(ga, gb):                    # across a cut: gb turned by its quarter turn (module docstring)
+        return geodesic_midpoints(ga, _matched(ga, gb))
+    g_mid = middle(g0[E[:, 0]], g0[E[:, 1]])                           # nodes n ... n + |E| - 1
     mid = n + mesh.elem_edges              # (m, 4) midpoint ids of the local edges bottom, top, left, right
     g_all = np.concatenate([g0, g_mid])
-    across = matched_midpoints(g_all[mid[:, 0]], g_all[mid[:, 1]])     # bottom to top
-    along = matched_midpoints(g_all[mid[:, 2]], g_all[mid[:, 3]])      # left to right
-    g_c = matched_midpoints(across, along)
+    across = middle(g_all[mid[:, 0]], g_all[mid[:, 1]])                # bottom to top
+    along = middle(g_all[mid[:, 2]], g_all[mid[:, 3]])                 # left to right
+    g_c = middle(across, along)
     c = n + len(E) + np.arange(m)
     q = mesh.quads
     b, t, l, r = mid.T

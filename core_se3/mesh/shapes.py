@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from ..errors import MeshError
+from ..errors import MeshError, warn_angle
 from .core import Mesh, frames_from
 from .gmsh_backend import gmsh_module, mesh_surfaces
 
@@ -163,6 +163,7 @@ def star(n_arms, arm_length, arm_width, palm=None, size=None, backend="auto", an
     if not (arm_length > 0 and arm_width > 0):
         raise MeshError(f"star needs arm_length > 0 and arm_width > 0, got {arm_length}, {arm_width}")
     n = int(n_arms)
+    warn_angle(angle0, "star: angle0", path=False)
     r_min = arm_width / (2 * math.sin(math.pi / n))
     R = r_min if palm is None else float(palm)
     if R < r_min * (1 - 1e-12):
@@ -253,6 +254,7 @@ def polygon(n_sides, radius, size=None, backend="auto", angle0=0.0, save=None):
     if not (isinstance(n_sides, (int, np.integer)) and n_sides >= 3) or not radius > 0:
         raise MeshError(f"polygon needs an integer n_sides >= 3 and radius > 0, got {n_sides!r}, {radius!r}")
     n = int(n_sides)
+    warn_angle(angle0, "polygon: angle0", path=False)
     size = radius / 4 if size is None else float(size)
     verts = _regular(n, radius, angle0)
     apo = radius * math.cos(math.pi / n)
@@ -460,6 +462,7 @@ def annulus_sector(r_in, r_out, angle, size=None, backend="auto", theta0=0.0, sa
     if not (0 < r_in < r_out and 0 < angle < 2 * np.pi):
         raise MeshError("annulus_sector needs 0 < r_in < r_out and 0 < angle < 2 pi, got "
                         f"{r_in}, {r_out}, {angle}")
+    warn_angle(theta0, "annulus_sector: theta0", path=False)
     size = (r_out - r_in) / 4 if size is None else float(size)
     tol = 1e-7 * r_out
     th1 = theta0 + angle

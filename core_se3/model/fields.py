@@ -26,7 +26,7 @@ from typing import Callable
 import numpy as np
 
 from .. import lie
-from ..errors import LoadError
+from ..errors import LoadError, warn_angle
 from ..registry import Kind, Registry
 from .base import Param, finite_vector
 
@@ -522,6 +522,7 @@ def _uniform(values, scale, mu0):
     direction = None
     if rot is not None:
         # the angle over [start, end] of the load factor, held outside
+        warn_angle(rot["angle"], "a rotating field's rotate.angle")
         direction = rotating_direction(rot["axis"], values["B"],
                                        turns_per_unit=rot["angle"] / (2 * pi * (rot["end"] - rot["start"])),
                                        lam0=rot["start"], lam1=rot["end"])

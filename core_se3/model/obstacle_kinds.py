@@ -23,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import lie
+from ..errors import warn_angle
 from .base import Param
 from .obstacles import Obstacle, ObstacleKind, contact_error, positive, register_obstacle, unit3, vector3
 
@@ -264,7 +265,9 @@ class Box(Obstacle):
         self.half = np.array([positive(v, "box half_sizes") for v in half])
         Q = np.eye(3) if rotation is None else np.asarray(rotation, float)
         if Q.shape == (3,):
-            Q = lie.exp_so3(vector3(Q, "box rotation"))
+            Q = vector3(Q, "box rotation")
+            warn_angle(np.linalg.norm(Q), "box rotation vector's angle", path=False)
+            Q = lie.exp_so3(Q)
         if Q.shape != (3, 3) or not np.all(np.isfinite(Q)) or np.abs(Q.T @ Q - np.eye(3)).max() > 1e-10 \
                 or np.linalg.det(Q) < 0:
             raise contact_error("box rotation must be a rotation vector or a proper orthonormal 3x3 matrix",

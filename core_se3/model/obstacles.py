@@ -43,7 +43,7 @@ from typing import Callable
 import numpy as np
 
 from .. import lie
-from ..errors import ContactError, did_you_mean
+from ..errors import ContactError, did_you_mean, warn_angle
 from ..registry import Kind, Registry
 
 __all__ = ["Obstacle", "ObstacleKind", "OBSTACLES", "register_obstacle", "obstacle_kind",
@@ -144,7 +144,7 @@ def rotation(axis, point, angle, scale=None):
         ok = False
     if not ok:                                  # ('abc': a bare ValueError of float() before)
         raise contact_error(f"a motion's angle must be a finite number [rad], got {angle!r}", "angle")
-    angle = float(angle)
+    angle = warn_angle(float(angle), "an obstacle motion's angle")
     scale = _motion_scale(scale)
 
     def T(lam):

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import lie
-from ..errors import SupportError
+from ..errors import SupportError, warn_angle
 
 __all__ = ["Prescribed", "checked_target", "apply_prescribed", "prescribed_rotation", "fixed_dofs", "rigid_rotation", "rigid_motion",
            "select_nodes", "check_conflict", "support_kind", "DOF_NAMES", "held_dof_drift",
@@ -297,6 +297,7 @@ def rigid_motion(mesh, nodes, translate=(0.0, 0.0, 0.0), axis=None, angle=0.0, p
         raise SupportError(f"a translation must be a finite 3-vector, got {np.asarray(translate).tolist()}")
     point = g0[:, :3, 3].mean(0) if point is None else point
     axis, angle, point = rigid_rotation(axis, angle, point) if axis is not None else (None, 0.0, np.zeros(3))
+    warn_angle(angle, "a prescribed rotation's angle (rotate_edge, move_edge)")
     fixed = _free_dofs(g0, axis if angle != 0 else None, free)
     if scale is not None and not callable(scale):
         raise SupportError(f"a rigid motion's scale must be a function of the load factor (lam -> s; default s = "

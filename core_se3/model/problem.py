@@ -32,7 +32,7 @@ from .fields import FIELD_DEFECT_TOL, MU0, field_defect, field_vanishes
 from .loads import element_area, line_shares, material_per_element
 from .magnetics import MagneticLoad, Magnetisation, br_numbers, magnets_force, magnets_output, table_kind
 from .probes import Probe, along_line
-from .solving import SOLVERS, dispatch, solve_linear
+from .solving import SOLVERS, check_linear_solver, dispatch, solve_linear
 from .supports import (LabSpring, LabTiltSpring, Prescribed, RotationComponentSpring, check_conflict,
                        check_rigid_motions, apply_prescribed, fixed_dofs, prescribed_rotation, rigid_motion,
                        select_nodes)
@@ -127,7 +127,9 @@ class Problem:
     element : str
         A key of ``core_se3.fem.ELEMENTS`` ('default': exact edge twists; 'seed': the seed's).
     linear_solver : str
-        'auto', 'banded', 'superlu' or 'mumps' (see ``core_se3.solvers.linalg``).
+        'auto', 'banded', 'superlu' or 'mumps' (see ``core_se3.solvers.linalg``); an unknown name,
+        or 'mumps' without petsc4py, is an :class:`~core_se3.errors.OptionError` here, naming the
+        choices on this machine (``model.solving.check_linear_solver``).
     backend : str, optional
         'numba' (compiled kernels), 'numpy' (the reference) or 'auto' (NumPy until numba pays
         for its start, then numba: ``core_se3.backend``); default ``core_se3.backend``'s.
@@ -161,8 +163,18 @@ class Problem:
         self.mesh = mesh                              # sets length_scale
         self.material = material
         self.element_name = element                   # an unknown name fails here; built at first use
-        self.linear_solver = linear_solver
+        self.linear_solver = linear_solver            # an unknown or unavailable name fails here
         self.solve_defaults = {}
+
+    @property
+    def linear_solver(self):
+        """The linear solver's name; setting it checks it (``model.solving.check_linear_solver``:
+        an OptionError naming the choices on this machine, not a failure when a solve begins)."""
+        return self._linear_solver
+
+    @linear_solver.setter
+    def linear_solver(self, name):
+        self._linear_solver = check_linear_solver(name)
 
     @property
     def mesh(self):

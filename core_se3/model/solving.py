@@ -18,8 +18,8 @@ from ..backend import launched_rank, launched_ranks
 from ..errors import MeshWarning, OptionError, ParallelError, SupportWarning, did_you_mean
 from .prescribed import DOF_NAMES, DRIFT_TOL, held_dof_drift
 
-__all__ = ["SOLVERS", "DISTRIBUTED_KEYS", "dispatch", "solve_linear", "check_held_dofs", "warn_final_state",
-           "dipole_warning"]
+__all__ = ["SOLVERS", "LINEAR_SOLVERS", "check_linear_solver", "DISTRIBUTED_KEYS", "dispatch", "solve_linear",
+           "check_held_dofs", "warn_final_state", "dipole_warning"]
 
 # keywords of the distributed set-up (a scenario's [solver] linear, petsc, partition), which
 # the serial solvers do not take
@@ -28,6 +28,37 @@ DISTRIBUTED_KEYS = ("linear", "petsc_options", "partition")
 SOLVERS: dict[str, Callable] = {}
 """Solvers by control name ('load', 'arclength', 'displacement', 'linear'): solve(problem, **options); and
 'distributed' (load stepping over MPI ranks, ``core_se3.parallel``)."""
+
+LINEAR_SOLVERS: dict[str, Callable] = {}
+"""The linear solvers by name (a Problem's ``linear_solver``): a function giving None where the
+solver runs on this machine, else why not; filled by ``core_se3.solvers``."""
+
+
+def check_linear_solver(name):
+    """``name`` if it is a linear solver (:data:`LINEAR_SOLVERS`) that runs on this machine, else
+    an :class:`~core_se3.errors.OptionError` naming the choices that do: ``Problem(linear_solver=
+    "lu")``, or ``"mumps"`` without petsc4py, was refused only when a solve began.
+
+    Example
+    -------
+    >>> check_linear_solver("superlu")
+    'superlu'
+    >>> check_linear_solver("lu")          # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.OptionError: Problem: unknown linear_solver 'lu'; the choices on this machine: auto, banded, ...
+    """
+    if not LINEAR_SOLVERS:                   # (core_se3.solvers not imported: checked when it solves)
+        return name
+    why = LINEAR_SOLVERS[name]() if isinstance(name, str) and name in LINEAR_SOLVERS else "unknown"
+    if why is None:
+        return name
+    here = ", ".join(sorted(k for k, usable in LINEAR_SOLVERS.items() if usable() is None))
+    if why == "unknown":
+        raise OptionError(f"Problem: unknown linear_solver {name!r}"
+                          f"{did_you_mean(name, LINEAR_SOLVERS) if isinstance(name, str) else ''}; "
+                          f"the choices on this machine: {here}")
+    raise OptionError(f"Problem: linear_solver {name!r} {why}; the choices on this machine: {here}")
 
 
 def dispatch(problem, control, solver, kw, given=()):

@@ -36,9 +36,9 @@ import numpy as np
 
 from ..errors import ResultFileError
 
-__all__ = ["SCHEMA", "VERSION", "read_json", "write_json", "probe_record", "step_record", "format_residual",
-           "ROUNDOFF_NOTE", "contact_record",
-           "mesh_record", "timing_record", "step_totals", "result_document"]
+__all__ = ["SCHEMA", "VERSION", "NON_FINITE", "read_json", "write_json", "json_text", "probe_record", "step_record",
+           "format_residual", "ROUNDOFF_NOTE", "contact_record", "mesh_record", "timing_record", "step_totals",
+           "result_document"]
 
 SCHEMA = "core-se3-result"
 VERSION = 1
@@ -309,8 +309,62 @@ def step_totals(steps):
     return out
 
 
+NON_FINITE = "non_finite"
+"""The key of a document's non-finite numbers (:func:`json_text`): JSON pointer -> 'NaN',
+'Infinity' or '-Infinity'."""
+
+
+def json_text(doc):
+    """``doc`` as strict JSON (indent 1): a NaN or infinite number -- which ``json.dumps`` wrote
+    as ``NaN``/``Infinity``, text that strict readers (JavaScript's JSON.parse, jq, Go, Rust's
+    serde) refuse -- is written as ``null`` and named, by its JSON pointer (RFC 6901), under the
+    top-level key ``non_finite`` of a dict document; :func:`read_json` puts the numbers back.
+
+    Example
+    -------
+    >>> json.loads(json_text({"u": [0.5, float("nan")], "e": float("-inf")}))
+    {'u': [0.5, None], 'e': None, 'non_finite': {'/u/1': 'NaN', '/e': '-Infinity'}}
+    """
+    try:
+        return json.dumps(doc, indent=1, allow_nan=False)
+    except ValueError as exc:             # (the walk only where a number is not finite)
+        if "Out of range float" not in str(exc):
+            raise                         # (a circular reference)
+        found = {}
+        clean = _finite(doc, "", found)
+        if not isinstance(clean, dict):
+            raise ValueError(f"a document with non-finite numbers ({', '.join(found)}) must be a JSON object, "
+                             "to name them under 'non_finite'") from None
+        clean[NON_FINITE] = {**clean.get(NON_FINITE, {}), **found}
+        return json.dumps(clean, indent=1, allow_nan=False)
+
+
+def _finite(x, ptr, found):
+    """``x`` with its non-finite floats as None, each recorded in ``found`` by its pointer."""
+    if isinstance(x, float) and not np.isfinite(x):
+        found[ptr] = "NaN" if x != x else ("Infinity" if x > 0 else "-Infinity")
+        return None
+    if isinstance(x, dict):
+        return {k: _finite(v, f"{ptr}/{str(k).replace('~', '~0').replace('/', '~1')}", found) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_finite(v, f"{ptr}/{i}", found) for i, v in enumerate(x)]
+    return x
+
+
+def _restore(doc):
+    """Put back the numbers a document names under ``non_finite`` (:func:`json_text`)."""
+    for ptr, text in (doc.pop(NON_FINITE, None) or {}).items():
+        *path, last = [p.replace("~1", "/").replace("~0", "~") for p in ptr.split("/")[1:]]
+        node = doc
+        for p in path:
+            node = node[int(p)] if isinstance(node, list) else node[p]
+        node[int(last) if isinstance(node, list) else last] = float(text.replace("Infinity", "inf"))
+    return doc
+
+
 def write_json(path, doc):
-    """Write a document (indent 1).
+    """Write a document as strict JSON (indent 1; a NaN or infinite number as null, named under
+    ``non_finite``: :func:`json_text`).
 
     Parameters: path (str or path-like), doc (a JSON-able dict).  Not atomic: the run directories
     use ``io.write_json_atomic``.
@@ -323,8 +377,9 @@ def write_json(path, doc):
     >>> read_json(path)["case"]
     'demo'
     """
+    text = json_text(doc)
     with open(path, "w") as fh:
-        json.dump(doc, fh, indent=1)
+        fh.write(text)
 
 
 def read_json(path):
@@ -333,7 +388,8 @@ def read_json(path):
     Parameters: path (str or path-like).  Returns: the document (dict).  Raises
     :class:`~core_se3.errors.ResultFileError` (a ``ValueError``) naming the file for text that is
     not JSON, a top level that is not an object (a list, a number, a string) and an object of
-    another schema or version.
+    another schema or version.  The numbers named under ``non_finite`` (:func:`json_text`) are
+    put back (NaN, inf), and the key goes.
 
     Example
     -------
@@ -357,7 +413,11 @@ def read_json(path):
         raise ResultFileError(f"not a {SCHEMA} document (its schema is {doc.get('schema')!r})", str(path))
     if doc.get("version") != VERSION:
         raise ResultFileError(f"schema version {doc.get('version')!r} (this code reads {VERSION})", str(path))
-    return doc
+    try:
+        return _restore(doc)
+    except (KeyError, IndexError, ValueError, TypeError, AttributeError) as exc:
+        raise ResultFileError(f"its '{NON_FINITE}' names a number that is not there ({type(exc).__name__}: {exc})",
+                              str(path)) from None
 
 
 def _json_kind(value):

@@ -9,10 +9,11 @@ import numpy as np
 
 from .. import lie
 from .. import mesh as M
-from ..errors import CoreSE3Error, LoadWarning, ScenarioError, SingularSystemError
+from ..errors import CoreSE3Error, LoadWarning, OptionError, ScenarioError, SingularSystemError
 from ..fem import RegionMaterial
 from ..fem.material_kinds import MATERIALS
 from ..model import FIELDS, LOADS, MU0, SUPPORTS, Problem
+from ..model.solving import check_linear_solver
 from .geometry import selection
 from .obstacles import add_obstacles
 from .magnetisation import pattern_br
@@ -52,6 +53,10 @@ def build_problem(v, spec, mesh, regions):
     """The Problem of a validated spec (its ``solve_defaults`` are the spec's [solver])."""
     s = spec["solver"]
     law = _law(v, spec, mesh, regions)
+    try:
+        check_linear_solver(s["linear_solver"])        # ('mumps' without petsc4py: [solver]'s, not [material]'s)
+    except OptionError as exc:
+        v.fail("solver.linear_solver", str(exc).removeprefix("Problem: "))
     try:
         prob = Problem(mesh, law, element=s["element"], linear_solver=s["linear_solver"])
     except CoreSE3Error as exc:

@@ -17,7 +17,7 @@ import os
 import warnings
 from collections import namedtuple
 
-from ..errors import ScenarioError
+from ..errors import AngleWarning, ScenarioError
 from .build import build_problem
 from .design_section import design_section
 from .keys import check_key, split_dotted
@@ -315,7 +315,7 @@ def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario", strict=
     spec["description"] = v.string(doc, "description", "", default="")
     spec["units"] = v.string(doc, "units", "", default="")
 
-    mesh, mspec, file_digest = mesh_section(v, doc["mesh"], base_dir)
+    mesh, mspec, file_digest = _keyed_angles(mesh_section, v, doc["mesh"], base_dir)
     spec["mesh"] = mspec
     spec["edges"] = edges_section(v, doc, mesh)
     regions = regions_section(v, doc, mesh)
@@ -351,7 +351,7 @@ def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario", strict=
                                      "remove [design] for a linear analysis")
         spec["design"] = design
     spec["sweep"] = sweep_section(v, doc)
-    problem = build_problem(v, spec, mesh, regions)
+    problem = _keyed_angles(build_problem, v, spec, mesh, regions)
     units_section(v, doc, spec)
     # the name labels the run (results' "scenario", titles, the default out/NAME): no mechanics
     phys = {k: spec[k] for k in spec if k not in ("output", "description", "sweep", "name")}
@@ -378,6 +378,15 @@ def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario", strict=
     for w in scn.warnings:
         warnings.warn(w, stacklevel=2)
     return scn
+
+
+def _keyed_angles(build, *args):
+    """``build(*args)`` without the AngleWarnings of the layers below (a generator's angle0, a
+    support's or an obstacle's angle, a field's rotate.angle): the validation says each as a
+    ScenarioWarning at its key (``units._angles``), once."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", AngleWarning)
+        return build(*args)
 
 
 def _huge_integers(v, doc, key=""):

@@ -23,7 +23,7 @@ from ..backend import restore_rent
 from ..errors import CheckpointError
 from ..io import atomic_path, write_json_atomic
 
-__all__ = ["SWEEP_FILES", "SweepCheckpoint", "write_csv", "write_plot", "write_status", "columns"]
+__all__ = ["SWEEP_FILES", "SweepCheckpoint", "write_csv", "write_plot", "write_status", "columns", "column_units"]
 
 SWEEP_FILES = ("sweep.csv", "sweep.png", "sweep.json", "sweep.npz")
 FORMAT = "core-se3-sweep-checkpoint"
@@ -113,12 +113,47 @@ def write_csv(path, keys, rows):
     return path
 
 
+_DIMENSIONS = (("length", ("ux", "uy", "uz", "penetration", "gap_error", "largest_slip")),
+               ("force", ("Fx", "Fy", "Fz", "tangential_force", "normal_force")), ("moment", ("Mx", "My", "Mz")))
+
+
+def column_units(cols, units):
+    """column -> unit of the ``sweep.csv`` columns a sweep computes, in the scenario's unit system
+    (``units``; its dimension names where none is given): probe displacements and contact lengths
+    in the length unit, reactions and contact forces in the force unit, their moments in the
+    moment unit, rotations in rad; the swept values are as the scenario gives them (absent).
+
+    Example
+    -------
+    >>> column_units(["E", "tip.uz", "tip.rotation", "supports[0].My", "steps"], "N-mm-MPa")
+    {'tip.uz': 'mm', 'tip.rotation': 'rad', 'supports[0].My': 'N mm', 'steps': '1'}
+    """
+    from .units import UNIT_SYSTEMS
+    u = UNIT_SYSTEMS.get(units) or UNIT_SYSTEMS["consistent"]
+    out = {}
+    for c in cols:
+        tail = c.rsplit(".", 1)[-1]
+        dim = next((d for d, tails in _DIMENSIONS if tail in tails and "." in c), None)
+        if dim is not None:
+            out[c] = u[dim]
+        elif tail in ("rotation", "rotation_vector") and "." in c:
+            out[c] = "rad"
+        elif c in ("steps", "iterations") or tail in ("nodes_in_contact", "faces_in_contact", "sticking", "slipping"):
+            out[c] = "1"
+    return out
+
+
 def write_status(path, result, scn, state, message=None):
-    """``sweep.json``: status, message, the swept keys, the number of rows, provenance."""
+    """``sweep.json``: status, message, the swept keys, the number of rows, the unit system and
+    the units of the CSV's computed columns (:func:`column_units`), provenance."""
     from ..results.provenance import provenance
+    from .outputs import unit_system_record
+    units = scn.spec["units"]
     doc = dict(schema="core-se3-sweep", version=1, scenario=scn.file, name=scn.name, status=result.status,
                error=message, keys=result.keys, rows=len(result.rows),
                failed=sum(r.get("status") != "complete" for r in result.rows),
+               unit_system=unit_system_record(units),
+               column_units=column_units(columns([{k: None for k in result.keys}] + list(result.rows)), units),
                provenance=provenance(scn.problem))
     return write_json_atomic(path, doc)
 

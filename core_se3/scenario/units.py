@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..errors import TURNS_MAX
 from ..model import FIELDS, MU0
 from .geometry import selection
 from .validate import make_scale
@@ -45,8 +46,8 @@ H_OVER_L_MAX = 0.3
 H_OVER_L_MIN = 1e-4
 LINEAR_MAX = 0.1              # a linear analysis: rotations of the order of the load number
 FIRST_STEP_MAX = 1e3
-TURNS_MAX = 3                      # a bare angle [rad] over three turns is likely degrees (360 -> 57 turns,
-                                   # 45 -> 7.2, 30 -> 4.8: silent at the ten turns before); real paths turn 1 or 2
+# TURNS_MAX (errors): a bare angle [rad] over three turns is likely degrees (360 -> 57 turns, 45 -> 7.2,
+# 30 -> 4.8: silent at the ten turns before); real paths turn 1 or 2
 # parameters of the built-in load kinds -> dimension
 _DIMENSION = {"force": "force", "moment": "moment", "p": "stress", "q": "stress", "g": "acceleration"}
 

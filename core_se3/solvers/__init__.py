@@ -14,12 +14,13 @@ Example
 >>> [len(p.solve(steps=2).steps), len(p.solve(control="arclength", dlam0=0.5).steps)]
 [3, 3]
 """
-from ..model.problem import SOLVERS
+from ..model.solving import LINEAR_SOLVERS, SOLVERS
 from .arclength import ArcState, PathEvent, PathInfo, path_follow, path_steps
 from .shell_paths import PathStep, arc_length, arc_length_steps, displacement_control
 from .convergence import increment_norm, relative_residual, scaled_norm
 from .equations import NewtonEquations
 from .linear import linear_solve, linear_state
+from .direct import have_petsc
 from .linalg import AUTO_MUMPS_MIN, Factorization, available_solvers, checked_solve, make_solver
 from .newton import (MAX_PRESCRIBED_TURN, NewtonState, NewtonStep, newton_solve, newton_steps,
                      requested_load_factors)
@@ -45,3 +46,6 @@ def _arclength(problem, steps=None, lam_end=1.0, **kw):
 
 
 SOLVERS.update(load=newton_solve, arclength=_arclength, displacement=displacement_control, linear=linear_solve)
+LINEAR_SOLVERS.update(auto=lambda: None, banded=lambda: None, superlu=lambda: None,
+                      mumps=lambda: None if have_petsc() else "needs petsc4py (Debian: python3-petsc4py), not "
+                                                              "installed here")

@@ -208,6 +208,9 @@ def _log_try(result, tries, lam_try, out, augmentation=None, quiet=False):
         entry["midpoint_probe"] = dict(converged=p.ok, iterations=p.iterations, linear_solves=p.solves,
                                        increments=[float(x) for x in p.incs], det_sign=p.det_sign)
         entry["linear_solves"] += p.solves
+    if getattr(out, "returned", None) is not None:   # limit_check off: a passed sign change's return check
+        entry["return_check"] = _return_entry(*out.returned)
+        entry["linear_solves"] += out.returned[0].solves
     if getattr(out, "refined", None) is not None:    # the refine check's parts (their iterations)
         entry["refine_check"] = dict(iterations=out.refined[1], failed=out.refined[2], linear_solves=out.refined[3])
         entry["linear_solves"] += out.refined[3]
@@ -358,6 +361,9 @@ def _note_passed(checks, eq, result):
         result.critical_points.append(cp)
         if eq.root and cp.kind == "snap":
             log.warning("load control passed a %s", cp.describe())
+        elif eq.root and cp.kind == "limit":
+            log.warning("load control jumped across a %s onto another branch (limit_check off: the run goes on "
+                        "from there; the return check found the step's ends not connected)", cp.describe())
         elif eq.root:
             log.warning("load control passed a %s (limit_check off: the path goes on, unstable)",
                         cp.describe())
@@ -603,8 +609,13 @@ def _judge(out, checks, eq, hooks, here, start=None, prober=None):
             start_sign(eq, g, lam, stress_conv)
             checks.count = eq.inertia_count()
     if out.ok:
+        passed = len(checks.crossed)
         out.reason = checks.judge(out, lam, lam_try)
         out.ok = not out.reason
+        if out.ok and len(checks.crossed) > passed and prober is not None:    # limit_check off: which kind?
+            back, gap, why = _return_try(prober, eq, hooks, out, here, checks.disconnect)
+            out.returned = (back, gap)                    # logged with the try (``_log_try``)
+            checks.label_passed(why)
     probe = out.ok and prober is not None and checks.wants_probe()
     # a try that turned a node by about pi or more, or passed a limit point ahead: the midpoint probe
     trigger = checks.probe_trigger(eq.largest_turn(out.eta_sum), out.k_step, lam, lam_try) if probe else ""
@@ -659,22 +670,37 @@ def _jumped_across(trier, eq, hooks, checks, out, here, mip, result):
     limit point, and why is returned (the bracket dropped, the reason logged with the try), else ''."""
     g, lam, stress = here
     lam_hi = checks.bracket[1]
-    g_hi = out.g
-    g_back, stress_back = _try_start(eq.problem, eq, trier, g_hi, eq.whole_frames(g_hi) if eq.predictor else g_hi,
-                                     lam_hi, lam, mip, out.ev.stress if mip and out.ev is not None else None,
-                                     hooks.predictors)
-    back = trier.run(g_back, lam, mip, stress_back)
-    gap = (eq.state_gap(g_hi, g), eq.state_gap(back.g, g)) if back.ok else None
-    why = checks.judge_return(back, gap, lam, lam_hi)
+    back, gap, why = _return_try((trier, mip), eq, hooks, out, (g, lam, lam_hi, stress), checks.judge_return)
     entry = result.log[-1] if result.log else {}
-    entry["return_check"] = dict(converged=back.ok, iterations=back.iterations, linear_solves=back.solves,
-                                 increments=[float(x) for x in back.incs], gap=None if gap is None else list(gap))
+    entry["return_check"] = _return_entry(back, gap)
     entry["linear_solves"] = entry.get("linear_solves", 0) + back.solves
     if why:
         entry["reason"] = "; ".join(x for x in (entry.get("reason"), why) if x)
         if eq.root:
             log.info("  lam %.6g: %s", lam_hi, why)
     return why
+
+
+def _return_try(prober, eq, hooks, out, here, judge):
+    """(the return try, the distances from g of out.g and of its end or None, ``judge``'s verdict
+    on it): from the state ``out.g`` the try ``out``
+    converged onto at lam_hi back to lam, ``here`` = (g, lam, lam_hi, stress_conv) (the return
+    check, ``solvers.step_checks``)."""
+    trier, mip = prober
+    g, lam, lam_hi, _ = here
+    g_hi = out.g
+    g_back, stress_back = _try_start(eq.problem, eq, trier, g_hi, eq.whole_frames(g_hi) if eq.predictor else g_hi,
+                                     lam_hi, lam, mip, out.ev.stress if mip and out.ev is not None else None,
+                                     hooks.predictors)
+    back = trier.run(g_back, lam, mip, stress_back)
+    gap = (eq.state_gap(g_hi, g), eq.state_gap(back.g, g)) if back.ok else None
+    return back, gap, judge(back, gap, lam, lam_hi)
+
+
+def _return_entry(back, gap):
+    """The log entry of a return try ``back`` (``_return_try``)."""
+    return dict(converged=back.ok, iterations=back.iterations, linear_solves=back.solves,
+                increments=[float(x) for x in back.incs], gap=None if gap is None else list(gap))
 
 
 def _refined_end(prober, eq, hooks, here, g_long):

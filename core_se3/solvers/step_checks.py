@@ -83,8 +83,9 @@ with det K -1; solved back at 0.2856445 it lands 0.0112 ell from the state there
 ell apart.  The returns of real bifurcations land within 2.1e-11 of the sides' distance (the
 Euler strips' 1e-17 ... 1e-19 ell of 1e-8 ... 1e-4, the torsion strip's 2.3e-14 of 6.1e-3).  A
 critical point stops the run with a ConvergenceError naming it and what to do; with ``limit_check`` off it
-is recorded where it was passed (``Result.critical_points``, bracketed by the step, no extra
-tries) and the path goes on, unstable.  The start
+is recorded where it was passed (``Result.critical_points``, bracketed by the step, no
+bisection) and the path goes on; its return check (one more try) names it a bifurcation when the sides
+connect, else a limit point jumped across (``StepChecks.label_passed``).  The start
 state's sign is taken to be that of the first accepted state when that is +1 (an unloaded,
 supported shell); a first state with det K < 0 costs one factorisation at the start to tell.
 
@@ -544,6 +545,18 @@ class StepChecks:
         >>> why[:50], "ended 0.0112 ell from the state there" in why, chk.bracket
         ('return check: the try from the state at load facto', True, None)
         """
+        why = self.disconnect(back, gap, lam, lam_hi)
+        if not why:
+            return ""
+        self.bracket, self.confirmed, self.probing = None, False, False
+        return why + "; the bracket is dropped and the try cut back"
+
+    @staticmethod
+    def disconnect(back, gap, lam, lam_hi):
+        """'' when the return try ``back`` (a TryOutcome from the state at ``lam_hi`` back to
+        ``lam``) landed on the state there (``gap``: the distances from it of the far state and of
+        the return's end, ell, or None), else why the two sides of the sign change do not connect
+        (:meth:`judge_return`; with ``limit_check`` off, :meth:`label_passed`)."""
         there, back_gap = (None, None) if gap is None else gap
         why = (back.reason[:120] or "no convergence") if not back.ok else path_refusal(back.contraction, back.travel)
         if not why and back_gap <= max(RETURN_TOL, RETURN_SHARE * there):
@@ -552,9 +565,17 @@ class StepChecks:
                 f"sign change back to {lam:.7g} ")
         why = (f"did not get there ({why})" if why else
                f"ended {back_gap:.3g} ell from the state there (the two sides {there:.3g} ell apart)")
-        self.bracket, self.confirmed, self.probing = None, False, False
         return head + why + (": the sides do not connect, the try across it jumped (a limit point, which load "
-                             "control cannot pass); the bracket is dropped and the try cut back")
+                             "control cannot pass)")
+
+    def label_passed(self, why):
+        """With ``limit_check`` off, the sign change just recorded (``crossed``) is a bifurcation
+        passed on the path when its return check connected its sides (``why`` ''), else a limit
+        point the step jumped across onto another branch (fuzz problem 108 with limit_check off:
+        1, 4 and 16 steps recorded a 'bifurcation' between 0.2854 and 0.286084, its limit point
+        0.2857128)."""
+        if why and self.crossed:
+            self.crossed[-1] = dataclasses.replace(self.crossed[-1], kind="limit")
 
     def _narrow(self, floor):
         lo, hi = self.bracket
