@@ -982,3 +982,21 @@ def test_asymmetry_is_unit_free_and_separates_non_conservative_loads():
         _, res_a, prob_a = run_case("arch-follower", steps=3)
     Ka = prob_a.tangent(res_a.final.g, res_a.final.load_factor)
     assert stability.asymmetry(Ka, prob_a.assembler().free) > 10 * stability.ASYM_TOL
+
+
+@pytest.mark.parametrize("h", [1e-3, 1e-4])
+def test_thin_rolled_strip_under_a_dead_moment_is_not_counted_as_conservative(h):
+    """The rollup strip (L 10, 10 x 1, dead end moment of 3 turns, one step) at L/h 1e4 and 1e5:
+    its tangent's Jacobi-scaled skew part falls like (h/L)^2 (9.2e-7, 9.2e-9: the rotations'
+    diagonal is the transverse shear's), below the 1e-6 that counted K as symmetric before, so
+    the end check counted sym K ('the number of negative eigenvalues of sym K rose from 0 to 2')
+    and stopped a path whose tip lies on the exact circle to 2e-16.  Now (ASYM_TOL 1e-10) it is
+    judged non-conservative at both thicknesses and ends on the circle."""
+    from core_se3.solvers.stability import ASYM_TOL, asymmetry
+    doc, res, prob = run_case("rollup", mesh=(10, 1), steps=1, overrides=dict(h=h))
+    L, k = 10.0, 3.0
+    R = L / (2 * np.pi * k)
+    exact = np.array([R * np.sin(2 * np.pi * k) - L, 0.0, R * (1 - np.cos(2 * np.pi * k))])
+    assert np.abs(res.final.probes["tip"]["u"] - exact).max() <= 1e-12 * L
+    K = prob.evaluate(res.final.g, 1.0).K
+    assert 10 * ASYM_TOL < asymmetry(K, prob.assembler().free) < 1e-5     # non-conservative, with margin
