@@ -54,6 +54,7 @@ from .base import Load, LoadEvaluation
 from .contact_faces import face_minima, face_wrench
 from .contact_output import ContactOutputs, field_key, field_key_clash
 from .friction import CoulombFriction, wrench
+from .loads import element_area
 from .contact_sweep import crossing_report
 from .contact_law import (E3, MODES, ContactLaw, as_contact_law, contact_wrench, nodal_areas, normal_law, ramp,
                           ramp_inverse, reference_sides, shell_diagonal_stiffness)
@@ -166,7 +167,7 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         el = np.arange(mesh.n_elements) if elements is None else np.asarray(elements, np.int64)
         h_node = np.zeros(mesh.n_nodes)                  # the thickest contact element at each node
         np.maximum.at(h_node, mesh.quads[el].ravel(), np.repeat(h_el[el], 4))
-        area = nodal_areas(mesh, elements)
+        area = nodal_areas(mesh, elements, element_area(problem, el))       # the element's own area (curved)
         self.nodes = np.nonzero(area > 0)[0] if nodes is None else np.asarray(nodes, np.int64)
         self.A = area[self.nodes]
         if len(self.nodes) == 0 or np.any(self.A <= 0):
