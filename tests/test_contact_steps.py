@@ -246,6 +246,50 @@ def test_a_ball_through_the_face_between_nodes_is_refused_without_face_samples()
     assert st.contact["pin"]["force"][2] > 0 and c.face_crossing(st.g, 1.0) == ""
 
 
+
+def test_a_cam_edge_through_a_face_that_no_sample_holds_is_refused():
+    """A box cam (half sizes 0.1 x 0.05, the default edge rounding 5e-4) turning about its axis
+    under a 20 x 1 strip (elements 0.05 x 0.1): between two states its edge enters a face between
+    the nodes deeper than its rounding, where the box's distance is not smooth (the ridge inside
+    the edge) and the face sample is dropped.  The quarter turn in 10 steps ended the steps at
+    load factors 0.5 and 0.6 with the strip flat, no force, penetration 0, the edge 0.0078 and
+    0.011 through its contact face.  Such a state is now refused, naming the rounding and the fix
+    (10 steps stop at 0.696 with it; a rounding larger than the edge's reach is not refused)."""
+    def cam(**kw):
+        p = cs.Problem(M.rectangle(1.0, 0.1, 20, 1), cs.Material(1e5, 0.0, 0.01))
+        p.clamp("x0")
+        c = p.add_obstacle("box", centre=(0.8, 0, -0.1), half_sizes=(0.1, 0.2, 0.05), name="cam",
+                           motion=dict(axis=(0, 1, 0), angle=np.pi / 2, point=(0.8, 0, -0.1)), **kw)
+        return p.mesh.g0, c
+    g0, c = cam()
+    assert c.obstacle.rounding == 5e-4 and len(c.face_el) == 20            # face samples on ('auto')
+    assert c.penetration(g0, 0.5) == 0.0 and _surface_depth(c, g0, 0.5, 0.01) < -0.0076
+    assert c.face_crossing(g0, 0.3) == ""                                   # below the strip
+    for lam, deep in ((0.5, "0.00782"), (0.6, "0.0109")):
+        why = c.step_error(g0, lam - 0.01, g0, lam)
+        assert f"reaches {deep} into the contact face of element 15" in why and "rounded by 0.0005" in why
+        assert "larger rounding" in why and "more load steps" in why
+    g0, c = cam(rounding=0.02)                                              # the edge within its rounding
+    assert c.face_crossing(g0, 0.5) == "" and c.face_crossing(g0, 0.6) == ""
+
+
+def test_a_cam_with_a_rounded_edge_turns_in_ten_steps():
+    """The cam above with the rounding the refusal advises (0.005, a tenth of its smallest half
+    size) makes its quarter turn in 10 steps (1 to 5 tries each), every stored state with the
+    strip outside it; at load factor 0.8 (72 degrees) its edge at (0.817, 0.0106) pushes the
+    strip's face up: tip 0.0192 (a cantilever pushed there by 0.0156 - the rounding's 0.002:
+    0.0209 - 0.0027; the sharp cam's run ended that step at 0.0140, the strip on the face)."""
+    p = cs.Problem(M.rectangle(1.0, 0.1, 20, 1), cs.Material(1e5, 0.0, 0.01))
+    p.clamp("x0")
+    c = p.add_obstacle("box", centre=(0.8, 0, -0.1), half_sizes=(0.1, 0.2, 0.05), name="cam", rounding=0.005,
+                       motion=dict(axis=(0, 1, 0), angle=np.pi / 2, point=(0.8, 0, -0.1)))
+    res = p.solve(steps=10)
+    tip = p.mesh.node_set("x1")
+    for st in res.steps:
+        assert _surface_depth(c, st.g, st.load_factor, 0.01) > -10 * c.tol and c.unfelt_face(st.g, st.load_factor)[0] is None
+    assert 0.018 < res.steps[8].g[tip, 2, 3].mean() < 0.0209
+
+
 # ----------------------------------------------------------------------------- lift-off
 HINGED_STRIP = """
 name = "hinged-strip"
