@@ -48,6 +48,20 @@ def test_swept_depth_finds_a_ball_that_passed_through():
     assert ball.distance(x, 0.0)[0] > 0 and ball.distance(x, 1.0)[0] > 0
 
 
+def test_a_path_through_the_centre_of_a_ball_is_a_crossing_not_an_error():
+    """The crossing check samples distances along the paths; a face point whose path meets a
+    ball's (or an infinite cylinder's) centre exactly, where the distance is defined (-R) but the
+    normal is not, stopped the run with ContactError "a point is at the centre of the sphere"
+    (a ball of radius 0.05 pressed 0.05 up into a plate under round coordinates, in 2 steps:
+    a face point's end state); now the sweep takes the distance there."""
+    for ball in (Sphere((0.0, 0.0, 0.0), 0.05), Cylinder((0.0, 0.0, 0.0), (0.0, 1.0, 0.0), 0.05)):
+        out, centre = np.array([[0.0, 0.0, -0.1]]), np.array([[0.0, 0.0, 0.0]])
+        assert ball.distance(centre)[0] == -0.05
+        # ending (or starting) at the centre: the end state's own depth is forgiven by the sweep
+        assert crossing_report(ball, np.zeros((0, 4), int), out, centre, 0.0, 1.0, 0.01, [7]) == ""
+        assert crossing_report(ball, np.zeros((0, 4), int), centre, out, 0.0, 1.0, 0.01, [7]) == ""
+        assert "passes through" in crossing_report(ball, np.zeros((0, 4), int), out, -out, 0.0, 1.0, 0.01, [7])
+
 def test_a_small_ball_between_the_nodes_is_found_on_the_face():
     """A ball of radius 0.1 rising through the middle of a 1 x 1 face: the nodes never come
     near it (nodal sampling misses it), the face grid does."""
