@@ -282,7 +282,8 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         if self.mu > 0:
             F, _, S = self.node_forces(g, lam)
             fb, Kb = wrench(g[self.nodes, :3, :3], self.c, F, S)
-            self._slide = self._sliding(g, lam)
+            slide = self._sliding(g, lam)        # the last evaluation in contact (failure_hint's evidence)
+            self._slide = slide if slide[0] or not hasattr(self, "_slide") else self._slide
         else:
             x, d, n, H, p, dp = self.state(g, lam)
             fb, Kb = contact_wrench(g[self.nodes, :3, :3], self.c, self.A, n, H, p, dp)
