@@ -304,6 +304,32 @@ def test_a_cam_with_a_rounded_edge_turns_in_ten_steps():
     assert 0.018 < res.steps[8].g[tip, 2, 3].mean() < 0.0209
 
 
+
+@pytest.mark.parametrize("press", [0.01, 0.05])
+def test_a_small_ball_sliding_along_a_plate_in_two_steps_or_eight(press):
+    """A ball of radius 0.05 (face samples: the plate's elements are 0.25) rises under a plate
+    clamped at both ends (2 x 1, h 0.02, E 1e4) until it presses ``press`` past its bottom face
+    (load factor 0 -> 0.5), then slides 1.0 along it, four elements (0.5 -> 1): in 2 steps the
+    slide is one step, the contact lost at the old place and regained four elements on.
+    Frictionless, the end state is that of 8 steps: 7.7e-10 (press 0.01, the contact tolerance
+    2e-8) and 7.7e-16 (press 0.05, deeper than h: the face points' sweep meets the ball's centre,
+    where the run stopped with "a point is at the centre of the sphere" before)."""
+    def run(steps):
+        p = cs.Problem(M.rectangle(2.0, 1.0, 8, 4), cs.Material(E=1e4, nu=0.3, h=0.02))
+        p.clamp("x0"), p.clamp("x1")
+
+        def motion(lam):
+            T = np.eye(4)
+            T[2, 3], T[0, 3] = (0.02 + press) * min(1.0, 2 * lam), max(0.0, 2 * lam - 1)
+            return T
+        c = p.add_obstacle("sphere", centre=(0.6, 0.1, -0.08), radius=0.05, motion=motion, name="ball")
+        st = p.solve(steps=steps).final
+        assert st.contact["ball"]["force"][2] > 0 and _surface_depth(c, st.g, 1.0, 0.01) > -10 * c.tol
+        return st.g[:, :3, 3]
+    x2, x8 = run(2), run(8)
+    assert np.abs(x2 - x8).max() < 1e-8
+
+
 # ----------------------------------------------------------------------------- lift-off
 HINGED_STRIP = """
 name = "hinged-strip"
