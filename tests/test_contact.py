@@ -736,3 +736,33 @@ def test_an_obstacle_motion_of_the_wrong_type_is_a_contact_error(options, match)
     p = cs.Problem(M.rectangle(10.0, 1.0, 16, 1), cs.Material(E=1.2e6, nu=0.0, h=0.1))
     with pytest.raises(ContactError, match=match):
         p.add_obstacle("sphere", centre=(0.0, 0.0, 11.0), radius=10.0, **options)
+
+
+
+@pytest.mark.parametrize("mesh, bore", [
+    (M.cylinder_panel(1.0, 0.1, -0.8, 0.8, 4, 1), dict(kind="cylinder", point=(0, 0, 0), axis=(0, 1, 0))),  # 0.4 rad
+    (M.hemisphere_quarter(1.0, 60.0, 2, 4), dict(kind="sphere", centre=(0, 0, 0))),     # a cap, 0.26 x 0.39 rad
+], ids=["cylinder", "sphere"])
+def test_contact_areas_on_curved_elements_are_the_elements_own(mesh, bore):
+    """A curved panel pressed by a uniform pressure q into a rigid bore of its own radius (its
+    outer face touching it at the nodes) passes the pressure straight on: the contact pressure of
+    every node off the support is q, and a penalty k's penetration is q / k.  The nodal areas
+    were the bilinear chords' (short by sin(a/2)/(a/2) at a rad per element, while the pressure
+    is integrated over the element's own area): pressure and penetration 1.0067 q and 1.0067 q / k
+    on the cylinder, 1.0096 to 1.0109 on the cap; now 1 to 4e-5 (the shell's strain under the
+    penetration q / k carries the rest).  Flat meshes keep the bilinear areas to the bit."""
+    h, q, k = 0.01, 1.0, 1e7
+    p = cs.Problem(mesh, cs.Material(E=1e5, nu=0.3, h=h))
+    held = np.nonzero(np.abs(mesh.X[:, 0]) < 1e-12)[0] if bore["kind"] == "cylinder" else mesh.node_set("x0")
+    p.clamp(held)                                   # the middle generator, the cap's hole: no rigid turn
+    p.add_pressure(q, follower=True)                # outward, onto the bore
+    bore = dict(bore)
+    kind = bore.pop("kind")
+    c = p.add_obstacle(kind, radius=1.0 + h / 2, inside=True, name="bore", law=dict(mode="penalty", k=k), **bore)
+    st = p.solve(steps=1).final
+    P = c.output_fields(st.g, 1.0)["contact_pressure"][c.nodes][~np.isin(c.nodes, held)]
+    assert np.abs(P / q - 1).max() < 1e-4
+    assert abs(c.penetration(st.g, 1.0) * k / q - 1) < 1e-4
+    flat = M.rectangle(1.0, 0.3, 3, 2)
+    j0 = cs.model.loads.element_area(cs.Problem(flat, cs.Material(E=1e5, nu=0.3, h=h)), None)
+    assert np.array_equal(cs.model.contact_law.nodal_areas(flat, None, j0), cs.model.contact_law.nodal_areas(flat))

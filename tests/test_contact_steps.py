@@ -48,6 +48,20 @@ def test_swept_depth_finds_a_ball_that_passed_through():
     assert ball.distance(x, 0.0)[0] > 0 and ball.distance(x, 1.0)[0] > 0
 
 
+def test_a_path_through_the_centre_of_a_ball_is_a_crossing_not_an_error():
+    """The crossing check samples distances along the paths; a face point whose path meets a
+    ball's (or an infinite cylinder's) centre exactly, where the distance is defined (-R) but the
+    normal is not, stopped the run with ContactError "a point is at the centre of the sphere"
+    (a ball of radius 0.05 pressed 0.05 up into a plate under round coordinates, in 2 steps:
+    a face point's end state); now the sweep takes the distance there."""
+    for ball in (Sphere((0.0, 0.0, 0.0), 0.05), Cylinder((0.0, 0.0, 0.0), (0.0, 1.0, 0.0), 0.05)):
+        out, centre = np.array([[0.0, 0.0, -0.1]]), np.array([[0.0, 0.0, 0.0]])
+        assert ball.distance(centre)[0] == -0.05
+        # ending (or starting) at the centre: the end state's own depth is forgiven by the sweep
+        assert crossing_report(ball, np.zeros((0, 4), int), out, centre, 0.0, 1.0, 0.01, [7]) == ""
+        assert crossing_report(ball, np.zeros((0, 4), int), centre, out, 0.0, 1.0, 0.01, [7]) == ""
+        assert "passes through" in crossing_report(ball, np.zeros((0, 4), int), out, -out, 0.0, 1.0, 0.01, [7])
+
 def test_a_small_ball_between_the_nodes_is_found_on_the_face():
     """A ball of radius 0.1 rising through the middle of a 1 x 1 face: the nodes never come
     near it (nodal sampling misses it), the face grid does."""
@@ -244,6 +258,76 @@ def test_a_ball_through_the_face_between_nodes_is_refused_without_face_samples()
     p, c = plate("auto")
     st = p.solve(steps=4).final
     assert st.contact["pin"]["force"][2] > 0 and c.face_crossing(st.g, 1.0) == ""
+
+
+
+def test_a_cam_edge_through_a_face_that_no_sample_holds_is_refused():
+    """A box cam (half sizes 0.1 x 0.05, the default edge rounding 5e-4) turning about its axis
+    under a 20 x 1 strip (elements 0.05 x 0.1): between two states its edge enters a face between
+    the nodes deeper than its rounding, where the box's distance is not smooth (the ridge inside
+    the edge) and the face sample is dropped.  The quarter turn in 10 steps ended the steps at
+    load factors 0.5 and 0.6 with the strip flat, no force, penetration 0, the edge 0.0078 and
+    0.011 through its contact face (six of its ten stored states had it unfelt in a face).  Such a state is now refused, naming the rounding and the fix
+    (10 steps stop at 0.696 with it; a rounding larger than the edge's reach is not refused)."""
+    def cam(**kw):
+        p = cs.Problem(M.rectangle(1.0, 0.1, 20, 1), cs.Material(1e5, 0.0, 0.01))
+        p.clamp("x0")
+        c = p.add_obstacle("box", centre=(0.8, 0, -0.1), half_sizes=(0.1, 0.2, 0.05), name="cam",
+                           motion=dict(axis=(0, 1, 0), angle=np.pi / 2, point=(0.8, 0, -0.1)), **kw)
+        return p.mesh.g0, c
+    g0, c = cam()
+    assert c.obstacle.rounding == 5e-4 and len(c.face_el) == 20            # face samples on ('auto')
+    assert c.penetration(g0, 0.5) == 0.0 and _surface_depth(c, g0, 0.5, 0.01) < -0.0076
+    assert c.face_crossing(g0, 0.3) == ""                                   # below the strip
+    for lam, deep in ((0.5, "0.00782"), (0.6, "0.0109")):
+        why = c.step_error(g0, lam - 0.01, g0, lam)
+        assert f"reaches {deep} into the contact face of element 15" in why and "rounded by 0.0005" in why
+        assert "larger rounding" in why and "more load steps" in why
+    g0, c = cam(rounding=0.02)                                              # the edge within its rounding
+    assert c.face_crossing(g0, 0.5) == "" and c.face_crossing(g0, 0.6) == ""
+
+
+def test_a_cam_with_a_rounded_edge_turns_in_ten_steps():
+    """The cam above with the rounding the refusal advises (0.005, a tenth of its smallest half
+    size) makes its quarter turn in 10 steps (1 to 5 tries each), every stored state with the
+    strip outside it; at load factor 0.8 (72 degrees) its edge at (0.817, 0.0106) pushes the
+    strip's face up: tip 0.0192 (a cantilever pushed there by 0.0156 - the rounding's 0.002:
+    0.0209 - 0.0027; the sharp cam's run ended that step at 0.0140, the strip on the face)."""
+    p = cs.Problem(M.rectangle(1.0, 0.1, 20, 1), cs.Material(1e5, 0.0, 0.01))
+    p.clamp("x0")
+    c = p.add_obstacle("box", centre=(0.8, 0, -0.1), half_sizes=(0.1, 0.2, 0.05), name="cam", rounding=0.005,
+                       motion=dict(axis=(0, 1, 0), angle=np.pi / 2, point=(0.8, 0, -0.1)))
+    res = p.solve(steps=10)
+    tip = p.mesh.node_set("x1")
+    for st in res.steps:
+        assert _surface_depth(c, st.g, st.load_factor, 0.01) > -10 * c.tol and c.unfelt_face(st.g, st.load_factor)[0] is None
+    assert 0.018 < res.steps[8].g[tip, 2, 3].mean() < 0.0209
+
+
+
+@pytest.mark.parametrize("press", [0.01, 0.05])
+def test_a_small_ball_sliding_along_a_plate_in_two_steps_or_eight(press):
+    """A ball of radius 0.05 (face samples: the plate's elements are 0.25) rises under a plate
+    clamped at both ends (2 x 1, h 0.02, E 1e4) until it presses ``press`` past its bottom face
+    (load factor 0 -> 0.5), then slides 1.0 along it, four elements (0.5 -> 1): in 2 steps the
+    slide is one step, the contact lost at the old place and regained four elements on.
+    Frictionless, the end state is that of 8 steps: 7.7e-10 (press 0.01, the contact tolerance
+    2e-8) and 7.7e-16 (press 0.05, deeper than h: the face points' sweep meets the ball's centre,
+    where the run stopped with "a point is at the centre of the sphere" before)."""
+    def run(steps):
+        p = cs.Problem(M.rectangle(2.0, 1.0, 8, 4), cs.Material(E=1e4, nu=0.3, h=0.02))
+        p.clamp("x0"), p.clamp("x1")
+
+        def motion(lam):
+            T = np.eye(4)
+            T[2, 3], T[0, 3] = (0.02 + press) * min(1.0, 2 * lam), max(0.0, 2 * lam - 1)
+            return T
+        c = p.add_obstacle("sphere", centre=(0.6, 0.1, -0.08), radius=0.05, motion=motion, name="ball")
+        st = p.solve(steps=steps).final
+        assert st.contact["ball"]["force"][2] > 0 and _surface_depth(c, st.g, 1.0, 0.01) > -10 * c.tol
+        return st.g[:, :3, 3]
+    x2, x8 = run(2), run(8)
+    assert np.abs(x2 - x8).max() < 1e-8
 
 
 # ----------------------------------------------------------------------------- lift-off

@@ -373,3 +373,79 @@ def test_friction_refuses_a_user_sdf_whose_gradient_is_not_unit():
         p.add_obstacle(ob, friction=0.3)
     assert exc.value.param == "grad"
     p.add_obstacle(ob)                     # frictionless: accepted
+
+
+def _grasp(pull):
+    """A free strip (L 1, w 0.05, h 0.01, E 1e5, 50 x 1) threaded between three rough rollers
+    (radius 0.1, mu 0.3): two below at x = 0.2 and 0.6, one above at x = 0.4 that comes down by
+    delta = 0.01 over load factor 0 -> 0.5 (three-point bending: P = 48 EI delta / l^3 on the top
+    one, P/2 on each other, l = 0.4), then an axial pull ``pull`` x mu (2P) at x = 1 (0.5 -> 1)."""
+    E, w, h, mu = 1e5, 0.05, 0.01, 0.3
+    P = 48 * E * w * h ** 3 / 12 * 0.01 / 0.4 ** 3
+    p = cs.Problem(M.rectangle(1.0, w, 50, 1), cs.Material(E=E, nu=0.0, h=h))
+    rollers = [p.add_obstacle("cylinder", point=(0.2, 0, -0.1 - h / 2), axis=(0, 1, 0), radius=0.1, name="left",
+                              friction=mu),
+               p.add_obstacle("cylinder", point=(0.6, 0, -0.1 - h / 2), axis=(0, 1, 0), radius=0.1, name="right",
+                              friction=mu),
+               p.add_obstacle("cylinder", point=(0.4, 0, 0.1 + h / 2), axis=(0, 1, 0), radius=0.1, name="top",
+                              friction=mu, motion=dict(translate=(0, 0, -0.01), scale=lambda lam: min(1.0, 2 * lam)))]
+    F = pull * mu * 2 * P
+    p.add_edge_force("x1", (F, 0, 0), scale=lambda lam: max(0.0, 2 * lam - 1))
+    return p, rollers, P, F, mu
+
+
+def test_a_grasp_by_three_rough_rollers_meets_coulomb_node_by_node():
+    """The grasp pulled by half of mu times the sum of its normal forces holds.  At every stored
+    step, node by node: the traction is tangential and within the cone, a slipping node's on it
+    (the hardening's 1e-8 k |s| beyond) and opposite to its slip over the step; the balance of
+    the pull, the rollers' forces and no reactions to 1e-9 of P (3e-11 measured).  The top roller's force
+    at the end of the squeeze is P (+0.64 %: the strip's rotations), its nodes stick throughout
+    (|t| at 0.97 of the cone at the full pull), while the outer ones slip from the start (the
+    bending strip draws its ends in)."""
+    from core_se3.results import restore_multipliers
+    p, rollers, P, F, mu = _grasp(0.5)
+    res = p.solve(steps=10)
+    prev = None
+    for st in res.steps[1:]:
+        lam = st.load_factor
+        total = sum(st.contact[c.name]["force"] for c in rollers)
+        assert np.linalg.norm(total + st.applied_force + st.reaction_force) < 1e-9 * P
+        for c in rollers:
+            y_prev = None
+            if prev is not None:
+                c.set_multipliers(prev.contact[c.name]["multipliers"])
+                y_prev = c.y_a.copy()
+            restore_multipliers(p, st)
+            x, _, n, _, pp, _ = c.state(st.g, lam)
+            t = c.tau @ c.obstacle.transform(lam)[:3, :3].T                 # the traction at the state
+            on = pp > 0
+            assert on.any() and np.abs(np.einsum("ki,ki->k", t, n)[on]).max() < 1e-12 * mu * pp[on].max()
+            ratio = np.linalg.norm(t, axis=1)[on] / (mu * pp[on])
+            assert ratio.max() < 1 + 1e-6
+            slipping = on & (np.linalg.norm(t, axis=1) > (1 - 1e-6) * mu * pp)
+            if y_prev is not None and slipping.any():
+                T = c.obstacle.transform(lam)
+                s = x - (y_prev @ T[:3, :3].T + T[:3, 3])
+                s -= np.einsum("ki,ki->k", s, n)[:, None] * n
+                cos = np.einsum("ki,ki->k", s, t)[slipping] / (np.linalg.norm(s, axis=1) * np.linalg.norm(t, axis=1))[slipping]
+                assert cos.max() < -0.999
+        prev = st
+        if lam == 0.5:
+            assert abs(st.contact["top"]["normal_force"] / P - 1) < 0.01
+        assert st.contact["top"]["slipping"] == 0 and st.contact["left"]["sticking"] == 0
+    assert abs(st.applied_force[0] / F - 1) < 1e-7              # the pull (9e-9 measured)
+
+
+def test_a_grasp_pulled_beyond_what_friction_holds_says_it_slides():
+    """The same grasp pulled by twice mu times its normal forces: no state holds beyond about
+    1.15 of them (the pull itself presses the strip on the rollers), and the run stops there.
+    The error blamed the mesh ("edge [39, 40] turns by 3.109 rad ... refine the mesh or the load
+    step": the last iterate had been flung off every roller, and the hint looked at it and at one
+    obstacle at a time); now it names the sliding over all three rollers."""
+    p, rollers, P, F, mu = _grasp(2.0)
+    with pytest.raises(cs.ConvergenceError, match="no static equilibrium: it slides -- all .* on obstacles") as info:
+        p.solve(steps=10)
+    msg = str(info.value)
+    assert all(repr(c.name) in msg.split("Probable cause")[1] for c in rollers)
+    assert "the last converged load factor is 0.78" in msg          # pull 1.15 mu (2P)
+    assert all(st.balance_error < 1e-8 for st in info.value.result.steps[1:])

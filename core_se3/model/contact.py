@@ -54,6 +54,7 @@ from .base import Load, LoadEvaluation
 from .contact_faces import face_minima, face_wrench
 from .contact_output import ContactOutputs, field_key, field_key_clash
 from .friction import CoulombFriction, wrench
+from .loads import element_area
 from .contact_sweep import crossing_report
 from .contact_law import (E3, MODES, ContactLaw, as_contact_law, contact_wrench, nodal_areas, normal_law, ramp,
                           ramp_inverse, reference_sides, shell_diagonal_stiffness)
@@ -166,7 +167,7 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         el = np.arange(mesh.n_elements) if elements is None else np.asarray(elements, np.int64)
         h_node = np.zeros(mesh.n_nodes)                  # the thickest contact element at each node
         np.maximum.at(h_node, mesh.quads[el].ravel(), np.repeat(h_el[el], 4))
-        area = nodal_areas(mesh, elements)
+        area = nodal_areas(mesh, elements, element_area(problem, el))       # the element's own area (curved)
         self.nodes = np.nonzero(area > 0)[0] if nodes is None else np.asarray(nodes, np.int64)
         self.A = area[self.nodes]
         if len(self.nodes) == 0 or np.any(self.A <= 0):
@@ -281,7 +282,8 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         if self.mu > 0:
             F, _, S = self.node_forces(g, lam)
             fb, Kb = wrench(g[self.nodes, :3, :3], self.c, F, S)
-            self._slide = self._sliding(g, lam)
+            slide = self._sliding(g, lam)        # the last evaluation in contact (failure_hint's evidence)
+            self._slide = slide if slide[0] or not hasattr(self, "_slide") else self._slide
         else:
             x, d, n, H, p, dp = self.state(g, lam)
             fb, Kb = contact_wrench(g[self.nodes, :3, :3], self.c, self.A, n, H, p, dp)
@@ -395,32 +397,60 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
                                lam0, lam1, depth, (self.node_ids, self.face_ids)) or self.face_crossing(g1, lam1)
 
     def face_crossing(self, g, lam):
-        """'' unless, with the faces not sampled (``faces = false``), a curved obstacle has crossed
-        a contact face between its nodes at (g, lam): the face's deepest point lies inside the
-        obstacle (d < -tol, below the face's nodes) and either the obstacle's normal there points
-        along the face's own normal toward the obstacle side (mean of s_a d3_a) -- the point is
-        past the obstacle's medial surface, its middle beyond the face -- or the obstacle is
-        thinner than the elements and reaches deeper than the thickness h (through the shell).
-        A chord that merely cuts a large obstacle (nodal sampling) has the normal against the
-        face's.  Steps ending so are refused (the sweep forgives penetration present at an end
-        state)."""
-        if len(self.face_el) or getattr(self.obstacle, "flat", False) or not len(self._quads):
+        """'' unless a curved obstacle reaches into a contact face between its nodes at (g, lam)
+        where no constraint feels it (:meth:`unfelt_face`); steps ending so are refused (the
+        sweep forgives penetration present at an end state), with the fix: face samples, or,
+        where they are on but cannot hold the obstacle there (a sharp edge or corner), more
+        steps or a larger rounding."""
+        e, depth = self.unfelt_face(g, lam)
+        if e is None:
             return ""
+        el = int(self.face_ids[e])
+        if not len(self.face_el):
+            return (f"obstacle {self.name!r} passes through the contact face of element {el} between its nodes at "
+                    f"load factor {lam:.6g} ({depth:.3g} deep, through the shell): the nodes "
+                    f"alone do not feel it; set faces = true (or 'auto') in the contact law, or refine the mesh")
+        r = getattr(self.obstacle, "rounding", None)
+        edge = f"its edges are rounded by {r:.3g}" if r is not None else "its surface is not smooth there"
+        return (f"obstacle {self.name!r} reaches {depth:.3g} into the contact face of element {el} between its nodes "
+                f"at load factor {lam:.6g}, where its face sample cannot hold it ({edge}: the face sample needs the "
+                "obstacle's surface to be smooth and convex where it meets the face, and inside an edge or corner "
+                "deeper than its rounding it is neither); give the obstacle a larger rounding (about a tenth of its "
+                "smallest half size), or take more load steps, so that it moves into a face by less than its "
+                "rounding per step")
+
+    def unfelt_face(self, g, lam):
+        """(the contact face's position in ``_quads``, its depth) of the deepest face that a curved
+        obstacle reaches into between the nodes at (g, lam) unfelt, or (None, 0): the face's
+        deepest point lies inside it (d < -tol, below the face's nodes by more than tol) and
+
+        * faces not sampled (``faces = false``): the obstacle's normal there points along the face's
+          own normal toward the obstacle side (mean of s_a d3_a) -- the point is past the
+          obstacle's medial surface, its middle beyond the face -- or the obstacle is thinner than
+          the elements and reaches deeper than the thickness h (through the shell); a chord that
+          merely cuts a large obstacle (nodal sampling) has the normal against the face's;
+        * faces sampled: the face's sample is not kept (``contact_faces.face_minima``: the
+          obstacle is not smooth and convex there -- a box's edge, rounded by r, entered deeper
+          than r between two states: a cam turning by 9 degrees a step under a strip of 0.05
+          elements ended its steps 0.0078 and 0.011 through the strip, the strip flat, no force,
+          penetration 0)."""
+        if getattr(self.obstacle, "flat", False) or not len(self._quads):
+            return None, 0.0
         on = np.nonzero(np.all(self.side[self._quads] != 0, axis=1))[0]
         x = self.contact_points(g)
         s = face_minima(self.obstacle, x[self._quads[on]], lam)
         d_nodes = self.obstacle.distance(x, lam)[self._quads[on]].min(1)
-        m = np.einsum("ma,maj->mj", self.side[self._quads[on]], g[self.nodes[self._quads[on]], :3, 2])
-        inside = s["d"] < np.minimum(-self.tol, d_nodes)
-        # the middle beyond the face, or a thin obstacle through the whole shell between the nodes
-        past = inside & ((np.einsum("mj,mj->m", s["n"], m) > 0) | (self._thin & (s["d"] < -self.h)))
+        if len(self.face_el):
+            past = (s["d"] < np.minimum(-self.tol, d_nodes - self.tol)) & ~s["ok"]
+        else:
+            m = np.einsum("ma,maj->mj", self.side[self._quads[on]], g[self.nodes[self._quads[on]], :3, 2])
+            inside = s["d"] < np.minimum(-self.tol, d_nodes)
+            # the middle beyond the face, or a thin obstacle through the whole shell between the nodes
+            past = inside & ((np.einsum("mj,mj->m", s["n"], m) > 0) | (self._thin & (s["d"] < -self.h)))
         if not past.any():
-            return ""
+            return None, 0.0
         e = int(np.argmin(np.where(past, s["d"], np.inf)))
-        el = int(self.face_ids[on[e]])
-        return (f"obstacle {self.name!r} passes through the contact face of element {el} between its nodes at "
-                f"load factor {lam:.6g} ({-float(s['d'][e]):.3g} deep, through the shell): the nodes "
-                f"alone do not feel it; set faces = true (or 'auto') in the contact law, or refine the mesh")
+        return int(on[e]), -float(s["d"][e])
 
     def clear(self, g, lam):
         """True when the obstacle exerts no force and no stiffness on the shell at the state

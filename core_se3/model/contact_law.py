@@ -14,6 +14,7 @@ from .. import lie
 from ..assembly import Assembler
 from ..fem.quadrature import shape_functions, surface_jacobian
 from ..errors import did_you_mean
+from .loads import curved_area
 from .obstacles import contact_error
 
 __all__ = ["ContactLaw", "as_contact_law", "MODES", "ramp", "ramp_inverse", "normal_law", "contact_wrench",
@@ -204,8 +205,13 @@ def contact_wrench(R, c, A, n, H, p, dp):
     return f, -Bt @ dF
 
 
-def nodal_areas(mesh, elements=None):
-    """A_i = int N_i dA over ``elements`` (default all; 2x2 Gauss, reference area) (n,).
+def nodal_areas(mesh, elements=None, j0=None):
+    """A_i = int N_i dA over ``elements`` (default all; 2x2 Gauss, reference area) (n,): with the
+    element's own area element ``j0`` (k, 4) of those elements (``loads.element_area``) on
+    curved elements, as the area loads take it (``loads.curved_area``; the bilinear chords'
+    area was short by sin(a/2)/(a/2) on a cylinder at a rad per element, so a contact pressure
+    and a given penalty k's force were off by that), the bilinear quads' on flat ones (to the
+    bit) and without ``j0``.
 
     Example
     -------
@@ -216,7 +222,8 @@ def nodal_areas(mesh, elements=None):
     el = np.arange(mesh.n_elements) if elements is None else np.asarray(elements, np.int64)
     quads = mesh.quads[el]
     N, dN = shape_functions()
-    w = np.einsum("qi,mq->mi", N, surface_jacobian(mesh.X[quads], dN))
+    jw = curved_area(surface_jacobian(mesh.X[quads], dN), j0, "contact")[0]
+    w = np.einsum("qi,mq->mi", N, jw)
     return np.bincount(quads.ravel(), weights=w.ravel(), minlength=mesh.n_nodes)
 
 

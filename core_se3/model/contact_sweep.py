@@ -88,7 +88,7 @@ def swept_depth(obstacle, x0, x1, lam0, lam1, depth, relative=False):
     ts = (lams - lam0) / (lam1 - lam0) if lam1 != lam0 else np.linspace(0.0, 1.0, len(lams))
     ya = _placement(obstacle, x0, lams[0])
     y_end = _placement(obstacle, x1, lam1)
-    da = obstacle.local(ya)[0]
+    da = obstacle.local_distance(ya)
     found = np.minimum(found, da)
     lower = np.minimum(lower, da)
     for j in range(1, len(lams)):
@@ -104,7 +104,7 @@ def swept_depth(obstacle, x0, x1, lam0, lam1, depth, relative=False):
             s_new = np.minimum(s[live] + ds, 1.0)
             idx = np.nonzero(live)[0]
             y = ya[idx] + s_new[:, None] * (yb[idx] - ya[idx])
-            dn = obstacle.local(y)[0]
+            dn = obstacle.local_distance(y)
             # between two samples d >= (d_a + d_b - v ds) / 2 (a 1-Lipschitz function on the chord)
             lower[idx] = np.minimum(lower[idx], 0.5 * (d[idx] + dn - v[idx] * (s_new - s[idx])))
             found[idx] = np.minimum(found[idx], dn)
@@ -112,7 +112,7 @@ def swept_depth(obstacle, x0, x1, lam0, lam1, depth, relative=False):
             live[idx] = (s_new < 1.0) & (dn >= -depth[idx])
         else:
             found[live] = -np.inf                 # too long a path to check: refuse the step
-        ya, da = yb, obstacle.local(yb)[0]
+        ya, da = yb, obstacle.local_distance(yb)
     return found, lower
 
 

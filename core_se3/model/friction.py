@@ -199,12 +199,23 @@ class CoulombFriction:
 
     def failure_hint(self):
         """'no static equilibrium: it slides' when every node in contact slipped at the last
-        evaluation (of the failed try): friction cannot hold the loads."""
+        evaluation in contact (of the failed tries; an iterate flung off every obstacle says
+        nothing), on this obstacle and on every other rough one of the problem (a grasp: two
+        rollers slipping while the third sticks hold the part): friction cannot hold the loads.
+        (A strip pulled out of three rough rollers by twice what they hold failed with "edge
+        [39, 40] turns by 3.109 rad ... refine the mesh or the load step": the last iterate had
+        left them all.)"""
         on, slip = getattr(self, "_slide", (0, 0))
-        if self.mu > 0 and on and slip == on:
-            return (f"no static equilibrium: it slides -- all {on} contact nodes on obstacle {self.name!r} slip "
-                    f"(Coulomb friction {self.mu:g} cannot hold the loads); raise the friction, add a support, "
-                    "or prescribe the sliding motion")
+        if not (self.mu > 0 and on):
+            return ""
+        rough = [self] + [ld for ld in getattr(self, "_loads", ()) if ld is not self and getattr(ld, "mu", 0.0) > 0
+                          and getattr(ld, "_slide", (0, 0))[0]]
+        on, slip = (sum(ld._slide[k] for ld in rough) for k in (0, 1))
+        if slip == on:
+            names = ", ".join(repr(ld.name) for ld in rough)
+            return (f"no static equilibrium: it slides -- all {on} contact nodes on obstacle{'s' * (len(rough) > 1)} "
+                    f"{names} slip (Coulomb friction {self.mu:g} cannot hold the loads); raise the friction, add a "
+                    "support, or prescribe the sliding motion")
         return ""
 
     def slip_status(self, g, lam, start):

@@ -149,6 +149,9 @@ class Sphere(Obstacle):
         s = self.sign
         return s * (rho - self.radius), s * e, s * H
 
+    def local_distance(self, y):
+        return self.sign * (np.linalg.norm(y - self.centre, axis=1) - self.radius)
+
     def local_surface(self, bounds):
         th, ph = np.linspace(0.0, np.pi, 13), np.linspace(0.0, 2 * np.pi, 25)
         return _grid(th, ph, lambda T, P: self.centre + self.radius * np.stack(
@@ -219,6 +222,12 @@ class Cylinder(Obstacle):
         n = np.einsum("kc,kci->ki", gq, J)
         H = gq[:, 0, None, None] * Hrho + np.einsum("kci,kcd,kdj->kij", J, Hq, J)
         return d, n, H
+
+    def local_distance(self, y):
+        if self.length is not None:
+            return self.local(y)[0]
+        r = y - self.point
+        return self.sign * (np.linalg.norm(r - np.outer(r @ self.axis, self.axis), axis=1) - self.radius)
 
     def local_surface(self, bounds):
         b1, b2 = _frame(self.axis)

@@ -277,8 +277,11 @@ class Obstacle:
         return d, n @ Q.T, np.einsum("ij,kjl,ml->kim", Q, H, Q)
 
     def distance(self, x, lam=0.0):
-        """d (k,) at lab points x (k, 3) [length]."""
-        return self.evaluate(x, lam)[0]
+        """d (k,) at lab points x (k, 3) [length] (:meth:`local_distance`: defined where the
+        normal is not, e.g. at a ball's centre, which the sweep of a step may pass through)."""
+        x = np.atleast_2d(np.asarray(x, float))
+        T = self.transform(lam)
+        return self.local_distance((x - T[:3, 3]) @ T[:3, :3])
 
     def relocated(self, c):
         """This obstacle in the coordinates x' = x - c of a part far from the origin (load
@@ -309,6 +312,14 @@ class Obstacle:
     def local(self, y):
         """(d, n, H) at points y (k, 3) in the placement's (lab) coordinates."""
         raise NotImplementedError(f"obstacle kind {self.kind!r} does not implement local(y)")
+
+    def local_distance(self, y):
+        """d (k,) at points y (k, 3) in the placement's coordinates: ``local(y)[0]``; a kind whose
+        normal is undefined at points where d is not (a sphere's centre, a cylinder's axis)
+        gives d there too (the crossing check of a step, ``model.contact_sweep``, samples the
+        distance alone: a face point passing through a ball's centre stopped the run with "a
+        point is at the centre of the sphere" instead of refusing the step)."""
+        return self.local(y)[0]
 
     def local_surface(self, bounds):
         """(points (p, 3), quads (q, 4)) of the surface at the placement, covering ``bounds``
