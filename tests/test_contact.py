@@ -766,3 +766,19 @@ def test_contact_areas_on_curved_elements_are_the_elements_own(mesh, bore):
     flat = M.rectangle(1.0, 0.3, 3, 2)
     j0 = cs.model.loads.element_area(cs.Problem(flat, cs.Material(E=1e5, nu=0.3, h=h)), None)
     assert np.array_equal(cs.model.contact_law.nodal_areas(flat, None, j0), cs.model.contact_law.nodal_areas(flat))
+
+
+@pytest.mark.parametrize("s", [1e-4, 1e-3, 1e3])
+def test_a_user_sdfs_difference_hessian_follows_the_length_unit(s):
+    """A user SDF without its Hessian takes it by central differences of its gradient.  The step
+    was a fixed 1e-6: 1e-6 of a unit sphere but 1e-2 of a sphere of radius 1e-4 (a 0.1 mm ball
+    in metres), whose Hessian came out 4.5e-7 off, and round-off at R 500 (7.9e-7).  Now 1e-6 of
+    the points' size: within 2e-10 of (I - n n) / |y| at every scale (the unit sphere's 1e-10)."""
+    from core_se3.model.obstacle_kinds import UserSDF
+    R = 0.5 * s
+    sdf = UserSDF(lambda y: np.linalg.norm(y, axis=1) - R, lambda y: y / np.linalg.norm(y, axis=1)[:, None])
+    y = np.random.default_rng(1).normal(size=(5, 3))
+    y *= (1.3 * R / np.linalg.norm(y, axis=1))[:, None]
+    _, n, H = sdf.local(y)
+    exact = (np.eye(3) - n[:, :, None] * n[:, None, :]) / np.linalg.norm(y, axis=1)[:, None, None]
+    assert np.abs(H - exact).max() <= 2e-10 * np.abs(exact).max()

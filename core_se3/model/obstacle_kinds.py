@@ -312,8 +312,10 @@ class Box(Obstacle):
 class UserSDF(Obstacle):
     """The user's signed distance function at the placement: ``d(y) -> (k,)``, ``grad(y) ->
     (k, 3)`` and optionally ``hessian(y) -> (k, 3, 3)`` (y: (k, 3) points).  Without ``hessian``
-    it is taken by central differences of ``grad`` (step ``fd_step`` [length], default 1e-6:
-    about 1e-6 of the obstacle's size -- give it for a problem not of unit size) and
+    it is taken by central differences of ``grad`` (step ``fd_step`` [length], default 1e-6 of
+    the largest |y| of the points evaluated, 1e-6 when all are at the placement's origin: the
+    points' own length unit; a fixed 1e-6 was 1e-6 of a 1 m obstacle but a step of 1e-3 of a
+    1 mm one written in metres, its Hessian off by 4.5e-7 instead of 4.6e-10) and
     ``approximate_hessian`` is set.  ``surface(bounds) -> (points, quads)``
     optionally draws it; ``thickness``: the solid's inradius where it is thin (default inf: only
     the nodes are checked for crossings over a step, ``model.contact_sweep``).
@@ -329,14 +331,14 @@ class UserSDF(Obstacle):
 
     kind = "user"
 
-    def __init__(self, d, grad, hessian=None, fd_step=1e-6, surface=None, motion=None, name=None,
+    def __init__(self, d, grad, hessian=None, fd_step=None, surface=None, motion=None, name=None,
                  thickness=np.inf):
         super().__init__(motion, name)
         self.thickness = np.inf if thickness is None or np.isinf(thickness) else positive(thickness, "thickness")
         if not (callable(d) and callable(grad)) or (hessian is not None and not callable(hessian)):
             raise contact_error("UserSDF needs callables d(y), grad(y) and optionally hessian(y)")
         self.d, self.grad, self.hessian, self.draw = d, grad, hessian, surface
-        self.fd_step = positive(fd_step, "fd_step")
+        self.fd_step = None if fd_step is None else positive(fd_step, "fd_step")
         self.approximate_hessian = hessian is None
 
     def local(self, y):
@@ -346,9 +348,10 @@ class UserSDF(Obstacle):
         if self.hessian is not None:
             H = np.asarray(self.hessian(y), float).reshape(k, 3, 3)
         else:
-            e = self.fd_step * np.eye(3)
+            h = self.fd_step or 1e-6 * (float(np.abs(y).max(initial=0.0)) or 1.0)
+            e = h * np.eye(3)
             H = np.stack([(np.asarray(self.grad(y + e[j]), float) - np.asarray(self.grad(y - e[j]), float))
-                          / (2 * self.fd_step) for j in range(3)], -1)
+                          / (2 * h) for j in range(3)], -1)
             H = 0.5 * (H + np.swapaxes(H, 1, 2))
         if not (np.all(np.isfinite(d)) and np.all(np.isfinite(n)) and np.all(np.isfinite(H))):
             raise contact_error(f"obstacle {self.name!r}: the user SDF returned non-finite values")
