@@ -291,19 +291,23 @@ def side_turns(mesh, g0, matching):
 
 
 def _congruence(C, D):
-    """C^T D C (k, 24, 24) of the elements' side turns C and stiffnesses D (k, 24, 24): a signed
-    permutation C (every element whose side turns are quarter turns: all but those round a cross
-    field's singular node) by indexing, (C^T D C)_ij = s_i s_j D_{r_i r_j} with column j's one
-    entry s_j at row r_j -- to the bit the einsum's sum of one product and zeros, at ~1/100 of its
-    cost (the closed cubed sphere, 64 per face: 3.4 s of set-up, 0.26 of a factorisation); the
-    others by the einsum."""
-    one = (np.count_nonzero(C, axis=1) == 1).all(axis=1) & (np.abs(C).max(axis=1) == 1.0).all(axis=1)
-    out = np.empty_like(D)
-    r = np.argmax(np.abs(C[one]), axis=1)                                    # (k1, 24) rows r_j
-    s = np.take_along_axis(C[one], r[:, None, :], axis=1)[:, 0]               # (k1, 24) signs s_j
-    Dr = np.take_along_axis(np.take_along_axis(D[one], r[:, :, None], axis=1), r[:, None, :], axis=2)
-    out[one] = s[:, :, None] * Dr * s[:, None, :] + 0.0                        # + 0: the einsum's zeros are +0
-    out[~one] = np.einsum("mki,mkl,mlj->mij", C[~one], D[~one], C[~one], optimize=True)
+    """C^T D C (k, 24, 24) of the elements' side turns C and stiffnesses D (k, 24, 24), to the
+    bit the einsum's (a sum of one product and zeros; zeros +0): D itself where C is the identity
+    (every element off the cuts), by indexing where C is a signed permutation (across the cuts),
+    (C^T D C)_ij = s_i s_j D_{r_i r_j} with column j's one entry s_j at row r_j, and by the einsum
+    round a cross field's singular node (C of turns by other angles) -- the einsum alone took
+    ~50 us per element (the closed cubed sphere, 64 per face: 1.26 s of its set-up)."""
+    k = len(C)
+    out = D + 0.0
+    rest = np.flatnonzero(~(C.reshape(k, -1) == np.eye(24).ravel()).all(axis=1))
+    Cr = C[rest]
+    one = (np.count_nonzero(Cr, axis=1) == 1).all(axis=1) & (np.abs(Cr).max(axis=1) == 1.0).all(axis=1)
+    r = np.argmax(np.abs(Cr[one]), axis=1)                                   # (k1, 24) rows r_j
+    s = np.take_along_axis(Cr[one], r[:, None, :], axis=1)[:, 0]              # (k1, 24) signs s_j
+    Dr = np.take_along_axis(np.take_along_axis(D[rest[one]], r[:, :, None], axis=1), r[:, None, :], axis=2)
+    out[rest[one]] = s[:, :, None] * Dr * s[:, None, :] + 0.0
+    other = rest[~one]
+    out[other] = np.einsum("mki,mkl,mlj->mij", C[other], D[other], C[other], optimize=True)
     return out
 
 
