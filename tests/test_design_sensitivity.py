@@ -420,3 +420,32 @@ def test_design_inputs_of_the_wrong_kind_are_design_errors():
         FieldVariable(p, UniformField((0.0, 0.0, 0.01)))
     with pytest.raises(DesignError, match=r"node ids must be whole numbers, got \[1.5\]"):
         NodePosition(p, [1.5])
+
+
+def test_a_rotation_angle_is_about_the_lab_axis_whatever_the_nodes_frames():
+    """RotationAngle dotted the lab axis with log(Rref^T R), the rotation's components in the
+    node's (probe's) reference frame: where that frame is not the lab's (any curved mesh, a file's
+    frames, d1 turned by quarter turns across a cut) a node turned by 0.5 rad about -y read 0 with
+    d1 turned by 90 deg about the normal and -0.5 with 180 deg, and on the quarter hemisphere whose
+    d1 are turned by random quarter turns the sensitivities of a node's angle were 0.42 off those
+    of the generator's frames (relative; every other quantity 1e-11).  Now R_0^T axis: the lab
+    angle, and its jacobian the derivative of that value (checked by differences along each
+    rotation dof)."""
+    from core_se3.mesh.gauge import turned_about_normal
+    for turn in (0.0, 0.7, 0.5 * np.pi, np.pi):
+        m = mesh.rectangle(2.0, 1.0, 2, 1)
+        m.g0 = turned_about_normal(m.g0, np.full(m.n_nodes, turn))
+        p = Problem(m, Material(1e3, 0.0, 0.01))
+        p.add_probe("tip", "x1")
+        g = lie.exp(np.array([0, 0, 0, 0.2, -0.5, 0.1])) @ m.g0
+        for q in (RotationAngle(p, node=2, axis=(0, -1, 0)), RotationAngle(p, probe="tip", axis=(0, -1, 0))):
+            assert abs(q.value(p, g, 1.0)[0] - (lie.log_so3(lie.exp_so3([0.2, -0.5, 0.1])) @ [0, -1, 0])) < 1e-12, turn
+            J = q.jacobian(p, g, 1.0).toarray()[0]
+            for node in (2, 4, 5):
+                for k in range(3, 6):
+                    d = []
+                    for s in (1e-6, -1e-6):
+                        gg = g.copy()
+                        gg[node] = g[node] @ lie.exp(s * np.eye(6)[k])
+                        d.append(q.value(p, gg, 1.0)[0])
+                    assert abs((d[0] - d[1]) / 2e-6 - J[6 * node + k]) < 1e-8, (turn, node, k)

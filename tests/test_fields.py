@@ -72,6 +72,19 @@ def test_user_field_finite_difference_hessian_is_flagged_approximate():
     assert not exact.approximate_hessian
 
 
+@pytest.mark.parametrize("s", [1.0, 1e-3, 1e-4, 1e3])
+def test_user_field_hessian_step_follows_the_length_unit(s):
+    """The finite-difference step of a UserField's Hessian is relative to the points' size: the
+    same dipole and body in other length units (x s, the moment x s^3 keeps B) get the same
+    relative accuracy (now 4e-11 ... 1e-10 at every s).  Before, the step was 1e-6 max(1, |x|),
+    an absolute 1e-6 below one unit: 4e-11 at s = 1, 8.8e-7 at s = 1e-3 (a body in mm written in
+    metres), 8.8e-5 at s = 1e-4."""
+    d = DipoleField(m=np.array([0.0, 1.0, 0.5]) * s ** 3, x0=(0.0, 0.0, 0.0))
+    u = UserField(lambda x: d.value(x, 1.0), lambda x: d.gradient(x, 1.0))
+    H, Hd = u.hessian(X * s, 1.0), d.hessian(X * s, 1.0)
+    assert np.abs(H - Hd).max() <= 1e-9 * np.abs(Hd).max()
+
+
 @pytest.mark.parametrize("make, match", [
     (lambda: UniformField((0, np.nan, 0)), "finite"),
     (lambda: UniformField((0, 0, 1), direction=(0, 0, 1)), "function"),

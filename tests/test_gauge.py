@@ -268,8 +268,10 @@ def test_a_vortex_of_the_users_d1_is_solved_or_said(kind):
     a ConvergenceError "non-finite residual" at load factor 1.2e-4; then a specific error (the
     tangents degenerate).  With the quarter turns across cuts (fem.element_default, "Cuts") the
     pair, whose turns are quarter turns, is the parallel frames' strip to round-off; random d1
-    leaves turns of up to 49 deg within flat elements (the tip's deflection 0.11 % off, its nodes 7.8e-3
-    apart in plane), which the element says (fem.frame_turns, FLAT_TURN)."""
+    leaves turns of up to 49 deg within flat elements (the tip's deflection 0.32 % off, its nodes 9.6e-3
+    apart in plane; 0.11 % when a side of the two elements round which the quarter turns do not close
+    took its mesh edge's first node's frame, which made the answer depend on the node numbering:
+    fem.element_default.side_turns), which the element says (fem.frame_turns, FLAT_TURN)."""
     from core_se3.errors import ElementWarning
     ref = _vortex_strip_tip(kind, parallel=True)
     if kind == "pair":
@@ -279,7 +281,7 @@ def test_a_vortex_of_the_users_d1_is_solved_or_said(kind):
         return
     with pytest.warns(ElementWarning, match=r"6 element\(s\) .* by up to 49 deg.* on a flat element"):
         tip = _vortex_strip_tip(kind)
-    assert 3e-4 < np.abs(tip - ref)[:, 2].max() / np.abs(ref[:, 2]).max() < 3e-3    # measured 1.1e-3
+    assert 1e-3 < np.abs(tip - ref)[:, 2].max() / np.abs(ref[:, 2]).max() < 1e-2    # measured 3.2e-3
 
 
 @pytest.mark.parametrize("backend", ["numpy", "numba"])
@@ -315,3 +317,95 @@ def test_quarter_turns_of_d1_on_a_doubly_curved_shell_change_nothing(backend):
     kept = alpha[m.quads[:, 0]] == 0
     for k in ("N1", "N2", "M1", "M2", "N1_local", "M2_local"):
         assert np.abs(a[k][kept] - b[k][kept]).max() < 1e-12 * np.abs(a[k]).max(), k
+
+
+def test_a_probe_between_nodes_whose_d1_differ_by_quarter_turns_reads_the_generators():
+    # a probe halfway along an edge joined its nodes' frames by their SE(3) geodesic, which across a
+    # cut of a cross field (d1 turned by 90 or 180 deg: a mesh file's default frames on a doubly
+    # curved shell) is a screw bowing off the edge: on the quarter hemisphere with d1 turned at
+    # random by quarter turns, a probe on an equator edge whose nodes' d1 differ by 180 deg read its
+    # reference point 1.3 off the edge (the element's size 2.6) and, 3 steps to a tip force of 3000,
+    # u = (3.40, 0.86, 4.09) for the generator frames' (4.26, 0.84, 4.54), rotation 1.549 for
+    # 1.239 rad, converged and silent.  The probe now takes the edge's quarter turn (Probe.
+    # edge_midpoint, as the element does): the generator's to 4e-15
+    m, turned = mesh.hemisphere_quarter(10.0, 18.0, 6, 6), mesh.hemisphere_quarter(10.0, 18.0, 6, 6)
+    turned.g0 = turned_about_normal(turned.g0, np.random.default_rng(3).integers(0, 4, m.n_nodes) * np.pi / 2)
+    a, b = 6, 13                                          # on the equator, d1 at 270 and 90 deg
+    X = m.X
+    out = []
+    for mm in (m, turned):
+        p = Problem(mm, Material(6.825e7, 0.3, 0.04))
+        p.fix(list(np.flatnonzero(X[:, 2] > X[:, 2].max() - 1e-9)), range(6))
+        p.add_nodal_load([int(np.argmax(X[:, 0]))], force=(3000.0, 0.0, 0.0))
+        p.add_probe("edge", lambda Y: np.isin(np.arange(len(Y)), [a, b]))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            pr = p.solve(steps=3).final.probes["edge"]
+        out.append(np.r_[p.probes["edge"].state(mm.g0)[0], pr["u"], pr["rotation_vector"]])
+    assert turned.g0[a, :3, 0] @ turned.g0[b, :3, 0] < -0.9            # their d1 half a turn apart
+    assert np.abs(out[0] - out[1]).max() < 1e-12 * np.abs(out[0]).max()
+
+
+def test_resultants_of_a_gauged_part_beside_a_part_with_cuts_are_across_the_users_d1():
+    # the resultants are reported across the user's d1 and d2 where the element builds its frames
+    # in the least-turn gauge (an annulus' radial d1), and in the frames an element compares its
+    # sides in where its nodes' d1 differ by quarter turns (a cut).  With both in one mesh (the
+    # annulus beside a quarter hemisphere whose d1 are turned by random quarter turns) the annulus'
+    # were reported across the gauge's d1 instead: N1 / N2 35 % / 52 % off those of the annulus
+    # alone.  Now both parts' are those of each part alone (measured 4e-16)
+    from core_se3.fem.resultants import element_resultants
+    from core_se3.mesh import Mesh
+    a = mesh.annulus(1.0, 2.0, 1.0, 4, 6)
+    q = mesh.hemisphere_quarter(10.0, 18.0, 4, 4)
+    q.g0 = turned_about_normal(q.g0, np.random.default_rng(3).integers(0, 4, q.n_nodes) * np.pi / 2)
+    g = q.g0.copy()
+    g[:, 0, 3] += 50.0
+    both = Mesh(np.concatenate([a.g0, g]), np.concatenate([a.quads, q.quads + a.n_nodes]))
+    law = Material(1e6, 0.3, 0.02)
+    eta = np.random.default_rng(0).standard_normal((both.n_nodes, 6)) * 1e-3
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        alone = [Problem(mm, law).element for mm in (a, q)]
+        whole = Problem(both, law).element
+    assert alone[0].gauge is not None and alone[1].matching is not None
+    got = element_resultants(whole, both.g0, eta)
+    parts = (element_resultants(alone[0], a.g0, eta[:a.n_nodes]), element_resultants(alone[1], q.g0, eta[a.n_nodes:]))
+    for k, ref in got.items():
+        for sl, part in ((slice(0, a.n_elements), parts[0][k]), (slice(a.n_elements, None), parts[1][k])):
+            assert np.abs(ref[sl] - part).max() < 1e-12 * np.abs(part).max(), k
+
+
+def test_quarter_turns_of_d1_change_nothing_for_every_isotropic_law_and_load():
+    # the check above for the default law and a nodal load, through the other laws (classical,
+    # shear-stabilised, a RegionMaterial whose two laws meet across cuts) and the loads that read
+    # element data (a follower pressure on the element's area and normals, gravity, a magnet per
+    # element in a gradient field, a follower edge moment along d3): the generator frames' linear
+    # answers to 3e-11 (audit, measured; the nonlinear states 3 steps on agree to 1e-13)
+    from core_se3.fem import RegionMaterial
+    from core_se3.model import GradientField
+    m, turned = mesh.hemisphere_quarter(10.0, 18.0, 6, 6), mesh.hemisphere_quarter(10.0, 18.0, 6, 6)
+    turned.g0 = turned_about_normal(turned.g0, np.random.default_rng(3).integers(0, 4, m.n_nodes) * np.pi / 2)
+    X = m.X
+    c = X[m.quads].mean(1)
+    laws = [Material.classical_shell(6.825e7, 0.3, 0.04), Material(6.825e7, 0.3, 0.04, shear_stabilisation=0.1),
+            RegionMaterial([Material(6.825e7, 0.3, 0.04, rho=1.0), Material.classical_shell(2e8, 0.2, 0.06, rho=1.0)],
+                           (c[:, 1] > c[:, 0]).astype(int))]
+    Br = np.random.default_rng(0).standard_normal((m.n_elements, 3)) * 0.3
+
+    def solve(mm, law, loads):
+        p = Problem(mm, law)
+        p.fix(list(np.flatnonzero(X[:, 2] > X[:, 2].max() - 1e-9)), range(6))
+        if loads:
+            p.add_pressure(20.0, follower=True)
+            p.add_gravity(g=(0.0, 0.0, -1e3))
+            p.add_magnetic(Br, GradientField((0.2, 0.0, 0.5), np.diag([0.02, -0.01, -0.01])), mu0=3e-3)
+            p.add_edge_moment(lambda Y: np.abs(Y[:, 2]) < 1e-9, (0.0, 0.0, 30.0), follower=True)
+        else:
+            p.add_nodal_load([int(np.argmax(X[:, 0]))], force=(1.0, 0.0, 0.0))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return p.solve_linear().displacements()
+
+    for law, loads in [(law, False) for law in laws] + [(laws[2], True)]:
+        a, b = solve(m, law, loads), solve(turned, law, loads)
+        assert np.abs(a[:, :3] - b[:, :3]).max() < 1e-9 * np.abs(a[:, :3]).max(), (law, loads)

@@ -84,6 +84,18 @@ def test_series_written_again_shorter_leaves_no_old_steps(tmp_path, mesh):
         f"step_{k:04d}.vtu" for k in range(5)]
 
 
+def test_a_series_into_a_file_is_refused_and_the_file_kept(tmp_path, mesh):
+    """write_series into a path that is a user's file failed with a bare FileExistsError from
+    os.makedirs; now an OptionError that names the path, the file untouched."""
+    from core_se3.errors import OptionError
+    X, quads, g0, g, *_ = mesh
+    f = tmp_path / "results"
+    f.write_text("mine")
+    with pytest.raises(OptionError, match="is a file, not a directory"):
+        io.write_series(f, X, quads, g0, [g], [0.0])
+    assert f.read_text() == "mine"
+
+
 def test_pvd_times_increase_strictly_for_paraview(tmp_path):
     """ParaView sorts a collection by its times (vtkPVDReader) and shows one data set per time:
     load factors that turn back (an arc-length path past a limit point), go negative or repeat

@@ -763,3 +763,36 @@ def test_a_user_field_with_a_curl_in_the_body_is_said_at_add_magnetic():
         assert all(w.filename == __file__ for w in seen)                  # said at the caller's line
     assert len(said["curl"]) == 1 and re.search(r"relative \|curl B\| 1\.00e\+00, \|div B\| 0\.00e\+00", said["curl"][0])
     assert said["free"] == [] and said["gradient"] == []
+
+
+def test_br_frame_along_d1_across_the_cuts_of_a_files_frames_is_refused(tmp_path):
+    """A magnet's Br_frame gives components along each element's reference directors, the mean
+    of its nodes' frames.  A mesh file's default frames on a closed doubly curved shell follow a
+    cross field, whose d1 jumps by quarter turns across cuts: there the mean frame is no director
+    of any node (on the closed cubed sphere, 4 x 4 per face, up to 40 deg off every node's d1 and
+    d2 on 30 of its 96 elements) and "along d1" differs from element to element by quarter turns;
+    such a magnet was built without a word.  Now in-plane components there are a ScenarioError
+    naming magnets[0].Br_frame; along d3 alone it is built, and so is an in-plane one on a mesh
+    without cuts."""
+    import sys
+    from pathlib import Path
+
+    import meshio
+
+    from core_se3 import scenario
+    sys.path.insert(0, str(Path(__file__).parents[1] / "benchmarks"))
+    from curved_frames import cubed_sphere
+    X, q = cubed_sphere(4)
+    meshio.write(tmp_path / "sphere.vtk", meshio.Mesh(X, [("quad", q)]))
+    base = ('units = "consistent"\n[mesh]\nfile = "sphere.vtk"\n[material]\nE = 6.825e7\nnu = 0.3\nh = 0.1\n'
+            '[[supports]]\ntype = "clamp"\nnodes = [0]\n[fields.coil]\ntype = "uniform"\nB = [0.0, 0.0, 0.05]\n'
+            '[[magnets]]\nmu0 = 1.0\nBr_frame = ')
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(ScenarioError, match=r"\[magnets\[0\]\.Br_frame\]: .*turn by quarter turns across cuts "
+                                                r"\(30 of its elements"):
+            scenario.loads(base + "[0.1, 0.0, 0.0]\n", base_dir=str(tmp_path))
+        assert len(scenario.loads(base + "[0.0, 0.0, 0.1]\n", base_dir=str(tmp_path)).problem.loads) == 1
+    dome = scenario.loads(base.replace('file = "sphere.vtk"', 'generator = "hemisphere_quarter"\nR = 10.0\nhole_deg = 18.0\nnt = 4\nnf = 4')
+                          + "[0.1, 0.0, 0.0]\n", base_dir=str(tmp_path))
+    assert len(dome.problem.loads) == 1

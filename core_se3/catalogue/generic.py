@@ -159,7 +159,8 @@ def case_document(case, p, prob, res, reference_case=None):
         err, at, errs = error_against_reference(loads_ref, disps, r)
         for s, e in zip(steps, errs):
             s["error"] = None if np.isnan(e) else float(e)
-        reference = dict(entry=entry, block=block, error=err, error_at_load=at, file="elastica.json",
+        reference = dict(entry=entry, block=block, error=None if np.isnan(err) else err,
+                         error_at_load=None if np.isnan(at) else at, file="elastica.json",
                          **_coverage(errs, r["load"], loads_ref))
     from ..scenario.provenance import problem_provenance
     extra = {}

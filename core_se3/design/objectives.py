@@ -359,7 +359,7 @@ class RotationAngle(Quantity):
 
     def value(self, problem, g, lam):
         Rref = lie.exp_so3(self.reference * self.axis) @ self.R0
-        th = self.reference + self.axis @ lie.log_so3(Rref.T @ self.frame._R(g))
+        th = self.reference + self._body_axis() @ lie.log_so3(Rref.T @ self.frame._R(g))
         if abs(th - self.reference) > 0.5 * np.pi:
             # re-centred when the state has turned a quarter turn from the reference: the next
             # states are counted from here (between re-centrings theta is one smooth function
@@ -367,14 +367,22 @@ class RotationAngle(Quantity):
             self.reference = float(th)
         return np.array([th - (self.target if self.target is not None else 0.0)])
 
+    def _body_axis(self):
+        """The lab axis in the reference frame R_0: log(Rref^T R) = R_0^T log(exp(-reference axis)
+        R R_0^T), so theta's lab component is R_0^T axis . log(Rref^T R).  (Before, the lab axis was
+        dotted with the body components: a node whose d1 is turned by 90 deg about the normal read a
+        turn of 0.5 rad about -y as 0, turned by 180 deg as -0.5.)"""
+        return self.R0.T @ self.axis
+
     def jacobian(self, problem, g, lam):
         # theta changes with the lab components of the rotation: d(log(Rref^T R))/d w through J_r^-1
         Rref = lie.exp_so3(self.reference * self.axis) @ self.R0
         q = lie.log_so3(Rref.T @ self.frame._R(g))
+        b = self._body_axis()
         if self.frame.node is None:
             return _probe_jacobian(problem, self.frame.probe, g,
-                                   lambda G: (lie.log_so3(Rref.T @ G[:, :3, :3]) @ self.axis)[:, None])
-        row = self.axis @ lie.dexp_inv_so3(q)
+                                   lambda G: (lie.log_so3(Rref.T @ G[:, :3, :3]) @ b)[:, None])
+        row = b @ lie.dexp_inv_so3(q)
         n = problem.mesh.n_nodes
         return sp.csr_matrix((row, (np.zeros(3, int), 6 * self.frame.node + 3 + np.arange(3))), shape=(1, 6 * n))
 

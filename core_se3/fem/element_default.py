@@ -63,12 +63,12 @@ v-w blocks stay exactly zero) and the strains, the resultants and the area take 
 cross field's singular node (a cubed sphere's valence-3 corners) the turns cannot close in one of
 its elements, which compares its sides in frames turned to its first node's by their actual
 angles.  Without cuts (every k = 0) nothing is done (the code paths of before, to the bit).  On
-the closed cubed sphere read from a file (R 10): the element's area within 2.6 / 2.6 / 2.6 % of
+the closed cubed sphere read from a file (R 10): the element's area within 2.0 / 1.4 / 1.3 % of
 its quad's on 4 / 8 / 16 per face (0.03 of it before on 17 / 56 / 90 elements) and a pressurised
 sphere's radial displacement within -3.4 / +5.9 % of the membrane value on 16 per face
-(-1.6 / +2.3 % on 24, -0.9 / +1.2 % on 32: O(h^2); largest at the midpoints of the cube's edges,
+(-1.4 / +2.3 % on 24, -0.7 / +1.2 % on 32: O(h^2); largest at the midpoints of the cube's edges,
 where two faces' grids meet at a kink, and as large with a hint's frames there; at the cube's 8
-valence-3 corners -3.4 / -1.6 / -0.9 %, O(h^2) too, as the face centres; -5.7 ... 7.2 times it before).
+valence-3 corners -3.0 / -1.3 / -0.7 %, O(h^2) too, as the face centres; -5.7 ... 7.2 times it before).
 """
 from __future__ import annotations
 
@@ -169,6 +169,21 @@ def _matching(g0, edge_nodes, material):
     return edge_matching(g0, edge_nodes)
 
 
+def _axis_law_note(material, g0, mesh):
+    """A sentence for an error on reference frames that turn by quarter turns across element
+    edges (a cross field's cuts) under a law that does not say it is in-plane isotropic (its
+    ``in_plane_isotropic`` attribute): the element keeps the user's d1 as its material axis and
+    takes no quarter turns -- a user's isotropic law without the attribute was refused on a
+    closed sphere from a file with the frames blamed only; "" otherwise."""
+    if getattr(material, "in_plane_isotropic", False) or edge_matching(g0, mesh.edge_nodes) is None:
+        return ""
+    return (f". The law ({type(material).__name__}) does not say it is in-plane isotropic (a true "
+            "in_plane_isotropic attribute, fem.ResultantLaw), so its material axis is each node's d1 as given and "
+            "the element takes no quarter turns across the cuts of a cross field (a mesh file's default frames on a "
+            "doubly curved shell); if the law is the same in every in-plane direction, say so "
+            "(in_plane_isotropic = True) and the element matches them")
+
+
 def edge_twists(g, edge_nodes, reference=False, matching=None):
     """psi_e = log(g_a^-1 g_b) for all edges (E, 6); raises if an edge turns by ~pi.
 
@@ -243,6 +258,13 @@ def _reference_turn_message(g, a, b, w):
             "finer mesh nor a smaller load step changes this")
 
 
+def _unclosed(mesh, matching):
+    """The elements round which the edges' quarter turns ``matching`` (E,) do not close (a cross
+    field's singular node at a corner), ascending."""
+    ks = mesh.elem_edge_sign * matching[mesh.elem_edges]                                 # q_lb - q_la per side
+    return np.flatnonzero((ks[:, 0] + ks[:, 3] - ks[:, 2] - ks[:, 1]) % 4)
+
+
 def corner_frame_turns(mesh, g0, matching):
     """S (m, 4, 3, 3): the turns about the normal of every element's nodal frames g0 (n, 4, 4) in
     which it compares its sides (g0_i S_i; module docstring, "Cuts", and :func:`side_turns`):
@@ -250,8 +272,7 @@ def corner_frame_turns(mesh, g0, matching):
     quarter turns ``matching`` (E,) do not close, Rz(-phi_i), phi_i the angle of node i's d1 in
     the first node's frame."""
     S = quarter_turns(corner_turns(g0, mesh.quads))
-    ks = mesh.elem_edge_sign * matching[mesh.elem_edges]                                 # q_lb - q_la per side
-    open_ = np.flatnonzero((ks[:, 0] + ks[:, 3] - ks[:, 2] - ks[:, 1]) % 4)
+    open_ = _unclosed(mesh, matching)
     if open_.size:
         R = g0[mesh.quads[open_], :3, :3]
         d1 = np.einsum("mji,mnj->mni", R[:, 0], R[:, :, :, 0])
@@ -265,11 +286,17 @@ def corner_frame_turns(mesh, g0, matching):
 def side_turns(mesh, g0, matching):
     """C (m, 24, 24): the element edge twists in each element's own gauge, C z (module
     docstring, "Cuts"), of the element's reference frames g0 (n, 4, 4) and the edges' quarter
-    turns ``matching`` (E,): side k's (v, w) turned by S^T, S = Rz(q pi/2), q the quarter turn
-    of its mesh edge's first node in the element's frames (``mesh.gauge.corner_turns``; C a
-    signed permutation, exact); in an element round which the matchings do not close (a singular
-    node of a cross field at its corner), S = Rz(-phi), phi the angle of that node's d1 in the
-    element's first node's frame (its four d1 span most of a quarter turn there).
+    turns ``matching`` (E,): side k's (v, w) turned by T, T = S_a^T (its mesh edge (a, b) running
+    as the side) or S_a^T R_k (running the other way, the twist in the frame g_b R_k, whose
+    components are those in g_a's: Ad_h psi = psi), S = Rz(q pi/2) the quarter turn q of the side's
+    first node in the element's frames (``mesh.gauge.corner_turns``; C a signed permutation,
+    exact; either end gives the same).  In an element round which the matchings do not close (a
+    singular node of a cross field at its corner) S = Rz(-phi), phi the angle of a node's d1 in
+    the element's first node's frame, and the two ends of a side differ: T is the mean of the two
+    ends' turns, so the element depends neither on the node numbering nor on which end comes
+    first.  (Before, T was S^T of the mesh edge's first node: a renumbered pinched closed sphere
+    moved by 4.3 % / 0.34 % (4 / 8 per face), two ranks gave 6.6e-6 off the serial run, and the
+    elements round the cube's corners had areas 0.974 ... 1.024 of their quads', now 1.013 ... 1.020.)
 
     Example
     -------
@@ -282,12 +309,21 @@ def side_turns(mesh, g0, matching):
     >>> C[0, 18:21, 18:21].astype(int).tolist()             # the right side (1, 3) starts at node 1
     [[0, 1, 0], [-1, 0, 0], [0, 0, 1]]
     """
-    first = np.where(mesh.elem_edge_sign > 0, LOCAL_EDGES[:, 0], LOCAL_EDGES[:, 1])       # (m, 4)
-    S = np.take_along_axis(corner_frame_turns(mesh, g0, matching), first[..., None, None], 1)   # (m, 4, 3, 3)
-    C = np.zeros((len(S), 8, 3, 8, 3))
+    S = np.swapaxes(corner_frame_turns(mesh, g0, matching), -1, -2)               # (m, 4, 3, 3): S^T
+    Rk = quarter_turns(matching[mesh.elem_edges])
+    fw = (mesh.elem_edge_sign > 0)[..., None, None]
+    T = np.where(fw, S[:, LOCAL_EDGES[:, 0]], S[:, LOCAL_EDGES[:, 0]] @ Rk)     # by the side's first node
+    open_ = _unclosed(mesh, matching)
+    if open_.size:                                                 # the mean of the two ends' turns
+        Tb = np.where(fw, S[:, LOCAL_EDGES[:, 1]] @ Rk, S[:, LOCAL_EDGES[:, 1]])[open_]
+        c, s = T[open_, :, 0, 0] + Tb[..., 0, 0], T[open_, :, 1, 0] + Tb[..., 1, 0]   # (a + b: either order alike)
+        r = np.hypot(c, s)
+        T[open_, :, 0, 0] = T[open_, :, 1, 1] = c / r
+        T[open_, :, 1, 0], T[open_, :, 0, 1] = s / r, -s / r
+    C = np.zeros((len(T), 8, 3, 8, 3))
     k = np.arange(8)
-    C[:, k, :, k, :] = np.repeat(np.swapaxes(S, -1, -2), 2, axis=1).transpose(1, 0, 2, 3)
-    return C.reshape(len(S), 24, 24)
+    C[:, k, :, k, :] = np.repeat(T, 2, axis=1).transpose(1, 0, 2, 3)
+    return C.reshape(len(T), 24, 24)
 
 
 def _congruence(C, D):
@@ -426,7 +462,10 @@ class DefaultElement(Element):
         self.gauge = element_gauge(mesh, material)
         # the quarter turns across a cross field's cuts (module docstring, "Cuts"): None without
         self.matching = _matching(self.frames(mesh.g0), mesh.edge_nodes, material)
-        psi0 = edge_twists(self.frames(mesh.g0), mesh.edge_nodes, reference=True, matching=self.matching)
+        try:
+            psi0 = edge_twists(self.frames(mesh.g0), mesh.edge_nodes, reference=True, matching=self.matching)
+        except ElementTooDistortedError as exc:
+            raise ElementTooDistortedError(str(exc) + _axis_law_note(material, self.frames(mesh.g0), mesh)) from None
         self.z0 = self._element_z(0.5 * psi0)                          # (m, 24)
         self._C = None if self.matching is None else side_turns(mesh, self.frames(mesh.g0), self.matching)   # (m, 24, 24)
         P = tying_matrices()

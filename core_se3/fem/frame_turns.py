@@ -142,7 +142,7 @@ def check_frame_turns(X, quads, g, j0, stacklevel=3):
             f"its quad's (frames turning by at most {MAX_NORMAL_TURN:g} deg give 0.94 ... 1.04)"
             + (f"; on a flat element (its frames left turned by {FLAT_TURN:g} deg or more: the user's d1 winds round "
                "a point, which no gauge removes) the answer depends on them (a strip with random d1 in +-3 rad: "
-               "its tip deflection 0.11 % off that of parallel frames)" if flat[k] else ""))
+               "its tip deflection 0.32 % off that of parallel frames)" if flat[k] else ""))
     fix = ("give frames whose d1 turns little within every element (d1 along the shell: a dome's meridians or "
            "parallels); a closed doubly curved surface (a sphere) has no such field of d1 (docs/ELEMENTS.md, "
            "'A mesh file's default frames')")
@@ -194,8 +194,8 @@ def check_node_windings(mesh, matching, stacklevel=3):
     quarter turns (``node_windings``): the elements round such a node compare their sides in frames
     turned by their actual angles (``element_default``, "Cuts"), and on a curved shell the answer
     there is off -- the closed cubed sphere (R/h 100) with d1 the projection of +x (spin points at
-    two nodes, winding 4), pressurised: 2.39 / 1.49 / 1.20 times the exact displacement at them on
-    8 / 16 / 24 per face (0.94 ... 1.07 beyond 30 deg of them on 16), silent before.
+    two nodes, winding 4), pressurised: 1.35 / 1.20 / 1.11 times the exact displacement at them on
+    8 / 16 / 24 per face (0.94 ... 1.06 beyond 30 deg of them on 16), silent before.
 
     Parameters
     ----------
@@ -215,6 +215,6 @@ def check_node_windings(mesh, matching, stacklevel=3):
         f"({w[bad[0]]} quarter turns round node {int(bad[0])}, above {MAX_NODE_WINDING}; a 4-fold field of d1 such "
         "as a mesh file's default frames winds by one at its singular nodes): d1 spins about the node, as the "
         "projection of a constant hint does where it is the normal, and the answer near it is off (a pressurised "
-        "closed sphere whose d1 is the projection of +x: 1.49 times the exact displacement at its spin points on "
+        "closed sphere whose d1 is the projection of +x: 1.20 times the exact displacement at its spin points on "
         "16 per face) -- give frames whose d1 follows the shell (a mesh file without d1_hint: d1 along its edges; "
         "docs/ELEMENTS.md, 'A mesh file's default frames')"), stacklevel=stacklevel)

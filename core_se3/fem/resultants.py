@@ -79,8 +79,17 @@ def element_resultants(element, g, increments=None):
     if getattr(element, "matching", None) is not None:
         # across a cross field's cuts the nodes' d1 of an element differ by quarter turns: the
         # strains and the resultants are in the frames it compares its sides in (those of its
-        # first node's d1 family, ``element_default``, "Cuts")
-        R = mean_rotation(element.corner_frames(frames)[..., :3, :3])
+        # first node's d1 family, ``element_default``, "Cuts"), g Q S; with a gauge Q too (a flat
+        # or developable part beside a doubly curved one with cuts), C = Re^T R takes the user's
+        # frames turned by the same quarter turns S into them, as without cuts (before, the
+        # gauged part's resultants were across the element's d1: an annulus' N1 moved by 35 %
+        # when a part with cuts was added to its mesh)
+        corner = element.corner_frames(frames)[..., :3, :3]                   # (m, 4, 3, 3)
+        R = mean_rotation(corner)
+        if to_element is not None and to_element(frames) is not frames:
+            S = np.einsum("mnji,mnjk->mnik", to_element(frames)[mesh.quads, :3, :3], corner)
+            user = mean_rotation(np.einsum("mnij,mnjk->mnik", frames[mesh.quads, :3, :3], S))
+            C = np.einsum("mji,mjk->mik", R, user)
     elif to_element is not None and to_element(frames) is not frames:
         # the strains are in the element's frames (turned about the normal, ``mesh.gauge``):
         # C = Re^T R takes the user's centre frame R into the element's Re

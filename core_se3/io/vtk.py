@@ -15,6 +15,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
+from ..errors import OptionError
 from ..lie import rotation_angle
 
 __all__ = ["frame_fields", "write_vtu", "write_pvd", "write_series", "as_frames", "as_points",
@@ -298,6 +299,9 @@ def write_series(
     if point_data_per_step is not None and len(point_data_per_step) != len(times):
         raise ValueError("point_data_per_step must have one mapping per step")
     directory = os.fspath(directory)
+    if os.path.exists(directory) and not os.path.isdir(directory):
+        raise OptionError(f"write_series: directory {directory!r} is a file, not a directory: nothing was written; "
+                          "give the path of a directory (the series' .vtu files and series.pvd go in it)")
     os.makedirs(directory, exist_ok=True)
     paths, entries = [], []
     for k, (g, t) in enumerate(zip(frames_per_step, times)):

@@ -422,6 +422,31 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
                 f"load factor {lam:.6g} ({-float(s['d'][e]):.3g} deep, through the shell): the nodes "
                 f"alone do not feel it; set faces = true (or 'auto') in the contact law, or refine the mesh")
 
+    def clear(self, g, lam):
+        """True when the obstacle exerts no force and no stiffness on the shell at the state
+        (g, lam): every contact node's and face sample's pressure and its derivative are 0 (the
+        law's ramp is exactly 0 beyond its band).  The step checks of smooth problems apply to a
+        try whose two ends are clear (``solvers.newton``: an obstacle the path never touches
+        turned them off for the whole run; fuzz seed 12, problem 78).
+
+        Example
+        -------
+        >>> from core_se3 import Problem, Material, mesh
+        >>> from core_se3.model import make_obstacle
+        >>> p = Problem(mesh.rectangle(1.0, 0.2, 2, 1), Material(1e4, 0.0, 0.02))
+        >>> c = ContactLoad(p, make_obstacle("sphere", centre=(0.5, 0.0, 0.5), radius=0.4))
+        >>> c.clear(p.mesh.g0, 0.0)
+        True
+        """
+        kn = len(self.nodes)                   # state()'s law, without its record of the active set
+        p, dp = normal_law(self.obstacle.distance(self.contact_points(g), lam), self.lam[:kn],
+                           self.k * self.soft[:kn], self.eps)
+        touching = bool(np.any(p > 0) or np.any(dp != 0))
+        if not touching and len(self.face_el):
+            _, pf, dpf = self.face_state(g, lam)
+            touching = bool(np.any(pf > 0) or np.any(dpf != 0))
+        return not self.largest(float(touching))
+
     def active_set_changed(self, g0, lam0, g1, lam1):
         """True when a node touches (gap within 10 tol) at one of the states and not at the other:
         lift-off or touch-down over the step (the limit check re-bases its stiffness); with

@@ -173,13 +173,36 @@ class Probe:
         return out
 
     @classmethod
-    def edge_midpoint(cls, name, nodes, angles=None):
+    def edge_midpoint(cls, name, nodes, angles=None, g0=None):
         """The middle of an ordered node set: its middle node, or halfway between the two
-        (``angles``: (n,) turns of every node of the mesh, ``Mesh.gauge_angles``; default none)."""
+        (``angles``: (n,) turns of every node of the mesh, ``Mesh.gauge_angles``; default none).
+        With ``g0`` (n, 4, 4), the reference frames, b's turn also takes the quarter turn that
+        leaves the two frames least turned about the normal (``mesh.gauge.edge_matching``, as the
+        default element joins them across a cross field's cuts): between a mesh file's default
+        frames on a doubly curved shell, whose d1 jump by quarter turns, the geodesic was a screw
+        of 90 or 180 deg (a probe between nodes whose d1 differ by 180 deg on the quarter
+        hemisphere read a point 1.3 (the element's size: 2.6) off the edge, its frame 180 deg off).
+
+        Example
+        -------
+        >>> import numpy as np
+        >>> from core_se3 import mesh
+        >>> from core_se3.mesh.gauge import turned_about_normal
+        >>> m = mesh.rectangle(2.0, 1.0, 1, 1)
+        >>> g = turned_about_normal(m.g0, np.array([0.0, 0.0, np.pi, 0.0]))      # node 2's d1 reversed
+        >>> Probe.edge_midpoint("tip", [2, 3], g0=g).state(g)[0].round(12).tolist()    # the edge's middle
+        [1.0, 0.5, 0.0]
+        >>> Probe.edge_midpoint("tip", [2, 3]).state(g)[0].round(12).tolist()          # a half-turn screw's
+        [1.0, 1.5, 0.0]
+        """
         nodes = list(nodes)
         k = len(nodes)
         if k % 2 == 1:
             return cls(name, nodes[k // 2], nodes[k // 2], 1.0)
         a, b = nodes[k // 2 - 1], nodes[k // 2]
         turns = (0.0, 0.0) if angles is None else (float(angles[a]), float(angles[b]))
+        if g0 is not None:
+            from ..mesh.gauge import edge_matching
+            q = edge_matching(np.stack([_turn(g0[a], turns[0]), _turn(g0[b], turns[1])]), np.array([[0, 1]]))
+            turns = turns if q is None else (turns[0], turns[1] + 0.5 * np.pi * float(q[0]))
         return cls(name, a, b, 0.5, turns)

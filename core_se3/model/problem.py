@@ -563,7 +563,8 @@ class Problem:
         if name in self.probes:
             raise OptionError(f"a probe named {name!r} exists already; give this one another name")
         line = along_line(self.mesh, self.nodes(where), name)
-        self.probes[name] = Probe.edge_midpoint(name, line, self.mesh.gauge_angles if len(line) % 2 == 0 else None)
+        self.probes[name] = Probe.edge_midpoint(name, line, self.mesh.gauge_angles if len(line) % 2 == 0 else None,
+                                                self.mesh.g0)
 
     def output_fields(self, g, lam=1.0):
         """Extra point fields for output (name -> (n, k)) summed over the loads (magnetisation,

@@ -24,6 +24,7 @@ from ..solvers import NewtonOptions, NewtonState, newton_steps, requested_load_f
 from ..solvers.newton import end_check
 from ..solvers.contact_probe import ContactProbe
 from ..solvers.options import split_options, unknown_keywords
+from ..solvers.stability import ASYM_TOL
 from ..solvers.step_checks import largest_turn, state_gap
 from .comm import is_root
 from .run import DistributedRun
@@ -183,7 +184,7 @@ class DistributedEquations:
         an iterative linear solver: ``limit_check``'s sign test is then refused, docs/PARALLEL.md)."""
         return self.run.system.det_sign()
 
-    def inertia_count(self, asym_tol=1e-6):
+    def inertia_count(self, asym_tol=ASYM_TOL):
         """The number of negative eigenvalues of sym(K) of the tangent of the last :meth:`solve`
         (``solvers.equations.NewtonEquations.inertia_count``), counted by MUMPS on the ranks."""
         return self.run.system.negative_count(asym_tol)

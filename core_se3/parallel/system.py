@@ -32,6 +32,7 @@ import numpy as np
 from .. import lie
 from ..errors import LinearSolverError, OptionError, ParallelError, SingularSystemError
 from ..solvers.linalg import PROBE_GROWTH
+from ..solvers.stability import ASYM_TOL
 from .comm import petsc_comm
 from .matrix import CooMatrix, SharedCsrMatrix
 
@@ -345,7 +346,7 @@ class DistributedSystem:
         d = self.ksp.getPC().getFactorMatrix().getMumpsRinfog(12)
         return None if not np.isfinite(d) or d == 0 else (1 if d > 0 else -1)
 
-    def negative_count(self, asym_tol=1e-6):
+    def negative_count(self, asym_tol=ASYM_TOL):
         """The number of negative eigenvalues of sym K on the free dofs (K: the assembled
         tangent, or the one the last solve factorised), counted on the ranks, never gathered:
         MUMPS' LDL^T of S sym(K) S (a congruence: the inertia of sym K; the held dofs' identity

@@ -189,6 +189,36 @@ def _name_supports(prob, counts, key):
             ld.support_name = key
 
 
+def _frame_br(v, key, m, mesh, elems):
+    """The lab B^r (k, 3) of a magnet's ``Br_frame``: its components along the reference directors
+    of each element of the selection ``elems`` (None: all), the mean of its nodes' frames.  In-plane
+    components are refused where the selection's frames turn by quarter turns across a cut (an
+    element edge whose nodes' d1 differ by more than 45 deg about the normal,
+    ``mesh.gauge.edge_matching``: a mesh file's default frames on a doubly curved part follow a
+    cross field): there the mean of the nodes' frames is no director of any of them (up to 40 deg
+    off every node's d1 and d2 on the closed cubed sphere 4 x 4 per face) and d1 jumps by a quarter
+    turn from one element to the next -- before, such a magnet was built without a word."""
+    from ..mesh.gauge import edge_matching
+    sel = np.arange(mesh.n_elements) if elems is None else np.asarray(elems)
+    comp = np.asarray(m["Br_frame"], float)
+    k = edge_matching(mesh.g0, mesh.edge_nodes) if np.any(comp[:2]) else None
+    if k is not None:
+        cut = np.isin(mesh.elem_edges[sel], np.flatnonzero(k)).any(1)
+        if cut.any():
+            e = int(sel[np.argmax(cut)])
+            where = f"region {m['region']!r}" if m.get("region") else "the whole shell"
+            v.fail(join(key, "Br_frame"),
+                   f"Br_frame = {comp.tolist()} has components along d1, d2, but the nodal frames of {where} turn by "
+                   f"quarter turns across cuts ({int(cut.sum())} of its elements, e.g. element {e} (nodes "
+                   f"{mesh.quads[e].tolist()}), have nodes whose d1 differ by more than 45 deg: a mesh file's default "
+                   "frames on a doubly curved shell follow a cross field, docs/ELEMENTS.md 'A mesh file's default "
+                   "frames'), so 'along d1' is no single direction there; give Br as a lab vector, a direction = "
+                   "\"radial\" or \"tangential\" pattern or a Br_file, or frames whose d1 turns little ([mesh] d1_hint); "
+                   "a Br_frame along d3 alone ([0, 0, Br]) is kept")
+    R0 = lie.mean_rotation(mesh.g0[mesh.quads[sel], :3, :3])      # (k, 3, 3)
+    return np.einsum("kij,j->ki", R0, comp)
+
+
 def _add_magnets(v, prob, spec, mesh, regions):
     built = {}
     mu0_units = mu0_of(spec["units"])
@@ -211,10 +241,7 @@ def _add_magnets(v, prob, spec, mesh, regions):
         elif "Br" in m:
             Br, per = np.asarray(m["Br"], float), None
         else:
-            # components along the reference directors, one lab vector per element of the selection
-            sel = np.arange(mesh.n_elements) if elems is None else elems
-            R0 = lie.mean_rotation(mesh.g0[mesh.quads[sel], :3, :3])      # (k, 3, 3)
-            Br = np.einsum("kij,j->ki", R0, np.asarray(m["Br_frame"], float))
+            Br = _frame_br(v, key, m, mesh, elems)
         mu0 = m["mu0"] if m["mu0"] is not None else mu0_units
         try:
             with warnings.catch_warnings(record=True) as said:

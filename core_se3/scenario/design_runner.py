@@ -230,7 +230,6 @@ def run_design(scn, out=None, method=None, max_iter=None, progress=False, vtu=Tr
     True
     """
     from ..backend import launched_rank
-    from ..io import write_series
     from .runner import point_fields
     from ..io.rundir import RunDirectory
     from .context import on_root

@@ -2,8 +2,9 @@
 step is solved again in halves; a jump that survives the halving is reported as a snap.
 
 Contact is not smooth, so the path check and the stability check of ``solvers.step_checks``
-leave it (its Newton tries contract irregularly at every step size, det K jumps as nodes touch
-and lift off).  What remains observable is the motion itself.  Let the *travel* of a converged
+leave the tries that touch an obstacle (its Newton tries contract irregularly at every step size,
+det K jumps as nodes touch and lift off; a try clear of every obstacle at both ends is judged as
+any).  What remains observable is the motion itself.  Let the *travel* of a converged
 try be the largest nodal displacement over the increment in element sizes h_e (the median
 reference edge length).  On a continuous path the travel of a step shrinks with the step: each
 half of a step travels about half as far.  Across a discontinuity of the quasi-static path (a

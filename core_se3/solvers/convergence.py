@@ -64,7 +64,8 @@ def relative_residual(asm, ev, ell, extra_scale=0.0):
     Returns
     -------
     (float, float)
-        |r|_s / max(|f_ext|_s, |r_int|_s, extra_scale), and 1e3 eps force_scale / that scale.
+        |r|_s / max(|f_ext|_s, |r_int|_s, extra_scale), and 1e3 eps force_scale / that scale
+        (at most 1e300).
 
     Example
     -------
@@ -79,7 +80,11 @@ def relative_residual(asm, ev, ell, extra_scale=0.0):
     """
     scale = max(scaled_norm(ev.f_ext, ell), scaled_norm(ev.r_int, ell), extra_scale, 1e-300)
     rn = scaled_norm(asm.scatter(ev.r), ell) / scale
-    floor = 1e3 * np.finfo(float).eps * ev.force_scale / scale
+    # at most 1e300 (the floor where nothing is loaded or stressed, scale 1e-300): that of a
+    # stressed reference (a curved shell at lam = 0) overflowed to inf with a bare NumPy
+    # RuntimeWarning once its force scale passed ~1e21 (the Sze roof in micrometres, E in Pa)
+    top = 1e3 * np.finfo(float).eps * ev.force_scale
+    floor = float(top / scale) if float(scale) * 1e300 > top else 1e300    # (Python floats: inf, no warning)
     return rn, floor
 
 

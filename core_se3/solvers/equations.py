@@ -41,7 +41,7 @@ from ..fem import ELEMENTS
 from .convergence import relative_residual, scaled_norm
 from .linalg import Factorization
 from .origin import part_origin, relocation
-from .stability import asymmetry, inertia
+from .stability import ASYM_TOL, asymmetry, inertia
 from .step_checks import largest_turn, state_gap
 
 __all__ = ["NewtonEquations", "part_origin"]
@@ -149,7 +149,7 @@ class NewtonEquations:
         fac = getattr(self, "_factor", None)
         return None if fac is None else fac.det_sign()
 
-    def inertia_count(self, asym_tol=1e-6):
+    def inertia_count(self, asym_tol=ASYM_TOL):
         """The number of negative eigenvalues of sym(K) of the tangent of the last :meth:`solve`
         (``solvers.stability.inertia``: one symmetric factorisation); None when not counted:
         no tangent, or K not symmetric to ``asym_tol`` (``stability.asymmetry``, Jacobi-scaled): under

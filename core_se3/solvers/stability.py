@@ -26,7 +26,7 @@ __all__ = ["inertia", "asymmetry", "stability_of", "negative_count", "unseen_cro
            "limit_point_hint", "prescribed_turn_hint", "TURN_HINT"]
 
 TURN_HINT = 0.05    # prescribed_turn_hint: the smallest eigenvalue's fraction of its start value
-ASYM_TOL = 1e-6     # stability_of / negative_count: K symmetric (conservative loads) to this
+ASYM_TOL = 1e-10    # stability_of / negative_count: K symmetric (conservative loads) to this (asymmetry)
 
 
 def _perm_parity(p):
@@ -286,7 +286,10 @@ def asymmetry(K, free=None):
     a spurious 'critical point' stopped it), the arch under its follower force 1.3e-7 (counted as
     conservative in its own units).  Measured on the catalogue's final states: conservative
     problems <= 3.0e-14 (contact, magnets at equilibrium, the Sze shells), the
-    non-conservative >= 5.1e-5 (arch-follower; rollup 9.2e-3, friction 0.25).
+    non-conservative >= 5.1e-5 (arch-follower; rollup 9.2e-3, friction 0.25).  A load's skew part
+    falls like (h/L)^2 with the thickness (the rotations' diagonal is the transverse shear's, ~h;
+    a bending moment ~h^3): the rollup 9.2e-7 at L/h 1e4 and 9.2e-9 at 1e5, hence ASYM_TOL = 1e-10
+    (1e-6 before: those strips counted as conservative and stopped on a spurious critical point).
 
     The left-trivialised tangent carries a skew term 1/2 ad*(r) of each node's unbalanced wrench r
     (the derivative of the gradient along g exp(eta)); at an equilibrium r vanishes except at a

@@ -362,15 +362,20 @@ class StepChecks:
         # the current stiffness (Bergan's, TryOutcome.k_step) at the start of the last accepted try
         # over the first's: (load factor, S_p), and the first's k_step (``stiffness``: tracked)
         self.stiffness, self.stiff, self.k_first = False, None, None
+        # obstacles (``contact``: their loads, set by the caller): the path and stability checks,
+        # the probe and the refine check judge a try whose ends are both ``clear`` of them (no
+        # contact force or stiffness: ``ContactLoad.clear``); ``start_clear`` is the current
+        # state's, ``end_clear`` the last try's end's
+        self.contact, self.clear, self.start_clear, self.end_clear = (), True, None, True
 
     def judge(self, out, lam, lam_try):
         """'' when the converged try ``out`` (a TryOutcome) from lam to lam_try may be accepted,
         else why it is refused (it is cut back; ``bracket`` is set for a det K sign change)."""
-        why = path_refusal(out.contraction, out.travel) if self.path else ""
+        why = path_refusal(out.contraction, out.travel) if self.path and self.clear else ""
         if why:
             self.rejected += 1
             return f"path check: the Newton corrections {why}, so the try may have converged onto another equilibrium"
-        s = out.det_sign
+        s = out.det_sign if self.clear else None
         if self.stability and s is not None and self.sign is None and s > 0:
             self.sign = s                      # module docstring: the start's sign taken as +1
         n = getattr(out, "count", None) if self.counting else None
@@ -391,7 +396,7 @@ class StepChecks:
         """Whether a converged try that passed :meth:`judge` is to be probed at its midpoint when
         its converged increment turns a node by more than PROBE_TURN (module docstring):
         ``probe`` and the stability check on, and the path's sign known."""
-        return bool(self.probe and self.stability and self.sign is not None)
+        return bool(self.probe and self.stability and self.clear and self.sign is not None)
 
     def limit_ahead(self, k_step, lam, lam_try):
         """(S_p, the load factor where it extrapolates to zero) when the current stiffness S_p =
@@ -459,7 +464,7 @@ class StepChecks:
         """Whether the converged try ``out`` that passed the other checks is to be solved again in
         REFINE_PARTS parts (``refine``, set by the caller: ``refine_check`` with the path check):
         it took more than REFINE_ITERATIONS Newton iterations (module docstring)."""
-        return bool(self.refine and self.path and out.iterations > REFINE_ITERATIONS)
+        return bool(self.refine and self.path and self.clear and out.iterations > REFINE_ITERATIONS)
 
     def judge_refinement(self, out, parts, lam, lam_try):
         """'' when the parts' end agrees with the long try ``out`` to REFINE_TOL ell, else why it
@@ -500,7 +505,10 @@ class StepChecks:
         located the bracket's low end moves up; a try that reached its high end with the old sign
         shows that the change seen there came from a jump, not from the path: the bracket goes."""
         if out.det_sign is not None:
-            self.sign = out.det_sign
+            self.sign = out.det_sign if self.clear else None     # touching an obstacle: not the path's
+        if not self.clear:
+            self.bracket, self.confirmed, self.probing = None, False, False
+        self.start_clear = self.end_clear
         k = getattr(out, "k_step", None)
         if self.stiffness and lam is not None and k is not None and np.isfinite(k):
             self.k_first = k if self.k_first is None else self.k_first
@@ -646,9 +654,9 @@ class StepChecks:
     def record(self):
         """What was checked for the stored step (``StepResult.checks``); resets the count."""
         out = self.last
-        rec = dict(path_check=self.path, contraction=None if out is None else float(out.contraction),
+        rec = dict(path_check=self.path and self.clear, contraction=None if out is None else float(out.contraction),
                    travel=None if out is None else float(out.travel), path_rejections=self.rejected,
-                   det_sign=self.sign if self.stability else None)
+                   det_sign=self.sign if self.stability and self.clear else None)
         if self.probe:
             rec.update(midpoint_probes=self.probes, probe_iterations=self.probe_iterations)
         if self.refinements:
