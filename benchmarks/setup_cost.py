@@ -147,29 +147,31 @@ def measure(case, solve):
 
 NOTES = """
 Read (2026-12-05, speed7; a shared 2-core machine: single timings move by up to 2x between runs, the
-ratios of one column are of one run): the set-up is dominated by the element's stiffness data
-("element build" less the rows under it: the laws' matrices, the enhanced membrane's condensation,
-the drilling and shear corrections; chunked NumPy, O(m)) -- 1.1 ... 2.7 factorisations, the most on
-the small and the cheaply factorised meshes.  The checks the recent stops added are O(m) and
-vectorised: frame turns <= 0.03, vortices <= 0.012, warp <= 0.007, node windings <= 0.003 of a
-factorisation; the cuts' handling (matching <= 0.005, side turns <= 0.054, C^T Dbar C <= 0.024) and
-the file read's (mesh checks <= 0.044, doubly curved parts' frames 0.14 ... 0.23, of it the cross
-field <= 0.073) likewise.  What a scene does not need is skipped: a generator's flat or developable
-mesh has no cut (``edge_matching`` is None after one pass over the edges, <= 0.003), so no side
-turns, no C^T Dbar C, no node windings (0 s), no cross field and no fitted normals (only a file's
-doubly curved parts get them); the gauge stops after one pass of ``normal_turns`` where no edge turns
-about the normal (strip, cylinder: <= 0.05).  Changed by speed7: C^T Dbar C across the cuts was a
-three-operand einsum on every element's (24, 24) (the sphere at 64 per face: 0.90 s against the new
-0.042 s in one process, 21x; at 32: 0.222 against 0.017 s, 13x; ~0.1 of a factorisation before) --
-now D itself off the cuts, an indexing across them, the einsum only round the singular nodes, to the
-bit; and the frame-turn check takes the rotation's log only (0.6x its time, the same bits).  Per
-Newton iteration (strip 128 / sphere 32): the compiled assembly 0.10 / 0.42 of the factorisation, the
-solves with refinement 0.73 / 1.12, the rest 0.16 / 0.19.  Left as they are: the doubly curved
-parts' frames of a file (the least-turn gauge's Laplacian LU, fitted normals, cross field), the
-follower pressure's element area recomputed without the element (<= 0.055 per pressure load, by
-design: a distributed rank builds only its own elements), and per load-stepped solve the end check's
-inertia (one more symmetric factorisation where the stability check runs: conservative loads; strip
-128: 5.8 s against 4.8 s for a factorisation in a cProfile run, ~1.2).
+ratios of one column are of one run; ranges below over two runs): the set-up is dominated by the
+element's stiffness data ("element build" less the rows under it: the laws' matrices, the enhanced
+membrane's condensation, the drilling and shear corrections; chunked NumPy, O(m)) -- 0.8 ... 2.7
+factorisations, the most on the small and the cheaply factorised meshes.  The checks the recent
+stops added are O(m) and vectorised: frame turns <= 0.03, vortices <= 0.034, warp <= 0.007, node
+windings <= 0.003 of a factorisation; the cuts' handling (matching <= 0.01, side turns <= 0.15 --
+the sphere at 32, 0.058 s since the sides' mean frames round the singular nodes, 0.021 s before --,
+C^T Dbar C <= 0.024) and the file read's (mesh checks <= 0.074, doubly curved parts' frames 0.14 ...
+0.28, of it the cross field <= 0.089) likewise.  What a scene does not need is skipped: a
+generator's flat or developable mesh has no cut (``edge_matching`` is None after one pass over the
+edges, <= 0.01), so no side turns, no C^T Dbar C, no node windings (0 s), no cross field and no
+fitted normals (only a file's doubly curved parts get them); the gauge stops after one pass of
+``normal_turns`` where no edge turns about the normal (strip, cylinder: <= 0.05).  Changed by
+speed7: C^T Dbar C across the cuts was a three-operand einsum on every element's (24, 24) (the
+sphere at 64 per face: 0.90 s against the new 0.042 s in one process, 21x; at 32: 0.222 against
+0.017 s, 13x; ~0.1 of a factorisation before) -- now D itself off the cuts, an indexing across
+them, the einsum only round the singular nodes, to the bit; and the frame-turn check takes the
+rotation's log only (0.6x its time, the same bits).  Per Newton iteration (strip 128 / sphere 32):
+the compiled assembly 0.10 ... 0.15 / 0.38 ... 0.42 of the factorisation, the solves with refinement
+0.7 ... 1.6 / 1.1 ... 2.1, the rest 0.16 ... 0.25 / 0.20.  Left as they are: the doubly curved parts'
+frames of a file (the least-turn gauge's Laplacian LU, fitted normals, cross field), the follower
+pressure's element area recomputed without the element (<= 0.11 per pressure load, by design: a
+distributed rank builds only its own elements), and per load-stepped solve the end check's inertia
+(one more symmetric factorisation where the stability check runs: conservative loads; strip 128:
+5.8 s against 4.8 s for a factorisation in a cProfile run, ~1.2).
 """
 
 
