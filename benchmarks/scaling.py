@@ -477,7 +477,12 @@ def main(argv=None):
           f"BLAS (loaded): {', '.join(info['blas_loaded']) or 'unknown'}; NumPy build: "
           f"{info['numpy_blas_build']}; thread env: {info['threads_env'] or 'default'}; "
           f"load average {load0[0]:.2f} at start, {load1[0]:.2f} at end.", ""]
-    (args.out / "scaling.md").write_text("\n".join(md))
+    kept = ""                       # setup_cost.py's section, kept
+    if (args.out / "scaling.md").exists():
+        old = (args.out / "scaling.md").read_text()
+        mark = "## Set-up and iteration against the factorisation"
+        kept = ("\n" + mark + old.split(mark, 1)[1]) if mark in old else ""
+    (args.out / "scaling.md").write_text("\n".join(md) + kept)
     print(f"wrote {args.out / 'scaling.md'} and {args.out / 'scaling.json'}")
     return 0
 

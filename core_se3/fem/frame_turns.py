@@ -94,7 +94,7 @@ def frame_turns(g, quads):
     n /= np.maximum(np.linalg.norm(n, axis=1), 1e-300)[:, None]
     turn = np.zeros(len(ge))
     for a, b in _PAIRS:                                                # six pairs, vectorised over elements
-        w = lie.log(lie.relative(ge[:, a], ge[:, b]))[:, 3:]           # in a's frame
+        w = lie.log_so3(lie.relative(ge[:, a], ge[:, b])[:, :3, :3])  # in a's frame (lie.log's w, to the bit)
         na = np.einsum("mji,mj->mi", ge[:, a, :3, :3], n)
         turn = np.maximum(turn, np.abs(np.einsum("mi,mi->m", w, na)))
     return np.degrees(turn)
