@@ -201,6 +201,12 @@ class NewtonTry:
                 if it == 0:
                     work = eq.work(ev, x)
                     k_step = eq.residual_sq(ev) / work if work > 0 else -np.inf
+                    if rn <= max(opts.rtol, floor):
+                        # a start already in balance (a load that does not change over the try):
+                        # its residual is round-off and the stiffness it gives is noise (a tip force
+                        # held after a jump gave S_p 0.8 ... 1.1e6 by rank count, and the probe's
+                        # limit-point extrapolation fired on one of them)
+                        k_step = None
                     pred = eq.increment_norm(eta)
                     # guard: a first increment doing negative work starts past an
                     # instability, where the mixed iteration's reach can carry it onto
