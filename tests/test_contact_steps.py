@@ -347,6 +347,26 @@ def test_a_small_ball_sliding_under_a_node_line_in_twenty_steps():
     assert np.abs(_sliding_ball(0.05, 20) - _sliding_ball(0.05, 8)).max() < 2e-8
 
 
+def test_a_ball_sliding_into_a_clamped_line_between_its_nodes_is_named():
+    """The plate of the sliding tests with the node line x = 1.0 clamped too, the ball (y = 0.1,
+    between the line's nodes at y = 0 and 0.25) pressed 0.015 past the plate's bottom face and
+    slid in 2 steps: it must pass through the held edge, which no state allows.  The run stopped
+    with "raise NewtonOptions.max_augmentations or the tolerance" (the deepest node, which the
+    held-node hint looks at, was not inside it: the face samples were); now it names the held
+    edge (0.000125 deep at load factor 0.682, the ball 0.036 from the line)."""
+    p = cs.Problem(M.rectangle(2.0, 1.0, 8, 4), cs.Material(E=1e4, nu=0.3, h=0.02))
+    p.clamp("x0"), p.clamp("x1"), p.clamp(np.nonzero(np.abs(p.mesh.X[:, 0] - 1.0) < 1e-9)[0])
+
+    def motion(lam):
+        T = np.eye(4)
+        T[2, 3], T[0, 3] = 0.035 * min(1.0, 2 * lam), max(0.0, 2 * lam - 1)
+        return T
+    p.add_obstacle("sphere", centre=(0.6, 0.1, -0.08), radius=0.05, motion=motion, name="ball")
+    with pytest.raises(cs.ConvergenceError, match=r"obstacle 'ball' presses .* into the edge between nodes \d+ and "
+                                                   r"\d+ of element \d+, whose translations a support holds"):
+        p.solve(steps=2)
+
+
 # ----------------------------------------------------------------------------- lift-off
 HINGED_STRIP = """
 name = "hinged-strip"

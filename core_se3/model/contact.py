@@ -515,8 +515,11 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
             return 0.0
         ratio = self.gap_error / self.tol
         kn = len(self.nodes)
-        i = int(np.argmax(err[:kn])) if kn else 0
+        i = int(np.argmin(d[:kn])) if kn else 0          # the deepest node (failure_hint)
         self._stuck = (int(self.nodes[i]), float(-d[i])) if ratio > 1.0 and kn and d[i] < -self.tol else None
+        j = int(np.argmin(d[kn:])) if len(d) > kn else 0
+        self._stuck_face = ((int(self.face_ids[j]), self.nodes[self.face_q[j]], self.contact_points(g)[self.face_q[j]], lam)
+                            if ratio > 1.0 and len(d) > kn and d[kn + j] < -self.tol else None)
         if ratio > 1.0:
             self.lam = self._extrapolated(p, lam)
             self.soft = np.where(p > 0, np.minimum(1.0, 10 * self.soft), self.soft_start)
@@ -558,7 +561,7 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         hint = super().failure_hint() or self.roundoff_hint()
         stuck = getattr(self, "_stuck", None)
         if hint or stuck is None:
-            return hint
+            return hint or self.held_face_hint()
         if pinch := self.pinch(stuck[0]):
             return pinch
         if self._held is None or not self._held()[stuck[0], :3].all():
@@ -566,6 +569,28 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         return (f"obstacle {self.name!r} presses {stuck[1]:.3g} into node {stuck[0]}, whose translations a support "
                 "holds: no equilibrium has the node outside it; keep the obstacle's motion off the held nodes "
                 "(or release them)")
+
+    def held_face_hint(self):
+        """'' unless the multiplier updates ran out with a face sample inside the obstacle on a face
+        with an edge whose two nodes a support holds in translation, and that edge (straight, and
+        fixed) reaches into the obstacle (33 points along it): no state has it outside (a clamped
+        line across a plate in the way of a ball of radius 0.05 sliding between its nodes stopped
+        with "raise NewtonOptions.max_augmentations", which cannot help)."""
+        face = getattr(self, "_stuck_face", None)
+        if face is None or self._held is None:
+            return ""
+        el, nodes, xq, lam = face
+        held = self._held()[nodes, :3].all(1)
+        edges = [(a, (a + 1) % 4) for a in range(4) if held[a] and held[(a + 1) % 4]]
+        t = np.linspace(0.0, 1.0, 33)[:, None]
+        for a, b in edges:
+            depth = -float(self.obstacle.evaluate((1 - t) * xq[a] + t * xq[b], lam)[0].min())
+            if depth > self.tol:
+                return (f"obstacle {self.name!r} presses {depth:.3g} into the edge between nodes {int(nodes[a])} and "
+                        f"{int(nodes[b])} of element {el}, whose translations a support holds: no equilibrium has the "
+                        "edge outside it; keep the obstacle's motion off the held nodes and the edges between them "
+                        "(or release them)")
+        return ""
 
     def roundoff_hint(self):
         """'' unless the obstacle's placement point (a ball's centre) lies so far from the contact
