@@ -305,6 +305,23 @@ def test_a_cam_with_a_rounded_edge_turns_in_ten_steps():
 
 
 
+def _sliding_ball(press, steps):
+    """The ball of the sliding tests below after ``steps`` equal steps: its rise to ``press`` past
+    the plate's bottom face (load factor 0 -> 0.5), then its slide of 1.0 along it (0.5 -> 1).
+    Returns the final positions after checking that the ball presses and has not passed through."""
+    p = cs.Problem(M.rectangle(2.0, 1.0, 8, 4), cs.Material(E=1e4, nu=0.3, h=0.02))
+    p.clamp("x0"), p.clamp("x1")
+
+    def motion(lam):
+        T = np.eye(4)
+        T[2, 3], T[0, 3] = (0.02 + press) * min(1.0, 2 * lam), max(0.0, 2 * lam - 1)
+        return T
+    c = p.add_obstacle("sphere", centre=(0.6, 0.1, -0.08), radius=0.05, motion=motion, name="ball")
+    st = p.solve(steps=steps).final
+    assert st.contact["ball"]["force"][2] > 0 and _surface_depth(c, st.g, 1.0, 0.01) > -10 * c.tol
+    return st.g[:, :3, 3]
+
+
 @pytest.mark.parametrize("press", [0.01, 0.05])
 def test_a_small_ball_sliding_along_a_plate_in_two_steps_or_eight(press):
     """A ball of radius 0.05 (face samples: the plate's elements are 0.25) rises under a plate
@@ -314,20 +331,40 @@ def test_a_small_ball_sliding_along_a_plate_in_two_steps_or_eight(press):
     Frictionless, the end state is that of 8 steps: 7.7e-10 (press 0.01, the contact tolerance
     2e-8) and 7.7e-16 (press 0.05, deeper than h: the face points' sweep meets the ball's centre,
     where the run stopped with "a point is at the centre of the sphere" before)."""
-    def run(steps):
-        p = cs.Problem(M.rectangle(2.0, 1.0, 8, 4), cs.Material(E=1e4, nu=0.3, h=0.02))
-        p.clamp("x0"), p.clamp("x1")
-
-        def motion(lam):
-            T = np.eye(4)
-            T[2, 3], T[0, 3] = (0.02 + press) * min(1.0, 2 * lam), max(0.0, 2 * lam - 1)
-            return T
-        c = p.add_obstacle("sphere", centre=(0.6, 0.1, -0.08), radius=0.05, motion=motion, name="ball")
-        st = p.solve(steps=steps).final
-        assert st.contact["ball"]["force"][2] > 0 and _surface_depth(c, st.g, 1.0, 0.01) > -10 * c.tol
-        return st.g[:, :3, 3]
-    x2, x8 = run(2), run(8)
+    x2, x8 = _sliding_ball(press, 2), _sliding_ball(press, 8)
     assert np.abs(x2 - x8).max() < 1e-8
+
+
+def test_a_small_ball_sliding_under_a_node_line_in_twenty_steps():
+    """The ball above pressed 0.05 and slid in 20 steps: at load factor 0.7 it sits under the node
+    line x = 1.0, held by the samples of the two faces either side, 3.4e-3 apart on the ball (the
+    line a ridge between the bilinear faces): nearly redundant, the Uzawa update moved force from
+    one to the other at a contraction of 0.982 per update (gaps +-2.1e-8 against the tolerance
+    2e-8, multipliers 0.570 and 0.004), and the run stopped with "constraint error 1.06 x its
+    tolerance after 25 multiplier updates" (9.87 x after 80).  With the geometric series of the
+    updates summed (``ContactLoad._extrapolated``) it completes, and ends where 8 steps end:
+    3.1e-9, within the contact tolerance 2e-8."""
+    assert np.abs(_sliding_ball(0.05, 20) - _sliding_ball(0.05, 8)).max() < 2e-8
+
+
+def test_a_ball_sliding_into_a_clamped_line_between_its_nodes_is_named():
+    """The plate of the sliding tests with the node line x = 1.0 clamped too, the ball (y = 0.1,
+    between the line's nodes at y = 0 and 0.25) pressed 0.015 past the plate's bottom face and
+    slid in 2 steps: it must pass through the held edge, which no state allows.  The run stopped
+    with "raise NewtonOptions.max_augmentations or the tolerance" (the deepest node, which the
+    held-node hint looks at, was not inside it: the face samples were); now it names the held
+    edge (0.000125 deep at load factor 0.682, the ball 0.036 from the line)."""
+    p = cs.Problem(M.rectangle(2.0, 1.0, 8, 4), cs.Material(E=1e4, nu=0.3, h=0.02))
+    p.clamp("x0"), p.clamp("x1"), p.clamp(np.nonzero(np.abs(p.mesh.X[:, 0] - 1.0) < 1e-9)[0])
+
+    def motion(lam):
+        T = np.eye(4)
+        T[2, 3], T[0, 3] = 0.035 * min(1.0, 2 * lam), max(0.0, 2 * lam - 1)
+        return T
+    p.add_obstacle("sphere", centre=(0.6, 0.1, -0.08), radius=0.05, motion=motion, name="ball")
+    with pytest.raises(cs.ConvergenceError, match=r"obstacle 'ball' presses .* into the edge between nodes \d+ and "
+                                                   r"\d+ of element \d+, whose translations a support holds"):
+        p.solve(steps=2)
 
 
 # ----------------------------------------------------------------------------- lift-off

@@ -29,7 +29,7 @@ from .contact import ContactLoad
 
 __all__ = ["RelocatedContact", "relocated_contact"]
 
-_PUBLISHED = ("gap_error", "step_stats", "_step_at", "_step_slip", "_step_stick", "_lam_update", "_stuck")
+_PUBLISHED = ("gap_error", "step_stats", "_step_at", "_step_slip", "_step_stick", "_lam_update", "_stuck", "_stuck_face")
 
 
 class RelocatedContact(ContactLoad):
