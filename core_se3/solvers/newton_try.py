@@ -200,13 +200,7 @@ class NewtonTry:
                 eta = eq.increment(x)
                 if it == 0:
                     work = eq.work(ev, x)
-                    k_step = eq.residual_sq(ev) / work if work > 0 else -np.inf
-                    if rn <= max(opts.rtol, floor):
-                        # a start already in balance (a load that does not change over the try):
-                        # its residual is round-off and the stiffness it gives is noise (a tip force
-                        # held after a jump gave S_p 0.8 ... 1.1e6 by rank count, and the probe's
-                        # limit-point extrapolation fired on one of them)
-                        k_step = None
+                    k_step = _current_stiffness(eq, ev, work, rn <= max(opts.rtol, floor))
                     pred = eq.increment_norm(eta)
                     # guard: a first increment doing negative work starts past an
                     # instability, where the mixed iteration's reach can carry it onto
@@ -385,3 +379,14 @@ def tangent_predictor(problem, g, lam, lam_try, solver, mip, caps=()):
     eta = alpha * eta
     stress = problem.linear_stress(ev, eta) if mip else None
     return problem.apply_prescribed(problem.retract(g, eta), lam_try), stress
+
+
+def _current_stiffness(eq, ev, work, balanced):
+    """Bergan's current stiffness k = |r_0|^2 / (r_0 . eta_0) of a try's first iterate (-inf for
+    work <= 0), or None when its start is already in balance (``balanced``: a load that does not
+    change over the try), whose residual is round-off and whose k is noise: a tip force held
+    after a jump gave S_p from 0.8 to 1.1e6 by the ranks' round-off, and the midpoint probe's
+    limit-point extrapolation fired on some of them (tests/test_parallel.py)."""
+    if balanced:
+        return None
+    return eq.residual_sq(ev) / work if work > 0 else -np.inf
