@@ -511,19 +511,10 @@ def test_limit_check_off_records_the_bifurcation_and_goes_on():
     assert res.steps[-1].load_factor == 1.0 and res.final.checks["det_sign"] == -1
 
 
-# fuzz seed 12 (benchmarks/results/invariants_fuzz_seed12.md): problem 78, a pinned 2 x 1 cylindrical
-# panel under two dead pressures and a third pressing it toward a half-space 0.0052 L below its face;
-# problem 246, a clamped 2 x 2 plate under 2.7 Euler loads (1 % off-axis) and a follower pressure,
-# a half-space 0.178 L below
-_PANEL_78 = dict(mesh=("cylinder_panel", (2.936026195837851, 2.7293602886249966, -0.9456213388412026,
-                                          0.9456213388412026, 2, 1)),
-                 L=5.552738044362063, perturb=0.04255721758915232, pseed=534377356, E=1095441992.255931,
-                 nu=0.10273996279498798, h=0.3507179182163402, support="pin-pin",
-                 loads=[("pressure", 5369379.807451757, [0.5645864849246599, 0.5367399628070835, -0.6270185909255543]),
-                        ("pressure", 5369379.807451757, [-0.10781281805071394, -0.4201194709399129,
-                                                         0.9010416341108392])],
-                 alpha=230.96975749235614, law=("cosserat", None),
-                 extra=("contact", dict(gap=0.005193805851486636, q=5369379.807451757)))
+# fuzz seed 12 (benchmarks/results/invariants_fuzz_seed12.md): problem 78 (``_PANEL_78`` of
+# tests/test_invariants_fuzz.py), a pinned 2 x 1 cylindrical panel under two dead pressures and a
+# third pressing it toward a half-space 0.0052 L below its face; problem 246, a clamped 2 x 2 plate
+# under 2.7 Euler loads (1 % off-axis) and a follower pressure, a half-space 0.178 L below
 _PLATE_246 = dict(mesh=("rectangle", (2.0778287034676044, 0.8776266630962353, 2, 2)), L=2.0778287034676044,
                   perturb=0.12548768233400864, pseed=474031738, E=2689650.422733381, nu=0.3047270665361927,
                   h=0.060974992400938954, support="clamp",
@@ -545,6 +536,7 @@ def test_an_obstacle_the_path_never_touches_leaves_the_step_checks_on(steps):
     8e-15 ell) on an unstable state.  The checks now judge every try whose two ends are clear of
     the obstacles (no contact force or stiffness: ``ContactLoad.clear``): 78 fails at its limit
     point, 246 lands on the path."""
+    from test_invariants_fuzz import _PANEL_78
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         with pytest.raises(ConvergenceError) as exc:
