@@ -232,6 +232,24 @@ def test_a_follower_pressure_on_a_closed_sphere_from_a_file_has_no_net_force():
         assert np.linalg.norm(net) < tol * 4.0 * np.pi * 10.0 ** 2, n
 
 
+_SPHERE = dict(R=10.0, h=0.1, E=6.825e7, nu=0.3)     # the closed spheres' radius and law (R/h 100)
+
+
+def _pressurised_radial(m, **problem_kw):
+    """The radial displacement of the closed sphere ``m`` under a unit follower pressure, held only
+    against its rigid motions (the tangential translations of its two poles and of one equator
+    node, none of which moves in the uniform expansion), over the membrane value
+    p R^2 (1 - nu) / (2 E h), at each node (linear analysis)."""
+    R, h, E, nu = (_SPHERE[k] for k in ("R", "h", "E", "nu"))
+    p = Problem(m, Material(E, nu, h), **problem_kw)
+    p.fix([int(np.argmax(m.X[:, 2])), int(np.argmin(m.X[:, 2])), int(np.argmax(m.X[:, 0]))], (0, 1))
+    p.add_pressure(1.0, follower=True)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        u = p.solve_linear().displacements()
+    return np.einsum("ni,ni->n", u[:, :3], m.X / R) / (R ** 2 * (1 - nu) / (2 * E * h))
+
+
 @pytest.mark.parametrize("backend", ["numpy", "numba"])
 def test_a_pressurised_closed_sphere_from_a_file_expands_as_the_membrane_solution(backend):
     # R/h 100, supports that only remove the rigid motions (the tangential translations of the two
@@ -241,19 +259,8 @@ def test_a_pressurised_closed_sphere_from_a_file_expands_as_the_membrane_solutio
     # On the default frames 16 x 16 per face it came out -5.7 ... 7.2 times that; now -3.4 ... +5.9 %
     # (8 x 8: -17 ... +25 %, 24 x 24: -1.4 ... +2.3 %: O(h^2), largest at the midpoints of the cube's
     # edges: test_the_pressurised_closed_sphere_errs_most_at_the_cube_edges), the same in both backends
-    R, h, E, nu = 10.0, 0.1, 6.825e7, 0.3
-
     def error(n):
-        m = _closed_sphere(n)
-        p = Problem(m, Material(E, nu, h), backend=backend)
-        top, bottom, side = int(np.argmax(m.X[:, 2])), int(np.argmin(m.X[:, 2])), int(np.argmax(m.X[:, 0]))
-        p.fix([top, bottom, side], (0, 1))
-        p.add_pressure(1.0, follower=True)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            u = p.solve_linear().displacements()
-        w = np.einsum("ni,ni->n", u[:, :3], m.X / R) / (R ** 2 * (1 - nu) / (2 * E * h))
-        return np.abs(w - 1.0).max()
+        return np.abs(_pressurised_radial(_closed_sphere(n), backend=backend) - 1.0).max()
 
     e8, e16 = error(8), error(16)
     assert e16 < 0.07 and 3.0 < e8 / e16 < 6.0          # O(h^2): 0.26 -> 0.059, a ratio of 4.4
@@ -267,19 +274,11 @@ def test_the_pressurised_closed_sphere_errs_most_at_the_cube_edges_and_its_corne
     # largest error, where two faces' grids meet at a kink; a hint's frames give 1.03 ... 1.08 there
     # on 16), the corners 0.924 ... 0.945 / 0.970 / 0.987 / 0.993 -- O(h^2) as the face centres
     # (0.967 / 0.986 / 0.993), no mend needed at the corners.  The exact normals give the same to 2e-3
-    R, h, E, nu = 10.0, 0.1, 6.825e7, 0.3
-
     def radial(n):
         m = _closed_sphere(n)
-        p = Problem(m, Material(E, nu, h))
-        p.fix([int(np.argmax(m.X[:, 2])), int(np.argmin(m.X[:, 2])), int(np.argmax(m.X[:, 0]))], (0, 1))
-        p.add_pressure(1.0, follower=True)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            u = p.solve_linear().displacements()
         c = m.X / np.abs(m.X).max(1, keepdims=True)                     # the cube's coordinates
         on, zero = (np.abs(np.abs(c) - 1) < 1e-9).sum(1), (np.abs(c) < 1e-9).sum(1)
-        e = np.einsum("ni,ni->n", u[:, :3], m.X / R) / (R ** 2 * (1 - nu) / (2 * E * h)) - 1.0
+        e = _pressurised_radial(m) - 1.0
         return np.abs(e[on == 3]).max(), np.abs(e[(on == 2) & (zero == 1)]).max(), np.abs(e).max()
 
     (c16, mid16, all16), (c32, mid32, all32) = radial(16), radial(32)
@@ -328,17 +327,9 @@ def test_a_closed_sphere_from_a_file_refines_onto_the_sphere():
     # sphere (R 10, spacing 1.8), and the refined 8 x 8 pressurised comes out 0.949 ... 1.050 of the
     # membrane value (16 x 16 read directly: 0.966 ... 1.059; 8 x 8: 0.828 ... 1.251)
     from core_se3.mesh.refine import refine
-    R, h, E, nu = 10.0, 0.1, 6.825e7, 0.3
     m = refine(_closed_sphere(8), 1)
-    assert m.n_elements == 4 * 384 and np.abs(np.linalg.norm(m.X, axis=1) - R).max() < 1e-3
-    p = Problem(m, Material(E, nu, h))
-    p.fix([int(np.argmax(m.X[:, 2])), int(np.argmin(m.X[:, 2])), int(np.argmax(m.X[:, 0]))], (0, 1))
-    p.add_pressure(1.0, follower=True)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        u = p.solve_linear().displacements()
-    w = np.einsum("ni,ni->n", u[:, :3], m.X / R) / (R ** 2 * (1 - nu) / (2 * E * h))
-    assert np.abs(w - 1.0).max() < 0.08
+    assert m.n_elements == 4 * 384 and np.abs(np.linalg.norm(m.X, axis=1) - _SPHERE["R"]).max() < 1e-3
+    assert np.abs(_pressurised_radial(m) - 1.0).max() < 0.08
 
 
 def test_a_pinched_closed_sphere_from_a_file_is_the_same_in_both_backends():
