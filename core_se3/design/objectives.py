@@ -34,7 +34,7 @@ from ..model import Probe
 from ..solvers.origin import frames_origin
 
 __all__ = ["Quantity", "NodePosition", "ProbePosition", "Orientation", "RotationAngle", "AngleInDegrees", "Energy",
-           "UserQuantity", "local_jacobian", "probe_frames", "target_array"]
+           "UserQuantity", "local_jacobian", "probe_frames", "target_array", "twist_angle"]
 
 
 def local_jacobian(fn, g, nodes, ell, step=1e-4, local=None, origin=None):
@@ -319,17 +319,49 @@ class Orientation(Quantity):
         return sp.csr_matrix((J.ravel(), (rows, cols)), shape=(3, 6 * n))
 
 
+def twist_angle(R, axis):
+    """The twist of rotations R (k, 3, 3) about the unit lab ``axis`` a: R = S T with T the turn
+    by theta about a and S a swing about an axis normal to a (the swing-twist decomposition),
+    theta = 2 atan2(a . v, w) for R's unit quaternion (w, v), in (-pi, pi].  A function of R
+    alone, smooth except where the swing is a half turn (w = a . v = 0: a turned upside down),
+    and theta = a . log(R) when R turns about a.  Also the gradient G (k, 3): d theta = G . omega
+    for R <- exp(omega^) R, G = (w (w a + v x a) + (a . v) v) / (w^2 + (a . v)^2).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> th, G = twist_angle(lie.exp_so3(np.array([[0.0, 1.7, 0.0]])), np.array([0.0, 1.0, 0.0]))
+    >>> round(float(th[0]), 12), np.round(G, 12).tolist()
+    (1.7, [[0.0, 1.0, 0.0]])
+    """
+    psi = lie.log_so3(R)
+    half = 0.5 * np.linalg.norm(psi, axis=-1)
+    w = np.cos(half)
+    v = 0.5 * np.sinc(half / np.pi)[:, None] * psi                 # sin(|psi|/2) psi/|psi|
+    c = v @ axis
+    den = w ** 2 + c ** 2
+    if np.any(den < 1e-20):
+        raise DesignError(f"the angle about the axis {axis.round(6).tolist()} is undefined: the frame is turned "
+                          "upside down about a normal to it (a swing of a half turn); measure it about another axis")
+    G = (w[:, None] * (w[:, None] * axis + np.cross(v, axis)) + c[:, None] * v) / den[:, None]
+    return 2.0 * np.arctan2(c, w), G
+
+
 class RotationAngle(Quantity):
     """The angle [rad] by which a probe (or node) has turned about the lab ``axis`` from its
-    reference frame, continuous through any number of turns:
-    theta = reference + axis . log(exp(-reference axis) R R_0^T), the reference following the
-    states it is evaluated at (it starts at ``reference``, default 0: the reference
-    configuration, and becomes the value whenever that is more than a quarter turn from it), so
-    that a shell turned gradually past pi is counted past pi; with ``target`` [rad] the misfit
-    theta - target.  (Before, the reference was the target: a strip turned by -90 deg was 'on
-    target' for a target of 270 deg, and a design reached it so.)  Evaluate one RotationAngle
-    along one path (a design's pose): a state turned by more than half a turn from the last
-    reference is counted a turn short or over.
+    reference frame, continuous through any number of turns: the twist theta of R R_0^T about
+    the axis (:func:`twist_angle`: R R_0^T = S T, T the turn by theta about the axis, S a swing
+    about a normal to it; theta = axis . log(R R_0^T) for a turn about the axis), counted on the
+    branch theta + 2 pi k nearest to a reference that follows the states it is evaluated at (it
+    starts at ``reference``, default 0: the reference configuration, and becomes the value
+    whenever that is more than a quarter turn from it), so that a shell turned gradually past pi
+    is counted past pi; with ``target`` [rad] the misfit theta - target.  The reference picks
+    only the branch: the value is a function of the state.  (Before, theta = reference +
+    axis . log(exp(-reference axis) R R_0^T), which changes with the reference off the axis:
+    the same state read 1.7 rad and, once the reference had followed it, 1.711 rad (a swing of
+    0.3 rad) or 2.5 and 2.555 (0.6 rad), so a design's angle misfit changed with the history of
+    its evaluations.)  Evaluate one RotationAngle along one path (a design's pose): a state
+    turned by more than half a turn from the last reference is counted a turn short or over.
 
     Parameters: problem; probe (a name) or node (an id); axis (3,); target, reference [rad]; name.
 
@@ -357,32 +389,26 @@ class RotationAngle(Quantity):
         self.R0 = self.frame.target
         self.name, self.size = name, 1
 
+    def _angles(self, R):
+        """(theta on the branch nearest to the reference (k,), its lab gradient (k, 3)) of frames R (k, 3, 3)."""
+        th, G = twist_angle(R @ self.R0.T, self.axis)
+        return th + 2 * np.pi * np.round((self.reference - th) / (2 * np.pi)), G
+
     def value(self, problem, g, lam):
-        Rref = lie.exp_so3(self.reference * self.axis) @ self.R0
-        th = self.reference + self._body_axis() @ lie.log_so3(Rref.T @ self.frame._R(g))
+        th = float(self._angles(self.frame._R(g)[None])[0][0])
         if abs(th - self.reference) > 0.5 * np.pi:
             # re-centred when the state has turned a quarter turn from the reference: the next
-            # states are counted from here (between re-centrings theta is one smooth function
-            # of R, and the jacobian its derivative; off the axis it depends on the reference)
-            self.reference = float(th)
+            # states are counted on the branch nearest to here
+            self.reference = th
         return np.array([th - (self.target if self.target is not None else 0.0)])
 
-    def _body_axis(self):
-        """The lab axis in the reference frame R_0: log(Rref^T R) = R_0^T log(exp(-reference axis)
-        R R_0^T), so theta's lab component is R_0^T axis . log(Rref^T R).  (Before, the lab axis was
-        dotted with the body components: a node whose d1 is turned by 90 deg about the normal read a
-        turn of 0.5 rad about -y as 0, turned by 180 deg as -0.5.)"""
-        return self.R0.T @ self.axis
-
     def jacobian(self, problem, g, lam):
-        # theta changes with the lab components of the rotation: d(log(Rref^T R))/d w through J_r^-1
-        Rref = lie.exp_so3(self.reference * self.axis) @ self.R0
-        q = lie.log_so3(Rref.T @ self.frame._R(g))
-        b = self._body_axis()
+        # R <- R exp(eta^) turns R R_0^T by the lab rotation R eta: d theta = (R^T G) . eta
         if self.frame.node is None:
             return _probe_jacobian(problem, self.frame.probe, g,
-                                   lambda G: (lie.log_so3(Rref.T @ G[:, :3, :3]) @ b)[:, None])
-        row = b @ lie.dexp_inv_so3(q)
+                                   lambda F: self._angles(F[:, :3, :3])[0][:, None])
+        R = self.frame._R(g)
+        row = R.T @ self._angles(R[None])[1][0]
         n = problem.mesh.n_nodes
         return sp.csr_matrix((row, (np.zeros(3, int), 6 * self.frame.node + 3 + np.arange(3))), shape=(1, 6 * n))
 
