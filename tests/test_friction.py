@@ -36,10 +36,14 @@ def test_return_mapping_is_coulomb():
                        -s[~stick] / np.linalg.norm(s[~stick], axis=1)[:, None])
 
 
-def _friction_state(obstacle, seed=1, mu=0.3):
+def _friction_state(obstacle, seed=1, mu=0.3, backend="numpy", turn=0.0):
+    """A strip 1 x 0.6 in contact with ``obstacle`` at a state with nodes sticking, slipping and
+    free (its multipliers and friction history set); ``turn``: the frames turned by that angle
+    about the lab normal z (the contact points stay, the body frames of the tractions turn)."""
     m = M.rectangle(1.0, 0.6, 3, 2)
     g = m.g0 @ lie.exp(np.random.default_rng(seed).normal(size=(m.n_nodes, 6)) * 0.08)
-    prob = cs.Problem(m, cs.Material(1e4, 0.3, 0.02), backend="numpy")
+    g[:, :3, :3] = lie.exp_so3(np.array([0.0, 0.0, turn])) @ g[:, :3, :3]
+    prob = cs.Problem(m, cs.Material(1e4, 0.3, 0.02), backend=backend)
     cl = prob.add(ContactLoad(prob, obstacle, friction=mu, law=ContactLaw(eps=0.02, faces=False)))
     lam = 0.6
     d = cl.gaps(g, lam)
@@ -51,8 +55,8 @@ def _friction_state(obstacle, seed=1, mu=0.3):
     anchors = cl.placement(x, lam) + rng.normal(size=x.shape) * 0.02 * np.array([1, 1, 0.3])
     tau = rng.normal(size=x.shape) * 0.3 * w[:, None]
     m_ = len(cl.lam0)
-    cl.set_multipliers(np.concatenate([np.concatenate([lam_n, cl.lam0[len(d):]]), np.ones(m_), tau.ravel(),
-                                       anchors.ravel()]))
+    history = [tau.ravel(), anchors.ravel()] if mu > 0 else []
+    cl.set_multipliers(np.concatenate([np.concatenate([lam_n, cl.lam0[len(d):]]), np.ones(m_)] + history))
     return prob, cl, g, lam
 
 
