@@ -29,8 +29,12 @@ its bilinear quad's area (the generators' hemisphere: turns up to 37 deg at 2 x 
 
 Round a cross field's singular node an element whose quarter turns do not close compares its
 sides in frames turned by their actual angles, in which it turns by 0.1 deg or less: on Gmsh's
-finer dome those have area ratios 0.895 ... 1.130 (measured after the bar above; a ratio above 1
-is not checked).
+finer dome those had area ratios 0.895 ... 1.130 (measured after the bar above; a ratio above 1
+is not checked).  Re-measured with the angles carried to the element's mean normal
+(``element_default.transported_d1_angles``): 1.013 ... 1.028 on Gmsh's domes, 1.013 ... 1.019 on
+the closed cubed sphere (4 ... 16 per face), inside the other elements' 0.889 ... 1.037, so no bar
+above 1 (a curved element's area exceeds its chord quad's; docs/ELEMENTS.md, "Frames turning
+within an element").
 """
 from __future__ import annotations
 
