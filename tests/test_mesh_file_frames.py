@@ -318,6 +318,42 @@ def test_d1_spinning_about_a_node_of_a_closed_sphere_warns():
     assert np.abs(node_windings(default, Problem(default, Material(E, nu, h)).element.matching)).max() == 1
 
 
+def test_d1_spinning_about_a_node_split_across_ranks_warns_with_the_whole_meshs_node():
+    # each rank's element counted the quarter turns open round its own nodes: the spin node 0 of
+    # the closed sphere with d1 the projection of +x (8 per face: 4 quarter turns), its 4 elements
+    # split 2 / 2, showed 2 on each rank -- silent -- while a rank holding all 4 of node 385's warned
+    # with its local id (node 176).  A rank's part now leaves the check to the run, which sums the
+    # ranks' windings by the whole mesh's node ids (parallel.run, fem.frame_turns.whole_node_windings)
+    from core_se3 import mesh as M
+    from core_se3.errors import ElementWarning
+    from core_se3.fem.element_default import DefaultElement
+    from core_se3.fem.frame_turns import check_node_windings, node_windings, whole_node_windings
+    from core_se3.parallel.local import subdomain
+    X, q = cubed_sphere(8)
+    hint = np.tile([1.0, 0.0, 0.0], (len(X), 1))
+    hint[np.abs(X[:, 0]) > 10.0 - 1e-9] = (0.0, 1.0, 0.0)
+    m = M.Mesh(M.frames_from(X, hint, X / 10.0), q)
+    law = Material(6.825e7, 0.3, 0.1)
+    part = (X[q].mean(1)[:, 0] > 0).astype(int)
+    round0 = np.flatnonzero((q == 0).any(1))
+    part[round0] = [0, 1, 0, 1]                                        # node 0's elements split 2 / 2
+    parts = []
+    for rank in (0, 1):
+        sub = subdomain(m, part, rank, 2)
+        with warnings.catch_warnings(record=True) as seen:
+            warnings.simplefilter("always")
+            el = DefaultElement(sub.mesh, law)
+        assert not [w for w in seen if "wind by a whole turn" in str(w.message)]
+        parts.append((sub.nodes, node_windings(sub.mesh, el.matching)))
+    assert all(abs(int(w[np.flatnonzero(ids == 0)[0]])) == 2 for ids, w in parts if 0 in ids)
+    whole = whole_node_windings(m.n_nodes, parts)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")                                # (the serial element's own warning)
+        assert np.array_equal(whole, node_windings(m, DefaultElement(m, law).matching))
+    with pytest.warns(ElementWarning, match=r"round node\(s\) \[0, 385\] \(4 quarter turns"):
+        check_node_windings(None, None, windings=whole)
+
+
 def test_a_closed_sphere_from_a_file_refines_onto_the_sphere():
     # mesh.refine put each new node on the geodesic of its edge's end frames, which across the
     # default frames' cuts (d1 a quarter or half turn apart) is a helix off the surface: refining

@@ -543,8 +543,8 @@ class DefaultElement(Element):
         self.area = self.j0.sum(axis=1)                                 # reference area per element
         check_frame_turns(mesh.X, mesh.quads, self.corner_frames(mesh.g0), self.j0, stacklevel=5)
         check_warp(mesh.X, mesh.quads, mesh.g0, stacklevel=5)               # warped quads (fem/warp.py)
-        if self.matching is not None:                                   # d1 spinning about a node (Cuts)
-            check_node_windings(mesh, self.matching, stacklevel=5)
+        if self.matching is not None and getattr(mesh, "whole_nodes", None) is None:   # d1 spinning about a node
+            check_node_windings(mesh, self.matching, stacklevel=5)      # (Cuts; a rank's part: the run sums them)
         self._Dbar = None
         # the coarse-curvature warning needs the supports (which edges are free): the Problem
         # issues it when it solves (Problem.check_element)
