@@ -115,6 +115,47 @@ def test_meshio_bad_points_are_named():
         M.from_meshio(meshio.Mesh(line, [("quad", np.array([[0, 1, 2, 3]]))]))
 
 
+def test_node_ids_numbered_from_one_are_named_with_the_fix():
+    """Quads numbered from 1 (Gmsh's, Abaqus' and Fortran's convention): a file's said "cells refer
+    to points that do not exist ... write it again", a Mesh's "quad connectivity refers to nodes
+    that do not exist" -- no element, no id, no fix.  Now the cell, the id, the range, and the fix
+    where no element uses 0 and the largest id is the number of nodes; other ids out of range are
+    named without it."""
+    import meshio
+    from core_se3.mesh.core import Mesh
+    m = M.rectangle(2.0, 1.0, 2, 2)
+    with pytest.raises(MeshError, match=r"quad cell 3 refers to node 9, which does not exist \(ids 1 \.\.\. 9 for 9 "
+                                        r"nodes.*numbered from 1.*cells - 1"):
+        M.from_meshio(meshio.Mesh(m.X, [("quad", m.quads + 1)]))
+    with pytest.raises(MeshError, match=r"quad 3 refers to node 9.*numbered from 1.*subtract 1 from them"):
+        Mesh(m.g0, m.quads + 1)
+    with pytest.raises(MeshError, match=r"quad 0 refers to node -1, .*do not belong together"):
+        Mesh(m.g0, m.quads - 1)
+
+
+def test_quads_listed_the_other_way_round_are_named_in_the_files_ids():
+    """A 3 x 3 plate whose file has an unused point first (file point ids = the reader's + 1) and
+    one quad listed clockwise: the reader said 'quad normals flip across the edge (5, 9)' -- its
+    own node numbers, not the file's (6, 10), and no cell.  Now the two cells, the edge in the
+    file's ids, which quads to reverse (the fewer orientation of each part); a Moebius strip is
+    said to have no orientation."""
+    import meshio
+    x, y = np.meshgrid(np.linspace(0, 1, 4), np.linspace(0, 1, 4))
+    X = np.r_[[[9.0, 9.0, 9.0]], np.c_[x.ravel(), y.ravel(), np.zeros(16)]]
+    q = np.array([[j * 4 + i, j * 4 + i + 1, (j + 1) * 4 + i + 1, (j + 1) * 4 + i] for j in range(3) for i in range(3)]) + 1
+    with pytest.raises(MeshError, match=r"quad cells 3 and 4 run along their shared edge \(6, 10\) the same way.*"
+                                        r"1 of the 9 quads \(cells \[4\]\) are listed the other way round"):
+        M.from_meshio(meshio.Mesh(X, [("quad", np.r_[q[:4], q[4:5, ::-1], q[5:]])]))
+    with pytest.raises(MeshError, match=r"3 of the 9 quads \(cells \[0, 1, 2\]\)"):
+        M.from_meshio(meshio.Mesh(X, [("quad", np.r_[q[:3], q[3:, ::-1]])]))
+    t = np.linspace(0.0, 2 * np.pi, 8, endpoint=False)
+    P = np.array([[(1 + s * np.cos(a / 2)) * np.cos(a), (1 + s * np.cos(a / 2)) * np.sin(a), s * np.sin(a / 2)]
+                  for a in t for s in (-0.3, 0.3)])
+    strip = [[2 * k, 2 * k + 2, 2 * k + 3, 2 * k + 1] for k in range(7)] + [[14, 1, 0, 15]]   # joined with a twist
+    with pytest.raises(MeshError, match=r"a non-orientable surface, a Moebius strip"):
+        M.from_meshio(meshio.Mesh(P, [("quad", np.array(strip))]))
+
+
 @pytest.mark.parametrize("order, before", [([1, 6, 2, 5], "quad normals flip across the edge (6, 2)"),
                                            ([1, 2, 5, 6], "degenerate, non-convex or listed clockwise")])
 def test_a_bow_tie_quad_is_named_with_its_node_order_and_the_fix(order, before):

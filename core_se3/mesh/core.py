@@ -16,7 +16,7 @@ import numpy as np
 
 from ..errors import MeshError, MeshWarning, did_you_mean
 
-__all__ = ["Mesh", "frames_from", "LOCAL_EDGES", "chain_order", "bow_tie_error"]
+__all__ = ["Mesh", "frames_from", "LOCAL_EDGES", "chain_order", "bow_tie_error", "missing_nodes_error"]
 
 # local edges of a quad in its own orientation: bottom, top (direction xi1), left, right (xi2)
 LOCAL_EDGES = np.array([[0, 1], [3, 2], [0, 3], [1, 2]])
@@ -128,6 +128,30 @@ def bow_tie_error(quads, P, what="quad"):
     return (f"{what} {i} is self-intersecting (a bow-tie): its node order {[a, b, c, d]} crosses its edges "
             f"{cross}{more}; list its nodes around its boundary, {list(order)} (reversed if its neighbours "
             "run the other way)")
+
+
+def missing_nodes_error(quads, n, what="quad"):
+    """The message for ``quads`` (m, k) node ids some of which are not among the n nodes, or "":
+    the first such element, its ids, the range found -- and, where no element uses id 0 and the
+    largest id is n (ids numbered from 1, as Gmsh, Abaqus and Fortran number them), that fix.
+
+    Example
+    -------
+    >>> print(missing_nodes_error(np.array([[1, 2, 4, 3], [2, 5, 6, 4]]), 6))
+    quad 1 refers to node 6, which does not exist (ids 1 ... 6 for 6 nodes, numbered from 0): the ids look numbered from 1 (no quad uses 0, the largest is the number of nodes) -- subtract 1 from them (quads - 1)
+    """
+    q = np.asarray(quads)
+    off = (q < 0) | (q >= n)
+    if not off.any():
+        return ""
+    i = int(np.flatnonzero(off.any(1))[0])
+    lo, hi = int(q.min()), int(q.max())
+    msg = (f"{what} {i} refers to node {int(q[i][off[i]][0])}, which does not exist (ids {lo} ... {hi} for {n} "
+           f"nodes, numbered from 0)")
+    if lo >= 1 and hi == n:
+        return msg + (f": the ids look numbered from 1 (no {what} uses 0, the largest is the number of nodes) -- "
+                      "subtract 1 from them (quads - 1)")
+    return msg + ": the connectivity and the nodes do not belong together"
 
 
 # positions are stored absolutely, to eps |X|: a mesh farther from the origin than this many of
@@ -260,7 +284,7 @@ class Mesh:
         if self.quads.ndim != 2 or self.quads.shape[1] != 4 or len(self.quads) == 0:
             raise MeshError("quads must be an (m, 4) integer array with m >= 1")
         if self.quads.min() < 0 or self.quads.max() >= n:
-            raise MeshError("quad connectivity refers to nodes that do not exist")
+            raise MeshError(missing_nodes_error(self.quads, n))
         s = np.sort(self.quads, axis=1)
         if np.any(s[:, 1:] == s[:, :-1]):
             bad = np.nonzero(np.any(s[:, 1:] == s[:, :-1], axis=1))[0][:5]
