@@ -354,6 +354,40 @@ def test_d1_spinning_about_a_node_split_across_ranks_warns_with_the_whole_meshs_
         check_node_windings(None, None, windings=whole)
 
 
+def test_a_ranks_element_names_the_whole_meshs_elements_and_nodes():
+    # an MPI rank builds its element on its part of the mesh, numbered locally: the closed sphere
+    # with the hint (1, 0.3, 0.2) (8 per face) warned of elements [13, 20, 27, 29] on rank 0 where
+    # the serial run names [77, 84, 91, 93]; a plate's warped quads likewise (local [0, 1, 2, 3] for
+    # [0, 1, 4, 5]).
+    # A rank's sub-mesh carries the whole mesh's ids (parallel.local.subdomain: Mesh.whole_ids),
+    # and the frame-turn and warp checks name them
+    from core_se3 import mesh as M
+    from core_se3.fem.element_default import DefaultElement
+    from core_se3.parallel.local import subdomain
+
+    def said(m, what):
+        with warnings.catch_warnings(record=True) as seen:
+            warnings.simplefilter("always")
+            DefaultElement(m, Material(6.825e7, 0.3, 0.1))
+        return [str(w.message)[:120] for w in seen if what in str(w.message)]
+    X, q = cubed_sphere(8)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", MeshWarning)
+        m = from_meshio(meshio.Mesh(X, [("quad", q)]), d1_hint=(1.0, 0.3, 0.2))
+    part = (m.X[m.quads].mean(1)[:, 0] > 0).astype(int)
+    serial = said(m, "turn about the normal")
+    assert "[77, 84, 91, 93]" in serial[0]
+    assert said(subdomain(m, part, 0, 2).mesh, "turn about the normal") == serial
+    plate = M.rectangle(4.0, 2.0, 4, 2)
+    g = plate.g0.copy()
+    g[6, 2, 3] = 0.3                                                   # node 6 lifted, its normal left along z
+    plate = M.Mesh(g, plate.quads)
+    part = (plate.X[plate.quads].mean(1)[:, 0] < 2.0).astype(int)      # node 6's elements 0, 1, 4, 5 on rank 1
+    serial = said(plate, "are warped")
+    assert "[0, 1, 4, 5]" in serial[0]
+    assert said(subdomain(plate, part, 1, 2).mesh, "are warped") == serial
+
+
 def test_a_closed_sphere_from_a_file_refines_onto_the_sphere():
     # mesh.refine put each new node on the geodesic of its edge's end frames, which across the
     # default frames' cuts (d1 a quarter or half turn apart) is a helix off the surface: refining

@@ -541,10 +541,11 @@ class DefaultElement(Element):
             self.Dbar_packed[sl] = Db[:, _IU[0], _IU[1]]
             self.Dz0[sl] = np.einsum("mij,mj->mi", _unpack(self.Dbar_packed[sl]), self.z0[sl])  # Dbar z0
         self.area = self.j0.sum(axis=1)                                 # reference area per element
-        check_frame_turns(mesh.X, mesh.quads, self.corner_frames(mesh.g0), self.j0, stacklevel=5)
-        check_warp(mesh.X, mesh.quads, mesh.g0, stacklevel=5)               # warped quads (fem/warp.py)
-        if self.matching is not None and getattr(mesh, "whole_nodes", None) is None:   # d1 spinning about a node
-            check_node_windings(mesh, self.matching, stacklevel=5)      # (Cuts; a rank's part: the run sums them)
+        ids = getattr(mesh, "whole_ids", None)                          # a rank's part: the whole mesh's ids
+        check_frame_turns(mesh.X, mesh.quads, self.corner_frames(mesh.g0), self.j0, stacklevel=5, ids=ids)
+        check_warp(mesh.X, mesh.quads, mesh.g0, stacklevel=5, ids=ids)      # warped quads (fem/warp.py)
+        if self.matching is not None and ids is None:                   # d1 spinning about a node (Cuts; a
+            check_node_windings(mesh, self.matching, stacklevel=5)      # rank's part: the run sums them)
         self._Dbar = None
         # the coarse-curvature warning needs the supports (which edges are free): the Problem
         # issues it when it solves (Problem.check_element)

@@ -104,7 +104,7 @@ def frame_turns(g, quads):
     return np.degrees(turn)
 
 
-def check_frame_turns(X, quads, g, j0, stacklevel=3):
+def check_frame_turns(X, quads, g, j0, stacklevel=3, ids=None):
     """ElementTooDistortedError / ElementWarning for elements whose frames turn about their normal
     so that the element's reference geometry is not its quad's (module docstring).
 
@@ -121,6 +121,8 @@ def check_frame_turns(X, quads, g, j0, stacklevel=3):
         The element's area element at its Gauss points (its area: the sum).
     stacklevel : int
         The warning's.
+    ids : (elements (m,), nodes (n,)) arrays of int, optional
+        The ids to name them by (a rank's part: the whole mesh's, ``Mesh.whole_ids``).
 
     Example
     -------
@@ -140,8 +142,9 @@ def check_frame_turns(X, quads, g, j0, stacklevel=3):
     if not len(bad):
         return
     k = int(bad[np.argmin(ratio[bad])])
-    what = (f"{len(bad)} element(s) (e.g. {bad[:5].tolist()}) whose nodes' frames turn about the normal by up to "
-            f"{turn[bad].max():.0f} deg (element {k}: {turn[k]:.0f} deg, nodes {np.asarray(quads)[k].tolist()}); the "
+    el, nd = ids if ids is not None else (np.arange(len(quads)), np.arange(len(X)))
+    what = (f"{len(bad)} element(s) (e.g. {el[bad[:5]].tolist()}) whose nodes' frames turn about the normal by up to "
+            f"{turn[bad].max():.0f} deg (element {int(el[k])}: {turn[k]:.0f} deg, nodes {nd[np.asarray(quads)[k]].tolist()}); the "
             f"element ties its strains along its edges in these frames, and its area from them is {ratio[k]:.2f} of "
             f"its quad's (frames turning by at most {MAX_NORMAL_TURN:g} deg give 0.94 ... 1.04)"
             + (f"; on a flat element (its frames left turned by {FLAT_TURN:g} deg or more: the user's d1 winds round "
