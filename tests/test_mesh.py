@@ -133,6 +133,41 @@ def test_node_ids_numbered_from_one_are_named_with_the_fix():
         Mesh(m.g0, m.quads - 1)
 
 
+@pytest.mark.parametrize("change, match", [
+    ("clockwise", r"quads \[1\] .*; quad 1: its nodes \[5, 6, 2, 1\] run clockwise .* list them the other way round, "
+                  r"\[1, 2, 6, 5\]"),
+    ("coincident", r"quads \[0, 1\] .*; quad 0 \(of 2 such quads\): its nodes 1 and 5 are at one point .* merge them"),
+    ("re-entrant", r"quads \[0\] .*; quad 0: its corner at node 5 is re-entrant .* move node 5 so that the quad is convex"),
+    ("straight", r"quads \[0\] .*; quad 0: its corner at node 5 is straight \(180 deg.* move node 5 off the line"),
+])
+def test_a_degenerate_quad_says_which_of_the_causes_it_is(change, match):
+    """A strip of three quads with one listed clockwise, two nodes at one point, a re-entrant or a
+    straight corner: each was 'quads [...] are degenerate, non-convex or listed clockwise about
+    their normal (corner k)' -- three causes and no node; the coincident nodes named one of their
+    two quads.  Now the quad, the node(s), which cause and its fix."""
+    m = M.rectangle(3.0, 1.0, 3, 1)                                     # quads [0, 1, 5, 4], [1, 2, 6, 5], ...
+    X, q = m.X.copy(), m.quads.copy()
+    if change == "clockwise":
+        q[1] = q[1][::-1]
+    else:
+        X[5] = {"coincident": X[1], "re-entrant": (0.3, -0.1, 0.0), "straight": (0.5, 0.0, 0.0)}[change]
+    g = M.frames_from(X, np.tile([1.0, 0.0, 0.0], (8, 1)), np.tile([0.0, 0.0, 1.0], (8, 1)))
+    with pytest.raises(MeshError, match=match):
+        M.Mesh(g, q)
+
+
+def test_a_degenerate_quad_of_a_file_is_named_by_the_files_point_ids():
+    """The same from a file with an unused point first (file point ids = the reader's + 1): two
+    nodes of quad cell 0 at one point were named 1 and 4 -- the reader's numbers; now 2 and 5."""
+    import meshio
+    m = M.rectangle(2.0, 1.0, 2, 1)                                     # quads [0, 1, 4, 3], [1, 2, 5, 4]
+    X = np.r_[[[9.0, 9.0, 9.0]], m.X]
+    X[5] = X[2]                                                         # file points 2 and 5 at one point
+    with pytest.raises(MeshError, match=r"mesh file: quad cells \[0, 1\] .*quad cell 0 \(of 2 such quad cells\): "
+                                        r"its nodes 2 and 5 are at one point.*\(point ids of the file\)"):
+        M.from_meshio(meshio.Mesh(X, [("quad", m.quads + 1)]))
+
+
 def test_quads_listed_the_other_way_round_are_named_in_the_files_ids():
     """A 3 x 3 plate whose file has an unused point first (file point ids = the reader's + 1) and
     one quad listed clockwise: the reader said 'quad normals flip across the edge (5, 9)' -- its

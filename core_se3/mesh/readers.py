@@ -15,7 +15,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from ..errors import MeshError, MeshWarning
-from .core import Mesh, bow_tie_error, chain_order, frames_from, missing_nodes_error
+from .core import Mesh, bow_tie_error, chain_order, degenerate_quad_error, frames_from, missing_nodes_error
 from .subdivide import split_to_quads
 
 __all__ = ["from_meshio", "read_meshio"]
@@ -254,7 +254,13 @@ def from_meshio(source, d1_hint=None, edges=None, triangles="error"):
     named, regions = _named_groups(sets, blocks, qb, remap)
     for name, nodes in _point_sets(raw, remap).items():
         named.setdefault(name, nodes)           # a group of lines of the same name keeps its order
-    mesh = Mesh(frames_from(X, t, d3), quads, named, regions=regions)
+    try:
+        mesh = Mesh(frames_from(X, t, d3), quads, named, regions=regions)
+    except MeshError:                         # a degenerate quad: named by the file's point ids
+        why = degenerate_quad_error(np.flatnonzero(remap >= 0)[quads], X[quads], d3[quads].sum(1), "quad cell")
+        if not why:
+            raise
+        raise MeshError(f"mesh file: {why} (point ids of the file)") from None
     _curved_part_frames(mesh, d1_hint)
     for name, pred in (edges or {}).items():
         mesh.edges[name] = np.nonzero(pred(mesh.X))[0]
