@@ -24,8 +24,8 @@ Frames that turn about the normal.  The geodesics are those of the user's frames
 least-turn gauge's (``mesh.gauge``, the frames the element builds on for an in-plane isotropic
 law, parallel on flat and developable parts): a turn of d1 about the normal from node to node
 is read as a curved edge.  That is what reproduces the annulus generator's circles from its
-radial d1 (the gauge's frames would put its new nodes on the chords, 0.028 off the circle on
-2 x 3); but a plate 2 x 1 (4 x 2) whose d1 is turned at random by up to 0.5 rad gets new nodes
+radial d1 (the gauge's frames would put its new nodes on the chords: 2 x 3 refined twice,
+0.028 off the circle); but a plate 2 x 1 (4 x 2) whose d1 is turned at random by up to 0.5 rad gets new nodes
 0.048 off its grid (spacing 0.5) and off its free edge, and a refined tip deflection 10 % off
 (0.3347 against 0.3043), a cylinder panel (d1 within 0.7 rad) new nodes 0.002 off its radius.
 No rule from one edge tells the two apart; give d1 that follows the mesh lines (or is parallel)
