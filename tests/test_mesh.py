@@ -115,6 +115,82 @@ def test_meshio_bad_points_are_named():
         M.from_meshio(meshio.Mesh(line, [("quad", np.array([[0, 1, 2, 3]]))]))
 
 
+def test_node_ids_numbered_from_one_are_named_with_the_fix():
+    """Quads numbered from 1 (Gmsh's, Abaqus' and Fortran's convention): a file's said "cells refer
+    to points that do not exist ... write it again", a Mesh's "quad connectivity refers to nodes
+    that do not exist" -- no element, no id, no fix.  Now the cell, the id, the range, and the fix
+    where no element uses 0 and the largest id is the number of nodes; other ids out of range are
+    named without it."""
+    import meshio
+    from core_se3.mesh.core import Mesh
+    m = M.rectangle(2.0, 1.0, 2, 2)
+    with pytest.raises(MeshError, match=r"quad cell 3 refers to node 9, which does not exist \(ids 1 \.\.\. 9 for 9 "
+                                        r"nodes.*numbered from 1.*cells - 1"):
+        M.from_meshio(meshio.Mesh(m.X, [("quad", m.quads + 1)]))
+    with pytest.raises(MeshError, match=r"quad 3 refers to node 9.*numbered from 1.*subtract 1 from them"):
+        Mesh(m.g0, m.quads + 1)
+    with pytest.raises(MeshError, match=r"quad 0 refers to node -1, .*do not belong together"):
+        Mesh(m.g0, m.quads - 1)
+
+
+@pytest.mark.parametrize("change, match", [
+    ("clockwise", r"quads \[1\] .*; quad 1: its nodes \[5, 6, 2, 1\] run clockwise .* list them the other way round, "
+                  r"\[1, 2, 6, 5\]"),
+    ("coincident", r"quads \[0, 1\] .*; quad 0 \(of 2 such quads\): its nodes 1 and 5 are at one point .* merge them"),
+    ("re-entrant", r"quads \[0\] .*; quad 0: its corner at node 5 is re-entrant .* move node 5 so that the quad is convex"),
+    ("straight", r"quads \[0\] .*; quad 0: its corner at node 5 is straight \(180 deg.* move node 5 off the line"),
+])
+def test_a_degenerate_quad_says_which_of_the_causes_it_is(change, match):
+    """A strip of three quads with one listed clockwise, two nodes at one point, a re-entrant or a
+    straight corner: each was 'quads [...] are degenerate, non-convex or listed clockwise about
+    their normal (corner k)' -- three causes and no node; the coincident nodes named one of their
+    two quads.  Now the quad, the node(s), which cause and its fix."""
+    m = M.rectangle(3.0, 1.0, 3, 1)                                     # quads [0, 1, 5, 4], [1, 2, 6, 5], ...
+    X, q = m.X.copy(), m.quads.copy()
+    if change == "clockwise":
+        q[1] = q[1][::-1]
+    else:
+        X[5] = {"coincident": X[1], "re-entrant": (0.3, -0.1, 0.0), "straight": (0.5, 0.0, 0.0)}[change]
+    g = M.frames_from(X, np.tile([1.0, 0.0, 0.0], (8, 1)), np.tile([0.0, 0.0, 1.0], (8, 1)))
+    with pytest.raises(MeshError, match=match):
+        M.Mesh(g, q)
+
+
+def test_a_degenerate_quad_of_a_file_is_named_by_the_files_point_ids():
+    """The same from a file with an unused point first (file point ids = the reader's + 1): two
+    nodes of quad cell 0 at one point were named 1 and 4 -- the reader's numbers; now 2 and 5."""
+    import meshio
+    m = M.rectangle(2.0, 1.0, 2, 1)                                     # quads [0, 1, 4, 3], [1, 2, 5, 4]
+    X = np.r_[[[9.0, 9.0, 9.0]], m.X]
+    X[5] = X[2]                                                         # file points 2 and 5 at one point
+    with pytest.raises(MeshError, match=r"mesh file: quad cells \[0, 1\] .*quad cell 0 \(of 2 such quad cells\): "
+                                        r"its nodes 2 and 5 are at one point.*\(point ids of the file\)"):
+        M.from_meshio(meshio.Mesh(X, [("quad", m.quads + 1)]))
+
+
+def test_quads_listed_the_other_way_round_are_named_in_the_files_ids():
+    """A 3 x 3 plate whose file has an unused point first (file point ids = the reader's + 1) and
+    one quad listed clockwise: the reader said 'quad normals flip across the edge (5, 9)' -- its
+    own node numbers, not the file's (6, 10), and no cell.  Now the two cells, the edge in the
+    file's ids, which quads to reverse (the fewer orientation of each part); a Moebius strip is
+    said to have no orientation."""
+    import meshio
+    x, y = np.meshgrid(np.linspace(0, 1, 4), np.linspace(0, 1, 4))
+    X = np.r_[[[9.0, 9.0, 9.0]], np.c_[x.ravel(), y.ravel(), np.zeros(16)]]
+    q = np.array([[j * 4 + i, j * 4 + i + 1, (j + 1) * 4 + i + 1, (j + 1) * 4 + i] for j in range(3) for i in range(3)]) + 1
+    with pytest.raises(MeshError, match=r"quad cells 3 and 4 run along their shared edge \(6, 10\) the same way.*"
+                                        r"1 of the 9 quads \(cells \[4\]\) are listed the other way round"):
+        M.from_meshio(meshio.Mesh(X, [("quad", np.r_[q[:4], q[4:5, ::-1], q[5:]])]))
+    with pytest.raises(MeshError, match=r"3 of the 9 quads \(cells \[0, 1, 2\]\)"):
+        M.from_meshio(meshio.Mesh(X, [("quad", np.r_[q[:3], q[3:, ::-1]])]))
+    t = np.linspace(0.0, 2 * np.pi, 8, endpoint=False)
+    P = np.array([[(1 + s * np.cos(a / 2)) * np.cos(a), (1 + s * np.cos(a / 2)) * np.sin(a), s * np.sin(a / 2)]
+                  for a in t for s in (-0.3, 0.3)])
+    strip = [[2 * k, 2 * k + 2, 2 * k + 3, 2 * k + 1] for k in range(7)] + [[14, 1, 0, 15]]   # joined with a twist
+    with pytest.raises(MeshError, match=r"a non-orientable surface, a Moebius strip"):
+        M.from_meshio(meshio.Mesh(P, [("quad", np.array(strip))]))
+
+
 @pytest.mark.parametrize("order, before", [([1, 6, 2, 5], "quad normals flip across the edge (6, 2)"),
                                            ([1, 2, 5, 6], "degenerate, non-convex or listed clockwise")])
 def test_a_bow_tie_quad_is_named_with_its_node_order_and_the_fix(order, before):

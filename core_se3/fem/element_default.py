@@ -265,18 +265,41 @@ def _unclosed(mesh, matching):
     return np.flatnonzero((ks[:, 0] + ks[:, 3] - ks[:, 2] - ks[:, 1]) % 4)
 
 
+def transported_d1_angles(R):
+    """phi (k, 4) [rad]: the angle of each node's d1 from the first node's, both carried to the
+    element's mean normal n = (sum_i d3_i) / |sum_i d3_i| by the least rotation that takes the
+    node's d3 to n (about d3_i x n), R (k, 4, 3, 3) the nodal rotations of k elements.
+
+    A turn of node i's frame by theta about its own d3 turns its carried d1 by theta about n,
+    exactly (P Rot(d3, theta) = Rot(n, theta) P for P d3 = n), so the angles of two nodes differ
+    by the same amount from any node's: phi measured from node j is phi - phi_j, and the
+    frames turned by -phi (:func:`corner_frame_turns`) differ from another start node's by one
+    common turn -- which leaves the element unchanged.  (Measured in the first node's tangent
+    plane instead, the angles were not additive on a curved element, and rotating the nodes of
+    the closed cubed sphere's corner elements moved the pinched sphere by 0.38 % / 6.3e-5 on
+    4 / 8 per face.)  With v' = c v + w x v + w (w . v) / (1 + c), w = d3 x n, c = d3 . n.
+    """
+    d3, d1 = R[..., 2], R[..., 0]                                      # (k, 4, 3)
+    n = d3.sum(axis=1)
+    n /= np.linalg.norm(n, axis=1)[:, None]
+    n = np.broadcast_to(n[:, None], d3.shape)
+    w, c = np.cross(d3, n), np.einsum("kni,kni->kn", d3, n)
+    v = c[..., None] * d1 + np.cross(w, d1) + w * (np.einsum("kni,kni->kn", w, d1) / (1.0 + c))[..., None]
+    b1 = v[:, :1]                                                      # the first node's, carried
+    return np.arctan2(np.einsum("kni,kni->kn", np.cross(b1, v), n), np.einsum("kni,kni->kn", b1, v))
+
+
 def corner_frame_turns(mesh, g0, matching):
     """S (m, 4, 3, 3): the turns about the normal of every element's nodal frames g0 (n, 4, 4) in
     which it compares its sides (g0_i S_i; module docstring, "Cuts", and :func:`side_turns`):
     the quarter turns of ``mesh.gauge.corner_turns``, or in an element round which the edges'
-    quarter turns ``matching`` (E,) do not close, Rz(-phi_i), phi_i the angle of node i's d1 in
-    the first node's frame."""
+    quarter turns ``matching`` (E,) do not close, Rz(-phi_i), phi_i the angle of node i's d1
+    from the first node's, both carried to the element's mean normal
+    (:func:`transported_d1_angles`: the element does not depend on which node comes first)."""
     S = quarter_turns(corner_turns(g0, mesh.quads))
     open_ = _unclosed(mesh, matching)
     if open_.size:
-        R = g0[mesh.quads[open_], :3, :3]
-        d1 = np.einsum("mji,mnj->mni", R[:, 0], R[:, :, :, 0])
-        phi = np.arctan2(d1[..., 1], d1[..., 0])
+        phi = transported_d1_angles(g0[mesh.quads[open_], :3, :3])
         c, s = np.cos(phi), np.sin(phi)
         S[open_, :, 0, 0] = S[open_, :, 1, 1] = c
         S[open_, :, 0, 1], S[open_, :, 1, 0] = s, -s
@@ -296,7 +319,8 @@ def side_turns(mesh, g0, matching):
     ends' turns, so the element depends neither on the node numbering nor on which end comes
     first.  (Before, T was S^T of the mesh edge's first node: a renumbered pinched closed sphere
     moved by 4.3 % / 0.34 % (4 / 8 per face), two ranks gave 6.6e-6 off the serial run, and the
-    elements round the cube's corners had areas 0.974 ... 1.024 of their quads', now 1.013 ... 1.020.)
+    elements round the cube's corners had areas 0.974 ... 1.024 of their quads', now 1.019 alike on 4 per
+    face.)
 
     Example
     -------
@@ -517,10 +541,11 @@ class DefaultElement(Element):
             self.Dbar_packed[sl] = Db[:, _IU[0], _IU[1]]
             self.Dz0[sl] = np.einsum("mij,mj->mi", _unpack(self.Dbar_packed[sl]), self.z0[sl])  # Dbar z0
         self.area = self.j0.sum(axis=1)                                 # reference area per element
-        check_frame_turns(mesh.X, mesh.quads, self.corner_frames(mesh.g0), self.j0, stacklevel=5)
-        check_warp(mesh.X, mesh.quads, mesh.g0, stacklevel=5)               # warped quads (fem/warp.py)
-        if self.matching is not None:                                   # d1 spinning about a node (Cuts)
-            check_node_windings(mesh, self.matching, stacklevel=5)
+        ids = getattr(mesh, "whole_ids", None)                          # a rank's part: the whole mesh's ids
+        check_frame_turns(mesh.X, mesh.quads, self.corner_frames(mesh.g0), self.j0, stacklevel=5, ids=ids)
+        check_warp(mesh.X, mesh.quads, mesh.g0, stacklevel=5, ids=ids)      # warped quads (fem/warp.py)
+        if self.matching is not None and ids is None:                   # d1 spinning about a node (Cuts; a
+            check_node_windings(mesh, self.matching, stacklevel=5)      # rank's part: the run sums them)
         self._Dbar = None
         # the coarse-curvature warning needs the supports (which edges are free): the Problem
         # issues it when it solves (Problem.check_element)

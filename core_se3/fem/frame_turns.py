@@ -29,8 +29,12 @@ its bilinear quad's area (the generators' hemisphere: turns up to 37 deg at 2 x 
 
 Round a cross field's singular node an element whose quarter turns do not close compares its
 sides in frames turned by their actual angles, in which it turns by 0.1 deg or less: on Gmsh's
-finer dome those have area ratios 0.895 ... 1.130 (measured after the bar above; a ratio above 1
-is not checked).
+finer dome those had area ratios 0.895 ... 1.130 (measured after the bar above; a ratio above 1
+is not checked).  Re-measured with the angles carried to the element's mean normal
+(``element_default.transported_d1_angles``): 1.013 ... 1.028 on Gmsh's domes, 1.013 ... 1.019 on
+the closed cubed sphere (4 ... 16 per face), inside the other elements' 0.889 ... 1.037, so no bar
+above 1 (a curved element's area exceeds its chord quad's; docs/ELEMENTS.md, "Frames turning
+within an element").
 """
 from __future__ import annotations
 
@@ -42,7 +46,7 @@ from .. import lie
 from ..errors import ElementTooDistortedError, ElementWarning
 
 __all__ = ["frame_turns", "check_frame_turns", "MAX_NORMAL_TURN", "WARN_AREA_RATIO", "MIN_AREA_RATIO", "FLAT_TURN",
-           "node_windings", "check_node_windings", "MAX_NODE_WINDING"]
+           "node_windings", "whole_node_windings", "check_node_windings", "MAX_NODE_WINDING"]
 
 #: [deg] the largest turn about the normal between two nodes' frames of one element left silent
 MAX_NORMAL_TURN = 60.0
@@ -100,7 +104,7 @@ def frame_turns(g, quads):
     return np.degrees(turn)
 
 
-def check_frame_turns(X, quads, g, j0, stacklevel=3):
+def check_frame_turns(X, quads, g, j0, stacklevel=3, ids=None):
     """ElementTooDistortedError / ElementWarning for elements whose frames turn about their normal
     so that the element's reference geometry is not its quad's (module docstring).
 
@@ -117,6 +121,8 @@ def check_frame_turns(X, quads, g, j0, stacklevel=3):
         The element's area element at its Gauss points (its area: the sum).
     stacklevel : int
         The warning's.
+    ids : (elements (m,), nodes (n,)) arrays of int, optional
+        The ids to name them by (a rank's part: the whole mesh's, ``Mesh.whole_ids``).
 
     Example
     -------
@@ -136,8 +142,9 @@ def check_frame_turns(X, quads, g, j0, stacklevel=3):
     if not len(bad):
         return
     k = int(bad[np.argmin(ratio[bad])])
-    what = (f"{len(bad)} element(s) (e.g. {bad[:5].tolist()}) whose nodes' frames turn about the normal by up to "
-            f"{turn[bad].max():.0f} deg (element {k}: {turn[k]:.0f} deg, nodes {np.asarray(quads)[k].tolist()}); the "
+    el, nd = ids if ids is not None else (np.arange(len(quads)), np.arange(len(X)))
+    what = (f"{len(bad)} element(s) (e.g. {el[bad[:5]].tolist()}) whose nodes' frames turn about the normal by up to "
+            f"{turn[bad].max():.0f} deg (element {int(el[k])}: {turn[k]:.0f} deg, nodes {nd[np.asarray(quads)[k]].tolist()}); the "
             f"element ties its strains along its edges in these frames, and its area from them is {ratio[k]:.2f} of "
             f"its quad's (frames turning by at most {MAX_NORMAL_TURN:g} deg give 0.94 ... 1.04)"
             + (f"; on a flat element (its frames left turned by {FLAT_TURN:g} deg or more: the user's d1 winds round "
@@ -189,7 +196,26 @@ def node_windings(mesh, matching):
     return w
 
 
-def check_node_windings(mesh, matching, stacklevel=3):
+def whole_node_windings(n_nodes, parts):
+    """The whole mesh's :func:`node_windings` (n_nodes,) from its ranks' parts: ``parts`` a list of
+    (the whole mesh's ids of a rank's local nodes, its local windings), each element on one rank,
+    so a node's winding is the sum of its ranks' -- a node whose elements are split across ranks
+    shows its whole winding on none of them (the closed cubed sphere with d1 the projection of +x,
+    8 per face, its spin node split 2 / 2: 2 quarter turns on each rank, silent).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> whole_node_windings(3, [(np.array([0, 2]), np.array([2, 0])), (np.array([1, 0]), np.array([1, 2]))]).tolist()
+    [4, 1, 0]
+    """
+    w = np.zeros(int(n_nodes), int)
+    for ids, local in parts:
+        np.add.at(w, np.asarray(ids, np.int64), np.asarray(local, int))
+    return w
+
+
+def check_node_windings(mesh, matching, stacklevel=3, windings=None):
     """ElementWarning for nodes round which the frames' d1 winds by more than MAX_NODE_WINDING
     quarter turns (``node_windings``): the elements round such a node compare their sides in frames
     turned by their actual angles (``element_default``, "Cuts"), and on a curved shell the answer
@@ -205,8 +231,11 @@ def check_node_windings(mesh, matching, stacklevel=3):
         The edges' quarter turns.
     stacklevel : int
         The warning's.
+    windings : (n,) array of int, optional
+        The nodes' windings, given (the whole mesh's from its ranks': :func:`whole_node_windings`;
+        ``mesh`` and ``matching`` are then not read).
     """
-    w = node_windings(mesh, matching)
+    w = node_windings(mesh, matching) if windings is None else np.asarray(windings)
     bad = np.flatnonzero(np.abs(w) > MAX_NODE_WINDING)
     if not len(bad):
         return

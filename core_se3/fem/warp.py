@@ -85,7 +85,7 @@ def quad_warp(X, quads, g):
     return np.abs(w) / size, np.abs(w - explained) / size
 
 
-def check_warp(X, quads, g, stacklevel=3):
+def check_warp(X, quads, g, stacklevel=3, ids=None):
     """ElementWarning for elements warped by more than their nodes' normals explain (module
     docstring).
 
@@ -99,6 +99,8 @@ def check_warp(X, quads, g, stacklevel=3):
         The frames the element builds on (their normals).
     stacklevel : int
         The warning's.
+    ids : (elements (m,), nodes (n,)) arrays of int, optional
+        The ids to name them by (a rank's part: the whole mesh's, ``Mesh.whole_ids``).
 
     Example
     -------
@@ -111,9 +113,10 @@ def check_warp(X, quads, g, stacklevel=3):
     if not len(bad):
         return
     k = int(bad[np.argmax(bad_warp[bad])])
+    el, nd = ids if ids is not None else (np.arange(len(quads)), np.arange(len(X)))
     warnings.warn(ElementWarning(
-        f"{len(bad)} element(s) (e.g. {bad[:5].tolist()}) are warped (their nodes not in a plane) by more than "
-        f"their nodes' normals d3 explain: element {k} (nodes {np.asarray(quads)[k].tolist()}) by "
+        f"{len(bad)} element(s) (e.g. {el[bad[:5]].tolist()}) are warped (their nodes not in a plane) by more than "
+        f"their nodes' normals d3 explain: element {int(el[k])} (nodes {nd[np.asarray(quads)[k]].tolist()}) by "
         f"{bad_warp[k]:.3f} of its size (its warp {warp[k]:.3f}), above {WARN_WARP:g} (a curved shell's quads "
         "with its normals: below 0.015); the element sees the shell its frames describe, and the answer depends "
         "on it there (a twisted plate with its normals left flat: 0.47 of the answer at 0.18) -- give the "

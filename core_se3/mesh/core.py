@@ -16,7 +16,8 @@ import numpy as np
 
 from ..errors import MeshError, MeshWarning, did_you_mean
 
-__all__ = ["Mesh", "frames_from", "LOCAL_EDGES", "chain_order", "bow_tie_error"]
+__all__ = ["Mesh", "frames_from", "LOCAL_EDGES", "chain_order", "bow_tie_error", "missing_nodes_error",
+           "degenerate_quad_error"]
 
 # local edges of a quad in its own orientation: bottom, top (direction xi1), left, right (xi2)
 LOCAL_EDGES = np.array([[0, 1], [3, 2], [0, 3], [1, 2]])
@@ -130,6 +131,30 @@ def bow_tie_error(quads, P, what="quad"):
             "run the other way)")
 
 
+def missing_nodes_error(quads, n, what="quad"):
+    """The message for ``quads`` (m, k) node ids some of which are not among the n nodes, or "":
+    the first such element, its ids, the range found -- and, where no element uses id 0 and the
+    largest id is n (ids numbered from 1, as Gmsh, Abaqus and Fortran number them), that fix.
+
+    Example
+    -------
+    >>> print(missing_nodes_error(np.array([[1, 2, 4, 3], [2, 5, 6, 4]]), 6))
+    quad 1 refers to node 6, which does not exist (ids 1 ... 6 for 6 nodes, numbered from 0): the ids look numbered from 1 (no quad uses 0, the largest is the number of nodes) -- subtract 1 from them (quads - 1)
+    """
+    q = np.asarray(quads)
+    off = (q < 0) | (q >= n)
+    if not off.any():
+        return ""
+    i = int(np.flatnonzero(off.any(1))[0])
+    lo, hi = int(q.min()), int(q.max())
+    msg = (f"{what} {i} refers to node {int(q[i][off[i]][0])}, which does not exist (ids {lo} ... {hi} for {n} "
+           f"nodes, numbered from 0)")
+    if lo >= 1 and hi == n:
+        return msg + (f": the ids look numbered from 1 (no {what} uses 0, the largest is the number of nodes) -- "
+                      "subtract 1 from them (quads - 1)")
+    return msg + ": the connectivity and the nodes do not belong together"
+
+
 # positions are stored absolutely, to eps |X|: a mesh farther from the origin than this many of
 # its shortest edges keeps its displacements to eps |X| only (a cantilever 10 x 1 on 8 x 2
 # elements, shortest edge 0.5, tip deflection 1.3e-3, placed at 1e8 / 1e10 / 1e12: 4e-6 / 4.7e-4 /
@@ -148,6 +173,65 @@ def _round_off_note(X_all, X_bad):
     return (f": the mesh lies {far:.3g} from the origin, where positions are stored to eps |X| = "
             f"{np.finfo(float).eps * far:.2g}, and this quad's shortest edge is {edge:.2g}; translate the mesh "
             "toward the origin (core_se3 keeps positions absolutely)")
+
+
+def degenerate_quad_error(quads, P, nrm=None, what="quad"):
+    """The message for the quads among ``quads`` (m, 4) node ids with corners P (m, 4, 3) that are
+    not convex with positive area about the normals ``nrm`` (m, 3) (default: each quad's largest
+    corner cross product, which a file's quads' normals follow), or "": which quads, and for the
+    first the cause (two nodes at one point, listed clockwise, a straight or a re-entrant corner),
+    its node(s) and the fix; a corner whose sine is round-off is degenerate too (an annulus of two
+    elements round a full turn: its quads' corners on one line, sine 2.4e-16).
+
+    Example
+    -------
+    >>> P = np.array([[[0, 0, 0], [1, 0, 0], [2, 0, 0], [0, 1, 0.0]]])
+    >>> print(degenerate_quad_error(np.array([[3, 4, 5, 6]]), P).split("; ")[1])
+    quad 0: its corner at node 4 is straight (180 deg: three of its nodes on one line, zero area there): move node 4 off the line
+    """
+    e1, e2 = np.roll(P, -1, axis=1) - P, np.roll(P, 1, axis=1) - P          # (m, 4, 3) at each corner
+    turn = np.cross(e1, e2)
+    if nrm is None:
+        nrm = turn[np.arange(len(P)), np.argmax(np.linalg.norm(turn, axis=-1), axis=1)]
+    nrm = nrm / np.maximum(np.linalg.norm(nrm, axis=1), 1e-300)[:, None]
+    c = np.einsum("mki,mi->mk", turn, nrm)
+    l1, l2 = np.linalg.norm(e1, axis=2), np.linalg.norm(e2, axis=2)
+    flat = c <= DEGENERATE_SINE * l1 * l2
+    if not np.any(flat):
+        return ""
+    bad = np.flatnonzero(flat.any(1))
+    k, i = int(np.argmax(flat[bad[0]])), int(bad[0])
+    X_all = P.reshape(-1, 3)
+    return (f"{what}s {bad[:5].tolist()} are degenerate, non-convex or listed clockwise about their normal "
+            f"(corner {k}){_round_off_note(X_all, P[bad[:5]])}"
+            + _bad_corner_note(np.asarray(quads)[i], i, c[i], l1[i], l2[i], len(bad), what))
+
+
+def _bad_corner_note(q, i, c, l1, l2, count, what="quad"):
+    """What is wrong with quad i (nodes q) whose corners' sines times edge lengths c (4,) about its
+    nodes' mean normal are not all positive (edge lengths l1, l2 (4,) at each corner), and the fix:
+    two nodes at one point, listed clockwise, a straight or a re-entrant corner."""
+    tol = DEGENERATE_SINE * l1 * l2
+    scale = max(float(l1.max()), 1e-300)
+    k = int(np.argmin(c / np.maximum(l1 * l2, 1e-300)))
+    node = int(q[k])
+    more = f" (of {count} such {what}s)" if count > 1 else ""
+    if l1.min() <= 1e-12 * scale:
+        j = int(np.argmin(l1))
+        why = (f"its nodes {int(q[j])} and {int(q[(j + 1) % 4])} are at one point (an edge of length "
+               f"{float(l1[j]):.2g}): merge them, or move one")
+    elif np.all(c < -tol):
+        why = (f"its nodes {[int(v) for v in q]} run clockwise about their normals d3 (every corner turns the other "
+               f"way): list them the other way round, {[int(v) for v in q[::-1]]}, or turn its nodes' d3 over")
+    elif np.all(np.abs(c) <= tol):
+        why = "its four nodes lie on one line (zero area): move them apart or remove the quad"
+    elif abs(c[k]) <= tol[k]:
+        why = (f"its corner at node {node} is straight (180 deg: three of its nodes on one line, zero area "
+               f"there): move node {node} off the line")
+    else:
+        why = (f"its corner at node {node} is re-entrant (non-convex: it turns the other way about the normal): "
+               f"move node {node} so that the quad is convex, or split it")
+    return f"; {what} {i}{more}: {why}"
 
 
 def chain_order(segments):
@@ -260,7 +344,7 @@ class Mesh:
         if self.quads.ndim != 2 or self.quads.shape[1] != 4 or len(self.quads) == 0:
             raise MeshError("quads must be an (m, 4) integer array with m >= 1")
         if self.quads.min() < 0 or self.quads.max() >= n:
-            raise MeshError("quad connectivity refers to nodes that do not exist")
+            raise MeshError(missing_nodes_error(self.quads, n))
         s = np.sort(self.quads, axis=1)
         if np.any(s[:, 1:] == s[:, :-1]):
             bad = np.nonzero(np.any(s[:, 1:] == s[:, :-1], axis=1))[0][:5]
@@ -347,17 +431,9 @@ class Mesh:
         why = bow_tie_error(self.quads, X)
         if why:
             raise MeshError(why)
-        nrm = self.g0[self.quads][:, :, :3, 2].sum(1)
-        nrm /= np.maximum(np.linalg.norm(nrm, axis=1), 1e-300)[:, None]
-        for k in range(4):
-            e1 = X[:, (k + 1) % 4] - X[:, k]
-            e2 = X[:, (k + 3) % 4] - X[:, k]
-            c = np.einsum("mi,mi->m", np.cross(e1, e2), nrm)
-            flat = c <= DEGENERATE_SINE * np.linalg.norm(e1, axis=1) * np.linalg.norm(e2, axis=1)
-            if np.any(flat):
-                bad = np.nonzero(flat)[0][:5]
-                raise MeshError(f"quads {bad.tolist()} are degenerate, non-convex or listed clockwise "
-                                f"about their normal (corner {k}){_round_off_note(self.X, X[bad])}")
+        why = degenerate_quad_error(self.quads, X, self.g0[self.quads][:, :, :3, 2].sum(1))
+        if why:
+            raise MeshError(why)
 
     def node_set(self, name_or_pred):
         """Node ids of a named node set, of the elements of a named region, or of the nodes

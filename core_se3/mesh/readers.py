@@ -11,9 +11,11 @@ import os
 import warnings
 
 import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
 
 from ..errors import MeshError, MeshWarning
-from .core import Mesh, bow_tie_error, chain_order, frames_from
+from .core import Mesh, bow_tie_error, chain_order, degenerate_quad_error, frames_from, missing_nodes_error
 from .subdivide import split_to_quads
 
 __all__ = ["from_meshio", "read_meshio"]
@@ -252,7 +254,13 @@ def from_meshio(source, d1_hint=None, edges=None, triangles="error"):
     named, regions = _named_groups(sets, blocks, qb, remap)
     for name, nodes in _point_sets(raw, remap).items():
         named.setdefault(name, nodes)           # a group of lines of the same name keeps its order
-    mesh = Mesh(frames_from(X, t, d3), quads, named, regions=regions)
+    try:
+        mesh = Mesh(frames_from(X, t, d3), quads, named, regions=regions)
+    except MeshError:                         # a degenerate quad: named by the file's point ids
+        why = degenerate_quad_error(np.flatnonzero(remap >= 0)[quads], X[quads], d3[quads].sum(1), "quad cell")
+        if not why:
+            raise
+        raise MeshError(f"mesh file: {why} (point ids of the file)") from None
     _curved_part_frames(mesh, d1_hint)
     for name, pred in (edges or {}).items():
         mesh.edges[name] = np.nonzero(pred(mesh.X))[0]
@@ -495,10 +503,16 @@ def _cell_blocks(m, triangles):
     if X.shape[1] == 2:
         X = np.c_[X, np.zeros(len(X))]
     blocks = [(c.type, np.asarray(c.data, np.int64)) for c in m.cells]
-    bad = [t for t, c in blocks if c.size and (c.min() < 0 or c.max() >= len(X))]
+    bad = [(t, c) for t, c in blocks if c.size and (c.min() < 0 or c.max() >= len(X))]
     if bad:
-        raise MeshError(f"the mesh's {sorted(set(bad))} cells refer to points that do not exist (it has "
-                        f"{len(X)} points): the file is inconsistent; write it again")
+        ids = np.concatenate([c.ravel() for _, c in blocks if c.size])
+        why = missing_nodes_error(bad[0][1], len(X), f"{bad[0][0]} cell").split(": ", 1)[0]
+        fix = ("the file's point ids look numbered from 1 (no cell uses point 0, the largest id is the number of "
+               "points): a writer of this file took them from 1 -- write it with ids from 0 (meshio.Mesh(points, "
+               "cells) with cells - 1)" if ids.min() >= 1 and ids.max() == len(X) else
+               "the file is inconsistent; write it again")
+        raise MeshError(f"the mesh's {sorted({t for t, _ in bad})} cells refer to points that do not exist (it has "
+                        f"{len(X)} points; {why}): {fix}")
     sets = _named_sets(m)
     blocks = _merge_repeated(m, blocks, sets)
     types = {t for t, _ in blocks}
@@ -581,10 +595,49 @@ def _oriented_quads(X, blocks, qb):
     key = cyc[:, 0] * n + cyc[:, 1]
     u, cnt = np.unique(key, return_counts=True)
     if np.any(cnt > 1):
-        bad = u[cnt > 1][0]
-        raise MeshError(f"quad normals flip across the edge ({bad // n}, {bad % n}): orient "
-                        "all quads consistently (same node order about the surface normal)")
+        raise MeshError(_flip_message(quads, used, key, u[cnt > 1][0]))
     return quads, remap
+
+
+def _flip_message(quads, used, key, bad):
+    """The MeshError message for quads (m, 4) (node ids; ``used`` their file point ids) two of which
+    run along one edge the same way (``key`` the directed edges a n + b of every quad's cycle,
+    ``bad`` a repeated one): the edge and the two cells in the file's ids, and the quads listed the
+    other way round from the rest of their connected part (the fewer of its two orientations),
+    which to reverse -- or that the surface is not
+    orientable (a Moebius strip).  (Before: the edge in the reader's own node numbers, no cell.)"""
+    n = len(used)
+    a, b = int(bad // n), int(bad % n)
+    cells = np.flatnonzero((key.reshape(-1, 4) == bad).any(1))[:2].tolist()
+    head = (f"quad cells {cells[0]} and {cells[1]} run along their shared edge ({int(used[a])}, {int(used[b])}) the "
+            f"same way (point ids of the file; cells counted over the file's quads in the order read): their "
+            f"normals flip there")
+    # the orientations spread over the quads' shared edges: two quads that run along an edge the
+    # same way have opposite orientations.  The double cover (quad, side): (i, 0) joined to (j, 0)
+    # where they agree, to (j, 1) where they do not; a part is orientable iff (i, 0) and (i, 1) lie
+    # in different components, and then s_i (which of the two) is the quad's orientation
+    und = np.sort(np.stack([quads, np.roll(quads, -1, axis=1)], -1), axis=-1).reshape(-1, 2)
+    e_id = np.unique(und[:, 0] * n + und[:, 1], return_inverse=True)[1].ravel()
+    order = np.argsort(e_id, kind="stable")
+    pair = e_id[order][1:] == e_id[order][:-1]
+    first, second = order[:-1][pair], order[1:][pair]                  # the directed edges of two quads
+    flip = (key[first] == key[second]).astype(np.int64)
+    qi, qj, m = first // 4, second // 4, len(quads)
+    rows = np.concatenate([qi, qi + m])
+    cols = np.concatenate([qj + m * flip, qj + m * (1 - flip)])
+    H = sp.coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(2 * m, 2 * m))
+    lab = connected_components(H, directed=False)[1]
+    l0, l1 = lab[:m], lab[m:]
+    if np.any(l0 == l1):
+        return head + ("; no order of the quads makes the normals agree everywhere (a non-orientable surface, a "
+                       "Moebius strip): a shell needs one side -- cut it into orientable parts")
+    part, s = np.minimum(l0, l1), (l0 > l1).astype(np.int64)
+    ones, size = np.bincount(part, weights=s, minlength=2 * m), np.bincount(part, minlength=2 * m)
+    s ^= (2 * ones > size)[part].astype(np.int64)                      # the fewer of each part's two
+    flipped = np.flatnonzero(s)
+    return head + (f"; {len(flipped)} of the {m} quads (cells {flipped[:10].tolist()}{' ...' if len(flipped) > 10 else ''})"
+                   f" are listed the other way round from the rest of their part: reverse their node order "
+                   f"(cells[i] = cells[i][::-1]), or orient the surface in the mesher")
 
 
 def _nodal_directors(X, quads, d1_hint):

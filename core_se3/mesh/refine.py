@@ -20,6 +20,17 @@ turn apart is a helix off the surface (before, refining the closed cubed sphere 
 quads that "are degenerate, non-convex or listed clockwise", a MeshError, so ``check-mesh``
 could not run on it).  Where no edge jumps (every generator's mesh) nothing changes.
 
+Frames that turn about the normal.  The geodesics are those of the user's frames, not of the
+least-turn gauge's (``mesh.gauge``, the frames the element builds on for an in-plane isotropic
+law, parallel on flat and developable parts): a turn of d1 about the normal from node to node
+is read as a curved edge.  That is what reproduces the annulus generator's circles from its
+radial d1 (the gauge's frames would put its new nodes on the chords: 2 x 3 refined twice,
+0.028 off the circle); but a plate 2 x 1 (4 x 2) whose d1 is turned at random by up to 0.5 rad gets new nodes
+0.048 off its grid (spacing 0.5) and off its free edge, and a refined tip deflection 10 % off
+(0.3347 against 0.3043), a cylinder panel (d1 within 0.7 rad) new nodes 0.002 off its radius.
+No rule from one edge tells the two apart; give d1 that follows the mesh lines (or is parallel)
+before refining or running ``check-mesh``.
+
 The old nodes keep their ids (the new ones follow: edge midpoints, then centres); element e's
 children are 4e ... 4e + 3, so after k refinements the descendants of element e are the ids
 4^k e ... 4^k (e + 1) - 1.  Named node sets that are lines (consecutive nodes joined by mesh

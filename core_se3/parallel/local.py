@@ -123,6 +123,10 @@ def subdomain(mesh, part, rank, size):
     # nodes that no element uses belong to rank 0 (and stay out of the sub-mesh's quads)
     sub.mesh = Mesh(mesh.g0[sub.nodes], sub.g2l[mesh.quads[sub.elements]])
     sub.mesh.gauge_angles = mesh.gauge_angles[sub.nodes]      # the serial element's frames
+    # the whole mesh's ids of its elements and nodes: the element's checks name them, and leave the
+    # windings of d1 round a node, which need every element round it, to the run
+    # (``fem.frame_turns.whole_node_windings``)
+    sub.mesh.whole_ids = (sub.elements, sub.nodes)
     return sub
 
 

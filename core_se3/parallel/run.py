@@ -161,8 +161,11 @@ class DistributedRun:
 
     def _check_element(self, problem, c):
         """The whole mesh's coarse-mesh warning (``Problem.check_element``, which needs the whole
-        mesh's free edges): the ranks' element indices gathered on rank 0, which warns."""
+        mesh's free edges): the ranks' element indices gathered on rank 0, which warns; and the
+        windings of d1 round the nodes (``fem.frame_turns``), which need every element round a
+        node: the ranks' windings summed on rank 0, which warns with the whole mesh's node ids."""
         el = self.local.element
+        self._check_windings(problem, c, el)
         index = getattr(el, "coarse_curvature", None)
         if index is None:
             return
@@ -172,6 +175,15 @@ class DistributedRun:
             for ids, i, s in parts:
                 idx[ids], size[ids] = i, s
             problem.check_element(idx, size, stacklevel=5)
+
+    def _check_windings(self, problem, c, el):
+        """ElementWarning on rank 0 for the whole mesh's nodes round which d1 winds (``_check_element``)."""
+        from ..fem.frame_turns import check_node_windings, node_windings, whole_node_windings
+        matching = getattr(el, "matching", None)
+        local = np.zeros(self.sub.mesh.n_nodes, int) if matching is None else node_windings(self.sub.mesh, matching)
+        parts = c.gather((self.sub.nodes, local), root=0)
+        if c.rank == 0:
+            check_node_windings(None, None, stacklevel=6, windings=whole_node_windings(problem.mesh.n_nodes, parts))
 
     def relocalize(self):
         """Localise the whole problem's loads again: after a change of their values in place (a
