@@ -368,6 +368,39 @@ def test_a_load_added_after_the_session_was_made_is_refused():
     assert s.state is before and s.values["P"].tolist() == [1.0]
 
 
+def test_a_support_or_material_changed_after_the_session_was_made_is_refused():
+    """The session holds the factors, the residual and the state of the problem as it was made.
+    Before, a support added after it (the strip's tip held in z) made the next update fail with
+    NumPy's 'operands could not be broadcast', and the Jacobian came back from the old factors
+    (d tip_z / d P = 1.0e-3 with tip_z held); a material set after it (E doubled) left the old
+    state returned as the current one (tip z = 3.007 where Problem.solve gives 1.615) with the
+    old law's Jacobian.  Now both are a ControlError naming what changed, the state kept; a
+    session's own MaterialVariable still sets the material (its commands equal cold solves)."""
+    from core_se3.design import MaterialVariable
+    p = strip(P=1.0)
+    s = Session(p, 1.0, [LoadMagnitude(p, p.loads[0], name="P")])
+    before = s.state
+    p.fix("x1", [2])
+    for call in (lambda: s.update(P=2.0), lambda: s.jacobian(["tip"])):
+        with pytest.raises(ControlError, match=r"supports changed after the session was made \(supports added: "
+                                               r"Prescribed; removed: none\).*make a new Session"):
+            call()
+    assert s.state is before and s.values["P"].tolist() == [1.0]
+    p = strip(P=1.0)
+    s = Session(p, 1.0, [LoadMagnitude(p, p.loads[0], name="P")])
+    p.material = Material(2.4e6, 0.0, 0.1)
+    for call in (lambda: s.update(P=1.0), lambda: s.update(P=1.01), lambda: s.jacobian(["tip"])):
+        with pytest.raises(ControlError, match="the problem's material changed after the session was made"):
+            call()
+    p = strip(P=1.0)
+    E = MaterialVariable(p, {"all": np.arange(p.mesh.n_elements)}, "E", name="E")
+    s = Session(p, 1.0, [LoadMagnitude(p, p.loads[0], name="P"), E])
+    s.jacobian(["tip"])                               # its partials set the law anew: still the session's
+    st = s.update(E=[2.4e6])
+    assert frame_error(st.g, cold(p), p.length_scale) <= 1e-8
+    assert s.update(P=1.2).lam == 1.0 and s.jacobian(["tip"]).jacobian.shape == (3, 2)
+
+
 def test_a_non_number_command_is_refused_naming_the_variable():
     """update(lam=True) moved the load factor to 1.0, update(P=True) set the load to 1 and
     update(P="2") to 2.0 (NumPy's float conversion): a bool, a string or None is no command."""

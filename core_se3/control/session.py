@@ -140,6 +140,12 @@ def _items(x):
     return [x] if isinstance(x, (str, Quantity, Variable)) else list(x)
 
 
+def _named_besides(items, others):
+    """The names of the loads or supports in ``items`` that are not in ``others`` (by identity)."""
+    return ", ".join(str(getattr(x, "name", None) or type(x).__name__) for x in items
+                     if not any(x is o for o in others)) or "none"
+
+
 def _start_refused(problem, lam, given, reason):
     """Why a session could not start.  At load factor 0 without a given g the start is the
     reference state, the equilibrium of loads that vanish there: loads that do not (a constant
@@ -232,6 +238,7 @@ class Session:
         self.problem, self.options = problem, opts
         self.commands = Commands(variables, problem)
         self._loads = list(problem.loads)    # what the lists below and the part's origin were made of
+        self._supports, self._material = list(problem.supports), problem.material   # (_check_unchanged)
         self._turning = [ld for ld in problem.loads if overrides(ld, "direction_turn")]
         # magnets in the field of a point dipole: their states are checked for its resolution
         self._near = [ld for ld in problem.loads if isinstance(ld, MagneticLoad) and dipole_sources(ld.field)]
@@ -384,21 +391,32 @@ class Session:
         (None if not linear: ``Commands.assign``)."""
         dr = self.commands.assign(values, None if g is None else self.problem, g, lam)
         self._stamp += 1
+        self._material = self.problem.material          # a MaterialVariable sets it: the session's own
         return dr
 
-    def _check_loads(self, what):
-        """ControlError when the problem's loads are no longer those the session was made with: a
-        load added after it (a contact, which a session refuses, was followed as a bare penalty:
-        the README strip's tip 1.2e-3 from Problem.solve's; a new magnet near a point dipole or a
-        turning load escaped the session's checks) or removed."""
-        now = self.problem.loads
-        if len(now) == len(self._loads) and all(a is b for a, b in zip(now, self._loads)):
-            return
-        added = [ld.name for ld in now if not any(ld is x for x in self._loads)]
-        removed = [ld.name for ld in self._loads if not any(ld is x for x in now)]
-        raise ControlError(f"{what}: the problem's loads changed after the session was made (added: "
-                           f"{', '.join(added) or 'none'}; removed: {', '.join(removed) or 'none'}); make a new "
-                           "Session of the problem as it is now")
+    def _check_unchanged(self, what):
+        """ControlError when the problem is no longer the one the session holds factors, a residual
+        and a state of: its loads changed (a load added after the session: a contact, which a session
+        refuses, was followed as a bare penalty, the README strip's tip 1.2e-3 from Problem.solve's;
+        a new magnet near a point dipole or a turning load escaped the session's checks; or one
+        removed), its supports changed (before: a support added made the next update fail with
+        NumPy's 'operands could not be broadcast', and the Jacobian was the old problem's, the
+        README strip's tip d z / d P 1.0e-3 with its z held), or its material was set outside the
+        session (``Problem.material``, ``set_material``: before, the old state was returned as the
+        current one, the strip at twice E with its tip at z = 3.01 where Problem.solve gives 1.62,
+        with the old law's Jacobian)."""
+        p, kinds, said = self.problem, [], []
+        for kind, now, held in (("loads", p.loads, self._loads), ("supports", p.supports, self._supports)):
+            if len(now) != len(held) or any(a is not b for a, b in zip(now, held)):
+                kinds.append(kind)
+                said.append(f"{kind} added: {_named_besides(now, held)}; removed: {_named_besides(held, now)}")
+        if p.material is not self._material:
+            kinds.append("material")
+            said.append("the material set by Problem.material or set_material, not by a session's MaterialVariable")
+        if kinds:
+            raise ControlError(f"{what}: the problem's {' and '.join(kinds)} changed after the session was made "
+                               f"({'; '.join(said)}); the session's state, factors and residual are of the problem "
+                               "as it was: make a new Session of the problem as it is now")
 
     # ------------------------------------------------------------------ updates --------
     def update(self, lam=None, **values):
@@ -421,7 +439,7 @@ class Session:
         (1.0, [2.0], True)
         """
         t0 = time.perf_counter()
-        self._check_loads("update")
+        self._check_unchanged("update")
         lam0 = self.lam
         lam1 = lam0 if lam is None else _load_factor(lam, "update")
         new = self.commands.parse(values)
@@ -598,7 +616,7 @@ class Session:
         >>> round(float(J[2, 0]) / (1e-6 * 10.0 ** 3 / 300), 2)
         1.0
         """
-        self._check_loads("jacobian")
+        self._check_unchanged("jacobian")
         qs = [self.quantity(q) for q in _items(quantities)]
         vs = list(self.variables.values()) if variables is None else \
             [v if isinstance(v, Variable) else self.commands.lookup(v) for v in _items(variables)]
@@ -616,7 +634,10 @@ class Session:
                                "not the plant's response")
         if self._origin is not None:        # on the frames relative to the part (module docstring)
             qs = [OnPart(q, self._origin) for q in qs]
-        return sensitivity(self.problem, self._g, self.lam, qs, vs, method, solve_with=SolveWith(factorization=c.F))
+        try:
+            return sensitivity(self.problem, self._g, self.lam, qs, vs, method, solve_with=SolveWith(factorization=c.F))
+        finally:
+            self._material = self.problem.material      # a MaterialVariable's partials restore the law anew
 
     def quantity(self, q):
         """A ``design`` quantity as given, or the position of the probe named q
