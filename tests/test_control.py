@@ -401,6 +401,30 @@ def test_a_support_or_material_changed_after_the_session_was_made_is_refused():
     assert s.update(P=1.2).lam == 1.0 and s.jacobian(["tip"]).jacobian.shape == (3, 2)
 
 
+def test_a_start_that_is_no_state_and_targets_that_are_no_numbers_are_refused():
+    """Every entry point checks what it is given.  Session(g=...) checked the shape only: the
+    README strip's cold state with its rotations scaled by 1.001 (frames rounded in a file)
+    'converged' in 8 iterations to a state whose positions were 8.7e-3 (8.7e-4 of the length) off
+    the cold solve, and every update kept the non-rotations; now it is refused as Problem.solve
+    refuses such a g_init.  track and plan read bools and strings as targets (True as 1.0: the
+    loop drove the tip to z = 1) and no samples as an IndexError or 'all 0 samples within'."""
+    p = strip(P=1.0)
+    g = cold(p)
+    for scale, where in ((1.001, np.s_[:, :3, :3]), (2.0, np.s_[-1, 3, 3])):
+        bad = g.copy()
+        bad[where] *= scale
+        with pytest.raises(OptionError, match="Session: the start g is not a state of this problem.*not proper rigid"):
+            Session(p, 1.0, [LoadMagnitude(p, p.loads[0], name="P")], g=bad)
+    s = Session(p, 1.0, [LoadMagnitude(p, p.loads[0], name="P")], g=g)      # a solve's state: taken
+    assert frame_error(s.g, g, p.length_scale) <= 1e-12
+    z0 = s.state.probes["tip"]["x"][2]
+    for targets in ([[True], [False]], [["1"], ["2"]], np.zeros((0, 1)), [[z0], [None]]):
+        for run in (lambda t: track(s, "tip", t, components=[2]), lambda t: plan(s, "tip", t, 1e-6, components=[2])):
+            with pytest.raises(OptionError, match="targets must be a finite array of numbers"):
+                run(targets)
+    assert s.values["P"].tolist() == [1.0]
+
+
 def test_a_non_number_command_is_refused_naming_the_variable():
     """update(lam=True) moved the load factor to 1.0, update(P=True) set the load to 1 and
     update(P="2") to 2.0 (NumPy's float conversion): a bool, a string or None is no command."""

@@ -31,6 +31,7 @@ import numpy as np
 
 from ..design import LoadMagnitude
 from ..errors import ControlError, OptionError
+from .commands import as_numbers
 
 __all__ = ["track", "plan", "Feedback", "PlanOptions", "Tracking", "Plan", "least_squares_step"]
 
@@ -216,9 +217,14 @@ class _Loop:
         self.split = np.cumsum([v.size for v in self.vars])[:-1]
 
     def targets(self, targets):
-        t = np.asarray(targets, float)
-        if t.ndim != 2 or t.shape[1] != len(self.rows) or not np.all(np.isfinite(t)):
-            raise OptionError(f"targets must be a finite array (samples, {len(self.rows)}), got shape {t.shape}")
+        """The targets as a finite (samples >= 1, components) float array, or OptionError: before,
+        bools and strings were read as numbers (True as 1.0, '2' as 2.0: a loop drove the tip to
+        z = 1), and no samples ended track in an IndexError and planned 'all 0 samples'."""
+        t = as_numbers(targets)
+        shape = np.shape(targets) if t is None else t.shape
+        if t is None or t.ndim != 2 or not len(t) or t.shape[1] != len(self.rows) or not np.all(np.isfinite(t)):
+            raise OptionError(f"targets must be a finite array of numbers (samples >= 1, {len(self.rows)}), got "
+                              f"{'shape ' + str(shape) if t is not None else repr(targets)[:80]}")
         return t
 
     def x(self):
