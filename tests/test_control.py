@@ -467,6 +467,35 @@ def test_a_refused_track_leaves_plant_and_model_at_the_same_command():
     assert abs(model.state.probes["tip"]["x"][2] - zm) < 1e-8 * 10.0       # back on its equilibrium
 
 
+def test_track_says_which_targets_it_did_not_reach_and_keeps_its_cycles_when_refused():
+    """track returned its record without a word on whether the targets were reached: a tip force
+    bounded at P = 5 chasing tip rises of 2, 5 and 9 (out of its reach) ended 0.72, 3.7 and 7.7
+    off with every command clipped at 5, and nothing said so; and a cycle the session refused
+    lost the cycles done with the exception.  Now ``tolerance`` flags the samples beyond it, the
+    message names them and the cycles cut by the bounds, the last state is the equilibrium at
+    the bound (a cold solve at P = 5), and the ControlError carries the cycles done."""
+    p = strip(P=0.1)
+    s = Session(p, 1.0, [LoadMagnitude(p, p.loads[0], name="P", upper=5.0)])
+    z0 = s.state.probes["tip"]["x"][2]
+    tr = track(s, "tip", z0 + np.array([0.0, 0.5, 2.0, 5.0, 9.0])[:, None], components=[2], tolerance=1e-2)
+    assert tr.reached.tolist() == [True, True, False, False, False] and tr.all_reached is False
+    assert tr.saturated.tolist() == [False, False, True, True, True]
+    assert tr.commands["P"][2:].ravel().tolist() == [5.0, 5.0, 5.0]
+    assert "3 of 4 samples after the start not reached (first: sample 2" in tr.message
+    assert "cut by the variables' bounds in 3 cycles (first: sample 2)" in tr.message
+    assert frame_error(s.g, cold(p), p.length_scale) <= 1e-8                  # the equilibrium at P = 5
+    with pytest.raises(OptionError, match="track: the tolerance must be a positive finite number"):
+        track(s, "tip", [[z0]], components=[2], tolerance=True)
+    p = strip(P=0.1)
+    s = Session(p, 1.0, [LoadMagnitude(p, p.loads[0], name="P")], max_turn=1e-3, max_splits=0)
+    z0 = s.state.probes["tip"]["x"][2]
+    with pytest.raises(ControlError, match="refused 6 times") as exc:
+        track(s, "tip", [[z0], [z0 + 1e-4], [z0 + 0.5]], components=[2], tolerance=1e-5)
+    done = exc.value.tracking
+    assert len(done.errors) == 2 and done.all_reached and "tracking stopped at sample 2 of 3" in done.message
+    assert done.commands["P"][-1, 0] == s.values["P"][0] > 1.0                 # where the session stays
+
+
 def test_an_interrupted_plant_leaves_plant_and_model_at_the_same_command():
     """track(..., model=...): the model went back to the plant's command only when the plant
     raised a ControlError; an interrupt (or any other exception) in the plant's update left the
