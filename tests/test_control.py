@@ -425,6 +425,30 @@ def test_a_start_that_is_no_state_and_targets_that_are_no_numbers_are_refused():
     assert s.values["P"].tolist() == [1.0]
 
 
+def test_max_factorizations_limits_the_factorisations_of_a_sub_step(monkeypatch):
+    """ControlOptions.max_factorizations was documented (default 3 per sub-step) and never read:
+    the magnetic strip's field turned from (0, 0, 0.3) to (0.3, 0, 0.1) took 5 factorisations in
+    each of its two sub-steps whatever it was set to.  Now a sub-step that would need more fails
+    and is split; the states equal the cold solve either way."""
+    from core_se3.control import corrector
+    made, step = [], corrector.Corrector.step
+
+    def counted(self, *a, **kw):
+        out = step(self, *a, **kw)
+        made.append(out.factorizations)
+        return out
+    monkeypatch.setattr(corrector.Corrector, "step", counted)
+    for cap in (None, 1, 2):
+        p, f = magnetic_strip()
+        s = Session(p, 1.0, [FieldVariable(p, f, name="B")], max_factorizations=cap)
+        made.clear()
+        st = s.update(B=[0.3, 0.0, 0.1])
+        assert frame_error(st.g, cold(p), p.length_scale) <= 1e-8
+        assert max(made) > 2 if cap is None else (max(made) <= cap and st.splits >= 2)
+    with pytest.raises(OptionError, match="max_factorizations must be in"):
+        ControlOptions(max_factorizations=0)
+
+
 def test_a_non_number_command_is_refused_naming_the_variable():
     """update(lam=True) moved the load factor to 1.0, update(P=True) set the load to 1 and
     update(P="2") to 2.0 (NumPy's float conversion): a bool, a string or None is no command."""
