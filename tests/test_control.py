@@ -445,6 +445,10 @@ def test_max_factorizations_limits_the_factorisations_of_a_sub_step(monkeypatch)
         st = s.update(B=[0.3, 0.0, 0.1])
         assert frame_error(st.g, cold(p), p.length_scale) <= 1e-8
         assert max(made) > 2 if cap is None else (max(made) <= cap and st.splits >= 2)
+    p, f = magnetic_strip()
+    s = Session(p, 1.0, [FieldVariable(p, f, name="B")], max_factorizations=1, max_splits=1)
+    with pytest.raises(ControlError, match=r"max_factorizations = 1 reached: no fresher factors tried"):
+        s.update(B=[0.3, 0.0, 0.1])                   # too few splits for the cap: refused, saying why
     with pytest.raises(OptionError, match="max_factorizations must be in"):
         ControlOptions(max_factorizations=0)
 

@@ -288,7 +288,8 @@ class Corrector:
                 nf += out.factorizations
                 its += out.iterations
             elif not out.ok and not out.fatal:
-                out.reason += f" (and max_factorizations = {self.opts.max_factorizations} made this sub-step)"
+                out.reason += (f" (max_factorizations = {self.opts.max_factorizations} reached: no fresher "
+                               "factors tried in this sub-step)")
             out.iterations, out.factorizations = its, nf
             return out
         except (SingularSystemError, ElementTooDistortedError, FloatingPointError) as exc:
