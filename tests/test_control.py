@@ -368,14 +368,16 @@ def test_a_load_added_after_the_session_was_made_is_refused():
     assert s.state is before and s.values["P"].tolist() == [1.0]
 
 
-def test_a_support_or_material_changed_after_the_session_was_made_is_refused():
+def test_a_support_material_or_field_changed_after_the_session_was_made_is_refused():
     """The session holds the factors, the residual and the state of the problem as it was made.
     Before, a support added after it (the strip's tip held in z) made the next update fail with
     NumPy's 'operands could not be broadcast', and the Jacobian came back from the old factors
     (d tip_z / d P = 1.0e-3 with tip_z held); a material set after it (E doubled) left the old
     state returned as the current one (tip z = 3.007 where Problem.solve gives 1.615) with the
-    old law's Jacobian.  Now both are a ControlError naming what changed, the state kept; a
-    session's own MaterialVariable still sets the material (its commands equal cold solves)."""
+    old law's Jacobian; a field set beside the session (B from 0.3 to 0.6) left update(B=0.3)
+    returning the old state (tip z 0.398 where the problem's field gives 0.590).  Now each is a
+    ControlError naming what changed, the state kept; a session's own MaterialVariable still sets
+    the material (its commands equal cold solves)."""
     from core_se3.design import MaterialVariable
     p = strip(P=1.0)
     s = Session(p, 1.0, [LoadMagnitude(p, p.loads[0], name="P")])
@@ -399,6 +401,17 @@ def test_a_support_or_material_changed_after_the_session_was_made_is_refused():
     st = s.update(E=[2.4e6])
     assert frame_error(st.g, cold(p), p.length_scale) <= 1e-8
     assert s.update(P=1.2).lam == 1.0 and s.jacobian(["tip"]).jacobian.shape == (3, 2)
+    p, f = magnetic_strip()
+    s = Session(p, 1.0, [FieldVariable(p, f, name="B")])
+    before = s.state
+    f.B = np.array([0.0, 0.0, 0.6])                   # the field set beside the session
+    for call in (lambda: s.update(B=[0.0, 0.0, 0.3]), lambda: s.jacobian(["tip"])):
+        with pytest.raises(ControlError, match=r"fields changed .*B's field B = \[0.0, 0.0, 0.6\] \(the state's: "
+                                               r"\[0.0, 0.0, 0.3\]\)"):
+            call()
+    f.B = np.array([0.0, 0.0, 0.3])                   # set back: the session goes on
+    assert s.update(B=[0.0, 0.0, 0.3]) is before
+    assert frame_error(s.update(B=[0.0, 0.0, 0.6]).g, cold(p), p.length_scale) <= 1e-8
 
 
 def test_a_start_that_is_no_state_and_targets_that_are_no_numbers_are_refused():

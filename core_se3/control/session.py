@@ -250,6 +250,7 @@ class Session:
         problem.check_supports()
         self.problem, self.options = problem, opts
         self.commands = Commands(variables, problem)
+        self._fields = self._fields_now()     # the arrays its field variables set (_check_unchanged)
         self._loads = list(problem.loads)    # what the lists below and the part's origin were made of
         self._supports, self._material = list(problem.supports), problem.material   # (_check_unchanged)
         self._turning = [ld for ld in problem.loads if overrides(ld, "direction_turn")]
@@ -403,6 +404,7 @@ class Session:
         dr = self.commands.assign(values, None if g is None else self.problem, g, lam)
         self._stamp += 1
         self._material = self.problem.material          # a MaterialVariable sets it: the session's own
+        self._fields = self._fields_now()                # what its field variables set, now
         return dr
 
     def _check_unchanged(self, what):
@@ -415,7 +417,10 @@ class Session:
         README strip's tip d z / d P 1.0e-3 with its z held), or its material was set outside the
         session (``Problem.material``, ``set_material``: before, the old state was returned as the
         current one, the strip at twice E with its tip at z = 3.01 where Problem.solve gives 1.62,
-        with the old law's Jacobian)."""
+        with the old law's Jacobian), or a field that a variable of the session sets was set
+        outside it (``field.B = ...``: before, the magnetic strip's field set from 0.3 to 0.6 left
+        ``update(B=[0, 0, 0.3])`` returning the old state, tip z 0.398 where the problem's field
+        gives 0.590, and the Jacobian of the old factors)."""
         p, kinds, said = self.problem, [], []
         for kind, now, held in (("loads", p.loads, self._loads), ("supports", p.supports, self._supports)):
             if len(now) != len(held) or any(a is not b for a, b in zip(now, held)):
@@ -423,11 +428,28 @@ class Session:
                 said.append(f"{kind} added: {_named_besides(now, held)}; removed: {_named_besides(held, now)}")
         if p.material is not self._material:
             kinds.append("material")
-            said.append("the material set by Problem.material or set_material, not by a session's MaterialVariable")
+            said.append("the material set by Problem.material or set_material, not by a session's update")
+        moved = [f"{what} = {np.round(now, 12).tolist()} (the state's: {np.round(self._fields[key][1], 12).tolist()})"
+                 for key, (what, now) in self._fields_now().items() if not np.array_equal(now, self._fields[key][1])]
+        if moved:
+            kinds.append("fields")
+            said.append(f"{', '.join(moved)}, set outside the session: set it back and command the change with "
+                        "update(name=...)")
         if kinds:
             raise ControlError(f"{what}: the problem's {' and '.join(kinds)} changed after the session was made "
                                f"({'; '.join(said)}); the session's state, factors and residual are of the problem "
                                "as it was: make a new Session of the problem as it is now")
+
+    def _fields_now(self):
+        """(field, attribute) -> a copy of the arrays the session's field variables set (a uniform
+        field's B, a gradient field's B0 and G): what ``_check_unchanged`` compares."""
+        out = {}
+        for v in self.variables.values():
+            f = getattr(v, "field", None)
+            for attr in ("B", "B0", "G") if f is not None else ():
+                if isinstance(getattr(f, attr, None), np.ndarray):
+                    out[(id(f), attr)] = (f"{v.name}'s field {attr}", np.array(getattr(f, attr), float))
+        return out
 
     # ------------------------------------------------------------------ updates --------
     def update(self, lam=None, **values):
