@@ -1120,6 +1120,23 @@ def test_a_singular_tangent_at_the_new_state_is_refused_under_the_stability_chec
     assert s.state is before and s.lam == 0.5 and np.array_equal(f.B, [-0.8, 0.0, 0.0])
 
 
+def test_the_stability_check_starts_from_the_first_known_sign(monkeypatch):
+    """A session whose start's det K sign is not known (a given start whose tangent cannot be
+    factored, or a zero pivot) skipped every later stability check: the antiparallel strip,
+    stability_check=True, was moved from load factor 0.5 over its critical point (0.642) to
+    1.0 and the unstable straight state was accepted.  Now the first update takes the sign at
+    its state and the crossing after it is refused.  (The unknown sign is set as such a start
+    leaves it.)"""
+    p, f = _antiparallel()
+    s = Session(p, 0.5, [FieldVariable(p, f, name="B")], steps=5, stability_check=True)
+    s._sign = None
+    assert s.update(lam=0.6).factorizations == 1 and s._sign == 1
+    with pytest.raises(ControlError, match=r"from positive at the last accepted state where it was known \(load "
+                                           r"factor 0.6\) to negative"):
+        s.update(lam=1.0)
+    assert s.lam == 0.6
+
+
 def test_plan_falls_back_when_an_extrapolated_command_lands_past_a_critical_point():
     """A clamped column under an axial tip force P 1e-3 (Euler load between 5 and 5.5): the
     plan of the tip's shortening at P = 3, 4.5, 5 extrapolates sample 2's command to P = 6, past

@@ -512,7 +512,9 @@ class Session:
         singular tangent at g (before, a singular tangent skipped the check and the state was
         accepted)."""
         if not renewed:
-            if not self.options.stability_check or self._sign is None or self._corr.F_g is g:
+            # (an unknown sign so far -- a start whose tangent could not be factored -- is taken
+            # here: before, it turned the check off for the whole session, without a word)
+            if not self.options.stability_check or self._corr.F_g is g:
                 return False, ""
             try:
                 self._corr.factor(g, lam, self._stamp, keep=True)
