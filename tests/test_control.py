@@ -109,7 +109,7 @@ def test_aged_factors_are_renewed_at_converged_states():
             st = s.update(coil=B0 * (1 + 3e-3 * k))
             its += st.iterations
             if st.factorizations and not renewed:          # renewed at the state: the Jacobian reuses them
-                assert s._corr.F_g is s.g
+                assert s._corr.F_g is s._g                      # (s.g: a read-only view of it)
                 n = s.counts["factorizations"]
                 s.jacobian(["tip_px"], ["coil"])
                 assert s.counts["factorizations"] == n
@@ -464,6 +464,25 @@ def test_max_factorizations_limits_the_factorisations_of_a_sub_step(monkeypatch)
         s.update(B=[0.3, 0.0, 0.1])                   # too few splits for the cap: refused, saying why
     with pytest.raises(OptionError, match="max_factorizations must be in"):
         ControlOptions(max_factorizations=0)
+
+
+def test_a_states_frames_and_values_cannot_be_written_into_the_session():
+    """State.g was the session's own frames: the magnetic strip's state scaled in place (positions
+    x 2, as for a picture) moved the session there -- the same command returned it as the
+    equilibrium, the Jacobian was taken at it (tip x 1.75 on a strip of length 1), and the next
+    update failed ('edge turns by 3.119 rad').  Now a state's g and values are read-only views;
+    copies are free to change, and the session's updates still equal cold solves."""
+    p, f = magnetic_strip()
+    s = Session(p, 1.0, [FieldVariable(p, f, name="B")])
+    st = s.update(B=[0.0, 0.0, 0.35])
+    with pytest.raises(ValueError, match="read-only"):
+        st.g[:, :3, 3] *= 2.0
+    with pytest.raises(ValueError, match="read-only"):
+        st.values["B"][2] = 0.5
+    picture = st.g.copy()
+    picture[:, :3, 3] *= 2.0
+    assert s.update(B=[0.0, 0.0, 0.35]) is st and frame_error(st.g, cold(p), p.length_scale) <= 1e-8
+    assert frame_error(s.update(B=[0.0, 0.0, 0.36]).g, cold(p), p.length_scale) <= 1e-8
 
 
 def test_a_non_number_command_is_refused_naming_the_variable():

@@ -78,7 +78,8 @@ class State:
     Attributes
     ----------
     g : (n, 4, 4) ndarray
-        The nodal frames; ``lam``: the load factor; ``values``: variable name -> values.
+        The nodal frames; ``lam``: the load factor; ``values``: variable name -> values.  The
+        arrays are read-only views (g is the session's own frames): copy them to change them.
     work : Work
         What the update took; its fields are also read as attributes of the state
         (``iterations``, ``factorizations``, ``substeps``, ``splits``, ``time`` [s]).
@@ -100,7 +101,11 @@ class State:
     """
 
     def __init__(self, problem, g, lam, values, work=Work(), local=None):
-        self.problem, self.g, self.lam, self.values = problem, g, float(lam), values
+        # read-only views: g is the session's own frames (a state's g scaled in place for a picture
+        # moved the session there -- the same command returned it, the Jacobian was taken at it on
+        # the factors of the equilibrium, and the next update failed)
+        self.problem, self.lam = problem, float(lam)
+        self.g, self.values = _read_only(g), {k: _read_only(v) for k, v in values.items()}
         self.work, self._local = work, local
         self._probes = None
 
@@ -123,6 +128,13 @@ class State:
                 out[name] = dict(x=x, u=pr.state(gu)[0] - pr.state(g0)[0], R=R)
             self._probes = out
         return self._probes
+
+
+def _read_only(a):
+    """A read-only view of the array a (its owner may still write it)."""
+    v = np.asarray(a).view()
+    v.flags.writeable = False
+    return v
 
 
 def _load_factor(lam, who):
