@@ -109,7 +109,7 @@ def test_aged_factors_are_renewed_at_converged_states():
             st = s.update(coil=B0 * (1 + 3e-3 * k))
             its += st.iterations
             if st.factorizations and not renewed:          # renewed at the state: the Jacobian reuses them
-                assert s._corr.F_g is s.g
+                assert s._corr.F_g is s._g                      # (s.g: a read-only view of it)
                 n = s.counts["factorizations"]
                 s.jacobian(["tip_px"], ["coil"])
                 assert s.counts["factorizations"] == n
@@ -368,6 +368,123 @@ def test_a_load_added_after_the_session_was_made_is_refused():
     assert s.state is before and s.values["P"].tolist() == [1.0]
 
 
+def test_a_support_material_or_field_changed_after_the_session_was_made_is_refused():
+    """The session holds the factors, the residual and the state of the problem as it was made.
+    Before, a support added after it (the strip's tip held in z) made the next update fail with
+    NumPy's 'operands could not be broadcast', and the Jacobian came back from the old factors
+    (d tip_z / d P = 1.0e-3 with tip_z held); a material set after it (E doubled) left the old
+    state returned as the current one (tip z = 3.007 where Problem.solve gives 1.615) with the
+    old law's Jacobian; a field set beside the session (B from 0.3 to 0.6) left update(B=0.3)
+    returning the old state (tip z 0.398 where the problem's field gives 0.590).  Now each is a
+    ControlError naming what changed, the state kept; a session's own MaterialVariable still sets
+    the material (its commands equal cold solves)."""
+    from core_se3.design import MaterialVariable
+    p = strip(P=1.0)
+    s = Session(p, 1.0, [LoadMagnitude(p, p.loads[0], name="P")])
+    before = s.state
+    p.fix("x1", [2])
+    for call in (lambda: s.update(P=2.0), lambda: s.jacobian(["tip"])):
+        with pytest.raises(ControlError, match=r"supports changed after the session was made \(supports added: "
+                                               r"Prescribed; removed: none\).*make a new Session"):
+            call()
+    assert s.state is before and s.values["P"].tolist() == [1.0]
+    p = strip(P=1.0)
+    s = Session(p, 1.0, [LoadMagnitude(p, p.loads[0], name="P")])
+    p.material = Material(2.4e6, 0.0, 0.1)
+    for call in (lambda: s.update(P=1.0), lambda: s.update(P=1.01), lambda: s.jacobian(["tip"])):
+        with pytest.raises(ControlError, match="the problem's material changed after the session was made"):
+            call()
+    p = strip(P=1.0)
+    E = MaterialVariable(p, {"all": np.arange(p.mesh.n_elements)}, "E", name="E")
+    s = Session(p, 1.0, [LoadMagnitude(p, p.loads[0], name="P"), E])
+    s.jacobian(["tip"])                               # its partials set the law anew: still the session's
+    st = s.update(E=[2.4e6])
+    assert frame_error(st.g, cold(p), p.length_scale) <= 1e-8
+    assert s.update(P=1.2).lam == 1.0 and s.jacobian(["tip"]).jacobian.shape == (3, 2)
+    p, f = magnetic_strip()
+    s = Session(p, 1.0, [FieldVariable(p, f, name="B")])
+    before = s.state
+    f.B = np.array([0.0, 0.0, 0.6])                   # the field set beside the session
+    for call in (lambda: s.update(B=[0.0, 0.0, 0.3]), lambda: s.jacobian(["tip"])):
+        with pytest.raises(ControlError, match=r"fields changed .*B's field B = \[0.0, 0.0, 0.6\] \(the state's: "
+                                               r"\[0.0, 0.0, 0.3\]\)"):
+            call()
+    f.B = np.array([0.0, 0.0, 0.3])                   # set back: the session goes on
+    assert s.update(B=[0.0, 0.0, 0.3]) is before
+    assert frame_error(s.update(B=[0.0, 0.0, 0.6]).g, cold(p), p.length_scale) <= 1e-8
+
+
+def test_a_start_that_is_no_state_and_targets_that_are_no_numbers_are_refused():
+    """Every entry point checks what it is given.  Session(g=...) checked the shape only: the
+    README strip's cold state with its rotations scaled by 1.001 (frames rounded in a file)
+    'converged' in 8 iterations to a state whose positions were 8.7e-3 (8.7e-4 of the length) off
+    the cold solve, and every update kept the non-rotations; now it is refused as Problem.solve
+    refuses such a g_init.  track and plan read bools and strings as targets (True as 1.0: the
+    loop drove the tip to z = 1) and no samples as an IndexError or 'all 0 samples within'."""
+    p = strip(P=1.0)
+    g = cold(p)
+    for scale, where in ((1.001, np.s_[:, :3, :3]), (2.0, np.s_[-1, 3, 3])):
+        bad = g.copy()
+        bad[where] *= scale
+        with pytest.raises(OptionError, match="Session: the start g is not a state of this problem.*not proper rigid"):
+            Session(p, 1.0, [LoadMagnitude(p, p.loads[0], name="P")], g=bad)
+    s = Session(p, 1.0, [LoadMagnitude(p, p.loads[0], name="P")], g=g)      # a solve's state: taken
+    assert frame_error(s.g, g, p.length_scale) <= 1e-12
+    z0 = s.state.probes["tip"]["x"][2]
+    for targets in ([[True], [False]], [["1"], ["2"]], np.zeros((0, 1)), [[z0], [None]]):
+        for run in (lambda t: track(s, "tip", t, components=[2]), lambda t: plan(s, "tip", t, 1e-6, components=[2])):
+            with pytest.raises(OptionError, match="targets must be a finite array of numbers"):
+                run(targets)
+    assert s.values["P"].tolist() == [1.0]
+
+
+def test_max_factorizations_limits_the_factorisations_of_a_sub_step(monkeypatch):
+    """ControlOptions.max_factorizations was documented (default 3 per sub-step) and never read:
+    the magnetic strip's field turned from (0, 0, 0.3) to (0.3, 0, 0.1) took 5 factorisations in
+    each of its two sub-steps whatever it was set to.  Now a sub-step that would need more fails
+    and is split; the states equal the cold solve either way."""
+    from core_se3.control import corrector
+    made, step = [], corrector.Corrector.step
+
+    def counted(self, *a, **kw):
+        out = step(self, *a, **kw)
+        made.append(out.factorizations)
+        return out
+    monkeypatch.setattr(corrector.Corrector, "step", counted)
+    for cap in (None, 1, 2):
+        p, f = magnetic_strip()
+        s = Session(p, 1.0, [FieldVariable(p, f, name="B")], max_factorizations=cap)
+        made.clear()
+        st = s.update(B=[0.3, 0.0, 0.1])
+        assert frame_error(st.g, cold(p), p.length_scale) <= 1e-8
+        assert max(made) > 2 if cap is None else (max(made) <= cap and st.splits >= 2)
+    p, f = magnetic_strip()
+    s = Session(p, 1.0, [FieldVariable(p, f, name="B")], max_factorizations=1, max_splits=1)
+    with pytest.raises(ControlError, match=r"max_factorizations = 1 reached: no fresher factors tried"):
+        s.update(B=[0.3, 0.0, 0.1])                   # too few splits for the cap: refused, saying why
+    with pytest.raises(OptionError, match="max_factorizations must be in"):
+        ControlOptions(max_factorizations=0)
+
+
+def test_a_states_frames_and_values_cannot_be_written_into_the_session():
+    """State.g was the session's own frames: the magnetic strip's state scaled in place (positions
+    x 2, as for a picture) moved the session there -- the same command returned it as the
+    equilibrium, the Jacobian was taken at it (tip x 1.75 on a strip of length 1), and the next
+    update failed ('edge turns by 3.119 rad').  Now a state's g and values are read-only views;
+    copies are free to change, and the session's updates still equal cold solves."""
+    p, f = magnetic_strip()
+    s = Session(p, 1.0, [FieldVariable(p, f, name="B")])
+    st = s.update(B=[0.0, 0.0, 0.35])
+    with pytest.raises(ValueError, match="read-only"):
+        st.g[:, :3, 3] *= 2.0
+    with pytest.raises(ValueError, match="read-only"):
+        st.values["B"][2] = 0.5
+    picture = st.g.copy()
+    picture[:, :3, 3] *= 2.0
+    assert s.update(B=[0.0, 0.0, 0.35]) is st and frame_error(st.g, cold(p), p.length_scale) <= 1e-8
+    assert frame_error(s.update(B=[0.0, 0.0, 0.36]).g, cold(p), p.length_scale) <= 1e-8
+
+
 def test_a_non_number_command_is_refused_naming_the_variable():
     """update(lam=True) moved the load factor to 1.0, update(P=True) set the load to 1 and
     update(P="2") to 2.0 (NumPy's float conversion): a bool, a string or None is no command."""
@@ -408,6 +525,35 @@ def test_a_refused_track_leaves_plant_and_model_at_the_same_command():
         track(plant, "tip", [[z0], [z0 + 0.5]], components=[2], model=model)
     assert plant.values["P"].tolist() == model.values["P"].tolist() == [1.0]
     assert abs(model.state.probes["tip"]["x"][2] - zm) < 1e-8 * 10.0       # back on its equilibrium
+
+
+def test_track_says_which_targets_it_did_not_reach_and_keeps_its_cycles_when_refused():
+    """track returned its record without a word on whether the targets were reached: a tip force
+    bounded at P = 5 chasing tip rises of 2, 5 and 9 (out of its reach) ended 0.72, 3.7 and 7.7
+    off with every command clipped at 5, and nothing said so; and a cycle the session refused
+    lost the cycles done with the exception.  Now ``tolerance`` flags the samples beyond it, the
+    message names them and the cycles cut by the bounds, the last state is the equilibrium at
+    the bound (a cold solve at P = 5), and the ControlError carries the cycles done."""
+    p = strip(P=0.1)
+    s = Session(p, 1.0, [LoadMagnitude(p, p.loads[0], name="P", upper=5.0)])
+    z0 = s.state.probes["tip"]["x"][2]
+    tr = track(s, "tip", z0 + np.array([0.0, 0.5, 2.0, 5.0, 9.0])[:, None], components=[2], tolerance=1e-2)
+    assert tr.reached.tolist() == [True, True, False, False, False] and tr.all_reached is False
+    assert tr.saturated.tolist() == [False, False, True, True, True]
+    assert tr.commands["P"][2:].ravel().tolist() == [5.0, 5.0, 5.0]
+    assert "3 of 4 samples after the start not reached (first: sample 2" in tr.message
+    assert "cut by the variables' bounds in 3 cycles (first: sample 2)" in tr.message
+    assert frame_error(s.g, cold(p), p.length_scale) <= 1e-8                  # the equilibrium at P = 5
+    with pytest.raises(OptionError, match="track: the tolerance must be a positive finite number"):
+        track(s, "tip", [[z0]], components=[2], tolerance=True)
+    p = strip(P=0.1)
+    s = Session(p, 1.0, [LoadMagnitude(p, p.loads[0], name="P")], max_turn=1e-3, max_splits=0)
+    z0 = s.state.probes["tip"]["x"][2]
+    with pytest.raises(ControlError, match="refused 6 times") as exc:
+        track(s, "tip", [[z0], [z0 + 1e-4], [z0 + 0.5]], components=[2], tolerance=1e-5)
+    done = exc.value.tracking
+    assert len(done.errors) == 2 and done.all_reached and "tracking stopped at sample 2 of 3" in done.message
+    assert done.commands["P"][-1, 0] == s.values["P"][0] > 1.0                 # where the session stays
 
 
 def test_an_interrupted_plant_leaves_plant_and_model_at_the_same_command():
@@ -991,6 +1137,23 @@ def test_a_singular_tangent_at_the_new_state_is_refused_under_the_stability_chec
     with pytest.raises(ControlError, match=r"ends where the tangent cannot be factored \(tangent is singular"):
         s.update(lam=0.55)
     assert s.state is before and s.lam == 0.5 and np.array_equal(f.B, [-0.8, 0.0, 0.0])
+
+
+def test_the_stability_check_starts_from_the_first_known_sign(monkeypatch):
+    """A session whose start's det K sign is not known (a given start whose tangent cannot be
+    factored, or a zero pivot) skipped every later stability check: the antiparallel strip,
+    stability_check=True, was moved from load factor 0.5 over its critical point (0.642) to
+    1.0 and the unstable straight state was accepted.  Now the first update takes the sign at
+    its state and the crossing after it is refused.  (The unknown sign is set as such a start
+    leaves it.)"""
+    p, f = _antiparallel()
+    s = Session(p, 0.5, [FieldVariable(p, f, name="B")], steps=5, stability_check=True)
+    s._sign = None
+    assert s.update(lam=0.6).factorizations == 1 and s._sign == 1
+    with pytest.raises(ControlError, match=r"from positive at the last accepted state where it was known \(load "
+                                           r"factor 0.6\) to negative"):
+        s.update(lam=1.0)
+    assert s.lam == 0.6
 
 
 def test_plan_falls_back_when_an_extrapolated_command_lands_past_a_critical_point():

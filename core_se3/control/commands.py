@@ -27,7 +27,7 @@ from ..design import (FieldGradientVariable, FieldVariable, LoadMagnitude, Mater
 from ..errors import OptionError, did_you_mean, warn_angle
 from ..model import GradientField, UniformField
 
-__all__ = ["Commands", "scenario_variables"]
+__all__ = ["Commands", "scenario_variables", "as_numbers"]
 
 
 def _sets(v):
@@ -146,17 +146,10 @@ class Commands:
         out = {}
         for name, x in values.items():
             v = self.lookup(name)
-            try:
-                kind = np.asarray(x).dtype.kind
-                a = np.asarray(x, float).ravel()
-                # NumPy makes [0, 0, True] an integer array: look at the entries themselves
-                if not isinstance(x, np.ndarray) and any(isinstance(e, (bool, np.bool_))
-                                                         for e in np.asarray(x, dtype=object).ravel()):
-                    kind = "b"
-            except (TypeError, ValueError):
-                kind = "O"
-            if kind not in "iuf":        # a bool, a string or None is no command: not read as 1, 2.0, nan
+            a = as_numbers(x)
+            if a is None:                # a bool, a string or None is no command: not read as 1, 2.0, nan
                 raise OptionError(f"variable {name!r}: expected {v.size} number{'s' * (v.size > 1)}, got {x!r}")
+            a = a.ravel()
             if a.size != v.size:
                 raise OptionError(f"variable {name!r} has {v.size} components ({', '.join(v.labels)}), got {a.size}")
             _check_shape(v, np.shape(x))
@@ -193,6 +186,27 @@ class Commands:
                 dr = None if d is None else dr + d
             v.assign(x)
         return None if dr is None else problem.assembler().vector(dr)
+
+
+def as_numbers(x):
+    """x as a float array when every entry is a number (integer or real), else None: a bool, a
+    string, None or a complex number is no number here (before, np.asarray read True as 1.0 and
+    '2' as 2.0).  NumPy makes [0, 0, True] an integer array: the entries themselves are looked at.
+
+    Example
+    -------
+    >>> as_numbers([1, 2.5]).tolist(), as_numbers([0.0, True]), as_numbers([["1"]])
+    ([1.0, 2.5], None, None)
+    """
+    try:
+        kind = np.asarray(x).dtype.kind
+        a = np.asarray(x, float)
+        if not isinstance(x, np.ndarray) and any(isinstance(e, (bool, np.bool_))
+                                                 for e in np.asarray(x, dtype=object).ravel()):
+            kind = "b"
+    except (TypeError, ValueError):
+        return None
+    return a if kind in "iuf" else None
 
 
 def _check_shape(v, shape):

@@ -268,24 +268,28 @@ class Corrector:
         (g, lam) and these parameters when the caller has it (``Session``: the last one plus
         its exact change), else it is evaluated."""
         nf = its = 0
+        cap = self.opts.max_factorizations or np.inf       # fresh factorisations this sub-step may make
         try:
             if self.F is None:
                 self.factor(g, lam, stamp)
                 nf += 1
             fresh = self.F_g is g and self.F_stamp == stamp
-            out = self._iterate(g, lam, check_path, fresh, stamp, r0)
+            out = self._iterate(g, lam, check_path, fresh, stamp, r0, may_renew=nf < cap)
             its += out.iterations
             nf += out.factorizations
-            if not out.ok and not out.fatal and not fresh:
+            if not out.ok and not out.fatal and not fresh and nf < cap:
                 self.factor(g, lam, stamp)                     # stale factors: again with g's
                 nf += 1
                 out = self._iterate(g, lam, check_path, True, stamp, r0)
                 its += out.iterations
                 nf += out.factorizations
-            if not out.ok and not out.fatal:
-                out = self._newton(g, lam, out.predictor, check_path)
+            if not out.ok and not out.fatal and nf < cap:
+                out = self._newton(g, lam, out.predictor, check_path, int(min(cap - nf, self.opts.max_iter)))
                 nf += out.factorizations
                 its += out.iterations
+            elif not out.ok and not out.fatal:
+                out.reason += (f" (max_factorizations = {self.opts.max_factorizations} reached: no fresher "
+                               "factors tried in this sub-step)")
             out.iterations, out.factorizations = its, nf
             return out
         except (SingularSystemError, ElementTooDistortedError, FloatingPointError) as exc:
@@ -301,14 +305,14 @@ class Corrector:
                 f"path_tolerance = {self.opts.path_tolerance:g}): the equilibrium path turns sharply or the state "
                 "snapped onto another branch")
 
-    def _iterate(self, g, lam, check_path, fresh, stamp, r0=None):
+    def _iterate(self, g, lam, check_path, fresh, stamp, r0=None, may_renew=True):
         """Predictor and corrector on the held factors: a SubStep (``fatal``: the step is too long
         whatever the factors; ``predictor``: the first increment; ``residual``: the free residual
         at the state returned)."""
         opts, ell = self.opts, self.ell
         t0 = time.perf_counter()
         t_factor = self._t_factor
-        out = self._chord(g, lam, check_path, fresh, stamp, r0)
+        out = self._chord(g, lam, check_path, fresh, stamp, r0, may_renew)
         if out.iterations:
             spent = time.perf_counter() - t0 - (self._t_factor - t_factor)    # a renewal inside not counted
             self._measured("iteration", spent / out.iterations)
@@ -316,7 +320,7 @@ class Corrector:
             self._last_try = out.iterations
         return out
 
-    def _chord(self, g, lam, check_path, fresh, stamp, r0):
+    def _chord(self, g, lam, check_path, fresh, stamp, r0, may_renew=True):
         """:meth:`_iterate`'s work (its docstring)."""
         opts, ell = self.opts, self.ell
         if r0 is None:
@@ -334,7 +338,7 @@ class Corrector:
         eta = mixer.step(eta)          # the predictor too: with carried pairs, a secant correction
         total = eta.copy()
         g1 = self.problem.retract(g, eta)
-        its, fn_prev, renewed = 1, pred, fresh
+        its, fn_prev, renewed = 1, pred, fresh or not may_renew     # (may_renew: max_factorizations)
         while True:
             r, rn, floor = self.residual(g1, lam)
             hist.append(rn)
@@ -359,14 +363,15 @@ class Corrector:
                 why = (f"no convergence in max_iter = {opts.max_iter} iterations on the held factors (residual "
                        f"{rn:.2e}, increment {fn:.2e})")
             if why:
-                return SubStep(False, g, why, its, int(renewed and not fresh), history=hist, predictor=predictor)
+                made = int(renewed and not fresh and may_renew)
+                return SubStep(False, g, why, its, made, history=hist, predictor=predictor)
             eta = mixer.step(f)
             g1 = self.problem.retract(g1, eta)
             total += eta
             fn_prev = fn
         why = self._path_error(predictor, total, check_path)
         self._moved = np.inf if why else increment_norm(total, ell) / (ell * np.sqrt(len(total)))
-        return SubStep(not why, g1 if not why else g, why, its, int(renewed and not fresh), history=hist,
+        return SubStep(not why, g1 if not why else g, why, its, int(renewed and not fresh and may_renew), history=hist,
                        predictor=predictor, fatal=bool(why) and fresh, residual=None if why else r)
 
     def _mixer(self):
@@ -381,10 +386,11 @@ class Corrector:
         self._moved = np.inf            # until this try converges
         return self._mix[1]
 
-    def _newton(self, g, lam, predictor, check_path):
+    def _newton(self, g, lam, predictor, check_path, max_iter):
         """Newton with a fresh tangent at every iterate (the solver's try, ``solvers.newton_try``,
-        with its mixed iteration) from g: for the sub-steps the held factors do not carry."""
-        nopts = NewtonOptions(rtol=self.opts.rtol, dtol=self.opts.dtol, max_iter=self.opts.max_iter,
+        with its mixed iteration) from g, at most ``max_iter`` iterations: for the sub-steps the
+        held factors do not carry."""
+        nopts = NewtonOptions(rtol=self.opts.rtol, dtol=self.opts.dtol, max_iter=max_iter,
                               linear_solver=self.opts.linear_solver, limit_check=False)
         trial = NewtonTry(self.problem, nopts, self.solver, SimpleNamespace(t_asm=0.0, t_sol=0.0))
         trial.first_solve = False                      # a singular tangent fails the try

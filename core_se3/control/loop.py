@@ -31,6 +31,7 @@ import numpy as np
 
 from ..design import LoadMagnitude
 from ..errors import ControlError, OptionError
+from .commands import as_numbers
 
 __all__ = ["track", "plan", "Feedback", "PlanOptions", "Tracking", "Plan", "least_squares_step"]
 
@@ -216,9 +217,14 @@ class _Loop:
         self.split = np.cumsum([v.size for v in self.vars])[:-1]
 
     def targets(self, targets):
-        t = np.asarray(targets, float)
-        if t.ndim != 2 or t.shape[1] != len(self.rows) or not np.all(np.isfinite(t)):
-            raise OptionError(f"targets must be a finite array (samples, {len(self.rows)}), got shape {t.shape}")
+        """The targets as a finite (samples >= 1, components) float array, or OptionError: before,
+        bools and strings were read as numbers (True as 1.0, '2' as 2.0: a loop drove the tip to
+        z = 1), and no samples ended track in an IndexError and planned 'all 0 samples'."""
+        t = as_numbers(targets)
+        shape = np.shape(targets) if t is None else t.shape
+        if t is None or t.ndim != 2 or not len(t) or t.shape[1] != len(self.rows) or not np.all(np.isfinite(t)):
+            raise OptionError(f"targets must be a finite array of numbers (samples >= 1, {len(self.rows)}), got "
+                              f"{'shape ' + str(shape) if t is not None else repr(targets)[:80]}")
         return t
 
     def x(self):
@@ -291,6 +297,13 @@ class Tracking:
         Seconds per cycle (Jacobian, step, update; sample 0: 0).
     iterations, factorizations : (K,) ndarray
         What each update took.
+    saturated : (K,) ndarray of bool
+        The cycle's command step was cut by a variable's bounds or norm bound: the target lies
+        beyond what the bounded commands reach (in the loop's linearisation).
+    tolerance : float or None
+        The error asked (``track(tolerance=...)``); ``reached``: errors <= tolerance (None
+        without one); ``message``: which samples were not reached, and where the commands were
+        held at their bounds.
 
     Example
     -------
@@ -306,6 +319,19 @@ class Tracking:
     cycle_time: np.ndarray
     iterations: np.ndarray
     factorizations: np.ndarray
+    saturated: np.ndarray = None
+    tolerance: float = None
+    message: str = ""
+
+    @property
+    def reached(self):
+        """errors <= tolerance per sample (None without a tolerance)."""
+        return None if self.tolerance is None else self.errors <= self.tolerance
+
+    @property
+    def all_reached(self):
+        """Every sample after the start within the tolerance (None without one)."""
+        return None if self.tolerance is None else bool(np.all(self.reached[1:]))
 
     @property
     def rate(self):
@@ -318,7 +344,7 @@ class Tracking:
         return float(self.errors[1:].max())
 
 
-def track(session, quantity, targets, variables=None, components=None, feedback=None, model=None):
+def track(session, quantity, targets, variables=None, components=None, feedback=None, model=None, tolerance=None):
     """Track ``targets`` (K, m) with the components ``components`` of ``quantity`` (a probe name
     or a ``design`` quantity) by Jacobian feedback, one warm update per sample (module
     docstring).
@@ -337,10 +363,16 @@ def track(session, quantity, targets, variables=None, components=None, feedback=
         The controller's model, when it is not the plant (a model error): the Jacobian is the
         model's, at the same commands (both sessions are updated every cycle; a probe name
         refers to the model's probe of that name).
+    tolerance : float, optional
+        The error |achieved - target| that counts as reached (``Tracking.reached``,
+        ``all_reached`` and ``message`` name the samples beyond it: a target out of reach, or
+        moving faster than the loop follows).
 
     Returns
     -------
     Tracking
+        Also when the session refuses a cycle after the halvings, or its Jacobian (past a
+        critical point): the ControlError raised carries the cycles done as ``.tracking``.
 
     Example
     -------
@@ -357,22 +389,60 @@ def track(session, quantity, targets, variables=None, components=None, feedback=
     True
     """
     fb = _options(Feedback, feedback, "track")
+    tolerance = None if tolerance is None else _tolerance(tolerance, "track")
     lp = _Loop(session, quantity, variables, components, model)
     T = lp.targets(targets)
     K = len(T)
     Y = np.zeros_like(T)
     X = np.zeros((K, len(lp.scale)))
-    dt, its, nf = np.zeros(K), np.zeros(K, int), np.zeros(K, int)
+    dt, its, nf, sat = np.zeros(K), np.zeros(K, int), np.zeros(K, int), np.zeros(K, bool)
     Y[0], X[0] = lp.y(), lp.x()
+
+    def record(done, why=""):
+        commands = dict(zip(lp.names, np.split(X[:done], lp.split, axis=1)))
+        errors = np.linalg.norm(Y[:done] - T[:done], axis=1)
+        return Tracking(T[:done], Y[:done], commands, errors, dt[:done], its[:done], nf[:done], sat[:done], tolerance,
+                        _tracking_message(errors, sat[:done], tolerance, K, why))
     for k in range(1, K):
         t0 = time.perf_counter()
-        dx = least_squares_step(lp.jacobian(), fb.gain * (T[k] - Y[k - 1]), lp.scale, fb.damping)
-        st, _ = lp.step(X[k - 1], dx, fb.max_halvings)
+        try:
+            dx = least_squares_step(lp.jacobian(), fb.gain * (T[k] - Y[k - 1]), lp.scale, fb.damping)
+            st, a = lp.step(X[k - 1], dx, fb.max_halvings)
+        except ControlError as exc:       # the cycles done kept (before, lost with the exception)
+            exc.tracking = record(k, f"tracking stopped at sample {k} of {K}: {exc}")
+            raise
         Y[k], X[k] = lp.y(), lp.x()
+        sat[k] = np.any(np.abs(X[k] - X[k - 1] - a * dx) > 1e-9 * np.maximum(np.abs(a * dx), lp.scale))
         dt[k] = time.perf_counter() - t0
         its[k], nf[k] = st.iterations, st.factorizations
-    commands = dict(zip(lp.names, np.split(X, lp.split, axis=1)))
-    return Tracking(T, Y, commands, np.linalg.norm(Y - T, axis=1), dt, its, nf)
+    return record(K)
+
+
+def _tracking_message(errors, saturated, tolerance, K, why=""):
+    """What a :class:`Tracking` says: the samples not within ``tolerance`` (or, without one, the
+    largest error), the cycles whose commands were held at their bounds, and why it stopped."""
+    out = []
+    if tolerance is not None:
+        bad = np.nonzero(errors[1:] > tolerance)[0] + 1
+        out.append(f"all {len(errors) - 1} samples after the start within {tolerance:g}" if not len(bad) else
+                   f"{len(bad)} of {len(errors) - 1} samples after the start not reached (first: sample {bad[0]}, "
+                   f"error {errors[bad[0]]:.3g} > {tolerance:g}; largest {errors[1:].max():.3g})")
+    elif len(errors) > 1:
+        out.append(f"largest error {errors[1:].max():.3g} at sample {int(np.argmax(errors[1:])) + 1} (no tolerance "
+                   "given)")
+    if saturated.any():
+        out.append(f"the command step was cut by the variables' bounds in {int(saturated.sum())} cycles (first: "
+                   f"sample {int(np.argmax(saturated))}): the targets there lie beyond the bounded commands' reach")
+    return "; ".join(out + ([why] if why else []))
+
+
+def _tolerance(tolerance, who):
+    """A tolerance as a positive finite float, or OptionError (before, '1e-3' or None ended in
+    NumPy's TypeError and True planned to within 1)."""
+    if (isinstance(tolerance, (bool, np.bool_)) or not isinstance(tolerance, (int, float, np.integer, np.floating))
+            or not (np.isfinite(tolerance) and tolerance > 0)):
+        raise OptionError(f"{who}: the tolerance must be a positive finite number, got {tolerance!r}")
+    return float(tolerance)
 
 
 def _sample(lp, target, tolerance, opts, guess, previous):
@@ -500,10 +570,7 @@ def plan(session, quantity, targets, tolerance, variables=None, components=None,
     >>> plan(s, "tip", [[z0 + 1.5]], 1e-9, components=[2], options=dict(max_iter=1)).reached.tolist()
     [False]
     """
-    if (isinstance(tolerance, (bool, np.bool_)) or not isinstance(tolerance, (int, float, np.integer, np.floating))
-            or not (np.isfinite(tolerance) and tolerance > 0)):
-        # before, '1e-3' or None ended in NumPy's TypeError and True planned to within 1
-        raise OptionError(f"plan: the tolerance must be a positive finite number, got {tolerance!r}")
+    tolerance = _tolerance(tolerance, "plan")
     opts = _options(PlanOptions, options, "plan")
     t0 = time.perf_counter()
     lp = _Loop(session, quantity, variables, components)

@@ -34,6 +34,7 @@ from ..errors import ControlError, ConvergenceError, ElementTooDistortedError, O
 from ..model.base import overrides
 from ..model.magnetics import MagneticLoad, dipole_sources
 from ..model.solving import dipole_warning
+from ..results.recorder import initial_state
 from ..solvers import NewtonOptions, newton_solve
 from ..solvers.newton import MAX_LOAD_TURN
 from ..solvers.options import split_options, unknown_keywords
@@ -77,7 +78,8 @@ class State:
     Attributes
     ----------
     g : (n, 4, 4) ndarray
-        The nodal frames; ``lam``: the load factor; ``values``: variable name -> values.
+        The nodal frames; ``lam``: the load factor; ``values``: variable name -> values.  The
+        arrays are read-only views (g is the session's own frames): copy them to change them.
     work : Work
         What the update took; its fields are also read as attributes of the state
         (``iterations``, ``factorizations``, ``substeps``, ``splits``, ``time`` [s]).
@@ -99,7 +101,11 @@ class State:
     """
 
     def __init__(self, problem, g, lam, values, work=Work(), local=None):
-        self.problem, self.g, self.lam, self.values = problem, g, float(lam), values
+        # read-only views: g is the session's own frames (a state's g scaled in place for a picture
+        # moved the session there -- the same command returned it, the Jacobian was taken at it on
+        # the factors of the equilibrium, and the next update failed)
+        self.problem, self.lam = problem, float(lam)
+        self.g, self.values = _read_only(g), {k: _read_only(v) for k, v in values.items()}
         self.work, self._local = work, local
         self._probes = None
 
@@ -124,6 +130,13 @@ class State:
         return self._probes
 
 
+def _read_only(a):
+    """A read-only view of the array a (its owner may still write it)."""
+    v = np.asarray(a).view()
+    v.flags.writeable = False
+    return v
+
+
 def _load_factor(lam, who):
     """lam as a float, or OptionError: a bool, a string, None, an array or a non-finite number
     is no load factor (before, Session read True as 1.0 and failed on '1' or None with NumPy's
@@ -138,6 +151,24 @@ def _items(x):
     """A sequence argument as a list: one name (a string) or one object is a list of one (before,
     jacobian(q, "PB") iterated the string: the variables P and B)."""
     return [x] if isinstance(x, (str, Quantity, Variable)) else list(x)
+
+
+def _given_start(g, problem):
+    """A given start as proper rigid frames of the problem's mesh (``results.recorder.initial_state``,
+    what ``Problem.solve`` checks its ``g_init`` with; a StepResult gives its frames), else an
+    OptionError.  Before, only the shape was checked: rotations scaled by 1.001 (frames rounded in
+    a file) converged in 8 iterations to a 'state' whose tip was 8.7e-4 of the README strip's
+    length off the cold solve, and every update after it kept the non-rotations."""
+    try:
+        return initial_state(g, problem.mesh.g0)[0]
+    except OptionError as exc:
+        raise OptionError(f"Session: the start g is not a state of this problem -- {exc}") from None
+
+
+def _named_besides(items, others):
+    """The names of the loads or supports in ``items`` that are not in ``others`` (by identity)."""
+    return ", ".join(str(getattr(x, "name", None) or type(x).__name__) for x in items
+                     if not any(x is o for o in others)) or "none"
 
 
 def _start_refused(problem, lam, given, reason):
@@ -231,7 +262,9 @@ class Session:
         problem.check_supports()
         self.problem, self.options = problem, opts
         self.commands = Commands(variables, problem)
+        self._fields = self._fields_now()     # the arrays its field variables set (_check_unchanged)
         self._loads = list(problem.loads)    # what the lists below and the part's origin were made of
+        self._supports, self._material = list(problem.supports), problem.material   # (_check_unchanged)
         self._turning = [ld for ld in problem.loads if overrides(ld, "direction_turn")]
         # magnets in the field of a point dipole: their states are checked for its resolution
         self._near = [ld for ld in problem.loads if isinstance(ld, MagneticLoad) and dipole_sources(ld.field)]
@@ -242,9 +275,7 @@ class Session:
         self.stats = dict(updates=0, refused=0, substeps=0, splits=0, iterations=0)
         t0 = time.perf_counter()
         given = g is not None
-        g = self._cold(lam, steps) if g is None else np.array(g, float)
-        if g.shape != problem.mesh.g0.shape:
-            raise OptionError(f"Session: g must have the shape {problem.mesh.g0.shape}, got {g.shape}")
+        g = self._cold(lam, steps) if g is None else _given_start(g, problem)
         out = self._corr.step(self._local(g), lam, self._stamp, check_path=False)
         if not out.ok:
             raise ControlError(_start_refused(problem, lam, given, out.reason))
@@ -384,21 +415,53 @@ class Session:
         (None if not linear: ``Commands.assign``)."""
         dr = self.commands.assign(values, None if g is None else self.problem, g, lam)
         self._stamp += 1
+        self._material = self.problem.material          # a MaterialVariable sets it: the session's own
+        self._fields = self._fields_now()                # what its field variables set, now
         return dr
 
-    def _check_loads(self, what):
-        """ControlError when the problem's loads are no longer those the session was made with: a
-        load added after it (a contact, which a session refuses, was followed as a bare penalty:
-        the README strip's tip 1.2e-3 from Problem.solve's; a new magnet near a point dipole or a
-        turning load escaped the session's checks) or removed."""
-        now = self.problem.loads
-        if len(now) == len(self._loads) and all(a is b for a, b in zip(now, self._loads)):
-            return
-        added = [ld.name for ld in now if not any(ld is x for x in self._loads)]
-        removed = [ld.name for ld in self._loads if not any(ld is x for x in now)]
-        raise ControlError(f"{what}: the problem's loads changed after the session was made (added: "
-                           f"{', '.join(added) or 'none'}; removed: {', '.join(removed) or 'none'}); make a new "
-                           "Session of the problem as it is now")
+    def _check_unchanged(self, what):
+        """ControlError when the problem is no longer the one the session holds factors, a residual
+        and a state of: its loads changed (a load added after the session: a contact, which a session
+        refuses, was followed as a bare penalty, the README strip's tip 1.2e-3 from Problem.solve's;
+        a new magnet near a point dipole or a turning load escaped the session's checks; or one
+        removed), its supports changed (before: a support added made the next update fail with
+        NumPy's 'operands could not be broadcast', and the Jacobian was the old problem's, the
+        README strip's tip d z / d P 1.0e-3 with its z held), or its material was set outside the
+        session (``Problem.material``, ``set_material``: before, the old state was returned as the
+        current one, the strip at twice E with its tip at z = 3.01 where Problem.solve gives 1.62,
+        with the old law's Jacobian), or a field that a variable of the session sets was set
+        outside it (``field.B = ...``: before, the magnetic strip's field set from 0.3 to 0.6 left
+        ``update(B=[0, 0, 0.3])`` returning the old state, tip z 0.398 where the problem's field
+        gives 0.590, and the Jacobian of the old factors)."""
+        p, kinds, said = self.problem, [], []
+        for kind, now, held in (("loads", p.loads, self._loads), ("supports", p.supports, self._supports)):
+            if len(now) != len(held) or any(a is not b for a, b in zip(now, held)):
+                kinds.append(kind)
+                said.append(f"{kind} added: {_named_besides(now, held)}; removed: {_named_besides(held, now)}")
+        if p.material is not self._material:
+            kinds.append("material")
+            said.append("the material set by Problem.material or set_material, not by a session's update")
+        moved = [f"{what} = {np.round(now, 12).tolist()} (the state's: {np.round(self._fields[key][1], 12).tolist()})"
+                 for key, (what, now) in self._fields_now().items() if not np.array_equal(now, self._fields[key][1])]
+        if moved:
+            kinds.append("fields")
+            said.append(f"{', '.join(moved)}, set outside the session: set it back and command the change with "
+                        "update(name=...)")
+        if kinds:
+            raise ControlError(f"{what}: the problem's {' and '.join(kinds)} changed after the session was made "
+                               f"({'; '.join(said)}); the session's state, factors and residual are of the problem "
+                               "as it was: make a new Session of the problem as it is now")
+
+    def _fields_now(self):
+        """(field, attribute) -> a copy of the arrays the session's field variables set (a uniform
+        field's B, a gradient field's B0 and G): what ``_check_unchanged`` compares."""
+        out = {}
+        for v in self.variables.values():
+            f = getattr(v, "field", None)
+            for attr in ("B", "B0", "G") if f is not None else ():
+                if isinstance(getattr(f, attr, None), np.ndarray):
+                    out[(id(f), attr)] = (f"{v.name}'s field {attr}", np.array(getattr(f, attr), float))
+        return out
 
     # ------------------------------------------------------------------ updates --------
     def update(self, lam=None, **values):
@@ -421,7 +484,7 @@ class Session:
         (1.0, [2.0], True)
         """
         t0 = time.perf_counter()
-        self._check_loads("update")
+        self._check_unchanged("update")
         lam0 = self.lam
         lam1 = lam0 if lam is None else _load_factor(lam, "update")
         new = self.commands.parse(values)
@@ -461,7 +524,9 @@ class Session:
         singular tangent at g (before, a singular tangent skipped the check and the state was
         accepted)."""
         if not renewed:
-            if not self.options.stability_check or self._sign is None or self._corr.F_g is g:
+            # (an unknown sign so far -- a start whose tangent could not be factored -- is taken
+            # here: before, it turned the check off for the whole session, without a word)
+            if not self.options.stability_check or self._corr.F_g is g:
                 return False, ""
             try:
                 self._corr.factor(g, lam, self._stamp, keep=True)
@@ -598,7 +663,7 @@ class Session:
         >>> round(float(J[2, 0]) / (1e-6 * 10.0 ** 3 / 300), 2)
         1.0
         """
-        self._check_loads("jacobian")
+        self._check_unchanged("jacobian")
         qs = [self.quantity(q) for q in _items(quantities)]
         vs = list(self.variables.values()) if variables is None else \
             [v if isinstance(v, Variable) else self.commands.lookup(v) for v in _items(variables)]
@@ -616,7 +681,10 @@ class Session:
                                "not the plant's response")
         if self._origin is not None:        # on the frames relative to the part (module docstring)
             qs = [OnPart(q, self._origin) for q in qs]
-        return sensitivity(self.problem, self._g, self.lam, qs, vs, method, solve_with=SolveWith(factorization=c.F))
+        try:
+            return sensitivity(self.problem, self._g, self.lam, qs, vs, method, solve_with=SolveWith(factorization=c.F))
+        finally:
+            self._material = self.problem.material      # a MaterialVariable's partials restore the law anew
 
     def quantity(self, q):
         """A ``design`` quantity as given, or the position of the probe named q
