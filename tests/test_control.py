@@ -1245,3 +1245,23 @@ def test_a_model_whose_regions_are_in_another_order_is_refused():
     coarse = Session(c, 1.0, [RegionMagnetisation(c, [[0, 1], [2, 3]], name="Br")])
     out = track(plant, "tip", targets, components=[2], model=coarse)
     assert out.max_error < 1e-3
+
+
+def test_a_quantity_no_command_moves_is_said_so_not_inverted():
+    """The straight antiparallel strip below its critical field (load factor 0.5 of 0.8): the tip's
+    x does not respond to the field to first order (a field along the strip exerts no couple on it
+    and a transverse one turns it only to second order), so the Jacobian is round-off (3.4e-18 per
+    0.3 T here).  Before, least squares inverted it: the loop commanded B_y = 7.3e12 and the session
+    refused that only as 'could not be followed'.  Now track and plan say the quantity does not
+    respond; the session stays at its command and the cycles done are kept."""
+    p, f = _antiparallel()
+    s = Session(p, 0.5, [FieldVariable(p, f, name="B")], steps=5)
+    B0 = s.values["B"].copy()
+    x0 = s.state.probes["tip"]["x"][0]
+    with pytest.raises(ControlError, match="does not respond to the commands") as exc:
+        track(s, "tip", x0 + np.array([0.0, -1e-3, -0.3])[:, None], components=[0], variables="B")
+    assert len(exc.value.tracking.errors) == 1
+    assert np.array_equal(s.values["B"], B0)
+    pl = plan(s, "tip", [[x0 - 0.3]], 1e-6, components=[0])
+    assert not pl.reached[0] and "does not respond to the commands" in pl.message
+    assert np.array_equal(s.values["B"], B0)

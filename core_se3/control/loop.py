@@ -33,6 +33,9 @@ from ..design import LoadMagnitude
 from ..errors import ControlError, OptionError
 from .commands import as_numbers
 
+#: a quantity's response to a command step of one scale below this fraction of its size is round-off
+RESPONSE_FLOOR = 1e-10
+
 __all__ = ["track", "plan", "Feedback", "PlanOptions", "Tracking", "Plan", "least_squares_step"]
 
 
@@ -141,22 +144,37 @@ def _components(components, size):
     return rows.astype(np.int64)
 
 
-def least_squares_step(J, e, scale, damping=0.0):
+def least_squares_step(J, e, scale, damping=0.0, floor=0.0):
     """The command step dx = s z, z = argmin |J s z - e|^2 + damping^2 |z|^2 (least norm when
-    damping is 0).
+    damping is 0), on the directions of J s whose singular value exceeds ``floor``: the response
+    of the quantity to a command step of one scale, below which it is round-off (the loops take
+    1e-10 of the quantity's size).  Without the floor a round-off Jacobian was inverted: a
+    straight strip in a field along its axis (tip x does not respond to B at all) was commanded
+    B_y = 7.3e12 T, which the session refused only as 'could not be followed'.  A quantity that
+    responds to no command direction above the floor is a ControlError that says so.
 
     Example
     -------
     >>> import numpy as np
     >>> least_squares_step(np.array([[2.0, 0.0]]), np.array([1.0]), np.ones(2)).tolist()
     [0.5, 0.0]
+    >>> least_squares_step(np.array([[2.0, 0.0], [0.0, 1e-17]]), np.array([1.0, 1.0]), np.ones(2), floor=1e-10).tolist()
+    [0.5, 0.0]
     """
     Js = J * scale[None, :]
+    sv = np.linalg.svd(Js, compute_uv=False)
+    top = float(sv.max()) if sv.size else 0.0
+    if not top > floor:
+        raise ControlError(f"the quantity does not respond to the commands here: its largest response to a command "
+                           f"step of one scale is {top:.1e}, at round-off (below {floor:.1e}); at this state no "
+                           "command moves it to first order (a symmetric state: e.g. a straight strip magnetised "
+                           "along a field parallel to it feels no couple) -- command other variables, or start the "
+                           "session from a state away from the symmetry")
     if damping > 0:
         n = Js.shape[1]
         z = np.linalg.solve(Js.T @ Js + damping ** 2 * np.eye(n), Js.T @ e)
     else:
-        z = np.linalg.lstsq(Js, e, rcond=None)[0]
+        z = np.linalg.lstsq(Js, e, rcond=max(floor / top, np.finfo(float).eps * max(Js.shape)))[0]
     return scale * z
 
 
@@ -232,6 +250,11 @@ class _Loop:
 
     def y(self):
         return self.q.value(self.s.problem, self.s.g, self.s.lam)[self.rows]
+
+    def floor(self, y, e):
+        """The response to a command step of one scale below which the Jacobian is round-off:
+        ``RESPONSE_FLOOR`` of the quantity's size max(|y|, |e|) (least_squares_step)."""
+        return RESPONSE_FLOOR * max(np.abs(y).max(initial=0.0), np.abs(e).max(initial=0.0))
 
     def jacobian(self):
         if self.model is not None:
@@ -406,7 +429,8 @@ def track(session, quantity, targets, variables=None, components=None, feedback=
     for k in range(1, K):
         t0 = time.perf_counter()
         try:
-            dx = least_squares_step(lp.jacobian(), fb.gain * (T[k] - Y[k - 1]), lp.scale, fb.damping)
+            e = fb.gain * (T[k] - Y[k - 1])
+            dx = least_squares_step(lp.jacobian(), e, lp.scale, fb.damping, lp.floor(Y[k - 1], e))
             st, a = lp.step(X[k - 1], dx, fb.max_halvings)
         except ControlError as exc:       # the cycles done kept (before, lost with the exception)
             exc.tracking = record(k, f"tracking stopped at sample {k} of {K}: {exc}")
@@ -475,7 +499,7 @@ def _sample(lp, target, tolerance, opts, guess, previous):
     x = lp.x()
     while e > tolerance and its < opts.max_iter:
         its += 1
-        dx = least_squares_step(J, target - y, lp.scale, opts.damping)
+        dx = least_squares_step(J, target - y, lp.scale, opts.damping, lp.floor(y, target - y))
         a = 1.0
         for _ in range(opts.max_halvings + 1):
             try:
