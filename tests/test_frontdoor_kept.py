@@ -1,0 +1,91 @@
+"""The front door loses nothing and misapplies nothing (branch wt-left8): outputs written
+atomically, failure messages that say what is kept, design starts in the variables' own shapes,
+angle warnings that say how to silence a meant multi-turn angle, and conservativeness judged by
+the load kinds."""
+import errno
+import os
+
+import numpy as np
+import pytest
+
+pytestmark = pytest.mark.core
+
+
+class _DiskFull:
+    """A file object that writes the first ``keep`` characters and then fails as a full disk."""
+
+    def __init__(self, fh, keep):
+        self.fh, self.keep = fh, keep
+
+    def write(self, text):
+        self.fh.write(text[:self.keep])
+        self.fh.flush()
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.fh.close()
+        return False
+
+    def __getattr__(self, name):
+        return getattr(self.fh, name)
+
+
+def test_write_json_that_fails_half_way_keeps_the_previous_file(tmp_path, monkeypatch):
+    """results.write_json over a good file, the disk full after 10 characters: the good file is
+    kept whole and no temporary file is left.  Before, open(path, 'w') emptied the file first and
+    left 10 characters of the new one (not JSON)."""
+    from core_se3.results import document, read_json, result_document, write_json
+    path = tmp_path / "r.json"
+    write_json(path, result_document("good", "core_se3", "default", {}, {"nx": None}, [], {}))
+    before = path.read_bytes()
+    real = open
+    monkeypatch.setattr(document, "open", lambda p, mode="r", *a, **k: _DiskFull(real(p, mode, *a, **k), 10)
+                        if "w" in mode else real(p, mode, *a, **k), raising=False)
+    with pytest.raises(OSError, match="No space"):
+        write_json(path, result_document("new", "core_se3", "default", {}, {"nx": None}, [], {}))
+    assert path.read_bytes() == before and read_json(path)["case"] == "good"
+    assert os.listdir(tmp_path) == ["r.json"]
+
+
+def _failing_savefig(monkeypatch):
+    """Figure.savefig that writes 7 bytes of the image and fails (a full disk)."""
+    from matplotlib.figure import Figure
+
+    def savefig(self, fname, **kw):
+        with open(fname, "wb") as fh:
+            fh.write(b"\x89PNG\r\n\x1a")
+        raise OSError(errno.ENOSPC, "No space left on device")
+    monkeypatch.setattr(Figure, "savefig", savefig)
+
+
+def test_plot_that_fails_half_way_keeps_the_previous_image(tmp_path, monkeypatch):
+    """plot_load_deflection (what ``bench run --plot`` and a run's probes.png draw) over a good
+    image, the save failing after 7 bytes: the good image is kept whole.  Before, savefig wrote
+    straight into the path and left the 7 bytes."""
+    from core_se3.io import plot_load_deflection
+    path = tmp_path / "curve.png"
+    plot_load_deflection(path, [0.0, 1.0], {"uz": [0.0, 0.5]})
+    before = path.read_bytes()
+    assert len(before) > 1000
+    _failing_savefig(monkeypatch)
+    with pytest.raises(OSError, match="No space"):
+        plot_load_deflection(path, [0.0, 1.0], {"uz": [0.0, 0.7]})
+    assert path.read_bytes() == before and os.listdir(tmp_path) == ["curve.png"]
+
+
+def test_bench_plot_that_fails_keeps_the_previous_image(tmp_path, monkeypatch, capsys):
+    """``core-se3 bench run cantilever-shear --plot`` over an earlier image with the save failing
+    (a full disk): exit status 2 with one error line, the earlier image kept byte for byte (the
+    forked plot worker inherits the failing savefig).  Before, the image was left truncated."""
+    from core_se3.cli import main
+    path = tmp_path / "with space" / "cantilever.png"
+    argv = ["bench", "run", "cantilever-shear", "--mesh", "4x1", "--steps", "1", "--plot", str(path), "-q"]
+    assert main(argv) == 0
+    before = path.read_bytes()
+    _failing_savefig(monkeypatch)
+    assert main(argv) == 2
+    assert "No space left on device" in capsys.readouterr().err
+    assert path.read_bytes() == before and os.listdir(path.parent) == ["cantilever.png"]
