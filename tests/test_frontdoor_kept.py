@@ -89,3 +89,71 @@ def test_bench_plot_that_fails_keeps_the_previous_image(tmp_path, monkeypatch, c
     assert main(argv) == 2
     assert "No space left on device" in capsys.readouterr().err
     assert path.read_bytes() == before and os.listdir(path.parent) == ["cantilever.png"]
+
+
+_STRIP = """name = "strip"
+[mesh]
+generator = "rectangle"
+L = 10.0
+width = 1.0
+nx = 4
+ny = 1
+[material]
+E = 1.2e6
+nu = 0.0
+h = 0.1
+[[supports]]
+type = "clamp"
+edge = "x0"
+[[loads]]
+type = "edge_force"
+edge = "x1"
+force = [0.0, 0.0, 1.0]
+[solver]
+steps = 3
+[output]
+plots = false
+picture = false
+"""
+
+
+def test_run_that_cannot_write_says_no_step_is_kept(tmp_path, capsys):
+    """``core-se3 run --out FILE/run`` (its parent a file: nothing can be written, nothing
+    solved): exit status 2 and a message that no load step converged and nothing is kept.
+    Before: 'the steps converged so far are kept where they could be written'."""
+    from core_se3.cli import main
+    scn = tmp_path / "s.toml"
+    scn.write_text(_STRIP)
+    assert main(["run", str(scn), "--out", str(scn / "run"), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "no load step converged: nothing is kept" in err and "converged so far are kept" not in err
+
+
+@pytest.mark.parametrize("failure, code", [(OSError(errno.ENOSPC, "No space left on device"), 2),
+                                           (KeyboardInterrupt(), 130)])
+def test_run_stopped_mid_way_names_the_step_it_keeps_and_resumes_from_it(tmp_path, monkeypatch, capsys,
+                                                                         failure, code):
+    """A 3-step run whose step-3 VTU file cannot be written (a full disk), or that gets Ctrl-C
+    there: the message names the step the checkpoint keeps (2, load factor 0.666667), and
+    ``--resume`` from it ends with the 4 records (start and 3 steps) at load factor 1 and the
+    files of steps 0..3.  Before, the message did not say which step (nor whether any) was kept."""
+    from core_se3.cli import main
+    from core_se3.results import read_json
+    from core_se3.scenario import sinks
+    scn, out = tmp_path / "s.toml", tmp_path / "out dir"
+    scn.write_text(_STRIP)
+    real = sinks.write_step_vtu
+
+    def write_step_vtu(run, k, *a, **kw):
+        if k == 3:
+            raise failure
+        return real(run, k, *a, **kw)
+    monkeypatch.setattr(sinks, "write_step_vtu", write_step_vtu)
+    assert main(["run", str(scn), "--out", str(out), "-q"]) == code
+    err = capsys.readouterr().err
+    assert f"{out / 'checkpoint.npz'} keeps step 2 at load factor 0.666667" in err and "--resume" in err
+    monkeypatch.setattr(sinks, "write_step_vtu", real)
+    assert main(["run", str(scn), "--out", str(out), "--resume", "-q"]) == 0
+    doc = read_json(out / "results.json")
+    assert [s["step"] for s in doc["steps"]] == [0, 1, 2, 3] and doc["steps"][-1]["load_factor"] == 1.0
+    assert sorted(os.listdir(out / "vtu")) == ["series.pvd"] + [f"step_{k:04d}.vtu" for k in range(4)]
