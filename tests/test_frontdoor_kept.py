@@ -157,3 +157,32 @@ def test_run_stopped_mid_way_names_the_step_it_keeps_and_resumes_from_it(tmp_pat
     doc = read_json(out / "results.json")
     assert [s["step"] for s in doc["steps"]] == [0, 1, 2, 3] and doc["steps"][-1]["load_factor"] == 1.0
     assert sorted(os.listdir(out / "vtu")) == ["series.pvd"] + [f"step_{k:04d}.vtu" for k in range(4)]
+
+
+def test_angle_warning_says_how_to_silence_a_meant_multi_turn_angle():
+    """A rotating field of 10 turns (20 pi rad) is legitimate; its AngleWarning said only that
+    angles are in radians.  Now it says how to silence it, and the code it quotes, run around
+    the same call, silences exactly that warning (a later call still warns)."""
+    import re
+    import warnings
+
+    import core_se3
+    from core_se3 import Material, Problem, mesh
+    from core_se3.errors import AngleWarning
+
+    def turn():
+        p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
+        p.clamp("x0")
+        p.rotate_edge("x1", axis=(1.0, 0.0, 0.0), angle=20 * np.pi)
+    with pytest.warns(AngleWarning) as said:
+        turn()
+    msg = str(said[0].message)
+    assert "62.8319 rad is 10 turns" in msg and "silence this warning" in msg
+    code = re.search(r"with warnings\.catch_warnings\(\): (warnings\.simplefilter\(.*\))$", msg).group(1)
+    with warnings.catch_warnings(record=True) as quiet:
+        warnings.simplefilter("always")
+        with warnings.catch_warnings():
+            eval(code, {"warnings": warnings, "core_se3": core_se3})
+            turn()
+        turn()
+    assert [issubclass(w.category, AngleWarning) for w in quiet] == [True]
