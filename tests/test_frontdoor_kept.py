@@ -186,3 +186,45 @@ def test_angle_warning_says_how_to_silence_a_meant_multi_turn_angle():
             turn()
         turn()
     assert [issubclass(w.category, AngleWarning) for w in quiet] == [True]
+
+
+def _two_region_design():
+    """A strip with a two-region magnetisation (6 variables, own shape (2, 3)) and the field's
+    magnitude (LoadMagnitude-free: a FieldVariable of 3) as the design variables."""
+    from core_se3 import Material, Problem, mesh
+    from core_se3.design import FieldVariable, RegionMagnetisation
+    from core_se3.design.inverse import Design, Pose, Target
+    from core_se3.design.objectives import ProbePosition
+    from core_se3.model.fields import UniformField
+    p = Problem(mesh.rectangle(1.0, 0.2, 4, 1), Material(1e3, 0.0, 0.05))
+    p.clamp("x0")
+    p.add_probe("tip")
+    f = UniformField((0.0, 0.0, 0.3))
+    p.add_magnetic((1.0, 0.0, 0.0), f, mu0=1.0)
+    m = RegionMagnetisation(p, [np.arange(2), np.arange(2, 4)], name="Br")
+    B = FieldVariable(p, f, name="B")
+    target = p.mesh.X[p.nodes("x1")].mean(0) + [0.0, 0.0, 0.05]
+    return Design(p, [m, B], [Pose("a", [Target(ProbePosition(p, "tip", target=target))])])
+
+
+def test_design_start_in_the_variables_own_shapes():
+    """Design.optimise(x0=...) took only the flat 9 numbers; the two-region magnetisation's start
+    by region, (2, 3), was refused ('x0 must be 9 finite numbers').  Now a start per variable
+    (own shapes), a dict {name: value} (the others at their start) and the flat numbers give
+    the same first point; the transposed (3, 2) and an unknown name are DesignErrors naming the
+    expected shapes and the variables."""
+    from core_se3.errors import DesignError
+    d = _two_region_design()
+    Br, B = np.array([[1.0, 0.0, 0.2], [0.8, 0.0, -0.1]]), np.array([0.0, 0.0, 0.25])
+    flat = np.concatenate([Br.ravel(), B])
+    starts = [flat, [Br, B], (Br.tolist(), B.tolist()), {"Br": Br, "B": B}]
+    firsts = [d.optimise(x0=x0, max_iter=1).history[0]["x"] for x0 in starts]
+    assert all(x == flat.tolist() for x in firsts)
+    start = d.x_start()
+    assert d.optimise(x0={"B": B}, max_iter=1).history[0]["x"] == start[:6].tolist() + B.tolist()
+    with pytest.raises(DesignError, match=r"shape \(2, 3\), got shape \(3, 2\) \(components by regions\?"):
+        d.optimise(x0=[Br.T, B], max_iter=1)
+    with pytest.raises(DesignError, match=r"x0 names no variable 'Bz'.*'Br', 'B'"):
+        d.optimise(x0={"Bz": B}, max_iter=1)
+    with pytest.raises(DesignError, match=r"x0 must be 9 finite numbers .*'Br': \(2, 3\), 'B': \(3,\)"):
+        d.optimise(x0=[1.0, 2.0, 3.0], max_iter=1)
