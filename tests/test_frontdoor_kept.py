@@ -282,3 +282,15 @@ def test_a_thin_rollup_is_not_counted_as_conservative():
     R = L / (2 * np.pi * k)
     exact = np.array([R * np.sin(2 * np.pi * k) - L, 0.0, R * (1 - np.cos(2 * np.pi * k))])
     assert np.abs(res.final.probes["tip"]["u"] - exact).max() <= 1e-12 * L
+
+
+def test_bench_plot_into_a_directory_is_refused_before_the_solve(tmp_path, capsys):
+    """``bench run --plot DIR`` (an existing directory) solved the case and then failed with
+    'Is a directory' naming a temporary file; now it is refused before the solve, naming the
+    option and a file path to give, and the directory is left as it was."""
+    from core_se3.cli import main
+    (tmp_path / "mine.txt").write_text("kept")
+    assert main(["bench", "run", "cantilever-shear", "--mesh", "4x1", "--steps", "1", "--plot", str(tmp_path)]) == 2
+    out, err = capsys.readouterr()
+    assert f"--plot {str(tmp_path)!r} is a directory" in err and "plot.png" in err and "case cantilever" not in out
+    assert os.listdir(tmp_path) == ["mine.txt"]

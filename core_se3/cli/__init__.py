@@ -143,9 +143,13 @@ def _case_plot(name, overrides, doc, res, path):
 BENCH_FILES = ("step_*.vtu", "series.pvd", "obstacles.pvd")     # a bench's --vtu names (never over foreign ones)
 
 
-def _plot_format_error(path):
-    """Why matplotlib cannot write the image ``path`` (an extension it has no writer for), or
-    None: checked before the case solves, not after (a bare ValueError from savefig)."""
+def _plot_target_error(path):
+    """Why the image ``path`` cannot be written -- an existing directory, an extension matplotlib
+    has no writer for -- or None: checked before the case solves, not after (a bare ValueError
+    from savefig; for a directory, 'Is a directory' naming the temporary file after the solve)."""
+    if os.path.isdir(path):
+        return (f"--plot {path!r} is a directory: give the path of an image file (e.g. "
+                f"{os.path.join(path, 'plot.png')!r})")
     ext = os.path.splitext(path)[1].lower().lstrip(".")
     if not ext:
         return None                            # matplotlib's default format (png)
@@ -175,7 +179,7 @@ def bench_run(args):
     from ..io.rundir import RunDirectory
     from ..io.worker import PlotProcess
     from ..scenario.context import on_root
-    bad = (_plot_format_error(args.plot) if args.plot else None) or (_json_target_error(args.json) if args.json
+    bad = (_plot_target_error(args.plot) if args.plot else None) or (_json_target_error(args.json) if args.json
                                                                       else None)
     if bad is not None:
         if launched_rank() == 0:
