@@ -294,3 +294,19 @@ def test_bench_plot_into_a_directory_is_refused_before_the_solve(tmp_path, capsy
     out, err = capsys.readouterr()
     assert f"--plot {str(tmp_path)!r} is a directory" in err and "plot.png" in err and "case cantilever" not in out
     assert os.listdir(tmp_path) == ["mine.txt"]
+
+
+def test_a_sweep_value_given_twice_is_refused(tmp_path, capsys):
+    """``--set material.E=1e6,1000000.0`` (or a [sweep] array with a value twice) ran two
+    identical runs, silently -- most likely a typo for another value.  Now exit status 2 before
+    any run, naming the key, the value and its two places; nothing is written."""
+    from core_se3.cli import main
+    scn = tmp_path / "s.toml"
+    scn.write_text(_STRIP)
+    out = tmp_path / "sweep"
+    assert main(["sweep", str(scn), "--set", "material.E=1e6,1000000.0", "--out", str(out), "-q"]) == 2
+    assert "--set material.E lists 1000000.0 twice (values 0 and 1)" in capsys.readouterr().err
+    scn.write_text(_STRIP + '[sweep]\n"solver.steps" = [2, 3, 2]\n')
+    assert main(["sweep", str(scn), "--out", str(out), "-q"]) == 2
+    assert "[sweep.solver.steps]: lists 2 twice (values 0 and 2)" in capsys.readouterr().err
+    assert not out.exists()
