@@ -310,3 +310,32 @@ def test_a_sweep_value_given_twice_is_refused(tmp_path, capsys):
     assert main(["sweep", str(scn), "--out", str(out), "-q"]) == 2
     assert "[sweep.solver.steps]: lists 2 twice (values 0 and 2)" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_vtu_and_pvd_that_fail_half_way_keep_the_previous_files(tmp_path, monkeypatch):
+    """io.write_vtu and io.write_pvd (the Python API's VTU output; a run wraps them itself) over
+    good files, the write failing after 5 bytes (a full disk): the good files are kept whole.
+    Before, meshio and ElementTree wrote straight into the path and left 5 bytes."""
+    import meshio
+    from xml.etree import ElementTree
+
+    from core_se3 import mesh
+    from core_se3.io import read_field_data, write_pvd, write_vtu
+    m = mesh.rectangle(1.0, 1.0, 2, 1)
+    vtu, pvd = tmp_path / "s.vtu", tmp_path / "series.pvd"
+    write_vtu(vtu, m.X, m.quads, m.g0, m.g0, field_data={"load_factor": 0.5})
+    write_pvd(pvd, [(0.5, "s.vtu")])
+    before = vtu.read_bytes(), pvd.read_bytes()
+
+    def full(path, *a, **k):
+        with open(path, "wb") as fh:
+            fh.write(b"<?xml")
+        raise OSError(errno.ENOSPC, "No space left on device")
+    monkeypatch.setattr(meshio, "write", full)
+    monkeypatch.setattr(ElementTree.ElementTree, "write", lambda self, path, *a, **k: full(path))
+    with pytest.raises(OSError, match="No space"):
+        write_vtu(vtu, m.X, m.quads, m.g0, m.g0, field_data={"load_factor": 1.0})
+    with pytest.raises(OSError, match="No space"):
+        write_pvd(pvd, [(1.0, "s.vtu")])
+    assert (vtu.read_bytes(), pvd.read_bytes()) == before and read_field_data(vtu) == {"load_factor": 0.5}
+    assert sorted(os.listdir(tmp_path)) == ["s.vtu", "series.pvd"]
