@@ -339,3 +339,15 @@ def test_vtu_and_pvd_that_fail_half_way_keep_the_previous_files(tmp_path, monkey
         write_pvd(pvd, [(1.0, "s.vtu")])
     assert (vtu.read_bytes(), pvd.read_bytes()) == before and read_field_data(vtu) == {"load_factor": 0.5}
     assert sorted(os.listdir(tmp_path)) == ["s.vtu", "series.pvd"]
+
+
+@pytest.mark.parametrize("sets, said", [(["load_max=nan"], "--set load_max: value 'nan' is not a finite number"),
+                                        (["E=1e6", "E=2e6"], "--set E is given twice")])
+def test_bench_set_names_a_non_finite_or_repeated_value(sets, said):
+    """``bench run --set load_max=nan`` was refused as the edge force's 'got array([nan, nan,
+    nan])', without the --set that caused it, and ``--set E=1e6 --set E=2e6`` ran with 2e6
+    silently; now both stop before the solve naming the --set."""
+    from core_se3.cli import main
+    argv = ["bench", "run", "cantilever-shear", "--mesh", "4x1", "--steps", "1"]
+    with pytest.raises(SystemExit, match=said):
+        main(argv + [a for s in sets for a in ("--set", s)])

@@ -34,15 +34,22 @@ def _parse_mesh(s):
 
 
 def _parse_set(items):
+    """``bench run --set KEY=VALUE ...`` as {KEY: float}; SystemExit naming the --set for a value
+    that is not a finite number (before, load_max=nan was reported as the edge force's
+    'got array([nan, nan, nan])') or a KEY given twice (the second silently replaced the first)."""
     out = {}
     for it in items or []:
         if "=" not in it:
             raise SystemExit(f"--set expects KEY=VALUE, got {it!r}")
         k, v = it.split("=", 1)
+        if k in out:
+            raise SystemExit(f"--set {k} is given twice (the second would silently replace the first): give it once")
         try:
             out[k] = float(v)
         except ValueError:
             raise SystemExit(f"--set {k}: value {v!r} is not a number") from None
+        if not np.isfinite(out[k]):
+            raise SystemExit(f"--set {k}: value {v!r} is not a finite number")
     return out
 
 
