@@ -351,3 +351,19 @@ def test_bench_set_names_a_non_finite_or_repeated_value(sets, said):
     argv = ["bench", "run", "cantilever-shear", "--mesh", "4x1", "--steps", "1"]
     with pytest.raises(SystemExit, match=said):
         main(argv + [a for s in sets for a in ("--set", s)])
+
+
+def test_output_dir_with_a_tilde_is_the_home_folder(tmp_path, monkeypatch):
+    """``[output] dir = "~/runs/strip"`` made a folder named '~' in the working directory (a
+    later ``rm -rf ~`` there is a disaster); now ~ is the home folder, as a shell reads it."""
+    from core_se3 import scenario
+    home, work = tmp_path / "home", tmp_path / "work"
+    home.mkdir()
+    work.mkdir()
+    monkeypatch.setenv("HOME", str(home))
+    monkeypatch.chdir(work)
+    scn = tmp_path / "s.toml"
+    scn.write_text(_STRIP.replace("[output]\n", '[output]\ndir = "~/runs/strip"\nvtu = false\n'))
+    res = scenario.run(scenario.load(str(scn)))
+    assert res.out == str(home / "runs" / "strip") and os.listdir(work) == []
+    assert "results.json" in os.listdir(home / "runs" / "strip")
