@@ -367,3 +367,22 @@ def test_output_dir_with_a_tilde_is_the_home_folder(tmp_path, monkeypatch):
     res = scenario.run(scenario.load(str(scn)))
     assert res.out == str(home / "runs" / "strip") and os.listdir(work) == []
     assert "results.json" in os.listdir(home / "runs" / "strip")
+
+
+def test_ctrl_c_in_bench_run_is_one_line(tmp_path, monkeypatch, capsys):
+    """Ctrl-C while ``bench run`` solved ended it with a Python traceback (the scenario commands
+    print one line); now one line saying what is written, exit status 130, and the --vtu
+    directory released (no lock left: the same command runs again)."""
+    import core_se3.catalogue as catalogue
+    from core_se3.cli import main
+    real = catalogue.run_case
+
+    def stop(*a, **k):
+        raise KeyboardInterrupt
+    monkeypatch.setattr(catalogue, "run_case", stop)
+    argv = ["bench", "run", "cantilever-shear", "--mesh", "4x1", "--steps", "1", "--vtu", str(tmp_path / "v")]
+    assert main(argv) == 130
+    err = capsys.readouterr().err
+    assert "interrupted (SIGINT): the case stopped" in err and "Traceback" not in err
+    monkeypatch.setattr(catalogue, "run_case", real)
+    assert main(argv) == 0 and "step_0001.vtu" in os.listdir(tmp_path / "v")

@@ -20,7 +20,8 @@ from ..backend import launched_rank, launched_ranks
 from ..errors import CoreSE3Error
 from ..fem import ELEMENTS
 from ..results.document import ROUNDOFF_NOTE, format_backends, format_residual
-from .common import error_code as _error_code, output_error as _output_error, progress_on as _progress_on, whole_number
+from .common import error_code as _error_code, interrupted as _interrupted, output_error as _output_error, \
+    progress_on as _progress_on, whole_number
 from .scenario import (add_parsers, design_run, friction_cells, friction_obstacles, kinds, mesh_check,
                        scenario_run, scenario_sweep, step_table as _step_table, warmup)
 
@@ -183,6 +184,7 @@ def _json_target_error(path):
 def bench_run(args):
     """``core-se3 bench run``; with ``--plot`` matplotlib is imported by a forked worker while the
     case solves (``io.worker.PlotProcess``; not under MPI)."""
+    from ..io.lifecycle import termination_as_interrupt
     from ..io.rundir import RunDirectory
     from ..io.worker import PlotProcess
     from ..scenario.context import on_root
@@ -202,9 +204,12 @@ def bench_run(args):
         return 2
     except OSError as exc:
         return _output_error(exc, "nothing was solved")
-    try:
-        with PlotProcess(enabled=bool(args.plot) and launched_ranks() == 1) as plots:
+    try:       # (the plot worker is forked before the handlers: it keeps the default ones)
+        with PlotProcess(enabled=bool(args.plot) and launched_ranks() == 1) as plots, termination_as_interrupt():
             return _bench_run(args, plots, rd)
+    except KeyboardInterrupt as exc:            # Ctrl-C or SIGTERM: one line, 130 or 143 (was a traceback)
+        return _interrupted(exc, "the case stopped; the outputs said 'wrote ...' above are complete (each file is "
+                                 "written whole), the others are not written: run it again")
     finally:
         if rd is not None:
             rd.release()
