@@ -386,3 +386,17 @@ def test_ctrl_c_in_bench_run_is_one_line(tmp_path, monkeypatch, capsys):
     assert "interrupted (SIGINT): the case stopped" in err and "Traceback" not in err
     monkeypatch.setattr(catalogue, "run_case", real)
     assert main(argv) == 0 and "step_0001.vtu" in os.listdir(tmp_path / "v")
+
+
+def test_a_load_added_twice_is_refused():
+    """``p.add(p.loads[0])`` put the same load object in the problem twice: it acted twice (the
+    tip force's total 2 instead of 1), silently.  Now a LoadError naming loads[0]; the problem
+    keeps its one load (total 1)."""
+    from core_se3 import Material, Problem, mesh
+    from core_se3.errors import LoadError
+    p = Problem(mesh.rectangle(10.0, 1.0, 4, 1), Material(1.2e6, 0.0, 0.1))
+    p.clamp("x0")
+    p.add_edge_force("x1", (0.0, 0.0, 1.0))
+    with pytest.raises(LoadError, match=r"is loads\[0\] of the problem already: adding it again would apply it twice"):
+        p.add(p.loads[0])
+    assert len(p.loads) == 1 and p.external(p.mesh.g0, 1.0)[0][:, 2].sum() == pytest.approx(1.0, rel=1e-14)
