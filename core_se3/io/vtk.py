@@ -20,7 +20,7 @@ from ..lie import rotation_angle
 from ..results.atomic import atomic_path
 
 __all__ = ["frame_fields", "write_vtu", "write_pvd", "write_series", "as_frames", "as_points",
-           "as_cells", "ensure_parent", "read_field_data", "pvd_times"]
+           "as_cells", "read_field_data", "pvd_times"]
 
 _CELL_TYPES = {3: "triangle", 4: "quad"}
 
@@ -55,13 +55,6 @@ def as_cells(quads, n: int) -> np.ndarray:
     if c.size and (c.min() < 0 or c.max() >= n):
         raise ValueError(f"quads reference node ids outside [0, {n})")
     return c
-
-
-def ensure_parent(path) -> str:
-    path = os.fspath(path)
-    parent = os.path.dirname(os.path.abspath(path))
-    os.makedirs(parent, exist_ok=True)
-    return path
 
 
 def frame_fields(g0, g) -> dict[str, np.ndarray]:
