@@ -599,7 +599,10 @@ class AngleWarning(UserWarning):
     :data:`TURNS_MAX` turns.  Every angle of core_se3 is in radians (the one exception, a
     scenario's ``hole_deg``, says so in its name); ``rotate_edge(..., angle=90)`` meant a quarter
     turn and rolled the edge 14.3 times.  Give the angle in radians (``numpy.radians``).  A
-    scenario file says the same as a :class:`ScenarioWarning` naming its key.
+    meant angle of many turns (a field turning 10 times) is silenced around the call with
+    ``warnings.catch_warnings()`` and ``warnings.simplefilter("ignore", AngleWarning)``, as the
+    message says (:data:`SILENCE_ANGLE`).  A scenario file says the same as a
+    :class:`ScenarioWarning` naming its key.
 
     Example
     -------
@@ -607,9 +610,16 @@ class AngleWarning(UserWarning):
     >>> with warnings.catch_warnings(record=True) as said:
     ...     warnings.simplefilter("always")
     ...     _ = warn_angle(90.0, "rotate_edge: angle")
-    >>> print(said[0].message)
-    rotate_edge: angle = 90 rad is 14.3 turns (more than 3): angles are in radians (90 degrees is 1.5708 rad)
+    >>> print(said[0].message)                        # doctest: +NORMALIZE_WHITESPACE
+    rotate_edge: angle = 90 rad is 14.3 turns (more than 3): angles are in radians (90 degrees is 1.5708 rad); if
+    the angle is meant, silence this warning around the call: with warnings.catch_warnings():
+    warnings.simplefilter("ignore", core_se3.errors.AngleWarning)
     """
+
+
+#: how to silence an AngleWarning of an angle that is meant (said in its message)
+SILENCE_ANGLE = ("if the angle is meant, silence this warning around the call: with warnings.catch_warnings(): "
+                 'warnings.simplefilter("ignore", core_se3.errors.AngleWarning)')
 
 
 def angle_in_degrees(angle, path=True):
@@ -649,5 +659,5 @@ def warn_angle(angle, what, path=True):
         here, f, level = os.path.dirname(os.path.abspath(__file__)) + os.sep, sys._getframe(0), 1
         while f.f_back is not None and os.path.abspath(f.f_code.co_filename).startswith(here):
             f, level = f.f_back, level + 1
-        warnings.warn(AngleWarning(f"{what} = {msg}"), stacklevel=level)
+        warnings.warn(AngleWarning(f"{what} = {msg}; {SILENCE_ANGLE}"), stacklevel=level)
     return angle

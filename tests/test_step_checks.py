@@ -73,13 +73,17 @@ def test_one_step_rollup_keeps_its_iterations():
 
 
 @pytest.mark.parametrize("name, steps", [("curved-rollup", 2), ("rollup", 6)])
-def test_a_try_that_turns_a_node_by_pi_is_probed_whichever_way_round_off_falls(name, steps):
+def test_a_try_that_turns_a_node_by_pi_is_probed_whichever_way_round_off_falls(name, steps, pinned_backend):
     """A roll-up stepped by exactly pi a step turns its tip by pi to round-off: curved-rollup in
     2 steps by 3.1415926535897927 and ...913 rad (an ulp or two below pi), rollup in 6 steps by
     pi, pi, pi, pi + 4e-16, pi - 5e-15, pi + 5e-15.  With the trigger at pi the last bit decided:
     curved-rollup was not probed, rollup in 6 steps probed its 4th and 6th steps only.  The
     trigger has a margin (PROBE_TURN = 0.95 pi): every such step is probed (3 Newton iterations
-    each), the tries and their iterations (6 and 19) unchanged, none refused."""
+    each), the tries and their iterations (6 and 19) unchanged, none refused.  (One backend for
+    both runs, ``pinned_backend``: 'auto' switches to numba after a count of work, and the two
+    runs' work differs by the probes, so the switch could fall at different steps: final frames
+    1.4e-16 apart under NumPy 2 after the end check stopped assembling tangents for a dead
+    moment, which is not conservative by its kind.)"""
     from core_se3.solvers.step_checks import PROBE_TURN
     assert 0.9 * np.pi < PROBE_TURN < np.pi * (1 - 1e-6)
     doc, res, _ = run_case(name, steps=steps)

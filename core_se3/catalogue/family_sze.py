@@ -353,8 +353,7 @@ def document(case, p, prob, res):
 
 
 def plot(case, p, doc, res, path):
-    from ..io.plots import new_figure
-    from ..io.vtk import ensure_parent
+    from ..io.plots import new_figure, save_figure
     fig = new_figure()
     ax = fig.add_subplot(111)
     ref = doc["reference"]
@@ -374,7 +373,7 @@ def plot(case, p, doc, res, path):
                     + ("" if ref["path_complete"] else " (partial path)")))
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
-    fig.savefig(ensure_parent(path), dpi=120, bbox_inches="tight")
+    save_figure(fig, path, dpi=120, bbox_inches="tight")      # atomic: a failed save keeps the earlier image
 
 
 def report(doc):

@@ -20,7 +20,8 @@ from ..backend import launched_rank, launched_ranks
 from ..errors import CoreSE3Error
 from ..fem import ELEMENTS
 from ..results.document import ROUNDOFF_NOTE, format_backends, format_residual
-from .common import error_code as _error_code, output_error as _output_error, progress_on as _progress_on, whole_number
+from .common import error_code as _error_code, interrupted as _interrupted, output_error as _output_error, \
+    progress_on as _progress_on, whole_number
 from .scenario import (add_parsers, design_run, friction_cells, friction_obstacles, kinds, mesh_check,
                        scenario_run, scenario_sweep, step_table as _step_table, warmup)
 
@@ -34,15 +35,22 @@ def _parse_mesh(s):
 
 
 def _parse_set(items):
+    """``bench run --set KEY=VALUE ...`` as {KEY: float}; SystemExit naming the --set for a value
+    that is not a finite number (before, load_max=nan was reported as the edge force's
+    'got array([nan, nan, nan])') or a KEY given twice (the second silently replaced the first)."""
     out = {}
     for it in items or []:
         if "=" not in it:
             raise SystemExit(f"--set expects KEY=VALUE, got {it!r}")
         k, v = it.split("=", 1)
+        if k in out:
+            raise SystemExit(f"--set {k} is given twice (the second would silently replace the first): give it once")
         try:
             out[k] = float(v)
         except ValueError:
             raise SystemExit(f"--set {k}: value {v!r} is not a number") from None
+        if not np.isfinite(out[k]):
+            raise SystemExit(f"--set {k}: value {v!r} is not a finite number")
     return out
 
 
@@ -143,9 +151,13 @@ def _case_plot(name, overrides, doc, res, path):
 BENCH_FILES = ("step_*.vtu", "series.pvd", "obstacles.pvd")     # a bench's --vtu names (never over foreign ones)
 
 
-def _plot_format_error(path):
-    """Why matplotlib cannot write the image ``path`` (an extension it has no writer for), or
-    None: checked before the case solves, not after (a bare ValueError from savefig)."""
+def _plot_target_error(path):
+    """Why the image ``path`` cannot be written -- an existing directory, an extension matplotlib
+    has no writer for -- or None: checked before the case solves, not after (a bare ValueError
+    from savefig; for a directory, 'Is a directory' naming the temporary file after the solve)."""
+    if os.path.isdir(path):
+        return (f"--plot {path!r} is a directory: give the path of an image file (e.g. "
+                f"{os.path.join(path, 'plot.png')!r})")
     ext = os.path.splitext(path)[1].lower().lstrip(".")
     if not ext:
         return None                            # matplotlib's default format (png)
@@ -172,10 +184,11 @@ def _json_target_error(path):
 def bench_run(args):
     """``core-se3 bench run``; with ``--plot`` matplotlib is imported by a forked worker while the
     case solves (``io.worker.PlotProcess``; not under MPI)."""
+    from ..io.lifecycle import termination_as_interrupt
     from ..io.rundir import RunDirectory
     from ..io.worker import PlotProcess
     from ..scenario.context import on_root
-    bad = (_plot_format_error(args.plot) if args.plot else None) or (_json_target_error(args.json) if args.json
+    bad = (_plot_target_error(args.plot) if args.plot else None) or (_json_target_error(args.json) if args.json
                                                                       else None)
     if bad is not None:
         if launched_rank() == 0:
@@ -191,9 +204,12 @@ def bench_run(args):
         return 2
     except OSError as exc:
         return _output_error(exc, "nothing was solved")
-    try:
-        with PlotProcess(enabled=bool(args.plot) and launched_ranks() == 1) as plots:
+    try:       # (the plot worker is forked before the handlers: it keeps the default ones)
+        with PlotProcess(enabled=bool(args.plot) and launched_ranks() == 1) as plots, termination_as_interrupt():
             return _bench_run(args, plots, rd)
+    except KeyboardInterrupt as exc:            # Ctrl-C or SIGTERM: one line, 130 or 143 (was a traceback)
+        return _interrupted(exc, "the case stopped; the outputs said 'wrote ...' above are complete (each file is "
+                                 "written whole), the others are not written: run it again")
     finally:
         if rd is not None:
             rd.release()

@@ -222,13 +222,13 @@ def _open(args):
 def _guarded(call, kept, resume):
     """(call(), None), or (None, the exit status) of a long run's error: a CoreSE3Error, an
     OSError writing its outputs (``kept``: what is kept) or an interrupt (``resume``: where it
-    stopped and how to continue, or a function giving it when the interrupt comes)."""
+    stopped and how to continue); either may be a function giving it when the error comes."""
     try:
         return call(), None
     except CoreSE3Error as exc:
         return None, error_code(exc)
     except OSError as exc:
-        return None, output_error(exc, kept)
+        return None, output_error(exc, kept() if callable(kept) else kept)
     except KeyboardInterrupt as exc:
         return None, interrupted(exc, resume() if callable(resume) else resume)
 
@@ -242,6 +242,26 @@ def _sweep_stopped(scn, out):
     if os.path.exists(os.path.join(output_directory(scn, out, "-sweep"), "sweep.npz")):
         return "the finished runs are in sweep.csv (sweep.json says where it stopped): continue with --resume"
     return "it stopped before its first finished run: nothing to continue; run it again (without --resume)"
+
+
+def _run_stopped(scn, out):
+    """What a run that stopped (an output it could not write, an interrupt) kept: the step and
+    load factor of the checkpoint in its directory (continue with --resume), or that no load step
+    converged, so nothing is kept to continue.  (Before: 'the steps converged so far are kept'
+    also when none had.)"""
+    from ..errors import CheckpointError
+    from ..io import Checkpoint
+    from ..scenario.runner import output_directory
+    ck = Checkpoint(output_directory(scn, out))
+    try:
+        st = ck.load() if ck.exists() else None
+    except (CheckpointError, OSError):
+        st = None
+    if st is None or st["step"] < 1:
+        return (f"no load step converged: nothing is kept to continue from (no checkpoint of a load step in "
+                f"{ck.directory}); run it again (with --force where {ck.directory} holds this run's files)")
+    return (f"the checkpoint {ck.path} keeps step {st['step']} at load factor {st['lam']:.6g} (results.json "
+            "records the steps to it): continue with --resume")
 
 
 def _contradiction(args):
@@ -271,9 +291,7 @@ def scenario_run(args):
     with _warnings_once(scn.warnings, _RUN_WARNINGS):
         res, code = _guarded(lambda: scenario.run(scn, out=args.out, resume=args.resume, progress=progress,
                                                   force=args.force),
-                             "the steps converged so far are kept where they could be written",
-                             "results.json says where; the checkpoint keeps the last converged step: continue "
-                             "with --resume")
+                             lambda: _run_stopped(scn, args.out), lambda: _run_stopped(scn, args.out))
     if code is not None:
         return code
     if not args.quiet:
@@ -457,8 +475,7 @@ def scenario_sweep(args):
     with _warnings_once(scn.warnings, _RUN_WARNINGS):
         res, code = _guarded(lambda: scenario.sweep(scn, grid, out=args.out, progress=progress, warm=not args.cold,
                                                     resume=args.resume, force=args.force),
-                             "the sweep's finished rows are kept in sweep.csv where it could be written",
-                             lambda: _sweep_stopped(scn, args.out))
+                             lambda: _sweep_stopped(scn, args.out), lambda: _sweep_stopped(scn, args.out))
     if code is not None:
         return code
     failed = [r for r in res.rows if r["status"] != "complete"]

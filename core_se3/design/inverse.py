@@ -40,7 +40,7 @@ import warnings
 import numpy as np
 
 from ..backend import launched_ranks
-from ..errors import ConvergenceError, DesignError, ParallelError, warn_angle
+from ..errors import ConvergenceError, DesignError, ParallelError, did_you_mean, warn_angle
 from .equilibrium import (ElementCheck, EquilibriumOptions, EquilibriumState, assign_all, follow, multipliers,
                           restore_multipliers, solve_flat)
 from .objectives import AngleInDegrees, NodePosition, Orientation, ProbePosition, RotationAngle
@@ -78,9 +78,20 @@ def _setting(pose, v, value):
     components); DesignError otherwise.  Before, a (regions, components) array, one of another
     size or a string failed at the first solve with a bare NumPy ValueError, and NaN as 12
     cut-backs of 'non-finite residual'."""
+    return _values_of(f"pose {pose.name!r}: the setting of {v.name!r} ({', '.join(v.labels)})", v, value)
+
+
+def _own_shape(v):
+    """A variable's own shape: (regions, components) of a regional one, else (size,)."""
     k = len(getattr(v, "regions", ())) or 1
-    own = (k, v.size // k) if k > 1 and v.size % k == 0 else (v.size,)
-    what = f"pose {pose.name!r}: the setting of {v.name!r} ({', '.join(v.labels)})"
+    return (k, v.size // k) if k > 1 and v.size % k == 0 else (v.size,)
+
+
+def _values_of(what, v, value):
+    """``value`` as (size,) numbers of ``v`` in the order of ``v.labels`` (:func:`_setting`, a
+    design's start): one number (every component), ``v.size`` numbers or an array of the
+    variable's own shape (:func:`_own_shape`); DesignError naming ``what`` otherwise."""
+    own = _own_shape(v)
     try:
         a = np.asarray(value, float)
         ok = not isinstance(value, (bool, str, bytes)) and np.asarray(value).dtype.kind in "iuf"
@@ -435,8 +446,11 @@ class Design:
         ----------
         method : str
             One of :data:`METHODS`.
-        x0 : (nx,) array, optional
-            The start (checked against the bounds).
+        x0 : (nx,) array, sequence or dict, optional
+            The start (checked against the bounds): the nx numbers in the order of ``labels``,
+            one value per variable (each of its own shape, (regions, components) for a regional
+            magnetisation, or its size, or one number), or a dict {variable name: value} (the
+            variables left out at their start).
         max_iter : int
             Iterations (least_squares: evaluations, scipy's ``max_nfev``: the start and every
             trial point, the rejected ones too -- each costs its equilibrium solves; the result
@@ -523,13 +537,7 @@ class Design:
         if x0 is None:
             x0 = self.x_start()
         else:
-            try:
-                x0 = np.asarray(x0, float)
-            except (TypeError, ValueError):
-                raise DesignError(f"x0 must be {self.nx} numbers ({', '.join(self.labels)}), got {x0!r}") from None
-            if x0.shape != (self.nx,) or not np.all(np.isfinite(x0)):
-                raise DesignError(f"x0 must be {self.nx} finite numbers ({', '.join(self.labels)}), got "
-                                  f"{x0.ravel().tolist()[:8]}")
+            x0 = self._start_of(x0)
             for lab, x in zip(self.labels, x0):        # a polar form's angle [rad]: degrees?
                 if lab.endswith(".angle"):
                     warn_angle(x, f"x0's {lab}")
@@ -538,6 +546,39 @@ class Design:
             raise DesignError(f"the start {x0[i]:g} of {self.labels[i]!r} lies outside its bounds "
                               f"[{self.lower[i]:g}, {self.upper[i]:g}]")
         return x0, norm
+
+    def _start_of(self, x0):
+        """A given start as (nx,) numbers in the order of ``self.labels``: the nx numbers; one
+        value per variable (a sequence with an entry per variable, or a dict {name: value} whose
+        variables left out keep their start), each one number, its size or its own shape
+        (regions, components), as a pose's settings; or, with one variable, a value of that
+        variable.  (Before, only the flat nx numbers: a two-region magnetisation's (2, 3) start
+        was refused.)  DesignError naming the expected shapes otherwise."""
+        vs, names = self.variables, [v.name for v in self.variables]
+        shapes = ", ".join(f"{v.name!r}: {_own_shape(v)}" for v in vs)
+        said = (f"x0 must be {self.nx} finite numbers ({', '.join(self.labels)}), one value per variable ({shapes}) "
+                f"or a dict {{variable name: value}}")
+        if isinstance(x0, dict):
+            unknown = [k for k in x0 if getattr(k, "name", k) not in names]
+            if unknown:
+                raise DesignError(f"x0 names no variable {unknown[0]!r}{did_you_mean(str(unknown[0]), names)} "
+                                  f"(the variables: {', '.join(map(repr, names))})")
+            given = {getattr(k, "name", k): val for k, val in x0.items()}
+            parts = [given.get(v.name, self.x0[i]) for i, v in enumerate(vs)]
+        else:
+            try:
+                flat = np.asarray(x0, float)
+            except (TypeError, ValueError):
+                flat = None
+            if flat is not None and flat.shape == (self.nx,) and not isinstance(x0, str):
+                parts = [flat[sl] for sl in self.slices]
+            elif len(vs) == 1:
+                parts = [x0]
+            elif isinstance(x0, (list, tuple, np.ndarray)) and not isinstance(x0, str) and len(x0) == len(vs):
+                parts = list(x0)
+            else:
+                raise DesignError(f"{said}, got {x0!r}"[:600])
+        return np.concatenate([_values_of(f"{said}: the start of {v.name!r}", v, val) for v, val in zip(vs, parts)])
 
     def _least_squares(self, x0, tol, max_iter, record):
         """scipy's trust-region reflective least squares on the scaled z = x / xscale; ``record``

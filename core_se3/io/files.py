@@ -1,5 +1,6 @@
-"""Atomic file writes: every file is written to a temporary name in its own directory and moved
-into place with os.replace, which is atomic on POSIX: a reader (or a run killed at any instant)
+"""Atomic file writes (:func:`atomic_path`, from ``results.atomic``, whose ``write_json`` uses it
+too): every file is written to a temporary name in its own directory and moved into place with
+os.replace, which is atomic on POSIX: a reader (or a run killed at any instant)
 sees either the previous complete file or the new complete file, never a partial one.
 
 Example
@@ -12,72 +13,13 @@ Example
 """
 from __future__ import annotations
 
-import contextlib
 import os
-import tempfile
 
-from ..results.document import json_text
+from ..results.atomic import atomic_path
+from ..results.document import write_json
 
 __all__ = ["atomic_path", "write_text_atomic", "write_json_atomic", "check_input_file", "read_input_file",
            "without_contents"]
-
-
-@contextlib.contextmanager
-def atomic_path(path, suffix=None):
-    """Yield a temporary path next to ``path`` (same extension); on success move it to ``path``.
-
-    If the block raises, the temporary file is removed and ``path`` keeps its previous content.
-    The file is fsync'ed before the move; its permissions follow the umask (not mkstemp's 0600).
-
-    Parameters
-    ----------
-    path : str or path-like
-        The final file (its directory is created if needed).
-    suffix : str, optional
-        Extension of the temporary file (default that of ``path``: writers that choose the format
-        by extension, e.g. meshio, still work).
-
-    Yields
-    ------
-    str
-        The temporary path to write.
-
-    Example
-    -------
-    >>> import os, pathlib, tempfile
-    >>> p = os.path.join(tempfile.mkdtemp(), "a.txt")
-    >>> with atomic_path(p) as tmp:
-    ...     _ = pathlib.Path(tmp).write_text("complete")
-    >>> try:
-    ...     with atomic_path(p) as tmp:
-    ...         _ = pathlib.Path(tmp).write_text("partial")
-    ...         raise KeyboardInterrupt                     # a run killed while writing
-    ... except KeyboardInterrupt:
-    ...     pass
-    >>> open(p).read(), os.listdir(os.path.dirname(p))
-    ('complete', ['a.txt'])
-    """
-    path = os.fspath(path)
-    d = os.path.dirname(os.path.abspath(path))
-    os.makedirs(d, exist_ok=True)
-    ext = suffix if suffix is not None else os.path.splitext(path)[1]
-    fd, tmp = tempfile.mkstemp(prefix="." + os.path.basename(path) + ".", suffix=".tmp" + ext, dir=d)
-    os.close(fd)
-    os.chmod(tmp, 0o666 & ~_umask())          # mkstemp makes 0600; give the usual permissions
-    try:
-        yield tmp
-        with open(tmp, "rb+") as fh:
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-
-
-def _umask():
-    mask = os.umask(0o022)
-    os.umask(mask)
-    return mask
 
 
 def write_text_atomic(path, text):
@@ -109,9 +51,9 @@ def write_text_atomic(path, text):
 
 
 def write_json_atomic(path, doc):
-    """:func:`write_text_atomic` of ``doc`` (anything ``json.dumps`` accepts) as strict JSON,
-    indent 1 (a NaN or infinite number as null, named under ``non_finite``:
-    ``results.document.json_text``); returns the path.
+    """``doc`` (anything ``json.dumps`` accepts) written atomically as strict JSON, indent 1 (a
+    NaN or infinite number as null, named under ``non_finite``): ``results.write_json``, which
+    is atomic itself; kept under this name for the run directories.  Returns the path.
 
     Example
     -------
@@ -120,7 +62,7 @@ def write_json_atomic(path, doc):
     >>> json.load(open(p))
     {'status': 'running', 'step': 3}
     """
-    return write_text_atomic(path, json_text(doc))
+    return write_json(path, doc)
 
 
 def check_input_file(path, limit, what="an input file"):

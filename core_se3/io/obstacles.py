@@ -4,9 +4,11 @@ file per output step holding every obstacle at that load factor, with the cell f
 ``obstacle``: its index)."""
 from __future__ import annotations
 
+import os
+
 import numpy as np
 
-from .vtk import ensure_parent
+from ..results.atomic import atomic_path
 
 __all__ = ["obstacle_surfaces", "write_obstacles"]
 
@@ -60,6 +62,7 @@ def write_obstacles(path, obstacles, points, lam=1.0):
         off += len(p)
     mesh = meshio.Mesh(np.concatenate(P), [("quad", np.concatenate(C))],
                        cell_data={"obstacle": [np.concatenate(idx).astype(float)]})
-    path = ensure_parent(path)
-    meshio.write(path, mesh, file_format="vtu")
+    path = os.fspath(path)
+    with atomic_path(path) as tmp:        # a failed or interrupted write keeps the earlier file whole
+        meshio.write(tmp, mesh, file_format="vtu")
     return path

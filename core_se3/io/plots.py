@@ -7,9 +7,10 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from ..lie import rotation_angle
-from .vtk import as_cells, as_frames, as_points, ensure_parent
+from ..results.atomic import atomic_path
+from .vtk import as_cells, as_frames, as_points
 
-__all__ = ["new_figure", "plot_load_deflection", "plot_shell", "plot_sequence"]
+__all__ = ["new_figure", "save_figure", "plot_load_deflection", "plot_shell", "plot_sequence"]
 
 
 def new_figure(figsize=(6.4, 4.8)):
@@ -36,6 +37,29 @@ def new_figure(figsize=(6.4, 4.8)):
     fig = Figure(figsize=figsize, dpi=120)
     FigureCanvasAgg(fig)
     return fig
+
+
+def save_figure(fig, path, **kw):
+    """Save ``fig`` to ``path`` atomically (``results.atomic.atomic_path``): drawn into a
+    temporary file beside it and moved into place, so a failed or interrupted save keeps the
+    previous image whole (before, ``--plot`` over an earlier image left it truncated, 0 bytes,
+    when the save failed).  The format is the extension's (matplotlib's default, png, without
+    one); ``kw`` go to ``Figure.savefig``.  Returns the path.
+
+    Example
+    -------
+    >>> import os, tempfile
+    >>> p = save_figure(new_figure((1.0, 1.0)), os.path.join(tempfile.mkdtemp(), "a", "f.png"))
+    >>> open(p, "rb").read(4)[1:], os.listdir(os.path.dirname(p))
+    (b'PNG', ['f.png'])
+    """
+    import os
+    from matplotlib import rcParams
+    fmt = kw.pop("format", None) or os.path.splitext(os.fspath(path))[1].lstrip(".").lower() \
+        or rcParams["savefig.format"]
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format=fmt, **kw)
+    return os.fspath(path)
 
 
 def plot_load_deflection(
@@ -127,9 +151,7 @@ def plot_load_deflection(
     if names or reference:
         ax.legend(fontsize="small")
     fig.tight_layout()
-    path = ensure_parent(path)
-    fig.savefig(path)
-    return path
+    return save_figure(fig, path)
 
 
 def plot_shell(path, X, quads, g, title: str | None = None, color_by_rotation: bool = True,
@@ -198,9 +220,7 @@ def plot_shell(path, X, quads, g, title: str | None = None, color_by_rotation: b
                                              edgecolor="0.35", linewidths=0.1, alpha=0.25))
         extra.append(np.asarray(pts))
     _finish_3d(ax, X, cells, [phi] + extra, view, title)
-    path = ensure_parent(path)
-    fig.savefig(path)
-    return path
+    return save_figure(fig, path)
 
 
 def _finish_3d(ax, X, cells, positions, view, title):
@@ -288,6 +308,4 @@ def plot_sequence(path, X, quads, positions: Sequence[np.ndarray], labels: Seque
     _finish_3d(ax, X, cells, positions, view, title)
     if handles:
         ax.legend(handles=handles, fontsize="x-small", loc="upper left", ncol=2, framealpha=0.6)
-    path = ensure_parent(path)
-    fig.savefig(path)
-    return path
+    return save_figure(fig, path)

@@ -17,9 +17,10 @@ import numpy as np
 
 from ..errors import OptionError
 from ..lie import rotation_angle
+from ..results.atomic import atomic_path
 
 __all__ = ["frame_fields", "write_vtu", "write_pvd", "write_series", "as_frames", "as_points",
-           "as_cells", "ensure_parent", "read_field_data", "pvd_times"]
+           "as_cells", "read_field_data", "pvd_times"]
 
 _CELL_TYPES = {3: "triangle", 4: "quad"}
 
@@ -54,13 +55,6 @@ def as_cells(quads, n: int) -> np.ndarray:
     if c.size and (c.min() < 0 or c.max() >= n):
         raise ValueError(f"quads reference node ids outside [0, {n})")
     return c
-
-
-def ensure_parent(path) -> str:
-    path = os.fspath(path)
-    parent = os.path.dirname(os.path.abspath(path))
-    os.makedirs(parent, exist_ok=True)
-    return path
 
 
 def frame_fields(g0, g) -> dict[str, np.ndarray]:
@@ -113,7 +107,7 @@ def write_vtu(path, X, quads, g0, g, point_data: Mapping[str, np.ndarray] | None
     Parameters
     ----------
     path : str or path-like
-        The ``.vtu`` file (its directory is created).
+        The ``.vtu`` file (its directory is created), written atomically (``results.atomic``).
     X, quads, g0, g, point_data, cell_data
         As above (ValueError for inconsistent shapes).
 
@@ -150,12 +144,13 @@ def write_vtu(path, X, quads, g0, g, point_data: Mapping[str, np.ndarray] | None
         if a.shape[0] != len(cells):
             raise ValueError(f"cell_data[{name!r}] has {a.shape[0]} rows, expected {len(cells)}")
         cfields[name] = [a]
-    path = ensure_parent(path)
+    path = os.fspath(path)
     mesh = meshio.Mesh(points=X, cells=[(_CELL_TYPES[cells.shape[1]], cells)], point_data=fields,
                        cell_data=cfields or None)
-    meshio.write(path, mesh, file_format="vtu")
-    if field_data:
-        _add_field_data(path, field_data)
+    with atomic_path(path) as tmp:        # a failed or interrupted write keeps the earlier file whole
+        meshio.write(tmp, mesh, file_format="vtu")
+        if field_data:
+            _add_field_data(tmp, field_data)
     return path
 
 
@@ -245,8 +240,9 @@ def write_pvd(path, entries: Sequence[tuple[float, str]]) -> str:
     for t, (_, fname) in zip(pvd_times([t for t, _ in entries]), entries):
         ET.SubElement(coll, "DataSet", timestep=repr(float(t)), group="", part="0", file=os.fspath(fname))
     ET.indent(root)
-    path = ensure_parent(path)
-    ET.ElementTree(root).write(path, encoding="utf-8", xml_declaration=True)
+    path = os.fspath(path)
+    with atomic_path(path) as tmp:
+        ET.ElementTree(root).write(tmp, encoding="utf-8", xml_declaration=True)
     return path
 
 

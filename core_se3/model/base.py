@@ -33,8 +33,30 @@ import numpy as np
 from ..errors import LoadError
 from ..registry import REQUIRED, Kind, Param, Registry
 
-__all__ = ["Evaluation", "Load", "LoadEvaluation", "force_scale_with_loads", "mesh_ids", "overrides", "Param", "LoadKind", "LOADS", "register_load", "load_kind",
+__all__ = ["Evaluation", "Load", "LoadEvaluation", "conservative_loads", "force_scale_with_loads", "mesh_ids", "overrides", "Param", "LoadKind", "LOADS", "register_load", "load_kind",
            "REQUIRED", "linear_scale", "finite_vector", "param_error", "check_given"]
+
+
+def conservative_loads(loads):
+    """Whether ``loads`` are conservative, judged by their kinds (:attr:`Load.conservative`):
+    False when any one is not (a follower force or pressure, a dead moment on the rotations,
+    contact, friction), True when every one is, None when some load does not say (a user's).
+    Where False, sym K says nothing of stability, however small the tangent's skew part: a dead
+    end moment's falls like (h/L)^2 (``solvers.stability.asymmetry``), and the roll-up at h/L
+    1e-6 measured under ASYM_TOL, was counted as conservative and stopped on a spurious
+    critical point.
+
+    Example
+    -------
+    >>> from core_se3.model import NodalLoad
+    >>> dead = NodalLoad(2, [1], [1.0], force=(0.0, 0.0, 1.0))
+    >>> conservative_loads([dead]), conservative_loads([dead, NodalLoad(2, [1], [1.0], moment=(0, 1.0, 0))])
+    (True, False)
+    """
+    said = [getattr(ld, "conservative", None) for ld in loads]
+    if any(c is False for c in said):
+        return False
+    return True if all(c is True for c in said) else None
 
 
 def linear_scale(lam):
@@ -189,7 +211,11 @@ class Load(abc.ABC):
     ``model.supports``) are reported with the support reactions (``StepResult.reaction_force``),
     not with the applied loads.  Loads that are constraint forces (``constraint_force = True``:
     contact) are reported apart from the applied loads, per load name (``StepResult.contact``), with the scalars of
-    :meth:`report`.  Solver hooks, optional (load-stepped Newton calls a hook only on the loads
+    :meth:`report`.  ``conservative`` says whether the load derives from a potential (its
+    stiffness symmetric at equilibrium, its work path independent): True, False (a follower
+    force or pressure, a dead moment on the rotations, contact and friction) or None, not said
+    (a user's load: judged by the tangent's symmetry); :func:`conservative_loads` reads it.
+    Solver hooks, optional (load-stepped Newton calls a hook only on the loads
     whose class overrides it, see :func:`overrides`; without them its path is unchanged):
     :meth:`limit_increment` caps a Newton increment; :meth:`start_error` refuses the start of a
     try (it is cut back); :meth:`update_multipliers` augments the
@@ -220,6 +246,7 @@ class Load(abc.ABC):
     support_force: ClassVar[bool] = False
     translation_invariant: bool = False
     approximate_tangent: bool = False
+    conservative: bool | None = None
     name: str = "load"
 
     @abc.abstractmethod

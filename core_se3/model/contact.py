@@ -106,6 +106,7 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
     kind = "contact"
     scales_with_load_factor = False
     constraint_force = True
+    conservative = False            # (a unilateral constraint, and friction dissipates)
 
     def __init__(self, problem, obstacle, nodes=None, elements=None, side="auto", lam_ref=0.0, friction=0.0,
                  law=None):

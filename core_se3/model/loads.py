@@ -211,6 +211,8 @@ class NodalLoad(Load):
         self.follower = bool(follower)
         self.scale = scale or linear_scale
         self.name = name
+        # a follower's work depends on the path, and so does a dead moment's on finite 3-D rotations
+        self.conservative = not self.follower and not np.any(self.moment)
         if self.weights.shape != self.nodes.shape or not np.all(np.isfinite(self.weights)):
             raise LoadError(f"load {name}: weights must be finite, one per node")
 
@@ -293,6 +295,7 @@ class SurfaceLoad(Load):
     def __init__(self, mesh, q, follower=False, elements=None, scale=None, name="surface", j0=None):
         self.mesh = mesh
         self.follower = bool(follower)
+        self.conservative = not self.follower        # a dead pressure or weight; a follower's work depends on the path
         self.scale = scale or linear_scale
         self.name = name
         self.elements = (np.arange(mesh.n_elements) if elements is None else

@@ -223,6 +223,7 @@ class MagneticLoad(Load):
         self.name = name
         self.approximate_tangent = bool(field.approximate_hessian)
         self.translation_invariant = bool(field.uniform)     # a field that varies in space reads x
+        self.conservative = True      # the potential -m . B^a(x, lam) of dipoles turning with the body in a lab field
 
     def direction_turn(self, g, lam0, lam1, samples=16):
         """The largest angle [rad] the applied field turns through at the magnetised nodes of

@@ -360,9 +360,16 @@ class Problem:
 
     # ---------------------------------------------------------------- loads ------------
     def add(self, load):
-        """Add any :class:`~core_se3.model.Load` instance; returns it."""
+        """Add any :class:`~core_se3.model.Load` instance; returns it.  LoadError for one that is
+        in the problem already (it would act twice, silently: ``p.add(p.loads[0])`` doubled the
+        load)."""
         if not isinstance(load, Load):
             raise LoadError(f"expected a core_se3.model.Load, got {type(load).__name__}")
+        same = next((j for j, ld in enumerate(self.loads) if ld is load), None)
+        if same is not None:
+            raise LoadError(f"this load ({getattr(load, 'name', 'load')!r}) is loads[{same}] of the problem already: "
+                            "adding it again would apply it twice; for a load meant twice, double its value "
+                            "(or build a second one)")
         self.loads.append(load)
         return load
 

@@ -145,6 +145,7 @@ class _Spring(Load):
     scales_with_load_factor = False
     support_force = True
     support_name = None
+    conservative = True             # (a linear spring's potential)
 
     def _scatter(self, n, fb, blk, tangent):
         f = np.zeros((n, 6))

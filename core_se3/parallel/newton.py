@@ -19,6 +19,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from ..errors import OptionError, did_you_mean
+from ..model.base import conservative_loads
 from ..results import Result, StepRecorder, initial_state
 from ..solvers import NewtonOptions, NewtonState, newton_steps, requested_load_factors
 from ..solvers.newton import end_check
@@ -186,7 +187,10 @@ class DistributedEquations:
 
     def inertia_count(self, asym_tol=ASYM_TOL):
         """The number of negative eigenvalues of sym(K) of the tangent of the last :meth:`solve`
-        (``solvers.equations.NewtonEquations.inertia_count``), counted by MUMPS on the ranks."""
+        (``solvers.equations.NewtonEquations.inertia_count``), counted by MUMPS on the ranks; None
+        for loads that are not conservative by their kinds."""
+        if conservative_loads(self.loads) is False:
+            return None
         return self.run.system.negative_count(asym_tol)
 
     def negative_count(self, g, lam):

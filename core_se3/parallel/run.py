@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ParallelError
+from ..model.base import conservative_loads
 from .comm import collective, world
 from .local import PatternAssembler, local_problem, subdomain
 from .localize import localize_load
@@ -278,7 +279,10 @@ class DistributedRun:
     def negative_count(self, g, lam):
         """The number of negative eigenvalues of sym K at the whole-mesh state (g, lam) (the
         tangent assembled on the ranks and its inertia counted there: ``DistributedSystem.
-        negative_count``), or None (K not symmetric); the end check's count."""
+        negative_count``), or None (loads not conservative by their kinds, or K not symmetric:
+        ``solvers.stability.negative_count``); the end check's count."""
+        if conservative_loads(self.problem.loads) is False:
+            return None
         self.evaluate(self.local_frames(g), lam, tangent=True)
         return collective(self.comm, self.system.negative_count)
 

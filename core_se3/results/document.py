@@ -31,10 +31,12 @@ path (so a roll-up reports 6 pi, not its value modulo 2 pi).  Catalogue runs, sc
 from __future__ import annotations
 
 import json
+import os
 
 import numpy as np
 
 from ..errors import ResultFileError
+from .atomic import atomic_path
 
 __all__ = ["SCHEMA", "VERSION", "NON_FINITE", "read_json", "write_json", "json_text", "probe_record", "step_record",
            "format_residual", "ROUNDOFF_NOTE", "contact_record", "mesh_record", "timing_record", "step_totals",
@@ -366,20 +368,24 @@ def write_json(path, doc):
     """Write a document as strict JSON (indent 1; a NaN or infinite number as null, named under
     ``non_finite``: :func:`json_text`).
 
-    Parameters: path (str or path-like), doc (a JSON-able dict).  Not atomic: the run directories
-    use ``io.write_json_atomic``.
+    Parameters: path (str or path-like), doc (a JSON-able dict).  Atomic (``results.atomic``):
+    the text goes to a temporary file beside ``path`` and is moved into place with os.replace, so
+    a write that fails or is interrupted half way keeps the previous file whole (before, an
+    ``open(path, "w")`` emptied it first).  Returns the path.
 
     Example
     -------
     >>> import os, tempfile
     >>> path = os.path.join(tempfile.mkdtemp(), "r.json")
-    >>> write_json(path, result_document("demo", "core_se3", "default", {}, {"nx": None}, [], {}))
+    >>> _ = write_json(path, result_document("demo", "core_se3", "default", {}, {"nx": None}, [], {}))
     >>> read_json(path)["case"]
     'demo'
     """
-    text = json_text(doc)
-    with open(path, "w") as fh:
-        fh.write(text)
+    text = json_text(doc)              # (an unserialisable doc fails here, before any file is touched)
+    with atomic_path(path) as tmp:
+        with open(tmp, "w") as fh:
+            fh.write(text)
+    return os.fspath(path)
 
 
 def read_json(path):

@@ -6,7 +6,7 @@ import re
 
 from ..errors import ScenarioError, did_you_mean
 
-__all__ = ["split_dotted", "check_key"]
+__all__ = ["split_dotted", "check_key", "repeated_value"]
 
 _PART = re.compile(r"^([^.\[\]]+)((?:\[\d+\])*)$")
 
@@ -60,3 +60,19 @@ def check_key(raw, key, file=None):
                                 file, key)
         node = node[p]
         path = here
+
+
+def repeated_value(values):
+    """Why a sweep's values of one key repeat one (``1e6,1e6``, ``8,8.0``: two identical runs,
+    most likely a typo for another value), or '' when each is given once.
+
+    Example
+    -------
+    >>> repeated_value([1e6, 2e6]), repeated_value([8, 16, 8.0])
+    ('', 'lists 8.0 twice (values 0 and 2): the two runs would be the same; give each value once')
+    """
+    for j, b in enumerate(values):
+        for i in range(j):
+            if values[i] == b and isinstance(values[i], bool) == isinstance(b, bool):     # (1 and true differ)
+                return f"lists {b!r} twice (values {i} and {j}): the two runs would be the same; give each value once"
+    return ""

@@ -81,7 +81,9 @@ def output_directory(scn, out=None, suffix=""):
     """The run directory: ``out``, else ``[output] dir``, else ``out/NAME`` with the scenario's
     name made safe (``io.rundir.safe_name``: a name of ``../..`` stays under ``out/``); a sweep's
     and a design's (``suffix``) beside the run's, also from ``[output] dir`` (the three shared
-    it: a sweep of a scenario with ``dir`` met its run's files).
+    it: a sweep of a scenario with ``dir`` met its run's files).  A leading ``~`` is the home
+    folder, as a shell reads it (before, ``dir = "~/runs/a"`` made a folder named '~' in the
+    working directory).
 
     Example
     -------
@@ -92,9 +94,9 @@ def output_directory(scn, out=None, suffix=""):
     ('out/___etc', 'out/___etc-sweep')
     """
     if out:
-        return os.fspath(out)
-    if scn.output["dir"]:
-        base = os.path.normpath(os.fspath(scn.output["dir"]))
+        return os.path.expanduser(os.fspath(out))
+    if scn.output["dir"]:             # "~/runs" is the home folder's, not a folder named '~' here
+        base = os.path.normpath(os.path.expanduser(os.fspath(scn.output["dir"])))
         if suffix and os.path.basename(base) in ("", ".", ".."):      # dir = "." or "/": a folder in it
             return os.path.join(base, suffix.lstrip("-"))
         return base + suffix

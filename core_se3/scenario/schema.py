@@ -187,7 +187,8 @@ ARCLENGTH = Section("arclength", (
 
 OUTPUT = Section("output", (
     Param("dir", "string", None, doc="output directory, relative to the working directory as --out is (the "
-          "scenario's input files are relative to the scenario file); default out/NAME; --out wins"),
+          "scenario's input files are relative to the scenario file; a leading ~ is the home folder); default "
+          "out/NAME; --out wins"),
     Param("vtu", "bool", True, doc="VTU series"),
     Param("vtu_every", "integer", 1, lo=1, doc="write every k-th step (and the last)"),
     Param("plots", "bool", True, doc="probes.png"),

@@ -20,7 +20,7 @@ from collections import namedtuple
 from ..errors import AngleWarning, ScenarioError
 from .build import build_problem
 from .design_section import design_section
-from .keys import check_key, split_dotted
+from .keys import check_key, repeated_value, split_dotted
 from .geometry import edges_section, mesh_section, probes_section, refine_guard, regions_section
 from .obstacles import obstacles_section
 from ..model import SUPPORTS
@@ -422,6 +422,8 @@ def sweep_section(v, doc):
     for key, vals in flat.items():
         if not isinstance(vals, list) or not vals or any(isinstance(x, dict) for x in vals):
             v.fail(f"sweep.{key}", f"expected a non-empty array of values to sweep, got {vals!r}")
+        if repeated_value(vals):
+            v.fail(f"sweep.{key}", repeated_value(vals))
         try:
             check_key(doc, key, v.file)
         except ScenarioError as exc:

@@ -44,7 +44,7 @@ from ..errors import CheckpointError, ConvergenceError, CoreSE3Error, ElementWar
 from ..io.lifecycle import Terminated, held_signals, termination_as_interrupt
 from ..io.rundir import RunDirectory
 from ..results.document import contact_record
-from .keys import check_key
+from .keys import check_key, repeated_value
 from .sweep_files import SWEEP_FILES, SweepCheckpoint, write_csv, write_plot, write_status
 
 __all__ = ["sweep", "check_sweep", "SweepResult", "parse_values", "WARM_SECTIONS", "point_row"]
@@ -122,6 +122,8 @@ def parse_values(text, key="--set"):
                                 "true/false, names; a vector as [a;b;c])", key=key) from None
     if not vals or any(v == "" for v in vals):
         raise ScenarioError(f"{key} needs at least one value", key=key)
+    if repeated_value(vals):
+        raise ScenarioError(f"{key} {repeated_value(vals)}", key=key)
     return vals
 
 

@@ -38,6 +38,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..fem import ELEMENTS
+from ..model.base import conservative_loads
 from .convergence import relative_residual, scaled_norm
 from .linalg import Factorization
 from .origin import part_origin, relocation
@@ -156,7 +157,7 @@ class NewtonEquations:
         non-conservative loads (followers, dead moments on rotations) sym(K) says nothing of
         stability (the rolled-up strip's count changes where det K's sign does not)."""
         fac = getattr(self, "_factor", None)
-        if fac is None:
+        if fac is None or conservative_loads(self.loads) is False:       # by the loads' kinds
             return None
         K = fac.K
         if asymmetry(K, self.asm.free) > asym_tol:

@@ -31,6 +31,7 @@ import numpy as np
 
 from .. import lie
 from ..errors import ConvergenceError, CoreSE3Error, ElementTooDistortedError, OptionError, SingularSystemError
+from ..model.base import conservative_loads
 from ..results import Result, StepRecorder, initial_state
 from .linalg import make_solver
 from .equations import NewtonEquations
@@ -505,7 +506,7 @@ def _step_checks(opts, eq, state):
                         opts.critical_tol, state.det_sign, stop=opts.limit_check, snap=snap,
                         friction=_friction_probe(opts, eq),
                         counting=opts.inertia_check and smooth and hasattr(eq, "inertia_count")
-                        and not any(getattr(ld, "follower", False) for ld in eq.loads))
+                        and conservative_loads(eq.loads) is not False)
     # the midpoint probe of a try that turned a node past pi (a stateful element's state is not restored)
     checks.probe = opts.midpoint_probe and opts.limit_check and not eq.stateful
     # ... and the return check of a located sign change (the stateful element's state at the far
@@ -913,7 +914,8 @@ def end_check(problem, opts, result, count=None):
     """
     if not (opts.end_check and opts.limit_check and not opts.inertia_check) or result.critical_points \
             or (count is None and getattr(problem.element, "stateful", False)) \
-            or any(getattr(ld, "constraint_force", False) or getattr(ld, "follower", False) for ld in problem.loads):
+            or any(getattr(ld, "constraint_force", False) for ld in problem.loads) \
+            or conservative_loads(problem.loads) is False:     # by the loads' kinds, not by K's skew part
         return
     t0 = time.perf_counter()
     found = unseen_crossing(problem, result.steps, count)

@@ -19,6 +19,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..errors import CoreSE3Error, SingularSystemError
+from ..model.base import conservative_loads
 from .linalg import AUTO_MUMPS_MIN, Factorization, available_solvers, make_solver, mumps_inertia
 from .system import ShellSystem
 
@@ -269,8 +270,9 @@ def analyse(sysm, state, lam, stability, its=0, hist=(), ev=None):
     sysm.factorizations += 1
     with Factorization(ev["K"], sysm.solver) as fac:
         t = fac.solve(ev["q"])
-    sign, nneg = stability_of(ev["K"], fac, free=getattr(getattr(sysm, "asm", None), "free", None)) \
-        if stability else (0, None)
+    loads = getattr(getattr(sysm, "problem", None), "loads", ())
+    sign, nneg = stability_of(ev["K"], fac, free=getattr(getattr(sysm, "asm", None), "free", None),
+                              counted=conservative_loads(loads) is not False) if stability else (0, None)
     return PathPoint(state, lam, t, float(ev["q"] @ t), sign, nneg, its, list(hist), ev)
 
 
@@ -325,7 +327,7 @@ def asymmetry(K, free=None):
     return float(np.abs(Kc.data[keep] * d[Kc.row[keep]] * d[Kc.col[keep]]).max(initial=0.0))
 
 
-def stability_of(K, fac=None, asym_tol=ASYM_TOL, free=None):
+def stability_of(K, fac=None, asym_tol=ASYM_TOL, free=None, counted=True):
     """(sign of det K, count of negative eigenvalues or None) at a converged state: the inertia of
     sym(K) (:func:`inertia`) when K is symmetric to ``asym_tol`` (:func:`asymmetry`, Jacobi-scaled:
     conservative loads, <= 3.0e-14 measured on the catalogue), else the sign of det K
@@ -334,7 +336,8 @@ def stability_of(K, fac=None, asym_tol=ASYM_TOL, free=None):
     column (a cantilever strip under a compressive follower end force, 15 EI/L^2, below its
     flutter load 20.05 EI/L^2 and with no static instability at all) was reported to have a
     'bifurcation point at lam = 0.65918 +- 0.0002' where an eigenvalue of sym(K) passed zero,
-    while the smallest |eigenvalue| of K grew from 0.027 to 0.115.
+    while the smallest |eigenvalue| of K grew from 0.027 to 0.115.  ``counted`` False (loads
+    that are not conservative by their kinds, ``model.base.conservative_loads``): the sign only.
 
     Example
     -------
@@ -343,7 +346,7 @@ def stability_of(K, fac=None, asym_tol=ASYM_TOL, free=None):
     (1, None)
     """
     Kd = K if sp.issparse(K) else np.asarray(K)
-    if abs(Kd).max() == 0 or asymmetry(Kd, free) <= asym_tol:
+    if counted and (abs(Kd).max() == 0 or asymmetry(Kd, free) <= asym_tol):
         return inertia(K)
     sign = fac.det_sign() if fac is not None else None
     if sign is None:
@@ -506,6 +509,8 @@ def negative_count(problem, g, lam, asym_tol=ASYM_TOL):
     >>> negative_count(p, p.mesh.g0, 0.0)
     0
     """
+    if conservative_loads(problem.loads) is False:      # by the loads' kinds, however small K's skew part
+        return None
     K = problem.tangent(g, lam)
     if abs(K).max() == 0 or asymmetry(K, problem.assembler().free) > asym_tol:
         return None
