@@ -60,8 +60,8 @@ class ScaleTable:
     Example
     -------
     >>> s = ScaleTable([[0.0, 0.0], [0.5, 1.0], [1.0, 0.0]])
-    >>> s(0.25), s(0.75), s(2.0), s.knots
-    (0.5, 0.5, 0.0, (0.0, 0.5, 1.0))
+    >>> s(0.25), s(0.75), s(2.0), s.knots, s.kinks
+    (0.5, 0.5, 0.0, (0.0, 0.5, 1.0), (0.5,))
     """
 
     def __init__(self, table):
@@ -71,6 +71,9 @@ class ScaleTable:
                             f"got {np.asarray(table).tolist()!r}")
         self.lam, self.s = t[:, 0].copy(), t[:, 1].copy()
         self.knots = tuple(float(x) for x in self.lam)
+        slope = np.diff(self.s) / np.diff(self.lam)
+        bend = np.abs(np.diff(slope)) > 1e-12 * np.abs(slope).max(initial=0.0)
+        self.kinks = tuple(float(x) for x in self.lam[1:-1][bend])     # inner points where the slope changes
 
     def __call__(self, lam):
         return float(np.interp(lam, self.lam, self.s))

@@ -165,21 +165,29 @@ class Problem:
         self.element_name = element                   # an unknown name fails here; built at first use
         self.linear_solver = linear_solver            # an unknown or unavailable name fails here
         self.solve_defaults = {}
-        self.scale_knots = set()     # load factors where a scale table changes slope (note_scale)
+        self.scale_tables = []       # the loads' piecewise-linear programmes (note_scale)
 
     def note_scale(self, scale):
-        """Keep the points of a load-factor programme ``scale`` (a :class:`~core_se3.model.ScaleTable`:
-        its knots; any other callable: none), where load stepping lands a try (``solvers.newton``).
+        """Keep a load-factor programme ``scale`` that is a :class:`~core_se3.model.ScaleTable`
+        (any other callable: nothing known of it): load stepping lands a try on its points
+        (:attr:`scale_knots`, ``solvers.newton``) and path following refuses its kinks
+        (``solvers.system``).
 
         Example
         -------
         >>> from core_se3 import Problem, Material, mesh
         >>> from core_se3.model import ScaleTable
         >>> p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
-        >>> p.note_scale(ScaleTable([[0.0, 0.0], [0.5, 1.0], [1.0, 0.0]])); sorted(p.scale_knots)
-        [0.0, 0.5, 1.0]
+        >>> p.note_scale(ScaleTable([[0.0, 0.0], [0.5, 1.0], [1.0, 0.0]])); p.scale_knots
+        (0.0, 0.5, 1.0)
         """
-        self.scale_knots.update(scale_knots(scale))
+        if scale_knots(scale) and all(t is not scale for t in self.scale_tables):
+            self.scale_tables.append(scale)
+
+    @property
+    def scale_knots(self):
+        """The load factors of the points of every noted scale table, sorted."""
+        return tuple(sorted({t for table in getattr(self, "scale_tables", ()) for t in scale_knots(table)}))
 
     @property
     def linear_solver(self):
