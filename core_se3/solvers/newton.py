@@ -39,7 +39,7 @@ from .options import NewtonOptions, load_steps, split_options, unknown_keywords
 from .origin import far_part_hint
 from .splitting import (MAX_LOAD_TURN, MAX_PRESCRIBED_TURN, check_substeps, first_knot, split_prescribed,
                         split_turning, substeps_needed)
-from .stability import limit_point_hint, prescribed_turn_hint, unseen_crossing
+from .stability import limit_point_hint, prescribed_turn_hint, stiffness_hint, unseen_crossing
 from .contact_probe import ContactProbe, median_edge
 from .friction_probe import RELAXATIONS, FrictionProbe
 from .step_checks import REFINE_PARTS, StepChecks, path_refusal, start_sign
@@ -352,27 +352,21 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
             _note_passed(checks, eq, result)
             if not ok and abs(dlam) < floor:
                 timer.close()
-                _cutbacks_exhausted(problem, eq, opts, g_whole, lam, lam_try, reason, result)
+                _cutbacks_exhausted(problem, eq, opts, g_whole, (lam, lam_try, reason, out), checks, result)
         if stored is None:                       # the target was already reached
             stored = _unchanged_step(rec, eq, g, g_whole, lam)
         timer.close()
-        state, g, stress_conv = _restart(eq, hooks, checks, (lam, g, g_whole, dlam, k_ref), stress_conv, mip)
+        state = _restart(hooks, checks, (lam, g_whole, dlam, k_ref))
         yield NewtonStep(stored, state, tries)
 
 
-def _restart(eq, hooks, checks, here, stress_conv, mip):
-    """The restart point (NewtonState) after a stored step ``here`` = (lam, g, g_whole, dlam,
-    k_ref), and the iterate and mixed stresses the next step starts from: those a resume starts
-    from, the stored (whole) frames moved to the equations' origin when there is one (else g and
-    ``stress_conv``), so that a resumed run repeats its computations bit for bit (the snap roof,
-    at z = 2540, resumed 1.4e-14 off: its first residual 1.4e-12 relative)."""
-    lam, g, g_whole, dlam, k_ref = here
-    state = NewtonState(lam, g_whole, dlam, k_ref, [_whole(ld).multipliers() for ld in hooks.aug] if hooks.aug else None,
-                        checks.sign, checks.k_first, checks.stiff)
-    if getattr(eq, "origin", None) is None:
-        return state, g, stress_conv
-    g = eq.local_frames(g_whole)
-    return state, g, (eq.stress(g, lam) if mip else None)
+def _restart(hooks, checks, here):
+    """The restart point (NewtonState) after a stored step ``here`` = (lam, g_whole, dlam,
+    k_ref): with the step checks' record a resume needs to check as the unbroken run does (det
+    K's sign, the midpoint probe's current stiffness)."""
+    lam, g_whole, dlam, k_ref = here
+    return NewtonState(lam, g_whole, dlam, k_ref, [_whole(ld).multipliers() for ld in hooks.aug] if hooks.aug else None,
+                       checks.sign, checks.k_first, checks.stiff)
 
 
 def _equations(problem, opts, equations):
@@ -828,17 +822,33 @@ def _record(rec, eq, opts, out, g_start, g, g_whole, lam, tries, checks, at_targ
     return None
 
 
-def _cutbacks_exhausted(problem, eq, opts, g_whole, lam, lam_try, reason, result):
-    """The ConvergenceError of a try cut back ``max_cutbacks`` times, with the likeliest cause."""
+def _cutbacks_exhausted(problem, eq, opts, g_whole, last, checks, result):
+    """The ConvergenceError of a try cut back ``max_cutbacks`` times, with the likeliest cause;
+    ``last`` = (lam, lam_try, reason, the last try's TryOutcome)."""
+    lam, lam_try, reason, out = last
     hint = next((h for h in (ld.failure_hint() for ld in hooked_loads(eq, "failure_hint")) if h),
-                None) or far_part_hint(problem) or (limit_point_hint(problem, g_whole, lam, opts.linear_solver)
-                          if lam != 0.0 and not eq.distributed else None) \
+                None) or far_part_hint(problem) or _limit_hint(problem, eq, opts, g_whole, lam, out, checks) \
         or (prescribed_turn_hint(problem, g_whole, lam, opts.linear_solver)
             if lam != 0.0 and problem.has_prescribed_motion and not eq.distributed and not eq.stateful else None)
     raise ConvergenceError(
         f"Newton failed at load factor {lam_try:.6g} after {opts.max_cutbacks} cut-backs "
         f"({reason}); the last converged load factor is {lam:.6g} and its state is "
         "kept in .result" + (f". Probable cause: {hint}" if hint else ""), result)
+
+
+def _limit_hint(problem, eq, opts, g_whole, lam, out, checks):
+    """The limit-point hint of a failure at the last converged load factor lam (None at 0).  A
+    distributed run's is the current stiffness of the last try's first iterate over the first
+    accepted try's (``out.k_step`` / ``StepChecks.k_first``), where the serial run's factorises
+    the whole tangent on one process (``stability.limit_point_hint``): before, the 8x8 snap roof
+    under 1.0003 times its limit load in one step failed on 2 ranks without the serial run's
+    'load control has met a limit point' (S_p = 0.0136 both ways)."""
+    if lam == 0.0:
+        return None
+    if not eq.distributed:
+        return limit_point_hint(problem, g_whole, lam, opts.linear_solver)
+    k, k_first = getattr(out, "k_step", None), checks.k_first
+    return stiffness_hint(lam, k / k_first) if k is not None and k_first and checks.stiffness else None
 
 
 def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, g_init=None, load_factors=None,

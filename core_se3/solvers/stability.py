@@ -442,13 +442,26 @@ def limit_point_hint(problem, g, lam, linear_solver=None):
         sp_ = f0 / f1 if f1 != 0 else 0.0
     else:
         sp_ = p0.qt / p1.qt if p1.qt != 0 else 0.0
-    if sp_ < 0.3:
-        return (f"the load-displacement stiffness at load factor {lam:.6g} has fallen to "
-                f"S_p = {sp_:.3g} of its initial value: load control has met a limit point "
-                "(the load cannot increase further on this path); trace it with arc length "
-                "(core_se3.solvers.arc_length) or displacement control "
-                "(core_se3.solvers.displacement_control)")
-    return None
+    return stiffness_hint(lam, sp_)
+
+
+def stiffness_hint(lam, sp_):
+    """The limit-point hint for a current stiffness S_p = ``sp_`` at load factor ``lam`` (below
+    0.3), else None: :func:`limit_point_hint`'s, and a distributed run's, whose S_p is that of the
+    failed try's first iterate (``TryOutcome.k_step`` over the first accepted try's).
+
+    Example
+    -------
+    >>> stiffness_hint(0.5, 0.8) is None, stiffness_hint(0.5, 0.01)[:52]
+    (True, 'the load-displacement stiffness at load factor 0.5 h')
+    """
+    if sp_ >= 0.3:
+        return None
+    return (f"the load-displacement stiffness at load factor {lam:.6g} has fallen to "
+            f"S_p = {sp_:.3g} of its initial value: load control has met a limit point "
+            "(the load cannot increase further on this path); trace it with arc length "
+            "(core_se3.solvers.arc_length) or displacement control "
+            "(core_se3.solvers.displacement_control)")
 
 
 def _rayleigh(pt):
