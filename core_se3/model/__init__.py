@@ -7,7 +7,8 @@ Example
 >>> sorted(model.FIELDS), sorted(model.OBSTACLES)
 (['dipole', 'gradient', 'uniform'], ['box', 'cylinder', 'half_space', 'sphere'])
 """
-from .base import LOADS, REQUIRED, Load, LoadEvaluation, LoadKind, Param, load_kind, overrides, register_load
+from .base import (LOADS, REQUIRED, Load, LoadEvaluation, LoadKind, Param, ScaleTable, load_kind, overrides,
+                   register_load)
 from .fields import (FIELDS, MU0, DipoleField, Field, FieldKind, GradientField, Superposition,
                      UniformField, UserField, check_field, field_kind, register_field,
                      rotating_direction)
@@ -23,7 +24,7 @@ from .supports import LabSpring, LabTiltSpring, Prescribed, RotationComponentSpr
 from .support_kinds import SUPPORTS, SupportKind, register_support, support_kind
 from .verify import tangent_fd_check, zero_modes
 
-__all__ = ["Load", "LoadEvaluation", "LoadKind", "Param", "REQUIRED", "LOADS", "register_load",
+__all__ = ["Load", "LoadEvaluation", "LoadKind", "Param", "ScaleTable", "REQUIRED", "LOADS", "register_load",
            "load_kind", "Field", "FieldKind", "FIELDS", "register_field", "field_kind", "MU0",
            "UniformField", "GradientField", "DipoleField", "UserField", "Superposition",
            "check_field", "rotating_direction", "NodalLoad", "SurfaceLoad", "edge_weights", "line_shares",

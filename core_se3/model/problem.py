@@ -25,7 +25,7 @@ from .. import backend as _backend
 from ..errors import LoadError, LoadWarning, MaterialError, MeshError, OptionError, SupportError, did_you_mean
 from ..fem import ELEMENTS, make_element
 from ..mesh import Mesh
-from .base import Evaluation, Load, check_given, force_scale_with_loads, linear_scale, load_kind
+from .base import Evaluation, Load, check_given, force_scale_with_loads, linear_scale, load_kind, scale_knots
 from .compiled import CompiledEvaluation
 from .contact import add_obstacle
 from .fields import FIELD_DEFECT_TOL, MU0, field_defect, field_vanishes
@@ -165,6 +165,29 @@ class Problem:
         self.element_name = element                   # an unknown name fails here; built at first use
         self.linear_solver = linear_solver            # an unknown or unavailable name fails here
         self.solve_defaults = {}
+        self.scale_tables = []       # the loads' piecewise-linear programmes (note_scale)
+
+    def note_scale(self, scale):
+        """Keep a load-factor programme ``scale`` that is a :class:`~core_se3.model.ScaleTable`
+        (any other callable: nothing known of it): load stepping lands a try on its points
+        (:attr:`scale_knots`, ``solvers.newton``) and path following refuses its kinks
+        (``solvers.system``).
+
+        Example
+        -------
+        >>> from core_se3 import Problem, Material, mesh
+        >>> from core_se3.model import ScaleTable
+        >>> p = Problem(mesh.rectangle(1.0, 1.0, 2, 1), Material(1e3, 0.0, 0.01))
+        >>> p.note_scale(ScaleTable([[0.0, 0.0], [0.5, 1.0], [1.0, 0.0]])); p.scale_knots
+        (0.0, 0.5, 1.0)
+        """
+        if scale_knots(scale) and all(t is not scale for t in self.scale_tables):
+            self.scale_tables.append(scale)
+
+    @property
+    def scale_knots(self):
+        """The load factors of the points of every noted scale table, sorted."""
+        return tuple(sorted({t for table in getattr(self, "scale_tables", ()) for t in scale_knots(table)}))
 
     @property
     def linear_solver(self):
@@ -317,6 +340,7 @@ class Problem:
         """
         self._support(rigid_motion(self.mesh, self.nodes(where), (0.0, 0.0, 0.0), axis, angle, point, free, scale),
                       name)
+        self.note_scale(scale)
 
     def move_edge(self, where, translate=(0.0, 0.0, 0.0), axis=None, angle=0.0, point=None, free=(), scale=None,
                   name=None):
@@ -324,6 +348,7 @@ class Problem:
         (default their centroid), then translated by s*translate, s = scale(lam) (default lam);
         ``free`` as for :meth:`rotate_edge` (``supports.rigid_motion``)."""
         self._support(rigid_motion(self.mesh, self.nodes(where), translate, axis, angle, point, free, scale), name)
+        self.note_scale(scale)
 
     def prescribe(self, where, target, fixed=(True,) * 6, name=None):
         """Selected nodes follow ``target(lam) -> (k, 4, 4)`` frames on the fixed dofs.  Linear
@@ -406,6 +431,7 @@ class Problem:
             bad = k.check(full, set(values))
             if bad is not None:
                 raise LoadError(bad[1])
+        self.note_scale(scale)
         if k.target == "line" and _names(where):
             return self._add_on_lines(k, where, scale, full)
         try:
@@ -487,6 +513,8 @@ class Problem:
         with warnings.catch_warnings(record=True) as seen:     # said at the caller's line, not here
             warnings.simplefilter("always")
             added = self._add_magnetic(Br, field, sel, mu0, Br_per)
+        for part in getattr(field, "fields", (field,)):      # a Superposition's parts
+            self.note_scale(getattr(part, "scale", None))
         for w in seen:
             warnings.warn(w.message, stacklevel=2)
         built = added if isinstance(added, list) else [added]
@@ -560,6 +588,9 @@ class Problem:
         >>> p.add_obstacle("sphere", centre=(0.5, 0.0, 0.5), radius=0.4).name
         'sphere'
         """
+        motion = options.get("motion")
+        if isinstance(motion, dict):
+            self.note_scale(motion.get("scale"))
         return add_obstacle(self, obstacle, region, nodes, **options)
 
     def add_probe(self, name, where="x1"):

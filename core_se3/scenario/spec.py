@@ -29,7 +29,7 @@ from .physics import (NON_PHYSICAL, fields_section, loads_section, magnets_secti
 from .units import plausibility, unit_defaults, units_section
 from .plugins import load_plugins
 from .schema import SCENARIO
-from .validate import Validator
+from .validate import Validator, make_scale
 
 try:                                  # Python >= 3.11
     import tomllib
@@ -185,6 +185,22 @@ class Scenario:
 
 
 
+def _refuse_bent_tables(v, spec):
+    """Arc length: a load's or field's scale table that bends (``ScaleTable.kinks``) is refused
+    naming its key: the load factor is the path's parameter, q = d f_ext / d lam jumps at the
+    bend (at a peak it vanishes), and the run failed there naming a limit point or a NaN load
+    factor (the snap roof under a table 0 -> 0.6 -> 0, or bent at 0.3)."""
+    scaled = [(f"loads[{i}].scale", ld.get("scale")) for i, ld in enumerate(spec["loads"])]
+    scaled += [(f"fields.{name}.scale", f.get("scale")) for name, f in spec["fields"].items()]
+    for key, sc in scaled:
+        kinks = getattr(make_scale(sc), "kinks", ()) if sc is not None else ()
+        if kinks:
+            v.fail(key, f"the table bends at load factor {kinks[0]:g}: arc length takes the load factor as "
+                        "the path's parameter, not as a load history (q = d f_ext / d lam jumps there); give "
+                        'a straight scale (two points, "linear" or "constant") with control = "arclength", '
+                        'or control = "load" for a load history')
+
+
 def _set_dotted(doc, key, value, file):
     """Set ``a.b[2].c`` = value in nested dicts/lists (missing tables are created)."""
     parts = split_dotted(key, file)
@@ -335,6 +351,8 @@ def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario", strict=
             if SUPPORTS[sp["type"]].moves:
                 v.fail(f"supports[{i}].type", "arc length scales the loads only: a prescribed "
                        'motion is not supported with control = "arclength"')
+    if spec["solver"]["control"] == "arclength":
+        _refuse_bent_tables(v, spec)
     if spec["solver"]["control"] == "arclength" and spec["obstacles"]:
         v.fail("solver.control", 'contact with [[obstacles]] needs load control (control = "load"): arc '
                                  "length does not update the contact multipliers")

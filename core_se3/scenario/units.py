@@ -414,7 +414,8 @@ def plausibility(v, scn):
 
 def _idle(v, scn):
     """Warn about a load, field or prescribed motion whose ``scale`` is 0 at every load factor of
-    the run (a table ramping beyond lam_end: it acts nowhere), and a field's ``rotate`` that has
+    the run (a table ramping beyond lam_end: it acts nowhere; under load control its table's
+    points inside the run count, where a try lands: a peak between two steps acts), and a field's ``rotate`` that has
     not begun at any step (its start at or past lam_end: it never turns).  Load control and
     linear analysis (an arc-length path's load factors are not known beforehand)."""
     if scn.solver["control"] == "arclength":
@@ -425,7 +426,13 @@ def _idle(v, scn):
     scaled += [(f"fields.{name}.scale", f.get("scale")) for name, f in spec["fields"].items()]
     where = f"at every load factor of the run ({lams.min():g} .. {lams.max():g})"
     for key, sc in scaled:
-        if sc is not None and all(make_scale(sc)(lam) == 0 for lam in lams):
+        if sc is None:
+            continue
+        f = make_scale(sc)
+        # load control also applies a table's points inside the run (a peak between two steps)
+        seen = lams if scn.solver["control"] == "linear" else \
+            np.r_[lams, [t for t in getattr(f, "knots", ()) if min(0.0, lams.min()) < t < lams.max()]]
+        if all(f(lam) == 0 for lam in seen):
             v.warn(key, f"the scale is 0 {where}: it acts nowhere; move its table's ramp into the run "
                         "or raise lam_end")
     for name, f in spec["fields"].items():

@@ -10,10 +10,9 @@ from __future__ import annotations
 import math
 from collections import namedtuple
 
-import numpy as np
-
 from ..errors import ScenarioError, ScenarioWarning, did_you_mean
 from ..registry import REQUIRED
+from ..model.base import ScaleTable
 
 __all__ = ["Validator", "Bounds", "join", "tname", "show", "make_scale", "user_key", "elsewhere"]
 
@@ -56,7 +55,7 @@ def make_scale(spec):
     Returns
     -------
     callable
-        lam -> s.
+        lam -> s (a table: a :class:`~core_se3.model.ScaleTable`, whose points load stepping lands on).
 
     Example
     -------
@@ -67,8 +66,7 @@ def make_scale(spec):
         return lambda lam: lam
     if spec == "constant":
         return lambda lam: 1.0
-    t = np.asarray(spec, float)
-    return lambda lam: float(np.interp(lam, t[:, 0], t[:, 1]))
+    return ScaleTable(spec)        # its points are where load stepping lands a try
 
 
 _TYPE_NAMES = ((bool, "a boolean"), (int, "an integer"), (float, "a number"), (str, "a string"),

@@ -38,9 +38,9 @@ from .equations import NewtonEquations
 from .newton_try import NewtonTry, augmented_try, hooked_loads, tangent_predictor
 from .options import NewtonOptions, load_steps, split_options, unknown_keywords
 from .origin import far_part_hint
-from .splitting import (MAX_LOAD_TURN, MAX_PRESCRIBED_TURN, check_substeps, split_prescribed,
+from .splitting import (MAX_LOAD_TURN, MAX_PRESCRIBED_TURN, check_substeps, first_knot, split_prescribed,
                         split_turning, substeps_needed)
-from .stability import limit_point_hint, prescribed_turn_hint, unseen_crossing
+from .stability import limit_point_hint, prescribed_turn_hint, stiffness_hint, unseen_crossing
 from .contact_probe import ContactProbe, median_edge
 from .friction_probe import RELAXATIONS, FrictionProbe
 from .step_checks import REFINE_PARTS, StepChecks, path_refusal, start_sign
@@ -59,7 +59,11 @@ class NewtonState:
     next requested one); k_ref: the stiffness of the first step (limit-point check; None until
     the first step converged); multipliers: those of the augmented loads (contact), one array
     per load in the order of ``problem.loads`` (None: their cold start); det_sign: the sign of
-    det K at the state (stability check; None: found again from the next try's first tangent).
+    det K at the state (stability check; None: found again from the next try's first tangent);
+    k_first, stiff: the midpoint probe's current-stiffness record (``StepChecks.k_first``, the
+    first accepted try's k_step, and ``StepChecks.stiff``, (lam, S_p) of the last accepted try's
+    start).  Without them a resumed run skipped the probe of its first try that the
+    uninterrupted run made (the snap roof to 0.735 P_max and back in 2 steps: 1 probe against 0).
 
     Attributes
     ----------
@@ -74,7 +78,7 @@ class NewtonState:
     -------
     >>> import numpy as np
     >>> NewtonState(0.5, np.eye(4)[None], dlam=0.25).pack()      # what a checkpoint stores
-    {'lam': 0.5, 'dlam': 0.25, 'k_ref': None, 'det_sign': None}
+    {'lam': 0.5, 'dlam': 0.25, 'k_ref': None, 'det_sign': None, 'k_first': None, 'stiff': None}
     """
     lam: float
     g: np.ndarray
@@ -82,12 +86,24 @@ class NewtonState:
     k_ref: float | None = None
     multipliers: list | None = None
     det_sign: int | None = None
+    k_first: float | None = None
+    stiff: tuple | None = None
 
     def pack(self):
         """JSON-able scalars (the frames and multipliers are stored apart)."""
         return dict(lam=float(self.lam), dlam=None if self.dlam is None else float(self.dlam),
                     k_ref=None if self.k_ref is None else float(self.k_ref),
-                    det_sign=None if self.det_sign is None else int(self.det_sign))
+                    det_sign=None if self.det_sign is None else int(self.det_sign),
+                    k_first=None if self.k_first is None else float(self.k_first),
+                    stiff=None if self.stiff is None else [float(x) for x in self.stiff])
+
+    @classmethod
+    def unpack(cls, lam, g, scalars, multipliers=None):
+        """The restart point of a checkpoint: ``scalars`` as :meth:`pack` wrote them (keys that
+        an older checkpoint lacks are None)."""
+        stiff = scalars.get("stiff")
+        return cls(lam, g, scalars.get("dlam"), scalars.get("k_ref"), multipliers, scalars.get("det_sign"),
+                   scalars.get("k_first"), None if stiff is None else tuple(float(x) for x in stiff))
 
     def arrays(self):
         """The multipliers as named arrays for a checkpoint ({} without augmented loads);
@@ -337,13 +353,21 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
             _note_passed(checks, eq, result)
             if not ok and abs(dlam) < floor:
                 timer.close()
-                _cutbacks_exhausted(problem, eq, opts, g_whole, lam, lam_try, reason, result)
+                _cutbacks_exhausted(problem, eq, opts, g_whole, (lam, lam_try, reason, out), checks, result)
         if stored is None:                       # the target was already reached
             stored = _unchanged_step(rec, eq, g, g_whole, lam)
         timer.close()
-        state = NewtonState(lam, g_whole, dlam, k_ref, [_whole(ld).multipliers() for ld in hooks.aug] if hooks.aug else None,
-                            checks.sign)
+        state = _restart(hooks, checks, (lam, g_whole, dlam, k_ref))
         yield NewtonStep(stored, state, tries)
+
+
+def _restart(hooks, checks, here):
+    """The restart point (NewtonState) after a stored step ``here`` = (lam, g_whole, dlam,
+    k_ref): with the step checks' record a resume needs to check as the unbroken run does (det
+    K's sign, the midpoint probe's current stiffness)."""
+    lam, g_whole, dlam, k_ref = here
+    return NewtonState(lam, g_whole, dlam, k_ref, [_whole(ld).multipliers() for ld in hooks.aug] if hooks.aug else None,
+                       checks.sign, checks.k_first, checks.stiff)
 
 
 def _equations(problem, opts, equations):
@@ -515,6 +539,7 @@ def _step_checks(opts, eq, state):
     # ... and of a try that passes a limit point ahead (the current stiffness of load control: not
     # with a prescribed motion, whose load factor is no load's)
     checks.stiffness = not (eq.stateful or eq.problem.has_prescribed_motion)
+    checks.k_first, checks.stiff = state.k_first, state.stiff          # a restart point's (a resume)
     # the refine check of a try of many iterations (not with augmented loads: the multipliers of
     # an augmented try are not those of its parts)
     checks.refine = opts.refine_check and checks.path and not hooked_loads(eq, "update_multipliers")
@@ -534,9 +559,12 @@ def _friction_probe(opts, eq):
 
 
 def _split_step(problem, hooks, g_whole, lam, lam_try, target, dlam, opts, result):
-    """The try's load factor and the increment carried on, split where a prescribed motion or a
-    turning load (``hooks.turning``) would turn too far within the step (``solvers.splitting``)."""
+    """The try's load factor and the increment carried on: ended at the first point of a scale
+    table inside the step (``splitting.first_knot``: the increment is not cut, the try after
+    it goes on), and split where a prescribed motion or a turning load (``hooks.turning``)
+    would turn too far within the step (``solvers.splitting``)."""
     turning = hooks.turning
+    lam_try = first_knot(getattr(problem, "scale_knots", ()), lam, lam_try)
     if problem.has_prescribed_motion:
         lam_split = split_prescribed(problem, lam, lam_try)
         if lam_split != lam_try:
@@ -795,17 +823,33 @@ def _record(rec, eq, opts, out, g_start, g, g_whole, lam, tries, checks, at_targ
     return None
 
 
-def _cutbacks_exhausted(problem, eq, opts, g_whole, lam, lam_try, reason, result):
-    """The ConvergenceError of a try cut back ``max_cutbacks`` times, with the likeliest cause."""
+def _cutbacks_exhausted(problem, eq, opts, g_whole, last, checks, result):
+    """The ConvergenceError of a try cut back ``max_cutbacks`` times, with the likeliest cause;
+    ``last`` = (lam, lam_try, reason, the last try's TryOutcome)."""
+    lam, lam_try, reason, out = last
     hint = next((h for h in (ld.failure_hint() for ld in hooked_loads(eq, "failure_hint")) if h),
-                None) or far_part_hint(problem) or (limit_point_hint(problem, g_whole, lam, opts.linear_solver)
-                          if lam != 0.0 and not eq.distributed else None) \
+                None) or far_part_hint(problem) or _limit_hint(problem, eq, opts, g_whole, lam, out, checks) \
         or (prescribed_turn_hint(problem, g_whole, lam, opts.linear_solver)
             if lam != 0.0 and problem.has_prescribed_motion and not eq.distributed and not eq.stateful else None)
     raise ConvergenceError(
         f"Newton failed at load factor {lam_try:.6g} after {opts.max_cutbacks} cut-backs "
         f"({reason}); the last converged load factor is {lam:.6g} and its state is "
         "kept in .result" + (f". Probable cause: {hint}" if hint else ""), result)
+
+
+def _limit_hint(problem, eq, opts, g_whole, lam, out, checks):
+    """The limit-point hint of a failure at the last converged load factor lam (None at 0).  A
+    distributed run's is the current stiffness of the last try's first iterate over the first
+    accepted try's (``out.k_step`` / ``StepChecks.k_first``), where the serial run's factorises
+    the whole tangent on one process (``stability.limit_point_hint``): before, the 8x8 snap roof
+    under 1.0003 times its limit load in one step failed on 2 ranks without the serial run's
+    'load control has met a limit point' (S_p = 0.0136 both ways)."""
+    if lam == 0.0:
+        return None
+    if not eq.distributed:
+        return limit_point_hint(problem, g_whole, lam, opts.linear_solver)
+    k, k_first = getattr(out, "k_step", None), checks.k_first
+    return stiffness_hint(lam, k / k_first) if k is not None and k_first and checks.stiffness else None
 
 
 def newton_solve(problem, steps=10, lam_end=1.0, lam_start=0.0, g_init=None, load_factors=None,

@@ -21,7 +21,7 @@ import numpy as np
 
 from ..errors import ConvergenceError, ElementTooDistortedError
 
-__all__ = ["MAX_PRESCRIBED_TURN", "MAX_LOAD_TURN", "split_prescribed", "split_turning", "substeps_needed",
+__all__ = ["MAX_PRESCRIBED_TURN", "MAX_LOAD_TURN", "first_knot", "split_prescribed", "split_turning", "substeps_needed",
            "check_substeps"]
 
 MAX_PRESCRIBED_TURN = 0.9 * np.pi   # largest rotation a prescribed motion may make in one step
@@ -29,6 +29,28 @@ MAX_PRESCRIBED_TURN = 0.9 * np.pi   # largest rotation a prescribed motion may m
 # magnet in a field turned by more than pi/2 feels a couple that can flip it the other way, onto
 # another equilibrium (a strip following a field turned 100 deg per step did; 50 deg did not)
 MAX_LOAD_TURN = 0.25 * np.pi
+
+
+def first_knot(knots, lam, lam_try):
+    """The try's end: the first of ``knots`` (the points of the problem's scale tables,
+    ``Problem.scale_knots``) strictly between lam and lam_try, else lam_try.
+
+    Between two points every programme s(lam) is linear, so a try sees the load it applies at
+    every load factor it passes; a try across a table's peak went from one side of it to the
+    other without applying it (the hinged roof of examples/snap-roof.toml, its load taken to
+    1.35 times its limit load and back in 3 steps: 'complete' on the unloaded roof, where 20
+    steps stop at the limit point).  Points within 1e-12 of either end are not counted.
+
+    Example
+    -------
+    >>> first_knot({0.0, 0.5, 1.0}, 1 / 3, 2 / 3), first_knot({0.5}, 1.0, 0.0), first_knot((), 0.0, 1.0)
+    (0.5, 0.5, 1.0)
+    """
+    tol = 1e-12 * max(1.0, abs(lam), abs(lam_try))
+    inside = [t for t in knots if min(lam, lam_try) + tol < t < max(lam, lam_try) - tol]
+    if not inside:
+        return lam_try
+    return min(inside) if lam_try > lam else max(inside)
 
 
 def split_prescribed(problem, lam, lam_try):

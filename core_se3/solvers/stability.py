@@ -430,20 +430,52 @@ def limit_point_hint(problem, g, lam, linear_solver=None):
     >>> limit_point_hint(p, p.mesh.g0, 0.5) is None
     True
     """
+    tables = bool(getattr(problem, "scale_tables", ()))
     try:
-        sysm = ShellSystem(problem, linear_solver, difference="backward")
+        sysm = ShellSystem(problem, linear_solver, difference="forward" if tables else "backward", tables=True)
         p0 = analyse(sysm, sysm.initial(), 0.0, False)
+        sysm.difference = "backward"
         p1 = analyse(sysm, sysm.local(g), lam, False)
     except (CoreSE3Error, FloatingPointError, ValueError):
         return None
-    sp_ = p0.qt / p1.qt if p1.qt != 0 else 0.0
-    if sp_ < 0.3:
-        return (f"the load-displacement stiffness at load factor {lam:.6g} has fallen to "
-                f"S_p = {sp_:.3g} of its initial value: load control has met a limit point "
-                "(the load cannot increase further on this path); trace it with arc length "
-                "(core_se3.solvers.arc_length) or displacement control "
-                "(core_se3.solvers.displacement_control)")
-    return None
+    if tables:                       # the flexibility along the load, free of the tables' slopes
+        f0, f1 = _rayleigh(p0), _rayleigh(p1)
+        if f0 is None or f1 is None:
+            return None              # no load rate at one end (a flat stretch): nothing to compare
+        sp_ = f0 / f1 if f1 != 0 else 0.0
+    else:
+        sp_ = p0.qt / p1.qt if p1.qt != 0 else 0.0
+    return stiffness_hint(lam, sp_)
+
+
+def stiffness_hint(lam, sp_):
+    """The limit-point hint for a current stiffness S_p = ``sp_`` at load factor ``lam`` (below
+    0.3), else None: :func:`limit_point_hint`'s, and a distributed run's, whose S_p is that of the
+    failed try's first iterate (``TryOutcome.k_step`` over the first accepted try's).
+
+    Example
+    -------
+    >>> stiffness_hint(0.5, 0.8) is None, stiffness_hint(0.5, 0.01)[:52]
+    (True, 'the load-displacement stiffness at load factor 0.5 h')
+    """
+    if sp_ >= 0.3:
+        return None
+    return (f"the load-displacement stiffness at load factor {lam:.6g} has fallen to "
+            f"S_p = {sp_:.3g} of its initial value: load control has met a limit point "
+            "(the load cannot increase further on this path); trace it with arc length "
+            "(core_se3.solvers.arc_length) or displacement control "
+            "(core_se3.solvers.displacement_control)")
+
+
+def _rayleigh(pt):
+    """q . K^-1 q / |q|^2 at a PathPoint (None for q = 0): the current flexibility along the
+    load, free of the programme's slope s'(lam) (a scale table's, which differs from stretch to
+    stretch: q = s' q_1 scales q . t by s'^2).  Load stepping's limit point hint with scale
+    tables compares it at the start (q from above) and at the last state (from below); the
+    backward q at 0 of a table that starts at (0, 0) is 0, so every failure was called 'a limit
+    point, S_p = 0' (the snap roof's, and any other)."""
+    qq = float(pt.ev["q"] @ pt.ev["q"])
+    return pt.qt / qq if qq != 0.0 else None
 
 
 def prescribed_turn_hint(problem, g, lam, linear_solver=None):

@@ -39,7 +39,11 @@ class ShellSystem:
     linear_solver : str, optional
         Default the problem's.
     difference : str, optional
-        'central' or 'backward' difference in lam for q.
+        'central', 'backward' or 'forward' difference in lam for q.
+    tables : bool, optional
+        Accept scale tables that bend (``ScaleTable.kinks``; path following refuses them): for
+        a diagnosis at one state (``stability.limit_point_hint``), whose one-sided q is the
+        programme's at that side.
 
     Attributes
     ----------
@@ -58,7 +62,7 @@ class ShellSystem:
     (24, 1.0)
     """
 
-    def __init__(self, problem, linear_solver=None, difference="central"):
+    def __init__(self, problem, linear_solver=None, difference="central", tables=False):
         self.difference = difference
         if problem.element.stateful:
             raise CoreSE3Error("path following needs a path-independent element (the default one); "
@@ -70,6 +74,13 @@ class ShellSystem:
                     raise CoreSE3Error("path following scales loads only: a prescribed motion that "
                                        "depends on the load factor is not supported; use "
                                        "newton_solve for displacement-driven problems")
+        kinked = [t for t in getattr(problem, "scale_tables", ()) if getattr(t, "kinks", ())]
+        if kinked and not tables:
+            raise OptionError(f"path following takes the load factor as the path's parameter, not as a load history: "
+                              f"the scale table {kinked[0]!r} bends at load factor {kinked[0].kinks[0]:g}, where "
+                              "q = d f_ext / d lam jumps (at a peak it vanishes); give each load a straight scale "
+                              "(a table of two points) for arc length and displacement control, or use load control "
+                              "(newton_solve) for a load history")
         hooked = [ld for ld in problem.loads if overrides(ld, "update_multipliers") or overrides(ld, "limit_increment")]
         if hooked:
             raise CoreSE3Error(f"path following does not support the load {hooked[0].name!r} (contact with an "
@@ -107,10 +118,11 @@ class ShellSystem:
     def load_direction(self, g, lam):
         """q = d f_ext / d lam at g (n, 6), by a difference in lam."""
         d = 1e-4 * max(1.0, abs(lam))
-        hi = lam + d if self.difference == "central" else lam
+        hi = lam if self.difference == "backward" else lam + d
+        lo = lam if self.difference == "forward" else lam - d
         fp, _, _ = self.problem.external(g, hi, tangent=False)
-        fm, _, _ = self.problem.external(g, lam - d, tangent=False)
-        return (fp - fm) / (hi - lam + d)
+        fm, _, _ = self.problem.external(g, lo, tangent=False)
+        return (fp - fm) / (hi - lo)
 
     def evaluate(self, g, lam, tangent=True):
         """dict(r, K, q, rn, floor, rint, fext): free residual, tangent, load direction,
