@@ -402,6 +402,32 @@ def test_a_roller_pressed_across_a_plate_between_its_node_lines():
     assert 0 < depth <= four.contact["roller"]["penetration"] + c.tol
 
 
+def _edge_under_plate(steps):
+    """The plate of :func:`_roller_under_plate` under a box's edge instead (half sizes 0.2 x 0.8 x
+    0.2 turned 45 degrees about y, edge up at x = 0.8, the default rounding 0.002; face samples by
+    'auto'), rising 0.075: first contact at load factor 2/3, pressed 0.025 in (1.25 h)."""
+    p = cs.Problem(M.rectangle(2.0, 1.0, 8, 4), cs.Material(E=1e4, nu=0.3, h=0.02))
+    p.clamp("x0"), p.clamp("x1")
+    c = p.add_obstacle("box", centre=(0.8, 0.0, -0.06 - 0.2 * np.sqrt(2)), half_sizes=(0.2, 0.8, 0.2),
+                       rotation=(0, np.pi / 4, 0), motion=dict(translate=(0, 0, 0.075)), name="edge")
+    return c, p.solve(steps=steps).final
+
+
+def test_a_box_edge_pressed_across_a_plate_between_its_node_lines():
+    """The roller's line contact with a box's rounded edge: the faces' iterates came to the edge
+    over the box's flat sides (no curvature: not a ruled line there) with their eta moved off
+    the middle, were held wherever they met the edge, and jumped between those places; Newton
+    stopped at first contact (load factor 0.678 after 12 cut-backs, 'no convergence ... residual
+    1.00e+00', in 3 steps and in 6).  A ruled line met off its middle now goes to its middle:
+    3 and 6 steps end alike (frictionless), the force is vertical and symmetric."""
+    c, three = _edge_under_plate(3)
+    _, six = _edge_under_plate(6)
+    assert np.abs(three.g[:, :3, 3] - six.g[:, :3, 3]).max() < 2e-8
+    F = three.contact["edge"]["force"]
+    assert F[2] > 0.01 and abs(F[1]) < 1e-9 * F[2] and abs(F[0]) < 1e-2 * F[2]
+    assert 0 < three.contact["edge"]["penetration"] < 0.1 * c.h
+
+
 # ----------------------------------------------------------------------------- lift-off
 HINGED_STRIP = """
 name = "hinged-strip"

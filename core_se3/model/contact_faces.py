@@ -150,6 +150,13 @@ def face_minima(obstacle, xq, lam, iters=16, line=None):
         # a bound coordinate stays fixed while its gradient pushes outward (projected Newton), and
         # one along which d is flat (a line of minima) stays where it is
         fixed = ((np.abs(xi) >= 1.0) & (G * np.sign(xi) < 0)) | _flat(M, G, J, line)
+        # a ruled line met away from its middle (the iterate came over a flat part, a box's side)
+        # goes to its middle, within ``line`` of its lower end's depth
+        off = fixed & ~_flat(M, G, J) & (np.abs(xi) < 1.0) & (xi != 0.0)
+        if off.any():
+            xi = np.where(off, 0.0, xi)
+            d, n, H = obstacle.evaluate(np.einsum("ma,mai->mi", face_shape(xi)[0], xq), lam)
+            continue
         Mf = np.where(fixed[:, :, None] | fixed[:, None, :], 0.0, M)
         Mf[:, [0, 1], [0, 1]] = np.where(fixed, 1.0, Mf[:, [0, 1], [0, 1]])
         Gf = np.where(fixed, 0.0, G)
