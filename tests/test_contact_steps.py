@@ -367,6 +367,67 @@ def test_a_ball_sliding_into_a_clamped_line_between_its_nodes_is_named():
         p.solve(steps=2)
 
 
+def _roller_under_plate(steps):
+    """A roller (radius 0.06, axis along y under x = 0.8, between the node lines 0.75 and 1.0)
+    rising 0.15 under a 2 x 1 plate (8 x 4, h 0.02, E 1e4, nu 0.3) clamped at both ends: first
+    contact at load factor 1/3, then pressed 0.1 in.  Face samples by 'auto' (0.06 < 0.35)."""
+    p = cs.Problem(M.rectangle(2.0, 1.0, 8, 4), cs.Material(E=1e4, nu=0.3, h=0.02))
+    p.clamp("x0"), p.clamp("x1")
+    c = p.add_obstacle("cylinder", point=(0.8, 0.5, -0.12), axis=(0, 1, 0), radius=0.06,
+                       motion=dict(translate=(0, 0, 0.15)), name="roller")
+    return p, c, p.solve(steps=steps).final
+
+
+def test_a_roller_pressed_across_a_plate_between_its_node_lines():
+    """A line contact across the faces: the roller's axis lies along the faces' eta lines, where
+    d is linear (no curvature), so each face's closest point was the lower end of its line; the
+    force there tilted the face the other way, and the next iterate took the other end (or
+    none): Newton alternated at first contact and the run stopped after 12 cut-backs ('no
+    convergence in 30 iterations (residual 1.00e+00)' at load factor 0.333374), also with 3
+    steps and for a box's rounded edge.  Now a ruled coordinate keeps the face's middle line
+    (``contact_faces._flat``): 4 and 8 steps end alike (frictionless: no path dependence) to the
+    contact tolerance, the state is mirror symmetric about its middle line y = 0, and the reported penetration
+    is that of the lines' lower ends (4.2e-4), at least the surface's actual depth (3.9e-4 on a
+    0.01 grid; the samples alone said 9e-10)."""
+    p, c, four = _roller_under_plate(4)
+    _, _, eight = _roller_under_plate(8)
+    x4, x8 = four.g[:, :3, 3], eight.g[:, :3, 3]
+    assert np.abs(x4 - x8).max() < 2e-8
+    X = p.mesh.X
+    mirror = [int(np.argmin(np.abs(X - [x, -y, z]).sum(1))) for x, y, z in X]
+    assert np.abs(x4[mirror] * [1, -1, 1] - x4).max() < 2e-8
+    F = four.contact["roller"]["force"]
+    assert F[2] > 0.1 and abs(F[1]) < 1e-9 * F[2]
+    depth = -_surface_depth(c, four.g, 1.0, 0.01)
+    assert 0 < depth <= four.contact["roller"]["penetration"] + c.tol
+
+
+def _edge_under_plate(steps):
+    """The plate of :func:`_roller_under_plate` under a box's edge instead (half sizes 0.2 x 0.8 x
+    0.2 turned 45 degrees about y, edge up at x = 0.8, the default rounding 0.002; face samples by
+    'auto'), rising 0.075: first contact at load factor 2/3, pressed 0.025 in (1.25 h)."""
+    p = cs.Problem(M.rectangle(2.0, 1.0, 8, 4), cs.Material(E=1e4, nu=0.3, h=0.02))
+    p.clamp("x0"), p.clamp("x1")
+    c = p.add_obstacle("box", centre=(0.8, 0.0, -0.06 - 0.2 * np.sqrt(2)), half_sizes=(0.2, 0.8, 0.2),
+                       rotation=(0, np.pi / 4, 0), motion=dict(translate=(0, 0, 0.075)), name="edge")
+    return c, p.solve(steps=steps).final
+
+
+def test_a_box_edge_pressed_across_a_plate_between_its_node_lines():
+    """The roller's line contact with a box's rounded edge: the faces' iterates came to the edge
+    over the box's flat sides (no curvature: not a ruled line there) with their eta moved off
+    the middle, were held wherever they met the edge, and jumped between those places; Newton
+    stopped at first contact (load factor 0.678 after 12 cut-backs, 'no convergence ... residual
+    1.00e+00', in 3 steps and in 6).  A ruled line met off its middle now goes to its middle:
+    3 and 6 steps end alike (frictionless), the force is vertical and symmetric."""
+    c, three = _edge_under_plate(3)
+    _, six = _edge_under_plate(6)
+    assert np.abs(three.g[:, :3, 3] - six.g[:, :3, 3]).max() < 2e-8
+    F = three.contact["edge"]["force"]
+    assert F[2] > 0.01 and abs(F[1]) < 1e-9 * F[2] and abs(F[0]) < 1e-2 * F[2]
+    assert 0 < three.contact["edge"]["penetration"] < 0.1 * c.h
+
+
 # ----------------------------------------------------------------------------- lift-off
 HINGED_STRIP = """
 name = "hinged-strip"

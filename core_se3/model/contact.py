@@ -60,6 +60,10 @@ from .contact_law import (E3, MODES, ContactLaw, as_contact_law, contact_wrench,
                           ramp_inverse, reference_sides, shell_diagonal_stiffness)
 from .obstacles import Obstacle, contact_error, make_obstacle, rigid_motion
 
+RULED_SLOPE = 0.1
+"""A face sample on a line contact (a roller's axis or a box's edge across the face,
+``contact_faces._flat``) stays on the face's middle line while the gap changes by at most this
+times h from there to the face's edge; the outputs' penetration is that of the line's lower end."""
 SIDES = {"auto": "auto", "top": 1.0, "bottom": -1.0, "mid": 0.0}    # the contact face: auto, +d3, -d3, mid-surface
 
 __all__ = ["SIDES", "ContactLoad", "ContactLaw", "add_obstacle", "ramp", "ramp_inverse", "normal_law", "contact_wrench",
@@ -254,7 +258,7 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         """(samples, p, dp) of the face samples (``model.contact_faces``): the samples dict of
         :func:`~core_se3.model.contact_faces.face_minima`; p = 0 where a face has none."""
         xq = self.contact_points(g)[self.face_q]
-        s = face_minima(self.obstacle, xq, lam)
+        s = face_minima(self.obstacle, xq, lam, line=self.h * RULED_SLOPE)
         kn = len(self.nodes)
         p, dp = normal_law(s["d"], self.lam[kn:], self.kf * self.soft[kn:], self.eps)
         return s, np.where(s["ok"], p, 0.0), np.where(s["ok"], dp, 0.0)
@@ -439,7 +443,7 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
             return None, 0.0
         on = np.nonzero(np.all(self.side[self._quads] != 0, axis=1))[0]
         x = self.contact_points(g)
-        s = face_minima(self.obstacle, x[self._quads[on]], lam)
+        s = face_minima(self.obstacle, x[self._quads[on]], lam, line=self.h * RULED_SLOPE if len(self.face_el) else None)
         d_nodes = self.obstacle.distance(x, lam)[self._quads[on]].min(1)
         if len(self.face_el):
             past = (s["d"] < np.minimum(-self.tol, d_nodes - self.tol)) & ~s["ok"]

@@ -58,17 +58,38 @@ def face_shape(xi):
     return N, dN
 
 
-def _flat(M, G, J, tol=1e-9):
-    """The face coordinates (m, 2) along which d is flat to second order at the iterate: no slope
-    (|dd/dxi_j| <= tol |x_,j|) and no curvature (M_jj <= tol tr M), e.g. along the axis of a
-    cylinder lying across the face.  The minimiser is a line there: the sample keeps its
-    coordinate (the face's middle line), else the round-off's sign of the slope sent it to
-    xi_j = +1 or -1 at every evaluation (a roller across a strip jumped from edge to edge of
-    the face and Newton stalled at a residual of 0.5 at first contact)."""
+RULED_CURVATURE = 1e-2
+"""A face coordinate along which the obstacle's curvature M_jj is at most this fraction of the
+face's tr M is *ruled* (a cylinder's axis or a box's edge lying across the face)."""
+
+
+def _flat(M, G, J, line=None, tol=1e-9):
+    """The face coordinates (m, 2) held where they are (m, 2 bool): those along which d is flat
+    to second order at the iterate, no slope (|dd/dxi_j| <= tol |x_,j|) and no curvature
+    (M_jj <= tol tr M), e.g. along the axis of a cylinder lying across the face: the minimiser is
+    a line there, and the round-off's sign of the slope sent it to xi_j = +1 or -1 at every
+    evaluation (a roller across a strip jumped from edge to edge of the face and Newton stalled
+    at a residual of 0.5 at first contact).
+
+    With ``line`` [length], also the *ruled* ones: M_jj <= RULED_CURVATURE tr M and
+    |dd/dxi_j| + M_jj / 2 <= line, where d changes by at most ``line`` from the face's middle
+    line to its edge.
+    The contact is then a line across the face, whose minimiser along it is set by the slope
+    alone; a point sample sent to the lower end tilts the face the other way by its own force,
+    and its next iterate sends it to the other end (a roller of radius 0.06 pressed into a
+    clamped plate between its node lines alternated so, and Newton stalled at every cut-back).
+    The sample keeps its coordinate; :func:`face_minima` reports the depth of the line's lower
+    end in ``d_low``."""
     edge = np.sqrt(np.einsum("mij,mij->mj", J, J))
     diag = M[:, [0, 1], [0, 1]]
     tr = np.abs(diag).sum(1, keepdims=True)
-    return (np.abs(G) <= tol * edge) & (np.abs(diag) <= tol * tr)
+    flat = (np.abs(G) <= tol * edge) & (np.abs(diag) <= tol * tr)
+    if line is None:
+        return flat
+    # curved across (tr M > 0): not a flat part of the obstacle (a box's face), where the
+    # minimum lies at a corner and the nodes carry the contact as on a plane
+    ruled = (np.abs(diag) <= RULED_CURVATURE * tr) & (tr > 0) & (np.abs(G) + 0.5 * np.abs(diag) <= line)
+    return flat | ruled
 
 
 def _descend(obstacle, xq, lam, xi, step, dnH, slope, halvings=12):
@@ -98,8 +119,9 @@ def _descend(obstacle, xq, lam, xi, step, dnH, slope, halvings=12):
     return xi, d, n, H
 
 
-def face_minima(obstacle, xq, lam, iters=16):
-    """The obstacle's closest point on each bilinear face with corners xq (m, 4, 3) at lam.
+def face_minima(obstacle, xq, lam, iters=16, line=None):
+    """The obstacle's closest point on each bilinear face with corners xq (m, 4, 3) at lam
+    (``line`` [length]: the ruled coordinates' hold, :func:`_flat`; None: exact minima).
 
     Projected Newton from the face's centre, each step halved (up to 12 times) until d
     decreases enough (Armijo; else the iterate stays): seen from afar a ball's d on the face is cone-like, its
@@ -110,7 +132,9 @@ def face_minima(obstacle, xq, lam, iters=16):
 
     Returns a dict of arrays: xi (m, 2), x (m, 3), d (m,), n (m, 3), H (m, 3, 3), N (m, 4),
     dN (m, 4, 2), J (m, 3, 2), Minv (m, 2, 2) (the inverse Hessian on the free coordinates, 0 on
-    a fixed one), ok (m,) (the sample carries a constraint: module docstring).
+    a fixed one), ok (m,) (the sample carries a constraint: module docstring), d_low (m,): d at
+    the lower end of the lines held in the face, d + sum_j min(0, G_j D + M_jj D^2 / 2) over
+    the held interior coordinates and their two ends D = +-1 - xi_j.
     """
     m = len(xq)
     xi = np.zeros((m, 2))
@@ -125,7 +149,14 @@ def face_minima(obstacle, xq, lam, iters=16):
         M[:, 1, 0] = M[:, 0, 1]
         # a bound coordinate stays fixed while its gradient pushes outward (projected Newton), and
         # one along which d is flat (a line of minima) stays where it is
-        fixed = ((np.abs(xi) >= 1.0) & (G * np.sign(xi) < 0)) | _flat(M, G, J)
+        fixed = ((np.abs(xi) >= 1.0) & (G * np.sign(xi) < 0)) | _flat(M, G, J, line)
+        # a ruled line met away from its middle (the iterate came over a flat part, a box's side)
+        # goes to its middle, within ``line`` of its lower end's depth
+        off = fixed & ~_flat(M, G, J) & (np.abs(xi) < 1.0) & (xi != 0.0)
+        if off.any():
+            xi = np.where(off, 0.0, xi)
+            d, n, H = obstacle.evaluate(np.einsum("ma,mai->mi", face_shape(xi)[0], xq), lam)
+            continue
         Mf = np.where(fixed[:, :, None] | fixed[:, None, :], 0.0, M)
         Mf[:, [0, 1], [0, 1]] = np.where(fixed, 1.0, Mf[:, [0, 1], [0, 1]])
         Gf = np.where(fixed, 0.0, G)
@@ -144,7 +175,13 @@ def face_minima(obstacle, xq, lam, iters=16):
     M = np.einsum("mij,mik,mkl->mjl", J, H, J)
     M[:, 0, 1] += np.einsum("mi,mi->m", n, x_ab)
     M[:, 1, 0] = M[:, 0, 1]
-    free = (np.abs(xi) < 1.0 - 1e-12) & ~_flat(M, np.einsum("mij,mi->mj", J, n), J)
+    G = np.einsum("mij,mi->mj", J, n)
+    inner = np.abs(xi) < 1.0 - 1e-12
+    free = inner & ~_flat(M, G, J, line)
+    held = inner & ~free
+    ends = np.stack([-1.0 - xi, 1.0 - xi])                        # the held lines' two ends
+    rise = G * ends + 0.5 * M[:, [0, 1], [0, 1]] * ends ** 2
+    d_low = d + np.where(held, np.minimum(rise.min(0), 0.0), 0.0).sum(1)
     Mf = np.where(free[:, :, None] & free[:, None, :], M, 0.0)
     Mf[:, [0, 1], [0, 1]] = np.where(free, Mf[:, [0, 1], [0, 1]], 1.0)
     det = Mf[:, 0, 0] * Mf[:, 1, 1] - Mf[:, 0, 1] ** 2
@@ -156,7 +193,7 @@ def face_minima(obstacle, xq, lam, iters=16):
     Minv[~(free[:, :, None] & free[:, None, :])] = 0.0
     d_nodes = obstacle.evaluate(xq.reshape(-1, 3), lam)[0].reshape(m, 4).min(1)
     ok = good & (d < d_nodes - 1e-12 * np.sqrt(scale))
-    return dict(xi=xi, x=x, d=d, n=n, H=H, N=N, dN=dN, J=J, Minv=Minv, ok=ok)
+    return dict(xi=xi, x=x, d=d, n=n, H=H, N=N, dN=dN, J=J, Minv=Minv, ok=ok, d_low=d_low)
 
 
 def face_wrench(R, c, A, s, p, dp):

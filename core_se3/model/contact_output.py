@@ -42,11 +42,13 @@ class ContactOutputs:
         return self.state(g, lam)[1]
 
     def penetration(self, g, lam):
-        """max_i (-d_i) over the nodes and the face samples, 0 when none penetrates [length]."""
+        """max_i (-d_i) over the nodes and the face samples, 0 when none penetrates [length]; a
+        sample held on a line contact counts the line's lower end (``d_low``: the chord of a
+        roller across a plate ended 3.9e-4 inside it, 0.02 h, with the samples' 9e-10 reported)."""
         pen = float(max(0.0, -self.gaps(g, lam).min()))
         if len(self.face_el):
             s, _, _ = self.face_state(g, lam)
-            pen = max(pen, float(-s["d"][s["ok"]].min(initial=0.0)))
+            pen = max(pen, float(-s["d_low"][s["ok"]].min(initial=0.0)))
         return pen
 
     def nodal_forces(self, g, lam):
@@ -68,12 +70,10 @@ class ContactOutputs:
         """Per-step scalars: penetration [length], gap error of the last update [length], the
         number of nodes carrying force."""
         _, d, _, _, p, _ = self.state(g, lam)
-        out = dict(penetration=float(max(0.0, -d.min())), gap_error=self.gap_error,
+        out = dict(penetration=self.penetration(g, lam), gap_error=self.gap_error,
                    nodes_in_contact=int(np.count_nonzero(p > 0)))
         if len(self.face_el):
-            s, pf, _ = self.face_state(g, lam)
-            out["penetration"] = float(max(out["penetration"], -s["d"][s["ok"]].min(initial=0.0)))
-            out["faces_in_contact"] = int(np.count_nonzero(pf > 0))
+            out["faces_in_contact"] = int(np.count_nonzero(self.face_state(g, lam)[1] > 0))
         if self.mu > 0:                                # friction: stick/slip counts, largest slip
             # the counts and the slip of the last accepted step (``accept_state``: the anchors
             # have moved to this state since)
