@@ -370,6 +370,17 @@ def test_duplicate_probe_name(tmp_path):
     bad(tmp_path, d, "probes[1].name", "must be unique")
 
 
+def test_a_dof_listed_twice_is_refused_not_merged(tmp_path):
+    """dofs = [0, 0] held one dof where two were likely meant ([0, 1]); before, the list was
+    sorted into a set and the run went on; now refused, naming the key and the repeat; a lab
+    axis twice in a rigid motion's ``free`` likewise."""
+    d = base()
+    d["supports"].append({"type": "fix", "edge": "x1", "dofs": [0, 0]})
+    bad(tmp_path, d, "supports[1].dofs", "lists [0] more than once", "was another meant?")
+    d["supports"][1] = {"type": "rotate", "edge": "x1", "axis": [1, 0, 0], "angle": 0.1, "free": ["x", "x"]}
+    bad(tmp_path, d, "supports[1].free", "lists ['x'] more than once")
+
+
 def test_node_ids_that_do_not_exist(tmp_path):
     d = base()
     d["supports"][0] = {"type": "clamp", "nodes": [0, 99]}
@@ -514,7 +525,7 @@ def test_mesh_file_nonconvex_quad(tmp_path):
 def test_mesh_file_flipped_normals(tmp_path):
     X = [[0, 0, 0], [1, 0, 0], [2, 0, 0], [0, 1, 0], [1, 1, 0], [2, 1, 0]]
     _write_quads(tmp_path / "m.vtu", X, [[0, 1, 4, 3], [1, 4, 5, 2]])      # second quad clockwise
-    bad(tmp_path, _file_doc("m.vtu"), "mesh.file", "normals flip across the edge")
+    bad(tmp_path, _file_doc("m.vtu"), "mesh.file", "run along their shared edge (1, 4) the same way", "normals flip there", "reverse their node order")
 
 
 def test_mesh_file_with_triangles(tmp_path):

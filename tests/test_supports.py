@@ -70,6 +70,8 @@ def test_bad_support_input_names_the_cause():
     for dofs in ([-1], [7], [], [1.5], [True]):
         with pytest.raises(SupportError, match="dofs must be one or more of 0, 1, 2"):
             _strip().fix("x0", dofs)
+    with pytest.raises(SupportError, match=r"dofs lists \[0\] more than once"):   # [0, 0]: was [0, 1] meant?
+        _strip().fix("x0", [0, 0])
     for angle in (float("nan"), float("inf"), "pi"):
         with pytest.raises(SupportError, match="rotation angle must be a finite number"):
             _strip().rotate_edge("x1", (1.0, 0.0, 0.0), angle)

@@ -200,7 +200,8 @@ def _node_ids(mesh, where):
 
 def fixed_dofs(dofs):
     """The (6,) mask of the body-frame dofs ``dofs`` (0-2 translations along d1..d3, 3-5
-    rotations about them), or a SupportError (a negative index would silently fix another dof).
+    rotations about them), or a SupportError (a negative index would silently fix another dof; a
+    dof listed twice, [0, 0], fixed one where two were likely meant).
 
     Example
     -------
@@ -211,6 +212,10 @@ def fixed_dofs(dofs):
     if not dofs or any(isinstance(d, bool) or not isinstance(d, (int, np.integer)) or not 0 <= d <= 5 for d in dofs):
         raise SupportError(f"dofs must be one or more of 0, 1, 2 (translations along d1, d2, d3) and 3, 4, 5 "
                            f"(rotations about them), got {dofs!r}")
+    repeated = sorted({int(d) for d in dofs if dofs.count(d) > 1})
+    if repeated:      # [0, 0] fixed one dof where [0, 1] was likely meant: said, not merged silently
+        raise SupportError(f"dofs lists {repeated} more than once ({dofs!r}): each dof once -- 0, 1, 2 "
+                           f"(translations along d1, d2, d3), 3, 4, 5 (rotations about them); was another meant?")
     fixed = np.zeros(6, bool)
     fixed[dofs] = True
     return fixed

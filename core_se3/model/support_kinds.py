@@ -113,7 +113,7 @@ _FREE = Param("free", "list", [], item="string", choices=tuple(AXES), unique="er
 register_support(SupportKind("clamp", (), lambda problem, nodes, scale: problem.clamp(nodes),
                              doc="position and rotation held at their reference values"))
 register_support(SupportKind(
-    "fix", (Param("dofs", "list", item="integer", lo=0, hi=5, min_items=1, unique="sort",
+    "fix", (Param("dofs", "list", item="integer", lo=0, hi=5, min_items=1, unique="error",
                   doc="dof numbers 0..5 (0-2 translations along d1..d3, 3-5 rotations)"),),
     lambda problem, nodes, scale, dofs: problem.fix(nodes, dofs),
     doc="body-frame dofs held: 0-2 translations along d1, d2, d3, 3-5 rotations"))

@@ -337,8 +337,10 @@ class Validator:
         elif ok:
             ok = all(not isinstance(a, bool) and isinstance(a, int) and (p.lo is None or a >= p.lo)
                      and (p.hi is None or a <= p.hi) for a in x)
-        if ok and p.unique == "error":
-            ok = len(set(x)) == len(x)
+        if ok and p.unique == "error" and len(set(x)) != len(x):
+            again = sorted({a for a in x if x.count(a) > 1})
+            self.fail(path, f"lists {show(again)} more than once ({show(x)}): each of the {what} once; was "
+                            "another meant?")
         if not ok:
             self.fail(path, f"expected {'a non-empty' if p.min_items else 'an'} array of {what}, got {show(x)}")
         return sorted(set(x)) if p.unique == "sort" else list(x)
