@@ -88,7 +88,7 @@ from .membrane_enhanced import condensed_stiffness, membrane_enhancement
 from .membrane_shear import curved_element_measures, shear_retention, shear_tying
 from .quadrature import GAUSS_2x2
 from .resultants import element_resultants
-from .warp import check_warp
+from .warp import check_chord_normals, check_warp
 
 _IU = np.triu_indices(24)                # the upper triangle of a 24x24 matrix, row by row
 
@@ -544,6 +544,7 @@ class DefaultElement(Element):
         ids = getattr(mesh, "whole_ids", None)                          # a rank's part: the whole mesh's ids
         check_frame_turns(mesh.X, mesh.quads, self.corner_frames(mesh.g0), self.j0, stacklevel=5, ids=ids)
         check_warp(mesh.X, mesh.quads, mesh.g0, stacklevel=5, ids=ids)      # warped quads (fem/warp.py)
+        check_chord_normals(mesh, stacklevel=5, ids=ids)                # normals against the chords (fem/warp.py)
         if self.matching is not None and ids is None:                   # d1 spinning about a node (Cuts; a
             check_node_windings(mesh, self.matching, stacklevel=5)      # rank's part: the run sums them)
         self._Dbar = None
