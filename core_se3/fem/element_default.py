@@ -482,6 +482,8 @@ class DefaultElement(Element):
 
     def __init__(self, mesh, material):
         super().__init__(mesh, material)
+        # normals against the chords (fem/warp.py), first: a flipped normal's edge twist is not finite
+        check_chord_normals(mesh, stacklevel=5, ids=getattr(mesh, "whole_ids", None))
         self._kernels = None
         self.gauge = element_gauge(mesh, material)
         # the quarter turns across a cross field's cuts (module docstring, "Cuts"): None without
@@ -544,7 +546,6 @@ class DefaultElement(Element):
         ids = getattr(mesh, "whole_ids", None)                          # a rank's part: the whole mesh's ids
         check_frame_turns(mesh.X, mesh.quads, self.corner_frames(mesh.g0), self.j0, stacklevel=5, ids=ids)
         check_warp(mesh.X, mesh.quads, mesh.g0, stacklevel=5, ids=ids)      # warped quads (fem/warp.py)
-        check_chord_normals(mesh, stacklevel=5, ids=ids)                # normals against the chords (fem/warp.py)
         if self.matching is not None and ids is None:                   # d1 spinning about a node (Cuts; a
             check_node_windings(mesh, self.matching, stacklevel=5)      # rank's part: the run sums them)
         self._Dbar = None

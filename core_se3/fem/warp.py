@@ -224,8 +224,8 @@ def check_chord_normals(mesh, stacklevel=3, ids=None):
         what = (f"the nodes' normals d3 contradict the positions along {where}: {at}'s chord c has "
                 f"|c . (n_a + n_b)| / |c| = {mu[e]:.3g}, above {bar[e]:.3g} ({CHORD_NORMAL_FLOOR:g} + "
                 f"{CHORD_NORMAL_CURVED:g} x the normals' turn there squared, {ends[e]:.3g} rad; the normals of a smooth "
-                "surface through the nodes give 0 on spheres and cylinders and at most 0.34 of the bar on the coarse "
-                "meshes measured)")
+                "surface through the nodes give 0 on spheres and cylinders and at most 0.64 of the bar on the coarse "
+                "meshes measured, a hook of two arcs with its inflection inside an edge)")
     warnings.warn(ElementWarning(
         f"{what}. The element joins the nodes by the helices of their frames and sees the shell the frames "
         "describe, not the one through the nodes (a flat plate given a sphere's normals of curvature 0.3, pressed: 0.45 "
