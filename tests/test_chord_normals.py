@@ -163,3 +163,18 @@ def test_the_measure_is_zero_on_spheres_and_cylinders_and_the_helicoid_s_l_squar
         exact = 2 * b * abs(np.sin(k * dx) - k * dx) / np.sqrt(1 + (k * b) ** 2) / chord
         assert abs(chord_normal_mismatch(m.X, m.edge_nodes, m.g0)[0].max() / exact - 1.0) < 1e-9
         assert abs(exact / (dx ** 2 * k ** 3 * b / (3 * (1 + (k * b) ** 2))) - 1.0) < 0.01
+
+
+def test_a_curved_developable_shell_from_a_file_gets_its_normals_at_its_edges():
+    # a half tube (radius 1, 15 deg elements) read from a file: the quads' mean normal at its
+    # straight edges was off by half an element's angle, 7.5 deg (mu 0.13, 2.4 times the bar:
+    # the warning's case), and its tip 1.2 % off the exact normals'; the boundary normals are now
+    # the neighbours' reflected across the chords, exact on a circle
+    th = np.radians(np.linspace(-60.0, 60.0, 9))
+    X = np.array([[np.cos(t), np.sin(t), z] for z in np.linspace(0.0, 4.0, 9) for t in th])
+    q = np.array([[j * 9 + i, j * 9 + i + 1, (j + 1) * 9 + i + 1, (j + 1) * 9 + i] for j in range(8) for i in range(8)])
+    for hint in (None, [0.0, 0.0, 1.0]):
+        m = from_meshio(meshio.Mesh(X, [("quad", q)]), d1_hint=hint)
+        exact = X * [1.0, 1.0, 0.0]
+        assert np.abs(m.g0[:, :3, 2] - exact).max() < 1e-12
+        assert not _said(m)
