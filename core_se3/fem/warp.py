@@ -231,7 +231,8 @@ def check_chord_normals(mesh, stacklevel=3, ids=None):
         "describe, not the one through the nodes (a flat plate given a sphere's normals of curvature 0.3, pressed: 0.45 "
         "of its deflection at L/h 400). Likely: normals given for another surface (or kept when the nodes were moved), a frame "
         "field rotated or mirrored against the positions, positions transformed without their frames (an axis "
-        "scaled, other units along one axis). Fix: give d3 the normal of the surface through the nodes "
+        "scaled, other units along one axis); a fold (crease) between faces, which one normal per node rounds over "
+        "the elements at it (an L angle read from a file: 0.71). Fix: give d3 the normal of the surface through the nodes "
         "(Mesh(g0=mesh.frames_from(X, d1, d3)) with the surface's normals; a mesh file read without frames gets "
         "normals fitted to its nodes)"), stacklevel=stacklevel)
 
