@@ -178,3 +178,24 @@ def test_a_curved_developable_shell_from_a_file_gets_its_normals_at_its_edges():
         exact = X * [1.0, 1.0, 0.0]
         assert np.abs(m.g0[:, :3, 2] - exact).max() < 1e-12
         assert not _said(m)
+
+
+def test_a_rank_names_the_whole_mesh_s_edges():
+    # a rank builds its element on its part, numbered locally; the warning names the whole mesh's
+    # nodes and elements (Mesh.whole_ids), as in the serial run
+    from core_se3.fem.element_default import DefaultElement
+    from core_se3.parallel.local import subdomain
+    plate = mesh.rectangle(4.0, 2.0, 4, 2)
+    g = plate.g0.copy()
+    g[6, :3, :3] = lie.exp_so3([0.0, 0.3, 0.0]) @ g[6, :3, :3]      # node 6's normal tilted by 0.3 rad
+    plate = mesh.Mesh(g, plate.quads)
+
+    def said(m):
+        with warnings.catch_warnings(record=True) as seen:
+            warnings.simplefilter("always")
+            DefaultElement(m, Material(1e4, 0.3, 0.01))
+        return [str(w.message) for w in seen if "contradict" in str(w.message)]
+    serial = said(plate)
+    assert len(serial) == 1 and "(5, 6)" in serial[0]
+    part = (plate.X[plate.quads].mean(1)[:, 0] < 2.0).astype(int)      # node 6's elements on rank 1
+    assert said(subdomain(plate, part, 1, 2).mesh) == serial
