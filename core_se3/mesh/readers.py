@@ -171,7 +171,9 @@ def from_meshio(source, d1_hint=None, edges=None, triangles="error"):
     Nodal frames: d3 = area-weighted mean of the adjacent quads' normals (quads must be
     consistently oriented: the normal is the right-hand side of the node order), on doubly curved
     parts the normal of a quadric fitted to each node's ring (the mean is off by half an element's
-    angle at a boundary and by the distortion inside, which thin domes feel).  Without a
+    angle at a boundary and by the distortion inside, which thin domes feel), at the boundary of
+    a curved developable part (a tube) the neighbours' normals reflected across the chords
+    (``_boundary_normals``: exact on a circle).  Without a
     ``d1_hint``, d1 = the projection of +x on flat and developable parts (where the element makes
     the frames parallel whatever d1 is: ``mesh.gauge``), and on doubly curved parts (domes,
     spheres, bellows, whose frames it keeps as given) d1 along the mesh's own edges
