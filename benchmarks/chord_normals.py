@@ -22,7 +22,7 @@ import numpy as np
 
 from core_se3 import Material, Problem, lie, mesh
 from core_se3.catalogue import shell_course as sc
-from core_se3.fem.warp import CHORD_NORMAL_CURVED, CHORD_NORMAL_FLOOR, chord_normal_mismatch
+from core_se3.fem.warp import CHORD_NORMAL_CURVED, CHORD_NORMAL_FLOOR, CHORD_NORMAL_TURN, chord_normal_bar, chord_normal_mismatch
 from core_se3.mesh.readers import from_meshio
 
 import curved_frames as cf
@@ -62,6 +62,35 @@ def _torus(n, Rt=3.0, rt=1.0):
     return _frames(X, q, d3, np.stack([-np.sin(a), np.cos(a), 0 * a], -1).reshape(-1, 3))
 
 
+def _corrugated(n, A=0.1, shift=0.37):
+    m = mesh.rectangle(1.0, 0.5, n, 2)
+    X = m.X.copy()
+    w = 2 * np.pi * (X[:, 0] + shift / n)
+    X[:, 2] = A * np.sin(w)
+    return _frames(X, m.quads, np.stack([-A * 2 * np.pi * np.cos(w), 0 * w, np.ones(len(X))], 1))
+
+
+def _half_tube():
+    th = np.radians(np.linspace(-60.0, 60.0, 9))
+    X = np.array([[np.cos(t), np.sin(t), z] for z in np.linspace(0.0, 4.0, 9) for t in th])
+    q = np.array([[j * 9 + i, j * 9 + i + 1, (j + 1) * 9 + i + 1, (j + 1) * 9 + i] for j in range(8) for i in range(8)])
+    return X, q
+
+
+def _ellipsoid_cap(n, jitter=0.15, seed=1):
+    """tests/test_element.py's cap (an ellipsoid's, axes 1.3, 0.8, 1; interior nodes moved along it)."""
+    rng = np.random.default_rng(seed)
+    t, f = np.linspace(0.3, 0.9, n + 1), np.linspace(-0.6, 0.6, n + 1)
+    P = []
+    for i, a in enumerate(t):
+        for j, b in enumerate(f):
+            if 0 < i < n and 0 < j < n:
+                a, b = a + jitter * (t[1] - t[0]) * rng.uniform(-1, 1), b + jitter * (f[1] - f[0]) * rng.uniform(-1, 1)
+            P.append([1.3 * np.sin(a) * np.cos(b), 0.8 * np.sin(a) * np.sin(b), np.cos(a)])
+    q = [[j * (n + 1) + i, j * (n + 1) + i + 1, (j + 1) * (n + 1) + i + 1, (j + 1) * (n + 1) + i] for j in range(n) for i in range(n)]
+    return np.array(P), np.array(q)
+
+
 def correct_meshes():
     """{name: Mesh} of correct frames: generators, files, Gmsh's domes, the examples, general surfaces."""
     out = {f"hemisphere quarter {n}x{n}": mesh.hemisphere_quarter(10.0, 18.0, n, n) for n in (2, 4, 8)}
@@ -70,7 +99,11 @@ def correct_meshes():
     for nx, ny in ((6, 1), (12, 2), (24, 4)):
         out[f"twisted beam 90 deg {nx}x{ny}"] = sc.twisted_mesh(12.0, 1.1, np.pi / 2, nx, ny)
     out["twisted beam 720 deg 12x2"] = sc.twisted_mesh(12.0, 1.1, 4 * np.pi, 12, 2)
-    out["Raasch hook 12x4 (an inflection inside an edge)"] = sc.hook_mesh(12, 4)
+    for nx, ny in ((12, 4), (24, 8), (96, 32)):
+        out[f"Raasch hook {nx}x{ny} (a curvature jump inside an edge)"] = sc.hook_mesh(nx, ny)
+    for n in (6, 12, 32):
+        out[f"corrugated sheet z = 0.1 sin(2 pi x), {n} per wave"] = _corrugated(n)
+    out["half tube from a file, 15 deg elements (the reader's edge normals)"] = _file(*_half_tube())
     for n in (2, 4, 8, 16):
         out[f"closed cubed sphere from a file, {n} per face"] = _file(*cf.cubed_sphere(n))
     for n in (4, 8):
@@ -88,6 +121,9 @@ def correct_meshes():
         out[f"saddle, grid off its rulings, {n}x{n}"] = _surface(n, "saddle")
         out[f"paraboloid {n}x{n}"] = _surface(n, "paraboloid")
     out["torus 3 / 1, 8x4"] = _torus(4)
+    for n in (4, 8, 16):
+        X, q = _ellipsoid_cap(n)
+        out[f"ellipsoid cap {n}x{n} (axes 1.3, 0.8, 1), its exact normals"] = _frames(X, q, -X / [1.69, 0.64, 1.0])
     return out
 
 
@@ -126,6 +162,13 @@ def wrong_meshes():
         g = m.g0.copy()
         g[:, :3, :3] = lie.exp_so3([0.0, np.radians(5.0), 0.0]) @ g[:, :3, :3]
         out[f"{name}, all frames turned by 5 deg about y (not the positions)"] = mesh.Mesh(g, m.quads)
+    for n in (4, 8, 16):
+        X, q = _ellipsoid_cap(n)
+        out[f"ellipsoid cap from a file {n}x{n} (the reader's boundary normals)"] = _file(X, q)
+    s = np.linspace(0.0, 1.0, 5)
+    X = np.array([p for z in s for p in [[x, 0.0, z] for x in s[::-1][:-1]] + [[0.0, y, z] for y in s]])
+    q = np.array([[j * 9 + i, j * 9 + i + 1, (j + 1) * 9 + i + 1, (j + 1) * 9 + i] for j in range(4) for i in range(8)])
+    out["an L angle (a 90 deg fold) from a file, 4x4 per face"] = _file(X, q)
     return out
 
 
@@ -133,7 +176,7 @@ def rows(meshes):
     out = []
     for name, m in meshes.items():
         mu, phi, ends = chord_normal_mismatch(m.X, m.edge_nodes, m.g0)
-        r = mu / (CHORD_NORMAL_FLOOR + CHORD_NORMAL_CURVED * ends ** 2)
+        r = mu / chord_normal_bar(ends)
         out.append(f"| {name} | {mu.max():.2g} | {np.degrees(phi.max()):.0f} | {r.max():.2g} | {(r > 1).sum()} / {len(r)} |")
     return out
 
@@ -173,9 +216,11 @@ def main():
     head = ["| mesh | max mu | max normal turn across an edge [deg] | max mu / bar | edges above the bar |",
             "|---|---|---|---|---|"]
     text = [f"# Nodal normals against the positions ({datetime.date.today()})", "",
-            f"`python benchmarks/chord_normals.py`; bar = {CHORD_NORMAL_FLOOR} + {CHORD_NORMAL_CURVED} phi_ends^2.", "",
+            f"`python benchmarks/chord_normals.py`; bar = {CHORD_NORMAL_FLOOR} + {CHORD_NORMAL_TURN} phi_ends + "
+            f"{CHORD_NORMAL_CURVED} phi_ends^2.", "",
             "## Correct frames", ""] + head + rows(correct_meshes()) + \
-           ["", "## Wrong frames (a flipped normal warns by its turn, above 120 deg)", ""] + head + rows(wrong_meshes()) + \
+           ["", "## Wrong frames, and a mesh file's own where they are off (a flipped normal warns by its turn, "
+            "above 120 deg)", ""] + head + rows(wrong_meshes()) + \
            ["", "## Answers with wrong normals over those with the right ones (linear)", "", "| case | ratio |", "|---|---|"] \
            + answer_rows()
     OUT.write_text("\n".join(text) + "\n")

@@ -38,15 +38,19 @@ import numpy as np
 from ..errors import ElementWarning
 
 __all__ = ["quad_warp", "check_warp", "WARN_WARP", "chord_normal_mismatch", "check_chord_normals", "CHORD_NORMAL_FLOOR",
-           "CHORD_NORMAL_CURVED", "MAX_EDGE_NORMAL_TURN"]
+           "CHORD_NORMAL_TURN", "CHORD_NORMAL_CURVED", "MAX_EDGE_NORMAL_TURN", "chord_normal_bar"]
 
 #: the unexplained warp [over the quad's size] above which the element warns
 WARN_WARP = 0.05
 #: the chord's component along its end normals' sum [over its length] above which an edge warns on
 #: a flat or finely meshed shell (:func:`chord_normal_mismatch`) ...
 CHORD_NORMAL_FLOOR = 0.02
-#: ... plus this times the square of the largest turn of the normals [rad] across the edges at its
-#: ends (a smooth surface's O((L/R)^2) term: docs/ELEMENTS.md, "Nodal normals against the positions")
+#: ... plus this times the largest turn of the normals [rad] across the edges at its ends phi_ends
+#: (a curvature that jumps inside the edge: a C1 junction of arcs of curvatures k1, -k2 gives
+#: L (k1 + k2) / 4, Raasch's hook 96 x 32 0.032) ...
+CHORD_NORMAL_TURN = 0.25
+#: ... plus this times phi_ends^2 (a smooth surface's O((L/R)^2) term: docs/ELEMENTS.md, "Nodal
+#: normals against the positions")
 CHORD_NORMAL_CURVED = 0.5
 #: [deg] normals turning by more than this across one edge warn (a node's normal flipped)
 MAX_EDGE_NORMAL_TURN = 120.0
@@ -180,9 +184,22 @@ def chord_normal_mismatch(X, edge_nodes, g):
     return mu, phi, np.maximum(node[a], node[b])
 
 
+def chord_normal_bar(phi_ends):
+    """The chord-normal mismatch above which an edge warns: CHORD_NORMAL_FLOOR + CHORD_NORMAL_TURN
+    phi_ends + CHORD_NORMAL_CURVED phi_ends^2, phi_ends [rad] the largest normal turn across the
+    edges at its two nodes (:func:`chord_normal_mismatch`).
+
+    Example
+    -------
+    >>> round(float(chord_normal_bar(0.2)), 4)
+    0.09
+    """
+    return CHORD_NORMAL_FLOOR + CHORD_NORMAL_TURN * phi_ends + CHORD_NORMAL_CURVED * np.square(phi_ends)
+
+
 def check_chord_normals(mesh, stacklevel=3, ids=None):
     """ElementWarning for edges whose end normals contradict their chord (:func:`chord_normal_mismatch`):
-    mu above CHORD_NORMAL_FLOOR + CHORD_NORMAL_CURVED phi_ends^2, or normals turning by more than
+    mu above CHORD_NORMAL_FLOOR + CHORD_NORMAL_TURN phi_ends + CHORD_NORMAL_CURVED phi_ends^2, or normals turning by more than
     MAX_EDGE_NORMAL_TURN across the edge.  The element joins its nodes by the helices of their
     frames and sees the shell the frames describe, not the one through the nodes: a flat 2 x 2
     plate (8 x 8 elements, edges pinned, pressed, h 0.005) given a sphere's normals of curvature
@@ -205,7 +222,7 @@ def check_chord_normals(mesh, stacklevel=3, ids=None):
     >>> check_chord_normals(mesh.hemisphere_quarter(10.0, 18.0, 2, 2))      # silent
     """
     mu, phi, ends = chord_normal_mismatch(mesh.X, mesh.edge_nodes, mesh.g0)
-    bar = CHORD_NORMAL_FLOOR + CHORD_NORMAL_CURVED * ends ** 2
+    bar = chord_normal_bar(ends)
     flip = phi > np.radians(MAX_EDGE_NORMAL_TURN)
     bad = np.flatnonzero((mu > bar) | flip)
     if not len(bad):
@@ -223,16 +240,18 @@ def check_chord_normals(mesh, stacklevel=3, ids=None):
     else:
         what = (f"the nodes' normals d3 contradict the positions along {where}: {at}'s chord c has "
                 f"|c . (n_a + n_b)| / |c| = {mu[e]:.3g}, above {bar[e]:.3g} ({CHORD_NORMAL_FLOOR:g} + "
-                f"{CHORD_NORMAL_CURVED:g} x the normals' turn there squared, {ends[e]:.3g} rad; the normals of a smooth "
-                "surface through the nodes give 0 on spheres and cylinders and at most 0.64 of the bar on the coarse "
-                "meshes measured, a hook of two arcs with its inflection inside an edge)")
+                f"{CHORD_NORMAL_TURN:g} t + {CHORD_NORMAL_CURVED:g} t^2, t = {ends[e]:.3g} rad the normals' largest turn "
+                "across an edge there; the normals of a smooth surface through the nodes give 0 on spheres and "
+                "cylinders and at most 0.64 of the bar on the meshes measured)")
     warnings.warn(ElementWarning(
         f"{what}. The element joins the nodes by the helices of their frames and sees the shell the frames "
         "describe, not the one through the nodes (a flat plate given a sphere's normals of curvature 0.3, pressed: 0.45 "
         "of its deflection at L/h 400). Likely: normals given for another surface (or kept when the nodes were moved), a frame "
         "field rotated or mirrored against the positions, positions transformed without their frames (an axis "
         "scaled, other units along one axis); a fold (crease) between faces, which one normal per node rounds over "
-        "the elements at it (an L angle read from a file: 0.71). Fix: give d3 the normal of the surface through the nodes "
+        "the elements at it (an L angle read from a file: 0.71); a mesh file's normals at the boundary of a doubly "
+        "curved part of unequal curvatures (fitted with one curvature there: an ellipsoid's cap 4 x 4 13 deg off, "
+        "8 x 8 4 deg). Fix: give d3 the normal of the surface through the nodes "
         "(Mesh(g0=mesh.frames_from(X, d1, d3)) with the surface's normals; a mesh file read without frames gets "
         "normals fitted to its nodes)"), stacklevel=stacklevel)
 
