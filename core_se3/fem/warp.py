@@ -198,9 +198,9 @@ def chord_normal_bar(phi_ends):
 
 
 def check_chord_normals(mesh, stacklevel=3, ids=None):
-    """ElementWarning for edges whose end normals contradict their chord (:func:`chord_normal_mismatch`):
-    mu above CHORD_NORMAL_FLOOR + CHORD_NORMAL_TURN phi_ends + CHORD_NORMAL_CURVED phi_ends^2, or normals turning by more than
-    MAX_EDGE_NORMAL_TURN across the edge.  The element joins its nodes by the helices of their
+    """ElementWarning for edges whose end normals contradict their chord: mu above
+    :func:`chord_normal_bar` (phi_ends) (:func:`chord_normal_mismatch`), or normals turning by more
+    than MAX_EDGE_NORMAL_TURN across the edge.  The element joins its nodes by the helices of their
     frames and sees the shell the frames describe, not the one through the nodes: a flat 2 x 2
     plate (8 x 8 elements, edges pinned, pressed, h 0.005) given a sphere's normals of curvature
     0.1 / 0.3 (mu 0.17 / 0.51) came out 0.85 / 0.45 of the flat plate's deflection (h 0.001: 0.26 /
@@ -253,7 +253,7 @@ def check_chord_normals(mesh, stacklevel=3, ids=None):
         "curved part of unequal curvatures (fitted with one curvature there: an ellipsoid's cap 4 x 4 13 deg off, "
         "8 x 8 4 deg). Fix: give d3 the normal of the surface through the nodes "
         "(Mesh(g0=mesh.frames_from(X, d1, d3)) with the surface's normals; a mesh file read without frames gets "
-        "normals fitted to its nodes)"), stacklevel=stacklevel)
+        "normals fitted to its nodes; at a doubly curved boundary, refine there)"), stacklevel=stacklevel)
 
 
 def _file_points(mesh):
