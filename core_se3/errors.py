@@ -482,7 +482,9 @@ class ElementWarning(UserWarning):
     curved shells (an element along a free edge whose out-of-plane edge turn phi has
     phi^3 L / h > 2, ``fem.element_default.COARSE_THIN_CURVED``), where a membrane-dominated
     shell can come out spuriously flexible (the Scordelis-Lo roof 2x2 at R/h 1e4: 10.9 times its
-    deflection; docs/ELEMENTS.md).
+    deflection; docs/ELEMENTS.md).  Issued when the element is built where the nodes' normals
+    contradict the positions (``fem.warp.check_chord_normals``: a plate given a sphere's normals
+    came out 0.45 of its deflection).
 
     Example
     -------

@@ -88,7 +88,7 @@ from .membrane_enhanced import condensed_stiffness, membrane_enhancement
 from .membrane_shear import curved_element_measures, shear_retention, shear_tying
 from .quadrature import GAUSS_2x2
 from .resultants import element_resultants
-from .warp import check_warp
+from .warp import check_chord_normals, check_warp
 
 _IU = np.triu_indices(24)                # the upper triangle of a 24x24 matrix, row by row
 
@@ -482,6 +482,8 @@ class DefaultElement(Element):
 
     def __init__(self, mesh, material):
         super().__init__(mesh, material)
+        # normals against the chords (fem/warp.py), first: a flipped normal's edge twist is not finite
+        check_chord_normals(mesh, stacklevel=5, ids=getattr(mesh, "whole_ids", None))
         self._kernels = None
         self.gauge = element_gauge(mesh, material)
         # the quarter turns across a cross field's cuts (module docstring, "Cuts"): None without
