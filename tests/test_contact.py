@@ -782,3 +782,23 @@ def test_a_user_sdfs_difference_hessian_follows_the_length_unit(s):
     _, n, H = sdf.local(y)
     exact = (np.eye(3) - n[:, :, None] * n[:, None, :]) / np.linalg.norm(y, axis=1)[:, None, None]
     assert np.abs(H - exact).max() <= 2e-10 * np.abs(exact).max()
+
+
+def test_a_large_obstacle_s_edge_cutting_the_faces_between_nodes_is_reported_and_warned():
+    """A box (half sizes 0.6 x 0.8 x 0.6, turned 45 deg about y: an edge up, default rounding)
+    pressed 0.1 into a 2 x 1 plate clamped at both ends (8 x 4, h 0.02), its edge at x = 0.8
+    between the node lines x = 0.75 and 1.0: no face samples ('auto': the box is thicker than an
+    element), so the plate rests on the box's sides at its nodes and the edge ends 0.037 (1.8 h)
+    inside the faces between them.  Before, the results said penetration 1.4e-9 and nothing
+    else; now ``face_cut`` reports the faces' deepest point and an AccuracyWarning names faces =
+    true (with it the same run reports penetration 4.4e-4, in 51 s instead of 0.6 s)."""
+    from core_se3.errors import AccuracyWarning
+    a, h = 0.6, 0.02
+    p = cs.Problem(M.rectangle(2.0, 1.0, 8, 4), cs.Material(1e4, 0.3, h))
+    p.clamp("x0"), p.clamp("x1")
+    p.add_obstacle("box", centre=(0.8, 0.0, -0.01 - a * np.sqrt(2)), half_sizes=(a, 0.8, a),
+                   rotation=(0, np.pi / 4, 0), motion=dict(translate=(0, 0, 0.11)), name="edge")
+    with pytest.warns(AccuracyWarning, match=r"cuts .* into the shell's contact faces between their nodes"):
+        st = p.solve(steps=4).final
+    c = st.contact["edge"]
+    assert c["penetration"] < 1e-6 and c["face_cut"] > h          # measured 1.4e-9 and 0.037
