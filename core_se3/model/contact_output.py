@@ -63,12 +63,11 @@ class ContactOutputs:
         face between its nodes unfelt: a box's edge (half sizes 0.6 x 0.8 x 0.6, turned edge up)
         pressed 0.1 into a 2 x 1 plate (8 x 4, h 0.02) ends 0.037 (1.8 h) inside the face between
         the nodes that rest on its sides, penetration 1.4e-9."""
-        if getattr(self.obstacle, "flat", False) or not len(self._quads):
+        if getattr(self.obstacle, "flat", False):          # the same on every rank: no collective
             return 0.0
-        on = np.nonzero(np.all(self.side[self._quads] != 0, axis=1))[0]
-        x = self.contact_points(g)
-        d = face_minima(self.obstacle, x[self._quads[on]], lam)["d"] if len(on) else np.zeros(0)
-        return float(self.largest(max(0.0, -float(d.min(initial=0.0)))))
+        on = np.nonzero(np.all(self.side[self._quads] != 0, axis=1))[0] if len(self._quads) else []
+        d = face_minima(self.obstacle, self.contact_points(g)[self._quads[on]], lam)["d"] if len(on) else np.zeros(0)
+        return float(self.largest(max(0.0, -float(d.min(initial=0.0)))))   # every rank calls it (mpirun)
 
     def warn_face_cut(self, cut, pen, lam):
         """An AccuracyWarning (once per obstacle) where the faces cut deeper than h/2 beyond the
