@@ -302,7 +302,9 @@ def _curved_part_frames(mesh, d1_hint):
     if not curved.any():
         return
     d3 = mesh.g0[:, :3, 2].copy()
-    d3[curved] = _fitted_normals(mesh.X, mesh.quads, d3)[curved]
+    boundary = np.zeros(mesh.n_nodes, bool)
+    boundary[mesh.edge_nodes[mesh.boundary_edges()[0]].ravel()] = True
+    d3[curved] = _fitted_normals(mesh.X, mesh.quads, d3, boundary)[curved]
     if d1_hint is None:
         d1 = edge_aligned_d1(mesh.X, mesh.quads, d3, edges=mesh.edge_nodes)
     else:
@@ -344,27 +346,64 @@ def _boundary_normals(mesh, part):
 FIT_TURN_MAX = 30.0
 
 
-def _fitted_normals(X, quads, d3):
+#: a boundary node's two-ring quadric with anisotropy below this fraction of its mean curvature
+#: is a sphere's: the one-curvature fit is kept there
+UMBILIC = 0.1
+
+
+def _fitted_normals(X, quads, d3, boundary):
     """Unit normals (n, 3): at each node the normal at the node of the quadric z = d x + e y +
-    a x^2 + b x y + c y^2 (8 neighbours or more in its quads; with fewer, at a boundary, z = d x +
-    e y + k (x^2 + y^2); fewer than 3: none) fitted (least squares) to the neighbours in the frame
-    of its quads' mean normal d3; where there is none, or it turns from d3 by more than
-    FIT_TURN_MAX, d3.  The mean of the quads' normals is off by half an element's angle at a
-    boundary and by the mesh's distortion inside: the thin whole hemisphere from a file (R/h 1e4,
-    4x4) gave 0.978 of its exact normals' deflection, a quarter with interior nodes moved by 0.3
-    of the spacing (16x16) 0.64 ... 0.81; with the fitted normals 1.001 and 1.00 ... 1.01
-    (benchmarks/results/curved_frames.md)."""
+    a x^2 + b x y + c y^2 fitted (least squares) in the frame of its quads' mean normal d3 to the
+    nodes of its quads (8 or more inside; an irregular interior node with fewer, z = d x + e y +
+    k (x^2 + y^2)) or, at a ``boundary`` (n,) bool node, to those of its two rings (its quads'
+    nodes and theirs: 14 at an edge node of a structured mesh, 8 at a corner).  Where there are
+    too few points, or the fit turns from d3 by more than FIT_TURN_MAX, d3.  The mean of the
+    quads' normals is off by half an element's angle at a boundary and by the mesh's distortion
+    inside: the thin whole hemisphere from a file (R/h 1e4, 4x4) gave 0.978 of its exact normals'
+    deflection, a quarter with interior nodes moved by 0.3 of the spacing (16x16) 0.64 ... 0.81;
+    with the fitted normals 1.001 and 1.00 ... 1.01 (benchmarks/results/curved_frames.md).  At a
+    boundary one ring is one-sided: its full quadric extrapolates (10 deg off on a cubed cap's
+    edge), one curvature misses unequal ones (an ellipsoid's cap, tests/test_element.py: 12.9 /
+    4.3 / 3.0 deg on 4x4 / 8x8 / 16x16, 0.53 / 0.16 / 0.05 inside); the two rings' quadric 1.3 /
+    0.48 / 0.16.  It is taken at a boundary node unless it is umbilic (anisotropy |(a - c, b)| <=
+    UMBILIC |a + c|: a sphere, where one curvature is exact) or agrees worse with the node's chords,
+    sum (c . (n_a + n_b))^2 / |c|^2 (``fem.warp.chord_normal_mismatch``'s measure; on coarse wide
+    rings the quadric misfits: an ellipsoidal dome's equator on 4x4 per quarter, 8.8 deg, its
+    answer 0.06 of the exact normals'; now 0.993) (docs/ELEMENTS.md, "A mesh file's own normals")."""
     n = len(X)
     pairs = np.concatenate([np.stack([quads[:, i], quads[:, j]], 1) for i in range(4) for j in range(4) if i != j])
     key = np.unique(pairs[:, 0] * n + pairs[:, 1])
     a, b = key // n, key % n
+    count = np.bincount(a, minlength=n)
+    v = _quadric_normals(X, a, b, d3, count >= 8)[0]
+    at = np.flatnonzero(boundary[a])           # (a, b) at a boundary node a, then b's ring (b, c)
+    k = count[b[at]]
+    first = np.searchsorted(a, b[at])          # b's ring: its pairs from here on
+    aa, cc = np.repeat(a[at], k), b[np.repeat(first - np.cumsum(k) + k, k) + np.arange(k.sum())]
+    two = np.unique(np.concatenate([key[at], (aa * n + cc)[aa != cc]]))
+    w, (p, q, r) = _quadric_normals(X, two // n, two % n, d3, np.ones(n, bool))
+    use = boundary & (np.hypot(p - r, q) > UMBILIC * np.abs(p + r))     # else one curvature fits
+    c = X[b] - X[a]
+    c /= np.linalg.norm(c, axis=1, keepdims=True)
+    u = np.where(use[:, None], w, v)
+    mu2 = [np.bincount(a, np.einsum("pi,pi->p", c, s[a] + s[b]) ** 2, n) for s in (u, v)]
+    use &= mu2[0] <= mu2[1]                    # the one agreeing better with its chords
+    v[use] = w[use]
+    return v
+
+
+def _quadric_normals(X, a, b, d3, full):
+    """The normals of ``_fitted_normals`` fitted at each node a to its points b (pairs (a, b),
+    each once; lengths in units of their rms): the full quadric where ``full`` (n,) bool and 5
+    points or more, else one curvature k (x^2 + y^2) with 3 or more; none (d3) with fewer."""
+    n = len(X)
     t1 = np.cross(d3, np.where(np.abs(d3[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]]))
     t1 /= np.linalg.norm(t1, axis=1, keepdims=True)
     t2 = np.cross(d3, t1)
     V = X[b] - X[a]
-    L = np.sqrt(np.bincount(a, np.einsum("pi,pi->p", V, V), n) / np.maximum(np.bincount(a, minlength=n), 1))
-    x, y, z = (np.einsum("pi,pi->p", V, t[a]) / L[a] for t in (t1, t2, d3))
     count = np.bincount(a, minlength=n)
+    L = np.sqrt(np.bincount(a, np.einsum("pi,pi->p", V, V), n) / np.maximum(count, 1))
+    x, y, z = (np.einsum("pi,pi->p", V, t[a]) / L[a] for t in (t1, t2, d3))
     slopes = []
     for A in (np.stack([x, y, x * x, x * y, y * y], 1), np.stack([x, y, x * x + y * y], 1)):
         k = A.shape[1]
@@ -374,16 +413,14 @@ def _fitted_normals(X, quads, d3):
             for j in range(i, k):
                 AtA[:, i, j] = AtA[:, j, i] = np.bincount(a, A[:, i] * A[:, j], n)
         AtA[count < k] = np.eye(k)
-        slopes.append(np.linalg.solve(AtA + 1e-12 * np.eye(k), Atz[..., None])[..., :2, 0])
-    # a ring all round (8 neighbours on a regular mesh): the full quadric; a boundary node's
-    # one-sided ring: one curvature (the full one extrapolates: 10 deg off on a cubed cap's edge)
-    ok = count >= 3
-    c = np.where((count >= 8)[:, None], slopes[0], slopes[1])
+        slopes.append(np.linalg.solve(AtA + 1e-12 * np.eye(k), Atz[..., None])[..., 0])
+    full = full & (count >= 5)
+    c = np.where(full[:, None], slopes[0][:, :2], slopes[1][:, :2])
     v = d3 - c[:, :1] * t1 - c[:, 1:2] * t2
     v /= np.linalg.norm(v, axis=1, keepdims=True)
-    keep = ~ok | (np.einsum("ni,ni->n", v, d3) < np.cos(np.radians(FIT_TURN_MAX)))
+    keep = (count < 3) | (np.einsum("ni,ni->n", v, d3) < np.cos(np.radians(FIT_TURN_MAX)))
     v[keep] = d3[keep]
-    return v
+    return v, slopes[0][:, 2:].T
 
 
 #: the element's d1 turning by more than this within a quad [deg] (on a doubly curved part, which
