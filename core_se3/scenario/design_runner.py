@@ -22,6 +22,7 @@ import numpy as np
 from ..design import FieldVariable
 from ..errors import ScenarioError
 from ..io import atomic_path, write_json_atomic
+from ..io.plots import save_figure
 from .build import mu0_of
 from .design_section import AngleInDegrees
 from .outputs import physical_record
@@ -180,8 +181,7 @@ def _convergence_plot(path, history, title):
     ax.set_title(title)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=110, bbox_inches="tight", format="png")
+    save_figure(fig, path, dpi=110, bbox_inches="tight")
     plt.close(fig)
     return path
 
@@ -207,8 +207,7 @@ def _target_plot(path, mesh, g, targets, achieved, title):
     ax.set_ylim(c[1] - r, c[1] + r)
     ax.set_zlim(c[2] - r, c[2] + r)
     ax.set_title(title)
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=110, bbox_inches="tight", format="png")
+    save_figure(fig, path, dpi=110, bbox_inches="tight")
     plt.close(fig)
     return path
 

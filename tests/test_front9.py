@@ -1,0 +1,25 @@
+"""front9: small front-door loose ends (the figure writer, design's output error, the annulus
+mesh's minimum, overflowing meshes, a meant multi-turn angle in a scenario file)."""
+import numpy as np
+import pytest
+
+pytestmark = pytest.mark.core
+
+
+def test_sweep_and_design_plots_go_through_the_one_figure_writer(tmp_path, monkeypatch):
+    """sweep_files.write_plot and design_runner's plots save through io.plots.save_figure (one
+    copy of the atomic save; before, each kept its own atomic_path around savefig)."""
+    pytest.importorskip("matplotlib")
+    from core_se3.io import plots
+    from core_se3.scenario import design_runner, sweep_files
+    from core_se3.scenario.sweep import SweepResult
+    saved = []
+    real = plots.save_figure
+    monkeypatch.setattr(plots, "save_figure", lambda fig, path, **kw: saved.append(path) or real(fig, path, **kw))
+    monkeypatch.setattr(design_runner, "save_figure", plots.save_figure, raising=False)
+    rows = [{"material.E": e, "status": "complete", "tip.uz": 1.0 / e} for e in (1.0, 2.0)]
+    sweep_files.write_plot(str(tmp_path / "sweep.png"), SweepResult(["material.E"], rows), "t")
+    history = [{"iteration": k, "objective": 1.0 / (k + 1), "gradient_norm": 0.1} for k in range(3)]
+    design_runner._convergence_plot(str(tmp_path / "convergence.png"), history, "t")
+    assert saved == [str(tmp_path / "sweep.png"), str(tmp_path / "convergence.png")]
+    assert all(open(p, "rb").read(4)[1:] == b"PNG" for p in saved)
