@@ -23,3 +23,26 @@ def test_sweep_and_design_plots_go_through_the_one_figure_writer(tmp_path, monke
     design_runner._convergence_plot(str(tmp_path / "convergence.png"), history, "t")
     assert saved == [str(tmp_path / "sweep.png"), str(tmp_path / "convergence.png")]
     assert all(open(p, "rb").read(4)[1:] == b"PNG" for p in saved)
+
+
+def test_design_output_error_says_which_files_were_written(tmp_path, monkeypatch, capsys):
+    """A design whose convergence plot cannot be written (a full disk) said "the design's result
+    is not written" though optimised.toml, the target plot and the VTU series were written: now
+    the error line names those written and the ones not (the failed file, design.json)."""
+    from test_design_scenario import BASE
+    from core_se3.cli import main
+    from core_se3.scenario import design_runner
+
+    def full(path, *a):
+        raise OSError(28, "No space left on device", str(path))
+    monkeypatch.setattr(design_runner, "_convergence_plot", full)
+    path = tmp_path / "strip.toml"
+    path.write_text(BASE)
+    out = tmp_path / "out"
+    assert main(["design", str(path), "--out", str(out), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: cannot write the outputs") and "the design's result is not written" not in err
+    written, not_written = err.split("; written: ")[1].split("; not written: ")
+    assert str(out / "optimised.toml") in written and (out / "optimised.toml").exists()
+    assert str(out / "convergence.png") in not_written and "design.json" in not_written
+    assert not (out / "design.json").exists()
