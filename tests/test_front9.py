@@ -46,3 +46,19 @@ def test_design_output_error_says_which_files_were_written(tmp_path, monkeypatch
     assert str(out / "optimised.toml") in written and (out / "optimised.toml").exists()
     assert str(out / "convergence.png") in not_written and "design.json" in not_written
     assert not (out / "design.json").exists()
+
+
+def test_an_annulus_of_too_few_elements_around_names_the_cause_and_the_minimum():
+    """``bench run sze-slit-annular --mesh 4x2``: two elements around the slit ring span half a
+    turn each, their corners on one line; the error said only 'quads ... degenerate'.  Now it
+    names the count around and the minimum (3 for a full turn, 2 for half a turn)."""
+    from core_se3 import mesh as M
+    from core_se3.cli import main
+    from core_se3.errors import MeshError
+    with pytest.raises(MeshError, match=r"nt = 2 element\(s\) around 6.28319 rad span 180 degrees.*at least nt = 3"):
+        M.annulus(6.0, 10.0, 2 * np.pi, 4, 2)
+    with pytest.raises(MeshError, match=r"at least nt = 2"):
+        M.annulus(6.0, 10.0, np.pi, 4, 1)
+    m = M.annulus(6.0, 10.0, 2 * np.pi, 4, 3)                   # the minimum: 120 degrees each
+    assert m.n_elements == 12
+    assert main(["bench", "run", "sze-slit-annular", "--mesh", "4x2", "-q"]) == 2
