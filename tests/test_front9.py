@@ -62,3 +62,26 @@ def test_an_annulus_of_too_few_elements_around_names_the_cause_and_the_minimum()
     m = M.annulus(6.0, 10.0, 2 * np.pi, 4, 3)                   # the minimum: 120 degrees each
     assert m.n_elements == 12
     assert main(["bench", "run", "sze-slit-annular", "--mesh", "4x2", "-q"]) == 2
+
+
+@pytest.mark.parametrize("L", [1e300, 1e155])
+def test_a_mesh_whose_lengths_overflow_says_so(L, tmp_path, capsys):
+    """A strip of L = 1e300 (and 1e155: edge lengths sqrt(e.e) overflow from 1.3e154) was refused
+    as 'quads ... degenerate ... nodes at one point (an edge of length 1)'; now as an overflow,
+    in Python and from a scenario file (its key).  A mesh far from the origin keeps its round-off
+    message (tests/test_mesh.py), and one of span 1e150 is accepted."""
+    import warnings
+    from core_se3 import mesh as M
+    from core_se3.cli import main
+    from core_se3.errors import MeshError
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(MeshError, match=r"the mesh spans 1e\+(300|155) \[length\], beyond 1e\+150: .*overflow"):
+            M.rectangle(L, 1.0, 2, 1)
+        assert M.rectangle(1e150, 1.0, 2, 1).n_elements == 2
+    f = tmp_path / "big.toml"
+    f.write_text(f'[mesh]\ngenerator = "rectangle"\nL = {L!r}\nwidth = 1.0\nnx = 2\nny = 1\n[material]\n'
+                 'E = 1.0\nnu = 0.0\nh = 0.1\n[[supports]]\ntype = "clamp"\nedge = "x0"\n')
+    assert main(["run", str(f), "--out", str(tmp_path / "o"), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "[mesh]" in err and "overflow" in err and "degenerate" not in err
