@@ -85,3 +85,55 @@ def test_a_mesh_whose_lengths_overflow_says_so(L, tmp_path, capsys):
     assert main(["run", str(f), "--out", str(tmp_path / "o"), "-q"]) == 2
     err = capsys.readouterr().err
     assert "[mesh]" in err and "overflow" in err and "degenerate" not in err
+
+
+TURNING = """
+units = "SI"
+{meant}
+[mesh]
+generator = "rectangle"
+L = 1.0
+width = 0.2
+nx = 2
+ny = 1
+[material]
+E = 1e6
+nu = 0.0
+h = 0.01
+[[supports]]
+type = "clamp"
+edge = "x0"
+[fields.coil]
+type = "uniform"
+B = [0.0, 0.0, 0.01]
+rotate = {{ axis = [0.0, 1.0, 0.0], angle = 62.8 }}
+[[magnets]]
+Br = [0.1, 0.0, 0.0]
+"""
+
+
+def test_a_meant_multi_turn_angle_is_said_once_and_can_be_said_meant():
+    """A field turning 10 times (62.8 rad) warned as a ScenarioWarning at its key, plus twice as a
+    bare AngleWarning whose hint (warnings.catch_warnings around the call) a file cannot follow,
+    and nothing said it was meant.  Now: one ScenarioWarning naming the top-level key
+    ``many_turns``; listed there, nothing is said (nor with --strict); a listed key that is no
+    angle of the file is refused with the closest one."""
+    import warnings
+    from core_se3 import scenario
+    from core_se3.errors import ScenarioError
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        scenario.loads(TURNING.format(meant=""))
+    assert [type(w.message).__name__ for w in said] == ["ScenarioWarning"]
+    assert 'many_turns = ["fields.coil.rotate.angle"]' in str(said[0].message)
+    meant = TURNING.format(meant='many_turns = ["fields.coil.rotate.angle"]')
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        scn = scenario.loads(meant, strict=True)
+        scn.load_numbers()
+    assert said == [] and scn.warnings == []
+    with pytest.warns(UserWarning, match="many_turns"):
+        assert scn.fingerprint == scenario.loads(TURNING.format(meant="")).fingerprint      # no mechanics
+    with pytest.raises(ScenarioError, match=r"\[many_turns\[0\]\]: 'fields.coil.rotate.angel' is not an angle.*"
+                                            r"did you mean 'fields.coil.rotate.angle'"):
+        scenario.loads(TURNING.format(meant='many_turns = ["fields.coil.rotate.angel"]'))
