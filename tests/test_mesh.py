@@ -258,7 +258,12 @@ def test_a_quad_flat_to_round_off_is_refused_at_the_mesh():
     on the x axis (the sine of every corner 2.4e-16, from sin(pi)), and passed the mesh check
     (corner cross products > 0 by round-off); the solve then failed with 'edge turns by 3.142
     rad: refine the mesh or the load step'.  A corner whose sine is at round-off is degenerate."""
-    with pytest.raises(MeshError, match=r"quads \[0, 1\] are degenerate"):
+    from core_se3.mesh.generators import _patch
+    with pytest.raises(MeshError, match=r"quads \[0, 1\] are degenerate"):    # the mesh's own check
+        _patch(np.array([0.5, 1.0]), np.array([0.0, np.pi, 2 * np.pi]),
+               lambda R, T: (np.stack([R * np.cos(T), R * np.sin(T), 0 * T], -1),
+                             np.stack([np.cos(T), np.sin(T), 0 * T], -1), np.tile([0, 0, 1.0], (T.size, 1))))
+    with pytest.raises(MeshError, match=r"nt = 2 element\(s\) around .* at least nt = 3"):   # the generator's
         M.annulus(0.5, 1.0, 2 * np.pi, 1, 2)
     assert M.annulus(0.5, 1.0, 2 * np.pi, 1, 3).n_elements == 3         # a third of a turn each: fine
     with pytest.warns(MeshWarning, match="from the origin"):           # an aspect ratio of 1e12: not

@@ -409,6 +409,18 @@ def friction_cells(st, o):
             f"{str(c['sticking']) + '/' + str(c['slipping']):>10}")
 
 
+def _design_files_kept(exc):
+    """What a design whose output failed (``exc``, an OSError) wrote and did not: the files
+    written before it (``exc.written``, by ``run_design``) are kept, design.json (written last)
+    and the failed file are not."""
+    written = getattr(exc, "written", None) or {}
+    failed = exc.filename or "the file above"
+    if not written:
+        return f"no file of the design is written ({failed} failed; design.json is written last)"
+    return (f"written: {', '.join(map(str, written.values()))}; not written: {failed} and the design's files after "
+            "it (design.json, its summary, is written last)")
+
+
 def design_run(args):
     """``core-se3 design``: optimise the [design] of a scenario, write the optimised scenario and
     the design's outputs (docs/DESIGN.md)."""
@@ -425,7 +437,7 @@ def design_run(args):
     except CoreSE3Error as exc:
         return error_code(exc)
     except OSError as exc:
-        return output_error(exc, "the design's result is not written")
+        return output_error(exc, _design_files_kept(exc))
     except KeyboardInterrupt as exc:
         return interrupted(exc, "the design is not finished (its outputs are written at the end)")
     if not args.quiet and launched_rank() == 0:          # under mpirun: rank 0 reports

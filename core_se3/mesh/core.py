@@ -85,6 +85,11 @@ def _set_ids(ids, count, what, kind):
     return ids
 
 
+#: the largest span [length] of a mesh: beyond it the squares of its lengths (edge lengths
+#: |e| = sqrt(e.e), areas) overflow double precision (1.8e308, at lengths of 1.3e154), and a
+#: mesh of L = 1e300 was refused as 'degenerate quads' (its edges' lengths inf)
+MAX_SPAN = 1e150
+
 #: the sine of a quad's corner angle at or below which the quad is degenerate (round-off)
 DEGENERATE_SINE = 1e-10
 
@@ -427,6 +432,12 @@ class Mesh:
         # every quad must be convex with positive area about the mean of its nodal normals; a
         # corner whose sine is round-off (an annulus of two elements round a full turn: its
         # quads' corners on one line, sine 2.4e-16) is degenerate too
+        span = float(np.max(self.X.max(0) - self.X.min(0)))     # (no square: it cannot overflow first)
+        if not span <= MAX_SPAN:
+            raise MeshError(f"the mesh spans {span:.3g} [length], beyond {MAX_SPAN:g}: its lengths' squares (edge "
+                            "lengths, areas) overflow double precision (1.8e308), so its quads cannot be measured; "
+                            "a span that large is likely a unit or exponent mistake: give the mesh in a unit where "
+                            "it spans about 1 to 1e6")
         X = self.X[self.quads]                                   # (m,4,3)
         why = bow_tie_error(self.quads, X)
         if why:

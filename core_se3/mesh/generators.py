@@ -323,8 +323,13 @@ def annulus(r_in, r_out, angle, nr, nt, grade=None):
         raise MeshError(f"annulus needs 0 < r_in < r_out, got {r_in}, {r_out}")
     _one_turn("annulus", "angle", angle)
     nr, nt = _counts(nr, nt)
-    return _patch(*_axes(grade, (r_in, r_out), (0.0, angle), nr, nt),
-                  lambda Rr, T: (np.stack([Rr * np.cos(T), Rr * np.sin(T), 0 * T], -1),
+    r, t = _axes(grade, (r_in, r_out), (0.0, angle), nr, nt)
+    if np.diff(t).max() >= np.pi * (1 - 1e-12):     # its four corners on one line through the centre
+        raise MeshError(f"annulus: nt = {nt} element(s) around {angle:g} rad span {np.degrees(np.diff(t).max()):.4g} "
+                        f"degrees each, too few: an element of half a turn or more has its corners on one line "
+                        f"(zero area); give at least nt = {int(angle // np.pi) + 1} elements around (the second "
+                        "count of a mesh NRxNT)")
+    return _patch(r, t, lambda Rr, T: (np.stack([Rr * np.cos(T), Rr * np.sin(T), 0 * T], -1),
                                  np.stack([np.cos(T), np.sin(T), 0 * T], -1),
                                  np.tile([0, 0, 1.0], (T.size, 1))))
 

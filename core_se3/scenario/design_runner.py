@@ -22,6 +22,7 @@ import numpy as np
 from ..design import FieldVariable
 from ..errors import ScenarioError
 from ..io import atomic_path, write_json_atomic
+from ..io.plots import save_figure
 from .build import mu0_of
 from .design_section import AngleInDegrees
 from .outputs import physical_record
@@ -180,8 +181,7 @@ def _convergence_plot(path, history, title):
     ax.set_title(title)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=110, bbox_inches="tight", format="png")
+    save_figure(fig, path, dpi=110, bbox_inches="tight")
     plt.close(fig)
     return path
 
@@ -207,8 +207,7 @@ def _target_plot(path, mesh, g, targets, achieved, title):
     ax.set_ylim(c[1] - r, c[1] + r)
     ax.set_zlim(c[2] - r, c[2] + r)
     ax.set_title(title)
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=110, bbox_inches="tight", format="png")
+    save_figure(fig, path, dpi=110, bbox_inches="tight")
     plt.close(fig)
     return path
 
@@ -236,8 +235,12 @@ def run_design(scn, out=None, method=None, max_iter=None, progress=False, vtu=Tr
     from .runner import output_directory
     rd = RunDirectory(output_directory(scn, out, "-design"), "design", DESIGN_FILES)
     on_root(lambda: rd.claim(force=force))
+    files = {}
     try:
-        return _design(scn, rd, method, max_iter, progress, vtu, plots)
+        return _design(scn, rd, method, max_iter, progress, vtu, plots, files)
+    except OSError as exc:           # the files written before it (the CLI says which were, which not)
+        exc.written = dict(files)
+        raise
     finally:
         rd.release()
 
@@ -285,7 +288,9 @@ def _pose_rows(scn, pose, st):
     return tg, ach, rows
 
 
-def _design(scn, rd, method, max_iter, progress, vtu, plots):
+def _design(scn, rd, method, max_iter, progress, vtu, plots, files):
+    """The design's optimisation and its outputs: each written file is put in ``files`` (kind ->
+    path) once written, so a failed write leaves there only the written ones."""
     from ..backend import launched_rank
     from ..io.rundir import safe_name
     from .sinks import write_path_vtu
@@ -295,7 +300,6 @@ def _design(scn, rd, method, max_iter, progress, vtu, plots):
     _check_writable(scn, design)
     r = design.optimise(method or ds["method"], max_iter=ds["max_iter"] if max_iter is None else max_iter, tol=ds["tol"],
                         tolerance=ds["tolerance"], progress=progress, stop_at_tolerance=ds["stop_at_tolerance"])
-    files = {}
     poses_doc = []
     for k, pose in enumerate(design.poses):
         st = r.states[k]
@@ -328,7 +332,7 @@ def _design(scn, rd, method, max_iter, progress, vtu, plots):
     doc = dict(schema="core-se3-design v1", scenario=scn.file, name=scn.name,
                result={**r.document(), **_units_document(scn, design, r)}, poses=poses_doc,
                files={k: os.path.relpath(v, out) for k, v in files.items()}, provenance=problem_provenance(scn.problem))
-    files["design"] = rd.file("design.json")
     if root:
-        write_json_atomic(files["design"], doc)
+        write_json_atomic(rd.file("design.json"), doc)
+    files["design"] = rd.file("design.json")
     return r, files

@@ -44,6 +44,8 @@ SCENARIO = Section("scenario", (
     Param("units", "string", "", doc='"SI", "N-mm-MPa" or "consistent"; required with magnets or gravity'),
     Param("plugins", "list", [], item="string",
           doc="Python files (relative to the scenario) or modules whose kinds the scenario uses"),
+    Param("many_turns", "list", [], item="string",
+          doc='the angle keys whose more than three turns are meant (no warning), e.g. ["fields.coil.rotate.angle"]'),
     Param("mesh", "table", doc="a generator or a file"), Param("edges", "table", None, doc="named node sets"),
     Param("regions", "table", None, doc="named element sets"), Param("material", "table", doc="the law"),
     Param("fields", "table", None, doc="applied fields by name"), Param("magnets", "any", None, doc="[[magnets]]"),

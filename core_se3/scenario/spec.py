@@ -17,7 +17,7 @@ import os
 import warnings
 from collections import namedtuple
 
-from ..errors import AngleWarning, ScenarioError
+from ..errors import ScenarioError
 from .build import build_problem
 from .design_section import design_section
 from .keys import check_key, repeated_value, split_dotted
@@ -26,7 +26,7 @@ from .obstacles import obstacles_section
 from ..model import SUPPORTS
 from .physics import (NON_PHYSICAL, fields_section, loads_section, magnets_section,
                       material_section, output_section, solver_section, supports_section)
-from .units import plausibility, unit_defaults, units_section
+from .units import keyed_angles as _keyed_angles, plausibility, unit_defaults, units_section
 from .plugins import load_plugins
 from .schema import SCENARIO
 from .validate import Validator, make_scale
@@ -330,6 +330,7 @@ def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario", strict=
     spec["name"] = v.string(doc, "name", "", default=default_name)
     spec["description"] = v.string(doc, "description", "", default="")
     spec["units"] = v.string(doc, "units", "", default="")
+    spec["many_turns"] = list(v.param(doc, "", SCENARIO.param("many_turns")))
 
     mesh, mspec, file_digest = _keyed_angles(mesh_section, v, doc["mesh"], base_dir)
     spec["mesh"] = mspec
@@ -372,7 +373,7 @@ def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario", strict=
     problem = _keyed_angles(build_problem, v, spec, mesh, regions)
     units_section(v, doc, spec)
     # the name labels the run (results' "scenario", titles, the default out/NAME): no mechanics
-    phys = {k: spec[k] for k in spec if k not in ("output", "description", "sweep", "name")}
+    phys = {k: spec[k] for k in spec if k not in ("output", "description", "sweep", "name", "many_turns")}
     phys["magnets"] = [{k: (dict(x, path=None) if k == "Br_table" else x) for k, x in m.items()}
                        for m in spec["magnets"]]          # a table's digest, not where it lies
     phys["solver"] = {k: x for k, x in spec["solver"].items() if k not in NON_PHYSICAL}
@@ -396,15 +397,6 @@ def from_dict(doc, file="<dict>", base_dir=".", default_name="scenario", strict=
     for w in scn.warnings:
         warnings.warn(w, stacklevel=2)
     return scn
-
-
-def _keyed_angles(build, *args):
-    """``build(*args)`` without the AngleWarnings of the layers below (a generator's angle0, a
-    support's or an obstacle's angle, a field's rotate.angle): the validation says each as a
-    ScenarioWarning at its key (``units._angles``), once."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", AngleWarning)
-        return build(*args)
 
 
 def _huge_integers(v, doc, key=""):

@@ -161,7 +161,7 @@ def write_status(path, result, scn, state, message=None):
 def write_plot(path, result, title):
     """Every probe displacement component against the first swept value (names or switches:
     one tick per run)."""
-    from ..io import new_figure
+    from ..io.plots import new_figure, save_figure
     fig = new_figure()
     ax = fig.add_subplot(1, 1, 1)
     key = result.keys[0]
@@ -185,6 +185,5 @@ def write_plot(path, result, title):
     if ys:
         ax.legend(fontsize="small")
     fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png")
+    save_figure(fig, path)
     return path

@@ -14,9 +14,11 @@ to the nearest supported node; E and h are the means over the loaded elements.
 """
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
-from ..errors import TURNS_MAX
+from ..errors import TURNS_MAX, AngleWarning, did_you_mean
 from ..model import FIELDS, MU0
 from .geometry import selection
 from .validate import make_scale
@@ -229,8 +231,7 @@ def load_numbers(scn, lam=None):
         E, h = _elem_props(spec, mi, elems)
         L = _spans(mesh, prob, nodes)
         f = spec["fields"][m["field"]]
-        field = FIELDS[f["type"]].build({k: x for k, x in f.items() if k not in ("type", "scale")},
-                                        make_scale(f["scale"]), MU0)
+        field = _field_of(f)
         Ba = max(float(np.linalg.norm(field.value(mesh.X[nodes], x), axis=1).max()) for x in lams)
         Br = _br_magnitude(m, mesh)
         mu0 = m["mu0"] if m["mu0"] is not None else (UNIT_SYSTEMS.get(spec["units"], {}).get("mu0") or MU0)
@@ -276,6 +277,22 @@ def _br_magnitude(m, mesh):
     if "Br_frame" in m:
         return float(np.linalg.norm(m["Br_frame"]))
     return float(m.get("Br_max", 0.0))
+
+
+def keyed_angles(build, *args):
+    """``build(*args)`` without the AngleWarnings of the layers below (a generator's angle0, a
+    support's or an obstacle's angle, a field's rotate.angle): the validation says each as a
+    ScenarioWarning at its key (:func:`_angles`), once."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", AngleWarning)
+        return build(*args)
+
+
+def _field_of(f):
+    """The field of a [fields.NAME] table ``f`` at scale 1 x its scale, to evaluate B [T] (its
+    rotate.angle said at its key by :func:`_angles`, not again as an AngleWarning)."""
+    return keyed_angles(FIELDS[f["type"]].build, {k: x for k, x in f.items() if k not in ("type", "scale")},
+                        make_scale(f["scale"]), MU0)
 
 
 def _density_message(rho, rho_si, u, units):
@@ -327,13 +344,23 @@ def _angles(v, spec):
         v.warn("mesh.hole_deg", f"hole_deg = {hole:g} degrees: hole_deg is in degrees ({hole:g} rad is "
                                 f"{np.degrees(hole):.4g} degrees); a hole under a degree makes the elements at it "
                                 "slivers (at 0.3 degrees and nt = nf: 190 times longer than wide)")
+    _many_turns(v, spec.get("many_turns") or [], found)
+
+
+def _many_turns(v, meant, found):
+    """Warn at each angle [rad] of ``found`` ((key, angle)) beyond TURNS_MAX turns unless its key is
+    listed in the top-level ``many_turns`` (``meant``), which lists only such angle keys."""
+    for i, key in enumerate(meant):
+        if key not in dict(found):
+            v.fail(f"many_turns[{i}]", f"{key!r} is not an angle of this file that may turn (its path angles: "
+                                       f"{', '.join(k for k, _ in found) or 'none'}){did_you_mean(key, dict(found))}")
     for key, angle in found:
         turns = abs(float(angle)) / (2 * np.pi)
-        if turns > TURNS_MAX:
+        if turns > TURNS_MAX and key not in meant:
+            cost = "" if key.startswith("obstacles") else " (the run then takes at least 8 sub-steps per turn)"
             v.warn(key, f"angle = {angle:g} rad is {turns:.3g} turns (more than {TURNS_MAX}): angles are in "
-                        f"radians (360 degrees is {2 * np.pi:.6g} rad)" + (
-                            "" if key.startswith("obstacles") else
-                            "; if so many turns are meant, the run takes at least 8 sub-steps per turn"))
+                        f"radians (360 degrees is {2 * np.pi:.6g} rad); if so many turns are meant{cost}, say so "
+                        f'at the top level: many_turns = ["{key}"]')
 
 
 def plausibility(v, scn):
@@ -380,8 +407,7 @@ def plausibility(v, scn):
                 v.warn(f"magnets[{i}]", f"|Br| = {br:g} T exceeds {B_MAX:g} T (the strongest permanent magnets, "
                                         "NdFeB, reach about 1.4 T): Br is in tesla; did you give mT?")
         for name, f in spec["fields"].items():
-            field = FIELDS[f["type"]].build({k: x for k, x in f.items() if k not in ("type", "scale")},
-                                            make_scale(f["scale"]), MU0)
+            field = _field_of(f)
             b = max(float(np.linalg.norm(field.value(scn.mesh.X, x), axis=1).max()) for x in scn.load_factors())
             if b > B_MAX and f["type"] != "dipole" or b > 1e3 * B_MAX:
                 v.warn(f"fields.{name}", f"the applied field reaches |B| = {b:g} T on the shell, above "
