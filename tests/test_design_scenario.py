@@ -461,3 +461,22 @@ def test_targets_all_of_weight_zero_are_refused(tmp_path):
     path.write_text(GRAVITY + "weight = 0.0\n")
     with pytest.raises(ScenarioError, match="weight is 0"):
         run_design(scenario.load(path), out=tmp_path / "o", vtu=False, plots=False)
+
+
+def test_a_design_leaves_the_users_matplotlib_backend_alone(tmp_path):
+    # a notebook or GUI session that runs a design keeps its backend (before: the design's plots
+    # called matplotlib.use("Agg"), so the user's next plt.show() showed nothing); a subprocess,
+    # since the backend is global to the interpreter
+    import subprocess
+    import sys
+    path = tmp_path / "strip.toml"
+    path.write_text(BASE)
+    code = ("import matplotlib; matplotlib.use('svg'); import matplotlib.pyplot as plt\n"
+            "from core_se3.cli import main\n"
+            f"assert main(['design', {str(path)!r}, '--out', {str(tmp_path / 'out')!r}, '-q']) == 0\n"
+            "print(matplotlib.get_backend())\n")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert run.stdout.split()[-1] == "svg"
+    assert (tmp_path / "out" / "convergence.png").read_bytes()[1:4] == b"PNG"
+    assert (tmp_path / "out" / "target_design.png").read_bytes()[1:4] == b"PNG"

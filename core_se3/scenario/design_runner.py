@@ -22,7 +22,7 @@ import numpy as np
 from ..design import FieldVariable
 from ..errors import ScenarioError
 from ..io import atomic_path, write_json_atomic
-from ..io.plots import save_figure
+from ..io.plots import new_figure, save_figure
 from .build import mu0_of
 from .design_section import AngleInDegrees
 from .outputs import physical_record
@@ -170,11 +170,9 @@ def designed_spec(scn, design, result, k):
 
 
 def _convergence_plot(path, history, title):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     it = [h["iteration"] for h in history]
-    fig, ax = plt.subplots(figsize=(6, 4))
+    fig = new_figure((6, 4))
+    ax = fig.add_subplot(1, 1, 1)
     ax.semilogy(it, [max(h["objective"], 1e-300) for h in history], "o-", label="objective")
     ax.semilogy(it, [max(h["gradient_norm"], 1e-300) for h in history], "s--", label="|gradient|")
     ax.set_xlabel("design iteration")
@@ -182,17 +180,14 @@ def _convergence_plot(path, history, title):
     ax.grid(True, which="both", alpha=0.3)
     ax.legend()
     save_figure(fig, path, dpi=110, bbox_inches="tight")
-    plt.close(fig)
     return path
 
 
 def _target_plot(path, mesh, g, targets, achieved, title):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import mpl_toolkits.mplot3d  # noqa: F401  (registers the 3d projection)
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
     x = g[:, :3, 3]
-    fig = plt.figure(figsize=(6, 5))
+    fig = new_figure((6, 5))
     ax = fig.add_subplot(111, projection="3d")
     ax.add_collection3d(Poly3DCollection(x[mesh.quads], facecolor=(0.6, 0.75, 0.9, 0.6), edgecolor="k", linewidth=0.2))
     ax.plot(*mesh.X[mesh.edge_nodes].transpose(2, 0, 1).reshape(3, -1), ",", color="0.7")
@@ -208,7 +203,6 @@ def _target_plot(path, mesh, g, targets, achieved, title):
     ax.set_zlim(c[2] - r, c[2] + r)
     ax.set_title(title)
     save_figure(fig, path, dpi=110, bbox_inches="tight")
-    plt.close(fig)
     return path
 
 
