@@ -112,3 +112,44 @@ def test_the_limit_point_hint_is_not_given_for_a_table_that_starts_at_zero():
         p.clamp("x0")
         p.add_edge_force("x1", (0.0, 0.0, 1.0), scale=scale)
         assert limit_point_hint(p, p.mesh.g0, 0.75) is None
+
+
+def _roof_scaled(scale):
+    """The snap roof under load control with its crown load's scale a Python callable."""
+    prob = _roof(1.0, 1).problem
+    ld = next(ld for ld in prob.loads if getattr(ld, "scale", None) is not None and hasattr(ld.scale, "knots"))
+    ld.scale = scale
+    prob.scale_tables.clear()
+    prob.note_scale(scale)
+    return prob
+
+
+@pytest.mark.parametrize("steps", [1, 3])
+def test_a_step_across_a_python_callables_peak_past_the_limit_point_stops_there(steps):
+    """A scale given in Python as a callable, s(lam) = sin(pi lam) (peak 1 = P/3000 at 0.5, past
+    the limit point 0.7435 at lam = asin(0.7435) / pi = 0.2662): 1 and 3 steps stop at the limit
+    point, as 20 steps do.  Before, the callable's peak was not known and both exited 'complete' on
+    the unloaded roof (1 step: lam 0 -> 1, s 0 -> 0)."""
+    import math
+    prob = _roof_scaled(lambda lam: math.sin(math.pi * lam))
+    assert prob.untabled_scales and not prob.scale_knots
+    with pytest.raises(ConvergenceError, match="limit point") as err:
+        newton_solve(prob, steps=steps)
+    last = float(re.search(r"the last converged load factor is ([0-9.e+-]+)", str(err.value)).group(1))
+    limit = math.asin(0.74354) / math.pi          # 0.7435 of the table's test, on the sine's way up
+    assert limit - 2.5e-4 < last <= limit + 1e-4
+
+
+def test_a_callable_added_with_its_load_is_stepped_onto():
+    """``Problem.add(load)`` notes the load's scale as the ``add_*`` methods do: a ScaleTable's
+    points and a callable's turns are landed on (before, a load built by hand and added kept its
+    table unseen: the same roof ended 'complete' in 1 step)."""
+    from core_se3.model import ScaleTable
+    prob = _roof(1.0, 1).problem
+    ld = next(ld for ld in prob.loads if hasattr(getattr(ld, "scale", None), "knots"))
+    prob.loads.remove(ld)
+    prob.scale_tables.clear()
+    prob.add(ld)
+    assert prob.scale_knots == (0.0, 0.5, 1.0) and isinstance(ld.scale, ScaleTable)
+    with pytest.raises(ConvergenceError, match="limit point"):
+        newton_solve(prob, steps=1)

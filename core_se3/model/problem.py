@@ -166,12 +166,14 @@ class Problem:
         self.linear_solver = linear_solver            # an unknown or unavailable name fails here
         self.solve_defaults = {}
         self.scale_tables = []       # the loads' piecewise-linear programmes (note_scale)
+        self.untabled_scales = []    # their other callable programmes, searched for turns (note_scale)
 
     def note_scale(self, scale):
-        """Keep a load-factor programme ``scale`` that is a :class:`~core_se3.model.ScaleTable`
-        (any other callable: nothing known of it): load stepping lands a try on its points
-        (:attr:`scale_knots`, ``solvers.newton``) and path following refuses its kinks
-        (``solvers.system``).
+        """Keep a load-factor programme ``scale``.  Load stepping lands a try on the points of a
+        :class:`~core_se3.model.ScaleTable` (:attr:`scale_knots`, ``solvers.newton``), and path
+        following refuses its kinks (``solvers.system``); any other callable is kept in
+        ``untabled_scales``, and load stepping ends a try at its first peak or trough inside the
+        try (``solvers.splitting.first_turn``, found on 64 samples of the try).
 
         Example
         -------
@@ -181,8 +183,15 @@ class Problem:
         >>> p.note_scale(ScaleTable([[0.0, 0.0], [0.5, 1.0], [1.0, 0.0]])); p.scale_knots
         (0.0, 0.5, 1.0)
         """
-        if scale_knots(scale) and all(t is not scale for t in self.scale_tables):
-            self.scale_tables.append(scale)
+        if scale_knots(scale):
+            if all(t is not scale for t in self.scale_tables):
+                self.scale_tables.append(scale)
+        elif callable(scale) and scale is not linear_scale:
+            # any other callable: load stepping ends a try on its first peak or trough inside the
+            # try, found on samples (``solvers.splitting.first_turn``)
+            untabled = self.__dict__.setdefault("untabled_scales", [])
+            if all(t is not scale for t in untabled):
+                untabled.append(scale)
 
     @property
     def scale_knots(self):
@@ -396,6 +405,7 @@ class Problem:
                             "adding it again would apply it twice; for a load meant twice, double its value "
                             "(or build a second one)")
         self.loads.append(load)
+        self.note_scale(getattr(load, "scale", None))    # its table's points / its turns are stepped onto
         return load
 
     def add_load(self, kind, where=None, scale=None, check=True, **values):

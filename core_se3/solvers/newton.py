@@ -38,7 +38,7 @@ from .equations import NewtonEquations
 from .newton_try import NewtonTry, augmented_try, hooked_loads, tangent_predictor
 from .options import NewtonOptions, load_steps, split_options, unknown_keywords
 from .origin import far_part_hint
-from .splitting import (MAX_LOAD_TURN, MAX_PRESCRIBED_TURN, check_substeps, first_knot, split_prescribed,
+from .splitting import (MAX_LOAD_TURN, MAX_PRESCRIBED_TURN, check_substeps, first_knot, first_turn, split_prescribed,
                         split_turning, substeps_needed)
 from .stability import limit_point_hint, prescribed_turn_hint, stiffness_hint, unseen_crossing
 from .contact_probe import ContactProbe, median_edge
@@ -561,10 +561,11 @@ def _friction_probe(opts, eq):
 def _split_step(problem, hooks, g_whole, lam, lam_try, target, dlam, opts, result):
     """The try's load factor and the increment carried on: ended at the first point of a scale
     table inside the step (``splitting.first_knot``: the increment is not cut, the try after
-    it goes on), and split where a prescribed motion or a turning load (``hooks.turning``)
+    it goes on) or at the first turn of another callable scale (``splitting.first_turn``), and split where a prescribed motion or a turning load (``hooks.turning``)
     would turn too far within the step (``solvers.splitting``)."""
     turning = hooks.turning
     lam_try = first_knot(getattr(problem, "scale_knots", ()), lam, lam_try)
+    lam_try = first_turn(getattr(problem, "untabled_scales", ()), lam, lam_try)
     if problem.has_prescribed_motion:
         lam_split = split_prescribed(problem, lam, lam_try)
         if lam_split != lam_try:

@@ -21,7 +21,7 @@ import numpy as np
 
 from ..errors import ConvergenceError, ElementTooDistortedError
 
-__all__ = ["MAX_PRESCRIBED_TURN", "MAX_LOAD_TURN", "first_knot", "split_prescribed", "split_turning", "substeps_needed",
+__all__ = ["MAX_PRESCRIBED_TURN", "MAX_LOAD_TURN", "SCALE_SAMPLES", "first_knot", "first_turn", "split_prescribed", "split_turning", "substeps_needed",
            "check_substeps"]
 
 MAX_PRESCRIBED_TURN = 0.9 * np.pi   # largest rotation a prescribed motion may make in one step
@@ -51,6 +51,76 @@ def first_knot(knots, lam, lam_try):
     if not inside:
         return lam_try
     return min(inside) if lam_try > lam else max(inside)
+
+
+#: samples of a try on which a Python callable's scale is searched for a turning point (first_turn)
+SCALE_SAMPLES = 64
+
+
+def first_turn(scales, lam, lam_try, samples=SCALE_SAMPLES):
+    """The try's end: the first turning point (a peak or a trough) strictly inside the try of
+    any of ``scales`` -- Python callables s(lam) whose points are not known
+    (``Problem.untabled_scales``) -- else lam_try.
+
+    What :func:`first_knot` does for a table, for a callable: a try across the peak of
+    s(lam) = sin(pi lam) went from the unloaded state to the unloaded state without applying the
+    peak (the snap roof past its limit load, 1 step: 'complete' on the unloaded roof).  Each
+    callable is sampled at ``samples`` equal intervals of the try; where its differences change
+    sign (flat stretches, |ds| below 1e-13 of its range, skipped) the extremum is bracketed and
+    found by golden section to 1e-12 of the try.  A turn narrower than two samples
+    (1/32 of the try) can be missed: give such a programme as a ``ScaleTable``.
+
+    Example
+    -------
+    >>> import math
+    >>> round(first_turn([lambda t: math.sin(math.pi * t)], 0.0, 1.0), 9), first_turn([abs], 1.0, 2.0)
+    (0.5, 2.0)
+    """
+    lo, hi = min(lam, lam_try), max(lam, lam_try)
+    if not scales or hi <= lo:
+        return lam_try
+    t = np.linspace(lam, lam_try, samples + 1)
+    end = lam_try
+    for s in scales:
+        turn = _turn_of(s, t)
+        if turn is not None and (turn - lam) * (end - turn) > 0.0:
+            end = turn
+    return end
+
+
+def _turn_of(s, t):
+    """The first extremum of the callable ``s`` on the samples ``t`` (golden-section refined), or
+    None: monotone on the samples, or not a real scalar function."""
+    try:
+        v = np.array([float(s(x)) for x in t])
+    except (TypeError, ValueError):
+        return None
+    if not np.all(np.isfinite(v)):
+        return None                     # the loads' own checks name a non-finite scale
+    d = np.diff(v)
+    sign = np.where(np.abs(d) > 1e-13 * max(np.ptp(v), np.abs(v).max(initial=0.0), 1e-300), np.sign(d), 0.0)
+    moves = np.flatnonzero(sign)
+    flips = moves[1:][sign[moves[1:]] != sign[moves[:-1]]]
+    if not flips.size:
+        return None
+    j = flips[0]                                           # the first move against the one before it
+    i = moves[np.searchsorted(moves, j) - 1]
+    a, b, up = t[i], t[j + 1], sign[i] > 0                 # s rises (up) on [t_i, ...], falls by t_{j+1}
+    f = (lambda x: -float(s(x))) if up else (lambda x: float(s(x)))
+    r = (np.sqrt(5.0) - 1.0) / 2.0
+    tol = 1e-12 * abs(t[-1] - t[0])
+    c, e = b - r * (b - a), a + r * (b - a)
+    fc, fe = f(c), f(e)
+    while abs(b - a) > tol:
+        if fc <= fe:
+            b, e, fe = e, c, fc
+            c = b - r * (b - a)
+            fc = f(c)
+        else:
+            a, c, fc = c, e, fe
+            e = a + r * (b - a)
+            fe = f(e)
+    return float(0.5 * (a + b))
 
 
 def split_prescribed(problem, lam, lam_try):
