@@ -83,7 +83,9 @@ def first_turn(scales, lam, lam_try, samples=SCALE_SAMPLES):
     end = lam_try
     for s in scales:
         turn = _turn_of(s, t)
-        if turn is not None and (turn - lam) * (end - turn) > 0.0:
+        # a turn found within 1e-9 of the try from its start or end is that end (a programme's
+        # kink at a requested load factor, reached to round-off): no sliver of a try
+        if turn is not None and (turn - lam) * (end - turn) > 1e-9 * (hi - lo) * abs(end - turn + turn - lam):
             end = turn
     return end
 
