@@ -796,3 +796,32 @@ def test_br_frame_along_d1_across_the_cuts_of_a_files_frames_is_refused(tmp_path
     dome = scenario.loads(base.replace('file = "sphere.vtk"', 'generator = "hemisphere_quarter"\nR = 10.0\nhole_deg = 18.0\nnt = 4\nnf = 4')
                           + "[0.1, 0.0, 0.0]\n", base_dir=str(tmp_path))
     assert len(dome.problem.loads) == 1
+
+
+def test_a_br_or_field_in_mt_given_as_tesla_warns_in_python_too(tmp_path):
+    """|B^r| or |B^a| above 2 T (mT meant, or M in A/m given as B^r) in the Python API: before,
+    the scenario's plausibility check said it but ``Problem.add_magnetic`` ran Zhao's strip with
+    Br = 143 (0.143 T in mT) to a converged tip 1000 times too strongly loaded without a word; now
+    a LoadWarning for a mu0 in tesla units (SI's MU0, N-mm-MPa's MU0 * 1e6), none for plausible
+    values or for own consistent units (mu0 = 1), and a scenario says it once, at its key."""
+    from core_se3 import scenario
+    m = mesh.rectangle(0.0172, 0.005, 6, 1)
+    p = Problem(m, Material(0.8969e6, 0.0, 0.42e-3))
+    with pytest.warns(LoadWarning, match=r"\|Br\| = 143 T exceeds 2 T .*did you give mT\?"):
+        p.add_magnetic((143.0, 0.0, 0.0), UniformField((0.0, 0.0, 0.01)))
+    with pytest.warns(LoadWarning, match=r"applied field reaches \|B\| = 50 T at load factor 1"):
+        p.add_magnetic((0.0, 0.0, 0.143), UniformField((0.0, 0.0, 50.0)), mu0=MU0 * 1e6)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        p.add_magnetic((0.143, 0.0, 0.0), UniformField((0.0, 0.0, 0.05)))
+        p.add_magnetic((0.143, 0.0, 0.0), DipoleField((0.0, 0.0, 1.0), (0.0, 0.0, 0.01)))   # 0.1 mT on the strip
+        p.add_magnetic((143.0, 0.0, 0.0), UniformField((0.0, 0.0, 50.0)), mu0=1.0)        # own units
+    text = ('name = "t"\nunits = "SI"\n[mesh]\ngenerator = "rectangle"\nL = 0.0172\nwidth = 0.005\nnx = 6\nny = 1\n'
+            '[material]\nE = 0.8969e6\nnu = 0.0\nh = 0.42e-3\n[[supports]]\ntype = "clamp"\nedge = "x0"\n'
+            '[fields.b]\ntype = "uniform"\nB = [0.0, 0.0, 0.01]\n[[magnets]]\nBr = [143.0, 0.0, 0.0]\n')
+    (tmp_path / "t.toml").write_text(text)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", LoadWarning)
+        said = [str(w) for w in scenario.load(tmp_path / "t.toml").warnings]
+    br = [w for w in said if "143 T" in w]
+    assert len(br) == 1 and "[magnets[0]]" in br[0] and not any("Br is zero" in w for w in said), said

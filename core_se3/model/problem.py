@@ -28,9 +28,10 @@ from ..mesh import Mesh
 from .base import Evaluation, Load, check_given, force_scale_with_loads, linear_scale, load_kind, scale_knots
 from .compiled import CompiledEvaluation
 from .contact import add_obstacle
-from .fields import FIELD_DEFECT_TOL, MU0, field_defect, field_vanishes
+from .fields import B_MAX, FIELD_DEFECT_TOL, MU0, field_defect, field_vanishes, tesla_units
 from .loads import element_area, line_shares, material_per_element
-from .magnetics import MagneticLoad, Magnetisation, br_numbers, magnets_force, magnets_output, table_kind
+from .magnetics import (MagneticLoad, Magnetisation, br_numbers, dipole_sources, magnets_force, magnets_output,
+                        table_kind)
 from .probes import Probe, along_line
 from .solving import SOLVERS, check_linear_solver, dispatch, solve_linear
 from .supports import (LabSpring, LabTiltSpring, Prescribed, RotationComponentSpring, check_conflict,
@@ -113,6 +114,34 @@ def _warn_field_defect(field, x, where):
                            "so the answer misses their part; give a curl- and divergence-free field (fields.check_field)")
         said.cause = "field_defect"
         warnings.warn(said, stacklevel=3)
+
+
+def _warn_tesla(loads, field, x, mu0, where):
+    """LoadWarning (at add_magnetic's caller) for a |B^r| of the magnets or an applied |B^a| at
+    the magnetised points ``x`` at load factor 1 above ``fields.B_MAX`` = 2 T (1000 times that
+    for a field with a point dipole, strong near its source), when ``mu0`` is of a unit system in
+    tesla (``fields.tesla_units``): most likely mT, or a magnetisation M [A/m] given as B^r.  A
+    scenario says it at the file's key (its plausibility check); before, the Python API ran a
+    strip given Br = 143 (mT meant) to a converged tip 1000 times too strongly loaded without a
+    word."""
+    if not tesla_units(mu0):
+        return
+    br = max(ld.mag.br_max for ld in loads)
+    try:
+        ba = float(np.linalg.norm(field.value(x, 1.0), axis=1).max())
+    except LoadError:
+        ba = 0.0                                 # (a dipole on a node: the load says so when evaluated)
+    said = []
+    if br > B_MAX:
+        said.append(f"|Br| = {br:g} T exceeds {B_MAX:g} T (the strongest permanent magnets, NdFeB, reach about "
+                    "1.4 T): Br is the residual flux density in tesla (M = Br/mu0: M = 1.14e5 A/m is Br = 0.143 T)")
+    if ba > B_MAX * (1e3 if dipole_sources(field) else 1.0):
+        said.append(f"the applied field reaches |B| = {ba:g} T at load factor 1, above {B_MAX:g} T (lab "
+                    "electromagnets): B is in tesla")
+    if said:
+        w = LoadWarning(f"add_magnetic on {where}: {'; '.join(said)}; did you give mT?")
+        w.cause = "tesla"
+        warnings.warn(w, stacklevel=3)
 
 
 class Problem:
@@ -532,6 +561,8 @@ class Problem:
             warnings.warn(said, stacklevel=2)
         else:
             _warn_field_defect(field, self.mesh.X[nodes], where)
+        if len(nodes):
+            _warn_tesla(built, field, self.mesh.X[nodes], mu0, where)
         return added
 
     def _add_magnetic(self, Br, field, sel, mu0, Br_per):
