@@ -816,6 +816,22 @@ def test_a_br_or_field_in_mt_given_as_tesla_warns_in_python_too(tmp_path):
         p.add_magnetic((0.143, 0.0, 0.0), UniformField((0.0, 0.0, 0.05)))
         p.add_magnetic((0.143, 0.0, 0.0), DipoleField((0.0, 0.0, 1.0), (0.0, 0.0, 0.01)))   # 0.1 mT on the strip
         p.add_magnetic((143.0, 0.0, 0.0), UniformField((0.0, 0.0, 50.0)), mu0=1.0)        # own units
+        mm = Problem(mesh.rectangle(17.2, 5.0, 6, 1), Material(0.8969, 0.0, 0.42))        # N, mm, MPa
+        mm.add_magnetic((0.143, 0.0, 0.0), UniformField((0.0, 0.0, 0.05)), mu0=MU0 * 1e6)
+    # the same strip in mm and MPa without mu0 (SI's, stresses in Pa): its loads were 1e6 times
+    # too strong, and a weak field (1e-8 T, load number 2.5e-5) bent it to u = (-12.4, 0, 15.2) mm
+    with pytest.warns(LoadWarning, match=r"mu0 = 1.25664e-06 makes stresses Pa, so E = 0.8969 is 0.897 Pa"):
+        mm.add_magnetic((0.143, 0.0, 0.0), UniformField((0.0, 0.0, 1e-8)))
+    with pytest.warns(LoadWarning, match=r"makes stresses MPa, so E = 896900 is 8.97e\+11 Pa"):
+        p.add_magnetic((0.143, 0.0, 0.0), UniformField((0.0, 0.0, 0.05)), mu0=MU0 * 1e6)   # SI E, mm's mu0
+    # a dipole in mm with SI's mu0 (the default): its field 1000 times too weak; the magnets' 1e6: too strong
+    for k, times in ((1.0, "0.001"), (1e6, "1000")):
+        with pytest.warns(LoadWarning, match=rf"has mu0 = {MU0 * k:.6g}, but with the magnets' mu0 = 1.25664 \(N-mm-MPa\) a "
+                                             rf"dipole's is 0.00125664 .* its field is {times} times the meant one"):
+            mm.add_magnetic((0.143, 0.0, 0.0), DipoleField((0.0, 0.0, 1e6), (17.2, 2.5, 50.0), mu0=MU0 * k), mu0=MU0 * 1e6)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        mm.add_magnetic((0.143, 0.0, 0.0), DipoleField((0.0, 0.0, 1e6), (17.2, 2.5, 50.0), mu0=MU0 * 1e3), mu0=MU0 * 1e6)
     text = ('name = "t"\nunits = "SI"\n[mesh]\ngenerator = "rectangle"\nL = 0.0172\nwidth = 0.005\nnx = 6\nny = 1\n'
             '[material]\nE = 0.8969e6\nnu = 0.0\nh = 0.42e-3\n[[supports]]\ntype = "clamp"\nedge = "x0"\n'
             '[fields.b]\ntype = "uniform"\nB = [0.0, 0.0, 0.01]\n[[magnets]]\nBr = [143.0, 0.0, 0.0]\n')

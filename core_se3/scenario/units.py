@@ -19,6 +19,7 @@ import warnings
 import numpy as np
 
 from ..errors import TURNS_MAX, AngleWarning, did_you_mean
+from ..fem.material import E_RANGE_PA
 from ..model import FIELDS, MU0
 from ..model.fields import B_MAX
 from .geometry import selection
@@ -39,7 +40,6 @@ UNIT_SYSTEMS = {
 }
 _CHOICES = ('units = "SI" (N, m, Pa, kg/m^3, T), units = "N-mm-MPa" (N, mm, MPa, t/mm^3, T) or '
             'units = "consistent" (your own consistent units; then every magnet needs its mu0)')
-E_RANGE_PA = (10.0, 7e11)          # soft gels .. tungsten carbide
 RHO_RANGE = (10.0, 2.5e4)          # kg/m^3: the lightest foams .. osmium (1.2 kg/m^3 is air, or 1.2 g/cm^3)
 H_OVER_L_MAX = 0.3
 # thinner than h/L 1e-4 (L/h 1e4) is beyond this package's own thin benchmarks (Scordelis-Lo R/h
