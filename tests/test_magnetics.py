@@ -841,3 +841,11 @@ def test_a_br_or_field_in_mt_given_as_tesla_warns_in_python_too(tmp_path):
         said = [str(w) for w in scenario.load(tmp_path / "t.toml").warnings]
     br = [w for w in said if "143 T" in w]
     assert len(br) == 1 and "[magnets[0]]" in br[0] and not any("Br is zero" in w for w in said), said
+    # units = "consistent" (no plausibility check of its own) with SI's mu0 and E in MPa: said at the magnet
+    text = text.replace('units = "SI"', 'units = "consistent"').replace("L = 0.0172\nwidth = 0.005", "L = 17.2\nwidth = 5.0")
+    text = text.replace("E = 0.8969e6", "E = 0.8969").replace("h = 0.42e-3", "h = 0.42").replace("[143.0,", "[0.143,")
+    (tmp_path / "t.toml").write_text(text + f"mu0 = {MU0!r}\n")
+    said = [str(w) for w in scenario.load(tmp_path / "t.toml").warnings]
+    assert [w.split(": ", 1)[1] for w in said if "makes stresses" in w] == [
+        "[magnets[0]]: mu0 = 1.25664e-06 makes stresses Pa, so E = 0.8969 is 0.897 Pa, outside the range of real solids "
+        "(10 Pa .. 700 GPa): give mu0 in the units of E (fields.MU0 for Pa, MU0 * 1e6 for N-mm-MPa)"], said
