@@ -575,7 +575,10 @@ class Problem:
         of loads.  A Br that is zero on every selected element adds nothing, with a LoadWarning
         (a sweep may start at zero), and so does a field that is zero (value and gradient at
         scale 1, ``fields.field_vanishes``) at every magnetised node; Br, mu0 or elements of the
-        wrong type are a LoadError."""
+        wrong type are a LoadError.  With a mu0 of tesla units (``fields.tesla_units``) a LoadWarning
+        says numbers that disagree with them: |Br| or |Ba| (at load factor 1) above 2 T (mT meant?),
+        an E of the magnetised elements outside 10 Pa .. 700 GPa in the stress unit mu0 fixes (MU0:
+        Pa, MU0 * 1e6: MPa), a point dipole's mu0 not of the magnets' units (docs/MAGNETICS.md)."""
         mu0 = MU0 if mu0 is None else mu0
         try:
             sel = self.elements(elements)
