@@ -540,7 +540,8 @@ def test_a_field_turned_in_big_steps_is_followed_not_jumped_to_another_equilibri
     assert ld.direction_turn(prob.mesh.g0, 0.1, 1.0) == pytest.approx(2 * np.pi, rel=1e-12)
     assert ld.direction_turn(prob.mesh.g0, 0.1, 0.1 + 0.9 / 8) <= MAX_LOAD_TURN + 1e-12
     m = mesh.rectangle(2.0, 1.0, 2, 1)
-    reversing = Problem(m, Material(1.0, 0.0, 0.1)).add_magnetic((1.0, 0, 0), UniformField((0, 0, 1.0), scale=lambda lam: 2 * lam - 1))
+    reversing = Problem(m, Material(1.0, 0.0, 0.1)).add_magnetic((1.0, 0, 0), UniformField((0, 0, 1.0), scale=lambda lam: 2 * lam - 1),
+                                                      mu0=1.0)
     assert reversing.direction_turn(m.g0, 0.0, 1.0) == 0.0
 
 
