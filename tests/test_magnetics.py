@@ -540,7 +540,8 @@ def test_a_field_turned_in_big_steps_is_followed_not_jumped_to_another_equilibri
     assert ld.direction_turn(prob.mesh.g0, 0.1, 1.0) == pytest.approx(2 * np.pi, rel=1e-12)
     assert ld.direction_turn(prob.mesh.g0, 0.1, 0.1 + 0.9 / 8) <= MAX_LOAD_TURN + 1e-12
     m = mesh.rectangle(2.0, 1.0, 2, 1)
-    reversing = Problem(m, Material(1.0, 0.0, 0.1)).add_magnetic((1.0, 0, 0), UniformField((0, 0, 1.0), scale=lambda lam: 2 * lam - 1))
+    reversing = Problem(m, Material(1.0, 0.0, 0.1)).add_magnetic((1.0, 0, 0), UniformField((0, 0, 1.0), scale=lambda lam: 2 * lam - 1),
+                                                      mu0=1.0)
     assert reversing.direction_turn(m.g0, 0.0, 1.0) == 0.0
 
 
@@ -796,3 +797,56 @@ def test_br_frame_along_d1_across_the_cuts_of_a_files_frames_is_refused(tmp_path
     dome = scenario.loads(base.replace('file = "sphere.vtk"', 'generator = "hemisphere_quarter"\nR = 10.0\nhole_deg = 18.0\nnt = 4\nnf = 4')
                           + "[0.1, 0.0, 0.0]\n", base_dir=str(tmp_path))
     assert len(dome.problem.loads) == 1
+
+
+def test_a_br_or_field_in_mt_given_as_tesla_warns_in_python_too(tmp_path):
+    """|B^r| or |B^a| above 2 T (mT meant, or M in A/m given as B^r) in the Python API: before,
+    the scenario's plausibility check said it but ``Problem.add_magnetic`` ran Zhao's strip with
+    Br = 143 (0.143 T in mT) to a converged tip 1000 times too strongly loaded without a word; now
+    a LoadWarning for a mu0 in tesla units (SI's MU0, N-mm-MPa's MU0 * 1e6), none for plausible
+    values or for own consistent units (mu0 = 1), and a scenario says it once, at its key."""
+    from core_se3 import scenario
+    m = mesh.rectangle(0.0172, 0.005, 6, 1)
+    p = Problem(m, Material(0.8969e6, 0.0, 0.42e-3))
+    with pytest.warns(LoadWarning, match=r"\|Br\| = 143 T exceeds 2 T .*did you give mT\?"):
+        p.add_magnetic((143.0, 0.0, 0.0), UniformField((0.0, 0.0, 0.01)))
+    with pytest.warns(LoadWarning, match=r"applied field reaches \|B\| = 50 T at load factor 1"):
+        p.add_magnetic((0.0, 0.0, 0.143), UniformField((0.0, 0.0, 50.0)), mu0=MU0 * 1e6)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        p.add_magnetic((0.143, 0.0, 0.0), UniformField((0.0, 0.0, 0.05)))
+        p.add_magnetic((0.143, 0.0, 0.0), DipoleField((0.0, 0.0, 1.0), (0.0, 0.0, 0.01)))   # 0.1 mT on the strip
+        p.add_magnetic((143.0, 0.0, 0.0), UniformField((0.0, 0.0, 50.0)), mu0=1.0)        # own units
+        mm = Problem(mesh.rectangle(17.2, 5.0, 6, 1), Material(0.8969, 0.0, 0.42))        # N, mm, MPa
+        mm.add_magnetic((0.143, 0.0, 0.0), UniformField((0.0, 0.0, 0.05)), mu0=MU0 * 1e6)
+    # the same strip in mm and MPa without mu0 (SI's, stresses in Pa): its loads were 1e6 times
+    # too strong, and a weak field (1e-8 T, load number 2.5e-5) bent it to u = (-12.4, 0, 15.2) mm
+    with pytest.warns(LoadWarning, match=r"mu0 = 1.25664e-06 makes stresses Pa, so E = 0.8969 is 0.897 Pa"):
+        mm.add_magnetic((0.143, 0.0, 0.0), UniformField((0.0, 0.0, 1e-8)))
+    with pytest.warns(LoadWarning, match=r"makes stresses MPa, so E = 896900 is 8.97e\+11 Pa"):
+        p.add_magnetic((0.143, 0.0, 0.0), UniformField((0.0, 0.0, 0.05)), mu0=MU0 * 1e6)   # SI E, mm's mu0
+    # a dipole in mm with SI's mu0 (the default): its field 1000 times too weak; the magnets' 1e6: too strong
+    for k, times in ((1.0, "0.001"), (1e6, "1000")):
+        with pytest.warns(LoadWarning, match=rf"has mu0 = {MU0 * k:.6g}, but with the magnets' mu0 = 1.25664 \(N-mm-MPa\) a "
+                                             rf"dipole's is 0.00125664 .* its field is {times} times the meant one"):
+            mm.add_magnetic((0.143, 0.0, 0.0), DipoleField((0.0, 0.0, 1e6), (17.2, 2.5, 50.0), mu0=MU0 * k), mu0=MU0 * 1e6)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        mm.add_magnetic((0.143, 0.0, 0.0), DipoleField((0.0, 0.0, 1e6), (17.2, 2.5, 50.0), mu0=MU0 * 1e3), mu0=MU0 * 1e6)
+    text = ('name = "t"\nunits = "SI"\n[mesh]\ngenerator = "rectangle"\nL = 0.0172\nwidth = 0.005\nnx = 6\nny = 1\n'
+            '[material]\nE = 0.8969e6\nnu = 0.0\nh = 0.42e-3\n[[supports]]\ntype = "clamp"\nedge = "x0"\n'
+            '[fields.b]\ntype = "uniform"\nB = [0.0, 0.0, 0.01]\n[[magnets]]\nBr = [143.0, 0.0, 0.0]\n')
+    (tmp_path / "t.toml").write_text(text)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", LoadWarning)
+        said = [str(w) for w in scenario.load(tmp_path / "t.toml").warnings]
+    br = [w for w in said if "143 T" in w]
+    assert len(br) == 1 and "[magnets[0]]" in br[0] and not any("Br is zero" in w for w in said), said
+    # units = "consistent" (no plausibility check of its own) with SI's mu0 and E in MPa: said at the magnet
+    text = text.replace('units = "SI"', 'units = "consistent"').replace("L = 0.0172\nwidth = 0.005", "L = 17.2\nwidth = 5.0")
+    text = text.replace("E = 0.8969e6", "E = 0.8969").replace("h = 0.42e-3", "h = 0.42").replace("[143.0,", "[0.143,")
+    (tmp_path / "t.toml").write_text(text + f"mu0 = {MU0!r}\n")
+    said = [str(w) for w in scenario.load(tmp_path / "t.toml").warnings]
+    assert [w.split(": ", 1)[1] for w in said if "makes stresses" in w] == [
+        "[magnets[0]]: mu0 = 1.25664e-06 makes stresses Pa, so E = 0.8969 is 0.897 Pa, outside the range of real solids "
+        "(10 Pa .. 700 GPa): give mu0 in the units of E (fields.MU0 for Pa, MU0 * 1e6 for N-mm-MPa)"], said

@@ -107,8 +107,8 @@ add_case(Case(
 add_case(Case(
     name="magnetic-gripper",
     description="A flat four-finger magnetic gripper (cross-shaped, palm clamped at its centre) whose "
-                "fingers are magnetised radially outward and along the thickness in opposite senses on "
-                "opposite halves (programmed, non-uniform Br); a uniform vertical field closes them.",
+                "fingers are magnetised radially outward and, alike, down through the thickness (programmed, "
+                "non-uniform Br: opposite in-plane senses on opposite fingers); a uniform field along +z closes them.",
     geometry="strip",
     params=dict(E=1.45 * 0.324054, nu=0.45, h=0.7, finger_length=20.0, finger_width=6.0, palm=6.0,
                 Br=6.8e-3, Ba_max=0.06, Br_angle_deg=45.0),
@@ -117,7 +117,9 @@ add_case(Case(
     load_name="Ba", load_unit="T", load_value=lambda p, lam: lam * p["Ba_max"],
     reference=None,
     notes="Magnetisation of a finger: Br (cos a e_out - sin a e_z) with e_out the finger's outward axis "
-          "and a = Br_angle_deg; in a field along -z the couple e_out-rotates each finger up about its "
-          "root, so the four fingers close like a hand. mesh = (elements along a finger, across it).",
+          "and a = Br_angle_deg; in the field along +z the couple Br Ba cos a (e_out x e_z) turns each finger up about its "
+          "root (its tip rises and moves inward: u = (-15.7, 0, +16.6) mm at 0.06 T), so the four fingers "
+          "close like a hand (before, this note said a field along -z, which turns them down). mesh = (elements "
+          "along a finger, across it).",
     extra=dict(family="magnetic"),
 ))

@@ -31,7 +31,12 @@ import numpy as np
 from ..errors import MaterialError, MeshError
 
 __all__ = ["Material", "RegionMaterial", "ResultantLaw", "law_matrix", "strain_operators", "CLASSICAL_DRILLING",
-           "SHEAR_STABILISATION_FLOOR", "STIFFNESS_RANGE", "stiffness_range_error"]
+           "SHEAR_STABILISATION_FLOOR", "STIFFNESS_RANGE", "stiffness_range_error", "E_RANGE_PA"]
+
+#: Young's moduli of real solids [Pa]: soft gels (10 Pa) .. tungsten carbide (700 GPa).  A
+#: scenario's E, and a magnet's mu0 against the material's E (the mu0 of tesla units fixes the
+#: stress unit: MU0 for Pa, MU0 * 1e6 for MPa), are checked against it.
+E_RANGE_PA = (10.0, 7e11)
 
 #: the classical-shell law's factor on the drilling-curvature modulus (Material.classical_shell)
 CLASSICAL_DRILLING = 0.01

@@ -30,7 +30,7 @@ from ..errors import LoadError, warn_angle
 from ..registry import Kind, Registry
 from .base import Param, finite_vector
 
-__all__ = ["MU0", "Field", "UniformField", "GradientField", "DipoleField", "UserField",
+__all__ = ["MU0", "B_MAX", "tesla_units", "Field", "UniformField", "GradientField", "DipoleField", "UserField",
            "Superposition", "rotating_direction", "check_field", "field_vanishes", "field_defect", "FIELD_DEFECT_TOL", "FieldKind", "FIELDS",
            "register_field", "field_kind"]
 
@@ -39,6 +39,26 @@ MU0 = 4e-7 * pi
 (``Problem.add_magnetic``: loads h B^r x B^a / mu0 in N/mm) is MU0 * 1e6, but a
 ``DipoleField``'s (B = mu0 m / (4 pi r^3) in T with m in A mm^2, r in mm) is MU0 * 1e3, as a
 scenario's units = "N-mm-MPa" sets them."""
+
+B_MAX = 2.0
+"""The largest plausible flux density [T]: NdFeB magnets reach about 1.4 T (a residual B^r),
+lab electromagnets about 2 T (an applied B^a).  A B^r or B^a above it was most likely given in
+mT (or a magnetisation M in A/m as B^r): a scenario's plausibility check and
+``Problem.add_magnetic`` (with a mu0 of tesla units, :func:`tesla_units`) say so."""
+
+
+def tesla_units(mu0):
+    """Is ``mu0`` the vacuum permeability of a unit system whose flux density is in tesla, i.e.
+    MU0 times a power of ten (SI: MU0; N-mm-MPa: MU0 * 1e6)?  Own consistent units (mu0 = 1,
+    say) are not checked against B_MAX.
+
+    Example
+    -------
+    >>> tesla_units(MU0), tesla_units(MU0 * 1e6), tesla_units(1.0)
+    (True, True, False)
+    """
+    k = np.log10(float(mu0) / MU0)
+    return bool(np.isfinite(k) and abs(k - round(k)) < 1e-9)
 
 
 

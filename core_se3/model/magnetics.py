@@ -121,6 +121,8 @@ class Magnetisation:
         (h/mu0) R_0^T int N_i B^r_0 dA.
     total_lab : (3,) ndarray
         int B^r_0 dV [T length^3] (exact for the lumped dipoles).
+    br_max : float
+        The largest |B^r_0| [T] at the Gauss points of the selection (a plausibility check's).
 
     Example
     -------
@@ -155,6 +157,7 @@ class Magnetisation:
         Brq = self._at_gauss(Br, N, X, quads)                         # (m,q,3) lab
         if not np.all(np.isfinite(Brq)):
             raise LoadError("magnetisation Br has non-finite values")
+        self.br_max = float(np.linalg.norm(Brq, axis=2).max()) if Brq.size else 0.0    # [T]
         lab = np.einsum("qi,mq,mqk->mik", N, j0, Brq)                 # int N_i Br dA, (m,4,3)
         n = mesh.n_nodes
         mom = np.stack([np.bincount(quads.ravel(), weights=lab[..., k].ravel(), minlength=n)

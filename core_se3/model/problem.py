@@ -24,13 +24,15 @@ from ..assembly import Assembler
 from .. import backend as _backend
 from ..errors import LoadError, LoadWarning, MaterialError, MeshError, OptionError, SupportError, did_you_mean
 from ..fem import ELEMENTS, make_element
+from ..fem.material import E_RANGE_PA
 from ..mesh import Mesh
 from .base import Evaluation, Load, check_given, force_scale_with_loads, linear_scale, load_kind, scale_knots
 from .compiled import CompiledEvaluation
 from .contact import add_obstacle
-from .fields import FIELD_DEFECT_TOL, MU0, field_defect, field_vanishes
+from .fields import B_MAX, FIELD_DEFECT_TOL, MU0, field_defect, field_vanishes, tesla_units
 from .loads import element_area, line_shares, material_per_element
-from .magnetics import MagneticLoad, Magnetisation, br_numbers, magnets_force, magnets_output, table_kind
+from .magnetics import (MagneticLoad, Magnetisation, br_numbers, dipole_sources, magnets_force, magnets_output,
+                        table_kind)
 from .probes import Probe, along_line
 from .solving import SOLVERS, check_linear_solver, dispatch, solve_linear
 from .supports import (LabSpring, LabTiltSpring, Prescribed, RotationComponentSpring, check_conflict,
@@ -113,6 +115,75 @@ def _warn_field_defect(field, x, where):
                            "so the answer misses their part; give a curl- and divergence-free field (fields.check_field)")
         said.cause = "field_defect"
         warnings.warn(said, stacklevel=3)
+
+
+def _warn_magnet_units(problem, loads, field, x, mu0, where):
+    """LoadWarning (at add_magnetic's caller) for a magnet whose numbers disagree with the units of
+    its ``mu0``, when that is of a unit system in tesla (``fields.tesla_units``: MU0 times a power
+    of ten): a |B^r| or an applied |B^a| at the magnetised points ``x`` at load factor 1 above
+    ``fields.B_MAX`` = 2 T (1000 times that for a field with a point dipole, strong near its
+    source) -- mT, or a magnetisation M [A/m] given as B^r --, and a Young's modulus of the
+    magnetised elements outside the range of real solids in the stress unit that mu0 fixes (Pa
+    for MU0, MPa for MU0 * 1e6: ``fem.material.E_RANGE_PA``) -- an N-mm-MPa model given SI's
+    default mu0 has loads 1e6 times too strong.  A scenario says these at the file's keys (its
+    plausibility check).  Before, the Python API ran Zhao's strip given Br = 143 (mT meant), or in
+    mm and MPa without mu0, to a converged tip without a word."""
+    if not tesla_units(mu0):
+        return
+    said = _tesla_said(loads, field, x)
+    els = np.concatenate([ld.mag.elements for ld in loads])
+    try:
+        E = material_per_element(problem.material, "E", problem.mesh.n_elements)[els] * (mu0 / MU0)    # [Pa]
+    except (AttributeError, TypeError, ValueError):
+        E = np.zeros(0)                          # (a law without E)
+    E = E[np.isfinite(E)]
+    if len(E) and not (E_RANGE_PA[0] <= E.min() and E.max() <= E_RANGE_PA[1]):
+        e = E.min() if E.min() < E_RANGE_PA[0] else E.max()
+        unit = {0: "Pa", 3: "kPa", 6: "MPa", 9: "GPa"}.get(int(round(np.log10(mu0 / MU0))), f"{mu0 / MU0:g} Pa")
+        said.append(f"mu0 = {mu0:.6g} makes stresses {unit}, so E = {e / (mu0 / MU0):g} is {e:.3g} Pa, outside "
+                    f"the range of real solids ({E_RANGE_PA[0]:g} Pa .. 700 GPa): give mu0 in the units of E "
+                    "(fields.MU0 for Pa, MU0 * 1e6 for N-mm-MPa)")
+    said += _dipole_said(field, mu0)
+    if said:
+        w = LoadWarning(f"add_magnetic on {where}: {'; '.join(said)}")
+        w.cause = "units"
+        warnings.warn(w, stacklevel=3)
+
+
+def _dipole_said(field, mu0):
+    """The message of ``_warn_magnet_units`` for a point dipole of ``field`` whose mu0 is not the
+    one of the magnets' units: SI (magnets MU0) needs the dipole's MU0, N-mm-MPa (magnets MU0 *
+    1e6) MU0 * 1e3 (m in A mm^2, r in mm); other units are not checked.  The default (SI's)
+    dipole in an N-mm-MPa model made a field 1000 times too weak, the magnets' MU0 * 1e6 1000
+    times too strong."""
+    units = {0: ("SI", MU0, "m"), 6: ("N-mm-MPa", MU0 * 1e3, "mm")}.get(int(round(np.log10(mu0 / MU0))))
+    for d in dipole_sources(field) if units else ():
+        name, want, length = units
+        k = 4 * np.pi * d.k
+        if abs(k / want - 1) > 1e-6:
+            return [f"the point dipole at x0 = {d.x0.tolist()} has mu0 = {k:.6g}, but with the magnets' mu0 = "
+                    f"{mu0:.6g} ({name}) a dipole's is {want:.6g} (B = mu0 m / (4 pi r^3) in T for m in A {length}^2 "
+                    f"and r in {length}): its field is {k / want:.6g} times the meant one; give DipoleField(..., mu0="
+                    f"{'MU0' if name == 'SI' else 'MU0 * 1e3'})"]
+    return []
+
+
+def _tesla_said(loads, field, x):
+    """The messages of ``_warn_magnet_units`` for a |B^r| or |B^a| (at load factor 1) above 2 T."""
+    br = max(ld.mag.br_max for ld in loads)
+    try:
+        ba = float(np.linalg.norm(field.value(x, 1.0), axis=1).max())
+    except LoadError:
+        ba = 0.0                                 # (a dipole on a node: the load says so when evaluated)
+    said = []
+    if br > B_MAX:
+        said.append(f"|Br| = {br:g} T exceeds {B_MAX:g} T (the strongest permanent magnets, NdFeB, reach about "
+                    "1.4 T): Br is the residual flux density in tesla (M = Br/mu0: M = 1.14e5 A/m is Br = 0.143 T); "
+                    "did you give mT?")
+    if ba > B_MAX * (1e3 if dipole_sources(field) else 1.0):
+        said.append(f"the applied field reaches |B| = {ba:g} T at load factor 1, above {B_MAX:g} T (lab "
+                    "electromagnets): B is in tesla; did you give mT?")
+    return said
 
 
 class Problem:
@@ -514,7 +585,10 @@ class Problem:
         of loads.  A Br that is zero on every selected element adds nothing, with a LoadWarning
         (a sweep may start at zero), and so does a field that is zero (value and gradient at
         scale 1, ``fields.field_vanishes``) at every magnetised node; Br, mu0 or elements of the
-        wrong type are a LoadError."""
+        wrong type are a LoadError.  With a mu0 of tesla units (``fields.tesla_units``) a LoadWarning
+        says numbers that disagree with them: |Br| or |Ba| (at load factor 1) above 2 T (mT meant?),
+        an E of the magnetised elements outside 10 Pa .. 700 GPa in the stress unit mu0 fixes (MU0:
+        Pa, MU0 * 1e6: MPa), a point dipole's mu0 not of the magnets' units (docs/MAGNETICS.md)."""
         mu0 = MU0 if mu0 is None else mu0
         try:
             sel = self.elements(elements)
@@ -542,6 +616,8 @@ class Problem:
             warnings.warn(said, stacklevel=2)
         else:
             _warn_field_defect(field, self.mesh.X[nodes], where)
+        if len(nodes):
+            _warn_magnet_units(self, built, field, self.mesh.X[nodes], mu0, where)
         return added
 
     def _add_magnetic(self, Br, field, sel, mu0, Br_per):

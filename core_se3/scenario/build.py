@@ -252,6 +252,9 @@ def _add_magnets(v, prob, spec, mesh, regions):
         for w in said:                            # a magnet that adds nothing (Br = 0), located in the file
             if issubclass(w.category, LoadWarning) and getattr(w.message, "cause", None) == "field":
                 _zero_field(v, spec, key, m)
+            elif issubclass(w.category, LoadWarning) and getattr(w.message, "cause", None) == "units":
+                if spec["units"] not in ("SI", "N-mm-MPa"):       # (those: the plausibility check says it)
+                    v.warn(key, str(w.message).split(": ", 1)[1])
             elif issubclass(w.category, LoadWarning) and getattr(w.message, "cause", None) == "field_defect":
                 v.warn(join("fields", m["field"]), str(w.message).replace("add_magnetic: ", "", 1))
             elif issubclass(w.category, LoadWarning):

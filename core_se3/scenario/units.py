@@ -19,7 +19,9 @@ import warnings
 import numpy as np
 
 from ..errors import TURNS_MAX, AngleWarning, did_you_mean
+from ..fem.material import E_RANGE_PA
 from ..model import FIELDS, MU0
+from ..model.fields import B_MAX
 from .geometry import selection
 from .validate import make_scale
 
@@ -38,9 +40,7 @@ UNIT_SYSTEMS = {
 }
 _CHOICES = ('units = "SI" (N, m, Pa, kg/m^3, T), units = "N-mm-MPa" (N, mm, MPa, t/mm^3, T) or '
             'units = "consistent" (your own consistent units; then every magnet needs its mu0)')
-E_RANGE_PA = (10.0, 7e11)          # soft gels .. tungsten carbide
 RHO_RANGE = (10.0, 2.5e4)          # kg/m^3: the lightest foams .. osmium (1.2 kg/m^3 is air, or 1.2 g/cm^3)
-B_MAX = 2.0                        # T: NdFeB magnets reach ~1.4 T, lab electromagnets ~2 T
 H_OVER_L_MAX = 0.3
 # thinner than h/L 1e-4 (L/h 1e4) is beyond this package's own thin benchmarks (Scordelis-Lo R/h
 # 1e4, in span h/L 1e-4) and real soft-robotic and engineering shells (L/h 10 .. 1e3), and is
