@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import CheckpointError
+from ..solvers.origin import HELD
 
 __all__ = ["changed_keys", "check_same_scenario", "check_extension", "check_checkpoint", "check_consistent"]
 
@@ -151,8 +152,27 @@ def check_consistent(path, st, problem):
     solver = st["extra"].get("newton") or st["extra"].get("arc") or {}
     if "lam" in solver and solver["lam"] != st["lam"]:
         bad(f"its solver state is at load factor {solver['lam']!r}, its frames at {st['lam']!r}")
+    _check_held(bad, solver, st)
     if sorted(st["unwrap"]) != sorted(problem.probes) or any(np.shape(w) != (3,) or not np.all(np.isfinite(w))
                                                              for w in st["unwrap"].values()):
         bad(f"its probe rotations ({sorted(st['unwrap'])}) are not 3-vectors of the probes {sorted(problem.probes)}")
     if not isinstance(st["timings"], dict) or any(not isinstance(v, (int, float)) for v in st["timings"].values()):
         bad("its timings are not numbers")
+
+
+def _check_held(bad, solver, st):
+    """``bad(why)`` unless the frames a far part's solver held (``solvers.origin.held_record``:
+    its origin in the solver state, the frames among the arrays) are the checkpoint's frames g
+    relative to that origin, to the bit (as the run wrote them)."""
+    c, held = solver.get("origin"), st.get("arrays", {}).get(HELD)
+    if c is None and held is None:
+        return
+    try:
+        c, held = np.asarray(c, dtype=float), np.asarray(held, dtype=float)
+        whole = held.copy()
+        whole[..., :3, 3] += c
+        same = c.shape == (3,) and whole.shape == np.shape(st["g"]) and np.array_equal(whole, st["g"])
+    except (TypeError, ValueError, IndexError):
+        same = False
+    if not same:
+        bad("its frames relative to the solver's origin (held_frames, origin) are not its frames g")

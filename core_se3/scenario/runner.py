@@ -287,7 +287,7 @@ def _restore(run, st):
         nw = st["extra"].get("newton", {})
         run.critical = [CriticalPoint.unpack(c) for c in st["extra"].get("critical", [])]
         run.critical_before = len(run.critical)       # the earlier sessions'; this one's follow
-        start = NewtonState.unpack(st["lam"], st["g"], nw, NewtonState.multipliers_of(st["arrays"]))
+        start = NewtonState.unpack(st["lam"], st["g"], nw, NewtonState.multipliers_of(st["arrays"]), st["arrays"])
     return start, st["unwrap"]
 
 
