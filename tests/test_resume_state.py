@@ -70,6 +70,62 @@ def test_a_resumed_arc_length_path_far_from_the_origin_ends_on_the_unbroken_path
         [(c["kind"], c["load_factor"]) for c in docs[0]["critical_points"]]
 
 
+ROUGH = """name = "rough"
+[mesh]
+generator = "rectangle"
+L = 10.0
+width = 1.0
+nx = 10
+ny = 2
+x0 = 10000.0
+[material]
+E = 1.2e6
+nu = 0.0
+h = 0.1
+[[supports]]
+type = "clamp"
+edge = "x0"
+[[loads]]
+type = "edge_force"
+edge = "x1"
+force = [0.0, 0.0, -6.0]
+[[obstacles]]
+type = "half_space"
+name = "floor"
+point = [10000.0, 0.0, -1.5]
+normal = [0.0, 0.0, 1.0]
+friction = 0.3
+motion = { translate = [0.0, 0.5, 0.0] }
+[[probes]]
+name = "tip"
+edge = "x1"
+[solver]
+steps = 6
+[output]
+picture = false
+plots = false
+vtu = false
+"""
+
+
+def test_a_resumed_rough_contact_far_from_the_origin_keeps_its_friction_anchors_to_the_bit(tmp_path, pinned_backend):
+    """A cantilever 1e4 from the origin pushed onto a rough floor that slides sideways (mu = 0.3),
+    stopped after step 3, resumed: the frames and the contact records equal the unbroken run's.
+    The restart point's friction anchors came back from the problem's coordinates (anchor + c -
+    c): the resumed run ended 9.3e-14 off in g (stopped after step 5), its contact forces 3.5e-7
+    off; the checkpoint now keeps the relocated load's own anchors too (``held_multipliers``)."""
+    ref = runner.run(scenario.loads(ROUGH, file="rough.toml"), out=str(tmp_path / "ref"))
+    out = str(tmp_path / "cut")
+    for stop in (1, 2):                               # after steps 1 and 3
+        with pytest.raises(runner.RunInterrupted):
+            runner.run(scenario.loads(ROUGH, file="rough.toml"), out=out, stop_after=stop, resume=stop > 1)
+    res = runner.run(scenario.loads(ROUGH, file="rough.toml"), out=out, resume=True)
+    np.testing.assert_array_equal(res.g, ref.g)
+    docs = [json.load(open(r.files["results"]))["steps"] for r in (ref, res)]
+    assert docs[0][-1]["contact"]["floor"]["slipping"] > 0                   # the history matters
+    assert [s["contact"] for s in docs[1]] == [s["contact"] for s in docs[0]]
+
+
 def test_held_frames_that_are_not_the_checkpoints_frames_are_refused(tmp_path):
     """A checkpoint whose frames relative to the solver's origin are not its frames g (edited,
     or mixed from two files) is refused as inconsistent, naming them; a checkpoint without them

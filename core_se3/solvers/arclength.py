@@ -234,7 +234,7 @@ def path_steps(sysm, options, lam_end=1.0, control=None, control_end=None, lam_m
     def snapshot(pt, why):
         return ArcState(sysm.whole(pt.state), pt.lam, step, ds, ds_max, ds_min, psi_u, direction, prev_du, prev_dl,
                         switch_mode, branch_switch, list(crit), why or ("max_steps" if step >= max_steps else ""),
-                        held_by(sysm, pt.state))
+                        held=held_by(sysm, pt.state))
 
     yield PathEvent(first, snapshot(first, ""), restart=start is not None)
     rejections = 0

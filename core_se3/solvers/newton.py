@@ -66,7 +66,9 @@ class NewtonState:
     uninterrupted run made (the snap roof to 0.735 P_max and back in 2 steps: 1 probe against 0).
     held: (c, g_c) the frames as the solver held them, relative to a far part's origin c
     (``solvers.origin.restart_frames``; None near the origin): a restart continues from them,
-    not from g's positions, which carry eps |x0|.
+    not from g's positions, which carry eps |x0|; held_multipliers: likewise the relocated
+    contact loads' own multipliers (friction anchors relative to c; None for a load that is not
+    relocated), ``RelocatedContact.from_whole``.
 
     Attributes
     ----------
@@ -92,6 +94,7 @@ class NewtonState:
     k_first: float | None = None
     stiff: tuple | None = None
     held: tuple | None = None
+    held_multipliers: list | None = None
 
     def pack(self):
         """JSON-able scalars (the frames and multipliers are stored apart)."""
@@ -104,17 +107,21 @@ class NewtonState:
     @classmethod
     def unpack(cls, lam, g, scalars, multipliers=None, arrays=None):
         """The restart point of a checkpoint: ``scalars`` as :meth:`pack` wrote them (keys that
-        an older checkpoint lacks are None), ``arrays`` its named arrays (the held frames)."""
+        an older checkpoint lacks are None), ``arrays`` its named arrays (the held frames and
+        multipliers)."""
         stiff = scalars.get("stiff")
+        held_m = None if arrays is None or multipliers is None else \
+            [arrays.get(f"held_multipliers_{i}") for i in range(len(multipliers))]
         return cls(lam, g, scalars.get("dlam"), scalars.get("k_ref"), multipliers, scalars.get("det_sign"),
                    scalars.get("k_first"), None if stiff is None else tuple(float(x) for x in stiff),
-                   held_of(scalars, arrays))
+                   held_of(scalars, arrays), held_m)
 
     def arrays(self):
-        """The multipliers (and the held frames) as named arrays for a checkpoint ({} without
-        augmented loads near the origin); :meth:`multipliers_of` reads them back."""
+        """The multipliers (and the held frames and multipliers) as named arrays for a checkpoint
+        ({} without augmented loads near the origin); :meth:`multipliers_of` reads them back."""
         return {**{f"multipliers_{i}": np.asarray(m, float) for i, m in enumerate(self.multipliers or [])},
-                **held_record(self.held)[1]}
+                **{f"held_multipliers_{i}": np.asarray(m, float) for i, m in enumerate(self.held_multipliers or [])
+                   if m is not None}, **held_record(self.held)[1]}
 
     @staticmethod
     def multipliers_of(arrays):
@@ -373,8 +380,10 @@ def _restart(hooks, checks, here, held=None):
     K's sign, the midpoint probe's current stiffness) and the frames the iterate ``held``
     relative to a far part's origin (``solvers.origin.held_by``)."""
     lam, g_whole, dlam, k_ref = here
+    held_m = [ld.multipliers() if held is not None and hasattr(ld, "from_whole") else None for ld in hooks.aug]
     return NewtonState(lam, g_whole, dlam, k_ref, [_whole(ld).multipliers() for ld in hooks.aug] if hooks.aug else None,
-                       checks.sign, checks.k_first, checks.stiff, held)
+                       checks.sign, checks.k_first, checks.stiff, held, held_m if any(m is not None for m in held_m)
+                       else None)
 
 
 def _equations(problem, opts, equations):
@@ -431,9 +440,10 @@ def _start_loads(hooks, state):
     """The loads' multipliers of the start ``state`` (None: their cold start; a restart point's
     are the problem's loads', taken into a relocated load's coordinates); the start is a stored
     state, the next step's slip counts from it."""
+    held = state.held_multipliers or [None] * len(hooks.aug)     # a relocated load's own (exact anchors)
     for i, ld in enumerate(hooks.aug):
         m = None if state.multipliers is None else state.multipliers[i]
-        ld.set_multipliers(ld.from_whole(m) if hasattr(ld, "from_whole") else m)
+        ld.set_multipliers(ld.from_whole(m, held[i]) if hasattr(ld, "from_whole") else m)
     _close_steps(hooks)
 
 
