@@ -1,0 +1,63 @@
+"""A resumed run's sessions (docs/SCENARIOS.md, 'Checkpoints and --resume'): a checkpoint keeps
+what each session of the run computed with beyond the scenario's fingerprint (package version,
+Python, NumPy, ranks, backend, the solver controls a resume may change), a resume under another
+package version is refused naming both, another difference is said, and results.json's
+provenance lists the sessions.  Before, a run started under one version (or rtol, or number of
+ranks) and resumed under another reported the last session's alone, as if it had run whole."""
+import json
+
+import numpy as np
+import pytest
+
+import core_se3
+from core_se3 import scenario
+from core_se3.errors import CheckpointError, ScenarioWarning
+from core_se3.scenario import runner
+
+DOC = {"mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 4, "ny": 1},
+       "material": {"E": 1.2e6, "nu": 0.0, "h": 0.1}, "supports": [{"type": "clamp", "edge": "x0"}],
+       "loads": [{"type": "edge_force", "edge": "x1", "force": [0.0, 0.0, 1.0]}],
+       "probes": [{"name": "tip", "edge": "x1"}], "solver": {"steps": 4},
+       "output": {"vtu": False, "plots": False, "picture": False}}
+
+
+def _scn(**solver):
+    return scenario.from_dict(dict(DOC, solver=dict(DOC["solver"], **solver)))
+
+
+def _cut(out, n=2, **solver):
+    with pytest.raises(runner.RunInterrupted):
+        runner.run(_scn(**solver), out=out, stop_after=n)
+
+
+def test_a_resume_under_another_package_version_is_refused_naming_both(tmp_path, monkeypatch):
+    out = str(tmp_path / "run")
+    with monkeypatch.context() as m:
+        m.setattr(core_se3, "__version__", "0.0.1")
+        _cut(out)
+    before = (tmp_path / "run" / "results.json").read_text()
+    with pytest.raises(CheckpointError, match=rf"written by core_se3 0\.0\.1, this is {core_se3.__version__}"):
+        runner.run(_scn(), out=out, resume=True)
+    assert (tmp_path / "run" / "results.json").read_text() == before        # nothing written
+
+
+def test_a_resume_with_other_controls_says_so_and_lists_both_sessions(tmp_path):
+    out = str(tmp_path / "run")
+    _cut(out)
+    with pytest.warns(ScenarioWarning, match=r"controls\.rtol 1e-10 -> 1e-08.*not bit for bit"):
+        res = runner.run(_scn(rtol=1e-8), out=out, resume=True)
+    doc = json.loads((tmp_path / "run" / "results.json").read_text())
+    sessions = doc["provenance"]["sessions"]
+    assert [s["first_step"] for s in sessions] == [0, 3]
+    assert [s["controls"]["rtol"] for s in sessions] == [1e-10, 1e-8]
+    assert sessions[1]["version"] == core_se3.__version__ and res.status == "complete"
+
+
+def test_an_unbroken_run_lists_no_sessions_and_a_plain_resume_warns_nothing(tmp_path, recwarn):
+    ref = runner.run(_scn(), out=str(tmp_path / "ref"))
+    out = str(tmp_path / "run")
+    _cut(out)
+    res = runner.run(_scn(), out=out, resume=True)
+    assert not [w for w in recwarn if issubclass(w.category, ScenarioWarning)]
+    np.testing.assert_array_equal(res.g, ref.g)
+    assert "sessions" not in ref.doc["provenance"] and len(res.doc["provenance"]["sessions"]) == 2
