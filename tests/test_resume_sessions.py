@@ -22,7 +22,8 @@ DOC = {"mesh": {"generator": "rectangle", "L": 10.0, "width": 1.0, "nx": 4, "ny"
 
 
 def _scn(**solver):
-    return scenario.from_dict(dict(DOC, solver=dict(DOC["solver"], **solver)))
+    base = {} if "load_factors" in solver else DOC["solver"]
+    return scenario.from_dict(dict(DOC, solver=dict(base, **solver)))
 
 
 def _cut(out, n=2, **solver):
@@ -61,3 +62,16 @@ def test_an_unbroken_run_lists_no_sessions_and_a_plain_resume_warns_nothing(tmp_
     assert not [w for w in recwarn if issubclass(w.category, ScenarioWarning)]
     np.testing.assert_array_equal(res.g, ref.g)
     assert "sessions" not in ref.doc["provenance"] and len(res.doc["provenance"]["sessions"]) == 2
+
+
+def test_a_resume_with_other_steps_names_the_load_factors_to_keep(tmp_path):
+    """After a failure the message says 'change the solver controls or the steps and rerun with
+    --resume'; finer steps (steps = 8 for 4) were refused naming only 'raise lam_end and steps in
+    proportion'.  The refusal now names the way that works: load_factors beginning with the
+    steps done -- and that resume runs."""
+    out = str(tmp_path / "run")
+    _cut(out)
+    with pytest.raises(CheckpointError, match=r"give solver\.load_factors that begin with them \(0\.25, 0\.5\)"):
+        runner.run(_scn(steps=8), out=out, resume=True)
+    res = runner.run(_scn(load_factors=[0.25, 0.5, 0.625, 0.75, 0.875, 1.0]), out=out, resume=True)
+    assert [s["load_factor"] for s in res.doc["steps"]] == [0.0, 0.25, 0.5, 0.625, 0.75, 0.875, 1.0]

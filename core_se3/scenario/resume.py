@@ -85,9 +85,13 @@ def check_extension(path, records, lams, solver):
     if done and not np.allclose(done, lams[:len(done)], rtol=1e-12, atol=0):
         key = "solver.load_factors" if solver.get("load_factors") else "solver.steps"
         bad = next(i for i, (a, b) in enumerate(zip(done, lams)) if abs(a - b) > 1e-12 * abs(b))
+        kept = ", ".join(f"{x:.6g}" for x in done) if len(done) <= 8 else \
+            ", ".join(f"{x:.6g}" for x in done[:3]) + ", ..., " + ", ".join(f"{x:.6g}" for x in done[-2:])
         raise CheckpointError(f"checkpoint {path}: {key} (or solver.lam_end) changed: step {bad + 1} was done at "
                               f"load factor {done[bad]:.6g}, the scenario now puts it at {lams[bad]:.6g}; an "
-                              "extended run must keep the steps done (raise lam_end and steps in proportion)")
+                              "extended run must keep the steps done (raise lam_end and steps in proportion), or "
+                              f"give solver.load_factors that begin with them ({kept}) and go on in the steps "
+                              "wanted (smaller ones toward a limit point)")
 
 
 def check_checkpoint(path, st, scn):
