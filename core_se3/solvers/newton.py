@@ -37,13 +37,14 @@ from .linalg import make_solver
 from .equations import NewtonEquations
 from .newton_try import NewtonTry, augmented_try, hooked_loads, tangent_predictor
 from .options import NewtonOptions, load_steps, split_options, unknown_keywords
-from .origin import far_part_hint, held_by, held_of, held_record, restart_frames
+from .origin import far_part_hint
 from .splitting import (MAX_LOAD_TURN, MAX_PRESCRIBED_TURN, check_substeps, first_knot, split_prescribed,
                         split_turning, substeps_needed)
 from .stability import limit_point_hint, prescribed_turn_hint, stiffness_hint, unseen_crossing
 from .contact_probe import ContactProbe, median_edge
 from .friction_probe import RELAXATIONS, FrictionProbe
 from .step_checks import REFINE_PARTS, StepChecks, path_refusal, start_sign
+from .origin import held_by, held_of, held_record, restart_frames  # a restart's exact frames
 
 __all__ = ["newton_solve", "newton_steps", "end_check", "requested_load_factors", "NewtonState", "NewtonStep",
            "MAX_PRESCRIBED_TURN", "MAX_LOAD_TURN"]
