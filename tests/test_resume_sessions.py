@@ -75,3 +75,20 @@ def test_a_resume_with_other_steps_names_the_load_factors_to_keep(tmp_path):
         runner.run(_scn(steps=8), out=out, resume=True)
     res = runner.run(_scn(load_factors=[0.25, 0.5, 0.625, 0.75, 0.875, 1.0]), out=out, resume=True)
     assert [s["load_factor"] for s in res.doc["steps"]] == [0.0, 0.25, 0.5, 0.625, 0.75, 0.875, 1.0]
+
+
+def test_a_run_whose_manifest_is_damaged_resumes_taking_its_files_by_name(tmp_path):
+    """A damaged .core-se3-manifest.json (a disk fault, a hand edit) stopped the resume with
+    'choose another --out': the run's steps could only be computed again elsewhere.  A resume now
+    takes the run's files by their names, as an older version's (with a warning), and ends in the
+    unbroken run's state; a new run or --force there is still refused (which files to delete?)."""
+    ref = runner.run(_scn(), out=str(tmp_path / "ref"))
+    out = tmp_path / "run"
+    _cut(str(out))
+    (out / ".core-se3-manifest.json").write_text("{not json")
+    with pytest.raises(Exception, match=r"is damaged.*continue it with --resume"):
+        runner.run(_scn(), out=str(out), force=True)
+    with pytest.warns(ScenarioWarning, match=r"manifest\.json is damaged .*taken by their names"):
+        res = runner.run(_scn(), out=str(out), resume=True)
+    np.testing.assert_array_equal(res.g, ref.g)
+    assert json.loads((out / ".core-se3-manifest.json").read_text())["files"] == ["checkpoint.npz", "results.json"]
