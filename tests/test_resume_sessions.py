@@ -92,3 +92,34 @@ def test_a_run_whose_manifest_is_damaged_resumes_taking_its_files_by_name(tmp_pa
         res = runner.run(_scn(), out=str(out), resume=True)
     np.testing.assert_array_equal(res.g, ref.g)
     assert json.loads((out / ".core-se3-manifest.json").read_text())["files"] == ["checkpoint.npz", "results.json"]
+
+
+def test_a_resumed_sweep_refuses_another_version_and_lists_its_sessions(tmp_path, monkeypatch):
+    """A sweep interrupted after its first row and resumed with another rtol lists both sessions
+    in sweep.json (first_row 0 and 1) and says so; one started under another package version is
+    refused (before: both continued silently, sweep.json naming the last session alone)."""
+    import importlib
+    from core_se3.io.lifecycle import Terminated
+    sweep_mod = importlib.import_module("core_se3.scenario.sweep")
+    grid = {"material.E": [1.2e6, 1.4e6, 1.6e6]}
+    orig, calls = sweep_mod.point_row, []
+
+    def cut_second(*a, **k):
+        calls.append(1)
+        if len(calls) == 2:
+            raise Terminated("SIGTERM")
+        return orig(*a, **k)
+    for name, version in (("other", "0.0.1"), ("same", core_se3.__version__)):
+        out = str(tmp_path / name)
+        calls.clear()
+        with monkeypatch.context() as m:
+            m.setattr(core_se3, "__version__", version)
+            m.setattr(sweep_mod, "point_row", cut_second)
+            with pytest.raises(Terminated):
+                sweep_mod.sweep(_scn(), grid, out=out, plot=False)
+    with pytest.raises(CheckpointError, match=r"written by core_se3 0\.0\.1"):
+        sweep_mod.sweep(_scn(), grid, out=str(tmp_path / "other"), plot=False, resume=True)
+    with pytest.warns(ScenarioWarning, match=r"controls\.rtol 1e-10 -> 1e-09"):
+        res = sweep_mod.sweep(_scn(rtol=1e-9), grid, out=str(tmp_path / "same"), plot=False, resume=True)
+    doc = json.loads((tmp_path / "same" / "sweep.json").read_text())
+    assert [s["first_row"] for s in doc["provenance"]["sessions"]] == [0, 1] and len(res.rows) == 3

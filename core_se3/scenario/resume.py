@@ -189,8 +189,9 @@ def session_record(scn, ranks):
     """What one session of a run computed with beyond its scenario's fingerprint: the package
     version, Python, NumPy, the MPI ranks, the backend setting and the solver controls a resume
     may change (``scenario.NON_PHYSICAL``: rtol, max_iter, linear_solver, ...).  A checkpoint
-    keeps every session's (``sessions``, each with its ``first_step``), results.json's provenance
-    lists them when there was more than one.
+    keeps every session's (``sessions``, each with its ``first_step``; a sweep's ``sweep.npz``
+    with its ``first_row``), results.json's (sweep.json's) provenance lists them when there was
+    more than one.
 
     Example
     -------
@@ -233,7 +234,8 @@ def check_session(path, sessions, now, say=True):
                               f"{now['version']}: the run's steps would be those of two versions (a fix or a changed "
                               "default between them changes results), reported as this one's; resume with core_se3 "
                               f"{last.get('version')}, or start over with --force (or use another --out)")
-    diff = changed_keys(*({k: x for k, x in rec.items() if k != "first_step"} for rec in (last, now)))
+    diff = changed_keys(*({k: x for k, x in rec.items() if k not in ("first_step", "first_row")}
+                          for rec in (last, now)))
     if diff and say:
         import warnings
         what = "; ".join(f"{k} {_short(a)} -> {_short(b)}" for k, a, b in diff[:6])
