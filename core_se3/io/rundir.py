@@ -43,7 +43,7 @@ import os
 import re
 import time
 
-from ..errors import CheckpointError
+from ..errors import CheckpointError, ScenarioWarning
 from .files import write_json_atomic
 
 __all__ = ["RunDirectory", "RunDirectoryError", "safe_name", "MANIFEST", "LOCK"]
@@ -154,8 +154,8 @@ class RunDirectory:
         os.makedirs(self.path, exist_ok=True)
         self._take_lock()
         try:
-            listed = self._read_manifest()
-            self.existed = listed is not None
+            listed = self._read_manifest(damaged_ok=resume and bool(adopt))
+            self.existed = listed is not None or self._damaged
             present = self._walk()
             if listed is None and resume:       # a run of an older version: its files by name
                 listed = [f for f in present if any(fnmatch.fnmatch(f, p) for p in adopt)]
@@ -288,9 +288,12 @@ class RunDirectory:
             "%Y-%m-%d %H:%M:%S"))).encode())
         self._lock = fd
 
-    def _read_manifest(self):
-        """The files the manifest lists (None without one); a damaged manifest is an error."""
-        self._manifest_kind = None
+    def _read_manifest(self, damaged_ok=False):
+        """The files the manifest lists (None without one); a damaged manifest is an error, or
+        with ``damaged_ok`` (a resume, which takes the run's files by name as an older version's:
+        it stopped there before, and the run could only start over elsewhere) None and a
+        ScenarioWarning saying so."""
+        self._manifest_kind, self._damaged = None, False
         if not os.path.exists(self.manifest_path):
             return None
         try:
@@ -301,8 +304,17 @@ class RunDirectory:
             if doc.get("tool") != "core-se3" or any(f.startswith("..") or os.path.isabs(f) for f in files):
                 raise ValueError("not a core-se3 manifest")
         except (OSError, ValueError, KeyError, TypeError) as exc:
+            if damaged_ok:
+                import warnings
+                self._damaged = True
+                warnings.warn(ScenarioWarning(f"{self.manifest_path} is damaged ({type(exc).__name__}): the run's files "
+                                              "are taken by their names (results.json, checkpoint.npz, vtu/...) and "
+                                              "the manifest written anew"), stacklevel=4)
+                return None
+            again = "continue it with --resume (its files are then taken by their names), or " \
+                if self.kind in ("run", "sweep") else ""
             raise RunDirectoryError(f"{self.manifest_path} is damaged ({type(exc).__name__}): it lists the files "
-                                    f"of the run that wrote this directory; choose another {self.option}") from None
+                                    f"of the run that wrote this directory; {again}choose another {self.option}") from None
         return files
 
     def _write_manifest(self):

@@ -85,10 +85,18 @@ class RelocatedContact(ContactLoad):
             if key in self.__dict__:
                 setattr(w, key, getattr(self, key))
 
-    def from_whole(self, m):
+    def from_whole(self, m, held=None):
         """The whole load's multipliers ``m`` (a restart point: anchors in the problem's
-        coordinates) in this load's (anchors relative to c), for :meth:`set_multipliers`."""
-        return None if m is None else self._anchors_moved(m, -self.shift)
+        coordinates) in this load's (anchors relative to c), for :meth:`set_multipliers`:
+        ``held``, this load's own as a restart state keeps them (``NewtonState.held_multipliers``),
+        when they are m's to the bit; else m's anchors moved by -c, which carry eps |c| (a rough
+        floor's strip 1e4 from the origin, resumed, ended 9.3e-14 off the unbroken run)."""
+        if m is None:
+            return None
+        if held is not None and np.shape(held) == np.shape(m) and np.array_equal(self._anchors_moved(held, self.shift),
+                                                                                 np.ravel(m)):
+            return np.array(held, float)
+        return self._anchors_moved(m, -self.shift)
 
     def set_multipliers(self, lam=None):
         """:meth:`ContactLoad.set_multipliers` (this load's coordinates); the state is handed to

@@ -3,14 +3,18 @@ keys that changed), it is consistent (a hand-edited or damaged file: frames of t
 proper rotations, its step and load factor those of its last record, records numbered from 0,
 the probes' unwrapped rotations), it is of the same control, and the load factors done so far
 are the first ones of the scenario's steps (so a finished run can be extended to a higher
-``lam_end``)."""
+``lam_end``); and that it was written by this package version, while what else a session may
+change (Python, NumPy, MPI ranks, backend, the solver controls outside the fingerprint) is said
+and recorded (``session_record``, ``check_session``)."""
 from __future__ import annotations
 
 import numpy as np
 
-from ..errors import CheckpointError
+from ..errors import CheckpointError, ScenarioWarning
+from ..solvers.origin import HELD
 
-__all__ = ["changed_keys", "check_same_scenario", "check_extension", "check_checkpoint", "check_consistent"]
+__all__ = ["changed_keys", "check_same_scenario", "check_extension", "check_checkpoint", "check_consistent",
+           "session_record", "check_session"]
 
 
 def changed_keys(old, new, prefix=""):
@@ -81,9 +85,13 @@ def check_extension(path, records, lams, solver):
     if done and not np.allclose(done, lams[:len(done)], rtol=1e-12, atol=0):
         key = "solver.load_factors" if solver.get("load_factors") else "solver.steps"
         bad = next(i for i, (a, b) in enumerate(zip(done, lams)) if abs(a - b) > 1e-12 * abs(b))
+        kept = ", ".join(f"{x:.6g}" for x in done) if len(done) <= 8 else \
+            ", ".join(f"{x:.6g}" for x in done[:3]) + ", ..., " + ", ".join(f"{x:.6g}" for x in done[-2:])
         raise CheckpointError(f"checkpoint {path}: {key} (or solver.lam_end) changed: step {bad + 1} was done at "
                               f"load factor {done[bad]:.6g}, the scenario now puts it at {lams[bad]:.6g}; an "
-                              "extended run must keep the steps done (raise lam_end and steps in proportion)")
+                              "extended run must keep the steps done (raise lam_end and steps in proportion), or "
+                              f"give solver.load_factors that begin with them ({kept}) and go on in the steps "
+                              "wanted (smaller ones toward a limit point)")
 
 
 def check_checkpoint(path, st, scn):
@@ -151,8 +159,87 @@ def check_consistent(path, st, problem):
     solver = st["extra"].get("newton") or st["extra"].get("arc") or {}
     if "lam" in solver and solver["lam"] != st["lam"]:
         bad(f"its solver state is at load factor {solver['lam']!r}, its frames at {st['lam']!r}")
+    _check_held(bad, solver, st)
     if sorted(st["unwrap"]) != sorted(problem.probes) or any(np.shape(w) != (3,) or not np.all(np.isfinite(w))
                                                              for w in st["unwrap"].values()):
         bad(f"its probe rotations ({sorted(st['unwrap'])}) are not 3-vectors of the probes {sorted(problem.probes)}")
     if not isinstance(st["timings"], dict) or any(not isinstance(v, (int, float)) for v in st["timings"].values()):
         bad("its timings are not numbers")
+
+
+def _check_held(bad, solver, st):
+    """``bad(why)`` unless the frames a far part's solver held (``solvers.origin.held_record``:
+    its origin in the solver state, the frames among the arrays) are the checkpoint's frames g
+    relative to that origin, to the bit (as the run wrote them)."""
+    c, held = solver.get("origin"), st.get("arrays", {}).get(HELD)
+    if c is None and held is None:
+        return
+    try:
+        c, held = np.asarray(c, dtype=float), np.asarray(held, dtype=float)
+        whole = held.copy()
+        whole[..., :3, 3] += c
+        same = c.shape == (3,) and whole.shape == np.shape(st["g"]) and np.array_equal(whole, st["g"])
+    except (TypeError, ValueError, IndexError):
+        same = False
+    if not same:
+        bad("its frames relative to the solver's origin (held_frames, origin) are not its frames g")
+
+
+def session_record(scn, ranks):
+    """What one session of a run computed with beyond its scenario's fingerprint: the package
+    version, Python, NumPy, the MPI ranks, the backend setting and the solver controls a resume
+    may change (``scenario.NON_PHYSICAL``: rtol, max_iter, linear_solver, ...).  A checkpoint
+    keeps every session's (``sessions``, each with its ``first_step``; a sweep's ``sweep.npz``
+    with its ``first_row``), results.json's (sweep.json's) provenance lists them when there was
+    more than one.
+
+    Example
+    -------
+    >>> from core_se3 import scenario
+    >>> scn = scenario.from_dict({"mesh": {"generator": "rectangle", "L": 1.0, "width": 1.0, "nx": 2, "ny": 1},
+    ...     "material": {"E": 1e3, "nu": 0.0, "h": 0.01}, "supports": [{"type": "clamp", "edge": "x0"}]})
+    >>> rec = session_record(scn, 1)
+    >>> sorted(rec), rec["controls"]["rtol"]
+    (['backend', 'controls', 'numpy', 'python', 'ranks', 'version'], 1e-10)
+    """
+    import platform
+    import sys
+    from .physics import NON_PHYSICAL
+    return dict(version=getattr(sys.modules.get("core_se3"), "__version__", None), python=platform.python_version(),
+                numpy=np.__version__, ranks=int(ranks), backend=scn.problem.backend_setting,
+                controls={k: scn.solver[k] for k in NON_PHYSICAL if k in scn.solver})
+
+
+def check_session(path, sessions, now, say=True):
+    """Before a resume: CheckpointError if the checkpoint's last session (``sessions``, None for
+    a checkpoint written before they were kept) ran another package version -- a fix or a changed
+    default would make the run's steps those of two versions, reported as one's; a
+    ScenarioWarning naming what else differs from session ``now`` (``session_record``): the
+    resumed steps then agree with an unbroken run to round-off (ranks, backend, NumPy) or to the
+    tolerances (controls), not bit for bit (``say``: this process says it; under mpirun rank 0).
+
+    Example
+    -------
+    >>> old = dict(first_step=0, version="0.1.0", ranks=1)
+    >>> check_session("ck.npz", [old], dict(version="0.2.0", ranks=1))      # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    core_se3.errors.CheckpointError: checkpoint ck.npz was written by core_se3 0.1.0, this is 0.2.0: ...
+    """
+    if not sessions:
+        return
+    last = sessions[-1]
+    if last.get("version") != now["version"]:
+        raise CheckpointError(f"checkpoint {path} was written by core_se3 {last.get('version')}, this is "
+                              f"{now['version']}: the run's steps would be those of two versions (a fix or a changed "
+                              "default between them changes results), reported as this one's; resume with core_se3 "
+                              f"{last.get('version')}, or start over with --force (or use another --out)")
+    diff = changed_keys(*({k: x for k, x in rec.items() if k not in ("first_step", "first_row")}
+                          for rec in (last, now)))
+    if diff and say:
+        import warnings
+        what = "; ".join(f"{k} {_short(a)} -> {_short(b)}" for k, a, b in diff[:6])
+        warnings.warn(ScenarioWarning(
+            f"{path}: this session differs from the one that wrote the checkpoint ({what}): the steps from here on "
+            "agree with an unbroken run to round-off (ranks, backend, NumPy) or to the tolerances (solver "
+            "controls), not bit for bit; results.json's provenance lists both sessions"), stacklevel=4)

@@ -39,7 +39,7 @@ from ..solvers.linear import linear_solve
 from .context import on_root, run_context
 from .outputs import cell_fields, physical_record, picture, plot_probes, point_fields, unit_system_record  # noqa: F401
 from .provenance import run_provenance
-from .resume import check_checkpoint
+from .resume import check_checkpoint, check_session, session_record
 from .sinks import (RUN_FILES, CheckpointSink, DocumentSink, ProgressSink, ProvenanceSink, PvdSink, RunInterrupted,
                     RunState, StepEvent, StopAfter, VtuSink, write_series_files, write_step_vtu)
 
@@ -240,7 +240,7 @@ def _lost_checkpoint(rd):
 def _run(scn, rd, ctx, st, progress, stop_after, t0):
     run = RunState(scn, rd, ctx, result=Result(mesh=scn.problem.mesh, element=scn.problem.element_name),
                    critical=None if scn.solver["control"] == "linear" else [],
-                   provenance=run_provenance(scn, ctx))
+                   provenance=run_provenance(scn, ctx), sessions=[dict(session_record(scn, ctx.ranks), first_step=0)])
     start, unwrap = _restore(run, st) if st is not None else (None, None)
     rec = StepRecorder(scn.problem, unwrap)
     ctx.barrier()                            # every rank has read the directory before rank 0 writes
@@ -277,9 +277,13 @@ def _sinks(run, progress, stop_after):
 
 
 def _restore(run, st):
-    """Records, timings and the solver's restart state of a checkpoint: (start, unwrap)."""
+    """Records, timings, sessions and the solver's restart state of a checkpoint: (start, unwrap)
+    (a session of another package version is refused, another difference said: ``check_session``)."""
     run.records, run.base, run.done = st["records"], dict(st["timings"]), st["step"]
     run.saved = len(run.records)
+    before = st["extra"].get("sessions")
+    check_session(os.path.join(run.rd.path, "checkpoint.npz"), before, run.sessions[-1], say=run.root)
+    run.sessions = list(before or []) + [dict(run.sessions[-1], first_step=run.done + 1)]
     if run.arc:
         start = ArcState.unpack(st["g"], st["extra"]["arc"], st["arrays"])
         run.critical = list(start.critical)
@@ -287,7 +291,7 @@ def _restore(run, st):
         nw = st["extra"].get("newton", {})
         run.critical = [CriticalPoint.unpack(c) for c in st["extra"].get("critical", [])]
         run.critical_before = len(run.critical)       # the earlier sessions'; this one's follow
-        start = NewtonState.unpack(st["lam"], st["g"], nw, NewtonState.multipliers_of(st["arrays"]))
+        start = NewtonState.unpack(st["lam"], st["g"], nw, NewtonState.multipliers_of(st["arrays"]), st["arrays"])
     return start, st["unwrap"]
 
 
@@ -307,7 +311,7 @@ def _initial_event(run, rec):
     record["balance_error"] = 0.0            # the unloaded start, not an equilibrium
     record["physical"] = physical_record(run.scn, 0.0)
     extra = dict(newton=NewtonState(0.0, g0).pack(), physical=run.scn.physical, ranks=run.ctx.ranks,
-                 backend=rent_state())
+                 backend=rent_state(), sessions=run.sessions)
     return StepEvent(0, record, g0, 0.0, False, extra, run.ctx.checkpoint_arrays(), rec.unwrapped)
 
 
@@ -375,7 +379,8 @@ def _linear_events(run, rec):
 def _event(run, k, record, item, finished, extra, arrays, unwrap):
     lam = item.step.load_factor
     record["physical"] = physical_record(run.scn, lam)
-    extra.update(physical=run.scn.physical, backend=rent_state())   # where 'auto' stands (a resume continues from it)
+    # where 'auto' stands (a resume continues from it), and what each session ran with
+    extra.update(physical=run.scn.physical, backend=rent_state(), sessions=run.sessions)
     return StepEvent(k, record, item.step.g, lam, finished, extra, arrays, unwrap)
 
 

@@ -100,7 +100,8 @@ class RunState:
     run context (who writes, ``scenario.context``), the step records so far, the timings of
     earlier sessions (``base``), the solver's Result (this session's timings), the critical
     points of the path (arc length; load control: those it passed, limit_check off, and contact
-    snaps), and the provenance of the run.
+    snaps), the provenance of the run and what each of its sessions ran with (``sessions``: a
+    resumed run has several, ``resume.session_record``).
 
     Example
     -------
@@ -120,6 +121,7 @@ class RunState:
     last: object = None
     saved: int = 0
     path: list = field(default_factory=list)        # load control's states (g, load_factor): the end check's
+    sessions: list = field(default_factory=list)    # what each session ran with (``resume.session_record``)
 
     @property
     def root(self):
@@ -146,6 +148,8 @@ class RunState:
         prov = dict(self.provenance)
         if "backend" in prov:                # what evaluated the steps so far
             prov["backend"] = dict(prov["backend"], used=sorted({r["backend"] for r in self.records if r.get("backend")}))
+        if len(self.sessions) > 1:           # a resumed run: what each session ran with, from which step
+            prov["sessions"] = self.sessions
         extra.update(unit_system=unit_system_record(scn.spec["units"]), load_numbers=scn.load_numbers(),
                      provenance=prov)
         return result_document(scn.name, "core_se3", scn.solver["element"], params, scn.mesh, self.records,

@@ -31,12 +31,16 @@ FORMAT = "core-se3-sweep-checkpoint"
 
 class SweepCheckpoint:
     """The finished rows of a sweep and their final frames (None for a failed run), saved in
-    ``sweep.npz`` after every run; :meth:`load` restores them for a resume (CheckpointError for
-    a checkpoint of another scenario or grid, or a damaged one)."""
+    ``sweep.npz`` after every run with what each session ran with (``resume.session_record``:
+    ``sessions``, each with its ``first_row``); :meth:`load` restores them for a resume
+    (CheckpointError for a checkpoint of another scenario or grid, a damaged one, or one of
+    another package version; a warning naming another difference: ``resume.check_session``)."""
 
     def __init__(self, rd, scn, grid, warm):
+        from .resume import session_record
         self.rd = rd
         self.rows, self.finals, self.rent = [], [], None
+        self.sessions = [dict(session_record(scn, 1), first_row=0)]
         self.n = scn.mesh.n_nodes
         # the load factors too: a run's fingerprint leaves them out (--resume may extend a run to a
         # higher lam_end), but a sweep's rows are the final states at them
@@ -53,7 +57,8 @@ class SweepCheckpoint:
         with atomic_path(self.rd.file("sweep.npz")) as tmp:
             with open(tmp, "wb") as fh:
                 np.savez(fh, format=np.array(FORMAT), fingerprint=np.array(self.fingerprint),
-                         rows=np.array(json.dumps(self.rows)), rent=np.array(json.dumps(rent)), **arrays)
+                         rows=np.array(json.dumps(self.rows)), rent=np.array(json.dumps(rent)),
+                         sessions=np.array(json.dumps(self.sessions)), **arrays)
 
     def load(self):
         """The rows done so far (none without a checkpoint: the sweep starts at its first point)."""
@@ -67,6 +72,7 @@ class SweepCheckpoint:
                     raise ValueError(f"not a {FORMAT} file")
                 fp, rows, rent = str(z["fingerprint"]), json.loads(str(z["rows"])), json.loads(str(z["rent"]))
                 finals = [np.array(z[f"g_{i}"]) if f"g_{i}" in z.files else None for i in range(len(rows))]
+                sessions = json.loads(str(z["sessions"])) if "sessions" in z.files else None
         except Exception as exc:
             raise CheckpointError(f"cannot read the sweep checkpoint {path}: {type(exc).__name__}; start over with "
                                   "--force, or use another --out") from None
@@ -76,6 +82,9 @@ class SweepCheckpoint:
         if not isinstance(rows, list) or any(g is not None and g.shape != (self.n, 4, 4) for g in finals):
             raise CheckpointError(f"{path} is inconsistent (its rows or frames do not fit the scenario): start over "
                                   "with --force, or use another --out")
+        from .resume import check_session
+        check_session(path, sessions, self.sessions[-1])
+        self.sessions = list(sessions or []) + [dict(self.sessions[-1], first_row=len(rows))]
         self.rows, self.finals, self.rent = rows, finals, rent
         restore_rent(rent)
         return self
@@ -155,6 +164,8 @@ def write_status(path, result, scn, state, message=None):
                unit_system=unit_system_record(units),
                column_units=column_units(columns([{k: None for k in result.keys}] + list(result.rows)), units),
                provenance=provenance(scn.problem))
+    if len(state.sessions) > 1:         # a resumed sweep: what each session ran with, from which row
+        doc["provenance"]["sessions"] = state.sessions
     return write_json_atomic(path, doc)
 
 

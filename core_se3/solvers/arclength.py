@@ -53,6 +53,7 @@ from ..errors import ConvergenceError, CoreSE3Error, ElementTooDistortedError, O
 from .corrector import ArcLengthConstraint, LinearConstraint, StepFailed, correct
 from .critical import Corrector, narrow, turned_twice, untraced
 from .options import ArcLengthOptions, split_options, unknown_keywords
+from .origin import held_by, held_of, held_record, restart_frames
 from .stability import CriticalPoint, analyse, locate_critical
 
 __all__ = ["ArcState", "PathEvent", "PathInfo", "path_steps", "path_follow", "correct",
@@ -77,7 +78,9 @@ class ArcState:
     switch, branch_switch whether a switch is still to come; critical: the CriticalPoints found
     so far (``mode`` not needed to continue); finished: why the path stopped at this point
     ('lam_end', 'control_end', 'lam_min', 'max_steps') or ''; unwrap: the continuously
-    unwrapped probe rotation vectors (arc_length's recorder; None for path_follow).
+    unwrapped probe rotation vectors (arc_length's recorder; None for path_follow); held: (c,
+    state relative to the origin c) as the system held it (``ShellSystem.origin``; None near the
+    origin): a restart continues from it, bit for bit (``solvers.origin.restart_frames``).
 
     Example
     -------
@@ -100,6 +103,7 @@ class ArcState:
     critical: list = field(default_factory=list)
     finished: str = ""
     unwrap: dict | None = None
+    held: tuple | None = None
 
     def pack(self):
         """(scalars, arrays): a JSON-able dict (floats round-trip exactly through repr) and the
@@ -111,7 +115,8 @@ class ArcState:
                   critical=[c.pack() for c in self.critical],
                   unwrap=None if self.unwrap is None else
                   {k: [float(x) for x in np.asarray(v, float)] for k, v in self.unwrap.items()})
-        arrays = {}
+        held_scalars, arrays = held_record(self.held)
+        sc.update(held_scalars)
         if self.prev_du is not None:
             arrays["prev_du"] = np.asarray(self.prev_du, float)
         if self.switch_mode is not None:
@@ -126,7 +131,7 @@ class ArcState:
             {k: np.array(v, float) for k, v in sc["unwrap"].items()}
         return cls(state, sc["lam"], sc["step"], sc["ds"], sc["ds_max"], sc["ds_min"], sc["psi_u"],
                    sc["direction"], arrays.get("prev_du"), sc["prev_dl"], arrays.get("switch_mode"),
-                   sc["branch_switch"], crit, sc["finished"], unwrap)
+                   sc["branch_switch"], crit, sc["finished"], unwrap, held_of(sc, arrays))
 
 
 def _fraction(cur, pt, why, lam_end, control_end, ctrl_val):
@@ -209,7 +214,7 @@ def path_steps(sysm, options, lam_end=1.0, control=None, control_end=None, lam_m
     if start is not None and start.finished and not (start.finished == "max_steps" and start.step < max_steps):
         info.critical[:] = list(start.critical)
         return
-    state, lam = (sysm.initial(), 0.0) if start is None else (sysm.local(start.state), float(start.lam))
+    state, lam = (sysm.initial(), 0.0) if start is None else (_restart_state(sysm, start), float(start.lam))
     first = cur = analyse(sysm, state, lam, o.stability)
     ctrl_val = control[0] if control else None
     crit = info.critical
@@ -228,8 +233,8 @@ def path_steps(sysm, options, lam_end=1.0, control=None, control_end=None, lam_m
 
     def snapshot(pt, why):
         return ArcState(sysm.whole(pt.state), pt.lam, step, ds, ds_max, ds_min, psi_u, direction, prev_du, prev_dl,
-                        switch_mode, branch_switch, list(crit),
-                        why or ("max_steps" if step >= max_steps else ""))
+                        switch_mode, branch_switch, list(crit), why or ("max_steps" if step >= max_steps else ""),
+                        held=held_by(sysm, pt.state))
 
     yield PathEvent(first, snapshot(first, ""), restart=start is not None)
     rejections = 0
@@ -280,6 +285,13 @@ def path_steps(sysm, options, lam_end=1.0, control=None, control_end=None, lam_m
         yield PathEvent(pt, snapshot(pt, why))
         if why:
             break
+
+
+def _restart_state(sysm, start):
+    """The system's state to continue from at the ArcState ``start``: the state it held there
+    (relative to a far part's origin, ``solvers.origin.restart_frames``), else ``start.state``
+    in the system's coordinates."""
+    return restart_frames(getattr(sysm, "origin", None), start.state, start.held, sysm.local)
 
 
 def _path_start(sysm, o, first, start, crit, lam_end):

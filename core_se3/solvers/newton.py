@@ -44,6 +44,7 @@ from .stability import limit_point_hint, prescribed_turn_hint, stiffness_hint, u
 from .contact_probe import ContactProbe, median_edge
 from .friction_probe import RELAXATIONS, FrictionProbe
 from .step_checks import REFINE_PARTS, StepChecks, path_refusal, start_sign
+from .origin import held_by, held_of, held_record, restart_frames  # a restart's exact frames
 
 __all__ = ["newton_solve", "newton_steps", "end_check", "requested_load_factors", "NewtonState", "NewtonStep",
            "MAX_PRESCRIBED_TURN", "MAX_LOAD_TURN"]
@@ -64,6 +65,11 @@ class NewtonState:
     first accepted try's k_step, and ``StepChecks.stiff``, (lam, S_p) of the last accepted try's
     start).  Without them a resumed run skipped the probe of its first try that the
     uninterrupted run made (the snap roof to 0.735 P_max and back in 2 steps: 1 probe against 0).
+    held: (c, g_c) the frames as the solver held them, relative to a far part's origin c
+    (``solvers.origin.restart_frames``; None near the origin): a restart continues from them,
+    not from g's positions, which carry eps |x0|; held_multipliers: likewise the relocated
+    contact loads' own multipliers (friction anchors relative to c; None for a load that is not
+    relocated), ``RelocatedContact.from_whole``.
 
     Attributes
     ----------
@@ -78,7 +84,7 @@ class NewtonState:
     -------
     >>> import numpy as np
     >>> NewtonState(0.5, np.eye(4)[None], dlam=0.25).pack()      # what a checkpoint stores
-    {'lam': 0.5, 'dlam': 0.25, 'k_ref': None, 'det_sign': None, 'k_first': None, 'stiff': None}
+    {'lam': 0.5, 'dlam': 0.25, 'k_ref': None, 'det_sign': None, 'k_first': None, 'stiff': None, 'origin': None}
     """
     lam: float
     g: np.ndarray
@@ -88,6 +94,8 @@ class NewtonState:
     det_sign: int | None = None
     k_first: float | None = None
     stiff: tuple | None = None
+    held: tuple | None = None
+    held_multipliers: list | None = None
 
     def pack(self):
         """JSON-able scalars (the frames and multipliers are stored apart)."""
@@ -95,20 +103,26 @@ class NewtonState:
                     k_ref=None if self.k_ref is None else float(self.k_ref),
                     det_sign=None if self.det_sign is None else int(self.det_sign),
                     k_first=None if self.k_first is None else float(self.k_first),
-                    stiff=None if self.stiff is None else [float(x) for x in self.stiff])
+                    stiff=None if self.stiff is None else [float(x) for x in self.stiff], **held_record(self.held)[0])
 
     @classmethod
-    def unpack(cls, lam, g, scalars, multipliers=None):
+    def unpack(cls, lam, g, scalars, multipliers=None, arrays=None):
         """The restart point of a checkpoint: ``scalars`` as :meth:`pack` wrote them (keys that
-        an older checkpoint lacks are None)."""
+        an older checkpoint lacks are None), ``arrays`` its named arrays (the held frames and
+        multipliers)."""
         stiff = scalars.get("stiff")
+        held_m = None if arrays is None or multipliers is None else \
+            [arrays.get(f"held_multipliers_{i}") for i in range(len(multipliers))]
         return cls(lam, g, scalars.get("dlam"), scalars.get("k_ref"), multipliers, scalars.get("det_sign"),
-                   scalars.get("k_first"), None if stiff is None else tuple(float(x) for x in stiff))
+                   scalars.get("k_first"), None if stiff is None else tuple(float(x) for x in stiff),
+                   held_of(scalars, arrays), held_m)
 
     def arrays(self):
-        """The multipliers as named arrays for a checkpoint ({} without augmented loads);
-        :meth:`multipliers_of` reads them back."""
-        return {f"multipliers_{i}": np.asarray(m, float) for i, m in enumerate(self.multipliers or [])}
+        """The multipliers (and the held frames and multipliers) as named arrays for a checkpoint
+        ({} without augmented loads near the origin); :meth:`multipliers_of` reads them back."""
+        return {**{f"multipliers_{i}": np.asarray(m, float) for i, m in enumerate(self.multipliers or [])},
+                **{f"held_multipliers_{i}": np.asarray(m, float) for i, m in enumerate(self.held_multipliers or [])
+                   if m is not None}, **held_record(self.held)[1]}
 
     @staticmethod
     def multipliers_of(arrays):
@@ -289,7 +303,7 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
     result = result if result is not None else Result(mesh=mesh, element=problem.element_name)
     stateful, driven = eq.stateful, eq.stateful or problem.has_prescribed_motion
     lam, dlam, k_ref = state.lam, state.dlam, state.k_ref
-    g, g_whole = eq.local_frames(state.g), state.g     # the iterate, and the whole mesh's frames
+    g, g_whole = restart_frames(getattr(eq, "origin", None), state.g, state.held, eq.local_frames), state.g
     timer = _Timer(result)
     trier = NewtonTry(problem, opts, solver, timer, eq)
     hooks = _Hooks(eq)
@@ -357,17 +371,20 @@ def newton_steps(problem, targets, options=None, start=None, recorder=None, resu
         if stored is None:                       # the target was already reached
             stored = _unchanged_step(rec, eq, g, g_whole, lam)
         timer.close()
-        state = _restart(hooks, checks, (lam, g_whole, dlam, k_ref))
+        state = _restart(hooks, checks, (lam, g_whole, dlam, k_ref), held_by(eq, g))
         yield NewtonStep(stored, state, tries)
 
 
-def _restart(hooks, checks, here):
+def _restart(hooks, checks, here, held=None):
     """The restart point (NewtonState) after a stored step ``here`` = (lam, g_whole, dlam,
     k_ref): with the step checks' record a resume needs to check as the unbroken run does (det
-    K's sign, the midpoint probe's current stiffness)."""
+    K's sign, the midpoint probe's current stiffness) and the frames the iterate ``held``
+    relative to a far part's origin (``solvers.origin.held_by``)."""
     lam, g_whole, dlam, k_ref = here
+    held_m = [ld.multipliers() if held is not None and hasattr(ld, "from_whole") else None for ld in hooks.aug]
     return NewtonState(lam, g_whole, dlam, k_ref, [_whole(ld).multipliers() for ld in hooks.aug] if hooks.aug else None,
-                       checks.sign, checks.k_first, checks.stiff)
+                       checks.sign, checks.k_first, checks.stiff, held, held_m if any(m is not None for m in held_m)
+                       else None)
 
 
 def _equations(problem, opts, equations):
@@ -424,9 +441,10 @@ def _start_loads(hooks, state):
     """The loads' multipliers of the start ``state`` (None: their cold start; a restart point's
     are the problem's loads', taken into a relocated load's coordinates); the start is a stored
     state, the next step's slip counts from it."""
+    held = state.held_multipliers or [None] * len(hooks.aug)     # a relocated load's own (exact anchors)
     for i, ld in enumerate(hooks.aug):
         m = None if state.multipliers is None else state.multipliers[i]
-        ld.set_multipliers(ld.from_whole(m) if hasattr(ld, "from_whole") else m)
+        ld.set_multipliers(ld.from_whole(m, held[i]) if hasattr(ld, "from_whole") else m)
     _close_steps(hooks)
 
 

@@ -10,7 +10,10 @@ import numpy as np
 
 from ..model.contact_frame import relocated_contact
 
-__all__ = ["part_origin", "mesh_origin", "frames_origin", "relocation", "far_part_hint"]
+__all__ = ["part_origin", "mesh_origin", "frames_origin", "relocation", "far_part_hint", "restart_frames",
+           "held_by", "held_record", "held_of"]
+
+HELD = "held_frames"                 # the name of the held frames among a restart state's arrays
 
 
 def part_origin(problem):
@@ -155,3 +158,67 @@ def far_part_hint(problem):
             f"problem's coordinates, whose positions carry a round-off eps |x0| = {eps:.2g} ({eps / h:.2g} of an "
             "element) that can stall Newton (docs/STEPS.md, 'Translation invariance'); place the part and its "
             "obstacles (or fields, springs) near the origin, or give the obstacle as a built-in kind")
+
+
+def restart_frames(origin, g, held, to_local):
+    """The iterate a restart from the problem's frames ``g`` continues from: the frames the solver
+    held at that state, ``held`` = (c, g_c) relative to its origin c (a restart state keeps them:
+    ``NewtonState.held``, ``ArcState.held``), when c is ``origin`` and g_c + c is g to the bit;
+    else ``to_local(g)``.  Frames taken back from g carry the round-off of its positions,
+    eps |x0|: the snap roof at z = 2540 resumed from its absolute frames ended 1.4e-14 off the
+    unbroken run; from the held ones it ends on its bits.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> c = np.array([0.0, 0.0, 2540.0])
+    >>> g_c = np.eye(4)[None].copy(); g_c[0, 2, 3] = 0.1            # as the solver held it
+    >>> g = g_c.copy(); g[0, 2, 3] += c[2]                            # the problem's frames: 2540.1
+    >>> def to_local(g):
+    ...     x = np.array(g); x[..., :3, 3] -= c; return x
+    >>> float(to_local(g)[0, 2, 3]), float(restart_frames(c, g, (c, g_c), to_local)[0, 2, 3])
+    (0.09999999999990905, 0.1)
+    """
+    if held is not None and origin is not None:
+        c, g_c = (np.asarray(x, dtype=float) for x in held)
+        if c.shape == (3,) and np.array_equal(c, origin) and g_c.shape == np.shape(g):
+            whole = np.array(g_c)
+            whole[..., :3, 3] += c
+            if np.array_equal(whole, g):
+                return np.array(g_c)
+    return to_local(g)
+
+
+def held_by(system, g):
+    """(c, a copy of g): the frames ``g`` a solver ``system`` holds relative to its origin c
+    (``NewtonEquations.origin``, ``ShellSystem.origin``), for a restart state; None when it has
+    none (a part near the origin, a distributed run, an algebraic system)."""
+    c = getattr(system, "origin", None)
+    return None if c is None else (c, np.array(g))
+
+
+def held_record(held):
+    """(scalars, arrays) of a restart state's ``held`` = (c, g_c) or None, for a checkpoint: the
+    origin as JSON floats (exact through repr) and the frames among the named arrays;
+    :func:`held_of` reads them back.
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> sc, arrays = held_record((np.array([0.0, 0.0, 2540.0]), np.eye(4)[None]))
+    >>> sc, sorted(arrays), held_of(sc, arrays)[0].tolist(), held_record(None)
+    ({'origin': [0.0, 0.0, 2540.0]}, ['held_frames'], [0.0, 0.0, 2540.0], ({'origin': None}, {}))
+    """
+    if held is None:
+        return {"origin": None}, {}
+    c, g_c = held
+    return {"origin": [float(x) for x in c]}, {HELD: np.asarray(g_c, float)}
+
+
+def held_of(scalars, arrays):
+    """The ``held`` = (c, g_c) of a restart state's checkpoint record (:func:`held_record`), or
+    None (none kept: a part near the origin, or a checkpoint written before they were)."""
+    c = scalars.get("origin")
+    if c is None or arrays is None or HELD not in arrays:
+        return None
+    return np.array(c, float), np.array(arrays[HELD], float)
