@@ -361,6 +361,29 @@ def test_every_ranks_element_is_built_on_the_serial_gauge(backend):
     assert np.abs(K[np.ix_(free, free)] - Kg).max() < 1e-12 * np.abs(Kg).max()
 
 
+@pytest.mark.parametrize("backend", ["numba", "numpy"])
+def test_a_ranks_edge_turning_by_pi_is_named_by_the_whole_meshs_nodes(backend):
+    """A step that fails on an edge turning by pi names the edge's nodes in the whole mesh's ids
+    on a rank's part too (the scenario strip of 12 x 3 under a tip force 1000 times too large
+    failed naming edge [22, 23] on two ranks for the serial [46, 47]: the rank's local ids)."""
+    from core_se3.errors import ElementTooDistortedError
+    p = Problem(mesh.rectangle(3.0, 1.0, 6, 2), Material(1e4, 0.3, 0.05), backend=backend)
+    p.clamp("x0")
+    g = p.mesh.g0.copy()
+    g[20, :3, :3] = lie.exp_so3([0.0, 0.0, 3.1])             # node 20 (on x1) turned by 3.1 rad
+    with pytest.raises(ElementTooDistortedError) as serial:
+        p.evaluate(g, 1.0)
+    assert re.match(r"edge \[(13, 20|19, 20|20, 13|20, 19)\] turns by 3.100", str(serial.value))
+    part = rcb(p.mesh.X[p.mesh.quads].mean(1), 2)
+    sub = subdomain(p.mesh, part, 1, 2)                     # the x1 half: node 20 is not local node 20
+    assert 20 in sub.nodes and sub.g2l[20] != 20
+    loc = local_problem(p, sub)
+    loc.backend = backend
+    with pytest.raises(ElementTooDistortedError) as ranks:
+        loc.evaluate(g[sub.nodes], 1.0)
+    assert str(ranks.value)[:30] == str(serial.value)[:30]
+
+
 def test_one_rank_shares_the_kernels_csr_with_petsc():
     """One rank: PETSc's matrix is the compiled evaluation's CSR of all dofs, not a copy; after
     ``set`` its free block is the serial tangent K_ff entry for entry and every held dof is an
