@@ -1,5 +1,7 @@
 """The problems that tests/test_parallel.py solves serially and on two ranks (shared by the
 test and tests/parallel_driver.py)."""
+import numpy as np
+
 from core_se3 import Material, Problem, mesh
 from core_se3.catalogue.case import case_params, get_case
 from core_se3.catalogue.run import build_problem
@@ -27,6 +29,9 @@ STOPS = {"sandwich-1": (1, {}), "sandwich-2": (2, {}), "sandwich-5": (5, {}), "s
 # the midpoint probe: fuzz problem 144 (tests/test_step_checks.py) in one step, whose long try over
 # a limit point is refused by the probe (name -> steps, solve keywords)
 PROBES = {"fuzz-144-1": (1, {})}
+# a uniform field turning by 1 rad a step (MAX_LOAD_TURN pi/4: two tries a step) on a magnet at
+# the tip of a 12 x 1 strip, which one rank holds: every rank splits the steps as serially
+SPLITS = {"magnet-turning-tip": 2}
 # designs optimised on two ranks (equilibria and sensitivities distributed) against serially
 DESIGNS = ("design-tip-angle", "design-field-direction")
 
@@ -39,6 +44,16 @@ def build(name):
         prob.add_pressure(0.5, follower=True)
         prob.add_probe("tip", "x1")
         return prob, CASES[name], {}
+    if name == "magnet-turning-tip":
+        from core_se3.model import UniformField
+        from core_se3.model.fields import rotating_direction
+        prob = Problem(mesh.rectangle(10.0, 1.0, 12, 1), Material(1e4, 0.3, 0.1))
+        prob.clamp("x0")
+        turn = rotating_direction((0.0, 1.0, 0.0), (0.0, 0.0, 1.0), turns_per_unit=2.0 / (2 * np.pi))
+        field = UniformField((0.0, 0.0, 0.05), scale=lambda lam: 1.0, direction=turn)
+        prob.add_magnetic((1.0, 0.0, 0.0), field, elements=np.arange(10, 12), mu0=1.0)
+        prob.add_probe("tip", "x1")
+        return prob, SPLITS[name], {}
     if name == "contact-faces":
         prob = Problem(mesh.rectangle(2.0, 1.0, 4, 2), Material(1e4, 0.0, 0.02))
         prob.clamp("x0")

@@ -411,7 +411,11 @@ class _Hooks:
 
     def __init__(self, eq):
         self.aug = hooked_loads(eq, "update_multipliers")            # augmented-Lagrangian loads (contact)
-        self.turning = hooked_loads(eq, "direction_turn")            # loads whose direction turns (fields)
+        # loads whose direction turns (fields), measured on the whole mesh's frames: on a distributed
+        # run's ranks the whole problem's, so that every rank splits a try alike (a rank's own loads --
+        # none on a rank without magnetised nodes, local node ids read in the whole frames -- split
+        # on some ranks only: a strip's turning tip magnet hung two ranks)
+        self.turning = hooked_loads(eq.problem if eq.distributed else eq, "direction_turn")
         self.sweeps = hooked_loads(eq, "step_error")                 # loads that check the whole step (contact)
         self.switches = hooked_loads(eq, "active_set_changed")       # loads whose tangent switches (contact)
         self.accepts = hooked_loads(eq, "accept_state")              # path-dependent loads (friction)
