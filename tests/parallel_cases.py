@@ -29,9 +29,11 @@ STOPS = {"sandwich-1": (1, {}), "sandwich-2": (2, {}), "sandwich-5": (5, {}), "s
 # the midpoint probe: fuzz problem 144 (tests/test_step_checks.py) in one step, whose long try over
 # a limit point is refused by the probe (name -> steps, solve keywords)
 PROBES = {"fuzz-144-1": (1, {})}
-# a uniform field turning by 1 rad a step (MAX_LOAD_TURN pi/4: two tries a step) on a magnet at
-# the tip of a 12 x 1 strip, which one rank holds: every rank splits the steps as serially
-SPLITS = {"magnet-turning-tip": 2}
+# loads on one rank's nodes only, at the tip of a 12 x 1 strip (name -> steps, solve keywords): a
+# uniform field turning by 1 rad a step (MAX_LOAD_TURN pi/4: two tries a step) on a magnet, which
+# every rank splits as serially; a follower force (not conservative) with inertia_check, which
+# every rank leaves uncounted as serially
+ONE_SIDED = {"magnet-turning-tip": (2, {}), "follower-tip-inertia": (2, dict(inertia_check=True))}
 # designs optimised on two ranks (equilibria and sensitivities distributed) against serially
 DESIGNS = ("design-tip-angle", "design-field-direction")
 
@@ -53,7 +55,13 @@ def build(name):
         field = UniformField((0.0, 0.0, 0.05), scale=lambda lam: 1.0, direction=turn)
         prob.add_magnetic((1.0, 0.0, 0.0), field, elements=np.arange(10, 12), mu0=1.0)
         prob.add_probe("tip", "x1")
-        return prob, SPLITS[name], {}
+        return prob, *ONE_SIDED[name]
+    if name == "follower-tip-inertia":
+        prob = Problem(mesh.rectangle(10.0, 1.0, 12, 1), Material(1e4, 0.3, 0.1))
+        prob.clamp("x0")
+        prob.add_edge_force("x1", (0.0, 0.0, 0.05), follower=True)
+        prob.add_probe("tip", "x1")
+        return prob, *ONE_SIDED[name]
     if name == "contact-faces":
         prob = Problem(mesh.rectangle(2.0, 1.0, 4, 2), Material(1e4, 0.0, 0.02))
         prob.clamp("x0")

@@ -46,7 +46,7 @@ from core_se3.parallel.system import rigid_body_modes
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, HERE)
-from parallel_cases import CASES, DESIGNS, PROBES, SPLITS, STOPS, build  # noqa: E402
+from parallel_cases import CASES, DESIGNS, ONE_SIDED, PROBES, STOPS, build  # noqa: E402
 
 HAVE_MPI = (importlib.util.find_spec("mpi4py") is not None and importlib.util.find_spec("petsc4py") is not None
             and shutil.which("mpirun") is not None)
@@ -96,13 +96,27 @@ def test_distributed_runs_agree_with_serial(request, ranks, name):
     _agrees_with_serial(request.getfixturevalue({1: "one_rank", 2: "two_ranks"}[ranks]), ranks, name)
 
 
-def test_a_field_turning_a_magnet_on_one_rank_splits_every_ranks_steps_as_serially(tmp_path_factory):
+@pytest.fixture(scope="module")
+def one_sided(tmp_path_factory):
+    """Two ranks on the strips whose loads one rank holds (``ONE_SIDED``); a hang fails in 300 s."""
+    return _driver(tmp_path_factory, 2, *ONE_SIDED, timeout=300)
+
+
+def test_a_field_turning_a_magnet_on_one_rank_splits_every_ranks_steps_as_serially(one_sided):
     """A try is split where a field turns by more than MAX_LOAD_TURN (pi/4) within it: the turn is
     measured on the whole problem's loads on every rank.  Each rank measured it on its own loads,
     so the rank without the magnet (at the tip of a 12 x 1 strip) did not split the 1 rad steps
     that the other split in two: the ranks iterated at different load factors and hung (a
     scenario of the same kind: 'running' after 200 s on two ranks, 3 s serially)."""
-    _agrees_with_serial(_driver(tmp_path_factory, 2, *SPLITS, timeout=300), 2, "magnet-turning-tip")
+    _agrees_with_serial(one_sided, 2, "magnet-turning-tip")
+
+
+def test_a_follower_force_on_one_ranks_nodes_is_left_uncounted_on_every_rank(one_sided):
+    """inertia_check counts the negative eigenvalues of sym K (collective) where the loads are
+    conservative by their kinds, judged on the whole problem's loads on every rank: each rank
+    judged its own, so the rank without the follower tip force counted and the other did not,
+    and the ranks hung."""
+    _agrees_with_serial(one_sided, 2, "follower-tip-inertia")
 
 
 def _agrees_with_serial(run, ranks, name):

@@ -534,7 +534,7 @@ def _step_checks(opts, eq, state):
                         opts.critical_tol, state.det_sign, stop=opts.limit_check, snap=snap,
                         friction=_friction_probe(opts, eq),
                         counting=opts.inertia_check and smooth and hasattr(eq, "inertia_count")
-                        and conservative_loads(eq.loads) is not False)
+                        and conservative_loads(eq.problem.loads) is not False)    # the whole problem's: every rank alike
     # the midpoint probe of a try that turned a node past pi (a stateful element's state is not restored)
     checks.probe = opts.midpoint_probe and opts.limit_check and not eq.stateful
     # ... and the return check of a located sign change (the stateful element's state at the far
