@@ -34,6 +34,9 @@ PROBES = {"fuzz-144-1": (1, {})}
 # every rank splits as serially; a follower force (not conservative) with inertia_check, which
 # every rank leaves uncounted as serially
 ONE_SIDED = {"magnet-turning-tip": (2, {}), "follower-tip-inertia": (2, dict(inertia_check=True))}
+# a failure without a named cause, as serially: a roller rising under a plate (contact: no
+# limit-point hint, which would send the user to arc length; name -> steps, solve keywords)
+FAILS = {"roller-lift": (4, dict(max_cutbacks=4))}
 # designs optimised on two ranks (equilibria and sensitivities distributed) against serially
 DESIGNS = ("design-tip-angle", "design-field-direction")
 
@@ -56,6 +59,14 @@ def build(name):
         prob.add_magnetic((1.0, 0.0, 0.0), field, elements=np.arange(10, 12), mu0=1.0)
         prob.add_probe("tip", "x1")
         return prob, *ONE_SIDED[name]
+    if name in FAILS:
+        prob = Problem(mesh.rectangle(2.0, 1.0, 8, 4), Material(1e4, 0.3, 0.02, rho=1.0))
+        prob.clamp("x0")
+        prob.add_gravity(g=(0.0, 0.0, -0.5))
+        prob.add_obstacle("cylinder", point=(1.5, 0.0, -0.06), axis=(0.0, 1.0, 0.0), radius=0.05,
+                          motion=dict(translate=(0.0, 0.0, 0.3)), name="roller")
+        prob.add_probe("tip", "x1")
+        return prob, *FAILS[name]
     if name == "follower-tip-inertia":
         prob = Problem(mesh.rectangle(10.0, 1.0, 12, 1), Material(1e4, 0.3, 0.1))
         prob.clamp("x0")

@@ -46,7 +46,7 @@ from core_se3.parallel.system import rigid_body_modes
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, HERE)
-from parallel_cases import CASES, DESIGNS, ONE_SIDED, PROBES, STOPS, build  # noqa: E402
+from parallel_cases import CASES, DESIGNS, FAILS, ONE_SIDED, PROBES, STOPS, build  # noqa: E402
 
 HAVE_MPI = (importlib.util.find_spec("mpi4py") is not None and importlib.util.find_spec("petsc4py") is not None
             and shutil.which("mpirun") is not None)
@@ -98,8 +98,9 @@ def test_distributed_runs_agree_with_serial(request, ranks, name):
 
 @pytest.fixture(scope="module")
 def one_sided(tmp_path_factory):
-    """Two ranks on the strips whose loads one rank holds (``ONE_SIDED``); a hang fails in 300 s."""
-    return _driver(tmp_path_factory, 2, *ONE_SIDED, timeout=300)
+    """Two ranks on the strips whose loads one rank holds (``ONE_SIDED``) and the runs that fail
+    (``FAILS``); a hang fails in 300 s."""
+    return _driver(tmp_path_factory, 2, *ONE_SIDED, *FAILS, timeout=300)
 
 
 def test_a_field_turning_a_magnet_on_one_rank_splits_every_ranks_steps_as_serially(one_sided):
@@ -117,6 +118,18 @@ def test_a_follower_force_on_one_ranks_nodes_is_left_uncounted_on_every_rank(one
     judged its own, so the rank without the follower tip force counted and the other did not,
     and the ranks hung."""
     _agrees_with_serial(one_sided, 2, "follower-tip-inertia")
+
+
+def test_a_contact_failure_names_no_limit_point_on_the_ranks_as_serially(one_sided):
+    """A roller rising under a plate under its weight fails (cut-backs exhausted at 0.406): serially
+    without a probable cause (the limit-point hint is of path following, which refuses contact),
+    on two ranks naming 'a limit point' at S_p = 0.0166 and arc length, which would refuse it."""
+    prob, steps, kw = build("roller-lift")
+    with pytest.raises(ConvergenceError) as exc:
+        prob.solve(steps=steps, solver="serial", **kw)
+    assert "Probable cause" not in str(exc.value)
+    assert one_sided["roller-lift"]["message"] == str(exc.value)
+    assert one_sided["roller-lift"]["lam"] == [s.load_factor for s in exc.value.result.steps]
 
 
 def _agrees_with_serial(run, ranks, name):

@@ -847,11 +847,15 @@ def _limit_hint(problem, eq, opts, g_whole, lam, out, checks):
     accepted try's (``out.k_step`` / ``StepChecks.k_first``), where the serial run's factorises
     the whole tangent on one process (``stability.limit_point_hint``): before, the 8x8 snap roof
     under 1.0003 times its limit load in one step failed on 2 ranks without the serial run's
-    'load control has met a limit point' (S_p = 0.0136 both ways)."""
+    'load control has met a limit point' (S_p = 0.0136 both ways).  None with contact, as
+    serially: a roller rising under a plate failed on 2 ranks naming a limit point (S_p = 0.0166)
+    and arc length, which refuses contact."""
     if lam == 0.0:
         return None
     if not eq.distributed:
         return limit_point_hint(problem, g_whole, lam, opts.linear_solver)
+    if hooked_loads(problem, "update_multipliers") or hooked_loads(problem, "limit_increment"):
+        return None      # contact: none serially either (path following refuses it: system.ShellSystem)
     k, k_first = getattr(out, "k_step", None), checks.k_first
     return stiffness_hint(lam, k / k_first) if k is not None and k_first and checks.stiffness else None
 
