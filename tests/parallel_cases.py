@@ -34,9 +34,10 @@ PROBES = {"fuzz-144-1": (1, {})}
 # every rank splits as serially; a follower force (not conservative) with inertia_check, which
 # every rank leaves uncounted as serially
 ONE_SIDED = {"magnet-turning-tip": (2, {}), "follower-tip-inertia": (2, dict(inertia_check=True))}
-# a failure without a named cause, as serially: a roller rising under a plate (contact: no
-# limit-point hint, which would send the user to arc length; name -> steps, solve keywords)
-FAILS = {"roller-lift": (4, dict(max_cutbacks=4))}
+# failures with the serial message (name -> steps, solve keywords): a roller rising under a plate
+# (contact: no limit-point hint, which would send the user to arc length); a roller pressing into
+# the clamped edge x1, which the rank that does not write holds (the cause named: that node)
+FAILS = {"roller-lift": (4, dict(max_cutbacks=4)), "press-held": (2, dict(max_cutbacks=2))}
 # designs optimised on two ranks (equilibria and sensitivities distributed) against serially
 DESIGNS = ("design-tip-angle", "design-field-direction")
 
@@ -59,6 +60,13 @@ def build(name):
         prob.add_magnetic((1.0, 0.0, 0.0), field, elements=np.arange(10, 12), mu0=1.0)
         prob.add_probe("tip", "x1")
         return prob, *ONE_SIDED[name]
+    if name == "press-held":
+        prob = Problem(mesh.rectangle(2.0, 1.0, 8, 4), Material(1e4, 0.3, 0.02))
+        prob.clamp("x1")
+        prob.add_obstacle("cylinder", point=(2.0, 0.0, -0.07), axis=(0.0, 1.0, 0.0), radius=0.05,
+                          motion=dict(translate=(0.0, 0.0, 0.2)), name="roller")
+        prob.add_probe("tip", "x0")
+        return prob, *FAILS[name]
     if name in FAILS:
         prob = Problem(mesh.rectangle(2.0, 1.0, 8, 4), Material(1e4, 0.3, 0.02, rho=1.0))
         prob.clamp("x0")
