@@ -438,6 +438,22 @@ def test_a_ranks_edge_turning_by_pi_is_named_by_the_whole_meshs_nodes(backend):
     assert str(ranks.value)[:30] == str(serial.value)[:30]
 
 
+def test_a_ranks_turned_lab_rotation_node_is_named_by_the_whole_meshs_id():
+    """A lab_rotation spring's node turned by nearly pi is named in the whole mesh's ids on a
+    rank's part (it was the rank's local id: node 2 for node 20)."""
+    from core_se3.errors import ElementTooDistortedError
+    p = Problem(mesh.rectangle(3.0, 1.0, 6, 2), Material(1e4, 0.3, 0.05))
+    p.clamp("x0")
+    p.add_rotation_component_support([20], (0.0, 1.0, 0.0), 5.0, name="roller")
+    g = p.mesh.g0.copy()
+    g[20, :3, :3] = lie.exp_so3([0.0, 3.05, 0.0])
+    sub = subdomain(p.mesh, rcb(p.mesh.X[p.mesh.quads].mean(1), 2), 1, 2)
+    spring = localize_load(p.loads[0], sub)[0]
+    assert sub.g2l[20] != 20 and spring.nodes.tolist() == [sub.g2l[20]]
+    with pytest.raises(ElementTooDistortedError, match="node 20 has turned by 3.050 rad"):
+        spring.evaluate(g[sub.nodes], 1.0)
+
+
 def test_one_rank_shares_the_kernels_csr_with_petsc():
     """One rank: PETSc's matrix is the compiled evaluation's CSR of all dofs, not a copy; after
     ``set`` its free block is the serial tangent K_ff entry for entry and every held dof is an

@@ -107,7 +107,7 @@ def _spring(ld, view, arrays):
     if not len(pos):
         return []
     part = copy.copy(ld)
-    part.n, part.nodes = view.mesh.n_nodes, loc
+    part.n, part.nodes, part.whole_nodes = view.mesh.n_nodes, loc, np.asarray(ld.node_ids)[pos]
     for name in arrays:
         setattr(part, name, np.ascontiguousarray(getattr(ld, name)[pos]))
     return [part]
