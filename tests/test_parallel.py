@@ -519,6 +519,20 @@ def test_a_load_without_a_distributed_form_is_refused():
         local_problem(p, subdomain(p.mesh, np.array([0, 1]), 0, 2))
 
 
+def test_a_partitioner_petsc_lacks_is_named_with_the_choices():
+    """A partitioner this PETSc was built without ([solver] partition = "parmetis" on Debian's)
+    says so and names the choices (it was PETSc's 'Unknown partitioning type' alone)."""
+    petsc = pytest.importorskip("petsc4py.PETSc")
+    from core_se3.parallel.partition import _petsc_partition
+    m = mesh.rectangle(2.0, 1.0, 4, 1)
+    try:
+        _petsc_partition(m, SerialComm(), "parmetis")
+    except ParallelError as exc:
+        assert "built without it" in str(exc) and "'auto', 'ptscotch' or 'rcb'" in str(exc)
+    else:
+        pytest.skip("this PETSc has ParMETIS")
+
+
 def test_partitions_are_balanced_and_cover_every_element():
     m = mesh.rectangle(3.0, 1.0, 30, 10)
     for P in (2, 3, 5):
