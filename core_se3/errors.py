@@ -22,7 +22,7 @@ __all__ = ["CoreSE3Error", "MaterialError", "MeshError", "LoadError", "SupportEr
            "CheckpointError", "OptionError", "DesignError", "ContactError", "ParallelError",
            "LinearSolverError", "ControlError", "ResultFileError", "ScenarioWarning", "SupportWarning", "ElementWarning", "MeshWarning",
            "AccuracyWarning", "OptionWarning", "LoadWarning", "PathWarning", "AngleWarning", "did_you_mean",
-           "angle_in_degrees", "warn_angle", "TURNS_MAX"]
+           "angle_in_degrees", "warn_angle", "TURNS_MAX", "edge_turn_error"]
 
 
 def did_you_mean(name, choices):
@@ -268,6 +268,27 @@ class ElementTooDistortedError(CoreSE3Error):
     ...
     core_se3.errors.ElementTooDistortedError: edge [0, 1] turns by 3.100 rad (>= 3.047); the relative rotation across an element must stay below pi: refine the mesh or the load step
     """
+
+
+def edge_turn_error(edge_nodes, e, angle, limit, mesh):
+    """The ElementTooDistortedError of mesh edge ``e`` (its nodes ``edge_nodes[e]``) turning by
+    ``angle`` >= ``limit`` [rad], naming the nodes by the whole mesh's ids: a rank's part of a
+    distributed run (``mesh.whole_ids``, parallel.local) numbers them locally, and the message
+    named those local ids (a strip's tip edge [46, 47] read [22, 23] on two ranks).
+
+    Example
+    -------
+    >>> import numpy as np
+    >>> from types import SimpleNamespace
+    >>> part = SimpleNamespace(whole_ids=(np.array([3]), np.array([46, 47, 7, 8])))
+    >>> str(edge_turn_error(np.array([[0, 1], [2, 3]]), 0, 3.056, 3.047, part))[:24]
+    'edge [46, 47] turns by 3'
+    """
+    ids = getattr(mesh, "whole_ids", None)
+    a, b = (int(i) if ids is None else int(ids[1][i]) for i in edge_nodes[e])
+    return ElementTooDistortedError(
+        f"edge {[a, b]} turns by {angle:.3f} rad (>= {limit:.3f}); the relative rotation across an element must "
+        "stay below pi: refine the mesh or the load step")
 
 
 def _located(message, file=None, key=None):

@@ -1,5 +1,7 @@
 """The problems that tests/test_parallel.py solves serially and on two ranks (shared by the
 test and tests/parallel_driver.py)."""
+import numpy as np
+
 from core_se3 import Material, Problem, mesh
 from core_se3.catalogue.case import case_params, get_case
 from core_se3.catalogue.run import build_problem
@@ -27,6 +29,15 @@ STOPS = {"sandwich-1": (1, {}), "sandwich-2": (2, {}), "sandwich-5": (5, {}), "s
 # the midpoint probe: fuzz problem 144 (tests/test_step_checks.py) in one step, whose long try over
 # a limit point is refused by the probe (name -> steps, solve keywords)
 PROBES = {"fuzz-144-1": (1, {})}
+# loads on one rank's nodes only, at the tip of a 12 x 1 strip (name -> steps, solve keywords): a
+# uniform field turning by 1 rad a step (MAX_LOAD_TURN pi/4: two tries a step) on a magnet, which
+# every rank splits as serially; a follower force (not conservative) with inertia_check, which
+# every rank leaves uncounted as serially
+ONE_SIDED = {"magnet-turning-tip": (2, {}), "follower-tip-inertia": (2, dict(inertia_check=True))}
+# failures with the serial message (name -> steps, solve keywords): a roller rising under a plate
+# (contact: no limit-point hint, which would send the user to arc length); a roller pressing into
+# the clamped edge x1, which the rank that does not write holds (the cause named: that node)
+FAILS = {"roller-lift": (4, dict(max_cutbacks=4)), "press-held": (2, dict(max_cutbacks=2))}
 # designs optimised on two ranks (equilibria and sensitivities distributed) against serially
 DESIGNS = ("design-tip-angle", "design-field-direction")
 
@@ -39,6 +50,37 @@ def build(name):
         prob.add_pressure(0.5, follower=True)
         prob.add_probe("tip", "x1")
         return prob, CASES[name], {}
+    if name == "magnet-turning-tip":
+        from core_se3.model import UniformField
+        from core_se3.model.fields import rotating_direction
+        prob = Problem(mesh.rectangle(10.0, 1.0, 12, 1), Material(1e4, 0.3, 0.1))
+        prob.clamp("x0")
+        turn = rotating_direction((0.0, 1.0, 0.0), (0.0, 0.0, 1.0), turns_per_unit=2.0 / (2 * np.pi))
+        field = UniformField((0.0, 0.0, 0.05), scale=lambda lam: 1.0, direction=turn)
+        prob.add_magnetic((1.0, 0.0, 0.0), field, elements=np.arange(10, 12), mu0=1.0)
+        prob.add_probe("tip", "x1")
+        return prob, *ONE_SIDED[name]
+    if name == "press-held":
+        prob = Problem(mesh.rectangle(2.0, 1.0, 8, 4), Material(1e4, 0.3, 0.02))
+        prob.clamp("x1")
+        prob.add_obstacle("cylinder", point=(2.0, 0.0, -0.07), axis=(0.0, 1.0, 0.0), radius=0.05,
+                          motion=dict(translate=(0.0, 0.0, 0.2)), name="roller")
+        prob.add_probe("tip", "x0")
+        return prob, *FAILS[name]
+    if name in FAILS:
+        prob = Problem(mesh.rectangle(2.0, 1.0, 8, 4), Material(1e4, 0.3, 0.02, rho=1.0))
+        prob.clamp("x0")
+        prob.add_gravity(g=(0.0, 0.0, -0.5))
+        prob.add_obstacle("cylinder", point=(1.5, 0.0, -0.06), axis=(0.0, 1.0, 0.0), radius=0.05,
+                          motion=dict(translate=(0.0, 0.0, 0.3)), name="roller")
+        prob.add_probe("tip", "x1")
+        return prob, *FAILS[name]
+    if name == "follower-tip-inertia":
+        prob = Problem(mesh.rectangle(10.0, 1.0, 12, 1), Material(1e4, 0.3, 0.1))
+        prob.clamp("x0")
+        prob.add_edge_force("x1", (0.0, 0.0, 0.05), follower=True)
+        prob.add_probe("tip", "x1")
+        return prob, *ONE_SIDED[name]
     if name == "contact-faces":
         prob = Problem(mesh.rectangle(2.0, 1.0, 4, 2), Material(1e4, 0.0, 0.02))
         prob.clamp("x0")

@@ -14,7 +14,7 @@ from core_se3.errors import ConvergenceError, SingularSystemError
 from core_se3.parallel import world
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from parallel_cases import CASES, PROBES, STOPS, build, roof_on_symmetry_planes, scenario_dict  # noqa: E402
+from parallel_cases import CASES, FAILS, ONE_SIDED, PROBES, STOPS, build, roof_on_symmetry_planes, scenario_dict  # noqa: E402
 
 
 def summary(res):
@@ -38,14 +38,14 @@ def main(out, names):
         d = doc_d["design"]
         doc[name] = dict(variables=d["variables"], max_misfit=d["max_misfit"], reached=d["reached"],
                          iterations=d["iterations"], equilibrium_solves=d["equilibrium_solves"])
-    for name in [n for n in names if n in CASES]:
+    for name in [n for n in names if n in CASES or n in ONE_SIDED]:
         prob, steps, kw = build(name)
         if comm.size == 1:                           # one rank: the shared-matrix path, asked for
             kw = dict(kw, solver="distributed")
         res = prob.solve(steps=steps, **kw)          # dispatches to the distributed solver
         doc[name] = summary(res)
         doc[name]["parallel"] = {k: v for k, v in res.parallel.items() if k in ("ranks", "linear")}
-    for name in [n for n in names if n in STOPS or n in PROBES or n == "sandwich-stable"]:   # runs the checks stop
+    for name in [n for n in names if n in STOPS or n in PROBES or n in FAILS or n == "sandwich-stable"]:   # runs the checks stop
         prob, steps, kw = build(name)
         try:
             res = prob.solve(steps=steps, solver="distributed", **kw)

@@ -26,6 +26,7 @@ import json
 import os
 import re
 import shutil
+import signal
 import subprocess
 import sys
 import warnings
@@ -45,7 +46,7 @@ from core_se3.parallel.system import rigid_body_modes
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, HERE)
-from parallel_cases import CASES, DESIGNS, PROBES, STOPS, build  # noqa: E402
+from parallel_cases import CASES, DESIGNS, FAILS, ONE_SIDED, PROBES, STOPS, build  # noqa: E402
 
 HAVE_MPI = (importlib.util.find_spec("mpi4py") is not None and importlib.util.find_spec("petsc4py") is not None
             and shutil.which("mpirun") is not None)
@@ -59,14 +60,21 @@ def mpi_env():
     return env
 
 
-def _driver(tmp_path_factory, ranks, *names):
+def _driver(tmp_path_factory, ranks, *names, timeout=600):
     if not HAVE_MPI:
         pytest.skip("needs mpi4py, petsc4py and mpirun")
     out = tmp_path_factory.mktemp("par") / "out.json"
     cmd = ["mpirun", "-n", str(ranks), "-x", "PYTHONPATH", "-x", "OMP_NUM_THREADS", "-x", "NUMBA_NUM_THREADS",
            sys.executable, os.path.join(HERE, "parallel_driver.py"), str(out), *names]
-    p = subprocess.run(cmd, env=mpi_env(), capture_output=True, text=True, timeout=600, cwd=ROOT)
-    assert p.returncode == 0, p.stdout[-3000:] + p.stderr[-3000:]
+    p = subprocess.Popen(cmd, env=mpi_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT,
+                         start_new_session=True)
+    try:
+        stdout, stderr = p.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:         # ranks that hang: mpirun and its ranks ended, the test fails
+        os.killpg(p.pid, signal.SIGKILL)
+        stdout, stderr = p.communicate()
+        pytest.fail(f"mpirun -n {ranks} {' '.join(names)} did not finish in {timeout} s (hung ranks)\n" + stdout[-2000:])
+    assert p.returncode == 0, stdout[-3000:] + stderr[-3000:]
     return json.loads(out.read_text())
 
 
@@ -85,7 +93,53 @@ def one_rank(tmp_path_factory):
 @pytest.mark.parametrize("ranks", [1, 2])
 @pytest.mark.parametrize("name", list(CASES))
 def test_distributed_runs_agree_with_serial(request, ranks, name):
-    run = request.getfixturevalue({1: "one_rank", 2: "two_ranks"}[ranks])
+    _agrees_with_serial(request.getfixturevalue({1: "one_rank", 2: "two_ranks"}[ranks]), ranks, name)
+
+
+@pytest.fixture(scope="module")
+def one_sided(tmp_path_factory):
+    """Two ranks on the strips whose loads one rank holds (``ONE_SIDED``) and the runs that fail
+    (``FAILS``); a hang fails in 300 s."""
+    return _driver(tmp_path_factory, 2, *ONE_SIDED, *FAILS, timeout=300)
+
+
+def test_a_field_turning_a_magnet_on_one_rank_splits_every_ranks_steps_as_serially(one_sided):
+    """A try is split where a field turns by more than MAX_LOAD_TURN (pi/4) within it: the turn is
+    measured on the whole problem's loads on every rank.  Each rank measured it on its own loads,
+    so the rank without the magnet (at the tip of a 12 x 1 strip) did not split the 1 rad steps
+    that the other split in two: the ranks iterated at different load factors and hung (a
+    scenario of the same kind: 'running' after 200 s on two ranks, 3 s serially)."""
+    _agrees_with_serial(one_sided, 2, "magnet-turning-tip")
+
+
+def test_a_follower_force_on_one_ranks_nodes_is_left_uncounted_on_every_rank(one_sided):
+    """inertia_check counts the negative eigenvalues of sym K (collective) where the loads are
+    conservative by their kinds, judged on the whole problem's loads on every rank: each rank
+    judged its own, so the rank without the follower tip force counted and the other did not,
+    and the ranks hung."""
+    _agrees_with_serial(one_sided, 2, "follower-tip-inertia")
+
+
+@pytest.mark.parametrize("name", list(FAILS))
+def test_a_failed_contact_run_gives_the_serial_message_on_the_ranks(one_sided, name):
+    """Runs whose cut-backs run out stop on two ranks with the serial message.  A roller rising
+    under a plate under its weight (fails at 0.406): serially without a probable cause (the
+    limit-point hint is path following's, which refuses contact), on two ranks it named 'a limit
+    point' at S_p = 0.0166 and arc length.  A roller pressing into the clamped edge x1: serially
+    'presses 0.015 into node 8, whose translations a support holds'; on two ranks no cause (rank
+    1 holds x1, rank 0 writes; the node was named in rank 1's own ids and looked up in the whole
+    mesh's supports)."""
+    prob, steps, kw = build(name)
+    with pytest.raises(ConvergenceError) as exc:
+        prob.solve(steps=steps, solver="serial", **kw)
+    assert ("Probable cause" in str(exc.value)) == (name == "press-held")
+    assert one_sided[name]["message"] == str(exc.value)
+    assert one_sided[name]["lam"] == [s.load_factor for s in exc.value.result.steps]
+
+
+def _agrees_with_serial(run, ranks, name):
+    """The distributed run ``run[name]`` on ``ranks`` took the serial run's tries, checks and
+    critical points, and reached its probes, contact forces and frames to 1e-10."""
     prob, steps, kw = build(name)
     ser = prob.solve(steps=steps, solver="serial", **kw)      # every check on, as distributed
     par = run[name]
@@ -361,6 +415,45 @@ def test_every_ranks_element_is_built_on_the_serial_gauge(backend):
     assert np.abs(K[np.ix_(free, free)] - Kg).max() < 1e-12 * np.abs(Kg).max()
 
 
+@pytest.mark.parametrize("backend", ["numba", "numpy"])
+def test_a_ranks_edge_turning_by_pi_is_named_by_the_whole_meshs_nodes(backend):
+    """A step that fails on an edge turning by pi names the edge's nodes in the whole mesh's ids
+    on a rank's part too (the scenario strip of 12 x 3 under a tip force 1000 times too large
+    failed naming edge [22, 23] on two ranks for the serial [46, 47]: the rank's local ids)."""
+    from core_se3.errors import ElementTooDistortedError
+    p = Problem(mesh.rectangle(3.0, 1.0, 6, 2), Material(1e4, 0.3, 0.05), backend=backend)
+    p.clamp("x0")
+    g = p.mesh.g0.copy()
+    g[20, :3, :3] = lie.exp_so3([0.0, 0.0, 3.1])             # node 20 (on x1) turned by 3.1 rad
+    with pytest.raises(ElementTooDistortedError) as serial:
+        p.evaluate(g, 1.0)
+    assert re.match(r"edge \[(13, 20|19, 20|20, 13|20, 19)\] turns by 3.100", str(serial.value))
+    part = rcb(p.mesh.X[p.mesh.quads].mean(1), 2)
+    sub = subdomain(p.mesh, part, 1, 2)                     # the x1 half: node 20 is not local node 20
+    assert 20 in sub.nodes and sub.g2l[20] != 20
+    loc = local_problem(p, sub)
+    loc.backend = backend
+    with pytest.raises(ElementTooDistortedError) as ranks:
+        loc.evaluate(g[sub.nodes], 1.0)
+    assert str(ranks.value)[:30] == str(serial.value)[:30]
+
+
+def test_a_ranks_turned_lab_rotation_node_is_named_by_the_whole_meshs_id():
+    """A lab_rotation spring's node turned by nearly pi is named in the whole mesh's ids on a
+    rank's part (it was the rank's local id: node 2 for node 20)."""
+    from core_se3.errors import ElementTooDistortedError
+    p = Problem(mesh.rectangle(3.0, 1.0, 6, 2), Material(1e4, 0.3, 0.05))
+    p.clamp("x0")
+    p.add_rotation_component_support([20], (0.0, 1.0, 0.0), 5.0, name="roller")
+    g = p.mesh.g0.copy()
+    g[20, :3, :3] = lie.exp_so3([0.0, 3.05, 0.0])
+    sub = subdomain(p.mesh, rcb(p.mesh.X[p.mesh.quads].mean(1), 2), 1, 2)
+    spring = localize_load(p.loads[0], sub)[0]
+    assert sub.g2l[20] != 20 and spring.nodes.tolist() == [sub.g2l[20]]
+    with pytest.raises(ElementTooDistortedError, match="node 20 has turned by 3.050 rad"):
+        spring.evaluate(g[sub.nodes], 1.0)
+
+
 def test_one_rank_shares_the_kernels_csr_with_petsc():
     """One rank: PETSc's matrix is the compiled evaluation's CSR of all dofs, not a copy; after
     ``set`` its free block is the serial tangent K_ff entry for entry and every held dof is an
@@ -424,6 +517,20 @@ def test_a_load_without_a_distributed_form_is_refused():
     p.add(Bare())
     with pytest.raises(ParallelError, match="'bare' .*localized"):
         local_problem(p, subdomain(p.mesh, np.array([0, 1]), 0, 2))
+
+
+def test_a_partitioner_petsc_lacks_is_named_with_the_choices():
+    """A partitioner this PETSc was built without ([solver] partition = "parmetis" on Debian's)
+    says so and names the choices (it was PETSc's 'Unknown partitioning type' alone)."""
+    petsc = pytest.importorskip("petsc4py.PETSc")
+    from core_se3.parallel.partition import _petsc_partition
+    m = mesh.rectangle(2.0, 1.0, 4, 1)
+    try:
+        _petsc_partition(m, SerialComm(), "parmetis")
+    except ParallelError as exc:
+        assert "built without it" in str(exc) and "'auto', 'ptscotch' or 'rcb'" in str(exc)
+    else:
+        pytest.skip("this PETSc has ParMETIS")
 
 
 def test_partitions_are_balanced_and_cover_every_element():

@@ -77,7 +77,7 @@ import warnings
 import numpy as np
 
 from .. import lie
-from ..errors import ElementTooDistortedError, ElementWarning
+from ..errors import ElementTooDistortedError, ElementWarning, edge_turn_error
 from ..mesh import LOCAL_EDGES
 from ..mesh.gauge import corner_turns, edge_matching, quarter_turns, turned_about_normal
 from .element import Element, ElementEvaluation, register_element
@@ -229,9 +229,10 @@ def _relative_frames(g, edge_nodes, matching=None):
     return h
 
 
-def _checked_log(h, edge_nodes, g_ref=None):
+def _checked_log(h, edge_nodes, g_ref=None, mesh=None):
     """psi = log(h) (E, 6); ElementTooDistortedError where an edge turns by ~pi (``g_ref``: the
-    reference frames, whose turn is the user's frames, not the mesh or the load step)."""
+    reference frames, whose turn is the user's frames, not the mesh or the load step; ``mesh``:
+    the nodes are named by its ``whole_ids``, a rank's part of a distributed run)."""
     psi = lie.log(h)
     ang = np.linalg.norm(psi[:, 3:], axis=1)
     if ang.size and ang.max() > MAX_EDGE_ANGLE:
@@ -239,9 +240,7 @@ def _checked_log(h, edge_nodes, g_ref=None):
         a, b = edge_nodes[e].tolist()
         if g_ref is not None:
             raise ElementTooDistortedError(_reference_turn_message(g_ref, a, b, psi[e, 3:]))
-        raise ElementTooDistortedError(
-            f"edge {[a, b]} turns by {ang[e]:.3f} rad (>= {MAX_EDGE_ANGLE:.3f}); the "
-            "relative rotation across an element must stay below pi: refine the mesh or the load step")
+        raise edge_turn_error(edge_nodes, e, float(ang[e]), MAX_EDGE_ANGLE, mesh)
     return psi
 
 
@@ -775,7 +774,7 @@ class DefaultElement(Element):
         mesh = self.mesh
         En = mesh.edge_nodes
         h = _relative_frames(self.frames(g), En, self.matching)
-        psi = _checked_log(h, En)
+        psi = _checked_log(h, En, mesh=mesh)
         Lp, Lm = lie.dexp_inv(psi, both=True)                          # L(psi), L(-psi)
         Lb = self._matched_L(Lp)                                       # node b's (Cuts)
         z = self._element_z(0.5 * psi)

@@ -15,6 +15,7 @@ from math import sqrt
 import numpy as np
 from numba import njit, prange
 
+from ..errors import edge_turn_error
 from .element_mixed import element_linear_stress, element_linear_stress_serial, signed_edge_stress, stress_from_signed
 from .element_dbar import NSYM, packed_matvec, split_form
 from .element_ops import CHUNK, MAX_EDGE_ANGLE, check_angles
@@ -264,6 +265,7 @@ class ElementKernels:
             raise ValueError(f"unknown mode {mode!r}")
         self.mode = mode
         self.error = error
+        self.whole_ids = None                  # (elements, nodes) of the whole mesh (a rank's part)
         self.psi = np.zeros((nE, 6))
         self.coef = np.zeros((nE, 3))
         self.ang = np.zeros(nE)
@@ -291,6 +293,7 @@ class ElementKernels:
         self = cls(mesh.quads, mesh.edge_nodes, mesh.elem_edges, mesh.elem_edge_sign,
                    element.Dbar_packed, element.z0, element.Dz0, pattern, gauge=getattr(element, "gauge", None),
                    matching=getattr(element, "matching", None), **kw)
+        self.whole_ids = getattr(mesh, "whole_ids", None)      # a rank's part: its errors name the whole mesh's nodes
         self.residual(np.ascontiguousarray(mesh.g0, dtype=float))
         z0 = (self.sign[..., None] * (0.5 * self.psi)[self.elem_edges]).reshape(-1, 24)
         self.z0 = np.ascontiguousarray(z0)
@@ -304,11 +307,9 @@ class ElementKernels:
         return g if self.gauge is None else np.ascontiguousarray(g @ self.gauge)
 
     def _raise(self, e):
-        a, b = self.edge_nodes[e].tolist()
-        ang = float(self.ang[e])
-        raise self.error(
-            f"edge {[a, b]} turns by {ang:.3f} rad (>= {MAX_EDGE_ANGLE:.3f}); the relative rotation "
-            "across an element must stay below pi: refine the mesh or the load step")
+        """The error of edge e turning by pi, its nodes named by the whole mesh's ids (``whole_ids``)."""
+        exc = edge_turn_error(self.edge_nodes, e, float(self.ang[e]), MAX_EDGE_ANGLE, self)
+        raise self.error(str(exc))
 
     def bundles(self):
         """(ElementMesh, ElementData, Workspace): the arrays the drivers take, from the

@@ -521,9 +521,12 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         ratio = self.gap_error / self.tol
         kn = len(self.nodes)
         i = int(np.argmin(d[:kn])) if kn else 0          # the deepest node (failure_hint)
-        self._stuck = (int(self.nodes[i]), float(-d[i])) if ratio > 1.0 and kn and d[i] < -self.tol else None
+        # (mesh node, depth, its id in messages: a rank's part names the whole mesh's, ``node_ids``)
+        self._stuck = (int(self.nodes[i]), float(-d[i]), int(self.node_ids[i])) \
+            if ratio > 1.0 and kn and d[i] < -self.tol else None
         j = int(np.argmin(d[kn:])) if len(d) > kn else 0
-        self._stuck_face = ((int(self.face_ids[j]), self.nodes[self.face_q[j]], self.contact_points(g)[self.face_q[j]], lam)
+        self._stuck_face = ((int(self.face_ids[j]), self.nodes[self.face_q[j]], self.contact_points(g)[self.face_q[j]], lam,
+                             np.asarray(self.node_ids)[self.face_q[j]])
                             if ratio > 1.0 and len(d) > kn and d[kn + j] < -self.tol else None)
         if ratio > 1.0:
             self.lam = self._extrapolated(p, lam)
@@ -571,7 +574,7 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
             return pinch
         if self._held is None or not self._held()[stuck[0], :3].all():
             return hint
-        return (f"obstacle {self.name!r} presses {stuck[1]:.3g} into node {stuck[0]}, whose translations a support "
+        return (f"obstacle {self.name!r} presses {stuck[1]:.3g} into node {stuck[2]}, whose translations a support "
                 "holds: no equilibrium has the node outside it; keep the obstacle's motion off the held nodes "
                 "(or release them)")
 
@@ -584,15 +587,15 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         face = getattr(self, "_stuck_face", None)
         if face is None or self._held is None:
             return ""
-        el, nodes, xq, lam = face
+        el, nodes, xq, lam, ids = face
         held = self._held()[nodes, :3].all(1)
         edges = [(a, (a + 1) % 4) for a in range(4) if held[a] and held[(a + 1) % 4]]
         t = np.linspace(0.0, 1.0, 33)[:, None]
         for a, b in edges:
             depth = -float(self.obstacle.evaluate((1 - t) * xq[a] + t * xq[b], lam)[0].min())
             if depth > self.tol:
-                return (f"obstacle {self.name!r} presses {depth:.3g} into the edge between nodes {int(nodes[a])} and "
-                        f"{int(nodes[b])} of element {el}, whose translations a support holds: no equilibrium has the "
+                return (f"obstacle {self.name!r} presses {depth:.3g} into the edge between nodes {int(ids[a])} and "
+                        f"{int(ids[b])} of element {el}, whose translations a support holds: no equilibrium has the "
                         "edge outside it; keep the obstacle's motion off the held nodes and the edges between them "
                         "(or release them)")
         return ""

@@ -146,6 +146,12 @@ class _Spring(Load):
     support_force = True
     support_name = None
     conservative = True             # (a linear spring's potential)
+    whole_nodes = None              # a rank's part (parallel.localize): the whole mesh's ids of ``nodes``
+
+    @property
+    def node_ids(self):
+        """The mesh ids of the nodes, in messages (``nodes``; a rank's part names the whole mesh's)."""
+        return self.nodes if self.whole_nodes is None else self.whole_nodes
 
     def _scatter(self, n, fb, blk, tangent):
         f = np.zeros((n, 6))
@@ -366,7 +372,7 @@ class RotationComponentSpring(_Spring):
         if np.any(turn > MAX_TOTAL_ROTATION):
             k = int(np.argmax(turn))
             raise ElementTooDistortedError(
-                f"{self.name}: node {int(self.nodes[k])} has turned by {turn[k]:.3f} rad from its "
+                f"{self.name}: node {int(self.node_ids[k])} has turned by {turn[k]:.3f} rad from its "
                 f"reference frame (> {MAX_TOTAL_ROTATION:.3f}); a held component of the total rotation "
                 "vector is defined below pi only")
         c = np.einsum("ni,ni->n", self.b, phi)

@@ -107,7 +107,7 @@ def _spring(ld, view, arrays):
     if not len(pos):
         return []
     part = copy.copy(ld)
-    part.n, part.nodes = view.mesh.n_nodes, loc
+    part.n, part.nodes, part.whole_nodes = view.mesh.n_nodes, loc, np.asarray(ld.node_ids)[pos]
     for name in arrays:
         setattr(part, name, np.ascontiguousarray(getattr(ld, name)[pos]))
     return [part]
@@ -167,6 +167,8 @@ class LocalContact(ContactLoad):
         self.face_el = self._quad_el if len(self.fpos) else np.zeros(0, np.int64)
         self.Af, self.kf = whole.Af[self.fpos], whole.kf[self.fpos]
         self._ids = whole.nodes[npos], whole._quad_el[qpos]         # the whole mesh's, for messages
+        held = whole._held                                          # the supports of the local nodes
+        self._held = None if held is None else (lambda: held()[view.sub.nodes])
 
     @property
     def node_ids(self):
@@ -202,6 +204,11 @@ class LocalContact(ContactLoad):
 
     def largest(self, value):
         return max(self.comm.allgather(value))
+
+    def failure_hint(self):
+        """The hint of the lowest rank that has one, on every rank (the deepest node pressed, held
+        by a support, is on one rank: the others, rank 0 that writes among them, said nothing)."""
+        return next((h for h in self.comm.allgather(super().failure_hint()) if h), "")
 
     def update_multipliers(self, g, lam):
         ratio = super().update_multipliers(g, lam)        # the decision on the largest gap error

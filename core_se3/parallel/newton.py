@@ -188,8 +188,10 @@ class DistributedEquations:
     def inertia_count(self, asym_tol=ASYM_TOL):
         """The number of negative eigenvalues of sym(K) of the tangent of the last :meth:`solve`
         (``solvers.equations.NewtonEquations.inertia_count``), counted by MUMPS on the ranks; None
-        for loads that are not conservative by their kinds."""
-        if conservative_loads(self.loads) is False:
+        for loads that are not conservative by their kinds -- the whole problem's, so that every
+        rank decides alike (a follower tip force on one rank's nodes: that rank skipped the count,
+        collective, that the others entered, and the ranks hung)."""
+        if conservative_loads(self.problem.loads) is False:
             return None
         return self.run.system.negative_count(asym_tol)
 

@@ -112,7 +112,9 @@ def _petsc_partition(mesh, comm, kind):
         part.apply(iset)
         mine = np.array(iset.getIndices(), np.int64)
     except PETSc.Error as exc:
-        raise ParallelError(f"PETSc partitioner {kind!r} failed ({exc})") from None
+        missing = " (this PETSc was built without it)" if getattr(exc, "ierr", None) == 86 else ""
+        raise ParallelError(f"PETSc partitioner {kind!r} failed{missing}: choose another partition (a scenario's "
+                            f"[solver] partition; 'auto', 'ptscotch' or 'rcb') -- PETSc said: {exc}") from None
     finally:
         part.destroy()
         A.destroy()

@@ -428,7 +428,11 @@ class _Hooks:
 
     def __init__(self, eq):
         self.aug = hooked_loads(eq, "update_multipliers")            # augmented-Lagrangian loads (contact)
-        self.turning = hooked_loads(eq, "direction_turn")            # loads whose direction turns (fields)
+        # loads whose direction turns (fields), measured on the whole mesh's frames: on a distributed
+        # run's ranks the whole problem's, so that every rank splits a try alike (a rank's own loads --
+        # none on a rank without magnetised nodes, local node ids read in the whole frames -- split
+        # on some ranks only: a strip's turning tip magnet hung two ranks)
+        self.turning = hooked_loads(eq.problem if eq.distributed else eq, "direction_turn")
         self.sweeps = hooked_loads(eq, "step_error")                 # loads that check the whole step (contact)
         self.switches = hooked_loads(eq, "active_set_changed")       # loads whose tangent switches (contact)
         self.accepts = hooked_loads(eq, "accept_state")              # path-dependent loads (friction)
@@ -548,7 +552,7 @@ def _step_checks(opts, eq, state):
                         opts.critical_tol, state.det_sign, stop=opts.limit_check, snap=snap,
                         friction=_friction_probe(opts, eq),
                         counting=opts.inertia_check and smooth and hasattr(eq, "inertia_count")
-                        and conservative_loads(eq.loads) is not False)
+                        and conservative_loads(eq.problem.loads) is not False)    # the whole problem's: every rank alike
     # the midpoint probe of a try that turned a node past pi (a stateful element's state is not restored)
     checks.probe = opts.midpoint_probe and opts.limit_check and not eq.stateful
     # ... and the return check of a located sign change (the stateful element's state at the far
@@ -862,11 +866,15 @@ def _limit_hint(problem, eq, opts, g_whole, lam, out, checks):
     accepted try's (``out.k_step`` / ``StepChecks.k_first``), where the serial run's factorises
     the whole tangent on one process (``stability.limit_point_hint``): before, the 8x8 snap roof
     under 1.0003 times its limit load in one step failed on 2 ranks without the serial run's
-    'load control has met a limit point' (S_p = 0.0136 both ways)."""
+    'load control has met a limit point' (S_p = 0.0136 both ways).  None with contact, as
+    serially: a roller rising under a plate failed on 2 ranks naming a limit point (S_p = 0.0166)
+    and arc length, which refuses contact."""
     if lam == 0.0:
         return None
     if not eq.distributed:
         return limit_point_hint(problem, g_whole, lam, opts.linear_solver)
+    if hooked_loads(problem, "update_multipliers") or hooked_loads(problem, "limit_increment"):
+        return None      # contact: none serially either (path following refuses it: system.ShellSystem)
     k, k_first = getattr(out, "k_step", None), checks.k_first
     return stiffness_hint(lam, k / k_first) if k is not None and k_first and checks.stiffness else None
 
