@@ -163,3 +163,36 @@ def test_a_resumed_scenario_writes_the_snap_it_found_before_the_interruption(tmp
     assert [c["description"] for c in resumed] == [c["description"] for c in whole]
     (snap,) = whole
     assert snap["kind"] == "snap" and snap["step"] == 3 and snap["travel"] > 3.0 and resumed == whole
+
+
+def _propped_roof(prop=True):
+    """The 8 x 8 quarter of Sze's hinged roof s3.8(a) (h 12.7, limit point at 0.7436 of its
+    point load alone), with a ball of radius 30 under its free edge at x = 222, 0.45 below the
+    contact face (``prop``; else far below the roof): the ball props the edge from load factor
+    about 0.6 on and moves the limit point."""
+    case = get_case("sze-hinged-roof")
+    p = build_problem(case, case_params(case), mesh=(8, 8))
+    gap, depth = (0.45, 0.0) if prop else (0.45, 5000.0)
+    z = np.sqrt(2540.0 ** 2 - 222.0 ** 2) - 12.7 / 2 - gap - 30.0 - depth
+    p.add_obstacle("sphere", centre=(222.0, 254.0, z), radius=30.0, name="prop")
+    return p
+
+
+@pytest.mark.parametrize("prop, lam_stop", [(True, 0.806763), (False, 0.74353)])
+def test_a_contact_run_that_stops_at_a_limit_point_says_so(prop, lam_stop):
+    """Load control stops at the roof's limit point (0.806763 propped, 0.74353 with the ball
+    far away), and the error names it: the smallest eigenvalue of the tangent with the contact
+    held has fallen to 0.0037 (0.0039) of its initial value (the roof alone's S_p there is
+    0.0064).  Before, ``limit_point_hint``'s ShellSystem refused the contact load and the error
+    said only 'no convergence in 30 iterations', with no cause."""
+    from core_se3.errors import ConvergenceError
+    with pytest.raises(ConvergenceError) as err:
+        _propped_roof(prop).solve(steps=4)
+    msg = str(err.value)
+    assert f"the last converged load factor is {lam_stop}" in msg
+    assert "Probable cause: the smallest eigenvalue of the tangent" in msg and "the equilibrium path turns" in msg
+    assert "arc length and displacement control do not take contact" in msg
+    ratio = float(msg.split("has fallen to ")[1].split(" ")[0])
+    assert 0 < ratio < 0.01
+    force = err.value.result.steps[-1].contact["prop"]["force"][2]
+    assert (force > 100.0) if prop else (force == 0.0)          # propped: the ball carries 121 at 0.75

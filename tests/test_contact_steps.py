@@ -305,10 +305,11 @@ def test_a_cam_with_a_rounded_edge_turns_in_ten_steps():
 
 
 
-def _sliding_ball(press, steps):
+def _sliding_ball(press, steps, tries=None):
     """The ball of the sliding tests below after ``steps`` equal steps: its rise to ``press`` past
     the plate's bottom face (load factor 0 -> 0.5), then its slide of 1.0 along it (0.5 -> 1).
-    Returns the final positions after checking that the ball presses and has not passed through."""
+    Returns the final positions after checking that the ball presses and has not passed through
+    (and appends each stored step's tries to the list ``tries``)."""
     p = cs.Problem(M.rectangle(2.0, 1.0, 8, 4), cs.Material(E=1e4, nu=0.3, h=0.02))
     p.clamp("x0"), p.clamp("x1")
 
@@ -317,7 +318,10 @@ def _sliding_ball(press, steps):
         T[2, 3], T[0, 3] = (0.02 + press) * min(1.0, 2 * lam), max(0.0, 2 * lam - 1)
         return T
     c = p.add_obstacle("sphere", centre=(0.6, 0.1, -0.08), radius=0.05, motion=motion, name="ball")
-    st = p.solve(steps=steps).final
+    res = p.solve(steps=steps)
+    st = res.final
+    if tries is not None:
+        tries.extend(s.attempts for s in res.steps[1:])
     assert st.contact["ball"]["force"][2] > 0 and _surface_depth(c, st.g, 1.0, 0.01) > -10 * c.tol
     return st.g[:, :3, 3]
 
@@ -343,8 +347,14 @@ def test_a_small_ball_sliding_under_a_node_line_in_twenty_steps():
     2e-8, multipliers 0.570 and 0.004), and the run stopped with "constraint error 1.06 x its
     tolerance after 25 multiplier updates" (9.87 x after 80).  With the geometric series of the
     updates summed (``ContactLoad._extrapolated``) it completes, and ends where 8 steps end:
-    3.1e-9, within the contact tolerance 2e-8."""
-    assert np.abs(_sliding_ball(0.05, 20) - _sliding_ball(0.05, 8)).max() < 2e-8
+    3.1e-9, within the contact tolerance 2e-8.  The ball is held by face samples alone (no node
+    carries force), which the start of a try did not carry with the ball: each slide step started
+    with the contact lost (the first residual 0.16 of the forces, whatever the step), and its
+    first two took 125 and 113 tries; with the faces carried (``ContactLoad._face_shift``) 3 and
+    4, and no step of the 20 more than 7 (the rise's steps 1 to 3, as before)."""
+    tries = []
+    assert np.abs(_sliding_ball(0.05, 20, tries) - _sliding_ball(0.05, 8)).max() < 2e-8
+    assert max(tries) <= 10 and sum(tries) < 100
 
 
 def test_a_ball_sliding_into_a_clamped_line_between_its_nodes_is_named():
@@ -365,6 +375,31 @@ def test_a_ball_sliding_into_a_clamped_line_between_its_nodes_is_named():
     with pytest.raises(cs.ConvergenceError, match=r"obstacle 'ball' presses .* into the edge between nodes \d+ and "
                                                    r"\d+ of element \d+, whose translations a support holds"):
         p.solve(steps=2)
+
+
+def test_a_ball_sliding_toward_a_clamped_line_names_the_line_ahead():
+    """The plate above with the node line x = 1.25 clamped instead: the ball slid in 2 steps
+    stopped at load factor 0.789 (its centre at x = 1.178, 0.072 from the line, whose edge it
+    does not reach yet) with "raise NewtonOptions.max_augmentations" alone (about 5 minutes of
+    cut-backs: the face next to the line props the ball ever more stiffly, a lever about the held
+    edge, and the multiplier updates contract ever more slowly).  The stall is the updates' at
+    the flat plate of that load factor, the sample 0.015 inside; the hint now looks along the
+    ball's way on and names the edge it reaches at load factor (1.25 - 0.0357 + 0.4) / 2 =
+    0.8071 (the ball's bottom-face circle of radius sqrt(0.05^2 - 0.035^2) = 0.0357 meets the
+    line; 33 load factors from 0.789 to 1: within 0.0066 after it)."""
+    p = cs.Problem(M.rectangle(2.0, 1.0, 8, 4), cs.Material(E=1e4, nu=0.3, h=0.02))
+    p.clamp("x0"), p.clamp("x1"), p.clamp(np.nonzero(np.abs(p.mesh.X[:, 0] - 1.25) < 1e-9)[0])
+
+    def motion(lam):
+        T = np.eye(4)
+        T[2, 3], T[0, 3] = 0.035 * min(1.0, 2 * lam), max(0.0, 2 * lam - 1)
+        return T
+    c = p.add_obstacle("sphere", centre=(0.6, 0.1, -0.08), radius=0.05, motion=motion, name="ball")
+    assert c.update_multipliers(p.mesh.g0, 0.789) > 1.0          # the stalled updates' state
+    hint = c.failure_hint()
+    assert "into the edge between nodes" in hint and "whose translations a support holds at load factor" in hint
+    lam_k = float(hint.split("at load factor ")[1].split(",")[0])
+    assert 0.8071 < lam_k < 0.8071 + 0.0066
 
 
 def _roller_under_plate(steps):

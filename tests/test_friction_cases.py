@@ -163,3 +163,42 @@ def test_friction_is_refused_on_distributed_runs():
     assert part.nodes[part.A > 0].tolist() == [0, 1] and part.nodes.tolist() == [0, 1, 2, 3]
     with pytest.raises(ContactError, match="'rough': friction is not distributed over ranks yet; run it on one"):
         localize_load(rough, s)
+
+
+def test_the_walker_quasi_static_check_weighs_the_centroid_inertia_against_friction():
+    """The quasi-static stride does not vanish as mu -> 0 (the feet's forces balance; which one
+    slips does not depend on mu's size: 0.650, 0.710, 0.743, 0.754 mm per cycle at mu 1, 0.5,
+    0.2, 0.1 on 20 x 1 elements; at mu 0.02 and 0.005 the runs stop), while a real walker's
+    does: the changes of its centroid's horizontal velocity need the floor's friction, at most
+    mu m g, for sum |dv| / (mu g) of the period.  States whose centroid moves as x = a t^2 / 2
+    (t = period x load factor) with a vertical bob that friction need not carry: over 6 states
+    the midpoint velocities change by a dt four times, so ``friction_time_over_period`` is
+    4 a dt / (mu g period) exactly, and above QS_FRICTION it warns with the period at which it
+    would be QS_FRICTION.  Before, the check compared the inertia with the weight alone (1 % at
+    mu 0.5), which says nothing as mu -> 0."""
+    import warnings
+
+    from core_se3.catalogue.family_friction import QS_FRICTION, quasi_static_check, quasi_static_warning
+    from core_se3.errors import AccuracyWarning
+    p = dict(WALKER_PARAMS)
+    g0 = np.tile(np.eye(4), (5, 1, 1))
+    a, dlam = 0.2 * p["g"], 1.0 / 20
+    dt = p["period"] * dlam
+    states = []
+    for tk in dt * np.arange(6):
+        g = g0.copy()
+        g[:, 0, 3] += np.arange(5) + a * tk ** 2 / 2
+        g[:, 2, 3] += 3.0 * a * tk ** 2 / 2               # vertical: carried by the normal force
+        states.append(g)
+    for mu, warns in ((0.5, False), (0.3, True), (0.01, True)):
+        q = quasi_static_check(None, dict(p, mu=mu), states, dlam)
+        exact = 4 * a * dt / (mu * p["g"] * p["period"])      # 0.04 / mu
+        assert abs(q["friction_time_over_period"] - exact) < 1e-9 * exact
+        with warnings.catch_warnings(record=True) as seen:
+            warnings.simplefilter("always")
+            quasi_static_warning(q, mu)
+        said = [str(w.message) for w in seen if issubclass(w.category, AccuracyWarning)]
+        assert bool(said) == warns
+        if warns:
+            slow = p["period"] * np.sqrt(exact / QS_FRICTION)
+            assert f"raise the period to at least {slow:.3g} s or mu" in said[0]

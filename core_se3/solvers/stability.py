@@ -19,7 +19,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..errors import CoreSE3Error, SingularSystemError
-from ..model.base import conservative_loads
+from ..model.base import conservative_loads, overrides
 from .linalg import AUTO_MUMPS_MIN, Factorization, available_solvers, make_solver, mumps_inertia
 from .system import ShellSystem
 
@@ -430,6 +430,8 @@ def limit_point_hint(problem, g, lam, linear_solver=None):
     >>> limit_point_hint(p, p.mesh.g0, 0.5) is None
     True
     """
+    if contact_loads(problem):
+        return contact_limit_hint(problem, g, lam, linear_solver)
     tables = bool(getattr(problem, "scale_tables", ()))
     try:
         sysm = ShellSystem(problem, linear_solver, difference="forward" if tables else "backward", tables=True)
@@ -509,22 +511,80 @@ def prescribed_turn_hint(problem, g, lam, linear_solver=None):
     >>> prescribed_turn_hint(p, p.mesh.g0, 0.5) is None              # as stiff as at the start
     True
     """
-    try:
-        solver = make_solver(linear_solver or problem.linear_solver)
-        mus = []
-        for gk, lk in ((problem.mesh.g0.copy(), 0.0), (np.asarray(g, float), lam)):
-            K = problem.tangent(gk, lk)
-            with Factorization(K, solver) as fac:
-                mus.append(smallest_mode(K, fac)[0])
-    except (CoreSE3Error, FloatingPointError, ValueError):
-        return None
-    ratio = mus[1] / mus[0] if mus[0] != 0 else np.inf
-    if not abs(ratio) < TURN_HINT:
+    ratio = _ratio(_smallest_eigenvalue(problem, problem.mesh.g0.copy(), 0.0, linear_solver),
+                   _smallest_eigenvalue(problem, g, lam, linear_solver))
+    if ratio is None or not abs(ratio) < TURN_HINT:
         return None
     return (f"the smallest eigenvalue of the tangent with the prescribed motion held has fallen to {ratio:.3g} of "
             f"its initial value at load factor {lam:.6g}: the equilibrium under the prescribed motion is about to "
             "turn back (a snap-back in the prescribed displacement), which load stepping cannot pass; trace it "
             "with arc length under a load (core_se3.solvers.arc_length, stop_at) or prescribe another displacement")
+
+
+def _smallest_eigenvalue(problem, g, lam, linear_solver=None):
+    """The smallest eigenvalue of the tangent on the free dofs at (g, lam)
+    (:func:`smallest_mode`), or None when it cannot be found."""
+    try:
+        K = problem.tangent(np.asarray(g, float), lam)
+        with Factorization(K, make_solver(linear_solver or problem.linear_solver)) as fac:
+            return smallest_mode(K, fac)[0]
+    except (CoreSE3Error, FloatingPointError, ValueError):
+        return None
+
+
+def _ratio(mu0, mu1):
+    """mu1 / mu0 (inf for mu0 = 0), or None when either is unknown."""
+    if mu0 is None or mu1 is None:
+        return None
+    return mu1 / mu0 if mu0 != 0 else np.inf
+
+
+def contact_loads(problem):
+    """The problem's loads with a multiplier state (contact: ``Load.update_multipliers``),
+    which path following refuses (``ShellSystem``)."""
+    return [ld for ld in getattr(problem, "loads", ()) if overrides(ld, "update_multipliers")]
+
+
+def contact_limit_hint(problem, g, lam, linear_solver=None):
+    """The limit-point hint of a failed run with contact at its last converged state (g, lam):
+    the smallest eigenvalue of the tangent (:func:`smallest_mode`) with the contact's active set
+    and multipliers held at that state's, over its value at the reference state (the contact at
+    its cold start there).  Under load control the path turns where this tangent is singular: a
+    limit point of the loads (a contact-stiffened roof), or a turn of the path of a shell driven
+    by a moving obstacle (a snap-back).  Below ``TURN_HINT`` (negative: an unstable state) the
+    message says so; else None.  Path following, the remedy for a shell alone
+    (:func:`limit_point_hint`, whose ``ShellSystem`` refuses contact), does not take contact:
+    the 8x8 hinged roof of Sze s3.8(a) propped by a ball under its free edge stopped at load
+    factor 0.8068 with "no convergence" and no cause (alone its limit point is at 0.7436).
+
+    Example
+    -------
+    >>> from core_se3 import Problem, Material, mesh
+    >>> p = Problem(mesh.rectangle(10.0, 1.0, 4, 1), Material(1.2e6, 0.0, 0.1))
+    >>> p.clamp("x0"); p.add_edge_force("x1", (0.0, 0.0, 1.0))
+    >>> c = p.add_obstacle("sphere", centre=(5.0, 0.5, -20.0), radius=1.0)
+    >>> contact_limit_hint(p, p.mesh.g0, 0.5) is None                # as stiff as at the start
+    True
+    """
+    loads = contact_loads(problem)
+    held = [ld.multipliers() for ld in loads]
+    try:
+        for ld in loads:
+            ld.set_multipliers(None)
+        mu0 = _smallest_eigenvalue(problem, problem.mesh.g0, 0.0, linear_solver)
+        for ld, m in zip(loads, held):
+            ld.set_multipliers(m)
+        ratio = _ratio(mu0, _smallest_eigenvalue(problem, g, lam, linear_solver))
+    finally:
+        for ld, m in zip(loads, held):
+            ld.set_multipliers(m)
+    if ratio is None or not ratio < TURN_HINT:
+        return None
+    return (f"the smallest eigenvalue of the tangent at load factor {lam:.6g}, with the contact held as it is there "
+            f"(its active set and multipliers), has fallen to {ratio:.3g} of its initial value: the equilibrium path "
+            "turns there (a limit point of the load, or a snap-back of a shell driven by a moving obstacle), and "
+            "load stepping cannot pass it; arc length and displacement control do not take contact: end the load "
+            "below this load factor, or drive the shell by a prescribed displacement whose path does not turn")
 
 
 def negative_count(problem, g, lam, asym_tol=ASYM_TOL):
