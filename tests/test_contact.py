@@ -348,11 +348,27 @@ steps = 2
     # an angle without its axis was dropped: the obstacle only translated
     ('type = "box"\ncentre = [5.0, 0.0, -2.0]\nhalf_sizes = [1.0, 1.0, 1.0]\n'
      'motion = {translate = [0.0, 0.0, 0.5], angle = 0.5}', "obstacles[0].motion.axis", "needs its rotation 'axis'"),
+    ('type = "sphere"\ncentre = [5.0, 0.0, -2.0]\nradius = 1.0\nfaces = 1', "obstacles[0].faces",
+     'expected true, false or "auto", got 1'),
+    ('type = "sphere"\ncentre = [5.0, 0.0, -2.0]\nradius = 1.0\nfaces = "yes"', "obstacles[0].faces",
+     'expected true, false or "auto"'),
 ])
 def test_scenario_validation_errors(entry, key, message):
     with pytest.raises(ScenarioError) as exc:
         scenario.loads(BASE + "[[obstacles]]\n" + entry + "\n", file="grasp.toml")
     assert exc.value.file == "grasp.toml" and exc.value.key == key and message in str(exc.value)
+
+
+@pytest.mark.parametrize("faces", [True, False, "auto"])
+def test_a_scenarios_faces_key_reaches_the_contact_law(faces):
+    """The contact warnings (face_cut, an obstacle smaller than the elements) ask for `faces =
+    true`; the scenario file refused that key ("unknown key 'faces'"), so a file's user could not
+    follow them.  Now [[obstacles]] faces = true / false / "auto" is the law's ``faces``."""
+    value = {True: "true", False: "false", "auto": '"auto"'}[faces]
+    scn = scenario.loads(BASE + '[[obstacles]]\ntype = "sphere"\ncentre = [5.0, 0.0, -2.0]\nradius = 1.0\n'
+                         + f"faces = {value}\n", file="grasp.toml")
+    ld = next(ld for ld in scn.problem.loads if hasattr(ld, "law"))
+    assert ld.law.faces is faces or ld.law.faces == faces
 
 
 def test_a_failed_runs_last_vtu_has_the_contact_forces_of_its_step(tmp_path):

@@ -198,7 +198,8 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
             warnings.warn(AccuracyWarning(
                 f"obstacle {self.name!r} is thinner (inradius {float(self.obstacle.thickness):.3g}) than the contact "
                 f"elements (diameter up to {size:.3g}) and faces = false: it can pass between the nodes unfelt; set "
-                f"faces = true (or 'auto', the default) in the contact law, or refine the mesh"), stacklevel=5)
+                f"faces = true (or 'auto', the default) in the contact law (a scenario's [[obstacles]] key), or refine "
+                f"the mesh"), stacklevel=5)
         use = bool(faces) and not flat
         self.face_el = el[on] if use else np.zeros(0, np.int64)
         self.face_q = self._quads if len(self.face_el) else np.zeros((0, 4), np.int64)
@@ -447,7 +448,8 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         if not len(self.face_el):
             return (f"obstacle {self.name!r} passes through the contact face of element {el} between its nodes at "
                     f"load factor {lam:.6g} ({depth:.3g} deep, through the shell): the nodes "
-                    f"alone do not feel it; set faces = true (or 'auto') in the contact law, or refine the mesh")
+                    f"alone do not feel it; set faces = true (or 'auto') in the contact law (a scenario's "
+                    "[[obstacles]] key), or refine the mesh")
         r = getattr(self.obstacle, "rounding", None)
         edge = f"its edges are rounded by {r:.3g}" if r is not None else "its surface is not smooth there"
         return (f"obstacle {self.name!r} reaches {depth:.3g} into the contact face of element {el} between its nodes "

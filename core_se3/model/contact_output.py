@@ -82,7 +82,7 @@ class ContactOutputs:
             f"obstacle {self.name!r} cuts {cut:.3g} ({cut / self.h:.2g} h) into the shell's contact faces between their "
             f"nodes at load factor {lam:.6g}, while the reported penetration (nodes and face samples) is {pen:.3g}: "
             f"{sampled}; the obstacle reaches {'through the shell' if cut >= self.h else 'past its mid-surface'} there "
-            "-- set faces = true in the contact law, refine "
+            "-- set faces = true in the contact law (a scenario's [[obstacles]] key), refine "
             "the mesh where it touches, or round the obstacle's edges (contact.NAME.face_cut in the results)"),
             stacklevel=3)
 

@@ -3,7 +3,7 @@
 parameters (read from the registry, so a new kind needs no code here), ``name``, the contact
 elements ``region`` (default all), an optional rigid ``motion`` with the load factor (a table:
 ``translate``, ``axis``, ``angle``, ``point``, ``scale``) and the enforcement (``mode``, ``beta``,
-``eps``, ``tol``, ``cap_depth``, ``side``) and Coulomb's ``friction`` coefficient (default 0).  Schema and examples: docs/SCENARIOS.md."""
+``eps``, ``tol``, ``cap_depth``, ``side``, ``faces``) and Coulomb's ``friction`` coefficient (default 0).  Schema and examples: docs/SCENARIOS.md."""
 from __future__ import annotations
 
 from ..errors import CoreSE3Error
@@ -40,8 +40,11 @@ def obstacles_section(v, doc, regions):
         o["params"] = v.params(t, key, kind.params)
         v.kind_check(kind, o["params"], t, key)
         _, o["region"] = region_ref(v, t, key, regions)
-        for k in ("mode", "beta", "eps", "tol", "cap_depth", "side", "friction"):
+        for k in ("mode", "beta", "eps", "tol", "cap_depth", "side", "friction", "faces"):
             o[k] = v.param(t, key, OBSTACLE.param(k))
+        if o["faces"] not in ("auto", True, False) or isinstance(o["faces"], (int, float)) and \
+                not isinstance(o["faces"], bool):
+            v.fail(join(key, "faces"), f'expected true, false or "auto", got {o["faces"]!r}')
         o["motion"] = None
         if "motion" in t:
             mk = join(key, "motion")
@@ -71,13 +74,14 @@ def add_obstacles(v, prob, spec, regions):
             motion = dict(translate=m["translate"], axis=m["axis"], angle=m["angle"], point=m["point"],
                           scale=make_scale(m["scale"]))
         try:
-            law = ContactLaw(mode=o["mode"], beta=o["beta"], eps=o["eps"], tol=o["tol"], cap_depth=o["cap_depth"])
+            law = ContactLaw(mode=o["mode"], beta=o["beta"], eps=o["eps"], tol=o["tol"], cap_depth=o["cap_depth"],
+                             faces=o.get("faces", "auto"))
             prob.add_obstacle(o["type"], region=regions[o["region"]] if o["region"] else None, motion=motion,
                               name=o["name"], side=SIDES[o["side"]], friction=o["friction"], law=law,
                               **o["params"])
         except CoreSE3Error as exc:
             param = getattr(exc, "param", None)
-            if param in ("nodes", "beta", "eps", "tol", "cap_depth", "side", "mode", "type", "friction"):
+            if param in ("nodes", "beta", "eps", "tol", "cap_depth", "side", "mode", "type", "friction", "faces"):
                 param = None if param == "nodes" else param
             v.fail(join(key, param) if param else key, str(exc))
         except ValueError as exc:               # a user's kind refusing its values

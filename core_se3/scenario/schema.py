@@ -100,7 +100,9 @@ OBSTACLE = Section("obstacle", (
     Param("cap_depth", "number", None, lo=0.0, lo_open=True, doc="step cap [length] (default 0.05 h)"),
     Param("side", "string", "auto", choices=("auto", "top", "bottom", "mid"),
           doc="the contact face (mid: the mid-surface, for an edge pressed end-on)"),
-    Param("friction", "number", 0.0, lo=0.0, doc="Coulomb's coefficient mu (0: frictionless)")),
+    Param("friction", "number", 0.0, lo=0.0, doc="Coulomb's coefficient mu (0: frictionless)"),
+    Param("faces", "any", "auto", doc='face samples: the obstacle\'s closest point on each contact face is held out '
+          'too; true, false, or "auto" (when the obstacle is curved and smaller than the contact elements)')),
     doc="[[obstacles]]: the keys of every obstacle besides its kind's")
 
 
