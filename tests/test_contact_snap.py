@@ -196,3 +196,53 @@ def test_a_contact_run_that_stops_at_a_limit_point_says_so(prop, lam_stop):
     assert 0 < ratio < 0.01
     force = err.value.result.steps[-1].contact["prop"]["force"][2]
     assert (force > 100.0) if prop else (force == 0.0)          # propped: the ball carries 121 at 0.75
+
+
+def _pushed_roof():
+    """The 8 x 8 quarter of Sze's thicker hinged roof (h 6.35) pushed at its crown by a ball of
+    radius 20 descending 30 over the load factor (no other load): the roof follows the ball down
+    to about 15 at load factor 0.5, then snaps through ahead of it (a snap-back of the crown's
+    displacement)."""
+    case = get_case("sze-hinged-roof-6.35")
+    prm = case_params(case)
+    prm["load_max"] = 0.0
+    p = build_problem(case, prm, mesh=(8, 8))
+    top = 2540.0 + prm["h"] / 2
+    p.add_obstacle("sphere", centre=(0.0, 0.0, top + 20.01), radius=20.0, name="pusher",
+                   motion=dict(translate=(0.0, 0.0, -30.0)))
+    return p
+
+
+def test_a_shell_that_snaps_away_from_a_pushing_obstacle_is_not_passed_silently():
+    """Before, 10 steps completed: between load factors 0.5 and 0.6 the crown jumped from -15.0
+    to -24.8 (9.8, a third of an element, so the snap check's travel of one element size never
+    looked), contact lost, and no critical point.  Now the node's lift-off from the ball by its
+    own motion (6.8 = 1.07 h > LIFT_OFF h) probes the step in halves; the jump survives them
+    and the run stops where the path in contact turns (0.5651, the tangent with the contact held
+    at 0.003 of its initial value), saying so."""
+    from core_se3.errors import ConvergenceError
+    with pytest.raises(ConvergenceError) as err:
+        _pushed_roof().solve(steps=10)
+    msg = str(err.value)
+    last = float(msg.split("the last converged load factor is ")[1].split(" ")[0])
+    assert 0.5 < last < 0.6 and "the equilibrium path turns" in msg
+    steps = err.value.result.steps
+    assert all(st.contact["pusher"]["force"][2] < -50.0 for st in steps[1:])      # in contact throughout (-59 ... -145)
+
+
+def test_lift_off_of_carried_released_and_jumping_nodes():
+    """ContactLoad.lift_off on given states of a 2 x 1 plate on a floor: nodes carried up by a
+    rising floor, or left behind by a falling one, lift off by 0; nodes that jump 0.3 above a
+    fixed floor lift off by 0.3 (in lengths; the node named)."""
+    p = Problem(mesh.rectangle(1.0, 0.5, 2, 1), Material(1e4, 0.0, 0.02))
+    c = p.add_obstacle("half_space", point=(0.0, 0.0, -0.01), normal=(0.0, 0.0, 1.0), name="floor",
+                       motion=dict(translate=(0.0, 0.0, 0.2)))
+    g0 = p.mesh.g0.copy()
+    up = g0.copy()
+    up[:, 2, 3] += 0.2                       # carried by the rising floor to load factor 1
+    assert c.lift_off(g0, 0.0, up, 1.0)[0] == pytest.approx(0.0, abs=1e-12)
+    assert c.lift_off(up, 1.0, up, 0.0)[0] == pytest.approx(0.0, abs=1e-12)   # floor falls away: released
+    jump = g0.copy()
+    jump[4, 2, 3] += 0.3
+    lift, node = c.lift_off(g0, 0.0, jump, 0.0)
+    assert lift == pytest.approx(0.3, rel=1e-12) and node == 4

@@ -435,6 +435,28 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         return crossing_report(self.obstacle, self._quads, self.contact_points(g0), self.contact_points(g1),
                                lam0, lam1, depth, (self.node_ids, self.face_ids)) or self.face_crossing(g1, lam1)
 
+    def lift_off(self, g0, lam0, g1, lam1):
+        """(the largest lift-off [length], the node) of the try from (g0, lam0) to (g1, lam1): over
+        the contact nodes that touched the obstacle at its start (gap at most h/100), how far
+        each ended from it by its own motion -- its gap at the end beyond the one the obstacle's
+        motion alone would have opened, d(x1, lam1) - max(d(x0, lam1), 0); (0.0, -1) if none.
+
+        A node carried along by an advancing obstacle ends on it (0); one released by a retreating
+        obstacle ends no farther than the retreat (0); one that jumps away -- a roof pushed at its
+        crown that snaps through ahead of the pusher -- ends as far as its jump.  The snap check
+        (``solvers.contact_probe``) probes a try whose lift-off exceeds LIFT_OFF h: a jump survives
+        the halving, a continuous lift-off shrinks with the step."""
+        if not len(self.nodes):
+            return 0.0, -1
+        x0 = self.contact_points(g0)
+        touching = self.obstacle.evaluate(x0, lam0)[0] <= 0.01 * self.h
+        if not touching.any():
+            return 0.0, -1
+        x1 = self.contact_points(g1)[touching]
+        lift = self.obstacle.evaluate(x1, lam1)[0] - np.maximum(self.obstacle.evaluate(x0[touching], lam1)[0], 0.0)
+        i = int(np.argmax(lift))
+        return float(lift[i]), int(np.asarray(self.node_ids)[touching][i])
+
     def face_crossing(self, g, lam):
         """'' unless a curved obstacle reaches into a contact face between its nodes at (g, lam)
         where no constraint feels it (:meth:`unfelt_face`); steps ending so are refused (the

@@ -199,6 +199,11 @@ class LocalContact(ContactLoad):
     def step_error(self, g0, lam0, g1, lam1):
         return next((w for w in self.comm.allgather(super().step_error(g0, lam0, g1, lam1)) if w), "")
 
+    def lift_off(self, g0, lam0, g1, lam1):
+        every = self.comm.allgather(super().lift_off(g0, lam0, g1, lam1))
+        top = max(v for v, _ in every)
+        return top, max(node for v, node in every if v == top)
+
     def start_error(self, g, lam):
         return next((w for w in self.comm.allgather(super().start_error(g, lam)) if w), "")
 

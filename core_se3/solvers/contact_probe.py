@@ -11,8 +11,11 @@ half of a step travels about half as far.  Across a discontinuity of the quasi-s
 stick-slip release, a lift-off that releases stored energy, a buckle under contact) the travel
 does not shrink: the half that holds the jump travels as far as the whole step.
 
-So a converged contact try that travels more than PROBE_TRAVEL = 1 element size is not accepted
-at once: it is **probed**, i.e. refused and solved again in two halves (the cut-back of a
+So a converged contact try that travels more than PROBE_TRAVEL = 1 element size, or lifts a node
+that touched an obstacle off it by its own motion by more than LIFT_OFF = 0.5 thicknesses
+(``ContactLoad.lift_off``: a jump smaller than an element -- the Sze roof (h 6.35, 8x8 quarter,
+elements 32 wide) pushed at its crown by a descending ball snapped through 9.8 ahead of it, contact
+lost, and the run completed without a word), is not accepted at once: it is **probed**, i.e. refused and solved again in two halves (the cut-back of a
 failed try).  A half whose travel shrank (at most SHRINK = 0.75 of the probed step's) is
 accepted; a half that travels as far again holds the jump and is probed in turn.  When the
 halves reach the end of a probed step, their state is compared with the probed step's: one that
@@ -48,11 +51,12 @@ import numpy as np
 
 from .stability import CriticalPoint
 
-__all__ = ["ContactProbe", "SnapPoint", "median_edge", "PROBE_TRAVEL", "SHRINK", "AGREE", "SNAP_HALVINGS"]
+__all__ = ["ContactProbe", "SnapPoint", "median_edge", "PROBE_TRAVEL", "LIFT_OFF", "SHRINK", "AGREE", "SNAP_HALVINGS"]
 
 log = logging.getLogger(__name__)
 
 PROBE_TRAVEL = 1.0     # a contact try travelling farther (in element sizes) is probed in halves
+LIFT_OFF = 0.5         # ... and one in which a touching node left its obstacle by its own motion (in thicknesses)
 SHRINK = 0.75          # a half travelling at most this fraction of its probed step's continues the path
 AGREE = 0.1            # the halves' end state differs by more than this fraction of the travel: a jump
 SNAP_HALVINGS = 6      # a jump surviving down to 1/2**6 of the requested step is a snap
@@ -120,14 +124,16 @@ class ContactProbe:
         """A new requested step of ``dlam_nominal``: a jump in 1/2**SNAP_HALVINGS of it is a snap."""
         self.min_step = abs(dlam_nominal) / 2 ** SNAP_HALVINGS * (1 + 1e-9)
 
-    def judge(self, g0, g1, lam, lam_try):
+    def judge(self, g0, g1, lam, lam_try, lift=0.0):
         """'' when the converged contact try from (g0, lam) to (g1, lam_try) may be accepted,
-        else why it is refused (it is probed: solved again in halves).  A snap found is kept
+        else why it is refused (it is probed: solved again in halves).  ``lift``: the try's
+        largest lift-off in thicknesses (``ContactLoad.lift_off``); a try travelling at most
+        PROBE_TRAVEL element sizes is probed too when it exceeds LIFT_OFF.  A snap found is kept
         (:meth:`passed`) with step -1 (the caller sets the stored step's index)."""
         x1 = self.positions(g1)
         d_max, node = self.largest_motion(self.positions(g0), x1)
         travel = d_max / self.h_e
-        if travel <= PROBE_TRAVEL:
+        if travel <= PROBE_TRAVEL and lift <= LIFT_OFF:
             return ""
         parent = self.probes[-1] if self.probes else None
         if parent is not None and travel <= SHRINK * parent.travel:
@@ -138,8 +144,9 @@ class ContactProbe:
             return ""
         self.probes.append(_Probe(lam, lam_try, x1, travel))
         self.probed += 1
-        return (f"snap check: the contact step travelled {travel:.3g} element sizes: solved again in halves to "
-                "tell a continuous path from a jump")
+        why = (f"travelled {travel:.3g} element sizes" if travel > PROBE_TRAVEL else
+               f"lifted a node {lift:.3g} thicknesses off its obstacle")
+        return f"snap check: the contact step {why}: solved again in halves to tell a continuous path from a jump"
 
     def accept(self, g, lam):
         """The try reaching (g, lam) was accepted: close the probes whose end it reached,

@@ -254,6 +254,12 @@ def _log_try(result, tries, lam_try, out, augmentation=None, quiet=False):
              out.reason + (" (multipliers updated: solved again)" if augmentation else ""))
 
 
+def _lift_off(loads, g0, lam0, g1, lam1):
+    """The largest lift-off of the try over the contact loads, in their thicknesses
+    (``ContactLoad.lift_off``: the snap check's second trigger)."""
+    return max((ld.lift_off(g0, lam0, g1, lam1)[0] / ld.h for ld in loads if hasattr(ld, "lift_off")), default=0.0)
+
+
 def _step_error(loads, g0, lam0, g1, lam1):
     """The first load's reason to refuse the converged step (g0, lam0) -> (g1, lam1), or ''."""
     return next((why for why in (ld.step_error(g0, lam0, g1, lam1) for ld in loads) if why), "")
@@ -689,7 +695,7 @@ def _judge(out, checks, eq, hooks, here, start=None, prober=None):
     if out.ok and sweeps:                    # a step that passed through an obstacle: cut back
         out.ok, out.reason = not (why := _step_error(sweeps, g, lam, out.g, lam_try)), why or out.reason
     if out.ok and checks.snap is not None:   # a large contact step: probed in halves (a snap?)
-        out.reason = checks.snap.judge(g, out.g, lam, lam_try)
+        out.reason = checks.snap.judge(g, out.g, lam, lam_try, _lift_off(sweeps, g, lam, out.g, lam_try))
         out.ok = not out.reason
     if out.ok and checks.friction is not None:   # a frictional step: its slip history's error
         out.reason = checks.friction.judge(out.g, lam, lam_try, start)
