@@ -352,17 +352,19 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         a moving obstacle, at the penalty's stiffness.  g itself when the obstacle is at rest over
         the increment (every frictionless case of a fixed obstacle is unchanged)."""
         T0, T1 = self.obstacle.transform(lam0), self.obstacle.transform(lam)
-        if np.array_equal(T0, T1) or not len(self.nodes):
+        if np.array_equal(T0, T1):
+            return g
+        Trel = T1 @ lie.inv(T0[None])[0]
+        shift, carried = self._face_shift(g0, lam0, lam, Trel)     # (collective on a rank's part)
+        if not len(self.nodes):
             return g
         x, _, n, _, p, _ = self.state(g0, lam0)
         on = p > 0
-        Trel = T1 @ lie.inv(T0[None])[0]
         target = g[self.nodes].copy()
         move = np.einsum("ki,ki->k", n, x @ Trel[:3, :3].T + Trel[:3, 3] - x)
         target[:, :3, 3] += move[:, None] * n
         stick = self.sticking(lam0, n, p)
         target[stick] = Trel @ g[self.nodes[stick]]
-        shift, carried = self._face_shift(g0, lam0, lam, Trel)
         face = carried & ~on
         target[face, :3, 3] += shift[face]
         on |= face
@@ -385,23 +387,34 @@ class ContactLoad(ContactOutputs, CoulombFriction, Load):
         of the forces whatever the step), and its first two steps took 125 and 113 tries (now 3
         and 4).  For a translating obstacle only: a turning one's sample can jump across the face
         (a box cam's rounded edge turning under a strip: carried so, its 10 steps stopped at 0.6)."""
+        shift, count = self._sum_shared(*self._face_shift_sums(g0, lam0, lam, Trel))
+        carried = count > 0
+        shift[carried] /= count[carried, None]
+        return shift, carried
+
+    def _face_shift_sums(self, g0, lam0, lam, Trel):
+        """(the sum of the shifts of :meth:`_face_shift` over the faces of each contact node,
+        their number) (k, 3), (k,)."""
         k = len(self.nodes)
         shift, count = np.zeros((k, 3)), np.zeros(k)
         if not len(self.face_el) or not np.allclose(Trel[:3, :3], np.eye(3), rtol=0.0, atol=1e-12):
-            return shift, count > 0
+            return shift, count
         s, pf, _ = self.face_state(g0, lam0)
         on = pf > 0
         if not on.any():
-            return shift, count > 0
+            return shift, count
         s1, _, _ = self.face_state(g0, lam)
         on &= s1["ok"]
         v = -np.maximum(0.0, s1["d"][on] - s["d"][on])[:, None] * s1["n"][on]
         q = self.face_q[on]
         np.add.at(shift, q.ravel(), np.repeat(v, 4, axis=0))
         np.add.at(count, q.ravel(), 1.0)
-        carried = count > 0
-        shift[carried] /= count[carried, None]
-        return shift, carried
+        return shift, count
+
+    def _sum_shared(self, shift, count):
+        """Per-node sums over the faces of the whole problem (here: this load's own; a rank's part
+        adds the other ranks' faces of its nodes on a partition boundary)."""
+        return shift, count
 
     def start_error(self, g, lam):
         """Refuse a try that starts with a contact point deeper than the thickness h inside the

@@ -199,6 +199,15 @@ class LocalContact(ContactLoad):
     def step_error(self, g0, lam0, g1, lam1):
         return next((w for w in self.comm.allgather(super().step_error(g0, lam0, g1, lam1)) if w), "")
 
+    def _sum_shared(self, shift, count):
+        # a node on a partition boundary is carried by faces of two ranks: their sums, as serially
+        kn = len(self.whole.nodes)
+        total, number = np.zeros((kn, 3)), np.zeros(kn)
+        for npos, s, c in self.comm.allgather((self._npos, shift, count)):
+            np.add.at(total, npos, s)
+            np.add.at(number, npos, c)
+        return total[self._npos], number[self._npos]
+
     def lift_off(self, g0, lam0, g1, lam1):
         every = self.comm.allgather(super().lift_off(g0, lam0, g1, lam1))
         top = max(v for v, _ in every)
